@@ -1,0 +1,62 @@
+"""Calibration loop: fit the model to measured data, diagnose the residual, add the
+library effect that explains it, refit, and report the error before and after on
+held-out data (ARCHITECTURE.md, "Calibration loop").
+
+numpy and scipy only. Typical use::
+
+    from swgsim.calibration import build_problem, calibrate, summarize
+    problem = build_problem("franka_joint2_slow.csv")
+    result = calibrate(problem)
+    summary = summarize(result)          # JSON-ready dict
+    markdown = render_report(result, summary, figures={})
+
+Modules: :mod:`.core` (terms, separable least squares, uncertainties), :mod:`.friction`
+(recordings, paper-law baseline), :mod:`.friction_effects` (the effect library),
+:mod:`.split` (held-out splits), :mod:`.diagnose` (residual probes, noise floor),
+:mod:`.loop` (selection loop), :mod:`.problems` (kind detection, problem builders),
+:mod:`.report` (summary and markdown), :mod:`.chain` (accepted effects as a simulation
+option), :mod:`.synthetic` (planted-effect data).
+"""
+
+from .chain import FrictionEffects, parse_effects
+from .core import FitResult, Param, ParamEstimate, Term, fit_terms
+from .diagnose import Diagnosis, diagnose, friction_probes, noise_floor
+from .friction import FrictionRecording, FrictionSignals, PaperLaw, load_friction_csv
+from .friction_effects import FRICTION_LIBRARY, make_effect
+from .loop import CalibrationResult, Problem, SelectionConfig, calibrate
+from .problems import MeasuredDataError, build_problem, detect_kind, friction_problem
+from .report import render_report, summarize
+from .split import HeldOutSplit, group_split, time_block_split
+
+__all__ = [
+    "FRICTION_LIBRARY",
+    "CalibrationResult",
+    "Diagnosis",
+    "FitResult",
+    "FrictionEffects",
+    "FrictionRecording",
+    "FrictionSignals",
+    "HeldOutSplit",
+    "MeasuredDataError",
+    "PaperLaw",
+    "Param",
+    "ParamEstimate",
+    "Problem",
+    "SelectionConfig",
+    "Term",
+    "build_problem",
+    "calibrate",
+    "detect_kind",
+    "diagnose",
+    "fit_terms",
+    "friction_probes",
+    "friction_problem",
+    "group_split",
+    "load_friction_csv",
+    "make_effect",
+    "noise_floor",
+    "parse_effects",
+    "render_report",
+    "summarize",
+    "time_block_split",
+]

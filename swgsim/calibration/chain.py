@@ -1,0 +1,226 @@
+"""Accepted friction effects as an option of the simulation chain.
+
+A calibration writes its accepted effects as a list (``summary.json`` key
+``friction_effects``, or ``friction_effects.yaml``)::
+
+    friction_effects:
+      - {kind: stribeck, params: {f_s: 0.12, v_st: 0.02}}
+      - {kind: presliding, params: {f_d: 0.1, q_c: 4.6e-4}}
+
+:class:`FrictionEffects` turns such a list into an extra friction torque of
+(t, q, q̇, q̈) [s, rad, rad/s, rad/s²] -> τ [N m], in the joint coordinate (gear output
+angle, τ positive along q̇), which the dynamics add to the paper-law friction:
+
+* :meth:`FrictionEffects.__call__` evaluates a whole trajectory (1-D arrays in time
+  order); states (presliding, lag) are integrated exactly along it.
+* :meth:`FrictionEffects.torque` evaluates one time step for any array shape (e.g. one
+  value per variant), with the states passed in; :meth:`FrictionEffects.state_derivative`
+  gives their time derivatives for an ODE integrator (python-control style ``rhs``).
+
+Effects that act *through* the friction law (``velocity_lag``) need the baseline
+(paper-law) parameters: the extra torque is then friction law with the effects minus
+friction law without them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .core import Term, evaluate_terms
+from .friction import FrictionSignals, PaperLaw, Scales
+from .friction_effects import Presliding, VelocityLag, make_effect
+
+__all__ = ["FrictionEffects", "parse_effects"]
+
+
+def parse_effects(effects: Sequence[Mapping[str, Any]]) -> list[tuple[Term, np.ndarray,
+                                                                        np.ndarray]]:
+    """Validate an effect list and build (term, coef, theta) triples.
+
+    Parameters
+    ----------
+    effects : sequence of mapping
+        Entries ``{"kind": key, "params": {raw name: value}}`` (``"name"`` optional;
+        ``"kind"`` defaults to ``"name"`` without a ``#k`` suffix).
+
+    Returns
+    -------
+    list of (Term, ndarray, ndarray)
+
+    Raises
+    ------
+    KeyError
+        Unknown effect or wrong parameter names (the message lists the right ones).
+    ValueError
+        A log-scaled parameter (time constant, period, ...) that is not positive.
+    """
+    out = []
+    for i, e in enumerate(effects):
+        if not isinstance(e, Mapping):
+            raise ValueError(f"effect {i} must be a mapping with kind and params, got {e!r}")
+        kind = e.get("kind") or str(e.get("name", "")).split("#")[0]
+        name = e.get("name") or kind
+        use_load = bool(e.get("use_load", False))
+        term = make_effect(kind, name, **({"use_load": use_load} if kind == "load_coulomb"
+                                          else {}))
+        coef, theta = term.from_params(dict(e.get("params", {})))
+        for p, v in zip(term.nonlinear, theta):
+            if p.log and not v > 0:
+                raise ValueError(f"effect {name!r}: parameter {p.name} must be > 0 "
+                                 f"[{p.unit}], got {v}")
+        out.append((term, coef, theta))
+    return out
+
+
+class FrictionEffects:
+    """Extra friction torque of a list of library effects.
+
+    Parameters
+    ----------
+    effects : sequence of mapping
+        See :func:`parse_effects`.
+    v_s : float
+        Smooth-sign velocity tanh(q̇ / v_s) [rad/s] (``v_s_rad_s`` in summary.json).
+    baseline : mapping, optional
+        Paper-law parameters ``{b0, b1, b2, b3, theta_b}`` [N m, N m s/rad, N m s³/rad³,
+        N m, rad]; required when an effect acts through the friction law
+        (``velocity_lag``).
+    t0 : float, default 0
+        Time origin of the drift effects [s] (``t0_s`` in summary.json).
+
+    Raises
+    ------
+    ValueError
+        ``v_s`` not positive, or ``velocity_lag`` without ``baseline``.
+
+    Examples
+    --------
+    >>> fx = FrictionEffects([{"kind": "stribeck", "params": {"f_s": 0.1, "v_st": 0.02}}],
+    ...                      v_s=1e-3)
+    >>> tau = fx(t, q, dq, ddq)            # whole trajectory, shape (n,)
+    >>> z = fx.initial_state(shape=(V,))   # per-step use inside an integrator
+    >>> tau_k = fx.torque(t_k, q_k, dq_k, ddq_k, z)
+    >>> dz = fx.state_derivative(t_k, q_k, dq_k, z)
+    """
+
+    def __init__(self, effects: Sequence[Mapping[str, Any]], v_s: float,
+                 baseline: Mapping[str, float] | None = None, t0: float = 0.0) -> None:
+        if not v_s > 0:
+            raise ValueError(f"v_s must be > 0 [rad/s], got {v_s}")
+        self.v_s = float(v_s)
+        self.t0 = float(t0)
+        self.items = parse_effects(effects)
+        self.has_transform = any(t.is_transform for t, _, _ in self.items)
+        if self.has_transform and baseline is None:
+            raise ValueError("velocity_lag acts through the friction law: pass baseline="
+                             "{b0, b1, b2, b3, theta_b}")
+        self.base_coef = (PaperLaw().from_derived(**{k: float(baseline[k]) for k in (
+            "b0", "b1", "b2", "b3", "theta_b")}) if baseline is not None else None)
+        # state layout: one per presliding or lag effect
+        self.state_names = [t.name for t, _, _ in self.items
+                            if isinstance(t, (Presliding, VelocityLag))]
+
+    @property
+    def n_states(self) -> int:
+        """Number of internal states (presliding z, lagged velocity)."""
+        return len(self.state_names)
+
+    def initial_state(self, shape: tuple[int, ...] = (), dq0: Any = 0.0) -> np.ndarray:
+        """States at rest: z = 0, lagged velocity = q̇0. Shape (n_states, *shape)."""
+        z = np.zeros((self.n_states, *shape))
+        for i, (t, _, _) in enumerate(x for x in self.items
+                                      if isinstance(x[0], (Presliding, VelocityLag))):
+            if isinstance(t, VelocityLag):
+                z[i] = dq0
+        return z
+
+    def _signals(self, t, q, dq, ddq, states: dict[str, np.ndarray] | None) -> FrictionSignals:
+        t = np.atleast_1d(np.asarray(t, float))
+        q = np.atleast_1d(np.asarray(q, float))
+        n = q.size
+        t = np.broadcast_to(t, q.shape).ravel() if t.size != n else t.ravel()
+        dq_ = np.broadcast_to(np.asarray(dq, float), q.shape).ravel()
+        ddq_ = np.broadcast_to(np.asarray(ddq, float), q.shape).ravel()
+        sc = Scales(v_ref=1.0, q_span=1.0, t0=self.t0, t_span=1.0, dt_med=1.0, dq_med=1.0)
+        return FrictionSignals(t_s=t, q_rad=q.ravel(), dq_rad_s=dq_, ddq_rad_s2=ddq_,
+                               load_nm=None, v_eff=dq_, v_s=self.v_s, scales=sc,
+                               extra={"states": states} if states is not None else {})
+
+    def _evaluate(self, sig: FrictionSignals) -> np.ndarray:
+        terms = [t for t, _, _ in self.items]
+        coefs = [c for _, c, _ in self.items]
+        thetas = [th for _, _, th in self.items]
+        if self.has_transform:
+            base = PaperLaw()
+            terms_all = [t for t in terms if t.is_transform] + [base] + [
+                t for t in terms if not t.is_transform]
+            pos = {id(t): i for i, t in enumerate(terms)}
+            c_all = [coefs[pos[id(t)]] if t is not base else self.base_coef for t in terms_all]
+            th_all = [thetas[pos[id(t)]] if t is not base else np.empty(0) for t in terms_all]
+            with_fx = evaluate_terms(terms_all, sig, c_all, th_all)
+            without = evaluate_terms([base], sig, [self.base_coef], [np.empty(0)])
+            return with_fx - without
+        return evaluate_terms(terms, sig, coefs, thetas)
+
+    def __call__(self, t: np.ndarray, q: np.ndarray, dq: np.ndarray,
+                 ddq: np.ndarray) -> np.ndarray:
+        """Extra friction torque along a trajectory.
+
+        Parameters
+        ----------
+        t, q, dq, ddq : ndarray, shape (n,)
+            Time [s] (increasing), angle [rad], velocity [rad/s], acceleration [rad/s²].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Extra torque [N m].
+        """
+        q = np.asarray(q, float)
+        if q.ndim != 1:
+            raise ValueError(f"trajectory arrays must be 1-D, got shape {q.shape}")
+        return self._evaluate(self._signals(t, q, dq, ddq, None))
+
+    def torque(self, t: Any, q: Any, dq: Any, ddq: Any, state: np.ndarray | None = None
+               ) -> np.ndarray:
+        """Extra friction torque at one time step, elementwise over any shape.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        q, dq, ddq : array_like, same shape S
+            Angle [rad], velocity [rad/s], acceleration [rad/s²] (q̈ of the previous
+            step is adequate for the ``inertia`` effect; better add J_a to the output
+            inertia).
+        state : ndarray, shape (n_states, *S), optional
+            From :meth:`initial_state` / integration of :meth:`state_derivative`.
+
+        Returns
+        -------
+        ndarray, shape S
+        """
+        q = np.asarray(q, float)
+        if self.n_states and state is None:
+            raise ValueError(f"these effects have states {self.state_names}: pass state")
+        states = ({n: np.asarray(state[i], float).ravel() for i, n in
+                   enumerate(self.state_names)} if self.n_states else None)
+        return self._evaluate(self._signals(t, q, dq, ddq, states)).reshape(q.shape)
+
+    def state_derivative(self, t: Any, q: Any, dq: Any, state: np.ndarray) -> np.ndarray:
+        """Time derivative of the states: Dahl dz/dt = (q̇ − |q̇| z) / q_c, lag
+        dv/dt = (q̇ − v) / T_L. Shape (n_states, *S)."""
+        dq = np.asarray(dq, float)
+        out = np.zeros_like(np.asarray(state, float))
+        i = 0
+        for term, _, th in self.items:
+            if isinstance(term, Presliding):
+                out[i] = (dq - np.abs(dq) * state[i]) / th[0]
+                i += 1
+            elif isinstance(term, VelocityLag):
+                out[i] = (dq - state[i]) / th[0]
+                i += 1
+        return out

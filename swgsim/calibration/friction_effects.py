@@ -1,0 +1,500 @@
+"""Declared library of candidate friction effects.
+
+Every effect is a :class:`~swgsim.calibration.core.Term` in the joint coordinate q
+(gear output angle [rad]) with the friction torque τ [N m] positive along q̇. ``sgn``
+is the smooth sign tanh(v / v_s) of the velocity v the friction law sees (q̇, or a
+lagged q̇ once ``velocity_lag`` is in the model). Each entry documents its form, its
+residual signature (how the residual of a model without it looks) and its source.
+
+==================  ===============================================  ===================
+name                form                                             residual signature
+==================  ===============================================  ===================
+asymmetric_coulomb  Δc |sgn|                                         same offset in both
+                                                                     directions, 0 at rest
+stribeck            F_s sgn exp(−(v/v_st)²)                          odd bump at low |v|
+presliding          F_d (z − sgn), dz/dq = (1 − z sgn(q̇)) / q_c     transient after each
+                                                                     reversal vs travel
+position_ripple     a sin(2πq/P) + b cos(2πq/P)                      peak over q, even in
+                                                                     direction
+friction_ripple     sgn (a sin(2πq/P) + b cos(2πq/P))                peak over q, odd in
+                                                                     direction
+load_coulomb        sgn (μ_s sin q + μ_c cos q)  or  μ sgn |load|    odd, slow trend in q
+inertia             J_a q̈                                            ∝ q̈: loops vs q̇
+thermal_drift       d exp(−(t − t0)/T_th) sgn                        odd, decays in time
+sensor_drift        c (1 − exp(−(t − t0)/T_d))                       even, creeps in time
+nonlinear_viscous   c_v sign(v) |v|^δ                                odd, concave in |v|
+velocity_lag        friction law acts on v = q̇ low-passed by T_L     hysteresis vs q̇,
+                                                                     sign of q̈ matters
+==================  ===============================================  ===================
+
+Sources: Armstrong-Hélouvry, Dupont & Canudas de Wit 1994 (survey, Automatica 30(7)):
+Coulomb, viscous, Stribeck, presliding, frictional memory, position dependence; Dahl
+1968 (Aerospace Corp. TR-0158(3107-18)-1): presliding state; Canudas de Wit, Olsson,
+Åström & Lischinsky 1995 (IEEE TAC 40(3), LuGre); Hess & Soom 1990 (ASME J. Tribology
+112): frictional lag; Tuttle & Seering 1996 (IEEE T-RA 12(3)): SWG friction varying
+periodically with rotation, kinematic error; PHYSICS.md sec. 5 (temperature, load and
+direction dependence of friction; gauge temperature drift); paper eq. (5) (μ F_n).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+
+from .core import Param, Term, linear_recurrence
+from .friction import FrictionSignals
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "FRICTION_LIBRARY",
+    "AsymmetricCoulomb",
+    "Stribeck",
+    "Presliding",
+    "PositionRipple",
+    "FrictionRipple",
+    "LoadCoulomb",
+    "Inertia",
+    "ThermalDrift",
+    "SensorDrift",
+    "NonlinearViscous",
+    "VelocityLag",
+    "dahl_state",
+    "first_order_lag",
+    "periodogram_peaks",
+]
+
+
+# ---------------------------------------------------------------------------------------
+# state integrators (exact on irregular sampling)
+
+
+def dahl_state(q: np.ndarray, q_c: float, z0: float = 0.0) -> np.ndarray:
+    """Normalised Dahl presliding state along a position path.
+
+    dz/dq = (1 − z sgn(q̇)) / q_c (Dahl 1968 with exponent 1, written over displacement
+    so that it is rate independent, as Dahl's model is). Integrated exactly per sample
+    step: z_k = s + (z_{k−1} − s) exp(−|Δq_k| / q_c), s = sgn(Δq_k). z approaches ±1
+    after a travel of a few q_c in one direction.
+
+    Parameters
+    ----------
+    q : ndarray, shape (n,)
+        Joint angle [rad].
+    q_c : float
+        Characteristic presliding displacement [rad], > 0.
+    z0 : float, default 0
+        State before the first sample.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        z in [−1, 1].
+    """
+    if not q_c > 0:
+        raise ValueError(f"q_c must be > 0 [rad], got {q_c}")
+    dq = np.diff(np.asarray(q, float), prepend=q[0])
+    a = np.exp(-np.abs(dq) / q_c)
+    b = np.sign(dq) * (1.0 - a)
+    return linear_recurrence(a, b, z0)
+
+
+def first_order_lag(t: np.ndarray, u: np.ndarray, tau_s: float) -> np.ndarray:
+    """First-order low-pass y' = (u − y) / τ on irregular samples (exact for u held
+    constant over each step, taking the sample at the step's end), y_0 = u_0.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Time [s].
+    u : ndarray, shape (n,)
+        Input.
+    tau_s : float
+        Time constant [s], > 0.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    if not tau_s > 0:
+        raise ValueError(f"tau_s must be > 0 [s], got {tau_s}")
+    dt = np.diff(np.asarray(t, float), prepend=t[0])
+    a = np.exp(-dt / tau_s)
+    return linear_recurrence(a, (1.0 - a) * np.asarray(u, float), float(u[0]))
+
+
+def periodogram_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float,
+                      n_peaks: int = 3, oversample: float = 5.0) -> list[tuple[float, float]]:
+    """Strongest periods of ``r`` over the irregular coordinate ``x``.
+
+    Fast Schuster periodogram: ``r`` is accumulated onto a uniform grid of spacing
+    p_min / 8 (nearest-cell extirpolation, the idea of Press & Rybicki 1989, order 0)
+    and Fourier transformed with ``oversample``-fold zero padding. The power is
+    normalised so that a pure sinusoid sampled evenly gives 1 (≈ the fraction of the
+    variance a sinusoid at that period explains). Local maxima, strongest first.
+
+    Parameters
+    ----------
+    x, r : ndarray, shape (n,)
+        Coordinate (q [rad] or t [s]) and signal.
+    p_min, p_max : float
+        Period range [units of x], 0 < p_min < p_max.
+    n_peaks : int, default 3
+    oversample : float, default 5
+
+    Returns
+    -------
+    list of (period, normalised power)
+    """
+    x = np.asarray(x, float)
+    r = np.asarray(r, float)
+    span = float(np.ptp(x)) if x.size else 0.0
+    if span <= 0 or not 0 < p_min < p_max or not np.any(r):
+        return []
+    rc = r - r.mean()
+    h = p_min / 8.0
+    cells = np.floor((x - x.min()) / h).astype(np.int64)
+    m = int(cells.max()) + 1
+    s = np.bincount(cells, weights=rc, minlength=m)
+    nfft = 1 << int(np.ceil(np.log2(max(oversample * m, 16))))
+    f = np.arange(nfft // 2 + 1) / (nfft * h)
+    pw = np.abs(np.fft.rfft(s, nfft)) ** 2 * 2.0 / (x.size * float(np.sum(rc * rc)))
+    band = (f >= 1.0 / p_max) & (f <= 1.0 / p_min)
+    pb = np.where(band, pw, 0.0)
+    loc = np.flatnonzero((pb[1:-1] > pb[:-2]) & (pb[1:-1] >= pb[2:])) + 1
+    loc = loc[np.argsort(pb[loc])[::-1]][:n_peaks]
+    return [(float(1.0 / f[i]), float(pb[i])) for i in loc if pb[i] > 0]
+
+
+def _amp_phase(a: float, b: float) -> tuple[float, float]:
+    return float(np.hypot(a, b)), float(np.arctan2(b, a))
+
+
+# ---------------------------------------------------------------------------------------
+# the library
+
+
+class AsymmetricCoulomb(Term):
+    """Direction-dependent Coulomb level: τ = Δc |sgn(v)|, so the Coulomb level is
+    b0 + Δc for q̇ > 0 and b0 − Δc for q̇ < 0 (Armstrong-Hélouvry et al. 1994;
+    asymmetric friction of gravity-loaded robot joints)."""
+
+    kind = "asymmetric_coulomb"
+    linear = (Param("delta_c", "N m", "half the difference of the Coulomb levels (+ minus −)"),)
+    description = "Coulomb level differs between the directions of motion"
+    signature = ("residual offset of the same sign in both directions of motion while "
+                 "moving, vanishing at rest")
+    source = "Armstrong-Hélouvry, Dupont & Canudas de Wit 1994"
+    probes = ("direction_offset",)
+
+    def columns(self, sig: FrictionSignals, theta: np.ndarray) -> np.ndarray:
+        return np.abs(sig.sgn)[:, None]
+
+
+class Stribeck(Term):
+    """Stribeck effect: τ = F_s sgn(v) exp(−(v / v_st)²), static friction above the
+    Coulomb level decaying with speed (Armstrong-Hélouvry et al. 1994, Gaussian form)."""
+
+    kind = "stribeck"
+    linear = (Param("f_s", "N m", "static minus Coulomb friction"),)
+    nonlinear = (Param("v_st", "rad/s", "Stribeck velocity", log=True),)
+    description = "friction above the Coulomb level at low speed (Stribeck curve)"
+    signature = ("residual odd in the direction of motion, a bump at low |q̇| that decays "
+                 "within v_st")
+    source = "Armstrong-Hélouvry et al. 1994; Stribeck 1902"
+    probes = ("velocity",)
+
+    def bounds(self, sig: FrictionSignals) -> list[tuple[float, float]]:
+        s = sig.scales
+        return [(max(2.0 * sig.v_s, 1e-3 * s.v_ref), s.v_ref)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.v_ref]) for f in (0.03, 0.1, 0.3)]
+
+    def columns(self, sig: FrictionSignals, theta: np.ndarray) -> np.ndarray:
+        return (sig.sgn * np.exp(-(sig.v_eff / theta[0]) ** 2))[:, None]
+
+
+class Presliding(Term):
+    """Presliding hysteresis (Dahl 1968): part F_d of the Coulomb level follows the
+    Dahl state z over displacement instead of the velocity sign: τ = F_d (z − sgn),
+    dz/dq = (1 − z sgn(q̇)) / q_c. With F_d = b0 the whole Coulomb level is of Dahl
+    type; LuGre (Canudas de Wit et al. 1995) has the same steady state."""
+
+    kind = "presliding"
+    linear = (Param("f_d", "N m", "Coulomb part following the presliding state"),)
+    nonlinear = (Param("q_c", "rad", "characteristic presliding displacement", log=True),)
+    description = "friction builds up over a small displacement after each reversal"
+    signature = ("after each reversal of motion the residual shows a transient over the "
+                 "travel since the reversal (hysteresis loop in torque vs position near "
+                 "reversals), odd in direction")
+    source = "Dahl 1968; Canudas de Wit et al. 1995 (LuGre); Armstrong-Hélouvry et al. 1994"
+    probes = ("travel_since_reversal", "velocity")
+
+    def bounds(self, sig):
+        return [(1e-5 * sig.scales.q_span, 0.1 * sig.scales.q_span)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.q_span]) for f in (1e-4, 1e-3, 1e-2)]
+
+    def columns(self, sig, theta):
+        states = sig.extra.get("states")
+        if states is not None and self.name in states:  # one step of an integrator
+            z = states[self.name]
+        else:
+            z = dahl_state(sig.q_rad, float(theta[0]))
+        return (z - sig.sgn)[:, None]
+
+
+class _Ripple(Term):
+    """Sinusoid over q with a period found from the residual spectrum."""
+
+    linear = (Param("a_sin", "N m", "sine coefficient"), Param("a_cos", "N m", "cosine coefficient"))
+    nonlinear = (Param("period", "rad", "period over the joint angle", log=True),)
+    repeatable = 3
+    odd = False
+
+    def bounds(self, sig):
+        s = sig.scales
+        return [(max(4.0 * s.dq_med, s.q_span / 2000.0), s.q_span / 2.0)]
+
+    def starts(self, sig, residual, idx):
+        lo, hi = self.bounds(sig)[0]
+        r = residual[idx] * (np.sign(sig.v_eff[idx]) if self.odd else 1.0)
+        peaks = periodogram_peaks(sig.q_rad[idx], r, lo, hi, n_peaks=3)
+        out = [np.array([p]) for p, _ in peaks]
+        return out or [np.array([np.sqrt(lo * hi)])]
+
+    def _base(self, sig):
+        return sig.sgn if self.odd else np.ones(sig.n)
+
+    def columns(self, sig, theta):
+        w = 2 * np.pi * sig.q_rad / theta[0]
+        b = self._base(sig)
+        return np.column_stack([b * np.sin(w), b * np.cos(w)])
+
+    def derived(self, coef, theta):
+        amp, ph = _amp_phase(coef[0], coef[1])
+        return {"amplitude": amp, "phase": ph, "period": float(theta[0])}
+
+    def derived_units(self):
+        return {"amplitude": "N m", "phase": "rad", "period": "rad"}
+
+    def primary(self):
+        return ("amplitude", "period")
+
+
+class PositionRipple(_Ripple):
+    """Torque ripple periodic in the joint angle, the same in both directions: kinematic
+    error and meshing stiffness ripple at orders of the wave generator (N q, 2 N q),
+    motor cogging, gauge ripple (Tuttle & Seering 1996; PHYSICS.md sec. 1 and 5)."""
+
+    kind = "position_ripple"
+    description = "ripple periodic in q, even in the direction of motion"
+    signature = "spectral peak of the residual over q, same sign in both directions"
+    source = "Tuttle & Seering 1996; PHYSICS.md sec. 1, 5"
+    probes = ("position_periodic",)
+
+
+class FrictionRipple(_Ripple):
+    """Friction whose level varies periodically with rotation (tooth meshing; Tuttle &
+    Seering 1996): τ = sgn(v) (a sin(2πq/P) + b cos(2πq/P))."""
+
+    kind = "friction_ripple"
+    description = "friction level periodic in q, odd in the direction of motion"
+    signature = "spectral peak over q of the residual times sgn(q̇) (flips with direction)"
+    source = "Tuttle & Seering 1996"
+    probes = ("position_periodic_odd",)
+    odd = True
+
+
+class LoadCoulomb(Term):
+    """Load-dependent Coulomb friction, the μ F_n term of paper eq. (5): with a load
+    signal τ = μ sgn |load|; without one the gravity load of the joint, ∝ sin/cos q,
+    stands in: τ = sgn (μ_s sin q + μ_c cos q)."""
+
+    kind = "load_coulomb"
+    description = "Coulomb level proportional to the transmitted (gravity) load"
+    signature = ("residual odd in direction with a slow trend over q: the two branches "
+                 "(q̇ > 0, q̇ < 0) spread or close along q")
+    source = "paper eq. (5) μ F_n; Armstrong-Hélouvry et al. 1994"
+    probes = ("position_odd",)
+
+    def __init__(self, name: str | None = None, use_load: bool = False) -> None:
+        super().__init__(name)
+        self.use_load = bool(use_load)
+
+    @classmethod
+    def for_signals(cls, sig: FrictionSignals, name: str | None = None) -> LoadCoulomb:
+        return cls(name, use_load=sig.load_nm is not None)
+
+    @property
+    def linear(self):  # type: ignore[override]
+        if self.use_load:
+            return (Param("mu", "-", "friction per unit load torque"),)
+        return (Param("mu_sin", "N m", "sgn sin q coefficient"),
+                Param("mu_cos", "N m", "sgn cos q coefficient"))
+
+    def applicable(self, sig) -> bool:
+        return sig.load_nm is not None if self.use_load else True
+
+    def columns(self, sig, theta):
+        if self.use_load:
+            return (sig.sgn * np.abs(sig.load_nm))[:, None]
+        return np.column_stack([sig.sgn * np.sin(sig.q_rad), sig.sgn * np.cos(sig.q_rad)])
+
+    def derived(self, coef, theta):
+        if self.use_load:
+            return {"mu": float(coef[0])}
+        amp, ph = _amp_phase(coef[0], coef[1])
+        return {"amplitude": amp, "phase": ph}
+
+    def derived_units(self):
+        return {"mu": "-"} if self.use_load else {"amplitude": "N m", "phase": "rad"}
+
+    def primary(self):
+        return ("mu",) if self.use_load else ("amplitude",)
+
+
+class Inertia(Term):
+    """Torque proportional to the acceleration, τ = J_a q̈: inertia not compensated by
+    the rigid-body model the friction torque was identified with (model mismatch)."""
+
+    kind = "inertia"
+    linear = (Param("j_a", "kg m²", "uncompensated inertia"),)
+    description = "torque proportional to q̈ (rigid-body model mismatch)"
+    signature = ("residual correlates with q̈; for oscillating motion it draws loops "
+                 "against q̇ whose sense flips with the sign of q̈")
+    source = "rigid-body model compensation of the data (README); Armstrong-Hélouvry 1994"
+    probes = ("acceleration",)
+
+    def columns(self, sig, theta):
+        return sig.ddq_rad_s2[:, None]
+
+
+class ThermalDrift(Term):
+    """Coulomb level relaxing as the joint warms up: τ = d exp(−(t − t0)/T_th) sgn(v)
+    (first-order thermal response; friction falls with lubricant temperature; PHYSICS.md
+    sec. 5; Armstrong-Hélouvry et al. 1994)."""
+
+    kind = "thermal_drift"
+    linear = (Param("d", "N m", "excess Coulomb level at t0"),)
+    nonlinear = (Param("t_th", "s", "thermal time constant", log=True),)
+    description = "friction level decays over time (warm-up)"
+    signature = "residual odd in direction whose magnitude changes monotonically with time"
+    source = "PHYSICS.md sec. 5; Armstrong-Hélouvry et al. 1994"
+    probes = ("time_odd",)
+
+    def bounds(self, sig):
+        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
+
+    def columns(self, sig, theta):
+        return (np.exp(-(sig.t_s - sig.scales.t0) / theta[0]) * sig.sgn)[:, None]
+
+
+class SensorDrift(Term):
+    """Zero drift of the torque measurement: τ = c (1 − exp(−(t − t0)/T_d)), a first-
+    order warm-up of the gauges and amplifier (PHYSICS.md sec. 5: gauge temperature
+    drift)."""
+
+    kind = "sensor_drift"
+    linear = (Param("c", "N m", "final offset change"),)
+    nonlinear = (Param("t_d", "s", "drift time constant", log=True),)
+    description = "offset creeping over time, same in both directions"
+    signature = "residual even in direction that creeps monotonically with time"
+    source = "PHYSICS.md sec. 5 (gauge temperature drift)"
+    probes = ("time",)
+
+    def bounds(self, sig):
+        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
+
+    def columns(self, sig, theta):
+        return (1.0 - np.exp(-(sig.t_s - sig.scales.t0) / theta[0]))[:, None]
+
+
+class NonlinearViscous(Term):
+    """Sub-linear viscous friction τ = c_v sign(v) |v|^δ, 0 < δ < 1 (lubricant shear
+    thinning; Armstrong-Hélouvry et al. 1994 list |v|^δ_v viscous terms)."""
+
+    kind = "nonlinear_viscous"
+    linear = (Param("c_v", "N m (s/rad)^δ", "coefficient (torque at 1 rad/s)"),)
+    nonlinear = (Param("delta", "-", "exponent"),)
+    description = "viscous friction growing like |q̇|^δ, δ < 1"
+    signature = ("residual odd in direction, rising steeply at low |q̇| and flattening "
+                 "(concave), not localised at low speed")
+    source = "Armstrong-Hélouvry et al. 1994"
+    probes = ("velocity",)
+
+    def bounds(self, sig):
+        return [(0.15, 0.9)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([d]) for d in (0.3, 0.5, 0.7)]
+
+    def columns(self, sig, theta):
+        v = sig.v_eff
+        return (np.sign(v) * np.abs(v) ** theta[0])[:, None]
+
+
+class VelocityLag(Term):
+    """Frictional memory (Hess & Soom 1990): the friction law sees the velocity through
+    a first-order lag, v = q̇ low-passed with time constant T_L. A transform term: it
+    changes the velocity of every friction term after it (put first in the model)."""
+
+    kind = "velocity_lag"
+    nonlinear = (Param("t_lag", "s", "lag time constant", log=True),)
+    is_transform = True
+    description = "friction follows the velocity with a lag (frictional memory)"
+    signature = ("hysteresis of the residual against q̇: higher friction when "
+                 "decelerating than when accelerating at the same speed")
+    source = "Hess & Soom 1990; Armstrong-Hélouvry et al. 1994 (frictional memory)"
+    probes = ("velocity_hysteresis",)
+
+    def bounds(self, sig):
+        s = sig.scales
+        return [(0.5 * s.dt_med, max(min(0.05 * s.t_span, 5.0), 2.0 * s.dt_med))]
+
+    def starts(self, sig, residual, idx):
+        lo, hi = self.bounds(sig)[0]
+        return [np.array([np.clip(f * sig.scales.dt_med, lo, hi)]) for f in (2, 10, 50)]
+
+    def columns(self, sig, theta):  # pragma: no cover - transform only
+        return np.zeros((sig.n, 0))
+
+    def transform(self, sig: FrictionSignals, theta: np.ndarray) -> FrictionSignals:
+        states = sig.extra.get("states")
+        if states is not None and self.name in states:  # one step of an integrator
+            return sig.replace(v_eff=states[self.name])
+        return sig.replace(v_eff=first_order_lag(sig.t_s, sig.v_eff, float(theta[0])))
+
+
+FRICTION_LIBRARY: dict[str, type[Term]] = {
+    cls.kind: cls for cls in (
+        AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
+        LoadCoulomb, Inertia, ThermalDrift, SensorDrift, NonlinearViscous, VelocityLag)
+}
+"""Library key -> effect class. Instantiate with ``FRICTION_LIBRARY[key](name)``."""
+
+
+def make_effect(kind: str, name: str | None = None, **kwargs: Any) -> Term:
+    """Instantiate a library effect by key.
+
+    Raises
+    ------
+    KeyError
+        Unknown key; the message lists the library.
+    """
+    try:
+        cls = FRICTION_LIBRARY[kind]
+    except KeyError:
+        raise KeyError(f"unknown friction effect {kind!r}; the library has "
+                       f"{sorted(FRICTION_LIBRARY)}") from None
+    return cls(name, **kwargs)

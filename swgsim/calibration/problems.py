@@ -1,0 +1,154 @@
+"""Measured data in: recognise the kind, load it, build a calibration problem.
+
+Kinds:
+
+1. a friction CSV (columns of :data:`~swgsim.calibration.friction.REQUIRED_COLUMNS`),
+2. a schema-v1 data-set directory (``manifest.json``, strain signals; ``swgsim.data``).
+
+The friction side is complete. The strain side (kind 2) is recognised, but its effect
+library needs the strain prediction of the simulation chain, which is not wired yet:
+:func:`build_problem` raises :class:`NotImplementedError` with that explanation.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from .diagnose import friction_probes
+from .friction import REQUIRED_COLUMNS, FrictionRecording, PaperLaw, load_friction_csv
+from .friction_effects import FRICTION_LIBRARY
+from .loop import Problem
+from .split import time_block_split
+
+log = logging.getLogger(__name__)
+
+__all__ = ["detect_kind", "friction_problem", "build_problem", "MeasuredDataError"]
+
+
+class MeasuredDataError(ValueError):
+    """The measured-data path is neither a friction CSV nor a data-set directory."""
+
+
+def detect_kind(path: str | Path) -> str:
+    """Recognise the kind of measured data at ``path``.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    str
+        ``"friction"`` for a CSV whose header holds the friction columns, ``"strain"``
+        for a directory holding ``manifest.json`` (schema-v1 data set).
+
+    Raises
+    ------
+    MeasuredDataError
+        The path does not exist, or is neither; the message names the path and what was
+        expected.
+    """
+    p = Path(path)
+    expected = (f"expected a friction CSV with columns {list(REQUIRED_COLUMNS)} or a "
+                "schema-v1 data-set directory holding manifest.json")
+    if not p.exists():
+        raise MeasuredDataError(f"measured data {str(p)!r} does not exist; {expected}")
+    if p.is_dir():
+        if (p / "manifest.json").is_file():
+            return "strain"
+        raise MeasuredDataError(f"{str(p)!r} is a directory without manifest.json; {expected}")
+    try:
+        with p.open(encoding="utf-8", errors="replace") as fh:
+            header = [h.strip() for h in fh.readline().split(",")]
+    except OSError as e:
+        raise MeasuredDataError(f"cannot read {str(p)!r}: {e}; {expected}") from e
+    if all(c in header for c in REQUIRED_COLUMNS):
+        return "friction"
+    raise MeasuredDataError(f"{str(p)!r} is not a friction CSV (header {header[:8]}); "
+                            f"{expected}")
+
+
+def friction_problem(
+    rec: FrictionRecording,
+    *,
+    v_s: float | None = None,
+    v_s_rel: float = 0.01,
+    n_blocks: int = 10,
+    validation_blocks: Sequence[int] = (3, 7),
+    test_blocks: Sequence[int] = (5, 9),
+    guard_frac: float = 0.05,
+    candidates: Sequence[str] | None = None,
+) -> Problem:
+    """Calibration problem for one friction recording.
+
+    Parameters
+    ----------
+    rec : FrictionRecording
+    v_s : float, optional
+        Smooth-sign velocity of the baseline [rad/s]; default ``v_s_rel`` times the 99th
+        percentile of |q̇|.
+    v_s_rel : float, default 0.01
+    n_blocks, validation_blocks, test_blocks, guard_frac
+        Held-out split, see :func:`~swgsim.calibration.split.time_block_split`.
+    candidates : sequence of str, optional
+        Library keys (default all of :data:`FRICTION_LIBRARY`).
+
+    Returns
+    -------
+    Problem
+
+    Raises
+    ------
+    KeyError
+        Unknown candidate key.
+    """
+    sig = rec.signals(v_s=v_s, v_s_rel=v_s_rel)
+    keys = list(candidates) if candidates is not None else list(FRICTION_LIBRARY)
+    unknown = [k for k in keys if k not in FRICTION_LIBRARY]
+    if unknown:
+        raise KeyError(f"unknown friction effects {unknown}; library: {sorted(FRICTION_LIBRARY)}")
+    split = time_block_split(rec.t_s, n_blocks, validation_blocks, test_blocks, guard_frac)
+    return Problem(
+        name=rec.name, kind="friction", units="N m", signals=sig, y=rec.tau_nm, t=rec.t_s,
+        baseline=(PaperLaw(),), library={k: FRICTION_LIBRARY[k] for k in keys},
+        probes=friction_probes(), split=split,
+        meta={"n_samples": rec.n, "duration_s": float(rec.t_s[-1] - rec.t_s[0]),
+              "dt_median_s": sig.scales.dt_med, "v_s_rad_s": sig.v_s,
+              "v_ref_rad_s": sig.scales.v_ref, "q_span_rad": sig.scales.q_span,
+              "t0_s": sig.scales.t0, "ddq_source": rec.ddq_source,
+              "has_load": rec.load_nm is not None})
+
+
+def build_problem(path: str | Path, **kwargs: Any) -> Problem:
+    """Recognise, load and wrap measured data (see :func:`detect_kind`).
+
+    Parameters
+    ----------
+    path : str or Path
+    **kwargs
+        Passed to :func:`friction_problem` (plus ``accel_window`` for the loader).
+
+    Returns
+    -------
+    Problem
+
+    Raises
+    ------
+    MeasuredDataError
+        Unrecognised path.
+    NotImplementedError
+        A strain data set: recognised, but its effect library is not available yet.
+    """
+    kind = detect_kind(path)
+    if kind == "friction":
+        aw = kwargs.pop("accel_window", 21)
+        return friction_problem(load_friction_csv(path, accel_window=aw), **kwargs)
+    raise NotImplementedError(
+        f"{str(path)!r} is a schema-v1 strain data set (kind 2). The calibration framework "
+        "(terms, selection loop, held-out split by recordings/operating points, report) is "
+        "domain independent, but the strain-side effect library needs the strain "
+        "prediction of the simulation chain, which is not wired into the calibration yet. "
+        "Only friction CSVs (kind 1) can be calibrated in this version.")

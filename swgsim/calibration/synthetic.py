@@ -1,0 +1,180 @@
+"""Simulated "measured" friction data with planted effects, for tests and examples.
+
+The trajectory resembles the real Franka recordings (``/work/shared/data/joint_friction``):
+a sum of three sines in q (span about 0.9 rad, |q̇| up to about 0.35 rad/s, frequent
+reversals), irregular sampling (10 ms ± 20 %). The torque is the paper law plus the
+planted library effects plus optional hidden (out-of-library) terms plus mildly coloured
+Gaussian noise: AR(1) with coefficient ``noise_rho`` and marginal standard deviation
+``noise_rel`` times the range of the clean torque.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .chain import parse_effects
+from .core import evaluate_terms
+from .friction import FrictionRecording, PaperLaw, Scales, FrictionSignals
+
+__all__ = ["BASELINE_TRUTH", "PLANTED", "SyntheticTruth", "synthetic_trajectory",
+           "synthetic_recording"]
+
+BASELINE_TRUTH = {"b0": 0.30, "b1": 0.40, "b2": 0.50, "b3": 0.05, "theta_b": 0.3}
+"""Paper-law parameters of the synthetic joint [N m, N m s/rad, N m s³/rad³, N m, rad]."""
+
+V_SMOOTH = 0.004
+"""Smooth-sign velocity of the synthetic data [rad/s] (about 1 % of max |q̇|)."""
+
+PLANTED: dict[str, dict[str, Any]] = {
+    "asymmetric_coulomb": {"params": {"delta_c": 0.04}, "check": {"delta_c": 0.04}},
+    "stribeck": {"params": {"f_s": 0.12, "v_st": 0.03},
+                 "check": {"f_s": 0.12, "v_st": 0.03}},
+    "presliding": {"params": {"f_d": 0.15, "q_c": 0.004},
+                   "check": {"f_d": 0.15, "q_c": 0.004}},
+    "position_ripple": {"params": {"a_sin": 0.03, "a_cos": 0.02, "period": 0.045},
+                        "check": {"amplitude": float(np.hypot(0.03, 0.02)), "period": 0.045}},
+    "friction_ripple": {"params": {"a_sin": 0.02, "a_cos": -0.025, "period": 0.07},
+                        "check": {"amplitude": float(np.hypot(0.02, 0.025)), "period": 0.07}},
+    "load_coulomb": {"params": {"mu_sin": 0.06, "mu_cos": 0.05},
+                     "check": {"amplitude": float(np.hypot(0.06, 0.05))}},
+    "inertia": {"params": {"j_a": 0.1}, "check": {"j_a": 0.1}},
+    "thermal_drift": {"params": {"d": 0.08, "t_th": 12.0}, "check": {"d": 0.08, "t_th": 12.0}},
+    "sensor_drift": {"params": {"c": 0.06, "t_d": 15.0}, "check": {"c": 0.06, "t_d": 15.0}},
+    "nonlinear_viscous": {"params": {"c_v": 0.15, "delta": 0.5},
+                          "check": {"c_v": 0.15, "delta": 0.5}},
+    "velocity_lag": {"params": {"t_lag": 0.04}, "check": {"t_lag": 0.04}},
+}
+"""Planted value of every library effect and the derived parameters a test checks."""
+
+
+@dataclass(frozen=True)
+class SyntheticTruth:
+    """What was planted.
+
+    Attributes
+    ----------
+    sigma : float
+        Marginal noise standard deviation [N m].
+    tau_clean : ndarray, shape (n,)
+        Torque without noise [N m].
+    effects : list of dict
+        Planted effect list (``{kind, params}``).
+    v_s : float
+        Smooth-sign velocity [rad/s].
+    """
+
+    sigma: float
+    tau_clean: np.ndarray
+    effects: list[dict[str, Any]]
+    v_s: float
+
+
+def synthetic_trajectory(duration_s: float = 40.0, dt_s: float = 0.01, jitter: float = 0.2,
+                         rng: np.random.Generator | None = None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Multi-sine joint trajectory on irregular samples.
+
+    Parameters
+    ----------
+    duration_s : float, default 40
+        [s]
+    dt_s : float, default 0.01
+        Mean sample interval [s].
+    jitter : float, default 0.2
+        Relative uniform jitter of the sample interval, in [0, 0.9].
+    rng : numpy.random.Generator, optional
+        Phases and sample times; default ``np.random.default_rng(0)``.
+
+    Returns
+    -------
+    t, q, dq, ddq : ndarray, shape (n,)
+        [s, rad, rad/s, rad/s²]
+    """
+    if not 0 <= jitter <= 0.9:
+        raise ValueError(f"jitter must be in [0, 0.9], got {jitter}")
+    rng = rng if rng is not None else np.random.default_rng(0)
+    n = int(duration_s / dt_s)
+    dt = dt_s * (1 + jitter * rng.uniform(-1, 1, n))
+    t = np.concatenate([[0.0], np.cumsum(dt[:-1])])
+    amp = np.array([0.30, 0.10, 0.04])
+    f = np.array([0.07, 0.19, 0.41])
+    ph = rng.uniform(0, 2 * np.pi, 3)
+    w = 2 * np.pi * f
+    arg = w[:, None] * t[None, :] + ph[:, None]  # (3, n)
+    q = -0.9 + (amp[:, None] * np.sin(arg)).sum(0)
+    dq = (amp[:, None] * w[:, None] * np.cos(arg)).sum(0)
+    ddq = -(amp[:, None] * w[:, None] ** 2 * np.sin(arg)).sum(0)
+    return t, q, dq, ddq
+
+
+def synthetic_recording(
+    effects: Sequence[Mapping[str, Any]] = (),
+    *,
+    baseline: Mapping[str, float] | None = None,
+    v_s: float = V_SMOOTH,
+    noise_rel: float = 0.015,
+    noise_rho: float = 0.3,
+    hidden: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = None,
+    duration_s: float = 40.0,
+    dt_s: float = 0.01,
+    rng: np.random.Generator | None = None,
+    name: str = "synthetic",
+) -> tuple[FrictionRecording, SyntheticTruth]:
+    """Simulated friction recording: paper law + planted effects + hidden terms + noise.
+
+    Parameters
+    ----------
+    effects : sequence of mapping
+        Library effects ``{kind, params}`` (see :data:`PLANTED`).
+    baseline : mapping, optional
+        Paper-law parameters; default :data:`BASELINE_TRUTH`.
+    v_s : float
+        Smooth-sign velocity [rad/s].
+    noise_rel : float, default 0.015
+        Noise standard deviation relative to the range of the clean torque.
+    noise_rho : float, default 0.3
+        AR(1) coefficient of the noise, in [0, 1).
+    hidden : callable (t, q, dq) -> tau, optional
+        An out-of-library term [N m].
+    duration_s, dt_s : float
+        See :func:`synthetic_trajectory`.
+    rng : numpy.random.Generator, optional
+    name : str
+
+    Returns
+    -------
+    FrictionRecording, SyntheticTruth
+    """
+    if not 0 <= noise_rho < 1:
+        raise ValueError(f"noise_rho must be in [0, 1), got {noise_rho}")
+    rng = rng if rng is not None else np.random.default_rng(0)
+    t, q, dq, ddq = synthetic_trajectory(duration_s, dt_s, rng=rng)
+    base = dict(BASELINE_TRUTH if baseline is None else baseline)
+    items = parse_effects(effects)
+    sc = Scales(v_ref=1.0, q_span=float(np.ptp(q)), t0=float(t[0]), t_span=float(t[-1] - t[0]),
+                dt_med=float(np.median(np.diff(t))), dq_med=1.0)
+    sig = FrictionSignals(t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=ddq, load_nm=None, v_eff=dq,
+                          v_s=v_s, scales=sc)
+    law = PaperLaw()
+    terms = [x[0] for x in items if x[0].is_transform] + [law] + [
+        x[0] for x in items if not x[0].is_transform]
+    by = {id(x[0]): x for x in items}
+    coefs = [law.from_derived(**base) if tm is law else by[id(tm)][1] for tm in terms]
+    thetas = [np.empty(0) if tm is law else by[id(tm)][2] for tm in terms]
+    tau = evaluate_terms(terms, sig, coefs, thetas)
+    if hidden is not None:
+        tau = tau + np.asarray(hidden(t, q, dq), float)
+    sigma = noise_rel * float(np.ptp(tau))
+    w = rng.standard_normal(t.size)
+    e = np.empty_like(w)
+    e[0] = w[0]
+    for k in range(1, w.size):  # AR(1), marginal variance 1
+        e[k] = noise_rho * e[k - 1] + np.sqrt(1 - noise_rho ** 2) * w[k]
+    rec = FrictionRecording(t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=ddq, tau_nm=tau + sigma * e,
+                            name=name, ddq_source="exact (synthetic)")
+    spec = [{"kind": x[0].kind, "params": x[0].to_params(x[1], x[2])} for x in items]
+    return rec, SyntheticTruth(sigma=sigma, tau_clean=tau, effects=spec, v_s=v_s)

@@ -1,0 +1,70 @@
+"""Disturbances of measured-looking data, paper eq. (10).
+
+    s_i^d = s_i + a_0 + Σ_{j=1}^{4} a_j sin(2π n_in t / j + α_j),
+
+an offset and sub-harmonics of the input speed n_in (orders 1, 1/2, 1/3, 1/4), with
+amplitudes and phases drawn at random per window and per sensor signal. The paper gives
+no ranges (PHYSICS.md sec. 7): a_0 ~ U(−A_0, A_0), a_j ~ U(0, A_h), α_j ~ U(0, 2π), with
+A_0 and A_h in mV/V (defaults 0.01 mV/V each, a few per cent of the signals' range,
+which are 0.05-0.3 mV/V).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class DisturbanceSpec:
+    """Amplitude ranges of eq. (10).
+
+    Attributes
+    ----------
+    offset_mvv : float
+        A_0, half-range of the uniform offset a_0 [mV/V], >= 0.
+    harmonic_mvv : float
+        A_h, upper bound of the uniform sub-harmonic amplitudes a_1..a_4 [mV/V], >= 0.
+    """
+
+    offset_mvv: float = 0.01
+    harmonic_mvv: float = 0.01
+
+    def __post_init__(self):
+        if not (self.offset_mvv >= 0 and self.harmonic_mvv >= 0):
+            raise ValueError("disturbance amplitudes offset_mvv and harmonic_mvv must be >= 0, "
+                             f"got {self.offset_mvv}, {self.harmonic_mvv}")
+
+
+def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,
+            spec: DisturbanceSpec, rng: np.random.Generator) -> np.ndarray:
+    """Apply eq. (10) to a batch of windows.
+
+    Parameters
+    ----------
+    signals : ndarray, shape (n_windows, n_sensors, n_t)
+        Clean signals [mV/V].
+    time_s : ndarray, shape (n_t,)
+        Time since window start [s].
+    n_in_rpm : ndarray, shape (n_windows,)
+        Input speed of each window [rpm].
+    spec : DisturbanceSpec
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    ndarray, same shape as ``signals``
+    """
+    n_w, n_s, _ = signals.shape
+    a0 = rng.uniform(-spec.offset_mvv, spec.offset_mvv, size=(n_w, n_s, 1))
+    aj = rng.uniform(0.0, spec.harmonic_mvv, size=(n_w, n_s, 4, 1))
+    alpha = rng.uniform(0.0, 2 * np.pi, size=(n_w, n_s, 4, 1))
+    f_in = np.asarray(n_in_rpm, float) / 60.0  # rev/s
+    j = np.arange(1, 5)
+    wt = 2 * np.pi * (f_in[:, None] / j[None, :])[:, :, None] * time_s[None, None, :]  # (n_w, 4, n_t)
+    # a sin(wt + alpha) = a cos(alpha) sin(wt) + a sin(alpha) cos(wt)
+    cs = (aj * np.cos(alpha))[..., 0]  # (n_w, n_s, 4)
+    sn = (aj * np.sin(alpha))[..., 0]
+    harm = np.einsum("wsj,wjt->wst", cs, np.sin(wt)) + np.einsum("wsj,wjt->wst", sn, np.cos(wt))
+    return signals + a0 + harm

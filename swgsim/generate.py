@@ -1,0 +1,504 @@
+"""Data-set generation: the paper grid (Sec. III-B, Tables IV-V) in resumable shards.
+
+A data-set config (a plain dict; the Hydra presets are ``conf/dataset/paper.yaml`` and
+``tiny.yaml``) names the gears, the variants of each class, the operating points, the
+chain settings, the disturbance of eq. (10) and the seed. :func:`plan` validates all of it
+before any work. One shard holds every window of one gear at one input speed (all
+classes, variants and load torques, clean and disturbed, plus the commissioning reference
+windows). Each shard draws its randomness from ``SeedSequence(seed, spawn_key=(gear,
+speed index))``, so the content does not depend on the number of workers or on the order
+in which shards run.
+
+Resumable and atomic: a shard file is written to a temporary name and renamed, then a
+sidecar ``<shard>.json`` records its SHA-256; a rerun skips shards whose file matches its
+sidecar. The manifest is written last, when every shard is there.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+import json
+import logging
+import os
+import shutil
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import data as dsio
+from .chain import ChainSettings, SimulationChain
+from .disturbance import DisturbanceSpec, disturb
+from .dynamics import rt1_size20
+from .faults import FAULTS, ChainParams, apply_fault, get_fault
+from .flexspline import FlexsplineGeometry, Mesh, TrussModel
+from .influence import Influence, InfluenceSolver
+from .sensors import SensorLayout, default_signals, signal_rows
+
+log = logging.getLogger(__name__)
+
+# defaults of the paper preset (conf/dataset/paper.yaml mirrors these)
+PAPER: dict[str, Any] = {
+    "name": "paper",
+    "seed": 2024,
+    "gears": [
+        # paper Table IV: b1 and k1 of SWG models 1-3 relative to nominal
+        {"id": 1, "b1_factor": 1.0, "k1_factor": 1.0, "tolerance_seed": 101},
+        {"id": 2, "b1_factor": 1.2, "k1_factor": 1.2, "tolerance_seed": 102},
+        {"id": 3, "b1_factor": 0.8, "k1_factor": 0.8, "tolerance_seed": 103},
+    ],
+    "tolerances": {"sd_theta_deg": 0.3, "sd_r_mm": 0.1, "sd_beta_deg": 0.5, "sd_gain": 0.01},
+    "sensors": {"r_torque_mm": 29.0, "r_pairs_mm": 32.0, "grid_length_mm": 3.0,
+                "gauge_factor": 2.0},
+    "variants": {
+        # paper Table V (empty in the text; PHYSICS.md sec. 7): 60 variants per class
+        "healthy": {"severities": [0.0], "repeat": 60},
+        "reduced_damping": {"severity_linspace": [0.05, 0.3333, 60]},
+        "reduced_stiffness": {"severity_linspace": [0.05, 0.25, 60]},
+        "eccentric_wg": {"severities": [0.02, 0.05, 0.1], "n_positions": 20},
+        "root_tooth_crack": {"severities": [0.5, 0.7, 0.9], "n_positions": 20},
+        "tip_tooth_crack": {"severities": [0.5, 0.75, 1.0], "n_positions": 20},
+    },
+    "operating_points": {"n_in_rpm": [2000.0, 4000.0], "t_out_nm": [7.0, 39.0, 70.0]},
+    "chain": {"sample_rate_hz": 10000.0, "window_s": 0.12, "settle_s": 0.05, "substeps": 1,
+              "contact_half_width_deg": 20.0, "ecc_load_share": 1.0},
+    "mesh": {"n_theta": 120},
+    "disturbance": {"offset_mvv": 0.01, "harmonic_mvv": 0.01},
+    "friction_effects": [],
+}
+
+
+@dataclass(frozen=True)
+class WindowSpec:
+    """One window to simulate: gear, class, variant and operating point."""
+
+    gear: int
+    fault: str
+    variant: int
+    severity: float
+    position_deg: float
+    t_out_nm: float
+    reference: bool
+
+
+@dataclass(frozen=True)
+class ShardSpec:
+    """One shard: all windows of one gear at one input speed."""
+
+    name: str
+    gear: int
+    speed_index: int
+    n_in_rpm: float
+    windows: tuple[WindowSpec, ...]
+
+
+def config_hash(cfg: dict) -> str:
+    """SHA-256 of the canonical JSON of a data-set config (first 16 hex digits)."""
+    return hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def _req(cond: bool, msg: str):
+    if not cond:
+        raise ValueError(msg)
+
+
+def variant_list(name: str, spec: dict) -> list[tuple[float, float]]:
+    """(severity, position_deg) of every variant of a class, in variant order.
+
+    Raises
+    ------
+    ValueError
+        Unknown fault, severity outside its range, or a non-positive variant count.
+    """
+    f = get_fault(name)
+    lo, hi = f.severity_range
+    if "severity_linspace" in spec:
+        a, b, n = spec["severity_linspace"]
+        _req(int(n) >= 1, f"dataset.variants.{name}.severity_linspace: count must be >= 1, "
+                          f"got {n}")
+        sev = list(np.linspace(float(a), float(b), int(n)))
+    else:
+        sev = [float(s) for s in spec.get("severities", [])]
+        _req(len(sev) >= 1, f"dataset.variants.{name}: give severities or severity_linspace")
+    for s in sev:
+        _req(lo <= s <= hi, f"dataset.variants.{name}: severity {s} outside the allowed "
+                            f"range [{lo}, {hi}]")
+    repeat = int(spec.get("repeat", 1))
+    _req(repeat >= 1, f"dataset.variants.{name}.repeat must be >= 1, got {repeat}")
+    if f.uses_position:
+        n_pos = int(spec.get("n_positions", 1))
+        _req(n_pos >= 1, f"dataset.variants.{name}.n_positions must be >= 1, got {n_pos}")
+        pos = [360.0 * k / n_pos for k in range(n_pos)]
+        out = [(s, p) for s in sev for p in pos]
+    else:
+        out = [(s, float("nan")) for s in sev]
+    return [v for v in out for _ in range(repeat)]
+
+
+def layout_for(cfg: dict, gear: dict) -> SensorLayout:
+    """The sensor layout of one gear, with its placement and gain tolerances."""
+    s = cfg["sensors"]
+    sig = default_signals(s["r_torque_mm"] * 1e-3, s["r_pairs_mm"] * 1e-3)
+    length = s["grid_length_mm"] * 1e-3
+    sig = tuple(dataclasses.replace(x, grids=tuple(dataclasses.replace(g, length_m=length)
+                                                   for g in x.grids)) for x in sig)
+    lay = SensorLayout(signals=sig, gauge_factor=float(s["gauge_factor"]))
+    t = cfg["tolerances"]
+    rng = np.random.default_rng(int(gear["tolerance_seed"]))
+    return lay.perturbed(rng, t["sd_theta_deg"], t["sd_r_mm"] * 1e-3, t["sd_beta_deg"],
+                         t["sd_gain"])
+
+
+def plan(cfg: dict) -> list[ShardSpec]:
+    """Validate a data-set config and list its shards, before any simulation.
+
+    Raises
+    ------
+    ValueError
+        With the parameter's name and allowed range: unknown fault, severity outside its
+        range, non-positive speed, negative torque or variant count, a gauge off the
+        collar, a truss too coarse for the gauge layout, bad chain settings.
+    """
+    ops = cfg["operating_points"]
+    for n in ops["n_in_rpm"]:
+        _req(np.isfinite(n) and float(n) > 0,
+             f"dataset.operating_points.n_in_rpm must be > 0 rpm, got {n}")
+        _req(float(n) <= 8000, f"dataset.operating_points.n_in_rpm must be <= 8000 rpm "
+                               f"(catalogue max input speed of size 20 is 6500), got {n}")
+    for t in ops["t_out_nm"]:
+        _req(np.isfinite(t) and 0 <= float(t) <= 107, "dataset.operating_points.t_out_nm "
+             f"must lie in [0, 107] N m (repeated peak torque of size 20), got {t}")
+    ch = cfg["chain"]
+    _req(ch["sample_rate_hz"] > 0, f"dataset.chain.sample_rate_hz must be > 0, got "
+                                   f"{ch['sample_rate_hz']}")
+    _req(ch["window_s"] > 0, f"dataset.chain.window_s must be > 0, got {ch['window_s']}")
+    _req(ch["settle_s"] >= 0, f"dataset.chain.settle_s must be >= 0, got {ch['settle_s']}")
+    _req(int(ch["substeps"]) >= 1, f"dataset.chain.substeps must be >= 1, got "
+                                   f"{ch['substeps']}")
+    _req(len(cfg["gears"]) >= 1, "dataset.gears must list at least one gear")
+    ids = [int(g["id"]) for g in cfg["gears"]]
+    _req(len(set(ids)) == len(ids), f"dataset.gears: ids must be unique, got {ids}")
+    for g in cfg["gears"]:
+        for k in ("b1_factor", "k1_factor"):
+            _req(0 < float(g[k]) <= 10, f"dataset.gears[id={g['id']}].{k} must lie in "
+                                        f"(0, 10], got {g[k]}")
+    unknown = set(cfg["variants"]) - set(FAULTS)
+    _req(not unknown, f"dataset.variants: unknown fault(s) {sorted(unknown)}; allowed: "
+                      f"{sorted(FAULTS)}")
+    variants = {name: variant_list(name, spec) for name, spec in cfg["variants"].items()}
+    # geometry-only truss (no factorisation) to check the gauge layout against the mesh
+    n_theta = int(cfg["mesh"]["n_theta"])
+    model = TrussModel(FlexsplineGeometry(), Mesh(n_theta))
+    for g in cfg["gears"]:
+        signal_rows(model, layout_for(cfg, g))
+    shards = []
+    for g in cfg["gears"]:
+        for si, n in enumerate(ops["n_in_rpm"]):
+            wins = []
+            for fault, vl in variants.items():
+                for vi, (sev, pos) in enumerate(vl):
+                    for t in ops["t_out_nm"]:
+                        wins.append(WindowSpec(int(g["id"]), fault, vi, sev, pos, float(t),
+                                               False))
+            for t in ops["t_out_nm"]:
+                wins.append(WindowSpec(int(g["id"]), "healthy", -1, 0.0, float("nan"),
+                                       float(t), True))
+            shards.append(ShardSpec(f"gear{g['id']}_n{int(round(n))}rpm.nc", int(g["id"]),
+                                    si, float(n), tuple(wins)))
+    return shards
+
+
+# --------------------------------------------------------------------------- workers
+def gear_influences(cfg: dict, shards: list[ShardSpec]) -> dict[int, dict[tuple, Influence]]:
+    """Influences of every gear's layout on every structure the shards need.
+
+    One factorisation of the healthy truss, one adjoint solve per gear, and a Woodbury
+    update per root-crack variant (:class:`swgsim.influence.InfluenceSolver`). Computed
+    once in the calling process; the shard workers need no truss.
+
+    Returns
+    -------
+    dict
+        gear id -> {(root_crack_index, severity): Influence}, (-1, 0.0) healthy.
+    """
+    n_theta = int(cfg["mesh"]["n_theta"])
+    solver = InfluenceSolver(TrussModel(FlexsplineGeometry(), Mesh(n_theta)))
+    keys = set()
+    for s in shards:
+        for w in s.windows:
+            if w.fault == "root_tooth_crack" and w.severity > 0:
+                p = apply_fault(ChainParams(gear=rt1_size20()), w.fault, w.severity,
+                                w.position_deg, n_theta)
+                keys.add((p.root_crack_index, p.root_crack_severity))
+    out = {}
+    for g in cfg["gears"]:
+        lay = layout_for(cfg, g)
+        adj = solver.adjoint(lay)
+        healthy = solver._coefficients(*adj)
+        inf = {(-1, 0.0): healthy}
+        for idx, sev in sorted(keys):
+            inf[(idx, sev)] = solver.root_crack(lay, idx, sev, adjoint=adj, healthy=healthy)
+        out[int(g["id"])] = inf
+    return out
+
+
+def gear_params(cfg: dict, gear: dict):
+    """Healthy ChainParams of one gear (paper Table IV factors on b1 and k1)."""
+    p = rt1_size20()
+    p = dataclasses.replace(p, b1_nms=p.b1_nms * float(gear["b1_factor"]),
+                            k1_nm_per_rad=p.k1_nm_per_rad * float(gear["k1_factor"]))
+    return ChainParams(gear=p)
+
+
+def simulate_shard(cfg: dict, shard: ShardSpec, influences: dict[tuple, Influence]):
+    """Simulate one shard; return (xarray.Dataset, n_windows).
+
+    Parameters
+    ----------
+    cfg : dict
+        Validated data-set config.
+    shard : ShardSpec
+    influences : dict
+        This gear's influences (:func:`gear_influences`).
+
+    The dataset holds the clean windows, their disturbed twins (eq. 10, same motion) and
+    the reference windows, in that order.
+    """
+    gear = next(g for g in cfg["gears"] if int(g["id"]) == shard.gear)
+    ch = cfg["chain"]
+    settings = ChainSettings(sample_rate_hz=float(ch["sample_rate_hz"]),
+                             window_s=float(ch["window_s"]), settle_s=float(ch["settle_s"]),
+                             substeps=int(ch["substeps"]),
+                             contact_half_width_deg=float(ch["contact_half_width_deg"]),
+                             ecc_load_share=float(ch["ecc_load_share"]))
+    chain = SimulationChain.from_influences(layout_for(cfg, gear), influences, settings)
+    healthy = gear_params(cfg, gear)
+    n_theta = int(cfg["mesh"]["n_theta"])
+    rng = np.random.default_rng(np.random.SeedSequence(int(cfg["seed"]),
+                                                       spawn_key=(shard.gear, shard.speed_index)))
+    wins = shard.windows
+    phi0 = rng.uniform(0.0, 2 * np.pi, size=len(wins))
+    params = [apply_fault(healthy, w.fault, w.severity,
+                          0.0 if np.isnan(w.position_deg) else w.position_deg, n_theta)
+              for w in wins]
+    n_t = int(round(settings.window_s * settings.sample_rate_hz))
+    # one vectorised dynamic run for every window of the shard
+    sig, res = chain.simulate(params, shard.n_in_rpm, np.array([w.t_out_nm for w in wins]),
+                              phi0)
+    eff = res.efficiency
+    n_mean = res.states[1].mean(axis=1) * 60 / (2 * np.pi)
+    t_mean = res.t_out.mean(axis=1)
+    time_s = np.arange(n_t) / settings.sample_rate_hz
+    dspec = DisturbanceSpec(offset_mvv=float(cfg["disturbance"]["offset_mvv"]),
+                            harmonic_mvv=float(cfg["disturbance"]["harmonic_mvv"]))
+    sig_d = disturb(sig, time_s, n_mean, dspec, rng)
+    ref = np.array([w.reference for w in wins])
+    order = np.concatenate([np.flatnonzero(~ref), np.flatnonzero(~ref), np.flatnonzero(ref),
+                            np.flatnonzero(ref)])
+    disturbed = np.concatenate([np.zeros((~ref).sum(), bool), np.ones((~ref).sum(), bool),
+                                np.zeros(ref.sum(), bool), np.ones(ref.sum(), bool)])
+    strain = np.where(disturbed[:, None, None], sig_d[order], sig[order])
+    meta = {
+        "gear": np.array([wins[k].gear for k in order]),
+        "fault": np.array([wins[k].fault for k in order]),
+        "variant": np.array([wins[k].variant for k in order]),
+        "severity": np.array([wins[k].severity for k in order]),
+        "position_deg": np.array([wins[k].position_deg for k in order]),
+        "n_in_rpm": np.full(order.size, shard.n_in_rpm),
+        "t_out_nm": np.array([wins[k].t_out_nm for k in order]),
+        "disturbed": disturbed,
+        "reference": np.array([wins[k].reference for k in order]),
+        "efficiency": eff[order],
+        "n_in_mean_rpm": n_mean[order],
+        "t_out_mean_nm": t_mean[order],
+    }
+    strain32 = strain.astype(np.float32)
+    h = hashlib.sha256(strain32.tobytes())
+    for k in sorted(meta):
+        h.update(np.ascontiguousarray(meta[k]).astype(str if k == "fault" else meta[k].dtype)
+                 .tobytes())
+    attrs = {"config": cfg, "seed": int(cfg["seed"]), "shard": shard.name,
+             "content_sha256": h.hexdigest(), "package_version": _version(),
+             "git_revision": _git_revision(), "sample_rate_hz": settings.sample_rate_hz}
+    return dsio.make_dataset(strain32, time_s, meta, attrs), order.size
+
+
+def _version() -> str:
+    try:
+        from importlib.metadata import version
+
+        return version("swg-monitor")
+    except Exception:  # noqa: BLE001 - not installed
+        return "unknown"
+
+
+def _git_revision() -> str:
+    try:
+        out = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], capture_output=True,
+                             text=True, cwd=Path(__file__).parent, timeout=10)
+        return out.stdout.strip() or "unknown"
+    except Exception:  # noqa: BLE001 - no git
+        return "unknown"
+
+
+def run_shard(cfg: dict, shard: ShardSpec, out_dir: str | os.PathLike,
+              influences: dict[tuple, Influence]) -> dict:
+    """Simulate and write one shard atomically, then its sidecar; return the sidecar."""
+    t0 = time.perf_counter()
+    ds, n = simulate_shard(cfg, shard, influences)
+    path = Path(out_dir) / shard.name
+    sha = dsio.write_shard(ds, path)
+    side = {"sha256": sha, "n_samples": int(n), "config_hash": config_hash(cfg),
+            "content_sha256": ds.attrs["content_sha256"]}
+    dsio.atomic_write_json(path.with_suffix(".json"), side)
+    log.info("shard %s: %d windows in %.1f s", shard.name, n, time.perf_counter() - t0)
+    return side
+
+
+def shard_done(out_dir: Path, shard: ShardSpec, chash: str) -> bool:
+    """Whether a shard's file is there and matches its sidecar (and this config)."""
+    f = out_dir / shard.name
+    side = f.with_suffix(".json")
+    if not (f.is_file() and side.is_file()):
+        return False
+    try:
+        meta = json.loads(side.read_text())
+    except json.JSONDecodeError:
+        return False
+    return meta.get("config_hash") == chash and dsio.sha256_file(f) == meta.get("sha256")
+
+
+def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> None:
+    """Create ``out_dir``, or check that it holds (part of) a data set of this config.
+
+    Raises
+    ------
+    ValueError
+        If ``out_dir`` holds a data set made with another config and ``overwrite`` is
+        false; nothing there is touched.
+    """
+    chash = config_hash(cfg)
+    mf = out_dir / dsio.MANIFEST
+    stamp = out_dir / ".config.json"
+    if out_dir.exists() and any(out_dir.iterdir()):
+        old = None
+        for f in (mf, stamp):
+            if f.is_file():
+                try:
+                    old = json.loads(f.read_text()).get("config_hash")
+                except json.JSONDecodeError:
+                    old = "unreadable"
+                break
+        if old is None:
+            if not overwrite:
+                raise ValueError(f"out_dir {out_dir} is not empty and holds no data set; "
+                                 "choose another out_dir or pass overwrite=true")
+        elif old != chash and not overwrite:
+            raise ValueError(
+                f"out_dir {out_dir} holds a data set made with another config (config hash "
+                f"{old}, this one {chash}); choose another out_dir or pass overwrite=true")
+        if overwrite and old != chash:
+            log.warning("overwrite=true: removing %s", out_dir)
+            shutil.rmtree(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if not stamp.is_file():
+        dsio.atomic_write_json(stamp, {"config_hash": chash, "config": cfg})
+
+
+def finalize(out_dir: Path, cfg: dict, shards: list[ShardSpec]) -> dict:
+    """Write the manifest once every shard is present and verified; return it."""
+    chash = config_hash(cfg)
+    entries = {}
+    for s in shards:
+        meta = json.loads((out_dir / s.name).with_suffix(".json").read_text())
+        entries[s.name] = {"sha256": meta["sha256"], "n_samples": meta["n_samples"],
+                           "content_sha256": meta["content_sha256"]}
+    content = hashlib.sha256("".join(entries[s.name]["content_sha256"]
+                                     for s in shards).encode()).hexdigest()
+    manifest = {"schema_version": dsio.SCHEMA_VERSION, "complete": True,
+                "config_hash": chash, "config": cfg, "seed": int(cfg["seed"]),
+                "shards": entries, "content_sha256": content, "package_version": _version(),
+                "git_revision": _git_revision(),
+                "n_samples": int(sum(e["n_samples"] for e in entries.values()))}
+    dsio.atomic_write_json(out_dir / dsio.MANIFEST, manifest)
+    return manifest
+
+
+def generate(cfg: dict, out_dir: str | os.PathLike, n_jobs: int = 1, overwrite: bool = False,
+             shard_index: int | None = None, progress: bool = True) -> dict:
+    """Generate (or complete) a data set.
+
+    Parameters
+    ----------
+    cfg : dict
+        Data-set config (see :data:`PAPER`).
+    out_dir : path-like
+        Target directory.
+    n_jobs : int
+        Worker processes for the shards (joblib, loky backend); 1 runs in-process.
+    overwrite : bool
+        Replace a data set of another config in ``out_dir``.
+    shard_index : int, optional
+        Compute only this shard (for cluster array jobs, e.g. the Hydra submitit
+        launcher); the manifest is written by whichever call finds all shards present.
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    dict
+        Summary: ``out_dir``, ``windows`` (samples written), ``computed`` and ``skipped``
+        shard names, ``wall_s``, ``complete``, ``content_sha256`` (when complete).
+
+    Raises
+    ------
+    ValueError
+        On any invalid config value (see :func:`plan`) or a foreign ``out_dir``.
+    """
+    t0 = time.perf_counter()
+    cfg = copy.deepcopy(cfg)
+    if int(n_jobs) < 1:
+        raise ValueError(f"n_jobs must be >= 1, got {n_jobs}")
+    shards = plan(cfg)
+    if shard_index is not None and not 0 <= int(shard_index) < len(shards):
+        raise ValueError(f"shard must lie in [0, {len(shards) - 1}], got {shard_index}")
+    out = Path(out_dir)
+    prepare_out_dir(out, cfg, overwrite)
+    chash = config_hash(cfg)
+    todo_all = shards if shard_index is None else [shards[int(shard_index)]]
+    todo = [s for s in todo_all if not shard_done(out, s, chash)]
+    skipped = [s.name for s in todo_all if s not in todo]
+    if skipped:
+        log.info("resuming: %d shard(s) already done, skipped", len(skipped))
+    from tqdm.auto import tqdm
+
+    infl = gear_influences(cfg, todo) if todo else {}
+    bar = tqdm(total=len(todo), desc=f"generate {cfg.get('name', '')}", unit="shard",
+               disable=not progress or not todo)
+    if int(n_jobs) == 1 or len(todo) <= 1:
+        for s in todo:
+            run_shard(cfg, s, out, infl[s.gear])
+            bar.update()
+    else:
+        from joblib import Parallel, delayed
+
+        par = Parallel(n_jobs=min(int(n_jobs), len(todo)), return_as="generator_unordered")
+        for _ in par(delayed(run_shard)(cfg, s, out, infl[s.gear]) for s in todo):
+            bar.update()
+    bar.close()
+    complete = all(shard_done(out, s, chash) for s in shards)
+    summary: dict[str, Any] = {"out_dir": str(out), "computed": [s.name for s in todo],
+                               "skipped": skipped, "complete": complete}
+    if complete:
+        manifest = finalize(out, cfg, shards)
+        summary["windows"] = manifest["n_samples"]
+        summary["content_sha256"] = manifest["content_sha256"]
+    else:
+        summary["windows"] = int(sum(len(s.windows) * 2 for s in todo))
+    summary["wall_s"] = time.perf_counter() - t0
+    return summary
