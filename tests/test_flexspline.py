@@ -138,6 +138,6 @@ def test_bad_mesh_and_gauge_are_refused():
     m = TrussModel(mesh=Mesh(120))
     with pytest.raises(ValueError, match="leaves the collar"):
         grid_row(m, Grid(60e-3, 0.0, 0.0))
-    coarse = TrussModel(mesh=Mesh(60))  # 3.35 mm cells at r = 32 mm > 3 mm grid
+    # 1.7 mm cells at r = 32 mm with n_theta = 120: a 1 mm grid would not average
     with pytest.raises(ValueError, match="too coarse for the gauge layout"):
-        grid_row(coarse, Grid(32e-3, 0.0, 0.0))
+        grid_row(m, Grid(32e-3, 0.0, 0.0, length_m=1e-3))
