@@ -101,6 +101,8 @@ def _stiffness(p, s, pos, n):
 
 
 def _eccentric(p, s, pos, n):
+    if s == 0.0:
+        return p
     return dataclasses.replace(p, ecc_m=s * p.w0_m, ecc_theta_rad=float(np.deg2rad(pos)))
 
 

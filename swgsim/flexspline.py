@@ -493,20 +493,28 @@ class TrussModel:
         return u
 
     def root_crack_bars(self, theta_index: int) -> np.ndarray:
-        """Bars cut by a root tooth crack at angle index ``theta_index``.
+        """Bars cut by a root tooth crack between the nodes at θ_i and θ_{i+1}.
 
-        The circumferential bars of the outer (tooth-side) layer of every rim station
-        between the nodes at θ_i and θ_{i+1} (paper Sec. II-B: circumferential bar
-        stiffness reduced drastically at one tooth).
+        A crack through the rim wall along the face width (paper Sec. II-B: the bar
+        stiffness between neighbouring nodes in circumferential direction is reduced
+        drastically at one tooth): every bar of the toothed rim that crosses the line
+        between angle indices i and i + 1 — circumferential edges and in-plane diagonals of
+        both layers and the crossing bars between the layers.
         """
         n_t = self.mesh.n_theta
-        j = self.rim_stations
-        a = self.node(j, OUTER, theta_index % n_t)
-        b = self.node(j, OUTER, (theta_index + 1) % n_t)
-        pair = {(int(x), int(y)) for x, y in zip(a, b, strict=True)}
-        sel = [k for k in np.flatnonzero(self.bar_kind == 1)
-               if (int(self.bars[0, k]), int(self.bars[1, k])) in pair]
-        return np.asarray(sel, dtype=int)
+        i0 = theta_index % n_t
+        st, _, ang = self.node_station_layer_angle(self.bars)
+        rim = self.mer["rim"][st].all(axis=0)
+        crosses = ((ang[0] == i0) & (ang[1] == (i0 + 1) % n_t)) | (
+            (ang[1] == i0) & (ang[0] == (i0 + 1) % n_t))
+        return np.flatnonzero(rim & crosses)
+
+    def node_station_layer_angle(self, nodes):
+        """Station, layer and angle index of node indices (vectorised)."""
+        n_t = self.mesh.n_theta
+        q, ang = np.divmod(np.asarray(nodes), n_t)
+        st, layer = np.divmod(q, 2)
+        return st, layer, ang
 
     def cracked(self, theta_index: int, severity: float) -> TrussModel:
         """A copy with the root-crack bars at ``theta_index`` scaled by (1 − severity).

@@ -102,15 +102,19 @@ class InfluenceSolver:
     def _crack_basis(self, theta_index: int):
         """Reduced Woodbury data of the crack bars at an angle index.
 
-        Returns U (n_F, r), k_c (r,), UᵀZ (r, r), (K_PF Z)[wg] (n_wg, r) and
-        toothᵀZ (n_theta, r), with Z = K_FF⁻¹ U: all that an updated influence needs.
+        ΔK = U D Uᵀ with U = Bᵀ of the crack bars (all DOFs) and D = −s diag(k). Returns
+        U_F (n_F, r), U_P[wg] (n_wg, r), k (r,), U_FᵀZ (r, r), (K_PF Z)[wg] (n_wg, r)
+        and toothᵀZ (n_theta, r), with Z = K_FF⁻¹ U_F: all that an updated influence
+        needs.
         """
         if theta_index not in self._crack_cache:
             bars = self.model.root_crack_bars(theta_index)
-            U = self.model._bar_rows(bars)[:, self._F].toarray().T  # (n_F, r)
+            u_all = self.model._bar_rows(bars).toarray().T  # (n_dof, r)
+            U = u_all[self._F]
+            u_p_wg = u_all[self._P][self._wg_pos]
             # column by column: SuperLU's multi-RHS solve is slower here (measured)
             Z = np.column_stack([self.model.lu.solve(U[:, k]) for k in range(U.shape[1])])
-            self._crack_cache[theta_index] = (U, self.model.k_bar[bars], U.T @ Z,
+            self._crack_cache[theta_index] = (U, u_p_wg, self.model.k_bar[bars], U.T @ Z,
                                               (self._K_PF @ Z)[self._wg_pos],
                                               np.asarray(self._tooth.T @ Z))
         return self._crack_cache[theta_index]
@@ -141,11 +145,15 @@ class InfluenceSolver:
         rows, lam = adjoint if adjoint is not None else self.adjoint(layout)
         if severity == 0.0:
             return self._coefficients(rows, lam)
-        U, k_c, utz, kpz_wg, tz = self._crack_basis(theta_index)
-        S = np.diag(1.0 / (-severity * k_c)) + utz  # (r, r)
-        y = np.linalg.solve(S, U.T @ lam)  # (r, 5); λ' = λ − Z y
+        U, u_p_wg, k_c, utz, kpz_wg, tz = self._crack_basis(theta_index)
+        d = -severity * k_c
+        S = np.diag(1.0 / d) + utz  # (r, r)
+        ul = U.T @ lam  # (r, 5)
+        y = np.linalg.solve(S, ul)  # λ' = λ − Z y
         h = healthy if healthy is not None else self._coefficients(rows, lam)
-        g_wg_delta = (kpz_wg @ y).T  # −(K_PF λ')ᵀ = −(K_PF λ)ᵀ + (K_PF Z y)ᵀ
+        # G_P' = c_P − K'_PF λ' with K'_PF = K_PF + U_P D U_Fᵀ:
+        #      = G_P + K_PF Z y − U_P D U_Fᵀ λ',  U_Fᵀ λ' = U_Fᵀ λ − U_FᵀZ y
+        g_wg_delta = (kpz_wg @ y - u_p_wg @ (d[:, None] * (ul - utz @ y))).T
         A, B, Ex, Ey = (g_wg_delta @ b for b in self._wg_basis)
         return Influence(A=h.A + A, B=h.B + B, Ex=h.Ex + Ex, Ey=h.Ey + Ey,
                          g=h.g - (tz @ y).T, theta=h.theta)

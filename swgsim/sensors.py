@@ -26,13 +26,15 @@ sig   bridge        radius      grids (angle θ, orientation)  sensitive to
 ====  ============  ==========  ===========================  =============================
 s0    full          29 mm       ±45° at θ = 22.5° and 112.5°  torque; order-2 WG ripple
                                                               cancels (grids 90° apart)
-s1    half          32 mm       ±45° at θ = 0°                torque + WG shear ripple
-s2    half          32 mm       0° (radial), 90° at θ = 90°   WG bending (ε_r − ε_θ)
-s3    half          32 mm       ±45° at θ = 180°              as s1 (180° apart: s1 ≈ s3)
-s4    half          32 mm       0°, 90° at θ = 270°           as s2 (s2 ≈ s4)
+s1    half          32 mm       0° (radial), 90° at θ = 0°    WG bending (ε_r − ε_θ)
+s2    half          32 mm       ±45° at θ = 90°               torque + mesh-zone shear ripple
+s3    half          32 mm       0°, 90° at θ = 180°           as s1 (180° apart: s1 ≈ s3)
+s4    half          32 mm       ±45° at θ = 270°              as s2 (s2 ≈ s4)
 ====  ============  ==========  ===========================  =============================
 
-Orientation β is measured from the radial (meridional) direction towards +θ.
+Orientation β is measured from the radial (meridional) direction towards +θ. The
+WG-bending pair is s1/s3 as in the paper, whose s1 and s3 carry the eccentric-WG offsets
+and the sinusoidal shape (Sec. II-C, Fig. 6c, Fig. 7b).
 """
 
 from __future__ import annotations
@@ -156,10 +158,10 @@ def default_signals(r_torque_m: float = 29e-3, r_pairs_m: float = 32e-3) -> tupl
     """Default five-signal layout (module docstring)."""
     return (
         Signal("s0", _shear_pair(r_torque_m, 22.5) + _shear_pair(r_torque_m, 112.5), "full"),
-        Signal("s1", _shear_pair(r_pairs_m, 0.0), "half"),
-        Signal("s2", _poisson_pair(r_pairs_m, 90.0), "half"),
-        Signal("s3", _shear_pair(r_pairs_m, 180.0), "half"),
-        Signal("s4", _poisson_pair(r_pairs_m, 270.0), "half"),
+        Signal("s1", _poisson_pair(r_pairs_m, 0.0), "half"),
+        Signal("s2", _shear_pair(r_pairs_m, 90.0), "half"),
+        Signal("s3", _poisson_pair(r_pairs_m, 180.0), "half"),
+        Signal("s4", _shear_pair(r_pairs_m, 270.0), "half"),
     )
 
 

@@ -64,14 +64,14 @@ def solver():
 
 
 def test_collar_shear_closed_form(solver):
-    """Half bridge s1 on the collar: GF/4 · τ / G with τ = T / (2π r² t_c)."""
+    """Half bridge s2 on the collar: GF/4 · τ / G with τ = T / (2π r² t_c)."""
     lay = SensorLayout()
     h = solver.healthy(lay)
     geo = solver.model.geometry
     g = geo.e_pa / (2 * (1 + geo.nu))
-    r = lay.signals[1].grids[0].r_m
+    r = lay.signals[2].grids[0].r_m
     gamma = 1.0 / (2 * np.pi * r**2 * geo.t_collar_m * g)
-    assert h.g[1].mean() == pytest.approx(1e3 * lay.gauge_factor / 4 * gamma, rel=0.10)
+    assert h.g[2].mean() == pytest.approx(1e3 * lay.gauge_factor / 4 * gamma, rel=0.10)
 
 
 def _naive_signals(solver, lay, psi, torque, w0, model=None, c=None):

@@ -1,0 +1,127 @@
+"""Sensor model and fault signatures of the whole chain (paper Sec. II-C, Fig. 6)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from swgsim import dynamics as dy
+from swgsim.chain import ChainSettings, SimulationChain
+from swgsim.faults import FAULTS, ChainParams, apply_fault
+from swgsim.sensors import SensorLayout
+
+N_IN, T_OUT = 2000.0, 39.0
+
+
+@pytest.fixture(scope="module")
+def chain():
+    return SimulationChain(SensorLayout(), settings=ChainSettings(window_s=0.06))
+
+
+@pytest.fixture(scope="module")
+def healthy():
+    return ChainParams(gear=dy.rt1_size20())
+
+
+def run(chain, variants, n_in=N_IN, t_out=T_OUT, phi0=0.4):
+    sig, res = chain.simulate(variants, n_in, t_out, phi0)
+    return sig, res
+
+
+def rms(x, axis=-1):
+    return np.sqrt(np.mean(np.square(x), axis=axis))
+
+
+def test_healthy_pairs_agree(chain, healthy):
+    """s1 ≈ s3 and s2 ≈ s4 on a healthy gear (symmetry of layout and ellipse, eq. 8)."""
+    (s,), _ = run(chain, [healthy])
+    assert rms(s[1] - s[3]) < 0.02 * rms(s[1])
+    assert rms(s[2] - s[4]) < 0.02 * rms(s[2])
+    # with gauge tolerances the pairs still agree within a few per cent
+    tol = SensorLayout().perturbed(np.random.default_rng(1))
+    ch = SimulationChain(tol, settings=chain.settings, solver=chain.solver)
+    (s,), _ = run(ch, [healthy])
+    assert rms(s[1] - s[3]) < 0.1 * rms(s[1])
+    assert rms(s[2] - s[4]) < 0.1 * rms(s[2])
+    assert 0.01 < np.abs(s).max() < 1.0  # mV/V, order 0.1 (PHYSICS.md sec. 4)
+
+
+@pytest.mark.parametrize("name", sorted(FAULTS))
+def test_severity_zero_is_healthy(chain, healthy, name):
+    p = apply_fault(healthy, name, 0.0, 54.0)
+    assert p == healthy
+    a, _ = run(chain, [healthy])
+    b, _ = run(chain, [p])
+    np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("name, sev", [("reduced_damping", 1.5), ("eccentric_wg", -0.1),
+                                       ("root_tooth_crack", 1.0), ("nope", 0.1)])
+def test_bad_fault_input_is_refused(healthy, name, sev):
+    with pytest.raises(ValueError, match="severity|unknown fault"):
+        apply_fault(healthy, name, sev, 0.0)
+
+
+def test_reduced_damping_signature(chain, healthy):
+    """Fig. 6a: hardly any change in the signals; the efficiency rises (Table II)."""
+    (a, b), res = run(chain, [healthy, apply_fault(healthy, "reduced_damping", 0.3)])
+    assert np.abs(b - a).max() < 0.01 * np.ptp(a)
+    assert res.efficiency[1] > res.efficiency[0] + 0.01
+
+
+def test_reduced_stiffness_signature(chain, healthy):
+    """Fig. 6b: a slight change, largest in s0 (the torque bridge)."""
+    (a, b), _ = run(chain, [healthy, apply_fault(healthy, "reduced_stiffness", 0.2)],
+                    n_in=4000.0, t_out=7.0)
+    d = rms(b - a)
+    assert d.argmax() == 0
+    assert d[0] < 0.05 * np.ptp(a[0]) + 0.05 * np.abs(a[0]).mean()
+    assert d[0] > 1e-4
+
+
+def test_eccentric_wg_signature(chain, healthy):
+    """Fig. 6c: offsets of s1 and s3 (opposite), and a changed shape."""
+    (a, b), _ = run(chain, [healthy, apply_fault(healthy, "eccentric_wg", 0.1, 0.0)])
+    off = b.mean(axis=1) - a.mean(axis=1)
+    assert abs(off[1]) > 0.1 * np.ptp(a[1]) and abs(off[3]) > 0.1 * np.ptp(a[3])
+    assert np.sign(off[1]) == -np.sign(off[3])
+    shape = rms((b - b.mean(1, keepdims=True)) - (a - a.mean(1, keepdims=True)))
+    assert shape.max() > 1e-3  # mV/V: not an offset alone
+
+
+def test_root_crack_signature(chain, healthy):
+    """Fig. 6d: amplitudes change, the pair differences lose their symmetry."""
+    (a, b), _ = run(chain, [healthy, apply_fault(healthy, "root_tooth_crack", 0.9, 90.0)])
+    amp_change = np.abs(np.ptp(b, axis=1) / np.ptp(a, axis=1) - 1)
+    assert amp_change.max() > 0.01
+    d13 = rms((b[1] - b[3]) - (a[1] - a[3]))
+    d24 = rms((b[2] - b[4]) - (a[2] - a[4]))
+    assert max(d13, d24) > 1e-3
+
+
+def test_tip_crack_signature(chain, healthy):
+    """Fig. 6e: short deviations, when a mesh zone passes the cracked tooth."""
+    (a, b), res = run(chain, [healthy, apply_fault(healthy, "tip_tooth_crack", 1.0, 90.0)])
+    dev = np.abs(b - a).max(axis=0)
+    assert dev.max() > 1e-3
+    assert np.median(dev) < 0.2 * dev.max()  # localised in time, not a global change
+    # deviations where a zone centre is within its half-width of the crack
+    psi = res.psi[0]
+    near = np.minimum(np.abs(np.angle(np.exp(1j * (psi - np.pi / 2)))),
+                      np.abs(np.angle(np.exp(1j * (psi + np.pi / 2)))))
+    assert np.all(dev[near > np.deg2rad(chain.settings.contact_half_width_deg)] < 1e-9)
+
+
+def test_fast_chain_matches_naive_per_step_solver(chain, healthy):
+    cases = [healthy, apply_fault(healthy, "eccentric_wg", 0.1, 30.0),
+             apply_fault(healthy, "root_tooth_crack", 0.7, 90.0),
+             apply_fault(healthy, "tip_tooth_crack", 1.0, 0.0)]
+    sig, res = run(chain, cases)
+    for k, p in enumerate(cases):
+        naive = chain.signals_naive(p, res.psi[k, :8], res.t_out[k, :8])
+        assert np.abs(sig[k, :, :8] - naive).max() <= 1e-9 * np.abs(naive).max()
+
+
+def test_gear_params_scale_as_table_iv(healthy):
+    g = dataclasses.replace(healthy.gear, b1_nms=healthy.gear.b1_nms * 1.2)
+    assert g.b1_nms == pytest.approx(1.2 * dy.rt1_size20().b1_nms)
