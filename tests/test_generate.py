@@ -1,0 +1,167 @@
+"""Data-set generation: schema, determinism, resume after SIGKILL, corruption, bad input."""
+
+import copy
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from swgsim import data as dsio
+from swgsim import generate as gen
+from swgcli import CONF_DIR
+
+
+def tiny_cfg(**chain):
+    cfg = yaml.safe_load(open(Path(CONF_DIR) / "dataset" / "tiny.yaml"))
+    cfg["variants"] = {
+        "healthy": {"severities": [0.0], "repeat": 2},
+        "eccentric_wg": {"severities": [0.1], "n_positions": 2},
+        "root_tooth_crack": {"severities": [0.9], "n_positions": 1},
+        "tip_tooth_crack": {"severities": [1.0], "n_positions": 1},
+    }
+    cfg["chain"].update({"window_s": 0.02, "settle_s": 0.01, **chain})
+    cfg["operating_points"] = {"n_in_rpm": [2000.0, 4000.0], "t_out_nm": [39.0]}
+    cfg["gears"] = cfg["gears"][:2]
+    return cfg
+
+
+def test_paper_preset_yaml_matches_python():
+    cfg = yaml.safe_load(open(Path(CONF_DIR) / "dataset" / "paper.yaml"))
+    assert cfg == json.loads(json.dumps(gen.PAPER))
+
+
+def test_paper_grid_counts():
+    shards = gen.plan(copy.deepcopy(gen.PAPER))
+    n = sum(len([w for w in s.windows if not w.reference]) for s in shards)
+    assert n == 6480  # 3 gears x 6 classes x 60 variants x 6 operating points
+    classes = {w.fault for s in shards for w in s.windows}
+    assert classes == set(dsio.FAULT_CLASSES)
+
+
+@pytest.fixture(scope="module")
+def tiny_set(tmp_path_factory):
+    out = tmp_path_factory.mktemp("tiny")
+    s = gen.generate(tiny_cfg(), out, n_jobs=1, progress=False)
+    return out, s
+
+
+def test_schema_and_content(tiny_set):
+    out, s = tiny_set
+    assert s["complete"]
+    ds = dsio.load(out)
+    n_win = 2 * 2 * (2 + 2 + 1 + 1)  # gears x speeds x variants
+    assert ds.sizes["sample"] == 2 * n_win + 2 * 2 * 2  # clean + disturbed + references
+    assert ds.strain_signal.dtype == np.float32 and ds.strain_signal.attrs["units"] == "mV/V"
+    assert list(ds.sensor.values) == ["s0", "s1", "s2", "s3", "s4"]
+    assert ds.attrs["schema_version"] == 1 and ds.attrs["sample_rate_hz"] == 10000.0
+    for name in dsio.PER_SAMPLE:
+        assert name in ds
+    clean = ds.strain_signal.values[~ds.disturbed.values]
+    dist = ds.strain_signal.values[ds.disturbed.values]
+    assert clean.shape == dist.shape and not np.allclose(clean, dist)
+    assert int(ds.reference.sum()) == 8
+    assert np.all(np.isnan(ds.position_deg.values[ds.fault.values == "healthy"]))
+
+
+def test_same_seed_same_hash_whatever_the_workers(tiny_set, tmp_path):
+    _, s1 = tiny_set
+    s2 = gen.generate(tiny_cfg(), tmp_path / "b", n_jobs=2, progress=False)
+    assert s2["content_sha256"] == s1["content_sha256"]
+    m1 = json.loads((Path(s1["out_dir"]) / "manifest.json").read_text())
+    m2 = json.loads((tmp_path / "b" / "manifest.json").read_text())
+    assert {k: v["sha256"] for k, v in m1["shards"].items()} == {
+        k: v["sha256"] for k, v in m2["shards"].items()}
+
+
+def test_rerun_skips_finished_shards(tiny_set):
+    out, _ = tiny_set
+    s = gen.generate(tiny_cfg(), out, n_jobs=1, progress=False)
+    assert s["computed"] == [] and len(s["skipped"]) == 4
+
+
+def test_altered_shard_is_detected(tiny_set, tmp_path):
+    import shutil
+
+    out, _ = tiny_set
+    bad = tmp_path / "bad"
+    shutil.copytree(out, bad)
+    f = sorted(bad.glob("*.nc"))[0]
+    raw = bytearray(f.read_bytes())
+    raw[len(raw) // 2] ^= 0xFF
+    f.write_bytes(bytes(raw))
+    with pytest.raises(dsio.DataSetError, match=f.name):
+        dsio.load(bad)
+    f.write_bytes(bytes(raw[: len(raw) // 3]))  # truncated
+    with pytest.raises(dsio.DataSetError, match=f.name):
+        dsio.load(bad)
+
+
+def test_sigkill_then_resume_is_bit_identical(tiny_set, tmp_path):
+    """Kill a run after its first shard, rerun: finished shards are not recomputed."""
+    out_ref, s_ref = tiny_set
+    out = tmp_path / "killed"
+    cfg_file = tmp_path / "cfg.json"
+    cfg_file.write_text(json.dumps(tiny_cfg()))
+    code = ("import json,sys; from swgsim.generate import generate; "
+            f"generate(json.load(open({str(cfg_file)!r})), {str(out)!r}, n_jobs=1, "
+            "progress=False)")
+    proc = subprocess.Popen([sys.executable, "-c", code])
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if list(out.glob("gear*.json")) or proc.poll() is not None:
+            break
+        time.sleep(0.02)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    done = sorted(p.name for p in out.glob("gear*.json"))
+    assert done, "the run was killed before any shard finished"
+    assert not (out / "manifest.json").exists() or len(done) == 4
+    mtimes = {p: (out / p).with_suffix(".nc").stat().st_mtime_ns for p in done}
+    s = gen.generate(tiny_cfg(), out, n_jobs=1, progress=False)
+    assert set(s["skipped"]) >= {Path(p).with_suffix(".nc").name for p in done}
+    for p, t in mtimes.items():
+        assert (out / p).with_suffix(".nc").stat().st_mtime_ns == t
+    assert s["content_sha256"] == s_ref["content_sha256"]
+    for f in out_ref.glob("gear*.nc"):
+        assert (out / f.name).read_bytes() == f.read_bytes()
+
+
+@pytest.mark.parametrize("edit, match", [
+    (lambda c: c["variants"].update({"cracked_housing": {"severities": [0.1]}}), "unknown fault"),
+    (lambda c: c["variants"].update({"eccentric_wg": {"severities": [0.9], "n_positions": 2}}),
+     r"severity 0.9 outside the allowed range \[0.0, 0.5\]"),
+    (lambda c: c["operating_points"].update({"n_in_rpm": [0.0]}), "n_in_rpm must be > 0"),
+    (lambda c: c["variants"].update({"healthy": {"severities": [0.0], "repeat": 0}}),
+     "repeat must be >= 1"),
+    (lambda c: c["variants"].update({"eccentric_wg": {"severities": [0.1], "n_positions": 0}}),
+     "n_positions must be >= 1"),
+    (lambda c: c["variants"].update({"reduced_damping": {"severity_linspace": [0.1, 0.2, 0]}}),
+     "count must be >= 1"),
+    (lambda c: c["sensors"].update({"r_pairs_mm": 45.0}), "leaves the collar"),
+    (lambda c: c["sensors"].update({"grid_length_mm": 0.8}), "too coarse for the gauge layout"),
+    (lambda c: c["mesh"].update({"n_theta": 50}), "multiple of 20"),
+])
+def test_bad_input_refused_before_any_work(tmp_path, edit, match):
+    cfg = tiny_cfg()
+    edit(cfg)
+    out = tmp_path / "never"
+    with pytest.raises(ValueError, match=match):
+        gen.generate(cfg, out, progress=False)
+    assert not out.exists()
+
+
+def test_foreign_out_dir_is_refused_and_kept(tiny_set):
+    out, _ = tiny_set
+    cfg = tiny_cfg()
+    cfg["seed"] = 99
+    before = sorted(p.name for p in out.iterdir())
+    with pytest.raises(ValueError, match="another config"):
+        gen.generate(cfg, out, progress=False)
+    assert sorted(p.name for p in out.iterdir()) == before
