@@ -1,0 +1,352 @@
+"""Hand-crafted features of the paper, Table III and eq. (7)-(9).
+
+Every feature of a window is normalised by the same quantity of its *reference window*:
+the commissioning recording of the same gear, at the same operating point
+(``n_in_rpm``, ``t_out_nm``) and with the same ``disturbed`` flag, flagged
+``reference == True`` in the data set (schema v1, see :mod:`swgsim.data`). The paper
+normalises "for each operating point by the value of the healthy gear" (eq. 7); taking
+the healthy value from a commissioning window of the *same* gear is what makes this
+possible for a gear that was never seen in training (leave-one-gear-out protocols):
+reference windows only ever serve as denominators, they are never training or test
+samples.
+
+Selections (paper Table III):
+
+=========  ==========================================================  ===========
+selection  features                                                    count (K=32)
+=========  ==========================================================  ===========
+1          m_rel(s0..s4), var_rel(s0..s4), eta_rel                     11
+2          selection 1 + DFT_rel of each zero-mean s0..s4              11 + 5 K
+3          DFT_rel of zero-mean ds13 = s1 - s3 and ds24 = s2 - s4,     2 K + 1
+           eta2_rel = |1 - eta_rel|^(1/4) (eq. 9)
+=========  ==========================================================  ===========
+
+DFT: the amplitude spectrum of the Hann-windowed zero-mean signal at orders of the input
+rotation (default 0.25, 0.5, ..., 8), computed by projecting onto
+``exp(-i 2 pi k f_in t)`` at the exact frequencies ``k * f_in``, with
+``f_in = n_in_mean_rpm / 60`` of that window, so that it needs neither an integer number
+of revolutions nor a particular window length (see :func:`order_spectrum`).
+
+DFT_rel (our choice; the paper only says "normalised component-wise similar to (7)"):
+``(|X| + eps) / (|X_ref| + eps)`` with ``eps = floor_rel * max_k |X_ref|`` per reference
+signal (default ``floor_rel = 1e-3``). Bins where the reference has almost no energy then
+give a ratio near 1 instead of exploding, and a window identical to its reference gives
+exactly 1 in every bin. Relative mean and variance follow eq. (7) literally (no floor).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+import pandas as pd
+
+log = logging.getLogger(__name__)
+
+SELECTIONS = ("selection1", "selection2", "selection3")
+META_COLUMNS = ("gear", "fault", "variant", "n_in_rpm", "t_out_nm", "disturbed")
+REFERENCE_KEYS = ("gear", "n_in_rpm", "t_out_nm", "disturbed")
+N_SENSORS = 5
+
+
+class Features(NamedTuple):
+    """Feature matrix of the non-reference windows of a data set.
+
+    Attributes
+    ----------
+    X : ndarray, shape (n_samples, n_features)
+        Features (dimensionless ratios), float64.
+    names : list of str, length n_features
+        Feature names, e.g. ``m_rel_s0``, ``dft_rel_ds13_o1.00``, ``eta2_rel``.
+    meta : pandas.DataFrame, n_samples rows
+        Per-sample metadata: ``sample`` (index into the data set) and
+        :data:`META_COLUMNS`, with a fresh 0..n-1 index aligned with the rows of ``X``.
+    """
+
+    X: np.ndarray
+    names: list[str]
+    meta: pd.DataFrame
+
+
+def paper_orders(max_order: float = 8.0, order_step: float = 0.25) -> np.ndarray:
+    """Orders of the input rotation used for the DFT features.
+
+    Parameters
+    ----------
+    max_order : float, default 8.0
+        Highest order (inclusive) [-].
+    order_step : float, default 0.25
+        Spacing and lowest order [-].
+
+    Returns
+    -------
+    ndarray, shape (n_orders,)
+        ``order_step, 2 * order_step, ..., max_order``; 32 values by default (paper Fig. 7
+        shows orders up to 8).
+
+    Raises
+    ------
+    ValueError
+        If ``order_step`` or ``max_order`` is not positive.
+    """
+    if not (order_step > 0 and max_order >= order_step):
+        raise ValueError(
+            f"order_step must be > 0 and max_order >= order_step, got order_step={order_step}, "
+            f"max_order={max_order}"
+        )
+    n = int(np.floor(max_order / order_step + 1e-9))
+    return order_step * np.arange(1, n + 1, dtype=np.float64)
+
+
+def order_spectrum(
+    x: np.ndarray,
+    time_s: np.ndarray,
+    f_in_hz: np.ndarray,
+    orders: np.ndarray,
+    chunk_elements: int = 1 << 22,
+) -> np.ndarray:
+    """Amplitude spectrum of zero-mean, Hann-windowed signals at orders of the input speed.
+
+    ``A_k = 2 / sum(w) * | sum_t w(t) (x(t) - mean(x)) exp(-i 2 pi k f_in t) |``, with the
+    periodic Hann window ``w``. A sinusoid of amplitude ``a`` at order ``k`` gives
+    ``A_k ~= a`` (exactly for an integer number of its periods in the window).
+
+    Parameters
+    ----------
+    x : ndarray, shape (n_samples, n_signals, n_time)
+        Signals [mV/V].
+    time_s : ndarray, shape (n_time,)
+        Time since window start [s].
+    f_in_hz : ndarray, shape (n_samples,)
+        Input rotation frequency of each window [Hz] (``n_in_mean_rpm / 60``).
+    orders : ndarray, shape (n_orders,)
+        Orders of the input rotation [-].
+    chunk_elements : int, default 2**22
+        Size of the per-chunk basis (samples x orders x time); bounds memory. Samples are
+        processed in chunks, each chunk as one batched matrix product.
+
+    Returns
+    -------
+    ndarray, shape (n_samples, n_signals, n_orders)
+        Amplitudes [mV/V], float64.
+
+    Raises
+    ------
+    ValueError
+        If shapes disagree.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    if x.ndim != 3:
+        raise ValueError(f"x must have shape (n_samples, n_signals, n_time), got {x.shape}")
+    n, _, n_time = x.shape
+    time_s = np.asarray(time_s, dtype=np.float64)
+    f_in_hz = np.asarray(f_in_hz, dtype=np.float64)
+    orders = np.asarray(orders, dtype=np.float64)
+    if time_s.shape != (n_time,):
+        raise ValueError(f"time_s must have shape ({n_time},), got {time_s.shape}")
+    if f_in_hz.shape != (n,):
+        raise ValueError(f"f_in_hz must have shape ({n},), got {f_in_hz.shape}")
+    # periodic Hann window, amplitude-correct scaling
+    w = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(n_time) / n_time)  # (T,)
+    scale = 2.0 / w.sum()
+    xw = (x - x.mean(axis=-1, keepdims=True)) * w  # (N, C, T)
+    n_orders = orders.size
+    out = np.empty((n, x.shape[1], n_orders))
+    step = max(1, int(chunk_elements // max(1, n_orders * n_time)))
+    for start in range(0, n, step):  # chunks of windows, each one batched matmul
+        sl = slice(start, start + step)
+        phase = (2.0 * np.pi) * f_in_hz[sl, None, None] * orders[None, :, None] * time_s
+        # phase: (B, K, T); basis transposed to (B, T, K)
+        re = np.matmul(xw[sl], np.cos(phase).transpose(0, 2, 1))  # (B, C, K)
+        im = np.matmul(xw[sl], np.sin(phase).transpose(0, 2, 1))  # (B, C, K)
+        out[sl] = np.hypot(re, im) * scale
+    return out
+
+
+def _selection_id(selection: int | str) -> int:
+    """Map 1, "1", "selection1" to 1 (etc.); raise naming the allowed values."""
+    s = str(selection).strip().lower().removeprefix("selection")
+    if s not in ("1", "2", "3"):
+        raise ValueError(
+            f"selection must be one of 1, 2, 3 or {', '.join(SELECTIONS)}; got {selection!r}"
+        )
+    return int(s)
+
+
+def feature_names(selection: int | str, orders: Sequence[float] | None = None) -> list[str]:
+    """Names of the features of a selection, in column order of :func:`extract_features`.
+
+    Parameters
+    ----------
+    selection : {1, 2, 3, "selection1", "selection2", "selection3"}
+        Paper Table III.
+    orders : sequence of float, optional
+        DFT orders; default :func:`paper_orders`.
+
+    Returns
+    -------
+    list of str
+    """
+    sel = _selection_id(selection)
+    orders = paper_orders() if orders is None else np.asarray(orders, dtype=np.float64)
+    sensors = [f"s{i}" for i in range(N_SENSORS)]
+
+    def dft(sig: str) -> list[str]:
+        return [f"dft_rel_{sig}_o{k:.2f}" for k in orders]
+
+    stats = [f"m_rel_{s}" for s in sensors] + [f"var_rel_{s}" for s in sensors] + ["eta_rel"]
+    if sel == 1:
+        return stats
+    if sel == 2:
+        return stats + [name for s in sensors for name in dft(s)]
+    return dft("ds13") + dft("ds24") + ["eta2_rel"]
+
+
+def reference_index(ds) -> tuple[np.ndarray, np.ndarray]:
+    """Pair every non-reference window with its reference window.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Schema-v1 data set (:func:`swgsim.data.load`).
+
+    Returns
+    -------
+    samples : ndarray of int, shape (n,)
+        Indices of the non-reference windows, in data-set order.
+    refs : ndarray of int, shape (n,)
+        Index of the reference window of the same gear, ``n_in_rpm``, ``t_out_nm`` and
+        ``disturbed`` flag, for each of ``samples``.
+
+    Raises
+    ------
+    ValueError
+        If the data set has no ``reference`` variable or no reference windows, if a key
+        has more than one reference window, or if a window has no reference window
+        (naming the first missing keys).
+    """
+    if "reference" not in ds:
+        raise ValueError(
+            "the data set has no 'reference' variable: features are normalised by the "
+            "reference (commissioning) windows of schema v1 (paper eq. 7)"
+        )
+    df = pd.DataFrame({k: np.asarray(ds[k].values) for k in (*REFERENCE_KEYS, "reference")})
+    df["reference"] = df["reference"].astype(bool)
+    df["disturbed"] = df["disturbed"].astype(bool)
+    df["idx"] = np.arange(len(df))
+    ref = df[df["reference"]]
+    if ref.empty:
+        raise ValueError(
+            "the data set has no reference windows (reference == True): features need one "
+            "healthy commissioning window per gear x operating point x disturbed flag"
+        )
+    dup = ref.duplicated(list(REFERENCE_KEYS), keep=False)
+    if dup.any():
+        keys = ref.loc[dup, list(REFERENCE_KEYS)].drop_duplicates().head(3).to_dict("records")
+        raise ValueError(f"more than one reference window for {keys}")
+    smp = df[~df["reference"]]
+    merged = smp.merge(
+        ref[[*REFERENCE_KEYS, "idx"]], on=list(REFERENCE_KEYS), how="left",
+        suffixes=("", "_ref"), validate="many_to_one",
+    )
+    missing = merged["idx_ref"].isna()
+    if missing.any():
+        keys = merged.loc[missing, list(REFERENCE_KEYS)].drop_duplicates()
+        raise ValueError(
+            f"{int(missing.sum())} windows have no reference window; first missing keys "
+            f"(gear, n_in_rpm, t_out_nm, disturbed): {keys.head(5).to_dict('records')}"
+        )
+    return merged["idx"].to_numpy(np.int64), merged["idx_ref"].to_numpy(np.int64)
+
+
+def extract_features(
+    ds,
+    selection: int | str,
+    orders: Sequence[float] | None = None,
+    floor_rel: float = 1e-3,
+) -> Features:
+    """Features of paper Table III for every non-reference window of a data set.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Schema-v1 data set with reference windows (:func:`swgsim.data.load`).
+        ``strain_signal`` (sample, sensor=5, time) [mV/V].
+    selection : {1, 2, 3, "selection1", "selection2", "selection3"}
+        Paper Table III (see the module docstring).
+    orders : sequence of float, optional
+        Orders of the input rotation for the DFT features [-]; default
+        :func:`paper_orders` (0.25, 0.5, ..., 8).
+    floor_rel : float, default 1e-3
+        Floor of DFT_rel as a fraction of the reference spectrum's maximum (see the module
+        docstring).
+
+    Returns
+    -------
+    Features
+        ``(X, names, meta)``: X of shape (n_samples, n_features), float64, for the
+        ``n_samples`` non-reference windows in data-set order.
+
+    Raises
+    ------
+    ValueError
+        For an unknown selection, a data set without (or with ambiguous) reference
+        windows, a bad ``floor_rel``, or non-finite features (e.g. a reference mean of
+        exactly zero in eq. (7)).
+    """
+    sel = _selection_id(selection)
+    if not floor_rel >= 0:
+        raise ValueError(f"floor_rel must be >= 0, got {floor_rel}")
+    orders = paper_orders() if orders is None else np.asarray(orders, dtype=np.float64)
+    names = feature_names(sel, orders)
+    samples, refs = reference_index(ds)
+    used = np.unique(np.concatenate([samples, refs]))  # windows whose raw values we need
+    pos = np.full(ds.sizes["sample"], -1, dtype=np.int64)
+    pos[used] = np.arange(used.size)
+    i_s, i_r = pos[samples], pos[refs]  # rows into the `used` arrays
+
+    s = np.asarray(ds["strain_signal"].values[used], dtype=np.float64)  # (U, 5, T)
+    if s.shape[1] != N_SENSORS:
+        raise ValueError(f"strain_signal must have {N_SENSORS} sensors, got {s.shape[1]}")
+    eta = np.asarray(ds["efficiency"].values[used], dtype=np.float64)  # (U,)
+    eta_rel = eta[i_s] / eta[i_r]  # (n,)
+
+    cols: list[np.ndarray] = []
+    if sel in (1, 2):
+        m = s.mean(axis=-1)  # (U, 5)
+        v = s.var(axis=-1)  # (U, 5)
+        cols += [m[i_s] / m[i_r], v[i_s] / v[i_r], eta_rel[:, None]]
+    if sel in (2, 3):
+        n_in = np.asarray(ds["n_in_mean_rpm"].values[used], dtype=np.float64)
+        n_des = np.asarray(ds["n_in_rpm"].values[used], dtype=np.float64)
+        f_in = np.where(np.isfinite(n_in), n_in, n_des) / 60.0  # (U,) [Hz]
+        time_s = np.asarray(ds["time"].values, dtype=np.float64)
+        if sel == 2:
+            sig = s  # (U, 5, T)
+        else:
+            sig = np.stack([s[:, 1] - s[:, 3], s[:, 2] - s[:, 4]], axis=1)  # (U, 2, T)
+        a = order_spectrum(sig, time_s, f_in, orders)  # (U, C, K)
+        eps = floor_rel * a.max(axis=-1, keepdims=True)  # (U, C, 1)
+        rel = (a[i_s] + eps[i_r]) / (a[i_r] + eps[i_r])  # (n, C, K)
+        cols.append(rel.reshape(rel.shape[0], -1))  # (n, C*K), signal-major
+    if sel == 3:
+        cols.append(np.abs(1.0 - eta_rel)[:, None] ** 0.25)  # eq. (9)
+    X = np.concatenate(cols, axis=1)
+    assert X.shape[1] == len(names), (X.shape, len(names))
+
+    bad = ~np.isfinite(X)
+    if bad.any():
+        cols_bad = [names[j] for j in np.flatnonzero(bad.any(axis=0))[:5]]
+        raise ValueError(
+            f"{int(bad.sum())} non-finite feature values (e.g. in {cols_bad}); a reference "
+            "window has a mean, variance or efficiency of zero"
+        )
+    meta = pd.DataFrame({"sample": samples})
+    for k in META_COLUMNS:
+        meta[k] = np.asarray(ds[k].values)[samples]
+    meta["fault"] = meta["fault"].astype(str)
+    meta["disturbed"] = meta["disturbed"].astype(bool)
+    log.info("selection %d: %d windows x %d features", sel, X.shape[0], X.shape[1])
+    return Features(X, names, meta)

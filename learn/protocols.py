@@ -1,0 +1,291 @@
+"""Evaluation protocols of the paper, Sec. IV.
+
+=============  ===================  =========  ==========================================
+name           scheme               disturbed  splits
+=============  ===================  =========  ==========================================
+cv_clean       ``group_kfold``      False      4-fold CV (Table VII)
+cv_disturbed   ``group_kfold``      True       4-fold CV (Table VIII)
+ood_clean      ``leave_one_gear``   False      1,2 -> 3; 2,3 -> 1; 1,3 -> 2 (Table IX)
+ood_disturbed  ``leave_one_gear``   True       same, on disturbed data (Table X)
+=============  ===================  =========  ==========================================
+
+Splits come from metadata, never from shuffling windows. In the CV a group is one
+``(gear, fault, variant)``: the windows of one fault variant at the six operating points
+never straddle training and test (the paper does not say how it split; a split by window
+would put near-copies of a test window into training). Folds are stratified by class
+(:class:`~sklearn.model_selection.StratifiedGroupKFold`). In leave-one-gear-out the
+held-out gear never appears in training; its features are still normalised by its own
+reference windows (see :mod:`learn.features`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from sklearn.base import clone
+from sklearn.metrics import confusion_matrix
+from sklearn.model_selection import StratifiedGroupKFold
+
+log = logging.getLogger(__name__)
+
+SCHEMES = ("group_kfold", "leave_one_gear")
+#: The paper's protocols: keyword arguments of :func:`make_splits`.
+PROTOCOLS: dict[str, dict] = {
+    "cv_clean": {"scheme": "group_kfold", "disturbed": False, "n_splits": 4},
+    "cv_disturbed": {"scheme": "group_kfold", "disturbed": True, "n_splits": 4},
+    "ood_clean": {"scheme": "leave_one_gear", "disturbed": False, "test_gears": (3, 1, 2)},
+    "ood_disturbed": {"scheme": "leave_one_gear", "disturbed": True, "test_gears": (3, 1, 2)},
+}
+GROUP_COLUMNS = ("gear", "fault", "variant")
+
+
+def class_labels(y: Sequence[str]) -> list[str]:
+    """Classes present in ``y``: the schema's order (:data:`swgsim.data.FAULT_CLASSES`)
+    first, any others sorted after."""
+    from swgsim.data import FAULT_CLASSES
+
+    present = {str(c) for c in np.unique(np.asarray(y).astype(str))}
+    return [c for c in FAULT_CLASSES if c in present] + sorted(present - set(FAULT_CLASSES))
+
+
+@dataclass(frozen=True)
+class Split:
+    """One train/test split.
+
+    Attributes
+    ----------
+    name : str
+        Short name usable as an MLflow key: ``fold0``.. or ``gear3``..
+    label : str
+        Human-readable name as in the paper: ``fold 1/4`` or ``1,2 -> 3``.
+    train, test : ndarray of int
+        Row positions into the metadata frame (and feature matrix) given to
+        :func:`make_splits`.
+    """
+
+    name: str
+    label: str
+    train: np.ndarray
+    test: np.ndarray
+
+
+@dataclass
+class ProtocolResult:
+    """Accuracies of one model under one protocol, all splits.
+
+    Attributes
+    ----------
+    splits : list of Split
+    train_accuracy, test_accuracy : ndarray, shape (n_splits,)
+        Accuracy on the training and test rows of each split [-], in 0..1.
+    confusion : ndarray of int, shape (n_classes, n_classes)
+        Test confusion matrix summed over splits (rows: true class, columns: predicted).
+    labels : list of str
+        Class names, order of ``confusion``.
+    fit_time_s : ndarray, shape (n_splits,)
+        Wall time of fit + predict per split [s].
+    """
+
+    splits: list[Split]
+    train_accuracy: np.ndarray
+    test_accuracy: np.ndarray
+    confusion: np.ndarray
+    labels: list[str]
+    fit_time_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def mean_train_accuracy(self) -> float:
+        """Mean training accuracy over splits [-]."""
+        return float(np.mean(self.train_accuracy))
+
+    @property
+    def mean_test_accuracy(self) -> float:
+        """Mean test accuracy over splits [-]."""
+        return float(np.mean(self.test_accuracy))
+
+
+def make_splits(
+    meta: pd.DataFrame,
+    scheme: str,
+    disturbed: bool,
+    n_splits: int = 4,
+    random_state: int | None = 0,
+    test_gears: Sequence[int] | None = None,
+) -> list[Split]:
+    """Train/test splits of a protocol from per-sample metadata.
+
+    Parameters
+    ----------
+    meta : pandas.DataFrame
+        Per-sample metadata with columns ``gear``, ``fault``, ``variant``, ``disturbed``
+        (e.g. :attr:`learn.features.Features.meta`); no reference windows.
+    scheme : {"group_kfold", "leave_one_gear"}
+        Stratified group k-fold with groups ``(gear, fault, variant)``, or leave one gear
+        out.
+    disturbed : bool
+        Use only the disturbed (True) or only the clean (False) windows.
+    n_splits : int, default 4
+        Folds of ``group_kfold`` (paper: 4).
+    random_state : int, optional
+        Shuffling seed of ``group_kfold``; None: no shuffling.
+    test_gears : sequence of int, optional
+        Held-out gear of each ``leave_one_gear`` split, in order; default: every gear
+        present, in the paper's order 3, 1, 2 where present.
+
+    Returns
+    -------
+    list of Split
+        Positions refer to rows of ``meta`` (``iloc``), so they index the feature matrix.
+
+    Raises
+    ------
+    ValueError
+        For an unknown scheme, missing columns, no windows with the requested
+        ``disturbed`` flag, too few groups for ``n_splits``, or a test gear that is absent
+        or is the only gear.
+    """
+    missing = {*GROUP_COLUMNS, "disturbed"} - set(meta.columns)
+    if missing:
+        raise ValueError(f"meta lacks columns {sorted(missing)}")
+    rows = np.flatnonzero(meta["disturbed"].to_numpy(bool) == bool(disturbed))
+    if rows.size == 0:
+        raise ValueError(f"no windows with disturbed={bool(disturbed)} in the data")
+    sub = meta.iloc[rows]
+    if scheme == "group_kfold":
+        groups = sub.groupby(list(GROUP_COLUMNS), sort=True).ngroup().to_numpy()
+        n_groups = int(groups.max()) + 1
+        if n_groups < n_splits:
+            raise ValueError(f"n_splits={n_splits} exceeds the number of groups ({n_groups})")
+        cv = StratifiedGroupKFold(
+            n_splits=n_splits, shuffle=random_state is not None, random_state=random_state
+        )
+        y = sub["fault"].astype(str).to_numpy()
+        return [
+            Split(f"fold{i}", f"fold {i + 1}/{n_splits}", rows[tr], rows[te])
+            for i, (tr, te) in enumerate(cv.split(np.zeros(len(sub)), y, groups))
+        ]
+    if scheme == "leave_one_gear":
+        gear = sub["gear"].to_numpy()
+        present = sorted(int(g) for g in np.unique(gear))
+        if len(present) < 2:
+            raise ValueError(f"leave_one_gear needs at least two gears, got {present}")
+        if test_gears is None:
+            order = [3, 1, 2]
+            test_gears = [g for g in order if g in present] + [
+                g for g in present if g not in order
+            ]
+        splits = []
+        for g in test_gears:
+            g = int(g)
+            if g not in present:
+                raise ValueError(f"test gear {g} is not in the data (gears: {present})")
+            train_gears = [h for h in present if h != g]
+            label = f"{','.join(map(str, train_gears))} -> {g}"
+            splits.append(Split(f"gear{g}", label, rows[gear != g], rows[gear == g]))
+        return splits
+    raise ValueError(f"scheme must be one of {SCHEMES}, got {scheme!r}")
+
+
+def protocol_splits(meta: pd.DataFrame, protocol: str, random_state: int | None = 0) -> list[Split]:
+    """Splits of one of the paper's protocols (:data:`PROTOCOLS`).
+
+    Parameters
+    ----------
+    meta : pandas.DataFrame
+        See :func:`make_splits`.
+    protocol : {"cv_clean", "cv_disturbed", "ood_clean", "ood_disturbed"}
+    random_state : int, optional
+        Seed of the CV shuffling.
+
+    Raises
+    ------
+    ValueError
+        For an unknown protocol.
+    """
+    if protocol not in PROTOCOLS:
+        raise ValueError(f"protocol must be one of {sorted(PROTOCOLS)}, got {protocol!r}")
+    return make_splits(meta, random_state=random_state, **PROTOCOLS[protocol])
+
+
+def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Sequence[str]):
+    """Fit a fresh clone of ``estimator`` on one split's training rows and score it.
+
+    Parameters
+    ----------
+    estimator : classifier
+        Unfitted scikit-learn-compatible classifier (cloned, never modified).
+    X : ndarray, shape (n_samples, n_features)
+    y : ndarray, shape (n_samples,)
+        Class names.
+    split : Split
+    labels : sequence of str
+        Class order of the confusion matrix.
+
+    Returns
+    -------
+    train_acc : float
+    test_acc : float
+    confusion : ndarray of int, shape (n_classes, n_classes)
+    seconds : float
+        Wall time of fit + predict [s].
+    """
+    t0 = time.perf_counter()
+    est = clone(estimator)
+    est.fit(X[split.train], y[split.train])
+    pred_tr = est.predict(X[split.train])
+    pred_te = est.predict(X[split.test])
+    train_acc = float(np.mean(pred_tr == y[split.train]))
+    test_acc = float(np.mean(pred_te == y[split.test]))
+    cm = confusion_matrix(y[split.test], pred_te, labels=list(labels))
+    return train_acc, test_acc, cm, time.perf_counter() - t0
+
+
+def evaluate(
+    estimator,
+    X: np.ndarray,
+    y: np.ndarray,
+    splits: Sequence[Split],
+    labels: Sequence[str] | None = None,
+    n_jobs: int | None = 1,
+) -> ProtocolResult:
+    """Train and test accuracy of ``estimator`` on every split.
+
+    Parameters
+    ----------
+    estimator : classifier
+        Unfitted classifier; a clone is fitted per split.
+    X : ndarray, shape (n_samples, n_features)
+    y : ndarray, shape (n_samples,)
+        Class names.
+    splits : sequence of Split
+    labels : sequence of str, optional
+        Class order; default :func:`class_labels` of ``y``.
+    n_jobs : int, optional
+        Splits fitted in parallel (joblib); 1: sequential.
+
+    Returns
+    -------
+    ProtocolResult
+    """
+    from joblib import Parallel, delayed
+
+    y = np.asarray(y).astype(str)
+    labels = class_labels(y) if labels is None else [str(c) for c in labels]
+    if n_jobs == 1:
+        out = [fit_split(estimator, X, y, s, labels) for s in splits]
+    else:
+        out = Parallel(n_jobs=n_jobs)(delayed(fit_split)(estimator, X, y, s, labels)
+                                      for s in splits)
+    return ProtocolResult(
+        splits=list(splits),
+        train_accuracy=np.array([o[0] for o in out]),
+        test_accuracy=np.array([o[1] for o in out]),
+        confusion=np.sum([o[2] for o in out], axis=0),
+        labels=labels,
+        fit_time_s=np.array([o[3] for o in out]),
+    )

@@ -1,0 +1,370 @@
+"""The paper's fault-classification study (Sec. IV, Tables VII-X) and the train task.
+
+Two entry points:
+
+* :func:`run_train` - the task function behind ``swgsim-train`` (Hydra). It dispatches on
+  ``cfg.task`` through :data:`TASKS`, a dict of task name to importable function path:
+  ``study`` runs one job (one protocol, one feature selection, one model, all splits),
+  ``paper_study`` the whole study, ``transfer`` :func:`learn.transfer.run_transfer`.
+* :func:`run_paper_study` - every job of Tables VII-X on one data set, features of each
+  selection computed once, one MLflow run per job, a report in ``report_dir``.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from learn.baselines import MODEL_LABELS, make_model
+from learn.features import Features, extract_features, paper_orders
+from learn.protocols import (
+    PROTOCOLS,
+    ProtocolResult,
+    class_labels,
+    evaluate,
+    fit_split,
+    make_splits,
+    protocol_splits,
+)
+
+log = logging.getLogger(__name__)
+
+#: Task name -> function ``f(cfg) -> dict`` (dotted path, imported on use).
+TASKS: dict[str, str] = {
+    "study": "learn.study.run_study_job",
+    "paper_study": "learn.study.run_paper_study_task",
+    "transfer": "learn.transfer.run_transfer",
+}
+
+#: The paper's tables: protocol, feature selections and models of each.
+PAPER_TABLES: dict[str, dict[str, Any]] = {
+    "VII": {"protocol": "cv_clean", "selections": (1, 2, 3),
+            "models": ("mlp", "svm", "rf", "knn", "nb")},
+    "VIII": {"protocol": "cv_disturbed", "selections": (1, 2, 3),
+             "models": ("mlp", "svm", "rf", "knn", "nb")},
+    "IX": {"protocol": "ood_clean", "selections": (1, 2, 3),
+           "models": ("mlp", "svm", "rf", "knn", "nb")},
+    "X": {"protocol": "ood_disturbed", "selections": (1, 3),
+          "models": ("mlp", "rf", "knn", "nb")},
+}
+
+
+def run_train(cfg) -> dict:
+    """Run the task named by ``cfg.task`` (default ``"study"``).
+
+    Parameters
+    ----------
+    cfg : omegaconf.DictConfig
+        Composed ``conf/train.yaml``.
+
+    Returns
+    -------
+    dict
+        Whatever the task returns (metrics, run ids, paths).
+
+    Raises
+    ------
+    ValueError
+        For a task not in :data:`TASKS`.
+    """
+    from hydra.utils import get_method
+
+    task = cfg.get("task", "study")
+    if task not in TASKS:
+        raise ValueError(f"task must be one of {sorted(TASKS)}, got {task!r}")
+    log.info("task %s -> %s", task, TASKS[task])
+    return get_method(TASKS[task])(cfg)
+
+
+def _features_from_cfg(ds, fcfg) -> Features:
+    orders = paper_orders(float(fcfg.get("max_order", 8.0)), float(fcfg.get("order_step", 0.25)))
+    return extract_features(ds, fcfg.selection, orders=orders,
+                            floor_rel=float(fcfg.get("floor_rel", 1e-3)))
+
+
+def run_study_job(cfg) -> dict:
+    """One job: a model under a protocol on one feature selection, all splits.
+
+    Reads ``cfg.data.path``, ``cfg.features`` (selection, max_order, order_step,
+    floor_rel), ``cfg.model`` (instantiated with Hydra), ``cfg.protocol`` (keyword
+    arguments of :func:`learn.protocols.make_splits` plus ``name``), ``cfg.logger``
+    (None: no tracking) and ``cfg.n_jobs``.
+
+    Parameters
+    ----------
+    cfg : omegaconf.DictConfig
+
+    Returns
+    -------
+    dict
+        ``protocol``, ``selection``, ``model``, ``splits`` (labels), ``train_accuracy``
+        and ``test_accuracy`` (lists, per split), ``mean_train_accuracy``,
+        ``mean_test_accuracy``, ``n_samples``, ``run_id`` (None without logger).
+    """
+    from hydra.utils import instantiate
+    from omegaconf import OmegaConf
+
+    from swgsim.data import load
+
+    ds = load(cfg.data.path)
+    feats = _features_from_cfg(ds, cfg.features)
+    y = feats.meta["fault"].to_numpy()
+    pcfg = OmegaConf.to_container(cfg.protocol, resolve=True)
+    pname = pcfg.pop("name")
+    splits = make_splits(feats.meta, **pcfg)
+    estimator = instantiate(cfg.model, _convert_="all")
+    result = evaluate(estimator, feats.X, y, splits, labels=class_labels(y),
+                      n_jobs=cfg.get("n_jobs", 1))
+    log.info("%s / %s / %s: test accuracy %s, mean %.4f", pname, cfg.features.name,
+             cfg.model.name, np.round(result.test_accuracy, 4), result.mean_test_accuracy)
+    run_id = None
+    if cfg.get("logger") is not None:
+        resolved = OmegaConf.to_container(cfg, resolve=True)
+        run_id = _log(result, cfg.logger, params=resolved, config=resolved,
+                      tags={"task": "study", "protocol": pname})
+    return {
+        "task": "study",
+        "protocol": pname,
+        "selection": cfg.features.name,
+        "model": cfg.model.name,
+        "splits": [s.label for s in splits],
+        "train_accuracy": result.train_accuracy.tolist(),
+        "test_accuracy": result.test_accuracy.tolist(),
+        "mean_train_accuracy": result.mean_train_accuracy,
+        "mean_test_accuracy": result.mean_test_accuracy,
+        "n_samples": int(sum(len(s.test) for s in splits)),
+        "run_id": run_id,
+    }
+
+
+def _log(result: ProtocolResult, lcfg, **kw) -> str:
+    from learn.tracking import log_job
+
+    return log_job(result, experiment=str(lcfg.experiment), run_name=str(lcfg.run_name),
+                   tracking_uri=lcfg.get("tracking_uri"),
+                   confusion_plot=bool(lcfg.get("confusion_plot", True)), **kw)
+
+
+def run_paper_study_task(cfg) -> dict:
+    """Task ``paper_study``: :func:`run_paper_study` from a composed config.
+
+    Uses ``cfg.data.path``, ``cfg.paths.report_dir``/paper, ``cfg.logger.tracking_uri``
+    (no tracking if ``cfg.logger`` is None), ``cfg.n_jobs``, ``cfg.seed``,
+    ``cfg.features`` (orders and floor; the selections are those of the tables) and
+    ``cfg.study`` (tables, models, scale, figures; see ``conf/experiment/paper.yaml``).
+
+    Returns
+    -------
+    dict
+        ``timings_s``, ``files`` (report paths as str), ``n_jobs_run`` and
+        ``mean_test_accuracy`` keyed by ``"table/selection/model"``.
+    """
+    fcfg = cfg.features
+    scfg = cfg.get("study") or {}
+    tables, models = scfg.get("tables"), scfg.get("models")
+    out = run_paper_study(
+        cfg.data.path,
+        Path(cfg.paths.report_dir) / "paper",
+        tracking_uri=cfg.logger.get("tracking_uri") if cfg.get("logger") is not None else None,
+        track=cfg.get("logger") is not None,
+        n_jobs=int(cfg.get("n_jobs", 1)),
+        random_state=int(cfg.seed),
+        tables=None if tables is None else [str(t) for t in tables],
+        models=None if models is None else [str(m) for m in models],
+        scale=bool(scfg.get("scale", True)),
+        figures=bool(scfg.get("figures", True)),
+        feature_kwargs={
+            "orders": paper_orders(float(fcfg.get("max_order", 8.0)),
+                                   float(fcfg.get("order_step", 0.25))),
+            "floor_rel": float(fcfg.get("floor_rel", 1e-3)),
+        },
+    )
+    res = out.pop("results")
+    means = res.groupby(["table", "selection", "model"])["test_accuracy"].mean()
+    out["mean_test_accuracy"] = {"/".join(k): float(v) for k, v in means.items()}
+    out["files"] = {k: str(v) for k, v in out["files"].items()}
+    return out
+
+
+def run_paper_study(
+    dataset_path: str | Path,
+    report_dir: str | Path,
+    tracking_uri: str | None = None,
+    n_jobs: int = 1,
+    progress: bool = True,
+    *,
+    random_state: int = 0,
+    tables: Sequence[str] | None = None,
+    models: Sequence[str] | None = None,
+    scale: bool = True,
+    track: bool = True,
+    experiment_prefix: str = "paper_study/",
+    feature_kwargs: Mapping[str, Any] | None = None,
+    figures: bool = True,
+) -> dict:
+    """Run the paper's study, Tables VII-X, and write its report.
+
+    ============  =============  ==============  =======================  ===========
+    table         protocol       selections      models                   splits
+    ============  =============  ==============  =======================  ===========
+    VII           cv_clean       1, 2, 3         MLP, SVM, RF, KNN, NB    4 folds
+    VIII          cv_disturbed   1, 2, 3         MLP, SVM, RF, KNN, NB    4 folds
+    IX            ood_clean      1, 2, 3         MLP, SVM, RF, KNN, NB    3 gears
+    X             ood_disturbed  1, 3            MLP, RF, KNN, NB         3 gears
+    ============  =============  ==============  =======================  ===========
+
+    Parameters
+    ----------
+    dataset_path : path-like
+        Schema-v1 data set with clean and disturbed windows and reference windows.
+    report_dir : path-like
+        Folder of the report (:func:`learn.report.write_report`), e.g. ``reports/paper``.
+    tracking_uri : str, optional
+        MLflow tracking URI; default :func:`learn.tracking.default_tracking_uri`.
+    n_jobs : int, default 1
+        Fits run in parallel (joblib processes), over every (job, split) of a table.
+    progress : bool, default True
+        Show a tqdm progress bar over fits.
+    random_state : int, default 0
+        Seed of the CV folds and of MLP, SVM and RF.
+    tables : sequence of {"VII", "VIII", "IX", "X"}, optional
+        Subset of tables; default all.
+    models : sequence of str, optional
+        Restrict every table to these models (e.g. for a quick run); default the paper's.
+    scale : bool, default True
+        Standardise features in every pipeline (see :mod:`learn.baselines`).
+    track : bool, default True
+        Log one MLflow run per job, in experiment ``experiment_prefix + protocol``.
+    experiment_prefix : str, default "paper_study/"
+    feature_kwargs : mapping, optional
+        ``orders`` and ``floor_rel`` of :func:`learn.features.extract_features`.
+    figures : bool, default True
+        Also draw the paper's Fig. 6-8 from the data set.
+
+    Returns
+    -------
+    dict
+        ``results`` (pandas.DataFrame, one row per job and split: table, protocol,
+        selection, model, split, split_label, train_accuracy, test_accuracy, fit_time_s,
+        n_train, n_test, run_id), ``timings_s`` (features and each table [s]),
+        ``files`` (report files by kind), ``n_jobs_run`` (number of jobs).
+
+    Raises
+    ------
+    ValueError
+        For an unknown table or model.
+    """
+    from joblib import Parallel, delayed
+    from tqdm.auto import tqdm
+
+    from learn.report import write_report
+    from swgsim.data import load
+
+    tables = list(PAPER_TABLES) if tables is None else list(tables)
+    unknown = set(tables) - set(PAPER_TABLES)
+    if unknown:
+        raise ValueError(f"tables must be among {list(PAPER_TABLES)}, got {sorted(unknown)}")
+    if models is not None:
+        bad = set(models) - set(MODEL_LABELS)
+        if bad:
+            raise ValueError(f"models must be among {list(MODEL_LABELS)}, got {sorted(bad)}")
+    timings: dict[str, float] = {}
+
+    t0 = time.perf_counter()
+    ds = load(dataset_path)
+    selections = sorted({s for t in tables for s in PAPER_TABLES[t]["selections"]})
+    feats = {s: extract_features(ds, s, **dict(feature_kwargs or {})) for s in selections}
+    timings["features"] = time.perf_counter() - t0
+    log.info("features of selections %s in %.1f s", selections, timings["features"])
+
+    jobs = []  # (table, protocol, selection, model)
+    for t in tables:
+        spec = PAPER_TABLES[t]
+        for s in spec["selections"]:
+            for m in spec["models"]:
+                if models is None or m in models:
+                    jobs.append((t, spec["protocol"], s, m))
+    n_fits = 0
+    splits_of: dict[tuple[str, int], list] = {}
+    for _, p, s, _ in jobs:
+        if (p, s) not in splits_of:
+            splits_of[(p, s)] = protocol_splits(feats[s].meta, p, random_state=random_state)
+        n_fits += len(splits_of[(p, s)])
+
+    rows = []
+    bar = tqdm(total=n_fits, desc="paper study", unit="fit", disable=not progress)
+    with Parallel(n_jobs=n_jobs, return_as="generator") as parallel:
+        for t in tables:
+            t_start = time.perf_counter()
+            tjobs = [j for j in jobs if j[0] == t]
+            bar.set_description(f"Table {t}")
+            tasks = []
+            for _, p, s, m in tjobs:
+                y = feats[s].meta["fault"].to_numpy()
+                labels = class_labels(y)
+                est = make_model(m, random_state=random_state, scale=scale)
+                for sp in splits_of[(p, s)]:
+                    tasks.append(delayed(fit_split)(est, feats[s].X, y, sp, labels))
+            outs = []
+            for o in parallel(tasks):
+                outs.append(o)
+                bar.update(1)
+            k = 0
+            for _, p, s, m in tjobs:
+                splits = splits_of[(p, s)]
+                part = outs[k:k + len(splits)]
+                k += len(splits)
+                y = feats[s].meta["fault"].to_numpy()
+                result = ProtocolResult(
+                    splits=splits,
+                    train_accuracy=np.array([o[0] for o in part]),
+                    test_accuracy=np.array([o[1] for o in part]),
+                    confusion=np.sum([o[2] for o in part], axis=0),
+                    labels=class_labels(y),
+                    fit_time_s=np.array([o[3] for o in part]),
+                )
+                run_id = None
+                if track:
+                    run_id = _log_study_job(result, t, p, s, m, dataset_path, random_state,
+                                            scale, tracking_uri, experiment_prefix)
+                for i, sp in enumerate(splits):
+                    rows.append({
+                        "table": t, "protocol": p, "selection": f"selection{s}", "model": m,
+                        "split": sp.name, "split_label": sp.label,
+                        "train_accuracy": result.train_accuracy[i],
+                        "test_accuracy": result.test_accuracy[i],
+                        "fit_time_s": result.fit_time_s[i],
+                        "n_train": len(sp.train), "n_test": len(sp.test), "run_id": run_id,
+                    })
+            timings[t] = time.perf_counter() - t_start
+            log.info("Table %s: %d jobs in %.1f s", t, len(tjobs), timings[t])
+    bar.close()
+    results = pd.DataFrame(rows)
+    files = write_report(results, report_dir, ds=ds if figures else None, timings_s=timings,
+                         dataset_path=str(dataset_path))
+    return {"results": results, "timings_s": timings, "files": files, "n_jobs_run": len(jobs)}
+
+
+def _log_study_job(result, table, protocol, selection, model, dataset_path, random_state,
+                   scale, tracking_uri, experiment_prefix) -> str:
+    from learn.tracking import log_job
+
+    est = make_model(model, random_state=random_state, scale=scale)
+    params: dict[str, Any] = {
+        "table": table, "protocol": protocol, "selection": f"selection{selection}",
+        "model": model, "dataset": str(dataset_path), "random_state": random_state,
+        "scale": scale, "protocol_spec": PROTOCOLS[protocol],
+        "estimator": {k: v if isinstance(v, (bool, int, float, str, type(None))) else str(v)
+                      for k, v in est.get_params(deep=True).items() if "__" in k},
+    }
+    params["protocol_spec"] = {k: list(v) if isinstance(v, tuple) else v
+                               for k, v in PROTOCOLS[protocol].items()}
+    return log_job(result, experiment=f"{experiment_prefix}{protocol}",
+                   run_name=f"selection{selection}-{model}", params=params, config=params,
+                   tracking_uri=tracking_uri, tags={"task": "paper_study", "table": table})

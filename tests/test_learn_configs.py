@@ -1,0 +1,83 @@
+"""Every option of the train config composes and instantiates (conf/, learn.baselines)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_dir
+from hydra.utils import instantiate
+from omegaconf import OmegaConf
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+
+from learn.baselines import PAPER_MODELS, make_model
+from learn.protocols import PROTOCOLS
+from swgcli.train import CONFIG_PATH
+
+CONF = Path(CONFIG_PATH)
+
+
+def compose_train(overrides=()):
+    with initialize_config_dir(config_dir=CONFIG_PATH, version_base="1.3"):
+        return compose("train", overrides=list(overrides))
+
+
+def _options(group: str) -> list[str]:
+    return sorted(p.stem for p in (CONF / group).glob("*.yaml"))
+
+
+def _plain(params: dict) -> dict:
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()
+            if k != "steps" and not hasattr(v, "get_params")}
+
+
+@pytest.mark.parametrize("name", sorted(PAPER_MODELS))
+def test_model_config_instantiates_to_paper_model(name):
+    cfg = compose_train([f"model={name}", "seed=3"])
+    est = instantiate(cfg.model, _convert_="all")
+    assert isinstance(est, Pipeline)
+    assert isinstance(est.steps[0][1], StandardScaler) and est.steps[-1][0] == name
+    assert _plain(est.get_params()) == _plain(make_model(name, random_state=3).get_params())
+
+
+def test_every_model_option_is_a_paper_model():
+    assert set(_options("model")) >= set(PAPER_MODELS)
+
+
+def test_table_vi_settings():
+    assert make_model("rf")[-1].get_params()["n_estimators"] == 100
+    assert make_model("rf")[-1].get_params()["max_depth"] == 7
+    assert make_model("knn")[-1].get_params()["n_neighbors"] == 3
+    assert make_model("mlp")[-1].get_params()["hidden_layer_sizes"] == (10, 10, 10)
+    assert make_model("svm")[-1].get_params()["kernel"] == "rbf"
+    assert not isinstance(make_model("nb", scale=False)[0], StandardScaler)
+    with pytest.raises(ValueError, match="model must be one of"):
+        make_model("xgb")
+
+
+@pytest.mark.parametrize("name", sorted(PROTOCOLS))
+def test_protocol_config_matches_paper_protocol(name):
+    p = OmegaConf.to_container(compose_train([f"protocol={name}"]).protocol, resolve=True)
+    assert p.pop("name") == name
+    p.pop("random_state", None)
+    expected = {k: list(v) if isinstance(v, tuple) else v for k, v in PROTOCOLS[name].items()}
+    assert p == expected
+
+
+@pytest.mark.parametrize("group", ["data", "features", "logger", "paths"])
+def test_every_option_composes_and_resolves(group):
+    for opt in _options(group):
+        cfg = compose_train([f"{group}={opt}"])
+        OmegaConf.to_container(cfg, resolve=True)  # every interpolation resolves
+    assert compose_train().task == "study"
+
+
+@pytest.mark.parametrize("experiment", [e for e in _options("experiment") if e != "transfer"])
+def test_experiments_compose(experiment):
+    cfg = compose_train([f"experiment={experiment}"])
+    OmegaConf.to_container(cfg, resolve=True)
+    table_protocol = {"table_vii": "cv_clean", "table_viii": "cv_disturbed",
+                      "table_ix": "ood_clean", "table_x": "ood_disturbed"}
+    if experiment in table_protocol:
+        assert cfg.protocol.name == table_protocol[experiment]

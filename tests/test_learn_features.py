@@ -1,0 +1,118 @@
+"""Features of paper Table III, eq. (7)-(9) (learn.features)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from learn.features import (
+    META_COLUMNS,
+    extract_features,
+    feature_names,
+    order_spectrum,
+    paper_orders,
+)
+from swgsim.data import PER_SAMPLE, make_dataset
+
+FS = 10_000.0
+N_TIME = 600  # 2 revolutions at 2000 rpm
+
+
+def _pair(reference_signal, sample_signal, eta=(0.8, 0.8), n_rpm=2000.0):
+    """Data set of one reference window and one sample window (gear 1, one op point)."""
+    meta = {k: np.zeros(2) for k in PER_SAMPLE}
+    meta.update(gear=np.array([1, 1]), fault=np.array(["healthy", "eccentric_wg"]),
+                variant=np.array([-1, 0]), n_in_rpm=np.full(2, n_rpm),
+                t_out_nm=np.full(2, 39.0), disturbed=np.zeros(2, bool),
+                reference=np.array([True, False]), efficiency=np.array(eta),
+                n_in_mean_rpm=np.full(2, n_rpm), t_out_mean_nm=np.full(2, 39.0))
+    t = np.arange(N_TIME) / FS
+    return make_dataset(np.stack([reference_signal, sample_signal]), t, meta)
+
+
+def _healthy(n_rpm=2000.0):
+    t = np.arange(N_TIME) / FS
+    theta = 2 * np.pi * n_rpm / 60 * t
+    s = np.stack([1.0 + 0.1 * np.cos(2 * theta)]
+                 + [0.5 + np.cos(2 * (theta - k * np.pi / 2)) for k in range(4)])
+    return s, theta
+
+
+@pytest.mark.parametrize("selection, n_features", [(1, 11), (2, 11 + 5 * 32), (3, 2 * 32 + 1)])
+def test_shapes_and_names(synthetic_ds, selection, n_features):
+    X, names, meta = extract_features(synthetic_ds, f"selection{selection}")
+    n_ref = int(synthetic_ds["reference"].sum())
+    assert X.shape == (synthetic_ds.sizes["sample"] - n_ref, n_features)
+    assert X.dtype == np.float64 and np.isfinite(X).all()
+    assert names == feature_names(selection) and len(set(names)) == n_features
+    assert list(meta.columns) == ["sample", *META_COLUMNS]
+    assert len(meta) == len(X) and not synthetic_ds["reference"].values[meta["sample"]].any()
+    if selection == 1:
+        assert names[0] == "m_rel_s0" and names[5] == "var_rel_s0" and names[10] == "eta_rel"
+    if selection == 3:
+        assert names[0] == "dft_rel_ds13_o0.25" and names[32] == "dft_rel_ds24_o0.25"
+        assert names[-1] == "eta2_rel"
+
+
+def test_paper_orders():
+    o = paper_orders()
+    assert o.size == 32 and o[0] == 0.25 and o[-1] == 8.0
+    assert paper_orders(4.0, 0.5).tolist() == [0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0]
+
+
+@pytest.mark.parametrize("selection", [1, 2, 3])
+def test_window_identical_to_reference_gives_one(selection):
+    s, _ = _healthy()
+    X, names, _ = extract_features(_pair(s, s.copy()), selection)
+    ratios = [j for j, n in enumerate(names) if n != "eta2_rel"]
+    np.testing.assert_allclose(X[0, ratios], 1.0, rtol=1e-12, atol=0)
+    if selection == 3:
+        assert X[0, names.index("eta2_rel")] == 0.0
+
+
+def test_relative_mean_variance_efficiency_eq7_eq9():
+    s, _ = _healthy()
+    x = s.copy()
+    x[2] = 2.0 * x[2]  # mean and variance of s2 scale by 2 and 4
+    X1, n1, _ = extract_features(_pair(s, x, eta=(0.8, 0.9)), 1)
+    assert X1[0, n1.index("m_rel_s2")] == pytest.approx(2.0)
+    assert X1[0, n1.index("var_rel_s2")] == pytest.approx(4.0)
+    assert X1[0, n1.index("m_rel_s1")] == pytest.approx(1.0)
+    assert X1[0, n1.index("eta_rel")] == pytest.approx(0.9 / 0.8)
+    X3, n3, _ = extract_features(_pair(s, x, eta=(0.8, 0.9)), 3)
+    assert X3[0, n3.index("eta2_rel")] == pytest.approx(abs(1 - 0.9 / 0.8) ** 0.25)
+
+
+def test_order_spectrum_recovers_amplitude():
+    t = np.arange(N_TIME) / FS
+    f_in = np.array([2000.0 / 60, 4000.0 / 60])
+    x = np.stack([0.3 * np.cos(2 * np.pi * 2 * f[None] * t + 0.4) + 5.0 for f in f_in])[:, None]
+    a = order_spectrum(x, t, f_in, paper_orders())  # (2, 1, 32)
+    k2 = list(paper_orders()).index(2.0)
+    np.testing.assert_allclose(a[:, 0, k2], 0.3, rtol=1e-3)
+    assert (a[:, 0].argmax(axis=-1) == k2).all()
+    # chunking does not change results (vectorised in chunks of windows)
+    np.testing.assert_allclose(order_spectrum(x, t, f_in, paper_orders(), chunk_elements=1), a)
+
+
+def test_selection3_detects_planted_order1_harmonic_in_ds13():
+    s, theta = _healthy()
+    x = s.copy()
+    x[1] += 0.05 * np.cos(theta + 1.0)  # order 1 on s1 only
+    X, names, _ = extract_features(_pair(s, x), 3)
+    ds13 = [j for j, n in enumerate(names) if n.startswith("dft_rel_ds13_")]
+    ds24 = [j for j, n in enumerate(names) if n.startswith("dft_rel_ds24_")]
+    assert names[ds13[int(np.argmax(X[0, ds13]))]] == "dft_rel_ds13_o1.00"
+    assert X[0, names.index("dft_rel_ds13_o1.00")] > 20.0
+    np.testing.assert_allclose(X[0, ds24], 1.0, rtol=1e-9)  # s2 - s4 untouched
+
+
+def test_errors_name_parameter_and_allowed_values(synthetic_ds):
+    with pytest.raises(ValueError, match="selection must be one of 1, 2, 3"):
+        extract_features(synthetic_ds, "selection4")
+    no_ref = synthetic_ds.isel(sample=~synthetic_ds["reference"].values)
+    with pytest.raises(ValueError, match="no reference windows"):
+        extract_features(no_ref, 1)
+    gear3_ref = (synthetic_ds["reference"] & (synthetic_ds["gear"] == 3)).values
+    with pytest.raises(ValueError, match="have no reference window"):
+        extract_features(synthetic_ds.isel(sample=~gear3_ref), 1)

@@ -1,0 +1,86 @@
+"""swgsim-train: run_train on the synthetic data, MLflow logging, multirun, dispatch."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from hydra import compose, initialize_config_dir
+
+from learn import study
+from learn.study import TASKS, run_train
+from swgcli.train import CONFIG_PATH
+
+
+def compose_train(overrides=()):
+    with initialize_config_dir(config_dir=CONFIG_PATH, version_base="1.3"):
+        return compose("train", overrides=list(overrides))
+
+
+def _shrunk(tiny_dataset, tracking_uri, tmp_path, *overrides):
+    return compose_train([f"data.path={tiny_dataset}", f"logger.tracking_uri={tracking_uri}",
+                          f"paths.root_dir={tmp_path}", *overrides])
+
+
+@pytest.mark.parametrize("protocol", ["cv_clean", "ood_disturbed"])
+def test_run_train_beats_chance_and_logs(tiny_dataset, tracking_uri, tmp_path, protocol):
+    import mlflow
+
+    cfg = _shrunk(tiny_dataset, tracking_uri, tmp_path, "model=rf", "features=selection1",
+                  f"protocol={protocol}", "model.estimator.n_estimators=20")
+    out = run_train(cfg)
+    n_splits = 4 if protocol.startswith("cv") else 3
+    assert len(out["test_accuracy"]) == len(out["train_accuracy"]) == n_splits
+    assert out["mean_test_accuracy"] > 0.4  # chance: 1/6
+    client = mlflow.MlflowClient(tracking_uri)
+    run = client.get_run(out["run_id"])
+    assert run.data.metrics["mean_test_accuracy"] == pytest.approx(out["mean_test_accuracy"])
+    assert run.data.params["model.estimator.n_estimators"] == "20"
+    assert run.data.params["protocol.name"] == protocol
+    assert {a.path for a in client.list_artifacts(out["run_id"])} == {
+        "config.yaml", "confusion_matrix.png"}
+    assert client.get_experiment(run.info.experiment_id).name == protocol
+
+
+def test_unknown_task_is_rejected(tiny_dataset, tracking_uri, tmp_path):
+    cfg = _shrunk(tiny_dataset, tracking_uri, tmp_path, "task=tarnsfer")
+    with pytest.raises(ValueError, match="task must be one of"):
+        run_train(cfg)
+
+
+def test_task_dispatch(monkeypatch, tmp_path):
+    calls = []
+    monkeypatch.setitem(TASKS, "probe", f"{__name__}._probe")
+    monkeypatch.setattr(sys.modules[__name__], "_probe", lambda cfg: calls.append(cfg) or {"ok": 1},
+                        raising=False)
+    cfg = compose_train(["task=probe"])
+    assert run_train(cfg) == {"ok": 1} and calls == [cfg]
+    assert TASKS["transfer"] == "learn.transfer.run_transfer"
+    assert TASKS["study"].rsplit(".", 1) == [study.__name__, "run_study_job"]
+
+
+def test_multirun_cli(tiny_dataset, tracking_uri, tmp_path):
+    cmd = [sys.executable, "-m", "swgcli.train", "-m", "model=rf,knn",
+           "features=selection1,selection3", "protocol=ood_disturbed",
+           f"data.path={tiny_dataset}", f"logger.tracking_uri={tracking_uri}",
+           f"paths.root_dir={tmp_path}", f"hydra.sweep.dir={tmp_path / 'multirun'}"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    jobs = sorted(p.name for p in (tmp_path / "multirun").iterdir() if p.name.isdigit())
+    assert jobs == ["0", "1", "2", "3"]
+    import mlflow
+
+    client = mlflow.MlflowClient(tracking_uri)
+    exp = client.get_experiment_by_name("ood_disturbed")
+    names = {r.info.run_name for r in client.search_runs([exp.experiment_id])}
+    assert {"selection1-rf", "selection3-rf", "selection1-knn", "selection3-knn"} <= names
+
+
+def test_paper_study_task(tiny_dataset, tracking_uri, tmp_path):
+    cfg = _shrunk(tiny_dataset, tracking_uri, tmp_path, "experiment=paper",
+                  "study.tables=[IX]", "study.models=[nb]", "study.figures=false")
+    out = run_train(cfg)
+    assert set(out["mean_test_accuracy"]) == {f"IX/selection{s}/nb" for s in (1, 2, 3)}
+    assert out["mean_test_accuracy"]["IX/selection1/nb"] > 0.4  # chance: 1/6
+    assert (tmp_path / "reports" / "paper" / "tables_vii_x.md").is_file()
