@@ -62,7 +62,8 @@ def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,
     alpha = rng.uniform(0.0, 2 * np.pi, size=(n_w, n_s, 4, 1))
     f_in = np.asarray(n_in_rpm, float) / 60.0  # rev/s
     j = np.arange(1, 5)
-    wt = 2 * np.pi * (f_in[:, None] / j[None, :])[:, :, None] * time_s[None, None, :]  # (n_w, 4, n_t)
+    # (n_w, 4, n_t)
+    wt = 2 * np.pi * (f_in[:, None] / j[None, :])[:, :, None] * time_s[None, None, :]
     # a sin(wt + alpha) = a cos(alpha) sin(wt) + a sin(alpha) cos(wt)
     cs = (aj * np.cos(alpha))[..., 0]  # (n_w, n_s, 4)
     sn = (aj * np.sin(alpha))[..., 0]

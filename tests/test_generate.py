@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 import yaml
 
+from swgcli import CONF_DIR
 from swgsim import data as dsio
 from swgsim import generate as gen
-from swgcli import CONF_DIR
 
 
 def tiny_cfg(**chain):

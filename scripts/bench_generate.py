@@ -1,0 +1,117 @@
+"""Benchmark data generation: fast influence path against the naive per-step solver.
+
+Generates a data set from scratch into a temporary folder (or ``--out``), measures wall
+time and peak memory (this process and its workers), then times the naive reference (one
+sparse solve of the whole truss per time step, :meth:`SimulationChain.signals_naive`) on a
+sample of windows of the same data set, and prints what it measured. The last line is one
+JSON object: windows, wall_s, windows_per_s, peak_rss_mib, speedup_vs_naive, and the
+figures behind them.
+
+    python scripts/bench_generate.py                 # the paper grid, 2 workers
+    python scripts/bench_generate.py --dataset tiny --n-jobs 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def peak_rss_mib() -> float:
+    """Peak resident memory of this process and of its largest child [MiB] (Linux: KiB)."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return (own + kids) / 1024.0
+
+
+def main(argv: list[str] | None = None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--dataset", default="paper", help="preset in conf/dataset (paper, tiny)")
+    ap.add_argument("--n-jobs", type=int, default=2, help="worker processes (default 2)")
+    ap.add_argument("--out", default=None, help="output folder (default: a temporary one)")
+    ap.add_argument("--naive-windows", type=int, default=3,
+                    help="windows timed with the naive solver (default 3)")
+    ap.add_argument("--naive-steps", type=int, default=40,
+                    help="time steps timed per naive window, extrapolated to the window")
+    args = ap.parse_args(argv)
+
+    from swgsim.chain import ChainSettings, SimulationChain
+    from swgsim.faults import apply_fault
+    from swgsim.flexspline import Mesh
+    from swgsim.generate import gear_params, generate, layout_for
+
+    cfg = yaml.safe_load(open(ROOT / "conf" / "dataset" / f"{args.dataset}.yaml"))
+    tmp = None
+    out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="bench_gen_")) / "ds"
+    if args.out is None:
+        tmp = out.parent
+    elif out.exists():
+        shutil.rmtree(out)
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; "
+          f"data set '{args.dataset}', n_jobs={args.n_jobs}, out={out}")
+    t0 = time.perf_counter()
+    summary = generate(cfg, out, n_jobs=args.n_jobs, progress=False)
+    wall = time.perf_counter() - t0
+    rss = peak_rss_mib()
+    windows = int(summary["windows"])
+    print(f"fast path: {windows} windows in {wall:.1f} s ({windows / wall:.0f} windows/s), "
+          f"peak RSS {rss:.0f} MiB")
+
+    # naive reference on a sample of windows of the same data set (gear 1, first speed)
+    ch = cfg["chain"]
+    settings = ChainSettings(sample_rate_hz=ch["sample_rate_hz"], window_s=ch["window_s"],
+                             settle_s=ch["settle_s"], substeps=ch["substeps"],
+                             contact_half_width_deg=ch["contact_half_width_deg"],
+                             ecc_load_share=ch["ecc_load_share"])
+    chain = SimulationChain(layout_for(cfg, cfg["gears"][0]), settings=settings,
+                            mesh=Mesh(int(cfg["mesh"]["n_theta"])))
+    h = gear_params(cfg, cfg["gears"][0])
+    cases = [h, apply_fault(h, "eccentric_wg", 0.1, 36.0),
+             apply_fault(h, "tip_tooth_crack", 1.0, 90.0),
+             apply_fault(h, "root_tooth_crack", 0.9, 54.0)][: max(args.naive_windows, 1)]
+    n_in = cfg["operating_points"]["n_in_rpm"][0]
+    t_out = cfg["operating_points"]["t_out_nm"][-1]
+    sig, res = chain.simulate(cases, n_in, t_out, 0.3)
+    n_t = res.time.size
+    k = min(args.naive_steps, n_t)
+    per_window = []
+    max_err = 0.0
+    for i, p in enumerate(cases):
+        chain.signals_naive(p, res.psi[i, :1], res.t_out[i, :1])  # factorisation outside
+        t1 = time.perf_counter()
+        naive = chain.signals_naive(p, res.psi[i, :k], res.t_out[i, :k])
+        per_window.append((time.perf_counter() - t1) / k * n_t)
+        max_err = max(max_err, float(np.abs(naive - sig[i, :, :k]).max() / np.abs(naive).max()))
+    naive_s = float(np.mean(per_window))
+    fast_s = wall / windows
+    speedup = naive_s / fast_s
+    print(f"naive reference: {naive_s:.2f} s per window ({n_t} steps, timed on {k} steps of "
+          f"{len(cases)} windows); fast path {fast_s * 1e3:.2f} ms per window (everything "
+          f"included); speed-up {speedup:.0f}x; max relative difference {max_err:.1e}")
+    if tmp is not None:
+        shutil.rmtree(tmp, ignore_errors=True)
+    result = {"windows": windows, "wall_s": round(wall, 2),
+              "windows_per_s": round(windows / wall, 1), "peak_rss_mib": round(rss, 1),
+              "speedup_vs_naive": round(speedup, 1), "naive_s_per_window": round(naive_s, 3),
+              "fast_ms_per_window": round(fast_s * 1e3, 3), "n_jobs": args.n_jobs,
+              "dataset": args.dataset, "naive_max_rel_diff": max_err,
+              "dynamics_included_in_naive": False}
+    print(json.dumps(result))
+    return result
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
