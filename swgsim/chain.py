@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import dynamics
-from .faults import ChainParams
+from .faults import ChainParams, angle_index, mesh_severity
 from .flexspline import FlexsplineGeometry, Mesh, TrussModel, factorize
 from .influence import (
     Influence,
@@ -62,6 +62,11 @@ class ChainSettings:
     ecc_load_share: float = 1.0
 
 
+def _key(p: ChainParams) -> tuple:
+    """Influence-cache key of a variant: (-1, 0.0) healthy, else (position, severity)."""
+    return (-1, 0.0) if not p.has_root_crack else p.root_crack_key()
+
+
 class SimulationChain:
     """Dynamics, flexspline truss and gauges of one gear design.
 
@@ -100,9 +105,9 @@ class SimulationChain:
     @classmethod
     def from_influences(cls, layout: SensorLayout, influences: dict[tuple, Influence],
                         settings: ChainSettings | None = None) -> SimulationChain:
-        """A chain from precomputed influences, keyed by (root_crack_index, severity).
+        """A chain from precomputed influences, keyed by ``ChainParams.root_crack_key()``.
 
-        The key (-1, 0.0) is the healthy structure. Such a chain needs no truss (workers
+        The key (nan, 0.0) is the healthy structure. Such a chain needs no truss (workers
         of the generator get their influences from the parent process); variants whose
         root crack is not among the keys raise KeyError, and the naive reference path is
         not available.
@@ -114,25 +119,20 @@ class SimulationChain:
     # ------------------------------------------------------------------ influence
     def influence(self, p: ChainParams) -> Influence:
         """Influence coefficients for a variant's flexspline (healthy or root crack)."""
-        key = (p.root_crack_index, p.root_crack_severity)
-        if p.root_crack_index < 0 or p.root_crack_severity == 0.0:
-            key = (-1, 0.0)
+        key = _key(p)
         if key not in self._influence:
             if self.solver is None:
                 raise KeyError(f"no precomputed influence for root crack {key}")
-            if p.root_crack_index < 0 or p.root_crack_severity == 0.0:
+            if not p.has_root_crack:
                 inf = self.solver._coefficients(*self._rows_lam)
             else:
-                inf = self.solver.root_crack(self.layout, p.root_crack_index,
-                                             p.root_crack_severity, adjoint=self._rows_lam)
+                inf = self.solver.root_crack_at(self.layout, p.root_crack_deg,
+                                                p.root_crack_severity, adjoint=self._rows_lam)
             self._influence[key] = inf
         return self._influence[key]
 
     def _tooth_factors(self, p: ChainParams) -> np.ndarray:
-        c = np.ones(self.influence(p).theta.size)
-        if p.tip_crack_index >= 0:
-            c[p.tip_crack_index] = 1.0 - p.tip_crack_severity
-        return c
+        return p.tooth_factors(self.influence(p).theta)
 
     def load_share(self, p: ChainParams, psi: np.ndarray) -> np.ndarray:
         """Load factor of the mesh zone at ψ (the one at ψ + π carries 2 − it)."""
@@ -213,8 +213,10 @@ class SimulationChain:
         ndarray, shape (5, n_t)
         """
         m = self.model
-        if p.root_crack_index >= 0 and p.root_crack_severity > 0:
-            mc = m.cracked(p.root_crack_index, p.root_crack_severity)
+        if p.has_root_crack:
+            n = m.mesh.n_theta
+            mc = m.cracked(angle_index(p.root_crack_deg, n),
+                           mesh_severity(p.root_crack_severity, n))
             lu = factorize(mc.K[m.free][:, m.free])
             k_fp = mc.K[m.free][:, m.prescribed].tocsc()
         else:

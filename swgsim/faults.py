@@ -39,24 +39,65 @@ class ChainParams:
         z_f = 200, PHYSICS.md sec. 2).
     ecc_m, ecc_theta_rad : float
         WG eccentricity [m] and its direction in the flexspline frame [rad].
-    root_crack_index : int
-        Angle index of a root tooth crack (−1: none).
+    root_crack_deg : float
+        Position of a root tooth crack in the flexspline frame [deg] (NaN: none); the
+        truss cuts the bars crossing the line just after the node nearest to it.
     root_crack_severity : float
-        Fraction of the crack bars' stiffness lost [-].
-    tip_crack_index : int
-        Angle index of a tip tooth crack (−1: none).
+        Fraction of the crack bars' stiffness lost, defined on the reference mesh [-]
+        (:func:`mesh_severity` converts it for other meshes).
+    tip_crack_deg : float
+        Centre of a tip tooth crack in the flexspline frame [deg] (NaN: none).
     tip_crack_severity : float
-        Fraction of the tooth force lost at that angle [-].
+        Fraction of the tooth force lost over the crack's arc [-].
+    crack_width_deg : float
+        Arc over which a tip crack removes tooth force [deg] (3 deg, about 1.7 tooth
+        pitches of the 200-tooth flexspline, one node of the reference mesh).
     """
 
     gear: GearParams
     w0_m: float = 0.254e-3
     ecc_m: float = 0.0
     ecc_theta_rad: float = 0.0
-    root_crack_index: int = -1
+    root_crack_deg: float = float("nan")
     root_crack_severity: float = 0.0
-    tip_crack_index: int = -1
+    tip_crack_deg: float = float("nan")
     tip_crack_severity: float = 0.0
+    crack_width_deg: float = 3.0
+
+    @property
+    def has_root_crack(self) -> bool:
+        """Whether the variant has a root crack of non-zero severity."""
+        return self.root_crack_severity > 0.0 and not np.isnan(self.root_crack_deg)
+
+    def root_crack_key(self) -> tuple[float, float]:
+        """(position [deg], severity) of the root crack; (nan, 0.0) for none."""
+        if not self.has_root_crack:
+            return (float("nan"), 0.0)
+        return (float(self.root_crack_deg), float(self.root_crack_severity))
+
+    def tooth_factors(self, theta_rad: np.ndarray) -> np.ndarray:
+        """Tooth-force factor c_i of each node, 1 − s × (share of its arc in the crack).
+
+        Parameters
+        ----------
+        theta_rad : ndarray, shape (n_theta,)
+            Node angles, uniformly spaced [rad].
+
+        Returns
+        -------
+        ndarray, shape (n_theta,)
+            1 everywhere without a tip crack; the lost load integrates to s times the crack
+            arc whatever the mesh.
+        """
+        c = np.ones(theta_rad.size)
+        if self.tip_crack_severity == 0.0 or np.isnan(self.tip_crack_deg):
+            return c
+        dth = np.rad2deg(2 * np.pi / theta_rad.size)
+        d = (np.rad2deg(theta_rad) - self.tip_crack_deg + 180.0) % 360.0 - 180.0
+        lo = np.maximum(d - dth / 2, -self.crack_width_deg / 2)
+        hi = np.minimum(d + dth / 2, self.crack_width_deg / 2)
+        overlap = np.clip(hi - lo, 0.0, None) / dth
+        return c - self.tip_crack_severity * np.minimum(overlap, 1.0)
 
 
 @dataclass(frozen=True)
@@ -73,7 +114,7 @@ class Fault:
     uses_position : bool
         Whether the fault has a circumferential position.
     apply : callable
-        ``apply(params, severity, position_deg, n_theta) -> ChainParams``.
+        ``apply(params, severity, position_deg) -> ChainParams``.
     signature : str
         Expected signature in the signals (paper Sec. II-C).
     """
@@ -82,43 +123,63 @@ class Fault:
     model: str
     severity_range: tuple[float, float]
     uses_position: bool
-    apply: Callable[[ChainParams, float, float, int], ChainParams]
+    apply: Callable[[ChainParams, float, float], ChainParams]
     signature: str
 
 
-def _angle_index(position_deg: float, n_theta: int) -> int:
+#: Mesh on which root-crack severities are defined (the default truss, 3 deg per node).
+REFERENCE_N_THETA = 120
+
+
+def angle_index(position_deg: float, n_theta: int) -> int:
+    """Index of the node nearest to a position [deg] on a mesh of ``n_theta`` nodes."""
     return int(round(np.mod(position_deg, 360.0) / 360.0 * n_theta)) % n_theta
 
 
-def _damping(p, s, pos, n):
+def mesh_severity(severity: float, n_theta: int) -> float:
+    """Root-crack stiffness loss on a mesh of ``n_theta`` nodes with the same compliance.
+
+    Cutting bars of a cell of width a to (1 − s) adds the compliance s / ((1 − s) k) ∝
+    a s / (1 − s). Keeping it equal to that of the reference mesh (a_ref, s) makes the
+    crack a physical defect rather than a mesh artefact:
+    s' / (1 − s') = s / (1 − s) · a_ref / a.
+    """
+    if severity <= 0.0:
+        return 0.0
+    rho = severity / (1.0 - severity) * n_theta / REFERENCE_N_THETA
+    return float(rho / (1.0 + rho))
+
+
+def _damping(p, s, pos):
     g = dataclasses.replace(p.gear, b1_nms=p.gear.b1_nms * (1.0 - s))
     return dataclasses.replace(p, gear=g)
 
 
-def _stiffness(p, s, pos, n):
+def _stiffness(p, s, pos):
     g = dataclasses.replace(p.gear, k1_nm_per_rad=p.gear.k1_nm_per_rad * (1.0 - s))
     return dataclasses.replace(p, gear=g)
 
 
-def _eccentric(p, s, pos, n):
+def _eccentric(p, s, pos):
     if s == 0.0:
         return p
     return dataclasses.replace(p, ecc_m=s * p.w0_m, ecc_theta_rad=float(np.deg2rad(pos)))
 
 
-def _root(p, s, pos, n):
+def _root(p, s, pos):
     if s == 0.0:
         return p
-    return dataclasses.replace(p, root_crack_index=_angle_index(pos, n), root_crack_severity=s)
+    return dataclasses.replace(p, root_crack_deg=float(np.mod(pos, 360.0)),
+                               root_crack_severity=s)
 
 
-def _tip(p, s, pos, n):
+def _tip(p, s, pos):
     if s == 0.0:
         return p
-    return dataclasses.replace(p, tip_crack_index=_angle_index(pos, n), tip_crack_severity=s)
+    return dataclasses.replace(p, tip_crack_deg=float(np.mod(pos, 360.0)), tip_crack_severity=s)
 
 
-def _healthy(p, s, pos, n):
+def _healthy(p, s, pos):
     return p
 
 
@@ -154,8 +215,8 @@ def get_fault(name: str) -> Fault:
         raise ValueError(f"unknown fault {name!r}; allowed: {sorted(FAULTS)}") from None
 
 
-def apply_fault(params: ChainParams, name: str, severity: float, position_deg: float = 0.0,
-                n_theta: int = 120) -> ChainParams:
+def apply_fault(params: ChainParams, name: str, severity: float,
+                position_deg: float = 0.0) -> ChainParams:
     """Apply a registered fault to healthy parameters.
 
     Parameters
@@ -168,8 +229,6 @@ def apply_fault(params: ChainParams, name: str, severity: float, position_deg: f
         Within the fault's ``severity_range`` (0 reproduces ``params`` exactly).
     position_deg : float
         Circumferential position in the flexspline frame [deg] (faults with a position).
-    n_theta : int
-        Truss nodes around the circumference (positions snap to nodes).
 
     Raises
     ------
@@ -180,4 +239,4 @@ def apply_fault(params: ChainParams, name: str, severity: float, position_deg: f
     lo, hi = f.severity_range
     if not (lo <= severity <= hi) or not np.isfinite(severity):
         raise ValueError(f"severity of {name} must lie in [{lo}, {hi}], got {severity}")
-    return f.apply(params, float(severity), float(position_deg), n_theta)
+    return f.apply(params, float(severity), float(position_deg))

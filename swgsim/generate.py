@@ -224,7 +224,7 @@ def gear_influences(cfg: dict, shards: list[ShardSpec]) -> dict[int, dict[tuple,
     Returns
     -------
     dict
-        gear id -> {(root_crack_index, severity): Influence}, (-1, 0.0) healthy.
+        gear id -> {(position_deg, severity): Influence}, (-1, 0.0) healthy.
     """
     n_theta = int(cfg["mesh"]["n_theta"])
     solver = InfluenceSolver(TrussModel(FlexsplineGeometry(), Mesh(n_theta)))
@@ -233,16 +233,16 @@ def gear_influences(cfg: dict, shards: list[ShardSpec]) -> dict[int, dict[tuple,
         for w in s.windows:
             if w.fault == "root_tooth_crack" and w.severity > 0:
                 p = apply_fault(ChainParams(gear=rt1_size20()), w.fault, w.severity,
-                                w.position_deg, n_theta)
-                keys.add((p.root_crack_index, p.root_crack_severity))
+                                w.position_deg)
+                keys.add(p.root_crack_key())
     out = {}
     for g in cfg["gears"]:
         lay = layout_for(cfg, g)
         adj = solver.adjoint(lay)
         healthy = solver._coefficients(*adj)
         inf = {(-1, 0.0): healthy}
-        for idx, sev in sorted(keys):
-            inf[(idx, sev)] = solver.root_crack(lay, idx, sev, adjoint=adj, healthy=healthy)
+        for pos, sev in sorted(keys):
+            inf[(pos, sev)] = solver.root_crack_at(lay, pos, sev, adjoint=adj, healthy=healthy)
         out[int(g["id"])] = inf
     return out
 
@@ -278,13 +278,12 @@ def simulate_shard(cfg: dict, shard: ShardSpec, influences: dict[tuple, Influenc
                              ecc_load_share=float(ch["ecc_load_share"]))
     chain = SimulationChain.from_influences(layout_for(cfg, gear), influences, settings)
     healthy = gear_params(cfg, gear)
-    n_theta = int(cfg["mesh"]["n_theta"])
     rng = np.random.default_rng(np.random.SeedSequence(int(cfg["seed"]),
                                                        spawn_key=(shard.gear, shard.speed_index)))
     wins = shard.windows
     phi0 = rng.uniform(0.0, 2 * np.pi, size=len(wins))
     params = [apply_fault(healthy, w.fault, w.severity,
-                          0.0 if np.isnan(w.position_deg) else w.position_deg, n_theta)
+                          0.0 if np.isnan(w.position_deg) else w.position_deg)
               for w in wins]
     n_t = int(round(settings.window_s * settings.sample_rate_hz))
     # one vectorised dynamic run for every window of the shard

@@ -119,6 +119,21 @@ class InfluenceSolver:
                                               np.asarray(self._tooth.T @ Z))
         return self._crack_cache[theta_index]
 
+    def root_crack_at(self, layout: SensorLayout, position_deg: float, severity: float,
+                      adjoint=None, healthy: Influence | None = None) -> Influence:
+        """Influence with a root crack at a position [deg] of nominal severity.
+
+        The crack cuts the bars after the node nearest to ``position_deg``; the nominal
+        severity (defined on the reference mesh) is converted to this mesh with
+        :func:`swgsim.faults.mesh_severity` so that the crack's compliance does not depend
+        on the mesh.
+        """
+        from .faults import angle_index, mesh_severity
+
+        n = self.model.mesh.n_theta
+        return self.root_crack(layout, angle_index(position_deg, n),
+                               mesh_severity(severity, n), adjoint=adjoint, healthy=healthy)
+
     def root_crack(self, layout: SensorLayout, theta_index: int, severity: float,
                    adjoint=None, healthy: Influence | None = None) -> Influence:
         """Influence with a root-tooth crack (bars scaled by 1 − severity), by Woodbury.
