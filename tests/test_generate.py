@@ -165,3 +165,22 @@ def test_foreign_out_dir_is_refused_and_kept(tiny_set):
     with pytest.raises(ValueError, match="another config"):
         gen.generate(cfg, out, progress=False)
     assert sorted(p.name for p in out.iterdir()) == before
+
+
+@pytest.mark.slow
+def test_submitit_local_launcher_one_job_per_shard(tmp_path):
+    """Cluster scale-out path: one Hydra submitit job per shard, manifest by the last."""
+    out = tmp_path / "ds"
+    exe = Path(sys.executable).parent / "swgsim-generate"
+    cmd = [str(exe), "-m", "dataset=tiny", f"out_dir={out}", "shard=0,1,2",
+           "hydra/launcher=submitit_local", "hydra.launcher.timeout_min=10", "progress=false",
+           "dataset.chain.window_s=0.02", "dataset.operating_points.t_out_nm=[39.0]"]
+    r = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stderr[-3000:]
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["complete"] and len(manifest["shards"]) == 3
+    cfg = yaml.safe_load(open(Path(CONF_DIR) / "dataset" / "tiny.yaml"))
+    cfg["chain"]["window_s"] = 0.02
+    cfg["operating_points"]["t_out_nm"] = [39.0]
+    s = gen.generate(cfg, tmp_path / "local", n_jobs=1, progress=False)
+    assert s["content_sha256"] == manifest["content_sha256"]
