@@ -25,6 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from .flexspline import TrussModel
 from .sensors import SensorLayout, signal_rows
@@ -222,18 +223,29 @@ def torque_influence(psi: np.ndarray, g: np.ndarray, theta: np.ndarray, c: np.nd
     k = int(np.ceil(half_width_rad / dth)) + 1
     offs = np.arange(-k, k + 1)
     sa = np.broadcast_to(np.asarray(share_a, float), psi.shape)
-    num = np.zeros((g.shape[0], psi.size))
-    den = np.zeros(psi.size)
+    n_t = psi.size
+    cols, vals = [], []
+    alpha = 0.5 * np.pi / half_width_rad * dth  # window phase per node spacing
+    ck, sk = np.cos(alpha * offs), np.sin(alpha * offs)
     for centre, share in ((psi, sa), (psi + np.pi, 2.0 - sa)):
-        base = np.round(centre / dth).astype(np.int64)
+        pos = centre / dth
+        base = np.round(pos).astype(np.int64)
+        frac = pos - base  # in [-0.5, 0.5]
+        # cos(alpha (k - frac)) by the addition theorem: two trig calls per time step
+        cw = np.cos(alpha * frac)[:, None] * ck + np.sin(alpha * frac)[:, None] * sk
+        inside = np.abs(offs[None, :] - frac[:, None]) * dth < half_width_rad
         idx = (base[:, None] + offs[None, :]) % n  # (n_t, 2K+1)
-        delta = (base[:, None] + offs[None, :]) * dth - centre[:, None]
-        # |delta| < pi here, so the window needs no wrapping
-        cw = np.cos((0.5 * np.pi / half_width_rad) * delta)
-        w = np.where(np.abs(delta) < half_width_rad, cw * cw, 0.0) * c[idx] * share[:, None]
-        num += np.einsum("tk,tki->it", w, g.T[idx])
-        den += w.sum(axis=1)
-    return num / den
+        w = np.where(inside, cw * cw, 0.0) * c[idx] * share[:, None]
+        cols.append(idx)
+        vals.append(w)
+    # one sparse row of zone weights per time step; the weighted sums are a CSR product
+    idx = np.concatenate(cols, axis=1)
+    w = np.concatenate(vals, axis=1)
+    m = idx.shape[1]
+    wmat = sp.csr_matrix((w.ravel(), idx.ravel(), np.arange(0, n_t * m + 1, m)),
+                         shape=(n_t, n))
+    num = wmat @ g.T  # (n_t, 5)
+    return (num / w.sum(axis=1)[:, None]).T
 
 
 def torque_influence_exact(psi: np.ndarray, g: np.ndarray, theta: np.ndarray, c: np.ndarray,
