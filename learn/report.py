@@ -202,16 +202,29 @@ def _example_windows(ds, gear=None, n_in_rpm=None, t_out_nm=None, disturbed=Fals
     return idx, int(gear), float(n_in_rpm), float(t_out_nm)
 
 
+def _align(ref: np.ndarray, other: np.ndarray, channel: int = 1) -> int:
+    """Lag [samples] that best aligns ``other`` to ``ref`` (windows start at random WG
+    angles): the maximum of the cross-correlation of one zero-mean channel over the first
+    half of the window."""
+    a = ref[channel] - ref[channel].mean()
+    b = other[channel] - other[channel].mean()
+    n = a.size
+    lags = np.arange(n // 2)
+    score = [np.dot(a[: n - k], b[k:]) / (n - k) for k in lags]
+    return int(lags[int(np.argmax(score))])
+
+
 def write_figures(ds, report_dir: str | Path, gear: int | None = None,
                   n_in_rpm: float | None = None, t_out_nm: float | None = None) -> dict[str, Path]:
     """Figures in the manner of the paper's Fig. 6, 7 and 8.
 
     Fig. 6: the five signals of the healthy gear (solid) and of each faulty class
-    (dashed), one panel per fault. Fig. 7: DFT amplitude of zero-mean s0, s1,
-    ds13 = s1 - s3 and ds24 = s2 - s4 versus order of the input rotation, one line per
-    class. Fig. 8: clean (solid) versus disturbed (dashed) healthy signals. One gear and
-    operating point (default: the lowest gear at 2000 rpm, 39 N m, where present); the
-    most severe variant of each fault.
+    (dashed, shifted in time onto the healthy window's WG angle), one panel per fault.
+    Fig. 7: DFT amplitude of zero-mean s0, s1, ds13 = s1 - s3 and ds24 = s2 - s4 versus
+    order of the input rotation, one line per class. Fig. 8: clean (solid) versus
+    disturbed (dashed) healthy signals. One gear and operating point (default: the
+    lowest gear at 2000 rpm, 39 N m, where present); the most severe variant of each
+    fault.
 
     Parameters
     ----------
@@ -249,9 +262,12 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
     fig = Figure(figsize=(12, 7), layout="constrained")
     axes = fig.subplots(2, 3, sharex=True).ravel()
     for ax, f, letter in zip(axes, faults, "abcdef", strict=False):
+        # windows start at random WG angles: shift the faulty one onto the healthy one
+        lag = _align(sig[healthy], sig[idx[f]])
+        n = t.size - lag
         for i in range(5):
-            ax.plot(t, sig[healthy, i], color=colors[i], lw=1.0, label=f"$s_{i}$")
-            ax.plot(t, sig[idx[f], i], color=colors[i], lw=1.0, ls="--")
+            ax.plot(t[:n], sig[healthy, i, :n], color=colors[i], lw=1.0, label=f"$s_{i}$")
+            ax.plot(t[:n], sig[idx[f], i, lag:], color=colors[i], lw=1.0, ls="--")
         ax.set_title(f"({letter}) {f.replace('_', ' ')}", fontsize=9)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("signal [mV/V]")
