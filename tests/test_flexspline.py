@@ -141,3 +141,19 @@ def test_bad_mesh_and_gauge_are_refused():
     # 1.7 mm cells at r = 32 mm with n_theta = 120: a 1 mm grid would not average
     with pytest.raises(ValueError, match="too coarse for the gauge layout"):
         grid_row(m, Grid(32e-3, 0.0, 0.0, length_m=1e-3))
+
+
+@pytest.mark.slow
+def test_mesh_fidelity_default_vs_twice_as_fine():
+    """The default truss (n_theta = 120) against n_theta = 240: signals within 5 % RMS,
+    fault signatures (faulty minus healthy) within 10 % (scripts/mesh_convergence.py)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "scripts" / "mesh_convergence.py"
+    spec = importlib.util.spec_from_file_location("mesh_convergence", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    out = mod.main(["--meshes", "120", "240"])
+    assert out[120]["overall"] < 0.05
+    assert out[120]["fault_signature"] < 0.10
