@@ -77,7 +77,7 @@ class InfluenceSolver:
         n_rim = m.rim_stations.size
         th = np.tile(m.theta, n_rim)
         self._wg_basis = np.stack([np.cos(2 * th), np.sin(2 * th), np.cos(th), np.sin(th)])
-        self._crack_cache: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._crack_cache: dict[int, tuple] = {}
 
     def _coefficients(self, rows, lam) -> Influence:
         """Influence coefficients from signal rows (5, n_dof) and adjoints (n_F, 5)."""
@@ -100,25 +100,60 @@ class InfluenceSolver:
         rows, lam = self.adjoint(layout)
         return self._coefficients(rows, lam)
 
+    def _rotation(self, steps: int) -> np.ndarray:
+        """Positions in F of the free DOFs rotated by ``steps`` node spacings.
+
+        The truss, its supports and its loads are cyclically symmetric, and DOFs are
+        cylindrical components, so a rotation by whole node spacings is a permutation:
+        entry p is the position in F of the DOF that F[p] moves to.
+        """
+        m = self.model
+        n_t = m.mesh.n_theta
+        node, comp = np.divmod(self._F, 3)
+        q, ang = np.divmod(node, n_t)
+        moved = 3 * (q * n_t + (ang + steps) % n_t) + comp
+        pos = np.full(m.n_dof, -1)
+        pos[self._F] = np.arange(self._F.size)
+        out = pos[moved]
+        if np.any(out < 0):  # not expected: supports are axisymmetric
+            raise RuntimeError("free DOF set is not cyclically symmetric")
+        return out
+
     def _crack_basis(self, theta_index: int):
         """Reduced Woodbury data of the crack bars at an angle index.
 
         ΔK = U D Uᵀ with U = Bᵀ of the crack bars (all DOFs) and D = −s diag(k). Returns
-        U_F (n_F, r), U_P[wg] (n_wg, r), k (r,), U_FᵀZ (r, r), (K_PF Z)[wg] (n_wg, r)
-        and toothᵀZ (n_theta, r), with Z = K_FF⁻¹ U_F: all that an updated influence
-        needs.
+        U_Fᵀ (r, n_F, sparse), the permutation of F that rotates index 0 onto this index,
+        U_P[wg] (n_wg, r), k (r,), U_FᵀZ (r, r), (K_PF Z)[wg] (n_wg, r) and
+        toothᵀZ (n_theta, r), with Z = K_FF⁻¹ U_F: all that an updated influence needs.
+
+        Only the crack at index 0 is solved for (r sparse solves); every other position
+        is its rotation (cyclic symmetry, :meth:`_rotation`), exact to round-off.
         """
-        if theta_index not in self._crack_cache:
-            bars = self.model.root_crack_bars(theta_index)
-            u_all = self.model._bar_rows(bars).toarray().T  # (n_dof, r)
-            U = u_all[self._F]
-            u_p_wg = u_all[self._P][self._wg_pos]
+        if 0 not in self._crack_cache:
+            bars = self.model.root_crack_bars(0)
+            rows = self.model._bar_rows(bars)  # (r, n_dof), sparse
+            u_f = rows[:, self._F].tocsr()  # U_Fᵀ
+            u_p_wg = rows[:, self._P][:, self._wg_pos].toarray().T  # (n_wg, r)
+            dense = u_f.toarray()
             # column by column: SuperLU's multi-RHS solve is slower here (measured)
-            Z = np.column_stack([self.model.lu.solve(U[:, k]) for k in range(U.shape[1])])
-            self._crack_cache[theta_index] = (U, u_p_wg, self.model.k_bar[bars], U.T @ Z,
-                                              (self._K_PF @ Z)[self._wg_pos],
-                                              np.asarray(self._tooth.T @ Z))
-        return self._crack_cache[theta_index]
+            Z = np.column_stack([self.model.lu.solve(dense[k]) for k in range(dense.shape[0])])
+            Z[np.abs(Z) < 1e-200] = 0.0  # flush subnormals: they make BLAS crawl
+            self._crack_cache[0] = (u_f, np.arange(self._F.size), u_p_wg,
+                                    self.model.k_bar[bars], np.asarray(u_f @ Z),
+                                    (self._K_PF @ Z)[self._wg_pos],
+                                    np.asarray(self._tooth.T @ Z))
+        i = int(theta_index) % self.model.mesh.n_theta
+        if i not in self._crack_cache:
+            u_f, _, u_p_wg, k_c, utz, kpz_wg, tz = self._crack_cache[0]
+            n_t = self.model.mesh.n_theta
+
+            def roll(a):  # rows ordered (rim station, angle): shift the angle by i
+                return np.roll(a.reshape(-1, n_t, a.shape[-1]), i, axis=1).reshape(a.shape)
+
+            self._crack_cache[i] = (u_f, self._rotation(i), roll(u_p_wg), k_c, utz,
+                                    roll(kpz_wg), np.roll(tz, i, axis=0))
+        return self._crack_cache[i]
 
     def root_crack_at(self, layout: SensorLayout, position_deg: float, severity: float,
                       adjoint=None, healthy: Influence | None = None) -> Influence:
@@ -161,10 +196,10 @@ class InfluenceSolver:
         rows, lam = adjoint if adjoint is not None else self.adjoint(layout)
         if severity == 0.0:
             return self._coefficients(rows, lam)
-        U, u_p_wg, k_c, utz, kpz_wg, tz = self._crack_basis(theta_index)
+        u_ft, perm, u_p_wg, k_c, utz, kpz_wg, tz = self._crack_basis(theta_index)
         d = -severity * k_c
         S = np.diag(1.0 / d) + utz  # (r, r)
-        ul = U.T @ lam  # (r, 5)
+        ul = np.asarray(u_ft @ lam[perm])  # U_Fᵀ λ of the rotated crack, (r, 5)
         y = np.linalg.solve(S, ul)  # λ' = λ − Z y
         h = healthy if healthy is not None else self._coefficients(rows, lam)
         # G_P' = c_P − K'_PF λ' with K'_PF = K_PF + U_P D U_Fᵀ:
