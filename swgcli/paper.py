@@ -1,6 +1,7 @@
 """swgsim-paper: the main job — the paper's data sets and its whole study, end to end.
 
-Stages: (1) generate ``data_dir`` (shards already there and valid are skipped),
+Stages: (1) generate ``data_dir`` (shards already there and valid are skipped; a data
+set of another config there is replaced),
 (2) the study of Tables VII-X (:func:`learn.study.run_paper_study`), every job logged to
 MLflow, (3) the report in ``report_dir``. Prints where it wrote and how long each stage
 took. Config: ``conf/paper.yaml``.
@@ -42,8 +43,9 @@ def run_paper(cfg: DictConfig) -> dict:
     stages: dict[str, float] = {}
     t0 = time.perf_counter()
     data_dir, report_dir = _abs(str(cfg.data_dir)), _abs(str(cfg.report_dir))
+    # data_dir is this job's own output: a data set of another config there is replaced
     gen = generate(OmegaConf.to_container(cfg.dataset, resolve=True), data_dir,
-                   n_jobs=int(cfg.n_jobs), progress=True)
+                   n_jobs=int(cfg.n_jobs), overwrite=True, progress=True)
     stages["generate"] = time.perf_counter() - t0
     state = (f"{len(gen['computed'])} shard(s) simulated" if gen["computed"]
              else "already there and valid, skipped")

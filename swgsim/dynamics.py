@@ -34,6 +34,7 @@ Integration: all variants as one vectorised system with classical RK4 at a fixed
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -204,6 +205,43 @@ def rt1_size20(cat: Catalogue | None = None, **overrides) -> GearParams:
     b1, mu = fit_friction(p, cat)
     p = dataclasses.replace(p, b1_nms=b1, mu=mu)
     return dataclasses.replace(p, **overrides)
+
+
+def gear_with_ke(gear: GearParams, harmonics: Sequence[Mapping[str, float]]) -> GearParams:
+    """Gear parameters with extra kinematic-error harmonics appended.
+
+    Parameters
+    ----------
+    gear : GearParams
+    harmonics : sequence of mapping
+        ``{order, amp_rad, phase_rad}`` each (``gear_ke_harmonics`` of a strain summary):
+        φ_err gains c · amp · sin(order · φ_in + phase).
+
+    Returns
+    -------
+    GearParams
+
+    Raises
+    ------
+    ValueError
+        A non-positive integer order or a negative amplitude.
+    """
+    o, a, p = list(gear.ke_orders), list(gear.ke_amp_rad), list(gear.ke_phase_rad)
+    for h in harmonics:
+        k, amp = int(h["order"]), float(h["amp_rad"])
+        if k < 1 or k != float(h["order"]):
+            raise ValueError(f"kinematic-error order must be a positive integer, got {h['order']}")
+        if not amp >= 0:
+            raise ValueError(f"kinematic-error amp_rad must be >= 0 [rad], got {amp}")
+        o.append(k)
+        a.append(amp)
+        p.append(float(h.get("phase_rad", 0.0)))
+    return dataclasses.replace(gear, ke_orders=tuple(o), ke_amp_rad=tuple(a),
+                               ke_phase_rad=tuple(p))
+
+
+# ---------------------------------------------------------------------------------------
+# the calibration problem
 
 
 # ---------------------------------------------------------------------------- model

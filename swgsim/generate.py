@@ -34,10 +34,11 @@ import numpy as np
 from . import data as dsio
 from .chain import ChainSettings, SimulationChain
 from .disturbance import DisturbanceSpec, disturb
-from .dynamics import rt1_size20
+from .dynamics import gear_with_ke, rt1_size20
 from .faults import FAULTS, ChainParams, apply_fault, get_fault
 from .flexspline import FlexsplineGeometry, Mesh, TrussModel
 from .influence import Influence, InfluenceSolver
+from .measurement import apply_sensor_effects, parse_sensor_effects
 from .sensors import SensorLayout, default_signals, signal_rows
 
 log = logging.getLogger(__name__)
@@ -69,6 +70,9 @@ PAPER: dict[str, Any] = {
               "contact_half_width_deg": 20.0, "ecc_load_share": 1.0},
     "mesh": {"n_theta": 120},
     "disturbance": {"offset_mvv": 0.01, "harmonic_mvv": 0.01},
+    # measurement-chain effects found by the calibration loop (swgsim.measurement), e.g.
+    # [{name: amplifier_lowpass, params: {f_c_hz: 250}}]; applied before eq. (10)
+    "sensor_effects": [],
     "friction_effects": [],
 }
 
@@ -187,6 +191,9 @@ def plan(cfg: dict) -> list[ShardSpec]:
         for k in ("b1_factor", "k1_factor"):
             _req(0 < float(g[k]) <= 10, f"dataset.gears[id={g['id']}].{k} must lie in "
                                         f"(0, 10], got {g[k]}")
+    parse_sensor_effects(cfg.get("sensor_effects") or [])
+    for g in cfg["gears"]:
+        gear_with_ke(rt1_size20(), g.get("ke_extra") or [])
     unknown = set(cfg["variants"]) - set(FAULTS)
     _req(not unknown, f"dataset.variants: unknown fault(s) {sorted(unknown)}; allowed: "
                       f"{sorted(FAULTS)}")
@@ -248,11 +255,15 @@ def gear_influences(cfg: dict, shards: list[ShardSpec]) -> dict[int, dict[tuple,
 
 
 def gear_params(cfg: dict, gear: dict):
-    """Healthy ChainParams of one gear (paper Table IV factors on b1 and k1)."""
+    """Healthy ChainParams of one gear (paper Table IV factors on b1 and k1).
+
+    A gear entry may add kinematic-error harmonics found by the calibration loop:
+    ``ke_extra: [{order, amp_rad, phase_rad}]`` (:func:`swgsim.dynamics.gear_with_ke`).
+    """
     p = rt1_size20()
     p = dataclasses.replace(p, b1_nms=p.b1_nms * float(gear["b1_factor"]),
                             k1_nm_per_rad=p.k1_nm_per_rad * float(gear["k1_factor"]))
-    return ChainParams(gear=p)
+    return ChainParams(gear=gear_with_ke(p, gear.get("ke_extra") or []))
 
 
 def simulate_shard(cfg: dict, shard: ShardSpec, influences: dict[tuple, Influence]):
@@ -293,6 +304,10 @@ def simulate_shard(cfg: dict, shard: ShardSpec, influences: dict[tuple, Influenc
     n_mean = res.states[1].mean(axis=1) * 60 / (2 * np.pi)
     t_mean = res.t_out.mean(axis=1)
     time_s = np.arange(n_t) / settings.sample_rate_hz
+    if cfg.get("sensor_effects"):
+        # windows are taken one after another in shard order (thermal drift)
+        sig = apply_sensor_effects(sig, time_s, n_mean, cfg["sensor_effects"],
+                                   t_start_s=np.arange(len(wins)) * settings.window_s)
     dspec = DisturbanceSpec(offset_mvv=float(cfg["disturbance"]["offset_mvv"]),
                             harmonic_mvv=float(cfg["disturbance"]["harmonic_mvv"]))
     sig_d = disturb(sig, time_s, n_mean, dspec, rng)

@@ -184,3 +184,25 @@ def test_submitit_local_launcher_one_job_per_shard(tmp_path):
     cfg["operating_points"]["t_out_nm"] = [39.0]
     s = gen.generate(cfg, tmp_path / "local", n_jobs=1, progress=False)
     assert s["content_sha256"] == manifest["content_sha256"]
+
+
+def test_sensor_effects_and_extra_kinematic_error_reach_the_data(tiny_set, tmp_path):
+    """Effects accepted by the calibration loop are options of the generator."""
+    out_ref, _ = tiny_set
+    cfg = tiny_cfg()
+    cfg["sensor_effects"] = [{"name": "offset", "params": {"offset_mvv": {"s1": 0.05}}}]
+    s = gen.generate(cfg, tmp_path / "fx", n_jobs=1, progress=False)
+    a, b = dsio.load(out_ref), dsio.load(s["out_dir"])
+    d = (b.strain_signal - a.strain_signal).values
+    np.testing.assert_allclose(d[:, 1], 0.05, atol=1e-6)
+    np.testing.assert_allclose(d[:, [0, 2, 3, 4]], 0.0, atol=1e-6)
+    cfg = tiny_cfg()
+    cfg["gears"][0]["ke_extra"] = [{"order": 3, "amp_rad": 2e-4, "phase_rad": 0.0}]
+    s = gen.generate(cfg, tmp_path / "ke", n_jobs=1, progress=False)
+    c = dsio.load(s["out_dir"])
+    g1 = (c.gear == 1).values
+    assert np.abs((c.strain_signal - a.strain_signal).values[g1, 0]).max() > 1e-3
+    assert np.abs((c.strain_signal - a.strain_signal).values[~g1]).max() == 0.0
+    cfg["sensor_effects"] = [{"name": "amplifier_lowpass", "params": {"f_c_hz": -5.0}}]
+    with pytest.raises(ValueError, match="f_c_hz"):
+        gen.plan(cfg)

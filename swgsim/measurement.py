@@ -1,0 +1,407 @@
+"""Measurement-chain effects on simulated bridge signals (the ``sensor_effects`` option).
+
+The chain (:mod:`swgsim.chain`) gives ideal, linear, perfectly placed and calibrated
+bridges. A real bench adds the measurement chain: gauges a little off their nominal
+angle, the bridge's own nonlinearity, per-channel amplifier gains, the amplifier's
+low-pass, sampling delay, offsets and a thermal drift of the zero. This module applies
+such effects to simulated windows, given each window's time axis and operating point,
+so that generated data can include what a calibration found
+(:func:`swgsim.calibration.strain.calibrate_strain` writes them as ``sensor_effects``).
+
+A ``sensor_effects`` option is a list of ``{name, params}``::
+
+    sensor_effects:
+      - {name: offset, params: {offset_mvv: {s1: 0.02, s3: -0.015}}}
+      - {name: amplifier_lowpass, params: {f_c_hz: 250.0}}
+
+Per-channel parameters take a scalar (all channels), a list of five values (s0..s4) or
+a mapping ``{"s1": value}`` (unnamed channels keep the neutral value).
+
+==================== ============================================== ======================
+name                 effect on channel c (s in mV/V)                 parameters [unit]
+==================== ============================================== ======================
+gauge_misplacement   s_c(ψ − δ_c): the gauge sits δ_c further along  delta_deg [deg]
+                     θ, i.e. a delay of δ_c / ψ̇ of channel c
+bridge_nonlinearity  s / (1 + k_c s)                                k_per_mvv [1/(mV/V)]
+                                                                    or bridge: quarter
+gain_mismatch        g_c s                                          gain [-]
+amplifier_lowpass    first-order low-pass, cut-off f_c (Tustin,     f_c_hz [Hz]
+                     pre-warped), DC gain 1, all channels
+time_delay           s(t − τ), all channels                         delay_s [s]
+offset               s + o_c                                        offset_mvv [mV/V]
+thermal_drift        s + r_c (t_start + t)                          rate_mvv_per_s
+                                                                    [mV/V/s]
+==================== ============================================== ======================
+
+The effects are applied in that (physical) order whatever the order of the list: gauge
+geometry, bridge, amplifier gain, amplifier filter, sampling, then the additive zero
+errors. Sources: quarter-bridge output GF ε / (4 + 2 GF ε), i.e. k = 2e-3 per mV/V
+independent of GF (Hoffmann, *An Introduction to Stress Analysis using Strain Gauges*,
+HBM 1989; PHYSICS.md sec. 4); gauge positioning as the dominant ripple source of
+sensorised SWGs (Schuller et al. 2024) and per-gauge gain tuning (Godler et al.); a
+first-order amplifier low-pass and sampling delay give a phase error growing with speed
+(PHYSICS.md sec. 5). Half bridges of a ±45° pair and full bridges with ±ε arms are
+linear exactly; their residual nonlinearity depends on the sum of the arm strains,
+which the signal alone does not carry, so ``bridge_nonlinearity`` is a per-channel
+``k`` (``bridge: quarter`` sets the quarter-bridge value).
+
+Edges: filters start in the steady state of the first sample and shifts extrapolate by
+mirroring; pass ``n_lead`` leading samples of history (dropped from the output, at least
+five filter time constants and the largest delay) for exact windows.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import ndimage, signal
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "SENSOR_EFFECTS",
+    "APPLY_ORDER",
+    "QUARTER_BRIDGE_K",
+    "SensorEffect",
+    "parse_sensor_effects",
+    "apply_sensor_effects",
+    "per_channel",
+    "psi_rate",
+    "fractional_delay",
+    "lowpass_coefficients",
+    "lowpass",
+]
+
+SENSORS = ("s0", "s1", "s2", "s3", "s4")
+
+QUARTER_BRIDGE_K = 2.0e-3
+"""k of the exact quarter bridge s / (1 + k s) [1/(mV/V)]: GF ε / (4 + 2 GF ε) in V/V
+with s = 1e3 GF ε / 4 gives k = 2e-3, whatever the gauge factor [derived]."""
+
+#: name -> {param: (neutral value, lower bound, upper bound, unit, per channel)}
+SENSOR_EFFECTS: dict[str, dict[str, tuple[float, float, float, str, bool]]] = {
+    "gauge_misplacement": {"delta_deg": (0.0, -10.0, 10.0, "deg", True)},
+    "bridge_nonlinearity": {"k_per_mvv": (0.0, -10.0, 10.0, "1/(mV/V)", True)},
+    "gain_mismatch": {"gain": (1.0, 0.5, 2.0, "-", True)},
+    "amplifier_lowpass": {"f_c_hz": (np.inf, 0.0, np.inf, "Hz", False)},
+    "time_delay": {"delay_s": (0.0, 0.0, 0.05, "s", False)},
+    "offset": {"offset_mvv": (0.0, -10.0, 10.0, "mV/V", True)},
+    "thermal_drift": {"rate_mvv_per_s": (0.0, -10.0, 10.0, "mV/V/s", True)},
+}
+"""Declared measurement effects: parameter, neutral value, allowed (open/closed) range,
+unit and whether it is given per channel."""
+
+APPLY_ORDER = ("gauge_misplacement", "bridge_nonlinearity", "gain_mismatch",
+               "amplifier_lowpass", "time_delay", "offset", "thermal_drift")
+"""Physical order in which :func:`apply_sensor_effects` applies the effects."""
+
+
+@dataclass(frozen=True)
+class SensorEffect:
+    """One validated measurement effect.
+
+    Attributes
+    ----------
+    name : str
+        A key of :data:`SENSOR_EFFECTS`.
+    params : dict
+        Parameter name -> float, or ndarray of shape (5,) for per-channel parameters.
+    """
+
+    name: str
+    params: dict[str, Any]
+
+
+def per_channel(value: Any, neutral: float, what: str) -> np.ndarray:
+    """A per-channel parameter as an array of shape (5,).
+
+    Parameters
+    ----------
+    value : float, sequence of 5 floats, or mapping of "s0".."s4" to float
+    neutral : float
+        Value of channels a mapping does not name.
+    what : str
+        Parameter name for error messages.
+
+    Raises
+    ------
+    ValueError
+        Wrong length, unknown channel name or non-numeric value.
+    """
+    if isinstance(value, Mapping):
+        out = np.full(5, float(neutral))
+        for k, v in value.items():
+            if k not in SENSORS:
+                raise ValueError(f"{what}: unknown channel {k!r}; allowed {list(SENSORS)}")
+            out[SENSORS.index(k)] = float(v)
+        return out
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        return np.full(5, float(arr))
+    if arr.shape != (5,):
+        raise ValueError(f"{what}: give a scalar, 5 values (s0..s4) or a mapping by channel, "
+                         f"got shape {arr.shape}")
+    return arr.copy()
+
+
+def parse_sensor_effects(effects: Sequence[Mapping[str, Any]] | None) -> list[SensorEffect]:
+    """Validate a ``sensor_effects`` list.
+
+    Parameters
+    ----------
+    effects : sequence of mapping
+        Entries ``{"name": key of SENSOR_EFFECTS, "params": {...}}`` (``"kind"`` is
+        accepted for ``"name"``; a ``#k`` suffix is ignored).
+
+    Returns
+    -------
+    list of SensorEffect
+        In the order given (:func:`apply_sensor_effects` applies them in
+        :data:`APPLY_ORDER`).
+
+    Raises
+    ------
+    ValueError
+        Unknown effect or parameter, a value outside its range (the message names the
+        parameter and the allowed range), or an effect given twice.
+    """
+    out: list[SensorEffect] = []
+    seen: set[str] = set()
+    for i, e in enumerate(effects or ()):
+        if not isinstance(e, Mapping):
+            raise ValueError(f"sensor_effects[{i}] must be a mapping {{name, params}}, got {e!r}")
+        name = str(e.get("name") or e.get("kind") or "").split("#")[0]
+        if name not in SENSOR_EFFECTS:
+            raise ValueError(f"sensor_effects[{i}]: unknown effect {name!r}; allowed: "
+                             f"{sorted(SENSOR_EFFECTS)}")
+        if name in seen:
+            raise ValueError(f"sensor_effects: {name} given twice; merge its parameters")
+        seen.add(name)
+        spec = SENSOR_EFFECTS[name]
+        params = dict(e.get("params") or {})
+        if name == "bridge_nonlinearity" and "bridge" in params:
+            bridge = params.pop("bridge")
+            if bridge not in ("quarter", "linear"):
+                raise ValueError(f"sensor_effects.{name}.bridge must be 'quarter' or 'linear', "
+                                 f"got {bridge!r}")
+            params.setdefault("k_per_mvv", QUARTER_BRIDGE_K if bridge == "quarter" else 0.0)
+        extra = sorted(set(params) - set(spec))
+        if extra:
+            raise ValueError(f"sensor_effects.{name}: unknown parameters {extra}; expected "
+                             f"{sorted(spec)}")
+        missing = sorted(set(spec) - set(params))
+        if missing:
+            raise ValueError(f"sensor_effects.{name}: missing parameters {missing}")
+        vals: dict[str, Any] = {}
+        for p, (neutral, lo, hi, unit, chan) in spec.items():
+            v = per_channel(params[p], neutral, f"sensor_effects.{name}.{p}") if chan else float(
+                params[p])
+            arr = np.atleast_1d(v)
+            strict_lo = name in ("amplifier_lowpass", "gain_mismatch")
+            bad = ~np.isfinite(arr) | (arr <= lo if strict_lo else arr < lo) | (arr > hi)
+            if np.any(bad):
+                lo_br = "(" if strict_lo else "["
+                raise ValueError(f"sensor_effects.{name}.{p} must lie in {lo_br}{lo:g}, {hi:g}] "
+                                 f"[{unit}], got {params[p]!r}")
+            vals[p] = v
+        out.append(SensorEffect(name, vals))
+    return out
+
+
+def psi_rate(n_in_rpm: np.ndarray | float, ratio: float = 100.0) -> np.ndarray:
+    """Rate of the WG angle relative to the flexspline, ψ̇ = ω_in (1 + 1/N) [rad/s].
+
+    With the circular spline fixed and the flexspline as output, φ_out = −φ_in / N, so
+    ψ = φ_in − φ_out = φ_in (1 + 1/N) (PHYSICS.md sec. 1 and 4).
+    """
+    return np.asarray(n_in_rpm, float) * 2 * np.pi / 60.0 * (1.0 + 1.0 / ratio)
+
+
+def _mirror(j: np.ndarray, n: int) -> np.ndarray:
+    """Indices reflected about the first and last sample (ndimage's ``mirror`` mode)."""
+    if n == 1:
+        return np.zeros_like(j)
+    period = 2 * (n - 1)
+    j = np.mod(np.abs(j), period)
+    return np.where(j > n - 1, period - j, j)
+
+
+def fractional_delay(x: np.ndarray, delay_samples: np.ndarray) -> np.ndarray:
+    """Delay rows of ``x`` by a fractional number of samples, y[k] = x(k − d).
+
+    Cubic B-spline interpolation along the last axis only (interpolating at the samples,
+    so a zero delay returns ``x`` exactly; Unser, IEEE Signal Proc. Mag. 16(6), 1999);
+    samples beyond the ends are mirrored.
+
+    Parameters
+    ----------
+    x : ndarray, shape (..., n)
+    delay_samples : ndarray, broadcastable to x.shape[:-1]
+        Delay of each row [samples] (negative: advance).
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+    """
+    x = np.asarray(x, float)
+    d = np.broadcast_to(np.asarray(delay_samples, float), x.shape[:-1])
+    if not np.any(d):
+        return x.copy()
+    n = x.shape[-1]
+    rows = x.reshape(-1, n)
+    coef = ndimage.spline_filter1d(rows, order=3, axis=-1, mode="mirror")
+    pos = np.arange(n)[None, :] - d.reshape(-1)[:, None]  # (rows, n)
+    i = np.floor(pos).astype(np.int64)
+    f = pos - i
+    g = 1.0 - f
+    weights = (g ** 3 / 6.0, 2.0 / 3.0 - f ** 2 + 0.5 * f ** 3,
+               2.0 / 3.0 - g ** 2 + 0.5 * g ** 3, f ** 3 / 6.0)  # B-spline at i-1 .. i+2
+    out = np.zeros_like(pos)
+    for m, w in zip((-1, 0, 1, 2), weights, strict=True):
+        out += np.take_along_axis(coef, _mirror(i + m, n), axis=1) * w
+    return out.reshape(x.shape)
+
+
+def lowpass_coefficients(f_c_hz: float, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """(b, a) of a first-order low-pass, bilinear transform pre-warped at f_c.
+
+    H(s) = 1 / (1 + s / ω_c) with s → (2 fs) (z − 1) / (z + 1) and ω_c pre-warped, so the
+    discrete response equals the analog one at f_c (−3 dB, −45°).
+
+    Raises
+    ------
+    ValueError
+        f_c not in (0, fs / 2).
+    """
+    if not 0.0 < f_c_hz < 0.5 * fs_hz:
+        raise ValueError(f"f_c_hz must lie in (0, {0.5 * fs_hz:g}) Hz (Nyquist of the "
+                         f"{fs_hz:g} Hz sampling), got {f_c_hz}")
+    k = np.tan(np.pi * f_c_hz / fs_hz)
+    b = np.array([k, k]) / (1 + k)
+    a = np.array([1.0, (k - 1) / (k + 1)])
+    return b, a
+
+
+def lowpass(x: np.ndarray, f_c_hz: float, fs_hz: float) -> np.ndarray:
+    """First-order low-pass along the last axis, started in the steady state of x[..., 0].
+
+    Parameters
+    ----------
+    x : ndarray, shape (..., n)
+    f_c_hz : float
+        Cut-off [Hz], in (0, fs / 2); ``inf`` returns x unchanged.
+    fs_hz : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+    """
+    x = np.asarray(x, float)
+    if np.isinf(f_c_hz):
+        return x.copy()
+    b, a = lowpass_coefficients(f_c_hz, fs_hz)
+    zi = signal.lfilter_zi(b, a)[0] * x[..., :1]
+    y, _ = signal.lfilter(b, a, x, axis=-1, zi=zi)
+    return y
+
+
+def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray | float,
+                         effects: Sequence[Mapping[str, Any]] | Sequence[SensorEffect] | None,
+                         *, t_start_s: np.ndarray | float | None = None, n_lead: int = 0,
+                         ratio: float = 100.0) -> np.ndarray:
+    """Apply measurement-chain effects to simulated windows (the ``sensor_effects`` hook).
+
+    Parameters
+    ----------
+    signals : ndarray, shape (n_windows, 5, n_t)
+        Ideal bridge outputs s0..s4 [mV/V], possibly with ``n_lead`` samples of history
+        before each window.
+    time_s : ndarray, shape (n_t,)
+        Sample times [s], uniformly spaced; the window starts at ``time_s[n_lead]``.
+    n_in_rpm : float or ndarray, shape (n_windows,)
+        Input speed of each window [rpm] (the acting mean; sets ψ̇ for gauge
+        misplacement), > 0.
+    effects : sequence of mapping or SensorEffect
+        See :func:`parse_sensor_effects`; empty or None returns a copy.
+    t_start_s : float or ndarray, shape (n_windows,), optional
+        Time of each window's first sample since the start of the recording sequence
+        [s] (thermal drift); default ``window index × window length``.
+    n_lead : int, default 0
+        Leading history samples, used to start filters and shifts and dropped from the
+        output.
+    ratio : float, default 100
+        Gear ratio N (ψ̇ = ω_in (1 + 1/N)).
+
+    Returns
+    -------
+    ndarray, shape (n_windows, 5, n_t − n_lead)
+        [mV/V].
+
+    Raises
+    ------
+    ValueError
+        Bad shapes, non-positive speed, ``n_lead`` outside [0, n_t), an invalid effect, or
+        a bridge nonlinearity whose denominator 1 + k s is not positive.
+    """
+    x = np.array(signals, dtype=float)
+    if x.ndim != 3 or x.shape[1] != 5:
+        raise ValueError(f"signals must have shape (n_windows, 5, n_t), got {x.shape}")
+    n_w, _, n_t = x.shape
+    time_s = np.asarray(time_s, float)
+    if time_s.shape != (n_t,) or n_t < 2:
+        raise ValueError(f"time_s must have shape ({n_t},) with n_t >= 2, got {time_s.shape}")
+    if not 0 <= int(n_lead) < n_t:
+        raise ValueError(f"n_lead must lie in [0, {n_t}), got {n_lead}")
+    n_lead = int(n_lead)
+    dt = float(time_s[1] - time_s[0])
+    if not dt > 0:
+        raise ValueError("time_s must be increasing")
+    fs = 1.0 / dt
+    n_in = np.broadcast_to(np.asarray(n_in_rpm, float), (n_w,))
+    if np.any(~np.isfinite(n_in)) or np.any(n_in <= 0):
+        raise ValueError(f"n_in_rpm must be > 0 rpm, got {n_in_rpm}")
+    items = [e if isinstance(e, SensorEffect) else None for e in (effects or ())]
+    if any(e is None for e in items):
+        items = parse_sensor_effects(effects)  # type: ignore[arg-type]
+    by = {e.name: e for e in items}
+    for name in APPLY_ORDER:
+        e = by.get(name)
+        if e is None:
+            continue
+        p = e.params
+        if name == "gauge_misplacement":
+            delta = np.deg2rad(p["delta_deg"])  # (5,)
+            d = delta[None, :] / psi_rate(n_in, ratio)[:, None] * fs  # (n_w, 5) samples
+            x = fractional_delay(x, d)
+        elif name == "bridge_nonlinearity":
+            k = p["k_per_mvv"][None, :, None]
+            den = 1.0 + k * x
+            if np.any(den <= 0):
+                raise ValueError("sensor_effects.bridge_nonlinearity: 1 + k_per_mvv * s must "
+                                 f"stay > 0; |k_per_mvv| < {1.0 / np.abs(x).max():.3g} for "
+                                 "these signals")
+            x = x / den
+        elif name == "gain_mismatch":
+            x = x * p["gain"][None, :, None]
+        elif name == "amplifier_lowpass":
+            if p["f_c_hz"] >= 0.5 * fs:
+                raise ValueError(f"sensor_effects.amplifier_lowpass.f_c_hz must lie in "
+                                 f"(0, {0.5 * fs:g}) Hz, got {p['f_c_hz']}")
+            x = lowpass(x, p["f_c_hz"], fs)
+        elif name == "time_delay":
+            x = fractional_delay(x, np.full((n_w, 5), p["delay_s"] * fs))
+        elif name == "offset":
+            x = x + p["offset_mvv"][None, :, None]
+        elif name == "thermal_drift":
+            if t_start_s is None:
+                t0 = np.arange(n_w) * (n_t - n_lead) * dt
+            else:
+                t0 = np.broadcast_to(np.asarray(t_start_s, float), (n_w,))
+            t_abs = t0[:, None] + (time_s - time_s[n_lead])[None, :]  # (n_w, n_t)
+            x = x + p["rate_mvv_per_s"][None, :, None] * t_abs[:, None, :]
+    return x[:, :, n_lead:]
