@@ -43,8 +43,9 @@ def parse_effects(effects: Sequence[Mapping[str, Any]]) -> list[tuple[Term, np.n
     Parameters
     ----------
     effects : sequence of mapping
-        Entries ``{"kind": key, "params": {raw name: value}}`` (``"name"`` optional;
-        ``"kind"`` defaults to ``"name"`` without a ``#k`` suffix).
+        Entries ``{"kind": key, "params": {raw name: value}}``; optional ``"name"``
+        (``"kind"`` defaults to it without a ``#k`` suffix) and ``"options"`` (e.g.
+        ``{"use_load": true}`` for ``load_coulomb``).
 
     Returns
     -------
@@ -63,11 +64,17 @@ def parse_effects(effects: Sequence[Mapping[str, Any]]) -> list[tuple[Term, np.n
             raise ValueError(f"effect {i} must be a mapping with kind and params, got {e!r}")
         kind = e.get("kind") or str(e.get("name", "")).split("#")[0]
         name = e.get("name") or kind
-        use_load = bool(e.get("use_load", False))
-        term = make_effect(kind, name, **({"use_load": use_load} if kind == "load_coulomb"
-                                          else {}))
+        options = dict(e.get("options") or {})
+        try:
+            term = make_effect(kind, name, **options)
+        except TypeError as err:
+            raise KeyError(f"effect {name!r}: bad options {options}: {err}") from None
+        missing = [o for o in term.required_options() if o not in options]
+        if missing:
+            raise KeyError(f"effect {name!r} ({kind}) needs options {missing} (the calibrated "
+                           "range of q; summary.json and friction_effects.yaml carry them)")
         coef, theta = term.from_params(dict(e.get("params", {})))
-        for p, v in zip(term.nonlinear, theta):
+        for p, v in zip(term.nonlinear, theta, strict=True):
             if p.log and not v > 0:
                 raise ValueError(f"effect {name!r}: parameter {p.name} must be > 0 "
                                  f"[{p.unit}], got {v}")
@@ -83,7 +90,8 @@ class FrictionEffects:
     effects : sequence of mapping
         See :func:`parse_effects`.
     v_s : float
-        Smooth-sign velocity tanh(q̇ / v_s) [rad/s] (``v_s_rad_s`` in summary.json).
+        Smooth-sign velocity tanh(q̇ / v_s) [rad/s] (``v_s_rad_s`` in summary.json);
+        may be None when ``effects`` is empty (the torque is then zero).
     baseline : mapping, optional
         Paper-law parameters ``{b0, b1, b2, b3, theta_b}`` [N m, N m s/rad, N m s³/rad³,
         N m, rad]; required when an effect acts through the friction law
@@ -94,7 +102,7 @@ class FrictionEffects:
     Raises
     ------
     ValueError
-        ``v_s`` not positive, or ``velocity_lag`` without ``baseline``.
+        ``v_s`` not positive (with effects), or ``velocity_lag`` without ``baseline``.
 
     Examples
     --------
@@ -106,13 +114,13 @@ class FrictionEffects:
     >>> dz = fx.state_derivative(t_k, q_k, dq_k, z)
     """
 
-    def __init__(self, effects: Sequence[Mapping[str, Any]], v_s: float,
-                 baseline: Mapping[str, float] | None = None, t0: float = 0.0) -> None:
-        if not v_s > 0:
+    def __init__(self, effects: Sequence[Mapping[str, Any]], v_s: float | None,
+                 baseline: Mapping[str, float] | None = None, t0: float | None = 0.0) -> None:
+        self.items = parse_effects(effects or [])
+        if self.items and not (v_s is not None and v_s > 0):
             raise ValueError(f"v_s must be > 0 [rad/s], got {v_s}")
-        self.v_s = float(v_s)
-        self.t0 = float(t0)
-        self.items = parse_effects(effects)
+        self.v_s = float(v_s) if v_s is not None else 1.0
+        self.t0 = float(t0 or 0.0)
         self.has_transform = any(t.is_transform for t, _, _ in self.items)
         if self.has_transform and baseline is None:
             raise ValueError("velocity_lag acts through the friction law: pass baseline="
@@ -150,6 +158,8 @@ class FrictionEffects:
                                extra={"states": states} if states is not None else {})
 
     def _evaluate(self, sig: FrictionSignals) -> np.ndarray:
+        if not self.items:
+            return np.zeros(sig.n)
         terms = [t for t, _, _ in self.items]
         coefs = [c for _, c, _ in self.items]
         thetas = [th for _, _, th in self.items]

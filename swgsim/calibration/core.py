@@ -40,6 +40,7 @@ __all__ = [
     "ParamEstimate",
     "fit_terms",
     "evaluate_terms",
+    "with_uncertainty",
     "integrated_autocorr_time",
     "linear_recurrence",
 ]
@@ -211,8 +212,8 @@ class Term:
 
     def derived(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
         """Reported parameters (default: the raw ones). Override for amplitude/phase."""
-        out = {p.name: float(v) for p, v in zip(self.linear, coef)}
-        out.update({p.name: float(v) for p, v in zip(self.nonlinear, theta)})
+        out = {p.name: float(v) for p, v in zip(self.linear, coef, strict=True)}
+        out.update({p.name: float(v) for p, v in zip(self.nonlinear, theta, strict=True)})
         return out
 
     def derived_units(self) -> dict[str, str]:
@@ -222,6 +223,14 @@ class Term:
     def primary(self) -> tuple[str, ...]:
         """Names of the derived parameters that characterise the effect."""
         return tuple(self.derived_units())
+
+    def options(self) -> dict[str, Any]:
+        """Constructor options other than the name (e.g. ``use_load``), for specs."""
+        return {}
+
+    def required_options(self) -> tuple[str, ...]:
+        """Options a spec must give (no safe default, e.g. the calibrated range)."""
+        return ()
 
     # -- generic -----------------------------------------------------------------------
     @property
@@ -257,8 +266,8 @@ class Term:
 
     def to_params(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
         """Raw parameter mapping (inverse of :meth:`from_params`)."""
-        out = {p.name: float(v) for p, v in zip(self.linear, coef)}
-        out.update({p.name: float(v) for p, v in zip(self.nonlinear, theta)})
+        out = {p.name: float(v) for p, v in zip(self.linear, coef, strict=True)}
+        out.update({p.name: float(v) for p, v in zip(self.nonlinear, theta, strict=True)})
         return out
 
     def predict(self, sig: Any, coef: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -280,8 +289,12 @@ class ParamEstimate:
     value, std : float
         Estimate and standard error (corrected for residual autocorrelation).
     flag : str
-        ``""`` (well determined), or why the data cannot pin it down: ``"weak (rel.
-        s.e. 0.8)"``, ``"correlated with b0 (r = 0.995)"``.
+        ``""`` (pinned down), or why the data cannot pin it down: ``"weak (rel. s.e.
+        0.8)"`` (relative standard error above ``max_rel_se``), ``"not determined
+        (singular)"``.
+    note : str
+        A strong correlation with another parameter (``"correlated with paper_law.b0
+        (r = -0.995)"``): the two trade off; informative even when both are pinned down.
     """
 
     term: str
@@ -290,6 +303,7 @@ class ParamEstimate:
     value: float
     std: float
     flag: str = ""
+    note: str = ""
 
     @property
     def identifiable(self) -> bool:
@@ -297,7 +311,7 @@ class ParamEstimate:
 
     def as_dict(self) -> dict[str, Any]:
         return {"value": self.value, "std": self.std, "unit": self.unit,
-                "identifiable": self.identifiable, "flag": self.flag}
+                "identifiable": self.identifiable, "flag": self.flag, "note": self.note}
 
 
 @dataclass
@@ -357,7 +371,7 @@ class FitResult:
     def spec(self) -> list[dict[str, Any]]:
         """Effect list ``[{name, kind, params}]`` (raw parameters) for every term."""
         return [{"name": t.name, "kind": t.kind, "params": t.to_params(c, th)}
-                for t, c, th in zip(self.terms, self.coefs, self.thetas)]
+                for t, c, th in zip(self.terms, self.coefs, self.thetas, strict=True)]
 
 
 # ---------------------------------------------------------------------------------------
@@ -371,7 +385,7 @@ def _design(terms: Sequence[Term], sig: Any, thetas: Sequence[np.ndarray],
     tkey: tuple = ()
     mats = []
     n = None
-    for i, (term, th) in enumerate(zip(terms, thetas)):
+    for i, (term, th) in enumerate(zip(terms, thetas, strict=True)):
         th = np.asarray(th, float)
         if term.is_transform:
             s = term.transform(s, th)
@@ -440,6 +454,10 @@ class _Packer:
     def from_u(self, u: np.ndarray) -> np.ndarray:
         return np.where(self.logs, np.exp(np.where(self.logs, u, 0.0)), u)
 
+    def from_u_partial(self, u: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        lg = self.logs[mask]
+        return np.where(lg, np.exp(np.where(lg, u, 0.0)), u)
+
     def u_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         lo = np.where(self.logs, np.log(np.where(self.logs, self.lo, 1.0)), self.lo)
         hi = np.where(self.logs, np.log(np.where(self.logs, self.hi, 1.0)), self.hi)
@@ -462,6 +480,7 @@ def fit_terms(
     *,
     max_starts: int = 3,
     max_nfev: int = 200,
+    fixed: Sequence[bool] | None = None,
     max_rel_se: float = 0.5,
     max_abs_corr: float = 0.98,
     uncertainty: bool = True,
@@ -486,10 +505,13 @@ def fit_terms(
     max_starts : int, default 3
     max_nfev : int, default 200
         Function evaluations per optimisation.
+    fixed : sequence of bool, optional
+        Per term: hold its nonlinear parameters at the (first) start instead of
+        optimising them (the linear coefficients of all terms are always refitted).
     max_rel_se : float, default 0.5
         Flag a reported parameter whose standard error exceeds this fraction of |value|.
     max_abs_corr : float, default 0.98
-        Flag a reported parameter whose correlation with another exceeds this.
+        Note a reported parameter whose correlation with another exceeds this.
     uncertainty : bool, default True
         Compute standard errors (skip for fast candidate screening).
 
@@ -525,24 +547,39 @@ def fit_terms(
     flat = [pk.clip(np.concatenate([np.asarray(c, float) for c in combo]))
             if pk.lo.size else np.empty(0) for combo in combos]
     n_nl = pk.lo.size
+    free = np.ones(n_nl, bool)
+    if fixed is not None:
+        if len(fixed) != len(terms):
+            raise ValueError(f"fixed needs one flag per term ({len(terms)}), got {len(fixed)}")
+        if n_nl:
+            free = np.concatenate([np.full(t.n_nonlinear, not bool(f))
+                                   for t, f in zip(terms, fixed, strict=True)])
     best_theta, best_rss, msg, ok = None, np.inf, "linear", True
-    if n_nl == 0:
-        best_theta = np.empty(0)
+    if n_nl == 0 or not free.any():
+        best_theta = flat[0] if n_nl else np.empty(0)
+        msg = "no free nonlinear parameters"
     else:
         scored = sorted(((float(np.sum(resid(f)[0] ** 2)), i) for i, f in enumerate(flat)))
         lo_u, hi_u = pk.u_bounds()
         for _, i in scored[:max_starts]:
-            u0 = pk.to_u(flat[i])
+            base = flat[i]
+
+            def full(u: np.ndarray, base: np.ndarray = base) -> np.ndarray:
+                th = base.copy()
+                th[free] = pk.from_u_partial(u, free)
+                return th
+
+            u0 = pk.to_u(base)[free]
             try:
-                sol = least_squares(lambda u: resid(pk.from_u(u))[0], u0, bounds=(lo_u, hi_u),
-                                    method="trf", x_scale="jac", max_nfev=max_nfev,
-                                    diff_step=1e-5)
+                sol = least_squares(lambda u: resid(full(u))[0], u0,
+                                    bounds=(lo_u[free], hi_u[free]), method="trf",
+                                    x_scale="jac", max_nfev=max_nfev, diff_step=1e-5)
             except (np.linalg.LinAlgError, ValueError) as e:  # pragma: no cover
                 log.debug("start %d failed: %s", i, e)
                 continue
             rss = float(np.sum(sol.fun ** 2))
             if rss < best_rss:
-                best_rss, best_theta, msg, ok = rss, pk.from_u(sol.x), sol.message, sol.success
+                best_rss, best_theta, msg, ok = rss, full(sol.x), sol.message, sol.success
         if best_theta is None:  # pragma: no cover
             best_theta, msg, ok = flat[scored[0][1]], "all starts failed", False
     r, c = resid(best_theta)
@@ -563,6 +600,18 @@ def fit_terms(
         message=str(msg))
     if uncertainty:
         _uncertainty(res, sig, idx, max_rel_se, max_abs_corr, cache)
+    return res
+
+
+def with_uncertainty(result: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float = 0.5,
+                     max_abs_corr: float = 0.98, tau_int: float | None = None) -> FitResult:
+    """Copy of ``result`` with standard errors and identifiability flags (see
+    :func:`fit_terms`); ``idx`` must be the samples it was fitted on. ``tau_int``
+    overrides the autocorrelation time used to inflate the covariance [samples]."""
+    res = dataclasses.replace(result, estimates=[])
+    if tau_int is not None:
+        res.tau_int = float(max(tau_int, 1.0))
+    _uncertainty(res, sig, np.asarray(idx), max_rel_se, max_abs_corr, {})
     return res
 
 
@@ -591,7 +640,11 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
     jtj = js.T @ js
     u, sv, vt = np.linalg.svd(jtj)
     res.cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
-    inv = (vt.T / np.where(sv > sv[0] * 1e-14, sv, np.inf)) @ u.T
+    ok = sv > sv[0] * 1e-12
+    inv = (vt.T / np.where(ok, sv, np.inf)) @ u.T
+    # directions the data do not determine (cond(J) > 1e6): unbounded variance there
+    null = vt[~ok]
+    inv = inv + 1e20 * null.T @ null
     cov_raw = inv / np.outer(scale, scale) * res.sigma ** 2 * res.tau_int
     # order of raw parameters: all linear (term order), then all nonlinear (term order)
     raw_values = np.concatenate([c_all] + [np.asarray(t, float) for t in thetas])
@@ -609,7 +662,7 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
     def derived_vec(v: np.ndarray) -> tuple[list[tuple[str, str, str]], np.ndarray]:
         cs, ts = unpack(v)
         names, vals = [], []
-        for t, cc, tt in zip(terms, cs, ts):
+        for t, cc, tt in zip(terms, cs, ts, strict=True):
             units = t.derived_units()
             for k, val in t.derived(cc, tt).items():
                 names.append((t.name, k, units.get(k, "")))
@@ -631,20 +684,18 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
         corr = cov_d / np.outer(sd, sd)
     est = []
     for i, (tn, pn, unit) in enumerate(names):
-        flag = ""
+        flag, note = "", ""
         rel = sd[i] / abs(d0[i]) if d0[i] != 0 else np.inf
         if not np.isfinite(sd[i]):
             flag = "not determined (singular)"
         elif rel > max_rel_se:
             flag = f"weak (rel. s.e. {rel:.2g})"
-        else:
-            row = np.abs(np.nan_to_num(corr[i]))
-            row[i] = 0
-            # only compare with parameters of other terms or raw-level partners
-            j = int(np.argmax(row)) if row.size else 0
-            if row.size and row[j] > max_abs_corr:
-                flag = f"correlated with {names[j][0]}.{names[j][1]} (r = {corr[i, j]:+.3f})"
-        est.append(ParamEstimate(tn, pn, unit, float(d0[i]), float(sd[i]), flag))
+        row = np.abs(np.nan_to_num(corr[i]))
+        row[i] = 0
+        j = int(np.argmax(row)) if row.size else 0
+        if row.size and row[j] > max_abs_corr:
+            note = f"correlated with {names[j][0]}.{names[j][1]} (r = {corr[i, j]:+.3f})"
+        est.append(ParamEstimate(tn, pn, unit, float(d0[i]), float(sd[i]), flag, note))
     res.estimates = est
 
 

@@ -2,12 +2,15 @@
 
 Each *probe* is a small nonparametric model of the residual along one signature
 variable (velocity, position, time, acceleration, ...). It is fitted on half of the
-samples and scored on the other half, the halves being alternate contiguous blocks in
-time (so autocorrelated noise cannot fake structure), then the other way round. The
+samples and scored on the other half, the halves being made of contiguous blocks in time
+(so autocorrelated noise cannot fake structure; blocks assigned by a fixed random
+permutation so that periodic structure is not aliased), then the other way round. The
 score is the out-of-sample fraction of the residual's mean square the probe explains:
 about −(bins / samples) for noise, clearly positive for structure. A residual is called
-*structured* when any probe scores above a threshold (default 0.03); the signature text
-names the probes that do, with their detail (period, amplitude, direction symmetry).
+*structured* when any probe scores above a threshold (default 0.03), or when it is far
+from white (integrated autocorrelation time above 10 samples and RMS above twice the
+noise floor) even if no probe explains it; the signature text names the probes that
+fire, with their detail (period, amplitude, direction symmetry).
 
 The noise floor is estimated by the difference-based estimator of Gasser, Sroka &
 Jennen-Steinmetz (1986) on irregular samples: σ² from pseudo-residuals of linear
@@ -317,15 +320,22 @@ def noise_floor(t: np.ndarray, r: np.ndarray) -> float:
 
 
 def _halves(t: np.ndarray, idx: np.ndarray, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two halves of ``idx`` made of contiguous time blocks assigned by a fixed random
+    permutation (balanced), so that a structure periodic in time is not aliased by a
+    regular alternation of blocks."""
     tt = t[idx]
     edges = np.linspace(tt.min(), tt.max(), n_blocks + 1)
     blk = np.clip(np.searchsorted(edges, tt, side="right") - 1, 0, n_blocks - 1)
-    return idx[blk % 2 == 0], idx[blk % 2 == 1]
+    perm = np.random.default_rng(20240607).permutation(n_blocks)
+    in_a = np.zeros(n_blocks, bool)
+    in_a[perm[: n_blocks // 2]] = True
+    return idx[in_a[blk]], idx[~in_a[blk]]
 
 
 def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
              probes: Sequence[Probe], units: str = "", threshold: float = 0.03,
-             n_blocks: int = 16) -> Diagnosis:
+             n_blocks: int = 24, coloured_tau: float = 10.0,
+             coloured_ratio: float = 2.0) -> Diagnosis:
     """Diagnose the residual ``r`` on the samples ``idx``.
 
     Parameters
@@ -343,8 +353,12 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
         Data units, for the text.
     threshold : float, default 0.03
         Score above which the residual counts as structured.
-    n_blocks : int, default 16
-        Alternate time blocks form the two halves.
+    n_blocks : int, default 24
+        Contiguous time blocks, half of them (fixed random choice) form each half.
+    coloured_tau, coloured_ratio : float, default 10 and 2
+        The residual also counts as structured when its integrated autocorrelation time
+        exceeds ``coloured_tau`` samples *and* its RMS exceeds ``coloured_ratio`` times
+        the noise floor (not white, and well above the sample-to-sample noise).
 
     Returns
     -------
@@ -381,18 +395,26 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
     diag = Diagnosis(rmse=rmse, noise_floor=nf, tau_int=integrated_autocorr_time(ra),
                      probes=results, threshold=threshold)
     top = [p for p in diag.ranked() if p.score >= threshold]
-    diag.structured = bool(top)
     ratio = rmse / nf if nf > 0 else float("nan")
+    # whiteness: a residual far above the noise floor and strongly autocorrelated is
+    # structured in time even when no probed variable explains it
+    coloured = bool(diag.tau_int > coloured_tau and ratio > coloured_ratio)
+    diag.structured = bool(top) or coloured
+    head = (f"RMS {rmse:.3g} {units}, {ratio:.2f}x the difference-based noise floor "
+            f"{nf:.3g} {units}, τ_int {diag.tau_int:.3g} samples")
     if top:
         parts = [f"{p.text} [{100 * p.score:.0f} % of the residual mean square]"
                  for p in top[:4]]
-        diag.signature = (f"structured residual (RMS {rmse:.3g} {units}, {ratio:.2f}x the "
-                          f"difference-based noise floor {nf:.3g} {units}): "
-                          + "; ".join(parts))
+        diag.signature = f"structured residual ({head}): " + "; ".join(parts)
+        if coloured:
+            diag.signature += "; besides, strongly autocorrelated in time"
+    elif coloured:
+        diag.signature = (f"structured residual ({head}): strongly autocorrelated in time "
+                          "but along none of the probed variables: coloured measurement "
+                          "noise, or an effect of a variable the data do not carry")
     else:
         best = diag.ranked()[0] if results else None
-        diag.signature = (f"no structure found (RMS {rmse:.3g} {units}, {ratio:.2f}x the "
-                          f"difference-based noise floor {nf:.3g} {units}; best probe "
+        diag.signature = (f"no structure found ({head}; best probe "
                           + (f"{best.name} explains {100 * best.score:.1f} %)" if best else ")"))
     return diag
 
@@ -426,7 +448,7 @@ def friction_probes() -> list[Probe]:
         velocity, velocity_hysteresis (bins over q̇ per sign of q̈), acceleration,
         position and position_odd (bins over q), position_periodic(_odd) (best
         sinusoid over q), travel_since_reversal (odd), time and time_odd (cubic trend),
-        time_periodic (best sinusoid over t).
+        time_periodic(_odd) (best sinusoid over t).
     """
 
     def q_range(sig):
@@ -460,6 +482,8 @@ def friction_probes() -> list[Probe]:
         TrendProbe("time", "drifts over time (same in both directions)", lambda s: s.t_s),
         TrendProbe("time_odd", "drifts over time with a sign flipping with direction",
                    lambda s: s.t_s, odd=True),
-        PeriodicProbe("time_periodic", "periodic in time", lambda s: s.t_s, t_range,
-                      unit="s"),
+        PeriodicProbe("time_periodic", "periodic in time, same in both directions",
+                      lambda s: s.t_s, t_range, unit="s"),
+        PeriodicProbe("time_periodic_odd", "periodic in time, flipping with direction",
+                      lambda s: s.t_s, t_range, odd=True, unit="s"),
     ]

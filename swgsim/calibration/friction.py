@@ -38,6 +38,7 @@ __all__ = [
     "FrictionSignals",
     "PaperLaw",
     "load_friction_csv",
+    "write_friction_csv",
     "estimate_acceleration",
     "REQUIRED_COLUMNS",
 ]
@@ -127,6 +128,8 @@ class Scales:
         Median sample interval [s].
     dq_med : float
         Median |Δq| per sample while moving [rad].
+    q_center : float
+        (max q + min q) / 2 [rad].
     """
 
     v_ref: float
@@ -135,6 +138,7 @@ class Scales:
     t_span: float
     dt_med: float
     dq_med: float
+    q_center: float = 0.0
 
     @classmethod
     def of(cls, rec: FrictionRecording) -> Scales:
@@ -146,7 +150,8 @@ class Scales:
                    t_span=float(rec.t_s[-1] - rec.t_s[0]),
                    dt_med=float(np.median(np.diff(rec.t_s))),
                    dq_med=float(np.median(dq[moving])) if moving.any() else float(
-                       np.median(dq) or 1e-9))
+                       np.median(dq) or 1e-9),
+                   q_center=float(0.5 * (np.max(rec.q_rad) + np.min(rec.q_rad))))
 
 
 @dataclass(frozen=True)
@@ -291,6 +296,30 @@ def load_friction_csv(path: str | Path, accel_window: int = 21) -> FrictionRecor
         tau_nm=cols["tau_friction_Nm"][sel],
         load_nm=cols["load_Nm"][sel] if "load_Nm" in cols else None,
         name=path.stem, ddq_source=source)
+
+
+def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:
+    """Write a recording as a friction CSV (data kind 1) readable by
+    :func:`load_friction_csv`.
+
+    Parameters
+    ----------
+    rec : FrictionRecording
+    path : str or Path
+
+    Returns
+    -------
+    Path
+    """
+    path = Path(path)
+    cols = {"time_s": rec.t_s, "q_rad": rec.q_rad, "dq_rad_per_s": rec.dq_rad_s,
+            "ddq_rad_per_s2": rec.ddq_rad_s2, "tau_friction_Nm": rec.tau_nm}
+    if rec.load_nm is not None:
+        cols["load_Nm"] = rec.load_nm
+    data = np.column_stack(list(cols.values()))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
+    return path
 
 
 class PaperLaw(Term):

@@ -18,14 +18,20 @@ position_ripple     a sin(2πq/P) + b cos(2πq/P)                      peak over
                                                                      direction
 friction_ripple     sgn (a sin(2πq/P) + b cos(2πq/P))                peak over q, odd in
                                                                      direction
-load_coulomb        sgn (μ_s sin q + μ_c cos q)  or  μ sgn |load|    odd, slow trend in q
+load_coulomb        sgn Σ c_n P_n(x), n = 1, 2  or  μ sgn |load|      odd, slow trend in q
+gravity_residual    Σ c_n P_n(x), n = 2, 3                           even, slow trend in q
 inertia             J_a q̈                                            ∝ q̈: loops vs q̇
 thermal_drift       d exp(−(t − t0)/T_th) sgn                        odd, decays in time
 sensor_drift        c (1 − exp(−(t − t0)/T_d))                       even, creeps in time
-nonlinear_viscous   c_v sign(v) |v|^δ                                odd, concave in |v|
 velocity_lag        friction law acts on v = q̇ low-passed by T_L     hysteresis vs q̇,
                                                                      sign of q̈ matters
 ==================  ===============================================  ===================
+
+P_n are Legendre polynomials of x, the joint angle scaled to [−1, 1] over the calibrated
+range and held constant outside it (a well-conditioned basis for a smooth dependence on
+the configuration however short the range). Repeatable effects may enter again: ripples
+up to six times (further periods: wave-generator orders, cogging), load_coulomb and
+gravity_residual up to three times (higher orders).
 
 Sources: Armstrong-Hélouvry, Dupont & Canudas de Wit 1994 (survey, Automatica 30(7)):
 Coulomb, viscous, Stribeck, presliding, frictional memory, position dependence; Dahl
@@ -56,10 +62,10 @@ __all__ = [
     "PositionRipple",
     "FrictionRipple",
     "LoadCoulomb",
+    "GravityResidual",
     "Inertia",
     "ThermalDrift",
     "SensorDrift",
-    "NonlinearViscous",
     "VelocityLag",
     "dahl_state",
     "first_order_lag",
@@ -251,9 +257,10 @@ class Presliding(Term):
 class _Ripple(Term):
     """Sinusoid over q with a period found from the residual spectrum."""
 
-    linear = (Param("a_sin", "N m", "sine coefficient"), Param("a_cos", "N m", "cosine coefficient"))
+    linear = (Param("a_sin", "N m", "sine coefficient"),
+              Param("a_cos", "N m", "cosine coefficient"))
     nonlinear = (Param("period", "rad", "period over the joint angle", log=True),)
-    repeatable = 3
+    repeatable = 6
     odd = False
 
     def bounds(self, sig):
@@ -310,52 +317,148 @@ class FrictionRipple(_Ripple):
     odd = True
 
 
-class LoadCoulomb(Term):
-    """Load-dependent Coulomb friction, the μ F_n term of paper eq. (5): with a load
-    signal τ = μ sgn |load|; without one the gravity load of the joint, ∝ sin/cos q,
-    stands in: τ = sgn (μ_s sin q + μ_c cos q)."""
+def _instance(name: str | None) -> int:
+    """k of an instance name ``kind#k`` (1 without suffix)."""
+    return int(name.rsplit("#", 1)[1]) if name and "#" in name else 1
+
+
+class _RangePolynomial(Term):
+    """Smooth function of the joint angle over the calibrated range: Legendre
+    polynomials P_a, P_b of x = (q − q_center) / q_half, x clipped to [−1, 1] (held
+    constant outside the range, so that a simulation never extrapolates a polynomial).
+    The Legendre basis is well conditioned however short the range; harmonics sin kq,
+    cos kq of a short arc are nearly collinear and give cancelling, meaningless
+    amplitudes. Instance k uses orders (first + 2(k − 1), first + 2k − 1)."""
+
+    first_order = 1
+    odd = False
+    repeatable = 3
+
+    def __init__(self, name: str | None = None, q_center: float = 0.0, q_half: float = 1.0,
+                 orders: tuple[int, int] | None = None) -> None:
+        super().__init__(name)
+        if not q_half > 0:
+            raise ValueError(f"q_half must be > 0 [rad], got {q_half}")
+        k = _instance(name)
+        self.orders = tuple(int(o) for o in orders) if orders is not None else (
+            self.first_order + 2 * (k - 1), self.first_order + 2 * k - 1)
+        self.q_center, self.q_half = float(q_center), float(q_half)
+
+    @classmethod
+    def for_signals(cls, sig: FrictionSignals, name: str | None = None) -> Term:
+        return cls(name, q_center=sig.scales.q_center, q_half=0.5 * sig.scales.q_span)
+
+    @property
+    def linear(self):  # type: ignore[override]
+        a, b = self.orders
+        return (Param(f"c{a}", "N m", f"coefficient of P{a}(x)"),
+                Param(f"c{b}", "N m", f"coefficient of P{b}(x)"))
+
+    def options(self) -> dict[str, Any]:
+        return {"q_center": self.q_center, "q_half": self.q_half, "orders": list(self.orders)}
+
+    def required_options(self) -> tuple[str, ...]:
+        return ("q_center", "q_half")
+
+    def columns(self, sig, theta):
+        x = np.clip((sig.q_rad - self.q_center) / self.q_half, -1.0, 1.0)
+        base = sig.sgn if self.odd else 1.0
+        cols = []
+        for o in self.orders:
+            c = np.zeros(o + 1)
+            c[o] = 1.0
+            cols.append(base * np.polynomial.legendre.legval(x, c))
+        return np.column_stack(cols)
+
+    def derived(self, coef, theta):
+        a, b = self.orders
+        out = {f"c{a}": float(coef[0]), f"c{b}": float(coef[1])}
+        # RMS over x uniform in [-1, 1]: ∫ P_n² dx / 2 = 1 / (2n + 1)
+        out["rms"] = float(np.sqrt(coef[0] ** 2 / (2 * a + 1) + coef[1] ** 2 / (2 * b + 1)))
+        return out
+
+    def derived_units(self):
+        a, b = self.orders
+        return {f"c{a}": "N m", f"c{b}": "N m", "rms": "N m"}
+
+    def primary(self):
+        return ("rms",)
+
+
+class LoadCoulomb(_RangePolynomial):
+    """Load-dependent Coulomb friction, the μ F_n term of paper eq. (5). With a load
+    signal (option ``use_load``): τ = μ sgn |load|. Without one, the Coulomb level varies
+    with the configuration-dependent (gravity) load, a smooth function of q over the
+    calibrated range: τ = sgn (c_a P_a(x) + c_b P_b(x)), orders (1, 2) for the first
+    instance, (3, 4), (5, 6) for repeats (see the base class for x)."""
 
     kind = "load_coulomb"
-    description = "Coulomb level proportional to the transmitted (gravity) load"
+    description = "Coulomb level varying with the transmitted (gravity) load"
     signature = ("residual odd in direction with a slow trend over q: the two branches "
                  "(q̇ > 0, q̇ < 0) spread or close along q")
     source = "paper eq. (5) μ F_n; Armstrong-Hélouvry et al. 1994"
     probes = ("position_odd",)
+    first_order = 1
+    odd = True
 
-    def __init__(self, name: str | None = None, use_load: bool = False) -> None:
-        super().__init__(name)
+    def __init__(self, name: str | None = None, use_load: bool = False, **kwargs: Any) -> None:
+        super().__init__(name, **kwargs)
         self.use_load = bool(use_load)
 
     @classmethod
     def for_signals(cls, sig: FrictionSignals, name: str | None = None) -> LoadCoulomb:
-        return cls(name, use_load=sig.load_nm is not None)
+        if sig.load_nm is not None:
+            return cls(name, use_load=True)
+        return cls(name, q_center=sig.scales.q_center, q_half=0.5 * sig.scales.q_span)
+
+    @property
+    def repeatable(self):  # type: ignore[override]
+        return 1 if self.use_load else 3
 
     @property
     def linear(self):  # type: ignore[override]
         if self.use_load:
             return (Param("mu", "-", "friction per unit load torque"),)
-        return (Param("mu_sin", "N m", "sgn sin q coefficient"),
-                Param("mu_cos", "N m", "sgn cos q coefficient"))
+        return super().linear
 
     def applicable(self, sig) -> bool:
         return sig.load_nm is not None if self.use_load else True
 
+    def options(self) -> dict[str, Any]:
+        return {"use_load": True} if self.use_load else super().options()
+
+    def required_options(self) -> tuple[str, ...]:
+        return () if self.use_load else super().required_options()
+
     def columns(self, sig, theta):
         if self.use_load:
             return (sig.sgn * np.abs(sig.load_nm))[:, None]
-        return np.column_stack([sig.sgn * np.sin(sig.q_rad), sig.sgn * np.cos(sig.q_rad)])
+        return super().columns(sig, theta)
 
     def derived(self, coef, theta):
-        if self.use_load:
-            return {"mu": float(coef[0])}
-        amp, ph = _amp_phase(coef[0], coef[1])
-        return {"amplitude": amp, "phase": ph}
+        return {"mu": float(coef[0])} if self.use_load else super().derived(coef, theta)
 
     def derived_units(self):
-        return {"mu": "-"} if self.use_load else {"amplitude": "N m", "phase": "rad"}
+        return {"mu": "-"} if self.use_load else super().derived_units()
 
     def primary(self):
-        return ("mu",) if self.use_load else ("amplitude",)
+        return ("mu",) if self.use_load else ("rms",)
+
+
+class GravityResidual(_RangePolynomial):
+    """Configuration-dependent torque left by the rigid-body compensation the friction
+    torque was identified with (README of the data: friction = joint torque minus the
+    rigid-body model; a gravity-model error is a smooth function of the joint angles):
+    τ = c_a P_a(x) + c_b P_b(x), orders (2, 3) for the first instance, (4, 5), (6, 7) for
+    repeats (constant and linear parts are covered by the paper law's b3 sin(q + θ_b))."""
+
+    kind = "gravity_residual"
+    description = "configuration-dependent torque, same in both directions (model mismatch)"
+    signature = ("residual even in direction that varies slowly with q (both branches "
+                 "shift together)")
+    source = "rigid-body compensation of the data (README); paper eq. (5) b3 term"
+    probes = ("position",)
+    first_order = 2
 
 
 class Inertia(Term):
@@ -420,30 +523,6 @@ class SensorDrift(Term):
         return (1.0 - np.exp(-(sig.t_s - sig.scales.t0) / theta[0]))[:, None]
 
 
-class NonlinearViscous(Term):
-    """Sub-linear viscous friction τ = c_v sign(v) |v|^δ, 0 < δ < 1 (lubricant shear
-    thinning; Armstrong-Hélouvry et al. 1994 list |v|^δ_v viscous terms)."""
-
-    kind = "nonlinear_viscous"
-    linear = (Param("c_v", "N m (s/rad)^δ", "coefficient (torque at 1 rad/s)"),)
-    nonlinear = (Param("delta", "-", "exponent"),)
-    description = "viscous friction growing like |q̇|^δ, δ < 1"
-    signature = ("residual odd in direction, rising steeply at low |q̇| and flattening "
-                 "(concave), not localised at low speed")
-    source = "Armstrong-Hélouvry et al. 1994"
-    probes = ("velocity",)
-
-    def bounds(self, sig):
-        return [(0.15, 0.9)]
-
-    def starts(self, sig, residual, idx):
-        return [np.array([d]) for d in (0.3, 0.5, 0.7)]
-
-    def columns(self, sig, theta):
-        v = sig.v_eff
-        return (np.sign(v) * np.abs(v) ** theta[0])[:, None]
-
-
 class VelocityLag(Term):
     """Frictional memory (Hess & Soom 1990): the friction law sees the velocity through
     a first-order lag, v = q̇ low-passed with time constant T_L. A transform term: it
@@ -479,7 +558,7 @@ class VelocityLag(Term):
 FRICTION_LIBRARY: dict[str, type[Term]] = {
     cls.kind: cls for cls in (
         AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
-        LoadCoulomb, Inertia, ThermalDrift, SensorDrift, NonlinearViscous, VelocityLag)
+        LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
 }
 """Library key -> effect class. Instantiate with ``FRICTION_LIBRARY[key](name)``."""
 

@@ -6,12 +6,24 @@ baseline terms, a library of candidate effects (term classes), the residual prob
 the held-out split. The friction side builds one with
 :func:`swgsim.calibration.friction_problem`; a strain-side library plugs in the same way.
 
-Acceptance rule (ARCHITECTURE.md, "Calibration loop"): a candidate is kept only if it
-lowers the validation RMSE by more than ``min_rel_improvement`` (relative) *and* lowers
-the BIC on the fit samples by more than ``-max_delta_bic``. Candidates are ranked by
-validation RMSE. The loop stops when the best candidate fails the rule. After the loop
-the final residual is diagnosed; if it is still structured the result says so
-(``unexplained``) and describes the signature, whatever was added before.
+Acceptance rule (ARCHITECTURE.md, "Calibration loop"). Every candidate is added to the
+current model and refitted on the fit samples (its own nonlinear parameters optimised,
+those of the current model held, all linear coefficients refitted); candidates are
+ranked by validation RMSE. Going down the ranking, the first candidate that passes all
+of
+
+1. validation RMSE lower by more than ``min_rel_improvement`` (relative),
+2. BIC on the fit samples lower by more than ``-max_delta_bic``, where the BIC counts
+   the *effective* number of samples n / τ_int (τ_int: integrated autocorrelation time
+   of the current residual). A structured residual is strongly autocorrelated; the
+   i.i.d. BIC would then reward any term that soaks up a few per cent of an unrelated
+   structure (hundreds of BIC points on 10⁴ samples). The plain ΔBIC is reported too.
+3. its primary parameters pinned down by the data (relative standard error, corrected
+   for autocorrelation, below ``max_rel_se``),
+
+is accepted, and the whole model is refitted jointly. The loop stops when no candidate
+passes. After the loop the final residual is diagnosed; if it is still structured the
+result says so (``unexplained``) and describes the signature, whatever was added.
 
 Errors before and after are computed on the test samples, which neither the fit nor the
 selection has seen, by the baseline and the final model refitted on fit + validation.
@@ -27,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from .core import FitResult, Term, fit_terms
+from .core import FitResult, Term, fit_terms, with_uncertainty
 from .diagnose import Diagnosis, Probe, diagnose
 from .split import HeldOutSplit
 
@@ -87,8 +99,8 @@ class SelectionConfig:
         Required relative drop of the validation RMSE.
     max_delta_bic : float, default -10
         Required BIC change on the fit samples (more negative is better).
-    max_iter : int, default 8
-        At most this many effects are added.
+    max_iter : int, default 12
+        At most this many accepted steps (a pair counts once).
     candidates : sequence of str, optional
         Library keys to try (default: the whole library).
     structure_threshold : float, default 0.03
@@ -97,16 +109,25 @@ class SelectionConfig:
         Identifiability flags (see :func:`~swgsim.calibration.core.fit_terms`).
     max_starts : int, default 3
         Optimisations per candidate fit (best starting points).
+    effective_bic : bool, default True
+        Count n / τ_int samples in the BIC of the rule and inflate the standard errors
+        by the same τ_int (False: the plain BIC and each fit's own τ_int).
+    pair_candidates : int, default 4
+        When no single candidate passes but some show evidence (validation gain or
+        effective ΔBIC beyond the thresholds), pairs of this many best candidates (by fit
+        RSS) are tried jointly (0 or 1: no look-ahead).
     """
 
     min_rel_improvement: float = 0.02
     max_delta_bic: float = -10.0
-    max_iter: int = 8
+    max_iter: int = 12
     candidates: Sequence[str] | None = None
     structure_threshold: float = 0.03
     max_rel_se: float = 0.5
     max_abs_corr: float = 0.98
     max_starts: int = 3
+    effective_bic: bool = True
+    pair_candidates: int = 4
 
     def __post_init__(self) -> None:
         if not 0 <= self.min_rel_improvement < 1:
@@ -114,6 +135,8 @@ class SelectionConfig:
                              f"{self.min_rel_improvement}")
         if self.max_delta_bic > 0:
             raise ValueError(f"max_delta_bic must be <= 0, got {self.max_delta_bic}")
+        if not self.max_rel_se > 0:
+            raise ValueError(f"max_rel_se must be > 0, got {self.max_rel_se}")
         if self.max_iter < 0:
             raise ValueError(f"max_iter must be >= 0, got {self.max_iter}")
 
@@ -130,8 +153,12 @@ class CandidateScore:
     rel_improvement : float
         1 − val_rmse / current validation RMSE.
     delta_bic : float
-        BIC change on the fit samples.
+        Plain (i.i.d.) BIC change on the fit samples.
+    delta_bic_eff : float
+        BIC change with the effective number of samples n / τ_int (used for the rule).
     accepted : bool
+    status : str
+        Why it was accepted or rejected.
     params : dict
         Derived parameters of the candidate (values only).
     fit : FitResult
@@ -142,14 +169,17 @@ class CandidateScore:
     val_rmse: float
     rel_improvement: float
     delta_bic: float
+    delta_bic_eff: float
     accepted: bool
     params: dict[str, float]
+    status: str = ""
     fit: FitResult | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return {"name": self.name, "kind": self.kind, "val_rmse": self.val_rmse,
                 "rel_improvement": self.rel_improvement, "delta_bic": self.delta_bic,
-                "accepted": self.accepted, "params": self.params}
+                "delta_bic_eff": self.delta_bic_eff, "accepted": self.accepted,
+                "status": self.status, "params": self.params}
 
 
 @dataclass
@@ -241,6 +271,161 @@ def _instance_name(kind: str, terms: Sequence[Term]) -> str:
     return kind if k == 0 else f"{kind}#{k + 1}"
 
 
+def _score(problem: Problem, fit: FitResult) -> tuple[np.ndarray, float]:
+    r = problem.y - fit.predict(problem.signals)
+    return r, _rmse(r[problem.split.validation])
+
+
+def _fit_candidate(problem: Problem, current: FitResult, new_terms: Sequence[Term],
+                   starts_new: Sequence[Sequence[np.ndarray]], fit_kw: dict[str, Any],
+                   val_cur: float, kind: str) -> CandidateScore | None:
+    """Add ``new_terms`` to the current model: their θ optimised, the rest held."""
+    sig, sp = problem.signals, problem.split
+    cur_th = {t.name: th for t, th in zip(current.terms, current.thetas, strict=True)}
+    new_st = {t.name: st for t, st in zip(new_terms, starts_new, strict=True)}
+    terms = _order(list(current.terms) + list(new_terms))
+    starts = [[cur_th[t.name]] if t.name in cur_th else new_st[t.name] for t in terms]
+    fixed = [t.name in cur_th for t in terms]
+    try:
+        f = fit_terms(terms, sig, problem.y, sp.fit, starts, fixed=fixed, uncertainty=False,
+                      **fit_kw)
+    except (ValueError, np.linalg.LinAlgError) as e:
+        log.warning("candidate %s failed: %s", "+".join(t.name for t in new_terms), e)
+        return None
+    _, v = _score(problem, f)
+    params: dict[str, float] = {}
+    for t in new_terms:
+        i = f.terms.index(t)
+        d = t.derived(f.coefs[i], f.thetas[i])
+        params.update(d if len(new_terms) == 1 else {f"{t.name}.{k}": x for k, x in d.items()})
+    return CandidateScore(
+        name=" + ".join(t.name for t in new_terms), kind=kind, val_rmse=v,
+        rel_improvement=1.0 - v / val_cur if val_cur > 0 else 0.0,
+        delta_bic=f.bic - current.bic, delta_bic_eff=float("nan"), accepted=False,
+        params=params, fit=f)
+
+
+def _new_terms(c: CandidateScore, current: FitResult) -> list[Term]:
+    names = {t.name for t in current.terms}
+    return [t for t in c.fit.terms if t.name not in names]
+
+
+def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
+                current: FitResult, r_cur: np.ndarray, val_cur: float,
+                fit_kw: dict[str, Any]) -> tuple[list[CandidateScore], float]:
+    """Fit every candidate added to the current model; ranked by validation RMSE.
+
+    Returns the candidates and the noise model's τ_int: the smallest integrated
+    autocorrelation time of the residuals of the current model, of every candidate that
+    helps on the validation data, and of the richest model of the iteration (the current
+    model plus all those candidates, nonlinear parameters as fitted singly, linear ones
+    refitted jointly). Like Mallows' Cp, which takes σ² from the full model, the noise
+    model then reflects what the library can explain: residual structure that library
+    effects explain does not count against a candidate; structure nothing explains does.
+    """
+    sig, sp = problem.signals, problem.split
+    cands = []
+    for key in keys:
+        cls = problem.library[key]
+        present = sum(1 for t in current.terms if t.kind == key)
+        term = cls.for_signals(sig, _instance_name(key, current.terms))
+        if present >= term.repeatable or not term.applicable(sig):
+            continue
+        c = _fit_candidate(problem, current, [term], [term.starts(sig, r_cur, sp.fit)],
+                           fit_kw, val_cur, key)
+        if c is not None:
+            cands.append(c)
+    cands.sort(key=lambda c: c.val_rmse)
+    helpful = [c for c in cands if c.rel_improvement > 0]
+    tau = min([current.tau_int] + [c.fit.tau_int for c in helpful])
+    if helpful:
+        terms = list(current.terms)
+        thetas = {t.name: th for t, th in zip(current.terms, current.thetas, strict=True)}
+        for c in helpful:
+            for t in _new_terms(c, current):
+                terms.append(t)
+                thetas[t.name] = c.fit.thetas[c.fit.terms.index(t)]
+        terms = _order(terms)
+        try:
+            full = fit_terms(terms, sig, problem.y, sp.fit, [[thetas[t.name]] for t in terms],
+                             fixed=[True] * len(terms), uncertainty=False, **fit_kw)
+            tau = min(full.tau_int, tau)
+        except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
+            log.debug("full model failed: %s", e)
+    _set_bic_eff(cands, current, tau)
+    return cands, tau
+
+
+def _set_bic_eff(cands: Sequence[CandidateScore], current: FitResult, tau: float) -> None:
+    n_eff = current.n / max(tau, 1.0)
+    for c in cands:
+        dk = c.fit.k - current.k
+        c.delta_bic_eff = float(n_eff * np.log(max(c.fit.rss, 1e-300) / current.rss)
+                                + dk * np.log(n_eff))
+
+
+def _pairs(problem: Problem, cfg: SelectionConfig, current: FitResult,
+           cands: Sequence[CandidateScore], tau: float, val_cur: float,
+           fit_kw: dict[str, Any]) -> tuple[list[CandidateScore], float]:
+    """Look-ahead when no single candidate passes: two effects that are confounded on
+    the fit data may each fail alone (each absorbs part of the other and generalises
+    badly) and pass together. Pairs of the ``pair_candidates`` candidates with the
+    largest drop of the fit RSS are fitted jointly."""
+    top = sorted(cands, key=lambda c: c.fit.rss)[:cfg.pair_candidates]
+    out = []
+    for i in range(len(top)):
+        for j in range(i + 1, len(top)):
+            ti, tj = _new_terms(top[i], current)[0], _new_terms(top[j], current)[0]
+            if ti.kind == tj.kind:
+                continue
+            th = {}
+            for f in (top[i].fit, top[j].fit):
+                th.update({t.name: x for t, x in zip(f.terms, f.thetas, strict=True)})
+            c = _fit_candidate(problem, current, [ti, tj], [[th[ti.name]], [th[tj.name]]],
+                               {**fit_kw, "max_starts": 1}, val_cur, f"{ti.kind} + {tj.kind}")
+            if c is not None:
+                out.append(c)
+    out.sort(key=lambda c: c.val_rmse)
+    tau = min([tau] + [c.fit.tau_int for c in out if c.rel_improvement > 0])
+    _set_bic_eff(out, current, tau)
+    return out, tau
+
+
+def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
+            cands: list[CandidateScore], tau: float) -> CandidateScore | None:
+    """First candidate in the ranking that passes the acceptance rule (module doc)."""
+    chosen = None
+    for c in cands:
+        if chosen is not None:
+            c.status = "not needed (a better-ranked candidate was accepted)"
+            continue
+        dbic = c.delta_bic_eff if cfg.effective_bic else c.delta_bic
+        if not c.rel_improvement > cfg.min_rel_improvement:
+            c.status = (f"rejected: validation gain {100 * c.rel_improvement:.1f} % <= "
+                        f"{100 * cfg.min_rel_improvement:.1f} %")
+            continue
+        if not dbic < cfg.max_delta_bic:
+            c.status = (f"rejected: {'effective ' if cfg.effective_bic else ''}ΔBIC "
+                        f"{dbic:+.1f} >= {cfg.max_delta_bic:g}")
+            continue
+        # identifiability of the new terms' primary parameters
+        f = with_uncertainty(c.fit, problem.signals, problem.split.fit, cfg.max_rel_se,
+                             cfg.max_abs_corr, tau_int=tau if cfg.effective_bic else None)
+        weak = []
+        for term in _new_terms(c, current):
+            est = f.estimates_of(term.name)
+            weak += [f"{term.name}.{k} (rel. s.e. {est[k].std / abs(est[k].value):.2g})"
+                     for k in term.primary()
+                     if k in est and not est[k].std <= cfg.max_rel_se * abs(est[k].value)]
+        if weak:
+            c.status = "rejected: not pinned down by the data: " + ", ".join(weak)
+            continue
+        c.accepted = True
+        c.status = "accepted"
+        chosen = c
+    return chosen
+
+
 def calibrate(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
     """Run the calibration loop on a problem.
 
@@ -269,8 +454,7 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
                   max_starts=cfg.max_starts)
 
     def score(fit: FitResult) -> tuple[np.ndarray, float]:
-        r = y - fit.predict(sig)
-        return r, _rmse(r[sp.validation])
+        return _score(problem, fit)
 
     current = fit_terms(_order(problem.baseline), sig, y, sp.fit, uncertainty=False, **fit_kw)
     baseline_sel = current
@@ -282,47 +466,30 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
         diag = diagnose(sig, problem.t, r_cur, diag_idx, problem.probes, problem.units,
                         cfg.structure_threshold)
         cands: list[CandidateScore] = []
+        accepted = None
         if it < cfg.max_iter:
-            for key in keys:
-                cls = problem.library[key]
-                present = sum(1 for t in current.terms if t.kind == key)
-                if present >= cls.repeatable:
-                    continue
-                term = cls.for_signals(sig, _instance_name(key, current.terms))
-                if not term.applicable(sig):
-                    continue
-                terms = _order(list(current.terms) + [term])
-                cur_th = {t.name: th for t, th in zip(current.terms, current.thetas)}
-                starts = [[cur_th[t.name]] if t.name in cur_th else t.starts(sig, r_cur, sp.fit)
-                          for t in terms]
-                try:
-                    f = fit_terms(terms, sig, y, sp.fit, starts, uncertainty=False, **fit_kw)
-                except (ValueError, np.linalg.LinAlgError) as e:
-                    log.warning("candidate %s failed: %s", term.name, e)
-                    continue
-                _, v = score(f)
-                i = f.terms.index(term)
-                cands.append(CandidateScore(
-                    name=term.name, kind=key, val_rmse=v,
-                    rel_improvement=1.0 - v / val_cur if val_cur > 0 else 0.0,
-                    delta_bic=f.bic - current.bic, accepted=False,
-                    params=term.derived(f.coefs[i], f.thetas[i]), fit=f))
-            cands.sort(key=lambda c: c.val_rmse)
-        best = cands[0] if cands else None
-        ok = (best is not None and best.rel_improvement > cfg.min_rel_improvement
-              and best.delta_bic < cfg.max_delta_bic)
-        if ok:
-            best.accepted = True
+            cands, tau = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw)
+            accepted = _choose(problem, cfg, current, cands, tau)
+            evidence = any(c.rel_improvement > cfg.min_rel_improvement
+                           or c.delta_bic_eff < cfg.max_delta_bic for c in cands)
+            if accepted is None and cfg.pair_candidates >= 2 and evidence:
+                pairs, tau = _pairs(problem, cfg, current, cands, tau, val_cur, fit_kw)
+                accepted = _choose(problem, cfg, current, pairs, tau)
+                cands = cands + pairs
         iterations.append(Iteration(it, [t.name for t in current.terms], val_cur, current.bic,
-                                    diag, cands, best.name if ok else None))
-        log.info("%s iteration %d: val RMSE %.4g, best %s (%.4g, dBIC %.1f) -> %s",
-                 problem.name, it, val_cur, best.name if best else None,
-                 best.val_rmse if best else np.nan, best.delta_bic if best else np.nan,
-                 "accepted" if ok else "stop")
-        if not ok:
+                                    diag, cands, accepted.name if accepted else None))
+        best = cands[0] if cands else None
+        log.info("%s iteration %d: val RMSE %.4g, best %s (%.4g), accepted %s", problem.name,
+                 it, val_cur, best.name if best else None, best.val_rmse if best else np.nan,
+                 accepted.name if accepted else None)
+        if accepted is None:
             break
-        current = best.fit
-        added.append(best.name)
+        # joint refit of all nonlinear parameters, from the candidate's values
+        current_before = current
+        current = fit_terms(accepted.fit.terms, sig, y, sp.fit,
+                            [[th] for th in accepted.fit.thetas], uncertainty=False,
+                            **{**fit_kw, "max_starts": 1})
+        added.extend(t.name for t in _new_terms(accepted, current_before))
         r_cur, val_cur = score(current)
 
     # final refits on fit + validation; test errors

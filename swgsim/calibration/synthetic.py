@@ -1,11 +1,12 @@
 """Simulated "measured" friction data with planted effects, for tests and examples.
 
 The trajectory resembles the real Franka recordings (``/work/shared/data/joint_friction``):
-a sum of three sines in q (span about 0.9 rad, |q̇| up to about 0.35 rad/s, frequent
-reversals), irregular sampling (10 ms ± 20 %). The torque is the paper law plus the
-planted library effects plus optional hidden (out-of-library) terms plus mildly coloured
-Gaussian noise: AR(1) with coefficient ``noise_rho`` and marginal standard deviation
-``noise_rel`` times the range of the clean torque.
+a sum of three sines in q (span about 2 rad, |q̇| up to about 0.65 rad/s, about 20
+reversals a minute) on a warped time axis with a slow passage every 9.3 s (low-speed
+coverage, as in point-to-point motion), irregular sampling (10 ms ± 20 %). The torque is
+the paper law plus the planted library effects plus optional hidden (out-of-library)
+terms plus mildly coloured Gaussian noise: AR(1) with coefficient ``noise_rho`` and
+marginal standard deviation ``noise_rel`` times the range of the clean torque.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 
 from .chain import parse_effects
 from .core import evaluate_terms
-from .friction import FrictionRecording, PaperLaw, Scales, FrictionSignals
+from .friction import FrictionRecording, FrictionSignals, PaperLaw, Scales
 
 __all__ = ["BASELINE_TRUTH", "PLANTED", "SyntheticTruth", "synthetic_trajectory",
            "synthetic_recording"]
@@ -30,7 +31,7 @@ V_SMOOTH = 0.004
 """Smooth-sign velocity of the synthetic data [rad/s] (about 1 % of max |q̇|)."""
 
 PLANTED: dict[str, dict[str, Any]] = {
-    "asymmetric_coulomb": {"params": {"delta_c": 0.04}, "check": {"delta_c": 0.04}},
+    "asymmetric_coulomb": {"params": {"delta_c": 0.15}, "check": {"delta_c": 0.15}},
     "stribeck": {"params": {"f_s": 0.12, "v_st": 0.03},
                  "check": {"f_s": 0.12, "v_st": 0.03}},
     "presliding": {"params": {"f_d": 0.15, "q_c": 0.004},
@@ -39,13 +40,13 @@ PLANTED: dict[str, dict[str, Any]] = {
                         "check": {"amplitude": float(np.hypot(0.03, 0.02)), "period": 0.045}},
     "friction_ripple": {"params": {"a_sin": 0.02, "a_cos": -0.025, "period": 0.07},
                         "check": {"amplitude": float(np.hypot(0.02, 0.025)), "period": 0.07}},
-    "load_coulomb": {"params": {"mu_sin": 0.06, "mu_cos": 0.05},
-                     "check": {"amplitude": float(np.hypot(0.06, 0.05))}},
+    "load_coulomb": {"params": {"c1": 0.1, "c2": -0.06},
+                     "check": {"rms": float(np.sqrt(0.1 ** 2 / 3 + 0.06 ** 2 / 5))}},
+    "gravity_residual": {"params": {"c2": 0.12, "c3": -0.08},
+                         "check": {"rms": float(np.sqrt(0.12 ** 2 / 5 + 0.08 ** 2 / 7))}},
     "inertia": {"params": {"j_a": 0.1}, "check": {"j_a": 0.1}},
-    "thermal_drift": {"params": {"d": 0.08, "t_th": 12.0}, "check": {"d": 0.08, "t_th": 12.0}},
-    "sensor_drift": {"params": {"c": 0.06, "t_d": 15.0}, "check": {"c": 0.06, "t_d": 15.0}},
-    "nonlinear_viscous": {"params": {"c_v": 0.15, "delta": 0.5},
-                          "check": {"c_v": 0.15, "delta": 0.5}},
+    "thermal_drift": {"params": {"d": 0.2, "t_th": 12.0}, "check": {"d": 0.2, "t_th": 12.0}},
+    "sensor_drift": {"params": {"c": 0.2, "t_d": 15.0}, "check": {"c": 0.2, "t_d": 15.0}},
     "velocity_lag": {"params": {"t_lag": 0.04}, "check": {"t_lag": 0.04}},
 }
 """Planted value of every library effect and the derived parameters a test checks."""
@@ -73,7 +74,7 @@ class SyntheticTruth:
     v_s: float
 
 
-def synthetic_trajectory(duration_s: float = 40.0, dt_s: float = 0.01, jitter: float = 0.2,
+def synthetic_trajectory(duration_s: float = 60.0, dt_s: float = 0.01, jitter: float = 0.2,
                          rng: np.random.Generator | None = None
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Multi-sine joint trajectory on irregular samples.
@@ -100,14 +101,24 @@ def synthetic_trajectory(duration_s: float = 40.0, dt_s: float = 0.01, jitter: f
     n = int(duration_s / dt_s)
     dt = dt_s * (1 + jitter * rng.uniform(-1, 1, n))
     t = np.concatenate([[0.0], np.cumsum(dt[:-1])])
-    amp = np.array([0.30, 0.10, 0.04])
-    f = np.array([0.07, 0.19, 0.41])
+    # time warp s(t) with speed factor w = 0.1 + 0.9 ((1 - cos th) / 2)^2, th = 2 pi t / T_w:
+    # slow passages every T_w seconds (low-speed coverage, as in point-to-point motion)
+    t_w = 9.3
+    th = 2 * np.pi * t / t_w
+    w = 0.1 + 0.9 * ((1 - np.cos(th)) / 2) ** 2
+    dw = 0.9 * (1 - np.cos(th)) / 2 * np.sin(th) * 2 * np.pi / t_w
+    s = 0.1 * t + 0.9 * (3 * t / 8 - t_w / (4 * np.pi) * np.sin(th)
+                         + t_w / (32 * np.pi) * np.sin(2 * th))
+    amp = np.array([0.80, 0.20, 0.06])
+    f = np.array([0.11, 0.29, 0.67])
     ph = rng.uniform(0, 2 * np.pi, 3)
-    w = 2 * np.pi * f
-    arg = w[:, None] * t[None, :] + ph[:, None]  # (3, n)
-    q = -0.9 + (amp[:, None] * np.sin(arg)).sum(0)
-    dq = (amp[:, None] * w[:, None] * np.cos(arg)).sum(0)
-    ddq = -(amp[:, None] * w[:, None] ** 2 * np.sin(arg)).sum(0)
+    om = 2 * np.pi * f
+    arg = om[:, None] * s[None, :] + ph[:, None]  # (3, n)
+    q = (amp[:, None] * np.sin(arg)).sum(0)
+    q_s = (amp[:, None] * om[:, None] * np.cos(arg)).sum(0)  # dq/ds
+    q_ss = -(amp[:, None] * om[:, None] ** 2 * np.sin(arg)).sum(0)
+    dq = q_s * w
+    ddq = q_ss * w * w + q_s * dw
     return t, q, dq, ddq
 
 
@@ -116,10 +127,10 @@ def synthetic_recording(
     *,
     baseline: Mapping[str, float] | None = None,
     v_s: float = V_SMOOTH,
-    noise_rel: float = 0.015,
+    noise_rel: float = 0.01,
     noise_rho: float = 0.3,
     hidden: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = None,
-    duration_s: float = 40.0,
+    duration_s: float = 60.0,
     dt_s: float = 0.01,
     rng: np.random.Generator | None = None,
     name: str = "synthetic",
@@ -129,12 +140,13 @@ def synthetic_recording(
     Parameters
     ----------
     effects : sequence of mapping
-        Library effects ``{kind, params}`` (see :data:`PLANTED`).
+        Library effects ``{kind, params}`` (see :data:`PLANTED`); ``load_coulomb`` and
+        ``gravity_residual`` get the trajectory's range of q unless ``options`` say.
     baseline : mapping, optional
         Paper-law parameters; default :data:`BASELINE_TRUTH`.
     v_s : float
         Smooth-sign velocity [rad/s].
-    noise_rel : float, default 0.015
+    noise_rel : float, default 0.01
         Noise standard deviation relative to the range of the clean torque.
     noise_rho : float, default 0.3
         AR(1) coefficient of the noise, in [0, 1).
@@ -154,6 +166,11 @@ def synthetic_recording(
     rng = rng if rng is not None else np.random.default_rng(0)
     t, q, dq, ddq = synthetic_trajectory(duration_s, dt_s, rng=rng)
     base = dict(BASELINE_TRUTH if baseline is None else baseline)
+    effects = [dict(e) for e in effects]
+    for e in effects:  # range-polynomial effects live on the trajectory's range of q
+        if e.get("kind") in ("load_coulomb", "gravity_residual") and "options" not in e:
+            e["options"] = {"q_center": float(0.5 * (q.max() + q.min())),
+                            "q_half": float(0.5 * np.ptp(q))}
     items = parse_effects(effects)
     sc = Scales(v_ref=1.0, q_span=float(np.ptp(q)), t0=float(t[0]), t_span=float(t[-1] - t[0]),
                 dt_med=float(np.median(np.diff(t))), dq_med=1.0)
@@ -176,5 +193,6 @@ def synthetic_recording(
         e[k] = noise_rho * e[k - 1] + np.sqrt(1 - noise_rho ** 2) * w[k]
     rec = FrictionRecording(t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=ddq, tau_nm=tau + sigma * e,
                             name=name, ddq_source="exact (synthetic)")
-    spec = [{"kind": x[0].kind, "params": x[0].to_params(x[1], x[2])} for x in items]
+    spec = [{"kind": x[0].kind, "params": x[0].to_params(x[1], x[2]),
+             **({"options": x[0].options()} if x[0].options() else {})} for x in items]
     return rec, SyntheticTruth(sigma=sigma, tau_clean=tau, effects=spec, v_s=v_s)

@@ -1,0 +1,857 @@
+"""Strain side of the calibration: signals, baseline, declared effect library, probes.
+
+The measured data are strain-gauge windows (data kind 2, schema v1). Every sample of
+every window and channel is one entry of the target vector, in the order (window,
+channel, time). The chain's prediction of a window (the nominal gear at the window's
+operating point, aligned to the window's WG angle and input angle; :mod:`.strain`) is
+split into *basis* signals, each of shape (n_windows, 5, n_ext) on a time grid that
+extends ``n_lead`` samples before and ``n_tail`` samples after the window (filters
+and shifts need the history):
+
+==========  ==========================================================================
+s_wg        w0 (A cos 2ψ + B sin 2ψ): the WG-deflection pattern [mV/V]
+s_t         T_out(t) h(ψ): the torque pattern [mV/V]
+dpsi        ∂(s_wg + s_t)/∂ψ at fixed torque [mV/V / rad]
+==========  ==========================================================================
+
+The baseline (:class:`ChainBaseline`) scales the two patterns (the WG deflection w0 and
+an overall gauge gain). Candidate effects (:data:`STRAIN_LIBRARY`) add columns or are
+transforms of the basis: the amplifier low-pass and the bridge nonlinearity map it,
+a kinematic-error harmonic replaces the torque pattern (its unit torque responses ΔT
+come with the signals) and re-aligns each window's input angle. Each documents its
+parametrisation, residual signature and source; every accepted one maps to the
+``sensor_effects`` option of :mod:`swgsim.measurement` or, for the kinematic error, to
+the gear's ``ke_*`` parameters (:mod:`swgsim.dynamics`).
+
+====================  =================================  =================================
+effect                parametrisation                    residual signature
+====================  =================================  =================================
+offset                o_c per channel [mV/V]             constant per channel, all windows
+gain_mismatch         g_c per channel, relative to the   WG/torque pattern of one channel
+                      mean gain (Σ g_c = 0) [-]          scaled, same at all speeds
+gauge_misplacement    δ_c per channel, relative to the   order-2 (ψ) pattern of a channel
+                      alignment-weighted mean [rad]      shifted in phase, 90° from it
+bridge_nonlinearity   s/(1 + k s) [1/(mV/V)]             ∝ s²: order 4 of ψ on s1/s3, a
+                      (transform of the basis)           load-squared offset on s0
+amplifier_lowpass     first order, cut-off f_c [Hz]      amplitudes fall and phases lag
+                      (transform of the basis)           with order × speed
+ke_order{k}           extra kinematic error A sin(k φ_in order k of the input (sidebands
+                      + φ) at the output [rad]           k ± 2) in the torque channels
+                      (transform, re-aligns φ_in)
+thermal_drift         r_c per channel, offset r_c t_seq  offset growing over the sequence
+                      [mV/V/s]                           of windows
+====================  =================================  =================================
+
+Identifiability (declared): without an encoder angle in the data the WG angle of each
+window is a nuisance fitted by alignment, so (i) a delay common to all channels is a
+shift of that angle and cannot be seen (``time_delay`` is a simulation option only);
+(ii) only *relative* gauge angles are observable: misplacements are reported relative
+to the alignment-weighted mean (weights: sensitivity of the alignment to each
+channel); (iii) a gain common to all channels is the baseline's gauge gain, so gains
+are reported relative to their mean.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import logging
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import signal as sps
+
+from ..measurement import fractional_delay, lowpass, lowpass_coefficients
+from .core import Param, Term
+from .diagnose import Probe
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "SENSORS",
+    "StrainSignals",
+    "ChainBaseline",
+    "ChannelOffset",
+    "GainMismatch",
+    "GaugeMisplacement",
+    "BridgeNonlinearity",
+    "AmplifierLowpass",
+    "KinematicErrorHarmonic",
+    "ThermalDrift",
+    "STRAIN_LIBRARY",
+    "strain_library",
+    "strain_probes",
+    "constraint_basis",
+]
+
+SENSORS = ("s0", "s1", "s2", "s3", "s4")
+
+
+# ---------------------------------------------------------------------------------------
+# signals
+
+
+class _MappedBasis(Mapping):
+    """Lazy view of a basis mapping with a function applied per entry, fn(key, array)."""
+
+    def __init__(self, base: Mapping[str, np.ndarray],
+                 fn: Callable[[str, np.ndarray], np.ndarray]) -> None:
+        self._base, self._fn, self._cache = base, fn, {}
+
+    def __getitem__(self, k: str) -> np.ndarray:
+        if k not in self._cache:
+            self._cache[k] = self._fn(k, self._base[k])
+        return self._cache[k]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._base)
+
+    def __len__(self) -> int:
+        return len(self._base)
+
+
+@dataclass(frozen=True)
+class StrainSignals:
+    """What strain terms and probes see. Per-sample arrays have shape (n,) with
+    n = n_windows · 5 · n_t, ordered (window, channel, time).
+
+    The basis signals are ``raw`` (the chain's prediction at the current alignment) with
+    the ``maps`` of the transform terms applied in order (low-pass, bridge nonlinearity),
+    lazily; a kinematic-error term replaces the raw torque pattern (``ripple``) and keeps
+    the maps, so transforms compose in any order.
+
+    Attributes
+    ----------
+    raw : mapping of str to ndarray, shape (n_windows, 5, n_lead + n_t + n_tail)
+        Basis signals "s_wg", "s_t", "dpsi" (module docstring) on the extended grid.
+    n_lead, n_t : int
+        History samples before the window, samples in the window.
+    fs : float
+        Sample rate [Hz].
+    window, channel, op : ndarray of int, shape (n,)
+        Window index (0..n_windows−1), channel (0..4), operating-point index.
+    t_s : ndarray, shape (n,)
+        Time since the window start [s].
+    t_seq_s : ndarray, shape (n,)
+        Time since the start of the recording sequence [s] (thermal drift).
+    phi_in_rad, psi_rad : ndarray, shape (n,)
+        Input angle and WG angle relative to the flexspline of the aligned model [rad].
+    psi_rate : ndarray, shape (n_windows,)
+        ψ̇ of each window [rad/s].
+    n_in_rpm, t_out_nm : ndarray, shape (n_windows,)
+        Operating point of each window [rpm, N m].
+    ops : tuple of (float, float)
+        Distinct operating points (n_in [rpm], T_out [N m]), indexed by ``op``.
+    w0_nom_m : float
+        Nominal WG deflection of the model [m].
+    weights : dict of str to ndarray, shape (5,)
+        Constraint weights of the relative per-channel effects (``"gain"``,
+        ``"misplacement"``).
+    maps : tuple of callable
+        Transforms of the basis, each ``Mapping -> Mapping``, applied in order.
+    ripple : callable, optional
+        ``ripple(ke) -> dict`` with the raw "s_t", "dpsi", "phi_in" (n_windows, m) and the
+        re-aligned torque shifts for extra kinematic-error harmonics ``ke`` (tuple of
+        (order, a_sin, a_cos)); ``ripple.unit(order)`` gives the unit responses at the
+        current alignment, shape (2, n_windows, 5, m).
+    ke : tuple of (int, float, float)
+        Extra kinematic-error harmonics in the raw basis.
+    ke_orders : tuple of int
+        Orders with kinematic-error responses.
+    ke_bound_rad : float
+        Bound of the kinematic-error coefficients [rad].
+    f_c_bounds : tuple of float
+        Range searched for the low-pass cut-off [Hz].
+    """
+
+    raw: Mapping[str, np.ndarray]
+    n_lead: int
+    n_t: int
+    fs: float
+    window: np.ndarray
+    channel: np.ndarray
+    op: np.ndarray
+    t_s: np.ndarray
+    t_seq_s: np.ndarray
+    phi_in_rad: np.ndarray
+    psi_rad: np.ndarray
+    psi_rate: np.ndarray
+    n_in_rpm: np.ndarray
+    t_out_nm: np.ndarray
+    ops: tuple[tuple[float, float], ...]
+    w0_nom_m: float
+    weights: dict[str, np.ndarray] = field(default_factory=dict)
+    maps: tuple[Callable[[Mapping[str, np.ndarray]], Mapping[str, np.ndarray]], ...] = ()
+    ripple: Any = None
+    ke: tuple[tuple[int, float, float], ...] = ()
+    ke_orders: tuple[int, ...] = ()
+    ke_bound_rad: float = 2e-3
+    f_c_bounds: tuple[float, float] = (50.0, 4500.0)
+
+    @property
+    def n(self) -> int:
+        return int(self.window.size)
+
+    @property
+    def n_windows(self) -> int:
+        return int(self.psi_rate.size)
+
+    @functools.cached_property
+    def basis(self) -> Mapping[str, np.ndarray]:
+        """Raw basis with the maps applied (lazily, cached per signals object)."""
+        b: Mapping[str, np.ndarray] = self.raw
+        for fn in self.maps:
+            b = fn(b)
+        return b
+
+    def window_part(self, a: np.ndarray) -> np.ndarray:
+        """Window samples of an extended array (..., m) -> (..., n_t)."""
+        return a[..., self.n_lead:self.n_lead + self.n_t]
+
+    def col(self, name: str) -> np.ndarray:
+        """Window part of a basis signal, flattened to shape (n,)."""
+        return np.ascontiguousarray(self.window_part(self.basis[name])).reshape(-1)
+
+    def prediction(self) -> np.ndarray:
+        """Nominal prediction s_wg + s_t, shape (n,) [mV/V]."""
+        return self.col("s_wg") + self.col("s_t")
+
+    @functools.cached_property
+    def onehot(self) -> np.ndarray:
+        """Channel indicators, shape (n, 5)."""
+        return (self.channel[:, None] == np.arange(5)[None, :]).astype(float)
+
+    def replace(self, **changes: Any) -> StrainSignals:
+        return dataclasses.replace(self, **changes)
+
+
+def constraint_basis(weights: np.ndarray) -> tuple[np.ndarray, int]:
+    """Basis of the per-channel values v with Σ w_c v_c = 0.
+
+    Parameters
+    ----------
+    weights : ndarray, shape (5,)
+        Positive weights.
+
+    Returns
+    -------
+    Q : ndarray, shape (5, 4)
+        v = Q r for the four free values r of the channels other than ``ref``.
+    ref : int
+        The channel with the largest weight, whose value follows from the others.
+    """
+    w = np.asarray(weights, float)
+    if w.shape != (5,) or np.any(~(w > 0)):
+        raise ValueError(f"constraint weights must be 5 positive values, got {weights}")
+    ref = int(np.argmax(w))
+    free = [c for c in range(5) if c != ref]
+    q = np.zeros((5, 4))
+    for j, c in enumerate(free):
+        q[c, j] = 1.0
+        q[ref, j] = -w[c] / w[ref]
+    return q, ref
+
+
+# ---------------------------------------------------------------------------------------
+# baseline
+
+
+class ChainBaseline(Term):
+    """The simulation chain's prediction for the nominal gear, two scales fitted.
+
+    s = a_wg · s_wg + a_torque · s_t. With a common gauge gain G and a WG deflection w0,
+    a_torque = G and a_wg = G w0 / w0_nom; reported as ``gauge_gain`` [-] and ``w0_mm``.
+    """
+
+    kind = "chain"
+    linear = (Param("a_wg", "-", "scale of the WG-deflection pattern"),
+              Param("a_torque", "-", "scale of the torque pattern (overall gauge gain)"))
+    description = ("nominal simulation chain (swgsim.chain) at each window's operating point, "
+                   "aligned to the window's WG angle; fitted: WG deflection w0 and overall "
+                   "gauge gain")
+    source = "paper Fig. 2 chain: eq. (1)-(6) dynamics, flexspline truss, gauge bridges"
+
+    def __init__(self, name: str | None = None, w0_nom_m: float = 0.254e-3) -> None:
+        super().__init__(name)
+        self.w0_nom_m = float(w0_nom_m)
+
+    @classmethod
+    def for_signals(cls, sig: StrainSignals, name: str | None = None) -> ChainBaseline:
+        return cls(name, sig.w0_nom_m)
+
+    def columns(self, sig: StrainSignals, theta: np.ndarray) -> np.ndarray:
+        return np.column_stack([sig.col("s_wg"), sig.col("s_t")])
+
+    def derived(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
+        a_w, a_t = (float(x) for x in coef)
+        return {"w0_mm": self.w0_nom_m * 1e3 * a_w / a_t if a_t else float("nan"),
+                "gauge_gain": a_t}
+
+    def derived_units(self) -> dict[str, str]:
+        return {"w0_mm": "mm", "gauge_gain": "-"}
+
+    def options(self) -> dict[str, Any]:
+        return {"w0_nom_m": self.w0_nom_m}
+
+
+# ---------------------------------------------------------------------------------------
+# effects
+
+
+def _rms(v: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(v))))
+
+
+class ChannelOffset(Term):
+    """Zero offset of each bridge channel."""
+
+    kind = "offset"
+    linear = tuple(Param(f"o_{s}", "mV/V", f"offset of {s}") for s in SENSORS)
+    description = "zero offset per channel (bridge imbalance, amplifier offset)"
+    signature = "a constant per channel, the same in every window and operating point"
+    source = "PHYSICS.md sec. 5 (offsets); paper eq. (10) a_0"
+
+    def columns(self, sig: StrainSignals, theta: np.ndarray) -> np.ndarray:
+        return sig.onehot
+
+    def derived(self, coef, theta):
+        out = {f"o_{s}": float(v) for s, v in zip(SENSORS, coef, strict=True)}
+        out["offset_rms"] = _rms(coef)
+        return out
+
+    def derived_units(self):
+        return {**{f"o_{s}": "mV/V" for s in SENSORS}, "offset_rms": "mV/V"}
+
+    def primary(self):
+        return ("offset_rms",)
+
+    def sensor_effect(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, Any]:
+        """The ``sensor_effects`` entry of :mod:`swgsim.measurement`."""
+        return {"name": "offset", "params": {"offset_mvv": [float(v) for v in coef]}}
+
+
+class ThermalDrift(Term):
+    """Zero drift of each channel over the recording sequence."""
+
+    kind = "thermal_drift"
+    linear = tuple(Param(f"r_{s}", "mV/V/s", f"drift rate of {s}") for s in SENSORS)
+    description = ("thermal drift of the zero per channel, o_c(t) = r_c t_seq with t_seq the "
+                   "time since the start of the sequence of windows")
+    signature = "an offset per channel that grows along the sequence of windows"
+    source = "PHYSICS.md sec. 5 (gauge temperature drift); Hoffmann 1989 (apparent strain)"
+
+    def columns(self, sig, theta):
+        return sig.onehot * sig.t_seq_s[:, None]
+
+    def derived(self, coef, theta):
+        out = {f"r_{s}": float(v) for s, v in zip(SENSORS, coef, strict=True)}
+        out["drift_rms"] = _rms(coef)
+        return out
+
+    def derived_units(self):
+        return {**{f"r_{s}": "mV/V/s" for s in SENSORS}, "drift_rms": "mV/V/s"}
+
+    def primary(self):
+        return ("drift_rms",)
+
+    def sensor_effect(self, coef, theta):
+        return {"name": "thermal_drift", "params": {"rate_mvv_per_s": [float(v) for v in coef]}}
+
+
+class _Relative(Term):
+    """Per-channel values v_c with Σ w_c v_c = 0: four raw parameters."""
+
+    weight_key = ""
+    raw_prefix = ""
+    raw_unit = "-"
+
+    def __init__(self, name: str | None = None, weights: Any = None) -> None:
+        super().__init__(name)
+        self.weights = np.ones(5) if weights is None else np.asarray(weights, float)
+        self.q, self.ref = constraint_basis(self.weights)
+        self.free = [c for c in range(5) if c != self.ref]
+        self.linear = tuple(Param(f"{self.raw_prefix}_{SENSORS[c]}", self.raw_unit,
+                                  f"relative value of {SENSORS[c]}") for c in self.free)
+
+    @classmethod
+    def for_signals(cls, sig: StrainSignals, name: str | None = None):
+        return cls(name, sig.weights.get(cls.weight_key))
+
+    def values(self, coef: np.ndarray) -> np.ndarray:
+        """Per-channel values v = Q r, shape (5,)."""
+        return self.q @ np.asarray(coef, float)
+
+    def options(self) -> dict[str, Any]:
+        return {"weights": [float(w) for w in self.weights]}
+
+
+class GainMismatch(_Relative):
+    """Gain of each channel relative to the mean gain (the baseline's gauge gain)."""
+
+    kind = "gain_mismatch"
+    weight_key = "gain"
+    raw_prefix = "g"
+    linear = tuple(Param(f"g_r{j}", "-", "relative gain of a free channel") for j in range(4))
+    description = ("gain of each channel relative to the mean of the five (gauge-factor and "
+                   "amplifier-gain tolerance); the common gain is the baseline's gauge_gain")
+    signature = ("one channel's WG and torque pattern scaled, the same at every speed and "
+                 "load; s1−s3 or s2−s4 no longer cancel")
+    source = ("Godler et al. (per-gauge gain tuning); Schuller et al. 2024 (sensing ripple); "
+              "PHYSICS.md sec. 4")
+
+    def columns(self, sig, theta):
+        return (sig.onehot * sig.prediction()[:, None]) @ self.q
+
+    def derived(self, coef, theta):
+        v = self.values(coef)
+        out = {f"g_{s}": float(x) for s, x in zip(SENSORS, v, strict=True)}
+        out["gain_rms"] = _rms(v)
+        return out
+
+    def derived_units(self):
+        return {**{f"g_{s}": "-" for s in SENSORS}, "gain_rms": "-"}
+
+    def primary(self):
+        return ("gain_rms",)
+
+    def sensor_effect(self, coef, theta):
+        return {"name": "gain_mismatch",
+                "params": {"gain": [float(1.0 + x) for x in self.values(coef)]}}
+
+
+class GaugeMisplacement(_Relative):
+    """Angular misplacement of each gauge (bridge) relative to the aligned mean."""
+
+    kind = "gauge_misplacement"
+    weight_key = "misplacement"
+    raw_prefix = "d"
+    raw_unit = "rad"
+    linear = tuple(Param(f"d_r{j}", "rad", "relative angle of a free channel")
+                   for j in range(4))
+    description = ("angular misplacement δ_c of each gauge along θ: s_c(ψ − δ_c), linearised "
+                   "−δ_c ∂s_c/∂ψ; relative to the mean weighted like the WG-angle alignment "
+                   "(which absorbs a common shift)")
+    signature = ("the order-2 (ψ) pattern of one channel shifted in phase: a residual in "
+                 "quadrature with that channel's signal, same angle at every speed")
+    source = ("Taghirad & Bélanger; Schuller et al. 2024 (gauge positioning is the dominant "
+              "ripple source); PHYSICS.md sec. 4")
+
+    def columns(self, sig, theta):
+        return (sig.onehot * (-sig.col("dpsi"))[:, None]) @ self.q
+
+    def derived(self, coef, theta):
+        v = np.rad2deg(self.values(coef))
+        out = {f"delta_{s}_deg": float(x) for s, x in zip(SENSORS, v, strict=True)}
+        out["misplacement_rms_deg"] = _rms(v)
+        return out
+
+    def derived_units(self):
+        return {**{f"delta_{s}_deg": "deg" for s in SENSORS}, "misplacement_rms_deg": "deg"}
+
+    def primary(self):
+        return ("misplacement_rms_deg",)
+
+    def sensor_effect(self, coef, theta):
+        return {"name": "gauge_misplacement",
+                "params": {"delta_deg": [float(x) for x in np.rad2deg(self.values(coef))]}}
+
+
+class BridgeNonlinearity(Term):
+    """Bridge output s / (1 + k s), one k for all channels (a transform of the basis)."""
+
+    kind = "bridge_nonlinearity"
+    nonlinear = (Param("k_per_mvv", "1/(mV/V)", "nonlinearity coefficient"),)
+    is_transform = True
+    description = ("bridge nonlinearity s/(1 + k s) on every channel (exact quarter bridge: "
+                   "k = 2e-3 per mV/V; half and full bridges with opposite arm strains are "
+                   "linear); applied to the nominal prediction p as p/(1 + k p) with the "
+                   "baseline scales outside, exact while those stay near 1")
+    signature = ("∝ s² to first order: order 4 of ψ and a constant on s1/s3, a load-squared "
+                 "offset and ripple on s0/s2/s4")
+    source = "Hoffmann 1989 (Wheatstone bridge nonlinearity); PHYSICS.md sec. 4"
+
+    @staticmethod
+    def _k_max(sig: StrainSignals) -> float:
+        p = np.abs(sig.raw["s_wg"] + sig.raw["s_t"]).max()
+        return 0.5 / max(float(p), 1e-9)
+
+    def bounds(self, sig):
+        k = self._k_max(sig)
+        return [(-k, k)]
+
+    def starts(self, sig, residual, idx):
+        k = self._k_max(sig)
+        return [np.array([0.0]), np.array([0.2 * k]), np.array([-0.2 * k])]
+
+    def transform(self, sig: StrainSignals, theta: np.ndarray) -> StrainSignals:
+        k = float(theta[0])
+
+        def apply(b: Mapping[str, np.ndarray]) -> Mapping[str, np.ndarray]:
+            den = 1.0 + k * (b["s_wg"] + b["s_t"])
+
+            def fn(key: str, x: np.ndarray) -> np.ndarray:
+                # the signal itself: s/(1 + k s); its perturbations (dpsi): /(1 + k s)²
+                return x / den if key in ("s_wg", "s_t") else x / (den * den)
+
+            return _MappedBasis(b, fn)
+
+        return sig.replace(maps=sig.maps + (apply,))
+
+    def sensor_effect(self, coef, theta):
+        return {"name": "bridge_nonlinearity", "params": {"k_per_mvv": float(theta[0])}}
+
+
+class AmplifierLowpass(Term):
+    """First-order amplifier low-pass on every channel (a transform of the basis)."""
+
+    kind = "amplifier_lowpass"
+    nonlinear = (Param("f_c_hz", "Hz", "cut-off frequency", log=True),)
+    is_transform = True
+    description = ("first-order low-pass of the strain amplifiers, cut-off f_c (bilinear, "
+                   "pre-warped); the phase lag of the dominant order 2 of ψ is absorbed by "
+                   "the WG-angle alignment, the rest (amplitude loss, relative phase of the "
+                   "other orders) is what the data show")
+    signature = ("amplitudes fall and phases lag with frequency = order × speed: the ripple "
+                 "amplitude ratio between speeds differs from the model, higher orders lag "
+                 "more")
+    source = "PHYSICS.md sec. 5 (amplifier low-pass, phase error growing with speed)"
+
+    def bounds(self, sig):
+        return [tuple(sig.f_c_bounds)]
+
+    def starts(self, sig, residual, idx):
+        lo, hi = sig.f_c_bounds
+        return [np.array([v]) for v in np.geomspace(lo * 1.5, hi / 2, 4)]
+
+    def transform(self, sig: StrainSignals, theta: np.ndarray) -> StrainSignals:
+        f_c = float(theta[0])
+        fs = sig.fs
+        b, a = lowpass_coefficients(f_c, fs)
+        f2 = 2.0 * sig.psi_rate / (2 * np.pi)  # order 2 of ψ [Hz], (n_w,)
+        _, h = sps.freqz(b, a, worN=2 * np.pi * f2 / fs)
+        lag_samples = -np.angle(h) / (2 * np.pi * f2) * fs  # (n_w,)
+
+        def fn(key: str, x: np.ndarray) -> np.ndarray:
+            y = lowpass(x, f_c, fs)
+            return fractional_delay(y, np.broadcast_to(-lag_samples[:, None], x.shape[:2]))
+
+        return sig.replace(maps=sig.maps + (lambda b: _MappedBasis(b, fn),))
+
+    def sensor_effect(self, coef, theta):
+        return {"name": "amplifier_lowpass", "params": {"f_c_hz": float(theta[0])}}
+
+
+class KinematicErrorHarmonic(Term):
+    """An extra kinematic-error harmonic A sin(k φ_in + φ) of a given order k.
+
+    A transform: the torque pattern becomes (T_out + a_sin ΔT_sin + a_cos ΔT_cos) h(ψ),
+    ΔT the linear response of the output torque to a unit harmonic (simulated), and the
+    torque phase of every window (its input angle, a nuisance) is re-aligned on that
+    window's own data with this ripple: the input angle is known only through the
+    torque ripple, so a harmonic that changes the ripple changes where each window sits.
+    """
+
+    kind = "ke_order"
+    order = 0
+    nonlinear = (Param("a_sin", "rad", "A cos φ (coefficient of sin k φ_in)"),
+                 Param("a_cos", "rad", "A sin φ (coefficient of cos k φ_in)"))
+    is_transform = True
+    description = ("extra kinematic-error harmonic of the input angle, φ_err += c A sin(k φ_in "
+                   "+ φ) in the dynamics (paper eq. 3), seen through the torque it adds "
+                   "(ΔT(t) h(ψ)); each window's input angle is re-aligned with it")
+    signature = ("order k of the input (and sidebands k ± 2 of ψ) in the torque-sensitive "
+                 "channels s0, s2, s4, in proportion to their torque sensitivity")
+    source = "Tuttle & Seering 1996 (kinematic error at WG frequencies); PHYSICS.md sec. 1, 5"
+
+    def applicable(self, sig):
+        return sig.ripple is not None and self.order in sig.ke_orders
+
+    def bounds(self, sig):
+        b = float(sig.ke_bound_rad)
+        return [(-b, b), (-b, b)]
+
+    def starts(self, sig, residual, idx):
+        """Linear estimate from the residual at the current alignment, and half of it."""
+        u = sig.ripple.unit(self.order)  # (2, n_w, 5, m)
+        x = np.column_stack([np.ascontiguousarray(sig.window_part(u[j])).reshape(-1)[idx]
+                             for j in range(2)])
+        c, *_ = np.linalg.lstsq(x, np.asarray(residual, float)[idx], rcond=None)
+        c = np.clip(c, -0.9 * sig.ke_bound_rad, 0.9 * sig.ke_bound_rad)
+        return [c, 0.5 * c]
+
+    def transform(self, sig: StrainSignals, theta: np.ndarray) -> StrainSignals:
+        ke = sig.ke + ((self.order, float(theta[0]), float(theta[1])),)
+        upd = sig.ripple(ke)
+        phi = np.broadcast_to(sig.window_part(upd["phi_in"])[:, None, :],
+                              (sig.n_windows, 5, sig.n_t)).reshape(-1)
+        return sig.replace(raw={**sig.raw, "s_t": upd["s_t"], "dpsi": upd["dpsi"]}, ke=ke,
+                           phi_in_rad=phi)
+
+    def derived(self, coef, theta):
+        a, b = (float(x) for x in theta)
+        return {"amplitude_rad": float(np.hypot(a, b)), "phase_rad": float(np.arctan2(b, a))}
+
+    def derived_units(self):
+        return {"amplitude_rad": "rad", "phase_rad": "rad"}
+
+    def primary(self):
+        return ("amplitude_rad",)
+
+    def gear_harmonic(self, coef, theta) -> dict[str, float]:
+        """``{order, amp_rad, phase_rad}`` to add to GearParams.ke_* (see
+        :func:`swgsim.dynamics.gear_with_ke`)."""
+        d = self.derived(coef, theta)
+        return {"order": int(self.order), "amp_rad": d["amplitude_rad"],
+                "phase_rad": d["phase_rad"]}
+
+
+def _ke_class(order: int) -> type[KinematicErrorHarmonic]:
+    return type(f"KinematicErrorOrder{order}", (KinematicErrorHarmonic,),
+                {"kind": f"ke_order{order}", "order": int(order),
+                 "__doc__": f"Extra kinematic-error harmonic of order {order}."})
+
+
+KE_ORDERS = (1, 2, 3, 4)
+"""Orders of the kinematic-error candidates (1, 2 and 4 are the classical ones,
+PHYSICS.md sec. 1; 3 for completeness)."""
+
+
+def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[Term]]:
+    """The declared strain-side library, keyed by effect name.
+
+    Parameters
+    ----------
+    ke_orders : tuple of int
+        Orders of the kinematic-error candidates (one key ``ke_order{k}`` each).
+    """
+    lib: dict[str, type[Term]] = {
+        "offset": ChannelOffset,
+        "gain_mismatch": GainMismatch,
+        "gauge_misplacement": GaugeMisplacement,
+        "bridge_nonlinearity": BridgeNonlinearity,
+        "amplifier_lowpass": AmplifierLowpass,
+    }
+    for k in ke_orders:
+        lib[f"ke_order{k}"] = _ke_class(int(k))
+    lib["thermal_drift"] = ThermalDrift
+    return lib
+
+
+STRAIN_LIBRARY = strain_library()
+
+
+# ---------------------------------------------------------------------------------------
+# probes
+
+
+class GroupMeanProbe(Probe):
+    """Residual mean per group label (fitted on one half, predicting the other)."""
+
+    def __init__(self, name: str, label: str, key: Callable[[StrainSignals], np.ndarray],
+                 describe_detail: Callable[[StrainSignals, np.ndarray, np.ndarray], dict]
+                 | None = None) -> None:
+        self.name, self.label, self.key, self._detail = name, label, key, describe_detail
+
+    def fit_predict(self, sig, r, ia, ib):
+        g = self.key(sig)
+        n_g = int(g.max()) + 1
+        cnt = np.bincount(g[ia], minlength=n_g)
+        s = np.bincount(g[ia], weights=r[ia], minlength=n_g)
+        mean = np.where(cnt > 0, s / np.maximum(cnt, 1), 0.0)
+        detail = self._detail(sig, mean, cnt) if self._detail else {}
+        return mean[g[ib]], detail
+
+    def describe(self, detail, units):
+        txt = self.label
+        if "text" in detail:
+            txt += " " + detail["text"].replace("{units}", units)
+        return txt
+
+
+def _channel_detail(sig, mean, cnt):
+    parts = ", ".join(f"{s} {m:+.3g}" for s, m in zip(SENSORS, mean, strict=True))
+    return {"means": [float(m) for m in mean], "text": f"(means {parts} {{units}})"}
+
+
+def _psi_bins(n_bins: int) -> Callable[[StrainSignals], np.ndarray]:
+    def key(sig):
+        b = np.floor(np.mod(sig.psi_rad, 2 * np.pi) / (2 * np.pi) * n_bins).astype(int)
+        return (sig.op * 5 + sig.channel) * n_bins + np.clip(b, 0, n_bins - 1)
+    return key
+
+
+def _pattern_detail(n_bins: int):
+    def detail(sig, mean, cnt):
+        centres = (np.arange(n_bins) + 0.5) * 2 * np.pi / n_bins
+        m = mean.reshape(-1, 5, n_bins)  # (op, channel, bin)
+        c2 = (m * np.cos(2 * centres)).sum(-1) * 2 / n_bins
+        s2 = (m * np.sin(2 * centres)).sum(-1) * 2 / n_bins
+        amp = np.hypot(c2, s2)  # (op, channel)
+        o, c = np.unravel_index(int(np.argmax(amp)), amp.shape)
+        pp = np.ptp(m, axis=-1)
+        op = sig.ops[o] if o < len(sig.ops) else (float("nan"), float("nan"))
+        return {"order2_amplitude": amp.tolist(), "peak_to_peak": pp.tolist(),
+                "text": (f"(largest order-2 component {amp[o, c]:.3g} {{units}} on "
+                         f"{SENSORS[c]} at {op[0]:g} rpm, {op[1]:g} N m; order-2 amplitude "
+                         "per operating point and channel: "
+                         + "; ".join(f"{sig.ops[i][0]:g} rpm/{sig.ops[i][1]:g} N m: "
+                                     + ", ".join(f"{a:.2g}" for a in amp[i])
+                                     for i in range(min(amp.shape[0], len(sig.ops))))
+                         + ")")}
+    return detail
+
+
+class SequenceTrendProbe(Probe):
+    """Per-channel linear trend of the residual over the sequence time (offsets removed)."""
+
+    name = "sequence_drift"
+    label = "drifts along the sequence of windows"
+
+    def fit_predict(self, sig, r, ia, ib):
+        slopes = np.zeros(5)
+        pred = np.zeros(ib.size)
+        for c in range(5):
+            a = ia[sig.channel[ia] == c]
+            b = sig.channel[ib] == c
+            if a.size < 3 or np.ptp(sig.t_seq_s[a]) == 0:
+                continue
+            ta = sig.t_seq_s[a]
+            tm = ta.mean()
+            slopes[c] = float(np.sum((ta - tm) * (r[a] - r[a].mean())) / np.sum((ta - tm) ** 2))
+            pred[b] = slopes[c] * (sig.t_seq_s[ib[b]] - tm)
+        return pred, {"slopes": slopes.tolist()}
+
+    def describe(self, detail, units):
+        if "slopes" not in detail:
+            return self.label
+        slopes = ", ".join(f"{s} {v:+.3g}"
+                           for s, v in zip(SENSORS, detail["slopes"], strict=True))
+        return f"{self.label} (slopes {slopes} {units}/s)"
+
+
+class ToneProbe(Probe):
+    """Best sinusoid on a grid of orders (of the input rotation) or frequencies, with
+    its own amplitude and phase per window and channel: the residual's line spectrum.
+
+    Per-window phases keep tones whose phase the aligned model cannot know (half orders,
+    interference at a fixed frequency) predictable from one set of time slices of a
+    window to the other; the grid value is common to all windows.
+
+    Parameters
+    ----------
+    name, label : str
+    coord : callable sig -> ndarray (n,)
+        Phase coordinate per sample: φ_in [rad] for orders, 2π t [rad·Hz⁻¹] for
+        frequencies.
+    grid : ndarray
+        Uniform grid of orders [-] or frequencies [Hz].
+    unit : str
+        "order" or "Hz" (text).
+    """
+
+    def __init__(self, name: str, label: str, coord: Callable[[StrainSignals], np.ndarray],
+                 grid: np.ndarray, unit: str) -> None:
+        self.name, self.label, self.coord, self.unit = name, label, coord, unit
+        self.grid = np.asarray(grid, float)
+        if self.grid.size > 1 and not np.allclose(np.diff(self.grid), self.grid[1] - self.grid[0]):
+            raise ValueError("the grid must be uniform")
+
+    @staticmethod
+    def _groups(sig: StrainSignals, idx: np.ndarray) -> tuple[np.ndarray, int]:
+        return sig.window[idx] * 5 + sig.channel[idx], sig.n_windows * 5
+
+    def spectrum(self, sig: StrainSignals, r: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """Power per grid value, summed over windows and channels, shape (n_grid,)
+        [(data units)²]: per group 4 |mean r e^{−i k x}|² (x the phase coordinate).
+
+        ``idx`` must be sorted (groups are then contiguous runs); e^{−i k x} on the
+        uniform grid by recurrence e^{−i (k + Δ) x} = e^{−i k x} e^{−i Δ x}."""
+        idx = np.sort(np.asarray(idx))
+        g, n_g = self._groups(sig, idx)
+        starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
+        cnt = np.diff(np.r_[starts, g.size])
+        x = self.coord(sig)[idx]
+        rr = np.asarray(r, float)[idx]
+        ks = self.grid
+        e = np.exp(-1j * ks[0] * x) * rr
+        step = np.exp(-1j * (ks[1] - ks[0]) * x) if ks.size > 1 else None
+        p = np.empty(ks.size)
+        for i in range(ks.size):
+            sums = np.add.reduceat(e, starts)
+            p[i] = 4.0 * np.sum(np.abs(sums / cnt) ** 2)
+            if step is not None:
+                e = e * step
+        return p
+
+    def _fit(self, sig, r, idx, k):
+        """Per-group least squares on [cos k x, sin k x]: coefficients (n_g, 2)."""
+        g, n_g = self._groups(sig, idx)
+        ph = k * self.coord(sig)[idx]
+        c, s_ = np.cos(ph), np.sin(ph)
+        ri = np.asarray(r, float)[idx]
+
+        def bc(w):
+            return np.bincount(g, weights=w, minlength=n_g)
+
+        cc, ss, cs, cr, sr = bc(c * c), bc(s_ * s_), bc(c * s_), bc(c * ri), bc(s_ * ri)
+        det = cc * ss - cs * cs
+        ok = det > 1e-9 * np.maximum(cc * ss, 1e-300)
+        a = np.where(ok, (ss * cr - cs * sr) / np.where(ok, det, 1.0), 0.0)
+        b = np.where(ok, (cc * sr - cs * cr) / np.where(ok, det, 1.0), 0.0)
+        return np.column_stack([a, b])
+
+    def fit_predict(self, sig, r, ia, ib):
+        p = self.spectrum(sig, r, ia)
+        k = float(self.grid[int(np.argmax(p))])
+        coef = self._fit(sig, r, ia, k)
+        gb, _ = self._groups(sig, ib)
+        ph = k * self.coord(sig)[ib]
+        pred = coef[gb, 0] * np.cos(ph) + coef[gb, 1] * np.sin(ph)
+        amp = np.hypot(coef[:, 0], coef[:, 1]).reshape(-1, 5)  # (n_w, 5)
+        return pred, {"value": k, "unit": self.unit,
+                      "amplitude_rms": np.sqrt((amp ** 2).mean(axis=0)).tolist()}
+
+    def describe(self, detail, units):
+        if "value" not in detail:
+            return self.label
+        at = (f"order {detail['value']:.2f} of the input rotation" if self.unit == "order"
+              else f"{detail['value']:.4g} Hz")
+        return (f"{self.label} at {at} (amplitude per channel, RMS over windows: "
+                + ", ".join(f"{s} {v:.2g}" for s, v in zip(SENSORS, detail["amplitude_rms"],
+                                                            strict=True))
+                + f" {units})")
+
+
+def strain_probes(psi_bins: int = 36, max_order: float = 20.0, d_order: float = 0.05,
+                  f_range_hz: tuple[float, float] = (20.0, 2000.0), d_f_hz: float = 5.0
+                  ) -> list[Probe]:
+    """Residual probes of the strain side, one per residual signature.
+
+    The diagnosis halves are interleaved time slices of every window (``Problem.t`` is
+    the time within the window), so per-window models predict across them.
+
+    Returns
+    -------
+    list of Probe
+        channel_offset (mean per channel), window_offset (mean per window and channel:
+        offsets that jump between windows), sequence_drift (per-channel trend over the
+        sequence time), wg_pattern (bins over the WG angle ψ per operating point and
+        channel: gain, misplacement, nonlinearity, low-pass), input_order (best order of
+        the input rotation, per window and channel: order spectrum), time_tone (best
+        frequency, per window and channel: interference, glitch trains).
+    """
+    return [
+        GroupMeanProbe("channel_offset", "constant offset per channel", lambda s: s.channel,
+                       _channel_detail),
+        GroupMeanProbe("window_offset", "offset per window and channel",
+                       lambda s: s.window * 5 + s.channel),
+        SequenceTrendProbe(),
+        GroupMeanProbe("wg_pattern", "periodic in the WG angle ψ, per channel and operating "
+                       "point", _psi_bins(psi_bins), _pattern_detail(psi_bins)),
+        ToneProbe("input_order", "a tone locked to the input rotation",
+                  lambda s: s.phi_in_rad, np.arange(0.25, max_order + 1e-9, d_order), "order"),
+        ToneProbe("time_tone", "a tone at a fixed frequency", lambda s: 2 * np.pi * s.t_s,
+                  np.arange(f_range_hz[0], f_range_hz[1] + 1e-9, d_f_hz), "Hz"),
+    ]

@@ -1,0 +1,126 @@
+"""swgsim-calibrate: kind detection, the task function end to end, MLflow logging."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import yaml
+from hydra import compose, initialize_config_dir
+
+from swgcli.calibrate import CONFIG_PATH, run_calibrate
+from swgsim.calibration import FrictionEffects, MeasuredDataError, build_problem, detect_kind
+from swgsim.calibration.friction import load_friction_csv, write_friction_csv
+from swgsim.calibration.synthetic import PLANTED, synthetic_recording
+
+
+def _cfg(overrides):
+    with initialize_config_dir(config_dir=CONFIG_PATH, version_base="1.3"):
+        return compose(config_name="calibrate", overrides=overrides)
+
+
+@pytest.fixture(scope="module")
+def planted_csv(tmp_path_factory):
+    rec, truth = synthetic_recording(
+        [{"kind": "stribeck", "params": PLANTED["stribeck"]["params"]}],
+        rng=np.random.default_rng(4), duration_s=40)
+    return write_friction_csv(rec, tmp_path_factory.mktemp("data") / "planted.csv"), truth
+
+
+def test_detect_kind(tmp_path, planted_csv):
+    assert detect_kind(planted_csv[0]) == "friction"
+    ds = tmp_path / "ds"
+    ds.mkdir()
+    (ds / "manifest.json").write_text("{}")
+    assert detect_kind(ds) == "strain"
+    with pytest.raises(NotImplementedError, match="strain data set"):
+        build_problem(ds)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n")
+    with pytest.raises(MeasuredDataError, match="bad.csv.*expected a friction CSV"):
+        detect_kind(bad)
+    with pytest.raises(MeasuredDataError, match="does not exist"):
+        detect_kind(tmp_path / "nope.csv")
+    with pytest.raises(MeasuredDataError, match="without manifest.json"):
+        detect_kind(tmp_path)
+
+
+def test_csv_round_trip_and_estimated_acceleration(tmp_path, planted_csv):
+    rec = load_friction_csv(planted_csv[0])
+    assert rec.ddq_source == "measured" and rec.n == 4000
+    # without an acceleration column the loader estimates it
+    cols = "time_s,q_rad,dq_rad_per_s,tau_friction_Nm"
+    data = np.column_stack([rec.t_s, rec.q_rad, rec.dq_rad_s, rec.tau_nm])
+    p = tmp_path / "noacc.csv"
+    np.savetxt(p, data, delimiter=",", header=cols, comments="")
+    r2 = load_friction_csv(p)
+    assert r2.ddq_source.startswith("estimated")
+    inner = slice(50, -50)
+    err = r2.ddq_rad_s2[inner] - rec.ddq_rad_s2[inner]
+    assert np.sqrt(np.mean(err ** 2)) < 0.05 * np.sqrt(np.mean(rec.ddq_rad_s2 ** 2))
+
+
+def test_run_calibrate_end_to_end(tmp_path, planted_csv, tracking_uri):
+    path, truth = planted_csv
+    out = tmp_path / "out"
+    cfg = _cfg([f"measured={path}", f"out_dir={out}", f"baseline.v_s={truth.v_s}",
+                f"logger.tracking_uri={tracking_uri}", "logger.experiment=test-calibration"])
+    res = run_calibrate(cfg)
+    summary = json.loads((out / "summary.json").read_text())
+    for key in ("rmse_before", "rmse_after", "effects_added", "unexplained",
+                "residual_signature", "heldout"):
+        assert key in summary
+    assert summary["rmse_after"] < summary["rmse_before"]
+    assert [e["name"] for e in summary["effects_added"]] == ["stribeck"]
+    p = summary["effects_added"][0]["params"]["f_s"]
+    assert set(p) >= {"value", "std", "unit", "identifiable"}
+    assert summary["unexplained"] is False
+    assert summary["heldout"]["method"].startswith("contiguous time blocks")
+    assert (out / "report.md").read_text().startswith("# Calibration report")
+    for k in ("velocity", "position", "hysteresis", "time", "overlay"):
+        assert (out / "figures" / f"{k}.png").stat().st_size > 10_000
+    # the accepted effects as a simulation option
+    fx_cfg = yaml.safe_load((out / "friction_effects.yaml").read_text())
+    fx = FrictionEffects(fx_cfg["effects"], v_s=fx_cfg["v_s"], baseline=fx_cfg["baseline"],
+                         t0=fx_cfg["t0_s"])
+    rec = load_friction_csv(path)
+    assert np.ptp(fx(rec.t_s, rec.q_rad, rec.dq_rad_s, rec.ddq_rad_s2)) > 0.1
+    # MLflow
+    import mlflow
+
+    run = mlflow.MlflowClient(tracking_uri).get_run(res["mlflow_run_id"])
+    assert run.data.metrics["rmse_after"] == pytest.approx(summary["rmse_after"])
+    assert run.data.tags["effects_added"] == "stribeck"
+
+
+def test_run_calibrate_rejects_unknown_data(tmp_path):
+    bad = tmp_path / "x.txt"
+    bad.write_text("hello\n")
+    cfg = _cfg([f"measured={bad}", f"out_dir={tmp_path / 'o'}", "logger.enabled=false"])
+    with pytest.raises(MeasuredDataError, match="x.txt"):
+        run_calibrate(cfg)
+
+
+def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
+    """Kind 2: a schema-v1 data-set directory is recognised and calibrated end to end."""
+    from swgsim import data as dsio
+    from swgsim.calibration import strain_synthetic as syn
+    from swgsim.chain import SimulationChain
+
+    clean = syn.simulate_windows(SimulationChain(), seed=0)
+    ds, _ = syn.bench_dataset(clean, [{"name": "offset",
+                                       "params": {"offset_mvv": {"s1": 0.02}}}])
+    d = tmp_path / "bench"
+    sha = dsio.write_shard(ds, d / "bench.nc")
+    dsio.atomic_write_json(d / "manifest.json", {"schema_version": 1, "complete": True,
+                                                 "shards": {"bench.nc": {"sha256": sha}}})
+    assert detect_kind(d) == "strain"
+    out = tmp_path / "out"
+    cfg = _cfg([f"measured={d}", f"out_dir={out}", f"logger.tracking_uri={tracking_uri}",
+                "logger.experiment=test-strain"])
+    res = run_calibrate(cfg)
+    summary = json.loads((out / "summary.json").read_text())
+    assert [e["name"] for e in summary["effects_added"]][0] == "offset"
+    assert summary["rmse_after"] < summary["rmse_before"]
+    assert res["mlflow_run_id"]

@@ -1,0 +1,76 @@
+"""Planted-effect tests of the calibration loop on simulated measured friction data.
+
+Each library effect planted alone into paper-law data with realistic, mildly coloured
+noise (AR(1), 1 % of the torque range) must be ranked first, recovered within 10 %, and
+bring the held-out RMSE to within 1.2x the noise; clean data get nothing; two planted
+effects are both found; an effect outside the library is reported as unexplained and not
+attributed to a candidate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from swgsim.calibration import FRICTION_LIBRARY, calibrate, friction_problem
+from swgsim.calibration.synthetic import PLANTED, synthetic_recording
+
+
+def run(kinds=(), seed=0, hidden=None):
+    rec, truth = synthetic_recording(
+        [{"kind": k, "params": PLANTED[k]["params"]} for k in kinds],
+        rng=np.random.default_rng(seed), hidden=hidden)
+    return calibrate(friction_problem(rec, v_s=truth.v_s)), truth
+
+
+def test_every_library_effect_has_a_planted_case():
+    assert set(PLANTED) == set(FRICTION_LIBRARY)
+    assert len(FRICTION_LIBRARY) >= 8
+
+
+@pytest.mark.parametrize("kind", sorted(FRICTION_LIBRARY))
+def test_planted_effect_is_found_and_recovered(kind):
+    res, truth = run([kind], seed=1)
+    first = res.iterations[0].candidates[0]
+    assert first.name == kind, [c.name for c in res.iterations[0].candidates[:3]]
+    assert res.added == [kind]
+    est = res.final.estimates_of(kind)
+    for name, value in PLANTED[kind]["check"].items():
+        assert est[name].value == pytest.approx(value, rel=0.10), name
+        assert est[name].identifiable, est[name].flag
+    assert res.rmse_after <= 1.2 * truth.sigma
+    assert res.rmse_after < res.rmse_before
+    assert not res.unexplained, res.residual_signature
+
+
+def test_clean_data_get_no_effect():
+    res, truth = run([], seed=2)
+    assert res.added == []
+    assert not res.unexplained, res.residual_signature
+    assert res.rmse_after == res.rmse_before <= 1.2 * truth.sigma
+
+
+def test_two_planted_effects_are_both_found():
+    res, truth = run(["stribeck", "position_ripple"], seed=3)
+    assert sorted(res.added) == ["position_ripple", "stribeck"]
+    assert res.rmse_after <= 1.2 * truth.sigma
+    est = res.final.estimates_of("stribeck")
+    assert est["f_s"].value == pytest.approx(PLANTED["stribeck"]["check"]["f_s"], rel=0.1)
+
+
+def test_confounded_pair_found_by_look_ahead():
+    # thermal drift and presliding each fail alone on these data (each absorbs part of
+    # the other on the fit blocks and generalises badly); together they pass
+    res, truth = run(["presliding", "thermal_drift"], seed=2)
+    assert sorted(res.added) == ["presliding", "thermal_drift"]
+    assert res.rmse_after <= 1.2 * truth.sigma
+
+
+def test_effect_outside_library_is_unexplained_not_attributed():
+    # a torque periodic in time (period unrelated to the motion), e.g. a hidden variable
+    res, truth = run([], seed=0, hidden=lambda t, q, dq: 0.06 * np.sin(2 * np.pi * t / 6.7))
+    assert res.added == [], [c.status for c in res.iterations[0].candidates[:3]]
+    assert res.unexplained
+    assert "periodic in time" in res.residual_signature
+    assert res.diag_after.probes["time_periodic"].detail["period"] == pytest.approx(6.7,
+                                                                                   rel=0.05)

@@ -1,0 +1,41 @@
+"""The calibration loop on the real joint-friction recordings (skipped where absent).
+
+The default run checks one short FAIRINO recording; ``-m slow`` runs all six against the
+targets: held-out RMSE after <= 0.6x that of the paper-law fit, and below the published
+classical-model errors on the Franka files.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+from swgsim.calibration import build_problem, calibrate
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "calibrate_real.py"
+spec = importlib.util.spec_from_file_location("calibrate_real", SCRIPT)
+calibrate_real = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(calibrate_real)
+DATA = calibrate_real.DEFAULT_DATA
+needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"no real data at {DATA}")
+
+
+@needs_data
+def test_fairino_spiral_improves_on_paper_law():
+    res = calibrate(build_problem(DATA / "fairino_joint3_spiral_slow.csv"))
+    assert res.rmse_after <= 0.6 * res.rmse_before
+    assert res.added  # something was found
+    assert res.unexplained  # and the report says what is left
+
+
+@needs_data
+@pytest.mark.slow
+def test_all_six_recordings_meet_the_targets():
+    rows = calibrate_real.main(["--data-dir", str(DATA)])
+    assert len(rows) == 6
+    for r in rows:
+        assert r["meets_ratio"], r
+        if r["published_coulomb_viscous"] is not None:
+            assert r["below_published"], r
