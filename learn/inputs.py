@@ -1,0 +1,467 @@
+"""Model inputs built from a schema-v1 data set: raw signals, differenced signals, features.
+
+The learners of the transfer study (``learn.transfer``) take these inputs:
+
+``raw``
+    The five bridge outputs s0..s4, each normalised with the healthy reference window of
+    the same gear, operating point and disturbed flag (see below). Shape (n, 5 + n_aux, T).
+``diff``
+    The differences of the redundant gauges (paper eq. 8) plus the torque bridge:
+    (s0, Δs13, Δs24), formed from the *normalised* channels. Shape (n, 3 + n_aux, T).
+``sel3``, ``sel1``
+    The paper's feature Selections 3 and 1 (Table III) from :mod:`learn.features`.
+    Shape (n, n_features).
+``raw_res``, ``diff_res``
+    Synchronous residuals: each window minus its phase-aligned reference window, in the
+    angle domain of the wave generator relative to the flexspline (see below). Shape
+    (n, 5 + n_aux, M) and (n, 3 + n_aux, M), one WG revolution of M points.
+``res_spec``
+    The residual's harmonic amplitudes, log10, per channel, plus the efficiency scalars.
+    Shape (n, 5 * (H - 1) + n_aux).
+
+Reference normalisation (the time-signal analogue of paper eq. 7). For each gear,
+operating point (n_in, T_out) and disturbed flag the data set holds one commissioning
+window of the healthy gear (``reference``). Each channel c of a window is mapped to
+
+    x_c <- (x_c - m_c) / r_c,     m_c = mean of the reference channel over time,
+                                  r_c = RMS of the reference channel about m_c,
+
+i.e. a healthy window of *any* gear at *any* operating point becomes a zero-mean signal
+of unit RMS, and a fault shows as a departure from that. Why this form:
+
+- the three gears differ in gauge gain and bridge offset (sensor models fitted to three
+  real gears); dividing by the gear's own RMS removes the gain, subtracting its own mean
+  removes the offset, so a model trained on two gears sees the third on the same scale;
+- the mean and the ripple amplitude grow with the load torque and change with speed;
+  normalising per operating point removes that, as eq. (7) does for the features;
+- an affine map instead of eq. (7)'s ratio, because channel means can be near zero
+  (a ratio would explode) and because offsets are fault information (eccentric WG);
+- differences are formed *after* normalisation, so a gain mismatch between s1 and s3 of
+  a healthy gear cancels (Δs13 ~ 0) instead of leaking a gear-specific residual.
+
+Synchronous residual (the ``*_res`` inputs). Every strain signal of the chain is a
+function of the wave-generator angle ψ relative to the flexspline (which carries the
+gauges) and of the load; at constant speed ψ advances at (1 + 1/N) times the input
+angle (N = ``ratio``). A window and its reference are each fitted by least squares with
+a Fourier series in ψ (harmonics h = 1..H) plus the disturbance's sub-harmonics of the
+input rotation (eq. 10: orders 1/4, 1/3, 1/2, 1; order 1 lies close to h = 1 at order
+1 + 1/N, yet fitting both lowers the healthy residual at h = 2 twelvefold on disturbed
+data) and a constant. The reference's series is rotated to the
+window's phase (the shift δ minimising the squared difference of all harmonics of
+s1..s4; started from the 2nd harmonic's phase, both roots δ, δ + π tried, refined by
+damped Newton steps) and subtracted; each channel is divided by the reference's RMS. What
+remains is what the fault adds, on the same scale for every gear: the gear's own
+tolerance signature (which differs between gears as much as a fault does, e.g. in
+Δs13) cancels, and so do the disturbance's sub-harmonics. The residual is synthesised
+on M points of one ψ revolution from harmonics ``min_harmonic``..H (h = 0 holds the
+random disturbance offset, h = 1 what is left of the order-1 disturbance), compressed by
+asinh(x / ``compress``) since fault signatures span four decades.
+
+Reference windows are used for nothing else: they are never training or test samples.
+
+Auxiliary scalars. Reduced damping barely changes the strain signals (paper Sec. II-C);
+it shows in the efficiency. The signal inputs therefore carry ``n_aux`` extra channels,
+each constant along time, holding per-window scalars (default: η2_rel of eq. 9 and
+η_rel - 1, with η_rel = η / η_ref as in eq. 7). Models read them at t = 0 and route them
+past the convolutions (``learn.nets``, ``learn.rocket``); Selection 3 already contains
+η2_rel.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+log = logging.getLogger(__name__)
+
+INPUTS = ("raw", "diff", "sel1", "sel3", "raw_res", "diff_res", "res_spec")
+SIGNAL_INPUTS = ("raw", "diff", "raw_res", "diff_res")
+RESIDUAL_INPUTS = ("raw_res", "diff_res", "res_spec")
+#: Default settings of the synchronous residual (see the module docstring).
+RESIDUAL_DEFAULTS = {"ratio": 100.0, "n_harmonics": 48,
+                     "nuisance_orders": (0.25, 1 / 3, 0.5, 1.0),
+                     "min_harmonic": 2, "n_points": 192, "compress": 1e-4}
+AUX = ("eta2_rel", "eta_rel")
+_META = ("gear", "fault", "variant", "severity", "n_in_rpm", "t_out_nm", "disturbed")
+
+
+@dataclass(frozen=True)
+class InputSet:
+    """Model input for the non-reference windows of a data set.
+
+    Attributes
+    ----------
+    X : ndarray, float32
+        (n, C, T) for signal inputs (the last ``n_aux`` channels constant along time) or
+        (n, F) for feature inputs.
+    y : ndarray of str, shape (n,)
+        Fault class of each window.
+    meta : pandas.DataFrame, n rows
+        gear, fault, variant, severity, n_in_rpm, t_out_nm, disturbed and ``sample`` (the
+        window's index in the data set).
+    n_aux : int
+        Number of trailing auxiliary channels of a signal input (0 for features).
+    kind : str
+        One of :data:`INPUTS`.
+    """
+
+    X: np.ndarray
+    y: np.ndarray
+    meta: pd.DataFrame
+    n_aux: int
+    kind: str
+
+    def subset(self, idx: np.ndarray) -> InputSet:
+        """The windows at positions ``idx`` (integer array or boolean mask)."""
+        idx = np.asarray(idx)
+        if idx.dtype == bool:
+            idx = np.flatnonzero(idx)
+        return InputSet(self.X[idx], self.y[idx], self.meta.iloc[idx].reset_index(drop=True),
+                        self.n_aux, self.kind)
+
+
+def window_meta(ds, disturbed: bool | None = None) -> tuple[pd.DataFrame, np.ndarray]:
+    """Metadata of the non-reference windows of ``ds`` and their reference windows.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Schema v1 with one reference window per gear, operating point and disturbed flag.
+    disturbed : bool, optional
+        Keep only the clean (False) or disturbed (True) windows; default all.
+
+    Returns
+    -------
+    meta : pandas.DataFrame
+        One row per window, in data-set order: ``sample`` and gear, fault, variant,
+        severity, n_in_rpm, t_out_nm, disturbed.
+    refs : ndarray of int, shape (n,)
+        Sample index of each window's reference window.
+
+    Raises
+    ------
+    ValueError
+        From :func:`learn.features.reference_index` (no or ambiguous reference window).
+    """
+    from learn.features import reference_index
+
+    samples, refs = reference_index(ds)
+    if disturbed is not None:
+        keep = ds["disturbed"].values[samples].astype(bool) == bool(disturbed)
+        samples, refs = samples[keep], refs[keep]
+    meta = pd.DataFrame({"sample": samples})
+    for k in _META:
+        meta[k] = np.asarray(ds[k].values)[samples]
+    meta["fault"] = meta["fault"].astype(str)
+    meta["disturbed"] = meta["disturbed"].astype(bool)
+    return meta, refs
+
+
+def normalise_signals(ds, samples: np.ndarray, refs: np.ndarray) -> np.ndarray:
+    """Reference-normalised bridge outputs.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Schema v1.
+    samples, refs : ndarray of int, shape (n,)
+        Windows to normalise and the reference window of each (:func:`window_meta`).
+
+    Returns
+    -------
+    ndarray, float32, shape (n, 5, T)
+        (s - m_ref) / r_ref per channel, dimensionless (see the module docstring).
+    """
+    sig = ds["strain_signal"].values  # (N, 5, T) [mV/V]
+    uref, inv = np.unique(refs, return_inverse=True)
+    rs = np.asarray(sig[uref], dtype=np.float64)  # (R, 5, T)
+    m = rs.mean(axis=2)  # (R, 5)
+    rms = np.sqrt(((rs - m[:, :, None]) ** 2).mean(axis=2))  # (R, 5)
+    rms = np.where(rms > 1e-12, rms, 1.0)
+    x = np.asarray(sig[samples], dtype=np.float32)  # (n, 5, T)
+    x -= m[inv][:, :, None].astype(np.float32)
+    x /= rms[inv][:, :, None].astype(np.float32)
+    return x
+
+
+def efficiency_features(ds, samples: np.ndarray, refs: np.ndarray) -> np.ndarray:
+    """η2_rel (paper eq. 9) and η_rel - 1 (eq. 7) of the windows ``samples``.
+
+    Returns
+    -------
+    ndarray, float64, shape (n, 2)
+        Columns: |1 - η/η_ref|^(1/4), η/η_ref - 1 [-].
+    """
+    eta = np.asarray(ds["efficiency"].values, dtype=np.float64)
+    rel = eta[samples] / eta[refs]
+    return np.stack([np.abs(1.0 - rel) ** 0.25, rel - 1.0], axis=1)
+
+
+@functools.lru_cache(maxsize=32)
+def _basis_pinv(f0_hz: float, t0_s: float, dt_s: float, n_t: int,
+                orders: tuple[float, ...]) -> np.ndarray:
+    """Pseudo-inverse of the Fourier basis [1, cos, sin](2π o f0 t), shape (P, T), cached:
+    a stream of windows at one speed reuses it."""
+    time_s = t0_s + dt_s * np.arange(n_t)
+    ang = 2 * np.pi * f0_hz * time_s[:, None] * np.asarray(orders)[None, :]  # (T, K)
+    basis = np.concatenate([np.ones((n_t, 1)), np.cos(ang), np.sin(ang)], axis=1)
+    out = np.linalg.pinv(basis)
+    out.setflags(write=False)
+    return out
+
+
+def harmonic_coefficients(x: np.ndarray, time_s: np.ndarray, f_in_hz: np.ndarray,
+                          psi_order: float, n_harmonics: int,
+                          nuisance_orders=(0.25, 1 / 3, 0.5, 1.0)) -> np.ndarray:
+    """Least-squares Fourier series in the WG angle ψ of each window.
+
+    Model: x(t) = c0 + sum_h Re(c_h e^{i h ψ(t)}) + sum_o (a_o cos + b_o sin)(2π o f_in t),
+    ψ(t) = 2π psi_order f_in t, h = 1..H.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, C, T)
+        Signals [any unit].
+    time_s : ndarray, shape (T,)
+        Time since window start [s].
+    f_in_hz : ndarray, shape (n,)
+        Input rotation frequency of each window [Hz]. Windows are grouped by the value
+        rounded to 1e-3 Hz and share the group's median (one pseudo-inverse per group).
+    psi_order : float
+        ψ rate per input revolution, 1 + 1/N [-].
+    n_harmonics : int
+        H.
+    nuisance_orders : sequence of float
+        Further orders of the input rotation fitted and discarded.
+
+    Returns
+    -------
+    ndarray, complex128, shape (n, C, H + 1)
+        c0 (real) at index 0, c_h at index h.
+
+    Raises
+    ------
+    ValueError
+        If the highest harmonic reaches the Nyquist frequency or the window has fewer
+        samples than the series has coefficients.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    n, n_ch, n_t = x.shape
+    time_s = np.asarray(time_s, dtype=np.float64)
+    h = np.arange(1, n_harmonics + 1)
+    orders = np.concatenate([psi_order * h, np.asarray(nuisance_orders, dtype=np.float64)])
+    fs = 1.0 / float(time_s[1] - time_s[0])
+    f_top = float(np.max(f_in_hz)) * float(orders.max())
+    if f_top >= fs / 2 or 1 + 2 * orders.size > n_t:
+        raise ValueError(
+            f"{n_harmonics} harmonics need {1 + 2 * orders.size} samples below Nyquist: the "
+            f"highest lies at {f_top:.0f} Hz for a sample rate of {fs:.0f} Hz and windows of "
+            f"{n_t} samples; lower n_harmonics")
+    out = np.empty((n, n_ch, n_harmonics + 1), dtype=np.complex128)
+    key = np.round(np.asarray(f_in_hz, dtype=np.float64), 3)
+    dt = float(time_s[1] - time_s[0])
+    for k in np.unique(key):
+        idx = np.flatnonzero(key == k)
+        f0 = float(np.median(np.asarray(f_in_hz)[idx]))
+        pinv = _basis_pinv(f0, float(time_s[0]), dt, n_t, tuple(orders.tolist()))  # (P, T)
+        coef = np.einsum("pt,nct->ncp", pinv, x[idx])  # (m, C, P)
+        k_all = orders.size
+        out[idx, :, 0] = coef[:, :, 0]
+        out[idx, :, 1:] = coef[:, :, 1:1 + n_harmonics] - 1j * coef[:, :, 1 + k_all:
+                                                                     1 + k_all + n_harmonics]
+    return out
+
+
+def align_phase(cw: np.ndarray, cr: np.ndarray, channels=(1, 2, 3, 4),
+                n_newton: int = 6) -> np.ndarray:
+    """ψ-shift δ of each window against its reference.
+
+    Minimises sum_{c, h >= 1} |cw[c, h] - cr[c, h] e^{i h δ}|^2 over ``channels``.
+
+    Parameters
+    ----------
+    cw, cr : ndarray, complex, shape (n, C, H + 1)
+        Coefficients of the windows and of their references (:func:`harmonic_coefficients`).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        δ [rad].
+    """
+    ch = list(channels)
+    h = np.arange(1, cw.shape[2])
+    a, b = cw[:, ch, 1:], cr[:, ch, 1:]
+    z = np.sum(a[:, :, 1] * np.conj(b[:, :, 1]), axis=1)  # 2nd harmonic
+    best = err_best = None
+    for start in (np.angle(z) / 2, np.angle(z) / 2 + np.pi):
+        d = start.copy()
+        for _ in range(n_newton):  # maximise Re sum a conj(b) e^{-ihd}
+            q = a * np.conj(b) * np.exp(-1j * h * d[:, None, None])
+            grad = np.sum(np.imag(q) * h, axis=(1, 2))
+            curv = np.sum(np.real(q) * h * h, axis=(1, 2))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                step = np.where(curv > 0, grad / curv, 0.0)
+            d = d + np.clip(np.nan_to_num(step), -0.2, 0.2)  # Newton, damped
+        err = np.sum(np.abs(a - b * np.exp(1j * h * d[:, None, None])) ** 2, axis=(1, 2))
+        if best is None:
+            best, err_best = d, err
+        else:
+            better = err < err_best
+            best, err_best = np.where(better, d, best), np.where(better, err, err_best)
+    return best
+
+
+def reference_residual(ds, samples: np.ndarray, refs: np.ndarray, *, ratio: float = 100.0,
+                       n_harmonics: int = 48, nuisance_orders=(0.25, 1 / 3, 0.5, 1.0),
+                       **_) -> np.ndarray:
+    """Harmonics of each window minus those of its phase-aligned reference window.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Schema v1 (uses ``strain_signal``, ``time``, ``n_in_mean_rpm``/``n_in_rpm``).
+    samples, refs : ndarray of int, shape (n,)
+        Windows and their reference windows (:func:`window_meta`).
+    ratio : float
+        Gear ratio N (catalogue, 100 for the paper's gears; PHYSICS.md sec. 2).
+    n_harmonics : int
+        Harmonics H of ψ.
+    nuisance_orders : sequence of float
+        Input-rotation orders fitted and discarded (eq. 10 sub-harmonics).
+
+    Returns
+    -------
+    ndarray, complex128, shape (n, 5, H + 1)
+        Residual coefficients divided by the reference's RMS per channel [-]; index 0 is
+        the change of the mean, index h the h-th harmonic of ψ.
+    """
+    sig = ds["strain_signal"].values
+    t = np.asarray(ds["time"].values, dtype=np.float64)
+    n_act = np.asarray(ds["n_in_mean_rpm"].values, dtype=np.float64)
+    n_des = np.asarray(ds["n_in_rpm"].values, dtype=np.float64)
+    f_in = np.where(np.isfinite(n_act), n_act, n_des) / 60.0
+    psi_order = 1.0 + 1.0 / float(ratio)
+    kw = {"psi_order": psi_order, "n_harmonics": int(n_harmonics),
+          "nuisance_orders": tuple(nuisance_orders)}
+    uref, inv = np.unique(refs, return_inverse=True)
+    cr = harmonic_coefficients(sig[uref], t, f_in[uref], **kw)[inv]  # (n, 5, H+1)
+    cw = np.empty_like(cr)
+    for start in range(0, len(samples), 1024):  # bound the float64 copy of the signals
+        sl = slice(start, start + 1024)
+        cw[sl] = harmonic_coefficients(sig[samples[sl]], t, f_in[samples[sl]], **kw)
+    delta = align_phase(cw, cr)
+    h = np.arange(1, n_harmonics + 1)
+    res = cw.copy()
+    res[:, :, 1:] -= cr[:, :, 1:] * np.exp(1j * h * delta[:, None, None])
+    res[:, :, 0] -= cr[:, :, 0]
+    rms = np.sqrt(0.5 * np.sum(np.abs(cr[:, :, 1:]) ** 2, axis=2))  # (n, 5)
+    return res / np.where(rms > 1e-12, rms, 1.0)[:, :, None]
+
+
+def synthesise(res: np.ndarray, n_points: int = 192, min_harmonic: int = 2) -> np.ndarray:
+    """Residual waveform over one ψ revolution from harmonics ``min_harmonic``..H.
+
+    Parameters
+    ----------
+    res : ndarray, complex, shape (n, C, H + 1)
+    n_points : int
+        M samples of ψ in [0, 2π).
+
+    Returns
+    -------
+    ndarray, float64, shape (n, C, M)
+    """
+    n_h = res.shape[2] - 1
+    h = np.arange(min_harmonic, n_h + 1)
+    psi = 2 * np.pi * np.arange(n_points) / n_points
+    e = np.exp(1j * h[:, None] * psi[None, :])  # (h, M)
+    return np.real(np.einsum("nch,hm->ncm", res[:, :, min_harmonic:], e))
+
+
+def _append_aux(x: np.ndarray, aux: np.ndarray) -> np.ndarray:
+    """Append per-window scalars as channels constant along time: (n, C, T) -> (n, C+A, T)."""
+    if aux.shape[1] == 0:
+        return x
+    a = np.broadcast_to(aux[:, :, None], (x.shape[0], aux.shape[1], x.shape[2]))
+    return np.concatenate([x, a.astype(x.dtype)], axis=1)
+
+
+def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
+                disturbed: bool | None = None, feature_kwargs: dict | None = None,
+                residual: dict | None = None) -> InputSet:
+    """Model input of kind ``kind`` for the non-reference windows of ``ds``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Schema v1 with reference windows.
+    kind : {"raw", "diff", "sel1", "sel3", "raw_res", "diff_res", "res_spec"}
+        See the module docstring.
+    aux : sequence of {"eta2_rel", "eta_rel"}
+        Per-window scalars appended as constant channels to a signal input, or as
+        columns to ``res_spec`` (ignored for sel1/sel3, which carry their own efficiency
+        term).
+    disturbed : bool, optional
+        Keep only the clean (False) or disturbed (True) windows; default all.
+    feature_kwargs : dict, optional
+        ``orders``, ``floor_rel`` of :func:`learn.features.extract_features`.
+    residual : dict, optional
+        Settings of the residual inputs, overriding :data:`RESIDUAL_DEFAULTS`: ``ratio``,
+        ``n_harmonics``, ``nuisance_orders``, ``min_harmonic``, ``n_points``,
+        ``compress`` (asinh scale; 0 or None: none).
+
+    Returns
+    -------
+    InputSet
+        Rows in data-set order, so :func:`learn.protocols.protocol_splits` on
+        ``meta`` indexes ``X``.
+
+    Raises
+    ------
+    ValueError
+        On an unknown ``kind`` or ``aux`` name, or a window without reference.
+    """
+    if kind not in INPUTS:
+        raise ValueError(f"unknown input {kind!r}; choose one of {INPUTS}")
+    bad = set(aux) - set(AUX)
+    if bad:
+        raise ValueError(f"unknown auxiliary scalars {sorted(bad)}; choose from {AUX}")
+    meta, refs = window_meta(ds, disturbed)
+    samples = meta["sample"].to_numpy()
+    y = meta["fault"].to_numpy()
+    eff_cols = [AUX.index(a) for a in aux]
+    if kind in RESIDUAL_INPUTS:
+        rk = {**RESIDUAL_DEFAULTS, **dict(residual or {})}
+        res = reference_residual(ds, samples, refs, **rk)  # (n, 5, H+1)
+        eff = efficiency_features(ds, samples, refs)[:, eff_cols]  # (n, A)
+        if kind == "res_spec":
+            amp = np.log10(np.abs(res[:, :, int(rk["min_harmonic"]):]) + 1e-7)  # (n, 5, H')
+            x = np.concatenate([amp.reshape(len(amp), -1), eff], axis=1)
+            return InputSet(x.astype(np.float32), y, meta, 0, kind)
+        if kind == "diff_res":
+            res = np.stack([res[:, 0], res[:, 1] - res[:, 3], res[:, 2] - res[:, 4]], axis=1)
+        x = synthesise(res, int(rk["n_points"]), int(rk["min_harmonic"]))  # (n, C, M)
+        if rk.get("compress"):
+            x = np.arcsinh(x / float(rk["compress"]))
+        x = _append_aux(x.astype(np.float32), eff)
+        return InputSet(np.ascontiguousarray(x), y, meta, len(eff_cols), kind)
+    if kind in SIGNAL_INPUTS:
+        x = normalise_signals(ds, samples, refs)  # (n, 5, T)
+        if kind == "diff":
+            x = np.stack([x[:, 0], x[:, 1] - x[:, 3], x[:, 2] - x[:, 4]], axis=1)  # (n, 3, T)
+        eff = efficiency_features(ds, samples, refs)  # (n, 2)
+        x = _append_aux(x, eff[:, eff_cols])
+        return InputSet(np.ascontiguousarray(x, dtype=np.float32), y, meta, len(eff_cols),
+                        kind)
+    from learn.features import extract_features
+
+    feats = extract_features(ds, int(kind[-1]), **dict(feature_kwargs or {}))
+    fs = feats.meta["sample"].to_numpy()
+    pos = np.searchsorted(fs, samples)
+    if not np.array_equal(fs[np.minimum(pos, fs.size - 1)], samples):
+        raise ValueError("features and windows disagree on the non-reference windows")
+    return InputSet(np.asarray(feats.X[pos], dtype=np.float32), y, meta, 0, kind)

@@ -1,0 +1,586 @@
+"""Torch MLP and 1D-CNN classifiers behind the scikit-learn interface.
+
+One small wrapper (:class:`TorchClassifier`) instead of skorch, because the transfer study
+needs three things beyond ``fit``/``predict``: fine-tuning on a few target windows with
+all layers or the last layer only (:meth:`TorchClassifier.fine_tune`), re-estimating the
+batch-norm statistics on unlabelled target windows (AdaBN, :meth:`TorchClassifier.adapt_bn`)
+and the penultimate embedding (:meth:`TorchClassifier.embed`).
+
+Conventions (scikit-learn): ``__init__`` stores arguments only; learned state ends in
+``_`` and is set in ``fit``, which returns ``self``; ``random_state`` seeds weight
+initialisation, shuffling, augmentation and the validation split, through local
+generators (``torch.random.fork_rng``), never the global seed.
+
+Input ``X``: (n, C, T) signals whose last ``n_aux`` channels are per-window scalars held
+constant along time (see :mod:`learn.inputs`), or (n, F) features. Inputs are
+standardised per channel (per feature) with statistics of the training windows; a
+fine-tuned model keeps the source statistics.
+
+Device: ``device="auto"`` uses CUDA when present, else the CPU. The number of CPU threads
+is left to the caller (``torch.set_num_threads``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import logging
+import math
+
+import numpy as np
+import torch
+from sklearn.base import BaseEstimator, ClassifierMixin
+from torch import nn
+
+log = logging.getLogger(__name__)
+
+
+def resolve_device(device: str = "auto") -> torch.device:
+    """``"auto"`` -> CUDA when available, else CPU; any other string is passed to torch."""
+    if device == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    return torch.device(device)
+
+
+@contextlib.contextmanager
+def _local_seed(seed: int, device: torch.device):
+    """Seed torch's default generators inside the block only (``fork_rng`` restores them),
+    so weight initialisation and dropout are reproducible without global seeding."""
+    devices = [device.index or 0] if device.type == "cuda" else []
+    with torch.random.fork_rng(devices=devices):
+        torch.manual_seed(seed)
+        yield
+
+
+def _seed_of(random_state) -> int:
+    if isinstance(random_state, np.random.Generator):
+        return int(random_state.integers(2**31 - 1))
+    if random_state is None:
+        return int(np.random.default_rng().integers(2**31 - 1))
+    return int(random_state)
+
+
+# --------------------------------------------------------------------------- modules
+
+
+class MLPNet(nn.Module):
+    """Fully connected net: (B, F) or (B, C, T) -> logits (B, K).
+
+    A 3-D input is flattened over its signal channels; its ``n_aux`` trailing scalar
+    channels are read at t = 0 and concatenated, so they are not repeated T times.
+    """
+
+    def __init__(self, n_in: int, n_aux: int, n_classes: int, hidden: tuple[int, ...],
+                 dropout: float):
+        super().__init__()
+        self.n_aux = n_aux
+        layers: list[nn.Module] = []
+        width = n_in
+        for h in hidden:
+            layers += [nn.Linear(width, h), nn.BatchNorm1d(h), nn.ReLU(), nn.Dropout(dropout)]
+            width = h
+        self.body = nn.Sequential(*layers)
+        self.head = nn.Linear(width, n_classes)
+
+    def _flat(self, x: torch.Tensor) -> torch.Tensor:
+        if x.ndim == 2:
+            return x
+        c = x.shape[1] - self.n_aux
+        sig = x[:, :c].flatten(1)  # (B, c*T)
+        return torch.cat([sig, x[:, c:, 0]], dim=1) if self.n_aux else sig
+
+    def embed(self, x: torch.Tensor) -> torch.Tensor:
+        return self.body(self._flat(x))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.head(self.embed(x))
+
+
+class CNN1DNet(nn.Module):
+    """1D-CNN: strided conv blocks, global average pooling, scalars joined, MLP head.
+
+    (B, C, T) -> conv blocks -> (B, ch[-1], T') -> mean over T' -> (B, ch[-1])
+    -> concat aux scalars (B, n_aux) -> Linear-ReLU -> Linear -> logits (B, K).
+    A 2-D input (B, F) is read as one channel of length F.
+    """
+
+    def __init__(self, n_channels: int, n_aux: int, n_classes: int,
+                 channels: tuple[int, ...], kernel_sizes: tuple[int, ...],
+                 strides: tuple[int, ...], head_hidden: int, dropout: float,
+                 padding_mode: str = "zeros"):
+        super().__init__()
+        if not len(channels) == len(kernel_sizes) == len(strides):
+            raise ValueError("channels, kernel_sizes and strides must have the same length")
+        self.n_aux = n_aux
+        blocks: list[nn.Module] = []
+        c_in = n_channels - n_aux
+        for c_out, k, s in zip(channels, kernel_sizes, strides, strict=True):
+            blocks += [nn.Conv1d(c_in, c_out, k, stride=s, padding=k // 2, bias=False,
+                                 padding_mode=padding_mode),
+                       nn.BatchNorm1d(c_out), nn.ReLU()]
+            c_in = c_out
+        self.features = nn.Sequential(*blocks)
+        self.body = nn.Sequential(nn.Linear(c_in + n_aux, head_hidden), nn.ReLU(),
+                                  nn.Dropout(dropout))
+        self.head = nn.Linear(head_hidden, n_classes)
+
+    def embed(self, x: torch.Tensor) -> torch.Tensor:
+        if x.ndim == 2:
+            x = x[:, None, :]  # (B, 1, F)
+        c = x.shape[1] - self.n_aux
+        z = self.features(x[:, :c]).mean(dim=2)  # (B, ch[-1])
+        if self.n_aux:
+            z = torch.cat([z, x[:, c:, 0]], dim=1)  # (B, ch[-1] + n_aux)
+        return self.body(z)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.head(self.embed(x))
+
+
+# --------------------------------------------------------------------------- estimator
+
+
+class TorchClassifier(ClassifierMixin, BaseEstimator):
+    """Base of the torch classifiers; subclasses add architecture arguments and
+    :meth:`_build_module`. See the module docstring for the input convention.
+
+    Common parameters
+    -----------------
+    n_aux : int
+        Trailing scalar channels of a 3-D input.
+    max_epochs : int
+        Epoch budget (cosine learning-rate decay over it).
+    batch_size : int
+    lr : float
+        Peak AdamW learning rate.
+    weight_decay : float
+        AdamW weight decay.
+    label_smoothing : float
+    val_fraction : float
+        Fraction of the training *groups* (or windows, without groups) held out for early
+        stopping; 0 trains the fixed budget. The split is carved from the data passed to
+        ``fit`` only, i.e. from the source gears in the transfer study.
+    patience : int
+        Epochs without a better validation loss before stopping.
+    aug_gain, aug_offset : float
+        Std of a random per-window, per-channel gain factor (1 + N(0, aug_gain)) and offset
+        (N(0, aug_offset)) applied to the signal channels while training [-]: robustness
+        to the gauge gain and offset of an unseen gear left after normalisation.
+    aug_crop : float
+        Train on random crops of this fraction of the window (1: off); the global
+        pooling makes the net length-agnostic, prediction uses the whole window.
+    device : str
+        "auto" (CUDA if present), "cpu", "cuda", ...
+    random_state : int, numpy Generator or None
+    verbose : bool
+        Log the loss per epoch.
+    """
+
+    _common = ("n_aux", "max_epochs", "batch_size", "lr", "weight_decay", "label_smoothing",
+               "val_fraction", "patience", "aug_gain", "aug_offset", "aug_crop", "device",
+               "random_state", "verbose")
+
+    # ---------------------------------------------------------------- to override
+    def _build_module(self, x_shape: tuple[int, ...], n_classes: int) -> nn.Module:
+        raise NotImplementedError
+
+    # ---------------------------------------------------------------- helpers
+    def _scale(self, X: np.ndarray) -> torch.Tensor:
+        X = np.asarray(X, dtype=np.float32)
+        if X.ndim == 3:
+            X = (X - self.mean_[None, :, None]) / self.scale_[None, :, None]
+        else:
+            X = (X - self.mean_[None]) / self.scale_[None]
+        return torch.from_numpy(np.ascontiguousarray(X, dtype=np.float32))
+
+    def _augment(self, xb: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
+        if xb.ndim != 3:
+            return xb
+        c = xb.shape[1] - self.n_aux
+        if self.aug_gain > 0 or self.aug_offset > 0:
+            xb = xb.clone()
+            shape = (xb.shape[0], c, 1)
+            if self.aug_gain > 0:
+                g = 1.0 + self.aug_gain * torch.randn(shape, generator=gen)
+                xb[:, :c] *= g.to(xb.device)
+            if self.aug_offset > 0:
+                o = self.aug_offset * torch.randn(shape, generator=gen)
+                xb[:, :c] += o.to(xb.device)
+        if self.aug_crop < 1.0:
+            t = xb.shape[2]
+            n = max(8, int(round(self.aug_crop * t)))
+            start = int(torch.randint(0, t - n + 1, (1,), generator=gen))
+            xb = xb[:, :, start:start + n]
+        return xb
+
+    def _encode(self, y) -> np.ndarray:
+        y = np.asarray(y)
+        lookup = {c: i for i, c in enumerate(self.classes_)}
+        try:
+            return np.array([lookup[v] for v in y], dtype=np.int64)
+        except KeyError as e:
+            raise ValueError(f"label {e.args[0]!r} not among the classes seen in fit") from e
+
+    def _val_split(self, n: int, y: np.ndarray, groups, rng: np.random.Generator):
+        if self.val_fraction <= 0:
+            return np.arange(n), np.array([], dtype=int)
+        if groups is None:
+            groups = np.arange(n)
+        groups = np.asarray(groups)
+        uniq = np.unique(groups)
+        n_val = max(1, int(round(self.val_fraction * uniq.size)))
+        val_groups = rng.choice(uniq, size=n_val, replace=False)
+        is_val = np.isin(groups, val_groups)
+        return np.flatnonzero(~is_val), np.flatnonzero(is_val)
+
+    def _run_epochs(self, X: torch.Tensor, yi: np.ndarray, params, lr: float, n_steps_epoch,
+                    n_epochs: int, gen: torch.Generator, X_val=None, y_val=None) -> list[dict]:
+        """Train ``params`` for ``n_epochs`` with AdamW + cosine decay; early stopping on
+        (X_val, y_val) when given. Returns the history; restores the best state."""
+        dev = self.device_
+        module = self.module_
+        opt = torch.optim.AdamW(params, lr=lr, weight_decay=self.weight_decay)
+        total = max(1, n_epochs * n_steps_epoch)
+        sched = torch.optim.lr_scheduler.LambdaLR(
+            opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, total) / total)))
+        loss_fn = nn.CrossEntropyLoss(label_smoothing=self.label_smoothing)
+        yt = torch.from_numpy(yi)
+        n = X.shape[0]
+        bs = min(self.batch_size, n)
+        history, best, best_state, bad = [], math.inf, None, 0
+        for epoch in range(n_epochs):
+            module.train()
+            perm = torch.randperm(n, generator=gen)
+            tot, seen = 0.0, 0
+            for s in range(n_steps_epoch):
+                idx = perm[s * bs:(s + 1) * bs]
+                if idx.numel() < 2:  # batch norm needs two windows
+                    continue
+                xb = self._augment(X[idx], gen).to(dev)
+                yb = yt[idx].to(dev)
+                opt.zero_grad(set_to_none=True)
+                loss = loss_fn(module(xb), yb)
+                loss.backward()
+                opt.step()
+                sched.step()
+                tot += float(loss.detach()) * idx.numel()
+                seen += idx.numel()
+            rec = {"epoch": epoch, "loss": tot / max(seen, 1)}
+            if X_val is not None and len(X_val):
+                vl, va = self._evaluate(X_val, y_val, loss_fn)
+                rec.update(val_loss=vl, val_accuracy=va)
+                if vl < best - 1e-4:
+                    best, bad = vl, 0
+                    best_state = copy.deepcopy(module.state_dict())
+                else:
+                    bad += 1
+            history.append(rec)
+            if self.verbose:
+                log.info("epoch %d %s", epoch, rec)
+            if X_val is not None and len(X_val) and bad >= self.patience:
+                break
+        if best_state is not None:
+            module.load_state_dict(best_state)
+        module.eval()
+        return history
+
+    @torch.no_grad()
+    def _evaluate(self, X: torch.Tensor, yi: np.ndarray, loss_fn) -> tuple[float, float]:
+        logits = self._logits(X)
+        yt = torch.from_numpy(yi)
+        return float(loss_fn(logits, yt)), float((logits.argmax(1) == yt).float().mean())
+
+    @torch.no_grad()
+    def _logits(self, X: torch.Tensor, batch: int = 512) -> torch.Tensor:
+        self.module_.eval()
+        out = [self.module_(X[i:i + batch].to(self.device_)).cpu()
+               for i in range(0, X.shape[0], batch)]
+        return torch.cat(out)
+
+    # ---------------------------------------------------------------- public API
+    def fit(self, X, y, groups=None):
+        """Train from scratch.
+
+        Parameters
+        ----------
+        X : array, shape (n, C, T) or (n, F)
+        y : array of labels, shape (n,)
+        groups : array, shape (n,), optional
+            Group of each window (e.g. class and variant); the early-stopping validation
+            split keeps whole groups apart. Ignored when ``val_fraction`` is 0.
+
+        Returns
+        -------
+        self
+        """
+        X = np.asarray(X, dtype=np.float32)
+        y = np.asarray(y)
+        if X.ndim not in (2, 3) or X.shape[0] != y.shape[0]:
+            raise ValueError(f"X must be (n, C, T) or (n, F) with n = len(y); got {X.shape}")
+        self.classes_ = np.unique(y)
+        yi = self._encode(y)
+        seed = _seed_of(self.random_state)
+        rng = np.random.default_rng(seed)
+        self.device_ = resolve_device(self.device)
+        axes = (0, 2) if X.ndim == 3 else (0,)
+        self.mean_ = X.mean(axis=axes)
+        sd = X.std(axis=axes)
+        self.scale_ = np.where(sd > 1e-8, sd, 1.0).astype(np.float32)
+        Xt = self._scale(X)
+        tr, va = self._val_split(len(y), y, groups, rng)
+        gen = torch.Generator().manual_seed(seed)
+        steps = max(1, math.ceil(len(tr) / self.batch_size))
+        with _local_seed(seed, self.device_):  # weights and dropout; global RNG untouched
+            self.module_ = self._build_module(X.shape, len(self.classes_)).to(self.device_)
+            self.history_ = self._run_epochs(
+                Xt[tr], yi[tr], list(self.module_.parameters()), self.lr, steps,
+                self.max_epochs, gen, Xt[va] if va.size else None,
+                yi[va] if va.size else None)
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def fine_tune(self, X, y, mode: str = "all", steps: int = 100, lr: float | None = None,
+                  X_replay=None, y_replay=None, replay: float = 1.0, random_state=None):
+        """Continue training on a few labelled windows of a new domain (in place).
+
+        Batch-norm statistics stay those of the source (BN layers in eval mode), and the
+        input standardisation of ``fit`` is kept: a handful of windows cannot re-estimate
+        them. Optionally each batch of target windows is joined by ``replay`` times as many
+        random source windows (``X_replay``), which keeps a 6-window fine-tuning from
+        forgetting what the source taught.
+
+        Parameters
+        ----------
+        X, y : arrays
+            The labelled target windows (k per class); labels among ``classes_``.
+        mode : {"all", "last"}
+            Update every weight, or the final linear layer only.
+        steps : int
+            Optimiser steps (a fixed budget: with k windows per class no validation
+            split exists, and none may come from the target's evaluation windows).
+        lr : float, optional
+            Peak learning rate (cosine decay); default ``self.lr / 10`` for "all",
+            ``self.lr`` for "last".
+        X_replay, y_replay : arrays, optional
+            Labelled source windows to mix into every batch.
+        replay : float
+            Source windows per target window in a batch (0: none).
+        random_state : int, optional
+            Seed of batches and augmentation; default derived from ``random_state``.
+
+        Returns
+        -------
+        self
+
+        Raises
+        ------
+        ValueError
+            On an unknown mode, an unfitted model or an unseen label.
+        """
+        if mode not in ("all", "last"):
+            raise ValueError(f"mode must be 'all' or 'last', got {mode!r}")
+        if not hasattr(self, "module_"):
+            raise ValueError("fit the model before fine-tuning it")
+        X = np.asarray(X, dtype=np.float32)
+        if len(X) == 0 or steps <= 0:
+            return self
+        yt = torch.from_numpy(self._encode(y))
+        Xt = self._scale(X)
+        use_replay = X_replay is not None and replay > 0 and len(X_replay) > 0
+        if use_replay:
+            Xr, yr = self._scale(X_replay), torch.from_numpy(self._encode(y_replay))
+        module = self.module_
+        params = list(module.head.parameters()) if mode == "last" else list(module.parameters())
+        if lr is None:
+            lr = self.lr if mode == "last" else self.lr / 10
+        trainable = {id(p) for p in params}
+        saved = {id(p): p.requires_grad for p in module.parameters()}
+        for p in module.parameters():
+            p.requires_grad_(id(p) in trainable)
+        seed = _seed_of(self.random_state if random_state is None else random_state) + 1
+        gen = torch.Generator().manual_seed(seed)
+        opt = torch.optim.AdamW(params, lr=lr, weight_decay=self.weight_decay)
+        sched = torch.optim.lr_scheduler.LambdaLR(
+            opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, steps) / steps)))
+        loss_fn = nn.CrossEntropyLoss(label_smoothing=self.label_smoothing)
+        bs = min(self.batch_size, len(X))
+        n = len(X)
+        history = []
+        try:
+            with _local_seed(seed, self.device_):
+                module.train()
+                for m in module.modules():
+                    if isinstance(m, nn.BatchNorm1d):
+                        m.eval()
+                perm, pos = torch.randperm(n, generator=gen), 0
+                for _ in range(steps):
+                    if pos + bs > n:
+                        perm, pos = torch.randperm(n, generator=gen), 0
+                    idx = perm[pos:pos + bs]
+                    pos += bs
+                    xb, yb = Xt[idx], yt[idx]
+                    if use_replay:
+                        ridx = torch.randint(0, len(Xr), (max(1, int(round(replay * bs))),),
+                                             generator=gen)
+                        xb, yb = torch.cat([xb, Xr[ridx]]), torch.cat([yb, yr[ridx]])
+                    xb = self._augment(xb, gen).to(self.device_)
+                    opt.zero_grad(set_to_none=True)
+                    loss = loss_fn(module(xb), yb.to(self.device_))
+                    loss.backward()
+                    opt.step()
+                    sched.step()
+                    history.append(float(loss.detach()))
+        finally:
+            for p in module.parameters():
+                p.requires_grad_(saved[id(p)])
+            module.eval()
+        self.finetune_history_ = history
+        return self
+
+    @torch.no_grad()
+    def adapt_bn(self, X, batch: int = 256):
+        """AdaBN (Li et al. 2018): re-estimate every batch-norm mean and variance on
+        unlabelled windows of the new domain (in place); weights are unchanged.
+
+        Parameters
+        ----------
+        X : array, (n, C, T) or (n, F)
+            Unlabelled target windows (labels are never needed).
+
+        Returns
+        -------
+        self
+        """
+        bns = [m for m in self.module_.modules() if isinstance(m, nn.BatchNorm1d)]
+        if not bns:
+            return self
+        Xt = self._scale(X)
+        saved = [m.momentum for m in bns]
+        for m in bns:
+            m.reset_running_stats()
+            m.momentum = None  # cumulative average over the batches
+        self.module_.train()
+        for i in range(0, Xt.shape[0], batch):
+            self.module_(Xt[i:i + batch].to(self.device_))
+        for m, mom in zip(bns, saved, strict=True):
+            m.momentum = mom
+        self.module_.eval()
+        return self
+
+    def predict_proba(self, X) -> np.ndarray:
+        """Class probabilities, shape (n, n_classes), columns in ``classes_`` order."""
+        return torch.softmax(self._logits(self._scale(X)), dim=1).numpy()
+
+    def decision_function(self, X) -> np.ndarray:
+        """Logits, shape (n, n_classes)."""
+        return self._logits(self._scale(X)).numpy()
+
+    def predict(self, X) -> np.ndarray:
+        """Predicted labels, shape (n,)."""
+        return self.classes_[self.decision_function(X).argmax(axis=1)]
+
+    @torch.no_grad()
+    def embed(self, X, batch: int = 512) -> np.ndarray:
+        """Penultimate-layer features, shape (n, width of the head's input)."""
+        Xt = self._scale(X)
+        self.module_.eval()
+        return torch.cat([self.module_.embed(Xt[i:i + batch].to(self.device_)).cpu()
+                          for i in range(0, Xt.shape[0], batch)]).numpy()
+
+
+class MLPClassifierTorch(TorchClassifier):
+    """Multi-layer perceptron (paper Table VI has 3 x 10 ReLU units; default here wider,
+    with batch norm and dropout). Flattens a signal input; see :class:`TorchClassifier`.
+
+    Parameters
+    ----------
+    hidden : tuple of int
+        Widths of the hidden layers.
+    dropout : float
+    """
+
+    def __init__(self, hidden=(128, 64), dropout=0.1, *, n_aux=0, max_epochs=60,
+                 batch_size=64, lr=3e-3, weight_decay=1e-2, label_smoothing=0.0,
+                 val_fraction=0.0, patience=8, aug_gain=0.0, aug_offset=0.0, aug_crop=1.0,
+                 device="auto", random_state=None, verbose=False):
+        self.hidden = hidden
+        self.dropout = dropout
+        self.n_aux = n_aux
+        self.max_epochs = max_epochs
+        self.batch_size = batch_size
+        self.lr = lr
+        self.weight_decay = weight_decay
+        self.label_smoothing = label_smoothing
+        self.val_fraction = val_fraction
+        self.patience = patience
+        self.aug_gain = aug_gain
+        self.aug_offset = aug_offset
+        self.aug_crop = aug_crop
+        self.device = device
+        self.random_state = random_state
+        self.verbose = verbose
+
+    def _build_module(self, x_shape, n_classes):
+        if len(x_shape) == 3:
+            n_in = (x_shape[1] - self.n_aux) * x_shape[2] + self.n_aux
+        else:
+            n_in = x_shape[1]
+        return MLPNet(n_in, self.n_aux if len(x_shape) == 3 else 0, n_classes,
+                      tuple(self.hidden), self.dropout)
+
+    def _augment(self, xb, gen):  # crops would change the flattened length
+        if self.aug_crop < 1.0:
+            raise ValueError("aug_crop < 1 is not possible for an MLP (fixed input length)")
+        return super()._augment(xb, gen)
+
+
+class CNN1DClassifier(TorchClassifier):
+    """1D convolutional net over the signal channels with global average pooling; the
+    auxiliary scalars join after pooling. See :class:`TorchClassifier`.
+
+    Parameters
+    ----------
+    channels, kernel_sizes, strides : tuple of int
+        One entry per conv block (conv -> batch norm -> ReLU); early strides keep the
+        CPU cost low (~4000 windows x 5 x 1200 samples: about a minute per ten epochs on
+        two cores).
+    head_hidden : int
+        Width of the hidden layer of the head.
+    dropout : float
+    padding_mode : {"zeros", "circular"}
+        "circular" for periodic inputs (the angle-domain residuals of one revolution).
+    """
+
+    def __init__(self, channels=(16, 32, 64, 64), kernel_sizes=(9, 7, 7, 5),
+                 strides=(4, 2, 2, 2), head_hidden=64, dropout=0.1, padding_mode="zeros", *,
+                 n_aux=0,
+                 max_epochs=30, batch_size=64, lr=3e-3, weight_decay=1e-2,
+                 label_smoothing=0.0, val_fraction=0.0, patience=8, aug_gain=0.0,
+                 aug_offset=0.0, aug_crop=1.0, device="auto", random_state=None,
+                 verbose=False):
+        self.channels = channels
+        self.kernel_sizes = kernel_sizes
+        self.strides = strides
+        self.head_hidden = head_hidden
+        self.dropout = dropout
+        self.padding_mode = padding_mode
+        self.n_aux = n_aux
+        self.max_epochs = max_epochs
+        self.batch_size = batch_size
+        self.lr = lr
+        self.weight_decay = weight_decay
+        self.label_smoothing = label_smoothing
+        self.val_fraction = val_fraction
+        self.patience = patience
+        self.aug_gain = aug_gain
+        self.aug_offset = aug_offset
+        self.aug_crop = aug_crop
+        self.device = device
+        self.random_state = random_state
+        self.verbose = verbose
+
+    def _build_module(self, x_shape, n_classes):
+        n_ch = x_shape[1] if len(x_shape) == 3 else 1
+        return CNN1DNet(n_ch, self.n_aux if len(x_shape) == 3 else 0, n_classes,
+                        tuple(self.channels), tuple(self.kernel_sizes), tuple(self.strides),
+                        self.head_hidden, self.dropout, self.padding_mode)

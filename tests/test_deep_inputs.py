@@ -1,0 +1,111 @@
+"""learn.inputs: shapes, reference normalisation, auxiliary scalars."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_deep_toy import make_toy_dataset
+
+from learn.inputs import AUX, build_input, normalise_signals, window_meta
+
+
+@pytest.fixture(scope="module")
+def toy():
+    return make_toy_dataset(n_variants=3, n_time=128)
+
+
+@pytest.mark.parametrize(("kind", "n_ch"), [("raw", 5), ("diff", 3)])
+def test_signal_input_shapes(toy, kind, n_ch):
+    inp = build_input(toy, kind)
+    n = int((~toy["reference"].values).sum())
+    assert inp.X.shape == (n, n_ch + len(AUX), 128)
+    assert inp.X.dtype == np.float32
+    assert inp.n_aux == len(AUX)
+    assert len(inp.y) == len(inp.meta) == n
+    # scalar channels are constant along time
+    assert np.all(inp.X[:, -inp.n_aux:, :] == inp.X[:, -inp.n_aux:, :1])
+    # rows follow the data set, without reference windows
+    assert not toy["reference"].values[inp.meta["sample"]].any()
+    assert np.all(np.diff(inp.meta["sample"].to_numpy()) > 0)
+
+
+def test_feature_inputs_and_filter(toy):
+    sel3 = build_input(toy, "sel3", disturbed=True)
+    assert sel3.X.ndim == 2 and sel3.n_aux == 0
+    assert sel3.meta["disturbed"].all()
+    raw = build_input(toy, "raw", aux=(), disturbed=True)
+    assert raw.X.shape[1] == 5 and raw.n_aux == 0
+    np.testing.assert_array_equal(raw.meta["sample"], sel3.meta["sample"])
+
+
+def test_reference_maps_to_zero_mean_unit_rms(toy):
+    meta, refs = window_meta(toy)
+    x = normalise_signals(toy, np.unique(refs), np.unique(refs))  # references themselves
+    np.testing.assert_allclose(x.mean(axis=2), 0.0, atol=1e-5)
+    np.testing.assert_allclose(np.sqrt((x ** 2).mean(axis=2)), 1.0, atol=1e-5)
+
+
+def test_normalisation_removes_gear_gain_and_offset(toy):
+    """A gear whose bridges have other gains and offsets gives the same input."""
+    ds2 = toy.copy(deep=True)
+    gear3 = ds2["gear"].values == 3
+    sig = ds2["strain_signal"].values
+    sig[gear3] = 1.7 * sig[gear3] + 0.3  # reference windows of gear 3 included
+    a = build_input(toy, "raw").X
+    b = build_input(ds2, "raw").X
+    np.testing.assert_allclose(a, b, atol=1e-4)
+
+
+def test_unknown_kind_and_missing_reference(toy):
+    with pytest.raises(ValueError, match="unknown input"):
+        build_input(toy, "spectrogram")
+    with pytest.raises(ValueError, match="auxiliary"):
+        build_input(toy, "raw", aux=("speed",))
+    no_ref = toy.isel(sample=np.flatnonzero(~toy["reference"].values))
+    with pytest.raises(ValueError, match="reference"):
+        build_input(no_ref, "raw")
+
+
+def test_synchronous_residual_cancels_gear_signature_and_keeps_fault():
+    """A window = reference shifted in WG angle + other disturbance: residual ~ 0; a
+    4th-harmonic fault term survives at its amplitude relative to the reference RMS."""
+    from learn.inputs import align_phase, harmonic_coefficients, synthesise
+
+    fs, n_t, f_in, order = 10_000.0, 1200, 2000 / 60, 1.01
+    t = np.arange(n_t) / fs
+    rng = np.random.default_rng(0)
+
+    def gear(psi0, fault=0.0, dist=0.0):
+        psi = 2 * np.pi * order * f_in * t + psi0
+        x = np.stack([0.12 * np.cos(2 * psi + 0.1 * c) + 0.004 * np.cos(4 * psi + c)
+                      for c in range(5)])
+        x += fault * np.cos(4 * psi + 0.3)
+        for o in (0.25, 0.5, 1.0):  # eq. (10) sub-harmonics
+            x += dist * rng.uniform(0.5, 1, (5, 1)) * np.sin(2 * np.pi * o * f_in * t + 1.0)
+        return x
+
+    kw = {"psi_order": order, "n_harmonics": 8}
+    ref = harmonic_coefficients(gear(0.0, dist=0.01)[None], t, np.array([f_in]), **kw)
+    win = harmonic_coefficients(np.stack([gear(1.234, dist=0.01), gear(2.5, 0.002, 0.01)]),
+                                t, np.full(2, f_in), **kw)
+    cr = np.repeat(ref, 2, axis=0)
+    d = align_phase(win, cr)
+    h = np.arange(1, 9)
+    res = win[:, :, 1:] - cr[:, :, 1:] * np.exp(1j * h * d[:, None, None])
+    assert np.abs(res[0]).max() < 1e-6  # healthy: nothing left
+    np.testing.assert_allclose(np.abs(res[1, :, 3]), 0.002, rtol=1e-2)  # h = 4 fault term
+    wave = synthesise(np.concatenate([np.zeros((2, 5, 1)), res], axis=2), n_points=64)
+    assert wave.shape == (2, 5, 64) and np.abs(wave[0]).max() < 1e-5
+
+
+def test_residual_inputs_shapes(toy):
+    kw = {"residual": {"ratio": 1e9, "n_harmonics": 6, "n_points": 32}}
+    raw = build_input(toy, "raw_res", **kw)
+    diff = build_input(toy, "diff_res", **kw)
+    spec = build_input(toy, "res_spec", **kw)
+    n = int((~toy["reference"].values).sum())
+    assert raw.X.shape == (n, 5 + 2, 32) and diff.X.shape == (n, 3 + 2, 32)
+    assert spec.X.shape == (n, 5 * 5 + 2) and spec.n_aux == 0
+    assert np.isfinite(raw.X).all() and np.isfinite(spec.X).all()
+    with pytest.raises(ValueError, match="Nyquist"):
+        build_input(toy, "raw_res", residual={"n_harmonics": 200})

@@ -1,0 +1,122 @@
+"""learn.nets and learn.rocket: scikit-learn contract, shapes, fitting a separable toy set,
+fine-tuning and AdaBN."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from sklearn.base import clone
+
+from learn.nets import CNN1DClassifier, MLPClassifierTorch
+from learn.rocket import MiniRocketClassifier
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(n)
+
+
+def separable(n_per_class=20, n_time=64, n_aux=1, seed=0):
+    """Three classes: a sinusoid of 4, 8 or 12 periods in channel 0 with random phase and
+    noise; one scalar channel carrying noise only."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n_time) / n_time
+    X, y = [], []
+    for c in range(3):
+        for _ in range(n_per_class):
+            x = 0.3 * rng.standard_normal((2 + n_aux, n_time))
+            x[0] += np.sin(2 * np.pi * (c + 1) * 4 * t + rng.uniform(0, 2 * np.pi))
+            x[2:] = rng.standard_normal((n_aux, 1))
+            X.append(x)
+            y.append(f"c{c}")
+    return np.asarray(X, dtype=np.float32), np.asarray(y)
+
+
+TINY = {"max_epochs": 15, "batch_size": 16, "device": "cpu", "random_state": 0}
+
+
+def spectrum(X):
+    """(n, C, T) -> amplitude spectrum of channel 0 plus the scalar, (n, T // 2 + 2)."""
+    return np.concatenate([np.abs(np.fft.rfft(X[:, 0], axis=1)), X[:, -1, :1]],
+                          axis=1).astype(np.float32)
+
+
+def _models():
+    return [
+        CNN1DClassifier(channels=(8, 8), kernel_sizes=(9, 9), strides=(2, 2), head_hidden=16,
+                        n_aux=1, **TINY),
+        MLPClassifierTorch(hidden=(32,), n_aux=1, **TINY),
+    ]
+
+
+@pytest.mark.parametrize(("model", "features"), [(_models()[0], False), (_models()[1], True)],
+                         ids=["cnn-signals", "mlp-spectrum"])
+def test_fit_beats_chance_and_shapes(model, features):
+    X, y = separable()
+    Xte, yte = separable(seed=1)
+    if features:
+        X, Xte = spectrum(X), spectrum(Xte)
+    assert clone(model).get_params() == model.get_params()
+    assert not hasattr(model, "module_")  # __init__ stores arguments only
+    out = model.fit(X, y)
+    assert out is model
+    proba = model.predict_proba(Xte)
+    assert proba.shape == (len(yte), 3)
+    np.testing.assert_allclose(proba.sum(axis=1), 1.0, rtol=1e-5)
+    assert list(model.classes_) == ["c0", "c1", "c2"]
+    assert model.embed(Xte).shape[0] == len(yte)
+    assert model.score(Xte, yte) > 0.8  # chance: 1/3
+
+
+def test_same_seed_same_model():
+    X, y = separable()
+    a = _models()[0].fit(X, y).predict_proba(X)
+    b = _models()[0].fit(X, y).predict_proba(X)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_feature_input_and_early_stopping():
+    X, y = separable()
+    F = spectrum(X)
+    groups = np.repeat(np.arange(len(y) // 2), 2)
+    mlp = MLPClassifierTorch(hidden=(16,), val_fraction=0.25, patience=3, **TINY)
+    mlp.fit(F, y, groups=groups)
+    assert "val_loss" in mlp.history_[0]
+    assert mlp.predict(F).shape == (len(y),)
+    cnn = CNN1DClassifier(channels=(4,), kernel_sizes=(3,), strides=(1,), head_hidden=8, **TINY)
+    assert cnn.fit(F, y).predict(F).shape == (len(y),)
+
+
+def test_fine_tune_last_touches_head_only_and_adabn_keeps_weights():
+    X, y = separable()
+    m = _models()[0].fit(X, y)
+    before = {k: v.clone() for k, v in m.module_.state_dict().items()}
+    m.fine_tune(X[:6], y[:6], mode="last", steps=5, X_replay=X, y_replay=y)
+    after = {k: v.clone() for k, v in m.module_.state_dict().items()}
+    changed = {k for k in before if not torch.equal(before[k], after[k])}
+    assert changed and all(k.startswith("head.") for k in changed)
+    assert all(p.requires_grad for p in m.module_.parameters())  # restored
+    m.fine_tune(X[:6], y[:6], mode="all", steps=3)
+    after2 = m.module_.state_dict()
+    assert any(not torch.equal(after[k], after2[k]) for k in after if k.startswith("features"))
+    w = {k: v.clone() for k, v in m.module_.state_dict().items()}
+    m.adapt_bn(X + 0.5)
+    bn = {k for k, v in m.module_.state_dict().items() if not torch.equal(w[k], v)}
+    assert bn and all("running" in k or "num_batches" in k for k in bn)
+    with pytest.raises(ValueError, match="mode"):
+        m.fine_tune(X, y, mode="middle")
+
+
+def test_minirocket_fits_separable_set():
+    X, y = separable(n_time=64)
+    Xte, yte = separable(n_time=64, seed=1)
+    m = MiniRocketClassifier(n_kernels=84 * 3, n_aux=1, random_state=0)
+    assert clone(m).get_params() == m.get_params()
+    m.fit(X, y)
+    assert m.transform(Xte).shape[0] == len(yte)
+    assert m.predict_proba(Xte).shape == (len(yte), 3)
+    assert m.score(Xte, yte) > 0.8

@@ -1,0 +1,175 @@
+"""learn.transfer: the k-shot split keeps the evaluation windows apart; CORAL; one
+transfer run end to end through the Hydra config (tiny grid)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import torch
+from test_deep_toy import make_toy_dataset, write_toy_dataset
+
+from learn.inputs import build_input
+from learn.protocols import protocol_splits
+from learn.transfer import (
+    RESULT_COLUMNS,
+    CoralClassifier,
+    _check_no_leak,
+    kshot_split,
+    summarise,
+)
+
+CONF = Path(__file__).resolve().parents[1] / "conf"
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(n)
+
+
+@pytest.fixture(scope="module")
+def meta():
+    return build_input(make_toy_dataset(n_variants=6, n_time=32), "sel1", disturbed=True).meta
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_kshot_split_keeps_evaluation_windows_apart(meta, seed):
+    for sp in protocol_splits(meta, "ood_disturbed"):
+        ks = kshot_split(meta, sp.test, k_max=5, seed=seed)
+        target = set(sp.test)
+        # pool and evaluation partition the held-out gear
+        assert set(ks.pool) | set(ks.evaluation) == target
+        assert not set(ks.pool) & set(ks.evaluation)
+        assert not set(ks.evaluation) & set(sp.train)
+        # whole variants: no (fault, variant) of the pool is evaluated
+        ev = meta.iloc[ks.evaluation]
+        pool = meta.iloc[ks.pool]
+        assert not (set(zip(ev.fault, ev.variant, strict=True))
+                    & set(zip(pool.fault, pool.variant, strict=True)))
+        # k windows per class, nested in k, all from the pool, none evaluated
+        prev = set()
+        for k in (1, 2, 5):
+            shots = ks.shots(k)
+            counts = meta.iloc[shots]["fault"].value_counts()
+            assert (counts == k).all() and len(counts) == 6
+            assert set(shots) <= set(ks.pool) and prev <= set(shots)
+            assert not set(shots) & set(ks.evaluation)
+            prev = set(shots)
+        _check_no_leak(meta, sp.train, ks)  # the run-time guard agrees
+        # every class still has evaluation windows
+        assert ev["fault"].nunique() == 6
+    # the draw is a function of the seed
+    a = kshot_split(meta, sp.test, 5, seed)
+    b = kshot_split(meta, sp.test, 5, seed)
+    np.testing.assert_array_equal(a.shots(5), b.shots(5))
+
+
+def test_leak_guard_raises(meta):
+    sp = protocol_splits(meta, "ood_disturbed")[0]
+    ks = kshot_split(meta, sp.test, 2, 0)
+    with pytest.raises(ValueError, match="leak"):
+        _check_no_leak(meta, np.concatenate([sp.train, ks.evaluation[:1]]), ks)
+    with pytest.raises(ValueError, match="too few"):
+        kshot_split(meta, sp.test, k_max=10_000, seed=0)
+
+
+def test_coral_recovers_a_shifted_domain():
+    from sklearn.linear_model import LogisticRegression
+
+    rng = np.random.default_rng(0)
+    Xs = rng.standard_normal((300, 4))
+    ys = (Xs[:, 0] > 0).astype(int)
+    Xt = Xs * np.array([3.0, 1.0, 0.5, 2.0]) + 5.0  # same task, rescaled and shifted
+    base = LogisticRegression().fit(Xs, ys)
+    coral = CoralClassifier(LogisticRegression(), reg=1e-3).fit(Xs, ys, Xt)
+    assert np.mean(coral.predict(Xt) == ys) > 0.95 > np.mean(base.predict(Xt) == ys)
+
+
+def test_transfer_end_to_end(tmp_path):
+    """Compose the real experiment, shrink it, run it; check the report."""
+    from hydra import compose, initialize_config_dir
+
+    from learn.study import run_train
+
+    data = write_toy_dataset(tmp_path / "toy", n_variants=4, n_time=64)
+    overrides = [
+        "experiment=transfer", f"data.path={data}", f"paths.report_dir={tmp_path}/reports",
+        f"logger.tracking_uri=sqlite:///{tmp_path}/mlflow.db",
+        "transfer.protocols=[cv_disturbed,ood_disturbed]", "transfer.seeds=[0,1]",
+        "transfer.cv_seeds=[0]", "transfer.k_shots=[0,1,2]", "transfer.finetune.steps=3",
+        "transfer.n_threads=1", "transfer.latency_repeats=3", "transfer.progress=false",
+        "transfer.runs=[{model:rf,input:sel3,adapt:coral},{model:minirocket,input:diff},"
+        "{model:mlp_torch,input:res_spec},{model:cnn,input:raw,finetune:true,adapt:adabn}]",
+        "transfer.residual.n_harmonics=4", "transfer.residual.n_points=16",
+        "transfer.n_jobs=1",
+        "transfer.models.minirocket.estimator.n_kernels=168",
+        "transfer.models.cnn.estimator.max_epochs=2",
+        "transfer.models.mlp_torch.estimator.max_epochs=2",
+        "transfer.models.rf.estimator.n_estimators=10",
+    ]
+    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
+        cfg = compose("train", overrides=overrides)
+    out = run_train(cfg)
+    rep = Path(out["report_dir"])
+    assert rep == tmp_path / "reports" / "transfer"
+    for name in ("results.csv", "table.md", "accuracy_vs_k.png", "latency.csv"):
+        assert (rep / name).is_file(), name
+    res = pd.read_csv(rep / "results.csv")
+    assert tuple(res.columns) == RESULT_COLUMNS
+    assert res["accuracy"].between(0, 1).all()
+    assert set(res["protocol"]) == {"cv_disturbed", "ood_disturbed"}
+    ood = res[res["protocol"] == "ood_disturbed"]
+    # 3 splits x 2 seeds x (rf, rf+coral, minirocket, mlp, cnn, cnn+adabn + 2 modes x 2 k)
+    assert len(ood) == 3 * 2 * (6 + 2 * 2)
+    assert set(ood["k_shot"]) == {0, 1, 2}
+    assert set(res[res["protocol"] == "cv_disturbed"]["k_shot"]) == {0}
+    # every model of one (split, seed) is scored on the same windows
+    assert ood.groupby(["split", "seed"])["n_test"].nunique().eq(1).all()
+    table = (rep / "table.md").read_text()
+    assert "worst" in table and "fine-tuned all layers, k=2" in table
+    assert "latency" in table.lower()
+    worst = summarise(res)
+    assert (worst["split"] == "worst").any()
+    assert out["run_id"] is not None
+
+
+@pytest.mark.parametrize(("name", "cls"), [("cnn", "CNN1DClassifier"),
+                                           ("mlp_torch", "MLPClassifierTorch"),
+                                           ("minirocket", "MiniRocketClassifier")])
+def test_deep_model_configs_instantiate(name, cls):
+    from hydra import compose, initialize_config_dir
+    from hydra.utils import instantiate
+    from sklearn.pipeline import Pipeline
+
+    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
+        cfg = compose("train", overrides=[f"model={name}", "seed=7"])
+    est = instantiate(cfg.model, _convert_="all")
+    assert isinstance(est, Pipeline) and type(est[-1]).__name__ == cls
+    assert est[-1].get_params()["random_state"] == 7
+
+
+def test_transfer_experiment_composes():
+    from hydra import compose, initialize_config_dir
+    from omegaconf import OmegaConf
+
+    from learn.inputs import INPUTS
+    from learn.transfer import ADAPT, _specs_from_cfg, make_estimator
+
+    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
+        cfg = compose("train", overrides=["experiment=transfer"])
+    assert cfg.task == "transfer"
+    tc = OmegaConf.to_container(cfg.transfer, resolve=True)
+    specs = _specs_from_cfg(tc["runs"])
+    for s in specs:
+        assert s.model in tc["models"] and s.input in INPUTS
+        assert s.adapt in (None, *ADAPT)
+        make_estimator(tc["models"][s.model], 0, 2, dict(s.params))  # params are valid
+    assert {"rf", "minirocket", "mlp_torch", "cnn"} <= {s.model for s in specs}
+    assert {("cnn", "raw"), ("cnn", "diff")} <= {(s.model, s.input) for s in specs}
+    assert set(tc["protocols"]) == {"cv_clean", "cv_disturbed", "ood_clean", "ood_disturbed"}
+    assert len(tc["seeds"]) == 5 and set(tc["k_shots"]) == {0, 1, 5, 10}
