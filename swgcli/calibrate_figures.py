@@ -90,6 +90,7 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
         Figure key to path relative to ``out_dir``.
     """
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
 
     out = Path(out_dir)
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -148,6 +149,7 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
         if pk:
             ax.annotate(f"{pk[0][0]:.4g} rad", (pk[0][0], pk[0][1]), fontsize=7, color=col)
     ax.set_xlabel("period over q [rad]")
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_ylabel("normalised power")
     ax.set_title("spectrum of the residual over q (same in both directions)", fontsize=9)
     ax.legend(fontsize=8)
@@ -157,6 +159,7 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
         per, pw = _spectrum(q[sp.fit_validation], rr, p_min, p_max)
         ax.semilogx(per, pw, color=col, lw=0.8, label=f"{lab}, odd part")
     ax.set_xlabel("period over q [rad]")
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_title("spectrum of residual · sgn(q̇) over q (flips with direction)", fontsize=9)
     ax.legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
