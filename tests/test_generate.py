@@ -206,3 +206,10 @@ def test_sensor_effects_and_extra_kinematic_error_reach_the_data(tiny_set, tmp_p
     cfg["sensor_effects"] = [{"name": "amplifier_lowpass", "params": {"f_c_hz": -5.0}}]
     with pytest.raises(ValueError, match="f_c_hz"):
         gen.plan(cfg)
+
+
+def test_friction_effects_not_yet_wired_are_refused():
+    cfg = tiny_cfg()
+    cfg["friction_effects"] = [{"name": "stribeck", "params": {"f_s": 0.1}}]
+    with pytest.raises(ValueError, match="friction_effects"):
+        gen.plan(cfg)
