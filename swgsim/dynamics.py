@@ -394,7 +394,7 @@ def _check(n_in_rpm, t_out_nm, fs_hz, duration_s, settle_s):
 
 def simulate(params: list[GearParams] | Batch, n_in_rpm, t_out_nm, phi_in0=0.0,
              sample_rate_hz: float = 10e3, window_s: float = 0.12, settle_s: float = 0.1,
-             substeps: int = 2) -> SimResult:
+             substeps: int = 2, friction_effects=None) -> SimResult:
     """Integrate many variants at once (RK4, fixed step) and return the steady window.
 
     Parameters
@@ -415,6 +415,14 @@ def simulate(params: list[GearParams] | Batch, n_in_rpm, t_out_nm, phi_in0=0.0,
         Transient discarded before the window [s].
     substeps : int
         RK4 steps per output sample.
+    friction_effects : object, optional
+        Extra friction at the output found by the calibration loop, e.g.
+        :class:`swgsim.calibration.chain.FrictionEffects`: ``torque(t, q, dq, ddq, z)``
+        [N m, positive along q̇], ``state_derivative(t, q, dq, z)``, ``n_states`` and
+        ``initial_state(shape, dq0)``, with q = φ_out. It enters as
+        J_out ω̇_out = … − τ and lowers the delivered torque; acceleration-dependent terms
+        see q̈ = 0 (add an inertia term to J_out instead). Its states are integrated with
+        the gear's and not recorded.
 
     Returns
     -------
@@ -434,23 +442,50 @@ def simulate(params: list[GearParams] | Batch, n_in_rpm, t_out_nm, phi_in0=0.0,
     phi0 = np.broadcast_to(np.asarray(phi_in0, float), (v,)).copy()
     bk = _ke_batch(b)
     x = steady_state(bk, w_d, t_load, phi0)
+    fx = friction_effects
+    if fx is not None and fx.n_states:
+        x = np.concatenate([x, fx.initial_state((v,), dq0=x[3])])
+
+    def f(tt, xx):
+        return _rhs_effects(tt, xx, bk, w_d, t_load, fx)
     n_win = int(round(window_s * sample_rate_hz))
     n_set = int(round(settle_s * sample_rate_hz))
     h = 1.0 / (sample_rate_hz * substeps)
-    rec = np.empty((5, v, n_win))
+    rec = np.empty((x.shape[0], v, n_win))
     t = 0.0
     for k in range(n_set + n_win):
         if k >= n_set:
             rec[:, :, k - n_set] = x
         for _ in range(substeps):
-            k1 = rhs(t, x, bk, w_d, t_load)
-            k2 = rhs(t + h / 2, x + h / 2 * k1, bk, w_d, t_load)
-            k3 = rhs(t + h / 2, x + h / 2 * k2, bk, w_d, t_load)
-            k4 = rhs(t + h, x + h * k3, bk, w_d, t_load)
+            k1 = f(t, x)
+            k2 = f(t + h / 2, x + h / 2 * k1)
+            k3 = f(t + h / 2, x + h / 2 * k2)
+            k4 = f(t + h, x + h * k3)
             x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             t += h
     ok = bool(np.all(np.isfinite(rec)))
-    return _result(rec, bk, w_d, t_load, sample_rate_hz, ok)
+    res = _result(rec[:5], bk, w_d, t_load, sample_rate_hz, ok)
+    if fx is not None:  # the delivered torque loses the extra friction
+        t_rec = settle_s + res.time
+        z = rec[5:] if rec.shape[0] > 5 else None
+        tau = fx.torque(np.broadcast_to(t_rec, (v, n_win)), rec[2], rec[3], 0.0, z)
+        res.t_out = res.t_out + tau  # steady state: c T_stiff − T_fric/sin α = T_load − τ
+        res.p_out = np.abs(res.t_out * rec[3])
+        res.efficiency = res.p_out.mean(axis=1) / res.p_in.mean(axis=1)
+    return res
+
+
+def _rhs_effects(t, x, b, w_d, t_load, fx):
+    """:func:`rhs` plus extra output friction and its states (rows 5.. of x)."""
+    d = rhs(t, x[:5], b, w_d, t_load)
+    if fx is None:
+        return d
+    z = x[5:] if x.shape[0] > 5 else None
+    tau = fx.torque(t, x[2], x[3], 0.0, z)
+    d[3] = d[3] - tau / b.j_out_kgm2
+    if z is not None:
+        d = np.concatenate([d, fx.state_derivative(t, x[2], x[3], z)])
+    return d
 
 
 def _ke_batch(b: Batch) -> Batch:

@@ -193,8 +193,9 @@ def plan(cfg: dict) -> list[ShardSpec]:
                                         f"(0, 10], got {g[k]}")
     parse_sensor_effects(cfg.get("sensor_effects") or [])
     _req(not cfg.get("friction_effects"), "dataset.friction_effects: calibrated friction "
-         "effects are not wired into the dynamic model yet (swgsim.calibration.chain."
-         "FrictionEffects evaluates them); leave the list empty")
+         "effects are not wired into data generation yet (pass a swgsim.calibration.chain."
+         "FrictionEffects to swgsim.dynamics.simulate(friction_effects=...)); leave the "
+         "list empty")
     for g in cfg["gears"]:
         gear_with_ke(rt1_size20(), g.get("ke_extra") or [])
     unknown = set(cfg["variants"]) - set(FAULTS)

@@ -75,3 +75,16 @@ def test_batch_equals_single_runs():
 def test_bad_operating_point_is_refused(kw, match):
     with pytest.raises(ValueError, match=match):
         dy.simulate([dy.rt1_size20()], **kw)
+
+
+def test_calibrated_friction_effect_enters_the_dynamics():
+    """An effect accepted by the calibration loop, as extra output friction."""
+    from swgsim.calibration.chain import FrictionEffects
+
+    p = dy.rt1_size20()
+    base = dy.simulate([p], 2000.0, 39.0, window_s=0.02)
+    fx = FrictionEffects([{"kind": "asymmetric_coulomb", "params": {"delta_c": -0.5}}],
+                         v_s=1e-3)
+    more = dy.simulate([p], 2000.0, 39.0, window_s=0.02, friction_effects=fx)
+    assert more.t_out.mean() == pytest.approx(base.t_out.mean(), abs=0.01)  # load held
+    assert more.efficiency[0] < base.efficiency[0] - 0.005  # more loss
