@@ -170,7 +170,7 @@ class SimulationChain:
         return s + t_out[None, :] * h
 
     def simulate(self, variants: list[ChainParams], n_in_rpm, t_out_nm,
-                 phi_in0: np.ndarray | float = 0.0):
+                 phi_in0: np.ndarray | float = 0.0, friction_effects=None):
         """Simulate variants at one operating point.
 
         Parameters
@@ -183,6 +183,9 @@ class SimulationChain:
             Load torque [N m], >= 0.
         phi_in0 : float or ndarray, shape (V,)
             Input angle at t = 0 [rad].
+        friction_effects : swgsim.calibration.chain.FrictionEffects, optional
+            Extra output friction accepted by a calibration (see
+            :func:`swgsim.dynamics.simulate`); None: the paper law alone.
 
         Returns
         -------
@@ -192,7 +195,8 @@ class SimulationChain:
         """
         st = self.settings
         res = dynamics.simulate([v.gear for v in variants], n_in_rpm, t_out_nm, phi_in0,
-                                st.sample_rate_hz, st.window_s, st.settle_s, st.substeps)
+                                st.sample_rate_hz, st.window_s, st.settle_s, st.substeps,
+                                friction_effects=friction_effects)
         if not res.success:
             raise RuntimeError(f"dynamic simulation failed: {res.message}")
         return self.signals_batch(variants, res.psi, res.t_out), res

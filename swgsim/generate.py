@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from . import data as dsio
+from .calibration.chain import friction_effects_from_config
 from .chain import ChainSettings, SimulationChain
 from .disturbance import DisturbanceSpec, disturb
 from .dynamics import gear_with_ke, rt1_size20
@@ -73,7 +74,7 @@ PAPER: dict[str, Any] = {
     # measurement-chain effects found by the calibration loop (swgsim.measurement), e.g.
     # [{name: amplifier_lowpass, params: {f_c_hz: 250}}]; applied before eq. (10)
     "sensor_effects": [],
-    "friction_effects": [],
+    "friction_effects": None,
 }
 
 
@@ -192,10 +193,7 @@ def plan(cfg: dict) -> list[ShardSpec]:
             _req(0 < float(g[k]) <= 10, f"dataset.gears[id={g['id']}].{k} must lie in "
                                         f"(0, 10], got {g[k]}")
     parse_sensor_effects(cfg.get("sensor_effects") or [])
-    _req(not cfg.get("friction_effects"), "dataset.friction_effects: calibrated friction "
-         "effects are not wired into data generation yet (pass a swgsim.calibration.chain."
-         "FrictionEffects to swgsim.dynamics.simulate(friction_effects=...)); leave the "
-         "list empty")
+    friction_effects_from_config(cfg.get("friction_effects"))
     for g in cfg["gears"]:
         gear_with_ke(rt1_size20(), g.get("ke_extra") or [])
     unknown = set(cfg["variants"]) - set(FAULTS)
@@ -303,7 +301,7 @@ def simulate_shard(cfg: dict, shard: ShardSpec, influences: dict[tuple, Influenc
     n_t = int(round(settings.window_s * settings.sample_rate_hz))
     # one vectorised dynamic run for every window of the shard
     sig, res = chain.simulate(params, shard.n_in_rpm, np.array([w.t_out_nm for w in wins]),
-                              phi0)
+                              phi0, friction_effects_from_config(cfg.get("friction_effects")))
     eff = res.efficiency
     n_mean = res.states[1].mean(axis=1) * 60 / (2 * np.pi)
     t_mean = res.t_out.mean(axis=1)

@@ -12,10 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from omegaconf import OmegaConf
 
 from swgcli import CONF_DIR
 from swgsim import data as dsio
 from swgsim import generate as gen
+from swgsim.calibration.chain import friction_effects_from_config
 
 
 def tiny_cfg(**chain):
@@ -208,8 +210,42 @@ def test_sensor_effects_and_extra_kinematic_error_reach_the_data(tiny_set, tmp_p
         gen.plan(cfg)
 
 
-def test_friction_effects_not_yet_wired_are_refused():
+def test_friction_effects_reach_the_data(tiny_set, tmp_path):
+    """Accepted friction effects (calibration output) are an option of the generator."""
+    out_ref, _ = tiny_set
     cfg = tiny_cfg()
-    cfg["friction_effects"] = [{"name": "stribeck", "params": {"f_s": 0.1}}]
-    with pytest.raises(ValueError, match="friction_effects"):
-        gen.plan(cfg)
+    cfg["friction_effects"] = {"v_s": 1e-3, "t0_s": 0.0, "baseline": None, "effects": [
+        {"kind": "asymmetric_coulomb", "params": {"delta_c": -0.5}}]}
+    s = gen.generate(cfg, tmp_path / "fr", n_jobs=1, progress=False)
+    a, b = dsio.load(out_ref), dsio.load(s["out_dir"])
+    fx_cfg = json.loads(b.attrs["config"])["friction_effects"]
+    assert fx_cfg["effects"][0]["kind"] == "asymmetric_coulomb"
+    # extra output friction: same load on the flexspline, lower efficiency
+    assert (b.efficiency.values < a.efficiency.values - 1e-3).all()
+    s0 = (b.strain_signal - a.strain_signal).values[:, 0].mean(axis=-1)
+    ref = np.abs(a.strain_signal.values[:, 0].mean(axis=-1))
+    assert np.abs(s0).max() < 0.02 * ref.max()
+
+
+def test_friction_effects_config_option_and_errors():
+    from hydra import compose, initialize_config_dir
+
+    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
+        c = compose("generate", overrides=[
+            "dataset=tiny", "+friction_effects@dataset.friction_effects=franka_joint2_slow"])
+    spec = OmegaConf.to_container(c.dataset.friction_effects, resolve=True)
+    fx = friction_effects_from_config(spec)
+    assert [t.name for t, _, _ in fx.items] == [e["name"] for e in spec["effects"]]
+    q = np.linspace(-1.0, -0.8, 50)
+    assert np.abs(fx(np.linspace(0, 1, 50), q, np.full(50, 0.1), np.zeros(50))).max() > 0
+    assert friction_effects_from_config(None) is None
+    assert friction_effects_from_config({"v_s": None, "effects": []}) is None
+    bad = [({"effects": [{"kind": "stribeck", "params": {"f_s": 0.1, "v_st": 0.02}}]}, "v_s"),
+           ({"v_s": 1e-3, "effects": [{"kind": "nope", "params": {}}]}, "nope"),
+           ({"v_s": 1e-3, "effect": []}, "unknown key"),
+           ([{"kind": "stribeck"}], "mapping")]
+    for spec, match in bad:
+        cfg = tiny_cfg()
+        cfg["friction_effects"] = spec
+        with pytest.raises(ValueError, match=match):
+            gen.plan(cfg)

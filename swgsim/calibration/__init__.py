@@ -18,7 +18,7 @@ Modules: :mod:`.core` (terms, separable least squares, uncertainties), :mod:`.fr
 option), :mod:`.synthetic` (planted-effect data).
 """
 
-from .chain import FrictionEffects, parse_effects
+from .chain import FrictionEffects, friction_effects_from_config, parse_effects
 from .core import FitResult, Param, ParamEstimate, Term, fit_terms
 from .diagnose import Diagnosis, diagnose, friction_probes, noise_floor
 from .friction import FrictionRecording, FrictionSignals, PaperLaw, load_friction_csv
@@ -29,6 +29,7 @@ from .report import render_report, summarize
 from .split import HeldOutSplit, group_split, time_block_split
 
 __all__ = [
+    "friction_effects_from_config",
     "FRICTION_LIBRARY",
     "CalibrationResult",
     "Diagnosis",

@@ -33,7 +33,7 @@ from .core import Term, evaluate_terms
 from .friction import FrictionSignals, PaperLaw, Scales
 from .friction_effects import Presliding, VelocityLag, make_effect
 
-__all__ = ["FrictionEffects", "parse_effects"]
+__all__ = ["FrictionEffects", "friction_effects_from_config", "parse_effects"]
 
 
 def parse_effects(effects: Sequence[Mapping[str, Any]]) -> list[tuple[Term, np.ndarray,
@@ -234,3 +234,58 @@ class FrictionEffects:
                 out[i] = (dq - state[i]) / th[0]
                 i += 1
         return out
+
+
+_SPEC_KEYS = {"v_s", "t0_s", "baseline", "effects"}
+
+
+def friction_effects_from_config(spec: Any, where: str = "dataset.friction_effects"
+                                 ) -> FrictionEffects | None:
+    """Build the extra friction of a data-set config (``conf/friction_effects/*.yaml``).
+
+    Parameters
+    ----------
+    spec : None or mapping
+        None, an empty mapping or empty list (the paper law alone), or the mapping a
+        calibration writes to ``friction_effects.yaml``: ``v_s`` [rad/s], ``t0_s`` [s],
+        ``baseline`` (paper-law parameters or None) and ``effects`` (list, see
+        :func:`parse_effects`).
+    where : str
+        Name of the config key, used in error messages.
+
+    Returns
+    -------
+    FrictionEffects or None
+        None when there are no effects.
+
+    Raises
+    ------
+    ValueError
+        ``spec`` of the wrong type, unknown keys, missing or non-positive ``v_s``, or an
+        invalid effect (the message names ``where`` and the effect).
+    """
+    if spec is None or (isinstance(spec, (list, tuple, Mapping)) and len(spec) == 0):
+        return None
+    if not isinstance(spec, Mapping):
+        raise ValueError(f"{where} must be null or a mapping {{v_s, t0_s, baseline, effects}} "
+                         "(the friction_effects.yaml a calibration writes), got "
+                         f"{type(spec).__name__}")
+    unknown = set(spec) - _SPEC_KEYS
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: "
+                         f"{sorted(_SPEC_KEYS)}")
+    effects = spec.get("effects") or []
+    if not isinstance(effects, (list, tuple)):
+        raise ValueError(f"{where}.effects must be a list, got {type(effects).__name__}")
+    if not effects:
+        return None
+    v_s = spec.get("v_s")
+    if v_s is None or not float(v_s) > 0:
+        raise ValueError(f"{where}.v_s must be > 0 [rad/s] (the smooth-sign velocity the "
+                         f"effects were fitted with), got {v_s}")
+    try:
+        return FrictionEffects(effects, v_s=float(v_s), baseline=spec.get("baseline"),
+                               t0=float(spec.get("t0_s") or 0.0))
+    except (KeyError, ValueError) as e:
+        msg = e.args[0] if e.args else str(e)
+        raise ValueError(f"{where}: {msg}") from None
