@@ -638,13 +638,16 @@ def _pct(m: float, s: float) -> str:
 
 def write_table(results: pd.DataFrame, path: str | Path, *, timings: Mapping | None = None,
                 latency: pd.DataFrame | None = None, targets: Mapping | None = None,
-                confusion: pd.DataFrame | None = None, paper: bool = True) -> Path:
+                confusion: pd.DataFrame | None = None, paper: bool = True,
+                separability: pd.DataFrame | None = None) -> Path:
     """Write ``table.md``: per protocol, accuracy [%] per split and worst split.
 
     Rows: every (model, input, k) present; the paper's own numbers (RF, Table X and IX)
     beside ours where known. With ``confusion``, a diagnosis of the best model per
     leave-one-gear-out protocol: its main confusions, the class pairs it cannot tell
-    apart and the accuracy ceiling if those pairs are truly indistinguishable.
+    apart and the accuracy ceiling if those pairs are truly indistinguishable. With
+    ``separability`` (:func:`learn.separability.summary_table`), how far each class lies
+    from the healthy windows in the signals themselves.
     """
     summ = summarise(results)
     lines = ["# Transfer to the unseen gear: deep learners, MiniRocket and the paper's "
@@ -657,6 +660,8 @@ def write_table(results: pd.DataFrame, path: str | Path, *, timings: Mapping | N
         lines += _targets_md(summ, targets) + [""]
     if confusion is not None and len(confusion):
         lines += _diagnosis_md(summ, confusion) + [""]
+    if separability is not None and len(separability):
+        lines += _separability_md(separability) + [""]
     for p in [q for q in ALL_PROTOCOLS if q in set(results["protocol"])]:
         sp = summ[summ["protocol"] == p]
         splits = sorted({s for s in sp["split"] if s != "worst"},
@@ -703,8 +708,9 @@ def write_table(results: pd.DataFrame, path: str | Path, *, timings: Mapping | N
 
 
 def _model_rank(m: str) -> int:
-    order = ["rf", "rf+coral", "minirocket", "mlp_torch", "mlp_torch+adabn", "cnn",
-             "cnn+adabn", "cnn+ft_last", "cnn+ft_all"]
+    order = ["rf", "rf+coral", "minirocket", "mlp_torch", "mlp_torch+adabn",
+             "mlp_torch+ft_last", "mlp_torch+ft_all", "cnn", "cnn+adabn", "cnn+ft_last",
+             "cnn+ft_all"]
     return order.index(m) if m in order else len(order)
 
 
@@ -795,35 +801,85 @@ def _diagnosis_md(summ: pd.DataFrame, confusion: pd.DataFrame) -> list[str]:
     return lines
 
 
-def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path) -> Path:
+def _separability_md(tab: pd.DataFrame) -> list[str]:
+    lines = ["## Class separability in the signals (independent of any classifier)", "",
+             f"Each {tab.attrs.get('kind', 'clean')} window reduced to the amplitudes of the "
+             "first harmonics of the wave-generator angle in the five bridges and η; its "
+             "separation = the largest distance from the healthy windows of the same gear "
+             "and operating point, in their spreads (`learn/separability.py`, figure "
+             "`separability.png`). Healthy windows scored leave-one-out reach "
+             f"{tab.attrs['p95']:.2f} (95th percentile) by chance.", "",
+             "| class | windows | beyond healthy p95 | beyond healthy p99 | median |",
+             "|---|---:|---:|---:|---:|"]
+    for r in tab.itertuples():
+        lines.append(f"| {r.fault} | {r.windows} | {100 * r.beyond_p95:.1f} % | "
+                     f"{100 * r.beyond_p99:.1f} % | {r.median:.3g} |")
+    return lines
+
+
+def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
+                       targets: Mapping | None = None) -> Path:
     """Figure: worst-split accuracy against k per leave-one-gear-out protocol.
 
-    Lines: each fine-tuned model (k = 0 is its pretrained model); dashed horizontal
-    lines: the k = 0 models without fine-tuning. Error bars: std over seeds.
+    Solid / dashed lines: a net fine-tuned on all layers / the last layer (k = 0 is its
+    pretrained model); dotted horizontal lines: models without target labels (including
+    the unsupervised adaptations). One colour per (model, input) in every panel. Error
+    bars: std over seeds. ``targets`` ({k: accuracy 0-1}) are marked on ood_disturbed.
+    One legend below the panels.
     """
+    from matplotlib import colormaps
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
     summ = summarise(results)
-    prots = [p for p in OOD_PROTOCOLS if p in set(results["protocol"])]
-    fig = Figure(figsize=(5.5 * max(1, len(prots)), 4.2), layout="constrained")
-    axes = [fig.add_subplot(1, max(1, len(prots)), i + 1) for i in range(max(1, len(prots)))]
-    for ax, p in zip(axes, prots, strict=False):
-        w = summ[(summ["protocol"] == p) & (summ["split"] == "worst")]
-        ft = w[w["model"].str.contains(r"\+ft_")]
-        for (m, i), g in ft.groupby(["model", "input"]):
-            base = w[(w["model"] == m.split("+")[0]) & (w["input"] == i) & (w["k_shot"] == 0)]
+    prots = [p for p in OOD_PROTOCOLS if p in set(results["protocol"])] or ["ood_disturbed"]
+    w_all = summ[summ["split"] == "worst"]
+    keys = sorted({(m.split("+")[0], i, m.partition("+")[2])
+                   for m, i in zip(w_all["model"], w_all["input"], strict=True)
+                   if not m.partition("+")[2].startswith("ft_")},
+                  key=lambda t: (_model_rank(t[0]), t[1], t[2]))
+    cmap = colormaps["tab20"]
+    colour = {k: cmap(n % 20) for n, k in enumerate(keys)}
+    k_max = max(1, int(results["k_shot"].max()) if len(results) else 1)
+    fig = Figure(figsize=(6.0 * len(prots), 4.0 + 0.22 * len(keys)), layout="constrained")
+    axes = [fig.add_subplot(1, len(prots), n + 1) for n in range(len(prots))]
+    handles: dict[str, Line2D] = {}
+    for ax, p in zip(axes, prots, strict=True):
+        w = w_all[w_all["protocol"] == p]
+        for (m, i), g in w[w["model"].str.contains(r"\+ft_")].groupby(["model", "input"]):
+            base_name, _, mode = m.partition("+")
+            base = w[(w["model"] == base_name) & (w["input"] == i) & (w["k_shot"] == 0)]
             g = pd.concat([base, g]).sort_values("k_shot")
+            ls = "-" if mode == "ft_all" else "--"
             ax.errorbar(g["k_shot"], 100 * g["mean"], yerr=100 * g["std"], marker="o",
-                        capsize=3, label=row_label(m, i, 0).replace(", k=0", ""))
-        flat = w[(w["k_shot"] == 0) & ~w["model"].isin(ft["model"].str.split("+").str[0])]
+                        ms=4, capsize=3, ls=ls, color=colour[(base_name, i, "")])
+            lab = row_label(m, i, 0).replace(", k=0", "")
+            handles.setdefault(lab, Line2D([], [], color=colour[(base_name, i, "")], ls=ls,
+                                           marker="o", ms=4))
+        flat = w[(w["k_shot"] == 0)]
         for _, r in flat.iterrows():
-            ax.axhline(100 * r["mean"], ls="--", lw=1, alpha=0.7,
-                       label=row_label(r["model"], r["input"], 0), color=None)
+            base_name, _, suffix = r["model"].partition("+")
+            ft_models = set(w["model"][w["model"].str.contains(r"\+ft_")])
+            if not suffix and any(f.startswith(base_name + "+ft_") for f in ft_models) and \
+                    ((w["model"].str.startswith(base_name + "+ft_")) & (w["input"]
+                                                                         == r["input"])).any():
+                continue  # drawn as the k = 0 point of its fine-tuned lines
+            c = colour[(base_name, r["input"], suffix)]
+            ax.axhline(100 * r["mean"], ls=":", lw=1.4, color=c)
+            lab = row_label(r["model"], r["input"], 0)
+            handles.setdefault(lab, Line2D([], [], color=c, ls=":", lw=1.4))
+        if targets and p == "ood_disturbed":
+            tk = sorted((int(k), 100 * float(v)) for k, v in targets.items())
+            ax.plot([k for k, _ in tk], [v for _, v in tk], "k*", ms=10)
+            handles.setdefault("target (issue)", Line2D([], [], color="k", marker="*", ls="",
+                                                        ms=10))
+        ax.set_xlim(-0.5, k_max + 0.5)
         ax.set_xlabel("labelled windows per class of the held-out gear, k")
         ax.set_ylabel("accuracy, worst split [%]")
         ax.set_title(p)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6, loc="lower right")
+    fig.legend(list(handles.values()), list(handles.keys()), loc="outside lower center",
+               ncol=3, fontsize=7, frameon=False)
     path = Path(path)
     fig.savefig(path, dpi=130)
     return path
@@ -906,10 +962,23 @@ def run_transfer(cfg) -> dict:
         files["latency"] = report_dir / "latency.csv"
         out["latency"].to_csv(files["latency"], index=False)
     targets = OmegaConf.to_container(tc.targets, resolve=True) if tc.get("targets") else None
+    from learn.separability import plot_separability, separations, summary_table
+
+    kind = "clean" if (~ds["disturbed"].values.astype(bool)).any() else "disturbed"
+    sep = separations(ds, disturbed=kind == "disturbed",
+                      ratio=float((tc.get("residual") or {}).get("ratio", 100.0)))
+    sep_tab = None
+    if "healthy" in sep:
+        sep_tab = summary_table(sep)
+        sep_tab.attrs["kind"] = kind
+        files["separability"] = plot_separability(
+            sep, report_dir / "separability.png",
+            f"Class separability in the simulated signals ({kind})")
     files["table"] = write_table(res, report_dir / "table.md", timings=timings,
                                  latency=out["latency"], targets=targets,
-                                 confusion=out["confusion"])
-    files["figure"] = plot_accuracy_vs_k(res, report_dir / "accuracy_vs_k.png")
+                                 confusion=out["confusion"], separability=sep_tab)
+    files["figure"] = plot_accuracy_vs_k(res, report_dir / "accuracy_vs_k.png",
+                                         targets=targets)
     summ = summarise(res)
     w = summ[(summ["protocol"] == "ood_disturbed") & (summ["split"] == "worst")]
     worst = {f"{r.model}/{r.input}/k{int(r.k_shot)}": float(r["mean"]) for _, r in w.iterrows()}
