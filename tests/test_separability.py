@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
+from test_deep_toy import make_toy_dataset
 
 from learn.separability import plot_separability, separations, summary_table
-from test_deep_toy import make_toy_dataset
 
 
 def test_planted_signature_separates_and_a_healthy_twin_does_not(tmp_path):
