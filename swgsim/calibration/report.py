@@ -179,6 +179,43 @@ def _param_rows(params: Mapping[str, Mapping[str, Any]]) -> list[str]:
     return rows
 
 
+def result_section(summary: Mapping[str, Any], baseline: str, extra: str) -> list[str]:
+    """Markdown lines of a report's "Result" section (friction and strain reports).
+
+    Parameters
+    ----------
+    summary : mapping
+        Summary with ``units``, ``rmse`` (fit / validation / test, before / after),
+        ``rmse_before``, ``rmse_after``, ``effects_added``, ``unexplained`` and
+        ``residual_signature``.
+    baseline : str
+        Name of the model before calibration, e.g. ``"paper law"``.
+    extra : str
+        Text right after the held-out RMSE and its unit, e.g. ``" (ratio 0.5)"``.
+
+    Returns
+    -------
+    list of str
+    """
+    s, u = summary, summary["units"]
+    lines = ["## Result", "", f"| | RMSE before ({baseline}) | RMSE after | after / before |",
+             "|---|---|---|---|"]
+    for k in ("fit", "validation", "test"):
+        b, a = s["rmse"][k]["before"], s["rmse"][k]["after"]
+        lines.append(f"| {k} | {_fmt(b)} {u} | {_fmt(a)} {u} | "
+                     f"{_fmt(a / b if b else None, 3)} |")
+    lines += ["", f"Held-out (test) RMSE {_fmt(s['rmse_before'])} → {_fmt(s['rmse_after'])} "
+              f"{u}{extra}. Effects added: "
+              + (", ".join(f"**{e['name']}**" for e in s["effects_added"]) or "none") + ".", ""]
+    if s["unexplained"]:
+        lines += ["**The final residual is still structured and no library effect explains "
+                  "it.** " + s["residual_signature"], ""]
+    else:
+        lines += ["The final residual shows no structure along the probed variables: "
+                  + s["residual_signature"], ""]
+    return lines
+
+
 def render_report(result: CalibrationResult, summary: Mapping[str, Any],
                   figures: Mapping[str, str] | None = None) -> str:
     """Markdown report of a calibration.
@@ -206,23 +243,7 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
               f"sample interval {_fmt(d.get('dt_median_s'))} s; acceleration "
               f"{d.get('ddq_source')}; smooth-sign velocity v_s = {_fmt(d.get('v_s_rad_s'))} "
               "rad/s.", ""]
-    ratio = s["rmse_ratio"]
-    lines += ["## Result", "",
-              "| | RMSE before (paper law) | RMSE after | after / before |",
-              "|---|---|---|---|"]
-    for k in ("fit", "validation", "test"):
-        b, a = s["rmse"][k]["before"], s["rmse"][k]["after"]
-        lines.append(f"| {k} | {_fmt(b)} {u} | {_fmt(a)} {u} | "
-                     f"{_fmt(a / b if b else None, 3)} |")
-    lines += ["", f"Held-out (test) RMSE {_fmt(s['rmse_before'])} → {_fmt(s['rmse_after'])} "
-              f"{u} (ratio {_fmt(ratio, 3)}). Effects added: "
-              + (", ".join(f"**{e['name']}**" for e in s["effects_added"]) or "none") + ".", ""]
-    if s["unexplained"]:
-        lines += ["**The final residual is still structured and no library effect explains "
-                  "it.** " + s["residual_signature"], ""]
-    else:
-        lines += ["The final residual shows no structure along the probed variables: "
-                  + s["residual_signature"], ""]
+    lines += result_section(s, "paper law", f" (ratio {_fmt(s['rmse_ratio'], 3)})")
     h = s["heldout"]
     lines += ["## Held-out data", "",
               f"{h.get('method')}: {h.get('n_blocks')} blocks of {_fmt(h.get('block_s'))} s; "

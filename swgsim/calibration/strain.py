@@ -54,7 +54,6 @@ import contextlib
 import dataclasses
 import json
 import logging
-import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -72,7 +71,8 @@ from ..faults import ChainParams
 from ..influence import torque_influence
 from ..measurement import psi_rate
 from .loop import CalibrationResult, Problem, SelectionConfig, calibrate
-from .report import UNCERTAINTY_METHOD, summarize, to_jsonable
+from .report import UNCERTAINTY_METHOD, _fmt, result_section, summarize, to_jsonable
+from .report import _param_rows as _rows
 from .split import HeldOutSplit, group_split
 from .strain_effects import (
     KE_ORDERS,
@@ -922,19 +922,6 @@ def order2_table(result: CalibrationResult) -> list[dict[str, Any]]:
     return rows
 
 
-def _fmt(x: Any, digits: int = 4) -> str:
-    if x is None:
-        return "–"
-    if isinstance(x, float):
-        return "–" if not math.isfinite(x) else f"{x:.{digits}g}"
-    return str(x)
-
-
-def _rows(params: Mapping[str, Mapping[str, Any]]) -> list[str]:
-    return [f"| {k} | {_fmt(e['value'])} | {_fmt(e['std'], 2)} | {e['unit']} | "
-            f"{'yes' if e['identifiable'] else 'no: ' + e['flag']} |" for k, e in params.items()]
-
-
 def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
                          figures: Mapping[str, str] | None = None) -> str:
     """Markdown report of a strain calibration.
@@ -956,22 +943,9 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
              "operating points (n_in [rpm], T_out [N m]) "
              + ", ".join(f"({o[0]:g}, {o[1]:g}) × {n}" for o, n in
                          zip(d["operating_points"], d["windows_per_op"], strict=True)) + ".", ""]
-    lines += ["## Result", "", "| | RMSE before (nominal chain) | RMSE after | after / before |",
-              "|---|---|---|---|"]
-    for k in ("fit", "validation", "test"):
-        b, a = s["rmse"][k]["before"], s["rmse"][k]["after"]
-        lines.append(f"| {k} | {_fmt(b)} {u} | {_fmt(a)} {u} | "
-                     f"{_fmt(a / b if b else None, 3)} |")
-    lines += ["", f"Held-out (test) RMSE {_fmt(s['rmse_before'])} → {_fmt(s['rmse_after'])} {u}; "
-              f"difference-based noise floor {_fmt(s['noise_floor'])} {u} (ratio "
-              f"{_fmt(s['rmse_over_noise_floor'], 3)}). Effects added: "
-              + (", ".join(f"**{e['name']}**" for e in s["effects_added"]) or "none") + ".", ""]
-    if s["unexplained"]:
-        lines += ["**The final residual is still structured and no library effect explains "
-                  "it.** " + s["residual_signature"], ""]
-    else:
-        lines += ["The final residual shows no structure along the probed variables: "
-                  + s["residual_signature"], ""]
+    lines += result_section(s, "nominal chain",
+                            f"; difference-based noise floor {_fmt(s['noise_floor'])} {u} (ratio "
+                            f"{_fmt(s['rmse_over_noise_floor'], 3)})")
     lines += ["## Held-out data", "", s["heldout"], ""]
     lines += ["## Baseline: nominal simulation chain", "", result.problem.baseline[0].description
               + ". Fitted on fit + validation windows:", "",
