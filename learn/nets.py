@@ -97,21 +97,29 @@ class MLPNet(nn.Module):
 
 
 class CNN1DNet(nn.Module):
-    """1D-CNN: strided conv blocks, global average pooling, scalars joined, MLP head.
+    """1D-CNN: strided conv blocks, pooling, scalars joined, MLP head.
 
-    (B, C, T) -> conv blocks -> (B, ch[-1], T') -> mean over T' -> (B, ch[-1])
+    (B, C, T) -> conv blocks -> (B, ch[-1], T') -> pool -> (B, P)
     -> concat aux scalars (B, n_aux) -> Linear-ReLU -> Linear -> logits (B, K).
+    ``pool="avg"``: mean over T' (P = ch[-1]), invariant to shifts in time, for signals;
+    ``pool="flatten"``: (B, ch[-1] * T') keeps the position, for inputs whose index has a
+    meaning (spectra, feature vectors; needs ``length`` = T).
     A 2-D input (B, F) is read as one channel of length F.
     """
 
     def __init__(self, n_channels: int, n_aux: int, n_classes: int,
                  channels: tuple[int, ...], kernel_sizes: tuple[int, ...],
                  strides: tuple[int, ...], head_hidden: int, dropout: float,
-                 padding_mode: str = "zeros"):
+                 padding_mode: str = "zeros", pool: str = "avg", length: int | None = None):
         super().__init__()
         if not len(channels) == len(kernel_sizes) == len(strides):
             raise ValueError("channels, kernel_sizes and strides must have the same length")
+        if pool not in ("avg", "flatten"):
+            raise ValueError(f"pool must be 'avg' or 'flatten', got {pool!r}")
+        if pool == "flatten" and not (length and length > 0):
+            raise ValueError("pool='flatten' needs the input length (length > 0)")
         self.n_aux = n_aux
+        self.pool = pool
         blocks: list[nn.Module] = []
         c_in = n_channels - n_aux
         for c_out, k, s in zip(channels, kernel_sizes, strides, strict=True):
@@ -120,7 +128,13 @@ class CNN1DNet(nn.Module):
                        nn.BatchNorm1d(c_out), nn.ReLU()]
             c_in = c_out
         self.features = nn.Sequential(*blocks)
-        self.body = nn.Sequential(nn.Linear(c_in + n_aux, head_hidden), nn.ReLU(),
+        n_pooled = c_in
+        if pool == "flatten":
+            n_t = length
+            for k, s in zip(kernel_sizes, strides, strict=True):
+                n_t = (n_t + 2 * (k // 2) - k) // s + 1
+            n_pooled = c_in * n_t
+        self.body = nn.Sequential(nn.Linear(n_pooled + n_aux, head_hidden), nn.ReLU(),
                                   nn.Dropout(dropout))
         self.head = nn.Linear(head_hidden, n_classes)
 
@@ -128,7 +142,8 @@ class CNN1DNet(nn.Module):
         if x.ndim == 2:
             x = x[:, None, :]  # (B, 1, F)
         c = x.shape[1] - self.n_aux
-        z = self.features(x[:, :c]).mean(dim=2)  # (B, ch[-1])
+        z = self.features(x[:, :c])  # (B, ch[-1], T')
+        z = z.mean(dim=2) if self.pool == "avg" else z.flatten(1)  # (B, P)
         if self.n_aux:
             z = torch.cat([z, x[:, c:, 0]], dim=1)  # (B, ch[-1] + n_aux)
         return self.body(z)
@@ -549,10 +564,15 @@ class CNN1DClassifier(TorchClassifier):
     dropout : float
     padding_mode : {"zeros", "circular"}
         "circular" for periodic inputs (the angle-domain residuals of one revolution).
+    pool : {"avg", "flatten"}
+        "avg": global average pooling, invariant to shifts in time (signals); "flatten":
+        keeps the position along the input (spectra and feature vectors such as
+        Selection 3, whose index is an order or a feature).
     """
 
     def __init__(self, channels=(16, 32, 64, 64), kernel_sizes=(9, 7, 7, 5),
-                 strides=(4, 2, 2, 2), head_hidden=64, dropout=0.1, padding_mode="zeros", *,
+                 strides=(4, 2, 2, 2), head_hidden=64, dropout=0.1, padding_mode="zeros",
+                 pool="avg", *,
                  n_aux=0,
                  max_epochs=30, batch_size=64, lr=3e-3, weight_decay=1e-2,
                  label_smoothing=0.0, val_fraction=0.0, patience=8, aug_gain=0.0,
@@ -564,6 +584,7 @@ class CNN1DClassifier(TorchClassifier):
         self.head_hidden = head_hidden
         self.dropout = dropout
         self.padding_mode = padding_mode
+        self.pool = pool
         self.n_aux = n_aux
         self.max_epochs = max_epochs
         self.batch_size = batch_size
@@ -583,4 +604,11 @@ class CNN1DClassifier(TorchClassifier):
         n_ch = x_shape[1] if len(x_shape) == 3 else 1
         return CNN1DNet(n_ch, self.n_aux if len(x_shape) == 3 else 0, n_classes,
                         tuple(self.channels), tuple(self.kernel_sizes), tuple(self.strides),
-                        self.head_hidden, self.dropout, self.padding_mode)
+                        self.head_hidden, self.dropout, self.padding_mode, self.pool,
+                        x_shape[-1])
+
+    def _augment(self, xb, gen):
+        if self.aug_crop < 1.0 and self.pool == "flatten":
+            raise ValueError("aug_crop < 1 is not possible with pool='flatten' (fixed input "
+                             "length)")
+        return super()._augment(xb, gen)

@@ -53,9 +53,15 @@ def _models():
     ]
 
 
-@pytest.mark.parametrize(("model", "features"), [(_models()[0], False), (_models()[1], True)],
-                         ids=["cnn-signals", "mlp-spectrum"])
-def test_fit_beats_chance_and_shapes(model, features):
+# minimum test accuracy (chance 1/3); an MLP on time samples has no shift invariance and
+# sees the sinusoids at random phases: 0.70 measured, so 0.55 for it
+@pytest.mark.parametrize(("model", "features", "min_acc"),
+                         [(_models()[0], False, 0.8), (_models()[1], True, 0.8),
+                          (_models()[1], False, 0.55),
+                          (CNN1DClassifier(channels=(8,), kernel_sizes=(5,), strides=(1,),
+                                           head_hidden=16, pool="flatten", **TINY), True, 0.8)],
+                         ids=["cnn-signals", "mlp-spectrum", "mlp-signals", "cnn-features"])
+def test_fit_beats_chance_and_shapes(model, features, min_acc):
     X, y = separable()
     Xte, yte = separable(seed=1)
     if features:
@@ -69,7 +75,7 @@ def test_fit_beats_chance_and_shapes(model, features):
     np.testing.assert_allclose(proba.sum(axis=1), 1.0, rtol=1e-5)
     assert list(model.classes_) == ["c0", "c1", "c2"]
     assert model.embed(Xte).shape[0] == len(yte)
-    assert model.score(Xte, yte) > 0.8  # chance: 1/3
+    assert model.score(Xte, yte) > min_acc  # chance: 1/3
 
 
 def test_same_seed_same_model():
