@@ -81,24 +81,20 @@ def separations(ds, disturbed: bool = False, n_harmonics: int = 8,
                 c = harmonic_coefficients(sig[idx].astype(float), t, f_in[idx],
                                           1.0 + 1.0 / ratio, n_harmonics)
                 x = np.concatenate([np.abs(c).reshape(len(idx), -1), eff[idx, None]], axis=1)
-                h = m["fault"][idx] == "healthy"
-                mu, sd = x[h].mean(axis=0), x[h].std(axis=0, ddof=1)
-                sd = np.maximum(sd, 1e-9 * np.maximum(np.abs(mu), 1e-12))
-                z = np.abs(x - mu) / sd
+                h = np.flatnonzero(m["fault"][idx] == "healthy")
+                z = _zmax(x, x[h])
+                # leave-one-out: a healthy window against the other healthy windows
+                z[h] = [_zmax(x[i:i + 1], x[h[h != i]])[0] for i in h]
                 for f in np.unique(m["fault"][idx]):
-                    sel = m["fault"][idx] == f
-                    if f == "healthy":  # leave-one-out: a healthy window against the rest
-                        zz = []
-                        for i in np.flatnonzero(sel):
-                            rest = np.flatnonzero(sel)
-                            rest = rest[rest != i]
-                            mu_i, sd_i = x[rest].mean(axis=0), x[rest].std(axis=0, ddof=1)
-                            sd_i = np.maximum(sd_i, 1e-9 * np.maximum(np.abs(mu_i), 1e-12))
-                            zz.append(np.max(np.abs(x[i] - mu_i) / sd_i))
-                        out.setdefault(f, []).extend(zz)
-                    else:
-                        out.setdefault(f, []).extend(z[sel].max(axis=1).tolist())
+                    out.setdefault(f, []).extend(z[m["fault"][idx] == f].tolist())
     return {k: np.asarray(v) for k, v in out.items()}
+
+
+def _zmax(x: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """Max over columns of |x - mean(ref)| / std(ref), shape (len(x),); std floored."""
+    mu, sd = ref.mean(axis=0), ref.std(axis=0, ddof=1)
+    sd = np.maximum(sd, 1e-9 * np.maximum(np.abs(mu), 1e-12))
+    return np.max(np.abs(x - mu) / sd, axis=1)
 
 
 def summary_table(sep: dict[str, np.ndarray]) -> pd.DataFrame:

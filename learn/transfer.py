@@ -51,6 +51,8 @@ import pandas as pd
 from sklearn.base import clone
 from sklearn.pipeline import Pipeline
 
+from learn.separability import plot_separability, separations, summary_table
+
 log = logging.getLogger(__name__)
 
 RESULT_COLUMNS = ("protocol", "split", "model", "input", "k_shot", "seed", "accuracy",
@@ -856,13 +858,11 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
             lab = row_label(m, i, 0).replace(", k=0", "")
             handles.setdefault(lab, Line2D([], [], color=colour[(base_name, i, "")], ls=ls,
                                            marker="o", ms=4))
-        flat = w[(w["k_shot"] == 0)]
-        for _, r in flat.iterrows():
+        ft_pairs = {(m.partition("+")[0], i) for m, i in zip(w["model"], w["input"],
+                                                             strict=True) if "+ft_" in m}
+        for _, r in w[w["k_shot"] == 0].iterrows():
             base_name, _, suffix = r["model"].partition("+")
-            ft_models = set(w["model"][w["model"].str.contains(r"\+ft_")])
-            if not suffix and any(f.startswith(base_name + "+ft_") for f in ft_models) and \
-                    ((w["model"].str.startswith(base_name + "+ft_")) & (w["input"]
-                                                                         == r["input"])).any():
+            if not suffix and (base_name, r["input"]) in ft_pairs:
                 continue  # drawn as the k = 0 point of its fine-tuned lines
             c = colour[(base_name, r["input"], suffix)]
             ax.axhline(100 * r["mean"], ls=":", lw=1.4, color=c)
@@ -962,8 +962,6 @@ def run_transfer(cfg) -> dict:
         files["latency"] = report_dir / "latency.csv"
         out["latency"].to_csv(files["latency"], index=False)
     targets = OmegaConf.to_container(tc.targets, resolve=True) if tc.get("targets") else None
-    from learn.separability import plot_separability, separations, summary_table
-
     kind = "clean" if (~ds["disturbed"].values.astype(bool)).any() else "disturbed"
     sep = separations(ds, disturbed=kind == "disturbed",
                       ratio=float((tc.get("residual") or {}).get("ratio", 100.0)))
