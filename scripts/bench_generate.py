@@ -27,7 +27,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -92,12 +91,13 @@ def main(argv: list[str] | None = None) -> dict:
                     help="time steps timed per naive window, extrapolated to the window")
     args = ap.parse_args(argv)
 
+    from swgcli import dataset_preset
     from swgsim.chain import ChainSettings, SimulationChain
     from swgsim.faults import apply_fault
     from swgsim.flexspline import Mesh
     from swgsim.generate import gear_params, generate, layout_for
 
-    cfg = yaml.safe_load(open(ROOT / "conf" / "dataset" / f"{args.dataset}.yaml"))
+    cfg = dataset_preset(args.dataset)
     tmp = None
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="bench_gen_")) / "ds"
     if args.out is None:

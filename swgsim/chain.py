@@ -23,10 +23,12 @@ from . import dynamics
 from .faults import ChainParams, angle_index, mesh_severity
 from .flexspline import FlexsplineGeometry, Mesh, TrussModel, factorize
 from .influence import (
+    TABLE_SUBDIVISIONS,
     Influence,
     InfluenceSolver,
     contact_window,
     torque_influence,
+    zone_table,
 )
 from .sensors import SensorLayout, signal_rows
 
@@ -206,7 +208,10 @@ class SimulationChain:
         """Signals of many variants; the same as :meth:`signals_from_motion` per variant.
 
         Variants that share a structure and tooth factors are evaluated together, in
-        chunks of ``chunk`` windows, to keep Python overhead and temporaries small.
+        chunks of ``chunk`` windows, to keep Python overhead and temporaries small; their
+        torque influence h(ψ) is read from one :class:`~swgsim.influence.ZoneTable` when
+        the group has more time steps than the table has points (within about 1e-8 mV/V
+        of the direct sum at 70 N m, tested), else summed directly.
 
         Parameters
         ----------
@@ -232,11 +237,15 @@ class SimulationChain:
             p0 = variants[members[0]]
             inf = self.influence(p0)
             c = self._tooth_factors(p0)
+            # a table pays when the group has more time steps than the table has points
+            table = (zone_table(inf.g, inf.theta, c, hw)
+                     if len(members) * n_t > 2 * inf.theta.size * TABLE_SUBDIVISIONS else None)
             for start in range(0, len(members), chunk):
                 idx = np.asarray(members[start:start + chunk])
                 ps = psi[idx]  # (m, n_t)
                 share = np.stack([self.load_share(variants[k], psi[k]) for k in idx])
-                h = torque_influence(ps.ravel(), inf.g, inf.theta, c, hw, share.ravel())
+                h = (torque_influence(ps.ravel(), inf.g, inf.theta, c, hw, share.ravel())
+                     if table is None else table.torque_influence(ps.ravel(), share.ravel()))
                 h = h.reshape(5, idx.size, n_t).transpose(1, 0, 2)  # (m, 5, n_t)
                 w0 = np.array([variants[k].w0_m for k in idx])[:, None, None]
                 sig = w0 * (inf.A[None, :, None] * np.cos(2 * ps)[:, None, :]

@@ -506,12 +506,10 @@ def _ke_batch(b: Batch) -> Batch:
 
 
 def _result(rec, bk, w_d, t_load, fs, ok, msg=""):
-    v, n = rec.shape[1], rec.shape[2]
-    flat = rec.reshape(5, -1)
-    rep = Batch({k: (np.repeat(val, n, axis=1) if val.ndim == 2 else np.repeat(val, n))
-                 for k, val in bk.fields.items()})
-    t_out, p_in, p_out = _outputs(flat, rep, np.repeat(w_d, n), np.repeat(t_load, n))
-    t_out, p_in, p_out = (a.reshape(v, n) for a in (t_out, p_in, p_out))
+    n = rec.shape[2]
+    # parameters broadcast against (V, n_t): (V,) -> (V, 1), (n_k, V) -> (n_k, V, 1)
+    col = Batch({k: val[..., None] for k, val in bk.fields.items()})
+    t_out, p_in, p_out = _outputs(rec, col, w_d[:, None], t_load[:, None])
     eff = p_out.mean(axis=1) / p_in.mean(axis=1)
     return SimResult(time=np.arange(n) / fs, states=rec, t_out=t_out, p_in=p_in,
                      p_out=p_out, efficiency=eff, success=ok,

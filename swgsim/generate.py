@@ -32,6 +32,8 @@ from typing import Any
 import numpy as np
 
 from . import data as dsio
+from . import dynamics
+from .acquisition import acquire, parse_acquisition, start_angles
 from .calibration.chain import friction_effects_from_config
 from .chain import ChainSettings, SimulationChain
 from .disturbance import DisturbanceSpec, disturb
@@ -71,6 +73,8 @@ PAPER: dict[str, Any] = {
               "contact_half_width_deg": 20.0, "ecc_load_share": 1.0},
     "mesh": {"n_theta": 120},
     "disturbance": {"offset_mvv": 0.01, "harmonic_mvv": 0.01},
+    # protocol (swgsim.acquisition): the paper's phase-locked, noise-free windows
+    "acquisition": {"start": "fixed", "wg_start_deg": 0.0, "amplifier": None},
     # measurement-chain effects found by the calibration loop (swgsim.measurement), e.g.
     # [{name: amplifier_lowpass, params: {f_c_hz: 250}}]; applied before eq. (10)
     "sensor_effects": [],
@@ -192,6 +196,12 @@ def plan(cfg: dict) -> list[ShardSpec]:
         for k in ("b1_factor", "k1_factor"):
             _req(0 < float(g[k]) <= 10, f"dataset.gears[id={g['id']}].{k} must lie in "
                                         f"(0, 10], got {g[k]}")
+    acq = parse_acquisition(cfg.get("acquisition"))
+    if acq.amplifier is not None:
+        lead_s = acq.amplifier.lead_samples(ch["sample_rate_hz"]) / ch["sample_rate_hz"]
+        _req(ch["settle_s"] >= lead_s, f"dataset.chain.settle_s must be >= {lead_s:g} s "
+                                       "(the amplifier's filter history), got "
+                                       f"{ch['settle_s']}")
     parse_sensor_effects(cfg.get("sensor_effects") or [])
     friction_effects_from_config(cfg.get("friction_effects"))
     for g in cfg["gears"]:
@@ -268,6 +278,31 @@ def gear_params(cfg: dict, gear: dict):
     return ChainParams(gear=gear_with_ke(p, gear.get("ke_extra") or []))
 
 
+def _motion_key(p: ChainParams, t_out_nm: float, phi0: float) -> tuple:
+    """Windows with equal keys have the same dynamic motion (flexspline faults do not enter
+    the I/O model, paper Table I)."""
+    return (p.gear, float(t_out_nm), float(phi0))
+
+
+def _signal_key(w: WindowSpec, phi0: float) -> tuple:
+    """Windows with equal keys have the same clean signals (healthy copies, references)."""
+    pos = None if np.isnan(w.position_deg) else float(w.position_deg)
+    return (w.fault, float(w.severity), pos, float(w.t_out_nm), float(phi0))
+
+
+def _unique(keys: list[tuple]) -> tuple[np.ndarray, np.ndarray]:
+    """First index of each distinct key and, per item, the position of its key."""
+    pos: dict[tuple, int] = {}
+    first: list[int] = []
+    inverse = np.empty(len(keys), np.int64)
+    for i, k in enumerate(keys):
+        if k not in pos:
+            pos[k] = len(first)
+            first.append(i)
+        inverse[i] = pos[k]
+    return np.asarray(first, np.int64), inverse
+
+
 def simulate_shard(cfg: dict, shard: ShardSpec, influences: dict[tuple, Influence]):
     """Simulate one shard; return (xarray.Dataset, n_windows).
 
@@ -280,45 +315,88 @@ def simulate_shard(cfg: dict, shard: ShardSpec, influences: dict[tuple, Influenc
         This gear's influences (:func:`gear_influences`).
 
     The dataset holds the clean windows, their disturbed twins (eq. 10, same motion) and
-    the reference windows, in that order.
+    the reference windows, in that order. Each distinct motion is integrated once and each
+    distinct window synthesised once (with ``acquisition.start: fixed`` the healthy copies
+    and the flexspline faults share the healthy gear's motion); the result is the same as
+    simulating every window on its own.
+
+    Randomness comes from three independent streams of ``SeedSequence(seed, spawn_key=
+    (gear, speed index))``: window start angles, eq. (10) draws, amplifier noise; so the
+    eq. (10) draws of a window do not depend on the acquisition protocol.
     """
     gear = next(g for g in cfg["gears"] if int(g["id"]) == shard.gear)
     ch = cfg["chain"]
+    acq = parse_acquisition(cfg.get("acquisition"))
+    amp = acq.amplifier
+    q = 1 if amp is None else amp.oversample
     settings = ChainSettings(sample_rate_hz=float(ch["sample_rate_hz"]),
                              window_s=float(ch["window_s"]), settle_s=float(ch["settle_s"]),
                              substeps=int(ch["substeps"]),
                              contact_half_width_deg=float(ch["contact_half_width_deg"]),
                              ecc_load_share=float(ch["ecc_load_share"]))
+    fs = settings.sample_rate_hz
+    n_t = int(round(settings.window_s * fs))
+    n_lead = 0 if amp is None else amp.lead_samples(fs)
     chain = SimulationChain.from_influences(layout_for(cfg, gear), influences, settings)
     healthy = gear_params(cfg, gear)
-    rng = np.random.default_rng(np.random.SeedSequence(int(cfg["seed"]),
-                                                       spawn_key=(shard.gear, shard.speed_index)))
+    ss = np.random.SeedSequence(int(cfg["seed"]), spawn_key=(shard.gear, shard.speed_index))
+    rng_start, rng_dist, rng_noise = (np.random.default_rng(s) for s in ss.spawn(3))
     wins = shard.windows
-    phi0 = rng.uniform(0.0, 2 * np.pi, size=len(wins))
+    phi0 = start_angles(acq, len(wins), rng_start, healthy.gear.ratio)
     params = [apply_fault(healthy, w.fault, w.severity,
                           0.0 if np.isnan(w.position_deg) else w.position_deg)
               for w in wins]
-    n_t = int(round(settings.window_s * settings.sample_rate_hz))
-    # one vectorised dynamic run for every window of the shard
-    sig, res = chain.simulate(params, shard.n_in_rpm, np.array([w.t_out_nm for w in wins]),
-                              phi0, friction_effects_from_config(cfg.get("friction_effects")))
-    eff = res.efficiency
-    n_mean = res.states[1].mean(axis=1) * 60 / (2 * np.pi)
-    t_mean = res.t_out.mean(axis=1)
-    time_s = np.arange(n_t) / settings.sample_rate_hz
+    t_out = np.array([w.t_out_nm for w in wins])
+    # each distinct motion once: (gear parameters, load, start angle)
+    m_idx, m_inv = _unique([_motion_key(p, t, a) for p, t, a in zip(params, t_out, phi0,
+                                                                        strict=True)])
+    # the window plus n_lead samples before and after it (history of the amplifier's
+    # filter), and one more to interpolate the last fine sample
+    n_rec = n_t + 2 * n_lead + (q > 1)
+    res = dynamics.simulate([params[k].gear for k in m_idx], shard.n_in_rpm, t_out[m_idx],
+                            phi0[m_idx], fs, n_rec / fs, settings.settle_s - n_lead / fs,
+                            settings.substeps,
+                            friction_effects=friction_effects_from_config(
+                                cfg.get("friction_effects")))
+    if not res.success:
+        raise RuntimeError(f"dynamic simulation failed in shard {shard.name}: {res.message}")
+    win = slice(n_lead, n_lead + n_t)  # the window's samples
+    eff = (res.p_out[:, win].mean(axis=1) / res.p_in[:, win].mean(axis=1))[m_inv]
+    n_mean = res.states[1][:, win].mean(axis=1)[m_inv] * 60 / (2 * np.pi)
+    t_mean = res.t_out[:, win].mean(axis=1)[m_inv]
+    # each distinct window once, on the fine grid (q samples per sample) if q > 1
+    s_idx, s_inv = _unique([_signal_key(w, a) for w, a in zip(wins, phi0, strict=True)])
+    psi, t_act = fine_motion(res, q, m_inv[s_idx])
+    sig_u = chain.signals_batch([params[k] for k in s_idx], psi, t_act)  # (U, 5, q n_rec')
+    # (V, 5, ...): copies of the unique windows, unless every window is distinct
+    sig = sig_u if np.array_equal(s_inv, np.arange(len(wins))) else sig_u[s_inv]
+    if amp is None:
+        sig = sig[:, :, win]
+    time_s = np.arange(n_t) / fs
+    sig = sig_u[s_inv]  # (V, 5, q (n + 2 lead)), views of the unique windows
+    if amp is None:
+        sig = sig[:, :, win]
     if cfg.get("sensor_effects"):
         # windows are taken one after another in shard order (thermal drift)
-        sig = apply_sensor_effects(sig, time_s, n_mean, cfg["sensor_effects"],
-                                   t_start_s=np.arange(len(wins)) * settings.window_s)
+        t_fine = np.arange(sig.shape[-1]) / (fs * q)
+        sig = apply_sensor_effects(sig, t_fine, n_mean, cfg["sensor_effects"],
+                                   t_start_s=np.arange(len(wins)) * settings.window_s
+                                   - n_lead / fs)
+    if amp is not None:  # anti-aliasing filter, sampling, noise, ADC of the bench amplifier
+        sig = acquire(sig, amp, rng_noise, n_lead)
     dspec = DisturbanceSpec(offset_mvv=float(cfg["disturbance"]["offset_mvv"]),
                             harmonic_mvv=float(cfg["disturbance"]["harmonic_mvv"]))
-    sig_d = disturb(sig, time_s, n_mean, dspec, rng)
     ref = np.array([w.reference for w in wins])
-    order = np.concatenate([np.flatnonzero(~ref), np.flatnonzero(~ref), np.flatnonzero(ref),
-                            np.flatnonzero(ref)])
-    disturbed = np.concatenate([np.zeros((~ref).sum(), bool), np.ones((~ref).sum(), bool),
+    order = np.concatenate([np.flatnonzero(~ref), np.flatnonzero(ref)])
+    n_clean = int((~ref).sum())
+    clean = sig[order].astype(np.float32)  # (V, 5, n_t), clean windows then references
+    dist = disturb(sig[order], time_s, n_mean[order], dspec, rng_dist).astype(np.float32)
+    strain32 = np.concatenate([clean[:n_clean], dist[:n_clean], clean[n_clean:],
+                               dist[n_clean:]])
+    order = np.concatenate([order[:n_clean], order[:n_clean], order[n_clean:],
+                            order[n_clean:]])
+    disturbed = np.concatenate([np.zeros(n_clean, bool), np.ones(n_clean, bool),
                                 np.zeros(ref.sum(), bool), np.ones(ref.sum(), bool)])
-    strain = np.where(disturbed[:, None, None], sig_d[order], sig[order])
     meta = {
         "gear": np.array([wins[k].gear for k in order]),
         "fault": np.array([wins[k].fault for k in order]),
@@ -333,15 +411,49 @@ def simulate_shard(cfg: dict, shard: ShardSpec, influences: dict[tuple, Influenc
         "n_in_mean_rpm": n_mean[order],
         "t_out_mean_nm": t_mean[order],
     }
-    strain32 = strain.astype(np.float32)
     h = hashlib.sha256(strain32.tobytes())
     for k in sorted(meta):
         h.update(np.ascontiguousarray(meta[k]).astype(str if k == "fault" else meta[k].dtype)
                  .tobytes())
     attrs = {"config": cfg, "seed": int(cfg["seed"]), "shard": shard.name,
              "content_sha256": h.hexdigest(), "package_version": _version(),
-             "git_revision": _git_revision(), "sample_rate_hz": settings.sample_rate_hz}
+             "git_revision": _git_revision(), "sample_rate_hz": fs}
     return dsio.make_dataset(strain32, time_s, meta, attrs), order.size
+
+
+def fine_motion(res: dynamics.SimResult, q: int,
+                rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """WG angle and output torque of some simulated variants on a q times finer grid.
+
+    The dynamics are integrated at the data rate; the gauge signals of an amplifier model
+    need ``q`` samples per sample. ψ is interpolated by cubic Hermite polynomials with its
+    derivative ω_in − ω_out (a state), the output torque by a cubic spline; both are
+    smooth on the scale of the sample rate (the torsional resonance lies near 0.2-0.5 kHz).
+
+    Parameters
+    ----------
+    res : SimResult
+        n_rec samples per variant at the data rate.
+    q : int
+        Fine samples per sample, >= 1.
+    rows : ndarray of int, shape (U,)
+        Variants to return.
+
+    Returns
+    -------
+    psi, t_out : ndarray, shape (U, q (n_rec − 1)) or (U, n_rec) if q == 1
+        [rad], [N m] at times k / (q fs), k = 0, 1, ...
+    """
+    psi, t_out = res.psi[rows], res.t_out[rows]
+    if q == 1:
+        return psi, t_out
+    from scipy.interpolate import CubicHermiteSpline, CubicSpline
+
+    t = res.time
+    tf = np.arange(q * (t.size - 1)) * (t[1] - t[0]) / q
+    dpsi = res.states[1][rows] - res.states[3][rows]
+    return (CubicHermiteSpline(t, psi, dpsi, axis=1)(tf),
+            CubicSpline(t, t_out, axis=1)(tf))
 
 
 def _version() -> str:
@@ -360,6 +472,24 @@ def _git_revision() -> str:
         return out.stdout.strip() or "unknown"
     except Exception:  # noqa: BLE001 - no git
         return "unknown"
+
+
+def _warm() -> None:
+    """Import the simulation stack in a worker (runs while the parent factorises)."""
+    import h5netcdf  # noqa: F401
+    import xarray  # noqa: F401
+
+    import swgsim.generate  # noqa: F401
+
+
+def _start_workers(n: int):
+    """loky's reusable process pool with ``n`` workers, already importing their modules."""
+    from joblib.externals.loky import get_reusable_executor
+
+    pool = get_reusable_executor(max_workers=n)
+    for _ in range(n):
+        pool.submit(_warm)
+    return pool
 
 
 def run_shard(cfg: dict, shard: ShardSpec, out_dir: str | os.PathLike,
@@ -493,20 +623,30 @@ def generate(cfg: dict, out_dir: str | os.PathLike, n_jobs: int = 1, overwrite: 
         log.info("resuming: %d shard(s) already done, skipped", len(skipped))
     from tqdm.auto import tqdm
 
-    infl = gear_influences(cfg, todo) if todo else {}
+    n_workers = min(int(n_jobs), len(todo))
+    pool = _start_workers(n_workers) if n_workers > 1 else None
     bar = tqdm(total=len(todo), desc=f"generate {cfg.get('name', '')}", unit="shard",
                disable=not progress or not todo)
-    if int(n_jobs) == 1 or len(todo) <= 1:
-        for s in todo:
-            run_shard(cfg, s, out, infl[s.gear])
-            bar.update()
-    else:
-        from joblib import Parallel, delayed
+    try:
+        # the parent factorises the truss while the workers start and import
+        infl = gear_influences(cfg, todo) if todo else {}
+        if pool is None:
+            for s in todo:
+                run_shard(cfg, s, out, infl[s.gear])
+                bar.update()
+        else:
+            from concurrent.futures import as_completed
 
-        par = Parallel(n_jobs=min(int(n_jobs), len(todo)), return_as="generator_unordered")
-        for _ in par(delayed(run_shard)(cfg, s, out, infl[s.gear]) for s in todo):
-            bar.update()
-    bar.close()
+            futures = [pool.submit(run_shard, cfg, s, out, infl[s.gear]) for s in todo]
+            for f in as_completed(futures):
+                f.result()
+                bar.update()
+    except BaseException:
+        if pool is not None:  # stop the workers now (error, Ctrl-C or SIGTERM)
+            pool.shutdown(wait=False, kill_workers=True)
+        raise
+    finally:
+        bar.close()
     complete = all(shard_done(out, s, chash) for s in shards)
     summary: dict[str, Any] = {"out_dir": str(out), "computed": [s.name for s in todo],
                                "skipped": skipped, "complete": complete}

@@ -291,3 +291,83 @@ def torque_influence_exact(psi: np.ndarray, g: np.ndarray, theta: np.ndarray, c:
          + (2 - sa) * contact_window(theta[None, :] - psi[:, None] - np.pi, half_width_rad))
     w = w * c[None, :]
     return ((w @ g.T) / w.sum(axis=1)[:, None]).T
+
+
+@dataclass(frozen=True)
+class ZoneTable:
+    """One mesh zone's weighted sums tabulated on a uniform grid of the WG angle ψ.
+
+    ``values[m]`` holds Σ_i w(θ_i − ψ_m) c_i g_i (five signals) and Σ_i w(θ_i − ψ_m) c_i
+    at ψ_m = 2π m / M; row M repeats row 0 (periodic). The zone at ψ + π reads the same
+    table at ψ + π, so :meth:`torque_influence` returns h(ψ) of :func:`torque_influence`
+    by linear interpolation. Build with :func:`zone_table`.
+
+    Attributes
+    ----------
+    values : ndarray, shape (M + 1, 6)
+    """
+
+    values: np.ndarray
+
+    def torque_influence(self, psi: np.ndarray, share_a: np.ndarray | float = 1.0) -> np.ndarray:
+        """h(ψ) by table look-up; same arguments and result as :func:`torque_influence`.
+
+        Parameters
+        ----------
+        psi : ndarray, shape (n_t,)
+            WG angle relative to the flexspline [rad].
+        share_a : float or ndarray, shape (n_t,)
+            Load factor of the zone at ψ; the zone at ψ + π carries 2 − share_a.
+
+        Returns
+        -------
+        ndarray, shape (5, n_t)
+        """
+        m = self.values.shape[0] - 1
+        scale = m / (2 * np.pi)
+        sa = np.broadcast_to(np.asarray(share_a, float), psi.shape)[:, None]
+        acc = None
+        for centre, share in ((psi, sa), (psi + np.pi, 2.0 - sa)):
+            u = np.mod(centre, 2 * np.pi) * scale
+            i = np.minimum(u.astype(np.int64), m - 1)
+            f = (u - i)[:, None]
+            z = (self.values[i] * (1.0 - f) + self.values[i + 1] * f) * share  # (n_t, 6)
+            acc = z if acc is None else acc + z
+        return (acc[:, :5] / acc[:, 5:]).T
+
+
+#: Grid points per node spacing of :func:`zone_table`.
+TABLE_SUBDIVISIONS = 64
+
+
+def zone_table(g: np.ndarray, theta: np.ndarray, c: np.ndarray, half_width_rad: float,
+               subdivisions: int = TABLE_SUBDIVISIONS) -> ZoneTable:
+    """Tabulate one zone's sums for :meth:`ZoneTable.torque_influence`.
+
+    Parameters
+    ----------
+    g : ndarray, shape (5, n_theta)
+        Signal per unit torque carried at each node angle [mV/V / N m].
+    theta : ndarray, shape (n_theta,)
+        Node angles, uniformly spaced from 0 [rad].
+    c : ndarray, shape (n_theta,)
+        Tooth-force factors.
+    half_width_rad : float
+        Half-width of a mesh zone [rad].
+    subdivisions : int, default 64
+        Grid points per node spacing; linear interpolation then reproduces
+        :func:`torque_influence` to about 5e-8 of the signal range (1e-8 at 128), tested.
+
+    Returns
+    -------
+    ZoneTable
+    """
+    m = theta.size * int(subdivisions)
+    grid = 2 * np.pi * np.arange(m) / m
+    n = theta.size
+    dth = 2 * np.pi / n
+    k = int(np.ceil(half_width_rad / dth)) + 1
+    idx = (np.round(grid / dth).astype(np.int64)[:, None] + np.arange(-k, k + 1)) % n  # (M, 2K+1)
+    w = contact_window(theta[idx] - grid[:, None], half_width_rad) * c[idx]  # (M, 2K+1)
+    vals = np.column_stack([(w[None] * g[:, idx]).sum(axis=-1).T, w.sum(axis=1)])  # (M, 6)
+    return ZoneTable(np.vstack([vals, vals[:1]]))

@@ -11,17 +11,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from omegaconf import OmegaConf
 
-from swgcli import CONF_DIR
+from swgcli import CONF_DIR, dataset_preset
 from swgsim import data as dsio
 from swgsim import generate as gen
 from swgsim.calibration.chain import friction_effects_from_config
 
 
 def tiny_cfg(**chain):
-    cfg = yaml.safe_load(open(Path(CONF_DIR) / "dataset" / "tiny.yaml"))
+    cfg = dataset_preset("tiny")
     cfg["variants"] = {
         "healthy": {"severities": [0.0], "repeat": 2},
         "eccentric_wg": {"severities": [0.1], "n_positions": 2},
@@ -35,8 +34,7 @@ def tiny_cfg(**chain):
 
 
 def test_paper_preset_yaml_matches_python():
-    cfg = yaml.safe_load(open(Path(CONF_DIR) / "dataset" / "paper.yaml"))
-    assert cfg == json.loads(json.dumps(gen.PAPER))
+    assert dataset_preset("paper") == json.loads(json.dumps(gen.PAPER))
 
 
 def test_paper_grid_counts():
@@ -181,7 +179,7 @@ def test_submitit_local_launcher_one_job_per_shard(tmp_path):
     assert r.returncode == 0, r.stderr[-3000:]
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["complete"] and len(manifest["shards"]) == 3
-    cfg = yaml.safe_load(open(Path(CONF_DIR) / "dataset" / "tiny.yaml"))
+    cfg = dataset_preset("tiny")
     cfg["chain"]["window_s"] = 0.02
     cfg["operating_points"]["t_out_nm"] = [39.0]
     s = gen.generate(cfg, tmp_path / "local", n_jobs=1, progress=False)
