@@ -395,3 +395,36 @@ def extract_features(
     meta["disturbed"] = meta["disturbed"].astype(bool)
     log.info("selection %d: %d windows x %d features", sel, X.shape[0], X.shape[1])
     return Features(X, names, meta)
+
+
+def feature_spread(feats: Features) -> pd.DataFrame:
+    """Spread of every feature per class, and how far each class lies from healthy.
+
+    Parameters
+    ----------
+    feats : Features
+        Output of :func:`extract_features`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (fault, feature), over the class's clean (undisturbed) windows of
+        every gear and operating point: ``fault``, ``feature``, ``median``, ``std``,
+        ``shift`` (median over the windows of |x − median of the healthy windows|) and
+        ``n`` (windows). A healthy ``std`` of 0 means every healthy window has the same
+        value (phase-locked, noise-free windows). Empty without healthy windows.
+    """
+    clean = ~feats.meta["disturbed"].to_numpy(bool)
+    fault = feats.meta["fault"].to_numpy().astype(str)
+    healthy = feats.X[clean & (fault == "healthy")]
+    if len(healthy) == 0:
+        return pd.DataFrame(columns=["fault", "feature", "median", "std", "shift", "n"])
+    ref = np.median(healthy, axis=0)
+    rows = []
+    for f in np.unique(fault[clean]):
+        x = feats.X[clean & (fault == f)]  # (n, F)
+        med, std = np.median(x, axis=0), x.std(axis=0)
+        shift = np.median(np.abs(x - ref), axis=0)
+        rows += [(f, name, float(m), float(s), float(d), len(x))
+                 for name, m, s, d in zip(feats.names, med, std, shift, strict=True)]
+    return pd.DataFrame(rows, columns=["fault", "feature", "median", "std", "shift", "n"])

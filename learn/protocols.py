@@ -29,11 +29,11 @@ import numpy as np
 import pandas as pd
 from sklearn.base import clone
 from sklearn.metrics import confusion_matrix
-from sklearn.model_selection import StratifiedGroupKFold
+from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
 
 log = logging.getLogger(__name__)
 
-SCHEMES = ("group_kfold", "leave_one_gear")
+SCHEMES = ("group_kfold", "kfold", "leave_one_gear")
 #: The paper's protocols: keyword arguments of :func:`make_splits`.
 PROTOCOLS: dict[str, dict] = {
     "cv_clean": {"scheme": "group_kfold", "disturbed": False, "n_splits": 4},
@@ -124,9 +124,10 @@ def make_splits(
     meta : pandas.DataFrame
         Per-sample metadata with columns ``gear``, ``fault``, ``variant``, ``disturbed``
         (e.g. :attr:`learn.features.Features.meta`); no reference windows.
-    scheme : {"group_kfold", "leave_one_gear"}
-        Stratified group k-fold with groups ``(gear, fault, variant)``, or leave one gear
-        out.
+    scheme : {"group_kfold", "kfold", "leave_one_gear"}
+        Stratified group k-fold with groups ``(gear, fault, variant)``, stratified k-fold
+        over windows (a variant's operating points may straddle training and test), or
+        leave one gear out.
     disturbed : bool
         Use only the disturbed (True) or only the clean (False) windows.
     n_splits : int, default 4
@@ -168,6 +169,14 @@ def make_splits(
         return [
             Split(f"fold{i}", f"fold {i + 1}/{n_splits}", rows[tr], rows[te])
             for i, (tr, te) in enumerate(cv.split(np.zeros(len(sub)), y, groups))
+        ]
+    if scheme == "kfold":
+        y = sub["fault"].astype(str).to_numpy()
+        cv = StratifiedKFold(n_splits=n_splits, shuffle=random_state is not None,
+                             random_state=random_state)
+        return [
+            Split(f"fold{i}", f"fold {i + 1}/{n_splits}", rows[tr], rows[te])
+            for i, (tr, te) in enumerate(cv.split(np.zeros(len(sub)), y))
         ]
     if scheme == "leave_one_gear":
         gear = sub["gear"].to_numpy()
@@ -212,7 +221,8 @@ def protocol_splits(meta: pd.DataFrame, protocol: str, random_state: int | None 
     return make_splits(meta, random_state=random_state, **PROTOCOLS[protocol])
 
 
-def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Sequence[str]):
+def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Sequence[str],
+              warnings_out: list | None = None):
     """Fit a fresh clone of ``estimator`` on one split's training rows and score it.
 
     Parameters
@@ -225,6 +235,10 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
     split : Split
     labels : sequence of str
         Class order of the confusion matrix.
+    warnings_out : list, optional
+        If given, the warnings raised by fit and predict are appended to it as
+        ``(category name, first line of the message)`` instead of being shown (so that a
+        caller, possibly in another process, can summarise them once).
 
     Returns
     -------
@@ -234,15 +248,36 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
     seconds : float
         Wall time of fit + predict [s].
     """
+    import warnings
+
     t0 = time.perf_counter()
-    est = clone(estimator)
-    est.fit(X[split.train], y[split.train])
-    pred_tr = est.predict(X[split.train])
-    pred_te = est.predict(X[split.test])
+    with warnings.catch_warnings(record=warnings_out is not None) as caught:
+        if warnings_out is not None:
+            warnings.simplefilter("always")
+        est = clone(estimator)
+        est.fit(X[split.train], y[split.train])
+        pred_tr = est.predict(X[split.train])
+        pred_te = est.predict(X[split.test])
+    if warnings_out is not None:
+        warnings_out.extend((w.category.__name__, str(w.message).splitlines()[0])
+                            for w in caught)
     train_acc = float(np.mean(pred_tr == y[split.train]))
     test_acc = float(np.mean(pred_te == y[split.test]))
     cm = confusion_matrix(y[split.test], pred_te, labels=list(labels))
     return train_acc, test_acc, cm, time.perf_counter() - t0
+
+
+def fit_split_quiet(estimator, X: np.ndarray, y: np.ndarray, split: Split,
+                    labels: Sequence[str]):
+    """:func:`fit_split` that returns its warnings instead of showing them.
+
+    Returns
+    -------
+    tuple
+        The four results of :func:`fit_split` and a list of ``(category, message)``.
+    """
+    caught: list = []
+    return (*fit_split(estimator, X, y, split, labels, caught), caught)
 
 
 def evaluate(

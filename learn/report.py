@@ -20,76 +20,10 @@ import pandas as pd
 
 from learn.baselines import MODEL_LABELS
 from learn.features import order_spectrum, reference_index
+from learn.paper_results import GEAR_SPLITS, PAPER_RESULTS, SPLIT_LABELS, TABLE_TITLES
 from swgsim.data import FAULT_CLASSES
 
 log = logging.getLogger(__name__)
-
-_SEL = ("selection1", "selection2", "selection3")
-_GEAR_SPLITS = ("gear3", "gear1", "gear2")  # paper's rows: 1,2 -> 3; 2,3 -> 1; 1,3 -> 2
-_SPLIT_LABELS = {"gear3": "1,2 → 3", "gear1": "2,3 → 1", "gear2": "1,3 → 2"}
-
-
-def _cv(values: dict[str, tuple[float, float]]) -> dict[str, dict[str, float]]:
-    return {m: {"train": tr, "test": te} for m, (tr, te) in values.items()}
-
-
-def _ood(models: tuple[str, ...], rows: dict[str, tuple[float, ...]]) -> dict:
-    return {split: dict(zip(models, vals, strict=True)) for split, vals in rows.items()}
-
-
-_M5 = ("mlp", "svm", "rf", "knn", "nb")
-_M4 = ("mlp", "rf", "knn", "nb")
-
-#: Scores of the paper [%], transcribed from its tables.
-#: Tables VII and VIII: avg. training and test score of 4-fold CV, per selection and model.
-#: Tables IX and X: score on the held-out gear, per selection, split (held-out gear) and
-#: model. Table VIII is ``None``: the paper's Table VIII has no numbers in our source
-#: (its text quotes some: best KNN test score about 80 % and NB 73.72 % on Selection 1,
-#: SVM at most about 47 %).
-PAPER_RESULTS: dict[str, dict | None] = {
-    # Table VII: score on training and test set for different selections (cv_clean)
-    "VII": {
-        "selection1": _cv({"mlp": (84.17, 83.33), "svm": (49.77, 49.60), "rf": (99.92, 99.81),
-                           "knn": (98.91, 97.95), "nb": (92.64, 92.59)}),
-        "selection2": _cv({"mlp": (82.47, 81.10), "svm": (35.60, 35.49), "rf": (99.56, 99.24),
-                           "knn": (98.62, 97.21), "nb": (79.96, 79.89)}),
-        "selection3": _cv({"mlp": (99.09, 98.30), "svm": (83.51, 66.10), "rf": (98.21, 96.96),
-                           "knn": (97.92, 94.48), "nb": (79.49, 79.43)}),
-    },
-    # Table VIII: score on training and test set for disturbed data: numbers missing
-    "VIII": None,
-    # Table IX: avg. score in per cent on out-of-distribution classification (ood_clean)
-    "IX": {
-        "selection1": _ood(_M5, {"gear3": (70.74, 44.44, 92.50, 90.14, 91.99),
-                                 "gear1": (75.83, 48.15, 99.91, 87.82, 92.69),
-                                 "gear2": (75.37, 43.84, 93.56, 86.30, 86.16)}),
-        "selection2": _ood(_M5, {"gear3": (61.16, 31.99, 59.54, 87.36, 76.30),
-                                 "gear1": (59.54, 30.32, 90.93, 80.88, 79.91),
-                                 "gear2": (58.98, 30.65, 61.76, 83.33, 67.92)}),
-        "selection3": _ood(_M5, {"gear3": (79.81, 40.93, 82.82, 77.08, 77.73),
-                                 "gear1": (81.62, 48.75, 77.82, 65.97, 60.28),
-                                 "gear2": (74.21, 47.92, 85.79, 83.15, 67.55)}),
-    },
-    # Table X: out-of-distribution classification on disturbed data (ood_disturbed)
-    "X": {
-        "selection1": _ood(_M4, {"gear3": (51.25, 87.59, 70.93, 66.85),
-                                 "gear1": (53.70, 85.69, 71.67, 65.00),
-                                 "gear2": (61.30, 79.03, 65.65, 73.84)}),
-        "selection3": _ood(_M4, {"gear3": (72.08, 90.09, 56.99, 53.94),
-                                 "gear1": (82.92, 86.20, 47.31, 56.39),
-                                 "gear2": (82.87, 92.31, 50.32, 74.26)}),
-    },
-}
-
-TABLE_TITLES = {
-    "VII": ("Score on training and test set for different selections", "cv_clean", _M5, _SEL),
-    "VIII": ("Score on training and test set for disturbed data", "cv_disturbed", _M5, _SEL),
-    "IX": ("Avg. score in per cent on out-of-distribution classification", "ood_clean", _M5,
-           _SEL),
-    "X": ("Avg. score in per cent on out-of-distribution classification on disturbed data "
-          "for four selected classifiers", "ood_disturbed", _M4, ("selection1", "selection3")),
-}
-
 
 def _cell(ours: float | None, paper: float | None) -> str:
     o = "–" if ours is None or not np.isfinite(ours) else f"{ours:.2f}"
@@ -123,14 +57,14 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
                     cells.append(_cell(ours, ref))
                 lines.append(f"| {label} | " + " | ".join(cells) + " |")
         else:
-            for split in _GEAR_SPLITS:
+            for split in GEAR_SPLITS:
                 cells = []
                 for m in models:
                     v = rs.loc[(rs["model"] == m) & (rs["split"] == split), "test_accuracy"]
                     ours = 100 * float(v.mean()) if len(v) else None
                     ref = paper[sel][split][m] if paper and sel in paper else None
                     cells.append(_cell(ours, ref))
-                lines.append(f"| {_SPLIT_LABELS[split]} | " + " | ".join(cells) + " |")
+                lines.append(f"| {SPLIT_LABELS[split]} | " + " | ".join(cells) + " |")
     return [*lines, ""]
 
 
@@ -165,7 +99,7 @@ def write_tables(
     if dataset_path:
         lines += [f"Data set: `{dataset_path}`.", ""]
     lines += ["Each cell reads *ours (paper)* in per cent; the paper's numbers are "
-              "`learn.report.PAPER_RESULTS`, transcribed from its Tables VII, IX and X. "
+              "`learn.paper_results.PAPER_RESULTS`, transcribed from its Tables VII, IX and X. "
               "CV tables: mean over 4 folds whose groups are (gear, fault, variant); "
               "out-of-distribution tables: test score on the held-out gear.", ""]
     for name in TABLE_TITLES:
@@ -333,6 +267,7 @@ def write_report(
     ds=None,
     timings_s: Mapping[str, float] | None = None,
     dataset_path: str | None = None,
+    confusion: pd.DataFrame | None = None,
 ) -> dict[str, Path]:
     """Write the study's report: tables (markdown), all results (CSV), figures.
 
@@ -347,11 +282,15 @@ def write_report(
     timings_s : mapping, optional
         Wall time per step [s].
     dataset_path : str, optional
+    confusion : pandas.DataFrame, optional
+        Test confusion counts (table, protocol, selection, model, true, predicted, count),
+        written to ``confusion.csv``.
 
     Returns
     -------
     dict of str to Path
-        ``tables`` (tables_vii_x.md), ``csv`` (results.csv) and the figures.
+        ``tables`` (tables_vii_x.md), ``csv`` (results.csv), ``confusion``
+        (confusion.csv, if given) and the figures.
     """
     report_dir = Path(report_dir)
     report_dir.mkdir(parents=True, exist_ok=True)
@@ -359,6 +298,9 @@ def write_report(
                                     dataset_path)}
     files["csv"] = report_dir / "results.csv"
     results.to_csv(files["csv"], index=False)
+    if confusion is not None:
+        files["confusion"] = report_dir / "confusion.csv"
+        confusion.to_csv(files["confusion"], index=False)
     if ds is not None:
         files.update(write_figures(ds, report_dir))
     log.info("report written to %s", report_dir)

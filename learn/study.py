@@ -28,9 +28,7 @@ from learn.protocols import (
     ProtocolResult,
     class_labels,
     evaluate,
-    fit_split,
     make_splits,
-    protocol_splits,
 )
 
 log = logging.getLogger(__name__)
@@ -202,11 +200,13 @@ def run_paper_study(
     random_state: int = 0,
     tables: Sequence[str] | None = None,
     models: Sequence[str] | None = None,
-    scale: bool = True,
+    scale: bool = False,
     track: bool = True,
     experiment_prefix: str = "paper_study/",
     feature_kwargs: Mapping[str, Any] | None = None,
     figures: bool = True,
+    name: str = "",
+    protocol_kwargs: Mapping[str, Mapping[str, Any]] | None = None,
 ) -> dict:
     """Run the paper's study, Tables VII-X, and write its report.
 
@@ -228,17 +228,18 @@ def run_paper_study(
     tracking_uri : str, optional
         MLflow tracking URI; default :func:`learn.tracking.default_tracking_uri`.
     n_jobs : int, default 1
-        Fits run in parallel (joblib processes), over every (job, split) of a table.
+        Fits run in parallel (joblib processes), over every (job, split) of every table.
     progress : bool, default True
-        Show a tqdm progress bar over fits.
+        Show one tqdm progress bar for the stage (loading, features, fits).
     random_state : int, default 0
         Seed of the CV folds and of MLP, SVM and RF.
     tables : sequence of {"VII", "VIII", "IX", "X"}, optional
         Subset of tables; default all.
     models : sequence of str, optional
         Restrict every table to these models (e.g. for a quick run); default the paper's.
-    scale : bool, default True
-        Standardise features in every pipeline (see :mod:`learn.baselines`).
+    scale : bool, default False
+        Standardise features in every pipeline (see :mod:`learn.baselines`); the paper
+        names scikit-learn's standard settings and no scaling.
     track : bool, default True
         Log one MLflow run per job, in experiment ``experiment_prefix + protocol``.
     experiment_prefix : str, default "paper_study/"
@@ -246,23 +247,37 @@ def run_paper_study(
         ``orders`` and ``floor_rel`` of :func:`learn.features.extract_features`.
     figures : bool, default True
         Also draw the paper's Fig. 6-8 from the data set.
+    name : str, optional
+        Name of the data set (protocol) for the progress bar.
+    protocol_kwargs : mapping, optional
+        Per protocol name, keyword arguments of :func:`learn.protocols.make_splits` that
+        replace the paper's (:data:`learn.protocols.PROTOCOLS`), e.g.
+        ``{"cv_clean": {"scheme": "kfold"}}`` (sensitivity studies).
 
     Returns
     -------
     dict
         ``results`` (pandas.DataFrame, one row per job and split: table, protocol,
         selection, model, split, split_label, train_accuracy, test_accuracy, fit_time_s,
-        n_train, n_test, run_id), ``timings_s`` (features and each table [s]),
-        ``files`` (report files by kind), ``n_jobs_run`` (number of jobs).
+        n_train, n_test, run_id), ``confusion`` (pandas.DataFrame: table, protocol,
+        selection, model, true, predicted, count; summed over splits), ``spread``
+        (:func:`learn.features.feature_spread` of Selections 1 and 3 where computed),
+        ``warnings`` (list of dicts category, message, count: what the fits raised),
+        ``timings_s`` (features and each table [s]), ``files`` (report files by kind),
+        ``n_jobs_run`` (number of jobs).
 
     Raises
     ------
     ValueError
         For an unknown table or model.
     """
+    from collections import Counter
+
     from joblib import Parallel, delayed
     from tqdm.auto import tqdm
 
+    from learn.features import feature_spread
+    from learn.protocols import fit_split_quiet
     from learn.report import write_report
     from swgsim.data import load
 
@@ -277,12 +292,6 @@ def run_paper_study(
     timings: dict[str, float] = {}
 
     t0 = time.perf_counter()
-    ds = load(dataset_path)
-    selections = sorted({s for t in tables for s in PAPER_TABLES[t]["selections"]})
-    feats = {s: extract_features(ds, s, **dict(feature_kwargs or {})) for s in selections}
-    timings["features"] = time.perf_counter() - t0
-    log.info("features of selections %s in %.1f s", selections, timings["features"])
-
     jobs = []  # (table, protocol, selection, model)
     for t in tables:
         spec = PAPER_TABLES[t]
@@ -290,65 +299,88 @@ def run_paper_study(
             for m in spec["models"]:
                 if models is None or m in models:
                     jobs.append((t, spec["protocol"], s, m))
-    n_fits = 0
+    selections = sorted({s for t in tables for s in PAPER_TABLES[t]["selections"]})
+    n_fits = sum(len(PROTOCOLS[p]["test_gears"]) if "test_gears" in PROTOCOLS[p]
+                 else PROTOCOLS[p]["n_splits"] for _, p, _, _ in jobs)
+    # one bar for the stage: loading, each selection's features, then every fit
+    bar = tqdm(total=1 + len(selections) + n_fits, desc=f"study {name}".strip(),
+               unit="step", disable=not progress)
+    ds = load(dataset_path)
+    bar.update()
+    feats = {}
+    for s in selections:
+        feats[s] = extract_features(ds, s, **dict(feature_kwargs or {}))
+        bar.update()
+    timings["features"] = time.perf_counter() - t0
+    log.info("features of selections %s in %.1f s", selections, timings["features"])
+
     splits_of: dict[tuple[str, int], list] = {}
     for _, p, s, _ in jobs:
         if (p, s) not in splits_of:
-            splits_of[(p, s)] = protocol_splits(feats[s].meta, p, random_state=random_state)
-        n_fits += len(splits_of[(p, s)])
+            kw = {**PROTOCOLS[p], **dict((protocol_kwargs or {}).get(p, {}))}
+            splits_of[(p, s)] = make_splits(feats[s].meta, random_state=random_state, **kw)
+    tasks = []  # one fit per (job, split), all tables in one stream
+    for _, p, s, m in jobs:
+        y = feats[s].meta["fault"].to_numpy()
+        est = make_model(m, random_state=random_state, scale=scale)
+        for sp in splits_of[(p, s)]:
+            tasks.append(delayed(fit_split_quiet)(est, feats[s].X, y, sp, class_labels(y)))
 
-    rows = []
-    bar = tqdm(total=n_fits, desc="paper study", unit="fit", disable=not progress)
-    with Parallel(n_jobs=n_jobs, return_as="generator") as parallel:
-        for t in tables:
-            t_start = time.perf_counter()
-            tjobs = [j for j in jobs if j[0] == t]
-            bar.set_description(f"Table {t}")
-            tasks = []
-            for _, p, s, m in tjobs:
-                y = feats[s].meta["fault"].to_numpy()
-                labels = class_labels(y)
-                est = make_model(m, random_state=random_state, scale=scale)
-                for sp in splits_of[(p, s)]:
-                    tasks.append(delayed(fit_split)(est, feats[s].X, y, sp, labels))
-            outs = []
-            for o in parallel(tasks):
-                outs.append(o)
-                bar.update(1)
-            k = 0
-            for _, p, s, m in tjobs:
-                splits = splits_of[(p, s)]
-                part = outs[k:k + len(splits)]
-                k += len(splits)
-                y = feats[s].meta["fault"].to_numpy()
-                result = ProtocolResult(
-                    splits=splits,
-                    train_accuracy=np.array([o[0] for o in part]),
-                    test_accuracy=np.array([o[1] for o in part]),
-                    confusion=np.sum([o[2] for o in part], axis=0),
-                    labels=class_labels(y),
-                    fit_time_s=np.array([o[3] for o in part]),
-                )
-                run_id = None
-                if track:
-                    run_id = _log_study_job(result, t, p, s, m, dataset_path, random_state,
-                                            scale, tracking_uri, experiment_prefix)
-                for i, sp in enumerate(splits):
-                    rows.append({
-                        "table": t, "protocol": p, "selection": f"selection{s}", "model": m,
-                        "split": sp.name, "split_label": sp.label,
-                        "train_accuracy": result.train_accuracy[i],
-                        "test_accuracy": result.test_accuracy[i],
-                        "fit_time_s": result.fit_time_s[i],
-                        "n_train": len(sp.train), "n_test": len(sp.test), "run_id": run_id,
-                    })
-            timings[t] = time.perf_counter() - t_start
-            log.info("Table %s: %d jobs in %.1f s", t, len(tjobs), timings[t])
+    rows, confusion = [], []
+    caught: Counter = Counter()
+    bar.total = 1 + len(selections) + len(tasks)  # the protocols may change split counts
+    bar.refresh()
+    t_table = time.perf_counter()
+    outs = Parallel(n_jobs=n_jobs, return_as="generator")(tasks)
+    for t, p, s, m in jobs:  # results arrive in order; log each job while fits go on
+        splits = splits_of[(p, s)]
+        part = [next(outs) for _ in splits]
+        bar.update(len(part))
+        for o in part:
+            caught.update(o[4])
+        y = feats[s].meta["fault"].to_numpy()
+        labels = class_labels(y)
+        result = ProtocolResult(
+            splits=splits,
+            train_accuracy=np.array([o[0] for o in part]),
+            test_accuracy=np.array([o[1] for o in part]),
+            confusion=np.sum([o[2] for o in part], axis=0),
+            labels=labels,
+            fit_time_s=np.array([o[3] for o in part]),
+        )
+        run_id = None
+        if track:
+            run_id = _log_study_job(result, t, p, s, m, dataset_path, random_state,
+                                    scale, tracking_uri, experiment_prefix)
+        for i, sp in enumerate(splits):
+            rows.append({
+                "table": t, "protocol": p, "selection": f"selection{s}", "model": m,
+                "split": sp.name, "split_label": sp.label,
+                "train_accuracy": result.train_accuracy[i],
+                "test_accuracy": result.test_accuracy[i],
+                "fit_time_s": result.fit_time_s[i],
+                "n_train": len(sp.train), "n_test": len(sp.test), "run_id": run_id,
+            })
+        for a, true in enumerate(labels):
+            for b, pred in enumerate(labels):
+                confusion.append((t, p, f"selection{s}", m, true, pred,
+                                  int(result.confusion[a, b])))
+        if (t, p, s, m) == [j for j in jobs if j[0] == t][-1]:
+            timings[t] = time.perf_counter() - t_table
+            t_table = time.perf_counter()
+            log.info("Table %s done in %.1f s", t, timings[t])
     bar.close()
     results = pd.DataFrame(rows)
+    confusion_df = pd.DataFrame(confusion, columns=["table", "protocol", "selection", "model",
+                                                    "true", "predicted", "count"])
+    spread = pd.concat([feature_spread(feats[s]).assign(selection=f"selection{s}")
+                        for s in (1, 3) if s in feats], ignore_index=True) \
+        if any(s in feats for s in (1, 3)) else pd.DataFrame()
+    warn = [{"category": c, "message": msg, "count": n} for (c, msg), n in caught.items()]
     files = write_report(results, report_dir, ds=ds if figures else None, timings_s=timings,
-                         dataset_path=str(dataset_path))
-    return {"results": results, "timings_s": timings, "files": files, "n_jobs_run": len(jobs)}
+                         dataset_path=str(dataset_path), confusion=confusion_df)
+    return {"results": results, "confusion": confusion_df, "spread": spread,
+            "warnings": warn, "timings_s": timings, "files": files, "n_jobs_run": len(jobs)}
 
 
 def _log_study_job(result, table, protocol, selection, model, dataset_path, random_state,

@@ -83,6 +83,17 @@ def _artifact_location(tracking_uri: str, experiment: str) -> str | None:
     return (db.resolve().parent / "mlruns" / safe).as_uri()
 
 
+def quiet_mlflow() -> None:
+    """Keep MLflow's own INFO messages (database set-up, migrations) off the console.
+
+    MLflow logs through its logger ``mlflow`` with a handler of its own; its warnings and
+    errors still show.
+    """
+    lg = logging.getLogger("mlflow")
+    if lg.getEffectiveLevel() < logging.WARNING:
+        lg.setLevel(logging.WARNING)
+
+
 def get_experiment_id(client, experiment: str) -> str:
     """Id of MLflow experiment ``experiment``, created if absent.
 
@@ -189,6 +200,7 @@ def log_job(
     import mlflow
     from mlflow.entities import Metric, Param, RunTag
 
+    quiet_mlflow()
     client = mlflow.MlflowClient(tracking_uri or default_tracking_uri())
     exp_id = get_experiment_id(client, experiment)
     run = client.create_run(exp_id, run_name=run_name, tags=dict(tags or {}))

@@ -718,7 +718,7 @@ def _model_rank(m: str) -> int:
 
 def _paper_rows(protocol: str, splits: Sequence[str]) -> list[str]:
     try:
-        from learn.report import PAPER_RESULTS
+        from learn.paper_results import PAPER_RESULTS
     except ImportError:  # pragma: no cover
         return []
     table = {"ood_clean": "IX", "ood_disturbed": "X"}[protocol]

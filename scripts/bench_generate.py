@@ -10,6 +10,7 @@ figures behind them.
 
     python scripts/bench_generate.py                 # the paper grid, 2 workers
     python scripts/bench_generate.py --dataset tiny --n-jobs 1
+    python scripts/bench_generate.py --profile       # + whole-process wall, stage breakdown
 """
 
 from __future__ import annotations
@@ -89,6 +90,9 @@ def main(argv: list[str] | None = None) -> dict:
                     help="windows timed with the naive solver (default 3)")
     ap.add_argument("--naive-steps", type=int, default=40,
                     help="time steps timed per naive window, extrapolated to the window")
+    ap.add_argument("--profile", action="store_true",
+                    help="also time swgsim-generate as a whole process and break one shard "
+                         "down by stage (cProfile)")
     args = ap.parse_args(argv)
 
     from swgcli import dataset_preset
@@ -146,9 +150,12 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"naive reference: {naive_s:.2f} s per window ({n_t} steps, timed on {k} steps of "
           f"{len(cases)} windows); fast path {fast_s * 1e3:.2f} ms per window (everything "
           f"included); speed-up {speedup:.0f}x; max relative difference {max_err:.1e}")
+    extra = {}
+    if args.profile:
+        extra = profile(args.dataset, cfg, args.n_jobs, out.parent / "whole")
     if tmp is not None:
         shutil.rmtree(tmp, ignore_errors=True)
-    result = {"windows": windows, "wall_s": round(wall, 2),
+    result = {**extra, "windows": windows, "wall_s": round(wall, 2),
               "windows_per_s": round(windows / wall, 1), "peak_rss_mib": round(rss, 1),
               "speedup_vs_naive": round(speedup, 1), "naive_s_per_window": round(naive_s, 3),
               "fast_ms_per_window": round(fast_s * 1e3, 3), "n_jobs": args.n_jobs,
@@ -156,6 +163,65 @@ def main(argv: list[str] | None = None) -> dict:
               "dynamics_included_in_naive": False}
     print(json.dumps(result))
     return result
+
+
+#: Stages of one shard: (label, module file, function) timed cumulatively by cProfile.
+STAGES = (
+    ("dynamics (RK4, distinct motions)", "dynamics.py", "simulate"),
+    ("fine grid (acquisition only)", "generate.py", "fine_motion"),
+    ("gauge signals (distinct windows)", "chain.py", "signals_batch"),
+    ("amplifier: filter, noise, ADC", "acquisition.py", "acquire"),
+    ("eq. (10) disturbance", "disturbance.py", "disturb"),
+    ("xarray data set", "data.py", "make_dataset"),
+    ("NetCDF write + SHA-256", "data.py", "write_shard"),
+)
+
+
+def profile(dataset: str, cfg: dict, n_jobs: int, out: Path) -> dict:
+    """Whole-process wall time of ``swgsim-generate`` and a stage breakdown of one shard.
+
+    Returns
+    -------
+    dict
+        ``process_wall_s`` and ``shard_stages_s`` (stage -> seconds for shard 0, plus
+        ``influences (parent, all gears)`` and ``other``).
+    """
+    import cProfile
+    import pstats
+    import subprocess
+
+    from swgsim import data as dsio
+    from swgsim.generate import gear_influences, plan, simulate_shard
+
+    exe = Path(sys.executable).parent / "swgsim-generate"
+    t0 = time.perf_counter()
+    subprocess.run([str(exe), f"dataset={dataset}", f"out_dir={out}", f"n_jobs={n_jobs}",
+                    "progress=false"], check=True, capture_output=True)
+    wall = time.perf_counter() - t0
+    shutil.rmtree(out, ignore_errors=True)
+    shards = plan(cfg)
+    t0 = time.perf_counter()
+    infl = gear_influences(cfg, shards)
+    t_infl = time.perf_counter() - t0
+    simulate_shard(cfg, shards[-1], infl[shards[-1].gear])  # warm: lazy imports, caches
+    pr = cProfile.Profile()
+    t0 = time.perf_counter()
+    pr.enable()
+    ds, _ = simulate_shard(cfg, shards[0], infl[shards[0].gear])
+    dsio.write_shard(ds, out.parent / "profile_shard.nc")
+    pr.disable()
+    total = time.perf_counter() - t0
+    st = pstats.Stats(pr).stats
+    stages = {"influences (parent, all gears)": round(t_infl, 3)}
+    for label, fname, func in STAGES:
+        ct = sum(v[3] for k, v in st.items() if k[0].endswith(fname) and k[2] == func)
+        stages[label] = round(ct, 3)
+    stages["other"] = round(total - sum(v for k, v in stages.items() if "parent" not in k), 3)
+    print(f"swgsim-generate dataset={dataset} as a whole process: {wall:.1f} s wall")
+    print(f"one shard ({shards[0].name}, {2 * len(shards[0].windows)} windows) by stage:")
+    for k, v in stages.items():
+        print(f"  {k:<34s} {v:7.3f} s")
+    return {"process_wall_s": round(wall, 2), "shard_stages_s": stages}
 
 
 if __name__ == "__main__":

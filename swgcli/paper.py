@@ -1,10 +1,14 @@
-"""swgsim-paper: the main job — the paper's data sets and its whole study, end to end.
+"""swgsim-paper: the main job — the paper's study under two data-set protocols, end to end.
 
-Stages: (1) generate ``data_dir`` (shards already there and valid are skipped; a data
-set of another config there is replaced),
-(2) the study of Tables VII-X (:func:`learn.study.run_paper_study`), every job logged to
-MLflow, (3) the report in ``report_dir``. Prints where it wrote and how long each stage
-took. Config: ``conf/paper.yaml``.
+For each protocol in ``protocols`` (default: the paper's phase-locked, noise-free windows
+and a real bench's): (1) generate ``<data_root>/<protocol>`` (shards already there and
+valid are skipped; a data set of another config there is replaced only if the folder
+holds nothing else), (2) the study of Tables VII-X (:func:`learn.study.run_paper_study`),
+every job logged to MLflow, with its report in ``<report_root>/<protocol>``; then (3) the
+summary side by side with the paper and the reproduction scorecard
+(:func:`learn.summary.write_summary`). One progress bar per stage; the console ends with
+the scorecard, where everything went, the time of each stage and the warnings, counted
+once. Config: ``conf/paper.yaml``.
 """
 
 from __future__ import annotations
@@ -12,6 +16,8 @@ from __future__ import annotations
 import logging
 import sys
 import time
+import warnings
+from collections import Counter
 
 import hydra
 from hydra.utils import to_absolute_path
@@ -29,57 +35,119 @@ def _abs(path: str) -> str:
         return path
 
 
+def _check(cfg: DictConfig) -> list[str]:
+    """Validate the job's own keys before any work; return the protocols to run."""
+    protocols = [str(p) for p in cfg.protocols]
+    if not protocols:
+        raise ValueError("protocols must name at least one of "
+                         f"{sorted(cfg.datasets)}, got []")
+    unknown = [p for p in protocols if p not in cfg.datasets]
+    if unknown:
+        raise ValueError(f"protocols: {unknown} not among the configured data sets "
+                         f"{sorted(cfg.datasets)}")
+    if len(set(protocols)) != len(protocols):
+        raise ValueError(f"protocols must not repeat, got {protocols}")
+    if int(cfg.n_jobs) < 1:
+        raise ValueError(f"n_jobs must be >= 1, got {cfg.n_jobs}")
+    return protocols
+
+
 def run_paper(cfg: DictConfig) -> dict:
     """Run the main job from a composed ``paper`` config (task function).
 
     Returns
     -------
     dict
-        ``stages_s`` (wall time of each stage [s]), ``data_dir``, ``report_dir``,
-        ``generate`` (generation summary), ``study`` (timings and files of the study).
+        ``stages_s`` (wall time of each stage [s]), ``generate`` and ``study`` (per
+        protocol), ``summary`` (files, scorecards, findings), ``warnings`` (category,
+        message, count).
     """
-    from swgsim.generate import generate
-
-    stages: dict[str, float] = {}
-    t0 = time.perf_counter()
-    data_dir, report_dir = _abs(str(cfg.data_dir)), _abs(str(cfg.report_dir))
-    # data_dir is this job's own output: a data set of another config there is replaced
-    gen = generate(OmegaConf.to_container(cfg.dataset, resolve=True), data_dir,
-                   n_jobs=int(cfg.n_jobs), overwrite=True, progress=True)
-    stages["generate"] = time.perf_counter() - t0
-    state = (f"{len(gen['computed'])} shard(s) simulated" if gen["computed"]
-             else "already there and valid, skipped")
-    print(f"[1/2] data set: {gen['windows']} windows in {data_dir} ({state}), "
-          f"{stages['generate']:.1f} s", flush=True)
-
     from learn.study import run_paper_study
-
-    t1 = time.perf_counter()
-    s = cfg.study
-    study = run_paper_study(
-        data_dir, report_dir, tracking_uri=cfg.tracking_uri, n_jobs=int(cfg.n_jobs),
-        random_state=int(cfg.seed),
-        tables=None if s.tables is None else [str(t) for t in s.tables],
-        models=None if s.models is None else [str(m) for m in s.models],
-        scale=bool(s.scale), figures=bool(s.figures))
-    stages["study"] = time.perf_counter() - t1
-    stages["total"] = time.perf_counter() - t0
-    res = study.pop("results")
-    print(f"[2/2] study: {study['n_jobs_run']} jobs, {len(res)} fits, "
-          f"{stages['study']:.1f} s", flush=True)
-    for k, v in study.get("timings_s", {}).items():
-        print(f"      {k:<12s} {v:7.1f} s")
-    print(f"report: {report_dir}")
-    for kind, path in study.get("files", {}).items():
-        print(f"      {kind:<12s} {path}")
+    from learn.summary import format_scorecard, write_summary
     from learn.tracking import default_tracking_uri
+    from swgsim.generate import generate, plan
 
-    print(f"MLflow runs: {cfg.tracking_uri or default_tracking_uri()}  "
-          "(browse: mlflow ui --backend-store-uri sqlite:///mlflow.db)")
-    print(f"total wall time {stages['total']:.1f} s "
-          f"(generate {stages['generate']:.1f} s, study {stages['study']:.1f} s)")
-    return {"stages_s": stages, "data_dir": data_dir, "report_dir": report_dir,
-            "generate": gen, "study": study}
+    protocols = _check(cfg)
+    datasets = {p: OmegaConf.to_container(cfg.datasets[p], resolve=True) for p in protocols}
+    for p in protocols:  # every data-set config is checked before any work
+        try:
+            plan(datasets[p])
+        except ValueError as e:
+            raise ValueError(f"datasets.{p}: {e}") from None
+    root_data, root_rep = _abs(str(cfg.data_root)), _abs(str(cfg.report_root))
+    s = cfg.study
+    n_stages = 2 * len(protocols) + 1
+    stages: dict[str, float] = {}
+    caught: Counter = Counter()
+    gen, study = {}, {}
+    t_all = time.perf_counter()
+    k = 0
+    with warnings.catch_warnings(record=True) as parent_warnings:
+        warnings.simplefilter("default")
+        for p in protocols:
+            k += 1
+            t0 = time.perf_counter()
+            out = f"{root_data}/{p}"
+            gen[p] = generate(datasets[p], out, n_jobs=int(cfg.n_jobs), overwrite=True,
+                              progress=True)
+            stages[f"generate {p}"] = time.perf_counter() - t0
+            state = (f"{len(gen[p]['computed'])} shard(s) simulated" if gen[p]["computed"]
+                     else "already there and valid")
+            if gen[p].get("replaced"):
+                state += "; " + gen[p]["replaced"]
+            print(f"[{k}/{n_stages}] data set {p}: {gen[p]['windows']} windows in {out} "
+                  f"({state}), {stages[f'generate {p}']:.1f} s", flush=True)
+        for p in protocols:
+            k += 1
+            t0 = time.perf_counter()
+            study[p] = run_paper_study(
+                f"{root_data}/{p}", f"{root_rep}/{p}", tracking_uri=cfg.tracking_uri,
+                n_jobs=int(cfg.n_jobs), random_state=int(cfg.seed),
+                tables=None if s.tables is None else [str(t) for t in s.tables],
+                models=None if s.models is None else [str(m) for m in s.models],
+                scale=bool(s.scale), figures=bool(s.figures),
+                experiment_prefix=f"paper_study/{p}/", name=p)
+            stages[f"study {p}"] = time.perf_counter() - t0
+            for w in study[p]["warnings"]:
+                caught[(w["category"], w["message"])] += w["count"]
+            print(f"[{k}/{n_stages}] study {p}: {study[p]['n_jobs_run']} jobs, "
+                  f"{len(study[p]['results'])} fits, {stages[f'study {p}']:.1f} s -> "
+                  f"{root_rep}/{p}", flush=True)
+        k += 1
+        t0 = time.perf_counter()
+        summary = write_summary(
+            {p: study[p]["results"] for p in protocols},
+            {p: study[p]["confusion"] for p in protocols}, root_rep, datasets,
+            {"scale": bool(s.scale), "seed": int(cfg.seed)},
+            spread={p: study[p]["spread"] for p in protocols})
+        stages["summary"] = time.perf_counter() - t0
+        print(f"[{k}/{n_stages}] summary: {summary['files']['md']}", flush=True)
+    for w in parent_warnings:
+        caught[(w.category.__name__, str(w.message).splitlines()[0])] += 1
+    stages["total"] = time.perf_counter() - t_all
+
+    print("\nReproduction scorecard (test cells of Tables VII, IX, X against the paper):")
+    print("\n".join(format_scorecard(summary["scorecards"])))
+    for p in protocols:
+        f = summary["findings"][p]
+        print(f"qualitative findings of Sec. IV reproduced, {p} protocol: "
+              f"{int((f['reproduced'] == True).sum())} of {int(f['reproduced'].notna().sum())}")  # noqa: E712
+    print("\nwritten:")
+    for p in protocols:
+        print(f"  data set {p:<8s} {root_data}/{p}")
+        print(f"  report {p:<10s} {root_rep}/{p}/ (tables_vii_x.md, results.csv, "
+              "confusion.csv, figures)")
+    print(f"  summary          {summary['files']['md']} (+ summary.csv, recall_rf.png)")
+    print(f"  MLflow runs      {cfg.tracking_uri or default_tracking_uri()}  (browse: mlflow "
+          "ui --backend-store-uri sqlite:///mlflow.db)")
+    print("wall time per stage: " + ", ".join(f"{n} {v:.1f} s" for n, v in stages.items()))
+    warn = [{"category": c, "message": m, "count": n} for (c, m), n in caught.most_common()]
+    if warn:
+        print("warnings (each counted once here, full text in the log):")
+        for w in warn:
+            print(f"  {w['count']:>4d} x {w['category']}: {w['message'][:110]}")
+    return {"stages_s": stages, "generate": gen, "study": study, "summary": summary,
+            "warnings": warn}
 
 
 @hydra.main(version_base="1.3", config_path=CONF_DIR, config_name="paper")

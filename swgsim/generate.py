@@ -22,7 +22,7 @@ import hashlib
 import json
 import logging
 import os
-import shutil
+import re
 import subprocess
 import time
 from dataclasses import dataclass
@@ -482,16 +482,6 @@ def _warm() -> None:
     import swgsim.generate  # noqa: F401
 
 
-def _start_workers(n: int):
-    """loky's reusable process pool with ``n`` workers, already importing their modules."""
-    from joblib.externals.loky import get_reusable_executor
-
-    pool = get_reusable_executor(max_workers=n)
-    for _ in range(n):
-        pool.submit(_warm)
-    return pool
-
-
 def run_shard(cfg: dict, shard: ShardSpec, out_dir: str | os.PathLike,
               influences: dict[tuple, Influence]) -> dict:
     """Simulate and write one shard atomically, then its sidecar; return the sidecar."""
@@ -519,41 +509,76 @@ def shard_done(out_dir: Path, shard: ShardSpec, chash: str) -> bool:
     return meta.get("config_hash") == chash and dsio.sha256_file(f) == meta.get("sha256")
 
 
-def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> None:
+#: Names of the files a data set of this project consists of: its manifest, the config
+#: stamp, the shards and their sidecars, and temporary files of an interrupted write.
+DATASET_FILE = re.compile(r"manifest\.json|\.config\.json|gear\d+_n\d+rpm\.(nc|json)|\..+\.tmp")
+
+
+def foreign_entries(out_dir: Path) -> list[str]:
+    """Names of the entries of ``out_dir`` that are not files of this project's data set
+    (:data:`DATASET_FILE`); folders and links always count as foreign."""
+    return sorted(p.name for p in Path(out_dir).iterdir()
+                  if p.is_symlink() or not p.is_file() or not DATASET_FILE.fullmatch(p.name))
+
+
+def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
     """Create ``out_dir``, or check that it holds (part of) a data set of this config.
+
+    With ``overwrite``, a data set of another config is replaced, but only if the folder
+    holds nothing but this project's data-set files (:func:`foreign_entries`); those files
+    are deleted one by one, the folder itself is kept.
+
+    Returns
+    -------
+    str or None
+        What was replaced, or None.
 
     Raises
     ------
     ValueError
-        If ``out_dir`` holds a data set made with another config and ``overwrite`` is
-        false; nothing there is touched.
+        Naming the folder, if ``out_dir`` is not a folder, holds a data set of another
+        config without ``overwrite``, or holds anything else; nothing is touched then.
     """
     chash = config_hash(cfg)
     mf = out_dir / dsio.MANIFEST
     stamp = out_dir / ".config.json"
+    replaced = None
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ValueError(f"out_dir {out_dir} exists and is not a folder")
     if out_dir.exists() and any(out_dir.iterdir()):
         old = None
         for f in (mf, stamp):
             if f.is_file():
                 try:
                     old = json.loads(f.read_text()).get("config_hash")
-                except json.JSONDecodeError:
+                except (json.JSONDecodeError, UnicodeDecodeError, AttributeError):
                     old = "unreadable"
                 break
-        if old is None:
+        if old != chash:
+            foreign = foreign_entries(out_dir)
+            if foreign:
+                what = ("holds no data set" if old is None else
+                        f"holds a data set of another config (hash {old}, this one {chash})")
+                raise ValueError(
+                    f"out_dir {out_dir} {what} and {len(foreign)} entr"
+                    f"{'y' if len(foreign) == 1 else 'ies'} that are not this project's "
+                    f"data set (e.g. {', '.join(foreign[:3])}); nothing was touched: "
+                    "choose another out_dir")
             if not overwrite:
-                raise ValueError(f"out_dir {out_dir} is not empty and holds no data set; "
-                                 "choose another out_dir or pass overwrite=true")
-        elif old != chash and not overwrite:
-            raise ValueError(
-                f"out_dir {out_dir} holds a data set made with another config (config hash "
-                f"{old}, this one {chash}); choose another out_dir or pass overwrite=true")
-        if overwrite and old != chash:
-            log.warning("overwrite=true: removing %s", out_dir)
-            shutil.rmtree(out_dir)
+                raise ValueError(
+                    f"out_dir {out_dir} holds a data set made with another config (config "
+                    f"hash {old}, this one {chash}); choose another out_dir or pass "
+                    "overwrite=true to replace it")
+            files = sorted(out_dir.iterdir())
+            for f in files:
+                f.unlink()
+            replaced = (f"replaced the data set in {out_dir} (config hash {old} -> {chash}, "
+                        f"{len(files)} files)")
+            log.warning("%s", replaced)
     out_dir.mkdir(parents=True, exist_ok=True)
     if not stamp.is_file():
         dsio.atomic_write_json(stamp, {"config_hash": chash, "config": cfg})
+    return replaced
 
 
 def finalize(out_dir: Path, cfg: dict, shards: list[ShardSpec]) -> dict:
@@ -599,7 +624,8 @@ def generate(cfg: dict, out_dir: str | os.PathLike, n_jobs: int = 1, overwrite: 
     -------
     dict
         Summary: ``out_dir``, ``windows`` (samples written), ``computed`` and ``skipped``
-        shard names, ``wall_s``, ``complete``, ``content_sha256`` (when complete).
+        shard names, ``wall_s``, ``complete``, ``content_sha256`` (when complete),
+        ``replaced`` (what an ``overwrite`` replaced, or None).
 
     Raises
     ------
@@ -614,7 +640,7 @@ def generate(cfg: dict, out_dir: str | os.PathLike, n_jobs: int = 1, overwrite: 
     if shard_index is not None and not 0 <= int(shard_index) < len(shards):
         raise ValueError(f"shard must lie in [0, {len(shards) - 1}], got {shard_index}")
     out = Path(out_dir)
-    prepare_out_dir(out, cfg, overwrite)
+    replaced = prepare_out_dir(out, cfg, overwrite)
     chash = config_hash(cfg)
     todo_all = shards if shard_index is None else [shards[int(shard_index)]]
     todo = [s for s in todo_all if not shard_done(out, s, chash)]
@@ -624,32 +650,36 @@ def generate(cfg: dict, out_dir: str | os.PathLike, n_jobs: int = 1, overwrite: 
     from tqdm.auto import tqdm
 
     n_workers = min(int(n_jobs), len(todo))
-    pool = _start_workers(n_workers) if n_workers > 1 else None
     bar = tqdm(total=len(todo), desc=f"generate {cfg.get('name', '')}", unit="shard",
                disable=not progress or not todo)
     try:
-        # the parent factorises the truss while the workers start and import
-        infl = gear_influences(cfg, todo) if todo else {}
-        if pool is None:
+        if n_workers <= 1:
+            infl = gear_influences(cfg, todo) if todo else {}
             for s in todo:
                 run_shard(cfg, s, out, infl[s.gear])
                 bar.update()
         else:
-            from concurrent.futures import as_completed
+            from joblib import Parallel, delayed
 
-            futures = [pool.submit(run_shard, cfg, s, out, infl[s.gear]) for s in todo]
-            for f in as_completed(futures):
-                f.result()
-                bar.update()
-    except BaseException:
-        if pool is not None:  # stop the workers now (error, Ctrl-C or SIGTERM)
-            pool.shutdown(wait=False, kill_workers=True)
-        raise
+            def tasks():
+                # the workers start and import while the parent factorises the truss:
+                # joblib takes the first tasks before it asks for the shards
+                for _ in range(n_workers):
+                    yield delayed(_warm)()
+                infl = gear_influences(cfg, todo)
+                for s in todo:
+                    yield delayed(run_shard)(cfg, s, out, infl[s.gear])
+
+            par = Parallel(n_jobs=n_workers, return_as="generator_unordered",
+                           pre_dispatch=f"{n_workers + 1}")
+            for r in par(tasks()):
+                if r is not None:
+                    bar.update()
     finally:
         bar.close()
     complete = all(shard_done(out, s, chash) for s in shards)
     summary: dict[str, Any] = {"out_dir": str(out), "computed": [s.name for s in todo],
-                               "skipped": skipped, "complete": complete}
+                               "skipped": skipped, "complete": complete, "replaced": replaced}
     if complete:
         manifest = finalize(out, cfg, shards)
         summary["windows"] = manifest["n_samples"]

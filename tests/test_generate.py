@@ -167,6 +167,99 @@ def test_foreign_out_dir_is_refused_and_kept(tiny_set):
     assert sorted(p.name for p in out.iterdir()) == before
 
 
+def test_overwrite_replaces_only_a_folder_of_our_data_set(tiny_set, tmp_path):
+    """overwrite=true replaces a data set of another config, never someone's files."""
+    import shutil
+
+    src, _ = tiny_set
+    cfg = tiny_cfg()
+    cfg["seed"] = 99
+    mixed = tmp_path / "mixed"
+    shutil.copytree(src, mixed)
+    (mixed / "thesis.tex").write_text("years of work")
+    (mixed / "figures").mkdir()
+    before = sorted(p.name for p in mixed.iterdir())
+    with pytest.raises(ValueError, match=f"{mixed}.*not this project's data set.*thesis.tex"):
+        gen.generate(cfg, mixed, progress=False, overwrite=True)
+    assert sorted(p.name for p in mixed.iterdir()) == before  # nothing touched
+    ours = tmp_path / "ours"
+    shutil.copytree(src, ours)
+    (ours / ".gear1_n2000rpm.nc.abc123.tmp").write_bytes(b"left by a killed run")
+    s = gen.generate(cfg, ours, progress=False, overwrite=True)
+    assert s["complete"] and "replaced the data set" in s["replaced"]
+    assert not list(ours.glob("*.tmp"))
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    (plain / "notes.txt").write_text("mine")
+    with pytest.raises(ValueError, match="holds no data set"):
+        gen.generate(cfg, plain, progress=False, overwrite=True)
+    assert (plain / "notes.txt").read_text() == "mine"
+
+
+def test_paper_protocol_healthy_windows_are_bit_identical(tiny_set):
+    """Paper protocol: sixty times the same SWG model, i.e. the same window (Sec. III-B)."""
+    out, _ = tiny_set
+    ds = dsio.load(out)
+    clean = ~ds.disturbed.values
+    sig = ds.strain_signal.values
+    keys = np.stack([ds.gear.values, ds.n_in_rpm.values, ds.t_out_nm.values], axis=1)
+    healthy = (ds.fault.values == "healthy") & clean
+    for key in np.unique(keys[healthy], axis=0):
+        group = np.flatnonzero(healthy & (keys == key).all(axis=1))  # copies and reference
+        assert len(group) >= 3 and ds.reference.values[group].any()
+        for k in group[1:]:
+            np.testing.assert_array_equal(sig[k], sig[group[0]])
+            assert ds.efficiency.values[k] == ds.efficiency.values[group[0]]
+
+
+def test_shared_motions_equal_simulating_each_window(tiny_set):
+    """Each distinct motion and window is simulated once; the result is the per-window one."""
+    from swgsim.chain import ChainSettings, SimulationChain
+    from swgsim.faults import apply_fault
+
+    out, _ = tiny_set
+    cfg = tiny_cfg()
+    shard = gen.plan(cfg)[0]
+    ds = dsio.load(out)
+    infl = gen.gear_influences(cfg, [shard])[shard.gear]
+    gear = next(g for g in cfg["gears"] if int(g["id"]) == shard.gear)
+    ch = cfg["chain"]
+    chain = SimulationChain.from_influences(gen.layout_for(cfg, gear), infl, ChainSettings(
+        sample_rate_hz=ch["sample_rate_hz"], window_s=ch["window_s"], settle_s=ch["settle_s"],
+        substeps=ch["substeps"], contact_half_width_deg=ch["contact_half_width_deg"],
+        ecc_load_share=ch["ecc_load_share"]))
+    healthy = gen.gear_params(cfg, gear)
+    sel = ((ds.gear.values == shard.gear) & (ds.n_in_rpm.values == shard.n_in_rpm)
+           & ~ds.disturbed.values & ~ds.reference.values)
+    for w in {w.fault: w for w in shard.windows if not w.reference}.values():
+        p = apply_fault(healthy, w.fault, w.severity,
+                        0.0 if np.isnan(w.position_deg) else w.position_deg)
+        (alone,), res = chain.simulate([p], shard.n_in_rpm, w.t_out_nm, 0.0)
+        k = np.flatnonzero(sel & (ds.fault.values == w.fault) & (ds.variant.values == w.variant)
+                           & (ds.t_out_nm.values == w.t_out_nm))[0]
+        np.testing.assert_allclose(ds.strain_signal.values[k], alone, rtol=0, atol=1e-6)
+        assert ds.efficiency.values[k] == pytest.approx(res.efficiency[0], rel=1e-12)
+
+
+def test_bench_windows_differ_and_carry_the_stated_noise(tmp_path):
+    """Bench protocol: random window starts; the amplifier's noise is on the signal."""
+    from swgsim.acquisition import parse_acquisition
+
+    cfg = tiny_cfg()
+    cfg["acquisition"] = dataset_preset("tiny_bench")["acquisition"]
+    quiet = json.loads(json.dumps(cfg))
+    quiet["acquisition"]["amplifier"]["noise_uv_rms"] = 0.0
+    a = dsio.load(gen.generate(cfg, tmp_path / "noisy", progress=False)["out_dir"])
+    b = dsio.load(gen.generate(quiet, tmp_path / "quiet", progress=False)["out_dir"])
+    sig = b.strain_signal.values
+    healthy = np.flatnonzero((b.fault.values == "healthy") & ~b.disturbed.values
+                             & (b.gear.values == 1) & (b.n_in_rpm.values == 2000.0))
+    assert not np.allclose(sig[healthy[0]], sig[healthy[1]], atol=1e-3)  # other start angle
+    noise = (a.strain_signal.values.astype(float) - sig).std()  # same draws but the noise
+    stated = parse_acquisition(cfg["acquisition"]).amplifier.noise_mvv
+    assert noise == pytest.approx(stated, rel=0.05)
+
+
 @pytest.mark.slow
 def test_submitit_local_launcher_one_job_per_shard(tmp_path):
     """Cluster scale-out path: one Hydra submitit job per shard, manifest by the last."""

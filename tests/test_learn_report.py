@@ -6,7 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.report import PAPER_RESULTS, write_report, write_tables
+from learn.paper_results import PAPER_RESULTS
+from learn.report import write_report, write_tables
 from learn.study import PAPER_TABLES, run_paper_study
 
 

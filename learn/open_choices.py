@@ -1,0 +1,132 @@
+"""Choices the paper leaves open, with the value taken and its reason or source.
+
+:func:`open_choices` lists them for one data-set config and study, reading every value
+that is a setting from the config itself, so the list never drifts from what ran. None of
+them was tuned against the paper's scores.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+
+def _amp(acq: Mapping[str, Any]) -> str:
+    a = acq.get("amplifier")
+    if not a:
+        return "none: ideal, noise-free sampling"
+    noise = a["noise_uv_rms"] / a["excitation_v"]
+    rng = a["vref_v"] / a["gain"] / a["excitation_v"] * 1e3
+    return (f"{a['name']}: noise {a['noise_uv_rms']} uV rms at {a['excitation_v']} V "
+            f"excitation = {noise:.2f} uV/V rms, range ±{rng:.2f} mV/V, {a['bits']} bit, "
+            f"sinc{a['order']} filter modelled at {a['oversample']}x the data rate")
+
+
+def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[dict[str, str]]:
+    """The paper's open choices for one data set and study.
+
+    Parameters
+    ----------
+    dataset : mapping
+        Resolved data-set config (``conf/dataset/<name>.yaml``).
+    study : mapping
+        Study settings: ``scale`` (bool), ``max_order``, ``order_step``, ``floor_rel``
+        (feature settings, optional).
+
+    Returns
+    -------
+    list of dict
+        ``choice``, ``value``, ``reason`` (all str), in the order of the pipeline.
+    """
+    ch, dist, tol = dataset["chain"], dataset["disturbance"], dataset["tolerances"]
+    acq = dataset.get("acquisition") or {}
+    v = dataset["variants"]
+    ops = dataset["operating_points"]
+    n_rev = [ch["window_s"] * n / 60 for n in ops["n_in_rpm"]]
+
+    def lin(name):
+        a, b, n = v[name]["severity_linspace"]
+        return f"{n} values of {a:g} … {b:g}"
+
+    rows = [
+        ("Window start (protocol)",
+         "fixed: every simulation starts at input angle "
+         f"{acq.get('wg_start_deg', 0.0):g}°" if acq.get("start") == "fixed"
+         else "random: input angle uniform over [0, 2π N), i.e. random WG and output angle",
+         "Sec. III-B: the healthy class is 'sixty times the same SWG model'; a bench cuts "
+         "windows at arbitrary times"),
+        ("Amplifier (protocol)", _amp(acq),
+         "the paper's data are simulated; the bench preset cites its data sheet "
+         "(swgsim/acquisition.py)"),
+        ("Window length", f"{ch['window_s']:g} s = " + ", ".join(
+            f"{r:g} input revolutions at {n:g} rpm" for r, n in zip(n_rev, ops["n_in_rpm"],
+                                                                   strict=True)),
+         f"the DFT resolves order {1 / min(n_rev):.2g} (eq. (10)'s lowest sub-harmonic is "
+         "order 0.25) and whole periods of the sub-harmonics fit the window where the "
+         "revolutions are whole multiples of 4; Fig. 6 shows at least 0.02 s"),
+        ("Sample rate", f"{ch['sample_rate_hz']:g} Hz",
+         "orders up to 37 of 4000 rpm below Nyquist; the features use orders <= 8"),
+        ("Transient before the window", f"{ch['settle_s']:g} s simulated and discarded",
+         "the speed loop and the torsional mode settle from the steady-state start"),
+        ("Eq. (10) amplitudes",
+         f"a0 ~ U(−{dist['offset_mvv']:g}, {dist['offset_mvv']:g}) mV/V, "
+         f"a1..a4 ~ U(0, {dist['harmonic_mvv']:g}) mV/V, phases U(0, 2π), per window and "
+         "signal",
+         "'slight irregularities' and 'slight constant offsets' (Sec. III-B): a few per "
+         "cent of the signals' range 0.05-0.3 mV/V; not given in the paper "
+         "(scripts/sweep_disturbance.py shows Tables VIII and X against them)"),
+        ("Efficiency η", "mean P_out / mean P_in of the simulated powers over the window",
+         "a bench measures it with torque flanges; class 0.05 (e.g. HBM T40B, data sheet "
+         "B03406) adds about 0.1 %, less than the spread the output angle causes on the "
+         "bench"),
+        ("Reference of eq. (7)",
+         "per gear, operating point and clean/disturbed: a commissioning window of the "
+         "healthy gear, recorded like every other window",
+         "'normalized for each operating point by the value of the healthy gear'; a gear "
+         "never seen in training has its own commissioning recording"),
+        ("Feature scaling",
+         "standardised (StandardScaler)" if study.get("scale") else "none",
+         "the paper names scikit-learn's standard settings and no preprocessing; eq. (9) "
+         "exists to make slight changes of η_rel distinguishable, which standardisation "
+         "would not need"),
+        ("DFT of eq. (8) features",
+         f"Hann window, exact orders {study.get('order_step', 0.25):g} … "
+         f"{study.get('max_order', 8.0):g} in steps of {study.get('order_step', 0.25):g}; "
+         f"DFT_rel floor {study.get('floor_rel', 1e-3):g} of the reference maximum",
+         "Fig. 7 shows orders up to 8; the floor keeps bins without reference energy near 1"),
+        ("Cross-validation",
+         "stratified 4-fold, groups (gear, fault, variant)",
+         "'k-fold cross validation with four splits'; grouping keeps a variant's operating "
+         "points, near-copies after eq. (7), on one side"),
+        ("Table V: reduced damping", f"b1 lowered by {lin('reduced_damping')}",
+         "run-in lowers b1 by up to a third (Table II prose)"),
+        ("Table V: reduced stiffness", f"k1 lowered by {lin('reduced_stiffness')}",
+         "stiffness drops by about 20 % during run-in (Fig. 4 prose)"),
+        ("Table V: eccentric WG",
+         f"e = {', '.join(f'{s:g}' for s in v['eccentric_wg']['severities'])} × w0 at "
+         f"{v['eccentric_wg']['n_positions']} positions",
+         "three severities × twenty positions (Sec. III-B)"),
+        ("Table V: root tooth crack",
+         f"{', '.join(f'{s:g}' for s in v['root_tooth_crack']['severities'])} of the crack "
+         f"bars' stiffness lost at {v['root_tooth_crack']['n_positions']} positions",
+         "'stiffness reduced drastically' (Sec. II-B)"),
+        ("Table V: tip tooth crack",
+         f"{', '.join(f'{s:g}' for s in v['tip_tooth_crack']['severities'])} of the tooth "
+         f"force lost over a 3° arc at {v['tip_tooth_crack']['n_positions']} positions",
+         "'a strongly reduced tooth force acting only at a specific node' (Sec. II-B)"),
+        ("Gauge layout (Fig. 3)",
+         "s0 full torque bridge at 29 mm; s1/s3 WG-bending and s2/s4 shear half bridges at "
+         "32 mm, 180° apart",
+         "s1 ≈ s3 and s2 ≈ s4 on a healthy gear (Sec. III-A); swgsim/sensors.py"),
+        ("Per-gear sensor models",
+         f"gauge angle σ {tol['sd_theta_deg']:g}°, radius σ {tol['sd_r_mm']:g} mm, "
+         f"orientation σ {tol['sd_beta_deg']:g}°, gain σ {100 * tol['sd_gain']:g} %",
+         "the paper fits each gear's sensor model to a real RT1-T gear; values unverified"),
+        ("Gear model", "size 20, ratio 100, k1/k2 from catalogue K1/K3, b1/μ from no-load "
+         "torque and efficiency at rated torque", "swgsim/dynamics.py (catalogue sources)"),
+        ("Classifier settings", "Table VI; everything else scikit-learn's defaults (MLP "
+         "max_iter 200)", "'standard settings of ... Scikit-learn' (Sec. III-C)"),
+        ("Seeds", f"data set {dataset['seed']}, study {study.get('seed', 0)}",
+         "fixed for repeatability"),
+    ]
+    return [{"choice": c, "value": val, "reason": r} for c, val, r in rows]
