@@ -67,5 +67,5 @@ def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,
     # a sin(wt + alpha) = a cos(alpha) sin(wt) + a sin(alpha) cos(wt)
     cs = (aj * np.cos(alpha))[..., 0]  # (n_w, n_s, 4)
     sn = (aj * np.sin(alpha))[..., 0]
-    harm = cs @ np.sin(wt) + sn @ np.cos(wt)  # (n_w, n_s, 4) @ (n_w, 4, n_t)
+    harm = np.einsum("wsj,wjt->wst", cs, np.sin(wt)) + np.einsum("wsj,wjt->wst", sn, np.cos(wt))
     return signals + a0 + harm
