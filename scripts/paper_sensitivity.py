@@ -44,7 +44,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n-jobs", type=int, default=2)
     ap.add_argument("--skip-scale", action="store_true", help="skip the scaling variant")
     ap.add_argument("--skip-cv", action="store_true", help="skip the CV-over-windows variant")
+    ap.add_argument("--plot-only", action="store_true",
+                    help="redraw eq10_sweep.png from <out>/eq10_sweep.csv and stop")
     args = ap.parse_args(argv)
+    if args.plot_only:
+        plot_sweep(pd.read_csv(Path(args.out) / "eq10_sweep.csv"),
+                   Path(args.out) / "eq10_sweep.png")
+        return 0
     if any(not np.isfinite(a) or a < 0 for a in args.amplitudes):
         ap.error(f"--amplitudes must be >= 0, got {args.amplitudes}")
 
@@ -112,10 +118,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def _sweep_figure(sweep: dict[float, pd.DataFrame], out: Path) -> None:
     """Table X cells (mean over the held-out gears) and Table VIII cells against the
-    eq. (10) amplitude factor, with the paper's values."""
-    from matplotlib.figure import Figure
-
-    from learn.paper_results import PAPER_RESULTS, scorecard, side_by_side
+    eq. (10) amplitude factor, with the paper's values; writes eq10_sweep.csv and .png."""
+    from learn.paper_results import scorecard, side_by_side
 
     rows = []
     for a, res in sorted(sweep.items()):
@@ -128,9 +132,23 @@ def _sweep_figure(sweep: dict[float, pd.DataFrame], out: Path) -> None:
                      "score": card.loc["X", "mad"]})
     df = pd.DataFrame(rows)
     df.to_csv(out / "eq10_sweep.csv", index=False)
-    fig = Figure(figsize=(12, 4.2), layout="constrained")
-    axes = fig.subplots(1, 3)
-    factors = sorted(sweep)
+    plot_sweep(df, out / "eq10_sweep.png")
+
+
+#: Table VIII values the paper's text quotes (Sec. IV-B), Selection 1 [%].
+VIII_TEXT = {"knn": 80.0, "nb": 73.72, "svm": 47.0}
+
+
+def plot_sweep(df: pd.DataFrame, path: Path) -> None:
+    """Figure of :func:`_sweep_figure` from its table (columns factor, table, selection,
+    model, score)."""
+    from matplotlib.figure import Figure
+
+    from learn.paper_results import PAPER_RESULTS
+
+    factors = sorted(df["factor"].unique())
+    fig = Figure(figsize=(15, 4.2), layout="constrained")
+    axes = fig.subplots(1, 4)
     for ax, sel in zip(axes[:2], ("selection1", "selection3"), strict=True):
         for k, m in enumerate(("mlp", "rf", "knn", "nb")):
             d = df[(df["table"] == "X") & (df["selection"] == sel) & (df["model"] == m)]
@@ -138,18 +156,26 @@ def _sweep_figure(sweep: dict[float, pd.DataFrame], out: Path) -> None:
             paper = np.mean(list(v[m] for v in PAPER_RESULTS["X"][sel].values()))
             ax.axhline(paper, color=f"C{k}", ls=":", lw=1)
         ax.set_title(f"Table X, Selection {sel[-1]} (dotted: paper)", fontsize=9)
-        ax.set_xlabel("eq. (10) amplitudes / preset's")
         ax.set_ylabel("mean over held-out gears [%]")
-        ax.set_xticks(factors)
     axes[0].legend(fontsize=7)
+    for k, m in enumerate(("mlp", "svm", "rf", "knn", "nb")):
+        d = df[(df["table"] == "VIII") & (df["selection"] == "selection1")
+               & (df["model"] == m)]
+        axes[2].plot(d["factor"], d["score"], "o-", color=f"C{k + 5}", label=m.upper())
+        if m in VIII_TEXT:
+            axes[2].axhline(VIII_TEXT[m], color=f"C{k + 5}", ls=":", lw=1)
+    axes[2].set_title("Table VIII, Selection 1 (dotted: paper's text)", fontsize=9)
+    axes[2].set_ylabel("mean test score of 4 folds [%]")
+    axes[2].legend(fontsize=7)
     d = df[df["model"] == "MAD"]
-    axes[2].plot(d["factor"], d["score"], "ko-")
-    axes[2].axhline(10, color="0.5", ls=":", lw=1)
-    axes[2].set_title("Table X: mean abs. deviation from the paper", fontsize=9)
-    axes[2].set_xlabel("eq. (10) amplitudes / preset's")
-    axes[2].set_ylabel("[points]")
-    axes[2].set_xticks(factors)
-    fig.savefig(out / "eq10_sweep.png", dpi=110)
+    axes[3].plot(d["factor"], d["score"], "ko-")
+    axes[3].axhline(10, color="0.5", ls=":", lw=1)
+    axes[3].set_title("Table X: mean abs. deviation from the paper", fontsize=9)
+    axes[3].set_ylabel("[points]")
+    for ax in axes:
+        ax.set_xlabel("eq. (10) amplitudes / preset's")
+        ax.set_xticks(factors)
+    fig.savefig(path, dpi=110)
 
 
 if __name__ == "__main__":
