@@ -36,8 +36,10 @@ exactly 1 in every bin. Relative mean and variance follow eq. (7) literally (no 
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -49,6 +51,44 @@ SELECTIONS = ("selection1", "selection2", "selection3")
 META_COLUMNS = ("gear", "fault", "variant", "n_in_rpm", "t_out_nm", "disturbed")
 REFERENCE_KEYS = ("gear", "n_in_rpm", "t_out_nm", "disturbed")
 N_SENSORS = 5
+
+
+@dataclass
+class FeatureSettings:
+    """Settings of the paper's features (Table III), the one place of their defaults.
+
+    Attributes
+    ----------
+    name : str
+        Config name, ``selection1`` .. ``selection3``.
+    selection : int
+        Paper Table III selection, 1, 2 or 3.
+    max_order : float
+        Highest DFT order of the input rotation [-] (paper Fig. 7 shows orders up to 8).
+    order_step : float
+        Spacing and lowest DFT order [-].
+    floor_rel : float
+        DFT_rel floor, fraction of the reference spectrum's maximum [-].
+    """
+
+    name: str = "selection1"
+    selection: int = 1
+    max_order: float = 8.0
+    order_step: float = 0.25
+    floor_rel: float = 1e-3
+
+    def kwargs(self) -> dict:
+        """``orders`` and ``floor_rel`` for :func:`extract_features`."""
+        return {"orders": paper_orders(self.max_order, self.order_step),
+                "floor_rel": self.floor_rel}
+
+    @classmethod
+    def of(cls, cfg) -> FeatureSettings:
+        """From a mapping or config node with any subset of the fields."""
+        if cfg is None:
+            return cls()
+        keys = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: cfg[k] for k in keys if k in cfg})
 
 
 class Features(NamedTuple):
@@ -70,7 +110,8 @@ class Features(NamedTuple):
     meta: pd.DataFrame
 
 
-def paper_orders(max_order: float = 8.0, order_step: float = 0.25) -> np.ndarray:
+def paper_orders(max_order: float = FeatureSettings.max_order,
+                 order_step: float = FeatureSettings.order_step) -> np.ndarray:
     """Orders of the input rotation used for the DFT features.
 
     Parameters
@@ -249,6 +290,48 @@ def feature_names(selection: int | str, orders: Sequence[float] | None = None) -
     return dft("ds13") + dft("ds24") + ["eta2_rel"]
 
 
+def check_orders(ds, orders: Sequence[float], what: str = "features") -> None:
+    """Refuse DFT orders that a data set cannot carry.
+
+    The highest order must lie below the Nyquist frequency at the highest input speed,
+    and the lowest order (and the spacing) must be resolved by the window, i.e. the window
+    must hold at least 1 / order input revolutions at the lowest speed.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Schema-v1 data set (``sample_rate_hz`` attribute, ``time``, ``n_in_rpm``).
+    orders : sequence of float
+        Orders of the input rotation [-].
+    what : str
+        Config name of the orders for messages (``features``, ``inputs``).
+
+    Raises
+    ------
+    ValueError
+        Naming ``<what>.max_order`` / ``<what>.order_step``, the value, the limit and the
+        data set.
+    """
+    orders = np.asarray(orders, dtype=np.float64)
+    t = np.asarray(ds["time"].values, dtype=np.float64)
+    fs = float(ds.attrs.get("sample_rate_hz", 0.0)) or 1.0 / float(t[1] - t[0])
+    n_in = np.asarray(ds["n_in_rpm"].values, dtype=np.float64)
+    src = ds.attrs.get("source_path", "the data set")
+    f_hi = orders.max() * n_in.max() / 60.0
+    if f_hi >= fs / 2:
+        raise ValueError(
+            f"{what}.max_order={orders.max():g} is {f_hi:.0f} Hz at {n_in.max():g} rpm, at or "
+            f"above the Nyquist frequency {fs / 2:g} Hz of {src}; allowed: max_order < "
+            f"{fs / 2 * 60 / n_in.max():.4g}")
+    rev = t.size / fs * n_in.min() / 60.0  # input revolutions per window at the lowest speed
+    step = float(np.min(np.diff(np.concatenate([[0.0], np.sort(orders)]))))
+    if step * rev < 1.0 - 1e-6:
+        raise ValueError(
+            f"{what}.order_step={step:g} needs windows of at least {1 / step:g} input "
+            f"revolutions; {src} holds {rev:.3g} at {n_in.min():g} rpm; allowed: order_step "
+            f">= {1 / rev:.3g}")
+
+
 def reference_index(ds) -> tuple[np.ndarray, np.ndarray]:
     """Pair every non-reference window with its reference window.
 
@@ -310,7 +393,7 @@ def extract_features(
     ds,
     selection: int | str,
     orders: Sequence[float] | None = None,
-    floor_rel: float = 1e-3,
+    floor_rel: float = FeatureSettings.floor_rel,
 ) -> Features:
     """Features of paper Table III for every non-reference window of a data set.
 
@@ -352,6 +435,8 @@ def extract_features(
     pos[used] = np.arange(used.size)
     i_s, i_r = pos[samples], pos[refs]  # rows into the `used` arrays
 
+    if sel in (2, 3):
+        check_orders(ds, orders)
     s = np.asarray(ds["strain_signal"].values[used], dtype=np.float64)  # (U, 5, T)
     if s.shape[1] != N_SENSORS:
         raise ValueError(f"strain_signal must have {N_SENSORS} sensors, got {s.shape[1]}")

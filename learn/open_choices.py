@@ -38,6 +38,9 @@ def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[d
     list of dict
         ``choice``, ``value``, ``reason`` (all str), in the order of the pipeline.
     """
+    from learn.features import FeatureSettings
+
+    fs = FeatureSettings.of(study)
     ch, dist, tol = dataset["chain"], dataset["disturbance"], dataset["tolerances"]
     acq = dataset.get("acquisition") or {}
     v = dataset["variants"]
@@ -90,9 +93,8 @@ def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[d
          "exists to make slight changes of η_rel distinguishable, which standardisation "
          "would not need"),
         ("DFT of eq. (8) features",
-         f"Hann window, exact orders {study.get('order_step', 0.25):g} … "
-         f"{study.get('max_order', 8.0):g} in steps of {study.get('order_step', 0.25):g}; "
-         f"DFT_rel floor {study.get('floor_rel', 1e-3):g} of the reference maximum",
+         f"Hann window, exact orders {fs.order_step:g} … {fs.max_order:g} in steps of "
+         f"{fs.order_step:g}; DFT_rel floor {fs.floor_rel:g} of the reference maximum",
          "Fig. 7 shows orders up to 8; the floor keeps bins without reference energy near 1"),
         ("Cross-validation",
          "stratified 4-fold, groups (gear, fault, variant)",

@@ -44,6 +44,41 @@ PROTOCOLS: dict[str, dict] = {
 GROUP_COLUMNS = ("gear", "fault", "variant")
 
 
+@dataclass
+class ProtocolConfig:
+    """A protocol as a config (``conf`` group ``protocol``): a name and the keyword
+    arguments of :func:`make_splits`. The paper's four are :data:`PROTOCOLS`.
+
+    Attributes
+    ----------
+    name : str
+    scheme : str
+        One of :data:`SCHEMES`.
+    disturbed : bool
+    n_splits : int
+        Folds of the k-fold schemes.
+    random_state : int or None
+        Shuffling seed of the k-fold schemes (the apps set it to ``${seed}``).
+    test_gears : list of int or None
+        Held-out gears of ``leave_one_gear``, in order.
+    """
+
+    name: str = "cv_clean"
+    scheme: str = "group_kfold"
+    disturbed: bool = False
+    n_splits: int = 4
+    random_state: int | None = 0
+    test_gears: list[int] | None = None
+
+    @classmethod
+    def paper(cls, name: str, **overrides) -> ProtocolConfig:
+        """One of the paper's protocols (:data:`PROTOCOLS`) as a config."""
+        if name not in PROTOCOLS:
+            raise ValueError(f"protocol must be one of {sorted(PROTOCOLS)}, got {name!r}")
+        kw = {k: list(v) if isinstance(v, tuple) else v for k, v in PROTOCOLS[name].items()}
+        return cls(name=name, **{**kw, **overrides})
+
+
 def class_labels(y: Sequence[str]) -> list[str]:
     """Classes present in ``y``: the schema's order (:data:`swgsim.data.FAULT_CLASSES`)
     first, any others sorted after."""

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from learn.baselines import MODEL_LABELS, make_model
-from learn.features import Features, extract_features, paper_orders
+from learn.features import Features, FeatureSettings, extract_features
 from learn.protocols import (
     PROTOCOLS,
     ProtocolResult,
@@ -81,9 +81,8 @@ def run_train(cfg) -> dict:
 
 
 def _features_from_cfg(ds, fcfg) -> Features:
-    orders = paper_orders(float(fcfg.get("max_order", 8.0)), float(fcfg.get("order_step", 0.25)))
-    return extract_features(ds, fcfg.selection, orders=orders,
-                            floor_rel=float(fcfg.get("floor_rel", 1e-3)))
+    settings = FeatureSettings.of(fcfg)
+    return extract_features(ds, settings.selection, **settings.kwargs())
 
 
 def run_study_job(cfg) -> dict:
@@ -177,11 +176,7 @@ def run_paper_study_task(cfg) -> dict:
         models=None if models is None else [str(m) for m in models],
         scale=bool(scfg.get("scale", True)),
         figures=bool(scfg.get("figures", True)),
-        feature_kwargs={
-            "orders": paper_orders(float(fcfg.get("max_order", 8.0)),
-                                   float(fcfg.get("order_step", 0.25))),
-            "floor_rel": float(fcfg.get("floor_rel", 1e-3)),
-        },
+        feature_kwargs=FeatureSettings.of(fcfg).kwargs(),
     )
     res = out.pop("results")
     means = res.groupby(["table", "selection", "model"])["test_accuracy"].mean()

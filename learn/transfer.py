@@ -914,17 +914,14 @@ def run_transfer(cfg) -> dict:
     import torch
     from omegaconf import OmegaConf
 
-    from learn.features import paper_orders
+    from learn.features import FeatureSettings
     from swgsim.data import load
 
     tc = cfg.transfer
     threads = tc.get("n_threads")
     if threads:
         torch.set_num_threads(int(threads))
-    fcfg = cfg.get("features") or {}
-    feature_kwargs = {"orders": paper_orders(float(fcfg.get("max_order", 8.0)),
-                                             float(fcfg.get("order_step", 0.25))),
-                      "floor_rel": float(fcfg.get("floor_rel", 1e-3))}
+    feature_kwargs = FeatureSettings.of(cfg.get("features")).kwargs()
     models = OmegaConf.to_container(tc.models, resolve=True)
     specs = _specs_from_cfg(OmegaConf.to_container(tc.runs, resolve=True))
     ds = load(cfg.data.path)

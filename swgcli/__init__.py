@@ -9,6 +9,42 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 CONF_DIR = str(REPO_ROOT / "conf")
 
 
+def compose_app(config_name: str, overrides: list[str] | tuple[str, ...] = ()):
+    """Compose an app's config as its command line would, without running it.
+
+    Registers the schemas (:mod:`swgcli.schema`), composes ``conf/<config_name>.yaml``
+    with Hydra's compose API and checks it against the app's schema, so tests and
+    notebooks get exactly what the app would see.
+
+    Parameters
+    ----------
+    config_name : {"generate", "paper", "train", "calibrate"}
+    overrides : sequence of str
+        Hydra overrides, e.g. ``["dataset=tiny", "n_jobs=1"]``.
+
+    Returns
+    -------
+    omegaconf.DictConfig
+
+    Raises
+    ------
+    ValueError
+        A key the schema does not have (see :func:`swgcli.schema.validate`); Hydra's own
+        composition errors are raised as they are.
+    """
+    from hydra import compose, initialize_config_dir
+
+    from swgcli import schema
+
+    apps = {"generate": schema.GenerateApp, "paper": schema.PaperApp,
+            "train": schema.TrainApp, "calibrate": schema.CalibrateApp}
+    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
+        cfg = compose(config_name=config_name, overrides=list(overrides))
+    if config_name in apps:
+        schema.validate(cfg, apps[config_name])
+    return cfg
+
+
 def dataset_preset(name: str, overrides: list[str] | tuple[str, ...] = ()) -> dict:
     """The data-set config of a preset in ``conf/dataset/``, composed as the apps do.
 
@@ -17,17 +53,14 @@ def dataset_preset(name: str, overrides: list[str] | tuple[str, ...] = ()) -> di
     name : str
         Preset name (``paper``, ``bench``, ``tiny``, ``tiny_bench``, ...).
     overrides : sequence of str
-        Hydra overrides relative to the data set, e.g. ``["chain.window_s=0.02"]``.
+        Hydra overrides relative to the data set, e.g. ``["chain.window_s=0.12"]``.
 
     Returns
     -------
     dict
         Plain, resolved config for :func:`swgsim.generate.generate`.
     """
-    from hydra import compose, initialize_config_dir
     from omegaconf import OmegaConf
 
-    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
-        cfg = compose(config_name="generate",
-                      overrides=[f"dataset={name}", *(f"dataset.{o}" for o in overrides)])
+    cfg = compose_app("generate", [f"dataset={name}", *(f"dataset.{o}" for o in overrides)])
     return OmegaConf.to_container(cfg.dataset, resolve=True)

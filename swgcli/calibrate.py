@@ -21,12 +21,12 @@ import logging
 from pathlib import Path
 from typing import Any
 
-import hydra
 from omegaconf import DictConfig, OmegaConf
 
-log = logging.getLogger(__name__)
+from swgcli.app import hydra_app
+from swgcli.schema import CalibrateApp
 
-CONFIG_PATH = str(Path(__file__).resolve().parents[1] / "conf")
+log = logging.getLogger(__name__)
 
 
 def _as_list(x: Any) -> list | None:
@@ -187,11 +187,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     return {**summary, "out_dir": str(out_dir), "mlflow_run_id": run_id}
 
 
-@hydra.main(version_base="1.3", config_path=CONFIG_PATH, config_name="calibrate")
-def main(cfg: DictConfig) -> None:
-    """Compose ``conf/calibrate.yaml`` and run :func:`run_calibrate`."""
-    run_calibrate(cfg)
-
+main = hydra_app("calibrate", CalibrateApp, "swgsim-calibrate")(run_calibrate)
 
 if __name__ == "__main__":
     main()

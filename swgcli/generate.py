@@ -10,13 +10,12 @@ Examples
 from __future__ import annotations
 
 import logging
-import sys
 
-import hydra
 from hydra.utils import to_absolute_path
 from omegaconf import DictConfig, OmegaConf
 
-from swgcli import CONF_DIR
+from swgcli.app import hydra_app
+from swgcli.schema import GenerateApp
 
 log = logging.getLogger(__name__)
 
@@ -47,22 +46,14 @@ def run_generate(cfg: DictConfig) -> dict:
                     progress=bool(cfg.progress))
 
 
-@hydra.main(version_base="1.3", config_path=CONF_DIR, config_name="generate")
-def _main(cfg: DictConfig) -> None:
-    try:
-        s = run_generate(cfg)
-    except ValueError as e:
-        log.error("%s", e)
-        print(f"swgsim-generate: error: {e}", file=sys.stderr)
-        sys.exit(2)
+@hydra_app("generate", GenerateApp, "swgsim-generate")
+def main(cfg: DictConfig) -> dict:
+    """Generate the data set and print a one-line summary."""
+    s = run_generate(cfg)
     state = "complete" if s["complete"] else "incomplete (other shards pending)"
     print(f"swgsim-generate: {s['windows']} windows, {len(s['computed'])} shard(s) computed, "
           f"{len(s['skipped'])} skipped, {s['wall_s']:.1f} s -> {s['out_dir']} [{state}]")
-
-
-def main() -> None:
-    """Console entry point."""
-    _main()
+    return s
 
 
 if __name__ == "__main__":

@@ -14,16 +14,15 @@ once. Config: ``conf/paper.yaml``.
 from __future__ import annotations
 
 import logging
-import sys
 import time
 import warnings
 from collections import Counter
 
-import hydra
 from hydra.utils import to_absolute_path
 from omegaconf import DictConfig, OmegaConf
 
-from swgcli import CONF_DIR
+from swgcli.app import hydra_app
+from swgcli.schema import PaperApp
 
 log = logging.getLogger(__name__)
 
@@ -150,20 +149,7 @@ def run_paper(cfg: DictConfig) -> dict:
             "warnings": warn}
 
 
-@hydra.main(version_base="1.3", config_path=CONF_DIR, config_name="paper")
-def _main(cfg: DictConfig) -> None:
-    try:
-        run_paper(cfg)
-    except ValueError as e:
-        log.error("%s", e)
-        print(f"swgsim-paper: error: {e}", file=sys.stderr)
-        sys.exit(2)
-
-
-def main() -> None:
-    """Console entry point."""
-    _main()
-
+main = hydra_app("paper", PaperApp, "swgsim-paper")(run_paper)
 
 if __name__ == "__main__":
     main()

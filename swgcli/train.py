@@ -12,15 +12,13 @@ Examples
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import hydra
 from omegaconf import DictConfig
 
-CONFIG_PATH = str(Path(__file__).resolve().parents[1] / "conf")
+from swgcli.app import hydra_app
+from swgcli.schema import TrainApp
 
 
-@hydra.main(version_base="1.3", config_path=CONFIG_PATH, config_name="train")
+@hydra_app("train", TrainApp, "swgsim-train")
 def main(cfg: DictConfig) -> dict:
     """Compose ``conf/train.yaml`` and run the task it names."""
     from learn.study import run_train

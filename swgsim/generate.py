@@ -16,7 +16,6 @@ sidecar. The manifest is written last, when every shard is there.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import hashlib
 import json
@@ -36,6 +35,7 @@ from . import dynamics
 from .acquisition import acquire, parse_acquisition, start_angles
 from .calibration.chain import friction_effects_from_config
 from .chain import ChainSettings, SimulationChain
+from .config import dataset_config
 from .disturbance import DisturbanceSpec, disturb
 from .dynamics import gear_with_ke, rt1_size20
 from .faults import FAULTS, ChainParams, apply_fault, get_fault
@@ -45,42 +45,6 @@ from .measurement import apply_sensor_effects, parse_sensor_effects
 from .sensors import SensorLayout, default_signals, signal_rows
 
 log = logging.getLogger(__name__)
-
-# defaults of the paper preset (conf/dataset/paper.yaml mirrors these)
-PAPER: dict[str, Any] = {
-    "name": "paper",
-    "seed": 2024,
-    "gears": [
-        # paper Table IV: b1 and k1 of SWG models 1-3 relative to nominal
-        {"id": 1, "b1_factor": 1.0, "k1_factor": 1.0, "tolerance_seed": 101},
-        {"id": 2, "b1_factor": 1.2, "k1_factor": 1.2, "tolerance_seed": 102},
-        {"id": 3, "b1_factor": 0.8, "k1_factor": 0.8, "tolerance_seed": 103},
-    ],
-    "tolerances": {"sd_theta_deg": 0.3, "sd_r_mm": 0.1, "sd_beta_deg": 0.5, "sd_gain": 0.01},
-    "sensors": {"r_torque_mm": 29.0, "r_pairs_mm": 32.0, "grid_length_mm": 3.0,
-                "gauge_factor": 2.0},
-    "variants": {
-        # paper Table V (empty in the text; PHYSICS.md sec. 7): 60 variants per class
-        "healthy": {"severities": [0.0], "repeat": 60},
-        "reduced_damping": {"severity_linspace": [0.05, 0.3333, 60]},
-        "reduced_stiffness": {"severity_linspace": [0.05, 0.25, 60]},
-        "eccentric_wg": {"severities": [0.02, 0.05, 0.1], "n_positions": 20},
-        "root_tooth_crack": {"severities": [0.5, 0.7, 0.9], "n_positions": 20},
-        "tip_tooth_crack": {"severities": [0.5, 0.75, 1.0], "n_positions": 20},
-    },
-    "operating_points": {"n_in_rpm": [2000.0, 4000.0], "t_out_nm": [7.0, 39.0, 70.0]},
-    "chain": {"sample_rate_hz": 10000.0, "window_s": 0.12, "settle_s": 0.05, "substeps": 1,
-              "contact_half_width_deg": 20.0, "ecc_load_share": 1.0},
-    "mesh": {"n_theta": 120},
-    "disturbance": {"offset_mvv": 0.01, "harmonic_mvv": 0.01},
-    # protocol (swgsim.acquisition): the paper's phase-locked, noise-free windows
-    "acquisition": {"start": "fixed", "wg_start_deg": 0.0, "amplifier": None},
-    # measurement-chain effects found by the calibration loop (swgsim.measurement), e.g.
-    # [{name: amplifier_lowpass, params: {f_c_hz: 250}}]; applied before eq. (10)
-    "sensor_effects": [],
-    "friction_effects": None,
-}
-
 
 @dataclass(frozen=True)
 class WindowSpec:
@@ -116,6 +80,17 @@ def _req(cond: bool, msg: str):
         raise ValueError(msg)
 
 
+def _in(value, lo, hi, key: str, unit: str = "", *, lo_open: bool = False,
+        hi_open: bool = False, why: str = "") -> None:
+    """Refuse ``value`` outside [lo, hi] (or the open ends) naming key, value and range."""
+    v = float(value)
+    ok = np.isfinite(v) and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
+    if not ok:
+        rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+        raise ValueError(f"{key} must lie in {rng}{' ' + unit if unit else ''}"
+                         f"{' (' + why + ')' if why else ''}, got {value}")
+
+
 def variant_list(name: str, spec: dict) -> list[tuple[float, float]]:
     """(severity, position_deg) of every variant of a class, in variant order.
 
@@ -126,14 +101,20 @@ def variant_list(name: str, spec: dict) -> list[tuple[float, float]]:
     """
     f = get_fault(name)
     lo, hi = f.severity_range
-    if "severity_linspace" in spec:
-        a, b, n = spec["severity_linspace"]
-        _req(int(n) >= 1, f"dataset.variants.{name}.severity_linspace: count must be >= 1, "
-                          f"got {n}")
+    lin, given = spec.get("severity_linspace"), spec.get("severities")
+    _req((lin is None) != (given is None), f"dataset.variants.{name}: give either severities "
+                                           "or severity_linspace [first, last, count]")
+    if lin is not None:
+        _req(len(lin) == 3, f"dataset.variants.{name}.severity_linspace must be [first, last, "
+                            f"count], got {lin}")
+        a, b, n = lin
+        _req(int(n) >= 1 and n == int(n), f"dataset.variants.{name}.severity_linspace: count "
+                                          f"must be an integer >= 1, got {n}")
         sev = list(np.linspace(float(a), float(b), int(n)))
     else:
-        sev = [float(s) for s in spec.get("severities", [])]
-        _req(len(sev) >= 1, f"dataset.variants.{name}: give severities or severity_linspace")
+        sev = [float(s) for s in given]
+        _req(len(sev) >= 1, f"dataset.variants.{name}.severities must list at least one "
+                            "severity")
     for s in sev:
         _req(lo <= s <= hi, f"dataset.variants.{name}: severity {s} outside the allowed "
                             f"range [{lo}, {hi}]")
@@ -173,29 +154,57 @@ def plan(cfg: dict) -> list[ShardSpec]:
         range, non-positive speed, negative torque or variant count, a gauge off the
         collar, a truss too coarse for the gauge layout, bad chain settings.
     """
+    cfg = dataset_config(cfg)
+    _in(cfg["seed"], 0, 2**32 - 1, "dataset.seed")
+    _req(bool(cfg["name"]) and "/" not in cfg["name"] and cfg["name"] not in (".", ".."),
+         f"dataset.name must be a non-empty folder name, got {cfg['name']!r}")
     ops = cfg["operating_points"]
-    for n in ops["n_in_rpm"]:
-        _req(np.isfinite(n) and float(n) > 0,
-             f"dataset.operating_points.n_in_rpm must be > 0 rpm, got {n}")
-        _req(float(n) <= 8000, f"dataset.operating_points.n_in_rpm must be <= 8000 rpm "
-                               f"(catalogue max input speed of size 20 is 6500), got {n}")
-    for t in ops["t_out_nm"]:
-        _req(np.isfinite(t) and 0 <= float(t) <= 107, "dataset.operating_points.t_out_nm "
-             f"must lie in [0, 107] N m (repeated peak torque of size 20), got {t}")
+    for key, lo, hi, unit, why in (
+            ("n_in_rpm", 0.0, 8000.0, "rpm", "catalogue max input speed of size 20 is 6500"),
+            ("t_out_nm", 0.0, 107.0, "N m", "repeated peak torque of size 20")):
+        vals = ops[key]
+        _req(len(vals) >= 1 and len(set(vals)) == len(vals),
+             f"dataset.operating_points.{key} must list distinct values, got {vals}")
+        for v in vals:
+            _in(v, lo, hi, f"dataset.operating_points.{key}", unit, lo_open=key == "n_in_rpm",
+                why=why)
     ch = cfg["chain"]
-    _req(ch["sample_rate_hz"] > 0, f"dataset.chain.sample_rate_hz must be > 0, got "
-                                   f"{ch['sample_rate_hz']}")
-    _req(ch["window_s"] > 0, f"dataset.chain.window_s must be > 0, got {ch['window_s']}")
-    _req(ch["settle_s"] >= 0, f"dataset.chain.settle_s must be >= 0, got {ch['settle_s']}")
-    _req(int(ch["substeps"]) >= 1, f"dataset.chain.substeps must be >= 1, got "
-                                   f"{ch['substeps']}")
+    _in(ch["sample_rate_hz"], 0.0, 1e6, "dataset.chain.sample_rate_hz", "Hz", lo_open=True)
+    _in(ch["window_s"], 0.0, 10.0, "dataset.chain.window_s", "s", lo_open=True)
+    _in(ch["settle_s"], 0.0, 10.0, "dataset.chain.settle_s", "s")
+    _in(ch["substeps"], 1, 100, "dataset.chain.substeps")
+    node_deg = 360.0 / int(cfg["mesh"]["n_theta"])
+    _in(ch["contact_half_width_deg"], node_deg, 90.0, "dataset.chain.contact_half_width_deg",
+        "deg", hi_open=True, why="at least one node spacing; the two mesh zones 180 deg "
+                                 "apart must not overlap")
+    ecc = cfg["variants"].get("eccentric_wg") or {}
+    e_max = max([*(ecc.get("severities") or []), *((ecc.get("severity_linspace") or [])[:2]),
+                 0.0])
+    _in(ch["ecc_load_share"], 0.0, 1.0 / e_max if e_max > 0 else 10.0,
+        "dataset.chain.ecc_load_share", why="the load share 1 ± κ e/w0 of a mesh zone must "
+        "stay in [0, 2] for the largest eccentricity of dataset.variants.eccentric_wg")
+    tol = cfg["tolerances"]
+    for key, hi, unit in (("sd_theta_deg", 5.0, "deg"), ("sd_r_mm", 2.0, "mm"),
+                          ("sd_beta_deg", 10.0, "deg"), ("sd_gain", 0.2, "")):
+        _in(tol[key], 0.0, hi, f"dataset.tolerances.{key}", unit)
+    dist = cfg["disturbance"]
+    for key in ("offset_mvv", "harmonic_mvv"):
+        _in(dist[key], 0.0, 1.0, f"dataset.disturbance.{key}", "mV/V")
+    if dist["harmonic_mvv"] > 0:  # eq. (10): sub-harmonics down to order 1/4
+        rev = ch["window_s"] * min(ops["n_in_rpm"]) / 60.0
+        need = 4.0 * 60.0 / min(ops["n_in_rpm"])
+        _req(rev >= 4.0 - 1e-9, f"dataset.chain.window_s={ch['window_s']:g} s holds {rev:.3g} "
+             f"input revolutions at {min(ops['n_in_rpm']):g} rpm, less than one period of "
+             f"eq. (10)'s lowest sub-harmonic (order 1/4); allowed: >= {need:.4g} s, or "
+             "dataset.disturbance.harmonic_mvv=0")
     _req(len(cfg["gears"]) >= 1, "dataset.gears must list at least one gear")
     ids = [int(g["id"]) for g in cfg["gears"]]
     _req(len(set(ids)) == len(ids), f"dataset.gears: ids must be unique, got {ids}")
-    for g in cfg["gears"]:
+    for i, g in enumerate(cfg["gears"]):
+        _in(g["id"], 1, 999, f"dataset.gears[{i}].id")
+        _in(g["tolerance_seed"], 0, 2**32 - 1, f"dataset.gears[{i}].tolerance_seed")
         for k in ("b1_factor", "k1_factor"):
-            _req(0 < float(g[k]) <= 10, f"dataset.gears[id={g['id']}].{k} must lie in "
-                                        f"(0, 10], got {g[k]}")
+            _in(g[k], 0.0, 10.0, f"dataset.gears[{i}].{k}", lo_open=True)
     acq = parse_acquisition(cfg.get("acquisition"))
     if acq.amplifier is not None:
         lead_s = acq.amplifier.lead_samples(ch["sample_rate_hz"]) / ch["sample_rate_hz"]
@@ -607,7 +616,8 @@ def generate(cfg: dict, out_dir: str | os.PathLike, n_jobs: int = 1, overwrite: 
     Parameters
     ----------
     cfg : dict
-        Data-set config (see :data:`PAPER`).
+        Data-set config (:class:`swgsim.config.DatasetConfig` as a dict, e.g.
+        :func:`swgsim.config.paper_config`).
     out_dir : path-like
         Target directory.
     n_jobs : int
@@ -633,7 +643,7 @@ def generate(cfg: dict, out_dir: str | os.PathLike, n_jobs: int = 1, overwrite: 
         On any invalid config value (see :func:`plan`) or a foreign ``out_dir``.
     """
     t0 = time.perf_counter()
-    cfg = copy.deepcopy(cfg)
+    cfg = dataset_config(cfg)  # complete and checked: what is hashed and stored
     if int(n_jobs) < 1:
         raise ValueError(f"n_jobs must be >= 1, got {n_jobs}")
     shards = plan(cfg)

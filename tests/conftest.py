@@ -17,7 +17,7 @@ def make_synthetic(
     gears=(1, 2, 3),
     n_variants: int = 4,
     ops=((2000.0, 7.0), (4000.0, 70.0)),
-    n_time: int = 600,
+    n_time: int = 1200,  # 0.12 s: four revolutions at 2000 rpm (DFT order 0.25)
     sample_rate_hz: float = 10_000.0,
     noise: float = 0.005,
 ):

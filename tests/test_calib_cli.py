@@ -7,17 +7,16 @@ import json
 import numpy as np
 import pytest
 import yaml
-from hydra import compose, initialize_config_dir
 
-from swgcli.calibrate import CONFIG_PATH, run_calibrate
+from swgcli import compose_app
+from swgcli.calibrate import run_calibrate
 from swgsim.calibration import FrictionEffects, MeasuredDataError, build_problem, detect_kind
 from swgsim.calibration.friction import load_friction_csv, write_friction_csv
 from swgsim.calibration.synthetic import PLANTED, synthetic_recording
 
 
 def _cfg(overrides):
-    with initialize_config_dir(config_dir=CONFIG_PATH, version_base="1.3"):
-        return compose(config_name="calibrate", overrides=overrides)
+    return compose_app("calibrate", overrides)
 
 
 @pytest.fixture(scope="module")

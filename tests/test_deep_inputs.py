@@ -30,7 +30,12 @@ def test_signal_input_shapes(toy, kind, n_ch):
 
 
 def test_feature_inputs_and_filter(toy):
-    sel3 = build_input(toy, "sel3", disturbed=True)
+    from learn.features import paper_orders
+
+    with pytest.raises(ValueError, match="features.order_step=0.25 needs windows of at least 4"):
+        build_input(toy, "sel3", disturbed=True)  # 32 ms hold 1.07 revolutions at 2000 rpm
+    sel3 = build_input(toy, "sel3", disturbed=True,
+                       feature_kwargs={"orders": paper_orders(8.0, 1.0)})
     assert sel3.X.ndim == 2 and sel3.n_aux == 0
     assert sel3.meta["disturbed"].all()
     raw = build_input(toy, "raw", aux=(), disturbed=True)

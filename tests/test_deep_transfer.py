@@ -92,13 +92,13 @@ def test_coral_recovers_a_shifted_domain():
 
 def test_transfer_end_to_end(tmp_path):
     """Compose the real experiment, shrink it, run it; check the report."""
-    from hydra import compose, initialize_config_dir
-
     from learn.study import run_train
+    from swgcli import compose_app
 
     data = write_toy_dataset(tmp_path / "toy", n_variants=4, n_time=64)
     overrides = [
         "experiment=transfer", f"data.path={data}", f"paths.report_dir={tmp_path}/reports",
+        "features.order_step=2.0",  # the toy's 16 ms windows hold half a revolution
         f"logger.tracking_uri=sqlite:///{tmp_path}/mlflow.db",
         "transfer.protocols=[cv_disturbed,ood_disturbed]", "transfer.seeds=[0,1]",
         "transfer.cv_seeds=[0]", "transfer.k_shots=[0,1,2]", "transfer.finetune.steps=3",
@@ -112,8 +112,7 @@ def test_transfer_end_to_end(tmp_path):
         "transfer.models.mlp_torch.estimator.max_epochs=2",
         "transfer.models.rf.estimator.n_estimators=10",
     ]
-    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
-        cfg = compose("train", overrides=overrides)
+    cfg = compose_app("train", overrides)
     out = run_train(cfg)
     rep = Path(out["report_dir"])
     assert rep == tmp_path / "reports" / "transfer"
@@ -142,26 +141,25 @@ def test_transfer_end_to_end(tmp_path):
                                            ("mlp_torch", "MLPClassifierTorch"),
                                            ("minirocket", "MiniRocketClassifier")])
 def test_deep_model_configs_instantiate(name, cls):
-    from hydra import compose, initialize_config_dir
     from hydra.utils import instantiate
     from sklearn.pipeline import Pipeline
 
-    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
-        cfg = compose("train", overrides=[f"model={name}", "seed=7"])
+    from swgcli import compose_app
+
+    cfg = compose_app("train", [f"model={name}", "seed=7"])
     est = instantiate(cfg.model, _convert_="all")
     assert isinstance(est, Pipeline) and type(est[-1]).__name__ == cls
     assert est[-1].get_params()["random_state"] == 7
 
 
 def test_transfer_experiment_composes():
-    from hydra import compose, initialize_config_dir
     from omegaconf import OmegaConf
 
     from learn.inputs import INPUTS
     from learn.transfer import ADAPT, _specs_from_cfg, make_estimator
+    from swgcli import compose_app
 
-    with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
-        cfg = compose("train", overrides=["experiment=transfer"])
+    cfg = compose_app("train", ["experiment=transfer"])
     assert cfg.task == "transfer"
     tc = OmegaConf.to_container(cfg.transfer, resolve=True)
     specs = _specs_from_cfg(tc["runs"])

@@ -15,7 +15,7 @@ from learn.features import (
 from swgsim.data import PER_SAMPLE, make_dataset
 
 FS = 10_000.0
-N_TIME = 600  # 2 revolutions at 2000 rpm
+N_TIME = 1200  # 4 revolutions at 2000 rpm (DFT order 0.25)
 
 
 def _pair(reference_signal, sample_signal, eta=(0.8, 0.8), n_rpm=2000.0):

@@ -6,16 +6,14 @@ import subprocess
 import sys
 
 import pytest
-from hydra import compose, initialize_config_dir
 
 from learn import study
 from learn.study import TASKS, run_train
-from swgcli.train import CONFIG_PATH
+from swgcli import compose_app
 
 
 def compose_train(overrides=()):
-    with initialize_config_dir(config_dir=CONFIG_PATH, version_base="1.3"):
-        return compose("train", overrides=list(overrides))
+    return compose_app("train", overrides)
 
 
 def _shrunk(tiny_dataset, tracking_uri, tmp_path, *overrides):

@@ -2,19 +2,16 @@
 
 import pandas as pd
 import pytest
-from hydra import compose, initialize_config_dir
 
-from swgcli import CONF_DIR
+from swgcli import compose_app
 from swgcli.paper import run_paper
 
 
 def main_cfg(tmp_path, *extra):
-    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
-        return compose("paper", overrides=[
+    return compose_app("paper", [
             "grid=tiny", f"data_root={tmp_path}/data", f"report_root={tmp_path}/reports",
             f"tracking_uri=sqlite:///{tmp_path}/mlflow.db", "study.figures=false",
             "study.tables=[VII,X]", "study.models=[rf,nb]",
-            "datasets.paper.chain.window_s=0.04", "datasets.bench.chain.window_s=0.04",
             *extra])
 
 

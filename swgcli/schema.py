@@ -1,0 +1,220 @@
+"""Typed schemas of the four apps, registered as Hydra structured configs.
+
+Each app's primary config (``conf/<app>.yaml``) starts from its schema here
+(:class:`GenerateApp`, :class:`PaperApp`, :class:`TrainApp`, :class:`CalibrateApp`), so
+Hydra refuses unknown keys, missing mandatory values and values of the wrong type while
+composing; :func:`validate` repeats the key check after composition, because Hydra's
+``+key=value`` adds a key even to a typed config. Ranges are checked where they are
+decided (:func:`swgsim.generate.plan`, the learners, the calibration).
+
+The config groups whose defaults live in Python are generated here from their one
+source, not written twice as YAML:
+
+=============  =====================================================================
+group          source
+=============  =====================================================================
+``protocol``   :data:`learn.protocols.PROTOCOLS` (the paper's four protocols)
+``model``      :data:`learn.baselines.PAPER_MODELS` (Table VI); deep models stay YAML
+``features``   :class:`learn.features.FeatureSettings` (Table III selections)
+``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.study.PAPER_TABLES`
+``dataset``    :class:`swgsim.config.DatasetConfig` (the paper preset is its defaults)
+=============  =====================================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from hydra.core.config_store import ConfigStore
+from omegaconf import MISSING, DictConfig, OmegaConf
+
+from learn.features import FeatureSettings
+from learn.protocols import PROTOCOLS, ProtocolConfig
+from swgsim.config import DatasetConfig, check_keys
+
+
+@dataclass
+class GenerateApp:
+    """``swgsim-generate``: simulate a data set."""
+
+    dataset: DatasetConfig = field(default_factory=DatasetConfig)
+    out_dir: str = "data/${dataset.name}"   # relative: from the directory you start in
+    n_jobs: int = 2                         # worker processes (joblib); 1: in-process
+    overwrite: bool = False                 # replace a data set of another config
+    shard: int | None = None                # compute only this shard (cluster array jobs)
+    progress: bool = True
+
+
+@dataclass
+class StudyOptions:
+    """The paper's study (:func:`learn.study.run_paper_study`)."""
+
+    tables: list[str] | None = None   # subset of [VII, VIII, IX, X]; null: all four
+    models: list[str] | None = None   # restrict every table to these; null: the paper's
+    scale: bool = False               # StandardScaler before each classifier (paper: none)
+    figures: bool = True              # Fig. 6-8 of each data set
+
+
+@dataclass
+class PaperApp:
+    """``swgsim-paper``: the main job."""
+
+    datasets: dict[str, DatasetConfig] = field(default_factory=dict)
+    protocols: list[str] = field(default_factory=lambda: ["paper", "bench"])
+    data_root: str = "data"
+    report_root: str = "reports"
+    n_jobs: int = 2
+    tracking_uri: str | None = None
+    seed: int = 0
+    study: StudyOptions = field(default_factory=StudyOptions)
+
+
+@dataclass
+class DataRef:
+    """A data set on disk (``conf/data/<name>.yaml``)."""
+
+    name: str = "paper"
+    path: str = "${paths.data_dir}/paper"
+
+
+@dataclass
+class LoggerConfig:
+    """MLflow tracking of ``swgsim-train`` (``~logger`` switches it off)."""
+
+    tracking_uri: str | None = None   # null: $MLFLOW_TRACKING_URI, else sqlite:///<repo>/mlflow.db
+    experiment: str = "${protocol.name}"
+    run_name: str = "${features.name}-${model.name}"
+    confusion_plot: bool = True
+
+
+@dataclass
+class PathsConfig:
+    """Every path the apps read or write; relative paths are from the working directory."""
+
+    root_dir: str = "${oc.env:SWG_ROOT,.}"
+    data_dir: str = "${paths.root_dir}/data"
+    report_dir: str = "${paths.root_dir}/reports"
+
+
+@dataclass
+class TrainApp:
+    """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.study.TASKS`."""
+
+    task: str = "study"
+    seed: int = 0
+    n_jobs: int = 1
+    data: DataRef = field(default_factory=DataRef)
+    features: FeatureSettings = field(default_factory=FeatureSettings)
+    model: Any = MISSING
+    protocol: ProtocolConfig = field(default_factory=ProtocolConfig)
+    logger: LoggerConfig | None = None
+    paths: PathsConfig = field(default_factory=PathsConfig)
+    study: StudyOptions = field(default_factory=StudyOptions)
+    transfer: Any = None
+
+
+@dataclass
+class BaselineOptions:
+    """Smooth sign of the paper's friction law."""
+
+    v_s: float | None = None     # tanh(dq / v_s) [rad/s]; null: v_s_rel * p99(|dq|)
+    v_s_rel: float = 0.01
+
+
+@dataclass
+class SplitOptions:
+    """Held-out time blocks of a friction recording; the other blocks are fit blocks."""
+
+    n_blocks: int = 10
+    validation_blocks: list[int] = field(default_factory=lambda: [3, 7])  # choose effects
+    test_blocks: list[int] = field(default_factory=lambda: [5, 9])  # errors before/after only
+    guard_frac: float = 0.05  # dropped at each boundary between roles [block lengths]
+
+
+@dataclass
+class SelectionOptions:
+    """Which effects a friction calibration accepts."""
+
+    candidates: list[str] | None = None  # null: the whole library; or effect names
+    min_rel_improvement: float = 0.02    # validation RMSE must drop by more than this
+    max_delta_bic: float = -10.0         # BIC on the fit blocks must drop by more than 10
+    effective_bic: bool = True           # BIC with n / tau_int samples
+    max_rel_se: float = 0.5              # primary parameters: relative standard error
+    max_abs_corr: float = 0.98           # flag parameters correlated beyond this
+    max_iter: int = 12                   # accepted steps at most (a pair counts once)
+    pair_candidates: int = 4             # pairs of the best 4 when no single one passes
+    max_starts: int = 3                  # optimiser starts per candidate
+    structure_threshold: float = 0.03    # probe score from which a residual is structured
+
+
+@dataclass
+class CalibrateLogger:
+    """MLflow tracking of ``swgsim-calibrate``."""
+
+    enabled: bool = True
+    tracking_uri: str | None = None
+    experiment: str = "calibration"
+    run_name: str | None = None
+
+
+@dataclass
+class CalibrateApp:
+    """``swgsim-calibrate``: calibrate the model against measured data."""
+
+    measured: str = MISSING   # friction CSV (kind 1) or schema-v1 data-set directory (kind 2)
+    out_dir: str = MISSING    # created if absent
+    baseline: BaselineOptions = field(default_factory=BaselineOptions)
+    accel_window: int = 21    # samples of the Savitzky-Golay estimate of ddq
+    split: SplitOptions = field(default_factory=SplitOptions)
+    selection: SelectionOptions = field(default_factory=SelectionOptions)
+    figures: bool = True
+    logger: CalibrateLogger = field(default_factory=CalibrateLogger)
+
+
+def register() -> None:
+    """Register the schemas and the generated config groups in Hydra's ConfigStore."""
+    from learn.baselines import PAPER_MODELS, model_config
+    from learn.study import PAPER_TABLES
+
+    cs = ConfigStore.instance()
+    cs.store(name="generate_schema", node=GenerateApp)
+    cs.store(name="paper_schema", node=PaperApp)
+    cs.store(name="train_schema", node=TrainApp)
+    cs.store(name="calibrate_schema", node=CalibrateApp)
+    for name in PROTOCOLS:
+        cs.store(group="protocol", name=name,
+                 node=ProtocolConfig.paper(name, random_state="${seed}"))
+    for name in PAPER_MODELS:
+        cs.store(group="model", name=name, node=model_config(name))
+    for k in (1, 2, 3):
+        cs.store(group="features", name=f"selection{k}",
+                 node=FeatureSettings(name=f"selection{k}", selection=k))
+    cs.store(group="paths", name="default", node=PathsConfig)
+    cs.store(group="logger", name="mlflow", node=LoggerConfig)
+    for table, spec in PAPER_TABLES.items():
+        cs.store(group="experiment", name=f"table_{table.lower()}", package="_global_", node={
+            "defaults": [{"override /protocol": spec["protocol"]}],
+            "hydra": {"sweeper": {"params": {
+                "features": ",".join(f"selection{s}" for s in spec["selections"]),
+                "model": ",".join(spec["models"])}}}})
+
+
+def validate(cfg: DictConfig, schema: type) -> None:
+    """Check a composed app config against its schema before any work.
+
+    Hydra's ``+key=value`` adds a key even to a typed config, so a misspelled key would
+    otherwise be ignored silently; mandatory values left at ``???`` are refused too.
+
+    Raises
+    ------
+    ValueError
+        One line: ``<full key>: unknown key; allowed: ...``, ``... missing value``, or a
+        value of the wrong type.
+    """
+    container = OmegaConf.to_container(cfg, resolve=True, throw_on_missing=False)
+    container.pop("hydra", None)
+    check_keys(container, schema, "")
+
+
+register()

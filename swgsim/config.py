@@ -1,0 +1,364 @@
+"""Typed schema of a data-set config, with the paper preset as its defaults.
+
+:class:`DatasetConfig` and its parts are plain dataclasses (no Hydra): their defaults *are*
+the paper's grid and protocol (Sec. III-B, Tables IV-V), the one place where those values
+live. The apps register them as Hydra structured configs (``swgcli.schema``), so the YAML
+presets in ``conf/dataset/`` hold only what differs from the paper; library users get the
+same defaults from :func:`paper_config`.
+
+:func:`check_keys` checks a plain mapping against such a schema before any work: every
+unknown, missing or mistyped key is refused with its full name, e.g.
+``dataset.chain.windows_s: unknown key; allowed: sample_rate_hz, window_s, ...``.
+Ranges and physical validity are checked where they are decided
+(:func:`swgsim.generate.plan`, :func:`swgsim.acquisition.parse_acquisition`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Union
+
+MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
+
+
+@dataclass
+class GearConfig:
+    """One SWG model of the data set (paper Table IV).
+
+    Attributes
+    ----------
+    id : int
+        SWG model number, >= 1.
+    b1_factor, k1_factor : float
+        b1 and k1 relative to the nominal gear [-], in (0, 10].
+    tolerance_seed : int
+        Seed of this gear's gauge tolerances (its sensor model), >= 0.
+    ke_extra : list of mapping
+        Extra kinematic-error harmonics ``{order, amp_rad, phase_rad}`` found by the
+        calibration loop (:func:`swgsim.dynamics.gear_with_ke`).
+    """
+
+    id: int = 1
+    b1_factor: float = 1.0
+    k1_factor: float = 1.0
+    tolerance_seed: int = 101
+    ke_extra: list[Any] = field(default_factory=list)
+
+
+@dataclass
+class TolerancesConfig:
+    """Per-gear gauge tolerances, standard deviations [unverified, see README]."""
+
+    sd_theta_deg: float = 0.3   # gauge angle [deg]
+    sd_r_mm: float = 0.1        # gauge radius [mm]
+    sd_beta_deg: float = 0.5    # grid orientation [deg]
+    sd_gain: float = 0.01       # channel gain [-]
+
+
+@dataclass
+class SensorsConfig:
+    """Gauge layout (swgsim/sensors.py)."""
+
+    r_torque_mm: float = 29.0    # radius of the s0 torque bridge [mm]
+    r_pairs_mm: float = 32.0     # radius of the s1..s4 half bridges [mm]
+    grid_length_mm: float = 3.0  # active grid length [mm]
+    gauge_factor: float = 2.0    # [-]
+
+
+@dataclass
+class VariantSpec:
+    """Variants of one class: severities (a list or a linspace) x positions x repeats."""
+
+    severities: list[float] | None = None
+    severity_linspace: list[float] | None = None  # [first, last, count]
+    repeat: int = 1
+    n_positions: int = 1
+
+
+def _paper_variants() -> dict[str, VariantSpec]:
+    # paper Table V (empty in the text): 60 variants per class, README *Design choices*
+    return {
+        "healthy": VariantSpec(severities=[0.0], repeat=60),
+        "reduced_damping": VariantSpec(severity_linspace=[0.05, 0.3333, 60]),
+        "reduced_stiffness": VariantSpec(severity_linspace=[0.05, 0.25, 60]),
+        "eccentric_wg": VariantSpec(severities=[0.02, 0.05, 0.1], n_positions=20),
+        "root_tooth_crack": VariantSpec(severities=[0.5, 0.7, 0.9], n_positions=20),
+        "tip_tooth_crack": VariantSpec(severities=[0.5, 0.75, 1.0], n_positions=20),
+    }
+
+
+@dataclass
+class OperatingPointsConfig:
+    """The paper's six operating points (Sec. III-B)."""
+
+    n_in_rpm: list[float] = field(default_factory=lambda: [2000.0, 4000.0])
+    t_out_nm: list[float] = field(default_factory=lambda: [7.0, 39.0, 70.0])
+
+
+@dataclass
+class ChainConfig:
+    """Numerical and contact settings of the simulation chain (swgsim.chain.ChainSettings)."""
+
+    sample_rate_hz: float = 10000.0
+    window_s: float = 0.12
+    settle_s: float = 0.05
+    substeps: int = 1
+    contact_half_width_deg: float = 20.0
+    ecc_load_share: float = 1.0
+
+
+@dataclass
+class MeshConfig:
+    """Truss mesh of the flexspline (swgsim.flexspline.Mesh)."""
+
+    n_theta: int = 120
+
+
+@dataclass
+class DisturbanceConfig:
+    """Amplitude ranges of eq. (10) [mV/V] (swgsim.disturbance)."""
+
+    offset_mvv: float = 0.01
+    harmonic_mvv: float = 0.01
+
+
+@dataclass
+class AmplifierConfig:
+    """A delta-sigma bridge ADC (swgsim.acquisition.Amplifier)."""
+
+    name: str = MISSING
+    noise_uv_rms: float = MISSING  # type: ignore[assignment]
+    excitation_v: float = MISSING  # type: ignore[assignment]
+    vref_v: float = MISSING  # type: ignore[assignment]
+    gain: float = MISSING  # type: ignore[assignment]
+    bits: int = 24
+    order: int = 3
+    oversample: int = 4
+
+
+@dataclass
+class AcquisitionConfig:
+    """Protocol of a data set (swgsim.acquisition): the paper's by default."""
+
+    start: str = "fixed"
+    wg_start_deg: float = 0.0
+    amplifier: AmplifierConfig | None = None
+
+
+def _paper_gears() -> list[GearConfig]:
+    # paper Table IV: b1 and k1 of SWG models 1-3 relative to nominal
+    return [GearConfig(1, 1.0, 1.0, 101), GearConfig(2, 1.2, 1.2, 102),
+            GearConfig(3, 0.8, 0.8, 103)]
+
+
+@dataclass
+class DatasetConfig:
+    """A data set: grid, chain, disturbance and protocol; defaults are the paper preset.
+
+    Attributes
+    ----------
+    name : str
+        Name, also the default folder ``data/<name>``.
+    seed : int
+        Seed of every random draw of the data set, >= 0.
+    gears : list of GearConfig
+    tolerances, sensors, operating_points, chain, mesh, disturbance, acquisition
+        See their classes.
+    variants : dict of str to VariantSpec
+        Class name -> its variants (paper Table V).
+    sensor_effects : list
+        Measurement-chain effects (swgsim.measurement), applied before eq. (10).
+    friction_effects : mapping or None
+        Extra friction found by a calibration (swgsim.calibration.chain).
+    """
+
+    name: str = "paper"
+    seed: int = 2024
+    gears: list[GearConfig] = field(default_factory=_paper_gears)
+    tolerances: TolerancesConfig = field(default_factory=TolerancesConfig)
+    sensors: SensorsConfig = field(default_factory=SensorsConfig)
+    variants: dict[str, VariantSpec] = field(default_factory=_paper_variants)
+    operating_points: OperatingPointsConfig = field(default_factory=OperatingPointsConfig)
+    chain: ChainConfig = field(default_factory=ChainConfig)
+    mesh: MeshConfig = field(default_factory=MeshConfig)
+    disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
+    acquisition: AcquisitionConfig = field(default_factory=AcquisitionConfig)
+    sensor_effects: list[Any] = field(default_factory=list)
+    friction_effects: Any | None = None
+
+
+def paper_config() -> dict:
+    """The paper preset as a plain dict (:class:`DatasetConfig` defaults)."""
+    return dataclasses.asdict(DatasetConfig())
+
+
+# ------------------------------------------------------------------------ checking
+_SCALARS = {int: "an integer", float: "a number", str: "a string", bool: "true or false"}
+
+
+def _describe(tp) -> str:
+    origin = typing.get_origin(tp)
+    if tp in _SCALARS:
+        return _SCALARS[tp]
+    if origin in (list, tuple):
+        return "a list"
+    if origin in (dict, Mapping) or dataclasses.is_dataclass(tp):
+        return "a mapping"
+    return str(tp)
+
+
+def _fields(schema: type) -> dict[str, Any]:
+    hints = typing.get_type_hints(schema)
+    return {f.name: hints[f.name] for f in dataclasses.fields(schema)}
+
+
+def _default(schema: type, name: str) -> Any:
+    f = {f.name: f for f in dataclasses.fields(schema)}[name]
+    if f.default_factory is not dataclasses.MISSING:
+        value = f.default_factory()
+    elif f.default is not dataclasses.MISSING:
+        value = f.default
+    else:
+        value = MISSING
+    return _plain(value)
+
+
+def _plain(value: Any) -> Any:
+    if dataclasses.is_dataclass(value):
+        return dataclasses.asdict(value)
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+def _value(value: Any, tp, where: str, fill: bool) -> Any:
+    if isinstance(value, str) and value == MISSING:
+        raise ValueError(f"{where}: missing value (give {where}=...)")
+    if tp is Any:
+        return value
+    origin = typing.get_origin(tp)
+    if origin in (Union, types.UnionType):
+        args = typing.get_args(tp)
+        if value is None and type(None) in args:
+            return None
+        inner = [a for a in args if a is not type(None)]
+        return _value(value, inner[0], where, fill)
+    if value is None:
+        raise ValueError(f"{where}: must be {_describe(tp)}, got null")
+    if dataclasses.is_dataclass(tp):
+        if not isinstance(value, Mapping):
+            raise ValueError(f"{where}: must be a mapping of {', '.join(_fields(tp))}, "
+                             f"got {value!r}")
+        return _mapping(value, tp, where, fill)
+    if origin in (list, tuple):
+        if not isinstance(value, (list, tuple)):
+            raise ValueError(f"{where}: must be a list, got {value!r}")
+        (item,) = typing.get_args(tp)[:1] or (Any,)
+        return [_value(v, item, f"{where}[{i}]", fill) for i, v in enumerate(value)]
+    if origin is dict:
+        if not isinstance(value, Mapping):
+            raise ValueError(f"{where}: must be a mapping, got {value!r}")
+        _, item = typing.get_args(tp)
+        return {k: _value(v, item, f"{where}.{k}", fill) for k, v in value.items()}
+    if tp is bool:
+        ok = isinstance(value, bool)
+    elif tp is int:
+        ok = isinstance(value, int) and not isinstance(value, bool)
+    elif tp is float:
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    elif tp is str:
+        ok = isinstance(value, str)
+    else:
+        ok = True
+    if not ok:
+        raise ValueError(f"{where}: must be {_describe(tp)}, got {value!r}")
+    return value
+
+
+def _mapping(cfg: Mapping[str, Any], schema: type, where: str, fill: bool) -> dict:
+    fields = _fields(schema)
+    pre = f"{where}." if where else ""
+    unknown = [k for k in cfg if k not in fields]
+    if unknown:
+        raise ValueError(f"{pre}{unknown[0]}: unknown key; allowed: {', '.join(fields)}")
+    out = {}
+    for name, tp in fields.items():
+        if name in cfg:
+            out[name] = _value(cfg[name], tp, f"{pre}{name}", fill)
+        elif fill:
+            default = _default(schema, name)
+            if isinstance(default, str) and default == MISSING:
+                raise ValueError(f"{pre}{name}: missing key")
+            out[name] = _value(default, tp, f"{pre}{name}", fill)
+        else:
+            raise ValueError(f"{pre}{name}: missing key")
+    return out
+
+
+def check_keys(cfg: Mapping[str, Any], schema: type, where: str) -> None:
+    """Check a complete mapping against a dataclass schema, recursively.
+
+    Parameters
+    ----------
+    cfg : mapping
+        Config to check, every key of the schema present (e.g. a composed app config).
+    schema : dataclass type
+        E.g. :class:`DatasetConfig`. Fields typed ``Any`` are not looked into.
+    where : str
+        Full name of ``cfg`` for messages, e.g. ``"dataset"`` ("" for a root config).
+
+    Raises
+    ------
+    ValueError
+        One line naming the first unknown key (with the allowed ones), missing key or
+        value of the wrong type, by its full name.
+    """
+    _mapping(cfg, schema, where, fill=False)
+
+
+def complete(cfg: Mapping[str, Any], schema: type, where: str) -> dict:
+    """A checked copy of a mapping with the keys it leaves out taken from the schema.
+
+    Parameters
+    ----------
+    cfg, schema, where
+        As in :func:`check_keys`; keys absent from ``cfg`` (at any depth) take the
+        schema's defaults, except mandatory ones.
+
+    Returns
+    -------
+    dict
+        Plain, complete config.
+
+    Raises
+    ------
+    ValueError
+        As :func:`check_keys` (unknown key, mandatory key missing, wrong type).
+    """
+    return _mapping(cfg, schema, where, fill=True)
+
+
+def dataset_config(cfg: Mapping[str, Any] | None = None) -> dict:
+    """A complete, checked data-set config: ``cfg`` over the paper preset's defaults.
+
+    Parameters
+    ----------
+    cfg : mapping, optional
+        Partial or complete data-set config; None: the paper preset.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    ValueError
+        Naming the key (``dataset.<key>``) that is unknown or of the wrong type.
+    """
+    return complete(cfg or {}, DatasetConfig, "dataset")
