@@ -21,11 +21,11 @@ only if asked (``scale=True``): the paper does not scale its features.
 from __future__ import annotations
 
 import logging
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from sklearn.base import ClassifierMixin
-from sklearn.pipeline import Pipeline
-from sklearn.preprocessing import StandardScaler
+if TYPE_CHECKING:
+    from sklearn.base import ClassifierMixin
+    from sklearn.pipeline import Pipeline
 
 log = logging.getLogger(__name__)
 
@@ -94,6 +94,9 @@ def make_pipeline(estimator: ClassifierMixin, name: str = "clf", scale: bool = F
     sklearn.pipeline.Pipeline
         Steps ``[("scale", StandardScaler()), (name, estimator)]`` or ``[(name, estimator)]``.
     """
+    from sklearn.pipeline import Pipeline
+    from sklearn.preprocessing import StandardScaler
+
     steps = [("scale", StandardScaler())] if scale else []
     return Pipeline([*steps, (str(name), estimator)])
 

@@ -11,6 +11,7 @@ table lie within ±3, ±5 and ±10 points of the paper and their mean absolute d
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -76,17 +77,26 @@ PAPER_RESULTS: dict[str, dict | None] = {
     },
 }
 
-#: Title, protocol, models and selections of each table, as in the paper.
-TABLE_TITLES = {
-    "VII": ("Score on training and test set for different selections", "cv_clean", M5,
-            SELECTIONS),
-    "VIII": ("Score on training and test set for disturbed data", "cv_disturbed", M5,
-             SELECTIONS),
-    "IX": ("Avg. score in per cent on out-of-distribution classification", "ood_clean", M5,
-           SELECTIONS),
-    "X": ("Avg. score in per cent on out-of-distribution classification on disturbed data "
-          "for four selected classifiers", "ood_disturbed", M4, ("selection1", "selection3")),
+#: The paper's tables: title, protocol, feature selections and models of each.
+PAPER_TABLES: dict[str, dict[str, Any]] = {
+    "VII": {"title": "Score on training and test set for different selections",
+            "protocol": "cv_clean", "selections": (1, 2, 3), "models": M5},
+    "VIII": {"title": "Score on training and test set for disturbed data",
+             "protocol": "cv_disturbed", "selections": (1, 2, 3), "models": M5},
+    "IX": {"title": "Avg. score in per cent on out-of-distribution classification",
+           "protocol": "ood_clean", "selections": (1, 2, 3), "models": M5},
+    "X": {"title": "Avg. score in per cent on out-of-distribution classification on "
+                   "disturbed data for four selected classifiers",
+          "protocol": "ood_disturbed", "selections": (1, 3), "models": M4},
 }
+
+
+def table_spec(table: str) -> tuple[str, str, tuple[str, ...], tuple[str, ...]]:
+    """Title, protocol, models and selection names of one of the paper's tables."""
+    t = PAPER_TABLES[table]
+    return (t["title"], t["protocol"], tuple(t["models"]),
+            tuple(f"selection{k}" for k in t["selections"]))
+
 
 CELL_COLUMNS = ("table", "selection", "model", "split")
 
@@ -188,7 +198,7 @@ def side_by_side(results: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
     out = paper_cells()  # every paper cell stays, with or without our score
     for f in frames:
         out = out.merge(f, on=list(CELL_COLUMNS), how="outer")
-    order = {t: i for i, t in enumerate(TABLE_TITLES)}
+    order = {t: i for i, t in enumerate(PAPER_TABLES)}
     split_order = {s: i for i, s in enumerate(("mean", *GEAR_SPLITS))}
     model_order = {m: i for i, m in enumerate(M5)}
     key = (out["table"].map(order) * 1e6 + out["selection"].str[-1].astype(int) * 1e4

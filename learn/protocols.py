@@ -27,9 +27,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from sklearn.base import clone
-from sklearn.metrics import confusion_matrix
-from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
 
 log = logging.getLogger(__name__)
 
@@ -185,6 +182,8 @@ def make_splits(
         ``disturbed`` flag, too few groups for ``n_splits``, or a test gear that is absent
         or is the only gear.
     """
+    from sklearn.model_selection import StratifiedGroupKFold, StratifiedKFold
+
     missing = {*GROUP_COLUMNS, "disturbed"} - set(meta.columns)
     if missing:
         raise ValueError(f"meta lacks columns {sorted(missing)}")
@@ -284,6 +283,9 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
         Wall time of fit + predict [s].
     """
     import warnings
+
+    from sklearn.base import clone
+    from sklearn.metrics import confusion_matrix
 
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=warnings_out is not None) as caught:

@@ -20,7 +20,7 @@ import pandas as pd
 
 from learn.baselines import MODEL_LABELS
 from learn.features import order_spectrum, reference_index
-from learn.paper_results import GEAR_SPLITS, PAPER_RESULTS, SPLIT_LABELS, TABLE_TITLES
+from learn.paper_results import GEAR_SPLITS, PAPER_RESULTS, PAPER_TABLES, SPLIT_LABELS, table_spec
 from swgsim.data import FAULT_CLASSES
 
 log = logging.getLogger(__name__)
@@ -32,7 +32,7 @@ def _cell(ours: float | None, paper: float | None) -> str:
 
 
 def _table_md(name: str, results: pd.DataFrame) -> list[str]:
-    title, protocol, models, selections = TABLE_TITLES[name]
+    title, protocol, models, selections = table_spec(name)
     paper = PAPER_RESULTS[name]
     res = results[results["table"] == name] if "table" in results else results.iloc[:0]
     lines = [f"## Table {name}: {title}", "", f"Protocol `{protocol}`. Cells: ours (paper) [%].",
@@ -102,7 +102,7 @@ def write_tables(
               "`learn.paper_results.PAPER_RESULTS`, transcribed from its Tables VII, IX and X. "
               "CV tables: mean over 4 folds whose groups are (gear, fault, variant); "
               "out-of-distribution tables: test score on the held-out gear.", ""]
-    for name in TABLE_TITLES:
+    for name in PAPER_TABLES:
         lines += _table_md(name, results)
     if timings_s:
         lines += ["## Run time", "", "| step | wall time [s] |", "|---|---:|"]

@@ -23,6 +23,7 @@ import pandas as pd
 
 from learn.baselines import MODEL_LABELS, make_model
 from learn.features import Features, FeatureSettings, extract_features
+from learn.paper_results import PAPER_TABLES
 from learn.protocols import (
     PROTOCOLS,
     ProtocolResult,
@@ -39,19 +40,6 @@ TASKS: dict[str, str] = {
     "paper_study": "learn.study.run_paper_study_task",
     "transfer": "learn.transfer.run_transfer",
 }
-
-#: The paper's tables: protocol, feature selections and models of each.
-PAPER_TABLES: dict[str, dict[str, Any]] = {
-    "VII": {"protocol": "cv_clean", "selections": (1, 2, 3),
-            "models": ("mlp", "svm", "rf", "knn", "nb")},
-    "VIII": {"protocol": "cv_disturbed", "selections": (1, 2, 3),
-             "models": ("mlp", "svm", "rf", "knn", "nb")},
-    "IX": {"protocol": "ood_clean", "selections": (1, 2, 3),
-           "models": ("mlp", "svm", "rf", "knn", "nb")},
-    "X": {"protocol": "ood_disturbed", "selections": (1, 3),
-          "models": ("mlp", "rf", "knn", "nb")},
-}
-
 
 def run_train(cfg) -> dict:
     """Run the task named by ``cfg.task`` (default ``"study"``).
@@ -76,6 +64,10 @@ def run_train(cfg) -> dict:
     task = cfg.get("task", "study")
     if task not in TASKS:
         raise ValueError(f"task must be one of {sorted(TASKS)}, got {task!r}")
+    if cfg.get("logger") is not None:
+        from learn.tracking import check_tracking
+
+        check_tracking(cfg.logger.get("tracking_uri"), "logger.tracking_uri")
     log.info("task %s -> %s", task, TASKS[task])
     return get_method(TASKS[task])(cfg)
 

@@ -24,11 +24,12 @@ from learn.findings import check_findings
 from learn.open_choices import open_choices
 from learn.paper_results import (
     GEAR_SPLITS,
+    PAPER_TABLES,
     SPLIT_LABELS,
-    TABLE_TITLES,
     our_cells,
     scorecard,
     side_by_side,
+    table_spec,
 )
 from swgsim.data import FAULT_CLASSES
 
@@ -99,7 +100,8 @@ def _cell(v: float) -> str:
 def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
     lines = []
     cols = [f"ours_{n}" for n in names]
-    for table, (title, protocol, models, selections) in TABLE_TITLES.items():
+    for table in PAPER_TABLES:
+        title, protocol, models, selections = table_spec(table)
         sub = cells[cells["table"] == table]
         if sub.empty:
             continue

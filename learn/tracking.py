@@ -83,6 +83,64 @@ def _artifact_location(tracking_uri: str, experiment: str) -> str | None:
     return (db.resolve().parent / "mlruns" / safe).as_uri()
 
 
+def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -> str:
+    """Check that an MLflow store can be written, before any work is done.
+
+    Parameters
+    ----------
+    tracking_uri : str, optional
+        Default :func:`default_tracking_uri`.
+    key : str
+        Config key named in messages.
+
+    Returns
+    -------
+    str
+        The URI.
+
+    Raises
+    ------
+    ValueError
+        One line naming ``key`` and the URI: an SQLite store whose folder is missing or
+        not writable, or whose file is not an SQLite database; a local folder store that
+        is not writable; an HTTP server that does not answer within 5 s.
+    """
+    import os
+    import sqlite3
+
+    uri = tracking_uri or default_tracking_uri()
+    if uri.startswith("sqlite:///"):
+        db = Path(uri.removeprefix("sqlite:///"))
+        folder = db.parent
+        if not folder.is_dir():
+            raise ValueError(f"{key}={uri}: folder {folder} does not exist")
+        if not os.access(folder, os.W_OK) or (db.exists() and not os.access(db, os.W_OK)):
+            raise ValueError(f"{key}={uri}: {db if db.exists() else folder} is not writable")
+        if db.exists():
+            try:
+                con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+                try:
+                    con.execute("select name from sqlite_master limit 1").fetchall()
+                finally:
+                    con.close()
+            except sqlite3.DatabaseError as e:
+                raise ValueError(f"{key}={uri}: {db} is not an SQLite database ({e})") from None
+    elif uri.startswith(("http://", "https://")):
+        import urllib.request
+
+        try:
+            urllib.request.urlopen(uri.rstrip("/") + "/health", timeout=5).close()
+        except OSError as e:
+            raise ValueError(f"{key}={uri}: the tracking server does not answer ({e})") \
+                from None
+    else:
+        folder = Path(uri.removeprefix("file://"))
+        probe = folder if folder.exists() else folder.parent
+        if not probe.is_dir() or not os.access(probe, os.W_OK):
+            raise ValueError(f"{key}={uri}: {probe} is not a writable folder")
+    return uri
+
+
 def quiet_mlflow() -> None:
     """Keep MLflow's own INFO messages (database set-up, migrations) off the console.
 

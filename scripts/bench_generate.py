@@ -106,8 +106,8 @@ def main(argv: list[str] | None = None) -> dict:
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="bench_gen_")) / "ds"
     if args.out is None:
         tmp = out.parent
-    elif out.exists():
-        shutil.rmtree(out)
+    elif out.exists() and any(out.iterdir()):
+        ap.error(f"--out {out} is not empty; give a new or empty folder (nothing is deleted)")
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; "
           f"data set '{args.dataset}', n_jobs={args.n_jobs}, out={out}")
     with TreeMemory() as mem:
@@ -152,7 +152,8 @@ def main(argv: list[str] | None = None) -> dict:
           f"included); speed-up {speedup:.0f}x; max relative difference {max_err:.1e}")
     extra = {}
     if args.profile:
-        extra = profile(args.dataset, cfg, args.n_jobs, out.parent / "whole")
+        with tempfile.TemporaryDirectory(prefix="bench_gen_profile_") as work:
+            extra = profile(args.dataset, cfg, args.n_jobs, Path(work))
     if tmp is not None:
         shutil.rmtree(tmp, ignore_errors=True)
     result = {**extra, "windows": windows, "wall_s": round(wall, 2),
@@ -177,8 +178,10 @@ STAGES = (
 )
 
 
-def profile(dataset: str, cfg: dict, n_jobs: int, out: Path) -> dict:
+def profile(dataset: str, cfg: dict, n_jobs: int, work: Path) -> dict:
     """Whole-process wall time of ``swgsim-generate`` and a stage breakdown of one shard.
+
+    ``work`` is an empty folder of the caller's (a temporary one); everything goes there.
 
     Returns
     -------
@@ -195,10 +198,9 @@ def profile(dataset: str, cfg: dict, n_jobs: int, out: Path) -> dict:
 
     exe = Path(sys.executable).parent / "swgsim-generate"
     t0 = time.perf_counter()
-    subprocess.run([str(exe), f"dataset={dataset}", f"out_dir={out}", f"n_jobs={n_jobs}",
-                    "progress=false"], check=True, capture_output=True)
+    subprocess.run([str(exe), f"dataset={dataset}", f"out_dir={work / 'whole'}",
+                    f"n_jobs={n_jobs}", "progress=false"], check=True, capture_output=True)
     wall = time.perf_counter() - t0
-    shutil.rmtree(out, ignore_errors=True)
     shards = plan(cfg)
     t0 = time.perf_counter()
     infl = gear_influences(cfg, shards)
@@ -208,7 +210,7 @@ def profile(dataset: str, cfg: dict, n_jobs: int, out: Path) -> dict:
     t0 = time.perf_counter()
     pr.enable()
     ds, _ = simulate_shard(cfg, shards[0], infl[shards[0].gear])
-    dsio.write_shard(ds, out.parent / "profile_shard.nc")
+    dsio.write_shard(ds, work / "profile_shard.nc")
     pr.disable()
     total = time.perf_counter() - t0
     st = pstats.Stats(pr).stats

@@ -32,16 +32,19 @@ def compose_app(config_name: str, overrides: list[str] | tuple[str, ...] = ()):
         A key the schema does not have (see :func:`swgcli.schema.validate`); Hydra's own
         composition errors are raised as they are.
     """
+    import importlib
+
     from hydra import compose, initialize_config_dir
 
     from swgcli import schema
 
-    apps = {"generate": schema.GenerateApp, "paper": schema.PaperApp,
-            "train": schema.TrainApp, "calibrate": schema.CalibrateApp}
+    # the app's module registers its schema (the calibration app's loads its stack)
+    module = importlib.import_module(f"swgcli.{config_name}") if config_name in (
+        "generate", "paper", "train", "calibrate") else None
     with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
         cfg = compose(config_name=config_name, overrides=list(overrides))
-    if config_name in apps:
-        schema.validate(cfg, apps[config_name])
+    if module is not None:
+        schema.validate(cfg, module.main.schema)
     return cfg
 
 

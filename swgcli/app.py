@@ -148,6 +148,7 @@ def hydra_app(config_name: str, schema: type, prog: str):
             return run(entry, prog)
 
         main.task = task  # type: ignore[attr-defined]
+        main.schema = schema  # type: ignore[attr-defined]
         main.__doc__ = f"Console entry point of {prog} (config conf/{config_name}.yaml)."
         return main
 

@@ -18,15 +18,108 @@ from __future__ import annotations
 
 import json
 import logging
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from omegaconf import DictConfig, OmegaConf
+from hydra.core.config_store import ConfigStore
+from omegaconf import MISSING, DictConfig, OmegaConf
 
 from swgcli.app import hydra_app
-from swgcli.schema import CalibrateApp
 
 log = logging.getLogger(__name__)
+
+
+def _arg(func, name: str):
+    """Default of a library function's argument: the one place of that default."""
+    import inspect
+
+    value = inspect.signature(func).parameters[name].default
+    return list(value) if isinstance(value, tuple) else value
+
+
+# the friction calibration's defaults live in swgsim.calibration; the app takes them
+
+def _friction_default(name: str):
+    from swgsim.calibration.problems import friction_problem
+
+    return _arg(friction_problem, name)
+
+
+def _load_friction_csv():
+    from swgsim.calibration.friction import load_friction_csv
+
+    return load_friction_csv
+
+
+def _selection_default(name: str):
+    from swgsim.calibration.loop import SelectionConfig
+
+    return getattr(SelectionConfig, name)
+
+
+@dataclass
+class BaselineOptions:
+    """Smooth sign of the paper's friction law."""
+
+    v_s: float | None = None     # tanh(dq / v_s) [rad/s]; null: v_s_rel * p99(|dq|)
+    v_s_rel: float = _friction_default("v_s_rel")
+
+
+@dataclass
+class SplitOptions:
+    """Held-out time blocks of a friction recording; the other blocks are fit blocks."""
+
+    n_blocks: int = _friction_default("n_blocks")
+    validation_blocks: list[int] = field(  # choose the effects
+        default_factory=lambda: _friction_default("validation_blocks"))
+    test_blocks: list[int] = field(  # errors before/after only; the last block extrapolates
+        default_factory=lambda: _friction_default("test_blocks"))
+    guard_frac: float = _friction_default("guard_frac")  # dropped at role boundaries [blocks]
+
+
+@dataclass
+class SelectionOptions:
+    """Which effects a friction calibration accepts (swgsim.calibration.SelectionConfig)."""
+
+    candidates: list[str] | None = None  # null: the whole library; or effect names
+    min_rel_improvement: float = _selection_default("min_rel_improvement")
+    max_delta_bic: float = _selection_default("max_delta_bic")
+    effective_bic: bool = _selection_default("effective_bic")
+    max_rel_se: float = _selection_default("max_rel_se")
+    max_abs_corr: float = _selection_default("max_abs_corr")
+    max_iter: int = _selection_default("max_iter")
+    pair_candidates: int = _selection_default("pair_candidates")
+    max_starts: int = _selection_default("max_starts")
+    structure_threshold: float = _selection_default("structure_threshold")
+
+
+@dataclass
+class CalibrateLogger:
+    """MLflow tracking of ``swgsim-calibrate``."""
+
+    enabled: bool = True
+    tracking_uri: str | None = None
+    experiment: str = "calibration"
+    run_name: str | None = None
+
+
+@dataclass
+class CalibrateApp:
+    """``swgsim-calibrate``: calibrate the model against measured data."""
+
+    measured: str = MISSING   # friction CSV (kind 1) or schema-v1 data-set directory (kind 2)
+    out_dir: str = MISSING    # created if absent
+    baseline: BaselineOptions = field(default_factory=BaselineOptions)
+    accel_window: int = field(  # samples of the Savitzky-Golay estimate of ddq
+        default_factory=lambda: _arg(_load_friction_csv(), "accel_window"))
+    split: SplitOptions = field(default_factory=SplitOptions)
+    selection: SelectionOptions = field(default_factory=SelectionOptions)
+    figures: bool = True
+    logger: CalibrateLogger = field(default_factory=CalibrateLogger)
+
+
+ConfigStore.instance().store(name="calibrate_schema", node=CalibrateApp)
 
 
 def _as_list(x: Any) -> list | None:
@@ -126,6 +219,64 @@ def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
     return run_id
 
 
+#: Options that only the friction calibration (kind 1) reads.
+FRICTION_ONLY = ("baseline", "accel_window", "split", "selection")
+
+
+def check_options(cfg: DictConfig, kind: str, measured: Path) -> None:
+    """Check the calibration options before any work.
+
+    Ranges of the friction options; and for a strain data set (kind 2), which takes none
+    of :data:`FRICTION_ONLY`, any of them set away from its default is refused rather
+    than ignored.
+
+    Raises
+    ------
+    ValueError
+        Naming the key, the value and the allowed range (or the data kind it needs).
+    """
+    defaults = OmegaConf.to_container(OmegaConf.structured(CalibrateApp), resolve=False)
+    given = OmegaConf.to_container(cfg, resolve=True)
+    if kind == "strain":
+        for group in FRICTION_ONLY:
+            d, g = defaults[group], given[group]
+            changed = ([f"{group}.{k}={g[k]}" for k in g if g[k] != d[k]]
+                       if isinstance(g, dict) else ([f"{group}={g}"] if g != d else []))
+            if changed:
+                names = ", ".join(f"{x}.*" if isinstance(defaults[x], dict) else x
+                                  for x in FRICTION_ONLY)
+                raise ValueError(
+                    f"{changed[0]} applies to friction recordings (kind 1); {measured} is a "
+                    f"strain data set (kind 2), whose calibration takes none of {names}")
+        return
+    b, sp, se = given["baseline"], given["split"], given["selection"]
+    aw = given["accel_window"]
+    if not (5 <= aw <= 1001 and aw % 2 == 1):
+        raise ValueError(f"accel_window must be an odd integer in [5, 1001], got {aw}")
+    if b["v_s"] is not None and not b["v_s"] > 0:
+        raise ValueError(f"baseline.v_s must be > 0 rad/s or null, got {b['v_s']}")
+    if not 0 < b["v_s_rel"] <= 1:
+        raise ValueError(f"baseline.v_s_rel must lie in (0, 1], got {b['v_s_rel']}")
+    n = sp["n_blocks"]
+    if not 3 <= n <= 1000:
+        raise ValueError(f"split.n_blocks must lie in [3, 1000], got {n}")
+    for key in ("validation_blocks", "test_blocks"):
+        bad = [x for x in sp[key] if not -n <= x < n]
+        if bad or not sp[key]:
+            raise ValueError(f"split.{key} must list blocks in [{-n}, {n - 1}], got {sp[key]}")
+    if not 0 <= sp["guard_frac"] <= 0.45:
+        raise ValueError(f"split.guard_frac must lie in [0, 0.45], got {sp['guard_frac']}")
+    for key, lo, hi in (("min_rel_improvement", 0.0, 1.0), ("max_rel_se", 0.0, 10.0),
+                        ("max_abs_corr", 0.0, 1.0), ("structure_threshold", 0.0, 1.0)):
+        if not lo <= se[key] <= hi:
+            raise ValueError(f"selection.{key} must lie in [{lo:g}, {hi:g}], got {se[key]}")
+    for key, lo, hi in (("max_iter", 0, 100), ("pair_candidates", 0, 50), ("max_starts", 1, 50)):
+        if not lo <= se[key] <= hi:
+            raise ValueError(f"selection.{key} must lie in [{lo}, {hi}], got {se[key]}")
+    if not se["max_delta_bic"] <= 0:
+        raise ValueError(f"selection.max_delta_bic must be <= 0, got {se['max_delta_bic']}")
+
+
 def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     """Calibrate the model against measured data (the task behind ``swgsim-calibrate``).
 
@@ -153,6 +304,11 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     measured = Path(cfg.measured).expanduser()
     out_dir = Path(cfg.out_dir).expanduser()
     kind = detect_kind(measured)
+    check_options(cfg, kind, measured)
+    if cfg.logger.enabled:
+        from learn.tracking import check_tracking
+
+        check_tracking(cfg.logger.tracking_uri, "logger.tracking_uri")
     log.info("measured data %s: kind %s", measured, kind)
     if kind == "strain":
         from swgsim.calibration.strain import calibrate_strain

@@ -73,6 +73,9 @@ def run_paper(cfg: DictConfig) -> dict:
             plan(datasets[p])
         except ValueError as e:
             raise ValueError(f"datasets.{p}: {e}") from None
+    from learn.tracking import check_tracking
+
+    check_tracking(cfg.tracking_uri, "tracking_uri")  # before any work
     root_data, root_rep = _abs(str(cfg.data_root)), _abs(str(cfg.report_root))
     s = cfg.study
     n_stages = 2 * len(protocols) + 1

@@ -1,7 +1,8 @@
 """Typed schemas of the four apps, registered as Hydra structured configs.
 
 Each app's primary config (``conf/<app>.yaml``) starts from its schema here
-(:class:`GenerateApp`, :class:`PaperApp`, :class:`TrainApp`, :class:`CalibrateApp`), so
+(:class:`GenerateApp`, :class:`PaperApp`, :class:`TrainApp`; the calibration app's,
+``CalibrateApp``, lives in :mod:`swgcli.calibrate`, which loads the calibration stack), so
 Hydra refuses unknown keys, missing mandatory values and values of the wrong type while
 composing; :func:`validate` repeats the key check after composition, because Hydra's
 ``+key=value`` adds a key even to a typed config. Ranges are checked where they are
@@ -16,7 +17,7 @@ group          source
 ``protocol``   :data:`learn.protocols.PROTOCOLS` (the paper's four protocols)
 ``model``      :data:`learn.baselines.PAPER_MODELS` (Table VI); deep models stay YAML
 ``features``   :class:`learn.features.FeatureSettings` (Table III selections)
-``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.study.PAPER_TABLES`
+``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.paper_results.PAPER_TABLES`
 ``dataset``    :class:`swgsim.config.DatasetConfig` (the paper preset is its defaults)
 =============  =====================================================================
 """
@@ -114,74 +115,15 @@ class TrainApp:
     transfer: Any = None
 
 
-@dataclass
-class BaselineOptions:
-    """Smooth sign of the paper's friction law."""
-
-    v_s: float | None = None     # tanh(dq / v_s) [rad/s]; null: v_s_rel * p99(|dq|)
-    v_s_rel: float = 0.01
-
-
-@dataclass
-class SplitOptions:
-    """Held-out time blocks of a friction recording; the other blocks are fit blocks."""
-
-    n_blocks: int = 10
-    validation_blocks: list[int] = field(default_factory=lambda: [3, 7])  # choose effects
-    test_blocks: list[int] = field(default_factory=lambda: [5, 9])  # errors before/after only
-    guard_frac: float = 0.05  # dropped at each boundary between roles [block lengths]
-
-
-@dataclass
-class SelectionOptions:
-    """Which effects a friction calibration accepts."""
-
-    candidates: list[str] | None = None  # null: the whole library; or effect names
-    min_rel_improvement: float = 0.02    # validation RMSE must drop by more than this
-    max_delta_bic: float = -10.0         # BIC on the fit blocks must drop by more than 10
-    effective_bic: bool = True           # BIC with n / tau_int samples
-    max_rel_se: float = 0.5              # primary parameters: relative standard error
-    max_abs_corr: float = 0.98           # flag parameters correlated beyond this
-    max_iter: int = 12                   # accepted steps at most (a pair counts once)
-    pair_candidates: int = 4             # pairs of the best 4 when no single one passes
-    max_starts: int = 3                  # optimiser starts per candidate
-    structure_threshold: float = 0.03    # probe score from which a residual is structured
-
-
-@dataclass
-class CalibrateLogger:
-    """MLflow tracking of ``swgsim-calibrate``."""
-
-    enabled: bool = True
-    tracking_uri: str | None = None
-    experiment: str = "calibration"
-    run_name: str | None = None
-
-
-@dataclass
-class CalibrateApp:
-    """``swgsim-calibrate``: calibrate the model against measured data."""
-
-    measured: str = MISSING   # friction CSV (kind 1) or schema-v1 data-set directory (kind 2)
-    out_dir: str = MISSING    # created if absent
-    baseline: BaselineOptions = field(default_factory=BaselineOptions)
-    accel_window: int = 21    # samples of the Savitzky-Golay estimate of ddq
-    split: SplitOptions = field(default_factory=SplitOptions)
-    selection: SelectionOptions = field(default_factory=SelectionOptions)
-    figures: bool = True
-    logger: CalibrateLogger = field(default_factory=CalibrateLogger)
-
-
 def register() -> None:
     """Register the schemas and the generated config groups in Hydra's ConfigStore."""
     from learn.baselines import PAPER_MODELS, model_config
-    from learn.study import PAPER_TABLES
+    from learn.paper_results import PAPER_TABLES
 
     cs = ConfigStore.instance()
     cs.store(name="generate_schema", node=GenerateApp)
     cs.store(name="paper_schema", node=PaperApp)
     cs.store(name="train_schema", node=TrainApp)
-    cs.store(name="calibrate_schema", node=CalibrateApp)
     for name in PROTOCOLS:
         cs.store(group="protocol", name=name,
                  node=ProtocolConfig.paper(name, random_state="${seed}"))
@@ -215,6 +157,52 @@ def validate(cfg: DictConfig, schema: type) -> None:
     container = OmegaConf.to_container(cfg, resolve=True, throw_on_missing=False)
     container.pop("hydra", None)
     check_keys(container, schema, "")
+    if isinstance(container.get("model"), dict):
+        check_target(container["model"], "model")
+    models = (container.get("transfer") or {}).get("models") if isinstance(
+        container.get("transfer"), dict) else None
+    for name, m in (models or {}).items():
+        check_target(m, f"transfer.models.{name}")
+
+
+def check_target(node: Any, where: str) -> None:
+    """Refuse keys of a ``_target_`` config that its target does not take.
+
+    Hydra would only fail when instantiating, with a TypeError that names no key; this
+    checks each ``{_target_: path, **kwargs}`` mapping (recursively) against the
+    signature of its target.
+
+    Raises
+    ------
+    ValueError
+        ``<where>.<key>: not a parameter of <target>; allowed: ...``, or a ``_target_``
+        that cannot be imported.
+    """
+    import importlib
+    import inspect
+
+    if isinstance(node, list):
+        for i, v in enumerate(node):
+            check_target(v, f"{where}[{i}]")
+        return
+    if not isinstance(node, dict):
+        return
+    target = node.get("_target_")
+    if target is not None:
+        module, _, name = str(target).rpartition(".")
+        try:
+            obj = getattr(importlib.import_module(module), name)
+        except (ImportError, AttributeError, ValueError):
+            raise ValueError(f"{where}._target_: cannot import {target!r}") from None
+        params = inspect.signature(obj).parameters
+        if not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+            bad = [k for k in node if not k.startswith("_") and k not in params]
+            if bad:
+                raise ValueError(f"{where}.{bad[0]}: not a parameter of {target}; allowed: "
+                                 f"{', '.join(k for k in params if k != 'self')}")
+    for k, v in node.items():
+        if not k.startswith("_"):
+            check_target(v, f"{where}.{k}")
 
 
 register()

@@ -36,10 +36,13 @@ samples. This is how a gear that was never seen in training gets its healthy ref
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import logging
 import os
+import re
+import socket
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
@@ -95,11 +98,47 @@ def _umask_mode() -> int:
     return 0o666 & ~mask
 
 
+def _host() -> str:
+    return re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname()) or "host"
+
+
+def temp_prefix(path: Path) -> str:
+    """Prefix of this process's temporary files for ``path``: ``.<name>.<host>-<pid>.``,
+    so that a later run can tell the leftovers of a dead process (:func:`stale_temp_files`).
+    """
+    return f".{path.name}.{_host()}-{os.getpid()}."
+
+
+_TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<host>[A-Za-z0-9_-]+)-(?P<pid>\d+)\..+\.tmp$")
+
+
+def stale_temp_files(folder: str | os.PathLike) -> list[Path]:
+    """Temporary files in ``folder`` left by processes of this host that no longer run.
+
+    A write in progress by a live process (on this host or another one) is never listed.
+    """
+    out = []
+    folder = Path(folder)
+    if not folder.is_dir():
+        return out
+    for p in folder.iterdir():
+        m = _TEMP.match(p.name)
+        if not m or m["host"] != _host() or int(m["pid"]) == os.getpid():
+            continue
+        try:
+            os.kill(int(m["pid"]), 0)
+        except ProcessLookupError:
+            out.append(p)
+        except PermissionError:  # alive, another user's
+            pass
+    return sorted(out)
+
+
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically (temporary file in the same folder, rename)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
@@ -107,8 +146,10 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
             os.fsync(f.fileno())
         os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno == errno.ENOSPC:
+            raise DataSetError(f"disk full while writing {path} (folder {path.parent})") from e
         raise
 
 
@@ -192,15 +233,17 @@ def write_shard(ds, path: str | os.PathLike) -> str:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
         ds.to_netcdf(tmp, engine="h5netcdf", invalid_netcdf=False)
         digest = sha256_file(tmp)
         os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno == errno.ENOSPC:
+            raise DataSetError(f"disk full while writing {path} (folder {path.parent})") from e
         raise
     return digest
 
@@ -229,7 +272,11 @@ def read_manifest(path: str | os.PathLike) -> dict:
 
 
 def verify(path: str | os.PathLike, shards: Iterable[str] | None = None) -> list[Path]:
-    """Check every shard of a data set against the SHA-256 in its manifest.
+    """Check a data set's files against its manifest.
+
+    Every shard the manifest lists must exist with its SHA-256; no shard file may exist
+    that the manifest does not list; the manifest's shard count and sample total must
+    agree with its entries.
 
     Returns
     -------
@@ -239,14 +286,25 @@ def verify(path: str | os.PathLike, shards: Iterable[str] | None = None) -> list
     Raises
     ------
     DataSetError
-        Naming the first shard that is missing, truncated or altered, or if the manifest
-        says the data set is incomplete.
+        Naming what is missing, extra, truncated or altered, or if the manifest says the
+        data set is incomplete or contradicts itself.
     """
     path = Path(path)
     manifest = read_manifest(path)
     if not manifest.get("complete", False):
         raise DataSetError(f"{path}: the data set is incomplete (generation did not finish)")
     entries = manifest["shards"]
+    if "n_shards" in manifest and manifest["n_shards"] != len(entries):
+        raise DataSetError(f"{path / MANIFEST}: lists {len(entries)} shards but records "
+                           f"n_shards={manifest['n_shards']}: an entry was removed or added")
+    total = sum(int(e.get("n_samples", 0)) for e in entries.values())
+    if "n_samples" in manifest and manifest["n_samples"] != total:
+        raise DataSetError(f"{path / MANIFEST}: its shards hold {total} samples but it "
+                           f"records n_samples={manifest['n_samples']}")
+    extra = sorted(p.name for p in path.glob("*.nc") if p.name not in entries)
+    if extra:
+        raise DataSetError(f"{path}: shard file(s) {extra} are not in {MANIFEST} (a removed "
+                           "entry, or files of another data set)")
     names = list(entries) if shards is None else list(shards)
     files = []
     for name in names:
@@ -285,6 +343,7 @@ def load(path: str | os.PathLike, check: bool = True):
 
     path = Path(path)
     files = verify(path) if check else [path / n for n in read_manifest(path)["shards"]]
+    entries = read_manifest(path)["shards"]
     parts = []
     for f in files:
         try:
@@ -292,6 +351,10 @@ def load(path: str | os.PathLike, check: bool = True):
                 parts.append(ds.load())
         except OSError as e:
             raise DataSetError(f"shard {f} cannot be read: {e}") from e
+        want = entries.get(f.name, {}).get("n_samples")
+        if want is not None and parts[-1].sizes.get("sample") != want:
+            raise DataSetError(f"shard {f} holds {parts[-1].sizes.get('sample')} samples, "
+                               f"{MANIFEST} says {want}")
     if not parts:
         raise DataSetError(f"{path}: the data set has no shards")
     out = xr.concat(parts, dim="sample", data_vars="minimal", coords="minimal",

@@ -22,6 +22,7 @@ import json
 import logging
 import os
 import re
+import shutil
 import subprocess
 import time
 from dataclasses import dataclass
@@ -168,6 +169,9 @@ def plan(cfg: dict) -> list[ShardSpec]:
         for v in vals:
             _in(v, lo, hi, f"dataset.operating_points.{key}", unit, lo_open=key == "n_in_rpm",
                 why=why)
+    n_theta = int(cfg["mesh"]["n_theta"])
+    _req(n_theta % 20 == 0 and 20 <= n_theta <= 2000, "dataset.mesh.n_theta must be a "
+         f"multiple of 20 in [20, 2000], got {cfg['mesh']['n_theta']}")
     ch = cfg["chain"]
     _in(ch["sample_rate_hz"], 0.0, 1e6, "dataset.chain.sample_rate_hz", "Hz", lo_open=True)
     _in(ch["window_s"], 0.0, 10.0, "dataset.chain.window_s", "s", lo_open=True)
@@ -223,7 +227,12 @@ def plan(cfg: dict) -> list[ShardSpec]:
     n_theta = int(cfg["mesh"]["n_theta"])
     model = TrussModel(FlexsplineGeometry(), Mesh(n_theta))
     for g in cfg["gears"]:
-        signal_rows(model, layout_for(cfg, g))
+        try:
+            signal_rows(model, layout_for(cfg, g))
+        except ValueError as e:
+            key = ("dataset.mesh.n_theta" if "too coarse" in str(e)
+                   else "dataset.sensors (r_torque_mm, r_pairs_mm, grid_length_mm)")
+            raise ValueError(f"{key}: {e}") from None
     shards = []
     for g in cfg["gears"]:
         for si, n in enumerate(ops["n_in_rpm"]):
@@ -533,9 +542,12 @@ def foreign_entries(out_dir: Path) -> list[str]:
 def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
     """Create ``out_dir``, or check that it holds (part of) a data set of this config.
 
-    With ``overwrite``, a data set of another config is replaced, but only if the folder
-    holds nothing but this project's data-set files (:func:`foreign_entries`); those files
-    are deleted one by one, the folder itself is kept.
+    Temporary files that dead processes of this host left behind are removed. A folder
+    holding an *unfinished* data set of another config (no manifest: a run that failed or
+    was stopped) is replaced, so that it never blocks a corrected rerun; a *finished* one
+    only with ``overwrite``. Either way the folder must hold nothing but this project's
+    data-set files (:func:`foreign_entries`), which are deleted one by one; the folder
+    itself is kept.
 
     Returns
     -------
@@ -545,8 +557,9 @@ def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
     Raises
     ------
     ValueError
-        Naming the folder, if ``out_dir`` is not a folder, holds a data set of another
-        config without ``overwrite``, or holds anything else; nothing is touched then.
+        Naming the folder, if ``out_dir`` is not a folder, holds a finished data set of
+        another config without ``overwrite``, holds anything else, or another run is
+        writing into it; nothing is touched then.
     """
     chash = config_hash(cfg)
     mf = out_dir / dsio.MANIFEST
@@ -554,6 +567,10 @@ def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
     replaced = None
     if out_dir.exists() and not out_dir.is_dir():
         raise ValueError(f"out_dir {out_dir} exists and is not a folder")
+    if out_dir.exists():
+        for f in dsio.stale_temp_files(out_dir):  # left by a killed run
+            f.unlink(missing_ok=True)
+            log.info("removed %s, left by a stopped run", f.name)
     if out_dir.exists() and any(out_dir.iterdir()):
         old = None
         for f in (mf, stamp):
@@ -565,6 +582,7 @@ def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
                 break
         if old != chash:
             foreign = foreign_entries(out_dir)
+            finished = mf.is_file()
             if foreign:
                 what = ("holds no data set" if old is None else
                         f"holds a data set of another config (hash {old}, this one {chash})")
@@ -573,7 +591,11 @@ def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
                     f"{'y' if len(foreign) == 1 else 'ies'} that are not this project's "
                     f"data set (e.g. {', '.join(foreign[:3])}); nothing was touched: "
                     "choose another out_dir")
-            if not overwrite:
+            live = [p.name for p in out_dir.iterdir() if p.name.endswith(".tmp")]
+            if live:
+                raise ValueError(f"out_dir {out_dir}: another run is writing into it "
+                                 f"({live[0]}); wait for it or choose another out_dir")
+            if finished and not overwrite:
                 raise ValueError(
                     f"out_dir {out_dir} holds a data set made with another config (config "
                     f"hash {old}, this one {chash}); choose another out_dir or pass "
@@ -581,13 +603,33 @@ def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
             files = sorted(out_dir.iterdir())
             for f in files:
                 f.unlink()
-            replaced = (f"replaced the data set in {out_dir} (config hash {old} -> {chash}, "
-                        f"{len(files)} files)")
+            replaced = (f"replaced the {'data set' if finished else 'unfinished data set'} "
+                        f"in {out_dir} (config hash {old} -> {chash}, {len(files)} files)")
             log.warning("%s", replaced)
     out_dir.mkdir(parents=True, exist_ok=True)
     if not stamp.is_file():
         dsio.atomic_write_json(stamp, {"config_hash": chash, "config": cfg})
     return replaced
+
+
+def check_disk_space(out_dir: Path, shards: list[ShardSpec], cfg: dict) -> None:
+    """Refuse to start when the disk of ``out_dir`` cannot hold the shards to write.
+
+    Raises
+    ------
+    ValueError
+        Naming the folder, the space needed and the space free.
+    """
+    n_t = int(round(cfg["chain"]["window_s"] * cfg["chain"]["sample_rate_hz"]))
+    windows = sum(2 * len(s.windows) for s in shards)  # clean and disturbed twins
+    need = int(1.1 * windows * (5 * n_t * 4 + 200)) + (1 << 20)  # float32 signals + metadata
+    probe = out_dir
+    while not probe.exists():
+        probe = probe.parent
+    free = shutil.disk_usage(probe).free
+    if free < need:
+        raise ValueError(f"out_dir {out_dir}: the data set needs about {need / 2**20:.0f} MiB, "
+                         f"the disk holding {probe} has {free / 2**20:.0f} MiB free")
 
 
 def finalize(out_dir: Path, cfg: dict, shards: list[ShardSpec]) -> dict:
@@ -602,6 +644,7 @@ def finalize(out_dir: Path, cfg: dict, shards: list[ShardSpec]) -> dict:
                                      for s in shards).encode()).hexdigest()
     manifest = {"schema_version": dsio.SCHEMA_VERSION, "complete": True,
                 "config_hash": chash, "config": cfg, "seed": int(cfg["seed"]),
+                "n_shards": len(shards),
                 "shards": entries, "content_sha256": content, "package_version": _version(),
                 "git_revision": _git_revision(),
                 "n_samples": int(sum(e["n_samples"] for e in entries.values()))}
@@ -650,10 +693,11 @@ def generate(cfg: dict, out_dir: str | os.PathLike, n_jobs: int = 1, overwrite: 
     if shard_index is not None and not 0 <= int(shard_index) < len(shards):
         raise ValueError(f"shard must lie in [0, {len(shards) - 1}], got {shard_index}")
     out = Path(out_dir)
-    replaced = prepare_out_dir(out, cfg, overwrite)
     chash = config_hash(cfg)
     todo_all = shards if shard_index is None else [shards[int(shard_index)]]
     todo = [s for s in todo_all if not shard_done(out, s, chash)]
+    check_disk_space(out, todo, cfg)  # before anything is written
+    replaced = prepare_out_dir(out, cfg, overwrite)
     skipped = [s.name for s in todo_all if s not in todo]
     if skipped:
         log.info("resuming: %d shard(s) already done, skipped", len(skipped))

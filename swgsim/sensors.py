@@ -284,6 +284,11 @@ def grid_row(model: TrussModel, grid: Grid, n_points: int = 9) -> sp.csr_matrix:
     r = np.hypot(x, y)
     th = th0 + np.arctan2(y, x)
     beta_loc = b - np.arctan2(y, x)
+    if r_hi - r_lo < grid.length_m:
+        raise ValueError(
+            f"truss too coarse for the gauge layout: the collar's usable span "
+            f"{r_lo * 1e3:.2f}..{r_hi * 1e3:.2f} mm is shorter than a "
+            f"{grid.length_m * 1e3:.1f} mm grid; raise mesh.n_theta")
     if r.min() < r_lo or r.max() > r_hi:
         raise ValueError(
             f"gauge grid at r = {grid.r_m * 1e3:.2f} mm (length {grid.length_m * 1e3:.1f} mm) "

@@ -187,7 +187,17 @@ def test_overwrite_replaces_only_a_folder_of_our_data_set(tiny_set, tmp_path):
     assert sorted(p.name for p in mixed.iterdir()) == before  # nothing touched
     ours = tmp_path / "ours"
     shutil.copytree(src, ours)
-    (ours / ".gear1_n2000rpm.nc.abc123.tmp").write_bytes(b"left by a killed run")
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    stale = ours / f"{dsio.temp_prefix(ours / 'gear1_n2000rpm.nc')}abc.tmp"
+    stale = stale.with_name(stale.name.replace(f"-{os.getpid()}.", f"-{dead}."))
+    stale.write_bytes(b"left by a killed run")
+    live = ours / f"{dsio.temp_prefix(ours / 'gear2_n2000rpm.nc')}xyz.tmp"
+    live.write_bytes(b"another run writes here")  # this process: alive
+    with pytest.raises(ValueError, match="another run is writing into it"):
+        gen.generate(cfg, ours, progress=False, overwrite=True)
+    assert not stale.exists() and live.exists()  # the killed run's leftover is cleaned
+    live.unlink()
     s = gen.generate(cfg, ours, progress=False, overwrite=True)
     assert s["complete"] and "replaced the data set" in s["replaced"]
     assert not list(ours.glob("*.tmp"))

@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.paper_results import PAPER_RESULTS
+from learn.paper_results import PAPER_RESULTS, PAPER_TABLES
 from learn.report import write_report, write_tables
-from learn.study import PAPER_TABLES, run_paper_study
+from learn.study import run_paper_study
 
 
 def _fake_results() -> pd.DataFrame:

@@ -64,6 +64,9 @@ class FrictionRecording:
     name : str
     ddq_source : str
         ``"measured"`` or how it was estimated.
+    notes : tuple of str
+        What loading found and did about the data (dropped rows, consistency measures);
+        shown in the report.
     """
 
     t_s: np.ndarray
@@ -74,6 +77,7 @@ class FrictionRecording:
     load_nm: np.ndarray | None = None
     name: str = "recording"
     ddq_source: str = "measured"
+    notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         n = self.t_s.shape[0]
@@ -231,8 +235,17 @@ def estimate_acceleration(t_s: np.ndarray, dq: np.ndarray, n_window: int = 21) -
     return np.interp(t_s, tu, au)
 
 
+#: Largest allowed RMS difference between ``dq_rad_per_s`` and the time derivative of
+#: ``q_rad``, relative to the RMS of ``dq_rad_per_s`` [-]. The six real recordings in
+#: ``shared/data/joint_friction`` lie at 0.02-0.12 (derivative noise); a velocity in deg/s
+#: beside an angle in rad, a swapped column or a frozen angle gives about 1 or more.
+DQ_CONSISTENCY_TOL = 0.5
+#: Fewest rows a friction recording must keep after cleaning.
+MIN_ROWS = 100
+
+
 def load_friction_csv(path: str | Path, accel_window: int = 21) -> FrictionRecording:
-    """Read a friction CSV (data kind 1).
+    """Read a friction CSV (data kind 1) and check that it is physically consistent.
 
     Parameters
     ----------
@@ -246,45 +259,92 @@ def load_friction_csv(path: str | Path, accel_window: int = 21) -> FrictionRecor
     Returns
     -------
     FrictionRecording
-        Rows with non-finite values are dropped; rows with a repeated time stamp keep
-        the first.
+        Rows with non-finite values are dropped, and rows repeating the previous time
+        stamp; both are counted in ``notes``, with the measured velocity consistency.
 
     Raises
     ------
     FileNotFoundError
     ValueError
-        A required column is missing (the message names the file, the missing columns
-        and the expected ones).
+        Naming the file: not a text CSV, a required column missing, rows of another
+        length, no usable rows or fewer than :data:`MIN_ROWS`, time going backwards, an
+        angle that stays constant while the velocity does not, or a velocity that is
+        not the derivative of the angle (relative RMS difference above
+        :data:`DQ_CONSISTENCY_TOL`).
     """
     import csv
 
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"friction CSV not found: {path}")
-    with path.open(newline="") as fh:
-        header = next(csv.reader(fh))
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            header = next(csv.reader(fh), [])
+            has_rows = any(line.strip() for line in fh)
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not a text CSV ({e.reason} at byte {e.start})") from None
     header = [h.strip() for h in header]
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     if missing:
         raise ValueError(f"{path}: not a friction CSV: missing columns {missing}; expected "
                          f"{list(REQUIRED_COLUMNS)} (+ optional {list(OPTIONAL_COLUMNS)}), "
                          f"found {header}")
-    data = np.genfromtxt(path, delimiter=",", skip_header=1, dtype=float)
+    if not has_rows:
+        raise ValueError(f"{path}: no data rows below the header")
+    try:
+        data = np.genfromtxt(path, delimiter=",", skip_header=1, dtype=float,
+                             encoding="utf-8")
+    except ValueError as e:
+        first = str(e).strip().splitlines()
+        raise ValueError(f"{path}: rows of another length than the header "
+                         f"({first[-1].strip() if first else e})") from None
+    if data.size == 0:
+        raise ValueError(f"{path}: no data rows below the header")
     if data.ndim == 1:
         data = data[None, :]
+    if data.shape[1] != len(header):
+        raise ValueError(f"{path}: {data.shape[1]} columns per row, header names "
+                         f"{len(header)}")
     cols = {h: data[:, i] for i, h in enumerate(header)}
     use = list(REQUIRED_COLUMNS) + [c for c in OPTIONAL_COLUMNS if c in cols]
     ok = np.all(np.isfinite(np.column_stack([cols[c] for c in use])), axis=1)
+    notes = []
     if not ok.all():
-        log.warning("%s: dropped %d rows with non-finite values", path.name, int((~ok).sum()))
+        notes.append(f"dropped {int((~ok).sum())} of {len(ok)} rows with non-finite or "
+                     "non-numeric values")
+        log.warning("%s: %s", path.name, notes[-1])
+    if not ok.any():
+        raise ValueError(f"{path}: no usable rows: all {len(ok)} rows hold non-finite or "
+                         "non-numeric values")
     t = cols["time_s"][ok]
-    keep = np.concatenate([[True], np.diff(t) > 0])
+    dt = np.diff(t)
+    if np.any(dt < 0):
+        k = int(np.flatnonzero(dt < 0)[0])
+        raise ValueError(f"{path}: time_s goes backwards after {t[k]:g} s (to {t[k + 1]:g} "
+                         "s); rows must be in time order")
+    keep = np.concatenate([[True], dt > 0])
     if not keep.all():
-        log.warning("%s: dropped %d rows with non-increasing time", path.name,
-                    int((~keep).sum()))
+        notes.append(f"dropped {int((~keep).sum())} rows repeating the previous time stamp")
+        log.warning("%s: %s", path.name, notes[-1])
     sel = np.flatnonzero(ok)[keep]
+    if sel.size < MIN_ROWS:
+        raise ValueError(f"{path}: {sel.size} usable rows, at least {MIN_ROWS} needed")
     t = cols["time_s"][sel]
+    q = cols["q_rad"][sel]
     dq = cols["dq_rad_per_s"][sel]
+    dq_rms = float(np.sqrt(np.mean(dq ** 2)))
+    if np.ptp(q) <= 1e-12 * max(1.0, float(np.abs(q).max())) and dq_rms > 0:
+        raise ValueError(f"{path}: q_rad stays at {q[0]:g} rad while dq_rad_per_s has RMS "
+                         f"{dq_rms:.3g} rad/s; the angle must move with the velocity")
+    if dq_rms > 0:
+        mismatch = float(np.sqrt(np.mean((dq - np.gradient(q, t)) ** 2)) / dq_rms)
+        if mismatch > DQ_CONSISTENCY_TOL:
+            raise ValueError(
+                f"{path}: dq_rad_per_s is not the time derivative of q_rad: their RMS "
+                f"difference is {mismatch:.2f} of the velocity's RMS (allowed "
+                f"{DQ_CONSISTENCY_TOL}); check units (rad, rad/s) and column order")
+        notes.append(f"velocity consistency: RMS(dq - d/dt q) / RMS(dq) = {mismatch:.3f} "
+                     f"(allowed {DQ_CONSISTENCY_TOL})")
     ddq = cols.get("ddq_rad_per_s2")
     if ddq is None or not np.any(ddq[sel]):
         acc = estimate_acceleration(t, dq, accel_window)
@@ -292,10 +352,10 @@ def load_friction_csv(path: str | Path, accel_window: int = 21) -> FrictionRecor
     else:
         acc, source = ddq[sel], "measured"
     return FrictionRecording(
-        t_s=t, q_rad=cols["q_rad"][sel], dq_rad_s=dq, ddq_rad_s2=acc,
+        t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=acc,
         tau_nm=cols["tau_friction_Nm"][sel],
         load_nm=cols["load_Nm"][sel] if "load_Nm" in cols else None,
-        name=path.stem, ddq_source=source)
+        name=path.stem, ddq_source=source, notes=tuple(notes))
 
 
 def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:

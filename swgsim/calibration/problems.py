@@ -28,6 +28,10 @@ log = logging.getLogger(__name__)
 __all__ = ["detect_kind", "friction_problem", "build_problem", "MeasuredDataError"]
 
 
+#: Fewest samples a held-out time block of a friction recording must hold.
+MIN_ROWS_PER_BLOCK = 20
+
+
 class MeasuredDataError(ValueError):
     """The measured-data path is neither a friction CSV nor a data-set directory."""
 
@@ -102,14 +106,20 @@ def friction_problem(
 
     Raises
     ------
-    KeyError
-        Unknown candidate key.
+    ValueError
+        Unknown candidate key, or too few samples for the held-out blocks.
     """
     sig = rec.signals(v_s=v_s, v_s_rel=v_s_rel)
     keys = list(candidates) if candidates is not None else list(FRICTION_LIBRARY)
     unknown = [k for k in keys if k not in FRICTION_LIBRARY]
     if unknown:
-        raise KeyError(f"unknown friction effects {unknown}; library: {sorted(FRICTION_LIBRARY)}")
+        raise ValueError(f"selection.candidates: unknown friction effects {unknown}; library: "
+                         f"{sorted(FRICTION_LIBRARY)}")
+    if rec.n < MIN_ROWS_PER_BLOCK * n_blocks:
+        raise ValueError(f"recording {rec.name!r}: {rec.n} samples are too few for "
+                         f"split.n_blocks={n_blocks} held-out blocks of at least "
+                         f"{MIN_ROWS_PER_BLOCK} samples; allowed: n_blocks <= "
+                         f"{rec.n // MIN_ROWS_PER_BLOCK}")
     split = time_block_split(rec.t_s, n_blocks, validation_blocks, test_blocks, guard_frac)
     return Problem(
         name=rec.name, kind="friction", units="N m", signals=sig, y=rec.tau_nm, t=rec.t_s,
@@ -119,7 +129,7 @@ def friction_problem(
               "dt_median_s": sig.scales.dt_med, "v_s_rad_s": sig.v_s,
               "v_ref_rad_s": sig.scales.v_ref, "q_span_rad": sig.scales.q_span,
               "t0_s": sig.scales.t0, "ddq_source": rec.ddq_source,
-              "has_load": rec.load_nm is not None})
+              "has_load": rec.load_nm is not None, "data_notes": list(rec.notes)})
 
 
 def build_problem(path: str | Path, **kwargs: Any) -> Problem:

@@ -243,6 +243,8 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
               f"sample interval {_fmt(d.get('dt_median_s'))} s; acceleration "
               f"{d.get('ddq_source')}; smooth-sign velocity v_s = {_fmt(d.get('v_s_rad_s'))} "
               "rad/s.", ""]
+    if d.get("data_notes"):
+        lines += ["Data checks on loading: " + "; ".join(d["data_notes"]) + ".", ""]
     lines += result_section(s, "paper law", f" (ratio {_fmt(s['rmse_ratio'], 3)})")
     h = s["heldout"]
     lines += ["## Held-out data", "",
