@@ -51,6 +51,8 @@ def main(cfg: DictConfig) -> dict:
     """Generate the data set and print a one-line summary."""
     s = run_generate(cfg)
     state = "complete" if s["complete"] else "incomplete (other shards pending)"
+    if s.get("replaced"):
+        print(f"swgsim-generate: {s['replaced']}")
     print(f"swgsim-generate: {s['windows']} windows, {len(s['computed'])} shard(s) computed, "
           f"{len(s['skipped'])} skipped, {s['wall_s']:.1f} s -> {s['out_dir']} [{state}]")
     return s

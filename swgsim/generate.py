@@ -605,7 +605,7 @@ def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
                 f.unlink()
             replaced = (f"replaced the {'data set' if finished else 'unfinished data set'} "
                         f"in {out_dir} (config hash {old} -> {chash}, {len(files)} files)")
-            log.warning("%s", replaced)
+            log.info("%s", replaced)  # the caller reports it (summary["replaced"])
     out_dir.mkdir(parents=True, exist_ok=True)
     if not stamp.is_file():
         dsio.atomic_write_json(stamp, {"config_hash": chash, "config": cfg})
