@@ -119,6 +119,20 @@ class MeshConfig:
 
 
 @dataclass
+class LoadConfig:
+    """What the gear drives: its inertia sets the output side of the I/O model (eq. 1).
+
+    Attributes
+    ----------
+    j_out_kgm2 : float
+        Output inertia: flange, coupling and driven load [kg m²]; 8.8e-3 for the bench
+        (GearParams.j_out_kgm2), a robot link's for ``conf/dataset/robot_joint.yaml``.
+    """
+
+    j_out_kgm2: float = 8.8e-3
+
+
+@dataclass
 class DisturbanceConfig:
     """Amplitude ranges of eq. (10) [mV/V] (swgsim.disturbance)."""
 
@@ -166,7 +180,7 @@ class DatasetConfig:
     seed : int
         Seed of every random draw of the data set, >= 0.
     gears : list of GearConfig
-    tolerances, sensors, operating_points, chain, mesh, disturbance, acquisition
+    tolerances, sensors, operating_points, chain, mesh, load, disturbance, acquisition
         See their classes.
     variants : dict of str to VariantSpec
         Class name -> its variants (paper Table V).
@@ -185,6 +199,7 @@ class DatasetConfig:
     operating_points: OperatingPointsConfig = field(default_factory=OperatingPointsConfig)
     chain: ChainConfig = field(default_factory=ChainConfig)
     mesh: MeshConfig = field(default_factory=MeshConfig)
+    load: LoadConfig = field(default_factory=LoadConfig)
     disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
     acquisition: AcquisitionConfig = field(default_factory=AcquisitionConfig)
     sensor_effects: list[Any] = field(default_factory=list)

@@ -187,6 +187,7 @@ def plan(cfg: dict) -> list[ShardSpec]:
     _in(ch["ecc_load_share"], 0.0, 1.0 / e_max if e_max > 0 else 10.0,
         "dataset.chain.ecc_load_share", why="the load share 1 ± κ e/w0 of a mesh zone must "
         "stay in [0, 2] for the largest eccentricity of dataset.variants.eccentric_wg")
+    _in(cfg["load"]["j_out_kgm2"], 1e-4, 100.0, "dataset.load.j_out_kgm2", "kg m²")
     tol = cfg["tolerances"]
     for key, hi, unit in (("sd_theta_deg", 5.0, "deg"), ("sd_r_mm", 2.0, "mm"),
                           ("sd_beta_deg", 10.0, "deg"), ("sd_gain", 0.2, "")):
@@ -285,14 +286,16 @@ def gear_influences(cfg: dict, shards: list[ShardSpec]) -> dict[int, dict[tuple,
 
 
 def gear_params(cfg: dict, gear: dict):
-    """Healthy ChainParams of one gear (paper Table IV factors on b1 and k1).
+    """Healthy ChainParams of one gear (paper Table IV factors on b1 and k1, the data
+    set's output inertia).
 
     A gear entry may add kinematic-error harmonics found by the calibration loop:
     ``ke_extra: [{order, amp_rad, phase_rad}]`` (:func:`swgsim.dynamics.gear_with_ke`).
     """
     p = rt1_size20()
     p = dataclasses.replace(p, b1_nms=p.b1_nms * float(gear["b1_factor"]),
-                            k1_nm_per_rad=p.k1_nm_per_rad * float(gear["k1_factor"]))
+                            k1_nm_per_rad=p.k1_nm_per_rad * float(gear["k1_factor"]),
+                            j_out_kgm2=float(cfg["load"]["j_out_kgm2"]))
     return ChainParams(gear=gear_with_ke(p, gear.get("ke_extra") or []))
 
 
