@@ -38,7 +38,7 @@ from .calibration.chain import friction_effects_from_config
 from .chain import ChainSettings, SimulationChain
 from .config import dataset_config
 from .disturbance import DisturbanceSpec, disturb
-from .dynamics import gear_with_ke, rt1_size20
+from .dynamics import gear_with_ke, rt1_size20, torsional_mode
 from .faults import FAULTS, ChainParams, apply_fault, get_fault
 from .flexspline import FlexsplineGeometry, Mesh, TrussModel
 from .influence import Influence, InfluenceSolver
@@ -216,6 +216,7 @@ def plan(cfg: dict) -> list[ShardSpec]:
         _req(ch["settle_s"] >= lead_s, f"dataset.chain.settle_s must be >= {lead_s:g} s "
                                        "(the amplifier's filter history), got "
                                        f"{ch['settle_s']}")
+    _check_settling(cfg)
     parse_sensor_effects(cfg.get("sensor_effects") or [])
     friction_effects_from_config(cfg.get("friction_effects"))
     for g in cfg["gears"]:
@@ -283,6 +284,31 @@ def gear_influences(cfg: dict, shards: list[ShardSpec]) -> dict[int, dict[tuple,
             inf[(pos, sev)] = solver.root_crack_at(lay, pos, sev, adjoint=adj, healthy=healthy)
         out[int(g["id"])] = inf
     return out
+
+
+SETTLE_DECAY_TIMES = 5.0  # transient left in the window: e^-5 = 0.7 % of the start's
+
+
+def min_settle_s(cfg: dict) -> float:
+    """Shortest ``chain.settle_s`` that lets the torsional mode ring down before the window.
+
+    :data:`SETTLE_DECAY_TIMES` times the longest decay time
+    (:func:`swgsim.dynamics.torsional_mode`) over the data set's gears and
+    operating points [s].
+    """
+    ops = cfg["operating_points"]
+    return SETTLE_DECAY_TIMES * max(
+        torsional_mode(gear_params(cfg, g).gear, float(n), float(t))[1]
+        for g in cfg["gears"] for n in ops["n_in_rpm"] for t in ops["t_out_nm"])
+
+
+def _check_settling(cfg: dict) -> None:
+    need = min_settle_s(cfg)
+    _req(cfg["chain"]["settle_s"] >= need - 1e-12,
+         f"dataset.chain.settle_s={cfg['chain']['settle_s']:g} s is shorter than "
+         f"{SETTLE_DECAY_TIMES:g} decay times of the torsional mode with "
+         f"dataset.load.j_out_kgm2={cfg['load']['j_out_kgm2']:g} kg m² (the window would "
+         f"still ring from the start); allowed: >= {need:.3g} s")
 
 
 def gear_params(cfg: dict, gear: dict):

@@ -88,3 +88,35 @@ def test_calibrated_friction_effect_enters_the_dynamics():
     more = dy.simulate([p], 2000.0, 39.0, window_s=0.02, friction_effects=fx)
     assert more.t_out.mean() == pytest.approx(base.t_out.mean(), abs=0.01)  # load held
     assert more.efficiency[0] < base.efficiency[0] - 0.005  # more loss
+
+
+@pytest.mark.parametrize("j_out", [8.8e-3, 0.69])
+def test_torsional_mode_matches_the_simulated_ring_down(j_out):
+    """The transient of a start without kinematic error, A(t) − B(t) with B already in
+    periodic steady motion at the same input angle, decays at the predicted rate."""
+    p = dy.rt1_size20(j_out_kgm2=j_out)
+    n, tq, fs = 2000.0, 39.0, 20e3
+    f_hz, tau = dy.torsional_mode(p, n, tq)
+    settle = 20 * tau
+    a = dy.simulate([p], n, tq, phi_in0=0.0, sample_rate_hz=fs, window_s=8 * tau,
+                 settle_s=0.0, substeps=1)
+    phi0 = -n * dy.RPM * settle
+    for _ in range(3):  # B's input angle meets A's once A's transient has died out
+        b = dy.simulate([p], n, tq, phi_in0=phi0, sample_rate_hz=fs, window_s=8 * tau,
+                        settle_s=settle, substeps=1)
+        phi0 -= b.states[0, 0, -1] - a.states[0, 0, -1]
+    d = np.abs(a.t_out[0] - b.t_out[0])
+    t = a.time
+    # envelope: the largest |difference| in each of 8 blocks of one decay time
+    blocks = np.array_split(np.arange(t.size), 8)
+    env = np.array([d[i].max() for i in blocks])
+    tm = np.array([t[i][np.argmax(d[i])] for i in blocks])
+    slope = np.polyfit(tm[1:6], np.log(env[1:6]), 1)[0]
+    assert -1.0 / slope == pytest.approx(tau, rel=0.05)
+    # the ring-down oscillates at the mode's frequency: interpolated zero crossings of
+    # A - B over the first six decay times
+    x = (a.t_out[0] - b.t_out[0])[: int(6 * tau * fs)]
+    i = np.flatnonzero(np.sign(x[:-1]) != np.sign(x[1:]))
+    tc = (i - x[i] / (x[i + 1] - x[i])) / fs
+    f_sim = (tc.size - 1) / 2 / (tc[-1] - tc[0])
+    assert f_sim == pytest.approx(f_hz, rel=0.02)

@@ -27,7 +27,7 @@ def tiny_cfg(**chain):
         "root_tooth_crack": {"severities": [0.9], "n_positions": 1},
         "tip_tooth_crack": {"severities": [1.0], "n_positions": 1},
     }
-    cfg["chain"].update({"window_s": 0.02, "settle_s": 0.01, **chain})
+    cfg["chain"].update({"window_s": 0.02, "settle_s": 0.02, **chain})
     cfg["disturbance"]["harmonic_mvv"] = 0.0  # windows shorter than eq. (10)'s sub-harmonics
     cfg["operating_points"] = {"n_in_rpm": [2000.0, 4000.0], "t_out_nm": [39.0]}
     cfg["gears"] = cfg["gears"][:2]
@@ -350,3 +350,17 @@ def test_friction_effects_config_option_and_errors():
         cfg["friction_effects"] = spec
         with pytest.raises(ValueError, match=match):
             gen.plan(cfg)
+
+
+def test_settling_shorter_than_the_torsional_ring_down_is_refused():
+    from swgsim.config import dataset_config
+    from swgsim.generate import min_settle_s, plan
+
+    cfg = dataset_config({"load": {"j_out_kgm2": 0.69}})
+    need = min_settle_s(cfg)
+    assert 0.1 < need < 0.2  # about 5 x 30 ms with a robot link
+    with pytest.raises(ValueError, match=r"dataset.chain.settle_s=0.05 s .* >= 0.147"):
+        plan(cfg)
+    cfg["chain"]["settle_s"] = 0.15
+    assert plan(cfg)
+    assert min_settle_s(dataset_config()) < 0.05  # the bench inertia rings down in ms

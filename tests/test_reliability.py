@@ -38,7 +38,7 @@ def small_cfg(**chain) -> dict:
                        "root_tooth_crack": {"severities": [0.9], "n_positions": 1}}
     cfg["gears"] = cfg["gears"][:2]
     cfg["operating_points"]["t_out_nm"] = [39.0]
-    cfg["chain"].update({"window_s": 0.06, "settle_s": 0.01, **chain})
+    cfg["chain"].update({"window_s": 0.06, "settle_s": 0.02, **chain})
     return cfg
 
 
