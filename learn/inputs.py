@@ -71,7 +71,7 @@ from __future__ import annotations
 
 import functools
 import logging
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -81,10 +81,24 @@ log = logging.getLogger(__name__)
 INPUTS = ("raw", "diff", "sel1", "sel3", "raw_res", "diff_res", "res_spec")
 SIGNAL_INPUTS = ("raw", "diff", "raw_res", "diff_res")
 RESIDUAL_INPUTS = ("raw_res", "diff_res", "res_spec")
-#: Default settings of the synchronous residual (see the module docstring).
-RESIDUAL_DEFAULTS = {"ratio": 100.0, "n_harmonics": 48,
-                     "nuisance_orders": (0.25, 1 / 3, 0.5, 1.0),
-                     "min_harmonic": 2, "n_points": 192, "compress": 1e-4}
+
+
+@dataclass
+class ResidualSettings:
+    """Settings of the synchronous residual inputs (see the module docstring)."""
+
+    ratio: float = 100.0        # gear ratio N: the WG turns at 1 + 1/N per input revolution
+    n_harmonics: int = 48       # harmonics of the WG angle fitted per window
+    nuisance_orders: list[float] = field(  # eq. (10) sub-harmonics, fitted and dropped
+        default_factory=lambda: [0.25, 1 / 3, 0.5, 1.0])
+    min_harmonic: int = 2       # synthesised from (0: offset; 1: order-1 disturbance out)
+    n_points: int = 192         # samples of one WG revolution
+    compress: float | None = 1e-4  # asinh(x / compress); fault residuals span 4 decades
+
+
+#: Default settings of the synchronous residual, as a mapping.
+RESIDUAL_DEFAULTS = {k: tuple(v) if isinstance(v, list) else v
+                     for k, v in asdict(ResidualSettings()).items()}
 AUX = ("eta2_rel", "eta_rel")
 _META = ("gear", "fault", "variant", "severity", "n_in_rpm", "t_out_nm", "disturbed")
 

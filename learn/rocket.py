@@ -105,11 +105,53 @@ class MiniRocketClassifier(ClassifierMixin, BaseEstimator):
         self.classes_ = self.ridge_.classes_
         return self
 
-    def refit_head(self, X, y, sample_weight=None):
-        """Refit only the ridge on (X, y) with the fitted transform and scalers (k-shot)."""
-        self.ridge_ = RidgeClassifierCV(alphas=np.asarray(self.alphas))
-        self.ridge_.fit(self.transform(X), y, sample_weight=sample_weight)
-        self.classes_ = self.ridge_.classes_
+    def refit_head(self, X, y, *, y_source, source_features, replay: float = 1.0):
+        """k-shot adaptation: refit only the ridge on the source windows plus k labelled
+        windows of the target, with the fitted kernels, scalers and ridge penalty.
+
+        The target windows are weighted so that together they weigh ``1 / replay`` times
+        the source windows (the balance of the torch nets' fine-tuning with replay,
+        :meth:`learn.nets.TorchClassifier.fine_tune`); the penalty stays the one the
+        leave-one-out CV chose on the source data, so nothing is chosen on the target.
+
+        Parameters
+        ----------
+        X : array (k_total, C, T) or (k_total, F)
+            Labelled target windows.
+        y : array (k_total,)
+        y_source : array (n,)
+            Labels of the training windows.
+        source_features : ndarray, shape (n, n_features)
+            :meth:`transform` of the training windows (computed once for every k).
+        replay : float
+            Source windows per target window in weight, > 0.
+
+        Returns
+        -------
+        self
+
+        Raises
+        ------
+        ValueError
+            ``replay`` <= 0 or shapes that do not match.
+        """
+        from sklearn.linear_model import RidgeClassifier
+
+        if not replay > 0:
+            raise ValueError(f"replay must be > 0, got {replay}")
+        f_t = self.transform(X)
+        f_s = np.asarray(source_features)
+        if f_s.shape[0] != len(y_source) or f_s.shape[1] != f_t.shape[1]:
+            raise ValueError(f"source_features of shape {f_s.shape} do not match "
+                             f"{len(y_source)} labels and {f_t.shape[1]} features")
+        w_t = f_s.shape[0] / (replay * max(f_t.shape[0], 1))
+        weight = np.concatenate([np.ones(f_s.shape[0]), np.full(f_t.shape[0], w_t)])
+        ridge = RidgeClassifier(alpha=float(self.ridge_.alpha_))
+        ridge.fit(np.concatenate([f_s, f_t]), np.concatenate([np.asarray(y_source),
+                                                             np.asarray(y)]),
+                  sample_weight=weight)
+        self.ridge_ = ridge
+        self.classes_ = ridge.classes_
         return self
 
     def decision_function(self, X) -> np.ndarray:

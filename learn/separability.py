@@ -2,18 +2,20 @@
 
 For every gear and operating point, each window is reduced to phase-invariant numbers:
 the amplitudes |c_h| of the harmonics h = 0..H of the wave-generator angle in every
-bridge (least-squares fit, :func:`learn.inputs.harmonic_coefficients`, the disturbance's
-sub-harmonics fitted and dropped) and the efficiency η. The healthy windows of that gear
-and operating point (60 copies that differ only in their start angle) give a mean and a
-spread per number; a window's separation is the largest |x - mean| / spread over the
-numbers. A class whose windows stay within a few spreads of the healthy cloud cannot be
-told from a healthy gear by any classifier of these data.
+bridge (least-squares fit, :func:`learn.inputs.harmonic_coefficients`; for disturbed
+windows the disturbance's sub-harmonics fitted and dropped) and the efficiency η. The
+healthy windows of that gear and operating point (copies that differ only in their start
+angle and noise) give a mean and a spread per number; a window's separation is the
+largest |x - mean| / spread over the numbers. A class whose windows stay within a few
+spreads of the healthy cloud cannot be told from a healthy gear by any classifier of
+these data.
 
     python -m learn.separability                      # data/paper, clean windows
     python -m learn.separability --disturbed --out reports/transfer
 
 The transfer report (``swgsim-train -m experiment=transfer``) includes the table and the
-figure.
+figure per data set; the observability map (``swgsim-observability``) uses the per-window
+records (:func:`separation_records`) over the output inertia, speed and load.
 
 Healthy windows are scored leave-one-out against the other healthy windows, which gives
 the separation a healthy window reaches by chance (the maximum over ~46 numbers is
@@ -31,8 +33,8 @@ import numpy as np
 import pandas as pd
 
 
-def separations(ds, disturbed: bool = False, n_harmonics: int = 8,
-                ratio: float = 100.0) -> dict[str, np.ndarray]:
+def separation_records(ds, disturbed: bool = False, n_harmonics: int = 8,
+                       ratio: float = 100.0) -> pd.DataFrame:
     """Separation of every window from the healthy windows of its gear and operating point.
 
     Parameters
@@ -41,7 +43,9 @@ def separations(ds, disturbed: bool = False, n_harmonics: int = 8,
         Schema v1 (``strain_signal``, ``time``, ``n_in_mean_rpm``, ``efficiency`` and
         the window labels).
     disturbed : bool
-        Use the disturbed (True) or clean (False) non-reference windows.
+        Use the disturbed (True) or clean (False) non-reference windows. For disturbed
+        windows the sub-harmonics of eq. (10) (orders 1/4, 1/3, 1/2, 1) are fitted and
+        dropped; clean windows hold none, so none are fitted.
     n_harmonics : int
         Harmonics H of the wave-generator angle, >= 1.
     ratio : float
@@ -49,27 +53,30 @@ def separations(ds, disturbed: bool = False, n_harmonics: int = 8,
 
     Returns
     -------
-    dict
-        Fault class -> ndarray, shape (n_windows,): max over the (5 (H + 1) + 1) numbers
-        of |x - mean_healthy| / std_healthy [-]; healthy windows leave-one-out. Groups
-        with fewer than three healthy windows are skipped.
+    pandas.DataFrame
+        One row per window of a (gear, operating point) with at least three healthy
+        windows: ``sample``, ``gear``, ``fault``, ``variant``, ``severity``, ``n_in_rpm``,
+        ``t_out_nm`` and ``z``, the max over the (5 (H + 1) + 1) numbers of
+        |x - mean_healthy| / std_healthy [-]; healthy windows leave-one-out.
 
     Raises
     ------
     ValueError
         ``n_harmonics`` < 1.
     """
-    from learn.inputs import harmonic_coefficients
+    from learn.inputs import RESIDUAL_DEFAULTS, harmonic_coefficients
 
     if int(n_harmonics) < 1:
         raise ValueError(f"n_harmonics must be >= 1, got {n_harmonics}")
-    keys = ("gear", "fault", "n_in_rpm", "t_out_nm", "disturbed", "reference")
+    keys = ("gear", "fault", "variant", "severity", "n_in_rpm", "t_out_nm", "disturbed",
+            "reference")
     m = {k: ds[k].values for k in keys}
     sig = ds["strain_signal"].values
     t = np.asarray(ds["time"].values, float)
     f_in = np.asarray(ds["n_in_mean_rpm"].values, float) / 60.0
     eff = ds["efficiency"].values
-    out: dict[str, list[float]] = {}
+    nuisance = RESIDUAL_DEFAULTS["nuisance_orders"] if disturbed else ()
+    parts = []
     use = (m["disturbed"] == disturbed) & ~m["reference"]
     for g in np.unique(m["gear"]):
         for n in np.unique(m["n_in_rpm"]):
@@ -79,15 +86,35 @@ def separations(ds, disturbed: bool = False, n_harmonics: int = 8,
                 if (m["fault"][idx] == "healthy").sum() < 3:
                     continue
                 c = harmonic_coefficients(sig[idx].astype(float), t, f_in[idx],
-                                          1.0 + 1.0 / ratio, n_harmonics)
+                                          1.0 + 1.0 / ratio, n_harmonics,
+                                          nuisance_orders=nuisance)
                 x = np.concatenate([np.abs(c).reshape(len(idx), -1), eff[idx, None]], axis=1)
                 h = np.flatnonzero(m["fault"][idx] == "healthy")
                 z = _zmax(x, x[h])
                 # leave-one-out: a healthy window against the other healthy windows
                 z[h] = [_zmax(x[i:i + 1], x[h[h != i]])[0] for i in h]
-                for f in np.unique(m["fault"][idx]):
-                    out.setdefault(f, []).extend(z[m["fault"][idx] == f].tolist())
-    return {k: np.asarray(v) for k, v in out.items()}
+                parts.append(pd.DataFrame({"sample": idx, "z": z,
+                                           **{k: m[k][idx] for k in keys[:6]}}))
+    cols = ["sample", "gear", "fault", "variant", "severity", "n_in_rpm", "t_out_nm", "z"]
+    if not parts:
+        return pd.DataFrame(columns=cols)
+    out = pd.concat(parts, ignore_index=True)[cols]
+    out["fault"] = out["fault"].astype(str)
+    return out
+
+
+def separations(ds, disturbed: bool = False, n_harmonics: int = 8,
+                ratio: float = 100.0) -> dict[str, np.ndarray]:
+    """Separations of :func:`separation_records` grouped by fault class.
+
+    Returns
+    -------
+    dict
+        Fault class -> ndarray, shape (n_windows,) [healthy spreads]. Groups with fewer
+        than three healthy windows are skipped.
+    """
+    rec = separation_records(ds, disturbed, n_harmonics, ratio)
+    return {f: g["z"].to_numpy() for f, g in rec.groupby("fault")}
 
 
 def _zmax(x: np.ndarray, ref: np.ndarray) -> np.ndarray:

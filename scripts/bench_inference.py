@@ -35,13 +35,14 @@ def main(argv: list[str] | None = None) -> int:
 
     from learn.features import paper_orders
     from learn.inputs import build_input
-    from learn.transfer import _specs_from_cfg, measure_latency
+    from learn.latency import measure_latency
+    from learn.runs import specs_from_config
     from swgsim.data import load
 
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
         cfg = compose("train", overrides=["experiment=transfer", *args.overrides])
     tc = cfg.transfer
-    specs = _specs_from_cfg(OmegaConf.to_container(tc.runs, resolve=True))
+    specs = specs_from_config(OmegaConf.to_container(tc.runs, resolve=True))
     models = OmegaConf.to_container(tc.models, resolve=True)
     residual = OmegaConf.to_container(tc.residual, resolve=True)
     fk = {"orders": paper_orders(float(cfg.features.get("max_order", 8.0)),

@@ -32,6 +32,7 @@ from omegaconf import MISSING, DictConfig, OmegaConf
 
 from learn.features import FeatureSettings
 from learn.protocols import PROTOCOLS, ProtocolConfig
+from learn.transfer import TransferConfig
 from swgsim.config import DatasetConfig, check_keys
 
 
@@ -69,6 +70,21 @@ class PaperApp:
     tracking_uri: str | None = None
     seed: int = 0
     study: StudyOptions = field(default_factory=StudyOptions)
+
+
+@dataclass
+class ObservabilityApp:
+    """``swgsim-observability``: the observability map over the output inertia."""
+
+    dataset: DatasetConfig = field(default_factory=DatasetConfig)  # preset observability
+    j_out_kgm2: list[float] | None = None   # null: n_j_out log-spaced, bench to robot link
+    n_j_out: int = 6
+    data_root: str = "data/observability"   # data sets in <data_root>/j_out_<value>
+    report_dir: str = "reports/observability"
+    n_jobs: int = 2
+    harmonics: int = 8                       # harmonics of the WG angle in the separation
+    plot_only: bool = False                  # redraw the figure from observability.csv
+    progress: bool = True
 
 
 @dataclass
@@ -112,7 +128,7 @@ class TrainApp:
     logger: LoggerConfig | None = None
     paths: PathsConfig = field(default_factory=PathsConfig)
     study: StudyOptions = field(default_factory=StudyOptions)
-    transfer: Any = None
+    transfer: TransferConfig | None = None
 
 
 def register() -> None:
@@ -124,6 +140,7 @@ def register() -> None:
     cs.store(name="generate_schema", node=GenerateApp)
     cs.store(name="paper_schema", node=PaperApp)
     cs.store(name="train_schema", node=TrainApp)
+    cs.store(name="observability_schema", node=ObservabilityApp)
     for name in PROTOCOLS:
         cs.store(group="protocol", name=name,
                  node=ProtocolConfig.paper(name, random_state="${seed}"))

@@ -11,15 +11,12 @@ import pytest
 import torch
 from test_deep_toy import make_toy_dataset, write_toy_dataset
 
+from learn.adapt import CoralClassifier
 from learn.inputs import build_input
+from learn.kshot import check_no_leak, kshot_split
 from learn.protocols import protocol_splits
-from learn.transfer import (
-    RESULT_COLUMNS,
-    CoralClassifier,
-    _check_no_leak,
-    kshot_split,
-    summarise,
-)
+from learn.transfer import RESULT_COLUMNS
+from learn.transfer_report import CONFUSION_COLUMNS, summarise
 
 CONF = Path(__file__).resolve().parents[1] / "conf"
 
@@ -60,7 +57,7 @@ def test_kshot_split_keeps_evaluation_windows_apart(meta, seed):
             assert set(shots) <= set(ks.pool) and prev <= set(shots)
             assert not set(shots) & set(ks.evaluation)
             prev = set(shots)
-        _check_no_leak(meta, sp.train, ks)  # the run-time guard agrees
+        check_no_leak(meta, sp.train, ks)  # the run-time guard agrees
         # every class still has evaluation windows
         assert ev["fault"].nunique() == 6
     # the draw is a function of the seed
@@ -73,7 +70,7 @@ def test_leak_guard_raises(meta):
     sp = protocol_splits(meta, "ood_disturbed")[0]
     ks = kshot_split(meta, sp.test, 2, 0)
     with pytest.raises(ValueError, match="leak"):
-        _check_no_leak(meta, np.concatenate([sp.train, ks.evaluation[:1]]), ks)
+        check_no_leak(meta, np.concatenate([sp.train, ks.evaluation[:1]]), ks)
     with pytest.raises(ValueError, match="too few"):
         kshot_split(meta, sp.test, k_max=10_000, seed=0)
 
@@ -97,15 +94,18 @@ def test_transfer_end_to_end(tmp_path):
 
     data = write_toy_dataset(tmp_path / "toy", n_variants=4, n_time=64)
     overrides = [
-        "experiment=transfer", f"data.path={data}", f"paths.report_dir={tmp_path}/reports",
+        "experiment=transfer", "transfer.run_on=[]", f"data.path={data}", "data.name=toy",
+        f"paths.report_dir={tmp_path}/reports",
         "features.order_step=2.0",  # the toy's 16 ms windows hold half a revolution
         f"logger.tracking_uri=sqlite:///{tmp_path}/mlflow.db",
         "transfer.protocols=[cv_disturbed,ood_disturbed]", "transfer.seeds=[0,1]",
         "transfer.cv_seeds=[0]", "transfer.k_shots=[0,1,2]", "transfer.finetune.steps=3",
         "transfer.n_threads=1", "transfer.latency_repeats=3", "transfer.progress=false",
-        "transfer.runs=[{model:rf,input:sel3,adapt:coral},{model:minirocket,input:diff},"
+        "transfer.runs=[{model:rf,input:sel3,adapt:coral},"
+        "{model:minirocket,input:diff,finetune:true},"
         "{model:mlp_torch,input:res_spec},{model:cnn,input:raw,finetune:true,adapt:adabn}]",
-        "transfer.residual.n_harmonics=4", "transfer.residual.n_points=16",
+        "transfer.primary={model:minirocket,input:diff}", "transfer.residual.n_harmonics=4",
+        "transfer.residual.n_points=16",
         "transfer.n_jobs=1",
         "transfer.models.minirocket.estimator.n_kernels=168",
         "transfer.models.cnn.estimator.max_epochs=2",
@@ -122,9 +122,19 @@ def test_transfer_end_to_end(tmp_path):
     assert tuple(res.columns) == RESULT_COLUMNS
     assert res["accuracy"].between(0, 1).all()
     assert set(res["protocol"]) == {"cv_disturbed", "ood_disturbed"}
+    assert set(res["dataset"]) == {"toy"}
     ood = res[res["protocol"] == "ood_disturbed"]
-    # 3 splits x 2 seeds x (rf, rf+coral, minirocket, mlp, cnn, cnn+adabn + 2 modes x 2 k)
-    assert len(ood) == 3 * 2 * (6 + 2 * 2)
+    # 3 splits x 2 seeds x (rf, rf+coral, minirocket, mlp, cnn, cnn+adabn, 2 k of the
+    # minirocket ridge, 2 modes x 2 k of the cnn)
+    assert len(ood) == 3 * 2 * (6 + 2 + 2 * 2)
+    assert (ood["model"] == "minirocket+ft_head").sum() == 3 * 2 * 2
+    conf = pd.read_csv(rep / "confusion.csv")
+    assert tuple(conf.columns) == CONFUSION_COLUMNS
+    # the confusion counts add up to the evaluated windows of every run
+    n = ood.groupby(["model", "input", "k_shot"])["n_test"].sum()
+    c = conf[conf["protocol"] == "ood_disturbed"].groupby(["model", "input", "k_shot"])[
+        "count"].sum()
+    pd.testing.assert_series_equal(n.sort_index(), c.sort_index(), check_names=False)
     assert set(ood["k_shot"]) == {0, 1, 2}
     assert set(res[res["protocol"] == "cv_disturbed"]["k_shot"]) == {0}
     # every model of one (split, seed) is scored on the same windows
@@ -156,18 +166,70 @@ def test_transfer_experiment_composes():
     from omegaconf import OmegaConf
 
     from learn.inputs import INPUTS
-    from learn.transfer import ADAPT, _specs_from_cfg, make_estimator
+    from learn.runs import ADAPT, make_estimator, specs_from_config
     from swgcli import compose_app
 
     cfg = compose_app("train", ["experiment=transfer"])
     assert cfg.task == "transfer"
     tc = OmegaConf.to_container(cfg.transfer, resolve=True)
-    specs = _specs_from_cfg(tc["runs"])
+    specs = specs_from_config(tc["runs"])
     for s in specs:
         assert s.model in tc["models"] and s.input in INPUTS
         assert s.adapt in (None, *ADAPT)
         make_estimator(tc["models"][s.model], 0, 2, dict(s.params))  # params are valid
     assert {"rf", "minirocket", "mlp_torch", "cnn"} <= {s.model for s in specs}
-    assert {("cnn", "raw"), ("cnn", "diff")} <= {(s.model, s.input) for s in specs}
-    assert set(tc["protocols"]) == {"cv_clean", "cv_disturbed", "ood_clean", "ood_disturbed"}
+    assert ("cnn", "raw") in {(s.model, s.input) for s in specs}
+    assert tc["protocols"] == ["ood_disturbed"]
+    assert tc["run_on"] == ["paper", "bench", "robot_joint"]
     assert len(tc["seeds"]) == 5 and set(tc["k_shots"]) == {0, 1, 5, 10}
+    # the robot joint's link inertia, with time for its torsional mode to ring down
+    rj = tc["datasets"]["robot_joint"]
+    assert rj["load"]["j_out_kgm2"] == 0.69 and rj["acquisition"]["start"] == "random"
+    from swgsim.generate import plan
+
+    for name in tc["run_on"]:
+        assert plan(tc["datasets"][name])
+
+
+def _synthetic_results():
+    rows = []
+    for ds, base in (("paper", 1.0), ("bench", 0.7)):
+        for split, off in (("gear1", 0.0), ("gear2", -0.1), ("gear3", 0.05)):
+            for seed in (0, 1):
+                for model, acc in (("rf", base - 0.3), ("minirocket", base)):
+                    rows.append({"dataset": ds, "protocol": "ood_disturbed", "split": split,
+                                 "model": model, "input": "raw_res", "k_shot": 0,
+                                 "seed": seed, "accuracy": min(1.0, acc + off),
+                                 "train_s": 1.0, "n_test": 10})
+    return pd.DataFrame(rows, columns=list(RESULT_COLUMNS))
+
+
+def test_targets_use_the_worst_split_and_the_observable_share(tmp_path):
+    from learn.transfer_report import class_recall, target_table, write_table
+
+    res = _synthetic_results()
+    conf = pd.DataFrame([
+        ("bench", "ood_disturbed", "minirocket", "raw_res", 0, "healthy", "healthy", 9),
+        ("bench", "ood_disturbed", "minirocket", "raw_res", 0, "healthy", "tip", 1),
+        ("bench", "ood_disturbed", "minirocket", "raw_res", 0, "tip", "tip", 6),
+        ("bench", "ood_disturbed", "minirocket", "raw_res", 0, "tip", "healthy", 4)],
+        columns=list(CONFUSION_COLUMNS))
+    rec = class_recall(conf).set_index("true")["recall"]
+    assert rec["healthy"] == pytest.approx(0.9) and rec["tip"] == pytest.approx(0.6)
+    sep = {"bench": {"disturbed": pd.DataFrame({"fault": ["healthy", "tip"],
+                                                "beyond_p95": [0.05, 0.55]})}}
+    targets = {"paper": {"protocol": "ood_disturbed", "accuracy": {0: 0.95}, "recall": {}},
+               "bench": {"protocol": "ood_disturbed", "accuracy": {},
+                         "recall": {"tip": 0.99}}}
+    tt = target_table(summarise(res), class_recall(conf), targets,
+                      {"model": "rf", "input": "raw_res"}, sep).set_index(["dataset", "who"])
+    # paper: the worst split of the best run (minirocket: 1.0 - 0.1), the primary's (rf)
+    assert tt.loc[("paper", "best"), "reached"] == pytest.approx(0.9)
+    assert tt.loc[("paper", "primary"), "reached"] == pytest.approx(0.6)
+    assert not tt.loc[("paper", "best"), "met"]
+    # bench: recall of the best run at k = 0 beside the share the signals leave observable
+    assert tt.loc[("bench", "best"), "reached"] == pytest.approx(0.6)
+    assert tt.loc[("bench", "best"), "observable"] == pytest.approx(0.55)
+    path = write_table(res, conf, tmp_path / "t.md", targets=targets, separability=sep)
+    text = path.read_text()
+    assert "| bench | recall of tip, k = 0 | 99.0 % |" in text and "55.0 %" in text

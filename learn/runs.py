@@ -1,0 +1,132 @@
+"""One (model, input) run of the transfer comparison: its spec, estimator and scoring.
+
+A run names a model config (``transfer.models.<name>``, a ``_target_`` mapping as in
+``conf/model/``) and an input of :data:`learn.inputs.INPUTS`, and says which target-gear
+adaptations it gets (:mod:`learn.transfer`).
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+ADAPT = ("adabn", "coral")
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One (model, input) pair of the comparison.
+
+    Attributes
+    ----------
+    model : str
+        Key into the model configs (``transfer.models``).
+    input : str
+        One of :data:`learn.inputs.INPUTS`.
+    finetune : bool
+        Adapt with k labelled target windows per class (leave-one-gear-out protocols):
+        torch nets are fine-tuned, MiniRocket's ridge is refitted.
+    adapt : str or None
+        ``adabn`` (torch nets) or ``coral`` (feature inputs), unsupervised.
+    params : tuple of (str, value)
+        Parameters set on the model for this input (e.g. ``padding_mode``).
+    """
+
+    model: str
+    input: str
+    finetune: bool = False
+    adapt: str | None = None
+    params: tuple = ()
+
+    @property
+    def label(self) -> str:
+        return f"{self.model}/{self.input}"
+
+
+def specs_from_config(runs: Iterable[Mapping[str, Any]]) -> list[RunSpec]:
+    """RunSpecs from ``transfer.runs`` entries ``{model, input, finetune, adapt, params}``.
+
+    Raises
+    ------
+    ValueError
+        ``transfer.runs[i]``: a missing model or input, an unknown key or adaptation.
+    """
+    out = []
+    allowed = {"model", "input", "finetune", "adapt", "params"}
+    for i, r in enumerate(runs):
+        r = dict(r)
+        bad = set(r) - allowed
+        if bad or "model" not in r or "input" not in r:
+            raise ValueError(f"transfer.runs[{i}]: needs model and input, may add finetune, "
+                             f"adapt, params; got keys {sorted(r)}")
+        if r.get("adapt") not in (None, *ADAPT):
+            raise ValueError(f"transfer.runs[{i}].adapt: must be one of {ADAPT} or null, "
+                             f"got {r['adapt']!r}")
+        out.append(RunSpec(model=str(r["model"]), input=str(r["input"]),
+                           finetune=bool(r.get("finetune", False)), adapt=r.get("adapt"),
+                           params=tuple(sorted(dict(r.get("params") or {}).items()))))
+    return out
+
+
+def final_step(est):
+    """The classifier of a pipeline (or the estimator itself)."""
+    from sklearn.pipeline import Pipeline
+
+    return est[-1] if isinstance(est, Pipeline) else est
+
+
+def pre_transform(est, X):
+    """``X`` through every step of a fitted pipeline but the last."""
+    from sklearn.pipeline import Pipeline
+
+    return est[:-1].transform(X) if isinstance(est, Pipeline) and len(est) > 1 else X
+
+
+def make_estimator(model_cfg: Mapping[str, Any], seed: int, n_aux: int,
+                   params: Mapping[str, Any] | None = None):
+    """Instantiate a model config (``_target_``) and set its seed, ``n_aux`` and ``params``.
+
+    Every parameter named ``random_state`` or ``*__random_state`` is set to ``seed``,
+    every ``n_aux`` to ``n_aux`` (the scalar channels of a signal input); ``params`` are
+    set on the final estimator of a pipeline.
+    """
+    from hydra.utils import instantiate
+
+    est = instantiate(model_cfg, _convert_="all")
+    keys = est.get_params(deep=True)
+    upd = {k: seed for k in keys if k == "random_state" or k.endswith("__random_state")}
+    upd.update({k: n_aux for k in keys if k == "n_aux" or k.endswith("__n_aux")})
+    est.set_params(**upd)
+    if params:
+        final_step(est).set_params(**dict(params))
+    return est
+
+
+def fit_with_groups(est, X, y, groups):
+    """``est.fit``, passing ``groups`` (for a source-only early-stopping split) to an
+    estimator whose ``fit`` takes them."""
+    from sklearn.pipeline import Pipeline
+
+    final = final_step(est)
+    if "groups" not in inspect.signature(final.fit).parameters:
+        return est.fit(X, y)
+    if isinstance(est, Pipeline):
+        return est.fit(X, y, **{f"{est.steps[-1][0]}__groups": groups})
+    return est.fit(X, y, groups=groups)
+
+
+def score(est, X, y, pred=None) -> tuple[float, list[tuple[str, str, int]]]:
+    """Accuracy and the confusion as (true, predicted, count) triples.
+
+    ``pred``, when given, are the estimator's predictions for ``X`` computed elsewhere
+    (e.g. from cached features); ``est.predict`` is then not called.
+    """
+    pred = np.asarray(est.predict(X) if pred is None else pred).astype(str)
+    y = np.asarray(y).astype(str)
+    pairs = pd.Series(list(zip(y, pred, strict=True))).value_counts()
+    return float(np.mean(pred == y)), [(t, p, int(c)) for (t, p), c in pairs.items()]

@@ -1,0 +1,592 @@
+"""Report of the transfer comparison (:mod:`learn.transfer`): tables, targets, figure, MLflow.
+
+Everything here reads the comparison's two tables: ``results`` (one row per run:
+:data:`learn.transfer.RESULT_COLUMNS`) and ``confusion`` (:data:`CONFUSION_COLUMNS`,
+counts summed over splits and seeds). Nothing is fitted or chosen here; the "best" model
+of a data set is a statement about the evaluation windows, reported beside the primary
+model that was declared before the run (``transfer.primary``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+CONFUSION_COLUMNS = ("dataset", "protocol", "model", "input", "k_shot", "true", "predicted",
+                     "count")
+OOD_PROTOCOLS = ("ood_clean", "ood_disturbed")
+ALL_PROTOCOLS = ("cv_clean", "cv_disturbed", "ood_clean", "ood_disturbed")
+_NAMES = {"rf": "RF", "minirocket": "MiniRocket", "mlp_torch": "MLP", "cnn": "CNN",
+          "mlp": "MLP (sklearn)", "knn": "KNN", "nb": "NB", "svm": "SVM"}
+_INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "Selection 3",
+           "raw_res": "synchronous residual", "diff_res": "differenced residual",
+           "res_spec": "residual spectrum"}
+_SPLIT_ORDER = {"gear3": 0, "gear1": 1, "gear2": 2}
+_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
+
+
+def row_label(model: str, inp: str, k: int) -> str:
+    """Human-readable row name, e.g. ``CNN, raw, fine-tuned all layers, k=5``."""
+    base, _, suffix = model.partition("+")
+    name = f"{_NAMES.get(base, base)}, {_INPUTS.get(inp, inp)}"
+    if suffix == "ft_all":
+        name += f", fine-tuned all layers, k={k}"
+    elif suffix == "ft_last":
+        name += f", fine-tuned last layer, k={k}"
+    elif suffix == "ft_head":
+        name += f", ridge refitted with k={k}"
+    elif suffix == "adabn":
+        name += ", AdaBN (unsupervised)"
+    elif suffix == "coral":
+        name += ", CORAL (unsupervised)"
+    return name
+
+
+def summarise(results: pd.DataFrame) -> pd.DataFrame:
+    """Mean and std over seeds per (dataset, protocol, model, input, k, split), plus the
+    worst split (lowest mean) per (dataset, protocol, model, input, k).
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        :data:`learn.transfer.RESULT_COLUMNS`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns dataset, protocol, model, input, k_shot, split, mean, std, n_seeds; the
+        worst split appears as ``split == "worst"`` with ``worst_of`` naming it (its std
+        is that split's std).
+    """
+    g = results.groupby([*_KEYS, "split"])["accuracy"]
+    per = g.agg(["mean", "std", "count"]).reset_index().rename(columns={"count": "n_seeds"})
+    per["std"] = per["std"].fillna(0.0)
+    worst = per.loc[per.groupby(_KEYS)["mean"].idxmin()].copy()
+    worst["worst_of"] = worst["split"]
+    worst["split"] = "worst"
+    return pd.concat([per, worst], ignore_index=True)
+
+
+def class_recall(confusion: pd.DataFrame) -> pd.DataFrame:
+    """Recall per class from the summed confusion counts.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns dataset, protocol, model, input, k_shot, true, recall (0..1), windows.
+    """
+    keys = [*_KEYS, "true"]
+    tot = confusion.groupby(keys)["count"].sum().rename("windows")
+    hit = confusion[confusion["true"] == confusion["predicted"]].groupby(keys)["count"].sum()
+    out = pd.concat([tot, hit.rename("hit")], axis=1).fillna(0.0).reset_index()
+    out["recall"] = out["hit"] / out["windows"]
+    return out.drop(columns="hit")
+
+
+def best_rows(summ: pd.DataFrame, k: int = 0) -> pd.DataFrame:
+    """Per (dataset, protocol), the run with the highest worst-split mean at k labelled
+    target windows per class, chosen on the evaluation windows: a statement about the
+    results, not a model selection."""
+    w = summ[(summ["split"] == "worst") & (summ["k_shot"] == int(k))]
+    if w.empty:
+        return w
+    return w.loc[w.groupby(["dataset", "protocol"])["mean"].idxmax()]
+
+
+def _kind(protocol: str) -> str:
+    return "disturbed" if protocol.endswith("disturbed") else "clean"
+
+
+def observable_share(separability: Mapping | None, dataset: str, protocol: str
+                     ) -> pd.Series | None:
+    """Per class, the share of windows beyond the healthy p95 (:mod:`learn.separability`)
+    in the data the protocol evaluates (clean or disturbed windows); healthy: the share
+    *within* it (0.95). None when not measured."""
+    tab = ((separability or {}).get(dataset) or {}).get(_kind(protocol))
+    if tab is None or not len(tab):
+        return None
+    share = tab.set_index("fault")["beyond_p95"].copy()
+    if "healthy" in share.index:
+        share["healthy"] = 1.0 - share["healthy"]
+    return share
+
+
+def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping,
+                 primary: Mapping | None = None,
+                 separability: Mapping | None = None) -> pd.DataFrame:
+    """Check the targets of ``transfer.targets`` per data set.
+
+    Parameters
+    ----------
+    summ : pandas.DataFrame
+        :func:`summarise`.
+    recall : pandas.DataFrame
+        :func:`class_recall`.
+    targets : mapping
+        Data set -> ``{protocol, accuracy: {k: min worst-split mean}, recall: {class:
+        min recall at k = 0}}`` (fractions).
+    primary : mapping, optional
+        ``{model, input}``: the run declared before the comparison; reported beside the
+        best one.
+    separability : mapping, optional
+        Data set -> {"clean", "disturbed"} -> :func:`learn.separability.summary_table`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns dataset, condition, target, who (primary / best), run, reached, met,
+        observable: for a recall, the class's share beyond the healthy p95; for an
+        accuracy, the mean of those shares over the classes (healthy: 0.95), an estimate
+        of what the signals allow, not a bound (NaN when not measured).
+    """
+    rows = []
+    for ds, spec in targets.items():
+        prot = spec.get("protocol", "ood_disturbed")
+        w = summ[(summ["dataset"] == ds) & (summ["protocol"] == prot)
+                 & (summ["split"] == "worst")]
+        if w.empty:
+            continue
+        share = observable_share(separability, ds, prot)
+        obs_acc = float(share.mean()) if share is not None else float("nan")
+        for k, tgt in sorted((spec.get("accuracy") or {}).items(), key=lambda t: int(t[0])):
+            cand = w[w["k_shot"] == int(k)]
+            if cand.empty:
+                continue
+            picks = [("best", cand.loc[cand["mean"].idxmax()])]
+            if primary:
+                pr = cand[(cand["model"].str.partition("+")[0] == primary["model"])
+                          & (cand["input"] == primary["input"])]
+                if len(pr):
+                    picks.insert(0, ("primary", pr.loc[pr["mean"].idxmax()]))
+            for who, b in picks:
+                rows.append({"dataset": ds, "condition": f"accuracy, worst split, k = {k}",
+                             "target": float(tgt), "who": who,
+                             "run": row_label(b["model"], b["input"], int(b["k_shot"])),
+                             "reached": float(b["mean"]),
+                             "met": bool(b["mean"] >= float(tgt)), "observable": obs_acc})
+        rec_t = spec.get("recall") or {}
+        if rec_t:
+            b = w[w["k_shot"] == 0]
+            if b.empty:
+                continue
+            b = b.loc[b["mean"].idxmax()]
+            r = recall[(recall["dataset"] == ds) & (recall["protocol"] == prot)
+                       & (recall["model"] == b["model"]) & (recall["input"] == b["input"])
+                       & (recall["k_shot"] == 0)].set_index("true")["recall"]
+            for cls, tgt in rec_t.items():
+                if cls in r.index:
+                    rows.append({"dataset": ds, "condition": f"recall of {cls}, k = 0",
+                                 "target": float(tgt), "who": "best",
+                                 "run": row_label(b["model"], b["input"], 0),
+                                 "reached": float(r[cls]), "met": bool(r[cls] >= float(tgt)),
+                                 "observable": float(share.get(cls, np.nan))
+                                 if share is not None else float("nan")})
+    return pd.DataFrame(rows, columns=["dataset", "condition", "target", "who", "run",
+                                       "reached", "met", "observable"])
+
+
+def _pct(m: float, s: float) -> str:
+    return f"{100 * m:.2f} ± {100 * s:.2f}"
+
+
+def _model_rank(m: str) -> int:
+    order = ["rf", "rf+coral", "minirocket", "minirocket+ft_head", "mlp_torch",
+             "mlp_torch+adabn", "mlp_torch+ft_last", "mlp_torch+ft_all", "cnn", "cnn+adabn",
+             "cnn+ft_last", "cnn+ft_all"]
+    return order.index(m) if m in order else len(order)
+
+
+def _paper_rows(protocol: str, splits: Sequence[str]) -> list[str]:
+    from learn.paper_results import PAPER_RESULTS
+
+    table = {"ood_clean": "IX", "ood_disturbed": "X"}[protocol]
+    out = []
+    for sel in ("selection1", "selection3"):
+        res = PAPER_RESULTS.get(table) or {}
+        if sel not in res:
+            continue
+        vals = [res[sel].get(s, {}).get("rf") for s in splits]
+        if any(v is None for v in vals):
+            continue
+        out.append(f"| paper Table {table}: RF, Selection {sel[-1]} (its data) | "
+                   + " | ".join(f"{v:.2f}" for v in vals) + f" | **{min(vals):.2f}** |")
+    return out
+
+
+def confusable_pairs(conf: pd.DataFrame, threshold: float = 0.25) -> list[tuple[str, str]]:
+    """Class pairs (a, b) with a -> b and b -> a each above ``threshold`` of the class.
+
+    Parameters
+    ----------
+    conf : pandas.DataFrame
+        Columns true, predicted, count (one model).
+    """
+    tot = conf.groupby("true")["count"].sum()
+    rate = {(t, p): c / tot[t] for t, p, c in conf[["true", "predicted", "count"]].itertuples(
+        index=False) if t != p}
+    return [(a, b) for (a, b), r in rate.items()
+            if a < b and r > threshold and rate.get((b, a), 0.0) > threshold]
+
+
+def _diagnosis_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame,
+                  separability: Mapping | None) -> list[str]:
+    lines = []
+    for _, b in best_rows(summ[summ["dataset"] == ds]).iterrows():
+        if b["protocol"] not in OOD_PROTOCOLS:
+            continue
+        c = confusion[(confusion["dataset"] == ds) & (confusion["protocol"] == b["protocol"])
+                      & (confusion["model"] == b["model"]) & (confusion["input"] == b["input"])
+                      & (confusion["k_shot"] == 0)]
+        if c.empty:
+            continue
+        tot = c.groupby("true")["count"].sum()
+        off = c[c["true"] != c["predicted"]].copy()
+        off["rate"] = off["count"] / off["true"].map(tot)
+        top = off.sort_values("rate", ascending=False).head(5)
+        lines += [f"### Diagnosis: {b['protocol']}, best run without target labels "
+                  f"({row_label(b['model'], b['input'], 0)})", "",
+                  "Main confusions (all splits and seeds; share of the true class):", ""]
+        lines += [f"- {r.true} → {r.predicted}: {100 * r.rate:.1f} %" for r in top.itertuples()
+                  if r.rate > 0] or ["- none: every window classified right"]
+        pairs = confusable_pairs(c)
+        if pairs:
+            n = tot.sum()
+            ceiling = 1.0 - sum(0.5 * (tot[a] + tot[b]) for a, b in pairs) / n
+            lines += ["", "Confused both ways (> 25 % each): "
+                      + ", ".join(f"{a} ↔ {b}" for a, b in pairs) + ". If these classes "
+                      "leave no trace in the data, no classifier beats chance between them: "
+                      f"accuracy ceiling {100 * ceiling:.1f} %."]
+        share = observable_share(separability, ds, b["protocol"])
+        if share is not None and "reduced_stiffness" in share.index:
+            f = float(share["reduced_stiffness"])
+            r_h = _recall_of(c, "healthy")
+            r_k = _recall_of(c, "reduced_stiffness")
+            lines += ["", f"Healthy / reduced stiffness: recall {100 * r_h:.1f} % / "
+                      f"{100 * r_k:.1f} %. Observability ceiling: {100 * f:.1f} % of the "
+                      f"{_kind(b['protocol'])} reduced-stiffness windows lie beyond the "
+                      "healthy 95th percentile (separability below); if the rest are "
+                      "healthy look-alikes, the best "
+                      "a classifier can do on these two classes together is "
+                      f"{100 * (1 - (1 - f) / 2):.1f} % (calling every look-alike healthy)."]
+        lines.append("")
+    return lines
+
+
+def _recall_of(conf: pd.DataFrame, cls: str) -> float:
+    c = conf[conf["true"] == cls]
+    n = c["count"].sum()
+    return float(c[c["predicted"] == cls]["count"].sum() / n) if n else float("nan")
+
+
+def _separability_md(tabs: Mapping[str, pd.DataFrame]) -> list[str]:
+    kinds = [k for k in ("clean", "disturbed") if k in tabs and len(tabs[k])]
+    if not kinds:
+        return []
+    p95 = ", ".join(f"{tabs[k].attrs.get('p95', float('nan')):.2f} ({k})" for k in kinds)
+    lines = ["### Class separability in the signals (independent of any classifier)", "",
+             "Each window reduced to the amplitudes of the first harmonics of the "
+             "wave-generator angle in the five bridges and η; its separation = the largest "
+             "distance from the healthy windows of the same gear and operating point, in "
+             "their spreads (`learn/separability.py`). Healthy windows scored "
+             f"leave-one-out reach {p95} at their 95th percentile by chance. Share of each "
+             "class beyond it:", "",
+             "| class | " + " | ".join(f"{k} windows" for k in kinds) + " | median ("
+             + kinds[-1] + ") |", "|---|" + "---:|" * (len(kinds) + 1)]
+    base = tabs[kinds[-1]].set_index("fault")
+    for f in base.index:
+        cells = [f"{100 * tabs[k].set_index('fault').loc[f, 'beyond_p95']:.1f} %"
+                 for k in kinds]
+        med = base["median"].get(f, np.nan) if "median" in base else np.nan
+        lines.append(f"| {f} | " + " | ".join(cells) + f" | {med:.3g} |")
+    return lines + [""]
+
+
+def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: Mapping | None,
+               separability: Mapping | None, order: Sequence[str]) -> list[str]:
+    """Per-class recall at k = 0 of the primary and the best run of each data set."""
+    rec = recall[(recall["protocol"] == "ood_disturbed") & (recall["k_shot"] == 0)]
+    if rec.empty:
+        return []
+    classes = sorted(set(rec["true"]))
+    lines = ["## Per-class recall without target labels (ood_disturbed, all splits and "
+             "seeds)", "", "| data set | run | " + " | ".join(classes) + " |",
+             "|---|---|" + "---:|" * len(classes)]
+    for ds in order:
+        runs = []
+        if primary:
+            runs.append((primary["model"], primary["input"], "primary"))
+        b = best_rows(summ[(summ["dataset"] == ds) & (summ["protocol"] == "ood_disturbed")])
+        if len(b):
+            runs.append((b["model"].iloc[0], b["input"].iloc[0], "best"))
+        for m, i, who in dict.fromkeys(runs):
+            r = rec[(rec["dataset"] == ds) & (rec["model"] == m) & (rec["input"] == i)]
+            if r.empty:
+                continue
+            r = r.set_index("true")["recall"]
+            lines.append(f"| {ds} | {row_label(m, i, 0)} ({who}) | "
+                         + " | ".join(f"{100 * r.get(c, np.nan):.1f}" for c in classes) + " |")
+        share = observable_share(separability, ds, "ood_disturbed")
+        if share is not None:
+            lines.append(f"| {ds} | *observable: share beyond the healthy p95 (healthy: "
+                         "within)* | " + " | ".join(f"*{100 * share.get(c, np.nan):.1f}*"
+                                                    for c in classes) + " |")
+    return lines + [""]
+
+
+def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path, *,
+                targets: Mapping | None = None, primary: Mapping | None = None,
+                separability: Mapping[str, Mapping[str, pd.DataFrame]] | None = None,
+                latency: pd.DataFrame | None = None, timings: Mapping | None = None,
+                paper: bool = True) -> Path:
+    """Write ``table.md``: targets, per-class recall, then per data set and protocol the
+    accuracy [%] per split and worst split, a diagnosis and the separability.
+
+    Parameters
+    ----------
+    results, confusion : pandas.DataFrame
+        The comparison's tables.
+    path : path
+    targets, primary : mapping, optional
+        See :func:`target_table`.
+    separability : mapping, optional
+        Data set -> {"clean", "disturbed"} -> :func:`learn.separability.summary_table`.
+    latency : pandas.DataFrame, optional
+        Columns model, input, input_ms, model_ms.
+    timings : mapping, optional
+        ``wall_s``, ``input_s``, ``generate_s``, ``threads``, ``cpus``, ``device``.
+    paper : bool
+        Add the paper's RF rows of Tables IX and X.
+    """
+    summ = summarise(results)
+    recall = class_recall(confusion) if len(confusion) else None
+    lines = ["# Transfer to the unseen gear: deep learners, MiniRocket and the paper's "
+             "pipeline", "",
+             "Accuracy [%] on the test windows, mean ± std over seeds; `worst` = the split "
+             "with the lowest mean. Leave-one-gear-out splits `gearN` hold out gear N "
+             "(paper: `1,2 → 3` is `gear3`); they are scored on the held-out gear's windows "
+             "outside the k-shot pool, for every k alike. *Best* runs are picked on these "
+             "evaluation windows and describe the results; the *primary* run was declared "
+             "before the comparison (`transfer.primary`).", "",
+             "What was chosen on what data: net sizes, epochs, MiniRocket's kernel count and "
+             "the list of runs were set for the CPU budget on an earlier data set (random "
+             "start angles, no amplifier), before these; early stopping, where enabled, "
+             "splits the source gears; MiniRocket's ridge penalty is chosen by "
+             "leave-one-out CV on the source windows and kept when its ridge is refitted "
+             "with k target windows; fine-tuning runs a fixed number of steps with "
+             "source replay; the unsupervised adaptations see the held-out gear's pool "
+             "windows without labels. Nothing is chosen on an evaluation window.", ""]
+    if targets and recall is not None:
+        tt = target_table(summ, recall, targets, primary, separability)
+        if len(tt):
+            lines += ["## Targets", "", "*Observable*: for a class, the share of its windows "
+                      "beyond the healthy 95th percentile in the evaluated (disturbed) "
+                      "windows; for an accuracy, their mean over the classes (healthy: 95 %), "
+                      "an estimate of what the signals carry, not a bound.", "",
+                      "| data set | condition | target | run | reached | observable |",
+                      "|---|---|---:|---|---:|---:|"]
+            for r in tt.itertuples():
+                obs = "" if np.isnan(r.observable) else f"{100 * r.observable:.1f} %"
+                lines.append(f"| {r.dataset} | {r.condition} | {100 * r.target:.1f} % | "
+                             f"{r.run} ({r.who}) | {100 * r.reached:.2f} % "
+                             f"({'met' if r.met else 'not met'}) | {obs} |")
+            lines.append("")
+    if recall is not None:
+        lines += _recall_md(recall, summ, primary, separability,
+                            list(dict.fromkeys(results["dataset"])))
+    for ds in dict.fromkeys(results["dataset"]):
+        lines += [f"## Data set `{ds}`", ""]
+        sep = (separability or {}).get(ds)
+        if recall is not None:
+            lines += _diagnosis_md(ds, summ, confusion, separability)
+        if sep:
+            lines += _separability_md(sep)
+        sd = summ[summ["dataset"] == ds]
+        for p in [q for q in ALL_PROTOCOLS if q in set(sd["protocol"])]:
+            sp = sd[sd["protocol"] == p]
+            splits = sorted({s for s in sp["split"] if s != "worst"},
+                            key=lambda s: (_SPLIT_ORDER.get(s, 9), s))
+            lines += [f"### {ds}: {p}", "", "| run | " + " | ".join(splits) + " | worst |",
+                      "|---|" + "---:|" * (len(splits) + 1)]
+            order = sp[sp["split"] == "worst"].sort_values(
+                ["k_shot", "model", "input"], key=lambda c: c.map(_model_rank)
+                if c.name == "model" else c)
+            for _, w in order.iterrows():
+                cells = []
+                for s in splits:
+                    r = sp[(sp["model"] == w["model"]) & (sp["input"] == w["input"])
+                           & (sp["k_shot"] == w["k_shot"]) & (sp["split"] == s)]
+                    cells.append(_pct(r["mean"].iloc[0], r["std"].iloc[0]) if len(r) else "")
+                cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
+                lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
+                             + " | ".join(cells) + " |")
+            if paper and p in OOD_PROTOCOLS:
+                lines += _paper_rows(p, splits)
+            lines.append("")
+    if latency is not None and len(latency):
+        lines += ["## Inference latency per window (CPU, batch 1, one thread)", "",
+                  "| model | input | input build [ms] | model [ms] |", "|---|---|---:|---:|"]
+        for _, r in latency.iterrows():
+            lines.append(f"| {_NAMES.get(r['model'], r['model'])} | {r['input']} | "
+                         f"{r['input_ms']:.2f} | {r['model_ms']:.2f} |")
+        lines.append("")
+    if timings:
+        tt = results.groupby(["model", "input"])["train_s"].sum().sort_values(ascending=False)
+        lines += ["## Time", "",
+                  f"Whole comparison: {timings.get('wall_s', float('nan')) / 60:.1f} min wall "
+                  f"time on {timings.get('device', 'CPU')}, {timings.get('threads', '?')} on a "
+                  f"machine with {timings.get('cpus', '?')} CPU cores (data sets generated "
+                  f"{timings.get('generate_s', 0.0):.1f} s, inputs "
+                  f"{timings.get('input_s', float('nan')):.1f} s). Sum of fit times per run "
+                  "over data sets, splits and seeds (adaptation: the adaptation alone):", "",
+                  "| model | input | train [s] |", "|---|---|---:|"]
+        for (m, i), v in tt.items():
+            lines.append(f"| {m} | {i} | {v:.1f} |")
+        lines.append("")
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
+                       targets: Mapping | None = None,
+                       separability: Mapping | None = None) -> Path:
+    """Figure: worst-split accuracy against k, one panel per (data set, leave-one-gear-out
+    protocol).
+
+    Solid / dashed lines: a net fine-tuned on all layers / the last layer, dash-dotted:
+    MiniRocket's ridge refitted (k = 0 is the model trained on the source gears); dotted
+    horizontal lines: runs without target labels (including the unsupervised
+    adaptations). One colour per (model, input) in every panel; error bars: std over
+    seeds; stars: the accuracy targets of the data set; grey band: the observability
+    estimate of the evaluated windows (mean over classes of the share beyond the healthy
+    p95, :func:`observable_share`), when ``separability`` is given. One legend below the
+    panels.
+    """
+    from matplotlib import colormaps
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    summ = summarise(results)
+    panels = [(d, p) for d in dict.fromkeys(results["dataset"]) for p in OOD_PROTOCOLS
+              if ((results["dataset"] == d) & (results["protocol"] == p)).any()]
+    panels = panels or [("", "ood_disturbed")]
+    w_all = summ[summ["split"] == "worst"]
+    keys = sorted({(m.split("+")[0], i, m.partition("+")[2])
+                   for m, i in zip(w_all["model"], w_all["input"], strict=True)
+                   if not m.partition("+")[2].startswith("ft_")},
+                  key=lambda t: (_model_rank(t[0]), t[1], t[2]))
+    cmap = colormaps["tab20"]
+    colour = {k: cmap(n % 20) for n, k in enumerate(keys)}
+    styles = {"ft_all": "-", "ft_last": "--", "ft_head": "-."}
+    k_max = max(1, int(results["k_shot"].max()) if len(results) else 1)
+    ncol = min(3, len(panels))
+    nrow = -(-len(panels) // ncol)
+    fig = Figure(figsize=(5.2 * ncol, 3.6 * nrow + 0.5 + 0.2 * len(keys)),
+                 layout="constrained")
+    handles: dict[str, Line2D] = {}
+    for n, (ds, p) in enumerate(panels):
+        ax = fig.add_subplot(nrow, ncol, n + 1)
+        w = w_all[(w_all["dataset"] == ds) & (w_all["protocol"] == p)]
+        for (m, i), g in w[w["model"].str.contains(r"\+ft_")].groupby(["model", "input"]):
+            base_name, _, mode = m.partition("+")
+            base = w[(w["model"] == base_name) & (w["input"] == i) & (w["k_shot"] == 0)]
+            g = pd.concat([base, g]).sort_values("k_shot")
+            ls = styles.get(mode, "-")
+            c = colour.get((base_name, i, ""), "k")
+            ax.errorbar(g["k_shot"], 100 * g["mean"], yerr=100 * g["std"], marker="o",
+                        ms=4, capsize=3, ls=ls, color=c)
+            lab = row_label(m, i, 0).replace(" with k=0", "").replace(", k=0", "")
+            handles.setdefault(lab, Line2D([], [], color=c, ls=ls, marker="o", ms=4))
+        ft_pairs = {(m.partition("+")[0], i) for m, i in zip(w["model"], w["input"],
+                                                             strict=True) if "+ft_" in m}
+        for _, r in w[w["k_shot"] == 0].iterrows():
+            base_name, _, suffix = r["model"].partition("+")
+            if not suffix and (base_name, r["input"]) in ft_pairs:
+                continue  # drawn as the k = 0 point of its adapted lines
+            c = colour[(base_name, r["input"], suffix)]
+            ax.axhline(100 * r["mean"], ls=":", lw=1.4, color=c)
+            handles.setdefault(row_label(r["model"], r["input"], 0),
+                               Line2D([], [], color=c, ls=":", lw=1.4))
+        acc_t = ((targets or {}).get(ds) or {}).get("accuracy") or {}
+        if acc_t and p == ((targets or {}).get(ds) or {}).get("protocol", "ood_disturbed"):
+            tk = sorted((int(k), 100 * float(v)) for k, v in acc_t.items())
+            ax.plot([k for k, _ in tk], [v for _, v in tk], "k*", ms=10)
+            handles.setdefault("target (issue)", Line2D([], [], color="k", marker="*", ls="",
+                                                        ms=10))
+        share = observable_share(separability, ds, p)
+        if share is not None:
+            ax.axhline(100 * float(share.mean()), color="0.6", lw=6, alpha=0.35, zorder=0)
+            handles.setdefault("observability estimate (signals)",
+                               Line2D([], [], color="0.6", lw=6, alpha=0.35))
+        ax.set_xlim(-0.5, k_max + 0.5)
+        ax.set_xlabel("labelled windows per class of the held-out gear, k")
+        ax.set_ylabel("accuracy, worst split [%]")
+        ax.set_title(f"{ds}: {p}" if ds else p)
+        ax.grid(alpha=0.3)
+    fig.legend(list(handles.values()), list(handles.keys()), loc="outside lower center",
+               ncol=3, fontsize=7, frameon=False)
+    path = Path(path)
+    fig.savefig(path, dpi=130)
+    return path
+
+
+def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], cfg, timings: Mapping,
+                 latency: pd.DataFrame | None = None) -> str:
+    """Log the comparison to MLflow: a parent run with the report files and params, and
+    one child run per (dataset, protocol, model, input, k) with ``<split>/accuracy`` per
+    seed (step = seed), ``<split>/accuracy_mean``, ``mean_accuracy``,
+    ``worst_split_accuracy`` and ``train_s``. Returns the parent run id."""
+    import mlflow
+    from mlflow.entities import Metric, Param, RunTag
+    from omegaconf import OmegaConf
+
+    from learn.tracking import default_tracking_uri, flatten_config, get_experiment_id
+
+    lcfg = cfg.logger
+    client = mlflow.MlflowClient(lcfg.get("tracking_uri") or default_tracking_uri())
+    exp_id = get_experiment_id(client, str(lcfg.get("experiment") or "transfer"))
+    resolved = OmegaConf.to_container(cfg, resolve=True)
+    parent = client.create_run(exp_id, run_name=str(lcfg.get("run_name") or "transfer"),
+                               tags={"task": "transfer"})
+    pid = parent.info.run_id
+    status = "FAILED"
+    try:
+        ts = parent.info.start_time
+        tc = dict(resolved.get("transfer") or {})
+        tc.pop("datasets", None)  # the data-set configs are in config.yaml
+        flat = sorted(flatten_config(tc).items())
+        for start in range(0, len(flat), 100):
+            client.log_batch(pid, params=[Param(f"transfer.{k}", v[:6000])
+                                          for k, v in flat[start:start + 100]])
+        client.log_batch(pid, metrics=[Metric("wall_s", float(timings["wall_s"]), ts, 0)])
+        client.log_dict(pid, resolved, "config.yaml")
+        for f in files.values():
+            client.log_artifact(pid, str(f))
+        for (d, p, m, i, k), g in results.groupby(_KEYS):
+            run = client.create_run(exp_id, run_name=f"{d}-{p}-{m}-{i}-k{k}",
+                                    tags={"mlflow.parentRunId": pid, "task": "transfer",
+                                          "dataset": d, "protocol": p})
+            mets = [Metric(f"{s}/accuracy", float(a), ts, int(sd))
+                    for s, sd, a in g[["split", "seed", "accuracy"]].itertuples(index=False)]
+            means = g.groupby("split")["accuracy"].mean()
+            mets += [Metric(f"{s}/accuracy_mean", float(v), ts, 0) for s, v in means.items()]
+            mets += [Metric("mean_accuracy", float(means.mean()), ts, 0),
+                     Metric("worst_split_accuracy", float(means.min()), ts, 0),
+                     Metric("train_s", float(g["train_s"].sum()), ts, 0)]
+            if latency is not None and len(latency):
+                lat = latency[(latency["model"] == m.split("+")[0]) & (latency["input"] == i)]
+                if len(lat):
+                    mets.append(Metric("latency_ms", float(lat["model_ms"].iloc[0]), ts, 0))
+            client.log_batch(run.info.run_id, metrics=mets,
+                             params=[Param("dataset", d), Param("protocol", p),
+                                     Param("model", m), Param("input", i),
+                                     Param("k_shot", str(k))],
+                             tags=[RunTag("splits", ";".join(sorted(means.index)))])
+            client.set_terminated(run.info.run_id, status="FINISHED")
+        status = "FINISHED"
+    finally:
+        client.set_terminated(pid, status=status)
+    return pid
