@@ -1,0 +1,158 @@
+"""swgsim-observability: the observability map over the output inertia (Hydra app).
+
+For each output inertia (``j_out_kgm2``, default ``n_j_out`` log-spaced from the bench's
+to a robot link's, :mod:`learn.observability`) the app generates the data set
+``<data_root>/j_out_<value>`` from the ``dataset`` preset with that inertia (a valid one
+already there is kept; the settling time is raised where the torsional mode rings
+longer), measures each window's separation from the healthy windows of its gear and
+operating point (clean windows), and writes ``<report_dir>/observability.csv``
+(:data:`learn.observability.COLUMNS` and more), ``torsional_modes.csv`` and
+``observability.png``. Config: ``conf/observability.yaml``.
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+import math
+import time
+from pathlib import Path
+
+from omegaconf import DictConfig, OmegaConf
+
+from swgcli.app import hydra_app
+from swgcli.schema import ObservabilityApp
+
+log = logging.getLogger(__name__)
+
+
+def _abs(path: str) -> str:
+    from hydra.utils import to_absolute_path
+
+    try:
+        return to_absolute_path(path)
+    except ValueError:  # outside a Hydra run
+        return path
+
+
+def data_set_configs(cfg: DictConfig) -> dict[float, dict]:
+    """The data-set config of every output inertia, checked before any work.
+
+    Returns
+    -------
+    dict
+        J_out [kg m²] -> data-set config (``load.j_out_kgm2`` set, ``chain.settle_s``
+        raised to :func:`swgsim.generate.min_settle_s` rounded up to 10 ms).
+
+    Raises
+    ------
+    ValueError
+        Naming the key: ``j_out_kgm2`` / ``n_j_out`` out of range, or a data-set key.
+    """
+    from learn.observability import j_out_grid
+    from swgsim.generate import min_settle_s, plan
+
+    if cfg.j_out_kgm2 is None:
+        if not 2 <= int(cfg.n_j_out) <= 50:
+            raise ValueError(f"n_j_out: must be in [2, 50], got {cfg.n_j_out}")
+        values = [float(v) for v in j_out_grid(int(cfg.n_j_out))]
+    else:
+        values = [float(v) for v in cfg.j_out_kgm2]
+        if not values or len(set(values)) != len(values):
+            raise ValueError(f"j_out_kgm2: must list distinct values, got {values}")
+    for key in ("n_jobs", "harmonics"):
+        if int(cfg[key]) < 1:
+            raise ValueError(f"{key}: must be >= 1, got {cfg[key]}")
+    base = OmegaConf.to_container(cfg.dataset, resolve=True)
+    out = {}
+    for j in values:
+        if not 1e-4 <= j <= 100.0:
+            raise ValueError(f"j_out_kgm2: {j} outside the allowed range [1e-4, 100] kg m²")
+        c = copy.deepcopy(base)
+        c["load"]["j_out_kgm2"] = j
+        c["name"] = f"{base['name']}_j_out_{j:.4g}"
+        need = math.ceil(min_settle_s(c) * 100 - 1e-9) / 100
+        c["chain"]["settle_s"] = max(float(c["chain"]["settle_s"]), need)
+        try:
+            plan(c)
+        except ValueError as e:
+            raise ValueError(f"{e} (data set of j_out_kgm2={j:.4g})") from None
+        out[j] = c
+    return out
+
+
+def run_observability(cfg: DictConfig) -> dict:
+    """Run the map (task function, no Hydra needed).
+
+    Returns
+    -------
+    dict
+        ``table`` (DataFrame), ``files``, ``data_sets`` (J_out -> folder), ``wall_s``.
+    """
+    import pandas as pd
+
+    from learn.observability import observability_table, plot_observability, torsional_modes
+    from learn.separability import separation_records
+    from swgsim.data import atomic_write_bytes, load
+    from swgsim.generate import generate
+
+    rep = Path(_abs(str(cfg.report_dir)))
+    csv = rep / "observability.csv"
+    if bool(cfg.plot_only):
+        if not csv.is_file():
+            raise FileNotFoundError(2, "no map to redraw (run without plot_only first)",
+                                    str(csv))
+        table = pd.read_csv(csv)
+        loads = sorted(set(table["t_out_nm"]))
+        modes = torsional_modes(sorted(set(table["j_out_kgm2"])), loads)
+        fig = plot_observability(table, rep / "observability.png", modes)
+        return {"table": table, "files": {"figure": str(fig)}, "data_sets": {}, "wall_s": 0.0}
+    configs = data_set_configs(cfg)
+    root = Path(_abs(str(cfg.data_root)))
+    t0 = time.perf_counter()
+    parts, folders = [], {}
+    for n, (j, c) in enumerate(configs.items(), 1):
+        folder = root / f"j_out_{j:.4g}"
+        g = generate(c, folder, n_jobs=int(cfg.n_jobs), overwrite=True,
+                     progress=bool(cfg.progress))
+        state = (f"{len(g['computed'])} shard(s) simulated" if g["computed"]
+                 else "already there and valid")
+        print(f"[{n}/{len(configs)}] J_out = {j:.4g} kg m² (settle {c['chain']['settle_s']:g}"
+              f" s): {g['windows']} windows in {folder} ({state})", flush=True)
+        rec = separation_records(load(folder), disturbed=False, n_harmonics=int(cfg.harmonics),
+                                 ratio=100.0)
+        parts.append(observability_table(rec, j))
+        folders[j] = str(folder)
+    table = pd.concat(parts, ignore_index=True)
+    loads = [float(t) for t in cfg.dataset.operating_points.t_out_nm]
+    modes = torsional_modes(list(configs), loads)
+    atomic_write_bytes(csv, table.to_csv(index=False, float_format="%.6g").encode())
+    atomic_write_bytes(rep / "torsional_modes.csv",
+                       modes.to_csv(index=False, float_format="%.6g").encode())
+    fig = plot_observability(table, rep / "observability.png", modes)
+    wall = time.perf_counter() - t0
+    return {"table": table, "files": {"csv": str(csv), "figure": str(fig),
+                                      "modes": str(rep / "torsional_modes.csv")},
+            "data_sets": folders, "wall_s": wall}
+
+
+@hydra_app("observability", ObservabilityApp, "swgsim-observability")
+def main(cfg: DictConfig) -> dict:
+    """Run the map and print where it went and the share per fault and inertia."""
+    out = run_observability(cfg)
+    t = out["table"]
+    if len(t):
+        piv = (t[t["fault"] != "healthy"].groupby(["fault", "j_out_kgm2"])
+               ["fraction_beyond_p95"].mean().unstack() * 100)
+        print("\nshare of fault windows beyond the healthy 95th percentile [%], mean over "
+              "speeds and loads (columns: J_out [kg m²]):")
+        print(piv.to_string(float_format=lambda v: f"{v:.1f}"))
+    for k, v in out["files"].items():
+        print(f"{k}: {v}")
+    if out["wall_s"]:
+        print(f"wall time {out['wall_s']:.1f} s")
+    return out
+
+
+if __name__ == "__main__":
+    main()
