@@ -6,7 +6,21 @@ Thin wrappers: each app's work lives in a task function that tests call directly
 from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
-CONF_DIR = str(REPO_ROOT / "conf")
+
+
+def _conf_dir() -> str:
+    """The config folder: ``conf/`` of a source checkout (editable install), else the copy
+    shipped inside this package by a plain ``pip install .`` (``swgcli/conf``,
+    pyproject's ``package-dir``)."""
+    for cand in (REPO_ROOT / "conf", Path(__file__).resolve().parent / "conf"):
+        if (cand / "paper.yaml").is_file():
+            return str(cand)
+    raise FileNotFoundError(f"no config folder: neither {REPO_ROOT / 'conf'} nor "
+                            f"{Path(__file__).resolve().parent / 'conf'} holds paper.yaml; "
+                            "reinstall the package")
+
+
+CONF_DIR = _conf_dir()
 
 
 def compose_app(config_name: str, overrides: list[str] | tuple[str, ...] = ()):

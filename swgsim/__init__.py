@@ -1,1 +1,53 @@
-"""swgsim."""
+"""swgsim: simulation chain of a strain wave gear with strain gauges on the flexspline.
+
+Dynamic input/output model (paper eq. 1-6), the flexspline as a space truss, strain-gauge
+bridges in mV/V, the paper's five faults, data-set protocols and generation, and the
+calibration loop against measured data (:mod:`swgsim.calibration`). See
+``docs/ARCHITECTURE.md`` for the data flow.
+
+The public API is listed in ``__all__``; names are imported on first use, so that
+``import swgsim`` stays cheap::
+
+    import swgsim
+    chain = swgsim.SimulationChain()
+    p = swgsim.apply_fault(swgsim.ChainParams(gear=swgsim.rt1_size20()), "eccentric_wg", 0.1)
+"""
+
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("swg-monitor")
+except PackageNotFoundError:  # not installed (source tree on sys.path)
+    __version__ = "0+unknown"
+
+_EXPORTS = {
+    # dynamic I/O model
+    "GearParams": "dynamics", "rt1_size20": "dynamics", "simulate": "dynamics",
+    "torsional_mode": "dynamics",
+    # faults and variants
+    "ChainParams": "faults", "FAULTS": "faults", "apply_fault": "faults",
+    "NO_ROOT_CRACK": "faults",
+    # flexspline, gauges, chain
+    "FlexsplineGeometry": "flexspline", "Mesh": "flexspline", "TrussModel": "flexspline",
+    "SensorLayout": "sensors", "SimulationChain": "chain", "ChainSettings": "chain",
+    # data sets
+    "dataset_config": "config", "load": "data",
+    "DataSetError": "data",
+}
+
+__all__ = ["__version__", *_EXPORTS]
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'swgsim' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

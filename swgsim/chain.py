@@ -64,11 +64,6 @@ class ChainSettings:
     ecc_load_share: float = 1.0
 
 
-def _key(p: ChainParams) -> tuple:
-    """Influence-cache key of a variant: (-1, 0.0) healthy, else (position, severity)."""
-    return (-1, 0.0) if not p.has_root_crack else p.root_crack_key()
-
-
 class SimulationChain:
     """Dynamics, flexspline truss and gauges of one gear design.
 
@@ -94,10 +89,7 @@ class SimulationChain:
                  alpha_tooth_rad: float = np.deg2rad(20.0)):
         self.layout = layout or SensorLayout()
         self.settings = settings or ChainSettings()
-        self._influence: dict[tuple, Influence] = {}
-        if solver is False:  # built by from_influences: no truss in this process
-            self.solver = self.model = self._rows_lam = None
-            return
+        self._influence: dict[tuple | None, Influence] = {}
         if solver is None:
             solver = InfluenceSolver(TrussModel(geometry, mesh), alpha_tooth_rad)
         self.solver = solver
@@ -105,28 +97,30 @@ class SimulationChain:
         self._rows_lam = solver.adjoint(self.layout)  # validates the layout early
 
     @classmethod
-    def from_influences(cls, layout: SensorLayout, influences: dict[tuple, Influence],
+    def from_influences(cls, layout: SensorLayout, influences: dict[tuple | None, Influence],
                         settings: ChainSettings | None = None) -> SimulationChain:
         """A chain from precomputed influences, keyed by ``ChainParams.root_crack_key()``.
 
-        The key (nan, 0.0) is the healthy structure. Such a chain needs no truss (workers
-        of the generator get their influences from the parent process); variants whose
-        root crack is not among the keys raise KeyError, and the naive reference path is
-        not available.
+        The key :data:`~swgsim.faults.NO_ROOT_CRACK` is the healthy structure. Such a chain
+        needs no truss (workers of the generator get their influences from the parent
+        process); variants whose root crack is not among the keys raise KeyError, and the
+        naive reference path is not available.
         """
-        chain = cls(layout, settings=settings, solver=False)
+        chain = cls.__new__(cls)  # no truss in this process
+        chain.layout, chain.settings = layout, settings or ChainSettings()
+        chain.solver = chain.model = chain._rows_lam = None
         chain._influence = dict(influences)
         return chain
 
     # ------------------------------------------------------------------ influence
     def influence(self, p: ChainParams) -> Influence:
         """Influence coefficients for a variant's flexspline (healthy or root crack)."""
-        key = _key(p)
+        key = p.root_crack_key()
         if key not in self._influence:
             if self.solver is None:
                 raise KeyError(f"no precomputed influence for root crack {key}")
             if not p.has_root_crack:
-                inf = self.solver._coefficients(*self._rows_lam)
+                inf = self.solver.coefficients(*self._rows_lam)
             else:
                 inf = self.solver.root_crack_at(self.layout, p.root_crack_deg,
                                                 p.root_crack_severity, adjoint=self._rows_lam)
@@ -229,9 +223,9 @@ class SimulationChain:
         out = np.empty((v, 5, n_t))
         groups: dict[tuple, list[int]] = {}
         for k, p in enumerate(variants):
-            tip = (-1.0, 0.0) if p.tip_crack_severity == 0.0 else (
+            tip = None if p.tip_crack_severity == 0.0 else (
                 p.tip_crack_deg, p.tip_crack_severity, p.crack_width_deg)
-            groups.setdefault((_key(p), tip), []).append(k)
+            groups.setdefault((p.root_crack_key(), tip), []).append(k)
         hw = np.deg2rad(self.settings.contact_half_width_deg)
         for members in groups.values():
             p0 = variants[members[0]]

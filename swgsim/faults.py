@@ -25,6 +25,10 @@ import numpy as np
 
 from .dynamics import GearParams
 
+NO_ROOT_CRACK = None
+"""Structure key (:meth:`ChainParams.root_crack_key`) of a flexspline without a root
+crack: the one sentinel for "no root crack" wherever influences are keyed."""
+
 
 @dataclass(frozen=True)
 class ChainParams:
@@ -69,10 +73,13 @@ class ChainParams:
         """Whether the variant has a root crack of non-zero severity."""
         return self.root_crack_severity > 0.0 and not np.isnan(self.root_crack_deg)
 
-    def root_crack_key(self) -> tuple[float, float]:
-        """(position [deg], severity) of the root crack; (nan, 0.0) for none."""
+    def root_crack_key(self) -> tuple[float, float] | None:
+        """(position [deg], severity) of the root crack; :data:`NO_ROOT_CRACK` for none.
+
+        The key of a flexspline structure: influence caches are keyed by it
+        (:meth:`swgsim.chain.SimulationChain.influence`)."""
         if not self.has_root_crack:
-            return (float("nan"), 0.0)
+            return NO_ROOT_CRACK
         return (float(self.root_crack_deg), float(self.root_crack_severity))
 
     def tooth_factors(self, theta_rad: np.ndarray) -> np.ndarray:

@@ -325,7 +325,7 @@ class TrussModel:
         self.bar_kind = np.concatenate(kinds)
 
     # ------------------------------------------------------------------ stiffness
-    def _bar_rows(self, bar_idx=None):
+    def bar_rows(self, bar_idx=None):
         """Rows mapping nodal DOFs (cylindrical components) to bar elongations.
 
         Returns
@@ -356,7 +356,7 @@ class TrussModel:
     @cached_property
     def B(self) -> sp.csr_matrix:
         """Compatibility matrix, shape (n_bars, n_dof): bar elongations = B @ u."""
-        return self._bar_rows()
+        return self.bar_rows()
 
     @cached_property
     def K(self) -> sp.csc_matrix:

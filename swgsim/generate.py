@@ -39,7 +39,7 @@ from .chain import ChainSettings, SimulationChain
 from .config import dataset_config
 from .disturbance import DisturbanceSpec, disturb
 from .dynamics import gear_with_ke, rt1_size20, torsional_mode
-from .faults import FAULTS, ChainParams, apply_fault, get_fault
+from .faults import FAULTS, NO_ROOT_CRACK, ChainParams, apply_fault, get_fault
 from .flexspline import FlexsplineGeometry, Mesh, TrussModel
 from .influence import Influence, InfluenceSolver
 from .measurement import apply_sensor_effects, parse_sensor_effects
@@ -263,7 +263,7 @@ def gear_influences(cfg: dict, shards: list[ShardSpec]) -> dict[int, dict[tuple,
     Returns
     -------
     dict
-        gear id -> {(position_deg, severity): Influence}, (-1, 0.0) healthy.
+        gear id -> {(position_deg, severity): Influence}, ``NO_ROOT_CRACK`` healthy.
     """
     n_theta = int(cfg["mesh"]["n_theta"])
     solver = InfluenceSolver(TrussModel(FlexsplineGeometry(), Mesh(n_theta)))
@@ -278,8 +278,8 @@ def gear_influences(cfg: dict, shards: list[ShardSpec]) -> dict[int, dict[tuple,
     for g in cfg["gears"]:
         lay = layout_for(cfg, g)
         adj = solver.adjoint(lay)
-        healthy = solver._coefficients(*adj)
-        inf = {(-1, 0.0): healthy}
+        healthy = solver.coefficients(*adj)
+        inf = {NO_ROOT_CRACK: healthy}
         for pos, sev in sorted(keys):
             inf[(pos, sev)] = solver.root_crack_at(lay, pos, sev, adjoint=adj, healthy=healthy)
         out[int(g["id"])] = inf

@@ -79,7 +79,7 @@ class InfluenceSolver:
         self._wg_basis = np.stack([np.cos(2 * th), np.sin(2 * th), np.cos(th), np.sin(th)])
         self._crack_cache: dict[int, tuple] = {}
 
-    def _coefficients(self, rows, lam) -> Influence:
+    def coefficients(self, rows, lam) -> Influence:
         """Influence coefficients from signal rows (5, n_dof) and adjoints (n_F, 5)."""
         c_p = rows[:, self._P].toarray()  # (5, n_P)
         g_p = c_p - (self._K_PF @ lam).T  # (5, n_P)
@@ -98,7 +98,7 @@ class InfluenceSolver:
     def healthy(self, layout: SensorLayout) -> Influence:
         """Influence of the healthy structure for a sensor layout."""
         rows, lam = self.adjoint(layout)
-        return self._coefficients(rows, lam)
+        return self.coefficients(rows, lam)
 
     def _rotation(self, steps: int) -> np.ndarray:
         """Positions in F of the free DOFs rotated by ``steps`` node spacings.
@@ -132,7 +132,7 @@ class InfluenceSolver:
         """
         if 0 not in self._crack_cache:
             bars = self.model.root_crack_bars(0)
-            rows = self.model._bar_rows(bars)  # (r, n_dof), sparse
+            rows = self.model.bar_rows(bars)  # (r, n_dof), sparse
             u_f = rows[:, self._F].tocsr()  # U_Fᵀ
             u_p_wg = rows[:, self._P][:, self._wg_pos].toarray().T  # (n_wg, r)
             dense = u_f.toarray()
@@ -195,13 +195,13 @@ class InfluenceSolver:
             raise ValueError(f"root-crack severity must lie in [0, 1), got {severity}")
         rows, lam = adjoint if adjoint is not None else self.adjoint(layout)
         if severity == 0.0:
-            return self._coefficients(rows, lam)
+            return self.coefficients(rows, lam)
         u_ft, perm, u_p_wg, k_c, utz, kpz_wg, tz = self._crack_basis(theta_index)
         d = -severity * k_c
         S = np.diag(1.0 / d) + utz  # (r, r)
         ul = np.asarray(u_ft @ lam[perm])  # U_Fᵀ λ of the rotated crack, (r, 5)
         y = np.linalg.solve(S, ul)  # λ' = λ − Z y
-        h = healthy if healthy is not None else self._coefficients(rows, lam)
+        h = healthy if healthy is not None else self.coefficients(rows, lam)
         # G_P' = c_P − K'_PF λ' with K'_PF = K_PF + U_P D U_Fᵀ:
         #      = G_P + K_PF Z y − U_P D U_Fᵀ λ',  U_Fᵀ λ' = U_Fᵀ λ − U_FᵀZ y
         g_wg_delta = (kpz_wg @ y - u_p_wg @ (d[:, None] * (ul - utz @ y))).T

@@ -27,7 +27,7 @@ import numpy as np
 from .. import data as dsio
 from ..chain import SimulationChain
 from ..dynamics import gear_with_ke, rt1_size20
-from ..faults import ChainParams
+from ..faults import NO_ROOT_CRACK, ChainParams
 from ..measurement import apply_sensor_effects
 
 __all__ = ["PLANTED", "HIDDEN", "CleanWindows", "simulate_windows", "bench_dataset",
@@ -131,7 +131,7 @@ def simulate_windows(chain: SimulationChain, ops: Sequence[tuple[float, float]] 
                                    settle_s=float(settle_s))
     p = ChainParams(gear=gear_with_ke(rt1_size20(), ke))
     # a chain sharing the layout's influence, with this window length
-    sim_chain = SimulationChain.from_influences(chain.layout, {(-1, 0.0): chain.influence(p)},
+    sim_chain = SimulationChain.from_influences(chain.layout, {NO_ROOT_CRACK: chain.influence(p)},
                                                 settings)
     n_ops = len(ops)
     n_w = n_ops * n_per_op
