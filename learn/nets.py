@@ -18,6 +18,11 @@ fine-tuned model keeps the source statistics.
 
 Device: ``device="auto"`` uses CUDA when present, else the CPU. The number of CPU threads
 is left to the caller (``torch.set_num_threads``).
+
+Input checks are scikit-learn's (``validate_data``): finite values, at least one window,
+the number of features (2-D) or channels (3-D) of ``fit``; a method of an unfitted model
+raises ``NotFittedError``. The classifiers pass ``sklearn.utils.estimator_checks.
+check_estimator`` (``tests/test_estimator_checks.py``), whose data are 2-D only.
 """
 
 from __future__ import annotations
@@ -30,6 +35,8 @@ import math
 import numpy as np
 import torch
 from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
 
 log = logging.getLogger(__name__)
@@ -189,6 +196,18 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
     random_state : int, numpy Generator or None
     verbose : bool
         Log the loss per epoch.
+
+    Attributes
+    ----------
+    classes_ : ndarray, shape (n_classes,)
+    n_features_in_ : int
+        Features of a 2-D input, channels (signals + scalars) of a 3-D input.
+    input_shape_ : tuple of int
+        Shape of one training window, (F,) or (C, T); later inputs must have as many
+        dimensions, and the length T where the net needs it (MLP, ``pool="flatten"``).
+    module_ : torch.nn.Module
+    history_ : list of dict
+        Loss per epoch (and validation loss and accuracy with ``val_fraction`` > 0).
     """
 
     _common = ("n_aux", "max_epochs", "batch_size", "lr", "weight_decay", "label_smoothing",
@@ -199,7 +218,29 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
     def _build_module(self, x_shape: tuple[int, ...], n_classes: int) -> nn.Module:
         raise NotImplementedError
 
+    def _fixed_length(self) -> bool:
+        """Whether the net needs the training length T of a 3-D input."""
+        return False
+
     # ---------------------------------------------------------------- helpers
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.three_d_array = True  # (n, C, T) signals
+        return tags
+
+    def _check_X(self, X) -> np.ndarray:
+        """Input of a fitted model as float32 after scikit-learn's checks (finite, n > 0,
+        ``n_features_in_``) and the net's (dimensions and, where needed, length of fit)."""
+        check_is_fitted(self, "module_")
+        X = validate_data(self, X, reset=False, dtype=np.float32, allow_nd=True)
+        if X.ndim != len(self.input_shape_) + 1:
+            raise ValueError(f"X must have {len(self.input_shape_) + 1} dimensions as in fit, "
+                             f"got shape {X.shape}")
+        if X.ndim == 3 and self._fixed_length() and X.shape[2] != self.input_shape_[1]:
+            raise ValueError(f"X has {X.shape[2]} time samples, but {type(self).__name__} "
+                             f"needs the {self.input_shape_[1]} of fit")
+        return X
+
     def _scale(self, X: np.ndarray) -> torch.Tensor:
         X = np.asarray(X, dtype=np.float32)
         if X.ndim == 3:
@@ -327,12 +368,19 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         Returns
         -------
         self
+
+        Raises
+        ------
+        ValueError
+            On non-finite or empty ``X``, ``X`` not 2-D or 3-D, ``len(y) != n`` or
+            continuous ``y``.
         """
-        X = np.asarray(X, dtype=np.float32)
-        y = np.asarray(y)
-        if X.ndim not in (2, 3) or X.shape[0] != y.shape[0]:
-            raise ValueError(f"X must be (n, C, T) or (n, F) with n = len(y); got {X.shape}")
+        X, y = validate_data(self, X, y, dtype=np.float32, allow_nd=True)
+        if X.ndim not in (2, 3):
+            raise ValueError(f"X must be (n, C, T) or (n, F); got shape {X.shape}")
+        check_classification_targets(y)
         self.classes_ = np.unique(y)
+        self.input_shape_ = X.shape[1:]
         yi = self._encode(y)
         seed = _seed_of(self.random_state)
         rng = np.random.default_rng(seed)
@@ -351,7 +399,6 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
                 Xt[tr], yi[tr], list(self.module_.parameters()), self.lr, steps,
                 self.max_epochs, gen, Xt[va] if va.size else None,
                 yi[va] if va.size else None)
-        self.n_features_in_ = X.shape[1]
         return self
 
     def fine_tune(self, X, y, mode: str = "all", steps: int = 100, lr: float | None = None,
@@ -390,20 +437,21 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         Raises
         ------
         ValueError
-            On an unknown mode, an unfitted model or an unseen label.
+            On an unknown mode, an unseen label or an input unlike that of ``fit``.
+        sklearn.exceptions.NotFittedError
+            On an unfitted model (a ``ValueError``).
         """
         if mode not in ("all", "last"):
             raise ValueError(f"mode must be 'all' or 'last', got {mode!r}")
-        if not hasattr(self, "module_"):
-            raise ValueError("fit the model before fine-tuning it")
-        X = np.asarray(X, dtype=np.float32)
+        check_is_fitted(self, "module_")
         if len(X) == 0 or steps <= 0:
             return self
         yt = torch.from_numpy(self._encode(y))
-        Xt = self._scale(X)
+        Xt = self._scale(self._check_X(X))
         use_replay = X_replay is not None and replay > 0 and len(X_replay) > 0
         if use_replay:
-            Xr, yr = self._scale(X_replay), torch.from_numpy(self._encode(y_replay))
+            Xr = self._scale(self._check_X(X_replay))
+            yr = torch.from_numpy(self._encode(y_replay))
         module = self.module_
         params = list(module.head.parameters()) if mode == "last" else list(module.parameters())
         if lr is None:
@@ -466,17 +514,20 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         -------
         self
         """
+        Xt = self._scale(self._check_X(X))
         bns = [m for m in self.module_.modules() if isinstance(m, nn.BatchNorm1d)]
         if not bns:
             return self
-        Xt = self._scale(X)
         saved = [m.momentum for m in bns]
         for m in bns:
             m.reset_running_stats()
             m.momentum = None  # cumulative average over the batches
-        self.module_.train()
-        for i in range(0, Xt.shape[0], batch):
-            self.module_(Xt[i:i + batch].to(self.device_))
+        self.module_.eval()  # dropout off: only the batch-norm statistics are re-estimated
+        for m in bns:
+            m.train()
+        with torch.no_grad():
+            for i in range(0, Xt.shape[0], batch):
+                self.module_(Xt[i:i + batch].to(self.device_))
         for m, mom in zip(bns, saved, strict=True):
             m.momentum = mom
         self.module_.eval()
@@ -484,20 +535,23 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
 
     def predict_proba(self, X) -> np.ndarray:
         """Class probabilities, shape (n, n_classes), columns in ``classes_`` order."""
-        return torch.softmax(self._logits(self._scale(X)), dim=1).numpy()
+        return torch.softmax(self._logits(self._scale(self._check_X(X))), dim=1).numpy()
 
     def decision_function(self, X) -> np.ndarray:
-        """Logits, shape (n, n_classes)."""
-        return self._logits(self._scale(X)).numpy()
+        """Logits, shape (n, n_classes); with two classes scikit-learn's binary form, the
+        logit of ``classes_[1]`` minus that of ``classes_[0]``, shape (n,) (> 0: class 1)."""
+        logits = self._logits(self._scale(self._check_X(X))).numpy()
+        return logits[:, 1] - logits[:, 0] if logits.shape[1] == 2 else logits
 
     def predict(self, X) -> np.ndarray:
-        """Predicted labels, shape (n,)."""
-        return self.classes_[self.decision_function(X).argmax(axis=1)]
+        """Predicted labels, shape (n,): the class of the largest logit."""
+        logits = self._logits(self._scale(self._check_X(X))).numpy()
+        return self.classes_[logits.argmax(axis=1)]
 
     @torch.no_grad()
     def embed(self, X, batch: int = 512) -> np.ndarray:
         """Penultimate-layer features, shape (n, width of the head's input)."""
-        Xt = self._scale(X)
+        Xt = self._scale(self._check_X(X))
         self.module_.eval()
         return torch.cat([self.module_.embed(Xt[i:i + batch].to(self.device_)).cpu()
                           for i in range(0, Xt.shape[0], batch)]).numpy()
@@ -542,6 +596,9 @@ class MLPClassifierTorch(TorchClassifier):
             n_in = x_shape[1]
         return MLPNet(n_in, self.n_aux if len(x_shape) == 3 else 0, n_classes,
                       tuple(self.hidden), self.dropout)
+
+    def _fixed_length(self) -> bool:  # the flattened signal fixes T
+        return True
 
     def _augment(self, xb, gen):  # crops would change the flattened length
         if self.aug_crop < 1.0:
@@ -606,6 +663,9 @@ class CNN1DClassifier(TorchClassifier):
                         tuple(self.channels), tuple(self.kernel_sizes), tuple(self.strides),
                         self.head_hidden, self.dropout, self.padding_mode, self.pool,
                         x_shape[-1])
+
+    def _fixed_length(self) -> bool:  # avg pooling is length-agnostic, flattening is not
+        return self.pool == "flatten"
 
     def _augment(self, xb, gen):
         if self.aug_crop < 1.0 and self.pool == "flatten":

@@ -9,6 +9,11 @@ Same input convention as :mod:`learn.nets`: (n, C, T) signals whose last ``n_aux
 channels are per-window scalars constant along time. The scalars bypass the transform
 (a zero-sum convolution of a constant is zero) and are appended to the standardised
 features, scaled by ``aux_weight``. A 2-D feature input skips the transform.
+
+The classifier is also a scikit-learn transformer (:meth:`MiniRocketClassifier.transform`:
+the features the ridge sees) and passes ``sklearn.utils.estimator_checks.check_estimator``
+(``tests/test_estimator_checks.py``); those checks feed 2-D data only, i.e. the
+standardised-features path, not the MiniRocket transform.
 """
 
 from __future__ import annotations
@@ -16,9 +21,11 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 from sklearn.linear_model import RidgeClassifierCV
 from sklearn.preprocessing import StandardScaler
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
 
 log = logging.getLogger(__name__)
 
@@ -26,7 +33,21 @@ log = logging.getLogger(__name__)
 ALPHAS = tuple(float(a) for a in np.logspace(-3, 3, 10))
 
 
-class MiniRocketClassifier(ClassifierMixin, BaseEstimator):
+def _weights(sample_weight, n: int) -> np.ndarray | None:
+    """Checked sample weights, shape (n,): finite, >= 0, not all zero (or None)."""
+    if sample_weight is None:
+        return None
+    w = np.asarray(sample_weight, dtype=np.float64)
+    if w.shape != (n,):
+        raise ValueError(f"sample_weight must have shape ({n},), got {w.shape}")
+    if not np.all(np.isfinite(w)) or np.any(w < 0):
+        raise ValueError("sample_weight must be finite and >= 0")
+    if not np.any(w > 0):
+        raise ValueError("sample_weight must contain at least one non-zero weight")
+    return w
+
+
+class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
     """MiniRocket features + ``RidgeClassifierCV``, scikit-learn compatible.
 
     Parameters
@@ -45,6 +66,16 @@ class MiniRocketClassifier(ClassifierMixin, BaseEstimator):
     n_jobs : int
         Threads of the transform.
     random_state : int or None
+
+    Attributes
+    ----------
+    classes_ : ndarray, shape (n_classes,)
+    n_features_in_ : int
+        Features of a 2-D input, channels (signals + scalars) of a 3-D input.
+    input_ndim_ : int
+        2 or 3, the dimensions of the training input; later inputs must match.
+    rocket_, scaler_, aux_scaler_ : fitted transform and scalers (those that apply)
+    ridge_ : RidgeClassifierCV, or the RidgeClassifier of :meth:`refit_head`
     """
 
     def __init__(self, n_kernels=10_000, max_dilations_per_kernel=32,
@@ -58,6 +89,21 @@ class MiniRocketClassifier(ClassifierMixin, BaseEstimator):
         self.n_jobs = n_jobs
         self.random_state = random_state
 
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.three_d_array = True  # (n, C, T) signals
+        return tags
+
+    def _check_X(self, X) -> np.ndarray:
+        """Input of a fitted model as float64 after scikit-learn's checks (finite, n > 0,
+        ``n_features_in_``) and the dimensions of fit."""
+        check_is_fitted(self, "ridge_")
+        X = validate_data(self, X, reset=False, dtype=np.float64, allow_nd=True)
+        if X.ndim != self.input_ndim_:
+            raise ValueError(f"X must have {self.input_ndim_} dimensions as in fit, "
+                             f"got shape {X.shape}")
+        return X
+
     def _split(self, X):
         X = np.asarray(X, dtype=np.float64)
         if X.ndim == 2:
@@ -67,6 +113,9 @@ class MiniRocketClassifier(ClassifierMixin, BaseEstimator):
 
     def transform(self, X) -> np.ndarray:
         """Standardised features of a fitted model, shape (n, n_features)."""
+        return self._features(self._check_X(X))
+
+    def _features(self, X: np.ndarray) -> np.ndarray:
         sig, aux = self._split(X)
         parts = []
         if sig is not None:
@@ -83,26 +132,41 @@ class MiniRocketClassifier(ClassifierMixin, BaseEstimator):
         X : array (n, C, T) or (n, F)
         y : array (n,)
         sample_weight : array (n,), optional
-            Passed to the ridge (e.g. to up-weight a few target windows).
+            Weights of the windows (e.g. to up-weight a few target windows), >= 0, not all
+            zero; used by the feature scalers and the ridge alike, so that an integer
+            weight acts as that many copies of the window.
 
         Returns
         -------
         self
+
+        Raises
+        ------
+        ValueError
+            On non-finite or empty ``X``, ``X`` not 2-D or 3-D, ``len(y) != n``,
+            continuous ``y`` or invalid ``sample_weight``.
         """
         from aeon.transformations.collection.convolution_based import MiniRocket
 
+        X, y = validate_data(self, X, y, dtype=np.float64, allow_nd=True)
+        if X.ndim not in (2, 3):
+            raise ValueError(f"X must be (n, C, T) or (n, F); got shape {X.shape}")
+        check_classification_targets(y)
+        sample_weight = _weights(sample_weight, X.shape[0])
+        self.input_ndim_ = X.ndim
         sig, aux = self._split(X)
         if sig is not None:
             self.rocket_ = MiniRocket(n_kernels=self.n_kernels,
                                       max_dilations_per_kernel=self.max_dilations_per_kernel,
                                       n_jobs=self.n_jobs, random_state=self.random_state)
             feats = self.rocket_.fit_transform(sig)
-            self.scaler_ = StandardScaler().fit(feats)
+            self.scaler_ = StandardScaler().fit(feats, sample_weight=sample_weight)
         if aux is not None and aux.shape[1]:
-            self.aux_scaler_ = StandardScaler().fit(aux)
-        self.ridge_ = RidgeClassifierCV(alphas=np.asarray(self.alphas))
-        self.ridge_.fit(self.transform(X), y, sample_weight=sample_weight)
-        self.classes_ = self.ridge_.classes_
+            self.aux_scaler_ = StandardScaler().fit(aux, sample_weight=sample_weight)
+        ridge = RidgeClassifierCV(alphas=np.asarray(self.alphas))
+        ridge.fit(self._features(X), y, sample_weight=sample_weight)
+        self.ridge_ = ridge
+        self.classes_ = ridge.classes_
         return self
 
     def refit_head(self, X, y, *, y_source, source_features, replay: float = 1.0):
@@ -155,15 +219,25 @@ class MiniRocketClassifier(ClassifierMixin, BaseEstimator):
         return self
 
     def decision_function(self, X) -> np.ndarray:
-        """Ridge scores, shape (n, n_classes)."""
-        return self.ridge_.decision_function(self.transform(X))
+        """Ridge scores, shape (n, n_classes); with two classes shape (n,), the score of
+        ``classes_[1]`` (> 0: class 1; the ridge's targets are -1 / +1)."""
+        features = self.transform(X)  # first: NotFittedError before ridge_ is looked up
+        return self.ridge_.decision_function(features)
 
     def predict(self, X) -> np.ndarray:
         """Predicted labels, shape (n,)."""
-        return self.ridge_.predict(self.transform(X))
+        features = self.transform(X)
+        return self.ridge_.predict(features)
 
     def predict_proba(self, X) -> np.ndarray:
-        """Softmax of the ridge scores, shape (n, n_classes): a ranking, not calibrated."""
+        """Softmax of the ridge scores, shape (n, n_classes): a ranking, not calibrated.
+
+        With two classes the scores of the two one-vs-rest ridges are -d and +d
+        (d = :meth:`decision_function`), so the probability of ``classes_[1]`` is
+        1 / (1 + exp(-2 d)).
+        """
         d = self.decision_function(X)
+        if d.ndim == 1:
+            d = np.stack([-d, d], axis=1)
         d = np.exp(d - d.max(axis=1, keepdims=True))
         return d / d.sum(axis=1, keepdims=True)
