@@ -1,9 +1,15 @@
-"""Dynamic I/O model, paper eq. (1)-(6): catalogue fits, efficiency, integrator."""
+"""Dynamic I/O model, paper eq. (1)-(6): catalogue fits, efficiency, integrator, energy
+balance.
+
+Tolerances are set at the accuracy reached, measured with the tests' own settings; each
+states it (python -m pytest tests/test_dynamics.py).
+"""
 
 import dataclasses
 
 import numpy as np
 import pytest
+from scipy.integrate import simpson
 from scipy.optimize import brentq
 
 from swgsim import dynamics as dy
@@ -17,12 +23,42 @@ def secant_stiffness(p: dy.GearParams, torque_nm: float) -> float:
     return torque_nm / (d / c)  # Δφ_k = c δ
 
 
+def steady_motion(p: dy.GearParams, n_in_rpm: float, t_gear_nm: float) -> tuple[float, float]:
+    """Efficiency and output wind-up of steady motion, from the module docstring's
+    equations, independently of the simulator.
+
+    The output balance c T_stiff = T_gear + T_fric / sin α with T_fric of eq. (5) at
+    φ̇_b = ω_out / sin α (kinematic error and b3 left out) is solved by fixed-point steps;
+    then η = T_gear / (c T_stiff) (P_in = P_out + T_fric φ̇_b, module docstring) and the
+    wind-up δ = Δφ_k (N + 1) tan α / N of the output against the rigid gear.
+
+    Returns
+    -------
+    eta : float
+        T_gear ω_out / P_in [-].
+    wind_up_rad : float
+        δ [rad], > 0 for a driving gear.
+    """
+    sa, ca = np.sin(p.alpha_tooth_rad), np.cos(p.alpha_tooth_rad)
+    v_b = n_in_rpm * dy.RPM / p.ratio / sa
+    t_stiff = t_gear_nm / p.c_out
+    for _ in range(50):
+        t_fric = (p.b0_nm + p.b1_nms * v_b + p.b2_nms3 * v_b**3
+                  + p.mu * p.c_out * abs(t_stiff) / ca) * np.tanh(v_b / p.v_smooth_rad_s)
+        t_stiff = (t_gear_nm + t_fric / sa) / p.c_out
+    d = brentq(lambda x: p.k1_nm_per_rad * x + p.k2_nm_per_rad3 * x**3 - t_stiff, 0, 1)
+    return t_gear_nm / (p.c_out * t_stiff), d * (p.ratio + 1) * np.tan(p.alpha_tooth_rad) / p.ratio
+
+
 def test_stiffness_matches_catalogue():
     cat = dy.Catalogue()
     p = dy.rt1_size20(cat)
-    assert secant_stiffness(p, 2.0) == pytest.approx(cat.k1_nm_per_rad, rel=0.10)
-    assert secant_stiffness(p, cat.t_low_nm) == pytest.approx(cat.k1_nm_per_rad, rel=0.10)
-    assert secant_stiffness(p, cat.t_high_nm) == pytest.approx(cat.k3_nm_per_rad, rel=0.10)
+    # matched by the fit at T_low and T_high: reached 2e-12, tolerance 1e-9
+    assert secant_stiffness(p, cat.t_low_nm) == pytest.approx(cat.k1_nm_per_rad, rel=1e-9)
+    assert secant_stiffness(p, cat.t_high_nm) == pytest.approx(cat.k3_nm_per_rad, rel=1e-9)
+    # below T_low the cubic term fades: reached -2.5 % at 2 N m, tolerance 3 %
+    assert secant_stiffness(p, 2.0) == pytest.approx(cat.k1_nm_per_rad, rel=0.03)
+    assert secant_stiffness(p, 2.0) < cat.k1_nm_per_rad
 
 
 @pytest.fixture(scope="module")
@@ -33,30 +69,40 @@ def rated():
 
 
 def test_efficiency_at_rated_torque_in_catalogue_band(rated):
+    """The friction fit gives the catalogue's 0.77 in steady motion; the simulated window
+    adds the kinematic error and the b3 ripple. Reached 1.7e-4, tolerance 4e-4; the load
+    is held to 3e-8, tolerance 1e-6."""
     assert rated.success
-    assert rated.efficiency[0] == pytest.approx(0.77, abs=0.05)
-    assert rated.t_out[0].mean() == pytest.approx(52.0, rel=1e-3)
+    assert rated.efficiency[0] == pytest.approx(0.77, abs=4e-4)
+    assert rated.t_out[0].mean() == pytest.approx(52.0, rel=1e-6)
 
 
 def test_lower_b1_raises_efficiency_by_a_few_percent(rated):
-    """Paper Table II: b1 lowered by 1/3 raises η by a few per cent (paper: about 7 %)."""
+    """Paper Table II: b1 lowered by 1/3 raises η by a few per cent (paper: about 7 %; this
+    model 4.8 %). The simulated gain matches the steady-motion prediction of eq. (5):
+    reached 2.3e-4 of the gain, tolerance 1e-3."""
     gain = rated.efficiency[1] / rated.efficiency[0] - 1
-    assert 0.01 < gain < 0.10
+    p = dy.rt1_size20()
+    lower = dataclasses.replace(p, b1_nms=p.b1_nms * 2 / 3)
+    predicted = steady_motion(lower, 2000.0, 52.0)[0] / steady_motion(p, 2000.0, 52.0)[0] - 1
+    assert gain == pytest.approx(predicted, rel=1e-3)
+    assert 0.01 < gain < 0.10  # "a few per cent"
 
 
 def test_rk4_agrees_with_solve_ivp():
     """Fixed-step RK4 (one step per 0.1 ms sample) against DOP853 at rtol 1e-10.
 
-    Stated tolerance: output torque within 5e-4 of its ripple range, angles within 1e-8
-    rad, efficiency within 1e-6.
+    Output torque: reached 1.9e-5 (4000 rpm, 7 N m) and 1.3e-4 (2000 rpm, 70 N m) of its
+    ripple range, tolerance 2.5e-4; input angle: reached 4.3e-9 rad, tolerance 1e-8 rad;
+    efficiency: reached 2.1e-8, tolerance 5e-8.
     """
     p = dy.rt1_size20()
     for n, t in ((4000.0, 7.0), (2000.0, 70.0)):
         ref = dy.simulate_reference(p, n, t, phi_in0=0.3, window_s=0.03, settle_s=0.02)
         fast = dy.simulate([p], n, t, phi_in0=0.3, window_s=0.03, settle_s=0.02, substeps=1)
-        assert np.abs(fast.t_out - ref.t_out).max() < 5e-4 * np.ptp(ref.t_out)
+        assert np.abs(fast.t_out - ref.t_out).max() < 2.5e-4 * np.ptp(ref.t_out)
         assert np.abs(fast.states[0] - ref.states[0]).max() < 1e-8
-        assert fast.efficiency[0] == pytest.approx(ref.efficiency[0], abs=1e-6)
+        assert fast.efficiency[0] == pytest.approx(ref.efficiency[0], abs=5e-8)
 
 
 def test_batch_equals_single_runs():
@@ -86,14 +132,26 @@ def test_calibrated_friction_effect_enters_the_dynamics():
     fx = FrictionEffects([{"kind": "asymmetric_coulomb", "params": {"delta_c": -0.5}}],
                          v_s=1e-3)
     more = dy.simulate([p], 2000.0, 39.0, window_s=0.02, friction_effects=fx)
-    assert more.t_out.mean() == pytest.approx(base.t_out.mean(), abs=0.01)  # load held
-    assert more.efficiency[0] < base.efficiency[0] - 0.005  # more loss
+    # load held: reached 9e-4 N m, tolerance 2e-3 N m
+    assert more.t_out.mean() == pytest.approx(base.t_out.mean(), abs=2e-3)
+    # more loss: the gear itself delivers T_load − τ = 39.5 N m, so in steady motion
+    # η = 39 / (c T_stiff(39.5 N m))
+    eta_0 = steady_motion(p, 2000.0, 39.0)[0]
+    eta_fx = steady_motion(p, 2000.0, 39.5)[0] * 39.0 / 39.5
+    drop, predicted = base.efficiency[0] - more.efficiency[0], eta_0 - eta_fx
+    assert drop > 0.005
+    assert drop == pytest.approx(predicted, rel=0.01)  # reached 0.69 %, tolerance 1 %
 
 
-@pytest.mark.parametrize("j_out", [8.8e-3, 0.69])
-def test_torsional_mode_matches_the_simulated_ring_down(j_out):
+@pytest.mark.parametrize("j_out, tol_tau, tol_f", [(8.8e-3, 0.005, 0.003), (0.69, 0.05, 0.01)])
+def test_torsional_mode_matches_the_simulated_ring_down(j_out, tol_tau, tol_f):
     """The transient of a start without kinematic error, A(t) − B(t) with B already in
-    periodic steady motion at the same input angle, decays at the predicted rate."""
+    periodic steady motion at the same input angle, decays at the predicted rate.
+
+    Bench inertia (345 Hz): decay time reached 0.17 %, tolerance 0.5 %; frequency reached
+    0.10 %, tolerance 0.3 %. Robot-link inertia (48 Hz, near the 30 Hz speed loop): decay
+    time reached 3.4 %, tolerance 5 %; frequency reached 0.69 %, tolerance 1 %.
+    """
     p = dy.rt1_size20(j_out_kgm2=j_out)
     n, tq, fs = 2000.0, 39.0, 20e3
     f_hz, tau = dy.torsional_mode(p, n, tq)
@@ -112,11 +170,111 @@ def test_torsional_mode_matches_the_simulated_ring_down(j_out):
     env = np.array([d[i].max() for i in blocks])
     tm = np.array([t[i][np.argmax(d[i])] for i in blocks])
     slope = np.polyfit(tm[1:6], np.log(env[1:6]), 1)[0]
-    assert -1.0 / slope == pytest.approx(tau, rel=0.05)
+    assert -1.0 / slope == pytest.approx(tau, rel=tol_tau)
     # the ring-down oscillates at the mode's frequency: interpolated zero crossings of
     # A - B over the first six decay times
     x = (a.t_out[0] - b.t_out[0])[: int(6 * tau * fs)]
     i = np.flatnonzero(np.sign(x[:-1]) != np.sign(x[1:]))
     tc = (i - x[i] / (x[i + 1] - x[i])) / fs
     f_sim = (tc.size - 1) / 2 / (tc[-1] - tc[0])
-    assert f_sim == pytest.approx(f_hz, rel=0.02)
+    assert f_sim == pytest.approx(f_hz, rel=tol_f)
+
+
+def power_terms(p: dy.GearParams, res: dy.SimResult, t_load_nm: np.ndarray) -> dict:
+    """Energy [J] and powers [W] along simulated windows, shape (V, n_t) each, from the
+    equations of the module docstring (eq. 2-6), written out independently of the simulator.
+
+    Energy balance of eq. (1) [derived]: with the elastic energy V = k1 Δφ_k²/2 + k2 Δφ_k⁴/4
+    and Δφ_k = tan α_in φ_in + c φ_out + φ_err(φ_in),
+
+        d/dt (J_in ω_in²/2 + J_out ω_out²/2 + V)
+            = T_m ω_in + T_stiff φ_err'(φ_in) ω_in − T_fric φ̇_b − P_load,
+
+    P_load = T_load tanh(N ω_out / v_s) ω_out >= 0 delivered to the load, T_fric φ̇_b lost in
+    the mesh. The second term is the power of the kinematic error: eq. (1) lets it strain
+    the flexspline without a reaction torque on the input, so it is a source of its own
+    next to the motor's T_m ω_in (0.2 % of it at 2000 rpm, 52 N m; the steady-state check
+    of the module docstring leaves it out).
+    """
+    phi_in, w_in, phi_out, w_out, _ = res.states
+    tl = np.asarray(t_load_nm, float)[:, None]
+    c = p.c_out
+    sa, ca = np.sin(p.alpha_tooth_rad), np.cos(p.alpha_tooth_rad)
+    k, a, th = (np.asarray(v, float)[:, None, None]
+                for v in (p.ke_orders, p.ke_amp_rad, p.ke_phase_rad))
+    phi_err = c * (a * np.sin(k * phi_in + th)).sum(axis=0)
+    dphi_err = c * (a * k * np.cos(k * phi_in + th)).sum(axis=0)  # d φ_err / d φ_in
+    d = p.tan_alpha_in * phi_in + c * phi_out + phi_err
+    t_stiff = p.k1_nm_per_rad * d + p.k2_nm_per_rad3 * d**3
+    v_b = -w_out / sa
+    t_fric = ((p.b0_nm + p.mu * c * np.abs(t_stiff) / ca) * np.tanh(v_b / p.v_smooth_rad_s)
+              + (p.b1_nms + p.b2_nms3 * v_b**2) * v_b
+              + p.b3_nm * np.sin(phi_out + p.theta_b_rad))
+    return {
+        "energy": (p.j_in_kgm2 * w_in**2 / 2 + p.j_out_kgm2 * w_out**2 / 2
+                   + p.k1_nm_per_rad * d**2 / 2 + p.k2_nm_per_rad3 * d**4 / 4),
+        "p_in": res.p_in,
+        "p_ke": t_stiff * dphi_err * w_in,
+        "p_fric": t_fric * v_b,
+        "p_load": tl * np.tanh(w_out * p.ratio / p.v_smooth_rad_s) * w_out,
+    }
+
+
+def test_energy_balance_holds_along_a_simulated_trajectory():
+    """Energy supplied (motor, kinematic error) = energy delivered to the load + friction
+    loss + change of kinetic and elastic energy, integrated over 50 ms from the start
+    (the start transient included), at three operating points.
+
+    The powers are integrated over the samples with Simpson's rule; RK4 and Simpson are
+    both of fourth order, so the residual falls as h⁴ with the step h = 1 / sample rate
+    (one RK4 step per sample). At 10 kHz: reached 9.8e-8 of the supplied energy, tolerance
+    2e-7. Observed order from 10 and 40 kHz: 3.98-4.08, band [3.5, 4.5] around the
+    expected 4.
+    """
+    p = dy.rt1_size20()
+    n_in, t_load = np.array([2000.0, 4000.0, 2000.0]), np.array([52.0, 7.0, 70.0])
+    resid, ke_share = {}, None
+    for fs in (10e3, 20e3, 40e3):
+        res = dy.simulate([p] * 3, n_in, t_load, 0.3, sample_rate_hz=fs, window_s=0.05,
+                          settle_s=0.0, substeps=1)
+        e = power_terms(p, res, t_load)
+        supplied = simpson(e["p_in"], dx=1 / fs, axis=-1)
+        net = simpson(e["p_in"] + e["p_ke"] - e["p_fric"] - e["p_load"], dx=1 / fs, axis=-1)
+        resid[fs] = np.abs(e["energy"][:, -1] - e["energy"][:, 0] - net) / supplied
+        if ke_share is None:
+            ke_share = np.abs(simpson(e["p_ke"], dx=1 / fs, axis=-1)) / supplied
+            assert np.all(supplied > 0) and np.all(e["p_load"] > 0) and np.all(e["p_fric"] > 0)
+    assert np.all(resid[10e3] < 2e-7)
+    order = np.log2(resid[10e3] / resid[40e3]) / 2
+    assert np.all((order > 3.5) & (order < 4.5)), order
+    # the test sees the kinematic error's power (1.8e-4 to 1.8e-3 of the supply)
+    assert np.all(ke_share > 100 * 2e-7)
+
+
+def test_rhs_takes_a_batch_as_documented():
+    """dynamics.rhs on a Batch straight from Batch.of: one RK4 step by hand reproduces the
+    first step of simulate (same arithmetic: reached 0, tolerance 1e-14 relative), and
+    scalar speed and load are accepted for one variant."""
+    p = dy.rt1_size20()
+    q = dataclasses.replace(p, k1_nm_per_rad=0.8 * p.k1_nm_per_rad, ke_phase_rad=(0.0, 0.5, 1.0))
+    b = dy.Batch.of([p, q])
+    w_d, t_load, phi0 = np.array([2000.0, 4000.0]) * dy.RPM, np.array([52.0, 7.0]), [0.3, 1.0]
+    x0 = dy.steady_state(b, w_d, t_load, np.array(phi0))
+
+    def f(x):
+        return dy.rhs(0.0, x, b, w_d, t_load)
+
+    h = 1e-4
+    d1 = f(x0)
+    assert d1.shape == (5, 2)
+    np.testing.assert_array_equal(d1[[0, 2, 4]], np.stack([x0[1], x0[3], w_d - x0[1]]))
+    d2 = f(x0 + h / 2 * d1)
+    d3 = f(x0 + h / 2 * d2)
+    d4 = f(x0 + h * d3)
+    x1 = x0 + h / 6 * (d1 + 2 * d2 + 2 * d3 + d4)
+    sim = dy.simulate([p, q], [2000.0, 4000.0], t_load, phi0, sample_rate_hz=1 / h,
+                      window_s=2 * h, settle_s=0.0, substeps=1)
+    np.testing.assert_allclose(sim.states[:, :, 0], x0, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(sim.states[:, :, 1], x1, rtol=1e-14, atol=0)
+    one = dy.rhs(0.0, x0[:, :1], dy.Batch.of([p]), float(w_d[0]), 52.0)
+    np.testing.assert_allclose(one[:, 0], d1[:, 0], rtol=1e-14, atol=0)
