@@ -256,7 +256,7 @@ def protocol_splits(meta: pd.DataFrame, protocol: str, random_state: int | None 
 
 
 def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Sequence[str],
-              warnings_out: list | None = None):
+              warnings_out: list | None = None, return_model: bool = False):
     """Fit a fresh clone of ``estimator`` on one split's training rows and score it.
 
     Parameters
@@ -273,6 +273,9 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
         If given, the warnings raised by fit and predict are appended to it as
         ``(category name, first line of the message)`` instead of being shown (so that a
         caller, possibly in another process, can summarise them once).
+    return_model : bool, default False
+        Also return the fitted clone (e.g. to log it; it travels back from a worker
+        process by pickling).
 
     Returns
     -------
@@ -281,6 +284,8 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
     confusion : ndarray of int, shape (n_classes, n_classes)
     seconds : float
         Wall time of fit + predict [s].
+    model : estimator
+        The fitted clone, only if ``return_model``.
     """
     import warnings
 
@@ -301,20 +306,23 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
     train_acc = float(np.mean(pred_tr == y[split.train]))
     test_acc = float(np.mean(pred_te == y[split.test]))
     cm = confusion_matrix(y[split.test], pred_te, labels=list(labels))
-    return train_acc, test_acc, cm, time.perf_counter() - t0
+    out = (train_acc, test_acc, cm, time.perf_counter() - t0)
+    return (*out, est) if return_model else out
 
 
 def fit_split_quiet(estimator, X: np.ndarray, y: np.ndarray, split: Split,
-                    labels: Sequence[str]):
+                    labels: Sequence[str], return_model: bool = False):
     """:func:`fit_split` that returns its warnings instead of showing them.
 
     Returns
     -------
     tuple
-        The four results of :func:`fit_split` and a list of ``(category, message)``.
+        The four results of :func:`fit_split`, a list of ``(category, message)`` and, if
+        ``return_model``, the fitted clone.
     """
     caught: list = []
-    return (*fit_split(estimator, X, y, split, labels, caught), caught)
+    out = fit_split(estimator, X, y, split, labels, caught, return_model)
+    return (*out[:4], caught, *out[4:])
 
 
 def evaluate(

@@ -114,9 +114,15 @@ def run_study_job(cfg) -> dict:
              cfg.model.name, np.round(result.test_accuracy, 4), result.mean_test_accuracy)
     run_id = None
     if cfg.get("logger") is not None:
+        from learn.tracking import hydra_sweep
+
         resolved = OmegaConf.to_container(cfg, resolve=True)
+        model = (_last_split_model(estimator, feats.X, y, splits[-1])
+                 if cfg.logger.get("log_models", True) else None)
         run_id = _log(result, cfg.logger, params=resolved, config=resolved,
-                      tags={"task": "study", "protocol": pname})
+                      tags={"task": "study", "protocol": pname}, dataset=str(cfg.data.path),
+                      model=model, model_tags={"split": splits[-1].label},
+                      X_sample=feats.X[splits[-1].test[:5]], group=hydra_sweep())
     return {
         "task": "study",
         "protocol": pname,
@@ -138,6 +144,24 @@ def _log(result: ProtocolResult, lcfg, **kw) -> str:
     return log_job(result, experiment=str(lcfg.experiment), run_name=str(lcfg.run_name),
                    tracking_uri=lcfg.get("tracking_uri"),
                    confusion_plot=bool(lcfg.get("confusion_plot", True)), **kw)
+
+
+def _last_split_model(estimator, X: np.ndarray, y: np.ndarray, split):
+    """A clone of ``estimator`` fitted on the last split's training rows (to be logged).
+
+    The protocol's fits run in worker processes and return scores only; this refit (one
+    more fit per job) is what ``logger.log_models`` costs. Its warnings were already
+    reported by the protocol's identical fit.
+    """
+    import warnings
+
+    from sklearn.base import clone
+
+    est = clone(estimator)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est.fit(X[split.train], np.asarray(y).astype(str)[split.train])
+    return est
 
 
 def run_paper_study_task(cfg) -> dict:
@@ -162,6 +186,8 @@ def run_paper_study_task(cfg) -> dict:
         Path(cfg.paths.report_dir) / "paper",
         tracking_uri=cfg.logger.get("tracking_uri") if cfg.get("logger") is not None else None,
         track=cfg.get("logger") is not None,
+        log_models=bool(cfg.logger.get("log_models", True))
+        if cfg.get("logger") is not None else False,
         n_jobs=int(cfg.get("n_jobs", 1)),
         random_state=int(cfg.seed),
         tables=None if tables is None else [str(t) for t in tables],
@@ -194,6 +220,7 @@ def run_paper_study(
     figures: bool = True,
     name: str = "",
     protocol_kwargs: Mapping[str, Mapping[str, Any]] | None = None,
+    log_models: bool = False,
 ) -> dict:
     """Run the paper's study, Tables VII-X, and write its report.
 
@@ -228,7 +255,10 @@ def run_paper_study(
         Standardise features in every pipeline (see :mod:`learn.baselines`); the paper
         names scikit-learn's standard settings and no scaling.
     track : bool, default True
-        Log one MLflow run per job, in experiment ``experiment_prefix + protocol``.
+        Log one MLflow run per job, in experiment ``experiment_prefix + protocol``, each
+        with the git commit, the data set (path and content hash) and its params; the jobs
+        of one call are children of one parent run per experiment (group
+        ``"study <name> <start time>"``).
     experiment_prefix : str, default "paper_study/"
     feature_kwargs : mapping, optional
         ``orders`` and ``floor_rel`` of :func:`learn.features.extract_features`.
@@ -240,6 +270,11 @@ def run_paper_study(
         Per protocol name, keyword arguments of :func:`learn.protocols.make_splits` that
         replace the paper's (:data:`learn.protocols.PROTOCOLS`), e.g.
         ``{"cv_clean": {"scheme": "kfold"}}`` (sensitivity studies).
+    log_models : bool, default False
+        With ``track``, also log each job's model fitted on its last split
+        (:meth:`learn.tracking.TrackedRun.log_model`): the protocol's own fit, returned by
+        the worker (no refit), plus the model's storage (``logger.log_models`` in
+        :class:`swgcli.schema.LoggerConfig`, for the measured cost).
 
     Returns
     -------
@@ -268,6 +303,7 @@ def run_paper_study(
     from learn.report import write_report
     from swgsim.data import load
 
+    group = f"study {name or Path(dataset_path).name} {time.strftime('%Y-%m-%d %H:%M:%S')}"
     tables = list(PAPER_TABLES) if tables is None else list(tables)
     unknown = set(tables) - set(PAPER_TABLES)
     if unknown:
@@ -310,8 +346,11 @@ def run_paper_study(
     for _, p, s, m in jobs:
         y = feats[s].meta["fault"].to_numpy()
         est = make_model(m, random_state=random_state, scale=scale)
-        for sp in splits_of[(p, s)]:
-            tasks.append(delayed(fit_split_quiet)(est, feats[s].X, y, sp, class_labels(y)))
+        sps = splits_of[(p, s)]
+        for sp in sps:  # the last split's model comes back to be logged
+            tasks.append(delayed(fit_split_quiet)(est, feats[s].X, y, sp, class_labels(y),
+                                                  return_model=track and log_models
+                                                  and sp is sps[-1]))
 
     rows, confusion = [], []
     caught: Counter = Counter()
@@ -337,8 +376,10 @@ def run_paper_study(
         )
         run_id = None
         if track:
+            model = part[-1][5] if log_models else None
             run_id = _log_study_job(result, t, p, s, m, dataset_path, random_state,
-                                    scale, tracking_uri, experiment_prefix)
+                                    scale, tracking_uri, experiment_prefix, group=group,
+                                    model_fit=model, X_sample=feats[s].X[splits[-1].test[:5]])
         for i, sp in enumerate(splits):
             rows.append({
                 "table": t, "protocol": p, "selection": f"selection{s}", "model": m,
@@ -371,7 +412,8 @@ def run_paper_study(
 
 
 def _log_study_job(result, table, protocol, selection, model, dataset_path, random_state,
-                   scale, tracking_uri, experiment_prefix) -> str:
+                   scale, tracking_uri, experiment_prefix, group=None, model_fit=None,
+                   X_sample=None) -> str:
     from learn.tracking import log_job
 
     est = make_model(model, random_state=random_state, scale=scale)
@@ -386,4 +428,6 @@ def _log_study_job(result, table, protocol, selection, model, dataset_path, rand
                                for k, v in PROTOCOLS[protocol].items()}
     return log_job(result, experiment=f"{experiment_prefix}{protocol}",
                    run_name=f"selection{selection}-{model}", params=params, config=params,
-                   tracking_uri=tracking_uri, tags={"task": "paper_study", "table": table})
+                   tracking_uri=tracking_uri, tags={"task": "paper_study", "table": table},
+                   dataset=str(dataset_path), group=group, model=model_fit,
+                   model_tags={"split": result.splits[-1].label}, X_sample=X_sample)

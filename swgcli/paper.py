@@ -104,6 +104,7 @@ def run_paper(cfg: DictConfig) -> dict:
             t0 = time.perf_counter()
             study[p] = run_paper_study(
                 f"{root_data}/{p}", f"{root_rep}/{p}", tracking_uri=cfg.tracking_uri,
+                log_models=bool(cfg.log_models),
                 n_jobs=int(cfg.n_jobs), random_state=int(cfg.seed),
                 tables=None if s.tables is None else [str(t) for t in s.tables],
                 models=None if s.models is None else [str(m) for m in s.models],

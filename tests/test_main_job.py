@@ -30,6 +30,20 @@ def test_main_job_runs_both_protocols_side_by_side(tmp_path, capsys):
     assert "Reproduction scorecard" in printed and "wall time per stage" in printed
     assert set(out["stages_s"]) == {"generate paper", "generate bench", "study paper",
                                     "study bench", "summary", "total"}
+    # every study job is an MLflow run with the data set as input and its last-split model
+    import mlflow
+
+    client = mlflow.MlflowClient(f"sqlite:///{tmp_path}/mlflow.db")
+    exps = [e.experiment_id for e in client.search_experiments()
+            if e.name.startswith("paper_study/")]
+    run_ids = set()
+    for p in ("paper", "bench"):
+        run_ids |= set(pd.read_csv(tmp_path / "reports" / p / "results.csv")["run_id"])
+    runs = {r.info.run_id: r for r in client.search_runs(exps)}
+    assert run_ids <= set(runs)
+    for rid in run_ids:
+        assert runs[rid].inputs.dataset_inputs and len(runs[rid].outputs.model_outputs) == 1
+        assert runs[rid].data.tags["mlflow.source.git.commit"]
     # the second run finds both data sets valid and simulates nothing
     again = run_paper(main_cfg(tmp_path))
     assert all(not g["computed"] for g in again["generate"].values())
