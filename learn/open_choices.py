@@ -77,7 +77,7 @@ def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[d
          "signal",
          "'slight irregularities' and 'slight constant offsets' (Sec. III-B): a few per "
          "cent of the signals' range 0.05-0.3 mV/V; not given in the paper "
-         "(scripts/sweep_disturbance.py shows Tables VIII and X against them)"),
+         "(scripts/paper_sensitivity.py shows Tables VIII and X against them)"),
         ("Efficiency η", "mean P_out / mean P_in of the simulated powers over the window",
          "a bench measures it with torque flanges; class 0.05 (e.g. HBM T40B, data sheet "
          "B03406) adds about 0.1 %, less than the spread the output angle causes on the "

@@ -161,7 +161,7 @@ def plan(cfg: dict) -> list[ShardSpec]:
          f"dataset.name must be a non-empty folder name, got {cfg['name']!r}")
     ops = cfg["operating_points"]
     for key, lo, hi, unit, why in (
-            ("n_in_rpm", 0.0, 8000.0, "rpm", "catalogue max input speed of size 20 is 6500"),
+            ("n_in_rpm", 0.0, 6500.0, "rpm", "catalogue max input speed of size 20"),
             ("t_out_nm", 0.0, 107.0, "N m", "repeated peak torque of size 20")):
         vals = ops[key]
         _req(len(vals) >= 1 and len(set(vals)) == len(vals),

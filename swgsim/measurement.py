@@ -36,7 +36,7 @@ thermal_drift        s + r_c (t_start + t)                          rate_mvv_per
 The effects are applied in that (physical) order whatever the order of the list: gauge
 geometry, bridge, amplifier gain, amplifier filter, sampling, then the additive zero
 errors. Sources: quarter-bridge output GF ε / (4 + 2 GF ε), i.e. k = 2e-3 per mV/V
-independent of GF (Hoffmann, *An Introduction to Stress Analysis using Strain Gauges*,
+independent of GF (Hoffmann, *An Introduction to Measurements using Strain Gages*,
 HBM 1989; PHYSICS.md sec. 4); gauge positioning as the dominant ripple source of
 sensorised SWGs (Schuller et al. 2024) and per-gauge gain tuning (Godler et al.); a
 first-order amplifier low-pass and sampling delay give a phase error growing with speed

@@ -12,8 +12,8 @@ with u_s = t_r u_r + t_z u_z the meridional component (Flügge, *Stresses in She
 ε_face = ε_mid ± (t / 2h)(ε_outer − ε_inner). A grid of length l measures the mean normal
 strain along its axis, sampled at ``n_points`` points.
 
-Bridges (PHYSICS.md sec. 4, Hoffmann, *An Introduction to Stress Analysis using Strain
-Gauges*, HBM 1989): output [mV/V] = 1e3 · GF/4 · Σ_k a_k ε_k · gain, with arm signs
+Bridges (PHYSICS.md sec. 4, Hoffmann, *An Introduction to Measurements using Strain
+Gages*, HBM 1989): output [mV/V] = 1e3 · GF/4 · Σ_k a_k ε_k · gain, with arm signs
 a_k = ±1 (quarter bridge: one grid; half bridge: two grids in adjacent arms; full bridge:
 four). The bridge is linearised (the exact quarter bridge GF ε / (4 + 2 GF ε) differs by
 GF ε / 2 ≈ 3e-4 relative at ε = 3e-4).

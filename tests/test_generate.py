@@ -140,7 +140,7 @@ def test_sigkill_then_resume_is_bit_identical(tiny_set, tmp_path):
     (lambda c: c["variants"].update({"eccentric_wg": {"severities": [0.9], "n_positions": 2}}),
      r"severity 0.9 outside the allowed range \[0.0, 0.5\]"),
     (lambda c: c["operating_points"].update({"n_in_rpm": [0.0]}),
-     r"dataset.operating_points.n_in_rpm must lie in \(0, 8000\] rpm"),
+     r"dataset.operating_points.n_in_rpm must lie in \(0, 6500\] rpm"),
     (lambda c: c["variants"].update({"healthy": {"severities": [0.0], "repeat": 0}}),
      "repeat must be >= 1"),
     (lambda c: c["variants"].update({"eccentric_wg": {"severities": [0.1], "n_positions": 0}}),
