@@ -341,7 +341,7 @@ def reference_residual(ds, samples: np.ndarray, refs: np.ndarray, *, ratio: floa
     samples, refs : ndarray of int, shape (n,)
         Windows and their reference windows (:func:`window_meta`).
     ratio : float
-        Gear ratio N (catalogue, 100 for the paper's gears; PHYSICS.md sec. 2).
+        Gear ratio N (catalogue, 100 for the paper's gears; docs/PHYSICS.md sec. 2).
     n_harmonics : int
         Harmonics H of ψ.
     nuisance_orders : sequence of float

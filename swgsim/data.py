@@ -1,4 +1,4 @@
-"""Data set on disk, schema v1 (see ``ARCHITECTURE.md`` and the README).
+"""Data set on disk, schema v1 (see ``docs/DATASET.md``).
 
 A data set is a directory of NetCDF4/HDF5 shards written through xarray + h5netcdf plus a
 ``manifest.json``. Every shard holds whole windows along the ``sample`` dimension; the

@@ -4,7 +4,7 @@
 
 an offset and sub-harmonics of the input speed n_in (orders 1, 1/2, 1/3, 1/4), with
 amplitudes and phases drawn at random per window and per sensor signal. The paper gives
-no ranges (PHYSICS.md sec. 7): a_0 ~ U(−A_0, A_0), a_j ~ U(0, A_h), α_j ~ U(0, 2π), with
+no ranges (docs/PHYSICS.md sec. 7): a_0 ~ U(−A_0, A_0), a_j ~ U(0, A_h), α_j ~ U(0, 2π), with
 A_0 and A_h in mV/V (defaults 0.01 mV/V each, a few per cent of the signals' range,
 which are 0.05-0.3 mV/V).
 """

@@ -4,7 +4,7 @@ States per variant: x = [φ_in, ω_in, φ_out, ω_out, ∫e_ω] (rad, rad/s, rad
 
 * Nonlinear twist (eq. 3-4): Δφ_k = tan α_in (φ_in − φ_out) + φ_out / tan α_tooth + φ_err,
   tan α_in = 1 / ((N + 1) tan α_tooth). Δφ_k = 0 when φ_out = −φ_in/N (circular spline
-  fixed, flexspline output, direction reversed; PHYSICS.md sec. 1).
+  fixed, flexspline output, direction reversed; docs/PHYSICS.md sec. 1).
 * Stiffness torque (eq. 2): T_stiff = k1 Δφ_k + k2 Δφ_k³, a generalised force on Δφ_k:
   it acts on the input with tan α_in and on the output with c = N / ((N + 1) tan α_tooth).
 * Kinematic error φ_err = c Σ_k A_k sin(k φ_in + θ_k): harmonics of the input angle,
@@ -60,14 +60,14 @@ class GearParams:
     ratio : float
         Catalogue gear ratio N [-] (100).
     alpha_tooth_rad : float
-        Gear-tooth (pressure) angle [rad] (20 deg, PHYSICS.md sec. 1).
+        Gear-tooth (pressure) angle [rad] (20 deg, docs/PHYSICS.md sec. 1).
     pitch_radius_m : float
-        Flexspline pitch radius [m] (25.4 mm, size 20, PHYSICS.md sec. 2).
+        Flexspline pitch radius [m] (25.4 mm, size 20, docs/PHYSICS.md sec. 2).
     j_in_kgm2 : float
         Input inertia: WG 0.193e-4 (catalogue) + motor rotor 1.0e-4 [unverified] [kg m²].
     j_out_kgm2 : float
         Output inertia incl. flange and load coupling [kg m²] (8.8e-3, public script
-        seed, PHYSICS.md sec. 1).
+        seed, docs/PHYSICS.md sec. 1).
     k1_nm_per_rad, k2_nm_per_rad3 : float
         Linear and cubic stiffness on Δφ_k [N m/rad], [N m/rad³] (eq. 2), fitted to
         catalogue K1, K3 (:func:`fit_stiffness`).
@@ -81,7 +81,7 @@ class GearParams:
         Velocity scale of the smooth sign tanh(φ̇_b / v_s) [rad/s].
     ke_amp_rad : tuple of float
         Kinematic-error amplitudes at the output for orders ``ke_orders`` [rad]
-        (about 1 arcmin peak to peak in total [unverified], PHYSICS.md sec. 1).
+        (about 1 arcmin peak to peak in total [unverified], docs/PHYSICS.md sec. 1).
     ke_orders : tuple of int
         Orders of the input angle (1, 2, 4).
     ke_phase_rad : tuple of float
@@ -123,7 +123,7 @@ class GearParams:
 
 @dataclass(frozen=True)
 class Catalogue:
-    """Catalogue data of a size-20, ratio-100 SWG (PHYSICS.md sec. 2, Schaeffler RT1 /
+    """Catalogue data of a size-20, ratio-100 SWG (docs/PHYSICS.md sec. 2, Schaeffler RT1 /
     Harmonic Drive CSG-20-100).
 
     Attributes

@@ -1,6 +1,6 @@
 """The paper's five faults (Table I) as parameter transforms with severity and position.
 
-Faults map parameters to parameters, never signals to signals (STYLE.md). Severity 0
+Faults map parameters to parameters, never signals to signals (docs/STYLE.md). Severity 0
 reproduces the healthy gear exactly. Each fault states its severity range, the model it
 manipulates (paper Table I) and its expected signature (paper Sec. II-C, Fig. 6).
 
@@ -40,7 +40,7 @@ class ChainParams:
         Dynamic I/O model parameters.
     w0_m : float
         Radial WG deflection at the major axis [m] (≈ module, 0.254 mm for size 20 with
-        z_f = 200, PHYSICS.md sec. 2).
+        z_f = 200, docs/PHYSICS.md sec. 2).
     ecc_m, ecc_theta_rad : float
         WG eccentricity [m] and its direction in the flexspline frame [rad].
     root_crack_deg : float

@@ -6,7 +6,7 @@ radially outwards along the collar to its clamped edge (r = R_c). The meridian i
 stations; every station carries ``n_theta`` nodes on each of two layers (inner and outer
 wall), offset by ±h/2 along the wall normal.
 
-Bars (lattice analogy, Hrennikoff 1941 / McHenry 1943, PHYSICS.md sec. 3):
+Bars (lattice analogy, Hrennikoff 1941 / McHenry 1943, docs/PHYSICS.md sec. 3):
 
 * in each layer, per cell of sides a (meridional) × b (circumferential), edge bars and both
   diagonals whose stiffnesses reproduce the plane-stress stiffness of a plate of thickness
@@ -29,7 +29,7 @@ inner-layer rim nodes follow the wave generator radially, w(θ) = w0 cos 2(θ �
 (+ e cos(θ − θ_e) for an eccentric wave generator); tooth forces act on the outer-layer rim
 nodes.
 
-Performance design (ARCHITECTURE.md): the truss is linear, so every gauge signal is a
+Performance design (docs/ARCHITECTURE.md): the truss is linear, so every gauge signal is a
 linear functional ``s = c · u`` of the displacements. With the free DOFs F and prescribed
 DOFs P, ``K_FF u_F = f_F − K_FP u_P``; one adjoint solve ``K_FF λ = c_F`` per gauge signal
 gives ``s = λ · f_F + (c_P − K_PF λ) · u_P``. A root-tooth crack scales a few bars, a
@@ -71,7 +71,7 @@ class FlexsplineGeometry:
     Attributes
     ----------
     r_mid_m : float
-        Mid-wall radius of sleeve and rim [m]. Pitch radius 25.4 mm (catalogue, PHYSICS.md
+        Mid-wall radius of sleeve and rim [m]. Pitch radius 25.4 mm (catalogue, docs/PHYSICS.md
         sec. 2) less half the tooth height and half the wall [derived, 24.4 mm].
     rim_width_m : float
         Axial width of the toothed rim from the open end [m] (8 mm [unverified]).
@@ -82,7 +82,7 @@ class FlexsplineGeometry:
     t_rim_m, t_sleeve_m, t_collar_m : float
         Effective wall thickness of rim (teeth add stiffness), sleeve and collar [m]
         (0.8, 0.5, 0.6 mm [unverified]; the rim value reproduces the size-17 WG bending
-        strain of about 2.8e-4 of PHYSICS.md sec. 3 when scaled).
+        strain of about 2.8e-4 of docs/PHYSICS.md sec. 3 when scaled).
     e_pa : float
         Young's modulus [Pa], 206 GPa (steel; flexsplines are alloy steel).
     nu : float
@@ -90,7 +90,7 @@ class FlexsplineGeometry:
     kappa_shear : float
         Transverse shear stiffness of the wall relative to G t [-]. Small values keep the
         in-plane share of the crossing bars small; 0.05 gives under 5 % shear deflection
-        for the order-2 ring mode (PHYSICS.md sec. 3, derived).
+        for the order-2 ring mode (docs/PHYSICS.md sec. 3, derived).
     """
 
     r_mid_m: float = 24.4e-3

@@ -37,10 +37,10 @@ The effects are applied in that (physical) order whatever the order of the list:
 geometry, bridge, amplifier gain, amplifier filter, sampling, then the additive zero
 errors. Sources: quarter-bridge output GF ε / (4 + 2 GF ε), i.e. k = 2e-3 per mV/V
 independent of GF (Hoffmann, *An Introduction to Measurements using Strain Gages*,
-HBM 1989; PHYSICS.md sec. 4); gauge positioning as the dominant ripple source of
+HBM 1989; docs/PHYSICS.md sec. 4); gauge positioning as the dominant ripple source of
 sensorised SWGs (Schuller et al. 2024) and per-gauge gain tuning (Godler et al.); a
 first-order amplifier low-pass and sampling delay give a phase error growing with speed
-(PHYSICS.md sec. 5). Half bridges of a ±45° pair and full bridges with ±ε arms are
+(docs/PHYSICS.md sec. 5). Half bridges of a ±45° pair and full bridges with ±ε arms are
 linear exactly; their residual nonlinearity depends on the sum of the arm strains,
 which the signal alone does not carry, so ``bridge_nonlinearity`` is a per-channel
 ``k`` (``bridge: quarter`` sets the quarter-bridge value).
@@ -216,7 +216,7 @@ def psi_rate(n_in_rpm: np.ndarray | float, ratio: float = 100.0) -> np.ndarray:
     """Rate of the WG angle relative to the flexspline, ψ̇ = ω_in (1 + 1/N) [rad/s].
 
     With the circular spline fixed and the flexspline as output, φ_out = −φ_in / N, so
-    ψ = φ_in − φ_out = φ_in (1 + 1/N) (PHYSICS.md sec. 1 and 4).
+    ψ = φ_in − φ_out = φ_in (1 + 1/N) (docs/PHYSICS.md sec. 1 and 4).
     """
     return np.asarray(n_in_rpm, float) * 2 * np.pi / 60.0 * (1.0 + 1.0 / ratio)
 

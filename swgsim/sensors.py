@@ -12,7 +12,7 @@ with u_s = t_r u_r + t_z u_z the meridional component (Flügge, *Stresses in She
 ε_face = ε_mid ± (t / 2h)(ε_outer − ε_inner). A grid of length l measures the mean normal
 strain along its axis, sampled at ``n_points`` points.
 
-Bridges (PHYSICS.md sec. 4, Hoffmann, *An Introduction to Measurements using Strain
+Bridges (docs/PHYSICS.md sec. 4, Hoffmann, *An Introduction to Measurements using Strain
 Gages*, HBM 1989): output [mV/V] = 1e3 · GF/4 · Σ_k a_k ε_k · gain, with arm signs
 a_k = ±1 (quarter bridge: one grid; half bridge: two grids in adjacent arms; full bridge:
 four). The bridge is linearised (the exact quarter bridge GF ε / (4 + 2 GF ε) differs by
@@ -113,7 +113,7 @@ class SensorLayout:
     signals : tuple of Signal
         s0..s4 in order (see module docstring for the default layout).
     gauge_factor : float
-        Gauge factor GF [-] (2.0, constantan foil gauges, PHYSICS.md sec. 4).
+        Gauge factor GF [-] (2.0, constantan foil gauges, docs/PHYSICS.md sec. 4).
     n_points : int
         Points sampled along each grid to average the strain.
     """
@@ -136,7 +136,7 @@ class SensorLayout:
         Models the paper's per-gear sensor models fitted to three real RT1-T gears
         (Sec. III-B): every grid is displaced by N(0, sd) in θ, r and orientation, every
         channel's gain is N(1, sd_gain). Gauge positioning is the dominant error of
-        sensorised RT1-T gears (Schuller et al. 2024, PHYSICS.md sec. 4).
+        sensorised RT1-T gears (Schuller et al. 2024, docs/PHYSICS.md sec. 4).
         """
         sigs = []
         for s in self.signals:

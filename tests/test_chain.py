@@ -46,7 +46,7 @@ def test_healthy_pairs_agree(chain, healthy):
     (s,), _ = run(ch, [healthy])
     assert rms(s[1] - s[3]) < 0.1 * rms(s[1])
     assert rms(s[2] - s[4]) < 0.1 * rms(s[2])
-    assert 0.01 < np.abs(s).max() < 1.0  # mV/V, order 0.1 (PHYSICS.md sec. 4)
+    assert 0.01 < np.abs(s).max() < 1.0  # mV/V, order 0.1 (docs/PHYSICS.md sec. 4)
 
 
 @pytest.mark.parametrize("name", sorted(FAULTS))

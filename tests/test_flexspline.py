@@ -1,4 +1,4 @@
-"""Space truss against closed forms (PHYSICS.md sec. 3), mesh convergence, fast vs naive.
+"""Space truss against closed forms (docs/PHYSICS.md sec. 3), mesh convergence, fast vs naive.
 
 Tolerances are set at the accuracy reached, measured with the tests' own settings; each
 states it (python -m pytest tests/test_flexspline.py).
@@ -24,7 +24,7 @@ def _tube(n_theta, length_m, rim_m, t_m=0.5e-3):
 @lru_cache
 def ring_bending_ratio(n_theta: int) -> float:
     """Outer-face circumferential strain of a free ring under w0 cos 2θ / closed form
-    (t/2) 3 w0 / R² of a thin inextensional ring (PHYSICS.md sec. 3); 6 mm wide, t = 0.5 mm.
+    (t/2) 3 w0 / R² of a thin inextensional ring (docs/PHYSICS.md sec. 3); 6 mm wide, t = 0.5 mm.
     """
     m = _tube(n_theta, 6e-3, 6e-3)
     k = m.K.tocsc()
