@@ -334,12 +334,17 @@ def _group(pgid: int) -> list[int]:
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_G_stopping_the_generator_stops_its_workers(tmp_path, sig, code):
     out = tmp_path / "ds"
+    # 12 speeds (2000-4200 rpm): 36 shards, minutes of work, so that the signal always meets running
+    # workers, even on a loaded machine (the paper grid alone can finish before it)
+    speeds = ",".join(str(2000.0 + 200.0 * k) for k in range(12))
     p = subprocess.Popen([str(BIN / "swgsim-generate"), "dataset=paper", f"out_dir={out}",
+                          f"dataset.operating_points.n_in_rpm=[{speeds}]",
                           "n_jobs=2", "progress=false"], start_new_session=True,
                          stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 60
+    deadline = time.time() + 180
     while len(_group(p.pid)) < 3 and time.time() < deadline:  # parent + 2 workers
         time.sleep(0.2)
+    assert len(_group(p.pid)) >= 3, "the generator's workers never started"
     time.sleep(1.0)
     os.kill(p.pid, sig)
     assert p.wait(timeout=30) == code, p.stderr.read()
