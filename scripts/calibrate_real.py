@@ -36,12 +36,14 @@ PUBLISHED = {
 TARGET_RATIO = 0.6
 
 
-def calibrate_file(path: Path, out: Path | None = None, figures: bool = True) -> dict:
+def calibrate_file(path: Path, out: Path | None = None, figures: bool = True,
+                   gear_ratio: float | None = None) -> dict:
     """Run the loop on one recording; returns one table row (and writes a report)."""
-    from swgsim.calibration import build_problem, calibrate, summarize
+    from swgsim.calibration import build_problem, summarize
+    from swgsim.calibration.problems import calibrate_friction
 
     t0 = time.perf_counter()
-    result = calibrate(build_problem(path))
+    result = calibrate_friction(build_problem(path, gear_ratio=gear_ratio))
     if out is not None:
         from swgcli.calibrate import write_outputs
 
@@ -60,10 +62,33 @@ def calibrate_file(path: Path, out: Path | None = None, figures: bool = True) ->
         "below_published": (None if best_pub is None else
                             result.rmse_after < pub["coulomb_viscous"]),
         "effects": [e["name"] for e in summary["effects_added"]],
+        "effect_params": [effect_text(e) for e in summary["effects_added"]],
+        "implausible": [f"{c['name']} (validation gain {100 * c['validation_gain']:.1f} %: "
+                        f"{c['violations']})" for c in summary["implausible_candidates"]
+                        if c["final_iteration"]],
         "unexplained": summary["unexplained"],
         "noise_floor": summary["noise_floor"],
         "seconds": time.perf_counter() - t0,
     }
+
+
+def effect_text(effect: dict) -> str:
+    """One accepted effect with its characterising parameters against their physical
+    ranges (summary ``effects_added`` entry), e.g. ``"velocity_lag: t_lag = 0.004 s in
+    [0.0001, 0.05]"``; ripples with their harmonics and wave-generator orders."""
+    parts = []
+    for k, r in (effect.get("ranges") or {}).items():
+        lo = "-inf" if r["low"] is None else f"{r['low']:.3g}"
+        hi = "inf" if r["high"] is None else f"{r['high']:.3g}"
+        unit = (effect["params"].get(k) or {}).get("unit", "")
+        parts.append(f"{k} = {r['value']:.4g} {unit} {'in' if r['inside'] else 'OUTSIDE'} "
+                     f"[{lo}, {hi}]")
+    o = effect.get("orders")
+    if o:
+        parts.append(f"period {o['fundamental_period']:.4g} rad, harmonics {o['harmonics']}"
+                     + (f", orders {[round(k, 3) for k in o['orders']]}" if o["orders"]
+                        else ""))
+    return f"{effect['name']}: " + "; ".join(parts)
 
 
 def format_table(rows: list[dict]) -> str:
@@ -80,6 +105,12 @@ def format_table(rows: list[dict]) -> str:
             f"{r['ratio']:.3f} {'ok' if r['meets_ratio'] else 'MISSED'} | {pub} | "
             f"{r['noise_floor']:.4f} | {', '.join(r['effects']) or 'none'} | "
             f"{'yes' if r['unexplained'] else 'no'} |")
+    lines += ["", "Accepted effects against their physical ranges, and the structure of the "
+              "final residual that candidates rejected as implausible would have absorbed:", ""]
+    for r in rows:
+        lines.append(f"- {r['file']}: " + ("; ".join(r["effect_params"]) or "no effect"))
+        if r["implausible"]:
+            lines.append("  - rejected as implausible: " + "; ".join(r["implausible"]))
     return "\n".join(lines)
 
 
@@ -90,6 +121,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--out", type=Path, default=None, help="write full reports here")
     ap.add_argument("--files", nargs="*", default=list(FILES), help="file stems")
     ap.add_argument("--no-figures", action="store_true")
+    ap.add_argument("--gear-ratio", type=float, default=None,
+                    help="reduction ratio N of the joints' gears, if known (ripple orders)")
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     rows = []
@@ -98,7 +131,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
         if not path.is_file():
             print(f"missing {path}", file=sys.stderr)
             continue
-        rows.append(calibrate_file(path, args.out, figures=not args.no_figures))
+        rows.append(calibrate_file(path, args.out, figures=not args.no_figures,
+                                   gear_ratio=args.gear_ratio))
         r = rows[-1]
         print(f"{r['file']}: {r['rmse_paper_law']:.4f} -> {r['rmse_after']:.4f} N m "
               f"(ratio {r['ratio']:.3f}) in {r['seconds']:.0f} s", file=sys.stderr, flush=True)

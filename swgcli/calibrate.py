@@ -84,6 +84,7 @@ class SelectionOptions:
 
     candidates: list[str] | None = None  # null: the whole library; or effect names
     min_rel_improvement: float = _selection_default("min_rel_improvement")
+    min_heldout_evidence: float = _selection_default("min_heldout_evidence")
     max_delta_bic: float = _selection_default("max_delta_bic")
     effective_bic: bool = _selection_default("effective_bic")
     max_rel_se: float = _selection_default("max_rel_se")
@@ -111,6 +112,7 @@ class CalibrateApp:
     measured: str = MISSING   # friction CSV (kind 1) or schema-v1 data-set directory (kind 2)
     out_dir: str = MISSING    # created if absent
     baseline: BaselineOptions = field(default_factory=BaselineOptions)
+    gear_ratio: float | None = None  # N (WG turns per output turn) if known: ripple orders
     accel_window: int = field(  # samples of the Savitzky-Golay estimate of ddq
         default_factory=lambda: _arg(_load_friction_csv(), "accel_window"))
     split: SplitOptions = field(default_factory=SplitOptions)
@@ -172,55 +174,42 @@ def write_outputs(result, out_dir: str | Path, source: str | None = None,
 
 
 def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
-    """One MLflow run: flattened config, metrics, the output directory as artifacts."""
-    import mlflow
-    from mlflow.entities import Metric, Param, RunTag
-
-    from learn.tracking import default_tracking_uri, flatten_config, get_experiment_id
+    """One MLflow run through :func:`learn.tracking.log_run`: the git commit, the measured
+    data (file or data-set folder) as dataset input, the flattened config and
+    ``config.yaml``, metrics, the output directory's files as artifacts. The calibrated
+    model is ``friction_effects.yaml`` (a simulation option), stored as an artifact."""
+    from learn.tracking import log_run
 
     lg = cfg.logger
-    client = mlflow.MlflowClient(lg.tracking_uri or default_tracking_uri())
-    exp_id = get_experiment_id(client, lg.experiment)
-    run = client.create_run(exp_id, run_name=lg.run_name or summary["name"],
-                            tags={"kind": summary["kind"], "data": summary["name"]})
-    run_id = run.info.run_id
-    status = "FAILED"
-    try:
-        ts = run.info.start_time
-        metrics = [Metric("rmse_before", summary["rmse_before"], ts, 0),
-                   Metric("rmse_after", summary["rmse_after"], ts, 0),
-                   Metric("rmse_ratio", summary["rmse_ratio"], ts, 0),
-                   Metric("n_effects_added", float(len(summary["effects_added"])), ts, 0),
-                   Metric("unexplained", float(summary["unexplained"]), ts, 0)]
+    resolved = OmegaConf.to_container(cfg, resolve=True)
+    tags = {"kind": summary["kind"], "data": summary["name"],
+            "effects_added": ",".join(e["name"] for e in summary["effects_added"]) or "none",
+            "unexplained": str(summary["unexplained"])}
+    with log_run(lg.experiment, lg.run_name or summary["name"], tracking_uri=lg.tracking_uri,
+                 params=resolved, config=resolved, dataset=Path(cfg.measured).expanduser(),
+                 tags=tags) as run:
+        metrics = {"rmse_before": summary["rmse_before"], "rmse_after": summary["rmse_after"],
+                   "rmse_ratio": summary["rmse_ratio"],
+                   "n_effects_added": float(len(summary["effects_added"])),
+                   "unexplained": float(summary["unexplained"])}
         for split, v in summary["rmse"].items():
             for when in ("before", "after"):
                 if v[when] is not None:
-                    metrics.append(Metric(f"{split}/rmse_{when}", v[when], ts, 0))
-        for it in summary["iterations"]:
-            metrics.append(Metric("validation_rmse", it["val_rmse"], ts, it["index"]))
-        params = flatten_config(OmegaConf.to_container(cfg, resolve=True))
-        flat = sorted(params.items())
-        tags = [RunTag("effects_added",
-                       ",".join(e["name"] for e in summary["effects_added"]) or "none"),
-                RunTag("unexplained", str(summary["unexplained"]))]
-        for start in range(0, max(len(flat), 1), 100):
-            client.log_batch(run_id, metrics=metrics if start == 0 else [],
-                             params=[Param(k, v) for k, v in flat[start:start + 100]],
-                             tags=tags if start == 0 else [])
+                    metrics[f"{split}/rmse_{when}"] = v[when]
+        run.log_metrics(metrics)
+        for it in summary["iterations"]:  # step: the selection's iteration
+            run.log_metrics({"validation_rmse": it["val_rmse"]}, step=it["index"])
         for f in ("report.md", "summary.json", "friction_effects.yaml"):
             if (out_dir / f).is_file():
-                client.log_artifact(run_id, str(out_dir / f))
+                run.log_artifact(out_dir / f)
         if (out_dir / "figures").is_dir():
-            client.log_artifacts(run_id, str(out_dir / "figures"), "figures")
-        status = "FINISHED"
-    finally:
-        client.set_terminated(run_id, status=status)
-    log.info("MLflow run %s (%s)", run_id, lg.experiment)
-    return run_id
+            run.log_artifact(out_dir / "figures", "figures")
+    log.info("MLflow run %s (%s)", run.run_id, lg.experiment)
+    return run.run_id
 
 
 #: Options that only the friction calibration (kind 1) reads.
-FRICTION_ONLY = ("baseline", "accel_window", "split", "selection")
+FRICTION_ONLY = ("baseline", "gear_ratio", "accel_window", "split", "selection")
 
 
 def check_options(cfg: DictConfig, kind: str, measured: Path) -> None:
@@ -255,6 +244,10 @@ def check_options(cfg: DictConfig, kind: str, measured: Path) -> None:
         raise ValueError(f"accel_window must be an odd integer in [5, 1001], got {aw}")
     if b["v_s"] is not None and not b["v_s"] > 0:
         raise ValueError(f"baseline.v_s must be > 0 rad/s or null, got {b['v_s']}")
+    gr = given["gear_ratio"]
+    if gr is not None and not 1 < gr <= 10_000:
+        raise ValueError(f"gear_ratio must lie in (1, 10000] (wave-generator turns per output "
+                         f"turn) or be null, got {gr}")
     if not 0 < b["v_s_rel"] <= 1:
         raise ValueError(f"baseline.v_s_rel must lie in (0, 1], got {b['v_s_rel']}")
     n = sp["n_blocks"]
@@ -267,6 +260,7 @@ def check_options(cfg: DictConfig, kind: str, measured: Path) -> None:
     if not 0 <= sp["guard_frac"] <= 0.45:
         raise ValueError(f"split.guard_frac must lie in [0, 0.45], got {sp['guard_frac']}")
     for key, lo, hi in (("min_rel_improvement", 0.0, 1.0), ("max_rel_se", 0.0, 10.0),
+                        ("min_heldout_evidence", 0.0, 1e6),
                         ("max_abs_corr", 0.0, 1.0), ("structure_threshold", 0.0, 1.0)):
         if not lo <= se[key] <= hi:
             raise ValueError(f"selection.{key} must lie in [{lo:g}, {hi:g}], got {se[key]}")
@@ -286,7 +280,9 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
         Composed ``conf/calibrate.yaml``: ``measured`` (a friction CSV, kind 1, or a
         schema-v1 strain data-set directory, kind 2, dispatched to
         :func:`swgsim.calibration.strain.calibrate_strain`), ``out_dir``, ``baseline``,
-        ``accel_window``, ``split``, ``selection``, ``figures``, ``logger``.
+        ``gear_ratio``, ``accel_window``, ``split``, ``selection``, ``figures``, ``logger``.
+        Friction recordings run :func:`swgsim.calibration.problems.calibrate_friction`
+        (the loop, then harmonic grouping of ripples).
 
     Returns
     -------
@@ -299,7 +295,8 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     swgsim.calibration.MeasuredDataError
         ``measured`` is neither a friction CSV nor a data-set directory.
     """
-    from swgsim.calibration import SelectionConfig, build_problem, calibrate, detect_kind
+    from swgsim.calibration import SelectionConfig, build_problem, detect_kind
+    from swgsim.calibration.problems import calibrate_friction
 
     measured = Path(cfg.measured).expanduser()
     out_dir = Path(cfg.out_dir).expanduser()
@@ -326,14 +323,16 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
         measured, v_s=cfg.baseline.v_s, v_s_rel=cfg.baseline.v_s_rel,
         n_blocks=cfg.split.n_blocks, validation_blocks=_as_list(cfg.split.validation_blocks),
         test_blocks=_as_list(cfg.split.test_blocks), guard_frac=cfg.split.guard_frac,
-        candidates=_as_list(sel.candidates), accel_window=cfg.accel_window)
+        candidates=_as_list(sel.candidates), accel_window=cfg.accel_window,
+        gear_ratio=cfg.gear_ratio)
     config = SelectionConfig(
         min_rel_improvement=sel.min_rel_improvement, max_delta_bic=sel.max_delta_bic,
+        min_heldout_evidence=sel.min_heldout_evidence,
         max_iter=sel.max_iter, candidates=_as_list(sel.candidates),
         structure_threshold=sel.structure_threshold, max_rel_se=sel.max_rel_se,
         max_abs_corr=sel.max_abs_corr, max_starts=sel.max_starts,
         effective_bic=sel.effective_bic, pair_candidates=sel.pair_candidates)
-    result = calibrate(problem, config)
+    result = calibrate_friction(problem, config)
     summary = write_outputs(result, out_dir, source=str(measured), figures=bool(cfg.figures))
     run_id = _log_mlflow(cfg, summary, out_dir) if cfg.logger.enabled else None
     log.info("%s: test RMSE %.4g -> %.4g %s, added %s, unexplained %s; report %s",

@@ -147,7 +147,10 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
         ax.semilogx(per, pw, color=col, lw=0.8, label=f"{lab}, even part")
         pk = periodogram_peaks(q[sp.fit_validation], r[sp.fit_validation], p_min, p_max, 1)
         if pk:
-            ax.annotate(f"{pk[0][0]:.4g} rad", (pk[0][0], pk[0][1]), fontsize=7, color=col)
+            n_ratio = getattr(sig, "gear_ratio", None)  # label the wave-generator order
+            order = f" (order {2 * np.pi / (pk[0][0] * n_ratio):.3g})" if n_ratio else ""
+            ax.annotate(f"{pk[0][0]:.4g} rad{order}", (pk[0][0], pk[0][1]), fontsize=7,
+                        color=col)
     ax.set_xlabel("period over q [rad]")
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_ylabel("normalised power")

@@ -123,3 +123,22 @@ def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
     assert [e["name"] for e in summary["effects_added"]][0] == "offset"
     assert summary["rmse_after"] < summary["rmse_before"]
     assert res["mlflow_run_id"]
+
+
+def test_gear_ratio_option_is_checked_and_reaches_the_summary(tmp_path, planted_csv):
+    """gear_ratio (friction option): refused below 1, carried into the summary."""
+    path, truth = planted_csv
+    cfg = _cfg([f"measured={path}", f"out_dir={tmp_path / 'o'}", "logger.enabled=false",
+                "gear_ratio=0.5"])
+    with pytest.raises(ValueError, match=r"gear_ratio must lie in \(1, 10000\]"):
+        run_calibrate(cfg)
+    out = tmp_path / "ok"
+    cfg = _cfg([f"measured={path}", f"out_dir={out}", "logger.enabled=false", "figures=false",
+                f"baseline.v_s={truth.v_s}", "gear_ratio=100",
+                "selection.candidates=[stribeck,position_ripple]"])
+    run_calibrate(cfg)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["data"]["gear_ratio"] == 100
+    assert summary["ripples"]["gear_ratio"] == 100
+    assert [e["name"] for e in summary["effects_added"]] == ["stribeck"]
+    assert summary["effects_added"][0]["ranges"]["v_st"]["inside"]

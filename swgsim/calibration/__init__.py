@@ -1,6 +1,6 @@
 """Calibration loop: fit the model to measured data, diagnose the residual, add the
 library effect that explains it, refit, and report the error before and after on
-held-out data (ARCHITECTURE.md, "Calibration loop").
+held-out data (docs/ARCHITECTURE.md, "Calibration loop").
 
 numpy and scipy only. Typical use::
 
@@ -15,7 +15,11 @@ Modules: :mod:`.core` (terms, separable least squares, uncertainties), :mod:`.fr
 :mod:`.split` (held-out splits), :mod:`.diagnose` (residual probes, noise floor),
 :mod:`.loop` (selection loop), :mod:`.problems` (kind detection, problem builders),
 :mod:`.report` (summary and markdown), :mod:`.chain` (accepted effects as a simulation
-option), :mod:`.synthetic` (planted-effect data).
+option), :mod:`.synthetic` (planted-effect data); :mod:`.friction_ranges`,
+:mod:`.strain_ranges` (physical ranges with sources), :mod:`.friction_ripples`,
+:mod:`.ripple_groups` (ripples in gear orders, harmonics grouped), :mod:`.strain`,
+:mod:`.strain_effects`, :mod:`.strain_align`, :mod:`.strain_checks`,
+:mod:`.strain_power` (strain side), :mod:`.discovery` (terms beyond the library).
 """
 
 from .chain import FrictionEffects, friction_effects_from_config, parse_effects
@@ -24,7 +28,13 @@ from .diagnose import Diagnosis, diagnose, friction_probes, noise_floor
 from .friction import FrictionRecording, FrictionSignals, PaperLaw, load_friction_csv
 from .friction_effects import FRICTION_LIBRARY, make_effect
 from .loop import CalibrationResult, Problem, SelectionConfig, calibrate
-from .problems import MeasuredDataError, build_problem, detect_kind, friction_problem
+from .problems import (
+                       MeasuredDataError,
+                       build_problem,
+                       calibrate_friction,
+                       detect_kind,
+                       friction_problem,
+)
 from .report import render_report, summarize
 from .split import HeldOutSplit, group_split, time_block_split
 
@@ -47,6 +57,7 @@ __all__ = [
     "Term",
     "build_problem",
     "calibrate",
+    "calibrate_friction",
     "detect_kind",
     "diagnose",
     "fit_terms",

@@ -166,6 +166,11 @@ class Term:
         where its form comes from.
     probes : tuple of str
         Names of the diagnosis probes whose structure it should explain.
+    ranges : dict of str to (float, float, str)
+        Physical range of a :meth:`derived` parameter, ``name -> (low, high, source)`` in
+        the parameter's unit (bounds inclusive; ``-inf``/``inf`` for an open side). A fit
+        outside the range is not accepted as this effect (:meth:`range_violations`): the
+        term would be absorbing something else.
     """
 
     kind: str = "term"
@@ -177,6 +182,7 @@ class Term:
     signature: str = ""
     source: str = ""
     probes: tuple[str, ...] = ()
+    ranges: dict[str, tuple[float, float, str]] = {}
 
     def __init__(self, name: str | None = None) -> None:
         self.name = name or self.kind
@@ -233,6 +239,32 @@ class Term:
         return ()
 
     # -- generic -----------------------------------------------------------------------
+    def range_violations(self, values: dict[str, float]) -> list[str]:
+        """Derived parameters outside their physical range (:attr:`ranges`).
+
+        Parameters
+        ----------
+        values : dict of str to float
+            Derived parameters (:meth:`derived`), in :meth:`derived_units`.
+
+        Returns
+        -------
+        list of str
+            One phrase per violation, e.g. ``"t_lag_s = 0.6 s outside [0.0001, 0.05] s
+            (Al-Bender et al. 2005)"``; empty when every ranged parameter is inside.
+        """
+        units = self.derived_units()
+        out = []
+        for name, (lo, hi, src) in self.ranges.items():
+            if name not in values:
+                continue
+            v = float(values[name])
+            if not lo <= v <= hi:
+                u = units.get(name, "")
+                u = f" {u}" if u and u != "-" else ""
+                out.append(f"{name} = {v:.3g}{u} outside [{lo:g}, {hi:g}]{u} ({src})")
+        return out
+
     @property
     def n_linear(self) -> int:
         return len(self.linear)

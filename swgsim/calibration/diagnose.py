@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from .core import integrated_autocorr_time
-from .friction_effects import periodogram_peaks
+from .friction_ripples import periodogram_peaks
 
 log = logging.getLogger(__name__)
 
@@ -168,13 +168,17 @@ class PeriodicProbe(Probe):
     odd : bool
     unit : str
         Unit of the coordinate (for the text).
+    wg_order : bool, default False
+        The coordinate is the output angle [rad]: with the signals' ``gear_ratio`` N the
+        period is also given as the wave-generator order k = 2π / (period · N).
     """
 
     def __init__(self, name: str, label: str, coord: Callable[[Any], np.ndarray],
                  period_range: Callable[[Any], tuple[float, float]], odd: bool = False,
-                 unit: str = "") -> None:
+                 unit: str = "", wg_order: bool = False) -> None:
         self.name, self.label, self.coord = name, label, coord
         self.period_range, self.odd, self.unit = period_range, odd, unit
+        self.wg_order = wg_order
 
     def fit_predict(self, sig, r, ia, ib):
         x = self.coord(sig)
@@ -190,12 +194,18 @@ class PeriodicProbe(Probe):
             return np.column_stack([s[i] * np.sin(w * x[i]), s[i] * np.cos(w * x[i]), s[i]])
 
         c, *_ = np.linalg.lstsq(cols(ia), r[ia], rcond=None)
-        return cols(ib) @ c, {"period": float(p), "amplitude": float(np.hypot(c[0], c[1]))}
+        detail = {"period": float(p), "amplitude": float(np.hypot(c[0], c[1]))}
+        n_ratio = getattr(sig, "gear_ratio", None) if self.wg_order else None
+        if n_ratio:
+            detail["order"] = float(2 * np.pi / (p * n_ratio))
+        return cols(ib) @ c, detail
 
     def describe(self, detail, units):
         if not detail:
             return self.label
-        return (f"{self.label}: period {detail['period']:.4g} {self.unit}, amplitude "
+        order = (f" (wave-generator order {detail['order']:.3g})" if "order" in detail
+                 else "")
+        return (f"{self.label}: period {detail['period']:.4g} {self.unit}{order}, amplitude "
                 f"{detail['amplitude']:.3g} {units}")
 
 
@@ -473,9 +483,9 @@ def friction_probes() -> list[Probe]:
         BinnedProbe("position_odd", "depends on q with a sign that flips with direction",
                     lambda s: s.q_rad, 60, odd=True),
         PeriodicProbe("position_periodic", "periodic in q, same in both directions",
-                      lambda s: s.q_rad, q_range, unit="rad"),
+                      lambda s: s.q_rad, q_range, unit="rad", wg_order=True),
         PeriodicProbe("position_periodic_odd", "periodic in q, flipping with direction",
-                      lambda s: s.q_rad, q_range, odd=True, unit="rad"),
+                      lambda s: s.q_rad, q_range, odd=True, unit="rad", wg_order=True),
         BinnedProbe("travel_since_reversal",
                     "depends on the travel since the last reversal (presliding)",
                     _travel_since_reversal, 30, odd=True),

@@ -1,7 +1,7 @@
 """Measured joint friction: recordings, signals and the paper-law baseline.
 
 A friction recording (data kind 1) is a CSV with the columns of the project's real data
-(``/work/shared/data/joint_friction/README.md``): ``time_s`` [s], ``q_rad`` [rad],
+(``docs/DATASET.md``, "Friction recordings"): ``time_s`` [s], ``q_rad`` [rad],
 ``dq_rad_per_s`` [rad/s], optionally ``ddq_rad_per_s2`` [rad/s²] and ``load_Nm`` [N m],
 and the target ``tau_friction_Nm`` [N m]. Sampling may be irregular.
 
@@ -94,7 +94,8 @@ class FrictionRecording:
     def n(self) -> int:
         return int(self.t_s.shape[0])
 
-    def signals(self, v_s: float | None = None, v_s_rel: float = 0.01) -> FrictionSignals:
+    def signals(self, v_s: float | None = None, v_s_rel: float = 0.01,
+                gear_ratio: float | None = None) -> FrictionSignals:
         """Signals for the model terms (see :class:`FrictionSignals`).
 
         Parameters
@@ -103,7 +104,20 @@ class FrictionRecording:
             Smooth-sign velocity [rad/s]; default ``v_s_rel`` times the 99th percentile
             of |q̇|.
         v_s_rel : float, default 0.01
+        gear_ratio : float, optional
+            Reduction ratio N of the strain wave gear (wave-generator turns per output
+            turn), when known: ripples over q are then labelled with wave-generator
+            orders k = 2π / (period · N).
+
+        Raises
+        ------
+        ValueError
+            The joint never moves, ``v_s`` is not positive, or ``gear_ratio`` is not
+            above 1.
         """
+        if gear_ratio is not None and not gear_ratio > 1:
+            raise ValueError(f"gear_ratio must be > 1 (wave-generator turns per output turn) "
+                             f"or None, got {gear_ratio}")
         v_ref = float(np.percentile(np.abs(self.dq_rad_s), 99))
         if v_ref <= 0:
             raise ValueError(f"recording {self.name!r} never moves (|dq| = 0)")
@@ -113,7 +127,8 @@ class FrictionRecording:
             raise ValueError(f"v_s must be > 0 [rad/s], got {v_s}")
         return FrictionSignals(
             t_s=self.t_s, q_rad=self.q_rad, dq_rad_s=self.dq_rad_s, ddq_rad_s2=self.ddq_rad_s2,
-            load_nm=self.load_nm, v_eff=self.dq_rad_s, v_s=float(v_s), scales=Scales.of(self))
+            load_nm=self.load_nm, v_eff=self.dq_rad_s, v_s=float(v_s), scales=Scales.of(self),
+            gear_ratio=None if gear_ratio is None else float(gear_ratio))
 
 
 @dataclass(frozen=True)
@@ -172,6 +187,10 @@ class FrictionSignals:
     v_s : float
         Smooth-sign velocity [rad/s].
     scales : Scales
+    extra : dict
+        Integrator states of one time step (``{"states": {term name: state}}``).
+    gear_ratio : float or None
+        Reduction ratio N (wave-generator turns per output turn) when known [-].
     """
 
     t_s: np.ndarray
@@ -183,6 +202,7 @@ class FrictionSignals:
     v_s: float
     scales: Scales
     extra: dict[str, Any] = field(default_factory=dict)
+    gear_ratio: float | None = None
 
     @property
     def n(self) -> int:

@@ -14,9 +14,9 @@ asymmetric_coulomb  Δc |sgn|                                         same offse
 stribeck            F_s sgn exp(−(v/v_st)²)                          odd bump at low |v|
 presliding          F_d (z − sgn), dz/dq = (1 − z sgn(q̇)) / q_c     transient after each
                                                                      reversal vs travel
-position_ripple     a sin(2πq/P) + b cos(2πq/P)                      peak over q, even in
+position_ripple     Σ_h a_h sin(2πhq/P) + b_h cos(2πhq/P)            peak over q, even in
                                                                      direction
-friction_ripple     sgn (a sin(2πq/P) + b cos(2πq/P))                peak over q, odd in
+friction_ripple     sgn Σ_h (a_h sin(2πhq/P) + b_h cos(2πhq/P))      peak over q, odd in
                                                                      direction
 load_coulomb        sgn Σ c_n P_n(x), n = 1, 2  or  μ sgn |load|      odd, slow trend in q
 gravity_residual    Σ c_n P_n(x), n = 2, 3                           even, slow trend in q
@@ -31,15 +31,21 @@ P_n are Legendre polynomials of x, the joint angle scaled to [−1, 1] over the 
 range and held constant outside it (a well-conditioned basis for a smooth dependence on
 the configuration however short the range). Repeatable effects may enter again: ripples
 up to six times (further periods: wave-generator orders, cogging), load_coulomb and
-gravity_residual up to three times (higher orders).
+gravity_residual up to three times (higher orders). Ripples live in
+:mod:`.friction_ripples` (a fundamental period and its harmonics, wave-generator orders
+when the gear ratio is known).
+
+Every effect declares the physical range of its characterising parameters
+(:attr:`~swgsim.calibration.core.Term.ranges`, values and sources in
+:mod:`.friction_ranges`): a fit outside it is not accepted as that effect.
 
 Sources: Armstrong-Hélouvry, Dupont & Canudas de Wit 1994 (survey, Automatica 30(7)):
 Coulomb, viscous, Stribeck, presliding, frictional memory, position dependence; Dahl
 1968 (Aerospace Corp. TR-0158(3107-18)-1): presliding state; Canudas de Wit, Olsson,
 Åström & Lischinsky 1995 (IEEE TAC 40(3), LuGre); Hess & Soom 1990 (ASME J. Tribology
 112): frictional lag; Tuttle & Seering 1996 (IEEE T-RA 12(3)): SWG friction varying
-periodically with rotation, kinematic error; PHYSICS.md sec. 5 (temperature, load and
-direction dependence of friction; gauge temperature drift); paper eq. (5) (μ F_n).
+periodically with rotation, kinematic error; docs/PHYSICS.md sec. 5 (temperature, load
+and direction dependence of friction; gauge temperature drift); paper eq. (5) (μ F_n).
 """
 
 from __future__ import annotations
@@ -49,8 +55,10 @@ from typing import Any
 
 import numpy as np
 
+from . import friction_ranges as rg
 from .core import Param, Term, linear_recurrence
 from .friction import FrictionSignals
+from .friction_ripples import FrictionRipple, PositionRipple, periodogram_peaks
 
 log = logging.getLogger(__name__)
 
@@ -131,53 +139,6 @@ def first_order_lag(t: np.ndarray, u: np.ndarray, tau_s: float) -> np.ndarray:
     return linear_recurrence(a, (1.0 - a) * np.asarray(u, float), float(u[0]))
 
 
-def periodogram_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float,
-                      n_peaks: int = 3, oversample: float = 5.0) -> list[tuple[float, float]]:
-    """Strongest periods of ``r`` over the irregular coordinate ``x``.
-
-    Fast Schuster periodogram: ``r`` is accumulated onto a uniform grid of spacing
-    p_min / 8 (nearest-cell extirpolation, the idea of Press & Rybicki 1989, order 0)
-    and Fourier transformed with ``oversample``-fold zero padding. The power is
-    normalised so that a pure sinusoid sampled evenly gives 1 (≈ the fraction of the
-    variance a sinusoid at that period explains). Local maxima, strongest first.
-
-    Parameters
-    ----------
-    x, r : ndarray, shape (n,)
-        Coordinate (q [rad] or t [s]) and signal.
-    p_min, p_max : float
-        Period range [units of x], 0 < p_min < p_max.
-    n_peaks : int, default 3
-    oversample : float, default 5
-
-    Returns
-    -------
-    list of (period, normalised power)
-    """
-    x = np.asarray(x, float)
-    r = np.asarray(r, float)
-    span = float(np.ptp(x)) if x.size else 0.0
-    if span <= 0 or not 0 < p_min < p_max or not np.any(r):
-        return []
-    rc = r - r.mean()
-    h = p_min / 8.0
-    cells = np.floor((x - x.min()) / h).astype(np.int64)
-    m = int(cells.max()) + 1
-    s = np.bincount(cells, weights=rc, minlength=m)
-    nfft = 1 << int(np.ceil(np.log2(max(oversample * m, 16))))
-    f = np.arange(nfft // 2 + 1) / (nfft * h)
-    pw = np.abs(np.fft.rfft(s, nfft)) ** 2 * 2.0 / (x.size * float(np.sum(rc * rc)))
-    band = (f >= 1.0 / p_max) & (f <= 1.0 / p_min)
-    pb = np.where(band, pw, 0.0)
-    loc = np.flatnonzero((pb[1:-1] > pb[:-2]) & (pb[1:-1] >= pb[2:])) + 1
-    loc = loc[np.argsort(pb[loc])[::-1]][:n_peaks]
-    return [(float(1.0 / f[i]), float(pb[i])) for i in loc if pb[i] > 0]
-
-
-def _amp_phase(a: float, b: float) -> tuple[float, float]:
-    return float(np.hypot(a, b)), float(np.arctan2(b, a))
-
-
 # ---------------------------------------------------------------------------------------
 # the library
 
@@ -194,6 +155,7 @@ class AsymmetricCoulomb(Term):
                  "moving, vanishing at rest")
     source = "Armstrong-Hélouvry, Dupont & Canudas de Wit 1994"
     probes = ("direction_offset",)
+    ranges = {"delta_c": rg.OPEN_DIRECTION_NM}
 
     def columns(self, sig: FrictionSignals, theta: np.ndarray) -> np.ndarray:
         return np.abs(sig.sgn)[:, None]
@@ -211,6 +173,7 @@ class Stribeck(Term):
                  "within v_st")
     source = "Armstrong-Hélouvry et al. 1994; Stribeck 1902"
     probes = ("velocity",)
+    ranges = {"f_s": rg.STRIBECK_EXCESS_NM, "v_st": rg.STRIBECK_VELOCITY_RAD_S}
 
     def bounds(self, sig: FrictionSignals) -> list[tuple[float, float]]:
         s = sig.scales
@@ -238,6 +201,7 @@ class Presliding(Term):
                  "reversals), odd in direction")
     source = "Dahl 1968; Canudas de Wit et al. 1995 (LuGre); Armstrong-Hélouvry et al. 1994"
     probes = ("travel_since_reversal", "velocity")
+    ranges = {"f_d": rg.PRESLIDING_PART_NM, "q_c": rg.PRESLIDING_DISPLACEMENT_RAD}
 
     def bounds(self, sig):
         return [(1e-5 * sig.scales.q_span, 0.1 * sig.scales.q_span)]
@@ -252,69 +216,6 @@ class Presliding(Term):
         else:
             z = dahl_state(sig.q_rad, float(theta[0]))
         return (z - sig.sgn)[:, None]
-
-
-class _Ripple(Term):
-    """Sinusoid over q with a period found from the residual spectrum."""
-
-    linear = (Param("a_sin", "N m", "sine coefficient"),
-              Param("a_cos", "N m", "cosine coefficient"))
-    nonlinear = (Param("period", "rad", "period over the joint angle", log=True),)
-    repeatable = 6
-    odd = False
-
-    def bounds(self, sig):
-        s = sig.scales
-        return [(max(4.0 * s.dq_med, s.q_span / 2000.0), s.q_span / 2.0)]
-
-    def starts(self, sig, residual, idx):
-        lo, hi = self.bounds(sig)[0]
-        r = residual[idx] * (np.sign(sig.v_eff[idx]) if self.odd else 1.0)
-        peaks = periodogram_peaks(sig.q_rad[idx], r, lo, hi, n_peaks=3)
-        out = [np.array([p]) for p, _ in peaks]
-        return out or [np.array([np.sqrt(lo * hi)])]
-
-    def _base(self, sig):
-        return sig.sgn if self.odd else np.ones(sig.n)
-
-    def columns(self, sig, theta):
-        w = 2 * np.pi * sig.q_rad / theta[0]
-        b = self._base(sig)
-        return np.column_stack([b * np.sin(w), b * np.cos(w)])
-
-    def derived(self, coef, theta):
-        amp, ph = _amp_phase(coef[0], coef[1])
-        return {"amplitude": amp, "phase": ph, "period": float(theta[0])}
-
-    def derived_units(self):
-        return {"amplitude": "N m", "phase": "rad", "period": "rad"}
-
-    def primary(self):
-        return ("amplitude", "period")
-
-
-class PositionRipple(_Ripple):
-    """Torque ripple periodic in the joint angle, the same in both directions: kinematic
-    error and meshing stiffness ripple at orders of the wave generator (N q, 2 N q),
-    motor cogging, gauge ripple (Tuttle & Seering 1996; PHYSICS.md sec. 1 and 5)."""
-
-    kind = "position_ripple"
-    description = "ripple periodic in q, even in the direction of motion"
-    signature = "spectral peak of the residual over q, same sign in both directions"
-    source = "Tuttle & Seering 1996; PHYSICS.md sec. 1, 5"
-    probes = ("position_periodic",)
-
-
-class FrictionRipple(_Ripple):
-    """Friction whose level varies periodically with rotation (tooth meshing; Tuttle &
-    Seering 1996): τ = sgn(v) (a sin(2πq/P) + b cos(2πq/P))."""
-
-    kind = "friction_ripple"
-    description = "friction level periodic in q, odd in the direction of motion"
-    signature = "spectral peak over q of the residual times sgn(q̇) (flips with direction)"
-    source = "Tuttle & Seering 1996"
-    probes = ("position_periodic_odd",)
-    odd = True
 
 
 def _instance(name: str | None) -> int:
@@ -398,6 +299,7 @@ class LoadCoulomb(_RangePolynomial):
                  "(q̇ > 0, q̇ < 0) spread or close along q")
     source = "paper eq. (5) μ F_n; Armstrong-Hélouvry et al. 1994"
     probes = ("position_odd",)
+    ranges = {"rms": rg.OPEN_CONFIGURATION_NM, "mu": rg.LOAD_FRICTION_PER_LOAD}
     first_order = 1
     odd = True
 
@@ -458,6 +360,7 @@ class GravityResidual(_RangePolynomial):
                  "shift together)")
     source = "rigid-body compensation of the data (README); paper eq. (5) b3 term"
     probes = ("position",)
+    ranges = {"rms": rg.OPEN_CONFIGURATION_NM}
     first_order = 2
 
 
@@ -472,6 +375,7 @@ class Inertia(Term):
                  "against q̇ whose sense flips with the sign of q̈")
     source = "rigid-body model compensation of the data (README); Armstrong-Hélouvry 1994"
     probes = ("acceleration",)
+    ranges = {"j_a": rg.OPEN_INERTIA_KGM2}
 
     def columns(self, sig, theta):
         return sig.ddq_rad_s2[:, None]
@@ -479,16 +383,20 @@ class Inertia(Term):
 
 class ThermalDrift(Term):
     """Coulomb level relaxing as the joint warms up: τ = d exp(−(t − t0)/T_th) sgn(v)
-    (first-order thermal response; friction falls with lubricant temperature; PHYSICS.md
-    sec. 5; Armstrong-Hélouvry et al. 1994)."""
+    (first-order thermal response of the warming joint; friction falls with lubricant
+    temperature; docs/PHYSICS.md sec. 5; Armstrong-Hélouvry et al. 1994). The time
+    constant is that of the warm-up, minutes to hours (:mod:`.friction_ranges`): on a
+    recording shorter than it the drift is nearly a straight line, d and T_th trade off
+    and are not pinned down, and the drift stays in the residual (probe ``time_odd``)."""
 
     kind = "thermal_drift"
     linear = (Param("d", "N m", "excess Coulomb level at t0"),)
     nonlinear = (Param("t_th", "s", "thermal time constant", log=True),)
     description = "friction level decays over time (warm-up)"
     signature = "residual odd in direction whose magnitude changes monotonically with time"
-    source = "PHYSICS.md sec. 5; Armstrong-Hélouvry et al. 1994"
+    source = "docs/PHYSICS.md sec. 5; Armstrong-Hélouvry et al. 1994"
     probes = ("time_odd",)
+    ranges = {"d": rg.OPEN_THERMAL_NM, "t_th": rg.THERMAL_TIME_S}
 
     def bounds(self, sig):
         return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
@@ -502,7 +410,7 @@ class ThermalDrift(Term):
 
 class SensorDrift(Term):
     """Zero drift of the torque measurement: τ = c (1 − exp(−(t − t0)/T_d)), a first-
-    order warm-up of the gauges and amplifier (PHYSICS.md sec. 5: gauge temperature
+    order warm-up of the gauges and amplifier (docs/PHYSICS.md sec. 5: gauge temperature
     drift)."""
 
     kind = "sensor_drift"
@@ -510,8 +418,9 @@ class SensorDrift(Term):
     nonlinear = (Param("t_d", "s", "drift time constant", log=True),)
     description = "offset creeping over time, same in both directions"
     signature = "residual even in direction that creeps monotonically with time"
-    source = "PHYSICS.md sec. 5 (gauge temperature drift)"
+    source = "docs/PHYSICS.md sec. 5 (gauge temperature drift)"
     probes = ("time",)
+    ranges = {"c": rg.OPEN_SENSOR_NM, "t_d": rg.SENSOR_DRIFT_TIME_S}
 
     def bounds(self, sig):
         return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
@@ -536,6 +445,7 @@ class VelocityLag(Term):
                  "decelerating than when accelerating at the same speed")
     source = "Hess & Soom 1990; Armstrong-Hélouvry et al. 1994 (frictional memory)"
     probes = ("velocity_hysteresis",)
+    ranges = {"t_lag": rg.VELOCITY_LAG_S}
 
     def bounds(self, sig):
         s = sig.scales

@@ -6,24 +6,56 @@ baseline terms, a library of candidate effects (term classes), the residual prob
 the held-out split. The friction side builds one with
 :func:`swgsim.calibration.friction_problem`; a strain-side library plugs in the same way.
 
-Acceptance rule (ARCHITECTURE.md, "Calibration loop"). Every candidate is added to the
-current model and refitted on the fit samples (its own nonlinear parameters optimised,
-those of the current model held, all linear coefficients refitted); candidates are
-ranked by validation RMSE. Going down the ranking, the first candidate that passes all
-of
+Acceptance rule: evidence, on one scale for every kind of data. Every candidate is added
+to the current model and refitted on the fit samples (its own nonlinear parameters
+optimised, those of the current model held, all linear coefficients refitted);
+candidates are ranked by validation RMSE. Going down the ranking, the first candidate that
+passes all of
 
-1. validation RMSE lower by more than ``min_rel_improvement`` (relative),
-2. BIC on the fit samples lower by more than ``-max_delta_bic``, where the BIC counts
-   the *effective* number of samples n / τ_int (τ_int: integrated autocorrelation time
-   of the current residual). A structured residual is strongly autocorrelated; the
-   i.i.d. BIC would then reward any term that soaks up a few per cent of an unrelated
-   structure (hundreds of BIC points on 10⁴ samples). The plain ΔBIC is reported too.
+1. *held-out evidence*: twice the log-likelihood ratio of the validation samples,
+   candidate against current model, each with its parameters fitted on the fit samples
+   (Gaussian errors, variance from the validation residual):
+   ``2 ln Λ_val = (n_val / τ_int) · ln(RMSE_val,current² / RMSE_val,candidate²)``,
+   above ``min_heldout_evidence`` (default 10). This is the predictive (plug-in) form of
+   a partial Bayes factor, the fit samples playing the training sample (O'Hagan 1995,
+   "Fractional Bayes factors for model comparison", JRSS B 57; Berger & Pericchi 1996,
+   "The intrinsic Bayes factor", JASA 91), i.e. a cross-validated likelihood (Smyth 2000,
+   Statistics and Computing 10). An effect that does not generalise to held-out data
+   earns nothing here, however well it fits.
+2. *fit evidence*: the BIC change on the fit samples below ``max_delta_bic`` (default
+   −10), where the BIC counts the *effective* number of samples n / τ_int. −ΔBIC / 2
+   approximates ln B, the log Bayes factor (Schwarz 1978; Kass & Raftery 1995, "Bayes
+   factors", JASA 90, sec. 4.1.3); it charges ln(n_eff) per parameter, which the held-out
+   likelihood does not.
 3. its primary parameters pinned down by the data (relative standard error, corrected
-   for autocorrelation, below ``max_rel_se``),
+   for autocorrelation, below ``max_rel_se``), and
+4. every parameter with a declared physical range inside it
+   (:attr:`~swgsim.calibration.core.Term.ranges`).
 
-is accepted, and the whole model is refitted jointly. The loop stops when no candidate
-passes. After the loop the final residual is diagnosed; if it is still structured the
-result says so (``unexplained``) and describes the signature, whatever was added.
+Both thresholds of 10 are on the 2 ln B scale of Kass & Raftery (1995, sec. 3.2: 2 ln B
+above 10 is "very strong" evidence, posterior odds above 150:1); ΔBIC differences of 10
+are also where Burnham & Anderson (2002, "Model selection and multimodel inference",
+sec. 2.6) call the weaker model "essentially no support". τ_int (Sokal 1997) is the
+integrated autocorrelation time of the residual of the noise model (see
+:func:`_candidates`): a structured residual is strongly autocorrelated, and counting
+its samples as independent would reward any term that soaks up a few per cent of an
+unrelated structure (hundreds of BIC points on 10⁴ samples). The same τ_int scales the
+validation samples, which come from the same process at the same sample spacing. No
+fixed percentage of validation RMSE is required (``min_rel_improvement`` is an optional
+floor of practical size, off by default): the evidence grows with the data, so a small
+effect measured on many samples passes and a large-looking gain on few samples does
+not. A candidate with a positive held-out gain that fails 1-2 is reported as "too
+small" (:attr:`CandidateScore.small`); the plain ΔBIC is reported too.
+
+The loop accepts the first passing candidate, refits the whole model jointly and starts
+the next iteration; it stops when no candidate passes. When no single candidate passes
+but some show evidence (held-out or fit), pairs are tried (:func:`_pairs`). After the
+loop the final residual is diagnosed; if it is still structured the result says so
+(``unexplained``) and describes the signature, whatever was added. A candidate of the
+last iteration that passed the evidence rule but lies outside its physical range also
+makes the run ``unexplained``: the residual holds structure, with very strong evidence,
+that no plausible library effect explains (the probes may not see it); the signature
+names the candidate and what it would have absorbed.
 
 Errors before and after are computed on the test samples, which neither the fit nor the
 selection has seen, by the baseline and the final model refitted on fit + validation.
@@ -95,10 +127,16 @@ class SelectionConfig:
 
     Attributes
     ----------
-    min_rel_improvement : float, default 0.02
-        Required relative drop of the validation RMSE.
+    min_rel_improvement : float, default 0
+        Optional floor on the relative drop of the validation RMSE (a practical size
+        below which an effect is not wanted, whatever the evidence); 0: none, the rule
+        rests on evidence alone (module docstring).
     max_delta_bic : float, default -10
-        Required BIC change on the fit samples (more negative is better).
+        Required BIC change on the fit samples (more negative is better): fit evidence,
+        −ΔBIC ≈ 2 ln B (Kass & Raftery 1995).
+    min_heldout_evidence : float, default 10
+        Required held-out evidence 2 ln Λ_val (twice the validation log-likelihood ratio,
+        effective samples), on the same 2 ln B scale ("very strong" above 10).
     max_iter : int, default 12
         At most this many accepted steps (a pair counts once).
     candidates : sequence of str, optional
@@ -110,16 +148,18 @@ class SelectionConfig:
     max_starts : int, default 3
         Optimisations per candidate fit (best starting points).
     effective_bic : bool, default True
-        Count n / τ_int samples in the BIC of the rule and inflate the standard errors
-        by the same τ_int (False: the plain BIC and each fit's own τ_int).
+        Count n / τ_int samples in the BIC and the held-out likelihood of the rule and
+        inflate the standard errors by the same τ_int (False: every sample counts, the
+        plain BIC, and each fit's own τ_int).
     pair_candidates : int, default 4
-        When no single candidate passes but some show evidence (validation gain or
-        effective ΔBIC beyond the thresholds), pairs of this many best candidates (by fit
+        When no single candidate passes but some show evidence (held-out evidence or
+        effective ΔBIC beyond its threshold), pairs of this many best candidates (by fit
         RSS) are tried jointly (0 or 1: no look-ahead).
     """
 
-    min_rel_improvement: float = 0.02
+    min_rel_improvement: float = 0.0
     max_delta_bic: float = -10.0
+    min_heldout_evidence: float = 10.0
     max_iter: int = 12
     candidates: Sequence[str] | None = None
     structure_threshold: float = 0.03
@@ -135,6 +175,9 @@ class SelectionConfig:
                              f"{self.min_rel_improvement}")
         if self.max_delta_bic > 0:
             raise ValueError(f"max_delta_bic must be <= 0, got {self.max_delta_bic}")
+        if not self.min_heldout_evidence >= 0:
+            raise ValueError("min_heldout_evidence must be >= 0, got "
+                             f"{self.min_heldout_evidence}")
         if not self.max_rel_se > 0:
             raise ValueError(f"max_rel_se must be > 0, got {self.max_rel_se}")
         if self.max_iter < 0:
@@ -156,12 +199,23 @@ class CandidateScore:
         Plain (i.i.d.) BIC change on the fit samples.
     delta_bic_eff : float
         BIC change with the effective number of samples n / τ_int (used for the rule).
+    heldout_evidence : float
+        2 ln Λ_val: twice the log-likelihood ratio of the validation samples, candidate
+        against the current model, with n_val / τ_int effective samples (used for the
+        rule).
     accepted : bool
     status : str
         Why it was accepted or rejected.
     params : dict
         Derived parameters of the candidate (values only).
     fit : FitResult
+    implausible : bool
+        Passed the evidence rule but a parameter lies outside its physical range
+        (:attr:`~swgsim.calibration.core.Term.ranges`): the residual holds structure that
+        this effect would absorb without being it.
+    small : bool
+        Rejected only for lack of evidence although its held-out gain is positive: an
+        effect that may be there but is too small for these data.
     """
 
     name: str
@@ -174,12 +228,17 @@ class CandidateScore:
     params: dict[str, float]
     status: str = ""
     fit: FitResult | None = None
+    implausible: bool = False
+    heldout_evidence: float = float("nan")
+    small: bool = False
 
     def as_dict(self) -> dict[str, Any]:
         return {"name": self.name, "kind": self.kind, "val_rmse": self.val_rmse,
                 "rel_improvement": self.rel_improvement, "delta_bic": self.delta_bic,
-                "delta_bic_eff": self.delta_bic_eff, "accepted": self.accepted,
-                "status": self.status, "params": self.params}
+                "delta_bic_eff": self.delta_bic_eff,
+                "heldout_evidence": self.heldout_evidence, "accepted": self.accepted,
+                "status": self.status, "params": self.params,
+                "implausible": self.implausible, "small": self.small}
 
 
 @dataclass
@@ -220,9 +279,13 @@ class CalibrationResult:
     diag_before, diag_after : Diagnosis
         Residual diagnosis of the baseline and of the final model (fit + validation).
     unexplained : bool
-        The final residual is still structured.
+        The final residual is still structured, or a candidate outside its physical range
+        still passes the evidence rule on it.
     residual_signature : str
     elapsed_s : float
+    implausible : list of str
+        Candidates of the last iteration that passed the evidence rule but lie outside
+        their physical range, with their gain and the violated range.
     """
 
     problem: Problem
@@ -237,6 +300,7 @@ class CalibrationResult:
     unexplained: bool
     residual_signature: str
     elapsed_s: float = 0.0
+    implausible: list[str] = field(default_factory=list)
 
     @property
     def rmse_before(self) -> float:
@@ -245,6 +309,14 @@ class CalibrationResult:
     @property
     def rmse_after(self) -> float:
         return self.rmse["test"]["after"]
+
+    def too_small(self) -> list[CandidateScore]:
+        """Single candidates of the last iteration rejected only for lack of evidence
+        although their held-out gain is positive (:attr:`CandidateScore.small`), best
+        first: effects that may be there but that these data cannot establish."""
+        if not self.iterations:
+            return []
+        return [c for c in self.iterations[-1].candidates if c.small and " + " not in c.name]
 
     def effect_terms(self) -> list[Term]:
         """Accepted effect terms of the final model, in order of acceptance."""
@@ -310,6 +382,44 @@ def _new_terms(c: CandidateScore, current: FitResult) -> list[Term]:
     return [t for t in c.fit.terms if t.name not in names]
 
 
+def _weak(problem: Problem, cfg: SelectionConfig, c: CandidateScore, current: FitResult,
+          tau: float | None) -> tuple[FitResult, list[str]]:
+    """The candidate's fit with uncertainties (covariance inflated by ``tau``, default its
+    own τ_int) and its new terms' primary parameters that the data do not pin down."""
+    f = with_uncertainty(c.fit, problem.signals, problem.split.fit, cfg.max_rel_se,
+                         cfg.max_abs_corr, tau_int=tau)
+    weak = []
+    for term in _new_terms(c, current):
+        est = f.estimates_of(term.name)
+        weak += [f"{term.name}.{k} (rel. s.e. {est[k].std / abs(est[k].value):.2g})"
+                 for k in term.primary()
+                 if k in est and not est[k].std <= cfg.max_rel_se * abs(est[k].value)]
+    return f, weak
+
+
+def _noise_model_member(problem: Problem, cfg: SelectionConfig, c: CandidateScore,
+                        current: FitResult) -> bool:
+    """Whether a candidate enters the noise model of :func:`_candidates`: it helps on the
+    validation data, its parameters lie in their physical ranges and its primary ones
+    are pinned down (with its own τ_int)."""
+    if not c.rel_improvement > 0 or _out_of_range(c, current):
+        return False
+    try:
+        return not _weak(problem, cfg, c, current, None)[1]
+    except (ValueError, np.linalg.LinAlgError):  # pragma: no cover
+        return False
+
+
+def _out_of_range(c: CandidateScore, current: FitResult) -> bool:
+    """Whether a candidate's fitted parameters leave their physical range."""
+    f = c.fit
+    for t in _new_terms(c, current):
+        i = f.terms.index(t)
+        if t.range_violations(t.derived(f.coefs[i], f.thetas[i])):
+            return True
+    return False
+
+
 def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
                 current: FitResult, r_cur: np.ndarray, val_cur: float,
                 fit_kw: dict[str, Any]) -> tuple[list[CandidateScore], float]:
@@ -322,6 +432,9 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
     refitted jointly). Like Mallows' Cp, which takes σ² from the full model, the noise
     model then reflects what the library can explain: residual structure that library
     effects explain does not count against a candidate; structure nothing explains does.
+    Only candidates that could be accepted enter the noise model (in range, primary
+    parameters pinned down: :func:`_noise_model_member`): what only an implausible or
+    unidentifiable candidate explains is structure no acceptable effect explains.
     """
     sig, sp = problem.signals, problem.split
     cands = []
@@ -336,7 +449,7 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
         if c is not None:
             cands.append(c)
     cands.sort(key=lambda c: c.val_rmse)
-    helpful = [c for c in cands if c.rel_improvement > 0]
+    helpful = [c for c in cands if _noise_model_member(problem, cfg, c, current)]
     tau = min([current.tau_int] + [c.fit.tau_int for c in helpful])
     if helpful:
         terms = list(current.terms)
@@ -352,16 +465,22 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
             tau = min(full.tau_int, tau)
         except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
             log.debug("full model failed: %s", e)
-    _set_bic_eff(cands, current, tau)
+    _set_evidence(cands, current, tau, problem.split.validation.size, val_cur)
     return cands, tau
 
 
-def _set_bic_eff(cands: Sequence[CandidateScore], current: FitResult, tau: float) -> None:
-    n_eff = current.n / max(tau, 1.0)
+def _set_evidence(cands: Sequence[CandidateScore], current: FitResult, tau: float,
+                  n_val: int, val_cur: float) -> None:
+    """Effective ΔBIC on the fit samples and held-out evidence 2 ln Λ_val (module doc),
+    both with n / τ_int effective samples."""
+    tau = max(tau, 1.0)
+    n_eff = current.n / tau
     for c in cands:
         dk = c.fit.k - current.k
         c.delta_bic_eff = float(n_eff * np.log(max(c.fit.rss, 1e-300) / current.rss)
                                 + dk * np.log(n_eff))
+        if n_val > 0 and val_cur > 0 and c.val_rmse > 0:
+            c.heldout_evidence = float(2.0 * n_val / tau * np.log(val_cur / c.val_rmse))
 
 
 def _pairs(problem: Problem, cfg: SelectionConfig, current: FitResult,
@@ -386,8 +505,9 @@ def _pairs(problem: Problem, cfg: SelectionConfig, current: FitResult,
             if c is not None:
                 out.append(c)
     out.sort(key=lambda c: c.val_rmse)
-    tau = min([tau] + [c.fit.tau_int for c in out if c.rel_improvement > 0])
-    _set_bic_eff(out, current, tau)
+    tau = min([tau] + [c.fit.tau_int for c in out
+                       if _noise_model_member(problem, cfg, c, current)])
+    _set_evidence(out, current, tau, problem.split.validation.size, val_cur)
     return out, tau
 
 
@@ -400,25 +520,39 @@ def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
             c.status = "not needed (a better-ranked candidate was accepted)"
             continue
         dbic = c.delta_bic_eff if cfg.effective_bic else c.delta_bic
-        if not c.rel_improvement > cfg.min_rel_improvement:
-            c.status = (f"rejected: validation gain {100 * c.rel_improvement:.1f} % <= "
-                        f"{100 * cfg.min_rel_improvement:.1f} %")
+        hev = c.heldout_evidence if cfg.effective_bic else c.heldout_evidence * max(tau, 1.0)
+        if not c.rel_improvement > 0:
+            c.status = (f"rejected: no held-out gain (validation RMSE "
+                        f"{100 * -c.rel_improvement:+.2g} %)")
             continue
+        if not c.rel_improvement > cfg.min_rel_improvement:
+            c.status = (f"rejected: validation gain {100 * c.rel_improvement:.2g} % <= floor "
+                        f"{100 * cfg.min_rel_improvement:.2g} %")
+            continue
+        short = []
+        if not hev > cfg.min_heldout_evidence:
+            short.append(f"held-out evidence 2 ln Λ = {hev:.3g} <= {cfg.min_heldout_evidence:g}")
         if not dbic < cfg.max_delta_bic:
-            c.status = (f"rejected: {'effective ' if cfg.effective_bic else ''}ΔBIC "
-                        f"{dbic:+.1f} >= {cfg.max_delta_bic:g}")
+            short.append(f"{'effective ' if cfg.effective_bic else ''}ΔBIC {dbic:+.3g} >= "
+                         f"{cfg.max_delta_bic:g}")
+        if short:
+            c.small = True
+            c.status = (f"rejected: too small for these data (validation gain "
+                        f"{100 * c.rel_improvement:.2g} %): " + "; ".join(short))
             continue
         # identifiability of the new terms' primary parameters
-        f = with_uncertainty(c.fit, problem.signals, problem.split.fit, cfg.max_rel_se,
-                             cfg.max_abs_corr, tau_int=tau if cfg.effective_bic else None)
-        weak = []
-        for term in _new_terms(c, current):
-            est = f.estimates_of(term.name)
-            weak += [f"{term.name}.{k} (rel. s.e. {est[k].std / abs(est[k].value):.2g})"
-                     for k in term.primary()
-                     if k in est and not est[k].std <= cfg.max_rel_se * abs(est[k].value)]
+        f, weak = _weak(problem, cfg, c, current, tau if cfg.effective_bic else None)
         if weak:
             c.status = "rejected: not pinned down by the data: " + ", ".join(weak)
+            continue
+        implausible = []
+        for term in _new_terms(c, current):
+            est = f.estimates_of(term.name)
+            implausible += [f"{term.name}.{v}" for v in
+                            term.range_violations({k: e.value for k, e in est.items()})]
+        if implausible:
+            c.status = "rejected: outside its physical range: " + ", ".join(implausible)
+            c.implausible = True
             continue
         c.accepted = True
         c.status = "accepted"
@@ -470,7 +604,7 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
         if it < cfg.max_iter:
             cands, tau = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw)
             accepted = _choose(problem, cfg, current, cands, tau)
-            evidence = any(c.rel_improvement > cfg.min_rel_improvement
+            evidence = any(c.heldout_evidence > cfg.min_heldout_evidence
                            or c.delta_bic_eff < cfg.max_delta_bic for c in cands)
             if accepted is None and cfg.pair_candidates >= 2 and evidence:
                 pairs, tau = _pairs(problem, cfg, current, cands, tau, val_cur, fit_kw)
@@ -514,6 +648,17 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
         baseline_final=base_final, final=final, rmse=rmse, diag_before=d_before,
         diag_after=d_after, unexplained=d_after.structured,
         residual_signature=d_after.signature, elapsed_s=time.perf_counter() - t_start)
+    last = iterations[-1].candidates if iterations else []
+    res.implausible = [f"{c.name} (validation gain {100 * c.rel_improvement:.2g} %, held-out "
+                       f"2 ln Λ {c.heldout_evidence:.3g}; {c.status.split(': ', 2)[-1]})"
+                       for c in last if c.implausible]
+    if res.implausible:
+        res.unexplained = True
+        res.residual_signature = (
+            res.residual_signature.rstrip(".") + ". A library candidate outside its "
+            "physical range still explains part of the residual with very strong evidence, "
+            "so an effect the library does not hold is there: " + "; ".join(res.implausible)
+            + ".")
     log.info("%s: test RMSE %.4g -> %.4g, added %s, unexplained %s", problem.name,
              rmse["test"]["before"], rmse["test"]["after"], added, res.unexplained)
     return res

@@ -20,12 +20,14 @@ from typing import Any
 from .diagnose import friction_probes
 from .friction import REQUIRED_COLUMNS, FrictionRecording, PaperLaw, load_friction_csv
 from .friction_effects import FRICTION_LIBRARY
-from .loop import Problem
+from .loop import CalibrationResult, Problem, SelectionConfig, calibrate
+from .ripple_groups import group_ripples
 from .split import time_block_split
 
 log = logging.getLogger(__name__)
 
-__all__ = ["detect_kind", "friction_problem", "build_problem", "MeasuredDataError"]
+__all__ = ["detect_kind", "friction_problem", "build_problem", "calibrate_friction",
+           "MeasuredDataError"]
 
 
 #: Fewest samples a held-out time block of a friction recording must hold.
@@ -85,6 +87,7 @@ def friction_problem(
     test_blocks: Sequence[int] = (5, 9),
     guard_frac: float = 0.05,
     candidates: Sequence[str] | None = None,
+    gear_ratio: float | None = None,
 ) -> Problem:
     """Calibration problem for one friction recording.
 
@@ -99,6 +102,10 @@ def friction_problem(
         Held-out split, see :func:`~swgsim.calibration.split.time_block_split`.
     candidates : sequence of str, optional
         Library keys (default all of :data:`FRICTION_LIBRARY`).
+    gear_ratio : float, optional
+        Reduction ratio N of the strain wave gear (wave-generator turns per output
+        turn), when known: ripple periods over q are then expressed and checked as
+        wave-generator orders k = 2π / (period · N) (:mod:`.friction_ripples`).
 
     Returns
     -------
@@ -107,9 +114,10 @@ def friction_problem(
     Raises
     ------
     ValueError
-        Unknown candidate key, or too few samples for the held-out blocks.
+        Unknown candidate key, too few samples for the held-out blocks, or a gear
+        ratio not above 1.
     """
-    sig = rec.signals(v_s=v_s, v_s_rel=v_s_rel)
+    sig = rec.signals(v_s=v_s, v_s_rel=v_s_rel, gear_ratio=gear_ratio)
     keys = list(candidates) if candidates is not None else list(FRICTION_LIBRARY)
     unknown = [k for k in keys if k not in FRICTION_LIBRARY]
     if unknown:
@@ -129,7 +137,8 @@ def friction_problem(
               "dt_median_s": sig.scales.dt_med, "v_s_rad_s": sig.v_s,
               "v_ref_rad_s": sig.scales.v_ref, "q_span_rad": sig.scales.q_span,
               "t0_s": sig.scales.t0, "ddq_source": rec.ddq_source,
-              "has_load": rec.load_nm is not None, "data_notes": list(rec.notes)})
+              "has_load": rec.load_nm is not None, "data_notes": list(rec.notes),
+              "gear_ratio": sig.gear_ratio})
 
 
 def build_problem(path: str | Path, **kwargs: Any) -> Problem:
@@ -162,3 +171,32 @@ def build_problem(path: str | Path, **kwargs: Any) -> Problem:
         "domain independent, but the strain-side effect library needs the strain "
         "prediction of the simulation chain, which is not wired into the calibration yet. "
         "Only friction CSVs (kind 1) can be calibrated in this version.")
+
+
+def calibrate_friction(problem: Problem, config: SelectionConfig | None = None
+                       ) -> CalibrationResult:
+    """The calibration loop for a friction problem, then ripple grouping.
+
+    :func:`~swgsim.calibration.loop.calibrate`, then
+    :func:`~swgsim.calibration.ripple_groups.group_ripples`: ripple instances that are
+    harmonics of one fundamental become one effect (wave-generator orders when the gear
+    ratio is known), and a ripple without held-out evidence of its own in the final
+    model is removed.
+
+    Parameters
+    ----------
+    problem : Problem
+        From :func:`friction_problem` or :func:`build_problem`.
+    config : SelectionConfig, optional
+
+    Returns
+    -------
+    CalibrationResult
+        ``problem.meta["ripples"]`` records the grouping (summary key ``ripples``).
+
+    Raises
+    ------
+    KeyError
+        ``config.candidates`` names an effect that is not in the library.
+    """
+    return group_ripples(calibrate(problem, config))

@@ -27,10 +27,11 @@ ripple: the torque phase is re-aligned, see :class:`_Realigner`), never a fitted
 parameter, so held-out windows are aligned exactly like fit windows.
 
 Fit and selection: :func:`swgsim.calibration.loop.calibrate` (separable least squares,
-uncertainties from the Jacobian with an autocorrelation correction, held-out RMSE +
-effective BIC acceptance, 'unexplained' verdict). Held-out data are whole windows chosen
-by metadata (per operating point: the last window of the sequence is a test window,
-the middle one a validation window), or whole operating points.
+uncertainties from the Jacobian with an autocorrelation correction, acceptance on
+evidence: held-out likelihood and effective BIC, physical ranges; 'unexplained' verdict).
+Held-out data are whole windows chosen by metadata (per operating point: the last window
+of the sequence is a test window, the middle one a validation window), or whole
+operating points.
 
 Limitations. Only relative gauge angles and relative channel gains are observable, and a
 delay common to all channels is not (module :mod:`.strain_effects`). A kinematic-error
@@ -40,7 +41,13 @@ placement error of single grids inside a bridge (not a rigid rotation of the bri
 leaks the WG pattern into a channel, e.g. order 2 of ψ into the full bridge s0; no
 candidate models it, and ``ke_order2`` can absorb part of it. Holding out operating
 points leaves the fit with fewer speeds: speed-dependent effects (low-pass) need at
-least two speeds among the fit windows.
+least two speeds among the fit windows. A window's input angle is known modulo 180° only
+unless the odd orders of the torque ripple rise above the noise (:mod:`.strain_align`;
+at 1 % noise they do not for the nominal gear). Structure that no library effect
+explains lowers the evidence of every candidate (fewer effective samples): with an
+out-of-library tone at order 3.5 (0.012 mV/V, 2.5 times the noise), a 1.5°
+misplacement of s2 was reported as too small (2 ln Λ 7.3) instead of accepted (2 ln Λ
+117-186 without it).
 
 Typical use::
 
@@ -71,9 +78,17 @@ from ..faults import ChainParams
 from ..influence import torque_influence
 from ..measurement import psi_rate
 from .loop import CalibrationResult, Problem, SelectionConfig, calibrate
-from .report import UNCERTAINTY_METHOD, _fmt, result_section, summarize, to_jsonable
-from .report import _param_rows as _rows
+from .report import UNCERTAINTY_METHOD, fmt_value, result_section, summarize, to_jsonable
+from .report import param_rows as _rows
 from .split import HeldOutSplit, group_split
+from .strain_align import flipped_ke, input_angle_evidence
+from .strain_checks import (
+    caveat,
+    result_extras,
+    simulation_option,
+    too_small_rows,
+    withheld_parameters,
+)
 from .strain_effects import (
     KE_ORDERS,
     SENSORS,
@@ -103,8 +118,12 @@ IDENTIFIABILITY = (
     "a nuisance fitted by alignment, so a delay common to all channels is a shift of that "
     "angle and cannot be identified (time_delay is a simulation option only, not a "
     "candidate); only relative gauge angles are observable (misplacements are relative to "
-    "the alignment-weighted mean); a gain common to all channels is the baseline's "
-    "gauge_gain (channel gains are relative to their mean).")
+    "the alignment-weighted mean; the angle of a channel with < 1 % of the alignment "
+    "weight is not estimated); a gain common to all channels is the baseline's "
+    "gauge_gain (channel gains are relative to their mean). A window's input angle is "
+    "known modulo 180° only unless odd orders of the torque ripple rise above the noise "
+    "(alignment table); the phase of an odd kinematic-error harmonic is then known "
+    "modulo π only.")
 
 
 # ---------------------------------------------------------------------------------------
@@ -176,6 +195,7 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
     max_windows : int, optional
         Keep at most this many windows per operating point (the first in sequence).
     name : str, optional
+        Name for the report; default the data set's ``name`` attribute, else its folder.
 
     Returns
     -------
@@ -229,7 +249,8 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
         sel = np.sort(np.concatenate([np.flatnonzero(op == i)[:int(max_windows)]
                                       for i in range(len(ops))]))
     t = np.asarray(ds["time"].values, float)
-    nm = name or (Path(source).name if source else str(ds.attrs.get("name", "strain")))
+    # the data set's own name (its attribute), else its folder
+    nm = name or str(ds.attrs.get("name") or (Path(source).name if source else "strain"))
     return StrainWindows(y=y[sel], time_s=t, n_in_rpm=n_op[sel], t_out_nm=t_op[sel],
                          n_in_mean_rpm=n_mean[sel], t_out_mean_nm=t_mean[sel],
                          sample=idx[sel], op=op[sel], ops=ops, name=nm, source=source)
@@ -512,9 +533,17 @@ class _Realigner:
             t += a_s * opm.d_t_long[f"ke{k}_sin"] + a_c * opm.d_t_long[f"ke{k}_cos"]
         return t
 
-    def shifts(self, ke: tuple) -> np.ndarray:
-        """Torque time shift of every window [s], shape (n_w,)."""
-        out = np.empty(self.n_w)
+    def objectives(self, ke: tuple) -> list[np.ndarray]:
+        """The alignment objective of every window over its torque shifts.
+
+        Returns
+        -------
+        list of ndarray
+            Per window, shape (n_rev + 1,): Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|² at the torque
+            shifts 0, 1, ... samples over one input revolution [(mV/V)²]: the drop of the
+            residual sum of squares with per-channel positive gains and offsets.
+        """
+        out: list[np.ndarray] = [np.empty(0)] * self.n_w
         n_t = self.n_t
         for i, opm in enumerate(self.opms):
             ws = np.flatnonzero(self.op_of == i)
@@ -530,8 +559,14 @@ class _Realigner:
             den = np.maximum(sum_p2 - sum_p ** 2 / n_t, 1e-30)
             obj = (np.maximum(num, 0.0) ** 2 / den).sum(axis=2)  # (n_j, n_ws)
             for j, w in enumerate(ws):
-                out[w] = StrainModel._best_shift(obj[:, j]) / opm.fs
+                out[w] = obj[:, j]
         return out
+
+    def shifts(self, ke: tuple) -> np.ndarray:
+        """Torque time shift of every window [s], shape (n_w,)."""
+        obj = self.objectives(ke)
+        return np.array([StrainModel._best_shift(obj[w]) / self.opms[self.op_of[w]].fs
+                         for w in range(self.n_w)])
 
     def _times(self, shifts: np.ndarray, w: np.ndarray) -> np.ndarray:
         opm = self.opms[self.op_of[w[0]]]
@@ -822,12 +857,21 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
       flag}}, ...}]``;
     * ``heldout``: text; ``heldout_split``: the split as a dict;
     * ``sensor_effects``: accepted measurement effects as the option of
-      :func:`swgsim.measurement.apply_sensor_effects`;
+      :func:`swgsim.measurement.apply_sensor_effects`, per-channel values that the data
+      cannot pin down set neutral (listed in ``withheld``);
+    * ``simulation``: the option with a ``caveat`` (None, or why to use it with care:
+      effects accepted in a run that ends unexplained) and ``withheld``;
+    * ``too_small``: candidates rejected only for lack of evidence although their
+      held-out gain is positive (:mod:`.strain_checks`); ``implausible``: candidates of
+      the last iteration with very strong evidence but outside their physical range
+      (they make the run ``unexplained``);
     * ``gear_ke_harmonics``: accepted kinematic-error harmonics for :func:`gear_with_ke`;
     * ``chain``: fitted baseline (w0, gauge gain) as chain overrides;
-    * ``alignment``: per window the time shifts, WG angle at its start and its s.e., input
-      angle at its start (nominal chain, and re-aligned with the accepted kinematic-error
-      harmonics);
+    * ``alignment``: per window the time shifts, WG angle at its start (mod 180°) and its
+      s.e., input angle at its start (nominal chain, and re-aligned with the accepted
+      kinematic-error harmonics) modulo the period the data decide (``phi_in0_period_deg``:
+      360°, or 180° where the odd orders of the torque ripple are below the noise,
+      :mod:`.strain_align`), with its s.e. and the evidence against a flip by 180°;
     * ``identifiability``: declared degeneracies and flagged parameters.
     """
     s = summarize(result, source)
@@ -841,16 +885,14 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
     s["baseline"]["params"] = {k: {**v, "stderr": v.get("std")}
                                for k, v in s["baseline"]["params"].items()}
     final = result.final
-    sensor, ke = [], []
-    for term in result.effect_terms():
-        i = final.terms.index(term)
-        if hasattr(term, "sensor_effect"):
-            sensor.append(term.sensor_effect(final.coefs[i], final.thetas[i]))
-        if hasattr(term, "gear_harmonic"):
-            ke.append(term.gear_harmonic(final.coefs[i], final.thetas[i]))
+    withheld = withheld_parameters(result)
+    sensor, ke = simulation_option(result, withheld)
     s.pop("friction_effects", None)
     s["sensor_effects"] = to_jsonable(sensor)
     s["gear_ke_harmonics"] = to_jsonable(ke)
+    s["withheld"] = to_jsonable(withheld)
+    s["too_small"] = to_jsonable(too_small_rows(result))
+    s["implausible"] = list(result.implausible)
     base_term = next(t for t in final.terms if t.kind == "chain")
     base = {e.name: e.value for e in final.estimates_of(base_term.name).values()}
     gain = base.get("gauge_gain", float("nan"))
@@ -860,7 +902,8 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
     s["simulation"] = {
         "sensor_effects": s["sensor_effects"], "gear_ke_harmonics": s["gear_ke_harmonics"],
         "call": ("swgsim.measurement.apply_sensor_effects(signals, time_s, n_in_rpm, "
-                 "summary['sensor_effects'], t_start_s=..., n_lead=...)")}
+                 "summary['sensor_effects'], t_start_s=..., n_lead=...)"),
+        "caveat": caveat(result), "withheld": s["withheld"]}
     se = _alignment_se(result)
     ke_final = tuple((h["order"], float(th[0]), float(th[1])) for h, th in (
         (term.gear_harmonic(final.coefs[i], final.thetas[i]), final.thetas[i])
@@ -871,8 +914,30 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
         phi_fin = np.rad2deg(np.mod(upd["phi_in"][:, sig.n_lead], 2 * np.pi))
     else:
         phi_fin = [a["phi_in0_deg"] for a in p.meta["alignment"]]
-    al = [dict(a, psi0_se_deg=float(x), phi_in0_final_deg=float(f))
-          for a, x, f in zip(p.meta["alignment"], se, phi_fin, strict=True)]
+    phi0 = [a["phi_in0_deg"] for a in p.meta["alignment"]]
+    ia0 = ia_f = None
+    if sig.ripple is not None:
+        sigma2 = max(final.sigma ** 2 * max(final.tau_int, 1.0), 1e-30)
+        ia0 = input_angle_evidence(sig.ripple.objectives(()), sig.fs, sig.n_in_rpm, sigma2)
+        odd = any(k % 2 for k, _, _ in ke_final)
+        ia_f = (input_angle_evidence(
+            sig.ripple.objectives(ke_final), sig.fs, sig.n_in_rpm, sigma2,
+            flipped=sig.ripple.objectives(flipped_ke(ke_final)) if odd else None)
+            if ke_final else ia0)
+        phi0, phi_fin = ia0.reported(phi0), ia_f.reported(phi_fin)
+    al = [dict(a, psi0_se_deg=float(x), phi_in0_deg=float(f0), phi_in0_final_deg=float(f))
+          for a, x, f0, f in zip(p.meta["alignment"], se, phi0, phi_fin, strict=True)]
+    if ia0 is not None:
+        for w, a in enumerate(al):
+            a.update(phi_in0_period_deg=float(ia0.period_deg[w]),
+                     phi_in0_se_deg=float(ia0.se_deg[w]),
+                     phi_in0_flip_evidence=float(ia0.flip_evidence[w]),
+                     phi_in0_final_period_deg=float(ia_f.period_deg[w]),
+                     phi_in0_final_flip_evidence=float(ia_f.flip_evidence[w]))
+        s["input_angle_global_flip_evidence"] = ia_f.global_evidence
+        for h in s["gear_ke_harmonics"]:
+            h["phase_known_modulo_rad"] = (np.pi if h["order"] % 2 and not
+                                           ia_f.global_evidence > 10.0 else 2 * np.pi)
     s["alignment"] = to_jsonable(al)
     s["data"].pop("alignment", None)
     flagged = [f"{e.term}.{e.name}: {e.flag}" for e in final.estimates if e.flag]
@@ -883,6 +948,8 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
     s["rmse_over_noise_floor"] = (result.rmse_after / diag.noise_floor
                                   if diag.noise_floor and diag.noise_floor > 0 else None)
     s["order2"] = to_jsonable(order2_table(result))
+    from .discovery import propose  # terms beyond the library (structured residual only)
+    s["proposed"] = [q.as_dict() for q in propose(result)]
     return to_jsonable(s)
 
 
@@ -939,13 +1006,16 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
     d = s["data"]
     lines = [f"# Strain calibration report: {s['name']}", "",
              f"Measured data: `{s['source']}` (kind: strain, schema v1). {d['n_windows']} "
-             f"windows of {_fmt(d['window_s'] * 1e3, 3)} ms at {_fmt(d['sample_rate_hz'])} Hz; "
+             f"windows of {fmt_value(d['window_s'] * 1e3, 3)} "
+             f"ms at {fmt_value(d['sample_rate_hz'])} Hz; "
              "operating points (n_in [rpm], T_out [N m]) "
              + ", ".join(f"({o[0]:g}, {o[1]:g}) × {n}" for o, n in
                          zip(d["operating_points"], d["windows_per_op"], strict=True)) + ".", ""]
     lines += result_section(s, "nominal chain",
-                            f"; difference-based noise floor {_fmt(s['noise_floor'])} {u} (ratio "
-                            f"{_fmt(s['rmse_over_noise_floor'], 3)})")
+                            f"; difference-based noise floor {fmt_value(s['noise_floor'])} {u} "
+                            f"(ratio "
+                            f"{fmt_value(s['rmse_over_noise_floor'], 3)})")
+    lines += result_extras(s)
     lines += ["## Held-out data", "", s["heldout"], ""]
     lines += ["## Baseline: nominal simulation chain", "", result.problem.baseline[0].description
               + ". Fitted on fit + validation windows:", "",
@@ -955,32 +1025,47 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
               "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
     lines += _rows(s["baseline"]["params_in_final_model"]) + [""]
     lines += ["WG angle of each window (alignment, nominal chain, per window on its own data; "
-              "s.e. from the curvature with the final residual σ):", "",
+              "s.e. from the curvature with the final residual σ). The input angle φ_in is "
+              "known modulo 360° only where the odd orders of the torque ripple rise above "
+              "the noise (evidence 2 ln Λ against the peak 180° away > 10); elsewhere it is "
+              "given modulo 180° (ambiguous: the order-2 ripple repeats every half "
+              "revolution).", "",
               "| sample | role | operating point | ψ(0) mod 180° [deg] | s.e. [deg] | "
-              "φ_in(0) mod 360° [deg] (final model) |", "|---|---|---|---|---|---|"]
+              "φ_in(0) [deg] (final model) | known modulo | 2 ln Λ (flip) |",
+              "|---|---|---|---|---|---|---|---|"]
     for a in s["alignment"]:
         o = d["operating_points"][a["op"]]
         lines.append(f"| {a['sample']} | {a['role']} | {o[0]:g} rpm, {o[1]:g} N m | "
-                     f"{_fmt(a['psi0_deg'], 4)} | {_fmt(a['psi0_se_deg'], 2)} | "
-                     f"{_fmt(a['phi_in0_final_deg'], 4)} |")
+                     f"{fmt_value(a['psi0_deg'], 4)} | {fmt_value(a['psi0_se_deg'], 2)} | "
+                     f"{fmt_value(a['phi_in0_final_deg'], 4)} | "
+                     f"{fmt_value(a.get('phi_in0_final_period_deg'), 3)}° | "
+                     f"{fmt_value(a.get('phi_in0_final_flip_evidence'), 3)} |")
     lines += ["", "## Selection", "",
               "Each iteration adds every library candidate to the current model and refits on "
               "the fit windows; candidates are ranked by validation RMSE. Accepted: the first "
-              f"with validation gain > {100 * s['selection']['min_rel_improvement']:.0f} %, "
-              f"effective ΔBIC < {s['selection']['max_delta_bic']:g} and its primary "
-              f"parameter pinned down (rel. s.e. < {s['selection']['max_rel_se']:g}).", ""]
+              "with very strong evidence on the 2 ln B scale of Kass & Raftery (1995): "
+              "held-out evidence 2 ln Λ (validation log-likelihood ratio, n/τ_int effective "
+              f"samples) > {s['selection']['min_heldout_evidence']:g} and effective ΔBIC on "
+              f"the fit windows < {s['selection']['max_delta_bic']:g}"
+              + (f", validation gain > {100 * s['selection']['min_rel_improvement']:.2g} %"
+                 if s['selection']['min_rel_improvement'] > 0 else "")
+              + f", its primary parameter pinned down (rel. s.e. < "
+              f"{s['selection']['max_rel_se']:g}) and every parameter inside its physical "
+              "range (the effect's declared source).", ""]
     for it in s["iterations"]:
         lines += [f"### Iteration {it['index']}: model {' + '.join(it['model'])}, validation "
-                  f"RMSE {_fmt(it['val_rmse'])} {u}", ""]
+                  f"RMSE {fmt_value(it['val_rmse'])} {u}", ""]
         if not it["candidates"]:
             lines += ["(no candidates tried: iteration limit)", ""]
             continue
-        lines += ["| rank | candidate | val. RMSE | gain | ΔBIC | eff. ΔBIC | status |",
-                  "|---|---|---|---|---|---|---|"]
+        lines += ["| rank | candidate | val. RMSE | gain | 2 ln Λ (held out) | ΔBIC | eff. ΔBIC "
+                  "| status |", "|---|---|---|---|---|---|---|---|"]
         for r, c in enumerate(it["candidates"], 1):
-            lines.append(f"| {r} | {c['name']} | {_fmt(c['val_rmse'])} | "
-                         f"{_fmt(100 * c['rel_improvement'], 3)} % | {_fmt(c['delta_bic'], 5)} | "
-                         f"{_fmt(c['delta_bic_eff'], 4)} | {c['status']} |")
+            lines.append(f"| {r} | {c['name']} | {fmt_value(c['val_rmse'])} | "
+                         f"{fmt_value(100 * c['rel_improvement'], 3)} % | "
+                         f"{fmt_value(c.get('heldout_evidence'), 4)} "
+                         f"| {fmt_value(c['delta_bic'], 5)} | "
+                         f"{fmt_value(c['delta_bic_eff'], 4)} | {c['status']} |")
         lines.append("")
     lines += ["## Accepted effects", ""]
     if not s["effects_added"]:
@@ -992,16 +1077,16 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
         lines += _rows(e["params"]) + [""]
     lines += ["## Identifiability", "", s["identifiability"]["declared"], "",
               f"Condition number of the scaled JᵀJ of the final model: "
-              f"{_fmt(s['identifiability']['condition_number'], 3)}. Flagged parameters: "
+              f"{fmt_value(s['identifiability']['condition_number'], 3)}. Flagged parameters: "
               + ("; ".join(s["identifiability"]["flagged"]) or "none") + ".", ""]
     lines += ["## Residual diagnosis", "",
               "Probe scores: out-of-sample fraction of the residual mean square explained by a "
               "nonparametric model along one variable (structured above "
-              f"{_fmt(s['diagnosis_after']['threshold'])}).", "",
+              f"{fmt_value(s['diagnosis_after']['threshold'])}).", "",
               "| probe | baseline residual | final residual |", "|---|---|---|"]
     pb, pa = s["diagnosis_before"]["probes"], s["diagnosis_after"]["probes"]
     for k in pb:
-        lines.append(f"| {k} | {_fmt(pb[k]['score'], 3)} | {_fmt(pa[k]['score'], 3)} |")
+        lines.append(f"| {k} | {fmt_value(pb[k]['score'], 3)} | {fmt_value(pa[k]['score'], 3)} |")
     lines += ["", f"Baseline residual: {s['residual_signature_before']}", "",
               f"Final residual: {s['residual_signature']}", "",
               "Order-2 component of ψ (amplitude [mV/V] / phase [deg]) per operating point and "
@@ -1015,6 +1100,8 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
         lines.append(f"| {r['n_in_rpm']:g} | {r['t_out_nm']:g} | {r['channel']} | "
                      f"{ap(r['measured'])} | {ap(r['baseline'])} | {ap(r['final'])} |")
     lines.append("")
+    from .discovery import proposals_section  # apart from the accepted effects
+    lines += proposals_section(s.get("proposed", []))
     captions = {
         "order_spectrum": "Residual amplitude spectrum per channel against the order of the "
                           "input rotation (baseline grey, final colour), mean over windows.",
@@ -1030,15 +1117,21 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
         lines += ["## Figures", ""]
         for k, path in figures.items():
             lines += [f"![{k}]({path})", "", f"*{captions.get(k, k)}*", ""]
-    lines += ["## As a simulation option", "",
-              "Measurement effects for `swgsim.measurement.apply_sensor_effects` "
+    lines += ["## As a simulation option", ""]
+    if s["simulation"].get("caveat"):
+        lines += [f"**Caveat.** {s['simulation']['caveat']}", ""]
+    if s["withheld"]:
+        lines += ["Set neutral here (not pinned down by the data): " + "; ".join(
+            f"{w['effect']}.{w['parameter']} ({w['reason']})" for w in s["withheld"]) + ".", ""]
+    lines += ["Measurement effects for `swgsim.measurement.apply_sensor_effects` "
               "(`sensor_effects` option):", "", "```json",
               json.dumps(s["sensor_effects"], indent=1), "```", "",
               "Kinematic-error harmonics for `swgsim.dynamics.gear_with_ke`: "
               + json.dumps(s["gear_ke_harmonics"]) + "; chain: w0 = "
-              f"{_fmt(s['chain']['w0_m'])} m, gauge gain {_fmt(s['chain']['gauge_gain'])}.", ""]
+              f"{fmt_value(s['chain']['w0_m'])} "
+              f"m, gauge gain {fmt_value(s['chain']['gauge_gain'])}.", ""]
     lines += ["## Uncertainty", "", UNCERTAINTY_METHOD, "",
-              f"Run time {_fmt(s['elapsed_s'], 3)} s.", ""]
+              f"Run time {fmt_value(s['elapsed_s'], 3)} s.", ""]
     return "\n".join(lines)
 
 

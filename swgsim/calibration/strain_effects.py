@@ -48,7 +48,12 @@ shift of that angle and cannot be seen (``time_delay`` is a simulation option on
 (ii) only *relative* gauge angles are observable: misplacements are reported relative
 to the alignment-weighted mean (weights: sensitivity of the alignment to each
 channel); (iii) a gain common to all channels is the baseline's gauge gain, so gains
-are reported relative to their mean.
+are reported relative to their mean; (iv) the angle of a channel with less than 1 % of
+the alignment weight (the full bridge s0 of the default layout) is not estimated
+(:attr:`GaugeMisplacement.min_weight_share`).
+
+Every effect declares the physical range of its parameters (``ranges``, bounds and
+sources in :mod:`.strain_ranges`); a fit outside is not accepted as the effect.
 """
 
 from __future__ import annotations
@@ -66,6 +71,15 @@ from scipy import signal as sps
 from ..measurement import fractional_delay, lowpass, lowpass_coefficients
 from .core import Param, Term
 from .diagnose import Probe
+from .strain_ranges import (
+    BRIDGE_K_RANGE,
+    DRIFT_RANGE_MVV_S,
+    GAIN_RANGE,
+    KE_RANGE_RAD,
+    LOWPASS_RANGE_HZ,
+    MISPLACEMENT_RANGE_DEG,
+    OFFSET_RANGE_MVV,
+)
 
 log = logging.getLogger(__name__)
 
@@ -87,6 +101,7 @@ __all__ = [
 ]
 
 SENSORS = ("s0", "s1", "s2", "s3", "s4")
+
 
 
 # ---------------------------------------------------------------------------------------
@@ -227,27 +242,39 @@ class StrainSignals:
         return dataclasses.replace(self, **changes)
 
 
-def constraint_basis(weights: np.ndarray) -> tuple[np.ndarray, int]:
-    """Basis of the per-channel values v with Σ w_c v_c = 0.
+def constraint_basis(weights: np.ndarray, estimable: Any = None) -> tuple[np.ndarray, int]:
+    """Basis of the per-channel values v with Σ w_c v_c = 0 over the estimable channels
+    (the others are held at 0).
 
     Parameters
     ----------
     weights : ndarray, shape (5,)
         Positive weights.
+    estimable : array of bool, shape (5,), optional
+        Channels whose value is estimated (default all; at least two).
 
     Returns
     -------
-    Q : ndarray, shape (5, 4)
-        v = Q r for the four free values r of the channels other than ``ref``.
+    Q : ndarray, shape (5, n_estimable − 1)
+        v = Q r for the free values r of the estimable channels other than ``ref``
+        (rows of the other channels are zero).
     ref : int
-        The channel with the largest weight, whose value follows from the others.
+        The estimable channel with the largest weight, whose value follows from the others.
+
+    Raises
+    ------
+    ValueError
+        Weights not 5 positive values, or fewer than two estimable channels.
     """
     w = np.asarray(weights, float)
     if w.shape != (5,) or np.any(~(w > 0)):
         raise ValueError(f"constraint weights must be 5 positive values, got {weights}")
-    ref = int(np.argmax(w))
-    free = [c for c in range(5) if c != ref]
-    q = np.zeros((5, 4))
+    est = np.ones(5, bool) if estimable is None else np.asarray(estimable, bool)
+    if est.shape != (5,) or est.sum() < 2:
+        raise ValueError(f"estimable must flag at least 2 of the 5 channels, got {estimable}")
+    ref = int(np.argmax(np.where(est, w, -np.inf)))
+    free = [c for c in range(5) if c != ref and est[c]]
+    q = np.zeros((5, len(free)))
     for j, c in enumerate(free):
         q[c, j] = 1.0
         q[ref, j] = -w[c] / w[ref]
@@ -311,7 +338,10 @@ class ChannelOffset(Term):
     linear = tuple(Param(f"o_{s}", "mV/V", f"offset of {s}") for s in SENSORS)
     description = "zero offset per channel (bridge imbalance, amplifier offset)"
     signature = "a constant per channel, the same in every window and operating point"
-    source = "PHYSICS.md sec. 5 (offsets); paper eq. (10) a_0"
+    source = "docs/PHYSICS.md sec. 5 (offsets); paper eq. (10) a_0"
+    ranges = {f"o_{s}": (-OFFSET_RANGE_MVV, OFFSET_RANGE_MVV,
+                         "input range of the bench converter, ADS131M04 at gain 128")
+              for s in SENSORS}
 
     def columns(self, sig: StrainSignals, theta: np.ndarray) -> np.ndarray:
         return sig.onehot
@@ -340,7 +370,10 @@ class ThermalDrift(Term):
     description = ("thermal drift of the zero per channel, o_c(t) = r_c t_seq with t_seq the "
                    "time since the start of the sequence of windows")
     signature = "an offset per channel that grows along the sequence of windows"
-    source = "PHYSICS.md sec. 5 (gauge temperature drift); Hoffmann 1989 (apparent strain)"
+    source = "docs/PHYSICS.md sec. 5 (gauge temperature drift); Hoffmann 1989 (apparent strain)"
+    ranges = {f"r_{s}": (-DRIFT_RANGE_MVV_S, DRIFT_RANGE_MVV_S,
+                         "thermal output ±1.8 µε/K (Kyowa SELCOM, Vishay TN-504) at <= 1 K/s")
+              for s in SENSORS}
 
     def columns(self, sig, theta):
         return sig.onehot * sig.t_seq_s[:, None]
@@ -361,17 +394,33 @@ class ThermalDrift(Term):
 
 
 class _Relative(Term):
-    """Per-channel values v_c with Σ w_c v_c = 0: four raw parameters."""
+    """Per-channel values v_c with Σ w_c v_c = 0 over the estimable channels: one raw
+    parameter per estimable channel but one.
+
+    A channel whose weight is below ``min_weight_share`` of the total carries almost no
+    information on its value relative to the others: it is not estimated (held at 0,
+    left out of :meth:`derived`, neutral in :meth:`sensor_effect`) and listed by
+    :meth:`withheld`.
+    """
 
     weight_key = ""
     raw_prefix = ""
     raw_unit = "-"
+    derived_fmt = "{}"
+    min_weight_share = 0.0
 
-    def __init__(self, name: str | None = None, weights: Any = None) -> None:
+    def __init__(self, name: str | None = None, weights: Any = None,
+                 estimable: Any = None) -> None:
         super().__init__(name)
         self.weights = np.ones(5) if weights is None else np.asarray(weights, float)
-        self.q, self.ref = constraint_basis(self.weights)
-        self.free = [c for c in range(5) if c != self.ref]
+        if estimable is None:
+            share = self.weights / self.weights.sum()
+            estimable = share >= self.min_weight_share
+            if estimable.sum() < 2:
+                estimable = np.ones(5, bool)
+        self.estimable = np.asarray(estimable, bool)
+        self.q, self.ref = constraint_basis(self.weights, self.estimable)
+        self.free = [c for c in range(5) if c != self.ref and self.estimable[c]]
         self.linear = tuple(Param(f"{self.raw_prefix}_{SENSORS[c]}", self.raw_unit,
                                   f"relative value of {SENSORS[c]}") for c in self.free)
 
@@ -380,11 +429,25 @@ class _Relative(Term):
         return cls(name, sig.weights.get(cls.weight_key))
 
     def values(self, coef: np.ndarray) -> np.ndarray:
-        """Per-channel values v = Q r, shape (5,)."""
+        """Per-channel values v = Q r, shape (5,) (0 on channels not estimated)."""
         return self.q @ np.asarray(coef, float)
 
+    def channel_param(self, c: int) -> str:
+        """Name of the derived parameter of channel ``c``."""
+        return self.derived_fmt.format(SENSORS[c])
+
+    def withheld(self, coef: np.ndarray, theta: np.ndarray, sig: Any = None
+                 ) -> dict[int, tuple[str, str]]:
+        """Channels not estimated: ``{channel: (parameter, reason)}``."""
+        share = self.weights / self.weights.sum()
+        return {c: (self.channel_param(c),
+                    f"not estimated: {SENSORS[c]} carries {100 * share[c]:.2g} % of the "
+                    f"{self.weight_key} weight (< {100 * self.min_weight_share:g} %)")
+                for c in range(5) if not self.estimable[c]}
+
     def options(self) -> dict[str, Any]:
-        return {"weights": [float(w) for w in self.weights]}
+        return {"weights": [float(w) for w in self.weights],
+                "estimable": [bool(e) for e in self.estimable]}
 
 
 class GainMismatch(_Relative):
@@ -399,26 +462,35 @@ class GainMismatch(_Relative):
     signature = ("one channel's WG and torque pattern scaled, the same at every speed and "
                  "load; s1−s3 or s2−s4 no longer cancel")
     source = ("Godler et al. (per-gauge gain tuning); Schuller et al. 2024 (sensing ripple); "
-              "PHYSICS.md sec. 4")
+              "docs/PHYSICS.md sec. 4")
+    ranges = {f"g_{s}": (-GAIN_RANGE, GAIN_RANGE,
+                         "gauge factor ±1 %, amplifier gain, lead wires, axial position")
+              for s in SENSORS}
 
     def columns(self, sig, theta):
         return (sig.onehot * sig.prediction()[:, None]) @ self.q
 
+    derived_fmt = "g_{}"
+
     def derived(self, coef, theta):
         v = self.values(coef)
-        out = {f"g_{s}": float(x) for s, x in zip(SENSORS, v, strict=True)}
-        out["gain_rms"] = _rms(v)
+        out = {f"g_{s}": float(x) for s, x, e in zip(SENSORS, v, self.estimable, strict=True)
+               if e}
+        out["gain_rms"] = _rms(v[self.estimable])
         return out
 
     def derived_units(self):
-        return {**{f"g_{s}": "-" for s in SENSORS}, "gain_rms": "-"}
+        return {**{f"g_{s}": "-" for s, e in zip(SENSORS, self.estimable, strict=True) if e},
+                "gain_rms": "-"}
 
     def primary(self):
         return ("gain_rms",)
 
-    def sensor_effect(self, coef, theta):
-        return {"name": "gain_mismatch",
-                "params": {"gain": [float(1.0 + x) for x in self.values(coef)]}}
+    def sensor_effect(self, coef, theta, neutral=()):
+        """The ``sensor_effects`` entry; channels in ``neutral`` get gain 1."""
+        v = self.values(coef)
+        v[list(neutral)] = 0.0
+        return {"name": "gain_mismatch", "params": {"gain": [float(1.0 + x) for x in v]}}
 
 
 class GaugeMisplacement(_Relative):
@@ -436,26 +508,45 @@ class GaugeMisplacement(_Relative):
     signature = ("the order-2 (ψ) pattern of one channel shifted in phase: a residual in "
                  "quadrature with that channel's signal, same angle at every speed")
     source = ("Taghirad & Bélanger; Schuller et al. 2024 (gauge positioning is the dominant "
-              "ripple source); PHYSICS.md sec. 4")
+              "ripple source); docs/PHYSICS.md sec. 4")
+    min_weight_share = 0.01
+    """A channel carrying less than 1 % of the WG-angle information (its ∂s/∂ψ
+    orthogonal to its own signal, the alignment weight) is not estimated: its angle is
+    measured by a signal that barely depends on ψ, so any small misfit of that channel
+    (a torque-phase error, a model detail) reads as degrees. With the default layout this
+    is the full bridge s0 (0.16 % of the weight; s2/s4 5.6 %, s1/s3 44 % each), whose
+    grids 90° apart cancel the order-2 pattern: on planted data with s2 misplaced by 1.5°
+    and no noise, s0's free angle came out +0.36° against a true −0.08° (20 standard
+    errors; 1.3-1.7° at about 5 s.e. with more windows)."""
+    ranges = {f"delta_{s}_deg": (-MISPLACEMENT_RANGE_DEG, MISPLACEMENT_RANGE_DEG,
+                                 "placement tolerance of bonded gauges, Vishay TN-511")
+              for s in SENSORS}
 
     def columns(self, sig, theta):
         return (sig.onehot * (-sig.col("dpsi"))[:, None]) @ self.q
 
+    derived_fmt = "delta_{}_deg"
+
     def derived(self, coef, theta):
         v = np.rad2deg(self.values(coef))
-        out = {f"delta_{s}_deg": float(x) for s, x in zip(SENSORS, v, strict=True)}
-        out["misplacement_rms_deg"] = _rms(v)
+        out = {f"delta_{s}_deg": float(x)
+               for s, x, e in zip(SENSORS, v, self.estimable, strict=True) if e}
+        out["misplacement_rms_deg"] = _rms(v[self.estimable])
         return out
 
     def derived_units(self):
-        return {**{f"delta_{s}_deg": "deg" for s in SENSORS}, "misplacement_rms_deg": "deg"}
+        return {**{f"delta_{s}_deg": "deg"
+                   for s, e in zip(SENSORS, self.estimable, strict=True) if e},
+                "misplacement_rms_deg": "deg"}
 
     def primary(self):
         return ("misplacement_rms_deg",)
 
-    def sensor_effect(self, coef, theta):
-        return {"name": "gauge_misplacement",
-                "params": {"delta_deg": [float(x) for x in np.rad2deg(self.values(coef))]}}
+    def sensor_effect(self, coef, theta, neutral=()):
+        """The ``sensor_effects`` entry; channels in ``neutral`` get 0°."""
+        v = np.rad2deg(self.values(coef))
+        v[list(neutral)] = 0.0
+        return {"name": "gauge_misplacement", "params": {"delta_deg": [float(x) for x in v]}}
 
 
 class BridgeNonlinearity(Term):
@@ -470,7 +561,9 @@ class BridgeNonlinearity(Term):
                    "baseline scales outside, exact while those stay near 1")
     signature = ("∝ s² to first order: order 4 of ψ and a constant on s1/s3, a load-squared "
                  "offset and ripple on s0/s2/s4")
-    source = "Hoffmann 1989 (Wheatstone bridge nonlinearity); PHYSICS.md sec. 4"
+    source = "Hoffmann 1989 (Wheatstone bridge nonlinearity); docs/PHYSICS.md sec. 4"
+    ranges = {"k_per_mvv": (-BRIDGE_K_RANGE, BRIDGE_K_RANGE,
+                            "exact quarter bridge 2e-3 per mV/V, Hoffmann 1989")}
 
     @staticmethod
     def _k_max(sig: StrainSignals) -> float:
@@ -516,7 +609,9 @@ class AmplifierLowpass(Term):
     signature = ("amplitudes fall and phases lag with frequency = order × speed: the ripple "
                  "amplitude ratio between speeds differs from the model, higher orders lag "
                  "more")
-    source = "PHYSICS.md sec. 5 (amplifier low-pass, phase error growing with speed)"
+    source = "docs/PHYSICS.md sec. 5 (amplifier low-pass, phase error growing with speed)"
+    ranges = {"f_c_hz": (*LOWPASS_RANGE_HZ,
+                         "sinc3 corner 0.262 f_DATA at 250 SPS-64 kSPS, TI ADS131M04")}
 
     def bounds(self, sig):
         return [tuple(sig.f_c_bounds)]
@@ -563,7 +658,9 @@ class KinematicErrorHarmonic(Term):
                    "(ΔT(t) h(ψ)); each window's input angle is re-aligned with it")
     signature = ("order k of the input (and sidebands k ± 2 of ψ) in the torque-sensitive "
                  "channels s0, s2, s4, in proportion to their torque sensitivity")
-    source = "Tuttle & Seering 1996 (kinematic error at WG frequencies); PHYSICS.md sec. 1, 5"
+    source = "Tuttle & Seering 1996 (kinematic error at WG frequencies); docs/PHYSICS.md sec. 1, 5"
+    ranges = {"amplitude_rad": (0.0, KE_RANGE_RAD,
+                                "1 arcmin positioning accuracy, Harmonic Drive CSF/CSG-20")}
 
     def applicable(self, sig):
         return sig.ripple is not None and self.order in sig.ke_orders
@@ -573,13 +670,17 @@ class KinematicErrorHarmonic(Term):
         return [(-b, b), (-b, b)]
 
     def starts(self, sig, residual, idx):
-        """Linear estimate from the residual at the current alignment, and half of it."""
+        """Linear estimate from the residual at the current alignment, and half of it; for
+        an odd order also its negative: with every window's input angle re-aligned, the
+        harmonic of sign −c with all windows 180° on predicts nearly the same signals
+        (only the nominal odd orders tell them apart, :mod:`.strain_align`), so both
+        local optima are tried."""
         u = sig.ripple.unit(self.order)  # (2, n_w, 5, m)
         x = np.column_stack([np.ascontiguousarray(sig.window_part(u[j])).reshape(-1)[idx]
                              for j in range(2)])
         c, *_ = np.linalg.lstsq(x, np.asarray(residual, float)[idx], rcond=None)
         c = np.clip(c, -0.9 * sig.ke_bound_rad, 0.9 * sig.ke_bound_rad)
-        return [c, 0.5 * c]
+        return [c, 0.5 * c] + ([-c] if self.order % 2 else [])
 
     def transform(self, sig: StrainSignals, theta: np.ndarray) -> StrainSignals:
         ke = sig.ke + ((self.order, float(theta[0]), float(theta[1])),)
@@ -615,7 +716,7 @@ def _ke_class(order: int) -> type[KinematicErrorHarmonic]:
 
 KE_ORDERS = (1, 2, 3, 4)
 """Orders of the kinematic-error candidates (1, 2 and 4 are the classical ones,
-PHYSICS.md sec. 1; 3 for completeness)."""
+docs/PHYSICS.md sec. 1; 3 for completeness)."""
 
 
 def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[Term]]:

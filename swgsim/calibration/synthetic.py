@@ -45,11 +45,17 @@ PLANTED: dict[str, dict[str, Any]] = {
     "gravity_residual": {"params": {"c2": 0.12, "c3": -0.08},
                          "check": {"rms": float(np.sqrt(0.12 ** 2 / 5 + 0.08 ** 2 / 7))}},
     "inertia": {"params": {"j_a": 0.1}, "check": {"j_a": 0.1}},
-    "thermal_drift": {"params": {"d": 0.2, "t_th": 12.0}, "check": {"d": 0.2, "t_th": 12.0}},
-    "sensor_drift": {"params": {"c": 0.2, "t_d": 15.0}, "check": {"c": 0.2, "t_d": 15.0}},
+    # drifts with physical time constants (minutes, :mod:`.friction_ranges`) need a
+    # recording of a few time constants to be told from a straight line: 240 s at 40 ms
+    "thermal_drift": {"params": {"d": 0.2, "t_th": 120.0}, "check": {"d": 0.2, "t_th": 120.0},
+                      "recording": {"duration_s": 240.0, "dt_s": 0.04}},
+    "sensor_drift": {"params": {"c": 0.2, "t_d": 90.0}, "check": {"c": 0.2, "t_d": 90.0},
+                     "recording": {"duration_s": 240.0, "dt_s": 0.04}},
     "velocity_lag": {"params": {"t_lag": 0.04}, "check": {"t_lag": 0.04}},
 }
-"""Planted value of every library effect and the derived parameters a test checks."""
+"""Planted value of every library effect (inside its physical range, :mod:`.friction_ranges`),
+the derived parameters a test checks and, where the default recording is too short to
+identify the effect, the ``recording`` options (``duration_s``, ``dt_s``) to plant it in."""
 
 
 @dataclass(frozen=True)
