@@ -26,6 +26,7 @@ from swgcli import compose_app, dataset_preset
 from swgcli.app import one_line
 from swgsim import data as dsio
 from swgsim import generate as gen
+from swgsim import outdir
 
 BIN = Path(sys.executable).parent
 
@@ -354,7 +355,7 @@ def test_G_stopping_the_generator_stops_its_workers(tmp_path, sig, code):
 
 
 def test_G_full_disk_is_refused_before_writing_naming_the_folder(tmp_path, monkeypatch):
-    monkeypatch.setattr(gen.shutil, "disk_usage",
+    monkeypatch.setattr(outdir.shutil, "disk_usage",
                         lambda p: shutil._ntuple_diskusage(10**9, 10**9 - 1000, 1000))
     out = tmp_path / "ds"
     msg = message(lambda: gen.generate(small_cfg(), out, n_jobs=1, progress=False))

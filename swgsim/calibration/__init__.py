@@ -10,16 +10,21 @@ numpy and scipy only. Typical use::
     summary = summarize(result)          # JSON-ready dict
     markdown = render_report(result, summary, figures={})
 
-Modules: :mod:`.core` (terms, separable least squares, uncertainties), :mod:`.friction`
-(recordings, paper-law baseline), :mod:`.friction_effects` (the effect library),
+Modules: :mod:`.terms` (Param, Term: the term interface), :mod:`.core` (separable least
+squares, results, uncertainties), :mod:`.friction` (recordings, paper-law baseline),
+:mod:`.friction_effects` (the effect library),
 :mod:`.split` (held-out splits), :mod:`.diagnose` (residual probes, noise floor),
 :mod:`.loop` (selection loop), :mod:`.problems` (kind detection, problem builders),
 :mod:`.report` (summary and markdown), :mod:`.chain` (accepted effects as a simulation
 option), :mod:`.synthetic` (planted-effect data); :mod:`.friction_ranges`,
 :mod:`.strain_ranges` (physical ranges with sources), :mod:`.friction_ripples`,
-:mod:`.ripple_groups` (ripples in gear orders, harmonics grouped), :mod:`.strain`,
-:mod:`.strain_effects`, :mod:`.strain_align`, :mod:`.strain_checks`,
-:mod:`.strain_power` (strain side), :mod:`.discovery` (terms beyond the library).
+:mod:`.ripple_groups` (ripples in gear orders, harmonics grouped); strain side:
+:mod:`.strain` (problem builder, runner), :mod:`.strain_data` (measured windows, held-out
+split), :mod:`.strain_model` (chain prediction per operating point, alignment),
+:mod:`.strain_signals` (signals, constraint basis), :mod:`.strain_effects` (effect
+library), :mod:`.strain_probes` (residual probes), :mod:`.strain_report` (summary,
+report, figures), :mod:`.strain_align`, :mod:`.strain_checks`, :mod:`.strain_power`;
+:mod:`.discovery` (terms beyond the library).
 """
 
 from .chain import FrictionEffects, friction_effects_from_config, parse_effects

@@ -33,7 +33,8 @@ and a sparse regression that keeps few of them. One mechanism, :func:`discover`:
 :func:`strain_basis` builds the basis of a strain calibration. Tones whose phase the
 model cannot know (a free order, mains hum) get one phase per window and harmonic,
 estimated on that window's own residual like the WG-angle alignment (:mod:`.strain`),
-so held-out windows are treated exactly like fit windows. No friction adapter yet.
+so held-out windows are treated exactly like fit windows. The friction adapter is
+:mod:`.discovery_friction`.
 
 Limits. Discovery proposes; nothing enters the model or the simulation options. The
 final model's nonlinear parameters were fitted on fit + validation data, the local
@@ -50,7 +51,7 @@ import logging
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from itertools import combinations as _combinations
+from itertools import combinations
 from typing import Any
 
 import numpy as np
@@ -268,7 +269,7 @@ def discover(target: np.ndarray, groups: Sequence[Group], fit: np.ndarray,
         variants = sorted({v for _, v in split})
         cand = []
         for m in range(1, len(variants) + 1):
-            for combo in _combinations(variants, m):
+            for combo in combinations(variants, m):
                 idx = np.array([start[i] + j for j, (b, v) in enumerate(split)
                                 if b in bases and v in combo], int)
                 others = joint(cols, [k for k in chosen if k != i])
@@ -657,15 +658,19 @@ def propose(result: CalibrationResult, max_terms: int = 5, min_gain: float = MIN
     ``max_terms``, ``min_gain``: see :func:`discover`; ``only_if_structured``: propose
     nothing when the loop's final residual is not structured (``result.unexplained``).
     Returns the proposals (empty when nothing beyond the library pays on held-out data);
-    raises ValueError for a problem kind without an adapter (only ``"strain"``).
+    raises ValueError for a problem kind without an adapter (``"strain"``,
+    ``"friction"``: :mod:`.discovery_friction`).
     """
     if only_if_structured and not result.unexplained:
         return []
-    adapters = {"strain": strain_basis}
+    from .discovery_friction import friction_basis, propose_friction  # own module
+    adapters = {"strain": strain_basis, "friction": friction_basis}
     kind = result.problem.kind
     if kind not in adapters:
         raise ValueError(f"problem.kind {kind!r} has no discovery adapter; allowed: "
                          f"{sorted(adapters)}")
+    if kind == "friction":  # refits without proposals whose joint gain fell to min_gain
+        return propose_friction(result, max_terms=max_terms, min_gain=min_gain)
     target, groups, fit, val, proj = adapters[kind](result)
     return discover(target, groups, fit, val, proj, max_terms=max_terms, min_gain=min_gain)
 
@@ -679,8 +684,9 @@ def proposals_section(proposed: Sequence[Mapping[str, Any]]) -> list[str]:
         :meth:`Proposal.as_dict` entries (``summary["proposed"]``).
     """
     lines = ["## Proposed terms (not in the library)", "",
-             "Not part of the fitted model. Candidate terms from a generic basis (crosstalk "
-             "between channels, tones at a free order or a fixed frequency with harmonics, "
+             "Not part of the fitted model. Candidate terms from a generic basis (strain: "
+             "crosstalk between channels; friction: ripples over the joint angle and velocity "
+             "laws; both: tones at a free order or a fixed frequency with harmonics, "
              "products with load and speed, slow trends), selected by a lasso on the fit "
              "data beside the final model and kept when they lower the validation RMSE "
              f"(held-out gain) by more than {100 * MIN_GAIN:g} % "
@@ -688,6 +694,6 @@ def proposals_section(proposed: Sequence[Mapping[str, Any]]) -> list[str]:
     if not proposed:
         return lines + ["None.", ""]
     lines += ["| proposed term | held-out gain |", "|---|---|"]
-    lines += [f"| {p['expression']} | {100 * float(p['heldout_gain']):.1f} % |"
+    lines += [f"| {p['expression'].replace('|', '/')} | {100 * float(p['heldout_gain']):.1f} % |"
               for p in proposed]
     return lines + [""]

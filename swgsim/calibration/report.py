@@ -171,7 +171,9 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         candidates rejected for a parameter outside its range would have absorbed, and
         ``ripples`` the harmonic grouping and held-out support of the ripples
         (:func:`~swgsim.calibration.ripple_groups.group_ripples`; None when it did not
-        run).
+        run); ``proposed`` the terms beyond the library that discovery proposes for a
+        structured final residual (:meth:`~swgsim.calibration.discovery.Proposal.as_dict`
+        entries, :mod:`swgsim.calibration.discovery_friction`; empty otherwise).
     """
     p = result.problem
     final = result.final
@@ -211,6 +213,8 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
                "call": "swgsim.calibration.FrictionEffects(summary['friction_effects'], "
                        "v_s=summary['simulation']['v_s_rad_s'], baseline=summary['simulation']"
                        "['baseline'], t0=summary['simulation']['t0_s'])"}
+    from .discovery import propose  # terms beyond the library (structured residual only)
+    proposed = [x.as_dict() for x in propose(result)] if p.kind == "friction" else []
     out = {
         "kind": p.kind, "name": p.name, "source": source, "units": p.units,
         "data": meta,
@@ -233,6 +237,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         "iterations": [it.as_dict() for it in result.iterations],
         "implausible_candidates": implausible_candidates(result),
         "ripples": ripples,
+        "proposed": proposed,
         "final_model": {"terms": [t.name for t in final.terms], "n_params": final.k,
                         "bic_fit_validation": final.bic, "tau_int": final.tau_int,
                         "condition_number": final.cond},
@@ -602,6 +607,8 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
               f"JᵀJ {fmt_value(fm['condition_number'], 3)}, residual τ_int "
               f"{fmt_value(fm['tau_int'], 3)} samples.", ""]
     lines += ripple_lines(s)
+    from .discovery import proposals_section  # apart from the accepted effects
+    lines += proposals_section(s.get("proposed", []))
     lines += ["## Residual diagnosis", "",
               "Probe scores: out-of-sample fraction of the residual mean square explained "
               "by a nonparametric model along one variable (two halves of time blocks, "

@@ -86,8 +86,8 @@ def input_angle_evidence(objectives: Sequence[np.ndarray], fs: float,
     ----------
     objectives : sequence of ndarray
         Per window, the torque-alignment objective J over shifts of 0, 1, ... samples
-        covering at least one input revolution [(mV/V)²] (``_Realigner.objectives`` of
-        :mod:`.strain`).
+        covering at least one input revolution [(mV/V)²] (``Realigner.objectives`` of
+        :mod:`.strain_model`).
     fs : float
         Sample rate [Hz].
     n_in_rpm : ndarray, shape (n_w,)

@@ -1,0 +1,206 @@
+"""Model terms of the calibration: named parameters and the term interface.
+
+A model is a sum of *terms*. Each term contributes columns ``X_j(θ_j)`` times linear
+coefficients ``c_j`` to the prediction ``ŷ = Σ_j X_j(θ_j) c_j``; ``θ_j`` are its nonlinear
+parameters (a ripple period, a time constant). A term may instead *transform* the
+signals every later term sees (a lag of the velocity seen by the friction law). The
+signals object is domain specific; the fitting (:mod:`.core`) only calls term methods, so
+each side (friction, strain) plugs in by defining its own signals and terms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Param", "Term"]
+
+
+# ---------------------------------------------------------------------------------------
+# terms
+
+
+@dataclass(frozen=True)
+class Param:
+    """A named parameter of a term.
+
+    Attributes
+    ----------
+    name : str
+        Identifier, unique within the term.
+    unit : str
+        Unit, e.g. ``"N m"``, ``"rad"``, ``"-"``.
+    description : str
+        One line.
+    log : bool
+        Nonlinear parameters only: optimise log(value) (positive scale parameters).
+    """
+
+    name: str
+    unit: str = "-"
+    description: str = ""
+    log: bool = False
+
+
+class Term:
+    """One additive term (or signal transform) of a model. Subclass and override.
+
+    Class attributes
+    ----------------
+    kind : str
+        Library key (``"stribeck"``); the instance ``name`` adds ``#2`` for a repeat.
+    linear : tuple of Param
+        Coefficients of the columns returned by :meth:`columns`.
+    nonlinear : tuple of Param
+        Parameters entering the columns nonlinearly (bounds from :meth:`bounds`).
+    is_transform : bool
+        True: the term has no columns and changes the signals later terms see
+        (:meth:`transform`).
+    repeatable : int
+        How many instances a model may hold (1: once).
+    description, signature, source : str
+        What the term models, how it shows in the residual of a model without it, and
+        where its form comes from.
+    probes : tuple of str
+        Names of the diagnosis probes whose structure it should explain.
+    ranges : dict of str to (float, float, str)
+        Physical range of a :meth:`derived` parameter, ``name -> (low, high, source)`` in
+        the parameter's unit (bounds inclusive; ``-inf``/``inf`` for an open side). A fit
+        outside the range is not accepted as this effect (:meth:`range_violations`): the
+        term would be absorbing something else.
+    """
+
+    kind: str = "term"
+    linear: tuple[Param, ...] = ()
+    nonlinear: tuple[Param, ...] = ()
+    is_transform: bool = False
+    repeatable: int = 1
+    description: str = ""
+    signature: str = ""
+    source: str = ""
+    probes: tuple[str, ...] = ()
+    ranges: dict[str, tuple[float, float, str]] = {}
+
+    def __init__(self, name: str | None = None) -> None:
+        self.name = name or self.kind
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(name={self.name!r})"
+
+    # -- to override -------------------------------------------------------------------
+    @classmethod
+    def for_signals(cls, sig: Any, name: str | None = None) -> Term:
+        """Instance suited to these signals (e.g. with or without a load column)."""
+        return cls(name)
+
+    def applicable(self, sig: Any) -> bool:
+        """Whether the term can be evaluated on these signals (e.g. a load column)."""
+        return True
+
+    def bounds(self, sig: Any) -> list[tuple[float, float]]:
+        """Box bounds of the nonlinear parameters [their units], data dependent."""
+        return []
+
+    def starts(self, sig: Any, residual: np.ndarray, idx: np.ndarray) -> list[np.ndarray]:
+        """Starting values of the nonlinear parameters (may use the current residual)."""
+        return [np.empty(0)]
+
+    def columns(self, sig: Any, theta: np.ndarray) -> np.ndarray:
+        """Design columns, shape (n, len(linear))."""
+        raise NotImplementedError
+
+    def transform(self, sig: Any, theta: np.ndarray) -> Any:
+        """Signals seen by later terms (``is_transform`` terms only)."""
+        return sig
+
+    def derived(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
+        """Reported parameters (default: the raw ones). Override for amplitude/phase."""
+        out = {p.name: float(v) for p, v in zip(self.linear, coef, strict=True)}
+        out.update({p.name: float(v) for p, v in zip(self.nonlinear, theta, strict=True)})
+        return out
+
+    def derived_units(self) -> dict[str, str]:
+        """Units of :meth:`derived` entries."""
+        return {p.name: p.unit for p in (*self.linear, *self.nonlinear)}
+
+    def primary(self) -> tuple[str, ...]:
+        """Names of the derived parameters that characterise the effect."""
+        return tuple(self.derived_units())
+
+    def options(self) -> dict[str, Any]:
+        """Constructor options other than the name (e.g. ``use_load``), for specs."""
+        return {}
+
+    def required_options(self) -> tuple[str, ...]:
+        """Options a spec must give (no safe default, e.g. the calibrated range)."""
+        return ()
+
+    # -- generic -----------------------------------------------------------------------
+    def range_violations(self, values: dict[str, float]) -> list[str]:
+        """Derived parameters outside their physical range (:attr:`ranges`).
+
+        Parameters
+        ----------
+        values : dict of str to float
+            Derived parameters (:meth:`derived`), in :meth:`derived_units`.
+
+        Returns
+        -------
+        list of str
+            One phrase per violation, e.g. ``"t_lag_s = 0.6 s outside [0.0001, 0.05] s
+            (Al-Bender et al. 2005)"``; empty when every ranged parameter is inside.
+        """
+        units = self.derived_units()
+        out = []
+        for name, (lo, hi, src) in self.ranges.items():
+            if name not in values:
+                continue
+            v = float(values[name])
+            if not lo <= v <= hi:
+                u = units.get(name, "")
+                u = f" {u}" if u and u != "-" else ""
+                out.append(f"{name} = {v:.3g}{u} outside [{lo:g}, {hi:g}]{u} ({src})")
+        return out
+
+    @property
+    def n_linear(self) -> int:
+        return len(self.linear)
+
+    @property
+    def n_nonlinear(self) -> int:
+        return len(self.nonlinear)
+
+    def raw_names(self) -> list[str]:
+        return [p.name for p in self.linear] + [p.name for p in self.nonlinear]
+
+    def from_params(self, params: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+        """(coef, theta) from a mapping of raw parameter names to values.
+
+        Raises
+        ------
+        KeyError
+            A raw parameter is missing; the message lists the expected names.
+        """
+        missing = [n for n in self.raw_names() if n not in params]
+        if missing:
+            raise KeyError(f"effect {self.kind!r} needs parameters {self.raw_names()}, "
+                           f"missing {missing}")
+        extra = sorted(set(params) - set(self.raw_names()))
+        if extra:
+            raise KeyError(f"effect {self.kind!r} has no parameters {extra}; "
+                           f"expected {self.raw_names()}")
+        coef = np.array([float(params[p.name]) for p in self.linear])
+        theta = np.array([float(params[p.name]) for p in self.nonlinear])
+        return coef, theta
+
+    def to_params(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
+        """Raw parameter mapping (inverse of :meth:`from_params`)."""
+        out = {p.name: float(v) for p, v in zip(self.linear, coef, strict=True)}
+        out.update({p.name: float(v) for p, v in zip(self.nonlinear, theta, strict=True)})
+        return out
+
+    def predict(self, sig: Any, coef: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Contribution ``columns(sig, theta) @ coef``, shape (n,)."""
+        return self.columns(sig, np.asarray(theta, float)) @ np.asarray(coef, float)
