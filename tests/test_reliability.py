@@ -341,7 +341,10 @@ def test_G_stopping_the_generator_stops_its_workers(tmp_path, sig, code):
     p = subprocess.Popen([str(BIN / "swgsim-generate"), "dataset=paper", f"out_dir={out}",
                           f"dataset.operating_points.n_in_rpm=[{speeds}]",
                           "n_jobs=2", "progress=false"], start_new_session=True,
-                         stderr=subprocess.PIPE, text=True)
+                         stderr=subprocess.PIPE, text=True,
+                         # as from a terminal: a runner started in the background (no job
+                         # control) passes SIGINT on as ignored, and Python keeps it so
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 180
     while len(_group(p.pid)) < 3 and time.time() < deadline:  # parent + 2 workers
         time.sleep(0.2)
