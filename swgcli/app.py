@@ -34,6 +34,17 @@ def _on_sigterm(signum, frame):  # noqa: ARG001
     raise Terminated()
 
 
+def absolute_path(path: str) -> str:
+    """``path`` relative to the directory the app was started in (Hydra changes into its
+    run folder); unchanged outside a Hydra run (tests calling a task directly)."""
+    from hydra.utils import to_absolute_path
+
+    try:
+        return to_absolute_path(path)
+    except ValueError:  # outside a Hydra run
+        return path
+
+
 def one_line(exc: BaseException) -> str | None:
     """The one-line message of a bad-input exception, or None for anything else."""
     from hydra.errors import ConfigCompositionException, MissingConfigException

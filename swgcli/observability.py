@@ -20,19 +20,10 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
-from swgcli.app import hydra_app
+from swgcli.app import absolute_path, hydra_app
 from swgcli.schema import ObservabilityApp
 
 log = logging.getLogger(__name__)
-
-
-def _abs(path: str) -> str:
-    from hydra.utils import to_absolute_path
-
-    try:
-        return to_absolute_path(path)
-    except ValueError:  # outside a Hydra run
-        return path
 
 
 def data_set_configs(cfg: DictConfig) -> dict[float, dict]:
@@ -96,7 +87,7 @@ def run_observability(cfg: DictConfig) -> dict:
     from swgsim.data import atomic_write_bytes, load
     from swgsim.generate import generate
 
-    rep = Path(_abs(str(cfg.report_dir)))
+    rep = Path(absolute_path(str(cfg.report_dir)))
     csv = rep / "observability.csv"
     if bool(cfg.plot_only):
         if not csv.is_file():
@@ -108,7 +99,7 @@ def run_observability(cfg: DictConfig) -> dict:
         fig = plot_observability(table, rep / "observability.png", modes)
         return {"table": table, "files": {"figure": str(fig)}, "data_sets": {}, "wall_s": 0.0}
     configs = data_set_configs(cfg)
-    root = Path(_abs(str(cfg.data_root)))
+    root = Path(absolute_path(str(cfg.data_root)))
     t0 = time.perf_counter()
     parts, folders = [], {}
     for n, (j, c) in enumerate(configs.items(), 1):

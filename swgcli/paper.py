@@ -18,20 +18,12 @@ import time
 import warnings
 from collections import Counter
 
-from hydra.utils import to_absolute_path
 from omegaconf import DictConfig, OmegaConf
 
-from swgcli.app import hydra_app
+from swgcli.app import absolute_path, hydra_app
 from swgcli.schema import PaperApp
 
 log = logging.getLogger(__name__)
-
-
-def _abs(path: str) -> str:
-    try:
-        return to_absolute_path(path)
-    except ValueError:  # outside a Hydra run
-        return path
 
 
 def _check(cfg: DictConfig) -> list[str]:
@@ -76,7 +68,7 @@ def run_paper(cfg: DictConfig) -> dict:
     from learn.tracking import check_tracking
 
     check_tracking(cfg.tracking_uri, "tracking_uri")  # before any work
-    root_data, root_rep = _abs(str(cfg.data_root)), _abs(str(cfg.report_root))
+    root_data, root_rep = absolute_path(str(cfg.data_root)), absolute_path(str(cfg.report_root))
     s = cfg.study
     n_stages = 2 * len(protocols) + 1
     stages: dict[str, float] = {}

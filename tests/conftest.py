@@ -111,3 +111,14 @@ def tiny_dataset(tmp_path_factory, synthetic_ds):
 def tracking_uri(tmp_path_factory) -> str:
     """A throw-away MLflow sqlite store, shared by the session (creating one is slow)."""
     return f"sqlite:///{tmp_path_factory.mktemp('mlflow') / 'mlflow.db'}"
+
+
+@pytest.fixture
+def torch_one_thread():
+    """torch on one thread during a test (small nets; results independent of the cores)."""
+    import torch
+
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(n)

@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
+from physics_reference import steady_motion
 
 from swgsim import dynamics as dy
 from swgsim.chain import ChainSettings, SimulationChain
@@ -123,22 +123,6 @@ def test_fast_chain_matches_naive_per_step_solver(chain, healthy):
     for k, p in enumerate(cases):
         naive = chain.signals_naive(p, res.psi[k, :8], res.t_out[k, :8])
         assert np.abs(sig[k, :, :8] - naive).max() <= 1e-9 * np.abs(naive).max()
-
-
-def steady_motion(p: dy.GearParams, n_in_rpm: float, t_load_nm: float) -> tuple[float, float]:
-    """Efficiency η and output wind-up δ [rad] of steady motion from eq. (2)-(5) as the
-    dynamics module docstring writes them (kinematic error and b3 left out): fixed-point
-    solution of c T_stiff = T_load + T_fric / sin α, η = T_load / (c T_stiff),
-    δ = Δφ_k (N + 1) tan α / N."""
-    sa, ca = np.sin(p.alpha_tooth_rad), np.cos(p.alpha_tooth_rad)
-    v_b = n_in_rpm * dy.RPM / p.ratio / sa
-    t_stiff = t_load_nm / p.c_out
-    for _ in range(50):
-        t_fric = (p.b0_nm + p.b1_nms * v_b + p.b2_nms3 * v_b**3
-                  + p.mu * p.c_out * abs(t_stiff) / ca) * np.tanh(v_b / p.v_smooth_rad_s)
-        t_stiff = (t_load_nm + t_fric / sa) / p.c_out
-    d = brentq(lambda x: p.k1_nm_per_rad * x + p.k2_nm_per_rad3 * x**3 - t_stiff, 0, 1)
-    return t_load_nm / (p.c_out * t_stiff), d * (p.ratio + 1) * np.tan(p.alpha_tooth_rad) / p.ratio
 
 
 def test_table_iv_b1_factor_shows_in_the_simulated_output(chain, healthy):

@@ -11,13 +11,7 @@ from sklearn.base import clone
 from learn.nets import CNN1DClassifier, MLPClassifierTorch
 from learn.rocket import MiniRocketClassifier
 
-
-@pytest.fixture(autouse=True)
-def _one_thread():
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("torch_one_thread")
 
 
 def separable(n_per_class=20, n_time=64, n_aux=1, seed=0):

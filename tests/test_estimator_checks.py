@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import torch
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 from sklearn.utils.estimator_checks import (
@@ -23,13 +22,7 @@ from sklearn.utils.estimator_checks import (
 from learn.nets import CNN1DClassifier, MLPClassifierTorch
 from learn.rocket import MiniRocketClassifier
 
-
-@pytest.fixture(autouse=True)
-def _one_thread():
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("torch_one_thread")
 
 
 FAST = {"max_epochs": 20, "batch_size": 32, "device": "cpu", "random_state": 0}

@@ -1,21 +1,8 @@
 """Strain side of the calibration: baseline and declared effect library.
 
-The signals and basis are defined in :mod:`.strain_signals`, the residual probes in
-:mod:`.strain_probes` (both re-exported here).
-
-The measured data are strain-gauge windows (data kind 2, schema v1). Every sample of
-every window and channel is one entry of the target vector, in the order (window,
-channel, time). The chain's prediction of a window (the nominal gear at the window's
-operating point, aligned to the window's WG angle and input angle; :mod:`.strain`) is
-split into *basis* signals, each of shape (n_windows, 5, n_ext) on a time grid that
-extends ``n_lead`` samples before and ``n_tail`` samples after the window (filters
-and shifts need the history):
-
-==========  ==========================================================================
-s_wg        w0 (A cos 2ψ + B sin 2ψ): the WG-deflection pattern [mV/V]
-s_t         T_out(t) h(ψ): the torque pattern [mV/V]
-dpsi        ∂(s_wg + s_t)/∂ψ at fixed torque [mV/V / rad]
-==========  ==========================================================================
+The signals and their basis (s_wg, s_t, dpsi: the chain's prediction of each window,
+split into patterns on an extended time grid) are defined in :mod:`.strain_signals`,
+the residual probes in :mod:`.strain_probes` (both re-exported here).
 
 The baseline (:class:`ChainBaseline`) scales the two patterns (the WG deflection w0 and
 an overall gauge gain). Candidate effects (:data:`STRAIN_LIBRARY`) add columns or are
