@@ -39,14 +39,11 @@ TARGET_RATIO = 0.6
 def calibrate_file(path: Path, out: Path | None = None, figures: bool = True,
                    gear_ratio: float | None = None) -> dict:
     """Run the loop on one recording; returns one table row (and writes a report)."""
-    from swgsim.calibration import build_problem, summarize
-    from swgsim.calibration.problems import calibrate_friction
+    from swgsim.calibration import build_problem, calibrate, summarize, write_outputs
 
     t0 = time.perf_counter()
-    result = calibrate_friction(build_problem(path, gear_ratio=gear_ratio))
+    result = calibrate(build_problem(path, gear_ratio=gear_ratio))
     if out is not None:
-        from swgcli.calibrate import write_outputs
-
         summary = write_outputs(result, out / path.stem, source=str(path), figures=figures)
     else:
         summary = summarize(result, source=str(path))

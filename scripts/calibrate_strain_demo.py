@@ -32,8 +32,9 @@ def main(argv=None) -> dict:
                     help="write the two-effect data set and its report here")
     args = ap.parse_args(argv)
 
-    from swgsim.calibration import strain_synthetic as syn
-    from swgsim.calibration.strain import StrainModel, calibrate_strain
+    from swgsim.calibration import build_problem, calibrate, summarize, write_outputs
+    from swgsim.calibration.strain import StrainModel
+    from swgsim.calibration.strain import synthetic as syn
     from swgsim.chain import SimulationChain
 
     t0 = time.perf_counter()
@@ -47,8 +48,8 @@ def main(argv=None) -> dict:
                                  seed=0, ke=ke) if ke else clean
         ds, truth = syn.bench_dataset(c, effects, hidden=hidden, noise_rel=args.noise, seed=1)
         data = syn.write_dataset(ds, out / "data") if out else ds
-        s = calibrate_strain(data, out / "report" if out else None, model=model,
-                             figures=out is not None)
+        result = calibrate(build_problem(data, model=model))
+        s = (write_outputs(result, out / "report") if out else summarize(result))
         return s, truth
 
     rows, cases = [], {}

@@ -1,9 +1,10 @@
 """``swgsim-calibrate``: Hydra app around :func:`run_calibrate`.
 
 Measured data in (a friction CSV, kind 1, or a schema-v1 data-set directory, kind 2,
-recognised automatically), a report out: ``out_dir/report.md``, ``summary.json``,
-``friction_effects.yaml`` (the accepted effects as a simulation option) and
-``figures/*.png``; the run is logged to MLflow.
+recognised automatically), a report out: ``out_dir/report.md``, ``summary.json``, the
+accepted effects as a simulation option (``friction_effects.yaml`` or
+``sensor_effects.yaml``) and ``figures/*.png``; the run is logged to MLflow. The app only
+parses, calls the kind-independent API of :mod:`swgsim.calibration` and writes.
 
 Examples
 --------
@@ -16,7 +17,6 @@ Examples
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,19 +41,19 @@ def _arg(func, name: str):
 # the friction calibration's defaults live in swgsim.calibration; the app takes them
 
 def _friction_default(name: str):
-    from swgsim.calibration.problems import friction_problem
+    from swgsim.calibration.friction import friction_problem
 
     return _arg(friction_problem, name)
 
 
-def _load_friction_csv():
-    from swgsim.calibration.friction import load_friction_csv
+def _friction_builder():
+    from swgsim.calibration.friction import build_problem
 
-    return load_friction_csv
+    return build_problem
 
 
 def _selection_default(name: str):
-    from swgsim.calibration.loop import SelectionConfig
+    from swgsim.calibration import SelectionConfig
 
     return getattr(SelectionConfig, name)
 
@@ -80,7 +80,7 @@ class SplitOptions:
 
 @dataclass
 class SelectionOptions:
-    """Which effects a friction calibration accepts (swgsim.calibration.SelectionConfig)."""
+    """Which effects a calibration accepts (swgsim.calibration.SelectionConfig)."""
 
     candidates: list[str] | None = None  # null: the whole library; or effect names
     min_rel_improvement: float = _selection_default("min_rel_improvement")
@@ -114,7 +114,7 @@ class CalibrateApp:
     baseline: BaselineOptions = field(default_factory=BaselineOptions)
     gear_ratio: float | None = None  # N (WG turns per output turn) if known: ripple orders
     accel_window: int = field(  # samples of the Savitzky-Golay estimate of ddq
-        default_factory=lambda: _arg(_load_friction_csv(), "accel_window"))
+        default_factory=lambda: _arg(_friction_builder(), "accel_window"))
     split: SplitOptions = field(default_factory=SplitOptions)
     selection: SelectionOptions = field(default_factory=SelectionOptions)
     figures: bool = True
@@ -130,54 +130,12 @@ def _as_list(x: Any) -> list | None:
     return list(OmegaConf.to_container(x, resolve=True)) if OmegaConf.is_config(x) else list(x)
 
 
-def write_outputs(result, out_dir: str | Path, source: str | None = None,
-                  figures: bool = True) -> dict[str, Any]:
-    """Write report.md, summary.json, friction_effects.yaml and figures of a result.
-
-    Parameters
-    ----------
-    result : swgsim.calibration.CalibrationResult
-    out_dir : str or Path
-        Created if absent.
-    source : str, optional
-        Path of the measured data (recorded in the summary).
-    figures : bool, default True
-
-    Returns
-    -------
-    dict
-        The summary (see :func:`swgsim.calibration.summarize`).
-    """
-    import yaml
-
-    from swgsim.calibration import render_report, summarize
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    summary = summarize(result, source=source)
-    figs = {}
-    if figures:
-        from swgcli.calibrate_figures import make_figures
-
-        figs = make_figures(result, out)
-    summary["figures"] = figs
-    (out / "summary.json").write_text(json.dumps(summary, indent=1, allow_nan=False))
-    (out / "report.md").write_text(render_report(result, summary, figs))
-    sim = summary.get("simulation") or {}
-    if summary["kind"] == "friction":
-        fx = {"v_s": sim.get("v_s_rad_s"), "t0_s": sim.get("t0_s"),
-              "baseline": sim.get("baseline"), "effects": summary["friction_effects"]}
-        (out / "friction_effects.yaml").write_text(
-            f"# accepted friction effects of {summary['name']} (swgsim-calibrate); a config "
-            "option for conf/friction_effects/\n" + yaml.safe_dump(fx, sort_keys=False))
-    return summary
-
-
 def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
     """One MLflow run through :func:`learn.tracking.log_run`: the git commit, the measured
     data (file or data-set folder) as dataset input, the flattened config and
-    ``config.yaml``, metrics, the output directory's files as artifacts. The calibrated
-    model is ``friction_effects.yaml`` (a simulation option), stored as an artifact."""
+    ``config.yaml``, metrics, the files the calibration wrote as artifacts. The calibrated
+    model is the simulation option (``friction_effects.yaml`` or ``sensor_effects.yaml``),
+    stored as an artifact."""
     from learn.tracking import log_run
 
     lg = cfg.logger
@@ -199,9 +157,8 @@ def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
         run.log_metrics(metrics)
         for it in summary["iterations"]:  # step: the selection's iteration
             run.log_metrics({"validation_rmse": it["val_rmse"]}, step=it["index"])
-        for f in ("report.md", "summary.json", "friction_effects.yaml"):
-            if (out_dir / f).is_file():
-                run.log_artifact(out_dir / f)
+        for f in summary["files"]:
+            run.log_artifact(out_dir / f)
         if (out_dir / "figures").is_dir():
             run.log_artifact(out_dir / "figures", "figures")
     log.info("MLflow run %s (%s)", run.run_id, lg.experiment)
@@ -209,7 +166,7 @@ def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
 
 
 #: Options that only the friction calibration (kind 1) reads.
-FRICTION_ONLY = ("baseline", "gear_ratio", "accel_window", "split", "selection")
+FRICTION_ONLY = ("baseline", "gear_ratio", "accel_window", "split")
 
 
 def check_options(cfg: DictConfig, kind: str, measured: Path) -> None:
@@ -237,8 +194,20 @@ def check_options(cfg: DictConfig, kind: str, measured: Path) -> None:
                 raise ValueError(
                     f"{changed[0]} applies to friction recordings (kind 1); {measured} is a "
                     f"strain data set (kind 2), whose calibration takes none of {names}")
+    se = given["selection"]
+    for key, lo, hi in (("min_rel_improvement", 0.0, 1.0), ("max_rel_se", 0.0, 10.0),
+                        ("min_heldout_evidence", 0.0, 1e6),
+                        ("max_abs_corr", 0.0, 1.0), ("structure_threshold", 0.0, 1.0)):
+        if not lo <= se[key] <= hi:
+            raise ValueError(f"selection.{key} must lie in [{lo:g}, {hi:g}], got {se[key]}")
+    for key, lo, hi in (("max_iter", 0, 100), ("pair_candidates", 0, 50), ("max_starts", 1, 50)):
+        if not lo <= se[key] <= hi:
+            raise ValueError(f"selection.{key} must lie in [{lo}, {hi}], got {se[key]}")
+    if not se["max_delta_bic"] <= 0:
+        raise ValueError(f"selection.max_delta_bic must be <= 0, got {se['max_delta_bic']}")
+    if kind == "strain":
         return
-    b, sp, se = given["baseline"], given["split"], given["selection"]
+    b, sp = given["baseline"], given["split"]
     aw = given["accel_window"]
     if not (5 <= aw <= 1001 and aw % 2 == 1):
         raise ValueError(f"accel_window must be an odd integer in [5, 1001], got {aw}")
@@ -259,16 +228,32 @@ def check_options(cfg: DictConfig, kind: str, measured: Path) -> None:
             raise ValueError(f"split.{key} must list blocks in [{-n}, {n - 1}], got {sp[key]}")
     if not 0 <= sp["guard_frac"] <= 0.45:
         raise ValueError(f"split.guard_frac must lie in [0, 0.45], got {sp['guard_frac']}")
-    for key, lo, hi in (("min_rel_improvement", 0.0, 1.0), ("max_rel_se", 0.0, 10.0),
-                        ("min_heldout_evidence", 0.0, 1e6),
-                        ("max_abs_corr", 0.0, 1.0), ("structure_threshold", 0.0, 1.0)):
-        if not lo <= se[key] <= hi:
-            raise ValueError(f"selection.{key} must lie in [{lo:g}, {hi:g}], got {se[key]}")
-    for key, lo, hi in (("max_iter", 0, 100), ("pair_candidates", 0, 50), ("max_starts", 1, 50)):
-        if not lo <= se[key] <= hi:
-            raise ValueError(f"selection.{key} must lie in [{lo}, {hi}], got {se[key]}")
-    if not se["max_delta_bic"] <= 0:
-        raise ValueError(f"selection.max_delta_bic must be <= 0, got {se['max_delta_bic']}")
+
+
+def problem_options(cfg: DictConfig, kind: str) -> dict[str, Any]:
+    """The options of the kind's problem builder from the app's config.
+
+    Friction: baseline, split, accel_window, gear_ratio and ``selection.candidates``
+    (:func:`swgsim.calibration.friction.build_problem`); strain:
+    ``selection.candidates`` (:func:`swgsim.calibration.strain.build_problem`).
+    """
+    cand = _as_list(cfg.selection.candidates)
+    if kind == "strain":
+        return {"candidates": cand} if cand is not None else {}
+    return dict(v_s=cfg.baseline.v_s, v_s_rel=cfg.baseline.v_s_rel,
+                n_blocks=cfg.split.n_blocks,
+                validation_blocks=_as_list(cfg.split.validation_blocks),
+                test_blocks=_as_list(cfg.split.test_blocks), guard_frac=cfg.split.guard_frac,
+                candidates=cand, accel_window=cfg.accel_window, gear_ratio=cfg.gear_ratio)
+
+
+def selection_config(cfg: DictConfig):
+    """:class:`swgsim.calibration.SelectionConfig` from the app's ``selection`` group."""
+    from swgsim.calibration import SelectionConfig
+
+    sel = OmegaConf.to_container(cfg.selection, resolve=True)
+    return SelectionConfig(**{k: (list(v) if isinstance(v, list) else v)
+                              for k, v in sel.items()})
 
 
 def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
@@ -278,11 +263,11 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     ----------
     cfg : DictConfig
         Composed ``conf/calibrate.yaml``: ``measured`` (a friction CSV, kind 1, or a
-        schema-v1 strain data-set directory, kind 2, dispatched to
-        :func:`swgsim.calibration.strain.calibrate_strain`), ``out_dir``, ``baseline``,
-        ``gear_ratio``, ``accel_window``, ``split``, ``selection``, ``figures``, ``logger``.
-        Friction recordings run :func:`swgsim.calibration.problems.calibrate_friction`
-        (the loop, then harmonic grouping of ripples).
+        schema-v1 strain data-set directory, kind 2), ``out_dir``, ``baseline``,
+        ``gear_ratio``, ``accel_window``, ``split`` (friction only), ``selection``,
+        ``figures``, ``logger``. Parses them, calls :func:`swgsim.calibration.build_problem`,
+        :func:`swgsim.calibration.calibrate` and :func:`swgsim.calibration.write_outputs`,
+        and logs the run.
 
     Returns
     -------
@@ -295,8 +280,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     swgsim.calibration.MeasuredDataError
         ``measured`` is neither a friction CSV nor a data-set directory.
     """
-    from swgsim.calibration import SelectionConfig, build_problem, detect_kind
-    from swgsim.calibration.problems import calibrate_friction
+    from swgsim.calibration import build_problem, calibrate, detect_kind, write_outputs
 
     measured = Path(cfg.measured).expanduser()
     out_dir = Path(cfg.out_dir).expanduser()
@@ -307,32 +291,8 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
 
         check_tracking(cfg.logger.tracking_uri, "logger.tracking_uri")
     log.info("measured data %s: kind %s", measured, kind)
-    if kind == "strain":
-        from swgsim.calibration.strain import calibrate_strain
-
-        summary = calibrate_strain(measured, out_dir, figures=bool(cfg.figures))
-        summary.pop("_result", None)
-        run_id = _log_mlflow(cfg, summary, out_dir) if cfg.logger.enabled else None
-        log.info("%s: held-out RMSE %.4g -> %.4g mV/V, added %s, unexplained %s; report %s",
-                 summary.get("name"), summary["rmse_before"], summary["rmse_after"],
-                 [e["name"] for e in summary["effects_added"]], summary["unexplained"],
-                 out_dir / "report.md")
-        return {**summary, "out_dir": str(out_dir), "mlflow_run_id": run_id}
-    sel = cfg.selection
-    problem = build_problem(
-        measured, v_s=cfg.baseline.v_s, v_s_rel=cfg.baseline.v_s_rel,
-        n_blocks=cfg.split.n_blocks, validation_blocks=_as_list(cfg.split.validation_blocks),
-        test_blocks=_as_list(cfg.split.test_blocks), guard_frac=cfg.split.guard_frac,
-        candidates=_as_list(sel.candidates), accel_window=cfg.accel_window,
-        gear_ratio=cfg.gear_ratio)
-    config = SelectionConfig(
-        min_rel_improvement=sel.min_rel_improvement, max_delta_bic=sel.max_delta_bic,
-        min_heldout_evidence=sel.min_heldout_evidence,
-        max_iter=sel.max_iter, candidates=_as_list(sel.candidates),
-        structure_threshold=sel.structure_threshold, max_rel_se=sel.max_rel_se,
-        max_abs_corr=sel.max_abs_corr, max_starts=sel.max_starts,
-        effective_bic=sel.effective_bic, pair_candidates=sel.pair_candidates)
-    result = calibrate_friction(problem, config)
+    problem = build_problem(measured, **problem_options(cfg, kind))
+    result = calibrate(problem, selection_config(cfg))
     summary = write_outputs(result, out_dir, source=str(measured), figures=bool(cfg.figures))
     run_id = _log_mlflow(cfg, summary, out_dir) if cfg.logger.enabled else None
     log.info("%s: test RMSE %.4g -> %.4g %s, added %s, unexplained %s; report %s",

@@ -34,6 +34,8 @@ _EXPORTS = {
     # flexspline, gauges, chain
     "FlexsplineGeometry": "flexspline", "Mesh": "flexspline", "TrussModel": "flexspline",
     "SensorLayout": "sensors", "SimulationChain": "chain", "ChainSettings": "chain",
+    # joint friction beyond the paper law (a calibration's accepted effects)
+    "FrictionEffects": "friction",
     # data sets
     "dataset_config": "config", "load": "data",
     "DataSetError": "data",

@@ -179,7 +179,7 @@ class SimulationChain:
             Load torque [N m], >= 0.
         phi_in0 : float or ndarray, shape (V,)
             Input angle at t = 0 [rad].
-        friction_effects : swgsim.calibration.chain.FrictionEffects, optional
+        friction_effects : swgsim.friction.simulation.FrictionEffects, optional
             Extra output friction accepted by a calibration (see
             :func:`swgsim.dynamics.simulate`); None: the paper law alone.
 

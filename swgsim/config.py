@@ -187,7 +187,7 @@ class DatasetConfig:
     sensor_effects : list
         Measurement-chain effects (swgsim.measurement), applied before eq. (10).
     friction_effects : mapping or None
-        Extra friction found by a calibration (swgsim.calibration.chain).
+        Extra friction found by a calibration (swgsim.friction.simulation).
     """
 
     name: str = "paper"

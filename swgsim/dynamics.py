@@ -436,7 +436,7 @@ def simulate(params: list[GearParams] | Batch, n_in_rpm, t_out_nm, phi_in0=0.0,
         RK4 steps per output sample.
     friction_effects : object, optional
         Extra friction at the output found by the calibration loop, e.g.
-        :class:`swgsim.calibration.chain.FrictionEffects`: ``torque(t, q, dq, ddq, z)``
+        :class:`swgsim.friction.simulation.FrictionEffects`: ``torque(t, q, dq, ddq, z)``
         [N m, positive along q̇], ``state_derivative(t, q, dq, z)``, ``n_states`` and
         ``initial_state(shape, dq0)``, with q = φ_out. It enters as
         J_out ω̇_out = … − τ and lowers the delivered torque; acceleration-dependent terms

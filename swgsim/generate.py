@@ -30,13 +30,13 @@ import numpy as np
 from . import data as dsio
 from . import dynamics
 from .acquisition import acquire, parse_acquisition, start_angles
-from .calibration.chain import friction_effects_from_config
 from .chain import ChainSettings, SimulationChain
 from .config import dataset_config
 from .disturbance import DisturbanceSpec, disturb
 from .dynamics import gear_with_ke, rt1_size20, torsional_mode
 from .faults import FAULTS, NO_ROOT_CRACK, ChainParams, apply_fault, get_fault
 from .flexspline import FlexsplineGeometry, Mesh, TrussModel
+from .friction import friction_effects_from_config
 from .influence import Influence, InfluenceSolver
 from .measurement import apply_sensor_effects, parse_sensor_effects
 from .outdir import (  # noqa: F401 - re-exported: the data-set folder API

@@ -1,4 +1,4 @@
-"""Accepted effects as a simulation option: swgsim.calibration.FrictionEffects."""
+"""Accepted effects as a simulation option: swgsim.friction.FrictionEffects."""
 
 from __future__ import annotations
 
@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 import yaml
 
-from swgsim.calibration import FRICTION_LIBRARY, FrictionEffects, parse_effects
-from swgsim.calibration.synthetic import (
+from swgsim.calibration.friction.synthetic import (
     BASELINE_TRUTH,
     PLANTED,
     V_SMOOTH,
     synthetic_recording,
     synthetic_trajectory,
 )
+from swgsim.friction import FRICTION_LIBRARY, FrictionEffects, parse_effects
 
 CONF = Path(__file__).resolve().parents[1] / "conf" / "friction_effects"
 

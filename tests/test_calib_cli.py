@@ -10,9 +10,12 @@ import yaml
 
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
-from swgsim.calibration import FrictionEffects, MeasuredDataError, build_problem, detect_kind
+from swgsim.calibration import MeasuredDataError, build_problem, detect_kind
 from swgsim.calibration.friction import load_friction_csv, write_friction_csv
-from swgsim.calibration.synthetic import PLANTED, synthetic_recording
+from swgsim.calibration.friction.synthetic import PLANTED, synthetic_recording
+from swgsim.data import DataSetError
+from swgsim.friction import FrictionEffects
+from swgsim.measurement import parse_sensor_effects
 
 
 def _cfg(overrides):
@@ -33,7 +36,7 @@ def test_detect_kind(tmp_path, planted_csv):
     ds.mkdir()
     (ds / "manifest.json").write_text("{}")
     assert detect_kind(ds) == "strain"
-    with pytest.raises(NotImplementedError, match="strain data set"):
+    with pytest.raises(DataSetError, match="schema_version"):  # the strain builder reads it
         build_problem(ds)
     bad = tmp_path / "bad.csv"
     bad.write_text("a,b\n1,2\n")
@@ -104,7 +107,7 @@ def test_run_calibrate_rejects_unknown_data(tmp_path):
 def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
     """Kind 2: a schema-v1 data-set directory is recognised and calibrated end to end."""
     from swgsim import data as dsio
-    from swgsim.calibration import strain_synthetic as syn
+    from swgsim.calibration.strain import synthetic as syn
     from swgsim.chain import SimulationChain
 
     clean = syn.simulate_windows(SimulationChain(), seed=0)
@@ -123,6 +126,11 @@ def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
     assert [e["name"] for e in summary["effects_added"]][0] == "offset"
     assert summary["rmse_after"] < summary["rmse_before"]
     assert res["mlflow_run_id"]
+    # the accepted effects as the data-set option sensor_effects, read by the generator
+    assert summary["files"] == ["report.md", "summary.json", "sensor_effects.yaml"]
+    fx = yaml.safe_load((out / "sensor_effects.yaml").read_text())["sensor_effects"]
+    assert fx == summary["sensor_effects"] and fx[0]["name"] == "offset"
+    parse_sensor_effects(fx)
 
 
 def test_gear_ratio_option_is_checked_and_reaches_the_summary(tmp_path, planted_csv):

@@ -13,12 +13,12 @@ from swgsim.calibration.core import (
     linear_recurrence,
 )
 from swgsim.calibration.diagnose import noise_floor
-from swgsim.calibration.friction_effects import (
+from swgsim.calibration.split import group_split, time_block_split
+from swgsim.friction.effects import (
     dahl_state,
     first_order_lag,
     periodogram_peaks,
 )
-from swgsim.calibration.split import group_split, time_block_split
 
 
 def test_linear_recurrence_matches_loop():

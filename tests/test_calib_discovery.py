@@ -1,6 +1,6 @@
 """Discovery of terms beyond the strain library (swgsim.calibration.discovery).
 
-Planted out-of-library effects (:data:`swgsim.calibration.strain_synthetic.HIDDEN`):
+Planted out-of-library effects (:data:`swgsim.calibration.strain.synthetic.HIDDEN`):
 crosstalk of s2 into s1, mains hum at 50 Hz with its third harmonic, a tone at order 2.7
 of the input rotation whose amplitude is proportional to the load, and a gauge gain of
 s1 that grows with the load. Each must be proposed in words that name it, with a
@@ -16,10 +16,12 @@ import re
 
 import numpy as np
 import pytest
+from strain_run import run_strain
 
 from swgsim.calibration import discovery as disc
-from swgsim.calibration import strain_synthetic as syn
-from swgsim.calibration.strain import StrainModel, calibrate_strain
+from swgsim.calibration.strain import StrainModel
+from swgsim.calibration.strain import discovery as strain_discovery
+from swgsim.calibration.strain import synthetic as syn
 from swgsim.chain import SimulationChain
 
 OPS3 = ((2000.0, 7.0), (4000.0, 70.0), (4000.0, 7.0))
@@ -43,7 +45,7 @@ def _run(bench, effects=(), hidden=(), clean=None, out_dir=None, window_period_s
                                   hidden=hidden, noise_rel=0.01, seed=1,
                                   window_period_s=window_period_s)
     kw = {} if window_period_s is None else {"window_period_s": window_period_s}
-    s = calibrate_strain(ds, out_dir, model=bench["model"], figures=False, **kw)
+    s, truth["result"] = run_strain(ds, out_dir, model=bench["model"], **kw)
     return s, truth
 
 
@@ -144,10 +146,10 @@ def test_load_dependent_gain_is_proposed(bench):
 @pytest.mark.parametrize("key", [None, "gain_mismatch"])
 def test_clean_data_and_library_effects_get_no_proposal(bench, key):
     fx = syn.PLANTED[key]["sensor_effects"] if key else ()
-    s, _ = _run(bench, fx)
+    s, truth = _run(bench, fx)
     assert s["proposed"] == []
     # also when discovery is forced to look (the residual is not structured here)
-    assert disc.propose(s["_result"], only_if_structured=False) == []
+    assert strain_discovery.propose(truth["result"], only_if_structured=False) == []
 
 
 @pytest.mark.slow
@@ -157,7 +159,7 @@ def test_other_library_effects_get_no_proposal(bench, key):
     spec = syn.PLANTED[key]
     clean = (syn.simulate_windows(bench["chain"], seed=0, ke=spec["ke"]) if "ke" in spec
              else None)
-    s, _ = _run(bench, spec.get("sensor_effects", ()), clean=clean,
-                window_period_s=spec.get("window_period_s"))
+    s, truth = _run(bench, spec.get("sensor_effects", ()), clean=clean,
+                    window_period_s=spec.get("window_period_s"))
     assert [e["name"] for e in s["effects_added"]] == [key]
-    assert disc.propose(s["_result"], only_if_structured=False) == []
+    assert strain_discovery.propose(truth["result"], only_if_structured=False) == []

@@ -1,7 +1,7 @@
-"""Discovery of terms beyond the friction library (swgsim.calibration.discovery_friction).
+"""Discovery of terms beyond the friction library (swgsim.calibration.friction.discovery).
 
 Out-of-library effects are added to the synthetic torque through the ``hidden`` hook of
-:func:`swgsim.calibration.synthetic.synthetic_recording` (60 s, noise 1 % of the torque
+:func:`swgsim.calibration.friction.synthetic.synthetic_recording` (60 s, noise 1 % of the torque
 range, AR(1) 0.3): a 7 Hz vibration in time (not periodic in q), and a ripple over the
 joint angle (period 0.0262 rad: order 2 of the wave generator for N = 120) whose
 amplitude is proportional to |q̇|. Each must be proposed in words that name it, the
@@ -19,10 +19,10 @@ import re
 import numpy as np
 import pytest
 
-from swgsim.calibration import calibrate, friction_problem, summarize
-from swgsim.calibration.discovery import propose
-from swgsim.calibration.report import render_report
-from swgsim.calibration.synthetic import PLANTED, synthetic_recording
+from swgsim.calibration import select_effects
+from swgsim.calibration.friction import friction_problem, render_report, summarize
+from swgsim.calibration.friction.discovery import propose
+from swgsim.calibration.friction.synthetic import PLANTED, synthetic_recording
 
 F_TONE_HZ = 7.0
 P_RIPPLE_RAD = 0.0262
@@ -39,7 +39,7 @@ def speed_ripple(t, q, dq):
 
 def run(hidden=None, effects=(), seed=1):
     rec, truth = synthetic_recording(effects, hidden=hidden, rng=np.random.default_rng(seed))
-    return calibrate(friction_problem(rec, v_s=truth.v_s, gear_ratio=N_GEAR))
+    return select_effects(friction_problem(rec, v_s=truth.v_s, gear_ratio=N_GEAR))
 
 
 def number(pattern: str, text: str) -> float:

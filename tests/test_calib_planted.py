@@ -12,8 +12,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swgsim.calibration import FRICTION_LIBRARY, calibrate, friction_problem, make_effect
-from swgsim.calibration.synthetic import PLANTED, synthetic_recording
+from swgsim.calibration import select_effects
+from swgsim.calibration.friction import friction_problem
+from swgsim.calibration.friction.synthetic import PLANTED, synthetic_recording
+from swgsim.friction import FRICTION_LIBRARY, make_effect
 
 
 def run(kinds=(), seed=0, hidden=None):
@@ -23,7 +25,7 @@ def run(kinds=(), seed=0, hidden=None):
     rec, truth = synthetic_recording(
         [{"kind": k, "params": PLANTED[k]["params"]} for k in kinds],
         rng=np.random.default_rng(seed), hidden=hidden, **recording)
-    return calibrate(friction_problem(rec, v_s=truth.v_s)), truth
+    return select_effects(friction_problem(rec, v_s=truth.v_s)), truth
 
 
 def test_every_library_effect_has_a_planted_case():

@@ -19,12 +19,12 @@ import re
 import numpy as np
 import pytest
 
-from swgsim.calibration import FRICTION_LIBRARY, SelectionConfig, friction_problem
-from swgsim.calibration.friction_ripples import PositionRipple, RippleTerm
-from swgsim.calibration.problems import calibrate_friction
-from swgsim.calibration.report import render_report, summarize
-from swgsim.calibration.ripple_groups import harmonic_groups
-from swgsim.calibration.synthetic import synthetic_recording
+from swgsim.calibration import SelectionConfig
+from swgsim.calibration.friction import calibrate, friction_problem, render_report, summarize
+from swgsim.calibration.friction.ripple_groups import harmonic_groups
+from swgsim.calibration.friction.synthetic import synthetic_recording
+from swgsim.friction import FRICTION_LIBRARY
+from swgsim.friction.ripples import PositionRipple, RippleTerm
 
 N = 50  # gear ratio of the harmonic-group case
 
@@ -33,7 +33,7 @@ def run(effects, seed=0, candidates=None, gear_ratio=None, **rec_kw):
     rec, truth = synthetic_recording(effects, rng=np.random.default_rng(seed), **rec_kw)
     problem = friction_problem(rec, v_s=truth.v_s, gear_ratio=gear_ratio)
     cfg = SelectionConfig(candidates=candidates) if candidates else None
-    return calibrate_friction(problem, cfg), truth
+    return calibrate(problem, cfg), truth
 
 
 @pytest.mark.parametrize("gear_ratio", [None, 100.0])
@@ -54,7 +54,7 @@ def test_every_effect_declares_ranges_with_sources(gear_ratio):
 
 
 def test_range_violations_name_parameter_range_and_source():
-    from swgsim.calibration.friction_effects import ThermalDrift, VelocityLag
+    from swgsim.friction.effects import ThermalDrift, VelocityLag
 
     v = VelocityLag().range_violations({"t_lag": 0.6})
     assert len(v) == 1 and "t_lag = 0.6 s outside [0.0001, 0.05] s" in v[0]

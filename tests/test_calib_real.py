@@ -12,8 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from swgsim.calibration import build_problem
-from swgsim.calibration.problems import calibrate_friction
+from swgsim.calibration import build_problem, calibrate
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "calibrate_real.py"
 spec = importlib.util.spec_from_file_location("calibrate_real", SCRIPT)
@@ -25,7 +24,7 @@ needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"no real data at {DAT
 
 @needs_data
 def test_fairino_spiral_improves_on_paper_law():
-    res = calibrate_friction(build_problem(DATA / "fairino_joint3_spiral_slow.csv"))
+    res = calibrate(build_problem(DATA / "fairino_joint3_spiral_slow.csv"))
     assert res.rmse_after <= 0.6 * res.rmse_before
     assert res.added  # something was found
     assert res.unexplained  # and the report says what is left

@@ -3,7 +3,7 @@ clean data, two effects, out-of-library residuals, held-out split.
 
 "Measured" data come from the chain's standard path (random WG start angles, settling
 transient) with planted measurement effects and white noise of 1 % of the signal range
-(:mod:`swgsim.calibration.strain_synthetic`); the calibration models them with one
+(:mod:`swgsim.calibration.strain.synthetic`); the calibration models them with one
 steady trajectory per operating point. Tiny: 2 operating points × 5 windows of 40 ms.
 """
 
@@ -13,11 +13,12 @@ import json
 
 import numpy as np
 import pytest
+from strain_run import run_strain
 
-from swgsim.calibration import strain_synthetic as syn
-from swgsim.calibration.strain import StrainModel, calibrate_strain, gear_with_ke
+from swgsim.calibration.strain import StrainModel
+from swgsim.calibration.strain import synthetic as syn
 from swgsim.chain import SimulationChain
-from swgsim.dynamics import rt1_size20
+from swgsim.dynamics import gear_with_ke, rt1_size20
 from swgsim.measurement import (
     QUARTER_BRIDGE_K,
     apply_sensor_effects,
@@ -113,9 +114,10 @@ def _run(bench, effects=(), hidden=(), ke=None, out_dir=None, name="bench",
     data = ds if out_dir is None else syn.write_dataset(ds, out_dir / "data")
     if window_period_s is not None:
         kw["window_period_s"] = window_period_s
-    s = calibrate_strain(data, None if out_dir is None else out_dir / "report",
-                         model=bench["model"], figures=out_dir is not None, **kw)
+    s, res = run_strain(data, None if out_dir is None else out_dir / "report",
+                        model=bench["model"], figures=out_dir is not None, **kw)
     truth["clean"] = clean
+    truth["result"] = res
     return s, truth
 
 
@@ -208,8 +210,8 @@ def test_out_of_library_residual_is_unexplained(bench, hidden, text):
 
 
 def test_heldout_windows_are_whole_and_last_is_test(bench):
-    s, _ = _run(bench, max_iter=0)
-    res = s["_result"]
+    s, truth = _run(bench, max_iter=0)
+    res = truth["result"]
     sig, sp = res.problem.signals, res.problem.split
     roles = [set(sig.window[idx].tolist()) for idx in (sp.fit, sp.validation, sp.test)]
     assert not (roles[0] & roles[1]) and not (roles[0] & roles[2]) and not (roles[1] & roles[2])
@@ -223,7 +225,7 @@ def test_heldout_windows_are_whole_and_last_is_test(bench):
 
 
 def test_every_strain_effect_declares_physical_ranges_with_sources():
-    from swgsim.calibration.strain_effects import strain_library
+    from swgsim.calibration.strain.effects import strain_library
 
     for key, cls in strain_library().items():
         term = cls()
@@ -283,7 +285,7 @@ def test_alignment_matches_the_simulated_truth_and_never_flips(bench):
     for noise, seed, decided in ((0.01, 1, False), (0.0005, 2, True)):
         clean = bench["clean"]
         ds, _ = syn.bench_dataset(clean, (), noise_rel=noise, seed=seed)
-        s = calibrate_strain(ds, None, model=bench["model"], figures=False)
+        s, _ = run_strain(ds, model=bench["model"])
         err, per, se = _input_angle_errors(s, clean)
         assert np.all(np.abs(err) < 4 * se), (noise, err, se)
         assert np.all(per == (360.0 if decided else 180.0)), (noise, per)

@@ -99,7 +99,7 @@ def test_bad_operating_point_is_refused(kw, match):
 
 def test_calibrated_friction_effect_enters_the_dynamics():
     """An effect accepted by the calibration loop, as extra output friction."""
-    from swgsim.calibration.chain import FrictionEffects
+    from swgsim.friction.simulation import FrictionEffects
 
     p = dy.rt1_size20()
     base = dy.simulate([p], 2000.0, 39.0, window_s=0.02)

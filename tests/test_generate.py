@@ -15,8 +15,8 @@ from omegaconf import OmegaConf
 from swgcli import compose_app, dataset_preset
 from swgsim import data as dsio
 from swgsim import generate as gen
-from swgsim.calibration.chain import friction_effects_from_config
 from swgsim.config import paper_config
+from swgsim.friction import friction_effects_from_config
 
 
 def tiny_cfg(**chain):

@@ -1,60 +1,56 @@
-"""Calibration loop: fit the model to measured data, diagnose the residual, add the
+"""Calibration against measured data: fit the model, diagnose the residual, add the
 library effect that explains it, refit, and report the error before and after on
 held-out data (docs/ARCHITECTURE.md, "Calibration loop").
 
-numpy and scipy only. Typical use::
+One API for both data kinds (friction CSVs, schema-v1 strain data sets); each step
+returns the same types whatever the kind::
 
-    from swgsim.calibration import build_problem, calibrate, summarize
-    problem = build_problem("franka_joint2_slow.csv")
-    result = calibrate(problem)
-    summary = summarize(result)          # JSON-ready dict
-    markdown = render_report(result, summary, figures={})
+    from swgsim.calibration import build_problem, calibrate, write_outputs
+    problem = build_problem("franka_joint2_slow.csv")   # or a data-set directory
+    result = calibrate(problem)                         # CalibrationResult
+    summary = write_outputs(result, "reports/franka")   # report.md, summary.json, ...
 
-Modules: :mod:`.terms` (Param, Term: the term interface), :mod:`.core` (separable least
-squares, results, uncertainties), :mod:`.friction` (recordings, paper-law baseline),
-:mod:`.friction_effects` (the effect library),
-:mod:`.split` (held-out splits), :mod:`.diagnose` (residual probes, noise floor),
-:mod:`.loop` (selection loop), :mod:`.problems` (kind detection, problem builders),
-:mod:`.report` (summary and markdown), :mod:`.chain` (accepted effects as a simulation
-option), :mod:`.synthetic` (planted-effect data); :mod:`.friction_ranges`,
-:mod:`.strain_ranges` (physical ranges with sources), :mod:`.friction_ripples`,
-:mod:`.ripple_groups` (ripples in gear orders, harmonics grouped); strain side:
-:mod:`.strain` (problem builder, runner), :mod:`.strain_data` (measured windows, held-out
-split), :mod:`.strain_model` (chain prediction per operating point, alignment),
-:mod:`.strain_signals` (signals, constraint basis), :mod:`.strain_effects` (effect
-library), :mod:`.strain_probes` (residual probes), :mod:`.strain_report` (summary,
-report, figures), :mod:`.strain_align`, :mod:`.strain_checks`, :mod:`.strain_power`;
-:mod:`.discovery` (terms beyond the library).
+or step by step: :func:`summarize` (JSON-ready dict), :func:`render_report` (markdown),
+:func:`make_figures`.
+
+Layout: the kind-independent parts here, the kinds in subpackages of the same shape
+(build problem -> calibrate -> summarise -> render -> write):
+
+* :mod:`.api` (kind detection and dispatch, writing the files), :mod:`.loop` (problem,
+  selection loop, result), :mod:`.core` (separable least squares, uncertainties),
+  :mod:`.split` (held-out splits), :mod:`.diagnose` (residual probes, noise floor),
+  :mod:`.discovery` (terms beyond the library: the engine), :mod:`.report` (summary keys
+  and markdown parts both kinds share);
+* :mod:`.friction` (data kind 1) and :mod:`.strain` (data kind 2).
+
+The model terms (:mod:`swgsim.terms`) and the friction effect forms
+(:mod:`swgsim.friction`) belong to the simulator; the calibration fits them.
 """
 
-from .chain import FrictionEffects, friction_effects_from_config, parse_effects
-from .core import FitResult, Param, ParamEstimate, Term, fit_terms
-from .diagnose import Diagnosis, diagnose, friction_probes, noise_floor
-from .friction import FrictionRecording, FrictionSignals, PaperLaw, load_friction_csv
-from .friction_effects import FRICTION_LIBRARY, make_effect
-from .loop import CalibrationResult, Problem, SelectionConfig, calibrate
-from .problems import (
-                       MeasuredDataError,
-                       build_problem,
-                       calibrate_friction,
-                       detect_kind,
-                       friction_problem,
+from .api import (
+    KINDS,
+    MeasuredDataError,
+    build_problem,
+    calibrate,
+    detect_kind,
+    kind_module,
+    make_figures,
+    render_report,
+    summarize,
+    write_outputs,
 )
-from .report import render_report, summarize
+from .core import FitResult, Param, ParamEstimate, Term, fit_terms
+from .diagnose import Diagnosis, diagnose, noise_floor
+from .loop import CalibrationResult, Problem, SelectionConfig, select_effects
 from .split import HeldOutSplit, group_split, time_block_split
 
 __all__ = [
-    "friction_effects_from_config",
-    "FRICTION_LIBRARY",
+    "KINDS",
     "CalibrationResult",
     "Diagnosis",
     "FitResult",
-    "FrictionEffects",
-    "FrictionRecording",
-    "FrictionSignals",
     "HeldOutSplit",
     "MeasuredDataError",
-    "PaperLaw",
     "Param",
     "ParamEstimate",
     "Problem",
@@ -62,18 +58,16 @@ __all__ = [
     "Term",
     "build_problem",
     "calibrate",
-    "calibrate_friction",
     "detect_kind",
     "diagnose",
     "fit_terms",
-    "friction_probes",
-    "friction_problem",
     "group_split",
-    "load_friction_csv",
-    "make_effect",
+    "kind_module",
+    "make_figures",
     "noise_floor",
-    "parse_effects",
     "render_report",
+    "select_effects",
     "summarize",
     "time_block_split",
+    "write_outputs",
 ]

@@ -1,15 +1,15 @@
 """Separable least squares of a sum of model terms, with uncertainties.
 
-The terms themselves (:class:`Param`, :class:`Term`) are defined in :mod:`.terms` and
-re-exported here.
+The terms themselves (:class:`Param`, :class:`Term`, the design matrix) are defined in
+:mod:`swgsim.terms` (a simulator input as much as a fitted model) and re-exported here.
 
 A model is a sum of *terms*. Each term contributes columns ``X_j(θ_j)`` times linear
 coefficients ``c_j`` to the prediction ``ŷ = Σ_j X_j(θ_j) c_j``; ``θ_j`` are its nonlinear
 parameters (a ripple period, a time constant). A term may instead *transform* the
 signals every later term sees (a lag of the velocity seen by the friction law). The
-signals object is domain specific (friction: :class:`~swgsim.calibration.friction.
-FrictionSignals`); this module only calls term methods, so a strain-side library plugs
-in by defining its own signals and terms.
+signals object is domain specific (friction: :class:`~swgsim.friction.FrictionSignals`);
+this module only calls term methods, so a strain-side library plugs in by defining its
+own signals and terms.
 
 Fitting is separable (variable projection, Golub & Pereyra 1973): for given θ the linear
 coefficients are the exact linear least-squares solution, and θ is found by
@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from .terms import Param, Term
+from ..terms import Param, Term, design_matrix, evaluate_terms, linear_recurrence
 
 log = logging.getLogger(__name__)
 
@@ -53,40 +53,6 @@ __all__ = [
 
 # ---------------------------------------------------------------------------------------
 # helpers
-
-
-def linear_recurrence(a: np.ndarray, b: np.ndarray, x0: float = 0.0) -> np.ndarray:
-    """Solve ``x_k = a_k x_{k-1} + b_k`` for all k at once (``x_{-1} = x0``).
-
-    Vectorised by a doubling (Hillis-Steele) scan over the affine maps
-    ``x -> a_k x + b_k``: log2(n) numpy passes instead of a Python loop, exact up to
-    round-off. Used for states integrated along irregularly sampled series (presliding
-    state, first-order lags).
-
-    Parameters
-    ----------
-    a, b : ndarray, shape (n,)
-        Coefficients of the recurrence.
-    x0 : float, default 0
-        State before the first sample.
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        The states ``x_0 .. x_{n-1}``.
-    """
-    a = np.array(a, dtype=float)
-    b = np.array(b, dtype=float)
-    if a.shape != b.shape or a.ndim != 1:
-        raise ValueError(f"a and b must be 1-D of equal shape, got {a.shape} and {b.shape}")
-    n = a.size
-    shift = 1
-    while shift < n:
-        # compose map k-shift (applied first) with map k: x -> a_k (a_j x + b_j) + b_k
-        b[shift:] = a[shift:] * b[:-shift] + b[shift:]
-        a[shift:] = a[shift:] * a[:-shift]
-        shift *= 2
-    return a * x0 + b
 
 
 def integrated_autocorr_time(r: np.ndarray, c: float = 5.0) -> float:
@@ -206,7 +172,7 @@ class FitResult:
 
     def predict(self, sig: Any) -> np.ndarray:
         """Model prediction on ``sig`` (all samples), shape (n,)."""
-        return _design(self.terms, sig, self.thetas) @ np.concatenate(
+        return design_matrix(self.terms, sig, self.thetas) @ np.concatenate(
             [c for c in self.coefs] or [np.empty(0)])
 
     def term_params(self, term: Term) -> dict[str, float]:
@@ -225,39 +191,6 @@ class FitResult:
 
 # ---------------------------------------------------------------------------------------
 # fitting
-
-
-def _design(terms: Sequence[Term], sig: Any, thetas: Sequence[np.ndarray],
-            cache: dict | None = None) -> np.ndarray:
-    """Stack the columns of all terms, applying transform terms in order."""
-    s = sig
-    tkey: tuple = ()
-    mats = []
-    n = None
-    for i, (term, th) in enumerate(zip(terms, thetas, strict=True)):
-        th = np.asarray(th, float)
-        if term.is_transform:
-            s = term.transform(s, th)
-            tkey = tkey + (i, th.tobytes())
-            continue
-        if term.n_linear == 0:
-            continue
-        key = (i, id(term), th.tobytes(), tkey)
-        if cache is not None and key in cache:
-            cols = cache[key]
-        else:
-            cols = np.asarray(term.columns(s, th), float)
-            if cols.ndim == 1:
-                cols = cols[:, None]
-            if cache is not None:
-                if len(cache) > 256:
-                    cache.clear()
-                cache[key] = cols
-        n = cols.shape[0]
-        mats.append(cols)
-    if not mats:
-        return np.zeros((n or 0, 0))
-    return np.hstack(mats)
 
 
 def _solve_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -383,7 +316,7 @@ def fit_terms(
 
     def resid(theta_flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         th = pk.split(theta_flat)
-        x = _design(terms, sig, th, cache)[idx]
+        x = design_matrix(terms, sig, th, cache)[idx]
         c = _solve_linear(x, y[idx])
         return y[idx] - x @ c, c
 
@@ -469,7 +402,7 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
     """Covariance of the raw parameters, delta method to the reported ones, flags."""
     terms, thetas, coefs = res.terms, list(res.thetas), list(res.coefs)
     c_all = np.concatenate(coefs) if coefs else np.empty(0)
-    x = _design(terms, sig, thetas, cache)[idx]
+    x = design_matrix(terms, sig, thetas, cache)[idx]
     cols = [x]
     for j, t in enumerate(terms):
         for m in range(t.n_nonlinear):
@@ -480,7 +413,7 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
             for s in (+1, -1):
                 th = [a.copy() for a in thetas]
                 th[j][m] = th0 + s * h
-                preds.append(_design(terms, sig, th, cache)[idx] @ c_all)
+                preds.append(design_matrix(terms, sig, th, cache)[idx] @ c_all)
             cols.append(((preds[0] - preds[1]) / (2 * h))[:, None])
     jac = np.hstack(cols)  # (m, n_lin + n_nl): d prediction / d raw parameter
     scale = np.sqrt(np.sum(jac * jac, axis=0))
@@ -546,27 +479,6 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
             note = f"correlated with {names[j][0]}.{names[j][1]} (r = {corr[i, j]:+.3f})"
         est.append(ParamEstimate(tn, pn, unit, float(d0[i]), float(sd[i]), flag, note))
     res.estimates = est
-
-
-def evaluate_terms(terms: Sequence[Term], sig: Any, coefs: Sequence[np.ndarray],
-                   thetas: Sequence[np.ndarray]) -> np.ndarray:
-    """Prediction of a sum of terms with given parameters (transform terms first).
-
-    Parameters
-    ----------
-    terms : sequence of Term
-    sig : object
-        Signals.
-    coefs, thetas : sequence of ndarray
-        Linear and nonlinear parameters per term (empty arrays where none).
-
-    Returns
-    -------
-    ndarray, shape (n,)
-    """
-    c = [np.asarray(x, float) for x in coefs]
-    return _design(terms, sig, [np.asarray(x, float) for x in thetas]) @ (
-        np.concatenate(c) if c else np.empty(0))
 
 
 def refit(result: FitResult, sig: Any, y: np.ndarray, idx: np.ndarray,

@@ -3,8 +3,9 @@ it earns its place, repeat; then report the error before and after on test data.
 
 Generic over the domain: a :class:`Problem` bundles the signals, the target, the
 baseline terms, a library of candidate effects (term classes), the residual probes and
-the held-out split. The friction side builds one with
-:func:`swgsim.calibration.friction_problem`; a strain-side library plugs in the same way.
+the held-out split. Each data kind builds one (:func:`swgsim.calibration.friction.build_problem`,
+:func:`swgsim.calibration.strain.build_problem`) and calls :func:`select_effects` in its
+``calibrate`` step.
 
 Acceptance rule: evidence, on one scale for every kind of data. Every candidate is added
 to the current model and refitted on the fit samples (its own nonlinear parameters
@@ -78,7 +79,7 @@ from .split import HeldOutSplit
 log = logging.getLogger(__name__)
 
 __all__ = ["Problem", "SelectionConfig", "CandidateScore", "Iteration", "CalibrationResult",
-           "calibrate"]
+           "select_effects"]
 
 
 @dataclass
@@ -262,7 +263,7 @@ class Iteration:
 
 @dataclass
 class CalibrationResult:
-    """Outcome of :func:`calibrate`.
+    """Outcome of :func:`select_effects` (and of each kind's ``calibrate``).
 
     Attributes
     ----------
@@ -560,8 +561,9 @@ def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
     return chosen
 
 
-def calibrate(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
-    """Run the calibration loop on a problem.
+def select_effects(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
+    """The selection loop on a problem: fit the baseline, add the library effect the
+    residual needs while held-out evidence supports it, stop with a verdict.
 
     Parameters
     ----------

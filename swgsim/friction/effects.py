@@ -32,12 +32,12 @@ range and held constant outside it (a well-conditioned basis for a smooth depend
 the configuration however short the range). Repeatable effects may enter again: ripples
 up to six times (further periods: wave-generator orders, cogging), load_coulomb and
 gravity_residual up to three times (higher orders). Ripples live in
-:mod:`.friction_ripples` (a fundamental period and its harmonics, wave-generator orders
+:mod:`.ripples` (a fundamental period and its harmonics, wave-generator orders
 when the gear ratio is known).
 
 Every effect declares the physical range of its characterising parameters
 (:attr:`~swgsim.calibration.core.Term.ranges`, values and sources in
-:mod:`.friction_ranges`): a fit outside it is not accepted as that effect.
+:mod:`.ranges`): a fit outside it is not accepted as that effect.
 
 Sources: Armstrong-Hélouvry, Dupont & Canudas de Wit 1994 (survey, Automatica 30(7)):
 Coulomb, viscous, Stribeck, presliding, frictional memory, position dependence; Dahl
@@ -55,10 +55,10 @@ from typing import Any
 
 import numpy as np
 
-from . import friction_ranges as rg
-from .core import Param, Term, linear_recurrence
-from .friction import FrictionSignals
-from .friction_ripples import FrictionRipple, PositionRipple, periodogram_peaks
+from ..terms import Param, Term, linear_recurrence
+from . import ranges as rg
+from .ripples import FrictionRipple, PositionRipple, periodogram_peaks
+from .signals import FrictionSignals
 
 log = logging.getLogger(__name__)
 
@@ -385,7 +385,7 @@ class ThermalDrift(Term):
     """Coulomb level relaxing as the joint warms up: τ = d exp(−(t − t0)/T_th) sgn(v)
     (first-order thermal response of the warming joint; friction falls with lubricant
     temperature; docs/PHYSICS.md sec. 5; Armstrong-Hélouvry et al. 1994). The time
-    constant is that of the warm-up, minutes to hours (:mod:`.friction_ranges`): on a
+    constant is that of the warm-up, minutes to hours (:mod:`.ranges`): on a
     recording shorter than it the drift is nearly a straight line, d and T_th trade off
     and are not pinned down, and the drift stays in the residual (probe ``time_odd``)."""
 

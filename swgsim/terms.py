@@ -1,21 +1,27 @@
-"""Model terms of the calibration: named parameters and the term interface.
+"""Model terms: named parameters, the term interface, evaluation of a sum of terms.
+
+Used by the simulator (friction effects as an input of the dynamics,
+:mod:`swgsim.friction`) and by the calibration, which fits such sums
+(:mod:`swgsim.calibration.core`).
 
 A model is a sum of *terms*. Each term contributes columns ``X_j(θ_j)`` times linear
 coefficients ``c_j`` to the prediction ``ŷ = Σ_j X_j(θ_j) c_j``; ``θ_j`` are its nonlinear
 parameters (a ripple period, a time constant). A term may instead *transform* the
 signals every later term sees (a lag of the velocity seen by the friction law). The
-signals object is domain specific; the fitting (:mod:`.core`) only calls term methods, so
-each side (friction, strain) plugs in by defining its own signals and terms.
+signals object is domain specific; the fitting (:mod:`swgsim.calibration.core`) only
+calls term methods, so each side (friction, strain) plugs in by defining its own signals
+and terms.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Param", "Term"]
+__all__ = ["Param", "Term", "design_matrix", "evaluate_terms", "linear_recurrence"]
 
 
 # ---------------------------------------------------------------------------------------
@@ -204,3 +210,112 @@ class Term:
     def predict(self, sig: Any, coef: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Contribution ``columns(sig, theta) @ coef``, shape (n,)."""
         return self.columns(sig, np.asarray(theta, float)) @ np.asarray(coef, float)
+
+
+# ---------------------------------------------------------------------------------------
+# evaluation
+
+
+def design_matrix(terms: Sequence[Term], sig: Any, thetas: Sequence[np.ndarray],
+            cache: dict | None = None) -> np.ndarray:
+    """Design matrix of a sum of terms: the columns of all terms side by side,
+    transform terms applied in order to the signals every later term sees.
+
+    Parameters
+    ----------
+    terms : sequence of Term
+    sig : object
+        Signals of the terms' side (e.g. :class:`swgsim.friction.FrictionSignals`).
+    thetas : sequence of ndarray
+        Nonlinear parameters per term (empty arrays where none).
+    cache : dict, optional
+        Column cache keyed by term, θ and the transforms before it (cleared above 256
+        entries); reused across calls of one fit.
+
+    Returns
+    -------
+    ndarray, shape (n, Σ n_linear)
+    """
+    s = sig
+    tkey: tuple = ()
+    mats = []
+    n = None
+    for i, (term, th) in enumerate(zip(terms, thetas, strict=True)):
+        th = np.asarray(th, float)
+        if term.is_transform:
+            s = term.transform(s, th)
+            tkey = tkey + (i, th.tobytes())
+            continue
+        if term.n_linear == 0:
+            continue
+        key = (i, id(term), th.tobytes(), tkey)
+        if cache is not None and key in cache:
+            cols = cache[key]
+        else:
+            cols = np.asarray(term.columns(s, th), float)
+            if cols.ndim == 1:
+                cols = cols[:, None]
+            if cache is not None:
+                if len(cache) > 256:
+                    cache.clear()
+                cache[key] = cols
+        n = cols.shape[0]
+        mats.append(cols)
+    if not mats:
+        return np.zeros((n or 0, 0))
+    return np.hstack(mats)
+
+
+def evaluate_terms(terms: Sequence[Term], sig: Any, coefs: Sequence[np.ndarray],
+                   thetas: Sequence[np.ndarray]) -> np.ndarray:
+    """Prediction of a sum of terms with given parameters (transform terms first).
+
+    Parameters
+    ----------
+    terms : sequence of Term
+    sig : object
+        Signals.
+    coefs, thetas : sequence of ndarray
+        Linear and nonlinear parameters per term (empty arrays where none).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    c = [np.asarray(x, float) for x in coefs]
+    return design_matrix(terms, sig, [np.asarray(x, float) for x in thetas]) @ (
+        np.concatenate(c) if c else np.empty(0))
+
+
+def linear_recurrence(a: np.ndarray, b: np.ndarray, x0: float = 0.0) -> np.ndarray:
+    """Solve ``x_k = a_k x_{k-1} + b_k`` for all k at once (``x_{-1} = x0``).
+
+    Vectorised by a doubling (Hillis-Steele) scan over the affine maps
+    ``x -> a_k x + b_k``: log2(n) numpy passes instead of a Python loop, exact up to
+    round-off. Used for states integrated along irregularly sampled series (presliding
+    state, first-order lags).
+
+    Parameters
+    ----------
+    a, b : ndarray, shape (n,)
+        Coefficients of the recurrence.
+    x0 : float, default 0
+        State before the first sample.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The states ``x_0 .. x_{n-1}``.
+    """
+    a = np.array(a, dtype=float)
+    b = np.array(b, dtype=float)
+    if a.shape != b.shape or a.ndim != 1:
+        raise ValueError(f"a and b must be 1-D of equal shape, got {a.shape} and {b.shape}")
+    n = a.size
+    shift = 1
+    while shift < n:
+        # compose map k-shift (applied first) with map k: x -> a_k (a_j x + b_j) + b_k
+        b[shift:] = a[shift:] * b[:-shift] + b[shift:]
+        a[shift:] = a[shift:] * a[:-shift]
+        shift *= 2
+    return a * x0 + b

@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from .core import Param, Term
-from .friction import FrictionSignals
-from .friction_ranges import RIPPLE_AMPLITUDE_NM, ripple_order_range, ripple_period_range
+from ..terms import Param, Term
+from .ranges import RIPPLE_AMPLITUDE_NM, ripple_order_range, ripple_period_range
+from .signals import FrictionSignals
 
 __all__ = [
     "RippleTerm",

@@ -1,11 +1,12 @@
 """Physical ranges of the strain-side effects' parameters, with their sources.
 
-The effects of :mod:`.strain_effects` declare them as :attr:`~.core.Term.ranges`; a fit
-outside its range is not accepted as the effect (acceptance rule 4 of :mod:`.loop`): the
-term would be absorbing something else, and a run where such a candidate still passes the
-evidence rule ends ``unexplained``. Each bound is an upper bound of what the named
-mechanism can produce, from a data sheet, a catalogue or a closed form; where a number is
-an assumption of this project, the text says so.
+The effects of :mod:`.effects` declare them as :attr:`swgsim.terms.Term.ranges`; a fit
+outside its range is not accepted as the effect (acceptance rule 4 of
+:mod:`swgsim.calibration.loop`): the term would be absorbing something else, and a run
+where such a candidate still passes the evidence rule ends ``unexplained``. Each bound
+is an upper bound of what the named mechanism can produce, from a data sheet, a
+catalogue or a closed form; where a number is an assumption of this project, the text
+says so.
 """
 
 from __future__ import annotations

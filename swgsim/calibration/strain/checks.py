@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .loop import CalibrationResult
+from ..loop import CalibrationResult
 
 __all__ = ["withheld_parameters", "simulation_option", "caveat", "too_small_rows",
            "result_extras"]

@@ -8,14 +8,15 @@ of the loop sees:
   instances: :func:`harmonic_groups` finds instances whose periods are integer fractions
   of one fundamental (with the gear ratio N: integer wave-generator orders k = 2π /
   (period · N)), and :func:`group_ripples` replaces them by one
-  :class:`~swgsim.calibration.friction_ripples.RippleTerm` with that fundamental and the
+  :class:`~swgsim.friction.ripples.RippleTerm` with that fundamental and the
   harmonic numbers, unless the held-out data support the separate periods;
 * an instance that paid when it was added may be redundant in the final model (a later
   effect explains the same structure): every ripple of the final model must keep
   held-out evidence of its own, ``2 ln Λ_val = (n_val / τ_int) ln(RMSE_without² /
-  RMSE_with²)`` above the loop's ``min_heldout_evidence`` (the same predictive-likelihood
-  scale as the acceptance rule, see :mod:`.loop`); the least supported one is removed and
-  the check repeated (backward elimination on held-out data).
+  RMSE_with²)`` above the loop's ``min_heldout_evidence`` (the same
+  predictive-likelihood scale as the acceptance rule, see
+  :mod:`swgsim.calibration.loop`); the least supported one is removed and the check
+  repeated (backward elimination on held-out data).
 
 Both steps fit on the fit samples and judge on the validation samples, like the loop;
 the test samples stay untouched until the final model is refitted on fit + validation
@@ -34,10 +35,10 @@ from typing import Any
 
 import numpy as np
 
-from .core import FitResult, Term, fit_terms, with_uncertainty
-from .diagnose import diagnose
-from .friction_ripples import RippleTerm, wave_generator_order
-from .loop import CalibrationResult
+from ...friction.ripples import RippleTerm, wave_generator_order
+from ..core import FitResult, Term, fit_terms, with_uncertainty
+from ..diagnose import diagnose
+from ..loop import CalibrationResult
 
 log = logging.getLogger(__name__)
 
@@ -184,7 +185,7 @@ def harmonic_groups(periods: Sequence[float], rel_se: Sequence[float] | None = N
 
 def heldout_evidence(val_with: float, val_without: float, n_val: int, tau: float) -> float:
     """Held-out evidence of a term, 2 ln Λ_val = (n_val / τ_int) ln(RMSE_without² /
-    RMSE_with²) (the scale of the loop's acceptance rule, :mod:`.loop`).
+    RMSE_with²) (the scale of the loop's acceptance rule, :mod:`swgsim.calibration.loop`).
 
     Parameters
     ----------

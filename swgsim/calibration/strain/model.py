@@ -4,7 +4,7 @@
 revolution more than a window, plus one run per unit kinematic-error harmonic) and aligns
 each window's WG angle ψ; :class:`Realigner` aligns each window's input angle (the torque
 phase) for a given kinematic-error model and gives the raw basis of
-:class:`~swgsim.calibration.strain_signals.StrainSignals` (:mod:`.strain`, module
+:class:`~swgsim.calibration.strain.signals.StrainSignals` (:mod:`.problem`, module
 docstring).
 """
 
@@ -17,13 +17,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from ..chain import ChainSettings, SimulationChain
-from ..dynamics import GearParams, rt1_size20
-from ..dynamics import simulate as simulate_dynamics
-from ..faults import ChainParams
-from ..influence import torque_influence
-from ..measurement import psi_rate
-from .strain_effects import KE_ORDERS
+from ...chain import ChainSettings, SimulationChain
+from ...dynamics import GearParams, rt1_size20
+from ...dynamics import simulate as simulate_dynamics
+from ...faults import ChainParams
+from ...influence import torque_influence
+from ...measurement import psi_rate
+from .effects import KE_ORDERS
 
 __all__ = ["StrainModel", "Realigner"]
 

@@ -1,8 +1,8 @@
 """Strain side of the calibration: baseline and declared effect library.
 
 The signals and their basis (s_wg, s_t, dpsi: the chain's prediction of each window,
-split into patterns on an extended time grid) are defined in :mod:`.strain_signals`,
-the residual probes in :mod:`.strain_probes` (both re-exported here).
+split into patterns on an extended time grid) are defined in :mod:`.signals`,
+the residual probes in :mod:`.probes` (both re-exported here).
 
 The baseline (:class:`ChainBaseline`) scales the two patterns (the WG deflection w0 and
 an overall gauge gain). Candidate effects (:data:`STRAIN_LIBRARY`) add columns or are
@@ -43,7 +43,7 @@ the alignment weight (the full bridge s0 of the default layout) is not estimated
 (:attr:`GaugeMisplacement.min_weight_share`).
 
 Every effect declares the physical range of its parameters (``ranges``, bounds and
-sources in :mod:`.strain_ranges`); a fit outside is not accepted as the effect.
+sources in :mod:`.ranges`); a fit outside is not accepted as the effect.
 """
 
 from __future__ import annotations
@@ -55,9 +55,10 @@ from typing import Any
 import numpy as np
 from scipy import signal as sps
 
-from ..measurement import fractional_delay, lowpass, lowpass_coefficients
-from .strain_probes import strain_probes
-from .strain_ranges import (
+from ...measurement import fractional_delay, lowpass, lowpass_coefficients
+from ...terms import Param, Term
+from .probes import strain_probes
+from .ranges import (
     BRIDGE_K_RANGE,
     DRIFT_RANGE_MVV_S,
     GAIN_RANGE,
@@ -66,8 +67,7 @@ from .strain_ranges import (
     MISPLACEMENT_RANGE_DEG,
     OFFSET_RANGE_MVV,
 )
-from .strain_signals import SENSORS, MappedBasis, StrainSignals, constraint_basis
-from .terms import Param, Term
+from .signals import SENSORS, MappedBasis, StrainSignals, constraint_basis
 
 log = logging.getLogger(__name__)
 
@@ -480,7 +480,7 @@ class KinematicErrorHarmonic(Term):
         """Linear estimate from the residual at the current alignment, and half of it; for
         an odd order also its negative: with every window's input angle re-aligned, the
         harmonic of sign −c with all windows 180° on predicts nearly the same signals
-        (only the nominal odd orders tell them apart, :mod:`.strain_align`), so both
+        (only the nominal odd orders tell them apart, :mod:`.align`), so both
         local optima are tried."""
         u = sig.ripple.unit(self.order)  # (2, n_w, 5, m)
         x = np.column_stack([np.ascontiguousarray(sig.window_part(u[j])).reshape(-1)[idx]

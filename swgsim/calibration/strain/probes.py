@@ -2,7 +2,7 @@
 
 Per-channel and per-window means, a trend along the sequence of windows, bins over the
 WG angle ψ, and the best tone in orders of the input rotation or in frequency
-(:func:`strain_probes`); scored out of sample by :mod:`.diagnose`.
+(:func:`strain_probes`); scored out of sample by :mod:`swgsim.calibration.diagnose`.
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .diagnose import Probe
-from .strain_signals import SENSORS, StrainSignals
+from ..diagnose import Probe
+from .signals import SENSORS, StrainSignals
 
 __all__ = ["GroupMeanProbe", "SequenceTrendProbe", "ToneProbe", "strain_probes"]
 

@@ -29,9 +29,9 @@ from typing import Any
 
 import numpy as np
 
-from .core import Term, evaluate_terms
-from .friction import FrictionSignals, PaperLaw, Scales
-from .friction_effects import Presliding, VelocityLag, make_effect
+from ..terms import Term, evaluate_terms
+from .effects import Presliding, VelocityLag, make_effect
+from .signals import FrictionSignals, PaperLaw, Scales
 
 __all__ = ["FrictionEffects", "friction_effects_from_config", "parse_effects"]
 

@@ -3,7 +3,7 @@
 Input: a schema-v1 data set (``swgsim.data``) of bench windows, fault possibly
 ``"unknown"``, each with its operating point (``n_in_rpm``, ``t_out_nm``,
 ``n_in_mean_rpm``, ``t_out_mean_nm``). Output: a report of the fitted chain, the effects
-the data need from the declared library (:mod:`.strain_effects`), the error before and
+the data need from the declared library (:mod:`.effects`), the error before and
 after on held-out windows, and the accepted effects as a simulation option
 (``sensor_effects`` of :mod:`swgsim.measurement`, kinematic-error harmonics for
 :class:`swgsim.dynamics.GearParams`).
@@ -23,7 +23,7 @@ revolution, then the torque phase over one input revolution, each at every sampl
 an objective invariant to per-channel positive gains and offsets, refined by a parabola;
 ψ(t) and T_out(t) are then cubic splines of the simulation at the two shifts. The
 alignment uses the nominal chain (plus, for a kinematic-error candidate, its own
-ripple: the torque phase is re-aligned, see :class:`.strain_model.Realigner`), never a fitted effect
+ripple: the torque phase is re-aligned, see :class:`.model.Realigner`), never a fitted effect
 parameter, so held-out windows are aligned exactly like fit windows.
 
 Fit and selection: :func:`swgsim.calibration.loop.calibrate` (separable least squares,
@@ -34,7 +34,7 @@ of the sequence is a test window, the middle one a validation window), or whole
 operating points.
 
 Limitations. Only relative gauge angles and relative channel gains are observable, and a
-delay common to all channels is not (module :mod:`.strain_effects`). A kinematic-error
+delay common to all channels is not (module :mod:`.effects`). A kinematic-error
 candidate re-aligns each window's input angle, so it can absorb part of a tone that is
 not locked to the rotation but lies within ~10 % of k n_in / 60 at one speed. A
 placement error of single grids inside a bridge (not a rigid rotation of the bridge)
@@ -42,45 +42,37 @@ leaks the WG pattern into a channel, e.g. order 2 of ψ into the full bridge s0;
 candidate models it, and ``ke_order2`` can absorb part of it. Holding out operating
 points leaves the fit with fewer speeds: speed-dependent effects (low-pass) need at
 least two speeds among the fit windows. A window's input angle is known modulo 180° only
-unless the odd orders of the torque ripple rise above the noise (:mod:`.strain_align`;
+unless the odd orders of the torque ripple rise above the noise (:mod:`.align`;
 at 1 % noise they do not for the nominal gear). Structure that no library effect
 explains lowers the evidence of every candidate (fewer effective samples): with an
 out-of-library tone at order 3.5 (0.012 mV/V, 2.5 times the noise), a 1.5°
 misplacement of s2 was reported as too small (2 ln Λ 7.3) instead of accepted (2 ln Λ
 117-186 without it).
 
-Typical use::
+Typical use (or the kind-independent :mod:`swgsim.calibration` API)::
 
-    from swgsim.calibration.strain import calibrate_strain
-    summary = calibrate_strain("data/bench_run_7", "reports/bench_run_7")
+    from swgsim.calibration import strain
+    problem = strain.build_problem("data/bench_run_7")
+    result = strain.calibrate(problem)
+    summary = strain.summarize(result)
 """
 
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import logging
 import time
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .. import data as dsio
-from ..dynamics import gear_with_ke
-from ..measurement import psi_rate
-from .loop import Problem, SelectionConfig, calibrate
-from .split import HeldOutSplit, group_split
-from .strain_data import StrainWindows, heldout_split, strain_windows
-from .strain_effects import ChainBaseline, StrainSignals, strain_library, strain_probes
-from .strain_model import Realigner, StrainModel
-from .strain_report import (
-    IDENTIFIABILITY,
-    render_strain_report,
-    strain_figures,
-    summarize_strain,
-)
+from ...measurement import psi_rate
+from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
+from ..split import HeldOutSplit, group_split
+from .data import StrainWindows, heldout_split, strain_windows
+from .effects import ChainBaseline, StrainSignals, strain_library, strain_probes
+from .model import Realigner, StrainModel
 
 log = logging.getLogger(__name__)
 
@@ -89,12 +81,9 @@ __all__ = [
     "StrainModel",
     "strain_windows",
     "strain_problem",
-    "calibrate_strain",
-    "summarize_strain",
-    "render_strain_report",
-    "strain_figures",
-    "gear_with_ke",
-    "IDENTIFIABILITY",
+    "build_problem",
+    "calibrate",
+    "one_blas_thread",
 ]
 
 def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
@@ -247,61 +236,47 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
 
 
 # ---------------------------------------------------------------------------------------
-# entry point
+# the kind's steps: build problem -> calibrate (summarise, render: .report; figures)
+
+_PROBLEM_KEYS = ("heldout", "validation", "test", "candidates", "window_period_s",
+                 "f_c_bounds_hz", "ke_bound_rad")
 
 
 @contextlib.contextmanager
-def _blas_threads(n: int | None):
-    """Limit BLAS threads within the block (no-op without threadpoolctl or for None)."""
-    if n is None:
-        yield
-        return
+def one_blas_thread():
+    """BLAS limited to one thread within the block (through ``threadpoolctl`` where
+    installed). The strain side's products are small (hundreds × hundreds): one thread
+    is fastest, and on shared cores threading cost 20× (measured)."""
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:  # pragma: no cover - optional
         yield
         return
-    with threadpool_limits(limits=int(n), user_api="blas"):
+    with threadpool_limits(limits=1, user_api="blas"):
         yield
 
-_PROBLEM_KEYS = ("heldout", "validation", "test", "candidates", "window_period_s",
-                 "f_c_bounds_hz", "ke_bound_rad")
-_SELECTION_KEYS = tuple(f.name for f in dataclasses.fields(SelectionConfig))
 
-
-def calibrate_strain(data: Any, out_dir: str | Path | None, *, model: StrainModel | None = None,
-                     select: Mapping[str, Any] | None = None, max_windows: int | None = None,
-                     figures: bool = True, name: str | None = None,
-                     blas_threads: int | None = 1, **options: Any) -> dict[str, Any]:
-    """Calibrate the chain against a measured strain data set and write the report.
+def build_problem(measured: Any, *, model: StrainModel | None = None,
+                  select: Mapping[str, Any] | None = None, max_windows: int | None = None,
+                  name: str | None = None, **options: Any) -> Problem:
+    """Calibration problem of measured strain windows (data kind 2).
 
     Parameters
     ----------
-    data : path-like or xarray.Dataset or StrainWindows
+    measured : path-like or xarray.Dataset or StrainWindows
         A schema-v1 data-set directory (``manifest.json``), a loaded data set, or windows.
-    out_dir : path-like or None
-        Writes ``report.md``, ``summary.json`` and ``figures/``; None writes nothing.
     model : StrainModel, optional
         Reuse simulated operating points across calls (default: a new nominal model).
-    select, max_windows
-        Window selection, see :func:`strain_windows`.
-    figures : bool, default True
-    name : str, optional
-    blas_threads : int or None, default 1
-        BLAS threads during the calibration (through ``threadpoolctl`` where installed).
-        Its products are small (hundreds × hundreds): one thread is fastest, and on
-        shared cores threading costs 20× (measured); None leaves the setting alone.
+    select, max_windows, name
+        Window selection and the data set's name, see :func:`strain_windows`.
     **options
-        Problem options (``heldout``, ``validation``, ``test``, ``candidates``,
-        ``window_period_s``, ``f_c_bounds_hz``; see :func:`strain_problem`) and selection
-        settings (:class:`~swgsim.calibration.loop.SelectionConfig` fields, e.g.
-        ``min_rel_improvement``, ``max_delta_bic``, ``max_iter``).
+        ``heldout``, ``validation``, ``test``, ``candidates``, ``window_period_s``,
+        ``f_c_bounds_hz``, ``ke_bound_rad``: see :func:`strain_problem`.
 
     Returns
     -------
-    dict
-        The summary (:func:`summarize_strain`), plus ``"_result"`` (the
-        CalibrationResult object, not written to JSON).
+    Problem
+        ``kind="strain"``, units mV/V.
 
     Raises
     ------
@@ -310,31 +285,40 @@ def calibrate_strain(data: Any, out_dir: str | Path | None, *, model: StrainMode
     ValueError, KeyError
         See :func:`strain_windows`, :func:`strain_problem`.
     """
-    t0 = time.perf_counter()
-    unknown = sorted(set(options) - set(_PROBLEM_KEYS) - set(_SELECTION_KEYS))
+    unknown = sorted(set(options) - set(_PROBLEM_KEYS))
     if unknown:
-        raise TypeError(f"unknown options {unknown}; allowed: {sorted(_PROBLEM_KEYS)} and "
-                        f"selection settings {sorted(_SELECTION_KEYS)}")
-    win = data if isinstance(data, StrainWindows) else strain_windows(data, select, max_windows,
-                                                                     name)
-    prob_kw = {k: options[k] for k in _PROBLEM_KEYS if k in options}
-    sel_kw = {k: options[k] for k in _SELECTION_KEYS if k in options}
-    if "candidates" in prob_kw:
-        sel_kw.setdefault("candidates", None)
-    with _blas_threads(blas_threads):
-        problem = strain_problem(win, model, **prob_kw)
-        result = calibrate(problem, SelectionConfig(**sel_kw))
-        summary = summarize_strain(result, win.source)
-    if out_dir is not None:
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        figs = strain_figures(result, out / "figures") if figures else {}
-        summary["figures"] = figs
-        (out / "report.md").write_text(render_strain_report(result, summary, figs))
-        dsio.atomic_write_json(out / "summary.json", summary)
-    summary["wall_s"] = time.perf_counter() - t0
-    summary["_result"] = result
-    log.info("strain calibration of %s: test RMSE %.4g -> %.4g mV/V, added %s, unexplained %s",
-             win.name, summary["rmse_before"], summary["rmse_after"],
-             [e["name"] for e in summary["effects_added"]], summary["unexplained"])
-    return summary
+        raise TypeError(f"unknown strain problem options {unknown}; allowed: "
+                        f"{sorted(_PROBLEM_KEYS)}")
+    win = (measured if isinstance(measured, StrainWindows)
+           else strain_windows(measured, select, max_windows, name))
+    with one_blas_thread():
+        return strain_problem(win, model, **options)
+
+
+def calibrate(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
+    """Calibrate the chain against measured strain windows: the selection loop
+    (:func:`swgsim.calibration.loop.select_effects`) with BLAS on one thread.
+
+    Parameters
+    ----------
+    problem : Problem
+        From :func:`build_problem`.
+    config : SelectionConfig, optional
+
+    Returns
+    -------
+    CalibrationResult
+
+    Raises
+    ------
+    KeyError
+        ``config.candidates`` names an effect that is not in the problem's library.
+    """
+    t0 = time.perf_counter()
+    with one_blas_thread():
+        result = select_effects(problem, config)
+    log.info("strain calibration of %s: test RMSE %.4g -> %.4g mV/V, added %s, unexplained "
+             "%s (%.1f s)", problem.name, result.rmse_before, result.rmse_after,
+             [t.name for t in result.effect_terms()], result.unexplained,
+             time.perf_counter() - t0)
+    return result

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from swgsim.calibration.friction_effects import periodogram_peaks
-from swgsim.calibration.loop import CalibrationResult
+from ...friction.ripples import periodogram_peaks
+from ..loop import CalibrationResult
 
 log = logging.getLogger(__name__)
 

@@ -2,7 +2,7 @@
 
 :func:`strain_windows` reads the windows and their operating points from a schema-v1 data
 set (``swgsim.data``); :func:`heldout_split` assigns whole windows (or whole operating
-points) to the fit, validation and test roles (:mod:`.strain`, module docstring).
+points) to the fit, validation and test roles (:mod:`.problem`, module docstring).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import data as dsio
+from ... import data as dsio
 
 __all__ = ["StrainWindows", "strain_windows", "heldout_split"]
 

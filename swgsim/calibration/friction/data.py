@@ -1,42 +1,31 @@
-"""Measured joint friction: recordings, signals and the paper-law baseline.
+"""Measured joint friction: recordings (data kind 1), loading and checks.
 
 A friction recording (data kind 1) is a CSV with the columns of the project's real data
 (``docs/DATASET.md``, "Friction recordings"): ``time_s`` [s], ``q_rad`` [rad],
 ``dq_rad_per_s`` [rad/s], optionally ``ddq_rad_per_s2`` [rad/s²] and ``load_Nm`` [N m],
 and the target ``tau_friction_Nm`` [N m]. Sampling may be irregular.
 
-The baseline is the paper's friction law, eq. (5), mapped to the joint coordinate q (the
-gear output angle φ_out; the flank sliding velocity φ̇_b = −φ̇_out / sin α_tooth of
-eq. (6) is proportional to q̇, so its constant factors fold into the coefficients):
-
-    τ = b0 sgn(q̇) + b1 q̇ + b2 q̇³ + b3 sin(q + θ_b)
-
-with the smooth sign sgn(q̇) = tanh(q̇ / v_s) and a small fixed v_s (default 1 % of the
-99th percentile of |q̇|) so that least squares is well posed. b3 sin(q + θ_b) is fitted
-linearly as A sin q + B cos q (b3 = hypot(A, B), θ_b = atan2(B, A)). The μ F_n term
-needs a load signal; the recordings have none, so it lives in the effect library
-(``load_coulomb``).
+The recording becomes the signals of the friction terms (:class:`swgsim.friction.FrictionSignals`,
+smooth-sign velocity v_s by default 1 % of the 99th percentile of |q̇|, so that least
+squares is well posed); the baseline is the paper's law on the joint
+(:class:`swgsim.friction.PaperLaw`).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from scipy.signal import savgol_filter
 
-from .core import Param, Term
+from ...friction.signals import FrictionSignals, Scales
 
 log = logging.getLogger(__name__)
 
 __all__ = [
     "FrictionRecording",
-    "FrictionSignals",
-    "PaperLaw",
     "load_friction_csv",
     "write_friction_csv",
     "estimate_acceleration",
@@ -127,94 +116,9 @@ class FrictionRecording:
             raise ValueError(f"v_s must be > 0 [rad/s], got {v_s}")
         return FrictionSignals(
             t_s=self.t_s, q_rad=self.q_rad, dq_rad_s=self.dq_rad_s, ddq_rad_s2=self.ddq_rad_s2,
-            load_nm=self.load_nm, v_eff=self.dq_rad_s, v_s=float(v_s), scales=Scales.of(self),
+            load_nm=self.load_nm, v_eff=self.dq_rad_s, v_s=float(v_s),
+            scales=Scales.of(self.t_s, self.q_rad, self.dq_rad_s),
             gear_ratio=None if gear_ratio is None else float(gear_ratio))
-
-
-@dataclass(frozen=True)
-class Scales:
-    """Data scales that set the bounds of nonlinear parameters.
-
-    Attributes
-    ----------
-    v_ref : float
-        99th percentile of |q̇| [rad/s].
-    q_span : float
-        max q − min q [rad].
-    t0, t_span : float
-        Start time and duration [s].
-    dt_med : float
-        Median sample interval [s].
-    dq_med : float
-        Median |Δq| per sample while moving [rad].
-    q_center : float
-        (max q + min q) / 2 [rad].
-    """
-
-    v_ref: float
-    q_span: float
-    t0: float
-    t_span: float
-    dt_med: float
-    dq_med: float
-    q_center: float = 0.0
-
-    @classmethod
-    def of(cls, rec: FrictionRecording) -> Scales:
-        v = np.abs(rec.dq_rad_s)
-        v_ref = float(np.percentile(v, 99))
-        dq = np.abs(np.diff(rec.q_rad))
-        moving = v[1:] > 0.05 * v_ref
-        return cls(v_ref=v_ref, q_span=float(np.ptp(rec.q_rad)) or 1e-9, t0=float(rec.t_s[0]),
-                   t_span=float(rec.t_s[-1] - rec.t_s[0]),
-                   dt_med=float(np.median(np.diff(rec.t_s))),
-                   dq_med=float(np.median(dq[moving])) if moving.any() else float(
-                       np.median(dq) or 1e-9),
-                   q_center=float(0.5 * (np.max(rec.q_rad) + np.min(rec.q_rad))))
-
-
-@dataclass(frozen=True)
-class FrictionSignals:
-    """What friction terms see. ``v_eff`` is the velocity the friction law acts on
-    (``dq_rad_s`` unless a transform term such as ``velocity_lag`` changed it).
-
-    Attributes
-    ----------
-    t_s, q_rad, dq_rad_s, ddq_rad_s2, load_nm : ndarray, shape (n,)
-        As in :class:`FrictionRecording` [s, rad, rad/s, rad/s², N m].
-    v_eff : ndarray, shape (n,)
-        Velocity seen by the friction law [rad/s].
-    v_s : float
-        Smooth-sign velocity [rad/s].
-    scales : Scales
-    extra : dict
-        Integrator states of one time step (``{"states": {term name: state}}``).
-    gear_ratio : float or None
-        Reduction ratio N (wave-generator turns per output turn) when known [-].
-    """
-
-    t_s: np.ndarray
-    q_rad: np.ndarray
-    dq_rad_s: np.ndarray
-    ddq_rad_s2: np.ndarray
-    load_nm: np.ndarray | None
-    v_eff: np.ndarray
-    v_s: float
-    scales: Scales
-    extra: dict[str, Any] = field(default_factory=dict)
-    gear_ratio: float | None = None
-
-    @property
-    def n(self) -> int:
-        return int(self.t_s.shape[0])
-
-    @property
-    def sgn(self) -> np.ndarray:
-        """Smooth sign tanh(v_eff / v_s), shape (n,)."""
-        return np.tanh(self.v_eff / self.v_s)
-
-    def replace(self, **changes: Any) -> FrictionSignals:
-        return dataclasses.replace(self, **changes)
 
 
 def estimate_acceleration(t_s: np.ndarray, dq: np.ndarray, n_window: int = 21) -> np.ndarray:
@@ -402,35 +306,3 @@ def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:
     return path
 
 
-class PaperLaw(Term):
-    """Paper eq. (5) on the joint: b0 sgn(q̇) + b1 q̇ + b2 q̇³ + b3 sin(q + θ_b)."""
-
-    kind = "paper_law"
-    linear = (
-        Param("b0", "N m", "Coulomb level (smooth sign tanh(q̇/v_s))"),
-        Param("b1", "N m s/rad", "viscous coefficient"),
-        Param("b2", "N m s³/rad³", "cubic viscous coefficient"),
-        Param("b3_sin", "N m", "b3 cos θ_b (coefficient of sin q)"),
-        Param("b3_cos", "N m", "b3 sin θ_b (coefficient of cos q)"),
-    )
-    description = "paper eq. (5)-(6) mapped to the joint coordinate, smooth Coulomb sign"
-    source = "paper eq. (5)-(6); Tuttle & Seering 1996"
-
-    def columns(self, sig: FrictionSignals, theta: np.ndarray) -> np.ndarray:
-        v = sig.v_eff
-        q = sig.q_rad
-        return np.column_stack([sig.sgn, v, v ** 3, np.sin(q), np.cos(q)])
-
-    def derived(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
-        b0, b1, b2, a, b = (float(x) for x in coef)
-        return {"b0": b0, "b1": b1, "b2": b2, "b3": float(np.hypot(a, b)),
-                "theta_b": float(np.arctan2(b, a))}
-
-    def derived_units(self) -> dict[str, str]:
-        return {"b0": "N m", "b1": "N m s/rad", "b2": "N m s³/rad³", "b3": "N m",
-                "theta_b": "rad"}
-
-    def from_derived(self, b0: float, b1: float, b2: float, b3: float,
-                     theta_b: float) -> np.ndarray:
-        """Raw coefficients from (b0, b1, b2, b3, θ_b)."""
-        return np.array([b0, b1, b2, b3 * np.cos(theta_b), b3 * np.sin(theta_b)])

@@ -1,10 +1,11 @@
 """Discovery on the friction side: the candidate basis of a friction calibration.
 
-The friction adapter of :mod:`.discovery` (same mechanism, :func:`~.discovery.discover`:
-the final model's design projected off, lasso with the effective-sample BIC on the fit
-rows, forward selection scored on the validation rows). The basis is built from the
-friction signals (:class:`~.friction.FrictionSignals`: time t, joint angle q, velocity
-q̇, acceleration q̈, load when recorded):
+The friction adapter of :mod:`swgsim.calibration.discovery` (same mechanism,
+:func:`~swgsim.calibration.discovery.discover`: the final model's design projected off,
+lasso with the effective-sample BIC on the fit rows, forward selection scored on the
+validation rows). The basis is built from the friction signals
+(:class:`swgsim.friction.FrictionSignals`: time t, joint angle q, velocity q̇, acceleration q̈,
+load when recorded):
 
 * *ripples over the joint angle* at free periods, the strongest lines of the residual's
   periodogram over q and of the residual times sgn(q̇) (a ripple of the friction level
@@ -12,7 +13,7 @@ q̇, acceleration q̈, load when recorded):
   2π h q / P, plain and times sgn(q̇) (friction-level ripple), each also times |q̇| / v_ref
   and the load (an amplitude that grows with speed or load). With the gear ratio N
   the period is also quoted as the wave-generator order k = 2π / (P N)
-  (:func:`~.friction_ripples.wave_generator_order`);
+  (:func:`~swgsim.friction.ripples.wave_generator_order`);
 * *tones in time* at fixed frequencies (the strongest lines of the residual's spectrum
   over t: a vibration or a hidden periodic process, not periodic in q), with harmonics,
   plain and times |q̇| / v_ref;
@@ -24,9 +25,10 @@ q̇, acceleration q̈, load when recorded):
   paper's q̇ and q̇³) and *acceleration*: q̈ (an inertia-like term).
 
 The nuisance is the final model's linear design at its fitted nonlinear parameters
-(:func:`~.discovery.model_design`) and a constant, fitted on the fit rows: what the
-model already spans is not proposed again. Rows: the problem's fit and validation
-samples (time blocks, :mod:`.split`); the test blocks are not used.
+(:func:`~swgsim.calibration.discovery.model_design`) and a constant, fitted on the fit
+rows: what the model already spans is not proposed again. Rows: the problem's fit and
+validation samples (time blocks, :mod:`swgsim.calibration.split`); the test blocks are
+not used.
 
 Limits. Free periods and frequencies come from the residual of the fit and validation
 rows together (the line search sees the held-out rows, as the strain adapter's does);
@@ -42,12 +44,12 @@ from typing import Any
 
 import numpy as np
 
-from .discovery import MIN_GAIN, Group, Projector, Proposal, discover, line_spectrum, model_design
-from .friction_ranges import ripple_period_range
-from .friction_ripples import periodogram_peaks, wave_generator_order
-from .loop import CalibrationResult
+from ...friction.ranges import ripple_period_range
+from ...friction.ripples import periodogram_peaks, wave_generator_order
+from ..discovery import MIN_GAIN, Group, Projector, Proposal, discover, line_spectrum, model_design
+from ..loop import CalibrationResult
 
-__all__ = ["friction_basis", "propose_friction", "line_peaks"]
+__all__ = ["friction_basis", "propose", "line_peaks"]
 
 Describe = Callable[[dict[str, float]], tuple[str, dict[str, Any]]]
 
@@ -56,11 +58,12 @@ def line_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float, n_peaks
                harmonics: Sequence[int], exclude: Sequence[float] = ()) -> list[float]:
     """Strongest line frequencies of ``r`` over the coordinate ``x`` [cycles per unit of x].
 
-    Coarse: :func:`~.friction_ripples.periodogram_peaks` (5-fold oversampled FFT of the
-    binned signal); a peak within one main lobe (1 / span of x) of a harmonic or
+    Coarse: :func:`swgsim.friction.ripples.periodogram_peaks` (5-fold oversampled FFT of
+    the binned signal); a peak within one main lobe (1 / span of x) of a harmonic or
     subharmonic (1..max(harmonics)) of an earlier or excluded line is skipped. Fine: the
     least-squares line spectrum with ``harmonics`` fitted jointly
-    (:func:`~.discovery.line_spectrum`) on ± lobe / 4, then ± lobe / 80 (21 points each).
+    (:func:`~swgsim.calibration.discovery.line_spectrum`) on ± lobe / 4, then ± lobe /
+    80 (21 points each).
 
     Parameters
     ----------
@@ -321,9 +324,9 @@ def _keyed(describe: Describe, key: str) -> Describe:
     return out
 
 
-def propose_friction(result: CalibrationResult, max_terms: int = 5,
-                     min_gain: float = MIN_GAIN) -> list[Proposal]:
-    """Terms beyond the friction library: :func:`~.discovery.discover` on
+def propose(result: CalibrationResult, max_terms: int = 5, min_gain: float = MIN_GAIN,
+            only_if_structured: bool = True) -> list[Proposal]:
+    """Terms beyond the friction library: :func:`~swgsim.calibration.discovery.discover` on
     :func:`friction_basis`, repeated without the candidates whose held-out gain in the
     joint fit of the kept proposals is not above ``min_gain`` (forward selection admits
     a term on its gain at the time; once the variants are reduced, a later term can take
@@ -334,7 +337,10 @@ def propose_friction(result: CalibrationResult, max_terms: int = 5,
     result : CalibrationResult
         A friction calibration.
     max_terms : int, default 5
-    min_gain : float, default :data:`~.discovery.MIN_GAIN`
+    min_gain : float, default :data:`~swgsim.calibration.discovery.MIN_GAIN`
+    only_if_structured : bool, default True
+        Propose nothing when the loop's final residual is not structured
+        (``result.unexplained`` false).
 
     Returns
     -------
@@ -345,8 +351,10 @@ def propose_friction(result: CalibrationResult, max_terms: int = 5,
     ------
     ValueError
         Not a friction problem; ``max_terms`` or ``min_gain`` out of range
-        (:func:`~.discovery.discover`).
+        (:func:`~swgsim.calibration.discovery.discover`).
     """
+    if only_if_structured and not result.unexplained:
+        return []
     y, groups, fit, val, proj = friction_basis(result)
     props: list[Proposal] = []
     for _ in range(5):

@@ -1,43 +1,47 @@
-"""Summary, markdown report and figures of a strain calibration (:mod:`.strain`).
+"""Summary, markdown report and simulation option of a strain calibration.
 
-:func:`summarize_strain` (``summary.json``), :func:`order2_table`,
-:func:`render_strain_report` (``report.md``) and :func:`strain_figures`.
+:func:`summarize` (``summary.json``), :func:`order2_table`, :func:`render_report`
+(``report.md``) and :func:`simulation_files` (``sensor_effects.yaml``); figures:
+:mod:`.figures`.
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .loop import CalibrationResult
-from .report import (
+from ..discovery import proposals_section
+from ..loop import CalibrationResult
+from ..report import (
     UNCERTAINTY_METHOD,
+    base_summary,
     fmt_value,
     param_rows,
     result_section,
-    summarize,
     to_jsonable,
 )
-from .strain_align import flipped_ke, input_angle_evidence
-from .strain_checks import (
+from .align import flipped_ke, input_angle_evidence
+from .checks import (
     caveat,
     result_extras,
     simulation_option,
     too_small_rows,
     withheld_parameters,
 )
-from .strain_signals import SENSORS, StrainSignals
+from .discovery import propose
+from .problem import one_blas_thread
+from .signals import SENSORS, StrainSignals
 
 __all__ = [
     "IDENTIFIABILITY",
-    "summarize_strain",
+    "summarize",
+    "order2_components",
     "order2_table",
-    "render_strain_report",
-    "strain_figures",
+    "render_report",
+    "simulation_files",
 ]
 
 IDENTIFIABILITY = (
@@ -67,10 +71,10 @@ def _alignment_se(result: CalibrationResult) -> np.ndarray:
     return np.rad2deg(result.final.sigma / np.sqrt(np.maximum(info, 1e-30)))
 
 
-def summarize_strain(result: CalibrationResult, source: str | None = None) -> dict[str, Any]:
+def summarize(result: CalibrationResult, source: str | None = None) -> dict[str, Any]:
     """Machine-readable summary of a strain calibration (``summary.json``).
 
-    The keys of :func:`swgsim.calibration.report.summarize` (``rmse_before``,
+    The keys of :func:`swgsim.calibration.report.base_summary` (``rmse_before``,
     ``rmse_after`` on the test windows [mV/V], ``unexplained``, ``residual_signature``,
     ``iterations``, ...) with, for the strain side:
 
@@ -83,7 +87,7 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
     * ``simulation``: the option with a ``caveat`` (None, or why to use it with care:
       effects accepted in a run that ends unexplained) and ``withheld``;
     * ``too_small``: candidates rejected only for lack of evidence although their
-      held-out gain is positive (:mod:`.strain_checks`); ``implausible``: candidates of
+      held-out gain is positive (:mod:`.checks`); ``implausible``: candidates of
       the last iteration with very strong evidence but outside their physical range
       (they make the run ``unexplained``);
     * ``gear_ke_harmonics``: accepted kinematic-error harmonics for :func:`gear_with_ke`;
@@ -92,10 +96,15 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
       s.e., input angle at its start (nominal chain, and re-aligned with the accepted
       kinematic-error harmonics) modulo the period the data decide (``phi_in0_period_deg``:
       360°, or 180° where the odd orders of the torque ripple are below the noise,
-      :mod:`.strain_align`), with its s.e. and the evidence against a flip by 180°;
+      :mod:`.align`), with its s.e. and the evidence against a flip by 180°;
     * ``identifiability``: declared degeneracies and flagged parameters.
     """
-    s = summarize(result, source)
+    with one_blas_thread():  # alignment evidence, discovery: small products
+        return _summarize(result, source)
+
+
+def _summarize(result: CalibrationResult, source: str | None) -> dict[str, Any]:
+    s = base_summary(result, source)
     p = result.problem
     split_desc = s.pop("heldout")
     s["heldout"] = split_desc.get("text", "")
@@ -108,7 +117,6 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
     final = result.final
     withheld = withheld_parameters(result)
     sensor, ke = simulation_option(result, withheld)
-    s.pop("friction_effects", None)
     s["sensor_effects"] = to_jsonable(sensor)
     s["gear_ke_harmonics"] = to_jsonable(ke)
     s["withheld"] = to_jsonable(withheld)
@@ -169,15 +177,25 @@ def summarize_strain(result: CalibrationResult, source: str | None = None) -> di
     s["rmse_over_noise_floor"] = (result.rmse_after / diag.noise_floor
                                   if diag.noise_floor and diag.noise_floor > 0 else None)
     s["order2"] = to_jsonable(order2_table(result))
-    from .discovery import propose  # terms beyond the library (structured residual only)
     s["proposed"] = [q.as_dict() for q in propose(result)]
     return to_jsonable(s)
 
 
-def _order2(sig: StrainSignals, x: np.ndarray) -> np.ndarray:
-    """Amplitude and phase of the order-2 (ψ) component per window and channel: least
-    squares of x on [1, cos 2ψ, sin 2ψ], shape (n_w, 5, 2) (amplitude [mV/V], phase
-    [deg])."""
+def order2_components(sig: StrainSignals, x: np.ndarray) -> np.ndarray:
+    """Amplitude and phase of the order-2 (ψ) component per window and channel.
+
+    Parameters
+    ----------
+    sig : StrainSignals
+    x : ndarray, shape (n_windows * 5 * n_t,)
+        Signals on the problem's rows [mV/V].
+
+    Returns
+    -------
+    ndarray, shape (n_windows, 5, 2)
+        Least squares of x on [1, cos 2ψ, sin 2ψ] per window and channel: amplitude
+        [mV/V], phase [deg].
+    """
     n_w, n_t = sig.n_windows, sig.n_t
     xs = x.reshape(n_w, 5, n_t)
     psi = sig.psi_rad.reshape(n_w, 5, n_t)[:, 0]
@@ -195,7 +213,7 @@ def order2_table(result: CalibrationResult) -> list[dict[str, Any]]:
     and final model, mean over the windows of the operating point."""
     sig: StrainSignals = result.problem.signals
     pb, pa = result.predictions()
-    m, b, a = (_order2(sig, x) for x in (result.problem.y, pb, pa))
+    m, b, a = (order2_components(sig, x) for x in (result.problem.y, pb, pa))
     op_w = sig.op.reshape(sig.n_windows, -1)[:, 0]
     rows = []
     for i, o in enumerate(sig.ops):
@@ -210,7 +228,7 @@ def order2_table(result: CalibrationResult) -> list[dict[str, Any]]:
     return rows
 
 
-def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
+def render_report(result: CalibrationResult, summary: Mapping[str, Any],
                          figures: Mapping[str, str] | None = None) -> str:
     """Markdown report of a strain calibration.
 
@@ -218,7 +236,7 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
     ----------
     result : CalibrationResult
     summary : mapping
-        From :func:`summarize_strain`.
+        From :func:`summarize`.
     figures : mapping of str to str, optional
         Figure key to a path relative to the report.
     """
@@ -321,7 +339,6 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
         lines.append(f"| {r['n_in_rpm']:g} | {r['t_out_nm']:g} | {r['channel']} | "
                      f"{ap(r['measured'])} | {ap(r['baseline'])} | {ap(r['final'])} |")
     lines.append("")
-    from .discovery import proposals_section  # apart from the accepted effects
     lines += proposals_section(s.get("proposed", []))
     captions = {
         "order_spectrum": "Residual amplitude spectrum per channel against the order of the "
@@ -356,126 +373,31 @@ def render_strain_report(result: CalibrationResult, summary: Mapping[str, Any],
     return "\n".join(lines)
 
 
-def strain_figures(result: CalibrationResult, out_dir: str | Path,
-                   fmt: str = "png") -> dict[str, str]:
-    """Diagnosis figures of a strain calibration.
+def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
+    """The accepted effects as a simulation option: ``sensor_effects.yaml``, the list for
+    the data-set option ``sensor_effects`` (:func:`swgsim.measurement.parse_sensor_effects`),
+    with the accepted kinematic-error harmonics and the caveat as comments.
 
     Parameters
     ----------
-    result : CalibrationResult
-    out_dir : path-like
-        Folder for the figures (created).
-    fmt : str, default "png"
+    summary : mapping
+        From :func:`summarize`.
 
     Returns
     -------
     dict of str to str
-        Figure key -> file name (relative to ``out_dir``'s parent, for the report).
+        File name -> text.
     """
-    import matplotlib
+    import yaml
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    sig: StrainSignals = result.problem.signals
-    n_w, n_t, fs = sig.n_windows, sig.n_t, sig.fs
-    y = result.problem.y.reshape(n_w, 5, n_t)
-    pb, pa = (x.reshape(n_w, 5, n_t) for x in result.predictions())
-    rb, ra = y - pb, y - pa
-    sp = result.problem.split
-    role = np.zeros(n_w, int)
-    role[np.unique(sig.window[sp.validation])] = 1
-    role[np.unique(sig.window[sp.test])] = 2
-    test_w = int(np.flatnonzero(role == 2)[0]) if (role == 2).any() else 0
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    figs: dict[str, str] = {}
-
-    def save(fig, key):
-        name = f"{key}.{fmt}"
-        fig.savefig(out / name, dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        figs[key] = f"{out.name}/{name}"
-
-    # order spectrum relative to the input rotation
-    fig, axes = plt.subplots(5, 1, figsize=(8, 9), sharex=True)
-    win = np.hanning(n_t)
-    freqs = np.fft.rfftfreq(n_t, 1 / fs)
-    f_in = sig.n_in_rpm / 60.0
-    grid = np.arange(0, 30.01, 0.05)
-    for c in range(5):
-        for r, col, lab in ((rb, "0.6", "baseline"), (ra, colors[c % len(colors)], "final")):
-            spec = np.abs(np.fft.rfft(r[:, c] * win, axis=-1)) * 2 / win.sum()  # (n_w, n_f)
-            amp = np.mean([np.interp(grid, freqs / f_in[w], spec[w]) for w in range(n_w)],
-                          axis=0)
-            axes[c].plot(grid, amp, color=col, lw=1, label=lab)
-        axes[c].set_ylabel(f"{SENSORS[c]} [mV/V]")
-    axes[0].legend(loc="upper right", fontsize=8)
-    axes[-1].set_xlabel("order relative to the input rotation")
-    fig.suptitle("Residual amplitude spectrum (Hann), mean over windows")
-    save(fig, "order_spectrum")
-
-    # offsets and drift along the sequence
-    t_start = sig.t_seq_s.reshape(n_w, 5, n_t)[:, 0, 0]
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
-    for ax, r, title in ((axes[0], rb, "baseline residual"), (axes[1], ra, "final residual")):
-        mean = r.mean(-1)
-        for c in range(5):
-            ax.plot(t_start, mean[:, c], "o-", ms=4, lw=0.8, color=colors[c % len(colors)],
-                    label=SENSORS[c])
-        for w in np.flatnonzero(role > 0):
-            ax.axvline(t_start[w], color="r" if role[w] == 2 else "orange", lw=0.6, alpha=0.5)
-        ax.set_title(title)
-        ax.set_xlabel("time since the first window [s] (red: test, orange: validation)")
-    axes[0].set_ylabel("mean residual [mV/V]")
-    axes[1].legend(fontsize=8)
-    save(fig, "offsets")
-
-    # channel differences
-    t_ms = np.arange(n_t) / fs * 1e3
-    fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), sharex=True)
-    for j, (a, b) in enumerate(((1, 3), (2, 4))):
-        lab = f"s{a}−s{b}"
-        axes[0, j].plot(t_ms, y[test_w, a] - y[test_w, b], color="k", lw=0.8, label="measured")
-        axes[0, j].plot(t_ms, pb[test_w, a] - pb[test_w, b], color="0.6", lw=1, label="baseline")
-        axes[0, j].plot(t_ms, pa[test_w, a] - pa[test_w, b], color=colors[0], lw=1, label="final")
-        axes[0, j].set_title(lab)
-        axes[1, j].plot(t_ms, rb[test_w, a] - rb[test_w, b], color="0.6", lw=0.8)
-        axes[1, j].plot(t_ms, ra[test_w, a] - ra[test_w, b], color=colors[0], lw=0.8)
-        axes[1, j].set_xlabel("time in the window [ms]")
-    axes[0, 0].set_ylabel("[mV/V]")
-    axes[1, 0].set_ylabel("residual [mV/V]")
-    axes[0, 0].legend(fontsize=8)
-    save(fig, "channel_differences")
-
-    # amplitude and phase with speed and load
-    m, b, a = (_order2(sig, x.reshape(-1)) for x in (y, pb, pa))
-    fig, axes = plt.subplots(2, 5, figsize=(13, 5))
-    x_op = np.array([f"{sig.n_in_rpm[w]:.0f}/{sig.t_out_nm[w]:.0f}" for w in range(n_w)])
-    order = np.lexsort((sig.t_out_nm, sig.n_in_rpm))
-    for c in range(5):
-        for z, mk, lab in ((m, "o", "measured"), (b, "x", "baseline"), (a, "+", "final")):
-            axes[0, c].plot(x_op[order], z[order, c, 0], mk, label=lab, ms=6)
-            axes[1, c].plot(x_op[order], z[order, c, 1], mk, ms=6)
-        axes[0, c].set_title(SENSORS[c])
-        axes[1, c].set_xlabel("n_in [rpm] / T_out [N m]")
-        for ax in axes[:, c]:
-            ax.tick_params(axis="x", labelrotation=60, labelsize=7)
-    axes[0, 0].set_ylabel("order-2 amplitude [mV/V]")
-    axes[1, 0].set_ylabel("order-2 phase [deg]")
-    axes[0, 0].legend(fontsize=7)
-    fig.tight_layout()
-    save(fig, "speed_load")
-
-    # overlay of a test window
-    fig, axes = plt.subplots(5, 1, figsize=(8, 9), sharex=True)
-    for c in range(5):
-        axes[c].plot(t_ms, y[test_w, c], color="k", lw=0.7, label="measured")
-        axes[c].plot(t_ms, pb[test_w, c], color="0.6", lw=1, label="baseline")
-        axes[c].plot(t_ms, pa[test_w, c], color=colors[0], lw=1, label="final")
-        axes[c].set_ylabel(f"{SENSORS[c]} [mV/V]")
-    axes[0].legend(fontsize=8, loc="upper right")
-    axes[-1].set_xlabel("time in the window [ms]")
-    save(fig, "overlay")
-    return figs
+    sim = summary.get("simulation") or {}
+    head = [f"# accepted sensor effects of {summary['name']} (swgsim-calibrate); the "
+            "data-set option sensor_effects"]
+    if sim.get("gear_ke_harmonics"):
+        head.append("# kinematic-error harmonics (swgsim.dynamics.gear_with_ke): "
+                    + json.dumps(sim["gear_ke_harmonics"]))
+    if sim.get("caveat"):
+        head.append(f"# caveat: {sim['caveat']}")
+    body = yaml.safe_dump({"sensor_effects": list(sim.get("sensor_effects") or [])},
+                          sort_keys=False)
+    return {"sensor_effects.yaml": "\n".join(head) + "\n" + body}

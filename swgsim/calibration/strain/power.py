@@ -1,17 +1,17 @@
 """Power of the strain-side acceptance rule, measured on planted bench data.
 
 For each seed, bench windows are simulated through the chain's standard path with their
-own random WG start angles (:func:`.strain_synthetic.simulate_windows`), white noise of
+own random WG start angles (:func:`.synthetic.simulate_windows`), white noise of
 ``noise_rel`` of the signal range with its own seed, once with a planted effect and once
-clean; both are calibrated (:func:`.strain.calibrate_strain`). A planted effect is
+clean; both are calibrated (:mod:`.problem`). A planted effect is
 *found* when it is accepted and every planted parameter is recovered within
 ``rel_tol`` of its true value (relative values for gains and gauge angles,
-:func:`.strain_synthetic.expected_values`); clean data are *left alone* when no effect is
+:func:`.synthetic.expected_values`); clean data are *left alone* when no effect is
 accepted. Power = found seeds / seeds; the false-alarm side = 1 − left alone / seeds.
 
 Typical use (``scripts/strain_power.py`` prints the table)::
 
-    from swgsim.calibration.strain_power import power_study
+    from swgsim.calibration.strain.power import power_study
     rows = power_study(["gauge_misplacement_s2"], seeds=range(10))
 """
 
@@ -24,9 +24,12 @@ from typing import Any
 
 import numpy as np
 
-from ..chain import SimulationChain
-from . import strain_synthetic as syn
-from .strain import StrainModel, calibrate_strain
+from ...chain import SimulationChain
+from ..loop import SelectionConfig
+from . import synthetic as syn
+from .model import StrainModel
+from .problem import build_problem, calibrate
+from .report import summarize
 
 __all__ = ["POWER_EFFECTS", "PowerRow", "power_study", "format_power_table"]
 
@@ -44,7 +47,7 @@ POWER_EFFECTS: dict[str, dict[str, Any]] = {
 }
 """Planted cases of the power study: a 1.5° misplacement of one gauge (s2: a torque
 half bridge; s1: a WG-bending half bridge); every key of
-:data:`.strain_synthetic.PLANTED` that is not marked implausible is accepted too."""
+:data:`.synthetic.PLANTED` that is not marked implausible is accepted too."""
 
 
 @dataclass
@@ -130,7 +133,7 @@ def power_study(effects: Sequence[str], seeds: Iterable[int] = range(10), *,
     ----------
     effects : sequence of str
         Keys of :data:`POWER_EFFECTS` or plausible keys of
-        :data:`.strain_synthetic.PLANTED`.
+        :data:`.synthetic.PLANTED`.
     seeds : iterable of int
         Seed k draws the WG start angles (``k``) and the noise (``1000 + k``).
     noise_rel : float, default 0.01
@@ -144,7 +147,7 @@ def power_study(effects: Sequence[str], seeds: Iterable[int] = range(10), *,
     clean : bool, default True
         Also calibrate the clean data of every seed (once, shared by all effects).
     **options
-        Passed to :func:`.strain.calibrate_strain` (selection settings).
+        Selection settings (:class:`~swgsim.calibration.loop.SelectionConfig` fields).
 
     Returns
     -------
@@ -157,6 +160,11 @@ def power_study(effects: Sequence[str], seeds: Iterable[int] = range(10), *,
         Unknown effect.
     """
     specs = [(e, _spec(e)) for e in effects]
+    config = SelectionConfig(**options)
+
+    def run(ds: Any, **problem_options: Any) -> dict[str, Any]:
+        return summarize(calibrate(build_problem(ds, model=model, **problem_options), config))
+
     chain = chain if chain is not None else SimulationChain()
     model = model if model is not None else StrainModel(chain=chain)
     seeds = [int(s) for s in seeds]
@@ -169,7 +177,7 @@ def power_study(effects: Sequence[str], seeds: Iterable[int] = range(10), *,
         if clean:
             t0 = time.perf_counter()
             ds, _ = syn.bench_dataset(windows[k], (), noise_rel=noise_rel, seed=1000 + k)
-            s = calibrate_strain(ds, None, model=model, figures=False, **options)
+            s = run(ds)
             clean_added.append([e["name"] for e in s["effects_added"]])
             t_clean += time.perf_counter() - t0
     for name, spec in specs:
@@ -183,10 +191,7 @@ def power_study(effects: Sequence[str], seeds: Iterable[int] = range(10), *,
             period = spec.get("window_period_s")
             ds, _ = syn.bench_dataset(win, spec.get("sensor_effects", ()), noise_rel=noise_rel,
                                       seed=1000 + k, window_period_s=period)
-            kw = dict(options)
-            if period is not None:
-                kw.setdefault("window_period_s", period)
-            s = calibrate_strain(ds, None, model=model, figures=False, **kw)
+            s = run(ds, **({} if period is None else {"window_period_s": period}))
             ok, est, truth = _recovered(spec, s, rel_tol)
             truth0 = truth0 or truth
             found += ok

@@ -3,7 +3,7 @@
 The measured data are strain-gauge windows (data kind 2, schema v1). Every sample of
 every window and channel is one entry of the target vector, in the order (window,
 channel, time). The chain's prediction of a window (the nominal gear at the window's
-operating point, aligned to the window's WG angle and input angle; :mod:`.strain`) is
+operating point, aligned to the window's WG angle and input angle; :mod:`.problem`) is
 split into *basis* signals, each of shape (n_windows, 5, n_ext) on a time grid that
 extends ``n_lead`` samples before and ``n_tail`` samples after the window (filters
 and shifts need the history):
@@ -14,7 +14,7 @@ s_t         T_out(t) h(ψ): the torque pattern [mV/V]
 dpsi        ∂(s_wg + s_t)/∂ψ at fixed torque [mV/V / rad]
 ==========  ==========================================================================
 
-The effect library that maps and extends this basis is :mod:`.strain_effects`.
+The effect library that maps and extends this basis is :mod:`.effects`.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Each window's input angle φ_in (the wave generator's angle in the housing frame) is a
 nuisance found by aligning the simulated output torque ripple to the window
-(:mod:`.strain`): the torque ripple of the kinematic error carries the input angle.
+(:mod:`.problem`): the torque ripple of the kinematic error carries the input angle.
 The dominant harmonic is order 2 (two teeth zones per WG revolution), which repeats every
 half revolution, so the alignment objective has two near-equal peaks 180° apart. Only the
 odd orders (order 1 of the nominal gear: 0.4e-4 rad, eccentricity) tell them apart. When
@@ -12,12 +12,12 @@ of the two peaks then flips φ_in by 180° at random (measured on planted bench 
 barely depends on the choice (that is what "below the noise" means), but a reported
 angle must not claim more than the data hold.
 
-:func:`input_angle_evidence` gives, per window, the evidence for the chosen peak
-against the best shift half a revolution away, 2 ln Λ = ΔJ / σ² (J: the drop of the
-residual sum of squares with per-channel gains and offsets, σ² the residual variance
-per sample): the log-likelihood ratio of the two alignments (Gaussian errors, gains
-profiled out). Above ``min_evidence`` (10, "very strong" on the 2 ln B scale of Kass &
-Raftery 1995, as the acceptance rule of :mod:`.loop`) φ_in is reported modulo 360°, else
+:func:`input_angle_evidence` gives, per window, the evidence for the chosen peak against
+the best shift half a revolution away, 2 ln Λ = ΔJ / σ² (J: the drop of the residual sum
+of squares with per-channel gains and offsets, σ² the residual variance per sample): the
+log-likelihood ratio of the two alignments (Gaussian errors, gains profiled out). Above
+``min_evidence`` (10, "very strong" on the 2 ln B scale of Kass & Raftery 1995, as the
+acceptance rule of :mod:`swgsim.calibration.loop`) φ_in is reported modulo 360°, else
 modulo 180° and marked ambiguous. The standard error of φ_in comes from the curvature of
 the objective at its peak (Fisher information −J'' / 2σ²).
 
@@ -87,7 +87,7 @@ def input_angle_evidence(objectives: Sequence[np.ndarray], fs: float,
     objectives : sequence of ndarray
         Per window, the torque-alignment objective J over shifts of 0, 1, ... samples
         covering at least one input revolution [(mV/V)²] (``Realigner.objectives`` of
-        :mod:`.strain_model`).
+        :mod:`.model`).
     fs : float
         Sample rate [Hz].
     n_in_rpm : ndarray, shape (n_w,)
