@@ -122,7 +122,7 @@ def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
 
 def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
     """Markdown section on the ripples (summary key ``ripples``, written by
-    :func:`~swgsim.calibration.ripple_groups.group_ripples`): the validation RMSE as
+    :func:`~swgsim.calibration.friction.ripple_groups.group_ripples`): the validation RMSE as
     ripple instances were added, harmonic groups, ripples removed for lack of held-out
     support, the held-out evidence of each ripple kept.
 
@@ -189,10 +189,9 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
     return lines
 
 
-
 def render_report(result: CalibrationResult, summary: Mapping[str, Any],
                   figures: Mapping[str, str] | None = None) -> str:
-    """Markdown report of a calibration.
+    """Markdown report of a friction calibration.
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Calibration of the simulation chain against measured strain windows (data kind 2).
+"""Measured strain windows (data kind 2) as a calibration problem, and its calibration.
 
 Input: a schema-v1 data set (``swgsim.data``) of bench windows, fault possibly
 ``"unknown"``, each with its operating point (``n_in_rpm``, ``t_out_nm``,

@@ -229,7 +229,7 @@ def order2_table(result: CalibrationResult) -> list[dict[str, Any]]:
 
 
 def render_report(result: CalibrationResult, summary: Mapping[str, Any],
-                         figures: Mapping[str, str] | None = None) -> str:
+                  figures: Mapping[str, str] | None = None) -> str:
     """Markdown report of a strain calibration.
 
     Parameters
