@@ -115,9 +115,12 @@ def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
     sim = summary.get("simulation") or {}
     fx = {"v_s": sim.get("v_s_rad_s"), "t0_s": sim.get("t0_s"),
           "baseline": sim.get("baseline"), "effects": summary["friction_effects"]}
-    return {"friction_effects.yaml":
-            f"# accepted friction effects of {summary['name']} (swgsim-calibrate); a config "
-            "option for conf/friction_effects/\n" + yaml.safe_dump(fx, sort_keys=False)}
+    head = (f"# accepted friction effects of {summary['name']} (swgsim-calibrate); a config "
+            "option for conf/friction_effects/\n")
+    if summary.get("unexplained") and summary["friction_effects"]:
+        head += ("# caveat: the run ends unexplained (the final residual is still structured); "
+                 "the effects may absorb part of what no library effect explains\n")
+    return {"friction_effects.yaml": head + yaml.safe_dump(fx, sort_keys=False)}
 
 
 def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
