@@ -13,7 +13,7 @@ ranking. The markdown helpers (:func:`result_section`, :func:`param_rows`,
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -21,7 +21,8 @@ import numpy as np
 from .core import FitResult, Term
 from .loop import CalibrationResult
 
-__all__ = ["base_summary", "UNCERTAINTY_METHOD", "to_jsonable", "fmt_value", "param_rows",
+__all__ = ["base_summary", "caveat", "option_yaml", "UNCERTAINTY_METHOD", "to_jsonable",
+           "fmt_value", "param_rows",
            "result_section", "implausible_candidates", "implausible_lines",
            "effect_range_lines"]
 
@@ -211,6 +212,49 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
     }
     return to_jsonable(out)
 
+
+
+def caveat(result: CalibrationResult) -> str | None:
+    """Caveat for the simulation option of a run that ends unexplained, else None.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+
+    Returns
+    -------
+    str or None
+        Why to use the accepted effects with care (the final residual is still
+        structured, so they may have absorbed part of it); None when the run is explained
+        or accepted nothing.
+    """
+    if not (result.unexplained and result.added):
+        return None
+    return ("The final residual is still structured (" + result.residual_signature.rstrip(".")
+            + "): the accepted effects (" + ", ".join(result.added) + ") were chosen in the "
+            "presence of structure that no library effect explains and may have absorbed "
+            "part of it. Use them as a simulation option with care: check them on data "
+            "without that structure, or once the structure is modelled.")
+
+
+def option_yaml(comments: Sequence[str], option: Mapping[str, Any]) -> str:
+    """A simulation option as YAML text, with comment lines above it.
+
+    Parameters
+    ----------
+    comments : sequence of str
+        One comment per line, without the ``#``.
+    option : mapping
+        The option (JSON-ready values).
+
+    Returns
+    -------
+    str
+    """
+    import yaml
+
+    return "".join(f"# {c}\n" for c in comments) + yaml.safe_dump(dict(option),
+                                                                   sort_keys=False)
 
 
 # ---------------------------------------------------------------------------------------

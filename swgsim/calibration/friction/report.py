@@ -19,8 +19,10 @@ from ..discovery import proposals_section
 from ..loop import CalibrationResult
 from ..report import (
     base_summary,
+    caveat,
     effect_range_lines,
     fmt_value,
+    option_yaml,
     param_rows,
     result_section,
     to_jsonable,
@@ -90,6 +92,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
     s["simulation"] = {
         "v_s_rad_s": meta.get("v_s_rad_s"), "t0_s": meta.get("t0_s"),
         "baseline": {k: e.value for k, e in final_base.items()},
+        "caveat": caveat(result),
         "call": "swgsim.friction.FrictionEffects(summary['friction_effects'], "
                 "v_s=summary['simulation']['v_s_rad_s'], baseline=summary['simulation']"
                 "['baseline'], t0=summary['simulation']['t0_s'])"}
@@ -110,17 +113,14 @@ def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
     dict of str to str
         File name -> text.
     """
-    import yaml
-
     sim = summary.get("simulation") or {}
     fx = {"v_s": sim.get("v_s_rad_s"), "t0_s": sim.get("t0_s"),
           "baseline": sim.get("baseline"), "effects": summary["friction_effects"]}
-    head = (f"# accepted friction effects of {summary['name']} (swgsim-calibrate); a config "
-            "option for conf/friction_effects/\n")
-    if summary.get("unexplained") and summary["friction_effects"]:
-        head += ("# caveat: the run ends unexplained (the final residual is still structured); "
-                 "the effects may absorb part of what no library effect explains\n")
-    return {"friction_effects.yaml": head + yaml.safe_dump(fx, sort_keys=False)}
+    head = [f"accepted friction effects of {summary['name']} (swgsim-calibrate); a config "
+            "option for conf/friction_effects/"]
+    if sim.get("caveat"):
+        head.append(f"caveat: {sim['caveat']}")
+    return {"friction_effects.yaml": option_yaml(head, fx)}
 
 
 def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
@@ -344,5 +344,7 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
             lines.append(f"  - {{kind: {e['kind']}, name: '{e['name']}', params: {{{ps}}}{opt}}}")
         lines += [f"friction_v_s: {fmt_value(sim.get('v_s_rad_s'), 6)}",
                   f"friction_t0_s: {fmt_value(sim.get('t0_s'), 6)}", "```", ""]
+        if sim.get("caveat"):
+            lines += [f"**Caveat.** {sim['caveat']}", ""]
     lines += [f"Run time {fmt_value(s['elapsed_s'], 3)} s.", ""]
     return "\n".join(lines)

@@ -8,7 +8,8 @@ A calibration's accepted effects become a simulation option (``sensor_effects`` 
   of the option (its channel gets the neutral value) and listed with the reason
   (:func:`withheld_parameters`);
 * *caveat*: effects accepted in a run whose final residual is still structured may
-  have absorbed part of what no library effect explains (:func:`caveat`);
+  have absorbed part of what no library effect explains
+  (:func:`swgsim.calibration.report.caveat`, shared with the friction side);
 * *too small*: candidates rejected only for lack of evidence although their held-out
   gain is positive are named in the report's Result section (:func:`too_small_rows`).
 """
@@ -22,8 +23,7 @@ import numpy as np
 
 from ..loop import CalibrationResult
 
-__all__ = ["withheld_parameters", "simulation_option", "caveat", "too_small_rows",
-           "result_extras"]
+__all__ = ["withheld_parameters", "simulation_option", "too_small_rows", "result_extras"]
 
 
 def withheld_parameters(result: CalibrationResult) -> list[dict[str, Any]]:
@@ -89,17 +89,6 @@ def simulation_option(result: CalibrationResult, withheld: list[dict[str, Any]]
         if hasattr(term, "gear_harmonic"):
             ke.append(term.gear_harmonic(final.coefs[i], final.thetas[i]))
     return sensor, ke
-
-
-def caveat(result: CalibrationResult) -> str | None:
-    """Caveat for the simulation option of a run that ends unexplained, else None."""
-    if not (result.unexplained and result.added):
-        return None
-    return ("The final residual is still structured (" + result.residual_signature.rstrip(".")
-            + "): the accepted effects (" + ", ".join(result.added) + ") were chosen in the "
-            "presence of structure that no library effect explains and may have absorbed "
-            "part of it. Use them as a simulation option with care: check them on data "
-            "without that structure, or once the structure is modelled.")
 
 
 def too_small_rows(result: CalibrationResult) -> list[dict[str, Any]]:

@@ -18,14 +18,15 @@ from ..loop import CalibrationResult
 from ..report import (
     UNCERTAINTY_METHOD,
     base_summary,
+    caveat,
     fmt_value,
+    option_yaml,
     param_rows,
     result_section,
     to_jsonable,
 )
 from .align import flipped_ke, input_angle_evidence
 from .checks import (
-    caveat,
     result_extras,
     simulation_option,
     too_small_rows,
@@ -388,16 +389,13 @@ def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
     dict of str to str
         File name -> text.
     """
-    import yaml
-
     sim = summary.get("simulation") or {}
-    head = [f"# accepted sensor effects of {summary['name']} (swgsim-calibrate); the "
-            "data-set option sensor_effects"]
+    head = [f"accepted sensor effects of {summary['name']} (swgsim-calibrate); the data-set "
+            "option sensor_effects"]
     if sim.get("gear_ke_harmonics"):
-        head.append("# kinematic-error harmonics (swgsim.dynamics.gear_with_ke): "
+        head.append("kinematic-error harmonics (swgsim.dynamics.gear_with_ke): "
                     + json.dumps(sim["gear_ke_harmonics"]))
     if sim.get("caveat"):
-        head.append(f"# caveat: {sim['caveat']}")
-    body = yaml.safe_dump({"sensor_effects": list(sim.get("sensor_effects") or [])},
-                          sort_keys=False)
-    return {"sensor_effects.yaml": "\n".join(head) + "\n" + body}
+        head.append(f"caveat: {sim['caveat']}")
+    return {"sensor_effects.yaml": option_yaml(
+        head, {"sensor_effects": list(sim.get("sensor_effects") or [])})}
