@@ -77,12 +77,13 @@ class ProtocolConfig:
 
 
 def class_labels(y: Sequence[str]) -> list[str]:
-    """Classes present in ``y``: the schema's order (:data:`swgsim.data.FAULT_CLASSES`)
+    """Classes present in ``y``: the registry's order (:func:`swgsim.faults.fault_classes`)
     first, any others sorted after."""
-    from swgsim.data import FAULT_CLASSES
+    from swgsim.faults import fault_classes
 
+    known = fault_classes()
     present = {str(c) for c in np.unique(np.asarray(y).astype(str))}
-    return [c for c in FAULT_CLASSES if c in present] + sorted(present - set(FAULT_CLASSES))
+    return [c for c in known if c in present] + sorted(present - set(known))
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import pandas as pd
 from learn.baselines import MODEL_LABELS
 from learn.features import order_spectrum, reference_index
 from learn.paper_results import GEAR_SPLITS, PAPER_RESULTS, PAPER_TABLES, SPLIT_LABELS, table_spec
-from swgsim.data import FAULT_CLASSES
+from swgsim.faults import fault_classes
 
 log = logging.getLogger(__name__)
 
@@ -191,8 +191,8 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
         samples, refs = reference_index(ds)
         healthy = int(refs[np.flatnonzero(np.isin(samples, list(idx.values())))[0]])
 
-    faults = [f for f in FAULT_CLASSES if f in idx and f != "healthy"]
-    faults += sorted(set(idx) - set(FAULT_CLASSES))  # e.g. "unknown" of measured data
+    faults = [f for f in fault_classes() if f in idx and f != "healthy"]
+    faults += sorted(set(idx) - set(fault_classes()))  # e.g. "unknown" of measured data
     fig = Figure(figsize=(12, 7), layout="constrained")
     axes = fig.subplots(2, 3, sharex=True).ravel()
     for ax, f, letter in zip(axes, faults, "abcdef", strict=False):

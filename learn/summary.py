@@ -31,7 +31,7 @@ from learn.paper_results import (
     side_by_side,
     table_spec,
 )
-from swgsim.data import FAULT_CLASSES
+from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
 
 log = logging.getLogger(__name__)
 

@@ -53,14 +53,6 @@ import numpy as np
 log = logging.getLogger(__name__)
 
 SCHEMA_VERSION = 1
-FAULT_CLASSES = (
-    "healthy",
-    "reduced_damping",
-    "reduced_stiffness",
-    "eccentric_wg",
-    "root_tooth_crack",
-    "tip_tooth_crack",
-)
 SENSORS = ("s0", "s1", "s2", "s3", "s4")
 PER_SAMPLE = {
     "gear": ("int64", ""),

@@ -124,6 +124,8 @@ class Fault:
         ``apply(params, severity, position_deg) -> ChainParams``.
     signature : str
         Expected signature in the signals (paper Sec. II-C).
+    display : str
+        Name in reports and figures (e.g. "eccentric WG"); default: the name with spaces.
     """
 
     name: str
@@ -132,6 +134,11 @@ class Fault:
     uses_position: bool
     apply: Callable[[ChainParams, float, float], ChainParams]
     signature: str
+    display: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.display:
+            object.__setattr__(self, "display", self.name.replace("_", " "))
 
 
 #: Mesh on which root-crack severities are defined (the default truss, 3 deg per node).
@@ -190,6 +197,8 @@ def _healthy(p, s, pos):
     return p
 
 
+#: The registry of fault classes, in the schema's class order (healthy first): the one
+#: place that lists them, with their display names. Extend it with :func:`register_fault`.
 FAULTS: dict[str, Fault] = {
     f.name: f
     for f in (
@@ -199,13 +208,65 @@ FAULTS: dict[str, Fault] = {
         Fault("reduced_stiffness", "I/O dynamics", (0.0, 0.9), False, _stiffness,
               "torque ripple changes slightly, mostly in s0 (Fig. 6b)"),
         Fault("eccentric_wg", "flexspline", (0.0, 0.5), True, _eccentric,
-              "offsets of the WG-bending pair and a changed, order-1 modulated shape (Fig. 6c)"),
+              "offsets of the WG-bending pair and a changed, order-1 modulated shape (Fig. 6c)",
+              display="eccentric WG"),
         Fault("root_tooth_crack", "flexspline", (0.0, 0.99), True, _root,
-              "amplitudes change in all signals (Fig. 6d)"),
+              "amplitudes change in all signals (Fig. 6d)", display="root crack"),
         Fault("tip_tooth_crack", "flexspline", (0.0, 1.0), True, _tip,
-              "short deviations when a mesh zone passes the crack (Fig. 6e)"),
+              "short deviations when a mesh zone passes the crack (Fig. 6e)",
+              display="tip crack"),
     )
 }
+
+#: The paper's six classes (Table I and healthy), in the schema's order.
+PAPER_CLASSES: tuple[str, ...] = tuple(FAULTS)
+
+
+def fault_classes() -> tuple[str, ...]:
+    """Names of the registered classes, healthy first, in registration order."""
+    return tuple(FAULTS)
+
+
+def display_name(name: str) -> str:
+    """Name of a class in reports and figures (its :attr:`Fault.display`); an
+    unregistered label (e.g. ``"unknown"`` of measured data) is returned with spaces."""
+    f = FAULTS.get(name)
+    return f.display if f is not None else str(name).replace("_", " ")
+
+
+def register_fault(fault: Fault) -> Fault:
+    """Add a fault class to the registry (:data:`FAULTS`), e.g. from a user's package.
+
+    The simulator, the data-set schema and the learners take their class list from the
+    registry, so a registered fault can be given under ``dataset.variants`` at once.
+
+    Parameters
+    ----------
+    fault : Fault
+        Its ``apply`` maps healthy :class:`ChainParams` to faulty ones (parameters, never
+        signals); severity 0 must return them unchanged.
+
+    Returns
+    -------
+    Fault
+        ``fault``, so that the call can decorate a module-level definition.
+
+    Raises
+    ------
+    ValueError
+        A name already registered or not a lower-case identifier, or a severity range
+        that does not hold 0 (the healthy gear).
+    """
+    if not fault.name.isidentifier() or fault.name != fault.name.lower():
+        raise ValueError(f"fault name must be a lower-case identifier, got {fault.name!r}")
+    if fault.name in FAULTS:
+        raise ValueError(f"fault {fault.name!r} is registered already")
+    lo, hi = fault.severity_range
+    if not (lo <= 0.0 <= hi):
+        raise ValueError(f"fault {fault.name}: severity_range {fault.severity_range} must "
+                         "hold 0 (the healthy gear)")
+    FAULTS[fault.name] = fault
+    return fault
 
 
 def get_fault(name: str) -> Fault:

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swgsim.data import FAULT_CLASSES, MANIFEST, SCHEMA_VERSION, atomic_write_json, write_shard
+from swgsim.data import MANIFEST, SCHEMA_VERSION, atomic_write_json, write_shard
+from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
 
 
 def make_synthetic(

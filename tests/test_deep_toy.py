@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from swgsim.data import FAULT_CLASSES, MANIFEST, atomic_write_json, make_dataset, write_shard
+from swgsim.data import MANIFEST, atomic_write_json, make_dataset, write_shard
+from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
 
 SPEEDS_RPM = (2000.0, 4000.0)
 TORQUES_NM = (7.0, 70.0)

@@ -16,6 +16,7 @@ from swgcli import compose_app, dataset_preset
 from swgsim import data as dsio
 from swgsim import generate as gen
 from swgsim.config import paper_config
+from swgsim.faults import PAPER_CLASSES
 from swgsim.friction import friction_effects_from_config
 
 
@@ -44,7 +45,7 @@ def test_paper_grid_counts():
     n = sum(len([w for w in s.windows if not w.reference]) for s in shards)
     assert n == 6480  # 3 gears x 6 classes x 60 variants x 6 operating points
     classes = {w.fault for s in shards for w in s.windows}
-    assert classes == set(dsio.FAULT_CLASSES)
+    assert classes == set(PAPER_CLASSES)
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ from learn.paper_results import (
 )
 from learn.summary import recall, write_summary
 from swgcli import dataset_preset
-from swgsim.data import FAULT_CLASSES
+from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
 
 FOLD_JITTER = np.array([-1.0, 1.0, -2.0, 2.0])  # points; averages to zero over 4 folds
 
