@@ -10,25 +10,26 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from swgsim.acquisition import Acquisition
+from swgsim.config import DatasetConfig
 
-def _amp(acq: Mapping[str, Any]) -> str:
-    a = acq.get("amplifier")
-    if not a:
+
+def _amp(acq: Acquisition) -> str:
+    a = acq.amplifier
+    if a is None:
         return "none: ideal, noise-free sampling"
-    noise = a["noise_uv_rms"] / a["excitation_v"]
-    rng = a["vref_v"] / a["gain"] / a["excitation_v"] * 1e3
-    return (f"{a['name']}: noise {a['noise_uv_rms']} uV rms at {a['excitation_v']} V "
-            f"excitation = {noise:.2f} uV/V rms, range ±{rng:.2f} mV/V, {a['bits']} bit, "
-            f"sinc{a['order']} filter modelled at {a['oversample']}x the data rate")
+    return (f"{a.name}: noise {a.noise_uv_rms} uV rms at {a.excitation_v} V "
+            f"excitation = {1e3 * a.noise_mvv:.2f} uV/V rms, range ±{a.range_mvv:.2f} mV/V, "
+            f"{a.bits} bit, sinc{a.order} filter modelled at {a.oversample}x the data rate")
 
 
-def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[dict[str, str]]:
+def open_choices(dataset: DatasetConfig, study: Mapping[str, Any]) -> list[dict[str, str]]:
     """The paper's open choices for one data set and study.
 
     Parameters
     ----------
-    dataset : mapping
-        Resolved data-set config (``conf/dataset/<name>.yaml``).
+    dataset : DatasetConfig
+        The data set's config (e.g. ``conf/dataset/<name>.yaml``, composed).
     study : mapping
         Study settings: ``scale`` (bool), ``max_order``, ``order_step``, ``floor_rel``
         (feature settings, optional).
@@ -41,39 +42,39 @@ def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[d
     from learn.features import FeatureSettings
 
     fs = FeatureSettings.of(study)
-    ch, dist, tol = dataset["chain"], dataset["disturbance"], dataset["tolerances"]
-    acq = dataset.get("acquisition") or {}
-    v = dataset["variants"]
-    ops = dataset["operating_points"]
-    n_rev = [ch["window_s"] * n / 60 for n in ops["n_in_rpm"]]
+    ch, dist, tol = dataset.chain, dataset.disturbance, dataset.tolerances
+    acq = dataset.acquisition
+    v = dataset.variants
+    ops = dataset.operating_points
+    n_rev = [ch.window_s * n / 60 for n in ops.n_in_rpm]
 
     def lin(name):
-        a, b, n = v[name]["severity_linspace"]
+        a, b, n = v[name].severity_linspace
         return f"{n} values of {a:g} … {b:g}"
 
     rows = [
         ("Window start (protocol)",
          "fixed: every simulation starts at input angle "
-         f"{acq.get('wg_start_deg', 0.0):g}°" if acq.get("start") == "fixed"
+         f"{acq.wg_start_deg:g}°" if acq.start == "fixed"
          else "random: input angle uniform over [0, 2π N), i.e. random WG and output angle",
          "Sec. III-B: the healthy class is 'sixty times the same SWG model'; a bench cuts "
          "windows at arbitrary times"),
         ("Amplifier (protocol)", _amp(acq),
          "the paper's data are simulated; the bench preset cites its data sheet "
          "(swgsim/acquisition.py)"),
-        ("Window length", f"{ch['window_s']:g} s = " + ", ".join(
-            f"{r:g} input revolutions at {n:g} rpm" for r, n in zip(n_rev, ops["n_in_rpm"],
+        ("Window length", f"{ch.window_s:g} s = " + ", ".join(
+            f"{r:g} input revolutions at {n:g} rpm" for r, n in zip(n_rev, ops.n_in_rpm,
                                                                    strict=True)),
          f"the DFT resolves order {1 / min(n_rev):.2g} (eq. (10)'s lowest sub-harmonic is "
          "order 0.25) and whole periods of the sub-harmonics fit the window where the "
          "revolutions are whole multiples of 4; Fig. 6 shows at least 0.02 s"),
-        ("Sample rate", f"{ch['sample_rate_hz']:g} Hz",
+        ("Sample rate", f"{ch.sample_rate_hz:g} Hz",
          "orders up to 37 of 4000 rpm below Nyquist; the features use orders <= 8"),
-        ("Transient before the window", f"{ch['settle_s']:g} s simulated and discarded",
+        ("Transient before the window", f"{ch.settle_s:g} s simulated and discarded",
          "the speed loop and the torsional mode settle from the steady-state start"),
         ("Eq. (10) amplitudes",
-         f"a0 ~ U(−{dist['offset_mvv']:g}, {dist['offset_mvv']:g}) mV/V, "
-         f"a1..a4 ~ U(0, {dist['harmonic_mvv']:g}) mV/V, phases U(0, 2π), per window and "
+         f"a0 ~ U(−{dist.offset_mvv:g}, {dist.offset_mvv:g}) mV/V, "
+         f"a1..a4 ~ U(0, {dist.harmonic_mvv:g}) mV/V, phases U(0, 2π), per window and "
          "signal",
          "'slight irregularities' and 'slight constant offsets' (Sec. III-B): a few per "
          "cent of the signals' range 0.05-0.3 mV/V; not given in the paper "
@@ -105,30 +106,30 @@ def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[d
         ("Table V: reduced stiffness", f"k1 lowered by {lin('reduced_stiffness')}",
          "stiffness drops by about 20 % during run-in (Fig. 4 prose)"),
         ("Table V: eccentric WG",
-         f"e = {', '.join(f'{s:g}' for s in v['eccentric_wg']['severities'])} × w0 at "
-         f"{v['eccentric_wg']['n_positions']} positions",
+         f"e = {', '.join(f'{s:g}' for s in v['eccentric_wg'].severities)} × w0 at "
+         f"{v['eccentric_wg'].n_positions} positions",
          "three severities × twenty positions (Sec. III-B)"),
         ("Table V: root tooth crack",
-         f"{', '.join(f'{s:g}' for s in v['root_tooth_crack']['severities'])} of the crack "
-         f"bars' stiffness lost at {v['root_tooth_crack']['n_positions']} positions",
+         f"{', '.join(f'{s:g}' for s in v['root_tooth_crack'].severities)} of the crack "
+         f"bars' stiffness lost at {v['root_tooth_crack'].n_positions} positions",
          "'stiffness reduced drastically' (Sec. II-B)"),
         ("Table V: tip tooth crack",
-         f"{', '.join(f'{s:g}' for s in v['tip_tooth_crack']['severities'])} of the tooth "
-         f"force lost over a 3° arc at {v['tip_tooth_crack']['n_positions']} positions",
+         f"{', '.join(f'{s:g}' for s in v['tip_tooth_crack'].severities)} of the tooth "
+         f"force lost over a 3° arc at {v['tip_tooth_crack'].n_positions} positions",
          "'a strongly reduced tooth force acting only at a specific node' (Sec. II-B)"),
         ("Gauge layout (Fig. 3)",
          "s0 full torque bridge at 29 mm; s1/s3 WG-bending and s2/s4 shear half bridges at "
          "32 mm, 180° apart",
          "s1 ≈ s3 and s2 ≈ s4 on a healthy gear (Sec. III-A); swgsim/sensors.py"),
         ("Per-gear sensor models",
-         f"gauge angle σ {tol['sd_theta_deg']:g}°, radius σ {tol['sd_r_mm']:g} mm, "
-         f"orientation σ {tol['sd_beta_deg']:g}°, gain σ {100 * tol['sd_gain']:g} %",
+         f"gauge angle σ {tol.sd_theta_deg:g}°, radius σ {tol.sd_r_mm:g} mm, "
+         f"orientation σ {tol.sd_beta_deg:g}°, gain σ {100 * tol.sd_gain:g} %",
          "the paper fits each gear's sensor model to a real RT1-T gear; values unverified"),
         ("Gear model", "size 20, ratio 100, k1/k2 from catalogue K1/K3, b1/μ from no-load "
          "torque and efficiency at rated torque", "swgsim/dynamics.py (catalogue sources)"),
         ("Classifier settings", "Table VI; everything else scikit-learn's defaults (MLP "
          "max_iter 200)", "'standard settings of ... Scikit-learn' (Sec. III-C)"),
-        ("Seeds", f"data set {dataset['seed']}, study {study.get('seed', 0)}",
+        ("Seeds", f"data set {dataset.seed}, study {study.get('seed', 0)}",
          "fixed for repeatability"),
     ]
     return [{"choice": c, "value": val, "reason": r} for c, val, r in rows]

@@ -31,6 +31,7 @@ from learn.paper_results import (
     side_by_side,
     table_spec,
 )
+from swgsim.config import DatasetConfig
 from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
 
 log = logging.getLogger(__name__)
@@ -239,7 +240,7 @@ def recall_figure(rec: Mapping[str, pd.DataFrame], path: str | Path,
 
 
 def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,
-                   datasets: Mapping[str, Mapping[str, Any]], fig: Path) -> list[str]:
+                   datasets: Mapping[str, DatasetConfig], fig: Path) -> list[str]:
     names = list(rec)
     lines = [f"![per-class recall]({fig.name})", ""]
     if spread.empty:
@@ -264,16 +265,16 @@ def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,
               & (r["true"] == cls)]
         return 100 * float(r["recall"].iloc[0]) if len(r) else float("nan")
 
-    locked = [n for n in names if (datasets[n].get("acquisition") or {}).get("start") == "fixed"]
+    locked = [n for n in names if datasets[n].acquisition.start == "fixed"]
     free = [n for n in names if n not in locked]
     if locked and free:
         a, b = locked[0], free[0]
-        amp = (datasets[b].get("acquisition") or {}).get("amplifier") or {}
-        noise = (amp.get("noise_uv_rms", 0) / amp["excitation_v"]) if amp else 0.0
+        amp = datasets[b].acquisition.amplifier
+        noise = 1e3 * amp.noise_mvv if amp is not None else 0.0
         rs = {c: (rc(a, "VII", "selection1", c), rc(b, "VII", "selection1", c))
               for c in FAULT_CLASSES}
-        win = datasets[b]["chain"]["window_s"]
-        n_lo = min(datasets[b]["operating_points"]["n_in_rpm"])
+        win = datasets[b].chain.window_s
+        n_lo = min(datasets[b].operating_points.n_in_rpm)
         ripple = 2 * win * n_lo / 60 * 1.01  # order 2 of ψ, ψ̇ = ω_in (1 + 1/N), N = 100
         def sp_val(proto, feature, col):
             r = spread[(spread["protocol"] == proto) & (spread["feature"] == feature)]
@@ -312,7 +313,7 @@ def write_summary(
     results: Mapping[str, pd.DataFrame],
     confusion: Mapping[str, pd.DataFrame],
     report_root: str | Path,
-    datasets: Mapping[str, Mapping[str, Any]],
+    datasets: Mapping[str, DatasetConfig],
     study: Mapping[str, Any],
     spread: Mapping[str, pd.DataFrame] | None = None,
     sensitivity: pd.DataFrame | None = None,
@@ -326,7 +327,7 @@ def write_summary(
         (:func:`learn.study.run_paper_study`), in display order (e.g. paper, bench).
     report_root : path-like
         Folder of ``summary.md``, ``summary.csv`` and ``recall_rf.png``.
-    datasets : mapping of str to mapping
+    datasets : mapping of str to DatasetConfig
         Protocol name -> resolved data-set config.
     study : mapping
         Study settings (``scale``, ``seed``, feature settings) for the open choices.
@@ -393,10 +394,10 @@ def write_summary(
     return {"files": files, "scorecards": cards, "findings": found}
 
 
-def _protocol_words(cfg: Mapping[str, Any]) -> str:
-    acq = cfg.get("acquisition") or {}
+def _protocol_words(cfg: DatasetConfig) -> str:
+    acq = cfg.acquisition
     start = ("every window from the same initial state (phase-locked)"
-             if acq.get("start") == "fixed" else "windows cut at arbitrary times")
-    amp = acq.get("amplifier")
-    return start + (f", sampled by {amp['name']} (noise, anti-aliasing, 24-bit)" if amp
+             if acq.start == "fixed" else "windows cut at arbitrary times")
+    amp = acq.amplifier
+    return start + (f", sampled by {amp.name} (noise, anti-aliasing, 24-bit)" if amp
                     else ", ideal noise-free sampling")

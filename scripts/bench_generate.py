@@ -96,12 +96,12 @@ def main(argv: list[str] | None = None) -> dict:
     args = ap.parse_args(argv)
 
     from swgcli import dataset_preset
-    from swgsim.chain import ChainSettings, SimulationChain
+    from swgsim.chain import SimulationChain
     from swgsim.faults import apply_fault
-    from swgsim.flexspline import Mesh
-    from swgsim.generate import gear_params, generate, layout_for
+    from swgsim.generate import generate
+    from swgsim.plan import gear_params, layout_for, plan
 
-    cfg = dataset_preset(args.dataset)
+    cfg = plan(dataset_preset(args.dataset))  # checked once; generate takes the plan
     tmp = None
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="bench_gen_")) / "ds"
     if args.out is None:
@@ -120,19 +120,14 @@ def main(argv: list[str] | None = None) -> dict:
           f"peak RSS {rss:.0f} MiB")
 
     # naive reference on a sample of windows of the same data set (gear 1, first speed)
-    ch = cfg["chain"]
-    settings = ChainSettings(sample_rate_hz=ch["sample_rate_hz"], window_s=ch["window_s"],
-                             settle_s=ch["settle_s"], substeps=ch["substeps"],
-                             contact_half_width_deg=ch["contact_half_width_deg"],
-                             ecc_load_share=ch["ecc_load_share"])
-    chain = SimulationChain(layout_for(cfg, cfg["gears"][0]), settings=settings,
-                            mesh=Mesh(int(cfg["mesh"]["n_theta"])))
-    h = gear_params(cfg, cfg["gears"][0])
+    dc = cfg.config
+    chain = SimulationChain(layout_for(dc, dc.gears[0]), settings=dc.chain, mesh=dc.mesh)
+    h = gear_params(dc, dc.gears[0])
     cases = [h, apply_fault(h, "eccentric_wg", 0.1, 36.0),
              apply_fault(h, "tip_tooth_crack", 1.0, 90.0),
              apply_fault(h, "root_tooth_crack", 0.9, 54.0)][: max(args.naive_windows, 1)]
-    n_in = cfg["operating_points"]["n_in_rpm"][0]
-    t_out = cfg["operating_points"]["t_out_nm"][-1]
+    n_in = dc.operating_points.n_in_rpm[0]
+    t_out = dc.operating_points.t_out_nm[-1]
     sig, res = chain.simulate(cases, n_in, t_out, 0.3)
     n_t = res.time.size
     k = min(args.naive_steps, n_t)
@@ -169,7 +164,7 @@ def main(argv: list[str] | None = None) -> dict:
 #: Stages of one shard: (label, module file, function) timed cumulatively by cProfile.
 STAGES = (
     ("dynamics (RK4, distinct motions)", "dynamics.py", "simulate"),
-    ("fine grid (acquisition only)", "generate.py", "fine_motion"),
+    ("fine grid (acquisition only)", "shard.py", "fine_motion"),
     ("gauge signals (distinct windows)", "chain.py", "signals_batch"),
     ("amplifier: filter, noise, ADC", "acquisition.py", "acquire"),
     ("eq. (10) disturbance", "disturbance.py", "disturb"),
@@ -194,14 +189,14 @@ def profile(dataset: str, cfg: dict, n_jobs: int, work: Path) -> dict:
     import subprocess
 
     from swgsim import data as dsio
-    from swgsim.generate import gear_influences, plan, simulate_shard
+    from swgsim.shard import gear_influences, simulate_shard
 
     exe = Path(sys.executable).parent / "swgsim-generate"
     t0 = time.perf_counter()
     subprocess.run([str(exe), f"dataset={dataset}", f"out_dir={work / 'whole'}",
                     f"n_jobs={n_jobs}", "progress=false"], check=True, capture_output=True)
     wall = time.perf_counter() - t0
-    shards = plan(cfg)
+    shards = cfg.shards
     t0 = time.perf_counter()
     infl = gear_influences(cfg, shards)
     t_infl = time.perf_counter() - t0

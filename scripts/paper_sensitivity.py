@@ -21,7 +21,7 @@ Nothing here feeds back into the presets.
 from __future__ import annotations
 
 import argparse
-import json
+import copy
 import sys
 import time
 from pathlib import Path
@@ -57,19 +57,20 @@ def main(argv: list[str] | None = None) -> int:
     from learn.paper_results import scorecard, side_by_side
     from learn.study import run_paper_study
     from swgcli import dataset_preset
+    from swgsim.config import dataset_config
     from swgsim.generate import generate
 
-    base = dataset_preset(args.dataset)
+    base = dataset_config(dataset_preset(args.dataset))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     data_root = Path(args.data_root)
 
     def data_for(factor: float) -> str:
-        cfg = json.loads(json.dumps(base))
-        for k in ("offset_mvv", "harmonic_mvv"):
-            cfg["disturbance"][k] = base["disturbance"][k] * factor
-        cfg["name"] = f"{base['name']}_eq10x{factor:g}"
-        path = data_root / cfg["name"]
+        cfg = copy.deepcopy(base)
+        cfg.disturbance.offset_mvv = base.disturbance.offset_mvv * factor
+        cfg.disturbance.harmonic_mvv = base.disturbance.harmonic_mvv * factor
+        cfg.name = f"{base.name}_eq10x{factor:g}"
+        path = data_root / cfg.name
         generate(cfg, path, n_jobs=args.n_jobs, progress=True)
         return str(path)
 

@@ -36,7 +36,7 @@ def run_generate(cfg: DictConfig) -> dict:
     """
     from swgsim.generate import generate
 
-    ds_cfg = OmegaConf.to_container(cfg.dataset, resolve=True)
+    ds_cfg = OmegaConf.to_object(cfg.dataset)  # the typed DatasetConfig
     try:
         out_dir = to_absolute_path(str(cfg.out_dir))
     except ValueError:  # not inside a Hydra run

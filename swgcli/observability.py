@@ -17,23 +17,28 @@ import logging
 import math
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from omegaconf import DictConfig, OmegaConf
 
 from swgcli.app import absolute_path, hydra_app
 from swgcli.schema import ObservabilityApp
 
+if TYPE_CHECKING:
+    from swgsim.plan import DatasetPlan
+
 log = logging.getLogger(__name__)
 
 
-def data_set_configs(cfg: DictConfig) -> dict[float, dict]:
-    """The data-set config of every output inertia, checked before any work.
+def data_set_configs(cfg: DictConfig) -> dict[float, DatasetPlan]:
+    """The data set of every output inertia, checked once, before any work.
 
     Returns
     -------
     dict
-        J_out [kg m²] -> data-set config (``load.j_out_kgm2`` set, ``chain.settle_s``
-        raised to :func:`swgsim.generate.min_settle_s` rounded up to 10 ms).
+        J_out [kg m²] -> the checked data set (:class:`swgsim.plan.DatasetPlan`;
+        ``load.j_out_kgm2`` set, ``chain.settle_s`` raised to
+        :func:`swgsim.plan.min_settle_s` rounded up to 10 ms).
 
     Raises
     ------
@@ -41,7 +46,7 @@ def data_set_configs(cfg: DictConfig) -> dict[float, dict]:
         Naming the key: ``j_out_kgm2`` / ``n_j_out`` out of range, or a data-set key.
     """
     from learn.observability import j_out_grid
-    from swgsim.generate import min_settle_s, plan
+    from swgsim.plan import min_settle_s, plan
 
     if cfg.j_out_kgm2 is None:
         if not 2 <= int(cfg.n_j_out) <= 50:
@@ -54,21 +59,20 @@ def data_set_configs(cfg: DictConfig) -> dict[float, dict]:
     for key in ("n_jobs", "harmonics"):
         if int(cfg[key]) < 1:
             raise ValueError(f"{key}: must be >= 1, got {cfg[key]}")
-    base = OmegaConf.to_container(cfg.dataset, resolve=True)
+    base = OmegaConf.to_object(cfg.dataset)  # the typed DatasetConfig
     out = {}
     for j in values:
         if not 1e-4 <= j <= 100.0:
             raise ValueError(f"j_out_kgm2: {j} outside the allowed range [1e-4, 100] kg m²")
         c = copy.deepcopy(base)
-        c["load"]["j_out_kgm2"] = j
-        c["name"] = f"{base['name']}_j_out_{j:.4g}"
+        c.load.j_out_kgm2 = j
+        c.name = f"{base.name}_j_out_{j:.4g}"
         need = math.ceil(min_settle_s(c) * 100 - 1e-9) / 100
-        c["chain"]["settle_s"] = max(float(c["chain"]["settle_s"]), need)
+        c.chain.settle_s = max(float(c.chain.settle_s), need)
         try:
-            plan(c)
+            out[j] = plan(c)
         except ValueError as e:
             raise ValueError(f"{e} (data set of j_out_kgm2={j:.4g})") from None
-        out[j] = c
     return out
 
 
@@ -108,7 +112,7 @@ def run_observability(cfg: DictConfig) -> dict:
                      progress=bool(cfg.progress))
         state = (f"{len(g['computed'])} shard(s) simulated" if g["computed"]
                  else "already there and valid")
-        print(f"[{n}/{len(configs)}] J_out = {j:.4g} kg m² (settle {c['chain']['settle_s']:g}"
+        print(f"[{n}/{len(configs)}] J_out = {j:.4g} kg m² (settle {c.config.chain.settle_s:g}"
               f" s): {g['windows']} windows in {folder} ({state})", flush=True)
         rec = separation_records(load(folder), disturbed=False, n_harmonics=int(cfg.harmonics),
                                  ratio=100.0)

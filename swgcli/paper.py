@@ -56,13 +56,15 @@ def run_paper(cfg: DictConfig) -> dict:
     from learn.study import run_paper_study
     from learn.summary import format_scorecard, write_summary
     from learn.tracking import default_tracking_uri
-    from swgsim.generate import generate, plan
+    from swgsim.generate import generate
+    from swgsim.plan import plan
 
     protocols = _check(cfg)
-    datasets = {p: OmegaConf.to_container(cfg.datasets[p], resolve=True) for p in protocols}
-    for p in protocols:  # every data-set config is checked before any work
+    datasets = {p: OmegaConf.to_object(cfg.datasets[p]) for p in protocols}  # typed
+    plans = {}
+    for p in protocols:  # every data-set config is checked once, before any work
         try:
-            plan(datasets[p])
+            plans[p] = plan(datasets[p])
         except ValueError as e:
             raise ValueError(f"datasets.{p}: {e}") from None
     from learn.tracking import check_tracking
@@ -82,7 +84,7 @@ def run_paper(cfg: DictConfig) -> dict:
             k += 1
             t0 = time.perf_counter()
             out = f"{root_data}/{p}"
-            gen[p] = generate(datasets[p], out, n_jobs=int(cfg.n_jobs), overwrite=True,
+            gen[p] = generate(plans[p], out, n_jobs=int(cfg.n_jobs), overwrite=True,
                               progress=True)
             stages[f"generate {p}"] = time.perf_counter() - t0
             state = (f"{len(gen[p]['computed'])} shard(s) simulated" if gen[p]["computed"]

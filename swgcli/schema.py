@@ -6,7 +6,7 @@ Each app's primary config (``conf/<app>.yaml``) starts from its schema here
 Hydra refuses unknown keys, missing mandatory values and values of the wrong type while
 composing; :func:`validate` repeats the key check after composition, because Hydra's
 ``+key=value`` adds a key even to a typed config. Ranges are checked where they are
-decided (:func:`swgsim.generate.plan`, the learners, the calibration).
+decided (:func:`swgsim.plan.plan`, the learners, the calibration).
 
 The config groups whose defaults live in Python are generated here from their one
 source, not written twice as YAML:

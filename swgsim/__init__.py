@@ -37,7 +37,8 @@ _EXPORTS = {
     # joint friction beyond the paper law (a calibration's accepted effects)
     "FrictionEffects": "friction",
     # data sets
-    "dataset_config": "config", "load": "data",
+    "DatasetConfig": "config", "dataset_config": "config",
+    "DatasetPlan": "plan", "load": "data",
     "DataSetError": "data",
 }
 

@@ -34,16 +34,14 @@ is 0.73 µV/V rms and the range ±2.84 mV/V.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 START_MODES = ("fixed", "random")
 
 
-@dataclass(frozen=True)
+@dataclass
 class Amplifier:
     """A delta-sigma bridge ADC channel, identical for the five bridges.
 
@@ -102,9 +100,10 @@ class Amplifier:
         return self.order * (self.oversample - 1) / 2 / (self.oversample * fs_hz)
 
 
-@dataclass(frozen=True)
+@dataclass
 class Acquisition:
-    """Protocol of a data set: how windows start and how they are sampled.
+    """How a data set's windows are recorded (the data-set option ``acquisition``): how
+    they start and how they are sampled; the defaults are the paper's recording.
 
     Attributes
     ----------
@@ -115,7 +114,7 @@ class Acquisition:
         None: ideal sampling (noise-free, no filter).
     """
 
-    start: str = "random"
+    start: str = "fixed"
     wg_start_deg: float = 0.0
     amplifier: Amplifier | None = None
 
@@ -131,65 +130,44 @@ _AMP_RANGES = {  # key: (lower, upper, lower inclusive)
 }
 
 
-def parse_acquisition(cfg: Mapping[str, Any] | None) -> Acquisition:
-    """Validate the ``dataset.acquisition`` option.
+def check_acquisition(acq: Acquisition) -> Acquisition:
+    """Check the ``dataset.acquisition`` option before any work.
 
     Parameters
     ----------
-    cfg : mapping or None
-        ``{start, wg_start_deg, amplifier}``; None or missing keys take the defaults
-        (random start, ideal sampling).
+    acq : Acquisition
+        The typed option (its keys and types were checked where it was built,
+        :func:`swgsim.config.dataset_config`).
 
     Returns
     -------
     Acquisition
+        ``acq`` itself.
 
     Raises
     ------
     ValueError
         Naming the key (``dataset.acquisition.<key>``), the value and the allowed range.
     """
-    cfg = dict(cfg or {})
-    unknown = set(cfg) - {"start", "wg_start_deg", "amplifier"}
-    if unknown:
-        raise ValueError(f"dataset.acquisition: unknown key(s) {sorted(unknown)}; allowed: "
-                         "start, wg_start_deg, amplifier")
-    start = str(cfg.get("start", "random"))
-    if start not in START_MODES:
+    if acq.start not in START_MODES:
         raise ValueError(f"dataset.acquisition.start must be one of {list(START_MODES)}, "
-                         f"got {start!r}")
-    wg = float(cfg.get("wg_start_deg", 0.0))
-    if not np.isfinite(wg):
-        raise ValueError(f"dataset.acquisition.wg_start_deg must be finite [deg], got {wg}")
-    amp_cfg = cfg.get("amplifier")
-    amp = None
-    if amp_cfg is not None:
-        if not isinstance(amp_cfg, Mapping):
-            raise ValueError("dataset.acquisition.amplifier must be null or a mapping, got "
-                             f"{amp_cfg!r}")
-        a = dict(amp_cfg)
-        allowed = {"name", *_AMP_RANGES}
-        unknown = set(a) - allowed
-        missing = {"name", "noise_uv_rms", "excitation_v", "vref_v", "gain"} - set(a)
-        if unknown or missing:
-            raise ValueError(f"dataset.acquisition.amplifier: unknown {sorted(unknown)}, "
-                             f"missing {sorted(missing)}; keys: {sorted(allowed)}")
-        for k, (lo, hi, incl) in _AMP_RANGES.items():
-            if k not in a:
-                continue
-            v = float(a[k])
-            ok = (lo <= v if incl else lo < v) and v <= hi and np.isfinite(v)
-            if k in ("bits", "order", "oversample"):
-                ok = ok and v == int(v)
-            if not ok:
-                br = "[" if incl else "("
-                raise ValueError(f"dataset.acquisition.amplifier.{k} must lie in "
-                                 f"{br}{lo}, {hi}], got {a[k]}")
-        amp = Amplifier(name=str(a["name"]), noise_uv_rms=float(a["noise_uv_rms"]),
-                        excitation_v=float(a["excitation_v"]), vref_v=float(a["vref_v"]),
-                        gain=float(a["gain"]), bits=int(a.get("bits", 24)),
-                        order=int(a.get("order", 3)), oversample=int(a.get("oversample", 4)))
-    return Acquisition(start=start, wg_start_deg=wg, amplifier=amp)
+                         f"got {acq.start!r}")
+    if not np.isfinite(float(acq.wg_start_deg)):
+        raise ValueError("dataset.acquisition.wg_start_deg must be finite [deg], got "
+                         f"{acq.wg_start_deg}")
+    amp = acq.amplifier
+    if amp is None:
+        return acq
+    for k, (lo, hi, incl) in _AMP_RANGES.items():
+        v = float(getattr(amp, k))
+        ok = (lo <= v if incl else lo < v) and v <= hi and np.isfinite(v)
+        if k in ("bits", "order", "oversample"):
+            ok = ok and v == int(v)
+        if not ok:
+            br = "[" if incl else "("
+            raise ValueError(f"dataset.acquisition.amplifier.{k} must lie in "
+                             f"{br}{lo}, {hi}], got {getattr(amp, k)}")
+    return acq
 
 
 def start_angles(acq: Acquisition, n: int, rng: np.random.Generator,

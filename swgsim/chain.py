@@ -35,7 +35,7 @@ from .sensors import SensorLayout, signal_rows
 log = logging.getLogger(__name__)
 
 
-@dataclass(frozen=True)
+@dataclass
 class ChainSettings:
     """Numerical and mesh-contact settings of the chain.
 

@@ -1,16 +1,18 @@
 """Typed schema of a data-set config, with the paper preset as its defaults.
 
 :class:`DatasetConfig` and its parts are plain dataclasses (no Hydra): their defaults *are*
-the paper's grid and protocol (Sec. III-B, Tables IV-V), the one place where those values
-live. The apps register them as Hydra structured configs (``swgcli.schema``), so the YAML
-presets in ``conf/dataset/`` hold only what differs from the paper; library users get the
-same defaults from :func:`paper_config`.
+the paper's grid and recording (Sec. III-B, Tables IV-V). Its parts are the simulator's
+own settings classes (chain, mesh, gauges, disturbance, acquisition), so every default is
+written once, where the value is used. The apps register the schema as a Hydra structured
+config (``swgcli.schema``) and hand the typed object on, so the YAML presets in
+``conf/dataset/`` hold only what differs from the paper; library users get the same
+defaults from ``DatasetConfig()`` (or :func:`paper_config` as plain data).
 
-:func:`check_keys` checks a plain mapping against such a schema before any work: every
-unknown, missing or mistyped key is refused with its full name, e.g.
-``dataset.chain.windows_s: unknown key; allowed: sample_rate_hz, window_s, ...``.
-Ranges and physical validity are checked where they are decided
-(:func:`swgsim.generate.plan`, :func:`swgsim.acquisition.parse_acquisition`).
+:func:`dataset_config` is the door for plain mappings: :func:`check_keys` refuses every
+unknown, missing or mistyped key with its full name, e.g.
+``dataset.chain.windows_s: unknown key; allowed: sample_rate_hz, window_s, ...``, and
+:func:`build` makes the typed object. Ranges and physical validity are checked once, by
+:func:`swgsim.plan.plan`.
 """
 
 from __future__ import annotations
@@ -21,6 +23,13 @@ import typing
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Union
+
+from .acquisition import Acquisition, Amplifier  # noqa: F401 - Amplifier: a schema part
+from .chain import ChainSettings
+from .disturbance import DisturbanceSpec
+from .dynamics import J_OUT_BENCH_KGM2, KeHarmonic
+from .flexspline import Mesh
+from .sensors import SensorsConfig, TolerancesConfig
 
 MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
 
@@ -37,36 +46,16 @@ class GearConfig:
         b1 and k1 relative to the nominal gear [-], in (0, 10].
     tolerance_seed : int
         Seed of this gear's gauge tolerances (its sensor model), >= 0.
-    ke_extra : list of mapping
-        Extra kinematic-error harmonics ``{order, amp_rad, phase_rad}`` found by the
-        calibration loop (:func:`swgsim.dynamics.gear_with_ke`).
+    ke_extra : list of KeHarmonic
+        Extra kinematic-error harmonics found by the calibration loop
+        (:func:`swgsim.dynamics.gear_with_ke`).
     """
 
     id: int = 1
     b1_factor: float = 1.0
     k1_factor: float = 1.0
     tolerance_seed: int = 101
-    ke_extra: list[Any] = field(default_factory=list)
-
-
-@dataclass
-class TolerancesConfig:
-    """Per-gear gauge tolerances, standard deviations [unverified, see README]."""
-
-    sd_theta_deg: float = 0.3   # gauge angle [deg]
-    sd_r_mm: float = 0.1        # gauge radius [mm]
-    sd_beta_deg: float = 0.5    # grid orientation [deg]
-    sd_gain: float = 0.01       # channel gain [-]
-
-
-@dataclass
-class SensorsConfig:
-    """Gauge layout (swgsim/sensors.py)."""
-
-    r_torque_mm: float = 29.0    # radius of the s0 torque bridge [mm]
-    r_pairs_mm: float = 32.0     # radius of the s1..s4 half bridges [mm]
-    grid_length_mm: float = 3.0  # active grid length [mm]
-    gauge_factor: float = 2.0    # [-]
+    ke_extra: list[KeHarmonic] = field(default_factory=list)
 
 
 @dataclass
@@ -100,67 +89,18 @@ class OperatingPointsConfig:
 
 
 @dataclass
-class ChainConfig:
-    """Numerical and contact settings of the simulation chain (swgsim.chain.ChainSettings)."""
-
-    sample_rate_hz: float = 10000.0
-    window_s: float = 0.12
-    settle_s: float = 0.05
-    substeps: int = 1
-    contact_half_width_deg: float = 20.0
-    ecc_load_share: float = 1.0
-
-
-@dataclass
-class MeshConfig:
-    """Truss mesh of the flexspline (swgsim.flexspline.Mesh)."""
-
-    n_theta: int = 120
-
-
-@dataclass
 class LoadConfig:
     """What the gear drives: its inertia sets the output side of the I/O model (eq. 1).
 
     Attributes
     ----------
     j_out_kgm2 : float
-        Output inertia: flange, coupling and driven load [kg m²]; 8.8e-3 for the bench
-        (GearParams.j_out_kgm2), a robot link's for ``conf/dataset/robot_joint.yaml``.
+        Output inertia: flange, coupling and driven load [kg m²]; the bench's
+        (:data:`swgsim.dynamics.J_OUT_BENCH_KGM2`) by default, a robot link's for
+        ``conf/dataset/robot_joint.yaml``.
     """
 
-    j_out_kgm2: float = 8.8e-3
-
-
-@dataclass
-class DisturbanceConfig:
-    """Amplitude ranges of eq. (10) [mV/V] (swgsim.disturbance)."""
-
-    offset_mvv: float = 0.01
-    harmonic_mvv: float = 0.01
-
-
-@dataclass
-class AmplifierConfig:
-    """A delta-sigma bridge ADC (swgsim.acquisition.Amplifier)."""
-
-    name: str = MISSING
-    noise_uv_rms: float = MISSING  # type: ignore[assignment]
-    excitation_v: float = MISSING  # type: ignore[assignment]
-    vref_v: float = MISSING  # type: ignore[assignment]
-    gain: float = MISSING  # type: ignore[assignment]
-    bits: int = 24
-    order: int = 3
-    oversample: int = 4
-
-
-@dataclass
-class AcquisitionConfig:
-    """Protocol of a data set (swgsim.acquisition): the paper's by default."""
-
-    start: str = "fixed"
-    wg_start_deg: float = 0.0
-    amplifier: AmplifierConfig | None = None
+    j_out_kgm2: float = J_OUT_BENCH_KGM2
 
 
 def _paper_gears() -> list[GearConfig]:
@@ -171,7 +111,12 @@ def _paper_gears() -> list[GearConfig]:
 
 @dataclass
 class DatasetConfig:
-    """A data set: grid, chain, disturbance and protocol; defaults are the paper preset.
+    """A data set: grid, chain, disturbance and recording; defaults are the paper preset.
+
+    The parts are the simulator's own settings classes (one definition, one default each):
+    :class:`swgsim.sensors.SensorsConfig` and :class:`~swgsim.sensors.TolerancesConfig`,
+    :class:`swgsim.chain.ChainSettings`, :class:`swgsim.flexspline.Mesh`,
+    :class:`swgsim.disturbance.DisturbanceSpec` and :class:`swgsim.acquisition.Acquisition`.
 
     Attributes
     ----------
@@ -197,11 +142,11 @@ class DatasetConfig:
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
     variants: dict[str, VariantSpec] = field(default_factory=_paper_variants)
     operating_points: OperatingPointsConfig = field(default_factory=OperatingPointsConfig)
-    chain: ChainConfig = field(default_factory=ChainConfig)
-    mesh: MeshConfig = field(default_factory=MeshConfig)
+    chain: ChainSettings = field(default_factory=ChainSettings)
+    mesh: Mesh = field(default_factory=Mesh)
     load: LoadConfig = field(default_factory=LoadConfig)
-    disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
-    acquisition: AcquisitionConfig = field(default_factory=AcquisitionConfig)
+    disturbance: DisturbanceSpec = field(default_factory=DisturbanceSpec)
+    acquisition: Acquisition = field(default_factory=Acquisition)
     sensor_effects: list[Any] = field(default_factory=list)
     friction_effects: Any | None = None
 
@@ -359,21 +304,52 @@ def complete(cfg: Mapping[str, Any], schema: type, where: str) -> dict:
     return _mapping(cfg, schema, where, fill=True)
 
 
-def dataset_config(cfg: Mapping[str, Any] | None = None) -> dict:
-    """A complete, checked data-set config: ``cfg`` over the paper preset's defaults.
+def build(value: Any, tp: Any) -> Any:
+    """A typed object of schema ``tp`` from a checked plain value (:func:`complete`).
+
+    Dataclasses are built from their mappings, recursively through lists, dicts and
+    optional fields; fields typed ``Any`` keep their plain value.
+    """
+    origin = typing.get_origin(tp)
+    if tp is Any or value is None:
+        return value
+    if origin in (Union, types.UnionType):
+        inner = [a for a in typing.get_args(tp) if a is not type(None)]
+        return build(value, inner[0])
+    if dataclasses.is_dataclass(tp):
+        hints = _fields(tp)
+        return tp(**{k: build(v, hints[k]) for k, v in value.items()})
+    if origin in (list, tuple):
+        (item,) = typing.get_args(tp)[:1] or (Any,)
+        return [build(v, item) for v in value]
+    if origin is dict:
+        _, item = typing.get_args(tp)
+        return {k: build(v, item) for k, v in value.items()}
+    if tp is float:
+        return float(value)
+    return value
+
+
+def dataset_config(cfg: Mapping[str, Any] | DatasetConfig | None = None) -> DatasetConfig:
+    """A complete, checked, typed data-set config: ``cfg`` over the paper preset's defaults.
+
+    The door of the data-set config: keys and types are checked here (ranges and physics
+    in :func:`swgsim.plan.plan`), and what leaves is a :class:`DatasetConfig`.
 
     Parameters
     ----------
-    cfg : mapping, optional
+    cfg : mapping or DatasetConfig, optional
         Partial or complete data-set config; None: the paper preset.
 
     Returns
     -------
-    dict
+    DatasetConfig
 
     Raises
     ------
     ValueError
         Naming the key (``dataset.<key>``) that is unknown or of the wrong type.
     """
-    return complete(cfg or {}, DatasetConfig, "dataset")
+    if isinstance(cfg, DatasetConfig):
+        cfg = dataclasses.asdict(cfg)
+    return build(complete(cfg or {}, DatasetConfig, "dataset"), DatasetConfig)

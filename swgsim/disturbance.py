@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 
-@dataclass(frozen=True)
+@dataclass
 class DisturbanceSpec:
     """Amplitude ranges of eq. (10).
 
@@ -30,11 +30,6 @@ class DisturbanceSpec:
 
     offset_mvv: float = 0.01
     harmonic_mvv: float = 0.01
-
-    def __post_init__(self):
-        if not (self.offset_mvv >= 0 and self.harmonic_mvv >= 0):
-            raise ValueError("disturbance amplitudes offset_mvv and harmonic_mvv must be >= 0, "
-                             f"got {self.offset_mvv}, {self.harmonic_mvv}")
 
 
 def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,

@@ -50,6 +50,11 @@ import numpy as np
 
 RPM = 2 * np.pi / 60.0
 
+#: Output inertia of the bench: flange and load coupling [kg m²] (public script seed,
+#: docs/PHYSICS.md sec. 1); the default of :class:`GearParams` and of the data-set option
+#: ``load.j_out_kgm2``.
+J_OUT_BENCH_KGM2 = 8.8e-3
+
 
 @dataclass(frozen=True)
 class GearParams:
@@ -94,7 +99,7 @@ class GearParams:
     alpha_tooth_rad: float = np.deg2rad(20.0)
     pitch_radius_m: float = 25.4e-3
     j_in_kgm2: float = 1.193e-4
-    j_out_kgm2: float = 8.8e-3
+    j_out_kgm2: float = J_OUT_BENCH_KGM2
     k1_nm_per_rad: float = 2160.0
     k2_nm_per_rad3: float = 7.4e7
     b0_nm: float = 0.29
@@ -216,15 +221,35 @@ def rt1_size20(cat: Catalogue | None = None, **overrides) -> GearParams:
     return dataclasses.replace(p, **overrides)
 
 
-def gear_with_ke(gear: GearParams, harmonics: Sequence[Mapping[str, float]]) -> GearParams:
+@dataclass
+class KeHarmonic:
+    """An extra kinematic-error harmonic: φ_err gains c · amp · sin(order · φ_in + phase).
+
+    Attributes
+    ----------
+    order : int
+        Order of the wave-generator angle, a positive integer.
+    amp_rad : float
+        Amplitude [rad], >= 0.
+    phase_rad : float
+        Phase [rad].
+    """
+
+    order: int
+    amp_rad: float
+    phase_rad: float = 0.0
+
+
+def gear_with_ke(gear: GearParams,
+                 harmonics: Sequence[KeHarmonic | Mapping[str, float]]) -> GearParams:
     """Gear parameters with extra kinematic-error harmonics appended.
 
     Parameters
     ----------
     gear : GearParams
-    harmonics : sequence of mapping
-        ``{order, amp_rad, phase_rad}`` each (``gear_ke_harmonics`` of a strain summary):
-        φ_err gains c · amp · sin(order · φ_in + phase).
+    harmonics : sequence of KeHarmonic
+        The data-set option ``gears[i].ke_extra``; a mapping ``{order, amp_rad,
+        phase_rad}`` (``gear_ke_harmonics`` of a strain summary) is taken as one.
 
     Returns
     -------
@@ -237,14 +262,15 @@ def gear_with_ke(gear: GearParams, harmonics: Sequence[Mapping[str, float]]) -> 
     """
     o, a, p = list(gear.ke_orders), list(gear.ke_amp_rad), list(gear.ke_phase_rad)
     for h in harmonics:
-        k, amp = int(h["order"]), float(h["amp_rad"])
-        if k < 1 or k != float(h["order"]):
-            raise ValueError(f"kinematic-error order must be a positive integer, got {h['order']}")
+        h = h if isinstance(h, KeHarmonic) else KeHarmonic(**h)
+        k, amp = int(h.order), float(h.amp_rad)
+        if k < 1 or k != float(h.order):
+            raise ValueError(f"kinematic-error order must be a positive integer, got {h.order}")
         if not amp >= 0:
             raise ValueError(f"kinematic-error amp_rad must be >= 0 [rad], got {amp}")
         o.append(k)
         a.append(amp)
-        p.append(float(h.get("phase_rad", 0.0)))
+        p.append(float(h.phase_rad))
     return dataclasses.replace(gear, ke_orders=tuple(o), ke_amp_rad=tuple(a),
                                ke_phase_rad=tuple(p))
 

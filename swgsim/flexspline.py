@@ -105,7 +105,7 @@ class FlexsplineGeometry:
     kappa_shear: float = 0.05
 
 
-@dataclass(frozen=True)
+@dataclass
 class Mesh:
     """Mesh density of the truss.
 

@@ -3,7 +3,8 @@ the manifest.
 
 A run never deletes what it did not create: a folder is replaced only when it holds
 nothing but this project's data-set files (:data:`DATASET_FILE`), and every write is
-atomic (:func:`swgsim.data.atomic_write_json`). Used by :func:`swgsim.generate.generate`.
+atomic (:func:`swgsim.data.atomic_write_json`). Used by :func:`swgsim.generate.generate`;
+takes the checked :class:`swgsim.plan.DatasetPlan`.
 """
 
 from __future__ import annotations
@@ -20,17 +21,12 @@ from typing import TYPE_CHECKING
 from . import data as dsio
 
 if TYPE_CHECKING:
-    from .generate import ShardSpec
+    from .plan import DatasetPlan, ShardSpec
 
 log = logging.getLogger(__name__)
 
-__all__ = ["config_hash", "package_version", "git_revision", "shard_done", "DATASET_FILE",
+__all__ = ["package_version", "git_revision", "shard_done", "DATASET_FILE",
            "foreign_entries", "prepare_out_dir", "check_disk_space", "finalize"]
-
-
-def config_hash(cfg: dict) -> str:
-    """SHA-256 of the canonical JSON of a data-set config (first 16 hex digits)."""
-    return hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()[:16]
 
 
 def package_version() -> str:
@@ -78,7 +74,7 @@ def foreign_entries(out_dir: Path) -> list[str]:
                   if p.is_symlink() or not p.is_file() or not DATASET_FILE.fullmatch(p.name))
 
 
-def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
+def prepare_out_dir(out_dir: Path, plan: DatasetPlan, overwrite: bool) -> str | None:
     """Create ``out_dir``, or check that it holds (part of) a data set of this config.
 
     Temporary files that dead processes of this host left behind are removed. A folder
@@ -100,7 +96,7 @@ def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
         another config without ``overwrite``, holds anything else, or another run is
         writing into it; nothing is touched then.
     """
-    chash = config_hash(cfg)
+    chash = plan.config_hash
     mf = out_dir / dsio.MANIFEST
     stamp = out_dir / ".config.json"
     replaced = None
@@ -147,11 +143,11 @@ def prepare_out_dir(out_dir: Path, cfg: dict, overwrite: bool) -> str | None:
             log.info("%s", replaced)  # the caller reports it (summary["replaced"])
     out_dir.mkdir(parents=True, exist_ok=True)
     if not stamp.is_file():
-        dsio.atomic_write_json(stamp, {"config_hash": chash, "config": cfg})
+        dsio.atomic_write_json(stamp, {"config_hash": chash, "config": plan.as_dict()})
     return replaced
 
 
-def check_disk_space(out_dir: Path, shards: list[ShardSpec], cfg: dict) -> None:
+def check_disk_space(out_dir: Path, shards: list[ShardSpec], plan: DatasetPlan) -> None:
     """Refuse to start when the disk of ``out_dir`` cannot hold the shards to write.
 
     Raises
@@ -159,7 +155,7 @@ def check_disk_space(out_dir: Path, shards: list[ShardSpec], cfg: dict) -> None:
     ValueError
         Naming the folder, the space needed and the space free.
     """
-    n_t = int(round(cfg["chain"]["window_s"] * cfg["chain"]["sample_rate_hz"]))
+    n_t = int(round(plan.config.chain.window_s * plan.config.chain.sample_rate_hz))
     windows = sum(2 * len(s.windows) for s in shards)  # clean and disturbed twins
     need = int(1.1 * windows * (5 * n_t * 4 + 200)) + (1 << 20)  # float32 signals + metadata
     probe = out_dir
@@ -171,9 +167,9 @@ def check_disk_space(out_dir: Path, shards: list[ShardSpec], cfg: dict) -> None:
                          f"the disk holding {probe} has {free / 2**20:.0f} MiB free")
 
 
-def finalize(out_dir: Path, cfg: dict, shards: list[ShardSpec]) -> dict:
+def finalize(out_dir: Path, plan: DatasetPlan) -> dict:
     """Write the manifest once every shard is present and verified; return it."""
-    chash = config_hash(cfg)
+    shards = plan.shards
     entries = {}
     for s in shards:
         meta = json.loads((out_dir / s.name).with_suffix(".json").read_text())
@@ -182,7 +178,8 @@ def finalize(out_dir: Path, cfg: dict, shards: list[ShardSpec]) -> dict:
     content = hashlib.sha256("".join(entries[s.name]["content_sha256"]
                                      for s in shards).encode()).hexdigest()
     manifest = {"schema_version": dsio.SCHEMA_VERSION, "complete": True,
-                "config_hash": chash, "config": cfg, "seed": int(cfg["seed"]),
+                "config_hash": plan.config_hash, "config": plan.as_dict(),
+                "seed": int(plan.config.seed),
                 "n_shards": len(shards),
                 "shards": entries, "content_sha256": content, "package_version": package_version(),
                 "git_revision": git_revision(),

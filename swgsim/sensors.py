@@ -47,6 +47,55 @@ import scipy.sparse as sp
 
 from .flexspline import INNER, OUTER, TrussModel
 
+# The default layout, written once (docs/PHYSICS.md sec. 4): bridge radii on the collar,
+# active grid length, gauge factor of constantan foil gauges.
+R_TORQUE_MM = 29.0     # radius of the s0 torque bridge [mm]
+R_PAIRS_MM = 32.0      # radius of the s1..s4 half bridges [mm]
+GRID_LENGTH_MM = 3.0   # active grid length [mm]
+GAUGE_FACTOR = 2.0     # [-]
+
+
+@dataclass
+class SensorsConfig:
+    """Gauge layout of a data set (the data-set option ``sensors``), in millimetres.
+
+    Attributes
+    ----------
+    r_torque_mm, r_pairs_mm : float
+        Radii of the s0 torque bridge and of the s1..s4 half bridges [mm].
+    grid_length_mm : float
+        Active grid length [mm].
+    gauge_factor : float
+        Gauge factor GF [-].
+    """
+
+    r_torque_mm: float = R_TORQUE_MM
+    r_pairs_mm: float = R_PAIRS_MM
+    grid_length_mm: float = GRID_LENGTH_MM
+    gauge_factor: float = GAUGE_FACTOR
+
+
+@dataclass
+class TolerancesConfig:
+    """Per-gear gauge tolerances, standard deviations (:meth:`SensorLayout.perturbed`).
+
+    Attributes
+    ----------
+    sd_theta_deg : float
+        Gauge angle [deg] (0.3, README *Design choices*; unverified).
+    sd_r_mm : float
+        Gauge radius [mm].
+    sd_beta_deg : float
+        Grid orientation [deg].
+    sd_gain : float
+        Channel gain [-].
+    """
+
+    sd_theta_deg: float = 0.3
+    sd_r_mm: float = 0.1
+    sd_beta_deg: float = 0.5
+    sd_gain: float = 0.01
+
 
 @dataclass(frozen=True)
 class Grid:
@@ -70,7 +119,7 @@ class Grid:
     theta_deg: float
     beta_deg: float
     arm: int = 1
-    length_m: float = 3.0e-3
+    length_m: float = GRID_LENGTH_MM * 1e-3
 
 
 @dataclass(frozen=True)
@@ -95,12 +144,12 @@ class Signal:
     gain: float = 1.0
 
 
-def _shear_pair(r, th, length=3.0e-3):
+def _shear_pair(r, th, length=GRID_LENGTH_MM * 1e-3):
     # arm signs chosen so that a positive output torque gives a positive signal
     return (Grid(r, th, -45.0, +1, length), Grid(r, th, 45.0, -1, length))
 
 
-def _poisson_pair(r, th, length=3.0e-3):
+def _poisson_pair(r, th, length=GRID_LENGTH_MM * 1e-3):
     return (Grid(r, th, 0.0, +1, length), Grid(r, th, 90.0, -1, length))
 
 
@@ -119,7 +168,7 @@ class SensorLayout:
     """
 
     signals: tuple[Signal, ...] = field(default_factory=lambda: default_signals())
-    gauge_factor: float = 2.0
+    gauge_factor: float = GAUGE_FACTOR
     n_points: int = 9
 
     def __post_init__(self):
@@ -128,16 +177,25 @@ class SensorLayout:
         if not 1.0 <= self.gauge_factor <= 5.0:
             raise ValueError(f"gauge_factor must lie in [1, 5], got {self.gauge_factor}")
 
-    def perturbed(self, rng: np.random.Generator, sd_theta_deg: float = 0.3,
-                  sd_r_m: float = 0.1e-3, sd_beta_deg: float = 0.5,
-                  sd_gain: float = 0.01) -> SensorLayout:
+    def perturbed(self, rng: np.random.Generator,
+                  tolerances: TolerancesConfig | None = None) -> SensorLayout:
         """A copy with per-gauge placement and per-channel gain tolerances.
 
         Models the paper's per-gear sensor models fitted to three real RT1-T gears
         (Sec. III-B): every grid is displaced by N(0, sd) in θ, r and orientation, every
         channel's gain is N(1, sd_gain). Gauge positioning is the dominant error of
         sensorised RT1-T gears (Schuller et al. 2024, docs/PHYSICS.md sec. 4).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Draws, in the order grid (r, θ, β) by grid, then the channel's gain.
+        tolerances : TolerancesConfig, optional
+            Standard deviations; default :class:`TolerancesConfig`.
         """
+        tol = tolerances if tolerances is not None else TolerancesConfig()
+        sd_r_m, sd_theta_deg, sd_beta_deg = tol.sd_r_mm * 1e-3, tol.sd_theta_deg, tol.sd_beta_deg
+        sd_gain = tol.sd_gain
         sigs = []
         for s in self.signals:
             grids = tuple(
@@ -154,8 +212,34 @@ class SensorLayout:
         return dataclasses.replace(self, signals=tuple(sigs))
 
 
-def default_signals(r_torque_m: float = 29e-3, r_pairs_m: float = 32e-3) -> tuple[Signal, ...]:
-    """Default five-signal layout (module docstring)."""
+def gear_layout(sensors: SensorsConfig, tolerances: TolerancesConfig,
+                tolerance_seed: int) -> SensorLayout:
+    """The layout of one gear: the data set's gauges with this gear's placement and gain
+    errors (:meth:`SensorLayout.perturbed`, drawn from ``default_rng(tolerance_seed)``).
+
+    Parameters
+    ----------
+    sensors : SensorsConfig
+        Radii and grid length [mm], gauge factor.
+    tolerances : TolerancesConfig
+    tolerance_seed : int
+        The gear's seed (its sensor model, paper Sec. III-B).
+
+    Returns
+    -------
+    SensorLayout
+    """
+    sig = default_signals(sensors.r_torque_mm * 1e-3, sensors.r_pairs_mm * 1e-3)
+    length = sensors.grid_length_mm * 1e-3
+    sig = tuple(dataclasses.replace(x, grids=tuple(dataclasses.replace(g, length_m=length)
+                                                   for g in x.grids)) for x in sig)
+    lay = SensorLayout(signals=sig, gauge_factor=float(sensors.gauge_factor))
+    return lay.perturbed(np.random.default_rng(int(tolerance_seed)), tolerances)
+
+
+def default_signals(r_torque_m: float = R_TORQUE_MM * 1e-3,
+                    r_pairs_m: float = R_PAIRS_MM * 1e-3) -> tuple[Signal, ...]:
+    """Default five-signal layout (module docstring); radii [m]."""
     return (
         Signal("s0", _shear_pair(r_torque_m, 22.5) + _shear_pair(r_torque_m, 112.5), "full"),
         Signal("s1", _poisson_pair(r_pairs_m, 0.0), "half"),

@@ -1,4 +1,4 @@
-"""Data-set protocol: window starts and the bench amplifier (swgsim.acquisition)."""
+"""Data-set recording: window starts and the bench amplifier (swgsim.acquisition)."""
 
 import numpy as np
 import pytest
@@ -7,10 +7,16 @@ from swgcli import dataset_preset
 from swgsim.acquisition import (
     Amplifier,
     acquire,
-    parse_acquisition,
+    check_acquisition,
     sinc_taps,
     start_angles,
 )
+from swgsim.config import dataset_config
+
+
+def parse_acquisition(cfg):
+    """The acquisition option through the data-set door, then its range checks."""
+    return check_acquisition(dataset_config({"acquisition": cfg}).acquisition)
 
 AMP = Amplifier(name="test", noise_uv_rms=2.4, excitation_v=3.3, vref_v=1.2, gain=128.0,
                 bits=24, order=3, oversample=4)
@@ -30,16 +36,17 @@ def test_bench_preset_cites_its_amplifier():
 
 @pytest.mark.parametrize("cfg, key", [
     ({"start": "sometimes"}, "dataset.acquisition.start"),
-    ({"begin": "fixed"}, "unknown key"),
+    ({"begin": "fixed"}, "dataset.acquisition.begin: unknown key"),
     ({"wg_start_deg": float("nan")}, "wg_start_deg"),
-    ({"amplifier": 3}, "amplifier must be null or a mapping"),
+    ({"amplifier": 3}, "dataset.acquisition.amplifier: must be a mapping"),
     ({"amplifier": {"name": "x", "noise_uv_rms": 1, "excitation_v": 0, "vref_v": 1,
                     "gain": 1}}, "amplifier.excitation_v must lie in \\(0"),
     ({"amplifier": {"name": "x", "noise_uv_rms": 1, "excitation_v": 1, "vref_v": 1,
                     "gain": 1, "oversample": 2.5}}, "amplifier.oversample"),
     ({"amplifier": {"name": "x", "noise_uv_rms": -1, "excitation_v": 1, "vref_v": 1,
                     "gain": 1}}, "amplifier.noise_uv_rms"),
-    ({"amplifier": {"name": "x", "noise": 1}}, "missing"),
+    ({"amplifier": {"name": "x", "noise": 1}}, "amplifier.noise: unknown key"),
+    ({"amplifier": {"name": "x", "noise_uv_rms": 1}}, "amplifier.excitation_v: missing"),
 ])
 def test_bad_acquisition_is_refused_naming_the_key(cfg, key):
     with pytest.raises(ValueError, match=key):

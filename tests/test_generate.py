@@ -18,6 +18,7 @@ from swgsim import generate as gen
 from swgsim.config import paper_config
 from swgsim.faults import PAPER_CLASSES
 from swgsim.friction import friction_effects_from_config
+from swgsim.plan import plan
 
 
 def tiny_cfg(**chain):
@@ -41,7 +42,7 @@ def test_paper_preset_is_the_schema_default():
 
 
 def test_paper_grid_counts():
-    shards = gen.plan(paper_config())
+    shards = plan(paper_config()).shards
     n = sum(len([w for w in s.windows if not w.reference]) for s in shards)
     assert n == 6480  # 3 gears x 6 classes x 60 variants x 6 operating points
     classes = {w.fault for s in shards for w in s.windows}
@@ -230,19 +231,21 @@ def test_shared_motions_equal_simulating_each_window(tiny_set):
     """Each distinct motion and window is simulated once; the result is the per-window one."""
     from swgsim.chain import ChainSettings, SimulationChain
     from swgsim.faults import apply_fault
+    from swgsim.plan import gear_params, layout_for, plan
+    from swgsim.shard import gear_influences
 
     out, _ = tiny_set
-    cfg = tiny_cfg()
-    shard = gen.plan(cfg)[0]
+    p = plan(tiny_cfg())
+    shard = p.shards[0]
     ds = dsio.load(out)
-    infl = gen.gear_influences(cfg, [shard])[shard.gear]
-    gear = next(g for g in cfg["gears"] if int(g["id"]) == shard.gear)
-    ch = cfg["chain"]
-    chain = SimulationChain.from_influences(gen.layout_for(cfg, gear), infl, ChainSettings(
-        sample_rate_hz=ch["sample_rate_hz"], window_s=ch["window_s"], settle_s=ch["settle_s"],
-        substeps=ch["substeps"], contact_half_width_deg=ch["contact_half_width_deg"],
-        ecc_load_share=ch["ecc_load_share"]))
-    healthy = gen.gear_params(cfg, gear)
+    infl = gear_influences(p, [shard])[shard.gear]
+    gear = p.gear(shard.gear)
+    ch = p.config.chain
+    chain = SimulationChain.from_influences(layout_for(p.config, gear), infl, ChainSettings(
+        sample_rate_hz=ch.sample_rate_hz, window_s=ch.window_s, settle_s=ch.settle_s,
+        substeps=ch.substeps, contact_half_width_deg=ch.contact_half_width_deg,
+        ecc_load_share=ch.ecc_load_share))
+    healthy = gear_params(p.config, gear)
     sel = ((ds.gear.values == shard.gear) & (ds.n_in_rpm.values == shard.n_in_rpm)
            & ~ds.disturbed.values & ~ds.reference.values)
     for w in {w.fault: w for w in shard.windows if not w.reference}.values():
@@ -257,7 +260,7 @@ def test_shared_motions_equal_simulating_each_window(tiny_set):
 
 def test_bench_windows_differ_and_carry_the_stated_noise(tmp_path):
     """Bench protocol: random window starts; the amplifier's noise is on the signal."""
-    from swgsim.acquisition import parse_acquisition
+    from swgsim.plan import plan
 
     cfg = tiny_cfg()
     cfg["acquisition"] = dataset_preset("tiny_bench")["acquisition"]
@@ -270,7 +273,7 @@ def test_bench_windows_differ_and_carry_the_stated_noise(tmp_path):
                              & (b.gear.values == 1) & (b.n_in_rpm.values == 2000.0))
     assert not np.allclose(sig[healthy[0]], sig[healthy[1]], atol=1e-3)  # other start angle
     noise = (a.strain_signal.values.astype(float) - sig).std()  # same draws but the noise
-    stated = parse_acquisition(cfg["acquisition"]).amplifier.noise_mvv
+    stated = plan(cfg).config.acquisition.amplifier.noise_mvv
     assert noise == pytest.approx(stated, rel=0.05)
 
 
@@ -312,7 +315,7 @@ def test_sensor_effects_and_extra_kinematic_error_reach_the_data(tiny_set, tmp_p
     assert np.abs((c.strain_signal - a.strain_signal).values[~g1]).max() == 0.0
     cfg["sensor_effects"] = [{"name": "amplifier_lowpass", "params": {"f_c_hz": -5.0}}]
     with pytest.raises(ValueError, match="f_c_hz"):
-        gen.plan(cfg)
+        plan(cfg)
 
 
 def test_friction_effects_reach_the_data(tiny_set, tmp_path):
@@ -350,18 +353,18 @@ def test_friction_effects_config_option_and_errors():
         cfg = tiny_cfg()
         cfg["friction_effects"] = spec
         with pytest.raises(ValueError, match=match):
-            gen.plan(cfg)
+            plan(cfg)
 
 
 def test_settling_shorter_than_the_torsional_ring_down_is_refused():
     from swgsim.config import dataset_config
-    from swgsim.generate import min_settle_s, plan
+    from swgsim.plan import min_settle_s, plan
 
     cfg = dataset_config({"load": {"j_out_kgm2": 0.69}})
     need = min_settle_s(cfg)
     assert 0.1 < need < 0.2  # about 5 x 30 ms with a robot link
     with pytest.raises(ValueError, match=r"dataset.chain.settle_s=0.05 s .* >= 0.147"):
         plan(cfg)
-    cfg["chain"]["settle_s"] = 0.15
-    assert plan(cfg)
+    cfg.chain.settle_s = 0.15
+    assert plan(cfg).shards
     assert min_settle_s(dataset_config()) < 0.05  # the bench inertia rings down in ms

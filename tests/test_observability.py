@@ -77,8 +77,8 @@ def test_app_end_to_end_on_the_tiny_bench_grid(tmp_path):
         "dataset=tiny_bench", "j_out_kgm2=[0.0088,0.2]", f"data_root={tmp_path}/data",
         f"report_dir={tmp_path}/rep", "n_jobs=1", "progress=false"])
     cfgs = data_set_configs(cfg)
-    assert cfgs[0.0088]["chain"]["settle_s"] == 0.05  # the preset's
-    assert cfgs[0.2]["chain"]["settle_s"] > 0.05      # raised for the longer ring-down
+    assert cfgs[0.0088].config.chain.settle_s == 0.05  # the preset's
+    assert cfgs[0.2].config.chain.settle_s > 0.05      # raised for the longer ring-down
     out = run_observability(cfg)
     tab = pd.read_csv(tmp_path / "rep" / "observability.csv")
     assert tuple(tab.columns[:5]) == COLUMNS

@@ -14,6 +14,7 @@ from learn.paper_results import (
 )
 from learn.summary import recall, write_summary
 from swgcli import dataset_preset
+from swgsim.config import dataset_config
 from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
 
 FOLD_JITTER = np.array([-1.0, 1.0, -2.0, 2.0])  # points; averages to zero over 4 folds
@@ -105,7 +106,8 @@ def test_summary_side_by_side_with_two_protocols(tmp_path):
     rec = recall(conf)
     assert rec["recall"].to_numpy() == pytest.approx(10 / 15)
     out = write_summary(res, {"paper": conf, "bench": conf}, tmp_path,
-                        {"paper": dataset_preset("paper"), "bench": dataset_preset("bench")},
+                        {"paper": dataset_config(dataset_preset("paper")),
+                         "bench": dataset_config(dataset_preset("bench"))},
                         {"scale": False, "seed": 0})
     md = out["files"]["md"].read_text()
     assert "| paper | VII | 15 | 15 | 15 | 15 | 1.0 |" in md

@@ -1,0 +1,347 @@
+"""What a data set holds, decided before any simulation: checks, variants and shards.
+
+:func:`plan` takes a typed :class:`~swgsim.config.DatasetConfig` (or a mapping, checked
+at the door by :func:`swgsim.config.dataset_config`), checks every range and physical
+limit once, and returns a :class:`DatasetPlan`: the config, its parsed effects and the
+list of shards. One shard holds every window of one gear at one input speed (all
+classes, variants and load torques, plus the commissioning reference windows). The
+simulation of a shard (:mod:`swgsim.shard`) and the orchestration (:mod:`swgsim.generate`)
+take the plan and check nothing again.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .acquisition import check_acquisition
+from .config import DatasetConfig, GearConfig, VariantSpec, dataset_config
+from .dynamics import gear_with_ke, rt1_size20, torsional_mode
+from .faults import FAULTS, ChainParams, get_fault
+from .flexspline import FlexsplineGeometry, TrussModel
+from .friction import FrictionEffects, friction_effects_from_config
+from .measurement import SensorEffect, parse_sensor_effects
+from .sensors import SensorLayout, gear_layout, signal_rows
+
+SETTLE_DECAY_TIMES = 5.0  # transient left in the window: e^-5 = 0.7 % of the start's
+
+
+@dataclass(frozen=True)
+class WindowSpec:
+    """One window to simulate: gear, class, variant and operating point."""
+
+    gear: int
+    fault: str
+    variant: int
+    severity: float
+    position_deg: float
+    t_out_nm: float
+    reference: bool
+
+
+@dataclass(frozen=True)
+class ShardSpec:
+    """One shard: all windows of one gear at one input speed."""
+
+    name: str
+    gear: int
+    speed_index: int
+    n_in_rpm: float
+    windows: tuple[WindowSpec, ...]
+
+
+@dataclass(frozen=True)
+class DatasetPlan:
+    """A checked data set: its config, what was parsed from it, and its shards.
+
+    Attributes
+    ----------
+    config : DatasetConfig
+        Complete and checked; what is hashed and stored with the data.
+    shards : tuple of ShardSpec
+    sensor_effects : tuple of SensorEffect
+        The parsed ``sensor_effects`` option.
+    friction : FrictionEffects or None
+        The parsed ``friction_effects`` option.
+    config_hash : str
+        :func:`config_hash` of ``config``.
+    """
+
+    config: DatasetConfig
+    shards: tuple[ShardSpec, ...]
+    sensor_effects: tuple[SensorEffect, ...]
+    friction: FrictionEffects | None
+    config_hash: str
+
+    def gear(self, gear_id: int) -> GearConfig:
+        """The config of the gear with this id."""
+        return next(g for g in self.config.gears if int(g.id) == int(gear_id))
+
+    def as_dict(self) -> dict[str, Any]:
+        """The config as plain data (stored in the manifest and the shards)."""
+        return dataclasses.asdict(self.config)
+
+
+def config_hash(cfg: DatasetConfig | Mapping[str, Any]) -> str:
+    """SHA-256 of the canonical JSON of a data-set config (first 16 hex digits)."""
+    plain = dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg
+    return hashlib.sha256(json.dumps(plain, sort_keys=True).encode()).hexdigest()[:16]
+
+
+# ------------------------------------------------------------------------- checks
+def _req(cond: bool, msg: str) -> None:
+    if not cond:
+        raise ValueError(msg)
+
+
+def _in(value, lo, hi, key: str, unit: str = "", *, lo_open: bool = False,
+        hi_open: bool = False, why: str = "") -> None:
+    """Refuse ``value`` outside [lo, hi] (or the open ends) naming key, value and range."""
+    v = float(value)
+    ok = np.isfinite(v) and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
+    if not ok:
+        rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+        raise ValueError(f"{key} must lie in {rng}{' ' + unit if unit else ''}"
+                         f"{' (' + why + ')' if why else ''}, got {value}")
+
+
+def _check_name_and_points(cfg: DatasetConfig) -> None:
+    _in(cfg.seed, 0, 2**32 - 1, "dataset.seed")
+    _req(bool(cfg.name) and "/" not in cfg.name and cfg.name not in (".", ".."),
+         f"dataset.name must be a non-empty folder name, got {cfg.name!r}")
+    for key, lo, hi, unit, why in (
+            ("n_in_rpm", 0.0, 6500.0, "rpm", "catalogue max input speed of size 20"),
+            ("t_out_nm", 0.0, 107.0, "N m", "repeated peak torque of size 20")):
+        vals = getattr(cfg.operating_points, key)
+        _req(len(vals) >= 1 and len(set(vals)) == len(vals),
+             f"dataset.operating_points.{key} must list distinct values, got {vals}")
+        for v in vals:
+            _in(v, lo, hi, f"dataset.operating_points.{key}", unit, lo_open=key == "n_in_rpm",
+                why=why)
+
+
+def _max_eccentricity(variants: Mapping[str, VariantSpec]) -> float:
+    ecc = variants.get("eccentric_wg")
+    if ecc is None:
+        return 0.0
+    return max([*(ecc.severities or []), *((ecc.severity_linspace or [])[:2]), 0.0])
+
+
+def _check_chain(cfg: DatasetConfig) -> None:
+    n_theta = int(cfg.mesh.n_theta)
+    _req(n_theta % 20 == 0 and 20 <= n_theta <= 2000, "dataset.mesh.n_theta must be a "
+         f"multiple of 20 in [20, 2000], got {cfg.mesh.n_theta}")
+    ch = cfg.chain
+    _in(ch.sample_rate_hz, 0.0, 1e6, "dataset.chain.sample_rate_hz", "Hz", lo_open=True)
+    _in(ch.window_s, 0.0, 10.0, "dataset.chain.window_s", "s", lo_open=True)
+    _in(ch.settle_s, 0.0, 10.0, "dataset.chain.settle_s", "s")
+    _in(ch.substeps, 1, 100, "dataset.chain.substeps")
+    _in(ch.contact_half_width_deg, 360.0 / n_theta, 90.0,
+        "dataset.chain.contact_half_width_deg", "deg", hi_open=True,
+        why="at least one node spacing; the two mesh zones 180 deg apart must not overlap")
+    e_max = _max_eccentricity(cfg.variants)
+    _in(ch.ecc_load_share, 0.0, 1.0 / e_max if e_max > 0 else 10.0,
+        "dataset.chain.ecc_load_share", why="the load share 1 ± κ e/w0 of a mesh zone must "
+        "stay in [0, 2] for the largest eccentricity of dataset.variants.eccentric_wg")
+    _in(cfg.load.j_out_kgm2, 1e-4, 100.0, "dataset.load.j_out_kgm2", "kg m²")
+
+
+def _check_tolerances_and_disturbance(cfg: DatasetConfig) -> None:
+    for key, hi, unit in (("sd_theta_deg", 5.0, "deg"), ("sd_r_mm", 2.0, "mm"),
+                          ("sd_beta_deg", 10.0, "deg"), ("sd_gain", 0.2, "")):
+        _in(getattr(cfg.tolerances, key), 0.0, hi, f"dataset.tolerances.{key}", unit)
+    for key in ("offset_mvv", "harmonic_mvv"):
+        _in(getattr(cfg.disturbance, key), 0.0, 1.0, f"dataset.disturbance.{key}", "mV/V")
+    if cfg.disturbance.harmonic_mvv > 0:  # eq. (10): sub-harmonics down to order 1/4
+        n_min = min(cfg.operating_points.n_in_rpm)
+        rev = cfg.chain.window_s * n_min / 60.0
+        need = 4.0 * 60.0 / n_min
+        _req(rev >= 4.0 - 1e-9, f"dataset.chain.window_s={cfg.chain.window_s:g} s holds "
+             f"{rev:.3g} input revolutions at {n_min:g} rpm, less than one period of "
+             f"eq. (10)'s lowest sub-harmonic (order 1/4); allowed: >= {need:.4g} s, or "
+             "dataset.disturbance.harmonic_mvv=0")
+
+
+def _check_gears(cfg: DatasetConfig) -> None:
+    _req(len(cfg.gears) >= 1, "dataset.gears must list at least one gear")
+    ids = [int(g.id) for g in cfg.gears]
+    _req(len(set(ids)) == len(ids), f"dataset.gears: ids must be unique, got {ids}")
+    for i, g in enumerate(cfg.gears):
+        _in(g.id, 1, 999, f"dataset.gears[{i}].id")
+        _in(g.tolerance_seed, 0, 2**32 - 1, f"dataset.gears[{i}].tolerance_seed")
+        for k in ("b1_factor", "k1_factor"):
+            _in(getattr(g, k), 0.0, 10.0, f"dataset.gears[{i}].{k}", lo_open=True)
+        try:
+            gear_with_ke(rt1_size20(), g.ke_extra)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"dataset.gears[{i}].ke_extra: {e}") from None
+
+
+def _check_recording(cfg: DatasetConfig) -> None:
+    acq = check_acquisition(cfg.acquisition)
+    if acq.amplifier is not None:
+        fs = cfg.chain.sample_rate_hz
+        lead_s = acq.amplifier.lead_samples(fs) / fs
+        _req(cfg.chain.settle_s >= lead_s, f"dataset.chain.settle_s must be >= {lead_s:g} s "
+                                           "(the amplifier's filter history), got "
+                                           f"{cfg.chain.settle_s}")
+    need = min_settle_s(cfg)
+    _req(cfg.chain.settle_s >= need - 1e-12,
+         f"dataset.chain.settle_s={cfg.chain.settle_s:g} s is shorter than "
+         f"{SETTLE_DECAY_TIMES:g} decay times of the torsional mode with "
+         f"dataset.load.j_out_kgm2={cfg.load.j_out_kgm2:g} kg m² (the window would "
+         f"still ring from the start); allowed: >= {need:.3g} s")
+
+
+def _check_layout(cfg: DatasetConfig) -> None:
+    """Every gear's gauges on the collar and resolved by the mesh (geometry only, no
+    factorisation)."""
+    model = TrussModel(FlexsplineGeometry(), cfg.mesh)
+    for g in cfg.gears:
+        try:
+            signal_rows(model, layout_for(cfg, g))
+        except ValueError as e:
+            key = ("dataset.mesh.n_theta" if "too coarse" in str(e)
+                   else "dataset.sensors (r_torque_mm, r_pairs_mm, grid_length_mm)")
+            raise ValueError(f"{key}: {e}") from None
+
+
+# ------------------------------------------------------------------------ the plan
+def variant_list(name: str, spec: VariantSpec) -> list[tuple[float, float]]:
+    """(severity, position_deg) of every variant of a class, in variant order.
+
+    Raises
+    ------
+    ValueError
+        Unknown fault, severity outside its range, or a non-positive variant count.
+    """
+    f = get_fault(name)
+    lo, hi = f.severity_range
+    lin, given = spec.severity_linspace, spec.severities
+    _req((lin is None) != (given is None), f"dataset.variants.{name}: give either severities "
+                                           "or severity_linspace [first, last, count]")
+    if lin is not None:
+        _req(len(lin) == 3, f"dataset.variants.{name}.severity_linspace must be [first, last, "
+                            f"count], got {lin}")
+        a, b, n = lin
+        _req(int(n) >= 1 and n == int(n), f"dataset.variants.{name}.severity_linspace: count "
+                                          f"must be an integer >= 1, got {n}")
+        sev = list(np.linspace(float(a), float(b), int(n)))
+    else:
+        sev = [float(s) for s in given]
+        _req(len(sev) >= 1, f"dataset.variants.{name}.severities must list at least one "
+                            "severity")
+    for s in sev:
+        _req(lo <= s <= hi, f"dataset.variants.{name}: severity {s} outside the allowed "
+                            f"range [{lo}, {hi}]")
+    _req(spec.repeat >= 1, f"dataset.variants.{name}.repeat must be >= 1, got {spec.repeat}")
+    if f.uses_position:
+        n_pos = int(spec.n_positions)
+        _req(n_pos >= 1, f"dataset.variants.{name}.n_positions must be >= 1, got {n_pos}")
+        pos = [360.0 * k / n_pos for k in range(n_pos)]
+        out = [(s, p) for s in sev for p in pos]
+    else:
+        out = [(s, float("nan")) for s in sev]
+    return [v for v in out for _ in range(int(spec.repeat))]
+
+
+def _variants(cfg: DatasetConfig) -> dict[str, list[tuple[float, float]]]:
+    unknown = set(cfg.variants) - set(FAULTS)
+    _req(not unknown, f"dataset.variants: unknown fault(s) {sorted(unknown)}; allowed: "
+                      f"{sorted(FAULTS)}")
+    return {name: variant_list(name, spec) for name, spec in cfg.variants.items()}
+
+
+def _shards(cfg: DatasetConfig, variants: dict[str, list[tuple[float, float]]]
+            ) -> tuple[ShardSpec, ...]:
+    ops = cfg.operating_points
+    shards = []
+    for g in cfg.gears:
+        gid = int(g.id)
+        for si, n in enumerate(ops.n_in_rpm):
+            wins = [WindowSpec(gid, fault, vi, sev, pos, float(t), False)
+                    for fault, vl in variants.items()
+                    for vi, (sev, pos) in enumerate(vl)
+                    for t in ops.t_out_nm]
+            wins += [WindowSpec(gid, "healthy", -1, 0.0, float("nan"), float(t), True)
+                     for t in ops.t_out_nm]
+            shards.append(ShardSpec(f"gear{gid}_n{int(round(n))}rpm.nc", gid, si, float(n),
+                                    tuple(wins)))
+    return tuple(shards)
+
+
+def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
+    """Check a data-set config and list its shards, before any simulation.
+
+    Parameters
+    ----------
+    cfg : DatasetConfig, mapping or DatasetPlan
+        A mapping is checked for keys and types first, at the door
+        (:func:`swgsim.config.dataset_config`); a typed config (e.g. composed by Hydra
+        from the schema, which checked its keys and types) is taken as it is; a plan is
+        returned as it is.
+
+    Returns
+    -------
+    DatasetPlan
+
+    Raises
+    ------
+    ValueError
+        With the parameter's name and allowed range: unknown fault, severity outside its
+        range, non-positive speed, negative torque or variant count, a gauge off the
+        collar, a truss too coarse for the gauge layout, bad chain settings.
+    """
+    if isinstance(cfg, DatasetPlan):
+        return cfg
+    if not isinstance(cfg, DatasetConfig):
+        cfg = dataset_config(cfg)
+    _check_name_and_points(cfg)
+    _check_chain(cfg)
+    _check_tolerances_and_disturbance(cfg)
+    _check_gears(cfg)
+    _check_recording(cfg)
+    effects = tuple(parse_sensor_effects(cfg.sensor_effects))
+    friction = friction_effects_from_config(cfg.friction_effects)
+    variants = _variants(cfg)
+    _check_layout(cfg)
+    return DatasetPlan(cfg, _shards(cfg, variants), effects, friction, config_hash(cfg))
+
+
+# ------------------------------------------------------------- per-gear parameters
+def layout_for(cfg: DatasetConfig, gear: GearConfig) -> SensorLayout:
+    """The sensor layout of one gear, with its placement and gain tolerances."""
+    return gear_layout(cfg.sensors, cfg.tolerances, gear.tolerance_seed)
+
+
+def gear_params(cfg: DatasetConfig, gear: GearConfig) -> ChainParams:
+    """Healthy ChainParams of one gear (paper Table IV factors on b1 and k1, the data
+    set's output inertia, the gear's extra kinematic-error harmonics ``ke_extra``)."""
+    p = rt1_size20()
+    p = dataclasses.replace(p, b1_nms=p.b1_nms * float(gear.b1_factor),
+                            k1_nm_per_rad=p.k1_nm_per_rad * float(gear.k1_factor),
+                            j_out_kgm2=float(cfg.load.j_out_kgm2))
+    return ChainParams(gear=gear_with_ke(p, gear.ke_extra))
+
+
+def min_settle_s(cfg: DatasetConfig) -> float:
+    """Shortest ``chain.settle_s`` that lets the torsional mode ring down before the window.
+
+    :data:`SETTLE_DECAY_TIMES` times the longest decay time
+    (:func:`swgsim.dynamics.torsional_mode`) over the data set's gears and
+    operating points [s].
+    """
+    ops = cfg.operating_points
+    return SETTLE_DECAY_TIMES * max(
+        torsional_mode(gear_params(cfg, g).gear, float(n), float(t))[1]
+        for g in cfg.gears for n in ops.n_in_rpm for t in ops.t_out_nm)
+
+
+__all__ = ["DatasetPlan", "ShardSpec", "WindowSpec", "SETTLE_DECAY_TIMES",
+           "config_hash", "gear_params", "layout_for", "min_settle_s", "plan", "variant_list"]
