@@ -43,6 +43,19 @@ def _git_state(root: str) -> tuple[str, str]:
     return head.stdout.strip(), dirty
 
 
+def repo_root() -> Path:
+    """Root of the source checkout.
+
+    Returns
+    -------
+    Path
+        The parent of the ``learn`` package if it holds ``pyproject.toml`` (a source
+        checkout or editable install), otherwise the current working directory.
+    """
+    here = Path(__file__).resolve().parents[1]
+    return here if (here / "pyproject.toml").is_file() else Path.cwd()
+
+
 def git_tags(root: str | Path | None = None) -> dict[str, str]:
     """Git commit of a checkout and whether its work tree differs from it, as run tags.
 
@@ -52,7 +65,7 @@ def git_tags(root: str | Path | None = None) -> dict[str, str]:
     Parameters
     ----------
     root : path-like, optional
-        Folder inside the checkout; default :func:`learn.tracking.repo_root`.
+        Folder inside the checkout; default :func:`repo_root`.
 
     Returns
     -------
@@ -62,8 +75,6 @@ def git_tags(root: str | Path | None = None) -> dict[str, str]:
         files). Both ``"unknown"`` where git is missing or ``root`` is not in a checkout;
         never raises.
     """
-    from learn.tracking import repo_root
-
     commit, dirty = _git_state(str(Path(root or repo_root()).resolve()))
     return {GIT_COMMIT_TAG: commit, GIT_DIRTY_TAG: dirty}
 

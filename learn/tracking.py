@@ -54,6 +54,7 @@ from learn.provenance import (
     dataset_ref,
     git_tags,
     model_requirements,
+    repo_root,
     sklearn_only,
 )
 
@@ -61,19 +62,6 @@ log = logging.getLogger(__name__)
 
 #: Tag that marks the parent run of a group (:func:`log_run`'s ``group``).
 GROUP_PARENT_TAG = "group_parent"
-
-
-def repo_root() -> Path:
-    """Root of the source checkout.
-
-    Returns
-    -------
-    Path
-        The parent of the ``learn`` package if it holds ``pyproject.toml`` (a source
-        checkout or editable install), otherwise the current working directory.
-    """
-    here = Path(__file__).resolve().parents[1]
-    return here if (here / "pyproject.toml").is_file() else Path.cwd()
 
 
 def default_tracking_uri() -> str:
