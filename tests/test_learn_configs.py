@@ -1,4 +1,4 @@
-"""Every option of the train config composes and instantiates (conf/, learn.baselines)."""
+"""Every option of the train config composes and instantiates (conf/, learn.learners.baselines)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from omegaconf import OmegaConf
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
-from learn.baselines import PAPER_MODELS, make_model
-from learn.protocols import PROTOCOLS
+from learn.learners.baselines import PAPER_MODELS, make_model
+from learn.studies.protocols import PROTOCOLS
 from swgcli import CONF_DIR, compose_app
 
 CONF = Path(CONF_DIR)
@@ -61,14 +61,23 @@ def test_table_vi_settings():
         make_model("xgb")
 
 
-@pytest.mark.parametrize("name", sorted(PROTOCOLS))
+#: The paper's protocols (Sec. IV), written out here: scheme, disturbed, splits.
+PAPER_PROTOCOLS = {
+    "cv_clean": ("group_kfold", False, {"n_splits": 4}),
+    "cv_disturbed": ("group_kfold", True, {"n_splits": 4}),
+    "ood_clean": ("leave_one_gear", False, {"test_gears": [3, 1, 2]}),
+    "ood_disturbed": ("leave_one_gear", True, {"test_gears": [3, 1, 2]}),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PAPER_PROTOCOLS))
 def test_protocol_config_matches_paper_protocol(name):
-    p = OmegaConf.to_container(compose_train([f"protocol={name}"]).protocol, resolve=True)
-    assert p.pop("name") == name
-    p.pop("random_state", None)
-    expected = {"n_splits": 4, "test_gears": None,  # the schema's, where the paper has none
-                **{k: list(v) if isinstance(v, tuple) else v for k, v in PROTOCOLS[name].items()}}
-    assert p == expected
+    assert set(PROTOCOLS) == set(PAPER_PROTOCOLS)
+    p = OmegaConf.to_container(compose_train([f"protocol={name}", "seed=5"]).protocol,
+                               resolve=True)
+    scheme, disturbed, splits = PAPER_PROTOCOLS[name]
+    assert p == {"name": name, "scheme": scheme, "disturbed": disturbed, "random_state": 5,
+                 "n_splits": 4, "test_gears": None, **splits}
 
 
 @pytest.mark.parametrize("group", ["data", "features", "logger", "paths"])

@@ -7,8 +7,8 @@ import sys
 
 import pytest
 
-from learn import study
-from learn.study import TASKS, run_train
+from learn.tasks import train as train_task
+from learn.tasks.train import TASKS, run_train
 from swgcli import compose_app
 
 
@@ -54,8 +54,8 @@ def test_task_dispatch(monkeypatch, tmp_path):
                         raising=False)
     cfg = compose_train(["task=probe"])
     assert run_train(cfg) == {"ok": 1} and calls == [cfg]
-    assert TASKS["transfer"] == "learn.transfer.run_transfer"
-    assert TASKS["study"].rsplit(".", 1) == [study.__name__, "run_study_job"]
+    assert TASKS["transfer"] == "learn.tasks.transfer.run_transfer"
+    assert TASKS["study"].rsplit(".", 1) == [train_task.__name__, "run_study_job"]
 
 
 def test_multirun_cli(tiny_dataset, tracking_uri, tmp_path):

@@ -18,10 +18,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.baselines import MODEL_LABELS
-from learn.features import order_spectrum, reference_index
-from learn.paper_results import GEAR_SPLITS, PAPER_RESULTS, PAPER_TABLES, SPLIT_LABELS, table_spec
-from swgsim.faults import fault_classes
+from learn.inputs.features import order_spectrum, reference_index
+from learn.learners.baselines import model_label
+from learn.reports.paper_results import (
+    GEAR_SPLITS,
+    PAPER_RESULTS,
+    PAPER_TABLES,
+    SPLIT_LABELS,
+    table_spec,
+)
+from swgsim.faults import display_name, fault_classes
 
 log = logging.getLogger(__name__)
 
@@ -41,7 +47,9 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
         lines += ["The paper's Table VIII gives no numbers (its text only quotes some: best "
                   "KNN test score about 80 % and NB 73.72 % on Selection 1, SVM at most about "
                   "47 %), so the paper's cells read (–).", ""]
-    lines += ["| | " + " | ".join(MODEL_LABELS[m] for m in models) + " |",
+    # a registered model beyond the paper's (learn.learners.baselines.register_model)
+    models = (*models, *(m for m in dict.fromkeys(res["model"]) if m not in models))
+    lines += ["| | " + " | ".join(model_label(m) for m in models) + " |",
               "|---|" + "---:|" * len(models)]
     for sel in selections:
         lines.append(f"| **Selection {sel[-1]}** |" + " |" * len(models))
@@ -53,7 +61,7 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
                 for m in models:
                     v = rs.loc[rs["model"] == m, f"{kind}_accuracy"]
                     ours = 100 * float(v.mean()) if len(v) else None
-                    ref = paper[sel][m][kind] if paper else None
+                    ref = paper[sel][m][kind] if paper and m in paper[sel] else None
                     cells.append(_cell(ours, ref))
                 lines.append(f"| {label} | " + " | ".join(cells) + " |")
         else:
@@ -62,7 +70,7 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
                 for m in models:
                     v = rs.loc[(rs["model"] == m) & (rs["split"] == split), "test_accuracy"]
                     ours = 100 * float(v.mean()) if len(v) else None
-                    ref = paper[sel][split][m] if paper and sel in paper else None
+                    ref = paper[sel][split].get(m) if paper and sel in paper else None
                     cells.append(_cell(ours, ref))
                 lines.append(f"| {SPLIT_LABELS[split]} | " + " | ".join(cells) + " |")
     return [*lines, ""]
@@ -82,7 +90,7 @@ def write_tables(
         One row per (table, selection, model, split) with columns ``table``
         ("VII".."X"), ``selection`` ("selection1"..), ``model`` ("mlp"..), ``split``
         ("fold0".. or "gear1".."gear3"), ``train_accuracy``, ``test_accuracy`` [-]
-        (as returned by :func:`learn.study.run_paper_study`). Missing jobs read "–".
+        (as returned by :func:`learn.tasks.paper.run_paper_study`). Missing jobs read "–".
     path : path-like
         Markdown file to write.
     timings_s : mapping, optional
@@ -99,7 +107,8 @@ def write_tables(
     if dataset_path:
         lines += [f"Data set: `{dataset_path}`.", ""]
     lines += ["Each cell reads *ours (paper)* in per cent; the paper's numbers are "
-              "`learn.paper_results.PAPER_RESULTS`, transcribed from its Tables VII, IX and X. "
+              "`learn.reports.paper_results.PAPER_RESULTS`, transcribed from its Tables VII, "
+              "IX and X. "
               "CV tables: mean over 4 folds whose groups are (gear, fault, variant); "
               "out-of-distribution tables: test score on the held-out gear.", ""]
     for name in PAPER_TABLES:
@@ -226,7 +235,7 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
                                               r"$\Delta\bar s_{1,3}$", r"$\Delta\bar s_{2,4}$"),
                                        strict=True)):
         for c, cls in enumerate(classes):
-            ax.plot(orders, amp[c, j], lw=1.0, label=cls.replace("_", " "))
+            ax.plot(orders, amp[c, j], lw=1.0, label=display_name(cls))
         ax.set_title(f"({'abcd'[j]}) DFT of {name}", fontsize=9)
         ax.set_xlabel("order of input rotation [-]")
         ax.set_ylabel("DFT amplitude [mV/V]")

@@ -52,7 +52,7 @@ def repo_root() -> Path:
         The parent of the ``learn`` package if it holds ``pyproject.toml`` (a source
         checkout or editable install), otherwise the current working directory.
     """
-    here = Path(__file__).resolve().parents[1]
+    here = Path(__file__).resolve().parents[2]
     return here if (here / "pyproject.toml").is_file() else Path.cwd()
 
 
@@ -179,8 +179,8 @@ def dataset_ref(path: str | os.PathLike, name: str | None = None) -> DatasetRef:
 def sklearn_only(model) -> bool:
     """Whether ``model`` and every estimator in its parameters are scikit-learn classes.
 
-    Models that are not (the torch nets of :mod:`learn.nets`, MiniRocket of
-    :mod:`learn.rocket`) need this package importable where they are loaded, so their
+    Models that are not (the torch nets of :mod:`learn.learners.nets`, MiniRocket of
+    :mod:`learn.learners.rocket`) need this package importable where they are loaded, so their
     requirements pin it (:func:`model_requirements`).
     """
     objs = [model]

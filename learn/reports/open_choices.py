@@ -10,6 +10,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from learn.inputs.features import FeatureSettings
+from learn.studies.tables import StudyOptions
+
 
 def _amp(acq: Mapping[str, Any]) -> str:
     a = acq.get("amplifier")
@@ -22,25 +25,27 @@ def _amp(acq: Mapping[str, Any]) -> str:
             f"sinc{a['order']} filter modelled at {a['oversample']}x the data rate")
 
 
-def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[dict[str, str]]:
+def open_choices(dataset: Mapping[str, Any], options: StudyOptions, seed: int,
+                 features: FeatureSettings | None = None) -> list[dict[str, str]]:
     """The paper's open choices for one data set and study.
 
     Parameters
     ----------
     dataset : mapping
         Resolved data-set config (``conf/dataset/<name>.yaml``).
-    study : mapping
-        Study settings: ``scale`` (bool), ``max_order``, ``order_step``, ``floor_rel``
-        (feature settings, optional).
+    options : StudyOptions
+        The study's options (scaling).
+    seed : int
+        The study's seed.
+    features : FeatureSettings, optional
+        DFT orders and floor; default the paper's.
 
     Returns
     -------
     list of dict
         ``choice``, ``value``, ``reason`` (all str), in the order of the pipeline.
     """
-    from learn.features import FeatureSettings
-
-    fs = FeatureSettings.of(study)
+    fs = features or FeatureSettings()
     ch, dist, tol = dataset["chain"], dataset["disturbance"], dataset["tolerances"]
     acq = dataset.get("acquisition") or {}
     v = dataset["variants"]
@@ -88,7 +93,7 @@ def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[d
          "'normalized for each operating point by the value of the healthy gear'; a gear "
          "never seen in training has its own commissioning recording"),
         ("Feature scaling",
-         "standardised (StandardScaler)" if study.get("scale") else "none",
+         "standardised (StandardScaler)" if options.scale else "none",
          "the paper names scikit-learn's standard settings and no preprocessing; eq. (9) "
          "exists to make slight changes of η_rel distinguishable, which standardisation "
          "would not need"),
@@ -128,7 +133,7 @@ def open_choices(dataset: Mapping[str, Any], study: Mapping[str, Any]) -> list[d
          "torque and efficiency at rated torque", "swgsim/dynamics.py (catalogue sources)"),
         ("Classifier settings", "Table VI; everything else scikit-learn's defaults (MLP "
          "max_iter 200)", "'standard settings of ... Scikit-learn' (Sec. III-C)"),
-        ("Seeds", f"data set {dataset['seed']}, study {study.get('seed', 0)}",
+        ("Seeds", f"data set {dataset['seed']}, study {seed}",
          "fixed for repeatability"),
     ]
     return [{"choice": c, "value": val, "reason": r} for c, val, r in rows]
