@@ -185,33 +185,55 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
     dict of str to Path
         ``fig6``, ``fig7`` and, if the data set has disturbed windows, ``fig8``.
     """
-    from matplotlib.figure import Figure
-
     report_dir = Path(report_dir)
     report_dir.mkdir(parents=True, exist_ok=True)
     idx, gear, n_in_rpm, t_out_nm = _example_windows(ds, gear, n_in_rpm, t_out_nm)
-    t = np.asarray(ds["time"].values)
-    sig = np.asarray(ds["strain_signal"].values)
     where = f"gear {gear}, {n_in_rpm:g} rpm, {t_out_nm:g} N m"
-    colors = [f"C{i}" for i in range(5)]
-    out: dict[str, Path] = {}
     healthy = idx.get("healthy")
     if healthy is None:  # fall back to the reference window of this operating point
         samples, refs = reference_index(ds)
         healthy = int(refs[np.flatnonzero(np.isin(samples, list(idx.values())))[0]])
-
     faults = [f for f in fault_classes() if f in idx and f != "healthy"]
     faults += sorted(set(idx) - set(fault_classes()))  # e.g. "unknown" of measured data
+    t = np.asarray(ds["time"].values)
+    sig = np.asarray(ds["strain_signal"].values)  # (n_samples, 5, n_t), read once
+    f_in = np.asarray(ds["n_in_mean_rpm"].values) / 60.0
+    rows = [healthy] + [idx[f] for f in faults]
+    out = {"fig6": _fig6(t, sig, rows, faults, where, report_dir / "fig6_signals.png"),
+           "fig7": _fig7(t, sig[rows], f_in[rows], faults, where, report_dir / "fig7_dft.png")}
+    try:
+        idx_d, *_ = _example_windows(ds, gear, n_in_rpm, t_out_nm, disturbed=True)
+    except ValueError:
+        log.info("no disturbed windows: Fig. 8 skipped")
+        return out
+    common = [f for f in ("healthy", *faults) if f in idx_d and f in idx]
+    if not common:
+        log.info("no class with clean and disturbed windows: Fig. 8 skipped")
+        return out
+    out["fig8"] = _fig8(t, sig[idx[common[0]]], sig[idx_d[common[0]]], common[0], where,
+                        report_dir / "fig8_disturbed.png")
+    return out
+
+
+_COLORS = [f"C{i}" for i in range(5)]
+
+
+def _fig6(t, sig, rows: list[int], faults: list[str], where: str, path: Path) -> Path:
+    """Fig. 6: healthy (solid, ``rows[0]``) and each faulty class (dashed, the other rows)
+    aligned on the WG angle."""
+    from matplotlib.figure import Figure
+
+    healthy = rows[0]
     fig = Figure(figsize=(12, 7), layout="constrained")
     axes = fig.subplots(2, 3, sharex=True).ravel()
-    for ax, f, letter in zip(axes, faults, "abcdef", strict=False):
+    for ax, f, row, letter in zip(axes, faults, rows[1:], "abcdef", strict=False):
         # windows start at random WG angles: shift the faulty one onto the healthy one
-        lag = _align(sig[healthy], sig[idx[f]])
+        lag = _align(sig[healthy], sig[row])
         n = t.size - lag
         for i in range(5):
-            ax.plot(t[:n], sig[healthy, i, :n], color=colors[i], lw=1.0, label=f"$s_{i}$")
-            ax.plot(t[:n], sig[idx[f], i, lag:], color=colors[i], lw=1.0, ls="--")
-        ax.set_title(f"({letter}) {f.replace('_', ' ')}", fontsize=9)
+            ax.plot(t[:n], sig[healthy, i, :n], color=_COLORS[i], lw=1.0, label=f"$s_{i}$")
+            ax.plot(t[:n], sig[row, i, lag:], color=_COLORS[i], lw=1.0, ls="--")
+        ax.set_title(f"({letter}) {display_name(f)}", fontsize=9)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("signal [mV/V]")
     for ax in axes[len(faults):]:
@@ -219,16 +241,20 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
     axes[0].legend(fontsize=7, ncol=5, title="solid: healthy, dashed: faulty",
                    title_fontsize=7)
     fig.suptitle(f"Healthy and faulty sensor signals ({where})", fontsize=10)
-    out["fig6"] = report_dir / "fig6_signals.png"
-    fig.savefig(out["fig6"], dpi=110)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def _fig7(t, sig, f_in, faults: list[str], where: str, path: Path) -> Path:
+    """Fig. 7: DFT of s0, s1, ds13 and ds24 against the order, one line per class
+    (``sig`` and ``f_in``: healthy first, then ``faults``)."""
+    from matplotlib.figure import Figure
 
     orders = np.arange(1, 161) * 0.05  # 0.05 .. 8
-    f_in = np.asarray(ds["n_in_mean_rpm"].values) / 60.0
     classes = ["healthy", *faults]
-    rows = [healthy] + [idx[f] for f in faults]
-    s = sig[rows].astype(np.float64)  # (n_classes, 5, T)
+    s = sig.astype(np.float64)  # (n_classes, 5, T)
     views = np.stack([s[:, 0], s[:, 1], s[:, 1] - s[:, 3], s[:, 2] - s[:, 4]], axis=1)
-    amp = order_spectrum(views, t, f_in[rows], orders)  # (n_classes, 4, n_orders)
+    amp = order_spectrum(views, t, f_in, orders)  # (n_classes, 4, n_orders)
     fig = Figure(figsize=(11, 7), layout="constrained")
     axes = fig.subplots(2, 2, sharex=True).ravel()
     for j, (ax, name) in enumerate(zip(axes, (r"$\bar s_0$", r"$\bar s_1$",
@@ -241,33 +267,26 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
         ax.set_ylabel("DFT amplitude [mV/V]")
     axes[0].legend(fontsize=7)
     fig.suptitle(f"DFT of sensor signals ({where})", fontsize=10)
-    out["fig7"] = report_dir / "fig7_dft.png"
-    fig.savefig(out["fig7"], dpi=110)
+    fig.savefig(path, dpi=110)
+    return path
 
-    try:
-        idx_d, *_ = _example_windows(ds, gear, n_in_rpm, t_out_nm, disturbed=True)
-    except ValueError:
-        log.info("no disturbed windows: Fig. 8 skipped")
-        return out
-    common = [f for f in ("healthy", *faults) if f in idx_d and f in idx]
-    if not common:
-        log.info("no class with clean and disturbed windows: Fig. 8 skipped")
-        return out
-    clean, dist = idx[common[0]], idx_d[common[0]]
+
+def _fig8(t, clean, dist, cls: str, where: str, path: Path) -> Path:
+    """Fig. 8: one class's clean (solid) and disturbed (dashed) window, shape (5, n_t)."""
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(8, 4.5), layout="constrained")
     ax = fig.add_subplot()
     for i in range(5):
-        ax.plot(t, sig[clean, i], color=colors[i], lw=1.0, label=f"$s_{i}$")
-        ax.plot(t, sig[dist, i], color=colors[i], lw=1.0, ls="--")
+        ax.plot(t, clean[i], color=_COLORS[i], lw=1.0, label=f"$s_{i}$")
+        ax.plot(t, dist[i], color=_COLORS[i], lw=1.0, ls="--")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("signal [mV/V]")
     ax.legend(fontsize=7, ncol=5, title="solid: clean, dashed: disturbed (eq. 10)",
               title_fontsize=7)
-    ax.set_title(f"Clean and disturbed signals, {common[0].replace('_', ' ')} ({where})",
-                 fontsize=10)
-    out["fig8"] = report_dir / "fig8_disturbed.png"
-    fig.savefig(out["fig8"], dpi=110)
-    return out
+    ax.set_title(f"Clean and disturbed signals, {display_name(cls)} ({where})", fontsize=10)
+    fig.savefig(path, dpi=110)
+    return path
 
 
 def write_report(

@@ -361,7 +361,24 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     """
     summ = summarise(results)
     recall = class_recall(confusion) if len(confusion) else None
-    lines = ["# Transfer to the unseen gear: deep learners, MiniRocket and the paper's "
+    lines = list(_INTRO_MD)
+    if targets and recall is not None:
+        lines += _targets_md(target_table(summ, recall, targets, primary, separability))
+    if recall is not None:
+        lines += _recall_md(recall, summ, primary, separability,
+                            list(dict.fromkeys(results["dataset"])))
+    for ds in dict.fromkeys(results["dataset"]):
+        lines += _dataset_md(ds, summ, confusion, recall, separability, paper)
+    if latency is not None and len(latency):
+        lines += _latency_md(latency)
+    if timings:
+        lines += _time_md(results, timings)
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+_INTRO_MD = ("# Transfer to the unseen gear: deep learners, MiniRocket and the paper's "
              "pipeline", "",
              "Accuracy [%] on the test windows, mean ± std over seeds; `worst` = the split "
              "with the lowest mean. Leave-one-gear-out splits `gearN` hold out gear N "
@@ -376,77 +393,88 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
              "leave-one-out CV on the source windows and kept when its ridge is refitted "
              "with k target windows; fine-tuning runs a fixed number of steps with "
              "source replay; the unsupervised adaptations see the held-out gear's pool "
-             "windows without labels. Nothing is chosen on an evaluation window.", ""]
-    if targets and recall is not None:
-        tt = target_table(summ, recall, targets, primary, separability)
-        if len(tt):
-            lines += ["## Targets", "", "*Observable*: for a class, the share of its windows "
-                      "beyond the healthy 95th percentile in the evaluated (disturbed) "
-                      "windows; for an accuracy, their mean over the classes (healthy: 95 %), "
-                      "an estimate of what the signals carry, not a bound.", "",
-                      "| data set | condition | target | run | reached | observable |",
-                      "|---|---|---:|---|---:|---:|"]
-            for r in tt.itertuples():
-                obs = "" if np.isnan(r.observable) else f"{100 * r.observable:.1f} %"
-                lines.append(f"| {r.dataset} | {r.condition} | {100 * r.target:.1f} % | "
-                             f"{r.run} ({r.who}) | {100 * r.reached:.2f} % "
-                             f"({'met' if r.met else 'not met'}) | {obs} |")
-            lines.append("")
+             "windows without labels. Nothing is chosen on an evaluation window.", "")
+
+
+def _targets_md(tt: pd.DataFrame) -> list[str]:
+    """The targets section of ``table.md`` (rows of :func:`target_table`)."""
+    if not len(tt):
+        return []
+    lines = ["## Targets", "", "*Observable*: for a class, the share of its windows beyond "
+             "the healthy 95th percentile in the evaluated (disturbed) windows; for an "
+             "accuracy, their mean over the classes (healthy: 95 %), an estimate of what the "
+             "signals carry, not a bound.", "",
+             "| data set | condition | target | run | reached | observable |",
+             "|---|---|---:|---|---:|---:|"]
+    for r in tt.itertuples():
+        obs = "" if np.isnan(r.observable) else f"{100 * r.observable:.1f} %"
+        lines.append(f"| {r.dataset} | {r.condition} | {100 * r.target:.1f} % | "
+                     f"{r.run} ({r.who}) | {100 * r.reached:.2f} % "
+                     f"({'met' if r.met else 'not met'}) | {obs} |")
+    lines.append("")
+    return lines
+
+
+def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
+                separability, paper: bool) -> list[str]:
+    """One data set's section: diagnosis, separability, a table per protocol."""
+    lines = [f"## Data set `{ds}`", ""]
+    sep = (separability or {}).get(ds)
     if recall is not None:
-        lines += _recall_md(recall, summ, primary, separability,
-                            list(dict.fromkeys(results["dataset"])))
-    for ds in dict.fromkeys(results["dataset"]):
-        lines += [f"## Data set `{ds}`", ""]
-        sep = (separability or {}).get(ds)
-        if recall is not None:
-            lines += _diagnosis_md(ds, summ, confusion, separability)
-        if sep:
-            lines += _separability_md(sep)
-        sd = summ[summ["dataset"] == ds]
-        for p in [q for q in ALL_PROTOCOLS if q in set(sd["protocol"])]:
-            sp = sd[sd["protocol"] == p]
-            splits = sorted({s for s in sp["split"] if s != "worst"},
-                            key=lambda s: (_SPLIT_ORDER.get(s, 9), s))
-            lines += [f"### {ds}: {p}", "", "| run | " + " | ".join(splits) + " | worst |",
-                      "|---|" + "---:|" * (len(splits) + 1)]
-            order = sp[sp["split"] == "worst"].sort_values(
-                ["k_shot", "model", "input"], key=lambda c: c.map(_model_rank)
-                if c.name == "model" else c)
-            for _, w in order.iterrows():
-                cells = []
-                for s in splits:
-                    r = sp[(sp["model"] == w["model"]) & (sp["input"] == w["input"])
-                           & (sp["k_shot"] == w["k_shot"]) & (sp["split"] == s)]
-                    cells.append(_pct(r["mean"].iloc[0], r["std"].iloc[0]) if len(r) else "")
-                cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
-                lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
-                             + " | ".join(cells) + " |")
-            if paper and p in OOD_PROTOCOLS:
-                lines += _paper_rows(p, splits)
-            lines.append("")
-    if latency is not None and len(latency):
-        lines += ["## Inference latency per window (CPU, batch 1, one thread)", "",
-                  "| model | input | input build [ms] | model [ms] |", "|---|---|---:|---:|"]
-        for _, r in latency.iterrows():
-            lines.append(f"| {model_label(r['model'])} | {r['input']} | "
-                         f"{r['input_ms']:.2f} | {r['model_ms']:.2f} |")
+        lines += _diagnosis_md(ds, summ, confusion, separability)
+    if sep:
+        lines += _separability_md(sep)
+    sd = summ[summ["dataset"] == ds]
+    for p in [q for q in ALL_PROTOCOLS if q in set(sd["protocol"])]:
+        sp = sd[sd["protocol"] == p]
+        splits = sorted({s for s in sp["split"] if s != "worst"},
+                        key=lambda s: (_SPLIT_ORDER.get(s, 9), s))
+        lines += [f"### {ds}: {p}", "", "| run | " + " | ".join(splits) + " | worst |",
+                  "|---|" + "---:|" * (len(splits) + 1)]
+        order = sp[sp["split"] == "worst"].sort_values(
+            ["k_shot", "model", "input"], key=lambda c: c.map(_model_rank)
+            if c.name == "model" else c)
+        for _, w in order.iterrows():
+            cells = []
+            for s in splits:
+                r = sp[(sp["model"] == w["model"]) & (sp["input"] == w["input"])
+                       & (sp["k_shot"] == w["k_shot"]) & (sp["split"] == s)]
+                cells.append(_pct(r["mean"].iloc[0], r["std"].iloc[0]) if len(r) else "")
+            cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
+            lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
+                         + " | ".join(cells) + " |")
+        if paper and p in OOD_PROTOCOLS:
+            lines += _paper_rows(p, splits)
         lines.append("")
-    if timings:
-        tt = results.groupby(["model", "input"])["train_s"].sum().sort_values(ascending=False)
-        lines += ["## Time", "",
-                  f"Whole comparison: {timings.get('wall_s', float('nan')) / 60:.1f} min wall "
-                  f"time on {timings.get('device', 'CPU')}, {timings.get('threads', '?')} on a "
-                  f"machine with {timings.get('cpus', '?')} CPU cores (data sets generated "
-                  f"{timings.get('generate_s', 0.0):.1f} s, inputs "
-                  f"{timings.get('input_s', float('nan')):.1f} s). Sum of fit times per run "
-                  "over data sets, splits and seeds (adaptation: the adaptation alone):", "",
-                  "| model | input | train [s] |", "|---|---|---:|"]
-        for (m, i), v in tt.items():
-            lines.append(f"| {m} | {i} | {v:.1f} |")
-        lines.append("")
-    path = Path(path)
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return lines
+
+
+def _latency_md(latency: pd.DataFrame) -> list[str]:
+    """The latency section of ``table.md``."""
+    lines = ["## Inference latency per window (CPU, batch 1, one thread)", "",
+             "| model | input | input build [ms] | model [ms] |", "|---|---|---:|---:|"]
+    for _, r in latency.iterrows():
+        lines.append(f"| {model_label(r['model'])} | {r['input']} | "
+                     f"{r['input_ms']:.2f} | {r['model_ms']:.2f} |")
+    lines.append("")
+    return lines
+
+
+def _time_md(results: pd.DataFrame, timings: Mapping) -> list[str]:
+    """The time section of ``table.md``."""
+    tt = results.groupby(["model", "input"])["train_s"].sum().sort_values(ascending=False)
+    lines = ["## Time", "",
+             f"Whole comparison: {timings.get('wall_s', float('nan')) / 60:.1f} min wall "
+             f"time on {timings.get('device', 'CPU')}, {timings.get('threads', '?')} on a "
+             f"machine with {timings.get('cpus', '?')} CPU cores (data sets generated "
+             f"{timings.get('generate_s', 0.0):.1f} s, inputs "
+             f"{timings.get('input_s', float('nan')):.1f} s). Sum of fit times per run "
+             "over data sets, splits and seeds (adaptation: the adaptation alone):", "",
+             "| model | input | train [s] |", "|---|---|---:|"]
+    for (m, i), v in tt.items():
+        lines.append(f"| {m} | {i} | {v:.1f} |")
+    lines.append("")
+    return lines
 
 
 def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
