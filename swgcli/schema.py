@@ -15,7 +15,7 @@ source, not written twice as YAML:
 group          source
 =============  =====================================================================
 ``protocol``   :data:`learn.studies.protocols.PROTOCOLS` (the paper's four protocols)
-``model``      :data:`learn.learners.baselines.PAPER_MODELS` (Table VI); deep models stay YAML
+``model``      :data:`learn.learners.baselines.MODELS` (Table VI); deep models stay YAML
 ``features``   :data:`learn.inputs.features.SELECTIONS` (Table III selections)
 ``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.studies.tables.PAPER_TABLES`
 ``dataset``    :class:`swgsim.config.DatasetConfig` (the paper preset is its defaults)
@@ -132,7 +132,7 @@ class TrainApp:
 
 def register() -> None:
     """Register the schemas and the generated config groups in Hydra's ConfigStore."""
-    from learn.learners.baselines import PAPER_MODELS, model_config
+    from learn.learners.baselines import MODELS, model_config
     from learn.studies.tables import PAPER_TABLES
 
     cs = ConfigStore.instance()
@@ -143,7 +143,7 @@ def register() -> None:
     for name in PROTOCOLS:
         cs.store(group="protocol", name=name,
                  node=ProtocolConfig.paper(name, random_state="${seed}"))
-    for name in PAPER_MODELS:
+    for name in MODELS:  # the paper's (Table VI) and any registered in learn.learners
         cs.store(group="model", name=name, node=model_config(name))
     for k, name in SELECTIONS.items():
         cs.store(group="features", name=name, node=FeatureSettings(name=name, selection=k))
