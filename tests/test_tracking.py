@@ -182,7 +182,7 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
     import mlflow
     from omegaconf import OmegaConf
 
-    from learn.inputs.features import FeatureSettings, extract_features
+    from learn.inputs.features import extract_features
     from learn.studies.protocols import make_splits
     from learn.tasks.train import run_train
     from swgcli import compose_app
@@ -201,7 +201,7 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
     (mo,) = run.outputs.model_outputs
     lm = client.get_logged_model(mo.model_id)
     model = mlflow.sklearn.load_model(lm.artifact_location)
-    feats = extract_features(load(tiny_dataset), 1, **FeatureSettings.of(cfg.features).kwargs())
+    feats = extract_features(load(tiny_dataset), 1, **OmegaConf.to_object(cfg.features).kwargs())
     pcfg = OmegaConf.to_container(cfg.protocol, resolve=True)
     pcfg.pop("name")
     last = make_splits(feats.meta, **pcfg)[-1]

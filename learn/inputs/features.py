@@ -36,7 +36,6 @@ exactly 1 in every bin. Relative mean and variance follow eq. (7) literally (no 
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -83,14 +82,6 @@ class FeatureSettings:
         """``orders`` and ``floor_rel`` for :func:`extract_features`."""
         return {"orders": paper_orders(self.max_order, self.order_step),
                 "floor_rel": self.floor_rel}
-
-    @classmethod
-    def of(cls, cfg) -> FeatureSettings:
-        """From a mapping or config node with any subset of the fields."""
-        if cfg is None:
-            return cls()
-        keys = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: cfg[k] for k in keys if k in cfg})
 
 
 class Features(NamedTuple):
