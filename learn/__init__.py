@@ -1,11 +1,15 @@
 """learn: the paper's fault-classification study and the learners beyond it.
 
-Features of the paper (Selections 1-3, :mod:`learn.features`), its protocols (4-fold CV
-and leave-one-gear-out on clean and disturbed data, :mod:`learn.protocols`), the study
-of Tables VII-X (:mod:`learn.study`), torch MLP and 1D-CNN and MiniRocket as
-scikit-learn estimators (:mod:`learn.nets`, :mod:`learn.rocket`), transfer to the gear
-not seen in training (:mod:`learn.transfer`) and the observability of faults in the
-signals (:mod:`learn.separability`, :mod:`learn.observability`).
+Layers, each importing only those before it:
+
+* :mod:`learn.inputs` - the paper's features (Selections 1-3) and the signal inputs;
+  :mod:`learn.tracking` - MLflow runs and their provenance;
+* :mod:`learn.learners` - the classifiers (the paper's Table VI and the model registry,
+  torch MLP and 1D-CNN, MiniRocket, CORAL);
+* :mod:`learn.studies` - protocols, the study of Tables VII-X, transfer to the gear not
+  seen in training, the observability of faults in the signals;
+* :mod:`learn.reports` - tables, figures and summaries of the studies' results;
+* :mod:`learn.tasks` - what the apps run: a study and its report.
 
 The public API is listed in ``__all__``; names are imported on first use (torch only
 when a net is asked for).
@@ -23,14 +27,17 @@ except PackageNotFoundError:  # not installed (source tree on sys.path)
     __version__ = "0+unknown"
 
 _EXPORTS = {
-    "FeatureSettings": "features", "extract_features": "features",
-    "feature_names": "features", "order_spectrum": "features",
-    "ProtocolConfig": "protocols", "make_splits": "protocols", "evaluate": "protocols",
-    "run_paper_study": "study",
-    "MLPClassifierTorch": "nets", "CNN1DClassifier": "nets",
-    "MiniRocketClassifier": "rocket",
-    "run_comparison": "transfer", "TransferConfig": "transfer",
-    "separation_records": "separability", "observability_table": "observability",
+    "FeatureSettings": "inputs.features", "extract_features": "inputs.features",
+    "feature_names": "inputs.features", "order_spectrum": "inputs.features",
+    "ModelSpec": "learners.baselines", "register_model": "learners.baselines",
+    "MLPClassifierTorch": "learners.nets", "CNN1DClassifier": "learners.nets",
+    "MiniRocketClassifier": "learners.rocket",
+    "ProtocolConfig": "studies.protocols", "make_splits": "studies.protocols",
+    "evaluate": "studies.protocols",
+    "StudyOptions": "studies.tables", "run_paper_study": "tasks.paper",
+    "run_comparison": "studies.transfer", "TransferConfig": "studies.transfer",
+    "separation_records": "studies.separability",
+    "observability_table": "studies.observability",
 }
 
 __all__ = ["__version__", *_EXPORTS]

@@ -33,10 +33,9 @@ def main(argv: list[str] | None = None) -> int:
     from hydra import compose, initialize_config_dir
     from omegaconf import OmegaConf
 
-    from learn.features import paper_orders
-    from learn.inputs import build_input
-    from learn.latency import measure_latency
-    from learn.runs import specs_from_config
+    from learn.inputs.signals import build_input
+    from learn.studies.latency import measure_latency
+    from learn.studies.runs import specs_from_config
     from swgsim.data import load
 
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
@@ -45,9 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     specs = specs_from_config(OmegaConf.to_container(tc.runs, resolve=True))
     models = OmegaConf.to_container(tc.models, resolve=True)
     residual = OmegaConf.to_container(tc.residual, resolve=True)
-    fk = {"orders": paper_orders(float(cfg.features.get("max_order", 8.0)),
-                                 float(cfg.features.get("order_step", 0.25))),
-          "floor_rel": float(cfg.features.get("floor_rel", 1e-3))}
+    fk = OmegaConf.to_object(cfg.features).kwargs()  # FeatureSettings
     ds = load(args.data)
     flag = bool(ds["disturbed"].values.any())
     inputs = {k: build_input(ds, k, aux=tuple(tc.aux), disturbed=flag, feature_kwargs=fk,

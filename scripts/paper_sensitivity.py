@@ -54,8 +54,10 @@ def main(argv: list[str] | None = None) -> int:
     if any(not np.isfinite(a) or a < 0 for a in args.amplitudes):
         ap.error(f"--amplitudes must be >= 0, got {args.amplitudes}")
 
-    from learn.paper_results import scorecard, side_by_side
-    from learn.study import run_paper_study
+    from learn.reports.paper_results import scorecard, side_by_side
+    from learn.studies.protocols import ProtocolConfig
+    from learn.studies.tables import StudyOptions
+    from learn.tasks.paper import run_paper_study
     from swgcli import dataset_preset
     from swgsim.config import dataset_config
     from swgsim.generate import generate
@@ -74,10 +76,11 @@ def main(argv: list[str] | None = None) -> int:
         generate(cfg, path, n_jobs=args.n_jobs, progress=True)
         return str(path)
 
-    def study(path, tag, **kw):
+    def study(path, tag, protocols=None, **options):
         t0 = time.perf_counter()
-        r = run_paper_study(path, out / "reports" / tag, n_jobs=args.n_jobs, track=False,
-                            figures=False, name=tag, **kw)["results"]
+        r = run_paper_study(path, out / "reports" / tag, StudyOptions(figures=False, **options),
+                            n_jobs=args.n_jobs, track=False, name=tag,
+                            protocols=protocols)["results"]
         r.to_csv(out / f"results_{tag}.csv", index=False)
         print(f"{tag}: {time.perf_counter() - t0:.0f} s", flush=True)
         return r
@@ -90,8 +93,8 @@ def main(argv: list[str] | None = None) -> int:
     if not args.skip_cv:
         variants["CV over windows"] = study(
             base_path, "cv_windows", tables=["VII", "VIII"],
-            protocol_kwargs={"cv_clean": {"scheme": "kfold"},
-                             "cv_disturbed": {"scheme": "kfold"}})
+            protocols={p: ProtocolConfig.paper(p, scheme="kfold")
+                       for p in ("cv_clean", "cv_disturbed")})
     sweep = {}
     for a in args.amplitudes:
         if a == 1.0:
@@ -120,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
 def _sweep_figure(sweep: dict[float, pd.DataFrame], out: Path) -> None:
     """Table X cells (mean over the held-out gears) and Table VIII cells against the
     eq. (10) amplitude factor, with the paper's values; writes eq10_sweep.csv and .png."""
-    from learn.paper_results import scorecard, side_by_side
+    from learn.reports.paper_results import scorecard, side_by_side
 
     rows = []
     for a, res in sorted(sweep.items()):
@@ -145,7 +148,7 @@ def plot_sweep(df: pd.DataFrame, path: Path) -> None:
     model, score)."""
     from matplotlib.figure import Figure
 
-    from learn.paper_results import PAPER_RESULTS
+    from learn.reports.paper_results import PAPER_RESULTS
 
     factors = sorted(df["factor"].unique())
     fig = Figure(figsize=(15, 4.2), layout="constrained")

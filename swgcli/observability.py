@@ -1,12 +1,12 @@
 """swgsim-observability: the observability map over the output inertia (Hydra app).
 
 For each output inertia (``j_out_kgm2``, default ``n_j_out`` log-spaced from the bench's
-to a robot link's, :mod:`learn.observability`) the app generates the data set
+to a robot link's, :mod:`learn.studies.observability`) the app generates the data set
 ``<data_root>/j_out_<value>`` from the ``dataset`` preset with that inertia (a valid one
 already there is kept; the settling time is raised where the torsional mode rings
 longer), measures each window's separation from the healthy windows of its gear and
 operating point (clean windows), and writes ``<report_dir>/observability.csv``
-(:data:`learn.observability.COLUMNS` and more), ``torsional_modes.csv`` and
+(:data:`learn.studies.observability.COLUMNS` and more), ``torsional_modes.csv`` and
 ``observability.png``. Config: ``conf/observability.yaml``.
 """
 
@@ -45,7 +45,7 @@ def data_set_configs(cfg: DictConfig) -> dict[float, DatasetPlan]:
     ValueError
         Naming the key: ``j_out_kgm2`` / ``n_j_out`` out of range, or a data-set key.
     """
-    from learn.observability import j_out_grid
+    from learn.studies.observability import j_out_grid
     from swgsim.plan import min_settle_s, plan
 
     if cfg.j_out_kgm2 is None:
@@ -86,8 +86,8 @@ def run_observability(cfg: DictConfig) -> dict:
     """
     import pandas as pd
 
-    from learn.observability import observability_table, plot_observability, torsional_modes
-    from learn.separability import separation_records
+    from learn.studies.observability import observability_table, plot_observability, torsional_modes
+    from learn.studies.separability import separation_records
     from swgsim.data import atomic_write_bytes, load
     from swgsim.generate import generate
 

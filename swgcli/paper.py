@@ -3,12 +3,12 @@
 For each protocol in ``protocols`` (default: the paper's phase-locked, noise-free windows
 and a real bench's): (1) generate ``<data_root>/<protocol>`` (shards already there and
 valid are skipped; a data set of another config there is replaced only if the folder
-holds nothing else), (2) the study of Tables VII-X (:func:`learn.study.run_paper_study`),
-every job logged to MLflow, with its report in ``<report_root>/<protocol>``; then (3) the
-summary side by side with the paper and the reproduction scorecard
-(:func:`learn.summary.write_summary`). One progress bar per stage; the console ends with
-the scorecard, where everything went, the time of each stage and the warnings, counted
-once. Config: ``conf/paper.yaml``.
+holds nothing else), (2) the study of Tables VII-X
+(:func:`learn.tasks.paper.run_paper_study`), every job logged to MLflow, with its report
+in ``<report_root>/<protocol>``; then (3) the summary side by side with the paper and the
+reproduction scorecard (:func:`learn.reports.summary.write_summary`). One progress bar per
+stage; the console ends with the scorecard, where everything went, the time of each stage
+and the warnings, counted once. Config: ``conf/paper.yaml``.
 """
 
 from __future__ import annotations
@@ -53,8 +53,8 @@ def run_paper(cfg: DictConfig) -> dict:
         protocol), ``summary`` (files, scorecards, findings), ``warnings`` (category,
         message, count).
     """
-    from learn.study import run_paper_study
-    from learn.summary import format_scorecard, write_summary
+    from learn.reports.summary import format_scorecard, write_summary
+    from learn.tasks.paper import run_paper_study
     from learn.tracking import default_tracking_uri
     from swgsim.generate import generate
     from swgsim.plan import plan
@@ -97,13 +97,9 @@ def run_paper(cfg: DictConfig) -> dict:
             k += 1
             t0 = time.perf_counter()
             study[p] = run_paper_study(
-                f"{root_data}/{p}", f"{root_rep}/{p}", tracking_uri=cfg.tracking_uri,
-                log_models=bool(cfg.log_models),
-                n_jobs=int(cfg.n_jobs), random_state=int(cfg.seed),
-                tables=None if s.tables is None else [str(t) for t in s.tables],
-                models=None if s.models is None else [str(m) for m in s.models],
-                scale=bool(s.scale), figures=bool(s.figures),
-                experiment_prefix=f"paper_study/{p}/", name=p)
+                f"{root_data}/{p}", f"{root_rep}/{p}", OmegaConf.to_object(s),
+                tracking_uri=cfg.tracking_uri, log_models=cfg.log_models, n_jobs=cfg.n_jobs,
+                random_state=cfg.seed, experiment_prefix=f"paper_study/{p}/", name=p)
             stages[f"study {p}"] = time.perf_counter() - t0
             for w in study[p]["warnings"]:
                 caught[(w["category"], w["message"])] += w["count"]
@@ -115,8 +111,7 @@ def run_paper(cfg: DictConfig) -> dict:
         summary = write_summary(
             {p: study[p]["results"] for p in protocols},
             {p: study[p]["confusion"] for p in protocols}, root_rep, datasets,
-            {"scale": bool(s.scale), "seed": int(cfg.seed)},
-            spread={p: study[p]["spread"] for p in protocols})
+            OmegaConf.to_object(s), cfg.seed, spread={p: study[p]["spread"] for p in protocols})
         stages["summary"] = time.perf_counter() - t0
         print(f"[{k}/{n_stages}] summary: {summary['files']['md']}", flush=True)
     for w in parent_warnings:

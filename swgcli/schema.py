@@ -14,10 +14,10 @@ source, not written twice as YAML:
 =============  =====================================================================
 group          source
 =============  =====================================================================
-``protocol``   :data:`learn.protocols.PROTOCOLS` (the paper's four protocols)
-``model``      :data:`learn.baselines.PAPER_MODELS` (Table VI); deep models stay YAML
-``features``   :class:`learn.features.FeatureSettings` (Table III selections)
-``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.paper_results.PAPER_TABLES`
+``protocol``   :data:`learn.studies.protocols.PROTOCOLS` (the paper's four protocols)
+``model``      :data:`learn.learners.baselines.MODELS` (Table VI); deep models stay YAML
+``features``   :data:`learn.inputs.features.SELECTIONS` (Table III selections)
+``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.studies.tables.PAPER_TABLES`
 ``dataset``    :class:`swgsim.config.DatasetConfig` (the paper preset is its defaults)
 =============  =====================================================================
 """
@@ -30,9 +30,11 @@ from typing import Any
 from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
-from learn.features import FeatureSettings
-from learn.protocols import PROTOCOLS, ProtocolConfig
-from learn.transfer import TransferConfig
+from learn.inputs.features import SELECTIONS, FeatureSettings
+from learn.studies.paper_study import StudyTracking
+from learn.studies.protocols import PROTOCOLS, ProtocolConfig
+from learn.studies.tables import StudyOptions
+from learn.studies.transfer import TransferConfig
 from swgsim.config import DatasetConfig, check_keys
 
 
@@ -49,16 +51,6 @@ class GenerateApp:
 
 
 @dataclass
-class StudyOptions:
-    """The paper's study (:func:`learn.study.run_paper_study`)."""
-
-    tables: list[str] | None = None   # subset of [VII, VIII, IX, X]; null: all four
-    models: list[str] | None = None   # restrict every table to these; null: the paper's
-    scale: bool = False               # StandardScaler before each classifier (paper: none)
-    figures: bool = True              # Fig. 6-8 of each data set
-
-
-@dataclass
 class PaperApp:
     """``swgsim-paper``: the main job."""
 
@@ -68,7 +60,7 @@ class PaperApp:
     report_root: str = "reports"
     n_jobs: int = 2
     tracking_uri: str | None = None
-    log_models: bool = True    # each study job's last-split model to MLflow (no refit)
+    log_models: bool = StudyTracking.log_models  # each job's last-split model (no refit)
     seed: int = 0
     study: StudyOptions = field(default_factory=StudyOptions)
 
@@ -109,7 +101,7 @@ class LoggerConfig:
     # single job (task study) refits it once. Measured per job (paper data set, selection
     # 1, 4860 training windows, 2 cores): storing 0.03-0.15 s and 0.6 MiB (RF, SVM, KNN;
     # MLP, NB < 0.1 MiB); a single job's refit RF 0.7-0.9 s, SVM 1.4 s, MLP 4.0 s.
-    log_models: bool = True
+    log_models: bool = StudyTracking.log_models
 
 
 @dataclass
@@ -123,7 +115,7 @@ class PathsConfig:
 
 @dataclass
 class TrainApp:
-    """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.study.TASKS`."""
+    """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.tasks.train.TASKS`."""
 
     task: str = "study"
     seed: int = 0
@@ -140,8 +132,8 @@ class TrainApp:
 
 def register() -> None:
     """Register the schemas and the generated config groups in Hydra's ConfigStore."""
-    from learn.baselines import PAPER_MODELS, model_config
-    from learn.paper_results import PAPER_TABLES
+    from learn.learners.baselines import MODELS, model_config
+    from learn.studies.tables import PAPER_TABLES
 
     cs = ConfigStore.instance()
     cs.store(name="generate_schema", node=GenerateApp)
@@ -151,19 +143,18 @@ def register() -> None:
     for name in PROTOCOLS:
         cs.store(group="protocol", name=name,
                  node=ProtocolConfig.paper(name, random_state="${seed}"))
-    for name in PAPER_MODELS:
+    for name in MODELS:  # the paper's (Table VI) and any registered in learn.learners
         cs.store(group="model", name=name, node=model_config(name))
-    for k in (1, 2, 3):
-        cs.store(group="features", name=f"selection{k}",
-                 node=FeatureSettings(name=f"selection{k}", selection=k))
+    for k, name in SELECTIONS.items():
+        cs.store(group="features", name=name, node=FeatureSettings(name=name, selection=k))
     cs.store(group="paths", name="default", node=PathsConfig)
     cs.store(group="logger", name="mlflow", node=LoggerConfig)
     for table, spec in PAPER_TABLES.items():
         cs.store(group="experiment", name=f"table_{table.lower()}", package="_global_", node={
-            "defaults": [{"override /protocol": spec["protocol"]}],
+            "defaults": [{"override /protocol": spec.protocol}],
             "hydra": {"sweeper": {"params": {
-                "features": ",".join(f"selection{s}" for s in spec["selections"]),
-                "model": ",".join(spec["models"])}}}})
+                "features": ",".join(spec.selection_names),
+                "model": ",".join(spec.models)}}}})
 
 
 def validate(cfg: DictConfig, schema: type) -> None:

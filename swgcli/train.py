@@ -1,4 +1,4 @@
-"""``swgsim-train``: Hydra app around :func:`learn.study.run_train`.
+"""``swgsim-train``: Hydra app around :func:`learn.tasks.train.run_train`.
 
 Examples
 --------
@@ -21,7 +21,7 @@ from swgcli.schema import TrainApp
 @hydra_app("train", TrainApp, "swgsim-train")
 def main(cfg: DictConfig) -> dict:
     """Compose ``conf/train.yaml`` and run the task it names."""
-    from learn.study import run_train
+    from learn.tasks.train import run_train
 
     return run_train(cfg)
 

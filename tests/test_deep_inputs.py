@@ -1,4 +1,4 @@
-"""learn.inputs: shapes, reference normalisation, auxiliary scalars."""
+"""learn.inputs.signals: shapes, reference normalisation, auxiliary scalars."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from test_deep_toy import make_toy_dataset
 
-from learn.inputs import AUX, build_input, normalise_signals, window_meta
+from learn.inputs.signals import AUX, build_input, normalise_signals, window_meta
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +30,7 @@ def test_signal_input_shapes(toy, kind, n_ch):
 
 
 def test_feature_inputs_and_filter(toy):
-    from learn.features import paper_orders
+    from learn.inputs.features import paper_orders
 
     with pytest.raises(ValueError, match="features.order_step=0.25 needs windows of at least 4"):
         build_input(toy, "sel3", disturbed=True)  # 32 ms hold 1.07 revolutions at 2000 rpm
@@ -74,7 +74,7 @@ def test_unknown_kind_and_missing_reference(toy):
 def test_synchronous_residual_cancels_gear_signature_and_keeps_fault():
     """A window = reference shifted in WG angle + other disturbance: residual ~ 0; a
     4th-harmonic fault term survives at its amplitude relative to the reference RMS."""
-    from learn.inputs import align_phase, harmonic_coefficients, synthesise
+    from learn.inputs.signals import align_phase, harmonic_coefficients, synthesise
 
     fs, n_t, f_in, order = 10_000.0, 1200, 2000 / 60, 1.01
     t = np.arange(n_t) / fs

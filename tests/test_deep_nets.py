@@ -1,5 +1,5 @@
-"""learn.nets and learn.rocket: scikit-learn contract, shapes, fitting a separable toy set,
-fine-tuning and AdaBN."""
+"""learn.learners.nets and learn.learners.rocket: scikit-learn contract, shapes, fitting a
+separable toy set, fine-tuning and AdaBN."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import pytest
 import torch
 from sklearn.base import clone
 
-from learn.nets import CNN1DClassifier, MLPClassifierTorch
-from learn.rocket import MiniRocketClassifier
+from learn.learners.nets import CNN1DClassifier, MLPClassifierTorch
+from learn.learners.rocket import MiniRocketClassifier
 
 pytestmark = pytest.mark.usefixtures("torch_one_thread")
 

@@ -1,4 +1,4 @@
-"""learn.transfer: the k-shot split keeps the evaluation windows apart; CORAL; one
+"""learn.studies.transfer: the k-shot split keeps the evaluation windows apart; CORAL; one
 transfer run end to end through the Hydra config (tiny grid)."""
 
 from __future__ import annotations
@@ -10,12 +10,12 @@ import pandas as pd
 import pytest
 from test_deep_toy import make_toy_dataset, write_toy_dataset
 
-from learn.adapt import CoralClassifier
-from learn.inputs import build_input
-from learn.kshot import check_no_leak, kshot_split
-from learn.protocols import protocol_splits
-from learn.transfer import RESULT_COLUMNS
-from learn.transfer_report import CONFUSION_COLUMNS, summarise
+from learn.inputs.signals import build_input
+from learn.learners.adapt import CoralClassifier
+from learn.reports.transfer_report import summarise
+from learn.studies.kshot import check_no_leak, kshot_split
+from learn.studies.protocols import protocol_splits
+from learn.studies.transfer import CONFUSION_COLUMNS, RESULT_COLUMNS, TargetSpec
 
 CONF = Path(__file__).resolve().parents[1] / "conf"
 
@@ -83,7 +83,7 @@ def test_coral_recovers_a_shifted_domain():
 
 def test_transfer_end_to_end(tmp_path):
     """Compose the real experiment, shrink it, run it; check the report."""
-    from learn.study import run_train
+    from learn.tasks.train import run_train
     from swgcli import compose_app
 
     data = write_toy_dataset(tmp_path / "toy", n_variants=4, n_time=64)
@@ -159,8 +159,8 @@ def test_deep_model_configs_instantiate(name, cls):
 def test_transfer_experiment_composes():
     from omegaconf import OmegaConf
 
-    from learn.inputs import INPUTS
-    from learn.runs import ADAPT, make_estimator, specs_from_config
+    from learn.inputs.signals import INPUTS
+    from learn.studies.runs import ADAPT, make_estimator, specs_from_config
     from swgcli import compose_app
 
     cfg = compose_app("train", ["experiment=transfer"])
@@ -199,7 +199,7 @@ def _synthetic_results():
 
 
 def test_targets_use_the_worst_split_and_the_observable_share(tmp_path):
-    from learn.transfer_report import class_recall, target_table, write_table
+    from learn.reports.transfer_report import class_recall, target_table, write_table
 
     res = _synthetic_results()
     conf = pd.DataFrame([
@@ -212,9 +212,8 @@ def test_targets_use_the_worst_split_and_the_observable_share(tmp_path):
     assert rec["healthy"] == pytest.approx(0.9) and rec["tip"] == pytest.approx(0.6)
     sep = {"bench": {"disturbed": pd.DataFrame({"fault": ["healthy", "tip"],
                                                 "beyond_p95": [0.05, 0.55]})}}
-    targets = {"paper": {"protocol": "ood_disturbed", "accuracy": {0: 0.95}, "recall": {}},
-               "bench": {"protocol": "ood_disturbed", "accuracy": {},
-                         "recall": {"tip": 0.99}}}
+    targets = {"paper": TargetSpec("ood_disturbed", accuracy={0: 0.95}),
+               "bench": TargetSpec("ood_disturbed", recall={"tip": 0.99})}
     tt = target_table(summarise(res), class_recall(conf), targets,
                       {"model": "rf", "input": "raw_res"}, sep).set_index(["dataset", "who"])
     # paper: the worst split of the best run (minirocket: 1.0 - 0.1), the primary's (rf)

@@ -209,7 +209,7 @@ EXPECTED_CONTENT = {
           ["pressure angle", "20°", "8.8e-3", "arcmin", "kinematic error", "1 + 1/N",
            "eq. 1"]),
     "2": ("dynamics.py Catalogue, pitch radius; faults.py w0 = module with z_f = 200; "
-          "learn/inputs.py ratio N = 100",
+          "learn/inputs/signals.py ratio N = 100",
           ["25.4", "0.254", "200", "K1", "K3", "0.105", "52", "ratio"]),
     "3": ("flexspline.py: lattice analogy, size-17 strain 2.8e-4, κ shear; "
           "test_flexspline.py: closed forms",

@@ -19,8 +19,8 @@ from sklearn.utils.estimator_checks import (
     check_sample_weight_equivalence_on_dense_data,
 )
 
-from learn.nets import CNN1DClassifier, MLPClassifierTorch
-from learn.rocket import MiniRocketClassifier
+from learn.learners.nets import CNN1DClassifier, MLPClassifierTorch
+from learn.learners.rocket import MiniRocketClassifier
 
 pytestmark = pytest.mark.usefixtures("torch_one_thread")
 

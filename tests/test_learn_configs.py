@@ -1,4 +1,4 @@
-"""Every option of the train config composes and instantiates (conf/, learn.baselines)."""
+"""Every option of the train config composes and instantiates (conf/, learn.learners.baselines)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from omegaconf import OmegaConf
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
-from learn.baselines import PAPER_MODELS, make_model
-from learn.protocols import PROTOCOLS
+from learn.learners.baselines import PAPER_MODELS, make_model
+from learn.studies.protocols import PROTOCOLS
 from swgcli import CONF_DIR, compose_app
 
 CONF = Path(CONF_DIR)
@@ -45,8 +45,50 @@ def test_model_config_instantiates_to_paper_model(name):
     assert _plain(est.get_params()) == _plain(make_model(name, random_state=3).get_params())
 
 
-def test_every_model_option_is_a_paper_model():
-    assert set(_options("model")) >= set(PAPER_MODELS)
+#: The paper's Table VI, written out here (not read from learn): estimator class and the
+#: settings it names; everything else is scikit-learn's default.
+TABLE_VI = {
+    "mlp": ("sklearn.neural_network.MLPClassifier",
+            {"hidden_layer_sizes": (10, 10, 10), "activation": "relu"}),
+    "svm": ("sklearn.svm.SVC", {"kernel": "rbf"}),
+    "rf": ("sklearn.ensemble.RandomForestClassifier", {"n_estimators": 100, "max_depth": 7}),
+    "knn": ("sklearn.neighbors.KNeighborsClassifier", {"n_neighbors": 3}),
+    "nb": ("sklearn.naive_bayes.GaussianNB", {}),
+}
+#: The deep models, the only ones written as YAML (conf/model/*.yaml).
+DEEP = {"mlp_torch": "learn.learners.nets.MLPClassifierTorch",
+        "cnn": "learn.learners.nets.CNN1DClassifier",
+        "minirocket": "learn.learners.rocket.MiniRocketClassifier"}
+
+
+def _cls(path: str):
+    import importlib
+
+    module, name = path.rsplit(".", 1)
+    return getattr(importlib.import_module(module), name)
+
+
+def test_model_options_are_table_vi_and_the_deep_yaml_models():
+    assert set(_options("model")) == set(TABLE_VI) | set(DEEP)
+    assert {p.stem for p in (CONF / "model").glob("*.yaml")} == set(DEEP)
+    assert list(PAPER_MODELS) == list(TABLE_VI)  # the paper's order of its tables
+
+
+@pytest.mark.parametrize("name", sorted(TABLE_VI))
+def test_model_option_is_the_table_vi_estimator(name):
+    path, settings = TABLE_VI[name]
+    est = instantiate(compose_train([f"model={name}", "seed=3"]).model, _convert_="all")[-1]
+    assert type(est) is _cls(path)
+    params, defaults = (_plain(p) for p in (est.get_params(), _cls(path)(**settings).get_params()))
+    params.pop("random_state", None), defaults.pop("random_state", None)
+    assert params == defaults  # Table VI's settings (a list from YAML for a tuple), else
+    # scikit-learn's defaults
+
+
+@pytest.mark.parametrize("name", sorted(DEEP))
+def test_yaml_model_is_its_deep_estimator(name):
+    est = instantiate(compose_train([f"model={name}"]).model, _convert_="all")[-1]
+    assert type(est) is _cls(DEEP[name])
 
 
 def test_table_vi_settings():
@@ -61,14 +103,23 @@ def test_table_vi_settings():
         make_model("xgb")
 
 
-@pytest.mark.parametrize("name", sorted(PROTOCOLS))
+#: The paper's protocols (Sec. IV), written out here: scheme, disturbed, splits.
+PAPER_PROTOCOLS = {
+    "cv_clean": ("group_kfold", False, {"n_splits": 4}),
+    "cv_disturbed": ("group_kfold", True, {"n_splits": 4}),
+    "ood_clean": ("leave_one_gear", False, {"test_gears": [3, 1, 2]}),
+    "ood_disturbed": ("leave_one_gear", True, {"test_gears": [3, 1, 2]}),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PAPER_PROTOCOLS))
 def test_protocol_config_matches_paper_protocol(name):
-    p = OmegaConf.to_container(compose_train([f"protocol={name}"]).protocol, resolve=True)
-    assert p.pop("name") == name
-    p.pop("random_state", None)
-    expected = {"n_splits": 4, "test_gears": None,  # the schema's, where the paper has none
-                **{k: list(v) if isinstance(v, tuple) else v for k, v in PROTOCOLS[name].items()}}
-    assert p == expected
+    assert set(PROTOCOLS) == set(PAPER_PROTOCOLS)
+    p = OmegaConf.to_container(compose_train([f"protocol={name}", "seed=5"]).protocol,
+                               resolve=True)
+    scheme, disturbed, splits = PAPER_PROTOCOLS[name]
+    assert p == {"name": name, "scheme": scheme, "disturbed": disturbed, "random_state": 5,
+                 "n_splits": 4, "test_gears": None, **splits}
 
 
 @pytest.mark.parametrize("group", ["data", "features", "logger", "paths"])

@@ -1,11 +1,11 @@
-"""Features of paper Table III, eq. (7)-(9) (learn.features)."""
+"""Features of paper Table III, eq. (7)-(9) (learn.inputs.features)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from learn.features import (
+from learn.inputs.features import (
     META_COLUMNS,
     extract_features,
     feature_names,

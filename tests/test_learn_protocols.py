@@ -1,13 +1,13 @@
-"""Protocols of paper Sec. IV: splits from metadata, no leaks (learn.protocols)."""
+"""Protocols of paper Sec. IV: splits from metadata, no leaks (learn.studies.protocols)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from learn.baselines import make_model
-from learn.features import extract_features
-from learn.protocols import PROTOCOLS, evaluate, make_splits, protocol_splits
+from learn.inputs.features import extract_features
+from learn.learners.baselines import make_model
+from learn.studies.protocols import PROTOCOLS, evaluate, make_splits, protocol_splits
 
 
 @pytest.fixture(scope="module")
@@ -18,7 +18,7 @@ def meta(synthetic_ds):
 @pytest.mark.parametrize("protocol", sorted(PROTOCOLS))
 def test_splits_have_no_leak(meta, protocol):
     splits = protocol_splits(meta, protocol, random_state=0)
-    disturbed = PROTOCOLS[protocol]["disturbed"]
+    disturbed = PROTOCOLS[protocol].disturbed
     rows = np.flatnonzero(meta["disturbed"].to_numpy() == disturbed)
     assert len(splits) == (4 if protocol.startswith("cv") else 3)
     tested = np.concatenate([s.test for s in splits])

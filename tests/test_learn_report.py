@@ -1,4 +1,4 @@
-"""Paper study and its report (learn.study.run_paper_study, learn.report)."""
+"""Paper study and its report (learn.tasks.paper.run_paper_study, learn.reports.report)."""
 
 from __future__ import annotations
 
@@ -6,20 +6,21 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.paper_results import PAPER_RESULTS, PAPER_TABLES
-from learn.report import write_report, write_tables
-from learn.study import run_paper_study
+from learn.reports.paper_results import PAPER_RESULTS
+from learn.reports.report import write_report, write_tables
+from learn.studies.tables import PAPER_TABLES, StudyOptions
+from learn.tasks.paper import run_paper_study
 
 
 def _fake_results() -> pd.DataFrame:
     rows = []
     for table, spec in PAPER_TABLES.items():
-        splits = (["fold0", "fold1", "fold2", "fold3"] if spec["protocol"].startswith("cv")
+        splits = (["fold0", "fold1", "fold2", "fold3"] if spec.protocol.startswith("cv")
                   else ["gear3", "gear1", "gear2"])
-        for s in spec["selections"]:
-            for m in spec["models"]:
+        for s in spec.selections:
+            for m in spec.models:
                 for sp in splits:
-                    rows.append({"table": table, "protocol": spec["protocol"],
+                    rows.append({"table": table, "protocol": spec.protocol,
                                  "selection": f"selection{s}", "model": m, "split": sp,
                                  "train_accuracy": 0.5, "test_accuracy": 0.25})
     return pd.DataFrame(rows)
@@ -53,8 +54,9 @@ def test_missing_jobs_read_dash(tmp_path):
 
 
 def test_paper_study_small(tiny_dataset, tracking_uri, tmp_path):
-    out = run_paper_study(tiny_dataset, tmp_path / "paper", tracking_uri=tracking_uri,
-                          progress=False, tables=["VII", "X"], models=["nb", "knn"])
+    out = run_paper_study(tiny_dataset, tmp_path / "paper",
+                          StudyOptions(tables=["VII", "X"], models=["nb", "knn"]),
+                          tracking_uri=tracking_uri, progress=False)
     res = out["results"]
     assert set(res["table"]) == {"VII", "X"}
     assert len(res) == 3 * 2 * 4 + 2 * 2 * 3 and out["n_jobs_run"] == 6 + 4
@@ -71,7 +73,7 @@ def test_paper_study_small(tiny_dataset, tracking_uri, tmp_path):
     back = pd.read_csv(files["csv"])
     assert np.allclose(back["test_accuracy"], res["test_accuracy"])
     with pytest.raises(ValueError, match="tables must be among"):
-        run_paper_study(tiny_dataset, tmp_path, track=False, tables=["XI"])
+        run_paper_study(tiny_dataset, tmp_path, StudyOptions(tables=["XI"]), track=False)
 
 
 def test_write_report_without_dataset_has_no_figures(tmp_path):

@@ -7,8 +7,8 @@ import sys
 
 import pytest
 
-from learn import study
-from learn.study import TASKS, run_train
+from learn.tasks import train as train_task
+from learn.tasks.train import TASKS, run_train
 from swgcli import compose_app
 
 
@@ -30,7 +30,9 @@ def test_run_train_beats_chance_and_logs(tiny_dataset, tracking_uri, tmp_path, p
     out = run_train(cfg)
     n_splits = 4 if protocol.startswith("cv") else 3
     assert len(out["test_accuracy"]) == len(out["train_accuracy"]) == n_splits
-    assert out["mean_test_accuracy"] > 0.4  # chance: 1/6
+    # reached 0.917 (cv_clean) and 0.861 (ood_disturbed) on the synthetic data set (RF of 20
+    # trees, seed 0; chance 1/6): the bound leaves 6 points below the lower one
+    assert out["mean_test_accuracy"] > 0.8
     client = mlflow.MlflowClient(tracking_uri)
     run = client.get_run(out["run_id"])
     assert run.data.metrics["mean_test_accuracy"] == pytest.approx(out["mean_test_accuracy"])
@@ -54,8 +56,8 @@ def test_task_dispatch(monkeypatch, tmp_path):
                         raising=False)
     cfg = compose_train(["task=probe"])
     assert run_train(cfg) == {"ok": 1} and calls == [cfg]
-    assert TASKS["transfer"] == "learn.transfer.run_transfer"
-    assert TASKS["study"].rsplit(".", 1) == [study.__name__, "run_study_job"]
+    assert TASKS["transfer"] == "learn.tasks.transfer.run_transfer"
+    assert TASKS["study"].rsplit(".", 1) == [train_task.__name__, "run_study_job"]
 
 
 def test_multirun_cli(tiny_dataset, tracking_uri, tmp_path):
@@ -80,5 +82,6 @@ def test_paper_study_task(tiny_dataset, tracking_uri, tmp_path):
                   "study.tables=[IX]", "study.models=[nb]", "study.figures=false")
     out = run_train(cfg)
     assert set(out["mean_test_accuracy"]) == {f"IX/selection{s}/nb" for s in (1, 2, 3)}
-    assert out["mean_test_accuracy"]["IX/selection1/nb"] > 0.4  # chance: 1/6
+    # reached 0.896 (NB, Selection 1, leave one gear out; chance 1/6): 9 points of margin
+    assert out["mean_test_accuracy"]["IX/selection1/nb"] > 0.8
     assert (tmp_path / "reports" / "paper" / "tables_vii_x.md").is_file()

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.observability import (
+from learn.studies.observability import (
     COLUMNS,
     J_OUT_BENCH,
     J_OUT_ROBOT,

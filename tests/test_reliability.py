@@ -154,7 +154,7 @@ def test_C_out_of_range_and_unphysical_data_sets_are_refused(tmp_path, edit, key
     ("features.order_step=0.05", "features.order_step=0.05"),  # finer than the window
 ])
 def test_C_feature_orders_the_data_cannot_carry_are_refused(small, tmp_path, override, key):
-    from learn.study import run_train
+    from learn.tasks.train import run_train
 
     cfg = compose_app("train", [f"data.path={small}", "~logger", "features=selection3",
                                 override, f"paths.report_dir={tmp_path}"])
@@ -168,7 +168,7 @@ def _manifest(folder: Path) -> dict:
 
 
 def test_D1_manifest_with_an_entry_removed_is_refused_naming_it(copy_of, tmp_path):
-    from learn.study import run_train
+    from learn.tasks.train import run_train
 
     folder = copy_of()
     m = _manifest(folder)

@@ -4,15 +4,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.findings import FINDINGS, check_findings
-from learn.paper_results import (
+from learn.reports.findings import FINDINGS, check_findings
+from learn.reports.paper_results import (
     PAPER_RESULTS,
     our_cells,
     paper_cells,
     scorecard,
     side_by_side,
 )
-from learn.summary import recall, write_summary
+from learn.reports.summary import recall, write_summary
+from learn.studies.tables import StudyOptions
 from swgcli import dataset_preset
 from swgsim.config import dataset_config
 from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
@@ -108,7 +109,7 @@ def test_summary_side_by_side_with_two_protocols(tmp_path):
     out = write_summary(res, {"paper": conf, "bench": conf}, tmp_path,
                         {"paper": dataset_config(dataset_preset("paper")),
                          "bench": dataset_config(dataset_preset("bench"))},
-                        {"scale": False, "seed": 0})
+                        StudyOptions(), 0)
     md = out["files"]["md"].read_text()
     assert "| paper | VII | 15 | 15 | 15 | 15 | 1.0 |" in md
     assert "| bench | IX | 45 | 0 | 0 | 0 | 30.0 |" in md

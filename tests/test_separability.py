@@ -1,10 +1,10 @@
-"""Class separability from the healthy windows (learn/separability.py) on the toy set."""
+"""Class separability from the healthy windows (learn/studies/separability.py) on the toy set."""
 
 import numpy as np
 import pytest
 from test_deep_toy import make_toy_dataset
 
-from learn.separability import plot_separability, separations, summary_table
+from learn.studies.separability import plot_separability, separations, summary_table
 
 
 def test_planted_signature_separates_and_a_healthy_twin_does_not(tmp_path):

@@ -12,8 +12,14 @@ import pandas as pd
 import pytest
 import yaml
 
-from learn.provenance import DIGEST_CHARS, GIT_COMMIT_TAG, GIT_DIRTY_TAG, dataset_ref, git_tags
 from learn.tracking import GROUP_PARENT_TAG, log_run, repo_root
+from learn.tracking.provenance import (
+    DIGEST_CHARS,
+    GIT_COMMIT_TAG,
+    GIT_DIRTY_TAG,
+    dataset_ref,
+    git_tags,
+)
 
 
 def _client(uri):
@@ -46,7 +52,7 @@ def _inputs(client, run_id):
 def test_run_carries_commit_dataset_config_and_model(tiny_dataset, tracking_uri, tmp_path):
     import mlflow
 
-    from learn.baselines import make_model
+    from learn.learners.baselines import make_model
 
     X, y = _xy()
     model = make_model("rf", random_state=0).set_params(rf__n_estimators=20).fit(X, y)
@@ -145,15 +151,15 @@ def test_own_estimators_are_logged_in_cloudpickle_quietly(kind, tracking_uri, ca
     mlflow.sklearn, and MLflow's per-model pickle warning stays off the console."""
     import mlflow
 
-    from learn.baselines import make_pipeline
+    from learn.learners.baselines import make_pipeline
 
     if kind == "mlp_torch":
-        from learn.nets import MLPClassifierTorch
+        from learn.learners.nets import MLPClassifierTorch
 
         X, y = _xy(n=120)
         est = MLPClassifierTorch(hidden=(8,), max_epochs=3, device="cpu", random_state=0)
     else:
-        from learn.rocket import MiniRocketClassifier
+        from learn.learners.rocket import MiniRocketClassifier
 
         X2, y = _xy(n=60)
         X = X2[:, :2, None] * np.sin(np.linspace(0, 6, 64))  # (n, 2 channels, 64 samples)
@@ -176,9 +182,9 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
     import mlflow
     from omegaconf import OmegaConf
 
-    from learn.features import FeatureSettings, extract_features
-    from learn.protocols import make_splits
-    from learn.study import run_train
+    from learn.inputs.features import extract_features
+    from learn.studies.protocols import make_splits
+    from learn.tasks.train import run_train
     from swgcli import compose_app
     from swgsim.data import load
 
@@ -195,7 +201,7 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
     (mo,) = run.outputs.model_outputs
     lm = client.get_logged_model(mo.model_id)
     model = mlflow.sklearn.load_model(lm.artifact_location)
-    feats = extract_features(load(tiny_dataset), 1, **FeatureSettings.of(cfg.features).kwargs())
+    feats = extract_features(load(tiny_dataset), 1, **OmegaConf.to_object(cfg.features).kwargs())
     pcfg = OmegaConf.to_container(cfg.protocol, resolve=True)
     pcfg.pop("name")
     last = make_splits(feats.meta, **pcfg)[-1]
@@ -208,7 +214,7 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
 def test_transfer_cells_log_seed_statistics_not_steps(tiny_dataset, tracking_uri):
     from omegaconf import OmegaConf
 
-    from learn.transfer_report import log_transfer
+    from learn.reports.transfer_report import log_transfer
 
     rows = [{"dataset": "tiny", "protocol": "ood_disturbed", "split": f"gear{g}", "model": m,
              "input": "sel1", "k_shot": 0, "seed": sd, "accuracy": 0.5 + 0.1 * g + 0.01 * sd,

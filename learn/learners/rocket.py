@@ -5,7 +5,7 @@ MiniRocket (Dempster, Schmidt & Webb, KDD 2021) turns a multivariate series into
 cross-validated ridge classifier on top is the method's standard head. The transform is
 aeon's (``aeon.transformations.collection.convolution_based.MiniRocket``).
 
-Same input convention as :mod:`learn.nets`: (n, C, T) signals whose last ``n_aux``
+Same input convention as :mod:`learn.learners.nets`: (n, C, T) signals whose last ``n_aux``
 channels are per-window scalars constant along time. The scalars bypass the transform
 (a zero-sum convolution of a constant is zero) and are appended to the standardised
 features, scaled by ``aux_weight``. A 2-D feature input skips the transform.
@@ -175,7 +175,7 @@ class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
 
         The target windows are weighted so that together they weigh ``1 / replay`` times
         the source windows (the balance of the torch nets' fine-tuning with replay,
-        :meth:`learn.nets.TorchClassifier.fine_tune`); the penalty stays the one the
+        :meth:`learn.learners.nets.TorchClassifier.fine_tune`); the penalty stays the one the
         leave-one-out CV chose on the source data, so nothing is chosen on the target.
 
         Parameters

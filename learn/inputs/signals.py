@@ -1,6 +1,6 @@
 """Model inputs built from a schema-v1 data set: raw signals, differenced signals, features.
 
-The learners of the transfer study (``learn.transfer``) take these inputs:
+The learners of the transfer study (``learn.studies.transfer``) take these inputs:
 
 ``raw``
     The five bridge outputs s0..s4, each normalised with the healthy reference window of
@@ -9,7 +9,7 @@ The learners of the transfer study (``learn.transfer``) take these inputs:
     The differences of the redundant gauges (paper eq. 8) plus the torque bridge:
     (s0, Δs13, Δs24), formed from the *normalised* channels. Shape (n, 3 + n_aux, T).
 ``sel3``, ``sel1``
-    The paper's feature Selections 3 and 1 (Table III) from :mod:`learn.features`.
+    The paper's feature Selections 3 and 1 (Table III) from :mod:`learn.inputs.features`.
     Shape (n, n_features).
 ``raw_res``, ``diff_res``
     Synchronous residuals: each window minus its phase-aligned reference window, in the
@@ -63,8 +63,8 @@ Auxiliary scalars. Reduced damping barely changes the strain signals (paper Sec.
 it shows in the efficiency. The signal inputs therefore carry ``n_aux`` extra channels,
 each constant along time, holding per-window scalars (default: η2_rel of eq. 9 and
 η_rel - 1, with η_rel = η / η_ref as in eq. 7). Models read them at t = 0 and route them
-past the convolutions (``learn.nets``, ``learn.rocket``); Selection 3 already contains
-η2_rel.
+past the convolutions (``learn.learners.nets``, ``learn.learners.rocket``); Selection 3
+already contains η2_rel.
 """
 
 from __future__ import annotations
@@ -159,9 +159,9 @@ def window_meta(ds, disturbed: bool | None = None) -> tuple[pd.DataFrame, np.nda
     Raises
     ------
     ValueError
-        From :func:`learn.features.reference_index` (no or ambiguous reference window).
+        From :func:`learn.inputs.features.reference_index` (no or ambiguous reference window).
     """
-    from learn.features import reference_index
+    from learn.inputs.features import reference_index
 
     samples, refs = reference_index(ds)
     if disturbed is not None:
@@ -422,7 +422,7 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     disturbed : bool, optional
         Keep only the clean (False) or disturbed (True) windows; default all.
     feature_kwargs : dict, optional
-        ``orders``, ``floor_rel`` of :func:`learn.features.extract_features`.
+        ``orders``, ``floor_rel`` of :func:`learn.inputs.features.extract_features`.
     residual : dict, optional
         Settings of the residual inputs, overriding :data:`RESIDUAL_DEFAULTS`: ``ratio``,
         ``n_harmonics``, ``nuisance_orders``, ``min_harmonic``, ``n_points``,
@@ -431,7 +431,7 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     Returns
     -------
     InputSet
-        Rows in data-set order, so :func:`learn.protocols.protocol_splits` on
+        Rows in data-set order, so :func:`learn.studies.protocols.protocol_splits` on
         ``meta`` indexes ``X``.
 
     Raises
@@ -471,7 +471,7 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
         x = _append_aux(x, eff[:, eff_cols])
         return InputSet(np.ascontiguousarray(x, dtype=np.float32), y, meta, len(eff_cols),
                         kind)
-    from learn.features import extract_features
+    from learn.inputs.features import extract_features
 
     feats = extract_features(ds, int(kind[-1]), **dict(feature_kwargs or {}))
     fs = feats.meta["sample"].to_numpy()

@@ -43,6 +43,19 @@ def _git_state(root: str) -> tuple[str, str]:
     return head.stdout.strip(), dirty
 
 
+def repo_root() -> Path:
+    """Root of the source checkout.
+
+    Returns
+    -------
+    Path
+        The parent of the ``learn`` package if it holds ``pyproject.toml`` (a source
+        checkout or editable install), otherwise the current working directory.
+    """
+    here = Path(__file__).resolve().parents[2]
+    return here if (here / "pyproject.toml").is_file() else Path.cwd()
+
+
 def git_tags(root: str | Path | None = None) -> dict[str, str]:
     """Git commit of a checkout and whether its work tree differs from it, as run tags.
 
@@ -52,7 +65,7 @@ def git_tags(root: str | Path | None = None) -> dict[str, str]:
     Parameters
     ----------
     root : path-like, optional
-        Folder inside the checkout; default :func:`learn.tracking.repo_root`.
+        Folder inside the checkout; default :func:`repo_root`.
 
     Returns
     -------
@@ -62,8 +75,6 @@ def git_tags(root: str | Path | None = None) -> dict[str, str]:
         files). Both ``"unknown"`` where git is missing or ``root`` is not in a checkout;
         never raises.
     """
-    from learn.tracking import repo_root
-
     commit, dirty = _git_state(str(Path(root or repo_root()).resolve()))
     return {GIT_COMMIT_TAG: commit, GIT_DIRTY_TAG: dirty}
 
@@ -168,8 +179,8 @@ def dataset_ref(path: str | os.PathLike, name: str | None = None) -> DatasetRef:
 def sklearn_only(model) -> bool:
     """Whether ``model`` and every estimator in its parameters are scikit-learn classes.
 
-    Models that are not (the torch nets of :mod:`learn.nets`, MiniRocket of
-    :mod:`learn.rocket`) need this package importable where they are loaded, so their
+    Models that are not (the torch nets of :mod:`learn.learners.nets`, MiniRocket of
+    :mod:`learn.learners.rocket`) need this package importable where they are loaded, so their
     requirements pin it (:func:`model_requirements`).
     """
     objs = [model]

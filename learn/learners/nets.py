@@ -12,7 +12,7 @@ initialisation, shuffling, augmentation and the validation split, through local
 generators (``torch.random.fork_rng``), never the global seed.
 
 Input ``X``: (n, C, T) signals whose last ``n_aux`` channels are per-window scalars held
-constant along time (see :mod:`learn.inputs`), or (n, F) features. Inputs are
+constant along time (see :mod:`learn.inputs.signals`), or (n, F) features. Inputs are
 standardised per channel (per feature) with statistics of the training windows; a
 fine-tuned model keeps the source statistics.
 

@@ -1,9 +1,9 @@
 """Unsupervised domain adaptation for feature classifiers: CORAL.
 
 The torch nets' adaptation (AdaBN: batch-norm statistics re-estimated on unlabelled
-target windows) is a method of the nets (:meth:`learn.nets.TorchClassifier.adapt_bn`);
+target windows) is a method of the nets (:meth:`learn.learners.nets.TorchClassifier.adapt_bn`);
 feature models get CORAL here. Both see the held-out gear's pool windows without labels
-(:mod:`learn.kshot`).
+(:mod:`learn.studies.kshot`).
 """
 
 from __future__ import annotations

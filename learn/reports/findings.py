@@ -5,8 +5,8 @@ Every statement the paper makes about Tables VII-X (Sec. IV-A to IV-D) is one
 whether it holds and the numbers it looked at. "About X %" in the paper is read as
 within ±5 points of X (:data:`ABOUT`); "below / above X %" literally.
 
-    >>> from learn.findings import check_findings
-    >>> rows = check_findings(cells)            # cells: learn.paper_results.our_cells(results)
+    >>> from learn.reports.findings import check_findings
+    >>> rows = check_findings(cells)  # cells: learn.reports.paper_results.our_cells(results)
 """
 
 from __future__ import annotations
@@ -17,16 +17,20 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from learn.paper_results import GEAR_SPLITS
+from learn.inputs.features import SELECTIONS
+from learn.learners.baselines import model_label
+from learn.reports.paper_results import GEAR_SPLITS
+from learn.studies.tables import M5
 
 #: Tolerance of "about X %" in the paper's text [points].
 ABOUT = 5.0
-_SEL = {1: "selection1", 2: "selection2", 3: "selection3"}
-_NAMES = {"mlp": "MLP", "svm": "SVM", "rf": "RF", "knn": "KNN", "nb": "NB"}
+_SEL = SELECTIONS
+_NAMES = {m: model_label(m) for m in M5}  # the paper's models, in its order
 
 
 class Scores:
-    """Our scores [%] by table, selection, model and split (:func:`learn.paper_results.our_cells`).
+    """Our scores [%] by table, selection, model and split
+    (:func:`learn.reports.paper_results.our_cells`).
 
     Parameters
     ----------
@@ -302,7 +306,7 @@ def check_findings(cells: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     cells : pandas.DataFrame
-        :func:`learn.paper_results.our_cells` of one study (columns ``table``,
+        :func:`learn.reports.paper_results.our_cells` of one study (columns ``table``,
         ``selection``, ``model``, ``split``, ``ours``).
 
     Returns

@@ -7,9 +7,8 @@ them was tuned against the paper's scores.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
-
+from learn.inputs.features import FeatureSettings
+from learn.studies.tables import StudyOptions
 from swgsim.acquisition import Acquisition
 from swgsim.config import DatasetConfig
 
@@ -23,25 +22,27 @@ def _amp(acq: Acquisition) -> str:
             f"{a.bits} bit, sinc{a.order} filter modelled at {a.oversample}x the data rate")
 
 
-def open_choices(dataset: DatasetConfig, study: Mapping[str, Any]) -> list[dict[str, str]]:
+def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
+                 features: FeatureSettings | None = None) -> list[dict[str, str]]:
     """The paper's open choices for one data set and study.
 
     Parameters
     ----------
     dataset : DatasetConfig
         The data set's config (e.g. ``conf/dataset/<name>.yaml``, composed).
-    study : mapping
-        Study settings: ``scale`` (bool), ``max_order``, ``order_step``, ``floor_rel``
-        (feature settings, optional).
+    options : StudyOptions
+        The study's options (scaling).
+    seed : int
+        The study's seed.
+    features : FeatureSettings, optional
+        DFT orders and floor; default the paper's.
 
     Returns
     -------
     list of dict
         ``choice``, ``value``, ``reason`` (all str), in the order of the pipeline.
     """
-    from learn.features import FeatureSettings
-
-    fs = FeatureSettings.of(study)
+    fs = features or FeatureSettings()
     ch, dist, tol = dataset.chain, dataset.disturbance, dataset.tolerances
     acq = dataset.acquisition
     v = dataset.variants
@@ -89,7 +90,7 @@ def open_choices(dataset: DatasetConfig, study: Mapping[str, Any]) -> list[dict[
          "'normalized for each operating point by the value of the healthy gear'; a gear "
          "never seen in training has its own commissioning recording"),
         ("Feature scaling",
-         "standardised (StandardScaler)" if study.get("scale") else "none",
+         "standardised (StandardScaler)" if options.scale else "none",
          "the paper names scikit-learn's standard settings and no preprocessing; eq. (9) "
          "exists to make slight changes of η_rel distinguishable, which standardisation "
          "would not need"),
@@ -129,7 +130,7 @@ def open_choices(dataset: DatasetConfig, study: Mapping[str, Any]) -> list[dict[
          "torque and efficiency at rated torque", "swgsim/dynamics.py (catalogue sources)"),
         ("Classifier settings", "Table VI; everything else scikit-learn's defaults (MLP "
          "max_iter 200)", "'standard settings of ... Scikit-learn' (Sec. III-C)"),
-        ("Seeds", f"data set {dataset.seed}, study {study.get('seed', 0)}",
+        ("Seeds", f"data set {dataset.seed}, study {seed}",
          "fixed for repeatability"),
     ]
     return [{"choice": c, "value": val, "reason": r} for c, val, r in rows]

@@ -2,7 +2,7 @@
 
 For every gear and operating point, each window is reduced to phase-invariant numbers:
 the amplitudes |c_h| of the harmonics h = 0..H of the wave-generator angle in every
-bridge (least-squares fit, :func:`learn.inputs.harmonic_coefficients`; for disturbed
+bridge (least-squares fit, :func:`learn.inputs.signals.harmonic_coefficients`; for disturbed
 windows the disturbance's sub-harmonics fitted and dropped) and the efficiency η. The
 healthy windows of that gear and operating point (copies that differ only in their start
 angle and noise) give a mean and a spread per number; a window's separation is the
@@ -10,8 +10,8 @@ largest |x - mean| / spread over the numbers. A class whose windows stay within 
 spreads of the healthy cloud cannot be told from a healthy gear by any classifier of
 these data.
 
-    python -m learn.separability                      # data/paper, clean windows
-    python -m learn.separability --disturbed --out reports/transfer
+    python -m learn.studies.separability                      # data/paper, clean windows
+    python -m learn.studies.separability --disturbed --out reports/transfer
 
 The transfer report (``swgsim-train -m experiment=transfer``) includes the table and the
 figure per data set; the observability map (``swgsim-observability``) uses the per-window
@@ -64,7 +64,7 @@ def separation_records(ds, disturbed: bool = False, n_harmonics: int = 8,
     ValueError
         ``n_harmonics`` < 1.
     """
-    from learn.inputs import RESIDUAL_DEFAULTS, harmonic_coefficients
+    from learn.inputs.signals import RESIDUAL_DEFAULTS, harmonic_coefficients
 
     if int(n_harmonics) < 1:
         raise ValueError(f"n_harmonics must be >= 1, got {n_harmonics}")
@@ -153,13 +153,15 @@ def plot_separability(sep: dict[str, np.ndarray], path: str | Path,
     """Box plot (5-95 % whiskers, log axis) of the separation per class; writes ``path``."""
     from matplotlib.figure import Figure
 
+    from swgsim.faults import display_name
+
     p95 = float(np.percentile(sep["healthy"], 95))
     names = sorted(sep, key=lambda f: np.median(sep[f]))
     fig = Figure(figsize=(7, 3.6), layout="constrained")
     ax = fig.add_subplot()
     ax.boxplot([np.maximum(sep[f], 1e-2) for f in names], orientation="horizontal",
                whis=(5, 95), showfliers=False)
-    ax.set_yticks(range(1, len(names) + 1), [f.replace("_", " ") for f in names])
+    ax.set_yticks(range(1, len(names) + 1), [display_name(f) for f in names])
     ax.set_xscale("log")
     ax.axvline(p95, color="k", ls="--", lw=0.8, label="healthy 95th percentile")
     ax.legend(loc="lower right", fontsize=8)

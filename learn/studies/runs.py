@@ -1,8 +1,8 @@
 """One (model, input) run of the transfer comparison: its spec, estimator and scoring.
 
 A run names a model config (``transfer.models.<name>``, a ``_target_`` mapping as in
-``conf/model/``) and an input of :data:`learn.inputs.INPUTS`, and says which target-gear
-adaptations it gets (:mod:`learn.transfer`).
+``conf/model/``) and an input of :data:`learn.inputs.signals.INPUTS`, and says which target-gear
+adaptations it gets (:mod:`learn.studies.transfer`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ class RunSpec:
     model : str
         Key into the model configs (``transfer.models``).
     input : str
-        One of :data:`learn.inputs.INPUTS`.
+        One of :data:`learn.inputs.signals.INPUTS`.
     finetune : bool
         Adapt with k labelled target windows per class (leave-one-gear-out protocols):
         torch nets are fine-tuned, MiniRocket's ridge is refitted.

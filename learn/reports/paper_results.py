@@ -11,17 +11,15 @@ table lie within ±3, ±5 and ±10 points of the paper and their mean absolute d
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
 
 import numpy as np
 import pandas as pd
 
-SELECTIONS = ("selection1", "selection2", "selection3")
+from learn.studies.tables import M4, M5, PAPER_TABLES
+
 #: Held-out gear of the paper's out-of-distribution rows: 1,2 -> 3; 2,3 -> 1; 1,3 -> 2.
 GEAR_SPLITS = ("gear3", "gear1", "gear2")
 SPLIT_LABELS = {"gear3": "1,2 → 3", "gear1": "2,3 → 1", "gear2": "1,3 → 2"}
-M5 = ("mlp", "svm", "rf", "knn", "nb")
-M4 = ("mlp", "rf", "knn", "nb")
 #: Tables with published test cells (Table VIII's numbers are missing from the text).
 SCORED_TABLES = ("VII", "IX", "X")
 #: Bands of the scorecard [points].
@@ -77,25 +75,11 @@ PAPER_RESULTS: dict[str, dict | None] = {
     },
 }
 
-#: The paper's tables: title, protocol, feature selections and models of each.
-PAPER_TABLES: dict[str, dict[str, Any]] = {
-    "VII": {"title": "Score on training and test set for different selections",
-            "protocol": "cv_clean", "selections": (1, 2, 3), "models": M5},
-    "VIII": {"title": "Score on training and test set for disturbed data",
-             "protocol": "cv_disturbed", "selections": (1, 2, 3), "models": M5},
-    "IX": {"title": "Avg. score in per cent on out-of-distribution classification",
-           "protocol": "ood_clean", "selections": (1, 2, 3), "models": M5},
-    "X": {"title": "Avg. score in per cent on out-of-distribution classification on "
-                   "disturbed data for four selected classifiers",
-          "protocol": "ood_disturbed", "selections": (1, 3), "models": M4},
-}
-
-
 def table_spec(table: str) -> tuple[str, str, tuple[str, ...], tuple[str, ...]]:
-    """Title, protocol, models and selection names of one of the paper's tables."""
+    """Title, protocol, models and selection names of one of the paper's tables
+    (:data:`learn.studies.tables.PAPER_TABLES`)."""
     t = PAPER_TABLES[table]
-    return (t["title"], t["protocol"], tuple(t["models"]),
-            tuple(f"selection{k}" for k in t["selections"]))
+    return t.title, t.protocol, t.models, t.selection_names
 
 
 CELL_COLUMNS = ("table", "selection", "model", "split")
@@ -129,7 +113,7 @@ def our_cells(results: pd.DataFrame) -> pd.DataFrame:
     ----------
     results : pandas.DataFrame
         One row per (table, selection, model, split) with ``test_accuracy`` in [0, 1]
-        (``results.csv`` of :func:`learn.study.run_paper_study`).
+        (``results.csv`` of :func:`learn.tasks.paper.run_paper_study`).
 
     Returns
     -------

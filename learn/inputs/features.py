@@ -36,7 +36,6 @@ exactly 1 in every bin. Relative mean and variance follow eq. (7) literally (no 
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -47,7 +46,9 @@ import pandas as pd
 
 log = logging.getLogger(__name__)
 
-SELECTIONS = ("selection1", "selection2", "selection3")
+#: The paper's feature selections (Table III), the one registry of them: number -> config
+#: name (``features=<name>`` of the apps, the ``selection`` column of results).
+SELECTIONS: dict[int, str] = {k: f"selection{k}" for k in (1, 2, 3)}
 META_COLUMNS = ("gear", "fault", "variant", "n_in_rpm", "t_out_nm", "disturbed")
 REFERENCE_KEYS = ("gear", "n_in_rpm", "t_out_nm", "disturbed")
 N_SENSORS = 5
@@ -81,14 +82,6 @@ class FeatureSettings:
         """``orders`` and ``floor_rel`` for :func:`extract_features`."""
         return {"orders": paper_orders(self.max_order, self.order_step),
                 "floor_rel": self.floor_rel}
-
-    @classmethod
-    def of(cls, cfg) -> FeatureSettings:
-        """From a mapping or config node with any subset of the fields."""
-        if cfg is None:
-            return cls()
-        keys = {f.name for f in dataclasses.fields(cls)}
-        return cls(**{k: cfg[k] for k in keys if k in cfg})
 
 
 class Features(NamedTuple):
@@ -254,11 +247,21 @@ def _spectrum_args(x, time_s, f_in_hz, orders):
 def _selection_id(selection: int | str) -> int:
     """Map 1, "1", "selection1" to 1 (etc.); raise naming the allowed values."""
     s = str(selection).strip().lower().removeprefix("selection")
-    if s not in ("1", "2", "3"):
-        raise ValueError(
-            f"selection must be one of 1, 2, 3 or {', '.join(SELECTIONS)}; got {selection!r}"
-        )
+    if not s.isdigit() or int(s) not in SELECTIONS:
+        raise ValueError(f"selection must be one of {', '.join(map(str, SELECTIONS))} or "
+                         f"{', '.join(SELECTIONS.values())}; got {selection!r}")
     return int(s)
+
+
+def selection_name(selection: int | str) -> str:
+    """Config name of a selection of :data:`SELECTIONS` (``3`` -> ``"selection3"``).
+
+    Raises
+    ------
+    ValueError
+        For a selection that is not registered.
+    """
+    return SELECTIONS[_selection_id(selection)]
 
 
 def feature_names(selection: int | str, orders: Sequence[float] | None = None) -> list[str]:

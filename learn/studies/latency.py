@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from learn.runs import RunSpec, final_step, make_estimator
+from learn.studies.runs import RunSpec, final_step, make_estimator
 
 
 def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs, inputs, *, aux=("eta2_rel",
@@ -32,8 +32,8 @@ def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs, inputs, *, aux=("e
     """
     import torch
 
-    from learn.features import reference_index
-    from learn.inputs import build_input
+    from learn.inputs.features import reference_index
+    from learn.inputs.signals import build_input
 
     threads = torch.get_num_threads()
     torch.set_num_threads(1)

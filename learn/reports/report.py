@@ -18,10 +18,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.baselines import MODEL_LABELS
-from learn.features import order_spectrum, reference_index
-from learn.paper_results import GEAR_SPLITS, PAPER_RESULTS, PAPER_TABLES, SPLIT_LABELS, table_spec
-from swgsim.faults import fault_classes
+from learn.inputs.features import order_spectrum, reference_index
+from learn.learners.baselines import model_label
+from learn.reports.paper_results import (
+    GEAR_SPLITS,
+    PAPER_RESULTS,
+    PAPER_TABLES,
+    SPLIT_LABELS,
+    table_spec,
+)
+from swgsim.faults import display_name, fault_classes
 
 log = logging.getLogger(__name__)
 
@@ -41,7 +47,9 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
         lines += ["The paper's Table VIII gives no numbers (its text only quotes some: best "
                   "KNN test score about 80 % and NB 73.72 % on Selection 1, SVM at most about "
                   "47 %), so the paper's cells read (–).", ""]
-    lines += ["| | " + " | ".join(MODEL_LABELS[m] for m in models) + " |",
+    # a registered model beyond the paper's (learn.learners.baselines.register_model)
+    models = (*models, *(m for m in dict.fromkeys(res["model"]) if m not in models))
+    lines += ["| | " + " | ".join(model_label(m) for m in models) + " |",
               "|---|" + "---:|" * len(models)]
     for sel in selections:
         lines.append(f"| **Selection {sel[-1]}** |" + " |" * len(models))
@@ -53,7 +61,7 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
                 for m in models:
                     v = rs.loc[rs["model"] == m, f"{kind}_accuracy"]
                     ours = 100 * float(v.mean()) if len(v) else None
-                    ref = paper[sel][m][kind] if paper else None
+                    ref = paper[sel][m][kind] if paper and m in paper[sel] else None
                     cells.append(_cell(ours, ref))
                 lines.append(f"| {label} | " + " | ".join(cells) + " |")
         else:
@@ -62,7 +70,7 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
                 for m in models:
                     v = rs.loc[(rs["model"] == m) & (rs["split"] == split), "test_accuracy"]
                     ours = 100 * float(v.mean()) if len(v) else None
-                    ref = paper[sel][split][m] if paper and sel in paper else None
+                    ref = paper[sel][split].get(m) if paper and sel in paper else None
                     cells.append(_cell(ours, ref))
                 lines.append(f"| {SPLIT_LABELS[split]} | " + " | ".join(cells) + " |")
     return [*lines, ""]
@@ -82,7 +90,7 @@ def write_tables(
         One row per (table, selection, model, split) with columns ``table``
         ("VII".."X"), ``selection`` ("selection1"..), ``model`` ("mlp"..), ``split``
         ("fold0".. or "gear1".."gear3"), ``train_accuracy``, ``test_accuracy`` [-]
-        (as returned by :func:`learn.study.run_paper_study`). Missing jobs read "–".
+        (as returned by :func:`learn.tasks.paper.run_paper_study`). Missing jobs read "–".
     path : path-like
         Markdown file to write.
     timings_s : mapping, optional
@@ -99,7 +107,8 @@ def write_tables(
     if dataset_path:
         lines += [f"Data set: `{dataset_path}`.", ""]
     lines += ["Each cell reads *ours (paper)* in per cent; the paper's numbers are "
-              "`learn.paper_results.PAPER_RESULTS`, transcribed from its Tables VII, IX and X. "
+              "`learn.reports.paper_results.PAPER_RESULTS`, transcribed from its Tables VII, "
+              "IX and X. "
               "CV tables: mean over 4 folds whose groups are (gear, fault, variant); "
               "out-of-distribution tables: test score on the held-out gear.", ""]
     for name in PAPER_TABLES:
@@ -176,65 +185,22 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
     dict of str to Path
         ``fig6``, ``fig7`` and, if the data set has disturbed windows, ``fig8``.
     """
-    from matplotlib.figure import Figure
-
     report_dir = Path(report_dir)
     report_dir.mkdir(parents=True, exist_ok=True)
     idx, gear, n_in_rpm, t_out_nm = _example_windows(ds, gear, n_in_rpm, t_out_nm)
-    t = np.asarray(ds["time"].values)
-    sig = np.asarray(ds["strain_signal"].values)
     where = f"gear {gear}, {n_in_rpm:g} rpm, {t_out_nm:g} N m"
-    colors = [f"C{i}" for i in range(5)]
-    out: dict[str, Path] = {}
     healthy = idx.get("healthy")
     if healthy is None:  # fall back to the reference window of this operating point
         samples, refs = reference_index(ds)
         healthy = int(refs[np.flatnonzero(np.isin(samples, list(idx.values())))[0]])
-
     faults = [f for f in fault_classes() if f in idx and f != "healthy"]
     faults += sorted(set(idx) - set(fault_classes()))  # e.g. "unknown" of measured data
-    fig = Figure(figsize=(12, 7), layout="constrained")
-    axes = fig.subplots(2, 3, sharex=True).ravel()
-    for ax, f, letter in zip(axes, faults, "abcdef", strict=False):
-        # windows start at random WG angles: shift the faulty one onto the healthy one
-        lag = _align(sig[healthy], sig[idx[f]])
-        n = t.size - lag
-        for i in range(5):
-            ax.plot(t[:n], sig[healthy, i, :n], color=colors[i], lw=1.0, label=f"$s_{i}$")
-            ax.plot(t[:n], sig[idx[f], i, lag:], color=colors[i], lw=1.0, ls="--")
-        ax.set_title(f"({letter}) {f.replace('_', ' ')}", fontsize=9)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("signal [mV/V]")
-    for ax in axes[len(faults):]:
-        ax.axis("off")
-    axes[0].legend(fontsize=7, ncol=5, title="solid: healthy, dashed: faulty",
-                   title_fontsize=7)
-    fig.suptitle(f"Healthy and faulty sensor signals ({where})", fontsize=10)
-    out["fig6"] = report_dir / "fig6_signals.png"
-    fig.savefig(out["fig6"], dpi=110)
-
-    orders = np.arange(1, 161) * 0.05  # 0.05 .. 8
+    t = np.asarray(ds["time"].values)
+    sig = np.asarray(ds["strain_signal"].values)  # (n_samples, 5, n_t), read once
     f_in = np.asarray(ds["n_in_mean_rpm"].values) / 60.0
-    classes = ["healthy", *faults]
     rows = [healthy] + [idx[f] for f in faults]
-    s = sig[rows].astype(np.float64)  # (n_classes, 5, T)
-    views = np.stack([s[:, 0], s[:, 1], s[:, 1] - s[:, 3], s[:, 2] - s[:, 4]], axis=1)
-    amp = order_spectrum(views, t, f_in[rows], orders)  # (n_classes, 4, n_orders)
-    fig = Figure(figsize=(11, 7), layout="constrained")
-    axes = fig.subplots(2, 2, sharex=True).ravel()
-    for j, (ax, name) in enumerate(zip(axes, (r"$\bar s_0$", r"$\bar s_1$",
-                                              r"$\Delta\bar s_{1,3}$", r"$\Delta\bar s_{2,4}$"),
-                                       strict=True)):
-        for c, cls in enumerate(classes):
-            ax.plot(orders, amp[c, j], lw=1.0, label=cls.replace("_", " "))
-        ax.set_title(f"({'abcd'[j]}) DFT of {name}", fontsize=9)
-        ax.set_xlabel("order of input rotation [-]")
-        ax.set_ylabel("DFT amplitude [mV/V]")
-    axes[0].legend(fontsize=7)
-    fig.suptitle(f"DFT of sensor signals ({where})", fontsize=10)
-    out["fig7"] = report_dir / "fig7_dft.png"
-    fig.savefig(out["fig7"], dpi=110)
-
+    out = {"fig6": _fig6(t, sig, rows, faults, where, report_dir / "fig6_signals.png"),
+           "fig7": _fig7(t, sig[rows], f_in[rows], faults, where, report_dir / "fig7_dft.png")}
     try:
         idx_d, *_ = _example_windows(ds, gear, n_in_rpm, t_out_nm, disturbed=True)
     except ValueError:
@@ -244,21 +210,83 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
     if not common:
         log.info("no class with clean and disturbed windows: Fig. 8 skipped")
         return out
-    clean, dist = idx[common[0]], idx_d[common[0]]
+    out["fig8"] = _fig8(t, sig[idx[common[0]]], sig[idx_d[common[0]]], common[0], where,
+                        report_dir / "fig8_disturbed.png")
+    return out
+
+
+_COLORS = [f"C{i}" for i in range(5)]
+
+
+def _fig6(t, sig, rows: list[int], faults: list[str], where: str, path: Path) -> Path:
+    """Fig. 6: healthy (solid, ``rows[0]``) and each faulty class (dashed, the other rows)
+    aligned on the WG angle."""
+    from matplotlib.figure import Figure
+
+    healthy = rows[0]
+    fig = Figure(figsize=(12, 7), layout="constrained")
+    axes = fig.subplots(2, 3, sharex=True).ravel()
+    for ax, f, row, letter in zip(axes, faults, rows[1:], "abcdef", strict=False):
+        # windows start at random WG angles: shift the faulty one onto the healthy one
+        lag = _align(sig[healthy], sig[row])
+        n = t.size - lag
+        for i in range(5):
+            ax.plot(t[:n], sig[healthy, i, :n], color=_COLORS[i], lw=1.0, label=f"$s_{i}$")
+            ax.plot(t[:n], sig[row, i, lag:], color=_COLORS[i], lw=1.0, ls="--")
+        ax.set_title(f"({letter}) {display_name(f)}", fontsize=9)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("signal [mV/V]")
+    for ax in axes[len(faults):]:
+        ax.axis("off")
+    axes[0].legend(fontsize=7, ncol=5, title="solid: healthy, dashed: faulty",
+                   title_fontsize=7)
+    fig.suptitle(f"Healthy and faulty sensor signals ({where})", fontsize=10)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def _fig7(t, sig, f_in, faults: list[str], where: str, path: Path) -> Path:
+    """Fig. 7: DFT of s0, s1, ds13 and ds24 against the order, one line per class
+    (``sig`` and ``f_in``: healthy first, then ``faults``)."""
+    from matplotlib.figure import Figure
+
+    orders = np.arange(1, 161) * 0.05  # 0.05 .. 8
+    classes = ["healthy", *faults]
+    s = sig.astype(np.float64)  # (n_classes, 5, T)
+    views = np.stack([s[:, 0], s[:, 1], s[:, 1] - s[:, 3], s[:, 2] - s[:, 4]], axis=1)
+    amp = order_spectrum(views, t, f_in, orders)  # (n_classes, 4, n_orders)
+    fig = Figure(figsize=(11, 7), layout="constrained")
+    axes = fig.subplots(2, 2, sharex=True).ravel()
+    for j, (ax, name) in enumerate(zip(axes, (r"$\bar s_0$", r"$\bar s_1$",
+                                              r"$\Delta\bar s_{1,3}$", r"$\Delta\bar s_{2,4}$"),
+                                       strict=True)):
+        for c, cls in enumerate(classes):
+            ax.plot(orders, amp[c, j], lw=1.0, label=display_name(cls))
+        ax.set_title(f"({'abcd'[j]}) DFT of {name}", fontsize=9)
+        ax.set_xlabel("order of input rotation [-]")
+        ax.set_ylabel("DFT amplitude [mV/V]")
+    axes[0].legend(fontsize=7)
+    fig.suptitle(f"DFT of sensor signals ({where})", fontsize=10)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def _fig8(t, clean, dist, cls: str, where: str, path: Path) -> Path:
+    """Fig. 8: one class's clean (solid) and disturbed (dashed) window, shape (5, n_t)."""
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(8, 4.5), layout="constrained")
     ax = fig.add_subplot()
     for i in range(5):
-        ax.plot(t, sig[clean, i], color=colors[i], lw=1.0, label=f"$s_{i}$")
-        ax.plot(t, sig[dist, i], color=colors[i], lw=1.0, ls="--")
+        ax.plot(t, clean[i], color=_COLORS[i], lw=1.0, label=f"$s_{i}$")
+        ax.plot(t, dist[i], color=_COLORS[i], lw=1.0, ls="--")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("signal [mV/V]")
     ax.legend(fontsize=7, ncol=5, title="solid: clean, dashed: disturbed (eq. 10)",
               title_fontsize=7)
-    ax.set_title(f"Clean and disturbed signals, {common[0].replace('_', ' ')} ({where})",
-                 fontsize=10)
-    out["fig8"] = report_dir / "fig8_disturbed.png"
-    fig.savefig(out["fig8"], dpi=110)
-    return out
+    ax.set_title(f"Clean and disturbed signals, {display_name(cls)} ({where})", fontsize=10)
+    fig.savefig(path, dpi=110)
+    return path
 
 
 def write_report(

@@ -1,7 +1,8 @@
-"""Report of the transfer comparison (:mod:`learn.transfer`): tables, targets, figure, MLflow.
+"""Report of the transfer comparison (:mod:`learn.studies.transfer`): tables, targets,
+figure, MLflow.
 
 Everything here reads the comparison's two tables: ``results`` (one row per run:
-:data:`learn.transfer.RESULT_COLUMNS`) and ``confusion`` (:data:`CONFUSION_COLUMNS`,
+:data:`learn.studies.transfer.RESULT_COLUMNS`) and ``confusion`` (:data:`CONFUSION_COLUMNS`,
 counts summed over splits and seeds). Nothing is fitted or chosen here; the "best" model
 of a data set is a statement about the evaluation windows, reported beside the primary
 model that was declared before the run (``transfer.primary``).
@@ -15,12 +16,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-CONFUSION_COLUMNS = ("dataset", "protocol", "model", "input", "k_shot", "true", "predicted",
-                     "count")
-OOD_PROTOCOLS = ("ood_clean", "ood_disturbed")
-ALL_PROTOCOLS = ("cv_clean", "cv_disturbed", "ood_clean", "ood_disturbed")
-_NAMES = {"rf": "RF", "minirocket": "MiniRocket", "mlp_torch": "MLP", "cnn": "CNN",
-          "mlp": "MLP (sklearn)", "knn": "KNN", "nb": "NB", "svm": "SVM"}
+from learn.learners.baselines import model_label
+from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
+from learn.studies.transfer import TargetSpec
+
 _INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "Selection 3",
            "raw_res": "synchronous residual", "diff_res": "differenced residual",
            "res_spec": "residual spectrum"}
@@ -31,7 +30,7 @@ _KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
 def row_label(model: str, inp: str, k: int) -> str:
     """Human-readable row name, e.g. ``CNN, raw, fine-tuned all layers, k=5``."""
     base, _, suffix = model.partition("+")
-    name = f"{_NAMES.get(base, base)}, {_INPUTS.get(inp, inp)}"
+    name = f"{model_label(base)}, {_INPUTS.get(inp, inp)}"
     if suffix == "ft_all":
         name += f", fine-tuned all layers, k={k}"
     elif suffix == "ft_last":
@@ -52,7 +51,7 @@ def summarise(results: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     results : pandas.DataFrame
-        :data:`learn.transfer.RESULT_COLUMNS`.
+        :data:`learn.studies.transfer.RESULT_COLUMNS`.
 
     Returns
     -------
@@ -102,7 +101,7 @@ def _kind(protocol: str) -> str:
 
 def observable_share(separability: Mapping | None, dataset: str, protocol: str
                      ) -> pd.Series | None:
-    """Per class, the share of windows beyond the healthy p95 (:mod:`learn.separability`)
+    """Per class, the share of windows beyond the healthy p95 (:mod:`learn.studies.separability`)
     in the data the protocol evaluates (clean or disturbed windows); healthy: the share
     *within* it (0.95). None when not measured."""
     tab = ((separability or {}).get(dataset) or {}).get(_kind(protocol))
@@ -114,7 +113,7 @@ def observable_share(separability: Mapping | None, dataset: str, protocol: str
     return share
 
 
-def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping,
+def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str, TargetSpec],
                  primary: Mapping | None = None,
                  separability: Mapping | None = None) -> pd.DataFrame:
     """Check the targets of ``transfer.targets`` per data set.
@@ -125,14 +124,14 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping,
         :func:`summarise`.
     recall : pandas.DataFrame
         :func:`class_recall`.
-    targets : mapping
-        Data set -> ``{protocol, accuracy: {k: min worst-split mean}, recall: {class:
-        min recall at k = 0}}`` (fractions).
+    targets : mapping of str to TargetSpec
+        Data set -> :class:`learn.studies.transfer.TargetSpec` (protocol, accuracy: {k: min
+        worst-split mean}, recall: {class: min recall at k = 0}; fractions).
     primary : mapping, optional
         ``{model, input}``: the run declared before the comparison; reported beside the
         best one.
     separability : mapping, optional
-        Data set -> {"clean", "disturbed"} -> :func:`learn.separability.summary_table`.
+        Data set -> {"clean", "disturbed"} -> :func:`learn.studies.separability.summary_table`.
 
     Returns
     -------
@@ -144,14 +143,14 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping,
     """
     rows = []
     for ds, spec in targets.items():
-        prot = spec.get("protocol", "ood_disturbed")
+        prot = spec.protocol
         w = summ[(summ["dataset"] == ds) & (summ["protocol"] == prot)
                  & (summ["split"] == "worst")]
         if w.empty:
             continue
         share = observable_share(separability, ds, prot)
         obs_acc = float(share.mean()) if share is not None else float("nan")
-        for k, tgt in sorted((spec.get("accuracy") or {}).items(), key=lambda t: int(t[0])):
+        for k, tgt in sorted(spec.accuracy.items(), key=lambda t: int(t[0])):
             cand = w[w["k_shot"] == int(k)]
             if cand.empty:
                 continue
@@ -167,7 +166,7 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping,
                              "run": row_label(b["model"], b["input"], int(b["k_shot"])),
                              "reached": float(b["mean"]),
                              "met": bool(b["mean"] >= float(tgt)), "observable": obs_acc})
-        rec_t = spec.get("recall") or {}
+        rec_t = spec.recall
         if rec_t:
             b = w[w["k_shot"] == 0]
             if b.empty:
@@ -200,7 +199,7 @@ def _model_rank(m: str) -> int:
 
 
 def _paper_rows(protocol: str, splits: Sequence[str]) -> list[str]:
-    from learn.paper_results import PAPER_RESULTS
+    from learn.reports.paper_results import PAPER_RESULTS
 
     table = {"ood_clean": "IX", "ood_disturbed": "X"}[protocol]
     out = []
@@ -290,7 +289,7 @@ def _separability_md(tabs: Mapping[str, pd.DataFrame]) -> list[str]:
              "Each window reduced to the amplitudes of the first harmonics of the "
              "wave-generator angle in the five bridges and η; its separation = the largest "
              "distance from the healthy windows of the same gear and operating point, in "
-             "their spreads (`learn/separability.py`). Healthy windows scored "
+             "their spreads (`learn/studies/separability.py`). Healthy windows scored "
              f"leave-one-out reach {p95} at their 95th percentile by chance. Share of each "
              "class beyond it:", "",
              "| class | " + " | ".join(f"{k} windows" for k in kinds) + " | median ("
@@ -337,7 +336,7 @@ def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: Mapping | None
 
 
 def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path, *,
-                targets: Mapping | None = None, primary: Mapping | None = None,
+                targets: Mapping[str, TargetSpec] | None = None, primary: Mapping | None = None,
                 separability: Mapping[str, Mapping[str, pd.DataFrame]] | None = None,
                 latency: pd.DataFrame | None = None, timings: Mapping | None = None,
                 paper: bool = True) -> Path:
@@ -352,7 +351,7 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     targets, primary : mapping, optional
         See :func:`target_table`.
     separability : mapping, optional
-        Data set -> {"clean", "disturbed"} -> :func:`learn.separability.summary_table`.
+        Data set -> {"clean", "disturbed"} -> :func:`learn.studies.separability.summary_table`.
     latency : pandas.DataFrame, optional
         Columns model, input, input_ms, model_ms.
     timings : mapping, optional
@@ -362,7 +361,24 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     """
     summ = summarise(results)
     recall = class_recall(confusion) if len(confusion) else None
-    lines = ["# Transfer to the unseen gear: deep learners, MiniRocket and the paper's "
+    lines = list(_INTRO_MD)
+    if targets and recall is not None:
+        lines += _targets_md(target_table(summ, recall, targets, primary, separability))
+    if recall is not None:
+        lines += _recall_md(recall, summ, primary, separability,
+                            list(dict.fromkeys(results["dataset"])))
+    for ds in dict.fromkeys(results["dataset"]):
+        lines += _dataset_md(ds, summ, confusion, recall, separability, paper)
+    if latency is not None and len(latency):
+        lines += _latency_md(latency)
+    if timings:
+        lines += _time_md(results, timings)
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+_INTRO_MD = ("# Transfer to the unseen gear: deep learners, MiniRocket and the paper's "
              "pipeline", "",
              "Accuracy [%] on the test windows, mean ± std over seeds; `worst` = the split "
              "with the lowest mean. Leave-one-gear-out splits `gearN` hold out gear N "
@@ -377,81 +393,92 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
              "leave-one-out CV on the source windows and kept when its ridge is refitted "
              "with k target windows; fine-tuning runs a fixed number of steps with "
              "source replay; the unsupervised adaptations see the held-out gear's pool "
-             "windows without labels. Nothing is chosen on an evaluation window.", ""]
-    if targets and recall is not None:
-        tt = target_table(summ, recall, targets, primary, separability)
-        if len(tt):
-            lines += ["## Targets", "", "*Observable*: for a class, the share of its windows "
-                      "beyond the healthy 95th percentile in the evaluated (disturbed) "
-                      "windows; for an accuracy, their mean over the classes (healthy: 95 %), "
-                      "an estimate of what the signals carry, not a bound.", "",
-                      "| data set | condition | target | run | reached | observable |",
-                      "|---|---|---:|---|---:|---:|"]
-            for r in tt.itertuples():
-                obs = "" if np.isnan(r.observable) else f"{100 * r.observable:.1f} %"
-                lines.append(f"| {r.dataset} | {r.condition} | {100 * r.target:.1f} % | "
-                             f"{r.run} ({r.who}) | {100 * r.reached:.2f} % "
-                             f"({'met' if r.met else 'not met'}) | {obs} |")
-            lines.append("")
+             "windows without labels. Nothing is chosen on an evaluation window.", "")
+
+
+def _targets_md(tt: pd.DataFrame) -> list[str]:
+    """The targets section of ``table.md`` (rows of :func:`target_table`)."""
+    if not len(tt):
+        return []
+    lines = ["## Targets", "", "*Observable*: for a class, the share of its windows beyond "
+             "the healthy 95th percentile in the evaluated (disturbed) windows; for an "
+             "accuracy, their mean over the classes (healthy: 95 %), an estimate of what the "
+             "signals carry, not a bound.", "",
+             "| data set | condition | target | run | reached | observable |",
+             "|---|---|---:|---|---:|---:|"]
+    for r in tt.itertuples():
+        obs = "" if np.isnan(r.observable) else f"{100 * r.observable:.1f} %"
+        lines.append(f"| {r.dataset} | {r.condition} | {100 * r.target:.1f} % | "
+                     f"{r.run} ({r.who}) | {100 * r.reached:.2f} % "
+                     f"({'met' if r.met else 'not met'}) | {obs} |")
+    lines.append("")
+    return lines
+
+
+def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
+                separability, paper: bool) -> list[str]:
+    """One data set's section: diagnosis, separability, a table per protocol."""
+    lines = [f"## Data set `{ds}`", ""]
+    sep = (separability or {}).get(ds)
     if recall is not None:
-        lines += _recall_md(recall, summ, primary, separability,
-                            list(dict.fromkeys(results["dataset"])))
-    for ds in dict.fromkeys(results["dataset"]):
-        lines += [f"## Data set `{ds}`", ""]
-        sep = (separability or {}).get(ds)
-        if recall is not None:
-            lines += _diagnosis_md(ds, summ, confusion, separability)
-        if sep:
-            lines += _separability_md(sep)
-        sd = summ[summ["dataset"] == ds]
-        for p in [q for q in ALL_PROTOCOLS if q in set(sd["protocol"])]:
-            sp = sd[sd["protocol"] == p]
-            splits = sorted({s for s in sp["split"] if s != "worst"},
-                            key=lambda s: (_SPLIT_ORDER.get(s, 9), s))
-            lines += [f"### {ds}: {p}", "", "| run | " + " | ".join(splits) + " | worst |",
-                      "|---|" + "---:|" * (len(splits) + 1)]
-            order = sp[sp["split"] == "worst"].sort_values(
-                ["k_shot", "model", "input"], key=lambda c: c.map(_model_rank)
-                if c.name == "model" else c)
-            for _, w in order.iterrows():
-                cells = []
-                for s in splits:
-                    r = sp[(sp["model"] == w["model"]) & (sp["input"] == w["input"])
-                           & (sp["k_shot"] == w["k_shot"]) & (sp["split"] == s)]
-                    cells.append(_pct(r["mean"].iloc[0], r["std"].iloc[0]) if len(r) else "")
-                cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
-                lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
-                             + " | ".join(cells) + " |")
-            if paper and p in OOD_PROTOCOLS:
-                lines += _paper_rows(p, splits)
-            lines.append("")
-    if latency is not None and len(latency):
-        lines += ["## Inference latency per window (CPU, batch 1, one thread)", "",
-                  "| model | input | input build [ms] | model [ms] |", "|---|---|---:|---:|"]
-        for _, r in latency.iterrows():
-            lines.append(f"| {_NAMES.get(r['model'], r['model'])} | {r['input']} | "
-                         f"{r['input_ms']:.2f} | {r['model_ms']:.2f} |")
+        lines += _diagnosis_md(ds, summ, confusion, separability)
+    if sep:
+        lines += _separability_md(sep)
+    sd = summ[summ["dataset"] == ds]
+    for p in [q for q in ALL_PROTOCOLS if q in set(sd["protocol"])]:
+        sp = sd[sd["protocol"] == p]
+        splits = sorted({s for s in sp["split"] if s != "worst"},
+                        key=lambda s: (_SPLIT_ORDER.get(s, 9), s))
+        lines += [f"### {ds}: {p}", "", "| run | " + " | ".join(splits) + " | worst |",
+                  "|---|" + "---:|" * (len(splits) + 1)]
+        order = sp[sp["split"] == "worst"].sort_values(
+            ["k_shot", "model", "input"], key=lambda c: c.map(_model_rank)
+            if c.name == "model" else c)
+        for _, w in order.iterrows():
+            cells = []
+            for s in splits:
+                r = sp[(sp["model"] == w["model"]) & (sp["input"] == w["input"])
+                       & (sp["k_shot"] == w["k_shot"]) & (sp["split"] == s)]
+                cells.append(_pct(r["mean"].iloc[0], r["std"].iloc[0]) if len(r) else "")
+            cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
+            lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
+                         + " | ".join(cells) + " |")
+        if paper and p in OOD_PROTOCOLS:
+            lines += _paper_rows(p, splits)
         lines.append("")
-    if timings:
-        tt = results.groupby(["model", "input"])["train_s"].sum().sort_values(ascending=False)
-        lines += ["## Time", "",
-                  f"Whole comparison: {timings.get('wall_s', float('nan')) / 60:.1f} min wall "
-                  f"time on {timings.get('device', 'CPU')}, {timings.get('threads', '?')} on a "
-                  f"machine with {timings.get('cpus', '?')} CPU cores (data sets generated "
-                  f"{timings.get('generate_s', 0.0):.1f} s, inputs "
-                  f"{timings.get('input_s', float('nan')):.1f} s). Sum of fit times per run "
-                  "over data sets, splits and seeds (adaptation: the adaptation alone):", "",
-                  "| model | input | train [s] |", "|---|---|---:|"]
-        for (m, i), v in tt.items():
-            lines.append(f"| {m} | {i} | {v:.1f} |")
-        lines.append("")
-    path = Path(path)
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return lines
+
+
+def _latency_md(latency: pd.DataFrame) -> list[str]:
+    """The latency section of ``table.md``."""
+    lines = ["## Inference latency per window (CPU, batch 1, one thread)", "",
+             "| model | input | input build [ms] | model [ms] |", "|---|---|---:|---:|"]
+    for _, r in latency.iterrows():
+        lines.append(f"| {model_label(r['model'])} | {r['input']} | "
+                     f"{r['input_ms']:.2f} | {r['model_ms']:.2f} |")
+    lines.append("")
+    return lines
+
+
+def _time_md(results: pd.DataFrame, timings: Mapping) -> list[str]:
+    """The time section of ``table.md``."""
+    tt = results.groupby(["model", "input"])["train_s"].sum().sort_values(ascending=False)
+    lines = ["## Time", "",
+             f"Whole comparison: {timings.get('wall_s', float('nan')) / 60:.1f} min wall "
+             f"time on {timings.get('device', 'CPU')}, {timings.get('threads', '?')} on a "
+             f"machine with {timings.get('cpus', '?')} CPU cores (data sets generated "
+             f"{timings.get('generate_s', 0.0):.1f} s, inputs "
+             f"{timings.get('input_s', float('nan')):.1f} s). Sum of fit times per run "
+             "over data sets, splits and seeds (adaptation: the adaptation alone):", "",
+             "| model | input | train [s] |", "|---|---|---:|"]
+    for (m, i), v in tt.items():
+        lines.append(f"| {m} | {i} | {v:.1f} |")
+    lines.append("")
+    return lines
 
 
 def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
-                       targets: Mapping | None = None,
+                       targets: Mapping[str, TargetSpec] | None = None,
                        separability: Mapping | None = None) -> Path:
     """Figure: worst-split accuracy against k, one panel per (data set, leave-one-gear-out
     protocol).
@@ -510,8 +537,9 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
             ax.axhline(100 * r["mean"], ls=":", lw=1.4, color=c)
             handles.setdefault(row_label(r["model"], r["input"], 0),
                                Line2D([], [], color=c, ls=":", lw=1.4))
-        acc_t = ((targets or {}).get(ds) or {}).get("accuracy") or {}
-        if acc_t and p == ((targets or {}).get(ds) or {}).get("protocol", "ood_disturbed"):
+        tgt = (targets or {}).get(ds)
+        acc_t = tgt.accuracy if tgt is not None else {}
+        if acc_t and p == tgt.protocol:
             tk = sorted((int(k), 100 * float(v)) for k, v in acc_t.items())
             ax.plot([k for k, _ in tk], [v for _, v in tk], "k*", ms=10)
             handles.setdefault("target (issue)", Line2D([], [], color="k", marker="*", ls="",
@@ -553,7 +581,7 @@ def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], cfg, timings:
     Parameters
     ----------
     results : pandas.DataFrame
-        :data:`learn.transfer.RESULT_COLUMNS`, one row per (cell, split, seed).
+        :data:`learn.studies.transfer.RESULT_COLUMNS`, one row per (cell, split, seed).
     files : mapping of str to Path
         Report files, stored as artifacts of the parent.
     cfg : omegaconf.DictConfig
@@ -570,8 +598,8 @@ def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], cfg, timings:
     """
     from omegaconf import OmegaConf
 
-    from learn.provenance import dataset_ref
     from learn.tracking import log_run
+    from learn.tracking.provenance import dataset_ref
 
     lcfg = cfg.logger
     uri, experiment = lcfg.get("tracking_uri"), str(lcfg.get("experiment") or "transfer")

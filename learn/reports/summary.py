@@ -2,9 +2,9 @@
 
 :func:`write_summary` writes ``<report_root>/summary.md`` and ``summary.csv``: every cell
 of Tables VII-X as *paper | ours, protocol A | ours, protocol B*, the reproduction
-scorecard of each protocol (:func:`learn.paper_results.scorecard`), the paper's
-qualitative findings checked under each protocol (:mod:`learn.findings`), the choices the
-paper leaves open (:mod:`learn.open_choices`), and what changes when windows are not
+scorecard of each protocol (:func:`learn.reports.paper_results.scorecard`), the paper's
+qualitative findings checked under each protocol (:mod:`learn.reports.findings`), the choices the
+paper leaves open (:mod:`learn.reports.open_choices`), and what changes when windows are not
 phase-locked: per-class recall of RF on Selections 1 and 3 (``recall_rf.png``) with the
 measured spread of healthy features behind it.
 """
@@ -19,10 +19,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from learn.baselines import MODEL_LABELS
-from learn.findings import check_findings
-from learn.open_choices import open_choices
-from learn.paper_results import (
+from learn.inputs.features import FeatureSettings
+from learn.learners.baselines import model_label
+from learn.reports.findings import check_findings
+from learn.reports.open_choices import open_choices
+from learn.reports.paper_results import (
     GEAR_SPLITS,
     PAPER_TABLES,
     SPLIT_LABELS,
@@ -31,8 +32,10 @@ from learn.paper_results import (
     side_by_side,
     table_spec,
 )
+from learn.studies.tables import StudyOptions
 from swgsim.config import DatasetConfig
 from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
+from swgsim.faults import display_name
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +50,7 @@ def format_scorecard(cards: Mapping[str, pd.DataFrame]) -> list[str]:
     Parameters
     ----------
     cards : mapping of str to pandas.DataFrame
-        Protocol -> :func:`learn.paper_results.scorecard`.
+        Protocol -> :func:`learn.reports.paper_results.scorecard`.
 
     Returns
     -------
@@ -109,7 +112,7 @@ def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
         lines += [f"### Table {table}: {title}", "",
                   f"Protocol `{protocol}`. Cells: paper / " + " / ".join(
                       f"ours, {n} protocol" for n in names) + " [%]", "",
-                  "| | " + " | ".join(MODEL_LABELS[m] for m in models) + " |",
+                  "| | " + " | ".join(model_label(m) for m in models) + " |",
                   "|---|" + "---:|" * len(models)]
         splits = ("mean",) if table in ("VII", "VIII") else GEAR_SPLITS
         for sel in selections:
@@ -152,7 +155,7 @@ def spread_table(spread: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
     Parameters
     ----------
     spread : mapping of str to pandas.DataFrame
-        Protocol -> :func:`learn.features.feature_spread` rows with a ``selection``
+        Protocol -> :func:`learn.inputs.features.feature_spread` rows with a ``selection``
         column (Selections 1 and 3).
 
     Returns
@@ -161,7 +164,7 @@ def spread_table(spread: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
         One row per protocol and feature group (``eta_rel``, ``m_rel_s1``, ``var_rel_s0``
         of Selection 1; the Selection-3 DFT_rel features as a median): ``healthy_std``
         and, per fault class, the median over its windows of the distance from the
-        healthy median (``shift`` of :func:`~learn.features.feature_spread`).
+        healthy median (``shift`` of :func:`~learn.inputs.features.feature_spread`).
     """
     rows = []
     for name, sp in spread.items():
@@ -224,7 +227,7 @@ def recall_figure(rec: Mapping[str, pd.DataFrame], path: str | Path,
                     else np.nan for c in FAULT_CLASSES]
             ax.bar(x + (k - (len(names) - 1) / 2) * width, 100 * np.asarray(vals), width,
                    label=f"{n} protocol", color=f"C{k}")
-        ax.set_xticks(x, [c.replace("_", "\n") for c in FAULT_CLASSES], fontsize=7)
+        ax.set_xticks(x, [display_name(c).replace(" ", "\n") for c in FAULT_CLASSES], fontsize=7)
         what = "4-fold CV, clean" if table == "VII" else "leave one gear out, disturbed"
         ax.set_title(f"Table {table} ({what}), Selection {sel[-1]}", fontsize=9)
         ax.set_ylim(0, 105)
@@ -232,7 +235,7 @@ def recall_figure(rec: Mapping[str, pd.DataFrame], path: str | Path,
         ax.set_ylabel("recall [%]")
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside upper right", ncol=len(names), fontsize=8)
-    fig.suptitle(f"Per-class recall of {MODEL_LABELS.get(model, model)} (dotted: chance)",
+    fig.suptitle(f"Per-class recall of {model_label(model)} (dotted: chance)",
                  fontsize=10)
     path = Path(path)
     fig.savefig(path, dpi=110)
@@ -246,7 +249,7 @@ def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,
     if spread.empty:
         return lines
     head = "| protocol | feature | healthy std | " + " | ".join(
-        c.replace("_", " ") for c in FAULT_CLASSES[1:]) + " |"
+        display_name(c) for c in FAULT_CLASSES[1:]) + " |"
     lines += ["Spread of the clean healthy windows' features (std over every gear and "
               "operating point) and how far each fault class lies from the healthy median "
               "(median over its windows of the absolute difference), in the features' own "
@@ -303,7 +306,7 @@ def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,
             f"noise (their healthy spread: {dft_sd:.2f}). The healthy class now has a width, "
             "and only faults that move features by more than it remain visible: RF on "
             "Selection 1 recalls "
-            + ", ".join(f"{c.replace('_', ' ')} {rs[c][0]:.0f} → {rs[c][1]:.0f} %"
+            + ", ".join(f"{display_name(c)} {rs[c][0]:.0f} → {rs[c][1]:.0f} %"
                         for c in FAULT_CLASSES) + f" ({a} → {b} protocol, Table VII).",
             ""]
     return lines
@@ -314,9 +317,11 @@ def write_summary(
     confusion: Mapping[str, pd.DataFrame],
     report_root: str | Path,
     datasets: Mapping[str, DatasetConfig],
-    study: Mapping[str, Any],
+    options: StudyOptions,
+    seed: int,
     spread: Mapping[str, pd.DataFrame] | None = None,
     sensitivity: pd.DataFrame | None = None,
+    features: FeatureSettings | None = None,
 ) -> dict[str, Any]:
     """Write the side-by-side summary of the paper's study under several protocols.
 
@@ -324,18 +329,22 @@ def write_summary(
     ----------
     results, confusion : mapping of str to pandas.DataFrame
         Protocol name -> that study's ``results`` and ``confusion``
-        (:func:`learn.study.run_paper_study`), in display order (e.g. paper, bench).
+        (:func:`learn.tasks.paper.run_paper_study`), in display order (e.g. paper, bench).
     report_root : path-like
         Folder of ``summary.md``, ``summary.csv`` and ``recall_rf.png``.
     datasets : mapping of str to DatasetConfig
         Protocol name -> resolved data-set config.
-    study : mapping
-        Study settings (``scale``, ``seed``, feature settings) for the open choices.
+    options : StudyOptions
+        The studies' options (for the open choices).
+    seed : int
+        The studies' seed.
     spread : mapping of str to pandas.DataFrame, optional
-        Protocol -> :func:`learn.features.feature_spread` (``spread`` of the study).
+        Protocol -> :func:`learn.inputs.features.feature_spread` (``spread`` of the study).
     sensitivity : pandas.DataFrame, optional
         Scorecards under alternative open choices (``scripts/paper_sensitivity.py``),
         shown if given.
+    features : FeatureSettings, optional
+        DFT orders and floor of the studies; default the paper's.
 
     Returns
     -------
@@ -383,9 +392,9 @@ def write_summary(
               "rows (their own `conf/dataset/<name>.yaml`).", "",
               "| choice | value taken | reason or source |", "|---|---|---|"]
     lines += [f"| {c['choice']} | {c['value']} | {c['reason']} |"
-              for c in open_choices(datasets[first], study)]
+              for c in open_choices(datasets[first], options, seed, features)]
     for n in names[1:]:
-        for c in open_choices(datasets[n], study)[:2]:
+        for c in open_choices(datasets[n], options, seed, features)[:2]:
             lines.append(f"| {c['choice']}, {n} | {c['value']} | {c['reason']} |")
     from swgsim.data import atomic_write_bytes
 

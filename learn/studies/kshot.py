@@ -6,7 +6,7 @@ The k labelled windows of a class are the first k of a seeded permutation of its
 windows (so the k = 1 windows are among the k = 5 ones). Every model, k = 0 included, is
 evaluated on the same remaining windows of the gear (other variants), so accuracies are
 comparable across k; the pool's windows (labels dropped) are also the unlabelled target
-data of the unsupervised adaptations (:mod:`learn.adapt`).
+data of the unsupervised adaptations (:mod:`learn.learners.adapt`).
 """
 
 from __future__ import annotations

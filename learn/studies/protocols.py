@@ -15,11 +15,12 @@ never straddle training and test (the paper does not say how it split; a split b
 would put near-copies of a test window into training). Folds are stratified by class
 (:class:`~sklearn.model_selection.StratifiedGroupKFold`). In leave-one-gear-out the
 held-out gear never appears in training; its features are still normalised by its own
-reference windows (see :mod:`learn.features`).
+reference windows (see :mod:`learn.inputs.features`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Sequence
@@ -31,20 +32,13 @@ import pandas as pd
 log = logging.getLogger(__name__)
 
 SCHEMES = ("group_kfold", "kfold", "leave_one_gear")
-#: The paper's protocols: keyword arguments of :func:`make_splits`.
-PROTOCOLS: dict[str, dict] = {
-    "cv_clean": {"scheme": "group_kfold", "disturbed": False, "n_splits": 4},
-    "cv_disturbed": {"scheme": "group_kfold", "disturbed": True, "n_splits": 4},
-    "ood_clean": {"scheme": "leave_one_gear", "disturbed": False, "test_gears": (3, 1, 2)},
-    "ood_disturbed": {"scheme": "leave_one_gear", "disturbed": True, "test_gears": (3, 1, 2)},
-}
 GROUP_COLUMNS = ("gear", "fault", "variant")
 
 
 @dataclass
 class ProtocolConfig:
-    """A protocol as a config (``conf`` group ``protocol``): a name and the keyword
-    arguments of :func:`make_splits`. The paper's four are :data:`PROTOCOLS`.
+    """A protocol: a name and the arguments of :func:`make_splits` (``conf`` group
+    ``protocol``). The paper's four are registered in :data:`PROTOCOLS`.
 
     Attributes
     ----------
@@ -69,11 +63,60 @@ class ProtocolConfig:
 
     @classmethod
     def paper(cls, name: str, **overrides) -> ProtocolConfig:
-        """One of the paper's protocols (:data:`PROTOCOLS`) as a config."""
+        """A copy of one of the paper's protocols (:data:`PROTOCOLS`), fields replaced by
+        ``overrides``.
+
+        Raises
+        ------
+        ValueError
+            For a name not in :data:`PROTOCOLS`.
+        """
         if name not in PROTOCOLS:
             raise ValueError(f"protocol must be one of {sorted(PROTOCOLS)}, got {name!r}")
-        kw = {k: list(v) if isinstance(v, tuple) else v for k, v in PROTOCOLS[name].items()}
-        return cls(name=name, **{**kw, **overrides})
+        p = PROTOCOLS[name]
+        return dataclasses.replace(p, test_gears=None if p.test_gears is None
+                                   else list(p.test_gears), **overrides)
+
+    @property
+    def out_of_distribution(self) -> bool:
+        """Whether the protocol holds a gear out of training (leave one gear out)."""
+        return self.scheme == "leave_one_gear"
+
+    @property
+    def n_planned(self) -> int:
+        """Number of splits it will give (the held-out gears, or the folds)."""
+        return len(self.test_gears) if self.test_gears is not None else self.n_splits
+
+    def spec(self) -> dict:
+        """Scheme, data and splits (no name, no seed), e.g. for a run's parameters:
+        ``{scheme, disturbed, n_splits}`` or ``{scheme, disturbed, test_gears}``."""
+        out: dict = {"scheme": self.scheme, "disturbed": self.disturbed}
+        if self.test_gears is None:
+            out["n_splits"] = self.n_splits
+        else:
+            out["test_gears"] = list(self.test_gears)
+        return out
+
+    def splits(self, meta: pd.DataFrame) -> list[Split]:
+        """:func:`make_splits` of this protocol on per-sample metadata."""
+        return make_splits(meta, self.scheme, self.disturbed, n_splits=self.n_splits,
+                           random_state=self.random_state, test_gears=self.test_gears)
+
+
+#: The paper's protocols (Sec. IV), by name.
+PROTOCOLS: dict[str, ProtocolConfig] = {
+    p.name: p for p in (
+        ProtocolConfig("cv_clean", "group_kfold", disturbed=False, n_splits=4),
+        ProtocolConfig("cv_disturbed", "group_kfold", disturbed=True, n_splits=4),
+        ProtocolConfig("ood_clean", "leave_one_gear", disturbed=False, test_gears=[3, 1, 2]),
+        ProtocolConfig("ood_disturbed", "leave_one_gear", disturbed=True,
+                       test_gears=[3, 1, 2]),
+    )
+}
+#: Names of the paper's leave-one-gear-out protocols, and of all four.
+OOD_PROTOCOLS: tuple[str, ...] = tuple(n for n, p in PROTOCOLS.items()
+                                       if p.out_of_distribution)
+ALL_PROTOCOLS: tuple[str, ...] = tuple(PROTOCOLS)
 
 
 def class_labels(y: Sequence[str]) -> list[str]:
@@ -156,7 +199,7 @@ def make_splits(
     ----------
     meta : pandas.DataFrame
         Per-sample metadata with columns ``gear``, ``fault``, ``variant``, ``disturbed``
-        (e.g. :attr:`learn.features.Features.meta`); no reference windows.
+        (e.g. :attr:`learn.inputs.features.Features.meta`); no reference windows.
     scheme : {"group_kfold", "kfold", "leave_one_gear"}
         Stratified group k-fold with groups ``(gear, fault, variant)``, stratified k-fold
         over windows (a variant's operating points may straddle training and test), or
@@ -253,7 +296,7 @@ def protocol_splits(meta: pd.DataFrame, protocol: str, random_state: int | None 
     """
     if protocol not in PROTOCOLS:
         raise ValueError(f"protocol must be one of {sorted(PROTOCOLS)}, got {protocol!r}")
-    return make_splits(meta, random_state=random_state, **PROTOCOLS[protocol])
+    return ProtocolConfig.paper(protocol, random_state=random_state).splits(meta)
 
 
 def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Sequence[str],

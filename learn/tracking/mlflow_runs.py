@@ -49,11 +49,12 @@ from typing import Any
 
 import numpy as np
 
-from learn.provenance import (
+from learn.tracking.provenance import (
     DatasetRef,
     dataset_ref,
     git_tags,
     model_requirements,
+    repo_root,
     sklearn_only,
 )
 
@@ -61,19 +62,6 @@ log = logging.getLogger(__name__)
 
 #: Tag that marks the parent run of a group (:func:`log_run`'s ``group``).
 GROUP_PARENT_TAG = "group_parent"
-
-
-def repo_root() -> Path:
-    """Root of the source checkout.
-
-    Returns
-    -------
-    Path
-        The parent of the ``learn`` package if it holds ``pyproject.toml`` (a source
-        checkout or editable install), otherwise the current working directory.
-    """
-    here = Path(__file__).resolve().parents[1]
-    return here if (here / "pyproject.toml").is_file() else Path.cwd()
 
 
 def default_tracking_uri() -> str:
@@ -374,21 +362,21 @@ class TrackedRun:
         ``mlflow.sklearn.load_model(uri)``, ``uri`` being
         ``client.get_logged_model(model_id).artifact_location`` (or ``models:/<model_id>``
         with the tracking URI set). Stored with cloudpickle (tag ``serialization_format``),
-        which also holds the torch nets (:mod:`learn.nets`) and MiniRocket
-        (:mod:`learn.rocket`) inside their pipelines: for the study's random forest
+        which also holds the torch nets (:mod:`learn.learners.nets`) and MiniRocket
+        (:mod:`learn.learners.rocket`) inside their pipelines: for the study's random forest
         (4860 training windows) 0.6 MiB written in 3 ms, where skops (MLflow's default)
         writes 2.8 MiB in about 0.9 s (dump, MLflow's check load, and the scan for
         scikit-learn types it does not trust by default). MLflow 3.17 gates loading either
         format behind ``MLFLOW_ALLOW_PICKLE_DESERIALIZATION`` (default on), so skops
         would add no safety there: load only models you logged. The pip requirements
-        are given (:func:`learn.provenance.model_requirements`), not inferred (MLflow
+        are given (:func:`learn.tracking.provenance.model_requirements`), not inferred (MLflow
         would load the model in a subprocess for that).
 
         Parameters
         ----------
         model : fitted estimator
             Anything with ``predict`` that pickles (a ``Pipeline`` of
-            :func:`learn.baselines.make_pipeline`).
+            :func:`learn.learners.baselines.make_pipeline`).
         name : str, default "model"
         X_sample : ndarray, shape (n, n_features), optional
             A few input rows: the model's signature (input and output types) is inferred
@@ -632,7 +620,7 @@ def log_job(
 
     Parameters
     ----------
-    result : learn.protocols.ProtocolResult
+    result : learn.studies.protocols.ProtocolResult
         Per-split accuracies and the summed confusion matrix.
     experiment : str
         MLflow experiment name (created if absent).

@@ -2,7 +2,7 @@
 
 For data sets that differ only in the output inertia J_out (the bench's flange and
 coupling up to a robot link), each fault window's separation from the healthy windows of
-its gear and operating point (:func:`learn.separability.separation_records`) is compared
+its gear and operating point (:func:`learn.studies.separability.separation_records`) is compared
 with what healthy windows reach by chance: the share of a fault's windows beyond the
 95th percentile of the healthy windows' leave-one-out separations, per (J_out, speed,
 load). A fault at 5 % is indistinguishable from a healthy gear in these windows; at
@@ -58,7 +58,7 @@ def observability_table(records: pd.DataFrame, j_out: float,
     Parameters
     ----------
     records : pandas.DataFrame
-        :func:`learn.separability.separation_records` of one data set.
+        :func:`learn.studies.separability.separation_records` of one data set.
     j_out : float
         Its output inertia [kg m²] (written to the table).
     percentile : float
@@ -126,10 +126,6 @@ def torsional_modes(j_values: Sequence[float], loads: Sequence[float],
     return pd.DataFrame(rows)
 
 
-_FAULTS = ("eccentric_wg", "reduced_damping", "root_tooth_crack", "tip_tooth_crack",
-           "reduced_stiffness")
-
-
 def plot_observability(table: pd.DataFrame, path: str | Path,
                        modes: pd.DataFrame | None = None) -> Path:
     """Figure: share of fault windows beyond the healthy p95 against J_out.
@@ -142,7 +138,10 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
     from matplotlib import colormaps
     from matplotlib.figure import Figure
 
-    faults = [f for f in _FAULTS if f in set(table["fault"])]
+    from swgsim.faults import display_name, fault_classes
+
+    present = set(table["fault"])  # one column per faulty class, in the registry's order
+    faults = [f for f in fault_classes() if f != "healthy" and f in present]
     loads = sorted(set(table["t_out_nm"]))
     speeds = sorted(set(table["n_in_rpm"]))
     cmap = colormaps["viridis"]
@@ -167,7 +166,7 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
             ax.set_ylim(-3, 103)
             ax.grid(alpha=0.3)
             if r == 0:
-                ax.set_title(f.replace("_", " "))
+                ax.set_title(display_name(f))
             if c == 0:
                 ax.set_ylabel(f"{t:g} N m\nbeyond healthy p95 [%]")
             if r == len(loads) - 1:

@@ -1,0 +1,353 @@
+"""The paper's fault-classification study (Sec. IV, Tables VII-X), computed.
+
+:func:`paper_study` runs every job (table, protocol, feature selection, model) of the
+tables chosen by :class:`learn.studies.tables.StudyOptions` on one data set: the
+features of each selection once, the splits of each (protocol, selection) once, every
+(job, split) fit in one stream of joblib processes, one MLflow run per job. It writes no
+report; :func:`learn.tasks.paper.run_paper_study` adds it. The steps, in order:
+:func:`plan_jobs`, :func:`compute_features`, :func:`plan_splits`, :func:`fit_tasks`,
+:func:`collect_job` per job, :func:`feature_spreads`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from collections import Counter
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from learn.inputs.features import Features, FeatureSettings, extract_features, selection_name
+from learn.learners.baselines import make_model
+from learn.studies.protocols import (
+    PROTOCOLS,
+    ProtocolConfig,
+    ProtocolResult,
+    Split,
+    class_labels,
+)
+from learn.studies.tables import StudyOptions
+
+log = logging.getLogger(__name__)
+
+CONFUSION_COLUMNS = ("table", "protocol", "selection", "model", "true", "predicted", "count")
+
+
+@dataclass(frozen=True)
+class StudyJob:
+    """One job of the study: a model under a table's protocol on one feature selection."""
+
+    table: str
+    protocol: str
+    selection: int
+    model: str
+
+    @property
+    def selection_name(self) -> str:
+        """``selection1`` .. (:data:`learn.inputs.features.SELECTIONS`)."""
+        return selection_name(self.selection)
+
+
+@dataclass(frozen=True)
+class StudyTracking:
+    """Where and how the study's jobs are logged to MLflow.
+
+    Attributes
+    ----------
+    tracking_uri : str or None
+        None: :func:`learn.tracking.default_tracking_uri`.
+    experiment_prefix : str
+        Experiment of a job: prefix + protocol.
+    log_models : bool
+        Also log each job's model fitted on its last split (the protocol's own fit,
+        returned by the worker: no refit).
+    group : str
+        Parent run that holds the jobs of one call (one per experiment).
+    """
+
+    tracking_uri: str | None = None
+    experiment_prefix: str = "paper_study/"
+    log_models: bool = True
+    group: str = ""
+
+
+@dataclass
+class PaperStudyResult:
+    """What :func:`paper_study` computed.
+
+    Attributes
+    ----------
+    results : pandas.DataFrame
+        One row per job and split: table, protocol, selection, model, split, split_label,
+        train_accuracy, test_accuracy, fit_time_s, n_train, n_test, run_id.
+    confusion : pandas.DataFrame
+        :data:`CONFUSION_COLUMNS`, summed over splits.
+    spread : pandas.DataFrame
+        :func:`learn.inputs.features.feature_spread` of Selections 1 and 3 where computed.
+    warnings : list of dict
+        ``category``, ``message``, ``count``: what the fits raised.
+    timings_s : dict of str to float
+        Features and each table [s].
+    n_jobs_run : int
+    ds : xarray.Dataset or None
+        The data set (for the figures of the report).
+    """
+
+    results: pd.DataFrame
+    confusion: pd.DataFrame
+    spread: pd.DataFrame
+    warnings: list[dict]
+    timings_s: dict[str, float]
+    n_jobs_run: int
+    ds: Any = field(default=None, repr=False)
+
+
+def plan_jobs(options: StudyOptions) -> list[StudyJob]:
+    """Every job of the chosen tables, in the order of the tables, selections and models.
+
+    Raises
+    ------
+    ValueError
+        An unknown table or model (:meth:`StudyOptions.check`).
+    """
+    options.check()
+    return [StudyJob(t.name, t.protocol, s, m) for t in options.selected_tables()
+            for s in t.selections for m in options.table_models(t)]
+
+
+def compute_features(ds, selections: list[int], settings: FeatureSettings,
+                     bar=None) -> dict[int, Features]:
+    """Features of each selection, computed once for every table that uses it."""
+    out = {}
+    for s in selections:
+        out[s] = extract_features(ds, s, **settings.kwargs())
+        if bar is not None:
+            bar.update()
+    return out
+
+
+def plan_splits(jobs: list[StudyJob], feats: Mapping[int, Features],
+                protocols: Mapping[str, ProtocolConfig],
+                random_state: int) -> dict[tuple[str, int], list[Split]]:
+    """Splits of each (protocol, selection), the CV shuffled by ``random_state``."""
+    out: dict[tuple[str, int], list[Split]] = {}
+    for j in jobs:
+        if (j.protocol, j.selection) not in out:
+            p = dataclasses.replace(protocols[j.protocol], random_state=random_state)
+            out[(j.protocol, j.selection)] = p.splits(feats[j.selection].meta)
+    return out
+
+
+def fit_tasks(jobs: list[StudyJob], feats: Mapping[int, Features],
+              splits_of: Mapping[tuple[str, int], list[Split]], scale: bool,
+              random_state: int, return_models: bool) -> list:
+    """One delayed :func:`learn.studies.protocols.fit_split_quiet` per (job, split), in job
+    order; the last split of a job returns its model if ``return_models``."""
+    from joblib import delayed
+
+    from learn.studies.protocols import fit_split_quiet
+
+    tasks = []
+    for j in jobs:
+        f = feats[j.selection]
+        y = f.meta["fault"].to_numpy()
+        est = make_model(j.model, random_state=random_state, scale=scale)
+        sps = splits_of[(j.protocol, j.selection)]
+        for sp in sps:
+            tasks.append(delayed(fit_split_quiet)(est, f.X, y, sp, class_labels(y),
+                                                  return_model=return_models and sp is sps[-1]))
+    return tasks
+
+
+def collect_job(outs: Iterator, splits: list[Split], labels: list[str]
+                ) -> tuple[ProtocolResult, Counter, Any]:
+    """The next ``len(splits)`` fit outputs as one job's result, its warnings and the
+    last split's model (None unless returned)."""
+    part = [next(outs) for _ in splits]
+    caught: Counter = Counter()
+    for o in part:
+        caught.update(o[4])
+    result = ProtocolResult(
+        splits=splits,
+        train_accuracy=np.array([o[0] for o in part]),
+        test_accuracy=np.array([o[1] for o in part]),
+        confusion=np.sum([o[2] for o in part], axis=0),
+        labels=labels,
+        fit_time_s=np.array([o[3] for o in part]),
+    )
+    return result, caught, part[-1][5] if len(part[-1]) > 5 else None
+
+
+def job_rows(job: StudyJob, result: ProtocolResult, run_id: str | None
+             ) -> tuple[list[dict], list[tuple]]:
+    """Rows of ``results`` (one per split) and of ``confusion`` of one job."""
+    rows = [{"table": job.table, "protocol": job.protocol, "selection": job.selection_name,
+             "model": job.model, "split": sp.name, "split_label": sp.label,
+             "train_accuracy": result.train_accuracy[i],
+             "test_accuracy": result.test_accuracy[i], "fit_time_s": result.fit_time_s[i],
+             "n_train": len(sp.train), "n_test": len(sp.test), "run_id": run_id}
+            for i, sp in enumerate(result.splits)]
+    conf = [(job.table, job.protocol, job.selection_name, job.model, true, pred,
+             int(result.confusion[a, b]))
+            for a, true in enumerate(result.labels) for b, pred in enumerate(result.labels)]
+    return rows, conf
+
+
+def feature_spreads(feats: Mapping[int, Features]) -> pd.DataFrame:
+    """:func:`learn.inputs.features.feature_spread` of Selections 1 and 3 where computed."""
+    from learn.inputs.features import feature_spread
+
+    parts = [feature_spread(feats[s]).assign(selection=selection_name(s))
+             for s in (1, 3) if s in feats]
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+
+
+def paper_study(
+    dataset_path: str | Path,
+    options: StudyOptions | None = None,
+    *,
+    tracking: StudyTracking | None = None,
+    n_jobs: int = 1,
+    progress: bool = True,
+    random_state: int = 0,
+    features: FeatureSettings | None = None,
+    protocols: Mapping[str, ProtocolConfig] | None = None,
+    name: str = "",
+) -> PaperStudyResult:
+    """Run the paper's study (Tables VII-X) on one data set; see the module docstring.
+
+    Parameters
+    ----------
+    dataset_path : path-like
+        Schema-v1 data set with clean and disturbed windows and reference windows.
+    options : StudyOptions, optional
+        Tables, models and scaling; default the paper's study.
+    tracking : StudyTracking, optional
+        One MLflow run per job (with the git commit, the data set and its params); None:
+        no tracking.
+    n_jobs : int, default 1
+        Fits run in parallel (joblib processes), over every (job, split) of every table.
+    progress : bool, default True
+        One tqdm progress bar for the stage (loading, features, fits).
+    random_state : int, default 0
+        Seed of the CV folds and of MLP, SVM and RF.
+    features : FeatureSettings, optional
+        DFT orders and floor of the features (the selections are the tables').
+    protocols : mapping of str to ProtocolConfig, optional
+        Protocols that replace the paper's of the same name (:data:`PROTOCOLS`), e.g.
+        ``{"cv_clean": ProtocolConfig.paper("cv_clean", scheme="kfold")}`` (sensitivity
+        studies); their ``random_state`` is replaced by ``random_state``.
+    name : str, optional
+        Name of the data set (protocol) for the progress bar.
+
+    Returns
+    -------
+    PaperStudyResult
+
+    Raises
+    ------
+    ValueError
+        For an unknown table or model.
+    """
+    from joblib import Parallel
+    from tqdm.auto import tqdm
+
+    from swgsim.data import load
+
+    options = options or StudyOptions()
+    protocols = {**PROTOCOLS, **dict(protocols or {})}
+    jobs = plan_jobs(options)
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    selections = sorted({s for t in options.selected_tables() for s in t.selections})
+    n_fits = sum(protocols[j.protocol].n_planned for j in jobs)
+    # one bar for the stage: loading, each selection's features, then every fit
+    bar = tqdm(total=1 + len(selections) + n_fits, desc=f"study {name}".strip(),
+               unit="step", disable=not progress)
+    ds = load(dataset_path)
+    bar.update()
+    feats = compute_features(ds, selections, features or FeatureSettings(), bar)
+    timings["features"] = time.perf_counter() - t0
+    log.info("features of selections %s in %.1f s", selections, timings["features"])
+    splits_of = plan_splits(jobs, feats, protocols, random_state)
+    log_models = tracking is not None and tracking.log_models
+    tasks = fit_tasks(jobs, feats, splits_of, options.scale, random_state, log_models)
+    bar.total = 1 + len(selections) + len(tasks)  # the protocols may change split counts
+    bar.refresh()
+    rows, confusion, caught = [], [], Counter()
+    last_of_table = {j.table: j for j in jobs}
+    t_table = time.perf_counter()
+    outs = Parallel(n_jobs=n_jobs, return_as="generator")(tasks)
+    for j in jobs:  # results arrive in order; log each job while fits go on
+        splits = splits_of[(j.protocol, j.selection)]
+        f = feats[j.selection]
+        result, c, model = collect_job(outs, splits, class_labels(f.meta["fault"].to_numpy()))
+        bar.update(len(splits))
+        caught.update(c)
+        run_id = None if tracking is None else log_study_job(
+            result, j, str(dataset_path), random_state, options.scale, protocols[j.protocol],
+            tracking, model=model, X_sample=f.X[splits[-1].test[:5]])
+        r, c = job_rows(j, result, run_id)
+        rows += r
+        confusion += c
+        if j is last_of_table[j.table]:
+            timings[j.table] = time.perf_counter() - t_table
+            t_table = time.perf_counter()
+            log.info("Table %s done in %.1f s", j.table, timings[j.table])
+    bar.close()
+    return PaperStudyResult(
+        results=pd.DataFrame(rows),
+        confusion=pd.DataFrame(confusion, columns=list(CONFUSION_COLUMNS)),
+        spread=feature_spreads(feats),
+        warnings=[{"category": c, "message": m, "count": n} for (c, m), n in caught.items()],
+        timings_s=timings, n_jobs_run=len(jobs), ds=ds)
+
+
+def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
+                  random_state: int, scale: bool, protocol: ProtocolConfig,
+                  tracking: StudyTracking, model=None, X_sample=None) -> str:
+    """Log one job of the study (:func:`learn.tracking.log_job`); return its run id.
+
+    Parameters
+    ----------
+    result : ProtocolResult
+    job : StudyJob
+    dataset_path : str
+    random_state : int
+    scale : bool
+    protocol : ProtocolConfig
+        The protocol that ran (its :meth:`ProtocolConfig.spec` is logged).
+    tracking : StudyTracking
+    model : estimator, optional
+        Fitted on the last split, to be logged.
+    X_sample : ndarray, optional
+        A few rows of the features (the model's input example).
+
+    Returns
+    -------
+    str
+        MLflow run id.
+    """
+    from learn.tracking import log_job
+
+    est = make_model(job.model, random_state=random_state, scale=scale)
+    params: dict[str, Any] = {
+        "table": job.table, "protocol": job.protocol, "selection": job.selection_name,
+        "model": job.model, "dataset": dataset_path, "random_state": random_state,
+        "scale": scale, "protocol_spec": protocol.spec(),
+        "estimator": {k: v if isinstance(v, (bool, int, float, str, type(None))) else str(v)
+                      for k, v in est.get_params(deep=True).items() if "__" in k},
+    }
+    return log_job(result, experiment=f"{tracking.experiment_prefix}{job.protocol}",
+                   run_name=f"{job.selection_name}-{job.model}", params=params, config=params,
+                   tracking_uri=tracking.tracking_uri,
+                   tags={"task": "paper_study", "table": job.table}, dataset=dataset_path,
+                   group=tracking.group or None, model=model,
+                   model_tags={"split": result.splits[-1].label}, X_sample=X_sample)
+

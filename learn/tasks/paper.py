@@ -1,0 +1,111 @@
+"""The paper's study with its report: :func:`run_paper_study` (the public entry point, also
+behind ``swgsim-paper``) and :func:`run_paper_study_task` (``swgsim-train
+experiment=paper``)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from learn.inputs.features import FeatureSettings
+from learn.studies.paper_study import StudyTracking, paper_study
+from learn.studies.protocols import ProtocolConfig
+from learn.studies.tables import StudyOptions
+from learn.tasks.config import typed
+
+
+def run_paper_study(
+    dataset_path: str | Path,
+    report_dir: str | Path,
+    options: StudyOptions | None = None,
+    *,
+    tracking_uri: str | None = None,
+    track: bool = True,
+    log_models: bool = StudyTracking.log_models,
+    experiment_prefix: str = StudyTracking.experiment_prefix,
+    n_jobs: int = 1,
+    progress: bool = True,
+    random_state: int = 0,
+    features: FeatureSettings | None = None,
+    protocols: dict[str, ProtocolConfig] | None = None,
+    name: str = "",
+) -> dict:
+    """Run the paper's study, Tables VII-X (:func:`learn.studies.paper_study.paper_study`),
+    and write its report (:func:`learn.reports.report.write_report`).
+
+    Parameters
+    ----------
+    dataset_path : path-like
+        Schema-v1 data set with clean and disturbed windows and reference windows.
+    report_dir : path-like
+        Folder of the report, e.g. ``reports/paper``.
+    options : StudyOptions, optional
+        Tables, models, scaling and figures; default the paper's study.
+    tracking_uri : str, optional
+        MLflow tracking URI; default :func:`learn.tracking.default_tracking_uri`.
+    track : bool, default True
+        Log one MLflow run per job, in experiment ``experiment_prefix + protocol``; the
+        jobs of one call are children of one parent run per experiment (group
+        ``"study <name> <start time>"``).
+    log_models : bool, default True
+        With ``track``, also log each job's model fitted on its last split (no refit).
+    experiment_prefix : str, default "paper_study/"
+    n_jobs, progress, random_state, features, protocols, name
+        See :func:`learn.studies.paper_study.paper_study`.
+
+    Returns
+    -------
+    dict
+        ``results``, ``confusion``, ``spread``, ``warnings``, ``timings_s``, ``n_jobs_run``
+        (:class:`learn.studies.paper_study.PaperStudyResult`) and ``files`` (report files
+        by kind).
+
+    Raises
+    ------
+    ValueError
+        For an unknown table or model.
+    """
+    from learn.reports.report import write_report
+
+    options = options or StudyOptions()
+    tracking = None
+    if track:
+        group = f"study {name or Path(dataset_path).name} {time.strftime('%Y-%m-%d %H:%M:%S')}"
+        tracking = StudyTracking(tracking_uri, experiment_prefix, log_models, group)
+    study = paper_study(dataset_path, options, tracking=tracking, n_jobs=n_jobs,
+                        progress=progress, random_state=random_state, features=features,
+                        protocols=protocols, name=name)
+    files = write_report(study.results, report_dir,
+                         ds=study.ds if options.figures else None, timings_s=study.timings_s,
+                         dataset_path=str(dataset_path), confusion=study.confusion)
+    return {"results": study.results, "confusion": study.confusion, "spread": study.spread,
+            "warnings": study.warnings, "timings_s": study.timings_s, "files": files,
+            "n_jobs_run": study.n_jobs_run}
+
+
+def run_paper_study_task(cfg) -> dict:
+    """Task ``paper_study``: :func:`run_paper_study` from a composed ``swgsim-train`` config.
+
+    Uses ``cfg.data.path``, ``cfg.paths.report_dir``/paper, ``cfg.logger`` (None: no
+    tracking; its ``tracking_uri`` and ``log_models``), ``cfg.n_jobs``, ``cfg.seed``,
+    ``cfg.features`` (orders and floor; the selections are those of the tables) and
+    ``cfg.study`` (:class:`learn.studies.tables.StudyOptions`).
+
+    Returns
+    -------
+    dict
+        ``timings_s``, ``files`` (report paths as str), ``n_jobs_run`` and
+        ``mean_test_accuracy`` keyed by ``"table/selection/model"``.
+    """
+    logger = cfg.logger
+    out = run_paper_study(
+        cfg.data.path, Path(cfg.paths.report_dir) / "paper", typed(cfg.study, StudyOptions),
+        tracking_uri=None if logger is None else logger.tracking_uri,
+        track=logger is not None, log_models=logger is not None and bool(logger.log_models),
+        n_jobs=int(cfg.n_jobs), random_state=int(cfg.seed),
+        features=typed(cfg.features, FeatureSettings))
+    res = out.pop("results")
+    means = res.groupby(["table", "selection", "model"])["test_accuracy"].mean()
+    out["mean_test_accuracy"] = {"/".join(k): float(v) for k, v in means.items()}
+    out["files"] = {k: str(v) for k, v in out["files"].items()}
+    return out

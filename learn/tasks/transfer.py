@@ -1,0 +1,211 @@
+"""Task ``transfer`` (``swgsim-train -m experiment=transfer``): the transfer comparison
+(:func:`learn.studies.transfer.run_comparison`) on every data set of ``transfer.run_on``
+(generated when missing), the separability of its classes, and its report
+(:mod:`learn.reports.transfer_report`) and MLflow runs. Files in ``report_dir``: see
+:mod:`learn.studies.transfer`."""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from learn.inputs.features import FeatureSettings
+from learn.studies.transfer import TransferConfig, check_config, run_comparison
+from learn.tasks.config import typed
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class _Collected:
+    """What the comparison gathered over the data sets."""
+
+    results: list = field(default_factory=list)
+    confusion: list = field(default_factory=list)
+    latency: pd.DataFrame | None = None
+    separability: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)
+    input_s: float = 0.0
+
+
+def _data_sets(cfg, tc: TransferConfig) -> tuple[list[tuple[str, str]], float]:
+    """(name, path) of every data set to run on, generating the missing ones."""
+    from hydra.utils import to_absolute_path
+
+    from swgsim.generate import generate
+    from swgsim.plan import plan
+
+    if not tc.run_on:
+        return [(str(cfg.data.name or Path(cfg.data.path).name), str(cfg.data.path))], 0.0
+    plans = {}
+    for name in tc.run_on:  # every data-set config is checked once, before any work
+        try:
+            plans[name] = plan(tc.datasets[name])
+        except ValueError as e:
+            raise ValueError(f"transfer.datasets.{name}: {e}") from None
+    try:
+        root = to_absolute_path(str(tc.data_root))
+    except ValueError:  # outside a Hydra run
+        root = str(tc.data_root)
+    out, t0 = [], time.perf_counter()
+    for name in tc.run_on:
+        path = f"{root}/{name}"
+        g = generate(plans[name], path, n_jobs=int(tc.n_jobs), overwrite=True,
+                     progress=tc.progress)
+        if g["computed"]:
+            log.info("data set %s: %d shard(s) simulated in %s", name, len(g["computed"]),
+                     path)
+        out.append((name, path))
+    return out, time.perf_counter() - t0
+
+
+def print_summary(targets: pd.DataFrame, report_dir: Path, wall_s: float, device: str) -> None:
+    """Print the targets (reached, observable) and where the report went."""
+    if len(targets):
+        print("\ntargets (worst split or recall, k labelled target windows per class):")
+        for r in targets.itertuples():
+            obs = "" if np.isnan(r.observable) else f", observable {100 * r.observable:.1f} %"
+            print(f"  {r.dataset:<12s} {r.condition:<36s} target {100 * r.target:5.1f} %  "
+                  f"reached {100 * r.reached:6.2f} % ({r.who}: {r.run}){obs}")
+    print(f"report: {report_dir}/table.md (+ results.csv, confusion.csv, figures); "
+          f"{wall_s / 60:.1f} min on {device}")
+
+
+def _device() -> str:
+    import torch
+
+    if torch.cuda.is_available():
+        return f"GPU {torch.cuda.get_device_name(0)}"
+    return "CPU"
+
+
+def _separability(ds, name: str, tc: TransferConfig, report_dir: Path, got: _Collected) -> None:
+    """Class separability of the clean and the disturbed windows of one data set."""
+    from learn.studies.separability import plot_separability, separations, summary_table
+
+    got.separability[name] = {}
+    for kind in ("clean", "disturbed"):
+        if not (ds["disturbed"].values.astype(bool) == (kind == "disturbed")).any():
+            continue
+        sep = separations(ds, disturbed=kind == "disturbed", ratio=float(tc.residual.ratio))
+        if "healthy" not in sep:
+            continue
+        got.separability[name][kind] = summary_table(sep)
+        got.files[f"separability_{name}_{kind}"] = plot_separability(
+            sep, report_dir / f"separability_{name}_{kind}.png",
+            f"Class separability, data set {name} ({kind} windows)")
+
+
+def _compare(cfg, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected:
+    """The comparison and the separability on every data set, one loaded at a time."""
+    from swgsim.data import load
+
+    feature_kwargs = typed(cfg.features, FeatureSettings).kwargs()
+    got = _Collected()
+    for name, path in data_sets:
+        ds = load(path)
+        log.info("transfer: %s, %d windows from %s, %d runs", name, ds.sizes["sample"], path,
+                 len(tc.runs))
+        out = run_comparison(ds, tc, dataset=name, feature_kwargs=feature_kwargs,
+                             split_seed=int(cfg.seed),
+                             latency=tc.latency and got.latency is None)
+        got.results.append(out["results"])
+        got.confusion.append(out["confusion"])
+        got.input_s += out["input_s"]
+        if len(out["latency"]):
+            got.latency = out["latency"]
+        _separability(ds, name, tc, report_dir, got)
+        del ds
+    return got
+
+
+def _timings(tc: TransferConfig, wall: float, input_s: float, generate_s: float) -> dict:
+    import torch
+
+    threads = (f"{tc.n_jobs} process(es) x {tc.threads_per_job or 'default'} torch thread(s)"
+               if tc.n_jobs > 1 else f"1 process x {torch.get_num_threads()} torch thread(s)")
+    return {"wall_s": wall, "input_s": input_s, "generate_s": generate_s, "threads": threads,
+            "cpus": os.cpu_count(), "device": _device()}
+
+
+def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, timings) -> dict:
+    """results.csv, confusion.csv, latency.csv, table.md and accuracy_vs_k.png."""
+    from learn.reports.transfer_report import plot_accuracy_vs_k, write_table
+
+    files = dict(got.files)
+    files["results"] = report_dir / "results.csv"
+    res.to_csv(files["results"], index=False)
+    files["confusion"] = report_dir / "confusion.csv"
+    conf.to_csv(files["confusion"], index=False)
+    if got.latency is not None and len(got.latency):
+        files["latency"] = report_dir / "latency.csv"
+        got.latency.to_csv(files["latency"], index=False)
+    targets = {d: t for d, t in tc.targets.items() if d in set(res["dataset"])}
+    files["table"] = write_table(res, conf, report_dir / "table.md", targets=targets,
+                                 primary=tc.primary, separability=got.separability,
+                                 latency=got.latency, timings=timings)
+    files["figure"] = plot_accuracy_vs_k(res, report_dir / "accuracy_vs_k.png",
+                                         targets=targets, separability=got.separability)
+    return files
+
+
+def run_transfer(cfg) -> dict:
+    """Task ``transfer``: the whole comparison over the data sets, report and MLflow.
+
+    Reads ``cfg.transfer`` (:class:`learn.studies.transfer.TransferConfig`,
+    ``conf/experiment/transfer.yaml``), ``cfg.data`` (when ``transfer.run_on`` is empty),
+    ``cfg.features`` (orders, floor), ``cfg.logger`` (None: no tracking) and ``cfg.seed``
+    (CV folds).
+
+    Returns
+    -------
+    dict
+        ``report_dir``, ``files``, ``wall_s``, ``n_runs``, ``worst_split`` (per data set,
+        ood_disturbed worst-split mean accuracy per model/input/k), ``targets`` (rows of
+        :func:`learn.reports.transfer_report.target_table`), ``run_id`` (parent MLflow run).
+
+    Raises
+    ------
+    ValueError
+        A bad ``transfer`` key (before any work).
+    """
+    import torch
+
+    from learn.reports.transfer_report import class_recall, log_transfer, summarise, target_table
+
+    tc = typed(cfg.transfer, TransferConfig)
+    check_config(tc)
+    if tc.n_threads:
+        torch.set_num_threads(int(tc.n_threads))
+    t_all = time.perf_counter()
+    data_sets, generate_s = _data_sets(cfg, tc)
+    report_dir = Path(tc.report_dir or Path(cfg.paths.report_dir) / "transfer")
+    report_dir.mkdir(parents=True, exist_ok=True)
+    got = _compare(cfg, tc, data_sets, report_dir)
+    res = pd.concat(got.results, ignore_index=True)
+    conf = pd.concat(got.confusion, ignore_index=True)
+    wall = time.perf_counter() - t_all
+    timings = _timings(tc, wall, got.input_s, generate_s)
+    files = _write(res, conf, got, tc, report_dir, timings)
+    summ = summarise(res)
+    w = summ[(summ["protocol"] == "ood_disturbed") & (summ["split"] == "worst")]
+    worst = {f"{r.dataset}/{r.model}/{r.input}/k{int(r.k_shot)}": float(r.mean)
+             for r in w.itertuples()}
+    targets = {d: t for d, t in tc.targets.items() if d in set(res["dataset"])}
+    tt = (target_table(summ, class_recall(conf), targets, tc.primary, got.separability)
+          if len(conf) else pd.DataFrame())
+    run_id = None if cfg.logger is None else log_transfer(res, files, cfg, timings,
+                                                          got.latency)
+    log.info("transfer report in %s (%.1f min)", report_dir, wall / 60)
+    if tc.progress:  # the console's summary (the log holds every cell)
+        print_summary(tt, report_dir, wall, timings["device"])
+    return {"task": "transfer", "report_dir": str(report_dir),
+            "files": {k: str(v) for k, v in files.items()}, "wall_s": wall,
+            "n_runs": len(res), "worst_split": worst,
+            "targets": tt.to_dict("records"), "run_id": run_id}

@@ -1,0 +1,21 @@
+"""Experiment tracking: MLflow runs (:mod:`learn.tracking.mlflow_runs`; ``log_run`` is the
+one helper every run goes through) and their provenance, git commit, data set and model
+requirements (:mod:`learn.tracking.provenance`). Imports no other part of :mod:`learn`.
+
+The public names are imported on first use (no MLflow import at package import).
+"""
+
+from __future__ import annotations
+
+from swgsim.lazy import lazy_exports
+
+_EXPORTS = {
+    **dict.fromkeys(("GROUP_PARENT_TAG", "TrackedRun", "check_tracking",
+                     "default_tracking_uri", "flatten_config", "hydra_sweep", "log_job",
+                     "log_run", "quiet_mlflow"), "mlflow_runs"),
+    **dict.fromkeys(("DatasetRef", "dataset_ref", "git_tags", "repo_root"), "provenance"),
+}
+
+__all__ = list(_EXPORTS)
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
