@@ -4,7 +4,7 @@ Measured data in (a friction CSV, kind 1, or a schema-v1 data-set directory, kin
 recognised automatically), a report out: ``out_dir/report.md``, ``summary.json``, the
 accepted effects as a simulation option (``friction_effects.yaml`` or
 ``sensor_effects.yaml``) and ``figures/*.png``; the run is logged to MLflow. The app only
-parses, calls the kind-independent API of :mod:`swgsim.calibration` and writes.
+parses, calls the kind-independent API of :mod:`swgcal` and writes.
 
 Examples
 --------
@@ -38,22 +38,22 @@ def _arg(func, name: str):
     return list(value) if isinstance(value, tuple) else value
 
 
-# the friction calibration's defaults live in swgsim.calibration; the app takes them
+# the friction calibration's defaults live in swgcal; the app takes them
 
 def _friction_default(name: str):
-    from swgsim.calibration.friction import friction_problem
+    from swgcal.friction import friction_problem
 
     return _arg(friction_problem, name)
 
 
 def _friction_builder():
-    from swgsim.calibration.friction import build_problem
+    from swgcal.friction import build_problem
 
     return build_problem
 
 
 def _selection_default(name: str):
-    from swgsim.calibration import SelectionConfig
+    from swgcal import SelectionConfig
 
     return getattr(SelectionConfig, name)
 
@@ -80,7 +80,7 @@ class SplitOptions:
 
 @dataclass
 class SelectionOptions:
-    """Which effects a calibration accepts (swgsim.calibration.SelectionConfig)."""
+    """Which effects a calibration accepts (swgcal.SelectionConfig)."""
 
     candidates: list[str] | None = None  # null: the whole library; or effect names
     min_rel_improvement: float = _selection_default("min_rel_improvement")
@@ -234,8 +234,8 @@ def problem_options(cfg: DictConfig, kind: str) -> dict[str, Any]:
     """The options of the kind's problem builder from the app's config.
 
     Friction: baseline, split, accel_window, gear_ratio and ``selection.candidates``
-    (:func:`swgsim.calibration.friction.build_problem`); strain:
-    ``selection.candidates`` (:func:`swgsim.calibration.strain.build_problem`).
+    (:func:`swgcal.friction.build_problem`); strain:
+    ``selection.candidates`` (:func:`swgcal.strain.build_problem`).
     """
     cand = _as_list(cfg.selection.candidates)
     if kind == "strain":
@@ -248,8 +248,8 @@ def problem_options(cfg: DictConfig, kind: str) -> dict[str, Any]:
 
 
 def selection_config(cfg: DictConfig):
-    """:class:`swgsim.calibration.SelectionConfig` from the app's ``selection`` group."""
-    from swgsim.calibration import SelectionConfig
+    """:class:`swgcal.SelectionConfig` from the app's ``selection`` group."""
+    from swgcal import SelectionConfig
 
     sel = OmegaConf.to_container(cfg.selection, resolve=True)
     return SelectionConfig(**{k: (list(v) if isinstance(v, list) else v)
@@ -265,8 +265,8 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
         Composed ``conf/calibrate.yaml``: ``measured`` (a friction CSV, kind 1, or a
         schema-v1 strain data-set directory, kind 2), ``out_dir``, ``baseline``,
         ``gear_ratio``, ``accel_window``, ``split`` (friction only), ``selection``,
-        ``figures``, ``logger``. Parses them, calls :func:`swgsim.calibration.build_problem`,
-        :func:`swgsim.calibration.calibrate` and :func:`swgsim.calibration.write_outputs`,
+        ``figures``, ``logger``. Parses them, calls :func:`swgcal.build_problem`,
+        :func:`swgcal.calibrate` and :func:`swgcal.write_outputs`,
         and logs the run.
 
     Returns
@@ -277,10 +277,10 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
 
     Raises
     ------
-    swgsim.calibration.MeasuredDataError
+    swgcal.MeasuredDataError
         ``measured`` is neither a friction CSV nor a data-set directory.
     """
-    from swgsim.calibration import build_problem, calibrate, detect_kind, write_outputs
+    from swgcal import build_problem, calibrate, detect_kind, write_outputs
 
     measured = Path(cfg.measured).expanduser()
     out_dir = Path(cfg.out_dir).expanduser()

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import yaml
 
+from swgcal import MeasuredDataError, build_problem, detect_kind
+from swgcal.friction import load_friction_csv, write_friction_csv
+from swgcal.friction.synthetic import PLANTED, synthetic_recording
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
-from swgsim.calibration import MeasuredDataError, build_problem, detect_kind
-from swgsim.calibration.friction import load_friction_csv, write_friction_csv
-from swgsim.calibration.friction.synthetic import PLANTED, synthetic_recording
 from swgsim.data import DataSetError
 from swgsim.friction import FrictionEffects
 from swgsim.measurement import parse_sensor_effects
@@ -106,8 +106,8 @@ def test_run_calibrate_rejects_unknown_data(tmp_path):
 
 def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
     """Kind 2: a schema-v1 data-set directory is recognised and calibrated end to end."""
+    from swgcal.strain import synthetic as syn
     from swgsim import data as dsio
-    from swgsim.calibration.strain import synthetic as syn
     from swgsim.chain import SimulationChain
 
     clean = syn.simulate_windows(SimulationChain(), seed=0)

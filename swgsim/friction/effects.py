@@ -1,6 +1,6 @@
 """Declared library of candidate friction effects.
 
-Every effect is a :class:`~swgsim.calibration.core.Term` in the joint coordinate q
+Every effect is a :class:`~swgcal.core.Term` in the joint coordinate q
 (gear output angle [rad]) with the friction torque τ [N m] positive along q̇. ``sgn``
 is the smooth sign tanh(v / v_s) of the velocity v the friction law sees (q̇, or a
 lagged q̇ once ``velocity_lag`` is in the model). Each entry documents its form, its
@@ -36,7 +36,7 @@ gravity_residual up to three times (higher orders). Ripples live in
 when the gear ratio is known).
 
 Every effect declares the physical range of its characterising parameters
-(:attr:`~swgsim.calibration.core.Term.ranges`, values and sources in
+(:attr:`~swgcal.core.Term.ranges`, values and sources in
 :mod:`.ranges`): a fit outside it is not accepted as that effect.
 
 Sources: Armstrong-Hélouvry, Dupont & Canudas de Wit 1994 (survey, Automatica 30(7)):
