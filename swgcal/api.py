@@ -11,6 +11,8 @@ returns the same types whatever the kind: a :class:`~swgcal.loop.Problem`, a
 from __future__ import annotations
 
 import importlib
+from collections.abc import Mapping
+from dataclasses import fields
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -19,12 +21,17 @@ from swgsim import data as dsio
 
 from .friction.data import REQUIRED_COLUMNS, FrictionRecording
 from .loop import CalibrationResult, Problem, SelectionConfig
+from .options import build, plain
 
-__all__ = ["KINDS", "MeasuredDataError", "detect_kind", "kind_module", "build_problem",
-           "calibrate", "summarize", "render_report", "make_figures", "write_outputs"]
+__all__ = ["KINDS", "MeasuredDataError", "detect_kind", "kind_module", "options_from_config",
+           "build_problem", "calibrate", "summarize", "render_report", "make_figures",
+           "write_outputs"]
 
 #: Data kind -> the subpackage that implements its steps.
 KINDS = {"friction": "swgcal.friction", "strain": "swgcal.strain"}
+
+#: Data kind -> how messages name it.
+KIND_LABELS = {"friction": "friction recording (kind 1)", "strain": "strain data set (kind 2)"}
 
 #: The step functions every kind subpackage defines.
 STEPS = ("build_problem", "calibrate", "summarize", "render_report", "make_figures",
@@ -85,6 +92,62 @@ def kind_module(kind: str) -> ModuleType:
     if kind not in KINDS:
         raise ValueError(f"unknown calibration kind {kind!r}; known: {sorted(KINDS)}")
     return importlib.import_module(KINDS[kind])
+
+
+def options_from_config(kind: str, given: Mapping[str, Any], measured: Any = None
+                        ) -> tuple[dict[str, Any], SelectionConfig]:
+    """Typed, checked options of a calibration from a plain config (an app's keys).
+
+    ``given`` holds ``selection`` (:class:`SelectionConfig` fields) and the option keys of
+    every kind (each kind subpackage's ``OPTIONS`` dataclass, e.g.
+    :class:`swgcal.friction.FrictionOptions`: ``baseline``, ``gear_ratio``,
+    ``accel_window``, ``split``). A key of another kind set away from its default is
+    refused rather than ignored; every range is the one its dataclass declares.
+
+    Parameters
+    ----------
+    kind : str
+        From :func:`detect_kind`.
+    given : mapping
+        Plain config (lists and dicts).
+    measured : optional
+        The measured data, named in messages.
+
+    Returns
+    -------
+    dict
+        Keyword arguments of :func:`build_problem` (``candidates`` included).
+    SelectionConfig
+
+    Raises
+    ------
+    ValueError
+        One line naming the key by its full name, the value and the allowed range (or the
+        data kind it needs); nothing is loaded before.
+    """
+    own = kind_module(kind).OPTIONS
+    own_keys = {f.name for f in fields(own)}
+    for other in sorted(set(KINDS) - {kind}):
+        cls = kind_module(other).OPTIONS
+        foreign = [f.name for f in fields(cls) if f.name not in own_keys]
+        defaults = plain(cls())
+        for key in foreign:
+            d = defaults[key]
+            g = plain(given.get(key, d))
+            changed = ([f"{key}.{k}={g[k]}" for k in g if g[k] != d.get(k)]
+                       if isinstance(g, dict) else ([f"{key}={g}"] if g != d else []))
+            if changed:
+                names = ", ".join(f"{x}.*" if isinstance(defaults[x], dict) else x
+                                  for x in foreign)
+                raise ValueError(f"{changed[0]} applies to a {KIND_LABELS[other]}; "
+                                 f"{measured} is a {KIND_LABELS[kind]}, whose calibration "
+                                 f"takes none of {names}")
+    selection = build(SelectionConfig, given.get("selection"), "selection.")
+    opts = build(own, {k: v for k, v in given.items() if k in own_keys})
+    kwargs = opts.problem_kwargs()
+    if selection.candidates is not None:
+        kwargs["candidates"] = list(selection.candidates)
+    return kwargs, selection
 
 
 def _kind_of_data(measured: Any) -> str:

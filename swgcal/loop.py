@@ -74,6 +74,7 @@ import numpy as np
 
 from .core import FitResult, Term, fit_terms, with_uncertainty
 from .diagnose import Diagnosis, Probe, diagnose
+from .options import check_ranges, ranged
 from .split import HeldOutSplit
 
 log = logging.getLogger(__name__)
@@ -124,7 +125,9 @@ class Problem:
 
 @dataclass(frozen=True)
 class SelectionConfig:
-    """Settings of the selection loop.
+    """Settings of the selection loop. Each numeric setting declares its allowed range
+    once (:func:`~swgcal.options.ranged`), checked on construction; apps read the
+    defaults and ranges from here.
 
     Attributes
     ----------
@@ -158,31 +161,20 @@ class SelectionConfig:
         RSS) are tried jointly (0 or 1: no look-ahead).
     """
 
-    min_rel_improvement: float = 0.0
-    max_delta_bic: float = -10.0
-    min_heldout_evidence: float = 10.0
-    max_iter: int = 12
+    min_rel_improvement: float = ranged(0.0, 0, 1, hi_open=True)
+    max_delta_bic: float = ranged(-10.0, hi=0)
+    min_heldout_evidence: float = ranged(10.0, 0)
+    max_iter: int = ranged(12, 0)
     candidates: Sequence[str] | None = None
-    structure_threshold: float = 0.03
-    max_rel_se: float = 0.5
-    max_abs_corr: float = 0.98
-    max_starts: int = 3
+    structure_threshold: float = ranged(0.03, 0, 1)
+    max_rel_se: float = ranged(0.5, 0, lo_open=True)
+    max_abs_corr: float = ranged(0.98, 0, 1)
+    max_starts: int = ranged(3, 1, 50)
     effective_bic: bool = True
-    pair_candidates: int = 4
+    pair_candidates: int = ranged(4, 0, 50)
 
     def __post_init__(self) -> None:
-        if not 0 <= self.min_rel_improvement < 1:
-            raise ValueError("min_rel_improvement must be in [0, 1), got "
-                             f"{self.min_rel_improvement}")
-        if self.max_delta_bic > 0:
-            raise ValueError(f"max_delta_bic must be <= 0, got {self.max_delta_bic}")
-        if not self.min_heldout_evidence >= 0:
-            raise ValueError("min_heldout_evidence must be >= 0, got "
-                             f"{self.min_heldout_evidence}")
-        if not self.max_rel_se > 0:
-            raise ValueError(f"max_rel_se must be > 0, got {self.max_rel_se}")
-        if self.max_iter < 0:
-            raise ValueError(f"max_iter must be >= 0, got {self.max_iter}")
+        check_ranges(self)
 
 
 @dataclass

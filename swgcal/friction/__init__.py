@@ -18,10 +18,13 @@ inputs: :mod:`swgsim.friction`.
 
 from .data import FrictionRecording, load_friction_csv, write_friction_csv
 from .figures import make_figures
-from .problem import build_problem, calibrate, friction_problem
+from .options import FrictionOptions
+from .problem import OPTIONS, build_problem, calibrate, friction_problem
 from .report import render_report, simulation_files, summarize
 
 __all__ = [
+    "OPTIONS",
+    "FrictionOptions",
     "FrictionRecording",
     "build_problem",
     "calibrate",

@@ -22,6 +22,8 @@ from scipy.signal import savgol_filter
 
 from swgsim.friction.signals import FrictionSignals, Scales
 
+from .options import FrictionOptions
+
 log = logging.getLogger(__name__)
 
 __all__ = [
@@ -168,7 +170,8 @@ DQ_CONSISTENCY_TOL = 0.5
 MIN_ROWS = 100
 
 
-def load_friction_csv(path: str | Path, accel_window: int = 21) -> FrictionRecording:
+def load_friction_csv(path: str | Path,
+                      accel_window: int = FrictionOptions.accel_window) -> FrictionRecording:
     """Read a friction CSV (data kind 1) and check that it is physically consistent.
 
     Parameters

@@ -18,14 +18,19 @@ from swgsim.friction.effects import FRICTION_LIBRARY
 from swgsim.friction.signals import PaperLaw
 
 from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
+from ..options import build
 from ..split import time_block_split
 from .data import FrictionRecording, load_friction_csv
+from .options import BaselineOptions, FrictionOptions, SplitOptions
 from .probes import friction_probes
 from .ripple_groups import group_ripples
 
 log = logging.getLogger(__name__)
 
-__all__ = ["friction_problem", "build_problem", "calibrate", "MIN_ROWS_PER_BLOCK"]
+__all__ = ["friction_problem", "build_problem", "calibrate", "MIN_ROWS_PER_BLOCK", "OPTIONS"]
+
+#: The typed options of this kind's problem (read by :func:`swgcal.api.options_from_config`).
+OPTIONS = FrictionOptions
 
 
 #: Fewest samples a held-out time block of a friction recording must hold.
@@ -35,14 +40,14 @@ MIN_ROWS_PER_BLOCK = 20
 def friction_problem(
     rec: FrictionRecording,
     *,
-    v_s: float | None = None,
-    v_s_rel: float = 0.01,
-    n_blocks: int = 10,
-    validation_blocks: Sequence[int] = (3, 7),
-    test_blocks: Sequence[int] = (5, 9),
-    guard_frac: float = 0.05,
+    v_s: float | None = BaselineOptions.v_s,
+    v_s_rel: float = BaselineOptions.v_s_rel,
+    n_blocks: int = SplitOptions.n_blocks,
+    validation_blocks: Sequence[int] = SplitOptions.validation_blocks,
+    test_blocks: Sequence[int] = SplitOptions.test_blocks,
+    guard_frac: float = SplitOptions.guard_frac,
     candidates: Sequence[str] | None = None,
-    gear_ratio: float | None = None,
+    gear_ratio: float | None = FrictionOptions.gear_ratio,
 ) -> Problem:
     """Calibration problem for one friction recording.
 
@@ -54,7 +59,8 @@ def friction_problem(
         percentile of |q̇|.
     v_s_rel : float, default 0.01
     n_blocks, validation_blocks, test_blocks, guard_frac
-        Held-out split, see :func:`~swgcal.split.time_block_split`.
+        Held-out split, see :func:`~swgcal.split.time_block_split`. Defaults and ranges
+        of every option: :mod:`swgcal.friction.options`.
     candidates : sequence of str, optional
         Library keys (default all of :data:`FRICTION_LIBRARY`).
     gear_ratio : float, optional
@@ -69,9 +75,14 @@ def friction_problem(
     Raises
     ------
     ValueError
-        Unknown candidate key, too few samples for the held-out blocks, or a gear
-        ratio not above 1.
+        An option outside its range (named by its app key, e.g. ``split.n_blocks``),
+        an unknown candidate key, or too few samples for the held-out blocks.
     """
+    build(FrictionOptions, {"baseline": {"v_s": v_s, "v_s_rel": v_s_rel},
+                            "gear_ratio": gear_ratio,
+                            "split": {"n_blocks": n_blocks, "guard_frac": guard_frac,
+                                      "validation_blocks": list(validation_blocks),
+                                      "test_blocks": list(test_blocks)}})
     sig = rec.signals(v_s=v_s, v_s_rel=v_s_rel, gear_ratio=gear_ratio)
     keys = list(candidates) if candidates is not None else list(FRICTION_LIBRARY)
     unknown = [k for k in keys if k not in FRICTION_LIBRARY]
@@ -96,7 +107,8 @@ def friction_problem(
               "gear_ratio": sig.gear_ratio})
 
 
-def build_problem(measured: str | Path | FrictionRecording, *, accel_window: int = 21,
+def build_problem(measured: str | Path | FrictionRecording, *,
+                  accel_window: int = FrictionOptions.accel_window,
                   **options: Any) -> Problem:
     """Calibration problem of a friction recording (data kind 1).
 
@@ -128,6 +140,7 @@ def build_problem(measured: str | Path | FrictionRecording, *, accel_window: int
     if unknown:
         raise TypeError(f"unknown friction problem options {unknown}; allowed: "
                         f"{sorted(allowed + ['accel_window'])}")
+    build(FrictionOptions, {"accel_window": accel_window})
     rec = (measured if isinstance(measured, FrictionRecording)
            else load_friction_csv(measured, accel_window=accel_window))
     return friction_problem(rec, **options)

@@ -22,10 +22,12 @@ planted effects), :mod:`.power` (planted-effect power study).
 from .data import StrainWindows, strain_windows
 from .figures import make_figures
 from .model import StrainModel
-from .problem import build_problem, calibrate, strain_problem
+from .problem import OPTIONS, StrainOptions, build_problem, calibrate, strain_problem
 from .report import render_report, simulation_files, summarize
 
 __all__ = [
+    "OPTIONS",
+    "StrainOptions",
     "StrainModel",
     "StrainWindows",
     "build_problem",

@@ -63,6 +63,7 @@ import contextlib
 import logging
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -85,7 +86,23 @@ __all__ = [
     "build_problem",
     "calibrate",
     "one_blas_thread",
+    "StrainOptions",
+    "OPTIONS",
 ]
+
+
+@dataclass(frozen=True)
+class StrainOptions:
+    """The app options of a strain problem besides ``selection``: none (the held-out
+    split comes from the data set's metadata; see :func:`strain_problem`)."""
+
+    def problem_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`build_problem` (none)."""
+        return {}
+
+
+#: The typed options of this kind's problem (read by :func:`swgcal.api.options_from_config`).
+OPTIONS = StrainOptions
 
 def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
                    heldout: str = "windows", validation: Sequence[int] | None = None,
