@@ -15,7 +15,9 @@ predictions on the test blocks:
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -73,44 +75,48 @@ def _log_smooth(f: np.ndarray, pw: np.ndarray, n_bins: int = 120
     return c[cnt > 0], m[cnt > 0]
 
 
-def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
-                 ) -> dict[str, str]:
-    """Write the diagnosis figures of a friction calibration.
+@dataclass(frozen=True)
+class _FigureData:
+    """What the figures of a friction calibration draw: the problem, its signals and split,
+    predictions and residuals before/after, the thinned plotting samples."""
 
-    Parameters
-    ----------
-    result : CalibrationResult
-        A friction calibration.
-    out_dir : str or Path
-        Directory; figures go to ``out_dir/figures/``.
-    dpi : int, default 110
+    p: Any
+    sig: Any
+    y: np.ndarray
+    sp: Any
+    pred_b: np.ndarray
+    pred_a: np.ndarray
+    rb: np.ndarray
+    ra: np.ndarray
+    idx: np.ndarray
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    u: str
+    title: str
+    sc: Any
+    acc_dec: np.ndarray
+    roles: dict
 
-    Returns
-    -------
-    dict of str to str
-        Figure key to path relative to ``out_dir``.
-    """
-    from matplotlib.figure import Figure
-    from matplotlib.ticker import NullFormatter
 
-    out = Path(out_dir)
-    (out / "figures").mkdir(parents=True, exist_ok=True)
+def _figure_data(result: CalibrationResult) -> _FigureData:
     p = result.problem
     sig, y, sp = p.signals, p.y, p.split
     pred_b, pred_a = result.predictions()
-    rb, ra = y - pred_b, y - pred_a
-    idx = _thin(sp.fit_validation)
-    t, q, v, a = sig.t_s, sig.q_rad, sig.dq_rad_s, sig.ddq_rad_s2
-    u = p.units
-    files: dict[str, str] = {}
-    title = f"{p.name}: paper law (before) vs final model (after)"
+    v, a = sig.dq_rad_s, sig.ddq_rad_s2
+    return _FigureData(
+        p=p, sig=sig, y=y, sp=sp, pred_b=pred_b, pred_a=pred_a, rb=y - pred_b, ra=y - pred_a,
+        idx=_thin(sp.fit_validation), t=sig.t_s, q=sig.q_rad, v=v, a=a, u=p.units,
+        title=f"{p.name}: paper law (before) vs final model (after)", sc=sig.scales,
+        acc_dec=np.sign(v * a), roles=sp.description.get("time_ranges_s", {}))
 
-    def save(fig, key: str) -> None:
-        path = out / "figures" / f"{key}.png"
-        fig.savefig(path, dpi=dpi)
-        files[key] = f"figures/{key}.png"
 
-    # -- velocity
+def _fig_velocity(d: _FigureData) -> Any:
+    """Residual before and after against q̇, coloured by accelerating/decelerating."""
+    from matplotlib.figure import Figure
+
+    v, a, idx, rb, ra, u, title, acc_dec = (d.v, d.a, d.idx, d.rb, d.ra, d.u, d.title, d.acc_dec)
     fig = Figure(figsize=(11, 4.2), layout="constrained")
     axs = fig.subplots(1, 2, sharey=True)
     acc_dec = np.sign(v * a)
@@ -126,9 +132,17 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
         ax.legend(fontsize=8, loc="upper left")
     axs[0].set_ylabel(f"residual [{u}]")
     fig.suptitle(title + "; colour: red accelerating, blue decelerating", fontsize=10)
-    save(fig, "velocity")
 
-    # -- position and spectrum over q
+    return fig
+
+
+def _fig_position(d: _FigureData) -> Any:
+    """Residual over q per direction; spectra over q of its even and odd parts."""
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
+
+    q, v, idx, rb, ra, u, sc, sp, sig, title = (
+        d.q, d.v, d.idx, d.rb, d.ra, d.u, d.sc, d.sp, d.sig, d.title)
     fig = Figure(figsize=(11, 7), layout="constrained")
     axs = fig.subplots(2, 2)
     for j, (r, lab) in enumerate(((rb, "before"), (ra, "after"))):
@@ -167,9 +181,16 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
     ax.set_title("spectrum of residual · sgn(q̇) over q (flips with direction)", fontsize=9)
     ax.legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
-    save(fig, "position")
 
-    # -- hysteresis near reversals and acceleration
+    return fig
+
+
+def _fig_hysteresis(d: _FigureData) -> Any:
+    """Residual near reversals (hysteresis) and against q̈."""
+    from matplotlib.figure import Figure
+
+    v, a, idx, rb, ra, u, sc, acc_dec, title = (
+        d.v, d.a, d.idx, d.rb, d.ra, d.u, d.sc, d.acc_dec, d.title)
     fig = Figure(figsize=(11, 4.2), layout="constrained")
     axs = fig.subplots(1, 3)
     vlim = 0.1 * sc.v_ref
@@ -195,9 +216,15 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
     ax.set_title("residual against acceleration", fontsize=9)
     ax.legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
-    save(fig, "hysteresis")
 
-    # -- time and spectrum in time
+    return fig
+
+
+def _fig_time(d: _FigureData) -> Any:
+    """Residual over time with the held-out blocks; its spectrum in time."""
+    from matplotlib.figure import Figure
+
+    t, rb, ra, u, sp, sc, roles, title = (d.t, d.rb, d.ra, d.u, d.sp, d.sc, d.roles, d.title)
     fig = Figure(figsize=(11, 6.5), layout="constrained")
     axs = fig.subplots(2, 1)
     ax = axs[0]
@@ -224,9 +251,16 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
                  "frequency, log-binned)", fontsize=9)
     ax.legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
-    save(fig, "time")
 
-    # -- overlay on the test blocks
+    return fig
+
+
+def _fig_overlay(d: _FigureData) -> Any:
+    """Measured torque and both models on the held-out test blocks."""
+    from matplotlib.figure import Figure
+
+    t, y, sp, pred_b, pred_a, rb, ra, u, roles, p = (
+        d.t, d.y, d.sp, d.pred_b, d.pred_a, d.rb, d.ra, d.u, d.roles, d.p)
     test_ranges = roles.get("test", [])
     fig = Figure(figsize=(11, 3.2 * max(len(test_ranges), 1)), layout="constrained")
     axs = np.atleast_1d(fig.subplots(max(len(test_ranges), 1), 1))
@@ -241,6 +275,34 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
         ax.legend(fontsize=8, ncol=3, loc="upper right")
     axs[-1].set_xlabel("t [s]")
     fig.suptitle(f"{p.name}: held-out test blocks", fontsize=10)
-    save(fig, "overlay")
+    return fig
+
+
+def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
+                 ) -> dict[str, str]:
+    """Write the diagnosis figures of a friction calibration.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        A friction calibration.
+    out_dir : str or Path
+        Directory; figures go to ``out_dir/figures/``.
+    dpi : int, default 110
+
+    Returns
+    -------
+    dict of str to str
+        Figure key to path relative to ``out_dir``.
+    """
+    out = Path(out_dir)
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    d = _figure_data(result)
+    files: dict[str, str] = {}
+    for key, draw in (("velocity", _fig_velocity), ("position", _fig_position),
+                      ("hysteresis", _fig_hysteresis), ("time", _fig_time),
+                      ("overlay", _fig_overlay)):
+        draw(d).savefig(out / "figures" / f"{key}.png", dpi=dpi)
+        files[key] = f"figures/{key}.png"
     log.info("figures written to %s", out / "figures")
     return files

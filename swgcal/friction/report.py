@@ -193,26 +193,8 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
     return lines
 
 
-def render_report(result: CalibrationResult, summary: Mapping[str, Any],
-                  figures: Mapping[str, str] | None = None) -> str:
-    """Markdown report of a friction calibration.
-
-    Parameters
-    ----------
-    result : CalibrationResult
-    summary : mapping
-        From :func:`summarize`.
-    figures : mapping of str to str, optional
-        Figure key (``"velocity"``, ``"position"``, ``"hysteresis"``, ``"time"``,
-        ``"overlay"``) to a path relative to the report.
-
-    Returns
-    -------
-    str
-    """
-    figures = dict(figures or {})
-    s = summary
-    u = s["units"]
+def _data_lines(s: Mapping[str, Any]) -> list[str]:
+    """Title and what the measured data are."""
     d = s["data"]
     lines = [f"# Calibration report: {s['name']}", ""]
     lines += [f"Measured data: `{s['source']}` (kind: {s['kind']}). "
@@ -222,7 +204,12 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
               "rad/s.", ""]
     if d.get("data_notes"):
         lines += ["Data checks on loading: " + "; ".join(d["data_notes"]) + ".", ""]
-    lines += result_section(s, "paper law", f" (ratio {fmt_value(s['rmse_ratio'], 3)})")
+    return lines
+
+
+def _heldout_lines(s: Mapping[str, Any]) -> list[str]:
+    """The held-out time blocks."""
+    lines: list[str] = []
     h = s["heldout"]
     lines += ["## Held-out data", "",
               f"{h.get('method')}: {h.get('n_blocks')} blocks of {fmt_value(h.get('block_s'))} s; "
@@ -233,11 +220,23 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
                  else "")
               + f"; guard of {fmt_value(h.get('guard_s'))} s dropped at every boundary "
               f"between roles; samples {h.get('n_samples')}. {h.get('note', '')}.", ""]
+    return lines
+
+
+def _baseline_lines(s: Mapping[str, Any]) -> list[str]:
+    """The paper-law baseline and its parameters."""
+    lines: list[str] = []
     lines += ["## Baseline: paper law (eq. 5-6 on the joint)", "",
               "τ = b0 tanh(q̇/v_s) + b1 q̇ + b2 q̇³ + b3 sin(q + θ_b), fitted on fit + "
               "validation blocks.", "",
               "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
     lines += param_rows(s["baseline"]["params"]) + [""]
+    return lines
+
+
+def _selection_lines(s: Mapping[str, Any]) -> list[str]:
+    """The acceptance rule."""
+    lines: list[str] = []
     lines += ["## Selection", "",
               "Each iteration adds every library candidate to the current model and refits "
               "on the fit blocks; candidates are ranked by validation RMSE. Accepted: the "
@@ -248,36 +247,47 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
               f"(rel. s.e. < {s['selection']['max_rel_se']:g}). When no single candidate "
               "passes, pairs of the best candidates are tried jointly. Effective ΔBIC: "
               "n/τ_int samples (τ_int of the best residual of the iteration).", ""]
-    its = s["iterations"]
-    for n_it, it in enumerate(its):
-        lines += [f"### Iteration {it['index']}: model {' + '.join(it['model'])}, "
-                  f"validation RMSE {fmt_value(it['val_rmse'])} {u}", "",
-                  f"Residual (fit blocks): {it['diagnosis']['signature']}", ""]
-        if it["accepted"]:
-            nxt = (its[n_it + 1]["diagnosis"] if n_it + 1 < len(its) else None)
-            trace = []
-            for name in it["accepted"].split(" + "):
-                kind = name.split("#")[0]
-                cls = result.problem.library.get(kind)
-                for pr in getattr(cls, "probes", ()):
-                    b = it["diagnosis"]["probes"].get(pr, {}).get("score")
-                    a = nxt["probes"].get(pr, {}).get("score") if nxt else None
-                    if b is not None:
-                        trace.append(f"{name} ↔ probe {pr}: {fmt_value(b, 2)} → {fmt_value(a, 2)}")
-            if trace:
-                lines += ["Trace (the accepted effect's signature probes, score before → "
-                          "after): " + "; ".join(trace) + ".", ""]
-        if not it["candidates"]:
-            lines += ["(no candidates tried: iteration limit)", ""]
-            continue
-        lines += ["| rank | candidate | val. RMSE | gain | ΔBIC | eff. ΔBIC | status |",
-                  "|---|---|---|---|---|---|---|"]
-        for r, c in enumerate(it["candidates"], 1):
-            lines.append(f"| {r} | {c['name']} | {fmt_value(c['val_rmse'])} | "
-                         f"{fmt_value(100 * c['rel_improvement'], 3)} "
-                         f"% | {fmt_value(c['delta_bic'], 5)} | "
-                         f"{fmt_value(c['delta_bic_eff'], 4)} | {c['status']} |")
-        lines.append("")
+    return lines
+
+
+def _iteration_lines(result: CalibrationResult, its: list, n_it: int, u: str) -> list[str]:
+    """One iteration: the residual, the probe trace of the accepted effect, the
+    ranked candidates."""
+    it = its[n_it]
+    lines: list[str] = []
+    lines += [f"### Iteration {it['index']}: model {' + '.join(it['model'])}, "
+              f"validation RMSE {fmt_value(it['val_rmse'])} {u}", "",
+              f"Residual (fit blocks): {it['diagnosis']['signature']}", ""]
+    if it["accepted"]:
+        nxt = (its[n_it + 1]["diagnosis"] if n_it + 1 < len(its) else None)
+        trace = []
+        for name in it["accepted"].split(" + "):
+            kind = name.split("#")[0]
+            cls = result.problem.library.get(kind)
+            for pr in getattr(cls, "probes", ()):
+                b = it["diagnosis"]["probes"].get(pr, {}).get("score")
+                a = nxt["probes"].get(pr, {}).get("score") if nxt else None
+                if b is not None:
+                    trace.append(f"{name} ↔ probe {pr}: {fmt_value(b, 2)} → {fmt_value(a, 2)}")
+        if trace:
+            lines += ["Trace (the accepted effect's signature probes, score before → "
+                      "after): " + "; ".join(trace) + ".", ""]
+    if not it["candidates"]:
+        return lines + ["(no candidates tried: iteration limit)", ""]
+    lines += ["| rank | candidate | val. RMSE | gain | ΔBIC | eff. ΔBIC | status |",
+              "|---|---|---|---|---|---|---|"]
+    for r, c in enumerate(it["candidates"], 1):
+        lines.append(f"| {r} | {c['name']} | {fmt_value(c['val_rmse'])} | "
+                     f"{fmt_value(100 * c['rel_improvement'], 3)} "
+                     f"% | {fmt_value(c['delta_bic'], 5)} | "
+                     f"{fmt_value(c['delta_bic_eff'], 4)} | {c['status']} |")
+    lines.append("")
+    return lines
+
+
+def _accepted_lines(s: Mapping[str, Any]) -> list[str]:
+    """The accepted effects and the final model."""
+    lines: list[str] = []
     lines += ["## Accepted effects", ""]
     if not s["effects_added"]:
         lines += ["None.", ""]
@@ -300,8 +310,13 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
     lines += [f"Final model: {fm['n_params']} parameters, condition number of the scaled "
               f"JᵀJ {fmt_value(fm['condition_number'], 3)}, residual τ_int "
               f"{fmt_value(fm['tau_int'], 3)} samples.", ""]
-    lines += ripple_lines(s)
-    lines += proposals_section(s.get("proposed", []))
+    return lines
+
+
+def _diagnosis_lines(s: Mapping[str, Any]) -> list[str]:
+    """Probe scores before/after, signatures, noise floor."""
+    u = s["units"]
+    lines: list[str] = []
     lines += ["## Residual diagnosis", "",
               "Probe scores: out-of-sample fraction of the residual mean square explained "
               "by a nonparametric model along one variable (two halves of time blocks, "
@@ -317,6 +332,12 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
               f"{fmt_value(s['rmse_after'] / s['noise_floor'] if s['noise_floor'] else None, 3)}× "
               "that (the estimator removes smooth structure and underestimates coloured "
               "noise).", ""]
+    return lines
+
+
+def _figure_lines(figures: Mapping[str, str]) -> list[str]:
+    """The figures with captions."""
+    lines: list[str] = []
     captions = {
         "velocity": "Residual against velocity (baseline and final), coloured by the sign "
                     "of the acceleration.",
@@ -332,7 +353,12 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
         lines += ["## Figures", ""]
         for k, path in figures.items():
             lines += [f"![{k}]({path})", "", f"*{captions.get(k, k)}*", ""]
-    lines += ["## Uncertainty", "", s["uncertainty_method"], ""]
+    return lines
+
+
+def _simulation_lines(s: Mapping[str, Any]) -> list[str]:
+    """The accepted effects as a simulation option."""
+    lines: list[str] = []
     if s["friction_effects"]:
         sim = s["simulation"]
         lines += ["## As a simulation option", "",
@@ -347,5 +373,37 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
                   f"friction_t0_s: {fmt_value(sim.get('t0_s'), 6)}", "```", ""]
         if sim.get("caveat"):
             lines += [f"**Caveat.** {sim['caveat']}", ""]
+    return lines
+
+
+def render_report(result: CalibrationResult, summary: Mapping[str, Any],
+                  figures: Mapping[str, str] | None = None) -> str:
+    """Markdown report of a friction calibration.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    summary : mapping
+        From :func:`summarize`.
+    figures : mapping of str to str, optional
+        Figure key (``"velocity"``, ``"position"``, ``"hysteresis"``, ``"time"``,
+        ``"overlay"``) to a path relative to the report.
+
+    Returns
+    -------
+    str
+    """
+    s = summary
+    lines = _data_lines(s)
+    lines += result_section(s, "paper law", f" (ratio {fmt_value(s['rmse_ratio'], 3)})")
+    lines += _heldout_lines(s) + _baseline_lines(s) + _selection_lines(s)
+    for n_it in range(len(s["iterations"])):
+        lines += _iteration_lines(result, s["iterations"], n_it, s["units"])
+    lines += _accepted_lines(s)
+    lines += ripple_lines(s)
+    lines += proposals_section(s.get("proposed", []))
+    lines += _diagnosis_lines(s) + _figure_lines(dict(figures or {}))
+    lines += ["## Uncertainty", "", s["uncertainty_method"], ""]
+    lines += _simulation_lines(s)
     lines += [f"Run time {fmt_value(s['elapsed_s'], 3)} s.", ""]
     return "\n".join(lines)

@@ -146,9 +146,34 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
         Bad held-out settings, a window shorter than one WG half revolution, or bad bounds.
     """
     model = model if model is not None else StrainModel()
-    fs, n_t, n_w = win.fs, win.n_t, win.n_windows
-    ratio = float(model.params.gear.ratio)
-    rate = psi_rate(win.n_in_mean_rpm, ratio)  # (n_w,)
+    rate, (lo, hi), n_lead, n_tail = _filter_margins(win, model, f_c_bounds_hz)
+    lib_all = strain_library(model.ke_orders)
+    keys = list(candidates) if candidates is not None else list(lib_all)
+    unknown = [k for k in keys if k not in lib_all]
+    if unknown:
+        raise KeyError(f"unknown strain effects {unknown}; library: {sorted(lib_all)}")
+    role, held_text = heldout_split(win, heldout, validation, test)
+    sim = _simulate_windows(win, model, n_lead, n_tail)
+    period = float(window_period_s) if window_period_s is not None else win.n_t / win.fs
+    if not period > 0:
+        raise ValueError(f"window_period_s must be > 0 [s], got {window_period_s}")
+    sig = _strain_signals(win, model, sim, rate, period, (lo, hi), ke_bound_rad)
+    split = _window_split(win, role, held_text, heldout, sig.window)
+    meta = _problem_meta(win, model, sim, role, period, (lo, hi), n_tail, sig.weights)
+    return Problem(name=win.name, kind="strain", units="mV/V", signals=sig,
+                   y=win.y.reshape(-1).astype(float), t=sig.t_s,
+                   baseline=(ChainBaseline.for_signals(sig),),
+                   library={k: lib_all[k] for k in keys}, probes=strain_probes(), split=split,
+                   meta=meta)
+
+
+def _filter_margins(win: StrainWindows, model: StrainModel,
+                    f_c_bounds_hz: tuple[float, float] | None
+                    ) -> tuple[np.ndarray, tuple[float, float], int, int]:
+    """ψ̇ per window [rad/s], the low-pass cut-off range [Hz] and the lead and tail of
+    simulated history that filters and shifts need [samples]."""
+    fs, n_t = win.fs, win.n_t
+    rate = psi_rate(win.n_in_mean_rpm, float(model.params.gear.ratio))  # (n_w,)
     f2 = 2 * rate / (2 * np.pi)
     if n_t / fs < np.pi / rate.min():
         raise ValueError(f"windows of {n_t / fs * 1e3:.1f} ms are shorter than half a WG "
@@ -159,13 +184,15 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
                          f"{(lo, hi)}")
     n_lead = int(np.ceil(6.0 / (2 * np.pi * lo) * fs)) + 4
     n_tail = int(np.ceil(np.max(np.arctan(f2 / lo) / (2 * np.pi * f2)) * fs)) + 6
-    lib_all = strain_library(model.ke_orders)
-    keys = list(candidates) if candidates is not None else list(lib_all)
-    unknown = [k for k in keys if k not in lib_all]
-    if unknown:
-        raise KeyError(f"unknown strain effects {unknown}; library: {sorted(lib_all)}")
-    role, held_text = heldout_split(win, heldout, validation, test)
+    return rate, (lo, hi), n_lead, n_tail
 
+
+def _simulate_windows(win: StrainWindows, model: StrainModel, n_lead: int,
+                      n_tail: int) -> dict[str, Any]:
+    """The chain at each operating point, aligned to each window: the basis signals
+    (``s_wg``, ``s_t``, ``dpsi``; shape (n_w, 5, n_lead + n_t + n_tail)), ψ and φ_in of
+    the windows, the alignment shifts [s], the model efficiency and the realigner."""
+    n_w, n_t, fs = win.n_windows, win.n_t, win.fs
     parts: dict[str, np.ndarray] = {}
     shifts = np.empty(n_w)
     eff = np.empty(n_w)
@@ -181,13 +208,18 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
         eff[ws] = opm.efficiency
     realign = Realigner(model, opms, win.op, parts, win.y, n_lead)
     first = realign(())
-    basis = {"s_wg": parts["s_wg"], "s_t": first["s_t"], "dpsi": first["dpsi"]}
-    shifts_t = first["shift_t"]
-    psi_w = parts["psi"][:, n_lead:n_lead + n_t]
-    phi_w = first["phi_in"][:, n_lead:n_lead + n_t]
+    return {"basis": {"s_wg": parts["s_wg"], "s_t": first["s_t"], "dpsi": first["dpsi"]},
+            "psi_w": parts["psi"][:, n_lead:n_lead + n_t],
+            "phi_w": first["phi_in"][:, n_lead:n_lead + n_t],
+            "shifts": shifts, "shifts_t": first["shift_t"], "efficiency": eff,
+            "realign": realign, "n_lead": n_lead}
 
-    # constraint weights: gains relative to the plain mean; misplacements relative to the
-    # mean weighted like the alignment (sensitivity of the correlation to each channel)
+
+def _constraint_weights(basis: Mapping[str, np.ndarray], n_lead: int, n_t: int
+                        ) -> dict[str, np.ndarray]:
+    """Constraint weights, shape (5,) each: gains relative to the plain mean;
+    misplacements relative to the mean weighted like the alignment (sensitivity of the
+    correlation to each channel)."""
     sl = slice(n_lead, n_lead + n_t)
     p = basis["s_wg"][:, :, sl] + basis["s_t"][:, :, sl]
     d = basis["dpsi"][:, :, sl]
@@ -196,29 +228,37 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
     proj = (d * p).sum(-1, keepdims=True) / np.maximum((p * p).sum(-1, keepdims=True), 1e-30)
     w_mis = ((d - proj * p) ** 2).sum(-1).sum(0)  # (5,)
     w_mis = np.maximum(w_mis, 1e-12 * w_mis.max())
-    weights = {"gain": np.ones(5), "misplacement": w_mis}
+    return {"gain": np.ones(5), "misplacement": w_mis}
 
-    period = float(window_period_s) if window_period_s is not None else n_t / fs
-    if not period > 0:
-        raise ValueError(f"window_period_s must be > 0 [s], got {window_period_s}")
+
+def _strain_signals(win: StrainWindows, model: StrainModel, sim: Mapping[str, Any],
+                    rate: np.ndarray, period: float, f_c_bounds: tuple[float, float],
+                    ke_bound_rad: float) -> StrainSignals:
+    """The signals of the fit, one sample per (window, channel, time), flattened."""
+    n_w, n_t, n_lead = win.n_windows, win.n_t, sim["n_lead"]
     t_start = (win.sample - win.sample.min()) * period  # (n_w,)
     shape = (n_w, 5, n_t)
     wi = np.broadcast_to(np.arange(n_w)[:, None, None], shape).ravel()
     ci = np.broadcast_to(np.arange(5)[None, :, None], shape).ravel()
     ts = np.broadcast_to(win.time_s[None, None, :] - win.time_s[0], shape).ravel()
-    sig = StrainSignals(
-        raw=basis, n_lead=n_lead, n_t=n_t, fs=fs, window=wi, channel=ci, op=win.op[wi],
-        t_s=ts, t_seq_s=t_start[wi] + ts,
-        phi_in_rad=np.broadcast_to(phi_w[:, None, :], shape).ravel(),
-        psi_rad=np.broadcast_to(psi_w[:, None, :], shape).ravel(),
+    return StrainSignals(
+        raw=sim["basis"], n_lead=n_lead, n_t=n_t, fs=win.fs, window=wi, channel=ci,
+        op=win.op[wi], t_s=ts, t_seq_s=t_start[wi] + ts,
+        phi_in_rad=np.broadcast_to(sim["phi_w"][:, None, :], shape).ravel(),
+        psi_rad=np.broadcast_to(sim["psi_w"][:, None, :], shape).ravel(),
         psi_rate=rate, n_in_rpm=win.n_in_mean_rpm, t_out_nm=win.t_out_mean_nm, ops=win.ops,
-        w0_nom_m=float(model.params.w0_m), weights=weights, maps=(), ripple=realign, ke=(),
-        ke_orders=model.ke_orders, ke_bound_rad=float(ke_bound_rad),
-        f_c_bounds=(float(lo), float(hi)))
-    y = win.y.reshape(-1).astype(float)
-    # the diagnosis splits samples into halves of contiguous blocks of Problem.t: with
-    # the time within the window, the halves are interleaved time slices of every window
-    groups = wi
+        w0_nom_m=float(model.params.w0_m),
+        weights=_constraint_weights(sim["basis"], n_lead, n_t), maps=(),
+        ripple=sim["realign"], ke=(), ke_orders=model.ke_orders,
+        ke_bound_rad=float(ke_bound_rad), f_c_bounds=(float(f_c_bounds[0]),
+                                                      float(f_c_bounds[1])))
+
+
+def _window_split(win: StrainWindows, role: np.ndarray, held_text: str, heldout: str,
+                  groups: np.ndarray) -> HeldOutSplit:
+    """Held-out split of whole windows (``groups``: the window of each sample). The
+    diagnosis splits samples into halves of contiguous blocks of Problem.t: with the time
+    within the window, the halves are interleaved time slices of every window."""
     split = group_split(groups, np.flatnonzero(role == 1).tolist(),
                         np.flatnonzero(role == 2).tolist())
     desc = dict(split.description)
@@ -228,29 +268,33 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
                  "validation_samples": win.sample[role == 1].tolist(),
                  "test_samples": win.sample[role == 2].tolist(),
                  "fit_samples": win.sample[role == 0].tolist()})
-    split = HeldOutSplit(split.fit, split.validation, split.test, desc)
-    rng_psi0 = np.rad2deg(np.mod(psi_w[:, 0], np.pi))
-    phi0 = np.rad2deg(np.mod(phi_w[:, 0], 2 * np.pi))
-    meta = {
+    return HeldOutSplit(split.fit, split.validation, split.test, desc)
+
+
+def _problem_meta(win: StrainWindows, model: StrainModel, sim: Mapping[str, Any],
+                  role: np.ndarray, period: float, f_c_bounds: tuple[float, float],
+                  n_tail: int, weights: Mapping[str, np.ndarray]) -> dict[str, Any]:
+    """What the report carries: sizes, operating points, the alignment of each window."""
+    n_w, n_t, fs = win.n_windows, win.n_t, win.fs
+    rng_psi0 = np.rad2deg(np.mod(sim["psi_w"][:, 0], np.pi))
+    phi0 = np.rad2deg(np.mod(sim["phi_w"][:, 0], 2 * np.pi))
+    return {
         "n_windows": n_w, "n_t": n_t, "sample_rate_hz": fs, "window_s": n_t / fs,
         "operating_points": [list(o) for o in win.ops],
         "windows_per_op": np.bincount(win.op, minlength=len(win.ops)).tolist(),
-        "n_lead": n_lead, "n_tail": n_tail, "window_period_s": period,
+        "n_lead": sim["n_lead"], "n_tail": n_tail, "window_period_s": period,
         "alignment": [{"sample": int(s), "op": int(o), "shift_psi_s": float(sh),
                        "shift_torque_s": float(st), "psi0_deg": float(a),
                        "phi_in0_deg": float(b), "role": ("fit", "validation", "test")[r]}
-                      for s, o, sh, st, a, b, r in zip(win.sample, win.op, shifts, shifts_t,
-                                                       rng_psi0, phi0, role, strict=True)],
-        "model_efficiency": eff.tolist(),
+                      for s, o, sh, st, a, b, r in zip(win.sample, win.op, sim["shifts"],
+                                                       sim["shifts_t"], rng_psi0, phi0, role,
+                                                       strict=True)],
+        "model_efficiency": sim["efficiency"].tolist(),
         "weights": {k: v.tolist() for k, v in weights.items()},
-        "f_c_bounds_hz": [float(lo), float(hi)],
-        "gear_ratio": ratio, "w0_nom_m": float(model.params.w0_m),
+        "f_c_bounds_hz": [float(f_c_bounds[0]), float(f_c_bounds[1])],
+        "gear_ratio": float(model.params.gear.ratio), "w0_nom_m": float(model.params.w0_m),
         "source": win.source,
     }
-    return Problem(name=win.name, kind="strain", units="mV/V", signals=sig, y=y, t=ts,
-                   baseline=(ChainBaseline.for_signals(sig),),
-                   library={k: lib_all[k] for k in keys}, probes=strain_probes(), split=split,
-                   meta=meta)
 
 
 # ---------------------------------------------------------------------------------------
