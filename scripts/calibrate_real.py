@@ -39,7 +39,7 @@ TARGET_RATIO = 0.6
 def calibrate_file(path: Path, out: Path | None = None, figures: bool = True,
                    gear_ratio: float | None = None) -> dict:
     """Run the loop on one recording; returns one table row (and writes a report)."""
-    from swgsim.calibration import build_problem, calibrate, summarize, write_outputs
+    from swgcal import build_problem, calibrate, summarize, write_outputs
 
     t0 = time.perf_counter()
     result = calibrate(build_problem(path, gear_ratio=gear_ratio))

@@ -32,9 +32,9 @@ def main(argv=None) -> dict:
                     help="write the two-effect data set and its report here")
     args = ap.parse_args(argv)
 
-    from swgsim.calibration import build_problem, calibrate, summarize, write_outputs
-    from swgsim.calibration.strain import StrainModel
-    from swgsim.calibration.strain import synthetic as syn
+    from swgcal import build_problem, calibrate, summarize, write_outputs
+    from swgcal.strain import StrainModel
+    from swgcal.strain import synthetic as syn
     from swgsim.chain import SimulationChain
 
     t0 = time.perf_counter()

@@ -2,7 +2,7 @@
 
 For every seed (WG start angles and noise drawn anew), bench windows (2 operating points
 × 5 windows of 40 ms, 1 % noise) are calibrated with a planted effect and clean
-(:mod:`swgsim.calibration.strain.power`). Prints the table (effect, planted parameter,
+(:mod:`swgcal.strain.power`). Prints the table (effect, planted parameter,
 true value, seeds found / seeds, median estimate, clean seeds left alone / seeds, wall
 time) and, per seed, what was added and the planted candidate's evidence. The last line
 is JSON.
@@ -30,7 +30,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--no-clean", action="store_true", help="skip the clean runs")
     args = ap.parse_args(argv)
 
-    from swgsim.calibration.strain.power import format_power_table, power_study
+    from swgcal.strain.power import format_power_table, power_study
 
     t0 = time.perf_counter()
     seeds = range(args.first_seed, args.first_seed + args.seeds)

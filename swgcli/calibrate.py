@@ -4,7 +4,7 @@ Measured data in (a friction CSV, kind 1, or a schema-v1 data-set directory, kin
 recognised automatically), a report out: ``out_dir/report.md``, ``summary.json``, the
 accepted effects as a simulation option (``friction_effects.yaml`` or
 ``sensor_effects.yaml``) and ``figures/*.png``; the run is logged to MLflow. The app only
-parses, calls the kind-independent API of :mod:`swgsim.calibration` and writes.
+parses, calls the kind-independent API of :mod:`swgcal` and writes.
 
 Examples
 --------
@@ -17,7 +17,11 @@ Examples
 
 from __future__ import annotations
 
+import collections.abc
+import dataclasses
 import logging
+import types
+import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,74 +29,69 @@ from typing import Any
 from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
+from swgcal import KINDS, SelectionConfig, kind_module
 from swgcli.app import hydra_app
 
 log = logging.getLogger(__name__)
 
 
-def _arg(func, name: str):
-    """Default of a library function's argument: the one place of that default."""
-    import inspect
-
-    value = inspect.signature(func).parameters[name].default
-    return list(value) if isinstance(value, tuple) else value
-
-
-# the friction calibration's defaults live in swgsim.calibration; the app takes them
-
-def _friction_default(name: str):
-    from swgsim.calibration.friction import friction_problem
-
-    return _arg(friction_problem, name)
+def _omegaconf_type(tp: Any) -> Any:
+    """The structured-config type of a library field type (tuples and sequences become
+    lists, ``X | None`` becomes ``Optional[X]``)."""
+    args = typing.get_args(tp)
+    origin = typing.get_origin(tp)
+    if origin in (types.UnionType, typing.Union) and type(None) in args:
+        (inner,) = [a for a in args if a is not type(None)]
+        return typing.Optional[_omegaconf_type(inner)]  # noqa: UP045 (OmegaConf needs it)
+    if origin in (tuple, list, collections.abc.Sequence):
+        return list[args[0]] if args else list
+    return tp
 
 
-def _friction_builder():
-    from swgsim.calibration.friction import build_problem
+def schema_of(cls: type, name: str | None = None) -> type:
+    """The app schema of a library option dataclass: the same keys, types and defaults
+    (the library's, written once), nested dataclasses included.
 
-    return build_problem
+    Parameters
+    ----------
+    cls : dataclass type
+        E.g. :class:`swgcal.SelectionConfig`.
+    name : str, optional
+        Name of the schema class (default: the library class's).
+
+    Returns
+    -------
+    dataclass type
+        Usable as a Hydra structured config.
+    """
+    hints = typing.get_type_hints(cls)
+    out = []
+    for f in dataclasses.fields(cls):
+        if f.default_factory is not dataclasses.MISSING:
+            sub = schema_of(type(f.default_factory()))
+            out.append((f.name, sub, field(default_factory=sub)))
+        elif isinstance(f.default, tuple):
+            out.append((f.name, _omegaconf_type(hints[f.name]),
+                        field(default_factory=lambda d=f.default: list(d))))
+        else:
+            out.append((f.name, _omegaconf_type(hints[f.name]), field(default=f.default)))
+    schema = dataclasses.make_dataclass(name or cls.__name__, out)
+    schema.__doc__ = f"App keys of :class:`{cls.__module__}.{cls.__qualname__}`."
+    return schema
 
 
-def _selection_default(name: str):
-    from swgsim.calibration import SelectionConfig
-
-    return getattr(SelectionConfig, name)
-
-
-@dataclass
-class BaselineOptions:
-    """Smooth sign of the paper's friction law."""
-
-    v_s: float | None = None     # tanh(dq / v_s) [rad/s]; null: v_s_rel * p99(|dq|)
-    v_s_rel: float = _friction_default("v_s_rel")
-
-
-@dataclass
-class SplitOptions:
-    """Held-out time blocks of a friction recording; the other blocks are fit blocks."""
-
-    n_blocks: int = _friction_default("n_blocks")
-    validation_blocks: list[int] = field(  # choose the effects
-        default_factory=lambda: _friction_default("validation_blocks"))
-    test_blocks: list[int] = field(  # errors before/after only; the last block extrapolates
-        default_factory=lambda: _friction_default("test_blocks"))
-    guard_frac: float = _friction_default("guard_frac")  # dropped at role boundaries [blocks]
-
-
-@dataclass
-class SelectionOptions:
-    """Which effects a calibration accepts (swgsim.calibration.SelectionConfig)."""
-
-    candidates: list[str] | None = None  # null: the whole library; or effect names
-    min_rel_improvement: float = _selection_default("min_rel_improvement")
-    min_heldout_evidence: float = _selection_default("min_heldout_evidence")
-    max_delta_bic: float = _selection_default("max_delta_bic")
-    effective_bic: bool = _selection_default("effective_bic")
-    max_rel_se: float = _selection_default("max_rel_se")
-    max_abs_corr: float = _selection_default("max_abs_corr")
-    max_iter: int = _selection_default("max_iter")
-    pair_candidates: int = _selection_default("pair_candidates")
-    max_starts: int = _selection_default("max_starts")
-    structure_threshold: float = _selection_default("structure_threshold")
+def kind_option_fields() -> list[tuple[str, Any, Any]]:
+    """Schema fields of every kind's problem options (``OPTIONS`` of each kind
+    subpackage), in the order the kinds declare them; a key shared by kinds once."""
+    out, seen = [], set()
+    for kind in KINDS:
+        schema = schema_of(kind_module(kind).OPTIONS)
+        for f in dataclasses.fields(schema):
+            if f.name not in seen:
+                seen.add(f.name)
+                out.append((f.name, f.type, field(default=f.default,
+                                                  default_factory=f.default_factory)))
+    return out
 
 
 @dataclass
@@ -105,29 +104,28 @@ class CalibrateLogger:
     run_name: str | None = None
 
 
-@dataclass
-class CalibrateApp:
-    """``swgsim-calibrate``: calibrate the model against measured data."""
+#: The ``selection`` group: the keys of :class:`swgcal.SelectionConfig`.
+SelectionOptions = schema_of(SelectionConfig, "SelectionOptions")
 
-    measured: str = MISSING   # friction CSV (kind 1) or schema-v1 data-set directory (kind 2)
-    out_dir: str = MISSING    # created if absent
-    baseline: BaselineOptions = field(default_factory=BaselineOptions)
-    gear_ratio: float | None = None  # N (WG turns per output turn) if known: ripple orders
-    accel_window: int = field(  # samples of the Savitzky-Golay estimate of ddq
-        default_factory=lambda: _arg(_friction_builder(), "accel_window"))
-    split: SplitOptions = field(default_factory=SplitOptions)
-    selection: SelectionOptions = field(default_factory=SelectionOptions)
-    figures: bool = True
-    logger: CalibrateLogger = field(default_factory=CalibrateLogger)
+CalibrateApp = dataclasses.make_dataclass("CalibrateApp", [
+    ("measured", str, field(default=MISSING)),
+    ("out_dir", str, field(default=MISSING)),
+    *kind_option_fields(),
+    ("selection", SelectionOptions, field(default_factory=SelectionOptions)),
+    ("figures", bool, field(default=True)),
+    ("logger", CalibrateLogger, field(default_factory=CalibrateLogger)),
+])
+CalibrateApp.__module__ = __name__
+CalibrateApp.__doc__ = """``swgsim-calibrate``: calibrate the model against measured data.
 
+``measured``: a friction CSV (kind 1) or a schema-v1 data-set directory (kind 2);
+``out_dir``: created if absent; the keys of every kind's problem options with the
+library's defaults and ranges (friction: :class:`swgcal.friction.FrictionOptions`:
+``baseline``, ``gear_ratio``, ``accel_window``, ``split``); ``selection``:
+:class:`swgcal.SelectionConfig`; ``figures``; ``logger`` (MLflow).
+"""
 
 ConfigStore.instance().store(name="calibrate_schema", node=CalibrateApp)
-
-
-def _as_list(x: Any) -> list | None:
-    if x is None:
-        return None
-    return list(OmegaConf.to_container(x, resolve=True)) if OmegaConf.is_config(x) else list(x)
 
 
 def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
@@ -165,97 +163,6 @@ def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
     return run.run_id
 
 
-#: Options that only the friction calibration (kind 1) reads.
-FRICTION_ONLY = ("baseline", "gear_ratio", "accel_window", "split")
-
-
-def check_options(cfg: DictConfig, kind: str, measured: Path) -> None:
-    """Check the calibration options before any work.
-
-    Ranges of the friction options; and for a strain data set (kind 2), which takes none
-    of :data:`FRICTION_ONLY`, any of them set away from its default is refused rather
-    than ignored.
-
-    Raises
-    ------
-    ValueError
-        Naming the key, the value and the allowed range (or the data kind it needs).
-    """
-    defaults = OmegaConf.to_container(OmegaConf.structured(CalibrateApp), resolve=False)
-    given = OmegaConf.to_container(cfg, resolve=True)
-    if kind == "strain":
-        for group in FRICTION_ONLY:
-            d, g = defaults[group], given[group]
-            changed = ([f"{group}.{k}={g[k]}" for k in g if g[k] != d[k]]
-                       if isinstance(g, dict) else ([f"{group}={g}"] if g != d else []))
-            if changed:
-                names = ", ".join(f"{x}.*" if isinstance(defaults[x], dict) else x
-                                  for x in FRICTION_ONLY)
-                raise ValueError(
-                    f"{changed[0]} applies to friction recordings (kind 1); {measured} is a "
-                    f"strain data set (kind 2), whose calibration takes none of {names}")
-    se = given["selection"]
-    for key, lo, hi in (("min_rel_improvement", 0.0, 1.0), ("max_rel_se", 0.0, 10.0),
-                        ("min_heldout_evidence", 0.0, 1e6),
-                        ("max_abs_corr", 0.0, 1.0), ("structure_threshold", 0.0, 1.0)):
-        if not lo <= se[key] <= hi:
-            raise ValueError(f"selection.{key} must lie in [{lo:g}, {hi:g}], got {se[key]}")
-    for key, lo, hi in (("max_iter", 0, 100), ("pair_candidates", 0, 50), ("max_starts", 1, 50)):
-        if not lo <= se[key] <= hi:
-            raise ValueError(f"selection.{key} must lie in [{lo}, {hi}], got {se[key]}")
-    if not se["max_delta_bic"] <= 0:
-        raise ValueError(f"selection.max_delta_bic must be <= 0, got {se['max_delta_bic']}")
-    if kind == "strain":
-        return
-    b, sp = given["baseline"], given["split"]
-    aw = given["accel_window"]
-    if not (5 <= aw <= 1001 and aw % 2 == 1):
-        raise ValueError(f"accel_window must be an odd integer in [5, 1001], got {aw}")
-    if b["v_s"] is not None and not b["v_s"] > 0:
-        raise ValueError(f"baseline.v_s must be > 0 rad/s or null, got {b['v_s']}")
-    gr = given["gear_ratio"]
-    if gr is not None and not 1 < gr <= 10_000:
-        raise ValueError(f"gear_ratio must lie in (1, 10000] (wave-generator turns per output "
-                         f"turn) or be null, got {gr}")
-    if not 0 < b["v_s_rel"] <= 1:
-        raise ValueError(f"baseline.v_s_rel must lie in (0, 1], got {b['v_s_rel']}")
-    n = sp["n_blocks"]
-    if not 3 <= n <= 1000:
-        raise ValueError(f"split.n_blocks must lie in [3, 1000], got {n}")
-    for key in ("validation_blocks", "test_blocks"):
-        bad = [x for x in sp[key] if not -n <= x < n]
-        if bad or not sp[key]:
-            raise ValueError(f"split.{key} must list blocks in [{-n}, {n - 1}], got {sp[key]}")
-    if not 0 <= sp["guard_frac"] <= 0.45:
-        raise ValueError(f"split.guard_frac must lie in [0, 0.45], got {sp['guard_frac']}")
-
-
-def problem_options(cfg: DictConfig, kind: str) -> dict[str, Any]:
-    """The options of the kind's problem builder from the app's config.
-
-    Friction: baseline, split, accel_window, gear_ratio and ``selection.candidates``
-    (:func:`swgsim.calibration.friction.build_problem`); strain:
-    ``selection.candidates`` (:func:`swgsim.calibration.strain.build_problem`).
-    """
-    cand = _as_list(cfg.selection.candidates)
-    if kind == "strain":
-        return {"candidates": cand} if cand is not None else {}
-    return dict(v_s=cfg.baseline.v_s, v_s_rel=cfg.baseline.v_s_rel,
-                n_blocks=cfg.split.n_blocks,
-                validation_blocks=_as_list(cfg.split.validation_blocks),
-                test_blocks=_as_list(cfg.split.test_blocks), guard_frac=cfg.split.guard_frac,
-                candidates=cand, accel_window=cfg.accel_window, gear_ratio=cfg.gear_ratio)
-
-
-def selection_config(cfg: DictConfig):
-    """:class:`swgsim.calibration.SelectionConfig` from the app's ``selection`` group."""
-    from swgsim.calibration import SelectionConfig
-
-    sel = OmegaConf.to_container(cfg.selection, resolve=True)
-    return SelectionConfig(**{k: (list(v) if isinstance(v, list) else v)
-                              for k, v in sel.items()})
-
-
 def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     """Calibrate the model against measured data (the task behind ``swgsim-calibrate``).
 
@@ -265,8 +172,8 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
         Composed ``conf/calibrate.yaml``: ``measured`` (a friction CSV, kind 1, or a
         schema-v1 strain data-set directory, kind 2), ``out_dir``, ``baseline``,
         ``gear_ratio``, ``accel_window``, ``split`` (friction only), ``selection``,
-        ``figures``, ``logger``. Parses them, calls :func:`swgsim.calibration.build_problem`,
-        :func:`swgsim.calibration.calibrate` and :func:`swgsim.calibration.write_outputs`,
+        ``figures``, ``logger``. Parses them, calls :func:`swgcal.build_problem`,
+        :func:`swgcal.calibrate` and :func:`swgcal.write_outputs`,
         and logs the run.
 
     Returns
@@ -277,22 +184,23 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
 
     Raises
     ------
-    swgsim.calibration.MeasuredDataError
+    swgcal.MeasuredDataError
         ``measured`` is neither a friction CSV nor a data-set directory.
     """
-    from swgsim.calibration import build_problem, calibrate, detect_kind, write_outputs
+    from swgcal import build_problem, calibrate, detect_kind, options_from_config, write_outputs
 
     measured = Path(cfg.measured).expanduser()
     out_dir = Path(cfg.out_dir).expanduser()
     kind = detect_kind(measured)
-    check_options(cfg, kind, measured)
+    options, selection = options_from_config(
+        kind, OmegaConf.to_container(cfg, resolve=True), measured)
     if cfg.logger.enabled:
         from learn.tracking import check_tracking
 
         check_tracking(cfg.logger.tracking_uri, "logger.tracking_uri")
     log.info("measured data %s: kind %s", measured, kind)
-    problem = build_problem(measured, **problem_options(cfg, kind))
-    result = calibrate(problem, selection_config(cfg))
+    problem = build_problem(measured, **options)
+    result = calibrate(problem, selection)
     summary = write_outputs(result, out_dir, source=str(measured), figures=bool(cfg.figures))
     run_id = _log_mlflow(cfg, summary, out_dir) if cfg.logger.enabled else None
     log.info("%s: test RMSE %.4g -> %.4g %s, added %s, unexplained %s; report %s",

@@ -6,7 +6,7 @@ angle, the bridge's own nonlinearity, per-channel amplifier gains, the amplifier
 low-pass, sampling delay, offsets and a thermal drift of the zero. This module applies
 such effects to simulated windows, given each window's time axis and operating point,
 so that generated data can include what a calibration found
-(:func:`swgsim.calibration.strain.calibrate` writes them as ``sensor_effects``).
+(:func:`swgcal.strain.calibrate` writes them as ``sensor_effects``).
 
 A ``sensor_effects`` option is a list of ``{name, params}``::
 

@@ -2,13 +2,13 @@
 
 Used by the simulator (friction effects as an input of the dynamics,
 :mod:`swgsim.friction`) and by the calibration, which fits such sums
-(:mod:`swgsim.calibration.core`).
+(:mod:`swgcal.core`).
 
 A model is a sum of *terms*. Each term contributes columns ``X_j(θ_j)`` times linear
 coefficients ``c_j`` to the prediction ``ŷ = Σ_j X_j(θ_j) c_j``; ``θ_j`` are its nonlinear
 parameters (a ripple period, a time constant). A term may instead *transform* the
 signals every later term sees (a lag of the velocity seen by the friction law). The
-signals object is domain specific; the fitting (:mod:`swgsim.calibration.core`) only
+signals object is domain specific; the fitting (:mod:`swgcal.core`) only
 calls term methods, so each side (friction, strain) plugs in by defining its own signals
 and terms.
 """

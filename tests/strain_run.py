@@ -7,7 +7,7 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from swgsim.calibration import SelectionConfig, build_problem, calibrate, summarize, write_outputs
+from swgcal import SelectionConfig, build_problem, calibrate, summarize, write_outputs
 
 SELECTION = {f.name for f in dataclasses.fields(SelectionConfig)} - {"candidates"}
 

@@ -8,8 +8,8 @@ import sys
 
 import pytest
 
-from swgsim.calibration import KINDS, kind_module
-from swgsim.calibration.api import STEPS
+from swgcal import KINDS, kind_module
+from swgcal.api import STEPS
 
 
 @pytest.mark.parametrize("kind", sorted(KINDS))
@@ -30,7 +30,7 @@ def test_every_kind_has_the_same_steps_with_the_same_signatures(kind):
 def test_unknown_kind_and_unknown_options_are_named():
     with pytest.raises(ValueError, match="unknown calibration kind 'torque'.*friction"):
         kind_module("torque")
-    from swgsim.calibration import friction, strain
+    from swgcal import friction, strain
 
     with pytest.raises(TypeError, match=r"unknown friction problem options \['n_block'\]"):
         friction.build_problem("x.csv", n_block=3)
@@ -40,7 +40,33 @@ def test_unknown_kind_and_unknown_options_are_named():
 
 def test_making_a_data_set_does_not_load_the_calibration():
     code = ("import sys, swgsim.generate, swgsim.friction; "
-            "print(sorted(m for m in sys.modules if m.startswith('swgsim.calibration')))")
+            "print(sorted(m for m in sys.modules if m.startswith('swgcal')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"
+
+
+def test_no_simulator_module_imports_the_calibration():
+    """swgsim is the simulator only: importing every one of its modules loads no swgcal
+    module, and no swgsim source names swgcal in an import (also inside functions)."""
+    import ast
+    from pathlib import Path
+
+    import swgsim
+
+    root = Path(swgsim.__file__).parent
+    offenders = []
+    for f in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(f.read_text(encoding="utf-8"))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            offenders += [f"{f.relative_to(root)}: {n}" for n in names
+                          if n.split(".")[0] == "swgcal"]
+    assert offenders == []
+    code = ("import pkgutil, importlib, sys, swgsim; "
+            "[importlib.import_module(m.name) for m in "
+            "pkgutil.walk_packages(swgsim.__path__, 'swgsim.')]; "
+            "print(sorted(m for m in sys.modules if m.startswith('swgcal')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"

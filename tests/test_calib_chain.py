@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
-from swgsim.calibration.friction.synthetic import (
+from swgcal.friction.synthetic import (
     BASELINE_TRUTH,
     PLANTED,
     V_SMOOTH,

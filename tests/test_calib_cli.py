@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import yaml
 
+from swgcal import MeasuredDataError, build_problem, detect_kind
+from swgcal.friction import load_friction_csv, write_friction_csv
+from swgcal.friction.synthetic import PLANTED, synthetic_recording
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
-from swgsim.calibration import MeasuredDataError, build_problem, detect_kind
-from swgsim.calibration.friction import load_friction_csv, write_friction_csv
-from swgsim.calibration.friction.synthetic import PLANTED, synthetic_recording
 from swgsim.data import DataSetError
 from swgsim.friction import FrictionEffects
 from swgsim.measurement import parse_sensor_effects
@@ -106,8 +106,8 @@ def test_run_calibrate_rejects_unknown_data(tmp_path):
 
 def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
     """Kind 2: a schema-v1 data-set directory is recognised and calibrated end to end."""
+    from swgcal.strain import synthetic as syn
     from swgsim import data as dsio
-    from swgsim.calibration.strain import synthetic as syn
     from swgsim.chain import SimulationChain
 
     clean = syn.simulate_windows(SimulationChain(), seed=0)
@@ -150,3 +150,38 @@ def test_gear_ratio_option_is_checked_and_reaches_the_summary(tmp_path, planted_
     assert summary["ripples"]["gear_ratio"] == 100
     assert [e["name"] for e in summary["effects_added"]] == ["stribeck"]
     assert summary["effects_added"][0]["ranges"]["v_st"]["inside"]
+
+
+def test_app_defaults_and_ranges_are_the_librarys(tmp_path, planted_csv):
+    """The app's schema is built from the library's option dataclasses (defaults written
+    once) and its option errors are the library's (ranges written once), raised before
+    any work."""
+    from omegaconf import OmegaConf
+
+    from swgcal import SelectionConfig
+    from swgcal.friction import FrictionOptions
+    from swgcal.options import plain
+
+    cfg = OmegaConf.to_container(_cfg(["measured=a.csv", "out_dir=b"]), resolve=True)
+    assert cfg["selection"] == plain(SelectionConfig())
+    assert {k: cfg[k] for k in plain(FrictionOptions())} == plain(FrictionOptions())
+    path, _ = planted_csv
+    for override, words in [
+        ("selection.max_rel_se=-1", "selection.max_rel_se must lie in (0, inf), got -1"),
+        ("selection.max_iter=-1", "selection.max_iter must lie in [0, inf), got -1"),
+        ("split.n_blocks=2", "split.n_blocks must lie in [3, inf), got 2"),
+        ("accel_window=20", "accel_window must be an odd integer in [5, 1001], got 20"),
+        ("split.test_blocks=[12]", "split.test_blocks must list blocks in [-10, 9]")]:
+        out = tmp_path / override.split("=")[0]
+        with pytest.raises(ValueError) as err:
+            run_calibrate(_cfg([f"measured={path}", f"out_dir={out}", "logger.enabled=false",
+                                override]))
+        assert str(err.value).startswith(words), (override, str(err.value))
+        assert not out.exists()
+        # the library refuses the same value with the same words
+        key, value = override.split("=")
+        with pytest.raises(ValueError, match=key.split(".")[-1] + " must"):
+            if key.startswith("selection."):
+                SelectionConfig(**{key.split(".")[1]: int(value)})
+            else:
+                build_problem(path, **{key.split(".")[-1]: yaml.safe_load(value)})

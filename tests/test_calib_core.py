@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swgsim.calibration.core import (
+from swgcal.core import (
     Param,
     Term,
     fit_terms,
     integrated_autocorr_time,
     linear_recurrence,
 )
-from swgsim.calibration.diagnose import noise_floor
-from swgsim.calibration.split import group_split, time_block_split
+from swgcal.diagnose import noise_floor
+from swgcal.split import group_split, time_block_split
 from swgsim.friction.effects import (
     dahl_state,
     first_order_lag,

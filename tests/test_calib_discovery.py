@@ -1,6 +1,6 @@
-"""Discovery of terms beyond the strain library (swgsim.calibration.discovery).
+"""Discovery of terms beyond the strain library (swgcal.discovery).
 
-Planted out-of-library effects (:data:`swgsim.calibration.strain.synthetic.HIDDEN`):
+Planted out-of-library effects (:data:`swgcal.strain.synthetic.HIDDEN`):
 crosstalk of s2 into s1, mains hum at 50 Hz with its third harmonic, a tone at order 2.7
 of the input rotation whose amplitude is proportional to the load, and a gauge gain of
 s1 that grows with the load. Each must be proposed in words that name it, with a
@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 from strain_run import run_strain
 
-from swgsim.calibration import discovery as disc
-from swgsim.calibration.strain import StrainModel
-from swgsim.calibration.strain import discovery as strain_discovery
-from swgsim.calibration.strain import synthetic as syn
+from swgcal import discovery as disc
+from swgcal.strain import StrainModel
+from swgcal.strain import discovery as strain_discovery
+from swgcal.strain import synthetic as syn
 from swgsim.chain import SimulationChain
 
 OPS3 = ((2000.0, 7.0), (4000.0, 70.0), (4000.0, 7.0))

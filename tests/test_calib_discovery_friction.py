@@ -1,7 +1,7 @@
-"""Discovery of terms beyond the friction library (swgsim.calibration.friction.discovery).
+"""Discovery of terms beyond the friction library (swgcal.friction.discovery).
 
 Out-of-library effects are added to the synthetic torque through the ``hidden`` hook of
-:func:`swgsim.calibration.friction.synthetic.synthetic_recording` (60 s, noise 1 % of the torque
+:func:`swgcal.friction.synthetic.synthetic_recording` (60 s, noise 1 % of the torque
 range, AR(1) 0.3): a 7 Hz vibration in time (not periodic in q), and a ripple over the
 joint angle (period 0.0262 rad: order 2 of the wave generator for N = 120) whose
 amplitude is proportional to |q̇|. Each must be proposed in words that name it, the
@@ -19,10 +19,10 @@ import re
 import numpy as np
 import pytest
 
-from swgsim.calibration import select_effects
-from swgsim.calibration.friction import friction_problem, render_report, summarize
-from swgsim.calibration.friction.discovery import propose
-from swgsim.calibration.friction.synthetic import PLANTED, synthetic_recording
+from swgcal import select_effects
+from swgcal.friction import friction_problem, render_report, summarize
+from swgcal.friction.discovery import propose
+from swgcal.friction.synthetic import PLANTED, synthetic_recording
 
 F_TONE_HZ = 7.0
 P_RIPPLE_RAD = 0.0262

@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from swgsim.calibration import select_effects
-from swgsim.calibration.friction import friction_problem
-from swgsim.calibration.friction.synthetic import PLANTED, synthetic_recording
+from swgcal import select_effects
+from swgcal.friction import friction_problem
+from swgcal.friction.synthetic import PLANTED, synthetic_recording
 from swgsim.friction import FRICTION_LIBRARY, make_effect
 
 

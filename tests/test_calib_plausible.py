@@ -19,10 +19,10 @@ import re
 import numpy as np
 import pytest
 
-from swgsim.calibration import SelectionConfig
-from swgsim.calibration.friction import calibrate, friction_problem, render_report, summarize
-from swgsim.calibration.friction.ripple_groups import harmonic_groups
-from swgsim.calibration.friction.synthetic import synthetic_recording
+from swgcal import SelectionConfig
+from swgcal.friction import calibrate, friction_problem, render_report, summarize
+from swgcal.friction.ripple_groups import harmonic_groups
+from swgcal.friction.synthetic import synthetic_recording
 from swgsim.friction import FRICTION_LIBRARY
 from swgsim.friction.ripples import PositionRipple, RippleTerm
 

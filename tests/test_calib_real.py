@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from swgsim.calibration import build_problem, calibrate
+from swgcal import build_problem, calibrate
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "calibrate_real.py"
 spec = importlib.util.spec_from_file_location("calibrate_real", SCRIPT)

@@ -3,7 +3,7 @@ clean data, two effects, out-of-library residuals, held-out split.
 
 "Measured" data come from the chain's standard path (random WG start angles, settling
 transient) with planted measurement effects and white noise of 1 % of the signal range
-(:mod:`swgsim.calibration.strain.synthetic`); the calibration models them with one
+(:mod:`swgcal.strain.synthetic`); the calibration models them with one
 steady trajectory per operating point. Tiny: 2 operating points × 5 windows of 40 ms.
 """
 
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from strain_run import run_strain
 
-from swgsim.calibration.strain import StrainModel
-from swgsim.calibration.strain import synthetic as syn
+from swgcal.strain import StrainModel
+from swgcal.strain import synthetic as syn
 from swgsim.chain import SimulationChain
 from swgsim.dynamics import gear_with_ke, rt1_size20
 from swgsim.measurement import (
@@ -225,7 +225,7 @@ def test_heldout_windows_are_whole_and_last_is_test(bench):
 
 
 def test_every_strain_effect_declares_physical_ranges_with_sources():
-    from swgsim.calibration.strain.effects import strain_library
+    from swgcal.strain.effects import strain_library
 
     for key, cls in strain_library().items():
         term = cls()

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import pytest
 
-from swgsim.calibration.strain.power import format_power_table, power_study
+from swgcal.strain.power import format_power_table, power_study
 
 
 def _check(rows, n_seeds, min_found, min_clean):

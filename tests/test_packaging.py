@@ -13,7 +13,7 @@ def test_every_package_and_config_folder_is_listed():
     cfg = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     listed = set(cfg["packages"])
     found = {".".join(p.parent.relative_to(ROOT).parts)
-             for top in ("swgsim", "learn", "swgcli")
+             for top in ("swgsim", "swgcal", "learn", "swgcli")
              for p in (ROOT / top).rglob("__init__.py")}
     conf = {"swgcli.conf", *("swgcli.conf." + ".".join(d.relative_to(ROOT / "conf").parts)
                              for d in (ROOT / "conf").rglob("*") if d.is_dir()
@@ -32,6 +32,15 @@ def test_public_api_resolves(package):
         assert hasattr(mod, name), name
     with pytest.raises(AttributeError, match="no attribute"):
         mod.not_a_name  # noqa: B018
+
+
+def test_calibration_api_resolves_and_the_simulator_does_not_export_it():
+    import swgcal
+    import swgsim
+
+    for name in swgcal.__all__:
+        assert hasattr(swgcal, name), name
+    assert not set(swgcal.__all__) & set(swgsim.__all__) - {"Param", "Term"}
 
 
 def test_config_folder_found():

@@ -4,7 +4,7 @@ effects beyond it.
 The dynamics add an extra friction torque τ(t, q, q̇, q̈) [N m] in the joint coordinate
 (gear output angle) to the paper-law friction of eq. (5)-(6). Its forms are model terms
 (:class:`swgsim.terms.Term`) that a calibration against measured joint friction fits
-(:mod:`swgsim.calibration.friction`) and whose accepted list a data set takes as the
+(:mod:`swgcal.friction`) and whose accepted list a data set takes as the
 option ``friction_effects`` (:func:`friction_effects_from_config`).
 
 Modules: :mod:`.signals` (what friction terms see, the paper law), :mod:`.effects` (the

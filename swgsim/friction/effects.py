@@ -1,6 +1,6 @@
 """Declared library of candidate friction effects.
 
-Every effect is a :class:`~swgsim.calibration.core.Term` in the joint coordinate q
+Every effect is a :class:`~swgcal.core.Term` in the joint coordinate q
 (gear output angle [rad]) with the friction torque τ [N m] positive along q̇. ``sgn``
 is the smooth sign tanh(v / v_s) of the velocity v the friction law sees (q̇, or a
 lagged q̇ once ``velocity_lag`` is in the model). Each entry documents its form, its
@@ -36,7 +36,7 @@ gravity_residual up to three times (higher orders). Ripples live in
 when the gear ratio is known).
 
 Every effect declares the physical range of its characterising parameters
-(:attr:`~swgsim.calibration.core.Term.ranges`, values and sources in
+(:attr:`~swgcal.core.Term.ranges`, values and sources in
 :mod:`.ranges`): a fit outside it is not accepted as that effect.
 
 Sources: Armstrong-Hélouvry, Dupont & Canudas de Wit 1994 (survey, Automatica 30(7)):
@@ -75,6 +75,7 @@ __all__ = [
     "ThermalDrift",
     "SensorDrift",
     "VelocityLag",
+    "register_effect",
     "dahl_state",
     "first_order_lag",
     "periodogram_peaks",
@@ -471,6 +472,40 @@ FRICTION_LIBRARY: dict[str, type[Term]] = {
         LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
 }
 """Library key -> effect class. Instantiate with ``FRICTION_LIBRARY[key](name)``."""
+
+
+def register_effect(cls: type[Term]) -> type[Term]:
+    """Add an effect class to :data:`FRICTION_LIBRARY` (usable as a class decorator).
+
+    The one step that makes a new friction effect known to both the simulation (a
+    ``friction_effects`` entry of its kind, :func:`~swgsim.friction.parse_effects`) and the
+    calibration (a candidate of every friction problem built afterwards). The class
+    defines the form (:meth:`~swgsim.terms.Term.columns` or ``transform``) and its
+    parameters; see docs/ARCHITECTURE.md, "Calibration loop".
+
+    Parameters
+    ----------
+    cls : subclass of Term
+        With a ``kind`` not yet in the library.
+
+    Returns
+    -------
+    The class itself.
+
+    Raises
+    ------
+    TypeError
+        Not a :class:`~swgsim.terms.Term` subclass.
+    ValueError
+        Its ``kind`` is already taken.
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Term)):
+        raise TypeError(f"a friction effect must subclass swgsim.terms.Term, got {cls!r}")
+    if cls.kind in FRICTION_LIBRARY:
+        raise ValueError(f"friction effect {cls.kind!r} is already registered "
+                         f"({FRICTION_LIBRARY[cls.kind].__qualname__})")
+    FRICTION_LIBRARY[cls.kind] = cls
+    return cls
 
 
 def make_effect(kind: str, name: str | None = None, **kwargs: Any) -> Term:

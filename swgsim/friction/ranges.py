@@ -1,7 +1,7 @@
 """Physical ranges of the friction-effect parameters, with their sources.
 
 A calibration fit of a library effect whose characterising parameter falls outside the
-range below is not accepted as that effect (:meth:`~swgsim.calibration.core.Term.
+range below is not accepted as that effect (:meth:`~swgcal.core.Term.
 range_violations`, checked by the selection loop): the residual then holds structure
 the effect absorbs without being it (a "velocity lag" of 0.6 s is no frictional memory,
 a "thermal drift" of 3.6 s no warm-up). Each range is ``(low, high, source)`` in the

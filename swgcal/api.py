@@ -1,0 +1,290 @@
+"""One calibration API for both data kinds: recognise the measured data, then the kind's
+steps build problem -> calibrate -> summarise -> render -> write.
+
+Each kind is a subpackage with the same step functions (:mod:`swgcal.friction`
+for friction CSVs, :mod:`swgcal.strain` for schema-v1 strain data sets);
+the functions here pick the kind from the data or from ``problem.kind``, and every step
+returns the same types whatever the kind: a :class:`~swgcal.loop.Problem`, a
+:class:`~swgcal.loop.CalibrationResult`, a JSON-ready summary dict, markdown.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Mapping
+from dataclasses import fields
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from swgsim import data as dsio
+
+from .friction.data import REQUIRED_COLUMNS, FrictionRecording
+from .loop import CalibrationResult, Problem, SelectionConfig
+from .options import build, plain
+
+__all__ = ["KINDS", "MeasuredDataError", "detect_kind", "kind_module", "options_from_config",
+           "build_problem", "calibrate", "summarize", "render_report", "make_figures",
+           "write_outputs"]
+
+#: Data kind -> the subpackage that implements its steps.
+KINDS = {"friction": "swgcal.friction", "strain": "swgcal.strain"}
+
+#: Data kind -> how messages name it.
+KIND_LABELS = {"friction": "friction recording (kind 1)", "strain": "strain data set (kind 2)"}
+
+#: The step functions every kind subpackage defines.
+STEPS = ("build_problem", "calibrate", "summarize", "render_report", "make_figures",
+         "simulation_files")
+
+
+class MeasuredDataError(ValueError):
+    """The measured-data path is neither a friction CSV nor a data-set directory."""
+
+
+def detect_kind(path: str | Path) -> str:
+    """Recognise the kind of measured data at ``path``.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    str
+        ``"friction"`` for a CSV whose header holds the friction columns, ``"strain"``
+        for a directory holding ``manifest.json`` (schema-v1 data set).
+
+    Raises
+    ------
+    MeasuredDataError
+        The path does not exist, or is neither; the message names the path and what was
+        expected.
+    """
+    p = Path(path)
+    expected = (f"expected a friction CSV with columns {list(REQUIRED_COLUMNS)} or a "
+                "schema-v1 data-set directory holding manifest.json")
+    if not p.exists():
+        raise MeasuredDataError(f"measured data {str(p)!r} does not exist; {expected}")
+    if p.is_dir():
+        if (p / "manifest.json").is_file():
+            return "strain"
+        raise MeasuredDataError(f"{str(p)!r} is a directory without manifest.json; {expected}")
+    try:
+        with p.open(encoding="utf-8", errors="replace") as fh:
+            header = [h.strip() for h in fh.readline().split(",")]
+    except OSError as e:
+        raise MeasuredDataError(f"cannot read {str(p)!r}: {e}; {expected}") from e
+    if all(c in header for c in REQUIRED_COLUMNS):
+        return "friction"
+    raise MeasuredDataError(f"{str(p)!r} is not a friction CSV (header {header[:8]}); "
+                            f"{expected}")
+
+
+def kind_module(kind: str) -> ModuleType:
+    """The subpackage of a data kind (imported on first use).
+
+    Raises
+    ------
+    ValueError
+        Unknown kind (the message lists the known ones).
+    """
+    if kind not in KINDS:
+        raise ValueError(f"unknown calibration kind {kind!r}; known: {sorted(KINDS)}")
+    return importlib.import_module(KINDS[kind])
+
+
+def options_from_config(kind: str, given: Mapping[str, Any], measured: Any = None
+                        ) -> tuple[dict[str, Any], SelectionConfig]:
+    """Typed, checked options of a calibration from a plain config (an app's keys).
+
+    ``given`` holds ``selection`` (:class:`SelectionConfig` fields) and the option keys of
+    every kind (each kind subpackage's ``OPTIONS`` dataclass, e.g.
+    :class:`swgcal.friction.FrictionOptions`: ``baseline``, ``gear_ratio``,
+    ``accel_window``, ``split``). A key of another kind set away from its default is
+    refused rather than ignored; every range is the one its dataclass declares.
+
+    Parameters
+    ----------
+    kind : str
+        From :func:`detect_kind`.
+    given : mapping
+        Plain config (lists and dicts).
+    measured : optional
+        The measured data, named in messages.
+
+    Returns
+    -------
+    dict
+        Keyword arguments of :func:`build_problem` (``candidates`` included).
+    SelectionConfig
+
+    Raises
+    ------
+    ValueError
+        One line naming the key by its full name, the value and the allowed range (or the
+        data kind it needs); nothing is loaded before.
+    """
+    own = kind_module(kind).OPTIONS
+    own_keys = {f.name for f in fields(own)}
+    for other in sorted(set(KINDS) - {kind}):
+        cls = kind_module(other).OPTIONS
+        foreign = [f.name for f in fields(cls) if f.name not in own_keys]
+        defaults = plain(cls())
+        for key in foreign:
+            d = defaults[key]
+            g = plain(given.get(key, d))
+            changed = ([f"{key}.{k}={g[k]}" for k in g if g[k] != d.get(k)]
+                       if isinstance(g, dict) else ([f"{key}={g}"] if g != d else []))
+            if changed:
+                names = ", ".join(f"{x}.*" if isinstance(defaults[x], dict) else x
+                                  for x in foreign)
+                raise ValueError(f"{changed[0]} applies to a {KIND_LABELS[other]}; "
+                                 f"{measured} is a {KIND_LABELS[kind]}, whose calibration "
+                                 f"takes none of {names}")
+    selection = build(SelectionConfig, given.get("selection"), "selection.")
+    opts = build(own, {k: v for k, v in given.items() if k in own_keys})
+    kwargs = opts.problem_kwargs()
+    if selection.candidates is not None:
+        kwargs["candidates"] = list(selection.candidates)
+    return kwargs, selection
+
+
+def _kind_of_data(measured: Any) -> str:
+    if isinstance(measured, FrictionRecording):
+        return "friction"
+    if isinstance(measured, (str, Path)):
+        return detect_kind(measured)
+    return "strain"  # an xarray.Dataset or StrainWindows (the strain builder checks)
+
+
+def build_problem(measured: Any, **options: Any) -> Problem:
+    """Recognise measured data and build its calibration problem.
+
+    Parameters
+    ----------
+    measured : str or Path or FrictionRecording or xarray.Dataset or StrainWindows
+        A friction CSV or a schema-v1 data-set directory (:func:`detect_kind`), or data
+        already loaded.
+    **options
+        The kind's problem options: :func:`swgcal.friction.build_problem`
+        (``accel_window``, ``v_s``, ``n_blocks``, ``candidates``, ``gear_ratio``, ...) or
+        :func:`swgcal.strain.build_problem` (``model``, ``select``,
+        ``heldout``, ``candidates``, ...).
+
+    Returns
+    -------
+    Problem
+
+    Raises
+    ------
+    MeasuredDataError
+        A path that is neither kind.
+    TypeError
+        An option the kind does not take.
+    """
+    return kind_module(_kind_of_data(measured)).build_problem(measured, **options)
+
+
+def calibrate(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
+    """Calibrate: the kind's selection of library effects on held-out evidence
+    (friction: then ripples grouped by harmonics).
+
+    Parameters
+    ----------
+    problem : Problem
+        From :func:`build_problem`.
+    config : SelectionConfig, optional
+
+    Returns
+    -------
+    CalibrationResult
+    """
+    return kind_module(problem.kind).calibrate(problem, config)
+
+
+def summarize(result: CalibrationResult, source: str | None = None) -> dict[str, Any]:
+    """Machine-readable summary of a calibration (``summary.json``): the shared keys
+    (:func:`swgcal.report.base_summary`) and the kind's own.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    source : str, optional
+        Path of the measured data.
+
+    Returns
+    -------
+    dict
+        JSON-serialisable.
+    """
+    return kind_module(result.problem.kind).summarize(result, source)
+
+
+def render_report(result: CalibrationResult, summary: dict[str, Any],
+                  figures: dict[str, str] | None = None) -> str:
+    """Markdown report of a calibration.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    summary : dict
+        From :func:`summarize`.
+    figures : dict of str to str, optional
+        Figure key -> path relative to the report.
+
+    Returns
+    -------
+    str
+    """
+    return kind_module(result.problem.kind).render_report(result, summary, figures)
+
+
+def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, str]:
+    """Diagnosis figures of a calibration, written to ``out_dir/figures/``.
+
+    Returns
+    -------
+    dict of str to str
+        Figure key -> path relative to ``out_dir``.
+    """
+    return kind_module(result.problem.kind).make_figures(result, out_dir)
+
+
+def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
+                  source: str | None = None, figures: bool = True) -> dict[str, Any]:
+    """Write a calibration's files: ``report.md``, ``summary.json``, the accepted effects
+    as a simulation option (friction: ``friction_effects.yaml``, strain:
+    ``sensor_effects.yaml``) and ``figures/*.png``.
+
+    Each file is written atomically (a temporary file renamed into place); nothing else
+    in ``out_dir`` is touched.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    out_dir : str or Path
+        Created if absent.
+    source : str, optional
+        Path of the measured data (recorded in the summary).
+    figures : bool, default True
+
+    Returns
+    -------
+    dict
+        The summary as written, with ``figures`` (key -> relative path) and ``files``
+        (the file names written besides the figures).
+    """
+    kind = kind_module(result.problem.kind)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    summary = kind.summarize(result, source)
+    summary["figures"] = kind.make_figures(result, out) if figures else {}
+    extra = kind.simulation_files(summary)
+    summary["files"] = ["report.md", "summary.json", *extra]
+    dsio.atomic_write_json(out / "summary.json", summary)
+    dsio.atomic_write_bytes(out / "report.md",
+                            kind.render_report(result, summary, summary["figures"]).encode())
+    for name, text in extra.items():
+        dsio.atomic_write_bytes(out / name, text.encode())
+    return summary

@@ -1,0 +1,496 @@
+"""Separable least squares of a sum of model terms, with uncertainties.
+
+The terms themselves (:class:`Param`, :class:`Term`, the design matrix) are defined in
+:mod:`swgsim.terms` (a simulator input as much as a fitted model) and re-exported here.
+
+A model is a sum of *terms*. Each term contributes columns ``X_j(θ_j)`` times linear
+coefficients ``c_j`` to the prediction ``ŷ = Σ_j X_j(θ_j) c_j``; ``θ_j`` are its nonlinear
+parameters (a ripple period, a time constant). A term may instead *transform* the
+signals every later term sees (a lag of the velocity seen by the friction law). The
+signals object is domain specific (friction: :class:`~swgsim.friction.FrictionSignals`);
+this module only calls term methods, so a strain-side library plugs in by defining its
+own signals and terms.
+
+Fitting is separable (variable projection, Golub & Pereyra 1973): for given θ the linear
+coefficients are the exact linear least-squares solution, and θ is found by
+:func:`scipy.optimize.least_squares` (trust region reflective, box bounds, log scale for
+positive scale parameters) from several starts. Uncertainties come from the Jacobian of
+the full parameter vector at the optimum, ``cov = s² (JᵀJ)⁻¹ · τ_int``, where ``s²`` is
+the residual variance and ``τ_int`` the integrated autocorrelation time of the residual
+(Sokal 1997, automatic window c = 5): autocorrelated residuals carry fewer independent
+samples than their count, and the plain Jacobian formula would be optimistic by about
+``sqrt(τ_int)``. The correction is approximate (it treats the regressors as white).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from swgsim.terms import Param, Term, design_matrix, evaluate_terms, linear_recurrence
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "Param",
+    "Term",
+    "FitResult",
+    "ParamEstimate",
+    "fit_terms",
+    "evaluate_terms",
+    "with_uncertainty",
+    "integrated_autocorr_time",
+    "linear_recurrence",
+]
+
+
+# ---------------------------------------------------------------------------------------
+# helpers
+
+
+def integrated_autocorr_time(r: np.ndarray, c: float = 5.0) -> float:
+    """Integrated autocorrelation time τ_int = 1 + 2 Σ_k ρ_k of a series.
+
+    Sokal's automatic window: the sum runs to the smallest lag M with M ≥ c τ_int(M)
+    (Sokal 1997, "Monte Carlo methods in statistical mechanics"; also emcee's
+    ``integrated_time``). White noise gives 1; AR(1) with coefficient ρ gives
+    (1 + ρ) / (1 − ρ).
+
+    Parameters
+    ----------
+    r : ndarray, shape (n,)
+        Series in sample order.
+    c : float, default 5
+        Window constant.
+
+    Returns
+    -------
+    float
+        τ_int ≥ 1 [samples].
+    """
+    x = np.asarray(r, float) - np.mean(r)
+    n = x.size
+    if n < 8 or not np.any(x):
+        return 1.0
+    nfft = 1 << (2 * n - 1).bit_length()
+    f = np.fft.rfft(x, nfft)
+    acf = np.fft.irfft(f * np.conj(f), nfft)[:n]
+    acf /= acf[0]
+    taus = 2.0 * np.cumsum(acf) - 1.0
+    m = np.arange(n)
+    ok = m >= c * taus
+    w = int(np.argmax(ok)) if ok.any() else n - 1
+    return float(max(1.0, min(taus[w], n / 10.0)))
+
+
+# ---------------------------------------------------------------------------------------
+# results
+
+
+@dataclass(frozen=True)
+class ParamEstimate:
+    """One reported parameter with its standard error and identifiability flag.
+
+    Attributes
+    ----------
+    term, name, unit : str
+    value, std : float
+        Estimate and standard error (corrected for residual autocorrelation).
+    flag : str
+        ``""`` (pinned down), or why the data cannot pin it down: ``"weak (rel. s.e.
+        0.8)"`` (relative standard error above ``max_rel_se``), ``"not determined
+        (singular)"``.
+    note : str
+        A strong correlation with another parameter (``"correlated with paper_law.b0
+        (r = -0.995)"``): the two trade off; informative even when both are pinned down.
+    """
+
+    term: str
+    name: str
+    unit: str
+    value: float
+    std: float
+    flag: str = ""
+    note: str = ""
+
+    @property
+    def identifiable(self) -> bool:
+        return not self.flag
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"value": self.value, "std": self.std, "unit": self.unit,
+                "identifiable": self.identifiable, "flag": self.flag, "note": self.note}
+
+
+@dataclass
+class FitResult:
+    """A fitted model: terms, parameters, covariance, scores.
+
+    Attributes
+    ----------
+    terms : tuple of Term
+    thetas, coefs : tuple of ndarray
+        Nonlinear and linear parameters per term [natural units].
+    n, k : int
+        Samples and parameters used in the fit.
+    rss : float
+        Residual sum of squares on the fit samples.
+    sigma : float
+        Residual standard deviation sqrt(rss / (n − k)).
+    tau_int : float
+        Integrated autocorrelation time of the fit residual [samples].
+    bic : float
+        n ln(rss / n) + k ln n (Schwarz 1978), Gaussian i.i.d. likelihood.
+    estimates : list of ParamEstimate
+        Reported (derived) parameters with standard errors and flags.
+    cond : float
+        Condition number of the column-scaled JᵀJ.
+    success : bool
+    message : str
+    """
+
+    terms: tuple[Term, ...]
+    thetas: tuple[np.ndarray, ...]
+    coefs: tuple[np.ndarray, ...]
+    n: int
+    k: int
+    rss: float
+    sigma: float
+    tau_int: float
+    bic: float
+    estimates: list[ParamEstimate] = field(default_factory=list)
+    cond: float = float("nan")
+    success: bool = True
+    message: str = ""
+
+    def predict(self, sig: Any) -> np.ndarray:
+        """Model prediction on ``sig`` (all samples), shape (n,)."""
+        return design_matrix(self.terms, sig, self.thetas) @ np.concatenate(
+            [c for c in self.coefs] or [np.empty(0)])
+
+    def term_params(self, term: Term) -> dict[str, float]:
+        """Raw parameters of one term."""
+        i = self.terms.index(term)
+        return term.to_params(self.coefs[i], self.thetas[i])
+
+    def estimates_of(self, term_name: str) -> dict[str, ParamEstimate]:
+        return {e.name: e for e in self.estimates if e.term == term_name}
+
+    def spec(self) -> list[dict[str, Any]]:
+        """Effect list ``[{name, kind, params}]`` (raw parameters) for every term."""
+        return [{"name": t.name, "kind": t.kind, "params": t.to_params(c, th)}
+                for t, c, th in zip(self.terms, self.coefs, self.thetas, strict=True)]
+
+
+# ---------------------------------------------------------------------------------------
+# fitting
+
+
+def _solve_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least-squares coefficients: column-scaled normal equations solved by a symmetric
+    eigendecomposition with a pseudo-inverse cut at 1e-12 of the largest eigenvalue
+    (rank-deficient safe; for the few-column designs here far faster than an SVD of the
+    tall matrix, and accurate while cond(X) < 1e6)."""
+    if x.shape[1] == 0:
+        return np.empty(0)
+    norms = np.sqrt(np.einsum("ij,ij->j", x, x))
+    norms[norms == 0] = 1.0
+    xs = x / norms
+    g = xs.T @ xs
+    w, v = np.linalg.eigh(g)
+    keep = w > w[-1] * 1e-12
+    c = v[:, keep] @ ((v[:, keep].T @ (xs.T @ y)) / w[keep])
+    return c / norms
+
+
+class _Packer:
+    """Map between the concatenated nonlinear parameters and the optimiser's space."""
+
+    def __init__(self, terms: Sequence[Term], sig: Any) -> None:
+        self.sizes = [t.n_nonlinear for t in terms]
+        self.logs = np.array([p.log for t in terms for p in t.nonlinear], bool)
+        b = [bd for t in terms for bd in t.bounds(sig)]
+        if len(b) != int(np.sum(self.sizes)):
+            raise ValueError("bounds() must give one (lo, hi) per nonlinear parameter")
+        self.lo = np.array([x[0] for x in b], float)
+        self.hi = np.array([x[1] for x in b], float)
+        if np.any(self.lo[self.logs] <= 0):
+            raise ValueError("log-scaled nonlinear parameters need positive lower bounds")
+
+    def clip(self, theta: np.ndarray) -> np.ndarray:
+        # keep strictly inside for the optimiser
+        span = self.hi - self.lo
+        return np.clip(theta, self.lo + 1e-9 * span, self.hi - 1e-9 * span)
+
+    def to_u(self, theta: np.ndarray) -> np.ndarray:
+        t = self.clip(np.asarray(theta, float))
+        return np.where(self.logs, np.log(np.where(self.logs, t, 1.0)), t)
+
+    def from_u(self, u: np.ndarray) -> np.ndarray:
+        return np.where(self.logs, np.exp(np.where(self.logs, u, 0.0)), u)
+
+    def from_u_partial(self, u: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        lg = self.logs[mask]
+        return np.where(lg, np.exp(np.where(lg, u, 0.0)), u)
+
+    def u_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo = np.where(self.logs, np.log(np.where(self.logs, self.lo, 1.0)), self.lo)
+        hi = np.where(self.logs, np.log(np.where(self.logs, self.hi, 1.0)), self.hi)
+        return lo, hi
+
+    def split(self, theta: np.ndarray) -> list[np.ndarray]:
+        out, i = [], 0
+        for s in self.sizes:
+            out.append(np.asarray(theta[i:i + s], float))
+            i += s
+        return out
+
+
+def fit_terms(
+    terms: Sequence[Term],
+    sig: Any,
+    y: np.ndarray,
+    idx: np.ndarray,
+    starts: Sequence[Sequence[np.ndarray]] | None = None,
+    *,
+    max_starts: int = 3,
+    max_nfev: int = 200,
+    fixed: Sequence[bool] | None = None,
+    max_rel_se: float = 0.5,
+    max_abs_corr: float = 0.98,
+    uncertainty: bool = True,
+) -> FitResult:
+    """Fit a sum of terms by separable least squares on the samples ``idx``.
+
+    Parameters
+    ----------
+    terms : sequence of Term
+        Model terms, applied in order (transform terms affect the terms after them).
+    sig : object
+        Signals passed to the terms (all samples: states integrate over the full series,
+        only the target of the samples ``idx`` enters the fit).
+    y : ndarray, shape (n,)
+        Target [data units].
+    idx : ndarray of int, shape (m,)
+        Fit samples.
+    starts : sequence, optional
+        Per term, a list of starting θ vectors; default each term's :meth:`Term.starts`
+        with a zero residual. Every combination is scored and the best ``max_starts``
+        are optimised.
+    max_starts : int, default 3
+    max_nfev : int, default 200
+        Function evaluations per optimisation.
+    fixed : sequence of bool, optional
+        Per term: hold its nonlinear parameters at the (first) start instead of
+        optimising them (the linear coefficients of all terms are always refitted).
+    max_rel_se : float, default 0.5
+        Flag a reported parameter whose standard error exceeds this fraction of |value|.
+    max_abs_corr : float, default 0.98
+        Note a reported parameter whose correlation with another exceeds this.
+    uncertainty : bool, default True
+        Compute standard errors (skip for fast candidate screening).
+
+    Returns
+    -------
+    FitResult
+
+    Raises
+    ------
+    ValueError
+        Fewer fit samples than parameters, or a non-finite target on the fit samples.
+    """
+    terms = tuple(terms)
+    y = np.asarray(y, float)
+    idx = np.asarray(idx)
+    if not np.all(np.isfinite(y[idx])):
+        raise ValueError("target has non-finite values on the fit samples")
+    pk = _Packer(terms, sig)
+    cache: dict = {}
+
+    def resid(theta_flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        th = pk.split(theta_flat)
+        x = design_matrix(terms, sig, th, cache)[idx]
+        c = _solve_linear(x, y[idx])
+        return y[idx] - x @ c, c
+
+    if starts is None:
+        z = np.zeros_like(y)
+        starts = [t.starts(sig, z, idx) for t in terms]
+    combos = list(itertools.product(*[list(s) if len(s) else [np.empty(0)] for s in starts]))
+    if len(combos) > 64:
+        combos = combos[:64]
+    flat = [pk.clip(np.concatenate([np.asarray(c, float) for c in combo]))
+            if pk.lo.size else np.empty(0) for combo in combos]
+    n_nl = pk.lo.size
+    free = np.ones(n_nl, bool)
+    if fixed is not None:
+        if len(fixed) != len(terms):
+            raise ValueError(f"fixed needs one flag per term ({len(terms)}), got {len(fixed)}")
+        if n_nl:
+            free = np.concatenate([np.full(t.n_nonlinear, not bool(f))
+                                   for t, f in zip(terms, fixed, strict=True)])
+    best_theta, best_rss, msg, ok = None, np.inf, "linear", True
+    if n_nl == 0 or not free.any():
+        best_theta = flat[0] if n_nl else np.empty(0)
+        msg = "no free nonlinear parameters"
+    else:
+        scored = sorted(((float(np.sum(resid(f)[0] ** 2)), i) for i, f in enumerate(flat)))
+        lo_u, hi_u = pk.u_bounds()
+        for _, i in scored[:max_starts]:
+            base = flat[i]
+
+            def full(u: np.ndarray, base: np.ndarray = base) -> np.ndarray:
+                th = base.copy()
+                th[free] = pk.from_u_partial(u, free)
+                return th
+
+            u0 = pk.to_u(base)[free]
+            try:
+                sol = least_squares(lambda u: resid(full(u))[0], u0,
+                                    bounds=(lo_u[free], hi_u[free]), method="trf",
+                                    x_scale="jac", max_nfev=max_nfev, diff_step=1e-5)
+            except (np.linalg.LinAlgError, ValueError) as e:  # pragma: no cover
+                log.debug("start %d failed: %s", i, e)
+                continue
+            rss = float(np.sum(sol.fun ** 2))
+            if rss < best_rss:
+                best_rss, best_theta, msg, ok = rss, full(sol.x), sol.message, sol.success
+        if best_theta is None:  # pragma: no cover
+            best_theta, msg, ok = flat[scored[0][1]], "all starts failed", False
+    r, c = resid(best_theta)
+    n = int(idx.size)
+    k = int(c.size + n_nl)
+    if n <= k:
+        raise ValueError(f"{n} fit samples for {k} parameters: need more samples")
+    rss = float(np.sum(r * r))
+    thetas = tuple(pk.split(best_theta))
+    coefs, i = [], 0
+    for t in terms:
+        coefs.append(np.asarray(c[i:i + t.n_linear], float))
+        i += t.n_linear
+    res = FitResult(
+        terms=terms, thetas=thetas, coefs=tuple(coefs), n=n, k=k, rss=rss,
+        sigma=float(np.sqrt(rss / (n - k))), tau_int=integrated_autocorr_time(r),
+        bic=float(n * np.log(max(rss, 1e-300) / n) + k * np.log(n)), success=bool(ok),
+        message=str(msg))
+    if uncertainty:
+        _uncertainty(res, sig, idx, max_rel_se, max_abs_corr, cache)
+    return res
+
+
+def with_uncertainty(result: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float = 0.5,
+                     max_abs_corr: float = 0.98, tau_int: float | None = None) -> FitResult:
+    """Copy of ``result`` with standard errors and identifiability flags (see
+    :func:`fit_terms`); ``idx`` must be the samples it was fitted on. ``tau_int``
+    overrides the autocorrelation time used to inflate the covariance [samples]."""
+    res = dataclasses.replace(result, estimates=[])
+    if tau_int is not None:
+        res.tau_int = float(max(tau_int, 1.0))
+    _uncertainty(res, sig, np.asarray(idx), max_rel_se, max_abs_corr, {})
+    return res
+
+
+def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
+                 max_abs_corr: float, cache: dict) -> None:
+    """Covariance of the raw parameters, delta method to the reported ones, flags."""
+    terms, thetas, coefs = res.terms, list(res.thetas), list(res.coefs)
+    c_all = np.concatenate(coefs) if coefs else np.empty(0)
+    x = design_matrix(terms, sig, thetas, cache)[idx]
+    cols = [x]
+    for j, t in enumerate(terms):
+        for m in range(t.n_nonlinear):
+            th0 = thetas[j][m]
+            h = 1e-4 * max(abs(th0), 1e-12) if t.nonlinear[m].log else 1e-4 * max(
+                abs(th0), 1e-3)
+            preds = []
+            for s in (+1, -1):
+                th = [a.copy() for a in thetas]
+                th[j][m] = th0 + s * h
+                preds.append(design_matrix(terms, sig, th, cache)[idx] @ c_all)
+            cols.append(((preds[0] - preds[1]) / (2 * h))[:, None])
+    jac = np.hstack(cols)  # (m, n_lin + n_nl): d prediction / d raw parameter
+    scale = np.sqrt(np.sum(jac * jac, axis=0))
+    scale[scale == 0] = 1.0
+    js = jac / scale
+    jtj = js.T @ js
+    u, sv, vt = np.linalg.svd(jtj)
+    res.cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
+    ok = sv > sv[0] * 1e-12
+    inv = (vt.T / np.where(ok, sv, np.inf)) @ u.T
+    # directions the data do not determine (cond(J) > 1e6): unbounded variance there
+    null = vt[~ok]
+    inv = inv + 1e20 * null.T @ null
+    cov_raw = inv / np.outer(scale, scale) * res.sigma ** 2 * res.tau_int
+    # order of raw parameters: all linear (term order), then all nonlinear (term order)
+    raw_values = np.concatenate([c_all] + [np.asarray(t, float) for t in thetas])
+
+    def unpack(v: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        cs, ts, i = [], [], 0
+        for t in terms:
+            cs.append(v[i:i + t.n_linear])
+            i += t.n_linear
+        for t in terms:
+            ts.append(v[i:i + t.n_nonlinear])
+            i += t.n_nonlinear
+        return cs, ts
+
+    def derived_vec(v: np.ndarray) -> tuple[list[tuple[str, str, str]], np.ndarray]:
+        cs, ts = unpack(v)
+        names, vals = [], []
+        for t, cc, tt in zip(terms, cs, ts, strict=True):
+            units = t.derived_units()
+            for k, val in t.derived(cc, tt).items():
+                names.append((t.name, k, units.get(k, "")))
+                vals.append(val)
+        return names, np.array(vals, float)
+
+    names, d0 = derived_vec(raw_values)
+    g = np.zeros((d0.size, raw_values.size))
+    sd_raw = np.sqrt(np.maximum(np.diag(cov_raw), 0))
+    for i in range(raw_values.size):
+        h = max(1e-6 * abs(raw_values[i]), 1e-3 * sd_raw[i], 1e-12)
+        vp, vm = raw_values.copy(), raw_values.copy()
+        vp[i] += h
+        vm[i] -= h
+        g[:, i] = (derived_vec(vp)[1] - derived_vec(vm)[1]) / (2 * h)
+    cov_d = g @ cov_raw @ g.T
+    sd = np.sqrt(np.maximum(np.diag(cov_d), 0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov_d / np.outer(sd, sd)
+    est = []
+    for i, (tn, pn, unit) in enumerate(names):
+        flag, note = "", ""
+        rel = sd[i] / abs(d0[i]) if d0[i] != 0 else np.inf
+        if not np.isfinite(sd[i]):
+            flag = "not determined (singular)"
+        elif rel > max_rel_se:
+            flag = f"weak (rel. s.e. {rel:.2g})"
+        row = np.abs(np.nan_to_num(corr[i]))
+        row[i] = 0
+        j = int(np.argmax(row)) if row.size else 0
+        if row.size and row[j] > max_abs_corr:
+            note = f"correlated with {names[j][0]}.{names[j][1]} (r = {corr[i, j]:+.3f})"
+        est.append(ParamEstimate(tn, pn, unit, float(d0[i]), float(sd[i]), flag, note))
+    res.estimates = est
+
+
+def refit(result: FitResult, sig: Any, y: np.ndarray, idx: np.ndarray,
+          **kwargs: Any) -> FitResult:
+    """Fit the same terms again on other samples, starting from ``result``'s θ."""
+    starts = [[np.asarray(th, float)] for th in result.thetas]
+    return fit_terms(result.terms, sig, y, idx, starts=starts, **kwargs)
+
+
+def replace_terms(result: FitResult, **changes: Any) -> FitResult:
+    """``dataclasses.replace`` for FitResult (helper for tests)."""
+    return dataclasses.replace(result, **changes)
+
+
+Objective = Callable[[np.ndarray], np.ndarray]

@@ -1,0 +1,38 @@
+"""Calibration against measured joint friction (data kind 1: a friction CSV).
+
+The kind's steps, with the same names and shapes as :mod:`swgcal.strain`:
+:func:`build_problem` (recording -> :class:`~swgcal.loop.Problem`),
+:func:`calibrate` (-> :class:`~swgcal.loop.CalibrationResult`),
+:func:`summarize` (-> ``summary.json``), :func:`render_report` (-> ``report.md``),
+:func:`make_figures` (-> ``figures/*.png``), :func:`simulation_files`
+(-> ``friction_effects.yaml``). The kind-independent entry points are in
+:mod:`swgcal`.
+
+Modules: :mod:`.data` (recordings: loading, checks), :mod:`.problem` (problem builder,
+calibration), :mod:`.probes` (residual probes), :mod:`.ripple_groups` (ripples grouped by
+harmonics, pruned without held-out support), :mod:`.discovery` (terms beyond the
+library), :mod:`.report` (summary, report, simulation option), :mod:`.figures`,
+:mod:`.synthetic` (recordings with planted effects). The effect forms are simulator
+inputs: :mod:`swgsim.friction`.
+"""
+
+from .data import FrictionRecording, load_friction_csv, write_friction_csv
+from .figures import make_figures
+from .options import FrictionOptions
+from .problem import OPTIONS, build_problem, calibrate, friction_problem
+from .report import render_report, simulation_files, summarize
+
+__all__ = [
+    "OPTIONS",
+    "FrictionOptions",
+    "FrictionRecording",
+    "build_problem",
+    "calibrate",
+    "friction_problem",
+    "load_friction_csv",
+    "make_figures",
+    "render_report",
+    "simulation_files",
+    "summarize",
+    "write_friction_csv",
+]

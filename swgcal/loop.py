@@ -1,0 +1,658 @@
+"""The calibration loop: fit, diagnose, try every candidate effect, keep the best one if
+it earns its place, repeat; then report the error before and after on test data.
+
+Generic over the domain: a :class:`Problem` bundles the signals, the target, the
+baseline terms, a library of candidate effects (term classes), the residual probes and
+the held-out split. Each data kind builds one (:func:`swgcal.friction.build_problem`,
+:func:`swgcal.strain.build_problem`) and calls :func:`select_effects` in its
+``calibrate`` step.
+
+Acceptance rule: evidence, on one scale for every kind of data. Every candidate is added
+to the current model and refitted on the fit samples (its own nonlinear parameters
+optimised, those of the current model held, all linear coefficients refitted);
+candidates are ranked by validation RMSE. Going down the ranking, the first candidate that
+passes all of
+
+1. *held-out evidence*: twice the log-likelihood ratio of the validation samples,
+   candidate against current model, each with its parameters fitted on the fit samples
+   (Gaussian errors, variance from the validation residual):
+   ``2 ln Λ_val = (n_val / τ_int) · ln(RMSE_val,current² / RMSE_val,candidate²)``,
+   above ``min_heldout_evidence`` (default 10). This is the predictive (plug-in) form of
+   a partial Bayes factor, the fit samples playing the training sample (O'Hagan 1995,
+   "Fractional Bayes factors for model comparison", JRSS B 57; Berger & Pericchi 1996,
+   "The intrinsic Bayes factor", JASA 91), i.e. a cross-validated likelihood (Smyth 2000,
+   Statistics and Computing 10). An effect that does not generalise to held-out data
+   earns nothing here, however well it fits.
+2. *fit evidence*: the BIC change on the fit samples below ``max_delta_bic`` (default
+   −10), where the BIC counts the *effective* number of samples n / τ_int. −ΔBIC / 2
+   approximates ln B, the log Bayes factor (Schwarz 1978; Kass & Raftery 1995, "Bayes
+   factors", JASA 90, sec. 4.1.3); it charges ln(n_eff) per parameter, which the held-out
+   likelihood does not.
+3. its primary parameters pinned down by the data (relative standard error, corrected
+   for autocorrelation, below ``max_rel_se``), and
+4. every parameter with a declared physical range inside it
+   (:attr:`~swgcal.core.Term.ranges`).
+
+Both thresholds of 10 are on the 2 ln B scale of Kass & Raftery (1995, sec. 3.2: 2 ln B
+above 10 is "very strong" evidence, posterior odds above 150:1); ΔBIC differences of 10
+are also where Burnham & Anderson (2002, "Model selection and multimodel inference",
+sec. 2.6) call the weaker model "essentially no support". τ_int (Sokal 1997) is the
+integrated autocorrelation time of the residual of the noise model (see
+:func:`_candidates`): a structured residual is strongly autocorrelated, and counting
+its samples as independent would reward any term that soaks up a few per cent of an
+unrelated structure (hundreds of BIC points on 10⁴ samples). The same τ_int scales the
+validation samples, which come from the same process at the same sample spacing. No
+fixed percentage of validation RMSE is required (``min_rel_improvement`` is an optional
+floor of practical size, off by default): the evidence grows with the data, so a small
+effect measured on many samples passes and a large-looking gain on few samples does
+not. A candidate with a positive held-out gain that fails 1-2 is reported as "too
+small" (:attr:`CandidateScore.small`); the plain ΔBIC is reported too.
+
+The loop accepts the first passing candidate, refits the whole model jointly and starts
+the next iteration; it stops when no candidate passes. When no single candidate passes
+but some show evidence (held-out or fit), pairs are tried (:func:`_pairs`). After the
+loop the final residual is diagnosed; if it is still structured the result says so
+(``unexplained``) and describes the signature, whatever was added. A candidate of the
+last iteration that passed the evidence rule but lies outside its physical range also
+makes the run ``unexplained``: the residual holds structure, with very strong evidence,
+that no plausible library effect explains (the probes may not see it); the signature
+names the candidate and what it would have absorbed.
+
+Errors before and after are computed on the test samples, which neither the fit nor the
+selection has seen, by the baseline and the final model refitted on fit + validation.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .core import FitResult, Term, fit_terms, with_uncertainty
+from .diagnose import Diagnosis, Probe, diagnose
+from .options import check_ranges, ranged
+from .split import HeldOutSplit
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Problem", "SelectionConfig", "CandidateScore", "Iteration", "CalibrationResult",
+           "select_effects"]
+
+
+@dataclass
+class Problem:
+    """Everything the loop needs, domain independent.
+
+    Attributes
+    ----------
+    name : str
+        Data name (file stem).
+    kind : str
+        ``"friction"`` or ``"strain"``.
+    units : str
+        Units of the target.
+    signals : object
+        Passed to terms and probes.
+    y : ndarray, shape (n,)
+        Target.
+    t : ndarray, shape (n,)
+        Time [s] (probes' halves, noise floor).
+    baseline : tuple of Term
+    library : mapping of str to Term class
+        Candidate effects by key.
+    probes : sequence of Probe
+    split : HeldOutSplit
+    meta : dict
+        Anything to carry into the report.
+    """
+
+    name: str
+    kind: str
+    units: str
+    signals: Any
+    y: np.ndarray
+    t: np.ndarray
+    baseline: tuple[Term, ...]
+    library: Mapping[str, type[Term]]
+    probes: Sequence[Probe]
+    split: HeldOutSplit
+    meta: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class SelectionConfig:
+    """Settings of the selection loop. Each numeric setting declares its allowed range
+    once (:func:`~swgcal.options.ranged`), checked on construction; apps read the
+    defaults and ranges from here.
+
+    Attributes
+    ----------
+    min_rel_improvement : float, default 0
+        Optional floor on the relative drop of the validation RMSE (a practical size
+        below which an effect is not wanted, whatever the evidence); 0: none, the rule
+        rests on evidence alone (module docstring).
+    max_delta_bic : float, default -10
+        Required BIC change on the fit samples (more negative is better): fit evidence,
+        −ΔBIC ≈ 2 ln B (Kass & Raftery 1995).
+    min_heldout_evidence : float, default 10
+        Required held-out evidence 2 ln Λ_val (twice the validation log-likelihood ratio,
+        effective samples), on the same 2 ln B scale ("very strong" above 10).
+    max_iter : int, default 12
+        At most this many accepted steps (a pair counts once).
+    candidates : sequence of str, optional
+        Library keys to try (default: the whole library).
+    structure_threshold : float, default 0.03
+        Probe score from which a residual counts as structured.
+    max_rel_se, max_abs_corr : float
+        Identifiability flags (see :func:`~swgcal.core.fit_terms`).
+    max_starts : int, default 3
+        Optimisations per candidate fit (best starting points).
+    effective_bic : bool, default True
+        Count n / τ_int samples in the BIC and the held-out likelihood of the rule and
+        inflate the standard errors by the same τ_int (False: every sample counts, the
+        plain BIC, and each fit's own τ_int).
+    pair_candidates : int, default 4
+        When no single candidate passes but some show evidence (held-out evidence or
+        effective ΔBIC beyond its threshold), pairs of this many best candidates (by fit
+        RSS) are tried jointly (0 or 1: no look-ahead).
+    """
+
+    min_rel_improvement: float = ranged(0.0, 0, 1, hi_open=True)
+    max_delta_bic: float = ranged(-10.0, hi=0)
+    min_heldout_evidence: float = ranged(10.0, 0)
+    max_iter: int = ranged(12, 0)
+    candidates: Sequence[str] | None = None
+    structure_threshold: float = ranged(0.03, 0, 1)
+    max_rel_se: float = ranged(0.5, 0, lo_open=True)
+    max_abs_corr: float = ranged(0.98, 0, 1)
+    max_starts: int = ranged(3, 1, 50)
+    effective_bic: bool = True
+    pair_candidates: int = ranged(4, 0, 50)
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
+
+
+@dataclass
+class CandidateScore:
+    """One candidate tried in one iteration.
+
+    Attributes
+    ----------
+    name, kind : str
+    val_rmse : float
+        Validation RMSE with the candidate added [data units].
+    rel_improvement : float
+        1 − val_rmse / current validation RMSE.
+    delta_bic : float
+        Plain (i.i.d.) BIC change on the fit samples.
+    delta_bic_eff : float
+        BIC change with the effective number of samples n / τ_int (used for the rule).
+    heldout_evidence : float
+        2 ln Λ_val: twice the log-likelihood ratio of the validation samples, candidate
+        against the current model, with n_val / τ_int effective samples (used for the
+        rule).
+    accepted : bool
+    status : str
+        Why it was accepted or rejected.
+    params : dict
+        Derived parameters of the candidate (values only).
+    fit : FitResult
+    implausible : bool
+        Passed the evidence rule but a parameter lies outside its physical range
+        (:attr:`~swgcal.core.Term.ranges`): the residual holds structure that
+        this effect would absorb without being it.
+    small : bool
+        Rejected only for lack of evidence although its held-out gain is positive: an
+        effect that may be there but is too small for these data.
+    """
+
+    name: str
+    kind: str
+    val_rmse: float
+    rel_improvement: float
+    delta_bic: float
+    delta_bic_eff: float
+    accepted: bool
+    params: dict[str, float]
+    status: str = ""
+    fit: FitResult | None = None
+    implausible: bool = False
+    heldout_evidence: float = float("nan")
+    small: bool = False
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "kind": self.kind, "val_rmse": self.val_rmse,
+                "rel_improvement": self.rel_improvement, "delta_bic": self.delta_bic,
+                "delta_bic_eff": self.delta_bic_eff,
+                "heldout_evidence": self.heldout_evidence, "accepted": self.accepted,
+                "status": self.status, "params": self.params,
+                "implausible": self.implausible, "small": self.small}
+
+
+@dataclass
+class Iteration:
+    """One pass of the loop: the model before it, the diagnosis, the ranked candidates."""
+
+    index: int
+    model: list[str]
+    val_rmse: float
+    bic: float
+    diagnosis: Diagnosis
+    candidates: list[CandidateScore]
+    accepted: str | None
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"index": self.index, "model": self.model, "val_rmse": self.val_rmse,
+                "bic": self.bic, "diagnosis": self.diagnosis.as_dict(),
+                "candidates": [c.as_dict() for c in self.candidates],
+                "accepted": self.accepted}
+
+
+@dataclass
+class CalibrationResult:
+    """Outcome of :func:`select_effects` (and of each kind's ``calibrate``).
+
+    Attributes
+    ----------
+    problem : Problem
+    config : SelectionConfig
+    iterations : list of Iteration
+    added : list of str
+        Names of the accepted effects, in order.
+    baseline_final, final : FitResult
+        Baseline and final model refitted on fit + validation samples.
+    rmse : dict
+        ``{"fit"|"validation"|"test": {"before": x, "after": y}}`` [data units];
+        fit/validation from the selection fits, test from the final refits.
+    diag_before, diag_after : Diagnosis
+        Residual diagnosis of the baseline and of the final model (fit + validation).
+    unexplained : bool
+        The final residual is still structured, or a candidate outside its physical range
+        still passes the evidence rule on it.
+    residual_signature : str
+    elapsed_s : float
+    implausible : list of str
+        Candidates of the last iteration that passed the evidence rule but lie outside
+        their physical range, with their gain and the violated range.
+    """
+
+    problem: Problem
+    config: SelectionConfig
+    iterations: list[Iteration]
+    added: list[str]
+    baseline_final: FitResult
+    final: FitResult
+    rmse: dict[str, dict[str, float]]
+    diag_before: Diagnosis
+    diag_after: Diagnosis
+    unexplained: bool
+    residual_signature: str
+    elapsed_s: float = 0.0
+    implausible: list[str] = field(default_factory=list)
+
+    @property
+    def rmse_before(self) -> float:
+        return self.rmse["test"]["before"]
+
+    @property
+    def rmse_after(self) -> float:
+        return self.rmse["test"]["after"]
+
+    def too_small(self) -> list[CandidateScore]:
+        """Single candidates of the last iteration rejected only for lack of evidence
+        although their held-out gain is positive (:attr:`CandidateScore.small`), best
+        first: effects that may be there but that these data cannot establish."""
+        if not self.iterations:
+            return []
+        return [c for c in self.iterations[-1].candidates if c.small and " + " not in c.name]
+
+    def effect_terms(self) -> list[Term]:
+        """Accepted effect terms of the final model, in order of acceptance."""
+        by = {t.name: t for t in self.final.terms}
+        return [by[n] for n in self.added]
+
+    def predictions(self) -> tuple[np.ndarray, np.ndarray]:
+        """Predictions of the baseline and the final model on all samples."""
+        sig = self.problem.signals
+        return self.baseline_final.predict(sig), self.final.predict(sig)
+
+
+def _rmse(r: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(r * r))) if r.size else float("nan")
+
+
+def _order(terms: Sequence[Term]) -> tuple[Term, ...]:
+    """Transform terms first (they change what the others see), others in order."""
+    return tuple([t for t in terms if t.is_transform] + [t for t in terms if not t.is_transform])
+
+
+def _instance_name(kind: str, terms: Sequence[Term]) -> str:
+    k = sum(1 for t in terms if t.kind == kind)
+    return kind if k == 0 else f"{kind}#{k + 1}"
+
+
+def _score(problem: Problem, fit: FitResult) -> tuple[np.ndarray, float]:
+    r = problem.y - fit.predict(problem.signals)
+    return r, _rmse(r[problem.split.validation])
+
+
+def _fit_candidate(problem: Problem, current: FitResult, new_terms: Sequence[Term],
+                   starts_new: Sequence[Sequence[np.ndarray]], fit_kw: dict[str, Any],
+                   val_cur: float, kind: str) -> CandidateScore | None:
+    """Add ``new_terms`` to the current model: their θ optimised, the rest held."""
+    sig, sp = problem.signals, problem.split
+    cur_th = {t.name: th for t, th in zip(current.terms, current.thetas, strict=True)}
+    new_st = {t.name: st for t, st in zip(new_terms, starts_new, strict=True)}
+    terms = _order(list(current.terms) + list(new_terms))
+    starts = [[cur_th[t.name]] if t.name in cur_th else new_st[t.name] for t in terms]
+    fixed = [t.name in cur_th for t in terms]
+    try:
+        f = fit_terms(terms, sig, problem.y, sp.fit, starts, fixed=fixed, uncertainty=False,
+                      **fit_kw)
+    except (ValueError, np.linalg.LinAlgError) as e:
+        log.warning("candidate %s failed: %s", "+".join(t.name for t in new_terms), e)
+        return None
+    _, v = _score(problem, f)
+    params: dict[str, float] = {}
+    for t in new_terms:
+        i = f.terms.index(t)
+        d = t.derived(f.coefs[i], f.thetas[i])
+        params.update(d if len(new_terms) == 1 else {f"{t.name}.{k}": x for k, x in d.items()})
+    return CandidateScore(
+        name=" + ".join(t.name for t in new_terms), kind=kind, val_rmse=v,
+        rel_improvement=1.0 - v / val_cur if val_cur > 0 else 0.0,
+        delta_bic=f.bic - current.bic, delta_bic_eff=float("nan"), accepted=False,
+        params=params, fit=f)
+
+
+def _new_terms(c: CandidateScore, current: FitResult) -> list[Term]:
+    names = {t.name for t in current.terms}
+    return [t for t in c.fit.terms if t.name not in names]
+
+
+def _weak(problem: Problem, cfg: SelectionConfig, c: CandidateScore, current: FitResult,
+          tau: float | None) -> tuple[FitResult, list[str]]:
+    """The candidate's fit with uncertainties (covariance inflated by ``tau``, default its
+    own τ_int) and its new terms' primary parameters that the data do not pin down."""
+    f = with_uncertainty(c.fit, problem.signals, problem.split.fit, cfg.max_rel_se,
+                         cfg.max_abs_corr, tau_int=tau)
+    weak = []
+    for term in _new_terms(c, current):
+        est = f.estimates_of(term.name)
+        weak += [f"{term.name}.{k} (rel. s.e. {est[k].std / abs(est[k].value):.2g})"
+                 for k in term.primary()
+                 if k in est and not est[k].std <= cfg.max_rel_se * abs(est[k].value)]
+    return f, weak
+
+
+def _noise_model_member(problem: Problem, cfg: SelectionConfig, c: CandidateScore,
+                        current: FitResult) -> bool:
+    """Whether a candidate enters the noise model of :func:`_candidates`: it helps on the
+    validation data, its parameters lie in their physical ranges and its primary ones
+    are pinned down (with its own τ_int)."""
+    if not c.rel_improvement > 0 or _out_of_range(c, current):
+        return False
+    try:
+        return not _weak(problem, cfg, c, current, None)[1]
+    except (ValueError, np.linalg.LinAlgError):  # pragma: no cover
+        return False
+
+
+def _out_of_range(c: CandidateScore, current: FitResult) -> bool:
+    """Whether a candidate's fitted parameters leave their physical range."""
+    f = c.fit
+    for t in _new_terms(c, current):
+        i = f.terms.index(t)
+        if t.range_violations(t.derived(f.coefs[i], f.thetas[i])):
+            return True
+    return False
+
+
+def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
+                current: FitResult, r_cur: np.ndarray, val_cur: float,
+                fit_kw: dict[str, Any]) -> tuple[list[CandidateScore], float]:
+    """Fit every candidate added to the current model; ranked by validation RMSE.
+
+    Returns the candidates and the noise model's τ_int: the smallest integrated
+    autocorrelation time of the residuals of the current model, of every candidate that
+    helps on the validation data, and of the richest model of the iteration (the current
+    model plus all those candidates, nonlinear parameters as fitted singly, linear ones
+    refitted jointly). Like Mallows' Cp, which takes σ² from the full model, the noise
+    model then reflects what the library can explain: residual structure that library
+    effects explain does not count against a candidate; structure nothing explains does.
+    Only candidates that could be accepted enter the noise model (in range, primary
+    parameters pinned down: :func:`_noise_model_member`): what only an implausible or
+    unidentifiable candidate explains is structure no acceptable effect explains.
+    """
+    sig, sp = problem.signals, problem.split
+    cands = []
+    for key in keys:
+        cls = problem.library[key]
+        present = sum(1 for t in current.terms if t.kind == key)
+        term = cls.for_signals(sig, _instance_name(key, current.terms))
+        if present >= term.repeatable or not term.applicable(sig):
+            continue
+        c = _fit_candidate(problem, current, [term], [term.starts(sig, r_cur, sp.fit)],
+                           fit_kw, val_cur, key)
+        if c is not None:
+            cands.append(c)
+    cands.sort(key=lambda c: c.val_rmse)
+    helpful = [c for c in cands if _noise_model_member(problem, cfg, c, current)]
+    tau = min([current.tau_int] + [c.fit.tau_int for c in helpful])
+    if helpful:
+        terms = list(current.terms)
+        thetas = {t.name: th for t, th in zip(current.terms, current.thetas, strict=True)}
+        for c in helpful:
+            for t in _new_terms(c, current):
+                terms.append(t)
+                thetas[t.name] = c.fit.thetas[c.fit.terms.index(t)]
+        terms = _order(terms)
+        try:
+            full = fit_terms(terms, sig, problem.y, sp.fit, [[thetas[t.name]] for t in terms],
+                             fixed=[True] * len(terms), uncertainty=False, **fit_kw)
+            tau = min(full.tau_int, tau)
+        except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
+            log.debug("full model failed: %s", e)
+    _set_evidence(cands, current, tau, problem.split.validation.size, val_cur)
+    return cands, tau
+
+
+def _set_evidence(cands: Sequence[CandidateScore], current: FitResult, tau: float,
+                  n_val: int, val_cur: float) -> None:
+    """Effective ΔBIC on the fit samples and held-out evidence 2 ln Λ_val (module doc),
+    both with n / τ_int effective samples."""
+    tau = max(tau, 1.0)
+    n_eff = current.n / tau
+    for c in cands:
+        dk = c.fit.k - current.k
+        c.delta_bic_eff = float(n_eff * np.log(max(c.fit.rss, 1e-300) / current.rss)
+                                + dk * np.log(n_eff))
+        if n_val > 0 and val_cur > 0 and c.val_rmse > 0:
+            c.heldout_evidence = float(2.0 * n_val / tau * np.log(val_cur / c.val_rmse))
+
+
+def _pairs(problem: Problem, cfg: SelectionConfig, current: FitResult,
+           cands: Sequence[CandidateScore], tau: float, val_cur: float,
+           fit_kw: dict[str, Any]) -> tuple[list[CandidateScore], float]:
+    """Look-ahead when no single candidate passes: two effects that are confounded on
+    the fit data may each fail alone (each absorbs part of the other and generalises
+    badly) and pass together. Pairs of the ``pair_candidates`` candidates with the
+    largest drop of the fit RSS are fitted jointly."""
+    top = sorted(cands, key=lambda c: c.fit.rss)[:cfg.pair_candidates]
+    out = []
+    for i in range(len(top)):
+        for j in range(i + 1, len(top)):
+            ti, tj = _new_terms(top[i], current)[0], _new_terms(top[j], current)[0]
+            if ti.kind == tj.kind:
+                continue
+            th = {}
+            for f in (top[i].fit, top[j].fit):
+                th.update({t.name: x for t, x in zip(f.terms, f.thetas, strict=True)})
+            c = _fit_candidate(problem, current, [ti, tj], [[th[ti.name]], [th[tj.name]]],
+                               {**fit_kw, "max_starts": 1}, val_cur, f"{ti.kind} + {tj.kind}")
+            if c is not None:
+                out.append(c)
+    out.sort(key=lambda c: c.val_rmse)
+    tau = min([tau] + [c.fit.tau_int for c in out
+                       if _noise_model_member(problem, cfg, c, current)])
+    _set_evidence(out, current, tau, problem.split.validation.size, val_cur)
+    return out, tau
+
+
+def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
+            cands: list[CandidateScore], tau: float) -> CandidateScore | None:
+    """First candidate in the ranking that passes the acceptance rule (module doc)."""
+    chosen = None
+    for c in cands:
+        if chosen is not None:
+            c.status = "not needed (a better-ranked candidate was accepted)"
+            continue
+        dbic = c.delta_bic_eff if cfg.effective_bic else c.delta_bic
+        hev = c.heldout_evidence if cfg.effective_bic else c.heldout_evidence * max(tau, 1.0)
+        if not c.rel_improvement > 0:
+            c.status = (f"rejected: no held-out gain (validation RMSE "
+                        f"{100 * -c.rel_improvement:+.2g} %)")
+            continue
+        if not c.rel_improvement > cfg.min_rel_improvement:
+            c.status = (f"rejected: validation gain {100 * c.rel_improvement:.2g} % <= floor "
+                        f"{100 * cfg.min_rel_improvement:.2g} %")
+            continue
+        short = []
+        if not hev > cfg.min_heldout_evidence:
+            short.append(f"held-out evidence 2 ln Λ = {hev:.3g} <= {cfg.min_heldout_evidence:g}")
+        if not dbic < cfg.max_delta_bic:
+            short.append(f"{'effective ' if cfg.effective_bic else ''}ΔBIC {dbic:+.3g} >= "
+                         f"{cfg.max_delta_bic:g}")
+        if short:
+            c.small = True
+            c.status = (f"rejected: too small for these data (validation gain "
+                        f"{100 * c.rel_improvement:.2g} %): " + "; ".join(short))
+            continue
+        # identifiability of the new terms' primary parameters
+        f, weak = _weak(problem, cfg, c, current, tau if cfg.effective_bic else None)
+        if weak:
+            c.status = "rejected: not pinned down by the data: " + ", ".join(weak)
+            continue
+        implausible = []
+        for term in _new_terms(c, current):
+            est = f.estimates_of(term.name)
+            implausible += [f"{term.name}.{v}" for v in
+                            term.range_violations({k: e.value for k, e in est.items()})]
+        if implausible:
+            c.status = "rejected: outside its physical range: " + ", ".join(implausible)
+            c.implausible = True
+            continue
+        c.accepted = True
+        c.status = "accepted"
+        chosen = c
+    return chosen
+
+
+def select_effects(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
+    """The selection loop on a problem: fit the baseline, add the library effect the
+    residual needs while held-out evidence supports it, stop with a verdict.
+
+    Parameters
+    ----------
+    problem : Problem
+    config : SelectionConfig, optional
+
+    Returns
+    -------
+    CalibrationResult
+
+    Raises
+    ------
+    KeyError
+        ``config.candidates`` names an effect that is not in the library.
+    """
+    cfg = config or SelectionConfig()
+    t_start = time.perf_counter()
+    sig, y, sp = problem.signals, problem.y, problem.split
+    keys = list(cfg.candidates) if cfg.candidates is not None else list(problem.library)
+    unknown = [k for k in keys if k not in problem.library]
+    if unknown:
+        raise KeyError(f"candidates {unknown} not in the library {sorted(problem.library)}")
+    fit_kw = dict(max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr,
+                  max_starts=cfg.max_starts)
+
+    def score(fit: FitResult) -> tuple[np.ndarray, float]:
+        return _score(problem, fit)
+
+    current = fit_terms(_order(problem.baseline), sig, y, sp.fit, uncertainty=False, **fit_kw)
+    baseline_sel = current
+    r_cur, val_cur = score(current)
+    iterations: list[Iteration] = []
+    added: list[str] = []
+    diag_idx = sp.fit
+    for it in range(cfg.max_iter + 1):
+        diag = diagnose(sig, problem.t, r_cur, diag_idx, problem.probes, problem.units,
+                        cfg.structure_threshold)
+        cands: list[CandidateScore] = []
+        accepted = None
+        if it < cfg.max_iter:
+            cands, tau = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw)
+            accepted = _choose(problem, cfg, current, cands, tau)
+            evidence = any(c.heldout_evidence > cfg.min_heldout_evidence
+                           or c.delta_bic_eff < cfg.max_delta_bic for c in cands)
+            if accepted is None and cfg.pair_candidates >= 2 and evidence:
+                pairs, tau = _pairs(problem, cfg, current, cands, tau, val_cur, fit_kw)
+                accepted = _choose(problem, cfg, current, pairs, tau)
+                cands = cands + pairs
+        iterations.append(Iteration(it, [t.name for t in current.terms], val_cur, current.bic,
+                                    diag, cands, accepted.name if accepted else None))
+        best = cands[0] if cands else None
+        log.info("%s iteration %d: val RMSE %.4g, best %s (%.4g), accepted %s", problem.name,
+                 it, val_cur, best.name if best else None, best.val_rmse if best else np.nan,
+                 accepted.name if accepted else None)
+        if accepted is None:
+            break
+        # joint refit of all nonlinear parameters, from the candidate's values
+        current_before = current
+        current = fit_terms(accepted.fit.terms, sig, y, sp.fit,
+                            [[th] for th in accepted.fit.thetas], uncertainty=False,
+                            **{**fit_kw, "max_starts": 1})
+        added.extend(t.name for t in _new_terms(accepted, current_before))
+        r_cur, val_cur = score(current)
+
+    # final refits on fit + validation; test errors
+    idx_fv = sp.fit_validation
+    base_final = fit_terms(_order(problem.baseline), sig, y, idx_fv, **fit_kw)
+    starts = [[th] for th in current.thetas]
+    final = fit_terms(current.terms, sig, y, idx_fv, starts, **fit_kw)
+    r_b = y - base_final.predict(sig)
+    r_a = y - final.predict(sig)
+    r_bs = y - baseline_sel.predict(sig)
+    rmse = {
+        "fit": {"before": _rmse(r_bs[sp.fit]), "after": _rmse(r_cur[sp.fit])},
+        "validation": {"before": _rmse(r_bs[sp.validation]), "after": val_cur},
+        "test": {"before": _rmse(r_b[sp.test]), "after": _rmse(r_a[sp.test])},
+    }
+    d_before = diagnose(sig, problem.t, r_b, idx_fv, problem.probes, problem.units,
+                        cfg.structure_threshold)
+    d_after = d_before if not added else diagnose(sig, problem.t, r_a, idx_fv, problem.probes,
+                                                  problem.units, cfg.structure_threshold)
+    res = CalibrationResult(
+        problem=problem, config=cfg, iterations=iterations, added=added,
+        baseline_final=base_final, final=final, rmse=rmse, diag_before=d_before,
+        diag_after=d_after, unexplained=d_after.structured,
+        residual_signature=d_after.signature, elapsed_s=time.perf_counter() - t_start)
+    last = iterations[-1].candidates if iterations else []
+    res.implausible = [f"{c.name} (validation gain {100 * c.rel_improvement:.2g} %, held-out "
+                       f"2 ln Λ {c.heldout_evidence:.3g}; {c.status.split(': ', 2)[-1]})"
+                       for c in last if c.implausible]
+    if res.implausible:
+        res.unexplained = True
+        res.residual_signature = (
+            res.residual_signature.rstrip(".") + ". A library candidate outside its "
+            "physical range still explains part of the residual with very strong evidence, "
+            "so an effect the library does not hold is there: " + "; ".join(res.implausible)
+            + ".")
+    log.info("%s: test RMSE %.4g -> %.4g, added %s, unexplained %s", problem.name,
+             rmse["test"]["before"], rmse["test"]["after"], added, res.unexplained)
+    return res

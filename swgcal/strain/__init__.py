@@ -1,0 +1,41 @@
+"""Calibration of the simulation chain against measured strain windows (data kind 2: a
+schema-v1 data-set directory).
+
+The kind's steps, with the same names and shapes as :mod:`swgcal.friction`:
+:func:`build_problem` (windows -> :class:`~swgcal.loop.Problem`),
+:func:`calibrate` (-> :class:`~swgcal.loop.CalibrationResult`),
+:func:`summarize` (-> ``summary.json``), :func:`render_report` (-> ``report.md``),
+:func:`make_figures` (-> ``figures/*.png``), :func:`simulation_files`
+(-> ``sensor_effects.yaml``). The kind-independent entry points are in
+:mod:`swgcal`.
+
+Modules: :mod:`.data` (measured windows, held-out split), :mod:`.model` (chain
+prediction per operating point, alignment), :mod:`.signals` (signals, constraint basis),
+:mod:`.effects` (effect library), :mod:`.ranges` (physical ranges with sources),
+:mod:`.probes` (residual probes), :mod:`.problem` (problem builder, calibration),
+:mod:`.align` (input angle modulo 180° or 360°), :mod:`.checks` (withheld parameters,
+too-small effects, caveats), :mod:`.discovery` (terms beyond the library), :mod:`.report`
+(summary, report, simulation option), :mod:`.figures`, :mod:`.synthetic` (windows with
+planted effects), :mod:`.power` (planted-effect power study).
+"""
+
+from .data import StrainWindows, strain_windows
+from .figures import make_figures
+from .model import StrainModel
+from .problem import OPTIONS, StrainOptions, build_problem, calibrate, strain_problem
+from .report import render_report, simulation_files, summarize
+
+__all__ = [
+    "OPTIONS",
+    "StrainOptions",
+    "StrainModel",
+    "StrainWindows",
+    "build_problem",
+    "calibrate",
+    "make_figures",
+    "render_report",
+    "simulation_files",
+    "strain_problem",
+    "strain_windows",
+    "summarize",
+]
