@@ -18,7 +18,7 @@ tip_tooth_crack    flexspline      [0, 1]                  F_tooth ← (1 − s)
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -269,22 +269,32 @@ def register_fault(fault: Fault) -> Fault:
     return fault
 
 
-def get_fault(name: str) -> Fault:
+def get_fault(name: str, faults: Mapping[str, Fault] | None = None) -> Fault:
     """The registered fault of that name.
+
+    Parameters
+    ----------
+    name : str
+    faults : mapping, optional
+        Where to look: default the registry :data:`FAULTS`; a data set's plan carries the
+        faults it uses (:attr:`swgsim.plan.DatasetPlan.faults`), so that worker processes
+        need no registration of their own.
 
     Raises
     ------
     ValueError
         Naming the allowed faults if ``name`` is unknown.
     """
+    faults = FAULTS if faults is None else faults
     try:
-        return FAULTS[name]
+        return faults[name]
     except KeyError:
-        raise ValueError(f"unknown fault {name!r}; allowed: {sorted(FAULTS)}") from None
+        raise ValueError(f"unknown fault {name!r}; allowed: {sorted(faults)}") from None
 
 
 def apply_fault(params: ChainParams, name: str, severity: float,
-                position_deg: float = 0.0) -> ChainParams:
+                position_deg: float = 0.0, *,
+                faults: Mapping[str, Fault] | None = None) -> ChainParams:
     """Apply a registered fault to healthy parameters.
 
     Parameters
@@ -292,18 +302,20 @@ def apply_fault(params: ChainParams, name: str, severity: float,
     params : ChainParams
         Healthy gear.
     name : str
-        A key of :data:`FAULTS`.
+        A key of :data:`FAULTS` (or of ``faults``).
     severity : float
         Within the fault's ``severity_range`` (0 reproduces ``params`` exactly).
     position_deg : float
         Circumferential position in the flexspline frame [deg] (faults with a position).
+    faults : mapping, optional
+        See :func:`get_fault`.
 
     Raises
     ------
     ValueError
         Unknown fault, or severity outside its range.
     """
-    f = get_fault(name)
+    f = get_fault(name, faults)
     lo, hi = f.severity_range
     if not (lo <= severity <= hi) or not np.isfinite(severity):
         raise ValueError(f"severity of {name} must lie in [{lo}, {hi}], got {severity}")

@@ -23,7 +23,7 @@ import numpy as np
 from .acquisition import check_acquisition
 from .config import DatasetConfig, GearConfig, VariantSpec, dataset_config
 from .dynamics import gear_with_ke, rt1_size20, torsional_mode
-from .faults import FAULTS, ChainParams, get_fault
+from .faults import FAULTS, ChainParams, Fault, get_fault
 from .flexspline import FlexsplineGeometry, TrussModel
 from .friction import FrictionEffects, friction_effects_from_config
 from .measurement import SensorEffect, parse_sensor_effects
@@ -65,6 +65,10 @@ class DatasetPlan:
     config : DatasetConfig
         Complete and checked; what is hashed and stored with the data.
     shards : tuple of ShardSpec
+    faults : dict of str to Fault
+        The fault classes the data set uses, from the registry
+        (:func:`swgsim.faults.register_fault`): shards are simulated with these, so a
+        class registered by a user needs no registration in the worker processes.
     sensor_effects : tuple of SensorEffect
         The parsed ``sensor_effects`` option.
     friction : FrictionEffects or None
@@ -75,6 +79,7 @@ class DatasetPlan:
 
     config: DatasetConfig
     shards: tuple[ShardSpec, ...]
+    faults: dict[str, Fault]
     sensor_effects: tuple[SensorEffect, ...]
     friction: FrictionEffects | None
     config_hash: str
@@ -311,7 +316,9 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     friction = friction_effects_from_config(cfg.friction_effects)
     variants = _variants(cfg)
     _check_layout(cfg)
-    return DatasetPlan(cfg, _shards(cfg, variants), effects, friction, config_hash(cfg))
+    faults = {name: get_fault(name) for name in ("healthy", *variants)}
+    return DatasetPlan(cfg, _shards(cfg, variants), faults, effects, friction,
+                       config_hash(cfg))
 
 
 # ------------------------------------------------------------- per-gear parameters

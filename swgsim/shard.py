@@ -276,7 +276,8 @@ def simulate_shard(plan: DatasetPlan, shard: ShardSpec,
     wins = shard.windows
     phi0 = start_angles(cfg.acquisition, len(wins), rng_start, healthy.gear.ratio)
     params = [apply_fault(healthy, w.fault, w.severity,
-                          0.0 if np.isnan(w.position_deg) else w.position_deg)
+                          0.0 if np.isnan(w.position_deg) else w.position_deg,
+                          faults=plan.faults)
               for w in wins]
     motions = simulate_motions(plan, shard, params, phi0, n_lead, q)
     sig = synthesise(chain, shard, params, phi0, motions, q)
