@@ -151,6 +151,9 @@ def hydra_app(config_name: str, schema: type, prog: str):
                 return None
 
         def entry():
+            from swgcli.schema import check_renamed
+
+            check_renamed([a for a in sys.argv[1:] if not a.startswith("-")], config_name)
             _hydra_main()
             if failed:
                 raise failed[0]

@@ -1,11 +1,11 @@
-"""swgsim-paper: the main job — the paper's study under two data-set protocols, end to end.
+"""swgsim-paper: the main job — the paper's study under two recordings, end to end.
 
-For each protocol in ``protocols`` (default: the paper's phase-locked, noise-free windows
-and a real bench's): (1) generate ``<data_root>/<protocol>`` (shards already there and
-valid are skipped; a data set of another config there is replaced only if the folder
-holds nothing else), (2) the study of Tables VII-X
+For each data set in ``run_on`` (default: the paper's recording, phase-locked and
+noise-free windows, and a real bench's): (1) generate ``<data_root>/<name>`` (shards
+already there and valid are skipped; a data set of another config there is replaced only
+if the folder holds nothing else), (2) the study of Tables VII-X
 (:func:`learn.tasks.paper.run_paper_study`), every job logged to MLflow, with its report
-in ``<report_root>/<protocol>``; then (3) the summary side by side with the paper and the
+in ``<report_root>/<name>``; then (3) the summary side by side with the paper and the
 reproduction scorecard (:func:`learn.reports.summary.write_summary`). One progress bar per
 stage; the console ends with the scorecard, where everything went, the time of each stage
 and the warnings, counted once. Config: ``conf/paper.yaml``.
@@ -13,6 +13,7 @@ and the warnings, counted once. Config: ``conf/paper.yaml``.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import time
 import warnings
@@ -27,20 +28,100 @@ log = logging.getLogger(__name__)
 
 
 def _check(cfg: DictConfig) -> list[str]:
-    """Validate the job's own keys before any work; return the protocols to run."""
-    protocols = [str(p) for p in cfg.protocols]
-    if not protocols:
-        raise ValueError("protocols must name at least one of "
+    """Validate the job's own keys before any work; return the data sets to run."""
+    names = [str(p) for p in cfg.run_on]
+    if not names:
+        raise ValueError("run_on must name at least one of "
                          f"{sorted(cfg.datasets)}, got []")
-    unknown = [p for p in protocols if p not in cfg.datasets]
+    unknown = [p for p in names if p not in cfg.datasets]
     if unknown:
-        raise ValueError(f"protocols: {unknown} not among the configured data sets "
+        raise ValueError(f"run_on: {unknown} not among the configured data sets "
                          f"{sorted(cfg.datasets)}")
-    if len(set(protocols)) != len(protocols):
-        raise ValueError(f"protocols must not repeat, got {protocols}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"run_on must not repeat, got {names}")
     if int(cfg.n_jobs) < 1:
         raise ValueError(f"n_jobs must be >= 1, got {cfg.n_jobs}")
-    return protocols
+    return names
+
+
+def _plans(cfg: DictConfig, names: list[str]) -> dict:
+    """Every data set of the run checked once, before any work: name -> DatasetPlan."""
+    from swgsim.plan import plan
+
+    plans = {}
+    for n in names:
+        try:
+            plans[n] = plan(OmegaConf.to_object(cfg.datasets[n]))  # the typed DatasetConfig
+        except ValueError as e:
+            raise ValueError(f"datasets.{n}: {e}") from None
+    return plans
+
+
+def _generate(cfg: DictConfig, plans: dict, root_data: str, stage, stages: dict) -> dict:
+    """Stage 1: each data set generated (or found valid) in ``<root_data>/<name>``."""
+    from swgsim.generate import generate
+
+    gen = {}
+    for n, p in plans.items():
+        t0 = time.perf_counter()
+        out = f"{root_data}/{n}"
+        gen[n] = g = generate(p, out, n_jobs=int(cfg.n_jobs), overwrite=True, progress=True)
+        stages[f"generate {n}"] = time.perf_counter() - t0
+        state = (f"{len(g['computed'])} shard(s) simulated" if g["computed"]
+                 else "already there and valid")
+        if g.get("replaced"):
+            state += "; " + g["replaced"]
+        print(f"[{stage()}] data set {n}: {g['windows']} windows in {out} ({state}), "
+              f"{stages[f'generate {n}']:.1f} s", flush=True)
+    return gen
+
+
+def _studies(cfg: DictConfig, names: list[str], root_data: str, root_rep: str, stage,
+             stages: dict, caught: Counter) -> dict:
+    """Stage 2: the paper's study on each data set, its report and MLflow runs."""
+    from learn.tasks.paper import run_paper_study
+
+    study = {}
+    for n in names:
+        t0 = time.perf_counter()
+        study[n] = run_paper_study(
+            f"{root_data}/{n}", f"{root_rep}/{n}", OmegaConf.to_object(cfg.study),
+            tracking_uri=cfg.tracking_uri, log_models=cfg.log_models, n_jobs=cfg.n_jobs,
+            random_state=cfg.seed, experiment_prefix=f"paper_study/{n}/", name=n)
+        stages[f"study {n}"] = time.perf_counter() - t0
+        for w in study[n]["warnings"]:
+            caught[(w["category"], w["message"])] += w["count"]
+        print(f"[{stage()}] study {n}: {study[n]['n_jobs_run']} jobs, "
+              f"{len(study[n]['results'])} fits, {stages[f'study {n}']:.1f} s -> "
+              f"{root_rep}/{n}", flush=True)
+    return study
+
+
+def _print_end(cfg: DictConfig, names: list[str], summary: dict, root_data: str,
+               root_rep: str, stages: dict, warn: list[dict]) -> None:
+    """The console's last words: scorecard, findings, where everything went, times."""
+    from learn.reports.summary import format_scorecard
+    from learn.tracking import default_tracking_uri
+
+    print("\nReproduction scorecard (test cells of Tables VII, IX, X against the paper):")
+    print("\n".join(format_scorecard(summary["scorecards"])))
+    for n in names:
+        f = summary["findings"][n]
+        print(f"qualitative findings of Sec. IV reproduced, {n} recording: "
+              f"{int((f['reproduced'] == True).sum())} of {int(f['reproduced'].notna().sum())}")  # noqa: E712
+    print("\nwritten:")
+    for n in names:
+        print(f"  data set {n:<8s} {root_data}/{n}")
+        print(f"  report {n:<10s} {root_rep}/{n}/ (tables_vii_x.md, results.csv, "
+              "confusion.csv, figures)")
+    print(f"  summary          {summary['files']['md']} (+ summary.csv, recall_rf.png)")
+    print(f"  MLflow runs      {cfg.tracking_uri or default_tracking_uri()}  (browse: mlflow "
+          "ui --backend-store-uri sqlite:///mlflow.db)")
+    print("wall time per stage: " + ", ".join(f"{n} {v:.1f} s" for n, v in stages.items()))
+    if warn:
+        print("warnings (each counted once here, full text in the log):")
+        for w in warn:
+            print(f"  {w['count']:>4d} x {w['category']}: {w['message'][:110]}")
 
 
 def run_paper(cfg: DictConfig) -> dict:
@@ -49,95 +130,42 @@ def run_paper(cfg: DictConfig) -> dict:
     Returns
     -------
     dict
-        ``stages_s`` (wall time of each stage [s]), ``generate`` and ``study`` (per
-        protocol), ``summary`` (files, scorecards, findings), ``warnings`` (category,
-        message, count).
+        ``stages_s`` (wall time of each stage [s]), ``generate`` and ``study`` (per data
+        set), ``summary`` (files, scorecards, findings), ``warnings`` (category, message,
+        count).
     """
-    from learn.reports.summary import format_scorecard, write_summary
-    from learn.tasks.paper import run_paper_study
-    from learn.tracking import default_tracking_uri
-    from swgsim.generate import generate
-    from swgsim.plan import plan
-
-    protocols = _check(cfg)
-    datasets = {p: OmegaConf.to_object(cfg.datasets[p]) for p in protocols}  # typed
-    plans = {}
-    for p in protocols:  # every data-set config is checked once, before any work
-        try:
-            plans[p] = plan(datasets[p])
-        except ValueError as e:
-            raise ValueError(f"datasets.{p}: {e}") from None
+    from learn.reports.summary import write_summary
     from learn.tracking import check_tracking
 
+    names = _check(cfg)
+    plans = _plans(cfg, names)
     check_tracking(cfg.tracking_uri, "tracking_uri")  # before any work
     root_data, root_rep = absolute_path(str(cfg.data_root)), absolute_path(str(cfg.report_root))
-    s = cfg.study
-    n_stages = 2 * len(protocols) + 1
+    counter, n_stages = itertools.count(1), 2 * len(names) + 1
+
+    def stage() -> str:
+        return f"{next(counter)}/{n_stages}"
+
     stages: dict[str, float] = {}
     caught: Counter = Counter()
-    gen, study = {}, {}
     t_all = time.perf_counter()
-    k = 0
     with warnings.catch_warnings(record=True) as parent_warnings:
         warnings.simplefilter("default")
-        for p in protocols:
-            k += 1
-            t0 = time.perf_counter()
-            out = f"{root_data}/{p}"
-            gen[p] = generate(plans[p], out, n_jobs=int(cfg.n_jobs), overwrite=True,
-                              progress=True)
-            stages[f"generate {p}"] = time.perf_counter() - t0
-            state = (f"{len(gen[p]['computed'])} shard(s) simulated" if gen[p]["computed"]
-                     else "already there and valid")
-            if gen[p].get("replaced"):
-                state += "; " + gen[p]["replaced"]
-            print(f"[{k}/{n_stages}] data set {p}: {gen[p]['windows']} windows in {out} "
-                  f"({state}), {stages[f'generate {p}']:.1f} s", flush=True)
-        for p in protocols:
-            k += 1
-            t0 = time.perf_counter()
-            study[p] = run_paper_study(
-                f"{root_data}/{p}", f"{root_rep}/{p}", OmegaConf.to_object(s),
-                tracking_uri=cfg.tracking_uri, log_models=cfg.log_models, n_jobs=cfg.n_jobs,
-                random_state=cfg.seed, experiment_prefix=f"paper_study/{p}/", name=p)
-            stages[f"study {p}"] = time.perf_counter() - t0
-            for w in study[p]["warnings"]:
-                caught[(w["category"], w["message"])] += w["count"]
-            print(f"[{k}/{n_stages}] study {p}: {study[p]['n_jobs_run']} jobs, "
-                  f"{len(study[p]['results'])} fits, {stages[f'study {p}']:.1f} s -> "
-                  f"{root_rep}/{p}", flush=True)
-        k += 1
+        gen = _generate(cfg, plans, root_data, stage, stages)
+        study = _studies(cfg, names, root_data, root_rep, stage, stages, caught)
         t0 = time.perf_counter()
         summary = write_summary(
-            {p: study[p]["results"] for p in protocols},
-            {p: study[p]["confusion"] for p in protocols}, root_rep, datasets,
-            OmegaConf.to_object(s), cfg.seed, spread={p: study[p]["spread"] for p in protocols})
+            {n: study[n]["results"] for n in names},
+            {n: study[n]["confusion"] for n in names}, root_rep,
+            {n: plans[n].config for n in names}, OmegaConf.to_object(cfg.study), cfg.seed,
+            spread={n: study[n]["spread"] for n in names})
         stages["summary"] = time.perf_counter() - t0
-        print(f"[{k}/{n_stages}] summary: {summary['files']['md']}", flush=True)
+        print(f"[{stage()}] summary: {summary['files']['md']}", flush=True)
     for w in parent_warnings:
         caught[(w.category.__name__, str(w.message).splitlines()[0])] += 1
     stages["total"] = time.perf_counter() - t_all
-
-    print("\nReproduction scorecard (test cells of Tables VII, IX, X against the paper):")
-    print("\n".join(format_scorecard(summary["scorecards"])))
-    for p in protocols:
-        f = summary["findings"][p]
-        print(f"qualitative findings of Sec. IV reproduced, {p} protocol: "
-              f"{int((f['reproduced'] == True).sum())} of {int(f['reproduced'].notna().sum())}")  # noqa: E712
-    print("\nwritten:")
-    for p in protocols:
-        print(f"  data set {p:<8s} {root_data}/{p}")
-        print(f"  report {p:<10s} {root_rep}/{p}/ (tables_vii_x.md, results.csv, "
-              "confusion.csv, figures)")
-    print(f"  summary          {summary['files']['md']} (+ summary.csv, recall_rf.png)")
-    print(f"  MLflow runs      {cfg.tracking_uri or default_tracking_uri()}  (browse: mlflow "
-          "ui --backend-store-uri sqlite:///mlflow.db)")
-    print("wall time per stage: " + ", ".join(f"{n} {v:.1f} s" for n, v in stages.items()))
     warn = [{"category": c, "message": m, "count": n} for (c, m), n in caught.most_common()]
-    if warn:
-        print("warnings (each counted once here, full text in the log):")
-        for w in warn:
-            print(f"  {w['count']:>4d} x {w['category']}: {w['message'][:110]}")
+    _print_end(cfg, names, summary, root_data, root_rep, stages, warn)
     return {"stages_s": stages, "generate": gen, "study": study, "summary": summary,
             "warnings": warn}
 

@@ -55,7 +55,7 @@ class PaperApp:
     """``swgsim-paper``: the main job."""
 
     datasets: dict[str, DatasetConfig] = field(default_factory=dict)
-    protocols: list[str] = field(default_factory=lambda: ["paper", "bench"])
+    run_on: list[str] = field(default_factory=lambda: ["paper", "bench"])  # keys of datasets
     data_root: str = "data"
     report_root: str = "reports"
     n_jobs: int = 2
@@ -128,6 +128,30 @@ class TrainApp:
     paths: PathsConfig = field(default_factory=PathsConfig)
     study: StudyOptions = field(default_factory=StudyOptions)
     transfer: TransferConfig | None = None
+
+
+#: Keys and groups renamed, per app: old name -> the new one and why. An override that
+#: uses an old name is refused naming the new one (:func:`check_renamed`).
+RENAMED: dict[str, dict[str, str]] = {
+    "paper": {"protocols": "run_on (the data sets to run, keys of datasets; 'protocol' "
+                           "names only an evaluation protocol, a data set's way of "
+                           "recording is its recording)"},
+}
+
+
+def check_renamed(overrides: list[str], app: str) -> None:
+    """Refuse command-line overrides that use a key or group renamed in ``app``.
+
+    Raises
+    ------
+    ValueError
+        ``<old>: renamed <new> (why)``, for the first override naming an old key.
+    """
+    renamed = RENAMED.get(app, {})
+    for o in overrides:
+        top = o.lstrip("+~").split("=", 1)[0].split(".", 1)[0].split("@", 1)[0]
+        if top in renamed:
+            raise ValueError(f"{top}: renamed {renamed[top]}")
 
 
 def register() -> None:

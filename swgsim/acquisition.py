@@ -1,6 +1,6 @@
 """How a window is recorded: its start, and the amplifier that samples the bridges.
 
-The data-set option ``acquisition`` is the *protocol* of a data set (its two presets are
+The data-set option ``acquisition`` is the *recording* of a data set (its two presets are
 ``conf/dataset/paper.yaml`` and ``bench.yaml``)::
 
     acquisition:

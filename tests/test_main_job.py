@@ -1,4 +1,4 @@
-"""The main job (swgsim-paper): both protocols, reports, summary, safe data folders."""
+"""The main job (swgsim-paper): both recordings, reports, summary, safe data folders."""
 
 import pandas as pd
 import pytest
@@ -15,7 +15,7 @@ def main_cfg(tmp_path, *extra):
             *extra])
 
 
-def test_main_job_runs_both_protocols_side_by_side(tmp_path, capsys):
+def test_main_job_runs_both_recordings_side_by_side(tmp_path, capsys):
     out = run_paper(main_cfg(tmp_path))
     printed = capsys.readouterr().out
     for p in ("paper", "bench"):
@@ -59,8 +59,8 @@ def test_main_job_never_deletes_what_it_did_not_create(tmp_path):
 
 
 @pytest.mark.parametrize("override, match", [
-    ("protocols=[paper,robot]", "not among the configured data sets"),
-    ("protocols=[]", "at least one"),
+    ("run_on=[paper,robot]", "not among the configured data sets"),
+    ("run_on=[]", "at least one"),
     ("datasets.bench.acquisition.start=sometimes", "datasets.bench: dataset.acquisition.start"),
     ("n_jobs=0", "n_jobs must be >= 1"),
 ])
@@ -68,3 +68,17 @@ def test_main_job_refuses_bad_input_before_any_work(tmp_path, override, match):
     with pytest.raises(ValueError, match=match):
         run_paper(main_cfg(tmp_path, override))
     assert not (tmp_path / "data").exists()
+
+
+def test_old_key_protocols_is_refused_naming_the_new_one(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    exe = Path(sys.executable).parent / "swgsim-paper"
+    r = subprocess.run([str(exe), "protocols=[paper]", f"data_root={tmp_path}/d"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2
+    assert r.stderr.strip().splitlines()[-1].startswith(
+        "swgsim-paper: error: protocols: renamed run_on")
+    assert not (tmp_path / "d").exists()
