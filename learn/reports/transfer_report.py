@@ -10,15 +10,19 @@ model that was declared before the run (``transfer.primary``).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from learn.learners.baselines import model_label
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
-from learn.studies.transfer import TargetSpec
+from learn.studies.runs import RunRef
+from learn.studies.transfer import TargetSpec, TransferConfig
+from learn.tracking.config import LoggerConfig
 
 _INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "Selection 3",
            "raw_res": "synchronous residual", "diff_res": "differenced residual",
@@ -114,7 +118,7 @@ def observable_share(separability: Mapping | None, dataset: str, protocol: str
 
 
 def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str, TargetSpec],
-                 primary: Mapping | None = None,
+                 primary: RunRef | None = None,
                  separability: Mapping | None = None) -> pd.DataFrame:
     """Check the targets of ``transfer.targets`` per data set.
 
@@ -127,9 +131,9 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str,
     targets : mapping of str to TargetSpec
         Data set -> :class:`learn.studies.transfer.TargetSpec` (protocol, accuracy: {k: min
         worst-split mean}, recall: {class: min recall at k = 0}; fractions).
-    primary : mapping, optional
-        ``{model, input}``: the run declared before the comparison; reported beside the
-        best one.
+    primary : RunRef, optional
+        The run declared before the comparison (``transfer.primary``); reported beside
+        the best one.
     separability : mapping, optional
         Data set -> {"clean", "disturbed"} -> :func:`learn.studies.separability.summary_table`.
 
@@ -155,9 +159,9 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str,
             if cand.empty:
                 continue
             picks = [("best", cand.loc[cand["mean"].idxmax()])]
-            if primary:
-                pr = cand[(cand["model"].str.partition("+")[0] == primary["model"])
-                          & (cand["input"] == primary["input"])]
+            if primary is not None:
+                pr = cand[(cand["model"].str.partition("+")[0] == primary.model)
+                          & (cand["input"] == primary.input)]
                 if len(pr):
                     picks.insert(0, ("primary", pr.loc[pr["mean"].idxmax()]))
             for who, b in picks:
@@ -303,7 +307,7 @@ def _separability_md(tabs: Mapping[str, pd.DataFrame]) -> list[str]:
     return lines + [""]
 
 
-def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: Mapping | None,
+def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: RunRef | None,
                separability: Mapping | None, order: Sequence[str]) -> list[str]:
     """Per-class recall at k = 0 of the primary and the best run of each data set."""
     rec = recall[(recall["protocol"] == "ood_disturbed") & (recall["k_shot"] == 0)]
@@ -315,8 +319,8 @@ def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: Mapping | None
              "|---|---|" + "---:|" * len(classes)]
     for ds in order:
         runs = []
-        if primary:
-            runs.append((primary["model"], primary["input"], "primary"))
+        if primary is not None:
+            runs.append((primary.model, primary.input, "primary"))
         b = best_rows(summ[(summ["dataset"] == ds) & (summ["protocol"] == "ood_disturbed")])
         if len(b):
             runs.append((b["model"].iloc[0], b["input"].iloc[0], "best"))
@@ -336,7 +340,7 @@ def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: Mapping | None
 
 
 def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path, *,
-                targets: Mapping[str, TargetSpec] | None = None, primary: Mapping | None = None,
+                targets: Mapping[str, TargetSpec] | None = None, primary: RunRef | None = None,
                 separability: Mapping[str, Mapping[str, pd.DataFrame]] | None = None,
                 latency: pd.DataFrame | None = None, timings: Mapping | None = None,
                 paper: bool = True) -> Path:
@@ -348,7 +352,8 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     results, confusion : pandas.DataFrame
         The comparison's tables.
     path : path
-    targets, primary : mapping, optional
+    targets : mapping of str to TargetSpec, optional
+    primary : RunRef, optional
         See :func:`target_table`.
     separability : mapping, optional
         Data set -> {"clean", "disturbed"} -> :func:`learn.studies.separability.summary_table`.
@@ -561,8 +566,10 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
     return path
 
 
-def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], cfg, timings: Mapping,
-                 latency: pd.DataFrame | None = None) -> str:
+def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], logger: LoggerConfig,
+                 tc: TransferConfig, data_sets: Sequence[tuple[str, str]], timings: Mapping,
+                 latency: pd.DataFrame | None = None,
+                 config: Mapping[str, Any] | None = None) -> str:
     """Log the comparison to MLflow through :func:`learn.tracking.log_run`.
 
     Two levels, each run with the git commit and its data set(s) as dataset inputs:
@@ -584,69 +591,67 @@ def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], cfg, timings:
         :data:`learn.studies.transfer.RESULT_COLUMNS`, one row per (cell, split, seed).
     files : mapping of str to Path
         Report files, stored as artifacts of the parent.
-    cfg : omegaconf.DictConfig
-        The composed config (``logger``, ``transfer``, ``data``).
+    logger : LoggerConfig
+        Tracking URI, experiment and parent run name.
+    tc : TransferConfig
+        The comparison, logged as the parent's ``transfer.*`` params (without the
+        data-set configs, which are in ``config.yaml``).
+    data_sets : sequence of (str, str)
+        (name, path) of the compared data sets; those in ``results`` are logged as
+        dataset inputs.
     timings : mapping
         ``wall_s`` [s] at least.
     latency : pandas.DataFrame, optional
         ``model``, ``input``, ``model_ms`` per (model, input).
+    config : mapping, optional
+        The resolved config of the run, stored as the parent's ``config.yaml``.
 
     Returns
     -------
     str
         The parent run id.
     """
-    from omegaconf import OmegaConf
-
     from learn.tracking import log_run
     from learn.tracking.provenance import dataset_ref
 
-    lcfg = cfg.logger
-    uri, experiment = lcfg.get("tracking_uri"), str(lcfg.get("experiment") or "transfer")
-    resolved = OmegaConf.to_container(cfg, resolve=True)
-    refs = {d: dataset_ref(p, d) for d, p in _data_set_paths(cfg, sorted(set(results["dataset"])))}
-    tc = dict(resolved.get("transfer") or {})
-    tc.pop("datasets", None)  # the data-set configs are in config.yaml
-    with log_run(experiment, str(lcfg.get("run_name") or "transfer"), tracking_uri=uri,
-                 params={"transfer": tc}, config=resolved, dataset=list(refs.values()),
+    compared = set(results["dataset"])
+    refs = {d: dataset_ref(p, d) for d, p in data_sets if d in compared}
+    params = dataclasses.asdict(tc)
+    params.pop("datasets")  # the data-set configs are in config.yaml
+    with log_run(logger.experiment, logger.run_name, tracking_uri=logger.tracking_uri,
+                 params={"transfer": params}, config=config, dataset=list(refs.values()),
                  tags={"task": "transfer"}) as parent:
         parent.log_metrics({"wall_s": float(timings["wall_s"])})
         for f in files.values():
             parent.log_artifact(f)
-        for (d, p, m, i, k), g in results.groupby(_KEYS):
-            keys = {"dataset": d, "protocol": p, "model": m, "input": i, "k_shot": int(k)}
-            tags = {"task": "transfer", "dataset": d, "protocol": p}
-            means = g.groupby("split")["accuracy"].mean()
-            with log_run(experiment, f"{d}-{p}-{m}-{i}-k{k}", tracking_uri=uri,
-                         params={**keys, "seeds": sorted(int(x) for x in set(g["seed"]))},
-                         dataset=refs.get(d), parent_run_id=parent.run_id,
-                         tags={**tags, "splits": ";".join(sorted(means.index))}) as cell:
-                per_seed = g.groupby(["split", "seed"])["accuracy"].mean().unstack("seed")
-                mets = {}
-                for s, row in per_seed.iterrows():
-                    mets.update({f"{s}/accuracy_mean": float(row.mean()),
-                                 f"{s}/accuracy_std": float(row.std(ddof=0)),
-                                 f"{s}/accuracy_min": float(row.min())})
-                mets.update(mean_accuracy=float(means.mean()),
-                            worst_split_accuracy=float(means.min()),
-                            train_s=float(g["train_s"].sum()))
-                if latency is not None and len(latency):
-                    lat = latency[(latency["model"] == m.split("+")[0]) & (latency["input"] == i)]
-                    if len(lat):
-                        mets["latency_ms"] = float(lat["model_ms"].iloc[0])
-                cell.log_metrics(mets)
+        for key, g in results.groupby(_KEYS):
+            _log_cell(logger, parent.run_id, key, g, refs, latency)
     return parent.run_id
 
 
-def _data_set_paths(cfg, names: Sequence[str]) -> list[tuple[str, str]]:
-    """(name, path) of the compared data sets that exist on disk (as run_transfer found them)."""
-    tc = cfg.transfer
-    if not tc.get("run_on"):
-        return [(n, str(cfg.data.path)) for n in names[:1]]
-    try:
-        from hydra.utils import to_absolute_path
+def _log_cell(logger: LoggerConfig, parent_id: str, key: tuple, g: pd.DataFrame,
+              refs: Mapping, latency: pd.DataFrame | None) -> None:
+    """The child run of one (dataset, protocol, model, input, k): seed statistics."""
+    from learn.tracking import log_run
 
-        root = to_absolute_path(str(tc.data_root))
-    except ValueError:  # outside a Hydra run
-        root = str(tc.data_root)
-    return [(n, f"{root}/{n}") for n in names if (Path(root) / n / "manifest.json").is_file()]
+    d, p, m, i, k = key
+    keys = {"dataset": d, "protocol": p, "model": m, "input": i, "k_shot": int(k)}
+    means = g.groupby("split")["accuracy"].mean()
+    with log_run(logger.experiment, f"{d}-{p}-{m}-{i}-k{k}", tracking_uri=logger.tracking_uri,
+                 params={**keys, "seeds": sorted(int(x) for x in set(g["seed"]))},
+                 dataset=refs.get(d), parent_run_id=parent_id,
+                 tags={"task": "transfer", "dataset": d, "protocol": p,
+                       "splits": ";".join(sorted(means.index))}) as cell:
+        per_seed = g.groupby(["split", "seed"])["accuracy"].mean().unstack("seed")
+        mets = {}
+        for s, row in per_seed.iterrows():
+            mets.update({f"{s}/accuracy_mean": float(row.mean()),
+                         f"{s}/accuracy_std": float(row.std(ddof=0)),
+                         f"{s}/accuracy_min": float(row.min())})
+        mets.update(mean_accuracy=float(means.mean()), worst_split_accuracy=float(means.min()),
+                    train_s=float(g["train_s"].sum()))
+        if latency is not None and len(latency):
+            lat = latency[(latency["model"] == m.split("+")[0]) & (latency["input"] == i)]
+            if len(lat):
+                mets["latency_ms"] = float(lat["model_ms"].iloc[0])
+        cell.log_metrics(mets)

@@ -33,6 +33,7 @@ from learn.studies.protocols import (
     class_labels,
 )
 from learn.studies.tables import StudyOptions
+from learn.tracking.config import LoggerConfig
 
 log = logging.getLogger(__name__)
 
@@ -73,7 +74,7 @@ class StudyTracking:
 
     tracking_uri: str | None = None
     experiment_prefix: str = "paper_study/"
-    log_models: bool = True
+    log_models: bool = LoggerConfig.log_models
     group: str = ""
 
 
