@@ -13,7 +13,6 @@ each model is fitted briefly (latency does not depend on how well it was trained
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import logging
 from pathlib import Path
 
@@ -43,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
     app = OmegaConf.to_object(cfg)  # swgcli.schema.TrainApp, every group typed
     tc = app.transfer
     specs, models = tc.runs, tc.models
-    residual = dataclasses.asdict(tc.residual)
+    residual = tc.residual
     fk = app.features.kwargs()
     ds = load(args.data)
     flag = bool(ds["disturbed"].values.any())

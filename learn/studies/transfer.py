@@ -32,7 +32,6 @@ parent run holding the report and the resolved config. """
 from __future__ import annotations
 
 import copy
-import dataclasses
 import logging
 import time
 from collections.abc import Mapping, Sequence
@@ -484,7 +483,7 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
 
             lat = measure_latency(ds, specs, tc.models, inputs, aux=tc.aux,
                                   feature_kwargs=feature_kwargs,
-                                  residual=dataclasses.asdict(tc.residual),
+                                  residual=tc.residual,
                                   repeats=tc.latency_repeats)
         del inputs
     bar.close()
@@ -500,5 +499,5 @@ def _inputs(ds, specs, tc: TransferConfig, disturbed: bool, feature_kwargs) -> d
 
     return {kind: build_input(ds, kind, aux=tuple(tc.aux), disturbed=disturbed,
                               feature_kwargs=dict(feature_kwargs or {}),
-                              residual=dataclasses.asdict(tc.residual))
+                              residual=tc.residual)
             for kind in sorted({s.input for s in specs})}
