@@ -212,7 +212,7 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
 
 
 def test_transfer_cells_log_seed_statistics_not_steps(tiny_dataset, tracking_uri):
-    from learn.reports.transfer_report import log_transfer
+    from learn.reports.transfer_runs import log_transfer
     from learn.studies.transfer import TransferConfig
     from learn.tracking.config import LoggerConfig
 

@@ -1,5 +1,5 @@
 """Report of the transfer comparison (:mod:`learn.studies.transfer`): tables, targets,
-figure, MLflow.
+figure (its MLflow runs: :mod:`learn.reports.transfer_runs`).
 
 Everything here reads the comparison's two tables: ``results`` (one row per run:
 :data:`learn.studies.transfer.RESULT_COLUMNS`) and ``confusion`` (:data:`CONFUSION_COLUMNS`,
@@ -10,10 +10,8 @@ model that was declared before the run (``transfer.primary``).
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -21,14 +19,14 @@ import pandas as pd
 from learn.learners.baselines import model_label
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import RunRef
-from learn.studies.transfer import TargetSpec, TransferConfig
-from learn.tracking.config import LoggerConfig
+from learn.studies.transfer import TargetSpec
 
 _INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "Selection 3",
            "raw_res": "synchronous residual", "diff_res": "differenced residual",
            "res_spec": "residual spectrum"}
 _SPLIT_ORDER = {"gear3": 0, "gear1": 1, "gear2": 2}
-_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
+#: The columns that name one cell of the comparison (a run summarised over seeds).
+CELL_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
 
 
 def row_label(model: str, inp: str, k: int) -> str:
@@ -64,10 +62,10 @@ def summarise(results: pd.DataFrame) -> pd.DataFrame:
         worst split appears as ``split == "worst"`` with ``worst_of`` naming it (its std
         is that split's std).
     """
-    g = results.groupby([*_KEYS, "split"])["accuracy"]
+    g = results.groupby([*CELL_KEYS, "split"])["accuracy"]
     per = g.agg(["mean", "std", "count"]).reset_index().rename(columns={"count": "n_seeds"})
     per["std"] = per["std"].fillna(0.0)
-    worst = per.loc[per.groupby(_KEYS)["mean"].idxmin()].copy()
+    worst = per.loc[per.groupby(CELL_KEYS)["mean"].idxmin()].copy()
     worst["worst_of"] = worst["split"]
     worst["split"] = "worst"
     return pd.concat([per, worst], ignore_index=True)
@@ -81,7 +79,7 @@ def class_recall(confusion: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         Columns dataset, protocol, model, input, k_shot, true, recall (0..1), windows.
     """
-    keys = [*_KEYS, "true"]
+    keys = [*CELL_KEYS, "true"]
     tot = confusion.groupby(keys)["count"].sum().rename("windows")
     hit = confusion[confusion["true"] == confusion["predicted"]].groupby(keys)["count"].sum()
     out = pd.concat([tot, hit.rename("hit")], axis=1).fillna(0.0).reset_index()
@@ -497,63 +495,27 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
     p95, :func:`observable_share`), when ``separability`` is given. One legend below the
     panels.
     """
-    from matplotlib import colormaps
     from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
 
     summ = summarise(results)
     panels = [(d, p) for d in dict.fromkeys(results["dataset"]) for p in OOD_PROTOCOLS
               if ((results["dataset"] == d) & (results["protocol"] == p)).any()]
     panels = panels or [("", "ood_disturbed")]
     w_all = summ[summ["split"] == "worst"]
-    keys = sorted({(m.split("+")[0], i, m.partition("+")[2])
-                   for m, i in zip(w_all["model"], w_all["input"], strict=True)
-                   if not m.partition("+")[2].startswith("ft_")},
-                  key=lambda t: (_model_rank(t[0]), t[1], t[2]))
-    cmap = colormaps["tab20"]
-    colour = {k: cmap(n % 20) for n, k in enumerate(keys)}
-    styles = {"ft_all": "-", "ft_last": "--", "ft_head": "-."}
+    colour = _run_colours(w_all)
     k_max = max(1, int(results["k_shot"].max()) if len(results) else 1)
     ncol = min(3, len(panels))
     nrow = -(-len(panels) // ncol)
-    fig = Figure(figsize=(5.2 * ncol, 3.6 * nrow + 0.5 + 0.2 * len(keys)),
+    fig = Figure(figsize=(5.2 * ncol, 3.6 * nrow + 0.5 + 0.2 * len(colour)),
                  layout="constrained")
-    handles: dict[str, Line2D] = {}
+    handles: dict = {}
     for n, (ds, p) in enumerate(panels):
         ax = fig.add_subplot(nrow, ncol, n + 1)
         w = w_all[(w_all["dataset"] == ds) & (w_all["protocol"] == p)]
-        for (m, i), g in w[w["model"].str.contains(r"\+ft_")].groupby(["model", "input"]):
-            base_name, _, mode = m.partition("+")
-            base = w[(w["model"] == base_name) & (w["input"] == i) & (w["k_shot"] == 0)]
-            g = pd.concat([base, g]).sort_values("k_shot")
-            ls = styles.get(mode, "-")
-            c = colour.get((base_name, i, ""), "k")
-            ax.errorbar(g["k_shot"], 100 * g["mean"], yerr=100 * g["std"], marker="o",
-                        ms=4, capsize=3, ls=ls, color=c)
-            lab = row_label(m, i, 0).replace(" with k=0", "").replace(", k=0", "")
-            handles.setdefault(lab, Line2D([], [], color=c, ls=ls, marker="o", ms=4))
-        ft_pairs = {(m.partition("+")[0], i) for m, i in zip(w["model"], w["input"],
-                                                             strict=True) if "+ft_" in m}
-        for _, r in w[w["k_shot"] == 0].iterrows():
-            base_name, _, suffix = r["model"].partition("+")
-            if not suffix and (base_name, r["input"]) in ft_pairs:
-                continue  # drawn as the k = 0 point of its adapted lines
-            c = colour[(base_name, r["input"], suffix)]
-            ax.axhline(100 * r["mean"], ls=":", lw=1.4, color=c)
-            handles.setdefault(row_label(r["model"], r["input"], 0),
-                               Line2D([], [], color=c, ls=":", lw=1.4))
-        tgt = (targets or {}).get(ds)
-        acc_t = tgt.accuracy if tgt is not None else {}
-        if acc_t and p == tgt.protocol:
-            tk = sorted((int(k), 100 * float(v)) for k, v in acc_t.items())
-            ax.plot([k for k, _ in tk], [v for _, v in tk], "k*", ms=10)
-            handles.setdefault("target (issue)", Line2D([], [], color="k", marker="*", ls="",
-                                                        ms=10))
-        share = observable_share(separability, ds, p)
-        if share is not None:
-            ax.axhline(100 * float(share.mean()), color="0.6", lw=6, alpha=0.35, zorder=0)
-            handles.setdefault("observability estimate (signals)",
-                               Line2D([], [], color="0.6", lw=6, alpha=0.35))
+        _draw_adapted(ax, w, colour, handles)
+        _draw_unlabelled(ax, w, colour, handles)
+        _draw_targets(ax, (targets or {}).get(ds), p, handles)
+        _draw_observable(ax, observable_share(separability, ds, p), handles)
         ax.set_xlim(-0.5, k_max + 0.5)
         ax.set_xlabel("labelled windows per class of the held-out gear, k")
         ax.set_ylabel("accuracy, worst split [%]")
@@ -566,92 +528,70 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
     return path
 
 
-def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], logger: LoggerConfig,
-                 tc: TransferConfig, data_sets: Sequence[tuple[str, str]], timings: Mapping,
-                 latency: pd.DataFrame | None = None,
-                 config: Mapping[str, Any] | None = None) -> str:
-    """Log the comparison to MLflow through :func:`learn.tracking.log_run`.
+def _run_colours(w_all: pd.DataFrame) -> dict:
+    """One colour per (model, input, unsupervised adaptation) in every panel."""
+    from matplotlib import colormaps
 
-    Two levels, each run with the git commit and its data set(s) as dataset inputs:
-
-    * a parent run: the ``transfer.*`` params, ``config.yaml``, the report files, metric
-      ``wall_s``, every data set compared;
-    * one child per (dataset, protocol, model, input, k): params of those five and
-      ``seeds`` (the list), metrics over the seeds ``<split>/accuracy_mean``,
-      ``<split>/accuracy_std`` (population), ``<split>/accuracy_min``,
-      ``mean_accuracy``, ``worst_split_accuracy``, ``train_s`` (sum) and ``latency_ms``
-      where measured. Every metric is one value of its run (step 0); the per-seed
-      accuracies are in the parent's ``results.csv``. (A run per seed would hold them too,
-      at 5 runs more per cell: measured 1.1 s more per cell on a local SQLite store, 2
-      busy cores, against 0.25 s for the cell's own run.)
-
-    Parameters
-    ----------
-    results : pandas.DataFrame
-        :data:`learn.studies.transfer.RESULT_COLUMNS`, one row per (cell, split, seed).
-    files : mapping of str to Path
-        Report files, stored as artifacts of the parent.
-    logger : LoggerConfig
-        Tracking URI, experiment and parent run name.
-    tc : TransferConfig
-        The comparison, logged as the parent's ``transfer.*`` params (without the
-        data-set configs, which are in ``config.yaml``).
-    data_sets : sequence of (str, str)
-        (name, path) of the compared data sets; those in ``results`` are logged as
-        dataset inputs.
-    timings : mapping
-        ``wall_s`` [s] at least.
-    latency : pandas.DataFrame, optional
-        ``model``, ``input``, ``model_ms`` per (model, input).
-    config : mapping, optional
-        The resolved config of the run, stored as the parent's ``config.yaml``.
-
-    Returns
-    -------
-    str
-        The parent run id.
-    """
-    from learn.tracking import log_run
-    from learn.tracking.provenance import dataset_ref
-
-    compared = set(results["dataset"])
-    refs = {d: dataset_ref(p, d) for d, p in data_sets if d in compared}
-    params = dataclasses.asdict(tc)
-    params.pop("datasets")  # the data-set configs are in config.yaml
-    with log_run(logger.experiment, logger.run_name, tracking_uri=logger.tracking_uri,
-                 params={"transfer": params}, config=config, dataset=list(refs.values()),
-                 tags={"task": "transfer"}) as parent:
-        parent.log_metrics({"wall_s": float(timings["wall_s"])})
-        for f in files.values():
-            parent.log_artifact(f)
-        for key, g in results.groupby(_KEYS):
-            _log_cell(logger, parent.run_id, key, g, refs, latency)
-    return parent.run_id
+    keys = sorted({(m.split("+")[0], i, m.partition("+")[2])
+                   for m, i in zip(w_all["model"], w_all["input"], strict=True)
+                   if not m.partition("+")[2].startswith("ft_")},
+                  key=lambda t: (_model_rank(t[0]), t[1], t[2]))
+    cmap = colormaps["tab20"]
+    return {k: cmap(n % 20) for n, k in enumerate(keys)}
 
 
-def _log_cell(logger: LoggerConfig, parent_id: str, key: tuple, g: pd.DataFrame,
-              refs: Mapping, latency: pd.DataFrame | None) -> None:
-    """The child run of one (dataset, protocol, model, input, k): seed statistics."""
-    from learn.tracking import log_run
+def _draw_adapted(ax, w: pd.DataFrame, colour: Mapping, handles: dict) -> None:
+    """Accuracy against k of every run adapted with k labelled windows (k = 0: the
+    source model)."""
+    from matplotlib.lines import Line2D
 
-    d, p, m, i, k = key
-    keys = {"dataset": d, "protocol": p, "model": m, "input": i, "k_shot": int(k)}
-    means = g.groupby("split")["accuracy"].mean()
-    with log_run(logger.experiment, f"{d}-{p}-{m}-{i}-k{k}", tracking_uri=logger.tracking_uri,
-                 params={**keys, "seeds": sorted(int(x) for x in set(g["seed"]))},
-                 dataset=refs.get(d), parent_run_id=parent_id,
-                 tags={"task": "transfer", "dataset": d, "protocol": p,
-                       "splits": ";".join(sorted(means.index))}) as cell:
-        per_seed = g.groupby(["split", "seed"])["accuracy"].mean().unstack("seed")
-        mets = {}
-        for s, row in per_seed.iterrows():
-            mets.update({f"{s}/accuracy_mean": float(row.mean()),
-                         f"{s}/accuracy_std": float(row.std(ddof=0)),
-                         f"{s}/accuracy_min": float(row.min())})
-        mets.update(mean_accuracy=float(means.mean()), worst_split_accuracy=float(means.min()),
-                    train_s=float(g["train_s"].sum()))
-        if latency is not None and len(latency):
-            lat = latency[(latency["model"] == m.split("+")[0]) & (latency["input"] == i)]
-            if len(lat):
-                mets["latency_ms"] = float(lat["model_ms"].iloc[0])
-        cell.log_metrics(mets)
+    styles = {"ft_all": "-", "ft_last": "--", "ft_head": "-."}
+    for (m, i), g in w[w["model"].str.contains(r"\+ft_")].groupby(["model", "input"]):
+        base_name, _, mode = m.partition("+")
+        base = w[(w["model"] == base_name) & (w["input"] == i) & (w["k_shot"] == 0)]
+        g = pd.concat([base, g]).sort_values("k_shot")
+        ls = styles.get(mode, "-")
+        c = colour.get((base_name, i, ""), "k")
+        ax.errorbar(g["k_shot"], 100 * g["mean"], yerr=100 * g["std"], marker="o",
+                    ms=4, capsize=3, ls=ls, color=c)
+        lab = row_label(m, i, 0).replace(" with k=0", "").replace(", k=0", "")
+        handles.setdefault(lab, Line2D([], [], color=c, ls=ls, marker="o", ms=4))
+
+
+def _draw_unlabelled(ax, w: pd.DataFrame, colour: Mapping, handles: dict) -> None:
+    """Horizontal lines of the runs without target labels (and the unsupervised
+    adaptations), but for those drawn as the k = 0 point of adapted lines."""
+    from matplotlib.lines import Line2D
+
+    ft_pairs = {(m.partition("+")[0], i) for m, i in zip(w["model"], w["input"],
+                                                         strict=True) if "+ft_" in m}
+    for _, r in w[w["k_shot"] == 0].iterrows():
+        base_name, _, suffix = r["model"].partition("+")
+        if not suffix and (base_name, r["input"]) in ft_pairs:
+            continue  # drawn as the k = 0 point of its adapted lines
+        c = colour[(base_name, r["input"], suffix)]
+        ax.axhline(100 * r["mean"], ls=":", lw=1.4, color=c)
+        handles.setdefault(row_label(r["model"], r["input"], 0),
+                           Line2D([], [], color=c, ls=":", lw=1.4))
+
+
+def _draw_targets(ax, tgt: TargetSpec | None, protocol: str, handles: dict) -> None:
+    """Stars at the data set's accuracy targets, when they refer to ``protocol``."""
+    from matplotlib.lines import Line2D
+
+    acc_t = tgt.accuracy if tgt is not None else {}
+    if acc_t and protocol == tgt.protocol:
+        tk = sorted((int(k), 100 * float(v)) for k, v in acc_t.items())
+        ax.plot([k for k, _ in tk], [v for _, v in tk], "k*", ms=10)
+        handles.setdefault("target (issue)", Line2D([], [], color="k", marker="*", ls="",
+                                                    ms=10))
+
+
+def _draw_observable(ax, share: pd.Series | None, handles: dict) -> None:
+    """Grey band at the observability estimate (mean share beyond the healthy p95)."""
+    from matplotlib.lines import Line2D
+
+    if share is not None:
+        ax.axhline(100 * float(share.mean()), color="0.6", lw=6, alpha=0.35, zorder=0)
+        handles.setdefault("observability estimate (signals)",
+                           Line2D([], [], color="0.6", lw=6, alpha=0.35))

@@ -181,7 +181,8 @@ def run_transfer(cfg) -> dict:
     """
     import torch
 
-    from learn.reports.transfer_report import class_recall, log_transfer, summarise, target_table
+    from learn.reports.transfer_report import class_recall, summarise, target_table
+    from learn.reports.transfer_runs import log_transfer
 
     app = typed_app(cfg)
     tc = app.transfer
