@@ -35,16 +35,15 @@ def main(argv: list[str] | None = None) -> int:
 
     from learn.inputs.signals import build_input
     from learn.studies.latency import measure_latency
-    from learn.studies.runs import specs_from_config
     from swgsim.data import load
 
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
         cfg = compose("train", overrides=["experiment=transfer", *args.overrides])
-    tc = cfg.transfer
-    specs = specs_from_config(OmegaConf.to_container(tc.runs, resolve=True))
-    models = OmegaConf.to_container(tc.models, resolve=True)
-    residual = OmegaConf.to_container(tc.residual, resolve=True)
-    fk = OmegaConf.to_object(cfg.features).kwargs()  # FeatureSettings
+    app = OmegaConf.to_object(cfg)  # swgcli.schema.TrainApp, every group typed
+    tc = app.transfer
+    specs, models = tc.runs, tc.models
+    residual = tc.residual
+    fk = app.features.kwargs()
     ds = load(args.data)
     flag = bool(ds["disturbed"].values.any())
     inputs = {k: build_input(ds, k, aux=tuple(tc.aux), disturbed=flag, feature_kwargs=fk,

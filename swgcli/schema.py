@@ -35,6 +35,7 @@ from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions
 from learn.studies.transfer import TransferConfig
+from learn.tracking.config import LoggerConfig
 from swgsim.config import DatasetConfig, check_keys
 
 
@@ -86,22 +87,6 @@ class DataRef:
 
     name: str = "paper"
     path: str = "${paths.data_dir}/paper"
-
-
-@dataclass
-class LoggerConfig:
-    """MLflow tracking of ``swgsim-train`` (``~logger`` switches it off)."""
-
-    tracking_uri: str | None = None   # null: $MLFLOW_TRACKING_URI, else sqlite:///<repo>/mlflow.db
-    experiment: str = "${protocol.name}"
-    run_name: str = "${features.name}-${model.name}"
-    confusion_plot: bool = True
-    # log each job's model, fitted on its last split, with mlflow.sklearn (true) or not.
-    # The study (task paper_study) keeps the model of its own last-split fit (no refit); a
-    # single job (task study) refits it once. Measured per job (paper data set, selection
-    # 1, 4860 training windows, 2 cores): storing 0.03-0.15 s and 0.6 MiB (RF, SVM, KNN;
-    # MLP, NB < 0.1 MiB); a single job's refit RF 0.7-0.9 s, SVM 1.4 s, MLP 4.0 s.
-    log_models: bool = StudyTracking.log_models
 
 
 @dataclass

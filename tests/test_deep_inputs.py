@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 from test_deep_toy import make_toy_dataset
 
-from learn.inputs.signals import AUX, build_input, normalise_signals, window_meta
+from learn.inputs.signals import (
+    AUX,
+    ResidualSettings,
+    build_input,
+    normalise_signals,
+    window_meta,
+)
 
 
 @pytest.fixture(scope="module")
@@ -104,7 +110,7 @@ def test_synchronous_residual_cancels_gear_signature_and_keeps_fault():
 
 
 def test_residual_inputs_shapes(toy):
-    kw = {"residual": {"ratio": 1e9, "n_harmonics": 6, "n_points": 32}}
+    kw = {"residual": ResidualSettings(ratio=1e9, n_harmonics=6, n_points=32)}
     raw = build_input(toy, "raw_res", **kw)
     diff = build_input(toy, "diff_res", **kw)
     spec = build_input(toy, "res_spec", **kw)
@@ -113,4 +119,4 @@ def test_residual_inputs_shapes(toy):
     assert spec.X.shape == (n, 5 * 5 + 2) and spec.n_aux == 0
     assert np.isfinite(raw.X).all() and np.isfinite(spec.X).all()
     with pytest.raises(ValueError, match="Nyquist"):
-        build_input(toy, "raw_res", residual={"n_harmonics": 200})
+        build_input(toy, "raw_res", residual=ResidualSettings(n_harmonics=200))

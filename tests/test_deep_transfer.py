@@ -160,17 +160,23 @@ def test_transfer_experiment_composes():
     from omegaconf import OmegaConf
 
     from learn.inputs.signals import INPUTS
-    from learn.studies.runs import ADAPT, make_estimator, specs_from_config
+    from learn.studies.runs import ADAPT, RunRef, RunSpec, make_estimator
+    from learn.studies.transfer import TransferConfig, check_config
     from swgcli import compose_app
 
     cfg = compose_app("train", ["experiment=transfer"])
     assert cfg.task == "transfer"
+    typed = OmegaConf.to_object(cfg.transfer)
+    assert isinstance(typed, TransferConfig)
+    check_config(typed)
+    specs = typed.runs
+    assert all(type(s) is RunSpec for s in specs)
+    assert typed.primary == RunRef("minirocket", "raw_res")
     tc = OmegaConf.to_container(cfg.transfer, resolve=True)
-    specs = specs_from_config(tc["runs"])
     for s in specs:
         assert s.model in tc["models"] and s.input in INPUTS
         assert s.adapt in (None, *ADAPT)
-        make_estimator(tc["models"][s.model], 0, 2, dict(s.params))  # params are valid
+        make_estimator(tc["models"][s.model], 0, 2, s.params)  # params are valid
     assert {"rf", "minirocket", "mlp_torch", "cnn"} <= {s.model for s in specs}
     assert ("cnn", "raw") in {(s.model, s.input) for s in specs}
     assert tc["protocols"] == ["ood_disturbed"]
@@ -200,6 +206,7 @@ def _synthetic_results():
 
 def test_targets_use_the_worst_split_and_the_observable_share(tmp_path):
     from learn.reports.transfer_report import class_recall, target_table, write_table
+    from learn.studies.runs import RunRef
 
     res = _synthetic_results()
     conf = pd.DataFrame([
@@ -215,7 +222,7 @@ def test_targets_use_the_worst_split_and_the_observable_share(tmp_path):
     targets = {"paper": TargetSpec("ood_disturbed", accuracy={0: 0.95}),
                "bench": TargetSpec("ood_disturbed", recall={"tip": 0.99})}
     tt = target_table(summarise(res), class_recall(conf), targets,
-                      {"model": "rf", "input": "raw_res"}, sep).set_index(["dataset", "who"])
+                      RunRef("rf", "raw_res"), sep).set_index(["dataset", "who"])
     # paper: the worst split of the best run (minirocket: 1.0 - 0.1), the primary's (rf)
     assert tt.loc[("paper", "best"), "reached"] == pytest.approx(0.9)
     assert tt.loc[("paper", "primary"), "reached"] == pytest.approx(0.6)

@@ -212,21 +212,19 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
 
 
 def test_transfer_cells_log_seed_statistics_not_steps(tiny_dataset, tracking_uri):
-    from omegaconf import OmegaConf
-
-    from learn.reports.transfer_report import log_transfer
+    from learn.reports.transfer_runs import log_transfer
+    from learn.studies.transfer import TransferConfig
+    from learn.tracking.config import LoggerConfig
 
     rows = [{"dataset": "tiny", "protocol": "ood_disturbed", "split": f"gear{g}", "model": m,
              "input": "sel1", "k_shot": 0, "seed": sd, "accuracy": 0.5 + 0.1 * g + 0.01 * sd,
              "train_s": 1.0, "n_test": 10}
             for m in ("rf", "cnn") for g in (1, 2, 3) for sd in (0, 1)]
     res = pd.DataFrame(rows)
-    cfg = OmegaConf.create({
-        "logger": {"tracking_uri": tracking_uri, "experiment": "test-transfer",
-                   "run_name": "transfer"},
-        "data": {"name": "tiny", "path": str(tiny_dataset)},
-        "transfer": {"run_on": [], "data_root": "unused", "seeds": [0, 1]}})
-    pid = log_transfer(res, {}, cfg, {"wall_s": 3.0})
+    logger = LoggerConfig(tracking_uri=tracking_uri, experiment="test-transfer",
+                          run_name="transfer")
+    tc = TransferConfig(run_on=[], data_root="unused", seeds=[0, 1])
+    pid = log_transfer(res, {}, logger, tc, [("tiny", str(tiny_dataset))], {"wall_s": 3.0})
     client = _client(tracking_uri)
     exp = client.get_run(pid).info.experiment_id
     runs = client.search_runs([exp], max_results=100)

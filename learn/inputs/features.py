@@ -452,23 +452,36 @@ def extract_features(
         v = s.var(axis=-1)  # (U, 5)
         cols += [m[i_s] / m[i_r], v[i_s] / v[i_r], eta_rel[:, None]]
     if sel in (2, 3):
-        n_in = np.asarray(ds["n_in_mean_rpm"].values[used], dtype=np.float64)
-        n_des = np.asarray(ds["n_in_rpm"].values[used], dtype=np.float64)
-        f_in = np.where(np.isfinite(n_in), n_in, n_des) / 60.0  # (U,) [Hz]
-        time_s = np.asarray(ds["time"].values, dtype=np.float64)
-        if sel == 2:
-            sig = s  # (U, 5, T)
-        else:
-            sig = np.stack([s[:, 1] - s[:, 3], s[:, 2] - s[:, 4]], axis=1)  # (U, 2, T)
-        a = order_spectrum(sig, time_s, f_in, orders)  # (U, C, K)
-        eps = floor_rel * a.max(axis=-1, keepdims=True)  # (U, C, 1)
-        rel = (a[i_s] + eps[i_r]) / (a[i_r] + eps[i_r])  # (n, C, K)
+        rel = _dft_rel(ds, s, used, i_s, i_r, sel, orders, floor_rel)  # (n, C, K)
         cols.append(rel.reshape(rel.shape[0], -1))  # (n, C*K), signal-major
     if sel == 3:
         cols.append(np.abs(1.0 - eta_rel)[:, None] ** 0.25)  # eq. (9)
     X = np.concatenate(cols, axis=1)
     assert X.shape[1] == len(names), (X.shape, len(names))
+    _check_finite(X, names)
+    log.info("selection %d: %d windows x %d features", sel, X.shape[0], X.shape[1])
+    return Features(X, names, _feature_meta(ds, samples))
 
+
+def _dft_rel(ds, s: np.ndarray, used: np.ndarray, i_s: np.ndarray, i_r: np.ndarray,
+             sel: int, orders: np.ndarray, floor_rel: float) -> np.ndarray:
+    """DFT_rel of eq. (8) of every window against its reference, shape (n, C, K): all
+    five signals (Selection 2) or the differences s1 - s3, s2 - s4 (Selection 3); ``s``
+    holds the ``used`` windows, shape (U, 5, T), ``i_s``/``i_r`` index it."""
+    n_in = np.asarray(ds["n_in_mean_rpm"].values[used], dtype=np.float64)
+    n_des = np.asarray(ds["n_in_rpm"].values[used], dtype=np.float64)
+    f_in = np.where(np.isfinite(n_in), n_in, n_des) / 60.0  # (U,) [Hz]
+    time_s = np.asarray(ds["time"].values, dtype=np.float64)
+    if sel == 2:
+        sig = s  # (U, 5, T)
+    else:
+        sig = np.stack([s[:, 1] - s[:, 3], s[:, 2] - s[:, 4]], axis=1)  # (U, 2, T)
+    a = order_spectrum(sig, time_s, f_in, orders)  # (U, C, K)
+    eps = floor_rel * a.max(axis=-1, keepdims=True)  # (U, C, 1)
+    return (a[i_s] + eps[i_r]) / (a[i_r] + eps[i_r])  # (n, C, K)
+
+
+def _check_finite(X: np.ndarray, names: list[str]) -> None:
     bad = ~np.isfinite(X)
     if bad.any():
         cols_bad = [names[j] for j in np.flatnonzero(bad.any(axis=0))[:5]]
@@ -476,13 +489,16 @@ def extract_features(
             f"{int(bad.sum())} non-finite feature values (e.g. in {cols_bad}); a reference "
             "window has a mean, variance or efficiency of zero"
         )
+
+
+def _feature_meta(ds, samples: np.ndarray) -> pd.DataFrame:
+    """Metadata of the windows ``samples`` (:data:`META_COLUMNS`)."""
     meta = pd.DataFrame({"sample": samples})
     for k in META_COLUMNS:
         meta[k] = np.asarray(ds[k].values)[samples]
     meta["fault"] = meta["fault"].astype(str)
     meta["disturbed"] = meta["disturbed"].astype(bool)
-    log.info("selection %d: %d windows x %d features", sel, X.shape[0], X.shape[1])
-    return Features(X, names, meta)
+    return meta
 
 
 def feature_spread(feats: Features) -> pd.DataFrame:

@@ -71,7 +71,7 @@ from __future__ import annotations
 
 import functools
 import logging
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -96,9 +96,6 @@ class ResidualSettings:
     compress: float | None = 1e-4  # asinh(x / compress); fault residuals span 4 decades
 
 
-#: Default settings of the synchronous residual, as a mapping.
-RESIDUAL_DEFAULTS = {k: tuple(v) if isinstance(v, list) else v
-                     for k, v in asdict(ResidualSettings()).items()}
 AUX = ("eta2_rel", "eta_rel")
 _META = ("gear", "fault", "variant", "severity", "n_in_rpm", "t_out_nm", "disturbed")
 
@@ -329,9 +326,8 @@ def align_phase(cw: np.ndarray, cr: np.ndarray, channels=(1, 2, 3, 4),
     return best
 
 
-def reference_residual(ds, samples: np.ndarray, refs: np.ndarray, *, ratio: float = 100.0,
-                       n_harmonics: int = 48, nuisance_orders=(0.25, 1 / 3, 0.5, 1.0),
-                       **_) -> np.ndarray:
+def reference_residual(ds, samples: np.ndarray, refs: np.ndarray,
+                       settings: ResidualSettings | None = None) -> np.ndarray:
     """Harmonics of each window minus those of its phase-aligned reference window.
 
     Parameters
@@ -340,12 +336,11 @@ def reference_residual(ds, samples: np.ndarray, refs: np.ndarray, *, ratio: floa
         Schema v1 (uses ``strain_signal``, ``time``, ``n_in_mean_rpm``/``n_in_rpm``).
     samples, refs : ndarray of int, shape (n,)
         Windows and their reference windows (:func:`window_meta`).
-    ratio : float
-        Gear ratio N (catalogue, 100 for the paper's gears; docs/PHYSICS.md sec. 2).
-    n_harmonics : int
-        Harmonics H of ψ.
-    nuisance_orders : sequence of float
-        Input-rotation orders fitted and discarded (eq. 10 sub-harmonics).
+    settings : ResidualSettings, optional
+        Uses ``ratio``, the gear ratio N (catalogue, 100 for the paper's gears;
+        docs/PHYSICS.md sec. 2), ``n_harmonics``, the harmonics H of ψ, and
+        ``nuisance_orders``, the input-rotation orders fitted and discarded (eq. 10
+        sub-harmonics); default :class:`ResidualSettings`.
 
     Returns
     -------
@@ -358,9 +353,11 @@ def reference_residual(ds, samples: np.ndarray, refs: np.ndarray, *, ratio: floa
     n_act = np.asarray(ds["n_in_mean_rpm"].values, dtype=np.float64)
     n_des = np.asarray(ds["n_in_rpm"].values, dtype=np.float64)
     f_in = np.where(np.isfinite(n_act), n_act, n_des) / 60.0
-    psi_order = 1.0 + 1.0 / float(ratio)
-    kw = {"psi_order": psi_order, "n_harmonics": int(n_harmonics),
-          "nuisance_orders": tuple(nuisance_orders)}
+    rs = settings or ResidualSettings()
+    n_harmonics = int(rs.n_harmonics)
+    psi_order = 1.0 + 1.0 / float(rs.ratio)
+    kw = {"psi_order": psi_order, "n_harmonics": n_harmonics,
+          "nuisance_orders": tuple(rs.nuisance_orders)}
     uref, inv = np.unique(refs, return_inverse=True)
     cr = harmonic_coefficients(sig[uref], t, f_in[uref], **kw)[inv]  # (n, 5, H+1)
     cw = np.empty_like(cr)
@@ -406,7 +403,7 @@ def _append_aux(x: np.ndarray, aux: np.ndarray) -> np.ndarray:
 
 def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
                 disturbed: bool | None = None, feature_kwargs: dict | None = None,
-                residual: dict | None = None) -> InputSet:
+                residual: ResidualSettings | None = None) -> InputSet:
     """Model input of kind ``kind`` for the non-reference windows of ``ds``.
 
     Parameters
@@ -423,10 +420,10 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
         Keep only the clean (False) or disturbed (True) windows; default all.
     feature_kwargs : dict, optional
         ``orders``, ``floor_rel`` of :func:`learn.inputs.features.extract_features`.
-    residual : dict, optional
-        Settings of the residual inputs, overriding :data:`RESIDUAL_DEFAULTS`: ``ratio``,
-        ``n_harmonics``, ``nuisance_orders``, ``min_harmonic``, ``n_points``,
-        ``compress`` (asinh scale; 0 or None: none).
+    residual : ResidualSettings, optional
+        Settings of the residual inputs: ``ratio``, ``n_harmonics``, ``nuisance_orders``,
+        ``min_harmonic``, ``n_points``, ``compress`` (asinh scale; 0 or None: none);
+        default :class:`ResidualSettings`.
 
     Returns
     -------
@@ -449,18 +446,18 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     y = meta["fault"].to_numpy()
     eff_cols = [AUX.index(a) for a in aux]
     if kind in RESIDUAL_INPUTS:
-        rk = {**RESIDUAL_DEFAULTS, **dict(residual or {})}
-        res = reference_residual(ds, samples, refs, **rk)  # (n, 5, H+1)
+        rs = residual or ResidualSettings()
+        res = reference_residual(ds, samples, refs, rs)  # (n, 5, H+1)
         eff = efficiency_features(ds, samples, refs)[:, eff_cols]  # (n, A)
         if kind == "res_spec":
-            amp = np.log10(np.abs(res[:, :, int(rk["min_harmonic"]):]) + 1e-7)  # (n, 5, H')
+            amp = np.log10(np.abs(res[:, :, int(rs.min_harmonic):]) + 1e-7)  # (n, 5, H')
             x = np.concatenate([amp.reshape(len(amp), -1), eff], axis=1)
             return InputSet(x.astype(np.float32), y, meta, 0, kind)
         if kind == "diff_res":
             res = np.stack([res[:, 0], res[:, 1] - res[:, 3], res[:, 2] - res[:, 4]], axis=1)
-        x = synthesise(res, int(rk["n_points"]), int(rk["min_harmonic"]))  # (n, C, M)
-        if rk.get("compress"):
-            x = np.arcsinh(x / float(rk["compress"]))
+        x = synthesise(res, int(rs.n_points), int(rs.min_harmonic))  # (n, C, M)
+        if rs.compress:
+            x = np.arcsinh(x / float(rs.compress))
         x = _append_aux(x.astype(np.float32), eff)
         return InputSet(np.ascontiguousarray(x), y, meta, len(eff_cols), kind)
     if kind in SIGNAL_INPUTS:

@@ -43,17 +43,15 @@ def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
         ``choice``, ``value``, ``reason`` (all str), in the order of the pipeline.
     """
     fs = features or FeatureSettings()
-    ch, dist, tol = dataset.chain, dataset.disturbance, dataset.tolerances
-    acq = dataset.acquisition
-    v = dataset.variants
-    ops = dataset.operating_points
-    n_rev = [ch.window_s * n / 60 for n in ops.n_in_rpm]
+    rows = [*_protocol_rows(dataset.acquisition), *_window_rows(dataset),
+            *_feature_rows(options, fs), *_fault_rows(dataset.variants),
+            *_model_rows(dataset, seed)]
+    return [{"choice": c, "value": val, "reason": r} for c, val, r in rows]
 
-    def lin(name):
-        a, b, n = v[name].severity_linspace
-        return f"{n} values of {a:g} … {b:g}"
 
-    rows = [
+def _protocol_rows(acq: Acquisition) -> list[tuple[str, str, str]]:
+    """Window start and amplifier: the data-set protocol."""
+    return [
         ("Window start (protocol)",
          "fixed: every simulation starts at input angle "
          f"{acq.wg_start_deg:g}°" if acq.start == "fixed"
@@ -63,6 +61,14 @@ def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
         ("Amplifier (protocol)", _amp(acq),
          "the paper's data are simulated; the bench preset cites its data sheet "
          "(swgsim/acquisition.py)"),
+    ]
+
+
+def _window_rows(dataset: DatasetConfig) -> list[tuple[str, str, str]]:
+    """Window, sampling, transient, eq. (10) and efficiency."""
+    ch, dist, ops = dataset.chain, dataset.disturbance, dataset.operating_points
+    n_rev = [ch.window_s * n / 60 for n in ops.n_in_rpm]
+    return [
         ("Window length", f"{ch.window_s:g} s = " + ", ".join(
             f"{r:g} input revolutions at {n:g} rpm" for r, n in zip(n_rev, ops.n_in_rpm,
                                                                    strict=True)),
@@ -84,6 +90,12 @@ def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
          "a bench measures it with torque flanges; class 0.05 (e.g. HBM T40B, data sheet "
          "B03406) adds about 0.1 %, less than the spread the output angle causes on the "
          "bench"),
+    ]
+
+
+def _feature_rows(options: StudyOptions, fs: FeatureSettings) -> list[tuple[str, str, str]]:
+    """Reference, scaling, DFT and cross-validation of the paper's features."""
+    return [
         ("Reference of eq. (7)",
          "per gear, operating point and clean/disturbed: a commissioning window of the "
          "healthy gear, recorded like every other window",
@@ -102,6 +114,17 @@ def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
          "stratified 4-fold, groups (gear, fault, variant)",
          "'k-fold cross validation with four splits'; grouping keeps a variant's operating "
          "points, near-copies after eq. (7), on one side"),
+    ]
+
+
+def _fault_rows(v) -> list[tuple[str, str, str]]:
+    """Table V: the severities and positions of the faults (``dataset.variants``)."""
+
+    def lin(name):
+        a, b, n = v[name].severity_linspace
+        return f"{n} values of {a:g} … {b:g}"
+
+    return [
         ("Table V: reduced damping", f"b1 lowered by {lin('reduced_damping')}",
          "run-in lowers b1 by up to a third (Table II prose)"),
         ("Table V: reduced stiffness", f"k1 lowered by {lin('reduced_stiffness')}",
@@ -118,6 +141,13 @@ def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
          f"{', '.join(f'{s:g}' for s in v['tip_tooth_crack'].severities)} of the tooth "
          f"force lost over a 3° arc at {v['tip_tooth_crack'].n_positions} positions",
          "'a strongly reduced tooth force acting only at a specific node' (Sec. II-B)"),
+    ]
+
+
+def _model_rows(dataset: DatasetConfig, seed: int) -> list[tuple[str, str, str]]:
+    """Gauges, per-gear sensor models, gear model, classifiers and seeds."""
+    tol = dataset.tolerances
+    return [
         ("Gauge layout (Fig. 3)",
          "s0 full torque bridge at 29 mm; s1/s3 WG-bending and s2/s4 shear half bridges at "
          "32 mm, 180° apart",
@@ -133,4 +163,3 @@ def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
         ("Seeds", f"data set {dataset.seed}, study {seed}",
          "fixed for repeatability"),
     ]
-    return [{"choice": c, "value": val, "reason": r} for c, val, r in rows]

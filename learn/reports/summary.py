@@ -248,19 +248,35 @@ def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,
     lines = [f"![per-class recall]({fig.name})", ""]
     if spread.empty:
         return lines
+    lines += _spread_md(spread)
+    locked = [n for n in names if datasets[n].acquisition.start == "fixed"]
+    free = [n for n in names if n not in locked]
+    if locked and free:
+        lines += _why_md(rec, spread, locked[0], free[0], datasets[free[0]])
+    return lines
+
+
+def _spread_md(spread: pd.DataFrame) -> list[str]:
+    """The table of the clean healthy windows' feature spread and the classes' distance."""
     head = "| protocol | feature | healthy std | " + " | ".join(
         display_name(c) for c in FAULT_CLASSES[1:]) + " |"
-    lines += ["Spread of the clean healthy windows' features (std over every gear and "
-              "operating point) and how far each fault class lies from the healthy median "
-              "(median over its windows of the absolute difference), in the features' own "
-              "units (ratios of eq. 7):", "", head,
-              "|---|---|---:|" + "---:|" * (len(FAULT_CLASSES) - 1)]
+    lines = ["Spread of the clean healthy windows' features (std over every gear and "
+             "operating point) and how far each fault class lies from the healthy median "
+             "(median over its windows of the absolute difference), in the features' own "
+             "units (ratios of eq. 7):", "", head,
+             "|---|---|---:|" + "---:|" * (len(FAULT_CLASSES) - 1)]
     for r in spread.itertuples(index=False):
         d = r._asdict()
         lines.append(f"| {d['protocol']} | {d['feature']} | {d['healthy_std']:.2e} | "
                      + " | ".join(f"{d.get(c, np.nan):.2e}" for c in FAULT_CLASSES[1:])
                      + " |")
     lines.append("")
+    return lines
+
+
+def _why_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame, a: str, b: str,
+            free: DatasetConfig) -> list[str]:
+    """Why the phase-locked protocol ``a`` is easier than the free one ``b``."""
 
     def rc(n, table, sel, cls):
         r = rec[n]
@@ -268,48 +284,43 @@ def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,
               & (r["true"] == cls)]
         return 100 * float(r["recall"].iloc[0]) if len(r) else float("nan")
 
-    locked = [n for n in names if datasets[n].acquisition.start == "fixed"]
-    free = [n for n in names if n not in locked]
-    if locked and free:
-        a, b = locked[0], free[0]
-        amp = datasets[b].acquisition.amplifier
-        noise = 1e3 * amp.noise_mvv if amp is not None else 0.0
-        rs = {c: (rc(a, "VII", "selection1", c), rc(b, "VII", "selection1", c))
-              for c in FAULT_CLASSES}
-        win = datasets[b].chain.window_s
-        n_lo = min(datasets[b].operating_points.n_in_rpm)
-        ripple = 2 * win * n_lo / 60 * 1.01  # order 2 of ψ, ψ̇ = ω_in (1 + 1/N), N = 100
-        def sp_val(proto, feature, col):
-            r = spread[(spread["protocol"] == proto) & (spread["feature"] == feature)]
-            return float(r[col].iloc[0]) if len(r) and col in r else float("nan")
+    def sp_val(proto, feature, col):
+        r = spread[(spread["protocol"] == proto) & (spread["feature"] == feature)]
+        return float(r[col].iloc[0]) if len(r) and col in r else float("nan")
 
-        eta_sd = sp_val(b, "eta_rel", "healthy_std")
-        eta_k1 = sp_val(b, "eta_rel", "reduced_stiffness")
-        dft_sd = sp_val(b, "DFT_rel (Sel. 3, median)", "healthy_std")
-        lines += [
-            "**Why.** Under the paper's protocol every healthy window is the same window: "
-            "the simulation starts at the same wave-generator and output angle and nothing "
-            "is noisy, so each healthy feature equals its reference exactly (eq. 7 ratios "
-            "of 1, healthy spread 0 above). A fault that moves a feature at all, however "
-            "little, then leaves a healthy class of zero width: even reduced stiffness, "
-            "whose order-2 torque ripple changes by about 0.1 % (README, *Design choices*), "
-            f"is recalled at {rs['reduced_stiffness'][0]:.0f} % by RF on Selection 1 "
-            f"(Table VII). Under the {b} protocol a window starts at an arbitrary "
-            "wave-generator angle: it holds a non-integer number of the order-2 ripple "
-            f"periods ({ripple:.2f} at {n_lo:g} rpm in {win:g} s), so its mean and variance "
-            "depend on where it starts; the kinematic error and the output angle, which sets "
-            "the position-dependent friction b3 sin(φ_out + θ_b) of eq. (5), change from "
-            f"window to window, so η_rel of healthy windows spreads by {eta_sd:.1e}, more "
-            f"than reduced stiffness moves it ({eta_k1:.1e}); and the amplifier adds "
-            f"{noise:.2f} µV/V rms of noise: where the pair differences Δs13 and Δs24 of a "
-            "healthy gear carry less than that, the DFT_rel bins of Selection 3 are ratios of "
-            f"noise (their healthy spread: {dft_sd:.2f}). The healthy class now has a width, "
-            "and only faults that move features by more than it remain visible: RF on "
-            "Selection 1 recalls "
-            + ", ".join(f"{display_name(c)} {rs[c][0]:.0f} → {rs[c][1]:.0f} %"
-                        for c in FAULT_CLASSES) + f" ({a} → {b} protocol, Table VII).",
-            ""]
-    return lines
+    amp = free.acquisition.amplifier
+    noise = 1e3 * amp.noise_mvv if amp is not None else 0.0
+    rs = {c: (rc(a, "VII", "selection1", c), rc(b, "VII", "selection1", c))
+          for c in FAULT_CLASSES}
+    win = free.chain.window_s
+    n_lo = min(free.operating_points.n_in_rpm)
+    ripple = 2 * win * n_lo / 60 * 1.01  # order 2 of ψ, ψ̇ = ω_in (1 + 1/N), N = 100
+    eta_sd = sp_val(b, "eta_rel", "healthy_std")
+    eta_k1 = sp_val(b, "eta_rel", "reduced_stiffness")
+    dft_sd = sp_val(b, "DFT_rel (Sel. 3, median)", "healthy_std")
+    return [
+        "**Why.** Under the paper's protocol every healthy window is the same window: "
+        "the simulation starts at the same wave-generator and output angle and nothing "
+        "is noisy, so each healthy feature equals its reference exactly (eq. 7 ratios "
+        "of 1, healthy spread 0 above). A fault that moves a feature at all, however "
+        "little, then leaves a healthy class of zero width: even reduced stiffness, "
+        "whose order-2 torque ripple changes by about 0.1 % (README, *Design choices*), "
+        f"is recalled at {rs['reduced_stiffness'][0]:.0f} % by RF on Selection 1 "
+        f"(Table VII). Under the {b} protocol a window starts at an arbitrary "
+        "wave-generator angle: it holds a non-integer number of the order-2 ripple "
+        f"periods ({ripple:.2f} at {n_lo:g} rpm in {win:g} s), so its mean and variance "
+        "depend on where it starts; the kinematic error and the output angle, which sets "
+        "the position-dependent friction b3 sin(φ_out + θ_b) of eq. (5), change from "
+        f"window to window, so η_rel of healthy windows spreads by {eta_sd:.1e}, more "
+        f"than reduced stiffness moves it ({eta_k1:.1e}); and the amplifier adds "
+        f"{noise:.2f} µV/V rms of noise: where the pair differences Δs13 and Δs24 of a "
+        "healthy gear carry less than that, the DFT_rel bins of Selection 3 are ratios of "
+        f"noise (their healthy spread: {dft_sd:.2f}). The healthy class now has a width, "
+        "and only faults that move features by more than it remain visible: RF on "
+        "Selection 1 recalls "
+        + ", ".join(f"{display_name(c)} {rs[c][0]:.0f} → {rs[c][1]:.0f} %"
+                    for c in FAULT_CLASSES) + f" ({a} → {b} protocol, Table VII).",
+        ""]
 
 
 def write_summary(
@@ -365,19 +376,7 @@ def write_summary(
     recall_figure(rec, files["recall"])
     sp = spread_table(spread or {})
 
-    first = names[0]
-    lines = ["# The paper's study under " + " and ".join(f"the {n} protocol" for n in names),
-             "",
-             "Every cell of Tables VII-X: the paper's score beside ours under each data-set "
-             "protocol (`conf/dataset/<name>.yaml`). "
-             + " ".join(f"**{n}**: {_protocol_words(datasets[n])}." for n in names),
-             "The study is the paper's in both (features, classifiers, protocols of Sec. "
-             "IV); only the data differ. Per-protocol tables, results and confusion counts "
-             "are in " + ", ".join(f"`{n}/`" for n in names) + ".", "",
-             "## Reproduction scorecard", "",
-             "Test cells of Tables VII, IX and X (the paper gives no numbers for Table "
-             "VIII) within ±3, ±5 and ±10 points of the paper, and the mean absolute "
-             "deviation.", "", *format_scorecard(cards), ""]
+    lines = _intro_md(names, datasets, cards)
     if sensitivity is not None and not sensitivity.empty:
         lines += ["### Against the paper's open choices", "",
                   "The same scorecard with one open choice changed at a time "
@@ -387,20 +386,46 @@ def write_summary(
               "## What changes when windows are not phase-locked", "",
               *_phase_lock_md(rec, sp, datasets, files["recall"]),
               "## Tables VII-X side by side", "", *_tables_md(cells, names),
-              "## Choices the paper leaves open", "",
-              f"Values of the {first} protocol; the others differ only in the protocol "
-              "rows (their own `conf/dataset/<name>.yaml`).", "",
-              "| choice | value taken | reason or source |", "|---|---|---|"]
-    lines += [f"| {c['choice']} | {c['value']} | {c['reason']} |"
-              for c in open_choices(datasets[first], options, seed, features)]
-    for n in names[1:]:
-        for c in open_choices(datasets[n], options, seed, features)[:2]:
-            lines.append(f"| {c['choice']}, {n} | {c['value']} | {c['reason']} |")
+              *_open_choices_md(names, datasets, options, seed, features)]
     from swgsim.data import atomic_write_bytes
 
     atomic_write_bytes(files["md"], ("\n".join(lines) + "\n").encode())
     log.info("summary written to %s", files["md"])
     return {"files": files, "scorecards": cards, "findings": found}
+
+
+def _intro_md(names: list[str], datasets: Mapping[str, DatasetConfig],
+              cards: Mapping) -> list[str]:
+    """Title, what was compared, and the reproduction scorecard."""
+    return ["# The paper's study under " + " and ".join(f"the {n} protocol" for n in names),
+            "",
+            "Every cell of Tables VII-X: the paper's score beside ours under each data-set "
+            "protocol (`conf/dataset/<name>.yaml`). "
+            + " ".join(f"**{n}**: {_protocol_words(datasets[n])}." for n in names),
+            "The study is the paper's in both (features, classifiers, protocols of Sec. "
+            "IV); only the data differ. Per-protocol tables, results and confusion counts "
+            "are in " + ", ".join(f"`{n}/`" for n in names) + ".", "",
+            "## Reproduction scorecard", "",
+            "Test cells of Tables VII, IX and X (the paper gives no numbers for Table "
+            "VIII) within ±3, ±5 and ±10 points of the paper, and the mean absolute "
+            "deviation.", "", *format_scorecard(cards), ""]
+
+
+def _open_choices_md(names: list[str], datasets: Mapping[str, DatasetConfig],
+                     options: StudyOptions, seed: int,
+                     features: FeatureSettings | None) -> list[str]:
+    """The open choices of the first protocol and the protocol rows of the others."""
+    first = names[0]
+    lines = ["## Choices the paper leaves open", "",
+             f"Values of the {first} protocol; the others differ only in the protocol "
+             "rows (their own `conf/dataset/<name>.yaml`).", "",
+             "| choice | value taken | reason or source |", "|---|---|---|"]
+    lines += [f"| {c['choice']} | {c['value']} | {c['reason']} |"
+              for c in open_choices(datasets[first], options, seed, features)]
+    for n in names[1:]:
+        for c in open_choices(datasets[n], options, seed, features)[:2]:
+            lines.append(f"| {c['choice']}, {n} | {c['value']} | {c['reason']} |")
+    return lines
 
 
 def _protocol_words(cfg: DatasetConfig) -> str:

@@ -1,5 +1,5 @@
 """Report of the transfer comparison (:mod:`learn.studies.transfer`): tables, targets,
-figure, MLflow.
+figure (its MLflow runs: :mod:`learn.reports.transfer_runs`).
 
 Everything here reads the comparison's two tables: ``results`` (one row per run:
 :data:`learn.studies.transfer.RESULT_COLUMNS`) and ``confusion`` (:data:`CONFUSION_COLUMNS`,
@@ -18,13 +18,15 @@ import pandas as pd
 
 from learn.learners.baselines import model_label
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
+from learn.studies.runs import RunRef
 from learn.studies.transfer import TargetSpec
 
 _INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "Selection 3",
            "raw_res": "synchronous residual", "diff_res": "differenced residual",
            "res_spec": "residual spectrum"}
 _SPLIT_ORDER = {"gear3": 0, "gear1": 1, "gear2": 2}
-_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
+#: The columns that name one cell of the comparison (a run summarised over seeds).
+CELL_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
 
 
 def row_label(model: str, inp: str, k: int) -> str:
@@ -60,10 +62,10 @@ def summarise(results: pd.DataFrame) -> pd.DataFrame:
         worst split appears as ``split == "worst"`` with ``worst_of`` naming it (its std
         is that split's std).
     """
-    g = results.groupby([*_KEYS, "split"])["accuracy"]
+    g = results.groupby([*CELL_KEYS, "split"])["accuracy"]
     per = g.agg(["mean", "std", "count"]).reset_index().rename(columns={"count": "n_seeds"})
     per["std"] = per["std"].fillna(0.0)
-    worst = per.loc[per.groupby(_KEYS)["mean"].idxmin()].copy()
+    worst = per.loc[per.groupby(CELL_KEYS)["mean"].idxmin()].copy()
     worst["worst_of"] = worst["split"]
     worst["split"] = "worst"
     return pd.concat([per, worst], ignore_index=True)
@@ -77,7 +79,7 @@ def class_recall(confusion: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         Columns dataset, protocol, model, input, k_shot, true, recall (0..1), windows.
     """
-    keys = [*_KEYS, "true"]
+    keys = [*CELL_KEYS, "true"]
     tot = confusion.groupby(keys)["count"].sum().rename("windows")
     hit = confusion[confusion["true"] == confusion["predicted"]].groupby(keys)["count"].sum()
     out = pd.concat([tot, hit.rename("hit")], axis=1).fillna(0.0).reset_index()
@@ -114,7 +116,7 @@ def observable_share(separability: Mapping | None, dataset: str, protocol: str
 
 
 def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str, TargetSpec],
-                 primary: Mapping | None = None,
+                 primary: RunRef | None = None,
                  separability: Mapping | None = None) -> pd.DataFrame:
     """Check the targets of ``transfer.targets`` per data set.
 
@@ -127,9 +129,9 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str,
     targets : mapping of str to TargetSpec
         Data set -> :class:`learn.studies.transfer.TargetSpec` (protocol, accuracy: {k: min
         worst-split mean}, recall: {class: min recall at k = 0}; fractions).
-    primary : mapping, optional
-        ``{model, input}``: the run declared before the comparison; reported beside the
-        best one.
+    primary : RunRef, optional
+        The run declared before the comparison (``transfer.primary``); reported beside
+        the best one.
     separability : mapping, optional
         Data set -> {"clean", "disturbed"} -> :func:`learn.studies.separability.summary_table`.
 
@@ -155,9 +157,9 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str,
             if cand.empty:
                 continue
             picks = [("best", cand.loc[cand["mean"].idxmax()])]
-            if primary:
-                pr = cand[(cand["model"].str.partition("+")[0] == primary["model"])
-                          & (cand["input"] == primary["input"])]
+            if primary is not None:
+                pr = cand[(cand["model"].str.partition("+")[0] == primary.model)
+                          & (cand["input"] == primary.input)]
                 if len(pr):
                     picks.insert(0, ("primary", pr.loc[pr["mean"].idxmax()]))
             for who, b in picks:
@@ -303,7 +305,7 @@ def _separability_md(tabs: Mapping[str, pd.DataFrame]) -> list[str]:
     return lines + [""]
 
 
-def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: Mapping | None,
+def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: RunRef | None,
                separability: Mapping | None, order: Sequence[str]) -> list[str]:
     """Per-class recall at k = 0 of the primary and the best run of each data set."""
     rec = recall[(recall["protocol"] == "ood_disturbed") & (recall["k_shot"] == 0)]
@@ -315,8 +317,8 @@ def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: Mapping | None
              "|---|---|" + "---:|" * len(classes)]
     for ds in order:
         runs = []
-        if primary:
-            runs.append((primary["model"], primary["input"], "primary"))
+        if primary is not None:
+            runs.append((primary.model, primary.input, "primary"))
         b = best_rows(summ[(summ["dataset"] == ds) & (summ["protocol"] == "ood_disturbed")])
         if len(b):
             runs.append((b["model"].iloc[0], b["input"].iloc[0], "best"))
@@ -336,7 +338,7 @@ def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: Mapping | None
 
 
 def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path, *,
-                targets: Mapping[str, TargetSpec] | None = None, primary: Mapping | None = None,
+                targets: Mapping[str, TargetSpec] | None = None, primary: RunRef | None = None,
                 separability: Mapping[str, Mapping[str, pd.DataFrame]] | None = None,
                 latency: pd.DataFrame | None = None, timings: Mapping | None = None,
                 paper: bool = True) -> Path:
@@ -348,7 +350,8 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     results, confusion : pandas.DataFrame
         The comparison's tables.
     path : path
-    targets, primary : mapping, optional
+    targets : mapping of str to TargetSpec, optional
+    primary : RunRef, optional
         See :func:`target_table`.
     separability : mapping, optional
         Data set -> {"clean", "disturbed"} -> :func:`learn.studies.separability.summary_table`.
@@ -492,63 +495,27 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
     p95, :func:`observable_share`), when ``separability`` is given. One legend below the
     panels.
     """
-    from matplotlib import colormaps
     from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
 
     summ = summarise(results)
     panels = [(d, p) for d in dict.fromkeys(results["dataset"]) for p in OOD_PROTOCOLS
               if ((results["dataset"] == d) & (results["protocol"] == p)).any()]
     panels = panels or [("", "ood_disturbed")]
     w_all = summ[summ["split"] == "worst"]
-    keys = sorted({(m.split("+")[0], i, m.partition("+")[2])
-                   for m, i in zip(w_all["model"], w_all["input"], strict=True)
-                   if not m.partition("+")[2].startswith("ft_")},
-                  key=lambda t: (_model_rank(t[0]), t[1], t[2]))
-    cmap = colormaps["tab20"]
-    colour = {k: cmap(n % 20) for n, k in enumerate(keys)}
-    styles = {"ft_all": "-", "ft_last": "--", "ft_head": "-."}
+    colour = _run_colours(w_all)
     k_max = max(1, int(results["k_shot"].max()) if len(results) else 1)
     ncol = min(3, len(panels))
     nrow = -(-len(panels) // ncol)
-    fig = Figure(figsize=(5.2 * ncol, 3.6 * nrow + 0.5 + 0.2 * len(keys)),
+    fig = Figure(figsize=(5.2 * ncol, 3.6 * nrow + 0.5 + 0.2 * len(colour)),
                  layout="constrained")
-    handles: dict[str, Line2D] = {}
+    handles: dict = {}
     for n, (ds, p) in enumerate(panels):
         ax = fig.add_subplot(nrow, ncol, n + 1)
         w = w_all[(w_all["dataset"] == ds) & (w_all["protocol"] == p)]
-        for (m, i), g in w[w["model"].str.contains(r"\+ft_")].groupby(["model", "input"]):
-            base_name, _, mode = m.partition("+")
-            base = w[(w["model"] == base_name) & (w["input"] == i) & (w["k_shot"] == 0)]
-            g = pd.concat([base, g]).sort_values("k_shot")
-            ls = styles.get(mode, "-")
-            c = colour.get((base_name, i, ""), "k")
-            ax.errorbar(g["k_shot"], 100 * g["mean"], yerr=100 * g["std"], marker="o",
-                        ms=4, capsize=3, ls=ls, color=c)
-            lab = row_label(m, i, 0).replace(" with k=0", "").replace(", k=0", "")
-            handles.setdefault(lab, Line2D([], [], color=c, ls=ls, marker="o", ms=4))
-        ft_pairs = {(m.partition("+")[0], i) for m, i in zip(w["model"], w["input"],
-                                                             strict=True) if "+ft_" in m}
-        for _, r in w[w["k_shot"] == 0].iterrows():
-            base_name, _, suffix = r["model"].partition("+")
-            if not suffix and (base_name, r["input"]) in ft_pairs:
-                continue  # drawn as the k = 0 point of its adapted lines
-            c = colour[(base_name, r["input"], suffix)]
-            ax.axhline(100 * r["mean"], ls=":", lw=1.4, color=c)
-            handles.setdefault(row_label(r["model"], r["input"], 0),
-                               Line2D([], [], color=c, ls=":", lw=1.4))
-        tgt = (targets or {}).get(ds)
-        acc_t = tgt.accuracy if tgt is not None else {}
-        if acc_t and p == tgt.protocol:
-            tk = sorted((int(k), 100 * float(v)) for k, v in acc_t.items())
-            ax.plot([k for k, _ in tk], [v for _, v in tk], "k*", ms=10)
-            handles.setdefault("target (issue)", Line2D([], [], color="k", marker="*", ls="",
-                                                        ms=10))
-        share = observable_share(separability, ds, p)
-        if share is not None:
-            ax.axhline(100 * float(share.mean()), color="0.6", lw=6, alpha=0.35, zorder=0)
-            handles.setdefault("observability estimate (signals)",
-                               Line2D([], [], color="0.6", lw=6, alpha=0.35))
+        _draw_adapted(ax, w, colour, handles)
+        _draw_unlabelled(ax, w, colour, handles)
+        _draw_targets(ax, (targets or {}).get(ds), p, handles)
+        _draw_observable(ax, observable_share(separability, ds, p), handles)
         ax.set_xlim(-0.5, k_max + 0.5)
         ax.set_xlabel("labelled windows per class of the held-out gear, k")
         ax.set_ylabel("accuracy, worst split [%]")
@@ -561,92 +528,70 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
     return path
 
 
-def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], cfg, timings: Mapping,
-                 latency: pd.DataFrame | None = None) -> str:
-    """Log the comparison to MLflow through :func:`learn.tracking.log_run`.
+def _run_colours(w_all: pd.DataFrame) -> dict:
+    """One colour per (model, input, unsupervised adaptation) in every panel."""
+    from matplotlib import colormaps
 
-    Two levels, each run with the git commit and its data set(s) as dataset inputs:
-
-    * a parent run: the ``transfer.*`` params, ``config.yaml``, the report files, metric
-      ``wall_s``, every data set compared;
-    * one child per (dataset, protocol, model, input, k): params of those five and
-      ``seeds`` (the list), metrics over the seeds ``<split>/accuracy_mean``,
-      ``<split>/accuracy_std`` (population), ``<split>/accuracy_min``,
-      ``mean_accuracy``, ``worst_split_accuracy``, ``train_s`` (sum) and ``latency_ms``
-      where measured. Every metric is one value of its run (step 0); the per-seed
-      accuracies are in the parent's ``results.csv``. (A run per seed would hold them too,
-      at 5 runs more per cell: measured 1.1 s more per cell on a local SQLite store, 2
-      busy cores, against 0.25 s for the cell's own run.)
-
-    Parameters
-    ----------
-    results : pandas.DataFrame
-        :data:`learn.studies.transfer.RESULT_COLUMNS`, one row per (cell, split, seed).
-    files : mapping of str to Path
-        Report files, stored as artifacts of the parent.
-    cfg : omegaconf.DictConfig
-        The composed config (``logger``, ``transfer``, ``data``).
-    timings : mapping
-        ``wall_s`` [s] at least.
-    latency : pandas.DataFrame, optional
-        ``model``, ``input``, ``model_ms`` per (model, input).
-
-    Returns
-    -------
-    str
-        The parent run id.
-    """
-    from omegaconf import OmegaConf
-
-    from learn.tracking import log_run
-    from learn.tracking.provenance import dataset_ref
-
-    lcfg = cfg.logger
-    uri, experiment = lcfg.get("tracking_uri"), str(lcfg.get("experiment") or "transfer")
-    resolved = OmegaConf.to_container(cfg, resolve=True)
-    refs = {d: dataset_ref(p, d) for d, p in _data_set_paths(cfg, sorted(set(results["dataset"])))}
-    tc = dict(resolved.get("transfer") or {})
-    tc.pop("datasets", None)  # the data-set configs are in config.yaml
-    with log_run(experiment, str(lcfg.get("run_name") or "transfer"), tracking_uri=uri,
-                 params={"transfer": tc}, config=resolved, dataset=list(refs.values()),
-                 tags={"task": "transfer"}) as parent:
-        parent.log_metrics({"wall_s": float(timings["wall_s"])})
-        for f in files.values():
-            parent.log_artifact(f)
-        for (d, p, m, i, k), g in results.groupby(_KEYS):
-            keys = {"dataset": d, "protocol": p, "model": m, "input": i, "k_shot": int(k)}
-            tags = {"task": "transfer", "dataset": d, "protocol": p}
-            means = g.groupby("split")["accuracy"].mean()
-            with log_run(experiment, f"{d}-{p}-{m}-{i}-k{k}", tracking_uri=uri,
-                         params={**keys, "seeds": sorted(int(x) for x in set(g["seed"]))},
-                         dataset=refs.get(d), parent_run_id=parent.run_id,
-                         tags={**tags, "splits": ";".join(sorted(means.index))}) as cell:
-                per_seed = g.groupby(["split", "seed"])["accuracy"].mean().unstack("seed")
-                mets = {}
-                for s, row in per_seed.iterrows():
-                    mets.update({f"{s}/accuracy_mean": float(row.mean()),
-                                 f"{s}/accuracy_std": float(row.std(ddof=0)),
-                                 f"{s}/accuracy_min": float(row.min())})
-                mets.update(mean_accuracy=float(means.mean()),
-                            worst_split_accuracy=float(means.min()),
-                            train_s=float(g["train_s"].sum()))
-                if latency is not None and len(latency):
-                    lat = latency[(latency["model"] == m.split("+")[0]) & (latency["input"] == i)]
-                    if len(lat):
-                        mets["latency_ms"] = float(lat["model_ms"].iloc[0])
-                cell.log_metrics(mets)
-    return parent.run_id
+    keys = sorted({(m.split("+")[0], i, m.partition("+")[2])
+                   for m, i in zip(w_all["model"], w_all["input"], strict=True)
+                   if not m.partition("+")[2].startswith("ft_")},
+                  key=lambda t: (_model_rank(t[0]), t[1], t[2]))
+    cmap = colormaps["tab20"]
+    return {k: cmap(n % 20) for n, k in enumerate(keys)}
 
 
-def _data_set_paths(cfg, names: Sequence[str]) -> list[tuple[str, str]]:
-    """(name, path) of the compared data sets that exist on disk (as run_transfer found them)."""
-    tc = cfg.transfer
-    if not tc.get("run_on"):
-        return [(n, str(cfg.data.path)) for n in names[:1]]
-    try:
-        from hydra.utils import to_absolute_path
+def _draw_adapted(ax, w: pd.DataFrame, colour: Mapping, handles: dict) -> None:
+    """Accuracy against k of every run adapted with k labelled windows (k = 0: the
+    source model)."""
+    from matplotlib.lines import Line2D
 
-        root = to_absolute_path(str(tc.data_root))
-    except ValueError:  # outside a Hydra run
-        root = str(tc.data_root)
-    return [(n, f"{root}/{n}") for n in names if (Path(root) / n / "manifest.json").is_file()]
+    styles = {"ft_all": "-", "ft_last": "--", "ft_head": "-."}
+    for (m, i), g in w[w["model"].str.contains(r"\+ft_")].groupby(["model", "input"]):
+        base_name, _, mode = m.partition("+")
+        base = w[(w["model"] == base_name) & (w["input"] == i) & (w["k_shot"] == 0)]
+        g = pd.concat([base, g]).sort_values("k_shot")
+        ls = styles.get(mode, "-")
+        c = colour.get((base_name, i, ""), "k")
+        ax.errorbar(g["k_shot"], 100 * g["mean"], yerr=100 * g["std"], marker="o",
+                    ms=4, capsize=3, ls=ls, color=c)
+        lab = row_label(m, i, 0).replace(" with k=0", "").replace(", k=0", "")
+        handles.setdefault(lab, Line2D([], [], color=c, ls=ls, marker="o", ms=4))
+
+
+def _draw_unlabelled(ax, w: pd.DataFrame, colour: Mapping, handles: dict) -> None:
+    """Horizontal lines of the runs without target labels (and the unsupervised
+    adaptations), but for those drawn as the k = 0 point of adapted lines."""
+    from matplotlib.lines import Line2D
+
+    ft_pairs = {(m.partition("+")[0], i) for m, i in zip(w["model"], w["input"],
+                                                         strict=True) if "+ft_" in m}
+    for _, r in w[w["k_shot"] == 0].iterrows():
+        base_name, _, suffix = r["model"].partition("+")
+        if not suffix and (base_name, r["input"]) in ft_pairs:
+            continue  # drawn as the k = 0 point of its adapted lines
+        c = colour[(base_name, r["input"], suffix)]
+        ax.axhline(100 * r["mean"], ls=":", lw=1.4, color=c)
+        handles.setdefault(row_label(r["model"], r["input"], 0),
+                           Line2D([], [], color=c, ls=":", lw=1.4))
+
+
+def _draw_targets(ax, tgt: TargetSpec | None, protocol: str, handles: dict) -> None:
+    """Stars at the data set's accuracy targets, when they refer to ``protocol``."""
+    from matplotlib.lines import Line2D
+
+    acc_t = tgt.accuracy if tgt is not None else {}
+    if acc_t and protocol == tgt.protocol:
+        tk = sorted((int(k), 100 * float(v)) for k, v in acc_t.items())
+        ax.plot([k for k, _ in tk], [v for _, v in tk], "k*", ms=10)
+        handles.setdefault("target (issue)", Line2D([], [], color="k", marker="*", ls="",
+                                                    ms=10))
+
+
+def _draw_observable(ax, share: pd.Series | None, handles: dict) -> None:
+    """Grey band at the observability estimate (mean share beyond the healthy p95)."""
+    from matplotlib.lines import Line2D
+
+    if share is not None:
+        ax.axhline(100 * float(share.mean()), color="0.6", lw=6, alpha=0.35, zorder=0)
+        handles.setdefault("observability estimate (signals)",
+                           Line2D([], [], color="0.6", lw=6, alpha=0.35))

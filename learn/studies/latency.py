@@ -7,16 +7,20 @@ holds it too.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from learn.inputs.signals import ResidualSettings
 from learn.studies.runs import RunSpec, final_step, make_estimator
 
 
-def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs, inputs, *, aux=("eta2_rel",
-                    "eta_rel"), feature_kwargs=None, residual=None, repeats: int = 100,
+def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs: Mapping[str, Any],
+                    inputs: Mapping[str, Any], *, aux: Sequence[str] = ("eta2_rel", "eta_rel"),
+                    feature_kwargs: Mapping[str, Any] | None = None,
+                    residual: ResidualSettings | None = None, repeats: int = 100,
                     n_fit: int = 600) -> pd.DataFrame:
     """Inference latency per window, batch 1, one CPU thread, of every (model, input).
 
@@ -24,6 +28,23 @@ def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs, inputs, *, aux=("e
     cost of ``predict`` does not depend on how well it was trained), then timed on
     ``repeats`` single windows (median). ``input_ms`` is the median time to build the
     input of one window from a two-window data set (the window and its reference).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The data set the inputs were built from (schema v1, with reference windows).
+    specs : sequence of RunSpec
+        The runs; each (model, input) is timed once.
+    model_cfgs : mapping of str to mapping
+        Model name -> ``_target_`` config (``transfer.models``).
+    inputs : mapping of str to InputSet
+        Input kind -> :class:`learn.inputs.signals.InputSet` built from ``ds``.
+    aux, feature_kwargs, residual
+        As for :func:`learn.inputs.signals.build_input`.
+    repeats : int
+        Timed windows per model.
+    n_fit : int
+        Most windows a model is fitted on.
 
     Returns
     -------
@@ -47,7 +68,7 @@ def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs, inputs, *, aux=("e
             inp = inputs[spec.input]
             rng = np.random.default_rng(0)
             idx = np.sort(rng.choice(len(inp.y), size=min(n_fit, len(inp.y)), replace=False))
-            est = make_estimator(model_cfgs[spec.model], 0, inp.n_aux, dict(spec.params))
+            est = make_estimator(model_cfgs[spec.model], 0, inp.n_aux, spec.params)
             if "max_epochs" in final_step(est).get_params():
                 final_step(est).set_params(max_epochs=1)
             est.fit(inp.X[idx], inp.y[idx])
@@ -59,7 +80,7 @@ def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs, inputs, *, aux=("e
                 t0 = time.perf_counter()
                 build_input(one, spec.input, aux=tuple(aux),
                             feature_kwargs=dict(feature_kwargs or {}),
-                            residual=dict(residual or {}))
+                            residual=residual)
                 t_in.append(time.perf_counter() - t0)
             est.predict(inp.X[:1])  # warm-up
             t_m = []

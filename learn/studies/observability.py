@@ -138,7 +138,7 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
     from matplotlib import colormaps
     from matplotlib.figure import Figure
 
-    from swgsim.faults import display_name, fault_classes
+    from swgsim.faults import fault_classes
 
     present = set(table["fault"])  # one column per faulty class, in the registry's order
     faults = [f for f in fault_classes() if f != "healthy" and f in present]
@@ -151,12 +151,32 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
                           + 0.6), layout="constrained")
     gs = fig.add_gridspec(nrow, len(faults), height_ratios=[1.0] * len(loads)
                           + [1.4] * (modes is not None))
+    first = _fault_panels(fig, gs, table, faults, loads, colour)
+    handles, labels = first.get_legend_handles_labels()
+    if modes is not None:
+        _mode_panel(fig.add_subplot(gs[-1, :]), modes, colour)
+    fig.legend(handles, labels, loc="outside lower center", ncol=len(speeds), fontsize=8,
+               frameon=False)
+    fig.suptitle("Which faults the flexspline gauges show: share of fault windows beyond "
+                 "the healthy 95th percentile (dotted: 5 %, chance)", fontsize=10)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=130)
+    return path
+
+
+def _fault_panels(fig, gs, table: pd.DataFrame, faults: list[str], loads: list[float],
+                  colour: dict):
+    """One panel per (load, fault): the share beyond the healthy p95 against J_out, one
+    line per input speed; returns the first panel (its legend is the figure's)."""
+    from swgsim.faults import display_name
+
     first = None
     for r, t in enumerate(loads):
         for c, f in enumerate(faults):
             ax = fig.add_subplot(gs[r, c], sharex=first)
             first = first or ax
-            for n in speeds:
+            for n in colour:
                 g = table[(table["fault"] == f) & (table["t_out_nm"] == t)
                           & (table["n_in_rpm"] == n)].sort_values("j_out_kgm2")
                 ax.plot(g["j_out_kgm2"], 100 * g["fraction_beyond_p95"], "o-", ms=3,
@@ -171,35 +191,30 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
                 ax.set_ylabel(f"{t:g} N m\nbeyond healthy p95 [%]")
             if r == len(loads) - 1:
                 ax.set_xlabel("output inertia J_out [kg m²]")
-    handles, labels = first.get_legend_handles_labels()
-    if modes is not None:
-        ax = fig.add_subplot(gs[-1, :])
-        for t, g in modes.groupby("t_out_nm"):
-            g = g.sort_values("j_out_kgm2")
-            ax.plot(g["j_out_kgm2"], g["f_hz"], "k-", lw=1.6)
-            ax.annotate(f"mode, {t:g} N m", (g["j_out_kgm2"].iloc[-1], g["f_hz"].iloc[-1]),
-                        fontsize=7, xytext=(3, 0), textcoords="offset points", va="center")
-        styles = {1: ":", 2: "--", 4: "-."}
-        for n in speeds:
-            for order, ls in styles.items():
-                ax.axhline(order * n / 60.0, color=colour[n], ls=ls, lw=1)
-        lo, hi = modes["f_hz"].min() / 1.5, modes["f_hz"].max() * 1.5
-        ax.set_ylim(lo, hi)
-        ax.set_xlim(modes["j_out_kgm2"].min() / 1.2, modes["j_out_kgm2"].max() * 1.8)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("output inertia J_out [kg m²]")
-        ax.set_ylabel("frequency [Hz]")
-        ax.set_title("Why: the torsional mode (black; output inertia on the gear stiffness) "
-                     "and the kinematic error's orders 1 (dotted), 2 (dashed) and 4 "
-                     "(dash-dot) at each speed. Reduced stiffness shows where an order "
-                     "crosses the mode.", fontsize=9)
-        ax.grid(alpha=0.3, which="both")
-    fig.legend(handles, labels, loc="outside lower center", ncol=len(speeds), fontsize=8,
-               frameon=False)
-    fig.suptitle("Which faults the flexspline gauges show: share of fault windows beyond "
-                 "the healthy 95th percentile (dotted: 5 %, chance)", fontsize=10)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
-    return path
+    return first
+
+
+def _mode_panel(ax, modes: pd.DataFrame, colour: dict) -> None:
+    """The torsional mode's frequency against J_out per load, and the kinematic error's
+    orders 1, 2 and 4 at each speed (the keys of ``colour``)."""
+    for t, g in modes.groupby("t_out_nm"):
+        g = g.sort_values("j_out_kgm2")
+        ax.plot(g["j_out_kgm2"], g["f_hz"], "k-", lw=1.6)
+        ax.annotate(f"mode, {t:g} N m", (g["j_out_kgm2"].iloc[-1], g["f_hz"].iloc[-1]),
+                    fontsize=7, xytext=(3, 0), textcoords="offset points", va="center")
+    styles = {1: ":", 2: "--", 4: "-."}
+    for n in colour:
+        for order, ls in styles.items():
+            ax.axhline(order * n / 60.0, color=colour[n], ls=ls, lw=1)
+    lo, hi = modes["f_hz"].min() / 1.5, modes["f_hz"].max() * 1.5
+    ax.set_ylim(lo, hi)
+    ax.set_xlim(modes["j_out_kgm2"].min() / 1.2, modes["j_out_kgm2"].max() * 1.8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("output inertia J_out [kg m²]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title("Why: the torsional mode (black; output inertia on the gear stiffness) "
+                 "and the kinematic error's orders 1 (dotted), 2 (dashed) and 4 "
+                 "(dash-dot) at each speed. Reduced stiffness shows where an order "
+                 "crosses the mode.", fontsize=9)
+    ax.grid(alpha=0.3, which="both")

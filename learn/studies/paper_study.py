@@ -33,6 +33,7 @@ from learn.studies.protocols import (
     class_labels,
 )
 from learn.studies.tables import StudyOptions
+from learn.tracking.config import LoggerConfig
 
 log = logging.getLogger(__name__)
 
@@ -73,7 +74,7 @@ class StudyTracking:
 
     tracking_uri: str | None = None
     experiment_prefix: str = "paper_study/"
-    log_models: bool = True
+    log_models: bool = LoggerConfig.log_models
     group: str = ""
 
 
@@ -280,26 +281,9 @@ def paper_study(
     tasks = fit_tasks(jobs, feats, splits_of, options.scale, random_state, log_models)
     bar.total = 1 + len(selections) + len(tasks)  # the protocols may change split counts
     bar.refresh()
-    rows, confusion, caught = [], [], Counter()
-    last_of_table = {j.table: j for j in jobs}
-    t_table = time.perf_counter()
+    run = _JobLogging(str(dataset_path), random_state, options.scale, protocols, tracking)
     outs = Parallel(n_jobs=n_jobs, return_as="generator")(tasks)
-    for j in jobs:  # results arrive in order; log each job while fits go on
-        splits = splits_of[(j.protocol, j.selection)]
-        f = feats[j.selection]
-        result, c, model = collect_job(outs, splits, class_labels(f.meta["fault"].to_numpy()))
-        bar.update(len(splits))
-        caught.update(c)
-        run_id = None if tracking is None else log_study_job(
-            result, j, str(dataset_path), random_state, options.scale, protocols[j.protocol],
-            tracking, model=model, X_sample=f.X[splits[-1].test[:5]])
-        r, c = job_rows(j, result, run_id)
-        rows += r
-        confusion += c
-        if j is last_of_table[j.table]:
-            timings[j.table] = time.perf_counter() - t_table
-            t_table = time.perf_counter()
-            log.info("Table %s done in %.1f s", j.table, timings[j.table])
+    rows, confusion, caught = _collect_jobs(jobs, outs, splits_of, feats, run, bar, timings)
     bar.close()
     return PaperStudyResult(
         results=pd.DataFrame(rows),
@@ -307,6 +291,50 @@ def paper_study(
         spread=feature_spreads(feats),
         warnings=[{"category": c, "message": m, "count": n} for (c, m), n in caught.items()],
         timings_s=timings, n_jobs_run=len(jobs), ds=ds)
+
+
+@dataclass
+class _JobLogging:
+    """What logging a job of one study call needs (:func:`log_study_job`)."""
+
+    dataset_path: str
+    random_state: int
+    scale: bool
+    protocols: Mapping[str, ProtocolConfig]
+    tracking: StudyTracking | None
+
+    def log(self, job: StudyJob, result: ProtocolResult, model, X_sample) -> str | None:
+        if self.tracking is None:
+            return None
+        return log_study_job(result, job, self.dataset_path, self.random_state, self.scale,
+                             self.protocols[job.protocol], self.tracking, model=model,
+                             X_sample=X_sample)
+
+
+def _collect_jobs(jobs: list[StudyJob], outs, splits_of: Mapping, feats: Mapping,
+                  run: _JobLogging, bar, timings: dict[str, float]
+                  ) -> tuple[list[dict], list[tuple], Counter]:
+    """Each job's result from the fits' outputs (in order), logged while fits go on: the
+    result rows, the confusion rows and the warnings caught; ``timings`` gets each
+    table's time [s]."""
+    rows, confusion, caught = [], [], Counter()
+    last_of_table = {j.table: j for j in jobs}
+    t_table = time.perf_counter()
+    for j in jobs:  # results arrive in order; log each job while fits go on
+        splits = splits_of[(j.protocol, j.selection)]
+        f = feats[j.selection]
+        result, c, model = collect_job(outs, splits, class_labels(f.meta["fault"].to_numpy()))
+        bar.update(len(splits))
+        caught.update(c)
+        run_id = run.log(j, result, model, f.X[splits[-1].test[:5]])
+        r, c = job_rows(j, result, run_id)
+        rows += r
+        confusion += c
+        if j is last_of_table[j.table]:
+            timings[j.table] = time.perf_counter() - t_table
+            t_table = time.perf_counter()
+            log.info("Table %s done in %.1f s", j.table, timings[j.table])
+    return rows, confusion, caught
 
 
 def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,

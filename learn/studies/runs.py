@@ -8,8 +8,8 @@ adaptations it gets (:mod:`learn.studies.transfer`).
 from __future__ import annotations
 
 import inspect
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -18,9 +18,29 @@ import pandas as pd
 ADAPT = ("adabn", "coral")
 
 
-@dataclass(frozen=True)
-class RunSpec:
-    """One (model, input) pair of the comparison.
+@dataclass
+class RunRef:
+    """A (model, input) pair named by the config, e.g. ``transfer.primary``.
+
+    Attributes
+    ----------
+    model : str
+        Key into the model configs (``transfer.models``).
+    input : str
+        One of :data:`learn.inputs.signals.INPUTS`.
+    """
+
+    model: str
+    input: str
+
+    @property
+    def label(self) -> str:
+        return f"{self.model}/{self.input}"
+
+
+@dataclass
+class RunSpec(RunRef):
+    """One (model, input) run of the comparison, an entry of ``transfer.runs``.
 
     Attributes
     ----------
@@ -32,45 +52,15 @@ class RunSpec:
         Adapt with k labelled target windows per class (leave-one-gear-out protocols):
         torch nets are fine-tuned, MiniRocket's ridge is refitted.
     adapt : str or None
-        ``adabn`` (torch nets) or ``coral`` (feature inputs), unsupervised.
-    params : tuple of (str, value)
+        ``adabn`` (torch nets) or ``coral`` (feature inputs), unsupervised
+        (:data:`ADAPT`).
+    params : dict of str to value
         Parameters set on the model for this input (e.g. ``padding_mode``).
     """
 
-    model: str
-    input: str
     finetune: bool = False
     adapt: str | None = None
-    params: tuple = ()
-
-    @property
-    def label(self) -> str:
-        return f"{self.model}/{self.input}"
-
-
-def specs_from_config(runs: Iterable[Mapping[str, Any]]) -> list[RunSpec]:
-    """RunSpecs from ``transfer.runs`` entries ``{model, input, finetune, adapt, params}``.
-
-    Raises
-    ------
-    ValueError
-        ``transfer.runs[i]``: a missing model or input, an unknown key or adaptation.
-    """
-    out = []
-    allowed = {"model", "input", "finetune", "adapt", "params"}
-    for i, r in enumerate(runs):
-        r = dict(r)
-        bad = set(r) - allowed
-        if bad or "model" not in r or "input" not in r:
-            raise ValueError(f"transfer.runs[{i}]: needs model and input, may add finetune, "
-                             f"adapt, params; got keys {sorted(r)}")
-        if r.get("adapt") not in (None, *ADAPT):
-            raise ValueError(f"transfer.runs[{i}].adapt: must be one of {ADAPT} or null, "
-                             f"got {r['adapt']!r}")
-        out.append(RunSpec(model=str(r["model"]), input=str(r["input"]),
-                           finetune=bool(r.get("finetune", False)), adapt=r.get("adapt"),
-                           params=tuple(sorted(dict(r.get("params") or {}).items()))))
-    return out
+    params: dict[str, Any] = field(default_factory=dict)
 
 
 def final_step(est):

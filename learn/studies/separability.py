@@ -64,7 +64,7 @@ def separation_records(ds, disturbed: bool = False, n_harmonics: int = 8,
     ValueError
         ``n_harmonics`` < 1.
     """
-    from learn.inputs.signals import RESIDUAL_DEFAULTS, harmonic_coefficients
+    from learn.inputs.signals import ResidualSettings, harmonic_coefficients
 
     if int(n_harmonics) < 1:
         raise ValueError(f"n_harmonics must be >= 1, got {n_harmonics}")
@@ -75,7 +75,7 @@ def separation_records(ds, disturbed: bool = False, n_harmonics: int = 8,
     t = np.asarray(ds["time"].values, float)
     f_in = np.asarray(ds["n_in_mean_rpm"].values, float) / 60.0
     eff = ds["efficiency"].values
-    nuisance = RESIDUAL_DEFAULTS["nuisance_orders"] if disturbed else ()
+    nuisance = tuple(ResidualSettings().nuisance_orders) if disturbed else ()
     parts = []
     use = (m["disturbed"] == disturbed) & ~m["reference"]
     for g in np.unique(m["gear"]):

@@ -32,7 +32,6 @@ parent run holding the report and the resolved config. """
 from __future__ import annotations
 
 import copy
-import dataclasses
 import logging
 import time
 from collections.abc import Mapping, Sequence
@@ -47,13 +46,13 @@ from learn.studies.kshot import KShotSplit, check_no_leak, kshot_split
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import (
     ADAPT,
+    RunRef,
     RunSpec,
     final_step,
     fit_with_groups,
     make_estimator,
     pre_transform,
     score,
-    specs_from_config,
 )
 from swgsim.config import DatasetConfig
 
@@ -124,11 +123,11 @@ class TransferConfig:
     residual : ResidualSettings
         Settings of the residual inputs.
     finetune : FinetuneSettings
-    runs : list of mapping
+    runs : list of RunSpec
         ``{model, input, finetune, adapt, params}`` each (:class:`learn.studies.runs.RunSpec`).
-    primary : dict
+    primary : RunRef or None
         ``{model, input}`` declared before the comparison (reported beside the best);
-        empty: none.
+        None: none.
     targets : dict of str to TargetSpec
     n_threads, n_jobs, threads_per_job : int
         Torch threads of the main process; (protocol, split, seed) cells in parallel
@@ -149,8 +148,8 @@ class TransferConfig:
     aux: list[str] = field(default_factory=lambda: ["eta2_rel", "eta_rel"])
     residual: ResidualSettings = field(default_factory=ResidualSettings)
     finetune: FinetuneSettings = field(default_factory=FinetuneSettings)
-    runs: list[Any] = field(default_factory=list)
-    primary: dict[str, str] = field(default_factory=dict)
+    runs: list[RunSpec] = field(default_factory=list)
+    primary: RunRef | None = None
     targets: dict[str, TargetSpec] = field(default_factory=dict)
     n_threads: int = 1
     n_jobs: int = 2
@@ -162,8 +161,8 @@ class TransferConfig:
     models: dict[str, Any] = field(default_factory=dict)
 
 
-def check_config(tc: TransferConfig) -> list[RunSpec]:
-    """Check ``transfer`` before any work; return the runs.
+def check_config(tc: TransferConfig) -> None:
+    """Check ``transfer`` before any work.
 
     Raises
     ------
@@ -189,9 +188,8 @@ def check_config(tc: TransferConfig) -> list[RunSpec]:
         if int(getattr(tc, key)) < 1:
             raise ValueError(f"transfer.{key}: must be >= 1, got {getattr(tc, key)}")
     _check_finetune(tc.finetune)
-    specs = _check_runs(tc)
+    _check_runs(tc)
     _check_targets(tc.targets)
-    return specs
 
 
 def _check_finetune(ft: FinetuneSettings) -> None:
@@ -202,23 +200,24 @@ def _check_finetune(ft: FinetuneSettings) -> None:
         raise ValueError(f"transfer.finetune.modes: must be among {FT_MODES}, got {bad}")
 
 
-def _check_runs(tc: TransferConfig) -> list[RunSpec]:
+def _check_runs(tc: TransferConfig) -> None:
     from learn.inputs.signals import INPUTS
 
-    specs = specs_from_config(tc.runs)
-    if not specs:
+    if not tc.runs:
         raise ValueError("transfer.runs: must list at least one {model, input}")
-    for i, s in enumerate(specs):
+    for i, s in enumerate(tc.runs):
         if s.model not in tc.models:
             raise ValueError(f"transfer.runs[{i}].model: {s.model!r} not among "
                              f"transfer.models {sorted(tc.models)}")
         if s.input not in INPUTS:
             raise ValueError(f"transfer.runs[{i}].input: {s.input!r} not among {INPUTS}")
+        if s.adapt not in (None, *ADAPT):
+            raise ValueError(f"transfer.runs[{i}].adapt: must be one of {ADAPT} or null, "
+                             f"got {s.adapt!r}")
     pr = tc.primary
-    if pr and (pr.get("model"), pr.get("input")) not in {(s.model, s.input) for s in specs}:
-        raise ValueError(f"transfer.primary: {pr} is not one of transfer.runs; name one "
-                         "of them, or transfer.primary={} for none")
-    return specs
+    if pr is not None and pr.label not in {s.label for s in tc.runs}:
+        raise ValueError(f"transfer.primary: {pr.label} is not one of transfer.runs; name "
+                         "one of them, or transfer.primary=null for none")
 
 
 def _check_targets(targets: Mapping[str, TargetSpec]) -> None:
@@ -353,7 +352,7 @@ def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int
     rows = []
     for spec in specs:
         inp = inputs[spec.input]
-        est = make_estimator(model_cfgs[spec.model], seed, inp.n_aux, dict(spec.params))
+        est = make_estimator(model_cfgs[spec.model], seed, inp.n_aux, spec.params)
         out, _ = _run_cell(spec, est, inp, split.train, evaluation, kshot, k_shots, ft, seed)
         for r in out:
             rows.append({"protocol": protocol, "split": split.name, **r})
@@ -459,7 +458,8 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
     """
     from tqdm.auto import tqdm
 
-    specs = check_config(tc)
+    check_config(tc)
+    specs = tc.runs
     latency = tc.latency if latency is None else latency
     t_all, input_s = time.perf_counter(), 0.0
     todo = _protocols_with_data(ds, tc.protocols)
@@ -483,7 +483,7 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
 
             lat = measure_latency(ds, specs, tc.models, inputs, aux=tc.aux,
                                   feature_kwargs=feature_kwargs,
-                                  residual=dataclasses.asdict(tc.residual),
+                                  residual=tc.residual,
                                   repeats=tc.latency_repeats)
         del inputs
     bar.close()
@@ -499,5 +499,5 @@ def _inputs(ds, specs, tc: TransferConfig, disturbed: bool, feature_kwargs) -> d
 
     return {kind: build_input(ds, kind, aux=tuple(tc.aux), disturbed=disturbed,
                               feature_kwargs=dict(feature_kwargs or {}),
-                              residual=dataclasses.asdict(tc.residual))
+                              residual=tc.residual)
             for kind in sorted({s.input for s in specs})}

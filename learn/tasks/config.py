@@ -1,46 +1,44 @@
-"""Typed objects from the apps' composed configs: the one place where a task turns a
-config node into the dataclass that travels on."""
+"""The apps' composed configs as typed objects: the one place where a task turns a
+config into the dataclasses that travel on (:func:`typed_app`)."""
 
 from __future__ import annotations
 
 import dataclasses
-from typing import TypeVar
-
-T = TypeVar("T")
+from typing import Any
 
 
-def typed(node, cls: type[T]) -> T:
-    """The dataclass ``cls`` of a config node.
+def typed_app(cfg: Any) -> Any:
+    """An app's whole composed config as its schema's dataclass, every group typed.
 
     Parameters
     ----------
-    node : omegaconf.DictConfig, mapping or None
-        A node of a structured config (:mod:`swgcli.schema`; converted with
-        ``OmegaConf.to_object``), a plain mapping with some of the fields, or None.
-    cls : type
-        A dataclass.
+    cfg : omegaconf.DictConfig or dataclass
+        A config composed on a structured schema (``swgcli.schema.TrainApp``), or the
+        typed object already (returned unchanged).
 
     Returns
     -------
-    cls
-        ``cls()`` for None; the defaults fill the fields a plain mapping lacks.
+    dataclass
+        ``OmegaConf.to_object(cfg)``: interpolations resolved, the groups as their
+        dataclasses (:class:`learn.inputs.features.FeatureSettings`,
+        :class:`learn.studies.protocols.ProtocolConfig`,
+        :class:`learn.tracking.config.LoggerConfig`,
+        :class:`learn.studies.tables.StudyOptions`,
+        :class:`learn.studies.transfer.TransferConfig`, ...); ``_target_`` configs (the
+        models) stay mappings for :func:`hydra.utils.instantiate`.
 
     Raises
     ------
-    ValueError
-        A plain mapping with a key that is not a field of ``cls``.
+    omegaconf.errors.MissingMandatoryValue
+        A mandatory value left at ``???`` (e.g. a run of ``transfer.runs`` without its
+        ``model``).
     """
     from omegaconf import DictConfig, OmegaConf
 
-    if node is None:
-        return cls()
-    if isinstance(node, cls):
-        return node
-    obj = OmegaConf.to_object(node) if isinstance(node, DictConfig) else dict(node)
-    if isinstance(obj, cls):
-        return obj
-    fields = {f.name for f in dataclasses.fields(cls)}
-    bad = sorted(set(obj) - fields)
-    if bad:
-        raise ValueError(f"{bad[0]}: not a field of {cls.__name__}; allowed: {sorted(fields)}")
-    return cls(**obj)
+    return OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
+
+
+def plain(app: Any) -> dict:
+    """A typed config (:func:`typed_app`) as nested dicts and lists: the resolved config
+    that a run logs."""
+    return dataclasses.asdict(app)

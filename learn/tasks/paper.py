@@ -11,7 +11,7 @@ from learn.inputs.features import FeatureSettings
 from learn.studies.paper_study import StudyTracking, paper_study
 from learn.studies.protocols import ProtocolConfig
 from learn.studies.tables import StudyOptions
-from learn.tasks.config import typed
+from learn.tasks.config import typed_app
 
 
 def run_paper_study(
@@ -84,12 +84,18 @@ def run_paper_study(
 
 
 def run_paper_study_task(cfg) -> dict:
-    """Task ``paper_study``: :func:`run_paper_study` from a composed ``swgsim-train`` config.
+    """Task ``paper_study``: :func:`run_paper_study` from ``swgsim-train``'s typed config.
 
-    Uses ``cfg.data.path``, ``cfg.paths.report_dir``/paper, ``cfg.logger`` (None: no
-    tracking; its ``tracking_uri`` and ``log_models``), ``cfg.n_jobs``, ``cfg.seed``,
-    ``cfg.features`` (orders and floor; the selections are those of the tables) and
-    ``cfg.study`` (:class:`learn.studies.tables.StudyOptions`).
+    Uses ``data.path``, ``paths.report_dir``/paper, ``logger``
+    (:class:`learn.tracking.config.LoggerConfig`; None: no tracking; its ``tracking_uri``
+    and ``log_models``), ``n_jobs``, ``seed``, ``features`` (orders and floor; the
+    selections are those of the tables) and ``study``
+    (:class:`learn.studies.tables.StudyOptions`).
+
+    Parameters
+    ----------
+    cfg : swgcli.schema.TrainApp or omegaconf.DictConfig
+        The typed app config (:func:`learn.tasks.config.typed_app`).
 
     Returns
     -------
@@ -97,13 +103,13 @@ def run_paper_study_task(cfg) -> dict:
         ``timings_s``, ``files`` (report paths as str), ``n_jobs_run`` and
         ``mean_test_accuracy`` keyed by ``"table/selection/model"``.
     """
-    logger = cfg.logger
+    app = typed_app(cfg)
+    logger = app.logger
     out = run_paper_study(
-        cfg.data.path, Path(cfg.paths.report_dir) / "paper", typed(cfg.study, StudyOptions),
+        app.data.path, Path(app.paths.report_dir) / "paper", app.study,
         tracking_uri=None if logger is None else logger.tracking_uri,
-        track=logger is not None, log_models=logger is not None and bool(logger.log_models),
-        n_jobs=int(cfg.n_jobs), random_state=int(cfg.seed),
-        features=typed(cfg.features, FeatureSettings))
+        track=logger is not None, log_models=logger is not None and logger.log_models,
+        n_jobs=app.n_jobs, random_state=app.seed, features=app.features)
     res = out.pop("results")
     means = res.groupby(["table", "selection", "model"])["test_accuracy"].mean()
     out["mean_test_accuracy"] = {"/".join(k): float(v) for k, v in means.items()}

@@ -8,9 +8,9 @@ import logging
 
 import numpy as np
 
-from learn.inputs.features import FeatureSettings, extract_features
-from learn.studies.protocols import ProtocolConfig, ProtocolResult, class_labels, evaluate
-from learn.tasks.config import typed
+from learn.inputs.features import extract_features
+from learn.studies.protocols import ProtocolResult, class_labels, evaluate
+from learn.tasks.config import plain, typed_app
 
 log = logging.getLogger(__name__)
 
@@ -27,8 +27,9 @@ def run_train(cfg) -> dict:
 
     Parameters
     ----------
-    cfg : omegaconf.DictConfig
-        Composed ``conf/train.yaml`` (:class:`swgcli.schema.TrainApp`).
+    cfg : omegaconf.DictConfig or swgcli.schema.TrainApp
+        Composed ``conf/train.yaml`` (:class:`swgcli.schema.TrainApp`); turned into the
+        typed object here, once (:func:`learn.tasks.config.typed_app`), and handed on.
 
     Returns
     -------
@@ -42,56 +43,60 @@ def run_train(cfg) -> dict:
     """
     from hydra.utils import get_method
 
-    if cfg.task not in TASKS:
-        raise ValueError(f"task must be one of {sorted(TASKS)}, got {cfg.task!r}")
-    if cfg.logger is not None:
+    app = typed_app(cfg)
+    if app.task not in TASKS:
+        raise ValueError(f"task must be one of {sorted(TASKS)}, got {app.task!r}")
+    if app.logger is not None:
         from learn.tracking import check_tracking
 
-        check_tracking(cfg.logger.tracking_uri, "logger.tracking_uri")
-    log.info("task %s -> %s", cfg.task, TASKS[cfg.task])
-    return get_method(TASKS[cfg.task])(cfg)
+        check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
+    log.info("task %s -> %s", app.task, TASKS[app.task])
+    return get_method(TASKS[app.task])(app)
 
 
 def run_study_job(cfg) -> dict:
     """One job: a model under a protocol on one feature selection, all splits.
 
-    Reads ``cfg.data.path``, ``cfg.features`` (:class:`learn.inputs.features.FeatureSettings`),
-    ``cfg.model`` (instantiated with Hydra), ``cfg.protocol``
-    (:class:`learn.studies.protocols.ProtocolConfig`), ``cfg.logger`` (None: no tracking)
-    and ``cfg.n_jobs``.
+    Reads ``data.path``, ``features`` (:class:`learn.inputs.features.FeatureSettings`),
+    ``model`` (a ``_target_`` config, instantiated with Hydra), ``protocol``
+    (:class:`learn.studies.protocols.ProtocolConfig`), ``logger``
+    (:class:`learn.tracking.config.LoggerConfig`; None: no tracking) and ``n_jobs``.
 
     Parameters
     ----------
-    cfg : omegaconf.DictConfig
+    cfg : swgcli.schema.TrainApp or omegaconf.DictConfig
+        The typed app config (:func:`learn.tasks.config.typed_app`).
 
     Returns
     -------
     dict
-        ``protocol``, ``selection``, ``model``, ``splits`` (labels), ``train_accuracy``
-        and ``test_accuracy`` (lists, per split), ``mean_train_accuracy``,
-        ``mean_test_accuracy``, ``n_samples``, ``run_id`` (None without logger).
+        ``protocol``, ``selection``, ``model`` (the name of the pipeline's classifier
+        step), ``splits`` (labels), ``train_accuracy`` and ``test_accuracy`` (lists, per
+        split), ``mean_train_accuracy``, ``mean_test_accuracy``, ``n_samples``, ``run_id``
+        (None without logger).
     """
     from hydra.utils import instantiate
 
     from swgsim.data import load
 
-    ds = load(cfg.data.path)
-    settings = typed(cfg.features, FeatureSettings)
-    protocol = typed(cfg.protocol, ProtocolConfig)
+    app = typed_app(cfg)
+    ds = load(app.data.path)
+    settings, protocol = app.features, app.protocol
     feats = extract_features(ds, settings.selection, **settings.kwargs())
     y = feats.meta["fault"].to_numpy()
     splits = protocol.splits(feats.meta)
-    estimator = instantiate(cfg.model, _convert_="all")
-    result = evaluate(estimator, feats.X, y, splits, labels=class_labels(y), n_jobs=cfg.n_jobs)
+    estimator = instantiate(app.model, _convert_="all")
+    model = _step_name(estimator)
+    result = evaluate(estimator, feats.X, y, splits, labels=class_labels(y), n_jobs=app.n_jobs)
     log.info("%s / %s / %s: test accuracy %s, mean %.4f", protocol.name, settings.name,
-             cfg.model.name, np.round(result.test_accuracy, 4), result.mean_test_accuracy)
-    run_id = None if cfg.logger is None else _log(cfg, result, protocol.name, estimator,
+             model, np.round(result.test_accuracy, 4), result.mean_test_accuracy)
+    run_id = None if app.logger is None else _log(app, result, protocol.name, estimator,
                                                   feats, splits[-1])
     return {
         "task": "study",
         "protocol": protocol.name,
         "selection": settings.name,
-        "model": cfg.model.name,
+        "model": model,
         "splits": [s.label for s in splits],
         "train_accuracy": result.train_accuracy.tolist(),
         "test_accuracy": result.test_accuracy.tolist(),
@@ -102,19 +107,27 @@ def run_study_job(cfg) -> dict:
     }
 
 
-def _log(cfg, result: ProtocolResult, protocol: str, estimator, feats, last) -> str:
-    from omegaconf import OmegaConf
+def _step_name(estimator) -> str:
+    """The name of a pipeline's classifier step (the model's config name,
+    :func:`learn.learners.baselines.make_pipeline`), else the estimator's class."""
+    from sklearn.pipeline import Pipeline
 
+    if isinstance(estimator, Pipeline):
+        return str(estimator.steps[-1][0])
+    return type(estimator).__name__
+
+
+def _log(app, result: ProtocolResult, protocol: str, estimator, feats, last) -> str:
     from learn.tracking import hydra_sweep, log_job
 
-    lcfg = cfg.logger
-    resolved = OmegaConf.to_container(cfg, resolve=True)
+    lcfg = app.logger
+    resolved = plain(app)
     model = (_last_split_model(estimator, feats.X, feats.meta["fault"].to_numpy(), last)
              if lcfg.log_models else None)
-    return log_job(result, experiment=str(lcfg.experiment), run_name=str(lcfg.run_name),
-                   tracking_uri=lcfg.tracking_uri, confusion_plot=bool(lcfg.confusion_plot),
+    return log_job(result, experiment=lcfg.experiment, run_name=lcfg.run_name,
+                   tracking_uri=lcfg.tracking_uri, confusion_plot=lcfg.confusion_plot,
                    params=resolved, config=resolved, tags={"task": "study", "protocol": protocol},
-                   dataset=str(cfg.data.path), model=model, model_tags={"split": last.label},
+                   dataset=str(app.data.path), model=model, model_tags={"split": last.label},
                    X_sample=feats.X[last.test[:5]], group=hydra_sweep())
 
 

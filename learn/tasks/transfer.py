@@ -15,9 +15,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.inputs.features import FeatureSettings
 from learn.studies.transfer import TransferConfig, check_config, run_comparison
-from learn.tasks.config import typed
+from learn.tasks.config import plain, typed_app
 
 log = logging.getLogger(__name__)
 
@@ -34,7 +33,7 @@ class _Collected:
     input_s: float = 0.0
 
 
-def _data_sets(cfg, tc: TransferConfig) -> tuple[list[tuple[str, str]], float]:
+def _data_sets(app, tc: TransferConfig) -> tuple[list[tuple[str, str]], float]:
     """(name, path) of every data set to run on, generating the missing ones."""
     from hydra.utils import to_absolute_path
 
@@ -42,7 +41,7 @@ def _data_sets(cfg, tc: TransferConfig) -> tuple[list[tuple[str, str]], float]:
     from swgsim.plan import plan
 
     if not tc.run_on:
-        return [(str(cfg.data.name or Path(cfg.data.path).name), str(cfg.data.path))], 0.0
+        return [(str(app.data.name or Path(app.data.path).name), str(app.data.path))], 0.0
     plans = {}
     for name in tc.run_on:  # every data-set config is checked once, before any work
         try:
@@ -102,18 +101,18 @@ def _separability(ds, name: str, tc: TransferConfig, report_dir: Path, got: _Col
             f"Class separability, data set {name} ({kind} windows)")
 
 
-def _compare(cfg, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected:
+def _compare(app, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected:
     """The comparison and the separability on every data set, one loaded at a time."""
     from swgsim.data import load
 
-    feature_kwargs = typed(cfg.features, FeatureSettings).kwargs()
+    feature_kwargs = app.features.kwargs()
     got = _Collected()
     for name, path in data_sets:
         ds = load(path)
         log.info("transfer: %s, %d windows from %s, %d runs", name, ds.sizes["sample"], path,
                  len(tc.runs))
         out = run_comparison(ds, tc, dataset=name, feature_kwargs=feature_kwargs,
-                             split_seed=int(cfg.seed),
+                             split_seed=app.seed,
                              latency=tc.latency and got.latency is None)
         got.results.append(out["results"])
         got.confusion.append(out["confusion"])
@@ -158,10 +157,15 @@ def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, tim
 def run_transfer(cfg) -> dict:
     """Task ``transfer``: the whole comparison over the data sets, report and MLflow.
 
-    Reads ``cfg.transfer`` (:class:`learn.studies.transfer.TransferConfig`,
-    ``conf/experiment/transfer.yaml``), ``cfg.data`` (when ``transfer.run_on`` is empty),
-    ``cfg.features`` (orders, floor), ``cfg.logger`` (None: no tracking) and ``cfg.seed``
-    (CV folds).
+    Reads ``transfer`` (:class:`learn.studies.transfer.TransferConfig`,
+    ``conf/experiment/transfer.yaml``), ``data`` (when ``transfer.run_on`` is empty),
+    ``features`` (orders, floor), ``logger`` (:class:`learn.tracking.config.LoggerConfig`;
+    None: no tracking) and ``seed`` (CV folds).
+
+    Parameters
+    ----------
+    cfg : swgcli.schema.TrainApp or omegaconf.DictConfig
+        The typed app config (:func:`learn.tasks.config.typed_app`).
 
     Returns
     -------
@@ -173,21 +177,26 @@ def run_transfer(cfg) -> dict:
     Raises
     ------
     ValueError
-        A bad ``transfer`` key (before any work).
+        A missing ``transfer`` config or a bad ``transfer`` key (before any work).
     """
     import torch
 
-    from learn.reports.transfer_report import class_recall, log_transfer, summarise, target_table
+    from learn.reports.transfer_report import class_recall, summarise, target_table
+    from learn.reports.transfer_runs import log_transfer
 
-    tc = typed(cfg.transfer, TransferConfig)
+    app = typed_app(cfg)
+    tc = app.transfer
+    if tc is None:
+        raise ValueError("transfer: missing; the task needs experiment=transfer (or a "
+                         "transfer group of its own)")
     check_config(tc)
     if tc.n_threads:
         torch.set_num_threads(int(tc.n_threads))
     t_all = time.perf_counter()
-    data_sets, generate_s = _data_sets(cfg, tc)
-    report_dir = Path(tc.report_dir or Path(cfg.paths.report_dir) / "transfer")
+    data_sets, generate_s = _data_sets(app, tc)
+    report_dir = Path(tc.report_dir or Path(app.paths.report_dir) / "transfer")
     report_dir.mkdir(parents=True, exist_ok=True)
-    got = _compare(cfg, tc, data_sets, report_dir)
+    got = _compare(app, tc, data_sets, report_dir)
     res = pd.concat(got.results, ignore_index=True)
     conf = pd.concat(got.confusion, ignore_index=True)
     wall = time.perf_counter() - t_all
@@ -200,8 +209,8 @@ def run_transfer(cfg) -> dict:
     targets = {d: t for d, t in tc.targets.items() if d in set(res["dataset"])}
     tt = (target_table(summ, class_recall(conf), targets, tc.primary, got.separability)
           if len(conf) else pd.DataFrame())
-    run_id = None if cfg.logger is None else log_transfer(res, files, cfg, timings,
-                                                          got.latency)
+    run_id = None if app.logger is None else log_transfer(
+        res, files, app.logger, tc, data_sets, timings, got.latency, config=plain(app))
     log.info("transfer report in %s (%.1f min)", report_dir, wall / 60)
     if tc.progress:  # the console's summary (the log holds every cell)
         print_summary(tt, report_dir, wall, timings["device"])

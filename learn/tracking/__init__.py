@@ -1,6 +1,7 @@
 """Experiment tracking: MLflow runs (:mod:`learn.tracking.mlflow_runs`; ``log_run`` is the
 one helper every run goes through) and their provenance, git commit, data set and model
-requirements (:mod:`learn.tracking.provenance`). Imports no other part of :mod:`learn`.
+requirements (:mod:`learn.tracking.provenance`); what a task logs
+(:class:`learn.tracking.config.LoggerConfig`). Imports no other part of :mod:`learn`.
 
 The public names are imported on first use (no MLflow import at package import).
 """
@@ -14,6 +15,7 @@ _EXPORTS = {
                      "default_tracking_uri", "flatten_config", "hydra_sweep", "log_job",
                      "log_run", "quiet_mlflow"), "mlflow_runs"),
     **dict.fromkeys(("DatasetRef", "dataset_ref", "git_tags", "repo_root"), "provenance"),
+    "LoggerConfig": "config",
 }
 
 __all__ = list(_EXPORTS)
