@@ -42,6 +42,11 @@ are reported relative to their mean; (iv) the angle of a channel with less than 
 the alignment weight (the full bridge s0 of the default layout) is not estimated
 (:attr:`GaugeMisplacement.min_weight_share`).
 
+The forms are those the simulation applies (one function per effect in
+:mod:`swgsim.measurement`, evaluated here on the basis: a linear effect's columns are its
+function at one-hot parameters); the terms add only the fit (free parameters, their
+constraint, starts, bounds, ranges).
+
 Every effect declares the physical range of its parameters (``ranges``, bounds and
 sources in :mod:`.ranges`); a fit outside is not accepted as the effect.
 """
@@ -55,7 +60,8 @@ from typing import Any
 import numpy as np
 from scipy import signal as sps
 
-from swgsim.measurement import fractional_delay, lowpass, lowpass_coefficients
+from swgsim import measurement as ms
+from swgsim.measurement import fractional_delay, lowpass_coefficients
 from swgsim.terms import Param, Term
 
 from .probes import strain_probes
@@ -152,7 +158,7 @@ class ChannelOffset(Term):
               for s in SENSORS}
 
     def columns(self, sig: StrainSignals, theta: np.ndarray) -> np.ndarray:
-        return sig.onehot
+        return ms.offset(0.0, sig.onehot)  # a unit offset of each channel
 
     def derived(self, coef, theta):
         out = {f"o_{s}": float(v) for s, v in zip(SENSORS, coef, strict=True)}
@@ -184,7 +190,7 @@ class ThermalDrift(Term):
               for s in SENSORS}
 
     def columns(self, sig, theta):
-        return sig.onehot * sig.t_seq_s[:, None]
+        return ms.thermal_drift(0.0, sig.onehot, sig.t_seq_s[:, None])  # unit rates
 
     def derived(self, coef, theta):
         out = {f"r_{s}": float(v) for s, v in zip(SENSORS, coef, strict=True)}
@@ -276,7 +282,7 @@ class GainMismatch(_Relative):
               for s in SENSORS}
 
     def columns(self, sig, theta):
-        return (sig.onehot * sig.prediction()[:, None]) @ self.q
+        return ms.gain_mismatch(sig.prediction()[:, None], sig.onehot) @ self.q
 
     derived_fmt = "g_{}"
 
@@ -331,7 +337,7 @@ class GaugeMisplacement(_Relative):
               for s in SENSORS}
 
     def columns(self, sig, theta):
-        return (sig.onehot * (-sig.col("dpsi"))[:, None]) @ self.q
+        return ms.gauge_misplacement_linear(sig.col("dpsi")[:, None], sig.onehot) @ self.q
 
     derived_fmt = "delta_{}_deg"
 
@@ -390,7 +396,7 @@ class BridgeNonlinearity(Term):
         k = float(theta[0])
 
         def apply(b: Mapping[str, np.ndarray]) -> Mapping[str, np.ndarray]:
-            den = 1.0 + k * (b["s_wg"] + b["s_t"])
+            den = ms.bridge_denominator(b["s_wg"] + b["s_t"], k)
 
             def fn(key: str, x: np.ndarray) -> np.ndarray:
                 # the signal itself: s/(1 + k s); its perturbations (dpsi): /(1 + k s)²
@@ -437,7 +443,7 @@ class AmplifierLowpass(Term):
         lag_samples = -np.angle(h) / (2 * np.pi * f2) * fs  # (n_w,)
 
         def fn(key: str, x: np.ndarray) -> np.ndarray:
-            y = lowpass(x, f_c, fs)
+            y = ms.amplifier_lowpass(x, f_c, fs)
             return fractional_delay(y, np.broadcast_to(-lag_samples[:, None], x.shape[:2]))
 
         return sig.replace(maps=sig.maps + (lambda b: MappedBasis(b, fn),))
