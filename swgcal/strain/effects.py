@@ -62,8 +62,9 @@ from scipy import signal as sps
 
 from swgsim import measurement as ms
 from swgsim.measurement import fractional_delay, lowpass_coefficients
-from swgsim.terms import Param, Term
+from swgsim.terms import Param
 
+from ..terms import FitTerm
 from .probes import strain_probes
 from .ranges import (
     BRIDGE_K_RANGE,
@@ -99,7 +100,7 @@ __all__ = [
 # baseline
 
 
-class ChainBaseline(Term):
+class ChainBaseline(FitTerm):
     """The simulation chain's prediction for the nominal gear, two scales fitted.
 
     s = a_wg · s_wg + a_torque · s_t. With a common gauge gain G and a WG deflection w0,
@@ -145,7 +146,7 @@ def _rms(v: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(v))))
 
 
-class ChannelOffset(Term):
+class ChannelOffset(FitTerm):
     """Zero offset of each bridge channel."""
 
     kind = "offset"
@@ -176,7 +177,7 @@ class ChannelOffset(Term):
         return {"name": "offset", "params": {"offset_mvv": [float(v) for v in coef]}}
 
 
-class ThermalDrift(Term):
+class ThermalDrift(FitTerm):
     """Zero drift of each channel over the recording sequence."""
 
     kind = "thermal_drift"
@@ -207,7 +208,7 @@ class ThermalDrift(Term):
         return {"name": "thermal_drift", "params": {"rate_mvv_per_s": [float(v) for v in coef]}}
 
 
-class _Relative(Term):
+class _Relative(FitTerm):
     """Per-channel values v_c with Σ w_c v_c = 0 over the estimable channels: one raw
     parameter per estimable channel but one.
 
@@ -363,7 +364,7 @@ class GaugeMisplacement(_Relative):
         return {"name": "gauge_misplacement", "params": {"delta_deg": [float(x) for x in v]}}
 
 
-class BridgeNonlinearity(Term):
+class BridgeNonlinearity(FitTerm):
     """Bridge output s / (1 + k s), one k for all channels (a transform of the basis)."""
 
     kind = "bridge_nonlinearity"
@@ -410,7 +411,7 @@ class BridgeNonlinearity(Term):
         return {"name": "bridge_nonlinearity", "params": {"k_per_mvv": float(theta[0])}}
 
 
-class AmplifierLowpass(Term):
+class AmplifierLowpass(FitTerm):
     """First-order amplifier low-pass on every channel (a transform of the basis)."""
 
     kind = "amplifier_lowpass"
@@ -452,7 +453,7 @@ class AmplifierLowpass(Term):
         return {"name": "amplifier_lowpass", "params": {"f_c_hz": float(theta[0])}}
 
 
-class KinematicErrorHarmonic(Term):
+class KinematicErrorHarmonic(FitTerm):
     """An extra kinematic-error harmonic A sin(k φ_in + φ) of a given order k.
 
     A transform: the torque pattern becomes (T_out + a_sin ΔT_sin + a_cos ΔT_cos) h(ψ),
@@ -533,7 +534,7 @@ KE_ORDERS = (1, 2, 3, 4)
 docs/PHYSICS.md sec. 1; 3 for completeness)."""
 
 
-def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[Term]]:
+def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[FitTerm]]:
     """The declared strain-side library, keyed by effect name.
 
     Parameters
@@ -541,7 +542,7 @@ def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[Ter
     ke_orders : tuple of int
         Orders of the kinematic-error candidates (one key ``ke_order{k}`` each).
     """
-    lib: dict[str, type[Term]] = {
+    lib: dict[str, type[FitTerm]] = {
         "offset": ChannelOffset,
         "gain_mismatch": GainMismatch,
         "gauge_misplacement": GaugeMisplacement,
