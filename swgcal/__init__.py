@@ -20,11 +20,14 @@ Layout: the kind-independent parts here, the kinds in subpackages of the same sh
   selection loop, result), :mod:`.core` (separable least squares, uncertainties),
   :mod:`.split` (held-out splits), :mod:`.diagnose` (residual probes, noise floor),
   :mod:`.discovery` (terms beyond the library: the engine), :mod:`.report` (summary keys
-  and markdown parts both kinds share);
+  and markdown parts both kinds share), :mod:`.terms` (:class:`~swgcal.terms.FitTerm`:
+  what a fit adds to a term's form), :mod:`.periodogram`;
 * :mod:`.friction` (data kind 1) and :mod:`.strain` (data kind 2).
 
-The model terms (:mod:`swgsim.terms`) and the friction effect forms
-(:mod:`swgsim.friction`) belong to the simulator; the calibration fits them.
+The model terms (:mod:`swgsim.terms`), the friction effect forms (:mod:`swgsim.friction`)
+and the measurement effects (:mod:`swgsim.measurement`) belong to the simulator; the
+calibration fits them and holds what only a fit needs (bounds, starts, probes, physical
+ranges).
 """
 
 from .api import (

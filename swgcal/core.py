@@ -1,7 +1,9 @@
 """Separable least squares of a sum of model terms, with uncertainties.
 
-The terms themselves (:class:`Param`, :class:`Term`, the design matrix) are defined in
-:mod:`swgsim.terms` (a simulator input as much as a fitted model) and re-exported here.
+The terms' forms (:class:`Param`, :class:`Term`, the design matrix) are defined in
+:mod:`swgsim.terms` (a simulator input as much as a fitted model) and re-exported here;
+what only a fit needs (bounds, starts, probes, physical ranges) is added by
+:class:`~swgcal.terms.FitTerm`, the class of every term this module fits.
 
 A model is a sum of *terms*. Each term contributes columns ``X_j(θ_j)`` times linear
 coefficients ``c_j`` to the prediction ``ŷ = Σ_j X_j(θ_j) c_j``; ``θ_j`` are its nonlinear
@@ -36,11 +38,14 @@ from scipy.optimize import least_squares
 
 from swgsim.terms import Param, Term, design_matrix, evaluate_terms, linear_recurrence
 
+from .terms import FitTerm
+
 log = logging.getLogger(__name__)
 
 __all__ = [
     "Param",
     "Term",
+    "FitTerm",
     "FitResult",
     "ParamEstimate",
     "fit_terms",

@@ -27,9 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.friction.ripples import periodogram_peaks
-
 from .core import integrated_autocorr_time
+from .periodogram import periodogram_peaks
 
 log = logging.getLogger(__name__)
 

@@ -31,7 +31,7 @@ passes all of
 3. its primary parameters pinned down by the data (relative standard error, corrected
    for autocorrelation, below ``max_rel_se``), and
 4. every parameter with a declared physical range inside it
-   (:attr:`~swgcal.core.Term.ranges`).
+   (:attr:`~swgcal.terms.FitTerm.ranges`).
 
 Both thresholds of 10 are on the 2 ln B scale of Kass & Raftery (1995, sec. 3.2: 2 ln B
 above 10 is "very strong" evidence, posterior odds above 150:1); ΔBIC differences of 10
@@ -204,7 +204,7 @@ class CandidateScore:
     fit : FitResult
     implausible : bool
         Passed the evidence rule but a parameter lies outside its physical range
-        (:attr:`~swgcal.core.Term.ranges`): the residual holds structure that
+        (:attr:`~swgcal.terms.FitTerm.ranges`): the residual holds structure that
         this effect would absorb without being it.
     small : bool
         Rejected only for lack of evidence although its held-out gain is positive: an

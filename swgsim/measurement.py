@@ -35,7 +35,14 @@ thermal_drift        s + r_c (t_start + t)                          rate_mvv_per
 
 The effects are applied in that (physical) order whatever the order of the list: gauge
 geometry, bridge, amplifier gain, amplifier filter, sampling, then the additive zero
-errors. Sources: quarter-bridge output GF ε / (4 + 2 GF ε), i.e. k = 2e-3 per mV/V
+errors. Each effect is one function of this module named like it (:func:`offset`,
+:func:`gain_mismatch`, ...; :func:`gauge_misplacement_linear` and
+:func:`bridge_denominator` give the first-order and common-denominator forms): the
+simulation applies them here and the calibration's fit terms
+(:mod:`swgcal.strain.effects`) evaluate the same functions, adding only what a fit needs
+(free parameters, starts, bounds, physical ranges).
+
+Sources: quarter-bridge output GF ε / (4 + 2 GF ε), i.e. k = 2e-3 per mV/V
 independent of GF (Hoffmann, *An Introduction to Measurements using Strain Gages*,
 HBM 1989; docs/PHYSICS.md sec. 4); gauge positioning as the dominant ripple source of
 sensorised SWGs (Schuller et al. 2024) and per-gauge gain tuning (Godler et al.); a
@@ -74,6 +81,15 @@ __all__ = [
     "fractional_delay",
     "lowpass_coefficients",
     "lowpass",
+    "gauge_misplacement",
+    "gauge_misplacement_linear",
+    "bridge_denominator",
+    "bridge_nonlinearity",
+    "gain_mismatch",
+    "amplifier_lowpass",
+    "time_delay",
+    "offset",
+    "thermal_drift",
 ]
 
 SENSORS = ("s0", "s1", "s2", "s3", "s4")
@@ -310,6 +326,251 @@ def lowpass(x: np.ndarray, f_c_hz: float, fs_hz: float) -> np.ndarray:
     return y
 
 
+# ---------------------------------------------------------------------------------------
+# the effects, one forward function each (also the forms the calibration fits,
+# :mod:`swgcal.strain.effects`)
+#
+# Each takes the signal and its parameters already broadcast against it (windows:
+# (n_windows, 5, n_t) with a per-channel parameter as shape (5, 1); the calibration's
+# stacked samples: (n, 1) with one-hot channel columns (n, 5)). An effect linear in its
+# parameters, f(s, p) = s + p u(s) or p s, evaluated with one-hot parameters gives the
+# design columns the calibration fits.
+
+
+def gauge_misplacement(x: np.ndarray, delta_rad: np.ndarray, psi_rate_rad_s: np.ndarray,
+                       fs_hz: float) -> np.ndarray:
+    """Gauges δ_c further along θ than nominal: s_c(ψ − δ_c), a delay of δ_c / ψ̇.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n_windows, 5, n_t)
+        Bridge signals [mV/V].
+    delta_rad : ndarray, shape (5,)
+        Angular misplacement of each channel's gauges [rad].
+    psi_rate_rad_s : ndarray, shape (n_windows,)
+        ψ̇ of each window [rad/s] (:func:`psi_rate`).
+    fs_hz : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+        [mV/V]; the delay by :func:`fractional_delay` (Schuller et al. 2024: gauge
+        positioning, the dominant ripple source; docs/PHYSICS.md sec. 4).
+    """
+    d = delta_rad[None, :] / psi_rate_rad_s[:, None] * fs_hz  # (n_w, 5) samples
+    return fractional_delay(x, d)
+
+
+def gauge_misplacement_linear(ds_dpsi: np.ndarray, delta_rad: np.ndarray) -> np.ndarray:
+    """First order of :func:`gauge_misplacement` in δ: s_c(ψ − δ_c) − s_c(ψ) ≈ −δ_c ∂s_c/∂ψ.
+
+    Parameters
+    ----------
+    ds_dpsi : ndarray
+        ∂s/∂ψ at fixed torque [mV/V / rad].
+    delta_rad : ndarray, broadcastable against ``ds_dpsi``
+        Misplacement [rad] (one-hot channels: the calibration's design columns).
+
+    Returns
+    -------
+    ndarray
+        The change of the signal [mV/V].
+    """
+    return -delta_rad * ds_dpsi
+
+
+def bridge_denominator(s: np.ndarray, k_per_mvv: np.ndarray | float) -> np.ndarray:
+    """1 + k s, the denominator of the bridge output s / (1 + k s) (Hoffmann 1989).
+
+    Parameters
+    ----------
+    s : ndarray
+        Linear bridge output [mV/V] (for the calibration's basis: the sum of its parts,
+        each part then divided by this common denominator).
+    k_per_mvv : float or ndarray, broadcastable against ``s``
+        Nonlinearity coefficient [1/(mV/V)] (:data:`QUARTER_BRIDGE_K` for the exact
+        quarter bridge).
+
+    Returns
+    -------
+    ndarray
+    """
+    return 1.0 + k_per_mvv * s
+
+
+def bridge_nonlinearity(x: np.ndarray, k_per_mvv: np.ndarray | float) -> np.ndarray:
+    """Bridge output s / (1 + k s) (:func:`bridge_denominator`).
+
+    Parameters
+    ----------
+    x : ndarray
+        Linear bridge output [mV/V].
+    k_per_mvv : float or ndarray, broadcastable against ``x``
+        [1/(mV/V)].
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+        [mV/V].
+
+    Raises
+    ------
+    ValueError
+        1 + k s not positive somewhere.
+    """
+    den = bridge_denominator(x, k_per_mvv)
+    if np.any(den <= 0):
+        raise ValueError("sensor_effects.bridge_nonlinearity: 1 + k_per_mvv * s must "
+                         f"stay > 0; |k_per_mvv| < {1.0 / np.abs(x).max():.3g} for "
+                         "these signals")
+    return x / den
+
+
+def gain_mismatch(x: np.ndarray, gain: np.ndarray) -> np.ndarray:
+    """Per-channel amplifier and gauge-factor gain, g_c s.
+
+    Parameters
+    ----------
+    x : ndarray
+        [mV/V].
+    gain : ndarray, broadcastable against ``x``
+        Gain [-] (shape (5, 1) for windows (n_windows, 5, n_t)).
+
+    Returns
+    -------
+    ndarray
+        [mV/V].
+    """
+    return x * gain
+
+
+def amplifier_lowpass(x: np.ndarray, f_c_hz: float, fs_hz: float) -> np.ndarray:
+    """First-order amplifier low-pass on every channel (:func:`lowpass`).
+
+    Parameters
+    ----------
+    x : ndarray, shape (..., n_t)
+        [mV/V].
+    f_c_hz : float
+        Cut-off [Hz], below the Nyquist frequency.
+    fs_hz : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+
+    Raises
+    ------
+    ValueError
+        ``f_c_hz`` not below fs / 2.
+    """
+    if f_c_hz >= 0.5 * fs_hz:
+        raise ValueError(f"sensor_effects.amplifier_lowpass.f_c_hz must lie in "
+                         f"(0, {0.5 * fs_hz:g}) Hz, got {f_c_hz}")
+    return lowpass(x, f_c_hz, fs_hz)
+
+
+def time_delay(x: np.ndarray, delay_s: float, fs_hz: float) -> np.ndarray:
+    """Sampling delay common to all channels, s(t − τ) (:func:`fractional_delay`).
+
+    Parameters
+    ----------
+    x : ndarray, shape (n_windows, 5, n_t)
+        [mV/V].
+    delay_s : float
+        τ [s].
+    fs_hz : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+    """
+    return fractional_delay(x, np.full(x.shape[:2], delay_s * fs_hz))
+
+
+def offset(x: np.ndarray | float, offset_mvv: np.ndarray) -> np.ndarray:
+    """Zero offset, s + o_c (bridge imbalance, amplifier offset; docs/PHYSICS.md sec. 5).
+
+    Parameters
+    ----------
+    x : ndarray or float
+        [mV/V].
+    offset_mvv : ndarray, broadcastable against ``x``
+        [mV/V].
+
+    Returns
+    -------
+    ndarray
+        [mV/V].
+    """
+    return x + offset_mvv
+
+
+def thermal_drift(x: np.ndarray | float, rate_mvv_per_s: np.ndarray,
+                  t_s: np.ndarray) -> np.ndarray:
+    """Zero drift, s + r_c t (gauge temperature drift; docs/PHYSICS.md sec. 5).
+
+    Parameters
+    ----------
+    x : ndarray or float
+        [mV/V].
+    rate_mvv_per_s : ndarray
+        r_c [mV/V/s], broadcastable against ``x``.
+    t_s : ndarray
+        Time since the start of the recording sequence [s], broadcastable against ``x``.
+
+    Returns
+    -------
+    ndarray
+        [mV/V].
+    """
+    return x + rate_mvv_per_s * t_s
+
+
+@dataclass(frozen=True)
+class _Windows:
+    """What the effects of :func:`apply_sensor_effects` need besides the signals."""
+
+    time_s: np.ndarray
+    dt: float
+    n_in: np.ndarray
+    ratio: float
+    n_lead: int
+    t_start_s: Any
+
+    def t_seq(self, n_w: int, n_t: int) -> np.ndarray:
+        """Time of every sample since the start of the sequence, shape (n_w, n_t) [s]."""
+        if self.t_start_s is None:
+            t0 = np.arange(n_w) * (n_t - self.n_lead) * self.dt
+        else:
+            t0 = np.broadcast_to(np.asarray(self.t_start_s, float), (n_w,))
+        return t0[:, None] + (self.time_s - self.time_s[self.n_lead])[None, :]
+
+    @property
+    def fs(self) -> float:
+        """Sample rate [Hz]."""
+        return 1.0 / self.dt
+
+
+_STEPS: dict[str, Any] = {
+    "gauge_misplacement": lambda x, p, w: gauge_misplacement(
+        x, np.deg2rad(p["delta_deg"]), psi_rate(w.n_in, w.ratio), w.fs),
+    "bridge_nonlinearity": lambda x, p, w: bridge_nonlinearity(
+        x, p["k_per_mvv"][None, :, None]),
+    "gain_mismatch": lambda x, p, w: gain_mismatch(x, p["gain"][None, :, None]),
+    "amplifier_lowpass": lambda x, p, w: amplifier_lowpass(x, p["f_c_hz"], w.fs),
+    "time_delay": lambda x, p, w: time_delay(x, p["delay_s"], w.fs),
+    "offset": lambda x, p, w: offset(x, p["offset_mvv"][None, :, None]),
+    "thermal_drift": lambda x, p, w: thermal_drift(
+        x, p["rate_mvv_per_s"][None, :, None], w.t_seq(*x.shape[::2])[:, None, :]),
+}
+"""Effect name -> step ``(signals, params, windows) -> signals`` of
+:func:`apply_sensor_effects`."""
+
+
 def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray | float,
                          effects: Sequence[Mapping[str, Any]] | Sequence[SensorEffect] | None,
                          *, t_start_s: np.ndarray | float | None = None, n_lead: int = 0,
@@ -351,57 +612,30 @@ def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.n
     x = np.array(signals, dtype=float)
     if x.ndim != 3 or x.shape[1] != 5:
         raise ValueError(f"signals must have shape (n_windows, 5, n_t), got {x.shape}")
+    windows = _check_windows(x, time_s, n_in_rpm, t_start_s, n_lead, ratio)
+    items = [e if isinstance(e, SensorEffect) else None for e in (effects or ())]
+    if any(e is None for e in items):
+        items = parse_sensor_effects(effects)  # type: ignore[arg-type]
+    by = {e.name: e for e in items}
+    for name in APPLY_ORDER:
+        if name in by:
+            x = _STEPS[name](x, by[name].params, windows)
+    return x[:, :, windows.n_lead:]
+
+
+def _check_windows(x: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray | float,
+                   t_start_s: Any, n_lead: int, ratio: float) -> _Windows:
+    """The time axis and operating points of :func:`apply_sensor_effects`, checked."""
     n_w, _, n_t = x.shape
     time_s = np.asarray(time_s, float)
     if time_s.shape != (n_t,) or n_t < 2:
         raise ValueError(f"time_s must have shape ({n_t},) with n_t >= 2, got {time_s.shape}")
     if not 0 <= int(n_lead) < n_t:
         raise ValueError(f"n_lead must lie in [0, {n_t}), got {n_lead}")
-    n_lead = int(n_lead)
     dt = float(time_s[1] - time_s[0])
     if not dt > 0:
         raise ValueError("time_s must be increasing")
-    fs = 1.0 / dt
     n_in = np.broadcast_to(np.asarray(n_in_rpm, float), (n_w,))
     if np.any(~np.isfinite(n_in)) or np.any(n_in <= 0):
         raise ValueError(f"n_in_rpm must be > 0 rpm, got {n_in_rpm}")
-    items = [e if isinstance(e, SensorEffect) else None for e in (effects or ())]
-    if any(e is None for e in items):
-        items = parse_sensor_effects(effects)  # type: ignore[arg-type]
-    by = {e.name: e for e in items}
-    for name in APPLY_ORDER:
-        e = by.get(name)
-        if e is None:
-            continue
-        p = e.params
-        if name == "gauge_misplacement":
-            delta = np.deg2rad(p["delta_deg"])  # (5,)
-            d = delta[None, :] / psi_rate(n_in, ratio)[:, None] * fs  # (n_w, 5) samples
-            x = fractional_delay(x, d)
-        elif name == "bridge_nonlinearity":
-            k = p["k_per_mvv"][None, :, None]
-            den = 1.0 + k * x
-            if np.any(den <= 0):
-                raise ValueError("sensor_effects.bridge_nonlinearity: 1 + k_per_mvv * s must "
-                                 f"stay > 0; |k_per_mvv| < {1.0 / np.abs(x).max():.3g} for "
-                                 "these signals")
-            x = x / den
-        elif name == "gain_mismatch":
-            x = x * p["gain"][None, :, None]
-        elif name == "amplifier_lowpass":
-            if p["f_c_hz"] >= 0.5 * fs:
-                raise ValueError(f"sensor_effects.amplifier_lowpass.f_c_hz must lie in "
-                                 f"(0, {0.5 * fs:g}) Hz, got {p['f_c_hz']}")
-            x = lowpass(x, p["f_c_hz"], fs)
-        elif name == "time_delay":
-            x = fractional_delay(x, np.full((n_w, 5), p["delay_s"] * fs))
-        elif name == "offset":
-            x = x + p["offset_mvv"][None, :, None]
-        elif name == "thermal_drift":
-            if t_start_s is None:
-                t0 = np.arange(n_w) * (n_t - n_lead) * dt
-            else:
-                t0 = np.broadcast_to(np.asarray(t_start_s, float), (n_w,))
-            t_abs = t0[:, None] + (time_s - time_s[n_lead])[None, :]  # (n_w, n_t)
-            x = x + p["rate_mvv_per_s"][None, :, None] * t_abs[:, None, :]
-    return x[:, :, n_lead:]
+    return _Windows(time_s, dt, n_in, ratio, int(n_lead), t_start_s)

@@ -2,7 +2,8 @@
 
 Used by the simulator (friction effects as an input of the dynamics,
 :mod:`swgsim.friction`) and by the calibration, which fits such sums
-(:mod:`swgcal.core`).
+(:mod:`swgcal.core`) and adds what only a fit needs (bounds, starts, probes, physical
+ranges: :class:`swgcal.terms.FitTerm`).
 
 A model is a sum of *terms*. Each term contributes columns ``X_j(θ_j)`` times linear
 coefficients ``c_j`` to the prediction ``ŷ = Σ_j X_j(θ_j) c_j``; ``θ_j`` are its nonlinear
@@ -41,7 +42,8 @@ class Param:
     description : str
         One line.
     log : bool
-        Nonlinear parameters only: optimise log(value) (positive scale parameters).
+        Nonlinear parameters only: a positive scale parameter (a time constant, a
+        period; a fit optimises its logarithm).
     """
 
     name: str
@@ -60,34 +62,20 @@ class Term:
     linear : tuple of Param
         Coefficients of the columns returned by :meth:`columns`.
     nonlinear : tuple of Param
-        Parameters entering the columns nonlinearly (bounds from :meth:`bounds`).
+        Parameters entering the columns nonlinearly.
     is_transform : bool
         True: the term has no columns and changes the signals later terms see
         (:meth:`transform`).
-    repeatable : int
-        How many instances a model may hold (1: once).
-    description, signature, source : str
-        What the term models, how it shows in the residual of a model without it, and
-        where its form comes from.
-    probes : tuple of str
-        Names of the diagnosis probes whose structure it should explain.
-    ranges : dict of str to (float, float, str)
-        Physical range of a :meth:`derived` parameter, ``name -> (low, high, source)`` in
-        the parameter's unit (bounds inclusive; ``-inf``/``inf`` for an open side). A fit
-        outside the range is not accepted as this effect (:meth:`range_violations`): the
-        term would be absorbing something else.
+    description, source : str
+        What the term models and where its form comes from.
     """
 
     kind: str = "term"
     linear: tuple[Param, ...] = ()
     nonlinear: tuple[Param, ...] = ()
     is_transform: bool = False
-    repeatable: int = 1
     description: str = ""
-    signature: str = ""
     source: str = ""
-    probes: tuple[str, ...] = ()
-    ranges: dict[str, tuple[float, float, str]] = {}
 
     def __init__(self, name: str | None = None) -> None:
         self.name = name or self.kind
@@ -104,14 +92,6 @@ class Term:
     def applicable(self, sig: Any) -> bool:
         """Whether the term can be evaluated on these signals (e.g. a load column)."""
         return True
-
-    def bounds(self, sig: Any) -> list[tuple[float, float]]:
-        """Box bounds of the nonlinear parameters [their units], data dependent."""
-        return []
-
-    def starts(self, sig: Any, residual: np.ndarray, idx: np.ndarray) -> list[np.ndarray]:
-        """Starting values of the nonlinear parameters (may use the current residual)."""
-        return [np.empty(0)]
 
     def columns(self, sig: Any, theta: np.ndarray) -> np.ndarray:
         """Design columns, shape (n, len(linear))."""
@@ -144,32 +124,6 @@ class Term:
         return ()
 
     # -- generic -----------------------------------------------------------------------
-    def range_violations(self, values: dict[str, float]) -> list[str]:
-        """Derived parameters outside their physical range (:attr:`ranges`).
-
-        Parameters
-        ----------
-        values : dict of str to float
-            Derived parameters (:meth:`derived`), in :meth:`derived_units`.
-
-        Returns
-        -------
-        list of str
-            One phrase per violation, e.g. ``"t_lag_s = 0.6 s outside [0.0001, 0.05] s
-            (Al-Bender et al. 2005)"``; empty when every ranged parameter is inside.
-        """
-        units = self.derived_units()
-        out = []
-        for name, (lo, hi, src) in self.ranges.items():
-            if name not in values:
-                continue
-            v = float(values[name])
-            if not lo <= v <= hi:
-                u = units.get(name, "")
-                u = f" {u}" if u and u != "-" else ""
-                out.append(f"{name} = {v:.3g}{u} outside [{lo:g}, {hi:g}]{u} ({src})")
-        return out
-
     @property
     def n_linear(self) -> int:
         return len(self.linear)

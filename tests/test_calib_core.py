@@ -6,19 +6,16 @@ import numpy as np
 import pytest
 
 from swgcal.core import (
+    FitTerm,
     Param,
-    Term,
     fit_terms,
     integrated_autocorr_time,
     linear_recurrence,
 )
 from swgcal.diagnose import noise_floor
+from swgcal.periodogram import periodogram_peaks
 from swgcal.split import group_split, time_block_split
-from swgsim.friction.effects import (
-    dahl_state,
-    first_order_lag,
-    periodogram_peaks,
-)
+from swgsim.friction.effects import dahl_state, first_order_lag
 
 
 def test_linear_recurrence_matches_loop():
@@ -84,7 +81,7 @@ def test_periodogram_finds_period_on_irregular_coordinate():
     assert 0.5 < power <= 1.2
 
 
-class _Exp(Term):
+class _Exp(FitTerm):
     kind = "exp"
     linear = (Param("a", "-"),)
     nonlinear = (Param("tau", "s", log=True),)
@@ -99,7 +96,7 @@ class _Exp(Term):
         return np.exp(-sig / theta[0])[:, None]
 
 
-class _Lin(Term):
+class _Lin(FitTerm):
     kind = "lin"
     linear = (Param("c0", "-"), Param("c1", "-"))
 

@@ -1,11 +1,14 @@
 """Extension point: a calibration effect defined outside the packages.
 
-The test defines a new friction effect (its physics: the form and its parameter; its
-name) and registers it with :func:`swgsim.friction.effects.register_effect`, editing
-nothing inside ``swgsim`` or ``swgcal``. The simulator then plants it
+The test defines a new friction effect in one class (its physics: the form and its
+parameter, a :class:`swgsim.terms.Term`; its fit: probes and physical range, a
+:class:`swgcal.terms.FitTerm`) and registers it with one call,
+:func:`swgcal.friction.library.register_effect`, editing nothing inside ``swgsim`` or
+``swgcal``. The simulator then knows and plants it
 (:func:`swgcal.friction.synthetic.synthetic_recording` goes through
-``parse_effects``), and the unchanged calibration loop offers it as a candidate among
-the whole library, accepts it on held-out evidence and recovers its parameter.
+:func:`swgsim.friction.parse_effects`), and the unchanged calibration loop offers it as a
+candidate among the whole library, accepts it on held-out evidence and recovers its
+parameter.
 """
 
 from __future__ import annotations
@@ -14,26 +17,32 @@ import numpy as np
 import pytest
 
 from swgcal import build_problem, calibrate
+from swgcal.friction import library
+from swgcal.friction.library import register_effect
 from swgcal.friction.synthetic import synthetic_recording
-from swgsim.friction.effects import FRICTION_LIBRARY, register_effect
-from swgsim.terms import Param, Term
+from swgcal.terms import FitTerm
+from swgsim import friction
+from swgsim.terms import Param
 
 
-class QuadraticDrag(Term):
+class QuadraticDrag(FitTerm):
     """Quadratic (turbulent-churning) drag of the lubricant: τ = c_q q̇ |q̇| [N m]
     (splash losses grow with the square of the speed; an illustration, not a library
     effect)."""
 
+    # the physics (what the simulator evaluates)
     kind = "quadratic_drag"
     linear = (Param("c_q", "N m s²/rad²", "quadratic drag coefficient"),)
     description = "drag growing with the square of the speed (lubricant churning)"
-    signature = "residual odd in q̇, growing like q̇|q̇| between the viscous and cubic terms"
     source = "illustration for tests/test_calib_extension.py"
-    probes = ("velocity",)
-    ranges = {"c_q": (0.0, np.inf, "drag opposes motion")}
 
     def columns(self, sig, theta):
         return (sig.dq_rad_s * np.abs(sig.dq_rad_s))[:, None]
+
+    # the fit (what the calibration adds)
+    signature = "residual odd in q̇, growing like q̇|q̇| between the viscous and cubic terms"
+    probes = ("velocity",)
+    ranges = {"c_q": (0.0, np.inf, "drag opposes motion")}
 
 
 @pytest.fixture
@@ -42,7 +51,8 @@ def quadratic_drag():
     try:
         yield QuadraticDrag
     finally:
-        del FRICTION_LIBRARY[QuadraticDrag.kind]
+        del library.FRICTION_LIBRARY[QuadraticDrag.kind]
+        del friction.FRICTION_LIBRARY[QuadraticDrag.kind]
 
 
 def test_registering_twice_or_a_non_term_is_refused(quadratic_drag):
@@ -50,6 +60,17 @@ def test_registering_twice_or_a_non_term_is_refused(quadratic_drag):
         register_effect(QuadraticDrag)
     with pytest.raises(TypeError, match="must subclass"):
         register_effect(dict)
+    with pytest.raises(ValueError, match="already registered"):  # the simulator's side
+        friction.effects.register_effect(QuadraticDrag)
+
+
+def test_one_call_registers_the_physics_in_the_simulator(quadratic_drag):
+    assert friction.FRICTION_LIBRARY["quadratic_drag"] is QuadraticDrag
+    fx = friction.FrictionEffects([{"kind": "quadratic_drag", "params": {"c_q": 2.0}}],
+                                  v_s=1e-3)
+    dq = np.array([-0.5, 0.0, 0.5])
+    np.testing.assert_allclose(fx(np.zeros(3), np.zeros(3), dq, np.zeros(3)),
+                               [-0.5, 0.0, 0.5])
 
 
 def test_an_effect_registered_from_outside_is_planted_found_and_recovered(quadratic_drag):

@@ -21,10 +21,10 @@ import pytest
 
 from swgcal import SelectionConfig
 from swgcal.friction import calibrate, friction_problem, render_report, summarize
+from swgcal.friction.library import FRICTION_LIBRARY, PositionRipple
 from swgcal.friction.ripple_groups import harmonic_groups
 from swgcal.friction.synthetic import synthetic_recording
-from swgsim.friction import FRICTION_LIBRARY
-from swgsim.friction.ripples import PositionRipple, RippleTerm
+from swgsim.friction.ripples import RippleTerm
 
 N = 50  # gear ratio of the harmonic-group case
 
@@ -54,7 +54,7 @@ def test_every_effect_declares_ranges_with_sources(gear_ratio):
 
 
 def test_range_violations_name_parameter_range_and_source():
-    from swgsim.friction.effects import ThermalDrift, VelocityLag
+    from swgcal.friction.library import ThermalDrift, VelocityLag
 
     v = VelocityLag().range_violations({"t_lag": 0.6})
     assert len(v) == 1 and "t_lag = 0.6 s outside [0.0001, 0.05] s" in v[0]

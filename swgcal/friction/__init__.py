@@ -8,8 +8,10 @@ The kind's steps, with the same names and shapes as :mod:`swgcal.strain`:
 (-> ``friction_effects.yaml``). The kind-independent entry points are in
 :mod:`swgcal`.
 
-Modules: :mod:`.data` (recordings: loading, checks), :mod:`.problem` (problem builder,
-calibration), :mod:`.probes` (residual probes), :mod:`.ripple_groups` (ripples grouped by
+Modules: :mod:`.library` (the fitted effects: the simulator's forms with their fit;
+:func:`~.library.register_effect` adds one to both), :mod:`.ranges` (physical ranges
+with sources), :mod:`.data` (recordings: loading, checks), :mod:`.problem` (problem
+builder, calibration), :mod:`.probes` (residual probes), :mod:`.ripple_groups` (ripples grouped by
 harmonics, pruned without held-out support), :mod:`.discovery` (terms beyond the
 library), :mod:`.report` (summary, report, simulation option), :mod:`.figures`,
 :mod:`.synthetic` (recordings with planted effects). The effect forms are simulator
@@ -18,11 +20,13 @@ inputs: :mod:`swgsim.friction`.
 
 from .data import FrictionRecording, load_friction_csv, write_friction_csv
 from .figures import make_figures
+from .library import FRICTION_LIBRARY, register_effect
 from .options import FrictionOptions
 from .problem import OPTIONS, build_problem, calibrate, friction_problem
 from .report import render_report, simulation_files, summarize
 
 __all__ = [
+    "FRICTION_LIBRARY",
     "OPTIONS",
     "FrictionOptions",
     "FrictionRecording",
@@ -31,6 +35,7 @@ __all__ = [
     "friction_problem",
     "load_friction_csv",
     "make_figures",
+    "register_effect",
     "render_report",
     "simulation_files",
     "summarize",

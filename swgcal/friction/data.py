@@ -199,11 +199,34 @@ def load_friction_csv(path: str | Path,
         not the derivative of the angle (relative RMS difference above
         :data:`DQ_CONSISTENCY_TOL`).
     """
-    import csv
-
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"friction CSV not found: {path}")
+    header = _read_header(path)
+    cols = _read_columns(path, header)
+    notes: list[str] = []
+    sel = _usable_rows(path, cols, notes)
+    t = cols["time_s"][sel]
+    q = cols["q_rad"][sel]
+    dq = cols["dq_rad_per_s"][sel]
+    _check_velocity(path, t, q, dq, notes)
+    ddq = cols.get("ddq_rad_per_s2")
+    if ddq is None or not np.any(ddq[sel]):
+        acc = estimate_acceleration(t, dq, accel_window)
+        source = f"estimated (Savitzky-Golay, quadratic, {accel_window} samples)"
+    else:
+        acc, source = ddq[sel], "measured"
+    return FrictionRecording(
+        t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=acc,
+        tau_nm=cols["tau_friction_Nm"][sel],
+        load_nm=cols["load_Nm"][sel] if "load_Nm" in cols else None,
+        name=path.stem, ddq_source=source, notes=tuple(notes))
+
+
+def _read_header(path: Path) -> list[str]:
+    """The header of a friction CSV, checked for the required columns and a data row."""
+    import csv
+
     try:
         with path.open(newline="", encoding="utf-8") as fh:
             header = next(csv.reader(fh), [])
@@ -218,6 +241,11 @@ def load_friction_csv(path: str | Path,
                          f"found {header}")
     if not has_rows:
         raise ValueError(f"{path}: no data rows below the header")
+    return header
+
+
+def _read_columns(path: Path, header: list[str]) -> dict[str, np.ndarray]:
+    """Every column of the CSV by its header name (all rows, as read)."""
     try:
         data = np.genfromtxt(path, delimiter=",", skip_header=1, dtype=float,
                              encoding="utf-8")
@@ -232,10 +260,14 @@ def load_friction_csv(path: str | Path,
     if data.shape[1] != len(header):
         raise ValueError(f"{path}: {data.shape[1]} columns per row, header names "
                          f"{len(header)}")
-    cols = {h: data[:, i] for i, h in enumerate(header)}
+    return {h: data[:, i] for i, h in enumerate(header)}
+
+
+def _usable_rows(path: Path, cols: dict[str, np.ndarray], notes: list[str]) -> np.ndarray:
+    """Indices of the rows kept: finite values, time stamps increasing (rows repeating
+    the previous one dropped); what was dropped is appended to ``notes``."""
     use = list(REQUIRED_COLUMNS) + [c for c in OPTIONAL_COLUMNS if c in cols]
     ok = np.all(np.isfinite(np.column_stack([cols[c] for c in use])), axis=1)
-    notes = []
     if not ok.all():
         notes.append(f"dropped {int((~ok).sum())} of {len(ok)} rows with non-finite or "
                      "non-numeric values")
@@ -256,9 +288,13 @@ def load_friction_csv(path: str | Path,
     sel = np.flatnonzero(ok)[keep]
     if sel.size < MIN_ROWS:
         raise ValueError(f"{path}: {sel.size} usable rows, at least {MIN_ROWS} needed")
-    t = cols["time_s"][sel]
-    q = cols["q_rad"][sel]
-    dq = cols["dq_rad_per_s"][sel]
+    return sel
+
+
+def _check_velocity(path: Path, t: np.ndarray, q: np.ndarray, dq: np.ndarray,
+                    notes: list[str]) -> None:
+    """The angle moves with the velocity and the velocity is its time derivative
+    (:data:`DQ_CONSISTENCY_TOL`); the consistency is appended to ``notes``."""
     dq_rms = float(np.sqrt(np.mean(dq ** 2)))
     if np.ptp(q) <= 1e-12 * max(1.0, float(np.abs(q).max())) and dq_rms > 0:
         raise ValueError(f"{path}: q_rad stays at {q[0]:g} rad while dq_rad_per_s has RMS "
@@ -272,17 +308,6 @@ def load_friction_csv(path: str | Path,
                 f"{DQ_CONSISTENCY_TOL}); check units (rad, rad/s) and column order")
         notes.append(f"velocity consistency: RMS(dq - d/dt q) / RMS(dq) = {mismatch:.3f} "
                      f"(allowed {DQ_CONSISTENCY_TOL})")
-    ddq = cols.get("ddq_rad_per_s2")
-    if ddq is None or not np.any(ddq[sel]):
-        acc = estimate_acceleration(t, dq, accel_window)
-        source = f"estimated (Savitzky-Golay, quadratic, {accel_window} samples)"
-    else:
-        acc, source = ddq[sel], "measured"
-    return FrictionRecording(
-        t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=acc,
-        tau_nm=cols["tau_friction_Nm"][sel],
-        load_nm=cols["load_Nm"][sel] if "load_Nm" in cols else None,
-        name=path.stem, ddq_source=source, notes=tuple(notes))
 
 
 def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:

@@ -44,11 +44,12 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.friction.ranges import ripple_period_range
-from swgsim.friction.ripples import periodogram_peaks, wave_generator_order
+from swgsim.friction.ripples import wave_generator_order
 
 from ..discovery import MIN_GAIN, Group, Projector, Proposal, discover, line_spectrum, model_design
 from ..loop import CalibrationResult
+from ..periodogram import periodogram_peaks
+from .ranges import ripple_period_range
 
 __all__ = ["friction_basis", "propose", "line_peaks"]
 
@@ -59,7 +60,7 @@ def line_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float, n_peaks
                harmonics: Sequence[int], exclude: Sequence[float] = ()) -> list[float]:
     """Strongest line frequencies of ``r`` over the coordinate ``x`` [cycles per unit of x].
 
-    Coarse: :func:`swgsim.friction.ripples.periodogram_peaks` (5-fold oversampled FFT of
+    Coarse: :func:`swgcal.periodogram.periodogram_peaks` (5-fold oversampled FFT of
     the binned signal); a peak within one main lobe (1 / span of x) of a harmonic or
     subharmonic (1..max(harmonics)) of an earlier or excluded line is skipped. Fine: the
     least-squares line spectrum with ``harmonics`` fitted jointly

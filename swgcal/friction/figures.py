@@ -21,9 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.friction.ripples import periodogram_peaks
-
 from ..loop import CalibrationResult
+from ..periodogram import periodogram_peaks
 
 log = logging.getLogger(__name__)
 

@@ -1,7 +1,7 @@
 """A friction recording (data kind 1) as a calibration problem, and its calibration.
 
 :func:`build_problem` loads a friction CSV (or takes a recording) and wraps it:
-paper-law baseline, the effect library (:data:`swgsim.friction.FRICTION_LIBRARY`), the
+paper-law baseline, the effect library (:data:`.library.FRICTION_LIBRARY`), the
 residual probes (:mod:`.probes`) and a held-out split in time blocks;
 :func:`calibrate` runs the selection loop and groups ripples by harmonics.
 """
@@ -14,13 +14,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from swgsim.friction.effects import FRICTION_LIBRARY
-from swgsim.friction.signals import PaperLaw
-
 from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
 from ..options import build
 from ..split import time_block_split
 from .data import FrictionRecording, load_friction_csv
+from .library import FRICTION_LIBRARY, PaperLaw
 from .options import BaselineOptions, FrictionOptions, SplitOptions
 from .probes import friction_probes
 from .ripple_groups import group_ripples

@@ -307,10 +307,10 @@ def group_ripples(result: CalibrationResult, *, rel_tol: float = HARMONIC_REL_TO
         and ``support`` (held-out evidence and validation gain of each ripple kept).
     """
     p, cfg = result.problem, result.config
-    n_ratio = getattr(p.signals, "gear_ratio", None)
     if min_evidence is None:
         min_evidence = float(getattr(cfg, "min_heldout_evidence", DEFAULT_MIN_EVIDENCE))
-    info: dict[str, Any] = {"gear_ratio": n_ratio, "history": ripple_history(result),
+    info: dict[str, Any] = {"gear_ratio": getattr(p.signals, "gear_ratio", None),
+                            "history": ripple_history(result),
                             "groups": [], "removed": [], "support": [],
                             "min_heldout_evidence": min_evidence}
     ripples = [t for t in result.final.terms if isinstance(t, RippleTerm)
@@ -318,111 +318,167 @@ def group_ripples(result: CalibrationResult, *, rel_tol: float = HARMONIC_REL_TO
     if not ripples:
         return dataclasses.replace(result, problem=dataclasses.replace(
             p, meta={**p.meta, "ripples": info}))
-    fit_kw = dict(max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr)
-    n_val = int(p.split.validation.size)
-    terms = list(result.final.terms)
-    thetas = {t.name: np.asarray(th, float) for t, th in zip(terms, result.final.thetas,
-                                                              strict=True)}
-    # the selection model: refitted on the fit samples from the final values
-    cur = _refit(result, terms, thetas, {t.name for t in terms}, fit_kw)
-    thetas = {t.name: np.asarray(th, float) for t, th in zip(cur.terms, cur.thetas,
-                                                              strict=True)}
-    val_cur = _val_rmse(result, cur)
-    changed = False
-    est = {}
+    st = _Pruning.start(result, min_evidence, info)
+    _group_harmonics(st, ripples, rel_tol)
+    _drop_unsupported(st, ripples)
+    meta = {**p.meta, "ripples": info}
+    if not st.changed:
+        return dataclasses.replace(result, problem=dataclasses.replace(p, meta=meta))
+    return _finish(result, st.cur, meta, st.val_cur, st.fit_kw)
+
+
+@dataclass
+class _Pruning:
+    """The model while ripples are grouped and pruned: the current fit (on the fit
+    samples), its nonlinear parameters by term name and validation RMSE."""
+
+    result: CalibrationResult
+    cur: FitResult
+    val_cur: float
+    min_evidence: float
+    info: dict[str, Any]
+    fit_kw: dict[str, Any]
+    thetas: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    changed: bool = False
+
+    @classmethod
+    def start(cls, result: CalibrationResult, min_evidence: float,
+              info: dict[str, Any]) -> _Pruning:
+        """The selection model, refitted on the fit samples from the final values."""
+        cfg = result.config
+        fit_kw = dict(max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr)
+        terms = list(result.final.terms)
+        thetas = {t.name: np.asarray(th, float) for t, th in zip(terms, result.final.thetas,
+                                                                  strict=True)}
+        cur = _refit(result, terms, thetas, {t.name for t in terms}, fit_kw)
+        st = cls(result, cur, _val_rmse(result, cur), min_evidence, info, fit_kw)
+        st.accept(cur, st.val_cur, changed=False)
+        return st
+
+    @property
+    def n_val(self) -> int:
+        return int(self.result.problem.split.validation.size)
+
+    @property
+    def gear_ratio(self) -> float | None:
+        return self.info["gear_ratio"]
+
+    def accept(self, fit: FitResult, val_rmse: float, changed: bool = True) -> None:
+        """Make ``fit`` the current model."""
+        self.cur, self.val_cur = fit, val_rmse
+        self.changed = self.changed or changed
+        self.thetas = {t.name: np.asarray(th, float) for t, th in
+                       zip(fit.terms, fit.thetas, strict=True)}
+
+
+def _period_errors(st: _Pruning, ripples: Sequence[Term]) -> dict[tuple[str, str], Any]:
+    """Standard errors of the current model's parameters, by (term, parameter), when two
+    single ripples of one kind could be harmonics of each other (else empty)."""
     kinds = [t.kind for t in ripples if t.single]
-    if any(kinds.count(k) > 1 for k in kinds):  # standard errors of the periods
-        try:
-            cu = with_uncertainty(cur, p.signals, p.split.fit, cfg.max_rel_se,
-                                  cfg.max_abs_corr)
-            est = {(e.term, e.name): e for e in cu.estimates}
-        except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
-            log.debug("ripple uncertainties failed: %s", e)
-    # 1. harmonics of one fundamental -> one effect
+    if not any(kinds.count(k) > 1 for k in kinds):
+        return {}
+    p, cfg = st.result.problem, st.result.config
+    try:
+        cu = with_uncertainty(st.cur, p.signals, p.split.fit, cfg.max_rel_se, cfg.max_abs_corr)
+    except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
+        log.debug("ripple uncertainties failed: %s", e)
+        return {}
+    return {(e.term, e.name): e for e in cu.estimates}
+
+
+def _group_harmonics(st: _Pruning, ripples: Sequence[Term], rel_tol: float) -> None:
+    """Step 1: ripples of one kind whose periods are harmonics of one fundamental become
+    one effect, unless the held-out data support separate periods."""
+    est = _period_errors(st, ripples)
     for kind in sorted({t.kind for t in ripples}):
-        members = [t for t in cur.terms if t.kind == kind and isinstance(t, RippleTerm)
-                   and t.single and t.name in result.added]
+        members = [t for t in st.cur.terms if t.kind == kind and isinstance(t, RippleTerm)
+                   and t.single and t.name in st.result.added]
         if len(members) < 2:
             continue
-        periods = [float(thetas[t.name][0]) for t in members]
+        periods = [float(st.thetas[t.name][0]) for t in members]
         rse = []
         for t, per in zip(members, periods, strict=True):
             e = est.get((t.name, "period"))
             rse.append(e.std / per if e is not None and np.isfinite(e.std) else 0.0)
-        for g in harmonic_groups(periods, rse, n_ratio, rel_tol):
-            mem = [members[i] for i in g.members]
-            cls = type(mem[0])
-            first = min(mem, key=lambda t: cur.terms.index(t))
-            fund = g.fundamental  # with N: the wave-generator turn, refined by the fit
-            merged = cls(first.name, harmonics=sorted(g.harmonics), gear_ratio=n_ratio)
-            new_terms = [merged if t is first else t for t in cur.terms if t not in mem
-                         or t is first]
-            th2 = {**thetas, first.name: np.array([fund])}
-            try:
-                fg = _refit(result, new_terms, th2, {first.name}, fit_kw)
-            except (ValueError, np.linalg.LinAlgError) as e:
-                log.warning("grouping %s failed: %s", [t.name for t in mem], e)
-                continue
-            val_g = _val_rmse(result, fg)
-            tau = min(cur.tau_int, fg.tau_int)
-            ev_sep = heldout_evidence(val_cur, val_g, n_val, tau)  # separate vs grouped
-            i_m = fg.terms.index(merged)
-            viol = merged.range_violations(merged.derived(fg.coefs[i_m], fg.thetas[i_m]))
-            p0 = float(fg.thetas[i_m][0])
-            rec = {"name": merged.name, "kind": kind, "members": [t.name for t in mem],
-                   "harmonics": list(merged.harmonics), "fundamental_period": p0,
-                   "fundamental_order": (wave_generator_order(p0, n_ratio) if n_ratio
-                                         else None),
-                   "orders": merged.orders(p0),
-                   "periods_separate": [float(thetas[t.name][0]) for t in mem],
-                   "val_rmse_separate": val_cur, "val_rmse_grouped": val_g,
-                   "evidence_separate_vs_grouped": ev_sep, "range_violations": viol}
-            if ev_sep > min_evidence or viol:
-                rec["grouped"] = False
-                rec["why"] = ("the held-out data support separate periods" if not viol
-                              else "grouped fundamental outside its range: " + "; ".join(viol))
-            else:
-                rec["grouped"] = True
-                cur, val_cur, changed = fg, val_g, True
-                thetas = {t.name: np.asarray(th, float) for t, th in
-                          zip(cur.terms, cur.thetas, strict=True)}
-            info["groups"].append(rec)
-    # 2. every ripple keeps held-out evidence of its own (backward elimination)
+        for g in harmonic_groups(periods, rse, st.gear_ratio, rel_tol):
+            _try_group(st, kind, [members[i] for i in g.members], g)
+
+
+def _try_group(st: _Pruning, kind: str, mem: list[Term], g: RippleGroupProposal) -> None:
+    """Fit one harmonic group as one effect; keep it unless separate periods win."""
+    n_ratio = st.gear_ratio
+    cur, thetas = st.cur, st.thetas
+    first = min(mem, key=lambda t: cur.terms.index(t))
+    fund = g.fundamental  # with N: the wave-generator turn, refined by the fit
+    merged = type(mem[0])(first.name, harmonics=sorted(g.harmonics), gear_ratio=n_ratio)
+    new_terms = [merged if t is first else t for t in cur.terms if t not in mem
+                 or t is first]
+    th2 = {**thetas, first.name: np.array([fund])}
+    try:
+        fg = _refit(st.result, new_terms, th2, {first.name}, st.fit_kw)
+    except (ValueError, np.linalg.LinAlgError) as e:
+        log.warning("grouping %s failed: %s", [t.name for t in mem], e)
+        return
+    val_g = _val_rmse(st.result, fg)
+    tau = min(cur.tau_int, fg.tau_int)
+    ev_sep = heldout_evidence(st.val_cur, val_g, st.n_val, tau)  # separate vs grouped
+    i_m = fg.terms.index(merged)
+    viol = merged.range_violations(merged.derived(fg.coefs[i_m], fg.thetas[i_m]))
+    p0 = float(fg.thetas[i_m][0])
+    rec = {"name": merged.name, "kind": kind, "members": [t.name for t in mem],
+           "harmonics": list(merged.harmonics), "fundamental_period": p0,
+           "fundamental_order": (wave_generator_order(p0, n_ratio) if n_ratio
+                                 else None),
+           "orders": merged.orders(p0),
+           "periods_separate": [float(thetas[t.name][0]) for t in mem],
+           "val_rmse_separate": st.val_cur, "val_rmse_grouped": val_g,
+           "evidence_separate_vs_grouped": ev_sep, "range_violations": viol}
+    if ev_sep > st.min_evidence or viol:
+        rec["grouped"] = False
+        rec["why"] = ("the held-out data support separate periods" if not viol
+                      else "grouped fundamental outside its range: " + "; ".join(viol))
+    else:
+        rec["grouped"] = True
+        st.accept(fg, val_g)
+    st.info["groups"].append(rec)
+
+
+def _drop_unsupported(st: _Pruning, ripples: Sequence[Term]) -> None:
+    """Step 2: every ripple keeps held-out evidence of its own (backward elimination:
+    the least supported one goes while it is below ``min_evidence``)."""
+    names = {r.name for r in ripples}
     while True:
-        rips = [t for t in cur.terms if isinstance(t, RippleTerm) and t.name in
-                {r.name for r in ripples}]
+        rips = [t for t in st.cur.terms if isinstance(t, RippleTerm) and t.name in names]
         if not rips:
-            break
-        support = []
-        for r in rips:
-            without = [t for t in cur.terms if t is not r]
-            try:
-                f0 = _refit(result, without, thetas, set(), fit_kw)
-            except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
-                log.debug("support of %s failed: %s", r.name, e)
-                continue
-            v0 = _val_rmse(result, f0)
-            ev = heldout_evidence(val_cur, v0, n_val, min(cur.tau_int, f0.tau_int))
-            support.append((ev, r, f0, v0))
+            return
+        support = [x for x in (_support(st, r) for r in rips) if x is not None]
         if not support:
-            break
+            return
         ev, r, f0, v0 = min(support, key=lambda x: x[0])
-        if ev > min_evidence:
-            info["support"] = [{"name": x[1].name, "heldout_evidence": x[0],
-                                "validation_gain": 1.0 - val_cur / x[3] if x[3] else None,
-                                "val_rmse_without": x[3]} for x in support]
-            break
-        info["removed"].append({"name": r.name, "heldout_evidence": ev,
-                                "val_rmse_with": val_cur, "val_rmse_without": v0,
-                                "why": f"held-out evidence 2 ln Λ = {ev:.3g} <= "
-                                       f"{min_evidence:g} in the final model"})
-        cur, val_cur, changed = f0, v0, True
-        thetas = {t.name: np.asarray(th, float) for t, th in zip(cur.terms, cur.thetas,
-                                                                  strict=True)}
-    meta = {**p.meta, "ripples": info}
-    if not changed:
-        return dataclasses.replace(result, problem=dataclasses.replace(p, meta=meta))
-    return _finish(result, cur, meta, val_cur, fit_kw)
+        if ev > st.min_evidence:
+            st.info["support"] = [{"name": x[1].name, "heldout_evidence": x[0],
+                                   "validation_gain": 1.0 - st.val_cur / x[3] if x[3]
+                                   else None, "val_rmse_without": x[3]} for x in support]
+            return
+        st.info["removed"].append({"name": r.name, "heldout_evidence": ev,
+                                   "val_rmse_with": st.val_cur, "val_rmse_without": v0,
+                                   "why": f"held-out evidence 2 ln Λ = {ev:.3g} <= "
+                                          f"{st.min_evidence:g} in the final model"})
+        st.accept(f0, v0)
+
+
+def _support(st: _Pruning, r: Term) -> tuple[float, Term, FitResult, float] | None:
+    """Held-out evidence of ripple ``r`` in the current model: (2 ln Λ, r, the fit
+    without it, its validation RMSE); None when the refit fails."""
+    without = [t for t in st.cur.terms if t is not r]
+    try:
+        f0 = _refit(st.result, without, st.thetas, set(), st.fit_kw)
+    except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
+        log.debug("support of %s failed: %s", r.name, e)
+        return None
+    v0 = _val_rmse(st.result, f0)
+    ev = heldout_evidence(st.val_cur, v0, st.n_val, min(st.cur.tau_int, f0.tau_int))
+    return ev, r, f0, v0
 
 
 def _finish(result: CalibrationResult, cur: FitResult, meta: dict[str, Any],

@@ -47,7 +47,7 @@ PLANTED: dict[str, dict[str, Any]] = {
     "gravity_residual": {"params": {"c2": 0.12, "c3": -0.08},
                          "check": {"rms": float(np.sqrt(0.12 ** 2 / 5 + 0.08 ** 2 / 7))}},
     "inertia": {"params": {"j_a": 0.1}, "check": {"j_a": 0.1}},
-    # drifts with physical time constants (minutes, :mod:`swgsim.friction.ranges`) need a
+    # drifts with physical time constants (minutes, :mod:`swgcal.friction.ranges`) need a
     # recording of a few time constants to be told from a straight line: 240 s at 40 ms
     "thermal_drift": {"params": {"d": 0.2, "t_th": 120.0}, "check": {"d": 0.2, "t_th": 120.0},
                       "recording": {"duration_s": 240.0, "dt_s": 0.04}},
@@ -55,7 +55,7 @@ PLANTED: dict[str, dict[str, Any]] = {
                      "recording": {"duration_s": 240.0, "dt_s": 0.04}},
     "velocity_lag": {"params": {"t_lag": 0.04}, "check": {"t_lag": 0.04}},
 }
-"""Planted value of every library effect (inside its physical range, :mod:`swgsim.friction.ranges`),
+"""Planted value of every library effect (inside its physical range, :mod:`swgcal.friction.ranges`),
 the derived parameters a test checks and, where the default recording is too short to
 identify the effect, the ``recording`` options (``duration_s``, ``dt_s``) to plant it in."""
 

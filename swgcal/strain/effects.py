@@ -42,6 +42,11 @@ are reported relative to their mean; (iv) the angle of a channel with less than 
 the alignment weight (the full bridge s0 of the default layout) is not estimated
 (:attr:`GaugeMisplacement.min_weight_share`).
 
+The forms are those the simulation applies (one function per effect in
+:mod:`swgsim.measurement`, evaluated here on the basis: a linear effect's columns are its
+function at one-hot parameters); the terms add only the fit (free parameters, their
+constraint, starts, bounds, ranges).
+
 Every effect declares the physical range of its parameters (``ranges``, bounds and
 sources in :mod:`.ranges`); a fit outside is not accepted as the effect.
 """
@@ -55,9 +60,11 @@ from typing import Any
 import numpy as np
 from scipy import signal as sps
 
-from swgsim.measurement import fractional_delay, lowpass, lowpass_coefficients
-from swgsim.terms import Param, Term
+from swgsim import measurement as ms
+from swgsim.measurement import fractional_delay, lowpass_coefficients
+from swgsim.terms import Param
 
+from ..terms import FitTerm
 from .probes import strain_probes
 from .ranges import (
     BRIDGE_K_RANGE,
@@ -93,7 +100,7 @@ __all__ = [
 # baseline
 
 
-class ChainBaseline(Term):
+class ChainBaseline(FitTerm):
     """The simulation chain's prediction for the nominal gear, two scales fitted.
 
     s = a_wg · s_wg + a_torque · s_t. With a common gauge gain G and a WG deflection w0,
@@ -139,7 +146,7 @@ def _rms(v: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(v))))
 
 
-class ChannelOffset(Term):
+class ChannelOffset(FitTerm):
     """Zero offset of each bridge channel."""
 
     kind = "offset"
@@ -152,7 +159,7 @@ class ChannelOffset(Term):
               for s in SENSORS}
 
     def columns(self, sig: StrainSignals, theta: np.ndarray) -> np.ndarray:
-        return sig.onehot
+        return ms.offset(0.0, sig.onehot)  # a unit offset of each channel
 
     def derived(self, coef, theta):
         out = {f"o_{s}": float(v) for s, v in zip(SENSORS, coef, strict=True)}
@@ -170,7 +177,7 @@ class ChannelOffset(Term):
         return {"name": "offset", "params": {"offset_mvv": [float(v) for v in coef]}}
 
 
-class ThermalDrift(Term):
+class ThermalDrift(FitTerm):
     """Zero drift of each channel over the recording sequence."""
 
     kind = "thermal_drift"
@@ -184,7 +191,7 @@ class ThermalDrift(Term):
               for s in SENSORS}
 
     def columns(self, sig, theta):
-        return sig.onehot * sig.t_seq_s[:, None]
+        return ms.thermal_drift(0.0, sig.onehot, sig.t_seq_s[:, None])  # unit rates
 
     def derived(self, coef, theta):
         out = {f"r_{s}": float(v) for s, v in zip(SENSORS, coef, strict=True)}
@@ -201,7 +208,7 @@ class ThermalDrift(Term):
         return {"name": "thermal_drift", "params": {"rate_mvv_per_s": [float(v) for v in coef]}}
 
 
-class _Relative(Term):
+class _Relative(FitTerm):
     """Per-channel values v_c with Σ w_c v_c = 0 over the estimable channels: one raw
     parameter per estimable channel but one.
 
@@ -276,7 +283,7 @@ class GainMismatch(_Relative):
               for s in SENSORS}
 
     def columns(self, sig, theta):
-        return (sig.onehot * sig.prediction()[:, None]) @ self.q
+        return ms.gain_mismatch(sig.prediction()[:, None], sig.onehot) @ self.q
 
     derived_fmt = "g_{}"
 
@@ -331,7 +338,7 @@ class GaugeMisplacement(_Relative):
               for s in SENSORS}
 
     def columns(self, sig, theta):
-        return (sig.onehot * (-sig.col("dpsi"))[:, None]) @ self.q
+        return ms.gauge_misplacement_linear(sig.col("dpsi")[:, None], sig.onehot) @ self.q
 
     derived_fmt = "delta_{}_deg"
 
@@ -357,7 +364,7 @@ class GaugeMisplacement(_Relative):
         return {"name": "gauge_misplacement", "params": {"delta_deg": [float(x) for x in v]}}
 
 
-class BridgeNonlinearity(Term):
+class BridgeNonlinearity(FitTerm):
     """Bridge output s / (1 + k s), one k for all channels (a transform of the basis)."""
 
     kind = "bridge_nonlinearity"
@@ -390,7 +397,7 @@ class BridgeNonlinearity(Term):
         k = float(theta[0])
 
         def apply(b: Mapping[str, np.ndarray]) -> Mapping[str, np.ndarray]:
-            den = 1.0 + k * (b["s_wg"] + b["s_t"])
+            den = ms.bridge_denominator(b["s_wg"] + b["s_t"], k)
 
             def fn(key: str, x: np.ndarray) -> np.ndarray:
                 # the signal itself: s/(1 + k s); its perturbations (dpsi): /(1 + k s)²
@@ -404,7 +411,7 @@ class BridgeNonlinearity(Term):
         return {"name": "bridge_nonlinearity", "params": {"k_per_mvv": float(theta[0])}}
 
 
-class AmplifierLowpass(Term):
+class AmplifierLowpass(FitTerm):
     """First-order amplifier low-pass on every channel (a transform of the basis)."""
 
     kind = "amplifier_lowpass"
@@ -437,7 +444,7 @@ class AmplifierLowpass(Term):
         lag_samples = -np.angle(h) / (2 * np.pi * f2) * fs  # (n_w,)
 
         def fn(key: str, x: np.ndarray) -> np.ndarray:
-            y = lowpass(x, f_c, fs)
+            y = ms.amplifier_lowpass(x, f_c, fs)
             return fractional_delay(y, np.broadcast_to(-lag_samples[:, None], x.shape[:2]))
 
         return sig.replace(maps=sig.maps + (lambda b: MappedBasis(b, fn),))
@@ -446,7 +453,7 @@ class AmplifierLowpass(Term):
         return {"name": "amplifier_lowpass", "params": {"f_c_hz": float(theta[0])}}
 
 
-class KinematicErrorHarmonic(Term):
+class KinematicErrorHarmonic(FitTerm):
     """An extra kinematic-error harmonic A sin(k φ_in + φ) of a given order k.
 
     A transform: the torque pattern becomes (T_out + a_sin ΔT_sin + a_cos ΔT_cos) h(ψ),
@@ -527,7 +534,7 @@ KE_ORDERS = (1, 2, 3, 4)
 docs/PHYSICS.md sec. 1; 3 for completeness)."""
 
 
-def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[Term]]:
+def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[FitTerm]]:
     """The declared strain-side library, keyed by effect name.
 
     Parameters
@@ -535,7 +542,7 @@ def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[Ter
     ke_orders : tuple of int
         Orders of the kinematic-error candidates (one key ``ke_order{k}`` each).
     """
-    lib: dict[str, type[Term]] = {
+    lib: dict[str, type[FitTerm]] = {
         "offset": ChannelOffset,
         "gain_mismatch": GainMismatch,
         "gauge_misplacement": GaugeMisplacement,

@@ -4,7 +4,9 @@ window (baseline and final model)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -38,29 +40,67 @@ def make_figures(result: CalibrationResult, out_dir: str | Path,
 
     out = Path(out_dir) / "figures"
     out.mkdir(parents=True, exist_ok=True)
-    sig: StrainSignals = result.problem.signals
-    n_w, n_t, fs = sig.n_windows, sig.n_t, sig.fs
-    y = result.problem.y.reshape(n_w, 5, n_t)
-    pb, pa = (x.reshape(n_w, 5, n_t) for x in result.predictions())
-    rb, ra = y - pb, y - pa
-    sp = result.problem.split
-    role = np.zeros(n_w, int)
-    role[np.unique(sig.window[sp.validation])] = 1
-    role[np.unique(sig.window[sp.test])] = 2
-    test_w = int(np.flatnonzero(role == 2)[0]) if (role == 2).any() else 0
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    v = _Views.of(result, plt.rcParams["axes.prop_cycle"].by_key()["color"])
     figs: dict[str, str] = {}
-
-    def save(fig, key):
+    for key, draw in (("order_spectrum", _order_spectrum), ("offsets", _offsets),
+                      ("channel_differences", _channel_differences),
+                      ("speed_load", _speed_load), ("overlay", _overlay)):
+        fig = draw(plt, v)
         name = f"{key}.{fmt}"
         fig.savefig(out / name, dpi=110, bbox_inches="tight")
         plt.close(fig)
         figs[key] = f"{out.name}/{name}"
+    return figs
 
-    # order spectrum relative to the input rotation
+
+@dataclass(frozen=True)
+class _Views:
+    """What the figures show: measured windows, predictions and residuals (baseline and
+    final), each (n_windows, 5, n_t), the role of each window (0 fit, 1 validation,
+    2 test) and the test window shown."""
+
+    sig: StrainSignals
+    y: np.ndarray
+    pb: np.ndarray
+    pa: np.ndarray
+    role: np.ndarray
+    test_w: int
+    colors: list[str]
+
+    @classmethod
+    def of(cls, result: CalibrationResult, colors: list[str]) -> _Views:
+        sig: StrainSignals = result.problem.signals
+        n_w, n_t = sig.n_windows, sig.n_t
+        y = result.problem.y.reshape(n_w, 5, n_t)
+        pb, pa = (x.reshape(n_w, 5, n_t) for x in result.predictions())
+        sp = result.problem.split
+        role = np.zeros(n_w, int)
+        role[np.unique(sig.window[sp.validation])] = 1
+        role[np.unique(sig.window[sp.test])] = 2
+        test_w = int(np.flatnonzero(role == 2)[0]) if (role == 2).any() else 0
+        return cls(sig, y, pb, pa, role, test_w, colors)
+
+    @property
+    def rb(self) -> np.ndarray:
+        return self.y - self.pb
+
+    @property
+    def ra(self) -> np.ndarray:
+        return self.y - self.pa
+
+    @property
+    def t_ms(self) -> np.ndarray:
+        return np.arange(self.sig.n_t) / self.sig.fs * 1e3
+
+
+def _order_spectrum(plt: Any, v: _Views) -> Any:
+    """Residual amplitude spectrum against the order of the input rotation."""
+    sig, colors = v.sig, v.colors
+    n_w, n_t = sig.n_windows, sig.n_t
+    rb, ra = v.rb, v.ra
     fig, axes = plt.subplots(5, 1, figsize=(8, 9), sharex=True)
     win = np.hanning(n_t)
-    freqs = np.fft.rfftfreq(n_t, 1 / fs)
+    freqs = np.fft.rfftfreq(n_t, 1 / sig.fs)
     f_in = sig.n_in_rpm / 60.0
     grid = np.arange(0, 30.01, 0.05)
     for c in range(5):
@@ -73,12 +113,16 @@ def make_figures(result: CalibrationResult, out_dir: str | Path,
     axes[0].legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("order relative to the input rotation")
     fig.suptitle("Residual amplitude spectrum (Hann), mean over windows")
-    save(fig, "order_spectrum")
+    return fig
 
-    # offsets and drift along the sequence
-    t_start = sig.t_seq_s.reshape(n_w, 5, n_t)[:, 0, 0]
+
+def _offsets(plt: Any, v: _Views) -> Any:
+    """Mean residual per window and channel along the sequence (offsets, drift)."""
+    sig, colors, role = v.sig, v.colors, v.role
+    t_start = sig.t_seq_s.reshape(sig.n_windows, 5, sig.n_t)[:, 0, 0]
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
-    for ax, r, title in ((axes[0], rb, "baseline residual"), (axes[1], ra, "final residual")):
+    for ax, r, title in ((axes[0], v.rb, "baseline residual"),
+                         (axes[1], v.ra, "final residual")):
         mean = r.mean(-1)
         for c in range(5):
             ax.plot(t_start, mean[:, c], "o-", ms=4, lw=0.8, color=colors[c % len(colors)],
@@ -89,27 +133,33 @@ def make_figures(result: CalibrationResult, out_dir: str | Path,
         ax.set_xlabel("time since the first window [s] (red: test, orange: validation)")
     axes[0].set_ylabel("mean residual [mV/V]")
     axes[1].legend(fontsize=8)
-    save(fig, "offsets")
+    return fig
 
-    # channel differences
-    t_ms = np.arange(n_t) / fs * 1e3
+
+def _channel_differences(plt: Any, v: _Views) -> Any:
+    """s1−s3 and s2−s4 of the test window: measured, models, residuals."""
+    y, pb, pa, rb, ra, w = v.y, v.pb, v.pa, v.rb, v.ra, v.test_w
+    t_ms, col = v.t_ms, v.colors[0]
     fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), sharex=True)
     for j, (a, b) in enumerate(((1, 3), (2, 4))):
         lab = f"s{a}−s{b}"
-        axes[0, j].plot(t_ms, y[test_w, a] - y[test_w, b], color="k", lw=0.8, label="measured")
-        axes[0, j].plot(t_ms, pb[test_w, a] - pb[test_w, b], color="0.6", lw=1, label="baseline")
-        axes[0, j].plot(t_ms, pa[test_w, a] - pa[test_w, b], color=colors[0], lw=1, label="final")
+        axes[0, j].plot(t_ms, y[w, a] - y[w, b], color="k", lw=0.8, label="measured")
+        axes[0, j].plot(t_ms, pb[w, a] - pb[w, b], color="0.6", lw=1, label="baseline")
+        axes[0, j].plot(t_ms, pa[w, a] - pa[w, b], color=col, lw=1, label="final")
         axes[0, j].set_title(lab)
-        axes[1, j].plot(t_ms, rb[test_w, a] - rb[test_w, b], color="0.6", lw=0.8)
-        axes[1, j].plot(t_ms, ra[test_w, a] - ra[test_w, b], color=colors[0], lw=0.8)
+        axes[1, j].plot(t_ms, rb[w, a] - rb[w, b], color="0.6", lw=0.8)
+        axes[1, j].plot(t_ms, ra[w, a] - ra[w, b], color=col, lw=0.8)
         axes[1, j].set_xlabel("time in the window [ms]")
     axes[0, 0].set_ylabel("[mV/V]")
     axes[1, 0].set_ylabel("residual [mV/V]")
     axes[0, 0].legend(fontsize=8)
-    save(fig, "channel_differences")
+    return fig
 
-    # amplitude and phase with speed and load
-    m, b, a = (order2_components(sig, x.reshape(-1)) for x in (y, pb, pa))
+
+def _speed_load(plt: Any, v: _Views) -> Any:
+    """Order-2 amplitude and phase per window against speed and load."""
+    sig, n_w = v.sig, v.sig.n_windows
+    m, b, a = (order2_components(sig, x.reshape(-1)) for x in (v.y, v.pb, v.pa))
     fig, axes = plt.subplots(2, 5, figsize=(13, 5))
     x_op = np.array([f"{sig.n_in_rpm[w]:.0f}/{sig.t_out_nm[w]:.0f}" for w in range(n_w)])
     order = np.lexsort((sig.t_out_nm, sig.n_in_rpm))
@@ -125,16 +175,18 @@ def make_figures(result: CalibrationResult, out_dir: str | Path,
     axes[1, 0].set_ylabel("order-2 phase [deg]")
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
-    save(fig, "speed_load")
+    return fig
 
-    # overlay of a test window
+
+def _overlay(plt: Any, v: _Views) -> Any:
+    """Measured signals of the test window with the baseline and final predictions."""
+    t_ms, w = v.t_ms, v.test_w
     fig, axes = plt.subplots(5, 1, figsize=(8, 9), sharex=True)
     for c in range(5):
-        axes[c].plot(t_ms, y[test_w, c], color="k", lw=0.7, label="measured")
-        axes[c].plot(t_ms, pb[test_w, c], color="0.6", lw=1, label="baseline")
-        axes[c].plot(t_ms, pa[test_w, c], color=colors[0], lw=1, label="final")
+        axes[c].plot(t_ms, v.y[w, c], color="k", lw=0.7, label="measured")
+        axes[c].plot(t_ms, v.pb[w, c], color="0.6", lw=1, label="baseline")
+        axes[c].plot(t_ms, v.pa[w, c], color=v.colors[0], lw=1, label="final")
         axes[c].set_ylabel(f"{SENSORS[c]} [mV/V]")
     axes[0].legend(fontsize=8, loc="upper right")
     axes[-1].set_xlabel("time in the window [ms]")
-    save(fig, "overlay")
-    return figs
+    return fig

@@ -1,6 +1,6 @@
 """Physical ranges of the strain-side effects' parameters, with their sources.
 
-The effects of :mod:`.effects` declare them as :attr:`swgsim.terms.Term.ranges`; a fit
+The effects of :mod:`.effects` declare them as :attr:`swgcal.terms.FitTerm.ranges`; a fit
 outside its range is not accepted as the effect (acceptance rule 4 of
 :mod:`swgcal.loop`): the term would be absorbing something else, and a run
 where such a candidate still passes the evidence rule ends ``unexplained``. Each bound

@@ -242,37 +242,62 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
         Figure key to a path relative to the report.
     """
     s = summary
-    u = s["units"]
-    d = s["data"]
-    lines = [f"# Strain calibration report: {s['name']}", "",
-             f"Measured data: `{s['source']}` (kind: strain, schema v1). {d['n_windows']} "
-             f"windows of {fmt_value(d['window_s'] * 1e3, 3)} "
-             f"ms at {fmt_value(d['sample_rate_hz'])} Hz; "
-             "operating points (n_in [rpm], T_out [N m]) "
-             + ", ".join(f"({o[0]:g}, {o[1]:g}) × {n}" for o, n in
-                         zip(d["operating_points"], d["windows_per_op"], strict=True)) + ".", ""]
+    lines = _data_section(s)
     lines += result_section(s, "nominal chain",
-                            f"; difference-based noise floor {fmt_value(s['noise_floor'])} {u} "
-                            f"(ratio "
+                            f"; difference-based noise floor {fmt_value(s['noise_floor'])} "
+                            f"{s['units']} (ratio "
                             f"{fmt_value(s['rmse_over_noise_floor'], 3)})")
     lines += result_extras(s)
     lines += ["## Held-out data", "", s["heldout"], ""]
-    lines += ["## Baseline: nominal simulation chain", "", result.problem.baseline[0].description
-              + ". Fitted on fit + validation windows:", "",
-              "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
+    lines += _baseline_section(result, s)
+    lines += _alignment_section(s)
+    lines += _selection_section(s)
+    lines += _accepted_section(s)
+    lines += _diagnosis_section(s)
+    lines += proposals_section(s.get("proposed", []))
+    lines += _figures_section(figures)
+    lines += _simulation_section(s)
+    lines += ["## Uncertainty", "", UNCERTAINTY_METHOD, "",
+              f"Run time {fmt_value(s['elapsed_s'], 3)} s.", ""]
+    return "\n".join(lines)
+
+
+_PARAM_HEAD = ["| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
+
+
+def _data_section(s: Mapping[str, Any]) -> list[str]:
+    """Title and the measured data."""
+    d = s["data"]
+    return [f"# Strain calibration report: {s['name']}", "",
+            f"Measured data: `{s['source']}` (kind: strain, schema v1). {d['n_windows']} "
+            f"windows of {fmt_value(d['window_s'] * 1e3, 3)} "
+            f"ms at {fmt_value(d['sample_rate_hz'])} Hz; "
+            "operating points (n_in [rpm], T_out [N m]) "
+            + ", ".join(f"({o[0]:g}, {o[1]:g}) × {n}" for o, n in
+                        zip(d["operating_points"], d["windows_per_op"], strict=True)) + ".", ""]
+
+
+def _baseline_section(result: CalibrationResult, s: Mapping[str, Any]) -> list[str]:
+    """The nominal chain's fitted scales, alone and in the final model."""
+    lines = ["## Baseline: nominal simulation chain", "", result.problem.baseline[0].description
+             + ". Fitted on fit + validation windows:", "", *_PARAM_HEAD]
     lines += param_rows(s["baseline"]["params"]) + [""]
-    lines += ["In the final model (with the accepted effects):", "",
-              "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
-    lines += param_rows(s["baseline"]["params_in_final_model"]) + [""]
-    lines += ["WG angle of each window (alignment, nominal chain, per window on its own data; "
-              "s.e. from the curvature with the final residual σ). The input angle φ_in is "
-              "known modulo 360° only where the odd orders of the torque ripple rise above "
-              "the noise (evidence 2 ln Λ against the peak 180° away > 10); elsewhere it is "
-              "given modulo 180° (ambiguous: the order-2 ripple repeats every half "
-              "revolution).", "",
-              "| sample | role | operating point | ψ(0) mod 180° [deg] | s.e. [deg] | "
-              "φ_in(0) [deg] (final model) | known modulo | 2 ln Λ (flip) |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["In the final model (with the accepted effects):", "", *_PARAM_HEAD]
+    return lines + param_rows(s["baseline"]["params_in_final_model"]) + [""]
+
+
+def _alignment_section(s: Mapping[str, Any]) -> list[str]:
+    """WG and input angle of every window."""
+    d = s["data"]
+    lines = ["WG angle of each window (alignment, nominal chain, per window on its own data; "
+             "s.e. from the curvature with the final residual σ). The input angle φ_in is "
+             "known modulo 360° only where the odd orders of the torque ripple rise above "
+             "the noise (evidence 2 ln Λ against the peak 180° away > 10); elsewhere it is "
+             "given modulo 180° (ambiguous: the order-2 ripple repeats every half "
+             "revolution).", "",
+             "| sample | role | operating point | ψ(0) mod 180° [deg] | s.e. [deg] | "
+             "φ_in(0) [deg] (final model) | known modulo | 2 ln Λ (flip) |",
+             "|---|---|---|---|---|---|---|---|"]
     for a in s["alignment"]:
         o = d["operating_points"][a["op"]]
         lines.append(f"| {a['sample']} | {a['role']} | {o[0]:g} rpm, {o[1]:g} N m | "
@@ -280,18 +305,24 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
                      f"{fmt_value(a['phi_in0_final_deg'], 4)} | "
                      f"{fmt_value(a.get('phi_in0_final_period_deg'), 3)}° | "
                      f"{fmt_value(a.get('phi_in0_final_flip_evidence'), 3)} |")
-    lines += ["", "## Selection", "",
-              "Each iteration adds every library candidate to the current model and refits on "
-              "the fit windows; candidates are ranked by validation RMSE. Accepted: the first "
-              "with very strong evidence on the 2 ln B scale of Kass & Raftery (1995): "
-              "held-out evidence 2 ln Λ (validation log-likelihood ratio, n/τ_int effective "
-              f"samples) > {s['selection']['min_heldout_evidence']:g} and effective ΔBIC on "
-              f"the fit windows < {s['selection']['max_delta_bic']:g}"
-              + (f", validation gain > {100 * s['selection']['min_rel_improvement']:.2g} %"
-                 if s['selection']['min_rel_improvement'] > 0 else "")
-              + f", its primary parameter pinned down (rel. s.e. < "
-              f"{s['selection']['max_rel_se']:g}) and every parameter inside its physical "
-              "range (the effect's declared source).", ""]
+    return lines
+
+
+def _selection_section(s: Mapping[str, Any]) -> list[str]:
+    """The acceptance rule and every iteration's ranked candidates."""
+    u = s["units"]
+    lines = ["", "## Selection", "",
+             "Each iteration adds every library candidate to the current model and refits on "
+             "the fit windows; candidates are ranked by validation RMSE. Accepted: the first "
+             "with very strong evidence on the 2 ln B scale of Kass & Raftery (1995): "
+             "held-out evidence 2 ln Λ (validation log-likelihood ratio, n/τ_int effective "
+             f"samples) > {s['selection']['min_heldout_evidence']:g} and effective ΔBIC on "
+             f"the fit windows < {s['selection']['max_delta_bic']:g}"
+             + (f", validation gain > {100 * s['selection']['min_rel_improvement']:.2g} %"
+                if s['selection']['min_rel_improvement'] > 0 else "")
+             + f", its primary parameter pinned down (rel. s.e. < "
+             f"{s['selection']['max_rel_se']:g}) and every parameter inside its physical "
+             "range (the effect's declared source).", ""]
     for it in s["iterations"]:
         lines += [f"### Iteration {it['index']}: model {' + '.join(it['model'])}, validation "
                   f"RMSE {fmt_value(it['val_rmse'])} {u}", ""]
@@ -307,23 +338,32 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
                          f"| {fmt_value(c['delta_bic'], 5)} | "
                          f"{fmt_value(c['delta_bic_eff'], 4)} | {c['status']} |")
         lines.append("")
-    lines += ["## Accepted effects", ""]
+    return lines
+
+
+def _accepted_section(s: Mapping[str, Any]) -> list[str]:
+    """The accepted effects with their parameters, and identifiability."""
+    lines = ["## Accepted effects", ""]
     if not s["effects_added"]:
         lines += ["None.", ""]
     for e in s["effects_added"]:
         lines += [f"### {e['name']}", "", f"{e['description']}. Signature: {e['signature']}. "
-                  f"Source: {e['source']}.", "",
-                  "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
+                  f"Source: {e['source']}.", "", *_PARAM_HEAD]
         lines += param_rows(e["params"]) + [""]
-    lines += ["## Identifiability", "", s["identifiability"]["declared"], "",
-              f"Condition number of the scaled JᵀJ of the final model: "
-              f"{fmt_value(s['identifiability']['condition_number'], 3)}. Flagged parameters: "
-              + ("; ".join(s["identifiability"]["flagged"]) or "none") + ".", ""]
-    lines += ["## Residual diagnosis", "",
-              "Probe scores: out-of-sample fraction of the residual mean square explained by a "
-              "nonparametric model along one variable (structured above "
-              f"{fmt_value(s['diagnosis_after']['threshold'])}).", "",
-              "| probe | baseline residual | final residual |", "|---|---|---|"]
+    return lines + ["## Identifiability", "", s["identifiability"]["declared"], "",
+                    f"Condition number of the scaled JᵀJ of the final model: "
+                    f"{fmt_value(s['identifiability']['condition_number'], 3)}. Flagged "
+                    "parameters: " + ("; ".join(s["identifiability"]["flagged"]) or "none")
+                    + ".", ""]
+
+
+def _diagnosis_section(s: Mapping[str, Any]) -> list[str]:
+    """Probe scores before and after, residual signatures, the order-2 table."""
+    lines = ["## Residual diagnosis", "",
+             "Probe scores: out-of-sample fraction of the residual mean square explained by a "
+             "nonparametric model along one variable (structured above "
+             f"{fmt_value(s['diagnosis_after']['threshold'])}).", "",
+             "| probe | baseline residual | final residual |", "|---|---|---|"]
     pb, pa = s["diagnosis_before"]["probes"], s["diagnosis_after"]["probes"]
     for k in pb:
         lines.append(f"| {k} | {fmt_value(pb[k]['score'], 3)} | {fmt_value(pa[k]['score'], 3)} |")
@@ -334,44 +374,54 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
               "load.", "",
               "| n_in [rpm] | T_out [N m] | channel | measured | baseline | final |",
               "|---|---|---|---|---|---|"]
+
+    def ap(x):
+        return f"{x[0]:.4f} / {x[1]:+.1f}"
+
     for r in s["order2"]:
-        def ap(x):
-            return f"{x[0]:.4f} / {x[1]:+.1f}"
         lines.append(f"| {r['n_in_rpm']:g} | {r['t_out_nm']:g} | {r['channel']} | "
                      f"{ap(r['measured'])} | {ap(r['baseline'])} | {ap(r['final'])} |")
-    lines.append("")
-    lines += proposals_section(s.get("proposed", []))
-    captions = {
-        "order_spectrum": "Residual amplitude spectrum per channel against the order of the "
-                          "input rotation (baseline grey, final colour), mean over windows.",
-        "offsets": "Mean residual per window and channel along the recording sequence "
-                   "(offsets, drift), baseline and final; held-out windows marked.",
-        "channel_differences": "Channel differences s1−s3 and s2−s4 of a test window: measured, "
-                               "baseline and final model, and their residuals.",
-        "speed_load": "Order-2 (ψ) amplitude and phase per window against speed and load: "
-                      "measured, baseline, final.",
-        "overlay": "Measured signals of a test window with the baseline and final predictions.",
-    }
-    if figures:
-        lines += ["## Figures", ""]
-        for k, path in figures.items():
-            lines += [f"![{k}]({path})", "", f"*{captions.get(k, k)}*", ""]
-    lines += ["## As a simulation option", ""]
+    return lines + [""]
+
+
+_CAPTIONS = {
+    "order_spectrum": "Residual amplitude spectrum per channel against the order of the "
+                      "input rotation (baseline grey, final colour), mean over windows.",
+    "offsets": "Mean residual per window and channel along the recording sequence "
+               "(offsets, drift), baseline and final; held-out windows marked.",
+    "channel_differences": "Channel differences s1−s3 and s2−s4 of a test window: measured, "
+                           "baseline and final model, and their residuals.",
+    "speed_load": "Order-2 (ψ) amplitude and phase per window against speed and load: "
+                  "measured, baseline, final.",
+    "overlay": "Measured signals of a test window with the baseline and final predictions.",
+}
+
+
+def _figures_section(figures: Mapping[str, str] | None) -> list[str]:
+    """The figures with their captions."""
+    if not figures:
+        return []
+    lines = ["## Figures", ""]
+    for k, path in figures.items():
+        lines += [f"![{k}]({path})", "", f"*{_CAPTIONS.get(k, k)}*", ""]
+    return lines
+
+
+def _simulation_section(s: Mapping[str, Any]) -> list[str]:
+    """The accepted effects as a simulation option (sensor effects, KE harmonics)."""
+    lines = ["## As a simulation option", ""]
     if s["simulation"].get("caveat"):
         lines += [f"**Caveat.** {s['simulation']['caveat']}", ""]
     if s["withheld"]:
         lines += ["Set neutral here (not pinned down by the data): " + "; ".join(
             f"{w['effect']}.{w['parameter']} ({w['reason']})" for w in s["withheld"]) + ".", ""]
-    lines += ["Measurement effects for `swgsim.measurement.apply_sensor_effects` "
-              "(`sensor_effects` option):", "", "```json",
-              json.dumps(s["sensor_effects"], indent=1), "```", "",
-              "Kinematic-error harmonics for `swgsim.dynamics.gear_with_ke`: "
-              + json.dumps(s["gear_ke_harmonics"]) + "; chain: w0 = "
-              f"{fmt_value(s['chain']['w0_m'])} "
-              f"m, gauge gain {fmt_value(s['chain']['gauge_gain'])}.", ""]
-    lines += ["## Uncertainty", "", UNCERTAINTY_METHOD, "",
-              f"Run time {fmt_value(s['elapsed_s'], 3)} s.", ""]
-    return "\n".join(lines)
+    return lines + ["Measurement effects for `swgsim.measurement.apply_sensor_effects` "
+                    "(`sensor_effects` option):", "", "```json",
+                    json.dumps(s["sensor_effects"], indent=1), "```", "",
+                    "Kinematic-error harmonics for `swgsim.dynamics.gear_with_ke`: "
+                    + json.dumps(s["gear_ke_harmonics"]) + "; chain: w0 = "
+                    f"{fmt_value(s['chain']['w0_m'])} "
+                    f"m, gauge gain {fmt_value(s['chain']['gauge_gain'])}.", ""]
 
 
 def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:

@@ -1,43 +1,34 @@
-"""Declared library of candidate friction effects.
+"""Library of friction effects: their forms, as inputs of the simulation.
 
-Every effect is a :class:`~swgcal.core.Term` in the joint coordinate q
+Every effect is a :class:`~swgsim.terms.Term` in the joint coordinate q
 (gear output angle [rad]) with the friction torque τ [N m] positive along q̇. ``sgn``
 is the smooth sign tanh(v / v_s) of the velocity v the friction law sees (q̇, or a
-lagged q̇ once ``velocity_lag`` is in the model). Each entry documents its form, its
-residual signature (how the residual of a model without it looks) and its source.
+lagged q̇ once ``velocity_lag`` is in the model). Each entry documents its form and
+its source; how it shows in a residual, its fit bounds and starts and its physical
+range are the calibration's (:mod:`swgcal.friction.library`).
 
-==================  ===============================================  ===================
-name                form                                             residual signature
-==================  ===============================================  ===================
-asymmetric_coulomb  Δc |sgn|                                         same offset in both
-                                                                     directions, 0 at rest
-stribeck            F_s sgn exp(−(v/v_st)²)                          odd bump at low |v|
-presliding          F_d (z − sgn), dz/dq = (1 − z sgn(q̇)) / q_c     transient after each
-                                                                     reversal vs travel
-position_ripple     Σ_h a_h sin(2πhq/P) + b_h cos(2πhq/P)            peak over q, even in
-                                                                     direction
-friction_ripple     sgn Σ_h (a_h sin(2πhq/P) + b_h cos(2πhq/P))      peak over q, odd in
-                                                                     direction
-load_coulomb        sgn Σ c_n P_n(x), n = 1, 2  or  μ sgn |load|      odd, slow trend in q
-gravity_residual    Σ c_n P_n(x), n = 2, 3                           even, slow trend in q
-inertia             J_a q̈                                            ∝ q̈: loops vs q̇
-thermal_drift       d exp(−(t − t0)/T_th) sgn                        odd, decays in time
-sensor_drift        c (1 − exp(−(t − t0)/T_d))                       even, creeps in time
-velocity_lag        friction law acts on v = q̇ low-passed by T_L     hysteresis vs q̇,
-                                                                     sign of q̈ matters
-==================  ===============================================  ===================
+==================  ===============================================
+name                form
+==================  ===============================================
+asymmetric_coulomb  Δc |sgn|
+stribeck            F_s sgn exp(−(v/v_st)²)
+presliding          F_d (z − sgn), dz/dq = (1 − z sgn(q̇)) / q_c
+position_ripple     Σ_h a_h sin(2πhq/P) + b_h cos(2πhq/P)
+friction_ripple     sgn Σ_h (a_h sin(2πhq/P) + b_h cos(2πhq/P))
+load_coulomb        sgn Σ c_n P_n(x), n = 1, 2  or  μ sgn |load|
+gravity_residual    Σ c_n P_n(x), n = 2, 3
+inertia             J_a q̈
+thermal_drift       d exp(−(t − t0)/T_th) sgn
+sensor_drift        c (1 − exp(−(t − t0)/T_d))
+velocity_lag        friction law acts on v = q̇ low-passed by T_L
+==================  ===============================================
 
 P_n are Legendre polynomials of x, the joint angle scaled to [−1, 1] over the calibrated
 range and held constant outside it (a well-conditioned basis for a smooth dependence on
-the configuration however short the range). Repeatable effects may enter again: ripples
-up to six times (further periods: wave-generator orders, cogging), load_coulomb and
-gravity_residual up to three times (higher orders). Ripples live in
+the configuration however short the range). Instance k of the polynomial effects
+(``load_coulomb#k``, ``gravity_residual#k``) takes the next two orders. Ripples live in
 :mod:`.ripples` (a fundamental period and its harmonics, wave-generator orders
 when the gear ratio is known).
-
-Every effect declares the physical range of its characterising parameters
-(:attr:`~swgcal.core.Term.ranges`, values and sources in
-:mod:`.ranges`): a fit outside it is not accepted as that effect.
 
 Sources: Armstrong-Hélouvry, Dupont & Canudas de Wit 1994 (survey, Automatica 30(7)):
 Coulomb, viscous, Stribeck, presliding, frictional memory, position dependence; Dahl
@@ -56,8 +47,7 @@ from typing import Any
 import numpy as np
 
 from ..terms import Param, Term, linear_recurrence
-from . import ranges as rg
-from .ripples import FrictionRipple, PositionRipple, periodogram_peaks
+from .ripples import FrictionRipple, PositionRipple
 from .signals import FrictionSignals
 
 log = logging.getLogger(__name__)
@@ -78,7 +68,6 @@ __all__ = [
     "register_effect",
     "dahl_state",
     "first_order_lag",
-    "periodogram_peaks",
 ]
 
 
@@ -152,11 +141,7 @@ class AsymmetricCoulomb(Term):
     kind = "asymmetric_coulomb"
     linear = (Param("delta_c", "N m", "half the difference of the Coulomb levels (+ minus −)"),)
     description = "Coulomb level differs between the directions of motion"
-    signature = ("residual offset of the same sign in both directions of motion while "
-                 "moving, vanishing at rest")
     source = "Armstrong-Hélouvry, Dupont & Canudas de Wit 1994"
-    probes = ("direction_offset",)
-    ranges = {"delta_c": rg.OPEN_DIRECTION_NM}
 
     def columns(self, sig: FrictionSignals, theta: np.ndarray) -> np.ndarray:
         return np.abs(sig.sgn)[:, None]
@@ -170,18 +155,7 @@ class Stribeck(Term):
     linear = (Param("f_s", "N m", "static minus Coulomb friction"),)
     nonlinear = (Param("v_st", "rad/s", "Stribeck velocity", log=True),)
     description = "friction above the Coulomb level at low speed (Stribeck curve)"
-    signature = ("residual odd in the direction of motion, a bump at low |q̇| that decays "
-                 "within v_st")
     source = "Armstrong-Hélouvry et al. 1994; Stribeck 1902"
-    probes = ("velocity",)
-    ranges = {"f_s": rg.STRIBECK_EXCESS_NM, "v_st": rg.STRIBECK_VELOCITY_RAD_S}
-
-    def bounds(self, sig: FrictionSignals) -> list[tuple[float, float]]:
-        s = sig.scales
-        return [(max(2.0 * sig.v_s, 1e-3 * s.v_ref), s.v_ref)]
-
-    def starts(self, sig, residual, idx):
-        return [np.array([f * sig.scales.v_ref]) for f in (0.03, 0.1, 0.3)]
 
     def columns(self, sig: FrictionSignals, theta: np.ndarray) -> np.ndarray:
         return (sig.sgn * np.exp(-(sig.v_eff / theta[0]) ** 2))[:, None]
@@ -197,18 +171,7 @@ class Presliding(Term):
     linear = (Param("f_d", "N m", "Coulomb part following the presliding state"),)
     nonlinear = (Param("q_c", "rad", "characteristic presliding displacement", log=True),)
     description = "friction builds up over a small displacement after each reversal"
-    signature = ("after each reversal of motion the residual shows a transient over the "
-                 "travel since the reversal (hysteresis loop in torque vs position near "
-                 "reversals), odd in direction")
     source = "Dahl 1968; Canudas de Wit et al. 1995 (LuGre); Armstrong-Hélouvry et al. 1994"
-    probes = ("travel_since_reversal", "velocity")
-    ranges = {"f_d": rg.PRESLIDING_PART_NM, "q_c": rg.PRESLIDING_DISPLACEMENT_RAD}
-
-    def bounds(self, sig):
-        return [(1e-5 * sig.scales.q_span, 0.1 * sig.scales.q_span)]
-
-    def starts(self, sig, residual, idx):
-        return [np.array([f * sig.scales.q_span]) for f in (1e-4, 1e-3, 1e-2)]
 
     def columns(self, sig, theta):
         states = sig.extra.get("states")
@@ -234,7 +197,6 @@ class _RangePolynomial(Term):
 
     first_order = 1
     odd = False
-    repeatable = 3
 
     def __init__(self, name: str | None = None, q_center: float = 0.0, q_half: float = 1.0,
                  orders: tuple[int, int] | None = None) -> None:
@@ -296,11 +258,7 @@ class LoadCoulomb(_RangePolynomial):
 
     kind = "load_coulomb"
     description = "Coulomb level varying with the transmitted (gravity) load"
-    signature = ("residual odd in direction with a slow trend over q: the two branches "
-                 "(q̇ > 0, q̇ < 0) spread or close along q")
     source = "paper eq. (5) μ F_n; Armstrong-Hélouvry et al. 1994"
-    probes = ("position_odd",)
-    ranges = {"rms": rg.OPEN_CONFIGURATION_NM, "mu": rg.LOAD_FRICTION_PER_LOAD}
     first_order = 1
     odd = True
 
@@ -313,10 +271,6 @@ class LoadCoulomb(_RangePolynomial):
         if sig.load_nm is not None:
             return cls(name, use_load=True)
         return cls(name, q_center=sig.scales.q_center, q_half=0.5 * sig.scales.q_span)
-
-    @property
-    def repeatable(self):  # type: ignore[override]
-        return 1 if self.use_load else 3
 
     @property
     def linear(self):  # type: ignore[override]
@@ -357,11 +311,7 @@ class GravityResidual(_RangePolynomial):
 
     kind = "gravity_residual"
     description = "configuration-dependent torque, same in both directions (model mismatch)"
-    signature = ("residual even in direction that varies slowly with q (both branches "
-                 "shift together)")
     source = "rigid-body compensation of the data (README); paper eq. (5) b3 term"
-    probes = ("position",)
-    ranges = {"rms": rg.OPEN_CONFIGURATION_NM}
     first_order = 2
 
 
@@ -372,11 +322,7 @@ class Inertia(Term):
     kind = "inertia"
     linear = (Param("j_a", "kg m²", "uncompensated inertia"),)
     description = "torque proportional to q̈ (rigid-body model mismatch)"
-    signature = ("residual correlates with q̈; for oscillating motion it draws loops "
-                 "against q̇ whose sense flips with the sign of q̈")
     source = "rigid-body model compensation of the data (README); Armstrong-Hélouvry 1994"
-    probes = ("acceleration",)
-    ranges = {"j_a": rg.OPEN_INERTIA_KGM2}
 
     def columns(self, sig, theta):
         return sig.ddq_rad_s2[:, None]
@@ -386,7 +332,7 @@ class ThermalDrift(Term):
     """Coulomb level relaxing as the joint warms up: τ = d exp(−(t − t0)/T_th) sgn(v)
     (first-order thermal response of the warming joint; friction falls with lubricant
     temperature; docs/PHYSICS.md sec. 5; Armstrong-Hélouvry et al. 1994). The time
-    constant is that of the warm-up, minutes to hours (:mod:`.ranges`): on a
+    constant is that of the warm-up, minutes to hours (:mod:`swgcal.friction.ranges`): on a
     recording shorter than it the drift is nearly a straight line, d and T_th trade off
     and are not pinned down, and the drift stays in the residual (probe ``time_odd``)."""
 
@@ -394,16 +340,7 @@ class ThermalDrift(Term):
     linear = (Param("d", "N m", "excess Coulomb level at t0"),)
     nonlinear = (Param("t_th", "s", "thermal time constant", log=True),)
     description = "friction level decays over time (warm-up)"
-    signature = "residual odd in direction whose magnitude changes monotonically with time"
     source = "docs/PHYSICS.md sec. 5; Armstrong-Hélouvry et al. 1994"
-    probes = ("time_odd",)
-    ranges = {"d": rg.OPEN_THERMAL_NM, "t_th": rg.THERMAL_TIME_S}
-
-    def bounds(self, sig):
-        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
-
-    def starts(self, sig, residual, idx):
-        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
 
     def columns(self, sig, theta):
         return (np.exp(-(sig.t_s - sig.scales.t0) / theta[0]) * sig.sgn)[:, None]
@@ -418,16 +355,7 @@ class SensorDrift(Term):
     linear = (Param("c", "N m", "final offset change"),)
     nonlinear = (Param("t_d", "s", "drift time constant", log=True),)
     description = "offset creeping over time, same in both directions"
-    signature = "residual even in direction that creeps monotonically with time"
     source = "docs/PHYSICS.md sec. 5 (gauge temperature drift)"
-    probes = ("time",)
-    ranges = {"c": rg.OPEN_SENSOR_NM, "t_d": rg.SENSOR_DRIFT_TIME_S}
-
-    def bounds(self, sig):
-        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
-
-    def starts(self, sig, residual, idx):
-        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
 
     def columns(self, sig, theta):
         return (1.0 - np.exp(-(sig.t_s - sig.scales.t0) / theta[0]))[:, None]
@@ -442,19 +370,7 @@ class VelocityLag(Term):
     nonlinear = (Param("t_lag", "s", "lag time constant", log=True),)
     is_transform = True
     description = "friction follows the velocity with a lag (frictional memory)"
-    signature = ("hysteresis of the residual against q̇: higher friction when "
-                 "decelerating than when accelerating at the same speed")
     source = "Hess & Soom 1990; Armstrong-Hélouvry et al. 1994 (frictional memory)"
-    probes = ("velocity_hysteresis",)
-    ranges = {"t_lag": rg.VELOCITY_LAG_S}
-
-    def bounds(self, sig):
-        s = sig.scales
-        return [(0.5 * s.dt_med, max(min(0.05 * s.t_span, 5.0), 2.0 * s.dt_med))]
-
-    def starts(self, sig, residual, idx):
-        lo, hi = self.bounds(sig)[0]
-        return [np.array([np.clip(f * sig.scales.dt_med, lo, hi)]) for f in (2, 10, 50)]
 
     def columns(self, sig, theta):  # pragma: no cover - transform only
         return np.zeros((sig.n, 0))
@@ -477,11 +393,12 @@ FRICTION_LIBRARY: dict[str, type[Term]] = {
 def register_effect(cls: type[Term]) -> type[Term]:
     """Add an effect class to :data:`FRICTION_LIBRARY` (usable as a class decorator).
 
-    The one step that makes a new friction effect known to both the simulation (a
-    ``friction_effects`` entry of its kind, :func:`~swgsim.friction.parse_effects`) and the
-    calibration (a candidate of every friction problem built afterwards). The class
-    defines the form (:meth:`~swgsim.terms.Term.columns` or ``transform``) and its
-    parameters; see docs/ARCHITECTURE.md, "Calibration loop".
+    The step that makes a new friction effect known to the simulation (a
+    ``friction_effects`` entry of its kind, :func:`~swgsim.friction.parse_effects`). The
+    class defines the form (:meth:`~swgsim.terms.Term.columns` or ``transform``) and its
+    parameters. To have it fitted as well, give it its fit metadata and register it with
+    :func:`swgcal.friction.library.register_effect` instead, which calls this function;
+    see docs/ARCHITECTURE.md, "To add a calibration effect: touch these files".
 
     Parameters
     ----------

@@ -9,9 +9,6 @@ the order k = 2π / (period · N). Harmonics of one fundamental belong to one ef
 :class:`RippleTerm` carries one fundamental period and a set of harmonic numbers h, each
 with its own amplitude and phase, τ = Σ_h b(v) (a_h sin(2π h q / P) + c_h cos(2π h q /
 P)), b = 1 (``position_ripple``) or sgn(v) (``friction_ripple``).
-
-The periods come from :func:`periodogram_peaks`, a fast Schuster periodogram on the
-irregular coordinate.
 """
 
 from __future__ import annotations
@@ -23,14 +20,12 @@ from typing import Any
 import numpy as np
 
 from ..terms import Param, Term
-from .ranges import RIPPLE_AMPLITUDE_NM, ripple_order_range, ripple_period_range
 from .signals import FrictionSignals
 
 __all__ = [
     "RippleTerm",
     "PositionRipple",
     "FrictionRipple",
-    "periodogram_peaks",
     "wave_generator_order",
 ]
 
@@ -64,49 +59,6 @@ def wave_generator_order(period_rad: float, gear_ratio: float) -> float:
     return 2.0 * math.pi / (float(period_rad) * float(gear_ratio))
 
 
-def periodogram_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float,
-                      n_peaks: int = 3, oversample: float = 5.0) -> list[tuple[float, float]]:
-    """Strongest periods of ``r`` over the irregular coordinate ``x``.
-
-    Fast Schuster periodogram: ``r`` is accumulated onto a uniform grid of spacing
-    p_min / 8 (nearest-cell extirpolation, the idea of Press & Rybicki 1989, order 0)
-    and Fourier transformed with ``oversample``-fold zero padding. The power is
-    normalised so that a pure sinusoid sampled evenly gives 1 (≈ the fraction of the
-    variance a sinusoid at that period explains). Local maxima, strongest first.
-
-    Parameters
-    ----------
-    x, r : ndarray, shape (n,)
-        Coordinate (q [rad] or t [s]) and signal.
-    p_min, p_max : float
-        Period range [units of x], 0 < p_min < p_max.
-    n_peaks : int, default 3
-    oversample : float, default 5
-
-    Returns
-    -------
-    list of (period, normalised power)
-    """
-    x = np.asarray(x, float)
-    r = np.asarray(r, float)
-    span = float(np.ptp(x)) if x.size else 0.0
-    if span <= 0 or not 0 < p_min < p_max or not np.any(r):
-        return []
-    rc = r - r.mean()
-    h = p_min / 8.0
-    cells = np.floor((x - x.min()) / h).astype(np.int64)
-    m = int(cells.max()) + 1
-    s = np.bincount(cells, weights=rc, minlength=m)
-    nfft = 1 << int(np.ceil(np.log2(max(oversample * m, 16))))
-    f = np.arange(nfft // 2 + 1) / (nfft * h)
-    pw = np.abs(np.fft.rfft(s, nfft)) ** 2 * 2.0 / (x.size * float(np.sum(rc * rc)))
-    band = (f >= 1.0 / p_max) & (f <= 1.0 / p_min)
-    pb = np.where(band, pw, 0.0)
-    loc = np.flatnonzero((pb[1:-1] > pb[:-2]) & (pb[1:-1] >= pb[2:])) + 1
-    loc = loc[np.argsort(pb[loc])[::-1]][:n_peaks]
-    return [(float(1.0 / f[i]), float(pb[i])) for i in loc if pb[i] > 0]
-
-
 class RippleTerm(Term):
     """Sinusoids over q at harmonics h of one fundamental period P (found from the
     residual spectrum), the same in both directions of motion or (``odd``) flipping with
@@ -120,7 +72,7 @@ class RippleTerm(Term):
         parameters are ``a_sin``, ``a_cos``; otherwise ``a_sin_h``, ``a_cos_h`` per h.
     gear_ratio : float, optional
         Reduction ratio N: the fundamental is then also reported as the wave-generator
-        order ``order`` = 2π / (P N), and the physical range applies to it.
+        order ``order`` = 2π / (P N).
 
     Raises
     ------
@@ -130,7 +82,6 @@ class RippleTerm(Term):
 
     nonlinear = (Param("period", "rad", "period over the joint angle (fundamental)",
                        log=True),)
-    repeatable = 6
     odd = False
 
     def __init__(self, name: str | None = None, harmonics: Sequence[int] = (1,),
@@ -143,9 +94,6 @@ class RippleTerm(Term):
             raise ValueError(f"gear_ratio must be > 1 or None, got {gear_ratio}")
         self.harmonics = h
         self.gear_ratio = None if gear_ratio is None else float(gear_ratio)
-        rng = ({"order": ripple_order_range(self.gear_ratio)} if self.gear_ratio
-               else {"period": ripple_period_range()})
-        self.ranges = {"amplitude": RIPPLE_AMPLITUDE_NM, **rng}
 
     @classmethod
     def for_signals(cls, sig: FrictionSignals, name: str | None = None) -> RippleTerm:
@@ -174,19 +122,6 @@ class RippleTerm(Term):
         if self.gear_ratio is not None:
             out["gear_ratio"] = self.gear_ratio
         return out
-
-    def bounds(self, sig):
-        s = sig.scales
-        lo = max(4.0 * s.dq_med, s.q_span / 2000.0)
-        return [(lo * self.harmonics[-1], s.q_span / 2.0 * self.harmonics[0])]
-
-    def starts(self, sig, residual, idx):
-        lo, hi = self.bounds(sig)[0]
-        h0 = self.harmonics[0]
-        r = residual[idx] * (np.sign(sig.v_eff[idx]) if self.odd else 1.0)
-        peaks = periodogram_peaks(sig.q_rad[idx], r, lo / h0, hi / h0, n_peaks=3)
-        out = [np.array([p * h0]) for p, _ in peaks]
-        return out or [np.array([np.sqrt(lo * hi)])]
 
     def _base(self, sig):
         return sig.sgn if self.odd else np.ones(sig.n)
@@ -251,9 +186,7 @@ class PositionRipple(RippleTerm):
 
     kind = "position_ripple"
     description = "ripple periodic in q, even in the direction of motion"
-    signature = "spectral peak of the residual over q, same sign in both directions"
     source = "Tuttle & Seering 1996; docs/PHYSICS.md sec. 1, 5"
-    probes = ("position_periodic",)
 
 
 class FrictionRipple(RippleTerm):
@@ -262,7 +195,5 @@ class FrictionRipple(RippleTerm):
 
     kind = "friction_ripple"
     description = "friction level periodic in q, odd in the direction of motion"
-    signature = "spectral peak over q of the residual times sgn(q̇) (flips with direction)"
     source = "Tuttle & Seering 1996"
-    probes = ("position_periodic_odd",)
     odd = True

@@ -1,0 +1,310 @@
+"""The calibration's friction library: each simulator effect with what its fit needs.
+
+The forms are the simulator's (:mod:`swgsim.friction.effects`, :mod:`swgsim.friction.
+ripples`, the paper law of :mod:`swgsim.friction.signals`); each class here subclasses
+one of them and :class:`~swgcal.terms.FitTerm`, adding its residual signature, the probes
+whose structure it should explain, the physical ranges of its characterising parameters
+(values and sources in :mod:`.ranges`: a fit outside is not accepted as that effect),
+how often a model may hold it, and the bounds and starts of its nonlinear parameters.
+
+==================  ===================================================================
+name                residual signature
+==================  ===================================================================
+asymmetric_coulomb  same offset in both directions, 0 at rest
+stribeck            odd bump at low |v|
+presliding          transient after each reversal vs travel
+position_ripple     peak over q, even in direction
+friction_ripple     peak over q, odd in direction
+load_coulomb        odd, slow trend in q
+gravity_residual    even, slow trend in q
+inertia             ∝ q̈: loops vs q̇
+thermal_drift       odd, decays in time
+sensor_drift        even, creeps in time
+velocity_lag        hysteresis vs q̇, sign of q̈ matters
+==================  ===================================================================
+
+Repeatable effects may enter a model again: ripples up to six times (further periods:
+wave-generator orders, cogging), load_coulomb and gravity_residual up to three times
+(higher orders). A new effect is one class (its form and its fit) registered with
+:func:`register_effect`, which makes it known to the simulator as well
+(docs/ARCHITECTURE.md, "To add a calibration effect: touch these files").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from swgsim.friction import effects as fx
+from swgsim.friction import ripples as rp
+from swgsim.friction import signals as fsig
+from swgsim.friction.signals import FrictionSignals
+from swgsim.terms import Term
+
+from ..periodogram import periodogram_peaks
+from ..terms import FitTerm
+from .ranges import (
+    LOAD_FRICTION_PER_LOAD,
+    OPEN_CONFIGURATION_NM,
+    OPEN_DIRECTION_NM,
+    OPEN_INERTIA_KGM2,
+    OPEN_SENSOR_NM,
+    OPEN_THERMAL_NM,
+    PRESLIDING_DISPLACEMENT_RAD,
+    PRESLIDING_PART_NM,
+    RIPPLE_AMPLITUDE_NM,
+    SENSOR_DRIFT_TIME_S,
+    STRIBECK_EXCESS_NM,
+    STRIBECK_VELOCITY_RAD_S,
+    THERMAL_TIME_S,
+    VELOCITY_LAG_S,
+    ripple_order_range,
+    ripple_period_range,
+)
+
+__all__ = [
+    "FRICTION_LIBRARY",
+    "PaperLaw",
+    "AsymmetricCoulomb",
+    "Stribeck",
+    "Presliding",
+    "PositionRipple",
+    "FrictionRipple",
+    "LoadCoulomb",
+    "GravityResidual",
+    "Inertia",
+    "ThermalDrift",
+    "SensorDrift",
+    "VelocityLag",
+    "make_effect",
+    "register_effect",
+]
+
+
+class PaperLaw(fsig.PaperLaw, FitTerm):
+    """The paper-law baseline (:class:`swgsim.friction.PaperLaw`), linear: nothing to add."""
+
+
+class AsymmetricCoulomb(fx.AsymmetricCoulomb, FitTerm):
+    __doc__ = fx.AsymmetricCoulomb.__doc__
+    signature = ("residual offset of the same sign in both directions of motion while "
+                 "moving, vanishing at rest")
+    probes = ("direction_offset",)
+    ranges = {"delta_c": OPEN_DIRECTION_NM}
+
+
+class Stribeck(fx.Stribeck, FitTerm):
+    __doc__ = fx.Stribeck.__doc__
+    signature = ("residual odd in the direction of motion, a bump at low |q̇| that decays "
+                 "within v_st")
+    probes = ("velocity",)
+    ranges = {"f_s": STRIBECK_EXCESS_NM, "v_st": STRIBECK_VELOCITY_RAD_S}
+
+    def bounds(self, sig: FrictionSignals) -> list[tuple[float, float]]:
+        s = sig.scales
+        return [(max(2.0 * sig.v_s, 1e-3 * s.v_ref), s.v_ref)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.v_ref]) for f in (0.03, 0.1, 0.3)]
+
+
+class Presliding(fx.Presliding, FitTerm):
+    __doc__ = fx.Presliding.__doc__
+    signature = ("after each reversal of motion the residual shows a transient over the "
+                 "travel since the reversal (hysteresis loop in torque vs position near "
+                 "reversals), odd in direction")
+    probes = ("travel_since_reversal", "velocity")
+    ranges = {"f_d": PRESLIDING_PART_NM, "q_c": PRESLIDING_DISPLACEMENT_RAD}
+
+    def bounds(self, sig):
+        return [(1e-5 * sig.scales.q_span, 0.1 * sig.scales.q_span)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.q_span]) for f in (1e-4, 1e-3, 1e-2)]
+
+
+class _RippleFit:
+    """The fit of a ripple (:class:`swgsim.friction.ripples.RippleTerm`): period bounds
+    from the sampling of q, starts from the residual's periodogram, the physical range on
+    the wave-generator order when the gear ratio is known (on the period otherwise)."""
+
+    repeatable = 6
+    harmonics: tuple[int, ...]
+    gear_ratio: float | None
+    odd: bool
+
+    def __init__(self, name: str | None = None, harmonics: Sequence[int] = (1,),
+                 gear_ratio: float | None = None) -> None:
+        super().__init__(name, harmonics=harmonics, gear_ratio=gear_ratio)  # type: ignore[call-arg]
+        rng = ({"order": ripple_order_range(self.gear_ratio)} if self.gear_ratio
+               else {"period": ripple_period_range()})
+        self.ranges = {"amplitude": RIPPLE_AMPLITUDE_NM, **rng}
+
+    def bounds(self, sig):
+        s = sig.scales
+        lo = max(4.0 * s.dq_med, s.q_span / 2000.0)
+        return [(lo * self.harmonics[-1], s.q_span / 2.0 * self.harmonics[0])]
+
+    def starts(self, sig, residual, idx):
+        lo, hi = self.bounds(sig)[0]
+        h0 = self.harmonics[0]
+        r = residual[idx] * (np.sign(sig.v_eff[idx]) if self.odd else 1.0)
+        peaks = periodogram_peaks(sig.q_rad[idx], r, lo / h0, hi / h0, n_peaks=3)
+        out = [np.array([p * h0]) for p, _ in peaks]
+        return out or [np.array([np.sqrt(lo * hi)])]
+
+
+class PositionRipple(_RippleFit, rp.PositionRipple, FitTerm):
+    __doc__ = rp.PositionRipple.__doc__
+    signature = "spectral peak of the residual over q, same sign in both directions"
+    probes = ("position_periodic",)
+
+
+class FrictionRipple(_RippleFit, rp.FrictionRipple, FitTerm):
+    __doc__ = rp.FrictionRipple.__doc__
+    signature = "spectral peak over q of the residual times sgn(q̇) (flips with direction)"
+    probes = ("position_periodic_odd",)
+
+
+class LoadCoulomb(fx.LoadCoulomb, FitTerm):
+    __doc__ = fx.LoadCoulomb.__doc__
+    signature = ("residual odd in direction with a slow trend over q: the two branches "
+                 "(q̇ > 0, q̇ < 0) spread or close along q")
+    probes = ("position_odd",)
+    ranges = {"rms": OPEN_CONFIGURATION_NM, "mu": LOAD_FRICTION_PER_LOAD}
+
+    @property
+    def repeatable(self):  # type: ignore[override]
+        return 1 if self.use_load else 3
+
+
+class GravityResidual(fx.GravityResidual, FitTerm):
+    __doc__ = fx.GravityResidual.__doc__
+    signature = ("residual even in direction that varies slowly with q (both branches "
+                 "shift together)")
+    probes = ("position",)
+    ranges = {"rms": OPEN_CONFIGURATION_NM}
+    repeatable = 3
+
+
+class Inertia(fx.Inertia, FitTerm):
+    __doc__ = fx.Inertia.__doc__
+    signature = ("residual correlates with q̈; for oscillating motion it draws loops "
+                 "against q̇ whose sense flips with the sign of q̈")
+    probes = ("acceleration",)
+    ranges = {"j_a": OPEN_INERTIA_KGM2}
+
+
+class ThermalDrift(fx.ThermalDrift, FitTerm):
+    __doc__ = fx.ThermalDrift.__doc__
+    signature = "residual odd in direction whose magnitude changes monotonically with time"
+    probes = ("time_odd",)
+    ranges = {"d": OPEN_THERMAL_NM, "t_th": THERMAL_TIME_S}
+
+    def bounds(self, sig):
+        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
+
+
+class SensorDrift(fx.SensorDrift, FitTerm):
+    __doc__ = fx.SensorDrift.__doc__
+    signature = "residual even in direction that creeps monotonically with time"
+    probes = ("time",)
+    ranges = {"c": OPEN_SENSOR_NM, "t_d": SENSOR_DRIFT_TIME_S}
+
+    def bounds(self, sig):
+        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
+
+
+class VelocityLag(fx.VelocityLag, FitTerm):
+    __doc__ = fx.VelocityLag.__doc__
+    signature = ("hysteresis of the residual against q̇: higher friction when "
+                 "decelerating than when accelerating at the same speed")
+    probes = ("velocity_hysteresis",)
+    ranges = {"t_lag": VELOCITY_LAG_S}
+
+    def bounds(self, sig):
+        s = sig.scales
+        return [(0.5 * s.dt_med, max(min(0.05 * s.t_span, 5.0), 2.0 * s.dt_med))]
+
+    def starts(self, sig, residual, idx):
+        lo, hi = self.bounds(sig)[0]
+        return [np.array([np.clip(f * sig.scales.dt_med, lo, hi)]) for f in (2, 10, 50)]
+
+
+FRICTION_LIBRARY: dict[str, type[FitTerm]] = {
+    cls.kind: cls for cls in (
+        AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
+        LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
+}
+"""Library key -> fitted effect class: the candidates of every friction calibration
+(the simulator's forms, :data:`swgsim.friction.FRICTION_LIBRARY`, with their fit)."""
+
+
+def register_effect(cls: type[FitTerm]) -> type[FitTerm]:
+    """Add a fitted friction effect to the simulator and the calibration (one call;
+    usable as a class decorator).
+
+    The class is the effect's form (a :class:`swgsim.terms.Term`: parameters,
+    ``columns`` or ``transform``) and its fit (a :class:`~swgcal.terms.FitTerm`:
+    ``probes``, ``ranges`` with sources, ``bounds``/``starts`` of nonlinear parameters,
+    ``signature``). Its form goes into :data:`swgsim.friction.FRICTION_LIBRARY`
+    (:func:`swgsim.friction.effects.register_effect`; a ``friction_effects`` entry of
+    its kind) unless that already holds a form the class subclasses (physics registered
+    on its own, fit added here); the class becomes a candidate of every friction
+    calibration built afterwards.
+
+    Parameters
+    ----------
+    cls : subclass of FitTerm
+        With a ``kind`` not yet in :data:`FRICTION_LIBRARY`.
+
+    Returns
+    -------
+    The class itself.
+
+    Raises
+    ------
+    TypeError
+        Not a subclass of both :class:`swgsim.terms.Term` and :class:`FitTerm`.
+    ValueError
+        Its ``kind`` is already in the calibration's library, or the simulator's holds
+        another form of that kind.
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Term) and issubclass(cls, FitTerm)):
+        raise TypeError("a fitted friction effect must subclass swgsim.terms.Term (its form) "
+                        f"and swgcal.terms.FitTerm (its fit), got {cls!r}")
+    if cls.kind in FRICTION_LIBRARY:
+        raise ValueError(f"friction effect {cls.kind!r} is already registered "
+                         f"({FRICTION_LIBRARY[cls.kind].__qualname__})")
+    form = fx.FRICTION_LIBRARY.get(cls.kind)
+    if form is None:
+        fx.register_effect(cls)
+    elif not issubclass(cls, form):
+        raise ValueError(f"friction effect {cls.kind!r}: the simulator holds the form "
+                         f"{form.__qualname__}, which {cls.__qualname__} does not subclass")
+    FRICTION_LIBRARY[cls.kind] = cls
+    return cls
+
+
+def make_effect(kind: str, name: str | None = None, **kwargs: Any) -> FitTerm:
+    """Instantiate a fitted library effect by key.
+
+    Raises
+    ------
+    KeyError
+        Unknown key; the message lists the library.
+    """
+    try:
+        cls = FRICTION_LIBRARY[kind]
+    except KeyError:
+        raise KeyError(f"unknown friction effect {kind!r}; the calibration's library has "
+                       f"{sorted(FRICTION_LIBRARY)}") from None
+    return cls(name, **kwargs)
