@@ -82,8 +82,9 @@ class ObservabilityApp:
 
 
 @dataclass
-class DataRef:
-    """A data set on disk (``conf/data/<name>.yaml``)."""
+class StoredDataset:
+    """A data set already on disk, to read (``conf/stored/<name>.yaml``); the group
+    ``dataset`` is the config of a data set to simulate."""
 
     name: str = "paper"
     path: str = "${paths.data_dir}/paper"
@@ -105,7 +106,7 @@ class TrainApp:
     task: str = "study"
     seed: int = 0
     n_jobs: int = 1
-    data: DataRef = field(default_factory=DataRef)
+    stored: StoredDataset = field(default_factory=StoredDataset)
     features: FeatureSettings = field(default_factory=FeatureSettings)
     model: Any = MISSING
     protocol: ProtocolConfig = field(default_factory=ProtocolConfig)
@@ -118,6 +119,8 @@ class TrainApp:
 #: Keys and groups renamed, per app: old name -> the new one and why. An override that
 #: uses an old name is refused naming the new one (:func:`check_renamed`).
 RENAMED: dict[str, dict[str, str]] = {
+    "train": {"data": "stored (a data set already on disk, to read; the group 'dataset' "
+                       "is the config of a data set to simulate)"},
     "paper": {"protocols": "run_on (the data sets to run, keys of datasets; 'protocol' "
                            "names only an evaluation protocol, a data set's way of "
                            "recording is its recording)"},

@@ -4,7 +4,7 @@ Examples
 --------
 ::
 
-    swgsim-train model=rf features=selection3 protocol=ood_disturbed data=tiny
+    swgsim-train model=rf features=selection3 protocol=ood_disturbed stored=tiny
     swgsim-train -m model=rf,knn features=selection1,selection3 protocol=ood_disturbed
     swgsim-train -m experiment=table_vii hydra/launcher=joblib
     swgsim-train experiment=paper n_jobs=2

@@ -88,7 +88,7 @@ def test_transfer_end_to_end(tmp_path):
 
     data = write_toy_dataset(tmp_path / "toy", n_variants=4, n_time=64)
     overrides = [
-        "experiment=transfer", "transfer.run_on=[]", f"data.path={data}", "data.name=toy",
+        "experiment=transfer", "transfer.run_on=[]", f"stored.path={data}", "stored.name=toy",
         f"paths.report_dir={tmp_path}/reports",
         "features.order_step=2.0",  # the toy's 16 ms windows hold half a revolution
         f"logger.tracking_uri=sqlite:///{tmp_path}/mlflow.db",

@@ -122,7 +122,7 @@ def test_protocol_config_matches_paper_protocol(name):
                  "n_splits": 4, "test_gears": None, **splits}
 
 
-@pytest.mark.parametrize("group", ["data", "features", "logger", "paths"])
+@pytest.mark.parametrize("group", ["stored", "features", "logger", "paths"])
 def test_every_option_composes_and_resolves(group):
     for opt in _options(group):
         cfg = compose_train([f"{group}={opt}"])

@@ -17,7 +17,7 @@ def compose_train(overrides=()):
 
 
 def _shrunk(tiny_dataset, tracking_uri, tmp_path, *overrides):
-    return compose_train([f"data.path={tiny_dataset}", f"logger.tracking_uri={tracking_uri}",
+    return compose_train([f"stored.path={tiny_dataset}", f"logger.tracking_uri={tracking_uri}",
                           f"paths.root_dir={tmp_path}", *overrides])
 
 
@@ -63,7 +63,7 @@ def test_task_dispatch(monkeypatch, tmp_path):
 def test_multirun_cli(tiny_dataset, tracking_uri, tmp_path):
     cmd = [sys.executable, "-m", "swgcli.train", "-m", "model=rf,knn",
            "features=selection1,selection3", "protocol=ood_disturbed",
-           f"data.path={tiny_dataset}", f"logger.tracking_uri={tracking_uri}",
+           f"stored.path={tiny_dataset}", f"logger.tracking_uri={tracking_uri}",
            f"paths.root_dir={tmp_path}", f"hydra.sweep.dir={tmp_path / 'multirun'}"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]

@@ -70,15 +70,22 @@ def test_main_job_refuses_bad_input_before_any_work(tmp_path, override, match):
     assert not (tmp_path / "data").exists()
 
 
-def test_old_key_protocols_is_refused_naming_the_new_one(tmp_path):
+@pytest.mark.parametrize("app, override, new", [
+    ("swgsim-paper", "protocols=[paper]", "run_on"),
+    ("swgsim-paper", "~protocols", "run_on"),
+    ("swgsim-train", "data=tiny", "stored"),
+    ("swgsim-train", "data.path=/x", "stored"),
+])
+def test_old_names_are_refused_naming_the_new_one(tmp_path, app, override, new):
     import subprocess
     import sys
     from pathlib import Path
 
-    exe = Path(sys.executable).parent / "swgsim-paper"
-    r = subprocess.run([str(exe), "protocols=[paper]", f"data_root={tmp_path}/d"],
-                       capture_output=True, text=True, timeout=120)
+    exe = Path(sys.executable).parent / app
+    r = subprocess.run([str(exe), override, f"hydra.run.dir={tmp_path}/run"],
+                       capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert r.returncode == 2
+    old = override.lstrip("~").split("=")[0].split(".")[0]
     assert r.stderr.strip().splitlines()[-1].startswith(
-        "swgsim-paper: error: protocols: renamed run_on")
-    assert not (tmp_path / "d").exists()
+        f"{app}: error: {old}: renamed {new}")
+    assert not (tmp_path / "run").exists() and not (tmp_path / "data").exists()

@@ -156,7 +156,7 @@ def test_C_out_of_range_and_unphysical_data_sets_are_refused(tmp_path, edit, key
 def test_C_feature_orders_the_data_cannot_carry_are_refused(small, tmp_path, override, key):
     from learn.tasks.train import run_train
 
-    cfg = compose_app("train", [f"data.path={small}", "~logger", "features=selection3",
+    cfg = compose_app("train", [f"stored.path={small}", "~logger", "features=selection3",
                                 override, f"paths.report_dir={tmp_path}"])
     msg = message(lambda: run_train(cfg))
     assert key in msg and str(small) in msg
@@ -180,7 +180,7 @@ def test_D1_manifest_with_an_entry_removed_is_refused_naming_it(copy_of, tmp_pat
     (folder / dsio.MANIFEST).write_text(json.dumps(m))
     msg = message(lambda: dsio.load(folder))
     assert "not in manifest.json" in msg and ".nc" in msg
-    cfg = compose_app("train", [f"data.path={folder}", "~logger",
+    cfg = compose_app("train", [f"stored.path={folder}", "~logger",
                                 f"paths.report_dir={tmp_path}"])
     assert "not in manifest.json" in message(lambda: run_train(cfg))  # no partial training
 
@@ -293,7 +293,7 @@ def _app(name, *args, env=None, cwd=None):
 
 @pytest.mark.parametrize("app, args, words", [
     ("swgsim-generate", ["dataset=tiny", "+dataset.chain.windows_s=1"], "windows_s"),
-    ("swgsim-train", ["data.path=/nowhere/data", "~logger"], "/nowhere/data"),
+    ("swgsim-train", ["stored.path=/nowhere/data", "~logger"], "/nowhere/data"),
     ("swgsim-calibrate", ["measured=/nowhere/x.csv", "out_dir=out"], "/nowhere/x.csv"),
 ])
 def test_F_apps_end_bad_input_in_one_line_with_exit_code_2(tmp_path, app, args, words):

@@ -188,7 +188,8 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
     from swgcli import compose_app
     from swgsim.data import load
 
-    cfg = compose_app("train", [f"data.path={tiny_dataset}", f"logger.tracking_uri={tracking_uri}",
+    cfg = compose_app("train", [f"stored.path={tiny_dataset}",
+                                f"logger.tracking_uri={tracking_uri}",
                                 f"paths.root_dir={tmp_path}", "model=rf", "features=selection1",
                                 "protocol=ood_disturbed", "model.estimator.n_estimators=20",
                                 "logger.log_models=true"])
@@ -253,7 +254,7 @@ def test_hydra_sweep_jobs_share_one_parent(tiny_dataset, tracking_uri, tmp_path)
 
     sweep = tmp_path / "multirun"
     cmd = [sys.executable, "-m", "swgcli.train", "-m", "model=nb,knn", "features=selection1",
-           "protocol=ood_disturbed", f"data.path={tiny_dataset}",
+           "protocol=ood_disturbed", f"stored.path={tiny_dataset}",
            f"logger.tracking_uri={tracking_uri}", "logger.experiment=test-sweep",
            f"paths.root_dir={tmp_path}", f"hydra.sweep.dir={sweep}"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)

@@ -43,22 +43,22 @@ def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
         ``choice``, ``value``, ``reason`` (all str), in the order of the pipeline.
     """
     fs = features or FeatureSettings()
-    rows = [*_protocol_rows(dataset.acquisition), *_window_rows(dataset),
+    rows = [*_recording_rows(dataset.acquisition), *_window_rows(dataset),
             *_feature_rows(options, fs), *_fault_rows(dataset.variants),
             *_model_rows(dataset, seed)]
     return [{"choice": c, "value": val, "reason": r} for c, val, r in rows]
 
 
-def _protocol_rows(acq: Acquisition) -> list[tuple[str, str, str]]:
-    """Window start and amplifier: the data-set protocol."""
+def _recording_rows(acq: Acquisition) -> list[tuple[str, str, str]]:
+    """Window start and amplifier: the data set's recording."""
     return [
-        ("Window start (protocol)",
+        ("Window start (recording)",
          "fixed: every simulation starts at input angle "
          f"{acq.wg_start_deg:g}°" if acq.start == "fixed"
          else "random: input angle uniform over [0, 2π N), i.e. random WG and output angle",
          "Sec. III-B: the healthy class is 'sixty times the same SWG model'; a bench cuts "
          "windows at arbitrary times"),
-        ("Amplifier (protocol)", _amp(acq),
+        ("Amplifier (recording)", _amp(acq),
          "the paper's data are simulated; the bench preset cites its data sheet "
          "(swgsim/acquisition.py)"),
     ]

@@ -163,18 +163,18 @@ def scorecard(cells: pd.DataFrame, column: str = "ours") -> pd.DataFrame:
 
 
 def side_by_side(results: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
-    """Every cell of Tables VII-X: the paper's score beside ours under each protocol.
+    """Every cell of Tables VII-X: the paper's score beside ours under each recording.
 
     Parameters
     ----------
     results : mapping of str to pandas.DataFrame
-        Protocol name (e.g. "paper", "bench") -> that protocol's ``results.csv``.
+        Data-set name (e.g. "paper", "bench") -> that study's ``results.csv``.
 
     Returns
     -------
     pandas.DataFrame
         Columns :data:`CELL_COLUMNS`, ``paper`` [%] (NaN where the paper gives none, e.g.
-        Table VIII) and one column ``ours_<protocol>`` [%] per protocol; rows in the
+        Table VIII) and one column ``ours_<name>`` [%] per data set; rows in the
         paper's order (table, selection, split, model).
     """
     frames = [our_cells(r).rename(columns={"ours": f"ours_{name}"})

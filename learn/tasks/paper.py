@@ -106,7 +106,7 @@ def run_paper_study_task(cfg) -> dict:
     app = typed_app(cfg)
     logger = app.logger
     out = run_paper_study(
-        app.data.path, Path(app.paths.report_dir) / "paper", app.study,
+        app.stored.path, Path(app.paths.report_dir) / "paper", app.study,
         tracking_uri=None if logger is None else logger.tracking_uri,
         track=logger is not None, log_models=logger is not None and logger.log_models,
         n_jobs=app.n_jobs, random_state=app.seed, features=app.features)

@@ -80,7 +80,7 @@ def run_study_job(cfg) -> dict:
     from swgsim.data import load
 
     app = typed_app(cfg)
-    ds = load(app.data.path)
+    ds = load(app.stored.path)
     settings, protocol = app.features, app.protocol
     feats = extract_features(ds, settings.selection, **settings.kwargs())
     y = feats.meta["fault"].to_numpy()
@@ -127,7 +127,7 @@ def _log(app, result: ProtocolResult, protocol: str, estimator, feats, last) -> 
     return log_job(result, experiment=lcfg.experiment, run_name=lcfg.run_name,
                    tracking_uri=lcfg.tracking_uri, confusion_plot=lcfg.confusion_plot,
                    params=resolved, config=resolved, tags={"task": "study", "protocol": protocol},
-                   dataset=str(app.data.path), model=model, model_tags={"split": last.label},
+                   dataset=str(app.stored.path), model=model, model_tags={"split": last.label},
                    X_sample=feats.X[last.test[:5]], group=hydra_sweep())
 
 

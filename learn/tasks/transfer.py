@@ -41,7 +41,7 @@ def _data_sets(app, tc: TransferConfig) -> tuple[list[tuple[str, str]], float]:
     from swgsim.plan import plan
 
     if not tc.run_on:
-        return [(str(app.data.name or Path(app.data.path).name), str(app.data.path))], 0.0
+        return [(str(app.stored.name or Path(app.stored.path).name), str(app.stored.path))], 0.0
     plans = {}
     for name in tc.run_on:  # every data-set config is checked once, before any work
         try:
@@ -158,7 +158,7 @@ def run_transfer(cfg) -> dict:
     """Task ``transfer``: the whole comparison over the data sets, report and MLflow.
 
     Reads ``transfer`` (:class:`learn.studies.transfer.TransferConfig`,
-    ``conf/experiment/transfer.yaml``), ``data`` (when ``transfer.run_on`` is empty),
+    ``conf/experiment/transfer.yaml``), ``stored`` (when ``transfer.run_on`` is empty),
     ``features`` (orders, floor), ``logger`` (:class:`learn.tracking.config.LoggerConfig`;
     None: no tracking) and ``seed`` (CV folds).
 
