@@ -29,6 +29,8 @@ from .chain import ChainSettings
 from .disturbance import DisturbanceSpec
 from .dynamics import J_OUT_BENCH_KGM2, KeHarmonic
 from .flexspline import Mesh
+from .friction.simulation import FrictionEffectsConfig
+from .measurement import SensorEffectConfig
 from .sensors import SensorsConfig, TolerancesConfig
 
 MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
@@ -129,10 +131,10 @@ class DatasetConfig:
         See their classes.
     variants : dict of str to VariantSpec
         Class name -> its variants (paper Table V).
-    sensor_effects : list
-        Measurement-chain effects (swgsim.measurement), applied before eq. (10).
-    friction_effects : mapping or None
-        Extra friction found by a calibration (swgsim.friction.simulation).
+    sensor_effects : list of SensorEffectConfig
+        Measurement-chain effects (:mod:`swgsim.measurement`), applied before eq. (10).
+    friction_effects : FrictionEffectsConfig or None
+        Extra friction found by a calibration (:mod:`swgsim.friction.simulation`).
     """
 
     name: str = "paper"
@@ -147,8 +149,8 @@ class DatasetConfig:
     load: LoadConfig = field(default_factory=LoadConfig)
     disturbance: DisturbanceSpec = field(default_factory=DisturbanceSpec)
     acquisition: Acquisition = field(default_factory=Acquisition)
-    sensor_effects: list[Any] = field(default_factory=list)
-    friction_effects: Any | None = None
+    sensor_effects: list[SensorEffectConfig] = field(default_factory=list)
+    friction_effects: FrictionEffectsConfig | None = None
 
 
 def paper_config() -> dict:

@@ -61,7 +61,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -164,14 +164,44 @@ def per_channel(value: Any, neutral: float, what: str) -> np.ndarray:
     return arr.copy()
 
 
-def parse_sensor_effects(effects: Sequence[Mapping[str, Any]] | None) -> list[SensorEffect]:
+@dataclass
+class SensorEffectConfig:
+    """One entry of the data-set option ``sensor_effects`` (what a strain calibration
+    writes to ``sensor_effects.yaml``).
+
+    Attributes
+    ----------
+    name : str
+        A key of :data:`SENSOR_EFFECTS` (a ``#k`` suffix is ignored).
+    params : dict
+        Parameter name -> value; per-channel parameters take a list of five values or a
+        mapping channel -> value (:func:`per_channel`).
+    """
+
+    name: str
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+def _entry(e: Any, i: int) -> SensorEffectConfig:
+    """One entry as the typed option; a plain mapping ``{name | kind, params}`` is taken as
+    one (a calibration's list read as YAML or JSON)."""
+    if isinstance(e, SensorEffectConfig):
+        return e
+    if not isinstance(e, Mapping):
+        raise ValueError(f"sensor_effects[{i}] must be a mapping {{name, params}}, got {e!r}")
+    return SensorEffectConfig(str(e.get("name") or e.get("kind") or ""),
+                              dict(e.get("params") or {}))
+
+
+def parse_sensor_effects(effects: Sequence[SensorEffectConfig | Mapping[str, Any]] | None
+                         ) -> list[SensorEffect]:
     """Validate a ``sensor_effects`` list.
 
     Parameters
     ----------
-    effects : sequence of mapping
-        Entries ``{"name": key of SENSOR_EFFECTS, "params": {...}}`` (``"kind"`` is
-        accepted for ``"name"``; a ``#k`` suffix is ignored).
+    effects : sequence of SensorEffectConfig
+        The option's entries; a plain mapping ``{"name": key of SENSOR_EFFECTS,
+        "params": {...}}`` is taken as one (``"kind"`` is accepted for ``"name"``).
 
     Returns
     -------
@@ -187,10 +217,9 @@ def parse_sensor_effects(effects: Sequence[Mapping[str, Any]] | None) -> list[Se
     """
     out: list[SensorEffect] = []
     seen: set[str] = set()
-    for i, e in enumerate(effects or ()):
-        if not isinstance(e, Mapping):
-            raise ValueError(f"sensor_effects[{i}] must be a mapping {{name, params}}, got {e!r}")
-        name = str(e.get("name") or e.get("kind") or "").split("#")[0]
+    for i, raw in enumerate(effects or ()):
+        e = _entry(raw, i)
+        name = e.name.split("#")[0]
         if name not in SENSOR_EFFECTS:
             raise ValueError(f"sensor_effects[{i}]: unknown effect {name!r}; allowed: "
                              f"{sorted(SENSOR_EFFECTS)}")
@@ -198,7 +227,7 @@ def parse_sensor_effects(effects: Sequence[Mapping[str, Any]] | None) -> list[Se
             raise ValueError(f"sensor_effects: {name} given twice; merge its parameters")
         seen.add(name)
         spec = SENSOR_EFFECTS[name]
-        params = dict(e.get("params") or {})
+        params = dict(e.params)
         if name == "bridge_nonlinearity" and "bridge" in params:
             bridge = params.pop("bridge")
             if bridge not in ("quarter", "linear"):

@@ -17,11 +17,17 @@ effect library: Stribeck, presliding, velocity lag, load-dependent Coulomb, drif
 
 from .effects import FRICTION_LIBRARY, make_effect, register_effect
 from .signals import FrictionSignals, PaperLaw, Scales
-from .simulation import FrictionEffects, friction_effects_from_config, parse_effects
+from .simulation import (
+    FrictionEffects,
+    FrictionEffectsConfig,
+    friction_effects_from_config,
+    parse_effects,
+)
 
 __all__ = [
     "FRICTION_LIBRARY",
     "FrictionEffects",
+    "FrictionEffectsConfig",
     "FrictionSignals",
     "PaperLaw",
     "Scales",

@@ -25,6 +25,7 @@ friction law without them.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -236,20 +237,57 @@ class FrictionEffects:
         return out
 
 
-_SPEC_KEYS = {"v_s", "t0_s", "baseline", "effects"}
+@dataclass
+class FrictionEffectsConfig:
+    """The data-set option ``friction_effects``: what a calibration writes to
+    ``friction_effects.yaml`` (``conf/friction_effects/*.yaml``).
+
+    Attributes
+    ----------
+    v_s : float or None
+        Smooth-sign velocity the effects were fitted with [rad/s], > 0 when there are
+        effects.
+    t0_s : float
+        Time origin of drift effects [s].
+    baseline : dict or None
+        Paper-law parameters ``{b0, b1, b2, b3, theta_b}``, needed by ``velocity_lag``.
+    effects : list
+        The effects, ``{kind, params}`` each (:func:`parse_effects`).
+    """
+
+    v_s: float | None = None
+    t0_s: float = 0.0
+    baseline: dict[str, float] | None = None
+    effects: list[Any] = field(default_factory=list)
 
 
-def friction_effects_from_config(spec: Any, where: str = "dataset.friction_effects"
+def _as_config(spec: Any, where: str) -> FrictionEffectsConfig:
+    """A plain mapping (e.g. a calibration's file read as YAML) as the typed option."""
+    if isinstance(spec, FrictionEffectsConfig):
+        return spec
+    if not isinstance(spec, Mapping):
+        raise ValueError(f"{where} must be null or a mapping {{v_s, t0_s, baseline, effects}} "
+                         "(the friction_effects.yaml a calibration writes), got "
+                         f"{type(spec).__name__}")
+    keys = {f.name for f in fields(FrictionEffectsConfig)}
+    unknown = set(spec) - keys
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(keys)}")
+    return FrictionEffectsConfig(v_s=spec.get("v_s"), t0_s=spec.get("t0_s") or 0.0,
+                                 baseline=spec.get("baseline"), effects=spec.get("effects") or [])
+
+
+def friction_effects_from_config(spec: FrictionEffectsConfig | Mapping[str, Any] | None,
+                                 where: str = "dataset.friction_effects"
                                  ) -> FrictionEffects | None:
     """Build the extra friction of a data-set config (``conf/friction_effects/*.yaml``).
 
     Parameters
     ----------
-    spec : None or mapping
-        None, an empty mapping or empty list (the paper law alone), or the mapping a
-        calibration writes to ``friction_effects.yaml``: ``v_s`` [rad/s], ``t0_s`` [s],
-        ``baseline`` (paper-law parameters or None) and ``effects`` (list, see
-        :func:`parse_effects`).
+    spec : FrictionEffectsConfig, mapping or None
+        None, an empty mapping or empty list (the paper law alone), or the typed option
+        (a mapping of its fields is taken as one, e.g. ``friction_effects.yaml`` read
+        with a YAML parser).
     where : str
         Name of the config key, used in error messages.
 
@@ -266,26 +304,17 @@ def friction_effects_from_config(spec: Any, where: str = "dataset.friction_effec
     """
     if spec is None or (isinstance(spec, (list, tuple, Mapping)) and len(spec) == 0):
         return None
-    if not isinstance(spec, Mapping):
-        raise ValueError(f"{where} must be null or a mapping {{v_s, t0_s, baseline, effects}} "
-                         "(the friction_effects.yaml a calibration writes), got "
-                         f"{type(spec).__name__}")
-    unknown = set(spec) - _SPEC_KEYS
-    if unknown:
-        raise ValueError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: "
-                         f"{sorted(_SPEC_KEYS)}")
-    effects = spec.get("effects") or []
-    if not isinstance(effects, (list, tuple)):
-        raise ValueError(f"{where}.effects must be a list, got {type(effects).__name__}")
-    if not effects:
+    cfg = _as_config(spec, where)
+    if not isinstance(cfg.effects, (list, tuple)):
+        raise ValueError(f"{where}.effects must be a list, got {type(cfg.effects).__name__}")
+    if not cfg.effects:
         return None
-    v_s = spec.get("v_s")
-    if v_s is None or not float(v_s) > 0:
+    if cfg.v_s is None or not float(cfg.v_s) > 0:
         raise ValueError(f"{where}.v_s must be > 0 [rad/s] (the smooth-sign velocity the "
-                         f"effects were fitted with), got {v_s}")
+                         f"effects were fitted with), got {cfg.v_s}")
     try:
-        return FrictionEffects(effects, v_s=float(v_s), baseline=spec.get("baseline"),
-                               t0=float(spec.get("t0_s") or 0.0))
+        return FrictionEffects(cfg.effects, v_s=float(cfg.v_s), baseline=cfg.baseline,
+                               t0=float(cfg.t0_s or 0.0))
     except (KeyError, ValueError) as e:
         msg = e.args[0] if e.args else str(e)
         raise ValueError(f"{where}: {msg}") from None
