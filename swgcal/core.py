@@ -258,6 +258,95 @@ class _Packer:
         return out
 
 
+def _start_vectors(terms: Sequence[Term], sig: Any, y: np.ndarray, idx: np.ndarray,
+                   starts: Sequence[Sequence[np.ndarray]] | None, pk: _Packer
+                   ) -> list[np.ndarray]:
+    """Every combination of the terms' starting θ vectors (the first 64), concatenated
+    and clipped inside the bounds; default starts: each term's :meth:`Term.starts` with a
+    zero residual."""
+    if starts is None:
+        z = np.zeros_like(y)
+        starts = [t.starts(sig, z, idx) for t in terms]
+    combos = list(itertools.product(*[list(s) if len(s) else [np.empty(0)] for s in starts]))
+    if len(combos) > 64:
+        combos = combos[:64]
+    return [pk.clip(np.concatenate([np.asarray(c, float) for c in combo]))
+            if pk.lo.size else np.empty(0) for combo in combos]
+
+
+def _free_mask(terms: Sequence[Term], fixed: Sequence[bool] | None, n_nl: int) -> np.ndarray:
+    """Which of the ``n_nl`` nonlinear parameters are optimised: all but those of the
+    ``fixed`` terms."""
+    free = np.ones(n_nl, bool)
+    if fixed is not None:
+        if len(fixed) != len(terms):
+            raise ValueError(f"fixed needs one flag per term ({len(terms)}), got {len(fixed)}")
+        if n_nl:
+            free = np.concatenate([np.full(t.n_nonlinear, not bool(f))
+                                   for t, f in zip(terms, fixed, strict=True)])
+    return free
+
+
+def _optimise(resid: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], pk: _Packer,
+              flat: Sequence[np.ndarray], free: np.ndarray, max_starts: int, max_nfev: int
+              ) -> tuple[np.ndarray, str, bool]:
+    """The nonlinear parameters: the ``max_starts`` starts of lowest RSS optimised over
+    the ``free`` parameters (bounded trust-region least squares, log-scaled where the
+    term says so), the best kept; (θ, optimiser message, success)."""
+    n_nl = pk.lo.size
+    best_theta, best_rss, msg, ok = None, np.inf, "linear", True
+    if n_nl == 0 or not free.any():
+        best_theta = flat[0] if n_nl else np.empty(0)
+        msg = "no free nonlinear parameters"
+    else:
+        scored = sorted(((float(np.sum(resid(f)[0] ** 2)), i) for i, f in enumerate(flat)))
+        lo_u, hi_u = pk.u_bounds()
+        for _, i in scored[:max_starts]:
+            base = flat[i]
+
+            def full(u: np.ndarray, base: np.ndarray = base) -> np.ndarray:
+                th = base.copy()
+                th[free] = pk.from_u_partial(u, free)
+                return th
+
+            u0 = pk.to_u(base)[free]
+            try:
+                sol = least_squares(lambda u: resid(full(u))[0], u0,
+                                    bounds=(lo_u[free], hi_u[free]), method="trf",
+                                    x_scale="jac", max_nfev=max_nfev, diff_step=1e-5)
+            except (np.linalg.LinAlgError, ValueError) as e:  # pragma: no cover
+                log.debug("start %d failed: %s", i, e)
+                continue
+            rss = float(np.sum(sol.fun ** 2))
+            if rss < best_rss:
+                best_rss, best_theta, msg, ok = rss, full(sol.x), sol.message, sol.success
+        if best_theta is None:  # pragma: no cover
+            best_theta, msg, ok = flat[scored[0][1]], "all starts failed", False
+    return best_theta, msg, ok
+
+
+def _fit_result(terms: tuple[Term, ...], pk: _Packer, theta: np.ndarray,
+                resid: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], n: int,
+                msg: str, ok: bool) -> FitResult:
+    """The fit at the nonlinear parameters ``theta`` on ``n`` samples: linear
+    coefficients per term, RSS, σ, τ_int of the residual, BIC (no uncertainties yet)."""
+    r, c = resid(theta)
+    k = int(c.size + pk.lo.size)
+    if n <= k:
+        raise ValueError(f"{n} fit samples for {k} parameters: need more samples")
+    rss = float(np.sum(r * r))
+    thetas = tuple(pk.split(theta))
+    coefs, i = [], 0
+    for t in terms:
+        coefs.append(np.asarray(c[i:i + t.n_linear], float))
+        i += t.n_linear
+    return FitResult(
+        terms=terms, thetas=thetas, coefs=tuple(coefs), n=n, k=k, rss=rss,
+        sigma=float(np.sqrt(rss / (n - k))), tau_int=integrated_autocorr_time(r),
+        bic=float(n * np.log(max(rss, 1e-300) / n) + k * np.log(n)), success=bool(ok),
+        message=str(msg))
+
+
 def fit_terms(
     terms: Sequence[Term],
     sig: Any,
@@ -325,66 +414,10 @@ def fit_terms(
         c = _solve_linear(x, y[idx])
         return y[idx] - x @ c, c
 
-    if starts is None:
-        z = np.zeros_like(y)
-        starts = [t.starts(sig, z, idx) for t in terms]
-    combos = list(itertools.product(*[list(s) if len(s) else [np.empty(0)] for s in starts]))
-    if len(combos) > 64:
-        combos = combos[:64]
-    flat = [pk.clip(np.concatenate([np.asarray(c, float) for c in combo]))
-            if pk.lo.size else np.empty(0) for combo in combos]
-    n_nl = pk.lo.size
-    free = np.ones(n_nl, bool)
-    if fixed is not None:
-        if len(fixed) != len(terms):
-            raise ValueError(f"fixed needs one flag per term ({len(terms)}), got {len(fixed)}")
-        if n_nl:
-            free = np.concatenate([np.full(t.n_nonlinear, not bool(f))
-                                   for t, f in zip(terms, fixed, strict=True)])
-    best_theta, best_rss, msg, ok = None, np.inf, "linear", True
-    if n_nl == 0 or not free.any():
-        best_theta = flat[0] if n_nl else np.empty(0)
-        msg = "no free nonlinear parameters"
-    else:
-        scored = sorted(((float(np.sum(resid(f)[0] ** 2)), i) for i, f in enumerate(flat)))
-        lo_u, hi_u = pk.u_bounds()
-        for _, i in scored[:max_starts]:
-            base = flat[i]
-
-            def full(u: np.ndarray, base: np.ndarray = base) -> np.ndarray:
-                th = base.copy()
-                th[free] = pk.from_u_partial(u, free)
-                return th
-
-            u0 = pk.to_u(base)[free]
-            try:
-                sol = least_squares(lambda u: resid(full(u))[0], u0,
-                                    bounds=(lo_u[free], hi_u[free]), method="trf",
-                                    x_scale="jac", max_nfev=max_nfev, diff_step=1e-5)
-            except (np.linalg.LinAlgError, ValueError) as e:  # pragma: no cover
-                log.debug("start %d failed: %s", i, e)
-                continue
-            rss = float(np.sum(sol.fun ** 2))
-            if rss < best_rss:
-                best_rss, best_theta, msg, ok = rss, full(sol.x), sol.message, sol.success
-        if best_theta is None:  # pragma: no cover
-            best_theta, msg, ok = flat[scored[0][1]], "all starts failed", False
-    r, c = resid(best_theta)
-    n = int(idx.size)
-    k = int(c.size + n_nl)
-    if n <= k:
-        raise ValueError(f"{n} fit samples for {k} parameters: need more samples")
-    rss = float(np.sum(r * r))
-    thetas = tuple(pk.split(best_theta))
-    coefs, i = [], 0
-    for t in terms:
-        coefs.append(np.asarray(c[i:i + t.n_linear], float))
-        i += t.n_linear
-    res = FitResult(
-        terms=terms, thetas=thetas, coefs=tuple(coefs), n=n, k=k, rss=rss,
-        sigma=float(np.sqrt(rss / (n - k))), tau_int=integrated_autocorr_time(r),
-        bic=float(n * np.log(max(rss, 1e-300) / n) + k * np.log(n)), success=bool(ok),
-        message=str(msg))
+    flat = _start_vectors(terms, sig, y, idx, starts, pk)
+    free = _free_mask(terms, fixed, pk.lo.size)
+    best_theta, msg, ok = _optimise(resid, pk, flat, free, max_starts, max_nfev)
+    res = _fit_result(terms, pk, best_theta, resid, int(idx.size), msg, ok)
     if uncertainty:
         _uncertainty(res, sig, idx, max_rel_se, max_abs_corr, cache)
     return res

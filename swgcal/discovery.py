@@ -165,6 +165,139 @@ def _split_name(name: str) -> tuple[str, str]:
     return ("" if name == "plain" else name), "plain"
 
 
+def _standardised(target: np.ndarray, groups: Sequence[Group], fit: np.ndarray,
+                  projector: Projector | None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The target and all candidate columns with the nuisance projected off (step 1),
+    the columns scaled to unit RMS on the fit rows; (target, columns, scales, usable:
+    columns not numerically zero, the others set to 0)."""
+    r = np.asarray(target, float)
+    z = np.hstack([g.columns for g in groups])
+    if projector is not None:
+        r = projector.resid(r)
+        z = projector.resid(z)
+    sd = np.sqrt(np.mean(z[fit] ** 2, axis=0))
+    ok = sd > 1e-9 * max(float(sd.max()), 1e-300)
+    z /= np.where(ok, sd, 1.0)
+    z[:, ~ok] = 0.0
+    return r, z, sd, ok
+
+
+@dataclass(frozen=True)
+class _Gram:
+    """Gram matrices of the standardised columns and the target on the fit rows (``gf``,
+    ``bf``) and the validation rows (``gv``, ``bv``; target ``rv`` on ``n_v`` rows):
+    least squares on the fit rows of any set of columns, scored on the validation
+    rows."""
+
+    gf: np.ndarray
+    bf: np.ndarray
+    gv: np.ndarray
+    bv: np.ndarray
+    rv: np.ndarray
+    n_v: int
+
+    def val_rmse(self, idx: np.ndarray) -> tuple[float, np.ndarray]:
+        """Validation RMSE of the columns ``idx`` fitted on the fit rows, and their
+        coefficients."""
+        rv, n_v = self.rv, self.n_v
+        if idx.size == 0:
+            return float(np.sqrt(rv @ rv / n_v)), np.empty(0)
+        c = np.linalg.lstsq(self.gf[np.ix_(idx, idx)], self.bf[idx], rcond=None)[0]
+        sse = rv @ rv - 2 * c @ self.bv[idx] + c @ self.gv[np.ix_(idx, idx)] @ c
+        return float(np.sqrt(max(sse, 0.0) / n_v)), c
+
+    def gains(self, parts: dict[int, np.ndarray], order: Sequence[int]) -> list[float]:
+        """Held-out gain of each group of ``order`` (its columns ``parts[i]``) added
+        after the ones before it."""
+        out, cur = [], self.val_rmse(np.empty(0, int))[0]
+        for k in range(len(order)):
+            v = self.val_rmse(_joint(parts, order[:k + 1]))[0]
+            out.append(1.0 - v / cur if cur > 0 else 0.0)
+            cur = v
+        return out
+
+
+def _joint(parts: dict[int, np.ndarray], order: Sequence[int]) -> np.ndarray:
+    """The columns of the groups ``order``, concatenated."""
+    return np.concatenate([parts[j] for j in order] or [np.empty(0, int)]).astype(int)
+
+
+def _lasso_columns(zf: np.ndarray, rf: np.ndarray, gram: _Gram, ok: np.ndarray,
+                   owner: np.ndarray, groups: Sequence[Group]) -> dict[int, np.ndarray]:
+    """Screening (step 2): the lasso path on the fit rows, the point on it of least BIC
+    with the effective number of samples; group -> the columns it keeps."""
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import lars_path_gram
+
+    from .core import integrated_autocorr_time
+
+    gf, bf, n_f = gram.gf, gram.bf, rf.size
+    with warnings.catch_warnings():  # collinear candidates: LARS drops them, says so
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        _, _, path = lars_path_gram(Xy=bf, Gram=gf, n_samples=n_f, method="lasso",
+                                    max_iter=min(500, 2 * zf.shape[1]))
+    c_all = np.linalg.solve(gf + 1e-9 * n_f * np.eye(gf.shape[0]), bf)
+    n_eff = n_f / integrated_autocorr_time(rf - zf @ c_all)
+    rss = rf @ rf - 2 * path.T @ bf + np.einsum("ij,ij->j", path, gf @ path)
+    df = np.count_nonzero(path, axis=0)
+    bic = n_eff * np.log(np.maximum(rss, 1e-300) / n_f) + df * np.log(n_eff)
+    sel = np.flatnonzero((path[:, int(np.argmin(bic))] != 0) & ok)
+    cols = {int(i): sel[owner[sel] == i] for i in np.unique(owner[sel])}
+    log.debug("discovery: lasso kept %d of %d columns in %s", sel.size, zf.shape[1],
+              [groups[i].key for i in cols])
+    return cols
+
+
+def _forward_selection(gram: _Gram, cols: dict[int, np.ndarray], max_terms: int,
+                       min_gain: float) -> list[int]:
+    """Held-out scoring (step 3): the kept groups, best alone first, each added when it
+    lowers the validation RMSE by more than ``min_gain``."""
+    chosen: list[int] = []
+    for i in sorted(cols, key=lambda i: gram.val_rmse(cols[i])[0]):
+        if len(chosen) < max_terms and gram.gains(cols, chosen + [i])[-1] > min_gain:
+            chosen.append(i)
+    return chosen
+
+
+def _fewest_variants(gram: _Gram, groups: Sequence[Group], cols: dict[int, np.ndarray],
+                     chosen: Sequence[int], start: np.ndarray, min_gain: float) -> None:
+    """Of each chosen group's variants (plain, × load, × speed) on its selected bases,
+    the fewest that do (nearly) as well on the validation rows: ``cols`` updated."""
+    for i in chosen:
+        g = groups[i]
+        split = [_split_name(nm) for nm in g.names]
+        bases = {split[j - start[i]][0] for j in cols[i]}
+        variants = sorted({v for _, v in split})
+        cand = []
+        for m in range(1, len(variants) + 1):
+            for combo in combinations(variants, m):
+                idx = np.array([start[i] + j for j, (b, v) in enumerate(split)
+                                if b in bases and v in combo], int)
+                others = _joint(cols, [k for k in chosen if k != i])
+                cand.append((m, gram.val_rmse(np.concatenate([others, idx]))[0], idx))
+        best = min(c[1] for c in cand)
+        cols[i] = min((c for c in cand if c[1] <= best * (1 + 0.5 * min_gain)),
+                      key=lambda c: (c[0], c[1]))[2]
+
+
+def _proposals(gram: _Gram, groups: Sequence[Group], cols: dict[int, np.ndarray],
+               kept: Sequence[int], start: np.ndarray, sd: np.ndarray) -> list[Proposal]:
+    """Words (step 4): each kept group described from its coefficients in the joint fit
+    of all kept groups (in the data's units), with its held-out gain."""
+    final_gain = dict(zip(kept, gram.gains(cols, kept), strict=True))
+    idx = _joint(cols, kept)
+    coef = dict(zip(idx.tolist(), (gram.val_rmse(idx)[1] / sd[idx]).tolist(), strict=True))
+    out = []
+    for i in kept:
+        g = groups[i]
+        cg = {nm: coef.get(int(start[i]) + j, 0.0) for j, nm in enumerate(g.names)}
+        expr, params = g.describe(cg)
+        params = {**params, "selected_columns": [g.names[j - start[i]] for j in cols[i]]}
+        out.append(Proposal(expr, params, final_gain[i], g.kind))
+    return out
+
+
 def discover(target: np.ndarray, groups: Sequence[Group], fit: np.ndarray,
              validation: np.ndarray, projector: Projector | None = None, *,
              max_terms: int = 5, min_gain: float = MIN_GAIN) -> list[Proposal]:
@@ -203,93 +336,18 @@ def discover(target: np.ndarray, groups: Sequence[Group], fit: np.ndarray,
     groups = [g for g in groups if g.columns.shape[1]]
     if not groups or max_terms == 0:
         return []
-    from sklearn.exceptions import ConvergenceWarning
-    from sklearn.linear_model import lars_path_gram
-
-    from .core import integrated_autocorr_time
-
-    r = np.asarray(target, float)
-    z = np.hstack([g.columns for g in groups])
-    if projector is not None:
-        r = projector.resid(r)
-        z = projector.resid(z)
+    r, z, sd, ok = _standardised(target, groups, fit, projector)
     owner = np.concatenate([np.full(g.columns.shape[1], i) for i, g in enumerate(groups)])
     start = np.searchsorted(owner, np.arange(len(groups)))
-    sd = np.sqrt(np.mean(z[fit] ** 2, axis=0))
-    ok = sd > 1e-9 * max(float(sd.max()), 1e-300)
-    z /= np.where(ok, sd, 1.0)
-    z[:, ~ok] = 0.0
     zf, zv, rf, rv = z[fit], z[validation], r[fit], r[validation]
-    gf, bf, gv, bv = zf.T @ zf, zf.T @ rf, zv.T @ zv, zv.T @ rv
-    n_f, n_v = rf.size, rv.size
-
-    # lasso path on the fit rows, BIC with the effective number of samples
-    with warnings.catch_warnings():  # collinear candidates: LARS drops them, says so
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        _, _, path = lars_path_gram(Xy=bf, Gram=gf, n_samples=n_f, method="lasso",
-                                    max_iter=min(500, 2 * z.shape[1]))
-    c_all = np.linalg.solve(gf + 1e-9 * n_f * np.eye(gf.shape[0]), bf)
-    n_eff = n_f / integrated_autocorr_time(rf - zf @ c_all)
-    rss = rf @ rf - 2 * path.T @ bf + np.einsum("ij,ij->j", path, gf @ path)
-    df = np.count_nonzero(path, axis=0)
-    bic = n_eff * np.log(np.maximum(rss, 1e-300) / n_f) + df * np.log(n_eff)
-    sel = np.flatnonzero((path[:, int(np.argmin(bic))] != 0) & ok)
-    cols = {int(i): sel[owner[sel] == i] for i in np.unique(owner[sel])}
-    log.debug("discovery: lasso kept %d of %d columns in %s", sel.size, z.shape[1],
-              [groups[i].key for i in cols])
-
-    def val_rmse(idx: np.ndarray) -> tuple[float, np.ndarray]:
-        if idx.size == 0:
-            return float(np.sqrt(rv @ rv / n_v)), np.empty(0)
-        c = np.linalg.lstsq(gf[np.ix_(idx, idx)], bf[idx], rcond=None)[0]
-        sse = rv @ rv - 2 * c @ bv[idx] + c @ gv[np.ix_(idx, idx)] @ c
-        return float(np.sqrt(max(sse, 0.0) / n_v)), c
-
-    def joint(parts: dict[int, np.ndarray], order: Sequence[int]) -> np.ndarray:
-        return np.concatenate([parts[j] for j in order] or [np.empty(0, int)]).astype(int)
-
-    def gains(parts: dict[int, np.ndarray], order: Sequence[int]) -> list[float]:
-        out, cur = [], val_rmse(np.empty(0, int))[0]
-        for k in range(len(order)):
-            v = val_rmse(joint(parts, order[:k + 1]))[0]
-            out.append(1.0 - v / cur if cur > 0 else 0.0)
-            cur = v
-        return out
-
-    chosen: list[int] = []
-    for i in sorted(cols, key=lambda i: val_rmse(cols[i])[0]):
-        if len(chosen) < max_terms and gains(cols, chosen + [i])[-1] > min_gain:
-            chosen.append(i)
-    # variants of the selected columns: the fewest that do (nearly) as well
-    for i in chosen:
-        g = groups[i]
-        split = [_split_name(nm) for nm in g.names]
-        bases = {split[j - start[i]][0] for j in cols[i]}
-        variants = sorted({v for _, v in split})
-        cand = []
-        for m in range(1, len(variants) + 1):
-            for combo in combinations(variants, m):
-                idx = np.array([start[i] + j for j, (b, v) in enumerate(split)
-                                if b in bases and v in combo], int)
-                others = joint(cols, [k for k in chosen if k != i])
-                cand.append((m, val_rmse(np.concatenate([others, idx]))[0], idx))
-        best = min(c[1] for c in cand)
-        cols[i] = min((c for c in cand if c[1] <= best * (1 + 0.5 * min_gain)),
-                      key=lambda c: (c[0], c[1]))[2]
-    kept = [i for i, gn in zip(chosen, gains(cols, chosen), strict=True) if gn > min_gain]
+    gram = _Gram(zf.T @ zf, zf.T @ rf, zv.T @ zv, zv.T @ rv, rv, rv.size)
+    cols = _lasso_columns(zf, rf, gram, ok, owner, groups)
+    chosen = _forward_selection(gram, cols, max_terms, min_gain)
+    _fewest_variants(gram, groups, cols, chosen, start, min_gain)
+    kept = [i for i, gn in zip(chosen, gram.gains(cols, chosen), strict=True) if gn > min_gain]
     if not kept:
         return []
-    final_gain = dict(zip(kept, gains(cols, kept), strict=True))
-    idx = joint(cols, kept)
-    coef = dict(zip(idx.tolist(), (val_rmse(idx)[1] / sd[idx]).tolist(), strict=True))
-    out = []
-    for i in kept:
-        g = groups[i]
-        cg = {nm: coef.get(int(start[i]) + j, 0.0) for j, nm in enumerate(g.names)}
-        expr, params = g.describe(cg)
-        params = {**params, "selected_columns": [g.names[j - start[i]] for j in cols[i]]}
-        out.append(Proposal(expr, params, final_gain[i], g.kind))
-    return out
+    return _proposals(gram, groups, cols, kept, start, sd)
 
 
 def model_design(result: CalibrationResult) -> tuple[np.ndarray, Any]:

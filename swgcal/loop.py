@@ -553,6 +553,119 @@ def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
     return chosen
 
 
+def _iteration(problem: Problem, cfg: SelectionConfig, keys: Sequence[str], it: int,
+               current: FitResult, r_cur: np.ndarray, val_cur: float,
+               fit_kw: dict[str, Any]) -> tuple[Iteration, CandidateScore | None]:
+    """One iteration: diagnose the current residual (fit samples); below ``max_iter``, rank
+    the candidates and choose one (pairs when none passes but some show evidence).
+    Returns the iteration's record and the accepted candidate."""
+    diag = diagnose(problem.signals, problem.t, r_cur, problem.split.fit, problem.probes,
+                    problem.units, cfg.structure_threshold)
+    cands: list[CandidateScore] = []
+    accepted = None
+    if it < cfg.max_iter:
+        cands, tau = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw)
+        accepted = _choose(problem, cfg, current, cands, tau)
+        evidence = any(c.heldout_evidence > cfg.min_heldout_evidence
+                       or c.delta_bic_eff < cfg.max_delta_bic for c in cands)
+        if accepted is None and cfg.pair_candidates >= 2 and evidence:
+            pairs, tau = _pairs(problem, cfg, current, cands, tau, val_cur, fit_kw)
+            accepted = _choose(problem, cfg, current, pairs, tau)
+            cands = cands + pairs
+    record = Iteration(it, [t.name for t in current.terms], val_cur, current.bic, diag, cands,
+                       accepted.name if accepted else None)
+    best = cands[0] if cands else None
+    log.info("%s iteration %d: val RMSE %.4g, best %s (%.4g), accepted %s", problem.name,
+             it, val_cur, best.name if best else None, best.val_rmse if best else np.nan,
+             accepted.name if accepted else None)
+    return record, accepted
+
+
+@dataclass
+class _Selection:
+    """Where the loop on the fit samples ended: the baseline and the selected model
+    (fitted on the fit samples), the selected model's residual on all samples and its
+    validation RMSE, the iterations and the instance names added."""
+
+    baseline: FitResult
+    current: FitResult
+    r_cur: np.ndarray
+    val_cur: float
+    iterations: list[Iteration]
+    added: list[str]
+
+
+def _select(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
+            fit_kw: dict[str, Any]) -> _Selection:
+    """The loop on the fit samples: from the baseline, add the accepted candidate and
+    refit all nonlinear parameters jointly, until no candidate is accepted."""
+    sig, y, sp = problem.signals, problem.y, problem.split
+    current = fit_terms(_order(problem.baseline), sig, y, sp.fit, uncertainty=False, **fit_kw)
+    baseline_sel = current
+    r_cur, val_cur = _score(problem, current)
+    iterations: list[Iteration] = []
+    added: list[str] = []
+    for it in range(cfg.max_iter + 1):
+        record, accepted = _iteration(problem, cfg, keys, it, current, r_cur, val_cur, fit_kw)
+        iterations.append(record)
+        if accepted is None:
+            break
+        # joint refit of all nonlinear parameters, from the candidate's values
+        current_before = current
+        current = fit_terms(accepted.fit.terms, sig, y, sp.fit,
+                            [[th] for th in accepted.fit.thetas], uncertainty=False,
+                            **{**fit_kw, "max_starts": 1})
+        added.extend(t.name for t in _new_terms(accepted, current_before))
+        r_cur, val_cur = _score(problem, current)
+    return _Selection(baseline_sel, current, r_cur, val_cur, iterations, added)
+
+
+def _final_result(problem: Problem, cfg: SelectionConfig, sel: _Selection,
+                  fit_kw: dict[str, Any], t_start: float) -> CalibrationResult:
+    """Final refits of the baseline and the selected model on fit + validation samples,
+    the RMSE before and after on the fit, validation and test samples, the diagnoses of
+    the final residuals."""
+    sig, y, sp = problem.signals, problem.y, problem.split
+    idx_fv = sp.fit_validation
+    base_final = fit_terms(_order(problem.baseline), sig, y, idx_fv, **fit_kw)
+    starts = [[th] for th in sel.current.thetas]
+    final = fit_terms(sel.current.terms, sig, y, idx_fv, starts, **fit_kw)
+    r_b = y - base_final.predict(sig)
+    r_a = y - final.predict(sig)
+    r_bs = y - sel.baseline.predict(sig)
+    rmse = {
+        "fit": {"before": _rmse(r_bs[sp.fit]), "after": _rmse(sel.r_cur[sp.fit])},
+        "validation": {"before": _rmse(r_bs[sp.validation]), "after": sel.val_cur},
+        "test": {"before": _rmse(r_b[sp.test]), "after": _rmse(r_a[sp.test])},
+    }
+    d_before = diagnose(sig, problem.t, r_b, idx_fv, problem.probes, problem.units,
+                        cfg.structure_threshold)
+    d_after = d_before if not sel.added else diagnose(sig, problem.t, r_a, idx_fv,
+                                                      problem.probes, problem.units,
+                                                      cfg.structure_threshold)
+    return CalibrationResult(
+        problem=problem, config=cfg, iterations=sel.iterations, added=sel.added,
+        baseline_final=base_final, final=final, rmse=rmse, diag_before=d_before,
+        diag_after=d_after, unexplained=d_after.structured,
+        residual_signature=d_after.signature, elapsed_s=time.perf_counter() - t_start)
+
+
+def _flag_implausible(res: CalibrationResult) -> None:
+    """Candidates of the last iteration outside their physical range: in
+    ``res.implausible``, the residual unexplained (the library lacks an effect)."""
+    last = res.iterations[-1].candidates if res.iterations else []
+    res.implausible = [f"{c.name} (validation gain {100 * c.rel_improvement:.2g} %, held-out "
+                       f"2 ln Λ {c.heldout_evidence:.3g}; {c.status.split(': ', 2)[-1]})"
+                       for c in last if c.implausible]
+    if res.implausible:
+        res.unexplained = True
+        res.residual_signature = (
+            res.residual_signature.rstrip(".") + ". A library candidate outside its "
+            "physical range still explains part of the residual with very strong evidence, "
+            "so an effect the library does not hold is there: " + "; ".join(res.implausible)
+            + ".")
+
+
 def select_effects(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
     """The selection loop on a problem: fit the baseline, add the library effect the
     residual needs while held-out evidence supports it, stop with a verdict.
@@ -573,86 +686,15 @@ def select_effects(problem: Problem, config: SelectionConfig | None = None) -> C
     """
     cfg = config or SelectionConfig()
     t_start = time.perf_counter()
-    sig, y, sp = problem.signals, problem.y, problem.split
     keys = list(cfg.candidates) if cfg.candidates is not None else list(problem.library)
     unknown = [k for k in keys if k not in problem.library]
     if unknown:
         raise KeyError(f"candidates {unknown} not in the library {sorted(problem.library)}")
     fit_kw = dict(max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr,
                   max_starts=cfg.max_starts)
-
-    def score(fit: FitResult) -> tuple[np.ndarray, float]:
-        return _score(problem, fit)
-
-    current = fit_terms(_order(problem.baseline), sig, y, sp.fit, uncertainty=False, **fit_kw)
-    baseline_sel = current
-    r_cur, val_cur = score(current)
-    iterations: list[Iteration] = []
-    added: list[str] = []
-    diag_idx = sp.fit
-    for it in range(cfg.max_iter + 1):
-        diag = diagnose(sig, problem.t, r_cur, diag_idx, problem.probes, problem.units,
-                        cfg.structure_threshold)
-        cands: list[CandidateScore] = []
-        accepted = None
-        if it < cfg.max_iter:
-            cands, tau = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw)
-            accepted = _choose(problem, cfg, current, cands, tau)
-            evidence = any(c.heldout_evidence > cfg.min_heldout_evidence
-                           or c.delta_bic_eff < cfg.max_delta_bic for c in cands)
-            if accepted is None and cfg.pair_candidates >= 2 and evidence:
-                pairs, tau = _pairs(problem, cfg, current, cands, tau, val_cur, fit_kw)
-                accepted = _choose(problem, cfg, current, pairs, tau)
-                cands = cands + pairs
-        iterations.append(Iteration(it, [t.name for t in current.terms], val_cur, current.bic,
-                                    diag, cands, accepted.name if accepted else None))
-        best = cands[0] if cands else None
-        log.info("%s iteration %d: val RMSE %.4g, best %s (%.4g), accepted %s", problem.name,
-                 it, val_cur, best.name if best else None, best.val_rmse if best else np.nan,
-                 accepted.name if accepted else None)
-        if accepted is None:
-            break
-        # joint refit of all nonlinear parameters, from the candidate's values
-        current_before = current
-        current = fit_terms(accepted.fit.terms, sig, y, sp.fit,
-                            [[th] for th in accepted.fit.thetas], uncertainty=False,
-                            **{**fit_kw, "max_starts": 1})
-        added.extend(t.name for t in _new_terms(accepted, current_before))
-        r_cur, val_cur = score(current)
-
-    # final refits on fit + validation; test errors
-    idx_fv = sp.fit_validation
-    base_final = fit_terms(_order(problem.baseline), sig, y, idx_fv, **fit_kw)
-    starts = [[th] for th in current.thetas]
-    final = fit_terms(current.terms, sig, y, idx_fv, starts, **fit_kw)
-    r_b = y - base_final.predict(sig)
-    r_a = y - final.predict(sig)
-    r_bs = y - baseline_sel.predict(sig)
-    rmse = {
-        "fit": {"before": _rmse(r_bs[sp.fit]), "after": _rmse(r_cur[sp.fit])},
-        "validation": {"before": _rmse(r_bs[sp.validation]), "after": val_cur},
-        "test": {"before": _rmse(r_b[sp.test]), "after": _rmse(r_a[sp.test])},
-    }
-    d_before = diagnose(sig, problem.t, r_b, idx_fv, problem.probes, problem.units,
-                        cfg.structure_threshold)
-    d_after = d_before if not added else diagnose(sig, problem.t, r_a, idx_fv, problem.probes,
-                                                  problem.units, cfg.structure_threshold)
-    res = CalibrationResult(
-        problem=problem, config=cfg, iterations=iterations, added=added,
-        baseline_final=base_final, final=final, rmse=rmse, diag_before=d_before,
-        diag_after=d_after, unexplained=d_after.structured,
-        residual_signature=d_after.signature, elapsed_s=time.perf_counter() - t_start)
-    last = iterations[-1].candidates if iterations else []
-    res.implausible = [f"{c.name} (validation gain {100 * c.rel_improvement:.2g} %, held-out "
-                       f"2 ln Λ {c.heldout_evidence:.3g}; {c.status.split(': ', 2)[-1]})"
-                       for c in last if c.implausible]
-    if res.implausible:
-        res.unexplained = True
-        res.residual_signature = (
-            res.residual_signature.rstrip(".") + ". A library candidate outside its "
-            "physical range still explains part of the residual with very strong evidence, "
-            "so an effect the library does not hold is there: " + "; ".join(res.implausible)
-            + ".")
+    sel = _select(problem, cfg, keys, fit_kw)
+    res = _final_result(problem, cfg, sel, fit_kw, t_start)
+    _flag_implausible(res)
     log.info("%s: test RMSE %.4g -> %.4g, added %s, unexplained %s", problem.name,
-             rmse["test"]["before"], rmse["test"]["after"], added, res.unexplained)
+             res.rmse["test"]["before"], res.rmse["test"]["after"], res.added, res.unexplained)
     return res

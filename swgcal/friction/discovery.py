@@ -40,6 +40,7 @@ words say "in time" only because the basis column is a function of t.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -186,6 +187,148 @@ def _tone_group(key: str, kind: str, freq: float, x: np.ndarray, harmonics: Sequ
     return Group(key, kind, np.column_stack(cols), tuple(names), describe)
 
 
+@dataclass(frozen=True)
+class _Rows:
+    """The friction signals on the basis rows (fit and validation rows together), the
+    modulators of the candidate columns (``mods``: |q̇| / v_ref, and the load when it
+    varies) and their (lowest, mean on the fit rows, highest) values."""
+
+    n: int
+    fit: np.ndarray
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    acc: np.ndarray
+    sgn: np.ndarray
+    speed: np.ndarray
+    load: np.ndarray | None
+    mods: dict[str, np.ndarray]
+    mod_range: dict[str, tuple[float, float, float]]
+    v_ref: float
+    dq_med: float
+    dt_med: float
+    gear_ratio: float | None
+
+
+def _basis_rows(sig: Any, rows: np.ndarray, fit: np.ndarray) -> _Rows:
+    """The signals on ``rows`` (``fit``: the fit rows among them) and the modulators."""
+    t, q = sig.t_s[rows], sig.q_rad[rows]
+    v, acc = sig.dq_rad_s[rows], sig.ddq_rad_s2[rows]
+    sgn = np.tanh(v / sig.v_s)
+    v_ref = sig.scales.v_ref
+    speed = np.abs(v) / v_ref
+    load = None if sig.load_nm is None else np.asarray(sig.load_nm, float)[rows]
+    mods = {"speed": speed} | ({} if load is None or np.ptp(load) <= 0 else {"load": load})
+    mod_range = {m: (float(mv.min()), float(mv[fit].mean()), float(mv.max()))
+                 for m, mv in mods.items()}
+    return _Rows(rows.size, fit, t, q, v, acc, sgn, speed, load, mods, mod_range, v_ref,
+                 sig.scales.dq_med, sig.scales.dt_med, sig.gear_ratio)
+
+
+def _angle_ripple_groups(b: _Rows, r0: np.ndarray, n_peaks: int,
+                         harmonics: Sequence[int]) -> list[Group]:
+    """Ripples over the joint angle at the strongest free periods of the residual: plain
+    and × sgn q̇, each also × |q̇| and × load."""
+    q, sgn, mods, fit = b.q, b.sgn, b.mods, b.fit
+    q_mods = {"plain": np.ones(b.n), "sgn": sgn} | mods | {f"sgn{m}": sgn * mv
+                                                            for m, mv in mods.items()}
+    p_lo, p_hi, _ = ripple_period_range()
+    p_min, p_max = max(p_lo, 4.0 * b.dq_med), min(p_hi, 0.5 * float(np.ptp(q)))
+    found: list[float] = []
+    # lines of the residual, of the residual × sgn q̇ (a friction-level ripple) and of
+    # the residual × each centred modulator (a ripple whose mean amplitude the model
+    # holds already, but not its growth with speed or load)
+    centred = [(mv - mv[fit].mean()) / (mv[fit].std() or 1.0) for mv in mods.values()]
+    for rr in [r0, r0 * sgn] + [r0 * c for c in centred]:
+        found += line_peaks(q, rr, p_min, p_max, n_peaks, harmonics, exclude=found)
+    groups = []
+    for f in found:
+        words = _tone_words("angle_ripple", f, harmonics, list(q_mods), b.mod_range, b.v_ref,
+                            b.gear_ratio)
+        groups.append(_tone_group(f"ripple over q {1 / f:.4g} rad", "angle_ripple", f, q,
+                                  harmonics, q_mods, words))
+    return groups
+
+
+def _time_tone_groups(b: _Rows, r0: np.ndarray, n_peaks: int,
+                      harmonics: Sequence[int]) -> list[Group]:
+    """Tones in time at the strongest fixed frequencies of the residual, plain and × |q̇|
+    (and × load); a tone on a line of the joint's own motion says so."""
+    t, q = b.t, b.q
+    t_mods = {"plain": np.ones(b.n)} | b.mods
+    dt_med, t_span = b.dt_med, float(np.ptp(t))
+    lobe_t = 1.0 / max(t_span, 1e-12)
+    motion_lines = line_peaks(t, q - q.mean(), 2.5 * dt_med, t_span / 2, 3, harmonics)
+    groups = []
+    for f in line_peaks(t, r0, 2.5 * dt_med, t_span / 4, n_peaks, harmonics):
+        on = next((g for g in motion_lines for h in harmonics
+                   if abs(f - h * g) < lobe_t), None)
+        words = _tone_words("time_tone", f, harmonics, list(t_mods), b.mod_range, b.v_ref,
+                            None, on)
+        groups.append(_tone_group(f"tone in time {f:.4g} Hz", "time_tone", f, t, harmonics,
+                                  t_mods, words))
+    return groups
+
+
+def _load_groups(b: _Rows) -> list[Group]:
+    """Friction level and viscous friction times the load (none without a varying
+    load)."""
+    if "load" not in b.mods:
+        return []
+
+    def load_words(coef: dict[str, float]) -> tuple[str, dict[str, Any]]:
+        c0, c1 = coef.get("sgn_load", 0.0), coef.get("v_load", 0.0)
+        parts = [f"friction level {'grows' if c0 > 0 else 'falls'} with the load "
+                 f"({c0:+.3g} N m per N m)"] if c0 else []
+        if c1:
+            parts.append(f"viscous friction {'grows' if c1 > 0 else 'falls'} with the "
+                         f"load ({c1:+.3g} N m s/rad per N m)")
+        return "; ".join(parts), {"level_per_load": c0, "viscous_per_load_s_per_rad": c1}
+    return [Group("load", "load_modulation", np.column_stack([b.sgn * b.load, b.v * b.load]),
+                  ("sgn_load", "v_load"), load_words)]
+
+
+def _trend_groups(b: _Rows) -> list[Group]:
+    """Slow trends in time (Legendre P1-P3 of the normalised time): an offset and, × sgn
+    q̇ (P1, P2), a friction level that drift."""
+    t = b.t
+    t_span = float(np.ptp(t))
+    tau = (t - 0.5 * (t.min() + t.max())) / max(0.5 * t_span, 1e-12)
+    leg = [tau, 0.5 * (3 * tau ** 2 - 1), 0.5 * (5 * tau ** 3 - 3 * tau)]
+    grid = np.linspace(-1, 1, 201)
+    leg_g = [grid, 0.5 * (3 * grid ** 2 - 1), 0.5 * (5 * grid ** 3 - 3 * grid)]
+
+    def trend_words(coef: dict[str, float], level: bool = False) -> tuple[str, dict[str, Any]]:
+        c = [coef.get(f"p{i + 1}", 0.0) for i in range(3)]
+        dev = float(np.max(np.abs(sum(ci * g for ci, g in zip(c, leg_g, strict=True)))))
+        what = ("friction level drifts slowly in time (× sgn q̇)" if level
+                else "slow trend in time (a torque offset that drifts)")
+        return (f"{what}: up to {dev:.3g} N m over the recording",
+                {"legendre_nm": c, "max_deviation_nm": dev})
+    return [Group("trend", "trend", np.column_stack(leg), ("p1", "p2", "p3"), trend_words),
+            Group("level trend", "level_trend", np.column_stack([b.sgn * g for g in leg[:2]]),
+                  ("p1", "p2"), lambda c: trend_words(c, level=True))]
+
+
+def _velocity_groups(b: _Rows, powers: Sequence[float]) -> list[Group]:
+    """A velocity law beyond sgn, q̇, q̇³ (sgn(q̇) |q̇ / v_ref|^p) and a torque
+    proportional to the acceleration."""
+    v_ref = b.v_ref
+
+    def vel_words(coef: dict[str, float]) -> tuple[str, dict[str, Any]]:
+        terms = [f"{coef.get(f'pow{pw:g}', 0.0):+.3g} N m · sgn(q̇) abs(q̇/v_ref)^{pw:g}"
+                 for pw in powers if coef.get(f"pow{pw:g}", 0.0)]
+        return (f"velocity law beyond the model: {' '.join(terms)} (v_ref = {v_ref:.3g} "
+                "rad/s)", {f"pow{pw:g}_nm": coef.get(f"pow{pw:g}", 0.0) for pw in powers})
+    return [Group("velocity law", "velocity_law",
+                  np.column_stack([b.sgn * b.speed ** pw for pw in powers]),
+                  tuple(f"pow{pw:g}" for pw in powers), vel_words),
+            Group("acceleration", "acceleration", b.acc[:, None], ("ddq",),
+                  lambda c: (f"torque proportional to the acceleration q̈ "
+                             f"({c.get('ddq', 0.0):+.3g} N m s²/rad)",
+                             {"coef_nm_s2_per_rad": c.get("ddq", 0.0)}))]
+
+
 def friction_basis(result: CalibrationResult, n_peaks: int = 2,
                    harmonics: Sequence[int] = (1, 2, 3),
                    powers: Sequence[float] = (0.5, 1.5, 2.0)
@@ -221,99 +364,17 @@ def friction_basis(result: CalibrationResult, n_peaks: int = 2,
     p = result.problem
     if p.kind != "friction":
         raise ValueError(f"problem.kind must be 'friction' for friction_basis, got {p.kind!r}")
-    sig = p.signals
     rows = np.union1d(p.split.fit, p.split.validation)
     fit = np.searchsorted(rows, p.split.fit)
     val = np.searchsorted(rows, p.split.validation)
     x0, _ = model_design(result)
-    n = rows.size
-    proj = Projector(np.hstack([x0[rows], np.ones((n, 1))]), fit)
+    proj = Projector(np.hstack([x0[rows], np.ones((rows.size, 1))]), fit)
     y = np.asarray(p.y, float)[rows]
     r0 = proj.resid(y)
-    t, q = sig.t_s[rows], sig.q_rad[rows]
-    v, acc = sig.dq_rad_s[rows], sig.ddq_rad_s2[rows]
-    sgn = np.tanh(v / sig.v_s)
-    v_ref = sig.scales.v_ref
-    speed = np.abs(v) / v_ref
-    load = None if sig.load_nm is None else np.asarray(sig.load_nm, float)[rows]
-    mods = {"speed": speed} | ({} if load is None or np.ptp(load) <= 0 else {"load": load})
-    mod_range = {m: (float(mv.min()), float(mv[fit].mean()), float(mv.max()))
-                 for m, mv in mods.items()}
-    groups: list[Group] = []
-
-    # ripples over the joint angle: plain and × sgn q̇, each also × |q̇| and × load
-    q_mods = {"plain": np.ones(n), "sgn": sgn} | mods | {f"sgn{m}": sgn * mv
-                                                          for m, mv in mods.items()}
-    dq_med = sig.scales.dq_med
-    p_lo, p_hi, _ = ripple_period_range()
-    p_min, p_max = max(p_lo, 4.0 * dq_med), min(p_hi, 0.5 * float(np.ptp(q)))
-    found: list[float] = []
-    # lines of the residual, of the residual × sgn q̇ (a friction-level ripple) and of
-    # the residual × each centred modulator (a ripple whose mean amplitude the model
-    # holds already, but not its growth with speed or load)
-    centred = [(mv - mv[fit].mean()) / (mv[fit].std() or 1.0) for mv in mods.values()]
-    for rr in [r0, r0 * sgn] + [r0 * c for c in centred]:
-        found += line_peaks(q, rr, p_min, p_max, n_peaks, harmonics, exclude=found)
-    for f in found:
-        words = _tone_words("angle_ripple", f, harmonics, list(q_mods), mod_range, v_ref,
-                            sig.gear_ratio)
-        groups.append(_tone_group(f"ripple over q {1 / f:.4g} rad", "angle_ripple", f, q,
-                                  harmonics, q_mods, words))
-    # tones in time at fixed frequencies, plain and × |q̇| (and × load)
-    t_mods = {"plain": np.ones(n)} | mods
-    dt_med, t_span = sig.scales.dt_med, float(np.ptp(t))
-    lobe_t = 1.0 / max(t_span, 1e-12)
-    motion_lines = line_peaks(t, q - q.mean(), 2.5 * dt_med, t_span / 2, 3, harmonics)
-    for f in line_peaks(t, r0, 2.5 * dt_med, t_span / 4, n_peaks, harmonics):
-        on = next((g for g in motion_lines for h in harmonics
-                   if abs(f - h * g) < lobe_t), None)
-        words = _tone_words("time_tone", f, harmonics, list(t_mods), mod_range, v_ref, None,
-                            on)
-        groups.append(_tone_group(f"tone in time {f:.4g} Hz", "time_tone", f, t, harmonics,
-                                  t_mods, words))
-    # friction level and viscous friction times the load
-    if "load" in mods:
-        def load_words(coef: dict[str, float]) -> tuple[str, dict[str, Any]]:
-            c0, c1 = coef.get("sgn_load", 0.0), coef.get("v_load", 0.0)
-            parts = [f"friction level {'grows' if c0 > 0 else 'falls'} with the load "
-                     f"({c0:+.3g} N m per N m)"] if c0 else []
-            if c1:
-                parts.append(f"viscous friction {'grows' if c1 > 0 else 'falls'} with the "
-                             f"load ({c1:+.3g} N m s/rad per N m)")
-            return "; ".join(parts), {"level_per_load": c0, "viscous_per_load_s_per_rad": c1}
-        groups.append(Group("load", "load_modulation", np.column_stack([sgn * load, v * load]),
-                            ("sgn_load", "v_load"), load_words))
-    # slow trends in time: an offset and a friction level that drift
-    tau = (t - 0.5 * (t.min() + t.max())) / max(0.5 * t_span, 1e-12)
-    leg = [tau, 0.5 * (3 * tau ** 2 - 1), 0.5 * (5 * tau ** 3 - 3 * tau)]
-    grid = np.linspace(-1, 1, 201)
-    leg_g = [grid, 0.5 * (3 * grid ** 2 - 1), 0.5 * (5 * grid ** 3 - 3 * grid)]
-
-    def trend_words(coef: dict[str, float], level: bool = False) -> tuple[str, dict[str, Any]]:
-        c = [coef.get(f"p{i + 1}", 0.0) for i in range(3)]
-        dev = float(np.max(np.abs(sum(ci * g for ci, g in zip(c, leg_g, strict=True)))))
-        what = ("friction level drifts slowly in time (× sgn q̇)" if level
-                else "slow trend in time (a torque offset that drifts)")
-        return (f"{what}: up to {dev:.3g} N m over the recording",
-                {"legendre_nm": c, "max_deviation_nm": dev})
-    groups.append(Group("trend", "trend", np.column_stack(leg), ("p1", "p2", "p3"),
-                        trend_words))
-    groups.append(Group("level trend", "level_trend", np.column_stack([sgn * g for g in leg[:2]]),
-                        ("p1", "p2"), lambda c: trend_words(c, level=True)))
-    # velocity law beyond sgn, q̇, q̇³; acceleration
-
-    def vel_words(coef: dict[str, float]) -> tuple[str, dict[str, Any]]:
-        terms = [f"{coef.get(f'pow{pw:g}', 0.0):+.3g} N m · sgn(q̇) abs(q̇/v_ref)^{pw:g}"
-                 for pw in powers if coef.get(f"pow{pw:g}", 0.0)]
-        return (f"velocity law beyond the model: {' '.join(terms)} (v_ref = {v_ref:.3g} "
-                "rad/s)", {f"pow{pw:g}_nm": coef.get(f"pow{pw:g}", 0.0) for pw in powers})
-    groups.append(Group("velocity law", "velocity_law",
-                        np.column_stack([sgn * speed ** pw for pw in powers]),
-                        tuple(f"pow{pw:g}" for pw in powers), vel_words))
-    groups.append(Group("acceleration", "acceleration", acc[:, None], ("ddq",),
-                        lambda c: (f"torque proportional to the acceleration q̈ "
-                                   f"({c.get('ddq', 0.0):+.3g} N m s²/rad)",
-                                   {"coef_nm_s2_per_rad": c.get("ddq", 0.0)})))
+    b = _basis_rows(p.signals, rows, fit)
+    groups = (_angle_ripple_groups(b, r0, n_peaks, harmonics)
+              + _time_tone_groups(b, r0, n_peaks, harmonics)
+              + _load_groups(b) + _trend_groups(b) + _velocity_groups(b, powers))
     for g in groups:  # the candidate's key in the proposal (for propose_friction)
         g.describe = _keyed(g.describe, g.key)
     return y, groups, fit, val, proj

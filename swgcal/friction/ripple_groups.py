@@ -134,31 +134,47 @@ def harmonic_groups(periods: Sequence[float], rel_se: Sequence[float] | None = N
     tol = np.maximum(rel_tol, 3.0 * se)
     # a harmonic relation is claimed only between periods the data pin down
     eligible = 3.0 * se <= MAX_PERIOD_TOL
-    out: list[RippleGroupProposal] = []
-
-    def dedupe(cands: list[tuple[int, int, float]]) -> list[tuple[int, int, float]]:
-        best: dict[int, tuple[int, int, float]] = {}
-        for i, h, err in cands:
-            if h not in best or err < best[h][2]:
-                best[h] = (i, h, err)
-        return sorted(best.values(), key=lambda x: x[1])
-
-    def proposal(sel: list[tuple[int, int, float]]) -> RippleGroupProposal:
-        f0 = float(np.mean([p[i] * h for i, h, _ in sel]))
-        return RippleGroupProposal(tuple(i for i, _, _ in sel), tuple(h for _, h, _ in sel),
-                                   f0)
-
     if gear_ratio is not None:
-        cands = []
-        for i in np.flatnonzero(eligible).tolist():
-            k = wave_generator_order(float(p[i]), float(gear_ratio))
-            h = int(round(k))
-            if _near(k, h, tol[i]):
-                cands.append((i, h, abs(k / h - 1.0)))
-        sel = dedupe(cands)
-        if len(sel) >= 2:
-            out.append(proposal(sel))
-        return out
+        return _groups_by_order(p, eligible, tol, float(gear_ratio))
+    return _groups_by_ratio(p, eligible, tol)
+
+
+def _dedupe(cands: list[tuple[int, int, float]]) -> list[tuple[int, int, float]]:
+    """Of candidate members (index, harmonic, relative error) at the same harmonic, the
+    one nearest to it; by harmonic."""
+    best: dict[int, tuple[int, int, float]] = {}
+    for i, h, err in cands:
+        if h not in best or err < best[h][2]:
+            best[h] = (i, h, err)
+    return sorted(best.values(), key=lambda x: x[1])
+
+
+def _proposal(p: np.ndarray, sel: list[tuple[int, int, float]]) -> RippleGroupProposal:
+    """The group of the members ``sel``; fundamental: the mean of period × harmonic."""
+    f0 = float(np.mean([p[i] * h for i, h, _ in sel]))
+    return RippleGroupProposal(tuple(i for i, _, _ in sel), tuple(h for _, h, _ in sel), f0)
+
+
+def _groups_by_order(p: np.ndarray, eligible: np.ndarray, tol: np.ndarray,
+                     gear_ratio: float) -> list[RippleGroupProposal]:
+    """With the gear ratio: the eligible periods whose wave-generator order is near an
+    integer, one group when there are two or more."""
+    cands = []
+    for i in np.flatnonzero(eligible).tolist():
+        k = wave_generator_order(float(p[i]), gear_ratio)
+        h = int(round(k))
+        if _near(k, h, tol[i]):
+            cands.append((i, h, abs(k / h - 1.0)))
+    sel = _dedupe(cands)
+    return [_proposal(p, sel)] if len(sel) >= 2 else []
+
+
+def _groups_by_ratio(p: np.ndarray, eligible: np.ndarray, tol: np.ndarray
+                     ) -> list[RippleGroupProposal]:
+    """Without the gear ratio: the longest period that groups another one (or a small
+    multiple of it) anchors a group, the choice grouping most periods winning; then the
+    rest is searched again."""
+    out: list[RippleGroupProposal] = []
     left = sorted(np.flatnonzero(eligible).tolist(), key=lambda i: -p[i])
     while len(left) >= 2:
         best: list[tuple[int, int, float]] = []
@@ -172,14 +188,14 @@ def harmonic_groups(periods: Sequence[float], rel_se: Sequence[float] | None = N
                     t_ia = math.hypot(tol[i], tol[a]) if i != a else tol[i]
                     if h <= MAX_HARMONIC and _near(ratio, h, t_ia):
                         cands.append((i, h, abs(ratio / h - 1.0)))
-                sel = dedupe(cands)
+                sel = _dedupe(cands)
                 if len(sel) >= 2 and len(sel) > len(best) and a in [i for i, _, _ in sel]:
                     best = sel
             if best:
                 break  # the longest period that groups another one anchors the group
         if len(best) < 2:
             break
-        out.append(proposal(best))
+        out.append(_proposal(p, best))
         left = [i for i in left if i not in {j for j, _, _ in best}]
     return out
 

@@ -12,6 +12,7 @@ are treated exactly like fit windows.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -123,6 +124,156 @@ def _mod_words(coef: Mapping[str, float], mods: Sequence[str], scale: float, uni
     return out, params
 
 
+@dataclass(frozen=True)
+class _Rows:
+    """A strain calibration on the basis rows (fit and validation rows together): window
+    ``w`` and channel ``ch`` of every row, the channels one-hot (``oh``), the sample
+    within the window (``t_idx``), the final model's signals ``pred`` (windows × channels
+    × time), the modulators (``mods``: load, and speed unless it varies with the load;
+    ``joint``: the words saying so), their ranges and means on the fit rows."""
+
+    fit: np.ndarray
+    w: np.ndarray
+    ch: np.ndarray
+    oh: np.ndarray
+    t_idx: np.ndarray
+    pred: np.ndarray
+    mods: dict[str, np.ndarray]
+    joint: str
+    rng: dict[str, tuple[float, float, str]]
+    mean_mod: dict[str, float]
+
+
+def _nuisance(b: _Rows, x0: np.ndarray, sig_f: Any, t_seq: np.ndarray, rows: np.ndarray
+              ) -> Projector:
+    """The final model's design ``x0`` and the library's linear directions per channel
+    (offset, gain, misplacement −∂s/∂ψ, drift ``t_seq``, the bridge nonlinearity's −s²)
+    on the basis rows; local: each window's ∂s/∂ψ."""
+    oh = b.oh
+    pred_nom = sig_f.prediction()[rows]
+    nuis = np.hstack([x0, oh, oh * t_seq[:, None], oh * pred_nom[:, None],
+                      oh * (-sig_f.col("dpsi")[rows])[:, None], -(pred_nom ** 2)[:, None]])
+    # each window's WG angle is a nuisance fitted on its own data (the alignment): its
+    # first-order change, ∂s/∂ψ on all channels, is a local nuisance of the window
+    return Projector(nuis, b.fit, sig_f.col("dpsi")[rows], b.w)
+
+
+def _basis_rows(result: CalibrationResult, rows: np.ndarray, fit: np.ndarray) -> _Rows:
+    """Windows, channels, the final model's signals and the modulators on ``rows``."""
+    sig = result.problem.signals
+    w, ch = sig.window[rows], sig.channel[rows]
+    oh = (ch[:, None] == np.arange(5)[None, :]).astype(float)
+    pred = result.final.predict(sig).reshape((sig.n_windows, 5, sig.n_t))
+    t_idx = (np.arange(sig.n) % sig.n_t)[rows]
+    load_w, speed_w = np.asarray(sig.t_out_nm, float), np.asarray(sig.n_in_rpm, float) / 1e3
+    corr = (abs(np.corrcoef(load_w, speed_w)[0, 1])
+            if np.ptp(load_w) > 0 and np.ptp(speed_w) > 0 else 1.0)
+    mods = {"load": load_w[w]}
+    joint = ""
+    if corr < LOAD_SPEED_COLLINEAR:
+        mods["speed"] = speed_w[w]
+    else:
+        joint = " (load and speed vary together in these data: either may be the cause)"
+    rng = {m: (float(v.min()), float(v.max()), _MOD_TEXT[m]) for m, v in mods.items()}
+    mean_mod = {m: float(v[fit].mean()) for m, v in mods.items()}
+    return _Rows(fit, w, ch, oh, t_idx, pred, mods, joint, rng, mean_mod)
+
+
+def _crosstalk_groups(b: _Rows, sig_f: Any) -> list[Group]:
+    """Crosstalk: the final model's signal of channel a on the rows of channel b, plain
+    and × load and speed; sources whose model signals are the same up to an offset (s1
+    and s3, s2 and s4 of the nominal layout) are one source."""
+    mods, mean_mod, joint, shape = b.mods, b.mean_mod, b.joint, b.pred.shape
+    nom = sig_f.prediction().reshape(shape)
+    nom = nom - nom.mean(axis=(0, 2), keepdims=True)
+    same = [[a2 for a2 in range(5) if np.allclose(nom[:, a], nom[:, a2], rtol=1e-6,
+                                                  atol=1e-6 * np.abs(nom).max())]
+            for a in range(5)]
+    groups = []
+    for a in range(5):
+        for c in range(5):
+            if c in same[a] or min(same[a]) < a:  # a gain of c, or a source done already
+                continue
+            col = b.oh[:, c] * b.pred[b.w, a, b.t_idx]
+            cols = np.column_stack([col] + [col * v for v in mods.values()])
+            names = ("plain",) + tuple(f"x_{m}" for m in mods)
+            alias = [SENSORS[x] for x in same[a] if x != a]
+            src = SENSORS[a] + (f" (or {', '.join(alias)}: the same signal in the model)"
+                                if alias else "")
+
+            def xt_words(coef, a=a, c=c, src=src):
+                mean = coef["plain"] + sum(mean_mod[m] * coef.get(f"x_{m}", 0.0) for m in mods)
+                mw, mp = _mod_words(coef, list(mods), 100.0, "%", joint)
+                txt = f"crosstalk: {100 * mean:.2g} % of {src} in {SENSORS[c]}"
+                return ((txt + ", " + ", ".join(f"fraction {x}" for x in mw)) if mw else txt,
+                        {"source": SENSORS[a], "target": SENSORS[c], "fraction": mean,
+                         "fraction_plain": coef["plain"], **{f"fraction_{k}": v
+                                                             for k, v in mp.items()}})
+            groups.append(Group(f"crosstalk {SENSORS[a]}->{SENSORS[c]}", "crosstalk", cols,
+                                names, xt_words))
+    return groups
+
+
+def _channel_groups(b: _Rows, t_seq: np.ndarray) -> list[Group]:
+    """Per channel: gain and offset times load and speed, and a slow trend (Legendre P2,
+    P3 of the time along the recording ``t_seq`` on the basis rows)."""
+    mods, joint, oh = b.mods, b.joint, b.oh
+    tau = (t_seq - 0.5 * (t_seq.min() + t_seq.max())) / max(0.5 * np.ptp(t_seq), 1e-12)
+    groups = []
+    for c in range(5):
+        own = oh[:, c] * b.pred[b.w, c, b.t_idx]
+        for kind, col, scale, unit, what in (("gain_modulation", own, 100.0, "%", "gain"),
+                                             ("offset_modulation", oh[:, c], 1.0, "mV/V",
+                                              "offset")):
+            def mod_words(coef, c=c, scale=scale, unit=unit, what=what):
+                mw, mp = _mod_words(coef, list(mods), scale, unit, joint)
+                return (f"{what} of {SENSORS[c]} " + " and ".join(mw),
+                        {"channel": SENSORS[c], "unit": "-" if unit == "%" else unit,
+                         **{f"{what}_{k}": v for k, v in mp.items()}})
+            groups.append(Group(f"{what} {SENSORS[c]}", kind,
+                                np.column_stack([col * v for v in mods.values()]),
+                                tuple(f"x_{m}" for m in mods), mod_words))
+        tr = np.column_stack([oh[:, c] * 0.5 * (3 * tau ** 2 - 1),
+                              oh[:, c] * 0.5 * (5 * tau ** 3 - 3 * tau)])
+
+        def trend_words(coef, c=c):
+            a2, a3 = coef.get("p2", 0.0), coef.get("p3", 0.0)
+            grid = np.linspace(-1, 1, 201)
+            dev = float(np.max(np.abs(a2 * 0.5 * (3 * grid ** 2 - 1)
+                                      + a3 * 0.5 * (5 * grid ** 3 - 3 * grid))))
+            return (f"slow trend of {SENSORS[c]} along the recording (curved, beyond a "
+                    f"linear drift: up to {_fmt_unit(dev, 'mV/V')})",
+                    {"channel": SENSORS[c], "legendre_p2_mvv": a2, "legendre_p3_mvv": a3,
+                     "max_deviation_mvv": dev})
+        groups.append(Group(f"trend {SENSORS[c]}", "trend", tr, ("p2", "p3"), trend_words))
+    return groups
+
+
+def _tone_groups(b: _Rows, sig: Any, phi: np.ndarray, t_s: np.ndarray, r0: np.ndarray,
+                 n_peaks: int, harmonics: Sequence[int], max_order: float,
+                 f_range_hz: tuple[float, float]) -> list[Group]:
+    """Tones at the strongest free orders of the input rotation (``phi``, on the basis
+    rows) and fixed frequencies (time ``t_s``) of the residual ``r0``, one phase per
+    window and harmonic."""
+    fit, w, ch = b.fit, b.w, b.ch
+    blk = w * 5 + ch
+    twopi_t = 2 * np.pi * t_s
+    revs = sig.n_t / sig.fs * float(np.min(sig.n_in_rpm)) / 60.0
+    lobe_o, lobe_f = 1.0 / revs, sig.fs / sig.n_t
+    searches = (("order_tone", phi, (0.5, max_order), lobe_o / 8, lobe_o),
+                ("fixed_tone", twopi_t, (f_range_hz[0], min(f_range_hz[1], 0.4 * sig.fs)),
+                 lobe_f / 8, lobe_f))
+    groups = []
+    for kind, coord, (lo, hi), step, lobe in searches:
+        for v in spectral_peaks(r0[fit], coord[fit], blk[fit], lo, hi, step, lobe, n_peaks,
+                                max(harmonics)):
+            words = _tone_words(kind, v, harmonics, SENSORS, b.rng, b.mean_mod, "mV/V",
+                                b.joint)
+            groups.append(tone_group(f"{kind} {v:.4g}", kind, v, coord, r0, w, ch, 5, fit,
+                                     harmonics, b.mods, words))
+    return groups
+
+
 def strain_basis(result: CalibrationResult, n_peaks: int = 2,
                  harmonics: Sequence[int] = (1, 2, 3), max_order: float = 20.0,
                  f_range_hz: tuple[float, float] = (20.0, 1000.0)
@@ -153,105 +304,13 @@ def strain_basis(result: CalibrationResult, n_peaks: int = 2,
     fit = np.searchsorted(rows, p.split.fit)
     val = np.searchsorted(rows, p.split.validation)
     x0, sig_f = model_design(result)
-    w, ch = sig.window[rows], sig.channel[rows]
-    oh = (ch[:, None] == np.arange(5)[None, :]).astype(float)
-    shape = (sig.n_windows, 5, sig.n_t)
-    pred_nom = sig_f.prediction()[rows]
-    nuis = np.hstack([x0[rows], oh, oh * sig.t_seq_s[rows, None], oh * pred_nom[:, None],
-                      oh * (-sig_f.col("dpsi")[rows])[:, None], -(pred_nom ** 2)[:, None]])
-    # each window's WG angle is a nuisance fitted on its own data (the alignment): its
-    # first-order change, ∂s/∂ψ on all channels, is a local nuisance of the window
-    proj = Projector(nuis, fit, sig_f.col("dpsi")[rows], w)
+    b = _basis_rows(result, rows, fit)
+    proj = _nuisance(b, x0[rows], sig_f, sig.t_seq_s[rows], rows)
     y = p.y[rows]
     r0 = proj.resid(y)
-    pred = result.final.predict(sig).reshape(shape)
-    t_idx = (np.arange(sig.n) % sig.n_t)[rows]
-    load_w, speed_w = np.asarray(sig.t_out_nm, float), np.asarray(sig.n_in_rpm, float) / 1e3
-    corr = (abs(np.corrcoef(load_w, speed_w)[0, 1])
-            if np.ptp(load_w) > 0 and np.ptp(speed_w) > 0 else 1.0)
-    mods = {"load": load_w[w]}
-    joint = ""
-    if corr < LOAD_SPEED_COLLINEAR:
-        mods["speed"] = speed_w[w]
-    else:
-        joint = " (load and speed vary together in these data: either may be the cause)"
-    rng = {m: (float(v.min()), float(v.max()), _MOD_TEXT[m]) for m, v in mods.items()}
-    mean_mod = {m: float(v[fit].mean()) for m, v in mods.items()}
-    groups: list[Group] = []
-
-    def variants(col: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
-        return (np.column_stack([col] + [col * v for v in mods.values()]),
-                ("plain",) + tuple(f"x_{m}" for m in mods))
-
-    # sources whose model signals are the same up to an offset (s1 and s3, s2 and s4 of
-    # the nominal layout) are one source
-    nom = sig_f.prediction().reshape(shape)
-    nom = nom - nom.mean(axis=(0, 2), keepdims=True)
-    same = [[a2 for a2 in range(5) if np.allclose(nom[:, a], nom[:, a2], rtol=1e-6,
-                                                  atol=1e-6 * np.abs(nom).max())]
-            for a in range(5)]
-    for a in range(5):
-        for b in range(5):
-            if b in same[a] or min(same[a]) < a:  # a gain of b, or a source done already
-                continue
-            cols, names = variants(oh[:, b] * pred[w, a, t_idx])
-            alias = [SENSORS[x] for x in same[a] if x != a]
-            src = SENSORS[a] + (f" (or {', '.join(alias)}: the same signal in the model)"
-                                if alias else "")
-
-            def xt_words(coef, a=a, b=b, src=src):
-                mean = coef["plain"] + sum(mean_mod[m] * coef.get(f"x_{m}", 0.0) for m in mods)
-                mw, mp = _mod_words(coef, list(mods), 100.0, "%", joint)
-                txt = f"crosstalk: {100 * mean:.2g} % of {src} in {SENSORS[b]}"
-                return ((txt + ", " + ", ".join(f"fraction {x}" for x in mw)) if mw else txt,
-                        {"source": SENSORS[a], "target": SENSORS[b], "fraction": mean,
-                         "fraction_plain": coef["plain"], **{f"fraction_{k}": v
-                                                             for k, v in mp.items()}})
-            groups.append(Group(f"crosstalk {SENSORS[a]}->{SENSORS[b]}", "crosstalk", cols,
-                                names, xt_words))
-    tau = sig.t_seq_s[rows]
-    tau = (tau - 0.5 * (tau.min() + tau.max())) / max(0.5 * np.ptp(tau), 1e-12)
-    for c in range(5):
-        own = oh[:, c] * pred[w, c, t_idx]
-        for kind, col, scale, unit, what in (("gain_modulation", own, 100.0, "%", "gain"),
-                                             ("offset_modulation", oh[:, c], 1.0, "mV/V",
-                                              "offset")):
-            def mod_words(coef, c=c, scale=scale, unit=unit, what=what):
-                mw, mp = _mod_words(coef, list(mods), scale, unit, joint)
-                return (f"{what} of {SENSORS[c]} " + " and ".join(mw),
-                        {"channel": SENSORS[c], "unit": "-" if unit == "%" else unit,
-                         **{f"{what}_{k}": v for k, v in mp.items()}})
-            groups.append(Group(f"{what} {SENSORS[c]}", kind,
-                                np.column_stack([col * v for v in mods.values()]),
-                                tuple(f"x_{m}" for m in mods), mod_words))
-        tr = np.column_stack([oh[:, c] * 0.5 * (3 * tau ** 2 - 1),
-                              oh[:, c] * 0.5 * (5 * tau ** 3 - 3 * tau)])
-
-        def trend_words(coef, c=c):
-            a2, a3 = coef.get("p2", 0.0), coef.get("p3", 0.0)
-            grid = np.linspace(-1, 1, 201)
-            dev = float(np.max(np.abs(a2 * 0.5 * (3 * grid ** 2 - 1)
-                                      + a3 * 0.5 * (5 * grid ** 3 - 3 * grid))))
-            return (f"slow trend of {SENSORS[c]} along the recording (curved, beyond a "
-                    f"linear drift: up to {_fmt_unit(dev, 'mV/V')})",
-                    {"channel": SENSORS[c], "legendre_p2_mvv": a2, "legendre_p3_mvv": a3,
-                     "max_deviation_mvv": dev})
-        groups.append(Group(f"trend {SENSORS[c]}", "trend", tr, ("p2", "p3"), trend_words))
-
-    blk = w * 5 + ch
-    phi = sig_f.phi_in_rad[rows]
-    twopi_t = 2 * np.pi * sig.t_s[rows]
-    revs = sig.n_t / sig.fs * float(np.min(sig.n_in_rpm)) / 60.0
-    lobe_o, lobe_f = 1.0 / revs, sig.fs / sig.n_t
-    searches = (("order_tone", phi, (0.5, max_order), lobe_o / 8, lobe_o),
-                ("fixed_tone", twopi_t, (f_range_hz[0], min(f_range_hz[1], 0.4 * sig.fs)),
-                 lobe_f / 8, lobe_f))
-    for kind, coord, (lo, hi), step, lobe in searches:
-        for v in spectral_peaks(r0[fit], coord[fit], blk[fit], lo, hi, step, lobe, n_peaks,
-                                max(harmonics)):
-            words = _tone_words(kind, v, harmonics, SENSORS, rng, mean_mod, "mV/V", joint)
-            groups.append(tone_group(f"{kind} {v:.4g}", kind, v, coord, r0, w, ch, 5, fit,
-                                     harmonics, mods, words))
+    groups = (_crosstalk_groups(b, sig_f) + _channel_groups(b, sig.t_seq_s[rows])
+              + _tone_groups(b, sig, sig_f.phi_in_rad[rows], sig.t_s[rows], r0, n_peaks,
+                             harmonics, max_order, f_range_hz))
     return y, groups, fit, val, proj
 
 

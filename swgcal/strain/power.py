@@ -162,57 +162,95 @@ def power_study(effects: Sequence[str], seeds: Iterable[int] = range(10), *,
     """
     specs = [(e, _spec(e)) for e in effects]
     config = SelectionConfig(**options)
-
-    def run(ds: Any, **problem_options: Any) -> dict[str, Any]:
-        return summarize(calibrate(build_problem(ds, model=model, **problem_options), config))
-
     chain = chain if chain is not None else SimulationChain()
     model = model if model is not None else StrainModel(chain=chain)
+    bench = _Bench(chain, model, config, noise_rel, n_per_op, rel_tol)
     seeds = [int(s) for s in seeds]
+    clean_added, t_clean = _clean_runs(bench, seeds, clean)
+    return [_effect_row(bench, name, spec, seeds, clean_added, t_clean)
+            for name, spec in specs]
+
+
+@dataclass
+class _Bench:
+    """What every run of a power study shares: the chain, the calibration model, the
+    selection settings, the noise, windows per operating point, the recovery tolerance,
+    and the clean windows of every seed (``windows``)."""
+
+    chain: SimulationChain
+    model: StrainModel
+    config: SelectionConfig
+    noise_rel: float
+    n_per_op: int
+    rel_tol: float
+    windows: dict[int, Any] = field(default_factory=dict)
+
+    def run(self, ds: Any, **problem_options: Any) -> dict[str, Any]:
+        """The summary of a bench data set, calibrated."""
+        return summarize(calibrate(build_problem(ds, model=self.model, **problem_options),
+                                   self.config))
+
+
+def _clean_runs(bench: _Bench, seeds: Sequence[int], clean: bool
+                ) -> tuple[list[list[str]], float]:
+    """Simulate every seed's windows (into ``bench.windows``) and, with ``clean``,
+    calibrate its clean data; (effects accepted per seed, wall time of the clean runs)."""
     clean_added: list[list[str]] = []
     t_clean = 0.0
-    rows = []
-    windows = {}
     for k in seeds:
-        windows[k] = syn.simulate_windows(chain, n_per_op=n_per_op, seed=k)
+        bench.windows[k] = syn.simulate_windows(bench.chain, n_per_op=bench.n_per_op, seed=k)
         if clean:
             t0 = time.perf_counter()
-            ds, _ = syn.bench_dataset(windows[k], (), noise_rel=noise_rel, seed=1000 + k)
-            s = run(ds)
+            ds, _ = syn.bench_dataset(bench.windows[k], (), noise_rel=bench.noise_rel,
+                                      seed=1000 + k)
+            s = bench.run(ds)
             clean_added.append([e["name"] for e in s["effects_added"]])
             t_clean += time.perf_counter() - t0
-    for name, spec in specs:
-        t0 = time.perf_counter()
-        found, est_first, details = 0, [], []
-        truth0: dict[str, float] = {}
-        for k in seeds:
-            win = windows[k]
-            if spec.get("ke"):
-                win = syn.simulate_windows(chain, n_per_op=n_per_op, seed=k, ke=spec["ke"])
-            period = spec.get("window_period_s")
-            ds, _ = syn.bench_dataset(win, spec.get("sensor_effects", ()), noise_rel=noise_rel,
-                                      seed=1000 + k, window_period_s=period)
-            s = run(ds, **({} if period is None else {"window_period_s": period}))
-            ok, est, truth = _recovered(spec, s, rel_tol)
-            truth0 = truth0 or truth
-            found += ok
-            if est:
-                est_first.append(next(iter(est.values())))
-            cand = [c for it in s["iterations"] for c in it["candidates"]
-                    if c["name"] == spec["key"]]
-            details.append({"seed": k, "added": [e["name"] for e in s["effects_added"]],
-                            "found": ok, "estimates": est,
-                            "statuses": [c["status"] for c in cand],
-                            "heldout_evidence": [c["heldout_evidence"] for c in cand],
-                            "delta_bic_eff": [c["delta_bic_eff"] for c in cand]})
-        param, true = (next(iter(truth0.items())) if truth0 else
-                       (next(iter(spec["check"])), float("nan")))
-        rows.append(PowerRow(
-            effect=name, parameter=param, true_value=float(true) if np.isscalar(true)
-            else float("nan"), found=found, n_seeds=len(seeds), estimates=est_first,
-            clean_left_alone=sum(1 for a in clean_added if not a), clean_added=clean_added,
-            wall_s=time.perf_counter() - t0 + t_clean, details=details))
-    return rows
+    return clean_added, t_clean
+
+
+def _seed_outcome(bench: _Bench, spec: Mapping[str, Any], k: int
+                  ) -> tuple[bool, dict[str, float], dict[str, float], dict[str, Any]]:
+    """One seed of a planted effect: plant it, calibrate; (found, estimates, true
+    values, details: added effects and the planted candidate's statuses)."""
+    win = bench.windows[k]
+    if spec.get("ke"):
+        win = syn.simulate_windows(bench.chain, n_per_op=bench.n_per_op, seed=k, ke=spec["ke"])
+    period = spec.get("window_period_s")
+    ds, _ = syn.bench_dataset(win, spec.get("sensor_effects", ()), noise_rel=bench.noise_rel,
+                              seed=1000 + k, window_period_s=period)
+    s = bench.run(ds, **({} if period is None else {"window_period_s": period}))
+    ok, est, truth = _recovered(spec, s, bench.rel_tol)
+    cand = [c for it in s["iterations"] for c in it["candidates"] if c["name"] == spec["key"]]
+    details = {"seed": k, "added": [e["name"] for e in s["effects_added"]],
+               "found": ok, "estimates": est,
+               "statuses": [c["status"] for c in cand],
+               "heldout_evidence": [c["heldout_evidence"] for c in cand],
+               "delta_bic_eff": [c["delta_bic_eff"] for c in cand]}
+    return ok, est, truth, details
+
+
+def _effect_row(bench: _Bench, name: str, spec: Mapping[str, Any], seeds: Sequence[int],
+                clean_added: list[list[str]], t_clean: float) -> PowerRow:
+    """A planted effect over the seeds: found seeds, the first parameter's estimates,
+    the clean runs' outcome."""
+    t0 = time.perf_counter()
+    found, est_first, details = 0, [], []
+    truth0: dict[str, float] = {}
+    for k in seeds:
+        ok, est, truth, detail = _seed_outcome(bench, spec, k)
+        truth0 = truth0 or truth
+        found += ok
+        if est:
+            est_first.append(next(iter(est.values())))
+        details.append(detail)
+    param, true = (next(iter(truth0.items())) if truth0 else
+                   (next(iter(spec["check"])), float("nan")))
+    return PowerRow(
+        effect=name, parameter=param, true_value=float(true) if np.isscalar(true)
+        else float("nan"), found=found, n_seeds=len(seeds), estimates=est_first,
+        clean_left_alone=sum(1 for a in clean_added if not a), clean_added=clean_added,
+        wall_s=time.perf_counter() - t0 + t_clean, details=details)
 
 
 def format_power_table(rows: Sequence[PowerRow]) -> str:
