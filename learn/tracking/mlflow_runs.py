@@ -492,6 +492,28 @@ def hydra_sweep() -> str | None:
     return f"sweep {Path(str(hc.sweep.dir)).resolve()}"
 
 
+def _create_run(client, experiment: str, run_name: str, tags: Mapping[str, Any] | None,
+                parent_run_id: str | None, group: str | None,
+                refs: list[DatasetRef]) -> tuple[TrackedRun, str | None]:
+    """Create the run of :func:`log_run` with its tags and parent; return it and the
+    group's parent run id (None outside a group)."""
+    key = (client.tracking_uri, experiment)
+    if key not in _EXPERIMENTS:  # looked up once per process
+        _EXPERIMENTS[key] = get_experiment_id(client, experiment)
+    exp_id = _EXPERIMENTS[key]
+    all_tags = {**git_tags(), **{k: str(v) for k, v in (tags or {}).items()}}
+    group_pid = None
+    if group is not None:
+        group = group.replace("'", "_").replace('"', "_")
+        all_tags["group"] = group
+        if parent_run_id is None:
+            parent_run_id = group_pid = group_parent(client, exp_id, group, refs)
+    if parent_run_id is not None:
+        all_tags["mlflow.parentRunId"] = parent_run_id
+    run = client.create_run(exp_id, run_name=run_name, tags=all_tags)
+    return TrackedRun(client, run.info.run_id, exp_id), group_pid
+
+
 @contextmanager
 def log_run(
     experiment: str,
@@ -559,21 +581,8 @@ def log_run(
         [dataset] if isinstance(dataset, (str, os.PathLike, DatasetRef)) else list(dataset))
     refs = [d if isinstance(d, DatasetRef) else dataset_ref(d) for d in items]
     client = mlflow.MlflowClient(tracking_uri or default_tracking_uri())
-    key = (client.tracking_uri, experiment)
-    if key not in _EXPERIMENTS:  # looked up once per process
-        _EXPERIMENTS[key] = get_experiment_id(client, experiment)
-    exp_id = _EXPERIMENTS[key]
-    all_tags = {**git_tags(), **{k: str(v) for k, v in (tags or {}).items()}}
-    group_pid = None
-    if group is not None:
-        group = group.replace("'", "_").replace('"', "_")
-        all_tags["group"] = group
-        if parent_run_id is None:
-            parent_run_id = group_pid = group_parent(client, exp_id, group, refs)
-    if parent_run_id is not None:
-        all_tags["mlflow.parentRunId"] = parent_run_id
-    run = client.create_run(exp_id, run_name=run_name, tags=all_tags)
-    tracked = TrackedRun(client, run.info.run_id, exp_id)
+    tracked, group_pid = _create_run(client, experiment, run_name, tags, parent_run_id,
+                                     group, refs)
     status = "FAILED"
     try:
         for ref in refs:
