@@ -419,7 +419,7 @@ def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]
 
 def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
                    feature_kwargs: Mapping[str, Any] | None = None, split_seed: int = 0,
-                   latency: bool | None = None) -> dict:
+                   latency: bool | None = None, checked: bool = False) -> dict:
     """Run every (protocol, split, seed, model, input) of the comparison on one data set.
 
     Parameters
@@ -441,6 +441,9 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
     latency : bool, optional
         Measure the inference latency (CPU, batch 1, one thread) of every (model, input);
         default ``tc.latency``.
+    checked : bool
+        ``tc`` has passed :func:`check_config` already (the task checks it once per run,
+        before any work, and runs one comparison per data set).
 
     Returns
     -------
@@ -458,7 +461,8 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
     """
     from tqdm.auto import tqdm
 
-    check_config(tc)
+    if not checked:
+        check_config(tc)
     specs = tc.runs
     latency = tc.latency if latency is None else latency
     t_all, input_s = time.perf_counter(), 0.0

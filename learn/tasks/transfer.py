@@ -113,7 +113,7 @@ def _compare(app, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected
                  len(tc.runs))
         out = run_comparison(ds, tc, dataset=name, feature_kwargs=feature_kwargs,
                              split_seed=app.seed,
-                             latency=tc.latency and got.latency is None)
+                             latency=tc.latency and got.latency is None, checked=True)
         got.results.append(out["results"])
         got.confusion.append(out["confusion"])
         got.input_s += out["input_s"]
