@@ -31,12 +31,17 @@ def meta():
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_kshot_split_keeps_evaluation_windows_apart(meta, seed):
     for sp in protocol_splits(meta, "ood_disturbed"):
-        ks = kshot_split(meta, sp.test, k_max=5, seed=seed)
+        ks = kshot_split(meta, sp.test, k_max=5, seed=seed, n_unlabelled=6)
         target = set(sp.test)
-        # pool and evaluation partition the held-out gear
-        assert set(ks.pool) | set(ks.evaluation) == target
+        # pool, healthy stream and evaluation partition the held-out gear
+        assert set(ks.pool) | set(ks.unlabelled) | set(ks.evaluation) == target
         assert not set(ks.pool) & set(ks.evaluation)
+        assert not set(ks.pool) & set(ks.unlabelled)
         assert not set(ks.evaluation) & set(sp.train)
+        # the pool is drawn as without a stream
+        no_stream = kshot_split(meta, sp.test, k_max=5, seed=seed, n_unlabelled=0)
+        np.testing.assert_array_equal(ks.pool, no_stream.pool)
+        assert no_stream.unlabelled.size == 0
         # whole variants: no (fault, variant) of the pool is evaluated
         ev = meta.iloc[ks.evaluation]
         pool = meta.iloc[ks.pool]
@@ -55,18 +60,50 @@ def test_kshot_split_keeps_evaluation_windows_apart(meta, seed):
         # every class still has evaluation windows
         assert ev["fault"].nunique() == 6
     # the draw is a function of the seed
-    a = kshot_split(meta, sp.test, 5, seed)
-    b = kshot_split(meta, sp.test, 5, seed)
+    a = kshot_split(meta, sp.test, 5, seed, n_unlabelled=6)
+    b = kshot_split(meta, sp.test, 5, seed, n_unlabelled=6)
     np.testing.assert_array_equal(a.shots(5), b.shots(5))
+    np.testing.assert_array_equal(a.unlabelled, b.unlabelled)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_healthy_stream_is_healthy_held_out_and_never_evaluated(meta, seed):
+    """The unsupervised adaptations' windows: healthy windows of the held-out gear only,
+    whole variants, none of them (nor a window of their variants) evaluated."""
+    for sp in protocol_splits(meta, "ood_disturbed"):
+        ks = kshot_split(meta, sp.test, k_max=2, seed=seed, n_unlabelled=6)
+        stream = meta.iloc[ks.unlabelled]
+        assert len(stream) >= 6
+        assert set(stream["fault"]) == {"healthy"}
+        assert set(stream["gear"]) == set(meta.iloc[sp.test]["gear"])
+        assert not set(ks.unlabelled) & (set(ks.evaluation) | set(sp.train))
+        ev = meta.iloc[ks.evaluation]
+        assert not (set(zip(ev.fault, ev.variant, strict=True))
+                    & set(zip(stream.fault, stream.variant, strict=True)))
+        # the evaluation keeps healthy windows (other variants) and every class
+        assert ev["fault"].nunique() == 6 and (ev["fault"] == "healthy").any()
+        check_no_leak(meta, sp.train, ks)
 
 
 def test_leak_guard_raises(meta):
+    from dataclasses import replace
+
     sp = protocol_splits(meta, "ood_disturbed")[0]
-    ks = kshot_split(meta, sp.test, 2, 0)
+    ks = kshot_split(meta, sp.test, 2, 0, n_unlabelled=4)
     with pytest.raises(ValueError, match="leak"):
         check_no_leak(meta, np.concatenate([sp.train, ks.evaluation[:1]]), ks)
     with pytest.raises(ValueError, match="too few"):
-        kshot_split(meta, sp.test, k_max=10_000, seed=0)
+        kshot_split(meta, sp.test, k_max=10_000, seed=0, n_unlabelled=0)
+    with pytest.raises(ValueError, match="too few"):
+        kshot_split(meta, sp.test, k_max=2, seed=0, n_unlabelled=10_000)
+    # a stream window that is evaluated, or one that is not healthy, is refused
+    with pytest.raises(ValueError, match="healthy stream leaks"):
+        check_no_leak(meta, sp.train, replace(ks, unlabelled=np.concatenate(
+            [ks.unlabelled, ks.evaluation[:1]])))
+    faulty = ks.pool[meta["fault"].to_numpy()[ks.pool] != "healthy"][:1]
+    with pytest.raises(ValueError, match="not healthy"):
+        check_no_leak(meta, sp.train, replace(ks, unlabelled=np.concatenate(
+            [ks.unlabelled, faulty])))
 
 
 def test_coral_recovers_a_shifted_domain():
@@ -94,6 +131,7 @@ def test_transfer_end_to_end(tmp_path):
         f"logger.tracking_uri=sqlite:///{tmp_path}/mlflow.db",
         "transfer.protocols=[cv_disturbed,ood_disturbed]", "transfer.seeds=[0,1]",
         "transfer.cv_seeds=[0]", "transfer.k_shots=[0,1,2]", "transfer.finetune.steps=3",
+        "transfer.adapt_windows=4",
         "transfer.n_threads=1", "transfer.latency_repeats=3", "transfer.progress=false",
         "transfer.runs=[{model:rf,input:sel3,adapt:coral},"
         "{model:minirocket,input:diff,finetune:true},"

@@ -1,12 +1,18 @@
-"""The k-shot split of a held-out gear: labelled pool and evaluation windows.
+"""The split of a held-out gear: labelled pool, healthy stream and evaluation windows.
 
 For the held-out gear of a leave-one-gear-out split, a seeded draw picks, per class,
 whole fault *variants* until they hold at least ``max(k_shots)`` windows: the *pool*.
 The k labelled windows of a class are the first k of a seeded permutation of its pool
-windows (so the k = 1 windows are among the k = 5 ones). Every model, k = 0 included, is
-evaluated on the same remaining windows of the gear (other variants), so accuracies are
-comparable across k; the pool's windows (labels dropped) are also the unlabelled target
-data of the unsupervised adaptations (:mod:`learn.learners.adapt`).
+windows (so the k = 1 windows are among the k = 5 ones).
+
+The unsupervised adaptations (AdaBN, CORAL: :mod:`learn.learners.adapt`) see what a real
+gear offers without labels: its *healthy stream*, the healthy windows recorded at
+commissioning, not the class-balanced pool. A second seeded draw (its own random
+stream, so the pool is the same with or without it) picks whole healthy variants outside
+the pool, each one pass over the operating points, until they hold at least
+``n_unlabelled`` windows. Every model, k = 0 included, is evaluated on the same remaining
+windows of the gear (other variants), so accuracies are comparable across k and across
+adaptations.
 """
 
 from __future__ import annotations
@@ -16,10 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+#: The class whose windows a gear offers without labels (its commissioning stream).
+HEALTHY = "healthy"
+
 
 @dataclass(frozen=True)
 class KShotSplit:
-    """Labelled pool and evaluation windows of a held-out gear.
+    """Labelled pool, healthy stream and evaluation windows of a held-out gear.
 
     Attributes
     ----------
@@ -31,12 +40,19 @@ class KShotSplit:
         Per class, the pool positions in draw order.
     pool_groups : set of (str, int)
         (fault, variant) of the pool.
+    unlabelled : ndarray of int
+        Positions of the healthy stream: the unlabelled target windows of the
+        unsupervised adaptations (empty when none was asked for).
+    unlabelled_groups : set of (str, int)
+        (fault, variant) of the healthy stream.
     """
 
     pool: np.ndarray
     evaluation: np.ndarray
     order: dict[str, np.ndarray]
     pool_groups: frozenset
+    unlabelled: np.ndarray
+    unlabelled_groups: frozenset
 
     def shots(self, k: int) -> np.ndarray:
         """Positions of the k labelled windows per class (nested in k)."""
@@ -48,8 +64,10 @@ class KShotSplit:
         return np.sort(np.concatenate([o[:k] for o in self.order.values()]))
 
 
-def kshot_split(meta: pd.DataFrame, target: np.ndarray, k_max: int, seed: int) -> KShotSplit:
-    """Split the windows of a held-out gear into a labelled pool and evaluation windows.
+def kshot_split(meta: pd.DataFrame, target: np.ndarray, k_max: int, seed: int, *,
+                n_unlabelled: int) -> KShotSplit:
+    """Split the windows of a held-out gear into a labelled pool, a healthy stream and
+    evaluation windows.
 
     Parameters
     ----------
@@ -60,7 +78,10 @@ def kshot_split(meta: pd.DataFrame, target: np.ndarray, k_max: int, seed: int) -
     k_max : int
         Largest k; the pool holds at least k_max windows of every class.
     seed : int
-        Seed of the variant draw and of the window order.
+        Seed of the variant draws and of the window order.
+    n_unlabelled : int
+        Least number of healthy windows in the healthy stream (whole healthy variants
+        outside the pool); 0: none (``transfer.adapt_windows``).
 
     Returns
     -------
@@ -69,52 +90,87 @@ def kshot_split(meta: pd.DataFrame, target: np.ndarray, k_max: int, seed: int) -
     Raises
     ------
     ValueError
-        If a class has too few windows for ``k_max`` while leaving one variant for
-        evaluation.
+        If a class has too few windows for ``k_max``, or the healthy class too few for
+        ``n_unlabelled`` on top of the pool, while leaving one variant for evaluation.
     """
     target = np.asarray(target, dtype=np.int64)
     sub = meta.iloc[target]
-    rng = np.random.default_rng([int(seed), int(sub["gear"].iloc[0]) if "gear" in sub else 0])
-    pool, order, groups = [], {}, set()
+    gear = int(sub["gear"].iloc[0]) if "gear" in sub else 0
     faults = sub["fault"].astype(str).to_numpy()
     variants = sub["variant"].to_numpy()
+    rng = np.random.default_rng([int(seed), gear])
+    pool, order, groups = [], {}, set()
     for c in sorted(set(faults)):
         in_c = faults == c
-        vs = rng.permutation(np.unique(variants[in_c]))
-        chosen, n = [], 0
-        for v in vs:
-            if n >= k_max:
-                break
-            chosen.append(v)
-            n += int(np.sum(in_c & (variants == v)))
-        if k_max > 0 and (n < k_max or len(chosen) == len(vs)):
-            raise ValueError(
-                f"class {c!r} of the held-out gear has too few windows for k={k_max} with "
-                f"variants left for evaluation ({len(vs)} variants, {int(in_c.sum())} windows)")
+        chosen = _draw_variants(rng, variants[in_c], k_max, f"class {c!r}", f"k={k_max}")
         pos = target[in_c & np.isin(variants, chosen)]
         order[c] = rng.permutation(pos)
         pool.append(pos)
         groups.update((c, int(v)) for v in chosen)
     pool_arr = np.sort(np.concatenate(pool)) if pool else np.array([], dtype=np.int64)
-    evaluation = np.setdiff1d(target, pool_arr)
-    return KShotSplit(pool_arr, evaluation, order, frozenset(groups))
+    stream, stream_groups = _healthy_stream(target, faults, variants, groups, n_unlabelled,
+                                            np.random.default_rng([int(seed), gear, 1]))
+    evaluation = np.setdiff1d(target, np.concatenate([pool_arr, stream]))
+    return KShotSplit(pool_arr, evaluation, order, frozenset(groups), stream,
+                      frozenset(stream_groups))
+
+
+def _draw_variants(rng: np.random.Generator, variants: np.ndarray, n_min: int, what: str,
+                   need: str) -> list:
+    """Whole variants in a seeded order until they hold ``n_min`` of the windows whose
+    variants are ``variants``; at least one variant is left over."""
+    vs = rng.permutation(np.unique(variants))
+    chosen, n = [], 0
+    for v in vs:
+        if n >= n_min:
+            break
+        chosen.append(v)
+        n += int(np.sum(variants == v))
+    if n_min > 0 and (n < n_min or len(chosen) == len(vs)):
+        raise ValueError(
+            f"{what} of the held-out gear has too few windows for {need} with variants "
+            f"left for evaluation ({len(vs)} variants, {len(variants)} windows)")
+    return chosen
+
+
+def _healthy_stream(target: np.ndarray, faults: np.ndarray, variants: np.ndarray,
+                    pool_groups: set, n: int, rng: np.random.Generator
+                    ) -> tuple[np.ndarray, set]:
+    """Positions and (fault, variant) groups of the healthy stream: whole healthy
+    variants outside the pool, at least ``n`` windows."""
+    if n <= 0:
+        return np.array([], dtype=np.int64), set()
+    free = (faults == HEALTHY) & ~np.isin(
+        variants, [v for c, v in pool_groups if c == HEALTHY])
+    chosen = _draw_variants(rng, variants[free], n, "the healthy class",
+                            f"a healthy stream of {n} windows outside the k-shot pool")
+    return np.sort(target[free & np.isin(variants, chosen)]), {(HEALTHY, int(v))
+                                                               for v in chosen}
 
 
 def check_no_leak(meta: pd.DataFrame, train: np.ndarray, kshot: KShotSplit) -> None:
-    """Raise if evaluation windows meet the training or pool windows, a variant of the
-    pool is evaluated, or the held-out gear is in training.
+    """Raise if evaluation windows meet the training, pool or healthy-stream windows, a
+    variant of the pool or of the stream is evaluated, the stream holds a window that is
+    not healthy or one of training, or the held-out gear is in training.
 
     Raises
     ------
     ValueError
         Naming the leak.
     """
-    ev = kshot.evaluation
+    ev, stream = kshot.evaluation, kshot.unlabelled
     if np.intersect1d(ev, train).size or np.intersect1d(ev, kshot.pool).size:
         raise ValueError("k-shot split leaks: evaluation windows in training or pool")
+    if np.intersect1d(ev, stream).size or np.intersect1d(stream, train).size:
+        raise ValueError("healthy stream leaks: its windows are evaluated or in training")
+    if (meta["fault"].astype(str).to_numpy()[stream] != HEALTHY).any():
+        raise ValueError("healthy stream leaks labels: it holds windows that are not "
+                         "healthy")
     groups = set(zip(meta["fault"].astype(str).to_numpy()[ev],
                      meta["variant"].to_numpy()[ev].astype(int).tolist(), strict=True))
     if groups & set(kshot.pool_groups):
         raise ValueError("k-shot split leaks: a pool variant is also evaluated")
+    if groups & set(kshot.unlabelled_groups):
+        raise ValueError("healthy stream leaks: a stream variant is also evaluated")
     if set(meta["gear"].to_numpy()[train]) & set(meta["gear"].to_numpy()[ev]):
         raise ValueError("leave-one-gear-out split leaks: the target gear is in training")

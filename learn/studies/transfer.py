@@ -13,9 +13,12 @@ leave-one-gear-out protocols it also
   layer only, MiniRocket's ridge refitted (its kernels stay);
 * runs the unsupervised adaptations: AdaBN for the torch nets (batch-norm statistics
   re-estimated on unlabelled target windows) and CORAL for feature models
-  (:mod:`learn.learners.adapt`).
+  (:mod:`learn.learners.adapt`). Their unlabelled windows are the held-out gear's
+  *healthy stream* (``adapt_windows`` healthy windows, whole healthy variants), what a
+  real gear offers at commissioning, not the class-balanced k-shot pool.
 
-The k-shot split is :func:`learn.studies.kshot.kshot_split`. Nothing in training, early stopping,
+The k-shot split and the healthy stream are :func:`learn.studies.kshot.kshot_split`; both
+are removed from the evaluation windows of every run. Nothing in training, early stopping,
 model choice or hyper-parameters sees an evaluation window: early stopping, where
 enabled, splits the *source* gears; fine-tuning has a fixed step budget; MiniRocket's
 ridge penalty stays the one chosen on the source windows. Model sizes, epochs and
@@ -118,6 +121,14 @@ class TransferConfig:
         protocols (null: ``seeds``).
     k_shots : list of int
         Labelled windows per class of the held-out gear, >= 0.
+    adapt_windows : int
+        Least number of windows of the held-out gear's healthy stream, the unlabelled
+        target data of the unsupervised adaptations (whole healthy variants outside the
+        k-shot pool, removed from the evaluation windows); 0: none (no run may adapt).
+        60 = ten healthy passes over the paper grid's six operating points, about the
+        size of the class-balanced pool the adaptations saw before (72 windows), so the
+        rule changes what they see, not how much; it leaves 288 of a gear's 360 healthy
+        windows of a kind for evaluation.
     aux : list of str
         Scalars appended to the signal inputs (:data:`learn.inputs.signals.AUX`).
     residual : ResidualSettings
@@ -145,6 +156,7 @@ class TransferConfig:
     seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
     cv_seeds: list[int] | None = field(default_factory=lambda: [0])
     k_shots: list[int] = field(default_factory=lambda: [0, 1, 5, 10])
+    adapt_windows: int = 60
     aux: list[str] = field(default_factory=lambda: ["eta2_rel", "eta_rel"])
     residual: ResidualSettings = field(default_factory=ResidualSettings)
     finetune: FinetuneSettings = field(default_factory=FinetuneSettings)
@@ -187,6 +199,8 @@ def check_config(tc: TransferConfig) -> None:
     for key in ("n_jobs", "n_threads", "latency_repeats"):
         if int(getattr(tc, key)) < 1:
             raise ValueError(f"transfer.{key}: must be >= 1, got {getattr(tc, key)}")
+    if int(tc.adapt_windows) < 0:
+        raise ValueError(f"transfer.adapt_windows: must be >= 0, got {tc.adapt_windows}")
     _check_finetune(tc.finetune)
     _check_runs(tc)
     _check_targets(tc.targets)
@@ -214,6 +228,9 @@ def _check_runs(tc: TransferConfig) -> None:
         if s.adapt not in (None, *ADAPT):
             raise ValueError(f"transfer.runs[{i}].adapt: must be one of {ADAPT} or null, "
                              f"got {s.adapt!r}")
+        if s.adapt is not None and int(tc.adapt_windows) < 1:
+            raise ValueError(f"transfer.runs[{i}].adapt: {s.adapt} needs unlabelled "
+                             "target windows; set transfer.adapt_windows >= 1")
     pr = tc.primary
     if pr is not None and pr.label not in {s.label for s in tc.runs}:
         raise ValueError(f"transfer.primary: {pr.label} is not one of transfer.runs; name "
@@ -276,13 +293,14 @@ def _run_cell(spec: RunSpec, est, inp, train, evaluation, kshot: KShotSplit | No
 
 def _adapt_unsupervised(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
                         ft: FinetuneSettings) -> None:
-    """AdaBN (torch nets) or CORAL (feature models) on the unlabelled target pool."""
+    """AdaBN (torch nets) or CORAL (feature models) on the held-out gear's healthy
+    stream (``kshot.unlabelled``, labels unused)."""
     if spec.adapt == "adabn":
         if not hasattr(final_step(est), "adapt_bn"):
             raise ValueError(f"{spec.label}: AdaBN needs a torch net")
         t0 = time.perf_counter()
         m = copy.deepcopy(est)
-        final_step(m).adapt_bn(pre_transform(m, X[kshot.pool]))
+        final_step(m).adapt_bn(pre_transform(m, X[kshot.unlabelled]))
         sc.add(f"{spec.model}+adabn", 0, m, time.perf_counter() - t0)
     elif spec.adapt == "coral":
         from learn.learners.adapt import CoralClassifier
@@ -291,7 +309,7 @@ def _adapt_unsupervised(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KSh
             raise ValueError(f"{spec.label}: CORAL needs a feature input")
         t0 = time.perf_counter()
         m = CoralClassifier(est, reg=float(ft.coral_reg))
-        m.fit(X[train], y[train], X[kshot.pool])
+        m.fit(X[train], y[train], X[kshot.unlabelled])
         sc.add(f"{spec.model}+coral", 0, m, time.perf_counter() - t0)
     elif spec.adapt is not None:
         raise ValueError(f"adapt must be one of {ADAPT} or null, got {spec.adapt!r}")
@@ -337,7 +355,8 @@ def _fine_tune(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
 
 
 def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int,
-          k_shots, ft: FinetuneSettings, threads: int | None) -> list[dict]:
+          k_shots, ft: FinetuneSettings, adapt_windows: int,
+          threads: int | None) -> list[dict]:
     """Every (model, input) of one (protocol, split, seed): a unit of parallel work."""
     if threads:
         import torch
@@ -346,7 +365,7 @@ def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int
     meta = next(iter(inputs.values())).meta
     kshot, evaluation = None, split.test
     if protocol in OOD_PROTOCOLS:
-        kshot = kshot_split(meta, split.test, k_max, seed)
+        kshot = kshot_split(meta, split.test, k_max, seed, n_unlabelled=adapt_windows)
         evaluation = kshot.evaluation
         check_no_leak(meta, split.train, kshot)
     rows = []
@@ -389,7 +408,8 @@ def _run_cells(cells: list, specs, tc: TransferConfig, inputs, bar, dataset: str
     from joblib import Parallel, delayed
 
     k_shots = [int(k) for k in tc.k_shots]
-    args = (specs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune)
+    args = (specs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
+            int(tc.adapt_windows))
     rows: list[dict] = []
     if tc.n_jobs == 1:
         for c in cells:
