@@ -174,6 +174,12 @@ def test_transfer_end_to_end(tmp_path):
     table = (rep / "table.md").read_text()
     assert "worst" in table and "fine-tuned all layers, k=2" in table
     assert "latency" in table.lower()
+    # the result is the declared primary, the best beside it marked as chosen afterwards
+    from learn.reports.transfer_picks import BEST, PRIMARY
+
+    assert table.index("## Headline") < table.index("## Per-class recall")
+    ood0 = [h for h in out["headline"] if h["protocol"] == "ood_disturbed" and h["k_shot"] == 0]
+    assert [h["who"] for h in ood0] == [PRIMARY, BEST] and ood0[0]["model"] == "minirocket"
     worst = summarise(res)
     assert (worst["split"] == "worst").any()
     assert out["run_id"] is not None
@@ -242,32 +248,93 @@ def _synthetic_results():
     return pd.DataFrame(rows, columns=list(RESULT_COLUMNS))
 
 
-def test_targets_use_the_worst_split_and_the_observable_share(tmp_path):
+def _synthetic_confusion():
+    """bench, minirocket (the best run), per split and seed: the tip crack is recalled
+    on 6 / 4 of 10 windows (seeds 0 / 1) on gear2, the worst split, and always elsewhere;
+    healthy on 9 of 10 everywhere."""
+    rows = []
+    for split in ("gear1", "gear2", "gear3"):
+        for seed, tip_hit in ((0, 6), (1, 4)):
+            hit = tip_hit if split == "gear2" else 10
+            key = ("bench", "ood_disturbed", split, seed, "minirocket", "raw_res", 0)
+            rows += [(*key, "healthy", "healthy", 9), (*key, "healthy", "tip", 1),
+                     (*key, "tip", "tip", hit)]
+            if hit < 10:
+                rows.append((*key, "tip", "healthy", 10 - hit))
+            rf = ("bench", "ood_disturbed", split, seed, "rf", "raw_res", 0)
+            rows += [(*rf, "healthy", "healthy", 10), (*rf, "tip", "tip", 3),
+                     (*rf, "tip", "healthy", 7)]
+    return pd.DataFrame(rows, columns=list(CONFUSION_COLUMNS))
+
+
+def test_recall_is_on_the_accuracys_basis():
+    """Per-class recall on the worst split of the run's accuracy, mean over seeds, not
+    pooled over splits (pooled, the tip crack would read 26 / 30)."""
+    from learn.reports.transfer_report import class_recall
+
+    res, conf = _synthetic_results(), _synthetic_confusion()
+    summ = summarise(res)
+    rec = class_recall(conf, summ)
+    rec = rec[rec["model"] == "minirocket"].set_index("true")
+    worst = summ[(summ["split"] == "worst") & (summ["dataset"] == "bench")
+                 & (summ["model"] == "minirocket")]["worst_of"].iloc[0]
+    assert worst == "gear2" and set(rec["split"]) == {"gear2"}
+    assert rec.loc["tip", "recall"] == pytest.approx(0.5)
+    assert rec.loc["healthy", "recall"] == pytest.approx(0.9)
+    assert rec.loc["tip", "windows"] == 20
+
+
+def test_targets_put_the_primary_first_and_mark_the_best_chosen_afterwards(tmp_path):
+    from learn.reports.transfer_picks import BEST, NO_PRIMARY, PRIMARY
     from learn.reports.transfer_report import class_recall, target_table, write_table
     from learn.studies.runs import RunRef
 
-    res = _synthetic_results()
-    conf = pd.DataFrame([
-        ("bench", "ood_disturbed", "minirocket", "raw_res", 0, "healthy", "healthy", 9),
-        ("bench", "ood_disturbed", "minirocket", "raw_res", 0, "healthy", "tip", 1),
-        ("bench", "ood_disturbed", "minirocket", "raw_res", 0, "tip", "tip", 6),
-        ("bench", "ood_disturbed", "minirocket", "raw_res", 0, "tip", "healthy", 4)],
-        columns=list(CONFUSION_COLUMNS))
-    rec = class_recall(conf).set_index("true")["recall"]
-    assert rec["healthy"] == pytest.approx(0.9) and rec["tip"] == pytest.approx(0.6)
+    res, conf = _synthetic_results(), _synthetic_confusion()
+    summ = summarise(res)
     sep = {"bench": {"disturbed": pd.DataFrame({"fault": ["healthy", "tip"],
                                                 "beyond_p95": [0.05, 0.55]})}}
     targets = {"paper": TargetSpec("ood_disturbed", accuracy={0: 0.95}),
                "bench": TargetSpec("ood_disturbed", recall={"tip": 0.99})}
-    tt = target_table(summarise(res), class_recall(conf), targets,
-                      RunRef("rf", "raw_res"), sep).set_index(["dataset", "who"])
-    # paper: the worst split of the best run (minirocket: 1.0 - 0.1), the primary's (rf)
-    assert tt.loc[("paper", "best"), "reached"] == pytest.approx(0.9)
-    assert tt.loc[("paper", "primary"), "reached"] == pytest.approx(0.6)
-    assert not tt.loc[("paper", "best"), "met"]
-    # bench: recall of the best run at k = 0 beside the share the signals leave observable
-    assert tt.loc[("bench", "best"), "reached"] == pytest.approx(0.6)
-    assert tt.loc[("bench", "best"), "observable"] == pytest.approx(0.55)
-    path = write_table(res, conf, tmp_path / "t.md", targets=targets, separability=sep)
-    text = path.read_text()
-    assert "| bench | recall of tip, k = 0 | 99.0 % |" in text and "55.0 %" in text
+    primary = RunRef("rf", "raw_res")
+    tt = target_table(summ, class_recall(conf, summ), targets, primary, sep)
+    paper = tt[tt["dataset"] == "paper"]
+    # the primary's row first (rf: 0.7 - 0.1 on gear2), the best beside it (minirocket)
+    assert list(paper["who"]) == [PRIMARY, BEST]
+    assert paper["reached"].tolist() == pytest.approx([0.6, 0.9])
+    assert not paper["met"].any() and set(paper["split"]) == {"gear2"}
+    # bench: the best run's recall on its worst split, beside the observable share
+    bench = tt[tt["dataset"] == "bench"]
+    assert list(bench["who"]) == [PRIMARY, BEST]
+    assert bench["reached"].tolist() == pytest.approx([0.3, 0.5])
+    assert bench["observable"].tolist() == pytest.approx([0.55, 0.55])
+    text = write_table(res, conf, tmp_path / "t.md", targets=targets, primary=primary,
+                       separability=sep, adapt_windows=60).read_text()
+    assert "| bench | recall of tip, worst split, k = 0 | 99.0 % |" in text and "55.0 %" in text
+    assert "at least 60 windows" in text
+    head = text[text.index("## Headline"):text.index("## Targets")]
+    row = next(line for line in head.splitlines() if line.startswith("| paper |"))
+    assert row.index(PRIMARY) < row.index(BEST)
+    assert row.split("|")[4].strip().startswith("60.00 %")  # the result: the primary
+    recall = text[text.index("## Per-class recall"):text.index("## Data set")]
+    assert "worst split" in recall and f"({BEST})" in recall
+    # no primary declared: said so, and the best still marked as chosen afterwards
+    tt = target_table(summ, class_recall(conf, summ), targets, None, sep)
+    assert list(tt[tt["dataset"] == "paper"]["who"]) == [NO_PRIMARY, BEST]
+    text = write_table(res, conf, tmp_path / "n.md", targets=targets).read_text()
+    head = text[text.index("## Headline"):text.index("## Targets")]
+    assert NO_PRIMARY in head and BEST in head
+
+
+def test_primary_at_k_is_fixed_before_the_results():
+    """At k > 0 the primary is its first adaptation in the declared order, not its
+    better one; a run without one keeps its k = 0 result."""
+    from learn.reports.transfer_picks import primary_row
+    from learn.studies.runs import RunRef
+
+    w = pd.DataFrame({"model": ["cnn", "cnn+adabn", "cnn+ft_all", "cnn+ft_last", "rf"],
+                      "input": "raw", "k_shot": [0, 0, 5, 5, 0],
+                      "mean": [0.5, 0.9, 0.6, 0.8, 0.7]})
+    assert primary_row(w, RunRef("cnn", "raw"), 0)["model"] == "cnn"
+    assert primary_row(w, RunRef("cnn", "raw"), 5)["model"] == "cnn+ft_all"
+    assert primary_row(w, RunRef("rf", "raw"), 5)["k_shot"] == 0
+    assert primary_row(w, RunRef("rf", "sel1"), 0) is None

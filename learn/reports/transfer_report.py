@@ -2,10 +2,13 @@
 figure (its MLflow runs: :mod:`learn.reports.transfer_runs`).
 
 Everything here reads the comparison's two tables: ``results`` (one row per run:
-:data:`learn.studies.transfer.RESULT_COLUMNS`) and ``confusion`` (:data:`CONFUSION_COLUMNS`,
-counts summed over splits and seeds). Nothing is fitted or chosen here; the "best" model
-of a data set is a statement about the evaluation windows, reported beside the primary
-model that was declared before the run (``transfer.primary``).
+:data:`learn.studies.transfer.RESULT_COLUMNS`) and ``confusion``
+(:data:`learn.studies.transfer.CONFUSION_COLUMNS`, counts per split and seed). Nothing is
+fitted or chosen here. The result of a data set is the primary run declared before the
+comparison (``transfer.primary``); the "best" run, a statement about the evaluation
+windows made afterwards, stands beside it, marked so (:mod:`learn.reports.transfer_picks`).
+Accuracies are worst-split means over seeds, and so are the per-class recalls beside them
+(:func:`class_recall`).
 """
 
 from __future__ import annotations
@@ -17,6 +20,12 @@ import numpy as np
 import pandas as pd
 
 from learn.learners.baselines import model_label
+from learn.reports.transfer_picks import (
+    BEST,
+    headline_md,
+    headline_table,
+    picks,
+)
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import RunRef
 from learn.studies.transfer import TargetSpec
@@ -71,30 +80,34 @@ def summarise(results: pd.DataFrame) -> pd.DataFrame:
     return pd.concat([per, worst], ignore_index=True)
 
 
-def class_recall(confusion: pd.DataFrame) -> pd.DataFrame:
-    """Recall per class from the summed confusion counts.
+def class_recall(confusion: pd.DataFrame, summ: pd.DataFrame) -> pd.DataFrame:
+    """Recall per class on the accuracy's basis: on the worst split of each run (the
+    split of its worst-split mean accuracy, :func:`summarise`), mean over seeds.
+
+    Parameters
+    ----------
+    confusion : pandas.DataFrame
+        :data:`learn.studies.transfer.CONFUSION_COLUMNS` (counts per split and seed).
+    summ : pandas.DataFrame
+        :func:`summarise` of the same comparison.
 
     Returns
     -------
     pandas.DataFrame
-        Columns dataset, protocol, model, input, k_shot, true, recall (0..1), windows.
+        Columns dataset, protocol, model, input, k_shot, true, split (the worst one),
+        recall (0..1, mean over seeds), windows (summed over seeds).
     """
-    keys = [*CELL_KEYS, "true"]
+    keys = [*CELL_KEYS, "split", "seed", "true"]
     tot = confusion.groupby(keys)["count"].sum().rename("windows")
     hit = confusion[confusion["true"] == confusion["predicted"]].groupby(keys)["count"].sum()
-    out = pd.concat([tot, hit.rename("hit")], axis=1).fillna(0.0).reset_index()
-    out["recall"] = out["hit"] / out["windows"]
-    return out.drop(columns="hit")
-
-
-def best_rows(summ: pd.DataFrame, k: int = 0) -> pd.DataFrame:
-    """Per (dataset, protocol), the run with the highest worst-split mean at k labelled
-    target windows per class, chosen on the evaluation windows: a statement about the
-    results, not a model selection."""
-    w = summ[(summ["split"] == "worst") & (summ["k_shot"] == int(k))]
-    if w.empty:
-        return w
-    return w.loc[w.groupby(["dataset", "protocol"])["mean"].idxmax()]
+    per = pd.concat([tot, hit.rename("hit")], axis=1).fillna(0.0).reset_index()
+    per["recall"] = per["hit"] / per["windows"]
+    out = per.groupby([*CELL_KEYS, "split", "true"], as_index=False).agg(
+        recall=("recall", "mean"), windows=("windows", "sum"))
+    worst = summ.loc[summ["split"] == "worst", [*CELL_KEYS, "worst_of"]]
+    out = out.merge(worst, on=CELL_KEYS)
+    return out[out["split"] == out["worst_of"]].drop(columns="worst_of").reset_index(
+        drop=True)
 
 
 def _kind(protocol: str) -> str:
@@ -115,78 +128,86 @@ def observable_share(separability: Mapping | None, dataset: str, protocol: str
     return share
 
 
+#: The columns of :func:`target_table`.
+TARGET_COLUMNS = ["dataset", "condition", "target", "who", "run", "split", "reached", "met",
+                  "observable"]
+
+
 def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str, TargetSpec],
                  primary: RunRef | None = None,
                  separability: Mapping | None = None) -> pd.DataFrame:
-    """Check the targets of ``transfer.targets`` per data set.
+    """Check the targets of ``transfer.targets`` per data set: the primary run's first,
+    the best run's beside it (:func:`learn.reports.transfer_picks.picks`).
 
     Parameters
     ----------
     summ : pandas.DataFrame
         :func:`summarise`.
     recall : pandas.DataFrame
-        :func:`class_recall`.
+        :func:`class_recall` (the worst split, mean over seeds: the accuracy's basis).
     targets : mapping of str to TargetSpec
         Data set -> :class:`learn.studies.transfer.TargetSpec` (protocol, accuracy: {k: min
         worst-split mean}, recall: {class: min recall at k = 0}; fractions).
     primary : RunRef, optional
-        The run declared before the comparison (``transfer.primary``); reported beside
-        the best one.
+        The run declared before the comparison (``transfer.primary``): the result; the
+        best one beside it is marked as chosen afterwards.
     separability : mapping, optional
         Data set -> {"clean", "disturbed"} -> :func:`learn.studies.separability.summary_table`.
 
     Returns
     -------
     pandas.DataFrame
-        Columns dataset, condition, target, who (primary / best), run, reached, met,
-        observable: for a recall, the class's share beyond the healthy p95; for an
-        accuracy, the mean of those shares over the classes (healthy: 0.95), an estimate
-        of what the signals allow, not a bound (NaN when not measured).
+        :data:`TARGET_COLUMNS`: who (:data:`~learn.reports.transfer_picks.PRIMARY`, ``BEST``
+        or why there is no primary: then run is empty, reached NaN, met None), split
+        (the run's worst split), observable: for a recall, the class's share beyond the
+        healthy p95; for an accuracy, the mean of those shares over the classes (healthy:
+        0.95), an estimate of what the signals allow, not a bound (NaN when not measured).
     """
     rows = []
     for ds, spec in targets.items():
-        prot = spec.protocol
-        w = summ[(summ["dataset"] == ds) & (summ["protocol"] == prot)
+        w = summ[(summ["dataset"] == ds) & (summ["protocol"] == spec.protocol)
                  & (summ["split"] == "worst")]
         if w.empty:
             continue
-        share = observable_share(separability, ds, prot)
+        share = observable_share(separability, ds, spec.protocol)
         obs_acc = float(share.mean()) if share is not None else float("nan")
         for k, tgt in sorted(spec.accuracy.items(), key=lambda t: int(t[0])):
-            cand = w[w["k_shot"] == int(k)]
-            if cand.empty:
-                continue
-            picks = [("best", cand.loc[cand["mean"].idxmax()])]
-            if primary is not None:
-                pr = cand[(cand["model"].str.partition("+")[0] == primary.model)
-                          & (cand["input"] == primary.input)]
-                if len(pr):
-                    picks.insert(0, ("primary", pr.loc[pr["mean"].idxmax()]))
-            for who, b in picks:
-                rows.append({"dataset": ds, "condition": f"accuracy, worst split, k = {k}",
-                             "target": float(tgt), "who": who,
-                             "run": row_label(b["model"], b["input"], int(b["k_shot"])),
-                             "reached": float(b["mean"]),
-                             "met": bool(b["mean"] >= float(tgt)), "observable": obs_acc})
-        rec_t = spec.recall
-        if rec_t:
-            b = w[w["k_shot"] == 0]
-            if b.empty:
-                continue
-            b = b.loc[b["mean"].idxmax()]
-            r = recall[(recall["dataset"] == ds) & (recall["protocol"] == prot)
+            for who, b in picks(w, primary, int(k)):
+                reached = np.nan if b is None else float(b["mean"])
+                rows.append(_target_row(ds, f"accuracy, worst split, k = {k}", tgt, who, b,
+                                        reached, obs_acc))
+        if spec.recall:
+            rows += _recall_targets(ds, spec, w, recall, primary, share)
+    return pd.DataFrame(rows, columns=TARGET_COLUMNS)
+
+
+def _target_row(ds: str, condition: str, target: float, who: str, b: pd.Series | None,
+                reached: float, observable: float) -> dict:
+    """One row of :func:`target_table` (``b``: the run's worst-split row, or None)."""
+    return {"dataset": ds, "condition": condition, "target": float(target), "who": who,
+            "run": "" if b is None else row_label(b["model"], b["input"], int(b["k_shot"])),
+            "split": "" if b is None else b["worst_of"], "reached": reached,
+            "met": None if b is None else bool(reached >= float(target)),
+            "observable": observable}
+
+
+def _recall_targets(ds: str, spec: TargetSpec, w: pd.DataFrame, recall: pd.DataFrame,
+                    primary: RunRef | None, share: pd.Series | None) -> list[dict]:
+    """Recall targets at k = 0 of the primary and the best run, on their worst split."""
+    rows = []
+    for who, b in picks(w, primary, 0):
+        r = pd.Series(dtype=float)
+        if b is not None:
+            r = recall[(recall["dataset"] == ds) & (recall["protocol"] == spec.protocol)
                        & (recall["model"] == b["model"]) & (recall["input"] == b["input"])
                        & (recall["k_shot"] == 0)].set_index("true")["recall"]
-            for cls, tgt in rec_t.items():
-                if cls in r.index:
-                    rows.append({"dataset": ds, "condition": f"recall of {cls}, k = 0",
-                                 "target": float(tgt), "who": "best",
-                                 "run": row_label(b["model"], b["input"], 0),
-                                 "reached": float(r[cls]), "met": bool(r[cls] >= float(tgt)),
-                                 "observable": float(share.get(cls, np.nan))
-                                 if share is not None else float("nan")})
-    return pd.DataFrame(rows, columns=["dataset", "condition", "target", "who", "run",
-                                       "reached", "met", "observable"])
+        for cls, tgt in spec.recall.items():
+            if b is not None and cls not in r.index:
+                continue
+            obs = float(share.get(cls, np.nan)) if share is not None else float("nan")
+            rows.append(_target_row(ds, f"recall of {cls}, worst split, k = 0", tgt, who, b,
+                                    float(r.get(cls, np.nan)), obs))
+    return rows
 
 
 def _pct(m: float, s: float) -> str:
@@ -233,53 +254,70 @@ def confusable_pairs(conf: pd.DataFrame, threshold: float = 0.25) -> list[tuple[
 
 
 def _diagnosis_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame,
-                  separability: Mapping | None) -> list[str]:
+                  separability: Mapping | None, primary: RunRef | None) -> list[str]:
+    """Per leave-one-gear-out protocol, the diagnosis of the primary run without target
+    labels and of the best one (chosen afterwards), on each run's worst split."""
     lines = []
-    for _, b in best_rows(summ[summ["dataset"] == ds]).iterrows():
-        if b["protocol"] not in OOD_PROTOCOLS:
-            continue
-        c = confusion[(confusion["dataset"] == ds) & (confusion["protocol"] == b["protocol"])
-                      & (confusion["model"] == b["model"]) & (confusion["input"] == b["input"])
-                      & (confusion["k_shot"] == 0)]
-        if c.empty:
-            continue
-        tot = c.groupby("true")["count"].sum()
-        off = c[c["true"] != c["predicted"]].copy()
-        off["rate"] = off["count"] / off["true"].map(tot)
-        top = off.sort_values("rate", ascending=False).head(5)
-        lines += [f"### Diagnosis: {b['protocol']}, best run without target labels "
-                  f"({row_label(b['model'], b['input'], 0)})", "",
-                  "Main confusions (all splits and seeds; share of the true class):", ""]
-        lines += [f"- {r.true} → {r.predicted}: {100 * r.rate:.1f} %" for r in top.itertuples()
-                  if r.rate > 0] or ["- none: every window classified right"]
-        pairs = confusable_pairs(c)
-        if pairs:
-            n = tot.sum()
-            ceiling = 1.0 - sum(0.5 * (tot[a] + tot[b]) for a, b in pairs) / n
-            lines += ["", "Confused both ways (> 25 % each): "
-                      + ", ".join(f"{a} ↔ {b}" for a, b in pairs) + ". If these classes "
-                      "leave no trace in the data, no classifier beats chance between them: "
-                      f"accuracy ceiling {100 * ceiling:.1f} %."]
-        share = observable_share(separability, ds, b["protocol"])
-        if share is not None and "reduced_stiffness" in share.index:
-            f = float(share["reduced_stiffness"])
-            r_h = _recall_of(c, "healthy")
-            r_k = _recall_of(c, "reduced_stiffness")
-            lines += ["", f"Healthy / reduced stiffness: recall {100 * r_h:.1f} % / "
-                      f"{100 * r_k:.1f} %. Observability ceiling: {100 * f:.1f} % of the "
-                      f"{_kind(b['protocol'])} reduced-stiffness windows lie beyond the "
-                      "healthy 95th percentile (separability below); if the rest are "
-                      "healthy look-alikes, the best "
-                      "a classifier can do on these two classes together is "
-                      f"{100 * (1 - (1 - f) / 2):.1f} % (calling every look-alike healthy)."]
-        lines.append("")
+    sd = summ[(summ["dataset"] == ds) & (summ["split"] == "worst")]
+    for prot in [p for p in OOD_PROTOCOLS if p in set(sd["protocol"])]:
+        chosen = picks(sd[sd["protocol"] == prot], primary, 0)
+        runs: dict[tuple, list[str]] = {}
+        for who, b in chosen:
+            if b is None:
+                lines += [f"### Diagnosis: {prot}: {who}", ""]
+                continue
+            runs.setdefault((b["model"], b["input"], b["worst_of"]), []).append(who)
+        for (m, i, split), whos in runs.items():
+            c = confusion[(confusion["dataset"] == ds) & (confusion["protocol"] == prot)
+                          & (confusion["model"] == m) & (confusion["input"] == i)
+                          & (confusion["k_shot"] == 0) & (confusion["split"] == split)]
+            if len(c):
+                lines += [f"### Diagnosis: {prot}, {row_label(m, i, 0)} ({'; '.join(whos)})",
+                          ""] + _diagnosis_of(c, split, _kind(prot),
+                                              observable_share(separability, ds, prot))
     return lines
 
 
+def _diagnosis_of(c: pd.DataFrame, split: str, kind: str, share: pd.Series | None
+                  ) -> list[str]:
+    """Main confusions, confusable pairs and the observability ceiling of one run on its
+    worst split (``c``: its confusion rows there, every seed)."""
+    tot = c.groupby("true")["count"].sum()
+    off = c[c["true"] != c["predicted"]].groupby(["true", "predicted"], as_index=False)[
+        "count"].sum()
+    off["rate"] = off["count"] / off["true"].map(tot)
+    top = off.sort_values("rate", ascending=False).head(5)
+    lines = [f"Main confusions (worst split {split}, counts summed over seeds; share of "
+             "the true class):", ""]
+    lines += [f"- {r.true} → {r.predicted}: {100 * r.rate:.1f} %" for r in top.itertuples()
+              if r.rate > 0] or ["- none: every window classified right"]
+    pairs = confusable_pairs(c.groupby(["true", "predicted"], as_index=False)["count"].sum())
+    if pairs:
+        ceiling = 1.0 - sum(0.5 * (tot[a] + tot[b]) for a, b in pairs) / tot.sum()
+        lines += ["", "Confused both ways (> 25 % each): "
+                  + ", ".join(f"{a} ↔ {b}" for a, b in pairs) + ". If these classes "
+                  "leave no trace in the data, no classifier beats chance between them: "
+                  f"accuracy ceiling {100 * ceiling:.1f} %."]
+    if share is not None and "reduced_stiffness" in share.index:
+        f = float(share["reduced_stiffness"])
+        lines += ["", f"Healthy / reduced stiffness: recall {100 * _recall_of(c, 'healthy'):.1f}"
+                  f" % / {100 * _recall_of(c, 'reduced_stiffness'):.1f} % (worst split, mean "
+                  f"over seeds). Observability ceiling: {100 * f:.1f} % of the {kind} "
+                  "reduced-stiffness windows lie beyond the healthy 95th percentile "
+                  "(separability below); if the rest are healthy look-alikes, the best "
+                  "a classifier can do on these two classes together is "
+                  f"{100 * (1 - (1 - f) / 2):.1f} % (calling every look-alike healthy)."]
+    return lines + [""]
+
+
 def _recall_of(conf: pd.DataFrame, cls: str) -> float:
+    """Recall of ``cls``, mean over the seeds of ``conf`` (one run, one split)."""
     c = conf[conf["true"] == cls]
-    n = c["count"].sum()
-    return float(c[c["predicted"] == cls]["count"].sum() / n) if n else float("nan")
+    if not c["count"].sum():
+        return float("nan")
+    hit = c[c["predicted"] == cls].groupby("seed")["count"].sum()
+    return float((hit.reindex(c["seed"].unique(), fill_value=0)
+                  / c.groupby("seed")["count"].sum()).mean())
 
 
 def _separability_md(tabs: Mapping[str, pd.DataFrame]) -> list[str]:
@@ -307,33 +345,37 @@ def _separability_md(tabs: Mapping[str, pd.DataFrame]) -> list[str]:
 
 def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: RunRef | None,
                separability: Mapping | None, order: Sequence[str]) -> list[str]:
-    """Per-class recall at k = 0 of the primary and the best run of each data set."""
+    """Per-class recall at k = 0 of the primary and the best run of each data set, on
+    the basis of the accuracy beside it (worst split, mean over seeds)."""
     rec = recall[(recall["protocol"] == "ood_disturbed") & (recall["k_shot"] == 0)]
     if rec.empty:
         return []
     classes = sorted(set(rec["true"]))
-    lines = ["## Per-class recall without target labels (ood_disturbed, all splits and "
-             "seeds)", "", "| data set | run | " + " | ".join(classes) + " |",
-             "|---|---|" + "---:|" * len(classes)]
+    lines = ["## Per-class recall without target labels (ood_disturbed)", "",
+             "On the accuracy's basis: each run's worst split (the split of its worst-split "
+             "mean accuracy), mean over seeds. The primary run (declared before the "
+             "comparison) first; the best run chosen afterwards on the held-out windows "
+             "beside it.", "",
+             "| data set | run | worst split | accuracy | " + " | ".join(classes) + " |",
+             "|---|---|---|---:|" + "---:|" * len(classes)]
     for ds in order:
-        runs = []
-        if primary is not None:
-            runs.append((primary.model, primary.input, "primary"))
-        b = best_rows(summ[(summ["dataset"] == ds) & (summ["protocol"] == "ood_disturbed")])
-        if len(b):
-            runs.append((b["model"].iloc[0], b["input"].iloc[0], "best"))
-        for m, i, who in dict.fromkeys(runs):
-            r = rec[(rec["dataset"] == ds) & (rec["model"] == m) & (rec["input"] == i)]
-            if r.empty:
+        w = summ[(summ["dataset"] == ds) & (summ["protocol"] == "ood_disturbed")
+                 & (summ["split"] == "worst")]
+        for who, b in picks(w, primary, 0):
+            if b is None:
+                lines.append(f"| {ds} | *{who}* | | |" + " |" * len(classes))
                 continue
-            r = r.set_index("true")["recall"]
-            lines.append(f"| {ds} | {row_label(m, i, 0)} ({who}) | "
+            r = rec[(rec["dataset"] == ds) & (rec["model"] == b["model"])
+                    & (rec["input"] == b["input"])].set_index("true")["recall"]
+            lines.append(f"| {ds} | {row_label(b['model'], b['input'], 0)} ({who}) | "
+                         f"{b['worst_of']} | {100 * b['mean']:.2f} | "
                          + " | ".join(f"{100 * r.get(c, np.nan):.1f}" for c in classes) + " |")
         share = observable_share(separability, ds, "ood_disturbed")
         if share is not None:
             lines.append(f"| {ds} | *observable: share beyond the healthy p95 (healthy: "
-                         "within)* | " + " | ".join(f"*{100 * share.get(c, np.nan):.1f}*"
-                                                    for c in classes) + " |")
+                         "within), all splits* | | | "
+                         + " | ".join(f"*{100 * share.get(c, np.nan):.1f}*" for c in classes)
+                         + " |")
     return lines + [""]
 
 
@@ -341,9 +383,9 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
                 targets: Mapping[str, TargetSpec] | None = None, primary: RunRef | None = None,
                 separability: Mapping[str, Mapping[str, pd.DataFrame]] | None = None,
                 latency: pd.DataFrame | None = None, timings: Mapping | None = None,
-                paper: bool = True) -> Path:
-    """Write ``table.md``: targets, per-class recall, then per data set and protocol the
-    accuracy [%] per split and worst split, a diagnosis and the separability.
+                paper: bool = True, adapt_windows: int | None = None) -> Path:
+    """Write ``table.md``: headline, targets, per-class recall, then per data set and
+    protocol the accuracy [%] per split and worst split, a diagnosis and the separability.
 
     Parameters
     ----------
@@ -361,17 +403,21 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
         ``wall_s``, ``input_s``, ``generate_s``, ``threads``, ``cpus``, ``device``.
     paper : bool
         Add the paper's RF rows of Tables IX and X.
+    adapt_windows : int, optional
+        Windows of the held-out gear's healthy stream the unsupervised adaptations saw
+        (``transfer.adapt_windows``); stated in the introduction.
     """
     summ = summarise(results)
-    recall = class_recall(confusion) if len(confusion) else None
-    lines = list(_INTRO_MD)
+    recall = class_recall(confusion, summ) if len(confusion) else None
+    order = list(dict.fromkeys(results["dataset"]))
+    lines = _intro_md(adapt_windows)
+    lines += headline_md(headline_table(summ, primary), row_label, order)
     if targets and recall is not None:
         lines += _targets_md(target_table(summ, recall, targets, primary, separability))
     if recall is not None:
-        lines += _recall_md(recall, summ, primary, separability,
-                            list(dict.fromkeys(results["dataset"])))
-    for ds in dict.fromkeys(results["dataset"]):
-        lines += _dataset_md(ds, summ, confusion, recall, separability, paper)
+        lines += _recall_md(recall, summ, primary, separability, order)
+    for ds in order:
+        lines += _dataset_md(ds, summ, confusion, recall, separability, paper, primary)
     if latency is not None and len(latency):
         lines += _latency_md(latency)
     if timings:
@@ -381,22 +427,36 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     return path
 
 
-_INTRO_MD = ("# Transfer to the unseen gear: deep learners, MiniRocket and the paper's "
-             "pipeline", "",
-             "Accuracy [%] on the test windows, mean ± std over seeds; `worst` = the split "
-             "with the lowest mean. Leave-one-gear-out splits `gearN` hold out gear N "
-             "(paper: `1,2 → 3` is `gear3`); they are scored on the held-out gear's windows "
-             "outside the k-shot pool, for every k alike. *Best* runs are picked on these "
-             "evaluation windows and describe the results; the *primary* run was declared "
-             "before the comparison (`transfer.primary`).", "",
-             "What was chosen on what data: net sizes, epochs, MiniRocket's kernel count and "
-             "the list of runs were set for the CPU budget on an earlier data set (random "
-             "start angles, no amplifier), before these; early stopping, where enabled, "
-             "splits the source gears; MiniRocket's ridge penalty is chosen by "
-             "leave-one-out CV on the source windows and kept when its ridge is refitted "
-             "with k target windows; fine-tuning runs a fixed number of steps with "
-             "source replay; the unsupervised adaptations see the held-out gear's pool "
-             "windows without labels. Nothing is chosen on an evaluation window.", "")
+def _intro_md(adapt_windows: int | None) -> list[str]:
+    """The introduction of ``table.md``: what the numbers are, what saw which windows."""
+    stream = (f"at least {adapt_windows} windows" if adapt_windows is not None
+              else "a set of windows")
+    return ["# Transfer to the unseen gear: deep learners, MiniRocket and the paper's "
+            "pipeline", "",
+            "Accuracy [%] on the test windows, mean ± std over seeds; `worst` = the split "
+            "with the lowest mean. Leave-one-gear-out splits `gearN` hold out gear N "
+            "(paper: `1,2 → 3` is `gear3`); they are scored on the held-out gear's windows "
+            "outside the k-shot pool and the healthy stream, for every k and every run "
+            "alike. The result of a data set is the *primary* run, declared before the "
+            "comparison (`transfer.primary`); the *best* run stands beside it, marked "
+            f"\"{BEST}\": it describes the results, nothing more.", "",
+            "What was chosen on what data: net sizes, epochs, MiniRocket's kernel count and "
+            "the list of runs were set for the CPU budget on an earlier data set (random "
+            "start angles, no amplifier), before these; early stopping, where enabled, "
+            "splits the source gears; MiniRocket's ridge penalty is chosen by "
+            "leave-one-out CV on the source windows and kept when its ridge is refitted "
+            "with k target windows; fine-tuning runs a fixed number of steps with "
+            "source replay. Nothing is chosen on an evaluation window.", "",
+            "Unsupervised adaptation (AdaBN, CORAL) sees what a real gear offers without "
+            f"labels: its healthy stream, {stream} of the held-out gear's healthy class "
+            "(whole healthy variants, each one pass over the operating points; "
+            "`transfer.adapt_windows`), removed from the evaluation windows; never the "
+            "class-balanced k-shot pool. Both align statistics of every source class to "
+            "those of the target's healthy windows alone: AdaBN's batch-norm statistics and "
+            "CORAL's mean and covariance then describe a healthy gear, not the mixture the "
+            "classifier was trained on, so they adapt less than with the class balance of "
+            "the held-out windows and may harm; they are kept to show what they do with "
+            "the data a gear offers.", ""]
 
 
 def _targets_md(tt: pd.DataFrame) -> list[str]:
@@ -406,25 +466,29 @@ def _targets_md(tt: pd.DataFrame) -> list[str]:
     lines = ["## Targets", "", "*Observable*: for a class, the share of its windows beyond "
              "the healthy 95th percentile in the evaluated (disturbed) windows; for an "
              "accuracy, their mean over the classes (healthy: 95 %), an estimate of what the "
-             "signals carry, not a bound.", "",
-             "| data set | condition | target | run | reached | observable |",
-             "|---|---|---:|---|---:|---:|"]
+             "signals carry, not a bound. Accuracies and recalls alike: the run's worst "
+             "split, mean over seeds; the primary run first, the best beside it chosen "
+             "afterwards on the held-out windows.", "",
+             "| data set | condition | target | run | worst split | reached | observable |",
+             "|---|---|---:|---|---|---:|---:|"]
     for r in tt.itertuples():
         obs = "" if np.isnan(r.observable) else f"{100 * r.observable:.1f} %"
-        lines.append(f"| {r.dataset} | {r.condition} | {100 * r.target:.1f} % | "
-                     f"{r.run} ({r.who}) | {100 * r.reached:.2f} % "
-                     f"({'met' if r.met else 'not met'}) | {obs} |")
+        reached = ("—" if r.met is None else
+                   f"{100 * r.reached:.2f} % ({'met' if r.met else 'not met'})")
+        run = f"{r.run} ({r.who})" if r.run else f"*{r.who}*"
+        lines.append(f"| {r.dataset} | {r.condition} | {100 * r.target:.1f} % | {run} | "
+                     f"{r.split} | {reached} | {obs} |")
     lines.append("")
     return lines
 
 
 def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
-                separability, paper: bool) -> list[str]:
+                separability, paper: bool, primary: RunRef | None) -> list[str]:
     """One data set's section: diagnosis, separability, a table per protocol."""
     lines = [f"## Data set `{ds}`", ""]
     sep = (separability or {}).get(ds)
     if recall is not None:
-        lines += _diagnosis_md(ds, summ, confusion, separability)
+        lines += _diagnosis_md(ds, summ, confusion, separability, primary)
     if sep:
         lines += _separability_md(sep)
     sd = summ[summ["dataset"] == ds]

@@ -26,7 +26,7 @@ kernels were set for the CPU budget on the earlier default data set, not on thes
 
 Files in ``report_dir`` (default ``reports/transfer``): ``results.csv`` (one row per
 run: :data:`RESULT_COLUMNS`, accuracy in 0..1), ``confusion.csv``
-(:data:`learn.reports.transfer_report.CONFUSION_COLUMNS`, counts summed over splits and seeds),
+(:data:`CONFUSION_COLUMNS`, counts per split and seed),
 ``table.md`` (:func:`learn.reports.transfer_report.write_table`), ``accuracy_vs_k.png``,
 ``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``. One MLflow run per
 (data set, protocol, model, input, k) with the per-split, per-seed accuracies, and a
@@ -63,8 +63,8 @@ log = logging.getLogger(__name__)
 
 RESULT_COLUMNS = ("dataset", "protocol", "split", "model", "input", "k_shot", "seed",
                   "accuracy", "train_s", "n_test")
-CONFUSION_COLUMNS = ("dataset", "protocol", "model", "input", "k_shot", "true", "predicted",
-                     "count")
+CONFUSION_COLUMNS = ("dataset", "protocol", "split", "seed", "model", "input", "k_shot",
+                     "true", "predicted", "count")
 FT_MODES = ("all", "last")
 
 
@@ -425,12 +425,13 @@ def _run_cells(cells: list, specs, tc: TransferConfig, inputs, bar, dataset: str
 
 
 def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """``results`` (:data:`RESULT_COLUMNS`) and ``confusion`` summed over splits and seeds."""
+    """``results`` (:data:`RESULT_COLUMNS`) and ``confusion`` per split and seed."""
     for r in rows:
         r["dataset"] = dataset
-    conf = [{"dataset": dataset, "protocol": r["protocol"], "model": r["model"],
-             "input": r["input"], "k_shot": r["k_shot"], "true": t, "predicted": p,
-             "count": c} for r in rows for t, p, c in r["confusion"]]
+    conf = [{"dataset": dataset, "protocol": r["protocol"], "split": r["split"],
+             "seed": r["seed"], "model": r["model"], "input": r["input"],
+             "k_shot": r["k_shot"], "true": t, "predicted": p, "count": c}
+            for r in rows for t, p, c in r["confusion"]]
     keys = list(CONFUSION_COLUMNS[:-1])
     confusion = (pd.DataFrame(conf).groupby(keys, as_index=False)["count"].sum()
                  if conf else pd.DataFrame(columns=list(CONFUSION_COLUMNS)))
@@ -469,7 +470,7 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
     -------
     dict
         ``results`` (DataFrame, :data:`RESULT_COLUMNS`), ``confusion`` (DataFrame,
-        :data:`CONFUSION_COLUMNS`, summed over splits and seeds), ``latency`` (DataFrame:
+        :data:`CONFUSION_COLUMNS`, per split and seed), ``latency`` (DataFrame:
         model, input, input_ms, model_ms), ``wall_s`` (total), ``input_s`` (building
         inputs).
 

@@ -64,14 +64,23 @@ def _data_sets(app, tc: TransferConfig) -> tuple[list[tuple[str, str]], float]:
     return out, time.perf_counter() - t0
 
 
-def print_summary(targets: pd.DataFrame, report_dir: Path, wall_s: float, device: str) -> None:
-    """Print the targets (reached, observable) and where the report went."""
+def print_summary(headline: list[str], targets: pd.DataFrame, report_dir: Path,
+                  wall_s: float, device: str) -> None:
+    """Print the headline (the primary run first, the best beside it chosen afterwards),
+    the targets (reached, observable) and where the report went."""
+    if headline:
+        print("\nresult (worst split, mean over seeds; the declared primary run first):")
+        for line in headline:
+            print(f"  {line}")
     if len(targets):
-        print("\ntargets (worst split or recall, k labelled target windows per class):")
+        print("\ntargets (worst split, mean over seeds; k labelled target windows per "
+              "class):")
         for r in targets.itertuples():
             obs = "" if np.isnan(r.observable) else f", observable {100 * r.observable:.1f} %"
-            print(f"  {r.dataset:<12s} {r.condition:<36s} target {100 * r.target:5.1f} %  "
-                  f"reached {100 * r.reached:6.2f} % ({r.who}: {r.run}){obs}")
+            reached = ("      —  " if r.met is None else f"{100 * r.reached:6.2f} %")
+            run = f"{r.run}, {r.split}" if r.run else "—"
+            print(f"  {r.dataset:<12s} {r.condition:<44s} target {100 * r.target:5.1f} %  "
+                  f"reached {reached} ({r.who}: {run}){obs}")
     print(f"report: {report_dir}/table.md (+ results.csv, confusion.csv, figures); "
           f"{wall_s / 60:.1f} min on {device}")
 
@@ -148,7 +157,8 @@ def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, tim
     targets = {d: t for d, t in tc.targets.items() if d in set(res["dataset"])}
     files["table"] = write_table(res, conf, report_dir / "table.md", targets=targets,
                                  primary=tc.primary, separability=got.separability,
-                                 latency=got.latency, timings=timings)
+                                 latency=got.latency, timings=timings,
+                                 adapt_windows=int(tc.adapt_windows))
     files["figure"] = plot_accuracy_vs_k(res, report_dir / "accuracy_vs_k.png",
                                          targets=targets, separability=got.separability)
     return files
@@ -171,7 +181,9 @@ def run_transfer(cfg) -> dict:
     -------
     dict
         ``report_dir``, ``files``, ``wall_s``, ``n_runs``, ``worst_split`` (per data set,
-        ood_disturbed worst-split mean accuracy per model/input/k), ``targets`` (rows of
+        ood_disturbed worst-split mean accuracy per model/input/k), ``headline`` (rows of
+        :func:`learn.reports.transfer_picks.headline_table`: the primary run first, the
+        best beside it), ``targets`` (rows of
         :func:`learn.reports.transfer_report.target_table`), ``run_id`` (parent MLflow run).
 
     Raises
@@ -181,7 +193,8 @@ def run_transfer(cfg) -> dict:
     """
     import torch
 
-    from learn.reports.transfer_report import class_recall, summarise, target_table
+    from learn.reports.transfer_picks import headline_lines, headline_table
+    from learn.reports.transfer_report import class_recall, row_label, summarise, target_table
     from learn.reports.transfer_runs import log_transfer
 
     app = typed_app(cfg)
@@ -207,14 +220,16 @@ def run_transfer(cfg) -> dict:
     worst = {f"{r.dataset}/{r.model}/{r.input}/k{int(r.k_shot)}": float(r.mean)
              for r in w.itertuples()}
     targets = {d: t for d, t in tc.targets.items() if d in set(res["dataset"])}
-    tt = (target_table(summ, class_recall(conf), targets, tc.primary, got.separability)
+    tt = (target_table(summ, class_recall(conf, summ), targets, tc.primary, got.separability)
           if len(conf) else pd.DataFrame())
+    head = headline_table(summ, tc.primary)
     run_id = None if app.logger is None else log_transfer(
         res, files, app.logger, tc, data_sets, timings, got.latency, config=plain(app))
     log.info("transfer report in %s (%.1f min)", report_dir, wall / 60)
     if tc.progress:  # the console's summary (the log holds every cell)
-        print_summary(tt, report_dir, wall, timings["device"])
+        print_summary(headline_lines(head, row_label), tt, report_dir, wall,
+                      timings["device"])
     return {"task": "transfer", "report_dir": str(report_dir),
             "files": {k: str(v) for k, v in files.items()}, "wall_s": wall,
-            "n_runs": len(res), "worst_split": worst,
+            "n_runs": len(res), "worst_split": worst, "headline": head.to_dict("records"),
             "targets": tt.to_dict("records"), "run_id": run_id}

@@ -1,0 +1,143 @@
+"""Which run a line of the transfer report states: the declared primary first, the best
+beside it, marked as chosen afterwards.
+
+The *primary* run (``transfer.primary``) was declared before the comparison: it is the
+result of a data set. The *best* run, the highest worst-split mean on the held-out gear's
+evaluation windows, is a choice made afterwards on those windows; wherever it appears it
+says so (:data:`BEST`). Every line that states "the" result of a data set (the headline,
+the targets, the per-class recall, the diagnosis) goes through :func:`picks`.
+
+At k = 0 the primary is the declared (model, input) as trained on the source gears (no
+adaptation); at k > 0 its first k-shot adaptation in the fixed order of
+:data:`PRIMARY_ADAPTATIONS` (MiniRocket's ridge refitted; a net fine-tuned on all layers,
+then on the last one), or, for a run without one, its k = 0 result (it ignores the shots;
+every k is scored on the same windows).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import pandas as pd
+
+from learn.studies.protocols import OOD_PROTOCOLS
+from learn.studies.runs import RunRef
+from learn.studies.transfer import FT_MODES
+
+PRIMARY = "primary, declared before the comparison"
+BEST = "best, chosen afterwards on the held-out windows"
+NO_PRIMARY = "no primary declared"
+PRIMARY_NOT_RUN = "the declared primary did not run here"
+#: Which adaptation of the primary is its result at k > 0, first found first (fixed
+#: before the comparison, never chosen on results).
+PRIMARY_ADAPTATIONS = ("ft_head", *(f"ft_{m}" for m in FT_MODES))
+
+
+def best_rows(summ: pd.DataFrame, k: int = 0) -> pd.DataFrame:
+    """Per (dataset, protocol), the run with the highest worst-split mean at k labelled
+    target windows per class, chosen on the evaluation windows: a statement about the
+    results made afterwards, not a model selection."""
+    w = summ[(summ["split"] == "worst") & (summ["k_shot"] == int(k))]
+    if w.empty:
+        return w
+    return w.loc[w.groupby(["dataset", "protocol"])["mean"].idxmax()]
+
+
+def primary_row(w: pd.DataFrame, primary: RunRef | None, k: int) -> pd.Series | None:
+    """The primary's worst-split row at ``k`` among one (dataset, protocol)'s worst-split
+    rows ``w`` (every k); None when none is declared or it did not run."""
+    if primary is None:
+        return None
+    mine = w[(w["model"].str.partition("+")[0] == primary.model)
+             & (w["input"] == primary.input)]
+    names = [f"{primary.model}+{a}" for a in PRIMARY_ADAPTATIONS] if k > 0 else []
+    for name, kk in [*((n, k) for n in names), (primary.model, 0)]:
+        r = mine[(mine["model"] == name) & (mine["k_shot"] == kk)]
+        if len(r):
+            return r.iloc[0]
+    return None
+
+
+def picks(w: pd.DataFrame, primary: RunRef | None, k: int
+          ) -> list[tuple[str, pd.Series | None]]:
+    """(who, row) of the primary and the best run at ``k``, primary first.
+
+    ``w``: one (dataset, protocol)'s worst-split rows. The primary's row is None, its
+    ``who`` :data:`NO_PRIMARY` or :data:`PRIMARY_NOT_RUN`, when there is none; the best
+    is labelled :data:`BEST`. Empty when no run has this k.
+    """
+    cand = w[w["k_shot"] == int(k)]
+    if cand.empty:
+        return []
+    pr = primary_row(w, primary, k)
+    who = NO_PRIMARY if primary is None else PRIMARY if pr is not None else PRIMARY_NOT_RUN
+    return [(who, pr), (BEST, cand.loc[cand["mean"].idxmax()])]
+
+
+def headline_table(summ: pd.DataFrame, primary: RunRef | None) -> pd.DataFrame:
+    """Per data set, leave-one-gear-out protocol and k: the primary's worst-split mean
+    accuracy and the best run's beside it.
+
+    Parameters
+    ----------
+    summ : pandas.DataFrame
+        :func:`learn.reports.transfer_report.summarise`.
+    primary : RunRef, optional
+        ``transfer.primary``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns dataset, protocol, k_shot, who, model, input, accuracy (0..1), worst_of;
+        the primary's row first.
+    """
+    w_all = summ[(summ["split"] == "worst") & summ["protocol"].isin(OOD_PROTOCOLS)]
+    rows = []
+    for (ds, prot), w in w_all.groupby(["dataset", "protocol"], sort=False):
+        for k in sorted(set(w["k_shot"].astype(int))):
+            for who, r in picks(w, primary, k):
+                run = {} if r is None else {"model": r["model"], "input": r["input"],
+                                            "accuracy": float(r["mean"]),
+                                            "worst_of": r["worst_of"]}
+                rows.append({"dataset": ds, "protocol": prot, "k_shot": k, "who": who,
+                             **run})
+    return pd.DataFrame(rows, columns=["dataset", "protocol", "k_shot", "who", "model",
+                                       "input", "accuracy", "worst_of"])
+
+
+def _cell(r, label, split: bool) -> str:
+    """One pick of the headline: accuracy and run, or what is missing."""
+    if pd.isna(r.model):
+        return r.who
+    where = f", {r.worst_of}" if split else ""
+    return (f"{100 * r.accuracy:.2f} % ({label(r.model, r.input, int(r.k_shot))}{where}; "
+            f"{r.who})")
+
+
+def headline_lines(head: pd.DataFrame, label) -> list[str]:
+    """One line per (data set, protocol, k): the primary's accuracy first, the best
+    beside it marked as chosen afterwards. ``label(model, input, k)`` names a run."""
+    return [f"{ds} {prot} k = {k}: " + "; beside it ".join(_cell(r, label, False)
+                                                           for r in g.itertuples())
+            for (ds, prot, k), g in head.groupby(["dataset", "protocol", "k_shot"],
+                                                 sort=False)]
+
+
+def headline_md(head: pd.DataFrame, label, order: Sequence[str]) -> list[str]:
+    """The headline section of ``table.md`` (rows of :func:`headline_table`); ``label``
+    as for :func:`headline_lines`, ``order``: the data sets."""
+    if not len(head):
+        return []
+    lines = ["## Headline", "",
+             "Accuracy on the worst split, mean over seeds. The result of a data set is the "
+             "primary run, declared before the comparison; beside it the best run, chosen "
+             "afterwards on the held-out gear's evaluation windows (a statement about the "
+             "runs compared, not a result one could have chosen in advance).", "",
+             "| data set | protocol | k | result (primary) | beside it (best) |",
+             "|---|---|---:|---|---|"]
+    for ds in order:
+        for (prot, k), g in head[head["dataset"] == ds].groupby(["protocol", "k_shot"],
+                                                                sort=False):
+            lines.append(f"| {ds} | {prot} | {k} | "
+                         + " | ".join(_cell(r, label, True) for r in g.itertuples()) + " |")
+    return lines + [""]
