@@ -144,7 +144,8 @@ def _timings(tc: TransferConfig, wall: float, input_s: float, generate_s: float)
 
 def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, timings) -> dict:
     """results.csv, confusion.csv, latency.csv, table.md and accuracy_vs_k.png."""
-    from learn.reports.transfer_report import plot_accuracy_vs_k, write_table
+    from learn.reports.transfer_figure import plot_accuracy_vs_k
+    from learn.reports.transfer_report import write_table
 
     files = dict(got.files)
     files["results"] = report_dir / "results.csv"
