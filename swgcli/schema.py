@@ -35,6 +35,7 @@ from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions
 from learn.studies.transfer import TransferConfig
+from learn.tasks.monitor import MonitorExperiment
 from learn.tracking.config import LoggerConfig
 from swgsim.config import DatasetConfig, check_keys
 
@@ -114,6 +115,7 @@ class TrainApp:
     paths: PathsConfig = field(default_factory=PathsConfig)
     study: StudyOptions = field(default_factory=StudyOptions)
     transfer: TransferConfig | None = None
+    monitor: MonitorExperiment | None = None
 
 
 #: Keys and groups renamed, per app: old name -> the new one and why. An override that

@@ -207,14 +207,20 @@ def acquire(signals: np.ndarray, amp: Amplifier, rng: np.random.Generator,
             n_lead: int) -> np.ndarray:
     """Record fine-grid bridge signals with ``amp``: filter, sample, noise, quantise.
 
+    :func:`sample` then :func:`digitise`; same parameters, plus ``rng`` (noise stream).
+    """
+    return digitise(sample(signals, amp, n_lead), amp, rng)
+
+
+def sample(signals: np.ndarray, amp: Amplifier, n_lead: int) -> np.ndarray:
+    """Filter and sample fine-grid bridge signals with ``amp`` (no noise, no quantisation).
+
     Parameters
     ----------
     signals : ndarray, shape (n_windows, n_sensors, oversample · (n_t + 2 n_lead))
         Bridge outputs on the fine grid [mV/V], starting ``n_lead`` output periods before
         the window and ending ``n_lead`` after it.
     amp : Amplifier
-    rng : numpy.random.Generator
-        Noise stream.
     n_lead : int
         Lead (and tail) output samples, >= ``amp.order`` (filter history).
 
@@ -251,6 +257,26 @@ def acquire(signals: np.ndarray, amp: Amplifier, rng: np.random.Generator,
     out = np.zeros(signals.shape[:-1] + (n_t,))
     for b in range(n_lag):
         out += xb[..., n_lead - b:n_lead - b + n_t, :] @ t_blocks[b]
+    return out
+
+
+def digitise(sampled: np.ndarray, amp: Amplifier, rng: np.random.Generator) -> np.ndarray:
+    """The converter's input-referred noise, quantisation and clipping on sampled signals.
+
+    Parameters
+    ----------
+    sampled : ndarray, shape (..., n_t)
+        Filtered, sampled bridge outputs [mV/V] (the filter part of :func:`acquire`).
+    amp : Amplifier
+    rng : numpy.random.Generator
+        Noise stream.
+
+    Returns
+    -------
+    ndarray, same shape
+        [mV/V], on the converter's LSB grid and within its range.
+    """
+    out = sampled
     if amp.noise_uv_rms > 0:
         out = out + rng.normal(0.0, amp.noise_mvv, size=out.shape)
     lsb = amp.lsb_mvv

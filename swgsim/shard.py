@@ -42,16 +42,13 @@ def gear_influences(plan: DatasetPlan, shards: list[ShardSpec] | tuple[ShardSpec
                     ) -> dict[int, dict[tuple | None, Influence]]:
     """Influences of every gear's layout on every structure the shards need.
 
-    One factorisation of the healthy truss, one adjoint solve per gear, and a Woodbury
-    update per root-crack variant (:class:`swgsim.influence.InfluenceSolver`). Computed
-    once in the calling process; the shard workers need no truss.
+    The root-crack structures of the shards' windows (:func:`influences_for`).
 
     Returns
     -------
     dict
         gear id -> {(position_deg, severity): Influence}, ``NO_ROOT_CRACK`` healthy.
     """
-    solver = InfluenceSolver(TrussModel(FlexsplineGeometry(), plan.config.mesh))
     keys = set()
     for s in shards:
         for w in s.windows:
@@ -59,15 +56,39 @@ def gear_influences(plan: DatasetPlan, shards: list[ShardSpec] | tuple[ShardSpec
                 p = apply_fault(ChainParams(gear=rt1_size20()), w.fault, w.severity,
                                 w.position_deg)
                 keys.add(p.root_crack_key())
+    return influences_for(plan, [int(g.id) for g in plan.config.gears], keys)
+
+
+def influences_for(plan: DatasetPlan, gear_ids: list[int], crack_keys
+                   ) -> dict[int, dict[tuple | None, Influence]]:
+    """Influences of some gears' layouts on the healthy truss and some root cracks.
+
+    One factorisation of the healthy truss, one adjoint solve per gear, and a Woodbury
+    update per root-crack structure (:class:`swgsim.influence.InfluenceSolver`). Computed
+    once in the calling process; the shard workers need no truss.
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+    gear_ids : list of int
+    crack_keys : iterable of (position_deg, severity)
+        :meth:`swgsim.faults.ChainParams.root_crack_key` of each cracked structure.
+
+    Returns
+    -------
+    dict
+        gear id -> {(position_deg, severity): Influence}, ``NO_ROOT_CRACK`` healthy.
+    """
+    solver = InfluenceSolver(TrussModel(FlexsplineGeometry(), plan.config.mesh))
     out = {}
-    for g in plan.config.gears:
-        lay = layout_for(plan.config, g)
+    for gid in gear_ids:
+        lay = layout_for(plan.config, plan.gear(gid))
         adj = solver.adjoint(lay)
         healthy = solver.coefficients(*adj)
         inf = {NO_ROOT_CRACK: healthy}
-        for pos, sev in sorted(keys):
+        for pos, sev in sorted(crack_keys):
             inf[(pos, sev)] = solver.root_crack_at(lay, pos, sev, adjoint=adj, healthy=healthy)
-        out[int(g.id)] = inf
+        out[int(gid)] = inf
     return out
 
 
@@ -336,5 +357,5 @@ def run_shard(plan: DatasetPlan, shard: ShardSpec, out_dir: str | os.PathLike,
     return side
 
 
-__all__ = ["gear_influences", "simulate_shard", "run_shard", "fine_motion",
+__all__ = ["gear_influences", "influences_for", "simulate_shard", "run_shard", "fine_motion",
            "simulate_motions", "synthesise", "record", "assemble", "Motions"]

@@ -19,6 +19,7 @@ TASKS: dict[str, str] = {
     "study": "learn.tasks.train.run_study_job",
     "paper_study": "learn.tasks.paper.run_paper_study_task",
     "transfer": "learn.tasks.transfer.run_transfer",
+    "monitor": "learn.tasks.monitor.run_monitor",
 }
 
 

@@ -1,0 +1,295 @@
+"""Evaluation of the monitor: leave-one-gear-out over simulated gear lives.
+
+For each data set (a checked :class:`~swgsim.plan.DatasetPlan`) and held-out gear, the
+diagnosis model is trained on the other gears' lives (:func:`train_model`); then, per
+seed, the held-out gear lives ``healthy_hours`` of healthy operation (false alarms,
+counted with the CUSUM restarted after each) and, from the same commissioning, one life
+per fault, severity and onset kind (:func:`fault_lives`). A fault life is the healthy life
+up to its onset (same seed, so the same windows: its monitor state at the onset is the
+healthy life's) and the fault after it, for ``horizon_h`` hours. Nothing is chosen on the
+held-out gear: the model, its settings and the rule's threshold are fixed before.
+
+Three detectors side by side: ``monitor`` (the conformal CUSUM, :mod:`.monitor`),
+``per_window`` (the paper's pipeline as a monitor: an alarm whenever one window is
+classified faulty, by the same diagnosis model) and ``always`` (an alarm at every window).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from swgsim.life import BLOCK, FaultOnset, LifeConfig, LifeSimulator, RecordBank
+from swgsim.sensor_faults import SENSOR_FAULTS
+from swgsim.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
+
+from .features import window_features
+from .model import HEALTHY, Baseline, design_matrix, fit_diagnosis
+from .monitor import GearMonitor
+from .rule import RuleConfig
+
+DETECTORS = ("monitor", "per_window", "always")
+
+
+@dataclass
+class MonitorStudyConfig:
+    """The evaluation's design, declared before it runs.
+
+    Attributes
+    ----------
+    seeds : list of int
+        Life seeds per held-out gear.
+    healthy_hours : float
+        Operating hours of each held-out gear's healthy life, commissioning included.
+    commissioning_h : float
+        Commissioning period of every life [h].
+    interval_min : float
+        Minutes between windows.
+    horizon_h : float
+        Hours a fault life runs after its onset.
+    onset_window_h : list of float
+        The onset is drawn uniformly this many hours after commissioning, [lo, hi].
+    growth_h : float
+        Hours of a growing fault's linear growth to its largest severity.
+    train_fault_h : float
+        Hours of each training life after its fault's onset.
+    train_variants : int
+        Training lives per class and severity: the fault at as many positions around the
+        flexspline (positions at (j + 1/2) 360° / count, not the held-out lives' random
+        ones), a sensor fault on the bridges in turn.
+    train_healthy_h : float
+        Hours of each training gear's healthy life after commissioning.
+    faults : list of str
+        Classes evaluated; empty: every gear fault of the data set and every sensor fault.
+    gears : list of int
+        Held-out gears; empty: every gear of the data set.
+    rule : RuleConfig
+    """
+
+    seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
+    healthy_hours: float = 1000.0
+    commissioning_h: float = 24.0
+    interval_min: float = 1.0
+    horizon_h: float = 24.0
+    onset_window_h: list[float] = field(default_factory=lambda: [1.0, 100.0])
+    growth_h: float = 10.0
+    train_fault_h: float = 0.5
+    train_variants: int = 5
+    train_healthy_h: float = 10.0
+    faults: list[str] = field(default_factory=list)
+    gears: list[int] = field(default_factory=list)
+    rule: RuleConfig = field(default_factory=RuleConfig)
+
+
+def table_v_severities(plan, fault: str) -> list[float]:
+    """The data set's severities of a class (paper Table V): its list, or the first, middle
+    and last of its linspace; a sensor fault's from :data:`swgsim.sensor_faults.SEVERITIES`."""
+    if fault in SENSOR_FAULTS:
+        return list(SENSOR_SEVERITIES[fault])
+    spec = plan.config.variants[fault]
+    if spec.severities is not None:
+        return [float(s) for s in spec.severities]
+    a, b, _ = spec.severity_linspace
+    return [float(a), float((a + b) / 2), float(b)]
+
+
+def classes(plan, cfg: MonitorStudyConfig) -> list[str]:
+    """Healthy, then the evaluated gear faults and sensor faults."""
+    gear = [f for f in plan.config.variants if f != HEALTHY]
+    chosen = cfg.faults or [*gear, *SENSOR_FAULTS]
+    return [HEALTHY, *chosen]
+
+
+def features_of(sim: LifeSimulator, start: int, stop: int
+                ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Health features, operating points and metadata of windows ``start:stop``."""
+    fs = sim.plan.config.chain.sample_rate_hz
+    f, pts, metas = [], [], []
+    for a in range(start, stop, BLOCK):
+        sig, meta = sim.windows(a, min(a + BLOCK, stop))
+        f.append(window_features(sig, meta["n_in_rpm"], meta["efficiency"], fs))
+        pts.append(np.stack([meta["n_in_rpm"], meta["t_out_nm"]], axis=1))
+        metas.append(meta)
+    meta = {k: np.concatenate([m[k] for m in metas]) for k in metas[0]}
+    return np.concatenate(f), np.concatenate(pts), meta
+
+
+def _split_baseline(feats, points) -> Baseline:
+    """The baseline from every other commissioning window per operating point (as the
+    monitor builds it)."""
+    ops, inv = np.unique(points, axis=0, return_inverse=True)
+    rank = np.zeros(len(points), int)
+    for k in range(len(ops)):
+        idx = np.flatnonzero(inv == k)
+        rank[idx] = np.arange(idx.size)
+    return Baseline.fit(feats[rank % 2 == 0], points[rank % 2 == 0])
+
+
+def train_model(plan, banks: dict[int, RecordBank], gears: list[int], cfg: MonitorStudyConfig,
+                seed: int = 0):
+    """The diagnosis model trained on the lives of ``gears`` (module docstring).
+
+    Per training gear: a healthy life (commissioning, then ``train_healthy_h`` hours) gives
+    the gear's baseline and the healthy windows; one life per class and severity, with a
+    step onset right after commissioning, gives ``train_fault_h`` hours of fault windows.
+    Lives of training gears use life seeds from 1000 on (the held-out gear's use the
+    study's seeds): fault positions differ from the held-out lives'.
+    """
+    cls = classes(plan, cfg)
+    n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
+    xs, ys, sev, gid = [], [], [], []
+    for g in gears:
+        life = LifeConfig(hours=cfg.commissioning_h + cfg.train_healthy_h,
+                          interval_min=cfg.interval_min, commissioning_h=cfg.commissioning_h,
+                          life_seed=1000)
+        lives = [(LifeSimulator(plan, g, life, banks[g]), HEALTHY, 0.0)]
+        k = 1
+        for c in cls[1:]:
+            for s in table_v_severities(plan, c):
+                for j in range(cfg.train_variants):  # bridges or fault positions
+                    pos = 360.0 * (j + 0.5) / cfg.train_variants
+                    fo = FaultOnset(c, cfg.commissioning_h, s,
+                                    sensor=j % 5 if c in SENSOR_FAULTS else None,
+                                    position_deg=None if c in SENSOR_FAULTS else pos)
+                    fl = dataclasses.replace(life, hours=cfg.commissioning_h + cfg.train_fault_h,
+                                             fault=fo, life_seed=1000 + k)
+                    lives.append((LifeSimulator(plan, g, fl, banks[g]), c, s))
+                    k += 1
+        f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
+        base = _split_baseline(f0[:n_comm], p0[:n_comm])
+        for sim, c, s in lives:
+            f, p, meta = (f0, p0, None) if c == HEALTHY else features_of(sim, n_comm, len(sim))
+            f, p = (f[n_comm:], p[n_comm:]) if c == HEALTHY else (f, p)
+            xs.append(design_matrix(base.z(f, p), p))
+            ys.append(np.full(len(f), c, object))
+            sev.append(np.full(len(f), s))
+            gid.append(np.full(len(f), g))
+    x = np.concatenate(xs)
+    model = fit_diagnosis(x, np.concatenate(ys).astype(str), np.concatenate(sev),
+                          np.concatenate(gid), cls, seed=seed)
+    model.points_range = np.stack([x[:, -2:].min(axis=0), x[:, -2:].max(axis=0)])
+    model.n_features = x.shape[1] - 2
+    model.sample_rate_hz = float(plan.config.chain.sample_rate_hz)
+    return model
+
+
+def fault_lives(plan, cfg: MonitorStudyConfig, seed: int) -> list[tuple[FaultOnset, str]]:
+    """The faults of one held-out gear and seed: every class at every severity with a step
+    onset, and every class growing linearly to its largest severity; onsets drawn from
+    the seed in ``onset_window_h`` after commissioning."""
+    rng = np.random.default_rng([seed, 7])
+    out = []
+    for c in classes(plan, cfg)[1:]:
+        sevs = table_v_severities(plan, c)
+        for s in sevs:
+            on = cfg.commissioning_h + rng.uniform(*cfg.onset_window_h)
+            out.append((FaultOnset(c, on, s), "step"))
+        on = cfg.commissioning_h + rng.uniform(*cfg.onset_window_h)
+        top = max(sevs, key=abs)
+        pts = [[on, sevs[0]]] + [[on + cfg.growth_h * abs(v / top), v] for v in sevs[1:]]
+        out.append((FaultOnset(c, on, top, growth="points", points=pts), "growing"))
+    return out
+
+
+def _per_window(model, lp: np.ndarray) -> np.ndarray:
+    """Windows the per-window rule calls faulty (its most probable class is not healthy)."""
+    return np.argmax(lp, axis=1) != 0
+
+
+def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: str
+                  ) -> tuple[list[dict], list[dict]]:
+    """Every life of held-out gear ``g`` for every seed: result rows and false-alarm rows."""
+    rows, fa_rows = [], []
+    n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
+    for seed in cfg.seeds:
+        base = LifeConfig(hours=cfg.healthy_hours, interval_min=cfg.interval_min,
+                          commissioning_h=cfg.commissioning_h, life_seed=int(seed))
+        lives = fault_lives(plan, cfg, int(seed))
+        sims = [(LifeSimulator(plan, g, dataclasses.replace(
+            base, hours=f.onset_h + cfg.horizon_h, fault=f), banks[g]), f, kind)
+            for f, kind in lives]
+        healthy = LifeSimulator(plan, g, base, banks[g])
+        f, p, meta = features_of(healthy, 0, len(healthy))
+        mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed))
+        mon.commission(f[:n_comm], p[:n_comm])
+        tr = mon.run(f[n_comm:], p[n_comm:], meta["hour"][n_comm:], latch=False)
+        pw = _per_window(model, mon._last_lp)
+        hours_h = cfg.healthy_hours - cfg.commissioning_h
+        fa_rows += [{"dataset": dataset, "held_out_gear": g, "seed": seed, "detector": d,
+                     "healthy_hours": hours_h, "false_alarms": n}
+                    for d, n in (("monitor", len(tr.alarms)), ("per_window", int(pw.sum())),
+                                 ("always", len(tr.score)))]
+        for sim, fo, kind in sims:
+            k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
+            start = 0.0 if k0 <= n_comm else float(tr.s[k0 - 1 - n_comm])
+            ff, pp, mm = features_of(sim, k0, len(sim))
+            ftr = mon.run(ff, pp, mm["hour"], latch=True, start=start)
+            row = {"dataset": dataset, "held_out_gear": g, "seed": seed, "fault": fo.fault,
+                   "severity": max((q[1] for q in fo.points), key=abs) if fo.points
+                   else fo.severity, "onset": kind, "onset_h": fo.onset_h}
+            rows.append({**row, **_monitor_row(mon, ftr, ff, pp, mm, fo)})
+            rows.append({**row, **_per_window_row(model, mon._last_lp, mm, fo)})
+            rows.append({**row, "detector": "always", "detected": True, "time_to_detect_h": 0.0,
+                         "fault_at_alarm": "unknown", "fault_after_1h": "unknown",
+                         "severity_est": np.nan, "severity_at_alarm": 0.0,
+                         "severity_low": np.nan, "severity_high": np.nan})
+    return rows, fa_rows
+
+
+def _monitor_row(mon, tr, ff, pp, mm, fo) -> dict:
+    if not tr.alarms:
+        return {"detector": "monitor", "detected": False, "time_to_detect_h": np.nan,
+                "fault_at_alarm": "", "fault_after_1h": "", "severity_est": np.nan,
+                "severity_at_alarm": np.nan, "severity_low": np.nan, "severity_high": np.nan}
+    a = tr.alarms[0]
+    al = mon.diagnose(tr, a, ff, pp)
+    return {"detector": "monitor", "detected": True, "time_to_detect_h": al.hour - fo.onset_h,
+            "fault_at_alarm": al.fault_at_alarm, "fault_after_1h": al.fault,
+            "severity_est": al.severity, "severity_at_alarm": float(mm["severity"][a]),
+            "severity_low": al.severity_low, "severity_high": al.severity_high}
+
+
+def _per_window_row(model, lp, mm, fo) -> dict:
+    bad = np.flatnonzero(_per_window(model, lp))
+    if bad.size == 0:
+        return {"detector": "per_window", "detected": False, "time_to_detect_h": np.nan,
+                "fault_at_alarm": "", "fault_after_1h": "", "severity_est": np.nan,
+                "severity_at_alarm": np.nan, "severity_low": np.nan, "severity_high": np.nan}
+    a = int(bad[0])
+    hour = mm["hour"]
+    end = int(np.searchsorted(hour, hour[a] + 1.0, side="right"))
+    labels = np.argmax(lp[a:end], axis=1)
+    labels = labels[labels != 0]
+    after = model.classes[int(np.bincount(labels).argmax())]
+    return {"detector": "per_window", "detected": True, "time_to_detect_h": hour[a] - fo.onset_h,
+            "fault_at_alarm": model.classes[int(np.argmax(lp[a]))], "fault_after_1h": after,
+            "severity_est": np.nan, "severity_at_alarm": float(mm["severity"][a]),
+            "severity_low": np.nan, "severity_high": np.nan}
+
+
+def run_held_out(plan, dataset: str, g: int, cfg: MonitorStudyConfig) -> dict:
+    """Train on the other gears and evaluate held-out gear ``g``: rows, timing."""
+    t0 = time.perf_counter()
+    gears = [int(x.id) for x in plan.config.gears]
+    banks = {x: RecordBank(plan, x) for x in gears}
+    model = train_model(plan, banks, [x for x in gears if x != g], cfg)
+    t1 = time.perf_counter()
+    rows, fa = evaluate_gear(plan, banks, g, model, cfg, dataset)
+    t2 = time.perf_counter()
+    return {"rows": rows, "false_alarms": fa, "train_s": t1 - t0, "evaluate_s": t2 - t1,
+            "dataset": dataset, "held_out_gear": g, "model": model}
+
+
+def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """results and false-alarm tables of :func:`run_held_out` parts."""
+    res = pd.DataFrame([r for p in parts for r in p["rows"]])
+    fa = pd.DataFrame([r for p in parts for r in p["false_alarms"]])
+    return res, fa
+
+
+__all__ = ["DETECTORS", "MonitorStudyConfig", "classes", "evaluate_gear", "fault_lives",
+           "features_of", "run_held_out", "table_v_severities", "to_frames", "train_model"]

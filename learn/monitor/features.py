@@ -1,0 +1,101 @@
+"""Health features of one window: what the monitor scores, cheap enough for every window.
+
+Per bridge, a least-squares Fourier series in the WG angle ψ (harmonics 1..H of the ψ
+rotation, 1 + 1/N per input revolution seen from the flexspline-fixed gauges; Sec. II-C:
+every fault of Table I changes these amplitudes or the offset), with eq. (10)'s
+sub-harmonics of orders 1/4, 1/3 and 1/2 fitted alongside and dropped:
+
+* the offset c0 [mV/V] (eccentric WG: offsets of the WG-bending pair; sensor offsets),
+* the amplitudes |c_h|, h = 1..H [mV/V] (phase-free: windows start at arbitrary angles),
+* log10 of the RMS of what the series leaves [mV/V] (tip crack: short deviations),
+
+and the window's efficiency (mean P_out / mean P_in; reduced damping). The basis is built
+once per (speed, window) from the duty point's desired speed, so a stream at one
+operating point costs one matrix product per window.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+N_HARMONICS = 12
+NUISANCE_ORDERS = (0.25, 1 / 3, 0.5)
+RATIO = 100.0  # gear ratio N of the size-20 gear (swgsim.dynamics.GearParams.ratio)
+
+
+@functools.lru_cache(maxsize=16)
+def _basis(n_in_rpm: float, fs_hz: float, n_t: int, n_harmonics: int
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Basis B (T, P) and its pseudo-inverse (P, T): [1, cos hψ, sin hψ, nuisance]."""
+    f_in = n_in_rpm / 60.0
+    t = np.arange(n_t) / fs_hz
+    orders = np.concatenate([(1.0 + 1.0 / RATIO) * np.arange(1, n_harmonics + 1),
+                             NUISANCE_ORDERS])
+    ang = 2 * np.pi * f_in * t[:, None] * orders[None, :]
+    b = np.concatenate([np.ones((n_t, 1)), np.cos(ang), np.sin(ang)], axis=1)
+    p = np.linalg.pinv(b)
+    b.setflags(write=False)
+    p.setflags(write=False)
+    return b, p
+
+
+def feature_names(n_harmonics: int = N_HARMONICS) -> list[str]:
+    """Names of the columns of :func:`window_features`."""
+    out = []
+    for s in range(5):
+        out += [f"s{s}_offset", *(f"s{s}_h{h}" for h in range(1, n_harmonics + 1)),
+                f"s{s}_log_rest"]
+    return [*out, "efficiency"]
+
+
+def window_features(signals: np.ndarray, n_in_rpm: np.ndarray, efficiency: np.ndarray,
+                    fs_hz: float, n_harmonics: int = N_HARMONICS) -> np.ndarray:
+    """Health features of windows (module docstring).
+
+    Parameters
+    ----------
+    signals : ndarray, shape (n, 5, n_t)
+        Bridge outputs s0..s4 [mV/V].
+    n_in_rpm : ndarray, shape (n,)
+        Desired input speed of each window's duty point [rpm].
+    efficiency : ndarray, shape (n,)
+        Mean P_out / mean P_in of each window [-].
+    fs_hz : float
+        Sample rate [Hz].
+    n_harmonics : int
+        H.
+
+    Returns
+    -------
+    ndarray, shape (n, 5 (H + 2) + 1)
+        Columns as :func:`feature_names`.
+
+    Raises
+    ------
+    ValueError
+        If the highest harmonic reaches the Nyquist frequency, or shapes disagree.
+    """
+    x = np.asarray(signals, dtype=np.float64)
+    n, c, n_t = x.shape
+    speeds = np.asarray(n_in_rpm, float)
+    if c != 5 or speeds.shape != (n,) or np.shape(efficiency) != (n,):
+        raise ValueError(f"signals must be (n, 5, n_t) with n speeds and efficiencies, got "
+                         f"{x.shape}, {speeds.shape}, {np.shape(efficiency)}")
+    if n and speeds.max() / 60.0 * n_harmonics >= fs_hz / 2:
+        raise ValueError(f"harmonic {n_harmonics} of {speeds.max():g} rpm reaches the Nyquist "
+                         f"frequency of {fs_hz:g} Hz")
+    out = np.empty((n, c, n_harmonics + 2))
+    for v in np.unique(speeds):
+        idx = np.flatnonzero(speeds == v)
+        b, p = _basis(float(v), float(fs_hz), n_t, n_harmonics)
+        coef = x[idx] @ p.T  # (m, 5, P)
+        rest = x[idx] - coef @ b.T
+        out[idx, :, 0] = coef[..., 0]
+        out[idx, :, 1:n_harmonics + 1] = np.hypot(coef[..., 1:n_harmonics + 1],
+                                                  coef[..., 1 + n_harmonics + 3:
+                                                       1 + 2 * n_harmonics + 3])
+        out[idx, :, -1] = np.log10(np.sqrt(np.mean(rest ** 2, axis=-1)) + 1e-9)
+    return np.concatenate([out.reshape(n, -1), np.asarray(efficiency, float)[:, None]],
+                          axis=1)

@@ -1,0 +1,227 @@
+"""One gear's monitor: commissioning, scoring, the sequential alarm, naming and severity.
+
+:class:`GearMonitor` takes a trained :class:`~learn.monitor.model.DiagnosisModel` and a
+gear's windows in time order. :meth:`GearMonitor.commission` builds the baseline from
+the commissioning windows, alternately per operating point: even ones fit the baseline,
+odd ones calibrate the rule (:mod:`.rule`). :meth:`GearMonitor.run` scores every later
+window, updates the CUSUM and raises an alarm when it crosses h; the fault is then named
+by the evidence of the windows since the CUSUM's last rise from zero up to the alarm
+(``fault_at_alarm``) and up to one hour after it (``fault``, with the severity and its
+interval). The alarm latches: one alarm per stream until the gear is commissioned again;
+an evaluation of false alarms restarts the CUSUM after each (``latch=False``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import Baseline, DiagnosisModel, design_matrix
+from .rule import RuleConfig, conformal_p, cusum, log_bet, min_calibration, threshold
+
+
+@dataclass
+class Alarm:
+    """An alarm and what the monitor says about it.
+
+    Attributes
+    ----------
+    hour : float
+        Operating hours of the window that raised it.
+    index : int
+        That window's index in the stream.
+    rise_index : int
+        First window of the CUSUM's rise that led to it.
+    fault_at_alarm : str
+        Named from the windows of the rise.
+    fault : str
+        Named from the windows of the rise up to ``confirm_h`` after the alarm.
+    severity, severity_low, severity_high : float
+        Estimate of ``fault``'s severity and its 90 % interval.
+    """
+
+    hour: float
+    index: int
+    rise_index: int
+    fault_at_alarm: str
+    fault: str
+    severity: float
+    severity_low: float
+    severity_high: float
+
+    def as_dict(self) -> dict:
+        """The ``summary.json`` entry."""
+        return {"hour": self.hour, "fault": self.fault, "fault_at_alarm": self.fault_at_alarm,
+                "severity": self.severity, "severity_low": self.severity_low,
+                "severity_high": self.severity_high}
+
+
+@dataclass
+class Trace:
+    """Per-window output of a run: score, p-value, CUSUM, and the alarm windows."""
+
+    hour: np.ndarray
+    score: np.ndarray
+    p: np.ndarray
+    s: np.ndarray
+    alarms: list[int]
+
+
+def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: float) -> None:
+    """Refuse commissioning windows too few for the rule at any operating point.
+
+    Raises
+    ------
+    ValueError
+        Naming the operating point, the windows it has and the minimum.
+    """
+    need = 2 * max(rule.min_baseline, min_calibration(rule, interval_min))
+    if len(points) == 0:
+        raise ValueError("the stream has no commissioning windows (a period known healthy, "
+                         f"at least {need} windows per operating point)")
+    ops, counts = np.unique(points, axis=0, return_counts=True)
+    for o, c in zip(ops, counts, strict=True):
+        if c < need:
+            raise ValueError(
+                f"commissioning too short for the design of one false alarm per "
+                f"{rule.design_hours:g} h: {c} windows at {o[0]:g} rpm, {o[1]:g} N m, at least "
+                f"{need} needed ({min_calibration(rule, interval_min)} to calibrate, "
+                f"{rule.min_baseline} for the baseline, alternately)")
+
+
+class GearMonitor:
+    """Monitor of one gear (module docstring).
+
+    Parameters
+    ----------
+    model : DiagnosisModel
+    rule : RuleConfig
+    interval_min : float
+        Operating minutes between windows.
+    seed : int
+        Of the p-values' smoothing draws.
+    confirm_h : float
+        Hours after an alarm whose windows name the fault (default 1 h).
+    """
+
+    def __init__(self, model: DiagnosisModel, rule: RuleConfig, interval_min: float,
+                 seed: int = 0, confirm_h: float = 1.0) -> None:
+        self.model, self.rule = model, rule
+        self.interval_min = float(interval_min)
+        self.h = threshold(rule, interval_min)
+        self.rng = np.random.default_rng(seed)
+        self.confirm_h = float(confirm_h)
+        self.baseline: Baseline | None = None
+        self.calibration: dict[int, np.ndarray] = {}
+
+    def commission(self, feats: np.ndarray, points: np.ndarray) -> None:
+        """Baseline and calibration from commissioning windows (module docstring).
+
+        Parameters
+        ----------
+        feats : ndarray, shape (n, F)
+            Health features (:func:`learn.monitor.features.window_features`).
+        points : ndarray, shape (n, 2)
+            (n_in_rpm, t_out_nm) of each window's duty point.
+        """
+        check_commissioning(points, self.rule, self.interval_min)
+        ops, inv = np.unique(points, axis=0, return_inverse=True)
+        rank = np.zeros(len(points), int)
+        for k in range(len(ops)):
+            idx = np.flatnonzero(inv == k)
+            rank[idx] = np.arange(idx.size)
+        fit, cal = rank % 2 == 0, rank % 2 == 1
+        self.baseline = Baseline.fit(feats[fit], points[fit])
+        scores = self.scores(feats[cal], points[cal])[0]
+        opi = self.baseline.index(points[cal])
+        self.calibration = {k: np.sort(scores[opi == k], axis=0)
+                            for k in range(len(self.baseline.points))}
+
+    def inputs(self, feats: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """The diagnosis model's inputs of windows (z-scores and operating point)."""
+        return design_matrix(self.baseline.z(feats, points), points)
+
+    def scores(self, feats: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Scores (n, 2) and log-probabilities (n, n_classes) of windows.
+
+        Two scores per window: the diagnosis model's evidence against healthy, and the
+        novelty ``Σ z²`` of its health features (a change the model was not trained on,
+        e.g. a bridge it never saw faulty, moves the latter).
+        """
+        z = self.baseline.z(feats, points)
+        lp = self.model.log_proba(design_matrix(z, points))
+        return np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp
+
+    def p_values(self, score: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Conformal p-values of windows against the calibration of their operating point,
+        the two scores' combined by Bonferroni, ``min(1, 2 min(p1, p2))`` (still
+        super-uniform, so the CUSUM's bound holds)."""
+        opi = self.baseline.index(points)
+        u = self.rng.uniform(size=score.shape)
+        p = np.empty(score.shape)
+        for k, cal in self.calibration.items():
+            m = opi == k
+            for j in range(score.shape[1]):
+                p[m, j] = conformal_p(score[m, j], cal[:, j], u[m, j])
+        return np.minimum(1.0, score.shape[1] * p.min(axis=1))
+
+    def run(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray,
+            latch: bool = True, start: float = 0.0) -> Trace:
+        """Score windows after commissioning and run the CUSUM.
+
+        Parameters
+        ----------
+        feats, points
+            As :meth:`commission`, of the windows after commissioning, in time order.
+        hours : ndarray, shape (n,)
+            Operating hours of each window, increasing.
+        latch : bool
+            Stop at the first alarm (a monitor); else restart the CUSUM after each alarm
+            (counting false alarms).
+        start : float
+            CUSUM value before the first window.
+
+        Returns
+        -------
+        Trace
+        """
+        score, lp = self.scores(feats, points)
+        self._last_lp, self._last_x = lp, None
+        p = self.p_values(score, points)
+        lf = log_bet(p)
+        s = np.empty(len(score))
+        alarms, cur, i0 = [], float(start), 0
+        while i0 < len(score):
+            seg = cusum(lf[i0:], cur)
+            hit = np.flatnonzero(seg >= self.h)
+            if hit.size == 0:
+                s[i0:] = seg
+                break
+            a = i0 + int(hit[0])
+            s[i0:a + 1] = seg[:a - i0 + 1]
+            alarms.append(a)
+            if latch:
+                s[a + 1:] = np.nan
+                break
+            cur, i0 = 0.0, a + 1
+        return Trace(np.asarray(hours, float), score, p, s, alarms)
+
+    def diagnose(self, trace: Trace, a: int, feats: np.ndarray, points: np.ndarray) -> Alarm:
+        """Name the fault of the alarm at window ``a`` of ``trace`` and its severity.
+
+        ``feats``/``points`` are the run's windows (those after the alarm included, as far
+        as the stream goes, up to ``confirm_h``).
+        """
+        zero = np.flatnonzero(trace.s[:a] <= 0)
+        rise = int(zero[-1]) + 1 if zero.size else 0
+        end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
+        lp = self._last_lp
+        at_alarm = self.model.name(lp[rise:a + 1])
+        fault = self.model.name(lp[rise:end])
+        x = self.inputs(feats[rise:end], points[rise:end])
+        est, lo, hi = self.model.estimate(fault, x)
+        return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi)
+
+
+__all__ = ["Alarm", "GearMonitor", "Trace", "check_commissioning"]

@@ -1,0 +1,112 @@
+"""The alarm rule: conformal p-values against the gear's own commissioning, and a CUSUM.
+
+**p-values.** Each window's score s (the diagnosis model's evidence against healthy) is
+ranked among the scores of the calibration windows of the same operating point, taken at
+commissioning and never used to fit anything: the smoothed conformal p-value
+``p = (#{c > s} + U (#{c = s} + 1)) / (n + 1)``, U uniform (Vovk, Gammerman and Shafer,
+*Algorithmic Learning in a Random World*, 2005, ch. 2). While the gear is as it was at
+commissioning, the p-values are uniform on (0, 1), whatever the score's distribution.
+
+**CUSUM of a betting function.** ``S_t = max(0, S_{t−1} + ln f(p_t))`` with the mixture
+``f(p) = ∫_0^1 κ p^(κ−1) dκ = (p (ln p − 1) + 1) / (p ln² p)``, which integrates to 1
+over uniform p (the power martingale mixed over κ, Vovk et al. 2005, ch. 7; Volkhonskiy
+et al., *Inductive conformal martingales for change-point detection*, COPA 2017). An
+alarm when ``S_t >= h``. With ``E_0[f(p)] = 1``, ``ln f`` is a log-likelihood ratio and
+Lorden's bound gives an average run length to a false alarm of at least ``e^h`` windows
+(Lorden, *Procedures for reacting to a change in distribution*, Ann. Math. Stat. 1971):
+``h = ln(design hours · 60 / interval_min)`` sets the design false-alarm rate, one per
+``design hours`` of operation (default 1000 h). No parameter is tuned to any gear.
+
+**Shortest commissioning.** One window moves S by at most ``ln f(1 / (n + 1))``, n the
+calibration windows of its operating point. For the rule to reach h within its design
+delay (``max_delay_windows``) at all, ``max_delay_windows · ln f(1/(n + 1)) >= h``;
+:func:`min_calibration` solves it for n, :func:`check_commissioning` refuses less.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class RuleConfig:
+    """The sequential rule's design.
+
+    Attributes
+    ----------
+    design_hours : float
+        One false alarm per this many operating hours, > 0 (default 1000 h).
+    max_delay_windows : int
+        Windows in which a fault that gives every window the smallest p-value must be
+        detectable (sets the shortest commissioning), >= 1.
+    min_baseline : int
+        Fewest baseline windows per operating point (its mean and spread), >= 2.
+    """
+
+    design_hours: float = 1000.0
+    max_delay_windows: int = 30
+    min_baseline: int = 30
+
+
+def log_bet(p: np.ndarray) -> np.ndarray:
+    """ln f(p) of the mixture betting function (module docstring), p in (0, 1]."""
+    p = np.clip(np.asarray(p, float), 1e-300, 1.0)
+    lp = np.log(p)
+    small = np.abs(lp) < 1e-6  # f(1) = 1/2 + O(ln p)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = (p * (lp - 1.0) + 1.0) / (p * lp ** 2)
+    return np.where(small, np.log(0.5), np.log(np.where(small, 1.0, f)))
+
+
+def threshold(rule: RuleConfig, interval_min: float) -> float:
+    """h = ln(windows in ``design_hours``): the design false-alarm rate (module docstring)."""
+    return math.log(rule.design_hours * 60.0 / float(interval_min))
+
+
+def min_calibration(rule: RuleConfig, interval_min: float) -> int:
+    """Fewest calibration windows per operating point for which the rule can reach h
+    within ``max_delay_windows`` (module docstring)."""
+    h = threshold(rule, interval_min)
+    n = 1
+    while rule.max_delay_windows * float(log_bet(1.0 / (n + 1))) < h:
+        n += 1
+    return n
+
+
+def conformal_p(scores: np.ndarray, calibration: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Smoothed conformal p-values of scores among calibration scores.
+
+    Parameters
+    ----------
+    scores : ndarray, shape (m,)
+    calibration : ndarray, shape (n,)
+        Sorted ascending.
+    u : ndarray, shape (m,)
+        Uniform draws in [0, 1).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        In (0, 1].
+    """
+    n = calibration.size
+    above = n - np.searchsorted(calibration, scores, side="right")
+    equal = np.searchsorted(calibration, scores, side="right") - np.searchsorted(
+        calibration, scores, side="left")
+    return (above + u * (equal + 1)) / (n + 1)
+
+
+def cusum(log_f: np.ndarray, start: float = 0.0) -> np.ndarray:
+    """S_t = max(0, S_{t−1} + ln f_t) from ``S_0 = start``; shape like ``log_f``."""
+    out = np.empty(len(log_f))
+    s = float(start)
+    for i, v in enumerate(log_f):
+        s = max(0.0, s + float(v))
+        out[i] = s
+    return out
+
+
+__all__ = ["RuleConfig", "log_bet", "threshold", "min_calibration", "conformal_p", "cusum"]

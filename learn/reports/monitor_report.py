@@ -1,0 +1,146 @@
+"""The monitor evaluation's table and figures (``reports/monitor``).
+
+``table.md``: per data set, detector, fault and severity: detection rate, median and
+95th-percentile time to detect [min], isolation at the alarm and one hour after (share of
+detected lives named correctly), severity error (median |estimate − true severity at the
+alarm|) and, per fault, the smallest severity detected in every life; then false alarms
+per 1000 h per held-out gear. Figures: time to detect against severity per fault, and
+false-alarm rate against time to detect per detector.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from swgsim.faults import FAULTS
+from swgsim.sensor_faults import SENSOR_FAULTS
+
+
+def display(fault: str) -> str:
+    """Report name of a gear or sensor fault."""
+    if fault in SENSOR_FAULTS:
+        return SENSOR_FAULTS[fault].display
+    return FAULTS[fault].display if fault in FAULTS else fault
+
+
+def summary_table(res: pd.DataFrame) -> pd.DataFrame:
+    """Per dataset, detector, fault, severity and onset: the table's figures."""
+    rows = []
+    keys = ["dataset", "detector", "fault", "severity", "onset"]
+    for k, g in res.groupby(keys, sort=False):
+        det = g[g.detected.astype(bool)]
+        ttd = det.time_to_detect_h * 60.0
+        err = (det.severity_est - det.severity_at_alarm).abs()
+        rows.append({**dict(zip(keys, k, strict=True)), "lives": len(g),
+                     "detection_rate": len(det) / len(g),
+                     "ttd_median_min": float(np.median(ttd)) if len(det) else np.nan,
+                     "ttd_p95_min": float(np.percentile(ttd, 95)) if len(det) else np.nan,
+                     "isolation_at_alarm": float((det.fault_at_alarm == det.fault).mean())
+                     if len(det) else np.nan,
+                     "isolation_after_1h": float((det.fault_after_1h == det.fault).mean())
+                     if len(det) else np.nan,
+                     "severity_error": float(err.median()) if err.notna().any() else np.nan})
+    return pd.DataFrame(rows)
+
+
+def smallest_detectable(tab: pd.DataFrame) -> pd.DataFrame:
+    """Per dataset, detector and fault: the smallest step severity detected in every life
+    (NaN when none is)."""
+    step = tab[tab.onset == "step"]
+    out = []
+    for k, g in step.groupby(["dataset", "detector", "fault"], sort=False):
+        ok = g[g.detection_rate >= 1.0].severity.abs()
+        out.append({"dataset": k[0], "detector": k[1], "fault": k[2],
+                    "smallest_detectable": float(ok.min()) if len(ok) else np.nan})
+    return pd.DataFrame(out)
+
+
+def false_alarm_table(fa: pd.DataFrame) -> pd.DataFrame:
+    """False alarms per 1000 h per dataset, detector and held-out gear (all seeds)."""
+    g = fa.groupby(["dataset", "detector", "held_out_gear"], sort=False).agg(
+        healthy_hours=("healthy_hours", "sum"), false_alarms=("false_alarms", "sum"))
+    g["per_1000_h"] = g.false_alarms / g.healthy_hours * 1000.0
+    return g.reset_index()
+
+
+def _md(df: pd.DataFrame) -> str:
+    """A markdown table; numbers to 3 significant digits, NaN as a dash."""
+    def cell(v) -> str:
+        if isinstance(v, (float, np.floating)):
+            return "-" if np.isnan(v) else f"{v:.3g}"
+        return str(v)
+    lines = ["| " + " | ".join(map(str, df.columns)) + " |",
+             "|" + "|".join("---" for _ in df.columns) + "|"]
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in df.itertuples(index=False)]
+    return "\n".join(lines)
+
+
+def write_table(res: pd.DataFrame, fa: pd.DataFrame, path: Path, header: str = "") -> str:
+    """``table.md`` (module docstring); returns its text."""
+    tab = summary_table(res)
+    tab["fault"] = tab.fault.map(display)
+    small = smallest_detectable(summary_table(res))
+    small["fault"] = small.fault.map(display)
+    text = [header, "## Detection and isolation per fault and severity (held-out gears, all "
+            "seeds)\n", _md(tab), "\n## Smallest severity detected in every life (step "
+            "onsets)\n", _md(small), "\n## False alarms in healthy operation\n",
+            _md(false_alarm_table(fa)), ""]
+    out = "\n".join(text)
+    path.write_text(out)
+    return out
+
+
+def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[Path]:
+    """Time to detect against severity per fault; false-alarm rate against time to detect."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    paths = []
+    mon = res[(res.detector == "monitor") & (res.onset == "step")]
+    faults = list(dict.fromkeys(mon.fault))
+    n = len(faults)
+    fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 3.0), squeeze=False)
+    for ax, f in zip(axes[0], faults, strict=True):
+        for ds, g in mon[mon.fault == f].groupby("dataset", sort=False):
+            t = g.time_to_detect_h.where(g.detected.astype(bool)) * 60
+            ax.plot(g.severity.abs(), t, "o", alpha=0.5, ms=3, label=ds)
+        ax.axhline(30, color="0.5", lw=0.8, ls="--")
+        ax.set_title(display(f), fontsize=9)
+        ax.set_xlabel("severity")
+    axes[0, 0].set_ylabel("time to detect [min]")
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle("Monitor: time to detect per life (held-out gear; dashed: 30 min target)",
+                 fontsize=9)
+    fig.tight_layout()
+    p = out_dir / "time_to_detect.png"
+    fig.savefig(p, dpi=130)
+    plt.close(fig)
+    paths.append(p)
+
+    fat = false_alarm_table(fa).groupby(["dataset", "detector"]).per_1000_h.max()
+    tab = summary_table(res)
+    ttd = tab.groupby(["dataset", "detector"]).ttd_median_min.median()
+    fig, ax = plt.subplots(figsize=(4.8, 3.4))
+    for (ds, d), v in fat.items():
+        ax.plot(max(v, 0.1), ttd.get((ds, d), np.nan), "o")
+        ax.annotate(f"{d} ({ds})", (max(v, 0.1), ttd.get((ds, d), np.nan)), fontsize=7)
+    ax.set_xscale("log")
+    ax.axvline(1.0, color="0.5", lw=0.8, ls="--")
+    ax.set_xlabel("false alarms per 1000 h (worst held-out gear; 0 drawn at 0.1)")
+    ax.set_ylabel("median time to detect [min]")
+    ax.set_title("False-alarm rate against time to detect", fontsize=9)
+    fig.tight_layout()
+    p = out_dir / "false_alarms_vs_ttd.png"
+    fig.savefig(p, dpi=130)
+    plt.close(fig)
+    paths.append(p)
+    return paths
+
+
+__all__ = ["display", "false_alarm_table", "figures", "smallest_detectable", "summary_table",
+           "write_table"]
