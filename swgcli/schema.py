@@ -35,6 +35,7 @@ from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions
 from learn.studies.transfer import TransferConfig
+from learn.monitor.rule import RuleConfig
 from learn.tasks.monitor import MonitorExperiment
 from learn.tracking.config import LoggerConfig
 from swgsim.config import DatasetConfig, check_keys
@@ -80,6 +81,20 @@ class ObservabilityApp:
     harmonics: int = 8                       # harmonics of the WG angle in the separation
     plot_only: bool = False                  # redraw the figure from observability.csv
     progress: bool = True
+
+
+@dataclass
+class MonitorApp:
+    """``swgsim-monitor``: one gear's stream through the condition monitor."""
+
+    stream: str = MISSING                    # a life data set (swgsim-generate, dataset.life)
+    diagnosis_model: str = MISSING           # a .joblib of experiment=monitor (models/)
+    gear: int | None = None                  # the gear to monitor when the stream holds several
+    out_dir: str = "reports/monitor_run"
+    rule: RuleConfig = field(default_factory=RuleConfig)
+    confirm_h: float = 1.0                   # hours after an alarm that name the fault
+    seed: int = 0                            # the p-values' smoothing draws
+    logger: LoggerConfig | None = None
 
 
 @dataclass
@@ -154,6 +169,7 @@ def register() -> None:
     cs.store(name="paper_schema", node=PaperApp)
     cs.store(name="train_schema", node=TrainApp)
     cs.store(name="observability_schema", node=ObservabilityApp)
+    cs.store(name="monitor_schema", node=MonitorApp)
     for name in PROTOCOLS:
         cs.store(group="protocol", name=name,
                  node=ProtocolConfig.paper(name, random_state="${seed}"))

@@ -30,6 +30,7 @@ from .disturbance import DisturbanceSpec
 from .dynamics import J_OUT_BENCH_KGM2, KeHarmonic
 from .flexspline import Mesh
 from .friction.simulation import FrictionEffectsConfig
+from .life import LifeConfig
 from .measurement import SensorEffectConfig
 from .sensors import SensorsConfig, TolerancesConfig
 
@@ -135,6 +136,9 @@ class DatasetConfig:
         Measurement-chain effects (:mod:`swgsim.measurement`), applied before eq. (10).
     friction_effects : FrictionEffectsConfig or None
         Extra friction found by a calibration (:mod:`swgsim.friction.simulation`).
+    life : LifeConfig or None
+        None: the grid of ``variants`` at every operating point. Set: each gear's life as
+        one time-ordered stream (:mod:`swgsim.life`) instead of the grid.
     """
 
     name: str = "paper"
@@ -151,6 +155,7 @@ class DatasetConfig:
     acquisition: Acquisition = field(default_factory=Acquisition)
     sensor_effects: list[SensorEffectConfig] = field(default_factory=list)
     friction_effects: FrictionEffectsConfig | None = None
+    life: LifeConfig | None = None
 
 
 def paper_config() -> dict:

@@ -127,6 +127,6 @@ def generate(cfg: DatasetConfig | DatasetPlan | Mapping[str, Any], out_dir: str 
         summary["windows"] = manifest["n_samples"]
         summary["content_sha256"] = manifest["content_sha256"]
     else:
-        summary["windows"] = int(sum(len(s.windows) * 2 for s in todo))
+        summary["windows"] = int(sum(s.n_windows for s in todo))
     summary["wall_s"] = time.perf_counter() - t0
     return summary

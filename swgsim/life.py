@@ -220,22 +220,24 @@ def severity_at(f: FaultOnset, hours: np.ndarray, levels: int) -> np.ndarray:
     if f.fault == "healthy":
         return np.zeros_like(h)
     if f.growth == "step":
-        exact = np.where(h >= f.onset_h, f.severity, 0.0)
-    elif f.growth == "linear":
+        return np.where(h >= f.onset_h, f.severity, 0.0)
+    if f.growth == "linear":
+        set_in = h >= f.onset_h
         exact = np.clip((h - f.onset_h) / f.growth_h, 0.0, 1.0) * f.severity
-        exact = np.where(h >= f.onset_h, exact, 0.0)
+        top = f.severity
     else:
         hp = np.array([p[0] for p in f.points], float)
         sp = np.array([p[1] for p in f.points], float)
-        exact = np.where(h >= hp[0], np.interp(h, hp, sp), 0.0)
-        exact = np.where(h >= f.onset_h, exact, 0.0)
-    top = np.max(np.abs(exact)) if exact.size else 0.0
-    if f.growth == "step" or top == 0:
-        return exact
-    step = top / int(levels)
-    q = np.floor(np.abs(exact) / step + 1e-9) * step * np.sign(exact)
-    # a growing fault is there from its onset: the first step is taken at once
-    return np.where((h >= f.onset_h) & (q == 0) & (exact != 0), np.sign(exact) * step, q)
+        set_in = h >= max(hp[0], f.onset_h)
+        exact = np.interp(h, hp, sp)
+        top = sp[np.argmax(np.abs(sp))]
+    if top == 0:
+        return np.zeros_like(h)
+    step = abs(top) / int(levels)
+    q = np.floor(np.abs(exact) / step + 1e-9) * step
+    # a growing fault is there from its onset: its first step is taken at once
+    q = np.maximum(q, step) * np.sign(np.where(exact != 0, exact, top))
+    return np.where(set_in, q, 0.0)
 
 
 @dataclass(frozen=True)
@@ -285,7 +287,7 @@ def schedule(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]) -> 
 
 __all__ = ["BLOCK", "DutyPoint", "FaultOnset", "LifeConfig", "Schedule", "check_life",
            "duty_cycle", "schedule", "severity_at", "LifeSimulator", "RecordBank",
-           "life_dataset"]
+           "life_dataset", "simulate_life_shard"]
 
 
 class RecordBank:
@@ -537,3 +539,25 @@ def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     ds["hour"] = ("sample", extra["hour"], {"units": "h"})
     ds["commissioning"] = ("sample", extra["commissioning"])
     return ds
+
+
+def simulate_life_shard(plan, shard):
+    """One gear's life as a data-set shard (``dataset.life``); returns (Dataset, n).
+
+    The shard's attributes are those of a grid shard (config, seed, ``content_sha256`` of
+    the float32 signals and the sorted per-sample variables, provenance) plus ``life``,
+    ``fault_position_deg`` and ``fault_sensor``.
+    """
+    import hashlib
+
+    from .outdir import git_revision, package_version
+
+    sim = LifeSimulator(plan, shard.gear, plan.config.life)
+    ds = life_dataset(sim)
+    h = hashlib.sha256(ds["strain_signal"].values.tobytes())
+    for k in sorted(v for v in ds.data_vars if v != "strain_signal"):
+        v = ds[k].values
+        h.update(np.ascontiguousarray(v.astype(str) if v.dtype.kind in "OU" else v).tobytes())
+    ds.attrs.update({"shard": shard.name, "content_sha256": h.hexdigest(),
+                     "package_version": package_version(), "git_revision": git_revision()})
+    return ds, len(sim)

@@ -64,7 +64,7 @@ def shard_done(out_dir: Path, shard: ShardSpec, chash: str) -> bool:
 
 #: Names of the files a data set of this project consists of: its manifest, the config
 #: stamp, the shards and their sidecars, and temporary files of an interrupted write.
-DATASET_FILE = re.compile(r"manifest\.json|\.config\.json|gear\d+_n\d+rpm\.(nc|json)|\..+\.tmp")
+DATASET_FILE = re.compile(r"manifest\.json|\.config\.json|gear\d+_(n\d+rpm|life)\.(nc|json)|\..+\.tmp")
 
 
 def foreign_entries(out_dir: Path) -> list[str]:
@@ -156,7 +156,7 @@ def check_disk_space(out_dir: Path, shards: list[ShardSpec], plan: DatasetPlan) 
         Naming the folder, the space needed and the space free.
     """
     n_t = int(round(plan.config.chain.window_s * plan.config.chain.sample_rate_hz))
-    windows = sum(2 * len(s.windows) for s in shards)  # clean and disturbed twins
+    windows = sum(s.n_windows for s in shards)
     need = int(1.1 * windows * (5 * n_t * 4 + 200)) + (1 << 20)  # float32 signals + metadata
     probe = out_dir
     while not probe.exists():

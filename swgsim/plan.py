@@ -26,6 +26,7 @@ from .dynamics import gear_with_ke, rt1_size20, torsional_mode
 from .faults import FAULTS, ChainParams, Fault, get_fault
 from .flexspline import FlexsplineGeometry, TrussModel
 from .friction import FrictionEffects, friction_effects_from_config
+from .life import check_life, schedule
 from .measurement import SensorEffect, parse_sensor_effects
 from .sensors import SensorLayout, gear_layout, signal_rows
 
@@ -54,6 +55,12 @@ class ShardSpec:
     speed_index: int
     n_in_rpm: float
     windows: tuple[WindowSpec, ...]
+    n_life_windows: int = 0  # a gear's life (dataset.life): its windows, no WindowSpec
+
+    @property
+    def n_windows(self) -> int:
+        """Windows written: the grid's clean and disturbed twins, or the life's."""
+        return 2 * len(self.windows) + self.n_life_windows
 
 
 @dataclass(frozen=True)
@@ -317,8 +324,15 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     variants = _variants(cfg)
     _check_layout(cfg)
     faults = {name: get_fault(name) for name in ("healthy", *variants)}
-    return DatasetPlan(cfg, _shards(cfg, variants), faults, effects, friction,
-                       config_hash(cfg))
+    if cfg.life is not None:
+        check_life(cfg.life)
+        ops = cfg.operating_points
+        n = len(schedule(cfg.life, list(ops.n_in_rpm), list(ops.t_out_nm)).hour)
+        shards = tuple(ShardSpec(f"gear{int(g.id)}_life.nc", int(g.id), 0, float("nan"), (), n)
+                       for g in cfg.gears)
+    else:
+        shards = _shards(cfg, variants)
+    return DatasetPlan(cfg, shards, faults, effects, friction, config_hash(cfg))
 
 
 # ------------------------------------------------------------- per-gear parameters

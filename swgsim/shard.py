@@ -284,6 +284,10 @@ def simulate_shard(plan: DatasetPlan, shard: ShardSpec,
     simulating every window on its own.
     """
     cfg = plan.config
+    if cfg.life is not None:
+        from .life import simulate_life_shard
+
+        return simulate_life_shard(plan, shard)
     gear = plan.gear(shard.gear)
     amp = cfg.acquisition.amplifier
     q = 1 if amp is None else amp.oversample

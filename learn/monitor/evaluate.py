@@ -174,6 +174,7 @@ def train_model(plan, banks: dict[int, RecordBank], gears: list[int], cfg: Monit
     model.points_range = np.stack([x[:, -2:].min(axis=0), x[:, -2:].max(axis=0)])
     model.n_features = x.shape[1] - 2
     model.sample_rate_hz = float(plan.config.chain.sample_rate_hz)
+    model.window_s = float(plan.config.chain.window_s)
     return model
 
 

@@ -98,6 +98,8 @@ class DiagnosisModel:
         Health features per window.
     sample_rate_hz : float
         Of the training windows.
+    window_s : float
+        Length of the training windows [s].
     """
 
     classes: list[str]
@@ -106,6 +108,7 @@ class DiagnosisModel:
     points_range: np.ndarray | None = None
     n_features: int = 0
     sample_rate_hz: float = 0.0
+    window_s: float = 0.0
 
     def log_proba(self, x: np.ndarray) -> np.ndarray:
         """ln P(class | window), shape (n, n_classes), columns in ``classes`` order."""

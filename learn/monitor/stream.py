@@ -1,0 +1,173 @@
+"""One gear's recorded stream through the monitor: input checks, the run, its outputs.
+
+A stream is a schema-v1 data set (:mod:`swgsim.data`) of one gear's windows with the
+per-sample variables ``hour`` (operating hours, increasing) and ``commissioning`` (the
+first windows, known healthy), e.g. a life written by ``swgsim-generate`` with
+``dataset.life`` set (:mod:`swgsim.life`). :func:`check_stream` refuses, before any work
+and in one line, a stream without commissioning, with hours out of order, or one that
+disagrees with the model (bridges, sample rate, operating points outside the training
+range). :func:`monitor_stream` runs :class:`~learn.monitor.monitor.GearMonitor` and
+:func:`write_outputs` writes ``summary.json``, ``report.md`` and ``health.png``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .features import window_features
+from .monitor import Alarm, GearMonitor, Trace, check_commissioning
+from .rule import RuleConfig
+
+
+@dataclass
+class StreamResult:
+    """What the monitor made of a stream."""
+
+    trace: Trace
+    alarms: list[Alarm]
+    n_commissioning: int
+    onset_h: float | None
+    true_fault: str | None
+
+
+def select_gear(ds, gear: int | None):
+    """The windows of one gear (the only one, or ``gear``).
+
+    Raises
+    ------
+    ValueError
+        If the stream holds several gears and none is named, or not the one named.
+    """
+    gears = sorted(set(int(g) for g in ds["gear"].values))
+    if gear is None:
+        if len(gears) != 1:
+            raise ValueError(f"gear: the stream holds gears {gears}; name one (gear=<id>)")
+        return ds
+    if int(gear) not in gears:
+        raise ValueError(f"gear: {gear} is not in the stream; it holds gears {gears}")
+    return ds.isel(sample=np.flatnonzero(ds["gear"].values == int(gear)))
+
+
+def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
+    """Refuse a stream the monitor cannot take (module docstring); return interval_min.
+
+    Raises
+    ------
+    ValueError
+        One line naming the stream and what is wrong, with the allowed values.
+    """
+    for v in ("hour", "commissioning"):
+        if v not in ds:
+            raise ValueError(f"{source}: no per-sample variable {v!r}; a stream is a gear's "
+                             "life (swgsim-generate with dataset.life set)")
+    hours = ds["hour"].values.astype(float)
+    if hours.size < 2 or not np.all(np.diff(hours) > 0):
+        bad = int(np.argmax(np.diff(hours) <= 0)) + 1 if hours.size >= 2 else 0
+        raise ValueError(f"{source}: hours must increase from window to window; window {bad} "
+                         f"is at {hours[bad] if hours.size else float('nan'):g} h")
+    comm = ds["commissioning"].values.astype(bool)
+    if not comm.any() or not comm[0] or np.any(np.diff(comm.astype(int)) > 0):
+        raise ValueError(f"{source}: the commissioning windows must be the first ones and "
+                         f"there must be some (found {int(comm.sum())})")
+    sensors = [str(s) for s in ds["sensor"].values]
+    if sensors != ["s0", "s1", "s2", "s3", "s4"]:
+        raise ValueError(f"{source}: bridges {sensors}; the model was trained on s0..s4")
+    fs = float(ds.attrs.get("sample_rate_hz", np.nan))
+    if not np.isclose(fs, model.sample_rate_hz):
+        raise ValueError(f"{source}: sample rate {fs:g} Hz; the model was trained at "
+                         f"{model.sample_rate_hz:g} Hz")
+    n_t = ds.sizes["time"]
+    if not np.isclose(n_t / fs, model.window_s):
+        raise ValueError(f"{source}: windows of {n_t / fs:g} s; the model was trained on "
+                         f"windows of {model.window_s:g} s")
+    pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
+    lo, hi = model.points_range
+    out = ~np.all((pts >= lo - 1e-9) & (pts <= hi + 1e-9), axis=1)
+    if out.any():
+        o = pts[np.flatnonzero(out)[0]]
+        raise ValueError(f"{source}: operating point {o[0]:g} rpm, {o[1]:g} N m outside the "
+                         f"model's training range: speed [{lo[0]:g}, {hi[0]:g}] rpm, torque "
+                         f"[{lo[1]:g}, {hi[1]:g}] N m")
+    interval = float(np.median(np.diff(hours)) * 60.0)
+    check_commissioning(pts[comm], rule, interval)
+    return interval
+
+
+def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
+                   source: str = "stream") -> StreamResult:
+    """Commission on the stream's commissioning windows and monitor the rest."""
+    interval = check_stream(ds, model, rule, source)
+    sig = ds["strain_signal"].values
+    pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
+    feats = window_features(sig, pts[:, 0], ds["efficiency"].values,
+                            float(ds.attrs["sample_rate_hz"]))
+    comm = ds["commissioning"].values.astype(bool)
+    n_c = int(comm.sum())
+    mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h)
+    mon.commission(feats[:n_c], pts[:n_c])
+    hours = ds["hour"].values.astype(float)
+    tr = mon.run(feats[n_c:], pts[n_c:], hours[n_c:], latch=True)
+    alarms = [mon.diagnose(tr, a, feats[n_c:], pts[n_c:]) for a in tr.alarms]
+    fault = ds["fault"].values.astype(str)
+    on = np.flatnonzero(fault != "healthy")
+    return StreamResult(tr, alarms, n_c, float(hours[on[0]]) if on.size else None,
+                        str(fault[on[0]]) if on.size else None)
+
+
+def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> dict[str, Path]:
+    """``summary.json``, ``report.md`` and ``health.png`` (module docstring)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from swgsim.data import atomic_write_bytes, atomic_write_json
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    summary = {"stream": source, "alarms": [a.as_dict() for a in res.alarms],
+               "threshold": h, "windows_monitored": int(res.trace.s.size),
+               "commissioning_windows": res.n_commissioning}
+    atomic_write_json(out_dir / "summary.json", summary)
+    tr = res.trace
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
+    a1.plot(tr.hour, -np.log10(tr.p), ".", ms=1.5, color="0.4")
+    a1.set_ylabel("−log10 p")
+    a2.plot(tr.hour, tr.s, lw=0.8)
+    a2.axhline(h, color="r", lw=0.8, ls="--", label=f"threshold h = {h:.1f}")
+    for ax in (a1, a2):
+        if res.onset_h is not None:
+            ax.axvline(res.onset_h, color="k", lw=0.8, ls=":")
+        for al in res.alarms:
+            ax.axvline(al.hour, color="r", lw=0.8)
+    a2.set_ylabel("CUSUM")
+    a2.set_xlabel("operating hours")
+    a2.legend(fontsize=7)
+    title = "health indicators" + (f"; true onset ({res.true_fault}) dotted"
+                                   if res.onset_h is not None else "")
+    a1.set_title(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out_dir / "health.png", dpi=130)
+    plt.close(fig)
+    lines = [f"# Monitor report: {source}", "",
+             f"{res.n_commissioning} commissioning windows, {tr.s.size} monitored; alarm "
+             f"threshold h = {h:.2f}.", ""]
+    if res.alarms:
+        for a in res.alarms:
+            lines.append(f"- alarm at {a.hour:.2f} h: **{a.fault}** (at the alarm: "
+                         f"{a.fault_at_alarm}), severity {a.severity:.3g} "
+                         f"[{a.severity_low:.3g}, {a.severity_high:.3g}]")
+    else:
+        lines.append("- no alarm")
+    if res.onset_h is not None:
+        lines += ["", f"Ground truth in the stream: {res.true_fault} from {res.onset_h:.2f} h."]
+    lines += ["", "![health indicators](health.png)", ""]
+    atomic_write_bytes(out_dir / "report.md", "\n".join(lines).encode())
+    return {k: out_dir / v for k, v in (("summary", "summary.json"), ("report", "report.md"),
+                                        ("figure", "health.png"))}
+
+
+__all__ = ["StreamResult", "check_stream", "monitor_stream", "select_gear", "write_outputs"]

@@ -1,0 +1,127 @@
+"""Gear lives (swgsim.life): schedules, state labels, determinism, sensor faults, the
+shortcut the evaluation takes (a fault life equals the healthy life before its onset),
+and lives written by swgsim-generate."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from swgcli import dataset_preset
+from swgsim.config import dataset_config
+from swgsim.life import (FaultOnset, LifeConfig, LifeSimulator, RecordBank, check_life,
+                         schedule, severity_at)
+from swgsim.plan import plan
+
+
+@pytest.fixture(scope="module")
+def tiny():
+    cfg = dataset_config(dataset_preset("tiny_bench"))
+    cfg.gears = cfg.gears[:1]
+    return plan(cfg)
+
+
+OPS = ([2000.0, 4000.0], [7.0, 70.0])
+
+
+def test_schedule_step_labels_and_duty_cycle():
+    life = LifeConfig(hours=3, commissioning_h=1,
+                      fault=FaultOnset("eccentric_wg", 2.0, 0.1))
+    s = schedule(life, *OPS)
+    assert len(s.hour) == 180 and np.all(np.diff(s.hour) > 0)
+    assert np.array_equal(s.commissioning, s.hour < 1.0)
+    assert np.all(s.fault[s.hour < 2.0] == "healthy") and np.all(s.severity[s.hour < 2.0] == 0)
+    assert np.all(s.fault[s.hour >= 2.0] == "eccentric_wg")
+    assert np.all(s.severity[s.hour >= 2.0] == 0.1)
+    # four duty points, 10 min each, in turn
+    assert list(s.duty_index[:41:10]) == [0, 1, 2, 3, 0]
+    assert np.all(s.duty_index[:10] == 0)
+
+
+def test_growth_is_a_staircase_of_the_schedule():
+    f = FaultOnset("reduced_damping", 10.0, 0.4, growth="linear", growth_h=4.0)
+    h = np.array([9.9, 10.0, 11.0, 12.0, 13.9, 14.0, 20.0])
+    sev = severity_at(f, h, levels=4)
+    assert sev.tolist() == pytest.approx([0.0, 0.1, 0.1, 0.2, 0.3, 0.4, 0.4])
+    pts = FaultOnset("root_tooth_crack", 5.0, 0.9, growth="points",
+                     points=[[5.0, 0.5], [7.0, 0.7], [9.0, 0.9]])
+    sev = severity_at(pts, np.array([4.0, 5.0, 6.0, 7.0, 9.0]), levels=9)
+    assert sev.tolist() == pytest.approx([0.0, 0.5, 0.6, 0.7, 0.9])
+
+
+@pytest.mark.parametrize("change, key", [
+    ({"commissioning_h": 5.0, "hours": 4.0}, "commissioning_h"),
+    ({"fault": FaultOnset("eccentric_wg", 0.5, 0.1)}, "onset_h"),
+    ({"fault": FaultOnset("eccentric_wg", 2.0, 0.9)}, "outside the allowed range"),
+    ({"fault": FaultOnset("bent_shaft", 2.0, 0.1)}, "unknown fault"),
+    ({"fault": FaultOnset("sensor_offset_step", 2.0, 0.01, sensor=7)}, "fault.sensor"),
+    ({"interval_min": 0.0}, "interval_min"),
+])
+def test_check_life_refuses_bad_values(change, key):
+    life = dataclasses.replace(LifeConfig(hours=4, commissioning_h=1), **change)
+    with pytest.raises(ValueError, match=key):
+        check_life(life)
+
+
+def test_windows_deterministic_and_slice_independent(tiny):
+    life = LifeConfig(hours=1.5, commissioning_h=1.0,
+                      fault=FaultOnset("root_tooth_crack", 1.2, 0.9))
+    a = LifeSimulator(tiny, 1, life)
+    s_all, m_all = a.windows(0, len(a))
+    b = LifeSimulator(tiny, 1, life)
+    s_part, m_part = b.windows(50, 80)
+    assert np.array_equal(s_part, s_all[50:80])
+    assert np.array_equal(m_part["hour"], m_all["hour"][50:80])
+    # the state labels follow the schedule
+    sch = a.schedule
+    assert np.array_equal(m_all["fault"], sch.fault.astype(str))
+    assert np.array_equal(m_all["severity"], sch.severity)
+    assert np.all(np.isfinite(m_all["position_deg"][m_all["fault"] != "healthy"]))
+    assert np.all(np.isnan(m_all["position_deg"][m_all["fault"] == "healthy"]))
+
+
+def test_fault_life_equals_healthy_life_before_onset(tiny):
+    """The evaluation starts a fault life at its onset from the healthy life's state."""
+    healthy = LifeConfig(hours=1.5, commissioning_h=1.0)
+    bank = RecordBank(tiny, 1)
+    h = LifeSimulator(tiny, 1, healthy, bank)
+    f = LifeSimulator(tiny, 1, dataclasses.replace(
+        healthy, fault=FaultOnset("tip_tooth_crack", 1.25, 1.0)), bank)
+    sh, _ = h.windows(0, len(h))
+    sf, mf = f.windows(0, len(f))
+    pre = mf["hour"] < 1.25
+    assert np.array_equal(sh[pre], sf[pre])
+    assert not np.allclose(sh[~pre], sf[~pre])
+
+
+def test_sensor_fault_on_one_bridge_after_onset(tiny):
+    healthy = LifeConfig(hours=1.2, commissioning_h=1.0)
+    h = LifeSimulator(tiny, 1, healthy)
+    f = LifeSimulator(tiny, 1, dataclasses.replace(
+        healthy, fault=FaultOnset("sensor_offset_step", 1.1, 0.05, sensor=2)))
+    sh, _ = h.windows(0, len(h))
+    sf, mf = f.windows(0, len(f))
+    on = mf["fault"] == "sensor_offset_step"
+    assert on.any() and np.array_equal(sh[~on], sf[~on])
+    d = (sf[on] - sh[on]).astype(float)
+    lsb = tiny.config.acquisition.amplifier.lsb_mvv
+    assert np.allclose(d[:, 2], 0.05, atol=2 * lsb)
+    assert np.allclose(d[:, [0, 1, 3, 4]], 0.0, atol=2 * lsb)
+
+
+def test_generate_writes_and_resumes_a_life(tmp_path):
+    from swgsim.data import load
+    from swgsim.generate import generate
+
+    cfg = dataset_config(dataset_preset("tiny_life"))
+    cfg.gears = cfg.gears[:1]
+    cfg.life.hours, cfg.life.commissioning_h = 1.0, 0.5
+    cfg.life.fault = FaultOnset("eccentric_wg", 0.75, 0.1)
+    out = generate(cfg, tmp_path / "life", progress=False)
+    assert out["complete"] and out["windows"] == 60
+    ds = load(tmp_path / "life")
+    assert ds["hour"].attrs["units"] == "h"
+    assert ds["commissioning"].values.sum() == 30
+    assert set(ds["fault"].values[ds["hour"].values >= 0.75]) == {"eccentric_wg"}
+    again = generate(cfg, tmp_path / "life", progress=False)
+    assert again["computed"] == [] and again["content_sha256"] == out["content_sha256"]
