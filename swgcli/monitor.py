@@ -44,7 +44,8 @@ def load_model(path: str):
     except Exception as e:  # noqa: BLE001 - any unpickling failure is the same answer
         raise ValueError(f"diagnosis_model: {p} is not a diagnosis model ({type(e).__name__})") from None
     if not isinstance(m, DiagnosisModel):
-        raise ValueError(f"diagnosis_model: {p} holds a {type(m).__name__}, not a diagnosis model")
+        raise ValueError(f"diagnosis_model: {p} holds a {type(m).__name__}, not a diagnosis "
+                         "model")
     return m
 
 

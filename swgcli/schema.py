@@ -31,11 +31,11 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
 from learn.inputs.features import SELECTIONS, FeatureSettings
+from learn.monitor.rule import RuleConfig
 from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions
 from learn.studies.transfer import TransferConfig
-from learn.monitor.rule import RuleConfig
 from learn.tasks.monitor import MonitorExperiment
 from learn.tracking.config import LoggerConfig
 from swgsim.config import DatasetConfig, check_keys

@@ -64,7 +64,8 @@ def shard_done(out_dir: Path, shard: ShardSpec, chash: str) -> bool:
 
 #: Names of the files a data set of this project consists of: its manifest, the config
 #: stamp, the shards and their sidecars, and temporary files of an interrupted write.
-DATASET_FILE = re.compile(r"manifest\.json|\.config\.json|gear\d+_(n\d+rpm|life)\.(nc|json)|\..+\.tmp")
+DATASET_FILE = re.compile(
+    r"manifest\.json|\.config\.json|gear\d+_(n\d+rpm|life)\.(nc|json)|\..+\.tmp")
 
 
 def foreign_entries(out_dir: Path) -> list[str]:

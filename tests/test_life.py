@@ -9,8 +9,15 @@ import pytest
 
 from swgcli import dataset_preset
 from swgsim.config import dataset_config
-from swgsim.life import (FaultOnset, LifeConfig, LifeSimulator, RecordBank, check_life,
-                         schedule, severity_at)
+from swgsim.life import (
+    FaultOnset,
+    LifeConfig,
+    LifeSimulator,
+    RecordBank,
+    check_life,
+    schedule,
+    severity_at,
+)
 from swgsim.plan import plan
 
 

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from learn.monitor.monitor import check_commissioning
-from learn.monitor.rule import (RuleConfig, conformal_p, cusum, log_bet, min_calibration,
-                                threshold)
+from learn.monitor.rule import RuleConfig, conformal_p, cusum, log_bet, min_calibration, threshold
 
 
 def test_betting_function_integrates_to_one():
@@ -112,8 +111,8 @@ def test_stream_outside_the_models_operating_points_refused():
 
 @pytest.fixture(scope="module")
 def tiny_eval():
-    from swgcli import dataset_preset
     from learn.monitor.evaluate import MonitorStudyConfig, run_held_out
+    from swgcli import dataset_preset
     from swgsim.plan import plan
 
     p = plan(dataset_preset("tiny_bench"))

@@ -12,7 +12,6 @@ range). :func:`monitor_stream` runs :class:`~learn.monitor.monitor.GearMonitor` 
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
