@@ -42,7 +42,8 @@ def load_model(path: str):
     try:
         m = joblib.load(p)
     except Exception as e:  # noqa: BLE001 - any unpickling failure is the same answer
-        raise ValueError(f"diagnosis_model: {p} is not a diagnosis model ({type(e).__name__})") from None
+        raise ValueError(f"diagnosis_model: {p} is not a diagnosis model "
+                         f"({type(e).__name__})") from None
     if not isinstance(m, DiagnosisModel):
         raise ValueError(f"diagnosis_model: {p} holds a {type(m).__name__}, not a diagnosis "
                          "model")
