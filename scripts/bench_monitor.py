@@ -1,0 +1,83 @@
+"""Cost of the condition monitor per window, on one core: health features, scoring
+(baseline z-scores, diagnosis model, novelty), conformal p-values and the CUSUM update.
+
+    python scripts/bench_monitor.py [--dataset bench] [--windows 3000]
+
+Trains a small diagnosis model on two gears of the preset (a few minutes), commissions
+gear 3 and times the monitor on its windows two ways: in blocks (as the evaluation runs
+it, cost amortised) and one window at a time (as a live monitor receives them). The
+simulation of the windows is not timed. Prints ms per window; target: at most 1 ms.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core: before numpy and sklearn load
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dataset", default="bench", help="data-set preset (default bench)")
+    ap.add_argument("--windows", type=int, default=3000, help="windows timed (default 3000)")
+    args = ap.parse_args()
+
+    from learn.monitor.evaluate import MonitorStudyConfig, features_of, train_model
+    from learn.monitor.features import window_features
+    from learn.monitor.monitor import GearMonitor
+    from swgcli import dataset_preset
+    from swgsim.life import LifeConfig, LifeSimulator, RecordBank
+    from swgsim.plan import plan
+
+    p = plan(dataset_preset(args.dataset))
+    cfg = MonitorStudyConfig(train_variants=2, train_healthy_h=4.0)
+    banks = {g: RecordBank(p, g) for g in (1, 2, 3)}
+    t0 = time.perf_counter()
+    model = train_model(p, banks, [1, 2], cfg)
+    print(f"diagnosis model trained in {time.perf_counter() - t0:.0f} s")
+    n_c = int(cfg.commissioning_h * 60)
+    life = LifeConfig(hours=cfg.commissioning_h + args.windows / 60 + 1, life_seed=0)
+    sim = LifeSimulator(p, 3, life, banks[3])
+    f, pts, _ = features_of(sim, 0, n_c)
+    mon = GearMonitor(model, cfg.rule, 1.0)
+    mon.commission(f, pts)
+    sig, meta = sim.windows(n_c, n_c + args.windows)
+    fs = p.config.chain.sample_rate_hz
+    n_in, eff = meta["n_in_rpm"], meta["efficiency"]
+    pw = np.stack([n_in, meta["t_out_nm"]], axis=1)
+
+    t0 = time.perf_counter()
+    for a in range(0, args.windows, 1024):
+        b = slice(a, a + 1024)
+        ff = window_features(sig[b], n_in[b], eff[b], fs)
+        mon.run(ff, pw[b], meta["hour"][b], latch=False)
+    block = (time.perf_counter() - t0) / args.windows * 1e3
+
+    n1 = min(args.windows, 500)
+    t0 = time.perf_counter()
+    for i in range(n1):
+        ff = window_features(sig[i:i + 1], n_in[i:i + 1], eff[i:i + 1], fs)
+        mon.run(ff, pw[i:i + 1], meta["hour"][i:i + 1], latch=False)
+    single = (time.perf_counter() - t0) / n1 * 1e3
+
+    t0 = time.perf_counter()
+    for a in range(0, args.windows, 1024):
+        b = slice(a, a + 1024)
+        window_features(sig[b], n_in[b], eff[b], fs)
+    feat = (time.perf_counter() - t0) / args.windows * 1e3
+    print(f"{args.dataset}: {args.windows} windows of {sig.shape[-1]} samples x 5 bridges, "
+          f"one core (OMP_NUM_THREADS={os.environ['OMP_NUM_THREADS']})")
+    print(f"  in blocks of 1024: {block:.3f} ms per window (features {feat:.3f} ms)")
+    print(f"  one at a time:     {single:.3f} ms per window ({n1} windows)")
+    print("  target: <= 1 ms per window")
+
+
+if __name__ == "__main__":
+    main()
