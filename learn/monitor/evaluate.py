@@ -226,7 +226,7 @@ def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: 
                                  ("always", len(tr.score)))]
         for sim, fo, kind in sims:
             k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
-            start = 0.0 if k0 <= n_comm else float(tr.s[k0 - 1 - n_comm])
+            start = 0.0 if k0 <= n_comm else tr.cusums[k0 - 1 - n_comm]
             ff, pp, mm = features_of(sim, k0, len(sim))
             ftr = mon.run(ff, pp, mm["hour"], latch=True, start=start)
             row = {"dataset": dataset, "held_out_gear": g, "seed": seed, "fault": fo.fault,

@@ -5,7 +5,8 @@ gear's windows in time order. :meth:`GearMonitor.commission` builds the baseline
 the commissioning windows, alternately per operating point: even ones fit the baseline,
 odd ones calibrate the rule (:mod:`.rule`). :meth:`GearMonitor.run` scores every later
 window, updates the CUSUM and raises an alarm when it crosses h; the fault is then named
-by the evidence of the windows since the CUSUM's last rise from zero up to the alarm
+by the evidence of the windows since the CUSUM's last rise from zero up to the alarm,
+relative to the gear's own healthy calibration windows (:meth:`GearMonitor.evidence`)
 (``fault_at_alarm``) and up to one hour after it (``fault``, with the severity and its
 interval). The alarm latches: one alarm per stream until the gear is commissioned again;
 an evaluation of false alarms restarts the CUSUM after each (``latch=False``).
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import Baseline, DiagnosisModel, design_matrix
-from .rule import RuleConfig, conformal_p, cusum, log_bet, min_calibration, threshold
+from .rule import RuleConfig, conformal_p, log_bets, min_calibration, threshold
 
 
 @dataclass
@@ -59,13 +60,66 @@ class Alarm:
 
 @dataclass
 class Trace:
-    """Per-window output of a run: score, p-value, CUSUM, and the alarm windows."""
+    """Per-window output of a run.
+
+    Attributes
+    ----------
+    hour : ndarray, shape (n,)
+    score : ndarray, shape (n, 2)
+        The diagnosis model's evidence against healthy and the novelty.
+    p : ndarray, shape (n,)
+        Combined conformal p-value.
+    cusums : ndarray, shape (n, k)
+        Every CUSUM of the rule (:func:`learn.monitor.rule.log_bets`); NaN after a latched
+        alarm.
+    alarms : list of int
+        Windows that raised an alarm.
+    """
 
     hour: np.ndarray
     score: np.ndarray
     p: np.ndarray
-    s: np.ndarray
+    cusums: np.ndarray
     alarms: list[int]
+
+    @property
+    def s(self) -> np.ndarray:
+        """The largest CUSUM of each window, shape (n,)."""
+        return np.max(self.cusums, axis=1)
+
+
+def run_cusums(lf: np.ndarray, h: float, start: np.ndarray | float = 0.0,
+               latch: bool = True) -> tuple[np.ndarray, list[int]]:
+    """CUSUMs ``S = max(0, S + ln f)`` side by side, an alarm when any reaches ``h``.
+
+    Parameters
+    ----------
+    lf : ndarray, shape (n, k)
+        ln f of each CUSUM per window.
+    h : float
+    start : float or ndarray, shape (k,)
+        Values before the first window.
+    latch : bool
+        Stop at the first alarm (the rest NaN); else restart every CUSUM at zero after it.
+
+    Returns
+    -------
+    (ndarray, shape (n, k), list of int)
+        The CUSUMs and the alarm windows.
+    """
+    n, k = lf.shape
+    out = np.full((n, k), np.nan)
+    s = np.broadcast_to(np.asarray(start, float), (k,)).copy()
+    alarms = []
+    for i in range(n):
+        s = np.maximum(0.0, s + lf[i])
+        out[i] = s
+        if (s >= h).any():
+            alarms.append(i)
+            if latch:
+                break
+            s[:] = 0.0
+    return out, alarms
 
 
 def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: float) -> None:
@@ -133,10 +187,20 @@ class GearMonitor:
             rank[idx] = np.arange(idx.size)
         fit, cal = rank % 2 == 0, rank % 2 == 1
         self.baseline = Baseline.fit(feats[fit], points[fit])
-        scores = self.scores(feats[cal], points[cal])[0]
+        scores, lp = self.scores(feats[cal], points[cal])
         opi = self.baseline.index(points[cal])
         self.calibration = {k: np.sort(scores[opi == k], axis=0)
                             for k in range(len(self.baseline.points))}
+        llr = lp - lp[:, :1]
+        self.bias = np.stack([llr[opi == k].mean(axis=0)
+                              for k in range(len(self.baseline.points))])
+
+    def evidence(self, lp: np.ndarray, opi: np.ndarray) -> np.ndarray:
+        """Per window and class, the evidence against healthy relative to this gear's
+        healthy windows: ``ln P(c|x) − ln P(healthy|x)`` minus its mean over the
+        calibration windows of the operating point (a class the model gives this gear's
+        healthy windows anyway, e.g. one it cannot tell from healthy, gains nothing)."""
+        return lp - lp[:, :1] - self.bias[opi]
 
     def inputs(self, feats: np.ndarray, points: np.ndarray) -> np.ndarray:
         """The diagnosis model's inputs of windows (z-scores and operating point)."""
@@ -179,33 +243,19 @@ class GearMonitor:
         latch : bool
             Stop at the first alarm (a monitor); else restart the CUSUM after each alarm
             (counting false alarms).
-        start : float
-            CUSUM value before the first window.
+        start : float or ndarray, shape (k,)
+            CUSUM values before the first window (e.g. a trace's ``cusums`` row).
 
         Returns
         -------
         Trace
         """
         score, lp = self.scores(feats, points)
-        self._last_lp, self._last_x = lp, None
+        self._last_lp = lp
+        self._last_opi = self.baseline.index(points)
         p = self.p_values(score, points)
-        lf = log_bet(p)
-        s = np.empty(len(score))
-        alarms, cur, i0 = [], float(start), 0
-        while i0 < len(score):
-            seg = cusum(lf[i0:], cur)
-            hit = np.flatnonzero(seg >= self.h)
-            if hit.size == 0:
-                s[i0:] = seg
-                break
-            a = i0 + int(hit[0])
-            s[i0:a + 1] = seg[:a - i0 + 1]
-            alarms.append(a)
-            if latch:
-                s[a + 1:] = np.nan
-                break
-            cur, i0 = 0.0, a + 1
-        return Trace(np.asarray(hours, float), score, p, s, alarms)
+        cus, alarms = run_cusums(log_bets(p, self.rule), self.h, start, latch)
+        return Trace(np.asarray(hours, float), score, p, cus, alarms)
 
     def diagnose(self, trace: Trace, a: int, feats: np.ndarray, points: np.ndarray) -> Alarm:
         """Name the fault of the alarm at window ``a`` of ``trace`` and its severity.
@@ -213,12 +263,13 @@ class GearMonitor:
         ``feats``/``points`` are the run's windows (those after the alarm included, as far
         as the stream goes, up to ``confirm_h``).
         """
-        zero = np.flatnonzero(trace.s[:a] <= 0)
+        j = int(np.argmax(trace.cusums[a]))  # the CUSUM that raised it
+        zero = np.flatnonzero(trace.cusums[:a, j] <= 0)
         rise = int(zero[-1]) + 1 if zero.size else 0
         end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
-        lp = self._last_lp
-        at_alarm = self.model.name(lp[rise:a + 1])
-        fault = self.model.name(lp[rise:end])
+        ev = self.evidence(self._last_lp, self._last_opi)
+        at_alarm = self.model.name(ev[rise:a + 1])
+        fault = self.model.name(ev[rise:end])
         x = self.inputs(feats[rise:end], points[rise:end])
         est, lo, hi = self.model.estimate(fault, x)
         return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi)

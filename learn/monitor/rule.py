@@ -17,6 +17,14 @@ Lorden's bound gives an average run length to a false alarm of at least ``e^h`` 
 ``h = ln(design hours · 60 / interval_min)`` sets the design false-alarm rate, one per
 ``design hours`` of operation (default 1000 h). No parameter is tuned to any gear.
 
+**A second CUSUM for weak, lasting changes.** The mixture gains only from p-values below
+about 0.15; a fault that lowers every window's p-value a little (mean p 0.2-0.3) never
+reaches h. With ``shift_sigma`` = δ > 0 a second CUSUM runs on the normal scores
+``z = Φ⁻¹(1 − p)`` (standard normal while healthy) with ``ln f = δ z − δ²/2``, Page's
+CUSUM for a shift of δ standard deviations, also of ``E_0[f] = 1`` (Page, *Continuous
+inspection schemes*, Biometrika 1954). An alarm when either reaches ``h + ln 2``, so that
+the two together keep the design rate (Bonferroni).
+
 **Shortest commissioning.** One window moves S by at most ``ln f(1 / (n + 1))``, n the
 calibration windows of its operating point. For the rule to reach h within its design
 delay (``max_delay_windows``) at all, ``max_delay_windows · ln f(1/(n + 1)) >= h``;
@@ -39,6 +47,8 @@ class RuleConfig:
     ----------
     design_hours : float
         One false alarm per this many operating hours, > 0 (default 1000 h).
+    shift_sigma : float
+        δ of the second CUSUM (module docstring), >= 0; 0 runs the mixture alone.
     max_delay_windows : int
         Windows in which a fault that gives every window the smallest p-value must be
         detectable (sets the shortest commissioning), >= 1.
@@ -47,6 +57,7 @@ class RuleConfig:
     """
 
     design_hours: float = 1000.0
+    shift_sigma: float = 0.5
     max_delay_windows: int = 30
     min_baseline: int = 30
 
@@ -61,9 +72,31 @@ def log_bet(p: np.ndarray) -> np.ndarray:
     return np.where(small, np.log(0.5), np.log(np.where(small, 1.0, f)))
 
 
+def log_shift(p: np.ndarray, delta: float) -> np.ndarray:
+    """ln f of Page's CUSUM on the normal scores of p-values: δ Φ⁻¹(1 − p) − δ²/2."""
+    from scipy.special import ndtri
+
+    z = ndtri(1.0 - np.clip(np.asarray(p, float), 1e-300, 1.0 - 1e-12))
+    return delta * z - 0.5 * delta * delta
+
+
+def n_cusums(rule: RuleConfig) -> int:
+    """CUSUMs the rule runs: the mixture, and Page's with ``shift_sigma`` > 0."""
+    return 1 + (rule.shift_sigma > 0)
+
+
+def log_bets(p: np.ndarray, rule: RuleConfig) -> np.ndarray:
+    """ln f of every CUSUM of the rule, shape (n, :func:`n_cusums`)."""
+    cols = [log_bet(p)]
+    if rule.shift_sigma > 0:
+        cols.append(log_shift(p, rule.shift_sigma))
+    return np.stack(cols, axis=1)
+
+
 def threshold(rule: RuleConfig, interval_min: float) -> float:
-    """h = ln(windows in ``design_hours``): the design false-alarm rate (module docstring)."""
-    return math.log(rule.design_hours * 60.0 / float(interval_min))
+    """h = ln(windows in ``design_hours``) + ln(CUSUMs): the design false-alarm rate
+    (module docstring)."""
+    return math.log(rule.design_hours * 60.0 / float(interval_min) * n_cusums(rule))
 
 
 def min_calibration(rule: RuleConfig, interval_min: float) -> int:
@@ -99,14 +132,5 @@ def conformal_p(scores: np.ndarray, calibration: np.ndarray, u: np.ndarray) -> n
     return (above + u * (equal + 1)) / (n + 1)
 
 
-def cusum(log_f: np.ndarray, start: float = 0.0) -> np.ndarray:
-    """S_t = max(0, S_{t−1} + ln f_t) from ``S_0 = start``; shape like ``log_f``."""
-    out = np.empty(len(log_f))
-    s = float(start)
-    for i, v in enumerate(log_f):
-        s = max(0.0, s + float(v))
-        out[i] = s
-    return out
-
-
-__all__ = ["RuleConfig", "log_bet", "threshold", "min_calibration", "conformal_p", "cusum"]
+__all__ = ["RuleConfig", "conformal_p", "log_bet", "log_bets", "log_shift", "min_calibration",
+           "n_cusums", "threshold"]
