@@ -8,8 +8,14 @@ import numpy as np
 import pytest
 
 from learn.monitor.monitor import check_commissioning, run_cusums
-from learn.monitor.rule import (RuleConfig, conformal_p, log_bet, log_bets, min_calibration,
-                                threshold)
+from learn.monitor.rule import (
+    RuleConfig,
+    conformal_p,
+    log_bet,
+    log_bets,
+    min_calibration,
+    threshold,
+)
 
 
 def test_betting_function_integrates_to_one():
