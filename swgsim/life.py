@@ -19,9 +19,9 @@ quantisation. A growing severity is simulated as a staircase of ``severity_level
 (the window's ``severity`` is the step's, i.e. what its signals hold).
 
 Randomness: the fault's position (gear faults) or bridge (sensor faults) from
-``SeedSequence(seed, spawn_key=(gear, life_seed, 0))``; the windows in blocks of
-:data:`BLOCK`, block b from ``spawn_key=(gear, life_seed, 1 + b)`` (start, eq. (10),
-noise), so a life is the same whatever slice of it is asked for.
+``SeedSequence(seed, spawn_key=(gear, life_seed, 0))``; window k from its own stream,
+``spawn_key=(gear, life_seed, 1 + k)`` (its start, eq. (10), noise), so a life is the same
+whatever slice of it is asked for, and any slice costs only its windows.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ from .faults import ChainParams, apply_fault, get_fault
 from .measurement import apply_sensor_effects
 from .sensor_faults import SENSOR_FAULTS, apply_sensor_fault, is_sensor_fault
 
-#: Windows per random block (module docstring).
+#: Windows made at once (memory).
 BLOCK = 1024
 GROWTH = ("step", "linear", "points")
 
@@ -449,35 +449,31 @@ class LifeSimulator:
             The schema's per-sample variables plus ``hour`` and ``commissioning``.
         """
         out_s, out_m = [], []
-        b0, b1 = start // BLOCK, (stop - 1) // BLOCK
-        for b in range(b0, b1 + 1):
-            s, m = self._block(b)
-            lo = max(start - b * BLOCK, 0)
-            hi = min(stop - b * BLOCK, len(m["hour"]))
-            out_s.append(s[lo:hi])
-            out_m.append({k: v[lo:hi] for k, v in m.items()})
+        for a in range(start, stop, BLOCK):  # in blocks: bounded memory
+            s, m = self._rows(np.arange(a, min(a + BLOCK, stop)))
+            out_s.append(s)
+            out_m.append(m)
         meta = {k: np.concatenate([m[k] for m in out_m]) for k in out_m[0]}
         return np.concatenate(out_s), meta
 
     def __len__(self) -> int:
         return self.schedule.hour.size
 
-    def _block(self, b: int):
+    def _rows(self, rows: np.ndarray):
         cfg = self.plan.config
         ch, amp = cfg.chain, cfg.acquisition.amplifier
         fs = ch.sample_rate_hz
         n_t = int(round(ch.window_s * fs))
+        time_s = np.arange(n_t) / fs
         sch = self.schedule
-        rows = np.arange(b * BLOCK, min((b + 1) * BLOCK, len(self)))
-        ss = np.random.SeedSequence(int(cfg.seed),
-                                    spawn_key=(self.gear_id, int(self.life.life_seed), 1 + b))
-        rng_start, rng_dist, rng_noise = (np.random.default_rng(s) for s in ss.spawn(3))
-        u = rng_start.uniform(size=rows.size)
         sig = np.empty((rows.size, 5, n_t))
         eff, n_mean, t_mean = (np.empty(rows.size) for _ in range(3))
+        rngs = [np.random.default_rng(np.random.SeedSequence(
+            int(cfg.seed), spawn_key=(self.gear_id, int(self.life.life_seed), 1 + int(r))))
+            for r in rows]
         for i, r in enumerate(rows):
             rec = self.bank.get(self._key(int(sch.duty_index[r]), float(sch.severity[r])))
-            o = int(u[i] * rec["n_period"])
+            o = int(rngs[i].uniform() * rec["n_period"])
             sig[i] = rec["signal"][:, o:o + n_t]
             e = o + n_t
             eff[i] = (rec["p_out"][e] - rec["p_out"][o]) / (rec["p_in"][e] - rec["p_in"][o])
@@ -489,10 +485,12 @@ class LifeSimulator:
             if on.any():
                 sig[on] = apply_sensor_fault(sig[on], self.life.fault.fault,
                                              sch.severity[rows][on], self.sensor)
-        if self.life.disturbed:
-            sig = disturb(sig, np.arange(n_t) / fs, n_mean, cfg.disturbance, rng_dist)
-        if amp is not None:
-            sig = digitise(sig, amp, rng_noise)
+        for i in range(rows.size):  # each window from its own stream
+            if self.life.disturbed:
+                sig[i:i + 1] = disturb(sig[i:i + 1], time_s, n_mean[i:i + 1], cfg.disturbance,
+                                       rngs[i])
+            if amp is not None:
+                sig[i:i + 1] = digitise(sig[i:i + 1], amp, rngs[i])
         duty = [sch.duty[int(d)] for d in sch.duty_index[rows]]
         gear_fault = (fault != "healthy") & _uses_position(self.life.fault.fault)
         meta = {

@@ -29,7 +29,7 @@ from swgsim.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
 
 from .features import window_features
 from .model import HEALTHY, Baseline, design_matrix, fit_diagnosis
-from .monitor import GearMonitor
+from .monitor import GearMonitor, Trace
 from .rule import RuleConfig
 
 DETECTORS = ("monitor", "per_window", "always")
@@ -58,9 +58,9 @@ class MonitorStudyConfig:
     train_fault_h : float
         Hours of each training life after its fault's onset.
     train_variants : int
-        Training lives per class and severity: the fault at as many positions around the
-        flexspline (positions at (j + 1/2) 360° / count, not the held-out lives' random
-        ones), a sensor fault on the bridges in turn.
+        Training lives per gear fault and severity: the fault at as many positions around
+        the flexspline (at (j + 1/2) 360° / count, not the held-out lives' random ones); a
+        sensor fault has one life on each of the five bridges.
     train_healthy_h : float
         Hours of each training gear's healthy life after commissioning.
     faults : list of str
@@ -150,19 +150,23 @@ def train_model(plan, banks: dict[int, RecordBank], gears: list[int], cfg: Monit
         k = 1
         for c in cls[1:]:
             for s in table_v_severities(plan, c):
-                for j in range(cfg.train_variants):  # bridges or fault positions
-                    pos = 360.0 * (j + 0.5) / cfg.train_variants
-                    fo = FaultOnset(c, cfg.commissioning_h, s,
-                                    sensor=j % 5 if c in SENSOR_FAULTS else None,
+                n_var = 5 if c in SENSOR_FAULTS else cfg.train_variants
+                for j in range(n_var):  # fault positions, or the five bridges
+                    pos = 360.0 * (j + 0.5) / n_var
+                    # no commissioning of its own (the healthy life's baseline serves):
+                    # one window, then the fault
+                    c0 = cfg.interval_min / 60.0
+                    fo = FaultOnset(c, c0, s, sensor=j % 5 if c in SENSOR_FAULTS else None,
                                     position_deg=None if c in SENSOR_FAULTS else pos)
-                    fl = dataclasses.replace(life, hours=cfg.commissioning_h + cfg.train_fault_h,
-                                             fault=fo, life_seed=1000 + k)
+                    fl = dataclasses.replace(life, hours=c0 + cfg.train_fault_h,
+                                             commissioning_h=c0, fault=fo,
+                                             life_seed=1000 + k)
                     lives.append((LifeSimulator(plan, g, fl, banks[g]), c, s))
                     k += 1
         f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
         base = _split_baseline(f0[:n_comm], p0[:n_comm])
         for sim, c, s in lives:
-            f, p, meta = (f0, p0, None) if c == HEALTHY else features_of(sim, n_comm, len(sim))
+            f, p, meta = (f0, p0, None) if c == HEALTHY else features_of(sim, 1, len(sim))
             f, p = (f[n_comm:], p[n_comm:]) if c == HEALTHY else (f, p)
             xs.append(design_matrix(base.z(f, p), p))
             ys.append(np.full(len(f), c, object))
@@ -218,7 +222,7 @@ def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: 
         mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed))
         mon.commission(f[:n_comm], p[:n_comm])
         tr = mon.run(f[n_comm:], p[n_comm:], meta["hour"][n_comm:], latch=False)
-        pw = _per_window(model, mon._last_lp)
+        pw = _per_window(model, tr.log_proba)
         hours_h = cfg.healthy_hours - cfg.commissioning_h
         fa_rows += [{"dataset": dataset, "held_out_gear": g, "seed": seed, "detector": d,
                      "healthy_hours": hours_h, "false_alarms": n}
@@ -227,18 +231,43 @@ def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: 
         for sim, fo, kind in sims:
             k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
             start = 0.0 if k0 <= n_comm else tr.cusums[k0 - 1 - n_comm]
-            ff, pp, mm = features_of(sim, k0, len(sim))
-            ftr = mon.run(ff, pp, mm["hour"], latch=True, start=start)
+            ftr, ff, pp, mm = _fault_life(mon, sim, k0, start, cfg)
             row = {"dataset": dataset, "held_out_gear": g, "seed": seed, "fault": fo.fault,
                    "severity": max((q[1] for q in fo.points), key=abs) if fo.points
                    else fo.severity, "onset": kind, "onset_h": fo.onset_h}
             rows.append({**row, **_monitor_row(mon, ftr, ff, pp, mm, fo)})
-            rows.append({**row, **_per_window_row(model, mon._last_lp, mm, fo)})
+            rows.append({**row, **_per_window_row(model, ftr.log_proba, mm, fo)})
             rows.append({**row, "detector": "always", "detected": True, "time_to_detect_h": 0.0,
                          "fault_at_alarm": "unknown", "fault_after_1h": "unknown",
                          "severity_est": np.nan, "severity_at_alarm": 0.0,
                          "severity_low": np.nan, "severity_high": np.nan})
     return rows, fa_rows
+
+
+def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start, cfg: MonitorStudyConfig,
+                chunk: int = 120):
+    """A fault life from its onset, in chunks of windows, until ``confirm_h`` after the
+    monitor's alarm and the per-window rule's (or the horizon): what both need, and no
+    more windows."""
+    traces, feats, pts, metas = [], [], [], []
+    state, alarm_h, pw_h = start, None, None
+    for a in range(k0, len(sim), chunk):
+        f, p, m = features_of(sim, a, min(a + chunk, len(sim)))
+        t = mon.run(f, p, m["hour"], latch=True, start=state) if alarm_h is None else \
+            mon.score_only(f, p, m["hour"])
+        if alarm_h is None and t.alarms:
+            alarm_h = float(t.hour[t.alarms[0]])
+        elif alarm_h is None:
+            state = t.cusums[-1]
+        bad = np.flatnonzero(np.argmax(t.log_proba, axis=1) != 0)
+        if pw_h is None and bad.size:
+            pw_h = float(t.hour[bad[0]])
+        traces.append(t), feats.append(f), pts.append(p), metas.append(m)
+        last = float(m["hour"][-1])
+        if all(x is not None and last >= x + mon.confirm_h for x in (alarm_h, pw_h)):
+            break
+    meta = {k: np.concatenate([m[k] for m in metas]) for k in metas[0]}
+    return Trace.concat(traces), np.concatenate(feats), np.concatenate(pts), meta
 
 
 def _monitor_row(mon, tr, ff, pp, mm, fo) -> dict:

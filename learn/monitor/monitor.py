@@ -74,6 +74,10 @@ class Trace:
         alarm.
     alarms : list of int
         Windows that raised an alarm.
+    log_proba : ndarray, shape (n, n_classes)
+        The diagnosis model's ln P(class | window).
+    op_index : ndarray of int, shape (n,)
+        Each window's operating point in the baseline.
     """
 
     hour: np.ndarray
@@ -81,6 +85,18 @@ class Trace:
     p: np.ndarray
     cusums: np.ndarray
     alarms: list[int]
+    log_proba: np.ndarray
+    op_index: np.ndarray
+
+    @classmethod
+    def concat(cls, traces: list[Trace]) -> Trace:
+        """Traces of consecutive windows as one (alarm indices shifted)."""
+        off = np.cumsum([0] + [len(t.hour) for t in traces[:-1]])
+        return cls(*(np.concatenate([getattr(t, k) for t in traces])
+                     for k in ("hour", "score", "p", "cusums")),
+                   [int(a + o) for t, o in zip(traces, off, strict=True) for a in t.alarms],
+                   np.concatenate([t.log_proba for t in traces]),
+                   np.concatenate([t.op_index for t in traces]))
 
     @property
     def s(self) -> np.ndarray:
@@ -251,23 +267,29 @@ class GearMonitor:
         Trace
         """
         score, lp = self.scores(feats, points)
-        self._last_lp = lp
-        self._last_opi = self.baseline.index(points)
         p = self.p_values(score, points)
         cus, alarms = run_cusums(log_bets(p, self.rule), self.h, start, latch)
-        return Trace(np.asarray(hours, float), score, p, cus, alarms)
+        return Trace(np.asarray(hours, float), score, p, cus, alarms, lp,
+                     self.baseline.index(points))
+
+    def score_only(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray) -> Trace:
+        """Windows after a latched alarm: scored for the naming, no CUSUM (NaN)."""
+        score, lp = self.scores(feats, points)
+        k = log_bets(np.ones(1), self.rule).shape[1]
+        return Trace(np.asarray(hours, float), score, np.full(len(score), np.nan),
+                     np.full((len(score), k), np.nan), [], lp, self.baseline.index(points))
 
     def diagnose(self, trace: Trace, a: int, feats: np.ndarray, points: np.ndarray) -> Alarm:
         """Name the fault of the alarm at window ``a`` of ``trace`` and its severity.
 
-        ``feats``/``points`` are the run's windows (those after the alarm included, as far
-        as the stream goes, up to ``confirm_h``).
+        ``trace``, ``feats`` and ``points`` cover the same windows: those of the run, the
+        ones after the alarm included as far as the stream goes (up to ``confirm_h``).
         """
         j = int(np.argmax(trace.cusums[a]))  # the CUSUM that raised it
         zero = np.flatnonzero(trace.cusums[:a, j] <= 0)
         rise = int(zero[-1]) + 1 if zero.size else 0
         end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
-        ev = self.evidence(self._last_lp, self._last_opi)
+        ev = self.evidence(trace.log_proba, trace.op_index)
         at_alarm = self.model.name(ev[rise:a + 1])
         fault = self.model.name(ev[rise:end])
         x = self.inputs(feats[rise:end], points[rise:end])
