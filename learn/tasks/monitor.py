@@ -194,6 +194,7 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float) -> No
 
     lcfg = app.logger
     check_tracking(lcfg.tracking_uri, "logger.tracking_uri")
+    logging.getLogger("mlflow").setLevel(logging.WARNING)  # no INFO lines on the console
     mlflow.set_tracking_uri(lcfg.tracking_uri)
     mlflow.set_experiment("monitor")
     tab = summary_table(res)
