@@ -29,10 +29,13 @@ from swgsim.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
 
 from .features import window_features
 from .model import HEALTHY, Baseline, design_matrix, fit_diagnosis
-from .monitor import GearMonitor, Trace
-from .rule import RuleConfig
+from .monitor import GearMonitor, Trace, run_cusums
+from .rule import RuleConfig, log_bets, threshold
 
 DETECTORS = ("monitor", "per_window", "always")
+#: Design rates of the trade-off curve (one false alarm per this many hours), up to the
+#: study's own: each is a threshold of the same rule on the same p-values.
+CURVE_DESIGN_HOURS = (1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0)
 
 
 @dataclass
@@ -206,9 +209,10 @@ def _per_window(model, lp: np.ndarray) -> np.ndarray:
 
 
 def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: str
-                  ) -> tuple[list[dict], list[dict]]:
-    """Every life of held-out gear ``g`` for every seed: result rows and false-alarm rows."""
-    rows, fa_rows = [], []
+                  ) -> tuple[list[dict], list[dict], list[dict]]:
+    """Every life of held-out gear ``g`` for every seed: result rows, false-alarm rows and
+    the rows of the trade-off curve (:func:`_curve`)."""
+    rows, fa_rows, curve = [], [], []
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     for seed in cfg.seeds:
         base = LifeConfig(hours=cfg.healthy_hours, interval_min=cfg.interval_min,
@@ -228,20 +232,55 @@ def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: 
                      "healthy_hours": hours_h, "false_alarms": n}
                     for d, n in (("monitor", len(tr.alarms)), ("per_window", int(pw.sum())),
                                  ("always", len(tr.score)))]
+        key = {"dataset": dataset, "held_out_gear": g, "seed": seed}
+        healthy_curve = _curve_healthy(tr, cfg, key, hours_h, curve)
         for sim, fo, kind in sims:
             k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
             start = 0.0 if k0 <= n_comm else tr.cusums[k0 - 1 - n_comm]
             ftr, ff, pp, mm = _fault_life(mon, sim, k0, start, cfg)
-            row = {"dataset": dataset, "held_out_gear": g, "seed": seed, "fault": fo.fault,
+            row = {**key, "fault": fo.fault,
                    "severity": max((q[1] for q in fo.points), key=abs) if fo.points
                    else fo.severity, "onset": kind, "onset_h": fo.onset_h}
+            _curve_fault(ftr, fo, k0 - 1 - n_comm, healthy_curve, cfg, row, curve)
             rows.append({**row, **_monitor_row(mon, ftr, ff, pp, mm, fo)})
             rows.append({**row, **_per_window_row(model, ftr.log_proba, mm, fo)})
             rows.append({**row, "detector": "always", "detected": True, "time_to_detect_h": 0.0,
                          "fault_at_alarm": "unknown", "fault_after_1h": "unknown",
                          "severity_est": np.nan, "severity_at_alarm": 0.0,
                          "severity_low": np.nan, "severity_high": np.nan})
-    return rows, fa_rows
+    return rows, fa_rows, curve
+
+
+def _curve_thresholds(cfg: MonitorStudyConfig) -> dict[float, float]:
+    return {d: threshold(dataclasses.replace(cfg.rule, design_hours=d), cfg.interval_min)
+            for d in CURVE_DESIGN_HOURS if d <= cfg.rule.design_hours}
+
+
+def _curve_healthy(tr: Trace, cfg: MonitorStudyConfig, key: dict, hours_h: float,
+                   out: list[dict]) -> dict[float, np.ndarray]:
+    """False alarms of the healthy life at each design rate of the curve; returns each
+    rate's CUSUMs (the state a fault life starts from)."""
+    lf = log_bets(tr.p, cfg.rule)
+    states = {}
+    for d, h in _curve_thresholds(cfg).items():
+        cus, al = run_cusums(lf, h, latch=False)
+        states[d] = cus
+        out.append({**key, "design_hours": d, "life": "healthy", "healthy_hours": hours_h,
+                    "false_alarms": len(al)})
+    return states
+
+
+def _curve_fault(ftr: Trace, fo: FaultOnset, before: int, states: dict, cfg, row: dict,
+                 out: list[dict]) -> None:
+    """Time to detect of a fault life at each design rate of the curve (NaN: not within
+    the windows scored before the default rule's alarm, i.e. later than it)."""
+    n = int(np.sum(~np.isnan(ftr.p)))
+    lf = log_bets(ftr.p[:n], cfg.rule)
+    for d, h in _curve_thresholds(cfg).items():
+        start = 0.0 if before < 0 else states[d][before]
+        _, al = run_cusums(lf, h, start, latch=True)
+        out.append({**row, "design_hours": d, "life": "fault",
+                    "time_to_detect_h": float(ftr.hour[al[0]] - fo.onset_h) if al else np.nan})
 
 
 def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start, cfg: MonitorStudyConfig,
@@ -308,17 +347,16 @@ def run_held_out(plan, dataset: str, g: int, cfg: MonitorStudyConfig) -> dict:
     banks = {x: RecordBank(plan, x) for x in gears}
     model = train_model(plan, banks, [x for x in gears if x != g], cfg)
     t1 = time.perf_counter()
-    rows, fa = evaluate_gear(plan, banks, g, model, cfg, dataset)
+    rows, fa, curve = evaluate_gear(plan, banks, g, model, cfg, dataset)
     t2 = time.perf_counter()
-    return {"rows": rows, "false_alarms": fa, "train_s": t1 - t0, "evaluate_s": t2 - t1,
+    return {"rows": rows, "false_alarms": fa, "curve": curve, "train_s": t1 - t0, "evaluate_s": t2 - t1,
             "dataset": dataset, "held_out_gear": g, "model": model}
 
 
-def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """results and false-alarm tables of :func:`run_held_out` parts."""
-    res = pd.DataFrame([r for p in parts for r in p["rows"]])
-    fa = pd.DataFrame([r for p in parts for r in p["false_alarms"]])
-    return res, fa
+def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """Results, false-alarm and trade-off-curve tables of :func:`run_held_out` parts."""
+    return tuple(pd.DataFrame([r for p in parts for r in p[k]])
+                 for k in ("rows", "false_alarms", "curve"))
 
 
 __all__ = ["DETECTORS", "MonitorStudyConfig", "classes", "evaluate_gear", "fault_lives",

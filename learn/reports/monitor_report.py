@@ -139,8 +139,11 @@ def write_table(res: pd.DataFrame, fa: pd.DataFrame, path: Path, header: str = "
     return out
 
 
-def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[Path]:
-    """Time to detect against severity per fault; false-alarm rate against time to detect."""
+def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
+            curve: pd.DataFrame | None = None) -> list[Path]:
+    """Time to detect against severity per fault; false-alarm rate against time to detect:
+    the monitor's rule at the design rates of ``curve`` (``tradeoff.csv``), and the
+    per-window and always-alarm detectors."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -149,19 +152,29 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[Path]:
     paths = []
     mon = res[(res.detector == "monitor") & (res.onset == "step")]
     faults = list(dict.fromkeys(mon.fault))
-    n = len(faults)
-    fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 3.0), squeeze=False)
-    for ax, f in zip(axes[0], faults, strict=True):
-        for ds, g in mon[mon.fault == f].groupby("dataset", sort=False):
-            t = g.time_to_detect_h.where(g.detected.astype(bool)) * 60
-            ax.plot(g.severity.abs(), t, "o", alpha=0.5, ms=3, label=ds)
+    ncol = 4
+    nrow = -(-len(faults) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(2.9 * ncol, 2.6 * nrow), squeeze=False)
+    top = float(np.nanmax(mon.time_to_detect_h.to_numpy(float) * 60, initial=60.0)) * 1.5
+    for ax, f in zip(axes.flat, faults, strict=False):
+        for i, (ds, g) in enumerate(mon[mon.fault == f].groupby("dataset", sort=False)):
+            det = g.detected.astype(bool)
+            jit = (i - 0.5) * 0.02 * g.severity.abs().max()
+            ax.plot(g.severity.abs()[det] + jit, g.time_to_detect_h[det] * 60, "o", ms=3,
+                    alpha=0.5, color=f"C{i}", label=ds)
+            ax.plot(g.severity.abs()[~det] + jit, np.full((~det).sum(), top), "x", ms=4,
+                    color=f"C{i}")
         ax.axhline(30, color="0.5", lw=0.8, ls="--")
+        ax.set_yscale("log")
         ax.set_title(display(f), fontsize=9)
-        ax.set_xlabel("severity")
-    axes[0, 0].set_ylabel("time to detect [min]")
+        ax.set_xlabel("severity", fontsize=8)
+    for ax in axes.flat[len(faults):]:
+        ax.set_visible(False)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("time to detect [min]", fontsize=8)
     axes[0, 0].legend(fontsize=7)
-    fig.suptitle("Monitor: time to detect per life (held-out gear; dashed: 30 min target)",
-                 fontsize=9)
+    fig.suptitle("Monitor: time to detect per life, held-out gears, step onsets (dashed: 30 "
+                 "min; x: not detected within the horizon)", fontsize=9)
     fig.tight_layout()
     p = out_dir / "time_to_detect.png"
     fig.savefig(p, dpi=130)
@@ -171,15 +184,31 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[Path]:
     fat = false_alarm_table(fa).groupby(["dataset", "detector"]).per_1000_h.max()
     tab = summary_table(res)
     ttd = tab.groupby(["dataset", "detector"]).ttd_median_min.median()
-    fig, ax = plt.subplots(figsize=(4.8, 3.4))
-    for (ds, d), v in fat.items():
-        ax.plot(max(v, 0.1), ttd.get((ds, d), np.nan), "o")
-        ax.annotate(f"{d} ({ds})", (max(v, 0.1), ttd.get((ds, d), np.nan)), fontsize=7)
+    fig, ax = plt.subplots(figsize=(5.6, 3.8))
+    floor = 0.1
+    if curve is not None and len(curve):
+        for i, (ds, c) in enumerate(curve.groupby("dataset", sort=False)):
+            hh = c[c.life == "healthy"].groupby("design_hours")
+            rate = hh.false_alarms.sum() / hh.healthy_hours.sum() * 1000
+            f = c[(c.life == "fault") & c.fault.isin(GEAR_TARGET_FAULTS)]
+            med = f.assign(t=f.time_to_detect_h.fillna(np.inf) * 60).groupby(
+                "design_hours").t.median()
+            ax.plot(np.maximum(rate, floor), med.reindex(rate.index), "o-", color=f"C{i}",
+                    label=f"monitor, {ds} (design 1 per 1-1000 h)")
+            ax.plot(1000 / rate.index.to_numpy(float), med.reindex(rate.index), ":",
+                    color=f"C{i}", lw=0.8)
+    for j, ((ds, d), v) in enumerate(fat.items()):
+        if d == "monitor":
+            continue
+        ax.plot(max(v, floor), ttd.get((ds, d), np.nan), "s", ms=4, color=f"C{2 + j % 6}",
+                label=f"{d.replace('_', '-')}, {ds}")
     ax.set_xscale("log")
     ax.axvline(1.0, color="0.5", lw=0.8, ls="--")
-    ax.set_xlabel("false alarms per 1000 h (worst held-out gear; 0 drawn at 0.1)")
+    ax.set_xlabel(f"false alarms per 1000 h, measured (0 drawn at {floor})")
     ax.set_ylabel("median time to detect [min]")
-    ax.set_title("False-alarm rate against time to detect", fontsize=9)
+    ax.set_title("False-alarm rate against time to detect (gear faults but stiffness; dotted: "
+                 "at the design rate)", fontsize=8)
+    ax.legend(fontsize=6)
     fig.tight_layout()
     p = out_dir / "false_alarms_vs_ttd.png"
     fig.savefig(p, dpi=130)
@@ -188,5 +217,5 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[Path]:
     return paths
 
 
-__all__ = ["display", "false_alarm_table", "targets", "figures", "smallest_detectable", "summary_table",
-           "write_table"]
+__all__ = ["display", "false_alarm_table", "figures", "smallest_detectable", "summary_table",
+           "targets", "write_table"]

@@ -4,7 +4,8 @@ its table and figures (:mod:`learn.reports.monitor_report`) and an MLflow run.
 
 Files in ``report_dir``: ``results.csv`` (one row per life and detector),
 ``false_alarms.csv``, ``table.md``, ``time_to_detect.png``, ``false_alarms_vs_ttd.png``,
-``timing.json``, ``models/<dataset>_without_gear<g>.joblib`` (the diagnosis models, for
+``tradeoff.csv`` (false alarms and times to detect of the same rule at other design
+rates), ``timing.json``, ``models/<dataset>_without_gear<g>.joblib`` (the diagnosis models, for
 ``swgsim-monitor``) and ``parts/`` (one finished (data set, held-out gear) each, with the
 hash of the config that made it: a rerun of the same config resumes from them).
 """
@@ -112,9 +113,10 @@ def run_monitor(cfg) -> dict:
     t0 = time.perf_counter()
     parts = _run_jobs(plans, jobs, mc, out)
     wall = time.perf_counter() - t0
-    res, fa = to_frames(parts)
+    res, fa, curve = to_frames(parts)
     res.to_csv(out / "results.csv", index=False)
     fa.to_csv(out / "false_alarms.csv", index=False)
+    curve.to_csv(out / "tradeoff.csv", index=False)
     from learn.reports.monitor_report import figures, write_table
 
     timing = {"wall_s": wall, "parts": [{k: p[k] for k in ("dataset", "held_out_gear",
@@ -126,7 +128,7 @@ def run_monitor(cfg) -> dict:
               f"{mc.study.healthy_hours:g} h per healthy life; design: one false alarm per "
               f"{mc.study.rule.design_hours:g} h. Wall time {wall / 60:.1f} min.\n")
     write_table(res, fa, out / "table.md", header)
-    figures(res, fa, out)
+    figures(res, fa, out, curve)
     if app.logger is not None:
         _log(app, res, fa, out, wall)
     det = res[(res.detector == "monitor")]
@@ -182,7 +184,8 @@ def _job(plan, name: str, g: int, key: str, study: MonitorStudyConfig, out: str)
     joblib.dump(part.pop("model"), buf)
     atomic_write_bytes(Path(out) / "models" / f"{name}_without_gear{g}.joblib", buf.getvalue())
     part["key"] = key
-    part["rows"] = pd.DataFrame(part["rows"]).to_dict("records")
+    for k in ("rows", "curve"):
+        part[k] = pd.DataFrame(part[k]).to_dict("records")
     return json.loads(json.dumps(part, default=float))
 
 
