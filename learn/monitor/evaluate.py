@@ -349,8 +349,8 @@ def run_held_out(plan, dataset: str, g: int, cfg: MonitorStudyConfig) -> dict:
     t1 = time.perf_counter()
     rows, fa, curve = evaluate_gear(plan, banks, g, model, cfg, dataset)
     t2 = time.perf_counter()
-    return {"rows": rows, "false_alarms": fa, "curve": curve, "train_s": t1 - t0, "evaluate_s": t2 - t1,
-            "dataset": dataset, "held_out_gear": g, "model": model}
+    return {"rows": rows, "false_alarms": fa, "curve": curve, "train_s": t1 - t0,
+            "evaluate_s": t2 - t1, "dataset": dataset, "held_out_gear": g, "model": model}
 
 
 def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
