@@ -134,3 +134,33 @@ def test_planted_step_fault_detected_and_named(tiny_eval):
     fa = pd.DataFrame(tiny_eval["false_alarms"]).set_index("detector")
     assert fa.loc["monitor", "false_alarms"] == 0
     assert fa.loc["always", "false_alarms"] == 360
+
+
+def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path):
+    """swgsim-monitor on a life written by swgsim-generate (preset tiny_life, gear 3: an
+    eccentric WG of severity 0.1 from 6 h on) with the model trained without gear 3."""
+    import json
+
+    import joblib
+
+    from swgcli import compose_app, dataset_preset
+    from swgcli.monitor import run_monitor_app
+    from swgsim.config import dataset_config
+    from swgsim.generate import generate
+
+    cfg = dataset_config(dataset_preset("tiny_life"))
+    cfg.gears = [g for g in cfg.gears if g.id == 3]
+    generate(cfg, tmp_path / "life", progress=False)
+    joblib.dump(tiny_eval["model"], tmp_path / "model.joblib")
+    app = compose_app("monitor", [f"stream={tmp_path / 'life'}",
+                                  f"diagnosis_model={tmp_path / 'model.joblib'}",
+                                  f"out_dir={tmp_path / 'out'}", "~logger"])
+    out = run_monitor_app(app)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["alarms"] == out["alarms"] and len(summary["alarms"]) == 1
+    alarm = summary["alarms"][0]
+    assert alarm["fault"] == "eccentric_wg" and 6.0 <= alarm["hour"] <= 6.5
+    assert alarm["severity_low"] <= alarm["severity"] <= alarm["severity_high"]
+    assert {"hour", "fault", "severity", "severity_low", "severity_high"} <= set(alarm)
+    assert (tmp_path / "out" / "report.md").is_file()
+    assert (tmp_path / "out" / "health.png").stat().st_size > 10_000
