@@ -129,6 +129,14 @@ def run_monitor(cfg) -> dict:
               f"{mc.study.rule.design_hours:g} h. Wall time {wall / 60:.1f} min.\n")
     write_table(res, fa, out / "table.md", header)
     figures(res, fa, out, curve)
+    if mc.progress:  # the console's summary
+        from learn.reports.monitor_report import targets
+
+        print("\ntargets (monitor; held-out gears, five seeds):")
+        for r in targets(res, fa).itertuples(index=False):
+            print(f"  {r.dataset:<12s} {r.what:<66s} target {r.target:>7s}  {r.measured}")
+        print(f"report: {out}/table.md (+ results.csv, false_alarms.csv, tradeoff.csv, "
+              f"figures); wall time {wall / 60:.1f} min")
     if app.logger is not None:
         _log(app, res, fa, out, wall)
     det = res[(res.detector == "monitor")]
