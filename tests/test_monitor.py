@@ -164,3 +164,16 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path):
     assert {"hour", "fault", "severity", "severity_low", "severity_high"} <= set(alarm)
     assert (tmp_path / "out" / "report.md").is_file()
     assert (tmp_path / "out" / "health.png").stat().st_size > 10_000
+
+
+def test_compiled_trees_equal_scikit_learn(tiny_eval):
+    """The flat-array walk of a live monitor gives scikit-learn's probabilities."""
+    from learn.monitor.trees import CompiledTrees
+
+    clf = tiny_eval["model"].classifier
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(30, clf.n_features_in_)) * 3
+    x[:, -2:] = [4000.0, 70.0]
+    x[4, 2] = np.nan
+    ct = CompiledTrees(clf)
+    np.testing.assert_allclose(ct.predict_proba(x), clf.predict_proba(x), rtol=0, atol=1e-12)
