@@ -58,15 +58,17 @@ class Baseline:
             idx[(points == o).all(axis=1)] = i
         return idx
 
-    def z(self, feats: np.ndarray, points: np.ndarray) -> np.ndarray:
-        """z-scores of windows against the baseline of their operating point.
+    def z(self, feats: np.ndarray, points: np.ndarray, index: np.ndarray | None = None
+          ) -> np.ndarray:
+        """z-scores of windows against the baseline of their operating point (``index``:
+        :meth:`index` of ``points``, when known).
 
         Raises
         ------
         ValueError
             If a window's operating point was not seen at commissioning.
         """
-        i = self.index(points)
+        i = self.index(points) if index is None else index
         if (i < 0).any():
             bad = points[np.flatnonzero(i < 0)[0]]
             raise ValueError(f"operating point {bad[0]:g} rpm, {bad[1]:g} N m was not seen at "

@@ -203,8 +203,8 @@ class GearMonitor:
             rank[idx] = np.arange(idx.size)
         fit, cal = rank % 2 == 0, rank % 2 == 1
         self.baseline = Baseline.fit(feats[fit], points[fit])
-        scores, lp = self.scores(feats[cal], points[cal])
         opi = self.baseline.index(points[cal])
+        scores, lp = self.scores(feats[cal], points[cal], opi)
         self.calibration = {k: np.sort(scores[opi == k], axis=0)
                             for k in range(len(self.baseline.points))}
         llr = lp - lp[:, :1]
@@ -222,26 +222,27 @@ class GearMonitor:
         """The diagnosis model's inputs of windows (z-scores and operating point)."""
         return design_matrix(self.baseline.z(feats, points), points)
 
-    def scores(self, feats: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Scores (n, 2) and log-probabilities (n, n_classes) of windows.
+    def scores(self, feats: np.ndarray, points: np.ndarray, index: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Scores (n, 2) and log-probabilities (n, n_classes) of windows (``index``: their
+        operating points' rows in the baseline, when known).
 
         Two scores per window: the diagnosis model's evidence against healthy, and the
         novelty ``Σ z²`` of its health features (a change the model was not trained on,
         e.g. a bridge it never saw faulty, moves the latter).
         """
-        z = self.baseline.z(feats, points)
+        z = self.baseline.z(feats, points, index)
         lp = self.model.log_proba(design_matrix(z, points))
         return np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp
 
-    def p_values(self, score: np.ndarray, points: np.ndarray) -> np.ndarray:
-        """Conformal p-values of windows against the calibration of their operating point,
-        the two scores' combined by Bonferroni, ``min(1, 2 min(p1, p2))`` (still
-        super-uniform, so the CUSUM's bound holds)."""
-        opi = self.baseline.index(points)
+    def p_values(self, score: np.ndarray, opi: np.ndarray) -> np.ndarray:
+        """Conformal p-values of windows against the calibration of their operating point
+        (``opi``: its row in the baseline), the two scores' combined by Bonferroni,
+        ``min(1, 2 min(p1, p2))`` (still super-uniform, so the CUSUM's bound holds)."""
         u = self.rng.uniform(size=score.shape)
         p = np.empty(score.shape)
-        for k, cal in self.calibration.items():
-            m = opi == k
+        for k in np.unique(opi):
+            cal, m = self.calibration[int(k)], opi == k
             for j in range(score.shape[1]):
                 p[m, j] = conformal_p(score[m, j], cal[:, j], u[m, j])
         return np.minimum(1.0, score.shape[1] * p.min(axis=1))
@@ -266,18 +267,19 @@ class GearMonitor:
         -------
         Trace
         """
-        score, lp = self.scores(feats, points)
-        p = self.p_values(score, points)
+        opi = self.baseline.index(points)
+        score, lp = self.scores(feats, points, opi)
+        p = self.p_values(score, opi)
         cus, alarms = run_cusums(log_bets(p, self.rule), self.h, start, latch)
-        return Trace(np.asarray(hours, float), score, p, cus, alarms, lp,
-                     self.baseline.index(points))
+        return Trace(np.asarray(hours, float), score, p, cus, alarms, lp, opi)
 
     def score_only(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray) -> Trace:
         """Windows after a latched alarm: scored for the naming, no CUSUM (NaN)."""
-        score, lp = self.scores(feats, points)
+        opi = self.baseline.index(points)
+        score, lp = self.scores(feats, points, opi)
         k = log_bets(np.ones(1), self.rule).shape[1]
         return Trace(np.asarray(hours, float), score, np.full(len(score), np.nan),
-                     np.full((len(score), k), np.nan), [], lp, self.baseline.index(points))
+                     np.full((len(score), k), np.nan), [], lp, opi)
 
     def diagnose(self, trace: Trace, a: int, feats: np.ndarray, points: np.ndarray) -> Alarm:
         """Name the fault of the alarm at window ``a`` of ``trace`` and its severity.

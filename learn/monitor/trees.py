@@ -67,12 +67,14 @@ class CompiledTrees:
         x = np.asarray(x, float)
         n = x.shape[0]
         node = np.broadcast_to(self.roots, (n, self.roots.size)).ravel().copy()
-        row = np.repeat(np.arange(n), self.roots.size)
+        # feature value of every walk: one row of x per window (flat index row * F + f)
+        base = np.repeat(np.arange(n) * x.shape[1], self.roots.size)
+        xf = x.ravel()
         act = np.flatnonzero(~self.leaf[node])  # walks not at a leaf yet
-        has_nan = bool(np.isnan(x).any())
+        has_nan = bool(np.isnan(xf).any())
         while act.size:
             nd = node[act]
-            v = x[row[act], self.feature[nd]]
+            v = xf[base[act] + self.feature[nd]]
             go_left = v <= self.threshold[nd]
             if has_nan:
                 go_left = np.where(np.isnan(v), self.nan_left[nd], go_left)
