@@ -129,7 +129,9 @@ def write_table(res: pd.DataFrame, fa: pd.DataFrame, path: Path, header: str = "
     tab["fault"] = tab.fault.map(display)
     small = smallest_detectable(summary_table(res))
     small["fault"] = small.fault.map(display)
-    text = [header, "## Targets (monitor; held-out gears, five seeds)\n", _md(targets(res, fa)),
+    seeds = res.seed.nunique() if "seed" in res else 0
+    text = [header, f"## Targets (monitor; held-out gears, {seeds} seed(s))\n",
+            _md(targets(res, fa)),
             "\n## Detection and isolation per fault and severity (held-out gears, all "
             "seeds)\n", _md(tab), "\n## Smallest severity detected in every life (step "
             "onsets)\n", _md(small), "\n## False alarms in healthy operation\n",

@@ -132,7 +132,7 @@ def run_monitor(cfg) -> dict:
     if mc.progress:  # the console's summary
         from learn.reports.monitor_report import targets
 
-        print("\ntargets (monitor; held-out gears, five seeds):")
+        print(f"\ntargets (monitor; held-out gears, {len(mc.study.seeds)} seed(s)):")
         for r in targets(res, fa).itertuples(index=False):
             print(f"  {r.dataset:<12s} {r.what:<66s} target {r.target:>7s}  {r.measured}")
         print(f"report: {out}/table.md (+ results.csv, false_alarms.csv, tradeoff.csv, "
