@@ -29,7 +29,7 @@ from swgsim.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
 
 from .features import window_features
 from .model import HEALTHY, Baseline, design_matrix, fit_diagnosis
-from .monitor import GearMonitor, Trace, run_cusums
+from .monitor import GearMonitor, Trace, baseline_windows, run_cusums
 from .rule import RuleConfig, log_bets, threshold
 
 DETECTORS = ("monitor", "per_window", "always")
@@ -121,17 +121,6 @@ def features_of(sim: LifeSimulator, start: int, stop: int
     return np.concatenate(f), np.concatenate(pts), meta
 
 
-def _split_baseline(feats, points) -> Baseline:
-    """The baseline from every other commissioning window per operating point (as the
-    monitor builds it)."""
-    ops, inv = np.unique(points, axis=0, return_inverse=True)
-    rank = np.zeros(len(points), int)
-    for k in range(len(ops)):
-        idx = np.flatnonzero(inv == k)
-        rank[idx] = np.arange(idx.size)
-    return Baseline.fit(feats[rank % 2 == 0], points[rank % 2 == 0])
-
-
 def train_model(plan, banks: dict[int, RecordBank], gears: list[int], cfg: MonitorStudyConfig,
                 seed: int = 0):
     """The diagnosis model trained on the lives of ``gears`` (module docstring).
@@ -167,7 +156,8 @@ def train_model(plan, banks: dict[int, RecordBank], gears: list[int], cfg: Monit
                     lives.append((LifeSimulator(plan, g, fl, banks[g]), c, s))
                     k += 1
         f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
-        base = _split_baseline(f0[:n_comm], p0[:n_comm])
+        fit = baseline_windows(p0[:n_comm])  # as the monitor builds it
+        base = Baseline.fit(f0[:n_comm][fit], p0[:n_comm][fit])
         for sim, c, s in lives:
             f, p, meta = (f0, p0, None) if c == HEALTHY else features_of(sim, 1, len(sim))
             f, p = (f[n_comm:], p[n_comm:]) if c == HEALTHY else (f, p)
@@ -203,7 +193,7 @@ def fault_lives(plan, cfg: MonitorStudyConfig, seed: int) -> list[tuple[FaultOns
     return out
 
 
-def _per_window(model, lp: np.ndarray) -> np.ndarray:
+def _per_window(lp: np.ndarray) -> np.ndarray:
     """Windows the per-window rule calls faulty (its most probable class is not healthy)."""
     return np.argmax(lp, axis=1) != 0
 
@@ -226,7 +216,7 @@ def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: 
         mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed))
         mon.commission(f[:n_comm], p[:n_comm])
         tr = mon.run(f[n_comm:], p[n_comm:], meta["hour"][n_comm:], latch=False)
-        pw = _per_window(model, tr.log_proba)
+        pw = _per_window(tr.log_proba)
         hours_h = cfg.healthy_hours - cfg.commissioning_h
         fa_rows += [{"dataset": dataset, "held_out_gear": g, "seed": seed, "detector": d,
                      "healthy_hours": hours_h, "false_alarms": n}
@@ -298,7 +288,7 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start, cfg: Monit
             alarm_h = float(t.hour[t.alarms[0]])
         elif alarm_h is None:
             state = t.cusums[-1]
-        bad = np.flatnonzero(np.argmax(t.log_proba, axis=1) != 0)
+        bad = np.flatnonzero(_per_window(t.log_proba))
         if pw_h is None and bad.size:
             pw_h = float(t.hour[bad[0]])
         traces.append(t), feats.append(f), pts.append(p), metas.append(m)
@@ -323,7 +313,7 @@ def _monitor_row(mon, tr, ff, pp, mm, fo) -> dict:
 
 
 def _per_window_row(model, lp, mm, fo) -> dict:
-    bad = np.flatnonzero(_per_window(model, lp))
+    bad = np.flatnonzero(_per_window(lp))
     if bad.size == 0:
         return {"detector": "per_window", "detected": False, "time_to_detect_h": np.nan,
                 "fault_at_alarm": "", "fault_after_1h": "", "severity_est": np.nan,

@@ -160,6 +160,17 @@ def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: floa
                 f"{rule.min_baseline} for the baseline, alternately)")
 
 
+def baseline_windows(points: np.ndarray) -> np.ndarray:
+    """Which commissioning windows fit the baseline: every other one of each operating
+    point, from its first (the rest calibrate the rule). Boolean mask, shape (n,)."""
+    _, inv = np.unique(points, axis=0, return_inverse=True)
+    rank = np.zeros(len(points), int)
+    for k in np.unique(inv):
+        idx = np.flatnonzero(inv == k)
+        rank[idx] = np.arange(idx.size)
+    return rank % 2 == 0
+
+
 class GearMonitor:
     """Monitor of one gear (module docstring).
 
@@ -196,12 +207,8 @@ class GearMonitor:
             (n_in_rpm, t_out_nm) of each window's duty point.
         """
         check_commissioning(points, self.rule, self.interval_min)
-        ops, inv = np.unique(points, axis=0, return_inverse=True)
-        rank = np.zeros(len(points), int)
-        for k in range(len(ops)):
-            idx = np.flatnonzero(inv == k)
-            rank[idx] = np.arange(idx.size)
-        fit, cal = rank % 2 == 0, rank % 2 == 1
+        fit = baseline_windows(points)
+        cal = ~fit
         self.baseline = Baseline.fit(feats[fit], points[fit])
         opi = self.baseline.index(points[cal])
         scores, lp = self.scores(feats[cal], points[cal], opi)
@@ -299,4 +306,5 @@ class GearMonitor:
         return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi)
 
 
-__all__ = ["Alarm", "GearMonitor", "Trace", "check_commissioning"]
+__all__ = ["Alarm", "GearMonitor", "Trace", "baseline_windows", "check_commissioning",
+           "run_cusums"]

@@ -197,30 +197,29 @@ class Inertia(fx.Inertia, FitTerm):
     ranges = {"j_a": OPEN_INERTIA_KGM2}
 
 
-class ThermalDrift(fx.ThermalDrift, FitTerm):
+class _TimeConstantFit:
+    """Bounds and starts of an effect whose one nonlinear parameter is a time constant:
+    from 2 % to 10 times the recording's span, started at 0.1, 0.3 and 1 span."""
+
+    def bounds(self, sig):
+        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
+
+    def starts(self, sig, residual, idx):
+        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
+
+
+class ThermalDrift(_TimeConstantFit, fx.ThermalDrift, FitTerm):
     __doc__ = fx.ThermalDrift.__doc__
     signature = "residual odd in direction whose magnitude changes monotonically with time"
     probes = ("time_odd",)
     ranges = {"d": OPEN_THERMAL_NM, "t_th": THERMAL_TIME_S}
 
-    def bounds(self, sig):
-        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
 
-    def starts(self, sig, residual, idx):
-        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
-
-
-class SensorDrift(fx.SensorDrift, FitTerm):
+class SensorDrift(_TimeConstantFit, fx.SensorDrift, FitTerm):
     __doc__ = fx.SensorDrift.__doc__
     signature = "residual even in direction that creeps monotonically with time"
     probes = ("time",)
     ranges = {"c": OPEN_SENSOR_NM, "t_d": SENSOR_DRIFT_TIME_S}
-
-    def bounds(self, sig):
-        return [(0.02 * sig.scales.t_span, 10.0 * sig.scales.t_span)]
-
-    def starts(self, sig, residual, idx):
-        return [np.array([f * sig.scales.t_span]) for f in (0.1, 0.3, 1.0)]
 
 
 class VelocityLag(fx.VelocityLag, FitTerm):
