@@ -120,3 +120,18 @@ def test_residual_inputs_shapes(toy):
     assert np.isfinite(raw.X).all() and np.isfinite(spec.X).all()
     with pytest.raises(ValueError, match="Nyquist"):
         build_input(toy, "raw_res", residual=ResidualSettings(n_harmonics=200))
+
+
+def test_basis_pseudo_inverse_where_lapacks_gesdd_fails():
+    """A well-conditioned basis for which NumPy's SVD (gesdd) reports no convergence (a
+    life window's mean speed on robot_joint): the pseudo-inverse still comes, exact."""
+    from learn.inputs.signals import ResidualSettings, _basis_pinv
+
+    rs = ResidualSettings()
+    orders = tuple((1.01 * np.arange(1, rs.n_harmonics + 1)).tolist()
+                   + list(rs.nuisance_orders))
+    f0, n_t = 66.66625151195727, 1200
+    pinv = _basis_pinv(f0, 0.0, 1e-4, n_t, orders)
+    ang = 2 * np.pi * f0 * (1e-4 * np.arange(n_t))[:, None] * np.asarray(orders)[None, :]
+    basis = np.concatenate([np.ones((n_t, 1)), np.cos(ang), np.sin(ang)], axis=1)
+    np.testing.assert_allclose(pinv @ basis, np.eye(basis.shape[1]), atol=1e-12)

@@ -117,7 +117,8 @@ def tiny_eval():
     cfg = MonitorStudyConfig(seeds=[0], healthy_hours=10.0, commissioning_h=4.0,
                              horizon_h=2.0, onset_window_h=[0.5, 1.0], growth_h=0.5,
                              train_fault_h=0.5, train_healthy_h=2.0, train_variants=2,
-                             faults=["eccentric_wg", "sensor_offset_step"], gears=[3])
+                             faults=["eccentric_wg", "sensor_offset_step"], gears=[3],
+                             baseline_hours=2.0)
     return run_held_out(p, "tiny_bench", 3, cfg)
 
 
@@ -134,6 +135,24 @@ def test_planted_step_fault_detected_and_named(tiny_eval):
     fa = pd.DataFrame(tiny_eval["false_alarms"]).set_index("detector")
     assert fa.loc["monitor", "false_alarms"] == 0
     assert fa.loc["always", "false_alarms"] == 360
+
+
+def test_per_window_baselines_beside_the_monitor(tiny_eval):
+    """The paper's pipeline and the CNN run as monitors on the same lives: one row per
+    life and detector; their false alarms counted over baseline_hours (2 h: 120 windows)."""
+    import pandas as pd
+
+    from learn.monitor.evaluate import DETECTORS
+
+    res = pd.DataFrame(tiny_eval["rows"])
+    per_life = res.groupby(["fault", "severity", "onset"]).detector.apply(tuple)
+    assert all(t == DETECTORS for t in per_life)
+    fa = pd.DataFrame(tiny_eval["false_alarms"]).set_index("detector")
+    for b in ("paper_rf", "cnn_res"):
+        assert fa.loc[b, "healthy_hours"] == 2.0 and 0 <= fa.loc[b, "false_alarms"] <= 120
+        det = res[(res.detector == b) & res.detected.astype(bool)]
+        assert (det.fault_at_alarm != "healthy").all()
+        assert (det.time_to_detect_h >= 0).all()
 
 
 def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path):
@@ -177,3 +196,37 @@ def test_compiled_trees_equal_scikit_learn(tiny_eval):
     x[4, 2] = np.nan
     ct = CompiledTrees(clf)
     np.testing.assert_allclose(ct.predict_proba(x), clf.predict_proba(x), rtol=0, atol=1e-12)
+
+
+def test_one_window_at_a_time_equals_the_block_path(tiny_eval):
+    """GearMonitor.step, window by window, gives run()'s scores, p-values, CUSUMs and
+    alarms (a CUSUM pushed over h by a shifted stretch: one alarm, then a restart)."""
+    from learn.monitor.evaluate import features_of
+    from learn.monitor.monitor import GearMonitor
+    from learn.monitor.rule import RuleConfig
+    from swgcli import dataset_preset
+    from swgsim.life import LifeConfig, LifeSimulator
+    from swgsim.plan import plan
+
+    p = plan(dataset_preset("tiny_bench"))
+    sim = LifeSimulator(p, 3, LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9))
+    f, pts, meta = features_of(sim, 0, len(sim))
+    f[270:290] += 3 * f[:240].std(axis=0)  # a stretch no healthy window looks like
+    rule = RuleConfig(design_hours=1.0)
+    a, b = (GearMonitor(tiny_eval["model"], rule, 1.0, seed=5) for _ in range(2))
+    for m in (a, b):
+        m.commission(f[:240], pts[:240])
+    blk, state = [], 0.0
+    for i in range(240, 300, 20):  # blocks of 20: the flat-array walk, as step's
+        blk.append(a.run(f[i:i + 20], pts[i:i + 20], meta["hour"][i:i + 20], latch=False,
+                         start=state))
+        state = 0.0 if blk[-1].alarms and blk[-1].alarms[-1] == 19 else blk[-1].cusums[-1]
+    steps = [b.step(f[i], pts[i], meta["hour"][i]) for i in range(240, 300)]
+    for k in ("score", "p", "cusums", "log_proba"):
+        np.testing.assert_allclose(np.concatenate([getattr(t, k) for t in steps]),
+                                   np.concatenate([getattr(t, k) for t in blk]),
+                                   rtol=1e-12, atol=1e-12)
+    alarms = [i for i, t in enumerate(steps) if t.alarms]
+    assert alarms == [i + 20 * j for j, t in enumerate(blk) for i in t.alarms] and alarms
+    with pytest.raises(ValueError, match="not seen at commissioning"):
+        b.step(f[0], (1.0, 2.0), 5.0)

@@ -20,6 +20,8 @@ import functools
 
 import numpy as np
 
+from learn.inputs.signals import pinv
+
 N_HARMONICS = 12
 NUISANCE_ORDERS = (0.25, 1 / 3, 0.5)
 RATIO = 100.0  # gear ratio N of the size-20 gear (swgsim.dynamics.GearParams.ratio)
@@ -35,7 +37,7 @@ def _basis(n_in_rpm: float, fs_hz: float, n_t: int, n_harmonics: int
                              NUISANCE_ORDERS])
     ang = 2 * np.pi * f_in * t[:, None] * orders[None, :]
     b = np.concatenate([np.ones((n_t, 1)), np.cos(ang), np.sin(ang)], axis=1)
-    p = np.linalg.pinv(b)
+    p = pinv(b)
     b.setflags(write=False)
     p.setflags(write=False)
     return b, p

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from learn.monitor.baselines import BASELINES
 from learn.monitor.evaluate import MonitorStudyConfig, run_held_out, to_frames
 from learn.tasks.config import typed_app
 from swgsim.config import DatasetConfig
@@ -76,6 +77,11 @@ def check_study(sc: MonitorStudyConfig) -> None:
         req(getattr(sc, k) > 0, f"monitor.study.{k} must be > 0, got {getattr(sc, k)}")
     req(sc.train_variants >= 1, "monitor.study.train_variants must be >= 1")
     req(sc.rule.design_hours > 0, "monitor.study.rule.design_hours must be > 0")
+    bad = sorted(set(sc.baselines) - set(BASELINES))
+    req(not bad, f"monitor.study.baselines: unknown {bad}; allowed: {sorted(BASELINES)}")
+    req(0 < sc.baseline_hours <= sc.healthy_hours - sc.commissioning_h,
+        "monitor.study.baseline_hours must lie in (0, healthy_hours - commissioning_h = "
+        f"{sc.healthy_hours - sc.commissioning_h:g}] h, got {sc.baseline_hours}")
 
 
 def _hash(obj) -> str:

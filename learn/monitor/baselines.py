@@ -1,0 +1,173 @@
+"""Per-window classifiers as monitors: the baselines of the monitor's evaluation table.
+
+Each labels every window on its own and raises an alarm whenever one window is classified
+as anything but healthy (the way a per-window classifier is used as a monitor):
+
+``paper_rf``
+    The paper's pipeline (Sec. III-IV): the random forest of
+    :mod:`learn.learners.baselines` (``rf``) on the Table III Selection 1 features, every
+    window normalised by *one* reference window of its gear and operating point (eq. 7) -
+    here the gear's first commissioning window at that operating point.
+``cnn_res``
+    The best per-window classifier of the transfer study (``conf/experiment/transfer.yaml``):
+    the 1D-CNN on the synchronous residual (``raw_res``, :mod:`learn.inputs.signals`)
+    against the same one reference window, with its efficiency scalars, as run there
+    (three circular conv blocks, ten epochs).
+
+Both are trained on the same lives of the training gears as the monitor's diagnosis model
+(:func:`learn.monitor.evaluate.training_lives`) and know the same classes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swgsim.life import LifeSimulator
+
+from .model import HEALTHY
+
+
+@dataclass(frozen=True)
+class BaselineSpec:
+    """A per-window baseline: its input (:data:`learn.inputs.signals.INPUTS`) and how to
+    make its untrained estimator from a seed."""
+
+    input: str
+    make: Callable[[int], object]
+    source: str
+
+
+def _paper_rf(seed: int):
+    from learn.learners.baselines import make_model
+
+    return make_model("rf", random_state=seed)
+
+
+def _cnn_res(seed: int):
+    from learn.inputs.signals import AUX
+    from learn.learners.baselines import make_pipeline
+    from learn.learners.nets import CNN1DClassifier
+
+    net = CNN1DClassifier(channels=(32, 64, 64), kernel_sizes=(7, 5, 5), strides=(2, 2, 2),
+                          padding_mode="circular", n_aux=len(AUX), max_epochs=10,
+                          device="cpu", random_state=seed)
+    return make_pipeline(net, name="cnn")
+
+
+#: The baselines, by detector name (module docstring).
+BASELINES: dict[str, BaselineSpec] = {
+    "paper_rf": BaselineSpec("sel1", _paper_rf, "paper Sec. III, Table III selection 1"),
+    "cnn_res": BaselineSpec("raw_res", _cnn_res, "transfer study, CNN on raw_res"),
+}
+
+
+@dataclass
+class References:
+    """One reference window per operating point of a gear: its first commissioning window
+    there (paper eq. 7's "value of the healthy gear").
+
+    Attributes
+    ----------
+    signal : ndarray, float32, shape (R, 5, n_t)
+        Bridge outputs [mV/V].
+    meta : dict of ndarray, shape (R,)
+        The schema's per-sample variables, ``reference`` True.
+    """
+
+    signal: np.ndarray
+    meta: dict[str, np.ndarray]
+
+    @classmethod
+    def of(cls, sim: LifeSimulator, n_commissioning: int) -> References:
+        """The references of a life's gear from its first ``n_commissioning`` windows.
+
+        Raises
+        ------
+        ValueError
+            If an operating point of the duty cycle has no commissioning window.
+        """
+        duty = sim.schedule.duty_index[:n_commissioning]
+        points, first = np.unique(duty, return_index=True)
+        if points.size != len(sim.schedule.duty):
+            raise ValueError(f"commissioning ({n_commissioning} windows) visits "
+                             f"{points.size} of {len(sim.schedule.duty)} operating points")
+        sig, meta = zip(*(sim.windows(int(i), int(i) + 1) for i in first), strict=True)
+        meta = {k: np.concatenate([m[k] for m in meta]) for k in meta[0]}
+        meta["reference"][:] = True
+        return cls(np.concatenate(sig), meta)
+
+
+def window_inputs(kind: str, signal: np.ndarray, meta: dict[str, np.ndarray],
+                  refs: References, sample_rate_hz: float) -> np.ndarray:
+    """A baseline's input for windows of a life, each against its reference.
+
+    Parameters
+    ----------
+    kind : str
+        An input of :func:`learn.inputs.signals.build_input`.
+    signal : ndarray, shape (n, 5, n_t)
+        Bridge outputs [mV/V] (:meth:`swgsim.life.LifeSimulator.windows`).
+    meta : dict of ndarray, shape (n,)
+        Their metadata, same source.
+    refs : References
+    sample_rate_hz : float
+
+    Returns
+    -------
+    ndarray, float32
+        (n, F) or (n, C, T), in window order.
+    """
+    from learn.inputs.signals import build_input
+    from swgsim.data import PER_SAMPLE, make_dataset
+
+    both = {k: np.concatenate([refs.meta[k], meta[k]]) for k in PER_SAMPLE}
+    both["reference"] = np.r_[np.ones(len(refs.signal), bool), np.zeros(len(signal), bool)]
+    ds = make_dataset(np.concatenate([refs.signal, signal]),
+                      np.arange(signal.shape[-1]) / sample_rate_hz, both)
+    return build_input(ds, kind).X
+
+
+@dataclass
+class WindowClassifier:
+    """A trained per-window baseline.
+
+    Attributes
+    ----------
+    name : str
+        Key of :data:`BASELINES`.
+    estimator : object
+        Fitted scikit-learn pipeline.
+    classes : list of str
+        Healthy first, as the diagnosis model's.
+    """
+
+    name: str
+    estimator: object
+    classes: list[str] = field(default_factory=list)
+
+    @property
+    def input(self) -> str:
+        return BASELINES[self.name].input
+
+    def labels(self, x: np.ndarray) -> np.ndarray:
+        """Index into :attr:`classes` of each window's predicted class, shape (n,)."""
+        pred = np.asarray(self.estimator.predict(x)).astype(str)
+        lookup = {c: i for i, c in enumerate(self.classes)}
+        return np.array([lookup[c] for c in pred], dtype=np.int64)
+
+
+def fit_baseline(name: str, x: np.ndarray, y: np.ndarray, classes: list[str],
+                 seed: int = 0) -> WindowClassifier:
+    """Train baseline ``name`` on inputs ``x`` (n, ...) and class names ``y`` (n,)."""
+    if classes[0] != HEALTHY:
+        raise ValueError(f"classes must start with {HEALTHY!r}, got {classes[:1]}")
+    est = BASELINES[name].make(seed)
+    est.fit(x, y)
+    return WindowClassifier(name, est, list(classes))
+
+
+__all__ = ["BASELINES", "BaselineSpec", "References", "WindowClassifier", "fit_baseline",
+           "window_inputs"]
