@@ -1,0 +1,123 @@
+"""How the monitor names a fault, compared on training gears only (no held-out gear).
+
+    python scripts/naming_study.py [--dataset bench] [--train 1] [--judge 2] [--lives 4]
+                                   [--variants 5]
+
+For a pair of *training* gears of a leave-one-gear-out split (default: gears 1 and 2, the
+training gears of held-out gear 3), the diagnosis classifier is trained on one gear's
+training lives (``--train``) and judged on the other's (``--judge``): a commissioned
+monitor of the judged gear sees ``--lives`` fault lives per class and Table V severity
+(fault positions drawn per life, as the evaluation's), and each naming rule names the
+fault from the first hour of windows after the onset. Prints the share named right per
+class and rule. The held-out gear is never simulated, so a rule chosen here is chosen
+before the evaluation sees it.
+
+Rules: ``sum`` (the monitor's: summed evidence relative to the gear's calibration
+windows), ``vote`` (the most frequent per-window argmax among the faults), ``clip``
+(summed evidence, each window's clipped to +-2 nats), ``mean_z`` (a classifier trained on
+hour means of the training gear's z-scores, applied to the hour's mean z-score).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+
+def _name_rules(mon, lp, opi, z_mean, agg_clf, classes):
+    ev = mon.evidence(lp, opi)[:, 1:]
+    out = {"sum": 1 + int(np.argmax(ev.sum(axis=0))),
+           "clip": 1 + int(np.argmax(np.clip(ev, -2, 2).sum(axis=0)))}
+    am = np.argmax(lp[:, 1:], axis=1)
+    out["vote"] = 1 + int(np.bincount(am, minlength=len(classes) - 1).argmax())
+    out["mean_z"] = 1 + int(np.argmax(agg_clf.predict_proba(z_mean[None])[0][1:]))
+    return {k: classes[v] for k, v in out.items()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dataset", default="bench")
+    ap.add_argument("--train", type=int, default=1)
+    ap.add_argument("--judge", type=int, default=2)
+    ap.add_argument("--lives", type=int, default=4)
+    ap.add_argument("--variants", type=int, default=None,
+                    help="training fault positions per class and severity (default: the "
+                    "evaluation's, MonitorStudyConfig.train_variants)")
+    args = ap.parse_args()
+
+    from sklearn.ensemble import HistGradientBoostingClassifier
+
+    from learn.monitor.evaluate import (
+        MonitorStudyConfig,
+        classes,
+        features_of,
+        table_v_severities,
+        training_lives,
+    )
+    from learn.monitor.model import HEALTHY, Baseline, DiagnosisModel, design_matrix
+    from learn.monitor.monitor import GearMonitor, baseline_windows
+    from swgcli import dataset_preset
+    from swgsim.life import FaultOnset, LifeConfig, LifeSimulator, RecordBank
+    from swgsim.plan import plan
+
+    p = plan(dataset_preset(args.dataset))
+    cfg = MonitorStudyConfig()
+    if args.variants is not None:
+        cfg.train_variants = args.variants
+    cls = classes(p, cfg)
+    n_comm = int(cfg.commissioning_h * 60)
+    bank = RecordBank(p, args.train)
+    lives = training_lives(p, bank, args.train, cfg)
+    f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
+    fit = baseline_windows(p0[:n_comm])
+    base = Baseline.fit(f0[:n_comm][fit], p0[:n_comm][fit])
+    xs, ys, agg_x, agg_y = [], [], [], []
+    rng = np.random.default_rng(0)
+    for sim, c, _ in lives:
+        f, q = (f0[n_comm:], p0[n_comm:]) if c == HEALTHY else features_of(sim, 1, len(sim))[:2]
+        z = base.z(f, q)
+        xs.append(design_matrix(z, q))
+        ys += [cls.index(c)] * len(f)
+        for _ in range(10):  # hour means of random halves of the life's windows
+            idx = rng.choice(len(z), max(2, len(z) // 2), replace=False)
+            agg_x.append(z[idx].mean(axis=0))
+            agg_y.append(cls.index(c))
+    clf = HistGradientBoostingClassifier(max_iter=200, early_stopping=False, random_state=0)
+    clf.fit(np.concatenate(xs), np.array(ys))
+    agg = HistGradientBoostingClassifier(max_iter=200, early_stopping=False,
+                                         random_state=0).fit(np.array(agg_x), np.array(agg_y))
+    model = DiagnosisModel(cls, clf)
+
+    jb = RecordBank(p, args.judge)
+    healthy = LifeSimulator(p, args.judge, LifeConfig(hours=cfg.commissioning_h + 1,
+                                                      life_seed=7), jb)
+    fh, ph, _ = features_of(healthy, 0, n_comm)
+    mon = GearMonitor(model, cfg.rule, 1.0)
+    mon.commission(fh, ph)
+    right: dict[tuple[str, str], list[bool]] = {}
+    k = 0
+    for c in cls[1:]:
+        for s in table_v_severities(p, c):
+            for _ in range(args.lives):
+                k += 1
+                on = cfg.commissioning_h + 1.0
+                life = LifeConfig(hours=on + 1.0, life_seed=5000 + k,
+                                  fault=FaultOnset(c, on, s))
+                sim = LifeSimulator(p, args.judge, life, jb)
+                a = int(np.searchsorted(sim.schedule.hour, on))
+                f, q, _ = features_of(sim, a, len(sim))
+                opi = mon.baseline.index(q)
+                _, lp = mon.scores(f, q, opi)
+                z = mon.baseline.z(f, q, opi)
+                for rule, name in _name_rules(mon, lp, opi, z.mean(axis=0), agg, cls).items():
+                    right.setdefault((c, rule), []).append(name == c)
+        print(c, {r: f"{np.mean(v):.2f}" for (cc, r), v in right.items() if cc == c},
+              flush=True)
+    rules = sorted({r for _, r in right})
+    print("all", {r: f"{np.mean([x for (c, rr), v in right.items() if rr == r for x in v]):.3f}"
+                  for r in rules})
+
+
+if __name__ == "__main__":
+    main()
