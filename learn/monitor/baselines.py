@@ -15,7 +15,8 @@ as anything but healthy (the way a per-window classifier is used as a monitor):
     (three circular conv blocks, ten epochs).
 
 Both are trained on the same lives of the training gears as the monitor's diagnosis model
-(:func:`learn.monitor.evaluate.training_lives`) and know the same classes.
+(:func:`learn.monitor.evaluate.training_lives`), class-balanced as the paper's data set
+(every class drawn down to the smallest's count), and know the same classes.
 """
 
 from __future__ import annotations

@@ -216,7 +216,8 @@ def _inputs(sim: LifeSimulator, start: int, stop: int, refs: References, kinds: 
 def train_baselines(plan, banks: dict[int, RecordBank], gears: list[int],
                     cfg: MonitorStudyConfig, seed: int = 0) -> list[WindowClassifier]:
     """The per-window baselines (:mod:`.baselines`) trained on the windows the diagnosis
-    model is trained on (:func:`train_model`), each against its gear's references."""
+    model is trained on (:func:`train_model`), each against its gear's references, as
+    many of each class (:func:`_balanced`)."""
     if not cfg.baselines:
         return []
     kinds = {BASELINES[b].input for b in cfg.baselines}
@@ -232,8 +233,20 @@ def train_baselines(plan, banks: dict[int, RecordBank], gears: list[int],
                 xs[k].append(x[k])
             ys.append(np.full(len(x[next(iter(kinds))]), c, object))
     y = np.concatenate(ys).astype(str)
-    return [fit_baseline(b, np.concatenate(xs[BASELINES[b].input]), y, classes(plan, cfg), seed)
-            for b in cfg.baselines]
+    keep = _balanced(y, seed)
+    return [fit_baseline(b, np.concatenate(xs[BASELINES[b].input])[keep], y[keep],
+                         classes(plan, cfg), seed) for b in cfg.baselines]
+
+
+def _balanced(y: np.ndarray, seed: int) -> np.ndarray:
+    """Indices of an equal number of windows of every class (that of the smallest class,
+    drawn from the seed, kept in order): a class-balanced training set like the paper's
+    data set, not one in which 15 fault positions per class outnumber healthy windows."""
+    rng = np.random.default_rng([seed, 11])
+    names, counts = np.unique(y, return_counts=True)
+    n = int(counts.min())
+    return np.sort(np.concatenate([rng.choice(np.flatnonzero(y == c), n, replace=False)
+                                   for c in names]))
 
 
 def fault_lives(plan, cfg: MonitorStudyConfig, seed: int) -> list[tuple[FaultOnset, str]]:
