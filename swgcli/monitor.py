@@ -71,6 +71,7 @@ def run_monitor_app(cfg) -> dict:
         from learn.tracking import check_tracking
 
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
+        logging.getLogger("mlflow").setLevel(logging.WARNING)  # no INFO lines on the console
         mlflow.set_tracking_uri(app.logger.tracking_uri)
         mlflow.set_experiment(app.logger.experiment)
         with mlflow.start_run(run_name=app.logger.run_name):

@@ -179,6 +179,9 @@ def register() -> None:
         cs.store(group="features", name=name, node=FeatureSettings(name=name, selection=k))
     cs.store(group="paths", name="default", node=PathsConfig)
     cs.store(group="logger", name="mlflow", node=LoggerConfig)
+    # swgsim-monitor's tracking as a group option, so that `~logger` removes all of it
+    cs.store(group="logger", name="monitor_stream",
+             node=LoggerConfig(experiment="monitor_stream", run_name="monitor"))
     for table, spec in PAPER_TABLES.items():
         cs.store(group="experiment", name=f"table_{table.lower()}", package="_global_", node={
             "defaults": [{"override /protocol": spec.protocol}],

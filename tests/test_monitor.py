@@ -155,7 +155,7 @@ def test_per_window_baselines_beside_the_monitor(tiny_eval):
         assert (det.time_to_detect_h >= 0).all()
 
 
-def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path):
+def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch):
     """swgsim-monitor on a life written by swgsim-generate (preset tiny_life, gear 3: an
     eccentric WG of severity 0.1 from 6 h on) with the model trained without gear 3."""
     import json
@@ -174,7 +174,9 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path):
     app = compose_app("monitor", [f"stream={tmp_path / 'life'}",
                                   f"diagnosis_model={tmp_path / 'model.joblib'}",
                                   f"out_dir={tmp_path / 'out'}", "~logger"])
+    monkeypatch.chdir(tmp_path)  # where a default tracking store would land
     out = run_monitor_app(app)
+    assert not (tmp_path / "mlflow.db").exists()  # ~logger: no tracking
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["alarms"] == out["alarms"] and len(summary["alarms"]) == 1
     alarm = summary["alarms"][0]

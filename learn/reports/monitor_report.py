@@ -199,10 +199,13 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
                     label=f"monitor, {ds} (design 1 per 1-1000 h)")
             ax.plot(1000 / rate.index.to_numpy(float), med.reindex(rate.index), ":",
                     color=f"C{i}", lw=0.8)
-    for j, ((ds, d), v) in enumerate(fat.items()):
+    others = [d for d in dict.fromkeys(fat.index.get_level_values(1)) if d != "monitor"]
+    sets = list(dict.fromkeys(fat.index.get_level_values(0)))
+    for (ds, d), v in fat.items():
         if d == "monitor":
             continue
-        ax.plot(max(v, floor), ttd.get((ds, d), np.nan), "s", ms=4, color=f"C{2 + j % 6}",
+        ax.plot(max(v, floor), ttd.get((ds, d), np.nan), "s^Dv"[sets.index(ds) % 4], ms=5,
+                color=f"C{2 + others.index(d) % 8}", alpha=0.8,
                 label=f"{d.replace('_', '-')}, {ds}")
     ax.set_xscale("log")
     ax.axvline(1.0, color="0.5", lw=0.8, ls="--")
