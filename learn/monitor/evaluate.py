@@ -272,11 +272,22 @@ def _per_window(lp: np.ndarray) -> np.ndarray:
     return np.argmax(lp, axis=1) != 0
 
 
-def _baseline_labels(sim: LifeSimulator, start: int, stop: int, refs: References,
-                     baselines: list[WindowClassifier]) -> dict[str, np.ndarray]:
-    """Each baseline's class index (0: healthy) of windows ``start:stop``."""
-    x = _inputs(sim, start, stop, refs, {b.input for b in baselines})
-    return {b.name: b.labels(x[b.input]) for b in baselines}
+class _Labeller:
+    """``on_block`` of :func:`features_of`: each baseline's class index (0: healthy) of
+    the blocks it is handed, from their signals (no window simulated twice)."""
+
+    def __init__(self, refs: References, baselines: list[WindowClassifier], fs: float):
+        self.refs, self.baselines, self.fs = refs, baselines, fs
+        self.out: dict[str, list] = {b.name: [] for b in baselines}
+
+    def __call__(self, sig: np.ndarray, meta: dict) -> None:
+        x = {k: window_inputs(k, sig, meta, self.refs, self.fs)
+             for k in {b.input for b in self.baselines}}
+        for b in self.baselines:
+            self.out[b.name].append(b.labels(x[b.input]))
+
+    def labels(self) -> dict[str, np.ndarray]:
+        return {d: np.concatenate(v) for d, v in self.out.items()}
 
 
 def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: str,
@@ -295,19 +306,25 @@ def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: 
             base, hours=f.onset_h + cfg.horizon_h, fault=f), banks[g]), f, kind)
             for f, kind in lives]
         healthy = LifeSimulator(plan, g, base, banks[g])
-        f, p, meta = features_of(healthy, 0, len(healthy))
+        n_scored = min(len(healthy), n_comm + n_base) if baselines else n_comm
+        refs = References.of(healthy, n_comm) if baselines else None
+        scored = _Labeller(refs, list(baselines), plan.config.chain.sample_rate_hz) \
+            if baselines else None
+        parts = [features_of(healthy, 0, n_comm),  # the baselines' blocks start after it
+                 features_of(healthy, n_comm, n_scored, on_block=scored),
+                 features_of(healthy, n_scored, len(healthy))]
+        parts = [q for q in parts if len(q[0])]
+        f, p = (np.concatenate([q[i] for q in parts]) for i in (0, 1))
+        meta = {k: np.concatenate([q[2][k] for q in parts]) for k in parts[0][2]}
         mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed))
         mon.commission(f[:n_comm], p[:n_comm])
         tr = mon.run(f[n_comm:], p[n_comm:], meta["hour"][n_comm:], latch=False)
         hours_h = cfg.healthy_hours - cfg.commissioning_h
         counts = [("monitor", hours_h, len(tr.alarms)),
                   ("per_window", hours_h, int(_per_window(tr.log_proba).sum()))]
-        refs = References.of(healthy, n_comm) if baselines else None
         if baselines:
-            stop = min(len(healthy), n_comm + n_base)
-            lab = _baseline_labels(healthy, n_comm, stop, refs, list(baselines))
-            counts += [(b, (stop - n_comm) * cfg.interval_min / 60, int(np.sum(v != 0)))
-                       for b, v in lab.items()]
+            counts += [(b, (n_scored - n_comm) * cfg.interval_min / 60, int(np.sum(v != 0)))
+                       for b, v in scored.labels().items()]
         counts.append(("always", hours_h, len(tr.score)))
         key = {"dataset": dataset, "held_out_gear": g, "seed": seed}
         fa_rows += [{**key, "detector": d, "healthy_hours": h, "false_alarms": n}
@@ -376,7 +393,12 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start, cfg: Monit
     state = start
     for a in range(k0, len(sim), chunk):
         b = min(a + chunk, len(sim))
-        f, p, m = features_of(sim, a, b)
+        last_start = float(sim.schedule.hour[a])
+        pending = [x for x in baselines if first[x.name] is None
+                   or last_start <= first[x.name] + mon.confirm_h]
+        lab = _Labeller(refs, pending, sim.plan.config.chain.sample_rate_hz) \
+            if pending else None
+        f, p, m = features_of(sim, a, b, on_block=lab)
         t = mon.run(f, p, m["hour"], latch=True, start=state) if first["monitor"] is None \
             else mon.score_only(f, p, m["hour"])
         if first["monitor"] is None and t.alarms:
@@ -384,10 +406,8 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start, cfg: Monit
         elif first["monitor"] is None:
             state = t.cusums[-1]
         last = float(m["hour"][-1])
-        pending = [x for x in baselines if first[x.name] is None
-                   or float(m["hour"][0]) <= first[x.name] + mon.confirm_h]
         chunk_labels = {"per_window": np.argmax(t.log_proba, axis=1),
-                        **(_baseline_labels(sim, a, b, refs, pending) if pending else {})}
+                        **(lab.labels() if lab else {})}
         for d in labels:
             lab = chunk_labels.get(d, np.full(b - a, -1))
             labels[d].append(lab)
