@@ -19,7 +19,7 @@ from typing import Any
 
 from swgsim import data as dsio
 
-from .friction.data import REQUIRED_COLUMNS, FrictionRecording
+from .friction.data import REQUIRED_COLUMNS, FrictionRecording, read_csv_header
 from .loop import CalibrationResult, Problem, SelectionConfig
 from .options import build, plain
 
@@ -71,10 +71,11 @@ def detect_kind(path: str | Path) -> str:
             return "strain"
         raise MeasuredDataError(f"{str(p)!r} is a directory without manifest.json; {expected}")
     try:
-        with p.open(encoding="utf-8", errors="replace") as fh:
-            header = [h.strip() for h in fh.readline().split(",")]
+        header = read_csv_header(p)
     except OSError as e:
         raise MeasuredDataError(f"cannot read {str(p)!r}: {e}; {expected}") from e
+    except ValueError as e:
+        raise MeasuredDataError(f"{e}; {expected}") from None
     if all(c in header for c in REQUIRED_COLUMNS):
         return "friction"
     raise MeasuredDataError(f"{str(p)!r} is not a friction CSV (header {header[:8]}); "

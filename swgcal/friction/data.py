@@ -13,11 +13,15 @@ squares is well posed); the baseline is the paper's law on the joint
 
 from __future__ import annotations
 
+import csv
+import itertools
 import logging
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
+from scipy.integrate import cumulative_trapezoid
 from scipy.signal import savgol_filter
 
 from swgsim.friction.signals import FrictionSignals, Scales
@@ -28,7 +32,10 @@ log = logging.getLogger(__name__)
 
 __all__ = [
     "FrictionRecording",
+    "VelocityConsistency",
     "load_friction_csv",
+    "read_csv_header",
+    "velocity_consistency",
     "write_friction_csv",
     "estimate_acceleration",
     "REQUIRED_COLUMNS",
@@ -161,11 +168,25 @@ def estimate_acceleration(t_s: np.ndarray, dq: np.ndarray, n_window: int = 21) -
     return np.interp(t_s, tu, au)
 
 
-#: Largest allowed RMS difference between ``dq_rad_per_s`` and the time derivative of
-#: ``q_rad``, relative to the RMS of ``dq_rad_per_s`` [-]. The six real recordings in
-#: ``shared/data/joint_friction`` lie at 0.02-0.12 (derivative noise); a velocity in deg/s
-#: beside an angle in rad, a swapped column or a frozen angle gives about 1 or more.
+#: Consistency figure (:func:`velocity_consistency`) above which a recording is refused:
+#: its velocity is not the time derivative of its angle [-]. Measured on the six real
+#: recordings in ``shared/data/joint_friction``: 0.005-0.091 as published (0.091: the
+#: spiral file's velocity offset, 9 % of its RMS); at most 0.091, 0.096 and 0.28 with the
+#: angle rounded to a 14-, 12- or 10-bit output encoder (2π/16384, 2π/4096, 2π/1024 rad);
+#: at most 0.091, 0.154 and 0.307 with the velocity low-passed by a causal second-order
+#: Butterworth filter at 5, 2 or 1 Hz (zero-phase filtering changes nothing). Errors: a
+#: velocity scaled by 2 or 1/2 gives 0.63-0.71, of the wrong sign 1.77-2.0, in deg/s
+#: beside an angle in rad 6.6-7.4, q and dq swapped 1.01-6.7, dq and tau swapped
+#: 0.56-28, an angle frozen half-way 0.74-0.95. (The former check, RMS(dq − d/dt q) /
+#: RMS(dq) at most 0.5, gave 0.02-0.12 as published but 0.22-2.2 at 14 bit and
+#: 0.87-4.5 at 12 bit, and 0.50 for a velocity scaled by 2.)
 DQ_CONSISTENCY_TOL = 0.5
+#: Consistency figure above which the check is unsure [-]: the recording is accepted, with
+#: a note and one warning. Between this and :data:`DQ_CONSISTENCY_TOL` lie a lagging
+#: velocity filter (1 Hz on the fastest real recording: 0.307), an angle of a few encoder
+#: counts (10 bit on the smallest real excursion, 0.015 rad: 0.28) and a velocity scale
+#: off by a factor 1.2-1.6 (|1 − k| / √k), which the figure cannot tell apart.
+DQ_CONSISTENCY_SURE = 0.2
 #: Fewest rows a friction recording must keep after cleaning.
 MIN_ROWS = 100
 
@@ -177,8 +198,9 @@ def load_friction_csv(path: str | Path,
     Parameters
     ----------
     path : str or Path
-        CSV with the columns ``time_s, q_rad, dq_rad_per_s, tau_friction_Nm`` and
-        optionally ``ddq_rad_per_s2`` and ``load_Nm``.
+        CSV (RFC 4180: quoted fields allowed; UTF-8, with or without a byte-order mark)
+        with the columns ``time_s, q_rad, dq_rad_per_s, tau_friction_Nm`` and optionally
+        ``ddq_rad_per_s2`` and ``load_Nm``, in any order; other columns are ignored.
     accel_window : int, default 21
         Window of :func:`estimate_acceleration`, used when ``ddq_rad_per_s2`` is absent
         or identically zero (the Franka files).
@@ -186,24 +208,25 @@ def load_friction_csv(path: str | Path,
     Returns
     -------
     FrictionRecording
-        Rows with non-finite values are dropped, and rows repeating the previous time
-        stamp; both are counted in ``notes``, with the measured velocity consistency.
+        Rows with non-finite or non-numeric values are dropped, and rows repeating the
+        previous time stamp; both are counted in ``notes``, with the measured velocity
+        consistency (:func:`velocity_consistency`), which says so where it is unsure.
 
     Raises
     ------
     FileNotFoundError
     ValueError
-        Naming the file: not a text CSV, a required column missing, rows of another
-        length, no usable rows or fewer than :data:`MIN_ROWS`, time going backwards, an
-        angle that stays constant while the velocity does not, or a velocity that is
-        not the derivative of the angle (relative RMS difference above
-        :data:`DQ_CONSISTENCY_TOL`).
+        Naming the file: not a UTF-8 text CSV, a column named twice, a required column
+        missing, rows of another length than the header, no usable rows or fewer than
+        :data:`MIN_ROWS`, time going backwards, an angle that stays constant while the
+        velocity does not, or a velocity that is not the derivative of the angle
+        (consistency figure above :data:`DQ_CONSISTENCY_TOL` after discounting the
+        angle's quantisation).
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"friction CSV not found: {path}")
-    header = _read_header(path)
-    cols = _read_columns(path, header)
+    cols = _read_columns(path)
     notes: list[str] = []
     sel = _usable_rows(path, cols, notes)
     t = cols["time_s"][sel]
@@ -223,44 +246,78 @@ def load_friction_csv(path: str | Path,
         name=path.stem, ddq_source=source, notes=tuple(notes))
 
 
-def _read_header(path: Path) -> list[str]:
-    """The header of a friction CSV, checked for the required columns and a data row."""
-    import csv
+def read_csv_header(path: str | Path) -> list[str]:
+    """Column names in the header row of a CSV file, as a CSV reader reads them.
 
+    Parameters
+    ----------
+    path : str or Path
+        UTF-8 text (a byte-order mark, as Excel's "CSV UTF-8" writes, is skipped); RFC
+        4180 quoting is undone (``"time_s"`` names ``time_s``).
+
+    Returns
+    -------
+    list of str
+        The names, stripped of surrounding blanks; empty for an empty file.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: not UTF-8 text, or not readable as CSV.
+    """
+    rows = _read_rows(Path(path), header_only=True)
+    return [h.strip() for h in rows[0]] if rows else []
+
+
+def _read_rows(path: Path, header_only: bool = False) -> list[list[str]]:
+    """The CSV records of ``path`` (csv module, ``utf-8-sig``: BOM and quoting undone)."""
     try:
-        with path.open(newline="", encoding="utf-8") as fh:
-            header = next(csv.reader(fh), [])
-            has_rows = any(line.strip() for line in fh)
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh)
+            return list(itertools.islice(reader, 1)) if header_only else list(reader)
     except UnicodeDecodeError as e:
-        raise ValueError(f"{path}: not a text CSV ({e.reason} at byte {e.start})") from None
-    header = [h.strip() for h in header]
+        raise ValueError(f"{path}: not a text CSV (UTF-8 expected; {e.reason}: "
+                         f"{e.object[e.start:e.end]!r})") from None
+    except csv.Error as e:
+        raise ValueError(f"{path}: not a text CSV ({e})") from None
+
+
+def _line_of(path: Path, record: int) -> int:
+    """The line on which record number ``record`` (0: the header) of the CSV ends."""
+    with path.open(newline="", encoding="utf-8-sig") as fh:
+        reader = csv.reader(fh)
+        for _ in itertools.islice(reader, record + 1):
+            pass
+        return reader.line_num
+
+
+def _read_columns(path: Path) -> dict[str, np.ndarray]:
+    """The known columns of the CSV by name (all rows, as floats; NaN where a cell is not
+    a number), after checking the header and the row lengths."""
+    rows = _read_rows(path)
+    header = [h.strip() for h in rows[0]] if rows else []
+    named = [h for h in header if h]
+    twice = sorted({h for h in named if named.count(h) > 1})
+    if twice:
+        raise ValueError(f"{path}: column(s) {twice} named more than once in the header "
+                         f"{header}; each column must be named once")
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     if missing:
         raise ValueError(f"{path}: not a friction CSV: missing columns {missing}; expected "
                          f"{list(REQUIRED_COLUMNS)} (+ optional {list(OPTIONAL_COLUMNS)}), "
                          f"found {header}")
-    if not has_rows:
+    body = [r for r in rows[1:] if "".join(r).strip()]  # blank lines left out
+    if not body:
         raise ValueError(f"{path}: no data rows below the header")
-    return header
-
-
-def _read_columns(path: Path, header: list[str]) -> dict[str, np.ndarray]:
-    """Every column of the CSV by its header name (all rows, as read)."""
-    try:
-        data = np.genfromtxt(path, delimiter=",", skip_header=1, dtype=float,
-                             encoding="utf-8")
-    except ValueError as e:
-        first = str(e).strip().splitlines()
-        raise ValueError(f"{path}: rows of another length than the header "
-                         f"({first[-1].strip() if first else e})") from None
-    if data.size == 0:
-        raise ValueError(f"{path}: no data rows below the header")
-    if data.ndim == 1:
-        data = data[None, :]
-    if data.shape[1] != len(header):
-        raise ValueError(f"{path}: {data.shape[1]} columns per row, header names "
-                         f"{len(header)}")
-    return {h: data[:, i] for i, h in enumerate(header)}
+    bad = [i for i, r in enumerate(rows) if len(r) != len(header) and "".join(r).strip()]
+    if bad:
+        raise ValueError(f"{path}: rows of another length than the header: line "
+                         f"{_line_of(path, bad[0])} has {len(rows[bad[0]])} fields, the header "
+                         f"names {len(header)} ({len(bad)} of {len(body)} rows differ)")
+    cells = np.array(body, dtype=object)
+    known = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
+    return {h: np.asarray(pd.to_numeric(cells[:, i], errors="coerce"), dtype=float)
+            for i, h in enumerate(header) if h in known}
 
 
 def _usable_rows(path: Path, cols: dict[str, np.ndarray], notes: list[str]) -> np.ndarray:
@@ -291,23 +348,126 @@ def _usable_rows(path: Path, cols: dict[str, np.ndarray], notes: list[str]) -> n
     return sel
 
 
+@dataclass(frozen=True)
+class VelocityConsistency:
+    """How far a velocity is from the time derivative of an angle
+    (:func:`velocity_consistency`); all figures are dimensionless.
+
+    Attributes
+    ----------
+    figure : float
+        ``hypot(shape, offset)``; compared with :data:`DQ_CONSISTENCY_SURE` and
+        :data:`DQ_CONSISTENCY_TOL`.
+    shape : float
+        RMS of the angle minus the integrated velocity, after the best-fit offset and
+        linear drift, relative to the geometric mean of the RMS excursions (about the
+        mean) of the angle and of the integrated velocity.
+    offset : float
+        The fitted drift, a constant velocity offset, relative to the RMS velocity.
+    quantisation : float
+        Part of ``shape`` expected from rounding the angle alone: (resolution / √12)
+        relative to the same excursion.
+    resolution_rad : float
+        Smallest step between distinct angle values [rad] (the encoder count, or the
+        file's printed precision).
+    """
+
+    figure: float
+    shape: float
+    offset: float
+    quantisation: float
+    resolution_rad: float
+
+
+def velocity_consistency(t_s: np.ndarray, q_rad: np.ndarray,
+                         dq_rad_s: np.ndarray) -> VelocityConsistency:
+    """Compare an angle with the time integral of a velocity.
+
+    The velocity is integrated by the cumulative trapezoid rule (irregular sampling is
+    fine) and subtracted from the angle; the best-fit offset and linear drift (a
+    constant velocity offset: sensor bias, time-stamp skew) are removed from the
+    difference by least squares. Integrating averages the angle's quantisation and the
+    velocity's noise instead of amplifying them as differentiating the angle does; a
+    velocity filter lagging by τ adds about τ·RMS(q̇) relative to the excursion. (The
+    white noise of an independent velocity sensor integrates to a random walk, so a
+    very long recording of a noisy tachometer scores higher; a velocity derived from
+    the angle integrates back to it.)
+
+    ``shape`` is normalised by the geometric mean of both excursions, so that a
+    velocity (or angle) scaled by k gives |1 − k| / √k whichever column is wrong (k = 2
+    or 1/2: 0.71, k = 180/π: 7.4), a sign error 2 and an unrelated column at least √2;
+    ``offset`` catches what the drift could absorb (on an angle ramp, a wrong scale or
+    sign is all drift).
+
+    Parameters
+    ----------
+    t_s : ndarray, shape (n,)
+        Time, strictly increasing [s].
+    q_rad : ndarray, shape (n,)
+        Angle [rad], not constant.
+    dq_rad_s : ndarray, shape (n,)
+        Velocity [rad/s], not identically zero.
+
+    Returns
+    -------
+    VelocityConsistency
+        Figures are infinite (or NaN) where the angle is constant or the velocity zero.
+    """
+    integral = cumulative_trapezoid(dq_rad_s, t_s, initial=0.0)
+    basis = np.column_stack([np.ones_like(t_s), t_s - t_s.mean()])
+    coef, *_ = np.linalg.lstsq(basis, q_rad - integral, rcond=None)
+    rest = q_rad - integral - basis @ coef
+    excursion = np.sqrt(_rms(q_rad - q_rad.mean()) * _rms(integral - integral.mean()))
+    steps = np.diff(np.unique(q_rad))
+    resolution = float(steps.min()) if steps.size else 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):  # inf: constant angle, zero velocity
+        shape = float(_rms(rest) / excursion)
+        offset = float(abs(coef[1]) / np.float64(_rms(dq_rad_s)))
+        quantisation = float(resolution / np.sqrt(12) / excursion)
+    return VelocityConsistency(figure=float(np.hypot(shape, offset)), shape=shape,
+                               offset=offset, quantisation=quantisation,
+                               resolution_rad=resolution)
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(x))))
+
+
 def _check_velocity(path: Path, t: np.ndarray, q: np.ndarray, dq: np.ndarray,
                     notes: list[str]) -> None:
     """The angle moves with the velocity and the velocity is its time derivative
-    (:data:`DQ_CONSISTENCY_TOL`); the consistency is appended to ``notes``."""
-    dq_rms = float(np.sqrt(np.mean(dq ** 2)))
+    (:func:`velocity_consistency`): refused above :data:`DQ_CONSISTENCY_TOL` once the
+    angle's quantisation is discounted (in quadrature), noted as unsure with one warning
+    above :data:`DQ_CONSISTENCY_SURE`; the figures are appended to ``notes``."""
+    dq_rms = _rms(dq)
     if np.ptp(q) <= 1e-12 * max(1.0, float(np.abs(q).max())) and dq_rms > 0:
         raise ValueError(f"{path}: q_rad stays at {q[0]:g} rad while dq_rad_per_s has RMS "
                          f"{dq_rms:.3g} rad/s; the angle must move with the velocity")
-    if dq_rms > 0:
-        mismatch = float(np.sqrt(np.mean((dq - np.gradient(q, t)) ** 2)) / dq_rms)
-        if mismatch > DQ_CONSISTENCY_TOL:
-            raise ValueError(
-                f"{path}: dq_rad_per_s is not the time derivative of q_rad: their RMS "
-                f"difference is {mismatch:.2f} of the velocity's RMS (allowed "
-                f"{DQ_CONSISTENCY_TOL}); check units (rad, rad/s) and column order")
-        notes.append(f"velocity consistency: RMS(dq - d/dt q) / RMS(dq) = {mismatch:.3f} "
-                     f"(allowed {DQ_CONSISTENCY_TOL})")
+    if dq_rms == 0:
+        return  # a joint that never moves is refused by FrictionRecording.signals
+    c = velocity_consistency(t, q, dq)
+    beyond_rounding = float(np.sqrt(max(c.figure ** 2 - c.quantisation ** 2, 0.0)))
+    parts = (f"RMS(q - integral of dq) {c.shape:.3f} of the excursion after offset and drift, "
+             f"velocity offset {c.offset:.3f} of RMS(dq)")
+    if c.quantisation >= 0.01:
+        parts += (f", of which the angle's {c.resolution_rad:.3g} rad resolution explains "
+                  f"{c.quantisation:.3f}")
+    if beyond_rounding > DQ_CONSISTENCY_TOL:
+        raise ValueError(
+            f"{path}: dq_rad_per_s is not the time derivative of q_rad: consistency figure "
+            f"{c.figure:.2f} ({parts}; allowed {DQ_CONSISTENCY_TOL}); check units (rad, "
+            "rad/s), sign and column order")
+    if c.figure > DQ_CONSISTENCY_SURE:
+        notes.append(
+            f"velocity consistency unsure: figure {c.figure:.3f} ({parts}); above "
+            f"{DQ_CONSISTENCY_SURE} a lagging velocity filter, an angle of few encoder counts "
+            "or a velocity scale off by 1.2-1.6x look alike (refused above "
+            f"{DQ_CONSISTENCY_TOL} once the angle's resolution is discounted); check units "
+            "and that dq_rad_per_s is the time derivative of q_rad")
+        log.warning("%s: %s", path.name, notes[-1])
+    else:
+        notes.append(f"velocity consistency: figure {c.figure:.3f} ({parts}; unsure above "
+                     f"{DQ_CONSISTENCY_SURE}, refused above {DQ_CONSISTENCY_TOL})")
 
 
 def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:
