@@ -12,17 +12,23 @@ defaults from ``DatasetConfig()`` (or :func:`paper_config` as plain data).
 unknown, missing or mistyped key with its full name, e.g.
 ``dataset.chain.windows_s: unknown key; allowed: sample_rate_hz, window_s, ...``, and
 :func:`build` makes the typed object. Ranges and physical validity are checked once, by
-:func:`swgsim.plan.plan`.
+:func:`swgsim.plan.plan`, which first refuses NaN and infinity in every float of the tree
+(:func:`check_finite`): every comparison with NaN is false, so NaN passes a range check
+written ``if v < lo or v > hi: raise``, and any key that has no range check.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
+import numbers
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Union
+
+import numpy as np
 
 from .acquisition import Acquisition, Amplifier  # noqa: F401 - Amplifier: a schema part
 from .chain import ChainSettings
@@ -335,6 +341,68 @@ def build(value: Any, tp: Any) -> Any:
     if tp is float:
         return float(value)
     return value
+
+
+# ------------------------------------------------------------------- finiteness
+#: Key of a field's metadata that lets it hold NaN or infinity, with the reason as its value:
+#: ``field(default=..., metadata={NONFINITE: "inf: no cut-off"})``. No field of
+#: :class:`DatasetConfig` or :class:`~swgsim.life.LifeConfig` sets it.
+NONFINITE = "nonfinite"
+
+
+def _nonfinite(value: Any, where: str) -> Iterator[tuple[str, Any]]:
+    """(full key, value) of every NaN or infinity in ``value``, depth first, in field order.
+
+    Dataclasses are walked field by field (a field whose metadata holds :data:`NONFINITE`
+    is skipped), mappings by key, lists and tuples by index, arrays element by element;
+    integers, booleans, strings and None are finite by nature.
+    """
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        for f in dataclasses.fields(value):
+            if NONFINITE not in f.metadata:
+                yield from _nonfinite(getattr(value, f.name), f"{where}.{f.name}")
+    elif isinstance(value, Mapping):
+        for k, v in value.items():
+            yield from _nonfinite(v, f"{where}.{k}")
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            yield from _nonfinite(v, f"{where}[{i}]")
+    elif isinstance(value, np.ndarray):
+        if value.dtype.kind in "fc":
+            for idx in np.argwhere(~np.isfinite(value)):
+                yield f"{where}[{', '.join(str(int(i)) for i in idx)}]", value[tuple(idx)]
+        elif value.dtype.kind == "O":
+            for idx in np.ndindex(value.shape):
+                yield from _nonfinite(value[idx], f"{where}[{', '.join(map(str, idx))}]")
+    elif (isinstance(value, numbers.Real) and not isinstance(value, numbers.Integral)
+          and not math.isfinite(value)):
+        yield where, value
+
+
+def check_finite(obj: Any, where: str) -> None:
+    """Refuse NaN and infinity in any float of a config tree, naming its full key.
+
+    Every float is checked, whatever its key: in nested dataclasses, lists, tuples, dicts
+    and arrays, and in fields typed ``Any`` (e.g. ``sensor_effects[i].params``), unless
+    the dataclass field declares otherwise in its metadata (:data:`NONFINITE`). A NaN
+    can arrive as ``.nan`` in YAML, ``nan`` on the command line or from a program; it is
+    refused here, before any range check compares with it.
+
+    Parameters
+    ----------
+    obj : Any
+        The config: a dataclass (e.g. :class:`DatasetConfig`), a mapping, a list, ...
+    where : str
+        Full name of ``obj`` for the message, e.g. ``"dataset"``.
+
+    Raises
+    ------
+    ValueError
+        One line naming the first non-finite value by its full key, e.g.
+        ``dataset.sensors.grid_length_mm must be a finite number, got nan``.
+    """
+    for key, value in _nonfinite(obj, where):
+        raise ValueError(f"{key} must be a finite number, got {value}")
 
 
 def dataset_config(cfg: Mapping[str, Any] | DatasetConfig | None = None) -> DatasetConfig:

@@ -28,6 +28,13 @@ n_in_mean_rpm          (sample)                float64  rpm     acting input spe
 t_out_mean_nm          (sample)                float64  N m     acting output torque
 =====================  ======================  =======  ======  ==========================
 
+Content is checked where it is written and where it is read: :func:`write_shard` refuses a
+shard whose signals hold NaN or infinity, and :func:`load` (``check=True``) refuses a shard
+that lacks a variable of the schema, holds a variable of the wrong dims or dtype, a
+non-finite signal, a fault label that is not a class of the schema, or metadata that
+contradicts ``manifest.json`` (:func:`check_shard`), each in one line naming the file and
+the variable.
+
 ``reference`` marks the commissioning windows: one recording of each gear while known to
 be healthy, per operating point and per clean/disturbed, taken before the gear is put into
 service. Features are normalised by them (paper eq. 7); they are never training or test
@@ -69,10 +76,23 @@ PER_SAMPLE = {
     "t_out_mean_nm": ("float64", "N m"),
 }
 MANIFEST = "manifest.json"
+#: The signal variables: every value finite (refused on write and on load).
+SIGNALS = ("strain_signal",)
+#: Fault labels of the schema besides the registered classes: measured data's unknown state.
+EXTRA_LABELS = ("unknown",)
+_DIMS = {"strain_signal": ("sample", "sensor", "time"), **{k: ("sample",) for k in PER_SAMPLE}}
+_KINDS = {"float32": "f", "float64": "fiu", "int64": "iu", "bool": "biu", "str": "UOS"}
+_CHUNK = 1 << 22  # values per finiteness test (bounded memory)
 
 
 class DataSetError(ValueError):
     """A data set on disk is missing, incomplete, altered or of another schema."""
+
+
+def config_digest(plain: Any) -> str:
+    """First 16 hex digits of the SHA-256 of the canonical JSON of a plain config (the
+    ``config_hash`` of a data set, :func:`swgsim.plan.config_hash`)."""
+    return hashlib.sha256(json.dumps(plain, sort_keys=True).encode()).hexdigest()[:16]
 
 
 def sha256_file(path: str | os.PathLike) -> str:
@@ -222,8 +242,20 @@ def write_shard(ds, path: str | os.PathLike) -> str:
         A schema-v1 data set (see :func:`make_dataset`).
     path : path-like
         Target file; written to a temporary name in the same folder, then renamed.
+
+    Returns
+    -------
+    str
+        SHA-256 hex digest of the file written.
+
+    Raises
+    ------
+    DataSetError
+        Before anything is written, if a signal variable holds NaN or infinity
+        (:func:`check_signals`), or if the disk is full.
     """
     path = Path(path)
+    check_signals(ds, f"shard {path}", "refused before writing")
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=".tmp", dir=path.parent)
     os.close(fd)
@@ -311,6 +343,184 @@ def verify(path: str | os.PathLike, shards: Iterable[str] | None = None) -> list
     return files
 
 
+# ------------------------------------------------------------------ content checks
+def _n_nonfinite(values: np.ndarray) -> int:
+    """Number of NaN or infinite values of an array, tested in chunks (bounded memory)."""
+    flat = np.asarray(values).reshape(-1)
+    if flat.dtype.kind not in "fc":
+        return 0
+    return sum(int(chunk.size - np.count_nonzero(np.isfinite(chunk)))
+               for chunk in (flat[i:i + _CHUNK] for i in range(0, flat.size, _CHUNK)))
+
+
+def check_signals(ds, where: str, what: str = "") -> None:
+    """Refuse NaN or infinity in the signal variables (:data:`SIGNALS`) and in ``time``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A shard, in memory.
+    where : str
+        What ``ds`` is, for the message, e.g. ``"shard data/x/gear1_n2000rpm.nc"``.
+    what : str, optional
+        Appended to the message, e.g. ``"refused before writing"``.
+
+    Raises
+    ------
+    DataSetError
+        Naming ``where``, the variable and how many of its values are not finite.
+    """
+    for name in (*SIGNALS, "time"):
+        if name in ds.variables:
+            values = ds[name].values
+            bad = _n_nonfinite(values)
+            if bad:
+                raise DataSetError(f"{where}: {name} holds {bad} non-finite value(s) (NaN or "
+                                   f"infinity) of {values.size}{'; ' + what if what else ''}")
+
+
+def fault_labels(manifest: dict) -> frozenset[str]:
+    """The fault labels a data set may hold: the schema's classes.
+
+    The registered gear faults (:data:`swgsim.faults.FAULTS`, ``healthy`` first), the
+    sensor faults (:data:`swgsim.sensor_faults.SENSOR_FAULTS`), :data:`EXTRA_LABELS`
+    (``unknown``, measured data), and the classes the manifest's config names
+    (``variants``, ``life.fault.fault``): a class registered by the user who generated the
+    data set need not be registered where it is read.
+    """
+    from .faults import FAULTS
+    from .sensor_faults import SENSOR_FAULTS
+
+    labels = {"healthy", *FAULTS, *SENSOR_FAULTS, *EXTRA_LABELS}
+    cfg = manifest.get("config")
+    if isinstance(cfg, dict):
+        if isinstance(cfg.get("variants"), dict):
+            labels.update(str(k) for k in cfg["variants"])
+        life = cfg.get("life")
+        if isinstance(life, dict) and isinstance(life.get("fault"), dict):
+            labels.add(str(life["fault"].get("fault")))
+    return frozenset(labels)
+
+
+def check_manifest(path: Path, manifest: dict) -> None:
+    """Refuse a manifest whose ``config_hash`` contradicts its own ``config`` (an edit).
+
+    Raises
+    ------
+    DataSetError
+        Naming the manifest file and both hashes.
+    """
+    cfg, rec = manifest.get("config"), manifest.get("config_hash")
+    if isinstance(cfg, dict) and rec is not None and config_digest(cfg) != rec:
+        raise DataSetError(f"{path / MANIFEST}: config_hash {rec} contradicts its config "
+                           f"(hash {config_digest(cfg)}): the config was edited")
+
+
+def _check_variables(ds, where: str) -> None:
+    """Every variable of the schema present with its dims and dtype, sensors s0..s4."""
+    for name, dims in _DIMS.items():
+        if name not in ds.variables:
+            raise DataSetError(f"{where}: variable {name} is missing (schema v1 requires "
+                               f"{', '.join(_DIMS)})")
+        var = ds[name]
+        if var.dims != dims:
+            raise DataSetError(f"{where}: variable {name} has dims {var.dims}, schema v1 "
+                               f"says {dims}")
+        dtype = "float32" if name == "strain_signal" else PER_SAMPLE[name][0]
+        if var.dtype.kind not in _KINDS[dtype]:
+            raise DataSetError(f"{where}: variable {name} has dtype {var.dtype}, schema v1 "
+                               f"says {dtype}")
+    if "sensor" not in ds.coords or list(ds["sensor"].values) != list(SENSORS):
+        got = list(ds["sensor"].values) if "sensor" in ds.coords else None
+        raise DataSetError(f"{where}: coordinate sensor must be {list(SENSORS)}, got {got}")
+    if "time" not in ds.coords:
+        raise DataSetError(f"{where}: coordinate time is missing")
+
+
+def _check_labels(ds, where: str, labels: frozenset[str]) -> None:
+    """Every fault label a class of the schema (:func:`fault_labels`)."""
+    found, count = np.unique(ds["fault"].values.astype(str), return_counts=True)
+    bad = [(str(v), int(c)) for v, c in zip(found, count, strict=True) if v not in labels]
+    if bad:
+        allowed = ", ".join(sorted(labels))
+        raise DataSetError(f"{where}: variable fault holds label {bad[0][0]!r} ({bad[0][1]} "
+                           f"sample(s)), not a class of the schema; allowed: {allowed}")
+
+
+def _check_against_manifest(ds, where: str, name: str, entry: dict, manifest: dict) -> None:
+    """The shard's attributes and time axis agree with its manifest entry and config."""
+    attrs, mf = ds.attrs, MANIFEST
+    if attrs.get("schema_version", SCHEMA_VERSION) != SCHEMA_VERSION:
+        raise DataSetError(f"{where}: attribute schema_version={attrs['schema_version']}, "
+                           f"{mf} says {SCHEMA_VERSION}")
+    for key, rec in (("shard", name), ("content_sha256", entry.get("content_sha256")),
+                     ("seed", manifest.get("seed"))):
+        if rec is not None and key in attrs and attrs[key] != rec:
+            raise DataSetError(f"{where}: attribute {key}={attrs[key]!r} contradicts {mf} "
+                               f"({rec!r})")
+    t = ds["time"].values
+    fs = attrs.get("sample_rate_hz")
+    if fs is not None and t.size > 1 and not np.isclose(1.0 / (t[1] - t[0]), fs, rtol=1e-6):
+        raise DataSetError(f"{where}: variable time is sampled at {1.0 / (t[1] - t[0]):g} Hz, "
+                           f"its attribute sample_rate_hz says {fs:g} Hz")
+    cfg = manifest.get("config")
+    if not isinstance(cfg, dict):
+        return
+    chain = cfg.get("chain")
+    if (isinstance(chain, dict) and fs is not None
+            and isinstance(chain.get("sample_rate_hz"), (int, float))):
+        if not np.isclose(chain["sample_rate_hz"], fs, rtol=1e-9):
+            raise DataSetError(f"{where}: attribute sample_rate_hz={fs:g} Hz contradicts "
+                               f"{mf} (config.chain.sample_rate_hz={chain['sample_rate_hz']:g})")
+        win = chain.get("window_s")
+        if isinstance(win, (int, float)) and round(win * fs) != ds.sizes["time"]:
+            raise DataSetError(f"{where}: variable time holds {ds.sizes['time']} samples, "
+                               f"{mf} says {round(win * fs)} (config.chain.window_s="
+                               f"{win:g} s at {fs:g} Hz)")
+    if isinstance(attrs.get("config"), str) and "config_hash" in manifest:
+        try:
+            same = json.loads(attrs["config"]) == cfg
+        except json.JSONDecodeError:
+            same = False
+        if not same:
+            raise DataSetError(f"{where}: attribute config contradicts {mf}'s config "
+                               "(a shard of another data set)")
+
+
+def check_shard(ds, path: Path, entry: dict, manifest: dict, labels: frozenset[str]) -> None:
+    """Check a loaded shard against the schema and its manifest.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The shard, in memory.
+    path : Path
+        Its file, named in the messages.
+    entry : dict
+        Its entry in the manifest's ``shards``.
+    manifest : dict
+        The data set's manifest.
+    labels : frozenset of str
+        Allowed fault labels (:func:`fault_labels`).
+
+    Raises
+    ------
+    DataSetError
+        One line naming the file and the variable or attribute: a variable of the schema
+        missing or of the wrong dims or dtype, the sensors not s0..s4, a non-finite signal
+        or time, a fault label not of the schema, or an attribute, sample count, sample
+        rate or window length that contradicts the manifest.
+    """
+    where = f"shard {path}"
+    _check_variables(ds, where)
+    want = entry.get("n_samples")
+    if want is not None and ds.sizes["sample"] != want:
+        raise DataSetError(f"{where} holds {ds.sizes['sample']} samples, {MANIFEST} says {want}")
+    check_signals(ds, where)
+    _check_labels(ds, where, labels)
+    _check_against_manifest(ds, where, path.name, entry, manifest)
+
+
 def load(path: str | os.PathLike, check: bool = True):
     """Load a schema-v1 data set directory as one ``xarray.Dataset``.
 
@@ -319,7 +529,10 @@ def load(path: str | os.PathLike, check: bool = True):
     path : path-like
         Data-set directory holding ``manifest.json`` and the shards.
     check : bool, default True
-        Verify every shard's SHA-256 against the manifest first.
+        Verify the manifest and every shard's SHA-256 first (:func:`verify`,
+        :func:`check_manifest`), then each shard's content as it is read
+        (:func:`check_shard`: variables, finite signals, fault labels, agreement with the
+        manifest). False: only the sample counts.
 
     Returns
     -------
@@ -329,13 +542,18 @@ def load(path: str | os.PathLike, check: bool = True):
     Raises
     ------
     DataSetError
-        If the directory is not a complete schema-v1 data set or a shard is altered.
+        One line naming the file: the directory is not a complete schema-v1 data set, a
+        shard is altered, or its content fails :func:`check_shard`.
     """
     import xarray as xr
 
     path = Path(path)
     files = verify(path) if check else [path / n for n in read_manifest(path)["shards"]]
-    entries = read_manifest(path)["shards"]
+    manifest = read_manifest(path)
+    entries = manifest["shards"]
+    if check:
+        check_manifest(path, manifest)
+        labels = fault_labels(manifest)
     parts = []
     for f in files:
         try:
@@ -343,6 +561,8 @@ def load(path: str | os.PathLike, check: bool = True):
                 parts.append(ds.load())
         except OSError as e:
             raise DataSetError(f"shard {f} cannot be read: {e}") from e
+        if check:
+            check_shard(parts[-1], f, entries.get(f.name, {}), manifest, labels)
         want = entries.get(f.name, {}).get("n_samples")
         if want is not None and parts[-1].sizes.get("sample") != want:
             raise DataSetError(f"shard {f} holds {parts[-1].sizes.get('sample')} samples, "

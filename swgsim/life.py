@@ -152,10 +152,21 @@ def duty_cycle(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]
 def check_life(life: LifeConfig, key: str = "dataset.life") -> None:
     """Refuse a life config outside its ranges, in one line naming the key.
 
+    Parameters
+    ----------
+    life : LifeConfig
+    key : str
+        Full name of ``life`` for messages.
+
     Raises
     ------
     ValueError
+        NaN or infinity in any float (checked first, :func:`swgsim.config.check_finite`),
+        or a value outside its range, naming the key.
     """
+    from .config import check_finite  # swgsim.config imports this module
+
+    check_finite(life, key)
     for k in ("hours", "interval_min"):
         v = float(getattr(life, k))
         _req(np.isfinite(v) and v > 0, f"{key}.{k} must be > 0, got {v}")

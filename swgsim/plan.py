@@ -12,8 +12,6 @@ take the plan and check nothing again.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -21,7 +19,8 @@ from typing import Any
 import numpy as np
 
 from .acquisition import check_acquisition
-from .config import DatasetConfig, GearConfig, VariantSpec, dataset_config
+from .config import DatasetConfig, GearConfig, VariantSpec, check_finite, dataset_config
+from .data import config_digest
 from .dynamics import gear_with_ke, rt1_size20, torsional_mode
 from .faults import FAULTS, ChainParams, Fault, get_fault
 from .flexspline import FlexsplineGeometry, TrussModel
@@ -102,8 +101,7 @@ class DatasetPlan:
 
 def config_hash(cfg: DatasetConfig | Mapping[str, Any]) -> str:
     """SHA-256 of the canonical JSON of a data-set config (first 16 hex digits)."""
-    plain = dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg
-    return hashlib.sha256(json.dumps(plain, sort_keys=True).encode()).hexdigest()[:16]
+    return config_digest(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
 
 
 # ------------------------------------------------------------------------- checks
@@ -306,14 +304,17 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     Raises
     ------
     ValueError
-        With the parameter's name and allowed range: unknown fault, severity outside its
-        range, non-positive speed, negative torque or variant count, a gauge off the
-        collar, a truss too coarse for the gauge layout, bad chain settings.
+        With the parameter's name: NaN or infinity in any float (checked first, for every
+        key, :func:`swgsim.config.check_finite`); then with the allowed range: unknown
+        fault, severity outside its range, non-positive speed, negative torque or variant
+        count, a gauge off the collar, a truss too coarse for the gauge layout, bad chain
+        settings.
     """
     if isinstance(cfg, DatasetPlan):
         return cfg
     if not isinstance(cfg, DatasetConfig):
         cfg = dataset_config(cfg)
+    check_finite(cfg, "dataset")  # before any range check compares with a NaN
     _check_name_and_points(cfg)
     _check_chain(cfg)
     _check_tolerances_and_disturbance(cfg)
