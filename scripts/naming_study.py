@@ -12,10 +12,18 @@ fault from the first hour of windows after the onset. Prints the share named rig
 class and rule. The held-out gear is never simulated, so a rule chosen here is chosen
 before the evaluation sees it.
 
-Rules: ``sum`` (the monitor's: summed evidence relative to the gear's calibration
-windows), ``vote`` (the most frequent per-window argmax among the faults), ``clip``
-(summed evidence, each window's clipped to +-2 nats), ``mean_z`` (a classifier trained on
-hour means of the training gear's z-scores, applied to the hour's mean z-score).
+Sensor faults are judged on each of the five bridges at five severities from the mild to
+the severe one (a growing sensor fault is named while between them); ``--sensor-levels``
+sets how many severities the training lives have.
+
+Rules: ``monitor`` (the monitor's, :meth:`learn.monitor.monitor.GearMonitor.name`: a
+sensor fault where one bridge's fitted offset step or gain drift explains the windows,
+else ``sum``), ``sum`` (summed evidence relative to the gear's calibration windows),
+``vote`` (the most frequent per-window argmax among the faults), ``clip`` (summed
+evidence, each window's clipped to +-2 nats), ``mean_z`` (a classifier trained on hour
+means of the training gear's z-scores, applied to the hour's mean z-score). Each life
+prints the best plausible one-bridge sensor fit and the median p-value it leaves
+(:data:`learn.monitor.sensor_check.SENSOR_P_MIN` was read off these).
 """
 
 from __future__ import annotations
@@ -25,9 +33,28 @@ import argparse
 import numpy as np
 
 
-def _name_rules(mon, lp, opi, z_mean, agg_clf, classes):
+def _best_sensor_fit(mon, z, q, opi):
+    """The plausible one-bridge sensor fit (learn.monitor.sensor_check) after which the
+    windows look most healthy, and their median p-value then (None, 0 if none)."""
+    from learn.monitor.sensor_check import fit_sensor_faults
+
+    b = mon.baseline
+    best, p_best = None, 0.0
+    for f in fit_sensor_faults(z, b.mean[opi], b.std[opi]):
+        if not f.plausible():
+            continue
+        score = np.stack([mon.model.score(mon.model.log_proba(
+            np.concatenate([f.z, q], axis=1))), np.sum(f.z ** 2, axis=1)], axis=1)
+        p = float(np.median(mon.p_values(score, opi, np.full(score.shape, 0.5))))
+        if p > p_best:
+            best, p_best = f, p
+    return best, p_best
+
+
+def _name_rules(mon, lp, opi, z_mean, agg_clf, classes, f, q):
     ev = mon.evidence(lp, opi)[:, 1:]
     out = {"sum": 1 + int(np.argmax(ev.sum(axis=0))),
+           "monitor": classes.index(mon.name(mon.evidence(lp, opi), f, q)[0]),
            "clip": 1 + int(np.argmax(np.clip(ev, -2, 2).sum(axis=0)))}
     am = np.argmax(lp[:, 1:], axis=1)
     out["vote"] = 1 + int(np.bincount(am, minlength=len(classes) - 1).argmax())
@@ -41,6 +68,11 @@ def main() -> None:
     ap.add_argument("--train", type=int, default=1)
     ap.add_argument("--judge", type=int, default=2)
     ap.add_argument("--lives", type=int, default=4)
+    ap.add_argument("--judge-faults", nargs="*", default=None,
+                    help="classes judged (default: every fault class)")
+    ap.add_argument("--sensor-levels", type=int, default=None,
+                    help="training severities per sensor fault (default: the evaluation's, "
+                    "MonitorStudyConfig.sensor_train_levels)")
     ap.add_argument("--variants", type=int, default=None,
                     help="training fault positions per class and severity (default: the "
                     "evaluation's, MonitorStudyConfig.train_variants)")
@@ -60,11 +92,14 @@ def main() -> None:
     from swgcli import dataset_preset
     from swgsim.life import FaultOnset, LifeConfig, LifeSimulator, RecordBank
     from swgsim.plan import plan
+    from swgsim.sensor_faults import SENSOR_FAULTS
 
     p = plan(dataset_preset(args.dataset))
     cfg = MonitorStudyConfig()
     if args.variants is not None:
         cfg.train_variants = args.variants
+    if args.sensor_levels is not None:
+        cfg.sensor_train_levels = args.sensor_levels
     cls = classes(p, cfg)
     n_comm = int(cfg.commissioning_h * 60)
     bank = RecordBank(p, args.train)
@@ -97,21 +132,33 @@ def main() -> None:
     mon.commission(fh, ph)
     right: dict[tuple[str, str], list[bool]] = {}
     k = 0
-    for c in cls[1:]:
-        for s in table_v_severities(p, c):
-            for _ in range(args.lives):
+    for c in args.judge_faults or cls[1:]:
+        sensor = c in SENSOR_FAULTS
+        sevs = table_v_severities(p, c)
+        if sensor:  # a growing sensor fault is named while between mild and severe
+            sevs = [float(v) for v in np.geomspace(sevs[0], sevs[-1], 5)]
+        for s in sevs:
+            for i in range(5 if sensor else args.lives):
                 k += 1
                 on = cfg.commissioning_h + 1.0
                 life = LifeConfig(hours=on + 1.0, life_seed=5000 + k,
-                                  fault=FaultOnset(c, on, s))
+                                  fault=FaultOnset(c, on, s, sensor=i if sensor else None))
                 sim = LifeSimulator(p, args.judge, life, jb)
                 a = int(np.searchsorted(sim.schedule.hour, on))
                 f, q, _ = features_of(sim, a, len(sim))
                 opi = mon.baseline.index(q)
                 _, lp = mon.scores(f, q, opi)
                 z = mon.baseline.z(f, q, opi)
-                for rule, name in _name_rules(mon, lp, opi, z.mean(axis=0), agg, cls).items():
+                fit, p_fit = _best_sensor_fit(mon, z, q, opi)
+                print(f"  {c} {s:.4g}{f' on s{i}' if sensor else ''}: best plausible "
+                      "one-bridge fit " + ("none" if fit is None else
+                                           f"p {p_fit:.3f} ({fit.fault} s{fit.bridge} "
+                                           f"{fit.severity:.4g})"), flush=True)
+                rules = _name_rules(mon, lp, opi, z.mean(axis=0), agg, cls, f, q)
+                for rule, name in rules.items():
                     right.setdefault((c, rule), []).append(name == c)
+                    if rule in ("sum", "monitor") and name != c:
+                        print(f"    {rule} named {name}", flush=True)
         print(c, {r: f"{np.mean(v):.2f}" for (cc, r), v in right.items() if cc == c},
               flush=True)
     rules = sorted({r for _, r in right})

@@ -132,6 +132,7 @@ def test_planted_step_fault_detected_and_named(tiny_eval):
     assert 0 <= ecc.time_to_detect_h <= 0.5
     sen = mon.loc[("sensor_offset_step", 0.05, "step")]
     assert sen.detected and sen.fault_after_1h == "sensor_offset_step"
+    assert sen.bridge_named == sen.bridge and sen.bridge in {f"s{i}" for i in range(5)}
     fa = pd.DataFrame(tiny_eval["false_alarms"]).set_index("detector")
     assert fa.loc["monitor", "false_alarms"] == 0
     assert fa.loc["always", "false_alarms"] == 360
@@ -232,3 +233,54 @@ def test_one_window_at_a_time_equals_the_block_path(tiny_eval):
     assert alarms == [i + 20 * j for j, t in enumerate(blk) for i in t.alarms] and alarms
     with pytest.raises(ValueError, match="not seen at commissioning"):
         b.step(f[0], (1.0, 2.0), 5.0)
+
+
+def test_one_bridge_fits_recover_planted_sensor_faults():
+    """Least squares of sensor_check: an offset step on s2 and a gain drift on s4, planted
+    in z-scores of noise, come back with their severities and leave noise behind."""
+    from learn.monitor.sensor_check import BLOCK, fit_sensor_faults
+
+    rng = np.random.default_rng(0)
+    n, f = 40, 5 * BLOCK + 1
+    mean = np.tile(rng.uniform(0.5, 2.0, f), (n, 1))
+    std = np.tile(rng.uniform(0.01, 0.02, f), (n, 1))
+    noise = rng.normal(size=(n, f))
+    z = noise.copy()
+    z[:, 2 * BLOCK] += 0.6 / std[:, 2 * BLOCK]  # offset +0.6 mV/V on s2
+    fit = {(x.fault, x.bridge): x for x in fit_sensor_faults(z, mean, std)}
+    off = fit[("sensor_offset_step", 2)]
+    assert off.severity == pytest.approx(0.6, abs=3 * 0.02 / np.sqrt(n))
+    assert np.sum(off.z ** 2) < 1.2 * np.sum(noise ** 2) < np.sum(z ** 2) / 5
+    z = noise.copy()
+    cols = slice(4 * BLOCK, 5 * BLOCK - 1)
+    z[:, cols] += -0.1 * mean[:, cols] / std[:, cols]  # gain 0.9 on s4
+    gain = {(x.fault, x.bridge): x for x in fit_sensor_faults(z, mean, std)}
+    assert gain[("sensor_gain_drift", 4)].severity == pytest.approx(0.1, abs=2e-3)
+    assert np.sum(gain[("sensor_gain_drift", 4)].z ** 2) < 1.2 * np.sum(noise ** 2)
+    with pytest.raises(ValueError, match="must be"):
+        fit_sensor_faults(z[:, :-1], mean, std)
+
+
+def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval):
+    """An offset step on s1 alone (whose eccentric WG moves s1 and s3 oppositely) is named
+    a sensor fault on s1; an eccentric WG is not explained by one bridge."""
+    from learn.monitor.evaluate import features_of
+    from learn.monitor.monitor import GearMonitor
+    from swgcli import dataset_preset
+    from swgsim.life import FaultOnset, LifeConfig, LifeSimulator
+    from swgsim.plan import plan
+
+    p = plan(dataset_preset("tiny_bench"))
+    mon = GearMonitor(tiny_eval["model"], RuleConfig(), 1.0)
+    named = {}
+    for fo in (FaultOnset("sensor_offset_step", 4.0, 0.02, sensor=1),
+               FaultOnset("eccentric_wg", 4.0, 0.1)):
+        sim = LifeSimulator(p, 3, LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9,
+                                             fault=fo))
+        f, pts, _ = features_of(sim, 0, len(sim))
+        mon.commission(f[:240], pts[:240])
+        _, lp = mon.scores(f[240:], pts[240:])
+        named[fo.fault] = mon.name(mon.evidence(lp, mon.baseline.index(pts[240:])),
+                                   f[240:], pts[240:])
+    assert named == {"sensor_offset_step": ("sensor_offset_step", 1),
+                     "eccentric_wg": ("eccentric_wg", None)}

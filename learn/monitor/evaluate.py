@@ -73,6 +73,9 @@ class MonitorStudyConfig:
         on the training gears alone (``scripts/naming_study.py``: trained on one training
         gear, judged on the other, both ways, the root and tip cracks were named right in
         0.83-0.92 and 0.67 of lives with 5 positions, in 1.00 with 15).
+    sensor_train_levels : int
+        Training severities of a sensor fault: this many, geometrically spaced from its mild
+        to its severe severity (:data:`swgsim.sensor_faults.SEVERITIES`; 2: those two).
     train_healthy_h : float
         Hours of each training gear's healthy life after commissioning.
     faults : list of str
@@ -97,6 +100,7 @@ class MonitorStudyConfig:
     growth_h: float = 10.0
     train_fault_h: float = 0.5
     train_variants: int = 15
+    sensor_train_levels: int = 2
     train_healthy_h: float = 10.0
     faults: list[str] = field(default_factory=list)
     gears: list[int] = field(default_factory=list)
@@ -115,6 +119,15 @@ def table_v_severities(plan, fault: str) -> list[float]:
         return [float(s) for s in spec.severities]
     a, b, _ = spec.severity_linspace
     return [float(a), float((a + b) / 2), float(b)]
+
+
+def train_severities(plan, fault: str, cfg: MonitorStudyConfig) -> list[float]:
+    """Severities of a class's training lives: a gear fault's Table V ones, a sensor
+    fault's ``cfg.sensor_train_levels`` from its mild to its severe one, geometrically."""
+    sevs = table_v_severities(plan, fault)
+    if fault not in SENSOR_FAULTS:
+        return sevs
+    return [float(v) for v in np.geomspace(sevs[0], sevs[-1], cfg.sensor_train_levels)]
 
 
 def classes(plan, cfg: MonitorStudyConfig) -> list[str]:
@@ -161,7 +174,7 @@ def training_lives(plan, bank: RecordBank, g: int, cfg: MonitorStudyConfig
     for c in classes(plan, cfg)[1:]:
         sensor = c in SENSOR_FAULTS
         n_var = 5 if sensor else cfg.train_variants
-        for s in table_v_severities(plan, c):
+        for s in train_severities(plan, c, cfg):
             for j in range(n_var):
                 fo = FaultOnset(c, c0, s, sensor=j if sensor else None,
                                 position_deg=None if sensor else 360.0 * (j + 0.5) / n_var)
@@ -337,7 +350,8 @@ def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: 
                                                   list(baselines))
             row = {**key, "fault": fo.fault,
                    "severity": max((q[1] for q in fo.points), key=abs) if fo.points
-                   else fo.severity, "onset": kind, "onset_h": fo.onset_h}
+                   else fo.severity, "onset": kind, "onset_h": fo.onset_h,
+                   "bridge": f"s{sim.sensor}" if fo.fault in SENSOR_FAULTS else ""}
             _curve_fault(ftr, fo, k0 - 1 - n_comm, healthy_curve, cfg, row, curve)
             rows.append({**row, **_monitor_row(mon, ftr, ff, pp, mm, fo)})
             for d, lab in labels.items():
@@ -432,7 +446,8 @@ def _monitor_row(mon, tr, ff, pp, mm, fo) -> dict:
     return {"detector": "monitor", "detected": True, "time_to_detect_h": al.hour - fo.onset_h,
             "fault_at_alarm": al.fault_at_alarm, "fault_after_1h": al.fault,
             "severity_est": al.severity, "severity_at_alarm": float(mm["severity"][a]),
-            "severity_low": al.severity_low, "severity_high": al.severity_high}
+            "severity_low": al.severity_low, "severity_high": al.severity_high,
+            "bridge_named": al.bridge or ""}
 
 
 def _per_window_row(detector: str, classes: list[str], labels: np.ndarray, mm, fo) -> dict:
@@ -478,4 +493,4 @@ def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFra
 
 __all__ = ["DETECTORS", "MonitorStudyConfig", "classes", "evaluate_gear", "fault_lives",
            "features_of", "run_held_out", "table_v_severities", "to_frames",
-           "train_baselines", "train_model", "training_lives"]
+           "train_baselines", "train_model", "train_severities", "training_lives"]

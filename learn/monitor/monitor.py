@@ -5,11 +5,13 @@ gear's windows in time order. :meth:`GearMonitor.commission` builds the baseline
 the commissioning windows, alternately per operating point: even ones fit the baseline,
 odd ones calibrate the rule (:mod:`.rule`). :meth:`GearMonitor.run` scores every later
 window, updates the CUSUM and raises an alarm when it crosses h; the fault is then named
-by the evidence of the windows since the CUSUM's last rise from zero up to the alarm,
-relative to the gear's own healthy calibration windows (:meth:`GearMonitor.evidence`)
+from the windows since the CUSUM's last rise from zero up to the alarm
 (``fault_at_alarm``) and up to one hour after it (``fault``, with the severity and its
-interval). The alarm latches: one alarm per stream until the gear is commissioned again;
-an evaluation of false alarms restarts the CUSUM after each (``latch=False``).
+interval): a sensor fault, with its bridge, where one bridge's offset step or gain drift
+explains them (:mod:`.sensor_check`), else by the diagnosis model's evidence relative to
+the gear's own healthy calibration windows (:meth:`GearMonitor.evidence`). The alarm
+latches: one alarm per stream until the gear is commissioned again; an evaluation of false
+alarms restarts the CUSUM after each (``latch=False``).
 :meth:`GearMonitor.step` is the same monitor for one window at a time, as a live joint
 delivers them: the same numbers as :meth:`~GearMonitor.run` (tested), with the CUSUMs
 kept in the monitor, at a fraction of the block path's overhead for a single window.
@@ -23,6 +25,7 @@ import numpy as np
 
 from .model import Baseline, DiagnosisModel, design_matrix
 from .rule import RuleConfig, conformal_p, log_bets, min_calibration, threshold
+from .sensor_check import SENSOR_P_MIN, fit_sensor_faults
 
 
 @dataclass
@@ -43,6 +46,9 @@ class Alarm:
         Named from the windows of the rise up to ``confirm_h`` after the alarm.
     severity, severity_low, severity_high : float
         Estimate of ``fault``'s severity and its 90 % interval.
+    bridge : str or None
+        The faulty bridge (``s0``..``s4``) where ``fault`` is a sensor fault that one
+        bridge alone explains (:mod:`.sensor_check`).
     """
 
     hour: float
@@ -53,12 +59,13 @@ class Alarm:
     severity: float
     severity_low: float
     severity_high: float
+    bridge: str | None = None
 
     def as_dict(self) -> dict:
         """The ``summary.json`` entry."""
         return {"hour": self.hour, "fault": self.fault, "fault_at_alarm": self.fault_at_alarm,
                 "severity": self.severity, "severity_low": self.severity_low,
-                "severity_high": self.severity_high}
+                "severity_high": self.severity_high, "bridge": self.bridge}
 
 
 @dataclass
@@ -248,11 +255,13 @@ class GearMonitor:
         lp = self.model.log_proba(design_matrix(z, points))
         return np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp
 
-    def p_values(self, score: np.ndarray, opi: np.ndarray) -> np.ndarray:
+    def p_values(self, score: np.ndarray, opi: np.ndarray, u: np.ndarray | None = None
+                 ) -> np.ndarray:
         """Conformal p-values of windows against the calibration of their operating point
         (``opi``: its row in the baseline), the two scores' combined by Bonferroni,
-        ``min(1, 2 min(p1, p2))`` (still super-uniform, so the CUSUM's bound holds)."""
-        u = self.rng.uniform(size=score.shape)
+        ``min(1, 2 min(p1, p2))`` (still super-uniform, so the CUSUM's bound holds).
+        ``u``: the smoothing draws, shape as ``score`` (default: the monitor's own)."""
+        u = self.rng.uniform(size=score.shape) if u is None else u
         p = np.empty(score.shape)
         for k in np.unique(opi):
             cal, m = self.calibration[int(k)], opi == k
@@ -347,11 +356,37 @@ class GearMonitor:
         rise = int(zero[-1]) + 1 if zero.size else 0
         end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
         ev = self.evidence(trace.log_proba, trace.op_index)
-        at_alarm = self.model.name(ev[rise:a + 1])
-        fault = self.model.name(ev[rise:end])
+        at_alarm, _ = self.name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1])
+        fault, bridge = self.name(ev[rise:end], feats[rise:end], points[rise:end])
         x = self.inputs(feats[rise:end], points[rise:end])
         est, lo, hi = self.model.estimate(fault, x)
-        return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi)
+        return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi,
+                     None if bridge is None else f"s{bridge}")
+
+    def name(self, ev: np.ndarray, feats: np.ndarray, points: np.ndarray
+             ) -> tuple[str, int | None]:
+        """Name the fault of windows since an alarm: a sensor fault where one bridge's
+        offset step or gain drift explains them (:mod:`.sensor_check`: a plausible fit
+        after which the windows look healthy, median p-value at least
+        :data:`~.sensor_check.SENSOR_P_MIN`), with its bridge; else the fault with the
+        largest summed evidence (:meth:`evidence` rows ``ev``) and None."""
+        b = self.baseline
+        opi = b.index(points)
+        z = b.z(feats, points, opi)
+        u = np.full((len(z), 2), 0.5)  # mid-p: the naming draws nothing from the monitor
+
+        def median_p(zz: np.ndarray) -> float:
+            lp = self.model.log_proba(design_matrix(zz, points))
+            score = np.stack([self.model.score(lp), np.sum(zz ** 2, axis=1)], axis=1)
+            return float(np.median(self.p_values(score, opi, u)))
+
+        fits = [f for f in fit_sensor_faults(z, b.mean[opi], b.std[opi])
+                if f.fault in self.model.classes and f.plausible()]
+        p = [median_p(f.z) for f in fits]
+        if p and max(p) >= SENSOR_P_MIN:
+            k = int(np.argmax(p))
+            return fits[k].fault, fits[k].bridge
+        return self.model.name(ev), None
 
 
 __all__ = ["Alarm", "GearMonitor", "Trace", "baseline_windows", "check_commissioning",

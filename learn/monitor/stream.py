@@ -156,7 +156,8 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
              f"threshold h = {h:.2f}.", ""]
     if res.alarms:
         for a in res.alarms:
-            lines.append(f"- alarm at {a.hour:.2f} h: **{a.fault}** (at the alarm: "
+            where = f" on bridge {a.bridge} (check that gauge)" if a.bridge else ""
+            lines.append(f"- alarm at {a.hour:.2f} h: **{a.fault}**{where} (at the alarm: "
                          f"{a.fault_at_alarm}), severity {a.severity:.3g} "
                          f"[{a.severity_low:.3g}, {a.severity_high:.3g}]")
     else:

@@ -76,6 +76,8 @@ def check_study(sc: MonitorStudyConfig) -> None:
     for k in ("horizon_h", "growth_h", "train_fault_h", "train_healthy_h"):
         req(getattr(sc, k) > 0, f"monitor.study.{k} must be > 0, got {getattr(sc, k)}")
     req(sc.train_variants >= 1, "monitor.study.train_variants must be >= 1")
+    req(sc.sensor_train_levels >= 2, "monitor.study.sensor_train_levels must be >= 2 (mild "
+        f"and severe), got {sc.sensor_train_levels}")
     req(sc.rule.design_hours > 0, "monitor.study.rule.design_hours must be > 0")
     bad = sorted(set(sc.baselines) - set(BASELINES))
     req(not bad, f"monitor.study.baselines: unknown {bad}; allowed: {sorted(BASELINES)}")
