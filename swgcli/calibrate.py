@@ -186,11 +186,16 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     ------
     swgcal.MeasuredDataError
         ``measured`` is neither a friction CSV nor a data-set directory.
+    ValueError
+        ``out_dir`` holds a file this project cannot show it wrote (named; before any
+        work, :func:`swgsim.ownership.check`); the app's own earlier output is replaced.
     """
     from swgcal import build_problem, calibrate, detect_kind, options_from_config, write_outputs
+    from swgsim import ownership
 
     measured = Path(cfg.measured).expanduser()
     out_dir = Path(cfg.out_dir).expanduser()
+    ownership.check(out_dir, "out_dir")  # before any work: nothing in it but our files
     kind = detect_kind(measured)
     options, selection = options_from_config(
         kind, OmegaConf.to_container(cfg, resolve=True), measured)
@@ -201,7 +206,10 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     log.info("measured data %s: kind %s", measured, kind)
     problem = build_problem(measured, **options)
     result = calibrate(problem, selection)
-    summary = write_outputs(result, out_dir, source=str(measured), figures=bool(cfg.figures))
+    with ownership.claim(out_dir, "swgsim-calibrate") as claim:
+        summary = write_outputs(result, out_dir, source=str(measured),
+                                figures=bool(cfg.figures))
+        claim.record([*summary["files"], *summary["figures"].values()])
     run_id = _log_mlflow(cfg, summary, out_dir) if cfg.logger.enabled else None
     log.info("%s: test RMSE %.4g -> %.4g %s, added %s, unexplained %s; report %s",
              summary["name"], summary["rmse_before"], summary["rmse_after"], summary["units"],

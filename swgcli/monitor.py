@@ -51,20 +51,31 @@ def load_model(path: str):
 
 
 def run_monitor_app(cfg) -> dict:
-    """Run the monitor on the stream (task function); return the summary."""
+    """Run the monitor on the stream (task function); return the summary.
+
+    Raises
+    ------
+    ValueError
+        ``out_dir`` holds a file this project cannot show it wrote (named; before any
+        work, :func:`swgsim.ownership.check`), or the model or stream is unfit.
+    """
     from learn.monitor.rule import threshold
     from learn.monitor.stream import monitor_stream, select_gear, write_outputs
+    from swgsim import ownership
     from swgsim.data import load
 
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
+    out = Path(absolute_path(app.out_dir))
+    ownership.check(out, "out_dir")  # before any work: nothing in it but our files
     model = load_model(absolute_path(app.diagnosis_model))
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
                          source=str(src))
     interval = float((ds["hour"].values[1] - ds["hour"].values[0]) * 60)
-    out = Path(absolute_path(app.out_dir))
-    files = write_outputs(res, out, threshold(app.rule, interval), str(src))
+    with ownership.claim(out, "swgsim-monitor") as claim:
+        files = write_outputs(res, out, threshold(app.rule, interval), str(src))
+        claim.record(files.values())
     if app.logger is not None:
         import mlflow
 

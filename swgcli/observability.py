@@ -83,16 +83,24 @@ def run_observability(cfg: DictConfig) -> dict:
     -------
     dict
         ``table`` (DataFrame), ``files``, ``data_sets`` (J_out -> folder), ``wall_s``.
+
+    Raises
+    ------
+    ValueError
+        ``report_dir`` or a data-set folder holds a file this project cannot show it
+        wrote (named; the report folder before any work, :func:`swgsim.ownership.check`).
     """
     import pandas as pd
 
     from learn.studies.observability import observability_table, plot_observability, torsional_modes
     from learn.studies.separability import separation_records
+    from swgsim import ownership
     from swgsim.data import atomic_write_bytes, load
     from swgsim.generate import generate
 
     rep = Path(absolute_path(str(cfg.report_dir)))
     csv = rep / "observability.csv"
+    ownership.check(rep, "report_dir")  # before any work: nothing in it but our files
     if bool(cfg.plot_only):
         if not csv.is_file():
             raise FileNotFoundError(2, "no map to redraw (run without plot_only first)",
@@ -100,7 +108,9 @@ def run_observability(cfg: DictConfig) -> dict:
         table = pd.read_csv(csv)
         loads = sorted(set(table["t_out_nm"]))
         modes = torsional_modes(sorted(set(table["j_out_kgm2"])), loads)
-        fig = plot_observability(table, rep / "observability.png", modes)
+        with ownership.claim(rep, "swgsim-observability") as claim:
+            fig = plot_observability(table, rep / "observability.png", modes)
+            claim.record([fig])
         return {"table": table, "files": {"figure": str(fig)}, "data_sets": {}, "wall_s": 0.0}
     configs = data_set_configs(cfg)
     root = Path(absolute_path(str(cfg.data_root)))
@@ -121,10 +131,12 @@ def run_observability(cfg: DictConfig) -> dict:
     table = pd.concat(parts, ignore_index=True)
     loads = [float(t) for t in cfg.dataset.operating_points.t_out_nm]
     modes = torsional_modes(list(configs), loads)
-    atomic_write_bytes(csv, table.to_csv(index=False, float_format="%.6g").encode())
-    atomic_write_bytes(rep / "torsional_modes.csv",
-                       modes.to_csv(index=False, float_format="%.6g").encode())
-    fig = plot_observability(table, rep / "observability.png", modes)
+    with ownership.claim(rep, "swgsim-observability") as claim:
+        atomic_write_bytes(csv, table.to_csv(index=False, float_format="%.6g").encode())
+        atomic_write_bytes(rep / "torsional_modes.csv",
+                           modes.to_csv(index=False, float_format="%.6g").encode())
+        fig = plot_observability(table, rep / "observability.png", modes)
+        claim.record([fig])
     wall = time.perf_counter() - t0
     return {"table": table, "files": {"csv": str(csv), "figure": str(fig),
                                       "modes": str(rep / "torsional_modes.csv")},

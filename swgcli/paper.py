@@ -3,12 +3,14 @@
 For each data set in ``run_on`` (default: the paper's recording, phase-locked and
 noise-free windows, and a real bench's): (1) generate ``<data_root>/<name>`` (shards
 already there and valid are skipped; a data set of another config there is replaced only
-if the folder holds nothing else), (2) the study of Tables VII-X
-(:func:`learn.tasks.paper.run_paper_study`), every job logged to MLflow, with its report
-in ``<report_root>/<name>``; then (3) the summary side by side with the paper and the
-reproduction scorecard (:func:`learn.reports.summary.write_summary`). One progress bar per
-stage; the console ends with the scorecard, where everything went, the time of each stage
-and the warnings, counted once. Config: ``conf/paper.yaml``.
+if every file in the folder is provably this project's, :mod:`swgsim.ownership`), (2) the
+study of Tables VII-X (:func:`learn.tasks.paper.run_paper_study`), every job logged to
+MLflow, with its report in ``<report_root>/<name>``; then (3) the summary side by side
+with the paper and the reproduction scorecard (:func:`learn.reports.summary.write_summary`)
+in ``report_root``, a folder shared with the other apps' reports, where only the summary's
+own files must be this project's. One progress bar per stage; the console ends with the
+scorecard, where everything went, the time of each stage and the warnings, counted once.
+Config: ``conf/paper.yaml``.
 """
 
 from __future__ import annotations
@@ -133,14 +135,26 @@ def run_paper(cfg: DictConfig) -> dict:
         ``stages_s`` (wall time of each stage [s]), ``generate`` and ``study`` (per data
         set), ``summary`` (files, scorecards, findings), ``warnings`` (category, message,
         count).
+
+    Raises
+    ------
+    ValueError
+        A bad key, or a folder holding a file this project cannot show it wrote, named
+        (:mod:`swgsim.ownership`): in ``report_root`` one of the summary's files, or
+        anything in ``<report_root>/<name>`` (both before any work) or in
+        ``<data_root>/<name>`` (when that data set is due).
     """
-    from learn.reports.summary import write_summary
+    from learn.reports.summary import SUMMARY_FILES, write_summary
     from learn.tracking import check_tracking
+    from swgsim import ownership
 
     names = _check(cfg)
     plans = _plans(cfg, names)
     check_tracking(cfg.tracking_uri, "tracking_uri")  # before any work
     root_data, root_rep = absolute_path(str(cfg.data_root)), absolute_path(str(cfg.report_root))
+    ownership.check(root_rep, "report_root", only=SUMMARY_FILES)  # shared: our files only
+    for n in names:
+        ownership.check(f"{root_rep}/{n}", "report_root")
     counter, n_stages = itertools.count(1), 2 * len(names) + 1
 
     def stage() -> str:
@@ -154,11 +168,14 @@ def run_paper(cfg: DictConfig) -> dict:
         gen = _generate(cfg, plans, root_data, stage, stages)
         study = _studies(cfg, names, root_data, root_rep, stage, stages, caught)
         t0 = time.perf_counter()
-        summary = write_summary(
-            {n: study[n]["results"] for n in names},
-            {n: study[n]["confusion"] for n in names}, root_rep,
-            {n: plans[n].config for n in names}, OmegaConf.to_object(cfg.study), cfg.seed,
-            spread={n: study[n]["spread"] for n in names})
+        with ownership.claim(root_rep, "swgsim-paper", "report_root",
+                             only=SUMMARY_FILES) as claim:
+            summary = write_summary(
+                {n: study[n]["results"] for n in names},
+                {n: study[n]["confusion"] for n in names}, root_rep,
+                {n: plans[n].config for n in names}, OmegaConf.to_object(cfg.study),
+                cfg.seed, spread={n: study[n]["spread"] for n in names})
+            claim.record(summary["files"].values())
         stages["summary"] = time.perf_counter() - t0
         print(f"[{stage()}] summary: {summary['files']['md']}", flush=True)
     for w in parent_warnings:

@@ -110,44 +110,47 @@ def _umask_mode() -> int:
     return 0o666 & ~mask
 
 
-def _host() -> str:
+def temp_host() -> str:
+    """This host's name as temporary files carry it (letters, digits, ``_`` and ``-``)."""
     return re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname()) or "host"
 
 
 def temp_prefix(path: Path) -> str:
-    """Prefix of this process's temporary files for ``path``: ``.<name>.<host>-<pid>.``,
-    so that a later run can tell the leftovers of a dead process (:func:`stale_temp_files`).
+    """Prefix of this process's temporary files for ``path``: ``.<name>.<host>-<pid>.``.
+
+    The name alone proves nothing: a temporary file is this project's only if the
+    ownership stamp of its folder names its ``<host>-<pid>`` (:mod:`swgsim.ownership`),
+    and only then may a later run remove it once that process is gone.
     """
-    return f".{path.name}.{_host()}-{os.getpid()}."
+    return f".{path.name}.{temp_host()}-{os.getpid()}."
 
 
-_TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<host>[A-Za-z0-9_-]+)-(?P<pid>\d+)\..+\.tmp$")
+#: Names :func:`temp_prefix` gives (``.<name>.<host>-<pid>.<random>.tmp``).
+TEMP_NAME = re.compile(r"^\.(?P<name>.+)\.(?P<host>[A-Za-z0-9_-]+)-(?P<pid>\d+)\..+\.tmp$")
 
 
-def stale_temp_files(folder: str | os.PathLike) -> list[Path]:
-    """Temporary files in ``folder`` left by processes of this host that no longer run.
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this host runs (another user's counts as running)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, another user's
+        return True
+    return True
 
-    A write in progress by a live process (on this host or another one) is never listed.
-    """
-    out = []
-    folder = Path(folder)
-    if not folder.is_dir():
-        return out
-    for p in folder.iterdir():
-        m = _TEMP.match(p.name)
-        if not m or m["host"] != _host() or int(m["pid"]) == os.getpid():
-            continue
-        try:
-            os.kill(int(m["pid"]), 0)
-        except ProcessLookupError:
-            out.append(p)
-        except PermissionError:  # alive, another user's
-            pass
-    return sorted(out)
+
+def _recorded(path: Path, tmp: str, digest: str | None = None) -> None:
+    """Record ``path`` (about to be replaced by the finished ``tmp``) in the ownership
+    stamp, if this process claimed a folder holding it (:func:`swgsim.ownership.before_replace`)."""
+    from . import ownership
+
+    ownership.before_replace(path, tmp, digest)
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically (temporary file in the same folder, rename)."""
+    """Write ``data`` to ``path`` atomically (temporary file in the same folder, rename);
+    in a folder this process claimed, the file is listed in its ownership stamp first."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=".tmp", dir=path.parent)
@@ -157,6 +160,7 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, _umask_mode())
+        _recorded(path, tmp)
         os.replace(tmp, path)
     except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
@@ -241,7 +245,9 @@ def write_shard(ds, path: str | os.PathLike) -> str:
     ds : xarray.Dataset
         A schema-v1 data set (see :func:`make_dataset`).
     path : path-like
-        Target file; written to a temporary name in the same folder, then renamed.
+        Target file; written to a temporary name in the same folder, then renamed (in a
+        folder this process claimed, listed in its ownership stamp first,
+        :mod:`swgsim.ownership`).
 
     Returns
     -------
@@ -263,6 +269,7 @@ def write_shard(ds, path: str | os.PathLike) -> str:
         ds.to_netcdf(tmp, engine="h5netcdf", invalid_netcdf=False)
         digest = sha256_file(tmp)
         os.chmod(tmp, _umask_mode())
+        _recorded(path, tmp, digest)
         os.replace(tmp, path)
     except BaseException as e:
         Path(tmp).unlink(missing_ok=True)

@@ -7,7 +7,10 @@ shards that are not done yet are simulated (:mod:`swgsim.shard`) in worker proce
 
 Resumable and atomic: a shard file is written to a temporary name and renamed, then a
 sidecar ``<shard>.json`` records its SHA-256; a rerun skips shards whose file matches its
-sidecar. The manifest is written last, when every shard is there.
+sidecar. The manifest is written last, when every shard is there. A run writes only into a
+folder it claimed (:mod:`swgsim.ownership`): every file it writes is listed with its
+SHA-256 in the folder's ownership stamp before it is renamed into place, and it deletes
+or overwrites nothing that is not listed there.
 """
 
 from __future__ import annotations
@@ -19,9 +22,11 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from . import ownership
 from .config import DatasetConfig
-from .outdir import check_disk_space, finalize, prepare_out_dir, shard_done
+from .outdir import check_disk_space, finalize, finished, prepare_out_dir, shard_done
 from .plan import DatasetPlan, ShardSpec, plan
+from .resources import check_memory
 from .shard import gear_influences, run_shard
 
 log = logging.getLogger(__name__)
@@ -33,6 +38,14 @@ def _warm() -> None:
     import xarray  # noqa: F401
 
     import swgsim.shard  # noqa: F401
+
+
+def _run_shard_in_worker(p: DatasetPlan, s: ShardSpec, out: Path,
+                         influences: dict) -> dict:
+    """:func:`swgsim.shard.run_shard` in a worker process, registered in the stamp of the
+    folder its parent claimed, so that its temporary and finished files are ours."""
+    with ownership.join(out):
+        return run_shard(p, s, out, influences)
 
 
 def _run(p: DatasetPlan, todo: list[ShardSpec], out: Path, n_workers: int, bar) -> None:
@@ -52,7 +65,7 @@ def _run(p: DatasetPlan, todo: list[ShardSpec], out: Path, n_workers: int, bar) 
             yield delayed(_warm)()
         infl = gear_influences(p, todo)
         for s in todo:
-            yield delayed(run_shard)(p, s, out, infl[s.gear])
+            yield delayed(_run_shard_in_worker)(p, s, out, infl[s.gear])
 
     par = Parallel(n_jobs=n_workers, return_as="generator_unordered",
                    pre_dispatch=f"{n_workers + 1}")
@@ -76,7 +89,8 @@ def generate(cfg: DatasetConfig | DatasetPlan | Mapping[str, Any], out_dir: str 
     n_jobs : int
         Worker processes for the shards (joblib, loky backend); 1 runs in-process.
     overwrite : bool
-        Replace a data set of another config in ``out_dir``.
+        Replace a finished data set of another config in ``out_dir`` (only files its
+        ownership stamp proves a run of this project wrote).
     shard_index : int, optional
         Compute only this shard (for cluster array jobs, e.g. the Hydra submitit
         launcher); the manifest is written by whichever call finds all shards present.
@@ -94,7 +108,12 @@ def generate(cfg: DatasetConfig | DatasetPlan | Mapping[str, Any], out_dir: str 
     ------
     ValueError
         On any invalid config value (see :func:`swgsim.plan.plan`), ``n_jobs`` or
-        ``shard_index``, or a foreign ``out_dir``; before anything is written.
+        ``shard_index``, shards too large for the memory available
+        (:func:`swgsim.resources.check_memory`), or an ``out_dir`` holding a file not
+        provably this project's (named) or another config's finished data set without
+        ``overwrite``
+        (:func:`swgsim.outdir.prepare_out_dir`); before anything is written or deleted.
+        A finished data set of this config is used as it is (nothing is written).
     """
     t0 = time.perf_counter()
     if int(n_jobs) < 1:
@@ -105,28 +124,37 @@ def generate(cfg: DatasetConfig | DatasetPlan | Mapping[str, Any], out_dir: str 
         raise ValueError(f"shard must lie in [0, {len(shards) - 1}], got {shard_index}")
     out = Path(out_dir)
     todo_all = list(shards) if shard_index is None else [shards[int(shard_index)]]
+    done = finished(out, p)
+    if done is not None:  # nothing to write, so nothing to prove: used as it is
+        return {"out_dir": str(out), "computed": [], "skipped": [s.name for s in todo_all],
+                "complete": True, "replaced": None, "windows": int(done.get("n_samples", 0)),
+                "content_sha256": done.get("content_sha256"),
+                "wall_s": time.perf_counter() - t0}
     todo = [s for s in todo_all if not shard_done(out, s, p.config_hash)]
     check_disk_space(out, todo, p)  # before anything is written
-    replaced = prepare_out_dir(out, p, overwrite)
-    skipped = [s.name for s in todo_all if s not in todo]
-    if skipped:
-        log.info("resuming: %d shard(s) already done, skipped", len(skipped))
-    from tqdm.auto import tqdm
+    check_memory(p, todo, min(int(n_jobs), len(todo)))
+    replaced, claim = prepare_out_dir(out, p, overwrite)
+    with claim:
+        skipped = [s.name for s in todo_all if s not in todo]
+        if skipped:
+            log.info("resuming: %d shard(s) already done, skipped", len(skipped))
+        from tqdm.auto import tqdm
 
-    bar = tqdm(total=len(todo), desc=f"generate {p.config.name}", unit="shard",
-               disable=not progress or not todo)
-    try:
-        _run(p, todo, out, min(int(n_jobs), len(todo)), bar)
-    finally:
-        bar.close()
-    complete = all(shard_done(out, s, p.config_hash) for s in shards)
-    summary: dict[str, Any] = {"out_dir": str(out), "computed": [s.name for s in todo],
-                               "skipped": skipped, "complete": complete, "replaced": replaced}
-    if complete:
-        manifest = finalize(out, p)
-        summary["windows"] = manifest["n_samples"]
-        summary["content_sha256"] = manifest["content_sha256"]
-    else:
-        summary["windows"] = int(sum(s.n_windows for s in todo))
+        bar = tqdm(total=len(todo), desc=f"generate {p.config.name}", unit="shard",
+                   disable=not progress or not todo)
+        try:
+            _run(p, todo, out, min(int(n_jobs), len(todo)), bar)
+        finally:
+            bar.close()
+        complete = all(shard_done(out, s, p.config_hash) for s in shards)
+        summary: dict[str, Any] = {"out_dir": str(out), "computed": [s.name for s in todo],
+                                   "skipped": skipped, "complete": complete,
+                                   "replaced": replaced}
+        if complete:
+            manifest = finalize(out, p)
+            summary["windows"] = manifest["n_samples"]
+            summary["content_sha256"] = manifest["content_sha256"]
+        else:
+            summary["windows"] = int(sum(s.n_windows for s in todo))
     summary["wall_s"] = time.perf_counter() - t0
     return summary

@@ -1,8 +1,9 @@
 """The output folder of a data set: what a run may replace, disk space, finished shards,
 the manifest.
 
-A run never deletes what it did not create: a folder is replaced only when it holds
-nothing but this project's data-set files (:data:`DATASET_FILE`), and every write is
+A run never deletes nor overwrites what it cannot prove it wrote: the folder is claimed
+through its ownership stamp (:mod:`swgsim.ownership`), which lists every file a run of
+this project wrote there with its SHA-256; a file's name proves nothing. Every write is
 atomic (:func:`swgsim.data.atomic_write_json`). Used by :func:`swgsim.generate.generate`;
 takes the checked :class:`swgsim.plan.DatasetPlan`.
 """
@@ -12,21 +13,21 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import re
 import shutil
 import subprocess
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from . import data as dsio
+from . import ownership
 
 if TYPE_CHECKING:
     from .plan import DatasetPlan, ShardSpec
 
 log = logging.getLogger(__name__)
 
-__all__ = ["package_version", "git_revision", "shard_done", "DATASET_FILE",
-           "foreign_entries", "prepare_out_dir", "check_disk_space", "finalize"]
+__all__ = ["package_version", "git_revision", "shard_done", "finished", "prepare_out_dir",
+           "check_disk_space", "finalize"]
 
 
 def package_version() -> str:
@@ -57,95 +58,103 @@ def shard_done(out_dir: Path, shard: ShardSpec, chash: str) -> bool:
         return False
     try:
         meta = json.loads(side.read_text())
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, UnicodeDecodeError):
         return False
-    return meta.get("config_hash") == chash and dsio.sha256_file(f) == meta.get("sha256")
+    return (isinstance(meta, dict) and meta.get("config_hash") == chash
+            and ownership.sha256(f) == meta.get("sha256"))
 
 
-#: Names of the files a data set of this project consists of: its manifest, the config
-#: stamp, the shards and their sidecars, and temporary files of an interrupted write.
-DATASET_FILE = re.compile(
-    r"manifest\.json|\.config\.json|gear\d+_(n\d+rpm|life)\.(nc|json)|\..+\.tmp")
+def finished(out_dir: Path, plan: DatasetPlan) -> dict | None:
+    """The manifest of a finished data set of this config in ``out_dir``, every shard
+    present with the SHA-256 it lists; None otherwise. Read-only: such a folder is used
+    as it is, whoever wrote it, since nothing needs to be written."""
+    try:
+        manifest = json.loads((out_dir / dsio.MANIFEST).read_text())
+    except (OSError, ValueError):
+        return None
+    if not (isinstance(manifest, dict) and manifest.get("complete") is True
+            and manifest.get("config_hash") == plan.config_hash
+            and isinstance(manifest.get("shards"), dict)
+            and set(manifest["shards"]) == {s.name for s in plan.shards}):
+        return None
+    for name, entry in manifest["shards"].items():
+        f = out_dir / name
+        if not (isinstance(entry, dict) and f.is_file()
+                and ownership.sha256(f) == entry.get("sha256")):
+            return None
+    return manifest
 
 
-def foreign_entries(out_dir: Path) -> list[str]:
-    """Names of the entries of ``out_dir`` that are not files of this project's data set
-    (:data:`DATASET_FILE`); folders and links always count as foreign."""
-    return sorted(p.name for p in Path(out_dir).iterdir()
-                  if p.is_symlink() or not p.is_file() or not DATASET_FILE.fullmatch(p.name))
+def _config_of(out_dir: Path, found: ownership.Survey) -> str | None:
+    """Config hash of our data set in ``out_dir`` (its manifest, else its config stamp);
+    ``"unknown"`` for our files without either; None for a folder without our files."""
+    for name in (dsio.MANIFEST, ".config.json"):
+        if name in found.owned:
+            try:
+                return str(json.loads((out_dir / name).read_text())["config_hash"])
+            except (ValueError, KeyError, TypeError):
+                return "unreadable"
+    return "unknown" if found.owned else None
 
 
-def prepare_out_dir(out_dir: Path, plan: DatasetPlan, overwrite: bool) -> str | None:
-    """Create ``out_dir``, or check that it holds (part of) a data set of this config.
+def prepare_out_dir(out_dir: Path, plan: DatasetPlan,
+                    overwrite: bool) -> tuple[str | None, ownership.Claim]:
+    """Claim ``out_dir`` for this data set: create it, or check that it holds (part of) a
+    data set of this project.
 
-    Temporary files that dead processes of this host left behind are removed. A folder
-    holding an *unfinished* data set of another config (no manifest: a run that failed or
-    was stopped) is replaced, so that it never blocks a corrected rerun; a *finished* one
-    only with ``overwrite``. Either way the folder must hold nothing but this project's
-    data-set files (:func:`foreign_entries`), which are deleted one by one; the folder
-    itself is kept.
+    The folder must hold nothing but files a run of this project can be shown to have
+    written (:func:`swgsim.ownership.check`: listed with their SHA-256 in its ownership
+    stamp), whatever their names; this is checked before anything is touched. Then the
+    folder is claimed (:func:`swgsim.ownership.claim`: stamped, our temporary files of
+    dead processes removed). Our *unfinished* data set of another config (no manifest: a
+    run that failed or was stopped) is replaced, so that it never blocks a corrected
+    rerun; our *finished* one only with ``overwrite``: its files are deleted one by one,
+    each checked against the stamp again; the folder itself is kept.
 
     Returns
     -------
-    str or None
+    replaced : str or None
         What was replaced, or None.
+    claim : swgsim.ownership.Claim
+        The claimed folder; the caller closes it.
 
     Raises
     ------
     ValueError
-        Naming the folder, if ``out_dir`` is not a folder, holds a finished data set of
-        another config without ``overwrite``, holds anything else, or another run is
-        writing into it; nothing is touched then.
+        Naming the folder: ``out_dir`` is not a folder, holds a file not provably ours
+        (named), holds a finished data set of another config without ``overwrite``, or
+        another run is writing our data set of another config into it; nothing is touched
+        then.
     """
     chash = plan.config_hash
-    mf = out_dir / dsio.MANIFEST
-    stamp = out_dir / ".config.json"
+    found = ownership.check(out_dir, "out_dir")
+    old = _config_of(out_dir, found)
     replaced = None
-    if out_dir.exists() and not out_dir.is_dir():
-        raise ValueError(f"out_dir {out_dir} exists and is not a folder")
-    if out_dir.exists():
-        for f in dsio.stale_temp_files(out_dir):  # left by a killed run
-            f.unlink(missing_ok=True)
-            log.info("removed %s, left by a stopped run", f.name)
-    if out_dir.exists() and any(out_dir.iterdir()):
-        old = None
-        for f in (mf, stamp):
-            if f.is_file():
-                try:
-                    old = json.loads(f.read_text()).get("config_hash")
-                except (json.JSONDecodeError, UnicodeDecodeError, AttributeError):
-                    old = "unreadable"
-                break
-        if old != chash:
-            foreign = foreign_entries(out_dir)
-            finished = mf.is_file()
-            if foreign:
-                what = ("holds no data set" if old is None else
-                        f"holds a data set of another config (hash {old}, this one {chash})")
-                raise ValueError(
-                    f"out_dir {out_dir} {what} and {len(foreign)} entr"
-                    f"{'y' if len(foreign) == 1 else 'ies'} that are not this project's "
-                    f"data set (e.g. {', '.join(foreign[:3])}); nothing was touched: "
-                    "choose another out_dir")
-            live = [p.name for p in out_dir.iterdir() if p.name.endswith(".tmp")]
-            if live:
-                raise ValueError(f"out_dir {out_dir}: another run is writing into it "
-                                 f"({live[0]}); wait for it or choose another out_dir")
-            if finished and not overwrite:
-                raise ValueError(
-                    f"out_dir {out_dir} holds a data set made with another config (config "
-                    f"hash {old}, this one {chash}); choose another out_dir or pass "
-                    "overwrite=true to replace it")
-            files = sorted(out_dir.iterdir())
-            for f in files:
-                f.unlink()
-            replaced = (f"replaced the {'data set' if finished else 'unfinished data set'} "
-                        f"in {out_dir} (config hash {old} -> {chash}, {len(files)} files)")
+    if old not in (None, chash):
+        done = dsio.MANIFEST in found.owned
+        if found.live:
+            raise ValueError(f"out_dir {out_dir}: another run is writing into it "
+                             f"({found.live[0]}); wait for it or choose another out_dir")
+        if done and not overwrite:
+            raise ValueError(
+                f"out_dir {out_dir} holds a data set made with another config (config "
+                f"hash {old}, this one {chash}); choose another out_dir or pass "
+                "overwrite=true to replace it")
+        replaced = f"{'data set' if done else 'unfinished data set'} in {out_dir} " \
+                   f"(config hash {old} -> {chash}"
+    claim = ownership.claim(out_dir, "swgsim-generate", found=found)
+    try:
+        if replaced:
+            n = claim.remove(found.owned)
+            replaced = f"replaced the {replaced}, {n} files)"
             log.info("%s", replaced)  # the caller reports it (summary["replaced"])
-    out_dir.mkdir(parents=True, exist_ok=True)
-    if not stamp.is_file():
-        dsio.atomic_write_json(stamp, {"config_hash": chash, "config": plan.as_dict()})
-    return replaced
+        if not (out_dir / ".config.json").is_file():
+            dsio.atomic_write_json(out_dir / ".config.json",
+                                   {"config_hash": chash, "config": plan.as_dict()})
+    except BaseException:
+        claim.close()
+        raise
+    return replaced, claim
 
 
 def check_disk_space(out_dir: Path, shards: list[ShardSpec], plan: DatasetPlan) -> None:

@@ -209,6 +209,23 @@ def _check_recording(cfg: DatasetConfig) -> None:
          f"still ring from the start); allowed: >= {need:.3g} s")
 
 
+def _check_sensors(cfg: DatasetConfig) -> None:
+    """The gauge layout's own ranges, before the mesh resolves it (:func:`_check_layout`):
+    radii inside the collar's clamped edge, a grid of positive length no longer than the
+    collar's radial extent, a gauge factor of foil (about 2) up to semiconductor gauges
+    (about 150; Hoffmann, *An Introduction to Measurements using Strain Gages*, HBM 1989,
+    sec. 2)."""
+    s, r_c = cfg.sensors, FlexsplineGeometry().r_collar_m * 1e3
+    _in(s.r_torque_mm, 0.0, r_c, "dataset.sensors.r_torque_mm", "mm", lo_open=True,
+        why="inside the collar's clamped edge")
+    _in(s.r_pairs_mm, 0.0, r_c, "dataset.sensors.r_pairs_mm", "mm", lo_open=True,
+        why="inside the collar's clamped edge")
+    _in(s.grid_length_mm, 0.0, r_c, "dataset.sensors.grid_length_mm", "mm", lo_open=True,
+        why="a grid of positive length on the collar")
+    _in(s.gauge_factor, 0.0, 200.0, "dataset.sensors.gauge_factor", lo_open=True,
+        why="foil gauges about 2, semiconductor gauges up to about 150")
+
+
 def _check_layout(cfg: DatasetConfig) -> None:
     """Every gear's gauges on the collar and resolved by the mesh (geometry only, no
     factorisation)."""
@@ -320,6 +337,7 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     _check_tolerances_and_disturbance(cfg)
     _check_gears(cfg)
     _check_recording(cfg)
+    _check_sensors(cfg)
     effects = tuple(parse_sensor_effects(cfg.sensor_effects))
     friction = friction_effects_from_config(cfg.friction_effects)
     variants = _variants(cfg)

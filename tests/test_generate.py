@@ -15,6 +15,7 @@ from omegaconf import OmegaConf
 from swgcli import compose_app, dataset_preset
 from swgsim import data as dsio
 from swgsim import generate as gen
+from swgsim import ownership
 from swgsim.config import paper_config
 from swgsim.faults import PAPER_CLASSES
 from swgsim.friction import friction_effects_from_config
@@ -149,7 +150,8 @@ def test_sigkill_then_resume_is_bit_identical(tiny_set, tmp_path):
      "n_positions must be >= 1"),
     (lambda c: c["variants"].update({"reduced_damping": {"severity_linspace": [0.1, 0.2, 0]}}),
      "count must be an integer >= 1"),
-    (lambda c: c["sensors"].update({"r_pairs_mm": 45.0}), "leaves the collar"),
+    (lambda c: c["sensors"].update({"r_pairs_mm": 45.0}), r"r_pairs_mm must lie in \(0, 38\] mm"),
+    (lambda c: c["sensors"].update({"r_pairs_mm": 37.0}), "leaves the collar"),
     (lambda c: c["sensors"].update({"grid_length_mm": 0.8}), "too coarse for the gauge layout"),
     (lambda c: c["mesh"].update({"n_theta": 50}), "multiple of 20"),
 ])
@@ -184,29 +186,31 @@ def test_overwrite_replaces_only_a_folder_of_our_data_set(tiny_set, tmp_path):
     (mixed / "thesis.tex").write_text("years of work")
     (mixed / "figures").mkdir()
     before = sorted(p.name for p in mixed.iterdir())
-    with pytest.raises(ValueError, match=f"{mixed}.*not this project's data set.*thesis.tex"):
+    with pytest.raises(ValueError, match=f"{mixed} holds thesis.tex, which this project"):
         gen.generate(cfg, mixed, progress=False, overwrite=True)
     assert sorted(p.name for p in mixed.iterdir()) == before  # nothing touched
     ours = tmp_path / "ours"
     shutil.copytree(src, ours)
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                          capture_output=True, text=True).stdout.strip()
-    stale = ours / f"{dsio.temp_prefix(ours / 'gear1_n2000rpm.nc')}abc.tmp"
-    stale = stale.with_name(stale.name.replace(f"-{os.getpid()}.", f"-{dead}."))
-    stale.write_bytes(b"left by a killed run")
+    # a run of ours, killed while writing: registered in the stamp, then gone
+    code = ("import os, sys; from pathlib import Path; from swgsim import data, ownership; "
+            "f = Path(sys.argv[1]); ownership.join(f.parent); "
+            "(f.parent / (data.temp_prefix(f) + 'abc.tmp')).write_bytes(b'half'); os._exit(0)")
+    subprocess.run([sys.executable, "-c", code, str(ours / "gear1_n2000rpm.nc")], check=True)
+    (stale,) = ours.glob("*.tmp")
+    ownership.join(ours).close()  # this process: a run of ours, alive
     live = ours / f"{dsio.temp_prefix(ours / 'gear2_n2000rpm.nc')}xyz.tmp"
-    live.write_bytes(b"another run writes here")  # this process: alive
+    live.write_bytes(b"another run writes here")
     with pytest.raises(ValueError, match="another run is writing into it"):
         gen.generate(cfg, ours, progress=False, overwrite=True)
-    assert not stale.exists() and live.exists()  # the killed run's leftover is cleaned
+    assert stale.exists() and live.exists()  # a refused run touches nothing
     live.unlink()
     s = gen.generate(cfg, ours, progress=False, overwrite=True)
     assert s["complete"] and "replaced the data set" in s["replaced"]
-    assert not list(ours.glob("*.tmp"))
+    assert not list(ours.glob("*.tmp"))  # the killed run's leftover is cleaned
     plain = tmp_path / "plain"
     plain.mkdir()
     (plain / "notes.txt").write_text("mine")
-    with pytest.raises(ValueError, match="holds no data set"):
+    with pytest.raises(ValueError, match=f"{plain} holds notes.txt"):
         gen.generate(cfg, plain, progress=False, overwrite=True)
     assert (plain / "notes.txt").read_text() == "mine"
 

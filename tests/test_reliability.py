@@ -222,13 +222,14 @@ def test_D3_an_unfinished_run_never_blocks_a_corrected_rerun(tmp_path, monkeypat
 
 def test_D4_temporary_files_of_a_killed_run_are_cleaned(copy_of):
     folder = copy_of()
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                          capture_output=True, text=True).stdout.strip()
-    name = dsio.temp_prefix(folder / "gear1_n4000rpm.nc").replace(f"-{os.getpid()}.",
-                                                                 f"-{dead}.")
-    (folder / f"{name}k.tmp").write_bytes(b"half a shard")
+    (folder / dsio.MANIFEST).unlink()  # killed before the end: no manifest
+    code = ("import os, sys; from pathlib import Path; from swgsim import data, ownership; "
+            "f = Path(sys.argv[1]); ownership.join(f.parent); "
+            "(f.parent / (data.temp_prefix(f) + 'k.tmp')).write_bytes(b'half'); os._exit(0)")
+    subprocess.run([sys.executable, "-c", code, str(folder / "gear1_n4000rpm.nc")], check=True)
+    assert len(list(folder.glob("*.tmp"))) == 1  # its stamp names the killed run: ours
     gen.generate(small_cfg(), folder, n_jobs=1, progress=False)
-    assert not list(folder.glob("*.tmp"))
+    assert not list(folder.glob("*.tmp")) and (folder / dsio.MANIFEST).is_file()
 
 
 # ------------------------------------------------------------------ E measured data

@@ -323,6 +323,10 @@ def _why_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame, a: str, b: st
         ""]
 
 
+#: The files :func:`write_summary` writes into the report root.
+SUMMARY_FILES = ("summary.csv", "recall_rf.png", "summary.md")
+
+
 def write_summary(
     results: Mapping[str, pd.DataFrame],
     confusion: Mapping[str, pd.DataFrame],
@@ -370,8 +374,7 @@ def write_summary(
     cards = {n: scorecard(cells, f"ours_{n}") for n in names}
     found = {n: check_findings(our_cells(results[n])) for n in names}
     rec = {n: recall(confusion[n]) for n in names}
-    files = {"csv": root / "summary.csv", "recall": root / "recall_rf.png",
-             "md": root / "summary.md"}
+    files = {k: root / f for k, f in zip(("csv", "recall", "md"), SUMMARY_FILES, strict=True)}
     cells.to_csv(files["csv"], index=False)
     recall_figure(rec, files["recall"])
     sp = spread_table(spread or {})

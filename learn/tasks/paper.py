@@ -63,10 +63,13 @@ def run_paper_study(
     Raises
     ------
     ValueError
-        For an unknown table or model.
+        For an unknown table or model, or a ``report_dir`` holding a file this project
+        cannot show it wrote (named; before any work, :func:`swgsim.ownership.check`).
     """
     from learn.reports.report import write_report
+    from swgsim import ownership
 
+    ownership.check(report_dir, "report_dir")  # before any work: nothing in it but ours
     options = options or StudyOptions()
     tracking = None
     if track:
@@ -75,9 +78,12 @@ def run_paper_study(
     study = paper_study(dataset_path, options, tracking=tracking, n_jobs=n_jobs,
                         progress=progress, random_state=random_state, features=features,
                         protocols=protocols, name=name)
-    files = write_report(study.results, report_dir,
-                         ds=study.ds if options.figures else None, timings_s=study.timings_s,
-                         dataset_path=str(dataset_path), confusion=study.confusion)
+    with ownership.claim(report_dir, "paper-study", "report_dir") as claim:
+        files = write_report(study.results, report_dir,
+                             ds=study.ds if options.figures else None,
+                             timings_s=study.timings_s, dataset_path=str(dataset_path),
+                             confusion=study.confusion)
+        claim.record(files.values())
     return {"results": study.results, "confusion": study.confusion, "spread": study.spread,
             "warnings": study.warnings, "timings_s": study.timings_s, "files": files,
             "n_jobs_run": study.n_jobs_run}

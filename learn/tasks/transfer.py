@@ -190,13 +190,15 @@ def run_transfer(cfg) -> dict:
     Raises
     ------
     ValueError
-        A missing ``transfer`` config or a bad ``transfer`` key (before any work).
+        A missing ``transfer`` config, a bad ``transfer`` key, or a ``report_dir``
+        holding a file this project cannot show it wrote (named); before any work.
     """
     import torch
 
     from learn.reports.transfer_picks import headline_lines, headline_table
     from learn.reports.transfer_report import class_recall, row_label, summarise, target_table
     from learn.reports.transfer_runs import log_transfer
+    from swgsim import ownership
 
     app = typed_app(cfg)
     tc = app.transfer
@@ -204,18 +206,20 @@ def run_transfer(cfg) -> dict:
         raise ValueError("transfer: missing; the task needs experiment=transfer (or a "
                          "transfer group of its own)")
     check_config(tc)
+    report_dir = Path(tc.report_dir or Path(app.paths.report_dir) / "transfer")
+    ownership.check(report_dir, "transfer.report_dir")  # before any work
     if tc.n_threads:
         torch.set_num_threads(int(tc.n_threads))
     t_all = time.perf_counter()
     data_sets, generate_s = _data_sets(app, tc)
-    report_dir = Path(tc.report_dir or Path(app.paths.report_dir) / "transfer")
-    report_dir.mkdir(parents=True, exist_ok=True)
-    got = _compare(app, tc, data_sets, report_dir)
-    res = pd.concat(got.results, ignore_index=True)
-    conf = pd.concat(got.confusion, ignore_index=True)
-    wall = time.perf_counter() - t_all
-    timings = _timings(tc, wall, got.input_s, generate_s)
-    files = _write(res, conf, got, tc, report_dir, timings)
+    with ownership.claim(report_dir, "transfer", "transfer.report_dir") as claim:
+        got = _compare(app, tc, data_sets, report_dir)
+        res = pd.concat(got.results, ignore_index=True)
+        conf = pd.concat(got.confusion, ignore_index=True)
+        wall = time.perf_counter() - t_all
+        timings = _timings(tc, wall, got.input_s, generate_s)
+        files = _write(res, conf, got, tc, report_dir, timings)
+        claim.record(files.values())
     summ = summarise(res)
     w = summ[(summ["protocol"] == "ood_disturbed") & (summ["split"] == "worst")]
     worst = {f"{r.dataset}/{r.model}/{r.input}/k{int(r.k_shot)}": float(r.mean)

@@ -1,0 +1,289 @@
+"""Ownership, not names: a run deletes or overwrites only what it can prove it wrote.
+
+A file is this project's only if an ownership stamp (``.swg-owner.json``, signed
+``"writer": "swg-monitor"``) lists it with the SHA-256 it has now, or, for a temporary
+file, names the run that left it (:mod:`swgsim.ownership`). Everything else, whatever its
+name, is left byte-identical and the run refuses in one line naming it: the data-set
+writer (with and without ``overwrite``) and every app that writes reports, whose Hydra
+files never land in the user's folder.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from swgcli import compose_app, dataset_preset
+from swgcli.app import one_line
+from swgsim import data as dsio
+from swgsim import generate as gen
+from swgsim import ownership
+
+BIN = Path(sys.executable).parent
+SHARD = "gear1_n4000rpm.nc"
+
+
+def small_cfg(seed: int = 0) -> dict:
+    """Two gears, two classes, one load: a data set in about a second."""
+    cfg = dataset_preset("tiny")
+    cfg["variants"] = {"healthy": {"severities": [0.0], "repeat": 2},
+                       "eccentric_wg": {"severities": [0.1], "n_positions": 1}}
+    cfg["gears"] = cfg["gears"][:2]
+    cfg["operating_points"]["t_out_nm"] = [39.0]
+    cfg["chain"].update({"window_s": 0.06, "settle_s": 0.02})
+    cfg["seed"] = seed
+    return cfg
+
+
+def files(folder: Path) -> dict[str, bytes]:
+    """Every file below ``folder`` (hidden ones included) and its bytes."""
+    return {p.relative_to(folder).as_posix(): p.read_bytes()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def refusal(call) -> str:
+    """The one-line message ``call`` is refused with."""
+    with pytest.raises(ValueError) as info:
+        call()
+    msg = one_line(info.value)
+    assert msg is not None and "\n" not in msg
+    return msg
+
+
+def dead_pid() -> int:
+    return int(subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                              capture_output=True, text=True, check=True).stdout)
+
+
+def killed_run_temp(folder: Path, target: str) -> Path:
+    """A temporary file left by a run of ours that was killed: the run joined the
+    folder's stamp, started writing ``target`` and died."""
+    code = ("import os, sys; from pathlib import Path; from swgsim import data, ownership; "
+            "f = Path(sys.argv[1]); ownership.join(f.parent); "
+            "(f.parent / (data.temp_prefix(f) + 'k.tmp')).write_bytes(b'half'); os._exit(0)")
+    before = set(folder.glob("*.tmp"))
+    subprocess.run([sys.executable, "-c", code, str(folder / target)], check=True)
+    (tmp,) = set(folder.glob("*.tmp")) - before
+    return tmp
+
+
+@pytest.fixture(scope="module")
+def ours(tmp_path_factory) -> Path:
+    """A finished data set of ours (stamped)."""
+    out = tmp_path_factory.mktemp("own") / "ds"
+    gen.generate(small_cfg(), out, n_jobs=1, progress=False)
+    return out
+
+
+# ------------------------------------------------------------------ swgsim-generate
+def _foreign_temp(folder: Path) -> None:
+    name = dsio.temp_prefix(folder / SHARD).replace(f"-{os.getpid()}.", f"-{dead_pid()}.")
+    (folder / f"{name}x.tmp").write_bytes(b"a user's file, named like our temp files")
+
+
+def _our_config_hash() -> str:
+    from swgsim.plan import plan
+
+    return plan(small_cfg()).config_hash
+
+
+def _forged_shard(folder: Path) -> None:
+    (folder / SHARD).write_bytes(b"\x89HDF\r\n\x1a\n a user's NetCDF")
+    (folder / SHARD).with_suffix(".json").write_text(json.dumps(
+        {"sha256": dsio.sha256_file(folder / SHARD), "n_samples": 1, "content_sha256": "0",
+         "config_hash": _our_config_hash()}))
+
+
+FOREIGN = {
+    "another tool's manifest.json": (
+        "manifest.json", lambda f: (f / "manifest.json").write_text(
+            '{"tool": "labview-export", "files": ["run1.tdms"]}')),
+    "a .config.json with our very config hash": (
+        ".config.json", lambda f: (f / ".config.json").write_text(json.dumps(
+            {"config_hash": _our_config_hash()}))),
+    "a NetCDF named like our shard": (
+        SHARD, lambda f: (f / SHARD).write_bytes(b"\x89HDF\r\n\x1a\n a user's NetCDF")),
+    "a NetCDF and sidecar forged to look finished": ("gear1_n4000rpm.json", _forged_shard),
+    "a temp-named file of a dead process": (".gear1_n4000rpm.nc.", _foreign_temp),
+    "another tool's .swg-owner.json": (
+        ownership.STAMP, lambda f: (f / ownership.STAMP).write_text('{"owner": "me"}')),
+}
+
+
+@pytest.mark.parametrize("overwrite", [False, True])
+@pytest.mark.parametrize("case", sorted(FOREIGN))
+def test_generate_refuses_a_folder_of_a_users_file_named_like_ours(tmp_path, case, overwrite):
+    name, make = FOREIGN[case]
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    make(folder)
+    before = files(folder)
+    msg = refusal(lambda: gen.generate(small_cfg(), folder, progress=False,
+                                       overwrite=overwrite))
+    assert f"out_dir {folder} holds {name}" in msg and "nothing was touched" in msg
+    assert files(folder) == before  # byte-identical, and nothing added (no stamp either)
+
+
+def test_stale_temp_cleanup_leaves_a_foreign_temp_looking_file(ours, tmp_path):
+    folder = tmp_path / "unfinished"
+    shutil.copytree(ours, folder)
+    (folder / dsio.MANIFEST).unlink()  # an unfinished data set of ours
+    mine = killed_run_temp(folder, SHARD)  # ours: its run is named in the stamp
+    _foreign_temp(folder)  # a dead pid too, but no stamp names it
+    (foreign,) = set(folder.glob("*.tmp")) - {mine}
+    before = files(folder)
+    msg = refusal(lambda: gen.generate(small_cfg(), folder, progress=False, overwrite=True))
+    assert foreign.name in msg
+    assert files(folder) == before  # the check comes first: not even our temp went
+    foreign.unlink()
+    s = gen.generate(small_cfg(), folder, progress=False)
+    assert s["complete"] and not mine.exists() and not list(folder.glob("*.tmp"))
+
+
+def test_an_edited_file_of_ours_is_no_longer_ours(ours, tmp_path):
+    folder = tmp_path / "edited"
+    shutil.copytree(ours, folder)
+    with (folder / "gear2_n4000rpm.json").open("a") as f:
+        f.write("\n")  # the user annotated our sidecar
+    before = files(folder)
+    msg = refusal(lambda: gen.generate(small_cfg(seed=5), folder, progress=False,
+                                       overwrite=True))
+    assert "gear2_n4000rpm.json" in msg and files(folder) == before
+
+
+def test_rerun_into_our_own_folders(ours, tmp_path, monkeypatch):
+    """overwrite=true replaces our own finished data set; an interrupted run resumes,
+    bit-identical; a finished one of this config is used as it is."""
+    folder = tmp_path / "ds"
+    shutil.copytree(ours, folder)
+    s = gen.generate(small_cfg(seed=5), folder, progress=False, overwrite=True)
+    assert s["complete"] and s["replaced"].startswith("replaced the data set")
+    stamp = json.loads((folder / ownership.STAMP).read_text())
+    assert stamp["writer"] == ownership.SIGNATURE
+    assert set(stamp["files"]) == {p.name for p in folder.iterdir()} - {ownership.STAMP}
+    calls, real = [], gen.run_shard
+
+    def fail_second(*a, **k):
+        calls.append(1)
+        if len(calls) == 2:
+            raise RuntimeError("the machine went down")
+        return real(*a, **k)
+
+    monkeypatch.setattr(gen, "run_shard", fail_second)
+    with pytest.raises(RuntimeError):
+        gen.generate(small_cfg(), folder, progress=False, overwrite=True)
+    monkeypatch.setattr(gen, "run_shard", real)
+    s = gen.generate(small_cfg(), folder, progress=False)
+    assert len(s["skipped"]) == 1 and s["content_sha256"] == json.loads(
+        (ours / dsio.MANIFEST).read_text())["content_sha256"]
+    for f in ours.glob("*.nc"):
+        assert (folder / f.name).read_bytes() == f.read_bytes()
+    before = files(folder)
+    assert not gen.generate(small_cfg(), folder, progress=False)["computed"]
+    assert files(folder) == before
+
+
+# ------------------------------------------------------------------ report writers
+USER_FILES = {"report.md": b"# my notes\n", "summary.json": b'{"mine": true}\n'}
+
+
+def user_folder(path: Path, names=USER_FILES) -> Path:
+    path.mkdir(parents=True)
+    for name, data in names.items():
+        (path / name).write_bytes(data)
+    return path
+
+
+def _app(name: str, *args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([str(BIN / name), *args], capture_output=True, text=True, cwd=cwd,
+                          env={**os.environ, "HYDRA_FULL_ERROR": "0"}, timeout=300)
+
+
+def _friction_csv(path: Path) -> Path:
+    t = np.arange(2000) * 0.002
+    rows = "\n".join(f"{a},{np.sin(a)},{np.cos(a)},{0.1 * np.tanh(20 * np.cos(a))}"
+                     for a in t)
+    path.write_text("time_s,q_rad,dq_rad_per_s,tau_friction_Nm\n" + rows + "\n")
+    return path
+
+
+@pytest.mark.parametrize("app, args, key", [
+    ("swgsim-calibrate", ["measured={csv}", "out_dir={out}", "logger.enabled=false"],
+     "out_dir"),
+    ("swgsim-monitor", ["stream={out}/../life", "diagnosis_model={out}/../m.joblib",
+                        "out_dir={out}", "~logger"], "out_dir"),
+    ("swgsim-paper", ["grid=tiny", "data_root={out}/../data", "report_root={out}",
+                      "tracking_uri=sqlite:///{out}/../m.db"], "report_root"),
+])
+def test_report_apps_refuse_a_users_folder_and_leave_no_hydra_files(tmp_path, app, args, key):
+    names = ({"summary.md": b"# my summary\n", "summary.csv": b"mine\n"}
+             if app == "swgsim-paper" else USER_FILES)
+    out = user_folder(tmp_path / "mine", names)
+    csv = _friction_csv(tmp_path / "rec.csv")
+    r = _app(app, *(a.format(out=out, csv=csv) for a in args), cwd=tmp_path)
+    assert r.returncode == 2, r.stderr
+    lines = [s for s in r.stderr.splitlines() if s.strip()]
+    assert lines == [f"{app}: error: {key} {out} holds {sorted(names)[0]} and 1 more such "
+                     "file(s), which this project cannot show it wrote (no ownership stamp "
+                     f".swg-owner.json lists it with its SHA-256); nothing was touched: move "
+                     f"it away or choose another {key}"]
+    assert files(out) == names  # byte-identical; no .hydra/, no *.log, no stamp
+    assert not (tmp_path / "data").exists()
+
+
+def test_main_job_refuses_a_users_file_in_a_study_folder(tmp_path):
+    from swgcli.paper import run_paper
+
+    out = user_folder(tmp_path / "reports" / "bench", {"results.csv": b"mine\n"})
+    cfg = compose_app("paper", ["grid=tiny", f"data_root={tmp_path}/data",
+                                f"report_root={tmp_path}/reports",
+                                f"tracking_uri=sqlite:///{tmp_path}/m.db"])
+    msg = refusal(lambda: run_paper(cfg))
+    assert f"{out} holds results.csv" in msg and files(out) == {"results.csv": b"mine\n"}
+    assert not (tmp_path / "data").exists()  # before any work
+
+
+def test_calibrate_rerun_replaces_its_own_files_only(tmp_path):
+    from swgcli.calibrate import run_calibrate
+
+    csv = _friction_csv(tmp_path / "rec.csv")
+    out = tmp_path / "out"
+    cfg = compose_app("calibrate", [f"measured={csv}", f"out_dir={out}",
+                                    "logger.enabled=false"])
+    run_calibrate(cfg)
+    stamp = json.loads((out / ownership.STAMP).read_text())
+    assert {"report.md", "summary.json", "figures/time.png"} <= set(stamp["files"])
+    run_calibrate(cfg)  # its own earlier output: replaced
+    (out / "report.md").write_text("# my edits\n")  # ours no longer: the user's now
+    before = files(out)
+    msg = refusal(lambda: run_calibrate(cfg))
+    assert f"out_dir {out} holds report.md" in msg and files(out) == before
+
+
+@pytest.mark.parametrize("app, key", [("observability", "report_dir"),
+                                      ("transfer", "transfer.report_dir")])
+def test_observability_and_transfer_refuse_before_any_work(tmp_path, app, key):
+    out = user_folder(tmp_path / "mine", {"table.md": b"mine\n"})
+    if app == "observability":
+        from swgcli.observability import run_observability
+
+        cfg = compose_app("observability", [f"report_dir={out}",
+                                            f"data_root={tmp_path}/data"])
+        call = lambda: run_observability(cfg)  # noqa: E731
+    else:
+        from learn.tasks.train import run_train
+
+        cfg = compose_app("train", ["experiment=transfer", "~logger",
+                                    f"transfer.report_dir={out}",
+                                    f"paths.data_dir={tmp_path}/data"])
+        call = lambda: run_train(cfg)  # noqa: E731
+    msg = refusal(call)
+    assert msg.startswith(f"{key} {out} holds table.md") and files(out) == {"table.md": b"mine\n"}
+    assert not (tmp_path / "data").exists()
