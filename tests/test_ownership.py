@@ -268,7 +268,8 @@ def test_calibrate_rerun_replaces_its_own_files_only(tmp_path):
 
 
 @pytest.mark.parametrize("app, key", [("observability", "report_dir"),
-                                      ("transfer", "transfer.report_dir")])
+                                      ("transfer", "transfer.report_dir"),
+                                      ("monitor", "monitor.report_dir")])
 def test_observability_and_transfer_refuse_before_any_work(tmp_path, app, key):
     out = user_folder(tmp_path / "mine", {"table.md": b"mine\n"})
     if app == "observability":
@@ -280,9 +281,8 @@ def test_observability_and_transfer_refuse_before_any_work(tmp_path, app, key):
     else:
         from learn.tasks.train import run_train
 
-        cfg = compose_app("train", ["experiment=transfer", "~logger",
-                                    f"transfer.report_dir={out}",
-                                    f"paths.data_dir={tmp_path}/data"])
+        cfg = compose_app("train", [f"experiment={app}", "~logger",
+                                    f"{key}={out}", f"paths.data_dir={tmp_path}/data"])
         call = lambda: run_train(cfg)  # noqa: E731
     msg = refusal(call)
     assert msg.startswith(f"{key} {out} holds table.md") and files(out) == {"table.md": b"mine\n"}

@@ -33,7 +33,7 @@ from swgsim.sensor_faults import SENSOR_FAULTS
 from swgsim.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
 
 from .baselines import BASELINES, References, WindowClassifier, fit_baseline, window_inputs
-from .features import window_features
+from .features import feature_names, window_features
 from .model import HEALTHY, Baseline, design_matrix, fit_diagnosis
 from .monitor import GearMonitor, Trace, baseline_windows, run_cusums
 from .rule import RuleConfig, log_bets, threshold
@@ -143,6 +143,8 @@ def features_of(sim: LifeSimulator, start: int, stop: int,
     """Health features, operating points and metadata of windows ``start:stop``;
     ``on_block(signals, meta)`` is called with each block of simulated windows."""
     fs = sim.plan.config.chain.sample_rate_hz
+    if stop <= start:
+        return np.empty((0, len(feature_names()))), np.empty((0, 2)), {}
     f, pts, metas = [], [], []
     for a in range(start, stop, BLOCK):
         sig, meta = sim.windows(a, min(a + BLOCK, stop))

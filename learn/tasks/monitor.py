@@ -73,6 +73,9 @@ def check_study(sc: MonitorStudyConfig) -> None:
     lo, hi = sc.onset_window_h
     req(0 <= lo <= hi, f"monitor.study.onset_window_h must be [lo, hi] with 0 <= lo <= hi, got "
         f"{sc.onset_window_h}")
+    req(sc.commissioning_h + hi <= sc.healthy_hours, "monitor.study.onset_window_h: the latest "
+        f"onset, commissioning_h + {hi:g} h, must lie within the healthy life (healthy_hours="
+        f"{sc.healthy_hours:g} h), whose monitor state a fault life starts from")
     for k in ("horizon_h", "growth_h", "train_fault_h", "train_healthy_h"):
         req(getattr(sc, k) > 0, f"monitor.study.{k} must be > 0, got {getattr(sc, k)}")
     req(sc.train_variants >= 1, "monitor.study.train_variants must be >= 1")
@@ -91,8 +94,15 @@ def _hash(obj) -> str:
 
 
 def run_monitor(cfg) -> dict:
-    """Run the evaluation (module docstring); return the figures' summary."""
-    from swgsim.data import atomic_write_json
+    """Run the evaluation (module docstring); return the figures' summary.
+
+    Raises
+    ------
+    ValueError
+        A bad ``monitor`` key or data set, or a ``report_dir`` holding a file this
+        project cannot show it wrote (named); before any work.
+    """
+    from swgsim import ownership
     from swgsim.plan import plan
 
     app = typed_app(cfg)
@@ -109,6 +119,15 @@ def run_monitor(cfg) -> dict:
         except ValueError as e:
             raise ValueError(f"monitor.datasets.{name}: {e}") from None
     out = Path(mc.report_dir)
+    ownership.check(out, "monitor.report_dir")  # before any work
+    with ownership.claim(out, "monitor", "monitor.report_dir") as claim:
+        return _evaluate(app, mc, plans, out, claim)
+
+
+def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim) -> dict:
+    """The evaluation into the claimed ``out`` (every file it writes recorded)."""
+    from swgsim.data import atomic_write_json
+
     (out / "parts").mkdir(parents=True, exist_ok=True)
     (out / "models").mkdir(exist_ok=True)
     jobs = []
@@ -136,7 +155,9 @@ def run_monitor(cfg) -> dict:
               f"{mc.study.healthy_hours:g} h per healthy life; design: one false alarm per "
               f"{mc.study.rule.design_hours:g} h. Wall time {wall / 60:.1f} min.\n")
     write_table(res, fa, out / "table.md", header)
-    figures(res, fa, out, curve)
+    figs = figures(res, fa, out, curve)
+    claim.record([out / f for f in ("results.csv", "false_alarms.csv", "tradeoff.csv",
+                                    "table.md")] + list(figs))
     if mc.progress:  # the console's summary
         from learn.reports.monitor_report import targets
 
@@ -193,8 +214,10 @@ def _job(plan, name: str, g: int, key: str, study: MonitorStudyConfig, out: str)
 
     import joblib
 
+    from swgsim import ownership
     from swgsim.data import atomic_write_bytes
 
+    ownership.join(out, "monitor")  # the model this worker writes is recorded
     part = run_held_out(plan, name, g, study)
     buf = io.BytesIO()
     joblib.dump(part.pop("model"), buf)
