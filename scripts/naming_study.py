@@ -62,48 +62,18 @@ def _name_rules(mon, lp, opi, z_mean, agg_clf, classes, f, q):
     return {k: classes[v] for k, v in out.items()}
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--dataset", default="bench")
-    ap.add_argument("--train", type=int, default=1)
-    ap.add_argument("--judge", type=int, default=2)
-    ap.add_argument("--lives", type=int, default=4)
-    ap.add_argument("--judge-faults", nargs="*", default=None,
-                    help="classes judged (default: every fault class)")
-    ap.add_argument("--sensor-levels", type=int, default=None,
-                    help="training severities per sensor fault (default: the evaluation's, "
-                    "MonitorStudyConfig.sensor_train_levels)")
-    ap.add_argument("--variants", type=int, default=None,
-                    help="training fault positions per class and severity (default: the "
-                    "evaluation's, MonitorStudyConfig.train_variants)")
-    args = ap.parse_args()
-
+def _train(p, gear: int, cfg, cls: list[str], n_comm: int):
+    """The window classifier and the hour-mean classifier (rule ``mean_z``) trained on
+    one training gear's lives."""
     from sklearn.ensemble import HistGradientBoostingClassifier
 
-    from learn.monitor.evaluate import (
-        MonitorStudyConfig,
-        classes,
-        features_of,
-        table_v_severities,
-        training_lives,
-    )
-    from learn.monitor.model import HEALTHY, Baseline, DiagnosisModel, design_matrix
-    from learn.monitor.monitor import GearMonitor, baseline_windows
-    from swgcli import dataset_preset
-    from swgsim.life import FaultOnset, LifeConfig, LifeSimulator, RecordBank
-    from swgsim.plan import plan
-    from swgsim.sensor_faults import SENSOR_FAULTS
+    from learn.monitor.evaluate import features_of, training_lives
+    from learn.monitor.model import HEALTHY, Baseline, design_matrix
+    from learn.monitor.monitor import baseline_windows
+    from swgsim.life import RecordBank
 
-    p = plan(dataset_preset(args.dataset))
-    cfg = MonitorStudyConfig()
-    if args.variants is not None:
-        cfg.train_variants = args.variants
-    if args.sensor_levels is not None:
-        cfg.sensor_train_levels = args.sensor_levels
-    cls = classes(p, cfg)
-    n_comm = int(cfg.commissioning_h * 60)
-    bank = RecordBank(p, args.train)
-    lives = training_lives(p, bank, args.train, cfg)
+    bank = RecordBank(p, gear)
+    lives = training_lives(p, bank, gear, cfg)
     f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
     fit = baseline_windows(p0[:n_comm])
     base = Baseline.fit(f0[:n_comm][fit], p0[:n_comm][fit])
@@ -122,6 +92,47 @@ def main() -> None:
     clf.fit(np.concatenate(xs), np.array(ys))
     agg = HistGradientBoostingClassifier(max_iter=200, early_stopping=False,
                                          random_state=0).fit(np.array(agg_x), np.array(agg_y))
+    return clf, agg
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dataset", default="bench")
+    ap.add_argument("--train", type=int, default=1)
+    ap.add_argument("--judge", type=int, default=2)
+    ap.add_argument("--lives", type=int, default=4)
+    ap.add_argument("--judge-faults", nargs="*", default=None,
+                    help="classes judged (default: every fault class)")
+    ap.add_argument("--sensor-levels", type=int, default=None,
+                    help="training severities per sensor fault (default: the evaluation's, "
+                    "MonitorStudyConfig.sensor_train_levels)")
+    ap.add_argument("--variants", type=int, default=None,
+                    help="training fault positions per class and severity (default: the "
+                    "evaluation's, MonitorStudyConfig.train_variants)")
+    args = ap.parse_args()
+
+    from learn.monitor.evaluate import (
+        MonitorStudyConfig,
+        classes,
+        features_of,
+        table_v_severities,
+    )
+    from learn.monitor.model import DiagnosisModel
+    from learn.monitor.monitor import GearMonitor
+    from swgcli import dataset_preset
+    from swgsim.life import FaultOnset, LifeConfig, LifeSimulator, RecordBank
+    from swgsim.plan import plan
+    from swgsim.sensor_faults import SENSOR_FAULTS
+
+    p = plan(dataset_preset(args.dataset))
+    cfg = MonitorStudyConfig()
+    if args.variants is not None:
+        cfg.train_variants = args.variants
+    if args.sensor_levels is not None:
+        cfg.sensor_train_levels = args.sensor_levels
+    cls = classes(p, cfg)
+    n_comm = int(cfg.commissioning_h * 60)
+    clf, agg = _train(p, args.train, cfg, cls, n_comm)
     model = DiagnosisModel(cls, clf)
 
     jb = RecordBank(p, args.judge)

@@ -6,6 +6,9 @@ signals or the efficiency, so that learners can be checked to beat chance quickl
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -123,3 +126,25 @@ def torch_one_thread():
     torch.set_num_threads(1)
     yield
     torch.set_num_threads(n)
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory) -> Path:
+    """A finished two-gear data set of ``test_reliability.small_cfg`` (about a second)."""
+    from test_reliability import small_cfg
+
+    from swgsim import generate as gen
+
+    out = tmp_path_factory.mktemp("small") / "small"
+    gen.generate(small_cfg(), out, n_jobs=1, progress=False)
+    return out
+
+
+@pytest.fixture
+def copy_of(small, tmp_path):
+    """A copy of :func:`small` under ``tmp_path / name`` to edit."""
+    def make(name: str = "ds") -> Path:
+        dst = tmp_path / name
+        shutil.copytree(small, dst)
+        return dst
+    return make

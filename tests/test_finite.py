@@ -9,7 +9,6 @@ import dataclasses
 import json
 import math
 import re
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -152,20 +151,6 @@ def test_generation_never_finalises_a_data_set_with_a_nonfinite_signal(tmp_path,
 
 
 # ------------------------------------------------------------------ loading
-@pytest.fixture(scope="module")
-def small(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("finite") / "small"
-    gen.generate(small_cfg(), out, n_jobs=1, progress=False)
-    return out
-
-
-@pytest.fixture
-def copy_of(small, tmp_path):
-    def make() -> Path:
-        return Path(shutil.copytree(small, tmp_path / "ds"))
-    return make
-
-
 def _manifest(folder: Path) -> dict:
     return json.loads((folder / dsio.MANIFEST).read_text())
 

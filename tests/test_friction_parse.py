@@ -11,23 +11,17 @@ second-order Butterworth low-pass on the velocity, causal (lag) or zero-phase.
 
 from __future__ import annotations
 
-import importlib.util
 import logging
 from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.signal import butter, filtfilt, lfilter
+from test_calib_real import DATA, needs_data
 
 from swgcal.api import detect_kind
 from swgcal.friction.data import DQ_CONSISTENCY_SURE, load_friction_csv, velocity_consistency
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "calibrate_real.py"
-spec = importlib.util.spec_from_file_location("calibrate_real", SCRIPT)
-calibrate_real = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(calibrate_real)
-DATA = calibrate_real.DEFAULT_DATA
-needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"no real data at {DATA}")
 #: rows of the six recordings (the data's README)
 ROWS = {"franka_joint2_slow": 25390, "franka_joint2_middle": 25402,
         "franka_joint2_high": 25352, "fairino_joint3_S_slow": 11501,

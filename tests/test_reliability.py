@@ -59,22 +59,6 @@ def message(call) -> str:
     return msg
 
 
-@pytest.fixture(scope="module")
-def small(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("rel") / "small"
-    gen.generate(small_cfg(), out, n_jobs=1, progress=False)
-    return out
-
-
-@pytest.fixture
-def copy_of(small, tmp_path):
-    def make(name="ds") -> Path:
-        dst = tmp_path / name
-        shutil.copytree(small, dst)
-        return dst
-    return make
-
-
 # ------------------------------------------------------------------ A deletion safety
 def test_A1_overwrite_refuses_a_folder_with_other_files(copy_of):
     folder = copy_of()
