@@ -79,11 +79,10 @@ def run_monitor_app(cfg) -> dict:
     if app.logger is not None:
         import mlflow
 
-        from learn.tracking import check_tracking
+        from learn.tracking import check_tracking, use_tracking
 
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
-        logging.getLogger("mlflow").setLevel(logging.WARNING)  # no INFO lines on the console
-        mlflow.set_tracking_uri(app.logger.tracking_uri)
+        use_tracking(app.logger.tracking_uri, "logger.tracking_uri")  # one opener at a time
         mlflow.set_experiment(app.logger.experiment)
         with mlflow.start_run(run_name=app.logger.run_name):
             mlflow.log_params({"stream": str(src), "diagnosis_model": app.diagnosis_model,

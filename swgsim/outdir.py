@@ -127,7 +127,7 @@ def prepare_out_dir(out_dir: Path, plan: DatasetPlan,
         then.
     """
     chash = plan.config_hash
-    found = ownership.check(out_dir, "out_dir")
+    found = ownership.check(out_dir, "out_dir", share=chash)  # jobs of one data set share it
     old = _config_of(out_dir, found)
     replaced = None
     if old not in (None, chash):
@@ -142,7 +142,7 @@ def prepare_out_dir(out_dir: Path, plan: DatasetPlan,
                 "overwrite=true to replace it")
         replaced = f"{'data set' if done else 'unfinished data set'} in {out_dir} " \
                    f"(config hash {old} -> {chash}"
-    claim = ownership.claim(out_dir, "swgsim-generate", found=found)
+    claim = ownership.claim(out_dir, "swgsim-generate", found=found, share=chash)
     try:
         if replaced:
             n = claim.remove(found.owned)

@@ -22,8 +22,25 @@ it touches anything, cleanup of temporary files included.
 Every write into a claimed folder is recorded: :func:`swgsim.data.atomic_write_bytes`
 and :func:`swgsim.data.write_shard` record the file's SHA-256 before they rename it into
 place (:func:`before_replace`), and an app records what its writers wrote otherwise
-(:meth:`Claim.record`). Stamp updates are serialised by an ``flock`` on the stamp and
-written atomically, so that worker processes and cluster jobs can share a folder.
+(:meth:`Claim.record`). Stamp updates are serialised by a file lock (``filelock``) on
+:data:`STAMP_LOCK` and written atomically, so that worker processes and cluster jobs can
+share a folder.
+
+One run at a time: :func:`claim` admits a run to its folder under the folder's *gate*
+:data:`LOCK` (a lock held for milliseconds) and the run then holds its own *run lock*
+``.swg-owner.<host>-<pid>.lock`` until the claim is closed; the stamp's ``holders`` name
+the runs and their app. A second run claiming the folder meanwhile (another process: the
+workers of a run, :func:`join`, take no lock) finds a holder's run lock held and is
+refused in one line naming the folder and that run, before it touches anything, unless
+both passed the same ``share`` (e.g. cluster jobs of one data set); :func:`check` looks
+too, so that an app is refused before any work. A run that was killed leaves a free run
+lock, removed by the next admission. Lock files are proved ours as every other file is,
+not by their names: each is listed in the stamp, empty (its SHA-256), before it is
+created, and a lock file is opened only if it is an empty plain file (no link), so that a
+lock never changes what another tool wrote. Proved ours, they are neither foreign nor
+``owned``: like the stamp, no run deletes them as output (the gate and the stamp's lock
+:data:`STAMP_LOCK` stay: removing a lock file others wait on would split them onto two
+files).
 
 One helper serves every app: :func:`check` (read-only, to refuse before any work) and
 :func:`claim` (check, stamp, register this process, remove our stale temporary files).
@@ -31,28 +48,39 @@ One helper serves every app: :func:`check` (read-only, to refuse before any work
 
 from __future__ import annotations
 
-import fcntl
+import hashlib
 import json
 import logging
 import os
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from filelock import FileLock, Timeout
 
 from . import data as dsio
 
 log = logging.getLogger(__name__)
 
-__all__ = ["SIGNATURE", "STAMP", "Survey", "Claim", "survey", "check", "claim", "join",
-           "before_replace", "sha256"]
+__all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "Survey", "Claim", "survey", "check",
+           "claim", "join", "before_replace", "sha256"]
 
 #: This project's signature: the ``writer`` of every stamp it writes.
 SIGNATURE = "swg-monitor"
 #: Name of the ownership stamp in every folder a run of this project writes into.
 STAMP = ".swg-owner.json"
+#: Name of the gate of a folder: runs are admitted to it under this lock (:func:`claim`).
+LOCK = ".swg-owner.lock"
+#: Name of the lock that serialises updates of the stamp.
+STAMP_LOCK = ".swg-owner.json.lock"
+_LOCKS = (LOCK, STAMP_LOCK)
+_EMPTY = hashlib.sha256(b"").hexdigest()  # the SHA-256 of a lock file (always empty)
 _VERSION = 1
 _CLAIMS: dict[Path, Claim] = {}   # folders this process claimed (resolved) -> claim
+_HELD: dict[Path, list] = {}  # run locks held: resolved folder -> [lock, count, pid, folder]
+_GATE_S = 30.0  # how long a run waits for the gate (held for milliseconds by others)
 _HASHES: dict[tuple, str] = {}    # (path, dev, ino, size, mtime_ns, ctime_ns) -> SHA-256
 
 
@@ -135,6 +163,10 @@ def _classify(s: Survey, path: Path, rel: str, stamps: list[tuple[Path, dict]]) 
         return
     if path.name == STAMP and stamps and stamps[0][0] == path.parent:
         return  # a stamp of ours
+    if _is_lock(path.name) and stamps and stamps[0][0] == path.parent:
+        hashes = stamps[0][1]["files"].get(path.name)
+        if isinstance(hashes, list) and sha256(path) in hashes:
+            return  # a lock file of ours, listed by the stamp beside it: kept, as the stamp
     runs = {r for _, st in stamps for r in st["runs"]}
     kind = _temp_owner(path.name, runs)
     if kind == "stale":
@@ -195,9 +227,9 @@ def _survey_once(folder: Path, only: frozenset[str] | None) -> Survey:
     if only is not None:
         stamps = [(folder, top)] if top else []
         runs = {r for _, st in stamps for r in st["runs"]}
-        names = only | {STAMP}
+        names = only | {STAMP, *_LOCKS}
         for p in sorted(folder.iterdir()):
-            if p.name in names or _temp_owner(p.name, runs):
+            if p.name in names or _is_lock(p.name) or _temp_owner(p.name, runs):
                 _classify(s, p, p.name, stamps)
         return s
     enclosing: dict[Path, list[tuple[Path, dict]]] = {folder: [(folder, top)] if top else []}
@@ -219,7 +251,7 @@ def _survey_once(folder: Path, only: frozenset[str] | None) -> Survey:
 
 
 def check(folder: str | os.PathLike, what: str = "out_dir",
-          only: Iterable[str] | None = None) -> Survey:
+          only: Iterable[str] | None = None, share: str | None = None) -> Survey:
     """:func:`survey`, refusing a folder that holds a file nothing proves ours.
 
     Parameters
@@ -229,6 +261,9 @@ def check(folder: str | os.PathLike, what: str = "out_dir",
         The key the folder was given as, for the message (``out_dir``, ``report_dir``).
     only : iterable of str, optional
         See :func:`survey`.
+    share : str, optional
+        See :func:`claim`: a run of another process holding the folder with the same
+        ``share`` is no reason to refuse.
 
     Returns
     -------
@@ -238,7 +273,8 @@ def check(folder: str | os.PathLike, what: str = "out_dir",
     Raises
     ------
     ValueError
-        One line naming the folder and its first foreign file; nothing was touched.
+        One line naming the folder and its first foreign file, or the run of another
+        process holding its run lock (:func:`claim`); nothing was touched.
     """
     s = survey(folder, only, what)
     if s.foreign:
@@ -247,13 +283,152 @@ def check(folder: str | os.PathLike, what: str = "out_dir",
             f"{what} {folder} holds {s.foreign[0]}{more}, which this project cannot show "
             f"it wrote (no ownership stamp {STAMP} lists it with its SHA-256); nothing was "
             f"touched: move it away or choose another {what}")
+    _probe(Path(folder), what, share)
     return s
 
 
+def _slot(run: str) -> str:
+    """Name of the run lock of run ``run`` (``<host>-<pid>``) in a folder it claimed."""
+    return f".swg-owner.{run}.lock"
+
+
+def _is_lock(name: str) -> bool:
+    """Whether ``name`` is named as a lock file of this module (proof comes from a stamp)."""
+    return name.startswith(".swg-owner.") and name.endswith(".lock")
+
+
+def _lock_file(folder: Path, name: str) -> str:
+    """Absolute path of the lock file ``name`` of ``folder``, which is absent or an empty
+    plain file (ours are empty: a lock is never opened on anything else)."""
+    path = folder / name
+    if path.is_symlink() or (path.exists() and (not path.is_file() or path.stat().st_size)):
+        raise ValueError(f"{path} is not this project's lock file (not an empty file); "
+                         "nothing was touched: move it away")
+    return os.path.abspath(path)
+
+
+@contextmanager
+def _gate(folder: Path) -> Iterator[None]:
+    """Hold the gate :data:`LOCK` of ``folder``, under which runs are admitted and leave
+    (held for milliseconds; waited for up to :data:`_GATE_S`)."""
+    lock = FileLock(_lock_file(folder, LOCK), thread_local=False)
+    try:
+        lock.acquire(timeout=_GATE_S)
+    except Timeout:
+        raise ValueError(f"{folder / LOCK} has been held by another process for over "
+                         f"{_GATE_S:g} s; try again, or stop that process") from None
+    try:
+        yield
+    finally:
+        lock.release()
+
+
+def _holders(folder: Path, stamp: dict) -> tuple[dict, list[str]]:
+    """Under the gate: the runs of the stamp's ``holders`` whose run lock is held (run ->
+    what the stamp says of it), and those whose lock is free (gone)."""
+    live, gone = {}, []
+    held = stamp.get("holders")
+    for run, info in sorted(held.items() if isinstance(held, dict) else []):
+        path = folder / _slot(run)
+        if run == _run_id() or path.is_symlink() or not path.is_file():
+            gone.append(run)
+            continue
+        lock = FileLock(_lock_file(folder, _slot(run)), thread_local=False)
+        try:
+            lock.acquire(timeout=0)
+        except Timeout:
+            live[run] = info if isinstance(info, dict) else {}
+            continue
+        lock.release()
+        gone.append(run)
+    return live, gone
+
+
+def _conflict(folder: Path, what: str, live: dict, share: str | None) -> None:
+    """Refuse ``folder`` if a run in ``live`` does not share it with this one."""
+    for run, info in live.items():
+        if share is None or info.get("share") != share:
+            raise ValueError(
+                f"{what}={folder}: another run ({run}, {info.get('app', '?')}) is writing "
+                f"into it; wait for it to finish or choose another {what}")
+
+
+def _held_here(folder: Path) -> list | None:
+    """The entry of :data:`_HELD` if this process holds the run lock of ``folder``."""
+    held = _HELD.get(folder.resolve())
+    return held if held is not None and held[2] == os.getpid() else None
+
+
+def _probe(folder: Path, what: str, share: str | None) -> None:
+    """Refuse ``folder`` if a run of another process holds it (and does not share it)."""
+    stamp = _read_stamp(folder)
+    if _held_here(folder) or not stamp or not stamp.get("holders") \
+            or not (folder / LOCK).is_file():
+        return
+    with _gate(folder):
+        _conflict(folder, what, _holders(folder, _read_stamp(folder) or stamp)[0], share)
+
+
+def _hold(folder: Path, what: str, app: str, share: str | None) -> None:
+    """Admit this run to ``folder`` under the gate and take its run lock (again, if this
+    process holds it: counted)."""
+    held = _held_here(folder)
+    if held is not None:
+        held[1] += 1
+        return
+    me, slot = _run_id(), _slot(_run_id())
+    with _gate(folder):
+        live, gone = _holders(folder, _read_stamp(folder) or {})
+        _conflict(folder, what, live, share)
+        for run in gone:  # their process is gone: its lock file goes before its entry
+            if os.path.exists(_lock_file(folder, _slot(run))) and run != me:
+                os.unlink(folder / _slot(run))
+
+        def admit(stamp: dict) -> None:
+            held = stamp["holders"] = {r: h for r, h in (stamp.get("holders") or {}).items()
+                                       if r not in gone}
+            held[me] = {"app": app, "share": share}
+            for run in gone:
+                stamp["files"].pop(_slot(run), None)
+            stamp["files"][slot] = [_EMPTY]  # listed before it appears
+        _update(folder, app, admit)
+        lock = FileLock(_lock_file(folder, slot), thread_local=False)
+        lock.acquire(timeout=0)  # this process's own lock: nobody else takes it
+    _HELD[folder.resolve()] = [lock, 1, os.getpid(), folder]
+
+
+def _let_go(key: Path) -> None:
+    """Drop one hold of the run lock of the (resolved) folder ``key``; at the last, the
+    lock is released and its file and entry removed (what fails is left to the next
+    run's admission). A forked child never releases its parent's lock."""
+    held = _HELD.get(key)
+    if held is None or held[2] != os.getpid():
+        return
+    held[1] -= 1
+    if held[1] > 0:
+        return
+    del _HELD[key]
+    lock, folder, me = held[0], held[3], _run_id()
+
+    def leave(stamp: dict) -> None:
+        if isinstance(stamp.get("holders"), dict):
+            stamp["holders"].pop(me, None)
+        stamp["files"].pop(_slot(me), None)
+    try:
+        with _gate(folder):
+            lock.release()
+            os.unlink(folder / _slot(me))
+            if _read_stamp(folder) is not None:
+                _update(folder, "", leave)
+    except (OSError, ValueError):
+        lock.release()
+
+
 def _new_stamp(app: str) -> dict:
-    """A stamp naming this process, so that its temporary files are ours from the start."""
-    return {"writer": SIGNATURE, "version": _VERSION, "apps": [app], "files": {},
-            "runs": [_run_id()]}
+    """A stamp naming this process, so that its temporary files are ours from the start,
+    and listing the lock files (empty) before they are created."""
+    return {"writer": SIGNATURE, "version": _VERSION, "apps": [app],
+            "files": {name: [_EMPTY] for name in _LOCKS}, "runs": [_run_id()]}
 
 
 def _write_stamp(path: Path, stamp: dict) -> None:
@@ -273,21 +448,14 @@ def _update(folder: Path, app: str, change) -> None:
             f.write((json.dumps(_new_stamp(app), indent=1) + "\n").encode())
             f.flush()
             os.fsync(f.fileno())
-    while True:
-        fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW)  # write access: flock is fcntl's on NFS
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX)
-            if os.fstat(fd).st_ino != os.stat(path).st_ino:
-                continue  # replaced while we waited: lock the new one
-            stamp = _read_stamp(folder)
-            if stamp is None:
-                raise ValueError(f"{path} is not this project's ownership stamp (another "
-                                 "tool's file, or damaged); nothing was touched: move it away")
-            change(stamp)
-            _write_stamp(path, stamp)
-            return
-        finally:
-            os.close(fd)  # releases the lock
+    with FileLock(_lock_file(folder, STAMP_LOCK), thread_local=False):
+        stamp = _read_stamp(folder)
+        if stamp is None:
+            raise ValueError(f"{path} is not this project's ownership stamp (another "
+                             "tool's file, or damaged); nothing was touched: move it away")
+        change(stamp)
+        stamp["files"][STAMP_LOCK] = [_EMPTY]  # held, so an empty plain file: ours
+        _write_stamp(path, stamp)
 
 
 class Claim:
@@ -303,7 +471,9 @@ class Claim:
 
     def __init__(self, folder: Path, app: str) -> None:
         self.folder, self.app = Path(folder), app
-        _CLAIMS[self.folder.resolve()] = self
+        self._key = self.folder.resolve()
+        self._locked = False  # holds (a count of) the run lock: set by claim()
+        _CLAIMS[self._key] = self
 
     def _rel(self, path: str | os.PathLike) -> str:
         p = Path(path)
@@ -316,7 +486,8 @@ class Claim:
         found = {}
         for p in paths:
             p = Path(p) if Path(p).is_absolute() else self.folder / p
-            if p.is_file() and not p.is_symlink() and p.name != STAMP:
+            if p.is_file() and not p.is_symlink() and p.name != STAMP \
+                    and not _is_lock(p.name):
                 found[self._rel(p)] = sha256(p)
 
         def add(stamp: dict) -> None:
@@ -349,9 +520,13 @@ class Claim:
         return len(rels)
 
     def close(self) -> None:
-        """Stop recording writes into the folder (the stamp stays)."""
-        if _CLAIMS.get(self.folder.resolve()) is self:
-            del _CLAIMS[self.folder.resolve()]
+        """Stop recording writes into the folder and let go of its run lock (the stamp and
+        the lock files stay)."""
+        if _CLAIMS.get(self._key) is self:
+            del _CLAIMS[self._key]
+        if self._locked:
+            self._locked = False
+            _let_go(self._key)
 
     def __enter__(self) -> Claim:
         return self
@@ -361,13 +536,17 @@ class Claim:
 
 
 def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
-          only: Iterable[str] | None = None, found: Survey | None = None) -> Claim:
+          only: Iterable[str] | None = None, found: Survey | None = None,
+          share: str | None = None) -> Claim:
     """Make ``folder`` a folder of this run: check it, stamp it, clean it.
 
-    The folder must hold nothing foreign (:func:`check`); then it is created, our
-    temporary files of dead processes are removed, its stamp written (or updated: this
-    process added to ``runs``, runs of this host that are gone removed, entries of
-    vanished files dropped), and every later write of this process into it recorded.
+    The folder must hold nothing foreign (:func:`check`); then it is created, the run
+    admitted under its gate :data:`LOCK` (refused if a run of another process holds the
+    folder, unless both give the same ``share``) and its run lock taken, held until the
+    claim is closed (a process may claim a folder it holds again); our temporary files of
+    dead processes are removed, its stamp written (or updated: this process added to
+    ``runs`` and ``holders``, runs of this host that are gone removed, entries of vanished
+    files dropped), and every later write of this process into it recorded.
 
     Parameters
     ----------
@@ -380,6 +559,10 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
         For a shared folder: check only these names (:func:`survey`).
     found : Survey, optional
         A survey of ``folder`` just made (saves hashing it again).
+    share : str, optional
+        Runs claiming the folder with the same ``share`` may write into it together (e.g.
+        the cluster jobs of one data set, each computing some of its shards: its config
+        hash); default None: this run alone.
 
     Returns
     -------
@@ -388,12 +571,30 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
     Raises
     ------
     ValueError
-        Naming the first foreign file, or if ``folder`` is not a folder; before anything
-        is touched.
+        Naming the first foreign file, or the run of another process that holds the
+        folder's run lock, or if ``folder`` is not a folder; before anything is touched.
     """
     folder = Path(folder)
-    found = found if found is not None else check(folder, what, only)
+    found = found if found is not None else check(folder, what, only, share)
     folder.mkdir(parents=True, exist_ok=True)
+    stamp = _read_stamp(folder)
+    if stamp is None or stamp["files"].get(LOCK) != [_EMPTY]:  # listed before it appears
+
+        def list_lock(stamp: dict) -> None:
+            stamp["files"][LOCK] = [_EMPTY]
+        _update(folder, app, list_lock)
+    _hold(folder, what, app, share)
+    try:
+        c = _stamp_claim(folder, app, found)
+    except BaseException:
+        _let_go(folder.resolve())
+        raise
+    c._locked = True
+    return c
+
+
+def _stamp_claim(folder: Path, app: str, found: Survey) -> Claim:
+    """The part of :func:`claim` done under the run lock: clean, stamp, register."""
     for f in found.stale:  # ours: a run of this project, gone, named in the stamp
         f.unlink(missing_ok=True)
         log.info("removed %s, left by a stopped run", f.name)

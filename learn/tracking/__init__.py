@@ -13,7 +13,8 @@ from swgsim.lazy import lazy_exports
 _EXPORTS = {
     **dict.fromkeys(("GROUP_PARENT_TAG", "TrackedRun", "check_tracking",
                      "default_tracking_uri", "flatten_config", "hydra_sweep", "log_job",
-                     "log_run", "quiet_mlflow"), "mlflow_runs"),
+                     "log_run", "quiet_mlflow", "store_lock", "tracking_client",
+                     "use_tracking"), "mlflow_runs"),
     **dict.fromkeys(("DatasetRef", "dataset_ref", "git_tags", "repo_root"), "provenance"),
     "LoggerConfig": "config",
 }

@@ -27,6 +27,12 @@ as ``config.yaml`` and the test confusion matrix summed over splits as
 goes through an explicit :class:`mlflow.MlflowClient`, so nothing here changes MLflow's
 global state (tracking URI, active run).
 
+Every process opens a store through :func:`tracking_client` (or, for MLflow's fluent API,
+:func:`use_tracking`): MLflow creates or migrates an SQLite store's schema when a process
+first opens it, and two processes doing so at once break it for one of them, so the
+first opening in a process holds the store's lock ``<database file>.lock`` (``filelock``;
+waited for up to 120 s).
+
 The default tracking URI is ``sqlite:///<repo root>/mlflow.db`` (MLflow 3's database
 store; its file store is deprecated): ``MLFLOW_TRACKING_URI`` wins if set, as in MLflow
 itself. Artifacts of a ``sqlite:///`` store go to ``mlruns/<experiment>/`` beside the
@@ -62,6 +68,9 @@ log = logging.getLogger(__name__)
 
 #: Tag that marks the parent run of a group (:func:`log_run`'s ``group``).
 GROUP_PARENT_TAG = "group_parent"
+#: How long a process waits for another one creating or migrating an SQLite store.
+STORE_LOCK_TIMEOUT_S = 120.0
+_OPENED: set[str] = set()  # stores this process opened (schema created or checked)
 
 
 def default_tracking_uri() -> str:
@@ -160,6 +169,104 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
         probe = folder if folder.exists() else folder.parent
         if not probe.is_dir() or not os.access(probe, os.W_OK):
             raise ValueError(f"{key}={uri}: {probe} is not a writable folder")
+    return uri
+
+
+@contextmanager
+def store_lock(tracking_uri: str, key: str = "tracking_uri",
+               timeout_s: float = STORE_LOCK_TIMEOUT_S) -> Iterator[None]:
+    """Hold the lock of an SQLite store, ``<database file>.lock``, while it is opened.
+
+    Parameters
+    ----------
+    tracking_uri : str
+        A ``sqlite:///`` URI gets the lock; any other URI none (a server or a folder
+        store creates nothing that two processes could race on).
+    key : str
+        Config key named in messages.
+    timeout_s : float
+        How long to wait for another process holding the lock.
+
+    Raises
+    ------
+    ValueError
+        One line naming ``key`` and the URI if the lock is not had within ``timeout_s``.
+    """
+    db = tracking_uri.removeprefix("sqlite:///").split("?")[0]
+    if not tracking_uri.startswith("sqlite:///") or db in ("", ":memory:"):
+        yield
+        return
+    from filelock import FileLock, Timeout
+
+    lock = FileLock(f"{db}.lock", thread_local=False)
+    try:
+        lock.acquire(timeout=timeout_s)
+    except Timeout:
+        raise ValueError(f"{key}={tracking_uri}: another process has held {db}.lock for over "
+                         f"{timeout_s:g} s (creating or migrating the store); wait for it "
+                         f"to finish or choose another {key}") from None
+    try:
+        yield
+    finally:
+        lock.release()
+
+
+def tracking_client(tracking_uri: str | None = None, key: str = "tracking_uri"):
+    """An :class:`mlflow.MlflowClient` on a store; the one way a process opens a store.
+
+    The first time in a process, the client is created and its first query made (MLflow
+    creates or migrates the schema of a new SQLite store then) under :func:`store_lock`,
+    so that processes starting together on a fresh store all succeed.
+
+    Parameters
+    ----------
+    tracking_uri : str, optional
+        Default :func:`default_tracking_uri`.
+    key : str
+        Config key named in messages.
+
+    Returns
+    -------
+    mlflow.MlflowClient
+
+    Raises
+    ------
+    ValueError
+        See :func:`store_lock`.
+    """
+    import mlflow
+
+    quiet_mlflow()
+    uri = tracking_uri or default_tracking_uri()
+    if uri in _OPENED:
+        return mlflow.MlflowClient(uri)
+    with store_lock(uri, key):
+        client = mlflow.MlflowClient(uri)
+        client.search_experiments(max_results=1)
+    _OPENED.add(uri)
+    return client
+
+
+def use_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -> str:
+    """Open a store (:func:`tracking_client`) and point MLflow's fluent API
+    (``mlflow.start_run``, ``mlflow.log_metric``) at it.
+
+    Parameters
+    ----------
+    tracking_uri : str, optional
+        Default :func:`default_tracking_uri`.
+    key : str
+        Config key named in messages.
+
+    Returns
+    -------
+    str
+        The URI.
+    """
+    import mlflow
+
+    uri = tracking_client(tracking_uri, key).tracking_uri
+    mlflow.set_tracking_uri(uri)
     return uri
 
 
@@ -566,7 +673,8 @@ def log_run(
     Raises
     ------
     ValueError
-        A data set that :func:`dataset_ref` cannot read, before the run is created.
+        A data set that :func:`dataset_ref` cannot read, before the run is created; a
+        store another process is creating for too long (:func:`tracking_client`).
 
     Examples
     --------
@@ -574,13 +682,11 @@ def log_run(
     ...     run.log_metrics({"accuracy": 0.98})
     ...     run.log_model(pipeline, X_sample=X[:5])
     """
-    import mlflow
-
     quiet_mlflow()
     items = [] if dataset is None else (
         [dataset] if isinstance(dataset, (str, os.PathLike, DatasetRef)) else list(dataset))
     refs = [d if isinstance(d, DatasetRef) else dataset_ref(d) for d in items]
-    client = mlflow.MlflowClient(tracking_uri or default_tracking_uri())
+    client = tracking_client(tracking_uri)
     tracked, group_pid = _create_run(client, experiment, run_name, tags, parent_run_id,
                                      group, refs)
     status = "FAILED"
