@@ -3,12 +3,14 @@
 :func:`hydra_app` turns a task function ``task(cfg)`` into a console entry point:
 
 * Hydra composes ``conf/<config_name>.yaml`` on the app's schema (``swgcli.schema``) and
-  :func:`swgcli.schema.validate` refuses keys the schema lacks, before any work;
+  :func:`swgcli.schema.validate` refuses keys the schema lacks and numbers outside their
+  field's range, and :func:`check_out_dirs` output folders given as files, before any
+  work;
 * bad input ends in one line on stderr, ``<prog>: error: <what>``, naming the key or file,
   and exit code 2: Hydra's composition errors (unknown, missing or mistyped keys, unknown
-  config options), :class:`ValueError` (our range and consistency checks, data-set and
-  measured-data errors) and unreadable input files; ``HYDRA_FULL_ERROR=1`` shows the
-  traceback instead;
+  config options, overrides it cannot parse, with how to quote them), :class:`ValueError`
+  (our range and consistency checks, data-set and measured-data errors) and unreadable
+  input files; ``HYDRA_FULL_ERROR=1`` shows the traceback instead;
 * SIGTERM stops the app as Ctrl-C does: the exception unwinds, worker processes are
   stopped and temporary files removed; exit code 130 (SIGINT) or 143 (SIGTERM);
 * anything else is a bug and keeps its traceback.
@@ -45,9 +47,83 @@ def absolute_path(path: str) -> str:
         return path
 
 
+def check_out_dirs(cfg: Any, schema: type) -> None:
+    """Refuse an output folder given as a file, before any work.
+
+    Every key the schema lists in ``OUT_DIRS`` (e.g. ``out_dir``, ``report_dir``) is
+    resolved from the directory the app was started in (:func:`absolute_path`); the
+    path and every parent that exists must be folders.
+
+    Parameters
+    ----------
+    cfg : omegaconf.DictConfig
+        The composed app config.
+    schema : dataclass type
+        The app's schema; ``OUT_DIRS`` (a class variable) names its output folders.
+
+    Raises
+    ------
+    ValueError
+        ``<key>=<path>: is a file, not a folder`` (or names the file among its parents).
+    """
+    from pathlib import Path
+
+    from omegaconf import OmegaConf
+
+    for key in getattr(schema, "OUT_DIRS", ()):
+        value = OmegaConf.select(cfg, key, default=None)
+        if value is None:
+            continue
+        path = Path(absolute_path(str(value))).expanduser()
+        for p in (path, *path.parents):
+            if p.is_dir():
+                break
+            if p.exists() or p.is_symlink():
+                where = "" if p == path else f" {p}"
+                raise ValueError(f"{key}={value}:{where} is a file, not a folder")
+
+
+def override_message(override: str, argv: list[str] | None = None) -> str:
+    """One line on a command-line override Hydra cannot parse, with how to write it.
+
+    Parameters
+    ----------
+    override : str
+        The override as Hydra got it (one command-line argument).
+    argv : list of str, optional
+        The command line (default ``sys.argv``), to name the argument before a stray
+        word: a value with a space given as two arguments.
+
+    Returns
+    -------
+    str
+        E.g. ``override 'data': not key=value; ...``.
+    """
+    argv = sys.argv[1:] if argv is None else argv
+    key, eq, value = override.partition("=")
+    if not eq and not override.startswith(("~", "+")):
+        prev = [a for a, b in zip(argv, argv[1:], strict=False) if b == override and "=" in a]
+        hint = (f"if it belongs to '{prev[0]}', quote the value with its space as one "
+                f"argument: '{prev[0]} {override}'" if prev else
+                "a value with a space must be one quoted argument: 'key=a b'")
+        return f"override '{override}': not key=value; {hint}"
+    if "~" in value:
+        home = os.path.expanduser(value) if value.startswith("~") else None
+        full = f" ({key}={home})" if home and home != value else ""
+        return (f"override '{override}': Hydra reads '~' only as the delete prefix (~key), "
+                f"not in a value, and does not expand it; give the full path{full}, or "
+                f"quote a literal ~: '{key}=\"{value}\"'")
+    return (f"override '{override}': not a valid Hydra override; quote a value with special "
+            f"characters (space, ~, =, brackets, quotes): '{key}=\"{value}\"'")
+
+
 def one_line(exc: BaseException) -> str | None:
     """The one-line message of a bad-input exception, or None for anything else."""
-    from hydra.errors import ConfigCompositionException, MissingConfigException
+    from hydra.errors import (
+        ConfigCompositionException,
+        MissingConfigException,
+        OverrideParseException,
+    )
     from omegaconf.errors import (
         ConfigAttributeError,
         ConfigKeyError,
@@ -56,6 +132,8 @@ def one_line(exc: BaseException) -> str | None:
         ValidationError,
     )
 
+    if isinstance(exc, OverrideParseException):
+        return override_message(exc.override)
     cause = exc.__cause__ if isinstance(exc, ConfigCompositionException) else exc
     if isinstance(cause, (ConfigAttributeError, ConfigKeyError)):
         key = getattr(cause, "full_key", None) or "?"
@@ -143,6 +221,7 @@ def hydra_app(config_name: str, schema: type, prog: str):
         def _hydra_main(cfg):
             try:
                 validate(cfg, schema)
+                check_out_dirs(cfg, schema)
                 return task(cfg)
             except Exception as e:  # noqa: BLE001
                 if one_line(e) is None or os.environ.get("SWG_USER_FULL_ERROR") == "1":
@@ -154,6 +233,7 @@ def hydra_app(config_name: str, schema: type, prog: str):
             from swgcli.schema import check_renamed
 
             check_renamed([a for a in sys.argv[1:] if not a.startswith("-")], config_name)
+            failed.clear()  # a run in the same process reports its own error
             _hydra_main()
             if failed:
                 raise failed[0]

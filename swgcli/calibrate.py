@@ -116,6 +116,7 @@ CalibrateApp = dataclasses.make_dataclass("CalibrateApp", [
     ("logger", CalibrateLogger, field(default_factory=CalibrateLogger)),
 ])
 CalibrateApp.__module__ = __name__
+CalibrateApp.OUT_DIRS = ("out_dir",)  # folders written (swgcli.app.check_out_dirs)
 CalibrateApp.__doc__ = """``swgsim-calibrate``: calibrate the model against measured data.
 
 ``measured``: a friction CSV (kind 1) or a schema-v1 data-set directory (kind 2);

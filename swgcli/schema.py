@@ -25,7 +25,7 @@ group          source
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
@@ -38,16 +38,22 @@ from learn.studies.tables import StudyOptions
 from learn.studies.transfer import TransferConfig
 from learn.tasks.monitor import MonitorExperiment
 from learn.tracking.config import LoggerConfig
-from swgsim.config import DatasetConfig, check_keys
+from swgsim.config import DatasetConfig, allowed, check_keys
+
+#: ``n_jobs`` of every app: worker processes, one or more (0 or a negative count is
+#: refused with the keys, before any work)
+N_JOBS = allowed(1, None, "worker processes")
 
 
 @dataclass
 class GenerateApp:
     """``swgsim-generate``: simulate a data set."""
 
+    OUT_DIRS: ClassVar[tuple[str, ...]] = ("out_dir",)  # folders written (app.check_out_dirs)
+
     dataset: DatasetConfig = field(default_factory=DatasetConfig)
     out_dir: str = "data/${dataset.name}"   # relative: from the directory you start in
-    n_jobs: int = 2                         # worker processes (joblib); 1: in-process
+    n_jobs: int = field(default=2, metadata=N_JOBS)  # worker processes (joblib); 1: in-process
     overwrite: bool = False                 # replace a data set of another config
     shard: int | None = None                # compute only this shard (cluster array jobs)
     progress: bool = True
@@ -59,9 +65,11 @@ class PaperApp:
 
     datasets: dict[str, DatasetConfig] = field(default_factory=dict)
     run_on: list[str] = field(default_factory=lambda: ["paper", "bench"])  # keys of datasets
+    OUT_DIRS: ClassVar[tuple[str, ...]] = ("data_root", "report_root")
+
     data_root: str = "data"
     report_root: str = "reports"
-    n_jobs: int = 2
+    n_jobs: int = field(default=2, metadata=N_JOBS)
     tracking_uri: str | None = None
     log_models: bool = StudyTracking.log_models  # each job's last-split model (no refit)
     seed: int = 0
@@ -72,12 +80,14 @@ class PaperApp:
 class ObservabilityApp:
     """``swgsim-observability``: the observability map over the output inertia."""
 
+    OUT_DIRS: ClassVar[tuple[str, ...]] = ("data_root", "report_dir")
+
     dataset: DatasetConfig = field(default_factory=DatasetConfig)  # preset observability
     j_out_kgm2: list[float] | None = None   # null: n_j_out log-spaced, bench to robot link
     n_j_out: int = 6
     data_root: str = "data/observability"   # data sets in <data_root>/j_out_<value>
     report_dir: str = "reports/observability"
-    n_jobs: int = 2
+    n_jobs: int = field(default=2, metadata=N_JOBS)
     harmonics: int = 8                       # harmonics of the WG angle in the separation
     plot_only: bool = False                  # redraw the figure from observability.csv
     progress: bool = True
@@ -86,6 +96,8 @@ class ObservabilityApp:
 @dataclass
 class MonitorApp:
     """``swgsim-monitor``: one gear's stream through the condition monitor."""
+
+    OUT_DIRS: ClassVar[tuple[str, ...]] = ("out_dir",)
 
     stream: str = MISSING                    # a life data set (swgsim-generate, dataset.life)
     diagnosis_model: str = MISSING           # a .joblib of experiment=monitor (models/)
@@ -119,9 +131,12 @@ class PathsConfig:
 class TrainApp:
     """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.tasks.train.TASKS`."""
 
+    OUT_DIRS: ClassVar[tuple[str, ...]] = ("paths.report_dir", "monitor.report_dir",
+                                           "transfer.report_dir", "transfer.data_root")
+
     task: str = "study"
     seed: int = 0
-    n_jobs: int = 1
+    n_jobs: int = field(default=1, metadata=N_JOBS)
     stored: StoredDataset = field(default_factory=StoredDataset)
     features: FeatureSettings = field(default_factory=FeatureSettings)
     model: Any = MISSING

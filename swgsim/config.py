@@ -254,8 +254,46 @@ def _value(value: Any, tp, where: str, fill: bool) -> Any:
     return value
 
 
+#: Key of a field's metadata holding its allowed range ``(lo, hi, what)`` (None: an open
+#: end), checked with the keys (:func:`check_keys`, :func:`complete`), so before any work:
+#: ``n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))``.
+RANGE = "range"
+
+
+def allowed(lo: float | None, hi: float | None, what: str = "") -> dict[str, tuple]:
+    """Field metadata declaring the allowed range of a number (:data:`RANGE`).
+
+    Parameters
+    ----------
+    lo, hi : float or None
+        Inclusive bounds; None leaves that end open.
+    what : str
+        What the value is, for the message (e.g. ``"worker processes"``).
+
+    Returns
+    -------
+    dict
+        ``{RANGE: (lo, hi, what)}``, for ``dataclasses.field(metadata=...)``.
+    """
+    return {RANGE: (lo, hi, what)}
+
+
+def _check_range(value: Any, spec: tuple, where: str) -> None:
+    """Refuse a number outside its field's :data:`RANGE`, naming the key and the range."""
+    lo, hi, what = spec
+    if value is None or isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        rng = (f"[{lo:g}, {hi:g}]" if lo is not None and hi is not None
+               else f">= {lo:g}" if lo is not None else f"<= {hi:g}")
+        raise ValueError(f"{where}={value}: out of range; allowed: {rng}"
+                         f"{' (' + what + ')' if what else ''}")
+
+
 def _mapping(cfg: Mapping[str, Any], schema: type, where: str, fill: bool) -> dict:
     fields = _fields(schema)
+    ranges = {f.name: f.metadata[RANGE] for f in dataclasses.fields(schema)
+              if RANGE in f.metadata}
     pre = f"{where}." if where else ""
     unknown = [k for k in cfg if k not in fields]
     if unknown:
@@ -264,6 +302,8 @@ def _mapping(cfg: Mapping[str, Any], schema: type, where: str, fill: bool) -> di
     for name, tp in fields.items():
         if name in cfg:
             out[name] = _value(cfg[name], tp, f"{pre}{name}", fill)
+            if name in ranges:
+                _check_range(out[name], ranges[name], f"{pre}{name}")
         elif fill:
             default = _default(schema, name)
             if isinstance(default, str) and default == MISSING:
@@ -289,8 +329,9 @@ def check_keys(cfg: Mapping[str, Any], schema: type, where: str) -> None:
     Raises
     ------
     ValueError
-        One line naming the first unknown key (with the allowed ones), missing key or
-        value of the wrong type, by its full name.
+        One line naming the first unknown key (with the allowed ones), missing key,
+        value of the wrong type or number outside its field's range (:func:`allowed`), by
+        its full name.
     """
     _mapping(cfg, schema, where, fill=False)
 

@@ -148,9 +148,17 @@ def _recorded(path: Path, tmp: str, digest: str | None = None) -> None:
     ownership.before_replace(path, tmp, digest)
 
 
-def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+def atomic_write_bytes(path: str | os.PathLike, data: bytes | memoryview,
+                       digest: str | None = None) -> None:
     """Write ``data`` to ``path`` atomically (temporary file in the same folder, rename);
-    in a folder this process claimed, the file is listed in its ownership stamp first."""
+    in a folder this process claimed, the file is listed in its ownership stamp first
+    (with ``digest``, the SHA-256 of ``data``, when the caller has it).
+
+    Raises
+    ------
+    DataSetError
+        If the disk is full (naming the file and its folder); nothing is left behind.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=".tmp", dir=path.parent)
@@ -160,7 +168,7 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, _umask_mode())
-        _recorded(path, tmp)
+        _recorded(path, tmp, digest)
         os.replace(tmp, path)
     except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
@@ -262,20 +270,12 @@ def write_shard(ds, path: str | os.PathLike) -> str:
     """
     path = Path(path)
     check_signals(ds, f"shard {path}", "refused before writing")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        ds.to_netcdf(tmp, engine="h5netcdf", invalid_netcdf=False)
-        digest = sha256_file(tmp)
-        os.chmod(tmp, _umask_mode())
-        _recorded(path, tmp, digest)
-        os.replace(tmp, path)
-    except BaseException as e:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(e, OSError) and e.errno == errno.ENOSPC:
-            raise DataSetError(f"disk full while writing {path} (folder {path.parent})") from e
-        raise
+    # encoded in memory, then written as plain bytes: a full disk fails in that write,
+    # never inside the HDF5 library, which kept the half-written file open after the
+    # error (touched again by the next HDF5 call or at exit: a segmentation fault)
+    data = ds.to_netcdf(engine="h5netcdf", invalid_netcdf=False)
+    digest = hashlib.sha256(data).hexdigest()
+    atomic_write_bytes(path, data, digest)
     return digest
 
 
@@ -285,7 +285,8 @@ def read_manifest(path: str | os.PathLike) -> dict:
     Raises
     ------
     DataSetError
-        If the directory or its manifest is missing or not schema v1.
+        If the directory or its manifest is missing or not schema v1, or the manifest
+        lacks its shard list or a shard's SHA-256 (naming the file and the entry).
     """
     path = Path(path)
     mf = path / MANIFEST
@@ -293,12 +294,24 @@ def read_manifest(path: str | os.PathLike) -> dict:
         raise DataSetError(f"{path} is not a data set: {MANIFEST} is missing")
     try:
         manifest = json.loads(mf.read_text())
-    except json.JSONDecodeError as e:
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
         raise DataSetError(f"{mf} is not valid JSON: {e}") from e
+    if not isinstance(manifest, dict):
+        raise DataSetError(f"{mf}: not a JSON object (schema v1, docs/DATASET.md)")
     if manifest.get("schema_version") != SCHEMA_VERSION:
         raise DataSetError(
             f"{mf}: schema_version {manifest.get('schema_version')!r}, expected {SCHEMA_VERSION}"
         )
+    shards = manifest.get("shards")
+    if not isinstance(shards, dict):
+        raise DataSetError(f"{mf}: shards is {'missing' if shards is None else 'not a mapping'}"
+                           " (schema v1: shard file name -> its sha256 and n_samples)")
+    for name, entry in shards.items():
+        sha = entry.get("sha256") if isinstance(entry, dict) else None
+        if not (isinstance(sha, str) and len(sha) == 64):
+            raise DataSetError(f"{mf}: shards.{name}.sha256 is "
+                               f"{'missing' if sha is None else repr(sha)}: the shard cannot "
+                               "be verified (a hand-made or truncated manifest; regenerate it)")
     return manifest
 
 
@@ -467,6 +480,11 @@ def _check_against_manifest(ds, where: str, name: str, entry: dict, manifest: di
                                f"({rec!r})")
     t = ds["time"].values
     fs = attrs.get("sample_rate_hz")
+    if fs is not None and not (isinstance(fs, (int, float, np.integer, np.floating))
+                               and not isinstance(fs, bool) and np.isfinite(fs) and fs > 0):
+        shown = repr(fs) if isinstance(fs, (str, bytes)) else fs
+        raise DataSetError(f"{where}: attribute sample_rate_hz={shown} is not a sample rate "
+                           "(a positive number of Hz)")
     if fs is not None and t.size > 1 and not np.isclose(1.0 / (t[1] - t[0]), fs, rtol=1e-6):
         raise DataSetError(f"{where}: variable time is sampled at {1.0 / (t[1] - t[0]):g} Hz, "
                            f"its attribute sample_rate_hz says {fs:g} Hz")
@@ -528,6 +546,20 @@ def check_shard(ds, path: Path, entry: dict, manifest: dict, labels: frozenset[s
     _check_against_manifest(ds, where, path.name, entry, manifest)
 
 
+def _check_same_time(ds, path: Path, first, first_path: Path) -> None:
+    """The shard's time axis and ``sample_rate_hz`` those of the data set's first shard
+    (joined along ``sample``, shards of another rate would be padded with NaN)."""
+    if ds is first:
+        return
+    t, t0 = ds["time"].values, first["time"].values
+    fs, fs0 = ds.attrs.get("sample_rate_hz"), first.attrs.get("sample_rate_hz")
+    if fs != fs0 or t.shape != t0.shape or not np.allclose(t, t0, rtol=1e-9, atol=0.0):
+        raise DataSetError(f"shard {path}: attribute sample_rate_hz={fs} Hz and its time axis "
+                           f"({t.size} samples) disagree with shard {first_path} "
+                           f"(sample_rate_hz={fs0} Hz, {t0.size} samples): the shards of a "
+                           "data set share one time axis")
+
+
 def load(path: str | os.PathLike, check: bool = True):
     """Load a schema-v1 data set directory as one ``xarray.Dataset``.
 
@@ -570,6 +602,7 @@ def load(path: str | os.PathLike, check: bool = True):
             raise DataSetError(f"shard {f} cannot be read: {e}") from e
         if check:
             check_shard(parts[-1], f, entries.get(f.name, {}), manifest, labels)
+            _check_same_time(parts[-1], f, parts[0], files[0])
         want = entries.get(f.name, {}).get("n_samples")
         if want is not None and parts[-1].sizes.get("sample") != want:
             raise DataSetError(f"shard {f} holds {parts[-1].sizes.get('sample')} samples, "

@@ -593,6 +593,40 @@ def torsional_mode(params: GearParams, n_in_rpm: float, t_out_nm: float) -> tupl
         On non-positive speed or negative torque, an unstable linearisation or no
         oscillatory mode.
     """
+    lam = linear_eigenvalues(params, n_in_rpm, t_out_nm)
+    scale = float(np.max(np.abs(lam)))
+    lam = lam[np.abs(lam) > 1e-9 * scale]  # drop the rigid rotation (zero eigenvalue)
+    if np.any(lam.real >= 0):
+        raise ValueError(f"the linearised gear is not stable at {n_in_rpm} rpm, "
+                         f"{t_out_nm} N m (eigenvalues {np.round(lam, 3)})")
+    if not np.any(np.abs(lam.imag) > 1e-9 * scale):
+        raise ValueError(f"no oscillatory mode at {n_in_rpm} rpm, {t_out_nm} N m "
+                         f"(eigenvalues {np.round(lam, 3)})")
+    top = lam[np.argmax(lam.imag)]
+    return float(top.imag / (2 * np.pi)), float(-1.0 / top.real)
+
+
+def linear_eigenvalues(params: GearParams, n_in_rpm: float, t_out_nm: float) -> np.ndarray:
+    """Eigenvalues of eq. (1) linearised at steady motion (kinematic error left out).
+
+    Parameters
+    ----------
+    params : GearParams
+    n_in_rpm : float
+        Input speed [rpm], > 0.
+    t_out_nm : float
+        Load torque [N m], >= 0.
+
+    Returns
+    -------
+    ndarray of complex, shape (5,)
+        [1/s]; one is about zero (the rigid rotation).
+
+    Raises
+    ------
+    ValueError
+        On non-positive speed or negative torque.
+    """
     _check(n_in_rpm, t_out_nm, 1.0, 1.0, 0.0)
     p = dataclasses.replace(params, ke_amp_rad=tuple(0.0 for _ in params.ke_amp_rad))
     b = _ke_batch(Batch.of([p]))
@@ -606,17 +640,27 @@ def torsional_mode(params: GearParams, n_in_rpm: float, t_out_nm: float) -> tupl
         xp[j] += h
         xm[j] -= h
         jac[:, j] = (rhs(0.0, xp, b, w_d, t_load) - rhs(0.0, xm, b, w_d, t_load))[:, 0] / (2 * h)
-    lam = np.linalg.eigvals(jac)
-    scale = float(np.max(np.abs(lam)))
-    lam = lam[np.abs(lam) > 1e-9 * scale]  # drop the rigid rotation (zero eigenvalue)
-    if np.any(lam.real >= 0):
-        raise ValueError(f"the linearised gear is not stable at {n_in_rpm} rpm, "
-                         f"{t_out_nm} N m (eigenvalues {np.round(lam, 3)})")
-    if not np.any(np.abs(lam.imag) > 1e-9 * scale):
-        raise ValueError(f"no oscillatory mode at {n_in_rpm} rpm, {t_out_nm} N m "
-                         f"(eigenvalues {np.round(lam, 3)})")
-    top = lam[np.argmax(lam.imag)]
-    return float(top.imag / (2 * np.pi)), float(-1.0 / top.real)
+    return np.linalg.eigvals(jac)
+
+
+def rk4_stable(lam: np.ndarray, step_s: float) -> bool:
+    """Whether the classic RK4 step ``step_s`` is stable for the eigenvalues ``lam``.
+
+    Parameters
+    ----------
+    lam : ndarray of complex
+        Eigenvalues of the linearised system [1/s] (:func:`linear_eigenvalues`).
+    step_s : float
+        Integrator step [s], ``1 / (sample_rate_hz · substeps)`` in :func:`simulate`.
+
+    Returns
+    -------
+    bool
+        True when every ``step_s · λ`` lies in RK4's stability region,
+        ``|1 + z + z²/2 + z³/6 + z⁴/24| <= 1`` (up to 1e-9).
+    """
+    z = np.asarray(lam, complex) * float(step_s)
+    return bool(np.all(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) <= 1 + 1e-9))
 
 
 def simulate_reference(params: GearParams, n_in_rpm: float, t_out_nm: float,

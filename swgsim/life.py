@@ -390,8 +390,10 @@ class RecordBank:
                                 0.0, fs, n_sim / fs, ch.settle_s - n_lead / fs, ch.substeps,
                                 friction_effects=self.plan.friction)
         if not res.success:
-            raise RuntimeError(f"dynamic simulation failed for gear {self.gear_id} at "
-                               f"{n_in:g} rpm: {res.message}")
+            from .shard import diverged
+
+            raise ValueError(diverged(self.plan, f"gear {self.gear_id}'s life at {n_in:g} rpm",
+                                      res.message))
         chain = self._chain(params)
         win = slice(n_lead, n_lead + n_rec)
         for c in range(0, len(keys), 16):  # gauge signals in small groups (memory)

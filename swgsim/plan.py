@@ -21,7 +21,7 @@ import numpy as np
 from .acquisition import check_acquisition
 from .config import DatasetConfig, GearConfig, VariantSpec, check_finite, dataset_config
 from .data import config_digest
-from .dynamics import gear_with_ke, rt1_size20, torsional_mode
+from .dynamics import gear_with_ke, linear_eigenvalues, rk4_stable, rt1_size20, torsional_mode
 from .faults import FAULTS, ChainParams, Fault, get_fault
 from .flexspline import FlexsplineGeometry, TrussModel
 from .friction import FrictionEffects, friction_effects_from_config
@@ -29,6 +29,7 @@ from .life import check_life, schedule
 from .measurement import SensorEffect, parse_sensor_effects
 from .sensors import SensorLayout, gear_layout, signal_rows
 
+MIN_GRID_LENGTH_MM = 0.2  # shortest foil strain-gauge grids on the market (0.2 mm)
 SETTLE_DECAY_TIMES = 5.0  # transient left in the window: e^-5 = 0.7 % of the start's
 
 
@@ -130,7 +131,8 @@ def _check_name_and_points(cfg: DatasetConfig) -> None:
             ("t_out_nm", 0.0, 107.0, "N m", "repeated peak torque of size 20")):
         vals = getattr(cfg.operating_points, key)
         _req(len(vals) >= 1 and len(set(vals)) == len(vals),
-             f"dataset.operating_points.{key} must list distinct values, got {vals}")
+             f"dataset.operating_points.{key} must list one or more distinct values, "
+             f"got {vals}")
         for v in vals:
             _in(v, lo, hi, f"dataset.operating_points.{key}", unit, lo_open=key == "n_in_rpm",
                 why=why)
@@ -193,6 +195,31 @@ def _check_gears(cfg: DatasetConfig) -> None:
             raise ValueError(f"dataset.gears[{i}].ke_extra: {e}") from None
 
 
+def _check_step(cfg: DatasetConfig) -> None:
+    """The integrator step 1 / (sample_rate_hz · substeps) stable for every gear's
+    linearised dynamics at every operating point (explicit RK4 diverges beyond it)."""
+    ch, ops = cfg.chain, cfg.operating_points
+    fs, k = float(ch.sample_rate_hz), int(ch.substeps)
+    for i, g in enumerate(cfg.gears):
+        p = gear_params(cfg, g).gear
+        for n in ops.n_in_rpm:
+            for t in ops.t_out_nm:
+                lam = linear_eigenvalues(p, float(n), float(t))
+                if rk4_stable(lam, 1.0 / (fs * k)):
+                    continue
+                need = next((m for m in range(k + 1, 101) if rk4_stable(lam, 1.0 / (fs * m))),
+                            None)
+                allowed = (f"allowed: dataset.chain.substeps >= {need}" if need is not None
+                           else "allowed: a higher dataset.chain.sample_rate_hz")
+                raise ValueError(
+                    f"dataset.chain.substeps={k} at dataset.chain.sample_rate_hz={fs:g} Hz: "
+                    f"the integrator step {1e3 / (fs * k):.3g} ms is too long for the "
+                    f"dynamics of dataset.gears[{i}] (id {int(g.id)}) with "
+                    f"dataset.load.j_out_kgm2={cfg.load.j_out_kgm2:g} kg m² at {n:g} rpm, "
+                    f"{t:g} N m (fastest mode {np.max(np.abs(lam)):.3g} 1/s; the "
+                    f"simulation would diverge); {allowed}")
+
+
 def _check_recording(cfg: DatasetConfig) -> None:
     acq = check_acquisition(cfg.acquisition)
     if acq.amplifier is not None:
@@ -211,17 +238,22 @@ def _check_recording(cfg: DatasetConfig) -> None:
 
 def _check_sensors(cfg: DatasetConfig) -> None:
     """The gauge layout's own ranges, before the mesh resolves it (:func:`_check_layout`):
-    radii inside the collar's clamped edge, a grid of positive length no longer than the
+    radii inside the collar's clamped edge, a grid from :data:`MIN_GRID_LENGTH_MM` up to the
     collar's radial extent, a gauge factor of foil (about 2) up to semiconductor gauges
     (about 150; Hoffmann, *An Introduction to Measurements using Strain Gages*, HBM 1989,
     sec. 2)."""
-    s, r_c = cfg.sensors, FlexsplineGeometry().r_collar_m * 1e3
+    geo = FlexsplineGeometry()
+    s, r_c = cfg.sensors, geo.r_collar_m * 1e3
     _in(s.r_torque_mm, 0.0, r_c, "dataset.sensors.r_torque_mm", "mm", lo_open=True,
         why="inside the collar's clamped edge")
     _in(s.r_pairs_mm, 0.0, r_c, "dataset.sensors.r_pairs_mm", "mm", lo_open=True,
         why="inside the collar's clamped edge")
-    _in(s.grid_length_mm, 0.0, r_c, "dataset.sensors.grid_length_mm", "mm", lo_open=True,
-        why="a grid of positive length on the collar")
+    # no mesh resolves a grid shorter than the shortest foil grids sold (0.2 mm) or lays
+    # one longer than the collar's radial extent (sleeve to clamped edge): the grid's own
+    # range, so that the mesh (dataset.mesh.n_theta) is not blamed for it
+    _in(s.grid_length_mm, MIN_GRID_LENGTH_MM, r_c - geo.r_mid_m * 1e3,
+        "dataset.sensors.grid_length_mm", "mm",
+        why="foil grids from 0.2 mm, no longer than the collar's radial extent")
     _in(s.gauge_factor, 0.0, 200.0, "dataset.sensors.gauge_factor", lo_open=True,
         why="foil gauges about 2, semiconductor gauges up to about 150")
 
@@ -337,6 +369,7 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     _check_tolerances_and_disturbance(cfg)
     _check_gears(cfg)
     _check_recording(cfg)
+    _check_step(cfg)
     _check_sensors(cfg)
     effects = tuple(parse_sensor_effects(cfg.sensor_effects))
     friction = friction_effects_from_config(cfg.friction_effects)
@@ -378,9 +411,20 @@ def min_settle_s(cfg: DatasetConfig) -> float:
     operating points [s].
     """
     ops = cfg.operating_points
-    return SETTLE_DECAY_TIMES * max(
-        torsional_mode(gear_params(cfg, g).gear, float(n), float(t))[1]
-        for g in cfg.gears for n in ops.n_in_rpm for t in ops.t_out_nm)
+    decay = []
+    for i, g in enumerate(cfg.gears):
+        for n in ops.n_in_rpm:
+            for t in ops.t_out_nm:
+                try:
+                    decay.append(torsional_mode(gear_params(cfg, g).gear, float(n),
+                                                float(t))[1])
+                except ValueError as e:
+                    raise ValueError(
+                        f"dataset.load.j_out_kgm2={cfg.load.j_out_kgm2:g} kg m² with "
+                        f"dataset.gears[{i}] (b1_factor={g.b1_factor:g}, k1_factor="
+                        f"{g.k1_factor:g}): {e}; the window's settling time cannot be "
+                        "judged") from None
+    return SETTLE_DECAY_TIMES * max(decay)
 
 
 __all__ = ["DatasetPlan", "ShardSpec", "WindowSpec", "SETTLE_DECAY_TIMES",

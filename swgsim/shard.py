@@ -138,14 +138,40 @@ class Motions:
     t_mean_nm: np.ndarray
 
 
+def diverged(plan: DatasetPlan, where: str, why: str) -> str:
+    """The one-line message of a dynamic simulation that failed for checked parameters.
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+    where : str
+        What was simulated: shard, gear, operating point, fault.
+    why : str
+        The integrator's message (e.g. ``non-finite states``).
+
+    Returns
+    -------
+    str
+        Naming the keys that set the integrator step and the dynamics.
+    """
+    ch = plan.config.chain
+    return (f"dataset.chain.substeps={ch.substeps}, dataset.chain.sample_rate_hz="
+            f"{ch.sample_rate_hz:g} Hz: the dynamic simulation of {where} failed ({why}); "
+            "the parameters are in range but the integrator step "
+            f"{1e3 / (ch.sample_rate_hz * ch.substeps):.3g} ms does not hold them with "
+            f"dataset.load.j_out_kgm2={plan.config.load.j_out_kgm2:g} kg m²: raise "
+            "dataset.chain.substeps")
+
+
 def simulate_motions(plan: DatasetPlan, shard: ShardSpec, params: list[ChainParams],
                      phi0: np.ndarray, n_lead: int, oversample: int) -> Motions:
     """Integrate each distinct motion (gear parameters, load, start angle) once.
 
     Raises
     ------
-    RuntimeError
-        Naming the shard, if the integration fails.
+    ValueError
+        Naming the shard, the window and the chain's keys, if the integration fails
+        (:func:`diverged`).
     """
     ch = plan.config.chain
     fs = ch.sample_rate_hz
@@ -160,7 +186,11 @@ def simulate_motions(plan: DatasetPlan, shard: ShardSpec, params: list[ChainPara
                             phi0[m_idx], fs, n_rec / fs, ch.settle_s - n_lead / fs,
                             ch.substeps, friction_effects=plan.friction)
     if not res.success:
-        raise RuntimeError(f"dynamic simulation failed in shard {shard.name}: {res.message}")
+        bad = int(np.argmin(np.isfinite(res.states).all(axis=(0, 2))))  # first diverged
+        w = shard.windows[m_idx[bad]]
+        raise ValueError(diverged(plan, f"shard {shard.name} (gear {shard.gear}, "
+                                        f"{shard.n_in_rpm:g} rpm, {w.t_out_nm:g} N m, fault "
+                                        f"{w.fault} severity {w.severity:g})", res.message))
     win = slice(n_lead, n_lead + n_t)  # the window's samples
     eff = (res.p_out[:, win].mean(axis=1) / res.p_in[:, win].mean(axis=1))[m_inv]
     n_mean = res.states[1][:, win].mean(axis=1)[m_inv] * 60 / (2 * np.pi)
@@ -362,4 +392,4 @@ def run_shard(plan: DatasetPlan, shard: ShardSpec, out_dir: str | os.PathLike,
 
 
 __all__ = ["gear_influences", "influences_for", "simulate_shard", "run_shard", "fine_motion",
-           "simulate_motions", "synthesise", "record", "assemble", "Motions"]
+           "diverged", "simulate_motions", "synthesise", "record", "assemble", "Motions"]

@@ -9,7 +9,6 @@ G signals and full disk.
 
 from __future__ import annotations
 
-import errno
 import json
 import os
 import shutil
@@ -350,13 +349,19 @@ def test_G_full_disk_is_refused_before_writing_naming_the_folder(tmp_path, monke
     assert str(out) in msg and "MiB free" in msg and not out.exists()
 
 
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
 def test_G_disk_full_while_writing_names_the_folder(tmp_path, monkeypatch):
-    import xarray as xr
+    real = dsio.tempfile.mkstemp
 
-    def enospc(self, path, *a, **k):
-        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+    def full(*a, **k):  # a shard's temporary file on a full disk: the kernel's ENOSPC
+        fd, name = real(*a, **k)
+        if ".nc." in Path(name).name:
+            dev = os.open("/dev/full", os.O_WRONLY)
+            os.dup2(dev, fd)
+            os.close(dev)
+        return fd, name
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", enospc)
+    monkeypatch.setattr(dsio.tempfile, "mkstemp", full)
     out = tmp_path / "ds"
     msg = message(lambda: gen.generate(small_cfg(), out, n_jobs=1, progress=False))
     assert "disk full" in msg and str(out) in msg

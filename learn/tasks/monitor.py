@@ -25,7 +25,7 @@ import pandas as pd
 from learn.monitor.baselines import BASELINES
 from learn.monitor.evaluate import MonitorStudyConfig, run_held_out, to_frames
 from learn.tasks.config import typed_app
-from swgsim.config import DatasetConfig
+from swgsim.config import DatasetConfig, allowed
 
 log = logging.getLogger(__name__)
 
@@ -52,7 +52,7 @@ class MonitorExperiment:
     datasets: dict[str, DatasetConfig] = field(default_factory=dict)
     study: MonitorStudyConfig = field(default_factory=MonitorStudyConfig)
     report_dir: str = "reports/monitor"
-    n_jobs: int = 2
+    n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
     progress: bool = True
 
 
@@ -232,12 +232,11 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float) -> No
     import mlflow
 
     from learn.reports.monitor_report import false_alarm_table, summary_table
-    from learn.tracking import check_tracking
+    from learn.tracking import check_tracking, use_tracking
 
     lcfg = app.logger
     check_tracking(lcfg.tracking_uri, "logger.tracking_uri")
-    logging.getLogger("mlflow").setLevel(logging.WARNING)  # no INFO lines on the console
-    mlflow.set_tracking_uri(lcfg.tracking_uri)
+    use_tracking(lcfg.tracking_uri, "logger.tracking_uri")  # one opener at a time
     mlflow.set_experiment("monitor")
     tab = summary_table(res)
     fat = false_alarm_table(fa)
