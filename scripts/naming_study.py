@@ -22,8 +22,11 @@ else ``sum``), ``sum`` (summed evidence relative to the gear's calibration windo
 ``vote`` (the most frequent per-window argmax among the faults), ``clip`` (summed
 evidence, each window's clipped to +-2 nats), ``mean_z`` (a classifier trained on hour
 means of the training gear's z-scores, applied to the hour's mean z-score). Each life
-prints the best plausible one-bridge sensor fit and the median p-value it leaves
-(:data:`learn.monitor.sensor_check.SENSOR_P_MIN` was read off these).
+prints the best plausible one-bridge sensor fit, the median p-value it leaves and the mean
+shift left on the other bridges (``rest``), and the first line that shift on the judged
+gear's healthy hour after commissioning, for every bridge
+(:data:`learn.monitor.sensor_check.SENSOR_P_MIN` and
+:data:`~learn.monitor.sensor_check.REST_MAX` were read off these).
 """
 
 from __future__ import annotations
@@ -49,6 +52,20 @@ def _best_sensor_fit(mon, z, q, opi):
         if p > p_best:
             best, p_best = f, p
     return best, p_best
+
+
+def _healthy_rest(mon, healthy, n_comm: int) -> None:
+    """Print the mean shift each one-bridge fit leaves on the other bridges over the
+    healthy hour after commissioning (about 1 where the windows are independent)."""
+    from learn.monitor.evaluate import features_of
+    from learn.monitor.sensor_check import fit_sensor_faults
+
+    f, q, _ = features_of(healthy, n_comm, len(healthy))
+    opi = mon.baseline.index(q)
+    fits = fit_sensor_faults(mon.baseline.z(f, q, opi), mon.baseline.mean[opi],
+                             mon.baseline.std[opi])
+    print("healthy hour: rest of each bridge's fit "
+          + " ".join(f"s{x.bridge} {x.rest:.2f}" for x in fits[::2]), flush=True)
 
 
 def _name_rules(mon, lp, opi, z_mean, agg_clf, classes, f, q):
@@ -131,6 +148,9 @@ def main() -> None:
     if args.sensor_levels is not None:
         cfg.sensor_train_levels = args.sensor_levels
     cls = classes(p, cfg)
+    unknown = sorted(set(args.judge_faults or []) - set(cls[1:]))
+    if unknown:
+        ap.error(f"--judge-faults: unknown class {unknown[0]}; allowed: {', '.join(cls[1:])}")
     n_comm = int(cfg.commissioning_h * 60)
     clf, agg = _train(p, args.train, cfg, cls, n_comm)
     model = DiagnosisModel(cls, clf)
@@ -141,6 +161,7 @@ def main() -> None:
     fh, ph, _ = features_of(healthy, 0, n_comm)
     mon = GearMonitor(model, cfg.rule, 1.0)
     mon.commission(fh, ph)
+    _healthy_rest(mon, healthy, n_comm)
     right: dict[tuple[str, str], list[bool]] = {}
     k = 0
     for c in args.judge_faults or cls[1:]:
@@ -164,7 +185,8 @@ def main() -> None:
                 print(f"  {c} {s:.4g}{f' on s{i}' if sensor else ''}: best plausible "
                       "one-bridge fit " + ("none" if fit is None else
                                            f"p {p_fit:.3f} ({fit.fault} s{fit.bridge} "
-                                           f"{fit.severity:.4g})"), flush=True)
+                                           f"{fit.severity:.4g}) rest {fit.rest:.2f}"),
+                      flush=True)
                 rules = _name_rules(mon, lp, opi, z.mean(axis=0), agg, cls, f, q)
                 for rule, name in rules.items():
                     right.setdefault((c, rule), []).append(name == c)

@@ -237,8 +237,9 @@ def test_one_window_at_a_time_equals_the_block_path(tiny_eval):
 
 def test_one_bridge_fits_recover_planted_sensor_faults():
     """Least squares of sensor_check: an offset step on s2 and a gain drift on s4, planted
-    in z-scores of noise, come back with their severities and leave noise behind."""
-    from learn.monitor.sensor_check import BLOCK, fit_sensor_faults
+    in z-scores of noise, come back with their severities and leave noise behind; the
+    mean shift left on the other bridges (rest) is small unless another bridge moved."""
+    from learn.monitor.sensor_check import BLOCK, REST_MAX, fit_sensor_faults
 
     rng = np.random.default_rng(0)
     n, f = 40, 5 * BLOCK + 1
@@ -251,6 +252,10 @@ def test_one_bridge_fits_recover_planted_sensor_faults():
     off = fit[("sensor_offset_step", 2)]
     assert off.severity == pytest.approx(0.6, abs=3 * 0.02 / np.sqrt(n))
     assert np.sum(off.z ** 2) < 1.2 * np.sum(noise ** 2) < np.sum(z ** 2) / 5
+    assert 0.5 < off.rest < REST_MAX  # the other bridges hold noise only: about 1
+    z[:, 3 * BLOCK] += 3.0  # ... unless s3's offset moved too (an eccentric WG's pattern)
+    moved = {(x.fault, x.bridge): x for x in fit_sensor_faults(z, mean, std)}
+    assert moved[("sensor_offset_step", 2)].rest > 2 * REST_MAX
     z = noise.copy()
     cols = slice(4 * BLOCK, 5 * BLOCK - 1)
     z[:, cols] += -0.1 * mean[:, cols] / std[:, cols]  # gain 0.9 on s4

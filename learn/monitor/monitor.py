@@ -25,7 +25,7 @@ import numpy as np
 
 from .model import Baseline, DiagnosisModel, design_matrix
 from .rule import RuleConfig, conformal_p, log_bets, min_calibration, threshold
-from .sensor_check import SENSOR_P_MIN, fit_sensor_faults
+from .sensor_check import REST_MAX, SENSOR_P_MIN, fit_sensor_faults
 
 
 @dataclass
@@ -368,7 +368,9 @@ class GearMonitor:
         """Name the fault of windows since an alarm: a sensor fault where one bridge's
         offset step or gain drift explains them (:mod:`.sensor_check`: a plausible fit
         after which the windows look healthy, median p-value at least
-        :data:`~.sensor_check.SENSOR_P_MIN`), with its bridge; else the fault with the
+        :data:`~.sensor_check.SENSOR_P_MIN`, and the other bridges have not moved on
+        average, :attr:`~.sensor_check.SensorFit.rest` at most
+        :data:`~.sensor_check.REST_MAX`), with its bridge; else the fault with the
         largest summed evidence (:meth:`evidence` rows ``ev``) and None."""
         b = self.baseline
         opi = b.index(points)
@@ -381,7 +383,7 @@ class GearMonitor:
             return float(np.median(self.p_values(score, opi, u)))
 
         fits = [f for f in fit_sensor_faults(z, b.mean[opi], b.std[opi])
-                if f.fault in self.model.classes and f.plausible()]
+                if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
         p = [median_p(f.z) for f in fits]
         if p and max(p) >= SENSOR_P_MIN:
             k = int(np.argmax(p))
