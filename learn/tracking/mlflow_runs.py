@@ -274,10 +274,16 @@ def quiet_mlflow() -> None:
     """Keep MLflow's own INFO messages (database set-up, migrations) off the console.
 
     MLflow logs through its logger ``mlflow`` with a handler of its own; its warnings and
-    errors still show, except the one that ``mlflow.sklearn`` repeats for every model saved
-    in the cloudpickle format, the format :meth:`TrackedRun.log_model` chooses (and
+    errors still show, except SQLAlchemy's deprecation of the ``noload`` loader strategy
+    (MLflow's store, not ours to fix) and the one that ``mlflow.sklearn`` repeats for every
+    model saved in the cloudpickle format, the format :meth:`TrackedRun.log_model` chooses (and
     records in the model's tag ``serialization_format``; its docstring says why).
     """
+    import warnings
+
+    # SQLAlchemy's deprecation of a loader strategy MLflow's own store uses: not ours to fix
+    warnings.filterwarnings("ignore", message="The ``noload`` loader strategy is deprecated",
+                            category=DeprecationWarning)
     lg = logging.getLogger("mlflow")
     if lg.getEffectiveLevel() < logging.WARNING:
         lg.setLevel(logging.WARNING)
