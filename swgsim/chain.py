@@ -1,7 +1,9 @@
 """The simulation chain (paper Fig. 2): dynamics -> flexspline -> strain gauges.
 
 :class:`SimulationChain` holds one flexspline truss with its factorisation and produces
-the five bridge signals of many gear variants at one operating point:
+the five bridge signals of many gear variants at one operating point
+(:meth:`SimulationChain.simulate`) or along an operating profile with its transients
+(:meth:`SimulationChain.simulate_profile`, :mod:`swgsim.profile`):
 
     s(t) = w0 (A cos 2ψ + B sin 2ψ) + e (E_x cos θ_e + E_y sin θ_e) + T_out(t) h(ψ(t)),
 
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,6 +34,9 @@ from .influence import (
     zone_table,
 )
 from .sensors import SensorLayout, signal_rows
+
+if TYPE_CHECKING:
+    from .profile import Profile
 
 log = logging.getLogger(__name__)
 
@@ -195,6 +201,55 @@ class SimulationChain:
                                 friction_effects=friction_effects)
         if not res.success:
             raise RuntimeError(f"dynamic simulation failed: {res.message}")
+        return self.signals_batch(variants, res.psi, res.t_out), res
+
+    def simulate_profile(self, variants: list[ChainParams], profile: Profile,
+                         phi_in0: np.ndarray | float = 0.0, duration_s: float | None = None,
+                         feedforward: bool = False):
+        """Simulate variants along an operating profile, recorded from t = 0.
+
+        Runs :func:`swgsim.dynamics.simulate_profile` at the chain's sample rate and
+        substeps and maps the recorded motion to the bridge signals with
+        :meth:`signals_batch`: ψ = φ_in − φ_out from the states and the acting output
+        torque t_out = c T_stiff − T_fric / sin α of the recorded states, the same
+        quantity and sign as :meth:`simulate` (positive when the gear drives the load
+        forward at positive speed). A reversed motion or an overhauling load gives a
+        negative t_out; it passes through signed, since the flexspline's torque strain is
+        linear in the torque (s = ... + t_out h(ψ)).
+
+        Parameters
+        ----------
+        variants : list of ChainParams
+            V variants.
+        profile : swgsim.profile.Profile
+            Desired speed and load, the same for all variants.
+        phi_in0 : float or ndarray, shape (V,)
+            Input angle at t = 0 [rad].
+        duration_s : float, optional
+            Recorded length [s]; default the profile's duration.
+        feedforward : bool
+            Add the acceleration feed-forward torque to the motor torque.
+
+        Returns
+        -------
+        signals : ndarray, shape (V, 5, n_t)
+            s0..s4 [mV/V] at times ``result.time`` (from t = 0, transients included).
+        result : dynamics.ProfileResult
+
+        Raises
+        ------
+        ValueError
+            A profile beyond the catalogue limits or an unstable step
+            (:func:`swgsim.dynamics.simulate_profile`).
+        RuntimeError
+            If the integration diverged (naming the profile).
+        """
+        st = self.settings
+        res = dynamics.simulate_profile([v.gear for v in variants], profile, phi_in0,
+                                        st.sample_rate_hz, duration_s, st.substeps,
+                                        feedforward)
+        if not res.success:
+            raise RuntimeError(f"dynamic simulation of profile {profile} failed: {res.message}")
         return self.signals_batch(variants, res.psi, res.t_out), res
 
     def signals_batch(self, variants: list[ChainParams], psi: np.ndarray, t_out: np.ndarray,

@@ -22,6 +22,7 @@ name                 effect on channel c (s in mV/V)                 parameters 
 ==================== ============================================== ======================
 gauge_misplacement   s_c(ψ − δ_c): the gauge sits δ_c further along  delta_deg [deg]
                      θ, i.e. a delay of δ_c / ψ̇ of channel c
+                     (with ``psi``: angle domain, any ψ̇)
 bridge_nonlinearity  s / (1 + k_c s)                                k_per_mvv [1/(mV/V)]
                                                                     or bridge: quarter
 gain_mismatch        g_c s                                          gain [-]
@@ -51,6 +52,12 @@ first-order amplifier low-pass and sampling delay give a phase error growing wit
 linear exactly; their residual nonlinearity depends on the sum of the arm strains,
 which the signal alone does not carry, so ``bridge_nonlinearity`` is a per-channel
 ``k`` (``bridge: quarter`` sets the quarter-bridge value).
+
+Speed: only ``gauge_misplacement`` depends on the motion. Given the constant ψ̇ of a
+steady window (``n_in_rpm``) it is a constant delay; given ψ(t) itself (``psi``, windows
+of an operating profile) it acts in the angle domain, a delay δ / ψ̇(t) varying with the
+speed, and refuses a window in which ψ reverses or stands still. The other effects act
+in time (filters, delays) or sample by sample and hold at any speed.
 
 Edges: filters start in the steady state of the first sample and shifts extrapolate by
 mirroring; pass ``n_lead`` leading samples of history (dropped from the output, at least
@@ -83,6 +90,9 @@ __all__ = [
     "lowpass",
     "gauge_misplacement",
     "gauge_misplacement_linear",
+    "gauge_misplacement_angle",
+    "angle_positions",
+    "spline_at",
     "bridge_denominator",
     "bridge_nonlinearity",
     "gain_mismatch",
@@ -298,8 +308,29 @@ def fractional_delay(x: np.ndarray, delay_samples: np.ndarray) -> np.ndarray:
         return x.copy()
     n = x.shape[-1]
     rows = x.reshape(-1, n)
-    coef = ndimage.spline_filter1d(rows, order=3, axis=-1, mode="mirror")
     pos = np.arange(n)[None, :] - d.reshape(-1)[:, None]  # (rows, n)
+    return spline_at(rows, pos).reshape(x.shape)
+
+
+def spline_at(rows: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """Cubic B-spline interpolant of each row of ``rows`` at fractional sample positions.
+
+    The interpolation of :func:`fractional_delay` (which calls it with pos = k − d) at any
+    positions: exact at integer positions, samples beyond the ends mirrored.
+
+    Parameters
+    ----------
+    rows : ndarray, shape (m, n)
+        Uniformly sampled signals.
+    pos : ndarray, shape (m, n_out)
+        Positions [samples] at which to evaluate row i, 0 the first sample.
+
+    Returns
+    -------
+    ndarray, shape (m, n_out)
+    """
+    n = rows.shape[-1]
+    coef = ndimage.spline_filter1d(rows, order=3, axis=-1, mode="mirror")
     i = np.floor(pos).astype(np.int64)
     f = pos - i
     g = 1.0 - f
@@ -308,7 +339,7 @@ def fractional_delay(x: np.ndarray, delay_samples: np.ndarray) -> np.ndarray:
     out = np.zeros_like(pos)
     for m, w in zip((-1, 0, 1, 2), weights, strict=True):
         out += np.take_along_axis(coef, _mirror(i + m, n), axis=1) * w
-    return out.reshape(x.shape)
+    return out
 
 
 def lowpass_coefficients(f_c_hz: float, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -389,6 +420,77 @@ def gauge_misplacement(x: np.ndarray, delta_rad: np.ndarray, psi_rate_rad_s: np.
     """
     d = delta_rad[None, :] / psi_rate_rad_s[:, None] * fs_hz  # (n_w, 5) samples
     return fractional_delay(x, d)
+
+
+def angle_positions(psi: np.ndarray, delta_rad: float) -> np.ndarray:
+    """Sample positions at which a monotone ψ(t) takes the values ψ(t_k) − δ.
+
+    The inverse t(ψ) is interpolated linearly between samples (exact for a linear ψ, i.e.
+    a constant speed) and extrapolated beyond the window at the rate of its end intervals.
+
+    Parameters
+    ----------
+    psi : ndarray, shape (n,)
+        WG angle relative to the flexspline at the samples [rad], strictly monotone.
+    delta_rad : float
+        Angular offset δ [rad].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Fractional positions [samples], 0 the first sample; k − δ / (ψ̇ Δt) at constant ψ̇.
+    """
+    u, target = (psi, psi - delta_rad) if psi[-1] > psi[0] else (-psi, -psi + delta_rad)
+    k = np.arange(psi.size, dtype=float)
+    pos = np.interp(target, u, k)
+    lo, hi = target < u[0], target > u[-1]
+    pos[lo] = (target[lo] - u[0]) / (u[1] - u[0])
+    pos[hi] = psi.size - 1 + (target[hi] - u[-1]) / (u[-1] - u[-2])
+    return pos
+
+
+def gauge_misplacement_angle(x: np.ndarray, delta_rad: np.ndarray,
+                             psi: np.ndarray) -> np.ndarray:
+    """Gauges δ_c further along θ than nominal, in the angle domain: s_c at ψ(t) − δ_c.
+
+    The speed-general form of :func:`gauge_misplacement`: each channel is interpolated
+    (:func:`spline_at`) at the time where ψ took the value ψ(t) − δ_c
+    (:func:`angle_positions`), a delay δ_c / ψ̇ that varies with the speed. At constant
+    ψ̇ it is the constant delay of :func:`gauge_misplacement` (to rounding, tested).
+
+    Parameters
+    ----------
+    x : ndarray, shape (n_windows, 5, n_t)
+        Bridge signals [mV/V].
+    delta_rad : ndarray, shape (5,)
+        Angular misplacement of each channel's gauges [rad].
+    psi : ndarray, shape (n_windows, n_t)
+        ψ = φ_in − φ_out at the samples of ``x`` [rad] (:attr:`swgsim.dynamics.SimResult.psi`),
+        strictly monotone in each window.
+
+    Returns
+    -------
+    ndarray, shape of ``x``
+        [mV/V].
+
+    Raises
+    ------
+    ValueError
+        ψ not strictly monotone in a window (a reversal or standstill: the angle ψ − δ is
+        then not, or not once, in the recorded motion).
+    """
+    x = np.asarray(x, float)
+    out = x.copy()
+    for w in range(x.shape[0]):
+        dpsi = np.diff(psi[w])
+        if not (np.all(dpsi > 0) or np.all(dpsi < 0)):
+            raise ValueError("sensor_effects.gauge_misplacement: psi must be strictly "
+                             f"monotone in every window (no reversal or standstill), window {w}")
+        pos = np.stack([angle_positions(psi[w], float(d)) for d in delta_rad])  # (5, n_t)
+        moved = np.asarray(delta_rad) != 0
+        if np.any(moved):
+            out[w, moved] = spline_at(x[w, moved], pos[moved])
+    return out
 
 
 def gauge_misplacement_linear(ds_dpsi: np.ndarray, delta_rad: np.ndarray) -> np.ndarray:
@@ -569,6 +671,7 @@ class _Windows:
     ratio: float
     n_lead: int
     t_start_s: Any
+    psi: np.ndarray | None = None
 
     def t_seq(self, n_w: int, n_t: int) -> np.ndarray:
         """Time of every sample since the start of the sequence, shape (n_w, n_t) [s]."""
@@ -586,7 +689,8 @@ class _Windows:
 
 _STEPS: dict[str, Any] = {
     "gauge_misplacement": lambda x, p, w: gauge_misplacement(
-        x, np.deg2rad(p["delta_deg"]), psi_rate(w.n_in, w.ratio), w.fs),
+        x, np.deg2rad(p["delta_deg"]), psi_rate(w.n_in, w.ratio), w.fs) if w.psi is None
+    else gauge_misplacement_angle(x, np.deg2rad(p["delta_deg"]), w.psi),
     "bridge_nonlinearity": lambda x, p, w: bridge_nonlinearity(
         x, p["k_per_mvv"][None, :, None]),
     "gain_mismatch": lambda x, p, w: gain_mismatch(x, p["gain"][None, :, None]),
@@ -600,10 +704,11 @@ _STEPS: dict[str, Any] = {
 :func:`apply_sensor_effects`."""
 
 
-def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray | float,
+def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray,
+                         n_in_rpm: np.ndarray | float | None,
                          effects: Sequence[Mapping[str, Any]] | Sequence[SensorEffect] | None,
                          *, t_start_s: np.ndarray | float | None = None, n_lead: int = 0,
-                         ratio: float = 100.0) -> np.ndarray:
+                         ratio: float = 100.0, psi: np.ndarray | None = None) -> np.ndarray:
     """Apply measurement-chain effects to simulated windows (the ``sensor_effects`` hook).
 
     Parameters
@@ -613,9 +718,9 @@ def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.n
         before each window.
     time_s : ndarray, shape (n_t,)
         Sample times [s], uniformly spaced; the window starts at ``time_s[n_lead]``.
-    n_in_rpm : float or ndarray, shape (n_windows,)
-        Input speed of each window [rpm] (the acting mean; sets ψ̇ for gauge
-        misplacement), > 0.
+    n_in_rpm : float or ndarray, shape (n_windows,), or None
+        Input speed of each window [rpm] (the acting mean; sets a constant ψ̇ for gauge
+        misplacement), > 0; ignored (may be None) when ``psi`` is given.
     effects : sequence of mapping or SensorEffect
         See :func:`parse_sensor_effects`; empty or None returns a copy.
     t_start_s : float or ndarray, shape (n_windows,), optional
@@ -626,6 +731,11 @@ def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.n
         output.
     ratio : float, default 100
         Gear ratio N (ψ̇ = ω_in (1 + 1/N)).
+    psi : ndarray, shape (n_windows, n_t), optional
+        ψ = φ_in − φ_out at every sample of ``signals`` [rad] (windows at varying speed,
+        e.g. :meth:`swgsim.chain.SimulationChain.simulate_profile`): gauge misplacement
+        then acts in the angle domain (:func:`gauge_misplacement_angle`), which needs a
+        strictly monotone ψ per window. The other effects do not depend on the speed.
 
     Returns
     -------
@@ -635,13 +745,14 @@ def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.n
     Raises
     ------
     ValueError
-        Bad shapes, non-positive speed, ``n_lead`` outside [0, n_t), an invalid effect, or
-        a bridge nonlinearity whose denominator 1 + k s is not positive.
+        Bad shapes, non-positive speed (without ``psi``), ``n_lead`` outside [0, n_t), an
+        invalid effect, a bridge nonlinearity whose denominator 1 + k s is not positive,
+        or gauge misplacement on a ``psi`` that reverses or stands still in a window.
     """
     x = np.array(signals, dtype=float)
     if x.ndim != 3 or x.shape[1] != 5:
         raise ValueError(f"signals must have shape (n_windows, 5, n_t), got {x.shape}")
-    windows = _check_windows(x, time_s, n_in_rpm, t_start_s, n_lead, ratio)
+    windows = _check_windows(x, time_s, n_in_rpm, t_start_s, n_lead, ratio, psi)
     items = [e if isinstance(e, SensorEffect) else None for e in (effects or ())]
     if any(e is None for e in items):
         items = parse_sensor_effects(effects)  # type: ignore[arg-type]
@@ -652,8 +763,9 @@ def apply_sensor_effects(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.n
     return x[:, :, windows.n_lead:]
 
 
-def _check_windows(x: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray | float,
-                   t_start_s: Any, n_lead: int, ratio: float) -> _Windows:
+def _check_windows(x: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray | float | None,
+                   t_start_s: Any, n_lead: int, ratio: float,
+                   psi: np.ndarray | None = None) -> _Windows:
     """The time axis and operating points of :func:`apply_sensor_effects`, checked."""
     n_w, _, n_t = x.shape
     time_s = np.asarray(time_s, float)
@@ -664,6 +776,11 @@ def _check_windows(x: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray | flo
     dt = float(time_s[1] - time_s[0])
     if not dt > 0:
         raise ValueError("time_s must be increasing")
+    if psi is not None:
+        psi = np.asarray(psi, float)
+        if psi.shape != (n_w, n_t) or not np.all(np.isfinite(psi)):
+            raise ValueError(f"psi must be finite with shape ({n_w}, {n_t}), got {psi.shape}")
+        return _Windows(time_s, dt, np.full(n_w, np.nan), ratio, int(n_lead), t_start_s, psi)
     n_in = np.broadcast_to(np.asarray(n_in_rpm, float), (n_w,))
     if np.any(~np.isfinite(n_in)) or np.any(n_in <= 0):
         raise ValueError(f"n_in_rpm must be > 0 rpm, got {n_in_rpm}")
