@@ -7,6 +7,8 @@ States per variant: x = [φ_in, ω_in, φ_out, ω_out, ∫e_ω] (rad, rad/s, rad
   fixed, flexspline output, direction reversed; docs/PHYSICS.md sec. 1).
 * Stiffness torque (eq. 2): T_stiff = k1 Δφ_k + k2 Δφ_k³, a generalised force on Δφ_k:
   it acts on the input with tan α_in and on the output with c = N / ((N + 1) tan α_tooth).
+  With backlash (lost motion b at the output, ``GearParams.backlash_rad``) it acts on the
+  dead-zoned twist d = Δφ_k − clip(Δφ_k, −g, g), g = c b / 2 (docs/PHYSICS.md sec. 8.1).
 * Kinematic error φ_err = c Σ_k A_k sin(k φ_in + θ_k): harmonics of the input angle,
   amplitudes A_k given as output angle [rad].
 * Friction (eq. 5-6) is a generalised force on the flank sliding coordinate φ_b with
@@ -17,7 +19,8 @@ States per variant: x = [φ_in, ω_in, φ_out, ω_out, ∫e_ω] (rad, rad/s, rad
 * Input: a motor with a PI speed loop tracking n_in,d; output: inertia J_out with the load
   torque T_out,d opposing its motion.
 
-Energy balance [derived]: with the elastic energy V = k1 Δφ_k²/2 + k2 Δφ_k⁴/4,
+Energy balance [derived]: with the elastic energy V = k1 d²/2 + k2 d⁴/4 (d = Δφ_k
+without backlash),
 
     d/dt (J_in ω_in²/2 + J_out ω_out²/2 + V) = T_m ω_in + T_stiff φ_err'(φ_in) ω_in
                                                − T_fric φ̇_b − P_load.
@@ -103,6 +106,12 @@ class GearParams:
         Phases of the kinematic-error harmonics [rad] [unverified, arbitrary fixed].
     kp_nms, ki_nm : float
         PI speed loop gains [N m s/rad], [N m/rad] (about 30 Hz bandwidth).
+    backlash_rad : float
+        Backlash (lost motion) at the output [rad], >= 0: the full width of the dead zone
+        in the output angle at a held input, the quantity catalogues and wear studies
+        state in arcmin. On the twist it is a dead zone of width c b
+        (:attr:`backlash_twist_rad`, Δφ_k = c δ_out at a held input); 0 (default) is the
+        paper's backlash-free gear (docs/PHYSICS.md sec. 8.1).
     """
 
     ratio: float = 100.0
@@ -124,6 +133,7 @@ class GearParams:
     ke_phase_rad: tuple[float, ...] = (0.3, 1.1, 2.0)
     kp_nms: float = 0.0225
     ki_nm: float = 0.85
+    backlash_rad: float = 0.0
 
     @property
     def tan_alpha_in(self) -> float:
@@ -134,6 +144,11 @@ class GearParams:
     def c_out(self) -> float:
         """Lever of T_stiff on the output, N / ((N + 1) tan α_tooth) [-]."""
         return 1.0 / np.tan(self.alpha_tooth_rad) - self.tan_alpha_in
+
+    @property
+    def backlash_twist_rad(self) -> float:
+        """Width of the dead zone on the twist Δφ_k, c · backlash_rad [rad]."""
+        return self.c_out * self.backlash_rad
 
 
 @dataclass(frozen=True)
@@ -322,6 +337,9 @@ def _forces(x, b: Batch, t_load):
     # kinematic error c sum_k A_k sin(k phi_in + th_k); ke arrays have shape (n_k, V)
     ke = (b.ke_amp_rad * np.sin(b.ke_orders * phi_in + b.ke_phase_rad)).sum(axis=0)
     dphi_k = b.tan_alpha_in * (phi_in - phi_out) + b.inv_tan_a * phi_out + b.c_out * ke
+    gap = b.fields.get("half_gap")  # present only when some variant has backlash
+    if gap is not None:  # dead zone: the teeth lose contact within ±g (sec. 8.1)
+        dphi_k = dphi_k - np.clip(dphi_k, -gap, gap)
     t_stiff = (b.k1_nm_per_rad + b.k2_nm_per_rad3 * dphi_k * dphi_k) * dphi_k
     v_b = -w_out * b.inv_sin_a
     sgn = np.tanh(v_b * b.inv_v_smooth)
@@ -372,7 +390,9 @@ def steady_state(b: Batch, w_d, t_load, phi_in0) -> np.ndarray:
 
     Solves the output balance c T_stiff = T_load + T_fric / sin α for the twist by a few
     fixed-point steps (kinematic error and b3 ignored), and starts the PI integrator at
-    the torque that balances the input.
+    the torque that balances the input. With backlash the twist lies half the dead zone,
+    g = c b / 2, further in the direction of T_stiff (at the middle of the gap for
+    T_stiff = 0).
     """
     w_out = -w_d / b.ratio
     sa = np.sin(b.alpha_tooth_rad)
@@ -388,6 +408,9 @@ def steady_state(b: Batch, w_d, t_load, phi_in0) -> np.ndarray:
     for _ in range(30):
         d = d - (b.k1_nm_per_rad * d + b.k2_nm_per_rad3 * d**3 - t_stiff) / (
             b.k1_nm_per_rad + 3 * b.k2_nm_per_rad3 * d**2)
+    gap = _half_gap(b)
+    if gap is not None:  # contact on the loaded flank: the twist crosses half the gap
+        d = d + gap * np.sign(t_stiff)
     # d = (phi_in + N phi_out) / ((N + 1) tan a)  ->  phi_out
     phi_out = (d * (b.ratio + 1) * np.tan(b.alpha_tooth_rad) - phi_in0) / b.ratio
     integ = b.tan_alpha_in * t_stiff / b.ki_nm
@@ -557,7 +580,30 @@ def _ke_batch(b: Batch) -> Batch:
     f["inv_sin_a"] = 1.0 / np.sin(a)
     f["inv_v_smooth"] = 1.0 / f["v_smooth_rad_s"]
     f["mu_c_cos"] = f["mu"] * f["c_out"] / np.cos(a)
+    gap = _half_gap(Batch(f))
+    if gap is not None:
+        f["half_gap"] = gap
     return Batch(f)
+
+
+def _half_gap(b: Batch) -> np.ndarray | None:
+    """Half the dead zone on the twist, c · backlash_rad / 2 [rad], shape (V,); None when
+    no variant of the batch has backlash (the dead zone is skipped then, so a backlash-free
+    batch runs the arithmetic of the model without it, bit for bit).
+
+    Raises
+    ------
+    ValueError
+        A negative or non-finite backlash.
+    """
+    if "half_gap" in b.fields:
+        return b.fields["half_gap"]
+    bl = b.fields.get("backlash_rad")
+    if bl is None or not np.any(bl != 0.0):
+        return None
+    if not np.all(np.isfinite(bl)) or np.any(bl < 0.0):
+        raise ValueError(f"backlash_rad must be finite and >= 0 [rad], got {bl}")
+    return 0.5 * b.fields["c_out"] * bl
 
 
 def _result(rec, bk, w_d, t_load, fs, ok, msg=""):
@@ -581,6 +627,9 @@ def torsional_mode(params: GearParams, n_in_rpm: float, t_out_nm: float) -> tupl
     resonance; its decay time how long the start of :func:`simulate` rings (the start,
     :func:`steady_state`, leaves out the kinematic error). Bench (8.8e-3 kg m²): about
     230-430 Hz and 4 ms over 7-70 N m; a robot link (0.69 kg m²): 30-60 Hz and 30 ms.
+    With backlash the linearisation is at the contact twist (the flanks stay in contact
+    while T_stiff keeps its sign), so the dead zone does not enter (docs/PHYSICS.md
+    sec. 8.1).
 
     Parameters
     ----------

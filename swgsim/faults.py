@@ -1,4 +1,5 @@
-"""The paper's five faults (Table I) as parameter transforms with severity and position.
+"""The paper's five faults (Table I), and wear, as parameter transforms with severity and
+position.
 
 Faults map parameters to parameters, never signals to signals (docs/STYLE.md). Severity 0
 reproduces the healthy gear exactly. Each fault states its severity range, the model it
@@ -12,7 +13,12 @@ reduced_stiffness  I/O dynamics    [0, 0.9]                k1 ← (1 − s) k1
 eccentric_wg       flexspline      [0, 0.5] of w0          u_ecc = [s w0, θ, 0]
 root_tooth_crack   flexspline      [0, 0.99]               k_bar ← (1 − s) k_bar at θ
 tip_tooth_crack    flexspline      [0, 1]                  F_tooth ← (1 − s) F_tooth at θ
+wear               I/O dynamics    [0, 1]                  k1, k2 ← (1 − 0.75 s) k1, k2;
+                                                           backlash ← s · 3 arcmin
 ================== =============== ======================= ============================
+
+``wear`` is not one of the paper's classes (:data:`PAPER_CLASSES`); docs/PHYSICS.md
+sec. 8.1.
 """
 
 from __future__ import annotations
@@ -197,6 +203,35 @@ def _healthy(p, s, pos):
     return p
 
 
+#: Stiffness left by complete wear (s = 1), a fraction of nominal [-]: the damaged
+#: wave-generator/flexspline interface of the wear study quoted in the issue "A joint in
+#: motion" (a quarter of the nominal torsional stiffness; the study itself was not found
+#: by search here, docs/PHYSICS.md sec. 8.1).
+WEAR_STIFFNESS_LEFT = 0.25
+
+#: Backlash (lost motion at the output) of complete wear (s = 1) [arcmin] [choice]: three
+#: times the catalogue's 1 arcmin hysteresis loss of a new size-20, ratio-100 gear
+#: (Harmonic Drive CSF/CSG catalogue, "Hysteresis Loss"; value not re-read here). Zhang et
+#: al., Machines 13 (2025) 918, report backlash growing in accelerated life tests.
+WEAR_BACKLASH_ARCMIN = 3.0
+
+
+def _wear(p: ChainParams, s: float, pos: float) -> ChainParams:
+    """Wear of severity s in [0, 1]: the whole torque-twist curve softened,
+    k1, k2 ← (1 − (1 − WEAR_STIFFNESS_LEFT) s) k1, k2 (k2 in proportion, so the catalogue's
+    K1/K3 shape is kept), and backlash ← backlash + s · WEAR_BACKLASH_ARCMIN (linear in s
+    [choice]); the position is unused."""
+    if s == 0.0:
+        return p
+    f = 1.0 - (1.0 - WEAR_STIFFNESS_LEFT) * s
+    g = p.gear
+    g = dataclasses.replace(g, k1_nm_per_rad=g.k1_nm_per_rad * f,
+                            k2_nm_per_rad3=g.k2_nm_per_rad3 * f,
+                            backlash_rad=g.backlash_rad
+                            + s * float(np.deg2rad(WEAR_BACKLASH_ARCMIN / 60.0)))
+    return dataclasses.replace(p, gear=g)
+
+
 #: The registry of fault classes, in the schema's class order (healthy first): the one
 #: place that lists them, with their display names. Extend it with :func:`register_fault`.
 FAULTS: dict[str, Fault] = {
@@ -218,8 +253,10 @@ FAULTS: dict[str, Fault] = {
     )
 }
 
-#: The paper's six classes (Table I and healthy), in the schema's order.
-PAPER_CLASSES: tuple[str, ...] = tuple(FAULTS)
+#: The paper's six classes (Table I and healthy), in the schema's order; registered
+#: classes (``wear`` below, a user's) come after them.
+PAPER_CLASSES: tuple[str, ...] = ("healthy", "reduced_damping", "reduced_stiffness",
+                                  "eccentric_wg", "root_tooth_crack", "tip_tooth_crack")
 
 
 def fault_classes() -> tuple[str, ...]:
@@ -267,6 +304,14 @@ def register_fault(fault: Fault) -> Fault:
                          "hold 0 (the healthy gear)")
     FAULTS[fault.name] = fault
     return fault
+
+
+#: Wear (docs/PHYSICS.md sec. 8.1): registered after the paper's classes, so the schema's
+#: class order and :data:`PAPER_CLASSES` stay the paper's.
+WEAR = register_fault(Fault(
+    "wear", "I/O dynamics", (0.0, 1.0), False, _wear,
+    "stiffness loss as reduced_stiffness (torsional mode down to about half at s = 1); the "
+    "backlash shows only where the torque changes sign (reversals, zero load)"))
 
 
 def get_fault(name: str, faults: Mapping[str, Fault] | None = None) -> Fault:
