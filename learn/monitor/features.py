@@ -12,6 +12,20 @@ sub-harmonics of orders 1/4, 1/3 and 1/2 fitted alongside and dropped:
 and the window's efficiency (mean P_out / mean P_in; reduced damping). The basis is built
 once per (speed, window) from the duty point's desired speed, so a stream at one
 operating point costs one matrix product per window.
+
+At varying speed (a move, a reversal) that basis no longer follows the gear, and the
+window's own ψ(t) [rad] (measured, or estimated from the motor encoder) may be passed:
+the basis is then built per window in the angle domain (computed order tracking by least
+squares): [1, cos hψ, sin hψ] for h = 1..H and the nuisance orders as multiples of the
+input angle, φ_in ≈ ψ N / (N + 1) (exact for a rigid gear, φ_out = −φ_in / N; the elastic
+twist shifts it by the output-side twist angle, mostly a constant phase, which phase-free
+amplitudes ignore [not measured]; the nuisance terms are dropped anyway). The fit takes
+the non-uniform ψ samples as they are: no resampling to uniform ψ, hence no interpolation
+error, and a reversal does not fold orders (each sample keeps its angle). A window whose
+ψ covers too little angle for the basis (condition number above :data:`MAX_CONDITION`:
+below about 1.45 ψ revolutions for H = 12 with orders 1/4, 1/3, 1/2, e.g. a steady 0.12 s
+window at 700 rpm, accepted at 750 rpm) is refused, naming the window. Cost: about 0.4 ms per window
+against 0.07 ms for the cached basis (H = 12, 1200 samples, one core).
 """
 
 from __future__ import annotations
@@ -25,6 +39,10 @@ from learn.inputs.signals import pinv
 N_HARMONICS = 12
 NUISANCE_ORDERS = (0.25, 1 / 3, 0.5)
 RATIO = 100.0  # gear ratio N of the size-20 gear (swgsim.dynamics.GearParams.ratio)
+#: Largest condition number of a window's angle-domain basis [-] [choice]: the desired-speed
+#: basis of a 0.12 s window at 10 kHz has 1.1e4 at 1000 rpm, 4.2e5 at 750 rpm, 6.7e10 at
+#: 500 rpm (nuisance orders no longer separable from the offset and ψ harmonics).
+MAX_CONDITION = 1e6
 
 
 @functools.lru_cache(maxsize=16)
@@ -52,8 +70,62 @@ def feature_names(n_harmonics: int = N_HARMONICS) -> list[str]:
     return [*out, "efficiency"]
 
 
+def _angle_coefficients(x: np.ndarray, psi: np.ndarray, n_harmonics: int, first: int = 0
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares Fourier coefficients of windows in their own angle ψ(t).
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, 5, n_t)
+        Bridge outputs [mV/V].
+    psi : ndarray, shape (n, n_t)
+        WG angle ψ of each sample [rad].
+    n_harmonics : int
+        H.
+    first : int
+        Index of the first window, for the error message.
+
+    Returns
+    -------
+    coef : ndarray, shape (n, 5, P)
+        [c0, a_1..a_H, a_nuis, b_1..b_H, b_nuis], P = 2 (H + 3) + 1, the column order of
+        :func:`_basis`.
+    rest : ndarray, shape (n, 5, n_t)
+        What the series leaves [mV/V].
+
+    Raises
+    ------
+    ValueError
+        A window whose basis has a condition number above :data:`MAX_CONDITION`.
+    """
+    n, n_t = psi.shape
+    h, k = n_harmonics, len(NUISANCE_ORDERS)
+    bt = np.empty((n, 2 * (h + k) + 1, n_t))  # the basis transposed, rows filled in place
+    bt[:, 0] = 1.0
+    bt[:, 1], bt[:, 1 + h + k] = np.cos(psi), np.sin(psi)
+    for j in range(2, h + 1):  # angle addition: cos, sin of j ψ from (j - 1) ψ, error ~ j eps
+        c, sn = bt[:, j - 1], bt[:, h + k + j - 1]
+        bt[:, j] = c * bt[:, 1] - sn * bt[:, 1 + h + k]
+        bt[:, h + k + j] = sn * bt[:, 1] + c * bt[:, 1 + h + k]
+    phi_in = psi * (RATIO / (RATIO + 1.0))
+    for j, o in enumerate(NUISANCE_ORDERS):
+        bt[:, 1 + h + j], bt[:, 1 + 2 * h + k + j] = np.cos(o * phi_in), np.sin(o * phi_in)
+    gram = bt @ np.swapaxes(bt, 1, 2)  # normal equations: cond(G) = cond(B)^2 <= 1e12
+    lam = np.linalg.eigvalsh(gram)
+    cond = np.sqrt(lam[:, -1] / np.maximum(lam[:, 0], 1e-300))
+    bad = np.flatnonzero(~(cond <= MAX_CONDITION))
+    if bad.size:
+        w = int(bad[0])
+        raise ValueError(f"window {first + w}: psi spans {np.ptp(psi[w]) / (2 * np.pi):.3g} "
+                         f"WG revolutions, too little for harmonics 1..{n_harmonics} and orders "
+                         f"{NUISANCE_ORDERS} (basis condition {cond[w]:.3g} > {MAX_CONDITION:g})")
+    coef = np.swapaxes(np.linalg.solve(gram, bt @ np.swapaxes(x, 1, 2)), 1, 2)  # (n, 5, P)
+    return coef, x - coef @ bt
+
+
 def window_features(signals: np.ndarray, n_in_rpm: np.ndarray, efficiency: np.ndarray,
-                    fs_hz: float, n_harmonics: int = N_HARMONICS) -> np.ndarray:
+                    fs_hz: float, n_harmonics: int = N_HARMONICS,
+                    psi: np.ndarray | None = None) -> np.ndarray:
     """Health features of windows (module docstring).
 
     Parameters
@@ -68,6 +140,10 @@ def window_features(signals: np.ndarray, n_in_rpm: np.ndarray, efficiency: np.nd
         Sample rate [Hz].
     n_harmonics : int
         H.
+    psi : ndarray, shape (n, n_t), optional
+        WG angle ψ = φ_in − φ_out of each sample [rad] (measured or estimated; e.g.
+        ``SimResult.psi``): fit in the angle domain (module docstring). None: the basis of
+        the desired speed (steady speed only).
 
     Returns
     -------
@@ -77,7 +153,8 @@ def window_features(signals: np.ndarray, n_in_rpm: np.ndarray, efficiency: np.nd
     Raises
     ------
     ValueError
-        If the highest harmonic reaches the Nyquist frequency, or shapes disagree.
+        If the highest harmonic reaches the Nyquist frequency (of the desired speed, or of
+        ψ's fastest step), shapes disagree, or a window's ψ covers too little angle.
     """
     x = np.asarray(signals, dtype=np.float64)
     n, c, n_t = x.shape
@@ -88,6 +165,8 @@ def window_features(signals: np.ndarray, n_in_rpm: np.ndarray, efficiency: np.nd
     if n and speeds.max() / 60.0 * n_harmonics >= fs_hz / 2:
         raise ValueError(f"harmonic {n_harmonics} of {speeds.max():g} rpm reaches the Nyquist "
                          f"frequency of {fs_hz:g} Hz")
+    if psi is not None:
+        return _features_in_angle(x, psi, efficiency, fs_hz, n_harmonics)
     out = np.empty((n, c, n_harmonics + 2))
     for v in np.unique(speeds):
         idx = np.flatnonzero(speeds == v)
@@ -99,5 +178,33 @@ def window_features(signals: np.ndarray, n_in_rpm: np.ndarray, efficiency: np.nd
                                                   coef[..., 1 + n_harmonics + 3:
                                                        1 + 2 * n_harmonics + 3])
         out[idx, :, -1] = np.log10(np.sqrt(np.mean(rest ** 2, axis=-1)) + 1e-9)
+    return np.concatenate([out.reshape(n, -1), np.asarray(efficiency, float)[:, None]],
+                          axis=1)
+
+
+def _features_in_angle(x: np.ndarray, psi: np.ndarray, efficiency: np.ndarray,
+                       fs_hz: float, n_harmonics: int) -> np.ndarray:
+    """:func:`window_features` with ``psi`` given: shapes (n, 5, n_t), (n, n_t), (n,)."""
+    n, c, n_t = x.shape
+    ang = np.asarray(psi, dtype=np.float64)
+    if ang.shape != (n, n_t) or not np.all(np.isfinite(ang)):
+        raise ValueError(f"psi must be finite with shape (n, n_t) = {(n, n_t)}, got "
+                         f"{ang.shape}")
+    if n and n_t > 1:
+        step = np.abs(np.diff(ang, axis=1)).max()  # [rad per sample]
+        if step * n_harmonics >= np.pi:
+            raise ValueError(f"harmonic {n_harmonics} of psi's fastest step "
+                             f"{step * fs_hz / (2 * np.pi) * 60:g} rpm (WG) reaches the "
+                             f"Nyquist frequency of {fs_hz:g} Hz")
+    out = np.empty((n, c, n_harmonics + 2))
+    if n:
+        coef, rest = np.empty((n, c, 2 * (n_harmonics + 3) + 1)), np.empty_like(x)
+        for i in range(0, n, 32):  # chunks of 32 windows: the bases stay in cache
+            coef[i:i + 32], rest[i:i + 32] = _angle_coefficients(
+                x[i:i + 32], ang[i:i + 32], n_harmonics, i)
+        h, k = n_harmonics, len(NUISANCE_ORDERS)
+        out[..., 0] = coef[..., 0]
+        out[..., 1:h + 1] = np.hypot(coef[..., 1:h + 1], coef[..., 1 + h + k:1 + 2 * h + k])
+        out[..., -1] = np.log10(np.sqrt(np.mean(rest ** 2, axis=-1)) + 1e-9)
     return np.concatenate([out.reshape(n, -1), np.asarray(efficiency, float)[:, None]],
                           axis=1)
