@@ -883,7 +883,15 @@ def simulate_profile(params: list[GearParams] | Batch, profile: Profile, phi_in0
             d[3] += g_max * np.cos(q0 - xx[2]) * inv_j_out
         return d
 
-    rec = np.empty((5, v, n))
+    rec = _rk4_record(f, x, n, sub, h)
+    return _profile_result(rec, bk, profile, kind, sample_rate_hz, j_ff if feedforward else None)
+
+
+def _rk4_record(f, x: np.ndarray, n: int, sub: int, h: float) -> np.ndarray:
+    """Classic RK4 from state ``x`` (5, V), ``sub`` steps of ``h`` per recorded sample, n
+    samples from t = 0; ``f(j, x, last)`` is the right-hand side at stage time j h / 2
+    (``last``: the step's end, taking left limits of steps in the inputs)."""
+    rec = np.empty((x.shape[0], x.shape[1], n))
     for k in range(n):
         rec[:, :, k] = x
         if k == n - 1:
@@ -895,7 +903,7 @@ def simulate_profile(params: list[GearParams] | Batch, profile: Profile, phi_in0
             k3 = f(j + 1, x + h / 2 * k2)
             k4 = f(j + 2, x + h * k3, last=True)
             x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return _profile_result(rec, bk, profile, kind, sample_rate_hz, j_ff if feedforward else None)
+    return rec
 
 
 def _profile_result(rec, bk, profile, kind, fs, j_ff) -> ProfileResult:
