@@ -7,10 +7,6 @@ Tolerances are set near the accuracy reached, each stated with its measured valu
 39 N m reach 0.17 mV/V, the rest RMS is 1e-5 to 2e-4 mV/V).
 """
 
-import importlib.util
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,7 +17,6 @@ from swgsim import profile as pf
 from swgsim.chain import SimulationChain
 from swgsim.faults import ChainParams
 
-ROOT = Path(__file__).resolve().parents[1]
 H = ft.N_HARMONICS
 N_MEAN, T_OUT = 2000.0, 39.0
 
@@ -47,19 +42,6 @@ def steady(chain):
     """The healthy gear at 2000 rpm, 39 N m: one 0.12 s window and its result."""
     sig, res = chain.simulate([ChainParams(gear=dy.rt1_size20())], N_MEAN, T_OUT, 0.3)
     return sig, res
-
-
-@pytest.fixture(scope="module")
-def head_features():
-    """learn/monitor/features.py as committed (HEAD), imported as a module of its own."""
-    src = subprocess.run(["git", "show", "HEAD:learn/monitor/features.py"], cwd=ROOT,
-                         capture_output=True, text=True, check=True).stdout
-    spec = importlib.util.spec_from_loader("features_head", loader=None)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["features_head"] = mod
-    exec(compile(src, "HEAD:learn/monitor/features.py", "exec"), mod.__dict__)
-    yield mod
-    sys.modules.pop("features_head", None)
 
 
 def test_steady_angle_features_match_desired_speed_basis(chain, steady):
@@ -113,18 +95,6 @@ def test_reversal_does_not_fold_orders():
     off, amp, _ = groups(f)
     np.testing.assert_allclose(off, 0.05, rtol=0, atol=1e-12)
     np.testing.assert_allclose(amp, np.broadcast_to(amps, (1, 5, H)), rtol=0, atol=1e-12)
-
-
-def test_without_psi_bit_identical_to_head(steady, head_features):
-    """No psi: today's path, bit-identical to HEAD's (windows at mixed speeds)."""
-    sig, res = steady
-    rng = np.random.default_rng(3)
-    x = np.concatenate([sig, sig + 0.01 * rng.normal(size=(3,) + sig.shape[1:])])
-    speeds = np.array([2000.0, 1000.0, 2000.0, 4000.0])
-    eff = np.array([0.7, 0.8, 0.75, 0.6])
-    for h in (H, 6):
-        assert np.array_equal(ft.window_features(x, speeds, eff, 10e3, h),
-                              head_features.window_features(x, speeds, eff, 10e3, h))
 
 
 @pytest.mark.parametrize("psi, match", [

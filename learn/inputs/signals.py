@@ -55,7 +55,12 @@ tolerance signature (which differs between gears as much as a fault does, e.g. i
 Δs13) cancels, and so do the disturbance's sub-harmonics. The residual is synthesised
 on M points of one ψ revolution from harmonics ``min_harmonic``..H (h = 0 holds the
 random disturbance offset, h = 1 what is left of the order-1 disturbance), compressed by
-asinh(x / ``compress``) since fault signatures span four decades.
+asinh(x / ``compress``) since fault signatures span four decades. At varying speed each
+window's own ψ(t) may be passed (``psi`` of :func:`harmonic_coefficients`,
+:func:`reference_residual`, :func:`build_input`; the data set does not carry it): the
+series is then fitted in the angle domain (computed order tracking by least squares,
+:func:`angle_coefficients`, as ``learn.monitor.features``), the nuisance orders as
+multiples of φ_in = ψ N / (N + 1).
 
 Reference windows are used for nothing else: they are never training or test samples.
 
@@ -81,6 +86,11 @@ log = logging.getLogger(__name__)
 INPUTS = ("raw", "diff", "sel1", "sel3", "raw_res", "diff_res", "res_spec")
 SIGNAL_INPUTS = ("raw", "diff", "raw_res", "diff_res")
 RESIDUAL_INPUTS = ("raw_res", "diff_res", "res_spec")
+#: Largest condition number of a window's angle-domain basis [-] [choice]: the
+#: desired-speed basis of a 0.12 s window at 10 kHz (H = 12, orders 1/4, 1/3, 1/2) has
+#: 1.1e4 at 1000 rpm, 4.2e5 at 750 rpm, 6.7e10 at 500 rpm (nuisance orders no longer
+#: separable from the offset and ψ harmonics); an angle-domain basis above it is refused.
+MAX_CONDITION = 1e6
 
 
 @dataclass
@@ -245,11 +255,14 @@ def _basis_pinv(f0_hz: float, t0_s: float, dt_s: float, n_t: int,
 
 def harmonic_coefficients(x: np.ndarray, time_s: np.ndarray, f_in_hz: np.ndarray,
                           psi_order: float, n_harmonics: int,
-                          nuisance_orders=(0.25, 1 / 3, 0.5, 1.0)) -> np.ndarray:
+                          nuisance_orders=(0.25, 1 / 3, 0.5, 1.0),
+                          psi: np.ndarray | None = None) -> np.ndarray:
     """Least-squares Fourier series in the WG angle ψ of each window.
 
-    Model: x(t) = c0 + sum_h Re(c_h e^{i h ψ(t)}) + sum_o (a_o cos + b_o sin)(2π o f_in t),
-    ψ(t) = 2π psi_order f_in t, h = 1..H.
+    Model: x(t) = c0 + sum_h Re(c_h e^{i h ψ(t)}) + sum_o (a_o cos + b_o sin)(o φ_in(t)),
+    h = 1..H; without ``psi``, ψ(t) = 2π psi_order f_in t and φ_in(t) = 2π f_in t (one
+    steady speed per window); with ``psi``, each window's own ψ(t) and φ_in = ψ / psi_order
+    (computed order tracking, :func:`angle_coefficients`).
 
     Parameters
     ----------
@@ -266,6 +279,10 @@ def harmonic_coefficients(x: np.ndarray, time_s: np.ndarray, f_in_hz: np.ndarray
         H.
     nuisance_orders : sequence of float
         Further orders of the input rotation fitted and discarded.
+    psi : ndarray, shape (n, T), optional
+        WG angle ψ = φ_in − φ_out of each sample [rad] (measured or estimated, e.g.
+        ``SimResult.psi``): fit each window in its own angle, which holds at varying speed
+        (``time_s`` and ``f_in_hz`` are then unused). None: the steady-speed basis above.
 
     Returns
     -------
@@ -275,10 +292,13 @@ def harmonic_coefficients(x: np.ndarray, time_s: np.ndarray, f_in_hz: np.ndarray
     Raises
     ------
     ValueError
-        If the highest harmonic reaches the Nyquist frequency or the window has fewer
-        samples than the series has coefficients.
+        If the highest harmonic reaches the Nyquist frequency (with ``psi``: of ψ's fastest
+        step), the window has fewer samples than the series has coefficients, or (with
+        ``psi``) shapes disagree or a window's ψ covers too little angle.
     """
     x = np.asarray(x, dtype=np.float64)
+    if psi is not None:
+        return angle_coefficients(x, psi, psi_order, n_harmonics, nuisance_orders)
     n, n_ch, n_t = x.shape
     time_s = np.asarray(time_s, dtype=np.float64)
     h = np.arange(1, n_harmonics + 1)
@@ -303,6 +323,132 @@ def harmonic_coefficients(x: np.ndarray, time_s: np.ndarray, f_in_hz: np.ndarray
         out[idx, :, 1:] = coef[:, :, 1:1 + n_harmonics] - 1j * coef[:, :, 1 + k_all:
                                                                      1 + k_all + n_harmonics]
     return out
+
+
+def _angle_basis(psi: np.ndarray, psi_order: float, n_harmonics: int,
+                 nuisance_orders: tuple[float, ...]) -> np.ndarray:
+    """Transposed angle-domain basis of windows, shape (n, P, T), P = 1 + 2 (H + K).
+
+    Rows [1, cos hψ (h = 1..H), cos o φ_in, sin hψ, sin o φ_in], φ_in = ψ / psi_order: the
+    column order of :func:`_basis_pinv`. cos, sin of hψ by angle addition from (h − 1)ψ
+    (error ~ h eps).
+    """
+    n, n_t = psi.shape
+    h, k = n_harmonics, len(nuisance_orders)
+    bt = np.empty((n, 1 + 2 * (h + k), n_t))
+    bt[:, 0] = 1.0
+    if h:
+        bt[:, 1], bt[:, 1 + h + k] = np.cos(psi), np.sin(psi)
+    for j in range(2, h + 1):
+        c, sn = bt[:, j - 1], bt[:, h + k + j - 1]
+        bt[:, j] = c * bt[:, 1] - sn * bt[:, 1 + h + k]
+        bt[:, h + k + j] = sn * bt[:, 1] + c * bt[:, 1 + h + k]
+    phi_in = psi / psi_order
+    for j, o in enumerate(nuisance_orders):
+        bt[:, 1 + h + j], bt[:, 1 + 2 * h + k + j] = np.cos(o * phi_in), np.sin(o * phi_in)
+    return bt
+
+
+def angle_coefficients(x: np.ndarray, psi: np.ndarray, psi_order: float, n_harmonics: int,
+                       nuisance_orders=(0.25, 1 / 3, 0.5, 1.0), chunk: int = 32
+                       ) -> np.ndarray:
+    """:func:`harmonic_coefficients` in each window's own WG angle ψ(t).
+
+    Computed order tracking by least squares on the samples as they are (no resampling to
+    uniform ψ; a reversal keeps each sample's angle), solved by the normal equations with
+    the condition-number refusal :data:`MAX_CONDITION` (:func:`angle_fit`, also the
+    solver of ``learn.monitor.features``). Nuisance
+    orders are multiples of φ_in = ψ / psi_order = ψ N / (N + 1) (rigid gear; the elastic
+    twist shifts it by the output-side twist angle [not measured]; they are dropped).
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, C, T)
+        Signals [any unit].
+    psi : ndarray, shape (n, T)
+        WG angle of each sample [rad].
+    psi_order, n_harmonics, nuisance_orders
+        As :func:`harmonic_coefficients`.
+    chunk : int
+        Windows per batched solve (the bases stay in cache).
+
+    Returns
+    -------
+    ndarray, complex128, shape (n, C, H + 1)
+        c0 (real) at index 0, c_h at index h (phase relative to ψ = 0).
+
+    Raises
+    ------
+    ValueError
+        On a shape mismatch, a non-finite ψ, harmonic H of ψ's fastest step at or above
+        the Nyquist frequency, or a window whose basis condition exceeds
+        :data:`MAX_CONDITION` (named by its index).
+    """
+    x = np.asarray(x, dtype=np.float64)
+    ang = np.asarray(psi, dtype=np.float64)
+    n, n_ch, n_t = x.shape
+    nuis = tuple(float(o) for o in nuisance_orders)
+    h, k = int(n_harmonics), len(nuis)
+    if ang.shape != (n, n_t) or not np.all(np.isfinite(ang)):
+        raise ValueError(f"psi must be finite with shape (n, T) = {(n, n_t)}, got {ang.shape}")
+    top = max([h, *(o / psi_order for o in nuis)])  # highest order, in ψ harmonics
+    step = float(np.abs(np.diff(ang, axis=1)).max()) if n and n_t > 1 else 0.0
+    if step * top >= np.pi or 1 + 2 * (h + k) > n_t:
+        raise ValueError(f"{h} harmonics need {1 + 2 * (h + k)} samples and psi steps below "
+                         f"pi / {top:g} rad: windows have {n_t} samples and psi's fastest "
+                         f"step is {step:.3g} rad; lower n_harmonics")
+    out = np.empty((n, n_ch, h + 1), dtype=np.complex128)
+    for i in range(0, n, chunk):
+        coef = angle_fit(x[i:i + chunk], ang[i:i + chunk], psi_order, h, nuis, first=i)[0]
+        out[i:i + chunk, :, 0] = coef[:, :, 0]
+        out[i:i + chunk, :, 1:] = coef[:, :, 1:1 + h] - 1j * coef[:, :, 1 + h + k:1 + 2 * h + k]
+    return out
+
+
+def angle_fit(x: np.ndarray, psi: np.ndarray, psi_order: float, n_harmonics: int,
+              nuisance_orders: tuple[float, ...], first: int = 0
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Least squares of windows on their own angle-domain basis (:func:`_angle_basis`),
+    by the normal equations; the one solver of :func:`angle_coefficients` and
+    ``learn.monitor.features.window_features``.
+
+    Parameters
+    ----------
+    x : ndarray, shape (m, C, T)
+        Signals [any unit].
+    psi : ndarray, shape (m, T)
+        WG angle of each sample [rad].
+    psi_order, n_harmonics, nuisance_orders
+        As :func:`harmonic_coefficients`.
+    first : int
+        Index of the first window, for the message.
+
+    Returns
+    -------
+    coef : ndarray, shape (m, C, P)
+        Real coefficients in the rows' order of :func:`_angle_basis`.
+    rest : ndarray, shape (m, C, T)
+        What the series leaves.
+
+    Raises
+    ------
+    ValueError
+        A window whose basis has a condition number above :data:`MAX_CONDITION`, named by
+        its index ``first + i``.
+    """
+    bt = _angle_basis(psi, psi_order, n_harmonics, nuisance_orders)  # (m, P, T)
+    gram = bt @ np.swapaxes(bt, 1, 2)  # cond(G) = cond(B)^2 <= MAX_CONDITION^2
+    lam = np.linalg.eigvalsh(gram)
+    cond = np.sqrt(lam[:, -1] / np.maximum(lam[:, 0], 1e-300))
+    bad = np.flatnonzero(~(cond <= MAX_CONDITION))
+    if bad.size:
+        w = int(bad[0])
+        raise ValueError(
+            f"window {first + w}: psi spans {np.ptp(psi[w]) / (2 * np.pi):.3g} WG "
+            f"revolutions, too little for harmonics 1..{n_harmonics} and orders "
+            f"{tuple(nuisance_orders)} (basis condition {cond[w]:.3g} > {MAX_CONDITION:g})")
+    coef = np.swapaxes(np.linalg.solve(gram, bt @ np.swapaxes(x, 1, 2)), 1, 2)  # (m, C, P)
+    return coef, x - coef @ bt
 
 
 def align_phase(cw: np.ndarray, cr: np.ndarray, channels=(1, 2, 3, 4),
@@ -345,7 +491,8 @@ def align_phase(cw: np.ndarray, cr: np.ndarray, channels=(1, 2, 3, 4),
 
 
 def reference_residual(ds, samples: np.ndarray, refs: np.ndarray,
-                       settings: ResidualSettings | None = None) -> np.ndarray:
+                       settings: ResidualSettings | None = None,
+                       psi: np.ndarray | None = None) -> np.ndarray:
     """Harmonics of each window minus those of its phase-aligned reference window.
 
     Parameters
@@ -359,6 +506,11 @@ def reference_residual(ds, samples: np.ndarray, refs: np.ndarray,
         docs/PHYSICS.md sec. 2), ``n_harmonics``, the harmonics H of ψ, and
         ``nuisance_orders``, the input-rotation orders fitted and discarded (eq. 10
         sub-harmonics); default :class:`ResidualSettings`.
+    psi : ndarray, shape (N, T), optional
+        WG angle ψ of every sample of every window of ``ds`` [rad] (row i: window i; the
+        data set does not carry it): windows and references are fitted in their own angle
+        (:func:`angle_coefficients`), which holds at varying speed. None: the basis of
+        each window's mean speed (steady speed).
 
     Returns
     -------
@@ -376,12 +528,17 @@ def reference_residual(ds, samples: np.ndarray, refs: np.ndarray,
     psi_order = 1.0 + 1.0 / float(rs.ratio)
     kw = {"psi_order": psi_order, "n_harmonics": n_harmonics,
           "nuisance_orders": tuple(rs.nuisance_orders)}
+    if psi is not None and np.shape(psi) != (sig.shape[0], t.size):
+        raise ValueError(f"psi must have shape (windows, T) = {(sig.shape[0], t.size)}, got "
+                         f"{np.shape(psi)}")
     uref, inv = np.unique(refs, return_inverse=True)
-    cr = harmonic_coefficients(sig[uref], t, f_in[uref], **kw)[inv]  # (n, 5, H+1)
+    cr = harmonic_coefficients(sig[uref], t, f_in[uref], **kw,
+                               psi=None if psi is None else psi[uref])[inv]  # (n, 5, H+1)
     cw = np.empty_like(cr)
     for start in range(0, len(samples), 1024):  # bound the float64 copy of the signals
         sl = slice(start, start + 1024)
-        cw[sl] = harmonic_coefficients(sig[samples[sl]], t, f_in[samples[sl]], **kw)
+        cw[sl] = harmonic_coefficients(sig[samples[sl]], t, f_in[samples[sl]], **kw,
+                                       psi=None if psi is None else psi[samples[sl]])
     delta = align_phase(cw, cr)
     h = np.arange(1, n_harmonics + 1)
     res = cw.copy()
@@ -421,7 +578,8 @@ def _append_aux(x: np.ndarray, aux: np.ndarray) -> np.ndarray:
 
 def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
                 disturbed: bool | None = None, feature_kwargs: dict | None = None,
-                residual: ResidualSettings | None = None) -> InputSet:
+                residual: ResidualSettings | None = None,
+                psi: np.ndarray | None = None) -> InputSet:
     """Model input of kind ``kind`` for the non-reference windows of ``ds``.
 
     Parameters
@@ -442,6 +600,9 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
         Settings of the residual inputs: ``ratio``, ``n_harmonics``, ``nuisance_orders``,
         ``min_harmonic``, ``n_points``, ``compress`` (asinh scale; 0 or None: none);
         default :class:`ResidualSettings`.
+    psi : ndarray, shape (N, T), optional
+        WG angle of every window of ``ds`` [rad], for the residual inputs
+        (:func:`reference_residual`); refused for the other kinds.
 
     Returns
     -------
@@ -456,6 +617,9 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     """
     if kind not in INPUTS:
         raise ValueError(f"unknown input {kind!r}; choose one of {INPUTS}")
+    if psi is not None and kind not in RESIDUAL_INPUTS:
+        raise ValueError(f"psi is used by the residual inputs {RESIDUAL_INPUTS} only, not "
+                         f"{kind!r}")
     bad = set(aux) - set(AUX)
     if bad:
         raise ValueError(f"unknown auxiliary scalars {sorted(bad)}; choose from {AUX}")
@@ -465,7 +629,7 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     eff_cols = [AUX.index(a) for a in aux]
     if kind in RESIDUAL_INPUTS:
         rs = residual or ResidualSettings()
-        res = reference_residual(ds, samples, refs, rs)  # (n, 5, H+1)
+        res = reference_residual(ds, samples, refs, rs, psi)  # (n, 5, H+1)
         eff = efficiency_features(ds, samples, refs)[:, eff_cols]  # (n, A)
         if kind == "res_spec":
             amp = np.log10(np.abs(res[:, :, int(rs.min_harmonic):]) + 1e-7)  # (n, 5, H')

@@ -22,10 +22,12 @@ twist shifts it by the output-side twist angle, mostly a constant phase, which p
 amplitudes ignore [not measured]; the nuisance terms are dropped anyway). The fit takes
 the non-uniform ψ samples as they are: no resampling to uniform ψ, hence no interpolation
 error, and a reversal does not fold orders (each sample keeps its angle). A window whose
-ψ covers too little angle for the basis (condition number above :data:`MAX_CONDITION`:
-below about 1.45 ψ revolutions for H = 12 with orders 1/4, 1/3, 1/2, e.g. a steady 0.12 s
-window at 700 rpm, accepted at 750 rpm) is refused, naming the window. Cost: about 0.4 ms per window
-against 0.07 ms for the cached basis (H = 12, 1200 samples, one core).
+ψ covers too little angle for the basis (condition number above
+:data:`learn.inputs.signals.MAX_CONDITION`: below about 1.45 ψ revolutions for H = 12 with
+orders 1/4, 1/3, 1/2, e.g. a steady 0.12 s window at 700 rpm, accepted at 750 rpm) is
+refused, naming the window; the solver is :func:`learn.inputs.signals.angle_fit`, shared
+with the synchronous residual. Cost: about 0.4 ms per window against 0.07 ms for the
+cached basis (H = 12, 1200 samples, one core).
 """
 
 from __future__ import annotations
@@ -34,15 +36,11 @@ import functools
 
 import numpy as np
 
-from learn.inputs.signals import pinv
+from learn.inputs.signals import angle_fit, pinv
 
 N_HARMONICS = 12
 NUISANCE_ORDERS = (0.25, 1 / 3, 0.5)
 RATIO = 100.0  # gear ratio N of the size-20 gear (swgsim.dynamics.GearParams.ratio)
-#: Largest condition number of a window's angle-domain basis [-] [choice]: the desired-speed
-#: basis of a 0.12 s window at 10 kHz has 1.1e4 at 1000 rpm, 4.2e5 at 750 rpm, 6.7e10 at
-#: 500 rpm (nuisance orders no longer separable from the offset and ψ harmonics).
-MAX_CONDITION = 1e6
 
 
 @functools.lru_cache(maxsize=16)
@@ -68,59 +66,6 @@ def feature_names(n_harmonics: int = N_HARMONICS) -> list[str]:
         out += [f"s{s}_offset", *(f"s{s}_h{h}" for h in range(1, n_harmonics + 1)),
                 f"s{s}_log_rest"]
     return [*out, "efficiency"]
-
-
-def _angle_coefficients(x: np.ndarray, psi: np.ndarray, n_harmonics: int, first: int = 0
-                        ) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares Fourier coefficients of windows in their own angle ψ(t).
-
-    Parameters
-    ----------
-    x : ndarray, shape (n, 5, n_t)
-        Bridge outputs [mV/V].
-    psi : ndarray, shape (n, n_t)
-        WG angle ψ of each sample [rad].
-    n_harmonics : int
-        H.
-    first : int
-        Index of the first window, for the error message.
-
-    Returns
-    -------
-    coef : ndarray, shape (n, 5, P)
-        [c0, a_1..a_H, a_nuis, b_1..b_H, b_nuis], P = 2 (H + 3) + 1, the column order of
-        :func:`_basis`.
-    rest : ndarray, shape (n, 5, n_t)
-        What the series leaves [mV/V].
-
-    Raises
-    ------
-    ValueError
-        A window whose basis has a condition number above :data:`MAX_CONDITION`.
-    """
-    n, n_t = psi.shape
-    h, k = n_harmonics, len(NUISANCE_ORDERS)
-    bt = np.empty((n, 2 * (h + k) + 1, n_t))  # the basis transposed, rows filled in place
-    bt[:, 0] = 1.0
-    bt[:, 1], bt[:, 1 + h + k] = np.cos(psi), np.sin(psi)
-    for j in range(2, h + 1):  # angle addition: cos, sin of j ψ from (j - 1) ψ, error ~ j eps
-        c, sn = bt[:, j - 1], bt[:, h + k + j - 1]
-        bt[:, j] = c * bt[:, 1] - sn * bt[:, 1 + h + k]
-        bt[:, h + k + j] = sn * bt[:, 1] + c * bt[:, 1 + h + k]
-    phi_in = psi * (RATIO / (RATIO + 1.0))
-    for j, o in enumerate(NUISANCE_ORDERS):
-        bt[:, 1 + h + j], bt[:, 1 + 2 * h + k + j] = np.cos(o * phi_in), np.sin(o * phi_in)
-    gram = bt @ np.swapaxes(bt, 1, 2)  # normal equations: cond(G) = cond(B)^2 <= 1e12
-    lam = np.linalg.eigvalsh(gram)
-    cond = np.sqrt(lam[:, -1] / np.maximum(lam[:, 0], 1e-300))
-    bad = np.flatnonzero(~(cond <= MAX_CONDITION))
-    if bad.size:
-        w = int(bad[0])
-        raise ValueError(f"window {first + w}: psi spans {np.ptp(psi[w]) / (2 * np.pi):.3g} "
-                         f"WG revolutions, too little for harmonics 1..{n_harmonics} and orders "
-                         f"{NUISANCE_ORDERS} (basis condition {cond[w]:.3g} > {MAX_CONDITION:g})")
-    coef = np.swapaxes(np.linalg.solve(gram, bt @ np.swapaxes(x, 1, 2)), 1, 2)  # (n, 5, P)
-    return coef, x - coef @ bt
 
 
 def window_features(signals: np.ndarray, n_in_rpm: np.ndarray, efficiency: np.ndarray,
@@ -200,8 +145,8 @@ def _features_in_angle(x: np.ndarray, psi: np.ndarray, efficiency: np.ndarray,
     if n:
         coef, rest = np.empty((n, c, 2 * (n_harmonics + 3) + 1)), np.empty_like(x)
         for i in range(0, n, 32):  # chunks of 32 windows: the bases stay in cache
-            coef[i:i + 32], rest[i:i + 32] = _angle_coefficients(
-                x[i:i + 32], ang[i:i + 32], n_harmonics, i)
+            coef[i:i + 32], rest[i:i + 32] = angle_fit(
+                x[i:i + 32], ang[i:i + 32], 1.0 + 1.0 / RATIO, n_harmonics, NUISANCE_ORDERS, i)
         h, k = n_harmonics, len(NUISANCE_ORDERS)
         out[..., 0] = coef[..., 0]
         out[..., 1:h + 1] = np.hypot(coef[..., 1:h + 1], coef[..., 1 + h + k:1 + 2 * h + k])
