@@ -31,6 +31,7 @@ from typing import Any, Union
 import numpy as np
 
 from .acquisition import Acquisition, Amplifier  # noqa: F401 - Amplifier: a schema part
+from .angles import InputAngleSensor, OutputEncoder
 from .chain import ChainSettings
 from .disturbance import DisturbanceSpec
 from .dynamics import J_OUT_BENCH_KGM2, KeHarmonic
@@ -38,6 +39,7 @@ from .flexspline import Mesh
 from .friction.simulation import FrictionEffectsConfig
 from .life import LifeConfig
 from .measurement import SensorEffectConfig
+from .profile import ConstantLoad, GravityLink, Hold, LoadSteps, Move, Profile, SpeedProfile
 from .sensors import SensorsConfig, TolerancesConfig
 
 MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
@@ -112,6 +114,184 @@ class LoadConfig:
     j_out_kgm2: float = J_OUT_BENCH_KGM2
 
 
+# -------------------------------------------------------------------------- profile
+@dataclass
+class MoveConfig:
+    """A ramp of the desired input speed (:class:`swgsim.profile.Move`).
+
+    Attributes
+    ----------
+    target_rpm : float
+        Target input speed [rpm]; negative turns backward.
+    accel_rpm_s : float
+        Acceleration limit [rpm/s], > 0.
+    """
+
+    target_rpm: float
+    accel_rpm_s: float
+
+
+@dataclass
+class HoldConfig:
+    """Hold the speed (:class:`swgsim.profile.Hold`): ``duration_s`` [s], >= 0."""
+
+    duration_s: float
+
+
+@dataclass
+class SegmentConfig:
+    """One segment of the speed profile: exactly one of ``move`` and ``hold``."""
+
+    move: MoveConfig | None = None
+    hold: HoldConfig | None = None
+
+
+@dataclass
+class ConstantLoadConfig:
+    """A brake opposing the motion (:class:`swgsim.profile.ConstantLoad`) [N m]."""
+
+    torque_nm: float
+
+
+@dataclass
+class LoadStepConfig:
+    """One load step: the signed load ``torque_nm`` [N m] from ``time_s`` [s] on."""
+
+    time_s: float
+    torque_nm: float
+
+
+@dataclass
+class LoadStepsConfig:
+    """A signed, stepping load (:class:`swgsim.profile.LoadSteps`).
+
+    Attributes
+    ----------
+    initial_nm : float
+        Load before the first step [N m], positive resisting forward motion.
+    steps : list of LoadStepConfig
+        In increasing time.
+    """
+
+    initial_nm: float
+    steps: list[LoadStepConfig] = field(default_factory=list)
+
+
+@dataclass
+class GravityLinkConfig:
+    """A link under gravity (:class:`swgsim.profile.GravityLink`, whose defaults these are:
+    the UR3e shoulder's links 2-6, no payload)."""
+
+    mass_kg: float = GravityLink.mass_kg
+    com_m: float = GravityLink.com_m
+    payload_kg: float = GravityLink.payload_kg
+    payload_m: float = GravityLink.payload_m
+    q0_rad: float = GravityLink.q0_rad
+
+
+@dataclass
+class ProfileLoadConfig:
+    """The load of a profile: exactly one of ``constant``, ``steps`` and ``gravity``."""
+
+    constant: ConstantLoadConfig | None = None
+    steps: LoadStepsConfig | None = None
+    gravity: GravityLinkConfig | None = None
+
+
+@dataclass
+class AngleChannelsConfig:
+    """The recorded angle channels of a profile data set (:mod:`swgsim.angles`).
+
+    Attributes
+    ----------
+    input_counts_per_rev : int
+        Counts per input revolution of the input angle sensor, >= 1
+        (:class:`swgsim.angles.InputAngleSensor`; default its 24-count Hall sensor).
+    output_encoder_bits : int or None
+        None: no output encoder; else its resolution 2**bits counts per revolution, bits
+        in [8, 32] (:class:`swgsim.angles.OutputEncoder`).
+    """
+
+    input_counts_per_rev: int = InputAngleSensor.counts_per_rev
+    output_encoder_bits: int | None = None
+
+    def input_sensor(self) -> InputAngleSensor:
+        """The input angle sensor."""
+        return InputAngleSensor(int(self.input_counts_per_rev))
+
+    def output_encoder(self) -> OutputEncoder | None:
+        """The output encoder, or None."""
+        bits = self.output_encoder_bits
+        return None if bits is None else OutputEncoder(int(bits))
+
+
+@dataclass
+class ProfileConfig:
+    """A gear's duty cycle as an operating profile (:mod:`swgsim.profile`), cut into windows.
+
+    Each variant is simulated once along the whole profile (transients included) and the
+    windows are cuts of that motion: at ``window_starts_s`` or, when None, tiling the
+    profile from ``dataset.chain.settle_s`` on, ``dataset.chain.window_s`` each.
+
+    Attributes
+    ----------
+    start_rpm : float
+        Desired input speed at t = 0 [rpm].
+    segments : list of SegmentConfig
+        Moves and holds, in order.
+    load : ProfileLoadConfig
+    feedforward : bool
+        Add the acceleration feed-forward torque to the motor torque.
+    window_starts_s : list of float or None
+        Start of each window [s] since the profile's start; None: tiling.
+    angles : AngleChannelsConfig
+    """
+
+    segments: list[SegmentConfig]
+    load: ProfileLoadConfig
+    start_rpm: float = 0.0
+    feedforward: bool = False
+    window_starts_s: list[float] | None = None
+    angles: AngleChannelsConfig = field(default_factory=AngleChannelsConfig)
+
+    def to_profile(self) -> Profile:
+        """The :class:`swgsim.profile.Profile` of this config.
+
+        Raises
+        ------
+        ValueError
+            A segment or the load not setting exactly one kind, naming its key.
+        """
+        segs: list[Move | Hold] = []
+        for i, s in enumerate(self.segments):
+            if (s.move is None) == (s.hold is None):
+                raise ValueError(f"dataset.profile.segments[{i}] must set exactly one of "
+                                 "move and hold")
+            segs.append(Move(float(s.move.target_rpm), float(s.move.accel_rpm_s))
+                        if s.move is not None else Hold(float(s.hold.duration_s)))
+        ld = self.load
+        kinds = [k for k in ("constant", "steps", "gravity") if getattr(ld, k) is not None]
+        if len(kinds) != 1:
+            raise ValueError("dataset.profile.load must set exactly one of constant, steps "
+                             f"and gravity, got {kinds or 'none'}")
+        if ld.constant is not None:
+            load = ConstantLoad(float(ld.constant.torque_nm))
+        elif ld.steps is not None:
+            load = LoadSteps(float(ld.steps.initial_nm),
+                             tuple((float(st.time_s), float(st.torque_nm))
+                                   for st in ld.steps.steps))
+        else:
+            g = ld.gravity
+            load = GravityLink(float(g.mass_kg), float(g.com_m), float(g.payload_kg),
+                               float(g.payload_m), float(g.q0_rad))
+        return Profile(SpeedProfile(float(self.start_rpm), tuple(segs)), load)
+
+    def load_kind(self) -> str:
+        """The key of the load set (``constant``, ``steps`` or ``gravity``)."""
+        return next((k for k in ("constant", "steps", "gravity")
+                     if getattr(self.load, k) is not None), "")
+
+
 def _paper_gears() -> list[GearConfig]:
     # paper Table IV: b1 and k1 of SWG models 1-3 relative to nominal
     return [GearConfig(1, 1.0, 1.0, 101), GearConfig(2, 1.2, 1.2, 102),
@@ -145,6 +325,9 @@ class DatasetConfig:
     life : LifeConfig or None
         None: the grid of ``variants`` at every operating point. Set: each gear's life as
         one time-ordered stream (:mod:`swgsim.life`) instead of the grid.
+    profile : ProfileConfig or None
+        None: steady operating points. Set: every variant simulated along this profile
+        and cut into windows (``operating_points`` unused).
     """
 
     name: str = "paper"
@@ -162,6 +345,7 @@ class DatasetConfig:
     sensor_effects: list[SensorEffectConfig] = field(default_factory=list)
     friction_effects: FrictionEffectsConfig | None = None
     life: LifeConfig | None = None
+    profile: ProfileConfig | None = None
 
 
 def paper_config() -> dict:

@@ -4,22 +4,33 @@
 at the door by :func:`swgsim.config.dataset_config`), checks every range and physical
 limit once, and returns a :class:`DatasetPlan`: the config, its parsed effects and the
 list of shards. One shard holds every window of one gear at one input speed (all
-classes, variants and load torques, plus the commissioning reference windows). The
-simulation of a shard (:mod:`swgsim.shard`) and the orchestration (:mod:`swgsim.generate`)
+classes, variants and load torques, plus the commissioning reference windows); with a
+``profile`` one shard holds every variant of one gear along the profile, cut into windows.
+The simulation of a shard (:mod:`swgsim.shard`) and the orchestration (:mod:`swgsim.generate`)
 take the plan and check nothing again.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from . import dynamics
+from . import profile as pf
 from .acquisition import check_acquisition
-from .config import DatasetConfig, GearConfig, VariantSpec, check_finite, dataset_config
+from .config import (
+    DatasetConfig,
+    GearConfig,
+    ProfileConfig,
+    VariantSpec,
+    check_finite,
+    dataset_config,
+)
 from .data import config_digest
 from .dynamics import gear_with_ke, linear_eigenvalues, rk4_stable, rt1_size20, torsional_mode
 from .faults import FAULTS, ChainParams, Fault, get_fault
@@ -56,10 +67,14 @@ class ShardSpec:
     n_in_rpm: float
     windows: tuple[WindowSpec, ...]
     n_life_windows: int = 0  # a gear's life (dataset.life): its windows, no WindowSpec
+    window_starts_s: tuple[float, ...] = ()  # a profile's cuts (dataset.profile)
 
     @property
     def n_windows(self) -> int:
-        """Windows written: the grid's clean and disturbed twins, or the life's."""
+        """Windows written: the grid's clean and disturbed twins, the life's, or every
+        variant's cuts of a profile."""
+        if self.window_starts_s:
+            return len(self.windows) * len(self.window_starts_s)
         return 2 * len(self.windows) + self.n_life_windows
 
 
@@ -82,6 +97,8 @@ class DatasetPlan:
         The parsed ``friction_effects`` option.
     config_hash : str
         :func:`config_hash` of ``config``.
+    profile : swgsim.profile.Profile or None
+        The checked ``profile`` option.
     """
 
     config: DatasetConfig
@@ -90,6 +107,7 @@ class DatasetPlan:
     sensor_effects: tuple[SensorEffect, ...]
     friction: FrictionEffects | None
     config_hash: str
+    profile: pf.Profile | None = None
 
     def gear(self, gear_id: int) -> GearConfig:
         """The config of the gear with this id."""
@@ -97,12 +115,22 @@ class DatasetPlan:
 
     def as_dict(self) -> dict[str, Any]:
         """The config as plain data (stored in the manifest and the shards)."""
-        return dataclasses.asdict(self.config)
+        return plain_config(self.config)
+
+
+def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
+    """A data-set config as plain data, without ``profile`` when it is None, so that a
+    steady data set keeps the config (and :func:`config_hash`) it had before profiles."""
+    out = dict(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
+    if "profile" in out and out["profile"] is None:
+        del out["profile"]
+    return out
 
 
 def config_hash(cfg: DatasetConfig | Mapping[str, Any]) -> str:
-    """SHA-256 of the canonical JSON of a data-set config (first 16 hex digits)."""
-    return config_digest(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
+    """SHA-256 of the canonical JSON of a data-set config (first 16 hex digits), of
+    :func:`plain_config`."""
+    return config_digest(plain_config(cfg))
 
 
 # ------------------------------------------------------------------------- checks
@@ -170,7 +198,8 @@ def _check_tolerances_and_disturbance(cfg: DatasetConfig) -> None:
         _in(getattr(cfg.tolerances, key), 0.0, hi, f"dataset.tolerances.{key}", unit)
     for key in ("offset_mvv", "harmonic_mvv"):
         _in(getattr(cfg.disturbance, key), 0.0, 1.0, f"dataset.disturbance.{key}", "mV/V")
-    if cfg.disturbance.harmonic_mvv > 0:  # eq. (10): sub-harmonics down to order 1/4
+    # eq. (10): sub-harmonics down to order 1/4 (a profile's windows have no eq. (10) twins)
+    if cfg.disturbance.harmonic_mvv > 0 and cfg.profile is None:
         n_min = min(cfg.operating_points.n_in_rpm)
         rev = cfg.chain.window_s * n_min / 60.0
         need = 4.0 * 60.0 / n_min
@@ -195,15 +224,37 @@ def _check_gears(cfg: DatasetConfig) -> None:
             raise ValueError(f"dataset.gears[{i}].ke_extra: {e}") from None
 
 
+def _speeds_and_loads(cfg: DatasetConfig) -> tuple[list[float], list[float]]:
+    """Input speeds [rpm] and load torques [N m] at which the dynamics are judged: the
+    operating points, or a profile's non-zero speeds |n| at its largest load."""
+    if cfg.profile is None:
+        ops = cfg.operating_points
+        return [float(n) for n in ops.n_in_rpm], [float(t) for t in ops.t_out_nm]
+    prof = cfg.profile.to_profile()
+    speeds = sorted({abs(float(n)) for n in prof.speed.knots()[1] if n != 0})
+    return speeds or [lowest_cruise_rpm(cfg.profile)], [pf.max_load_nm(prof.load)]
+
+
+def lowest_cruise_rpm(profile: ProfileConfig) -> float:
+    """Lowest non-zero |speed| the profile holds [rpm]: of its holds at a non-zero speed,
+    else of its non-zero corner speeds; 0 for a profile that never turns."""
+    tk, nk = profile.to_profile().speed.knots()
+    held = [abs(nk[i]) for i in range(1, tk.size) if nk[i] == nk[i - 1] and nk[i] != 0
+            and tk[i] > tk[i - 1]]
+    moving = [abs(n) for n in nk if n != 0]
+    return float(min(held or moving or [0.0]))
+
+
 def _check_step(cfg: DatasetConfig) -> None:
     """The integrator step 1 / (sample_rate_hz · substeps) stable for every gear's
     linearised dynamics at every operating point (explicit RK4 diverges beyond it)."""
-    ch, ops = cfg.chain, cfg.operating_points
+    ch = cfg.chain
     fs, k = float(ch.sample_rate_hz), int(ch.substeps)
+    speeds, loads = _speeds_and_loads(cfg)
     for i, g in enumerate(cfg.gears):
         p = gear_params(cfg, g).gear
-        for n in ops.n_in_rpm:
-            for t in ops.t_out_nm:
+        for n in speeds:
+            for t in loads:
                 lam = linear_eigenvalues(p, float(n), float(t))
                 if rk4_stable(lam, 1.0 / (fs * k)):
                     continue
@@ -269,6 +320,76 @@ def _check_layout(cfg: DatasetConfig) -> None:
             key = ("dataset.mesh.n_theta" if "too coarse" in str(e)
                    else "dataset.sensors (r_torque_mm, r_pairs_mm, grid_length_mm)")
             raise ValueError(f"{key}: {e}") from None
+
+
+def _profile_key(msg: str, profile: ProfileConfig) -> str:
+    """A message of :func:`swgsim.profile.validate` with its keys as ``dataset.profile``'s."""
+    p = "dataset.profile"
+    msg = re.sub(r"\bspeed\.segments\[(\d+)\]\.(target_rpm|accel_rpm_s)",
+                 rf"{p}.segments[\1].move.\2", msg)
+    msg = re.sub(r"\bspeed\.segments\[(\d+)\]\.duration_s", rf"{p}.segments[\1].hold.duration_s",
+                 msg)
+    msg = re.sub(r"\bspeed\.segments\[", f"{p}.segments[", msg)
+    msg = re.sub(r"\bspeed\.start_rpm", f"{p}.start_rpm", msg)
+    return re.sub(r"\bload([.:])", rf"{p}.load.{profile.load_kind()}\1", msg)
+
+
+def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
+    """A profile within the gear's limits and stable for RK4 at standstill, and its
+    window starts [s]; before any work."""
+    pc, ch = cfg.profile, cfg.chain
+    prof = pc.to_profile()
+    step = 1.0 / (float(ch.sample_rate_hz) * int(ch.substeps))
+    for i, g in enumerate(cfg.gears):
+        p = gear_params(cfg, g).gear
+        try:
+            pf.validate(prof, float(p.j_out_kgm2), float(p.ratio))
+        except ValueError as e:
+            raise ValueError(_profile_key(str(e), pc)) from None
+        try:
+            dynamics._standstill_check(dynamics._ke_batch(dynamics.Batch.of([p])), prof, step)
+        except ValueError as e:
+            raise ValueError(f"dataset.chain.substeps={ch.substeps} at dataset.chain."
+                             f"sample_rate_hz={ch.sample_rate_hz:g} Hz, dataset.gears[{i}]: "
+                             f"{str(e).removeprefix('substeps: ')}") from None
+    n_low = lowest_cruise_rpm(pc)
+    _req(n_low > 0, "dataset.profile.segments: the profile never turns the input; allowed: "
+                    "a move to a non-zero target_rpm")
+    rev_s = 60.0 / n_low
+    _req(ch.window_s >= rev_s - 1e-12,
+         f"dataset.chain.window_s={ch.window_s:g} s is shorter than one wave-generator "
+         f"revolution at the profile's lowest cruise speed {n_low:g} rpm; allowed: >= "
+         f"{rev_s:.4g} s")
+    dur = prof.speed.duration_s
+    amp = cfg.acquisition.amplifier
+    lead_s = 0.0 if amp is None else (amp.lead_samples(ch.sample_rate_hz) + 1) / ch.sample_rate_hz
+    if pc.window_starts_s is None:
+        n = int(np.floor((dur - lead_s - ch.settle_s) / ch.window_s + 1e-9))
+        _req(n >= 1, f"dataset.chain.window_s={ch.window_s:g} s: no window fits the profile "
+                     f"of {dur:g} s after dataset.chain.settle_s={ch.settle_s:g} s; allowed: "
+                     f"<= {dur - lead_s - ch.settle_s:.4g} s")
+        starts = tuple(round(float(ch.settle_s + k * ch.window_s), 12) for k in range(n))
+    else:
+        starts = tuple(float(t) for t in pc.window_starts_s)
+        _req(len(starts) >= 1, "dataset.profile.window_starts_s must list at least one start")
+        for i, t in enumerate(starts):
+            _in(t, lead_s, dur - ch.window_s - lead_s, f"dataset.profile.window_starts_s[{i}]",
+                "s", why="the window inside the profile, with the amplifier's history")
+    return prof, starts
+
+
+def _profile_shards(cfg: DatasetConfig, variants: dict[str, list[tuple[float, float]]],
+                    starts: tuple[float, ...]) -> tuple[ShardSpec, ...]:
+    """One shard per gear: every variant (and a healthy reference) along the profile."""
+    shards = []
+    for g in cfg.gears:
+        gid = int(g.id)
+        wins = [WindowSpec(gid, fault, vi, sev, pos, float("nan"), False)
+                for fault, vl in variants.items() for vi, (sev, pos) in enumerate(vl)]
+        wins.append(WindowSpec(gid, "healthy", -1, 0.0, float("nan"), float("nan"), True))
+        shards.append(ShardSpec(f"gear{gid}_profile.nc", gid, 0, float("nan"), tuple(wins),
+                                window_starts_s=starts))
+    return tuple(shards)
 
 
 # ------------------------------------------------------------------------ the plan
@@ -357,7 +478,10 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
         key, :func:`swgsim.config.check_finite`); then with the allowed range: unknown
         fault, severity outside its range, non-positive speed, negative torque or variant
         count, a gauge off the collar, a truss too coarse for the gauge layout, bad chain
-        settings.
+        settings; with a profile (``dataset.profile``): a profile beyond the gear's limits
+        (:func:`swgsim.profile.validate`), an RK4 step unstable at standstill, a window
+        shorter than one wave-generator revolution at the lowest cruise speed, or windows
+        outside the profile.
     """
     if isinstance(cfg, DatasetPlan):
         return cfg
@@ -368,6 +492,7 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     _check_chain(cfg)
     _check_tolerances_and_disturbance(cfg)
     _check_gears(cfg)
+    prof, starts = _check_profile(cfg) if cfg.profile is not None else (None, ())
     _check_recording(cfg)
     _check_step(cfg)
     _check_sensors(cfg)
@@ -376,7 +501,11 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     variants = _variants(cfg)
     _check_layout(cfg)
     faults = {name: get_fault(name) for name in ("healthy", *variants)}
-    if cfg.life is not None:
+    _req(cfg.life is None or cfg.profile is None,
+         "dataset.profile: give either dataset.life or dataset.profile, not both")
+    if cfg.profile is not None:
+        shards = _profile_shards(cfg, variants, starts)
+    elif cfg.life is not None:
         check_life(cfg.life)
         ops = cfg.operating_points
         n = len(schedule(cfg.life, list(ops.n_in_rpm), list(ops.t_out_nm)).hour)
@@ -384,7 +513,7 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
                        for g in cfg.gears)
     else:
         shards = _shards(cfg, variants)
-    return DatasetPlan(cfg, shards, faults, effects, friction, config_hash(cfg))
+    return DatasetPlan(cfg, shards, faults, effects, friction, config_hash(cfg), prof)
 
 
 # ------------------------------------------------------------- per-gear parameters
@@ -410,11 +539,11 @@ def min_settle_s(cfg: DatasetConfig) -> float:
     (:func:`swgsim.dynamics.torsional_mode`) over the data set's gears and
     operating points [s].
     """
-    ops = cfg.operating_points
+    speeds, loads = _speeds_and_loads(cfg)
     decay = []
     for i, g in enumerate(cfg.gears):
-        for n in ops.n_in_rpm:
-            for t in ops.t_out_nm:
+        for n in speeds:
+            for t in loads:
                 try:
                     decay.append(torsional_mode(gear_params(cfg, g).gear, float(n),
                                                 float(t))[1])
@@ -428,4 +557,5 @@ def min_settle_s(cfg: DatasetConfig) -> float:
 
 
 __all__ = ["DatasetPlan", "ShardSpec", "WindowSpec", "SETTLE_DECAY_TIMES",
-           "config_hash", "gear_params", "layout_for", "min_settle_s", "plan", "variant_list"]
+           "config_hash", "lowest_cruise_rpm", "plain_config", "gear_params", "layout_for",
+           "min_settle_s", "plan", "variant_list"]
