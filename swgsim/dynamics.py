@@ -776,10 +776,29 @@ class ProfileResult(SimResult):
     p_load: np.ndarray | None = None
 
 
-def _standstill_check(bk: Batch, profile, step_s: float) -> None:
-    """Refuse an RK4 step that is unstable where the profile passes 0 rpm: there the
-    friction's smooth sign has the slope (b0 + μ c |T_stiff| / cos α) / v_s + b1 on φ̇_b,
-    a damping −slope / (sin²α J_out) [1/s] on ω_out [derived, eq. 5-6]."""
+def check_standstill_step(params: list[GearParams] | Batch, profile: Profile,
+                          step_s: float) -> None:
+    """Refuse an RK4 step that is unstable where the profile passes 0 rpm.
+
+    There the friction's smooth sign has the slope (b0 + μ c |T_stiff| / cos α) / v_s + b1
+    on φ̇_b, a damping −slope / (sin²α J_out) [1/s] on ω_out [derived, eq. 5-6], with
+    T_stiff at the profile's largest load.
+
+    Parameters
+    ----------
+    params : list of GearParams or Batch
+        The variants (V).
+    profile : swgsim.profile.Profile
+    step_s : float
+        Integrator step [s], 1 / (sample_rate_hz · substeps).
+
+    Raises
+    ------
+    ValueError
+        ``substeps: the RK4 step ... is unstable at 0 rpm ...`` with the step needed.
+    """
+    b = params if isinstance(params, Batch) else Batch.of(list(params))
+    bk = b if "inv_tan_a" in b.fields else _ke_batch(b)
     _, nk = profile.speed.knots()
     if np.all(nk > 0) or np.all(nk < 0):
         return
@@ -849,7 +868,7 @@ def simulate_profile(params: list[GearParams] | Batch, profile: Profile, phi_in0
     bk = _ke_batch(b)
     v, n, sub = bk.ratio.size, int(round(dur * sample_rate_hz)), int(substeps)
     h = 1.0 / (sample_rate_hz * sub)
-    _standstill_check(bk, profile, h)
+    check_standstill_step(bk, profile, h)
     th = np.arange(2 * (n - 1) * sub + 1) * (h / 2)  # stage times
     wd_h, ad_h = pf.speed_at(profile, th)
     ad_l = pf.speed_at(profile, th, side="left")[1]  # the last stage takes left limits

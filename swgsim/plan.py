@@ -347,7 +347,7 @@ def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
         except ValueError as e:
             raise ValueError(_profile_key(str(e), pc)) from None
         try:
-            dynamics._standstill_check(dynamics._ke_batch(dynamics.Batch.of([p])), prof, step)
+            dynamics.check_standstill_step([p], prof, step)
         except ValueError as e:
             raise ValueError(f"dataset.chain.substeps={ch.substeps} at dataset.chain."
                              f"sample_rate_hz={ch.sample_rate_hz:g} Hz, dataset.gears[{i}]: "
