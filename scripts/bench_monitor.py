@@ -37,18 +37,19 @@ def main() -> None:
     from learn.monitor.features import window_features
     from learn.monitor.monitor import GearMonitor
     from swgcli import dataset_preset
-    from swgsim.life import LifeConfig, LifeSimulator, RecordBank
+    from swgsim.life import LifeConfig, LifeSimulator
+    from swgsim.life_profile import record_bank
     from swgsim.plan import plan
 
     p = plan(dataset_preset(args.dataset))
     cfg = MonitorStudyConfig(train_variants=2, train_healthy_h=4.0)
-    banks = {g: RecordBank(p, g) for g in (1, 2, 3)}
+    banks = {g: record_bank(p, g) for g in (1, 2, 3)}
     t0 = time.perf_counter()
     model = train_model(p, banks, [1, 2], cfg)
     print(f"diagnosis model trained in {time.perf_counter() - t0:.0f} s")
     n_c = int(cfg.commissioning_h * 60)
     life = LifeConfig(hours=cfg.commissioning_h + args.windows / 60 + 1, life_seed=0)
-    fresh = RecordBank(p, 3)
+    fresh = record_bank(p, 3)
     sim = LifeSimulator(p, 3, life, fresh)
     t0 = time.perf_counter()
     fresh.simulate()

@@ -87,9 +87,9 @@ def _train(p, gear: int, cfg, cls: list[str], n_comm: int):
     from learn.monitor.evaluate import features_of, training_lives
     from learn.monitor.model import HEALTHY, Baseline, design_matrix
     from learn.monitor.monitor import baseline_windows
-    from swgsim.life import RecordBank
+    from swgsim.life_profile import record_bank
 
-    bank = RecordBank(p, gear)
+    bank = record_bank(p, gear)
     lives = training_lives(p, bank, gear, cfg)
     f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
     fit = baseline_windows(p0[:n_comm])
@@ -137,7 +137,8 @@ def main() -> None:
     from learn.monitor.model import DiagnosisModel
     from learn.monitor.monitor import GearMonitor
     from swgcli import dataset_preset
-    from swgsim.life import FaultOnset, LifeConfig, LifeSimulator, RecordBank
+    from swgsim.life import FaultOnset, LifeConfig, LifeSimulator
+    from swgsim.life_profile import record_bank
     from swgsim.plan import plan
     from swgsim.sensor_faults import SENSOR_FAULTS
 
@@ -155,7 +156,7 @@ def main() -> None:
     clf, agg = _train(p, args.train, cfg, cls, n_comm)
     model = DiagnosisModel(cls, clf)
 
-    jb = RecordBank(p, args.judge)
+    jb = record_bank(p, args.judge)
     healthy = LifeSimulator(p, args.judge, LifeConfig(hours=cfg.commissioning_h + 1,
                                                       life_seed=7), jb)
     fh, ph, _ = features_of(healthy, 0, n_comm)

@@ -33,8 +33,14 @@ class DisturbanceSpec:
 
 
 def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,
-            spec: DisturbanceSpec, rng: np.random.Generator) -> np.ndarray:
+            spec: DisturbanceSpec, rng: np.random.Generator,
+            phi_in: np.ndarray | None = None) -> np.ndarray:
     """Apply eq. (10) to a batch of windows.
+
+    At a steady speed the sub-harmonics' phase is 2π n_in t / j; at a varying speed (a
+    window of an operating profile) eq. (10)'s orders of the input rotation are taken in
+    the input angle itself, φ_in(t) / j (equal at a steady speed up to the constant phase,
+    which α_j draws anyway).
 
     Parameters
     ----------
@@ -46,6 +52,9 @@ def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,
         Input speed of each window [rpm].
     spec : DisturbanceSpec
     rng : numpy.random.Generator
+    phi_in : ndarray, shape (n_windows, n_t), optional
+        Input angle of each sample [rad]: the sub-harmonics in the angle domain; None: at
+        the steady speed ``n_in_rpm`` (then bit-identical to before).
 
     Returns
     -------
@@ -58,7 +67,10 @@ def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,
     f_in = np.asarray(n_in_rpm, float) / 60.0  # rev/s
     j = np.arange(1, 5)
     # (n_w, 4, n_t)
-    wt = 2 * np.pi * (f_in[:, None] / j[None, :])[:, :, None] * time_s[None, None, :]
+    if phi_in is None:
+        wt = 2 * np.pi * (f_in[:, None] / j[None, :])[:, :, None] * time_s[None, None, :]
+    else:
+        wt = np.asarray(phi_in, float)[:, None, :] / j[None, :, None]
     # a sin(wt + alpha) = a cos(alpha) sin(wt) + a sin(alpha) cos(wt)
     cs = (aj * np.cos(alpha))[..., 0]  # (n_w, n_s, 4)
     sn = (aj * np.sin(alpha))[..., 0]

@@ -434,13 +434,17 @@ class LifeSimulator:
         self.plan, self.life, self.gear_id = plan, life, int(gear_id)
         cfg = plan.config
         ops = cfg.operating_points
-        self.schedule = schedule(life, list(ops.n_in_rpm), list(ops.t_out_nm))
+        from .life_profile import record_bank
+
+        self.bank = record_bank(plan, self.gear_id) if bank is None else bank
+        slots = getattr(self.bank, "slots", None)  # a profile: one duty point per slot
+        self.schedule = schedule(life if slots is None else dataclasses.replace(
+            life, duty=slots.duty(life.interval_min)), list(ops.n_in_rpm), list(ops.t_out_nm))
         ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(self.gear_id, int(life.life_seed), 0))
         u = np.random.default_rng(ss).uniform(size=2)
         f = life.fault
         self.position_deg = float(360.0 * u[0] if f.position_deg is None else f.position_deg)
         self.sensor = int(5 * u[1]) if f.sensor is None else int(f.sensor)
-        self.bank = RecordBank(plan, self.gear_id) if bank is None else bank
         self.bank.want(self._key(d, s) for d, s in
                        {(int(d), float(s)) for d, s in zip(self.schedule.duty_index,
                                                            self.schedule.severity,
@@ -484,14 +488,25 @@ class LifeSimulator:
         rngs = [np.random.default_rng(np.random.SeedSequence(
             int(cfg.seed), spawn_key=(self.gear_id, int(self.life.life_seed), 1 + int(r))))
             for r in rows]
+        slots = getattr(self.bank, "slots", None)
+        angles: dict[str, np.ndarray] = {}
         for i, r in enumerate(rows):
-            rec = self.bank.get(self._key(int(sch.duty_index[r]), float(sch.severity[r])))
-            o = int(rngs[i].uniform() * rec["n_period"])
+            d = int(sch.duty_index[r])
+            rec = self.bank.get(self._key(d, float(sch.severity[r])))
+            if slots is not None:  # a profile: slot d, started within its jitter
+                rec = {k: v[d] for k, v in rec.items()}
+                o = int(rngs[i].uniform() * (rec["signal"].shape[-1] - n_t + 1))
+                for k in ("phi_in", "phi_in_meas", "phi_out_meas"):
+                    if k in rec:
+                        angles.setdefault(k, np.empty((rows.size, n_t)))[i] = rec[k][o:o + n_t]
+            else:
+                o = int(rngs[i].uniform() * rec["n_period"])
             sig[i] = rec["signal"][:, o:o + n_t]
             e = o + n_t
             eff[i] = (rec["p_out"][e] - rec["p_out"][o]) / (rec["p_in"][e] - rec["p_in"][o])
             n_mean[i] = (rec["w_in"][e] - rec["w_in"][o]) / n_t * 60 / (2 * np.pi)
             t_mean[i] = (rec["t_out"][e] - rec["t_out"][o]) / n_t
+        phi_in = angles.pop("phi_in", None)
         fault = sch.fault[rows]
         if is_sensor_fault(self.life.fault.fault):
             on = fault != "healthy"
@@ -501,7 +516,7 @@ class LifeSimulator:
         for i in range(rows.size):  # each window from its own stream
             if self.life.disturbed:
                 sig[i:i + 1] = disturb(sig[i:i + 1], time_s, n_mean[i:i + 1], cfg.disturbance,
-                                       rngs[i])
+                                       rngs[i], None if phi_in is None else phi_in[i:i + 1])
             if amp is not None:
                 sig[i:i + 1] = digitise(sig[i:i + 1], amp, rngs[i])
         duty = [sch.duty[int(d)] for d in sch.duty_index[rows]]
@@ -522,6 +537,7 @@ class LifeSimulator:
             "t_out_mean_nm": t_mean,
             "hour": sch.hour[rows],
             "commissioning": sch.commissioning[rows],
+            **angles,  # a profile's angle channels, (n, n_t) [rad]
         }
         return sig.astype(np.float32), meta
 
@@ -541,6 +557,7 @@ def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     stop = len(sim) if stop is None else stop
     sig, meta = sim.windows(start, stop)
     extra = {k: meta.pop(k) for k in ("hour", "commissioning")}
+    angles = {k: meta.pop(k) for k in [k for k, v in meta.items() if v.ndim == 2]}
     cfg = sim.plan.config
     n_t = sig.shape[-1]
     attrs = {"config": sim.plan.as_dict(), "seed": int(cfg.seed),
@@ -549,6 +566,8 @@ def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     ds = dsio.make_dataset(sig, np.arange(n_t) / cfg.chain.sample_rate_hz, meta, attrs)
     ds["hour"] = ("sample", extra["hour"], {"units": "h"})
     ds["commissioning"] = ("sample", extra["commissioning"])
+    for k, v in angles.items():  # a profile's angle channels
+        ds[k] = (("sample", "time"), v, {"units": "rad"})
     return ds
 
 

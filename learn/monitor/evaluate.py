@@ -29,11 +29,12 @@ import numpy as np
 import pandas as pd
 
 from swgsim.life import BLOCK, FaultOnset, LifeConfig, LifeSimulator, RecordBank
+from swgsim.life_profile import record_bank
 from swgsim.sensor_faults import SENSOR_FAULTS
 from swgsim.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
 
 from .baselines import BASELINES, References, WindowClassifier, fit_baseline, window_inputs
-from .features import feature_names, window_features
+from .features import feature_names, twist_features, window_angles, window_features
 from .model import HEALTHY, Baseline, design_matrix, fit_diagnosis
 from .monitor import GearMonitor, Trace, baseline_windows, run_cusums
 from .rule import RuleConfig, log_bets, threshold
@@ -142,19 +143,35 @@ def features_of(sim: LifeSimulator, start: int, stop: int,
                 ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """Health features, operating points and metadata of windows ``start:stop``;
     ``on_block(signals, meta)`` is called with each block of simulated windows."""
-    fs = sim.plan.config.chain.sample_rate_hz
     if stop <= start:
-        return np.empty((0, len(feature_names()))), np.empty((0, 2)), {}
+        n_f = len(feature_names(twist=has_twist(sim.plan)))
+        return np.empty((0, n_f)), np.empty((0, 2)), {}
     f, pts, metas = [], [], []
     for a in range(start, stop, BLOCK):
         sig, meta = sim.windows(a, min(a + BLOCK, stop))
-        f.append(window_features(sig, meta["n_in_rpm"], meta["efficiency"], fs))
+        f.append(life_features(sim.plan, sig, meta))
         pts.append(np.stack([meta["n_in_rpm"], meta["t_out_nm"]], axis=1))
         metas.append(meta)
         if on_block is not None:
             on_block(sig, meta)
     meta = {k: np.concatenate([m[k] for m in metas]) for k in metas[0]}
     return np.concatenate(f), np.concatenate(pts), meta
+
+
+def has_twist(plan) -> bool:
+    """Whether a data set's lives record an output encoder (twist features)."""
+    return plan.profile is not None and plan.config.profile.angles.output_encoder_bits is not None
+
+
+def life_features(plan, sig: np.ndarray, meta: dict[str, np.ndarray]) -> np.ndarray:
+    """Health features of a block of a life's windows: :func:`window_features`, in the
+    angle domain when the windows carry angle channels (a profile), and the twist
+    features with an output encoder; shape (n, F)."""
+    fs = plan.config.chain.sample_rate_hz
+    sensor = plan.config.profile.angles.input_sensor() if plan.profile is not None else None
+    psi, twist = window_angles(meta, sensor, fs)
+    f = window_features(sig, meta["n_in_rpm"], meta["efficiency"], fs, psi=psi)
+    return f if twist is None else np.concatenate([f, twist_features(twist)], axis=1)
 
 
 def training_lives(plan, bank: RecordBank, g: int, cfg: MonitorStudyConfig
@@ -341,7 +358,8 @@ def evaluate_gear(plan, banks, g: int, model, cfg: MonitorStudyConfig, dataset: 
             counts += [(b, (n_scored - n_comm) * cfg.interval_min / 60, int(np.sum(v != 0)))
                        for b, v in scored.labels().items()]
         counts.append(("always", hours_h, len(tr.score)))
-        key = {"dataset": dataset, "held_out_gear": g, "seed": seed}
+        key = {"dataset": plan.config.name if plan.profile is not None else dataset,
+               "output_encoder": has_twist(plan), "held_out_gear": g, "seed": seed}
         fa_rows += [{**key, "detector": d, "healthy_hours": h, "false_alarms": n}
                     for d, h, n in counts]
         healthy_curve = _curve_healthy(tr, cfg, key, hours_h, curve)
@@ -476,10 +494,12 @@ def run_held_out(plan, dataset: str, g: int, cfg: MonitorStudyConfig) -> dict:
     """Train on the other gears and evaluate held-out gear ``g``: rows, timing."""
     t0 = time.perf_counter()
     gears = [int(x.id) for x in plan.config.gears]
-    banks = {x: RecordBank(plan, x) for x in gears}
+    banks = {x: record_bank(plan, x) for x in gears}
     train = [x for x in gears if x != g]
     model = train_model(plan, banks, train, cfg)
-    baselines = train_baselines(plan, banks, train, cfg)
+    # the per-window baselines' inputs (time-domain statistics, the synchronous residual)
+    # are defined at a steady speed: on a profile the monitor runs without them
+    baselines = train_baselines(plan, banks, train, cfg) if plan.profile is None else []
     t1 = time.perf_counter()
     rows, fa, curve = evaluate_gear(plan, banks, g, model, cfg, dataset, baselines)
     t2 = time.perf_counter()

@@ -98,7 +98,7 @@ class SensorFit:
     @property
     def rest(self) -> float:
         """``n · mean_j(mean_i z_ij)²`` over the n windows and the features j outside
-        the fitted bridge (the other bridges and the efficiency): the χ² per degree of
+        the fitted bridge (the other bridges, the efficiency and the twist): the χ² per degree of
         freedom of their mean shift where the windows are independent and nothing but
         this bridge moved (module docstring)."""
         keep = np.ones(self.z.shape[1], bool)
@@ -120,7 +120,8 @@ def fit_sensor_faults(z: np.ndarray, mean: np.ndarray, std: np.ndarray) -> list[
     ----------
     z : ndarray, shape (n, F)
         z-scores of the windows since the alarm against the gear's baseline,
-        F = 5 (H + 2) + 1 (:func:`learn.monitor.features.feature_names`).
+        F = 5 (H + 2) + 1, or more (:func:`learn.monitor.features.feature_names`: the
+        twist features of an output encoder come after the bridges' and efficiency).
     mean, std : ndarray, shape (n, F)
         The baseline's mean and standard deviation at each window's operating point.
 
@@ -135,8 +136,8 @@ def fit_sensor_faults(z: np.ndarray, mean: np.ndarray, std: np.ndarray) -> list[
         If the shapes disagree with five bridges of H + 2 features.
     """
     n, f = z.shape
-    if f != 5 * BLOCK + 1 or mean.shape != z.shape or std.shape != z.shape:
-        raise ValueError(f"z, mean and std must be (n, {5 * BLOCK + 1}), got {z.shape}, "
+    if f < 5 * BLOCK + 1 or mean.shape != z.shape or std.shape != z.shape:
+        raise ValueError(f"z, mean and std must be (n, >= {5 * BLOCK + 1}), got {z.shape}, "
                          f"{mean.shape}, {std.shape}")
     out = []
     for c in range(5):

@@ -26,8 +26,18 @@ def display(fault: str) -> str:
     return FAULTS[fault].display if fault in FAULTS else fault
 
 
+def labelled(df: pd.DataFrame | None) -> pd.DataFrame | None:
+    """``df`` with the lives of a joint with an output encoder told apart in the data-set
+    label: ``<dataset> (output encoder)`` where the column ``output_encoder`` is True."""
+    if df is None or "output_encoder" not in df or not df["output_encoder"].any():
+        return df
+    enc = df["output_encoder"].fillna(False).astype(bool)
+    return df.assign(dataset=np.where(enc, df["dataset"] + " (output encoder)", df["dataset"]))
+
+
 def summary_table(res: pd.DataFrame) -> pd.DataFrame:
     """Per dataset, detector, fault, severity and onset: the table's figures."""
+    res = labelled(res)
     rows = []
     keys = ["dataset", "detector", "fault", "severity", "onset"]
     for k, g in res.groupby(keys, sort=False):
@@ -58,6 +68,7 @@ def targets(res: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
     correctly one hour after the alarm (all lives; target >= 0.99), sensor faults named
     as a gear fault (count; target 0) and with their faulty bridge (count).
     """
+    res, fa = labelled(res), labelled(fa)
     mon = res[res.detector == "monitor"].copy()
     mon["detected"] = mon.detected.astype(bool)
     rows = []
@@ -109,7 +120,7 @@ def smallest_detectable(tab: pd.DataFrame) -> pd.DataFrame:
 
 def false_alarm_table(fa: pd.DataFrame) -> pd.DataFrame:
     """False alarms per 1000 h per dataset, detector and held-out gear (all seeds)."""
-    g = fa.groupby(["dataset", "detector", "held_out_gear"], sort=False).agg(
+    g = labelled(fa).groupby(["dataset", "detector", "held_out_gear"], sort=False).agg(
         healthy_hours=("healthy_hours", "sum"), false_alarms=("false_alarms", "sum"))
     g["per_1000_h"] = g.false_alarms / g.healthy_hours * 1000.0
     return g.reset_index()
@@ -152,6 +163,7 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
     per-window and always-alarm detectors."""
     import matplotlib
 
+    res, fa, curve = labelled(res), labelled(fa), labelled(curve)
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

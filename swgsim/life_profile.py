@@ -1,0 +1,199 @@
+"""Gear lives on an operating profile: the data set's profile is the duty cycle.
+
+A joint that repeats one motion (``dataset.profile``: moves, dwells, a gravity load)
+returns to the same pose every cycle, so each state of the gear (healthy, a fault at one
+severity and position) is simulated once along the whole profile
+(:func:`swgsim.dynamics.simulate_profile`, as a profile data set's shard,
+:mod:`swgsim.shard`) and every window of the life is a cut of that motion. The cuts are the
+data set's window starts, those in which the wave generator turns at least
+:data:`MIN_WG_REVOLUTIONS` revolutions one way (*slots*), each window starting up to
+:data:`START_JITTER_S` after its slot's start (uniformly): a monitor records while the
+joint moves, and the angle-domain features need about 1.45 revolutions
+(:mod:`learn.monitor.features`); a window holding a reversal is left out too (the gauge
+misplacement is defined along a monotone ψ, :mod:`swgsim.measurement`).
+
+Window k of a life lies in slot k mod S (one window every ``interval_min`` of operation,
+as a steady life's duty points). Its operating point, the key of the monitor's baseline,
+is the slot's *commanded* one: the mean desired input speed and the mean load along the
+desired motion (the link's pose integrated from the desired speed), the same for every
+state of the gear. What differs from cycle to cycle: the window's start within its
+slot's jitter (as a steady life's window starts anywhere in an output revolution),
+eq. (10)'s draws, taken in the input angle (:func:`swgsim.disturbance.disturb`), and the
+converter's noise and quantisation; what is the same: the motion (the gear returns to
+its pose every cycle; no payload, temperature or speed variation between cycles is
+modelled). The angle channels (input sensor, optional output encoder,
+:mod:`swgsim.angles`) are recorded with every window.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import dynamics
+from . import profile as pf
+from .acquisition import sample, start_angles
+from .angles import measure_angles
+from .life import DutyPoint, RecordBank
+from .measurement import apply_sensor_effects
+
+#: Least wave-generator revolutions (one way) of a window recorded by a profile life.
+MIN_WG_REVOLUTIONS = 2.0
+#: Spread of a window's start after its slot's start [s] [choice: about one WG revolution
+#: at the robot joint's 2400 rpm cruise]: a monitor's windows are not locked to the
+#: motion command, and without it every window of a slot would hold the same motion.
+START_JITTER_S = 0.025
+
+
+@dataclass(frozen=True)
+class Slots:
+    """The windows of one profile cycle that a life records.
+
+    Attributes
+    ----------
+    starts : ndarray of int, shape (S,)
+        First sample of each slot in the profile's motion.
+    n_in_rpm : ndarray, shape (S,)
+        Mean desired input speed [rpm] (signed).
+    t_out_nm : ndarray, shape (S,)
+        Mean load along the desired motion [N m].
+    """
+
+    starts: np.ndarray
+    n_in_rpm: np.ndarray
+    t_out_nm: np.ndarray
+
+    def duty(self, interval_min: float) -> list[DutyPoint]:
+        """One duty point per slot, each held one window interval: window k in slot k mod S."""
+        return [DutyPoint(float(n), float(t), float(interval_min))
+                for n, t in zip(self.n_in_rpm, self.t_out_nm, strict=True)]
+
+
+def profile_slots(plan) -> Slots:
+    """The slots of a profile data set (module docstring).
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+        With a profile.
+
+    Returns
+    -------
+    Slots
+
+    Raises
+    ------
+    ValueError
+        If no window of the profile turns the wave generator :data:`MIN_WG_REVOLUTIONS`
+        revolutions one way, naming ``dataset.profile``.
+    """
+    from .plan import gear_params
+
+    cfg = plan.config
+    fs = float(cfg.chain.sample_rate_hz)
+    n_t = int(round(cfg.chain.window_s * fs))
+    n_jit = jitter_samples(plan)
+    starts = np.round(np.asarray(plan.shards[0].window_starts_s) * fs).astype(np.int64)
+    t = np.arange(int(starts.max()) + n_t + n_jit + 1) / fs
+    w_d, _ = pf.speed_at(plan.profile, t)  # [rad/s]
+    ratio = float(gear_params(cfg, cfg.gears[0]).gear.ratio)
+    q_d = np.concatenate([[0.0], np.cumsum((w_d[1:] + w_d[:-1]) / 2) / fs]) / ratio
+    load = np.broadcast_to(pf.load_at(plan.profile.load, t, q=q_d, q_dot=w_d / ratio,
+                                      ratio=ratio), t.shape)
+    keep, n_mean, t_mean = [], [], []
+    for s in starts:
+        w, span = w_d[s:s + n_t], w_d[s:s + n_t + n_jit]
+        turns = min(abs(w.sum()), abs(w_d[s + n_jit:s + n_jit + n_t].sum())) / fs / (2 * np.pi)
+        if span.min() * span.max() >= 0 and turns >= MIN_WG_REVOLUTIONS:
+            keep.append(s)
+            n_mean.append(w.mean() * 60 / (2 * np.pi))
+            t_mean.append(load[s:s + n_t].mean())
+    if not keep:
+        raise ValueError(f"dataset.profile: no window turns the wave generator "
+                         f"{MIN_WG_REVOLUTIONS:g} revolutions one way; a gear life on the "
+                         "profile records only such windows")
+    return Slots(np.array(keep), np.round(n_mean, 6), np.round(t_mean, 6))
+
+
+def jitter_samples(plan) -> int:
+    """:data:`START_JITTER_S` in samples of the data set's rate."""
+    return int(round(START_JITTER_S * float(plan.config.chain.sample_rate_hz)))
+
+
+class ProfileRecordBank(RecordBank):
+    """Records of one gear along the profile: one per state, all its slots (module
+    docstring). :meth:`get` gives, per slot over its window and jitter (n = n_t + jitter
+    samples), ``signal`` (S, 5, n) [mV/V] sampled as the converter does (before its
+    noise), the cumulative sums ``p_in``, ``p_out`` [W], ``w_in`` [rad/s], ``t_out``
+    [N m] (S, n + 1) as a steady record's, ``phi_in`` (S, n) [rad] (the simulated input
+    angle, for eq. (10)) and the recorded angle channels ``phi_in_meas`` (and
+    ``phi_out_meas`` with an output encoder)."""
+
+    def __init__(self, plan, gear_id: int, chunk: int = 32) -> None:
+        super().__init__(plan, gear_id, chunk)
+        self.slots = profile_slots(plan)
+
+    @staticmethod
+    def key(dp: DutyPoint, fault: str, severity: float, position_deg: float) -> tuple:
+        """The key of a record: the state alone (every slot is in the record)."""
+        return (0.0, 0.0, *RecordBank.key(dp, fault, severity, position_deg)[2:])
+
+    def _simulate(self, keys: list[tuple]) -> None:
+        from .shard import diverged, fine_motion
+
+        cfg = self.plan.config
+        ch, amp = cfg.chain, cfg.acquisition.amplifier
+        fs = ch.sample_rate_hz
+        q = 1 if amp is None else amp.oversample
+        n_lead = 0 if amp is None else amp.lead_samples(fs)
+        n_t = int(round(ch.window_s * fs)) + jitter_samples(self.plan)  # window + jitter
+        params = [self.params(k) for k in keys]
+        # the same pose every cycle: one start angle per gear, within one WG revolution
+        ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(self.gear_id, 2 ** 20))
+        phi0 = np.mod(start_angles(cfg.acquisition, 1, np.random.default_rng(ss),
+                                   self.healthy.gear.ratio), 2 * np.pi)
+        starts = self.slots.starts
+        n_rec = int(starts.max()) + n_t + n_lead + 1
+        res = dynamics.simulate_profile([p.gear for p in params], self.plan.profile,
+                                        np.full(len(keys), phi0[0]), fs, n_rec / fs,
+                                        ch.substeps, cfg.profile.feedforward)
+        if not res.success:
+            raise ValueError(diverged(self.plan, f"gear {self.gear_id}'s life on the profile",
+                                      res.message))
+        chain = self._chain(params)
+        n_cut = q * (n_t + 2 * n_lead) if amp is not None else n_t
+        idx = q * (starts - n_lead)[:, None] + np.arange(n_cut)[None, :]
+        win = starts[:, None] + np.arange(n_t)[None, :]
+        angles = cfg.profile.angles
+        meas = measure_angles(res.states[0][:, win], res.states[2][:, win],
+                              input_sensor=angles.input_sensor(),
+                              output_encoder=angles.output_encoder())
+        t_fine = np.arange(n_cut) / (fs * q)
+        for v, k in enumerate(keys):
+            psi_f, t_f = fine_motion(res, q, np.array([v]))
+            cut = chain.signals_batch([params[v]], psi_f, t_f)[0][:, idx].transpose(1, 0, 2)
+            if self.plan.sensor_effects:
+                cut = apply_sensor_effects(cut, t_fine, None, self.plan.sensor_effects,
+                                           t_start_s=(starts - n_lead) / fs, psi=psi_f[0][idx])
+            cut = sample(cut, amp, n_lead) if amp is not None else cut
+            cum = {c: np.concatenate([np.zeros((len(starts), 1)), np.cumsum(x[v, win], axis=1)],
+                                     axis=1)
+                   for c, x in (("p_in", res.p_in), ("p_out", res.p_out),
+                                ("w_in", res.states[1]), ("t_out", res.t_out))}
+            self._records[k] = {
+                "signal": cut.astype(np.float32), **cum,
+                "phi_in": res.states[0][v, win],
+                **{f"{c}_meas": m[v] for c, m in meas.items()},
+            }
+
+
+def record_bank(plan, gear_id: int) -> RecordBank:
+    """The records of one gear's lives: along the profile for a profile data set, else
+    at its steady operating points."""
+    return ProfileRecordBank(plan, gear_id) if plan.profile is not None else RecordBank(
+        plan, gear_id)
+
+
+__all__ = ["MIN_WG_REVOLUTIONS", "START_JITTER_S", "ProfileRecordBank", "Slots", "jitter_samples",
+           "profile_slots", "record_bank"]
