@@ -481,14 +481,23 @@ class Claim:
         return p.resolve().relative_to(self.folder.resolve()).as_posix()
 
     def record(self, paths: Iterable[str | os.PathLike]) -> None:
-        """List files this run wrote (paths absolute or relative to the folder) in the
-        stamp with their SHA-256; folders, missing files and the stamp are skipped."""
+        """List files this run wrote in the stamp with their SHA-256; folders, missing
+        files and the stamp are skipped. A path is absolute, relative to the folder (a
+        name inside it), or else relative to the current directory, as the folder itself
+        may be given (``Path(report_dir) / "results.csv"``).
+
+        Raises
+        ------
+        ValueError
+            A path outside the folder.
+        """
         found = {}
         for p in paths:
-            p = Path(p) if Path(p).is_absolute() else self.folder / p
+            p = Path(p)
+            p = p if p.is_absolute() or not (self.folder / p).is_file() else self.folder / p
             if p.is_file() and not p.is_symlink() and p.name != STAMP \
                     and not _is_lock(p.name):
-                found[self._rel(p)] = sha256(p)
+                found[self._rel(p.absolute())] = sha256(p)
 
         def add(stamp: dict) -> None:
             stamp["files"].update({rel: [h] for rel, h in found.items()})

@@ -287,3 +287,20 @@ def test_observability_and_transfer_refuse_before_any_work(tmp_path, app, key):
     msg = refusal(call)
     assert msg.startswith(f"{key} {out} holds table.md") and files(out) == {"table.md": b"mine\n"}
     assert not (tmp_path / "data").exists()
+
+
+def test_record_takes_paths_as_the_folder_was_given(tmp_path, monkeypatch):
+    """A run that claims a folder by a relative path records the files it writes there by
+    paths relative to the current directory (the monitor task's report_dir): a rerun may
+    then replace them. Found when a finished ``experiment=monitor`` could not be rerun:
+    its tables were missing from the stamp."""
+    monkeypatch.chdir(tmp_path)
+    out = Path("reports") / "monitor"
+    with ownership.claim(out, "monitor", "monitor.report_dir") as c:
+        (out / "results.csv").write_text("a,b\n")
+        c.record([out / "results.csv"])
+        Path("elsewhere.csv").write_text("x\n")
+        with pytest.raises(ValueError):
+            c.record([Path("elsewhere.csv")])
+    assert "results.csv" in json.loads((out / ownership.STAMP).read_text())["files"]
+    ownership.check(out, "monitor.report_dir")  # a rerun is allowed
