@@ -115,3 +115,27 @@ def test_steady_lives_keep_their_bank_and_features(motion):
     cfg = dataclasses.replace(motion.config, profile=dataclasses.replace(
         motion.config.profile, angles=no_enc))
     assert not has_twist(plan(cfg))
+
+
+def test_a_profile_stream_gives_the_lifes_features_and_a_model_mismatch_is_named(
+        motion, bank, tmp_path):
+    from types import SimpleNamespace
+
+    import xarray as xr
+
+    from learn.monitor.rule import RuleConfig
+    from learn.monitor.stream import check_stream, stream_features
+
+    sim = LifeSimulator(motion, 1, LifeConfig(hours=0.3, commissioning_h=0.2), bank)
+    sig, meta = sim.windows(0, len(sim))
+    ds = life_dataset(sim)
+    ds.to_netcdf(tmp_path / "life.nc", engine="h5netcdf")
+    back = xr.load_dataset(tmp_path / "life.nc", engine="h5netcdf")
+    assert np.allclose(stream_features(back), life_features(motion, sig, meta), rtol=0,
+                       atol=1e-9)
+    model = SimpleNamespace(sample_rate_hz=back.attrs["sample_rate_hz"], window_s=0.07,
+                            n_features=len(feature_names()), points_range=None)
+    with pytest.raises(ValueError, match=r"^stream: its windows give 73 health features "
+                                         r"\(with an output encoder's twist\); the model "
+                                         r"was trained on 71$"):
+        check_stream(back, model, RuleConfig())

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .features import window_features
+from .features import feature_names, twist_features, window_angles, window_features
 from .monitor import Alarm, GearMonitor, Trace, check_commissioning
 from .rule import RuleConfig
 
@@ -83,6 +83,12 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
     if not np.isclose(n_t / fs, model.window_s):
         raise ValueError(f"{source}: windows of {n_t / fs:g} s; the model was trained on "
                          f"windows of {model.window_s:g} s")
+    twist = "phi_out_meas" in ds
+    n_f = len(feature_names(twist=twist))
+    if model.n_features and n_f != model.n_features:
+        raise ValueError(f"{source}: its windows give {n_f} health features "
+                         f"({'with' if twist else 'without'} an output encoder's twist); the "
+                         f"model was trained on {model.n_features}")
     pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
     lo, hi = model.points_range
     out = ~np.all((pts >= lo - 1e-9) & (pts <= hi + 1e-9), axis=1)
@@ -96,14 +102,36 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
     return interval
 
 
+def _input_sensor(ds):
+    """The input angle sensor of a stream with angle channels, from its config."""
+    import json
+
+    from swgsim.angles import InputAngleSensor
+
+    cfg = ds.attrs.get("config", "{}")
+    cfg = json.loads(cfg) if isinstance(cfg, str) else cfg
+    counts = ((cfg.get("profile") or {}).get("angles") or {}).get("input_counts_per_rev")
+    return InputAngleSensor() if counts is None else InputAngleSensor(int(counts))
+
+
+def stream_features(ds) -> np.ndarray:
+    """Health features of a stream's windows, shape (n, F): in the angle domain when the
+    stream carries angle channels (a life on a profile), with the twist features when it
+    carries an output encoder's (:func:`learn.monitor.features.window_angles`)."""
+    fs = float(ds.attrs["sample_rate_hz"])
+    meta = {k: ds[k].values for k in ("phi_in_meas", "phi_out_meas") if k in ds}
+    psi, twist = window_angles(meta, _input_sensor(ds), fs) if meta else (None, None)
+    f = window_features(ds["strain_signal"].values, ds["n_in_rpm"].values,
+                        ds["efficiency"].values, fs, psi=psi)
+    return f if twist is None else np.concatenate([f, twist_features(twist)], axis=1)
+
+
 def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
                    source: str = "stream") -> StreamResult:
     """Commission on the stream's commissioning windows and monitor the rest."""
     interval = check_stream(ds, model, rule, source)
-    sig = ds["strain_signal"].values
     pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
-    feats = window_features(sig, pts[:, 0], ds["efficiency"].values,
-                            float(ds.attrs["sample_rate_hz"]))
+    feats = stream_features(ds)
     comm = ds["commissioning"].values.astype(bool)
     n_c = int(comm.sum())
     mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h)
