@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from swgcli.app import absolute_path, hydra_app
@@ -100,7 +101,11 @@ def run_observability(cfg: DictConfig) -> dict:
 
     rep = Path(absolute_path(str(cfg.report_dir)))
     csv = rep / "observability.csv"
+    if cfg.map not in ("steady", "motion"):
+        raise ValueError(f"map: must be one of ['steady', 'motion'], got {cfg.map!r}")
     ownership.check(rep, "report_dir")  # before any work: nothing in it but our files
+    if cfg.map == "motion":
+        return run_motion_map(cfg, rep)
     if bool(cfg.plot_only):
         if not csv.is_file():
             raise FileNotFoundError(2, "no map to redraw (run without plot_only first)",
@@ -143,12 +148,91 @@ def run_observability(cfg: DictConfig) -> dict:
             "data_sets": folders, "wall_s": wall}
 
 
+def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
+    """The steady (``robot_joint``) and profile (``robot_joint_motion``) data sets of every
+    output inertia of the map, checked before any work.
+
+    Raises
+    ------
+    ValueError
+        Naming the key (``j_out_kgm2``, ``n_j_out``, ``motion.*`` or a data-set key).
+    """
+    from learn.studies.observability import j_out_grid
+    from learn.studies.observability_motion import check_motion_map
+    from swgcli import dataset_preset
+    from swgsim.config import dataset_config
+    from swgsim.plan import plan
+
+    check_motion_map(OmegaConf.to_object(cfg.motion))
+    if cfg.j_out_kgm2 is None:
+        if not 2 <= int(cfg.n_j_out) <= 50:
+            raise ValueError(f"n_j_out: must be in [2, 50], got {cfg.n_j_out}")
+        values = [float(v) for v in j_out_grid(int(cfg.n_j_out))]
+    else:
+        values = [float(v) for v in cfg.j_out_kgm2]
+    out = {}
+    for j in values:
+        if not 1e-4 <= j <= 100.0:
+            raise ValueError(f"j_out_kgm2: {j} outside the allowed range [1e-4, 100] kg m²")
+        try:
+            out[j] = {k: plan(dataset_config(dataset_preset(name, [f"load.j_out_kgm2={j}"])))
+                      for k, name in (("steady", "robot_joint"), ("profile",
+                                                                  "robot_joint_motion"))}
+        except ValueError as e:
+            raise ValueError(f"{e} (data set of j_out_kgm2={j:.4g})") from None
+    return out
+
+
+def run_motion_map(cfg: DictConfig, rep: Path) -> dict:
+    """``map=motion``: steady windows against the joint in motion, with and without the
+    output encoder (:mod:`learn.studies.observability_motion`); writes
+    ``observability_motion.csv``, ``smallest_detectable.csv`` and
+    ``observability_motion.png`` into ``rep``."""
+    import pandas as pd
+    from tqdm.auto import tqdm
+
+    from learn.studies.observability_motion import (
+        motion_map_rows,
+        plot_motion_map,
+        smallest_detectable,
+    )
+    from swgsim import ownership
+    from swgsim.data import atomic_write_bytes
+
+    plans = motion_plans(cfg)
+    mc = OmegaConf.to_object(cfg.motion)
+    t0 = time.perf_counter()
+    parts = [motion_map_rows(p, j, mc) for j, p in tqdm(plans.items(), desc="motion map",
+                                                         unit="J_out",
+                                                         disable=not cfg.progress)]
+    table = pd.concat(parts, ignore_index=True)
+    small = smallest_detectable(table)
+    with ownership.claim(rep, "swgsim-observability") as claim:
+        files = {"csv": rep / "observability_motion.csv",
+                 "smallest": rep / "smallest_detectable.csv"}
+        atomic_write_bytes(files["csv"], table.to_csv(index=False, float_format="%.6g").encode())
+        atomic_write_bytes(files["smallest"], small.to_csv(index=False,
+                                                           float_format="%.6g").encode())
+        files["figure"] = plot_motion_map(table, rep / "observability_motion.png")
+        claim.record([files["figure"]])
+    return {"table": table, "smallest": small, "files": {k: str(v) for k, v in files.items()},
+            "data_sets": {}, "wall_s": time.perf_counter() - t0}
+
+
 @hydra_app("observability", ObservabilityApp, "swgsim-observability")
 def main(cfg: DictConfig) -> dict:
     """Run the map and print where it went and the share per fault and inertia."""
     out = run_observability(cfg)
     t = out["table"]
-    if len(t):
+    if "smallest" in out:
+        print("\nsmallest severity with half its windows beyond the healthy 95th percentile "
+              "(k1 left in brackets; '-': none up to the largest):")
+        s = out["smallest"].assign(cell=lambda d: [
+            "-" if np.isnan(a) else f"{a:g} ({b:.2f})"
+            for a, b in zip(d.smallest_severity, d.stiffness_left, strict=True)])
+        print(s.pivot_table(index=["fault", "view"], columns="j_out_kgm2", values="cell",
+                            aggfunc="first").to_string())
+    elif len(t):
         piv = (t[t["fault"] != "healthy"].groupby(["fault", "j_out_kgm2"])
                ["fraction_beyond_p95"].mean().unstack() * 100)
         print("\nshare of fault windows beyond the healthy 95th percentile [%], mean over "

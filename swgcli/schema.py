@@ -32,6 +32,7 @@ from omegaconf import MISSING, DictConfig, OmegaConf
 
 from learn.inputs.features import SELECTIONS, FeatureSettings
 from learn.monitor.rule import RuleConfig
+from learn.studies.observability_motion import MotionMapConfig
 from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions
@@ -91,6 +92,9 @@ class ObservabilityApp:
     harmonics: int = 8                       # harmonics of the WG angle in the separation
     plot_only: bool = False                  # redraw the figure from observability.csv
     progress: bool = True
+    map: str = "steady"                      # steady: the map above; motion: stiffness and
+    #                                          wear, steady windows against a joint in motion
+    motion: MotionMapConfig = field(default_factory=MotionMapConfig)  # design of map=motion
 
 
 @dataclass

@@ -1,0 +1,250 @@
+"""Observability of stiffness loss and wear: steady windows against a joint in motion.
+
+The steady map (:mod:`learn.studies.observability`) found reduced stiffness nearly
+invisible at every steady operating point: below the torsional mode the kinematic-error
+torque ripple changes with stiffness only as r²/(1 − r²). This study asks what a joint in
+motion adds, per output inertia J_out, for three views of the same gear:
+
+* ``steady``: windows at steady operating points (the ``robot_joint`` preset's recording at
+  :data:`STEADY_POINTS`), each window starting anywhere in an output revolution;
+* ``profile``: windows of the robot joint's raise-and-lower profile
+  (``robot_joint_motion``: accelerations ring the torsional mode, whose frequency moves
+  with √k, and the gravity load changes along the pose), with the input angle only (a
+  24-count Hall sensor; the features in the WG angle estimated from it);
+* ``profile + output encoder``: the same windows with a 20-bit output encoder, adding the
+  output twist (its mean and RMS: the torque over the stiffness, first order in k).
+
+Every window is a gear life's (:class:`swgsim.life.LifeSimulator`): its own start (steady:
+in an output revolution; profile: within the slot's jitter), eq. (10) draws and converter
+noise. Per window the monitor's health features (:func:`learn.monitor.evaluate.life_features`)
+are z-scored against healthy reference windows of the same operating point or slot, and
+its *separation* is the mean square z-score; a fault window is *beyond* when its separation
+exceeds the 95th percentile of healthy test windows' at its point (so a fault the features
+cannot see stays near 5 %). The smallest detectable loss of a view is the smallest
+severity with at least half its windows beyond (one window tells more often than not);
+the monitor accumulates evidence over windows and sees less than that.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from swgsim.life import DutyPoint, FaultOnset, LifeConfig, LifeSimulator
+
+#: Steady operating points of the ``steady`` view: (input speed [rpm], load [N m]), the
+#: robot profile's cruise speed order of magnitude at a light and a medium load.
+STEADY_POINTS = ((2000.0, 7.0), (2000.0, 39.0))
+VIEWS = ("steady", "profile", "profile + output encoder")
+COLUMNS = ("j_out_kgm2", "view", "fault", "severity", "stiffness_left", "fraction_beyond_p95",
+           "median_separation", "windows")
+
+
+@dataclass
+class MotionMapConfig:
+    """The motion study's design (``motion`` group of ``swgsim-observability``).
+
+    Attributes
+    ----------
+    windows : int
+        Windows per fault state and view, >= 20, spread over the operating points (steady)
+        or slots (profile); healthy gets twice as many per point (reference and test
+        halves: the reference's mean and spread and the test's 95th percentile per point
+        rest on ``windows`` windows each).
+    reduced_stiffness : list of float
+        Severities of ``reduced_stiffness`` (k1 × (1 − s)), within its range [0, 0.25].
+    wear : list of float
+        Severities of ``wear`` (k1, k2 × (1 − 0.75 s), backlash 3 arcmin × s), in [0, 1].
+    seed : int
+        Life seed of the windows.
+    """
+
+    windows: int = 120
+    reduced_stiffness: list[float] = field(default_factory=lambda: [0.05, 0.1, 0.15, 0.2, 0.25])
+    wear: list[float] = field(default_factory=lambda: [0.0667, 0.1333, 0.2, 0.3333, 0.6667,
+                                                       1.0])
+    seed: int = 0
+
+
+def check_motion_map(mc: MotionMapConfig, key: str = "motion") -> None:
+    """Refuse a design outside its ranges in one line naming the key.
+
+    Raises
+    ------
+    ValueError
+    """
+    if int(mc.windows) < 20:
+        raise ValueError(f"{key}.windows must be >= 20, got {mc.windows}")
+    for name, hi in (("reduced_stiffness", 0.25), ("wear", 1.0)):
+        bad = [s for s in getattr(mc, name) if not 0 < float(s) <= hi]
+        if bad or not getattr(mc, name):
+            raise ValueError(f"{key}.{name} must list severities in (0, {hi}], got "
+                             f"{getattr(mc, name)}")
+
+
+def plan_slots(plan):
+    """The slots of a profile data set (:func:`swgsim.life_profile.profile_slots`)."""
+    from swgsim.life_profile import profile_slots
+
+    return profile_slots(plan).starts
+
+
+def stiffness_left(fault: str, severity: float) -> float:
+    """k1 after the fault as a fraction of nominal [-] (swgsim.faults)."""
+    if fault == "reduced_stiffness":
+        return 1.0 - severity
+    if fault == "wear":
+        return 1.0 - 0.75 * severity
+    return 1.0
+
+
+def _windows(plan, fault: str, severity: float, n: int, seed: int, steady: bool):
+    """Features, operating points and, for a profile, the same windows' features without
+    the output encoder: n windows of one state, cycling through the points or slots."""
+    from learn.monitor.evaluate import life_features
+
+    iv = 1.0
+    duty = [DutyPoint(s, t, iv) for s, t in STEADY_POINTS] if steady else []
+    c0 = iv / 60.0
+    fo = FaultOnset(fault, c0, severity) if fault != "healthy" else FaultOnset()
+    life = LifeConfig(hours=(n + 1) * c0, interval_min=iv, commissioning_h=c0, duty=duty,
+                      fault=fo, life_seed=seed, severity_levels=1)
+    sim = LifeSimulator(plan, 1, life)
+    sig, meta = sim.windows(1, len(sim))
+    pts = np.stack([meta["n_in_rpm"], meta["t_out_nm"]], axis=1)
+    with_enc = life_features(plan, sig, meta)
+    if steady:
+        return {"steady": with_enc}, pts
+    no_enc = life_features(plan, sig, {k: v for k, v in meta.items() if k != "phi_out_meas"})
+    return {"profile + output encoder": with_enc, "profile": no_enc}, pts
+
+
+def separations(ref: np.ndarray, ref_pts: np.ndarray, x: np.ndarray, pts: np.ndarray
+                ) -> np.ndarray:
+    """Mean square z-score of windows ``x`` (n, F) against the reference windows of their
+    operating point [-], shape (n,).
+
+    Raises
+    ------
+    ValueError
+        A window's point without reference windows.
+    """
+    out = np.empty(len(x))
+    for p in np.unique(pts, axis=0):
+        r, m = ref[(ref_pts == p).all(axis=1)], (pts == p).all(axis=1)
+        if len(r) < 3:
+            raise ValueError(f"operating point {tuple(p)}: {len(r)} reference windows")
+        z = (x[m] - r.mean(axis=0)) / np.maximum(r.std(axis=0, ddof=1), 1e-12)
+        out[m] = np.mean(z ** 2, axis=1)
+    return out
+
+
+def motion_map_rows(plans: dict[str, object], j_out: float, mc: MotionMapConfig
+                    ) -> pd.DataFrame:
+    """The map's rows at one output inertia.
+
+    Parameters
+    ----------
+    plans : dict
+        ``steady``: the steady data set (robot_joint at this J_out), ``profile``: the
+        profile data set with an output encoder (robot_joint_motion at this J_out).
+    j_out : float
+        [kg m²].
+    mc : MotionMapConfig
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`COLUMNS`, one row per (view, fault, severity), healthy included.
+    """
+    rows = []
+    states = [("reduced_stiffness", s) for s in mc.reduced_stiffness] + [
+        ("wear", s) for s in mc.wear]
+    for kind, plan in (("steady", plans["steady"]), ("profile", plans["profile"])):
+        steady = kind == "steady"
+        n_pts = len(STEADY_POINTS) if steady else len(plan_slots(plan))
+        hf, hp = _windows(plan, "healthy", 0.0, 2 * mc.windows * n_pts, mc.seed, steady)
+        half = _alternate(hp)  # reference and test halves, every point in both
+        views = {v: (f[half], hp[half]) for v, f in hf.items()}
+        thr = {}
+        for v, f in hf.items():
+            s = separations(*views[v], f[~half], hp[~half])
+            thr[v] = {tuple(p): np.percentile(s[(hp[~half] == p).all(axis=1)], 95)
+                      for p in np.unique(hp, axis=0)}
+            rows.append(_row(j_out, v, "healthy", 0.0, s, hp[~half], thr[v]))
+        for fault, sev in states:
+            ff, fp = _windows(plan, fault, sev, mc.windows, mc.seed + 1, steady)
+            for v, f in ff.items():
+                rows.append(_row(j_out, v, fault, sev, separations(*views[v], f, fp), fp,
+                                 thr[v]))
+    return pd.DataFrame(rows, columns=list(COLUMNS))
+
+
+def _alternate(pts: np.ndarray) -> np.ndarray:
+    """True for every other window of each operating point, shape (n,)."""
+    out = np.zeros(len(pts), bool)
+    for p in np.unique(pts, axis=0):
+        idx = np.flatnonzero((pts == p).all(axis=1))
+        out[idx[::2]] = True
+    return out
+
+
+def _row(j_out, view, fault, sev, s, pts, thr) -> dict:
+    beyond = np.array([si > thr[tuple(p)] for si, p in zip(s, pts, strict=True)])
+    return {"j_out_kgm2": float(j_out), "view": view, "fault": fault, "severity": float(sev),
+            "stiffness_left": stiffness_left(fault, sev),
+            "fraction_beyond_p95": float(beyond.mean()),
+            "median_separation": float(np.median(s)), "windows": int(len(s))}
+
+
+def plot_motion_map(table: pd.DataFrame, path):
+    """Share of windows beyond the healthy 95th percentile against the stiffness left, one
+    panel per fault, one colour per view, one line style per output inertia; returns the
+    path."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    faults = ["reduced_stiffness", "wear"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    colour = dict(zip(VIEWS, ("tab:grey", "tab:blue", "tab:red"), strict=True))
+    js = sorted(table.j_out_kgm2.unique())
+    styles = ["-", "--", ":", "-.", (0, (1, 4)), (0, (5, 1))]
+    for ax, f in zip(axes, faults, strict=True):
+        for v in VIEWS:
+            for i, j in enumerate(js):
+                g = table[(table.fault == f) & (table.view == v) & (table.j_out_kgm2 == j)]
+                ax.plot(g.stiffness_left, 100 * g.fraction_beyond_p95, marker="o", ms=3,
+                        color=colour[v], ls=styles[i % len(styles)],
+                        label=f"{v}, J_out {j:.3g}" if f == faults[0] else None)
+        ax.axhline(5, color="k", lw=0.6)
+        ax.axhline(50, color="k", lw=0.6, ls=":")
+        ax.invert_xaxis()
+        ax.set(title=f.replace("_", " "), xlabel="k1 left [fraction of nominal]")
+    axes[0].set_ylabel("fault windows beyond healthy p95 [%]")
+    fig.legend(loc="lower center", ncol=3, fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.18, 1, 1))
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def smallest_detectable(table: pd.DataFrame, level: float = 0.5) -> pd.DataFrame:
+    """Per (J_out, view, fault): the smallest severity (and the stiffness left) with at least
+    ``level`` of its windows beyond the healthy 95th percentile; NaN where none is."""
+    out = []
+    for (j, v, f), g in table[table.fault != "healthy"].groupby(
+            ["j_out_kgm2", "view", "fault"], sort=False):
+        ok = g[g.fraction_beyond_p95 >= level].sort_values("severity")
+        out.append({"j_out_kgm2": j, "view": v, "fault": f,
+                    "smallest_severity": float(ok.severity.iloc[0]) if len(ok) else np.nan,
+                    "stiffness_left": float(ok.stiffness_left.iloc[0]) if len(ok) else np.nan})
+    return pd.DataFrame(out)
+
+
+__all__ = ["COLUMNS", "STEADY_POINTS", "VIEWS", "MotionMapConfig", "check_motion_map",
+           "motion_map_rows", "plot_motion_map", "separations", "smallest_detectable",
+           "stiffness_left"]
