@@ -152,6 +152,12 @@ def one_line(exc: BaseException) -> str | None:
         key = getattr(cause, "full_key", None)
         msg = str(getattr(cause, "msg", cause)).splitlines()[0]
         return f"{key}: {msg}" if key else msg
+    m = re.search(r"full_key: (\S+)", str(cause))  # OmegaConf's own error while merging
+    if m and isinstance(cause, AttributeError) and "'NoneType'" in str(cause):
+        key = m.group(1)
+        return (f"{key}: is null in this preset, and OmegaConf cannot merge a whole section "
+                f"into a null one from the command line; set {key} in a data-set preset "
+                "(conf/dataset/*.yaml, e.g. tiny_life.yaml) and select it with dataset=...")
     if isinstance(exc, (ConfigCompositionException, MissingConfigException)):
         text = str(exc).split("Config search path:")[0]
         lines = [s.strip() for s in text.splitlines() if s.strip()]

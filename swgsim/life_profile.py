@@ -71,12 +71,21 @@ class Slots:
 
 
 def profile_slots(plan) -> Slots:
-    """The slots of a profile data set (module docstring).
+    """The slots of a profile data set (module docstring; :func:`slots_of` of its plan)."""
+    return slots_of(plan.config, plan.profile, plan.shards[0].window_starts_s)
+
+
+def slots_of(cfg, profile: pf.Profile, starts_s) -> Slots:
+    """The slots of a profile (module docstring).
 
     Parameters
     ----------
-    plan : DatasetPlan
-        With a profile.
+    cfg : DatasetConfig
+        With a profile (its chain, its first gear's ratio).
+    profile : swgsim.profile.Profile
+        The checked profile.
+    starts_s : sequence of float
+        The data set's window starts [s].
 
     Returns
     -------
@@ -90,16 +99,15 @@ def profile_slots(plan) -> Slots:
     """
     from .plan import gear_params
 
-    cfg = plan.config
     fs = float(cfg.chain.sample_rate_hz)
     n_t = int(round(cfg.chain.window_s * fs))
-    n_jit = jitter_samples(plan)
-    starts = np.round(np.asarray(plan.shards[0].window_starts_s) * fs).astype(np.int64)
+    n_jit = int(round(START_JITTER_S * fs))
+    starts = np.round(np.asarray(starts_s) * fs).astype(np.int64)
     t = np.arange(int(starts.max()) + n_t + n_jit + 1) / fs
-    w_d, _ = pf.speed_at(plan.profile, t)  # [rad/s]
+    w_d, _ = pf.speed_at(profile, t)  # [rad/s]
     ratio = float(gear_params(cfg, cfg.gears[0]).gear.ratio)
     q_d = np.concatenate([[0.0], np.cumsum((w_d[1:] + w_d[:-1]) / 2) / fs]) / ratio
-    load = np.broadcast_to(pf.load_at(plan.profile.load, t, q=q_d, q_dot=w_d / ratio,
+    load = np.broadcast_to(pf.load_at(profile.load, t, q=q_d, q_dot=w_d / ratio,
                                       ratio=ratio), t.shape)
     keep, n_mean, t_mean = [], [], []
     for s in starts:
@@ -196,4 +204,4 @@ def record_bank(plan, gear_id: int) -> RecordBank:
 
 
 __all__ = ["MIN_WG_REVOLUTIONS", "START_JITTER_S", "ProfileRecordBank", "Slots", "jitter_samples",
-           "profile_slots", "record_bank"]
+           "profile_slots", "record_bank", "slots_of"]

@@ -73,9 +73,11 @@ class ShardSpec:
     def n_windows(self) -> int:
         """Windows written: the grid's clean and disturbed twins, the life's, or every
         variant's cuts of a profile."""
+        if self.n_life_windows:
+            return self.n_life_windows
         if self.window_starts_s:
             return len(self.windows) * len(self.window_starts_s)
-        return 2 * len(self.windows) + self.n_life_windows
+        return 2 * len(self.windows)
 
 
 @dataclass(frozen=True)
@@ -501,19 +503,30 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     variants = _variants(cfg)
     _check_layout(cfg)
     faults = {name: get_fault(name) for name in ("healthy", *variants)}
-    _req(cfg.life is None or cfg.profile is None,
-         "dataset.profile: give either dataset.life or dataset.profile, not both")
-    if cfg.profile is not None:
+    if cfg.life is not None:
+        shards = _life_shards(cfg, prof, starts)
+    elif cfg.profile is not None:
         shards = _profile_shards(cfg, variants, starts)
-    elif cfg.life is not None:
-        check_life(cfg.life)
-        ops = cfg.operating_points
-        n = len(schedule(cfg.life, list(ops.n_in_rpm), list(ops.t_out_nm)).hour)
-        shards = tuple(ShardSpec(f"gear{int(g.id)}_life.nc", int(g.id), 0, float("nan"), (), n)
-                       for g in cfg.gears)
     else:
         shards = _shards(cfg, variants)
     return DatasetPlan(cfg, shards, faults, effects, friction, config_hash(cfg), prof)
+
+
+def _life_shards(cfg: DatasetConfig, prof, starts: tuple[float, ...]) -> tuple[ShardSpec, ...]:
+    """One shard per gear holding its life; on a profile (the duty cycle is the profile,
+    swgsim.life_profile) with the profile's window starts, and no duty points of its own."""
+    check_life(cfg.life)
+    ops = cfg.operating_points
+    life = cfg.life
+    if prof is not None:
+        _req(not life.duty, "dataset.life.duty must be empty with dataset.profile: the "
+                            "profile is the life's duty cycle")
+        from .life_profile import slots_of
+
+        slots_of(cfg, prof, starts)  # refused here if no window of the profile turns enough
+    n = len(schedule(life, list(ops.n_in_rpm), list(ops.t_out_nm)).hour)
+    return tuple(ShardSpec(f"gear{int(g.id)}_life.nc", int(g.id), 0, float("nan"), (), n,
+                           starts) for g in cfg.gears)
 
 
 # ------------------------------------------------------------- per-gear parameters

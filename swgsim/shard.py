@@ -318,12 +318,12 @@ def simulate_shard(plan: DatasetPlan, shard: ShardSpec,
     simulating every window on its own.
     """
     cfg = plan.config
-    if plan.profile is not None:
-        return simulate_profile_shard(plan, shard, influences)
-    if cfg.life is not None:
+    if cfg.life is not None:  # a gear's life, at steady points or along the profile
         from .life import simulate_life_shard
 
         return simulate_life_shard(plan, shard)
+    if plan.profile is not None:
+        return simulate_profile_shard(plan, shard, influences)
     gear = plan.gear(shard.gear)
     amp = cfg.acquisition.amplifier
     q = 1 if amp is None else amp.oversample

@@ -139,3 +139,19 @@ def test_a_profile_stream_gives_the_lifes_features_and_a_model_mismatch_is_named
                                          r"\(with an output encoder's twist\); the model "
                                          r"was trained on 71$"):
         check_stream(back, model, RuleConfig())
+
+
+def test_a_life_on_a_profile_is_a_data_set_and_its_duty_is_the_profile(tmp_path):
+    from swgsim.data import load
+    from swgsim.generate import generate
+
+    cfg = dataset_config(dataset_preset("tiny_motion_life"))
+    s = generate(cfg, tmp_path / "life", n_jobs=1, progress=False)
+    assert s["complete"] and s["windows"] == 60
+    ds = load(tmp_path / "life")
+    assert ds["phi_out_meas"].shape == (60, 700)
+    assert set(ds["fault"].values[ds["hour"].values >= 0.75]) == {"wear"}
+    bad = dataset_config(dataset_preset("tiny_motion_life", ["life.duty=[{n_in_rpm: 2000}]"]))
+    with pytest.raises(ValueError, match=r"^dataset.life.duty must be empty with "
+                                         r"dataset.profile"):
+        plan(bad)

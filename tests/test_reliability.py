@@ -277,6 +277,7 @@ def _app(name, *args, env=None, cwd=None):
 
 @pytest.mark.parametrize("app, args, words", [
     ("swgsim-generate", ["dataset=tiny", "+dataset.chain.windows_s=1"], "windows_s"),
+    ("swgsim-generate", ["dataset=tiny", "dataset.life={hours: 1.0}"], "dataset.life: is null"),
     ("swgsim-train", ["stored.path=/nowhere/data", "~logger"], "/nowhere/data"),
     ("swgsim-calibrate", ["measured=/nowhere/x.csv", "out_dir=out"], "/nowhere/x.csv"),
 ])
