@@ -32,7 +32,7 @@ def compose_app(config_name: str, overrides: list[str] | tuple[str, ...] = ()):
 
     Parameters
     ----------
-    config_name : {"generate", "paper", "train", "calibrate", "observability", "monitor"}
+    config_name : {"generate", "paper", "train", "calibrate", "observability", "monitor", "export"}
     overrides : sequence of str
         Hydra overrides, e.g. ``["dataset=tiny", "n_jobs=1"]``.
 
@@ -54,7 +54,8 @@ def compose_app(config_name: str, overrides: list[str] | tuple[str, ...] = ()):
 
     # the app's module registers its schema (the calibration app's loads its stack)
     module = importlib.import_module(f"swgcli.{config_name}") if config_name in (
-        "generate", "paper", "train", "calibrate", "observability", "monitor") else None
+        "generate", "paper", "train", "calibrate", "observability", "monitor",
+        "export") else None
     with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
         cfg = compose(config_name=config_name, overrides=list(overrides))
     if module is not None:
