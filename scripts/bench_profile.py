@@ -1,4 +1,4 @@
-"""Benchmark: cost of a profile window (``dynamics.simulate_profile``) against a steady
+"""Benchmark: cost of a profile window (``profile_dynamics.simulate_profile``) against a steady
 window of the same length (``dynamics.simulate``), the issue's target being a profile
 window at most twice a steady one (docs/PHYSICS.md sec. 1.8).
 
@@ -23,6 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from swgsim import dynamics as dy  # noqa: E402
 from swgsim import profile as pf  # noqa: E402
+from swgsim import profile_dynamics as pd  # noqa: E402
 
 
 def best_of(fn, repeat: int) -> float:
@@ -70,7 +71,7 @@ def main(argv: list[str] | None = None) -> dict:
           f"{a.sample_rate_hz:g} Hz, {a.substeps} substep): {steady * 1e3:.1f} ms")
     ratios = {}
     for name, prof in cases(a.window_s).items():
-        t = best_of(lambda prof=prof: dy.simulate_profile(params, prof, duration_s=a.window_s,
+        t = best_of(lambda prof=prof: pd.simulate_profile(params, prof, duration_s=a.window_s,
                                                           **kw), a.repeat)
         ratios[name] = t / steady
         print(f"profile window, {name}: {t * 1e3:.1f} ms = {t / steady:.2f} x steady")

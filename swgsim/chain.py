@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import dynamics
+from . import dynamics, profile_dynamics
 from .faults import ChainParams, angle_index, mesh_severity
 from .flexspline import FlexsplineGeometry, Mesh, TrussModel, factorize
 from .influence import (
@@ -208,7 +208,7 @@ class SimulationChain:
                          feedforward: bool = False):
         """Simulate variants along an operating profile, recorded from t = 0.
 
-        Runs :func:`swgsim.dynamics.simulate_profile` at the chain's sample rate and
+        Runs :func:`swgsim.profile_dynamics.simulate_profile` at the chain's sample rate and
         substeps and maps the recorded motion to the bridge signals with
         :meth:`signals_batch`: ψ = φ_in − φ_out from the states and the acting output
         torque t_out = c T_stiff − T_fric / sin α of the recorded states, the same
@@ -234,18 +234,18 @@ class SimulationChain:
         -------
         signals : ndarray, shape (V, 5, n_t)
             s0..s4 [mV/V] at times ``result.time`` (from t = 0, transients included).
-        result : dynamics.ProfileResult
+        result : profile_dynamics.ProfileResult
 
         Raises
         ------
         ValueError
             A profile beyond the catalogue limits or an unstable step
-            (:func:`swgsim.dynamics.simulate_profile`).
+            (:func:`swgsim.profile_dynamics.simulate_profile`).
         RuntimeError
             If the integration diverged (naming the profile).
         """
         st = self.settings
-        res = dynamics.simulate_profile([v.gear for v in variants], profile, phi_in0,
+        res = profile_dynamics.simulate_profile([v.gear for v in variants], profile, phi_in0,
                                         st.sample_rate_hz, duration_s, st.substeps,
                                         feedforward)
         if not res.success:

@@ -3,7 +3,7 @@
 A joint that repeats one motion (``dataset.profile``: moves, dwells, a gravity load)
 returns to the same pose every cycle, so each state of the gear (healthy, a fault at one
 severity and position) is simulated once along the whole profile
-(:func:`swgsim.dynamics.simulate_profile`, as a profile data set's shard,
+(:func:`swgsim.profile_dynamics.simulate_profile`, as a profile data set's shard,
 :mod:`swgsim.shard`) and every window of the life is a cut of that motion. The cuts are the
 data set's window starts, those in which the wave generator turns at least
 :data:`MIN_WG_REVOLUTIONS` revolutions one way (*slots*), each window starting up to
@@ -31,8 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import dynamics
 from . import profile as pf
+from . import profile_dynamics
 from .acquisition import sample, start_angles
 from .angles import measure_angles
 from .life import DutyPoint, RecordBank
@@ -163,7 +163,7 @@ class ProfileRecordBank(RecordBank):
                                    self.healthy.gear.ratio), 2 * np.pi)
         starts = self.slots.starts
         n_rec = int(starts.max()) + n_t + n_lead + 1
-        res = dynamics.simulate_profile([p.gear for p in params], self.plan.profile,
+        res = profile_dynamics.simulate_profile([p.gear for p in params], self.plan.profile,
                                         np.full(len(keys), phi0[0]), fs, n_rec / fs,
                                         ch.substeps, cfg.profile.feedforward)
         if not res.success:

@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from . import dynamics
 from . import profile as pf
+from . import profile_dynamics
 from .acquisition import check_acquisition
 from .config import (
     DatasetConfig,
@@ -349,7 +349,7 @@ def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
         except ValueError as e:
             raise ValueError(_profile_key(str(e), pc)) from None
         try:
-            dynamics.check_standstill_step([p], prof, step)
+            profile_dynamics.check_standstill_step([p], prof, step)
         except ValueError as e:
             raise ValueError(f"dataset.chain.substeps={ch.substeps} at dataset.chain."
                              f"sample_rate_hz={ch.sample_rate_hz:g} Hz, dataset.gears[{i}]: "

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from . import data as dsio
-from . import dynamics
+from . import dynamics, profile_dynamics
 from .acquisition import acquire, start_angles
 from .angles import measure_angles
 from .chain import SimulationChain
@@ -358,7 +358,7 @@ class ProfileMotion:
         One per variant (``shard.windows``).
     phi0 : ndarray, shape (V,)
         Input angle at the profile's start [rad].
-    res : dynamics.ProfileResult
+    res : profile_dynamics.ProfileResult
         The motion from t = 0 at the data rate.
     starts : ndarray of int, shape (W,)
         First sample of each window in ``res``.
@@ -366,7 +366,7 @@ class ProfileMotion:
 
     params: list[ChainParams]
     phi0: np.ndarray
-    res: dynamics.ProfileResult
+    res: profile_dynamics.ProfileResult
     starts: np.ndarray
 
 
@@ -410,7 +410,7 @@ def profile_motion(plan: DatasetPlan, shard: ShardSpec,
               for w in shard.windows]
     starts = np.round(np.asarray(shard.window_starts_s) * fs).astype(np.int64)
     n_rec = int(starts.max()) + n_t + n_lead + 1
-    res = dynamics.simulate_profile([p.gear for p in params], plan.profile, phi0, fs,
+    res = profile_dynamics.simulate_profile([p.gear for p in params], plan.profile, phi0, fs,
                                     n_rec / fs, ch.substeps, cfg.profile.feedforward)
     if not res.success:
         raise ValueError(diverged(plan, f"shard {shard.name} (gear {shard.gear}, profile)",

@@ -1,7 +1,7 @@
 """Angle channels (swgsim/angles.py): quantisation in closed form, ψ and the twist from the
 recorded channels against the simulated states (dynamics.simulate at 2000 rpm, bench
 output inertia), and the edge-interpolated ψ of a coarse Hall sensor at steady speed and
-along a reversal (dynamics.simulate_profile).
+along a reversal (profile_dynamics.simulate_profile).
 
 Tolerances are closed-form bounds; the figures reached are quoted in each test
 (python -m pytest tests/test_angles.py).
@@ -15,6 +15,7 @@ import pytest
 from swgsim import angles as an
 from swgsim import dynamics as dy
 from swgsim import profile as pf
+from swgsim import profile_dynamics as pd
 
 N = 100.0
 DT = 1e-4  # sample interval of simulate's default 10 kHz [s]
@@ -117,7 +118,7 @@ def test_edge_interpolated_psi_along_a_reversal():
     within one count; reached 0.009)."""
     p = dy.rt1_size20()
     sp = pf.SpeedProfile(1000.0, (pf.Hold(0.02), pf.Move(-1000.0, 2e4), pf.Hold(0.02)))
-    r = dy.simulate_profile([p], pf.Profile(sp, pf.LoadSteps(7.0, ((0.01, 39.0),))), 0.3)
+    r = pd.simulate_profile([p], pf.Profile(sp, pf.LoadSteps(7.0, ((0.01, 39.0),))), 0.3)
     hall = an.InputAngleSensor()
     res_rad = hall.resolution_rad
     m = an.measure_angles(r, input_sensor=hall)

@@ -1,4 +1,4 @@
-"""Operating profiles in the dynamic model (swgsim/profile.py, dynamics.simulate_profile):
+"""Operating profiles in the dynamic model (swgsim/profile.py, profile_dynamics.simulate_profile):
 closed forms of the speed profile, the steady case against ``simulate``, the ring-down
 after a load step against the linearised torsional mode, the energy balance along a
 reversal with a load step, and the catalogue limits.
@@ -16,6 +16,7 @@ from test_dynamics import power_terms
 
 from swgsim import dynamics as dy
 from swgsim import profile as pf
+from swgsim import profile_dynamics as pd
 
 
 def test_speed_profile_matches_the_trapezoid_closed_forms():
@@ -49,7 +50,7 @@ def test_steady_profile_reproduces_simulate():
     p = dy.rt1_size20()
     q = dataclasses.replace(p, k1_nm_per_rad=0.8 * p.k1_nm_per_rad)
     prof = pf.Profile(pf.SpeedProfile(2000.0, (pf.Hold(0.03),)), pf.ConstantLoad(39.0))
-    res = dy.simulate_profile([p, q], prof, [0.3, 1.0], substeps=2)
+    res = pd.simulate_profile([p, q], prof, [0.3, 1.0], substeps=2)
     ref = dy.simulate([p, q], 2000.0, 39.0, [0.3, 1.0], window_s=0.03, settle_s=0.0,
                       substeps=2)
     for name in ("states", "t_out", "p_in", "p_out"):
@@ -98,7 +99,7 @@ def ring_down(p: dy.GearParams, dec: int):
     fs, t_s = 20e3, 0.01
     prof = pf.Profile(pf.SpeedProfile(2000.0, (pf.Hold(t_s + 8.5 * tau),)),
                       pf.LoadSteps(7.0, ((t_s, 39.0),)))
-    res = dy.simulate_profile([p], prof, 0.0, sample_rate_hz=fs, substeps=1)
+    res = pd.simulate_profile([p], prof, 0.0, sample_rate_hz=fs, substeps=1)
     assert res.t_out[0, int(t_s * fs) - 1] == pytest.approx(7.0, rel=1e-9)  # steady before
     i0, i1 = int(round((t_s + 2 * tau) * fs)), int(round((t_s + 8 * tau) * fs))
     lam, amp = modes(res.t_out[0, i0:i1:dec] - 39.0, dec / fs, 6)
@@ -111,7 +112,7 @@ def _energy_residual(p, prof, fs, t_s, tl_steps):
     feed-forward: the module docstring's balance with the time-varying load power
     P_load = T_L(t) q̇, q̇ = −ω_out; P_in = T_m ω_in from the profile's closed forms.
     Integrated piecewise between the corners and the load step (all on the sample grid)."""
-    res = dy.simulate_profile([p], prof, 0.3, sample_rate_hz=fs, substeps=1, feedforward=True)
+    res = pd.simulate_profile([p], prof, 0.3, sample_rate_hz=fs, substeps=1, feedforward=True)
     e = power_terms(p, res, np.zeros(1))
     tk, nk = prof.speed.knots()
     w_in, integ, w_out = res.states[1, 0], res.states[4, 0], res.states[3, 0]
@@ -175,7 +176,7 @@ def test_gravity_link_is_held_at_standstill():
     cruise = (10.0 - 500 * dy.RPM * 0.05) / (500 * dy.RPM)
     sp = pf.SpeedProfile(0.0, (pf.Move(500.0, 1e4), pf.Hold(cruise), pf.Move(0.0, 1e4),
                                pf.Hold(0.5)))
-    res = dy.simulate_profile([p], pf.Profile(sp, link), 0.0, sample_rate_hz=5e3,
+    res = pd.simulate_profile([p], pf.Profile(sp, link), 0.0, sample_rate_hz=5e3,
                               substeps=1)
     assert res.success
     q = -res.states[2, 0]
@@ -218,7 +219,7 @@ def test_profile_beyond_the_limits_is_refused(profile, key):
     """Refused before any work in one line naming the key and the limit; the acceleration
     limit for the robot link (0.69 kg m²) with 7 N m: (107 - 7) N / (J_out 2π/60)."""
     with pytest.raises(ValueError, match=key) as err:
-        dy.simulate_profile([dy.rt1_size20(j_out_kgm2=0.69)], profile, duration_s=0.01)
+        pd.simulate_profile([dy.rt1_size20(j_out_kgm2=0.69)], profile, duration_s=0.01)
     assert "\n" not in str(err.value)
 
 
@@ -228,5 +229,5 @@ def test_unstable_step_at_standstill_is_refused():
     sp = pf.SpeedProfile(1000.0, (pf.Move(-1000.0, 1e5),))
     prof = pf.Profile(sp, pf.LoadSteps(39.0))
     with pytest.raises(ValueError, match="substeps: the RK4 step"):
-        dy.simulate_profile([dy.rt1_size20()], prof, substeps=1)
-    assert dy.simulate_profile([dy.rt1_size20()], prof, substeps=2).success
+        pd.simulate_profile([dy.rt1_size20()], prof, substeps=1)
+    assert pd.simulate_profile([dy.rt1_size20()], prof, substeps=2).success

@@ -10,8 +10,8 @@ import pytest
 
 from swgcli import dataset_preset
 from swgsim import data as dsio
-from swgsim import dynamics
 from swgsim import generate as gen
+from swgsim import profile_dynamics
 from swgsim.angles import psi_estimate
 from swgsim.config import DatasetConfig, dataset_config
 from swgsim.plan import plain_config, plan
@@ -112,7 +112,7 @@ def test_bad_profile_refused_before_work(tmp_path, monkeypatch, override, key):
     def no_work(*a, **k):
         raise AssertionError("simulated before the config was checked")
 
-    monkeypatch.setattr(dynamics, "simulate_profile", no_work)
+    monkeypatch.setattr(profile_dynamics, "simulate_profile", no_work)
     with pytest.raises(ValueError, match=r"^" + key.replace("[", r"\[").replace("]", r"\]")):
         gen.generate(cfg, tmp_path / "bad", n_jobs=1, progress=False)
     assert not (tmp_path / "bad" / "manifest.json").exists()

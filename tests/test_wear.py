@@ -16,6 +16,7 @@ from test_profile import ring_down
 
 from swgsim import dynamics as dy
 from swgsim import profile as pf
+from swgsim import profile_dynamics as pd
 from swgsim.faults import (
     FAULTS,
     PAPER_CLASSES,
@@ -69,7 +70,7 @@ def test_quasi_static_torque_twist_curve_has_the_closed_form_dead_zone():
     steps = tuple(((i + 1) * hold, t) for i, t in enumerate(loads[1:]))
     prof = pf.Profile(pf.SpeedProfile(0.0, (pf.Hold(hold * len(loads)),)),
                       pf.LoadSteps(loads[0], steps))
-    res = dy.simulate_profile([p, q], prof, 0.0, sample_rate_hz=fs, substeps=1)
+    res = pd.simulate_profile([p, q], prof, 0.0, sample_rate_hz=fs, substeps=1)
     ends = [int(round((i + 1) * hold * fs)) - 1 for i in range(len(loads))]
     tw_p = twist(p, res.states[:, 0])[ends]
     tw_q = twist(q, res.states[:, 1])[ends]
@@ -89,7 +90,7 @@ def test_quasi_static_torque_twist_curve_has_the_closed_form_dead_zone():
 
 def tangent_stiffness(p: dy.GearParams, t_out: float, n_in: float = 2000.0) -> float:
     """k1 + 3 k2 d² at the steady twist d of ``steady_state`` [N m/rad]."""
-    b = dy._ke_batch(dy.Batch.of([p]))
+    b = dy.ke_batch(dy.Batch.of([p]))
     x = dy.steady_state(b, np.array([n_in * dy.RPM]), np.array([t_out]), np.array([0.0]))
     d = abs(float(twist(p, x[:, 0]))) - p.backlash_twist_rad / 2
     return p.k1_nm_per_rad + 3 * p.k2_nm_per_rad3 * d * d
@@ -159,7 +160,7 @@ def test_backlash_zero_runs_the_backlash_free_arithmetic():
                         settle_s=0.01)
     mixed = dy.simulate([p, q, worn(1.0)], [2000.0, 4000.0, 2000.0], [7.0, 39.0, 7.0],
                         [0.3, 1.0, 0.0], window_s=0.01, settle_s=0.01)
-    assert "half_gap" not in dy._ke_batch(dy.Batch.of([p, q])).fields
+    assert "half_gap" not in dy.ke_batch(dy.Batch.of([p, q])).fields
     np.testing.assert_array_equal(mixed.states[:, :2], alone.states)
     np.testing.assert_array_equal(mixed.t_out[:2], alone.t_out)
     with pytest.raises(ValueError, match="backlash_rad"):
@@ -171,7 +172,7 @@ def test_steady_state_shifts_the_twist_by_half_the_gap():
     direction (exact up to rounding)."""
     p = worn(1.0)
     q = dataclasses.replace(p, backlash_rad=0.0)
-    b = dy._ke_batch(dy.Batch.of([p, q]))
+    b = dy.ke_batch(dy.Batch.of([p, q]))
     x = dy.steady_state(b, np.full(2, 2000 * dy.RPM), np.full(2, 39.0), np.zeros(2))
     shift = twist(p, x[:, 0]) - twist(q, x[:, 1])
     assert shift == pytest.approx(p.backlash_twist_rad / 2, rel=1e-9)
