@@ -149,8 +149,9 @@ def run_observability(cfg: DictConfig) -> dict:
 
 
 def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
-    """The steady (``robot_joint``) and profile (``robot_joint_motion``) data sets of every
-    output inertia of the map, checked before any work.
+    """The steady (``motion_steady``, preset ``robot_joint``) and profile
+    (``motion_profile``, preset ``robot_joint_motion``) data sets of every output inertia
+    of the map, checked before any work.
 
     Raises
     ------
@@ -159,9 +160,7 @@ def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
     """
     from learn.studies.observability import j_out_grid
     from learn.studies.observability_motion import check_motion_map
-    from swgcli import dataset_preset
-    from swgsim.config import dataset_config
-    from swgsim.plan import plan
+    from swgsim.plan import min_settle_s, plan
 
     check_motion_map(OmegaConf.to_object(cfg.motion))
     if cfg.j_out_kgm2 is None:
@@ -174,12 +173,19 @@ def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
     for j in values:
         if not 1e-4 <= j <= 100.0:
             raise ValueError(f"j_out_kgm2: {j} outside the allowed range [1e-4, 100] kg m²")
-        try:
-            out[j] = {k: plan(dataset_config(dataset_preset(name, [f"load.j_out_kgm2={j}"])))
-                      for k, name in (("steady", "robot_joint"), ("profile",
-                                                                  "robot_joint_motion"))}
-        except ValueError as e:
-            raise ValueError(f"{e} (data set of j_out_kgm2={j:.4g})") from None
+        out[j] = {}
+        for k in ("steady", "profile"):
+            c = copy.deepcopy(OmegaConf.to_object(cfg[f"motion_{k}"]))
+            c.load.j_out_kgm2 = j
+            if k == "steady":  # as the steady map: settled where the mode rings longer
+                need = math.ceil(min_settle_s(c) * 100 - 1e-9) / 100
+                c.chain.settle_s = max(float(c.chain.settle_s), need)
+            try:
+                out[j][k] = plan(c)
+            except ValueError as e:
+                m = str(e)
+                m = f"motion_{k}.{m[8:]}" if m.startswith("dataset.") else f"motion_{k}: {m}"
+                raise ValueError(f"{m} (data set of j_out_kgm2={j:.4g})") from None
     return out
 
 

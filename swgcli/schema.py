@@ -95,6 +95,8 @@ class ObservabilityApp:
     map: str = "steady"                      # steady: the map above; motion: stiffness and
     #                                          wear, steady windows against a joint in motion
     motion: MotionMapConfig = field(default_factory=MotionMapConfig)  # design of map=motion
+    motion_steady: DatasetConfig = field(default_factory=DatasetConfig)   # preset robot_joint
+    motion_profile: DatasetConfig = field(default_factory=DatasetConfig)  # robot_joint_motion
 
 
 @dataclass

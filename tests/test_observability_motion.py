@@ -46,12 +46,18 @@ def test_bad_designs_are_refused_naming_the_key(change, key):
         check_motion_map(MotionMapConfig(**change))
 
 
-def test_the_app_refuses_an_unknown_map(tmp_path):
+def test_the_app_refuses_an_unknown_map_and_names_a_bad_preset_key(tmp_path):
     from swgcli import compose_app
     from swgcli.observability import run_observability
 
     cfg = compose_app("observability", ["map=steadyy", f"report_dir={tmp_path}/r"])
     with pytest.raises(ValueError, match=r"^map: must be one of \['steady', 'motion'\]"):
+        run_observability(cfg)
+    cfg = compose_app("observability", [
+        "map=motion", "j_out_kgm2=[0.5]", f"report_dir={tmp_path}/r",
+        "motion_profile.profile.segments=[{move: {target_rpm: 9000, accel_rpm_s: 1000}}]"])
+    with pytest.raises(ValueError, match=r"^motion_profile.profile.segments\[0\].move."
+                                         r"target_rpm must be within ±6500 rpm"):
         run_observability(cfg)
 
 
