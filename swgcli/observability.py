@@ -177,9 +177,10 @@ def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
         for k in ("steady", "profile"):
             c = copy.deepcopy(OmegaConf.to_object(cfg[f"motion_{k}"]))
             c.load.j_out_kgm2 = j
-            if k == "steady":  # as the steady map: settled where the mode rings longer
-                need = math.ceil(min_settle_s(c) * 100 - 1e-9) / 100
-                c.chain.settle_s = max(float(c.chain.settle_s), need)
+            # as the steady map: settled where the mode rings longer (a profile's windows
+            # then tile from the later start)
+            need = math.ceil(min_settle_s(c) * 100 - 1e-9) / 100
+            c.chain.settle_s = max(float(c.chain.settle_s), need)
             try:
                 out[j][k] = plan(c)
             except ValueError as e:
