@@ -31,6 +31,27 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
+def j_out_values(cfg: DictConfig) -> list[float]:
+    """The map's output inertias [kg m²]: ``j_out_kgm2``, or ``n_j_out`` log-spaced from
+    the bench's to a robot link's.
+
+    Raises
+    ------
+    ValueError
+        ``n_j_out`` outside [2, 50] or ``j_out_kgm2`` not distinct values.
+    """
+    from learn.studies.observability import j_out_grid
+
+    if cfg.j_out_kgm2 is None:
+        if not 2 <= int(cfg.n_j_out) <= 50:
+            raise ValueError(f"n_j_out: must be in [2, 50], got {cfg.n_j_out}")
+        return [float(v) for v in j_out_grid(int(cfg.n_j_out))]
+    values = [float(v) for v in cfg.j_out_kgm2]
+    if not values or len(set(values)) != len(values):
+        raise ValueError(f"j_out_kgm2: must list distinct values, got {values}")
+    return values
+
+
 def data_set_configs(cfg: DictConfig) -> dict[float, DatasetPlan]:
     """The data set of every output inertia, checked once, before any work.
 
@@ -46,17 +67,9 @@ def data_set_configs(cfg: DictConfig) -> dict[float, DatasetPlan]:
     ValueError
         Naming the key: ``j_out_kgm2`` / ``n_j_out`` out of range, or a data-set key.
     """
-    from learn.studies.observability import j_out_grid
     from swgsim.plan import min_settle_s, plan
 
-    if cfg.j_out_kgm2 is None:
-        if not 2 <= int(cfg.n_j_out) <= 50:
-            raise ValueError(f"n_j_out: must be in [2, 50], got {cfg.n_j_out}")
-        values = [float(v) for v in j_out_grid(int(cfg.n_j_out))]
-    else:
-        values = [float(v) for v in cfg.j_out_kgm2]
-        if not values or len(set(values)) != len(values):
-            raise ValueError(f"j_out_kgm2: must list distinct values, got {values}")
+    values = j_out_values(cfg)
     for key in ("n_jobs", "harmonics"):
         if int(cfg[key]) < 1:
             raise ValueError(f"{key}: must be >= 1, got {cfg[key]}")
@@ -158,19 +171,12 @@ def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
     ValueError
         Naming the key (``j_out_kgm2``, ``n_j_out``, ``motion.*`` or a data-set key).
     """
-    from learn.studies.observability import j_out_grid
     from learn.studies.observability_motion import check_motion_map
     from swgsim.plan import min_settle_s, plan
 
     check_motion_map(OmegaConf.to_object(cfg.motion))
-    if cfg.j_out_kgm2 is None:
-        if not 2 <= int(cfg.n_j_out) <= 50:
-            raise ValueError(f"n_j_out: must be in [2, 50], got {cfg.n_j_out}")
-        values = [float(v) for v in j_out_grid(int(cfg.n_j_out))]
-    else:
-        values = [float(v) for v in cfg.j_out_kgm2]
     out = {}
-    for j in values:
+    for j in j_out_values(cfg):
         if not 1e-4 <= j <= 100.0:
             raise ValueError(f"j_out_kgm2: {j} outside the allowed range [1e-4, 100] kg m²")
         out[j] = {}
