@@ -187,3 +187,12 @@ def test_cortex_m4f_build_fits_and_computes_the_same_bits(tiny_export):
     assert t["instructions_undecoded"] == 0
     size = __import__("json").loads((out / "size.json").read_text())
     assert size["flash_bytes"] == t["flash_bytes"] and size["accuracy_c"] is not None
+
+
+def test_the_export_leaves_numpys_error_state_alone(tiny_export):
+    """emlearn sets numpy.seterr(all='raise') on import; the export imports it through
+    learn.export.import_emlearn, which restores the state (an underflow elsewhere in the
+    process raised before)."""
+    assert np.geterr() == {"divide": "warn", "over": "warn", "under": "ignore",
+                           "invalid": "warn"}
+    np.float64(1e-300) * np.float64(1e-300)  # an underflow, silently 0

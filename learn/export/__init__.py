@@ -12,3 +12,22 @@ One concern per module:
 
 Method, interface and figures: ``docs/EXPORT.md``.
 """
+
+
+def import_emlearn():
+    """emlearn, imported with numpy's floating-point error state kept as it was.
+
+    emlearn 0.23.2 calls ``numpy.seterr(all='raise')`` when imported (its ``bayes``
+    module, loaded by ``emlearn.convert``): every later underflow anywhere in the process
+    would raise. Found when the test suite ran test_export before the calibration tests.
+    """
+    import numpy as np
+
+    old = np.geterr()
+    try:
+        import emlearn
+        import emlearn.trees  # noqa: F401
+    finally:
+        np.seterr(**old)
+    return emlearn
+

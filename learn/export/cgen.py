@@ -96,9 +96,11 @@ def write_sources(out: Path, t: ref.StageTables, class_names: list[str], model_c
     about : dict
         ``dataset``, ``gear``, ``train_gears`` for the header's comment.
     """
-    import emlearn
-
     from swgsim.data import atomic_write_bytes
+
+    from . import import_emlearn
+
+    emlearn = import_emlearn()
 
     head = HEADER.format(
         n_t=t.n_t, fs_hz=t.fs_hz, n_harmonics=t.n_harmonics, ratio=RATIO,

@@ -139,7 +139,9 @@ def to_c(estimator, name: str = "swg_forest") -> tuple[str, dict]:
     ValueError
         As :func:`check_representable`.
     """
-    from emlearn import trees as et
+    from . import import_emlearn
+
+    et = import_emlearn().trees
 
     check_representable(estimator)
     ests = getattr(estimator, "estimators_", [estimator])

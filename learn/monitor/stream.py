@@ -85,7 +85,7 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
                          f"windows of {model.window_s:g} s")
     twist = "phi_out_meas" in ds
     n_f = len(feature_names(twist=twist))
-    if model.n_features and n_f != model.n_features:
+    if getattr(model, "n_features", 0) and n_f != model.n_features:
         raise ValueError(f"{source}: its windows give {n_f} health features "
                          f"({'with' if twist else 'without'} an output encoder's twist); the "
                          f"model was trained on {model.n_features}")
