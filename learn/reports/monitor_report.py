@@ -32,6 +32,7 @@ def labelled(df: pd.DataFrame | None) -> pd.DataFrame | None:
     if df is None or "output_encoder" not in df or not df["output_encoder"].any():
         return df
     enc = df["output_encoder"].fillna(False).astype(bool)
+    enc &= ~df["dataset"].astype(str).str.endswith(" (output encoder)")  # labelled once
     return df.assign(dataset=np.where(enc, df["dataset"] + " (output encoder)", df["dataset"]))
 
 
@@ -174,8 +175,10 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
     nrow = -(-len(faults) // ncol)
     fig, axes = plt.subplots(nrow, ncol, figsize=(2.9 * ncol, 2.6 * nrow), squeeze=False)
     top = float(np.nanmax(mon.time_to_detect_h.to_numpy(float) * 60, initial=60.0)) * 1.5
+    index = {ds: i for i, ds in enumerate(dict.fromkeys(mon.dataset))}  # one colour each
     for ax, f in zip(axes.flat, faults, strict=False):
-        for i, (ds, g) in enumerate(mon[mon.fault == f].groupby("dataset", sort=False)):
+        for ds, g in mon[mon.fault == f].groupby("dataset", sort=False):
+            i = index[ds]
             det = g.detected.astype(bool)
             jit = (i - 0.5) * 0.02 * g.severity.abs().max()
             ax.plot(g.severity.abs()[det] + jit, g.time_to_detect_h[det] * 60, "o", ms=3,
