@@ -18,12 +18,11 @@ from strain_run import run_strain
 from swgcal.strain import StrainModel
 from swgcal.strain import synthetic as syn
 from swgsim.chain import SimulationChain
+from swgsim.dsp import fractional_delay, lowpass
 from swgsim.dynamics import gear_with_ke, rt1_size20
 from swgsim.measurement import (
     QUARTER_BRIDGE_K,
     apply_sensor_effects,
-    fractional_delay,
-    lowpass,
     parse_sensor_effects,
     psi_rate,
 )

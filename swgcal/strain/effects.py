@@ -61,7 +61,7 @@ import numpy as np
 from scipy import signal as sps
 
 from swgsim import measurement as ms
-from swgsim.measurement import fractional_delay, lowpass_coefficients
+from swgsim.dsp import fractional_delay, lowpass_coefficients
 from swgsim.terms import Param
 
 from ..terms import FitTerm
