@@ -34,7 +34,7 @@ from swgsim.sensor_faults import SENSOR_FAULTS
 from swgsim.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
 
 from .baselines import BASELINES, References, WindowClassifier, fit_baseline, window_inputs
-from .features import feature_names, twist_features, window_angles, window_features
+from .features import feature_names, health_features
 from .model import HEALTHY, Baseline, design_matrix, fit_diagnosis
 from .monitor import GearMonitor, Trace, baseline_windows, run_cusums
 from .rule import RuleConfig, log_bets, threshold
@@ -167,11 +167,8 @@ def life_features(plan, sig: np.ndarray, meta: dict[str, np.ndarray]) -> np.ndar
     """Health features of a block of a life's windows: :func:`window_features`, in the
     angle domain when the windows carry angle channels (a profile), and the twist
     features with an output encoder; shape (n, F)."""
-    fs = plan.config.chain.sample_rate_hz
     sensor = plan.config.profile.angles.input_sensor() if plan.profile is not None else None
-    psi, twist = window_angles(meta, sensor, fs)
-    f = window_features(sig, meta["n_in_rpm"], meta["efficiency"], fs, psi=psi)
-    return f if twist is None else np.concatenate([f, twist_features(twist)], axis=1)
+    return health_features(sig, meta, plan.config.chain.sample_rate_hz, sensor)
 
 
 def training_lives(plan, bank: RecordBank, g: int, cfg: MonitorStudyConfig

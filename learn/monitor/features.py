@@ -112,6 +112,34 @@ def window_angles(meta: dict[str, np.ndarray], input_sensor, fs_hz: float,
     return psi, None if phi_out is None else twist_estimate(phi_in, phi_out, ratio)
 
 
+def health_features(signals: np.ndarray, meta: dict[str, np.ndarray], fs_hz: float,
+                    input_sensor=None) -> np.ndarray:
+    """The monitor's features of windows as they come: :func:`window_features`, in the
+    angle domain when ``meta`` carries the angle channels (a life on a profile), with
+    :func:`twist_features` after them when it carries an output encoder's.
+
+    Parameters
+    ----------
+    signals : ndarray, shape (n, 5, n_t)
+        Bridge outputs [mV/V].
+    meta : dict
+        ``n_in_rpm`` (n,), ``efficiency`` (n,), optionally ``phi_in_meas`` and
+        ``phi_out_meas`` (n, n_t) [rad].
+    fs_hz : float
+        Sample rate [Hz].
+    input_sensor : swgsim.angles.InputAngleSensor, optional
+        The sensor of ``phi_in_meas`` (needed with it).
+
+    Returns
+    -------
+    ndarray, shape (n, F)
+        Columns :func:`feature_names` (``twist`` with an output encoder).
+    """
+    psi, twist = window_angles(meta, input_sensor, fs_hz)
+    f = window_features(signals, meta["n_in_rpm"], meta["efficiency"], fs_hz, psi=psi)
+    return f if twist is None else np.concatenate([f, twist_features(twist)], axis=1)
+
+
 def twist_features(twist: np.ndarray) -> np.ndarray:
     """Mean and RMS about the mean of each window's output twist [arcmin].
 

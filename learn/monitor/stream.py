@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .features import feature_names, twist_features, window_angles, window_features
+from .features import feature_names, health_features
 from .monitor import Alarm, GearMonitor, Trace, check_commissioning
 from .rule import RuleConfig
 
@@ -117,13 +117,11 @@ def _input_sensor(ds):
 def stream_features(ds) -> np.ndarray:
     """Health features of a stream's windows, shape (n, F): in the angle domain when the
     stream carries angle channels (a life on a profile), with the twist features when it
-    carries an output encoder's (:func:`learn.monitor.features.window_angles`)."""
-    fs = float(ds.attrs["sample_rate_hz"])
-    meta = {k: ds[k].values for k in ("phi_in_meas", "phi_out_meas") if k in ds}
-    psi, twist = window_angles(meta, _input_sensor(ds), fs) if meta else (None, None)
-    f = window_features(ds["strain_signal"].values, ds["n_in_rpm"].values,
-                        ds["efficiency"].values, fs, psi=psi)
-    return f if twist is None else np.concatenate([f, twist_features(twist)], axis=1)
+    carries an output encoder's (:func:`learn.monitor.features.health_features`)."""
+    meta = {k: ds[k].values for k in ("n_in_rpm", "efficiency", "phi_in_meas",
+                                      "phi_out_meas") if k in ds}
+    return health_features(ds["strain_signal"].values, meta, float(ds.attrs["sample_rate_hz"]),
+                           _input_sensor(ds) if "phi_in_meas" in meta else None)
 
 
 def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
