@@ -244,6 +244,14 @@ class ProfileConfig:
         Add the acceleration feed-forward torque to the motor torque.
     window_starts_s : list of float or None
         Start of each window [s] since the profile's start; None: tiling.
+    start_jitter_s : float
+        A gear life's windows (``dataset.life`` beside the profile) start up to this long
+        after their slot's start, uniformly [s], >= 0 (:mod:`swgsim.life_profile`). The
+        default, about one WG revolution at the robot joint's 2400 rpm cruise [choice],
+        is a monitor whose windows are not locked to the motion command; one triggered by
+        the controller's command sets its trigger's spread (a few servo cycles: UR
+        controllers run at 500 Hz, 2 ms). Without any, every window of a slot holds the
+        same motion.
     angles : AngleChannelsConfig
     """
 
@@ -252,6 +260,7 @@ class ProfileConfig:
     start_rpm: float = 0.0
     feedforward: bool = False
     window_starts_s: list[float] | None = None
+    start_jitter_s: float = 0.025
     angles: AngleChannelsConfig = field(default_factory=AngleChannelsConfig)
 
     def to_profile(self) -> Profile:

@@ -7,7 +7,7 @@ severity and position) is simulated once along the whole profile
 :mod:`swgsim.shard`) and every window of the life is a cut of that motion. The cuts are the
 data set's window starts, those in which the wave generator turns at least
 :data:`MIN_WG_REVOLUTIONS` revolutions one way (*slots*), each window starting up to
-:data:`START_JITTER_S` after its slot's start (uniformly): a monitor records while the
+``dataset.profile.start_jitter_s`` after its slot's start (uniformly): a monitor records while the
 joint moves, and the angle-domain features need about 1.45 revolutions
 (:mod:`learn.monitor.features`); a window holding a reversal is left out too (the gauge
 misplacement is defined along a monotone ψ, :mod:`swgsim.measurement`).
@@ -40,10 +40,6 @@ from .measurement import apply_sensor_effects
 
 #: Least wave-generator revolutions (one way) of a window recorded by a profile life.
 MIN_WG_REVOLUTIONS = 2.0
-#: Spread of a window's start after its slot's start [s] [choice: about one WG revolution
-#: at the robot joint's 2400 rpm cruise]: a monitor's windows are not locked to the
-#: motion command, and without it every window of a slot would hold the same motion.
-START_JITTER_S = 0.025
 
 
 @dataclass(frozen=True)
@@ -101,7 +97,7 @@ def slots_of(cfg, profile: pf.Profile, starts_s) -> Slots:
 
     fs = float(cfg.chain.sample_rate_hz)
     n_t = int(round(cfg.chain.window_s * fs))
-    n_jit = int(round(START_JITTER_S * fs))
+    n_jit = _jitter(cfg)
     starts = np.round(np.asarray(starts_s) * fs).astype(np.int64)
     t = np.arange(int(starts.max()) + n_t + n_jit + 1) / fs
     w_d, _ = pf.speed_at(profile, t)  # [rad/s]
@@ -125,8 +121,12 @@ def slots_of(cfg, profile: pf.Profile, starts_s) -> Slots:
 
 
 def jitter_samples(plan) -> int:
-    """:data:`START_JITTER_S` in samples of the data set's rate."""
-    return int(round(START_JITTER_S * float(plan.config.chain.sample_rate_hz)))
+    """``dataset.profile.start_jitter_s`` in samples of the data set's rate."""
+    return _jitter(plan.config)
+
+
+def _jitter(cfg) -> int:
+    return int(round(float(cfg.profile.start_jitter_s) * float(cfg.chain.sample_rate_hz)))
 
 
 class ProfileRecordBank(RecordBank):
@@ -203,5 +203,5 @@ def record_bank(plan, gear_id: int) -> RecordBank:
         plan, gear_id)
 
 
-__all__ = ["MIN_WG_REVOLUTIONS", "START_JITTER_S", "ProfileRecordBank", "Slots", "jitter_samples",
+__all__ = ["MIN_WG_REVOLUTIONS", "ProfileRecordBank", "Slots", "jitter_samples",
            "profile_slots", "record_bank", "slots_of"]

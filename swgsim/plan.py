@@ -362,6 +362,8 @@ def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
          f"dataset.chain.window_s={ch.window_s:g} s is shorter than one wave-generator "
          f"revolution at the profile's lowest cruise speed {n_low:g} rpm; allowed: >= "
          f"{rev_s:.4g} s")
+    _in(pc.start_jitter_s, 0.0, ch.window_s, "dataset.profile.start_jitter_s", "s",
+        why="a life's window starts within one window of their slot's")
     dur = prof.speed.duration_s
     amp = cfg.acquisition.amplifier
     lead_s = 0.0 if amp is None else (amp.lead_samples(ch.sample_rate_hz) + 1) / ch.sample_rate_hz
