@@ -331,7 +331,7 @@ def _profile_key(msg: str, profile: ProfileConfig) -> str:
                  rf"{p}.segments[\1].move.\2", msg)
     msg = re.sub(r"\bspeed\.segments\[(\d+)\]\.duration_s", rf"{p}.segments[\1].hold.duration_s",
                  msg)
-    msg = re.sub(r"\bspeed\.segments\[", f"{p}.segments[", msg)
+    msg = re.sub(r"\bspeed\.segments\b", f"{p}.segments", msg)
     msg = re.sub(r"\bspeed\.start_rpm", f"{p}.start_rpm", msg)
     return re.sub(r"\bload([.:])", rf"{p}.load.{profile.load_kind()}\1", msg)
 

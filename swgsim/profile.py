@@ -16,10 +16,10 @@ the power T_L q̇ (negative when it drives the gear: a lowered arm, an overhauli
 An opposing load is T_L = T tanh(N q̇ / v_s), today's brake.
 
 Limits, checked by :func:`validate` before any work (docs/PHYSICS.md sec. 2): |speed| <=
-6500 rpm, load torque <= 107 N m (repeated peak torque), J_out |q̈| + max |T_L| <= 107 N m
-during every move [derived], the torque overshoot of a load step T_0 + 2 |ΔT| <= 191 N m
-(momentary peak torque) [derived, undamped step response], positive acceleration limits,
-finite numbers.
+6500 rpm, its time average over the profile <= 3500 rpm, load torque <= 107 N m
+(repeated peak torque), J_out |q̈| + max |T_L| <= 107 N m during every move [derived], the
+torque overshoot of a load step T_0 + 2 |ΔT| <= 191 N m (momentary peak torque) [derived,
+undamped step response], positive acceleration limits, finite numbers.
 """
 
 from __future__ import annotations
@@ -38,6 +38,10 @@ G_ACCEL = 9.81  # [m/s²]
 #: rating table as digitised in github.com/AimanHaidar/harmonic-drive-selector
 #: (data/reducers_tables.py, row CSG 20 100, which also gives 107 N m and 6500 rpm).
 MAX_INPUT_SPEED_RPM = 6500.0
+#: Limit for average input speed [rpm] of the same catalogue row (a profile's time average
+#: of |n|, :meth:`SpeedProfile.average_speed_rpm`); the paper's steady 4000 rpm points
+#: exceed it and are kept, since the paper records them.
+MAX_AVERAGE_INPUT_SPEED_RPM = 3500.0
 REPEATED_PEAK_TORQUE_NM = 107.0
 MOMENTARY_PEAK_TORQUE_NM = 191.0
 
@@ -113,6 +117,17 @@ class SpeedProfile:
     def duration_s(self) -> float:
         """End of the last segment [s]."""
         return float(self.knots()[0][-1])
+
+    def average_speed_rpm(self) -> float:
+        """Time average of |n| over the profile [rpm], the catalogue's average input speed
+        of a duty cycle (sum |n_i| t_i / sum t_i), exact for the piecewise-linear speed;
+        |start_rpm| for a profile of no duration (it keeps its speed)."""
+        t, n = self.knots()
+        dt, n0, n1 = np.diff(t), n[:-1], n[1:]
+        same = n0 * n1 >= 0  # a ramp through 0 rpm covers (n0² + n1²) / (2 |n1 − n0|) of it
+        area = np.where(same, (np.abs(n0) + np.abs(n1)) / 2,
+                        (n0 ** 2 + n1 ** 2) / (2 * np.maximum(np.abs(n1 - n0), 1e-300))) * dt
+        return float(area.sum() / t[-1]) if t[-1] > 0 else abs(float(n[0]))
 
 
 @dataclass(frozen=True)
@@ -283,6 +298,11 @@ def _check_speed(sp: SpeedProfile) -> None:
                 raise ValueError(f"{key}.duration_s must be >= 0 s, got {s.duration_s}")
         else:
             raise ValueError(f"{key} must be a Move or a Hold, got {type(s).__name__}")
+    n_av = sp.average_speed_rpm()
+    if n_av > MAX_AVERAGE_INPUT_SPEED_RPM:
+        raise ValueError(f"speed.segments: the average input speed over the profile, "
+                         f"{n_av:.4g} rpm, exceeds {MAX_AVERAGE_INPUT_SPEED_RPM:g} rpm (catalogue "
+                         "limit for average input speed, size 20); add holds at lower speed")
 
 
 def _check_load(load: Load, sp: SpeedProfile) -> None:
@@ -346,7 +366,8 @@ def validate(profile: Profile, j_out_kgm2: float, ratio: float = 100.0) -> None:
     Raises
     ------
     ValueError
-        One line naming the key and the limit: a speed beyond ±6500 rpm, a load beyond
+        One line naming the key and the limit: a speed beyond ±6500 rpm, an average input
+        speed over the profile beyond 3500 rpm, a load beyond
         ±107 N m, a step overshooting 191 N m, an acceleration whose torque
         J_out a / N + max |T_L| exceeds 107 N m, a non-positive acceleration limit, a
         negative hold, a brake through 0 rpm, a non-finite number.

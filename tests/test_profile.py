@@ -214,6 +214,9 @@ def test_gravity_link_is_held_at_standstill():
      "load.torque_nm: a brake"),
     (pf.Profile(pf.SpeedProfile(0.0, (pf.Move(2000.0, 2e5),)), pf.LoadSteps(7.0)),
      r"speed.segments\[0\].accel_rpm_s must be <= 1.384e\+05 rpm/s.*107"),
+    (pf.Profile(pf.SpeedProfile(3000.0, (pf.Move(4000.0, 1e4), pf.Hold(1.0))), pf.LoadSteps(7.0)),
+     "speed.segments: the average input speed over the profile, 3955 rpm, exceeds 3500"),
+    (pf.Profile(pf.SpeedProfile(4000.0), pf.LoadSteps(7.0)), "average input speed .* 4000 rpm"),
 ])
 def test_profile_beyond_the_limits_is_refused(profile, key):
     """Refused before any work in one line naming the key and the limit; the acceleration
@@ -221,6 +224,20 @@ def test_profile_beyond_the_limits_is_refused(profile, key):
     with pytest.raises(ValueError, match=key) as err:
         pd.simulate_profile([dy.rt1_size20(j_out_kgm2=0.69)], profile, duration_s=0.01)
     assert "\n" not in str(err.value)
+
+
+def test_average_input_speed_against_hand_integrals():
+    # a ramp through 0 rpm: 1000 -> 0 in 0.1 s (mean 500), 0 -> -3000 in 0.3 s (mean 1500)
+    sp = pf.SpeedProfile(1000.0, (pf.Move(-3000.0, 1e4),))
+    assert sp.average_speed_rpm() == pytest.approx((0.1 * 500 + 0.3 * 1500) / 0.4, rel=1e-12)
+    # the robot joint's raise and lower: four 0.2 s ramps to 2400 rpm, 0.6 s at 2400, 0.1 s
+    # dwell
+    up, down = pf.Move(2400.0, 12000.0), pf.Move(0.0, 12000.0)
+    sp = pf.SpeedProfile(0.0, (up, pf.Hold(0.3), down, pf.Hold(0.1), pf.Move(-2400.0, 12000.0),
+                               pf.Hold(0.3), down))
+    assert sp.average_speed_rpm() == pytest.approx((4 * 0.2 * 1200 + 0.6 * 2400) / 1.5,
+                                                   rel=1e-12)
+    assert pf.SpeedProfile(-2000.0).average_speed_rpm() == 2000.0
 
 
 def test_unstable_step_at_standstill_is_refused():
