@@ -27,7 +27,7 @@ except PackageNotFoundError:  # not installed (source tree on sys.path)
 _EXPORTS = {
     # dynamic I/O model
     "GearParams": "dynamics", "rt1_size20": "dynamics", "simulate": "dynamics",
-    "torsional_mode": "dynamics",
+    "torsional_mode": "modes",
     # faults and variants
     "ChainParams": "faults", "FAULTS": "faults", "apply_fault": "faults",
     "NO_ROOT_CRACK": "faults",

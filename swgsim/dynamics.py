@@ -457,7 +457,16 @@ def outputs(x, b, w_d, t_load):
     return t_out, t_m * x[1], np.abs(t_out * x[3])
 
 
-def _check(n_in_rpm, t_out_nm, fs_hz, duration_s, settle_s):
+def check_inputs(n_in_rpm, t_out_nm, fs_hz: float = 1.0, duration_s: float = 1.0,
+                 settle_s: float = 0.0) -> None:
+    """Refuse a speed <= 0 rpm, a load < 0 N m, a non-finite one, a sample rate or window
+    <= 0 or a negative settling time, in one line (:func:`simulate`'s inputs).
+
+    Raises
+    ------
+    ValueError
+        Naming the argument and its allowed range.
+    """
     if np.any(~np.isfinite(n_in_rpm)) or np.any(np.asarray(n_in_rpm) <= 0):
         raise ValueError(f"n_in_rpm must be > 0 rpm, got {n_in_rpm}")
     if np.any(np.asarray(t_out_nm) < 0) or np.any(~np.isfinite(t_out_nm)):
@@ -509,7 +518,7 @@ def simulate(params: list[GearParams] | Batch, n_in_rpm, t_out_nm, phi_in0=0.0,
     ValueError
         On non-positive speed, negative torque or non-positive rates/durations.
     """
-    _check(n_in_rpm, t_out_nm, sample_rate_hz, window_s, settle_s)
+    check_inputs(n_in_rpm, t_out_nm, sample_rate_hz, window_s, settle_s)
     b = params if isinstance(params, Batch) else Batch.of(list(params))
     v = b.ratio.size
     w_d = np.broadcast_to(np.asarray(n_in_rpm, float) * RPM, (v,)).copy()
@@ -614,111 +623,6 @@ def _result(rec, bk, w_d, t_load, fs, ok, msg=""):
                      message=msg or ("ok" if ok else "non-finite states"))
 
 
-def torsional_mode(params: GearParams, n_in_rpm: float, t_out_nm: float) -> tuple[float, float]:
-    """Natural frequency and decay time of the torsional mode of eq. (1), linearised at
-    steady motion.
-
-    The torsional mode is the output inertia ringing on the gear's stiffness (the
-    oscillatory eigenvalue of highest frequency; the others belong to the speed loop).
-    Its frequency says whether the kinematic error's orders excite the gear below or above
-    resonance; its decay time how long the start of :func:`simulate` rings (the start,
-    :func:`steady_state`, leaves out the kinematic error). Bench (8.8e-3 kg m²): about
-    230-430 Hz and 4 ms over 7-70 N m; a robot link (0.69 kg m²): 30-60 Hz and 30 ms.
-    With backlash the linearisation is at the contact twist (the flanks stay in contact
-    while T_stiff keeps its sign), so the dead zone does not enter (docs/PHYSICS.md
-    sec. 8.1).
-
-    Parameters
-    ----------
-    params : GearParams
-    n_in_rpm : float
-        Input speed [rpm], > 0.
-    t_out_nm : float
-        Load torque [N m], >= 0.
-
-    Returns
-    -------
-    f_hz : float
-        Damped natural frequency Im λ / 2π [Hz].
-    decay_s : float
-        1 / (−Re λ) [s].
-
-    Raises
-    ------
-    ValueError
-        On non-positive speed or negative torque, an unstable linearisation or no
-        oscillatory mode.
-    """
-    lam = linear_eigenvalues(params, n_in_rpm, t_out_nm)
-    scale = float(np.max(np.abs(lam)))
-    lam = lam[np.abs(lam) > 1e-9 * scale]  # drop the rigid rotation (zero eigenvalue)
-    if np.any(lam.real >= 0):
-        raise ValueError(f"the linearised gear is not stable at {n_in_rpm} rpm, "
-                         f"{t_out_nm} N m (eigenvalues {np.round(lam, 3)})")
-    if not np.any(np.abs(lam.imag) > 1e-9 * scale):
-        raise ValueError(f"no oscillatory mode at {n_in_rpm} rpm, {t_out_nm} N m "
-                         f"(eigenvalues {np.round(lam, 3)})")
-    top = lam[np.argmax(lam.imag)]
-    return float(top.imag / (2 * np.pi)), float(-1.0 / top.real)
-
-
-def linear_eigenvalues(params: GearParams, n_in_rpm: float, t_out_nm: float) -> np.ndarray:
-    """Eigenvalues of eq. (1) linearised at steady motion (kinematic error left out).
-
-    Parameters
-    ----------
-    params : GearParams
-    n_in_rpm : float
-        Input speed [rpm], > 0.
-    t_out_nm : float
-        Load torque [N m], >= 0.
-
-    Returns
-    -------
-    ndarray of complex, shape (5,)
-        [1/s]; one is about zero (the rigid rotation).
-
-    Raises
-    ------
-    ValueError
-        On non-positive speed or negative torque.
-    """
-    _check(n_in_rpm, t_out_nm, 1.0, 1.0, 0.0)
-    p = dataclasses.replace(params, ke_amp_rad=tuple(0.0 for _ in params.ke_amp_rad))
-    b = ke_batch(Batch.of([p]))
-    w_d = np.array([float(n_in_rpm) * RPM])
-    t_load = np.array([float(t_out_nm)])
-    x0 = steady_state(b, w_d, t_load, np.array([0.0]))
-    jac = np.empty((5, 5))
-    for j in range(5):  # central differences, step relative to the state's size
-        h = 1e-7 * max(1.0, abs(float(x0[j, 0])))
-        xp, xm = x0.copy(), x0.copy()
-        xp[j] += h
-        xm[j] -= h
-        jac[:, j] = (rhs(0.0, xp, b, w_d, t_load) - rhs(0.0, xm, b, w_d, t_load))[:, 0] / (2 * h)
-    return np.linalg.eigvals(jac)
-
-
-def rk4_stable(lam: np.ndarray, step_s: float) -> bool:
-    """Whether the classic RK4 step ``step_s`` is stable for the eigenvalues ``lam``.
-
-    Parameters
-    ----------
-    lam : ndarray of complex
-        Eigenvalues of the linearised system [1/s] (:func:`linear_eigenvalues`).
-    step_s : float
-        Integrator step [s], ``1 / (sample_rate_hz · substeps)`` in :func:`simulate`.
-
-    Returns
-    -------
-    bool
-        True when every ``step_s · λ`` lies in RK4's stability region,
-        ``|1 + z + z²/2 + z³/6 + z⁴/24| <= 1`` (up to 1e-9).
-    """
-    z = np.asarray(lam, complex) * float(step_s)
-    return bool(np.all(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) <= 1 + 1e-9))
-
-
 def simulate_reference(params: GearParams, n_in_rpm: float, t_out_nm: float,
                        phi_in0: float = 0.0, sample_rate_hz: float = 10e3,
                        window_s: float = 0.12, settle_s: float = 0.1,
@@ -729,7 +633,7 @@ def simulate_reference(params: GearParams, n_in_rpm: float, t_out_nm: float,
     """
     from scipy.integrate import solve_ivp
 
-    _check(n_in_rpm, t_out_nm, sample_rate_hz, window_s, settle_s)
+    check_inputs(n_in_rpm, t_out_nm, sample_rate_hz, window_s, settle_s)
     bk = ke_batch(Batch.of([params]))
     w_d = np.array([n_in_rpm * RPM])
     t_load = np.array([float(t_out_nm)])

@@ -32,12 +32,13 @@ from .config import (
     dataset_config,
 )
 from .data import config_digest
-from .dynamics import gear_with_ke, linear_eigenvalues, rk4_stable, rt1_size20, torsional_mode
+from .dynamics import gear_with_ke, rt1_size20
 from .faults import FAULTS, ChainParams, Fault, get_fault
 from .flexspline import FlexsplineGeometry, TrussModel
 from .friction import FrictionEffects, friction_effects_from_config
 from .life import check_life, schedule
 from .measurement import SensorEffect, parse_sensor_effects
+from .modes import linear_eigenvalues, rk4_stable, torsional_mode
 from .sensors import SensorLayout, gear_layout, signal_rows
 
 MIN_GRID_LENGTH_MM = 0.2  # shortest foil strain-gauge grids on the market (0.2 mm)
@@ -551,7 +552,7 @@ def min_settle_s(cfg: DatasetConfig) -> float:
     """Shortest ``chain.settle_s`` that lets the torsional mode ring down before the window.
 
     :data:`SETTLE_DECAY_TIMES` times the longest decay time
-    (:func:`swgsim.dynamics.torsional_mode`) over the data set's gears and
+    (:func:`swgsim.modes.torsional_mode`) over the data set's gears and
     operating points [s].
     """
     speeds, loads = _speeds_and_loads(cfg)

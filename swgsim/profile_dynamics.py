@@ -22,9 +22,9 @@ from .dynamics import (
     ke_batch,
     outputs,
     rhs,
-    rk4_stable,
     steady_state,
 )
+from .modes import rk4_stable
 
 if TYPE_CHECKING:
     from swgsim.profile import Profile

@@ -14,6 +14,7 @@ from scipy.integrate import simpson
 from scipy.optimize import brentq
 
 from swgsim import dynamics as dy
+from swgsim import modes
 
 
 def secant_stiffness(p: dy.GearParams, torque_nm: float) -> float:
@@ -128,7 +129,7 @@ def test_torsional_mode_matches_the_simulated_ring_down(j_out, tol_tau, tol_f):
     """
     p = dy.rt1_size20(j_out_kgm2=j_out)
     n, tq, fs = 2000.0, 39.0, 20e3
-    f_hz, tau = dy.torsional_mode(p, n, tq)
+    f_hz, tau = modes.torsional_mode(p, n, tq)
     settle = 20 * tau
     a = dy.simulate([p], n, tq, phi_in0=0.0, sample_rate_hz=fs, window_s=8 * tau,
                  settle_s=0.0, substeps=1)

@@ -17,6 +17,7 @@ from test_dynamics import power_terms
 from swgsim import dynamics as dy
 from swgsim import profile as pf
 from swgsim import profile_dynamics as pd
+from swgsim.modes import torsional_mode
 
 
 def test_speed_profile_matches_the_trapezoid_closed_forms():
@@ -95,7 +96,7 @@ def ring_down(p: dy.GearParams, dec: int):
     delivered torque from 2 to 8 decay times after the step (six damped exponentials,
     every ``dec``-th sample), the predicted (frequency [Hz], decay time [s]) of
     ``torsional_mode`` at 39 N m, and the simulation."""
-    f_hz, tau = dy.torsional_mode(p, 2000.0, 39.0)
+    f_hz, tau = torsional_mode(p, 2000.0, 39.0)
     fs, t_s = 20e3, 0.01
     prof = pf.Profile(pf.SpeedProfile(2000.0, (pf.Hold(t_s + 8.5 * tau),)),
                       pf.LoadSteps(7.0, ((t_s, 39.0),)))

@@ -15,6 +15,7 @@ import pytest
 from test_profile import ring_down
 
 from swgsim import dynamics as dy
+from swgsim import modes
 from swgsim import profile as pf
 from swgsim import profile_dynamics as pd
 from swgsim.faults import (
@@ -98,9 +99,9 @@ def tangent_stiffness(p: dy.GearParams, t_out: float, n_in: float = 2000.0) -> f
 
 def natural_and_damped(p: dy.GearParams, t_out: float) -> tuple[float, float]:
     """|λ| and Im λ of the torsional mode of the linearisation at 2000 rpm [1/s]."""
-    lam = dy.linear_eigenvalues(p, 2000.0, t_out)
+    lam = modes.linear_eigenvalues(p, 2000.0, t_out)
     top = lam[np.argmax(lam.imag)]
-    assert top.imag / (2 * np.pi) == pytest.approx(dy.torsional_mode(p, 2000.0, t_out)[0])
+    assert top.imag / (2 * np.pi) == pytest.approx(modes.torsional_mode(p, 2000.0, t_out)[0])
     return float(abs(top)), float(top.imag)
 
 

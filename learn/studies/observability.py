@@ -109,11 +109,12 @@ def torsional_modes(j_values: Sequence[float], loads: Sequence[float],
     Returns
     -------
     pandas.DataFrame
-        Columns j_out_kgm2, t_out_nm, f_hz, decay_s (:func:`swgsim.dynamics.torsional_mode`).
+        Columns j_out_kgm2, t_out_nm, f_hz, decay_s (:func:`swgsim.modes.torsional_mode`).
     """
     import dataclasses
 
-    from swgsim.dynamics import rt1_size20, torsional_mode
+    from swgsim.dynamics import rt1_size20
+    from swgsim.modes import torsional_mode
 
     p = rt1_size20()
     rows = []
