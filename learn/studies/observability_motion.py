@@ -100,13 +100,14 @@ def stiffness_left(fault: str, severity: float) -> float:
     return 1.0
 
 
-def _windows(plan, fault: str, severity: float, n: int, seed: int, steady: bool):
+def _windows(plan, fault: str, severity: float, n: int, seed: int, points=None):
     """Features, operating points and, for a profile, the same windows' features without
-    the output encoder: n windows of one state, cycling through the points or slots."""
+    the output encoder: n windows of one state, cycling through the steady ``points``
+    ((input speed [rpm], load [N m]) pairs) or, when None, the profile's slots."""
     from learn.monitor.evaluate import life_features
 
     iv = 1.0
-    duty = [DutyPoint(s, t, iv) for s, t in STEADY_POINTS] if steady else []
+    duty = [DutyPoint(s, t, iv) for s, t in points] if points is not None else []
     c0 = iv / 60.0
     fo = FaultOnset(fault, c0, severity) if fault != "healthy" else FaultOnset()
     life = LifeConfig(hours=(n + 1) * c0, interval_min=iv, commissioning_h=c0, duty=duty,
@@ -115,10 +116,64 @@ def _windows(plan, fault: str, severity: float, n: int, seed: int, steady: bool)
     sig, meta = sim.windows(1, len(sim))
     pts = np.stack([meta["n_in_rpm"], meta["t_out_nm"]], axis=1)
     with_enc = life_features(plan, sig, meta)
-    if steady:
+    if points is not None:
         return {"steady": with_enc}, pts
     no_enc = life_features(plan, sig, {k: v for k, v in meta.items() if k != "phi_out_meas"})
     return {"profile + output encoder": with_enc, "profile": no_enc}, pts
+
+
+def _reference(plan, windows: int, seed: int, points=None):
+    """Healthy windows of each view split into reference and test halves: the reference
+    (features, points), the test windows' p95 of separation per point, and the test
+    windows' separations and points."""
+    n_pts = len(points) if points is not None else len(plan_slots(plan))
+    hf, hp = _windows(plan, "healthy", 0.0, 2 * windows * n_pts, seed, points)
+    half = _alternate(hp)  # reference and test halves, every point in both
+    ref, thr, test = {}, {}, {}
+    for v, f in hf.items():
+        ref[v] = (f[half], hp[half])
+        s = separations(*ref[v], f[~half], hp[~half])
+        thr[v] = {tuple(p): np.percentile(s[(hp[~half] == p).all(axis=1)], 95)
+                  for p in np.unique(hp, axis=0)}
+        test[v] = (s, hp[~half])
+    return ref, thr, test
+
+
+def fault_visibility(plan, fault: str, severity: float, windows: int, seeds,
+                     points=None) -> dict[str, np.ndarray]:
+    """Share of a fault's windows beyond the healthy 95th percentile of their point, per
+    view and fault life (each seed draws its own fault position).
+
+    Parameters
+    ----------
+    plan : swgsim.plan.Plan
+        A steady data set (``points`` given) or a profile data set.
+    fault : str
+        A class of :data:`swgsim.faults.FAULTS`.
+    severity : float
+        Within the fault's range.
+    windows : int
+        Windows of each fault life, spread over the points or slots; twice as many healthy
+        windows per point or slot (reference and test halves), as :class:`MotionMapConfig`.
+    seeds : sequence of int
+        Life seeds of the fault lives (the healthy windows use seed 0).
+    points : sequence of (float, float), optional
+        Steady operating points (input speed [rpm], load [N m]); None: the profile's slots.
+
+    Returns
+    -------
+    dict
+        View (:data:`VIEWS`: ``steady``, or ``profile`` and ``profile + output encoder``)
+        -> ndarray, shape (len(seeds),) [-], 0.05 where the features cannot see the fault.
+    """
+    ref, thr, _ = _reference(plan, windows, 0, points)
+    out = {v: [] for v in ref}
+    for seed in seeds:
+        ff, fp = _windows(plan, fault, severity, windows, int(seed), points)
+        for v, f in ff.items():
+            s = separations(*ref[v], f, fp)
+            out[v].append(_beyond(s, fp, thr[v]).mean())
+    return {v: np.asarray(x) for v, x in out.items()}
 
 
 def separations(ref: np.ndarray, ref_pts: np.ndarray, x: np.ndarray, pts: np.ndarray
@@ -163,21 +218,14 @@ def motion_map_rows(plans: dict[str, object], j_out: float, mc: MotionMapConfig
     states = [("reduced_stiffness", s) for s in mc.reduced_stiffness] + [
         ("wear", s) for s in mc.wear]
     for kind, plan in (("steady", plans["steady"]), ("profile", plans["profile"])):
-        steady = kind == "steady"
-        n_pts = len(STEADY_POINTS) if steady else len(plan_slots(plan))
-        hf, hp = _windows(plan, "healthy", 0.0, 2 * mc.windows * n_pts, mc.seed, steady)
-        half = _alternate(hp)  # reference and test halves, every point in both
-        views = {v: (f[half], hp[half]) for v, f in hf.items()}
-        thr = {}
-        for v, f in hf.items():
-            s = separations(*views[v], f[~half], hp[~half])
-            thr[v] = {tuple(p): np.percentile(s[(hp[~half] == p).all(axis=1)], 95)
-                      for p in np.unique(hp, axis=0)}
-            rows.append(_row(j_out, v, "healthy", 0.0, s, hp[~half], thr[v]))
+        points = STEADY_POINTS if kind == "steady" else None
+        ref, thr, test = _reference(plan, mc.windows, mc.seed, points)
+        for v, (s, pts) in test.items():
+            rows.append(_row(j_out, v, "healthy", 0.0, s, pts, thr[v]))
         for fault, sev in states:
-            ff, fp = _windows(plan, fault, sev, mc.windows, mc.seed + 1, steady)
+            ff, fp = _windows(plan, fault, sev, mc.windows, mc.seed + 1, points)
             for v, f in ff.items():
-                rows.append(_row(j_out, v, fault, sev, separations(*views[v], f, fp), fp,
+                rows.append(_row(j_out, v, fault, sev, separations(*ref[v], f, fp), fp,
                                  thr[v]))
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
@@ -191,8 +239,13 @@ def _alternate(pts: np.ndarray) -> np.ndarray:
     return out
 
 
+def _beyond(s: np.ndarray, pts: np.ndarray, thr: dict) -> np.ndarray:
+    """True for each separation beyond its point's threshold, shape (n,)."""
+    return np.array([si > thr[tuple(p)] for si, p in zip(s, pts, strict=True)])
+
+
 def _row(j_out, view, fault, sev, s, pts, thr) -> dict:
-    beyond = np.array([si > thr[tuple(p)] for si, p in zip(s, pts, strict=True)])
+    beyond = _beyond(s, pts, thr)
     return {"j_out_kgm2": float(j_out), "view": view, "fault": fault, "severity": float(sev),
             "stiffness_left": stiffness_left(fault, sev),
             "fraction_beyond_p95": float(beyond.mean()),
