@@ -201,7 +201,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     options, selection = options_from_config(
         kind, OmegaConf.to_container(cfg, resolve=True), measured)
     if cfg.logger.enabled:
-        from learn.tracking import check_tracking
+        from learn.tracking.store import check_tracking
 
         check_tracking(cfg.logger.tracking_uri, "logger.tracking_uri")
     log.info("measured data %s: kind %s", measured, kind)

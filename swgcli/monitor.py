@@ -79,7 +79,7 @@ def run_monitor_app(cfg) -> dict:
     if app.logger is not None:
         import mlflow
 
-        from learn.tracking import check_tracking, use_tracking
+        from learn.tracking.store import check_tracking, use_tracking
 
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
         use_tracking(app.logger.tracking_uri, "logger.tracking_uri")  # one opener at a time

@@ -103,7 +103,7 @@ def _print_end(cfg: DictConfig, names: list[str], summary: dict, root_data: str,
                root_rep: str, stages: dict, warn: list[dict]) -> None:
     """The console's last words: scorecard, findings, where everything went, times."""
     from learn.reports.summary import format_scorecard
-    from learn.tracking import default_tracking_uri
+    from learn.tracking.store import default_tracking_uri
 
     print("\nReproduction scorecard (test cells of Tables VII, IX, X against the paper):")
     print("\n".join(format_scorecard(summary["scorecards"])))
@@ -145,7 +145,7 @@ def run_paper(cfg: DictConfig) -> dict:
         ``<data_root>/<name>`` (when that data set is due).
     """
     from learn.reports.summary import SUMMARY_FILES, write_summary
-    from learn.tracking import check_tracking
+    from learn.tracking.store import check_tracking
     from swgsim import ownership
 
     names = _check(cfg)

@@ -2,7 +2,7 @@
 lost to a second run started meanwhile.
 
 * Two processes opening a fresh SQLite MLflow store at the same moment both log their run:
-  MLflow creates the schema under the store's lock (``learn.tracking.tracking_client``).
+  MLflow creates the schema under the store's lock (``learn.tracking.store.tracking_client``).
 * A folder claimed by a run (:func:`swgsim.ownership.claim`) is refused to a second run of
   another process in one line naming the folder and the run, before anything is touched;
   a worker joining the run is not; once the run is over, its lock files are proved ours

@@ -62,7 +62,7 @@ class StudyTracking:
     Attributes
     ----------
     tracking_uri : str or None
-        None: :func:`learn.tracking.default_tracking_uri`.
+        None: :func:`learn.tracking.store.default_tracking_uri`.
     experiment_prefix : str
         Experiment of a job: prefix + protocol.
     log_models : bool

@@ -232,7 +232,7 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float) -> No
     import mlflow
 
     from learn.reports.monitor_report import false_alarm_table, summary_table
-    from learn.tracking import check_tracking, use_tracking
+    from learn.tracking.store import check_tracking, use_tracking
 
     lcfg = app.logger
     check_tracking(lcfg.tracking_uri, "logger.tracking_uri")

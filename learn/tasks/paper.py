@@ -42,7 +42,7 @@ def run_paper_study(
     options : StudyOptions, optional
         Tables, models, scaling and figures; default the paper's study.
     tracking_uri : str, optional
-        MLflow tracking URI; default :func:`learn.tracking.default_tracking_uri`.
+        MLflow tracking URI; default :func:`learn.tracking.store.default_tracking_uri`.
     track : bool, default True
         Log one MLflow run per job, in experiment ``experiment_prefix + protocol``; the
         jobs of one call are children of one parent run per experiment (group

@@ -48,7 +48,7 @@ def run_train(cfg) -> dict:
     if app.task not in TASKS:
         raise ValueError(f"task must be one of {sorted(TASKS)}, got {app.task!r}")
     if app.logger is not None:
-        from learn.tracking import check_tracking
+        from learn.tracking.store import check_tracking
 
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     log.info("task %s -> %s", app.task, TASKS[app.task])

@@ -1,5 +1,6 @@
 """Experiment tracking: MLflow runs (:mod:`learn.tracking.mlflow_runs`; ``log_run`` is the
-one helper every run goes through) and their provenance, git commit, data set and model
+one helper every run goes through), the MLflow store they go to
+(:mod:`learn.tracking.store`) and their provenance, git commit, data set and model
 requirements (:mod:`learn.tracking.provenance`); what a task logs
 (:class:`learn.tracking.config.LoggerConfig`). Imports no other part of :mod:`learn`.
 
@@ -11,10 +12,10 @@ from __future__ import annotations
 from swgsim.lazy import lazy_exports
 
 _EXPORTS = {
-    **dict.fromkeys(("GROUP_PARENT_TAG", "TrackedRun", "check_tracking",
-                     "default_tracking_uri", "flatten_config", "hydra_sweep", "log_job",
-                     "log_run", "quiet_mlflow", "store_lock", "tracking_client",
-                     "use_tracking"), "mlflow_runs"),
+    **dict.fromkeys(("GROUP_PARENT_TAG", "TrackedRun", "flatten_config", "hydra_sweep",
+                     "log_job", "log_run"), "mlflow_runs"),
+    **dict.fromkeys(("check_tracking", "default_tracking_uri", "quiet_mlflow", "store_lock",
+                     "tracking_client", "use_tracking"), "store"),
     **dict.fromkeys(("DatasetRef", "dataset_ref", "git_tags", "repo_root"), "provenance"),
     "LoggerConfig": "config",
 }

@@ -14,7 +14,7 @@ class LoggerConfig:
     ----------
     tracking_uri : str or None
         None: ``$MLFLOW_TRACKING_URI``, else ``sqlite:///<repo>/mlflow.db``
-        (:func:`learn.tracking.default_tracking_uri`).
+        (:func:`learn.tracking.store.default_tracking_uri`).
     experiment, run_name : str
         MLflow experiment and run name; interpolations of the app's config.
     confusion_plot : bool

@@ -27,18 +27,8 @@ as ``config.yaml`` and the test confusion matrix summed over splits as
 goes through an explicit :class:`mlflow.MlflowClient`, so nothing here changes MLflow's
 global state (tracking URI, active run).
 
-Every process opens a store through :func:`tracking_client` (or, for MLflow's fluent API,
-:func:`use_tracking`): MLflow creates or migrates an SQLite store's schema when a process
-first opens it, and two processes doing so at once break it for one of them, so the
-first opening in a process holds the store's lock ``<database file>.lock`` (``filelock``;
-waited for up to 120 s).
-
-The default tracking URI is ``sqlite:///<repo root>/mlflow.db`` (MLflow 3's database
-store; its file store is deprecated): ``MLFLOW_TRACKING_URI`` wins if set, as in MLflow
-itself. Artifacts of a ``sqlite:///`` store go to ``mlruns/<experiment>/`` beside the
-database file (rather than MLflow's default ``./mlruns`` in the working directory); a
-server URI keeps the server's artifact store. Browse with ``mlflow ui --backend-store-uri
-sqlite:///mlflow.db``.
+How a process opens the MLflow store, its default URI and where its artifacts go: see
+:mod:`learn.tracking.store`.
 """
 
 from __future__ import annotations
@@ -46,7 +36,6 @@ from __future__ import annotations
 import json
 import logging
 import os
-import re
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -60,23 +49,14 @@ from learn.tracking.provenance import (
     dataset_ref,
     git_tags,
     model_requirements,
-    repo_root,
     sklearn_only,
 )
+from learn.tracking.store import get_experiment_id, quiet_mlflow, tracking_client
 
 log = logging.getLogger(__name__)
 
 #: Tag that marks the parent run of a group (:func:`log_run`'s ``group``).
 GROUP_PARENT_TAG = "group_parent"
-#: How long a process waits for another one creating or migrating an SQLite store.
-STORE_LOCK_TIMEOUT_S = 120.0
-_OPENED: set[str] = set()  # stores this process opened (schema created or checked)
-
-
-def default_tracking_uri() -> str:
-    """``MLFLOW_TRACKING_URI`` if set, else ``sqlite:///<repo root>/mlflow.db``."""
-    env = os.environ.get("MLFLOW_TRACKING_URI")
-    return env if env else f"sqlite:///{repo_root() / 'mlflow.db'}"
 
 
 def _flatten(obj: Any, prefix: str = "") -> Iterator[tuple[str, Any]]:
@@ -104,228 +84,6 @@ def flatten_config(config: Mapping[str, Any]) -> dict[str, str]:
         Values as strings, cut to MLflow's parameter length limit (6000 characters).
     """
     return {k: str(v)[:6000] for k, v in _flatten(config)}
-
-
-def _artifact_location(tracking_uri: str, experiment: str) -> str | None:
-    if not tracking_uri.startswith("sqlite:///"):
-        return None
-    db = Path(tracking_uri.removeprefix("sqlite:///"))
-    safe = re.sub(r"[^\w.-]+", "_", experiment)
-    return (db.resolve().parent / "mlruns" / safe).as_uri()
-
-
-def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -> str:
-    """Check that an MLflow store can be written, before any work is done.
-
-    Parameters
-    ----------
-    tracking_uri : str, optional
-        Default :func:`default_tracking_uri`.
-    key : str
-        Config key named in messages.
-
-    Returns
-    -------
-    str
-        The URI.
-
-    Raises
-    ------
-    ValueError
-        One line naming ``key`` and the URI: an SQLite store whose folder is missing or
-        not writable, or whose file is not an SQLite database; a local folder store that
-        is not writable; an HTTP server that does not answer within 5 s.
-    """
-    import os
-    import sqlite3
-
-    uri = tracking_uri or default_tracking_uri()
-    if uri.startswith("sqlite:///"):
-        db = Path(uri.removeprefix("sqlite:///"))
-        folder = db.parent
-        if not folder.is_dir():
-            raise ValueError(f"{key}={uri}: folder {folder} does not exist")
-        if not os.access(folder, os.W_OK) or (db.exists() and not os.access(db, os.W_OK)):
-            raise ValueError(f"{key}={uri}: {db if db.exists() else folder} is not writable")
-        if db.exists():
-            try:
-                con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
-                try:
-                    con.execute("select name from sqlite_master limit 1").fetchall()
-                finally:
-                    con.close()
-            except sqlite3.DatabaseError as e:
-                raise ValueError(f"{key}={uri}: {db} is not an SQLite database ({e})") from None
-    elif uri.startswith(("http://", "https://")):
-        import urllib.request
-
-        try:
-            urllib.request.urlopen(uri.rstrip("/") + "/health", timeout=5).close()
-        except OSError as e:
-            raise ValueError(f"{key}={uri}: the tracking server does not answer ({e})") \
-                from None
-    else:
-        folder = Path(uri.removeprefix("file://"))
-        probe = folder if folder.exists() else folder.parent
-        if not probe.is_dir() or not os.access(probe, os.W_OK):
-            raise ValueError(f"{key}={uri}: {probe} is not a writable folder")
-    return uri
-
-
-@contextmanager
-def store_lock(tracking_uri: str, key: str = "tracking_uri",
-               timeout_s: float = STORE_LOCK_TIMEOUT_S) -> Iterator[None]:
-    """Hold the lock of an SQLite store, ``<database file>.lock``, while it is opened.
-
-    Parameters
-    ----------
-    tracking_uri : str
-        A ``sqlite:///`` URI gets the lock; any other URI none (a server or a folder
-        store creates nothing that two processes could race on).
-    key : str
-        Config key named in messages.
-    timeout_s : float
-        How long to wait for another process holding the lock.
-
-    Raises
-    ------
-    ValueError
-        One line naming ``key`` and the URI if the lock is not had within ``timeout_s``.
-    """
-    db = tracking_uri.removeprefix("sqlite:///").split("?")[0]
-    if not tracking_uri.startswith("sqlite:///") or db in ("", ":memory:"):
-        yield
-        return
-    from filelock import FileLock, Timeout
-
-    lock = FileLock(f"{db}.lock", thread_local=False)
-    try:
-        lock.acquire(timeout=timeout_s)
-    except Timeout:
-        raise ValueError(f"{key}={tracking_uri}: another process has held {db}.lock for over "
-                         f"{timeout_s:g} s (creating or migrating the store); wait for it "
-                         f"to finish or choose another {key}") from None
-    try:
-        yield
-    finally:
-        lock.release()
-
-
-def tracking_client(tracking_uri: str | None = None, key: str = "tracking_uri"):
-    """An :class:`mlflow.MlflowClient` on a store; the one way a process opens a store.
-
-    The first time in a process, the client is created and its first query made (MLflow
-    creates or migrates the schema of a new SQLite store then) under :func:`store_lock`,
-    so that processes starting together on a fresh store all succeed.
-
-    Parameters
-    ----------
-    tracking_uri : str, optional
-        Default :func:`default_tracking_uri`.
-    key : str
-        Config key named in messages.
-
-    Returns
-    -------
-    mlflow.MlflowClient
-
-    Raises
-    ------
-    ValueError
-        See :func:`store_lock`.
-    """
-    import mlflow
-
-    quiet_mlflow()
-    uri = tracking_uri or default_tracking_uri()
-    if uri in _OPENED:
-        return mlflow.MlflowClient(uri)
-    with store_lock(uri, key):
-        client = mlflow.MlflowClient(uri)
-        client.search_experiments(max_results=1)
-    _OPENED.add(uri)
-    return client
-
-
-def use_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -> str:
-    """Open a store (:func:`tracking_client`) and point MLflow's fluent API
-    (``mlflow.start_run``, ``mlflow.log_metric``) at it.
-
-    Parameters
-    ----------
-    tracking_uri : str, optional
-        Default :func:`default_tracking_uri`.
-    key : str
-        Config key named in messages.
-
-    Returns
-    -------
-    str
-        The URI.
-    """
-    import mlflow
-
-    uri = tracking_client(tracking_uri, key).tracking_uri
-    mlflow.set_tracking_uri(uri)
-    return uri
-
-
-def quiet_mlflow() -> None:
-    """Keep MLflow's own INFO messages (database set-up, migrations) off the console.
-
-    MLflow logs through its logger ``mlflow`` with a handler of its own; its warnings and
-    errors still show, except SQLAlchemy's deprecation of the ``noload`` loader strategy
-    (MLflow's store, not ours to fix) and the one that ``mlflow.sklearn`` repeats for every
-    model saved in the cloudpickle format, the format :meth:`TrackedRun.log_model` chooses (and
-    records in the model's tag ``serialization_format``; its docstring says why).
-    """
-    import warnings
-
-    # SQLAlchemy's deprecation of a loader strategy MLflow's own store uses: not ours to fix
-    warnings.filterwarnings("ignore", message="The ``noload`` loader strategy is deprecated",
-                            category=DeprecationWarning)
-    lg = logging.getLogger("mlflow")
-    if lg.getEffectiveLevel() < logging.WARNING:
-        lg.setLevel(logging.WARNING)
-    sk = logging.getLogger("mlflow.sklearn")
-    if not any(isinstance(f, _PickleWarningFilter) for f in sk.filters):
-        sk.addFilter(_PickleWarningFilter())
-
-
-class _PickleWarningFilter(logging.Filter):
-    """Drop ``mlflow.sklearn``'s per-model warning about the (cloud)pickle format."""
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        return "pickle or cloudpickle format" not in record.getMessage()
-
-
-def get_experiment_id(client, experiment: str) -> str:
-    """Id of MLflow experiment ``experiment``, created if absent.
-
-    Parameters
-    ----------
-    client : mlflow.MlflowClient
-    experiment : str
-        Experiment name.
-
-    Returns
-    -------
-    str
-    """
-    from mlflow.exceptions import MlflowException
-
-    exp = client.get_experiment_by_name(experiment)
-    if exp is not None:
-        return exp.experiment_id
-    try:
-        return client.create_experiment(
-            experiment, artifact_location=_artifact_location(client.tracking_uri, experiment)
-        )
-    except MlflowException:  # created meanwhile by a parallel job
-        exp = client.get_experiment_by_name(experiment)
-        if exp is None:
-            raise
-        return exp.experiment_id
 
 
 def confusion_figure(confusion: np.ndarray, labels: Sequence[str], title: str = ""):
@@ -654,10 +412,10 @@ def log_run(
     Parameters
     ----------
     experiment : str
-        MLflow experiment name (created if absent, :func:`get_experiment_id`).
+        MLflow experiment name (created if absent, :func:`learn.tracking.store.get_experiment_id`).
     run_name : str
     tracking_uri : str, optional
-        Default :func:`default_tracking_uri`.
+        Default :func:`learn.tracking.store.default_tracking_uri`.
     params : mapping, optional
         Params; nested mappings are flattened with dots (:func:`flatten_config`).
     config : mapping, optional
@@ -680,7 +438,8 @@ def log_run(
     ------
     ValueError
         A data set that :func:`dataset_ref` cannot read, before the run is created; a
-        store another process is creating for too long (:func:`tracking_client`).
+        store another process is creating for too long
+        (:func:`learn.tracking.store.tracking_client`).
 
     Examples
     --------
@@ -752,7 +511,7 @@ def log_job(
     config : mapping, optional
         Resolved config, stored as the artifact ``config.yaml``.
     tracking_uri : str, optional
-        Default :func:`default_tracking_uri`.
+        Default :func:`learn.tracking.store.default_tracking_uri`.
     tags : mapping, optional
         Run tags.
     confusion_plot : bool, default True
