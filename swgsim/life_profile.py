@@ -97,7 +97,7 @@ def slots_of(cfg, profile: pf.Profile, starts_s) -> Slots:
 
     fs = float(cfg.chain.sample_rate_hz)
     n_t = int(round(cfg.chain.window_s * fs))
-    n_jit = _jitter(cfg)
+    n_jit = jitter_samples(cfg)
     starts = np.round(np.asarray(starts_s) * fs).astype(np.int64)
     t = np.arange(int(starts.max()) + n_t + n_jit + 1) / fs
     w_d, _ = pf.speed_at(profile, t)  # [rad/s]
@@ -120,12 +120,8 @@ def slots_of(cfg, profile: pf.Profile, starts_s) -> Slots:
     return Slots(np.array(keep), np.round(n_mean, 6), np.round(t_mean, 6))
 
 
-def jitter_samples(plan) -> int:
-    """``dataset.profile.start_jitter_s`` in samples of the data set's rate."""
-    return _jitter(plan.config)
-
-
-def _jitter(cfg) -> int:
+def jitter_samples(cfg) -> int:
+    """``dataset.profile.start_jitter_s`` of a data set's config in samples of its rate."""
     return int(round(float(cfg.profile.start_jitter_s) * float(cfg.chain.sample_rate_hz)))
 
 
@@ -155,7 +151,7 @@ class ProfileRecordBank(RecordBank):
         fs = ch.sample_rate_hz
         q = 1 if amp is None else amp.oversample
         n_lead = 0 if amp is None else amp.lead_samples(fs)
-        n_t = int(round(ch.window_s * fs)) + jitter_samples(self.plan)  # window + jitter
+        n_t = int(round(ch.window_s * fs)) + jitter_samples(cfg)  # window + jitter
         params = [self.params(k) for k in keys]
         # the same pose every cycle: one start angle per gear, within one WG revolution
         ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(self.gear_id, 2 ** 20))
