@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
-from swgsim.lazy import lazy_exports
+from swgsim.base.lazy import lazy_exports
 
 try:
     __version__ = version("swg-monitor")

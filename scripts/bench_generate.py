@@ -96,10 +96,11 @@ def main(argv: list[str] | None = None) -> dict:
     args = ap.parse_args(argv)
 
     from swgcli import dataset_preset
-    from swgsim.chain import SimulationChain
-    from swgsim.faults import apply_fault
-    from swgsim.generate import generate
-    from swgsim.plan import gear_params, layout_for, plan
+    from swgsim.datasets.gears import gear_params, layout_for
+    from swgsim.datasets.generate import generate
+    from swgsim.datasets.plan import plan
+    from swgsim.gear.chain import SimulationChain
+    from swgsim.gear.faults import apply_fault
 
     cfg = plan(dataset_preset(args.dataset))  # checked once; generate takes the plan
     tmp = None
@@ -188,8 +189,9 @@ def profile(dataset: str, cfg: dict, n_jobs: int, work: Path) -> dict:
     import pstats
     import subprocess
 
-    from swgsim import data as dsio
-    from swgsim.shard import gear_influences, simulate_shard
+    from swgsim.datasets import schema as dsio
+    from swgsim.datasets.generate import simulate_shard
+    from swgsim.datasets.steps import gear_influences
 
     exe = Path(sys.executable).parent / "swgsim-generate"
     t0 = time.perf_counter()

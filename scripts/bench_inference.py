@@ -35,7 +35,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from learn.inputs.signals import build_input
     from learn.studies.latency import measure_latency
-    from swgsim.data import load
+    from swgsim.datasets.schema import load
 
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
         cfg = compose("train", overrides=["experiment=transfer", *args.overrides])

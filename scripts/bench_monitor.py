@@ -1,6 +1,6 @@
 """Cost of the condition monitor per window, on one core: health features, scoring
 (baseline z-scores, diagnosis model, novelty), conformal p-values and the CUSUM update;
-and the cost of a gear life's windows (records and windows, swgsim.life).
+and the cost of a gear life's windows (records and windows, swgsim.datasets.life).
 
     python scripts/bench_monitor.py [--dataset bench] [--windows 3000]
 
@@ -37,9 +37,10 @@ def main() -> None:
     from learn.monitor.features import window_features
     from learn.monitor.monitor import GearMonitor
     from swgcli import dataset_preset
-    from swgsim.life import LifeConfig, LifeSimulator
-    from swgsim.life_profile import record_bank
-    from swgsim.plan import plan
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import record_bank
+    from swgsim.datasets.schedule import LifeConfig
 
     p = plan(dataset_preset(args.dataset))
     cfg = MonitorStudyConfig(train_variants=2, train_healthy_h=4.0)

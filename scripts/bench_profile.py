@@ -21,9 +21,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from swgsim import dynamics as dy  # noqa: E402
-from swgsim import profile as pf  # noqa: E402
-from swgsim import profile_dynamics as pd  # noqa: E402
+from swgsim.gear import dynamics as dy  # noqa: E402
+from swgsim.gear import profile as pf  # noqa: E402
+from swgsim.gear import profile_dynamics as pd  # noqa: E402
 
 
 def best_of(fn, repeat: int) -> float:

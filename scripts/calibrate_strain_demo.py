@@ -1,7 +1,7 @@
 """Strain-side calibration demo: plant library effects in bench-like data, recover them.
 
 Simulates bench windows through the chain's standard path (2 operating points, random WG
-start angles), plants each strain library effect alone (swgsim.measurement, or a
+start angles), plants each strain library effect alone (swgsim.sensing.effects, or a
 kinematic-error harmonic through the dynamics), adds white noise of 1 % of the signal
 range, runs the calibration loop and prints the recovery table: effect, parameter, true
 value, recovered ± standard error, rank of the planted effect among the candidates of
@@ -35,7 +35,7 @@ def main(argv=None) -> dict:
     from swgcal import build_problem, calibrate, summarize, write_outputs
     from swgcal.strain import StrainModel
     from swgcal.strain import synthetic as syn
-    from swgsim.chain import SimulationChain
+    from swgsim.gear.chain import SimulationChain
 
     t0 = time.perf_counter()
     chain = SimulationChain()

@@ -36,9 +36,9 @@ from learn.studies.observability_motion import (  # noqa: E402
     fault_visibility,
 )
 from swgcli import dataset_preset  # noqa: E402
-from swgsim.config import dataset_config  # noqa: E402
-from swgsim.life_profile import profile_slots  # noqa: E402
-from swgsim.plan import plan  # noqa: E402
+from swgsim.datasets.config import dataset_config  # noqa: E402
+from swgsim.datasets.plan import plan  # noqa: E402
+from swgsim.datasets.slots import profile_slots  # noqa: E402
 
 
 def conditions(payload_kg: float, jitter_s: float) -> list[tuple[str, str, list[str], object]]:

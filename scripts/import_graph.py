@@ -33,13 +33,32 @@ def modules() -> dict[str, Path]:
     return out
 
 
-def imports(name: str, path: Path, known: set[str]) -> set[str]:
-    """Project modules that ``name`` imports (absolute and relative, any depth)."""
+def _top_level(tree: ast.Module):
+    """The import statements a module runs when it is imported: not those inside
+    functions or classes, nor under ``if TYPE_CHECKING:``."""
+    stack = list(tree.body)
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            yield node
+        elif isinstance(node, ast.If):
+            if "TYPE_CHECKING" not in ast.unparse(node.test):
+                stack.extend(node.body + node.orelse)
+        elif isinstance(node, ast.Try):
+            stack.extend(node.body + node.orelse + node.finalbody
+                         + [n for h in node.handlers for n in h.body])
+        elif isinstance(node, ast.With):
+            stack.extend(node.body)
+
+
+def imports(name: str, path: Path, known: set[str], top_level: bool = False) -> set[str]:
+    """Project modules that ``name`` imports (absolute and relative, any depth; with
+    ``top_level``, only the imports run at import time)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
     is_pkg = path.name == "__init__.py"
     base = name.split(".") if is_pkg else name.split(".")[:-1]
     found = set()
-    for node in ast.walk(tree):
+    for node in (_top_level(tree) if top_level else ast.walk(tree)):
         if isinstance(node, ast.Import):
             cands = [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):

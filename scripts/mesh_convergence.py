@@ -24,11 +24,11 @@ def main(argv=None) -> dict:
     ap.add_argument("--meshes", type=int, nargs="+", default=[60, 120, 240])
     args = ap.parse_args(argv)
 
-    from swgsim.chain import ChainSettings, SimulationChain
-    from swgsim.dynamics import rt1_size20
-    from swgsim.faults import ChainParams, apply_fault
-    from swgsim.flexspline import Mesh
-    from swgsim.sensors import SensorLayout
+    from swgsim.gear.chain import ChainSettings, SimulationChain
+    from swgsim.gear.dynamics import rt1_size20
+    from swgsim.gear.faults import ChainParams, apply_fault
+    from swgsim.gear.flexspline import Mesh
+    from swgsim.gear.sensors import SensorLayout
 
     h = ChainParams(gear=rt1_size20())
     cases = {"healthy": h, "eccentric_wg": apply_fault(h, "eccentric_wg", 0.1, 36.0),

@@ -87,7 +87,7 @@ def _train(p, gear: int, cfg, cls: list[str], n_comm: int):
     from learn.monitor.evaluate import features_of, training_lives
     from learn.monitor.model import HEALTHY, Baseline, design_matrix
     from learn.monitor.monitor import baseline_windows
-    from swgsim.life_profile import record_bank
+    from swgsim.datasets.records import record_bank
 
     bank = record_bank(p, gear)
     lives = training_lives(p, bank, gear, cfg)
@@ -137,10 +137,11 @@ def main() -> None:
     from learn.monitor.model import DiagnosisModel
     from learn.monitor.monitor import GearMonitor
     from swgcli import dataset_preset
-    from swgsim.life import FaultOnset, LifeConfig, LifeSimulator
-    from swgsim.life_profile import record_bank
-    from swgsim.plan import plan
-    from swgsim.sensor_faults import SENSOR_FAULTS
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import record_bank
+    from swgsim.datasets.schedule import FaultOnset, LifeConfig
+    from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
     p = plan(dataset_preset(args.dataset))
     cfg = MonitorStudyConfig()

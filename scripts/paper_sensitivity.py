@@ -59,8 +59,8 @@ def main(argv: list[str] | None = None) -> int:
     from learn.studies.tables import StudyOptions
     from learn.tasks.paper import run_paper_study
     from swgcli import dataset_preset
-    from swgsim.config import dataset_config
-    from swgsim.generate import generate
+    from swgsim.datasets.config import dataset_config
+    from swgsim.datasets.generate import generate
 
     base = dataset_config(dataset_preset(args.dataset))
     out = Path(args.out)

@@ -24,8 +24,8 @@ Layout: the kind-independent parts here, the kinds in subpackages of the same sh
   what a fit adds to a term's form), :mod:`.periodogram`;
 * :mod:`.friction` (data kind 1) and :mod:`.strain` (data kind 2).
 
-The model terms (:mod:`swgsim.terms`), the friction effect forms (:mod:`swgsim.friction`)
-and the measurement effects (:mod:`swgsim.measurement`) belong to the simulator; the
+The model terms (:mod:`swgsim.gear.terms`), the friction effect forms (:mod:`swgsim.gear.friction`)
+and the measurement effects (:mod:`swgsim.sensing.effects`) belong to the simulator; the
 calibration fits them and holds what only a fit needs (bounds, starts, probes, physical
 ranges).
 """

@@ -17,7 +17,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from swgsim import data as dsio
+from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
 from .friction.data import REQUIRED_COLUMNS, FrictionRecording, read_csv_header
 from .loop import CalibrationResult, Problem, SelectionConfig
@@ -283,9 +283,9 @@ def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
     summary["figures"] = kind.make_figures(result, out) if figures else {}
     extra = kind.simulation_files(summary)
     summary["files"] = ["report.md", "summary.json", *extra]
-    dsio.atomic_write_json(out / "summary.json", summary)
-    dsio.atomic_write_bytes(out / "report.md",
+    atomic_write_json(out / "summary.json", summary)
+    atomic_write_bytes(out / "report.md",
                             kind.render_report(result, summary, summary["figures"]).encode())
     for name, text in extra.items():
-        dsio.atomic_write_bytes(out / name, text.encode())
+        atomic_write_bytes(out / name, text.encode())
     return summary

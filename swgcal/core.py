@@ -1,7 +1,7 @@
 """Separable least squares of a sum of model terms, with uncertainties.
 
 The terms' forms (:class:`Param`, :class:`Term`, the design matrix) are defined in
-:mod:`swgsim.terms` (a simulator input as much as a fitted model) and re-exported here;
+:mod:`swgsim.gear.terms` (a simulator input as much as a fitted model) and re-exported here;
 what only a fit needs (bounds, starts, probes, physical ranges) is added by
 :class:`~swgcal.terms.FitTerm`, the class of every term this module fits.
 
@@ -9,7 +9,7 @@ A model is a sum of *terms*. Each term contributes columns ``X_j(θ_j)`` times l
 coefficients ``c_j`` to the prediction ``ŷ = Σ_j X_j(θ_j) c_j``; ``θ_j`` are its nonlinear
 parameters (a ripple period, a time constant). A term may instead *transform* the
 signals every later term sees (a lag of the velocity seen by the friction law). The
-signals object is domain specific (friction: :class:`~swgsim.friction.FrictionSignals`);
+signals object is domain specific (friction: :class:`~swgsim.gear.friction.FrictionSignals`);
 this module only calls term methods, so a strain-side library plugs in by defining its
 own signals and terms.
 
@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from swgsim.terms import Param, Term, design_matrix, evaluate_terms, linear_recurrence
+from swgsim.gear.terms import Param, Term, design_matrix, evaluate_terms, linear_recurrence
 
 from .terms import FitTerm
 

@@ -1,7 +1,7 @@
 """Model terms as the calibration fits them: a simulator form plus the fit's vocabulary.
 
 A term's form (its parameters, columns or transform, reported parameters) is the
-simulator's (:class:`swgsim.terms.Term`: friction effects in :mod:`swgsim.friction`,
+simulator's (:class:`swgsim.gear.terms.Term`: friction effects in :mod:`swgsim.gear.friction`,
 evaluated by the dynamics). What only a fit needs lives here, on :class:`FitTerm`:
 box bounds and starting values of the nonlinear parameters, how many instances a model
 may hold, the residual signature and the diagnosis probes the term should explain, and
@@ -17,13 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.terms import Term
+from swgsim.gear.terms import Term
 
 __all__ = ["FitTerm"]
 
 
 class FitTerm(Term):
-    """A :class:`swgsim.terms.Term` with what its fit needs. Subclass and override.
+    """A :class:`swgsim.gear.terms.Term` with what its fit needs. Subclass and override.
 
     Class attributes
     ----------------
@@ -34,7 +34,7 @@ class FitTerm(Term):
     probes : tuple of str
         Names of the diagnosis probes whose structure it should explain.
     ranges : dict of str to (float, float, str)
-        Physical range of a :meth:`~swgsim.terms.Term.derived` parameter,
+        Physical range of a :meth:`~swgsim.gear.terms.Term.derived` parameter,
         ``name -> (low, high, source)`` in the parameter's unit (bounds inclusive;
         ``-inf``/``inf`` for an open side). A fit outside the range is not accepted as
         this effect (:meth:`range_violations`): the term would be absorbing something
@@ -60,8 +60,8 @@ class FitTerm(Term):
         Parameters
         ----------
         values : dict of str to float
-            Derived parameters (:meth:`~swgsim.terms.Term.derived`), in
-            :meth:`~swgsim.terms.Term.derived_units`.
+            Derived parameters (:meth:`~swgsim.gear.terms.Term.derived`), in
+            :meth:`~swgsim.gear.terms.Term.derived_units`.
 
         Returns
         -------

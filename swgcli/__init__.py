@@ -76,7 +76,7 @@ def dataset_preset(name: str, overrides: list[str] | tuple[str, ...] = ()) -> di
     Returns
     -------
     dict
-        Plain, resolved config for :func:`swgsim.generate.generate`.
+        Plain, resolved config for :func:`swgsim.datasets.generate.generate`.
     """
     from omegaconf import OmegaConf
 

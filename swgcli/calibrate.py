@@ -189,10 +189,10 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
         ``measured`` is neither a friction CSV nor a data-set directory.
     ValueError
         ``out_dir`` holds a file this project cannot show it wrote (named; before any
-        work, :func:`swgsim.ownership.check`); the app's own earlier output is replaced.
+        work, :func:`swgsim.files.ownership.check`); the app's own earlier output is replaced.
     """
     from swgcal import build_problem, calibrate, detect_kind, options_from_config, write_outputs
-    from swgsim import ownership
+    from swgsim.files import ownership
 
     measured = Path(cfg.measured).expanduser()
     out_dir = Path(cfg.out_dir).expanduser()

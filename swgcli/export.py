@@ -29,7 +29,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from learn.export.pipeline import ExportOptions
 from swgcli.app import absolute_path, hydra_app
-from swgsim.config import DatasetConfig
+from swgsim.datasets.config import DatasetConfig
 
 log = logging.getLogger(__name__)
 
@@ -59,7 +59,7 @@ def run_export_app(cfg) -> dict:
         model the C stage cannot represent.
     """
     from learn.export.pipeline import run_export
-    from swgsim.plan import plan
+    from swgsim.datasets.plan import plan
 
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
     p = plan(app.dataset)

@@ -32,9 +32,9 @@ def run_generate(cfg: DictConfig) -> dict:
     Returns
     -------
     dict
-        The summary of :func:`swgsim.generate.generate`.
+        The summary of :func:`swgsim.datasets.generate.generate`.
     """
-    from swgsim.generate import generate
+    from swgsim.datasets.generate import generate
 
     ds_cfg = OmegaConf.to_object(cfg.dataset)  # the typed DatasetConfig
     try:

@@ -57,12 +57,12 @@ def run_monitor_app(cfg) -> dict:
     ------
     ValueError
         ``out_dir`` holds a file this project cannot show it wrote (named; before any
-        work, :func:`swgsim.ownership.check`), or the model or stream is unfit.
+        work, :func:`swgsim.files.ownership.check`), or the model or stream is unfit.
     """
     from learn.monitor.rule import threshold
     from learn.monitor.stream import monitor_stream, select_gear, write_outputs
-    from swgsim import ownership
-    from swgsim.data import load
+    from swgsim.datasets.schema import load
+    from swgsim.files import ownership
 
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
     out = Path(absolute_path(app.out_dir))

@@ -26,7 +26,7 @@ from swgcli.app import absolute_path, hydra_app
 from swgcli.schema import ObservabilityApp
 
 if TYPE_CHECKING:
-    from swgsim.plan import DatasetPlan
+    from swgsim.datasets.plan import DatasetPlan
 
 log = logging.getLogger(__name__)
 
@@ -58,16 +58,16 @@ def data_set_configs(cfg: DictConfig) -> dict[float, DatasetPlan]:
     Returns
     -------
     dict
-        J_out [kg m²] -> the checked data set (:class:`swgsim.plan.DatasetPlan`;
+        J_out [kg m²] -> the checked data set (:class:`swgsim.datasets.plan.DatasetPlan`;
         ``load.j_out_kgm2`` set, ``chain.settle_s`` raised to
-        :func:`swgsim.plan.min_settle_s` rounded up to 10 ms).
+        :func:`swgsim.datasets.plan.min_settle_s` rounded up to 10 ms).
 
     Raises
     ------
     ValueError
         Naming the key: ``j_out_kgm2`` / ``n_j_out`` out of range, or a data-set key.
     """
-    from swgsim.plan import min_settle_s, plan
+    from swgsim.datasets.plan import min_settle_s, plan
 
     values = j_out_values(cfg)
     for key in ("n_jobs", "harmonics"):
@@ -102,15 +102,16 @@ def run_observability(cfg: DictConfig) -> dict:
     ------
     ValueError
         ``report_dir`` or a data-set folder holds a file this project cannot show it
-        wrote (named; the report folder before any work, :func:`swgsim.ownership.check`).
+        wrote (named; the report folder before any work, :func:`swgsim.files.ownership.check`).
     """
     import pandas as pd
 
     from learn.studies.observability import observability_table, plot_observability, torsional_modes
     from learn.studies.separability import separation_records
-    from swgsim import ownership
-    from swgsim.data import atomic_write_bytes, load
-    from swgsim.generate import generate
+    from swgsim.datasets.generate import generate
+    from swgsim.datasets.schema import load
+    from swgsim.files import ownership
+    from swgsim.files.ownership import atomic_write_bytes
 
     rep = Path(absolute_path(str(cfg.report_dir)))
     csv = rep / "observability.csv"
@@ -172,7 +173,7 @@ def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
         Naming the key (``j_out_kgm2``, ``n_j_out``, ``motion.*`` or a data-set key).
     """
     from learn.studies.observability_motion import check_motion_map
-    from swgsim.plan import min_settle_s, plan
+    from swgsim.datasets.plan import min_settle_s, plan
 
     check_motion_map(OmegaConf.to_object(cfg.motion))
     out = {}
@@ -209,8 +210,8 @@ def run_motion_map(cfg: DictConfig, rep: Path) -> dict:
         plot_motion_map,
         smallest_detectable,
     )
-    from swgsim import ownership
-    from swgsim.data import atomic_write_bytes
+    from swgsim.files import ownership
+    from swgsim.files.ownership import atomic_write_bytes
 
     plans = motion_plans(cfg)
     mc = OmegaConf.to_object(cfg.motion)

@@ -3,7 +3,7 @@
 For each data set in ``run_on`` (default: the paper's recording, phase-locked and
 noise-free windows, and a real bench's): (1) generate ``<data_root>/<name>`` (shards
 already there and valid are skipped; a data set of another config there is replaced only
-if every file in the folder is provably this project's, :mod:`swgsim.ownership`), (2) the
+if every file in the folder is provably this project's, :mod:`swgsim.files.ownership`), (2) the
 study of Tables VII-X (:func:`learn.tasks.paper.run_paper_study`), every job logged to
 MLflow, with its report in ``<report_root>/<name>``; then (3) the summary side by side
 with the paper and the reproduction scorecard (:func:`learn.reports.summary.write_summary`)
@@ -48,7 +48,7 @@ def _check(cfg: DictConfig) -> list[str]:
 
 def _plans(cfg: DictConfig, names: list[str]) -> dict:
     """Every data set of the run checked once, before any work: name -> DatasetPlan."""
-    from swgsim.plan import plan
+    from swgsim.datasets.plan import plan
 
     plans = {}
     for n in names:
@@ -61,7 +61,7 @@ def _plans(cfg: DictConfig, names: list[str]) -> dict:
 
 def _generate(cfg: DictConfig, plans: dict, root_data: str, stage, stages: dict) -> dict:
     """Stage 1: each data set generated (or found valid) in ``<root_data>/<name>``."""
-    from swgsim.generate import generate
+    from swgsim.datasets.generate import generate
 
     gen = {}
     for n, p in plans.items():
@@ -140,13 +140,13 @@ def run_paper(cfg: DictConfig) -> dict:
     ------
     ValueError
         A bad key, or a folder holding a file this project cannot show it wrote, named
-        (:mod:`swgsim.ownership`): in ``report_root`` one of the summary's files, or
+        (:mod:`swgsim.files.ownership`): in ``report_root`` one of the summary's files, or
         anything in ``<report_root>/<name>`` (both before any work) or in
         ``<data_root>/<name>`` (when that data set is due).
     """
     from learn.reports.summary import SUMMARY_FILES, write_summary
     from learn.tracking.store import check_tracking
-    from swgsim import ownership
+    from swgsim.files import ownership
 
     names = _check(cfg)
     plans = _plans(cfg, names)

@@ -6,7 +6,7 @@ Each app's primary config (``conf/<app>.yaml``) starts from its schema here
 Hydra refuses unknown keys, missing mandatory values and values of the wrong type while
 composing; :func:`validate` repeats the key check after composition, because Hydra's
 ``+key=value`` adds a key even to a typed config. Ranges are checked where they are
-decided (:func:`swgsim.plan.plan`, the learners, the calibration).
+decided (:func:`swgsim.datasets.plan.plan`, the learners, the calibration).
 
 The config groups whose defaults live in Python are generated here from their one
 source, not written twice as YAML:
@@ -18,7 +18,7 @@ group          source
 ``model``      :data:`learn.learners.baselines.MODELS` (Table VI); deep models stay YAML
 ``features``   :data:`learn.inputs.features.SELECTIONS` (Table III selections)
 ``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.studies.tables.PAPER_TABLES`
-``dataset``    :class:`swgsim.config.DatasetConfig` (the paper preset is its defaults)
+``dataset``    :class:`swgsim.datasets.config.DatasetConfig` (the paper preset is its defaults)
 =============  =====================================================================
 """
 
@@ -39,7 +39,8 @@ from learn.studies.tables import StudyOptions
 from learn.studies.transfer import TransferConfig
 from learn.tasks.monitor import MonitorExperiment
 from learn.tracking.config import LoggerConfig
-from swgsim.config import DatasetConfig, allowed, check_keys
+from swgsim.base.typed import allowed, check_keys
+from swgsim.datasets.config import DatasetConfig
 
 #: ``n_jobs`` of every app: worker processes, one or more (0 or a negative count is
 #: refused with the keys, before any work)

@@ -12,8 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swgsim.data import MANIFEST, SCHEMA_VERSION, atomic_write_json, write_shard
-from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
+from swgsim.datasets.schema import MANIFEST, SCHEMA_VERSION, write_shard
+from swgsim.files.ownership import atomic_write_json
+from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
 
 
 def make_synthetic(
@@ -33,7 +34,7 @@ def make_synthetic(
     s1; root_tooth_crack -15 % amplitude on all sensors; tip_tooth_crack order-1 harmonic
     on s2. Healthy s1 = s3 and s2 = s4 up to noise (order-2 signals 180 deg apart).
     """
-    from swgsim.data import make_dataset
+    from swgsim.datasets.schema import make_dataset
 
     rng = np.random.default_rng(seed)
     t = np.arange(n_time) / sample_rate_hz
@@ -133,7 +134,7 @@ def small(tmp_path_factory) -> Path:
     """A finished two-gear data set of ``test_reliability.small_cfg`` (about a second)."""
     from test_reliability import small_cfg
 
-    from swgsim import generate as gen
+    from swgsim.datasets import generate as gen
 
     out = tmp_path_factory.mktemp("small") / "small"
     gen.generate(small_cfg(), out, n_jobs=1, progress=False)

@@ -3,7 +3,7 @@
 import numpy as np
 from scipy.optimize import brentq
 
-from swgsim import dynamics as dy
+from swgsim.gear import dynamics as dy
 
 
 def steady_motion(p: dy.GearParams, n_in_rpm: float, t_gear_nm: float) -> tuple[float, float]:

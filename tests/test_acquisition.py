@@ -1,17 +1,17 @@
-"""Data-set recording: window starts and the bench amplifier (swgsim.acquisition)."""
+"""Data-set recording: window starts and the bench amplifier (swgsim.sensing.acquisition)."""
 
 import numpy as np
 import pytest
 
 from swgcli import dataset_preset
-from swgsim.acquisition import (
+from swgsim.datasets.config import dataset_config
+from swgsim.sensing.acquisition import (
     Amplifier,
     acquire,
     check_acquisition,
     sinc_taps,
     start_angles,
 )
-from swgsim.config import dataset_config
 
 
 def parse_acquisition(cfg):

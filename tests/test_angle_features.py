@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from learn.monitor import features as ft
-from swgsim import dynamics as dy
-from swgsim import profile as pf
-from swgsim.chain import SimulationChain
-from swgsim.faults import ChainParams
+from swgsim.gear import dynamics as dy
+from swgsim.gear import profile as pf
+from swgsim.gear.chain import SimulationChain
+from swgsim.gear.faults import ChainParams
 
 H = ft.N_HARMONICS
 N_MEAN, T_OUT = 2000.0, 39.0

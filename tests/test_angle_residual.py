@@ -15,10 +15,10 @@ import pytest
 import xarray as xr
 
 from learn.inputs import signals as sg
-from swgsim import dynamics as dy
-from swgsim import profile as pf
-from swgsim.chain import SimulationChain
-from swgsim.faults import ChainParams
+from swgsim.gear import dynamics as dy
+from swgsim.gear import profile as pf
+from swgsim.gear.chain import SimulationChain
+from swgsim.gear.faults import ChainParams
 
 N_MEAN, T_OUT = 2000.0, 39.0
 RS = sg.ResidualSettings()

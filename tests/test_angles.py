@@ -1,4 +1,4 @@
-"""Angle channels (swgsim/angles.py): quantisation in closed form, ψ and the twist from the
+"""Angle channels (swgsim/sensing/angles.py): quantisation in closed form, ψ and the twist from the
 recorded channels against the simulated states (dynamics.simulate at 2000 rpm, bench
 output inertia), and the edge-interpolated ψ of a coarse Hall sensor at steady speed and
 along a reversal (profile_dynamics.simulate_profile).
@@ -12,10 +12,10 @@ import math
 import numpy as np
 import pytest
 
-from swgsim import angles as an
-from swgsim import dynamics as dy
-from swgsim import profile as pf
-from swgsim import profile_dynamics as pd
+from swgsim.gear import dynamics as dy
+from swgsim.gear import profile as pf
+from swgsim.gear import profile_dynamics as pd
+from swgsim.sensing import angles as an
 
 N = 100.0
 DT = 1e-4  # sample interval of simulate's default 10 kHz [s]

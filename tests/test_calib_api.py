@@ -39,7 +39,7 @@ def test_unknown_kind_and_unknown_options_are_named():
 
 
 def test_making_a_data_set_does_not_load_the_calibration():
-    code = ("import sys, swgsim.generate, swgsim.friction; "
+    code = ("import sys, swgsim.datasets.generate, swgsim.gear.friction; "
             "print(sorted(m for m in sys.modules if m.startswith('swgcal')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()

@@ -1,4 +1,4 @@
-"""Accepted effects as a simulation option: swgsim.friction.FrictionEffects."""
+"""Accepted effects as a simulation option: swgsim.gear.friction.FrictionEffects."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from swgcal.friction.synthetic import (
     synthetic_recording,
     synthetic_trajectory,
 )
-from swgsim.friction import FRICTION_LIBRARY, FrictionEffects, parse_effects
+from swgsim.gear.friction import FRICTION_LIBRARY, FrictionEffects, parse_effects
 
 CONF = Path(__file__).resolve().parents[1] / "conf" / "friction_effects"
 

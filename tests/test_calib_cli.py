@@ -13,9 +13,9 @@ from swgcal.friction import load_friction_csv, write_friction_csv
 from swgcal.friction.synthetic import PLANTED, synthetic_recording
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
-from swgsim.data import DataSetError
-from swgsim.friction import FrictionEffects
-from swgsim.measurement import parse_sensor_effects
+from swgsim.datasets.schema import DataSetError
+from swgsim.gear.friction import FrictionEffects
+from swgsim.sensing.effects import parse_sensor_effects
 
 
 def _cfg(overrides):
@@ -107,16 +107,17 @@ def test_run_calibrate_rejects_unknown_data(tmp_path):
 def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
     """Kind 2: a schema-v1 data-set directory is recognised and calibrated end to end."""
     from swgcal.strain import synthetic as syn
-    from swgsim import data as dsio
-    from swgsim.chain import SimulationChain
+    from swgsim.datasets import schema as dsio
+    from swgsim.files.ownership import atomic_write_json
+    from swgsim.gear.chain import SimulationChain
 
     clean = syn.simulate_windows(SimulationChain(), seed=0)
     ds, _ = syn.bench_dataset(clean, [{"name": "offset",
                                        "params": {"offset_mvv": {"s1": 0.02}}}])
     d = tmp_path / "bench"
     sha = dsio.write_shard(ds, d / "bench.nc")
-    dsio.atomic_write_json(d / "manifest.json", {"schema_version": 1, "complete": True,
-                                                 "shards": {"bench.nc": {"sha256": sha}}})
+    atomic_write_json(d / "manifest.json", {"schema_version": 1, "complete": True,
+                                            "shards": {"bench.nc": {"sha256": sha}}})
     assert detect_kind(d) == "strain"
     out = tmp_path / "out"
     cfg = _cfg([f"measured={d}", f"out_dir={out}", f"logger.tracking_uri={tracking_uri}",

@@ -15,7 +15,7 @@ from swgcal.core import (
 from swgcal.diagnose import noise_floor
 from swgcal.periodogram import periodogram_peaks
 from swgcal.split import group_split, time_block_split
-from swgsim.friction.effects import dahl_state, first_order_lag
+from swgsim.gear.friction.effects import dahl_state, first_order_lag
 
 
 def test_linear_recurrence_matches_loop():

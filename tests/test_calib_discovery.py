@@ -22,7 +22,7 @@ from swgcal import discovery as disc
 from swgcal.strain import StrainModel
 from swgcal.strain import discovery as strain_discovery
 from swgcal.strain import synthetic as syn
-from swgsim.chain import SimulationChain
+from swgsim.gear.chain import SimulationChain
 
 OPS3 = ((2000.0, 7.0), (4000.0, 70.0), (4000.0, 7.0))
 

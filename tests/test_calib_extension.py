@@ -1,12 +1,12 @@
 """Extension point: a calibration effect defined outside the packages.
 
 The test defines a new friction effect in one class (its physics: the form and its
-parameter, a :class:`swgsim.terms.Term`; its fit: probes and physical range, a
+parameter, a :class:`swgsim.gear.terms.Term`; its fit: probes and physical range, a
 :class:`swgcal.terms.FitTerm`) and registers it with one call,
 :func:`swgcal.friction.library.register_effect`, editing nothing inside ``swgsim`` or
 ``swgcal``. The simulator then knows and plants it
 (:func:`swgcal.friction.synthetic.synthetic_recording` goes through
-:func:`swgsim.friction.parse_effects`), and the unchanged calibration loop offers it as a
+:func:`swgsim.gear.friction.parse_effects`), and the unchanged calibration loop offers it as a
 candidate among the whole library, accepts it on held-out evidence and recovers its
 parameter.
 """
@@ -21,8 +21,8 @@ from swgcal.friction import library
 from swgcal.friction.library import register_effect
 from swgcal.friction.synthetic import synthetic_recording
 from swgcal.terms import FitTerm
-from swgsim import friction
-from swgsim.terms import Param
+from swgsim.gear import friction
+from swgsim.gear.terms import Param
 
 
 class QuadraticDrag(FitTerm):

@@ -24,7 +24,7 @@ from swgcal.friction import calibrate, friction_problem, render_report, summariz
 from swgcal.friction.library import FRICTION_LIBRARY, PositionRipple
 from swgcal.friction.ripple_groups import harmonic_groups
 from swgcal.friction.synthetic import synthetic_recording
-from swgsim.friction.ripples import RippleTerm
+from swgsim.gear.friction.ripples import RippleTerm
 
 N = 50  # gear ratio of the harmonic-group case
 

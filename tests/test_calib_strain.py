@@ -17,10 +17,10 @@ from strain_run import run_strain
 
 from swgcal.strain import StrainModel
 from swgcal.strain import synthetic as syn
-from swgsim.chain import SimulationChain
-from swgsim.dsp import fractional_delay, lowpass
-from swgsim.dynamics import gear_with_ke, rt1_size20
-from swgsim.measurement import (
+from swgsim.gear.chain import SimulationChain
+from swgsim.gear.dynamics import gear_with_ke, rt1_size20
+from swgsim.sensing.dsp import fractional_delay, lowpass
+from swgsim.sensing.effects import (
     QUARTER_BRIDGE_K,
     apply_sensor_effects,
     parse_sensor_effects,
@@ -31,7 +31,7 @@ FS = 10e3
 
 
 # ---------------------------------------------------------------------------------------
-# measurement effects (swgsim.measurement)
+# measurement effects (swgsim.sensing.effects)
 
 
 def test_lowpass_first_order_response():

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from physics_reference import steady_motion
 
-from swgsim import dynamics as dy
-from swgsim.chain import ChainSettings, SimulationChain
-from swgsim.faults import FAULTS, ChainParams, apply_fault
-from swgsim.sensors import SensorLayout
+from swgsim.gear import dynamics as dy
+from swgsim.gear.chain import ChainSettings, SimulationChain
+from swgsim.gear.faults import FAULTS, ChainParams, apply_fault
+from swgsim.gear.sensors import SensorLayout
 
 N_IN, T_OUT = 2000.0, 39.0
 

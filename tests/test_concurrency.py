@@ -3,7 +3,7 @@ lost to a second run started meanwhile.
 
 * Two processes opening a fresh SQLite MLflow store at the same moment both log their run:
   MLflow creates the schema under the store's lock (``learn.tracking.store.tracking_client``).
-* A folder claimed by a run (:func:`swgsim.ownership.claim`) is refused to a second run of
+* A folder claimed by a run (:func:`swgsim.files.ownership.claim`) is refused to a second run of
   another process in one line naming the folder and the run, before anything is touched;
   a worker joining the run is not; once the run is over, its lock files are proved ours
   (listed in the stamp), so a rerun into the folder works.
@@ -23,8 +23,8 @@ from pathlib import Path
 import pytest
 
 from swgcli.app import one_line
-from swgsim import data as dsio
-from swgsim import ownership
+from swgsim.datasets import schema as dsio
+from swgsim.files import atomic, ownership
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="forked processes")
 FORK = mp.get_context("fork")
@@ -99,7 +99,7 @@ def test_second_run_is_refused_worker_joins_rerun_works(tmp_path):
         assert ready.wait(TIMEOUT_S)
         before = _files(folder)
         assert before["result.txt"] == b"finished work\n"
-        holder = f"{dsio.temp_host()}-{first.pid}, swgsim-generate"
+        holder = f"{atomic.temp_host()}-{first.pid}, swgsim-generate"
         # (b) another run: refused in one line naming the folder and the run, by check()
         # before any work and by claim(); nothing of the first run's is touched
         for call in (lambda: ownership.check(folder, "out_dir"),
@@ -144,7 +144,7 @@ def test_lock_file_of_another_tool_is_foreign_and_never_opened(tmp_path):
 
 def test_a_claim_held_by_this_process_can_be_claimed_again(tmp_path):
     folder = tmp_path / "out"
-    slot = f".swg-owner.{dsio.temp_host()}-{os.getpid()}.lock"
+    slot = f".swg-owner.{atomic.temp_host()}-{os.getpid()}.lock"
     with ownership.claim(folder, "a"):
         with ownership.claim(folder, "b"):
             ownership.check(folder)
@@ -183,7 +183,7 @@ def test_runs_sharing_a_folder_write_together_others_are_refused(tmp_path):
             p.join(TIMEOUT_S)
     with ownership.claim(folder, "swgsim-generate", share="cfg2"):
         assert sorted(json.loads((folder / ownership.STAMP).read_text())["holders"]) == [
-            f"{dsio.temp_host()}-{os.getpid()}"]
+            f"{atomic.temp_host()}-{os.getpid()}"]
 
 
 def test_a_killed_run_leaves_a_free_lock_that_the_next_run_removes(tmp_path):
@@ -194,7 +194,7 @@ def test_a_killed_run_leaves_a_free_lock_that_the_next_run_removes(tmp_path):
     assert ready.wait(TIMEOUT_S)
     first.kill()
     first.join(TIMEOUT_S)
-    slot = folder / f".swg-owner.{dsio.temp_host()}-{first.pid}.lock"
+    slot = folder / f".swg-owner.{atomic.temp_host()}-{first.pid}.lock"
     assert slot.is_file() and ownership.check(folder).foreign == []
     with ownership.claim(folder, "swgsim-calibrate"):
         assert not slot.exists()

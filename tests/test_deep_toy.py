@@ -14,8 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from swgsim.data import MANIFEST, atomic_write_json, make_dataset, write_shard
-from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
+from swgsim.datasets.schema import MANIFEST, make_dataset, write_shard
+from swgsim.files.ownership import atomic_write_json
+from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
 
 SPEEDS_RPM = (2000.0, 4000.0)
 TORQUES_NM = (7.0, 70.0)
@@ -130,7 +131,7 @@ def write_toy_dataset(path: str | Path, **kwargs) -> Path:
 
 
 def test_toy_dataset_is_schema_v1(tmp_path):
-    from swgsim.data import load
+    from swgsim.datasets.schema import load
 
     path = write_toy_dataset(tmp_path / "toy", n_variants=3, n_time=64)
     ds = load(path)

@@ -229,7 +229,7 @@ def test_transfer_experiment_composes():
     # the robot joint's link inertia, with time for its torsional mode to ring down
     rj = tc["datasets"]["robot_joint"]
     assert rj["load"]["j_out_kgm2"] == 0.69 and rj["acquisition"]["start"] == "random"
-    from swgsim.generate import plan
+    from swgsim.datasets.generate import plan
 
     for name in tc["run_on"]:
         assert plan(tc["datasets"][name])

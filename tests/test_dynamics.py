@@ -13,8 +13,8 @@ from physics_reference import steady_motion
 from scipy.integrate import simpson
 from scipy.optimize import brentq
 
-from swgsim import dynamics as dy
-from swgsim import modes
+from swgsim.gear import dynamics as dy
+from swgsim.gear import modes
 
 
 def secant_stiffness(p: dy.GearParams, torque_nm: float) -> float:
@@ -100,7 +100,7 @@ def test_bad_operating_point_is_refused(kw, match):
 
 def test_calibrated_friction_effect_enters_the_dynamics():
     """An effect accepted by the calibration loop, as extra output friction."""
-    from swgsim.friction.simulation import FrictionEffects
+    from swgsim.gear.friction.simulation import FrictionEffects
 
     p = dy.rt1_size20()
     base = dy.simulate([p], 2000.0, 39.0, window_s=0.02)

@@ -136,7 +136,7 @@ def tiny_export(tmp_path_factory):
         pytest.skip("no C compiler (cc) on PATH: sudo apt-get install -y gcc")
     from learn.export.pipeline import ExportOptions, run_export
     from swgcli import dataset_preset
-    from swgsim.plan import plan
+    from swgsim.datasets.plan import plan
 
     out = tmp_path_factory.mktemp("export")
     opts = ExportOptions(commissioning_h=2.0, train_healthy_h=1.0, train_fault_h=0.25,
@@ -165,7 +165,7 @@ def test_host_c_equals_python_on_held_out_windows(tiny_export):
 
 
 def test_export_folder_is_stamped_as_ours(tiny_export):
-    from swgsim import ownership
+    from swgsim.files import ownership
 
     out, _ = tiny_export
     survey = ownership.survey(out)

@@ -9,9 +9,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from swgsim import data as dsio
-from swgsim.faults import FAULTS, Fault, display_name, fault_classes, register_fault
-from swgsim.generate import generate
+from swgsim.datasets import schema as dsio
+from swgsim.datasets.generate import generate
+from swgsim.gear.faults import FAULTS, Fault, display_name, fault_classes, register_fault
 
 NAME = "worn_wg_bearing"
 

@@ -19,10 +19,10 @@ from omegaconf import OmegaConf
 from test_reliability import small_cfg
 
 from swgcli import compose_app, dataset_preset
-from swgsim import data as dsio
-from swgsim import generate as gen
-from swgsim.config import NONFINITE, check_finite
-from swgsim.life import DutyPoint, FaultOnset, LifeConfig, check_life
+from swgsim.base.typed import NONFINITE, check_finite
+from swgsim.datasets import generate as gen
+from swgsim.datasets import schema as dsio
+from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig, check_life
 
 NAN, INF = float("nan"), float("inf")
 
@@ -133,16 +133,16 @@ def test_write_shard_refuses_nonfinite_signals_before_writing(tmp_path):
 
 
 def test_generation_never_finalises_a_data_set_with_a_nonfinite_signal(tmp_path, monkeypatch):
-    import swgsim.shard
+    import swgsim.datasets.generate as generation
 
-    simulate = swgsim.shard.simulate_shard
+    simulate = generation.simulate_shard
 
     def poisoned(*args, **kwargs):
         ds, n = simulate(*args, **kwargs)
         ds["strain_signal"].values[:, 1] = INF  # a bridge that is 100 % infinite
         return ds, n
 
-    monkeypatch.setattr(swgsim.shard, "simulate_shard", poisoned)
+    monkeypatch.setattr(generation, "simulate_shard", poisoned)
     out = tmp_path / "ds"
     with pytest.raises(ValueError, match=r"gear1_n4000rpm\.nc: strain_signal holds \d+ "
                                          "non-finite"):
@@ -206,7 +206,7 @@ def test_load_refuses_a_shard_with_bad_content_naming_file_and_variable(copy_of,
 
 
 def _rehash(m: dict) -> None:
-    from swgsim.plan import config_hash
+    from swgsim.datasets.plan import config_hash
 
     m["config_hash"] = config_hash(m["config"])
 

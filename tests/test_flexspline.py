@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
-from swgsim import influence as inf
-from swgsim.flexspline import INNER, FlexsplineGeometry, Mesh, TrussModel
-from swgsim.sensors import SensorLayout, face_strain_rows, signal_rows
+from swgsim.gear import influence as inf
+from swgsim.gear.flexspline import INNER, FlexsplineGeometry, Mesh, TrussModel
+from swgsim.gear.sensors import SensorLayout, face_strain_rows, signal_rows
 
 
 def _tube(n_theta, length_m, rim_m, t_m=0.5e-3):
@@ -190,7 +190,7 @@ def test_woodbury_root_crack_matches_refactorised_solver(solver):
 def test_bad_mesh_and_gauge_are_refused():
     with pytest.raises(ValueError, match="multiple of 20"):
         TrussModel(mesh=Mesh(50))
-    from swgsim.sensors import Grid, grid_row
+    from swgsim.gear.sensors import Grid, grid_row
 
     m = TrussModel(mesh=Mesh(120))
     with pytest.raises(ValueError, match="leaves the collar"):

@@ -13,13 +13,13 @@ import pytest
 from omegaconf import OmegaConf
 
 from swgcli import compose_app, dataset_preset
-from swgsim import data as dsio
-from swgsim import generate as gen
-from swgsim import ownership
-from swgsim.config import paper_config
-from swgsim.faults import PAPER_CLASSES
-from swgsim.friction import friction_effects_from_config
-from swgsim.plan import plan
+from swgsim.datasets import generate as gen
+from swgsim.datasets import schema as dsio
+from swgsim.datasets.config import paper_config
+from swgsim.datasets.plan import plan
+from swgsim.files import atomic, ownership
+from swgsim.gear.faults import PAPER_CLASSES
+from swgsim.gear.friction import friction_effects_from_config
 
 
 def tiny_cfg(**chain):
@@ -38,7 +38,7 @@ def tiny_cfg(**chain):
 
 
 def test_paper_preset_is_the_schema_default():
-    """The paper's values live in one place: swgsim.config.DatasetConfig."""
+    """The paper's values live in one place: swgsim.datasets.config.DatasetConfig."""
     assert dataset_preset("paper") == json.loads(json.dumps(paper_config()))
 
 
@@ -114,7 +114,7 @@ def test_sigkill_then_resume_is_bit_identical(tiny_set, tmp_path):
     out = tmp_path / "killed"
     cfg_file = tmp_path / "cfg.json"
     cfg_file.write_text(json.dumps(tiny_cfg()))
-    code = ("import json,sys; from swgsim.generate import generate; "
+    code = ("import json,sys; from swgsim.datasets.generate import generate; "
             f"generate(json.load(open({str(cfg_file)!r})), {str(out)!r}, n_jobs=1, "
             "progress=False)")
     proc = subprocess.Popen([sys.executable, "-c", code])
@@ -192,13 +192,13 @@ def test_overwrite_replaces_only_a_folder_of_our_data_set(tiny_set, tmp_path):
     ours = tmp_path / "ours"
     shutil.copytree(src, ours)
     # a run of ours, killed while writing: registered in the stamp, then gone
-    code = ("import os, sys; from pathlib import Path; from swgsim import data, ownership; "
+    code = ("import os, sys; from pathlib import Path; from swgsim.files import atomic, ownership; "
             "f = Path(sys.argv[1]); ownership.join(f.parent); "
-            "(f.parent / (data.temp_prefix(f) + 'abc.tmp')).write_bytes(b'half'); os._exit(0)")
+            "(f.parent / (atomic.temp_prefix(f) + 'abc.tmp')).write_bytes(b'half'); os._exit(0)")
     subprocess.run([sys.executable, "-c", code, str(ours / "gear1_n2000rpm.nc")], check=True)
     (stale,) = ours.glob("*.tmp")
     ownership.join(ours).close()  # this process: a run of ours, alive
-    live = ours / f"{dsio.temp_prefix(ours / 'gear2_n2000rpm.nc')}xyz.tmp"
+    live = ours / f"{atomic.temp_prefix(ours / 'gear2_n2000rpm.nc')}xyz.tmp"
     live.write_bytes(b"another run writes here")
     with pytest.raises(ValueError, match="another run is writing into it"):
         gen.generate(cfg, ours, progress=False, overwrite=True)
@@ -233,10 +233,11 @@ def test_paper_protocol_healthy_windows_are_bit_identical(tiny_set):
 
 def test_shared_motions_equal_simulating_each_window(tiny_set):
     """Each distinct motion and window is simulated once; the result is the per-window one."""
-    from swgsim.chain import ChainSettings, SimulationChain
-    from swgsim.faults import apply_fault
-    from swgsim.plan import gear_params, layout_for, plan
-    from swgsim.shard import gear_influences
+    from swgsim.datasets.gears import gear_params, layout_for
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.steps import gear_influences
+    from swgsim.gear.chain import ChainSettings, SimulationChain
+    from swgsim.gear.faults import apply_fault
 
     out, _ = tiny_set
     p = plan(tiny_cfg())
@@ -264,7 +265,7 @@ def test_shared_motions_equal_simulating_each_window(tiny_set):
 
 def test_bench_windows_differ_and_carry_the_stated_noise(tmp_path):
     """Bench protocol: random window starts; the amplifier's noise is on the signal."""
-    from swgsim.plan import plan
+    from swgsim.datasets.plan import plan
 
     cfg = tiny_cfg()
     cfg["acquisition"] = dataset_preset("tiny_bench")["acquisition"]
@@ -361,8 +362,8 @@ def test_friction_effects_config_option_and_errors():
 
 
 def test_settling_shorter_than_the_torsional_ring_down_is_refused():
-    from swgsim.config import dataset_config
-    from swgsim.plan import min_settle_s, plan
+    from swgsim.datasets.config import dataset_config
+    from swgsim.datasets.plan import min_settle_s, plan
 
     cfg = dataset_config({"load": {"j_out_kgm2": 0.69}})
     need = min_settle_s(cfg)

@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 from test_reliability import small_cfg
 
-from swgsim import generate as gen
-from swgsim.plan import plan
-from swgsim.resources import BYTES_PER_FINE_SAMPLE, check_memory, shard_memory
+from swgsim.datasets import generate as gen
+from swgsim.datasets.plan import plan
+from swgsim.datasets.resources import BYTES_PER_FINE_SAMPLE, check_memory, shard_memory
 
 
 def test_memory_estimate_scales_with_the_fine_samples_of_a_shard():
@@ -38,7 +38,7 @@ def test_memory_is_checked_per_worker_naming_the_keys():
 def test_a_data_set_too_large_for_memory_is_refused_before_any_work(tmp_path, monkeypatch):
     """1 MHz and 10 s windows (12 GiB per shard): every range holds and the disk check
     passes; on a machine with 8 GiB available it is refused before the folder is made."""
-    import swgsim.resources as res
+    import swgsim.datasets.resources as res
 
     monkeypatch.setattr(res, "available_memory", lambda: 8 << 30)
     monkeypatch.setattr(gen, "check_disk_space", lambda *a: None)

@@ -12,7 +12,7 @@ from learn.inputs.features import (
     order_spectrum,
     paper_orders,
 )
-from swgsim.data import PER_SAMPLE, make_dataset
+from swgsim.datasets.schema import PER_SAMPLE, make_dataset
 
 FS = 10_000.0
 N_TIME = 1200  # 4 revolutions at 2000 rpm (DFT order 0.25)

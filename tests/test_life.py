@@ -1,4 +1,4 @@
-"""Gear lives (swgsim.life): schedules, state labels, determinism, sensor faults, the
+"""Gear lives (swgsim.datasets.life): schedules, state labels, determinism, sensor faults, the
 shortcut the evaluation takes (a fault life equals the healthy life before its onset),
 and lives written by swgsim-generate."""
 
@@ -8,17 +8,11 @@ import numpy as np
 import pytest
 
 from swgcli import dataset_preset
-from swgsim.config import dataset_config
-from swgsim.life import (
-    FaultOnset,
-    LifeConfig,
-    LifeSimulator,
-    RecordBank,
-    check_life,
-    schedule,
-    severity_at,
-)
-from swgsim.plan import plan
+from swgsim.datasets.config import dataset_config
+from swgsim.datasets.life import LifeSimulator
+from swgsim.datasets.plan import plan
+from swgsim.datasets.records import RecordBank
+from swgsim.datasets.schedule import FaultOnset, LifeConfig, check_life, schedule, severity_at
 
 
 @pytest.fixture(scope="module")
@@ -117,8 +111,8 @@ def test_sensor_fault_on_one_bridge_after_onset(tiny):
 
 
 def test_generate_writes_and_resumes_a_life(tmp_path):
-    from swgsim.data import load
-    from swgsim.generate import generate
+    from swgsim.datasets.generate import generate
+    from swgsim.datasets.schema import load
 
     cfg = dataset_config(dataset_preset("tiny_life"))
     cfg.gears = cfg.gears[:1]

@@ -1,4 +1,4 @@
-"""Gear lives on an operating profile (swgsim.life_profile): the slots, the windows of a
+"""Gear lives on an operating profile (swgsim.datasets.slots): the slots, the windows of a
 life along the profile, eq. (10) in the angle domain, and the monitor's features of such
 windows (angle domain, twist from an output encoder) against closed forms."""
 
@@ -10,11 +10,13 @@ import pytest
 from learn.monitor.evaluate import has_twist, life_features
 from learn.monitor.features import TWIST_FEATURES, feature_names
 from swgcli import dataset_preset
-from swgsim.config import dataset_config
-from swgsim.disturbance import DisturbanceSpec, disturb
-from swgsim.life import FaultOnset, LifeConfig, LifeSimulator, life_dataset
-from swgsim.life_profile import ProfileRecordBank, profile_slots, record_bank
-from swgsim.plan import plan
+from swgsim.datasets.config import dataset_config
+from swgsim.datasets.life import LifeSimulator, life_dataset
+from swgsim.datasets.plan import plan
+from swgsim.datasets.records import ProfileRecordBank, record_bank
+from swgsim.datasets.schedule import FaultOnset, LifeConfig
+from swgsim.datasets.slots import profile_slots
+from swgsim.sensing.disturbance import DisturbanceSpec, disturb
 
 # tiny_motion with 0.07 s windows: two slots turn the WG 2 revolutions one way, at
 # +2000 rpm under 7 N m and at -2000 rpm under 30 N m (the load step at 0.2 s)
@@ -97,7 +99,7 @@ def test_disturbance_in_the_input_angle_equals_the_time_form_at_steady_speed():
 def test_twist_features_follow_the_stiffness_closed_form(motion, bank):
     """The mean twist of a slot's windows with k1 · 0.75 against the closed form: the same
     stiffness torque T_s = k1 d + k2 d³ (paper eq. (3); friction and load unchanged)
-    solved for d with 0.75 k1, d = N δ / ((N + 1) tan α) (swgsim.dynamics.steady_state's
+    solved for d with 0.75 k1, d = N δ / ((N + 1) tan α) (swgsim.gear.dynamics.steady_state's
     relation), T_s taken from the healthy windows' measured twist."""
     assert has_twist(motion)
     names = feature_names(twist=True)
@@ -157,8 +159,8 @@ def test_a_profile_stream_gives_the_lifes_features_and_a_model_mismatch_is_named
 
 
 def test_a_life_on_a_profile_is_a_data_set_and_its_duty_is_the_profile(tmp_path):
-    from swgsim.data import load
-    from swgsim.generate import generate
+    from swgsim.datasets.generate import generate
+    from swgsim.datasets.schema import load
 
     cfg = dataset_config(dataset_preset("tiny_motion_life"))
     s = generate(cfg, tmp_path / "life", n_jobs=1, progress=False)

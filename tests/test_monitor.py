@@ -66,7 +66,7 @@ def test_short_commissioning_refused_with_the_minimum():
 
 
 def _stream(n=200, n_comm=120, hours=None, fs=10e3):
-    from swgsim.data import make_dataset
+    from swgsim.datasets.schema import make_dataset
 
     meta = {"gear": np.ones(n, int), "fault": np.full(n, "healthy"), "variant": np.zeros(n, int),
             "severity": np.zeros(n), "position_deg": np.full(n, np.nan),
@@ -111,7 +111,7 @@ def test_stream_outside_the_models_operating_points_refused():
 def tiny_eval():
     from learn.monitor.evaluate import MonitorStudyConfig, run_held_out
     from swgcli import dataset_preset
-    from swgsim.plan import plan
+    from swgsim.datasets.plan import plan
 
     p = plan(dataset_preset("tiny_bench"))
     cfg = MonitorStudyConfig(seeds=[0], healthy_hours=10.0, commissioning_h=4.0,
@@ -165,8 +165,8 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch)
 
     from swgcli import compose_app, dataset_preset
     from swgcli.monitor import run_monitor_app
-    from swgsim.config import dataset_config
-    from swgsim.generate import generate
+    from swgsim.datasets.config import dataset_config
+    from swgsim.datasets.generate import generate
 
     cfg = dataset_config(dataset_preset("tiny_life"))
     cfg.gears = [g for g in cfg.gears if g.id == 3]
@@ -208,8 +208,9 @@ def test_one_window_at_a_time_equals_the_block_path(tiny_eval):
     from learn.monitor.monitor import GearMonitor
     from learn.monitor.rule import RuleConfig
     from swgcli import dataset_preset
-    from swgsim.life import LifeConfig, LifeSimulator
-    from swgsim.plan import plan
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.schedule import LifeConfig
 
     p = plan(dataset_preset("tiny_bench"))
     sim = LifeSimulator(p, 3, LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9))
@@ -272,8 +273,9 @@ def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval):
     from learn.monitor.evaluate import features_of
     from learn.monitor.monitor import GearMonitor
     from swgcli import dataset_preset
-    from swgsim.life import FaultOnset, LifeConfig, LifeSimulator
-    from swgsim.plan import plan
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.schedule import FaultOnset, LifeConfig
 
     p = plan(dataset_preset("tiny_bench"))
     mon = GearMonitor(tiny_eval["model"], RuleConfig(), 1.0)

@@ -55,7 +55,7 @@ def test_j_out_grid_spans_bench_to_robot_link():
 def test_torsional_mode_follows_the_inertia():
     m = torsional_modes([J_OUT_BENCH, J_OUT_ROBOT], [7.0, 70.0])
     f = m.set_index(["j_out_kgm2", "t_out_nm"])["f_hz"]
-    from swgsim.dynamics import rt1_size20
+    from swgsim.gear.dynamics import rt1_size20
 
     # stiffer under load (cubic stiffness of eq. 2)
     assert f[(J_OUT_BENCH, 70.0)] > f[(J_OUT_BENCH, 7.0)]

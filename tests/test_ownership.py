@@ -2,7 +2,7 @@
 
 A file is this project's only if an ownership stamp (``.swg-owner.json``, signed
 ``"writer": "swg-monitor"``) lists it with the SHA-256 it has now, or, for a temporary
-file, names the run that left it (:mod:`swgsim.ownership`). Everything else, whatever its
+file, names the run that left it (:mod:`swgsim.files.ownership`). Everything else, whatever its
 name, is left byte-identical and the run refuses in one line naming it: the data-set
 writer (with and without ``overwrite``) and every app that writes reports, whose Hydra
 files never land in the user's folder.
@@ -22,9 +22,9 @@ import pytest
 
 from swgcli import compose_app, dataset_preset
 from swgcli.app import one_line
-from swgsim import data as dsio
-from swgsim import generate as gen
-from swgsim import ownership
+from swgsim.datasets import generate as gen
+from swgsim.datasets import schema as dsio
+from swgsim.files import atomic, ownership
 
 BIN = Path(sys.executable).parent
 SHARD = "gear1_n4000rpm.nc"
@@ -65,9 +65,9 @@ def dead_pid() -> int:
 def killed_run_temp(folder: Path, target: str) -> Path:
     """A temporary file left by a run of ours that was killed: the run joined the
     folder's stamp, started writing ``target`` and died."""
-    code = ("import os, sys; from pathlib import Path; from swgsim import data, ownership; "
+    code = ("import os, sys; from pathlib import Path; from swgsim.files import atomic, ownership; "
             "f = Path(sys.argv[1]); ownership.join(f.parent); "
-            "(f.parent / (data.temp_prefix(f) + 'k.tmp')).write_bytes(b'half'); os._exit(0)")
+            "(f.parent / (atomic.temp_prefix(f) + 'k.tmp')).write_bytes(b'half'); os._exit(0)")
     before = set(folder.glob("*.tmp"))
     subprocess.run([sys.executable, "-c", code, str(folder / target)], check=True)
     (tmp,) = set(folder.glob("*.tmp")) - before
@@ -84,12 +84,12 @@ def ours(tmp_path_factory) -> Path:
 
 # ------------------------------------------------------------------ swgsim-generate
 def _foreign_temp(folder: Path) -> None:
-    name = dsio.temp_prefix(folder / SHARD).replace(f"-{os.getpid()}.", f"-{dead_pid()}.")
+    name = atomic.temp_prefix(folder / SHARD).replace(f"-{os.getpid()}.", f"-{dead_pid()}.")
     (folder / f"{name}x.tmp").write_bytes(b"a user's file, named like our temp files")
 
 
 def _our_config_hash() -> str:
-    from swgsim.plan import plan
+    from swgsim.datasets.plan import plan
 
     return plan(small_cfg()).config_hash
 

@@ -1,7 +1,7 @@
-"""Operating profiles in the dynamic model (swgsim/profile.py, profile_dynamics.simulate_profile):
-closed forms of the speed profile, the steady case against ``simulate``, the ring-down
-after a load step against the linearised torsional mode, the energy balance along a
-reversal with a load step, and the catalogue limits.
+"""Operating profiles in the dynamic model (swgsim/gear/profile.py,
+profile_dynamics.simulate_profile): closed forms of the speed profile, the steady case
+against ``simulate``, the ring-down after a load step against the linearised torsional
+mode, the energy balance along a reversal with a load step, and the catalogue limits.
 
 Tolerances are set near the accuracy reached, measured with the tests' own settings; each
 states it (python -m pytest tests/test_profile.py).
@@ -14,10 +14,10 @@ import pytest
 from scipy.integrate import simpson
 from test_dynamics import power_terms
 
-from swgsim import dynamics as dy
-from swgsim import profile as pf
-from swgsim import profile_dynamics as pd
-from swgsim.modes import torsional_mode
+from swgsim.gear import dynamics as dy
+from swgsim.gear import profile as pf
+from swgsim.gear import profile_dynamics as pd
+from swgsim.gear.modes import torsional_mode
 
 
 def test_speed_profile_matches_the_trapezoid_closed_forms():

@@ -9,12 +9,12 @@ Tolerances are set near the accuracy reached, each stated with its measured valu
 import numpy as np
 import pytest
 
-from swgsim import dynamics as dy
-from swgsim import measurement as ms
-from swgsim import profile as pf
-from swgsim.chain import ChainSettings, SimulationChain
-from swgsim.faults import ChainParams
-from swgsim.sensors import SensorLayout
+from swgsim.gear import dynamics as dy
+from swgsim.gear import profile as pf
+from swgsim.gear.chain import ChainSettings, SimulationChain
+from swgsim.gear.faults import ChainParams
+from swgsim.gear.sensors import SensorLayout
+from swgsim.sensing import effects as ms
 
 N_IN, T_OUT = 2000.0, 39.0
 EFFECTS = {

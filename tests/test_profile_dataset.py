@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from swgcli import dataset_preset
-from swgsim import data as dsio
-from swgsim import generate as gen
-from swgsim import profile_dynamics
-from swgsim.angles import psi_estimate
-from swgsim.config import DatasetConfig, dataset_config
-from swgsim.plan import plain_config, plan
-from swgsim.shard import profile_motion
+from swgsim.datasets import generate as gen
+from swgsim.datasets import schema as dsio
+from swgsim.datasets.config import DatasetConfig, dataset_config
+from swgsim.datasets.plan import plain_config, plan
+from swgsim.datasets.profile_shard import profile_motion
+from swgsim.gear import profile_dynamics
+from swgsim.sensing.angles import psi_estimate
 
 #: config_hash of every steady preset, recorded before profiles existed: a data set that
 #: sets no profile keeps its hash (and its stored config).

@@ -23,9 +23,10 @@ import pytest
 
 from swgcli import compose_app, dataset_preset
 from swgcli.app import one_line
-from swgsim import data as dsio
-from swgsim import generate as gen
-from swgsim import outdir
+from swgsim.datasets import generate as gen
+from swgsim.datasets import outdir
+from swgsim.datasets import schema as dsio
+from swgsim.files import atomic
 
 BIN = Path(sys.executable).parent
 
@@ -206,9 +207,9 @@ def test_D3_an_unfinished_run_never_blocks_a_corrected_rerun(tmp_path, monkeypat
 def test_D4_temporary_files_of_a_killed_run_are_cleaned(copy_of):
     folder = copy_of()
     (folder / dsio.MANIFEST).unlink()  # killed before the end: no manifest
-    code = ("import os, sys; from pathlib import Path; from swgsim import data, ownership; "
+    code = ("import os, sys; from pathlib import Path; from swgsim.files import atomic, ownership; "
             "f = Path(sys.argv[1]); ownership.join(f.parent); "
-            "(f.parent / (data.temp_prefix(f) + 'k.tmp')).write_bytes(b'half'); os._exit(0)")
+            "(f.parent / (atomic.temp_prefix(f) + 'k.tmp')).write_bytes(b'half'); os._exit(0)")
     subprocess.run([sys.executable, "-c", code, str(folder / "gear1_n4000rpm.nc")], check=True)
     assert len(list(folder.glob("*.tmp"))) == 1  # its stamp names the killed run: ours
     gen.generate(small_cfg(), folder, n_jobs=1, progress=False)
@@ -352,7 +353,7 @@ def test_G_full_disk_is_refused_before_writing_naming_the_folder(tmp_path, monke
 
 @pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
 def test_G_disk_full_while_writing_names_the_folder(tmp_path, monkeypatch):
-    real = dsio.tempfile.mkstemp
+    real = atomic.tempfile.mkstemp
 
     def full(*a, **k):  # a shard's temporary file on a full disk: the kernel's ENOSPC
         fd, name = real(*a, **k)
@@ -362,7 +363,7 @@ def test_G_disk_full_while_writing_names_the_folder(tmp_path, monkeypatch):
             os.close(dev)
         return fd, name
 
-    monkeypatch.setattr(dsio.tempfile, "mkstemp", full)
+    monkeypatch.setattr(atomic.tempfile, "mkstemp", full)
     out = tmp_path / "ds"
     msg = message(lambda: gen.generate(small_cfg(), out, n_jobs=1, progress=False))
     assert "disk full" in msg and str(out) in msg

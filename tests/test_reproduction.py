@@ -15,8 +15,8 @@ from learn.reports.paper_results import (
 from learn.reports.summary import recall, write_summary
 from learn.studies.tables import StudyOptions
 from swgcli import dataset_preset
-from swgsim.config import dataset_config
-from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
+from swgsim.datasets.config import dataset_config
+from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
 
 FOLD_JITTER = np.array([-1.0, 1.0, -2.0, 2.0])  # points; averages to zero over 4 folds
 

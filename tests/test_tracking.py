@@ -186,7 +186,7 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
     from learn.studies.protocols import make_splits
     from learn.tasks.train import run_train
     from swgcli import compose_app
-    from swgsim.data import load
+    from swgsim.datasets.schema import load
 
     cfg = compose_app("train", [f"stored.path={tiny_dataset}",
                                 f"logger.tracking_uri={tracking_uri}",

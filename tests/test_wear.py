@@ -1,5 +1,5 @@
-"""Wear and backlash in the dynamic model (swgsim/dynamics.py ``backlash_rad``,
-swgsim/faults.py ``wear``, docs/PHYSICS.md sec. 8.1): the dead zone of the torque-twist
+"""Wear and backlash in the dynamic model (swgsim/gear/dynamics.py ``backlash_rad``,
+swgsim/gear/faults.py ``wear``, docs/PHYSICS.md sec. 8.1): the dead zone of the torque-twist
 curve against its closed form, the torsional mode's √-law in the stiffness, the ring-down
 of a worn gear against the linearised mode, the backlash-free arithmetic unchanged, and
 the fault's registration and severity mapping.
@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from test_profile import ring_down
 
-from swgsim import dynamics as dy
-from swgsim import modes
-from swgsim import profile as pf
-from swgsim import profile_dynamics as pd
-from swgsim.faults import (
+from swgsim.gear import dynamics as dy
+from swgsim.gear import modes
+from swgsim.gear import profile as pf
+from swgsim.gear import profile_dynamics as pd
+from swgsim.gear.faults import (
     FAULTS,
     PAPER_CLASSES,
     WEAR_BACKLASH_ARCMIN,

@@ -24,9 +24,9 @@ from test_reliability import _calibrate, _group, message, small_cfg, snapshot
 
 from swgcli import compose_app
 from swgcli.app import check_out_dirs, override_message
-from swgsim import data as dsio
-from swgsim import generate as gen
-from swgsim.plan import plan
+from swgsim.datasets import generate as gen
+from swgsim.datasets import schema as dsio
+from swgsim.datasets.plan import plan
 
 APPS = {"swgsim-generate": "generate", "swgsim-calibrate": "calibrate",
         "swgsim-monitor": "monitor", "swgsim-observability": "observability",
@@ -89,7 +89,7 @@ def test_2_an_integrator_step_too_long_is_refused_before_work(tmp_path):
 
 
 def test_2_a_diverged_simulation_names_shard_window_and_keys(tmp_path, monkeypatch):
-    from swgsim import shard
+    from swgsim.datasets import grid_shard as shard
 
     real = shard.dynamics.simulate
 
@@ -222,10 +222,11 @@ def test_6_a_full_disk_ends_in_one_line_with_the_workers_stopped(tmp_path):
     assert (tmp_path / "keep.txt").read_text() == "mine"
     # and in-process: no HDF5 file is left open to be touched after the error
     code = (_DEV_FULL + "import sys, h5py\nsys.path.insert(0, sys.argv[2])\n"
-            "from conftest import make_synthetic\nfrom swgsim import data\n"
-            "try:\n    data.write_shard(make_synthetic(n_variants=1), "
+            "from conftest import make_synthetic\nfrom swgsim.datasets import schema\n"
+            "from swgsim.files.atomic import DiskFullError\n"
+            "try:\n    schema.write_shard(make_synthetic(n_variants=1), "
             "__import__('pathlib').Path(sys.argv[1]) / 's.nc')\n"
-            "except data.DataSetError as e:\n    print(e)\n"
+            "except DiskFullError as e:\n    print(e)\n"
             "print([i.name for i in h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE)])\n")
     r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "w"),
                         str(Path(__file__).parent)], capture_output=True, text=True,

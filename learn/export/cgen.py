@@ -96,7 +96,7 @@ def write_sources(out: Path, t: ref.StageTables, class_names: list[str], model_c
     about : dict
         ``dataset``, ``gear``, ``train_gears`` for the header's comment.
     """
-    from swgsim.data import atomic_write_bytes
+    from swgsim.files.ownership import atomic_write_bytes
 
     from . import import_emlearn
 

@@ -19,7 +19,8 @@ import numpy as np
 from learn.monitor.evaluate import MonitorStudyConfig, classes, training_lives
 from learn.monitor.model import HEALTHY
 from learn.monitor.monitor import baseline_windows
-from swgsim.life import BLOCK, RecordBank
+from swgsim.datasets.life import BLOCK
+from swgsim.datasets.records import RecordBank
 
 from . import reference as ref
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from learn.monitor.evaluate import MonitorStudyConfig, classes
-from swgsim.config import allowed
+from swgsim.base.typed import allowed
 
 from . import cgen, forest, host, target
 from . import reference as ref
@@ -180,7 +180,7 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
         Its name (for the header and the summary).
     opts : ExportOptions
     out : Path
-        Output folder: claimed (:func:`swgsim.ownership.claim`; refused before any work
+        Output folder: claimed (:func:`swgsim.files.ownership.claim`; refused before any work
         if it holds a file this project cannot show it wrote), then the C files,
         ``summary.json`` and ``size.json``.
     cross : bool
@@ -198,8 +198,8 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
     ValueError
         Bad options, a foreign file in ``out``, or a model the C cannot represent.
     """
-    from swgsim import ownership
-    from swgsim.data import atomic_write_json
+    from swgsim.files import ownership
+    from swgsim.files.ownership import atomic_write_json
 
     out = Path(out)
     ownership.check(out, "out_dir")

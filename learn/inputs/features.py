@@ -3,7 +3,7 @@
 Every feature of a window is normalised by the same quantity of its *reference window*:
 the commissioning recording of the same gear, at the same operating point
 (``n_in_rpm``, ``t_out_nm``) and with the same ``disturbed`` flag, flagged
-``reference == True`` in the data set (schema v1, see :mod:`swgsim.data`). The paper
+``reference == True`` in the data set (schema v1, see :mod:`swgsim.datasets.schema`). The paper
 normalises "for each operating point by the value of the healthy gear" (eq. 7); taking
 the healthy value from a commissioning window of the *same* gear is what makes this
 possible for a gear that was never seen in training (leave-one-gear-out protocols):
@@ -341,7 +341,7 @@ def reference_index(ds) -> tuple[np.ndarray, np.ndarray]:
     Parameters
     ----------
     ds : xarray.Dataset
-        Schema-v1 data set (:func:`swgsim.data.load`).
+        Schema-v1 data set (:func:`swgsim.datasets.schema.load`).
 
     Returns
     -------
@@ -403,7 +403,7 @@ def extract_features(
     Parameters
     ----------
     ds : xarray.Dataset
-        Schema-v1 data set with reference windows (:func:`swgsim.data.load`).
+        Schema-v1 data set with reference windows (:func:`swgsim.datasets.schema.load`).
         ``strain_signal`` (sample, sensor=5, time) [mV/V].
     selection : {1, 2, 3, "selection1", "selection2", "selection3"}
         Paper Table III (see the module docstring).

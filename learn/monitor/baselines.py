@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.life import LifeSimulator
+from swgsim.datasets.life import LifeSimulator
 
 from .model import HEALTHY
 
@@ -110,7 +110,7 @@ def window_inputs(kind: str, signal: np.ndarray, meta: dict[str, np.ndarray],
     kind : str
         An input of :func:`learn.inputs.signals.build_input`.
     signal : ndarray, shape (n, 5, n_t)
-        Bridge outputs [mV/V] (:meth:`swgsim.life.LifeSimulator.windows`).
+        Bridge outputs [mV/V] (:meth:`swgsim.datasets.life.LifeSimulator.windows`).
     meta : dict of ndarray, shape (n,)
         Their metadata, same source.
     refs : References
@@ -122,7 +122,7 @@ def window_inputs(kind: str, signal: np.ndarray, meta: dict[str, np.ndarray],
         (n, F) or (n, C, T), in window order.
     """
     from learn.inputs.signals import build_input
-    from swgsim.data import PER_SAMPLE, make_dataset
+    from swgsim.datasets.schema import PER_SAMPLE, make_dataset
 
     both = {k: np.concatenate([refs.meta[k], meta[k]]) for k in PER_SAMPLE}
     both["reference"] = np.r_[np.ones(len(refs.signal), bool), np.zeros(len(signal), bool)]

@@ -1,6 +1,6 @@
 """Evaluation of the monitor: leave-one-gear-out over simulated gear lives.
 
-For each data set (a checked :class:`~swgsim.plan.DatasetPlan`) and held-out gear, the
+For each data set (a checked :class:`~swgsim.datasets.plan.DatasetPlan`) and held-out gear, the
 diagnosis model is trained on the other gears' lives (:func:`train_model`); then, per
 seed, the held-out gear lives ``healthy_hours`` of healthy operation (false alarms,
 counted with the CUSUM restarted after each) and, from the same commissioning, one life
@@ -28,10 +28,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from swgsim.life import BLOCK, FaultOnset, LifeConfig, LifeSimulator, RecordBank
-from swgsim.life_profile import record_bank
-from swgsim.sensor_faults import SENSOR_FAULTS
-from swgsim.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
+from swgsim.datasets.life import BLOCK, LifeSimulator
+from swgsim.datasets.records import RecordBank, record_bank
+from swgsim.datasets.schedule import FaultOnset, LifeConfig
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
+from swgsim.sensing.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
 
 from .baselines import BASELINES, References, WindowClassifier, fit_baseline, window_inputs
 from .features import feature_names, health_features
@@ -76,7 +77,7 @@ class MonitorStudyConfig:
         0.83-0.92 and 0.67 of lives with 5 positions, in 1.00 with 15).
     sensor_train_levels : int
         Training severities of a sensor fault: this many, geometrically spaced from its mild
-        to its severe severity (:data:`swgsim.sensor_faults.SEVERITIES`; 2: those two).
+        to its severe severity (:data:`swgsim.sensing.sensor_faults.SEVERITIES`; 2: those two).
     train_healthy_h : float
         Hours of each training gear's healthy life after commissioning.
     faults : list of str
@@ -112,7 +113,8 @@ class MonitorStudyConfig:
 
 def table_v_severities(plan, fault: str) -> list[float]:
     """The data set's severities of a class (paper Table V): its list, or the first, middle
-    and last of its linspace; a sensor fault's from :data:`swgsim.sensor_faults.SEVERITIES`."""
+    and last of its linspace; a sensor fault's from
+    :data:`swgsim.sensing.sensor_faults.SEVERITIES`."""
     if fault in SENSOR_FAULTS:
         return list(SENSOR_SEVERITIES[fault])
     spec = plan.config.variants[fault]

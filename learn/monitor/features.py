@@ -40,7 +40,7 @@ from learn.inputs.signals import angle_fit, pinv
 
 N_HARMONICS = 12
 NUISANCE_ORDERS = (0.25, 1 / 3, 0.5)
-RATIO = 100.0  # gear ratio N of the size-20 gear (swgsim.dynamics.GearParams.ratio)
+RATIO = 100.0  # gear ratio N of the size-20 gear (swgsim.gear.dynamics.GearParams.ratio)
 
 
 @functools.lru_cache(maxsize=16)
@@ -78,7 +78,7 @@ def window_angles(meta: dict[str, np.ndarray], input_sensor, fs_hz: float,
     """ψ and the output twist of windows from their recorded angle channels.
 
     The input channel of a coarse sensor (a 24-count Hall sensor: 15° steps) is
-    interpolated between its edges first (:func:`swgsim.angles.psi_smooth`); the output
+    interpolated between its edges first (:func:`swgsim.sensing.angles.psi_smooth`); the output
     encoder, where there is one, is used as recorded (20 bits: 1.24 arcsec).
 
     Parameters
@@ -86,7 +86,7 @@ def window_angles(meta: dict[str, np.ndarray], input_sensor, fs_hz: float,
     meta : dict
         Per-window metadata; ``phi_in_meas`` (n, n_t) [rad] and optionally
         ``phi_out_meas`` (n, n_t) [rad].
-    input_sensor : swgsim.angles.InputAngleSensor
+    input_sensor : swgsim.sensing.angles.InputAngleSensor
         The sensor that recorded ``phi_in_meas``.
     fs_hz : float
         Sample rate [Hz].
@@ -98,10 +98,10 @@ def window_angles(meta: dict[str, np.ndarray], input_sensor, fs_hz: float,
     psi : ndarray, shape (n, n_t), or None
         WG angle ψ [rad]; None without an input angle channel (steady windows).
     twist : ndarray, shape (n, n_t), or None
-        Output twist δ = φ_out + φ_in / N [rad] (:func:`swgsim.angles.twist_estimate`);
+        Output twist δ = φ_out + φ_in / N [rad] (:func:`swgsim.sensing.angles.twist_estimate`);
         None without an output encoder.
     """
-    from swgsim.angles import edge_interpolate, psi_estimate, twist_estimate
+    from swgsim.sensing.angles import edge_interpolate, psi_estimate, twist_estimate
 
     if "phi_in_meas" not in meta:
         return None, None
@@ -127,7 +127,7 @@ def health_features(signals: np.ndarray, meta: dict[str, np.ndarray], fs_hz: flo
         ``phi_out_meas`` (n, n_t) [rad].
     fs_hz : float
         Sample rate [Hz].
-    input_sensor : swgsim.angles.InputAngleSensor, optional
+    input_sensor : swgsim.sensing.angles.InputAngleSensor, optional
         The sensor of ``phi_in_meas`` (needed with it).
 
     Returns

@@ -2,7 +2,7 @@
 from being named as gear faults.
 
 A sensor fault acts on one bridge only and in one of two shapes
-(:mod:`swgsim.sensor_faults`): an offset step moves that bridge's offset c0 by δ [mV/V]
+(:mod:`swgsim.sensing.sensor_faults`): an offset step moves that bridge's offset c0 by δ [mV/V]
 and nothing else; a gain drift multiplies its whole output by g = 1 − severity, i.e.
 its offset and every harmonic amplitude by g (its residual's RMS, which also holds the
 converter's noise, is left free). A gear fault is seen by every bridge through the
@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from swgsim.sensor_faults import SENSOR_FAULTS
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 from .features import N_HARMONICS
 
@@ -108,7 +108,7 @@ class SensorFit:
 
     def plausible(self) -> bool:
         """Significant (:data:`FIT_MIN`) and within the fault's severity range (a gain
-        only falls: :data:`swgsim.sensor_faults.SENSOR_FAULTS`)."""
+        only falls: :data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`)."""
         lo, hi = SENSOR_FAULTS[self.fault].severity_range
         return self.reduction >= FIT_MIN and lo <= self.severity <= hi
 

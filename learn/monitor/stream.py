@@ -1,9 +1,9 @@
 """One gear's recorded stream through the monitor: input checks, the run, its outputs.
 
-A stream is a schema-v1 data set (:mod:`swgsim.data`) of one gear's windows with the
+A stream is a schema-v1 data set (:mod:`swgsim.datasets.schema`) of one gear's windows with the
 per-sample variables ``hour`` (operating hours, increasing) and ``commissioning`` (the
 first windows, known healthy), e.g. a life written by ``swgsim-generate`` with
-``dataset.life`` set (:mod:`swgsim.life`). :func:`check_stream` refuses, before any work
+``dataset.life`` set (:mod:`swgsim.datasets.life`). :func:`check_stream` refuses, before any work
 and in one line, a stream without commissioning, with hours out of order, or one that
 disagrees with the model (bridges, sample rate, operating points outside the training
 range). :func:`monitor_stream` runs :class:`~learn.monitor.monitor.GearMonitor` and
@@ -106,7 +106,7 @@ def _input_sensor(ds):
     """The input angle sensor of a stream with angle channels, from its config."""
     import json
 
-    from swgsim.angles import InputAngleSensor
+    from swgsim.sensing.angles import InputAngleSensor
 
     cfg = ds.attrs.get("config", "{}")
     cfg = json.loads(cfg) if isinstance(cfg, str) else cfg
@@ -150,7 +150,7 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from swgsim.data import atomic_write_bytes, atomic_write_json
+    from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
     out_dir.mkdir(parents=True, exist_ok=True)
     summary = {"stream": source, "alarms": [a.as_dict() for a in res.alarms],

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from swgsim.faults import FAULTS
-from swgsim.sensor_faults import SENSOR_FAULTS
+from swgsim.gear.faults import FAULTS
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 
 def display(fault: str) -> str:

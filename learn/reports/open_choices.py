@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from learn.inputs.features import FeatureSettings
 from learn.studies.tables import StudyOptions
-from swgsim.acquisition import Acquisition
-from swgsim.config import DatasetConfig
+from swgsim.datasets.config import DatasetConfig
+from swgsim.sensing.acquisition import Acquisition
 
 
 def _amp(acq: Acquisition) -> str:
@@ -60,7 +60,7 @@ def _recording_rows(acq: Acquisition) -> list[tuple[str, str, str]]:
          "windows at arbitrary times"),
         ("Amplifier (recording)", _amp(acq),
          "the paper's data are simulated; the bench preset cites its data sheet "
-         "(swgsim/acquisition.py)"),
+         "(swgsim/sensing/acquisition.py)"),
     ]
 
 
@@ -151,13 +151,13 @@ def _model_rows(dataset: DatasetConfig, seed: int) -> list[tuple[str, str, str]]
         ("Gauge layout (Fig. 3)",
          "s0 full torque bridge at 29 mm; s1/s3 WG-bending and s2/s4 shear half bridges at "
          "32 mm, 180° apart",
-         "s1 ≈ s3 and s2 ≈ s4 on a healthy gear (Sec. III-A); swgsim/sensors.py"),
+         "s1 ≈ s3 and s2 ≈ s4 on a healthy gear (Sec. III-A); swgsim/gear/sensors.py"),
         ("Per-gear sensor models",
          f"gauge angle σ {tol.sd_theta_deg:g}°, radius σ {tol.sd_r_mm:g} mm, "
          f"orientation σ {tol.sd_beta_deg:g}°, gain σ {100 * tol.sd_gain:g} %",
          "the paper fits each gear's sensor model to a real RT1-T gear; values unverified"),
         ("Gear model", "size 20, ratio 100, k1/k2 from catalogue K1/K3, b1/μ from no-load "
-         "torque and efficiency at rated torque", "swgsim/dynamics.py (catalogue sources)"),
+         "torque and efficiency at rated torque", "swgsim/gear/dynamics.py (catalogue sources)"),
         ("Classifier settings", "Table VI; everything else scikit-learn's defaults (MLP "
          "max_iter 200)", "'standard settings of ... Scikit-learn' (Sec. III-C)"),
         ("Seeds", f"data set {dataset.seed}, study {seed}",

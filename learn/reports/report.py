@@ -27,7 +27,7 @@ from learn.reports.paper_results import (
     SPLIT_LABELS,
     table_spec,
 )
-from swgsim.faults import display_name, fault_classes
+from swgsim.gear.faults import display_name, fault_classes
 
 log = logging.getLogger(__name__)
 

@@ -33,9 +33,9 @@ from learn.reports.paper_results import (
     table_spec,
 )
 from learn.studies.tables import StudyOptions
-from swgsim.config import DatasetConfig
-from swgsim.faults import PAPER_CLASSES as FAULT_CLASSES
-from swgsim.faults import display_name
+from swgsim.datasets.config import DatasetConfig
+from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
+from swgsim.gear.faults import display_name
 
 log = logging.getLogger(__name__)
 
@@ -390,7 +390,7 @@ def write_summary(
               *_phase_lock_md(rec, sp, datasets, files["recall"]),
               "## Tables VII-X side by side", "", *_tables_md(cells, names),
               *_open_choices_md(names, datasets, options, seed, features)]
-    from swgsim.data import atomic_write_bytes
+    from swgsim.files.ownership import atomic_write_bytes
 
     atomic_write_bytes(files["md"], ("\n".join(lines) + "\n").encode())
     log.info("summary written to %s", files["md"])

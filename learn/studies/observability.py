@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 #: The bench's output inertia: flange and load coupling [kg m²]
-#: (:attr:`swgsim.dynamics.GearParams.j_out_kgm2`, from a public simulation script of the
+#: (:attr:`swgsim.gear.dynamics.GearParams.j_out_kgm2`, from a public simulation script of the
 #: same model structure).
 J_OUT_BENCH = 8.8e-3
 #: A robot link's: the shoulder (joint 2) of a Universal Robots UR3e carrying links 2-6
@@ -109,12 +109,12 @@ def torsional_modes(j_values: Sequence[float], loads: Sequence[float],
     Returns
     -------
     pandas.DataFrame
-        Columns j_out_kgm2, t_out_nm, f_hz, decay_s (:func:`swgsim.modes.torsional_mode`).
+        Columns j_out_kgm2, t_out_nm, f_hz, decay_s (:func:`swgsim.gear.modes.torsional_mode`).
     """
     import dataclasses
 
-    from swgsim.dynamics import rt1_size20
-    from swgsim.modes import torsional_mode
+    from swgsim.gear.dynamics import rt1_size20
+    from swgsim.gear.modes import torsional_mode
 
     p = rt1_size20()
     rows = []
@@ -139,7 +139,7 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
     from matplotlib import colormaps
     from matplotlib.figure import Figure
 
-    from swgsim.faults import fault_classes
+    from swgsim.gear.faults import fault_classes
 
     present = set(table["fault"])  # one column per faulty class, in the registry's order
     faults = [f for f in fault_classes() if f != "healthy" and f in present]
@@ -170,7 +170,7 @@ def _fault_panels(fig, gs, table: pd.DataFrame, faults: list[str], loads: list[f
                   colour: dict):
     """One panel per (load, fault): the share beyond the healthy p95 against J_out, one
     line per input speed; returns the first panel (its legend is the figure's)."""
-    from swgsim.faults import display_name
+    from swgsim.gear.faults import display_name
 
     first = None
     for r, t in enumerate(loads):

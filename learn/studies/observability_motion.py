@@ -14,7 +14,7 @@ motion adds, per output inertia J_out, for three views of the same gear:
 * ``profile + output encoder``: the same windows with a 20-bit output encoder, adding the
   output twist (its mean and RMS: the torque over the stiffness, first order in k).
 
-Every window is a gear life's (:class:`swgsim.life.LifeSimulator`): its own start (steady:
+Every window is a gear life's (:class:`swgsim.datasets.life.LifeSimulator`): its own start (steady:
 in an output revolution; profile: within the slot's jitter), eq. (10) draws and converter
 noise. Per window the monitor's health features (:func:`learn.monitor.evaluate.life_features`)
 are z-scored against healthy reference windows of the same operating point or slot, and
@@ -32,7 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from swgsim.life import DutyPoint, FaultOnset, LifeConfig, LifeSimulator
+from swgsim.datasets.life import LifeSimulator
+from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
 
 #: Steady operating points of the ``steady`` view: (input speed [rpm], load [N m]), the
 #: robot profile's cruise speed order of magnitude at a light and a medium load.
@@ -85,14 +86,14 @@ def check_motion_map(mc: MotionMapConfig, key: str = "motion") -> None:
 
 
 def plan_slots(plan):
-    """The slots of a profile data set (:func:`swgsim.life_profile.profile_slots`)."""
-    from swgsim.life_profile import profile_slots
+    """The slots of a profile data set (:func:`swgsim.datasets.slots.profile_slots`)."""
+    from swgsim.datasets.slots import profile_slots
 
     return profile_slots(plan).starts
 
 
 def stiffness_left(fault: str, severity: float) -> float:
-    """k1 after the fault as a fraction of nominal [-] (swgsim.faults)."""
+    """k1 after the fault as a fraction of nominal [-] (swgsim.gear.faults)."""
     if fault == "reduced_stiffness":
         return 1.0 - severity
     if fault == "wear":
@@ -146,10 +147,10 @@ def fault_visibility(plan, fault: str, severity: float, windows: int, seeds,
 
     Parameters
     ----------
-    plan : swgsim.plan.Plan
+    plan : swgsim.datasets.plan.Plan
         A steady data set (``points`` given) or a profile data set.
     fault : str
-        A class of :data:`swgsim.faults.FAULTS`.
+        A class of :data:`swgsim.gear.faults.FAULTS`.
     severity : float
         Within the fault's range.
     windows : int

@@ -259,7 +259,7 @@ def paper_study(
     from joblib import Parallel
     from tqdm.auto import tqdm
 
-    from swgsim.data import load
+    from swgsim.datasets.schema import load
 
     options = options or StudyOptions()
     protocols = {**PROTOCOLS, **dict(protocols or {})}

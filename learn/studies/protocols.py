@@ -120,9 +120,9 @@ ALL_PROTOCOLS: tuple[str, ...] = tuple(PROTOCOLS)
 
 
 def class_labels(y: Sequence[str]) -> list[str]:
-    """Classes present in ``y``: the registry's order (:func:`swgsim.faults.fault_classes`)
+    """Classes present in ``y``: the registry's order (:func:`swgsim.gear.faults.fault_classes`)
     first, any others sorted after."""
-    from swgsim.faults import fault_classes
+    from swgsim.gear.faults import fault_classes
 
     known = fault_classes()
     present = {str(c) for c in np.unique(np.asarray(y).astype(str))}

@@ -153,7 +153,7 @@ def plot_separability(sep: dict[str, np.ndarray], path: str | Path,
     """Box plot (5-95 % whiskers, log axis) of the separation per class; writes ``path``."""
     from matplotlib.figure import Figure
 
-    from swgsim.faults import display_name
+    from swgsim.gear.faults import display_name
 
     p95 = float(np.percentile(sep["healthy"], 95))
     names = sorted(sep, key=lambda f: np.median(sep[f]))
@@ -184,7 +184,7 @@ def main(argv: list[str] | None = None) -> None:
     a = ap.parse_args(argv)
     if a.harmonics < 1:
         ap.error(f"--harmonics must be >= 1, got {a.harmonics}")
-    from swgsim.data import load
+    from swgsim.datasets.schema import load
 
     sep = separations(load(a.data), a.disturbed, a.harmonics)
     kind = "disturbed" if a.disturbed else "clean"

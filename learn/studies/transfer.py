@@ -57,7 +57,7 @@ from learn.studies.runs import (
     pre_transform,
     score,
 )
-from swgsim.config import DatasetConfig
+from swgsim.datasets.config import DatasetConfig
 
 log = logging.getLogger(__name__)
 

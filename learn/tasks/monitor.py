@@ -25,7 +25,8 @@ import pandas as pd
 from learn.monitor.baselines import BASELINES
 from learn.monitor.evaluate import MonitorStudyConfig, run_held_out, to_frames
 from learn.tasks.config import typed_app
-from swgsim.config import DatasetConfig, allowed
+from swgsim.base.typed import allowed
+from swgsim.datasets.config import DatasetConfig
 
 log = logging.getLogger(__name__)
 
@@ -102,8 +103,8 @@ def run_monitor(cfg) -> dict:
         A bad ``monitor`` key or data set, or a ``report_dir`` holding a file this
         project cannot show it wrote (named); before any work.
     """
-    from swgsim import ownership
-    from swgsim.plan import plan
+    from swgsim.datasets.plan import plan
+    from swgsim.files import ownership
 
     app = typed_app(cfg)
     mc: MonitorExperiment = app.monitor
@@ -126,7 +127,7 @@ def run_monitor(cfg) -> dict:
 
 def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim) -> dict:
     """The evaluation into the claimed ``out`` (every file it writes recorded)."""
-    from swgsim.data import atomic_write_json
+    from swgsim.files.ownership import atomic_write_json
 
     (out / "parts").mkdir(parents=True, exist_ok=True)
     (out / "models").mkdir(exist_ok=True)
@@ -179,7 +180,7 @@ def _run_jobs(plans, jobs, mc: MonitorExperiment, out: Path) -> list[dict]:
     import joblib
     from tqdm.auto import tqdm
 
-    from swgsim.data import atomic_write_json
+    from swgsim.files.ownership import atomic_write_json
 
     done, todo = [], []
     for name, g, key in jobs:
@@ -214,8 +215,8 @@ def _job(plan, name: str, g: int, key: str, study: MonitorStudyConfig, out: str)
 
     import joblib
 
-    from swgsim import ownership
-    from swgsim.data import atomic_write_bytes
+    from swgsim.files import ownership
+    from swgsim.files.ownership import atomic_write_bytes
 
     ownership.join(out, "monitor")  # the model this worker writes is recorded
     part = run_held_out(plan, name, g, study)

@@ -64,10 +64,10 @@ def run_paper_study(
     ------
     ValueError
         For an unknown table or model, or a ``report_dir`` holding a file this project
-        cannot show it wrote (named; before any work, :func:`swgsim.ownership.check`).
+        cannot show it wrote (named; before any work, :func:`swgsim.files.ownership.check`).
     """
     from learn.reports.report import write_report
-    from swgsim import ownership
+    from swgsim.files import ownership
 
     ownership.check(report_dir, "report_dir")  # before any work: nothing in it but ours
     options = options or StudyOptions()

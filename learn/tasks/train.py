@@ -78,7 +78,7 @@ def run_study_job(cfg) -> dict:
     """
     from hydra.utils import instantiate
 
-    from swgsim.data import load
+    from swgsim.datasets.schema import load
 
     app = typed_app(cfg)
     ds = load(app.stored.path)

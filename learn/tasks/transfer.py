@@ -37,8 +37,8 @@ def _data_sets(app, tc: TransferConfig) -> tuple[list[tuple[str, str]], float]:
     """(name, path) of every data set to run on, generating the missing ones."""
     from hydra.utils import to_absolute_path
 
-    from swgsim.generate import generate
-    from swgsim.plan import plan
+    from swgsim.datasets.generate import generate
+    from swgsim.datasets.plan import plan
 
     if not tc.run_on:
         return [(str(app.stored.name or Path(app.stored.path).name), str(app.stored.path))], 0.0
@@ -112,7 +112,7 @@ def _separability(ds, name: str, tc: TransferConfig, report_dir: Path, got: _Col
 
 def _compare(app, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected:
     """The comparison and the separability on every data set, one loaded at a time."""
-    from swgsim.data import load
+    from swgsim.datasets.schema import load
 
     feature_kwargs = app.features.kwargs()
     got = _Collected()
@@ -198,7 +198,7 @@ def run_transfer(cfg) -> dict:
     from learn.reports.transfer_picks import headline_lines, headline_table
     from learn.reports.transfer_report import class_recall, row_label, summarise, target_table
     from learn.reports.transfer_runs import log_transfer
-    from swgsim import ownership
+    from swgsim.files import ownership
 
     app = typed_app(cfg)
     tc = app.transfer

@@ -9,7 +9,7 @@ The public names are imported on first use (no MLflow import at package import).
 
 from __future__ import annotations
 
-from swgsim.lazy import lazy_exports
+from swgsim.base.lazy import lazy_exports
 
 _EXPORTS = {
     **dict.fromkeys(("GROUP_PARENT_TAG", "TrackedRun", "flatten_config", "hydra_sweep",

@@ -120,7 +120,8 @@ class DatasetRef:
 def _dataset_ref(path: str, name: str, stamp: tuple[int, int]) -> DatasetRef:
     import hashlib
 
-    from swgsim.data import read_manifest, sha256_file
+    from swgsim.datasets.schema import read_manifest
+    from swgsim.files.digest import sha256_file
 
     p = Path(path)
     if p.is_file():
@@ -159,9 +160,9 @@ def dataset_ref(path: str | os.PathLike, name: str | None = None) -> DatasetRef:
     ------
     ValueError
         ``dataset=<path>: ...`` where the path is neither a file nor a folder with a
-        readable schema-v1 manifest (:class:`swgsim.data.DataSetError`).
+        readable schema-v1 manifest (:class:`swgsim.datasets.schema.DataSetError`).
     """
-    from swgsim.data import MANIFEST, DataSetError
+    from swgsim.datasets.schema import MANIFEST, DataSetError
 
     p = Path(path).expanduser().resolve()
     probe = p if p.is_file() else p / MANIFEST

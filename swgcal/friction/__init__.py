@@ -15,7 +15,7 @@ builder, calibration), :mod:`.probes` (residual probes), :mod:`.ripple_groups` (
 harmonics, pruned without held-out support), :mod:`.discovery` (terms beyond the
 library), :mod:`.report` (summary, report, simulation option), :mod:`.figures`,
 :mod:`.synthetic` (recordings with planted effects). The effect forms are simulator
-inputs: :mod:`swgsim.friction`.
+inputs: :mod:`swgsim.gear.friction`.
 """
 
 from .data import FrictionRecording, load_friction_csv, write_friction_csv

@@ -5,10 +5,10 @@ A friction recording (data kind 1) is a CSV with the columns of the project's re
 ``dq_rad_per_s`` [rad/s], optionally ``ddq_rad_per_s2`` [rad/s²] and ``load_Nm`` [N m],
 and the target ``tau_friction_Nm`` [N m]. Sampling may be irregular.
 
-The recording becomes the signals of the friction terms (:class:`swgsim.friction.FrictionSignals`,
-smooth-sign velocity v_s by default 1 % of the 99th percentile of |q̇|, so that least
-squares is well posed); the baseline is the paper's law on the joint
-(:class:`swgsim.friction.PaperLaw`).
+The recording becomes the signals of the friction terms
+(:class:`swgsim.gear.friction.FrictionSignals`, smooth-sign velocity v_s by default 1 % of
+the 99th percentile of |q̇|, so that least squares is well posed); the baseline is the
+paper's law on the joint (:class:`swgsim.gear.friction.PaperLaw`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import pandas as pd
 from scipy.integrate import cumulative_trapezoid
 from scipy.signal import savgol_filter
 
-from swgsim.friction.signals import FrictionSignals, Scales
+from swgsim.gear.friction.signals import FrictionSignals, Scales
 
 from .options import FrictionOptions
 

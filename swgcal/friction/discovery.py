@@ -4,7 +4,7 @@ The friction adapter of :mod:`swgcal.discovery` (same mechanism,
 :func:`~swgcal.discovery.discover`: the final model's design projected off,
 lasso with the effective-sample BIC on the fit rows, forward selection scored on the
 validation rows). The basis is built from the friction signals
-(:class:`swgsim.friction.FrictionSignals`: time t, joint angle q, velocity q̇, acceleration q̈,
+(:class:`swgsim.gear.friction.FrictionSignals`: time t, joint angle q, velocity q̇, acceleration q̈,
 load when recorded):
 
 * *ripples over the joint angle* at free periods, the strongest lines of the residual's
@@ -13,7 +13,7 @@ load when recorded):
   2π h q / P, plain and times sgn(q̇) (friction-level ripple), each also times |q̇| / v_ref
   and the load (an amplitude that grows with speed or load). With the gear ratio N
   the period is also quoted as the wave-generator order k = 2π / (P N)
-  (:func:`~swgsim.friction.ripples.wave_generator_order`);
+  (:func:`~swgsim.gear.friction.ripples.wave_generator_order`);
 * *tones in time* at fixed frequencies (the strongest lines of the residual's spectrum
   over t: a vibration or a hidden periodic process, not periodic in q), with harmonics,
   plain and times |q̇| / v_ref;
@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.friction.ripples import wave_generator_order
+from swgsim.gear.friction.ripples import wave_generator_order
 
 from ..discovery import MIN_GAIN, Group, Projector, Proposal, discover, line_spectrum, model_design
 from ..loop import CalibrationResult

@@ -1,7 +1,7 @@
 """The calibration's friction library: each simulator effect with what its fit needs.
 
-The forms are the simulator's (:mod:`swgsim.friction.effects`, :mod:`swgsim.friction.
-ripples`, the paper law of :mod:`swgsim.friction.signals`); each class here subclasses
+The forms are the simulator's (:mod:`swgsim.gear.friction.effects`, :mod:`swgsim.gear.friction.
+ripples`, the paper law of :mod:`swgsim.gear.friction.signals`); each class here subclasses
 one of them and :class:`~swgcal.terms.FitTerm`, adding its residual signature, the probes
 whose structure it should explain, the physical ranges of its characterising parameters
 (values and sources in :mod:`.ranges`: a fit outside is not accepted as that effect),
@@ -37,11 +37,11 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.friction import effects as fx
-from swgsim.friction import ripples as rp
-from swgsim.friction import signals as fsig
-from swgsim.friction.signals import FrictionSignals
-from swgsim.terms import Term
+from swgsim.gear.friction import effects as fx
+from swgsim.gear.friction import ripples as rp
+from swgsim.gear.friction import signals as fsig
+from swgsim.gear.friction.signals import FrictionSignals
+from swgsim.gear.terms import Term
 
 from ..periodogram import periodogram_peaks
 from ..terms import FitTerm
@@ -84,7 +84,7 @@ __all__ = [
 
 
 class PaperLaw(fsig.PaperLaw, FitTerm):
-    """The paper-law baseline (:class:`swgsim.friction.PaperLaw`), linear: nothing to add."""
+    """The paper-law baseline (:class:`swgsim.gear.friction.PaperLaw`), linear: nothing to add."""
 
 
 class AsymmetricCoulomb(fx.AsymmetricCoulomb, FitTerm):
@@ -126,7 +126,7 @@ class Presliding(fx.Presliding, FitTerm):
 
 
 class _RippleFit:
-    """The fit of a ripple (:class:`swgsim.friction.ripples.RippleTerm`): period bounds
+    """The fit of a ripple (:class:`swgsim.gear.friction.ripples.RippleTerm`): period bounds
     from the sampling of q, starts from the residual's periodogram, the physical range on
     the wave-generator order when the gear ratio is known (on the period otherwise)."""
 
@@ -244,18 +244,18 @@ FRICTION_LIBRARY: dict[str, type[FitTerm]] = {
         LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
 }
 """Library key -> fitted effect class: the candidates of every friction calibration
-(the simulator's forms, :data:`swgsim.friction.FRICTION_LIBRARY`, with their fit)."""
+(the simulator's forms, :data:`swgsim.gear.friction.FRICTION_LIBRARY`, with their fit)."""
 
 
 def register_effect(cls: type[FitTerm]) -> type[FitTerm]:
     """Add a fitted friction effect to the simulator and the calibration (one call;
     usable as a class decorator).
 
-    The class is the effect's form (a :class:`swgsim.terms.Term`: parameters,
+    The class is the effect's form (a :class:`swgsim.gear.terms.Term`: parameters,
     ``columns`` or ``transform``) and its fit (a :class:`~swgcal.terms.FitTerm`:
     ``probes``, ``ranges`` with sources, ``bounds``/``starts`` of nonlinear parameters,
-    ``signature``). Its form goes into :data:`swgsim.friction.FRICTION_LIBRARY`
-    (:func:`swgsim.friction.effects.register_effect`; a ``friction_effects`` entry of
+    ``signature``). Its form goes into :data:`swgsim.gear.friction.FRICTION_LIBRARY`
+    (:func:`swgsim.gear.friction.effects.register_effect`; a ``friction_effects`` entry of
     its kind) unless that already holds a form the class subclasses (physics registered
     on its own, fit added here); the class becomes a candidate of every friction
     calibration built afterwards.
@@ -272,13 +272,13 @@ def register_effect(cls: type[FitTerm]) -> type[FitTerm]:
     Raises
     ------
     TypeError
-        Not a subclass of both :class:`swgsim.terms.Term` and :class:`FitTerm`.
+        Not a subclass of both :class:`swgsim.gear.terms.Term` and :class:`FitTerm`.
     ValueError
         Its ``kind`` is already in the calibration's library, or the simulator's holds
         another form of that kind.
     """
     if not (isinstance(cls, type) and issubclass(cls, Term) and issubclass(cls, FitTerm)):
-        raise TypeError("a fitted friction effect must subclass swgsim.terms.Term (its form) "
+        raise TypeError("a fitted friction effect must subclass swgsim.gear.terms.Term (its form) "
                         f"and swgcal.terms.FitTerm (its fit), got {cls!r}")
     if cls.kind in FRICTION_LIBRARY:
         raise ValueError(f"friction effect {cls.kind!r} is already registered "

@@ -64,7 +64,7 @@ def friction_problem(
     gear_ratio : float, optional
         Reduction ratio N of the strain wave gear (wave-generator turns per output
         turn), when known: ripple periods over q are then expressed and checked as
-        wave-generator orders k = 2π / (period · N) (:mod:`swgsim.friction.ripples`).
+        wave-generator orders k = 2π / (period · N) (:mod:`swgsim.gear.friction.ripples`).
 
     Returns
     -------

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from swgsim.friction.ripples import RippleTerm
+from swgsim.gear.friction.ripples import RippleTerm
 
 from ..core import FitResult, Term
 from ..discovery import proposals_section
@@ -76,7 +76,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         for a structured final residual (:mod:`swgcal.friction.discovery`;
         empty otherwise); ``friction_effects`` the accepted effects as a simulation
         option and ``simulation`` (v_s, t0, baseline) for
-        :class:`swgsim.friction.FrictionEffects`.
+        :class:`swgsim.gear.friction.FrictionEffects`.
     """
     s = base_summary(result, source)
     final = result.final
@@ -94,7 +94,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         "v_s_rad_s": meta.get("v_s_rad_s"), "t0_s": meta.get("t0_s"),
         "baseline": {k: e.value for k, e in final_base.items()},
         "caveat": caveat(result),
-        "call": "swgsim.friction.FrictionEffects(summary['friction_effects'], "
+        "call": "swgsim.gear.friction.FrictionEffects(summary['friction_effects'], "
                 "v_s=summary['simulation']['v_s_rad_s'], baseline=summary['simulation']"
                 "['baseline'], t0=summary['simulation']['t0_s'])"}
     return to_jsonable(s)
@@ -102,7 +102,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
 
 def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
     """The accepted effects as a simulation option: ``friction_effects.yaml`` for
-    ``conf/friction_effects/`` (:func:`swgsim.friction.friction_effects_from_config`).
+    ``conf/friction_effects/`` (:func:`swgsim.gear.friction.friction_effects_from_config`).
 
     Parameters
     ----------
@@ -362,7 +362,7 @@ def _simulation_lines(s: Mapping[str, Any]) -> list[str]:
     if s["friction_effects"]:
         sim = s["simulation"]
         lines += ["## As a simulation option", "",
-                  "The accepted effects, for `swgsim.friction.FrictionEffects` (or a "
+                  "The accepted effects, for `swgsim.gear.friction.FrictionEffects` (or a "
                   "`friction_effects` config list):", "", "```yaml", "friction_effects:"]
         for e in s["friction_effects"]:
             ps = ", ".join(f"{k}: {fmt_value(v, 6)}" for k, v in e["params"].items())

@@ -8,7 +8,7 @@ of the loop sees:
   instances: :func:`harmonic_groups` finds instances whose periods are integer fractions
   of one fundamental (with the gear ratio N: integer wave-generator orders k = 2π /
   (period · N)), and :func:`group_ripples` replaces them by one
-  :class:`~swgsim.friction.ripples.RippleTerm` with that fundamental and the
+  :class:`~swgsim.gear.friction.ripples.RippleTerm` with that fundamental and the
   harmonic numbers, unless the held-out data support the separate periods;
 * an instance that paid when it was added may be redundant in the final model (a later
   effect explains the same structure): every ripple of the final model must keep
@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.friction.ripples import RippleTerm, wave_generator_order
+from swgsim.gear.friction.ripples import RippleTerm, wave_generator_order
 
 from ..core import FitResult, Term, fit_terms, with_uncertainty
 from ..diagnose import diagnose

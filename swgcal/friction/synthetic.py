@@ -17,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.friction.signals import FrictionSignals, PaperLaw, Scales
-from swgsim.friction.simulation import parse_effects
-from swgsim.terms import evaluate_terms
+from swgsim.gear.friction.signals import FrictionSignals, PaperLaw, Scales
+from swgsim.gear.friction.simulation import parse_effects
+from swgsim.gear.terms import evaluate_terms
 
 from .data import FrictionRecording
 

@@ -1,8 +1,8 @@
 """What a strain calibration may hand on, and with which caveats.
 
 A calibration's accepted effects become a simulation option (``sensor_effects`` of
-:mod:`swgsim.measurement`, kinematic-error harmonics for
-:func:`swgsim.dynamics.gear_with_ke`). Three checks decide how:
+:mod:`swgsim.sensing.effects`, kinematic-error harmonics for
+:func:`swgsim.gear.dynamics.gear_with_ke`). Three checks decide how:
 
 * *withheld parameters*: a per-channel value that the data cannot pin down is kept out
   of the option (its channel gets the neutral value) and listed with the reason
@@ -74,9 +74,9 @@ def simulation_option(result: CalibrationResult, withheld: list[dict[str, Any]]
     Returns
     -------
     sensor_effects : list of dict
-        Entries of :func:`swgsim.measurement.apply_sensor_effects`'s ``effects``.
+        Entries of :func:`swgsim.sensing.effects.apply_sensor_effects`'s ``effects``.
     gear_ke_harmonics : list of dict
-        ``{order, amp_rad, phase_rad}`` for :func:`swgsim.dynamics.gear_with_ke`.
+        ``{order, amp_rad, phase_rad}`` for :func:`swgsim.gear.dynamics.gear_with_ke`.
     """
     final = result.final
     sensor, ke = [], []

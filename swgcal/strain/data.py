@@ -1,7 +1,7 @@
 """Measured strain windows for the calibration (data kind 2) and their held-out split.
 
 :func:`strain_windows` reads the windows and their operating points from a schema-v1 data
-set (``swgsim.data``); :func:`heldout_split` assigns whole windows (or whole operating
+set (``swgsim.datasets.schema``); :func:`heldout_split` assigns whole windows (or whole operating
 points) to the fit, validation and test roles (:mod:`.problem`, module docstring).
 """
 
@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim import data as dsio
+from swgsim.datasets import schema as dsio
 
 __all__ = ["StrainWindows", "strain_windows", "heldout_split"]
 

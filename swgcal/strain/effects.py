@@ -10,8 +10,8 @@ transforms of the basis: the amplifier low-pass and the bridge nonlinearity map 
 a kinematic-error harmonic replaces the torque pattern (its unit torque responses ΔT
 come with the signals) and re-aligns each window's input angle. Each documents its
 parametrisation, residual signature and source; every accepted one maps to the
-``sensor_effects`` option of :mod:`swgsim.measurement` or, for the kinematic error, to
-the gear's ``ke_*`` parameters (:mod:`swgsim.dynamics`).
+``sensor_effects`` option of :mod:`swgsim.sensing.effects` or, for the kinematic error, to
+the gear's ``ke_*`` parameters (:mod:`swgsim.gear.dynamics`).
 
 ====================  =================================  =================================
 effect                parametrisation                    residual signature
@@ -43,7 +43,7 @@ the alignment weight (the full bridge s0 of the default layout) is not estimated
 (:attr:`GaugeMisplacement.min_weight_share`).
 
 The forms are those the simulation applies (one function per effect in
-:mod:`swgsim.measurement`, evaluated here on the basis: a linear effect's columns are its
+:mod:`swgsim.sensing.effects`, evaluated here on the basis: a linear effect's columns are its
 function at one-hot parameters); the terms add only the fit (free parameters, their
 constraint, starts, bounds, ranges).
 
@@ -60,9 +60,9 @@ from typing import Any
 import numpy as np
 from scipy import signal as sps
 
-from swgsim import measurement as ms
-from swgsim.dsp import fractional_delay, lowpass_coefficients
-from swgsim.terms import Param
+from swgsim.gear.terms import Param
+from swgsim.sensing import effects as ms
+from swgsim.sensing.dsp import fractional_delay, lowpass_coefficients
 
 from ..terms import FitTerm
 from .probes import strain_probes
@@ -110,7 +110,7 @@ class ChainBaseline(FitTerm):
     kind = "chain"
     linear = (Param("a_wg", "-", "scale of the WG-deflection pattern"),
               Param("a_torque", "-", "scale of the torque pattern (overall gauge gain)"))
-    description = ("nominal simulation chain (swgsim.chain) at each window's operating point, "
+    description = ("nominal simulation chain (swgsim.gear.chain) at each window's operating point, "
                    "aligned to the window's WG angle; fitted: WG deflection w0 and overall "
                    "gauge gain")
     source = "paper Fig. 2 chain: eq. (1)-(6) dynamics, flexspline truss, gauge bridges"
@@ -173,7 +173,7 @@ class ChannelOffset(FitTerm):
         return ("offset_rms",)
 
     def sensor_effect(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, Any]:
-        """The ``sensor_effects`` entry of :mod:`swgsim.measurement`."""
+        """The ``sensor_effects`` entry of :mod:`swgsim.sensing.effects`."""
         return {"name": "offset", "params": {"offset_mvv": [float(v) for v in coef]}}
 
 
@@ -517,7 +517,7 @@ class KinematicErrorHarmonic(FitTerm):
 
     def gear_harmonic(self, coef, theta) -> dict[str, float]:
         """``{order, amp_rad, phase_rad}`` to add to GearParams.ke_* (see
-        :func:`swgsim.dynamics.gear_with_ke`)."""
+        :func:`swgsim.gear.dynamics.gear_with_ke`)."""
         d = self.derived(coef, theta)
         return {"order": int(self.order), "amp_rad": d["amplitude_rad"],
                 "phase_rad": d["phase_rad"]}

@@ -17,12 +17,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from swgsim.chain import ChainSettings, SimulationChain
-from swgsim.dynamics import GearParams, rt1_size20
-from swgsim.dynamics import simulate as simulate_dynamics
-from swgsim.faults import ChainParams
-from swgsim.influence import torque_influence
-from swgsim.measurement import psi_rate
+from swgsim.gear.chain import ChainSettings, SimulationChain
+from swgsim.gear.dynamics import GearParams, rt1_size20
+from swgsim.gear.dynamics import simulate as simulate_dynamics
+from swgsim.gear.faults import ChainParams
+from swgsim.gear.influence import torque_influence
+from swgsim.sensing.effects import psi_rate
 
 from .effects import KE_ORDERS
 
@@ -65,7 +65,7 @@ class StrainModel:
         Chain with the sensor layout of the measured gear (default: nominal layout,
         default truss, built here: about 1.5 s).
     params : ChainParams, optional
-        Gear (default: nominal RT1 size 20, :func:`swgsim.dynamics.rt1_size20`).
+        Gear (default: nominal RT1 size 20, :func:`swgsim.gear.dynamics.rt1_size20`).
     ke_orders : tuple of int
         Orders of the unit kinematic-error responses (the ``ke_order{k}`` candidates).
     ke_unit_rad : float

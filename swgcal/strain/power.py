@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.chain import SimulationChain
+from swgsim.gear.chain import SimulationChain
 
 from ..loop import SelectionConfig
 from . import synthetic as syn

@@ -1,19 +1,19 @@
 """Measured strain windows (data kind 2) as a calibration problem, and its calibration.
 
-Input: a schema-v1 data set (``swgsim.data``) of bench windows, fault possibly
+Input: a schema-v1 data set (``swgsim.datasets.schema``) of bench windows, fault possibly
 ``"unknown"``, each with its operating point (``n_in_rpm``, ``t_out_nm``,
 ``n_in_mean_rpm``, ``t_out_mean_nm``). Output: a report of the fitted chain, the effects
 the data need from the declared library (:mod:`.effects`), the error before and
 after on held-out windows, and the accepted effects as a simulation option
-(``sensor_effects`` of :mod:`swgsim.measurement`, kinematic-error harmonics for
-:class:`swgsim.dynamics.GearParams`).
+(``sensor_effects`` of :mod:`swgsim.sensing.effects`, kinematic-error harmonics for
+:class:`swgsim.gear.dynamics.GearParams`).
 
 Model of a window. The chain is deterministic and periodic in steady state, so each
 operating point is simulated once (:class:`StrainModel`): the dynamics with φ_in(0) = 0
 over one input revolution more than a window, plus one run per unit kinematic-error
 harmonic (linear response of the output torque), all in one vectorised integration.
 The bridge signals follow from the chain's influence coefficients,
-s = w0 (A cos 2ψ + B sin 2ψ) + T_out(t) h(ψ) (paper Fig. 2, :mod:`swgsim.influence`).
+s = w0 (A cos 2ψ + B sin 2ψ) + T_out(t) h(ψ) (paper Fig. 2, :mod:`swgsim.gear.influence`).
 A window has two unknown phases: the WG angle relative to the flexspline ψ (the gauge
 pattern) and the input angle φ_in (the torque ripple of the kinematic error), which
 advance at rates in the ratio 1 + 1/N and are independent at a window's start (the
@@ -68,7 +68,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.measurement import psi_rate
+from swgsim.sensing.effects import psi_rate
 
 from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
 from ..split import HeldOutSplit, group_split

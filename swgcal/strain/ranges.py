@@ -16,7 +16,7 @@ __all__ = ["OFFSET_RANGE_MVV", "DRIFT_RANGE_MVV_S", "GAIN_RANGE", "MISPLACEMENT_
 
 OFFSET_RANGE_MVV = 2.84
 """Largest |offset| [mV/V]: the input range of the bench preset's converter (TI
-ADS131M04 at gain 128, 1.2 V reference, 3.3 V excitation, :mod:`swgsim.acquisition`);
+ADS131M04 at gain 128, 1.2 V reference, 3.3 V excitation, :mod:`swgsim.sensing.acquisition`);
 a larger zero offset would clip the channel."""
 DRIFT_RANGE_MVV_S = 1e-3
 """Largest |zero drift rate| [mV/V/s]: thermal output of self-temperature-compensated
@@ -38,7 +38,7 @@ ADA801368 on rosette misalignment of ±2°); 5° leaves margin for a marking err
 BRIDGE_K_RANGE = 2e-3
 """Largest |bridge nonlinearity k| [1/(mV/V)]: the exact quarter bridge,
 s/(1 + 2e-3 s) in mV/V, independent of the gauge factor (Hoffmann 1989, ch. on the
-Wheatstone bridge; :data:`swgsim.measurement.QUARTER_BRIDGE_K`); half and full bridges
+Wheatstone bridge; :data:`swgsim.sensing.effects.QUARTER_BRIDGE_K`); half and full bridges
 with opposite arm strains are more linear."""
 LOWPASS_RANGE_HZ = (0.262 * 250.0, 0.262 * 64e3)
 """Range of the amplifier corner frequency [Hz]: the −3 dB corner 0.262 f_DATA of the

@@ -83,7 +83,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
       flag}}, ...}]``;
     * ``heldout``: text; ``heldout_split``: the split as a dict;
     * ``sensor_effects``: accepted measurement effects as the option of
-      :func:`swgsim.measurement.apply_sensor_effects`, per-channel values that the data
+      :func:`swgsim.sensing.effects.apply_sensor_effects`, per-channel values that the data
       cannot pin down set neutral (listed in ``withheld``);
     * ``simulation``: the option with a ``caveat`` (None, or why to use it with care:
       effects accepted in a run that ends unexplained) and ``withheld``;
@@ -131,7 +131,7 @@ def _summarize(result: CalibrationResult, source: str | None) -> dict[str, Any]:
                            "(sensors.gauge_factor) of the whole layout")}
     s["simulation"] = {
         "sensor_effects": s["sensor_effects"], "gear_ke_harmonics": s["gear_ke_harmonics"],
-        "call": ("swgsim.measurement.apply_sensor_effects(signals, time_s, n_in_rpm, "
+        "call": ("swgsim.sensing.effects.apply_sensor_effects(signals, time_s, n_in_rpm, "
                  "summary['sensor_effects'], t_start_s=..., n_lead=...)"),
         "caveat": caveat(result), "withheld": s["withheld"]}
     se = _alignment_se(result)
@@ -415,10 +415,10 @@ def _simulation_section(s: Mapping[str, Any]) -> list[str]:
     if s["withheld"]:
         lines += ["Set neutral here (not pinned down by the data): " + "; ".join(
             f"{w['effect']}.{w['parameter']} ({w['reason']})" for w in s["withheld"]) + ".", ""]
-    return lines + ["Measurement effects for `swgsim.measurement.apply_sensor_effects` "
+    return lines + ["Measurement effects for `swgsim.sensing.effects.apply_sensor_effects` "
                     "(`sensor_effects` option):", "", "```json",
                     json.dumps(s["sensor_effects"], indent=1), "```", "",
-                    "Kinematic-error harmonics for `swgsim.dynamics.gear_with_ke`: "
+                    "Kinematic-error harmonics for `swgsim.gear.dynamics.gear_with_ke`: "
                     + json.dumps(s["gear_ke_harmonics"]) + "; chain: w0 = "
                     f"{fmt_value(s['chain']['w0_m'])} "
                     f"m, gauge gain {fmt_value(s['chain']['gauge_gain'])}.", ""]
@@ -426,7 +426,7 @@ def _simulation_section(s: Mapping[str, Any]) -> list[str]:
 
 def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
     """The accepted effects as a simulation option: ``sensor_effects.yaml``, the list for
-    the data-set option ``sensor_effects`` (:func:`swgsim.measurement.parse_sensor_effects`),
+    the data-set option ``sensor_effects`` (:func:`swgsim.sensing.effects.parse_sensor_effects`),
     with the accepted kinematic-error harmonics and the caveat as comments.
 
     Parameters
@@ -443,7 +443,7 @@ def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
     head = [f"accepted sensor effects of {summary['name']} (swgsim-calibrate); the data-set "
             "option sensor_effects"]
     if sim.get("gear_ke_harmonics"):
-        head.append("kinematic-error harmonics (swgsim.dynamics.gear_with_ke): "
+        head.append("kinematic-error harmonics (swgsim.gear.dynamics.gear_with_ke): "
                     + json.dumps(sim["gear_ke_harmonics"]))
     if sim.get("caveat"):
         head.append(f"caveat: {sim['caveat']}")

@@ -1,11 +1,11 @@
 """Bench-like strain data with planted effects, for tests and examples.
 
 The "measured" windows come from the simulation chain's standard path
-(:meth:`swgsim.chain.SimulationChain.simulate`: a random WG start angle per window, a
+(:meth:`swgsim.gear.chain.SimulationChain.simulate`: a random WG start angle per window, a
 settling transient, the fast influence path), not from the calibration's model (one
 steady trajectory per operating point, shifted and interpolated), so a test does not
 check the model against itself. Then the planted measurement effects
-(:func:`swgsim.measurement.apply_sensor_effects`, with a lead of history so that filters
+(:func:`swgsim.sensing.effects.apply_sensor_effects`, with a lead of history so that filters
 and shifts start in steady state), optional planted kinematic-error harmonics (through
 the dynamics), optional out-of-library disturbances (:data:`HIDDEN`), and white Gaussian
 noise of standard deviation ``noise_rel`` times the range of the noise-free signals.
@@ -24,11 +24,12 @@ from typing import Any
 
 import numpy as np
 
-from swgsim import data as dsio
-from swgsim.chain import SimulationChain
-from swgsim.dynamics import gear_with_ke, rt1_size20
-from swgsim.faults import NO_ROOT_CRACK, ChainParams
-from swgsim.measurement import apply_sensor_effects
+from swgsim.datasets import schema as dsio
+from swgsim.files.ownership import atomic_write_json
+from swgsim.gear.chain import SimulationChain
+from swgsim.gear.dynamics import gear_with_ke, rt1_size20
+from swgsim.gear.faults import NO_ROOT_CRACK, ChainParams
+from swgsim.sensing.effects import apply_sensor_effects
 
 __all__ = ["PLANTED", "HIDDEN", "CleanWindows", "simulate_windows", "bench_dataset",
            "write_dataset", "expected_values"]
@@ -222,7 +223,7 @@ def bench_dataset(clean: CleanWindows, sensor_effects: Sequence[Mapping[str, Any
     ----------
     clean : CleanWindows
     sensor_effects : sequence of mapping
-        Planted measurement effects (:mod:`swgsim.measurement`).
+        Planted measurement effects (:mod:`swgsim.sensing.effects`).
     hidden : sequence of mapping
         Out-of-library disturbances (values of :data:`HIDDEN`).
     noise_rel : float, default 0.01
@@ -278,7 +279,7 @@ def write_dataset(ds: Any, out_dir: str | Path) -> Path:
     Returns
     -------
     Path
-        The data-set directory (loadable with :func:`swgsim.data.load`).
+        The data-set directory (loadable with :func:`swgsim.datasets.schema.load`).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -289,7 +290,7 @@ def write_dataset(ds: Any, out_dir: str | Path) -> Path:
                 "shards": {shard: {"sha256": sha, "n_samples": n, "content_sha256": sha}},
                 "n_samples": n, "config": json.loads(json.dumps(
                     {k: str(v) for k, v in ds.attrs.items()}))}
-    dsio.atomic_write_json(out / dsio.MANIFEST, manifest)
+    atomic_write_json(out / dsio.MANIFEST, manifest)
     return out
 
 

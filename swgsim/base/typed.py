@@ -1,0 +1,305 @@
+"""Typed configs: plain mappings checked against dataclass schemas, before any work.
+
+A config travels as a dataclass; plain data (YAML, JSON, a notebook's dict) enters through
+:func:`complete` (every unknown, missing or mistyped key refused with its full name, e.g.
+``dataset.chain.windows_s: unknown key; allowed: sample_rate_hz, window_s, ...``) and
+:func:`build` (the typed object). A field may declare its allowed range in its metadata
+(:func:`allowed`), checked with the keys. :func:`check_finite` refuses NaN and infinity
+anywhere in a config tree: every comparison with NaN is false, so NaN passes a range
+check written ``if v < lo or v > hi: raise``, and any key that has no range check.
+
+Used by every schema of the project: the data set's (:mod:`swgsim.datasets.config`) and
+the apps' (``swgcli.schema``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+import types
+import typing
+from collections.abc import Iterator, Mapping
+from typing import Any, Union
+
+import numpy as np
+
+__all__ = ["MISSING", "NONFINITE", "RANGE", "allowed", "build", "check_finite", "check_keys",
+           "complete"]
+
+MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
+
+_SCALARS = {int: "an integer", float: "a number", str: "a string", bool: "true or false"}
+
+
+def _describe(tp) -> str:
+    origin = typing.get_origin(tp)
+    if tp in _SCALARS:
+        return _SCALARS[tp]
+    if origin in (list, tuple):
+        return "a list"
+    if origin in (dict, Mapping) or dataclasses.is_dataclass(tp):
+        return "a mapping"
+    return str(tp)
+
+
+def _fields(schema: type) -> dict[str, Any]:
+    hints = typing.get_type_hints(schema)
+    return {f.name: hints[f.name] for f in dataclasses.fields(schema)}
+
+
+def _default(schema: type, name: str) -> Any:
+    f = {f.name: f for f in dataclasses.fields(schema)}[name]
+    if f.default_factory is not dataclasses.MISSING:
+        value = f.default_factory()
+    elif f.default is not dataclasses.MISSING:
+        value = f.default
+    else:
+        value = MISSING
+    return _plain(value)
+
+
+def _plain(value: Any) -> Any:
+    if dataclasses.is_dataclass(value):
+        return dataclasses.asdict(value)
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+def _value(value: Any, tp, where: str, fill: bool) -> Any:
+    if isinstance(value, str) and value == MISSING:
+        raise ValueError(f"{where}: missing value (give {where}=...)")
+    if tp is Any:
+        return value
+    origin = typing.get_origin(tp)
+    if origin in (Union, types.UnionType):
+        args = typing.get_args(tp)
+        if value is None and type(None) in args:
+            return None
+        inner = [a for a in args if a is not type(None)]
+        return _value(value, inner[0], where, fill)
+    if value is None:
+        raise ValueError(f"{where}: must be {_describe(tp)}, got null")
+    if dataclasses.is_dataclass(tp):
+        if not isinstance(value, Mapping):
+            raise ValueError(f"{where}: must be a mapping of {', '.join(_fields(tp))}, "
+                             f"got {value!r}")
+        return _mapping(value, tp, where, fill)
+    if origin in (list, tuple):
+        if not isinstance(value, (list, tuple)):
+            raise ValueError(f"{where}: must be a list, got {value!r}")
+        (item,) = typing.get_args(tp)[:1] or (Any,)
+        return [_value(v, item, f"{where}[{i}]", fill) for i, v in enumerate(value)]
+    if origin is dict:
+        if not isinstance(value, Mapping):
+            raise ValueError(f"{where}: must be a mapping, got {value!r}")
+        _, item = typing.get_args(tp)
+        return {k: _value(v, item, f"{where}.{k}", fill) for k, v in value.items()}
+    if tp is bool:
+        ok = isinstance(value, bool)
+    elif tp is int:
+        ok = isinstance(value, int) and not isinstance(value, bool)
+    elif tp is float:
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    elif tp is str:
+        ok = isinstance(value, str)
+    else:
+        ok = True
+    if not ok:
+        raise ValueError(f"{where}: must be {_describe(tp)}, got {value!r}")
+    return value
+
+
+#: Key of a field's metadata holding its allowed range ``(lo, hi, what)`` (None: an open
+#: end), checked with the keys (:func:`check_keys`, :func:`complete`), so before any work:
+#: ``n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))``.
+RANGE = "range"
+
+
+def allowed(lo: float | None, hi: float | None, what: str = "") -> dict[str, tuple]:
+    """Field metadata declaring the allowed range of a number (:data:`RANGE`).
+
+    Parameters
+    ----------
+    lo, hi : float or None
+        Inclusive bounds; None leaves that end open.
+    what : str
+        What the value is, for the message (e.g. ``"worker processes"``).
+
+    Returns
+    -------
+    dict
+        ``{RANGE: (lo, hi, what)}``, for ``dataclasses.field(metadata=...)``.
+    """
+    return {RANGE: (lo, hi, what)}
+
+
+def _check_range(value: Any, spec: tuple, where: str) -> None:
+    """Refuse a number outside its field's :data:`RANGE`, naming the key and the range."""
+    lo, hi, what = spec
+    if value is None or isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        rng = (f"[{lo:g}, {hi:g}]" if lo is not None and hi is not None
+               else f">= {lo:g}" if lo is not None else f"<= {hi:g}")
+        raise ValueError(f"{where}={value}: out of range; allowed: {rng}"
+                         f"{' (' + what + ')' if what else ''}")
+
+
+def _mapping(cfg: Mapping[str, Any], schema: type, where: str, fill: bool) -> dict:
+    fields = _fields(schema)
+    ranges = {f.name: f.metadata[RANGE] for f in dataclasses.fields(schema)
+              if RANGE in f.metadata}
+    pre = f"{where}." if where else ""
+    unknown = [k for k in cfg if k not in fields]
+    if unknown:
+        raise ValueError(f"{pre}{unknown[0]}: unknown key; allowed: {', '.join(fields)}")
+    out = {}
+    for name, tp in fields.items():
+        if name in cfg:
+            out[name] = _value(cfg[name], tp, f"{pre}{name}", fill)
+            if name in ranges:
+                _check_range(out[name], ranges[name], f"{pre}{name}")
+        elif fill:
+            default = _default(schema, name)
+            if isinstance(default, str) and default == MISSING:
+                raise ValueError(f"{pre}{name}: missing key")
+            out[name] = _value(default, tp, f"{pre}{name}", fill)
+        else:
+            raise ValueError(f"{pre}{name}: missing key")
+    return out
+
+
+def check_keys(cfg: Mapping[str, Any], schema: type, where: str) -> None:
+    """Check a complete mapping against a dataclass schema, recursively.
+
+    Parameters
+    ----------
+    cfg : mapping
+        Config to check, every key of the schema present (e.g. a composed app config).
+    schema : dataclass type
+        E.g. :class:`DatasetConfig`. Fields typed ``Any`` are not looked into.
+    where : str
+        Full name of ``cfg`` for messages, e.g. ``"dataset"`` ("" for a root config).
+
+    Raises
+    ------
+    ValueError
+        One line naming the first unknown key (with the allowed ones), missing key,
+        value of the wrong type or number outside its field's range (:func:`allowed`), by
+        its full name.
+    """
+    _mapping(cfg, schema, where, fill=False)
+
+
+def complete(cfg: Mapping[str, Any], schema: type, where: str) -> dict:
+    """A checked copy of a mapping with the keys it leaves out taken from the schema.
+
+    Parameters
+    ----------
+    cfg, schema, where
+        As in :func:`check_keys`; keys absent from ``cfg`` (at any depth) take the
+        schema's defaults, except mandatory ones.
+
+    Returns
+    -------
+    dict
+        Plain, complete config.
+
+    Raises
+    ------
+    ValueError
+        As :func:`check_keys` (unknown key, mandatory key missing, wrong type).
+    """
+    return _mapping(cfg, schema, where, fill=True)
+
+
+def build(value: Any, tp: Any) -> Any:
+    """A typed object of schema ``tp`` from a checked plain value (:func:`complete`).
+
+    Dataclasses are built from their mappings, recursively through lists, dicts and
+    optional fields; fields typed ``Any`` keep their plain value.
+    """
+    origin = typing.get_origin(tp)
+    if tp is Any or value is None:
+        return value
+    if origin in (Union, types.UnionType):
+        inner = [a for a in typing.get_args(tp) if a is not type(None)]
+        return build(value, inner[0])
+    if dataclasses.is_dataclass(tp):
+        hints = _fields(tp)
+        return tp(**{k: build(v, hints[k]) for k, v in value.items()})
+    if origin in (list, tuple):
+        (item,) = typing.get_args(tp)[:1] or (Any,)
+        return [build(v, item) for v in value]
+    if origin is dict:
+        _, item = typing.get_args(tp)
+        return {k: build(v, item) for k, v in value.items()}
+    if tp is float:
+        return float(value)
+    return value
+
+
+# ------------------------------------------------------------------- finiteness
+#: Key of a field's metadata that lets it hold NaN or infinity, with the reason as its value:
+#: ``field(default=..., metadata={NONFINITE: "inf: no cut-off"})``. No field of
+#: :class:`DatasetConfig` or :class:`~swgsim.datasets.schedule.LifeConfig` sets it.
+NONFINITE = "nonfinite"
+
+
+def _nonfinite(value: Any, where: str) -> Iterator[tuple[str, Any]]:
+    """(full key, value) of every NaN or infinity in ``value``, depth first, in field order.
+
+    Dataclasses are walked field by field (a field whose metadata holds :data:`NONFINITE`
+    is skipped), mappings by key, lists and tuples by index, arrays element by element;
+    integers, booleans, strings and None are finite by nature.
+    """
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        for f in dataclasses.fields(value):
+            if NONFINITE not in f.metadata:
+                yield from _nonfinite(getattr(value, f.name), f"{where}.{f.name}")
+    elif isinstance(value, Mapping):
+        for k, v in value.items():
+            yield from _nonfinite(v, f"{where}.{k}")
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            yield from _nonfinite(v, f"{where}[{i}]")
+    elif isinstance(value, np.ndarray):
+        if value.dtype.kind in "fc":
+            for idx in np.argwhere(~np.isfinite(value)):
+                yield f"{where}[{', '.join(str(int(i)) for i in idx)}]", value[tuple(idx)]
+        elif value.dtype.kind == "O":
+            for idx in np.ndindex(value.shape):
+                yield from _nonfinite(value[idx], f"{where}[{', '.join(map(str, idx))}]")
+    elif (isinstance(value, numbers.Real) and not isinstance(value, numbers.Integral)
+          and not math.isfinite(value)):
+        yield where, value
+
+
+def check_finite(obj: Any, where: str) -> None:
+    """Refuse NaN and infinity in any float of a config tree, naming its full key.
+
+    Every float is checked, whatever its key: in nested dataclasses, lists, tuples, dicts
+    and arrays, and in fields typed ``Any`` (e.g. ``sensor_effects[i].params``), unless
+    the dataclass field declares otherwise in its metadata (:data:`NONFINITE`). A NaN
+    can arrive as ``.nan`` in YAML, ``nan`` on the command line or from a program; it is
+    refused here, before any range check compares with it.
+
+    Parameters
+    ----------
+    obj : Any
+        The config: a dataclass (e.g. :class:`DatasetConfig`), a mapping, a list, ...
+    where : str
+        Full name of ``obj`` for the message, e.g. ``"dataset"``.
+
+    Raises
+    ------
+    ValueError
+        One line naming the first non-finite value by its full key, e.g.
+        ``dataset.sensors.grid_length_mm must be a finite number, got nan``.
+    """
+    for key, value in _nonfinite(obj, where):
+        raise ValueError(f"{key} must be a finite number, got {value}")

@@ -1,0 +1,220 @@
+"""Gear lives: one gear's operation as a time-ordered stream of windows.
+
+The schedule (duty cycle, commissioning, fault onset and severity) is
+:mod:`swgsim.datasets.schedule`; the records the windows are cut from are
+:mod:`swgsim.datasets.records`.
+
+A life runs a duty cycle over operating points (each held for its dwell time, in turn)
+and records one window every ``interval_min`` of operation. It starts with a
+commissioning period known to be healthy; then, optionally, a fault of any class (a gear
+fault of :data:`swgsim.gear.faults.FAULTS` or a sensor fault of
+:data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`) sets in at ``onset_h`` and follows a severity
+schedule: a step, linear growth to a final severity, or (hour, severity) pairs.
+
+How windows are made. A gear in a steady state at one operating point repeats its signals
+once per output revolution (the WG angle and the flexspline both return; N input
+revolutions, 3 s at 2000 rpm). Each (operating point, state) is therefore simulated
+once, as one *record* of one output revolution plus a window (:class:`LifeSimulator`):
+the dynamics (:func:`swgsim.gear.dynamics.simulate`), the gauge signals and the measurement
+chain up to the converter's filter, exactly as a data set's windows
+(:mod:`swgsim.datasets.grid_shard`). A window is cut from its record at a random start, and gets its
+own eq. (10) draws (if ``disturbed``), its sensor fault and the converter's noise and
+quantisation. A growing severity is simulated as a staircase of ``severity_levels`` steps
+(the window's ``severity`` is the step's, i.e. what its signals hold).
+
+Randomness: the fault's position (gear faults) or bridge (sensor faults) from
+``SeedSequence(seed, spawn_key=(gear, life_seed, 0))``; window k from its own stream,
+``spawn_key=(gear, life_seed, 1 + k)`` (its start, eq. (10), noise), so a life is the same
+whatever slice of it is asked for, and any slice costs only its windows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+
+import numpy as np
+
+from swgsim.datasets.plan import DatasetPlan, ShardSpec
+from swgsim.datasets.records import RecordBank, record_bank
+from swgsim.datasets.schedule import LifeConfig, schedule, uses_position
+from swgsim.datasets.schema import make_dataset
+from swgsim.files.provenance import git_revision, package_version
+from swgsim.gear.influence import Influence
+from swgsim.sensing.acquisition import digitise
+from swgsim.sensing.disturbance import disturb
+from swgsim.sensing.sensor_faults import apply_sensor_fault, is_sensor_fault
+
+#: Windows made at once (memory).
+BLOCK = 1024
+
+__all__ = ["BLOCK", "LifeSimulator", "life_dataset", "simulate_life_shard"]
+
+
+class LifeSimulator:
+    """Makes the windows of one gear's life from its records (module docstring).
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+        The checked data set: chain, gear, recording, disturbance, sensor effects.
+    gear_id : int
+    life : LifeConfig
+        Checked (:func:`check_life`).
+    bank : RecordBank, optional
+        The gear's records, shared with other lives of it; a new one when not given. The
+        life's records are asked for at once, and simulated at the first window.
+    """
+
+    def __init__(self, plan: DatasetPlan, gear_id: int, life: LifeConfig,
+                 bank: RecordBank | None = None) -> None:
+        self.plan, self.life, self.gear_id = plan, life, int(gear_id)
+        cfg = plan.config
+        ops = cfg.operating_points
+        self.bank = record_bank(plan, self.gear_id) if bank is None else bank
+        slots = getattr(self.bank, "slots", None)  # a profile: one duty point per slot
+        self.schedule = schedule(life if slots is None else dataclasses.replace(
+            life, duty=slots.duty(life.interval_min)), list(ops.n_in_rpm), list(ops.t_out_nm))
+        ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(self.gear_id, int(life.life_seed), 0))
+        u = np.random.default_rng(ss).uniform(size=2)
+        f = life.fault
+        self.position_deg = float(360.0 * u[0] if f.position_deg is None else f.position_deg)
+        self.sensor = int(5 * u[1]) if f.sensor is None else int(f.sensor)
+        self.bank.want(self._key(d, s) for d, s in
+                       {(int(d), float(s)) for d, s in zip(self.schedule.duty_index,
+                                                           self.schedule.severity,
+                                                           strict=True)})
+
+    def _key(self, d: int, severity: float) -> tuple:
+        return RecordBank.key(self.schedule.duty[d], self.life.fault.fault, severity,
+                              self.position_deg)
+
+    # ------------------------------------------------------------------ windows
+    def windows(self, start: int, stop: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Windows ``start:stop`` of the life.
+
+        Returns
+        -------
+        signals : ndarray, float32, shape (stop − start, 5, n_t)
+            Bridge outputs [mV/V].
+        meta : dict of ndarray, shape (stop − start,)
+            The schema's per-sample variables plus ``hour`` and ``commissioning``.
+        """
+        out_s, out_m = [], []
+        for a in range(start, stop, BLOCK):  # in blocks: bounded memory
+            s, m = self._rows(np.arange(a, min(a + BLOCK, stop)))
+            out_s.append(s)
+            out_m.append(m)
+        meta = {k: np.concatenate([m[k] for m in out_m]) for k in out_m[0]}
+        return np.concatenate(out_s), meta
+
+    def __len__(self) -> int:
+        return self.schedule.hour.size
+
+    def _rows(self, rows: np.ndarray):
+        cfg = self.plan.config
+        ch, amp = cfg.chain, cfg.acquisition.amplifier
+        fs = ch.sample_rate_hz
+        n_t = int(round(ch.window_s * fs))
+        time_s = np.arange(n_t) / fs
+        sch = self.schedule
+        sig = np.empty((rows.size, 5, n_t))
+        eff, n_mean, t_mean = (np.empty(rows.size) for _ in range(3))
+        rngs = [np.random.default_rng(np.random.SeedSequence(
+            int(cfg.seed), spawn_key=(self.gear_id, int(self.life.life_seed), 1 + int(r))))
+            for r in rows]
+        slots = getattr(self.bank, "slots", None)
+        angles: dict[str, np.ndarray] = {}
+        for i, r in enumerate(rows):
+            d = int(sch.duty_index[r])
+            rec = self.bank.get(self._key(d, float(sch.severity[r])))
+            if slots is not None:  # a profile: slot d, started within its jitter
+                rec = {k: v[d] for k, v in rec.items()}
+                o = int(rngs[i].uniform() * (rec["signal"].shape[-1] - n_t + 1))
+                for k in ("phi_in", "phi_in_meas", "phi_out_meas"):
+                    if k in rec:
+                        angles.setdefault(k, np.empty((rows.size, n_t)))[i] = rec[k][o:o + n_t]
+            else:
+                o = int(rngs[i].uniform() * rec["n_period"])
+            sig[i] = rec["signal"][:, o:o + n_t]
+            e = o + n_t
+            eff[i] = (rec["p_out"][e] - rec["p_out"][o]) / (rec["p_in"][e] - rec["p_in"][o])
+            n_mean[i] = (rec["w_in"][e] - rec["w_in"][o]) / n_t * 60 / (2 * np.pi)
+            t_mean[i] = (rec["t_out"][e] - rec["t_out"][o]) / n_t
+        phi_in = angles.pop("phi_in", None)
+        fault = sch.fault[rows]
+        if is_sensor_fault(self.life.fault.fault):
+            on = fault != "healthy"
+            if on.any():
+                sig[on] = apply_sensor_fault(sig[on], self.life.fault.fault,
+                                             sch.severity[rows][on], self.sensor)
+        for i in range(rows.size):  # each window from its own stream
+            if self.life.disturbed:
+                sig[i:i + 1] = disturb(sig[i:i + 1], time_s, n_mean[i:i + 1], cfg.disturbance,
+                                       rngs[i], None if phi_in is None else phi_in[i:i + 1])
+            if amp is not None:
+                sig[i:i + 1] = digitise(sig[i:i + 1], amp, rngs[i])
+        duty = [sch.duty[int(d)] for d in sch.duty_index[rows]]
+        gear_fault = (fault != "healthy") & uses_position(self.life.fault.fault)
+        meta = {
+            "gear": np.full(rows.size, self.gear_id),
+            "fault": fault.astype(str),
+            "variant": np.zeros(rows.size, np.int64),
+            "severity": sch.severity[rows],
+            "position_deg": np.where(gear_fault,
+                                     self.position_deg, np.nan),
+            "n_in_rpm": np.array([d.n_in_rpm for d in duty]),
+            "t_out_nm": np.array([d.t_out_nm for d in duty]),
+            "disturbed": np.full(rows.size, bool(self.life.disturbed)),
+            "reference": np.zeros(rows.size, bool),
+            "efficiency": eff,
+            "n_in_mean_rpm": n_mean,
+            "t_out_mean_nm": t_mean,
+            "hour": sch.hour[rows],
+            "commissioning": sch.commissioning[rows],
+            **angles,  # a profile's angle channels, (n, n_t) [rad]
+        }
+        return sig.astype(np.float32), meta
+
+
+def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
+    """Windows ``start:stop`` of a life as a schema-v1 ``xarray.Dataset``, with the per-sample
+    variables ``hour`` [h] and ``commissioning`` (bool) and the life in the attributes."""
+    stop = len(sim) if stop is None else stop
+    sig, meta = sim.windows(start, stop)
+    extra = {k: meta.pop(k) for k in ("hour", "commissioning")}
+    angles = {k: meta.pop(k) for k in [k for k, v in meta.items() if v.ndim == 2]}
+    cfg = sim.plan.config
+    n_t = sig.shape[-1]
+    attrs = {"config": sim.plan.as_dict(), "seed": int(cfg.seed),
+             "life": dataclasses.asdict(sim.life), "gear_id": sim.gear_id,
+             "fault_position_deg": sim.position_deg, "fault_sensor": sim.sensor}
+    ds = make_dataset(sig, np.arange(n_t) / cfg.chain.sample_rate_hz, meta, attrs)
+    ds["hour"] = ("sample", extra["hour"], {"units": "h"})
+    ds["commissioning"] = ("sample", extra["commissioning"])
+    for k, v in angles.items():  # a profile's angle channels
+        ds[k] = (("sample", "time"), v, {"units": "rad"})
+    return ds
+
+
+def simulate_life_shard(plan: DatasetPlan, shard: ShardSpec,
+                        influences: dict[tuple | None, Influence] | None = None):
+    """One gear's life as a data-set shard (``dataset.life``); returns (Dataset, n).
+
+    ``influences`` is not used: the life's records compute the influences of the root
+    cracks they meet (:class:`swgsim.datasets.records.RecordBank`); it is taken so that
+    every shard runner has one signature (:data:`swgsim.datasets.generate.RUNNERS`).
+
+    The shard's attributes are those of a grid shard (config, seed, ``content_sha256`` of
+    the float32 signals and the sorted per-sample variables, provenance) plus ``life``,
+    ``fault_position_deg`` and ``fault_sensor``.
+    """
+    sim = LifeSimulator(plan, shard.gear, plan.config.life)
+    ds = life_dataset(sim)
+    h = hashlib.sha256(ds["strain_signal"].values.tobytes())
+    for k in sorted(v for v in ds.data_vars if v != "strain_signal"):
+        v = ds[k].values
+        h.update(np.ascontiguousarray(v.astype(str) if v.dtype.kind in "OU" else v).tobytes())
+    ds.attrs.update({"shard": shard.name, "content_sha256": h.hexdigest(),
+                     "package_version": package_version(), "git_revision": git_revision()})
+    return ds, len(sim)

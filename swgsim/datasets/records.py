@@ -1,0 +1,209 @@
+"""Records of a gear's states, from which its life's windows are cut.
+
+A gear in a steady state at one operating point repeats its signals once per output
+revolution (the WG angle and the flexspline both return; N input revolutions, 3 s at
+2000 rpm). Each (operating point, state) is therefore simulated once, as one *record* of
+one output revolution plus a window (:class:`RecordBank`): the dynamics
+(:func:`swgsim.gear.dynamics.simulate`), the gauge signals and the measurement chain up to
+the converter's filter, exactly as a data set's windows (:mod:`swgsim.datasets.
+grid_shard`). On an operating profile (:class:`ProfileRecordBank`) each state is
+simulated once along the whole profile, and its record holds every slot
+(:mod:`swgsim.datasets.slots`). The windows are cut by :mod:`swgsim.datasets.life`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from swgsim.datasets.gears import gear_params, layout_for
+from swgsim.datasets.plan import DatasetPlan
+from swgsim.datasets.schedule import DutyPoint, uses_position
+from swgsim.datasets.slots import jitter_samples, profile_slots
+from swgsim.datasets.steps import diverged, fine_motion, influences_for
+from swgsim.gear import dynamics, profile_dynamics
+from swgsim.gear.chain import SimulationChain
+from swgsim.gear.faults import ChainParams, apply_fault
+from swgsim.sensing.acquisition import sample, start_angles
+from swgsim.sensing.angles import measure_angles
+from swgsim.sensing.effects import apply_sensor_effects
+from swgsim.sensing.sensor_faults import is_sensor_fault
+
+__all__ = ["ProfileRecordBank", "RecordBank", "record_bank"]
+
+
+class RecordBank:
+    """Records of one gear: one output revolution plus a window per (duty point, state).
+
+    States are asked for first (:meth:`want`) and simulated together at the first
+    :meth:`get` (:meth:`simulate`): the RK4 integration costs nearly the same per step
+    for one variant as for a hundred, so every record of a speed is one batch.
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+        The checked data set.
+    gear_id : int
+    chunk : int
+        Variants per batch (bounds the memory of the dynamics and gauge signals).
+    """
+
+    def __init__(self, plan: DatasetPlan, gear_id: int, chunk: int = 96) -> None:
+        self.plan, self.gear_id, self.chunk = plan, int(gear_id), int(chunk)
+        self.healthy = gear_params(plan.config, plan.gear(self.gear_id))
+        self._pending: set[tuple] = set()
+        self._records: dict[tuple, dict] = {}
+        self._influences: dict = {}
+
+    @staticmethod
+    def key(dp: DutyPoint, fault: str, severity: float, position_deg: float) -> tuple:
+        """The key of a record: (speed, torque, gear fault, severity, position)."""
+        if fault == "healthy" or is_sensor_fault(fault) or severity == 0:
+            return (float(dp.n_in_rpm), float(dp.t_out_nm), "healthy", 0.0, 0.0)
+        pos = float(position_deg) if uses_position(fault) else 0.0
+        return (float(dp.n_in_rpm), float(dp.t_out_nm), fault, float(severity), pos)
+
+    def params(self, key: tuple) -> ChainParams:
+        """Chain parameters of the gear in the state of a key."""
+        _, _, fault, sev, pos = key
+        return self.healthy if fault == "healthy" else apply_fault(self.healthy, fault, sev,
+                                                                    pos)
+
+    def want(self, keys) -> None:
+        """Ask for records, simulated at the next :meth:`get`."""
+        self._pending |= {k for k in keys if k not in self._records}
+
+    def get(self, key: tuple) -> dict[str, np.ndarray]:
+        """A record: ``signal`` (5, n_rec) [mV/V] sampled as the bench's converter does
+        (before its noise), ``n_period`` (samples of one output revolution) and the
+        cumulative sums ``p_in``, ``p_out`` [W], ``w_in`` [rad/s], ``t_out`` [N m] over its
+        samples, shape (n_rec + 1,)."""
+        if key not in self._records:
+            self.want([key])
+            self.simulate()
+        return self._records[key]
+
+    def simulate(self) -> None:
+        """Simulate every pending record, in batches per input speed."""
+        pending, self._pending = sorted(self._pending), set()
+        for n in sorted({k[0] for k in pending}):
+            group = [k for k in pending if k[0] == n]
+            for c in range(0, len(group), self.chunk):
+                self._simulate(group[c:c + self.chunk])
+
+    def _chain(self, params: list[ChainParams]) -> SimulationChain:
+        keys = {p.root_crack_key() for p in params} - {None} - set(self._influences)
+        if keys or not self._influences:
+            self._influences.update(influences_for(self.plan, [self.gear_id], keys)[self.gear_id])
+        cfg = self.plan.config
+        return SimulationChain.from_influences(layout_for(cfg, self.plan.gear(self.gear_id)),
+                                               self._influences, cfg.chain)
+
+    def _simulate(self, keys: list[tuple]) -> None:
+        cfg = self.plan.config
+        ch, amp = cfg.chain, cfg.acquisition.amplifier
+        fs, n_in = ch.sample_rate_hz, keys[0][0]
+        q = 1 if amp is None else amp.oversample
+        n_lead = 0 if amp is None else amp.lead_samples(fs)
+        n_t = int(round(ch.window_s * fs))
+        n_period = int(math.ceil(self.healthy.gear.ratio * 60.0 / n_in * fs))
+        n_rec = n_period + n_t
+        params = [self.params(k) for k in keys]
+        n_sim = n_rec + 2 * n_lead + (q > 1)
+        res = dynamics.simulate([p.gear for p in params], n_in, np.array([k[1] for k in keys]),
+                                0.0, fs, n_sim / fs, ch.settle_s - n_lead / fs, ch.substeps,
+                                friction_effects=self.plan.friction)
+        if not res.success:
+            raise ValueError(diverged(self.plan, f"gear {self.gear_id}'s life at {n_in:g} rpm",
+                                      res.message))
+        chain = self._chain(params)
+        win = slice(n_lead, n_lead + n_rec)
+        for c in range(0, len(keys), 16):  # gauge signals in small groups (memory)
+            rows = np.arange(c, min(c + 16, len(keys)))
+            psi, t_act = fine_motion(res, q, rows)
+            sig = chain.signals_batch([params[r] for r in rows], psi, t_act)
+            if self.plan.sensor_effects:
+                t_fine = np.arange(sig.shape[-1]) / (fs * q)
+                sig = apply_sensor_effects(sig, t_fine, np.full(rows.size, n_in),
+                                           self.plan.sensor_effects,
+                                           t_start_s=np.full(rows.size, -n_lead / fs))
+            sig = sample(sig, amp, n_lead) if amp is not None else sig[:, :, :n_rec]
+            for i, r in enumerate(rows):
+                cum = {k: np.concatenate([[0.0], np.cumsum(v[r, win])])
+                       for k, v in (("p_in", res.p_in), ("p_out", res.p_out),
+                                    ("w_in", res.states[1]), ("t_out", res.t_out))}
+                self._records[keys[r]] = {"signal": sig[i, :, :n_rec].astype(np.float32),
+                                          "n_period": n_period, **cum}
+
+
+class ProfileRecordBank(RecordBank):
+    """Records of one gear along the profile: one per state, all its slots (module
+    docstring). :meth:`get` gives, per slot over its window and jitter (n = n_t + jitter
+    samples), ``signal`` (S, 5, n) [mV/V] sampled as the converter does (before its
+    noise), the cumulative sums ``p_in``, ``p_out`` [W], ``w_in`` [rad/s], ``t_out``
+    [N m] (S, n + 1) as a steady record's, ``phi_in`` (S, n) [rad] (the simulated input
+    angle, for eq. (10)) and the recorded angle channels ``phi_in_meas`` (and
+    ``phi_out_meas`` with an output encoder)."""
+
+    def __init__(self, plan: DatasetPlan, gear_id: int, chunk: int = 32) -> None:
+        super().__init__(plan, gear_id, chunk)
+        self.slots = profile_slots(plan)
+
+    @staticmethod
+    def key(dp: DutyPoint, fault: str, severity: float, position_deg: float) -> tuple:
+        """The key of a record: the state alone (every slot is in the record)."""
+        return (0.0, 0.0, *RecordBank.key(dp, fault, severity, position_deg)[2:])
+
+    def _simulate(self, keys: list[tuple]) -> None:
+        cfg = self.plan.config
+        ch, amp = cfg.chain, cfg.acquisition.amplifier
+        fs = ch.sample_rate_hz
+        q = 1 if amp is None else amp.oversample
+        n_lead = 0 if amp is None else amp.lead_samples(fs)
+        n_t = int(round(ch.window_s * fs)) + jitter_samples(cfg)  # window + jitter
+        params = [self.params(k) for k in keys]
+        # the same pose every cycle: one start angle per gear, within one WG revolution
+        ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(self.gear_id, 2 ** 20))
+        phi0 = np.mod(start_angles(cfg.acquisition, 1, np.random.default_rng(ss),
+                                   self.healthy.gear.ratio), 2 * np.pi)
+        starts = self.slots.starts
+        n_rec = int(starts.max()) + n_t + n_lead + 1
+        res = profile_dynamics.simulate_profile([p.gear for p in params], self.plan.profile,
+                                        np.full(len(keys), phi0[0]), fs, n_rec / fs,
+                                        ch.substeps, cfg.profile.feedforward)
+        if not res.success:
+            raise ValueError(diverged(self.plan, f"gear {self.gear_id}'s life on the profile",
+                                      res.message))
+        chain = self._chain(params)
+        n_cut = q * (n_t + 2 * n_lead) if amp is not None else n_t
+        idx = q * (starts - n_lead)[:, None] + np.arange(n_cut)[None, :]
+        win = starts[:, None] + np.arange(n_t)[None, :]
+        angles = cfg.profile.angles
+        meas = measure_angles(res.states[0][:, win], res.states[2][:, win],
+                              input_sensor=angles.input_sensor(),
+                              output_encoder=angles.output_encoder())
+        t_fine = np.arange(n_cut) / (fs * q)
+        for v, k in enumerate(keys):
+            psi_f, t_f = fine_motion(res, q, np.array([v]))
+            cut = chain.signals_batch([params[v]], psi_f, t_f)[0][:, idx].transpose(1, 0, 2)
+            if self.plan.sensor_effects:
+                cut = apply_sensor_effects(cut, t_fine, None, self.plan.sensor_effects,
+                                           t_start_s=(starts - n_lead) / fs, psi=psi_f[0][idx])
+            cut = sample(cut, amp, n_lead) if amp is not None else cut
+            cum = {c: np.concatenate([np.zeros((len(starts), 1)), np.cumsum(x[v, win], axis=1)],
+                                     axis=1)
+                   for c, x in (("p_in", res.p_in), ("p_out", res.p_out),
+                                ("w_in", res.states[1]), ("t_out", res.t_out))}
+            self._records[k] = {
+                "signal": cut.astype(np.float32), **cum,
+                "phi_in": res.states[0][v, win],
+                **{f"{c}_meas": m[v] for c, m in meas.items()},
+            }
+
+
+def record_bank(plan: DatasetPlan, gear_id: int) -> RecordBank:
+    """The records of one gear's lives: along the profile for a profile data set, else
+    at its steady operating points."""
+    return ProfileRecordBank(plan, gear_id) if plan.profile is not None else RecordBank(
+        plan, gear_id)

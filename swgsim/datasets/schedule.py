@@ -1,0 +1,284 @@
+"""A gear life's schedule: duty cycle, commissioning, fault onset and severity over the
+operating hours, decided before any simulation.
+
+A life runs a duty cycle over operating points (each held for its dwell time, in turn)
+and records one window every ``interval_min`` of operation. It starts with a
+commissioning period known to be healthy; then, optionally, a fault of any class (a gear
+fault of :data:`swgsim.gear.faults.FAULTS` or a sensor fault of
+:data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`) sets in at ``onset_h`` and follows a
+severity schedule: a step, linear growth to a final severity, or (hour, severity) pairs.
+The types here are what the data-set config (:mod:`swgsim.datasets.config`) holds; the
+simulation of a life's windows is :mod:`swgsim.datasets.life`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swgsim.base.typed import check_finite
+from swgsim.gear.faults import get_fault
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS, is_sensor_fault
+
+__all__ = ["GROWTH", "DutyPoint", "FaultOnset", "LifeConfig", "Schedule", "check_life",
+           "duty_cycle", "schedule", "severity_at", "uses_position"]
+
+GROWTH = ("step", "linear", "points")
+
+
+@dataclass
+class DutyPoint:
+    """One operating point of a duty cycle and how long it is held each cycle.
+
+    Attributes
+    ----------
+    n_in_rpm : float
+        Input (WG) speed [rpm].
+    t_out_nm : float
+        Load torque [N m].
+    dwell_min : float
+        Operating time at this point per cycle [min], > 0.
+    """
+
+    n_in_rpm: float = 2000.0
+    t_out_nm: float = 7.0
+    dwell_min: float = 10.0
+
+
+@dataclass
+class FaultOnset:
+    """The fault of a life and its severity schedule.
+
+    Attributes
+    ----------
+    fault : str
+        ``healthy`` (no fault), a gear fault or a ``sensor_*`` fault.
+    onset_h : float
+        Operating hours at which the fault sets in, >= the commissioning period.
+    severity : float
+        Final severity (``step``, ``linear``).
+    growth : {"step", "linear", "points"}
+        ``step``: ``severity`` from the onset on; ``linear``: from 0 at the onset to
+        ``severity`` ``growth_h`` hours later, then constant; ``points``: linear between
+        the (hour, severity) pairs of ``points``, 0 before the first.
+    growth_h : float
+        Hours of linear growth, > 0 for ``linear``.
+    points : list of [hour, severity]
+        Increasing hours, for ``points``.
+    position_deg : float or None
+        Circumferential position of a gear fault on the flexspline [deg]; None draws it
+        uniformly from the life's seed.
+    sensor : int or None
+        Faulty bridge of a sensor fault (0..4); None draws it from the life's seed.
+    """
+
+    fault: str = "healthy"
+    onset_h: float = 0.0
+    severity: float = 0.0
+    growth: str = "step"
+    growth_h: float = 0.0
+    points: list[list[float]] = field(default_factory=list)
+    position_deg: float | None = None
+    sensor: int | None = None
+
+
+@dataclass
+class LifeConfig:
+    """One gear's life (module docstring).
+
+    Attributes
+    ----------
+    hours : float
+        Operating hours recorded, commissioning included, > 0.
+    interval_min : float
+        Operating minutes between windows, > 0 (default one a minute).
+    commissioning_h : float
+        The first hours, known healthy: the monitor's baseline. The default, 24 h (1,440
+        windows, 240 per operating point of the paper's six), is above the minimum of the
+        monitor's default design (one false alarm per 1000 h; ``learn.monitor``).
+    duty : list of DutyPoint
+        The duty cycle; empty: the data set's operating points, 10 min each.
+    fault : FaultOnset
+    severity_levels : int
+        Steps of the staircase that simulates a growing severity, >= 1.
+    disturbed : bool
+        Add eq. (10)'s per-window disturbance to every window.
+    life_seed : int
+        Number of this life among the lives of one gear and data-set seed, >= 0.
+    """
+
+    hours: float = 1000.0
+    interval_min: float = 1.0
+    commissioning_h: float = 24.0
+    duty: list[DutyPoint] = field(default_factory=list)
+    fault: FaultOnset = field(default_factory=FaultOnset)
+    severity_levels: int = 8
+    disturbed: bool = True
+    life_seed: int = 0
+
+
+def _req(cond: bool, msg: str) -> None:
+    if not cond:
+        raise ValueError(msg)
+
+
+def duty_cycle(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]
+               ) -> list[DutyPoint]:
+    """The life's duty cycle: ``life.duty`` or every (speed, torque) pair, 10 min each."""
+    if life.duty:
+        return list(life.duty)
+    return [DutyPoint(float(n), float(t)) for n in n_in_rpm for t in t_out_nm]
+
+
+def check_life(life: LifeConfig, key: str = "dataset.life") -> None:
+    """Refuse a life config outside its ranges, in one line naming the key.
+
+    Parameters
+    ----------
+    life : LifeConfig
+    key : str
+        Full name of ``life`` for messages.
+
+    Raises
+    ------
+    ValueError
+        NaN or infinity in any float (checked first, :func:`swgsim.base.typed.check_finite`),
+        or a value outside its range, naming the key.
+    """
+    check_finite(life, key)
+    for k in ("hours", "interval_min"):
+        v = float(getattr(life, k))
+        _req(np.isfinite(v) and v > 0, f"{key}.{k} must be > 0, got {v}")
+    c = float(life.commissioning_h)
+    _req(np.isfinite(c) and 0 < c < life.hours, f"{key}.commissioning_h must lie in (0, "
+         f"{life.hours:g}) h (a commissioning period known healthy, inside the life), got {c}")
+    _req(c * 60.0 / life.interval_min >= 1, f"{key}.commissioning_h={c:g} h holds no window "
+         f"at interval_min={life.interval_min:g}")
+    for i, d in enumerate(life.duty):
+        _req(d.dwell_min > 0, f"{key}.duty[{i}].dwell_min must be > 0, got {d.dwell_min}")
+        _req(0 < d.n_in_rpm <= 6500, f"{key}.duty[{i}].n_in_rpm must lie in (0, 6500] rpm, "
+             f"got {d.n_in_rpm}")
+        _req(0 <= d.t_out_nm <= 107, f"{key}.duty[{i}].t_out_nm must lie in [0, 107] N m, "
+             f"got {d.t_out_nm}")
+    _req(int(life.severity_levels) >= 1, f"{key}.severity_levels must be >= 1, got "
+         f"{life.severity_levels}")
+    _req(int(life.life_seed) >= 0, f"{key}.life_seed must be >= 0, got {life.life_seed}")
+    _check_fault(life.fault, c, f"{key}.fault")
+
+
+def _check_fault(f: FaultOnset, commissioning_h: float, key: str) -> None:
+    if f.fault == "healthy":
+        return
+    if is_sensor_fault(f.fault):
+        lo, hi = SENSOR_FAULTS[f.fault].severity_range
+        _req(f.sensor is None or 0 <= int(f.sensor) <= 4, f"{key}.sensor must lie in "
+             f"[0, 4] (bridges s0..s4) or be null, got {f.sensor}")
+    else:
+        try:
+            lo, hi = get_fault(f.fault).severity_range
+        except (KeyError, ValueError):
+            raise ValueError(f"{key}.fault: unknown fault {f.fault!r}; allowed: healthy, "
+                             f"the gear faults and {sorted(SENSOR_FAULTS)}") from None
+    _req(f.onset_h >= commissioning_h, f"{key}.onset_h must be >= the commissioning period "
+         f"({commissioning_h:g} h), got {f.onset_h}")
+    _req(f.growth in GROWTH, f"{key}.growth must be one of {list(GROWTH)}, got {f.growth!r}")
+    sev = [p[1] for p in f.points] if f.growth == "points" else [f.severity]
+    for s in sev:
+        _req(lo <= s <= hi, f"{key}: severity {s} outside the allowed range [{lo}, {hi}] of "
+             f"{f.fault}")
+    if f.growth == "linear":
+        _req(f.growth_h > 0, f"{key}.growth_h must be > 0 for linear growth, got {f.growth_h}")
+    if f.growth == "points":
+        hrs = [p[0] for p in f.points]
+        _req(len(hrs) >= 1 and all(len(p) == 2 for p in f.points)
+             and all(b > a for a, b in zip(hrs, hrs[1:], strict=False))
+             and hrs[0] >= f.onset_h, f"{key}.points must be [hour, severity] pairs with "
+             f"increasing hours from onset_h on, got {f.points}")
+
+
+def severity_at(f: FaultOnset, hours: np.ndarray, levels: int) -> np.ndarray:
+    """Severity of the fault at each hour, on the staircase of ``levels`` steps.
+
+    The exact schedule is rounded down to the nearest of ``levels`` equal steps of its
+    largest value (a step schedule is exact); 0 before the onset.
+
+    Returns
+    -------
+    ndarray, shape like ``hours``
+    """
+    h = np.asarray(hours, float)
+    if f.fault == "healthy":
+        return np.zeros_like(h)
+    if f.growth == "step":
+        return np.where(h >= f.onset_h, f.severity, 0.0)
+    if f.growth == "linear":
+        set_in = h >= f.onset_h
+        exact = np.clip((h - f.onset_h) / f.growth_h, 0.0, 1.0) * f.severity
+        top = f.severity
+    else:
+        hp = np.array([p[0] for p in f.points], float)
+        sp = np.array([p[1] for p in f.points], float)
+        set_in = h >= max(hp[0], f.onset_h)
+        exact = np.interp(h, hp, sp)
+        top = sp[np.argmax(np.abs(sp))]
+    if top == 0:
+        return np.zeros_like(h)
+    step = abs(top) / int(levels)
+    q = np.floor(np.abs(exact) / step + 1e-9) * step
+    # a growing fault is there from its onset: its first step is taken at once
+    q = np.maximum(q, step) * np.sign(np.where(exact != 0, exact, top))
+    return np.where(set_in, q, 0.0)
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """What each window of a life is: hour, operating point and true state.
+
+    Attributes
+    ----------
+    hour : ndarray, shape (W,)
+        Operating hours since the start of commissioning [h].
+    duty_index : ndarray of int, shape (W,)
+        Index into ``duty``.
+    fault : ndarray of str, shape (W,)
+        True class (``healthy`` before the onset).
+    severity : ndarray, shape (W,)
+        True severity (the staircase's step).
+    commissioning : ndarray of bool, shape (W,)
+        Inside the commissioning period.
+    duty : list of DutyPoint
+    """
+
+    hour: np.ndarray
+    duty_index: np.ndarray
+    fault: np.ndarray
+    severity: np.ndarray
+    commissioning: np.ndarray
+    duty: list[DutyPoint]
+
+
+def schedule(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]) -> Schedule:
+    """The windows of a life (checked config), in time order.
+
+    Window k is taken at ``k · interval_min`` minutes of operation; its operating point is
+    the duty point held at that time.
+    """
+    duty = duty_cycle(life, n_in_rpm, t_out_nm)
+    n_w = int(math.floor(life.hours * 60.0 / life.interval_min + 1e-9))
+    minutes = np.arange(n_w) * float(life.interval_min)
+    edges = np.cumsum([d.dwell_min for d in duty])
+    idx = np.searchsorted(edges, minutes % edges[-1], side="right")
+    hour = minutes / 60.0
+    sev = severity_at(life.fault, hour, life.severity_levels)
+    fault = np.where(sev != 0, life.fault.fault, "healthy")
+    return Schedule(hour, idx.astype(np.int64), fault.astype(object), sev,
+                    hour < life.commissioning_h, duty)
+
+
+def uses_position(name: str) -> bool:
+    """Whether a fault class has a circumferential position (False for sensor faults)."""
+    if name == "healthy" or is_sensor_fault(name):
+        return False
+    return bool(get_fault(name).uses_position)

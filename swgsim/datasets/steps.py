@@ -1,0 +1,134 @@
+"""Steps every shard runner shares: the gears' influences on the truss, the motion on a
+finer grid, and the message of a simulation that diverged.
+
+The influences are computed once in the parent process (one factorisation of the healthy
+truss, one adjoint solve per gear, a Woodbury update per root crack), so that the shard
+workers need no truss.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline, CubicSpline
+
+from swgsim.datasets.gears import layout_for
+from swgsim.datasets.plan import DatasetPlan, ShardSpec
+from swgsim.gear import dynamics
+from swgsim.gear.dynamics import rt1_size20
+from swgsim.gear.faults import NO_ROOT_CRACK, ChainParams, apply_fault
+from swgsim.gear.flexspline import FlexsplineGeometry, TrussModel
+from swgsim.gear.influence import Influence, InfluenceSolver
+
+__all__ = ["diverged", "fine_motion", "gear_influences", "influences_for"]
+
+
+def gear_influences(plan: DatasetPlan, shards: list[ShardSpec] | tuple[ShardSpec, ...]
+                    ) -> dict[int, dict[tuple | None, Influence]]:
+    """Influences of every gear's layout on every structure the shards need.
+
+    The root-crack structures of the shards' windows (:func:`influences_for`).
+
+    Returns
+    -------
+    dict
+        gear id -> {(position_deg, severity): Influence}, ``NO_ROOT_CRACK`` healthy.
+    """
+    keys = set()
+    for s in shards:
+        for w in s.windows:
+            if w.fault == "root_tooth_crack" and w.severity > 0:
+                p = apply_fault(ChainParams(gear=rt1_size20()), w.fault, w.severity,
+                                w.position_deg)
+                keys.add(p.root_crack_key())
+    return influences_for(plan, [int(g.id) for g in plan.config.gears], keys)
+
+
+def influences_for(plan: DatasetPlan, gear_ids: list[int], crack_keys
+                   ) -> dict[int, dict[tuple | None, Influence]]:
+    """Influences of some gears' layouts on the healthy truss and some root cracks.
+
+    One factorisation of the healthy truss, one adjoint solve per gear, and a Woodbury
+    update per root-crack structure (:class:`swgsim.gear.influence.InfluenceSolver`). Computed
+    once in the calling process; the shard workers need no truss.
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+    gear_ids : list of int
+    crack_keys : iterable of (position_deg, severity)
+        :meth:`swgsim.gear.faults.ChainParams.root_crack_key` of each cracked structure.
+
+    Returns
+    -------
+    dict
+        gear id -> {(position_deg, severity): Influence}, ``NO_ROOT_CRACK`` healthy.
+    """
+    solver = InfluenceSolver(TrussModel(FlexsplineGeometry(), plan.config.mesh))
+    out = {}
+    for gid in gear_ids:
+        lay = layout_for(plan.config, plan.gear(gid))
+        adj = solver.adjoint(lay)
+        healthy = solver.coefficients(*adj)
+        inf = {NO_ROOT_CRACK: healthy}
+        for pos, sev in sorted(crack_keys):
+            inf[(pos, sev)] = solver.root_crack_at(lay, pos, sev, adjoint=adj, healthy=healthy)
+        out[int(gid)] = inf
+    return out
+
+
+def diverged(plan: DatasetPlan, where: str, why: str) -> str:
+    """The one-line message of a dynamic simulation that failed for checked parameters.
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+    where : str
+        What was simulated: shard, gear, operating point, fault.
+    why : str
+        The integrator's message (e.g. ``non-finite states``).
+
+    Returns
+    -------
+    str
+        Naming the keys that set the integrator step and the dynamics.
+    """
+    ch = plan.config.chain
+    return (f"dataset.chain.substeps={ch.substeps}, dataset.chain.sample_rate_hz="
+            f"{ch.sample_rate_hz:g} Hz: the dynamic simulation of {where} failed ({why}); "
+            "the parameters are in range but the integrator step "
+            f"{1e3 / (ch.sample_rate_hz * ch.substeps):.3g} ms does not hold them with "
+            f"dataset.load.j_out_kgm2={plan.config.load.j_out_kgm2:g} kg m²: raise "
+            "dataset.chain.substeps")
+
+
+def fine_motion(res: dynamics.SimResult, q: int,
+                rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """WG angle and output torque of some simulated variants on a q times finer grid.
+
+    The dynamics are integrated at the data rate; the gauge signals of an amplifier model
+    need ``q`` samples per sample. ψ is interpolated by cubic Hermite polynomials with its
+    derivative ω_in − ω_out (a state), the output torque by a cubic spline; both are
+    smooth on the scale of the sample rate (the torsional resonance lies near 0.2-0.5 kHz).
+
+    Parameters
+    ----------
+    res : SimResult
+        n_rec samples per variant at the data rate.
+    q : int
+        Fine samples per sample, >= 1.
+    rows : ndarray of int, shape (U,)
+        Variants to return.
+
+    Returns
+    -------
+    psi, t_out : ndarray, shape (U, q (n_rec − 1)) or (U, n_rec) if q == 1
+        [rad], [N m] at times k / (q fs), k = 0, 1, ...
+    """
+    psi, t_out = res.psi[rows], res.t_out[rows]
+    if q == 1:
+        return psi, t_out
+    t = res.time
+    tf = np.arange(q * (t.size - 1)) * (t[1] - t[0]) / q
+    dpsi = res.states[1][rows] - res.states[3][rows]
+    return (CubicHermiteSpline(t, psi, dpsi, axis=1)(tf),
+            CubicSpline(t, t_out, axis=1)(tf))

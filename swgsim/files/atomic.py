@@ -1,0 +1,101 @@
+"""Atomic replacement of a file, and the names of this process's temporary files.
+
+A file is written to a temporary name in its own folder, flushed to disk and renamed over
+its target (``os.replace``): a reader sees the old file or the new one, never half of
+one. The temporary name carries the host and process (:func:`temp_prefix`), so that a
+later run can tell a stale temporary file of a finished process from a live one
+(:func:`pid_alive`); whether it may remove one is decided by the folder's ownership stamp
+(:mod:`swgsim.files.ownership`), never by the name alone.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import re
+import socket
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+__all__ = ["DiskFullError", "TEMP_NAME", "pid_alive", "replace_atomically", "temp_host",
+           "temp_prefix"]
+
+
+class DiskFullError(ValueError):
+    """The disk filled up while a file was written; nothing was left behind."""
+
+
+def _umask_mode() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def temp_host() -> str:
+    """This host's name as temporary files carry it (letters, digits, ``_`` and ``-``)."""
+    return re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname()) or "host"
+
+
+def temp_prefix(path: Path) -> str:
+    """Prefix of this process's temporary files for ``path``: ``.<name>.<host>-<pid>.``.
+
+    The name alone proves nothing: a temporary file is this project's only if the
+    ownership stamp of its folder names its ``<host>-<pid>`` (:mod:`swgsim.files.ownership`),
+    and only then may a later run remove it once that process is gone.
+    """
+    return f".{path.name}.{temp_host()}-{os.getpid()}."
+
+
+#: Names :func:`temp_prefix` gives (``.<name>.<host>-<pid>.<random>.tmp``).
+TEMP_NAME = re.compile(r"^\.(?P<name>.+)\.(?P<host>[A-Za-z0-9_-]+)-(?P<pid>\d+)\..+\.tmp$")
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this host runs (another user's counts as running)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, another user's
+        return True
+    return True
+
+
+def replace_atomically(path: str | os.PathLike, data: bytes | memoryview,
+                       before_replace: Callable[[Path, str], None] | None = None) -> None:
+    """Write ``data`` to ``path`` atomically: a temporary file in the same folder, flushed
+    to disk, then renamed over ``path``.
+
+    Parameters
+    ----------
+    path : path-like
+        The target; its folder is created if needed.
+    data : bytes
+    before_replace : callable, optional
+        ``before_replace(path, tmp)`` runs between the flush and the rename (the
+        ownership stamp records the file there, :func:`swgsim.files.ownership.
+        atomic_write_bytes`).
+
+    Raises
+    ------
+    DiskFullError
+        If the disk is full, naming the file and its folder; nothing is left behind.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, _umask_mode())
+        if before_replace is not None:
+            before_replace(path, tmp)
+        os.replace(tmp, path)
+    except BaseException as e:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno == errno.ENOSPC:
+            raise DiskFullError(f"disk full while writing {path} (folder {path.parent})") from e
+        raise

@@ -1,0 +1,42 @@
+"""SHA-256 digests of files and of plain configs."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from typing import Any
+
+__all__ = ["config_digest", "sha256_file"]
+
+
+def config_digest(plain: Any) -> str:
+    """First 16 hex digits of the SHA-256 of the canonical JSON of a plain config.
+
+    Parameters
+    ----------
+    plain : JSON-serialisable
+        Nested dicts, lists and scalars (keys sorted before hashing).
+
+    Returns
+    -------
+    str
+        16 hex digits (the ``config_hash`` of a data set,
+        :func:`swgsim.datasets.plan.config_hash`).
+    """
+    return hashlib.sha256(json.dumps(plain, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def sha256_file(path: str | os.PathLike) -> str:
+    """SHA-256 hex digest of a file's bytes, read in blocks of 1 MiB.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be read.
+    """
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()

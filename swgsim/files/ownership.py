@@ -1,0 +1,693 @@
+"""Ownership of output folders: a run deletes or overwrites only what it can prove it wrote.
+
+A file's name proves nothing (a ``manifest.json`` of another tool, a user's
+``report.md``). Every run therefore writes, before anything else, an *ownership stamp*
+:data:`STAMP` (``.swg-owner.json``) into its output folder::
+
+    {"writer": "swg-monitor", "version": 1, "apps": ["swgsim-calibrate"],
+     "files": {"report.md": ["<sha256>"], "figures/time.png": ["<sha256>"]},
+     "runs": ["<host>-<pid>", ...]}
+
+``writer`` is this project's signature; ``files`` maps each file a run of this project
+wrote (path relative to the folder) to its SHA-256 (the previous one is kept beside a
+new one until the next claim, so that a run stopped between recording and renaming
+still proves the file on disk); ``runs`` names the processes (``<host>-<pid>``,
+:func:`swgsim.files.atomic.temp_prefix`) that may leave temporary files there. A file is *ours*
+if a stamp of this project in its folder or an enclosing one (up to the folder checked)
+lists it with the SHA-256 it has now; a temporary file is ours if its name carries a run
+a stamp lists. Anything else, whatever its name, is *foreign*: it is never deleted nor
+overwritten, and a run whose folder holds one refuses (:func:`check`), naming it, before
+it touches anything, cleanup of temporary files included.
+
+Every write into a claimed folder is recorded: :func:`swgsim.files.ownership.atomic_write_bytes`
+and :func:`swgsim.datasets.schema.write_shard` record the file's SHA-256 before they rename it into
+place (:func:`before_replace`), and an app records what its writers wrote otherwise
+(:meth:`Claim.record`). Stamp updates are serialised by a file lock (``filelock``) on
+:data:`STAMP_LOCK` and written atomically, so that worker processes and cluster jobs can
+share a folder.
+
+One run at a time: :func:`claim` admits a run to its folder under the folder's *gate*
+:data:`LOCK` (a lock held for milliseconds) and the run then holds its own *run lock*
+``.swg-owner.<host>-<pid>.lock`` until the claim is closed; the stamp's ``holders`` name
+the runs and their app. A second run claiming the folder meanwhile (another process: the
+workers of a run, :func:`join`, take no lock) finds a holder's run lock held and is
+refused in one line naming the folder and that run, before it touches anything, unless
+both passed the same ``share`` (e.g. cluster jobs of one data set); :func:`check` looks
+too, so that an app is refused before any work. A run that was killed leaves a free run
+lock, removed by the next admission. Lock files are proved ours as every other file is,
+not by their names: each is listed in the stamp, empty (its SHA-256), before it is
+created, and a lock file is opened only if it is an empty plain file (no link), so that a
+lock never changes what another tool wrote. Proved ours, they are neither foreign nor
+``owned``: like the stamp, no run deletes them as output (the gate and the stamp's lock
+:data:`STAMP_LOCK` stay: removing a lock file others wait on would split them onto two
+files).
+
+One helper serves every app: :func:`check` (read-only, to refuse before any work) and
+:func:`claim` (check, stamp, register this process, remove our stale temporary files).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import time
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from filelock import FileLock, Timeout
+
+from swgsim.files.atomic import TEMP_NAME, pid_alive, replace_atomically, temp_host
+from swgsim.files.digest import sha256_file
+
+log = logging.getLogger(__name__)
+
+__all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "Survey", "Claim", "survey", "check",
+           "claim", "join", "before_replace", "sha256", "atomic_write_bytes",
+           "atomic_write_json"]
+
+#: This project's signature: the ``writer`` of every stamp it writes.
+SIGNATURE = "swg-monitor"
+#: Name of the ownership stamp in every folder a run of this project writes into.
+STAMP = ".swg-owner.json"
+#: Name of the gate of a folder: runs are admitted to it under this lock (:func:`claim`).
+LOCK = ".swg-owner.lock"
+#: Name of the lock that serialises updates of the stamp.
+STAMP_LOCK = ".swg-owner.json.lock"
+_LOCKS = (LOCK, STAMP_LOCK)
+_EMPTY = hashlib.sha256(b"").hexdigest()  # the SHA-256 of a lock file (always empty)
+_VERSION = 1
+_CLAIMS: dict[Path, Claim] = {}   # folders this process claimed (resolved) -> claim
+_HELD: dict[Path, list] = {}  # run locks held: resolved folder -> [lock, count, pid, folder]
+_GATE_S = 30.0  # how long a run waits for the gate (held for milliseconds by others)
+_HASHES: dict[tuple, str] = {}    # (path, dev, ino, size, mtime_ns, ctime_ns) -> SHA-256
+
+
+def sha256(path: Path) -> str:
+    """SHA-256 of a file, computed once per process while the file is unchanged (same
+    inode, size, modification and change time)."""
+    st = os.stat(path)
+    key = (str(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+    if key not in _HASHES:
+        if len(_HASHES) > 4096:
+            _HASHES.clear()
+        _HASHES[key] = sha256_file(path)
+    return _HASHES[key]
+
+
+def _run_id() -> str:
+    """This process as a stamp names it: ``<host>-<pid>``, as in its temporary files."""
+    return f"{temp_host()}-{os.getpid()}"
+
+
+def _read_stamp(folder: Path) -> dict | None:
+    """The stamp in ``folder`` if it is this project's, else None (absent, unreadable or
+    another tool's). An empty or half-created stamp is read again a few times."""
+    path = folder / STAMP
+    for attempt in range(4):
+        if not path.is_file() or path.is_symlink():
+            return None
+        try:
+            stamp = json.loads(path.read_bytes())
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            time.sleep(0.05 * (attempt + 1))  # another process may be creating it
+            continue
+        except OSError:
+            return None
+        ok = (isinstance(stamp, dict) and stamp.get("writer") == SIGNATURE
+              and isinstance(stamp.get("files"), dict) and isinstance(stamp.get("runs"), list))
+        return stamp if ok else None
+    return None
+
+
+@dataclass
+class Survey:
+    """What a folder holds, sorted by ownership (:func:`survey`).
+
+    Attributes
+    ----------
+    folder : Path
+    owned : dict of str to str
+        Files proved ours: path relative to ``folder`` -> SHA-256 (stamps excluded).
+    foreign : list of str
+        Files (relative paths) nothing proves ours, links and special files included.
+    stale : list of Path
+        Our temporary files whose process (on this host) is gone.
+    live : list of str
+        Our temporary files of a process still running (or of another host).
+    """
+
+    folder: Path
+    owned: dict[str, str] = field(default_factory=dict)
+    foreign: list[str] = field(default_factory=list)
+    stale: list[Path] = field(default_factory=list)
+    live: list[str] = field(default_factory=list)
+
+
+def _temp_owner(name: str, runs: set[str]) -> str | None:
+    """``"stale"``/``"live"`` for a temporary file of a run in ``runs``, else None."""
+    m = TEMP_NAME.match(name)
+    if not m or f"{m['host']}-{m['pid']}" not in runs:
+        return None
+    if m["host"] != temp_host() or int(m["pid"]) == os.getpid():
+        return "live"
+    return "stale" if not pid_alive(int(m["pid"])) else "live"
+
+
+def _classify(s: Survey, path: Path, rel: str, stamps: list[tuple[Path, dict]]) -> None:
+    """Sort one entry of the folder into ``s`` (``stamps``: enclosing stamps, innermost
+    first, with their folders)."""
+    if path.is_symlink() or not path.is_file():
+        s.foreign.append(rel)
+        return
+    if path.name == STAMP and stamps and stamps[0][0] == path.parent:
+        return  # a stamp of ours
+    if _is_lock(path.name) and stamps and stamps[0][0] == path.parent:
+        hashes = stamps[0][1]["files"].get(path.name)
+        if isinstance(hashes, list) and sha256(path) in hashes:
+            return  # a lock file of ours, listed by the stamp beside it: kept, as the stamp
+    runs = {r for _, st in stamps for r in st["runs"]}
+    kind = _temp_owner(path.name, runs)
+    if kind == "stale":
+        s.stale.append(path)
+        return
+    if kind == "live":
+        s.live.append(rel)
+        return
+    for where, st in stamps:
+        hashes = st["files"].get(path.relative_to(where).as_posix())
+        if isinstance(hashes, list) and hashes and sha256(path) in hashes:
+            s.owned[rel] = sha256(path)
+            return
+    s.foreign.append(rel)
+
+
+def survey(folder: str | os.PathLike, only: Iterable[str] | None = None,
+           what: str = "out_dir") -> Survey:
+    """Sort the files below ``folder`` into ours and foreign; read-only.
+
+    Parameters
+    ----------
+    folder : path-like
+        Need not exist.
+    only : iterable of str, optional
+        For a folder shared with others (the main job's report root): look only at these
+        names (and our stamp and temporary files there); default every file below.
+    what : str
+        The key the folder was given as, for the message.
+
+    Returns
+    -------
+    Survey
+
+    Raises
+    ------
+    ValueError
+        If ``folder`` exists and is not a folder.
+    """
+    folder = Path(folder)
+    only = None if only is None else frozenset(only)
+    if not folder.exists() and not folder.is_symlink():
+        return Survey(folder)
+    if not folder.is_dir():
+        raise ValueError(f"{what} {folder} exists and is not a folder")
+    s = _survey_once(folder, only)
+    if s.foreign:  # a run sharing the folder may have finished a file after we read its
+        again = _survey_once(folder, only)  # stamp: it is recorded before it appears
+        again.foreign = [f for f in again.foreign if f in set(s.foreign)]
+        s = again
+    return s
+
+
+def _survey_once(folder: Path, only: frozenset[str] | None) -> Survey:
+    """One pass of :func:`survey` over an existing folder."""
+    s = Survey(folder)
+    top = _read_stamp(folder)
+    if only is not None:
+        stamps = [(folder, top)] if top else []
+        runs = {r for _, st in stamps for r in st["runs"]}
+        names = only | {STAMP, *_LOCKS}
+        for p in sorted(folder.iterdir()):
+            if p.name in names or _is_lock(p.name) or _temp_owner(p.name, runs):
+                _classify(s, p, p.name, stamps)
+        return s
+    enclosing: dict[Path, list[tuple[Path, dict]]] = {folder: [(folder, top)] if top else []}
+    for dirpath, dirnames, filenames in os.walk(folder):
+        here = Path(dirpath)
+        stamps = enclosing[here]
+        for d in sorted(dirnames):
+            sub = here / d
+            if sub.is_symlink():
+                s.foreign.append(sub.relative_to(folder).as_posix())
+                continue
+            st = _read_stamp(sub)
+            enclosing[sub] = ([(sub, st)] if st else []) + stamps
+        dirnames[:] = [d for d in dirnames if not (here / d).is_symlink()]
+        for f in sorted(filenames):
+            _classify(s, here / f, (here / f).relative_to(folder).as_posix(), stamps)
+    s.foreign.sort()
+    return s
+
+
+def check(folder: str | os.PathLike, what: str = "out_dir",
+          only: Iterable[str] | None = None, share: str | None = None) -> Survey:
+    """:func:`survey`, refusing a folder that holds a file nothing proves ours.
+
+    Parameters
+    ----------
+    folder : path-like
+    what : str
+        The key the folder was given as, for the message (``out_dir``, ``report_dir``).
+    only : iterable of str, optional
+        See :func:`survey`.
+    share : str, optional
+        See :func:`claim`: a run of another process holding the folder with the same
+        ``share`` is no reason to refuse.
+
+    Returns
+    -------
+    Survey
+        With ``foreign`` empty.
+
+    Raises
+    ------
+    ValueError
+        One line naming the folder and its first foreign file, or the run of another
+        process holding its run lock (:func:`claim`); nothing was touched.
+    """
+    s = survey(folder, only, what)
+    if s.foreign:
+        more = f" and {len(s.foreign) - 1} more such file(s)" if len(s.foreign) > 1 else ""
+        raise ValueError(
+            f"{what} {folder} holds {s.foreign[0]}{more}, which this project cannot show "
+            f"it wrote (no ownership stamp {STAMP} lists it with its SHA-256); nothing was "
+            f"touched: move it away or choose another {what}")
+    _probe(Path(folder), what, share)
+    return s
+
+
+def _slot(run: str) -> str:
+    """Name of the run lock of run ``run`` (``<host>-<pid>``) in a folder it claimed."""
+    return f".swg-owner.{run}.lock"
+
+
+def _is_lock(name: str) -> bool:
+    """Whether ``name`` is named as a lock file of this module (proof comes from a stamp)."""
+    return name.startswith(".swg-owner.") and name.endswith(".lock")
+
+
+def _lock_file(folder: Path, name: str) -> str:
+    """Absolute path of the lock file ``name`` of ``folder``, which is absent or an empty
+    plain file (ours are empty: a lock is never opened on anything else)."""
+    path = folder / name
+    if path.is_symlink() or (path.exists() and (not path.is_file() or path.stat().st_size)):
+        raise ValueError(f"{path} is not this project's lock file (not an empty file); "
+                         "nothing was touched: move it away")
+    return os.path.abspath(path)
+
+
+@contextmanager
+def _gate(folder: Path) -> Iterator[None]:
+    """Hold the gate :data:`LOCK` of ``folder``, under which runs are admitted and leave
+    (held for milliseconds; waited for up to :data:`_GATE_S`)."""
+    lock = FileLock(_lock_file(folder, LOCK), thread_local=False)
+    try:
+        lock.acquire(timeout=_GATE_S)
+    except Timeout:
+        raise ValueError(f"{folder / LOCK} has been held by another process for over "
+                         f"{_GATE_S:g} s; try again, or stop that process") from None
+    try:
+        yield
+    finally:
+        lock.release()
+
+
+def _holders(folder: Path, stamp: dict) -> tuple[dict, list[str]]:
+    """Under the gate: the runs of the stamp's ``holders`` whose run lock is held (run ->
+    what the stamp says of it), and those whose lock is free (gone)."""
+    live, gone = {}, []
+    held = stamp.get("holders")
+    for run, info in sorted(held.items() if isinstance(held, dict) else []):
+        path = folder / _slot(run)
+        if run == _run_id() or path.is_symlink() or not path.is_file():
+            gone.append(run)
+            continue
+        lock = FileLock(_lock_file(folder, _slot(run)), thread_local=False)
+        try:
+            lock.acquire(timeout=0)
+        except Timeout:
+            live[run] = info if isinstance(info, dict) else {}
+            continue
+        lock.release()
+        gone.append(run)
+    return live, gone
+
+
+def _conflict(folder: Path, what: str, live: dict, share: str | None) -> None:
+    """Refuse ``folder`` if a run in ``live`` does not share it with this one."""
+    for run, info in live.items():
+        if share is None or info.get("share") != share:
+            raise ValueError(
+                f"{what}={folder}: another run ({run}, {info.get('app', '?')}) is writing "
+                f"into it; wait for it to finish or choose another {what}")
+
+
+def _held_here(folder: Path) -> list | None:
+    """The entry of :data:`_HELD` if this process holds the run lock of ``folder``."""
+    held = _HELD.get(folder.resolve())
+    return held if held is not None and held[2] == os.getpid() else None
+
+
+def _probe(folder: Path, what: str, share: str | None) -> None:
+    """Refuse ``folder`` if a run of another process holds it (and does not share it)."""
+    stamp = _read_stamp(folder)
+    if _held_here(folder) or not stamp or not stamp.get("holders") \
+            or not (folder / LOCK).is_file():
+        return
+    with _gate(folder):
+        _conflict(folder, what, _holders(folder, _read_stamp(folder) or stamp)[0], share)
+
+
+def _hold(folder: Path, what: str, app: str, share: str | None) -> None:
+    """Admit this run to ``folder`` under the gate and take its run lock (again, if this
+    process holds it: counted)."""
+    held = _held_here(folder)
+    if held is not None:
+        held[1] += 1
+        return
+    me, slot = _run_id(), _slot(_run_id())
+    with _gate(folder):
+        live, gone = _holders(folder, _read_stamp(folder) or {})
+        _conflict(folder, what, live, share)
+        for run in gone:  # their process is gone: its lock file goes before its entry
+            if os.path.exists(_lock_file(folder, _slot(run))) and run != me:
+                os.unlink(folder / _slot(run))
+
+        def admit(stamp: dict) -> None:
+            held = stamp["holders"] = {r: h for r, h in (stamp.get("holders") or {}).items()
+                                       if r not in gone}
+            held[me] = {"app": app, "share": share}
+            for run in gone:
+                stamp["files"].pop(_slot(run), None)
+            stamp["files"][slot] = [_EMPTY]  # listed before it appears
+        _update(folder, app, admit)
+        lock = FileLock(_lock_file(folder, slot), thread_local=False)
+        lock.acquire(timeout=0)  # this process's own lock: nobody else takes it
+    _HELD[folder.resolve()] = [lock, 1, os.getpid(), folder]
+
+
+def _let_go(key: Path) -> None:
+    """Drop one hold of the run lock of the (resolved) folder ``key``; at the last, the
+    lock is released and its file and entry removed (what fails is left to the next
+    run's admission). A forked child never releases its parent's lock."""
+    held = _HELD.get(key)
+    if held is None or held[2] != os.getpid():
+        return
+    held[1] -= 1
+    if held[1] > 0:
+        return
+    del _HELD[key]
+    lock, folder, me = held[0], held[3], _run_id()
+
+    def leave(stamp: dict) -> None:
+        if isinstance(stamp.get("holders"), dict):
+            stamp["holders"].pop(me, None)
+        stamp["files"].pop(_slot(me), None)
+    try:
+        with _gate(folder):
+            lock.release()
+            os.unlink(folder / _slot(me))
+            if _read_stamp(folder) is not None:
+                _update(folder, "", leave)
+    except (OSError, ValueError):
+        lock.release()
+
+
+def _new_stamp(app: str) -> dict:
+    """A stamp naming this process, so that its temporary files are ours from the start,
+    and listing the lock files (empty) before they are created."""
+    return {"writer": SIGNATURE, "version": _VERSION, "apps": [app],
+            "files": {name: [_EMPTY] for name in _LOCKS}, "runs": [_run_id()]}
+
+
+def _write_stamp(path: Path, stamp: dict) -> None:
+    replace_atomically(path, (json.dumps(stamp, indent=1, sort_keys=True) + "\n").encode())
+
+
+def _update(folder: Path, app: str, change) -> None:
+    """Apply ``change(stamp)`` to the stamp of ``folder`` under an exclusive lock and write
+    it atomically; the stamp is created (exclusively) when there is none."""
+    path = folder / STAMP
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o666)
+    except FileExistsError:
+        pass
+    else:  # a new stamp: written in place (readers retry an empty one), then updated
+        with os.fdopen(fd, "wb") as f:
+            f.write((json.dumps(_new_stamp(app), indent=1) + "\n").encode())
+            f.flush()
+            os.fsync(f.fileno())
+    with FileLock(_lock_file(folder, STAMP_LOCK), thread_local=False):
+        stamp = _read_stamp(folder)
+        if stamp is None:
+            raise ValueError(f"{path} is not this project's ownership stamp (another "
+                             "tool's file, or damaged); nothing was touched: move it away")
+        change(stamp)
+        stamp["files"][STAMP_LOCK] = [_EMPTY]  # held, so an empty plain file: ours
+        _write_stamp(path, stamp)
+
+
+class Claim:
+    """A folder this process writes into, stamped as ours (made by :func:`claim` or
+    :func:`join`); a context manager that stops recording into it on exit.
+
+    Attributes
+    ----------
+    folder : Path
+    app : str
+        The app that claimed it (recorded in the stamp's ``apps``).
+    """
+
+    def __init__(self, folder: Path, app: str) -> None:
+        self.folder, self.app = Path(folder), app
+        self._key = self.folder.resolve()
+        self._locked = False  # holds (a count of) the run lock: set by claim()
+        _CLAIMS[self._key] = self
+
+    def _rel(self, path: str | os.PathLike) -> str:
+        p = Path(path)
+        p = p if p.is_absolute() else self.folder / p
+        return p.resolve().relative_to(self.folder.resolve()).as_posix()
+
+    def record(self, paths: Iterable[str | os.PathLike]) -> None:
+        """List files this run wrote in the stamp with their SHA-256; folders, missing
+        files and the stamp are skipped. A path is absolute, relative to the folder (a
+        name inside it), or else relative to the current directory, as the folder itself
+        may be given (``Path(report_dir) / "results.csv"``).
+
+        Raises
+        ------
+        ValueError
+            A path outside the folder.
+        """
+        found = {}
+        for p in paths:
+            p = Path(p)
+            p = p if p.is_absolute() or not (self.folder / p).is_file() else self.folder / p
+            if p.is_file() and not p.is_symlink() and p.name != STAMP \
+                    and not _is_lock(p.name):
+                found[self._rel(p.absolute())] = sha256(p)
+
+        def add(stamp: dict) -> None:
+            stamp["files"].update({rel: [h] for rel, h in found.items()})
+        if found:
+            _update(self.folder, self.app, add)
+
+    def remove(self, rels: Iterable[str]) -> int:
+        """Delete files of the folder proved ours (each checked against the stamp again,
+        just before); return how many.
+
+        Raises
+        ------
+        ValueError
+            Naming a file the stamp no longer proves ours (changed since the check).
+        """
+        rels = sorted(rels)
+        proof = survey(self.folder).owned
+        for rel in rels:
+            if rel not in proof:
+                raise ValueError(f"{self.folder / rel} changed since it was checked and is "
+                                 "no longer provably this project's; left as it is")
+        for rel in rels:
+            (self.folder / rel).unlink()
+
+        def drop(stamp: dict) -> None:
+            for rel in rels:
+                stamp["files"].pop(rel, None)
+        _update(self.folder, self.app, drop)
+        return len(rels)
+
+    def close(self) -> None:
+        """Stop recording writes into the folder and let go of its run lock (the stamp and
+        the lock files stay)."""
+        if _CLAIMS.get(self._key) is self:
+            del _CLAIMS[self._key]
+        if self._locked:
+            self._locked = False
+            _let_go(self._key)
+
+    def __enter__(self) -> Claim:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
+          only: Iterable[str] | None = None, found: Survey | None = None,
+          share: str | None = None) -> Claim:
+    """Make ``folder`` a folder of this run: check it, stamp it, clean it.
+
+    The folder must hold nothing foreign (:func:`check`); then it is created, the run
+    admitted under its gate :data:`LOCK` (refused if a run of another process holds the
+    folder, unless both give the same ``share``) and its run lock taken, held until the
+    claim is closed (a process may claim a folder it holds again); our temporary files of
+    dead processes are removed, its stamp written (or updated: this process added to
+    ``runs`` and ``holders``, runs of this host that are gone removed, entries of vanished
+    files dropped), and every later write of this process into it recorded.
+
+    Parameters
+    ----------
+    folder : path-like
+    app : str
+        Name of the app, recorded in the stamp.
+    what : str
+        The key the folder was given as, for messages.
+    only : iterable of str, optional
+        For a shared folder: check only these names (:func:`survey`).
+    found : Survey, optional
+        A survey of ``folder`` just made (saves hashing it again).
+    share : str, optional
+        Runs claiming the folder with the same ``share`` may write into it together (e.g.
+        the cluster jobs of one data set, each computing some of its shards: its config
+        hash); default None: this run alone.
+
+    Returns
+    -------
+    Claim
+
+    Raises
+    ------
+    ValueError
+        Naming the first foreign file, or the run of another process that holds the
+        folder's run lock, or if ``folder`` is not a folder; before anything is touched.
+    """
+    folder = Path(folder)
+    found = found if found is not None else check(folder, what, only, share)
+    folder.mkdir(parents=True, exist_ok=True)
+    stamp = _read_stamp(folder)
+    if stamp is None or stamp["files"].get(LOCK) != [_EMPTY]:  # listed before it appears
+
+        def list_lock(stamp: dict) -> None:
+            stamp["files"][LOCK] = [_EMPTY]
+        _update(folder, app, list_lock)
+    _hold(folder, what, app, share)
+    try:
+        c = _stamp_claim(folder, app, found)
+    except BaseException:
+        _let_go(folder.resolve())
+        raise
+    c._locked = True
+    return c
+
+
+def _stamp_claim(folder: Path, app: str, found: Survey) -> Claim:
+    """The part of :func:`claim` done under the run lock: clean, stamp, register."""
+    for f in found.stale:  # ours: a run of this project, gone, named in the stamp
+        f.unlink(missing_ok=True)
+        log.info("removed %s, left by a stopped run", f.name)
+    me = _run_id()
+
+    def refresh(stamp: dict) -> None:
+        host = temp_host() + "-"
+        stamp["runs"] = sorted({r for r in stamp["runs"] if not (
+            r.startswith(host) and r[len(host):].isdigit()
+            and not pid_alive(int(r[len(host):])))} | {me})
+        stamp["apps"] = sorted(set(stamp.get("apps", [])) | {app})
+        stamp["files"] = {rel: h for rel, h in stamp["files"].items()
+                          if (folder / rel).is_file()}
+    _update(folder, app, refresh)
+    return Claim(folder, app)
+
+
+def join(folder: str | os.PathLike, app: str = "worker") -> Claim:
+    """Register this process (a worker of a run that claimed ``folder``) in its stamp, so
+    that its temporary files and the files it writes are ours.
+
+    Raises
+    ------
+    ValueError
+        If ``folder`` holds no stamp of this project.
+    """
+    folder = Path(folder)
+    stamp = _read_stamp(folder)
+    if stamp is None:
+        raise ValueError(f"{folder} was not claimed by a run of this project (no {STAMP})")
+    me = _run_id()
+
+    def add(stamp: dict) -> None:
+        stamp["runs"] = sorted(set(stamp["runs"]) | {me})
+    if me not in stamp["runs"]:  # a run is removed from it only once it is gone
+        _update(folder, app, add)
+    return Claim(folder, app)
+
+
+def before_replace(path: str | os.PathLike, tmp: str | os.PathLike,
+                   digest: str | None = None) -> None:
+    """Record ``path`` in the stamp of the claimed folder holding it, with the SHA-256 of
+    its finished temporary file ``tmp``, before ``tmp`` is renamed to ``path`` (called by
+    :func:`atomic_write_bytes` and :func:`swgsim.datasets.schema.write_shard`); the
+    hash recorded before is kept beside it. Nothing happens outside a claimed folder."""
+    path = Path(path)
+    if not _CLAIMS or path.name == STAMP:
+        return
+    where = path.parent.resolve()
+    for d in (where, *where.parents):
+        c = _CLAIMS.get(d)
+        if c is not None:
+            break
+    else:
+        return
+    rel = (where / path.name).relative_to(d).as_posix()
+    h = digest or sha256_file(tmp)
+
+    def add(stamp: dict) -> None:
+        old = stamp["files"].get(rel)
+        stamp["files"][rel] = ([old[-1]] if isinstance(old, list) and old and old[-1] != h
+                               else []) + [h]
+    _update(c.folder, c.app, add)
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes | memoryview,
+                       digest: str | None = None) -> None:
+    """Write ``data`` to ``path`` atomically (:func:`swgsim.files.atomic.replace_atomically`);
+    in a folder this process claimed, the file is listed in its ownership stamp first
+    (:func:`before_replace`, with ``digest``, the SHA-256 of ``data``, when the caller has
+    it).
+
+    Raises
+    ------
+    swgsim.files.atomic.DiskFullError
+        If the disk is full (naming the file and its folder); nothing is left behind.
+    """
+    replace_atomically(path, data, lambda p, tmp: before_replace(p, tmp, digest))
+
+
+def atomic_write_json(path: str | os.PathLike, obj: Any) -> None:
+    """Write ``obj`` as indented JSON (keys sorted) to ``path`` atomically, recorded as
+    :func:`atomic_write_bytes` records it."""
+    atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=True) + "\n").encode())

@@ -1,0 +1,284 @@
+"""How a window is recorded: its start, and the amplifier that samples the bridges.
+
+The data-set option ``acquisition`` is the *recording* of a data set (its two presets are
+``conf/dataset/paper.yaml`` and ``bench.yaml``)::
+
+    acquisition:
+      start: fixed        # fixed | random
+      wg_start_deg: 0.0   # input (WG) angle at the start of every simulation, start: fixed
+      amplifier: null     # null: ideal sampling; or the mapping below
+
+``start: fixed`` reads the paper (Sec. III-B): every window is simulated from the same
+initial state, so the healthy class is "sixty times the same SWG model", identical
+windows. ``start: random`` is what a bench records: windows cut at arbitrary times, i.e.
+at a random input angle φ_in and a random output angle φ_out. Drawing φ_in(0) uniformly
+over [0, 2π N) makes both uniform: the WG angle φ_in mod 2π and the output angle
+φ_out ≈ −φ_in / N (circular spline fixed, paper eq. 3-4).
+
+``amplifier`` models a delta-sigma bridge ADC (:class:`Amplifier`): the bridge signal is
+synthesised ``oversample`` times faster than the data rate, filtered by the converter's
+sinc^order decimation filter (its anti-aliasing filter, one boxcar of ``oversample`` fine
+samples per stage), sampled at the data rate, given the converter's input-referred
+noise and quantised to its LSB, then clipped to its input range. All in mV/V: a voltage
+v at the ADC input is v / V_exc of the bridge excitation.
+
+Source of the bench preset (``conf/dataset/bench.yaml``): Texas Instruments ADS131M04,
+4-channel simultaneous-sampling 24-bit delta-sigma ADC with PGA (data sheet SBAS890 /
+ADS131M04-Q1 SBASAS2, sec. 7.1 "Noise Measurements", Table 7-1: input-referred noise
+2.40 µV rms at gain 128 and OSR 256, inputs shorted, 25 °C; the noise depends on OSR and
+gain only, not on the clock; internal reference 1.2 V, full scale ±V_REF / gain; sinc3
+decimation filter, −3 dB at 0.262 f_DATA). TI's bridge-measurement guide (SBAA532A) lists
+it among its bridge ADCs. Excitation 3.3 V from the analog supply (assumed), so the noise
+is 0.73 µV/V rms and the range ±2.84 mV/V.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+START_MODES = ("fixed", "random")
+
+
+@dataclass
+class Amplifier:
+    """A delta-sigma bridge ADC channel, identical for the five bridges.
+
+    Attributes
+    ----------
+    name : str
+        Device name, for reports.
+    noise_uv_rms : float
+        Input-referred noise at the data rate [µV rms], >= 0.
+    excitation_v : float
+        Bridge excitation voltage [V], > 0 (converts V at the input to mV/V).
+    vref_v : float
+        ADC reference voltage [V], > 0.
+    gain : float
+        PGA gain [-], > 0; full scale ±vref_v / gain at the input.
+    bits : int
+        ADC resolution [bit], in [8, 32].
+    order : int
+        Order of the sinc decimation filter [-], in [1, 5] (3 for sinc3).
+    oversample : int
+        Fine samples per output sample used to model the filter and aliasing [-], in
+        [1, 64].
+    """
+
+    name: str
+    noise_uv_rms: float
+    excitation_v: float
+    vref_v: float
+    gain: float
+    bits: int = 24
+    order: int = 3
+    oversample: int = 4
+
+    @property
+    def noise_mvv(self) -> float:
+        """Noise in bridge units [mV/V rms]."""
+        return self.noise_uv_rms * 1e-3 / self.excitation_v
+
+    @property
+    def range_mvv(self) -> float:
+        """Half of the input range in bridge units [mV/V]."""
+        return self.vref_v / self.gain / self.excitation_v * 1e3
+
+    @property
+    def lsb_mvv(self) -> float:
+        """Quantisation step [mV/V]."""
+        return 2.0 * self.range_mvv / 2.0**self.bits
+
+    def lead_samples(self, fs_hz: float) -> int:
+        """Output samples simulated before and after a window so that the filter sees
+        the signal's history [-] (the filter spans ``order`` output periods)."""
+        return int(self.order) + 1
+
+    def group_delay_s(self, fs_hz: float) -> float:
+        """Delay of the sinc filter [s]: order · (oversample − 1) / 2 fine samples."""
+        return self.order * (self.oversample - 1) / 2 / (self.oversample * fs_hz)
+
+
+@dataclass
+class Acquisition:
+    """How a data set's windows are recorded (the data-set option ``acquisition``): how
+    they start and how they are sampled; the defaults are the paper's recording.
+
+    Attributes
+    ----------
+    start : {"fixed", "random"}
+    wg_start_deg : float
+        Input angle at the start of every simulation with ``start="fixed"`` [deg].
+    amplifier : Amplifier or None
+        None: ideal sampling (noise-free, no filter).
+    """
+
+    start: str = "fixed"
+    wg_start_deg: float = 0.0
+    amplifier: Amplifier | None = None
+
+
+_AMP_RANGES = {  # key: (lower, upper, lower inclusive)
+    "noise_uv_rms": (0.0, 1e4, True),
+    "excitation_v": (0.0, 50.0, False),
+    "vref_v": (0.0, 50.0, False),
+    "gain": (0.0, 1e4, False),
+    "bits": (8, 32, True),
+    "order": (1, 5, True),
+    "oversample": (1, 64, True),
+}
+
+
+def check_acquisition(acq: Acquisition) -> Acquisition:
+    """Check the ``dataset.acquisition`` option before any work.
+
+    Parameters
+    ----------
+    acq : Acquisition
+        The typed option (its keys and types were checked where it was built,
+        :func:`swgsim.datasets.config.dataset_config`).
+
+    Returns
+    -------
+    Acquisition
+        ``acq`` itself.
+
+    Raises
+    ------
+    ValueError
+        Naming the key (``dataset.acquisition.<key>``), the value and the allowed range.
+    """
+    if acq.start not in START_MODES:
+        raise ValueError(f"dataset.acquisition.start must be one of {list(START_MODES)}, "
+                         f"got {acq.start!r}")
+    if not np.isfinite(float(acq.wg_start_deg)):
+        raise ValueError("dataset.acquisition.wg_start_deg must be finite [deg], got "
+                         f"{acq.wg_start_deg}")
+    amp = acq.amplifier
+    if amp is None:
+        return acq
+    for k, (lo, hi, incl) in _AMP_RANGES.items():
+        v = float(getattr(amp, k))
+        ok = (lo <= v if incl else lo < v) and v <= hi and np.isfinite(v)
+        if k in ("bits", "order", "oversample"):
+            ok = ok and v == int(v)
+        if not ok:
+            br = "[" if incl else "("
+            raise ValueError(f"dataset.acquisition.amplifier.{k} must lie in "
+                             f"{br}{lo}, {hi}], got {getattr(amp, k)}")
+    return acq
+
+
+def start_angles(acq: Acquisition, n: int, rng: np.random.Generator,
+                 ratio: float) -> np.ndarray:
+    """Input angle φ_in at the start of each window's simulation [rad], shape (n,).
+
+    ``fixed``: ``wg_start_deg`` for every window. ``random``: uniform over [0, 2π N), so
+    that the WG angle and the output angle are both uniform (module docstring). Draws from
+    ``rng`` in both cases, so that other streams do not depend on the mode.
+    """
+    u = rng.uniform(0.0, 1.0, size=n)
+    if acq.start == "fixed":
+        return np.full(n, np.deg2rad(acq.wg_start_deg))
+    return 2 * np.pi * float(ratio) * u
+
+
+def sinc_taps(length: int, order: int) -> np.ndarray:
+    """FIR taps of the sinc^order decimation filter at the fine rate, unit DC gain.
+
+    ``order`` moving averages of ``length`` samples in cascade (a delta-sigma converter's
+    sinc filter with ``length`` fine samples per output sample): response
+    (sin(π f L / f_fine) / (L sin(π f / f_fine)))^order, zeros at multiples of the output
+    rate f_fine / L.
+
+    Returns
+    -------
+    ndarray, shape (order (length − 1) + 1,)
+    """
+    box = np.full(int(length), 1.0 / int(length))
+    taps = np.ones(1)
+    for _ in range(int(order)):
+        taps = np.convolve(taps, box)
+    return taps
+
+
+def acquire(signals: np.ndarray, amp: Amplifier, rng: np.random.Generator,
+            n_lead: int) -> np.ndarray:
+    """Record fine-grid bridge signals with ``amp``: filter, sample, noise, quantise.
+
+    :func:`sample` then :func:`digitise`; same parameters, plus ``rng`` (noise stream).
+    """
+    return digitise(sample(signals, amp, n_lead), amp, rng)
+
+
+def sample(signals: np.ndarray, amp: Amplifier, n_lead: int) -> np.ndarray:
+    """Filter and sample fine-grid bridge signals with ``amp`` (no noise, no quantisation).
+
+    Parameters
+    ----------
+    signals : ndarray, shape (n_windows, n_sensors, oversample · (n_t + 2 n_lead))
+        Bridge outputs on the fine grid [mV/V], starting ``n_lead`` output periods before
+        the window and ending ``n_lead`` after it.
+    amp : Amplifier
+    n_lead : int
+        Lead (and tail) output samples, >= ``amp.order`` (filter history).
+
+    Returns
+    -------
+    ndarray, shape (n_windows, n_sensors, n_t)
+        Sampled windows [mV/V]: the sinc output at the end of each output period
+        (:func:`sinc_taps`), so a window lags the fine signal by
+        :meth:`Amplifier.group_delay_s` (a pure delay; windows start at arbitrary times
+        anyway).
+
+    Raises
+    ------
+    ValueError
+        If the length is not a multiple of ``oversample`` or ``n_lead`` is too short.
+    """
+    q = int(amp.oversample)
+    n_fine = signals.shape[-1]
+    if n_fine % q or n_fine // q <= 2 * n_lead:
+        raise ValueError(f"signals of {n_fine} fine samples do not hold oversample={q} x "
+                         f"(n_t + 2 x {n_lead})")
+    if n_lead < amp.order:
+        raise ValueError(f"n_lead must be >= the filter order {amp.order}, got {n_lead}")
+    n_t = n_fine // q - 2 * n_lead
+    taps = sinc_taps(q, amp.order)
+    # output sample k of the window is the filter output at the last fine sample e_k of
+    # its period: Σ_j taps[j] x[e_k − j]. With the fine samples as blocks of q, tap j reads
+    # block (k − j // q) at position q − 1 − j % q: one matrix product per block lag.
+    n_lag = -(-taps.size // q)
+    t_blocks = np.zeros((n_lag, q))
+    for j, tap in enumerate(taps):
+        t_blocks[j // q, q - 1 - j % q] = tap
+    xb = signals.reshape(signals.shape[:-1] + (n_fine // q, q))  # (..., blocks, q)
+    out = np.zeros(signals.shape[:-1] + (n_t,))
+    for b in range(n_lag):
+        out += xb[..., n_lead - b:n_lead - b + n_t, :] @ t_blocks[b]
+    return out
+
+
+def digitise(sampled: np.ndarray, amp: Amplifier, rng: np.random.Generator) -> np.ndarray:
+    """The converter's input-referred noise, quantisation and clipping on sampled signals.
+
+    Parameters
+    ----------
+    sampled : ndarray, shape (..., n_t)
+        Filtered, sampled bridge outputs [mV/V] (the filter part of :func:`acquire`).
+    amp : Amplifier
+    rng : numpy.random.Generator
+        Noise stream.
+
+    Returns
+    -------
+    ndarray, same shape
+        [mV/V], on the converter's LSB grid and within its range.
+    """
+    out = sampled
+    if amp.noise_uv_rms > 0:
+        out = out + rng.normal(0.0, amp.noise_mvv, size=out.shape)
+    lsb = amp.lsb_mvv
+    out = np.round(out / lsb) * lsb
+    return np.clip(out, -amp.range_mvv, amp.range_mvv)

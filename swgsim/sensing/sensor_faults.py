@@ -1,0 +1,124 @@
+"""Faults of the sensors themselves: classes of their own, named ``sensor_*``.
+
+A gauge or its bridge can fail while the gear is sound. A monitor must name such a fault
+as a sensor fault, never as a gear fault, so the gear lives (:mod:`swgsim.datasets.life`) carry
+them as classes of their own. Each acts on one bridge's output, after the bridge and
+before the converter's noise (gain and offset commute with the linear anti-aliasing
+filter, so applying them to the sampled signal is exact):
+
+===================== ========================================== ===================
+name                  effect on bridge c (s in mV/V)             severity
+===================== ========================================== ===================
+sensor_gain_drift     (1 − severity) s: the strain reaching the   relative gain loss
+                      grid falls as the adhesive creeps or the    [-], in [0, 0.5]
+                      gauge debonds from its edges
+sensor_offset_step    s + severity: the zero shifts when a gauge  zero shift [mV/V],
+                      or its solder tab is fatigue-damaged or     in [-0.5, 0.5]
+                      partly debonds
+===================== ========================================== ===================
+
+Magnitudes (the evaluation's severities, ``SEVERITIES``). Gain: sound installations hold
+their gain within 0.2 % to a little over 1 % under load for more than a year (Espion and
+Halleux, *Long-term measurements of strains with strain-gauges and stability of
+strain-gauge transducers*, HBM Reports in Applied Measurement, RAM 2000/1), and a falling
+output of more than 0.1 % of full scale marks a faulty installation (Vishay Measurements
+Group, *Transducer-class strain gages: creep compensation*); the mild drift, 2 %, is twice
+the worst sound installation, the severe one, 10 %, a gauge partly debonded (our choice;
+no source gives a percentage for debonding). Offset: fatigue damage of a gauge shows first
+as a permanent zero shift (Vishay Micro-Measurements, Tech Note TN-508-1, *Fatigue
+Characteristics of Micro-Measurements Strain Gages*; ASTM E1949, sec. 4.4), whose failure
+criterion is of the order of 100 µε (the exact number is not in the parts of TN-508 we
+could read), i.e. GF ε / 4 = 0.05 mV/V on a quarter bridge with GF = 2: the severe step;
+a tenth of it, 0.005 mV/V, the mild one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+SENSORS = ("s0", "s1", "s2", "s3", "s4")
+
+
+@dataclass(frozen=True)
+class SensorFault:
+    """A fault of one bridge.
+
+    Attributes
+    ----------
+    name : str
+        ``sensor_*``.
+    severity_range : tuple of float
+        Allowed closed range.
+    unit : str
+        Unit of the severity.
+    apply : callable
+        ``apply(x, severity)`` on one bridge's signals ``x`` [mV/V], shape (n, n_t),
+        with ``severity`` of shape (n, 1); returns the faulty signals.
+    display : str
+        Name in reports and figures.
+    """
+
+    name: str
+    severity_range: tuple[float, float]
+    unit: str
+    apply: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    display: str
+
+
+SENSOR_FAULTS: dict[str, SensorFault] = {
+    f.name: f for f in (
+        SensorFault("sensor_gain_drift", (0.0, 0.5), "-", lambda x, s: x * (1.0 - s),
+                    "sensor gain drift"),
+        SensorFault("sensor_offset_step", (-0.5, 0.5), "mV/V", lambda x, s: x + s,
+                    "sensor offset step"),
+    )
+}
+
+#: Severities of the evaluation (module docstring): mild and severe.
+SEVERITIES: dict[str, tuple[float, ...]] = {
+    "sensor_gain_drift": (0.02, 0.10),
+    "sensor_offset_step": (0.005, 0.05),
+}
+
+
+def is_sensor_fault(name: str) -> bool:
+    """Whether ``name`` is a registered sensor fault."""
+    return name in SENSOR_FAULTS
+
+
+def apply_sensor_fault(x: np.ndarray, name: str, severity: np.ndarray | float,
+                       sensor: int) -> np.ndarray:
+    """One bridge's fault on a batch of windows (a copy; the input is left as it is).
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, 5, n_t)
+        Sampled bridge outputs [mV/V].
+    name : str
+        A key of :data:`SENSOR_FAULTS`.
+    severity : float or ndarray, shape (n,)
+        In the fault's unit.
+    sensor : int
+        Index of the faulty bridge, 0..4.
+
+    Returns
+    -------
+    ndarray, shape (n, 5, n_t)
+
+    Raises
+    ------
+    KeyError
+        For an unknown name.
+    """
+    f = SENSOR_FAULTS[name]
+    out = np.array(x, copy=True)
+    sev = np.broadcast_to(np.asarray(severity, float), (x.shape[0],))[:, None]
+    out[:, sensor] = f.apply(out[:, sensor], sev)
+    return out
+
+
+__all__ = ["SENSOR_FAULTS", "SEVERITIES", "SensorFault", "apply_sensor_fault",
+           "is_sensor_fault"]
