@@ -7,14 +7,23 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 py="${PYTHON:-python3.11}"
 command -v "$py" >/dev/null 2>&1 || py=python3
-stamp=".venv/.installed-$(sha1sum pyproject.toml | cut -c1-12)"
+# the set-up installs requirements-lock.txt (every package pinned with its hashes, torch's CPU
+# wheel among them; `bash scripts/lock.sh` refreshes it), then the project without
+# dependencies; it runs again when the lock or pyproject.toml changes
+lock=requirements-lock.txt
+stamp=".venv/.installed-$(cat "$lock" pyproject.toml | sha1sum | cut -c1-12)"
 if [ ! -f "$stamp" ]; then
     echo "== setting up .venv (once; a few minutes)"
     [ -x .venv/bin/python ] || "$py" -m venv .venv
     .venv/bin/python -m pip install -q --upgrade pip >/dev/null 2>&1 || true
-    # the CPU wheel of torch first, so that nothing pulls a CUDA build
-    .venv/bin/python -c "import torch" 2>/dev/null || .venv/bin/python -m pip install -q "torch==2.13.0"
-    .venv/bin/python -m pip install -q -e ".[dev]"
+    # pip's notes go to a log, shown only when the install fails
+    log=.venv/install.log
+    if ! { .venv/bin/python -m pip install -q --require-hashes -r "$lock" &&
+           .venv/bin/python -m pip install -q --no-deps -e .; } >"$log" 2>&1; then
+        grep -v "is ignored: it is neither a file nor a directory" "$log" | tail -n 40 >&2
+        echo "== set-up failed (the whole log: $log)" >&2
+        exit 1
+    fi
     rm -f .venv/.installed-*
     touch "$stamp"
 fi
