@@ -1,0 +1,265 @@
+"""What the joint's temperature does to the five strain-gauge bridges s0..s4, and the
+temperature sensor that measures it.
+
+Two effects per bridge, linear in the temperature difference ΔT = T − T_ref from the
+coefficients' reference (20 °C; the temperature at commissioning is not known in advance):
+
+    s' = (1 + span_c ΔT) s + zero_c ΔT        [mV/V]
+
+* **Zero drift** (``zero_c``, mV/V per K). A gauge bonded to steel reads an apparent
+  strain when its temperature changes; self-temperature-compensated foil gauges on the
+  matching steel keep it within ±1.8 µε/K, representative value, some series within
+  ±1 µε/K at 20-40 °C (Kyowa, *Self-temperature-compensation gages*) **[src]**. In a
+  bridge the arms' common apparent strain cancels (equal arms, opposite signs: the mean
+  drift is 0 **[derived]**); what is left is the gauge-to-gauge mismatch within the
+  bridge. With a mismatch of sd σ per gauge and n active arms of signs ±1 the bridge
+  reads 1e3 · GF/4 · Σ ±δ_k [mV/V] (docs/PHYSICS.md sec. 4.2), sd 1e3 · GF/4 · √n · σ
+  **[derived]**: s0 is a full bridge (n = 4), s1..s4 half bridges (n = 2,
+  docs/PHYSICS.md sec. 4.3). σ = 0.2 µε/K, about a ninth of Kyowa's bound on a lot's
+  apparent strain, for gauges of one lot on one part **[choice; no within-lot spread
+  found]**: sd 2.0e-4 mV/V per K (s0), 1.41e-4 (s1..s4).
+* **Span drift** (``span_c``, per K). For the same torque the steel strains more as it
+  warms: the modulus falls, −2.9e-4 /K (carbon-molybdenum steels, 206.2 / 201.3 /
+  196.5 GPa at −73 / 21 / 93 °C, central difference; Roark's *Formulas for Stress and
+  Strain*, table of elastic moduli against temperature) **[src; derived]**, shear
+  modulus alike at constant ν **[choice]**; the collar grows (the shear stress of a
+  torque, T / (2π r² t), falls by 3 α per K, α = 11e-6 /K, the expansion to which gauges
+  for steel are compensated: suffix "-11" of TML gauges) **[src, suffix; derived]**; the
+  gauge factor of constantan rises, about +1e-4 /K **[unverified]**. Together
+  +3.57e-4 /K, +1.1 % over 30 K, a gain common to every bridge; bridge-to-bridge spread
+  sd 5e-5 /K **[choice: half of 1e-4 /K, the temperature effect on sensitivity of a
+  finished, compensated torque transducer, ≤ 0.1 % per 10 K (HBM T10F, in HBM's glossary
+  of torque transducer terms, which gives 0.05 % per 10 K on the zero) [src]]**. The
+  zero drifts above are 14 times that transducer's (s0: 0.05 % of 0.284 mV/V at 70 N m,
+  docs/PHYSICS.md sec. 4.6, per 10 K = 1.4e-5 mV/V per K): bare bridges, no compensation. For strain
+  imposed by a displacement (the wave generator's bending, s1 and s3) the modulus does
+  not enter; one gain per bridge is applied here all the same (a simplification).
+
+Not modelled: self-heating of the gauges by their excitation (below 1 µm/m at room
+temperature by HBM's account **[unverified]**) and temperature gradients across the
+flexspline.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Reference temperature of the drift coefficients [°C] (module docstring).
+REF_TEMP_C = 20.0
+
+#: Number of bridges s0..s4.
+N_BRIDGES = 5
+
+#: Relative change of the steel's modulus [1/K] (carbon-moly steels, Roark; docstring).
+MODULUS_TC_PER_K = -2.9e-4
+#: Linear expansion of steel [1/K] (gauge compensation suffix -11; docstring).
+STEEL_EXPANSION_PER_K = 11e-6
+#: Relative change of the gauge factor of constantan [1/K] [unverified; docstring].
+GAUGE_FACTOR_TC_PER_K = 1.0e-4
+
+
+@dataclass(frozen=True)
+class BridgeDrift:
+    """Temperature coefficients of the five bridges: their means and per-gear spreads.
+
+    Attributes
+    ----------
+    zero_mean_mvv_per_k : float
+        Mean zero drift of every bridge [mV/V per K] (0: the arms' common apparent strain
+        cancels, module docstring).
+    gauge_mismatch_ue_per_k : float
+        Sd of one gauge's apparent strain about its bridge's common value [µε/K] (0.2)
+        [choice]; sets the zero drift's spread (:attr:`zero_sd_mvv_per_k`).
+    gauge_factor : float
+        Gauge factor [-] (2.0, constantan foil, docs/PHYSICS.md sec. 4.2).
+    active_arms : tuple of int
+        Active arms of s0..s4 (4, 2, 2, 2, 2): full bridge s0, half bridges s1..s4
+        (docs/PHYSICS.md sec. 4.3).
+    span_mean_per_k : float
+        Mean relative gain change [1/K]: −modulus + gauge factor − 3 × expansion terms,
+        +3.57e-4 (module docstring) [derived].
+    span_sd_per_k : float
+        Bridge-to-bridge sd of the gain change [1/K] (5e-5) [choice].
+    ref_c : float
+        Temperature at which the coefficients give no change [°C] (20).
+
+    Raises
+    ------
+    ValueError
+        A negative spread, a gauge factor or arm count out of range, a non-finite value.
+    """
+
+    zero_mean_mvv_per_k: float = 0.0
+    gauge_mismatch_ue_per_k: float = 0.2
+    gauge_factor: float = 2.0
+    active_arms: tuple[int, ...] = (4, 2, 2, 2, 2)
+    span_mean_per_k: float = (-MODULUS_TC_PER_K + GAUGE_FACTOR_TC_PER_K
+                              - 3 * STEEL_EXPANSION_PER_K)
+    span_sd_per_k: float = 5e-5
+    ref_c: float = REF_TEMP_C
+
+    def __post_init__(self):
+        for name in ("zero_mean_mvv_per_k", "span_mean_per_k", "ref_c"):
+            if not np.isfinite(getattr(self, name)):
+                raise ValueError(f"BridgeDrift.{name} must be finite, got "
+                                 f"{getattr(self, name)}")
+        for name in ("gauge_mismatch_ue_per_k", "span_sd_per_k"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"BridgeDrift.{name} must lie in [0, inf), got {v}")
+        if not 1.0 <= self.gauge_factor <= 5.0:
+            raise ValueError(f"BridgeDrift.gauge_factor must lie in [1, 5], got "
+                             f"{self.gauge_factor}")
+        arms = tuple(self.active_arms)
+        if len(arms) != N_BRIDGES or any(a not in (1, 2, 4) for a in arms):
+            raise ValueError(f"BridgeDrift.active_arms must be {N_BRIDGES} values of 1, 2 "
+                             f"or 4, got {arms}")
+
+    @property
+    def zero_sd_mvv_per_k(self) -> np.ndarray:
+        """Sd of each bridge's zero drift, 1e3 · GF/4 · √n · σ [mV/V per K], shape (5,)."""
+        n = np.asarray(self.active_arms, dtype=float)
+        return 1e3 * self.gauge_factor / 4 * np.sqrt(n) * self.gauge_mismatch_ue_per_k * 1e-6
+
+
+def draw_bridge_drift(cfg: BridgeDrift, rng: np.random.Generator
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """One gear's drift coefficients: normal draws about the means.
+
+    Parameters
+    ----------
+    cfg : BridgeDrift
+    rng : numpy.random.Generator
+        Seeded by the caller (one per gear); draws 10 standard normals, zeros first.
+
+    Returns
+    -------
+    zero_mvv_per_k : ndarray, shape (5,)
+        Zero drift of s0..s4 [mV/V per K].
+    span_per_k : ndarray, shape (5,)
+        Relative gain change of s0..s4 [1/K].
+
+    Raises
+    ------
+    TypeError
+        ``rng`` is not a Generator.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    z = rng.standard_normal((2, N_BRIDGES))  # (zero, span) x bridge
+    zero = cfg.zero_mean_mvv_per_k + cfg.zero_sd_mvv_per_k * z[0]
+    span = cfg.span_mean_per_k + cfg.span_sd_per_k * z[1]
+    return zero, span
+
+
+def _vector(x, name: str) -> np.ndarray:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (N_BRIDGES,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be {N_BRIDGES} finite values, got shape {a.shape}")
+    return a
+
+
+def apply_bridge_drift(signals, temp_c, zero_mvv_per_k, span_per_k,
+                       ref_c: float = REF_TEMP_C) -> np.ndarray:
+    """Bridge outputs at the joint's temperature: (1 + span_c ΔT) s + zero_c ΔT.
+
+    Parameters
+    ----------
+    signals : array_like, shape (W, 5, T)
+        Bridge outputs s0..s4 of W windows of T samples at ``ref_c`` [mV/V].
+    temp_c : array_like, shape (W,)
+        Temperature of the gauges in each window [°C] (:func:`swgsim.thermal.joint_temperature`).
+    zero_mvv_per_k, span_per_k : array_like, shape (5,)
+        One gear's coefficients (:func:`draw_bridge_drift`) [mV/V per K], [1/K].
+    ref_c : float
+        Reference temperature of the coefficients [°C] (20).
+
+    Returns
+    -------
+    ndarray, shape (W, 5, T)
+        Drifted outputs [mV/V], float64 (a new array).
+
+    Raises
+    ------
+    ValueError
+        Shapes other than above or values not finite.
+    """
+    x = np.asarray(signals, dtype=float)
+    if x.ndim != 3 or x.shape[1] != N_BRIDGES:
+        raise ValueError(f"signals must have shape (W, {N_BRIDGES}, T), got {x.shape}")
+    t = np.asarray(temp_c, dtype=float)
+    if t.shape != (x.shape[0],) or not np.all(np.isfinite(t)):
+        raise ValueError(f"temp_c must be {x.shape[0]} finite values (one per window), "
+                         f"got shape {t.shape}")
+    zero, span = _vector(zero_mvv_per_k, "zero_mvv_per_k"), _vector(span_per_k, "span_per_k")
+    if not np.isfinite(ref_c):
+        raise ValueError(f"ref_c must be finite, got {ref_c}")
+    d = (t - ref_c)[:, None, None]  # (W, 1, 1)
+    return (1.0 + span[None, :, None] * d) * x + zero[None, :, None] * d
+
+
+@dataclass(frozen=True)
+class TemperatureSensor:
+    """The joint's temperature channel (an NTC or PT1000 on the joint's housing).
+
+    Attributes
+    ----------
+    resolution_k : float
+        Quantisation step of the reading [K] (0.1), >= 0 (0: none) [choice: a common
+        resolution of joint temperature readouts].
+    noise_sd_k : float
+        Sd of the reading's white noise [K] (0.05), >= 0 [choice]. A sensor's offset
+        (a PT1000 of class B: ±(0.3 + 0.005 |T|) K, IEC 60751 [unverified]) is not
+        modelled.
+
+    Raises
+    ------
+    ValueError
+        A negative or non-finite value.
+    """
+
+    resolution_k: float = 0.1
+    noise_sd_k: float = 0.05
+
+    def __post_init__(self):
+        for name in ("resolution_k", "noise_sd_k"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"TemperatureSensor.{name} must lie in [0, inf) K, got {v}")
+
+
+def measure_temperature(true_c, sensor: TemperatureSensor,
+                        rng: np.random.Generator) -> np.ndarray:
+    """Readings of the temperature channel: noisy, then quantised to the resolution.
+
+    Parameters
+    ----------
+    true_c : array_like
+        True temperatures [°C].
+    sensor : TemperatureSensor
+    rng : numpy.random.Generator
+        Seeded by the caller; one standard normal per reading.
+
+    Returns
+    -------
+    ndarray, shape of ``true_c``
+        Readings [°C], float64, multiples of ``resolution_k``.
+
+    Raises
+    ------
+    ValueError
+        A non-finite true temperature.
+    TypeError
+        ``rng`` is not a Generator.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    t = np.asarray(true_c, dtype=np.float64)
+    if not np.all(np.isfinite(t)):
+        raise ValueError("true_c must be finite")
+    r = t + sensor.noise_sd_k * rng.standard_normal(t.shape)
+    if sensor.resolution_k > 0:
+        r = np.round(r / sensor.resolution_k) * sensor.resolution_k
+    return r

@@ -1,0 +1,398 @@
+"""Temperature of a joint over a gear life, and what it does to the gear's friction.
+
+A joint warms while it runs and cools while it stands, its friction falls as the grease
+warms: a benign change a monitor must not call a fault. Here: the joint temperature with a
+cold start every operating day (:func:`joint_temperature`), the gear's friction at a
+temperature and run-in state (:func:`gear_at_temperature`), the model's steady efficiency
+and loss. SI except temperatures in °C (differences in K), life times in hours (``_h``),
+the time constant in minutes (``tau_min``), speeds in rpm.
+
+Sources. Harmonic Drive AG, *Engineering Data CSD-2A Component Sets* (1019659 11/2014)
+and *HFUS-2A* (1019658): efficiency "varies depending on" ratio, input speed, load torque,
+temperature and lubrication; no-load running torque as curves over −10..+40 °C at 500 to
+3500 rpm (CSD-2A illustration 26.1); grease change after about 8.5e8 input revolutions at
+40 °C grease temperature (SK-1A, SK-2) **[src]**. The curves are graphs we could not read:
+the temperature law is anchored on the issue's figures instead **[unverified]**. Universal
+Robots, *Robot start-up in cold environments*: sealed strain wave gear joints whose grease
+viscosity and friction depend on temperature, 21 °C internal joint temperature as the
+reference before full speed, ambient 0-50 °C **[src]**. Nevmerzhitskiy et al., *Friction
+model of industrial robot joint with temperature correction by example of KUKA KR10*,
+J. Robotics 2019, 6931563: a joint heated by intensive motion to 65 °C motor temperature,
+cooled to 25 °C, its friction re-identified along the way **[src]**.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from itertools import accumulate
+
+import numpy as np
+
+from swgsim.dynamics import RPM, GearParams
+
+#: Reference temperature of the catalogue and so of :func:`swgsim.dynamics.rt1_size20`
+#: [°C] (efficiency at 20 °C, docs/PHYSICS.md sec. 2).
+REF_TEMP_C = 20.0
+#: Temperatures the viscosity law accepts [°C] (the issue's range; anchored on 0..40 °C).
+TEMP_RANGE_C = (-40.0, 150.0)
+#: k of ν(T) = ν(T_ref) exp(−k (T − T_ref)) [1/K] [choice; :func:`viscosity_ratio`].
+VISCOSITY_COEFF_PER_K = 0.035
+#: Exponent m of the viscosity in the load-independent friction [-]: 2/3 as in Palmgren's
+#: viscous friction moment of rolling bearings, M0 ∝ (ν n)^(2/3) (the wave generator runs
+#: on a thin ball bearing) [recall, Palmgren 1959 / Harris & Kotzalas, not re-read].
+FRICTION_EXPONENT = 2.0 / 3.0
+#: Run-in: excess friction of a new gear [-], time constant [operating h] [choice: the
+#: issue's "+3 points over about 30 h"; 74.0 -> 77.0 % at the rated point, the tests].
+RUN_IN_DROP = 0.16
+RUN_IN_TAU_H = 30.0
+
+_HOURS_PER_DAY = 24.0
+
+
+def _fail(name: str, rng: str, value) -> None:
+    raise ValueError(f"{name} must lie in {rng}, got {value}")  # one line, naming the key
+
+
+def _positive(x, name: str, unit: str, hi: float = np.inf) -> float:
+    """``x`` as a float, refused unless in (0, hi]."""
+    if np.ndim(x) or not (np.isfinite(float(x)) and 0 < float(x) <= hi):
+        _fail(name, f"(0, {hi:g}] {unit}".replace(", inf]", ", inf)").strip(), x)
+    return float(x)
+
+
+def _finite(x, name: str, lo: float = -np.inf, hi: float = np.inf, rng: str = ""):
+    """``x`` as a float array, refused unless finite and within [lo, hi]."""
+    a = np.asarray(x, dtype=float)
+    if a.size and not (np.all(np.isfinite(a)) and a.min() >= lo and a.max() <= hi):
+        bad = a[~(np.isfinite(a) & (a >= lo) & (a <= hi))]
+        _fail(name, rng or f"[{lo}, {hi}]", bad.flat[0])
+    return a
+
+
+@dataclass(frozen=True)
+class JointThermal:
+    """Thermal model of a joint and its day (:func:`joint_temperature`); a field outside
+    its range raises ValueError naming it.
+
+    Attributes
+    ----------
+    r_th_k_per_w : float
+        Thermal resistance joint -> ambient (0.6) [K/W]: 32.5 W lost at the rated point
+        (2000 rpm, 52 N m) warm it by 19.5 K, the issue's "about 20 K" [choice]; the paper's
+        points: 23-36 W at 2000 rpm (14-22 K), 96-122 W at 4000 rpm (58-73 K) [derived].
+    tau_min : float
+        Thermal time constant R_th C (30) [min]: 20-60 min is usual for small gearboxes
+        [unverified]; C = 3000 J/K, e.g. 3.3 kg of aluminium at 900 J/(kg K) [derived].
+    ambient_c : float
+        Hall temperature at the first start (20, the catalogue's reference) [°C].
+    ambient_swing_k : float
+        Day/night amplitude (3, a heated hall) [K] [choice], phase ``sin(2π t / 24 h)``,
+        t the wall-clock hours since the first start, taken as 08:00: warmest at 14:00,
+        coldest at 02:00, ``ambient_c`` at each day's start.
+    ambient_points : tuple of (float, float)
+        Slow offsets of the hall, ``(wall-clock hour, offset K)`` pairs, hours >= 0 and
+        strictly increasing, linear in between, held outside (default none); the hall
+        warming by 10 K over two days: ``((0, 0), (48, 10))``. Lists become tuples.
+    run_h_per_day : float
+        Operating hours per day before a stop, in (0, 24] (16: two shifts) [h] [choice].
+        The stop lasts 24 − run_h_per_day wall-clock hours (8 h = 16 time constants: a
+        cold start every day); 24 never stops. The life starts cold, at ambient.
+    """
+
+    r_th_k_per_w: float = 0.6
+    tau_min: float = 30.0
+    ambient_c: float = 20.0
+    ambient_swing_k: float = 3.0
+    ambient_points: tuple[tuple[float, float], ...] = ()
+    run_h_per_day: float = 16.0
+
+    def __post_init__(self):
+        for name, unit in (("r_th_k_per_w", "K/W"), ("tau_min", "min")):
+            _positive(getattr(self, name), f"JointThermal.{name}", unit)
+        _finite(self.ambient_c, "JointThermal.ambient_c", -273.15, np.inf, "[-273.15, inf) °C")
+        _finite(self.ambient_swing_k, "JointThermal.ambient_swing_k", 0, np.inf, "[0, inf) K")
+        _positive(self.run_h_per_day, "JointThermal.run_h_per_day", "h", _HOURS_PER_DAY)
+        pts = np.asarray(self.ambient_points, dtype=float).reshape(-1, 2)  # (n_points, 2)
+        _finite(pts[:, 0], "JointThermal.ambient_points hours", 0.0, np.inf, "[0, inf) h")
+        _finite(pts[:, 1], "JointThermal.ambient_points offsets", rng="finite K")
+        if np.any(np.diff(pts[:, 0]) <= 0):
+            raise ValueError("JointThermal.ambient_points hours must increase strictly, got "
+                             f"{pts[:, 0].tolist()}")
+        object.__setattr__(self, "ambient_points", tuple((float(h), float(k)) for h, k in pts))
+
+
+def wall_clock_h(operating_h, run_h_per_day: float) -> np.ndarray:
+    """Wall-clock hours of operating hours, with the daily stops inserted.
+
+    Day d runs from wall-clock hour 24 d for ``run_h_per_day`` hours, then stands until
+    24 (d + 1); an operating hour on a day's boundary starts the next day, after the stop.
+
+    Parameters
+    ----------
+    operating_h, run_h_per_day : array_like, shape (W,); float
+        Operating hours since the first start, >= 0; hours per day, in (0, 24] [h].
+
+    Returns
+    -------
+    ndarray, shape (W,)
+        Wall-clock hours since the first start [h]; ValueError for values out of range.
+    """
+    run = _positive(run_h_per_day, "run_h_per_day", "h", _HOURS_PER_DAY)
+    h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
+    if run == _HOURS_PER_DAY:
+        return h.copy()
+    day = np.floor(h / run)
+    return day * _HOURS_PER_DAY + (h - day * run)
+
+
+def _offset_k(wall_h: np.ndarray, cfg: JointThermal) -> np.ndarray:
+    """Piecewise-linear offset of the hall at wall-clock hours [K]."""
+    pts = np.asarray(cfg.ambient_points).reshape(-1, 2)  # (n_points, 2)
+    return np.interp(wall_h, pts[:, 0], pts[:, 1]) if len(pts) else np.zeros_like(wall_h)
+
+
+def ambient_temperature(wall_h, cfg: JointThermal) -> np.ndarray:
+    """Hall temperature ambient_c + swing sin(2π t / 24 h) + offset(t) [°C], shape of
+    ``wall_h`` (wall-clock hours since the first start [h])."""
+    t = np.asarray(wall_h, dtype=float)
+    return (cfg.ambient_c + cfg.ambient_swing_k * np.sin(2 * np.pi * t / _HOURS_PER_DAY)
+            + _offset_k(t, cfg))
+
+
+def _grid(wall: np.ndarray, cfg: JointThermal) -> np.ndarray:
+    """Event times [wall-clock h]: start, windows, stop starts and ends, ambient points."""
+    last, run = wall[-1], cfg.run_h_per_day
+    ev = [np.zeros(1), wall]
+    if run < _HOURS_PER_DAY:
+        days = np.arange(np.floor(last / _HOURS_PER_DAY))  # days that ended before `last`
+        ev += [days * _HOURS_PER_DAY + run, (days + 1) * _HOURS_PER_DAY]
+    if cfg.ambient_points:
+        hrs = np.asarray(cfg.ambient_points)[:, 0]
+        ev.append(hrs[(hrs > 0) & (hrs < last)])
+    return np.unique(np.concatenate(ev))
+
+
+def _forced_response(t, heat_k, offset, slope, cfg: JointThermal) -> np.ndarray:
+    """Particular solution of τ T' + T = R P + T_amb(t) at times t [°C], for a constant
+    heat R P (``heat_k`` [K]) and an offset of slope ``slope`` [K/h], ``offset`` at t:
+    R P + ambient_c + offset − slope τ + S (sin ωt − ωτ cos ωt) / (1 + (ωτ)²), ω = 2π/24 h
+    [derived: substitute]."""
+    tau, w = cfg.tau_min / 60.0, 2 * np.pi / _HOURS_PER_DAY
+    wt = w * tau
+    swing = cfg.ambient_swing_k / (1.0 + wt * wt) * (np.sin(w * t) - wt * np.cos(w * t))
+    return heat_k + cfg.ambient_c + offset - slope * tau + swing
+
+
+def joint_temperature(operating_h, loss_w, cfg: JointThermal | None = None) -> np.ndarray:
+    """Joint temperature at each window of a life: exact first-order response.
+
+    C dT/dt = P(t) − (T − T_amb(t)) / R_th, τ = R_th C, from T = T_amb at the first start.
+    Window i's loss holds from its operating hour to the next window's (window 0's from
+    hour 0), and is 0 during the daily stops. Between events (windows, stop starts and
+    ends, ambient breakpoints) the loss is constant and the ambient a sine plus a line, so
+    each step is exact, T(t1) = T_p(t1) + (T(t0) − T_p(t0)) e^{−(t1−t0)/τ} with the
+    particular solution T_p (:func:`_forced_response`); a loop over events, O(W).
+
+    Parameters
+    ----------
+    operating_h : array_like, shape (W,)
+        Operating hours of the windows since the first start, >= 0, non-decreasing [h].
+    loss_w : array_like, shape (W,)
+        Power loss of each window's operating point, >= 0 (:func:`loss_power_w`) [W].
+    cfg : JointThermal, optional
+
+    Returns
+    -------
+    ndarray, shape (W,)
+        Joint temperature at the start of each window [°C]. ValueError for shapes not
+        (W,) alike, hours negative or decreasing, losses negative, non-finite values.
+    """
+    cfg = cfg or JointThermal()
+    h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
+    p = _finite(loss_w, "loss_w", 0.0, np.inf, "[0, inf) W")
+    if h.ndim != 1 or h.size == 0 or p.shape != h.shape:
+        raise ValueError(f"operating_h, loss_w must share a shape (W,), got {h.shape}, {p.shape}")
+    if np.any(np.diff(h) < 0):
+        raise ValueError("operating_h must not decrease (windows in time order)")
+    wall = wall_clock_h(h, cfg.run_h_per_day)
+    g = _grid(wall, cfg)  # (K,) events; intervals (K - 1,)
+    t0, t1 = g[:-1], g[1:]
+    running = np.mod(0.5 * (t0 + t1), _HOURS_PER_DAY) < cfg.run_h_per_day
+    i = np.maximum(np.searchsorted(wall, t0, side="right") - 1, 0)  # window of interval
+    heat = np.where(running, cfg.r_th_k_per_w * p[i], 0.0)  # R P [K]
+    off = _offset_k(g, cfg)
+    slope = np.diff(off) / (t1 - t0)
+    e = np.exp(-(t1 - t0) * 60.0 / cfg.tau_min)
+    c = (_forced_response(t1, heat, off[1:], slope, cfg)
+         - e * _forced_response(t0, heat, off[:-1], slope, cfg))
+    t_start = float(ambient_temperature(0.0, cfg))
+    temps = accumulate(zip(e.tolist(), c.tolist(), strict=True),  # T_k+1 = e_k T_k + c_k
+                       lambda tk, ec: ec[0] * tk + ec[1], initial=t_start)
+    return np.fromiter(temps, float, g.size)[np.searchsorted(g, wall)]
+
+
+def steady_rise_k(loss_w, cfg: JointThermal | None = None) -> np.ndarray:
+    """Steady rise over ambient, R_th P_loss [K], shape of ``loss_w`` (loss [W])."""
+    cfg = cfg or JointThermal()
+    return cfg.r_th_k_per_w * np.asarray(loss_w, dtype=float)
+
+
+def viscosity_ratio(temp_c, ref_c: float = REF_TEMP_C) -> np.ndarray:
+    """Viscosity of the grease relative to the reference, ν(T) / ν(T_ref) [-].
+
+    Reynolds' exponential law ν ∝ exp(−k T), the classic viscosity-temperature relation
+    of lubricants over a limited range, k = 0.035 1/K [choice: the issue's value]. The
+    grease's base-oil viscosities, to anchor the Walther law (ASTM D341), were not found;
+    through typical mineral oils (ISO VG 32-100) Walther gives 0.058-0.071 1/K at 20 °C
+    [derived]: 0.035 is an effective coefficient, anchored at 0..40 °C on the issue's
+    no-load torque factors (:func:`friction_scale`) [unverified]; −40..150 °C accepted.
+
+    Parameters
+    ----------
+    temp_c, ref_c : array_like; float
+        Grease temperature; reference temperature (20) [°C].
+
+    Returns
+    -------
+    ndarray, shape of ``temp_c``
+        ν(T) / ν(ref) [-]. ValueError for a temperature outside [−40, 150] °C.
+    """
+    rng = f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] °C"
+    t = _finite(temp_c, "temp_c", *TEMP_RANGE_C, rng)
+    r = _finite(ref_c, "ref_c", *TEMP_RANGE_C, rng)
+    return np.exp(-VISCOSITY_COEFF_PER_K * (t - r))
+
+
+def friction_scale(temp_c, ref_c: float = REF_TEMP_C,
+                   exponent: float = FRICTION_EXPONENT) -> np.ndarray:
+    """Factor on the load-independent friction at a temperature, (ν(T)/ν(ref))^m [-].
+
+    For b0_nm, b1_nms, b2_nms3, b3_nm of :class:`swgsim.dynamics.GearParams` (churning,
+    the wave generator's bearing, seals); μ, the mesh's load-proportional term, is kept
+    [choice: boundary friction taken as independent of temperature]. The no-load running
+    torque scales by the factor exactly: ×1.595 at 0 °C, ×0.627 at 40 °C, the issue's ×1.6
+    and ×0.63 [unverified: the catalogue curves could not be read]; rated-point efficiency
+    of :func:`swgsim.dynamics.rt1_size20` 70.5 / 77.0 / 81.7 % at 0 / 20 / 40 °C, the
+    issue's roughly 69 / 77 / 82 % (tests/test_thermal.py).
+
+    Parameters
+    ----------
+    temp_c, ref_c : array_like; float
+        Joint temperature, in [−40, 150]; that of the nominal coefficients (20) [°C].
+    exponent : float
+        m (:data:`FRICTION_EXPONENT`, 2/3) [-].
+
+    Returns
+    -------
+    ndarray, shape of ``temp_c``
+        Factor, 1 at ``ref_c`` [-]; refusals as :func:`viscosity_ratio`.
+    """
+    return viscosity_ratio(temp_c, ref_c) ** exponent
+
+
+def run_in_factor(operating_h, drop: float = RUN_IN_DROP,
+                  tau_h: float = RUN_IN_TAU_H) -> np.ndarray:
+    """Friction multiplier of a gear running in, 1 + drop · exp(−h / τ) [-].
+
+    Convention: the nominal friction (the catalogue fit) is the run-in state; the factor
+    tends to 1, a new gear starts at 1 + drop. Lubricant redistribution while running is
+    the mechanism (Universal Robots, module docstring) [src]; no measured curve: 0.16 and
+    30 h give the issue's +3 points of rated-point efficiency over about 30 h [choice].
+
+    Parameters
+    ----------
+    operating_h, tau_h : array_like; float
+        Operating hours since the first start, >= 0; time constant, > 0 [h].
+    drop : float
+        Relative excess friction of a new gear, in [0, 1] [-].
+
+    Returns
+    -------
+    ndarray, shape of ``operating_h``
+        Multiplier on all friction (:func:`gear_at_temperature`) [-]; ValueError if out
+        of range.
+    """
+    h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
+    d = float(_finite(drop, "drop", 0.0, 1.0, "[0, 1]"))
+    return 1.0 + d * np.exp(-h / _positive(tau_h, "tau_h", "h"))
+
+
+def gear_at_temperature(gear: GearParams, temp_c: float, run_in: float = 1.0) -> GearParams:
+    """The gear's friction coefficients at a temperature and a run-in state.
+
+    b0, b1, b2, b3 times ``friction_scale(temp_c) · run_in`` (b3 with b0, whose 6 % it
+    is, docs/PHYSICS.md sec. 1.4), μ times ``run_in``; all else kept. 20 °C and
+    ``run_in`` = 1 return a gear equal to the input (factors exactly 1).
+
+    Parameters
+    ----------
+    gear : GearParams
+        Nominal gear, run in, at 20 °C (:func:`swgsim.dynamics.rt1_size20`).
+    temp_c, run_in : float
+        Joint temperature, in [−40, 150] [°C]; run-in multiplier, > 0
+        (:func:`run_in_factor`) [-].
+
+    Returns
+    -------
+    GearParams
+        ValueError for a temperature outside its range, ``run_in`` <= 0, or an array.
+    """
+    if np.ndim(temp_c):
+        raise ValueError("gear_at_temperature takes a scalar temp_c")
+    r = _positive(run_in, "run_in", "")
+    f = float(friction_scale(temp_c)) * r
+    return dataclasses.replace(gear, b0_nm=gear.b0_nm * f, b1_nms=gear.b1_nms * f,
+                               b2_nms3=gear.b2_nms3 * f, b3_nm=gear.b3_nm * f,
+                               mu=gear.mu * r)
+
+
+def _steady_friction(gear: GearParams, n_in_rpm, t_out_nm):
+    """Steady friction torque T_fric [N m] and flank speed v [rad/s], broadcast: with
+    v = ω_in / (N sin α) and c T_stiff = T_load + T_fric / sin α, eq. (5) (b3 averaging
+    out) gives T_fric = (b0 s + b1 v + b2 v³ + μ s T_load / cos α) / (1 − μ s / (sin α
+    cos α)), s = tanh(v / v_s) (docs/PHYSICS.md sec. 1.4, as in ``fit_friction``)."""
+    n = _finite(n_in_rpm, "n_in_rpm", 0.0, np.inf, "(0, inf) rpm")
+    t = _finite(t_out_nm, "t_out_nm", 0.0, np.inf, "[0, inf) N m")
+    if np.any(n <= 0):
+        _fail("n_in_rpm", "(0, inf) rpm", n[n <= 0].flat[0])
+    sa, ca = np.sin(gear.alpha_tooth_rad), np.cos(gear.alpha_tooth_rad)
+    v = n * RPM / (gear.ratio * sa)
+    s = np.tanh(v / gear.v_smooth_rad_s)
+    num = gear.b0_nm * s + gear.b1_nms * v + gear.b2_nms3 * v**3 + gear.mu * s * t / ca
+    return num / (1.0 - gear.mu * s / (sa * ca)), v, t
+
+
+def steady_efficiency(gear: GearParams, n_in_rpm, t_out_nm) -> np.ndarray:
+    """Efficiency of the model in steady state, T_load / (T_load + T_fric / sin α) [-].
+
+    The energy balance of :mod:`swgsim.dynamics` (docs/PHYSICS.md sec. 1.5), which has no
+    function for it (:func:`swgsim.dynamics.fit_friction` solves it for b1 and μ).
+
+    Parameters
+    ----------
+    gear : GearParams
+    n_in_rpm, t_out_nm : array_like
+        Input speed, > 0 [rpm]; load torque, >= 0 [N m]; broadcast together.
+
+    Returns
+    -------
+    ndarray, broadcast shape
+        Efficiency, 0 at no load [-]; ValueError for a speed <= 0, a negative torque.
+    """
+    tf, _, t = _steady_friction(gear, n_in_rpm, t_out_nm)
+    return t / (t + tf / np.sin(gear.alpha_tooth_rad))
+
+
+def loss_power_w(gear: GearParams, n_in_rpm, t_out_nm) -> np.ndarray:
+    """Power lost in the gear in steady state, P_in − P_out = T_fric φ̇_b [W], broadcast
+    over ``n_in_rpm`` [rpm] and ``t_out_nm`` [N m] as :func:`steady_efficiency`."""
+    tf, v, _ = _steady_friction(gear, n_in_rpm, t_out_nm)
+    return tf * v
+
+
+def no_load_torque_nm(gear: GearParams, n_in_rpm) -> np.ndarray:
+    """No-load running torque at the input, P_in / ω_in at zero load [N m], shape of
+    ``n_in_rpm`` [rpm]: the catalogue's 0.105 N m at 2000 rpm (docs/PHYSICS.md sec. 2)."""
+    n = np.asarray(n_in_rpm, dtype=float)
+    return loss_power_w(gear, n, 0.0) / (n * RPM)

@@ -1,0 +1,269 @@
+"""Joint temperature, friction against temperature and run-in (swgsim.thermal), and the
+bridges' temperature drift and the temperature sensor (swgsim.bridge_drift): closed forms,
+a fixed-step reference, identities, refusals and seeded draws."""
+
+import dataclasses
+import time
+
+import numpy as np
+import pytest
+
+from swgsim import bridge_drift as bd
+from swgsim import thermal as th
+from swgsim.dynamics import RPM, Batch, rt1_size20, steady_state
+
+GEAR = rt1_size20()
+FLAT = th.JointThermal(ambient_swing_k=0.0, run_h_per_day=24.0)  # constant hall, no stops
+
+
+# ---------------------------------------------------------------- joint temperature
+def test_warm_up_from_cold_is_the_first_order_step_response():
+    h = np.array([0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 5.0])
+    t = th.joint_temperature(h, np.full(h.shape, 30.0), FLAT)
+    exact = 20.0 + 0.6 * 30.0 * (1.0 - np.exp(-h / 0.5))
+    # exact updates composed: rounding only (reached 0 K; 1e-12 leaves room for other
+    # platforms' exp)
+    np.testing.assert_allclose(t, exact, rtol=0, atol=1e-12)
+
+
+def test_cooling_over_a_stop_is_the_exponential_decay():
+    cfg = th.JointThermal(tau_min=240.0, ambient_swing_k=0.0, run_h_per_day=16.0)
+    assert th.wall_clock_h([0.0, 8.0, 16.0, 20.0, 32.0], 16.0).tolist() == [
+        0.0, 8.0, 24.0, 28.0, 48.0]
+    h = np.array([0.0, 15.0, 16.0])  # the last: next morning, after 8 h standing
+    t = th.joint_temperature(h, np.full(3, 25.0), cfg)
+    rise = 0.6 * 25.0
+    end_of_day = 20.0 + rise * (1.0 - np.exp(-16.0 / 4.0))
+    assert t[1] == pytest.approx(20.0 + rise * (1.0 - np.exp(-15.0 / 4.0)), abs=1e-12)
+    # reached 7e-15 and 0 K; margin for other platforms' exp
+    assert t[2] == pytest.approx(20.0 + (end_of_day - 20.0) * np.exp(-8.0 / 4.0), abs=1e-12)
+
+
+def test_every_day_starts_cold_after_a_stop_of_many_time_constants():
+    cfg = dataclasses.replace(FLAT, run_h_per_day=16.0)  # 8 h stop = 16 time constants
+    h = np.arange(0.0, 3 * 16.0, 0.25)
+    t = th.joint_temperature(h, np.full(h.shape, 30.0), cfg)
+    rise = th.steady_rise_k(30.0, cfg)
+    starts = t[np.isin(h, [16.0, 32.0])]
+    ends = t[np.isin(h, [15.75, 31.75])]
+    np.testing.assert_allclose(ends, 20.0 + rise, atol=1e-12)  # e^-31.5 of the rise: 4e-13
+    # what is left of the rise after the stop: e^-16 of it (2.0e-6 K), reached to 5e-10
+    # of it (rounding of T, 1e-15 K)
+    np.testing.assert_allclose(starts - 20.0, rise * np.exp(-16.0), rtol=1e-6)
+
+
+def test_steady_rise_is_r_th_times_the_loss():
+    assert th.steady_rise_k(32.5, FLAT) == pytest.approx(0.6 * 32.5, rel=1e-15)
+    t = th.joint_temperature([0.0, 50.0], [32.5, 32.5], FLAT)  # 100 time constants
+    assert t[1] == pytest.approx(20.0 + 0.6 * 32.5, abs=1e-12)
+
+
+def _reference(h, p, cfg, dt_h=1.0 / 60.0):
+    """RK4 at a fixed step on wall-clock time; every event lies on the step grid."""
+    wall = th.wall_clock_h(h, cfg.run_h_per_day)
+    n = int(round(wall[-1] / dt_h))
+    temp, out = float(th.ambient_temperature(0.0, cfg)), {}
+    k_w = np.rint(wall / dt_h).astype(int)
+    for k in range(n + 1):
+        out[k] = temp
+        t = k * dt_h
+        i = max(np.searchsorted(k_w, k, side="right") - 1, 0)
+        on = np.mod(t + 0.5 * dt_h, 24.0) < cfg.run_h_per_day
+        heat = cfg.r_th_k_per_w * p[i] * on
+
+        def f(tt, x, heat=heat):
+            return (heat + th.ambient_temperature(tt, cfg) - x) * 60.0 / cfg.tau_min
+
+        a = f(t, temp)
+        b = f(t + dt_h / 2, temp + dt_h / 2 * a)
+        c = f(t + dt_h / 2, temp + dt_h / 2 * b)
+        d = f(t + dt_h, temp + dt_h * c)
+        temp = temp + dt_h / 6 * (a + 2 * b + 2 * c + d)
+    return np.array([out[k] for k in k_w])
+
+
+def test_swing_ramps_stops_and_loss_steps_match_a_fixed_step_reference():
+    cfg = th.JointThermal(tau_min=90.0, ambient_swing_k=4.0, run_h_per_day=16.0,
+                          ambient_points=[[0.0, 0.0], [30.0, 5.0], [40.0, 2.0]])
+    h = np.arange(0.0, 40.0, 0.5)
+    p = 20.0 + 15.0 * np.sin(h)  # a different loss every window
+    fast = th.joint_temperature(h, p, cfg)
+    # RK4 at 1 min against the exact updates: 9.3e-10 K, falling 16-fold per halved step
+    # (1.5e-8 K at 2 min, 7.7e-8 K at 3 min: order 4), so the reference's own error
+    np.testing.assert_allclose(fast, _reference(h, p, cfg), rtol=0, atol=2e-9)
+    assert cfg.ambient_points == ((0.0, 0.0), (30.0, 5.0), (40.0, 2.0))
+
+
+def test_a_hundred_thousand_windows_take_well_under_a_second():
+    h = np.sort(np.random.default_rng(1).uniform(0.0, 1000.0, 100_000))
+    cfg = th.JointThermal(ambient_points=((0.0, 0.0), (48.0, 10.0)))
+    t0 = time.perf_counter()
+    t = th.joint_temperature(h, np.full(h.shape, 30.0), cfg)
+    assert time.perf_counter() - t0 < 1.0  # 0.03-0.05 s measured on the 2-core machine
+    assert np.all(np.isfinite(t)) and t.max() < 20.0 + 10.0 + 3.0 + 18.0 + 1e-9
+
+
+@pytest.mark.parametrize("call, key", [
+    (lambda: th.JointThermal(run_h_per_day=0.0), "JointThermal.run_h_per_day"),
+    (lambda: th.JointThermal(r_th_k_per_w=-1.0), "JointThermal.r_th_k_per_w"),
+    (lambda: th.JointThermal(ambient_points=((5.0, 1.0), (5.0, 2.0))), "ambient_points"),
+    (lambda: th.joint_temperature([0.0, 2.0, 1.0], [1.0, 1.0, 1.0]), "must not decrease"),
+    (lambda: th.joint_temperature([0.0, 1.0], [1.0]), "share a shape"),
+    (lambda: th.joint_temperature([0.0, 1.0], [1.0, -1.0]), "loss_w"),
+    (lambda: th.wall_clock_h([-1.0], 16.0), "operating_h"),
+])
+def test_bad_thermal_input_is_refused_in_one_line(call, key):
+    with pytest.raises(ValueError, match=key) as e:
+        call()
+    assert "\n" not in str(e.value)
+
+
+# ---------------------------------------------------------------- viscosity, friction
+def test_viscosity_law_at_its_defining_values_and_range():
+    assert th.viscosity_ratio(20.0) == 1.0
+    assert th.viscosity_ratio(0.0) == pytest.approx(np.exp(0.7), rel=1e-15)
+    assert th.viscosity_ratio(40.0) == pytest.approx(np.exp(-0.7), rel=1e-15)
+    assert th.viscosity_ratio(60.0, ref_c=40.0) == pytest.approx(np.exp(-0.7), rel=1e-15)
+    for bad in (-40.5, 150.5, np.nan):
+        with pytest.raises(ValueError, match=r"temp_c must lie in \[-40, 150\] °C"):
+            th.viscosity_ratio([20.0, bad])
+
+
+def test_friction_scale_follows_the_catalogue_trend_at_the_rated_point():
+    eta = {t: float(th.steady_efficiency(th.gear_at_temperature(GEAR, t), 2000.0, 52.0))
+           for t in (0.0, 20.0, 40.0)}
+    assert eta[20.0] == pytest.approx(0.77, abs=1e-12)  # the fit of rt1_size20
+    # the issue's roughly 69 / 82 % (rounded, not read from the catalogue): reached
+    # 70.48 % (the fitted model's viscous share of the rated loss is 56 %, the issue's
+    # estimate took 60 %) and 81.74 %
+    assert abs(eta[0.0] - 0.69) < 0.02 and abs(eta[40.0] - 0.82) < 0.01
+    nl = {t: float(th.no_load_torque_nm(th.gear_at_temperature(GEAR, t), 2000.0))
+          for t in (0.0, 20.0, 40.0)}
+    assert nl[20.0] == pytest.approx(0.105, rel=1e-12)  # the catalogue's running torque
+    for t, target in ((0.0, 1.6), (40.0, 0.63)):
+        assert nl[t] / nl[20.0] == pytest.approx(float(th.friction_scale(t)), rel=1e-12)
+        assert abs(nl[t] / nl[20.0] - target) < 0.01  # reached 0.005 and 0.003
+
+
+def test_steady_closed_form_matches_the_models_steady_state():
+    n = np.array([500.0, 2000.0, 4000.0])[:, None]
+    t = np.array([7.0, 39.0, 70.0])[None, :]
+    for gear in (GEAR, th.gear_at_temperature(GEAR, 0.0, run_in=1.1)):
+        b = Batch.of([gear] * 9)
+        x = steady_state(b, (n * RPM * np.ones_like(t)).ravel(), (t * np.ones_like(n)).ravel(),
+                         np.zeros(9))
+        t_stiff = x[4] * gear.ki_nm / gear.tan_alpha_in  # the PI integrator balances it
+        eta_fp = (t * np.ones_like(n)).ravel() / (gear.c_out * t_stiff)
+        # 20 fixed-point steps of dynamics.steady_state: converged to 1e-16
+        np.testing.assert_allclose(th.steady_efficiency(gear, n, t).ravel(), eta_fp,
+                                   rtol=1e-12)
+    p_out = t * n * RPM / GEAR.ratio
+    loss = th.loss_power_w(GEAR, n, t)
+    assert loss.shape == (3, 3)
+    np.testing.assert_allclose(loss, p_out * (1 / th.steady_efficiency(GEAR, n, t) - 1),
+                               rtol=1e-12)
+    with pytest.raises(ValueError, match="n_in_rpm"):
+        th.loss_power_w(GEAR, 0.0, 7.0)
+
+
+def test_gear_at_reference_and_run_in_is_the_input_gear():
+    assert th.gear_at_temperature(GEAR, 20.0, 1.0) == GEAR
+    cold = th.gear_at_temperature(GEAR, 0.0, run_in=1.1)
+    s = float(th.friction_scale(0.0)) * 1.1
+    assert cold.b1_nms == pytest.approx(GEAR.b1_nms * s, rel=1e-15)
+    assert cold.b3_nm == pytest.approx(GEAR.b3_nm * s, rel=1e-15)
+    assert cold.mu == pytest.approx(GEAR.mu * 1.1, rel=1e-15)
+    assert dataclasses.replace(cold, b0_nm=GEAR.b0_nm, b1_nms=GEAR.b1_nms,
+                               b2_nms3=GEAR.b2_nms3, b3_nm=GEAR.b3_nm, mu=GEAR.mu) == GEAR
+    with pytest.raises(ValueError, match="run_in"):
+        th.gear_at_temperature(GEAR, 20.0, run_in=0.0)
+
+
+def test_run_in_factor_limits_and_efficiency_gain():
+    assert th.run_in_factor(0.0) == pytest.approx(1.16, rel=1e-15)
+    assert th.run_in_factor(30.0) == pytest.approx(1 + 0.16 * np.exp(-1.0), rel=1e-15)
+    assert th.run_in_factor(1e5) == 1.0
+    assert np.all(np.diff(th.run_in_factor(np.linspace(0.0, 200.0, 50))) < 0)
+    new = th.gear_at_temperature(GEAR, 20.0, run_in=float(th.run_in_factor(0.0)))
+    gain = 0.77 - float(th.steady_efficiency(new, 2000.0, 52.0))
+    assert abs(gain - 0.03) < 0.001  # the issue's +3 points; reached 0.0003
+    with pytest.raises(ValueError, match="drop"):
+        th.run_in_factor(0.0, drop=-0.1)
+
+
+# ---------------------------------------------------------------- bridge drift
+def _signals(rng, w=3, n_t=50):
+    return 0.1 * rng.standard_normal((w, 5, n_t))
+
+
+def test_span_drift_is_a_common_mode_gain():
+    s = _signals(np.random.default_rng(0))
+    temp = np.array([20.0, 35.0, 5.0])
+    out = bd.apply_bridge_drift(s, temp, np.zeros(5), np.full(5, 4e-4))
+    gain = np.broadcast_to((1 + 4e-4 * (temp - 20.0))[:, None, None], s.shape)
+    np.testing.assert_allclose(out / s, gain, rtol=1e-13)
+    assert np.array_equal(out[0], s[0])  # at the reference: unchanged
+
+
+def test_zero_drift_is_additive_and_independent_of_the_signal():
+    rng = np.random.default_rng(1)
+    zero = np.array([2e-4, -1e-4, 1.4e-4, 0.0, -3e-4])
+    temp = np.array([20.0, 40.0, -10.0])
+    d = [bd.apply_bridge_drift(s, temp, zero, np.zeros(5)) - s
+         for s in (_signals(rng), _signals(rng))]
+    np.testing.assert_allclose(d[0], d[1], atol=1e-15)
+    np.testing.assert_allclose(d[0][:, :, 0], zero[None, :] * (temp - 20.0)[:, None],
+                               atol=1e-15)
+
+
+@pytest.mark.parametrize("args, key", [
+    ((np.zeros((2, 4, 10)), np.zeros(2), np.zeros(5), np.zeros(5)), "signals"),
+    ((np.zeros((2, 5, 10)), np.zeros(3), np.zeros(5), np.zeros(5)), "temp_c"),
+    ((np.zeros((2, 5, 10)), np.zeros(2), np.zeros(4), np.zeros(5)), "zero_mvv_per_k"),
+    ((np.zeros((2, 5, 10)), np.zeros(2), np.zeros(5), [0, 0, 0, 0, np.nan]), "span_per_k"),
+])
+def test_bad_bridge_input_is_refused_in_one_line(args, key):
+    with pytest.raises(ValueError, match=key) as e:
+        bd.apply_bridge_drift(*args)
+    assert "\n" not in str(e.value)
+
+
+def test_drift_defaults_and_seeded_draws():
+    cfg = bd.BridgeDrift()
+    # 1e3 GF/4 sqrt(n) sigma: full bridge 2e-4, half bridges 1.41e-4 mV/V per K
+    np.testing.assert_allclose(cfg.zero_sd_mvv_per_k,
+                               [2e-4] + [np.sqrt(2) * 1e-4] * 4, rtol=1e-14)
+    assert cfg.span_mean_per_k == pytest.approx(2.9e-4 + 1e-4 - 3.3e-5, rel=1e-14)
+    a = bd.draw_bridge_drift(cfg, np.random.default_rng(7))
+    b = bd.draw_bridge_drift(cfg, np.random.default_rng(7))
+    c = bd.draw_bridge_drift(cfg, np.random.default_rng(8))
+    assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+    assert not np.array_equal(a[0], c[0])
+    assert a[0].shape == a[1].shape == (5,)
+    rng = np.random.default_rng(3)
+    draws = np.array([np.concatenate(bd.draw_bridge_drift(cfg, rng)) for _ in range(4000)])
+    # sd of an sd estimate from 4000 draws: 1.1 %; 5 % is 4.5 sigma
+    np.testing.assert_allclose(draws.std(axis=0),
+                               np.concatenate([cfg.zero_sd_mvv_per_k, [5e-5] * 5]),
+                               rtol=0.05)
+    with pytest.raises(ValueError, match="BridgeDrift.span_sd_per_k"):
+        bd.BridgeDrift(span_sd_per_k=-1.0)
+
+
+# ---------------------------------------------------------------- temperature sensor
+def test_sensor_quantises_and_adds_seeded_noise():
+    true = np.linspace(18.0, 42.0, 1001)
+    quiet = bd.measure_temperature(true, bd.TemperatureSensor(0.1, 0.0),
+                                   np.random.default_rng(0))
+    assert quiet.dtype == np.float64 and quiet.shape == true.shape
+    np.testing.assert_allclose(quiet * 10, np.round(quiet * 10), atol=1e-9)
+    assert np.max(np.abs(quiet - true)) <= 0.05 + 1e-12
+    sensor = bd.TemperatureSensor()
+    r1 = bd.measure_temperature(true, sensor, np.random.default_rng(5))
+    r2 = bd.measure_temperature(true, sensor, np.random.default_rng(5))
+    assert np.array_equal(r1, r2)
+    raw = bd.measure_temperature(np.full(20_000, 30.0), bd.TemperatureSensor(0.0, 0.05),
+                                 np.random.default_rng(6))
+    assert raw.std() == pytest.approx(0.05, rel=0.03)  # 1 % sd of the estimate
+    with pytest.raises(ValueError, match="TemperatureSensor.resolution_k"):
+        bd.TemperatureSensor(resolution_k=-0.1)
