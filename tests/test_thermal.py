@@ -1,5 +1,5 @@
-"""Joint temperature, friction against temperature and run-in (swgsim.thermal), and the
-bridges' temperature drift and the temperature sensor (swgsim.bridge_drift): closed forms,
+"""Joint temperature, friction against temperature and run-in (swgsim.gear.thermal), and the
+bridges' temperature drift and the temperature sensor (swgsim.sensing.bridge_drift): closed forms,
 a fixed-step reference, identities, refusals and seeded draws."""
 
 import dataclasses
@@ -8,9 +8,9 @@ import time
 import numpy as np
 import pytest
 
-from swgsim import bridge_drift as bd
-from swgsim import thermal as th
-from swgsim.dynamics import RPM, Batch, rt1_size20, steady_state
+from swgsim.gear import thermal as th
+from swgsim.gear.dynamics import RPM, Batch, rt1_size20, steady_state
+from swgsim.sensing import bridge_drift as bd
 
 GEAR = rt1_size20()
 FLAT = th.JointThermal(ambient_swing_k=0.0, run_h_per_day=24.0)  # constant hall, no stops

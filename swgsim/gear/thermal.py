@@ -29,7 +29,7 @@ from itertools import accumulate
 
 import numpy as np
 
-from swgsim.dynamics import RPM, GearParams
+from swgsim.gear.dynamics import RPM, GearParams
 
 #: Reference temperature of the catalogue and so of :func:`swgsim.dynamics.rt1_size20`
 #: [°C] (efficiency at 20 °C, docs/PHYSICS.md sec. 2).
