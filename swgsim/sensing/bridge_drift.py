@@ -170,7 +170,8 @@ def apply_bridge_drift(signals, temp_c, zero_mvv_per_k, span_per_k,
     signals : array_like, shape (W, 5, T)
         Bridge outputs s0..s4 of W windows of T samples at ``ref_c`` [mV/V].
     temp_c : array_like, shape (W,)
-        Temperature of the gauges in each window [°C] (:func:`swgsim.gear.thermal.joint_temperature`).
+        Temperature of the gauges in each window [°C]
+        (:func:`swgsim.gear.thermal.joint_temperature`).
     zero_mvv_per_k, span_per_k : array_like, shape (5,)
         One gear's coefficients (:func:`draw_bridge_drift`) [mV/V per K], [1/K].
     ref_c : float
