@@ -29,7 +29,7 @@ except PackageNotFoundError:  # not installed (source tree on sys.path)
 _EXPORTS = {
     "FeatureSettings": "inputs.features", "extract_features": "inputs.features",
     "feature_names": "inputs.features", "order_spectrum": "inputs.features",
-    "ModelSpec": "learners.baselines", "register_model": "learners.baselines",
+    "ModelSpec": "learners.models", "register_model": "learners.models",
     "MLPClassifierTorch": "learners.nets", "CNN1DClassifier": "learners.nets",
     "MiniRocketClassifier": "learners.rocket",
     "ProtocolConfig": "studies.protocols", "make_splits": "studies.protocols",

@@ -1,5 +1,5 @@
 """Cost of the condition monitor per window, on one core: health features, scoring
-(baseline z-scores, diagnosis model, novelty), conformal p-values and the CUSUM update;
+(normal behaviour z-scores, diagnosis model, novelty), conformal p-values and the CUSUM update;
 and the cost of a gear life's windows (records and windows, swgsim.datasets.life).
 
     python scripts/bench_monitor.py [--dataset bench] [--windows 3000]
@@ -33,9 +33,10 @@ def main() -> None:
     ap.add_argument("--windows", type=int, default=3000, help="windows timed (default 3000)")
     args = ap.parse_args()
 
-    from learn.monitor.evaluate import MonitorStudyConfig, features_of, train_model
     from learn.monitor.features import window_features
-    from learn.monitor.monitor import GearMonitor
+    from learn.monitor.gear_monitor import GearMonitor
+    from learn.monitor.study import MonitorStudyConfig
+    from learn.monitor.training import features_of, train_model
     from swgcli import dataset_preset
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.plan import plan

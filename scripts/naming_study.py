@@ -16,7 +16,7 @@ Sensor faults are judged on each of the five bridges at five severities from the
 the severe one (a growing sensor fault is named while between them); ``--sensor-levels``
 sets how many severities the training lives have.
 
-Rules: ``monitor`` (the monitor's, :meth:`learn.monitor.monitor.GearMonitor.name`: a
+Rules: ``monitor`` (the monitor's, :meth:`learn.monitor.gear_monitor.GearMonitor.name`: a
 sensor fault where one bridge's fitted offset step or gain drift explains the windows,
 else ``sum``), ``sum`` (summed evidence relative to the gear's calibration windows),
 ``vote`` (the most frequent per-window argmax among the faults), ``clip`` (summed
@@ -41,7 +41,7 @@ def _best_sensor_fit(mon, z, q, opi):
     windows look most healthy, and their median p-value then (None, 0 if none)."""
     from learn.monitor.sensor_check import fit_sensor_faults
 
-    b = mon.baseline
+    b = mon.normal
     best, p_best = None, 0.0
     for f in fit_sensor_faults(z, b.mean[opi], b.std[opi]):
         if not f.plausible():
@@ -57,13 +57,13 @@ def _best_sensor_fit(mon, z, q, opi):
 def _healthy_rest(mon, healthy, n_comm: int) -> None:
     """Print the mean shift each one-bridge fit leaves on the other bridges over the
     healthy hour after commissioning (about 1 where the windows are independent)."""
-    from learn.monitor.evaluate import features_of
     from learn.monitor.sensor_check import fit_sensor_faults
+    from learn.monitor.training import features_of
 
     f, q, _ = features_of(healthy, n_comm, len(healthy))
-    opi = mon.baseline.index(q)
-    fits = fit_sensor_faults(mon.baseline.z(f, q, opi), mon.baseline.mean[opi],
-                             mon.baseline.std[opi])
+    opi = mon.normal.index(q)
+    fits = fit_sensor_faults(mon.normal.z(f, q, opi), mon.normal.mean[opi],
+                             mon.normal.std[opi])
     print("healthy hour: rest of each bridge's fit "
           + " ".join(f"s{x.bridge} {x.rest:.2f}" for x in fits[::2]), flush=True)
 
@@ -84,16 +84,16 @@ def _train(p, gear: int, cfg, cls: list[str], n_comm: int):
     one training gear's lives."""
     from sklearn.ensemble import HistGradientBoostingClassifier
 
-    from learn.monitor.evaluate import features_of, training_lives
-    from learn.monitor.model import HEALTHY, Baseline, design_matrix
-    from learn.monitor.monitor import baseline_windows
+    from learn.monitor.gear_monitor import normal_windows
+    from learn.monitor.model import HEALTHY, NormalBehaviour, design_matrix
+    from learn.monitor.training import features_of, training_lives
     from swgsim.datasets.records import record_bank
 
     bank = record_bank(p, gear)
     lives = training_lives(p, bank, gear, cfg)
     f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
-    fit = baseline_windows(p0[:n_comm])
-    base = Baseline.fit(f0[:n_comm][fit], p0[:n_comm][fit])
+    fit = normal_windows(p0[:n_comm])
+    base = NormalBehaviour.fit(f0[:n_comm][fit], p0[:n_comm][fit])
     xs, ys, agg_x, agg_y = [], [], [], []
     rng = np.random.default_rng(0)
     for sim, c, _ in lives:
@@ -128,14 +128,10 @@ def main() -> None:
                     "evaluation's, MonitorStudyConfig.train_variants)")
     args = ap.parse_args()
 
-    from learn.monitor.evaluate import (
-        MonitorStudyConfig,
-        classes,
-        features_of,
-        table_v_severities,
-    )
+    from learn.monitor.gear_monitor import GearMonitor
     from learn.monitor.model import DiagnosisModel
-    from learn.monitor.monitor import GearMonitor
+    from learn.monitor.study import MonitorStudyConfig
+    from learn.monitor.training import classes, features_of, table_v_severities
     from swgcli import dataset_preset
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.plan import plan
@@ -180,9 +176,9 @@ def main() -> None:
                 sim = LifeSimulator(p, args.judge, life, jb)
                 a = int(np.searchsorted(sim.schedule.hour, on))
                 f, q, _ = features_of(sim, a, len(sim))
-                opi = mon.baseline.index(q)
+                opi = mon.normal.index(q)
                 _, lp = mon.scores(f, q, opi)
-                z = mon.baseline.z(f, q, opi)
+                z = mon.normal.z(f, q, opi)
                 fit, p_fit = _best_sensor_fit(mon, z, q, opi)
                 print(f"  {c} {s:.4g}{f' on s{i}' if sensor else ''}: best plausible "
                       "one-bridge fit " + ("none" if fit is None else

@@ -101,7 +101,7 @@ def options_from_config(kind: str, given: Mapping[str, Any], measured: Any = Non
 
     ``given`` holds ``selection`` (:class:`SelectionConfig` fields) and the option keys of
     every kind (each kind subpackage's ``OPTIONS`` dataclass, e.g.
-    :class:`swgcal.friction.FrictionOptions`: ``baseline``, ``gear_ratio``,
+    :class:`swgcal.friction.FrictionOptions`: ``base model``, ``gear_ratio``,
     ``accel_window``, ``split``). A key of another kind set away from its default is
     refused rather than ignored; every range is the one its dataclass declares.
 

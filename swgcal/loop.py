@@ -2,7 +2,7 @@
 it earns its place, repeat; then report the error before and after on test data.
 
 Generic over the domain: a :class:`Problem` bundles the signals, the target, the
-baseline terms, a library of candidate effects (term classes), the residual probes and
+base model terms, a library of candidate effects (term classes), the residual probes and
 the held-out split. Each data kind builds one (:func:`swgcal.friction.build_problem`,
 :func:`swgcal.strain.build_problem`) and calls :func:`select_effects` in its
 ``calibrate`` step.
@@ -59,7 +59,7 @@ that no plausible library effect explains (the probes may not see it); the signa
 names the candidate and what it would have absorbed.
 
 Errors before and after are computed on the test samples, which neither the fit nor the
-selection has seen, by the baseline and the final model refitted on fit + validation.
+selection has seen, by the base model and the final model refitted on fit + validation.
 """
 
 from __future__ import annotations
@@ -101,7 +101,7 @@ class Problem:
         Target.
     t : ndarray, shape (n,)
         Time [s] (probes' halves, noise floor).
-    baseline : tuple of Term
+    base model : tuple of Term
     library : mapping of str to Term class
         Candidate effects by key.
     probes : sequence of Probe
@@ -116,7 +116,7 @@ class Problem:
     signals: Any
     y: np.ndarray
     t: np.ndarray
-    baseline: tuple[Term, ...]
+    base_model: tuple[Term, ...]
     library: Mapping[str, type[Term]]
     probes: Sequence[Probe]
     split: HeldOutSplit
@@ -264,13 +264,13 @@ class CalibrationResult:
     iterations : list of Iteration
     added : list of str
         Names of the accepted effects, in order.
-    baseline_final, final : FitResult
-        Baseline and final model refitted on fit + validation samples.
+    base_model_final, final : FitResult
+        Base model and final model refitted on fit + validation samples.
     rmse : dict
         ``{"fit"|"validation"|"test": {"before": x, "after": y}}`` [data units];
         fit/validation from the selection fits, test from the final refits.
     diag_before, diag_after : Diagnosis
-        Residual diagnosis of the baseline and of the final model (fit + validation).
+        Residual diagnosis of the base model and of the final model (fit + validation).
     unexplained : bool
         The final residual is still structured, or a candidate outside its physical range
         still passes the evidence rule on it.
@@ -285,7 +285,7 @@ class CalibrationResult:
     config: SelectionConfig
     iterations: list[Iteration]
     added: list[str]
-    baseline_final: FitResult
+    base_model_final: FitResult
     final: FitResult
     rmse: dict[str, dict[str, float]]
     diag_before: Diagnosis
@@ -317,9 +317,9 @@ class CalibrationResult:
         return [by[n] for n in self.added]
 
     def predictions(self) -> tuple[np.ndarray, np.ndarray]:
-        """Predictions of the baseline and the final model on all samples."""
+        """Predictions of the base model and the final model on all samples."""
         sig = self.problem.signals
-        return self.baseline_final.predict(sig), self.final.predict(sig)
+        return self.base_model_final.predict(sig), self.final.predict(sig)
 
 
 def _rmse(r: np.ndarray) -> float:
@@ -583,11 +583,11 @@ def _iteration(problem: Problem, cfg: SelectionConfig, keys: Sequence[str], it: 
 
 @dataclass
 class _Selection:
-    """Where the loop on the fit samples ended: the baseline and the selected model
+    """Where the loop on the fit samples ended: the base model and the selected model
     (fitted on the fit samples), the selected model's residual on all samples and its
     validation RMSE, the iterations and the instance names added."""
 
-    baseline: FitResult
+    base_model: FitResult
     current: FitResult
     r_cur: np.ndarray
     val_cur: float
@@ -597,11 +597,11 @@ class _Selection:
 
 def _select(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
             fit_kw: dict[str, Any]) -> _Selection:
-    """The loop on the fit samples: from the baseline, add the accepted candidate and
+    """The loop on the fit samples: from the base model, add the accepted candidate and
     refit all nonlinear parameters jointly, until no candidate is accepted."""
     sig, y, sp = problem.signals, problem.y, problem.split
-    current = fit_terms(_order(problem.baseline), sig, y, sp.fit, uncertainty=False, **fit_kw)
-    baseline_sel = current
+    current = fit_terms(_order(problem.base_model), sig, y, sp.fit, uncertainty=False, **fit_kw)
+    base_model_sel = current
     r_cur, val_cur = _score(problem, current)
     iterations: list[Iteration] = []
     added: list[str] = []
@@ -617,22 +617,22 @@ def _select(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
                             **{**fit_kw, "max_starts": 1})
         added.extend(t.name for t in _new_terms(accepted, current_before))
         r_cur, val_cur = _score(problem, current)
-    return _Selection(baseline_sel, current, r_cur, val_cur, iterations, added)
+    return _Selection(base_model_sel, current, r_cur, val_cur, iterations, added)
 
 
 def _final_result(problem: Problem, cfg: SelectionConfig, sel: _Selection,
                   fit_kw: dict[str, Any], t_start: float) -> CalibrationResult:
-    """Final refits of the baseline and the selected model on fit + validation samples,
+    """Final refits of the base model and the selected model on fit + validation samples,
     the RMSE before and after on the fit, validation and test samples, the diagnoses of
     the final residuals."""
     sig, y, sp = problem.signals, problem.y, problem.split
     idx_fv = sp.fit_validation
-    base_final = fit_terms(_order(problem.baseline), sig, y, idx_fv, **fit_kw)
+    base_final = fit_terms(_order(problem.base_model), sig, y, idx_fv, **fit_kw)
     starts = [[th] for th in sel.current.thetas]
     final = fit_terms(sel.current.terms, sig, y, idx_fv, starts, **fit_kw)
     r_b = y - base_final.predict(sig)
     r_a = y - final.predict(sig)
-    r_bs = y - sel.baseline.predict(sig)
+    r_bs = y - sel.base_model.predict(sig)
     rmse = {
         "fit": {"before": _rmse(r_bs[sp.fit]), "after": _rmse(sel.r_cur[sp.fit])},
         "validation": {"before": _rmse(r_bs[sp.validation]), "after": sel.val_cur},
@@ -645,7 +645,7 @@ def _final_result(problem: Problem, cfg: SelectionConfig, sel: _Selection,
                                                       cfg.structure_threshold)
     return CalibrationResult(
         problem=problem, config=cfg, iterations=sel.iterations, added=sel.added,
-        baseline_final=base_final, final=final, rmse=rmse, diag_before=d_before,
+        base_model_final=base_final, final=final, rmse=rmse, diag_before=d_before,
         diag_after=d_after, unexplained=d_after.structured,
         residual_signature=d_after.signature, elapsed_s=time.perf_counter() - t_start)
 
@@ -667,7 +667,7 @@ def _flag_implausible(res: CalibrationResult) -> None:
 
 
 def select_effects(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
-    """The selection loop on a problem: fit the baseline, add the library effect the
+    """The selection loop on a problem: fit the base model, add the library effect the
     residual needs while held-out evidence supports it, stop with a verdict.
 
     Parameters

@@ -176,8 +176,8 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
             "delta_bic_eff": cand.delta_bic_eff if cand else None,
             "ranges": _ranges_of(term, final),
         })
-    base_term = result.baseline_final.terms[0]
-    base_params = result.baseline_final.estimates_of(base_term.name)
+    base_term = result.base_model_final.terms[0]
+    base_params = result.base_model_final.estimates_of(base_term.name)
     final_base = final.estimates_of(base_term.name)
     meta = dict(p.meta)
     ripples = meta.pop("ripples", None)
@@ -188,7 +188,7 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
         "rmse_ratio": result.rmse_after / result.rmse_before if result.rmse_before else None,
         "rmse": result.rmse,
         "noise_floor": result.diag_after.noise_floor,
-        "baseline": {"name": base_term.name, "description": base_term.description,
+        "base_model": {"name": base_term.name, "description": base_term.description,
                      "params": {k: e.as_dict() for k, e in base_params.items()},
                      "params_in_final_model": {k: e.as_dict() for k, e in final_base.items()}},
         "effects_added": effects,
@@ -304,7 +304,7 @@ def param_rows(params: Mapping[str, Mapping[str, Any]]) -> list[str]:
     return rows
 
 
-def result_section(summary: Mapping[str, Any], baseline: str, extra: str) -> list[str]:
+def result_section(summary: Mapping[str, Any], base_model: str, extra: str) -> list[str]:
     """Markdown lines of a report's "Result" section (friction and strain reports).
 
     Parameters
@@ -313,7 +313,7 @@ def result_section(summary: Mapping[str, Any], baseline: str, extra: str) -> lis
         Summary with ``units``, ``rmse`` (fit / validation / test, before / after),
         ``rmse_before``, ``rmse_after``, ``effects_added``, ``unexplained`` and
         ``residual_signature``.
-    baseline : str
+    base model : str
         Name of the model before calibration, e.g. ``"paper law"``.
     extra : str
         Text right after the held-out RMSE and its unit, e.g. ``" (ratio 0.5)"``.
@@ -323,7 +323,7 @@ def result_section(summary: Mapping[str, Any], baseline: str, extra: str) -> lis
     list of str
     """
     s, u = summary, summary["units"]
-    lines = ["## Result", "", f"| | RMSE before ({baseline}) | RMSE after | after / before |",
+    lines = ["## Result", "", f"| | RMSE before ({base_model}) | RMSE after | after / before |",
              "|---|---|---|---|"]
     for k in ("fit", "validation", "test"):
         b, a = s["rmse"][k]["before"], s["rmse"][k]["after"]

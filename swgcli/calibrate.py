@@ -122,7 +122,7 @@ CalibrateApp.__doc__ = """``swgsim-calibrate``: calibrate the model against meas
 ``measured``: a friction CSV (kind 1) or a schema-v1 data-set directory (kind 2);
 ``out_dir``: created if absent; the keys of every kind's problem options with the
 library's defaults and ranges (friction: :class:`swgcal.friction.FrictionOptions`:
-``baseline``, ``gear_ratio``, ``accel_window``, ``split``); ``selection``:
+``base model``, ``gear_ratio``, ``accel_window``, ``split``); ``selection``:
 :class:`swgcal.SelectionConfig`; ``figures``; ``logger`` (MLflow).
 """
 
@@ -171,7 +171,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     ----------
     cfg : DictConfig
         Composed ``conf/calibrate.yaml``: ``measured`` (a friction CSV, kind 1, or a
-        schema-v1 strain data-set directory, kind 2), ``out_dir``, ``baseline``,
+        schema-v1 strain data-set directory, kind 2), ``out_dir``, ``base model``,
         ``gear_ratio``, ``accel_window``, ``split`` (friction only), ``selection``,
         ``figures``, ``logger``. Parses them, calls :func:`swgcal.build_problem`,
         :func:`swgcal.calibrate` and :func:`swgcal.write_outputs`,

@@ -3,20 +3,28 @@
 Reads a stream (a gear's life: a schema-v1 data set with ``hour`` and ``commissioning``,
 e.g. ``swgsim-generate dataset=tiny_life``) and a diagnosis model trained on simulated
 gears (``models/*.joblib`` of ``swgsim-train experiment=monitor``), checks that they fit
-before any work, builds the gear's baseline from its commissioning windows, runs the
+before any work, builds the gear's normal behaviour from its commissioning windows, runs the
 sequential rule (:mod:`learn.monitor`) and writes ``summary.json``, ``report.md``,
 ``health.png`` and an MLflow run. Config: ``conf/monitor.yaml``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
+from learn.monitor.rule import check_rule, threshold
+from learn.monitor.stream import monitor_stream, select_gear, write_outputs
+from learn.tracking import log_run
+from learn.tracking.store import check_tracking
 from swgcli.app import absolute_path, hydra_app
 from swgcli.schema import MonitorApp
+from swgsim.base.typed import check_range
+from swgsim.datasets.schema import load
+from swgsim.files import ownership
 
 log = logging.getLogger(__name__)
 
@@ -56,15 +64,17 @@ def run_monitor_app(cfg) -> dict:
     Raises
     ------
     ValueError
-        ``out_dir`` holds a file this project cannot show it wrote (named; before any
-        work, :func:`swgsim.files.ownership.check`), or the model or stream is unfit.
+        Before any work: a rule option or ``confirm_h`` out of range
+        (:func:`learn.monitor.rule.check_rule`), an unwritable MLflow store, ``out_dir``
+        holding a file this project cannot show it wrote (named,
+        :func:`swgsim.files.ownership.check`), or a model or stream that is unfit.
     """
-    from learn.monitor.rule import threshold
-    from learn.monitor.stream import monitor_stream, select_gear, write_outputs
-    from swgsim.datasets.schema import load
-    from swgsim.files import ownership
-
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
+    check_rule(app.rule, "rule")
+    check_range(app.confirm_h, 0.0, 1000.0, "confirm_h", "h", lo_open=True,
+                why="hours after an alarm whose windows name the fault")
+    if app.logger is not None:
+        check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(absolute_path(app.out_dir))
     ownership.check(out, "out_dir")  # before any work: nothing in it but our files
     model = load_model(absolute_path(app.diagnosis_model))
@@ -77,19 +87,15 @@ def run_monitor_app(cfg) -> dict:
         files = write_outputs(res, out, threshold(app.rule, interval), str(src))
         claim.record(files.values())
     if app.logger is not None:
-        import mlflow
-
-        from learn.tracking.store import check_tracking, use_tracking
-
-        check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
-        use_tracking(app.logger.tracking_uri, "logger.tracking_uri")  # one opener at a time
-        mlflow.set_experiment(app.logger.experiment)
-        with mlflow.start_run(run_name=app.logger.run_name):
-            mlflow.log_params({"stream": str(src), "diagnosis_model": app.diagnosis_model,
-                               "design_hours": app.rule.design_hours})
-            mlflow.log_metric("alarms", len(res.alarms))
+        params = {"stream": str(src), "diagnosis_model": app.diagnosis_model,
+                  "gear": app.gear, "rule": dataclasses.asdict(app.rule),
+                  "confirm_h": app.confirm_h}
+        with log_run(app.logger.experiment, app.logger.run_name,
+                     tracking_uri=app.logger.tracking_uri, params=params,
+                     config=dataclasses.asdict(app), dataset=src) as run:
+            run.log_metrics({"alarms": len(res.alarms)})
             for f in files.values():
-                mlflow.log_artifact(str(f))
+                run.log_artifact(f)
     return {"alarms": [a.as_dict() for a in res.alarms],
             "files": {k: str(v) for k, v in files.items()}}
 

@@ -1,6 +1,6 @@
-"""swgsim-paper: the main job — the paper's study under two recordings, end to end.
+"""swgsim-paper: the main job — the paper's study under two acquisitions, end to end.
 
-For each data set in ``run_on`` (default: the paper's recording, phase-locked and
+For each data set in ``run_on`` (default: the paper's acquisition, phase-locked and
 noise-free windows, and a real bench's): (1) generate ``<data_root>/<name>`` (shards
 already there and valid are skipped; a data set of another config there is replaced only
 if every file in the folder is provably this project's, :mod:`swgsim.files.ownership`), (2) the
@@ -109,7 +109,7 @@ def _print_end(cfg: DictConfig, names: list[str], summary: dict, root_data: str,
     print("\n".join(format_scorecard(summary["scorecards"])))
     for n in names:
         f = summary["findings"][n]
-        print(f"qualitative findings of Sec. IV reproduced, {n} recording: "
+        print(f"qualitative findings of Sec. IV reproduced, {n} acquisition: "
               f"{int((f['reproduced'] == True).sum())} of {int(f['reproduced'].notna().sum())}")  # noqa: E712
     print("\nwritten:")
     for n in names:

@@ -15,7 +15,7 @@ source, not written twice as YAML:
 group          source
 =============  =====================================================================
 ``protocol``   :data:`learn.studies.protocols.PROTOCOLS` (the paper's four protocols)
-``model``      :data:`learn.learners.baselines.MODELS` (Table VI); deep models stay YAML
+``model``      :data:`learn.learners.models.MODELS` (Table VI); deep models stay YAML
 ``features``   :data:`learn.inputs.features.SELECTIONS` (Table III selections)
 ``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.studies.tables.PAPER_TABLES`
 ``dataset``    :class:`swgsim.datasets.config.DatasetConfig` (the paper preset is its defaults)
@@ -37,7 +37,7 @@ from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions
 from learn.studies.transfer import TransferConfig
-from learn.tasks.monitor import MonitorExperiment
+from learn.tasks.monitor_evaluation import MonitorExperiment
 from learn.tracking.config import LoggerConfig
 from swgsim.base.typed import allowed, check_keys
 from swgsim.datasets.config import DatasetConfig
@@ -157,17 +157,39 @@ class TrainApp:
 
 #: Keys and groups renamed, per app: old name -> the new one and why. An override that
 #: uses an old name is refused naming the new one (:func:`check_renamed`).
+_STUDY_RENAMED = {
+    "study.baselines": "study.detectors (the per-window detectors beside the monitor; "
+                       "'baseline' named three things)",
+    "study.baseline_hours": "study.detector_hours",
+    "rule.min_baseline": "rule.min_normal_windows (windows per operating point that fit the "
+                         "gear's normal behaviour)",
+}
+_FRICTION_RENAMED = {
+    "friction_effects.baseline": "friction_effects.base_model (the calibration's paper-law "
+                                 "parameters)",
+}
+#: Keys renamed, per app: old dotted key (matched at any depth, e.g. ``monitor.study.
+#: baselines``) -> the new key and why. Refused in one line naming the new key.
 RENAMED: dict[str, dict[str, str]] = {
     "train": {"data": "stored (a data set already on disk, to read; the group 'dataset' "
-                       "is the config of a data set to simulate)"},
+                      "is the config of a data set to simulate)",
+              **_STUDY_RENAMED, **_FRICTION_RENAMED},
     "paper": {"protocols": "run_on (the data sets to run, keys of datasets; 'protocol' "
                            "names only an evaluation protocol, a data set's way of "
-                           "recording is its recording)"},
+                           "acquisition is its acquisition)", **_FRICTION_RENAMED},
+    "generate": dict(_FRICTION_RENAMED),
+    "observability": dict(_FRICTION_RENAMED),
+    "export": dict(_FRICTION_RENAMED),
+    "monitor": {"rule.min_baseline": _STUDY_RENAMED["rule.min_baseline"]},
+    "calibrate": {"baseline": "base_model (the paper-law model the calibration starts from)"},
 }
 
 
 def check_renamed(overrides: list[str], app: str) -> None:
     """Refuse command-line overrides that use a key or group renamed in ``app``.
+
+    An old key matches an override's key whole, or a whole run of its dotted parts
+    (``monitor.study.baselines=...`` matches ``study.baselines``).
 
     Raises
     ------
@@ -176,14 +198,19 @@ def check_renamed(overrides: list[str], app: str) -> None:
     """
     renamed = RENAMED.get(app, {})
     for o in overrides:
-        top = o.lstrip("+~").split("=", 1)[0].split(".", 1)[0].split("@", 1)[0]
-        if top in renamed:
-            raise ValueError(f"{top}: renamed {renamed[top]}")
+        key = o.lstrip("+~").split("=", 1)[0].split("@", 1)[0]
+        parts = key.split(".")
+        for old, new in renamed.items():
+            n = len(old.split("."))
+            runs = [".".join(parts[i:i + n]) for i in range(len(parts) - n + 1)]
+            if old in runs:
+                raise ValueError(f"{key.split(old)[0]}{old}: renamed "
+                                 f"{key.split(old)[0]}{new}")
 
 
 def register() -> None:
     """Register the schemas and the generated config groups in Hydra's ConfigStore."""
-    from learn.learners.baselines import MODELS, model_config
+    from learn.learners.models import MODELS, model_config
     from learn.studies.tables import PAPER_TABLES
 
     cs = ConfigStore.instance()

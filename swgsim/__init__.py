@@ -1,7 +1,7 @@
 """swgsim: simulation chain of a strain wave gear with strain gauges on the flexspline.
 
 Dynamic input/output model (paper eq. 1-6), the flexspline as a space truss, strain-gauge
-bridges in mV/V, the paper's five faults, data-set recordings and generation (the
+bridges in mV/V, the paper's five faults, data-set acquisitions and generation (the
 calibration loop against measured data is the separate package :mod:`swgcal`). See
 ``docs/ARCHITECTURE.md`` for the data flow.
 

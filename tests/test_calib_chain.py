@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from swgcal.friction.synthetic import (
-    BASELINE_TRUTH,
+    BASE_MODEL_TRUTH,
     PLANTED,
     V_SMOOTH,
     synthetic_recording,
@@ -25,7 +25,7 @@ def test_effect_torque_reproduces_planted_data(kind):
     spec = [{"kind": kind, "params": PLANTED[kind]["params"]}]
     rec, truth = synthetic_recording(spec, rng=np.random.default_rng(0), duration_s=10)
     _, base = synthetic_recording([], rng=np.random.default_rng(0), duration_s=10)
-    fx = FrictionEffects(truth.effects, v_s=V_SMOOTH, baseline=BASELINE_TRUTH, t0=0.0)
+    fx = FrictionEffects(truth.effects, v_s=V_SMOOTH, base_model=BASE_MODEL_TRUTH, t0=0.0)
     extra = fx(rec.t_s, rec.q_rad, rec.dq_rad_s, rec.ddq_rad_s2)
     # same seed, same trajectory: the extra torque is the difference of the clean torques
     np.testing.assert_allclose(base.tau_clean + extra, truth.tau_clean, atol=1e-9)
@@ -35,7 +35,7 @@ def test_pointwise_torque_with_integrated_states_matches_trajectory():
     spec = [{"kind": "presliding", "params": {"f_d": 0.15, "q_c": 0.004}},
             {"kind": "velocity_lag", "params": {"t_lag": 0.04}},
             {"kind": "stribeck", "params": {"f_s": 0.1, "v_st": 0.03}}]
-    fx = FrictionEffects(spec, v_s=V_SMOOTH, baseline=BASELINE_TRUTH)
+    fx = FrictionEffects(spec, v_s=V_SMOOTH, base_model=BASE_MODEL_TRUTH)
     assert fx.n_states == 2
     t, q, dq, ddq = synthetic_trajectory(duration_s=10, dt_s=0.001, jitter=0.0)
     ref = fx(t, q, dq, ddq)
@@ -61,7 +61,7 @@ def test_spec_errors_are_clear():
         parse_effects([{"kind": "stribeck", "params": {"f_s": 1.0, "v_st": -1.0}}])
     with pytest.raises(KeyError, match="needs options"):
         parse_effects([{"kind": "gravity_residual", "params": {"c2": 0.1, "c3": 0.0}}])
-    with pytest.raises(ValueError, match="baseline"):
+    with pytest.raises(ValueError, match="base_model"):
         FrictionEffects([{"kind": "velocity_lag", "params": {"t_lag": 0.1}}], v_s=0.01)
 
 
@@ -70,6 +70,6 @@ def test_config_group_options_instantiate():
     assert files
     for f in files:
         c = yaml.safe_load(f.read_text())
-        fx = FrictionEffects(c["effects"], v_s=c["v_s"], baseline=c["baseline"], t0=c["t0_s"])
+        fx = FrictionEffects(c["effects"], v_s=c["v_s"], base_model=c["base_model"], t0=c["t0_s"])
         t, q, dq, ddq = synthetic_trajectory(duration_s=1)
         assert np.all(np.isfinite(fx(t, q, dq, ddq)))

@@ -66,7 +66,7 @@ def test_csv_round_trip_and_estimated_acceleration(tmp_path, planted_csv):
 def test_run_calibrate_end_to_end(tmp_path, planted_csv, tracking_uri):
     path, truth = planted_csv
     out = tmp_path / "out"
-    cfg = _cfg([f"measured={path}", f"out_dir={out}", f"baseline.v_s={truth.v_s}",
+    cfg = _cfg([f"measured={path}", f"out_dir={out}", f"base_model.v_s={truth.v_s}",
                 f"logger.tracking_uri={tracking_uri}", "logger.experiment=test-calibration"])
     res = run_calibrate(cfg)
     summary = json.loads((out / "summary.json").read_text())
@@ -84,7 +84,7 @@ def test_run_calibrate_end_to_end(tmp_path, planted_csv, tracking_uri):
         assert (out / "figures" / f"{k}.png").stat().st_size > 10_000
     # the accepted effects as a simulation option
     fx_cfg = yaml.safe_load((out / "friction_effects.yaml").read_text())
-    fx = FrictionEffects(fx_cfg["effects"], v_s=fx_cfg["v_s"], baseline=fx_cfg["baseline"],
+    fx = FrictionEffects(fx_cfg["effects"], v_s=fx_cfg["v_s"], base_model=fx_cfg["base_model"],
                          t0=fx_cfg["t0_s"])
     rec = load_friction_csv(path)
     assert np.ptp(fx(rec.t_s, rec.q_rad, rec.dq_rad_s, rec.ddq_rad_s2)) > 0.1
@@ -143,7 +143,7 @@ def test_gear_ratio_option_is_checked_and_reaches_the_summary(tmp_path, planted_
         run_calibrate(cfg)
     out = tmp_path / "ok"
     cfg = _cfg([f"measured={path}", f"out_dir={out}", "logger.enabled=false", "figures=false",
-                f"baseline.v_s={truth.v_s}", "gear_ratio=100",
+                f"base_model.v_s={truth.v_s}", "gear_ratio=100",
                 "selection.candidates=[stribeck,position_ripple]"])
     run_calibrate(cfg)
     summary = json.loads((out / "summary.json").read_text())

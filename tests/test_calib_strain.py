@@ -169,7 +169,7 @@ def test_clean_data_get_no_effect(bench):
     assert s["effects_added"] == []
     assert not s["unexplained"]
     assert s["rmse_after"] < 1.2 * truth["sigma"]
-    base = s["baseline"]["params"]
+    base = s["base_model"]["params"]
     assert base["w0_mm"]["value"] == pytest.approx(0.254, rel=0.01)
     assert base["gauge_gain"]["value"] == pytest.approx(1.0, abs=0.01)
 

@@ -10,7 +10,7 @@ import pytest
 from sklearn.base import BaseEstimator, ClassifierMixin
 
 from learn import ModelSpec, StudyOptions, register_model, run_paper_study
-from learn.learners import baselines
+from learn.learners import models as model_registry
 
 
 class CentroidClassifier(ClassifierMixin, BaseEstimator):
@@ -32,8 +32,8 @@ class CentroidClassifier(ClassifierMixin, BaseEstimator):
 @pytest.fixture
 def registered(monkeypatch):
     """Register the classifier in copies of the registries (undone after the test)."""
-    monkeypatch.setattr(baselines, "MODELS", dict(baselines.MODELS))
-    monkeypatch.setattr(baselines, "MODEL_LABELS", dict(baselines.MODEL_LABELS))
+    monkeypatch.setattr(model_registry, "MODELS", dict(model_registry.MODELS))
+    monkeypatch.setattr(model_registry, "MODEL_LABELS", dict(model_registry.MODEL_LABELS))
     return register_model(ModelSpec("centroid", CentroidClassifier, label="Centroid"))
 
 

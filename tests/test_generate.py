@@ -327,7 +327,7 @@ def test_friction_effects_reach_the_data(tiny_set, tmp_path):
     """Accepted friction effects (calibration output) are an option of the generator."""
     out_ref, _ = tiny_set
     cfg = tiny_cfg()
-    cfg["friction_effects"] = {"v_s": 1e-3, "t0_s": 0.0, "baseline": None, "effects": [
+    cfg["friction_effects"] = {"v_s": 1e-3, "t0_s": 0.0, "base_model": None, "effects": [
         {"kind": "asymmetric_coulomb", "params": {"delta_c": -0.5}}]}
     s = gen.generate(cfg, tmp_path / "fr", n_jobs=1, progress=False)
     a, b = dsio.load(out_ref), dsio.load(s["out_dir"])

@@ -1,4 +1,4 @@
-"""Every option of the train config composes and instantiates (conf/, learn.learners.baselines)."""
+"""Every option of the train config composes and instantiates (conf/, learn.learners.models)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from omegaconf import OmegaConf
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
-from learn.learners.baselines import PAPER_MODELS, make_model
+from learn.learners.models import PAPER_MODELS, make_model
 from learn.studies.protocols import PROTOCOLS
 from swgcli import CONF_DIR, compose_app
 
@@ -26,7 +26,7 @@ def _options(group: str) -> list[str]:
     """Options of a config group: YAML files in conf/ and nodes generated in Python."""
     import swgcli.schema  # noqa: F401  (registers the generated groups)
 
-    stored = [n.removesuffix(".yaml") for n in ConfigStore.instance().list(group)] \
+    stored = [n.removesuffix(".yaml") for n in ConfigStore.instance().list(group)]\
         if group in ConfigStore.instance().repo else []
     return sorted({*(p.stem for p in (CONF / group).glob("*.yaml")), *stored})
 

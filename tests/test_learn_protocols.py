@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from learn.inputs.features import extract_features
-from learn.learners.baselines import make_model
+from learn.learners.models import make_model
 from learn.studies.protocols import PROTOCOLS, evaluate, make_splits, protocol_splits
 
 

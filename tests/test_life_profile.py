@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from learn.monitor.evaluate import has_twist, life_features
 from learn.monitor.features import TWIST_FEATURES, feature_names
+from learn.monitor.training import has_twist, life_features
 from swgcli import dataset_preset
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.life import LifeSimulator, life_dataset

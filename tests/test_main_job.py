@@ -1,4 +1,4 @@
-"""The main job (swgsim-paper): both recordings, reports, summary, safe data folders."""
+"""The main job (swgsim-paper): both acquisitions, reports, summary, safe data folders."""
 
 import pandas as pd
 import pytest

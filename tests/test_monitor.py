@@ -7,7 +7,7 @@ import types
 import numpy as np
 import pytest
 
-from learn.monitor.monitor import check_commissioning, run_cusums
+from learn.monitor.gear_monitor import check_commissioning, run_cusums
 from learn.monitor.rule import (
     RuleConfig,
     conformal_p,
@@ -107,19 +107,22 @@ def test_stream_outside_the_models_operating_points_refused():
         check_stream(_stream(), m, RuleConfig(), "s")
 
 
+TINY_STUDY = dict(seeds=[0], healthy_hours=10.0, commissioning_h=4.0, horizon_h=2.0,
+                  onset_window_h=[0.5, 1.0], growth_h=0.5, train_fault_h=0.5,
+                  train_healthy_h=2.0, train_variants=2,
+                  faults=["eccentric_wg", "sensor_offset_step"], gears=[3], detector_hours=2.0)
+
+
 @pytest.fixture(scope="module")
 def tiny_eval():
-    from learn.monitor.evaluate import MonitorStudyConfig, run_held_out
+    """The monitor's part of held-out gear 3 of tiny_bench (the diagnosis model with it)."""
+    from learn.monitor.evaluate import run_held_out
+    from learn.monitor.study import MonitorStudyConfig
     from swgcli import dataset_preset
     from swgsim.datasets.plan import plan
 
-    p = plan(dataset_preset("tiny_bench"))
-    cfg = MonitorStudyConfig(seeds=[0], healthy_hours=10.0, commissioning_h=4.0,
-                             horizon_h=2.0, onset_window_h=[0.5, 1.0], growth_h=0.5,
-                             train_fault_h=0.5, train_healthy_h=2.0, train_variants=2,
-                             faults=["eccentric_wg", "sensor_offset_step"], gears=[3],
-                             baseline_hours=2.0)
-    return run_held_out(p, "tiny_bench", 3, cfg)
+    return run_held_out(plan(dataset_preset("tiny_bench")), "tiny_bench", 3,
+                        MonitorStudyConfig(**TINY_STUDY))
 
 
 def test_planted_step_fault_detected_and_named(tiny_eval):
@@ -138,20 +141,30 @@ def test_planted_step_fault_detected_and_named(tiny_eval):
     assert fa.loc["always", "false_alarms"] == 360
 
 
-def test_per_window_baselines_beside_the_monitor(tiny_eval):
-    """The paper's pipeline and the CNN run as monitors on the same lives: one row per
-    life and detector; their false alarms counted over baseline_hours (2 h: 120 windows)."""
+def test_per_window_detectors_beside_the_monitor(tiny_eval):
+    """The paper's pipeline and the CNN run as monitors on the monitor's lives, each a part
+    of its own: one row per life and detector, the same lives as the monitor's; their false
+    alarms counted over detector_hours (2 h: 120 windows)."""
     import pandas as pd
 
-    from learn.monitor.evaluate import DETECTORS
+    from learn.monitor.evaluate import COMPARED, run_detectors
+    from learn.monitor.study import MonitorStudyConfig
+    from swgcli import dataset_preset
+    from swgsim.datasets.plan import plan
 
     res = pd.DataFrame(tiny_eval["rows"])
-    per_life = res.groupby(["fault", "severity", "onset"]).detector.apply(tuple)
-    assert all(t == DETECTORS for t in per_life)
-    fa = pd.DataFrame(tiny_eval["false_alarms"]).set_index("detector")
-    for b in ("paper_rf", "cnn_res"):
-        assert fa.loc[b, "healthy_hours"] == 2.0 and 0 <= fa.loc[b, "false_alarms"] <= 120
-        det = res[(res.detector == b) & res.detected.astype(bool)]
+    lives = res.groupby(["fault", "severity", "onset"]).detector.apply(tuple)
+    assert all(t == COMPARED for t in lives)
+    parts = run_detectors(plan(dataset_preset("tiny_bench")), "tiny_bench", 3,
+                          MonitorStudyConfig(**TINY_STUDY), ["paper_rf", "cnn_res"])
+    assert [p["detector"] for p in parts] == ["paper_rf", "cnn_res"]
+    for part in parts:
+        rows = pd.DataFrame(part["rows"])
+        assert sorted(map(tuple, rows[["fault", "severity", "onset"]].values)) == sorted(
+            lives.index)
+        (fa,) = part["false_alarms"]
+        assert fa["healthy_hours"] == 2.0 and 0 <= fa["false_alarms"] <= 120
+        det = rows[rows.detected.astype(bool)]
         assert (det.fault_at_alarm != "healthy").all()
         assert (det.time_to_detect_h >= 0).all()
 
@@ -204,9 +217,9 @@ def test_compiled_trees_equal_scikit_learn(tiny_eval):
 def test_one_window_at_a_time_equals_the_block_path(tiny_eval):
     """GearMonitor.step, window by window, gives run()'s scores, p-values, CUSUMs and
     alarms (a CUSUM pushed over h by a shifted stretch: one alarm, then a restart)."""
-    from learn.monitor.evaluate import features_of
-    from learn.monitor.monitor import GearMonitor
+    from learn.monitor.gear_monitor import GearMonitor
     from learn.monitor.rule import RuleConfig
+    from learn.monitor.training import features_of
     from swgcli import dataset_preset
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.plan import plan
@@ -270,8 +283,8 @@ def test_one_bridge_fits_recover_planted_sensor_faults():
 def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval):
     """An offset step on s1 alone (whose eccentric WG moves s1 and s3 oppositely) is named
     a sensor fault on s1; an eccentric WG is not explained by one bridge."""
-    from learn.monitor.evaluate import features_of
-    from learn.monitor.monitor import GearMonitor
+    from learn.monitor.gear_monitor import GearMonitor
+    from learn.monitor.training import features_of
     from swgcli import dataset_preset
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.plan import plan
@@ -287,7 +300,7 @@ def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval):
         f, pts, _ = features_of(sim, 0, len(sim))
         mon.commission(f[:240], pts[:240])
         _, lp = mon.scores(f[240:], pts[240:])
-        named[fo.fault] = mon.name(mon.evidence(lp, mon.baseline.index(pts[240:])),
+        named[fo.fault] = mon.name(mon.evidence(lp, mon.normal.index(pts[240:])),
                                    f[240:], pts[240:])
     assert named == {"sensor_offset_step": ("sensor_offset_step", 1),
                      "eccentric_wg": ("eccentric_wg", None)}

@@ -52,7 +52,7 @@ def _inputs(client, run_id):
 def test_run_carries_commit_dataset_config_and_model(tiny_dataset, tracking_uri, tmp_path):
     import mlflow
 
-    from learn.learners.baselines import make_model
+    from learn.learners.models import make_model
 
     X, y = _xy()
     model = make_model("rf", random_state=0).set_params(rf__n_estimators=20).fit(X, y)
@@ -151,7 +151,7 @@ def test_own_estimators_are_logged_in_cloudpickle_quietly(kind, tracking_uri, ca
     mlflow.sklearn, and MLflow's per-model pickle warning stays off the console."""
     import mlflow
 
-    from learn.learners.baselines import make_pipeline
+    from learn.learners.models import make_pipeline
 
     if kind == "mlp_torch":
         from learn.learners.nets import MLPClassifierTorch

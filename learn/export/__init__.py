@@ -3,7 +3,7 @@
 One concern per module:
 
 * :mod:`.reference` - the stage's arithmetic in Python (float32, op for op as the C);
-* :mod:`.data` - simulated gear lives through it, each gear's baseline;
+* :mod:`.data` - simulated gear lives through it, each gear's normal behaviour;
 * :mod:`.forest` - the exported classifier (random forest, emlearn) and its refusals;
 * :mod:`.ctemplates`, :mod:`.cgen` - the C sources and tables;
 * :mod:`.host` - the C compiled for the host and run on windows;

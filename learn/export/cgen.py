@@ -1,5 +1,5 @@
 """C files of the embedded stage: ``swg_monitor.h``, ``swg_monitor.c``, ``swg_tables.h``
-(constants: normal equations, baseline, operating points), ``swg_model.h`` (the forest,
+(constants: normal equations, normal behaviour, operating points), ``swg_model.h`` (the forest,
 emlearn) and emlearn's headers it needs (``eml_trees.h``, ``eml_common.h``,
 ``eml_log.h``, MIT licence, copied from the installed emlearn)."""
 
@@ -75,7 +75,7 @@ def tables_header(t: ref.StageTables, class_names: list[str]) -> str:
              _array("SWG_OP_POINTS", "const float", "[SWG_N_OPS][2]", t.points, c_float),
              "const char *const SWG_CLASS_NAMES[SWG_N_CLASSES] = {"
              + ", ".join(f'"{c}"' for c in class_names) + "};\n",
-             "const swg_baseline_t SWG_BASELINE = {\n", _braced(t.mean, c_float), ",\n",
+             "const swg_normal_t SWG_NORMAL = {\n", _braced(t.mean, c_float), ",\n",
              _braced(t.inv_std, c_float), "\n};\n#endif /* SWG_TABLES_H */\n"]
     return "".join(parts)
 

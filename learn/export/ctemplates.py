@@ -8,7 +8,7 @@ No dynamic allocation: the window state is a caller-owned struct (static or on t
 
 HEADER = r"""/* swg_monitor.h - the condition monitor's per-window stage (swgsim-export).
  *
- * Data set {dataset}, gear {gear} (its commissioning baseline), classifier trained on
+ * Data set {dataset}, gear {gear} (its normal behaviour at commissioning), classifier trained on
  * gears {train_gears}. Generated code: do not edit; re-export instead.
  *
  * Interface
@@ -34,8 +34,8 @@ HEADER = r"""/* swg_monitor.h - the condition monitor's per-window stage (swgsim
  * returns   the class index (SWG_CLASS_NAMES), or a negative SWG_ERR_* code.
  *
  * Memory: swg_state_t (SWG_STATE_BYTES) and about 1 kB of stack in swg_end; constant
- * tables in flash (normal equations per speed, the baseline per operating point, the
- * forest). The baseline (mean, 1/std of every feature per operating point) is the gear's
+ * tables in flash (normal equations per speed, the normal behaviour per operating point, the
+ * forest). The normal behaviour (mean, 1/std of every feature per operating point) is the gear's
  * own, set at commissioning: swg_end_with() takes it from RAM instead (e.g. computed on
  * the device or written to a flash page after commissioning).
  */
@@ -66,7 +66,7 @@ extern "C" {{
 #define SWG_ERR_LENGTH (-2)   /* the window did not hold SWG_N_T samples */
 #define SWG_ERR_OP (-3)       /* op outside 0..SWG_N_OPS-1 */
 
-/* Operating points (desired input speed [rpm], output torque [N m]) of the baseline. */
+/* Operating points (desired input speed [rpm], output torque [N m]) of the normal behaviour. */
 extern const float SWG_OP_POINTS[SWG_N_OPS][2];
 /* Class names, index = swg_end's return value; 0 is healthy. */
 extern const char *const SWG_CLASS_NAMES[SWG_N_CLASSES];
@@ -84,19 +84,19 @@ typedef struct {{
 
 #define SWG_STATE_BYTES ((int)sizeof(swg_state_t))
 
-/* The gear's baseline: mean and 1 / standard deviation per operating point and feature. */
+/* The gear's normal behaviour: mean and 1 / standard deviation per operating point and feature. */
 typedef struct {{
     float mean[SWG_N_OPS][SWG_N_FEATURES];
     float inv_std[SWG_N_OPS][SWG_N_FEATURES];
-}} swg_baseline_t;
+}} swg_normal_t;
 
-extern const swg_baseline_t SWG_BASELINE;   /* gear {gear}'s, in flash */
+extern const swg_normal_t SWG_NORMAL;   /* gear {gear}'s, in flash */
 
 void swg_begin(swg_state_t *st);
 void swg_push(swg_state_t *st, const float x[SWG_N_BRIDGES], float phi_rad);
 int32_t swg_end(swg_state_t *st, int32_t op, float efficiency, float *features,
                 float *p_healthy);
-int32_t swg_end_with(swg_state_t *st, const swg_baseline_t *baseline, int32_t op,
+int32_t swg_end_with(swg_state_t *st, const swg_normal_t *normal, int32_t op,
                      float efficiency, float *features, float *p_healthy);
 /* Row of SWG_OP_POINTS of (rpm, N m), or SWG_ERR_OP. */
 int32_t swg_op_index(float n_in_rpm, float t_out_nm);
@@ -326,7 +326,7 @@ static void bridge_features(const float *tot, float x0, const float *ginv, const
     f[H + 1] = log10_32(sqrtf(ms) + SWG_REST_FLOOR);
 }}
 
-int32_t swg_end_with(swg_state_t *st, const swg_baseline_t *baseline, int32_t op,
+int32_t swg_end_with(swg_state_t *st, const swg_normal_t *normal, int32_t op,
                      float efficiency, float *features, float *p_healthy)
 {{
     float f[SWG_N_FEATURES];
@@ -350,7 +350,7 @@ int32_t swg_end_with(swg_state_t *st, const swg_baseline_t *baseline, int32_t op
     }}
     f[SWG_N_FEATURES - 1] = efficiency;
     for (k = 0; k < SWG_N_FEATURES; k++) {{
-        const float z = (f[k] - baseline->mean[op][k]) * baseline->inv_std[op][k];
+        const float z = (f[k] - normal->mean[op][k]) * normal->inv_std[op][k];
         float v = floor32(z * SWG_Z_SCALE + 0.5f);
         if (v > 32767.0f) {{
             v = 32767.0f;
@@ -380,7 +380,7 @@ int32_t swg_end_with(swg_state_t *st, const swg_baseline_t *baseline, int32_t op
 int32_t swg_end(swg_state_t *st, int32_t op, float efficiency, float *features,
                 float *p_healthy)
 {{
-    return swg_end_with(st, &SWG_BASELINE, op, efficiency, features, p_healthy);
+    return swg_end_with(st, &SWG_NORMAL, op, efficiency, features, p_healthy);
 }}
 
 int32_t swg_op_index(float n_in_rpm, float t_out_nm)

@@ -2,8 +2,8 @@
 
 Each gear lives as the monitor's training lives (:func:`learn.monitor.evaluate.
 training_lives`: a healthy life with its commissioning, then one life per class, severity
-and fault position or bridge); its baseline comes from its own commissioning windows
-(every other one per operating point, :func:`learn.monitor.monitor.baseline_windows`, as
+and fault position or bridge); its normal behaviour comes from its own commissioning windows
+(every other one per operating point, :func:`learn.monitor.gear_monitor.normal_windows`, as
 the monitor builds it), and its labelled windows are the healthy ones after
 commissioning and each fault life's after its first (as ``train_model``). The lives are
 steady, so each window's input angle is the nominal one, φ = 2π n t / 60 at its desired
@@ -16,9 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.monitor.evaluate import MonitorStudyConfig, classes, training_lives
+from learn.monitor.gear_monitor import normal_windows
 from learn.monitor.model import HEALTHY
-from learn.monitor.monitor import baseline_windows
+from learn.monitor.study import MonitorStudyConfig
+from learn.monitor.training import classes, training_lives
 from swgsim.datasets.life import BLOCK
 from swgsim.datasets.records import RecordBank
 
@@ -40,12 +41,12 @@ class GearWindows:
         Class index (0: healthy).
     efficiency : ndarray, float32, shape (n,)
     mean, inv_std : ndarray, float32, shape (K, F)
-        The gear's baseline from its commissioning windows.
+        The gear's normal behaviour from its commissioning windows.
     feats64 : ndarray, shape (n, F)
         The monitor's own least-squares features of the same windows
         (:func:`learn.monitor.features.window_features`).
     mean64, inv_std64 : ndarray, shape (K, F)
-        The gear's baseline of ``feats64``.
+        The gear's normal behaviour of ``feats64``.
     signals : ndarray, float32, shape (n, 5, n_t) or None
         The windows' bridge outputs [mV/V], kept when asked (for the C's check).
     """
@@ -64,7 +65,7 @@ class GearWindows:
 
 
 def base_tables(plan, n_harmonics: int = ref.N_HARMONICS) -> ref.StageTables:
-    """The stage's tables of a data set without a baseline (mean 0, 1 / std 1): window
+    """The stage's tables of a data set without a normal behaviour (mean 0, 1 / std 1): window
     length, normal equations per speed, operating points and their classifier inputs.
 
     Raises
@@ -131,14 +132,14 @@ def life_windows(sim, start: int, stop: int, tables: ref.StageTables, keep: bool
             np.concatenate(sigs) if keep else None, np.concatenate(f64))
 
 
-def baseline32(feats: np.ndarray, op: np.ndarray, n_ops: int) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and 1 / std (ddof 1, std at least 1e-12, as learn.monitor.model.Baseline) of
-    each operating point's baseline windows, float32, each shape (K, F).
+def normal32(feats: np.ndarray, op: np.ndarray, n_ops: int) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and 1 / std (ddof 1, std at least 1e-12, as learn.monitor.model.NormalBehaviour) of
+    each operating point's normal-behaviour windows, float32, each shape (K, F).
 
     Raises
     ------
     ValueError
-        If an operating point has fewer than two baseline windows.
+        If an operating point has fewer than two normal-behaviour windows.
     """
     mean = np.zeros((n_ops, feats.shape[1]))
     std = np.ones_like(mean)
@@ -146,23 +147,23 @@ def baseline32(feats: np.ndarray, op: np.ndarray, n_ops: int) -> tuple[np.ndarra
         f = feats[op == k].astype(float)
         if len(f) < 2:
             raise ValueError(f"operating point {k} has {len(f)} commissioning windows for "
-                             "the baseline; at least 2 needed (raise commissioning_h)")
+                             "the normal behaviour; at least 2 needed (raise commissioning_h)")
         mean[k], std[k] = f.mean(axis=0), np.maximum(f.std(axis=0, ddof=1), 1e-12)
     return mean.astype(np.float32), (1.0 / std).astype(np.float32)
 
 
 def gear_windows(plan, g: int, cfg: MonitorStudyConfig, tables: ref.StageTables,
                  keep: bool = False) -> GearWindows:
-    """One gear's baseline and labelled windows (module docstring)."""
+    """One gear's normal behaviour and labelled windows (module docstring)."""
     cls = classes(plan, cfg)
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     lives = training_lives(plan, RecordBank(plan, g), g, cfg)
     healthy = lives[0][0]
     f0, op0, e0, s0, g0 = life_windows(healthy, 0, len(healthy), tables, keep)
-    fit = baseline_windows(tables.points[op0[:n_comm]])
+    fit = normal_windows(tables.points[op0[:n_comm]])
     k = len(tables.points)
-    mean, inv_std = baseline32(f0[:n_comm][fit], op0[:n_comm][fit], k)
-    mean64, inv_std64 = baseline32(g0[:n_comm][fit], op0[:n_comm][fit], k)
+    mean, inv_std = normal32(f0[:n_comm][fit], op0[:n_comm][fit], k)
+    mean64, inv_std64 = normal32(g0[:n_comm][fit], op0[:n_comm][fit], k)
     parts = [(f0[n_comm:], op0[n_comm:], e0[n_comm:], None if s0 is None else s0[n_comm:],
               g0[n_comm:], HEALTHY)]
     for sim, c, _ in lives[1:]:
@@ -177,8 +178,8 @@ def gear_windows(plan, g: int, cfg: MonitorStudyConfig, tables: ref.StageTables,
         signals=np.concatenate([p[3] for p in parts]) if keep else None)
 
 
-def with_baseline(tables: ref.StageTables, gw: GearWindows) -> ref.StageTables:
-    """``tables`` with gear ``gw``'s baseline."""
+def with_normal(tables: ref.StageTables, gw: GearWindows) -> ref.StageTables:
+    """``tables`` with gear ``gw``'s normal behaviour."""
     import dataclasses
 
     return dataclasses.replace(tables, mean=gw.mean, inv_std=gw.inv_std)

@@ -2,7 +2,7 @@
 
 Steps (:func:`run_export`): the training gears' windows through the stage's Python
 reference (:mod:`.data`), a random forest on them sized by the flash budget
-(:mod:`.forest`); the held-out gear's baseline from its commissioning and its labelled
+(:mod:`.forest`); the held-out gear's normal behaviour from its commissioning and its labelled
 windows; the C files (:mod:`.cgen`); the C compiled for the host and run on every
 held-out window (:mod:`.host`: classes against the Python pipeline's, features against
 the reference's); with the cross tools, flash, RAM and cycles on a Cortex-M4F
@@ -22,12 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from learn.monitor.evaluate import MonitorStudyConfig, classes
+from learn.monitor.study import MonitorStudyConfig
+from learn.monitor.training import classes
 from swgsim.base.typed import allowed
 
 from . import cgen, forest, host, target
 from . import reference as ref
-from .data import base_tables, gear_windows, with_baseline
+from .data import base_tables, gear_windows, with_normal
 
 log = logging.getLogger(__name__)
 
@@ -39,14 +40,14 @@ class ExportOptions:
     Attributes
     ----------
     held_out_gear : int
-        The gear whose baseline the C holds and on whose windows it is judged.
+        The gear whose normal behaviour the C holds and on whose windows it is judged.
     n_trees : int
         Trees of the forest.
     forest_bytes : int
         Flash for the forest's decision nodes [bytes] (sets ``max_leaf_nodes``).
     commissioning_h, train_healthy_h, train_fault_h : float
         Hours of each gear's commissioning, healthy life after it, and fault lives
-        (:class:`learn.monitor.evaluate.MonitorStudyConfig`).
+        (:class:`learn.monitor.study.MonitorStudyConfig`).
     train_variants : int
         Fault positions per gear fault and severity.
     faults : list of str
@@ -74,7 +75,7 @@ class ExportOptions:
                                   train_healthy_h=self.train_healthy_h,
                                   train_fault_h=self.train_fault_h,
                                   train_variants=self.train_variants,
-                                  faults=list(self.faults), baselines=[])
+                                  faults=list(self.faults), detectors=[])
 
 
 def _phi(tables: ref.StageTables, op: np.ndarray) -> np.ndarray:
@@ -118,20 +119,20 @@ def train_stage(plan, opts: ExportOptions):
     tables0 = base_tables(plan)
     study = opts.study()
     tr = [gear_windows(plan, g, study, tables0) for g in train]
-    x = np.concatenate([ref.design_rows(w.feats, with_baseline(tables0, w), w.op) for w in tr])
+    x = np.concatenate([ref.design_rows(w.feats, with_normal(tables0, w), w.op) for w in tr])
     y = np.concatenate([w.y for w in tr])
     missing = sorted(set(range(len(classes(plan, study)))) - set(y.tolist()))
     if missing:
         raise ValueError(f"the training gears have no windows of classes {missing}")
     rf = forest.fit_forest(x, y, opts.n_trees, opts.forest_bytes, opts.seed)
     held = gear_windows(plan, g_out, study, tables0, keep=True)
-    return with_baseline(tables0, held), rf, held, tr
+    return with_normal(tables0, held), rf, held, tr
 
 
 def full_model_accuracy(plan, tr, held, seed: int) -> float:
     """Per-window accuracy on the held-out windows of the monitor's own classifier (its
     histogram gradient boosting, as learn.monitor.model, on its float64 least-squares
-    features z-scored against each gear's baseline), trained on the training gears."""
+    features z-scored against each gear's normal behaviour), trained on the training gears."""
     from sklearn.ensemble import HistGradientBoostingClassifier
 
     def rows(w):

@@ -16,7 +16,7 @@ into the least-squares coefficients c = G⁻¹ b; the features are the offset c�
 amplitudes √(c_cos,h² + c_sin,h²), log10 of the RMS of what the fit leaves, from
 yᵀy − 2 cᵀb + cᵀGc (stationary in c: c's float32 rounding enters to second order; cᵀb
 alone lost 4 % of the residual energy), and the efficiency; then z-scores against the
-gear's baseline and the classifier's int16 inputs (:func:`quantize`).
+gear's normal behaviour and the classifier's int16 inputs (:func:`quantize`).
 
 At the nominal angle this is the monitor's least-squares fit (the same basis, the same
 normal equations); the differences are float32 rounding, largest on the residual RMS
@@ -227,11 +227,12 @@ class StageTables:
         (BᵀB)⁻¹ and BᵀB of each speed's nominal basis (symmetric: the C stores the
         upper triangles).
     points : ndarray, shape (K, 2)
-        Operating points (n_in_rpm, t_out_nm) of the baseline.
+        Operating points (n_in_rpm, t_out_nm) of the normal behaviour.
     speed_index : ndarray of int, shape (K,)
         Row of ``g_inv`` of each operating point.
     mean, inv_std : ndarray, float32, shape (K, F)
-        The gear's baseline (learn.monitor.model.Baseline): mean and 1 / std per point.
+        The gear's normal behaviour (learn.monitor.model.NormalBehaviour): mean and
+        1 / std per point.
     point_inputs : ndarray of int16, shape (K, 2)
         The classifier's operating-point inputs: speed [rpm] and torque [0.1 N m].
     """

@@ -38,6 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swgsim.base.typed import check_finite, check_range
+
 
 @dataclass
 class RuleConfig:
@@ -52,14 +54,14 @@ class RuleConfig:
     max_delay_windows : int
         Windows in which a fault that gives every window the smallest p-value must be
         detectable (sets the shortest commissioning), >= 1.
-    min_baseline : int
-        Fewest baseline windows per operating point (its mean and spread), >= 2.
+    min_normal_windows : int
+        Fewest normal-behaviour windows per operating point (its mean and spread), >= 2.
     """
 
     design_hours: float = 1000.0
     shift_sigma: float = 0.5
     max_delay_windows: int = 30
-    min_baseline: int = 30
+    min_normal_windows: int = 30
 
 
 def log_bet(p: np.ndarray) -> np.ndarray:
@@ -99,14 +101,51 @@ def threshold(rule: RuleConfig, interval_min: float) -> float:
     return math.log(rule.design_hours * 60.0 / float(interval_min) * n_cusums(rule))
 
 
+def check_rule(rule: RuleConfig, key: str = "rule") -> None:
+    """Refuse a rule outside its ranges, in one line naming the key, before any work.
+
+    Parameters
+    ----------
+    rule : RuleConfig
+    key : str
+        Full name of ``rule`` for messages (``rule``, ``monitor.study.rule``).
+
+    Raises
+    ------
+    ValueError
+        NaN or infinity anywhere; ``design_hours`` outside (0, 1e6] h; ``shift_sigma``
+        outside [0, 10]; ``max_delay_windows`` outside [1, 1e5] (0 can never alarm);
+        ``min_normal_windows`` outside [2, 1e5] (a spread needs two windows).
+    """
+    check_finite(rule, key)
+    check_range(rule.design_hours, 0.0, 1e6, f"{key}.design_hours", "h", lo_open=True,
+                why="one false alarm per this many operating hours")
+    check_range(rule.shift_sigma, 0.0, 10.0, f"{key}.shift_sigma",
+                why="the shift CUSUM's delta in standard deviations; 0 leaves it out")
+    check_range(rule.max_delay_windows, 1, 100_000, f"{key}.max_delay_windows",
+                why="windows in which the strongest evidence must reach the threshold")
+    check_range(rule.min_normal_windows, 2, 100_000, f"{key}.min_normal_windows",
+                why="a mean and a spread per operating point")
+
+
 def min_calibration(rule: RuleConfig, interval_min: float) -> int:
     """Fewest calibration windows per operating point for which the rule can reach h
-    within ``max_delay_windows`` (module docstring)."""
+    within ``max_delay_windows`` (module docstring): the smallest n with
+    ``max_delay_windows · ln f(1 / (n + 1)) >= h`` (ln f(1/(n+1)) grows with n), by
+    doubling and bisection."""
     h = threshold(rule, interval_min)
-    n = 1
-    while rule.max_delay_windows * float(log_bet(1.0 / (n + 1))) < h:
-        n += 1
-    return n
+
+    def enough(n: int) -> bool:
+        return rule.max_delay_windows * float(log_bet(1.0 / (n + 1))) >= h
+
+    hi = 1
+    while not enough(hi):
+        hi *= 2
+    lo = hi // 2
+    while hi - lo > 1:  # enough(hi), not enough(lo) (or lo = 0)
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if enough(mid) else (mid, hi)
+    return max(hi, 1)
 
 
 def conformal_p(scores: np.ndarray, calibration: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -132,5 +171,5 @@ def conformal_p(scores: np.ndarray, calibration: np.ndarray, u: np.ndarray) -> n
     return (above + u * (equal + 1)) / (n + 1)
 
 
-__all__ = ["RuleConfig", "conformal_p", "log_bet", "log_bets", "log_shift", "min_calibration",
-           "n_cusums", "threshold"]
+__all__ = ["RuleConfig", "check_rule", "conformal_p", "log_bet", "log_bets", "log_shift",
+           "min_calibration", "n_cusums", "threshold"]

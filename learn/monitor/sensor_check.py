@@ -10,13 +10,13 @@ flexspline (an eccentric WG moves the offsets of s1 and s3 by equal and opposite
 amounts, and s0's; a crack changes the harmonics of several bridges, not in proportion).
 This is the analytical redundancy of sensor fault isolation: each hypothesis "bridge c
 has fault f" is fitted to the windows since the alarm by its one parameter (least
-squares in the z-scores against the gear's baseline), the fitted effect is taken out,
+squares in the z-scores against the gear's normal behaviour), the fitted effect is taken out,
 and what is left is judged twice, where the fit is plausible (significant, and a gain
 that falls, not rises):
 
 * window by window, as the alarm was: the diagnosis model's score and the novelty Σ z²,
   as conformal p-values against the gear's calibration windows
-  (:meth:`learn.monitor.monitor.GearMonitor.p_values`), whose median must be at least
+  (:meth:`learn.monitor.gear_monitor.GearMonitor.p_values`), whose median must be at least
   :data:`SENSOR_P_MIN` (the windows look as healthy as the gear's own healthy ones);
 * over all the windows together, on the other bridges and the efficiency, which a
   sensor fault leaves alone: their mean z-scores over the n windows, as
@@ -32,7 +32,7 @@ windows most healthy is the sensor fault named.
 Source: the structured-residual idea of sensor fault isolation (P. M. Frank, "Fault
 diagnosis in dynamic systems using analytical and knowledge-based redundancy",
 Automatica 26(3), 1990, sec. 4: one residual per sensor, insensitive to that sensor);
-here the "observer" is the gear's own healthy baseline and the fault model is
+here the "observer" is the gear's own normal behaviour and the fault model is
 parametric.
 """
 
@@ -119,11 +119,11 @@ def fit_sensor_faults(z: np.ndarray, mean: np.ndarray, std: np.ndarray) -> list[
     Parameters
     ----------
     z : ndarray, shape (n, F)
-        z-scores of the windows since the alarm against the gear's baseline,
+        z-scores of the windows since the alarm against the gear's normal behaviour,
         F = 5 (H + 2) + 1, or more (:func:`learn.monitor.features.feature_names`: the
         twist features of an output encoder come after the bridges' and efficiency).
     mean, std : ndarray, shape (n, F)
-        The baseline's mean and standard deviation at each window's operating point.
+        The normal behaviour's mean and standard deviation at each window's operating point.
 
     Returns
     -------

@@ -6,7 +6,7 @@ first windows, known healthy), e.g. a life written by ``swgsim-generate`` with
 ``dataset.life`` set (:mod:`swgsim.datasets.life`). :func:`check_stream` refuses, before any work
 and in one line, a stream without commissioning, with hours out of order, or one that
 disagrees with the model (bridges, sample rate, operating points outside the training
-range). :func:`monitor_stream` runs :class:`~learn.monitor.monitor.GearMonitor` and
+range). :func:`monitor_stream` runs :class:`~learn.monitor.gear_monitor.GearMonitor` and
 :func:`write_outputs` writes ``summary.json``, ``report.md`` and ``health.png``.
 """
 
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .features import feature_names, health_features
-from .monitor import Alarm, GearMonitor, Trace, check_commissioning
+from .gear_monitor import Alarm, GearMonitor, Trace, check_commissioning
 from .rule import RuleConfig
 
 

@@ -63,7 +63,7 @@ class CompiledTrees:
         self.depth = depth
 
     def raw(self, x: np.ndarray) -> np.ndarray:
-        """Raw scores (n, n_classes): baseline plus the sum of every tree's leaf value."""
+        """Raw scores (n, n_classes): normal behaviour plus the sum of every tree's leaf value."""
         x = np.asarray(x, float)
         n = x.shape[0]
         node = np.broadcast_to(self.roots, (n, self.roots.size)).ravel().copy()

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from learn.inputs.features import SELECTIONS
-from learn.learners.baselines import model_label
+from learn.learners.models import model_label
 from learn.reports.paper_results import GEAR_SPLITS
 from learn.studies.tables import M5
 

@@ -43,22 +43,22 @@ def open_choices(dataset: DatasetConfig, options: StudyOptions, seed: int,
         ``choice``, ``value``, ``reason`` (all str), in the order of the pipeline.
     """
     fs = features or FeatureSettings()
-    rows = [*_recording_rows(dataset.acquisition), *_window_rows(dataset),
+    rows = [*_acquisition_rows(dataset.acquisition), *_window_rows(dataset),
             *_feature_rows(options, fs), *_fault_rows(dataset.variants),
             *_model_rows(dataset, seed)]
     return [{"choice": c, "value": val, "reason": r} for c, val, r in rows]
 
 
-def _recording_rows(acq: Acquisition) -> list[tuple[str, str, str]]:
-    """Window start and amplifier: the data set's recording."""
+def _acquisition_rows(acq: Acquisition) -> list[tuple[str, str, str]]:
+    """Window start and amplifier: the data set's acquisition."""
     return [
-        ("Window start (recording)",
+        ("Window start (acquisition)",
          "fixed: every simulation starts at input angle "
          f"{acq.wg_start_deg:g}°" if acq.start == "fixed"
          else "random: input angle uniform over [0, 2π N), i.e. random WG and output angle",
          "Sec. III-B: the healthy class is 'sixty times the same SWG model'; a bench cuts "
          "windows at arbitrary times"),
-        ("Amplifier (recording)", _amp(acq),
+        ("Amplifier (acquisition)", _amp(acq),
          "the paper's data are simulated; the bench preset cites its data sheet "
          "(swgsim/sensing/acquisition.py)"),
     ]
@@ -100,7 +100,7 @@ def _feature_rows(options: StudyOptions, fs: FeatureSettings) -> list[tuple[str,
          "per gear, operating point and clean/disturbed: a commissioning window of the "
          "healthy gear, recorded like every other window",
          "'normalized for each operating point by the value of the healthy gear'; a gear "
-         "never seen in training has its own commissioning recording"),
+         "never seen in training has its own commissioning acquisition"),
         ("Feature scaling",
          "standardised (StandardScaler)" if options.scale else "none",
          "the paper names scikit-learn's standard settings and no preprocessing; eq. (9) "

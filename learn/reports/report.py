@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from learn.inputs.features import order_spectrum, reference_index
-from learn.learners.baselines import model_label
+from learn.learners.models import model_label
 from learn.reports.paper_results import (
     GEAR_SPLITS,
     PAPER_RESULTS,
@@ -47,7 +47,7 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
         lines += ["The paper's Table VIII gives no numbers (its text only quotes some: best "
                   "KNN test score about 80 % and NB 73.72 % on Selection 1, SVM at most about "
                   "47 %), so the paper's cells read (–).", ""]
-    # a registered model beyond the paper's (learn.learners.baselines.register_model)
+    # a registered model beyond the paper's (learn.learners.models.register_model)
     models = (*models, *(m for m in dict.fromkeys(res["model"]) if m not in models))
     lines += ["| | " + " | ".join(model_label(m) for m in models) + " |",
               "|---|" + "---:|" * len(models)]

@@ -1,9 +1,9 @@
-"""The paper's study under several recordings, side by side with the paper.
+"""The paper's study under several acquisitions, side by side with the paper.
 
 :func:`write_summary` writes ``<report_root>/summary.md`` and ``summary.csv``: every cell
-of Tables VII-X as *paper | ours, recording A | ours, recording B*, the reproduction
-scorecard of each recording (:func:`learn.reports.paper_results.scorecard`), the paper's
-qualitative findings checked under each recording (:mod:`learn.reports.findings`), the choices the
+of Tables VII-X as *paper | ours, acquisition A | ours, acquisition B*, the reproduction
+scorecard of each acquisition (:func:`learn.reports.paper_results.scorecard`), the paper's
+qualitative findings checked under each acquisition (:mod:`learn.reports.findings`), the choices the
 paper leaves open (:mod:`learn.reports.open_choices`), and what changes when windows are not
 phase-locked: per-class recall of RF on Selections 1 and 3 (``recall_rf.png``) with the
 measured spread of healthy features behind it.
@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from learn.inputs.features import FeatureSettings
-from learn.learners.baselines import model_label
+from learn.learners.models import model_label
 from learn.reports.findings import check_findings
 from learn.reports.open_choices import open_choices
 from learn.reports.paper_results import (
@@ -45,19 +45,19 @@ RECALL_PANELS = (("VII", "selection1"), ("VII", "selection3"), ("X", "selection1
 
 
 def format_scorecard(cards: Mapping[str, pd.DataFrame]) -> list[str]:
-    """Markdown table of the scorecards of several recordings.
+    """Markdown table of the scorecards of several acquisitions.
 
     Parameters
     ----------
     cards : mapping of str to pandas.DataFrame
-        Recording (data-set name) -> :func:`learn.reports.paper_results.scorecard`.
+        Acquisition (data-set name) -> :func:`learn.reports.paper_results.scorecard`.
 
     Returns
     -------
     list of str
-        Lines of one table: recording, table, cells, within ±3/±5/±10, mean abs. deviation.
+        Lines of one table: acquisition, table, cells, within ±3/±5/±10, mean abs. deviation.
     """
-    lines = ["| recording | table | cells | within ±3 | within ±5 | within ±10 | "
+    lines = ["| acquisition | table | cells | within ±3 | within ±5 | within ±10 | "
              "mean abs. deviation [points] |", "|---|---|---:|---:|---:|---:|---:|"]
     for name, card in cards.items():
         for r in card.itertuples():
@@ -111,7 +111,7 @@ def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
             continue
         lines += [f"### Table {table}: {title}", "",
                   f"Evaluation protocol `{protocol}`. Cells: paper / " + " / ".join(
-                      f"ours, {n} recording" for n in names) + " [%]", "",
+                      f"ours, {n} acquisition" for n in names) + " [%]", "",
                   "| | " + " | ".join(model_label(m) for m in models) + " |",
                   "|---|" + "---:|" * len(models)]
         splits = ("mean",) if table in ("VII", "VIII") else GEAR_SPLITS
@@ -150,18 +150,18 @@ def _findings_md(found: Mapping[str, pd.DataFrame]) -> list[str]:
 
 
 def spread_table(spread: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
-    """Spread of healthy features and how far each fault moves them, per recording.
+    """Spread of healthy features and how far each fault moves them, per acquisition.
 
     Parameters
     ----------
     spread : mapping of str to pandas.DataFrame
-        Recording -> :func:`learn.inputs.features.feature_spread` rows with a ``selection``
+        Acquisition -> :func:`learn.inputs.features.feature_spread` rows with a ``selection``
         column (Selections 1 and 3).
 
     Returns
     -------
     pandas.DataFrame
-        One row per recording and feature group (``eta_rel``, ``m_rel_s1``, ``var_rel_s0``
+        One row per acquisition and feature group (``eta_rel``, ``m_rel_s1``, ``var_rel_s0``
         of Selection 1; the Selection-3 DFT_rel features as a median): ``healthy_std``
         and, per fault class, the median over its windows of the distance from the
         healthy median (``shift`` of :func:`~learn.inputs.features.feature_spread`).
@@ -182,7 +182,7 @@ def spread_table(spread: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
             if not feats or (sel, feats[0]) not in healthy.index:
                 continue
             h = healthy.loc[[(sel, f) for f in feats]]
-            row = {"recording": name, "feature": label,
+            row = {"acquisition": name, "feature": label,
                    "healthy_std": float(np.median(h["std"]))}
             for fault in FAULT_CLASSES[1:]:
                 d = sp[(sp["fault"] == fault) & (sp["selection"] == sel)
@@ -195,15 +195,15 @@ def spread_table(spread: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
 
 def recall_figure(rec: Mapping[str, pd.DataFrame], path: str | Path,
                   model: str = "rf") -> Path:
-    """Per-class recall of one model on Selections 1 and 3 under each recording.
+    """Per-class recall of one model on Selections 1 and 3 under each acquisition.
 
     Four panels: Table VII (4-fold CV, clean) and Table X (leave one gear out, disturbed),
-    Selections 1 and 3; one bar per class and recording.
+    Selections 1 and 3; one bar per class and acquisition.
 
     Parameters
     ----------
     rec : mapping of str to pandas.DataFrame
-        Recording -> :func:`recall`.
+        Acquisition -> :func:`recall`.
     path : path-like
         PNG to write.
     model : str, default "rf"
@@ -226,7 +226,7 @@ def recall_figure(rec: Mapping[str, pd.DataFrame], path: str | Path,
             vals = [float(r.loc[r["true"] == c, "recall"].iloc[0]) if (r["true"] == c).any()
                     else np.nan for c in FAULT_CLASSES]
             ax.bar(x + (k - (len(names) - 1) / 2) * width, 100 * np.asarray(vals), width,
-                   label=f"{n} recording", color=f"C{k}")
+                   label=f"{n} acquisition", color=f"C{k}")
         ax.set_xticks(x, [display_name(c).replace(" ", "\n") for c in FAULT_CLASSES], fontsize=7)
         what = "4-fold CV, clean" if table == "VII" else "leave one gear out, disturbed"
         ax.set_title(f"Table {table} ({what}), Selection {sel[-1]}", fontsize=9)
@@ -258,7 +258,7 @@ def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,
 
 def _spread_md(spread: pd.DataFrame) -> list[str]:
     """The table of the clean healthy windows' feature spread and the classes' distance."""
-    head = "| recording | feature | healthy std | " + " | ".join(
+    head = "| acquisition | feature | healthy std | " + " | ".join(
         display_name(c) for c in FAULT_CLASSES[1:]) + " |"
     lines = ["Spread of the clean healthy windows' features (std over every gear and "
              "operating point) and how far each fault class lies from the healthy median "
@@ -267,7 +267,7 @@ def _spread_md(spread: pd.DataFrame) -> list[str]:
              "|---|---|---:|" + "---:|" * (len(FAULT_CLASSES) - 1)]
     for r in spread.itertuples(index=False):
         d = r._asdict()
-        lines.append(f"| {d['recording']} | {d['feature']} | {d['healthy_std']:.2e} | "
+        lines.append(f"| {d['acquisition']} | {d['feature']} | {d['healthy_std']:.2e} | "
                      + " | ".join(f"{d.get(c, np.nan):.2e}" for c in FAULT_CLASSES[1:])
                      + " |")
     lines.append("")
@@ -276,7 +276,7 @@ def _spread_md(spread: pd.DataFrame) -> list[str]:
 
 def _why_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame, a: str, b: str,
             free: DatasetConfig) -> list[str]:
-    """Why the phase-locked recording ``a`` is easier than the free one ``b``."""
+    """Why the phase-locked acquisition ``a`` is easier than the free one ``b``."""
 
     def rc(n, table, sel, cls):
         r = rec[n]
@@ -285,7 +285,7 @@ def _why_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame, a: str, b: st
         return 100 * float(r["recall"].iloc[0]) if len(r) else float("nan")
 
     def sp_val(proto, feature, col):
-        r = spread[(spread["recording"] == proto) & (spread["feature"] == feature)]
+        r = spread[(spread["acquisition"] == proto) & (spread["feature"] == feature)]
         return float(r[col].iloc[0]) if len(r) and col in r else float("nan")
 
     amp = free.acquisition.amplifier
@@ -299,14 +299,14 @@ def _why_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame, a: str, b: st
     eta_k1 = sp_val(b, "eta_rel", "reduced_stiffness")
     dft_sd = sp_val(b, "DFT_rel (Sel. 3, median)", "healthy_std")
     return [
-        "**Why.** Under the paper's recording every healthy window is the same window: "
+        "**Why.** Under the paper's acquisition every healthy window is the same window: "
         "the simulation starts at the same wave-generator and output angle and nothing "
         "is noisy, so each healthy feature equals its reference exactly (eq. 7 ratios "
         "of 1, healthy spread 0 above). A fault that moves a feature at all, however "
         "little, then leaves a healthy class of zero width: even reduced stiffness, "
         "whose order-2 torque ripple changes by about 0.1 % (README, *Design choices*), "
         f"is recalled at {rs['reduced_stiffness'][0]:.0f} % by RF on Selection 1 "
-        f"(Table VII). Under the {b} recording a window starts at an arbitrary "
+        f"(Table VII). Under the {b} acquisition a window starts at an arbitrary "
         "wave-generator angle: it holds a non-integer number of the order-2 ripple "
         f"periods ({ripple:.2f} at {n_lo:g} rpm in {win:g} s), so its mean and variance "
         "depend on where it starts; the kinematic error and the output angle, which sets "
@@ -319,7 +319,7 @@ def _why_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame, a: str, b: st
         "and only faults that move features by more than it remain visible: RF on "
         "Selection 1 recalls "
         + ", ".join(f"{display_name(c)} {rs[c][0]:.0f} → {rs[c][1]:.0f} %"
-                    for c in FAULT_CLASSES) + f" ({a} → {b} recording, Table VII).",
+                    for c in FAULT_CLASSES) + f" ({a} → {b} acquisition, Table VII).",
         ""]
 
 
@@ -338,7 +338,7 @@ def write_summary(
     sensitivity: pd.DataFrame | None = None,
     features: FeatureSettings | None = None,
 ) -> dict[str, Any]:
-    """Write the side-by-side summary of the paper's study under several recordings.
+    """Write the side-by-side summary of the paper's study under several acquisitions.
 
     Parameters
     ----------
@@ -400,14 +400,14 @@ def write_summary(
 def _intro_md(names: list[str], datasets: Mapping[str, DatasetConfig],
               cards: Mapping) -> list[str]:
     """Title, what was compared, and the reproduction scorecard."""
-    return ["# The paper's study under " + " and ".join(f"the {n} recording" for n in names),
+    return ["# The paper's study under " + " and ".join(f"the {n} acquisition" for n in names),
             "",
             "Every cell of Tables VII-X: the paper's score beside ours under each "
-            "recording (`conf/dataset/<name>.yaml`). "
-            + " ".join(f"**{n}**: {_recording_words(datasets[n])}." for n in names),
+            "acquisition (`conf/dataset/<name>.yaml`). "
+            + " ".join(f"**{n}**: {_acquisition_words(datasets[n])}." for n in names),
             "The study is the paper's in both (features, classifiers, evaluation protocols "
-            "of Sec. IV); only the data differ. Per-recording tables, results and confusion counts "
-            "are in " + ", ".join(f"`{n}/`" for n in names) + ".", "",
+            "of Sec. IV); only the data differ. Per-acquisition tables, results and confusion "
+            "counts are in " + ", ".join(f"`{n}/`" for n in names) + ".", "",
             "## Reproduction scorecard", "",
             "Test cells of Tables VII, IX and X (the paper gives no numbers for Table "
             "VIII) within ±3, ±5 and ±10 points of the paper, and the mean absolute "
@@ -417,10 +417,10 @@ def _intro_md(names: list[str], datasets: Mapping[str, DatasetConfig],
 def _open_choices_md(names: list[str], datasets: Mapping[str, DatasetConfig],
                      options: StudyOptions, seed: int,
                      features: FeatureSettings | None) -> list[str]:
-    """The open choices of the first data set and the recording rows of the others."""
+    """The open choices of the first data set and the acquisition rows of the others."""
     first = names[0]
     lines = ["## Choices the paper leaves open", "",
-             f"Values of the {first} recording; the others differ only in the recording "
+             f"Values of the {first} acquisition; the others differ only in the acquisition "
              "rows (their own `conf/dataset/<name>.yaml`).", "",
              "| choice | value taken | reason or source |", "|---|---|---|"]
     lines += [f"| {c['choice']} | {c['value']} | {c['reason']} |"
@@ -431,7 +431,7 @@ def _open_choices_md(names: list[str], datasets: Mapping[str, DatasetConfig],
     return lines
 
 
-def _recording_words(cfg: DatasetConfig) -> str:
+def _acquisition_words(cfg: DatasetConfig) -> str:
     acq = cfg.acquisition
     start = ("every window from the same initial state (phase-locked)"
              if acq.start == "fixed" else "windows cut at arbitrary times")

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.learners.baselines import model_label
+from learn.learners.models import model_label
 from learn.reports.transfer_picks import (
     BEST,
     headline_md,

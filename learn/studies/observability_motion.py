@@ -16,7 +16,7 @@ motion adds, per output inertia J_out, for three views of the same gear:
 
 Every window is a gear life's (:class:`swgsim.datasets.life.LifeSimulator`): its own start (steady:
 in an output revolution; profile: within the slot's jitter), eq. (10) draws and converter
-noise. Per window the monitor's health features (:func:`learn.monitor.evaluate.life_features`)
+noise. Per window the monitor's health features (:func:`learn.monitor.training.life_features`)
 are z-scored against healthy reference windows of the same operating point or slot, and
 its *separation* is the mean square z-score; a fault window is *beyond* when its separation
 exceeds the 95th percentile of healthy test windows' at its point (so a fault the features
@@ -105,7 +105,7 @@ def _windows(plan, fault: str, severity: float, n: int, seed: int, points=None):
     """Features, operating points and, for a profile, the same windows' features without
     the output encoder: n windows of one state, cycling through the steady ``points``
     ((input speed [rpm], load [N m]) pairs) or, when None, the profile's slots."""
-    from learn.monitor.evaluate import life_features
+    from learn.monitor.training import life_features
 
     iv = 1.0
     duty = [DutyPoint(s, t, iv) for s, t in points] if points is not None else []

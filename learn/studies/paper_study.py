@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from learn.inputs.features import Features, FeatureSettings, extract_features, selection_name
-from learn.learners.baselines import make_model
+from learn.learners.models import make_model
 from learn.studies.protocols import (
     PROTOCOLS,
     ProtocolConfig,

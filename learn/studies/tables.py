@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from learn.inputs.features import selection_name
-from learn.learners.baselines import PAPER_MODELS
+from learn.learners.models import PAPER_MODELS
 
 #: The paper's five models in the order of its tables (Table VI).
 M5: tuple[str, ...] = tuple(PAPER_MODELS)
@@ -44,7 +44,7 @@ class PaperTable:
         Feature selections (paper Table III), registered in
         :data:`learn.inputs.features.SELECTIONS`.
     models : tuple of str
-        Model names (:data:`learn.learners.baselines.MODELS`).
+        Model names (:data:`learn.learners.models.MODELS`).
     """
 
     name: str
@@ -87,7 +87,7 @@ class StudyOptions:
     models : list of str or None
         None: each table's paper models. Else the paper models of each table that are
         listed, plus every listed model that is not one of the paper's (registered with
-        :func:`learn.learners.baselines.register_model`) in every table.
+        :func:`learn.learners.models.register_model`) in every table.
     scale : bool
         StandardScaler before each classifier (the paper names scikit-learn's standard
         settings and no scaling).
@@ -108,7 +108,7 @@ class StudyOptions:
         ValueError
             ``study.tables`` or ``study.models`` naming what is not registered.
         """
-        from learn.learners.baselines import MODELS
+        from learn.learners.models import MODELS
 
         bad = sorted(set(self.tables or ()) - set(PAPER_TABLES))
         if bad:

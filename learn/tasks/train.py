@@ -19,7 +19,7 @@ TASKS: dict[str, str] = {
     "study": "learn.tasks.train.run_study_job",
     "paper_study": "learn.tasks.paper.run_paper_study_task",
     "transfer": "learn.tasks.transfer.run_transfer",
-    "monitor": "learn.tasks.monitor.run_monitor",
+    "monitor": "learn.tasks.monitor_evaluation.run_monitor_evaluation",
 }
 
 
@@ -110,7 +110,7 @@ def run_study_job(cfg) -> dict:
 
 def _step_name(estimator) -> str:
     """The name of a pipeline's classifier step (the model's config name,
-    :func:`learn.learners.baselines.make_pipeline`), else the estimator's class."""
+    :func:`learn.learners.models.make_pipeline`), else the estimator's class."""
     from sklearn.pipeline import Pipeline
 
     if isinstance(estimator, Pipeline):

@@ -16,7 +16,8 @@ _EXPORTS = {
                      "log_job", "log_run"), "mlflow_runs"),
     **dict.fromkeys(("check_tracking", "default_tracking_uri", "quiet_mlflow", "store_lock",
                      "tracking_client", "use_tracking"), "store"),
-    **dict.fromkeys(("DatasetRef", "dataset_ref", "git_tags", "repo_root"), "provenance"),
+    **dict.fromkeys(("DatasetRef", "dataset_ref", "git_tags", "provenance_tags", "repo_root"),
+                    "provenance"),
     "LoggerConfig": "config",
 }
 

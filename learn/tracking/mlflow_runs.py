@@ -47,8 +47,8 @@ import numpy as np
 from learn.tracking.provenance import (
     DatasetRef,
     dataset_ref,
-    git_tags,
     model_requirements,
+    provenance_tags,
     sklearn_only,
 )
 from learn.tracking.store import get_experiment_id, quiet_mlflow, tracking_client
@@ -247,7 +247,7 @@ class TrackedRun:
         ----------
         model : fitted estimator
             Anything with ``predict`` that pickles (a ``Pipeline`` of
-            :func:`learn.learners.baselines.make_pipeline`).
+            :func:`learn.learners.models.make_pipeline`).
         name : str, default "model"
         X_sample : ndarray, shape (n, n_features), optional
             A few input rows: the model's signature (input and output types) is inferred
@@ -332,7 +332,7 @@ def group_parent(client, experiment_id: str, group: str,
         pid = found[0].info.run_id
     else:
         run = client.create_run(experiment_id, run_name=group,
-                                tags={**git_tags(), GROUP_PARENT_TAG: group})
+                                tags={**provenance_tags(), GROUP_PARENT_TAG: group})
         pid = run.info.run_id
         parent = TrackedRun(client, pid, experiment_id)
         for d in datasets:
@@ -372,7 +372,7 @@ def _create_run(client, experiment: str, run_name: str, tags: Mapping[str, Any] 
     if key not in _EXPERIMENTS:  # looked up once per process
         _EXPERIMENTS[key] = get_experiment_id(client, experiment)
     exp_id = _EXPERIMENTS[key]
-    all_tags = {**git_tags(), **{k: str(v) for k, v in (tags or {}).items()}}
+    all_tags = {**provenance_tags(), **{k: str(v) for k, v in (tags or {}).items()}}
     group_pid = None
     if group is not None:
         group = group.replace("'", "_").replace('"', "_")
@@ -401,7 +401,8 @@ def log_run(
 ) -> Iterator[TrackedRun]:
     """Open one MLflow run with its provenance; the one way runs are logged here.
 
-    On entry the run is created with the git tags (:func:`git_tags`), ``tags``, the parent
+    On entry the run is created with the provenance tags (git state and library versions,
+    :func:`provenance_tags`), ``tags``, the parent
     (``parent_run_id``, or the parent of ``group``, :func:`group_parent`), the data sets
     as dataset inputs (:meth:`TrackedRun.log_dataset`), ``params`` flattened and
     ``config`` as ``config.yaml``; the body logs metrics, figures, files and the model

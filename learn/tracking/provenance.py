@@ -3,6 +3,7 @@
 Used by :func:`learn.tracking.log_run`, which attaches all of it to every run:
 
 * :func:`git_tags` - the commit of the checkout and whether its work tree is dirty;
+  :func:`provenance_tags` - those and the versions of numpy, scipy, scikit-learn, torch;
 * :func:`dataset_ref` - a data set's name, absolute path and content hash, read from its
   ``manifest.json`` (schema v1, ``docs/DATASET.md``) rather than re-hashing gigabytes of
   shards;
@@ -16,6 +17,10 @@ import functools
 import os
 from dataclasses import dataclass
 from pathlib import Path
+
+from swgsim.datasets.schema import MANIFEST, DataSetError, read_manifest
+from swgsim.files.digest import sha256_file
+from swgsim.files.provenance import library_versions
 
 #: Run tag of the git commit (MLflow's own key, shown in its UI) and of the dirty flag.
 GIT_COMMIT_TAG = "mlflow.source.git.commit"
@@ -54,6 +59,23 @@ def repo_root() -> Path:
     """
     here = Path(__file__).resolve().parents[2]
     return here if (here / "pyproject.toml").is_file() else Path.cwd()
+
+
+#: Prefix of the run tags that record a library's version (``library.numpy``, ...).
+LIBRARY_TAG = "library."
+
+
+def provenance_tags(root: str | Path | None = None) -> dict[str, str]:
+    """Every run's provenance tags: the git state (:func:`git_tags`) and the versions of
+    the numerical libraries (:func:`swgsim.files.provenance.library_versions`, tagged
+    ``library.<name>``).
+
+    Returns
+    -------
+    dict of str to str
+    """
+    return {**git_tags(root),
+            **{LIBRARY_TAG + k: v for k, v in library_versions().items()}}
 
 
 def git_tags(root: str | Path | None = None) -> dict[str, str]:
@@ -120,9 +142,6 @@ class DatasetRef:
 def _dataset_ref(path: str, name: str, stamp: tuple[int, int]) -> DatasetRef:
     import hashlib
 
-    from swgsim.datasets.schema import read_manifest
-    from swgsim.files.digest import sha256_file
-
     p = Path(path)
     if p.is_file():
         return DatasetRef(name, path, sha256_file(p), "file_sha256")
@@ -162,8 +181,6 @@ def dataset_ref(path: str | os.PathLike, name: str | None = None) -> DatasetRef:
         ``dataset=<path>: ...`` where the path is neither a file nor a folder with a
         readable schema-v1 manifest (:class:`swgsim.datasets.schema.DataSetError`).
     """
-    from swgsim.datasets.schema import MANIFEST, DataSetError
-
     p = Path(path).expanduser().resolve()
     probe = p if p.is_file() else p / MANIFEST
     if not probe.is_file():

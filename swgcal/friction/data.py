@@ -7,7 +7,7 @@ and the target ``tau_friction_Nm`` [N m]. Sampling may be irregular.
 
 The recording becomes the signals of the friction terms
 (:class:`swgsim.gear.friction.FrictionSignals`, smooth-sign velocity v_s by default 1 % of
-the 99th percentile of |q̇|, so that least squares is well posed); the baseline is the
+the 99th percentile of |q̇|, so that least squares is well posed); the base model is the
 paper's law on the joint (:class:`swgsim.gear.friction.PaperLaw`).
 """
 

@@ -84,7 +84,7 @@ __all__ = [
 
 
 class PaperLaw(fsig.PaperLaw, FitTerm):
-    """The paper-law baseline (:class:`swgsim.gear.friction.PaperLaw`), linear: nothing to add."""
+    """The paper-law base model (:class:`swgsim.gear.friction.PaperLaw`), linear: nothing to add."""
 
 
 class AsymmetricCoulomb(fx.AsymmetricCoulomb, FitTerm):

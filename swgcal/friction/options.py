@@ -1,7 +1,7 @@
 """The friction problem's options (data kind 1), each default and range written once.
 
 :func:`~swgcal.friction.problem.friction_problem` takes its defaults from here and checks
-its arguments with these classes; ``swgsim-calibrate`` builds its ``baseline``,
+its arguments with these classes; ``swgsim-calibrate`` builds its ``base model``,
 ``gear_ratio``, ``accel_window`` and ``split`` keys from :class:`FrictionOptions`.
 """
 
@@ -12,11 +12,11 @@ from typing import Any
 
 from ..options import check_ranges, ranged
 
-__all__ = ["BaselineOptions", "SplitOptions", "FrictionOptions"]
+__all__ = ["BaseModelOptions", "SplitOptions", "FrictionOptions"]
 
 
 @dataclass(frozen=True)
-class BaselineOptions:
+class BaseModelOptions:
     """Smooth sign tanh(q̇ / v_s) of the paper's friction law (paper eq. 5).
 
     Attributes
@@ -72,7 +72,7 @@ class FrictionOptions:
 
     Attributes
     ----------
-    baseline : BaselineOptions
+    base model : BaseModelOptions
     gear_ratio : float or None
         Reduction ratio N (wave-generator turns per output turn) when known: ripple
         periods are then reported and checked as wave-generator orders.
@@ -81,7 +81,7 @@ class FrictionOptions:
     split : SplitOptions
     """
 
-    baseline: BaselineOptions = field(default_factory=BaselineOptions)
+    base_model: BaseModelOptions = field(default_factory=BaseModelOptions)
     gear_ratio: float | None = ranged(None, 1, 10_000, lo_open=True)
     accel_window: int = ranged(21, 5, 1001, odd=True)
     split: SplitOptions = field(default_factory=SplitOptions)
@@ -91,7 +91,7 @@ class FrictionOptions:
 
     def problem_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :func:`swgcal.friction.build_problem`."""
-        b, s = self.baseline, self.split
+        b, s = self.base_model, self.split
         return dict(v_s=b.v_s, v_s_rel=b.v_s_rel, n_blocks=s.n_blocks,
                     validation_blocks=list(s.validation_blocks),
                     test_blocks=list(s.test_blocks), guard_frac=s.guard_frac,

@@ -1,7 +1,7 @@
 """A friction recording (data kind 1) as a calibration problem, and its calibration.
 
 :func:`build_problem` loads a friction CSV (or takes a recording) and wraps it:
-paper-law baseline, the effect library (:data:`.library.FRICTION_LIBRARY`), the
+paper-law base model, the effect library (:data:`.library.FRICTION_LIBRARY`), the
 residual probes (:mod:`.probes`) and a held-out split in time blocks;
 :func:`calibrate` runs the selection loop and groups ripples by harmonics.
 """
@@ -19,7 +19,7 @@ from ..options import build
 from ..split import time_block_split
 from .data import FrictionRecording, load_friction_csv
 from .library import FRICTION_LIBRARY, PaperLaw
-from .options import BaselineOptions, FrictionOptions, SplitOptions
+from .options import BaseModelOptions, FrictionOptions, SplitOptions
 from .probes import friction_probes
 from .ripple_groups import group_ripples
 
@@ -38,8 +38,8 @@ MIN_ROWS_PER_BLOCK = 20
 def friction_problem(
     rec: FrictionRecording,
     *,
-    v_s: float | None = BaselineOptions.v_s,
-    v_s_rel: float = BaselineOptions.v_s_rel,
+    v_s: float | None = BaseModelOptions.v_s,
+    v_s_rel: float = BaseModelOptions.v_s_rel,
     n_blocks: int = SplitOptions.n_blocks,
     validation_blocks: Sequence[int] = SplitOptions.validation_blocks,
     test_blocks: Sequence[int] = SplitOptions.test_blocks,
@@ -53,7 +53,7 @@ def friction_problem(
     ----------
     rec : FrictionRecording
     v_s : float, optional
-        Smooth-sign velocity of the baseline [rad/s]; default ``v_s_rel`` times the 99th
+        Smooth-sign velocity of the base model [rad/s]; default ``v_s_rel`` times the 99th
         percentile of |q̇|.
     v_s_rel : float, default 0.01
     n_blocks, validation_blocks, test_blocks, guard_frac
@@ -76,7 +76,7 @@ def friction_problem(
         An option outside its range (named by its app key, e.g. ``split.n_blocks``),
         an unknown candidate key, or too few samples for the held-out blocks.
     """
-    build(FrictionOptions, {"baseline": {"v_s": v_s, "v_s_rel": v_s_rel},
+    build(FrictionOptions, {"base_model": {"v_s": v_s, "v_s_rel": v_s_rel},
                             "gear_ratio": gear_ratio,
                             "split": {"n_blocks": n_blocks, "guard_frac": guard_frac,
                                       "validation_blocks": list(validation_blocks),
@@ -95,7 +95,7 @@ def friction_problem(
     split = time_block_split(rec.t_s, n_blocks, validation_blocks, test_blocks, guard_frac)
     return Problem(
         name=rec.name, kind="friction", units="N m", signals=sig, y=rec.tau_nm, t=rec.t_s,
-        baseline=(PaperLaw(),), library={k: FRICTION_LIBRARY[k] for k in keys},
+        base_model=(PaperLaw(),), library={k: FRICTION_LIBRARY[k] for k in keys},
         probes=friction_probes(), split=split,
         meta={"n_samples": rec.n, "duration_s": float(rec.t_s[-1] - rec.t_s[0]),
               "dt_median_s": sig.scales.dt_med, "v_s_rad_s": sig.v_s,

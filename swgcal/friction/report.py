@@ -75,7 +75,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         did not run); ``proposed`` the terms beyond the library that discovery proposes
         for a structured final residual (:mod:`swgcal.friction.discovery`;
         empty otherwise); ``friction_effects`` the accepted effects as a simulation
-        option and ``simulation`` (v_s, t0, baseline) for
+        option and ``simulation`` (v_s, t0, base model) for
         :class:`swgsim.gear.friction.FrictionEffects`.
     """
     s = base_summary(result, source)
@@ -83,7 +83,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
     by_name = {t.name: t for t in result.effect_terms()}
     for e in s["effects_added"]:
         e["orders"] = to_jsonable(_orders_of(by_name[e["name"]], final))
-    base_name = result.baseline_final.terms[0].name
+    base_name = result.base_model_final.terms[0].name
     final_base = final.estimates_of(base_name)
     meta = result.problem.meta
     s["proposed"] = [x.as_dict() for x in propose(result)]
@@ -92,11 +92,11 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
          **({"options": e["options"]} if e["options"] else {})} for e in s["effects_added"]]
     s["simulation"] = {
         "v_s_rad_s": meta.get("v_s_rad_s"), "t0_s": meta.get("t0_s"),
-        "baseline": {k: e.value for k, e in final_base.items()},
+        "base_model": {k: e.value for k, e in final_base.items()},
         "caveat": caveat(result),
         "call": "swgsim.gear.friction.FrictionEffects(summary['friction_effects'], "
-                "v_s=summary['simulation']['v_s_rad_s'], baseline=summary['simulation']"
-                "['baseline'], t0=summary['simulation']['t0_s'])"}
+                "v_s=summary['simulation']['v_s_rad_s'], base_model=summary['simulation']"
+                "['base_model'], t0=summary['simulation']['t0_s'])"}
     return to_jsonable(s)
 
 
@@ -116,7 +116,7 @@ def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
     """
     sim = summary.get("simulation") or {}
     fx = {"v_s": sim.get("v_s_rad_s"), "t0_s": sim.get("t0_s"),
-          "baseline": sim.get("baseline"), "effects": summary["friction_effects"]}
+          "base_model": sim.get("base_model"), "effects": summary["friction_effects"]}
     head = [f"accepted friction effects of {summary['name']} (swgsim-calibrate); a config "
             "option for conf/friction_effects/"]
     if sim.get("caveat"):
@@ -223,14 +223,14 @@ def _heldout_lines(s: Mapping[str, Any]) -> list[str]:
     return lines
 
 
-def _baseline_lines(s: Mapping[str, Any]) -> list[str]:
-    """The paper-law baseline and its parameters."""
+def _base_model_lines(s: Mapping[str, Any]) -> list[str]:
+    """The paper-law base model and its parameters."""
     lines: list[str] = []
-    lines += ["## Baseline: paper law (eq. 5-6 on the joint)", "",
+    lines += ["## Base model: paper law (eq. 5-6 on the joint)", "",
               "τ = b0 tanh(q̇/v_s) + b1 q̇ + b2 q̇³ + b3 sin(q + θ_b), fitted on fit + "
               "validation blocks.", "",
               "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
-    lines += param_rows(s["baseline"]["params"]) + [""]
+    lines += param_rows(s["base_model"]["params"]) + [""]
     return lines
 
 
@@ -305,7 +305,7 @@ def _accepted_lines(s: Mapping[str, Any]) -> list[str]:
         lines += effect_range_lines(e)
     lines += ["Paper-law parameters in the final model:", "",
               "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
-    lines += param_rows(s["baseline"]["params_in_final_model"]) + [""]
+    lines += param_rows(s["base_model"]["params_in_final_model"]) + [""]
     fm = s["final_model"]
     lines += [f"Final model: {fm['n_params']} parameters, condition number of the scaled "
               f"JᵀJ {fmt_value(fm['condition_number'], 3)}, residual τ_int "
@@ -321,11 +321,11 @@ def _diagnosis_lines(s: Mapping[str, Any]) -> list[str]:
               "Probe scores: out-of-sample fraction of the residual mean square explained "
               "by a nonparametric model along one variable (two halves of time blocks, "
               f"structured above {fmt_value(s['diagnosis_after']['threshold'])}).", "",
-              "| probe | baseline residual | final residual |", "|---|---|---|"]
+              "| probe | base model residual | final residual |", "|---|---|---|"]
     pb, pa = s["diagnosis_before"]["probes"], s["diagnosis_after"]["probes"]
     for k in pb:
         lines.append(f"| {k} | {fmt_value(pb[k]['score'], 3)} | {fmt_value(pa[k]['score'], 3)} |")
-    lines += ["", f"Baseline residual: {s['residual_signature_before']}", "",
+    lines += ["", f"Base model residual: {s['residual_signature_before']}", "",
               f"Final residual: {s['residual_signature']}", "",
               f"Noise floor (difference-based, Gasser et al. 1986): "
               f"{fmt_value(s['noise_floor'])} {u}; test RMSE after is "
@@ -339,7 +339,7 @@ def _figure_lines(figures: Mapping[str, str]) -> list[str]:
     """The figures with captions."""
     lines: list[str] = []
     captions = {
-        "velocity": "Residual against velocity (baseline and final), coloured by the sign "
+        "velocity": "Residual against velocity (base model and final), coloured by the sign "
                     "of the acceleration.",
         "position": "Residual against joint angle per direction of motion, and its "
                     "spectrum over q.",
@@ -396,7 +396,7 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
     s = summary
     lines = _data_lines(s)
     lines += result_section(s, "paper law", f" (ratio {fmt_value(s['rmse_ratio'], 3)})")
-    lines += _heldout_lines(s) + _baseline_lines(s) + _selection_lines(s)
+    lines += _heldout_lines(s) + _base_model_lines(s) + _selection_lines(s)
     for n_it in range(len(s["iterations"])):
         lines += _iteration_lines(result, s["iterations"], n_it, s["units"])
     lines += _accepted_lines(s)

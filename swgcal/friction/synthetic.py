@@ -23,10 +23,10 @@ from swgsim.gear.terms import evaluate_terms
 
 from .data import FrictionRecording
 
-__all__ = ["BASELINE_TRUTH", "PLANTED", "SyntheticTruth", "synthetic_trajectory",
+__all__ = ["BASE_MODEL_TRUTH", "PLANTED", "SyntheticTruth", "synthetic_trajectory",
            "synthetic_recording"]
 
-BASELINE_TRUTH = {"b0": 0.30, "b1": 0.40, "b2": 0.50, "b3": 0.05, "theta_b": 0.3}
+BASE_MODEL_TRUTH = {"b0": 0.30, "b1": 0.40, "b2": 0.50, "b3": 0.05, "theta_b": 0.3}
 """Paper-law parameters of the synthetic joint [N m, N m s/rad, N m s³/rad³, N m, rad]."""
 
 V_SMOOTH = 0.004
@@ -133,7 +133,7 @@ def synthetic_trajectory(duration_s: float = 60.0, dt_s: float = 0.01, jitter: f
 def synthetic_recording(
     effects: Sequence[Mapping[str, Any]] = (),
     *,
-    baseline: Mapping[str, float] | None = None,
+    base_model: Mapping[str, float] | None = None,
     v_s: float = V_SMOOTH,
     noise_rel: float = 0.01,
     noise_rho: float = 0.3,
@@ -150,8 +150,8 @@ def synthetic_recording(
     effects : sequence of mapping
         Library effects ``{kind, params}`` (see :data:`PLANTED`); ``load_coulomb`` and
         ``gravity_residual`` get the trajectory's range of q unless ``options`` say.
-    baseline : mapping, optional
-        Paper-law parameters; default :data:`BASELINE_TRUTH`.
+    base model : mapping, optional
+        Paper-law parameters; default :data:`BASE_MODEL_TRUTH`.
     v_s : float
         Smooth-sign velocity [rad/s].
     noise_rel : float, default 0.01
@@ -173,7 +173,7 @@ def synthetic_recording(
         raise ValueError(f"noise_rho must be in [0, 1), got {noise_rho}")
     rng = rng if rng is not None else np.random.default_rng(0)
     t, q, dq, ddq = synthetic_trajectory(duration_s, dt_s, rng=rng)
-    base = dict(BASELINE_TRUTH if baseline is None else baseline)
+    base = dict(BASE_MODEL_TRUTH if base_model is None else base_model)
     effects = [dict(e) for e in effects]
     for e in effects:  # range-polynomial effects live on the trajectory's range of q
         if e.get("kind") in ("load_coulomb", "gravity_residual") and "options" not in e:

@@ -1,10 +1,10 @@
-"""Strain side of the calibration: baseline and declared effect library.
+"""Strain side of the calibration: base model and declared effect library.
 
 The signals and their basis (s_wg, s_t, dpsi: the chain's prediction of each window,
 split into patterns on an extended time grid) are defined in :mod:`.signals`,
 the residual probes in :mod:`.probes` (both re-exported here).
 
-The baseline (:class:`ChainBaseline`) scales the two patterns (the WG deflection w0 and
+The base model (:class:`ChainBaseModel`) scales the two patterns (the WG deflection w0 and
 an overall gauge gain). Candidate effects (:data:`STRAIN_LIBRARY`) add columns or are
 transforms of the basis: the amplifier low-pass and the bridge nonlinearity map it,
 a kinematic-error harmonic replaces the torque pattern (its unit torque responses ΔT
@@ -37,7 +37,7 @@ window is a nuisance fitted by alignment, so (i) a delay common to all channels 
 shift of that angle and cannot be seen (``time_delay`` is a simulation option only);
 (ii) only *relative* gauge angles are observable: misplacements are reported relative
 to the alignment-weighted mean (weights: sensitivity of the alignment to each
-channel); (iii) a gain common to all channels is the baseline's gauge gain, so gains
+channel); (iii) a gain common to all channels is the base model's gauge gain, so gains
 are reported relative to their mean; (iv) the angle of a channel with less than 1 % of
 the alignment weight (the full bridge s0 of the default layout) is not estimated
 (:attr:`GaugeMisplacement.min_weight_share`).
@@ -82,7 +82,7 @@ log = logging.getLogger(__name__)
 __all__ = [
     "SENSORS",
     "StrainSignals",
-    "ChainBaseline",
+    "ChainBaseModel",
     "ChannelOffset",
     "GainMismatch",
     "GaugeMisplacement",
@@ -97,10 +97,10 @@ __all__ = [
 ]
 
 # ---------------------------------------------------------------------------------------
-# baseline
+# base model
 
 
-class ChainBaseline(FitTerm):
+class ChainBaseModel(FitTerm):
     """The simulation chain's prediction for the nominal gear, two scales fitted.
 
     s = a_wg · s_wg + a_torque · s_t. With a common gauge gain G and a WG deflection w0,
@@ -120,7 +120,7 @@ class ChainBaseline(FitTerm):
         self.w0_nom_m = float(w0_nom_m)
 
     @classmethod
-    def for_signals(cls, sig: StrainSignals, name: str | None = None) -> ChainBaseline:
+    def for_signals(cls, sig: StrainSignals, name: str | None = None) -> ChainBaseModel:
         return cls(name, sig.w0_nom_m)
 
     def columns(self, sig: StrainSignals, theta: np.ndarray) -> np.ndarray:
@@ -266,14 +266,14 @@ class _Relative(FitTerm):
 
 
 class GainMismatch(_Relative):
-    """Gain of each channel relative to the mean gain (the baseline's gauge gain)."""
+    """Gain of each channel relative to the mean gain (the base model's gauge gain)."""
 
     kind = "gain_mismatch"
     weight_key = "gain"
     raw_prefix = "g"
     linear = tuple(Param(f"g_r{j}", "-", "relative gain of a free channel") for j in range(4))
     description = ("gain of each channel relative to the mean of the five (gauge-factor and "
-                   "amplifier-gain tolerance); the common gain is the baseline's gauge_gain")
+                   "amplifier-gain tolerance); the common gain is the base model's gauge_gain")
     signature = ("one channel's WG and torque pattern scaled, the same at every speed and "
                  "load; s1−s3 or s2−s4 no longer cancel")
     source = ("Godler et al. (per-gauge gain tuning); Schuller et al. 2024 (sensing ripple); "
@@ -373,7 +373,7 @@ class BridgeNonlinearity(FitTerm):
     description = ("bridge nonlinearity s/(1 + k s) on every channel (exact quarter bridge: "
                    "k = 2e-3 per mV/V; half and full bridges with opposite arm strains are "
                    "linear); applied to the nominal prediction p as p/(1 + k p) with the "
-                   "baseline scales outside, exact while those stay near 1")
+                   "base model scales outside, exact while those stay near 1")
     signature = ("∝ s² to first order: order 4 of ψ and a constant on s1/s3, a load-squared "
                  "offset and ripple on s0/s2/s4")
     source = "Hoffmann 1989 (Wheatstone bridge nonlinearity); docs/PHYSICS.md sec. 4"

@@ -1,6 +1,6 @@
 """Figures of a strain calibration: residual order spectrum, offsets along the sequence,
 channel differences, order-2 amplitude and phase with speed and load, overlay of a test
-window (baseline and final model)."""
+window (base model and final model)."""
 
 from __future__ import annotations
 
@@ -55,7 +55,7 @@ def make_figures(result: CalibrationResult, out_dir: str | Path,
 
 @dataclass(frozen=True)
 class _Views:
-    """What the figures show: measured windows, predictions and residuals (baseline and
+    """What the figures show: measured windows, predictions and residuals (base model and
     final), each (n_windows, 5, n_t), the role of each window (0 fit, 1 validation,
     2 test) and the test window shown."""
 
@@ -104,7 +104,7 @@ def _order_spectrum(plt: Any, v: _Views) -> Any:
     f_in = sig.n_in_rpm / 60.0
     grid = np.arange(0, 30.01, 0.05)
     for c in range(5):
-        for r, col, lab in ((rb, "0.6", "baseline"), (ra, colors[c % len(colors)], "final")):
+        for r, col, lab in ((rb, "0.6", "base_model"), (ra, colors[c % len(colors)], "final")):
             spec = np.abs(np.fft.rfft(r[:, c] * win, axis=-1)) * 2 / win.sum()  # (n_w, n_f)
             amp = np.mean([np.interp(grid, freqs / f_in[w], spec[w]) for w in range(n_w)],
                           axis=0)
@@ -121,7 +121,7 @@ def _offsets(plt: Any, v: _Views) -> Any:
     sig, colors, role = v.sig, v.colors, v.role
     t_start = sig.t_seq_s.reshape(sig.n_windows, 5, sig.n_t)[:, 0, 0]
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
-    for ax, r, title in ((axes[0], v.rb, "baseline residual"),
+    for ax, r, title in ((axes[0], v.rb, "base model residual"),
                          (axes[1], v.ra, "final residual")):
         mean = r.mean(-1)
         for c in range(5):
@@ -144,7 +144,7 @@ def _channel_differences(plt: Any, v: _Views) -> Any:
     for j, (a, b) in enumerate(((1, 3), (2, 4))):
         lab = f"s{a}−s{b}"
         axes[0, j].plot(t_ms, y[w, a] - y[w, b], color="k", lw=0.8, label="measured")
-        axes[0, j].plot(t_ms, pb[w, a] - pb[w, b], color="0.6", lw=1, label="baseline")
+        axes[0, j].plot(t_ms, pb[w, a] - pb[w, b], color="0.6", lw=1, label="base_model")
         axes[0, j].plot(t_ms, pa[w, a] - pa[w, b], color=col, lw=1, label="final")
         axes[0, j].set_title(lab)
         axes[1, j].plot(t_ms, rb[w, a] - rb[w, b], color="0.6", lw=0.8)
@@ -164,7 +164,7 @@ def _speed_load(plt: Any, v: _Views) -> Any:
     x_op = np.array([f"{sig.n_in_rpm[w]:.0f}/{sig.t_out_nm[w]:.0f}" for w in range(n_w)])
     order = np.lexsort((sig.t_out_nm, sig.n_in_rpm))
     for c in range(5):
-        for z, mk, lab in ((m, "o", "measured"), (b, "x", "baseline"), (a, "+", "final")):
+        for z, mk, lab in ((m, "o", "measured"), (b, "x", "base_model"), (a, "+", "final")):
             axes[0, c].plot(x_op[order], z[order, c, 0], mk, label=lab, ms=6)
             axes[1, c].plot(x_op[order], z[order, c, 1], mk, ms=6)
         axes[0, c].set_title(SENSORS[c])
@@ -179,12 +179,12 @@ def _speed_load(plt: Any, v: _Views) -> Any:
 
 
 def _overlay(plt: Any, v: _Views) -> Any:
-    """Measured signals of the test window with the baseline and final predictions."""
+    """Measured signals of the test window with the base model and final predictions."""
     t_ms, w = v.t_ms, v.test_w
     fig, axes = plt.subplots(5, 1, figsize=(8, 9), sharex=True)
     for c in range(5):
         axes[c].plot(t_ms, v.y[w, c], color="k", lw=0.7, label="measured")
-        axes[c].plot(t_ms, v.pb[w, c], color="0.6", lw=1, label="baseline")
+        axes[c].plot(t_ms, v.pb[w, c], color="0.6", lw=1, label="base_model")
         axes[c].plot(t_ms, v.pa[w, c], color=v.colors[0], lw=1, label="final")
         axes[c].set_ylabel(f"{SENSORS[c]} [mV/V]")
     axes[0].legend(fontsize=8, loc="upper right")

@@ -73,7 +73,7 @@ from swgsim.sensing.effects import psi_rate
 from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
 from ..split import HeldOutSplit, group_split
 from .data import StrainWindows, heldout_split, strain_windows
-from .effects import ChainBaseline, StrainSignals, strain_library, strain_probes
+from .effects import ChainBaseModel, StrainSignals, strain_library, strain_probes
 from .model import Realigner, StrainModel
 
 log = logging.getLogger(__name__)
@@ -186,7 +186,7 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
     meta = _problem_meta(win, model, sim, role, period, (lo, hi), n_tail, sig.weights)
     return Problem(name=win.name, kind="strain", units="mV/V", signals=sig,
                    y=win.y.reshape(-1).astype(float), t=sig.t_s,
-                   baseline=(ChainBaseline.for_signals(sig),),
+                   base_model=(ChainBaseModel.for_signals(sig),),
                    library={k: lib_all[k] for k in keys}, probes=strain_probes(), split=split,
                    meta=meta)
 

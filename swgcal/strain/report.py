@@ -51,7 +51,7 @@ IDENTIFIABILITY = (
     "angle and cannot be identified (time_delay is a simulation option only, not a "
     "candidate); only relative gauge angles are observable (misplacements are relative to "
     "the alignment-weighted mean; the angle of a channel with < 1 % of the alignment "
-    "weight is not estimated); a gain common to all channels is the baseline's "
+    "weight is not estimated); a gain common to all channels is the base model's "
     "gauge_gain (channel gains are relative to their mean). A window's input angle is "
     "known modulo 180° only unless odd orders of the torque ripple rise above the noise "
     "(alignment table); the phase of an odd kinematic-error harmonic is then known "
@@ -92,7 +92,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
       the last iteration with very strong evidence but outside their physical range
       (they make the run ``unexplained``);
     * ``gear_ke_harmonics``: accepted kinematic-error harmonics for :func:`gear_with_ke`;
-    * ``chain``: fitted baseline (w0, gauge gain) as chain overrides;
+    * ``chain``: fitted base model (w0, gauge gain) as chain overrides;
     * ``alignment``: per window the time shifts, WG angle at its start (mod 180°) and its
       s.e., input angle at its start (nominal chain, and re-aligned with the accepted
       kinematic-error harmonics) modulo the period the data decide (``phi_in0_period_deg``:
@@ -113,8 +113,8 @@ def _summarize(result: CalibrationResult, source: str | None) -> dict[str, Any]:
     for e in s["effects_added"]:
         for q in e["params"].values():
             q["stderr"] = q.get("std")
-    s["baseline"]["params"] = {k: {**v, "stderr": v.get("std")}
-                               for k, v in s["baseline"]["params"].items()}
+    s["base_model"]["params"] = {k: {**v, "stderr": v.get("std")}
+                               for k, v in s["base_model"]["params"].items()}
     final = result.final
     withheld = withheld_parameters(result)
     sensor, ke = simulation_option(result, withheld)
@@ -210,7 +210,7 @@ def order2_components(sig: StrainSignals, x: np.ndarray) -> np.ndarray:
 
 
 def order2_table(result: CalibrationResult) -> list[dict[str, Any]]:
-    """Order-2 (ψ) amplitude and phase per operating point and channel: measured, baseline
+    """Order-2 (ψ) amplitude and phase per operating point and channel: measured, base model
     and final model, mean over the windows of the operating point."""
     sig: StrainSignals = result.problem.signals
     pb, pa = result.predictions()
@@ -225,7 +225,7 @@ def order2_table(result: CalibrationResult) -> list[dict[str, Any]]:
                 ph = float(np.rad2deg(np.angle(np.mean(np.exp(1j * np.deg2rad(z[sel, c, 1]))))))
                 return amp, ph
             rows.append({"n_in_rpm": o[0], "t_out_nm": o[1], "channel": s,
-                         "measured": mean_ap(m), "baseline": mean_ap(b), "final": mean_ap(a)})
+                         "measured": mean_ap(m), "base_model": mean_ap(b), "final": mean_ap(a)})
     return rows
 
 
@@ -249,7 +249,7 @@ def render_report(result: CalibrationResult, summary: Mapping[str, Any],
                             f"{fmt_value(s['rmse_over_noise_floor'], 3)})")
     lines += result_extras(s)
     lines += ["## Held-out data", "", s["heldout"], ""]
-    lines += _baseline_section(result, s)
+    lines += _base_model_section(result, s)
     lines += _alignment_section(s)
     lines += _selection_section(s)
     lines += _accepted_section(s)
@@ -277,13 +277,13 @@ def _data_section(s: Mapping[str, Any]) -> list[str]:
                         zip(d["operating_points"], d["windows_per_op"], strict=True)) + ".", ""]
 
 
-def _baseline_section(result: CalibrationResult, s: Mapping[str, Any]) -> list[str]:
+def _base_model_section(result: CalibrationResult, s: Mapping[str, Any]) -> list[str]:
     """The nominal chain's fitted scales, alone and in the final model."""
-    lines = ["## Baseline: nominal simulation chain", "", result.problem.baseline[0].description
+    lines = ["## Base model: nominal simulation chain", "", result.problem.base_model[0].description
              + ". Fitted on fit + validation windows:", "", *_PARAM_HEAD]
-    lines += param_rows(s["baseline"]["params"]) + [""]
+    lines += param_rows(s["base_model"]["params"]) + [""]
     lines += ["In the final model (with the accepted effects):", "", *_PARAM_HEAD]
-    return lines + param_rows(s["baseline"]["params_in_final_model"]) + [""]
+    return lines + param_rows(s["base_model"]["params_in_final_model"]) + [""]
 
 
 def _alignment_section(s: Mapping[str, Any]) -> list[str]:
@@ -363,16 +363,16 @@ def _diagnosis_section(s: Mapping[str, Any]) -> list[str]:
              "Probe scores: out-of-sample fraction of the residual mean square explained by a "
              "nonparametric model along one variable (structured above "
              f"{fmt_value(s['diagnosis_after']['threshold'])}).", "",
-             "| probe | baseline residual | final residual |", "|---|---|---|"]
+             "| probe | base model residual | final residual |", "|---|---|---|"]
     pb, pa = s["diagnosis_before"]["probes"], s["diagnosis_after"]["probes"]
     for k in pb:
         lines.append(f"| {k} | {fmt_value(pb[k]['score'], 3)} | {fmt_value(pa[k]['score'], 3)} |")
-    lines += ["", f"Baseline residual: {s['residual_signature_before']}", "",
+    lines += ["", f"Base model residual: {s['residual_signature_before']}", "",
               f"Final residual: {s['residual_signature']}", "",
               "Order-2 component of ψ (amplitude [mV/V] / phase [deg]) per operating point and "
               "channel, mean over its windows: how amplitude and phase change with speed and "
               "load.", "",
-              "| n_in [rpm] | T_out [N m] | channel | measured | baseline | final |",
+              "| n_in [rpm] | T_out [N m] | channel | measured | base model | final |",
               "|---|---|---|---|---|---|"]
 
     def ap(x):
@@ -380,20 +380,20 @@ def _diagnosis_section(s: Mapping[str, Any]) -> list[str]:
 
     for r in s["order2"]:
         lines.append(f"| {r['n_in_rpm']:g} | {r['t_out_nm']:g} | {r['channel']} | "
-                     f"{ap(r['measured'])} | {ap(r['baseline'])} | {ap(r['final'])} |")
+                     f"{ap(r['measured'])} | {ap(r['base_model'])} | {ap(r['final'])} |")
     return lines + [""]
 
 
 _CAPTIONS = {
     "order_spectrum": "Residual amplitude spectrum per channel against the order of the "
-                      "input rotation (baseline grey, final colour), mean over windows.",
+                      "input rotation (base model grey, final colour), mean over windows.",
     "offsets": "Mean residual per window and channel along the recording sequence "
-               "(offsets, drift), baseline and final; held-out windows marked.",
+               "(offsets, drift), base model and final; held-out windows marked.",
     "channel_differences": "Channel differences s1−s3 and s2−s4 of a test window: measured, "
-                           "baseline and final model, and their residuals.",
+                           "base model and final model, and their residuals.",
     "speed_load": "Order-2 (ψ) amplitude and phase per window against speed and load: "
-                  "measured, baseline, final.",
-    "overlay": "Measured signals of a test window with the baseline and final predictions.",
+                  "measured, base model, final.",
+    "overlay": "Measured signals of a test window with the base model and final predictions.",
 }
 
 

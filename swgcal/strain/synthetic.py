@@ -300,7 +300,7 @@ def expected_values(key: str, effect: Mapping[str, Any],
     """True values of the parameters a calibration reports for a planted effect.
 
     Gains and gauge angles are only observable relative to a weighted mean (the
-    baseline's gauge gain and the WG-angle alignment absorb the common part): the truth
+    base model's gauge gain and the WG-angle alignment absorb the common part): the truth
     is converted with the weights the calibration reports (``effect["options"]``):
     g_c = G_c / (Σ w G / Σ w) − 1, δ_c = Δ_c − Σ w Δ / Σ w, the sums over the estimated
     channels (``options["estimable"]``; the others are not reported).

@@ -25,7 +25,7 @@ from typing import Any, Union
 import numpy as np
 
 __all__ = ["MISSING", "NONFINITE", "RANGE", "allowed", "build", "check_finite", "check_keys",
-           "complete"]
+           "check_range", "complete"]
 
 MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
 
@@ -303,3 +303,39 @@ def check_finite(obj: Any, where: str) -> None:
     """
     for key, value in _nonfinite(obj, where):
         raise ValueError(f"{key} must be a finite number, got {value}")
+
+
+def check_range(value: Any, lo: float, hi: float, key: str, unit: str = "", *,
+                lo_open: bool = False, hi_open: bool = False, why: str = "") -> None:
+    """Refuse a number outside [lo, hi] (or the open ends), NaN and infinity included,
+    in one line naming the key, the value and the range.
+
+    Parameters
+    ----------
+    value : number
+    lo, hi : float
+        Bounds (``-inf`` or ``inf`` for an open end).
+    key : str
+        Full name, e.g. ``dataset.chain.window_s``.
+    unit : str
+        Unit for the message, e.g. ``"s"``.
+    lo_open, hi_open : bool
+        Exclude the bound.
+    why : str
+        What the range means, for the message.
+
+    Raises
+    ------
+    ValueError
+        ``<key> must lie in [lo, hi] unit (why), got <value>``.
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    ok = math.isfinite(v) and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
+    if not ok:
+        rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+        raise ValueError(f"{key} must lie in {rng}{' ' + unit if unit else ''}"
+                         f"{' (' + why + ')' if why else ''}, got {value}")
+

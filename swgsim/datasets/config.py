@@ -1,7 +1,7 @@
 """Typed schema of a data-set config, with the paper preset as its defaults.
 
 :class:`DatasetConfig` and its parts are plain dataclasses (no Hydra): their defaults *are*
-the paper's grid and recording (Sec. III-B, Tables IV-V). Its parts are the simulator's
+the paper's grid and acquisition (Sec. III-B, Tables IV-V). Its parts are the simulator's
 own settings classes (chain, mesh, gauges, disturbance, acquisition), so every default is
 written once, where the value is used. The apps register the schema as a Hydra structured
 config (``swgcli.schema``) and hand the typed object on, so the YAML presets in
@@ -308,7 +308,7 @@ def _paper_gears() -> list[GearConfig]:
 
 @dataclass
 class DatasetConfig:
-    """A data set: grid, chain, disturbance and recording; defaults are the paper preset.
+    """A data set: grid, chain, disturbance and acquisition; defaults are the paper preset.
 
     The parts are the simulator's own settings classes (one definition, one default each):
     :class:`swgsim.gear.sensors.SensorsConfig` and

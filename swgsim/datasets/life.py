@@ -57,7 +57,7 @@ class LifeSimulator:
     Parameters
     ----------
     plan : DatasetPlan
-        The checked data set: chain, gear, recording, disturbance, sensor effects.
+        The checked data set: chain, gear, acquisition, disturbance, sensor effects.
     gear_id : int
     life : LifeConfig
         Checked (:func:`check_life`).

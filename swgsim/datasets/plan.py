@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.base.typed import check_finite
+from swgsim.base.typed import check_finite, check_range
 from swgsim.datasets.config import (
     DatasetConfig,
     GearConfig,
@@ -154,19 +154,8 @@ def _req(cond: bool, msg: str) -> None:
         raise ValueError(msg)
 
 
-def _in(value, lo, hi, key: str, unit: str = "", *, lo_open: bool = False,
-        hi_open: bool = False, why: str = "") -> None:
-    """Refuse ``value`` outside [lo, hi] (or the open ends) naming key, value and range."""
-    v = float(value)
-    ok = np.isfinite(v) and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
-    if not ok:
-        rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
-        raise ValueError(f"{key} must lie in {rng}{' ' + unit if unit else ''}"
-                         f"{' (' + why + ')' if why else ''}, got {value}")
-
-
 def _check_name_and_points(cfg: DatasetConfig) -> None:
-    _in(cfg.seed, 0, 2**32 - 1, "dataset.seed")
+    check_range(cfg.seed, 0, 2**32 - 1, "dataset.seed")
     _req(bool(cfg.name) and "/" not in cfg.name and cfg.name not in (".", ".."),
          f"dataset.name must be a non-empty folder name, got {cfg.name!r}")
     for key, lo, hi, unit, why in (
@@ -177,8 +166,8 @@ def _check_name_and_points(cfg: DatasetConfig) -> None:
              f"dataset.operating_points.{key} must list one or more distinct values, "
              f"got {vals}")
         for v in vals:
-            _in(v, lo, hi, f"dataset.operating_points.{key}", unit, lo_open=key == "n_in_rpm",
-                why=why)
+            check_range(v, lo, hi, f"dataset.operating_points.{key}", unit,
+                        lo_open=key == "n_in_rpm", why=why)
 
 
 def _max_eccentricity(variants: Mapping[str, VariantSpec]) -> float:
@@ -193,26 +182,26 @@ def _check_chain(cfg: DatasetConfig) -> None:
     _req(n_theta % 20 == 0 and 20 <= n_theta <= 2000, "dataset.mesh.n_theta must be a "
          f"multiple of 20 in [20, 2000], got {cfg.mesh.n_theta}")
     ch = cfg.chain
-    _in(ch.sample_rate_hz, 0.0, 1e6, "dataset.chain.sample_rate_hz", "Hz", lo_open=True)
-    _in(ch.window_s, 0.0, 10.0, "dataset.chain.window_s", "s", lo_open=True)
-    _in(ch.settle_s, 0.0, 10.0, "dataset.chain.settle_s", "s")
-    _in(ch.substeps, 1, 100, "dataset.chain.substeps")
-    _in(ch.contact_half_width_deg, 360.0 / n_theta, 90.0,
-        "dataset.chain.contact_half_width_deg", "deg", hi_open=True,
-        why="at least one node spacing; the two mesh zones 180 deg apart must not overlap")
+    check_range(ch.sample_rate_hz, 0.0, 1e6, "dataset.chain.sample_rate_hz", "Hz", lo_open=True)
+    check_range(ch.window_s, 0.0, 10.0, "dataset.chain.window_s", "s", lo_open=True)
+    check_range(ch.settle_s, 0.0, 10.0, "dataset.chain.settle_s", "s")
+    check_range(ch.substeps, 1, 100, "dataset.chain.substeps")
+    check_range(ch.contact_half_width_deg, 360.0 / n_theta, 90.0,
+                "dataset.chain.contact_half_width_deg", "deg", hi_open=True,
+                why="at least one node spacing; the two mesh zones 180 deg apart must not overlap")
     e_max = _max_eccentricity(cfg.variants)
-    _in(ch.ecc_load_share, 0.0, 1.0 / e_max if e_max > 0 else 10.0,
-        "dataset.chain.ecc_load_share", why="the load share 1 ± κ e/w0 of a mesh zone must "
-        "stay in [0, 2] for the largest eccentricity of dataset.variants.eccentric_wg")
-    _in(cfg.load.j_out_kgm2, 1e-4, 100.0, "dataset.load.j_out_kgm2", "kg m²")
+    check_range(ch.ecc_load_share, 0.0, 1.0 / e_max if e_max > 0 else 10.0,
+                "dataset.chain.ecc_load_share", why="the load share 1 ± κ e/w0 of a mesh zone must "
+                "stay in [0, 2] for the largest eccentricity of dataset.variants.eccentric_wg")
+    check_range(cfg.load.j_out_kgm2, 1e-4, 100.0, "dataset.load.j_out_kgm2", "kg m²")
 
 
 def _check_tolerances_and_disturbance(cfg: DatasetConfig) -> None:
     for key, hi, unit in (("sd_theta_deg", 5.0, "deg"), ("sd_r_mm", 2.0, "mm"),
                           ("sd_beta_deg", 10.0, "deg"), ("sd_gain", 0.2, "")):
-        _in(getattr(cfg.tolerances, key), 0.0, hi, f"dataset.tolerances.{key}", unit)
+        check_range(getattr(cfg.tolerances, key), 0.0, hi, f"dataset.tolerances.{key}", unit)
     for key in ("offset_mvv", "harmonic_mvv"):
-        _in(getattr(cfg.disturbance, key), 0.0, 1.0, f"dataset.disturbance.{key}", "mV/V")
+        check_range(getattr(cfg.disturbance, key), 0.0, 1.0, f"dataset.disturbance.{key}", "mV/V")
     # eq. (10): sub-harmonics down to order 1/4 (a profile's windows have no eq. (10) twins)
     if cfg.disturbance.harmonic_mvv > 0 and cfg.profile is None:
         n_min = min(cfg.operating_points.n_in_rpm)
@@ -229,10 +218,10 @@ def _check_gears(cfg: DatasetConfig) -> None:
     ids = [int(g.id) for g in cfg.gears]
     _req(len(set(ids)) == len(ids), f"dataset.gears: ids must be unique, got {ids}")
     for i, g in enumerate(cfg.gears):
-        _in(g.id, 1, 999, f"dataset.gears[{i}].id")
-        _in(g.tolerance_seed, 0, 2**32 - 1, f"dataset.gears[{i}].tolerance_seed")
+        check_range(g.id, 1, 999, f"dataset.gears[{i}].id")
+        check_range(g.tolerance_seed, 0, 2**32 - 1, f"dataset.gears[{i}].tolerance_seed")
         for k in ("b1_factor", "k1_factor"):
-            _in(getattr(g, k), 0.0, 10.0, f"dataset.gears[{i}].{k}", lo_open=True)
+            check_range(getattr(g, k), 0.0, 10.0, f"dataset.gears[{i}].{k}", lo_open=True)
         try:
             gear_with_ke(rt1_size20(), g.ke_extra)
         except (TypeError, ValueError) as e:
@@ -286,7 +275,7 @@ def _check_step(cfg: DatasetConfig) -> None:
                     f"simulation would diverge); {allowed}")
 
 
-def _check_recording(cfg: DatasetConfig) -> None:
+def _check_acquisition(cfg: DatasetConfig) -> None:
     acq = check_acquisition(cfg.acquisition)
     if acq.amplifier is not None:
         fs = cfg.chain.sample_rate_hz
@@ -310,18 +299,18 @@ def _check_sensors(cfg: DatasetConfig) -> None:
     sec. 2)."""
     geo = FlexsplineGeometry()
     s, r_c = cfg.sensors, geo.r_collar_m * 1e3
-    _in(s.r_torque_mm, 0.0, r_c, "dataset.sensors.r_torque_mm", "mm", lo_open=True,
-        why="inside the collar's clamped edge")
-    _in(s.r_pairs_mm, 0.0, r_c, "dataset.sensors.r_pairs_mm", "mm", lo_open=True,
-        why="inside the collar's clamped edge")
+    check_range(s.r_torque_mm, 0.0, r_c, "dataset.sensors.r_torque_mm", "mm", lo_open=True,
+                why="inside the collar's clamped edge")
+    check_range(s.r_pairs_mm, 0.0, r_c, "dataset.sensors.r_pairs_mm", "mm", lo_open=True,
+                why="inside the collar's clamped edge")
     # no mesh resolves a grid shorter than the shortest foil grids sold (0.2 mm) or lays
     # one longer than the collar's radial extent (sleeve to clamped edge): the grid's own
     # range, so that the mesh (dataset.mesh.n_theta) is not blamed for it
-    _in(s.grid_length_mm, MIN_GRID_LENGTH_MM, r_c - geo.r_mid_m * 1e3,
-        "dataset.sensors.grid_length_mm", "mm",
-        why="foil grids from 0.2 mm, no longer than the collar's radial extent")
-    _in(s.gauge_factor, 0.0, 200.0, "dataset.sensors.gauge_factor", lo_open=True,
-        why="foil gauges about 2, semiconductor gauges up to about 150")
+    check_range(s.grid_length_mm, MIN_GRID_LENGTH_MM, r_c - geo.r_mid_m * 1e3,
+                "dataset.sensors.grid_length_mm", "mm",
+                why="foil grids from 0.2 mm, no longer than the collar's radial extent")
+    check_range(s.gauge_factor, 0.0, 200.0, "dataset.sensors.gauge_factor", lo_open=True,
+                why="foil gauges about 2, semiconductor gauges up to about 150")
 
 
 def _check_layout(cfg: DatasetConfig) -> None:
@@ -375,8 +364,8 @@ def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
          f"dataset.chain.window_s={ch.window_s:g} s is shorter than one wave-generator "
          f"revolution at the profile's lowest cruise speed {n_low:g} rpm; allowed: >= "
          f"{rev_s:.4g} s")
-    _in(pc.start_jitter_s, 0.0, ch.window_s, "dataset.profile.start_jitter_s", "s",
-        why="a life's window starts within one window of their slot's")
+    check_range(pc.start_jitter_s, 0.0, ch.window_s, "dataset.profile.start_jitter_s", "s",
+                why="a life's window starts within one window of their slot's")
     dur = prof.speed.duration_s
     amp = cfg.acquisition.amplifier
     lead_s = 0.0 if amp is None else (amp.lead_samples(ch.sample_rate_hz) + 1) / ch.sample_rate_hz
@@ -390,8 +379,9 @@ def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
         starts = tuple(float(t) for t in pc.window_starts_s)
         _req(len(starts) >= 1, "dataset.profile.window_starts_s must list at least one start")
         for i, t in enumerate(starts):
-            _in(t, lead_s, dur - ch.window_s - lead_s, f"dataset.profile.window_starts_s[{i}]",
-                "s", why="the window inside the profile, with the amplifier's history")
+            check_range(t, lead_s, dur - ch.window_s - lead_s,
+                        f"dataset.profile.window_starts_s[{i}]", "s",
+                        why="the window inside the profile, with the amplifier's history")
     return prof, starts
 
 
@@ -510,7 +500,7 @@ def plan(cfg: DatasetConfig | Mapping[str, Any] | DatasetPlan) -> DatasetPlan:
     _check_tolerances_and_disturbance(cfg)
     _check_gears(cfg)
     prof, starts = _check_profile(cfg) if cfg.profile is not None else (None, ())
-    _check_recording(cfg)
+    _check_acquisition(cfg)
     _check_step(cfg)
     _check_sensors(cfg)
     effects = tuple(parse_sensor_effects(cfg.sensor_effects))

@@ -95,7 +95,7 @@ class LifeConfig:
     interval_min : float
         Operating minutes between windows, > 0 (default one a minute).
     commissioning_h : float
-        The first hours, known healthy: the monitor's baseline. The default, 24 h (1,440
+        The first hours, known healthy: the monitor's commissioning. The default, 24 h (1,440
         windows, 240 per operating point of the paper's six), is above the minimum of the
         monitor's default design (one false alarm per 1000 h; ``learn.monitor``).
     duty : list of DutyPoint

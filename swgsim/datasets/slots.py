@@ -15,7 +15,7 @@ joint moves, and the angle-domain features need about 1.45 revolutions
 misplacement is defined along a monotone ψ, :mod:`swgsim.sensing.effects`).
 
 Window k of a life lies in slot k mod S (one window every ``interval_min`` of operation,
-as a steady life's duty points). Its operating point, the key of the monitor's baseline,
+as a steady life's duty points). Its operating point, the key of the monitor's normal behaviour,
 is the slot's *commanded* one: the mean desired input speed and the mean load along the
 desired motion (the link's pose integrated from the desired speed), the same for every
 state of the gear. What differs from cycle to cycle: the window's start within its

@@ -1,6 +1,6 @@
 """How a window is recorded: its start, and the amplifier that samples the bridges.
 
-The data-set option ``acquisition`` is the *recording* of a data set (its two presets are
+The data-set option ``acquisition`` is the *acquisition* of a data set (its two presets are
 ``conf/dataset/paper.yaml`` and ``bench.yaml``)::
 
     acquisition:
@@ -103,7 +103,7 @@ class Amplifier:
 @dataclass
 class Acquisition:
     """How a data set's windows are recorded (the data-set option ``acquisition``): how
-    they start and how they are sampled; the defaults are the paper's recording.
+    they start and how they are sampled; the defaults are the paper's acquisition.
 
     Attributes
     ----------

@@ -5,7 +5,7 @@
 coordinate q (the gear output angle), the velocity the friction law acts on, the
 smooth-sign velocity and the data scales that set the bounds of nonlinear parameters.
 
-The baseline is the paper's friction law, eq. (5), mapped to the joint coordinate q (the
+The base model is the paper's friction law, eq. (5), mapped to the joint coordinate q (the
 flank sliding velocity φ̇_b = −φ̇_out / sin α_tooth of eq. (6) is proportional to q̇, so
 its constant factors fold into the coefficients):
 

@@ -17,7 +17,7 @@ angle, τ positive along q̇), which the dynamics add to the paper-law friction:
   value per variant), with the states passed in; :meth:`FrictionEffects.state_derivative`
   gives their time derivatives for an ODE integrator (python-control style ``rhs``).
 
-Effects that act *through* the friction law (``velocity_lag``) need the baseline
+Effects that act *through* the friction law (``velocity_lag``) need the base model
 (paper-law) parameters: the extra torque is then friction law with the effects minus
 friction law without them.
 """
@@ -93,7 +93,7 @@ class FrictionEffects:
     v_s : float
         Smooth-sign velocity tanh(q̇ / v_s) [rad/s] (``v_s_rad_s`` in summary.json);
         may be None when ``effects`` is empty (the torque is then zero).
-    baseline : mapping, optional
+    base model : mapping, optional
         Paper-law parameters ``{b0, b1, b2, b3, theta_b}`` [N m, N m s/rad, N m s³/rad³,
         N m, rad]; required when an effect acts through the friction law
         (``velocity_lag``).
@@ -103,7 +103,7 @@ class FrictionEffects:
     Raises
     ------
     ValueError
-        ``v_s`` not positive (with effects), or ``velocity_lag`` without ``baseline``.
+        ``v_s`` not positive (with effects), or ``velocity_lag`` without ``base model``.
 
     Examples
     --------
@@ -116,18 +116,18 @@ class FrictionEffects:
     """
 
     def __init__(self, effects: Sequence[Mapping[str, Any]], v_s: float | None,
-                 baseline: Mapping[str, float] | None = None, t0: float | None = 0.0) -> None:
+                 base_model: Mapping[str, float] | None = None, t0: float | None = 0.0) -> None:
         self.items = parse_effects(effects or [])
         if self.items and not (v_s is not None and v_s > 0):
             raise ValueError(f"v_s must be > 0 [rad/s], got {v_s}")
         self.v_s = float(v_s) if v_s is not None else 1.0
         self.t0 = float(t0 or 0.0)
         self.has_transform = any(t.is_transform for t, _, _ in self.items)
-        if self.has_transform and baseline is None:
-            raise ValueError("velocity_lag acts through the friction law: pass baseline="
+        if self.has_transform and base_model is None:
+            raise ValueError("velocity_lag acts through the friction law: pass base_model="
                              "{b0, b1, b2, b3, theta_b}")
-        self.base_coef = (PaperLaw().from_derived(**{k: float(baseline[k]) for k in (
-            "b0", "b1", "b2", "b3", "theta_b")}) if baseline is not None else None)
+        self.base_coef = (PaperLaw().from_derived(**{k: float(base_model[k]) for k in (
+            "b0", "b1", "b2", "b3", "theta_b")}) if base_model is not None else None)
         # state layout: one per presliding or lag effect
         self.state_names = [t.name for t, _, _ in self.items
                             if isinstance(t, (Presliding, VelocityLag))]
@@ -249,7 +249,7 @@ class FrictionEffectsConfig:
         effects.
     t0_s : float
         Time origin of drift effects [s].
-    baseline : dict or None
+    base model : dict or None
         Paper-law parameters ``{b0, b1, b2, b3, theta_b}``, needed by ``velocity_lag``.
     effects : list
         The effects, ``{kind, params}`` each (:func:`parse_effects`).
@@ -257,7 +257,7 @@ class FrictionEffectsConfig:
 
     v_s: float | None = None
     t0_s: float = 0.0
-    baseline: dict[str, float] | None = None
+    base_model: dict[str, float] | None = None
     effects: list[Any] = field(default_factory=list)
 
 
@@ -266,7 +266,7 @@ def _as_config(spec: Any, where: str) -> FrictionEffectsConfig:
     if isinstance(spec, FrictionEffectsConfig):
         return spec
     if not isinstance(spec, Mapping):
-        raise ValueError(f"{where} must be null or a mapping {{v_s, t0_s, baseline, effects}} "
+        raise ValueError(f"{where} must be null or a mapping {{v_s, t0_s, base model, effects}} "
                          "(the friction_effects.yaml a calibration writes), got "
                          f"{type(spec).__name__}")
     keys = {f.name for f in fields(FrictionEffectsConfig)}
@@ -274,7 +274,8 @@ def _as_config(spec: Any, where: str) -> FrictionEffectsConfig:
     if unknown:
         raise ValueError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(keys)}")
     return FrictionEffectsConfig(v_s=spec.get("v_s"), t0_s=spec.get("t0_s") or 0.0,
-                                 baseline=spec.get("baseline"), effects=spec.get("effects") or [])
+                                 base_model=spec.get("base_model"),
+                                 effects=spec.get("effects") or [])
 
 
 def friction_effects_from_config(spec: FrictionEffectsConfig | Mapping[str, Any] | None,
@@ -313,7 +314,7 @@ def friction_effects_from_config(spec: FrictionEffectsConfig | Mapping[str, Any]
         raise ValueError(f"{where}.v_s must be > 0 [rad/s] (the smooth-sign velocity the "
                          f"effects were fitted with), got {cfg.v_s}")
     try:
-        return FrictionEffects(cfg.effects, v_s=float(cfg.v_s), baseline=cfg.baseline,
+        return FrictionEffects(cfg.effects, v_s=float(cfg.v_s), base_model=cfg.base_model,
                                t0=float(cfg.t0_s or 0.0))
     except (KeyError, ValueError) as e:
         msg = e.args[0] if e.args else str(e)

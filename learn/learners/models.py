@@ -1,4 +1,4 @@
-"""Scikit-learn baselines of the paper, Table VI.
+"""The model registry and the paper's scikit-learn classifiers, Table VI.
 
 =====  ==============================================  ==================================
 name   estimator                                       paper Table VI
@@ -140,7 +140,7 @@ PAPER_MODELS: dict[str, ModelSpec] = {
 
 
 def model_config(name: str, scale: bool = False, random_state: Any = "${seed}") -> dict:
-    """Hydra config of a registered model: ``_target_: learn.learners.baselines.make_pipeline``.
+    """Hydra config of a registered model: ``_target_: learn.learners.models.make_pipeline``.
 
     Parameters
     ----------
@@ -164,7 +164,7 @@ def model_config(name: str, scale: bool = False, random_state: Any = "${seed}") 
     est = {"_target_": spec.target, **spec.settings}
     if spec.seeded:
         est["random_state"] = random_state
-    return {"_target_": "learn.learners.baselines.make_pipeline", "name": name, "scale": scale,
+    return {"_target_": "learn.learners.models.make_pipeline", "name": name, "scale": scale,
             "estimator": est}
 
 

@@ -1,11 +1,15 @@
-"""Per-window classifiers as monitors: the baselines of the monitor's evaluation table.
+"""Per-window detectors beside the monitor: classifiers used as monitors, in a registry.
 
 Each labels every window on its own and raises an alarm whenever one window is classified
-as anything but healthy (the way a per-window classifier is used as a monitor):
+as anything but healthy (the way a per-window classifier is used as a monitor). The
+registry :data:`DETECTORS` holds them by name, like the faults
+(:func:`swgsim.gear.faults.register_fault`) and the models
+(:func:`learn.learners.models.register_model`); an evaluation runs the ones its config
+names (``monitor.study.detectors``). Shipped:
 
 ``paper_rf``
     The paper's pipeline (Sec. III-IV): the random forest of
-    :mod:`learn.learners.baselines` (``rf``) on the Table III Selection 1 features, every
+    :mod:`learn.learners.models` (``rf``) on the Table III Selection 1 features, every
     window normalised by *one* reference window of its gear and operating point (eq. 7) -
     here the gear's first commissioning window at that operating point.
 ``cnn_res``
@@ -15,8 +19,10 @@ as anything but healthy (the way a per-window classifier is used as a monitor):
     (three circular conv blocks, ten epochs).
 
 Both are trained on the same lives of the training gears as the monitor's diagnosis model
-(:func:`learn.monitor.evaluate.training_lives`), class-balanced as the paper's data set
-(every class drawn down to the smallest's count), and know the same classes.
+(:func:`learn.monitor.training.training_lives`), class-balanced as the paper's data set
+(every class drawn down to the smallest's count), and know the same classes. Their inputs
+are defined at a steady input speed: on a data set along an operating profile they cannot
+run (:meth:`DetectorSpec.cannot_run_on` says why, and the evaluation reports it).
 """
 
 from __future__ import annotations
@@ -26,31 +32,51 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from learn.inputs.signals import AUX, build_input
+from learn.learners.models import make_model, make_pipeline
 from swgsim.datasets.life import LifeSimulator
+from swgsim.datasets.plan import DatasetPlan
+from swgsim.datasets.schema import PER_SAMPLE, make_dataset
 
 from .model import HEALTHY
 
 
 @dataclass(frozen=True)
-class BaselineSpec:
-    """A per-window baseline: its input (:data:`learn.inputs.signals.INPUTS`) and how to
-    make its untrained estimator from a seed."""
+class DetectorSpec:
+    """A per-window detector: its input and how to make its untrained estimator.
+
+    Attributes
+    ----------
+    input : str
+        An input of :func:`learn.inputs.signals.build_input` (e.g. ``sel1``, ``raw_res``),
+        each window against one reference window of its operating point.
+    make : callable
+        ``make(seed) -> estimator`` with ``fit(x, y)`` and ``predict(x)`` (class names).
+    source : str
+        Where the detector comes from (paper section, study).
+    steady_only : bool
+        Its input is defined at a steady input speed (a window at one operating point).
+    """
 
     input: str
     make: Callable[[int], object]
     source: str
+    steady_only: bool = True
+
+    def cannot_run_on(self, plan: DatasetPlan) -> str | None:
+        """Why this detector cannot run on a data set's lives, or None if it can."""
+        if self.steady_only and plan.profile is not None:
+            return (f"its input {self.input} is defined at a steady input speed; "
+                    f"{plan.config.name} moves along an operating profile")
+        return None
 
 
 def _paper_rf(seed: int):
-    from learn.learners.baselines import make_model
-
     return make_model("rf", random_state=seed)
 
 
 def _cnn_res(seed: int):
-    from learn.inputs.signals import AUX
-    from learn.learners.baselines import make_pipeline
-    from learn.learners.nets import CNN1DClassifier
+    from learn.learners.nets import CNN1DClassifier  # torch, imported when a net is made
 
     net = CNN1DClassifier(channels=(32, 64, 64), kernel_sizes=(7, 5, 5), strides=(2, 2, 2),
                           padding_mode="circular", n_aux=len(AUX), max_epochs=10,
@@ -58,11 +84,33 @@ def _cnn_res(seed: int):
     return make_pipeline(net, name="cnn")
 
 
-#: The baselines, by detector name (module docstring).
-BASELINES: dict[str, BaselineSpec] = {
-    "paper_rf": BaselineSpec("sel1", _paper_rf, "paper Sec. III, Table III selection 1"),
-    "cnn_res": BaselineSpec("raw_res", _cnn_res, "transfer study, CNN on raw_res"),
+#: The per-window detectors by name (module docstring); add one with
+#: :func:`register_detector`.
+DETECTORS: dict[str, DetectorSpec] = {
+    "paper_rf": DetectorSpec("sel1", _paper_rf, "paper Sec. III, Table III selection 1"),
+    "cnn_res": DetectorSpec("raw_res", _cnn_res, "transfer study, CNN on raw_res"),
 }
+
+
+def register_detector(name: str, spec: DetectorSpec) -> None:
+    """Add a per-window detector to :data:`DETECTORS`, to be named in
+    ``monitor.study.detectors``.
+
+    Parameters
+    ----------
+    name : str
+        Its name in the evaluation's tables (not ``monitor``, ``per_window`` or
+        ``always``, the rows the evaluation always has).
+    spec : DetectorSpec
+
+    Raises
+    ------
+    ValueError
+        A name already registered or reserved.
+    """
+    if name in DETECTORS or name in ("monitor", "per_window", "always"):
+        raise ValueError(f"detector {name!r} is already registered or reserved")
+    DETECTORS[name] = spec
 
 
 @dataclass
@@ -103,7 +151,7 @@ class References:
 
 def window_inputs(kind: str, signal: np.ndarray, meta: dict[str, np.ndarray],
                   refs: References, sample_rate_hz: float) -> np.ndarray:
-    """A baseline's input for windows of a life, each against its reference.
+    """A detector's input for windows of a stream, each against its reference.
 
     Parameters
     ----------
@@ -121,9 +169,6 @@ def window_inputs(kind: str, signal: np.ndarray, meta: dict[str, np.ndarray],
     ndarray, float32
         (n, F) or (n, C, T), in window order.
     """
-    from learn.inputs.signals import build_input
-    from swgsim.datasets.schema import PER_SAMPLE, make_dataset
-
     both = {k: np.concatenate([refs.meta[k], meta[k]]) for k in PER_SAMPLE}
     both["reference"] = np.r_[np.ones(len(refs.signal), bool), np.zeros(len(signal), bool)]
     ds = make_dataset(np.concatenate([refs.signal, signal]),
@@ -133,12 +178,12 @@ def window_inputs(kind: str, signal: np.ndarray, meta: dict[str, np.ndarray],
 
 @dataclass
 class WindowClassifier:
-    """A trained per-window baseline.
+    """A trained per-window detector.
 
     Attributes
     ----------
     name : str
-        Key of :data:`BASELINES`.
+        Key of :data:`DETECTORS`.
     estimator : object
         Fitted scikit-learn pipeline.
     classes : list of str
@@ -151,7 +196,8 @@ class WindowClassifier:
 
     @property
     def input(self) -> str:
-        return BASELINES[self.name].input
+        """The detector's input (:attr:`DetectorSpec.input`)."""
+        return DETECTORS[self.name].input
 
     def labels(self, x: np.ndarray) -> np.ndarray:
         """Index into :attr:`classes` of each window's predicted class, shape (n,)."""
@@ -160,15 +206,21 @@ class WindowClassifier:
         return np.array([lookup[c] for c in pred], dtype=np.int64)
 
 
-def fit_baseline(name: str, x: np.ndarray, y: np.ndarray, classes: list[str],
+def fit_detector(name: str, x: np.ndarray, y: np.ndarray, classes: list[str],
                  seed: int = 0) -> WindowClassifier:
-    """Train baseline ``name`` on inputs ``x`` (n, ...) and class names ``y`` (n,)."""
+    """Train detector ``name`` on inputs ``x`` (n, ...) and class names ``y`` (n,).
+
+    Raises
+    ------
+    ValueError
+        ``classes`` not starting with healthy.
+    """
     if classes[0] != HEALTHY:
         raise ValueError(f"classes must start with {HEALTHY!r}, got {classes[:1]}")
-    est = BASELINES[name].make(seed)
+    est = DETECTORS[name].make(seed)
     est.fit(x, y)
     return WindowClassifier(name, est, list(classes))
 
 
-__all__ = ["BASELINES", "BaselineSpec", "References", "WindowClassifier", "fit_baseline",
-           "window_inputs"]
+__all__ = ["DETECTORS", "DetectorSpec", "References", "WindowClassifier", "fit_detector",
+           "register_detector", "window_inputs"]

@@ -1,8 +1,8 @@
 """One gear's monitor: commissioning, scoring, the sequential alarm, naming and severity.
 
 :class:`GearMonitor` takes a trained :class:`~learn.monitor.model.DiagnosisModel` and a
-gear's windows in time order. :meth:`GearMonitor.commission` builds the baseline from
-the commissioning windows, alternately per operating point: even ones fit the baseline,
+gear's windows in time order. :meth:`GearMonitor.commission` builds the normal behaviour from
+the commissioning windows, alternately per operating point: even ones fit the normal behaviour,
 odd ones calibrate the rule (:mod:`.rule`). :meth:`GearMonitor.run` scores every later
 window, updates the CUSUM and raises an alarm when it crosses h; the fault is then named
 from the windows since the CUSUM's last rise from zero up to the alarm
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import Baseline, DiagnosisModel, design_matrix
+from .model import DiagnosisModel, NormalBehaviour, design_matrix
 from .rule import RuleConfig, conformal_p, log_bets, min_calibration, threshold
 from .sensor_check import REST_MAX, SENSOR_P_MIN, fit_sensor_faults
 
@@ -87,7 +87,7 @@ class Trace:
     log_proba : ndarray, shape (n, n_classes)
         The diagnosis model's ln P(class | window).
     op_index : ndarray of int, shape (n,)
-        Each window's operating point in the baseline.
+        Each window's operating point in the normal behaviour.
     """
 
     hour: np.ndarray
@@ -156,7 +156,7 @@ def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: floa
     ValueError
         Naming the operating point, the windows it has and the minimum.
     """
-    need = 2 * max(rule.min_baseline, min_calibration(rule, interval_min))
+    need = 2 * max(rule.min_normal_windows, min_calibration(rule, interval_min))
     if len(points) == 0:
         raise ValueError("the stream has no commissioning windows (a period known healthy, "
                          f"at least {need} windows per operating point)")
@@ -167,11 +167,11 @@ def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: floa
                 f"commissioning too short for the design of one false alarm per "
                 f"{rule.design_hours:g} h: {c} windows at {o[0]:g} rpm, {o[1]:g} N m, at least "
                 f"{need} needed ({min_calibration(rule, interval_min)} to calibrate, "
-                f"{rule.min_baseline} for the baseline, alternately)")
+                f"{rule.min_normal_windows} for the normal behaviour, alternately)")
 
 
-def baseline_windows(points: np.ndarray) -> np.ndarray:
-    """Which commissioning windows fit the baseline: every other one of each operating
+def normal_windows(points: np.ndarray) -> np.ndarray:
+    """Which commissioning windows fit the normal behaviour: every other one of each operating
     point, from its first (the rest calibrate the rule). Boolean mask, shape (n,)."""
     _, inv = np.unique(points, axis=0, return_inverse=True)
     rank = np.zeros(len(points), int)
@@ -203,12 +203,12 @@ class GearMonitor:
         self.h = threshold(rule, interval_min)
         self.rng = np.random.default_rng(seed)
         self.confirm_h = float(confirm_h)
-        self.baseline: Baseline | None = None
+        self.normal: NormalBehaviour | None = None
         self.calibration: dict[int, np.ndarray] = {}
         self.cusum = np.zeros(0)
 
     def commission(self, feats: np.ndarray, points: np.ndarray) -> None:
-        """Baseline and calibration from commissioning windows (module docstring).
+        """Normal behaviour and calibration from commissioning windows (module docstring).
 
         Parameters
         ----------
@@ -218,17 +218,17 @@ class GearMonitor:
             (n_in_rpm, t_out_nm) of each window's duty point.
         """
         check_commissioning(points, self.rule, self.interval_min)
-        fit = baseline_windows(points)
+        fit = normal_windows(points)
         cal = ~fit
-        self.baseline = Baseline.fit(feats[fit], points[fit])
-        opi = self.baseline.index(points[cal])
+        self.normal = NormalBehaviour.fit(feats[fit], points[fit])
+        opi = self.normal.index(points[cal])
         scores, lp = self.scores(feats[cal], points[cal], opi)
         self.calibration = {k: np.sort(scores[opi == k], axis=0)
-                            for k in range(len(self.baseline.points))}
+                            for k in range(len(self.normal.points))}
         llr = lp - lp[:, :1]
         self.bias = np.stack([llr[opi == k].mean(axis=0)
-                              for k in range(len(self.baseline.points))])
-        self._rows = {(float(a), float(b)): k for k, (a, b) in enumerate(self.baseline.points)}
+                              for k in range(len(self.normal.points))])
+        self._rows = {(float(a), float(b)): k for k, (a, b) in enumerate(self.normal.points)}
         self.cusum = np.zeros(log_bets(np.ones(1), self.rule).shape[1])
 
     def evidence(self, lp: np.ndarray, opi: np.ndarray) -> np.ndarray:
@@ -240,25 +240,25 @@ class GearMonitor:
 
     def inputs(self, feats: np.ndarray, points: np.ndarray) -> np.ndarray:
         """The diagnosis model's inputs of windows (z-scores and operating point)."""
-        return design_matrix(self.baseline.z(feats, points), points)
+        return design_matrix(self.normal.z(feats, points), points)
 
     def scores(self, feats: np.ndarray, points: np.ndarray, index: np.ndarray | None = None
                ) -> tuple[np.ndarray, np.ndarray]:
         """Scores (n, 2) and log-probabilities (n, n_classes) of windows (``index``: their
-        operating points' rows in the baseline, when known).
+        operating points' rows in the normal behaviour, when known).
 
         Two scores per window: the diagnosis model's evidence against healthy, and the
         novelty ``Σ z²`` of its health features (a change the model was not trained on,
         e.g. a bridge it never saw faulty, moves the latter).
         """
-        z = self.baseline.z(feats, points, index)
+        z = self.normal.z(feats, points, index)
         lp = self.model.log_proba(design_matrix(z, points))
         return np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp
 
     def p_values(self, score: np.ndarray, opi: np.ndarray, u: np.ndarray | None = None
                  ) -> np.ndarray:
         """Conformal p-values of windows against the calibration of their operating point
-        (``opi``: its row in the baseline), the two scores' combined by Bonferroni,
+        (``opi``: its row in the normal behaviour), the two scores' combined by Bonferroni,
         ``min(1, 2 min(p1, p2))`` (still super-uniform, so the CUSUM's bound holds).
         ``u``: the smoothing draws, shape as ``score`` (default: the monitor's own)."""
         u = self.rng.uniform(size=score.shape) if u is None else u
@@ -289,7 +289,7 @@ class GearMonitor:
         -------
         Trace
         """
-        opi = self.baseline.index(points)
+        opi = self.normal.index(points)
         score, lp = self.scores(feats, points, opi)
         p = self.p_values(score, opi)
         cus, alarms = run_cusums(log_bets(p, self.rule), self.h, start, latch)
@@ -319,13 +319,13 @@ class GearMonitor:
             If the monitor is not commissioned or the operating point was not seen at
             commissioning.
         """
-        if self.baseline is None:
+        if self.normal is None:
             raise ValueError("the monitor is not commissioned (GearMonitor.commission)")
         k = self._rows.get((float(point[0]), float(point[1])))
         if k is None:
             raise ValueError(f"operating point {point[0]:g} rpm, {point[1]:g} N m was not seen "
-                             f"at commissioning; the baseline has {list(self._rows)}")
-        z = (np.asarray(feat, float) - self.baseline.mean[k]) / self.baseline.std[k]
+                             f"at commissioning; the normal behaviour has {list(self._rows)}")
+        z = (np.asarray(feat, float) - self.normal.mean[k]) / self.normal.std[k]
         lp = self.model.log_proba(np.concatenate([z, point])[None, :])
         score = np.array([[self.model.score(lp)[0], z @ z]])
         u = self.rng.uniform(size=(1, 2))
@@ -339,7 +339,7 @@ class GearMonitor:
 
     def score_only(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray) -> Trace:
         """Windows after a latched alarm: scored for the naming, no CUSUM (NaN)."""
-        opi = self.baseline.index(points)
+        opi = self.normal.index(points)
         score, lp = self.scores(feats, points, opi)
         k = log_bets(np.ones(1), self.rule).shape[1]
         return Trace(np.asarray(hours, float), score, np.full(len(score), np.nan),
@@ -372,7 +372,7 @@ class GearMonitor:
         average, :attr:`~.sensor_check.SensorFit.rest` at most
         :data:`~.sensor_check.REST_MAX`), with its bridge; else the fault with the
         largest summed evidence (:meth:`evidence` rows ``ev``) and None."""
-        b = self.baseline
+        b = self.normal
         opi = b.index(points)
         z = b.z(feats, points, opi)
         u = np.full((len(z), 2), 0.5)  # mid-p: the naming draws nothing from the monitor
@@ -391,5 +391,5 @@ class GearMonitor:
         return self.model.name(ev), None
 
 
-__all__ = ["Alarm", "GearMonitor", "Trace", "baseline_windows", "check_commissioning",
+__all__ = ["Alarm", "GearMonitor", "Trace", "normal_windows", "check_commissioning",
            "run_cusums"]

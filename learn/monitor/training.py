@@ -1,0 +1,207 @@
+"""The monitor's training data: simulated lives of the training gears, their features, the
+diagnosis model and the per-window detectors trained on them.
+
+For a data set (a checked :class:`~swgsim.datasets.plan.DatasetPlan`) and the gears it
+trains on, each gear lives a healthy life (commissioning, then ``train_healthy_h`` hours)
+and one short life per class, severity and fault position or bridge
+(:func:`training_lives`); the diagnosis model learns the z-scores of their windows against
+the gear's own normal behaviour (:func:`train_model`), the per-window detectors their
+inputs against one reference window (:func:`train_detectors`). The held-out evaluation
+(:mod:`learn.monitor.evaluate`) and the C export (:mod:`learn.export`) take their data
+from here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import numpy as np
+
+from swgsim.datasets.life import BLOCK, LifeSimulator
+from swgsim.datasets.plan import DatasetPlan
+from swgsim.datasets.records import RecordBank
+from swgsim.datasets.schedule import FaultOnset, LifeConfig
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
+from swgsim.sensing.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
+
+from .detectors import DETECTORS, References, WindowClassifier, fit_detector, window_inputs
+from .features import feature_names, health_features
+from .gear_monitor import normal_windows
+from .model import HEALTHY, DiagnosisModel, NormalBehaviour, design_matrix, fit_diagnosis
+from .study import MonitorStudyConfig
+
+
+def table_v_severities(plan: DatasetPlan, fault: str) -> list[float]:
+    """The data set's severities of a class (paper Table V): its list, or the first, middle
+    and last of its linspace; a sensor fault's from
+    :data:`swgsim.sensing.sensor_faults.SEVERITIES`."""
+    if fault in SENSOR_FAULTS:
+        return list(SENSOR_SEVERITIES[fault])
+    spec = plan.config.variants[fault]
+    if spec.severities is not None:
+        return [float(s) for s in spec.severities]
+    a, b, _ = spec.severity_linspace
+    return [float(a), float((a + b) / 2), float(b)]
+
+
+def train_severities(plan: DatasetPlan, fault: str, cfg: MonitorStudyConfig) -> list[float]:
+    """Severities of a class's training lives: a gear fault's Table V ones, a sensor
+    fault's ``cfg.sensor_train_levels`` from its mild to its severe one, geometrically."""
+    sevs = table_v_severities(plan, fault)
+    if fault not in SENSOR_FAULTS:
+        return sevs
+    return [float(v) for v in np.geomspace(sevs[0], sevs[-1], cfg.sensor_train_levels)]
+
+
+def classes(plan: DatasetPlan, cfg: MonitorStudyConfig) -> list[str]:
+    """Healthy, then the evaluated gear faults and sensor faults."""
+    gear = [f for f in plan.config.variants if f != HEALTHY]
+    chosen = cfg.faults or [*gear, *SENSOR_FAULTS]
+    return [HEALTHY, *chosen]
+
+
+def features_of(sim: LifeSimulator, start: int, stop: int,
+                on_block: Callable[[np.ndarray, dict], None] | None = None
+                ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Health features, operating points and metadata of windows ``start:stop``;
+    ``on_block(signals, meta)`` is called with each block of simulated windows."""
+    if stop <= start:
+        n_f = len(feature_names(twist=has_twist(sim.plan)))
+        return np.empty((0, n_f)), np.empty((0, 2)), {}
+    f, pts, metas = [], [], []
+    for a in range(start, stop, BLOCK):
+        sig, meta = sim.windows(a, min(a + BLOCK, stop))
+        f.append(life_features(sim.plan, sig, meta))
+        pts.append(np.stack([meta["n_in_rpm"], meta["t_out_nm"]], axis=1))
+        metas.append(meta)
+        if on_block is not None:
+            on_block(sig, meta)
+    meta = {k: np.concatenate([m[k] for m in metas]) for k in metas[0]}
+    return np.concatenate(f), np.concatenate(pts), meta
+
+
+def has_twist(plan: DatasetPlan) -> bool:
+    """Whether a data set's lives record an output encoder (twist features)."""
+    return plan.profile is not None and plan.config.profile.angles.output_encoder_bits is not None
+
+
+def life_features(plan: DatasetPlan, sig: np.ndarray, meta: dict[str, np.ndarray]) -> np.ndarray:
+    """Health features of a block of a life's windows: :func:`window_features`, in the
+    angle domain when the windows carry angle channels (a profile), and the twist
+    features with an output encoder; shape (n, F)."""
+    sensor = plan.config.profile.angles.input_sensor() if plan.profile is not None else None
+    return health_features(sig, meta, plan.config.chain.sample_rate_hz, sensor)
+
+
+def training_lives(plan: DatasetPlan, bank: RecordBank, g: int, cfg: MonitorStudyConfig
+                   ) -> list[tuple[LifeSimulator, str, float]]:
+    """The training lives of gear ``g``: (life, class, severity), the healthy life first.
+
+    The healthy life is commissioning, then ``train_healthy_h`` hours; then one life per
+    class and severity per fault position (``train_variants`` of them) or per bridge (a
+    sensor fault): one window, then the fault for ``train_fault_h`` hours (no
+    commissioning of its own: the healthy life's normal behaviour serves). Life seeds from 1000
+    on (the held-out gear's use the study's seeds): fault positions differ from the
+    held-out lives'.
+    """
+    life = LifeConfig(hours=cfg.commissioning_h + cfg.train_healthy_h,
+                      interval_min=cfg.interval_min, commissioning_h=cfg.commissioning_h,
+                      life_seed=1000)
+    lives = [(LifeSimulator(plan, g, life, bank), HEALTHY, 0.0)]
+    c0 = cfg.interval_min / 60.0
+    for c in classes(plan, cfg)[1:]:
+        sensor = c in SENSOR_FAULTS
+        n_var = 5 if sensor else cfg.train_variants
+        for s in train_severities(plan, c, cfg):
+            for j in range(n_var):
+                fo = FaultOnset(c, c0, s, sensor=j if sensor else None,
+                                position_deg=None if sensor else 360.0 * (j + 0.5) / n_var)
+                fl = dataclasses.replace(life, hours=c0 + cfg.train_fault_h,
+                                         commissioning_h=c0, fault=fo,
+                                         life_seed=1000 + len(lives))
+                lives.append((LifeSimulator(plan, g, fl, bank), c, s))
+    return lives
+
+
+def train_model(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
+                cfg: MonitorStudyConfig, seed: int = 0) -> DiagnosisModel:
+    """The diagnosis model trained on the lives of ``gears`` (:func:`training_lives`):
+    the healthy life gives the gear's normal behaviour (as the monitor builds it) and the healthy
+    windows after commissioning, each fault life its windows after the first."""
+    cls = classes(plan, cfg)
+    n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
+    xs, ys, sev, gid = [], [], [], []
+    for g in gears:
+        lives = training_lives(plan, banks[g], g, cfg)
+        f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
+        fit = normal_windows(p0[:n_comm])  # as the monitor builds it
+        base = NormalBehaviour.fit(f0[:n_comm][fit], p0[:n_comm][fit])
+        for sim, c, s in lives:
+            f, p = (f0[n_comm:], p0[n_comm:]) if c == HEALTHY else features_of(sim, 1, len(sim))[:2]
+            xs.append(design_matrix(base.z(f, p), p))
+            ys.append(np.full(len(f), c, object))
+            sev.append(np.full(len(f), s))
+            gid.append(np.full(len(f), g))
+    x = np.concatenate(xs)
+    model = fit_diagnosis(x, np.concatenate(ys).astype(str), np.concatenate(sev),
+                          np.concatenate(gid), cls, seed=seed)
+    model.points_range = np.stack([x[:, -2:].min(axis=0), x[:, -2:].max(axis=0)])
+    model.n_features = x.shape[1] - 2
+    model.sample_rate_hz = float(plan.config.chain.sample_rate_hz)
+    model.window_s = float(plan.config.chain.window_s)
+    return model
+
+
+def _inputs(sim: LifeSimulator, start: int, stop: int, refs: References, kinds: set[str]
+            ) -> dict[str, np.ndarray]:
+    """The detectors' inputs of windows ``start:stop`` of a life, per input kind."""
+    fs = sim.plan.config.chain.sample_rate_hz
+    out: dict[str, list] = {k: [] for k in kinds}
+    for a in range(start, stop, BLOCK):
+        sig, meta = sim.windows(a, min(a + BLOCK, stop))
+        for k in kinds:
+            out[k].append(window_inputs(k, sig, meta, refs, fs))
+    return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def train_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
+                    cfg: MonitorStudyConfig, names: list[str], seed: int = 0
+                    ) -> list[WindowClassifier]:
+    """The per-window detectors ``names`` (keys of :data:`learn.monitor.detectors.
+    DETECTORS`) trained on the windows the diagnosis model is trained on
+    (:func:`train_model`), each against its gear's references, as many of each class
+    (:func:`_balanced`)."""
+    if not names:
+        return []
+    kinds = {DETECTORS[b].input for b in names}
+    n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
+    xs: dict[str, list] = {k: [] for k in kinds}
+    ys = []
+    for g in gears:
+        lives = training_lives(plan, banks[g], g, cfg)
+        refs = References.of(lives[0][0], n_comm)
+        for sim, c, _ in lives:
+            x = _inputs(sim, n_comm if c == HEALTHY else 1, len(sim), refs, kinds)
+            for k in kinds:
+                xs[k].append(x[k])
+            ys.append(np.full(len(x[next(iter(kinds))]), c, object))
+    y = np.concatenate(ys).astype(str)
+    keep = _balanced(y, seed)
+    return [fit_detector(b, np.concatenate(xs[DETECTORS[b].input])[keep], y[keep],
+                         classes(plan, cfg), seed) for b in names]
+
+
+def _balanced(y: np.ndarray, seed: int) -> np.ndarray:
+    """Indices of an equal number of windows of every class (that of the smallest class,
+    drawn from the seed, kept in order): a class-balanced training set like the paper's
+    data set, not one in which 15 fault positions per class outnumber healthy windows."""
+    rng = np.random.default_rng([seed, 11])
+    names, counts = np.unique(y, return_counts=True)
+    n = int(counts.min())
+    return np.sort(np.concatenate([rng.choice(np.flatnonzero(y == c), n, replace=False)
+                                   for c in names]))
+
+
+__all__ = ["classes", "features_of", "has_twist", "life_features", "table_v_severities",
+           "train_detectors", "train_model", "train_severities", "training_lives"]

@@ -1,0 +1,285 @@
+"""Task ``monitor`` (``swgsim-train experiment=monitor``): the condition monitor's
+leave-one-gear-out evaluation over simulated gear lives (:mod:`learn.monitor.evaluate`),
+its table and figures (:mod:`learn.reports.monitor_report`) and an MLflow run.
+
+Files in ``report_dir``: ``results.csv`` (one row per life and detector),
+``false_alarms.csv``, ``table.md``, ``time_to_detect.png``, ``false_alarms_vs_ttd.png``,
+``tradeoff.csv`` (false alarms and times to detect of the same rule at other design
+rates), ``timing.json``, ``models/<dataset>_without_gear<g>.joblib`` (the diagnosis
+models, for ``swgsim-monitor``) and ``parts/``: one finished part per (data set, held-out
+gear) for the monitor and per (data set, held-out gear, detector) for each per-window
+detector, each with the hash of the config that made it (a detector's without the list
+of the others), so that a rerun of the same config resumes from them and a detector added
+later runs alone.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import io
+import json
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import joblib
+import pandas as pd
+from tqdm.auto import tqdm
+
+from learn.monitor.detectors import DETECTORS
+from learn.monitor.evaluate import run_detectors, run_held_out, to_frames
+from learn.monitor.study import MonitorStudyConfig, check_study
+from learn.reports.monitor_report import (
+    false_alarm_table,
+    figures,
+    summary_table,
+    targets,
+    write_table,
+)
+from learn.tasks.config import plain, typed_app
+from learn.tracking import log_run
+from learn.tracking.store import check_tracking
+from swgsim.base.typed import allowed
+from swgsim.datasets.config import DatasetConfig
+from swgsim.datasets.plan import DatasetPlan, plan
+from swgsim.files import ownership
+from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class MonitorExperiment:
+    """``monitor`` group of ``swgsim-train``.
+
+    Attributes
+    ----------
+    run_on : list of str
+        Keys of ``datasets`` to evaluate, in order.
+    datasets : dict of str to DatasetConfig
+        Data-set presets whose gears live (their chain, acquisition, gears, Table V grid).
+    study : MonitorStudyConfig
+        The evaluation's design.
+    report_dir : str
+    n_jobs : int
+        Worker processes, one part (data set, held-out gear, and detector) each.
+    progress : bool
+    """
+
+    run_on: list[str] = field(default_factory=lambda: ["bench", "robot_joint"])
+    datasets: dict[str, DatasetConfig] = field(default_factory=dict)
+    study: MonitorStudyConfig = field(default_factory=MonitorStudyConfig)
+    report_dir: str = "reports/monitor"
+    n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
+    progress: bool = True
+
+
+@dataclass(frozen=True)
+class Job:
+    """One resumable part: the monitor (``detector`` None) or one per-window detector on
+    one held-out gear of one data set."""
+
+    dataset: str
+    gear: int
+    detector: str | None
+    key: str
+
+    @property
+    def file(self) -> str:
+        """Its part's file name in ``parts/``."""
+        return f"{self.dataset}_gear{self.gear}{'_' + self.detector if self.detector else ''}.json"
+
+
+def _hash(obj) -> str:
+    return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def plan_jobs(mc: MonitorExperiment, plans: dict[str, DatasetPlan]
+              ) -> tuple[list[Job], dict[str, dict[str, str]]]:
+    """The parts of an evaluation, and the detectors that cannot run on a data set.
+
+    Returns
+    -------
+    jobs : list of Job
+    not_run : dict
+        Data set -> {detector: why it cannot run there}
+        (:meth:`learn.monitor.detectors.DetectorSpec.cannot_run_on`), reported, not run.
+    """
+    study = dataclasses.asdict(mc.study)
+    common = {k: v for k, v in study.items() if k not in ("detectors", "detector_hours")}
+    jobs, not_run = [], {}
+    for name, p in plans.items():
+        why = {d: DETECTORS[d].cannot_run_on(p) for d in mc.study.detectors}
+        not_run[name] = {d: w for d, w in why.items() if w}
+        for g in mc.study.gears or [int(x.id) for x in p.config.gears]:
+            base = {"dataset": p.config_hash, "gear": g}
+            jobs.append(Job(name, g, None, _hash({**base, "study": common})))
+            jobs += [Job(name, g, d, _hash({**base, "study": common, "detector": d,
+                                             "detector_hours": mc.study.detector_hours}))
+                     for d in mc.study.detectors if not why[d]]
+    return jobs, not_run
+
+
+def run_monitor_evaluation(cfg) -> dict:
+    """Run the evaluation (module docstring); return the figures' summary.
+
+    Raises
+    ------
+    ValueError
+        A bad ``monitor`` key or data set, an unwritable MLflow store, or a
+        ``report_dir`` holding a file this project cannot show it wrote (named); before
+        any work.
+    """
+    app = typed_app(cfg)
+    mc: MonitorExperiment = app.monitor
+    check_study(mc.study)
+    unknown = [d for d in mc.run_on if d not in mc.datasets]
+    if unknown:
+        raise ValueError(f"monitor.run_on: {unknown} not among monitor.datasets "
+                         f"{sorted(mc.datasets)}")
+    plans = {}
+    for name in mc.run_on:  # every config checked before any work
+        try:
+            plans[name] = plan(mc.datasets[name])
+        except ValueError as e:
+            raise ValueError(f"monitor.datasets.{name}: {e}") from None
+    if app.logger is not None:
+        check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
+    out = Path(mc.report_dir)
+    ownership.check(out, "monitor.report_dir")  # before any work
+    with ownership.claim(out, "monitor", "monitor.report_dir") as claim:
+        return _evaluate(app, mc, plans, out, claim)
+
+
+def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim) -> dict:
+    """The evaluation into the claimed ``out`` (every file it writes recorded)."""
+    (out / "parts").mkdir(parents=True, exist_ok=True)
+    (out / "models").mkdir(exist_ok=True)
+    jobs, not_run = plan_jobs(mc, plans)
+    for name, why in not_run.items():
+        for d, w in why.items():
+            log.warning("detector %s not run on %s: %s", d, name, w)
+    t0 = time.perf_counter()
+    parts = _run_jobs(plans, jobs, mc, out)
+    wall = time.perf_counter() - t0
+    res, fa, curve = to_frames(parts)
+    res.to_csv(out / "results.csv", index=False)
+    fa.to_csv(out / "false_alarms.csv", index=False)
+    curve.to_csv(out / "tradeoff.csv", index=False)
+    timing = {"wall_s": wall, "parts": [{k: p.get(k) for k in ("dataset", "held_out_gear",
+                                                              "detector", "train_s",
+                                                              "evaluate_s")} for p in parts]}
+    atomic_write_json(out / "timing.json", timing)
+    header = (f"# Condition monitor: leave-one-gear-out over simulated lives\n\n"
+              f"Data sets {', '.join(mc.run_on)}; seeds {mc.study.seeds}; "
+              f"{mc.study.healthy_hours:g} h per healthy life; design: one false alarm per "
+              f"{mc.study.rule.design_hours:g} h. Wall time {wall / 60:.1f} min.\n"
+              + "".join(f"\nDetector {d} not run on {n}: {w}.\n"
+                        for n, why in not_run.items() for d, w in why.items()))
+    write_table(res, fa, out / "table.md", header)
+    figs = figures(res, fa, out, curve)
+    claim.record([out / f for f in ("results.csv", "false_alarms.csv", "tradeoff.csv",
+                                    "table.md")] + list(figs))
+    if mc.progress:  # the console's summary
+        print(f"\ntargets (monitor; held-out gears, {len(mc.study.seeds)} seed(s)):")
+        for r in targets(res, fa).itertuples(index=False):
+            print(f"  {r.dataset:<12s} {r.what:<66s} target {r.target:>7s}  {r.measured}")
+        for n, why in not_run.items():
+            for d, w in why.items():
+                print(f"detector {d} not run on {n}: {w}")
+        print(f"report: {out}/table.md (+ results.csv, false_alarms.csv, tradeoff.csv, "
+              f"figures); wall time {wall / 60:.1f} min")
+    if app.logger is not None:
+        _log(app, res, fa, out, wall, plans)
+    det = res[(res.detector == "monitor")]
+    return {"task": "monitor", "report_dir": str(out), "wall_s": wall,
+            "lives": int(len(det)), "detected": float(det.detected.mean()),
+            "false_alarms": int(fa[fa.detector == "monitor"].false_alarms.sum())}
+
+
+def _finished(out: Path, jobs: list[Job]) -> tuple[list[dict], list[Job]]:
+    """Parts already done (their key matches) and the jobs left."""
+    done, todo = [], []
+    for j in jobs:
+        f = out / "parts" / j.file
+        try:
+            part = json.loads(f.read_text()) if f.is_file() else None
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            part = None
+        if part is not None and part.get("key") == j.key:
+            done.append(part)
+        else:
+            todo.append(j)
+    return done, todo
+
+
+def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path) -> list[dict]:
+    """Each part, resumed from ``parts/`` when its key matches; one progress line over
+    all of them (done, left, time left) and a log line per finished part."""
+    done, todo = _finished(out, jobs)
+    if done:
+        log.info("resuming: %d of %d part(s) already done", len(done), len(jobs))
+    bar = tqdm(total=len(todo), desc="monitor evaluation", unit="part",
+               disable=not mc.progress)
+    par = joblib.Parallel(n_jobs=min(mc.n_jobs, max(1, len(todo))),
+                          return_as="generator_unordered")
+    t0 = time.perf_counter()
+    for part, job in par(joblib.delayed(_job)(plans[j.dataset], j, mc.study, str(out))
+                         for j in todo):
+        atomic_write_json(out / "parts" / job.file, part)
+        done.append(part)
+        bar.update()
+        log.info("part %s done (%d of %d left, %.1f min so far)", job.file,
+                 bar.total - bar.n, bar.total, (time.perf_counter() - t0) / 60)
+    bar.close()
+    order = {(j.dataset, j.gear, j.detector): i for i, j in enumerate(jobs)}
+    return sorted(done, key=lambda p: order[(p["dataset"], p["held_out_gear"],
+                                             p.get("detector"))])
+
+
+def _job(plan: DatasetPlan, job: Job, study: MonitorStudyConfig, out: str
+         ) -> tuple[dict, Job]:
+    """One part in a worker: the monitor's (and its diagnosis model, written to
+    ``models/``) or one detector's."""
+    ownership.join(out, "monitor")  # what this worker writes is recorded
+    if job.detector is None:
+        part = run_held_out(plan, job.dataset, job.gear, study)
+        buf = io.BytesIO()
+        joblib.dump(part.pop("model"), buf)
+        atomic_write_bytes(Path(out) / "models" / f"{job.dataset}_without_gear{job.gear}"
+                           ".joblib", buf.getvalue())
+    else:
+        (part,) = run_detectors(plan, job.dataset, job.gear, study, [job.detector])
+    part["key"] = job.key
+    for k in ("rows", "curve"):
+        part[k] = pd.DataFrame(part[k]).to_dict("records")
+    return json.loads(json.dumps(part, default=float)), job
+
+
+def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
+         plans: dict[str, DatasetPlan]) -> None:
+    """The evaluation's MLflow run (:func:`learn.tracking.log_run`: commit, library
+    versions, the resolved config)."""
+    lcfg = app.logger
+    mc: MonitorExperiment = app.monitor
+    tab, fat = summary_table(res), false_alarm_table(fa)
+    mon = tab[tab.detector == "monitor"]
+    params = {"run_on": ",".join(mc.run_on), "seeds": str(mc.study.seeds),
+              "healthy_hours": mc.study.healthy_hours,
+              "design_hours": mc.study.rule.design_hours,
+              **{f"config_hash.{n}": p.config_hash for n, p in plans.items()}}
+    with log_run("monitor", "monitor", tracking_uri=lcfg.tracking_uri, params=params,
+                 config=plain(app)) as run:
+        run.log_metrics({"detection_rate": float(mon.detection_rate.mean()),
+                         "worst_false_alarms_per_1000h": float(
+                             fat[fat.detector == "monitor"].per_1000_h.max()),
+                         "wall_s": wall})
+        for f in ("results.csv", "false_alarms.csv", "table.md", "time_to_detect.png",
+                  "false_alarms_vs_ttd.png"):
+            if (out / f).is_file():
+                run.log_artifact(out / f)
+
+
+__all__ = ["Job", "MonitorExperiment", "plan_jobs", "run_monitor_evaluation"]
