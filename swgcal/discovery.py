@@ -67,7 +67,7 @@ __all__ = ["Proposal", "Group", "MIN_GAIN", "LOAD_SPEED_COLLINEAR", "discover",
 MIN_GAIN = 0.01
 """Default held-out gain a proposal must exceed: 1 % of the validation RMSE, half the
 loop's ``min_rel_improvement``. On noise-only residuals the effective-BIC lasso selects
-no column at all (tests/test_calib_discovery.py); the planted effects gain 5-60 %."""
+no column at all (tests/swgcal/test_calib_discovery.py); the planted effects gain 5-60 %."""
 
 LOAD_SPEED_COLLINEAR = 0.99
 """|correlation| of load and speed over the windows above which their products are

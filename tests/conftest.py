@@ -131,8 +131,8 @@ def torch_one_thread():
 
 @pytest.fixture(scope="module")
 def small(tmp_path_factory) -> Path:
-    """A finished two-gear data set of ``test_reliability.small_cfg`` (about a second)."""
-    from test_reliability import small_cfg
+    """A finished two-gear data set of ``bad_input.small_cfg`` (about a second)."""
+    from bad_input import small_cfg
 
     from swgsim.datasets import generate as gen
 

@@ -22,7 +22,7 @@ is left to the caller (``torch.set_num_threads``).
 Input checks are scikit-learn's (``validate_data``): finite values, at least one window,
 the number of features (2-D) or channels (3-D) of ``fit``; a method of an unfitted model
 raises ``NotFittedError``. The classifiers pass ``sklearn.utils.estimator_checks.
-check_estimator`` (``tests/test_estimator_checks.py``), whose data are 2-D only.
+check_estimator`` (``tests/learn/test_estimator_checks.py``), whose data are 2-D only.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ features, scaled by ``aux_weight``. A 2-D feature input skips the transform.
 
 The classifier is also a scikit-learn transformer (:meth:`MiniRocketClassifier.transform`:
 the features the ridge sees) and passes ``sklearn.utils.estimator_checks.check_estimator``
-(``tests/test_estimator_checks.py``); those checks feed 2-D data only, i.e. the
+(``tests/learn/test_estimator_checks.py``); those checks feed 2-D data only, i.e. the
 standardised-features path, not the MiniRocket transform.
 """
 

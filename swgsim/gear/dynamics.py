@@ -30,14 +30,14 @@ flexspline without a reaction torque on the input, so it is a source of its own 
 the motor (0.02-0.2 % of the motor's energy at the bench's operating points). Without it,
 tan α_in ω_in = c |ω_out| at Δφ̇_k = 0, so P_in = P_out + T_fric φ̇_b in steady state and
 η = T_load / (T_load + T_fric / sin α). Tested along simulated trajectories to 2e-7 of the
-supplied energy, converging at RK4's order 4 (tests/test_dynamics.py).
+supplied energy, converging at RK4's order 4 (tests/swgsim/test_dynamics.py).
 
 Along an operating profile (:func:`swgsim.gear.profile_dynamics.simulate_profile`,
 docs/PHYSICS.md sec. 1.8) the same balance holds with the time-varying load power
 P_load = T_L(t, q, q̇) q̇, q = −φ_out the joint angle and T_L > 0 resisting forward
 motion (negative when the load drives the gear), and T_m including the acceleration
 feed-forward; tested along a reversal with a load step to 2.5e-10 of the supplied energy,
-order 4 (tests/test_profile.py).
+order 4 (tests/swgsim/test_profile.py).
 
 Equations of motion:
 

@@ -5,7 +5,7 @@ the steady state at the profile's start, the whole motion recorded.
 :func:`simulate_profile` (optional acceleration feed-forward), :class:`ProfileResult`,
 :func:`check_standstill_step` (the RK4 step at standstill, where the friction is stiffest).
 Checks: the ring-down after a load step against the linearised torsional mode, the energy
-balance along a reversal (tests/test_profile.py, docs/PHYSICS.md sec. 1.8).
+balance along a reversal (tests/swgsim/test_profile.py, docs/PHYSICS.md sec. 1.8).
 """
 
 from __future__ import annotations

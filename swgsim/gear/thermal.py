@@ -274,7 +274,7 @@ def friction_scale(temp_c, ref_c: float = REF_TEMP_C,
     torque scales by the factor exactly: ×1.595 at 0 °C, ×0.627 at 40 °C, the issue's ×1.6
     and ×0.63 [unverified: the catalogue curves could not be read]; rated-point efficiency
     of :func:`swgsim.dynamics.rt1_size20` 70.5 / 77.0 / 81.7 % at 0 / 20 / 40 °C, the
-    issue's roughly 69 / 77 / 82 % (tests/test_thermal.py).
+    issue's roughly 69 / 77 / 82 % (tests/swgsim/test_thermal.py).
 
     Parameters
     ----------

@@ -275,7 +275,7 @@ def twist_bound_rad(gear: GearParams, mesh_torque_nm: float) -> float:
     Rated 52 N m at η = 0.77: 67.5 N m / (7.40 · 2103 N m/rad) = 4.34e-3 rad (14.9 arcmin)
     plus Σ A_k = 1.7e-4 rad (0.58 arcmin). The catalogue's "about 11 arcmin" is
     52 N m / (c² k1) without friction; the cubic stiffness of ``rt1_size20`` gives a mean
-    twist of 8.1 arcmin at 52 N m, 2000 rpm (tests/test_angles.py).
+    twist of 8.1 arcmin at 52 N m, 2000 rpm (tests/swgsim/test_angles.py).
 
     Parameters
     ----------

@@ -3,7 +3,7 @@ computed order tracking by least squares in each window's own ψ(t), checked aga
 steady-speed features of the desired-speed basis.
 
 Tolerances are set near the accuracy reached, each stated with its measured value
-(python -m pytest tests/test_angle_features.py; the amplitudes of the healthy gear at
+(python -m pytest tests/learn/test_angle_features.py; the amplitudes of the healthy gear at
 39 N m reach 0.17 mV/V, the rest RMS is 1e-5 to 2e-4 mV/V).
 """
 

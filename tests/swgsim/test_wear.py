@@ -5,7 +5,7 @@ of a worn gear against the linearised mode, the backlash-free arithmetic unchang
 the fault's registration and severity mapping.
 
 Tolerances are set near the accuracy reached, measured with the tests' own settings; each
-states it (python -m pytest tests/test_wear.py).
+states it (python -m pytest tests/swgsim/test_wear.py).
 """
 
 import dataclasses
@@ -136,7 +136,7 @@ def test_torsional_mode_follows_the_square_root_of_the_stiffness(t_out):
 def test_ring_down_of_a_worn_gear_matches_the_torsional_mode(j_out, dec):
     """Worn gear (s = 1, 3 arcmin backlash), load step 7 -> 39 N m at 2000 rpm: the
     torque stays one-signed, so the flanks never part and the linearisation holds. As in
-    tests/test_profile.py, the delivered torque from 2 to 8 decay times after the step is
+    tests/swgsim/test_profile.py, the delivered torque from 2 to 8 decay times after the step is
     decomposed into six damped exponentials; its largest oscillatory one is the mode of
     ``torsional_mode`` at 39 N m (the twist stays above 6.6 g). Bench (287.8 Hz, 3.94 ms):
     frequency reached -0.38 %, decay time +1.2 %; robot link (39.8 Hz, 27.7 ms, 20 kHz

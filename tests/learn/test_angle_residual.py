@@ -4,7 +4,7 @@ tracking by least squares in each window's own ψ(t), checked against the steady
 series of the time basis.
 
 Tolerances are set near the accuracy reached, each stated with its measured value
-(python -m pytest tests/test_angle_residual.py; the healthy gear at 39 N m, 0.12 s windows
+(python -m pytest tests/learn/test_angle_residual.py; the healthy gear at 39 N m, 0.12 s windows
 at 10 kHz, default ResidualSettings: H = 48, nuisance orders 1/4, 1/3, 1/2, 1; the largest
 coefficient is 0.17 mV/V).
 """

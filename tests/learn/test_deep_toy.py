@@ -115,7 +115,7 @@ def make_toy_dataset(
                         meta["n_in_mean_rpm"].append(n_in)
                         meta["t_out_mean_nm"].append(t_out)
     return make_dataset(np.stack(sig), t, {k: np.asarray(v) for k, v in meta.items()},
-                        attrs={"seed": seed, "generator": "tests/test_deep_toy.py"})
+                        attrs={"seed": seed, "generator": "tests/learn/test_deep_toy.py"})
 
 
 def write_toy_dataset(path: str | Path, **kwargs) -> Path:

@@ -4,7 +4,7 @@ against ``simulate``, the ring-down after a load step against the linearised tor
 mode, the energy balance along a reversal with a load step, and the catalogue limits.
 
 Tolerances are set near the accuracy reached, measured with the tests' own settings; each
-states it (python -m pytest tests/test_profile.py).
+states it (python -m pytest tests/swgsim/test_profile.py).
 """
 
 import dataclasses

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from bad_input import small_cfg
 from conftest import make_synthetic, write_dataset
 from omegaconf import OmegaConf
-from test_reliability import small_cfg
 
 from swgcli import compose_app, dataset_preset
 from swgsim.base.typed import NONFINITE, check_finite

@@ -1,7 +1,7 @@
 """Space truss against closed forms (docs/PHYSICS.md sec. 3), mesh convergence, fast vs naive.
 
 Tolerances are set at the accuracy reached, measured with the tests' own settings; each
-states it (python -m pytest tests/test_flexspline.py).
+states it (python -m pytest tests/swgsim/test_flexspline.py).
 """
 
 from functools import lru_cache
@@ -208,7 +208,7 @@ def test_mesh_fidelity_default_vs_twice_as_fine():
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "scripts" / "mesh_convergence.py"
+    path = Path(__file__).resolve().parents[2] / "scripts" / "mesh_convergence.py"
     spec = importlib.util.spec_from_file_location("mesh_convergence", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_reliability import _calibrate, _group, message, small_cfg, snapshot
+from bad_input import calibrate_call, message, process_group, small_cfg, snapshot
 
 from swgcli import compose_app
 from swgcli.app import check_out_dirs, override_message
@@ -128,7 +128,7 @@ def test_3_a_manifest_without_hashes_is_named_to_every_reader(copy_of, tmp_path,
     cfg = compose_app("train", [f"stored.path={folder}", "~logger",
                                 f"paths.report_dir={tmp_path}/rep"])
     assert message(lambda: run_train(cfg)) == msg
-    msg = message(_calibrate(folder, tmp_path / "out"))
+    msg = message(calibrate_call(folder, tmp_path / "out"))
     assert str(folder / dsio.MANIFEST) in msg and words in msg
     assert snapshot(folder) == before and not (tmp_path / "out").exists()
 
@@ -177,7 +177,7 @@ def test_5_an_unknown_strain_candidate_is_refused_before_loading(small, tmp_path
 
     monkeypatch.setattr(sp, "strain_windows", never)
     before = snapshot(small)
-    msg = message(_calibrate(small, tmp_path / "out", "selection.candidates=[offset,ofset]"))
+    msg = message(calibrate_call(small, tmp_path / "out", "selection.candidates=[offset,ofset]"))
     assert msg.startswith("selection.candidates: unknown strain effects ['ofset']")
     assert "offset" in msg.split("library:")[1]
     assert snapshot(small) == before and not (tmp_path / "out").exists()
@@ -215,9 +215,9 @@ def test_6_a_full_disk_ends_in_one_line_with_the_workers_stopped(tmp_path):
     line = one_error_line("swgsim-generate", err)
     assert "disk full while writing" in line and str(out) in line
     deadline = time.time() + 10  # the workers were killed: give them time to be gone
-    while _group(p.pid) and time.time() < deadline:
+    while process_group(p.pid) and time.time() < deadline:
         time.sleep(0.2)
-    assert _group(p.pid) == []  # no worker goes on writing
+    assert process_group(p.pid) == []  # no worker goes on writing
     assert not list(out.glob("*.tmp")) and not list(out.glob("*.nc"))
     assert (tmp_path / "keep.txt").read_text() == "mine"
     # and in-process: no HDF5 file is left open to be touched after the error
@@ -229,7 +229,7 @@ def test_6_a_full_disk_ends_in_one_line_with_the_workers_stopped(tmp_path):
             "except DiskFullError as e:\n    print(e)\n"
             "print([i.name for i in h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE)])\n")
     r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "w"),
-                        str(Path(__file__).parent)], capture_output=True, text=True,
+                        str(Path(__file__).parents[1])], capture_output=True, text=True,
                        timeout=120)
     assert r.returncode == 0, r.stderr
     assert r.stdout.splitlines()[-2].startswith("disk full while writing")

@@ -2,7 +2,7 @@
 balance.
 
 Tolerances are set at the accuracy reached, measured with the tests' own settings; each
-states it (python -m pytest tests/test_dynamics.py).
+states it (python -m pytest tests/swgsim/test_dynamics.py).
 """
 
 import dataclasses

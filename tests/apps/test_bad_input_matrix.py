@@ -20,43 +20,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from bad_input import calibrate_call, friction_csv, message, process_group, small_cfg, snapshot
 
-from swgcli import compose_app, dataset_preset
-from swgcli.app import one_line
+from swgcli import compose_app
 from swgsim.datasets import generate as gen
 from swgsim.datasets import outdir
 from swgsim.datasets import schema as dsio
 from swgsim.files import atomic
 
 BIN = Path(sys.executable).parent
-
-
-def small_cfg(**chain) -> dict:
-    """Two gears, three classes, one load: a data set in about a second."""
-    cfg = dataset_preset("tiny")
-    cfg["variants"] = {"healthy": {"severities": [0.0], "repeat": 2},
-                       "eccentric_wg": {"severities": [0.1], "n_positions": 1},
-                       "root_tooth_crack": {"severities": [0.9], "n_positions": 1}}
-    cfg["gears"] = cfg["gears"][:2]
-    cfg["operating_points"]["t_out_nm"] = [39.0]
-    cfg["chain"].update({"window_s": 0.06, "settle_s": 0.02, **chain})
-    return cfg
-
-
-def snapshot(folder: Path) -> dict[str, tuple[int, float]]:
-    """Every file below ``folder``: size and modification time."""
-    return {str(p.relative_to(folder)): (p.stat().st_size, p.stat().st_mtime)
-            for p in sorted(folder.rglob("*")) if p.is_file()}
-
-
-def message(call) -> str:
-    """The one-line message a bad-input exception of ``call`` ends in."""
-    with pytest.raises(Exception) as info:  # noqa: PT011 - sorted by one_line below
-        call()
-    msg = one_line(info.value)
-    assert msg is not None, f"not reported as bad input: {info.value!r}"
-    assert "\n" not in msg
-    return msg
 
 
 # ------------------------------------------------------------------ A deletion safety
@@ -217,33 +189,18 @@ def test_D4_temporary_files_of_a_killed_run_are_cleaned(copy_of):
 
 
 # ------------------------------------------------------------------ E measured data
-def _csv(path: Path, t, q, dq, tau=None, extra: str = "") -> Path:
-    tau = np.zeros_like(t) if tau is None else tau
-    rows = "\n".join(f"{a},{b},{c},{d}" for a, b, c, d in zip(t, q, dq, tau, strict=True))
-    path.write_text("time_s,q_rad,dq_rad_per_s,tau_friction_Nm\n" + rows + extra + "\n")
-    return path
-
-
-def _calibrate(measured: Path, out: Path, *extra):
-    from swgcli.calibrate import run_calibrate
-
-    cfg = compose_app("calibrate", [f"measured={measured}", f"out_dir={out}",
-                                    "logger.enabled=false", "figures=false", *extra])
-    return lambda: run_calibrate(cfg)
-
-
 T = np.arange(2000) * 0.002
 
 
 @pytest.mark.parametrize("case, make, words", [
-    ("constant angle", lambda p: _csv(p, T, np.full_like(T, 0.3), np.sin(T)),
+    ("constant angle", lambda p: friction_csv(p, T, np.full_like(T, 0.3), np.sin(T)),
      "q_rad stays at"),
-    ("velocity in deg/s", lambda p: _csv(p, T, np.sin(T), np.rad2deg(np.cos(T))),
+    ("velocity in deg/s", lambda p: friction_csv(p, T, np.sin(T), np.rad2deg(np.cos(T))),
      "not the time derivative"),
-    ("time backwards", lambda p: _csv(p, T[::-1], np.sin(T), np.cos(T)), "goes backwards"),
-    ("all non-finite", lambda p: _csv(p, T, np.full_like(T, np.nan), np.cos(T)),
+    ("time backwards", lambda p: friction_csv(p, T[::-1], np.sin(T), np.cos(T)), "goes backwards"),
+    ("all non-finite", lambda p: friction_csv(p, T, np.full_like(T, np.nan), np.cos(T)),
      "no usable rows"),
-    ("too few rows", lambda p: _csv(p, T[:60], np.sin(T[:60]), np.cos(T[:60])),
+    ("too few rows", lambda p: friction_csv(p, T[:60], np.sin(T[:60]), np.cos(T[:60])),
      "at least 100 needed"),
     ("binary", lambda p: (p.write_bytes(b"time_s,q_rad,dq_rad_per_s,tau_friction_Nm\n"
                                         + bytes(range(256)) * 8), p)[1], "not a text CSV"),
@@ -252,20 +209,20 @@ T = np.arange(2000) * 0.002
 ])
 def test_E_inconsistent_friction_recordings_are_refused(tmp_path, case, make, words):
     csv = make(tmp_path / "rec.csv")
-    msg = message(_calibrate(csv, tmp_path / "out"))
+    msg = message(calibrate_call(csv, tmp_path / "out"))
     assert words in msg and str(csv) in msg, case
     assert not (tmp_path / "out").exists()
 
 
 def test_E_too_few_samples_for_the_held_out_split(tmp_path):
-    csv = _csv(tmp_path / "rec.csv", T[:150], np.sin(T[:150]), np.cos(T[:150]))
-    msg = message(_calibrate(csv, tmp_path / "out"))
+    csv = friction_csv(tmp_path / "rec.csv", T[:150], np.sin(T[:150]), np.cos(T[:150]))
+    msg = message(calibrate_call(csv, tmp_path / "out"))
     assert "split.n_blocks=10" in msg and "allowed: n_blocks <= 7" in msg
 
 
 def test_E_strain_data_set_refuses_friction_only_options(small, tmp_path):
     before = snapshot(small)
-    msg = message(_calibrate(small, tmp_path / "out", "split.n_blocks=5"))
+    msg = message(calibrate_call(small, tmp_path / "out", "split.n_blocks=5"))
     assert "split.n_blocks=5" in msg and str(small) in msg and "kind 1" in msg
     assert snapshot(small) == before and not (tmp_path / "out").exists()
 
@@ -305,19 +262,6 @@ def test_F_tracking_store_is_checked_before_any_work(tmp_path):
 
 
 # ------------------------------------------------------------------ G signals, disk
-def _group(pgid: int) -> list[int]:
-    out = []
-    for d in os.listdir("/proc"):
-        if d.isdigit():
-            try:
-                stat = Path(f"/proc/{d}/stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(stat[2]) == pgid and stat[0] != "Z":
-                out.append(int(d))
-    return out
-
-
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_G_stopping_the_generator_stops_its_workers(tmp_path, sig, code):
     out = tmp_path / "ds"
@@ -332,14 +276,14 @@ def test_G_stopping_the_generator_stops_its_workers(tmp_path, sig, code):
                          # control) passes SIGINT on as ignored, and Python keeps it so
                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 180
-    while len(_group(p.pid)) < 3 and time.time() < deadline:  # parent + 2 workers
+    while len(process_group(p.pid)) < 3 and time.time() < deadline:  # parent + 2 workers
         time.sleep(0.2)
-    assert len(_group(p.pid)) >= 3, "the generator's workers never started"
+    assert len(process_group(p.pid)) >= 3, "the generator's workers never started"
     time.sleep(1.0)
     os.kill(p.pid, sig)
     assert p.wait(timeout=30) == code, p.stderr.read()
     time.sleep(0.5)
-    assert _group(p.pid) == []  # no worker goes on writing
+    assert process_group(p.pid) == []  # no worker goes on writing
     assert not list(out.glob("*.tmp"))
 
 

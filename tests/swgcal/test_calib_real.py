@@ -14,7 +14,7 @@ import pytest
 
 from swgcal import build_problem, calibrate
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "calibrate_real.py"
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "calibrate_real.py"
 spec = importlib.util.spec_from_file_location("calibrate_real", SCRIPT)
 calibrate_real = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(calibrate_real)

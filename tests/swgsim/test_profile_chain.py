@@ -2,7 +2,7 @@
 sensor effects at varying speed (gauge misplacement in the angle domain).
 
 Tolerances are set near the accuracy reached, each stated with its measured value
-(python -m pytest tests/test_profile_chain.py).
+(python -m pytest tests/swgsim/test_profile_chain.py).
 """
 
 

@@ -4,7 +4,7 @@ output inertia), and the edge-interpolated ψ of a coarse Hall sensor at steady 
 along a reversal (profile_dynamics.simulate_profile).
 
 Tolerances are closed-form bounds; the figures reached are quoted in each test
-(python -m pytest tests/test_angles.py).
+(python -m pytest tests/swgsim/test_angles.py).
 """
 
 import math

@@ -34,7 +34,7 @@ class QuadraticDrag(FitTerm):
     kind = "quadratic_drag"
     linear = (Param("c_q", "N m s²/rad²", "quadratic drag coefficient"),)
     description = "drag growing with the square of the speed (lubricant churning)"
-    source = "illustration for tests/test_calib_extension.py"
+    source = "illustration for tests/swgcal/test_calib_effect_registry.py"
 
     def columns(self, sig, theta):
         return (sig.dq_rad_s * np.abs(sig.dq_rad_s))[:, None]

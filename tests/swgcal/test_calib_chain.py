@@ -17,7 +17,7 @@ from swgcal.friction.synthetic import (
 )
 from swgsim.gear.friction import FRICTION_LIBRARY, FrictionEffects, parse_effects
 
-CONF = Path(__file__).resolve().parents[1] / "conf" / "friction_effects"
+CONF = Path(__file__).resolve().parents[2] / "conf" / "friction_effects"
 
 
 @pytest.mark.parametrize("kind", sorted(FRICTION_LIBRARY))

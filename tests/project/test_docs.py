@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 SCANNED_DIRS = ("swgsim", "learn", "swgcli", "scripts", "conf", "tests")
 SUFFIXES = {".py", ".yaml", ".yml", ".sh", ".toml", ".cfg", ".txt"}

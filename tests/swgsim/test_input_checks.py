@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import pytest
-from test_reliability import small_cfg
+from bad_input import small_cfg
 
 from swgsim.datasets import generate as gen
 from swgsim.datasets.plan import plan

@@ -17,7 +17,7 @@ from learn.studies.kshot import check_no_leak, kshot_split
 from learn.studies.protocols import protocol_splits
 from learn.studies.transfer import CONFUSION_COLUMNS, RESULT_COLUMNS, TargetSpec
 
-CONF = Path(__file__).resolve().parents[1] / "conf"
+CONF = Path(__file__).resolve().parents[2] / "conf"
 
 
 pytestmark = pytest.mark.usefixtures("torch_one_thread")

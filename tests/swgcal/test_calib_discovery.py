@@ -6,7 +6,7 @@ of the input rotation whose amplitude is proportional to the load, and a gauge g
 s1 that grows with the load. Each must be proposed in words that name it, with a
 positive held-out gain; clean data and in-library effects get no proposal. Load and
 speed vary together on the two-point bench, so the load-dependent cases use a third
-operating point (4000 rpm, 7 N m). Same fixtures as tests/test_calib_strain.py (tiny:
+operating point (4000 rpm, 7 N m). Same fixtures as tests/swgcal/test_calib_strain.py (tiny:
 5 windows of 40 ms per operating point, noise 1 % of the signal range).
 """
 

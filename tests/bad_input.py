@@ -1,0 +1,70 @@
+"""Helpers of the bad-input tests (tests/apps, tests/swgsim): a small data set, snapshots
+of folders, the one-line message of a refused call, a friction CSV, the calibration app as
+a call, and the live members of a process group."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from swgcli import compose_app, dataset_preset
+from swgcli.app import one_line
+
+
+def small_cfg(**chain) -> dict:
+    """Two gears, three classes, one load: a data set in about a second."""
+    cfg = dataset_preset("tiny")
+    cfg["variants"] = {"healthy": {"severities": [0.0], "repeat": 2},
+                       "eccentric_wg": {"severities": [0.1], "n_positions": 1},
+                       "root_tooth_crack": {"severities": [0.9], "n_positions": 1}}
+    cfg["gears"] = cfg["gears"][:2]
+    cfg["operating_points"]["t_out_nm"] = [39.0]
+    cfg["chain"].update({"window_s": 0.06, "settle_s": 0.02, **chain})
+    return cfg
+
+
+def snapshot(folder: Path) -> dict[str, tuple[int, float]]:
+    """Every file below ``folder``: size and modification time."""
+    return {str(p.relative_to(folder)): (p.stat().st_size, p.stat().st_mtime)
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def message(call) -> str:
+    """The one-line message a bad-input exception of ``call`` ends in."""
+    with pytest.raises(Exception) as info:  # noqa: PT011 - sorted by one_line below
+        call()
+    msg = one_line(info.value)
+    assert msg is not None, f"not reported as bad input: {info.value!r}"
+    assert "\n" not in msg
+    return msg
+
+
+def friction_csv(path: Path, t, q, dq, tau=None, extra: str = "") -> Path:
+    tau = np.zeros_like(t) if tau is None else tau
+    rows = "\n".join(f"{a},{b},{c},{d}" for a, b, c, d in zip(t, q, dq, tau, strict=True))
+    path.write_text("time_s,q_rad,dq_rad_per_s,tau_friction_Nm\n" + rows + extra + "\n")
+    return path
+
+
+def calibrate_call(measured: Path, out: Path, *extra):
+    from swgcli.calibrate import run_calibrate
+
+    cfg = compose_app("calibrate", [f"measured={measured}", f"out_dir={out}",
+                                    "logger.enabled=false", "figures=false", *extra])
+    return lambda: run_calibrate(cfg)
+
+
+def process_group(pgid: int) -> list[int]:
+    out = []
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                stat = Path(f"/proc/{d}/stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(stat[2]) == pgid and stat[0] != "Z":
+                out.append(int(d))
+    return out
