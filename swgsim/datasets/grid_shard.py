@@ -23,7 +23,7 @@ import numpy as np
 from swgsim.datasets.gears import gear_params, layout_for
 from swgsim.datasets.plan import DatasetPlan, ShardSpec, WindowSpec
 from swgsim.datasets.schema import make_dataset
-from swgsim.datasets.steps import diverged, fine_motion
+from swgsim.datasets.steps import diverged, fine_motion, unique_index
 from swgsim.files.provenance import git_revision, package_version
 from swgsim.gear import dynamics
 from swgsim.gear.chain import SimulationChain
@@ -46,19 +46,6 @@ def _signal_key(w: WindowSpec, phi0: float) -> tuple:
     """Windows with equal keys have the same clean signals (healthy copies, references)."""
     pos = None if np.isnan(w.position_deg) else float(w.position_deg)
     return (w.fault, float(w.severity), pos, float(w.t_out_nm), float(phi0))
-
-
-def _unique(keys: list[tuple]) -> tuple[np.ndarray, np.ndarray]:
-    """First index of each distinct key and, per item, the position of its key."""
-    pos: dict[tuple, int] = {}
-    first: list[int] = []
-    inverse = np.empty(len(keys), np.int64)
-    for i, k in enumerate(keys):
-        if k not in pos:
-            pos[k] = len(first)
-            first.append(i)
-        inverse[i] = pos[k]
-    return np.asarray(first, np.int64), inverse
 
 
 @dataclass
@@ -96,7 +83,7 @@ def simulate_motions(plan: DatasetPlan, shard: ShardSpec, params: list[ChainPara
     fs = ch.sample_rate_hz
     n_t = int(round(ch.window_s * fs))
     t_out = np.array([w.t_out_nm for w in shard.windows])
-    m_idx, m_inv = _unique([_motion_key(p, t, a) for p, t, a in zip(params, t_out, phi0,
+    m_idx, m_inv = unique_index([_motion_key(p, t, a) for p, t, a in zip(params, t_out, phi0,
                                                                         strict=True)])
     # the window plus n_lead samples before and after it (history of the amplifier's
     # filter), and one more to interpolate the last fine sample
@@ -127,7 +114,7 @@ def synthesise(chain: SimulationChain, shard: ShardSpec, params: list[ChainParam
     ndarray, shape (V, 5, oversample · n_rec')
         [mV/V]; windows that are copies of one another are views of one array.
     """
-    s_idx, s_inv = _unique([_signal_key(w, a) for w, a in zip(shard.windows, phi0,
+    s_idx, s_inv = unique_index([_signal_key(w, a) for w, a in zip(shard.windows, phi0,
                                                                 strict=True)])
     psi, t_act = fine_motion(motions.res, oversample, motions.inverse[s_idx])
     sig_u = chain.signals_batch([params[k] for k in s_idx], psi, t_act)

@@ -21,7 +21,7 @@ from swgsim.datasets.gears import gear_params, layout_for
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.schedule import DutyPoint, uses_position
 from swgsim.datasets.slots import jitter_samples, profile_slots
-from swgsim.datasets.steps import diverged, fine_motion, influences_for
+from swgsim.datasets.steps import diverged, fine_motion, influences_for, unique_index
 from swgsim.gear import dynamics, profile_dynamics
 from swgsim.gear.chain import SimulationChain
 from swgsim.gear.faults import ChainParams, apply_fault
@@ -46,7 +46,7 @@ class RecordBank:
         The checked data set.
     gear_id : int
     chunk : int
-        Variants per batch (bounds the memory of the dynamics and gauge signals).
+        Distinct motions per batch (bounds the memory of the dynamics).
     """
 
     def __init__(self, plan: DatasetPlan, gear_id: int, chunk: int = 96) -> None:
@@ -85,12 +85,23 @@ class RecordBank:
         return self._records[key]
 
     def simulate(self) -> None:
-        """Simulate every pending record, in batches per input speed."""
+        """Simulate every pending record, in batches per input speed of at most
+        ``chunk`` distinct motions (:meth:`motion`): an integration costs nearly the same
+        for one motion as for a hundred, so a batch takes every record it can."""
         pending, self._pending = sorted(self._pending), set()
         for n in sorted({k[0] for k in pending}):
-            group = [k for k in pending if k[0] == n]
-            for c in range(0, len(group), self.chunk):
-                self._simulate(group[c:c + self.chunk])
+            by_motion: dict[tuple, list[tuple]] = {}
+            for k in pending:
+                if k[0] == n:
+                    by_motion.setdefault(self.motion(k), []).append(k)
+            groups = list(by_motion.values())
+            for c in range(0, len(groups), self.chunk):
+                self._simulate([k for g in groups[c:c + self.chunk] for k in g])
+
+    def motion(self, key: tuple) -> tuple:
+        """What a record's dynamics depend on: the gear's parameters and the load (the
+        flexspline's faults share the healthy gear's motion, paper Table I)."""
+        return (self.params(key).gear, key[1])
 
     def _chain(self, params: list[ChainParams]) -> SimulationChain:
         keys = {p.root_crack_key() for p in params} - {None} - set(self._influences)
@@ -111,8 +122,10 @@ class RecordBank:
         n_rec = n_period + n_t
         params = [self.params(k) for k in keys]
         n_sim = n_rec + 2 * n_lead + (q > 1)
-        res = dynamics.simulate([p.gear for p in params], n_in, np.array([k[1] for k in keys]),
-                                0.0, fs, n_sim / fs, ch.settle_s - n_lead / fs, ch.substeps,
+        first, motion = unique_index([self.motion(k) for k in keys])  # one per motion
+        res = dynamics.simulate([params[i].gear for i in first], n_in,
+                                np.array([keys[i][1] for i in first]), 0.0, fs, n_sim / fs,
+                                ch.settle_s - n_lead / fs, ch.substeps,
                                 friction_effects=self.plan.friction)
         if not res.success:
             raise ValueError(diverged(self.plan, f"gear {self.gear_id}'s life at {n_in:g} rpm",
@@ -121,7 +134,7 @@ class RecordBank:
         win = slice(n_lead, n_lead + n_rec)
         for c in range(0, len(keys), 16):  # gauge signals in small groups (memory)
             rows = np.arange(c, min(c + 16, len(keys)))
-            psi, t_act = fine_motion(res, q, rows)
+            psi, t_act = fine_motion(res, q, motion[rows])
             sig = chain.signals_batch([params[r] for r in rows], psi, t_act)
             if self.plan.sensor_effects:
                 t_fine = np.arange(sig.shape[-1]) / (fs * q)
@@ -130,7 +143,7 @@ class RecordBank:
                                            t_start_s=np.full(rows.size, -n_lead / fs))
             sig = sample(sig, amp, n_lead) if amp is not None else sig[:, :, :n_rec]
             for i, r in enumerate(rows):
-                cum = {k: np.concatenate([[0.0], np.cumsum(v[r, win])])
+                cum = {k: np.concatenate([[0.0], np.cumsum(v[motion[r], win])])
                        for k, v in (("p_in", res.p_in), ("p_out", res.p_out),
                                     ("w_in", res.states[1]), ("t_out", res.t_out))}
                 self._records[keys[r]] = {"signal": sig[i, :, :n_rec].astype(np.float32),
@@ -155,6 +168,10 @@ class ProfileRecordBank(RecordBank):
         """The key of a record: the state alone (every slot is in the record)."""
         return (0.0, 0.0, *RecordBank.key(dp, fault, severity, position_deg)[2:])
 
+    def motion(self, key: tuple) -> tuple:
+        """What a record's motion along the profile depends on: the gear's parameters."""
+        return (self.params(key).gear,)
+
     def _simulate(self, keys: list[tuple]) -> None:
         cfg = self.plan.config
         ch, amp = cfg.chain, cfg.acquisition.amplifier
@@ -169,9 +186,11 @@ class ProfileRecordBank(RecordBank):
                                    self.healthy.gear.ratio), 2 * np.pi)
         starts = self.slots.starts
         n_rec = int(starts.max()) + n_t + n_lead + 1
-        res = profile_dynamics.simulate_profile([p.gear for p in params], self.plan.profile,
-                                        np.full(len(keys), phi0[0]), fs, n_rec / fs,
-                                        ch.substeps, cfg.profile.feedforward)
+        first, motion = unique_index([self.motion(k) for k in keys])  # one per motion
+        res = profile_dynamics.simulate_profile([params[i].gear for i in first],
+                                                self.plan.profile,
+                                                np.full(len(first), phi0[0]), fs, n_rec / fs,
+                                                ch.substeps, cfg.profile.feedforward)
         if not res.success:
             raise ValueError(diverged(self.plan, f"gear {self.gear_id}'s life on the profile",
                                       res.message))
@@ -184,9 +203,10 @@ class ProfileRecordBank(RecordBank):
                               input_sensor=angles.input_sensor(),
                               output_encoder=angles.output_encoder())
         t_fine = np.arange(n_cut) / (fs * q)
-        for v, k in enumerate(keys):
+        for r, k in enumerate(keys):
+            v = motion[r]
             psi_f, t_f = fine_motion(res, q, np.array([v]))
-            cut = chain.signals_batch([params[v]], psi_f, t_f)[0][:, idx].transpose(1, 0, 2)
+            cut = chain.signals_batch([params[r]], psi_f, t_f)[0][:, idx].transpose(1, 0, 2)
             if self.plan.sensor_effects:
                 cut = apply_sensor_effects(cut, t_fine, None, self.plan.sensor_effects,
                                            t_start_s=(starts - n_lead) / fs, psi=psi_f[0][idx])

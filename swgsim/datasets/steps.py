@@ -19,7 +19,7 @@ from swgsim.gear.faults import NO_ROOT_CRACK, ChainParams, apply_fault
 from swgsim.gear.flexspline import FlexsplineGeometry, TrussModel
 from swgsim.gear.influence import Influence, InfluenceSolver
 
-__all__ = ["diverged", "fine_motion", "gear_influences", "influences_for"]
+__all__ = ["diverged", "fine_motion", "gear_influences", "influences_for", "unique_index"]
 
 
 def gear_influences(plan: DatasetPlan, shards: list[ShardSpec] | tuple[ShardSpec, ...]
@@ -132,3 +132,28 @@ def fine_motion(res: dynamics.SimResult, q: int,
     dpsi = res.states[1][rows] - res.states[3][rows]
     return (CubicHermiteSpline(t, psi, dpsi, axis=1)(tf),
             CubicSpline(t, t_out, axis=1)(tf))
+
+
+def unique_index(keys: list) -> tuple[np.ndarray, np.ndarray]:
+    """First index of each distinct key, and per item the position of its key among them.
+
+    Parameters
+    ----------
+    keys : list of hashable, length V
+
+    Returns
+    -------
+    first : ndarray of int, shape (U,)
+        Index of the first item of each distinct key, in order of appearance.
+    inverse : ndarray of int, shape (V,)
+        Row of ``first`` of each item.
+    """
+    pos: dict = {}
+    first: list[int] = []
+    inverse = np.empty(len(keys), np.int64)
+    for i, k in enumerate(keys):
+        if k not in pos:
+            pos[k] = len(first)
+            first.append(i)
+        inverse[i] = pos[k]
+    return np.asarray(first, np.int64), inverse
