@@ -35,6 +35,7 @@ import hashlib
 
 import numpy as np
 
+from swgsim.datasets.conditions import WindowConditions, efficiency_ratio, window_conditions
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.datasets.records import RecordBank, record_bank
 from swgsim.datasets.schedule import LifeConfig, schedule, uses_position
@@ -84,6 +85,30 @@ class LifeSimulator:
                        {(int(d), float(s)) for d, s in zip(self.schedule.duty_index,
                                                            self.schedule.severity,
                                                            strict=True)})
+        self.conditions = None if life.conditions is None else self._conditions(life)
+
+    def _conditions(self, life: LifeConfig) -> WindowConditions:
+        """The life's conditions per window (:func:`swgsim.datasets.conditions.
+        window_conditions`).
+
+        Raises
+        ------
+        ValueError
+            Payload changes on a profile, or with a record bank that keeps no torque part.
+        """
+        if life.conditions.payload and getattr(self.bank, "slots", None) is not None:
+            raise ValueError("dataset.life.conditions.payload: payload changes are for lives "
+                             "at steady operating points; on a profile, set the link's "
+                             "dataset.profile.load.gravity.payload_kg")
+        if life.conditions.payload and not self.bank.torque_part:
+            raise ValueError("a life with payload changes needs a record bank that keeps the "
+                             "torque part (record_bank(..., torque_part=True))")
+        sch = self.schedule
+        duty = [sch.duty[int(d)] for d in sch.duty_index]
+        return window_conditions(life.conditions, sch.hour,
+                                 np.array([d.n_in_rpm for d in duty]),
+                                 np.array([d.t_out_nm for d in duty]), self.bank.healthy,
+                                 int(self.plan.config.seed), self.gear_id, int(life.life_seed))
 
     def _key(self, d: int, severity: float) -> tuple:
         return RecordBank.key(self.schedule.duty[d], self.life.fault.fault, severity,
@@ -111,23 +136,43 @@ class LifeSimulator:
     def __len__(self) -> int:
         return self.schedule.hour.size
 
-    def _rows(self, rows: np.ndarray):
+    def _rows(self, rows: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Windows ``rows`` (a block): cut from their records, under the life's
+        conditions, through the measurement chain, with their metadata."""
         cfg = self.plan.config
-        ch, amp = cfg.chain, cfg.acquisition.amplifier
-        fs = ch.sample_rate_hz
-        n_t = int(round(ch.window_s * fs))
-        time_s = np.arange(n_t) / fs
-        sch = self.schedule
-        sig = np.empty((rows.size, 5, n_t))
-        eff, n_mean, t_mean = (np.empty(rows.size) for _ in range(3))
         rngs = [np.random.default_rng(np.random.SeedSequence(
             int(cfg.seed), spawn_key=(self.gear_id, int(self.life.life_seed), 1 + int(r))))
             for r in rows]
+        sig, keys, eff, n_mean, t_mean, angles = self._cut(rows, rngs)
+        if self.conditions is not None:
+            self._condition(rows, keys, sig, eff, t_mean)
+        phi_in = angles.pop("phi_in", None)
+        fault = self.schedule.fault[rows]
+        if is_sensor_fault(self.life.fault.fault):
+            on = fault != "healthy"
+            if on.any():
+                sig[on] = apply_sensor_fault(sig[on], self.life.fault.fault,
+                                             self.schedule.severity[rows][on], self.sensor)
+        self._record(sig, n_mean, rngs, phi_in)
+        meta = self._meta(rows, fault, eff, n_mean, t_mean)
+        return sig.astype(np.float32), {**meta, **angles}
+
+    def _cut(self, rows: np.ndarray, rngs: list[np.random.Generator]):
+        """Each window cut from its record at its start (drawn from its stream): signals
+        (n, 5, n_t) [mV/V], record keys, efficiency, mean speed [rpm] and torque [N m],
+        and a profile's angle channels (n, n_t) [rad]."""
+        fs = self.plan.config.chain.sample_rate_hz
+        n_t = int(round(self.plan.config.chain.window_s * fs))
+        sch = self.schedule
+        sig = np.empty((rows.size, 5, n_t))
+        eff, n_mean, t_mean = (np.empty(rows.size) for _ in range(3))
         slots = getattr(self.bank, "slots", None)
         angles: dict[str, np.ndarray] = {}
+        keys = []
         for i, r in enumerate(rows):
             d = int(sch.duty_index[r])
-            rec = self.bank.get(self._key(d, float(sch.severity[r])))
+            keys.append(self._key(d, float(sch.severity[r])))
+            rec = self.bank.get(keys[-1])
             if slots is not None:  # a profile: slot d, started within its jitter
                 rec = {k: v[d] for k, v in rec.items()}
                 o = int(rngs[i].uniform() * (rec["signal"].shape[-1] - n_t + 1))
@@ -137,23 +182,52 @@ class LifeSimulator:
             else:
                 o = int(rngs[i].uniform() * rec["n_period"])
             sig[i] = rec["signal"][:, o:o + n_t]
+            lam = 1.0 if self.conditions is None else self.conditions.payload[r]
+            if lam != 1.0:  # a heavier tool: the torque-driven part scales
+                sig[i] += (lam - 1.0) * rec["torque"][:, o:o + n_t]
             e = o + n_t
             eff[i] = (rec["p_out"][e] - rec["p_out"][o]) / (rec["p_in"][e] - rec["p_in"][o])
             n_mean[i] = (rec["w_in"][e] - rec["w_in"][o]) / n_t * 60 / (2 * np.pi)
             t_mean[i] = (rec["t_out"][e] - rec["t_out"][o]) / n_t
-        phi_in = angles.pop("phi_in", None)
-        fault = sch.fault[rows]
-        if is_sensor_fault(self.life.fault.fault):
-            on = fault != "healthy"
-            if on.any():
-                sig[on] = apply_sensor_fault(sig[on], self.life.fault.fault,
-                                             sch.severity[rows][on], self.sensor)
-        for i in range(rows.size):  # each window from its own stream
+        return sig, keys, eff, n_mean, t_mean, angles
+
+    def _condition(self, rows: np.ndarray, keys: list[tuple], sig: np.ndarray,
+                   eff: np.ndarray, t_mean: np.ndarray) -> None:
+        """The life's conditions on windows ``rows``, in place: the efficiency at the
+        acting load and friction, the acting torque, the bridges' drift
+        (:mod:`swgsim.datasets.conditions`)."""
+        c = self.conditions
+        duty = [self.schedule.duty[int(d)] for d in self.schedule.duty_index[rows]]
+        n = np.array([d.n_in_rpm for d in duty])
+        t = np.array([d.t_out_nm for d in duty])
+        for key in set(keys):  # the state's own gear parameters
+            m = np.array([k == key for k in keys])
+            eff[m] *= efficiency_ratio(self.bank.params(key), n[m], t[m], c.friction[rows][m],
+                                       c.mu_factor[rows][m], c.payload[rows][m])
+        t_mean *= c.payload[rows]
+        gain, offset = c.bridge_gain_offset(rows)
+        sig *= gain[:, :, None]
+        sig += offset[:, :, None]
+
+    def _record(self, sig: np.ndarray, n_mean: np.ndarray, rngs: list[np.random.Generator],
+                phi_in: np.ndarray | None) -> None:
+        """eq. (10) and the converter's noise and quantisation, each window from its own
+        stream, in place."""
+        cfg = self.plan.config
+        amp, fs = cfg.acquisition.amplifier, cfg.chain.sample_rate_hz
+        time_s = np.arange(sig.shape[-1]) / fs
+        for i in range(sig.shape[0]):
             if self.life.disturbed:
                 sig[i:i + 1] = disturb(sig[i:i + 1], time_s, n_mean[i:i + 1], cfg.disturbance,
                                        rngs[i], None if phi_in is None else phi_in[i:i + 1])
             if amp is not None:
                 sig[i:i + 1] = digitise(sig[i:i + 1], amp, rngs[i])
+
+    def _meta(self, rows: np.ndarray, fault: np.ndarray, eff: np.ndarray,
+              n_mean: np.ndarray, t_mean: np.ndarray) -> dict[str, np.ndarray]:
+        """The per-sample variables of windows ``rows``: the schema's, ``hour``,
+        ``commissioning`` and, with a temperature sensor, ``temperature_c``."""
+        sch = self.schedule
         duty = [sch.duty[int(d)] for d in sch.duty_index[rows]]
         gear_fault = (fault != "healthy") & uses_position(self.life.fault.fault)
         meta = {
@@ -161,8 +235,7 @@ class LifeSimulator:
             "fault": fault.astype(str),
             "variant": np.zeros(rows.size, np.int64),
             "severity": sch.severity[rows],
-            "position_deg": np.where(gear_fault,
-                                     self.position_deg, np.nan),
+            "position_deg": np.where(gear_fault, self.position_deg, np.nan),
             "n_in_rpm": np.array([d.n_in_rpm for d in duty]),
             "t_out_nm": np.array([d.t_out_nm for d in duty]),
             "disturbed": np.full(rows.size, bool(self.life.disturbed)),
@@ -172,26 +245,32 @@ class LifeSimulator:
             "t_out_mean_nm": t_mean,
             "hour": sch.hour[rows],
             "commissioning": sch.commissioning[rows],
-            **angles,  # a profile's angle channels, (n, n_t) [rad]
         }
-        return sig.astype(np.float32), meta
+        if self.conditions is not None and self.conditions.reading_c is not None:
+            meta["temperature_c"] = self.conditions.reading_c[rows]
+        return meta
 
 
 def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     """Windows ``start:stop`` of a life as a schema-v1 ``xarray.Dataset``, with the per-sample
-    variables ``hour`` [h] and ``commissioning`` (bool) and the life in the attributes."""
+    variables ``hour`` [h], ``commissioning`` (bool) and, with a temperature sensor,
+    ``temperature_c`` [degC], and the life in the attributes."""
     stop = len(sim) if stop is None else stop
     sig, meta = sim.windows(start, stop)
-    extra = {k: meta.pop(k) for k in ("hour", "commissioning")}
+    extra = {k: meta.pop(k) for k in ("hour", "commissioning", "temperature_c") if k in meta}
     angles = {k: meta.pop(k) for k in [k for k, v in meta.items() if v.ndim == 2]}
     cfg = sim.plan.config
     n_t = sig.shape[-1]
     attrs = {"config": sim.plan.as_dict(), "seed": int(cfg.seed),
-             "life": dataclasses.asdict(sim.life), "gear_id": sim.gear_id,
+             "life": {k: v for k, v in dataclasses.asdict(sim.life).items()
+                      if not (k == "conditions" and v is None)}, "gear_id": sim.gear_id,
              "fault_position_deg": sim.position_deg, "fault_sensor": sim.sensor}
     ds = make_dataset(sig, np.arange(n_t) / cfg.chain.sample_rate_hz, meta, attrs)
     ds["hour"] = ("sample", extra["hour"], {"units": "h"})
     ds["commissioning"] = ("sample", extra["commissioning"])
+    if "temperature_c" in extra:  # the joint's temperature reading
+        ds["temperature_c"] = ("sample", extra["temperature_c"].astype(np.float64),
+                               {"units": "degC"})
     for k, v in angles.items():  # a profile's angle channels
         ds[k] = (("sample", "time"), v, {"units": "rad"})
     return ds
@@ -209,7 +288,9 @@ def simulate_life_shard(plan: DatasetPlan, shard: ShardSpec,
     the float32 signals and the sorted per-sample variables, provenance) plus ``life``,
     ``fault_position_deg`` and ``fault_sensor``.
     """
-    sim = LifeSimulator(plan, shard.gear, plan.config.life)
+    life = plan.config.life
+    payload = life.conditions is not None and bool(life.conditions.payload)
+    sim = LifeSimulator(plan, shard.gear, life, record_bank(plan, shard.gear, payload))
     ds = life_dataset(sim)
     h = hashlib.sha256(ds["strain_signal"].values.tobytes())
     for k in sorted(v for v in ds.data_vars if v != "strain_signal"):

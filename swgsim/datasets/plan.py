@@ -134,11 +134,15 @@ class DatasetPlan:
 
 
 def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
-    """A data-set config as plain data, without ``profile`` when it is None, so that a
-    steady data set keeps the config (and :func:`config_hash`) it had before profiles."""
+    """A data-set config as plain data, without ``profile`` and ``life.conditions`` when
+    they are None, so that a data set keeps the config (and :func:`config_hash`) it had
+    before these options."""
     out = dict(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
     if "profile" in out and out["profile"] is None:
         del out["profile"]
+    life = out.get("life")
+    if isinstance(life, dict) and "conditions" in life and life["conditions"] is None:
+        out["life"] = {k: v for k, v in life.items() if k != "conditions"}
     return out
 
 
@@ -526,6 +530,9 @@ def _life_shards(cfg: DatasetConfig, prof, starts: tuple[float, ...]) -> tuple[S
     if prof is not None:
         _req(not life.duty, "dataset.life.duty must be empty with dataset.profile: the "
                             "profile is the life's duty cycle")
+        _req(life.conditions is None or not life.conditions.payload,
+             "dataset.life.conditions.payload: payload changes are for lives at steady "
+             "operating points; on a profile, set dataset.profile.load.gravity.payload_kg")
         slots_of(cfg, prof, starts)  # refused here if no window of the profile turns enough
     n = len(schedule(life, list(ops.n_in_rpm), list(ops.t_out_nm)).hour)
     return tuple(ShardSpec(f"gear{int(g.id)}_life.nc", int(g.id), 0, float("nan"), (), n,

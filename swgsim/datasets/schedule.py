@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.base.typed import check_finite
+from swgsim.datasets.conditions import ConditionsConfig, check_conditions
 from swgsim.gear.faults import get_fault
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS, is_sensor_fault
 
@@ -107,6 +108,9 @@ class LifeConfig:
         Add eq. (10)'s per-window disturbance to every window.
     life_seed : int
         Number of this life among the lives of one gear and data-set seed, >= 0.
+    conditions : ConditionsConfig or None
+        What changes while the gear stays healthy: temperature, run-in, payload, the
+        bridges' drift (:mod:`swgsim.datasets.conditions`); None: nothing but the fault.
     """
 
     hours: float = 1000.0
@@ -117,6 +121,7 @@ class LifeConfig:
     severity_levels: int = 8
     disturbed: bool = True
     life_seed: int = 0
+    conditions: ConditionsConfig | None = None
 
 
 def _req(cond: bool, msg: str) -> None:
@@ -166,6 +171,8 @@ def check_life(life: LifeConfig, key: str = "dataset.life") -> None:
          f"{life.severity_levels}")
     _req(int(life.life_seed) >= 0, f"{key}.life_seed must be >= 0, got {life.life_seed}")
     _check_fault(life.fault, c, f"{key}.fault")
+    if life.conditions is not None:
+        check_conditions(life.conditions, float(life.hours), f"{key}.conditions")
 
 
 def _check_fault(f: FaultOnset, commissioning_h: float, key: str) -> None:

@@ -24,7 +24,7 @@ cooled to 25 °C, its friction re-identified along the way **[src]**.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import accumulate
 
 import numpy as np
@@ -70,17 +70,18 @@ def _finite(x, name: str, lo: float = -np.inf, hi: float = np.inf, rng: str = ""
     return a
 
 
-@dataclass(frozen=True)
+@dataclass
 class JointThermal:
-    """Thermal model of a joint and its day (:func:`joint_temperature`); a field outside
-    its range raises ValueError naming it.
+    """Thermal model of a joint and its day (:func:`joint_temperature`); :meth:`check`
+    refuses a field outside its range, naming it.
 
     Attributes
     ----------
     r_th_k_per_w : float
-        Thermal resistance joint -> ambient (0.6) [K/W]: 32.5 W lost at the rated point
-        (2000 rpm, 52 N m) warm it by 19.5 K, the issue's "about 20 K" [choice]; the paper's
-        points: 23-36 W at 2000 rpm (14-22 K), 96-122 W at 4000 rpm (58-73 K) [derived].
+        Thermal resistance joint -> ambient (0.3) [K/W]: the paper's six operating points
+        lose 23-122 W (mean 69 W, :func:`loss_power_w`), so its duty cycle warms the joint
+        by about 21 K, the issue's "about 20 K" [choice]; the rated point alone (2000 rpm,
+        52 N m, 32.5 W) by about 10 K [derived].
     tau_min : float
         Thermal time constant R_th C (30) [min]: 20-60 min is usual for small gearboxes
         [unverified]; C = 3000 J/K, e.g. 3.3 kg of aluminium at 900 J/(kg K) [derived].
@@ -90,36 +91,45 @@ class JointThermal:
         Day/night amplitude (3, a heated hall) [K] [choice], phase ``sin(2π t / 24 h)``,
         t the wall-clock hours since the first start, taken as 08:00: warmest at 14:00,
         coldest at 02:00, ``ambient_c`` at each day's start.
-    ambient_points : tuple of (float, float)
-        Slow offsets of the hall, ``(wall-clock hour, offset K)`` pairs, hours >= 0 and
+    ambient_points : list of [float, float]
+        Slow offsets of the hall, ``[wall-clock hour, offset K]`` pairs, hours >= 0 and
         strictly increasing, linear in between, held outside (default none); the hall
-        warming by 10 K over two days: ``((0, 0), (48, 10))``. Lists become tuples.
+        warming by 10 K over two days: ``[[0, 0], [48, 10]]``.
     run_h_per_day : float
         Operating hours per day before a stop, in (0, 24] (16: two shifts) [h] [choice].
         The stop lasts 24 − run_h_per_day wall-clock hours (8 h = 16 time constants: a
         cold start every day); 24 never stops. The life starts cold, at ambient.
     """
 
-    r_th_k_per_w: float = 0.6
+    r_th_k_per_w: float = 0.3
     tau_min: float = 30.0
     ambient_c: float = 20.0
     ambient_swing_k: float = 3.0
-    ambient_points: tuple[tuple[float, float], ...] = ()
+    ambient_points: list[list[float]] = field(default_factory=list)
     run_h_per_day: float = 16.0
 
-    def __post_init__(self):
+    def check(self, key: str = "JointThermal") -> None:
+        """Refuse a field outside its range in one line naming ``<key>.<field>``.
+
+        Raises
+        ------
+        ValueError
+        """
         for name, unit in (("r_th_k_per_w", "K/W"), ("tau_min", "min")):
-            _positive(getattr(self, name), f"JointThermal.{name}", unit)
-        _finite(self.ambient_c, "JointThermal.ambient_c", -273.15, np.inf, "[-273.15, inf) °C")
-        _finite(self.ambient_swing_k, "JointThermal.ambient_swing_k", 0, np.inf, "[0, inf) K")
-        _positive(self.run_h_per_day, "JointThermal.run_h_per_day", "h", _HOURS_PER_DAY)
-        pts = np.asarray(self.ambient_points, dtype=float).reshape(-1, 2)  # (n_points, 2)
-        _finite(pts[:, 0], "JointThermal.ambient_points hours", 0.0, np.inf, "[0, inf) h")
-        _finite(pts[:, 1], "JointThermal.ambient_points offsets", rng="finite K")
+            _positive(getattr(self, name), f"{key}.{name}", unit)
+        _finite(self.ambient_c, f"{key}.ambient_c", -273.15, np.inf, "[-273.15, inf) °C")
+        _finite(self.ambient_swing_k, f"{key}.ambient_swing_k", 0, np.inf, "[0, inf) K")
+        _positive(self.run_h_per_day, f"{key}.run_h_per_day", "h", _HOURS_PER_DAY)
+        try:
+            pts = np.asarray(self.ambient_points, dtype=float).reshape(-1, 2)  # (n, 2)
+        except ValueError:
+            raise ValueError(f"{key}.ambient_points must be [hour, offset K] pairs, got "
+                             f"{self.ambient_points}") from None
+        _finite(pts[:, 0], f"{key}.ambient_points hours", 0.0, np.inf, "[0, inf) h")
+        _finite(pts[:, 1], f"{key}.ambient_points offsets", rng="finite K")
         if np.any(np.diff(pts[:, 0]) <= 0):
-            raise ValueError("JointThermal.ambient_points hours must increase strictly, got "
+            raise ValueError(f"{key}.ambient_points hours must increase strictly, got "
                              f"{pts[:, 0].tolist()}")
-        object.__setattr__(self, "ambient_points", tuple((float(h), float(k)) for h, k in pts))
 
 
 def wall_clock_h(operating_h, run_h_per_day: float) -> np.ndarray:
@@ -209,6 +219,7 @@ def joint_temperature(operating_h, loss_w, cfg: JointThermal | None = None) -> n
         (W,) alike, hours negative or decreasing, losses negative, non-finite values.
     """
     cfg = cfg or JointThermal()
+    cfg.check()
     h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
     p = _finite(loss_w, "loss_w", 0.0, np.inf, "[0, inf) W")
     if h.ndim != 1 or h.size == 0 or p.shape != h.shape:
@@ -347,40 +358,51 @@ def gear_at_temperature(gear: GearParams, temp_c: float, run_in: float = 1.0) ->
                                mu=gear.mu * r)
 
 
-def _steady_friction(gear: GearParams, n_in_rpm, t_out_nm):
+def _steady_friction(gear: GearParams, n_in_rpm, t_out_nm, friction=1.0, mu_factor=1.0):
     """Steady friction torque T_fric [N m] and flank speed v [rad/s], broadcast: with
     v = ω_in / (N sin α) and c T_stiff = T_load + T_fric / sin α, eq. (5) (b3 averaging
-    out) gives T_fric = (b0 s + b1 v + b2 v³ + μ s T_load / cos α) / (1 − μ s / (sin α
-    cos α)), s = tanh(v / v_s) (docs/PHYSICS.md sec. 1.4, as in ``fit_friction``)."""
+    out) gives T_fric = (f (b0 s + b1 v + b2 v³) + m μ s T_load / cos α) / (1 − m μ s /
+    (sin α cos α)), s = tanh(v / v_s), f and m the factors on the load-independent terms
+    and on μ (:func:`gear_at_temperature`; docs/PHYSICS.md sec. 1.4, as in
+    ``fit_friction``)."""
     n = _finite(n_in_rpm, "n_in_rpm", 0.0, np.inf, "(0, inf) rpm")
     t = _finite(t_out_nm, "t_out_nm", 0.0, np.inf, "[0, inf) N m")
     if np.any(n <= 0):
         _fail("n_in_rpm", "(0, inf) rpm", n[n <= 0].flat[0])
+    f = _finite(friction, "friction", 0.0, np.inf, "(0, inf)")
+    m = _finite(mu_factor, "mu_factor", 0.0, np.inf, "(0, inf)")
     sa, ca = np.sin(gear.alpha_tooth_rad), np.cos(gear.alpha_tooth_rad)
     v = n * RPM / (gear.ratio * sa)
     s = np.tanh(v / gear.v_smooth_rad_s)
-    num = gear.b0_nm * s + gear.b1_nms * v + gear.b2_nms3 * v**3 + gear.mu * s * t / ca
-    return num / (1.0 - gear.mu * s / (sa * ca)), v, t
+    mu = gear.mu * m
+    num = f * (gear.b0_nm * s + gear.b1_nms * v + gear.b2_nms3 * v**3) + mu * s * t / ca
+    return num / (1.0 - mu * s / (sa * ca)), v, t
 
 
-def steady_efficiency(gear: GearParams, n_in_rpm, t_out_nm) -> np.ndarray:
+def steady_efficiency(gear: GearParams, n_in_rpm, t_out_nm, friction=1.0,
+                      mu_factor=1.0) -> np.ndarray:
     """Efficiency of the model in steady state, T_load / (T_load + T_fric / sin α) [-].
 
-    The energy balance of :mod:`swgsim.dynamics` (docs/PHYSICS.md sec. 1.5), which has no
-    function for it (:func:`swgsim.dynamics.fit_friction` solves it for b1 and μ).
+    The energy balance of :mod:`swgsim.gear.dynamics` (docs/PHYSICS.md sec. 1.5), which
+    has no function for it (:func:`swgsim.gear.dynamics.fit_friction` solves it for b1
+    and μ).
 
     Parameters
     ----------
     gear : GearParams
     n_in_rpm, t_out_nm : array_like
         Input speed, > 0 [rpm]; load torque, >= 0 [N m]; broadcast together.
+    friction, mu_factor : array_like
+        Factors on the load-independent friction (b0, b1, b2; the temperature's and the
+        run-in's, :func:`gear_at_temperature`) and on μ (the run-in's), > 0 [-];
+        broadcast with the speeds.
 
     Returns
     -------
     ndarray, broadcast shape
         Efficiency, 0 at no load [-]; ValueError for a speed <= 0, a negative torque.
     """
-    tf, _, t = _steady_friction(gear, n_in_rpm, t_out_nm)
+    tf, _, t = _steady_friction(gear, n_in_rpm, t_out_nm, friction, mu_factor)
     return t / (t + tf / np.sin(gear.alpha_tooth_rad))
 
 

@@ -42,7 +42,7 @@ flexspline.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -60,7 +60,7 @@ STEEL_EXPANSION_PER_K = 11e-6
 GAUGE_FACTOR_TC_PER_K = 1.0e-4
 
 
-@dataclass(frozen=True)
+@dataclass
 class BridgeDrift:
     """Temperature coefficients of the five bridges: their means and per-gear spreads.
 
@@ -74,7 +74,7 @@ class BridgeDrift:
         [choice]; sets the zero drift's spread (:attr:`zero_sd_mvv_per_k`).
     gauge_factor : float
         Gauge factor [-] (2.0, constantan foil, docs/PHYSICS.md sec. 4.2).
-    active_arms : tuple of int
+    active_arms : list of int
         Active arms of s0..s4 (4, 2, 2, 2, 2): full bridge s0, half bridges s1..s4
         (docs/PHYSICS.md sec. 4.3).
     span_mean_per_k : float
@@ -85,37 +85,39 @@ class BridgeDrift:
     ref_c : float
         Temperature at which the coefficients give no change [°C] (20).
 
-    Raises
-    ------
-    ValueError
-        A negative spread, a gauge factor or arm count out of range, a non-finite value.
+    :meth:`check` refuses a negative spread, a gauge factor or arm count out of range, a
+    non-finite value.
     """
 
     zero_mean_mvv_per_k: float = 0.0
     gauge_mismatch_ue_per_k: float = 0.2
     gauge_factor: float = 2.0
-    active_arms: tuple[int, ...] = (4, 2, 2, 2, 2)
+    active_arms: list[int] = field(default_factory=lambda: [4, 2, 2, 2, 2])
     span_mean_per_k: float = (-MODULUS_TC_PER_K + GAUGE_FACTOR_TC_PER_K
                               - 3 * STEEL_EXPANSION_PER_K)
     span_sd_per_k: float = 5e-5
     ref_c: float = REF_TEMP_C
 
-    def __post_init__(self):
+    def check(self, key: str = "BridgeDrift") -> None:
+        """Refuse a field outside its range in one line naming ``<key>.<field>``.
+
+        Raises
+        ------
+        ValueError
+        """
         for name in ("zero_mean_mvv_per_k", "span_mean_per_k", "ref_c"):
             if not np.isfinite(getattr(self, name)):
-                raise ValueError(f"BridgeDrift.{name} must be finite, got "
-                                 f"{getattr(self, name)}")
+                raise ValueError(f"{key}.{name} must be finite, got {getattr(self, name)}")
         for name in ("gauge_mismatch_ue_per_k", "span_sd_per_k"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"BridgeDrift.{name} must lie in [0, inf), got {v}")
+                raise ValueError(f"{key}.{name} must lie in [0, inf), got {v}")
         if not 1.0 <= self.gauge_factor <= 5.0:
-            raise ValueError(f"BridgeDrift.gauge_factor must lie in [1, 5], got "
-                             f"{self.gauge_factor}")
-        arms = tuple(self.active_arms)
+            raise ValueError(f"{key}.gauge_factor must lie in [1, 5], got {self.gauge_factor}")
+        arms = list(self.active_arms)
         if len(arms) != N_BRIDGES or any(a not in (1, 2, 4) for a in arms):
-            raise ValueError(f"BridgeDrift.active_arms must be {N_BRIDGES} values of 1, 2 "
-                             f"or 4, got {arms}")
+            raise ValueError(f"{key}.active_arms must be {N_BRIDGES} values of 1, 2 or 4, "
+                             f"got {arms}")
 
     @property
     def zero_sd_mvv_per_k(self) -> np.ndarray:
@@ -201,7 +203,7 @@ def apply_bridge_drift(signals, temp_c, zero_mvv_per_k, span_per_k,
     return (1.0 + span[None, :, None] * d) * x + zero[None, :, None] * d
 
 
-@dataclass(frozen=True)
+@dataclass
 class TemperatureSensor:
     """The joint's temperature channel (an NTC or PT1000 on the joint's housing).
 
@@ -215,20 +217,23 @@ class TemperatureSensor:
         (a PT1000 of class B: ±(0.3 + 0.005 |T|) K, IEC 60751 [unverified]) is not
         modelled.
 
-    Raises
-    ------
-    ValueError
-        A negative or non-finite value.
+    :meth:`check` refuses a negative or non-finite value.
     """
 
     resolution_k: float = 0.1
     noise_sd_k: float = 0.05
 
-    def __post_init__(self):
+    def check(self, key: str = "TemperatureSensor") -> None:
+        """Refuse a field outside its range in one line naming ``<key>.<field>``.
+
+        Raises
+        ------
+        ValueError
+        """
         for name in ("resolution_k", "noise_sd_k"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"TemperatureSensor.{name} must lie in [0, inf) K, got {v}")
+                raise ValueError(f"{key}.{name} must lie in [0, inf) K, got {v}")
 
 
 def measure_temperature(true_c, sensor: TemperatureSensor,

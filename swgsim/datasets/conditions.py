@@ -1,0 +1,257 @@
+"""A healthy joint's changing day: temperature, run-in, payload and the bridges' drift.
+
+``dataset.life.conditions`` (:class:`ConditionsConfig`; None, the default: nothing changes
+but the fault, every preset's content as before) gives a life the variation a real joint
+lives through while its gear stays healthy, each with a sourced magnitude
+(:mod:`swgsim.gear.thermal`, :mod:`swgsim.sensing.bridge_drift`):
+
+* **temperature**: operating days with stops, a cold start after each, a first-order
+  warm-up towards a rise set by the power the gear loses at its operating point, and a
+  hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`);
+* **friction**: the grease's viscosity with the temperature
+  (:func:`swgsim.gear.thermal.friction_scale`) and the run-in of a new gear
+  (:func:`swgsim.gear.thermal.run_in_factor`);
+* **payload**: a heavier (or lighter) tool from set hours on, the acting load at every
+  duty point times a factor, the commanded points unchanged;
+* **bridges**: each bridge's zero and span drift with the temperature, per gear
+  (:func:`swgsim.sensing.bridge_drift.draw_bridge_drift`);
+* **temperature sensor**: the joint's reading, ``temperature_c`` of every window
+  (None: the stream has no temperature).
+
+How a window gets them (:func:`window_conditions`, used by
+:class:`swgsim.datasets.life.LifeSimulator`): the records are those of the nominal gear
+(:mod:`swgsim.datasets.records`); the friction factor changes the window's efficiency by
+the ratio of the model's steady efficiencies (:func:`swgsim.gear.thermal.
+steady_efficiency`), and not its gauge signals, which the chain takes from the torque the
+gear delivers (:mod:`swgsim.gear.chain`): measured, a 25 K warmer gear moves the
+efficiency by 80-240 healthy standard deviations and every gauge feature by at most 1.1
+(the residual of s0 at 4000 rpm, 70 N m) - held constant [stated simplification]. The
+payload scales the torque-driven part of the record's signals (the chain is linear in the
+output torque; :class:`swgsim.datasets.records.RecordBank` with ``torque_part``), the
+acting torque and, through the steady efficiency, the efficiency. What stays constant:
+the thermal model's parameters over a life, the gear's stiffness and backlash (the
+catalogue gives no temperature dependence), the sensor's calibration offset.
+
+Randomness: the bridges' coefficients from ``SeedSequence(seed, spawn_key=(gear,
+2**21))`` (a property of the gear, the same in all its lives), the sensor's noise from
+``spawn_key=(gear, life_seed, 2**22)``, drawn for the whole schedule at once; neither
+touches a window's own stream.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swgsim.base.typed import check_range
+from swgsim.gear.faults import ChainParams
+from swgsim.gear.thermal import (
+    REF_TEMP_C,
+    RUN_IN_DROP,
+    RUN_IN_TAU_H,
+    JointThermal,
+    friction_scale,
+    joint_temperature,
+    loss_power_w,
+    run_in_factor,
+    steady_efficiency,
+)
+from swgsim.sensing.bridge_drift import (
+    BridgeDrift,
+    TemperatureSensor,
+    draw_bridge_drift,
+    measure_temperature,
+)
+
+__all__ = ["ConditionsConfig", "RunInConfig", "WindowConditions", "check_conditions",
+           "efficiency_ratio", "window_conditions"]
+
+
+@dataclass
+class RunInConfig:
+    """Friction of a new gear running in (:func:`swgsim.gear.thermal.run_in_factor`).
+
+    Attributes
+    ----------
+    drop : float
+        Excess friction of a new gear, in [0, 1] [-].
+    tau_h : float
+        Time constant, > 0 [operating h].
+    """
+
+    drop: float = RUN_IN_DROP
+    tau_h: float = RUN_IN_TAU_H
+
+
+@dataclass
+class ConditionsConfig:
+    """What changes while the gear stays healthy (module docstring).
+
+    Attributes
+    ----------
+    thermal : JointThermal or None
+        The joint's temperature over the life; None: it stays at the catalogue's
+        reference temperature (20 °C).
+    viscosity : bool
+        Friction follows the grease's viscosity with the temperature.
+    run_in : RunInConfig or None
+        A new gear's friction running in from hour 0; None: the gear is run in.
+    payload : list of [float, float]
+        ``[operating hour, factor]`` pairs, hours increasing: from each hour on, the acting
+        load at every duty point is the commanded one times the factor (> 0); before the
+        first, 1.
+    bridge_drift : BridgeDrift or None
+        The bridges' zero and span drift with temperature; None: none.
+    temperature_sensor : TemperatureSensor or None
+        The joint's temperature reading (``temperature_c``); None: the stream has none.
+    """
+
+    thermal: JointThermal | None = field(default_factory=JointThermal)
+    viscosity: bool = True
+    run_in: RunInConfig | None = None
+    payload: list[list[float]] = field(default_factory=list)
+    bridge_drift: BridgeDrift | None = field(default_factory=BridgeDrift)
+    temperature_sensor: TemperatureSensor | None = field(default_factory=TemperatureSensor)
+
+
+def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
+    """Refuse conditions outside their ranges, in one line naming the key.
+
+    Parameters
+    ----------
+    cfg : ConditionsConfig
+    hours : float
+        The life's length [h] (payload steps must lie inside it).
+    key : str
+        Full name, e.g. ``dataset.life.conditions``.
+
+    Raises
+    ------
+    ValueError
+    """
+    if cfg.thermal is not None:
+        cfg.thermal.check(f"{key}.thermal")
+    if cfg.run_in is not None:
+        check_range(cfg.run_in.drop, 0.0, 1.0, f"{key}.run_in.drop")
+        check_range(cfg.run_in.tau_h, 0.0, 1e5, f"{key}.run_in.tau_h", "h", lo_open=True)
+    last = -np.inf
+    for i, step in enumerate(cfg.payload):
+        if len(step) != 2:
+            raise ValueError(f"{key}.payload[{i}] must be [hour, factor], got {step}")
+        check_range(step[0], 0.0, hours, f"{key}.payload[{i}][0]", "h",
+                    why="an operating hour inside the life")
+        check_range(step[1], 0.0, 10.0, f"{key}.payload[{i}][1]", lo_open=True,
+                    why="factor on the acting load")
+        if step[0] <= last:
+            raise ValueError(f"{key}.payload: hours must increase, got "
+                             f"{[s[0] for s in cfg.payload]}")
+        last = step[0]
+    if cfg.bridge_drift is not None:
+        cfg.bridge_drift.check(f"{key}.bridge_drift")
+    if cfg.temperature_sensor is not None:
+        cfg.temperature_sensor.check(f"{key}.temperature_sensor")
+
+
+@dataclass(frozen=True)
+class WindowConditions:
+    """The conditions of every window of a life's schedule.
+
+    Attributes
+    ----------
+    temperature_c : ndarray, shape (W,)
+        The joint's true temperature [°C].
+    reading_c : ndarray, shape (W,) or None
+        The temperature sensor's reading [°C] (None without a sensor).
+    friction : ndarray, shape (W,)
+        Factor on the load-independent friction (viscosity, run-in) [-].
+    mu_factor : ndarray, shape (W,)
+        Factor on the mesh's load-proportional friction μ (run-in) [-].
+    payload : ndarray, shape (W,)
+        Factor on the acting load [-].
+    zero_mvv_per_k, span_per_k : ndarray, shape (5,)
+        The gear's bridge drift coefficients (zeros without drift).
+    drift_ref_c : float
+        Temperature of no drift [°C].
+    """
+
+    temperature_c: np.ndarray
+    reading_c: np.ndarray | None
+    friction: np.ndarray
+    mu_factor: np.ndarray
+    payload: np.ndarray
+    zero_mvv_per_k: np.ndarray
+    span_per_k: np.ndarray
+    drift_ref_c: float
+
+    def bridge_gain_offset(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each window's bridge gain and zero offset, shapes (n, 5) and (n, 5) [-, mV/V]:
+        the drift at the window's temperature."""
+        dt = (self.temperature_c[rows] - self.drift_ref_c)[:, None]
+        return 1.0 + self.span_per_k[None, :] * dt, self.zero_mvv_per_k[None, :] * dt
+
+
+def _payload(cfg: ConditionsConfig, hours: np.ndarray) -> np.ndarray:
+    out = np.ones_like(hours)
+    for h, f in cfg.payload:
+        out[hours >= h] = f
+    return out
+
+
+def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
+                      t_out_nm: np.ndarray, gear: ChainParams, seed: int, gear_id: int,
+                      life_seed: int) -> WindowConditions:
+    """The conditions of a life's windows (module docstring).
+
+    Parameters
+    ----------
+    cfg : ConditionsConfig
+        Checked (:func:`check_conditions`).
+    hours : ndarray, shape (W,)
+        Operating hours of the windows, increasing [h].
+    n_in_rpm, t_out_nm : ndarray, shape (W,)
+        Each window's commanded speed [rpm] and load [N m].
+    gear : ChainParams
+        The healthy gear (its loss heats the joint).
+    seed, gear_id, life_seed : int
+        The data set's seed, the gear, the life (random streams, module docstring).
+
+    Returns
+    -------
+    WindowConditions
+    """
+    payload = _payload(cfg, hours)
+    if cfg.thermal is not None:
+        loss = loss_power_w(gear.gear, np.abs(n_in_rpm), np.abs(t_out_nm) * payload)
+        temp = joint_temperature(hours, loss, cfg.thermal)
+    else:
+        temp = np.full(hours.shape, REF_TEMP_C)
+    run_in = (run_in_factor(hours, cfg.run_in.drop, cfg.run_in.tau_h)
+              if cfg.run_in is not None else np.ones_like(hours))
+    friction = (friction_scale(temp) if cfg.viscosity else 1.0) * run_in
+    reading = None
+    if cfg.temperature_sensor is not None:
+        ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), int(life_seed), 2**22))
+        reading = measure_temperature(temp, cfg.temperature_sensor, np.random.default_rng(ss))
+    zero, span, ref = np.zeros(5), np.zeros(5), REF_TEMP_C
+    if cfg.bridge_drift is not None:
+        ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), 2**21))
+        zero, span = draw_bridge_drift(cfg.bridge_drift, np.random.default_rng(ss))
+        ref = float(cfg.bridge_drift.ref_c)
+    return WindowConditions(temp, reading, np.asarray(friction, float), run_in, payload,
+                            zero, span, ref)
+
+
+def efficiency_ratio(gear: ChainParams, n_in_rpm: np.ndarray, t_out_nm: np.ndarray,
+                     friction: np.ndarray, mu_factor: np.ndarray, payload: np.ndarray
+                     ) -> np.ndarray:
+    """The factor a window's efficiency changes by under its conditions: the model's
+    steady efficiency at the acting load and friction over that of the record (commanded
+    load, nominal friction), shape (n,) [-] (:func:`swgsim.gear.thermal.
+    steady_efficiency`)."""
+    n = np.abs(np.asarray(n_in_rpm, float))
+    t = np.abs(np.asarray(t_out_nm, float))
+    nominal = steady_efficiency(gear.gear, n, t)
+    acting = steady_efficiency(gear.gear, n, t * payload, friction, mu_factor)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(nominal > 0, acting / nominal, 1.0)
