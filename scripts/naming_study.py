@@ -85,15 +85,17 @@ def _train(p, gear: int, cfg, cls: list[str], n_comm: int):
     from sklearn.ensemble import HistGradientBoostingClassifier
 
     from learn.monitor.gear_monitor import normal_windows
-    from learn.monitor.model import HEALTHY, NormalBehaviour, design_matrix
+    from learn.monitor.model import HEALTHY, design_matrix
+    from learn.monitor.normal import Conditions, NormalBehaviour
     from learn.monitor.training import features_of, training_lives
     from swgsim.datasets.records import record_bank
 
     bank = record_bank(p, gear)
     lives = training_lives(p, bank, gear, cfg)
-    f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
+    f0, p0, m0 = features_of(lives[0][0], 0, len(lives[0][0]))
     fit = normal_windows(p0[:n_comm])
-    base = NormalBehaviour.fit(f0[:n_comm][fit], p0[:n_comm][fit])
+    base = NormalBehaviour.fit(f0[:n_comm][fit], p0[:n_comm][fit],
+                               Conditions.of(m0)[:n_comm][fit])
     xs, ys, agg_x, agg_y = [], [], [], []
     rng = np.random.default_rng(0)
     for sim, c, _ in lives:

@@ -71,6 +71,7 @@ def run_monitor_app(cfg) -> dict:
     """
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
     check_rule(app.rule, "rule")
+    app.normal.check("normal")
     check_range(app.confirm_h, 0.0, 1000.0, "confirm_h", "h", lo_open=True,
                 why="hours after an alarm whose windows name the fault")
     if app.logger is not None:
@@ -81,7 +82,7 @@ def run_monitor_app(cfg) -> dict:
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
-                         source=str(src))
+                         source=str(src), normal=app.normal)
     interval = float((ds["hour"].values[1] - ds["hour"].values[0]) * 60)
     with ownership.claim(out, "swgsim-monitor") as claim:
         files = write_outputs(res, out, threshold(app.rule, interval), str(src))
@@ -96,7 +97,7 @@ def run_monitor_app(cfg) -> dict:
             run.log_metrics({"alarms": len(res.alarms)})
             for f in files.values():
                 run.log_artifact(f)
-    return {"alarms": [a.as_dict() for a in res.alarms],
+    return {"alarms": [a.as_dict() for a in res.alarms], "events": res.events(),
             "files": {k: str(v) for k, v in files.items()}}
 
 
@@ -106,9 +107,12 @@ def main(cfg: DictConfig) -> dict:
     out = run_monitor_app(cfg)
     if not out["alarms"]:
         print("no alarm")
-    for a in out["alarms"]:
-        print(f"alarm at {a['hour']:.2f} h: {a['fault']}, severity {a['severity']:.3g} "
-              f"[{a['severity_low']:.3g}, {a['severity_high']:.3g}]")
+    for e in out["events"]:
+        if e["kind"] == "advisory":
+            print(f"advisory at {e['hour']:.2f} h: {e['advice']}")
+        else:
+            print(f"alarm at {e['hour']:.2f} h: {e['fault']}, severity {e['severity']:.3g} "
+                  f"[{e['severity_low']:.3g}, {e['severity_high']:.3g}]")
     for k, v in out["files"].items():
         print(f"{k}: {v}")
     return out

@@ -31,6 +31,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
 from learn.inputs.features import SELECTIONS, FeatureSettings
+from learn.monitor.normal import NormalConfig
 from learn.monitor.rule import RuleConfig
 from learn.studies.observability_motion import MotionMapConfig
 from learn.studies.paper_study import StudyTracking
@@ -111,6 +112,7 @@ class MonitorApp:
     gear: int | None = None                  # the gear to monitor when the stream holds several
     out_dir: str = "reports/monitor_run"
     rule: RuleConfig = field(default_factory=RuleConfig)
+    normal: NormalConfig = field(default_factory=NormalConfig)  # conditions (temperature, ...)
     confirm_h: float = 1.0                   # hours after an alarm that name the fault
     seed: int = 0                            # the p-values' smoothing draws
     logger: LoggerConfig | None = None

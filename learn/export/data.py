@@ -133,7 +133,7 @@ def life_windows(sim, start: int, stop: int, tables: ref.StageTables, keep: bool
 
 
 def normal32(feats: np.ndarray, op: np.ndarray, n_ops: int) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and 1 / std (ddof 1, std at least 1e-12, as learn.monitor.model.NormalBehaviour) of
+    """Mean and 1 / std (ddof 1, std at least 1e-12, as learn.monitor.normal.NormalBehaviour) of
     each operating point's normal-behaviour windows, float32, each shape (K, F).
 
     Raises

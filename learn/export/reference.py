@@ -231,7 +231,7 @@ class StageTables:
     speed_index : ndarray of int, shape (K,)
         Row of ``g_inv`` of each operating point.
     mean, inv_std : ndarray, float32, shape (K, F)
-        The gear's normal behaviour (learn.monitor.model.NormalBehaviour): mean and
+        The gear's normal behaviour (learn.monitor.normal.NormalBehaviour): mean and
         1 / std per point.
     point_inputs : ndarray of int16, shape (K, 2)
         The classifier's operating-point inputs: speed [rpm] and torque [0.1 N m].

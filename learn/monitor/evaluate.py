@@ -36,7 +36,9 @@ from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 from .detectors import References, WindowClassifier, window_inputs
 from .gear_monitor import GearMonitor, Trace, run_cusums
 from .model import DiagnosisModel
+from .normal import Conditions
 from .rule import log_bets, threshold
+from .stream import advisories
 from .study import MonitorStudyConfig
 from .training import (
     classes,
@@ -80,22 +82,45 @@ def _per_window(lp: np.ndarray) -> np.ndarray:
     return np.argmax(lp, axis=1) != 0
 
 
+def nuisance_fault_lives(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int
+                         ) -> list[tuple[FaultOnset, str]]:
+    """The faults lived under a nuisance by one held-out gear and seed: every gear fault
+    at its mildest and largest Table V severity, with a step onset drawn from the seed in
+    ``onset_window_h`` after commissioning."""
+    rng = np.random.default_rng([seed, 8])
+    out = []
+    for c in classes(plan, cfg)[1:]:
+        if c in SENSOR_FAULTS:
+            continue
+        sevs = table_v_severities(plan, c)
+        for s in sorted({min(sevs, key=abs), max(sevs, key=abs)}):
+            on = cfg.commissioning_h + rng.uniform(*cfg.onset_window_h)
+            out.append((FaultOnset(c, on, s), "step"))
+    return out
+
+
 def _lives(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: MonitorStudyConfig,
-           seed: int) -> tuple[LifeSimulator, list[tuple[LifeSimulator, FaultOnset, str]]]:
-    """The healthy life of held-out gear ``g`` for a seed and its fault lives
-    (:func:`fault_lives`), sharing its records."""
-    base = LifeConfig(hours=cfg.healthy_hours, interval_min=cfg.interval_min,
-                      commissioning_h=cfg.commissioning_h, life_seed=int(seed))
+           seed: int, nuisance: str = "none"
+           ) -> tuple[LifeSimulator, list[tuple[LifeSimulator, FaultOnset, str]]]:
+    """The healthy life of held-out gear ``g`` for a seed, under a nuisance of
+    ``cfg.nuisances`` or none, and its fault lives (:func:`fault_lives`,
+    :func:`nuisance_fault_lives`), sharing its records."""
+    cond = None if nuisance == "none" else cfg.nuisances[nuisance]
+    base = LifeConfig(hours=cfg.healthy_hours if cond is None else cfg.nuisance_hours,
+                      interval_min=cfg.interval_min, commissioning_h=cfg.commissioning_h,
+                      life_seed=int(seed), conditions=cond)
+    onsets = (fault_lives if cond is None else nuisance_fault_lives)(plan, cfg, int(seed))
     faults = [(LifeSimulator(plan, g, dataclasses.replace(
         base, hours=f.onset_h + cfg.horizon_h, fault=f), banks[g]), f, kind)
-        for f, kind in fault_lives(plan, cfg, int(seed))]
+        for f, kind in onsets]
     return LifeSimulator(plan, g, base, banks[g]), faults
 
 
-def _key(plan: DatasetPlan, dataset: str, g: int, seed: int) -> dict:
-    """The columns that name a life's data set, gear and seed in every table."""
+def _key(plan: DatasetPlan, dataset: str, g: int, seed: int, nuisance: str) -> dict:
+    """The columns that name a life's data set, gear, seed and nuisance in every table."""
     return {"dataset": plan.config.name if plan.profile is not None else dataset,
-            "output_encoder": has_twist(plan), "held_out_gear": g, "seed": seed}
+            "output_encoder": has_twist(plan), "held_out_gear": g, "seed": seed,
+            "nuisance": nuisance}
 
 
 def _fault_row(key: dict, sim: LifeSimulator, fo: FaultOnset, kind: str) -> dict:
@@ -106,32 +131,43 @@ def _fault_row(key: dict, sim: LifeSimulator, fo: FaultOnset, kind: str) -> dict
 
 
 def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
-                  model: DiagnosisModel, cfg: MonitorStudyConfig, dataset: str
-                  ) -> tuple[list[dict], list[dict], list[dict]]:
+                  model: DiagnosisModel, cfg: MonitorStudyConfig, dataset: str,
+                  nuisance: str = "none") -> tuple[list[dict], list[dict], list[dict]]:
     """The monitor (and the per-window rule and ``always``) on every life of held-out gear
-    ``g`` for every seed: result rows, false-alarm rows and the rows of the trade-off
-    curve (:func:`_curve_healthy`, :func:`_curve_fault`)."""
+    ``g`` for every seed, under a nuisance of ``cfg.nuisances`` or none: result rows,
+    false-alarm rows (every alarm, the gear-fault alarms among them, the advisories) and,
+    without a nuisance, the rows of the trade-off curve (:func:`_curve_healthy`,
+    :func:`_curve_fault`)."""
     rows, fa_rows, curve = [], [], []
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
-    hours_h = cfg.healthy_hours - cfg.commissioning_h
     for seed in cfg.seeds:
-        healthy, sims = _lives(plan, banks, g, cfg, seed)
+        healthy, sims = _lives(plan, banks, g, cfg, seed, nuisance)
         f, p, meta = features_of(healthy, 0, len(healthy))
-        mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed))
-        mon.commission(f[:n_comm], p[:n_comm])
-        tr = mon.run(f[n_comm:], p[n_comm:], meta["hour"][n_comm:], latch=False)
-        key = _key(plan, dataset, g, seed)
+        cond = Conditions.of(meta)
+        mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed), normal=cfg.normal)
+        mon.commission(f[:n_comm], p[:n_comm], cond[:n_comm])
+        f, p, c = f[n_comm:], p[n_comm:], cond[n_comm:]
+        tr = mon.run(f, p, meta["hour"][n_comm:], c, latch=False)
+        key = _key(plan, dataset, g, seed, nuisance)
+        hours_h = float(healthy.life.hours - cfg.commissioning_h)
+        named = [mon.diagnose(tr, a, f, p, c) for a in tr.alarms]
+        fa_rows.append({**key, "detector": "monitor", "healthy_hours": hours_h,
+                        "false_alarms": len(tr.alarms),
+                        "gear_fault_alarms": sum(a.bridge is None for a in named),
+                        "advisories": len(advisories(tr, mon))})
         fa_rows += [{**key, "detector": d, "healthy_hours": hours_h, "false_alarms": n}
-                    for d, n in (("monitor", len(tr.alarms)),
-                                 ("per_window", int(_per_window(tr.log_proba).sum())),
+                    for d, n in (("per_window", int(_per_window(tr.log_proba).sum())),
                                  ("always", len(tr.score)))]
-        healthy_curve = _curve_healthy(tr, cfg, key, hours_h, curve)
+        healthy_curve = _curve_healthy(tr, cfg, key, hours_h, curve) \
+            if nuisance == "none" else None
         for sim, fo, kind in sims:
             k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
-            start = 0.0 if k0 <= n_comm else tr.cusums[k0 - 1 - n_comm]
-            ftr, ff, pp, mm = _fault_life(mon, sim, k0, start)
+            before = k0 - 1 - n_comm  # the healthy trace's window before the onset
+            start = (0.0, None) if before < 0 else (tr.cusums[before], tr.state(before))
+            ftr, ff, pp, mm = _fault_life(mon, sim, k0, *start)
             row = _fault_row(key, sim, fo, kind)
-            _curve_fault(ftr, fo, k0 - 1 - n_comm, healthy_curve, cfg, row, curve)
+            if healthy_curve is not None:
+                _curve_fault(ftr, fo, before, healthy_curve, cfg, row, curve)
             rows.append({**row, **_monitor_row(mon, ftr, ff, pp, mm, fo)})
             rows.append({**row, **_per_window_row("per_window", model.classes,
                                                   np.argmax(ftr.log_proba, axis=1), mm, fo)})
@@ -155,20 +191,21 @@ def _labels(sim: LifeSimulator, start: int, stop: int, refs: References,
 
 def evaluate_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
                        detectors: list[WindowClassifier], cfg: MonitorStudyConfig,
-                       dataset: str) -> tuple[list[dict], list[dict]]:
+                       dataset: str, nuisance: str = "none") -> tuple[list[dict], list[dict]]:
     """Per-window detectors on the lives of held-out gear ``g`` (those of
-    :func:`evaluate_gear`): false alarms over the first ``detector_hours`` of each healthy
-    life, and each fault life from its onset until an hour after the detector's first
-    alarm (or the horizon). Returns result rows and false-alarm rows."""
+    :func:`evaluate_gear`, under the same nuisance): false alarms over the first
+    ``detector_hours`` of each healthy life, and each fault life from its onset until an
+    hour after the detector's first alarm (or the horizon). Returns result rows and
+    false-alarm rows."""
     rows, fa_rows = [], []
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     n_det = int(round(cfg.detector_hours * 60 / cfg.interval_min))
     for seed in cfg.seeds:
-        healthy, sims = _lives(plan, banks, g, cfg, seed)
+        healthy, sims = _lives(plan, banks, g, cfg, seed, nuisance)
         refs = References.of(healthy, n_comm)
         stop = min(len(healthy), n_comm + n_det)
         labels, _, _ = _labels(healthy, n_comm, stop, refs, detectors)
-        key = _key(plan, dataset, g, seed)
+        key = _key(plan, dataset, g, seed, nuisance)
         fa_rows += [{**key, "detector": d, "healthy_hours": (stop - n_comm) * cfg.interval_min
                      / 60, "false_alarms": int(np.sum(v != 0))} for d, v in labels.items()]
         for sim, fo, kind in sims:
@@ -231,17 +268,22 @@ def _curve_fault(ftr: Trace, fo: FaultOnset, before: int, states: dict, cfg, row
                     "time_to_detect_h": float(ftr.hour[al[0]] - fo.onset_h) if al else np.nan})
 
 
-def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start):
+def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
+                friction_start: tuple[float, float] | None):
     """A fault life from its onset, in chunks of windows, until ``confirm_h`` after the
     monitor's alarm and the per-window rule's (or the horizon): what they need, and no
-    more windows. Returns the monitor's trace, features, operating points and metadata."""
+    more windows; the CUSUMs and the friction factor start from ``start`` and
+    ``friction_start`` (the healthy life's before the onset; None: the monitor's own).
+    Returns the monitor's trace, features, operating points and metadata."""
     traces, feats, pts, metas = [], [], [], []
     first: dict[str, float | None] = {"monitor": None, "per_window": None}
-    state = start
+    state, fstate = start, friction_start
     for a in range(k0, len(sim), CHUNK):
         f, p, m = features_of(sim, a, min(a + CHUNK, len(sim)))
-        t = mon.run(f, p, m["hour"], latch=True, start=state) if first["monitor"] is None \
-            else mon.score_only(f, p, m["hour"])
+        cond = Conditions.of(m)
+        t = mon.run(f, p, m["hour"], cond, latch=True, start=state, friction_start=fstate) \
+            if first["monitor"] is None else mon.score_only(f, p, m["hour"], cond, fstate)
+        fstate = None  # from the second chunk on, the monitor's own
         if first["monitor"] is None and t.alarms:
             first["monitor"] = float(t.hour[t.alarms[0]])
         elif first["monitor"] is None:
@@ -263,7 +305,7 @@ def _monitor_row(mon, tr, ff, pp, mm, fo) -> dict:
                 "fault_at_alarm": "", "fault_after_1h": "", "severity_est": np.nan,
                 "severity_at_alarm": np.nan, "severity_low": np.nan, "severity_high": np.nan}
     a = tr.alarms[0]
-    al = mon.diagnose(tr, a, ff, pp)
+    al = mon.diagnose(tr, a, ff, pp, Conditions.of(mm))
     return {"detector": "monitor", "detected": True, "time_to_detect_h": al.hour - fo.onset_h,
             "fault_at_alarm": al.fault_at_alarm, "fault_after_1h": al.fault,
             "severity_est": al.severity, "severity_at_alarm": float(mm["severity"][a]),
@@ -291,15 +333,34 @@ def _per_window_row(detector: str, classes: list[str], labels: np.ndarray, mm, f
             "severity_low": np.nan, "severity_high": np.nan}
 
 
+def _nuisances(cfg: MonitorStudyConfig) -> list[str]:
+    return ["none", *cfg.nuisances]
+
+
+def _banks(plan: DatasetPlan) -> dict[int, RecordBank]:
+    """Every gear's records, shared by all its lives."""
+    return {int(x.id): record_bank(plan, int(x.id)) for x in plan.config.gears}
+
+
+def _runnable(plan: DatasetPlan, cfg: MonitorStudyConfig) -> list[str]:
+    """The nuisances a data set can live: payload changes need steady operating points."""
+    return [n for n in _nuisances(cfg) if n == "none" or plan.profile is None
+            or not cfg.nuisances[n].payload]
+
+
 def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfig) -> dict:
     """Train the diagnosis model on the other gears and evaluate the monitor on held-out
-    gear ``g`` (:func:`evaluate_gear`): rows, false alarms, curve, timing and the model."""
+    gear ``g`` (:func:`evaluate_gear`) without and under every nuisance: rows, false
+    alarms, curve, timing and the model."""
     t0 = time.perf_counter()
     gears = [int(x.id) for x in plan.config.gears]
-    banks = {x: record_bank(plan, x) for x in gears}
+    banks = _banks(plan)
     model = train_model(plan, banks, [x for x in gears if x != g], cfg)
     t1 = time.perf_counter()
-    rows, fa, curve = evaluate_gear(plan, banks, g, model, cfg, dataset)
+    rows, fa, curve = [], [], []
+    for nuisance in _runnable(plan, cfg):
+        r, a, c = evaluate_gear(plan, banks, g, model, cfg, dataset, nuisance)
+        rows, fa, curve = rows + r, fa + a, curve + c
     t2 = time.perf_counter()
     return {"rows": rows, "false_alarms": fa, "curve": curve, "train_s": t1 - t0,
             "evaluate_s": t2 - t1, "dataset": dataset, "held_out_gear": g, "model": model}
@@ -308,14 +369,17 @@ def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfi
 def run_detectors(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfig,
                   names: list[str]) -> list[dict]:
     """Train the per-window detectors ``names`` on the other gears and evaluate them on
-    held-out gear ``g`` (:func:`evaluate_detectors`); one part per detector (rows, false
-    alarms, an empty curve, timing)."""
+    held-out gear ``g`` (:func:`evaluate_detectors`) without and under every nuisance;
+    one part per detector (rows, false alarms, an empty curve, timing)."""
     t0 = time.perf_counter()
     gears = [int(x.id) for x in plan.config.gears]
-    banks = {x: record_bank(plan, x) for x in gears}
+    banks = _banks(plan)
     dets = train_detectors(plan, banks, [x for x in gears if x != g], cfg, names)
     t1 = time.perf_counter()
-    rows, fa = evaluate_detectors(plan, banks, g, dets, cfg, dataset)
+    rows, fa = [], []
+    for nuisance in _runnable(plan, cfg):
+        r, a = evaluate_detectors(plan, banks, g, dets, cfg, dataset, nuisance)
+        rows, fa = rows + r, fa + a
     t2 = time.perf_counter()
     return [{"rows": [r for r in rows if r["detector"] == d],
              "false_alarms": [r for r in fa if r["detector"] == d], "curve": [],
@@ -331,4 +395,5 @@ def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFra
 
 
 __all__ = ["COMPARED", "CURVE_DESIGN_HOURS", "evaluate_detectors", "evaluate_gear",
-           "fault_lives", "run_detectors", "run_held_out", "to_frames"]
+           "fault_lives", "nuisance_fault_lives", "run_detectors", "run_held_out",
+           "to_frames"]

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import DiagnosisModel, NormalBehaviour, design_matrix
+from .model import DiagnosisModel, design_matrix
+from .normal import Conditions, NormalBehaviour, NormalConfig
 from .rule import RuleConfig, conformal_p, log_bets, min_calibration, threshold
 from .sensor_check import REST_MAX, SENSOR_P_MIN, fit_sensor_faults
 
@@ -88,6 +89,12 @@ class Trace:
         The diagnosis model's ln P(class | window).
     op_index : ndarray of int, shape (n,)
         Each window's operating point in the normal behaviour.
+    friction : ndarray, shape (n,)
+        The friction factor in force at each window (:meth:`GearMonitor.track_friction`).
+    outside : ndarray of int, shape (n,)
+        The conditions commissioning did not see at each window
+        (:meth:`learn.monitor.normal.NormalBehaviour.outside`: 1 temperature, 2 load,
+        4 friction).
     """
 
     hour: np.ndarray
@@ -97,16 +104,24 @@ class Trace:
     alarms: list[int]
     log_proba: np.ndarray
     op_index: np.ndarray
+    friction: np.ndarray
+    outside: np.ndarray
 
     @classmethod
     def concat(cls, traces: list[Trace]) -> Trace:
         """Traces of consecutive windows as one (alarm indices shifted)."""
         off = np.cumsum([0] + [len(t.hour) for t in traces[:-1]])
-        return cls(*(np.concatenate([getattr(t, k) for t in traces])
-                     for k in ("hour", "score", "p", "cusums")),
-                   [int(a + o) for t, o in zip(traces, off, strict=True) for a in t.alarms],
-                   np.concatenate([t.log_proba for t in traces]),
-                   np.concatenate([t.op_index for t in traces]))
+        cat = {k: np.concatenate([getattr(t, k) for t in traces])
+               for k in ("hour", "score", "p", "cusums", "log_proba", "op_index", "friction",
+                         "outside")}
+        return cls(alarms=[int(a + o) for t, o in zip(traces, off, strict=True)
+                           for a in t.alarms], **cat)
+
+    def state(self, i: int) -> tuple[float, float]:
+        """The friction-tracking start of a run that continues after window ``i``: the
+        factor in force at window ``i + 1`` (window ``i``'s update included) and window
+        ``i``'s hour (:meth:`GearMonitor.run`'s ``friction_start``)."""
+        return float(self.friction[min(i + 1, len(self.friction) - 1)]), float(self.hour[i])
 
     @property
     def s(self) -> np.ndarray:
@@ -194,20 +209,26 @@ class GearMonitor:
         Of the p-values' smoothing draws.
     confirm_h : float
         Hours after an alarm whose windows name the fault (default 1 h).
+    normal : NormalConfig, optional
+        How the normal behaviour follows the conditions (:mod:`.normal`).
     """
 
     def __init__(self, model: DiagnosisModel, rule: RuleConfig, interval_min: float,
-                 seed: int = 0, confirm_h: float = 1.0) -> None:
+                 seed: int = 0, confirm_h: float = 1.0,
+                 normal: NormalConfig | None = None) -> None:
         self.model, self.rule = model, rule
         self.interval_min = float(interval_min)
         self.h = threshold(rule, interval_min)
         self.rng = np.random.default_rng(seed)
         self.confirm_h = float(confirm_h)
+        self.normal_config = normal or NormalConfig()
         self.normal: NormalBehaviour | None = None
         self.calibration: dict[int, np.ndarray] = {}
         self.cusum = np.zeros(0)
+        self.friction, self.last_hour = 1.0, None
 
-    def commission(self, feats: np.ndarray, points: np.ndarray) -> None:
+    def commission(self, feats: np.ndarray, points: np.ndarray,
+                   cond: Conditions | None = None) -> None:
         """Normal behaviour and calibration from commissioning windows (module docstring).
 
         Parameters
@@ -216,20 +237,25 @@ class GearMonitor:
             Health features (:func:`learn.monitor.features.window_features`).
         points : ndarray, shape (n, 2)
             (n_in_rpm, t_out_nm) of each window's duty point.
+        cond : Conditions, optional
+            The windows' acting load and temperature (:class:`.normal.Conditions`);
+            default: the commanded load, no temperature.
         """
         check_commissioning(points, self.rule, self.interval_min)
+        cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
         fit = normal_windows(points)
         cal = ~fit
-        self.normal = NormalBehaviour.fit(feats[fit], points[fit])
+        self.normal = NormalBehaviour.fit(feats[fit], points[fit], cond[fit],
+                                          self.normal_config)
         opi = self.normal.index(points[cal])
-        scores, lp = self.scores(feats[cal], points[cal], opi)
-        self.calibration = {k: np.sort(scores[opi == k], axis=0)
-                            for k in range(len(self.normal.points))}
+        scores, lp = self.scores(feats[cal], points[cal], cond[cal], 1.0, opi)
+        n_p = len(self.normal.points)
+        self.calibration = {k: np.sort(scores[opi == k], axis=0) for k in range(n_p)}
         llr = lp - lp[:, :1]
-        self.bias = np.stack([llr[opi == k].mean(axis=0)
-                              for k in range(len(self.normal.points))])
+        self.bias = np.stack([llr[opi == k].mean(axis=0) for k in range(n_p)])
         self._rows = {(float(a), float(b)): k for k, (a, b) in enumerate(self.normal.points)}
         self.cusum = np.zeros(log_bets(np.ones(1), self.rule).shape[1])
+        self.friction, self.last_hour = 1.0, None
 
     def evidence(self, lp: np.ndarray, opi: np.ndarray) -> np.ndarray:
         """Per window and class, the evidence against healthy relative to this gear's
@@ -238,11 +264,13 @@ class GearMonitor:
         healthy windows anyway, e.g. one it cannot tell from healthy, gains nothing)."""
         return lp - lp[:, :1] - self.bias[opi]
 
-    def inputs(self, feats: np.ndarray, points: np.ndarray) -> np.ndarray:
+    def inputs(self, feats: np.ndarray, points: np.ndarray, cond: Conditions | None = None,
+               friction: np.ndarray | float = 1.0) -> np.ndarray:
         """The diagnosis model's inputs of windows (z-scores and operating point)."""
-        return design_matrix(self.normal.z(feats, points), points)
+        return design_matrix(self.normal.z(feats, points, cond, friction), points)
 
-    def scores(self, feats: np.ndarray, points: np.ndarray, index: np.ndarray | None = None
+    def scores(self, feats: np.ndarray, points: np.ndarray, cond: Conditions | None = None,
+               friction: np.ndarray | float = 1.0, index: np.ndarray | None = None
                ) -> tuple[np.ndarray, np.ndarray]:
         """Scores (n, 2) and log-probabilities (n, n_classes) of windows (``index``: their
         operating points' rows in the normal behaviour, when known).
@@ -251,7 +279,7 @@ class GearMonitor:
         novelty ``Σ z²`` of its health features (a change the model was not trained on,
         e.g. a bridge it never saw faulty, moves the latter).
         """
-        z = self.normal.z(feats, points, index)
+        z = self.normal.z(feats, points, cond, friction, index)
         lp = self.model.log_proba(design_matrix(z, points))
         return np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp
 
@@ -269,34 +297,68 @@ class GearMonitor:
                 p[m, j] = conformal_p(score[m, j], cal[:, j], u[m, j])
         return np.minimum(1.0, score.shape[1] * p.min(axis=1))
 
+    def track_friction(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray,
+                       cond: Conditions, opi: np.ndarray,
+                       start: tuple[float, float | None] | None = None) -> np.ndarray:
+        """The friction factor in force at each window (before it updates it) and the
+        monitor's own factor after the last (:mod:`.normal`: an exponential mean of the
+        windows' loss ratios over ``friction_track_h`` operating hours), shape (n,).
+        ``start``: (factor, hour of the window before), default the monitor's own."""
+        tau = self.normal_config.friction_track_h
+        r, last = (self.friction, self.last_hour) if start is None else start
+        out = np.empty(len(hours))
+        if tau <= 0:
+            out[:] = 1.0
+            return out
+        ratio = self.normal.friction_ratio(feats, points, cond, opi)
+        default_dh = self.interval_min / 60.0
+        for i, (h, q) in enumerate(zip(hours.tolist(), ratio.tolist(), strict=True)):
+            out[i] = r
+            dh = default_dh if last is None else h - last
+            if np.isfinite(q):
+                r += (1.0 - np.exp(-max(dh, 0.0) / tau)) * (q - r)
+            last = h
+        self.friction, self.last_hour = r, last
+        return out
+
     def run(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray,
-            latch: bool = True, start: float = 0.0) -> Trace:
+            cond: Conditions | None = None, latch: bool = True, start: float = 0.0,
+            friction_start: tuple[float, float | None] | None = None) -> Trace:
         """Score windows after commissioning and run the CUSUM.
 
         Parameters
         ----------
-        feats, points
+        feats, points, cond
             As :meth:`commission`, of the windows after commissioning, in time order.
         hours : ndarray, shape (n,)
             Operating hours of each window, increasing.
         latch : bool
-            Stop at the first alarm (a monitor); else restart the CUSUM after each alarm
-            (counting false alarms).
+            Stop at the first alarm; else restart the CUSUM after each alarm and go on
+            (the monitor keeps watching; counting false alarms).
         start : float or ndarray, shape (k,)
             CUSUM values before the first window (e.g. a trace's ``cusums`` row).
+        friction_start : (float, float or None), optional
+            The friction factor and the hour of the window before (e.g. from a trace);
+            default the monitor's own.
 
         Returns
         -------
         Trace
         """
+        cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
         opi = self.normal.index(points)
-        score, lp = self.scores(feats, points, opi)
+        fr = self.track_friction(feats, points, np.asarray(hours, float), cond, opi,
+                                 friction_start)
+        score, lp = self.scores(feats, points, cond, fr, opi)
         p = self.p_values(score, opi)
         cus, alarms = run_cusums(log_bets(p, self.rule), self.h, start, latch)
-        return Trace(np.asarray(hours, float), score, p, cus, alarms, lp, opi)
+        return Trace(np.asarray(hours, float), score, p, cus, alarms, lp, opi, fr,
+                     self.normal.outside(points, cond, fr, opi))
 
-    def step(self, feat: np.ndarray, point: tuple[float, float], hour: float) -> Trace:
-        """Score one window after commissioning and update the monitor's own CUSUMs.
+    def step(self, feat: np.ndarray, point: tuple[float, float], hour: float,
+             torque_nm: float | None = None, temperature_c: float | None = None) -> Trace:
+        """Score one window after commissioning and update the monitor's own CUSUMs and
+        friction factor.
 
         Parameters
         ----------
@@ -306,6 +368,8 @@ class GearMonitor:
             (n_in_rpm, t_out_nm) of its duty point.
         hour : float
             Its operating hours.
+        torque_nm, temperature_c : float, optional
+            Its acting load [N m] (default the commanded) and temperature reading [°C].
 
         Returns
         -------
@@ -325,9 +389,12 @@ class GearMonitor:
         if k is None:
             raise ValueError(f"operating point {point[0]:g} rpm, {point[1]:g} N m was not seen "
                              f"at commissioning; the normal behaviour has {list(self._rows)}")
-        z = (np.asarray(feat, float) - self.normal.mean[k]) / self.normal.std[k]
-        lp = self.model.log_proba(np.concatenate([z, point])[None, :])
-        score = np.array([[self.model.score(lp)[0], z @ z]])
+        f, pt = np.asarray(feat, float)[None, :], np.array([point], float)
+        cond = Conditions(np.array([point[1] if torque_nm is None else torque_nm], float),
+                          None if temperature_c is None else np.array([temperature_c], float))
+        opi = np.array([k])
+        fr = self.track_friction(f, pt, np.array([float(hour)]), cond, opi)
+        score, lp = self.scores(f, pt, cond, fr, opi)
         u = self.rng.uniform(size=(1, 2))
         cal = self.calibration[k]
         p = min(1.0, 2 * min(conformal_p(score[:, j], cal[:, j], u[:, j])[0] for j in (0, 1)))
@@ -335,35 +402,49 @@ class GearMonitor:
         alarm = bool((cus >= self.h).any())
         self.cusum = np.zeros_like(cus) if alarm else cus
         return Trace(np.array([float(hour)]), score, np.array([p]), cus[None, :],
-                     [0] if alarm else [], lp, np.array([k]))
+                     [0] if alarm else [], lp, opi, fr,
+                     self.normal.outside(pt, cond, fr, opi))
 
-    def score_only(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray) -> Trace:
+    def score_only(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray,
+                   cond: Conditions | None = None,
+                   friction_start: tuple[float, float | None] | None = None) -> Trace:
         """Windows after a latched alarm: scored for the naming, no CUSUM (NaN)."""
+        cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
         opi = self.normal.index(points)
-        score, lp = self.scores(feats, points, opi)
+        fr = self.track_friction(feats, points, np.asarray(hours, float), cond, opi,
+                                 friction_start)
+        score, lp = self.scores(feats, points, cond, fr, opi)
         k = log_bets(np.ones(1), self.rule).shape[1]
         return Trace(np.asarray(hours, float), score, np.full(len(score), np.nan),
-                     np.full((len(score), k), np.nan), [], lp, opi)
+                     np.full((len(score), k), np.nan), [], lp, opi, fr,
+                     self.normal.outside(points, cond, fr, opi))
 
-    def diagnose(self, trace: Trace, a: int, feats: np.ndarray, points: np.ndarray) -> Alarm:
+    def diagnose(self, trace: Trace, a: int, feats: np.ndarray, points: np.ndarray,
+                 cond: Conditions | None = None) -> Alarm:
         """Name the fault of the alarm at window ``a`` of ``trace`` and its severity.
 
-        ``trace``, ``feats`` and ``points`` cover the same windows: those of the run, the
-        ones after the alarm included as far as the stream goes (up to ``confirm_h``).
+        ``trace``, ``feats``, ``points`` and ``cond`` cover the same windows: those of the
+        run, the ones after the alarm included as far as the stream goes (up to
+        ``confirm_h``).
         """
         j = int(np.argmax(trace.cusums[a]))  # the CUSUM that raised it
         zero = np.flatnonzero(trace.cusums[:a, j] <= 0)
         rise = int(zero[-1]) + 1 if zero.size else 0
         end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
+        cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
         ev = self.evidence(trace.log_proba, trace.op_index)
-        at_alarm, _ = self.name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1])
-        fault, bridge = self.name(ev[rise:end], feats[rise:end], points[rise:end])
-        x = self.inputs(feats[rise:end], points[rise:end])
+        fr = trace.friction
+        at_alarm, _ = self.name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
+                                cond[rise:a + 1], fr[rise:a + 1])
+        fault, bridge = self.name(ev[rise:end], feats[rise:end], points[rise:end],
+                                  cond[rise:end], fr[rise:end])
+        x = self.inputs(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end])
         est, lo, hi = self.model.estimate(fault, x)
         return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi,
                      None if bridge is None else f"s{bridge}")
 
-    def name(self, ev: np.ndarray, feats: np.ndarray, points: np.ndarray
+    def name(self, ev: np.ndarray, feats: np.ndarray, points: np.ndarray,
+             cond: Conditions | None = None, friction: np.ndarray | float = 1.0
              ) -> tuple[str, int | None]:
         """Name the fault of windows since an alarm: a sensor fault where one bridge's
         offset step or gain drift explains them (:mod:`.sensor_check`: a plausible fit
@@ -374,7 +455,7 @@ class GearMonitor:
         largest summed evidence (:meth:`evidence` rows ``ev``) and None."""
         b = self.normal
         opi = b.index(points)
-        z = b.z(feats, points, opi)
+        z = b.z(feats, points, cond, friction, opi)
         u = np.full((len(z), 2), 0.5)  # mid-p: the naming draws nothing from the monitor
 
         def median_p(zz: np.ndarray) -> float:

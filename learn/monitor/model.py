@@ -1,12 +1,9 @@
-"""The gear's own normal behaviour and the diagnosis model trained on simulated gears.
+"""The diagnosis model trained on simulated gears.
 
-**NormalBehaviour.** Per operating point, the mean and standard deviation of each health
-feature (:mod:`.features`) over the gear's normal-behaviour windows: half of its commissioning
-windows (the other half calibrates the alarm rule, :mod:`.rule`). A window is described
-by its z-scores against its own gear's normal behaviour, so that a model trained on other gears
-sees deviations from healthy, not the gear's individual signature (the leave-one-gear-out
-study measured that one commissioning window is too few: its error is as large as a mild
-fault's shift).
+A window is described by its z-scores against its own gear's normal behaviour
+(:mod:`.normal`), so that a model trained on other gears sees deviations from healthy,
+not the gear's individual signature (the leave-one-gear-out study measured that one
+commissioning window is too few: its error is as large as a mild fault's shift).
 
 **Diagnosis model.** A histogram gradient-boosting classifier (scikit-learn) on the
 z-scores and the operating point, trained on simulated gears' lives: healthy windows and
@@ -26,55 +23,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 HEALTHY = "healthy"
-
-
-@dataclass
-class NormalBehaviour:
-    """Mean and spread of each feature per operating point (module docstring).
-
-    Attributes
-    ----------
-    points : ndarray, shape (P, 2)
-        (n_in_rpm, t_out_nm) of each operating point.
-    mean, std : ndarray, shape (P, F)
-    """
-
-    points: np.ndarray
-    mean: np.ndarray
-    std: np.ndarray
-
-    @classmethod
-    def fit(cls, feats: np.ndarray, points: np.ndarray) -> NormalBehaviour:
-        """From normal-behaviour windows' features (n, F) and their operating points (n, 2)."""
-        ops = np.unique(points, axis=0)
-        mean = np.stack([feats[(points == o).all(axis=1)].mean(axis=0) for o in ops])
-        std = np.stack([feats[(points == o).all(axis=1)].std(axis=0, ddof=1) for o in ops])
-        return cls(ops, mean, np.maximum(std, 1e-12))
-
-    def index(self, points: np.ndarray) -> np.ndarray:
-        """Row of each window's operating point; -1 where the normal behaviour has none."""
-        idx = np.full(len(points), -1)
-        for i, o in enumerate(self.points):
-            idx[(points == o).all(axis=1)] = i
-        return idx
-
-    def z(self, feats: np.ndarray, points: np.ndarray, index: np.ndarray | None = None
-          ) -> np.ndarray:
-        """z-scores of windows against the normal behaviour of their operating point (``index``:
-        :meth:`index` of ``points``, when known).
-
-        Raises
-        ------
-        ValueError
-            If a window's operating point was not seen at commissioning.
-        """
-        i = self.index(points) if index is None else index
-        if (i < 0).any():
-            bad = points[np.flatnonzero(i < 0)[0]]
-            raise ValueError(f"operating point {bad[0]:g} rpm, {bad[1]:g} N m was not seen at "
-                             "commissioning; the normal behaviour has "
-                             f"{[tuple(map(float, o)) for o in self.points]}")
-        return (feats - self.mean[i]) / self.std[i]
 
 
 def design_matrix(z: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -213,4 +161,4 @@ def fit_diagnosis(x: np.ndarray, fault: np.ndarray, severity: np.ndarray, gear: 
     return model
 
 
-__all__ = ["NormalBehaviour", "DiagnosisModel", "design_matrix", "fit_diagnosis", "HEALTHY"]
+__all__ = ["DiagnosisModel", "design_matrix", "fit_diagnosis", "HEALTHY"]

@@ -19,18 +19,49 @@ import numpy as np
 
 from .features import feature_names, health_features
 from .gear_monitor import Alarm, GearMonitor, Trace, check_commissioning
+from .normal import Conditions, NormalConfig
 from .rule import RuleConfig
+
+#: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
+CONDITIONS = {1: "temperature", 2: "load", 4: "friction"}
+#: A joint temperature reading outside this range is refused [°C].
+TEMPERATURE_RANGE_C = (-40.0, 150.0)
 
 
 @dataclass
 class StreamResult:
-    """What the monitor made of a stream."""
+    """What the monitor made of a stream.
+
+    Attributes
+    ----------
+    trace : Trace
+        The monitored windows (after commissioning).
+    alarms : list of Alarm
+        Every alarm, named; the monitor keeps watching after each (consecutive alarms
+        naming the same fault are one).
+    advisories : list of dict
+        Where the condition left what commissioning saw: ``hour``, ``index`` and
+        ``condition`` (temperature, load, friction): recommission, not a gear fault.
+    n_commissioning : int
+    onset_h : float or None
+        The stream's true fault onset, where it records one (a simulated life).
+    true_fault : str or None
+    """
 
     trace: Trace
     alarms: list[Alarm]
+    advisories: list[dict]
     n_commissioning: int
     onset_h: float | None
     true_fault: str | None
+
+    def events(self) -> list[dict]:
+        """Alarms and advisories in time order, each with its ``kind``: ``gear_fault``,
+        ``sensor_fault`` (named with its bridge) or ``advisory``."""
+        ev = [{"kind": "sensor_fault" if a.bridge else "gear_fault", **a.as_dict()}
+              for a in self.alarms]
+        ev += [{"kind": "advisory", **a} for a in self.advisories]
+        return sorted(ev, key=lambda e: e["hour"])
 
 
 def select_gear(ds, gear: int | None):
@@ -97,6 +128,13 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
         raise ValueError(f"{source}: operating point {o[0]:g} rpm, {o[1]:g} N m outside the "
                          f"model's training range: speed [{lo[0]:g}, {hi[0]:g}] rpm, torque "
                          f"[{lo[1]:g}, {hi[1]:g}] N m")
+    if "temperature_c" in ds:
+        t = ds["temperature_c"].values.astype(float)
+        lo, hi = TEMPERATURE_RANGE_C
+        bad = np.flatnonzero(~np.isfinite(t) | (t < lo) | (t > hi))
+        if bad.size:
+            raise ValueError(f"{source}: temperature_c of window {int(bad[0])} is "
+                             f"{t[bad[0]]:g} °C; allowed: finite, in [{lo:g}, {hi:g}] °C")
     interval = float(np.median(np.diff(hours)) * 60.0)
     check_commissioning(pts[comm], rule, interval)
     return interval
@@ -125,22 +163,58 @@ def stream_features(ds) -> np.ndarray:
 
 
 def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
-                   source: str = "stream") -> StreamResult:
-    """Commission on the stream's commissioning windows and monitor the rest."""
+                   source: str = "stream", normal: NormalConfig | None = None
+                   ) -> StreamResult:
+    """Commission on the stream's commissioning windows and monitor the rest, with its
+    conditions (acting load, temperature where the stream has it; :mod:`.normal`); the
+    monitor keeps watching after every alarm and advisory."""
     interval = check_stream(ds, model, rule, source)
     pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
     feats = stream_features(ds)
+    cond = Conditions.of({k: ds[k].values for k in ("t_out_mean_nm", "temperature_c")
+                          if k in ds})
     comm = ds["commissioning"].values.astype(bool)
     n_c = int(comm.sum())
-    mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h)
-    mon.commission(feats[:n_c], pts[:n_c])
+    mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h, normal=normal)
+    mon.commission(feats[:n_c], pts[:n_c], cond[:n_c])
     hours = ds["hour"].values.astype(float)
-    tr = mon.run(feats[n_c:], pts[n_c:], hours[n_c:], latch=True)
-    alarms = [mon.diagnose(tr, a, feats[n_c:], pts[n_c:]) for a in tr.alarms]
+    f, p, c = feats[n_c:], pts[n_c:], cond[n_c:]
+    tr = mon.run(f, p, hours[n_c:], c, latch=False)
+    alarms: list[Alarm] = []
+    for a in tr.alarms:
+        al = mon.diagnose(tr, a, f, p, c)
+        if not alarms or alarms[-1].fault != al.fault:  # the same fault again: one alarm
+            alarms.append(al)
     fault = ds["fault"].values.astype(str)
     on = np.flatnonzero(fault != "healthy")
-    return StreamResult(tr, alarms, n_c, float(hours[on[0]]) if on.size else None,
+    return StreamResult(tr, alarms, advisories(tr, mon), n_c,
+                        float(hours[on[0]]) if on.size else None,
                         str(fault[on[0]]) if on.size else None)
+
+
+def advisories(tr: Trace, mon: GearMonitor, clear_h: float = 1.0) -> list[dict]:
+    """An advisory where a condition leaves what commissioning saw (a bit of
+    :attr:`Trace.outside` set), naming the condition and the point; the same condition
+    is advised again only after it was back inside for ``clear_h`` hours (the duty
+    cycle's points have ranges of their own)."""
+    out = []
+    raised: dict[int, float] = {}  # bit -> hour it was last seen outside, while raised
+    for i, (bits, hour) in enumerate(zip(tr.outside.tolist(), tr.hour.tolist(), strict=True)):
+        for b in [b for b, last in raised.items() if not bits & b and hour - last >= clear_h]:
+            del raised[b]
+        new = [b for b in CONDITIONS if bits & b and b not in raised]
+        for b in CONDITIONS:
+            if bits & b:
+                raised[b] = hour
+        if new:
+            what = ", ".join(CONDITIONS[b] for b in new)
+            o = mon.normal.points[tr.op_index[i]]
+            out.append({"hour": float(hour), "index": i, "condition": what,
+                        "operating_point": [float(o[0]), float(o[1])],
+                        "friction_factor": float(tr.friction[i]),
+                        "advice": f"the {what} left what commissioning saw at {o[0]:g} rpm, "
+                                  f"{o[1]:g} N m: recommission the monitor"})
+    return out
 
 
 def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> dict[str, Path]:
@@ -154,7 +228,8 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
 
     out_dir.mkdir(parents=True, exist_ok=True)
     summary = {"stream": source, "alarms": [a.as_dict() for a in res.alarms],
-               "threshold": h, "windows_monitored": int(res.trace.s.size),
+               "events": res.events(), "threshold": h,
+               "windows_monitored": int(res.trace.s.size),
                "commissioning_windows": res.n_commissioning}
     atomic_write_json(out_dir / "summary.json", summary)
     tr = res.trace
@@ -188,6 +263,8 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
                          f"[{a.severity_low:.3g}, {a.severity_high:.3g}]")
     else:
         lines.append("- no alarm")
+    for a in res.advisories:
+        lines.append(f"- advisory at {a['hour']:.2f} h: {a['advice']}")
     if res.onset_h is not None:
         lines += ["", f"Ground truth in the stream: {res.true_fault} from {res.onset_h:.2f} h."]
     lines += ["", "![health indicators](health.png)", ""]
@@ -196,4 +273,5 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
                                         ("figure", "health.png"))}
 
 
-__all__ = ["StreamResult", "check_stream", "monitor_stream", "select_gear", "write_outputs"]
+__all__ = ["CONDITIONS", "StreamResult", "advisories", "check_stream", "monitor_stream",
+           "select_gear", "write_outputs"]

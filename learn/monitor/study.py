@@ -11,9 +11,33 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from swgsim.base.typed import check_finite, check_range
+from swgsim.datasets.conditions import ConditionsConfig, RunInConfig, check_conditions
+from swgsim.gear.thermal import JointThermal
+from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 
 from .detectors import DETECTORS
+from .normal import NormalConfig
 from .rule import RuleConfig, check_rule
+
+
+def _nuisances() -> dict[str, ConditionsConfig]:
+    """The benign changes of a real day the evaluation lives through, each alone and all
+    together (magnitudes: :mod:`swgsim.datasets.conditions` and its sources). Commissioning
+    (the first 24 h) sees two daily warm-ups; the hall warms by 10 K over the third and
+    fourth day (wall-clock hours 48-96); the payload grows by 10 % at 36 h."""
+    hall = [[0.0, 0.0], [48.0, 0.0], [96.0, 10.0]]
+
+    def day(**kw) -> ConditionsConfig:  # a joint with its thermal day and its sensors
+        return ConditionsConfig(**{"thermal": JointThermal(), "bridge_drift": BridgeDrift(),
+                                   "temperature_sensor": TemperatureSensor(), **kw})
+
+    still = {"thermal": None, "viscosity": False, "bridge_drift": None}
+    return {"warm_up": day(),
+            "hall": day(thermal=JointThermal(ambient_points=hall)),
+            "run_in": day(run_in=RunInConfig(), **still),
+            "payload": day(payload=[[36.0, 1.1]], **still),
+            "all": day(thermal=JointThermal(ambient_points=hall), run_in=RunInConfig(),
+                       payload=[[36.0, 1.1]])}
 
 
 @dataclass
@@ -61,7 +85,15 @@ class MonitorStudyConfig:
     detector_hours : float
         Hours of each healthy life, after commissioning, over which the detectors' false
         alarms are counted (a rate of thousands per 1000 h needs no more).
+    nuisances : dict of str to ConditionsConfig
+        Benign changes, each lived by a healthy life of ``nuisance_hours`` per seed and by
+        every gear fault at its mildest and largest Table V severity (default: the five
+        of a real day); empty: none.
+    nuisance_hours : float
+        Operating hours of each nuisance's healthy life, commissioning included.
     rule : RuleConfig
+    normal : NormalConfig
+        How the gear's normal behaviour follows the conditions (:mod:`learn.monitor.normal`).
     """
 
     seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
@@ -79,7 +111,10 @@ class MonitorStudyConfig:
     gears: list[int] = field(default_factory=list)
     detectors: list[str] = field(default_factory=lambda: list(DETECTORS))
     detector_hours: float = 100.0
+    nuisances: dict[str, ConditionsConfig] = field(default_factory=_nuisances)
+    nuisance_hours: float = 224.0
     rule: RuleConfig = field(default_factory=RuleConfig)
+    normal: NormalConfig = field(default_factory=NormalConfig)
 
 
 def _req(cond: bool, msg: str) -> None:
@@ -124,6 +159,11 @@ def check_study(sc: MonitorStudyConfig, key: str = "monitor.study") -> None:
     check_range(sc.sensor_train_levels, 2, 100, f"{key}.sensor_train_levels",
                 why="mild and severe at least")
     check_rule(sc.rule, f"{key}.rule")
+    sc.normal.check(f"{key}.normal")
+    check_range(sc.nuisance_hours, sc.commissioning_h, 1e6, f"{key}.nuisance_hours", "h",
+                lo_open=True, why="longer than commissioning")
+    for name, c in sc.nuisances.items():
+        check_conditions(c, sc.nuisance_hours, f"{key}.nuisances.{name}")
     bad = sorted(set(sc.detectors) - set(DETECTORS))
     _req(not bad, f"{key}.detectors: unknown {bad}; allowed: {sorted(DETECTORS)}")
     check_range(sc.detector_hours, 0.0, sc.healthy_hours - sc.commissioning_h,

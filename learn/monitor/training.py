@@ -28,7 +28,8 @@ from swgsim.sensing.sensor_faults import SEVERITIES as SENSOR_SEVERITIES
 from .detectors import DETECTORS, References, WindowClassifier, fit_detector, window_inputs
 from .features import feature_names, health_features
 from .gear_monitor import normal_windows
-from .model import HEALTHY, DiagnosisModel, NormalBehaviour, design_matrix, fit_diagnosis
+from .model import HEALTHY, DiagnosisModel, design_matrix, fit_diagnosis
+from .normal import Conditions, NormalBehaviour
 from .study import MonitorStudyConfig
 
 
@@ -134,12 +135,17 @@ def train_model(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int
     xs, ys, sev, gid = [], [], [], []
     for g in gears:
         lives = training_lives(plan, banks[g], g, cfg)
-        f0, p0, _ = features_of(lives[0][0], 0, len(lives[0][0]))
+        f0, p0, m0 = features_of(lives[0][0], 0, len(lives[0][0]))
+        c0 = Conditions.of(m0)
         fit = normal_windows(p0[:n_comm])  # as the monitor builds it
-        base = NormalBehaviour.fit(f0[:n_comm][fit], p0[:n_comm][fit])
+        base = NormalBehaviour.fit(f0[:n_comm][fit], p0[:n_comm][fit], c0[:n_comm][fit])
         for sim, c, s in lives:
-            f, p = (f0[n_comm:], p0[n_comm:]) if c == HEALTHY else features_of(sim, 1, len(sim))[:2]
-            xs.append(design_matrix(base.z(f, p), p))
+            if c == HEALTHY:
+                f, p, cond = f0[n_comm:], p0[n_comm:], c0[n_comm:]
+            else:
+                f, p, m = features_of(sim, 1, len(sim))
+                cond = Conditions.of(m)
+            xs.append(design_matrix(base.z(f, p, cond), p))
             ys.append(np.full(len(f), c, object))
             sev.append(np.full(len(f), s))
             gid.append(np.full(len(f), g))

@@ -19,16 +19,15 @@ lives through while its gear stays healthy, each with a sourced magnitude
   (None: the stream has no temperature).
 
 How a window gets them (:func:`window_conditions`, used by
-:class:`swgsim.datasets.life.LifeSimulator`): the records are those of the nominal gear
-(:mod:`swgsim.datasets.records`); the friction factor changes the window's efficiency by
+:class:`swgsim.datasets.life.LifeSimulator`): its record is that of the nominal gear at
+the acting load (a payload factor's own record, simulated like any other,
+:mod:`swgsim.datasets.records`); the friction factor changes the window's efficiency by
 the ratio of the model's steady efficiencies (:func:`swgsim.gear.thermal.
 steady_efficiency`), and not its gauge signals, which the chain takes from the torque the
 gear delivers (:mod:`swgsim.gear.chain`): measured, a 25 K warmer gear moves the
 efficiency by 80-240 healthy standard deviations and every gauge feature by at most 1.1
-(the residual of s0 at 4000 rpm, 70 N m) - held constant [stated simplification]. The
-payload scales the torque-driven part of the record's signals (the chain is linear in the
-output torque; :class:`swgsim.datasets.records.RecordBank` with ``torque_part``), the
-acting torque and, through the steady efficiency, the efficiency. What stays constant:
+(the residual of s0 at 4000 rpm, 70 N m) - held constant [stated simplification]. What
+stays constant:
 the thermal model's parameters over a life, the gear's stiffness and backlash (the
 catalogue gives no temperature dependence), the sensor's calibration offset.
 
@@ -242,16 +241,15 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
                             zero, span, ref)
 
 
-def efficiency_ratio(gear: ChainParams, n_in_rpm: np.ndarray, t_out_nm: np.ndarray,
-                     friction: np.ndarray, mu_factor: np.ndarray, payload: np.ndarray
-                     ) -> np.ndarray:
-    """The factor a window's efficiency changes by under its conditions: the model's
-    steady efficiency at the acting load and friction over that of the record (commanded
-    load, nominal friction), shape (n,) [-] (:func:`swgsim.gear.thermal.
+def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray,
+                     mu_factor: np.ndarray) -> np.ndarray:
+    """The factor a window's efficiency changes by under its friction: the model's steady
+    efficiency at the acting friction over that at the nominal one, at the record's
+    speed and load, shape of ``friction`` [-] (:func:`swgsim.gear.thermal.
     steady_efficiency`)."""
     n = np.abs(np.asarray(n_in_rpm, float))
     t = np.abs(np.asarray(t_out_nm, float))
     nominal = steady_efficiency(gear.gear, n, t)
-    acting = steady_efficiency(gear.gear, n, t * payload, friction, mu_factor)
+    acting = steady_efficiency(gear.gear, n, t, friction, mu_factor)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(nominal > 0, acting / nominal, 1.0)

@@ -81,11 +81,13 @@ class LifeSimulator:
         f = life.fault
         self.position_deg = float(360.0 * u[0] if f.position_deg is None else f.position_deg)
         self.sensor = int(5 * u[1]) if f.sensor is None else int(f.sensor)
-        self.bank.want(self._key(d, s) for d, s in
-                       {(int(d), float(s)) for d, s in zip(self.schedule.duty_index,
-                                                           self.schedule.severity,
-                                                           strict=True)})
         self.conditions = None if life.conditions is None else self._conditions(life)
+        lam = (np.ones(len(self.schedule.hour)) if self.conditions is None
+               else self.conditions.payload)
+        self.bank.want(self._key(d, s, x) for d, s, x in
+                       {(int(d), float(s), float(x)) for d, s, x in zip(
+                           self.schedule.duty_index, self.schedule.severity, lam,
+                           strict=True)})
 
     def _conditions(self, life: LifeConfig) -> WindowConditions:
         """The life's conditions per window (:func:`swgsim.datasets.conditions.
@@ -94,15 +96,12 @@ class LifeSimulator:
         Raises
         ------
         ValueError
-            Payload changes on a profile, or with a record bank that keeps no torque part.
+            Payload changes on a profile.
         """
         if life.conditions.payload and getattr(self.bank, "slots", None) is not None:
             raise ValueError("dataset.life.conditions.payload: payload changes are for lives "
                              "at steady operating points; on a profile, set the link's "
                              "dataset.profile.load.gravity.payload_kg")
-        if life.conditions.payload and not self.bank.torque_part:
-            raise ValueError("a life with payload changes needs a record bank that keeps the "
-                             "torque part (record_bank(..., torque_part=True))")
         sch = self.schedule
         duty = [sch.duty[int(d)] for d in sch.duty_index]
         return window_conditions(life.conditions, sch.hour,
@@ -110,9 +109,13 @@ class LifeSimulator:
                                  np.array([d.t_out_nm for d in duty]), self.bank.healthy,
                                  int(self.plan.config.seed), self.gear_id, int(life.life_seed))
 
-    def _key(self, d: int, severity: float) -> tuple:
-        return RecordBank.key(self.schedule.duty[d], self.life.fault.fault, severity,
-                              self.position_deg)
+    def _key(self, d: int, severity: float, payload: float = 1.0) -> tuple:
+        """The record of duty point ``d`` in a state, at the acting load (the commanded
+        one times ``payload``)."""
+        dp = self.schedule.duty[d]
+        if payload != 1.0:
+            dp = dataclasses.replace(dp, t_out_nm=dp.t_out_nm * payload)
+        return RecordBank.key(dp, self.life.fault.fault, severity, self.position_deg)
 
     # ------------------------------------------------------------------ windows
     def windows(self, start: int, stop: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -145,7 +148,7 @@ class LifeSimulator:
             for r in rows]
         sig, keys, eff, n_mean, t_mean, angles = self._cut(rows, rngs)
         if self.conditions is not None:
-            self._condition(rows, keys, sig, eff, t_mean)
+            self._condition(rows, keys, sig, eff)
         phi_in = angles.pop("phi_in", None)
         fault = self.schedule.fault[rows]
         if is_sensor_fault(self.life.fault.fault):
@@ -171,7 +174,8 @@ class LifeSimulator:
         keys = []
         for i, r in enumerate(rows):
             d = int(sch.duty_index[r])
-            keys.append(self._key(d, float(sch.severity[r])))
+            lam = 1.0 if self.conditions is None else float(self.conditions.payload[r])
+            keys.append(self._key(d, float(sch.severity[r]), lam))
             rec = self.bank.get(keys[-1])
             if slots is not None:  # a profile: slot d, started within its jitter
                 rec = {k: v[d] for k, v in rec.items()}
@@ -182,9 +186,6 @@ class LifeSimulator:
             else:
                 o = int(rngs[i].uniform() * rec["n_period"])
             sig[i] = rec["signal"][:, o:o + n_t]
-            lam = 1.0 if self.conditions is None else self.conditions.payload[r]
-            if lam != 1.0:  # a heavier tool: the torque-driven part scales
-                sig[i] += (lam - 1.0) * rec["torque"][:, o:o + n_t]
             e = o + n_t
             eff[i] = (rec["p_out"][e] - rec["p_out"][o]) / (rec["p_in"][e] - rec["p_in"][o])
             n_mean[i] = (rec["w_in"][e] - rec["w_in"][o]) / n_t * 60 / (2 * np.pi)
@@ -192,19 +193,15 @@ class LifeSimulator:
         return sig, keys, eff, n_mean, t_mean, angles
 
     def _condition(self, rows: np.ndarray, keys: list[tuple], sig: np.ndarray,
-                   eff: np.ndarray, t_mean: np.ndarray) -> None:
+                   eff: np.ndarray) -> None:
         """The life's conditions on windows ``rows``, in place: the efficiency at the
-        acting load and friction, the acting torque, the bridges' drift
-        (:mod:`swgsim.datasets.conditions`)."""
+        acting friction, the bridges' drift (:mod:`swgsim.datasets.conditions`; the
+        acting load is the record's)."""
         c = self.conditions
-        duty = [self.schedule.duty[int(d)] for d in self.schedule.duty_index[rows]]
-        n = np.array([d.n_in_rpm for d in duty])
-        t = np.array([d.t_out_nm for d in duty])
-        for key in set(keys):  # the state's own gear parameters
+        for key in set(keys):  # the state's own gear parameters, at the record's load
             m = np.array([k == key for k in keys])
-            eff[m] *= efficiency_ratio(self.bank.params(key), n[m], t[m], c.friction[rows][m],
-                                       c.mu_factor[rows][m], c.payload[rows][m])
-        t_mean *= c.payload[rows]
+            eff[m] *= efficiency_ratio(self.bank.params(key), key[0], key[1],
+                                       c.friction[rows][m], c.mu_factor[rows][m])
         gain, offset = c.bridge_gain_offset(rows)
         sig *= gain[:, :, None]
         sig += offset[:, :, None]
@@ -288,9 +285,7 @@ def simulate_life_shard(plan: DatasetPlan, shard: ShardSpec,
     the float32 signals and the sorted per-sample variables, provenance) plus ``life``,
     ``fault_position_deg`` and ``fault_sensor``.
     """
-    life = plan.config.life
-    payload = life.conditions is not None and bool(life.conditions.payload)
-    sim = LifeSimulator(plan, shard.gear, life, record_bank(plan, shard.gear, payload))
+    sim = LifeSimulator(plan, shard.gear, plan.config.life)
     ds = life_dataset(sim)
     h = hashlib.sha256(ds["strain_signal"].values.tobytes())
     for k in sorted(v for v in ds.data_vars if v != "strain_signal"):

@@ -47,16 +47,10 @@ class RecordBank:
     gear_id : int
     chunk : int
         Distinct motions per batch (bounds the memory of the dynamics).
-    torque_part : bool
-        Also keep each record's torque-driven signal (``torque``: the record's signal less
-        that of the same motion at zero output torque, through the same measurement
-        chain), which a payload change scales (:mod:`swgsim.datasets.conditions`).
     """
 
-    def __init__(self, plan: DatasetPlan, gear_id: int, chunk: int = 96,
-                 torque_part: bool = False) -> None:
+    def __init__(self, plan: DatasetPlan, gear_id: int, chunk: int = 96) -> None:
         self.plan, self.gear_id, self.chunk = plan, int(gear_id), int(chunk)
-        self.torque_part = bool(torque_part)
         self.healthy = gear_params(plan.config, plan.gear(self.gear_id))
         self._pending: set[tuple] = set()
         self._records: dict[tuple, dict] = {}
@@ -143,16 +137,12 @@ class RecordBank:
             psi, t_act = fine_motion(res, q, motion[rows])
             variants = [params[r] for r in rows]
             sig = self._measured(chain.signals_batch(variants, psi, t_act), n_in, n_lead)
-            torque = (sig - self._measured(chain.signals_batch(variants, psi, 0 * t_act),
-                                           n_in, n_lead)) if self.torque_part else None
             for i, r in enumerate(rows):
                 cum = {k: np.concatenate([[0.0], np.cumsum(v[motion[r], win])])
                        for k, v in (("p_in", res.p_in), ("p_out", res.p_out),
                                     ("w_in", res.states[1]), ("t_out", res.t_out))}
                 self._records[keys[r]] = {"signal": sig[i, :, :n_rec].astype(np.float32),
                                           "n_period": n_period, **cum}
-                if torque is not None:
-                    self._records[keys[r]]["torque"] = torque[i, :, :n_rec].astype(np.float32)
 
     def _measured(self, sig: np.ndarray, n_in: float, n_lead: int) -> np.ndarray:
         """Ideal bridge signals on the fine grid through the measurement chain (sensor
@@ -178,9 +168,8 @@ class ProfileRecordBank(RecordBank):
     angle, for eq. (10)) and the recorded angle channels ``phi_in_meas`` (and
     ``phi_out_meas`` with an output encoder)."""
 
-    def __init__(self, plan: DatasetPlan, gear_id: int, chunk: int = 32,
-                 torque_part: bool = False) -> None:
-        super().__init__(plan, gear_id, chunk, torque_part)
+    def __init__(self, plan: DatasetPlan, gear_id: int, chunk: int = 32) -> None:
+        super().__init__(plan, gear_id, chunk)
         self.slots = profile_slots(plan)
 
     @staticmethod
@@ -242,9 +231,8 @@ class ProfileRecordBank(RecordBank):
             }
 
 
-def record_bank(plan: DatasetPlan, gear_id: int, torque_part: bool = False) -> RecordBank:
+def record_bank(plan: DatasetPlan, gear_id: int) -> RecordBank:
     """The records of one gear's lives: along the profile for a profile data set, else
-    at its steady operating points (``torque_part``: :class:`RecordBank`)."""
-    if plan.profile is not None:
-        return ProfileRecordBank(plan, gear_id, torque_part=torque_part)
-    return RecordBank(plan, gear_id, torque_part=torque_part)
+    at its steady operating points."""
+    return ProfileRecordBank(plan, gear_id) if plan.profile is not None else RecordBank(
+        plan, gear_id)

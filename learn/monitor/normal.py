@@ -1,0 +1,448 @@
+"""The gear's normal behaviour: its health features as the operating conditions set them,
+learnt at commissioning.
+
+A window's features (:mod:`.features`) depend on the gear's health and on what a real
+joint's day does to it: the temperature (the bridges' gain and zero drift, the grease's
+viscosity in the friction), the acting load (a heavier tool) and a slow, even change of
+the friction (run-in). Condition-monitoring practice regresses the indicators on the
+operating variables before thresholding them (normal-behaviour models: Tautz-Weinert and
+Watson, *IET Renew. Power Gener.* 11(4), 2017; Bittencourt and Axelsson, *IEEE/ASME Trans.
+Mechatronics* 19(5), 2014, for robot-joint friction against temperature and load). Here
+the regression has the physics' shape, so that a few parameters learnt at commissioning
+carry it to the conditions commissioning did not see:
+
+* **bridges and temperature**: each bridge's output is ``G_c(T) s + ζ_c (T − T̄)`` with
+  ``G_c = 1 + γ_c (T − T̄)`` (span and zero drift per K, one pair per bridge): every
+  amplitude of bridge c scales by G_c, its offset by G_c plus ζ_c ΔT, its residual's RMS
+  by G_c. γ_c and ζ_c are least-squares fits over all commissioning windows (pooled over
+  harmonics and operating points);
+* **efficiency, temperature and load**: the loss torque ``L = τ (1/η − 1)`` at the output
+  is ``A_n φ(T) + B_n τ`` per input speed n: a load-independent part following the
+  grease's viscosity (φ, the catalogue law of :func:`swgsim.gear.thermal.friction_scale`;
+  Harmonic Drive engineering data: no-load running torque over temperature) and a part
+  proportional to the load (the mesh's); A_n and B_n fitted at commissioning;
+* **the acting load**: the gauges are linear in the output torque, so a Fourier
+  coefficient is ``a + τ b`` and its squared amplitude a quadratic in τ, through the
+  commissioning means at the loads of the same speed (exact with three); an offset is a
+  line in τ; the residual's power a quadratic;
+* **a slow, even change of the friction** (run-in, grease): tracked as one factor r on the
+  loss torque (an exponential mean of the windows' ratio to the prediction over
+  ``friction_track_h`` operating hours). A gear fault that changes friction changes it
+  unevenly (reduced damping lowers the viscous term only: more at light loads), so its
+  pattern over the operating points stays in the z-scores.
+
+:meth:`NormalBehaviour.reference` brings a window's features to the reference condition of
+its operating point (commissioning's mean temperature and load); the z-scores are their
+deviations from commissioning's corrected mean in its spread. Where the stream has no
+temperature, the temperature terms are left out (the spread of commissioning's warm-ups
+is then in the standard deviations). :meth:`NormalBehaviour.outside` flags windows whose
+condition commissioning did not see (temperature beyond its range by
+``temperature_margin_k``, load beyond its by ``load_margin``, the friction factor beyond
+``friction_margin``): the monitor advises to recommission (an advisory, not a gear fault)
+and keeps watching with the extrapolated model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swgsim.base.typed import check_range
+from swgsim.gear.thermal import friction_scale
+
+from .features import N_HARMONICS
+
+#: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
+BLOCK = N_HARMONICS + 2
+EFFICIENCY = 5 * BLOCK
+#: Least temperature spread of commissioning to fit the temperature terms [K].
+MIN_SPREAD_K = 2.0
+#: An amplitude enters the fit of its bridge's gain when its mean is this many standard
+#: deviations above zero (its log is then well defined).
+SIGNIFICANT = 20.0
+
+
+@dataclass
+class NormalConfig:
+    """How the normal behaviour follows the conditions (module docstring).
+
+    Attributes
+    ----------
+    friction_track_h : float
+        Time constant of the friction factor's tracking [operating h], > 0; 0: not
+        tracked (the factor stays 1).
+    temperature_margin_k : float
+        A window's temperature may exceed commissioning's range at its operating point
+        by this much before it is outside [K], >= 0.
+    load_margin : float
+        Relative margin on commissioning's acting load at the operating point [-], >= 0.
+    friction_margin : float
+        The friction factor may leave 1 by this much before the condition is outside
+        [-], > 0.
+    """
+
+    friction_track_h: float = 4.0
+    temperature_margin_k: float = 2.0
+    load_margin: float = 0.03
+    friction_margin: float = 0.05
+
+    def check(self, key: str = "normal") -> None:
+        """Refuse a field out of range in one line naming ``<key>.<field>``.
+
+        Raises
+        ------
+        ValueError
+        """
+        check_range(self.friction_track_h, 0.0, 1e4, f"{key}.friction_track_h", "h")
+        check_range(self.temperature_margin_k, 0.0, 100.0, f"{key}.temperature_margin_k",
+                    "K")
+        check_range(self.load_margin, 0.0, 1.0, f"{key}.load_margin")
+        check_range(self.friction_margin, 0.0, 1.0, f"{key}.friction_margin", lo_open=True)
+
+
+@dataclass
+class Conditions:
+    """A window's operating conditions as a real joint measures them.
+
+    Attributes
+    ----------
+    torque_nm : ndarray, shape (n,)
+        Acting output torque over the window (``t_out_mean_nm``) [N m].
+    temperature_c : ndarray, shape (n,) or None
+        The joint's temperature reading (``temperature_c``) [°C]; None: not measured.
+    """
+
+    torque_nm: np.ndarray
+    temperature_c: np.ndarray | None = None
+
+    def __getitem__(self, idx) -> Conditions:
+        t = None if self.temperature_c is None else self.temperature_c[idx]
+        return Conditions(self.torque_nm[idx], t)
+
+    @classmethod
+    def of(cls, meta: dict[str, np.ndarray]) -> Conditions:
+        """From windows' metadata (``t_out_mean_nm``, optional ``temperature_c``)."""
+        t = meta.get("temperature_c")
+        return cls(np.asarray(meta["t_out_mean_nm"], float),
+                   None if t is None else np.asarray(t, float))
+
+    @classmethod
+    def concat(cls, parts: list[Conditions]) -> Conditions:
+        """Consecutive windows' conditions as one."""
+        temps = [p.temperature_c for p in parts]
+        t = None if any(x is None for x in temps) else np.concatenate(temps)
+        return cls(np.concatenate([p.torque_nm for p in parts]), t)
+
+
+def _poly(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
+    """Coefficients (c0, c1, c2) of y ≈ c0 + c1 x + c2 x² of at most ``degree`` (and one
+    less than the points), by least squares, for each column of y (k, F); shape (3, F)."""
+    deg = min(degree, len(x) - 1)
+    v = np.vander(x, deg + 1, increasing=True)  # (k, deg + 1)
+    coef = np.linalg.lstsq(v, y, rcond=None)[0]
+    return np.vstack([coef, np.zeros((2 - deg, y.shape[1]))])
+
+
+@dataclass
+class NormalBehaviour:
+    """The gear's normal behaviour per operating point (module docstring).
+
+    Attributes
+    ----------
+    points : ndarray, shape (P, 2)
+        (n_in_rpm, t_out_nm) of each operating point (commanded).
+    mean, std : ndarray, shape (P, F)
+        Commissioning's features brought to the reference condition: mean and spread.
+    ref_torque, ref_temp : ndarray, shape (P,)
+        Commissioning's mean acting load [N m] and temperature [°C] (NaN: none).
+    torque_range, temp_range : ndarray, shape (P, 2)
+        Commissioning's range of acting load [N m] and temperature [°C].
+    gain, zero : ndarray, shape (5,)
+        γ_c [1/K] and ζ_c [mV/V per K] of each bridge (0 without temperature).
+    loss : ndarray, shape (P, 2)
+        (A, B) of the loss torque at each point's speed [N m], [-].
+    load : ndarray, shape (P, 3, F)
+        Per point, the quadratic in τ of each feature's load curve at its speed (squared
+        amplitudes, offsets, residual power; unused columns zero).
+    config : NormalConfig
+    """
+
+    points: np.ndarray
+    mean: np.ndarray
+    std: np.ndarray
+    ref_torque: np.ndarray
+    ref_temp: np.ndarray
+    torque_range: np.ndarray
+    temp_range: np.ndarray
+    gain: np.ndarray
+    zero: np.ndarray
+    loss: np.ndarray
+    load: np.ndarray
+    config: NormalConfig = field(default_factory=NormalConfig)
+
+    # ------------------------------------------------------------------ fitting
+    @classmethod
+    def fit(cls, feats: np.ndarray, points: np.ndarray, cond: Conditions,
+            config: NormalConfig | None = None) -> NormalBehaviour:
+        """From commissioning windows: features (n, F), operating points (n, 2) and
+        conditions.
+
+        Raises
+        ------
+        ValueError
+            If an operating point has fewer than two windows.
+        """
+        config = config or NormalConfig()
+        ops, inv = np.unique(points, axis=0, return_inverse=True)
+        inv = inv.ravel()
+        if np.bincount(inv).min() < 2:
+            raise ValueError("the normal behaviour needs at least two windows per operating "
+                             "point")
+        n_p, n_f = len(ops), feats.shape[1]
+        tq = cond.torque_nm
+        ref_torque = np.array([tq[inv == k].mean() for k in range(n_p)])
+        torque_range = np.array([[tq[inv == k].min(), tq[inv == k].max()] for k in range(n_p)])
+        temp = cond.temperature_c
+        use_t = temp is not None and np.ptp(temp) >= MIN_SPREAD_K
+        ref_temp = np.array([temp[inv == k].mean() if use_t else np.nan for k in range(n_p)])
+        temp_range = np.array([[temp[inv == k].min(), temp[inv == k].max()] if use_t
+                               else [np.nan, np.nan] for k in range(n_p)])
+        dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
+        gain, zero = (_bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
+        loss = _loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
+        nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
+                 torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config)
+        warm = nb._temperature_corrected(feats, inv, dt)
+        nb.load = _load_curves(warm, inv, ops, ref_torque)
+        ref = nb._corrected(feats, inv, cond, np.ones(len(feats)))
+        nb.mean = np.stack([ref[inv == k].mean(axis=0) for k in range(n_p)])
+        nb.std = np.maximum(np.stack([ref[inv == k].std(axis=0, ddof=1)
+                                      for k in range(n_p)]), 1e-12)
+        return nb
+
+    # ------------------------------------------------------------------ using it
+    def index(self, points: np.ndarray) -> np.ndarray:
+        """Row of each window's operating point; -1 where commissioning saw none."""
+        idx = np.full(len(points), -1)
+        for i, o in enumerate(self.points):
+            idx[(points == o).all(axis=1)] = i
+        return idx
+
+    def _check(self, points: np.ndarray, index: np.ndarray | None) -> np.ndarray:
+        i = self.index(points) if index is None else index
+        if (i < 0).any():
+            bad = points[np.flatnonzero(i < 0)[0]]
+            raise ValueError(f"operating point {bad[0]:g} rpm, {bad[1]:g} N m was not seen at "
+                             "commissioning; the normal behaviour has "
+                             f"{[tuple(map(float, o)) for o in self.points]}")
+        return i
+
+    def reference(self, feats: np.ndarray, points: np.ndarray, cond: Conditions,
+                  friction: np.ndarray | float = 1.0, index: np.ndarray | None = None
+                  ) -> np.ndarray:
+        """Windows' features brought to the reference condition of their operating point
+        (module docstring), shape (n, F).
+
+        Parameters
+        ----------
+        feats : ndarray, shape (n, F)
+        points : ndarray, shape (n, 2)
+        cond : Conditions
+        friction : float or ndarray, shape (n,)
+            The friction factor r of each window (:meth:`friction_ratio`).
+        index : ndarray of int, shape (n,), optional
+            :meth:`index` of ``points``, when known.
+
+        Raises
+        ------
+        ValueError
+            If a window's operating point was not seen at commissioning.
+        """
+        i = self._check(points, index)
+        return self._corrected(feats, i, cond, np.broadcast_to(friction, (len(feats),)))
+
+    def z(self, feats: np.ndarray, points: np.ndarray, cond: Conditions | None = None,
+          friction: np.ndarray | float = 1.0, index: np.ndarray | None = None) -> np.ndarray:
+        """z-scores of windows against the normal behaviour, shape (n, F); ``cond`` None:
+        each window at its point's reference condition (no correction).
+
+        Raises
+        ------
+        ValueError
+            If a window's operating point was not seen at commissioning.
+        """
+        i = self._check(points, index)
+        if cond is None:
+            cond = Conditions(self.ref_torque[i], None)
+        ref = self._corrected(feats, i, cond, np.broadcast_to(friction, (len(feats),)))
+        return (ref - self.mean[i]) / self.std[i]
+
+    def friction_ratio(self, feats: np.ndarray, points: np.ndarray, cond: Conditions,
+                       index: np.ndarray | None = None) -> np.ndarray:
+        """Each window's loss torque over the model's prediction at its load and
+        temperature (the friction factor's evidence), shape (n,)."""
+        i = self._check(points, index)
+        tq = np.maximum(np.abs(cond.torque_nm), 1e-9)
+        eta = np.clip(feats[:, EFFICIENCY], 1e-6, 1.0)
+        pred = self._loss(i, cond)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(pred > 0, tq * (1.0 / eta - 1.0) / pred, 1.0)
+
+    def outside(self, points: np.ndarray, cond: Conditions, friction: np.ndarray | float,
+                index: np.ndarray | None = None) -> np.ndarray:
+        """Which condition each window has that commissioning did not see: a bit field,
+        1 temperature, 2 load, 4 friction (0: none), shape (n,) int."""
+        i = self._check(points, index)
+        c = self.config
+        out = np.zeros(len(points), np.int64)
+        if cond.temperature_c is not None and np.isfinite(self.ref_temp[i]).all():
+            t = cond.temperature_c
+            lo, hi = self.temp_range[i, 0], self.temp_range[i, 1]
+            out |= ((t < lo - c.temperature_margin_k) | (t > hi + c.temperature_margin_k)) * 1
+        lo, hi = self.torque_range[i, 0], self.torque_range[i, 1]
+        tq = cond.torque_nm
+        span = c.load_margin * np.abs(self.ref_torque[i])
+        out |= ((tq < lo - span) | (tq > hi + span)) * 2
+        fr = np.broadcast_to(np.asarray(friction, float), (len(points),))
+        out |= (np.abs(fr - 1.0) > c.friction_margin) * 4
+        return out
+
+    # ------------------------------------------------------------------ internals
+    def _gain(self, dt: np.ndarray) -> np.ndarray:
+        """Each window's bridge gain relative to the reference, shape (n, 5)."""
+        return 1.0 + self.gain[None, :] * dt[:, None]
+
+    def _dt(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
+        if cond.temperature_c is None or not np.isfinite(self.ref_temp).all():
+            return np.zeros(len(i))
+        return cond.temperature_c - self.ref_temp[i]
+
+    def _temperature_corrected(self, feats: np.ndarray, i: np.ndarray, dt: np.ndarray
+                               ) -> np.ndarray:
+        """Features with the bridges' temperature drift taken out (the efficiency's is in
+        the loss model)."""
+        out = np.array(feats, float)
+        g = self._gain(dt)
+        for c in range(5):
+            j0 = c * BLOCK
+            out[:, j0] = (out[:, j0] - self.zero[c] * dt) / g[:, c]
+            out[:, j0 + 1:j0 + BLOCK - 1] /= g[:, c:c + 1]
+            out[:, j0 + BLOCK - 1] -= np.log10(g[:, c])
+        return out
+
+    def _loss(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
+        """Predicted loss torque at each window's load and temperature [N m]."""
+        tq = np.abs(cond.torque_nm)
+        phi = (friction_scale(cond.temperature_c)
+               if cond.temperature_c is not None and np.isfinite(self.ref_temp).all()
+               else np.ones(len(i)))
+        return self.loss[i, 0] * phi + self.loss[i, 1] * tq
+
+    def _corrected(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
+                   friction: np.ndarray) -> np.ndarray:
+        """Features at the reference condition of their point (module docstring)."""
+        out = self._temperature_corrected(feats, i, self._dt(i, cond))
+        tq = np.abs(cond.torque_nm)
+        t0 = np.abs(self.ref_torque[i])
+        q = self.load[i]  # (n, 3, F)
+
+        def curve(tau):  # (n, F)
+            return q[:, 0] + q[:, 1] * tau[:, None] + q[:, 2] * tau[:, None] ** 2
+
+        at, at0 = curve(tq), curve(t0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where((at > 0) & (at0 > 0), at / at0, 1.0)
+        for c in range(5):
+            j0 = c * BLOCK
+            out[:, j0] -= (at - at0)[:, j0]  # the offset's line
+            out[:, j0 + 1:j0 + BLOCK - 1] /= np.sqrt(ratio[:, j0 + 1:j0 + BLOCK - 1])
+            out[:, j0 + BLOCK - 1] -= 0.5 * np.log10(ratio[:, j0 + BLOCK - 1])
+        eta = feats[:, EFFICIENCY]
+        ref_cond = Conditions(t0, None if cond.temperature_c is None
+                              else self.ref_temp[i])
+        pred = friction * self._loss(i, cond)
+        pred0 = self._loss(i, ref_cond)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            eta_pred = np.where(tq > 0, tq / (tq + pred), 0.0)
+            eta_ref = np.where(t0 > 0, t0 / (t0 + pred0), 0.0)
+        out[:, EFFICIENCY] = eta - eta_pred + eta_ref
+        return out
+
+
+def _bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """γ_c and ζ_c of the five bridges (module docstring): the gain from the significant
+    amplitudes' logs, the zero from the offsets, by least squares pooled over points."""
+    gain, zero = np.zeros(5), np.zeros(5)
+    d2 = float(dt @ dt)
+    if d2 <= 0:
+        return gain, zero
+    for c in range(5):
+        j0 = c * BLOCK
+        amp = feats[:, j0 + 1:j0 + BLOCK - 1]
+        num = den = 0.0
+        for k in np.unique(inv):
+            m = inv == k
+            a = amp[m]
+            sig = a.mean(axis=0) > SIGNIFICANT * a.std(axis=0, ddof=1)
+            if sig.any():  # Σ_j Σ_i ΔT_i (ln a_ij − mean_i ln a_ij) over Σ_j Σ_i ΔT_i²
+                la = np.log(a[:, sig])
+                num += float(dt[m] @ (la - la.mean(axis=0)).sum(axis=1))
+                den += float(dt[m] @ dt[m]) * int(sig.sum())
+        gain[c] = num / den if den > 0 else 0.0
+        off = feats[:, j0]
+        resid = np.zeros(len(off))
+        for k in np.unique(inv):
+            m = inv == k
+            resid[m] = off[m] - off[m].mean() - gain[c] * off[m].mean() * dt[m]
+        zero[c] = float(dt @ resid) / d2
+    return gain, zero
+
+
+def _loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
+                ops: np.ndarray, inv: np.ndarray) -> np.ndarray:
+    """(A, B) per point: the loss torque τ (1/η − 1) ≈ A φ(T) + B τ by least squares over
+    the windows at the point's speed (module docstring), shape (P, 2)."""
+    tq = np.abs(torque)
+    loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
+    phi = friction_scale(temp) if temp is not None else np.ones(len(eta))
+    out = np.zeros((len(ops), 2))
+    for n in np.unique(ops[:, 0]):
+        ks = np.flatnonzero(ops[:, 0] == n)
+        m = np.isin(inv, ks)
+        x = np.stack([phi[m], tq[m]], axis=1)
+        if np.unique(ops[ks, 1]).size < 2:  # one load: the loss's level only
+            coef = np.array([np.mean(loss[m] / phi[m]), 0.0])
+        else:
+            coef = np.linalg.lstsq(x, loss[m], rcond=None)[0]
+        out[ks] = coef
+    return out
+
+
+def _load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,
+                 ref_torque: np.ndarray) -> np.ndarray:
+    """Per point, the quadratics in τ of the load curves at its speed (module docstring):
+    squared amplitudes, offsets (a line), residual power, shape (P, 3, F)."""
+    n_p, n_f = len(ops), feats.shape[1]
+    y = np.zeros((n_p, n_f))
+    for k in range(n_p):
+        f = feats[inv == k]
+        for c in range(5):
+            j0 = c * BLOCK
+            y[k, j0] = f[:, j0].mean()
+            y[k, j0 + 1:j0 + BLOCK - 1] = (f[:, j0 + 1:j0 + BLOCK - 1] ** 2).mean(axis=0)
+            y[k, j0 + BLOCK - 1] = (10.0 ** (2 * f[:, j0 + BLOCK - 1])).mean()
+    out = np.zeros((n_p, 3, n_f))
+    offsets = [c * BLOCK for c in range(5)]
+    for n in np.unique(ops[:, 0]):
+        ks = np.flatnonzero(ops[:, 0] == n)
+        x = np.abs(ref_torque[ks])
+        coef = _poly(x, y[ks], 2)  # (3, F): squared amplitudes, residual power
+        coef[:, offsets] = _poly(x, y[ks][:, offsets], 1)  # offsets: a line
+        out[ks] = coef
+    out[:, :, EFFICIENCY:] = 0.0  # the efficiency has its loss model; twist: none
+    return out
+
+
+__all__ = ["BLOCK", "Conditions", "EFFICIENCY", "NormalBehaviour", "NormalConfig"]
