@@ -24,6 +24,7 @@ window every interval of operation.
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import os
 import stat
@@ -36,9 +37,10 @@ log = logging.getLogger(__name__)
 
 __all__ = ["MAX_TABLE_BYTES", "MIN_WINDOW_SAMPLES", "TABLE_FORMATS", "TURNING_RPM",
            "assign_points", "check_angle_speed", "check_angle_turns", "check_file",
-           "check_limit", "check_output_angle", "check_sampling", "column_name", "datetime_seconds",
-           "numeric", "read_table", "row_name", "segment_starts", "stream_table", "thin",
-           "unwrap_segments", "window_reduce", "window_starts"]
+           "check_limit", "check_output_angle", "check_sampling", "column_name",
+           "content_hash", "datetime_seconds", "numeric", "read_table", "row_name",
+           "segment_starts", "stream_table", "thin", "unwrap_segments", "window_reduce",
+           "window_starts"]
 
 #: Largest table read [bytes] (1 GiB): a CSV of about 10 columns at 10 kHz holds some
 #: 1.5 h; pandas holds it in about 2-3 times its size of memory. Longer recordings: one
@@ -612,6 +614,16 @@ def assign_points(mean_rpm: np.ndarray, lo_rpm: np.ndarray, hi_rpm: np.ndarray,
               & (np.abs(lo_rpm - n) <= tol_rpm) & (np.abs(hi_rpm - n) <= tol_rpm))
         out[at] = k
     return out
+
+
+def content_hash(ds) -> str:
+    """SHA-256 of a shard's float32 signals and its other variables in sorted order (as a
+    life shard's, :func:`swgsim.datasets.life.simulate_life_shard`)."""
+    h = hashlib.sha256(ds["strain_signal"].values.tobytes())
+    for k in sorted(v for v in ds.data_vars if v != "strain_signal"):
+        v = ds[k].values
+        h.update(np.ascontiguousarray(v.astype(str) if v.dtype.kind in "OU" else v).tobytes())
+    return h.hexdigest()
 
 
 def stream_table(ds) -> tuple[Any, dict]:

@@ -498,16 +498,6 @@ def _select(s: Samples, m: RecordingMapping, w0: np.ndarray, n_t: int, hour: np.
         "mean_rpm": sp[take], "mean_nm": tq[take]}
 
 
-def _content_hash(ds) -> str:
-    """SHA-256 of the float32 signals and the other variables in sorted order (as a life
-    shard's, :func:`swgsim.datasets.life.simulate_life_shard`)."""
-    h = hashlib.sha256(ds["strain_signal"].values.tobytes())
-    for k in sorted(v for v in ds.data_vars if v != "strain_signal"):
-        v = ds[k].values
-        h.update(np.ascontiguousarray(v.astype(str) if v.dtype.kind in "OU" else v).tobytes())
-    return h.hexdigest()
-
-
 def recording_stream(path: str | os.PathLike, m: RecordingMapping,
                      max_bytes: int = rt.MAX_TABLE_BYTES, progress: bool = False):
     """A recording as a stream in memory (module docstring); nothing is written.
@@ -587,7 +577,7 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
                                {"units": "degC"})
     for k, v in angles.items():
         ds[k] = (("sample", "time"), v[idx], {"units": "rad"})
-    ds.attrs.update({"content_sha256": _content_hash(ds), "package_version": package_version(),
+    ds.attrs.update({"content_sha256": rt.content_hash(ds), "package_version": package_version(),
                      "git_revision": git_revision()})
     return ds, {"recording": str(p), "rows": int(n), "segments": int(starts.size),
                 "sample_rate_hz": fs, "window_samples": n_t, **info}
@@ -616,8 +606,7 @@ def write_stream(ds, out_dir: str | os.PathLike, overwrite: bool = False,
     ds : xarray.Dataset
     out_dir : path-like
     overwrite : bool
-        Replace what a run of this project wrote there before (a stream or a data set);
-        nothing else is ever deleted.
+        Replace what a run of this project wrote there (a stream or a data set).
     found : swgsim.files.ownership.Survey, optional
         A survey of ``out_dir`` just made (:func:`swgsim.files.ownership.check`).
 
