@@ -477,7 +477,8 @@ def check_angle_speed(phi: np.ndarray, speed_rpm: np.ndarray, time_s: np.ndarray
                       starts: np.ndarray, resolution: float, names: tuple[str, str],
                       fmt: str) -> None:
     """Refuse an angle whose advance over a segment disagrees with the integrated speed
-    (:data:`ANGLE_AGREEMENT`); segments turning less than one revolution are not judged.
+    (:data:`ANGLE_AGREEMENT`); segments in which neither turns one revolution are not
+    judged.
 
     Parameters
     ----------
@@ -499,7 +500,7 @@ def check_angle_speed(phi: np.ndarray, speed_rpm: np.ndarray, time_s: np.ndarray
     w = speed_rpm[:-1] * (2 * np.pi / 60.0) * np.diff(time_s)
     integ = _segment_sums(w, starts)
     adv = _segment_sums(np.diff(phi), starts)
-    judged = np.abs(integ) >= 2 * np.pi
+    judged = np.maximum(np.abs(integ), np.abs(adv)) >= 2 * np.pi
     bad = np.flatnonzero(judged & (np.abs(adv - integ) > ANGLE_AGREEMENT * np.abs(integ)
                                    + 2 * resolution))
     if bad.size:
