@@ -183,8 +183,8 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
             df = pd.read_parquet(p, columns=use)
         else:
             parts = []
-            with tqdm(desc=f"read {p.name}", unit="row", unit_scale=True,
-                      disable=not progress) as bar:
+            with tqdm(desc=f"read {p.name}", unit="row", unit_scale=True, delay=2.0,
+                      disable=not progress) as bar:  # shown when reading takes > 2 s
                 for chunk in pd.read_csv(p, usecols=use, encoding="utf-8-sig",
                                          chunksize=_CHUNK_ROWS, low_memory=False,
                                          float_precision="round_trip"):
@@ -314,10 +314,11 @@ def segment_starts(time_s: np.ndarray, clock_s: np.ndarray | None, window_s: flo
     back = np.flatnonzero(d < 0)
     if back.size:
         i = int(back[0]) + 1
-        what = names[0] if clock_s is None else names[1]
-        raise ValueError(f"{what}, {row_name(i, fmt)}: goes back from {clock[i - 1]:.9g} to "
-                         f"{clock[i]:.9g} s; the clock must never decrease (rows in "
-                         "recording order)")
+        what = ("time goes back" if clock_s is None else "the clock goes back")
+        raise ValueError(f"{names[0] if clock_s is None else names[1]}, {row_name(i, fmt)}: "
+                         f"{what} from {clock[i - 1]:.9g} to {clock[i]:.9g} s; rows must be in "
+                         "recording order" + (" (without a clock column the time column is "
+                                              "the clock)" if clock_s is None else ""))
     return np.concatenate([[0], np.flatnonzero(d > window_s) + 1]).astype(np.int64)
 
 

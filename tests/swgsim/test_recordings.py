@@ -269,7 +269,7 @@ TABLES = [
     ("irregular sampling", _shift("time_s", slice(85, 159), 2e-4), None,
      r"row 85 \(line 87\): a step of 0.0012 s; the sample rate 1000 Hz .*irregular"),
     ("clock going back", _set("hours", slice(240, 319), 1 / 60), None,
-     r"column 'hours' \(clock.column\), row 240 \(line 242\): goes back"),
+     r"column 'hours' \(clock.column\), row 240 \(line 242\): the clock goes back"),
     ("not finite", _set("s2", 90, np.nan), None,
      r"column 's2' \(bridges.columns\[2\]\), row 90 \(line 92\): nan is not a finite"),
     ("not a number", _set("s1", 90, "0.1x"), None,
