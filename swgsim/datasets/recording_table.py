@@ -316,7 +316,8 @@ def segment_starts(time_s: np.ndarray, clock_s: np.ndarray | None, window_s: flo
         i = int(back[0]) + 1
         what = ("time goes back" if clock_s is None else "the clock goes back")
         raise ValueError(f"{names[0] if clock_s is None else names[1]}, {row_name(i, fmt)}: "
-                         f"{what} from {clock[i - 1]:.9g} to {clock[i]:.9g} s; rows must be in "
+                         f"{what} from {clock[i - 1]:.9g} to {clock[i]:.9g} s"
+                         f"{'' if clock_s is None else ' (since the first row)'}; rows must be in "
                          "recording order" + (" (without a clock column the time column is "
                                               "the clock)" if clock_s is None else ""))
     return np.concatenate([[0], np.flatnonzero(d > window_s) + 1]).astype(np.int64)

@@ -489,12 +489,18 @@ def _select(s: Samples, m: RecordingMapping, w0: np.ndarray, n_t: int, hour: np.
                             f"it covers every window (the last at {hour[take[-1]]:.6g} h); "
                             "nothing is left to monitor"))
     names, counts = np.unique(k[take][comm], return_counts=True)
+    unseen = np.setdiff1d(k[take], names)
+    if unseen.size:  # the monitor has no normal behaviour there
+        raise ValueError(f"commissioning_h={m.commissioning_h:g}: no commissioning window at "
+                         f"operating_points.points[{unseen[0]}] {op.points[unseen[0]]}, which "
+                         "later windows are at; lengthen the commissioning or drop the point")
     return take, k[take], {
         "windows_cut": int(w0.size), "outside_points": int(w0.size - cand.size),
         "windows": int(take.size), "commissioning_windows": {
             f"{pts[i, 0]:g} rpm, {pts[i, 1]:g} N m": int(c) for i, c in zip(names, counts,
                                                                               strict=True)},
         "hours": [float(hour[take[0]]), float(hour[take[-1]])],
+        "speed_offset_rpm": float(np.max(np.abs(sp[take] - pts[k[take], 0]))),
         "mean_rpm": sp[take], "mean_nm": tq[take]}
 
 
@@ -518,7 +524,9 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
         where the recording has them, ``temperature_c``, ``phi_in_meas``,
         ``phi_out_meas``) and a summary: ``rows``, ``segments``, ``sample_rate_hz``,
         ``window_samples``, ``windows_cut``, ``outside_points``, ``windows``,
-        ``commissioning_windows`` per operating point, ``hours`` (first, last).
+        ``commissioning_windows`` per operating point, ``hours`` (first, last),
+        ``speed_offset_rpm`` (the largest distance of a window's mean speed from its
+        point's [rpm]: without an input angle the monitor fits at the point's speed).
 
     Raises
     ------

@@ -305,6 +305,9 @@ TABLES = [
      r"operating_points: no window is at a declared point .* speeds span \[1500, 1500\]"),
     ("commissioning covers everything", None, lambda m: m.update(commissioning_h=1.0),
      r"commissioning_h=1: it covers every window"),
+    ("a point unseen at commissioning", _set("t_out_nm", slice(400, 639), 20.0),
+     lambda m: m["operating_points"].update(points=[[RPM, NM], [RPM, 20.0]]),
+     r"no commissioning window at operating_points.points\[1\] \[1500.0, 20.0\]"),
 ]
 
 
