@@ -239,6 +239,16 @@ def test_the_mapping_default_window_is_the_data_sets():
     assert m.bridges.columns == ["s0", "s1", "s2", "s3", "s4"] and m.clock is None
 
 
+def test_the_example_mapping_reads():
+    """examples/own_joint_mapping.yaml (docs/OWN_JOINT.md) is a mapping the importer takes."""
+    from pathlib import Path
+
+    m = read_mapping(Path(__file__).resolve().parents[2] / "examples" /
+                     "own_joint_mapping.yaml")
+    assert m.bridges.unit == "counts" and len(m.bridges.calibration) == 5
+    assert m.input_angle.counts_per_rev == 4096 and m.clock.unit == "h"
+
+
 def _set(col, row, value):
     def f(df):
         df[col] = df[col].astype(object) if isinstance(value, str) else df[col]
