@@ -1,0 +1,698 @@
+"""A recording's table: bounded reading, checks over its rows, segments and windows.
+
+The array work behind :mod:`swgsim.datasets.recordings`, which holds the column mapping
+and calls these functions with its fields; nothing here knows the mapping's classes. A
+table is CSV (UTF-8, a byte-order mark accepted, comma-separated, one header line) or
+Parquet (pandas with pyarrow), one row per sample. Every refusal is one ``ValueError``
+line naming the file, the column (with the mapping key it was given as) and the row:
+rows are counted from 0, the header not counted (row ``i`` of a CSV is its line
+``i + 2``, given beside it).
+
+**Segments.** A recording may hold several continuous stretches (a condition-monitoring
+logger's bursts). A new segment begins at a row where the clock (the operating-hours or
+wall-clock column; without one, the time column itself) advances by more than one window
+length since the previous row; inside a segment the time column must advance by the
+sample period, within the tolerance, and a longer step is refused as a gap (a clock that
+does not jump there says the logger did not stop). The time column may restart at a
+segment's first row (time since the burst's start).
+
+**Windows.** Each segment is cut from its first row into consecutive windows of ``n_t``
+samples; a segment's tail shorter than a window is left out. Per window the mean, minimum
+or maximum of a column comes from :func:`window_reduce`, and :func:`thin` takes one
+window every interval of operation.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import stat
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+__all__ = ["MAX_TABLE_BYTES", "MIN_WINDOW_SAMPLES", "TABLE_FORMATS", "TURNING_RPM",
+           "assign_points", "check_angle_speed", "check_angle_turns", "check_file",
+           "check_limit", "check_output_angle", "check_sampling", "column_name",
+           "content_hash", "datetime_seconds", "numeric", "read_table", "row_name",
+           "segment_starts", "stream_table", "thin", "unwrap_segments", "window_reduce",
+           "window_starts"]
+
+#: Largest table read [bytes] (1 GiB): a CSV of about 10 columns at 10 kHz holds some
+#: 1.5 h; pandas holds it in about 2-3 times its size of memory. Longer recordings: one
+#: file per day, or Parquet (compressed, typically 3-5 times smaller).
+MAX_TABLE_BYTES = 1 << 30
+#: The formats read, by file suffix.
+TABLE_FORMATS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet"}
+#: Fewest samples in a window: the monitor's least-squares series in the wave-generator
+#: angle has 31 coefficients per bridge (offset, 12 harmonics and 3 sub-harmonic orders,
+#: as cosine and sine; learn/monitor/features.py), so a window needs at least twice as many
+#: samples [choice].
+MIN_WINDOW_SAMPLES = 64
+#: Speed above which the joint turns [rpm]: where the angle must move with the speed.
+TURNING_RPM = 10.0
+#: Relative agreement asked of an angle's advance over a segment with the integrated speed
+#: (input angle) or with the input angle over the ratio (output angle), plus two counts:
+#: a unit error (rpm for rad/s: 9.5; degrees for rad: 57) or a wrong count per revolution
+#: (by a factor 2 or more) is far outside it; the output's elastic twist changes by a few
+#: arcmin per load step, under 1 % of one input revolution's output angle [choice].
+ANGLE_AGREEMENT = 0.10
+_CHUNK_ROWS = 1_000_000  # CSV rows read at a time (the progress bar's step)
+
+
+def row_name(i: int, fmt: str) -> str:
+    """How messages name row ``i`` (0-based, header not counted): ``row 12 (line 14)``
+    for a CSV, whose line numbers count the header."""
+    return f"row {i} (line {i + 2})" if fmt == "csv" else f"row {i}"
+
+
+def column_name(column: str, key: str) -> str:
+    """How messages name a column: ``column 'x' (key)``, with the mapping key it was
+    given as."""
+    return f"column {column!r} ({key})"
+
+
+def check_file(path: str | os.PathLike, what: str, max_bytes: int) -> Path:
+    """Refuse a path that is not a regular, non-empty file of at most ``max_bytes``.
+
+    Parameters
+    ----------
+    path : path-like
+    what : str
+        The key the file was given as, for the message (``recording``, ``mapping``).
+    max_bytes : int
+        Largest size read [bytes].
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ValueError
+        If it is a folder, a device, a pipe or a socket, is empty, or is larger than
+        ``max_bytes``.
+    """
+    p = Path(path).expanduser()
+    if not p.exists():
+        raise FileNotFoundError(2, f"no {what} file", str(p))
+    st = p.stat()
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a folder" if p.is_dir() else "not a regular file (a device, pipe or socket)"
+        raise ValueError(f"{what} {p}: is {kind}; give a file")
+    if st.st_size == 0:
+        raise ValueError(f"{what} {p}: the file is empty (0 bytes)")
+    if st.st_size > max_bytes:
+        raise ValueError(f"{what} {p}: {st.st_size / 2**20:.1f} MiB, more than the "
+                         f"{max_bytes / 2**20:g} MiB read; split it or write it as Parquet")
+    return p
+
+
+def _header(p: Path, fmt: str) -> list[str]:
+    """The column names of a table, refusing a file that is not one."""
+    import pandas as pd
+
+    try:
+        if fmt == "parquet":
+            import pyarrow.parquet as pq
+
+            return [str(c) for c in pq.ParquetFile(p).schema_arrow.names]
+        return [str(c) for c in pd.read_csv(p, nrows=0, encoding="utf-8-sig").columns]
+    except ImportError as e:
+        raise ValueError(f"recording {p}: reading Parquet needs pyarrow ({e})") from None
+    except (UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as e:
+        raise ValueError(f"recording {p}: not a CSV table (UTF-8 text, one header line, "
+                         f"comma-separated): {str(e).splitlines()[0]}") from None
+    except Exception as e:  # noqa: BLE001 - pyarrow's errors for a file that is not Parquet
+        raise ValueError(f"recording {p}: not a Parquet table ({type(e).__name__}: "
+                         f"{str(e).splitlines()[0] if str(e) else ''})") from None
+
+
+def read_table(path: str | os.PathLike, columns: dict[str, str],
+               max_bytes: int = MAX_TABLE_BYTES, progress: bool = False):
+    """Read the mapped columns of a recording's table, bounded and checked.
+
+    Parameters
+    ----------
+    path : path-like
+        A CSV (``.csv``, ``.txt``) or Parquet (``.parquet``, ``.pq``) file.
+    columns : dict of str to str
+        Column name -> the mapping key it was given as (for messages).
+    max_bytes : int
+        Largest file read (:func:`check_file`).
+    progress : bool
+        A progress bar over the CSV's rows.
+
+    Returns
+    -------
+    (pandas.DataFrame, str)
+        The mapped columns only, and the format (``csv`` or ``parquet``).
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        One line naming the file: not a regular file, empty, too large, of another
+        suffix, not a table, a mapped column missing (named with its key and the columns
+        the table has), or no data row.
+    """
+    import pandas as pd
+    from tqdm.auto import tqdm
+
+    p = check_file(path, "recording", max_bytes)
+    fmt = TABLE_FORMATS.get(p.suffix.lower())
+    if fmt is None:
+        raise ValueError(f"recording {p}: suffix {p.suffix or '(none)'!r}; a table is read "
+                         f"from {', '.join(TABLE_FORMATS)}")
+    have = _header(p, fmt)
+    for col, key in columns.items():
+        if col not in have:
+            hint = ("; the header is one field: is the file separated by ';' or tabs? "
+                    "Write it comma-separated") if len(have) == 1 and len(columns) > 1 else ""
+            shown = ", ".join(have[:20]) + (", ..." if len(have) > 20 else "")
+            raise ValueError(f"recording {p}: column {col!r} ({key}) is missing; the table "
+                             f"has {shown}{hint}")
+    use = list(columns)
+    try:
+        if fmt == "parquet":
+            df = pd.read_parquet(p, columns=use)
+        else:
+            parts = []
+            with tqdm(desc=f"read {p.name}", unit="row", unit_scale=True, delay=2.0,
+                      disable=not progress) as bar:  # shown when reading takes > 2 s
+                for chunk in pd.read_csv(p, usecols=use, encoding="utf-8-sig",
+                                         chunksize=_CHUNK_ROWS, low_memory=False,
+                                         float_precision="round_trip"):
+                    parts.append(chunk)
+                    bar.update(len(chunk))
+            df = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=use)
+    except (UnicodeDecodeError, pd.errors.ParserError) as e:
+        raise ValueError(f"recording {p}: not a table: {str(e).splitlines()[0]}") from None
+    if len(df) == 0:
+        raise ValueError(f"recording {p}: the table has a header but no data row")
+    return df, fmt
+
+
+def numeric(df, column: str, key: str, fmt: str) -> np.ndarray:
+    """A column as finite float64, refusing the first cell that is not.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+    column : str
+    key : str
+        The mapping key the column was given as.
+    fmt : str
+        ``csv`` or ``parquet`` (how rows are named, :func:`row_name`).
+
+    Returns
+    -------
+    ndarray, shape (n_rows,)
+
+    Raises
+    ------
+    ValueError
+        ``column 'x' (key), row i: 'abc' is not a number`` or ``... nan is not finite``.
+    """
+    import pandas as pd
+
+    s = df[column]
+    if s.dtype.kind == "b":
+        raise ValueError(f"column {column!r} ({key}): holds true/false, not numbers")
+    if s.dtype.kind in "fiu":
+        v = s.to_numpy(dtype=np.float64)
+    else:
+        num = pd.to_numeric(s, errors="coerce")
+        bad = np.flatnonzero(num.isna().to_numpy() & s.notna().to_numpy())
+        if bad.size:
+            raise ValueError(f"column {column!r} ({key}), {row_name(int(bad[0]), fmt)}: "
+                             f"{s.iloc[bad[0]]!r} is not a number")
+        v = num.to_numpy(dtype=np.float64)
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size:
+        raise ValueError(f"column {column!r} ({key}), {row_name(int(bad[0]), fmt)}: "
+                         f"{v[bad[0]]} is not a finite number (an empty cell, NaN or "
+                         f"infinity; {bad.size} such row(s))")
+    return v
+
+
+def datetime_seconds(df, column: str, key: str, fmt: str) -> np.ndarray:
+    """A wall-clock column (ISO 8601 text or datetime values) as seconds since its first
+    row, float64, shape (n_rows,).
+
+    Raises
+    ------
+    ValueError
+        Naming the column and the first row that is not a time stamp.
+    """
+    import pandas as pd
+
+    s = df[column]
+    try:
+        ts = pd.to_datetime(s, errors="coerce", utc=True, format="ISO8601") \
+            if s.dtype.kind not in "M" else pd.to_datetime(s, utc=True)
+    except (ValueError, TypeError) as e:
+        raise ValueError(f"column {column!r} ({key}): not time stamps ({e})") from None
+    bad = np.flatnonzero(ts.isna().to_numpy())
+    if bad.size:
+        raise ValueError(f"column {column!r} ({key}), {row_name(int(bad[0]), fmt)}: "
+                         f"{s.iloc[bad[0]]!r} is not a time stamp (ISO 8601, e.g. "
+                         "2025-03-01T12:00:00.0001)")
+    ns = ts.to_numpy(dtype="datetime64[ns]").astype(np.int64)
+    return (ns - ns[0]).astype(np.float64) * 1e-9
+
+
+def check_limit(values: np.ndarray, lo: float, hi: float, column: str, key: str, unit: str,
+                fmt: str, why: str) -> None:
+    """Refuse the first value outside [lo, hi], naming the column, the row and ``why``
+    (what a value there means, e.g. a unit mistaken).
+
+    Raises
+    ------
+    ValueError
+    """
+    bad = np.flatnonzero((values < lo) | (values > hi))
+    if bad.size:
+        i = int(bad[0])
+        raise ValueError(f"column {column!r} ({key}), {row_name(i, fmt)}: {values[i]:g} {unit} "
+                         f"outside [{lo:g}, {hi:g}] {unit}: {why}")
+
+
+def segment_starts(time_s: np.ndarray, clock_s: np.ndarray | None, window_s: float,
+                   names: tuple[str, str], fmt: str) -> np.ndarray:
+    """First rows of the recording's segments (module docstring).
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (n,)
+        Time column [s].
+    clock_s : ndarray, shape (n,), or None
+        The clock [s] (operating hours or wall-clock time); None: the time column.
+    window_s : float
+        Window length [s]: a larger advance of the clock starts a segment.
+    names : (str, str)
+        The time and clock columns as messages name them.
+    fmt : str
+
+    Returns
+    -------
+    ndarray of int, shape (n_segments,)
+        Starting with 0, increasing.
+
+    Raises
+    ------
+    ValueError
+        The clock (or, without one, the time) going back, naming the row.
+    """
+    clock = time_s if clock_s is None else clock_s
+    d = np.diff(clock)
+    back = np.flatnonzero(d < 0)
+    if back.size:
+        i = int(back[0]) + 1
+        what = ("time goes back" if clock_s is None else "the clock goes back")
+        raise ValueError(f"{names[0] if clock_s is None else names[1]}, {row_name(i, fmt)}: "
+                         f"{what} from {clock[i - 1]:.9g} to {clock[i]:.9g} s"
+                         f"{'' if clock_s is None else ' (since the first row)'}; rows must be in "
+                         "recording order" + (" (without a clock column the time column is "
+                                              "the clock)" if clock_s is None else ""))
+    return np.concatenate([[0], np.flatnonzero(d > window_s) + 1]).astype(np.int64)
+
+
+def _inside(n: int, starts: np.ndarray) -> np.ndarray:
+    """Whether step i -> i+1 lies inside a segment, shape (n - 1,)."""
+    new = np.zeros(n, bool)
+    new[starts] = True
+    return ~new[1:]
+
+
+def check_sampling(time_s: np.ndarray, starts: np.ndarray, window_s: float,
+                   rate_hz: float | None, tolerance: float, name: str, fmt: str
+                   ) -> tuple[float, int]:
+    """The sample rate and the samples per window, refusing a time column that does not
+    fit them.
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (n,)
+        [s].
+    starts : ndarray of int
+        Segment starts (:func:`segment_starts`).
+    window_s : float
+        [s].
+    rate_hz : float or None
+        The logger's nominal sample rate [Hz]; None: one over the median step inside the
+        segments.
+    tolerance : float
+        Largest relative deviation of a step from the sample period.
+    name : str
+        The time column as messages name it.
+    fmt : str
+
+    Returns
+    -------
+    (float, int)
+        Sample rate [Hz] and samples per window, ``round(window_s * rate)``.
+
+    Raises
+    ------
+    ValueError
+        Naming the row: time not increasing inside a segment, a gap longer than a window
+        inside a segment, a step off the sample period by more than ``tolerance``; or no
+        two samples in any segment, a median step that contradicts ``rate_hz``, a rate
+        giving fewer than :data:`MIN_WINDOW_SAMPLES` samples per window.
+    """
+    inside = _inside(time_s.size, starts)
+    d = np.diff(time_s)
+    bad = np.flatnonzero(inside & (d <= 0))
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise ValueError(f"{name}, {row_name(i, fmt)}: time goes from {time_s[i - 1]:.9g} to "
+                         f"{time_s[i]:.9g} s inside a segment; it must increase (the clock "
+                         "does not jump there)")
+    steps = d[inside]
+    if steps.size == 0:
+        raise ValueError(f"{name}: no segment holds two samples (the clock jumps at every "
+                         "row?)")
+    median = float(np.median(steps))
+    fs = float(rate_hz) if rate_hz is not None else 1.0 / median
+    if abs(median * fs - 1.0) > tolerance:
+        raise ValueError(f"{name}: the median step is {median:.6g} s ({1 / median:.6g} Hz); "
+                         f"sample_rate_hz={fs:g} Hz says {1 / fs:.6g} s")
+    bad = np.flatnonzero(inside & (np.abs(d * fs - 1.0) > tolerance))
+    if bad.size:
+        i = int(bad[0]) + 1
+        if d[i - 1] > window_s:
+            raise ValueError(f"{name}, {row_name(i, fmt)}: a gap of {d[i - 1]:.6g} s inside a "
+                             f"segment, longer than a window ({window_s:g} s), where the "
+                             "clock does not jump: a new segment begins only where the clock "
+                             "advances by more than a window")
+        raise ValueError(f"{name}, {row_name(i, fmt)}: a step of {d[i - 1]:.6g} s; the sample "
+                         f"rate {fs:.6g} Hz gives {1 / fs:.6g} s within rate_tolerance="
+                         f"{tolerance:g} (irregular sampling: resample the recording first)")
+    n_t = int(round(window_s * fs))
+    if n_t < MIN_WINDOW_SAMPLES:
+        raise ValueError(f"{name}: sample rate {fs:.6g} Hz too low for windows of "
+                         f"{window_s:g} s: {n_t} samples per window, at least "
+                         f"{MIN_WINDOW_SAMPLES}")
+    return fs, n_t
+
+
+def unwrap_segments(phi: np.ndarray, starts: np.ndarray, period: float) -> np.ndarray:
+    """An angle made continuous inside each segment: a step of more than half a
+    ``period`` (a single-turn sensor wrapping) is taken as the wrap. Values whose steps
+    never wrap are returned unchanged, bit for bit.
+
+    Parameters
+    ----------
+    phi : ndarray, shape (n,)
+        Angle [rad or counts].
+    starts : ndarray of int
+        Segment starts.
+    period : float
+        One revolution in the unit of ``phi``.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    d = np.diff(phi)
+    corr = np.where(np.abs(d) > period / 2, -period * np.round(d / period), 0.0)
+    corr[~_inside(phi.size, starts)] = 0.0
+    if not corr.any():
+        return phi.copy()
+    cs = np.concatenate([[0.0], np.cumsum(corr)])
+    seg = np.searchsorted(starts, np.arange(phi.size), side="right") - 1
+    return phi + (cs - cs[starts[seg]])
+
+
+def check_angle_turns(phi: np.ndarray, speed_rpm: np.ndarray, starts: np.ndarray,
+                      resolution: float, name: str, fmt: str) -> None:
+    """Refuse an angle that goes back by more than one count while the speed says the
+    joint turns the other way (:data:`TURNING_RPM`).
+
+    Parameters
+    ----------
+    phi : ndarray, shape (n,)
+        Unwrapped angle [rad].
+    speed_rpm : ndarray, shape (n,)
+        Input speed [rpm].
+    starts : ndarray of int
+    resolution : float
+        One count [rad].
+    name : str
+        The angle column as messages name it.
+    fmt : str
+
+    Raises
+    ------
+    ValueError
+        Naming the row, the step and the speed.
+    """
+    d = np.diff(phi)
+    s = np.sign(speed_rpm[1:])
+    turning = (np.abs(speed_rpm[1:]) >= TURNING_RPM) & (np.sign(speed_rpm[:-1]) == s)
+    bad = np.flatnonzero(_inside(phi.size, starts) & turning & (s * d < -1.01 * resolution))
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise ValueError(f"{name}, {row_name(i, fmt)}: the angle steps by {d[i - 1]:+.6g} rad "
+                         f"while the speed is {speed_rpm[i]:g} rpm (not monotone while the "
+                         "joint turns: a sign convention, a wrapped angle of another period "
+                         "or another column?)")
+
+
+def _segment_sums(x: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """Sum of ``x`` (one value per step, shape (n - 1,)) over each segment's steps."""
+    n = x.size + 1
+    ends = np.append(starts[1:], n) - 1  # last step index + 1 of each segment
+    xp = np.append(x, 0.0)
+    idx = np.ravel(np.column_stack([starts, np.maximum(ends, starts)]))
+    sums = np.add.reduceat(xp, np.minimum(idx, x.size))[::2]
+    return np.where(ends > starts, sums, 0.0)
+
+
+def check_angle_speed(phi: np.ndarray, speed_rpm: np.ndarray, time_s: np.ndarray,
+                      starts: np.ndarray, resolution: float, names: tuple[str, str],
+                      fmt: str) -> None:
+    """Refuse an angle whose advance over a segment disagrees with the integrated speed
+    (:data:`ANGLE_AGREEMENT`); segments in which neither turns one revolution are not
+    judged.
+
+    Parameters
+    ----------
+    phi : ndarray, shape (n,)
+        Unwrapped input angle [rad].
+    speed_rpm, time_s : ndarray, shape (n,)
+    starts : ndarray of int
+    resolution : float
+        One count [rad].
+    names : (str, str)
+        The angle and speed columns as messages name them.
+    fmt : str
+
+    Raises
+    ------
+    ValueError
+        Naming the segment's rows, both advances and what usually causes it.
+    """
+    w = speed_rpm[:-1] * (2 * np.pi / 60.0) * np.diff(time_s)
+    integ = _segment_sums(w, starts)
+    adv = _segment_sums(np.diff(phi), starts)
+    judged = np.maximum(np.abs(integ), np.abs(adv)) >= 2 * np.pi
+    bad = np.flatnonzero(judged & (np.abs(adv - integ) > ANGLE_AGREEMENT * np.abs(integ)
+                                   + 2 * resolution))
+    if bad.size:
+        k = int(bad[0])
+        a = int(starts[k])
+        b = int(starts[k + 1] - 1 if k + 1 < starts.size else phi.size - 1)
+        raise ValueError(f"{names[0]}: over {row_name(a, fmt)} to {row_name(b, fmt)} the angle "
+                         f"advances {adv[k]:.6g} rad, {names[1]} integrates to {integ[k]:.6g} "
+                         f"rad (ratio {adv[k] / integ[k]:.3g}): a unit that cannot be right "
+                         "(the speed in rad/s, the angle in degrees, counts_per_rev, or the "
+                         "angle's sign)")
+
+
+def check_output_angle(phi_out: np.ndarray, phi_in: np.ndarray, starts: np.ndarray,
+                       ratio: float, resolution: float, name: str, fmt: str) -> None:
+    """Refuse an output angle whose advance over a segment is not that of the input angle
+    over ``-ratio`` (a rigid gear: φ_out = −φ_in / N, the convention of
+    :mod:`swgsim.sensing.angles`), within :data:`ANGLE_AGREEMENT`; segments in which the
+    input turns less than one revolution are not judged.
+
+    Raises
+    ------
+    ValueError
+        Naming the segment's rows and both advances.
+    """
+    adv_in = _segment_sums(np.diff(phi_in), starts)
+    adv = _segment_sums(np.diff(phi_out), starts)
+    want = -adv_in / ratio
+    judged = np.abs(adv_in) >= 2 * np.pi
+    bad = np.flatnonzero(judged & (np.abs(adv - want) > ANGLE_AGREEMENT * np.abs(want)
+                                   + 2 * resolution))
+    if bad.size:
+        k = int(bad[0])
+        a = int(starts[k])
+        raise ValueError(f"{name}: over the segment from {row_name(a, fmt)} the output angle "
+                         f"advances {adv[k]:.6g} rad, the input angle over -ratio "
+                         f"({-ratio:g}) gives {want[k]:.6g} rad: a sign convention (the "
+                         "output turns against the input: phi_out = -phi_in / N), "
+                         "counts_per_rev or ratio that cannot be right")
+
+
+def window_starts(starts: np.ndarray, n: int, n_t: int) -> tuple[np.ndarray, np.ndarray]:
+    """First rows of the whole windows of every segment, cut from its first row.
+
+    Returns
+    -------
+    (ndarray of int, ndarray of int), each shape (n_windows,)
+        The windows' first rows, increasing, and their segments.
+    """
+    ends = np.append(starts[1:], n)
+    k = (ends - starts) // n_t
+    seg = np.repeat(np.arange(starts.size), k)
+    within = np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k)
+    return starts[seg] + within * n_t, seg
+
+
+def window_reduce(x: np.ndarray, w0: np.ndarray, n_t: int, how: str = "mean") -> np.ndarray:
+    """Mean, minimum or maximum of ``x`` (shape (n,)) over each window [w0, w0 + n_t),
+    shape (n_windows,)."""
+    ufunc = {"mean": np.add, "min": np.minimum, "max": np.maximum}[how]
+    if w0.size == 0:
+        return np.empty(0)
+    idx = np.ravel(np.column_stack([w0, w0 + n_t]))
+    r = ufunc.reduceat(np.append(x, 0.0), idx)[::2]
+    return r / n_t if how == "mean" else r
+
+
+def thin(hours: np.ndarray, interval_h: float, tolerance_h: float) -> np.ndarray:
+    """Indices of the windows taken: the first, then each first one at least
+    ``interval_h - tolerance_h`` after the last taken (``hours`` increasing).
+
+    Returns
+    -------
+    ndarray of int
+    """
+    if interval_h <= 0:
+        return np.arange(hours.size)
+    taken, i = [], 0
+    while i < hours.size:
+        taken.append(i)
+        i = max(i + 1, int(np.searchsorted(hours, hours[i] + interval_h - tolerance_h)))
+    return np.asarray(taken, dtype=np.int64)
+
+
+def assign_points(mean_rpm: np.ndarray, lo_rpm: np.ndarray, hi_rpm: np.ndarray,
+                  mean_nm: np.ndarray, points: np.ndarray, tol_rpm: float, tol_nm: float
+                  ) -> np.ndarray:
+    """Each window's declared operating point, or -1 (outside every one).
+
+    A window is at point (n, T) when its mean speed and mean torque lie within the
+    tolerances of it and its lowest and highest speed within the speed tolerance (a
+    steady window); the points' tolerance boxes do not overlap (checked with the mapping).
+
+    Parameters
+    ----------
+    mean_rpm, lo_rpm, hi_rpm : ndarray, shape (n_windows,)
+        Mean, lowest and highest input speed of each window [rpm].
+    mean_nm : ndarray, shape (n_windows,)
+        Mean output torque [N m].
+    points : ndarray, shape (P, 2)
+        Declared (n_in_rpm, t_out_nm).
+    tol_rpm, tol_nm : float
+        Tolerances [rpm], [N m].
+
+    Returns
+    -------
+    ndarray of int, shape (n_windows,)
+    """
+    out = np.full(mean_rpm.size, -1, dtype=np.int64)
+    for k, (n, t) in enumerate(points):
+        at = ((np.abs(mean_rpm - n) <= tol_rpm) & (np.abs(mean_nm - t) <= tol_nm)
+              & (np.abs(lo_rpm - n) <= tol_rpm) & (np.abs(hi_rpm - n) <= tol_rpm))
+        out[at] = k
+    return out
+
+
+def content_hash(ds) -> str:
+    """SHA-256 of a shard's float32 signals and its other variables in sorted order (as a
+    life shard's, :func:`swgsim.datasets.life.simulate_life_shard`)."""
+    h = hashlib.sha256(ds["strain_signal"].values.tobytes())
+    for k in sorted(v for v in ds.data_vars if v != "strain_signal"):
+        v = ds[k].values
+        h.update(np.ascontiguousarray(v.astype(str) if v.dtype.kind in "OU" else v).tobytes())
+    return h.hexdigest()
+
+
+def stream_table(ds) -> tuple[Any, dict]:
+    """The table a burst logger would record of a stream, and the mapping that imports it
+    back (:func:`swgsim.datasets.recordings.import_recording`): an example of the format,
+    and the round trip's test.
+
+    Each window is a burst of its samples: ``time_s`` [s] the window's hour in seconds
+    plus the time in it, ``hours`` the window's hour (constant in the burst, the clock),
+    the bridges ``s0``..``s4`` [mV/V], ``n_in_rpm`` and ``t_out_nm`` the window's acting
+    means, ``p_in_w`` (100 W) and ``p_out_w`` (100 W times the efficiency; only where
+    every efficiency is finite), the angles ``phi_in`` and ``phi_out`` [rad] and
+    ``temperature_c`` where the stream has them.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A stream of one gear (a life: ``hour``, ``commissioning``).
+
+    Returns
+    -------
+    (pandas.DataFrame, dict)
+        The table, one row per sample, and the mapping as plain data: the stream's
+        operating points, commissioning period, window, interval, sample rate and gear.
+    """
+    import json
+
+    import pandas as pd
+
+    from swgsim.datasets.schema import SENSORS
+    from swgsim.sensing.angles import InputAngleSensor
+
+    sig = ds["strain_signal"].values  # (n_w, 5, n_t)
+    n_w, _, n_t = sig.shape
+    fs = float(ds.attrs["sample_rate_hz"])
+    hour = ds["hour"].values.astype(float)
+
+    def rep(v) -> np.ndarray:
+        return np.repeat(np.asarray(v), n_t)
+
+    cols = {"time_s": (hour[:, None] * 3600.0 + np.arange(n_t) / fs).ravel(),
+            "hours": rep(hour), **{s: sig[:, i, :].ravel() for i, s in enumerate(SENSORS)},
+            "n_in_rpm": rep(ds["n_in_mean_rpm"].values),
+            "t_out_nm": rep(ds["t_out_mean_nm"].values)}
+    comm = ds["commissioning"].values.astype(bool)
+    pts = np.unique(np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1), axis=0)
+    mapping: dict[str, Any] = {
+        "time": "time_s", "clock": {"column": "hours", "unit": "h"},
+        "operating_points": {"points": pts.tolist()},
+        "commissioning_h": float((hour[~comm][0] if (~comm).any() else hour[-1] + 1.0) - hour[0]),
+        "gear": int(ds["gear"].values[0]), "window_s": n_t / fs, "sample_rate_hz": fs,
+        "interval_min": float(np.median(np.diff(hour)) * 60.0) if n_w > 1 else 0.0}
+    eff = ds["efficiency"].values
+    if np.isfinite(eff).all():
+        cols.update(p_in_w=np.full(n_w * n_t, 100.0), p_out_w=rep(100.0 * eff))
+        mapping["power"] = {"input": "p_in_w", "output": "p_out_w"}
+    angles = (json.loads(ds.attrs.get("config", "{}")).get("profile") or {}).get("angles") or {}
+    if "phi_in_meas" in ds:
+        cols["phi_in"] = ds["phi_in_meas"].values.ravel()
+        mapping["input_angle"] = {"column": "phi_in", "counts_per_rev": int(
+            angles.get("input_counts_per_rev") or InputAngleSensor().counts_per_rev)}
+    if "phi_out_meas" in ds:
+        cols["phi_out"] = ds["phi_out_meas"].values.ravel()
+        mapping["output_angle"] = {"column": "phi_out",
+                                   "counts_per_rev": 2 ** int(angles["output_encoder_bits"])}
+    if "temperature_c" in ds:
+        cols["temperature_c"] = rep(ds["temperature_c"].values)
+        mapping["temperature"] = "temperature_c"
+    return pd.DataFrame(cols), mapping
