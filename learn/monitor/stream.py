@@ -186,7 +186,7 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
         if not alarms or alarms[-1].fault != al.fault:  # the same fault again: one alarm
             alarms.append(al)
     fault = ds["fault"].values.astype(str)
-    on = np.flatnonzero(fault != "healthy")
+    on = np.flatnonzero((fault != "healthy") & (fault != "unknown"))  # a recording: unknown
     return StreamResult(tr, alarms, advisories(tr, mon), n_c,
                         float(hours[on[0]]) if on.size else None,
                         str(fault[on[0]]) if on.size else None)

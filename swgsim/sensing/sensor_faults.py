@@ -84,6 +84,38 @@ SEVERITIES: dict[str, tuple[float, ...]] = {
 }
 
 
+def register_sensor_fault(fault: SensorFault, severities: tuple[float, float]) -> SensorFault:
+    """Add a sensor fault to :data:`SENSOR_FAULTS`, with its mild and severe severity of
+    the monitor's evaluation (:data:`SEVERITIES`).
+
+    Parameters
+    ----------
+    fault : SensorFault
+        Named ``sensor_<...>``; ``apply(x, severity)`` acts on one bridge's samples.
+    severities : (float, float)
+        Mild and severe, inside ``fault.severity_range``.
+
+    Returns
+    -------
+    SensorFault
+
+    Raises
+    ------
+    ValueError
+        A name taken or not starting with ``sensor_``, or severities outside the range.
+    """
+    if fault.name in SENSOR_FAULTS or not fault.name.startswith("sensor_"):
+        raise ValueError(f"sensor fault {fault.name!r}: the name must start with 'sensor_' "
+                         "and not be registered yet")
+    lo, hi = fault.severity_range
+    if len(severities) != 2 or not all(lo <= s <= hi for s in severities):
+        raise ValueError(f"sensor fault {fault.name!r}: severities {severities} must be two "
+                         f"values in [{lo}, {hi}]")
+    SENSOR_FAULTS[fault.name] = fault
+    SEVERITIES[fault.name] = tuple(float(s) for s in severities)
+    return fault
+
+
 def is_sensor_fault(name: str) -> bool:
     """Whether ``name`` is a registered sensor fault."""
     return name in SENSOR_FAULTS
@@ -121,4 +153,5 @@ def apply_sensor_fault(x: np.ndarray, name: str, severity: np.ndarray | float,
 
 
 __all__ = ["SENSOR_FAULTS", "SEVERITIES", "SensorFault", "apply_sensor_fault",
+           "register_sensor_fault",
            "is_sensor_fault"]

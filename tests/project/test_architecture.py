@@ -145,3 +145,65 @@ def test_the_checker_finds_a_planted_cycle_and_a_floor_breach(tmp_path):
     assert import_graph.cycles(g) == [["swgsim.gear.a", "swgsim.gear.b"]]
     um, ud = unit("swgsim.gear.c"), unit("swgsim.datasets.plan")
     assert ud[1] >= um[1] and ud[0] != um[0]
+
+
+# ------------------------------------------------------------- the architecture page
+DOC = ROOT / "docs" / "ARCHITECTURE.md"
+
+
+def _apps() -> set[str]:
+    import tomllib
+
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    return set(scripts)
+
+
+def _presets() -> set[str]:
+    return {f.stem for f in (ROOT / "conf" / "dataset").glob("*.yaml")}
+
+
+def test_architecture_names_every_app_and_preset():
+    import re
+
+    text = DOC.read_text(encoding="utf-8")
+    named_apps = set(re.findall(r"`(swgsim-[a-z]+)`", text))
+    assert _apps() - named_apps == set(), "apps missing from docs/ARCHITECTURE.md"
+    presets = text.split("Data-set presets (`conf/dataset/`):", 1)[1].split("\n\n", 1)[0]
+    listed = set(re.findall(r"`([a-z_]+)`", presets))
+    assert listed == _presets()
+
+
+def test_everything_the_architecture_names_exists():
+    import re
+
+    text = DOC.read_text(encoding="utf-8")
+    missing = [p for p in re.findall(r"`((?:swgsim|learn|swgcal|swgcli|tests|scripts)/"
+                                     r"[\w/]+\.py)`", text) if not (ROOT / p).is_file()]
+    for pkg, rows in (("swgsim", r"\| `((?:base|files|gear|sensing|datasets)/[\w/]+\.py)`"),):
+        missing += [f"{pkg}/{m}" for m in re.findall(rows, text)
+                    if not (ROOT / pkg / m).is_file()]
+    table = text.split("### `learn/`", 1)[1].split("### `swgcli/`", 1)[0]
+    pkg = None
+    for line in table.splitlines():
+        cells = [c.strip() for c in line.split("|")[1:-1]]
+        if len(cells) < 3 or cells[0].startswith("---") or cells[0] == "package":
+            continue
+        pkg = cells[0].strip("`/") or pkg
+        missing += [f"learn/{pkg}/{m}" for m in re.findall(r"`(\w+\.py)`", cells[1])
+                    if not (ROOT / "learn" / pkg / m).is_file()]
+    dotted = re.findall(r"`((?:swgsim|learn|swgcal)(?:\.\w+)+)`", text)
+    import importlib
+
+    for d in dotted:
+        parts = d.split(".")
+        for k in range(len(parts), 0, -1):  # the longest module prefix, then attributes
+            try:
+                obj = importlib.import_module(".".join(parts[:k]))
+            except ImportError:
+                continue
+            for a in parts[k:]:
+                obj = getattr(obj, a, None)
+            if obj is None:
+                missing.append(d)
+            break
+    assert missing == []
