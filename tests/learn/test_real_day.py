@@ -1,0 +1,81 @@
+"""The monitor through a real joint's day (preset tiny_real_day: daily warm-ups, the hall
+warming, run-in, a heavier tool, the bridges' drift, a temperature sensor): no gear-fault
+alarm on the healthy gear, the changes that leave commissioning's range advised, and a
+fault under them still found and named (learn/monitor/normal.py)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from learn.monitor.rule import RuleConfig
+from learn.monitor.stream import monitor_stream
+from learn.monitor.study import MonitorStudyConfig
+from learn.monitor.training import train_model
+from swgcli import dataset_preset
+from swgsim.datasets.config import dataset_config
+from swgsim.datasets.generate import generate
+from swgsim.datasets.plan import plan
+from swgsim.datasets.records import record_bank
+from swgsim.datasets.schedule import FaultOnset
+from swgsim.datasets.schema import load
+
+
+@pytest.fixture(scope="module")
+def model():
+    """The diagnosis model trained on gears 1 and 2 of the tiny bench at the preset's three
+    loads, healthy and with an eccentric WG (as the monitor's evaluation trains it)."""
+    cfg = dataset_preset("tiny_real_day")
+    cfg["gears"] = dataset_preset("tiny_bench")["gears"][:2]
+    cfg["life"] = None
+    p = plan(dataset_config(cfg))
+    study = MonitorStudyConfig(commissioning_h=4.0, train_healthy_h=2.0, train_fault_h=0.5,
+                               train_variants=1, faults=["eccentric_wg"], nuisances={},
+                               interval_min=2.0)
+    return train_model(p, {g: record_bank(p, g) for g in (1, 2)}, [1, 2], study)
+
+
+@pytest.fixture(scope="module")
+def healthy(tmp_path_factory):
+    """The preset's healthy gear through its real day, as a stream on disk."""
+    return _stream(tmp_path_factory.mktemp("healthy"))
+
+
+def _stream(tmp_path, fault: FaultOnset | None = None):
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    if fault is not None:
+        cfg = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, fault=fault))
+    generate(cfg, tmp_path / "day", progress=False)
+    return load(tmp_path / "day")
+
+
+def test_a_healthy_real_day_raises_no_gear_fault_alarm(model, healthy):
+    ds = healthy
+    t = ds["temperature_c"].values
+    assert t.max() - t.min() > 20.0  # warm-ups and the hall: the day is not flat
+    res = monitor_stream(ds, model, RuleConfig(), source="day")
+    assert res.alarms == []
+    kinds = {a["condition"] for a in res.advisories}
+    assert "load" in kinds  # the heavier tool from 36 h is advised, not alarmed
+    assert all(a["hour"] >= 24.0 for a in res.advisories)  # none inside commissioning
+    assert [e["kind"] for e in res.events()] == ["advisory"] * len(res.advisories)
+
+
+def test_a_fault_under_the_real_day_is_found_and_named(model, tmp_path):
+    ds = _stream(tmp_path, FaultOnset("eccentric_wg", 40.0, 0.1))
+    res = monitor_stream(ds, model, RuleConfig(), source="day")
+    assert res.alarms, "the eccentric WG under the real day was not found"
+    first = res.alarms[0]
+    assert 40.0 <= first.hour <= 41.0 and first.fault == "eccentric_wg"
+
+
+def test_temperature_outside_its_range_is_refused_naming_the_window(model, healthy):
+    ds = healthy.copy(deep=True)
+    ds["temperature_c"].values[100] = np.nan
+    with pytest.raises(ValueError, match="temperature_c of window 100 is nan"):
+        monitor_stream(ds, model, RuleConfig(), source="day")
+    ds["temperature_c"].values[100] = 400.0
+    with pytest.raises(ValueError, match=r"window 100 is 400 °C; allowed: finite, in \[-40"):
+        monitor_stream(ds, model, RuleConfig(), source="day")
