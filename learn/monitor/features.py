@@ -6,7 +6,7 @@ every fault of Table I changes these amplitudes or the offset), with eq. (10)'s
 sub-harmonics of orders 1/4, 1/3 and 1/2 fitted alongside and dropped:
 
 * the offset c0 [mV/V] (eccentric WG: offsets of the WG-bending pair; sensor offsets),
-* the amplitudes |c_h|, h = 1..H [mV/V] (phase-free: windows start at arbitrary angles),
+* the amplitudes ``|c_h|``, h = 1..H [mV/V] (phase-free: windows start at arbitrary angles),
 * log10 of the RMS of what the series leaves [mV/V] (tip crack: short deviations),
 
 and the window's efficiency (mean P_out / mean P_in; reduced damping). The basis is built
