@@ -146,7 +146,8 @@ def twist_features(twist: np.ndarray) -> np.ndarray:
     Under a load the twist is the torque over the torsional stiffness (paper eq. (3),
     k1 δ + k2 δ³): a stiffness loss raises the mean twist at the same operating point in
     proportion (k1 −25 %: +33 %), which the gauges' torque ripple shows only as r²/(1 − r²)
-    below the torsional mode (README, "what a monitor needs to see stiffness").
+    below the torsional mode (docs/results/observability.md, "what a monitor needs to see
+    stiffness").
 
     Parameters
     ----------

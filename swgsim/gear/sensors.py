@@ -82,7 +82,7 @@ class TolerancesConfig:
     Attributes
     ----------
     sd_theta_deg : float
-        Gauge angle [deg] (0.3, README *Design choices*; unverified).
+        Gauge angle [deg] (0.3, docs/simulation.md *Design choices*; unverified).
     sd_r_mm : float
         Gauge radius [mm].
     sd_beta_deg : float
