@@ -80,12 +80,16 @@ def _toc_entries(marker: str) -> str:
 def _fill_markers(app, docname: str, source: list[str]) -> None:
     """Toctree markers (a line ``@NAME@``) replaced by the pages of this checkout; links
     to the repository's README (``../README.md``, read on GitHub) to the site's front
-    page, which says what the README says."""
+    page, which says what the README says; links to a stand-in page to the page it
+    stands in for, when that is present."""
     if docname in MARKED:
         source[0] = re.sub(r"^@(\w+)@$", lambda m: _toc_entries(m[1]), source[0],
                            flags=re.M)
     if "/" not in docname:
         source[0] = source[0].replace("](../README.md)", "](index.md)")
+    for doc, standin in OPTIONAL_PAGES.items():  # links to a stand-in go to the page itself
+        if standin and _present(doc):
+            source[0] = source[0].replace(f"{standin}.md)", f"{doc}.md)")
 
 
 # ------------------------------------------------------------------------------ MyST
