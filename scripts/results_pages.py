@@ -346,7 +346,7 @@ def rebuild(rep: Path, pages: Path, commit: str) -> tuple[dict[Path, str], list[
         texts[page] = BLOCK_RE.sub(
             lambda m, b=b, body=body: (m["begin"] + body + m["end"]) if m["name"] == b.name
             else m[0], texts[page])
-        notes.append(f"{b.name}: rebuilt from {', '.join(b.sources)}")
+        notes.append(f"{b.name}: from {', '.join(b.sources)}")
     return texts, notes
 
 
