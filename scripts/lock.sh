@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Refresh requirements-lock.txt: every package that scripts/quickstart.sh installs (the
-# dependencies and the `dev` extra of pyproject.toml, torch's CPU wheel among them), each
-# pinned with its sha256 hashes (pip-tools' pip-compile --generate-hashes, Python 3.11).
+# dependencies and the `dev` and `docs` extras of pyproject.toml, torch's CPU wheel among
+# them), each pinned with its sha256 hashes (pip-tools' pip-compile --generate-hashes,
+# Python 3.11).
 # pyproject.toml keeps its ranges for library users; this file is for the set-up.
 #   bash scripts/lock.sh                  # keep the current pins where pyproject.toml allows
 #   bash scripts/lock.sh --upgrade        # the newest releases pyproject.toml allows
@@ -20,7 +21,7 @@ trap 'rm -rf "$tools"' EXIT
 "$py" -m venv "$tools/venv"
 "$tools/venv/bin/python" -m pip install -q "pip==26.3" "pip-tools==7.6.2" 2>/dev/null
 CUSTOM_COMPILE_COMMAND="bash scripts/lock.sh" "$tools/venv/bin/pip-compile" -q \
-    --extra dev --generate-hashes --allow-unsafe --strip-extras \
+    --extra dev --extra docs --generate-hashes --allow-unsafe --strip-extras \
     --no-emit-index-url --no-emit-find-links \
     --output-file requirements-lock.txt "$@" pyproject.toml \
     2> >(grep -v "is ignored: it is neither a file nor a directory" >&2)

@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# Set up .venv at the repo root if needed, then run the main job or the tests.
+# Set up .venv at the repo root if needed, then run the main job, the tests or the docs.
 #   bash scripts/quickstart.sh main [hydra overrides...]   # the paper's full study
 #   bash scripts/quickstart.sh test [pytest args...]       # the test suite
+#   bash scripts/quickstart.sh docs [sphinx-build args...] # the documentation site: offline,
+#                                                          # warnings as errors, written to
+#                                                          # docs/_build/html
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -32,5 +35,10 @@ what="${1:-}"
 case "$what" in
     main) exec .venv/bin/swgsim-paper "$@" ;;
     test) exec .venv/bin/python -m pytest "$@" ;;
-    *) echo "usage: bash scripts/quickstart.sh {main|test} [args...]" >&2; exit 2 ;;
+    # the API pages and the gallery are generated anew each time (docs/api,
+    # docs/auto_examples); the examples run on the tiny presets
+    docs) rm -rf docs/_build docs/api docs/auto_examples docs/sg_execution_times.rst
+          MPLBACKEND=Agg exec .venv/bin/python -m sphinx -b html -W --keep-going -q \
+              "$@" docs docs/_build/html ;;
+    *) echo "usage: bash scripts/quickstart.sh {main|test|docs} [args...]" >&2; exit 2 ;;
 esac

@@ -385,7 +385,7 @@ def fit_terms(
         Per term: hold its nonlinear parameters at the (first) start instead of
         optimising them (the linear coefficients of all terms are always refitted).
     max_rel_se : float, default 0.5
-        Flag a reported parameter whose standard error exceeds this fraction of |value|.
+        Flag a reported parameter whose standard error exceeds this fraction of ``|value|``.
     max_abs_corr : float, default 0.98
         Note a reported parameter whose correlation with another exceeds this.
     uncertainty : bool, default True

@@ -25,8 +25,8 @@ __all__ = ["FitTerm"]
 class FitTerm(Term):
     """A :class:`swgsim.gear.terms.Term` with what its fit needs. Subclass and override.
 
-    Class attributes
-    ----------------
+    Attributes
+    ----------
     repeatable : int
         How many instances a model may hold (1: once).
     signature : str

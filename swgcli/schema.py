@@ -11,15 +11,15 @@ decided (:func:`swgsim.datasets.plan.plan`, the learners, the calibration).
 The config groups whose defaults live in Python are generated here from their one
 source, not written twice as YAML:
 
-=============  =====================================================================
-group          source
-=============  =====================================================================
-``protocol``   :data:`learn.studies.protocols.PROTOCOLS` (the paper's four protocols)
-``model``      :data:`learn.learners.models.MODELS` (Table VI); deep models stay YAML
-``features``   :data:`learn.inputs.features.SELECTIONS` (Table III selections)
-``experiment`` ``table_vii`` .. ``table_x`` from :data:`learn.studies.tables.PAPER_TABLES`
-``dataset``    :class:`swgsim.datasets.config.DatasetConfig` (the paper preset is its defaults)
-=============  =====================================================================
+==============  =====================================================================
+group           source
+==============  =====================================================================
+``protocol``    :data:`learn.studies.protocols.PROTOCOLS` (the paper's four protocols)
+``model``       :data:`learn.learners.models.MODELS` (Table VI); deep models stay YAML
+``features``    :data:`learn.inputs.features.SELECTIONS` (Table III selections)
+``experiment``  ``table_vii`` .. ``table_x`` from :data:`learn.studies.tables.PAPER_TABLES`
+``dataset``     :class:`swgsim.datasets.config.DatasetConfig` (the paper preset is its defaults)
+==============  =====================================================================
 """
 
 from __future__ import annotations

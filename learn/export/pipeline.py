@@ -84,7 +84,7 @@ def _phi(tables: ref.StageTables, op: np.ndarray) -> np.ndarray:
 
 
 def feature_error(feats32: np.ndarray, feats64: np.ndarray, n_harmonics: int) -> dict:
-    """Largest |reference − monitor least squares| per feature kind (offset and
+    """Largest ``|reference − monitor least squares|`` per feature kind (offset and
     amplitudes [mV/V], log10 residual RMS [-], efficiency)."""
     d = np.abs(feats32.astype(float) - feats64)
     k = np.arange(d.shape[1] - 1) % (n_harmonics + 2)

@@ -88,14 +88,14 @@ def n_basis(n_harmonics: int = N_HARMONICS) -> int:
 
 
 def sincos32(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """cos a, sin a in float32 as the C computes them (quadrant reduction to |r| ≤ π/4,
+    """cos a, sin a in float32 as the C computes them (quadrant reduction to ``|r| ≤ π/4``,
     Taylor polynomials to r⁸ / r⁹: error below 3e-8 on the reduced angle, plus the
     rounding of a itself).
 
     Parameters
     ----------
     a : ndarray of float32
-        Angles [rad], |a| < 2^13 π / 2.
+        Angles [rad], ``|a| < 2^13 π / 2``.
 
     Returns
     -------

@@ -18,7 +18,7 @@ selection  features                                                    count (K=
 1          m_rel(s0..s4), var_rel(s0..s4), eta_rel                     11
 2          selection 1 + DFT_rel of each zero-mean s0..s4              11 + 5 K
 3          DFT_rel of zero-mean ds13 = s1 - s3 and ds24 = s2 - s4,     2 K + 1
-           eta2_rel = |1 - eta_rel|^(1/4) (eq. 9)
+           ``eta2_rel = |1 - eta_rel|^(1/4)`` (eq. 9)
 =========  ==========================================================  ===========
 
 DFT: the amplitude spectrum of the Hann-windowed zero-mean signal at orders of the input
@@ -514,7 +514,7 @@ def feature_spread(feats: Features) -> pd.DataFrame:
     pandas.DataFrame
         One row per (fault, feature), over the class's clean (undisturbed) windows of
         every gear and operating point: ``fault``, ``feature``, ``median``, ``std``,
-        ``shift`` (median over the windows of |x − median of the healthy windows|) and
+        ``shift`` (median over the windows of ``|x − median|`` of the healthy windows) and
         ``n`` (windows). A healthy ``std`` of 0 means every healthy window has the same
         value (phase-locked, noise-free windows). Empty without healthy windows.
     """

@@ -215,7 +215,7 @@ def efficiency_features(ds, samples: np.ndarray, refs: np.ndarray) -> np.ndarray
     Returns
     -------
     ndarray, float64, shape (n, 2)
-        Columns: |1 - η/η_ref|^(1/4), η/η_ref - 1 [-].
+        Columns: ``|1 - η/η_ref|^(1/4)``, ``η/η_ref - 1`` [-].
     """
     eta = np.asarray(ds["efficiency"].values, dtype=np.float64)
     rel = eta[samples] / eta[refs]
@@ -455,7 +455,7 @@ def align_phase(cw: np.ndarray, cr: np.ndarray, channels=(1, 2, 3, 4),
                 n_newton: int = 6) -> np.ndarray:
     """ψ-shift δ of each window against its reference.
 
-    Minimises sum_{c, h >= 1} |cw[c, h] - cr[c, h] e^{i h δ}|^2 over ``channels``.
+    Minimises ``sum_{c, h >= 1} |cw[c, h] - cr[c, h] e^{i h δ}|^2`` over ``channels``.
 
     Parameters
     ----------

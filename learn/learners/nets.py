@@ -166,8 +166,8 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
     """Base of the torch classifiers; subclasses add architecture arguments and
     :meth:`_build_module`. See the module docstring for the input convention.
 
-    Common parameters
-    -----------------
+    Parameters
+    ----------
     n_aux : int
         Trailing scalar channels of a 3-D input.
     max_epochs : int

@@ -6,7 +6,7 @@ every fault of Table I changes these amplitudes or the offset), with eq. (10)'s
 sub-harmonics of orders 1/4, 1/3 and 1/2 fitted alongside and dropped:
 
 * the offset c0 [mV/V] (eccentric WG: offsets of the WG-bending pair; sensor offsets),
-* the amplitudes |c_h|, h = 1..H [mV/V] (phase-free: windows start at arbitrary angles),
+* the amplitudes ``|c_h|``, h = 1..H [mV/V] (phase-free: windows start at arbitrary angles),
 * log10 of the RMS of what the series leaves [mV/V] (tip crack: short deviations),
 
 and the window's efficiency (mean P_out / mean P_in; reduced damping). The basis is built
@@ -146,7 +146,8 @@ def twist_features(twist: np.ndarray) -> np.ndarray:
     Under a load the twist is the torque over the torsional stiffness (paper eq. (3),
     k1 δ + k2 δ³): a stiffness loss raises the mean twist at the same operating point in
     proportion (k1 −25 %: +33 %), which the gauges' torque ripple shows only as r²/(1 − r²)
-    below the torsional mode (README, "what a monitor needs to see stiffness").
+    below the torsional mode (docs/results/observability.md, "what a monitor needs to see
+    stiffness").
 
     Parameters
     ----------

@@ -174,10 +174,10 @@ def _inputs(sim: LifeSimulator, start: int, stop: int, refs: References, kinds: 
 def train_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
                     cfg: MonitorStudyConfig, names: list[str], seed: int = 0
                     ) -> list[WindowClassifier]:
-    """The per-window detectors ``names`` (keys of :data:`learn.monitor.detectors.
-    DETECTORS`) trained on the windows the diagnosis model is trained on
-    (:func:`train_model`), each against its gear's references, as many of each class
-    (:func:`_balanced`)."""
+    """The per-window detectors ``names`` (keys of
+    :data:`learn.monitor.detectors.DETECTORS`) trained on the windows the diagnosis model
+    is trained on (:func:`train_model`), each against its gear's references, as many of
+    each class (:func:`_balanced`)."""
     if not names:
         return []
     kinds = {DETECTORS[b].input for b in names}

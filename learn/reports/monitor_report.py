@@ -2,8 +2,8 @@
 
 ``table.md``: per data set, detector, fault and severity: detection rate, median and
 95th-percentile time to detect [min], isolation at the alarm and one hour after (share of
-detected lives named correctly), severity error (median |estimate − true severity at the
-alarm|) and, per fault, the smallest severity detected in every life; then false alarms
+detected lives named correctly), severity error (median ``|estimate − true severity|`` at
+the alarm) and, per fault, the smallest severity detected in every life; then false alarms
 per 1000 h per held-out gear. Figures: time to detect against severity per fault, and
 false-alarm rate against time to detect per detector.
 """

@@ -145,7 +145,7 @@ def scorecard(cells: pd.DataFrame, column: str = "ours") -> pd.DataFrame:
     -------
     pandas.DataFrame
         One row per table in :data:`SCORED_TABLES`: ``cells`` (number of paper cells),
-        ``within_3``, ``within_5``, ``within_10`` (cells with |ours − paper| <= band),
+        ``within_3``, ``within_5``, ``within_10`` (cells with ``|ours − paper| <= band``),
         ``mad`` (mean absolute deviation over the cells with a score [points]) and
         ``missing`` (cells without a score).
     """

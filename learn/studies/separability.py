@@ -1,12 +1,12 @@
 """How far each fault class lies from the healthy gear in the simulated signals.
 
 For every gear and operating point, each window is reduced to phase-invariant numbers:
-the amplitudes |c_h| of the harmonics h = 0..H of the wave-generator angle in every
+the amplitudes ``|c_h|`` of the harmonics h = 0..H of the wave-generator angle in every
 bridge (least-squares fit, :func:`learn.inputs.signals.harmonic_coefficients`; for disturbed
 windows the disturbance's sub-harmonics fitted and dropped) and the efficiency η. The
 healthy windows of that gear and operating point (copies that differ only in their start
 angle and noise) give a mean and a spread per number; a window's separation is the
-largest |x - mean| / spread over the numbers. A class whose windows stay within a few
+largest ``|x - mean| / spread`` over the numbers. A class whose windows stay within a few
 spreads of the healthy cloud cannot be told from a healthy gear by any classifier of
 these data.
 
@@ -57,7 +57,7 @@ def separation_records(ds, disturbed: bool = False, n_harmonics: int = 8,
         One row per window of a (gear, operating point) with at least three healthy
         windows: ``sample``, ``gear``, ``fault``, ``variant``, ``severity``, ``n_in_rpm``,
         ``t_out_nm`` and ``z``, the max over the (5 (H + 1) + 1) numbers of
-        |x - mean_healthy| / std_healthy [-]; healthy windows leave-one-out.
+        ``|x - mean_healthy| / std_healthy`` [-]; healthy windows leave-one-out.
 
     Raises
     ------

@@ -7,7 +7,7 @@ and the target ``tau_friction_Nm`` [N m]. Sampling may be irregular.
 
 The recording becomes the signals of the friction terms
 (:class:`swgsim.gear.friction.FrictionSignals`, smooth-sign velocity v_s by default 1 % of
-the 99th percentile of |q̇|, so that least squares is well posed); the base model is the
+the 99th percentile of ``|q̇|``, so that least squares is well posed); the base model is the
 paper's law on the joint (:class:`swgsim.gear.friction.PaperLaw`).
 """
 
@@ -100,7 +100,7 @@ class FrictionRecording:
         ----------
         v_s : float, optional
             Smooth-sign velocity [rad/s]; default ``v_s_rel`` times the 99th percentile
-            of |q̇|.
+            of ``|q̇|``.
         v_s_rel : float, default 0.01
         gear_ratio : float, optional
             Reduction ratio N of the strain wave gear (wave-generator turns per output
@@ -394,7 +394,7 @@ def velocity_consistency(t_s: np.ndarray, q_rad: np.ndarray,
     the angle integrates back to it.)
 
     ``shape`` is normalised by the geometric mean of both excursions, so that a
-    velocity (or angle) scaled by k gives |1 − k| / √k whichever column is wrong (k = 2
+    velocity (or angle) scaled by k gives ``|1 − k| / √k`` whichever column is wrong (k = 2
     or 1/2: 0.71, k = 180/π: 7.4), a sign error 2 and an unrelated column at least √2;
     ``offset`` catches what the drift could absorb (on an angle ramp, a wrong scale or
     sign is all drift).

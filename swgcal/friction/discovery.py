@@ -10,18 +10,18 @@ load when recorded):
 * *ripples over the joint angle* at free periods, the strongest lines of the residual's
   periodogram over q and of the residual times sgn(q̇) (a ripple of the friction level
   changes sign with the direction of motion), with harmonics; columns cos, sin of
-  2π h q / P, plain and times sgn(q̇) (friction-level ripple), each also times |q̇| / v_ref
+  2π h q / P, plain and times sgn(q̇) (friction-level ripple), each also times ``|q̇| / v_ref``
   and the load (an amplitude that grows with speed or load). With the gear ratio N
   the period is also quoted as the wave-generator order k = 2π / (P N)
   (:func:`~swgsim.gear.friction.ripples.wave_generator_order`);
 * *tones in time* at fixed frequencies (the strongest lines of the residual's spectrum
   over t: a vibration or a hidden periodic process, not periodic in q), with harmonics,
-  plain and times |q̇| / v_ref;
+  plain and times ``|q̇| / v_ref``;
 * *load*: sgn(q̇) · load and q̇ · load (friction level and viscous friction growing with
   the load; only when a load column is recorded);
 * *slow trends in time*: Legendre P1-P3 of the normalised time (an offset that drifts)
   and sgn(q̇) times P1, P2 (a friction level that drifts);
-* *velocity law*: sgn(q̇) |q̇ / v_ref|^p (p = 0.5, 1.5, 2: a viscous law other than the
+* *velocity law*: ``sgn(q̇) |q̇ / v_ref|^p`` (p = 0.5, 1.5, 2: a viscous law other than the
   paper's q̇ and q̇³) and *acceleration*: q̈ (an inertia-like term).
 
 The nuisance is the final model's linear design at its fitted nonlinear parameters
@@ -190,7 +190,7 @@ def _tone_group(key: str, kind: str, freq: float, x: np.ndarray, harmonics: Sequ
 @dataclass(frozen=True)
 class _Rows:
     """The friction signals on the basis rows (fit and validation rows together), the
-    modulators of the candidate columns (``mods``: |q̇| / v_ref, and the load when it
+    modulators of the candidate columns (``mods``: ``|q̇| / v_ref``, and the load when it
     varies) and their (lowest, mean on the fit rows, highest) values."""
 
     n: int
@@ -228,7 +228,7 @@ def _basis_rows(sig: Any, rows: np.ndarray, fit: np.ndarray) -> _Rows:
 def _angle_ripple_groups(b: _Rows, r0: np.ndarray, n_peaks: int,
                          harmonics: Sequence[int]) -> list[Group]:
     """Ripples over the joint angle at the strongest free periods of the residual: plain
-    and × sgn q̇, each also × |q̇| and × load."""
+    and × sgn q̇, each also × ``|q̇|`` and × load."""
     q, sgn, mods, fit = b.q, b.sgn, b.mods, b.fit
     q_mods = {"plain": np.ones(b.n), "sgn": sgn} | mods | {f"sgn{m}": sgn * mv
                                                             for m, mv in mods.items()}
@@ -252,7 +252,7 @@ def _angle_ripple_groups(b: _Rows, r0: np.ndarray, n_peaks: int,
 
 def _time_tone_groups(b: _Rows, r0: np.ndarray, n_peaks: int,
                       harmonics: Sequence[int]) -> list[Group]:
-    """Tones in time at the strongest fixed frequencies of the residual, plain and × |q̇|
+    """Tones in time at the strongest fixed frequencies of the residual, plain and × ``|q̇|``
     (and × load); a tone on a line of the joint's own motion says so."""
     t, q = b.t, b.q
     t_mods = {"plain": np.ones(b.n)} | b.mods
@@ -311,7 +311,7 @@ def _trend_groups(b: _Rows) -> list[Group]:
 
 
 def _velocity_groups(b: _Rows, powers: Sequence[float]) -> list[Group]:
-    """A velocity law beyond sgn, q̇, q̇³ (sgn(q̇) |q̇ / v_ref|^p) and a torque
+    """A velocity law beyond sgn, q̇, q̇³ (``sgn(q̇) |q̇ / v_ref|^p``) and a torque
     proportional to the acceleration."""
     v_ref = b.v_ref
 
@@ -344,7 +344,7 @@ def friction_basis(result: CalibrationResult, n_peaks: int = 2,
         frequencies in time.
     harmonics : sequence of int, default (1, 2, 3)
     powers : sequence of float, default (0.5, 1.5, 2)
-        Exponents p of the velocity-law columns sgn(q̇) |q̇ / v_ref|^p.
+        Exponents p of the velocity-law columns ``sgn(q̇) |q̇ / v_ref|^p``.
 
     Returns
     -------

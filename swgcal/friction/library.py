@@ -11,7 +11,7 @@ how often a model may hold it, and the bounds and starts of its nonlinear parame
 name                residual signature
 ==================  ===================================================================
 asymmetric_coulomb  same offset in both directions, 0 at rest
-stribeck            odd bump at low |v|
+stribeck            odd bump at low ``|v|``
 presliding          transient after each reversal vs travel
 position_ripple     peak over q, even in direction
 friction_ripple     peak over q, odd in direction
@@ -97,7 +97,7 @@ class AsymmetricCoulomb(fx.AsymmetricCoulomb, FitTerm):
 
 class Stribeck(fx.Stribeck, FitTerm):
     __doc__ = fx.Stribeck.__doc__
-    signature = ("residual odd in the direction of motion, a bump at low |q̇| that decays "
+    signature = ("residual odd in the direction of motion, a bump at low ``|q̇|`` that decays "
                  "within v_st")
     probes = ("velocity",)
     ranges = {"f_s": STRIBECK_EXCESS_NM, "v_st": STRIBECK_VELOCITY_RAD_S}

@@ -22,9 +22,9 @@ class BaseModelOptions:
     Attributes
     ----------
     v_s : float or None
-        Smooth-sign velocity [rad/s]; None: ``v_s_rel`` times the 99th percentile of |q̇|.
+        Smooth-sign velocity [rad/s]; None: ``v_s_rel`` times the 99th percentile of ``|q̇|``.
     v_s_rel : float, default 0.01
-        Fraction of the 99th percentile of |q̇| [-].
+        Fraction of the 99th percentile of ``|q̇|`` [-].
     """
 
     v_s: float | None = ranged(None, 0, lo_open=True)

@@ -54,7 +54,7 @@ def friction_problem(
     rec : FrictionRecording
     v_s : float, optional
         Smooth-sign velocity of the base model [rad/s]; default ``v_s_rel`` times the 99th
-        percentile of |q̇|.
+        percentile of ``|q̇|``.
     v_s_rel : float, default 0.01
     n_blocks, validation_blocks, test_blocks, guard_frac
         Held-out split, see :func:`~swgcal.split.time_block_split`. Defaults and ranges

@@ -1,7 +1,7 @@
 """Simulated "measured" friction data with planted effects, for tests and examples.
 
 The trajectory resembles the real Franka recordings (``/work/shared/data/joint_friction``):
-a sum of three sines in q (span about 2 rad, |q̇| up to about 0.65 rad/s, about 20
+a sum of three sines in q (span about 2 rad, ``|q̇|`` up to about 0.65 rad/s, about 20
 reversals a minute) on a warped time axis with a slow passage every 9.3 s (low-speed
 coverage, as in point-to-point motion), irregular sampling (10 ms ± 20 %). The torque is
 the paper law plus the planted library effects plus optional hidden (out-of-library)

@@ -25,9 +25,9 @@ bridge_nonlinearity   s/(1 + k s) [1/(mV/V)]             ∝ s²: order 4 of ψ 
                       (transform of the basis)           load-squared offset on s0
 amplifier_lowpass     first order, cut-off f_c [Hz]      amplitudes fall and phases lag
                       (transform of the basis)           with order × speed
-ke_order{k}           extra kinematic error A sin(k φ_in order k of the input (sidebands
-                      + φ) at the output [rad]           k ± 2) in the torque channels
-                      (transform, re-aligns φ_in)
+ke_order{k}           extra kinematic error              order k of the input (sidebands
+                      A sin(k φ_in + φ) at the output    k ± 2) in the torque channels
+                      [rad] (transform, re-aligns φ_in)
 thermal_drift         r_c per channel, offset r_c t_seq  offset growing over the sequence
                       [mV/V/s]                           of windows
 ====================  =================================  =================================

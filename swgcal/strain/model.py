@@ -179,7 +179,7 @@ class StrainModel:
 
     @staticmethod
     def _corr_objective(pred: np.ndarray, yd: np.ndarray) -> np.ndarray:
-        """Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|² for candidate predictions pred (5, n_j, n_t)
+        """``Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|²`` for candidate predictions pred (5, n_j, n_t)
         and the mean-free window yd (5, n_t): the fit with the best positive gain and any
         offset per channel (a negative gain would accept a pattern 90° off in ψ)."""
         n_t = yd.shape[-1]
@@ -192,7 +192,7 @@ class StrainModel:
         """WG-angle time shift of each window (nominal chain only).
 
         The pattern s_wg(ψ) + T̄ h(ψ) (mean torque) against the window over half a WG
-        revolution at every sample, maximising Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|² (tilde:
+        revolution at every sample, maximising ``Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|²`` (tilde:
         mean removed per channel: invariant to per-channel positive gains and offsets),
         refined by a parabola through the neighbours. The torque phase follows in
         :class:`Realigner`.
@@ -256,7 +256,7 @@ class Realigner:
 
     For extra harmonics ``ke`` = ((order, a_sin, a_cos), ...), the torque of an operating
     point is T(t) = T_out(t) + Σ (a_sin ΔT_sin + a_cos ΔT_cos)(t); each window's time
-    shift of T over one input revolution maximises Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|² with
+    shift of T over one input revolution maximises ``Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|²`` with
     p_c = s_wg,c + T h_c (ψ fixed), by matrix products of the shifted torque with
     per-channel vectors (no candidate signals are formed), refined by a parabola.
     Results are memoised per ``ke``.
@@ -308,7 +308,7 @@ class Realigner:
         Returns
         -------
         list of ndarray
-            Per window, shape (n_rev + 1,): Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|² at the torque
+            Per window, shape (n_rev + 1,): ``Σ_c max(ỹ_c · p̃_c, 0)² / |p̃_c|²`` at the torque
             shifts 0, 1, ... samples over one input revolution [(mV/V)²]: the drop of the
             residual sum of squares with per-channel positive gains and offsets.
         """

@@ -135,7 +135,7 @@ class ToneProbe(Probe):
 
     def spectrum(self, sig: StrainSignals, r: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """Power per grid value, summed over windows and channels, shape (n_grid,)
-        [(data units)²]: per group 4 |mean r e^{−i k x}|² (x the phase coordinate).
+        [(data units)²]: per group ``4 |mean r e^{−i k x}|²`` (x the phase coordinate).
 
         ``idx`` must be sorted (groups are then contiguous runs); e^{−i k x} on the
         uniform grid by recurrence e^{−i (k + Δ) x} = e^{−i k x} e^{−i Δ x}."""

@@ -234,7 +234,7 @@ def _check_gears(cfg: DatasetConfig) -> None:
 
 def _speeds_and_loads(cfg: DatasetConfig) -> tuple[list[float], list[float]]:
     """Input speeds [rpm] and load torques [N m] at which the dynamics are judged: the
-    operating points, or a profile's non-zero speeds |n| at its largest load."""
+    operating points, or a profile's non-zero speeds ``|n|`` at its largest load."""
     if cfg.profile is None:
         ops = cfg.operating_points
         return [float(n) for n in ops.n_in_rpm], [float(t) for t in ops.t_out_nm]
@@ -244,7 +244,7 @@ def _speeds_and_loads(cfg: DatasetConfig) -> tuple[list[float], list[float]]:
 
 
 def lowest_cruise_rpm(profile: ProfileConfig) -> float:
-    """Lowest non-zero |speed| the profile holds [rpm]: of its holds at a non-zero speed,
+    """Lowest non-zero ``|speed|`` the profile holds [rpm]: of its holds at a non-zero speed,
     else of its non-zero corner speeds; 0 for a profile that never turns."""
     tk, nk = profile.to_profile().speed.knots()
     held = [abs(nk[i]) for i in range(1, tk.size) if nk[i] == nk[i - 1] and nk[i] != 0

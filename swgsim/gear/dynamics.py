@@ -13,7 +13,7 @@ States per variant: x = [φ_in, ω_in, φ_out, ω_out, ∫e_ω] (rad, rad/s, rad
   amplitudes A_k given as output angle [rad].
 * Friction (eq. 5-6) is a generalised force on the flank sliding coordinate φ_b with
   φ̇_b = −φ̇_out / sin α_tooth: T_fric = b0 sgn + b1 φ̇_b + b2 φ̇_b³ + b3 sin(φ_out + θ_b)
-  + μ F_n r_p sgn, F_n = |c T_stiff| / (r_p cos α_tooth) the tooth normal force; sgn is
+  + μ F_n r_p sgn, ``F_n = |c T_stiff| / (r_p cos α_tooth)`` the tooth normal force; sgn is
   tanh(φ̇_b / v_s), a smooth sign. It acts on the output with 1 / sin α_tooth and
   dissipates T_fric φ̇_b.
 * Input: a motor with a PI speed loop tracking n_in,d; output: inertia J_out with the load
@@ -28,7 +28,7 @@ without backlash),
 The second term is the power of the kinematic error: eq. (1) lets it strain the
 flexspline without a reaction torque on the input, so it is a source of its own beside
 the motor (0.02-0.2 % of the motor's energy at the bench's operating points). Without it,
-tan α_in ω_in = c |ω_out| at Δφ̇_k = 0, so P_in = P_out + T_fric φ̇_b in steady state and
+``tan α_in ω_in = c |ω_out|`` at Δφ̇_k = 0, so P_in = P_out + T_fric φ̇_b in steady state and
 η = T_load / (T_load + T_fric / sin α). Tested along simulated trajectories to 2e-7 of the
 supplied energy, converging at RK4's order 4 (tests/swgsim/test_dynamics.py).
 
@@ -428,7 +428,7 @@ class SimResult:
         Acting output torque delivered by the gear, c T_stiff − T_fric / sin α [N m]
         (positive when it drives the load); this loads the flexspline.
     p_in, p_out : ndarray, shape (V, n_t)
-        Mechanical power at input (T_m ω_in) and output (|T_out ω_out|) [W].
+        Mechanical power at input (T_m ω_in) and output (``|T_out ω_out|``) [W].
     efficiency : ndarray, shape (V,)
         mean(P_out) / mean(P_in) over the window [-].
     success : bool

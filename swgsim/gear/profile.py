@@ -15,10 +15,10 @@ signed load T_L > 0 resists forward motion, the gear then delivers T_L; the load
 the power T_L q̇ (negative when it drives the gear: a lowered arm, an overhauling load).
 An opposing load is T_L = T tanh(N q̇ / v_s), today's brake.
 
-Limits, checked by :func:`validate` before any work (docs/PHYSICS.md sec. 2): |speed| <=
+Limits, checked by :func:`validate` before any work (docs/PHYSICS.md sec. 2): ``|speed|`` <=
 6500 rpm, its time average over the profile <= 3500 rpm, load torque <= 107 N m
-(repeated peak torque), J_out |q̈| + max |T_L| <= 107 N m during every move [derived], the
-torque overshoot of a load step T_0 + 2 |ΔT| <= 191 N m (momentary peak torque) [derived,
+(repeated peak torque), ``J_out |q̈| + max |T_L| <= 107`` N m during every move [derived], the
+torque overshoot of a load step ``T_0 + 2 |ΔT| <= 191`` N m (momentary peak torque) [derived,
 undamped step response], positive acceleration limits, finite numbers.
 """
 
@@ -71,7 +71,7 @@ class Move:
         Target input speed [rpm]; negative turns backward (a reversal when the speed
         before is positive).
     accel_rpm_s : float
-        Acceleration limit [rpm/s], > 0; the ramp lasts |Δn| / accel.
+        Acceleration limit [rpm/s], > 0; the ramp lasts ``|Δn| / accel``.
     """
 
     target_rpm: float
@@ -119,9 +119,9 @@ class SpeedProfile:
         return float(self.knots()[0][-1])
 
     def average_speed_rpm(self) -> float:
-        """Time average of |n| over the profile [rpm], the catalogue's average input speed
-        of a duty cycle (sum |n_i| t_i / sum t_i), exact for the piecewise-linear speed;
-        |start_rpm| for a profile of no duration (it keeps its speed)."""
+        """Time average of ``|n|`` over the profile [rpm], the catalogue's average input speed
+        of a duty cycle (``sum |n_i| t_i / sum t_i``), exact for the piecewise-linear speed;
+        ``|start_rpm|`` for a profile of no duration (it keeps its speed)."""
         t, n = self.knots()
         dt, n0, n1 = np.diff(t), n[:-1], n[1:]
         same = n0 * n1 >= 0  # a ramp through 0 rpm covers (n0² + n1²) / (2 |n1 − n0|) of it
@@ -135,7 +135,7 @@ class ConstantLoad:
     """A brake torque ``torque_nm`` [N m], >= 0, opposing the output motion (steady bench).
 
     Needs a speed profile that keeps a positive speed: the brake switches within
-    |n| < v_s = 0.05 rad/s, which fixed-step RK4 cannot resolve through a reversal.
+    ``|n| < v_s`` = 0.05 rad/s, which fixed-step RK4 cannot resolve through a reversal.
     """
 
     torque_nm: float
@@ -271,7 +271,7 @@ def load_at(load: Load, t, q=None, q_dot=None, ratio: float = 100.0,
 
 
 def max_load_nm(load: Load) -> float:
-    """Largest |T_L| the load can reach [N m] (a brake's torque, the largest step, a link's
+    """Largest ``|T_L|`` the load can reach [N m] (a brake's torque, the largest step, a link's
     torque at horizontal)."""
     if isinstance(load, ConstantLoad):
         return abs(load.torque_nm)
@@ -369,7 +369,7 @@ def validate(profile: Profile, j_out_kgm2: float, ratio: float = 100.0) -> None:
         One line naming the key and the limit: a speed beyond ±6500 rpm, an average input
         speed over the profile beyond 3500 rpm, a load beyond
         ±107 N m, a step overshooting 191 N m, an acceleration whose torque
-        J_out a / N + max |T_L| exceeds 107 N m, a non-positive acceleration limit, a
+        ``J_out a / N + max |T_L|`` exceeds 107 N m, a non-positive acceleration limit, a
         negative hold, a brake through 0 rpm, a non-finite number.
     """
     if not isinstance(profile, Profile):

@@ -49,7 +49,7 @@ def check_standstill_step(params: list[GearParams] | Batch, profile: Profile,
                           step_s: float) -> None:
     """Refuse an RK4 step that is unstable where the profile passes 0 rpm.
 
-    There the friction's smooth sign has the slope (b0 + μ c |T_stiff| / cos α) / v_s + b1
+    There the friction's smooth sign has the slope ``(b0 + μ c |T_stiff| / cos α) / v_s + b1``
     on φ̇_b, a damping −slope / (sin²α J_out) [1/s] on ω_out [derived, eq. 5-6], with
     T_stiff at the profile's largest load.
 

@@ -21,16 +21,16 @@ GF ε / 2 ≈ 3e-4 relative at ε = 3e-4).
 Default layout (the paper's Fig. 3 is not in its text; chosen to meet its constraints, all
 on the back face of the collar, i.e. the face away from the toothed rim):
 
-====  ============  ==========  ===========================  =============================
+====  ============  ==========  ============================  =============================
 sig   bridge        radius      grids (angle θ, orientation)  sensitive to
-====  ============  ==========  ===========================  =============================
+====  ============  ==========  ============================  =============================
 s0    full          29 mm       ±45° at θ = 22.5° and 112.5°  torque; order-2 WG ripple
                                                               cancels (grids 90° apart)
 s1    half          32 mm       0° (radial), 90° at θ = 0°    WG bending (ε_r − ε_θ)
 s2    half          32 mm       ±45° at θ = 90°               torque + mesh-zone shear ripple
 s3    half          32 mm       0°, 90° at θ = 180°           as s1 (180° apart: s1 ≈ s3)
 s4    half          32 mm       ±45° at θ = 270°              as s2 (s2 ≈ s4)
-====  ============  ==========  ===========================  =============================
+====  ============  ==========  ============================  =============================
 
 Orientation β is measured from the radial (meridional) direction towards +θ. The
 WG-bending pair is s1/s3 as in the paper, whose s1 and s3 carry the eccentric-WG offsets
@@ -82,7 +82,7 @@ class TolerancesConfig:
     Attributes
     ----------
     sd_theta_deg : float
-        Gauge angle [deg] (0.3, README *Design choices*; unverified).
+        Gauge angle [deg] (0.3, docs/simulation.md *Design choices*; unverified).
     sd_r_mm : float
         Gauge radius [mm].
     sd_beta_deg : float

@@ -55,8 +55,8 @@ class Param:
 class Term:
     """One additive term (or signal transform) of a model. Subclass and override.
 
-    Class attributes
-    ----------------
+    Attributes
+    ----------
     kind : str
         Library key (``"stribeck"``); the instance ``name`` adds ``#2`` for a repeat.
     linear : tuple of Param

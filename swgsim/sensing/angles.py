@@ -264,12 +264,12 @@ def twist_estimate(phi_in_meas, phi_out_meas, ratio: float = 100.0) -> np.ndarra
 
 
 def twist_bound_rad(gear: GearParams, mesh_torque_nm: float) -> float:
-    """Upper bound on |δ|, the error of ψ from the input angle alone [rad].
+    """Upper bound on ``|δ|``, the error of ψ from the input angle alone [rad].
 
     Derivation (docs/PHYSICS.md sec. 1.1-1.2): Δφ_k = c δ + c e(φ_in) with e the
-    kinematic error, |e| <= Σ A_k, and T_stiff = k1 Δφ_k + k2 Δφ_k³ carries the mesh torque
-    c |T_stiff|. For k2 >= 0 the linear stiffness is the softest, |Δφ_k| <= |T_stiff| / k1,
-    so |δ| <= T_mesh / (c² k1) + Σ A_k (+ backlash / 2, the dead zone). The mesh torque is
+    kinematic error, ``|e| <= Σ A_k``, and T_stiff = k1 Δφ_k + k2 Δφ_k³ carries the mesh torque
+    ``c |T_stiff|``. For k2 >= 0 the linear stiffness is the softest, ``|Δφ_k| <= |T_stiff| / k1``,
+    so ``|δ| <= T_mesh / (c² k1) + Σ A_k`` (+ backlash / 2, the dead zone). The mesh torque is
     the load plus the output friction, T_load / η at steady speed (η the efficiency).
 
     Rated 52 N m at η = 0.77: 67.5 N m / (7.40 · 2103 N m/rad) = 4.34e-3 rad (14.9 arcmin)
@@ -282,7 +282,7 @@ def twist_bound_rad(gear: GearParams, mesh_torque_nm: float) -> float:
     gear : GearParams
         Gear (k2 >= 0 assumed).
     mesh_torque_nm : float
-        Largest mesh torque c |T_stiff| [N m], >= 0.
+        Largest mesh torque ``c |T_stiff|`` [N m], >= 0.
     """
     if not (math.isfinite(mesh_torque_nm) and mesh_torque_nm >= 0):
         raise ValueError(f"mesh_torque_nm must be finite and >= 0, got {mesh_torque_nm!r}")

@@ -214,7 +214,7 @@ class TemperatureSensor:
         resolution of joint temperature readouts].
     noise_sd_k : float
         Sd of the reading's white noise [K] (0.05), >= 0 [choice]. A sensor's offset
-        (a PT1000 of class B: ±(0.3 + 0.005 |T|) K, IEC 60751 [unverified]) is not
+        (a PT1000 of class B: ``±(0.3 + 0.005 |T|)`` K, IEC 60751 [unverified]) is not
         modelled.
 
     :meth:`check` refuses a negative or non-finite value.

@@ -49,8 +49,10 @@ NUMBERED_RE = re.compile(r"^(?P<num>\d+(?:\.\d+)*)\.?\s+\S")
 MD_LINK_RE = re.compile(r"\]\((?P<target>[^)\s]+)\)")
 
 
-def resolve(cited: str) -> tuple[Path | None, str | None]:
-    """The repository file a citation names, or (None, why not)."""
+def resolve(cited: str, base: Path = ROOT) -> tuple[Path | None, str | None]:
+    """The repository file a citation names, or (None, why not); a path starting with
+    ``./`` or ``../`` is relative to ``base``, the folder of the citing file (a page of
+    ``docs/`` including ``../README.md``)."""
     if cited.startswith(("/", "~")):
         return None, "is outside the repository (absolute path)"
     if "/" not in cited:
@@ -58,7 +60,7 @@ def resolve(cited: str) -> tuple[Path | None, str | None]:
             if cand.is_file():
                 return cand, None
         return None, f"is neither docs/{cited} nor {cited} at the repository root"
-    target = (ROOT / cited).resolve()
+    target = ((base if cited.startswith(".") else ROOT) / cited).resolve()
     if ROOT not in target.parents:
         return None, "is outside the repository"
     if not target.is_file():
@@ -81,7 +83,7 @@ def _strip_md_links(text: str) -> str:
     return MD_LINK_RE.sub("]()", text)
 
 
-def citation_problems(text: str, where: str) -> list[str]:
+def citation_problems(text: str, where: str, base: Path = ROOT) -> list[str]:
     """Problems with the document citations in ``text`` (empty if all resolve).
 
     Parameters
@@ -90,12 +92,14 @@ def citation_problems(text: str, where: str) -> list[str]:
         File content (for markdown, link targets are checked separately).
     where : str
         Name of the file, for the messages.
+    base : Path
+        Folder of the file: relative paths (``../README.md``) start there.
     """
     out = []
     for m in DOC_RE.finditer(text):
         cited = m["path"]
         line = text.count("\n", 0, m.start()) + 1
-        doc, why = resolve(cited)
+        doc, why = resolve(cited, base)
         if doc is None:
             out.append(f"{where}:{line}: cites {cited}, which {why}")
             continue
@@ -153,7 +157,7 @@ def test_every_cited_document_and_section_exists():
         if f.suffix == ".md":
             text = _strip_md_links(text)
         n_cited += len(DOC_RE.findall(text))
-        problems += citation_problems(text, str(f.relative_to(ROOT)))
+        problems += citation_problems(text, str(f.relative_to(ROOT)), f.parent)
     assert n_cited >= 30, f"found only {n_cited} citations; is the pattern broken?"
     assert not problems, "\n".join(problems)
 

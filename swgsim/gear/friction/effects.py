@@ -10,12 +10,12 @@ range are the calibration's (:mod:`swgcal.friction.library`).
 ==================  ===============================================
 name                form
 ==================  ===============================================
-asymmetric_coulomb  Δc |sgn|
+asymmetric_coulomb  ``Δc |sgn|``
 stribeck            F_s sgn exp(−(v/v_st)²)
 presliding          F_d (z − sgn), dz/dq = (1 − z sgn(q̇)) / q_c
 position_ripple     Σ_h a_h sin(2πhq/P) + b_h cos(2πhq/P)
 friction_ripple     sgn Σ_h (a_h sin(2πhq/P) + b_h cos(2πhq/P))
-load_coulomb        sgn Σ c_n P_n(x), n = 1, 2  or  μ sgn |load|
+load_coulomb        sgn Σ c_n P_n(x), n = 1, 2  or  ``μ sgn |load|``
 gravity_residual    Σ c_n P_n(x), n = 2, 3
 inertia             J_a q̈
 thermal_drift       d exp(−(t − t0)/T_th) sgn
@@ -80,7 +80,7 @@ def dahl_state(q: np.ndarray, q_c: float, z0: float = 0.0) -> np.ndarray:
 
     dz/dq = (1 − z sgn(q̇)) / q_c (Dahl 1968 with exponent 1, written over displacement
     so that it is rate independent, as Dahl's model is). Integrated exactly per sample
-    step: z_k = s + (z_{k−1} − s) exp(−|Δq_k| / q_c), s = sgn(Δq_k). z approaches ±1
+    step: z_k = s + (z_{k−1} − s) exp(−``|Δq_k|`` / q_c), s = sgn(Δq_k). z approaches ±1
     after a travel of a few q_c in one direction.
 
     Parameters
@@ -134,7 +134,7 @@ def first_order_lag(t: np.ndarray, u: np.ndarray, tau_s: float) -> np.ndarray:
 
 
 class AsymmetricCoulomb(Term):
-    """Direction-dependent Coulomb level: τ = Δc |sgn(v)|, so the Coulomb level is
+    """Direction-dependent Coulomb level: ``τ = Δc |sgn(v)|``, so the Coulomb level is
     b0 + Δc for q̇ > 0 and b0 − Δc for q̇ < 0 (Armstrong-Hélouvry et al. 1994;
     asymmetric friction of gravity-loaded robot joints)."""
 
@@ -251,7 +251,7 @@ class _RangePolynomial(Term):
 
 class LoadCoulomb(_RangePolynomial):
     """Load-dependent Coulomb friction, the μ F_n term of paper eq. (5). With a load
-    signal (option ``use_load``): τ = μ sgn |load|. Without one, the Coulomb level varies
+    signal (option ``use_load``): ``τ = μ sgn |load|``. Without one, the Coulomb level varies
     with the configuration-dependent (gravity) load, a smooth function of q over the
     calibrated range: τ = sgn (c_a P_a(x) + c_b P_b(x)), orders (1, 2) for the first
     instance, (3, 4), (5, 6) for repeats (see the base class for x)."""

@@ -36,7 +36,7 @@ class Scales:
     Attributes
     ----------
     v_ref : float
-        99th percentile of |q̇| [rad/s].
+        99th percentile of ``|q̇|`` [rad/s].
     q_span : float
         max q − min q [rad].
     t0, t_span : float
@@ -44,7 +44,7 @@ class Scales:
     dt_med : float
         Median sample interval [s].
     dq_med : float
-        Median |Δq| per sample while moving [rad].
+        Median ``|Δq|`` per sample while moving [rad].
     q_center : float
         (max q + min q) / 2 [rad].
     """

@@ -138,7 +138,7 @@ class FrictionEffects:
         return len(self.state_names)
 
     def initial_state(self, shape: tuple[int, ...] = (), dq0: Any = 0.0) -> np.ndarray:
-        """States at rest: z = 0, lagged velocity = q̇0. Shape (n_states, *shape)."""
+        """States at rest: z = 0, lagged velocity = q̇0. Shape ``(n_states, *shape)``."""
         z = np.zeros((self.n_states, *shape))
         for i, (t, _, _) in enumerate(x for x in self.items
                                       if isinstance(x[0], (Presliding, VelocityLag))):
@@ -207,7 +207,7 @@ class FrictionEffects:
             Angle [rad], velocity [rad/s], acceleration [rad/s²] (q̈ of the previous
             step is adequate for the ``inertia`` effect; better add J_a to the output
             inertia).
-        state : ndarray, shape (n_states, *S), optional
+        state : ndarray, shape ``(n_states, *S)``, optional
             From :meth:`initial_state` / integration of :meth:`state_derivative`.
 
         Returns
@@ -222,8 +222,8 @@ class FrictionEffects:
         return self._evaluate(self._signals(t, q, dq, ddq, states)).reshape(q.shape)
 
     def state_derivative(self, t: Any, q: Any, dq: Any, state: np.ndarray) -> np.ndarray:
-        """Time derivative of the states: Dahl dz/dt = (q̇ − |q̇| z) / q_c, lag
-        dv/dt = (q̇ − v) / T_L. Shape (n_states, *S)."""
+        """Time derivative of the states: Dahl ``dz/dt = (q̇ − |q̇| z) / q_c``, lag
+        dv/dt = (q̇ − v) / T_L. Shape ``(n_states, *S)``."""
         dq = np.asarray(dq, float)
         out = np.zeros_like(np.asarray(state, float))
         i = 0

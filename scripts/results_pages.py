@@ -1,0 +1,385 @@
+"""Rebuild the tables of the results pages (``docs/results/*.md``) from a run's reports.
+
+Each generated table of a results page sits between two markers in its Markdown source::
+
+    <!-- results:begin paper.scorecard -->
+    *Run*: `swgsim-paper` at commit `abc1234`, 2026-11-25 ... Source: `reports/summary.md`.
+    | acquisition | table | ... |
+    <!-- results:end paper.scorecard -->
+
+This script reads a run's ``reports/`` folder (it reruns nothing: the reports of
+``swgsim-paper``, ``swgsim-train experiment=transfer``, ``swgsim-train
+experiment=monitor``, ``swgsim-observability``, ``swgsim-export`` and
+``scripts/calibrate_real.py --out``) and writes each block whose report is there, with
+the run named: the command, the commit (``--commit``, else the checkout's HEAD) and the
+date the report was written (its modification time). A block whose report is missing is
+left as it is, and said so. The readings around the blocks are not touched.
+
+    python scripts/results_pages.py reports/
+    python scripts/results_pages.py reports/ --commit abc1234 --check   # exit 1 if stale
+
+Bad input (no such folder, a page without a block's markers, a report that lacks the
+section a block copies) ends in one line naming it, exit code 2, before any page is
+written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import re
+import subprocess
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from learn.reports.paper_results import CELL_COLUMNS, our_cells, paper_cells
+from learn.reports.summary import recall
+from swgsim.files.ownership import atomic_write_bytes
+from swgsim.gear.faults import display_name
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = ROOT / "docs" / "results"
+BLOCK_RE = re.compile(r"(?P<begin><!-- results:begin (?P<name>[\w.]+) -->\n)(?P<body>.*?)"
+                      r"(?P<end><!-- results:end (?P=name) -->)", re.S)
+
+
+class ReportError(ValueError):
+    """A report or page this script cannot use; the message names it."""
+
+
+@dataclass(frozen=True)
+class Block:
+    """One generated table: where it goes, what it reads, how it is made.
+
+    Attributes
+    ----------
+    name : str
+        The block's name in its page's markers.
+    page : str
+        File name of the page in ``docs/results``.
+    sources : tuple of str
+        Reports it reads, relative to the reports folder (glob patterns allowed); the
+        block is rebuilt only when each matches a file.
+    command : str
+        The command that writes those reports (named on the page).
+    build : callable
+        ``build(reports) -> str``: the block's Markdown below its run line.
+    """
+
+    name: str
+    page: str
+    sources: tuple[str, ...]
+    command: str
+    build: Callable[[Path], str]
+
+
+# ------------------------------------------------------------------- reading markdown
+def section(path: Path, title: str, level: int = 2) -> str:
+    """Body of the first heading of ``level`` whose text starts with ``title``."""
+    text = path.read_text(encoding="utf-8")
+    marks = "#" * level
+    m = re.search(rf"^{marks} {re.escape(title)}[^\n]*\n(?P<body>.*?)(?=^#{{1,{level}}} |\Z)",
+                  text, re.M | re.S)
+    if m is None:
+        raise ReportError(f"{path}: no section '{marks} {title}...'")
+    return m["body"].strip()
+
+
+def tables_of(body: str) -> str:
+    """The Markdown tables of a section (lines starting with ``|``), blank-line separated."""
+    out, table = [], []
+    for line in body.splitlines() + [""]:
+        if line.startswith("|"):
+            table.append(line)
+        elif table:
+            out.append("\n".join(table))
+            table = []
+    return "\n\n".join(out)
+
+
+def tidy(md: str) -> str:
+    """Report Markdown made safe for the site: images and relative links named, not
+    followed (they point into ``reports/``); headings as bold lines."""
+    md = re.sub(r"!\[([^\]]*)\]\(([^)\s]+)\)", r"(figure: `\2` in the reports)", md)
+    md = re.sub(r"\[([^\]]+)\]\((?![a-z]+:)([^)\s]+)\)", r"\1 (`\2`)", md)
+    return re.sub(r"^#{1,6} (.+)$", r"**\1**", md, flags=re.M)
+
+
+def md_table(df: pd.DataFrame) -> str:
+    """A Markdown table of a frame, cells as they are."""
+    rows = ["| " + " | ".join(map(str, df.columns)) + " |",
+            "|" + "|".join("---" for _ in df.columns) + "|"]
+    rows += ["| " + " | ".join(map(str, r)) + " |" for r in df.itertuples(index=False)]
+    return "\n".join(rows)
+
+
+def pct(v: float) -> str:
+    """A share in per cent as the pages print it: 3 significant digits, at most 100."""
+    return "-" if not np.isfinite(v) else f"{v:.3g}"
+
+
+# ------------------------------------------------------------------------ the builders
+def paper_scorecard(rep: Path) -> str:
+    summary = rep / "summary.md"
+    card = tables_of(section(summary, "Reproduction scorecard"))
+    found = section(summary, "Qualitative findings")
+    line = next((x for x in found.splitlines() if x.startswith("Reproduced:")), None)
+    if line is None:
+        raise ReportError(f"{summary}: no 'Reproduced:' line under 'Qualitative findings'")
+    return f"{card}\n\nQualitative findings of Sec. IV {line[0].lower()}{line[1:]}"
+
+
+def _acquisitions(rep: Path) -> dict[str, Path]:
+    """Acquisition name -> its study folder (one with ``results.csv`` and the tables)."""
+    return {p.parent.name: p.parent for p in sorted(rep.glob("*/results.csv"))
+            if (p.parent / "tables_vii_x.md").is_file()}
+
+
+#: (table, model, selection, words): the cells the paper's claims rest on.
+KEY_CELLS = (("VII", "rf", "selection1", "Table VII, RF, Selection 1 (mean over folds)"),
+             ("X", "rf", "selection3", "Table X, RF, Selection 3 (held-out gears)"),
+             ("X", "mlp", "selection3", "Table X, MLP, Selection 3 (held-out gears)"))
+
+
+def _span(v: pd.Series, digits: int) -> str:
+    v = v.dropna()
+    if v.empty:
+        return "-"
+    lo, hi = v.min(), v.max()
+    return f"{lo:.{digits}f}" if np.isclose(lo, hi) else f"{lo:.{digits}f}-{hi:.{digits}f}"
+
+
+def paper_key_cells(rep: Path) -> str:
+    paper = paper_cells()
+    rows = []
+    for name, folder in _acquisitions(rep).items():
+        ours = our_cells(pd.read_csv(folder / "results.csv"))
+        both = paper.merge(ours, on=list(CELL_COLUMNS), how="outer")
+        for table, model, sel, words in KEY_CELLS:
+            c = both[(both.table == table) & (both.model == model) & (both.selection == sel)]
+            rows.append((name, words, _span(c.ours, 1), _span(c.paper, 2)))
+    if not rows:
+        raise ReportError(f"{rep}: no acquisition folder with results.csv and tables_vii_x.md")
+    return md_table(pd.DataFrame(rows, columns=["acquisition", "cell", "ours [%]",
+                                                "paper [%]"]))
+
+
+def paper_phase_lock(rep: Path) -> str:
+    rows = {}
+    for name, folder in _acquisitions(rep).items():
+        r = recall(pd.read_csv(folder / "confusion.csv"))
+        r = r[(r.table == "VII") & (r.model == "rf") & (r.selection == "selection1")]
+        rows[name] = r.set_index("true").recall * 100.0
+    if not rows:
+        raise ReportError(f"{rep}: no acquisition folder with confusion.csv")
+    tab = pd.DataFrame(rows)
+    tab.index = [display_name(c) for c in tab.index]
+    tab = tab.map(lambda v: f"{v:.0f}").reset_index(names="class")
+    spread = tables_of(section(rep / "summary.md", "What changes when windows are not"))
+    return ("RF on Selection 1 (Table VII), per-class recall [%] under each acquisition:\n\n"
+            f"{md_table(tab)}\n\nSpread of the clean healthy windows' features and how far "
+            "each fault class lies from the healthy median (`reports/summary.md`):\n\n"
+            f"{spread}")
+
+
+def transfer_headline(rep: Path) -> str:
+    return tidy(section(rep / "transfer" / "table.md", "Headline"))
+
+
+def transfer_recall(rep: Path) -> str:
+    return tidy(section(rep / "transfer" / "table.md", "Per-class recall"))
+
+
+def monitor_targets(rep: Path) -> str:
+    table = rep / "monitor" / "table.md"
+    head = table.read_text(encoding="utf-8").split("\n## ", 1)[0].splitlines()[1:]
+    intro = " ".join(x for x in head if x.strip())
+    return tidy(f"{intro}\n\n{section(table, 'Targets')}")
+
+
+def observability_map(rep: Path) -> str:
+    t = pd.read_csv(rep / "observability" / "observability.csv")
+    t = t[t.fault != "healthy"]
+    piv = t.pivot_table(index="fault", columns="j_out_kgm2", values="fraction_beyond_p95",
+                        aggfunc="mean", sort=False) * 100.0
+    piv.columns = [f"J_out {j:.2g} kg m²" if i == 0 else f"{j:.2g}"
+                   for i, j in enumerate(piv.columns)]
+    piv.index = [display_name(f) for f in piv.index]
+    return md_table(piv.map(pct).reset_index(names="fault"))
+
+
+def observability_motion(rep: Path) -> str:
+    folder = rep / "observability"
+    small = pd.read_csv(folder / "smallest_detectable.csv")
+    full = pd.read_csv(folder / "observability_motion.csv")
+
+    def cell(r) -> str:
+        if np.isfinite(r.smallest_severity):
+            return f"{r.smallest_severity:.2g} ({r.stiffness_left:.2f})"
+        g = full[(full.j_out_kgm2 == r.j_out_kgm2) & (full.view == r.view)
+                 & (full.fault == r.fault)]
+        top = g[g.severity == g.severity.max()]
+        return (f"none up to {g.severity.max():.2g} "
+                f"({100 * top.fraction_beyond_p95.mean():.0f} %)")
+
+    small["cell"] = [cell(r) for r in small.itertuples()]
+    piv = small.pivot_table(index=["fault", "view"], columns="j_out_kgm2", values="cell",
+                            aggfunc="first", sort=False)
+    piv.columns = [f"J_out {j:.2g} kg m²" if i == 0 else f"{j:.2g}"
+                   for i, j in enumerate(piv.columns)]
+    out = piv.reset_index()
+    out["fault"] = out.fault.map(display_name)
+    return md_table(out)
+
+
+def export_size(rep: Path) -> str:
+    s = json.loads((rep / "export" / "size.json").read_text(encoding="utf-8"))
+
+    def val(key: str, unit: str = "") -> str:
+        v = s.get(key)
+        return f"not measured ({s.get('why', 'no reason given')})" if v is None else f"{v:,}{unit}"
+
+    rows = [("flash (text + data)", val("flash_bytes", " B"), "≤ 32 kB"),
+            ("RAM (data + bss + stack high-water mark)", val("ram_bytes", " B"), "≤ 16 kB"),
+            ("cycles per window (high bound)", val("cycles_per_window"), "≤ 10 ms at 168 MHz"),
+            ("accuracy on the held-out gear, exported Python / C",
+             f"{s['accuracy_python']:.4f} / {s['accuracy_c']:.4f}", "within 1 point"),
+            ("the full monitor's classifier on the same windows",
+             f"{s['accuracy_full_monitor_model']:.4f}", "-")]
+    return (f"Data set `{s['dataset']}`, gear {s['held_out_gear']} held out, "
+            f"{s['held_out_windows']} held-out windows.\n\n"
+            + md_table(pd.DataFrame(rows, columns=["Cortex-M4F", "measured", "target"])))
+
+
+def calibration_real(rep: Path) -> str:
+    rows = []
+    for p in sorted((rep / "calibration_real").glob("*/summary.json")):
+        s = json.loads(p.read_text(encoding="utf-8"))
+        names = [e["name"] for e in s.get("effects_added", [])]
+        rows.append((p.parent.name, f"{s['rmse_before']:.4f}", f"{s['rmse_after']:.4f}",
+                     f"{s['rmse_after'] / s['rmse_before']:.3f}",
+                     f"{len(names)}: {', '.join(names)}" if len(names) > 3
+                     else ", ".join(names) or "none"))
+    return md_table(pd.DataFrame(rows, columns=["recording", "paper law", "after", "ratio",
+                                                "effects added"]))
+
+
+BLOCKS = (
+    Block("paper.scorecard", "paper.md", ("summary.md",), "swgsim-paper", paper_scorecard),
+    Block("paper.key_cells", "paper.md", ("*/tables_vii_x.md",), "swgsim-paper",
+          paper_key_cells),
+    Block("paper.phase_lock", "paper.md", ("*/tables_vii_x.md", "summary.md"), "swgsim-paper",
+          paper_phase_lock),
+    Block("transfer.headline", "transfer.md", ("transfer/table.md",),
+          "swgsim-train -m experiment=transfer", transfer_headline),
+    Block("transfer.recall", "transfer.md", ("transfer/table.md",),
+          "swgsim-train -m experiment=transfer", transfer_recall),
+    Block("monitor.targets", "monitor.md", ("monitor/table.md",),
+          "swgsim-train experiment=monitor", monitor_targets),
+    Block("observability.map", "observability.md", ("observability/observability.csv",),
+          "swgsim-observability", observability_map),
+    Block("observability.motion", "observability.md",
+          ("observability/smallest_detectable.csv", "observability/observability_motion.csv"),
+          "swgsim-observability map=motion", observability_motion),
+    Block("export.size", "export.md", ("export/size.json",), "swgsim-export", export_size),
+    Block("calibration.real", "calibration.md", ("calibration_real/*/summary.json",),
+          "python scripts/calibrate_real.py --out reports/calibration_real",
+          calibration_real),
+)
+
+
+# ----------------------------------------------------------------------------- the run
+def head_commit() -> str:
+    """The checkout's HEAD, short; ``unknown`` outside a git checkout."""
+    try:
+        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
+                             capture_output=True, text=True, check=True)
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return out.stdout.strip()
+
+
+def sources_of(block: Block, rep: Path) -> list[Path] | None:
+    """The report files of a block, or None when one of its sources is missing."""
+    files = []
+    for pattern in block.sources:
+        found = sorted(rep.glob(pattern))
+        if not found:
+            return None
+        files += found
+    return files
+
+
+def run_line(block: Block, rep: Path, files: list[Path], commit: str) -> str:
+    """The block's first line: the command, the commit and the date of the run."""
+    newest = max(files, key=lambda p: p.stat().st_mtime)
+    day = dt.datetime.fromtimestamp(newest.stat().st_mtime, dt.UTC).date().isoformat()
+    names = ", ".join(f"`reports/{p}`" for p in block.sources)
+    return (f"*Run*: `{block.command}` at commit `{commit}`, {day} (when "
+            f"`reports/{newest.relative_to(rep)}` was written). Source: {names}, tables "
+            "rebuilt by `scripts/results_pages.py`.")
+
+
+def rebuild(rep: Path, pages: Path, commit: str) -> tuple[dict[Path, str], list[str]]:
+    """New text of every page a block of this run changes, and a line per block."""
+    texts = {p: p.read_text(encoding="utf-8") for p in sorted(pages.glob("*.md"))}
+    for b in BLOCKS:  # every page and marker before any work
+        page = pages / b.page
+        if page not in texts:
+            raise ReportError(f"{page}: missing (block {b.name})")
+        if not any(m["name"] == b.name for m in BLOCK_RE.finditer(texts[page])):
+            raise ReportError(f"{page}: no markers of block {b.name}")
+    notes = []
+    for b in BLOCKS:
+        files = sources_of(b, rep)
+        if files is None:
+            notes.append(f"{b.name}: kept (no {' or '.join(b.sources)} in {rep})")
+            continue
+        body = f"{run_line(b, rep, files, commit)}\n\n{b.build(rep).strip()}\n"
+        page = pages / b.page
+        texts[page] = BLOCK_RE.sub(
+            lambda m, b=b, body=body: (m["begin"] + body + m["end"]) if m["name"] == b.name
+            else m[0], texts[page])
+        notes.append(f"{b.name}: from {', '.join(b.sources)}")
+    return texts, notes
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry (module docstring); returns the exit code."""
+    ap = argparse.ArgumentParser(prog="results_pages", description=__doc__.split("\n")[0])
+    ap.add_argument("reports", type=Path, help="a run's reports/ folder")
+    ap.add_argument("--commit", default=None, help="the run's commit (default: HEAD)")
+    ap.add_argument("--pages", type=Path, default=PAGES, help="the results pages' folder")
+    ap.add_argument("--check", action="store_true",
+                    help="write nothing; exit 1 when a page would change")
+    args = ap.parse_args(argv)
+    try:
+        if not args.reports.is_dir():
+            raise ReportError(f"reports folder {args.reports} does not exist")
+        if not args.pages.is_dir():
+            raise ReportError(f"pages folder {args.pages} does not exist")
+        texts, notes = rebuild(args.reports.resolve(), args.pages,
+                               args.commit or head_commit())
+    except (ReportError, FileNotFoundError, KeyError, pd.errors.ParserError) as e:
+        print(f"results_pages: error: {e}", file=sys.stderr)
+        return 2
+    changed = [p for p, t in texts.items() if t != p.read_text(encoding="utf-8")]
+    for line in notes:
+        print(line)
+    if args.check:
+        print(f"{len(changed)} page(s) would change: {', '.join(p.name for p in changed)}")
+        return 1 if changed else 0
+    for p in changed:
+        atomic_write_bytes(p, texts[p].encode("utf-8"))
+    print(f"{len(changed)} page(s) written: {', '.join(p.name for p in changed) or 'none'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
