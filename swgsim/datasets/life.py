@@ -42,8 +42,8 @@ from swgsim.datasets.schedule import LifeConfig, schedule, uses_position
 from swgsim.datasets.schema import make_dataset
 from swgsim.files.provenance import git_revision, package_version
 from swgsim.gear.influence import Influence
-from swgsim.sensing.acquisition import digitise
-from swgsim.sensing.disturbance import disturb
+from swgsim.sensing.acquisition import quantise
+from swgsim.sensing.disturbance import apply_disturbance, draw_disturbance
 from swgsim.sensing.sensor_faults import apply_sensor_fault, is_sensor_fault
 
 #: Windows made at once (memory).
@@ -213,12 +213,17 @@ class LifeSimulator:
         cfg = self.plan.config
         amp, fs = cfg.acquisition.amplifier, cfg.chain.sample_rate_hz
         time_s = np.arange(sig.shape[-1]) / fs
-        for i in range(sig.shape[0]):
+        draws, noise = [], []
+        for i in range(sig.shape[0]):  # each window's draws from its own stream, in order
             if self.life.disturbed:
-                sig[i:i + 1] = disturb(sig[i:i + 1], time_s, n_mean[i:i + 1], cfg.disturbance,
-                                       rngs[i], None if phi_in is None else phi_in[i:i + 1])
-            if amp is not None:
-                sig[i:i + 1] = digitise(sig[i:i + 1], amp, rngs[i])
+                draws.append(draw_disturbance(cfg.disturbance, rngs[i], (1, sig.shape[1])))
+            if amp is not None and amp.noise_uv_rms > 0:
+                noise.append(rngs[i].normal(0.0, amp.noise_mvv, size=(1, *sig.shape[1:])))
+        if self.life.disturbed:  # then the arithmetic for the whole block
+            a0, aj, alpha = (np.concatenate(d) for d in zip(*draws, strict=True))
+            sig[:] = apply_disturbance(sig, time_s, n_mean, (a0, aj, alpha), phi_in)
+        if amp is not None:
+            sig[:] = quantise(sig, amp, np.concatenate(noise) if noise else None)
 
     def _meta(self, rows: np.ndarray, fault: np.ndarray, eff: np.ndarray,
               n_mean: np.ndarray, t_mean: np.ndarray) -> dict[str, np.ndarray]:

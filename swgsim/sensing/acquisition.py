@@ -276,9 +276,15 @@ def digitise(sampled: np.ndarray, amp: Amplifier, rng: np.random.Generator) -> n
     ndarray, same shape
         [mV/V], on the converter's LSB grid and within its range.
     """
-    out = sampled
-    if amp.noise_uv_rms > 0:
-        out = out + rng.normal(0.0, amp.noise_mvv, size=out.shape)
+    noise = rng.normal(0.0, amp.noise_mvv, size=sampled.shape) if amp.noise_uv_rms > 0 \
+        else None
+    return quantise(sampled, amp, noise)
+
+
+def quantise(sampled: np.ndarray, amp: Amplifier, noise: np.ndarray | None) -> np.ndarray:
+    """:func:`digitise` with the noise already drawn (``noise`` None: none), on the
+    converter's LSB grid and within its range [mV/V]."""
+    out = sampled if noise is None else sampled + noise
     lsb = amp.lsb_mvv
     out = np.round(out / lsb) * lsb
     return np.clip(out, -amp.range_mvv, amp.range_mvv)

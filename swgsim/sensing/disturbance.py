@@ -60,10 +60,28 @@ def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,
     -------
     ndarray, same shape as ``signals``
     """
-    n_w, n_s, _ = signals.shape
+    return apply_disturbance(signals, time_s, n_in_rpm,
+                             draw_disturbance(spec, rng, signals.shape[:2]), phi_in)
+
+
+def draw_disturbance(spec: DisturbanceSpec, rng: np.random.Generator,
+                     shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """eq. (10)'s random draws for ``shape`` = (n_windows, n_sensors) windows: the offsets
+    a0 (n_w, n_s, 1), the sub-harmonics' amplitudes a_j and phases α_j (n_w, n_s, 4, 1),
+    in this order from ``rng`` [mV/V, rad]."""
+    n_w, n_s = shape
     a0 = rng.uniform(-spec.offset_mvv, spec.offset_mvv, size=(n_w, n_s, 1))
     aj = rng.uniform(0.0, spec.harmonic_mvv, size=(n_w, n_s, 4, 1))
     alpha = rng.uniform(0.0, 2 * np.pi, size=(n_w, n_s, 4, 1))
+    return a0, aj, alpha
+
+
+def apply_disturbance(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,
+                      draws: tuple[np.ndarray, np.ndarray, np.ndarray],
+                      phi_in: np.ndarray | None = None) -> np.ndarray:
+    """eq. (10) with given draws (:func:`draw_disturbance`) on windows (n_w, n_s, n_t);
+    arguments as :func:`disturb`."""
+    a0, aj, alpha = draws
     f_in = np.asarray(n_in_rpm, float) / 60.0  # rev/s
     j = np.arange(1, 5)
     # (n_w, 4, n_t)

@@ -110,7 +110,8 @@ def test_stream_outside_the_models_operating_points_refused():
 TINY_STUDY = dict(seeds=[0], healthy_hours=10.0, commissioning_h=4.0, horizon_h=2.0,
                   onset_window_h=[0.5, 1.0], growth_h=0.5, train_fault_h=0.5,
                   train_healthy_h=2.0, train_variants=2,
-                  faults=["eccentric_wg", "sensor_offset_step"], gears=[3], detector_hours=2.0)
+                  faults=["eccentric_wg", "sensor_offset_step"], gears=[3], detector_hours=2.0,
+                  nuisances={})
 
 
 @pytest.fixture(scope="module")
