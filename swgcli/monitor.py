@@ -76,14 +76,14 @@ def run_monitor_app(cfg) -> dict:
     if app.logger is not None:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(absolute_path(app.out_dir))
-    ownership.check(out, "out_dir")  # before any work: nothing in it but our files
+    ownership.check(out, "out_dir", app="swgsim-monitor")  # before any work
     model = load_model(absolute_path(app.diagnosis_model))
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
                          source=str(src))
     interval = float((ds["hour"].values[1] - ds["hour"].values[0]) * 60)
-    with ownership.claim(out, "swgsim-monitor") as claim:
+    with ownership.claim(out, "swgsim-monitor", strict=True) as claim:
         files = write_outputs(res, out, threshold(app.rule, interval), str(src))
         claim.record(files.values())
     if app.logger is not None:
