@@ -158,7 +158,10 @@ def host_check(out: Path, tables: ref.StageTables, held, py_cls, py_ph) -> dict:
     if host.find_cc() is None:
         return {"host_c": "not checked: no C compiler (cc) on PATH"}
     with tempfile.TemporaryDirectory(prefix="swg_host_") as tmp:
-        lib = host.build(out, Path(tmp) / "libswg.so")
+        try:
+            lib = host.build(out, Path(tmp) / "libswg.so")
+        except RuntimeError as e:  # the compiler failed: reported, the run goes on
+            return {"host_c": f"not checked: {e}", "failed": str(e)}
         cls, ph, feats = host.HostStage(lib, tables.n_features).run(
             held.signals, _phi(tables, held.op), held.op, held.efficiency)
     d = np.abs(feats.astype(float) - held.feats.astype(float))
@@ -192,7 +195,9 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
     Returns
     -------
     dict
-        The summary (also ``out/summary.json``); ``size`` the content of ``size.json``.
+        The summary (also ``out/summary.json``); ``size`` the content of ``size.json``;
+        ``failed`` the external tools that failed, one line each (the host compiler, a
+        cross tool: the figures they give are reported as not measured, with why).
 
     Raises
     ------
@@ -229,6 +234,7 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
         c_cls = chk.pop("c_classes", None)
         summary["host_c"] = chk
         summary["target"] = _target(out, tables, held, c_cls, cross)
+        summary["failed"] = [x["failed"] for x in (chk, summary["target"]) if "failed" in x]
         summary["size"] = size_record(summary)
         atomic_write_json(out / "size.json", summary["size"])
         atomic_write_json(out / "summary.json", summary)
@@ -243,8 +249,11 @@ def _target(out: Path, tables: ref.StageTables, held, c_cls, cross: bool) -> dic
     if why:
         return {"measured": False, "why": why}
     i = 0
-    res = target.measure(out, held.signals[i], _phi(tables, held.op[i:i + 1])[0],
-                         int(held.op[i]), float(held.efficiency[i]))
+    try:
+        res = target.measure(out, held.signals[i], _phi(tables, held.op[i:i + 1])[0],
+                             int(held.op[i]), float(held.efficiency[i]))
+    except target.ToolError as e:  # reported in size.json and summary.json, not raised
+        return {"measured": False, "why": str(e), "failed": str(e)}
     bits = [f"{v:08x}" for v in held.feats[i].view(np.uint32)]
     res["target_features_equal_reference"] = res.pop("target_feature_bits") == bits
     res["target_class_equal_host"] = c_cls is None or res["target_class"] == int(c_cls[i])
@@ -259,7 +268,9 @@ def size_record(summary: dict) -> dict:
            "cycles_per_window": t.get("cycles_per_window"),
            "accuracy_python": summary["accuracy_python"],
            "accuracy_c": c.get("accuracy_c")}
-    rec |= {k: v for k, v in t.items() if k not in rec and k != "measured"}
+    rec |= {k: v for k, v in t.items() if k not in rec and k not in ("measured", "failed")}
+    if not t.get("measured"):
+        rec["target"] = f"not measured ({t['why']})"
     rec["accuracy_full_monitor_model"] = summary.get("accuracy_full_monitor_model")
     rec["held_out_windows"] = summary["windows"]["held_out"]
     rec["dataset"], rec["held_out_gear"] = summary["dataset"], summary["held_out_gear"]
