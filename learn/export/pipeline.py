@@ -25,6 +25,7 @@ import numpy as np
 from learn.monitor.study import MonitorStudyConfig
 from learn.monitor.training import classes
 from swgsim.base.typed import allowed
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 from . import cgen, forest, host, target
 from . import reference as ref
@@ -101,7 +102,8 @@ def check_gears(plan, opts: ExportOptions) -> tuple[list[int], int]:
     Raises
     ------
     ValueError
-        If ``held_out_gear`` is not a gear of the data set or no training gear is left.
+        If ``held_out_gear`` is not a gear of the data set, no training gear is left, or
+        ``faults`` names a class the data set does not have.
     """
     gears = [int(g.id) for g in plan.config.gears]
     if opts.held_out_gear not in gears:
@@ -110,6 +112,11 @@ def check_gears(plan, opts: ExportOptions) -> tuple[list[int], int]:
     train = [g for g in gears if g != opts.held_out_gear]
     if not train:
         raise ValueError("the data set has no gear to train on besides the held-out one")
+    allowed_faults = [f for f in plan.config.variants if f != "healthy"] + list(SENSOR_FAULTS)
+    unknown = [f for f in opts.faults if f not in allowed_faults]
+    if unknown:
+        raise ValueError(f"export.faults: {unknown} not among the data set's gear faults "
+                         f"and the sensor faults; allowed: {allowed_faults}")
     return train, opts.held_out_gear
 
 

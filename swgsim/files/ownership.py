@@ -51,6 +51,7 @@ One helper serves every app: :func:`check` (read-only, to refuse before any work
 
 from __future__ import annotations
 
+import fnmatch
 import json
 import logging
 import os
@@ -80,16 +81,17 @@ from swgsim.files.stamp import (
     update,
     writers_of,
 )
-from swgsim.files.writers import Writer, entry, read_entry, refuse_others
+from swgsim.files.writers import Writer, entry, read_entry, refuse_others, writer_of
 
 log = logging.getLogger(__name__)
 
 __all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "Survey", "Claim", "survey", "check",
            "claim", "join", "before_replace", "sha256", "atomic_write_bytes",
-           "atomic_write_json"]
+           "atomic_write_json", "stop_note"]
 
 _CLAIMS: dict[Path, Claim] = {}   # folders this process claimed (resolved) -> claim
 _HELD: dict[Path, list] = {}  # run locks held: resolved folder -> [lock, count, pid, folder]
+_STOPPED: list[tuple[Path, str]] = []  # claims a stop (Ctrl-C, SIGTERM) ended: folder, app
 _GATE_S = 30.0  # how long a run waits for the gate (held for milliseconds by others)
 
 
@@ -479,7 +481,9 @@ class Claim:
     def __enter__(self) -> Claim:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, exc_type, *exc) -> None:
+        if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+            _STOPPED.append((self.folder, self.app))  # for the line the app ends with
         self.close()
 
 
@@ -641,3 +645,31 @@ def atomic_write_json(path: str | os.PathLike, obj: Any) -> None:
     """Write ``obj`` as indented JSON (keys sorted) to ``path`` atomically, recorded as
     :func:`atomic_write_bytes` records it."""
     atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=True) + "\n").encode())
+
+
+def stop_note() -> str:
+    """What the claims a stop (Ctrl-C, SIGTERM) ended keep, and what a rerun reuses: one
+    clause per folder (:class:`swgsim.files.writers.Writer`: its finished parts, proved by
+    the stamp), for the one line an app ends with; empty if the stop ended no claim."""
+    notes, seen = [], set()
+    for folder, app in _STOPPED:
+        if folder in seen:
+            continue
+        seen.add(folder)
+        w = writer_of(app)
+        try:
+            found = survey(folder)
+        except (OSError, ValueError):
+            continue
+        kept = sorted(r for r, by in found.writers.items() if w.parts and by is not None
+                      and by.kind == w.kind and fnmatch.fnmatch(r, w.parts))
+        names = ", ".join(kept[:2]) + (", ..." if len(kept) > 2 else "")
+        if w.parts:
+            what = (f"{len(kept)} finished {w.part}(s) of the {w.kind} kept ({names})"
+                    if kept else f"no {w.part} of the {w.kind} finished yet")
+            notes.append(f"{folder}: {what}; rerun the same command to resume: {w.resume}")
+        else:
+            notes.append(f"{folder}: nothing of the {w.kind} half-written (each file is "
+                         "written whole); rerun the same command")
+    _STOPPED.clear()
+    return "; ".join(notes)

@@ -37,16 +37,29 @@ class Writer:
     kind : str
         The kind of output (``data set``, ``monitor report``, ...): an app replaces only
         files of its own kind.
+    parts : str
+        Glob (relative to the folder) of the finished parts a stopped run leaves for a
+        rerun to resume from (shards, the evaluation's parts); empty: none.
+    part : str
+        What one part is called (``shard``).
+    resume : str
+        What a rerun of the same command reuses, for the line a stop ends with.
     """
 
     app: str
     kind: str
+    parts: str = ""   # glob (relative) of its finished parts kept by a stop, "" for none
+    part: str = ""    # what one part is called
+    resume: str = ""  # what a rerun of the same command reuses (with parts)
 
 
 #: The tag an app claims a folder with (:func:`swgsim.files.ownership.claim`) -> the program
 #: and its kind of output. A tag not listed is its own program and kind (a test's).
 WRITERS: dict[str, Writer] = {
-    "swgsim-generate": Writer("swgsim-generate", "data set"),
+    "swgsim-generate": Writer(
+        "swgsim-generate", "data set", "*.nc", "shard",
+        "it reuses each shard whose SHA-256 its sidecar and the ownership stamp prove "
+        "complete, and simulates the rest"),
     "swgsim-calibrate": Writer("swgsim-calibrate", "calibration"),
     "swgsim-monitor": Writer("swgsim-monitor", "monitor report"),
     "swgsim-export": Writer("swgsim-export", "export"),
@@ -54,7 +67,10 @@ WRITERS: dict[str, Writer] = {
     "swgsim-paper": Writer("swgsim-paper", "paper study"),
     "paper-study": Writer("swgsim-paper or swgsim-train task=paper_study", "paper study"),
     "transfer": Writer("swgsim-train experiment=transfer", "transfer report"),
-    "monitor": Writer("swgsim-train experiment=monitor", "monitor evaluation"),
+    "monitor": Writer(
+        "swgsim-train experiment=monitor", "monitor evaluation", "parts/*.json", "part",
+        "it reuses each part in parts/ whose SHA-256 the ownership stamp and whose key the "
+        "config prove complete, and runs the rest"),
 }
 
 
