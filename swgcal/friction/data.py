@@ -14,6 +14,7 @@ paper's law on the joint (:class:`swgsim.gear.friction.PaperLaw`).
 from __future__ import annotations
 
 import csv
+import io
 import itertools
 import logging
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ import pandas as pd
 from scipy.integrate import cumulative_trapezoid
 from scipy.signal import savgol_filter
 
+from swgsim.files.inputs import HEADER_BYTES, check_input_file, read_head
 from swgsim.gear.friction.signals import FrictionSignals, Scales
 
 from .options import FrictionOptions
@@ -271,12 +273,40 @@ def read_csv_header(path: str | Path) -> list[str]:
     return [h.strip() for h in rows[0]] if rows else []
 
 
+def _head_rows(path: Path) -> list[list[str]]:
+    """The header record of ``path``, from a bounded read of its head
+    (:data:`swgsim.files.inputs.HEADER_BYTES`); a regular file under
+    :data:`swgsim.files.inputs.MAX_INPUT_BYTES` checked first."""
+    check_input_file(path, "friction CSV")
+    head = read_head(path)
+    if b"\0" in head:
+        raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary file)")
+    end = min((i for i in (head.find(b"\n"), head.find(b"\r")) if i >= 0), default=-1)
+    if end < 0 and len(head) == HEADER_BYTES:
+        raise ValueError(f"{path}: not a text CSV (no line end in its first "
+                         f"{HEADER_BYTES // 1024} KiB: no header line)")
+    line = head if end < 0 else head[:end]
+    try:
+        return list(itertools.islice(csv.reader(io.StringIO(line.decode("utf-8-sig"))), 1))
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not a text CSV (UTF-8 expected; {e.reason}: "
+                         f"{e.object[e.start:e.end]!r})") from None
+    except csv.Error as e:
+        raise ValueError(f"{path}: not a text CSV ({e})") from None
+
+
 def _read_rows(path: Path, header_only: bool = False) -> list[list[str]]:
-    """The CSV records of ``path`` (csv module, ``utf-8-sig``: BOM and quoting undone)."""
+    """The CSV records of ``path`` (csv module, ``utf-8-sig``: BOM and quoting undone),
+    after the header's bounded checks (:func:`_head_rows`)."""
+    first = _head_rows(path)
+    if header_only:
+        return first
     try:
         with path.open(newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh)
-            return list(itertools.islice(reader, 1)) if header_only else list(reader)
+            rows = list(csv.reader(fh))
+        if any("\0" in c for r in rows for c in r):
+            raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary file)")
+        return rows
     except UnicodeDecodeError as e:
         raise ValueError(f"{path}: not a text CSV (UTF-8 expected; {e.reason}: "
                          f"{e.object[e.start:e.end]!r})") from None

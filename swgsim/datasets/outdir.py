@@ -51,6 +51,8 @@ def finished(out_dir: Path, plan: DatasetPlan) -> dict | None:
     """The manifest of a finished data set of this config in ``out_dir``, every shard
     present with the SHA-256 it lists; None otherwise. Read-only: such a folder is used
     as it is, whoever wrote it, since nothing needs to be written."""
+    if not (out_dir / MANIFEST).is_file():  # a FIFO or a device is never read
+        return None
     try:
         manifest = json.loads((out_dir / MANIFEST).read_text())
     except (OSError, ValueError):
