@@ -34,6 +34,7 @@ from collections.abc import Callable
 from typing import Any
 
 from swgcli import CONF_DIR
+from swgsim.files.ownership import forget_stops
 
 
 class Terminated(KeyboardInterrupt):
@@ -255,6 +256,7 @@ def run(entry: Callable[[], Any], prog: str) -> Any:
     os.environ["HYDRA_FULL_ERROR"] = "1"  # Hydra raises; we decide how to report
     os.environ["SWG_USER_FULL_ERROR"] = "1" if user_full else "0"
     _STOPPING.clear()
+    forget_stops()
     shield_workers()
     previous = {signal.SIGTERM: signal.signal(signal.SIGTERM, _on_signal)}
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not ignored

@@ -240,7 +240,7 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
         chk = host_check(out, tables, held, py_cls, py_ph)
         c_cls = chk.pop("c_classes", None)
         summary["host_c"] = chk
-        summary["target"] = _target(out, tables, held, c_cls, cross)
+        summary["target"] = target_figures(out, tables, held, c_cls, cross)
         summary["failed"] = [x["failed"] for x in (chk, summary["target"]) if "failed" in x]
         summary["size"] = size_record(summary)
         atomic_write_json(out / "size.json", summary["size"])
@@ -250,7 +250,7 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
     return summary
 
 
-def _target(out: Path, tables: ref.StageTables, held, c_cls, cross: bool) -> dict:
+def target_figures(out: Path, tables: ref.StageTables, held, c_cls, cross: bool) -> dict:
     """Cortex-M4F figures on the first held-out window, or why there are none."""
     why = target.missing_tools() if cross else "not asked (cross=false)"
     if why:

@@ -87,7 +87,7 @@ log = logging.getLogger(__name__)
 
 __all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "Survey", "Claim", "survey", "check",
            "claim", "join", "before_replace", "sha256", "atomic_write_bytes",
-           "atomic_write_json", "stop_note"]
+           "atomic_write_json", "stop_note", "forget_stops"]
 
 _CLAIMS: dict[Path, Claim] = {}   # folders this process claimed (resolved) -> claim
 _HELD: dict[Path, list] = {}  # run locks held: resolved folder -> [lock, count, pid, folder]
@@ -673,3 +673,9 @@ def stop_note() -> str:
                          "written whole); rerun the same command")
     _STOPPED.clear()
     return "; ".join(notes)
+
+
+def forget_stops() -> None:
+    """Forget the claims earlier stops ended (a run starting in this process: its
+    :func:`stop_note` names its own)."""
+    _STOPPED.clear()
