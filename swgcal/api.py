@@ -17,6 +17,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from swgsim.files.inputs import check_input_file
 from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
 from .friction.data import REQUIRED_COLUMNS, FrictionRecording, read_csv_header
@@ -58,8 +59,10 @@ def detect_kind(path: str | Path) -> str:
     Raises
     ------
     MeasuredDataError
-        The path does not exist, or is neither; the message names the path and what was
-        expected.
+        The path does not exist, or is neither (a FIFO, a device, a file over
+        :data:`swgsim.files.inputs.MAX_INPUT_BYTES`, a sparse file, a binary file, a first
+        line over :data:`swgsim.files.inputs.HEADER_BYTES`: refused before it is read); the
+        message names the path and what was expected.
     """
     p = Path(path)
     expected = (f"expected a friction CSV with columns {list(REQUIRED_COLUMNS)} or a "
@@ -70,6 +73,10 @@ def detect_kind(path: str | Path) -> str:
         if (p / "manifest.json").is_file():
             return "strain"
         raise MeasuredDataError(f"{str(p)!r} is a directory without manifest.json; {expected}")
+    try:  # a regular file under MAX_INPUT_BYTES, before anything is read
+        check_input_file(p, "measured")
+    except ValueError as e:
+        raise MeasuredDataError(f"{e}; {expected}") from None
     try:
         header = read_csv_header(p)
     except OSError as e:

@@ -11,8 +11,16 @@
   config options, overrides it cannot parse, with how to quote them), :class:`ValueError`
   (our range and consistency checks, data-set and measured-data errors) and unreadable
   input files; ``HYDRA_FULL_ERROR=1`` shows the traceback instead;
-* SIGTERM stops the app as Ctrl-C does: the exception unwinds, worker processes are
-  stopped and temporary files removed; exit code 130 (SIGINT) or 143 (SIGTERM);
+* SIGTERM stops the app as Ctrl-C does (:func:`run`, the one place for every app): the
+  exception unwinds (claims closed, temporary files removed), a second signal meanwhile
+  is ignored so that the cleanup finishes, progress bars are closed, the worker pool
+  (joblib's loky executor) is shut down with its workers killed, and an error a pool
+  raises because its workers got the signal too is taken as the stop, not as a bug (the
+  workers start with SIGINT blocked, :func:`shield_workers`, so that a terminal's Ctrl-C
+  reaches them through the app only); the
+  app ends with one line naming what was finished and kept and how a rerun resumes
+  (:func:`swgsim.files.ownership.stop_note`), and exit code 130 (SIGINT) or 143
+  (SIGTERM);
 * anything else is a bug and keeps its traceback.
 """
 
@@ -26,14 +34,78 @@ from collections.abc import Callable
 from typing import Any
 
 from swgcli import CONF_DIR
+from swgsim.files.ownership import forget_stops
 
 
 class Terminated(KeyboardInterrupt):
     """Raised in the main thread on SIGTERM, so that cleanup runs as for Ctrl-C."""
 
 
-def _on_sigterm(signum, frame):  # noqa: ARG001
-    raise Terminated()
+_STOPPING: list[int] = []  # the signal that is stopping this process, once received
+
+
+def _on_signal(signum, frame):  # noqa: ARG001
+    """SIGTERM or SIGINT: raise the stop in the main thread, once; a second signal while
+    the first unwinds is ignored, so that the cleanup finishes."""
+    if _STOPPING:
+        return
+    _STOPPING.append(signum)
+    raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def shield_workers() -> None:
+    """Start joblib's workers (and loky's resource tracker) with SIGINT blocked: a
+    terminal's Ctrl-C reaches the whole process group, and a worker that gets it prints
+    its own KeyboardInterrupt traceback (while importing, or in the middle of a task);
+    the app stops them instead (:func:`stop_workers`). SIGTERM still ends a worker
+    silently. Wraps loky's ``fork_exec``, once; the mask is set in the spawning thread
+    only for the spawn (the child keeps it across exec)."""
+    try:
+        from joblib.externals.loky.backend import fork_exec as fe
+    except ImportError:  # no joblib: no pool
+        return
+    if getattr(fe.fork_exec, "swg_shielded", False):
+        return
+    real = fe.fork_exec
+
+    def fork_exec(*args, **kwargs):
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            return real(*args, **kwargs)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+    fork_exec.swg_shielded = True  # type: ignore[attr-defined]
+    fe.fork_exec = fork_exec
+
+
+def stop_workers() -> None:
+    """Shut down joblib's worker pool (the loky executor), killing its workers, and
+    close the progress bars still open: what a stop leaves running otherwise."""
+    loky = sys.modules.get("joblib.externals.loky.reusable_executor")
+    executor = getattr(loky, "_executor", None) if loky else None
+    if executor is not None:
+        try:
+            executor.shutdown(wait=True, kill_workers=True)
+        except Exception:  # noqa: BLE001 - a pool already broken by the signal
+            pass
+    tqdm = sys.modules.get("tqdm.std")
+    for bar in list(getattr(getattr(tqdm, "tqdm", None), "_instances", ()) or ()):
+        try:
+            bar.close()
+        except Exception:  # noqa: BLE001 - a bar of a finished stream
+            pass
+
+
+def stop_line(prog: str, code: int) -> str:
+    """The one line a stopped app ends with: how it was stopped, what it kept, how to
+    resume (:func:`swgsim.files.ownership.stop_note`)."""
+    from swgsim.files.ownership import stop_note
+
+    how = "terminated (SIGTERM)" if code == 143 else "interrupted (SIGINT)"
+    note = stop_note()
+    return f"{prog}: {how}; " + (note or "nothing was written into an output folder "
+                                 "yet; rerun the same command to start again")
 
 
 def absolute_path(path: str) -> str:
@@ -147,6 +219,12 @@ def one_line(exc: BaseException) -> str | None:
         return f"{key}: missing value (give {key}=...)"
     if isinstance(cause, ValidationError):
         key = getattr(cause, "full_key", None) or "?"
+        m = re.match(r"Value '?(-?\d+)'? \(int\) is incompatible with type hint 'float'",
+                     cause.msg)
+        if m:  # OmegaConf converts no int inside a nested list of floats
+            return (f"{key}: {m.group(1)} is an integer where a float is required (OmegaConf "
+                    f"checks the numbers of nested lists strictly); write it with a decimal "
+                    f"point: {m.group(1)}.0")
         return f"{key}: {cause.msg.splitlines()[0]}"
     if isinstance(cause, OmegaConfBaseException):
         key = getattr(cause, "full_key", None)
@@ -177,25 +255,38 @@ def run(entry: Callable[[], Any], prog: str) -> Any:
     user_full = os.environ.get("HYDRA_FULL_ERROR") == "1"
     os.environ["HYDRA_FULL_ERROR"] = "1"  # Hydra raises; we decide how to report
     os.environ["SWG_USER_FULL_ERROR"] = "1" if user_full else "0"
-    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    _STOPPING.clear()
+    forget_stops()
+    shield_workers()
+    previous = {signal.SIGTERM: signal.signal(signal.SIGTERM, _on_signal)}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not ignored
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, _on_signal)
     try:
         return entry()
-    except Terminated:
-        print(f"{prog}: terminated", file=sys.stderr)
-        sys.exit(143)
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        sys.exit(130)
-    except Exception as e:  # noqa: BLE001 - sorted into bad input and bugs below
+    except KeyboardInterrupt as e:
+        _stop(prog, 143 if isinstance(e, Terminated) else 130)
+    except Exception as e:  # noqa: BLE001 - sorted into stops, bad input and bugs below
+        if _STOPPING:  # a worker pool's error because its workers got the signal too
+            _stop(prog, 143 if _STOPPING[0] == signal.SIGTERM else 130)
         msg = one_line(e)
         if msg is None or user_full:
             raise
         print(f"{prog}: error: {msg}", file=sys.stderr)
         sys.exit(2)
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         if not user_full:
             os.environ.pop("HYDRA_FULL_ERROR", None)
+
+
+def _stop(prog: str, code: int) -> None:
+    """End a stopped app: no further signal, the pool and bars stopped, one line."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    stop_workers()
+    print(stop_line(prog, code), file=sys.stderr, flush=True)
+    sys.exit(code)
 
 
 def hydra_app(config_name: str, schema: type, prog: str):
@@ -230,7 +321,8 @@ def hydra_app(config_name: str, schema: type, prog: str):
                 check_out_dirs(cfg, schema)
                 return task(cfg)
             except Exception as e:  # noqa: BLE001
-                if one_line(e) is None or os.environ.get("SWG_USER_FULL_ERROR") == "1":
+                if _STOPPING or one_line(e) is None \
+                        or os.environ.get("SWG_USER_FULL_ERROR") == "1":
                     raise
                 failed.append(e)  # reported once by main(), not by Hydra's job runner
                 return None

@@ -196,7 +196,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
 
     measured = Path(cfg.measured).expanduser()
     out_dir = Path(cfg.out_dir).expanduser()
-    ownership.check(out_dir, "out_dir")  # before any work: nothing in it but our files
+    ownership.check(out_dir, "out_dir", app="swgsim-calibrate")  # before any work
     kind = detect_kind(measured)
     options, selection = options_from_config(
         kind, OmegaConf.to_container(cfg, resolve=True), measured)
@@ -207,7 +207,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     log.info("measured data %s: kind %s", measured, kind)
     problem = build_problem(measured, **options)
     result = calibrate(problem, selection)
-    with ownership.claim(out_dir, "swgsim-calibrate") as claim:
+    with ownership.claim(out_dir, "swgsim-calibrate", strict=True) as claim:
         summary = write_outputs(result, out_dir, source=str(measured),
                                 figures=bool(cfg.figures))
         claim.record([*summary["files"], *summary["figures"].values()])

@@ -69,7 +69,9 @@ def run_export_app(cfg) -> dict:
 
 @hydra_app("export", ExportApp, "swgsim-export")
 def main(cfg: DictConfig) -> dict:
-    """Run the export and print the figures and where they went."""
+    """Run the export and print the figures and where they went; a failed external tool
+    (compiler, cross tool, QEMU) ends it with exit 2 and one line, after every file is
+    written (:func:`learn.export.pipeline.run_export`)."""
     s = run_export_app(cfg)
     size, host = s["size"], s["host_c"]
     print(f"accuracy on held-out gear {s['held_out_gear']}: python {s['accuracy_python']:.4f}, "
@@ -87,6 +89,10 @@ def main(cfg: DictConfig) -> dict:
     else:
         print(f"Cortex-M4F: not measured ({s['target']['why']})")
     print(f"files: {Path(s['files'][0]).parent}")
+    if s["failed"]:  # every file is written and listed; the figures it lacks say why
+        raise ValueError(f"{s['failed'][0]}; the C files, size.json and summary.json are in "
+                         f"{Path(s['files'][0]).parent}, what it did not measure marked "
+                         "'not measured'")
     return s
 
 

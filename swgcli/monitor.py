@@ -25,6 +25,7 @@ from swgcli.schema import MonitorApp
 from swgsim.base.typed import check_range
 from swgsim.datasets.schema import load
 from swgsim.files import ownership
+from swgsim.files.inputs import check_input_file
 
 log = logging.getLogger(__name__)
 
@@ -37,16 +38,18 @@ def load_model(path: str):
     FileNotFoundError
         If there is no file.
     ValueError
-        If the file is not a diagnosis model.
+        If the file is not a diagnosis model, or not a regular file under
+        :data:`swgsim.files.inputs.MAX_INPUT_BYTES` (refused before it is read).
     """
     import joblib
 
     from learn.monitor.model import DiagnosisModel
 
     p = Path(path)
-    if not p.is_file():
+    if not p.exists():
         raise FileNotFoundError(2, "no diagnosis model (run swgsim-train experiment=monitor, "
                                 "which writes reports/monitor/models/*.joblib)", str(p))
+    check_input_file(p, "diagnosis_model")  # a regular file under 2 GiB, before reading
     try:
         m = joblib.load(p)
     except Exception as e:  # noqa: BLE001 - any unpickling failure is the same answer
@@ -77,14 +80,14 @@ def run_monitor_app(cfg) -> dict:
     if app.logger is not None:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(absolute_path(app.out_dir))
-    ownership.check(out, "out_dir")  # before any work: nothing in it but our files
+    ownership.check(out, "out_dir", app="swgsim-monitor")  # before any work
     model = load_model(absolute_path(app.diagnosis_model))
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
                          source=str(src), normal=app.normal)
     interval = float((ds["hour"].values[1] - ds["hour"].values[0]) * 60)
-    with ownership.claim(out, "swgsim-monitor") as claim:
+    with ownership.claim(out, "swgsim-monitor", strict=True) as claim:
         files = write_outputs(res, out, threshold(app.rule, interval), str(src))
         claim.record(files.values())
     if app.logger is not None:

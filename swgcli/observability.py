@@ -117,7 +117,7 @@ def run_observability(cfg: DictConfig) -> dict:
     csv = rep / "observability.csv"
     if cfg.map not in ("steady", "motion"):
         raise ValueError(f"map: must be one of ['steady', 'motion'], got {cfg.map!r}")
-    ownership.check(rep, "report_dir")  # before any work: nothing in it but our files
+    ownership.check(rep, "report_dir", app="swgsim-observability")  # before any work
     if cfg.map == "motion":
         return run_motion_map(cfg, rep)
     if bool(cfg.plot_only):
@@ -127,7 +127,7 @@ def run_observability(cfg: DictConfig) -> dict:
         table = pd.read_csv(csv)
         loads = sorted(set(table["t_out_nm"]))
         modes = torsional_modes(sorted(set(table["j_out_kgm2"])), loads)
-        with ownership.claim(rep, "swgsim-observability") as claim:
+        with ownership.claim(rep, "swgsim-observability", "report_dir", strict=True) as claim:
             fig = plot_observability(table, rep / "observability.png", modes)
             claim.record([fig])
         return {"table": table, "files": {"figure": str(fig)}, "data_sets": {}, "wall_s": 0.0}
@@ -150,7 +150,7 @@ def run_observability(cfg: DictConfig) -> dict:
     table = pd.concat(parts, ignore_index=True)
     loads = [float(t) for t in cfg.dataset.operating_points.t_out_nm]
     modes = torsional_modes(list(configs), loads)
-    with ownership.claim(rep, "swgsim-observability") as claim:
+    with ownership.claim(rep, "swgsim-observability", "report_dir", strict=True) as claim:
         atomic_write_bytes(csv, table.to_csv(index=False, float_format="%.6g").encode())
         atomic_write_bytes(rep / "torsional_modes.csv",
                            modes.to_csv(index=False, float_format="%.6g").encode())
@@ -221,7 +221,7 @@ def run_motion_map(cfg: DictConfig, rep: Path) -> dict:
                                                          disable=not cfg.progress)]
     table = pd.concat(parts, ignore_index=True)
     small = smallest_detectable(table)
-    with ownership.claim(rep, "swgsim-observability") as claim:
+    with ownership.claim(rep, "swgsim-observability", "report_dir", strict=True) as claim:
         files = {"csv": rep / "observability_motion.csv",
                  "smallest": rep / "smallest_detectable.csv"}
         atomic_write_bytes(files["csv"], table.to_csv(index=False, float_format="%.6g").encode())

@@ -152,9 +152,10 @@ def run_paper(cfg: DictConfig) -> dict:
     plans = _plans(cfg, names)
     check_tracking(cfg.tracking_uri, "tracking_uri")  # before any work
     root_data, root_rep = absolute_path(str(cfg.data_root)), absolute_path(str(cfg.report_root))
-    ownership.check(root_rep, "report_root", only=SUMMARY_FILES)  # shared: our files only
+    ownership.check(root_rep, "report_root", only=SUMMARY_FILES,
+                    app="swgsim-paper")  # shared: our files only
     for n in names:
-        ownership.check(f"{root_rep}/{n}", "report_root")
+        ownership.check(f"{root_rep}/{n}", "report_root", app="paper-study")
     counter, n_stages = itertools.count(1), 2 * len(names) + 1
 
     def stage() -> str:
@@ -169,7 +170,7 @@ def run_paper(cfg: DictConfig) -> dict:
         study = _studies(cfg, names, root_data, root_rep, stage, stages, caught)
         t0 = time.perf_counter()
         with ownership.claim(root_rep, "swgsim-paper", "report_root",
-                             only=SUMMARY_FILES) as claim:
+                             only=SUMMARY_FILES, strict=True) as claim:
             summary = write_summary(
                 {n: study[n]["results"] for n in names},
                 {n: study[n]["confusion"] for n in names}, root_rep,

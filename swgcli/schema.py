@@ -262,6 +262,37 @@ def validate(cfg: DictConfig, schema: type) -> None:
         container.get("transfer"), dict) else None
     for name, m in (models or {}).items():
         check_target(m, f"transfer.models.{name}")
+    if isinstance(container.get("monitor"), dict):
+        check_monitor_choices(container["monitor"])
+
+
+def check_monitor_choices(monitor: dict) -> None:
+    """Refuse ``monitor.study.faults`` and ``monitor.study.gears`` that a data set of
+    ``monitor.run_on`` does not have (they would fail deep in a worker otherwise).
+
+    Raises
+    ------
+    ValueError
+        ``monitor.study.faults: ['x'] not in monitor.datasets.bench; allowed: ...``.
+    """
+    from swgsim.sensing.sensor_faults import SENSOR_FAULTS
+
+    study = monitor.get("study") or {}
+    for name in monitor.get("run_on") or []:
+        ds = (monitor.get("datasets") or {}).get(name)
+        if not isinstance(ds, dict):
+            continue  # refused by the task, naming monitor.run_on
+        faults = [f for f in (ds.get("variants") or {}) if f != "healthy"]
+        faults += list(SENSOR_FAULTS)
+        bad = [f for f in study.get("faults") or [] if f not in faults]
+        if bad:
+            raise ValueError(f"monitor.study.faults: {bad} not in monitor.datasets.{name}; "
+                             f"allowed: its gear faults and the sensor faults {faults}")
+        gears = [g.get("id") for g in ds.get("gears") or [] if isinstance(g, dict)]
+        bad = [g for g in study.get("gears") or [] if g not in gears]
+        if bad:
+            raise ValueError(f"monitor.study.gears: {bad} not in monitor.datasets.{name}; "
+                             f"allowed: {gears} (empty: every gear)")
 
 
 def check_target(node: Any, where: str) -> None:

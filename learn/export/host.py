@@ -31,17 +31,23 @@ def build(src: Path, out: Path) -> Path:
     Raises
     ------
     RuntimeError
-        No C compiler, or the compiler's first error line.
+        No C compiler, or one line naming it, its exit status and its first error line.
     """
     cc = find_cc()
     if cc is None:
         raise RuntimeError("no C compiler (cc, gcc or clang) on PATH")
     cmd = [cc, *CFLAGS, "-shared", "-I", str(src), str(src / "swg_monitor.c"), "-o",
            str(out), "-lm"]
-    res = subprocess.run(cmd, capture_output=True, text=True)
+    try:
+        res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        raise RuntimeError(f"{Path(cc).name} failed ({getattr(e, 'strerror', None) or e})"
+                           ) from None
     if res.returncode:
-        first = next((s for s in res.stderr.splitlines() if "error" in s), res.stderr[:300])
-        raise RuntimeError(f"{' '.join(cmd)}: {first}")
+        lines = [" ".join(s.split()) for s in res.stderr.splitlines() if s.strip()]
+        first = next((s for s in lines if "error" in s), lines[0] if lines else "")[:200]
+        raise RuntimeError(f"{Path(cc).name} failed (exit {res.returncode}) compiling "
+                           f"swg_monitor.c for the host: {first}")
     return out
 
 

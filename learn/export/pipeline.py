@@ -25,6 +25,7 @@ import numpy as np
 from learn.monitor.study import MonitorStudyConfig
 from learn.monitor.training import classes
 from swgsim.base.typed import allowed
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 from . import cgen, forest, host, target
 from . import reference as ref
@@ -101,7 +102,8 @@ def check_gears(plan, opts: ExportOptions) -> tuple[list[int], int]:
     Raises
     ------
     ValueError
-        If ``held_out_gear`` is not a gear of the data set or no training gear is left.
+        If ``held_out_gear`` is not a gear of the data set, no training gear is left, or
+        ``faults`` names a class the data set does not have.
     """
     gears = [int(g.id) for g in plan.config.gears]
     if opts.held_out_gear not in gears:
@@ -110,6 +112,11 @@ def check_gears(plan, opts: ExportOptions) -> tuple[list[int], int]:
     train = [g for g in gears if g != opts.held_out_gear]
     if not train:
         raise ValueError("the data set has no gear to train on besides the held-out one")
+    allowed_faults = [f for f in plan.config.variants if f != "healthy"] + list(SENSOR_FAULTS)
+    unknown = [f for f in opts.faults if f not in allowed_faults]
+    if unknown:
+        raise ValueError(f"export.faults: {unknown} not among the data set's gear faults "
+                         f"and the sensor faults; allowed: {allowed_faults}")
     return train, opts.held_out_gear
 
 
@@ -158,7 +165,10 @@ def host_check(out: Path, tables: ref.StageTables, held, py_cls, py_ph) -> dict:
     if host.find_cc() is None:
         return {"host_c": "not checked: no C compiler (cc) on PATH"}
     with tempfile.TemporaryDirectory(prefix="swg_host_") as tmp:
-        lib = host.build(out, Path(tmp) / "libswg.so")
+        try:
+            lib = host.build(out, Path(tmp) / "libswg.so")
+        except RuntimeError as e:  # the compiler failed: reported, the run goes on
+            return {"host_c": f"not checked: {e}", "failed": str(e)}
         cls, ph, feats = host.HostStage(lib, tables.n_features).run(
             held.signals, _phi(tables, held.op), held.op, held.efficiency)
     d = np.abs(feats.astype(float) - held.feats.astype(float))
@@ -192,7 +202,9 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
     Returns
     -------
     dict
-        The summary (also ``out/summary.json``); ``size`` the content of ``size.json``.
+        The summary (also ``out/summary.json``); ``size`` the content of ``size.json``;
+        ``failed`` the external tools that failed, one line each (the host compiler, a
+        cross tool: the figures they give are reported as not measured, with why).
 
     Raises
     ------
@@ -203,7 +215,7 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
     from swgsim.files.ownership import atomic_write_json
 
     out = Path(out)
-    ownership.check(out, "out_dir")
+    ownership.check(out, "out_dir", app=app)
     check_gears(plan, opts)
     tables, rf, held, tr = train_stage(plan, opts)
     code, info = forest.to_c(rf)
@@ -221,14 +233,15 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
                "windows": {"train": int(sum(len(w.y) for w in tr)), "held_out": len(held.y)}}
     if opts.full_model:
         summary["accuracy_full_monitor_model"] = full_model_accuracy(plan, tr, held, opts.seed)
-    with ownership.claim(out, app) as claim:
+    with ownership.claim(out, app, strict=True) as claim:
         files = cgen.write_sources(out, tables, cls, code, {
             "dataset": dataset, "gear": held.gear,
             "train_gears": ", ".join(map(str, train_gears))})
         chk = host_check(out, tables, held, py_cls, py_ph)
         c_cls = chk.pop("c_classes", None)
         summary["host_c"] = chk
-        summary["target"] = _target(out, tables, held, c_cls, cross)
+        summary["target"] = target_figures(out, tables, held, c_cls, cross)
+        summary["failed"] = [x["failed"] for x in (chk, summary["target"]) if "failed" in x]
         summary["size"] = size_record(summary)
         atomic_write_json(out / "size.json", summary["size"])
         atomic_write_json(out / "summary.json", summary)
@@ -237,14 +250,17 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
     return summary
 
 
-def _target(out: Path, tables: ref.StageTables, held, c_cls, cross: bool) -> dict:
+def target_figures(out: Path, tables: ref.StageTables, held, c_cls, cross: bool) -> dict:
     """Cortex-M4F figures on the first held-out window, or why there are none."""
     why = target.missing_tools() if cross else "not asked (cross=false)"
     if why:
         return {"measured": False, "why": why}
     i = 0
-    res = target.measure(out, held.signals[i], _phi(tables, held.op[i:i + 1])[0],
-                         int(held.op[i]), float(held.efficiency[i]))
+    try:
+        res = target.measure(out, held.signals[i], _phi(tables, held.op[i:i + 1])[0],
+                             int(held.op[i]), float(held.efficiency[i]))
+    except target.ToolError as e:  # reported in size.json and summary.json, not raised
+        return {"measured": False, "why": str(e), "failed": str(e)}
     bits = [f"{v:08x}" for v in held.feats[i].view(np.uint32)]
     res["target_features_equal_reference"] = res.pop("target_feature_bits") == bits
     res["target_class_equal_host"] = c_cls is None or res["target_class"] == int(c_cls[i])
@@ -259,7 +275,9 @@ def size_record(summary: dict) -> dict:
            "cycles_per_window": t.get("cycles_per_window"),
            "accuracy_python": summary["accuracy_python"],
            "accuracy_c": c.get("accuracy_c")}
-    rec |= {k: v for k, v in t.items() if k not in rec and k != "measured"}
+    rec |= {k: v for k, v in t.items() if k not in rec and k not in ("measured", "failed")}
+    if not t.get("measured"):
+        rec["target"] = f"not measured ({t['why']})"
     rec["accuracy_full_monitor_model"] = summary.get("accuracy_full_monitor_model")
     rec["held_out_windows"] = summary["windows"]["held_out"]
     rec["dataset"], rec["held_out_gear"] = summary["dataset"], summary["held_out_gear"]

@@ -54,10 +54,30 @@ def missing_tools() -> str | None:
     return None
 
 
+class ToolError(RuntimeError):
+    """A cross tool failed (non-zero exit, timeout, not executable); the message is one
+    line naming the tool, its exit status and its first error line."""
+
+
+def tool_message(name: str, rc: int | str, text: str) -> str:
+    """One line on a failed tool: its name, exit status and first error line (else its
+    last line), shortened to 200 characters."""
+    lines = [" ".join(s.split()) for s in text.splitlines() if s.strip()]
+    first = next((s for s in lines if "error" in s.lower()), lines[-1] if lines else "")
+    first = first if len(first) <= 200 else first[:197] + "..."
+    return f"{name} failed (exit {rc})" + (f": {first}" if first else "")
+
+
 def _run(cmd: list[str], cwd: Path, timeout: float = 600) -> str:
-    res = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+    try:
+        res = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        raise ToolError(f"{Path(cmd[0]).name} failed (no answer in {timeout:g} s)") from None
+    except OSError as e:
+        raise ToolError(f"{Path(cmd[0]).name} failed ({e.strerror or e})") from None
     if res.returncode:
-        raise RuntimeError(f"{' '.join(cmd[:3])} ...: {(res.stderr or res.stdout)[-400:]}")
+        raise ToolError(tool_message(Path(cmd[0]).name, res.returncode,
+                                     res.stderr or res.stdout))
     return res.stdout
 
 
@@ -88,19 +108,24 @@ def _symbol(elf: Path, name: str) -> int:
         parts = line.split()
         if len(parts) == 3 and parts[2] == name:
             return int(parts[0], 16) & ~1
-    raise RuntimeError(f"{name} not in {elf.name}")
+    raise ToolError(f"arm-none-eabi-nm: {name} not in {elf.name}")
 
 
 def _qemu(elf: Path, log: Path) -> str:
     cmd = [QEMU, "-M", "mps2-an386", "-cpu", "cortex-m4", "-nographic", "-monitor", "none",
            "-serial", "null", "-semihosting-config", "enable=on,target=native",
            "-singlestep", "-d", "in_asm,exec,nochain", "-D", str(log), "-kernel", str(elf)]
-    res = subprocess.run(cmd, cwd=elf.parent, capture_output=True, text=True, timeout=900,
-                         stdin=subprocess.DEVNULL)
+    try:
+        res = subprocess.run(cmd, cwd=elf.parent, capture_output=True, text=True,
+                             timeout=900, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        raise ToolError(f"{QEMU} failed (no answer in 900 s)") from None
+    except OSError as e:
+        raise ToolError(f"{QEMU} failed ({e.strerror or e})") from None
     text = res.stdout + res.stderr  # semihosting writes to stderr when it is not a tty
     line = next((s for s in text.splitlines() if s.startswith("class ")), None)
     if res.returncode or line is None:
-        raise RuntimeError(f"{QEMU} (rc {res.returncode}) printed {text[-300:]!r}")
+        raise ToolError(tool_message(QEMU, res.returncode, text or "printed no result"))
     return line
 
 
@@ -226,12 +251,12 @@ def measure(src: Path, x: np.ndarray, phi: np.ndarray, op: int, efficiency: floa
 
     Raises
     ------
-    RuntimeError
-        If a tool is missing or fails.
+    ToolError
+        If a tool is missing or fails (one line naming it).
     """
     why = missing_tools()
     if why:
-        raise RuntimeError(why)
+        raise ToolError(why)
     with tempfile.TemporaryDirectory(prefix="swg_m4_") as tmp:
         work = Path(tmp)
         stage = sizes(link(src, work, firmware.MAIN_SIZE, {}, "size"))

@@ -95,6 +95,10 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
             raise ValueError(f"{source}: no per-sample variable {v!r}; a stream is a gear's "
                              "life (swgsim-generate with dataset.life set)")
     hours = ds["hour"].values.astype(float)
+    if hours.size and not (np.all(np.isfinite(hours)) and hours.min() >= 0):
+        bad = int(np.flatnonzero(~(np.isfinite(hours) & (hours >= 0)))[0])
+        raise ValueError(f"{source}: variable 'hour' must be finite and >= 0 (operating hours "
+                         f"since commissioning began); window {bad} is at {hours[bad]:g} h")
     if hours.size < 2 or not np.all(np.diff(hours) > 0):
         bad = int(np.argmax(np.diff(hours) <= 0)) + 1 if hours.size >= 2 else 0
         raise ValueError(f"{source}: hours must increase from window to window; window {bad} "

@@ -148,8 +148,8 @@ def run_monitor_evaluation(cfg) -> dict:
     if app.logger is not None:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(mc.report_dir)
-    ownership.check(out, "monitor.report_dir")  # before any work
-    with ownership.claim(out, "monitor", "monitor.report_dir") as claim:
+    ownership.check(out, "monitor.report_dir", app="monitor")  # before any work
+    with ownership.claim(out, "monitor", "monitor.report_dir", strict=True) as claim:
         return _evaluate(app, mc, plans, out, claim)
 
 

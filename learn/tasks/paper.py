@@ -69,7 +69,7 @@ def run_paper_study(
     from learn.reports.report import write_report
     from swgsim.files import ownership
 
-    ownership.check(report_dir, "report_dir")  # before any work: nothing in it but ours
+    ownership.check(report_dir, "report_dir", app="paper-study")  # before any work
     options = options or StudyOptions()
     tracking = None
     if track:
@@ -78,7 +78,7 @@ def run_paper_study(
     study = paper_study(dataset_path, options, tracking=tracking, n_jobs=n_jobs,
                         progress=progress, random_state=random_state, features=features,
                         protocols=protocols, name=name)
-    with ownership.claim(report_dir, "paper-study", "report_dir") as claim:
+    with ownership.claim(report_dir, "paper-study", "report_dir", strict=True) as claim:
         files = write_report(study.results, report_dir,
                              ds=study.ds if options.figures else None,
                              timings_s=study.timings_s, dataset_path=str(dataset_path),

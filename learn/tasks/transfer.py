@@ -207,12 +207,13 @@ def run_transfer(cfg) -> dict:
                          "transfer group of its own)")
     check_config(tc)
     report_dir = Path(tc.report_dir or Path(app.paths.report_dir) / "transfer")
-    ownership.check(report_dir, "transfer.report_dir")  # before any work
+    ownership.check(report_dir, "transfer.report_dir", app="transfer")  # before any work
     if tc.n_threads:
         torch.set_num_threads(int(tc.n_threads))
     t_all = time.perf_counter()
     data_sets, generate_s = _data_sets(app, tc)
-    with ownership.claim(report_dir, "transfer", "transfer.report_dir") as claim:
+    with ownership.claim(report_dir, "transfer", "transfer.report_dir",
+                         strict=True) as claim:
         got = _compare(app, tc, data_sets, report_dir)
         res = pd.concat(got.results, ignore_index=True)
         conf = pd.concat(got.confusion, ignore_index=True)

@@ -14,6 +14,7 @@ paper's law on the joint (:class:`swgsim.gear.friction.PaperLaw`).
 from __future__ import annotations
 
 import csv
+import io
 import itertools
 import logging
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ import pandas as pd
 from scipy.integrate import cumulative_trapezoid
 from scipy.signal import savgol_filter
 
+from swgsim.files.inputs import HEADER_BYTES, check_input_file, read_head
 from swgsim.gear.friction.signals import FrictionSignals, Scales
 
 from .options import FrictionOptions
@@ -36,6 +38,8 @@ __all__ = [
     "load_friction_csv",
     "read_csv_header",
     "velocity_consistency",
+    "velocity_scale",
+    "scale_cause",
     "write_friction_csv",
     "estimate_acceleration",
     "REQUIRED_COLUMNS",
@@ -269,12 +273,40 @@ def read_csv_header(path: str | Path) -> list[str]:
     return [h.strip() for h in rows[0]] if rows else []
 
 
+def _head_rows(path: Path) -> list[list[str]]:
+    """The header record of ``path``, from a bounded read of its head
+    (:data:`swgsim.files.inputs.HEADER_BYTES`); a regular file under
+    :data:`swgsim.files.inputs.MAX_INPUT_BYTES` checked first."""
+    check_input_file(path, "friction CSV")
+    head = read_head(path)
+    if b"\0" in head:
+        raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary file)")
+    end = min((i for i in (head.find(b"\n"), head.find(b"\r")) if i >= 0), default=-1)
+    if end < 0 and len(head) == HEADER_BYTES:
+        raise ValueError(f"{path}: not a text CSV (no line end in its first "
+                         f"{HEADER_BYTES // 1024} KiB: no header line)")
+    line = head if end < 0 else head[:end]
+    try:
+        return list(itertools.islice(csv.reader(io.StringIO(line.decode("utf-8-sig"))), 1))
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not a text CSV (UTF-8 expected; {e.reason}: "
+                         f"{e.object[e.start:e.end]!r})") from None
+    except csv.Error as e:
+        raise ValueError(f"{path}: not a text CSV ({e})") from None
+
+
 def _read_rows(path: Path, header_only: bool = False) -> list[list[str]]:
-    """The CSV records of ``path`` (csv module, ``utf-8-sig``: BOM and quoting undone)."""
+    """The CSV records of ``path`` (csv module, ``utf-8-sig``: BOM and quoting undone),
+    after the header's bounded checks (:func:`_head_rows`)."""
+    first = _head_rows(path)
+    if header_only:
+        return first
     try:
         with path.open(newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh)
-            return list(itertools.islice(reader, 1)) if header_only else list(reader)
+            rows = list(csv.reader(fh))
+        if any("\0" in c for r in rows for c in r):
+            raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary file)")
+        return rows
     except UnicodeDecodeError as e:
         raise ValueError(f"{path}: not a text CSV (UTF-8 expected; {e.reason}: "
                          f"{e.object[e.start:e.end]!r})") from None
@@ -429,6 +461,71 @@ def velocity_consistency(t_s: np.ndarray, q_rad: np.ndarray,
                                resolution_rad=resolution)
 
 
+#: Largest RMS of q_rad - q0 - (integral of dq) / k, relative to the angle's excursion, at
+#: which a velocity k times the angle's derivative is named a pure factor (a noisy
+#: tachometer or a lagging filter leave more) [-].
+PURE_FACTOR_TOL = 0.02
+
+#: Factors with a likely cause: velocity / (derivative of the angle) -> the cause.
+_FACTORS = {
+    180 / np.pi: "dq_rad_per_s looks like deg/s: divide it by 57.3",
+    np.pi / 180: "q_rad looks like degrees: multiply it by pi/180",
+    60 / (2 * np.pi): "dq_rad_per_s looks like rpm: multiply it by 2 pi/60",
+    1000.0: "time_s looks like milliseconds: divide it by 1000",
+    1e-3: "dq_rad_per_s looks like mrad/s, or time_s like kiloseconds",
+}
+
+
+def velocity_scale(t_s: np.ndarray, q_rad: np.ndarray, dq_rad_s: np.ndarray) -> float | None:
+    """The factor k when a velocity is a pure multiple of an angle's time derivative.
+
+    Fits ``q = q0 + (integral of dq) / k`` by least squares (no drift: a velocity offset
+    is not a pure factor) and accepts k when the rest is at most
+    :data:`PURE_FACTOR_TOL` of the angle's RMS excursion.
+
+    Parameters
+    ----------
+    t_s : ndarray, shape (n,)
+        Time, strictly increasing [s].
+    q_rad : ndarray, shape (n,)
+        Angle [rad].
+    dq_rad_s : ndarray, shape (n,)
+        Velocity [rad/s].
+
+    Returns
+    -------
+    float or None
+        k = velocity / (dq/dt) (2.0: the velocity twice the derivative, or the time
+        column twice too long; -1: a sign error), or None if no pure factor fits.
+    """
+    integral = cumulative_trapezoid(dq_rad_s, t_s, initial=0.0)
+    basis = np.column_stack([integral - integral.mean(), np.ones_like(t_s)])
+    coef, *_ = np.linalg.lstsq(basis, q_rad, rcond=None)
+    excursion = _rms(q_rad - q_rad.mean())
+    if not (excursion > 0 and coef[0] != 0 and np.isfinite(coef[0])):
+        return None
+    rest = _rms(q_rad - basis @ coef) / excursion
+    return float(1.0 / coef[0]) if rest <= PURE_FACTOR_TOL else None
+
+
+def scale_cause(k: float) -> str:
+    """The likely cause of a velocity ``k`` times the angle's derivative, in words."""
+    sign = "" if k > 0 else "a sign error (dq_rad_per_s or q_rad reversed)"
+    m = abs(k)
+    if abs(m - 1) < 0.02:
+        return sign + "; flip the sign of dq_rad_per_s (or of q_rad)"
+    for f, why in _FACTORS.items():
+        if abs(m / f - 1) < 0.02:
+            return (sign + " and " if sign else "") + why
+    return ((sign + ", and " if sign else "") + f"likely time_s is {_factor(m)} times too "
+            f"long (its unit or sample clock) or dq_rad_per_s's unit is not rad/s: divide "
+            f"dq_rad_per_s by {_factor(m)} if it is the velocity that is wrong")
+
+
+def _factor(k: float) -> str:
+    return f"{k:.2f}" if 0.1 <= abs(k) < 100 else f"{k:.4g}"
+
+
 def _rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x))))
 
@@ -453,6 +550,13 @@ def _check_velocity(path: Path, t: np.ndarray, q: np.ndarray, dq: np.ndarray,
         parts += (f", of which the angle's {c.resolution_rad:.3g} rad resolution explains "
                   f"{c.quantisation:.3f}")
     if beyond_rounding > DQ_CONSISTENCY_TOL:
+        k = velocity_scale(t, q, dq)
+        if k is not None:
+            raise ValueError(
+                f"{path}: dq_rad_per_s is not the time derivative of q_rad but {_factor(k)} "
+                f"times it (a pure factor: consistency figure {c.figure:.2f}, allowed "
+                f"{DQ_CONSISTENCY_TOL}); "
+                f"{scale_cause(k)}")
         raise ValueError(
             f"{path}: dq_rad_per_s is not the time derivative of q_rad: consistency figure "
             f"{c.figure:.2f} ({parts}; allowed {DQ_CONSISTENCY_TOL}); check units (rad, "

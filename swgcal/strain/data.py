@@ -16,7 +16,16 @@ import numpy as np
 
 from swgsim.datasets import schema as dsio
 
-__all__ = ["StrainWindows", "strain_windows", "heldout_split"]
+__all__ = ["StrainWindows", "strain_windows", "heldout_split", "check_bridge_scale",
+           "MAX_BRIDGE_MVV"]
+
+#: Largest |bridge output| a strain-gauge bridge on a flexspline gives [mV/V]: a full bridge
+#: of gauge factor 2 at 5000 µε (about the yield strain of flexspline steel) gives
+#: GF · ε = 10 mV/V [derived]; twice that as margin.
+MAX_BRIDGE_MVV = 20.0
+#: Below this peak |output| of every bridge a recording is taken as given in V/V, not
+#: mV/V (a bench bridge's 24-bit noise alone is larger) [mV/V] [choice].
+MIN_BRIDGE_MVV = 1e-4
 
 
 @dataclass(frozen=True)
@@ -94,7 +103,8 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
     ------
     ValueError
         A ``select`` key that is not a per-sample variable, no window left, non-finite
-        signals, or an operating point with non-positive speed.
+        signals, bridge outputs beyond a strain-gauge bridge's range (the unit's factor
+        named, :func:`check_bridge_scale`), or an operating point with non-positive speed.
     """
     source = None
     if not hasattr(ds, "data_vars"):
@@ -115,6 +125,8 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
     y = np.asarray(ds["strain_signal"].values[idx], float)
     if not np.all(np.isfinite(y)):
         raise ValueError("strain_signal has non-finite values in the selected windows")
+    check_bridge_scale(y, [str(v) for v in ds["sensor"].values] if "sensor" in ds.coords
+                       else [f"s{i}" for i in range(y.shape[1])])
     n_des = np.asarray(ds["n_in_rpm"].values[idx], float)
     t_des = np.asarray(ds["t_out_nm"].values[idx], float)
     n_mean = np.asarray(ds["n_in_mean_rpm"].values[idx], float)
@@ -143,6 +155,39 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
     return StrainWindows(y=y[sel], time_s=t, n_in_rpm=n_op[sel], t_out_nm=t_op[sel],
                          n_in_mean_rpm=n_mean[sel], t_out_mean_nm=t_mean[sel],
                          sample=idx[sel], op=op[sel], ops=ops, name=nm, source=source)
+
+
+def check_bridge_scale(y: np.ndarray, names: Sequence[str]) -> None:
+    """Refuse bridge outputs no strain-gauge bridge gives, naming the factor when the unit
+    is off by one (µV/V or V/V for mV/V).
+
+    Parameters
+    ----------
+    y : ndarray, shape (n_windows, n_bridges, n_t)
+        Bridge outputs as recorded [mV/V].
+    names : sequence of str
+        The bridges' names (``s0``..``s4``).
+
+    Raises
+    ------
+    ValueError
+        ``strain_signal: bridge s2 peaks at 1850 mV/V, beyond any strain-gauge bridge
+        (allowed |s| <= 20 mV/V); 1000 times too large: it looks like µV/V ...``.
+    """
+    peak = np.abs(y).max(axis=(0, 2)) if y.size else np.zeros(0)
+    big = np.flatnonzero(peak > MAX_BRIDGE_MVV)
+    if big.size:
+        i = int(big[np.argmax(peak[big])])
+        unit = ("1000 times too large: it looks like µV/V; divide strain_signal by 1000"
+                if peak[i] / 1000 <= MAX_BRIDGE_MVV else "check that it is in mV/V")
+        raise ValueError(f"strain_signal: bridge {names[i]} peaks at {peak[i]:.4g} mV/V, "
+                         f"beyond any strain-gauge bridge (allowed |s| <= {MAX_BRIDGE_MVV:g} "
+                         f"mV/V); {unit}")
+    if peak.size and np.all(peak < MIN_BRIDGE_MVV) and np.any(peak > 0):
+        raise ValueError(f"strain_signal: every bridge peaks below {MIN_BRIDGE_MVV:g} mV/V "
+                         f"(largest {peak.max():.3g} mV/V), below a bridge's own noise; "
+                         "1000 times too small: it looks like V/V; multiply strain_signal by "
+                         "1000")
 
 
 def heldout_split(win: StrainWindows, heldout: str, validation: Sequence[int] | None,

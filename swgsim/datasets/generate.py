@@ -33,6 +33,7 @@ from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.grid_shard import simulate_grid_shard
 from swgsim.datasets.life import simulate_life_shard
 from swgsim.datasets.outdir import (
+    APP,
     check_disk_space,
     finalize,
     finished,
@@ -102,7 +103,7 @@ def _run_shard_in_worker(p: DatasetPlan, s: ShardSpec, out: Path,
                          influences: dict) -> dict:
     """:func:`run_shard` in a worker process, registered in the stamp of the folder its
     parent claimed, so that its temporary and finished files are ours."""
-    with ownership.join(out):
+    with ownership.join(out, APP):
         return run_shard(p, s, out, influences)
 
 

@@ -22,10 +22,14 @@ from swgsim.datasets.schema import MANIFEST, SCHEMA_VERSION
 from swgsim.files import ownership
 from swgsim.files.ownership import atomic_write_json
 from swgsim.files.provenance import git_revision, library_versions, package_version
+from swgsim.files.writers import others, refuse_others
 
 log = logging.getLogger(__name__)
 
-__all__ = ["shard_done", "finished", "prepare_out_dir",
+#: The tag generation claims a folder with (:data:`swgsim.files.writers.WRITERS`).
+APP = "swgsim-generate"
+
+__all__ = ["APP", "shard_done", "finished", "prepare_out_dir",
            "check_disk_space", "finalize"]
 
 
@@ -47,6 +51,8 @@ def finished(out_dir: Path, plan: DatasetPlan) -> dict | None:
     """The manifest of a finished data set of this config in ``out_dir``, every shard
     present with the SHA-256 it lists; None otherwise. Read-only: such a folder is used
     as it is, whoever wrote it, since nothing needs to be written."""
+    if not (out_dir / MANIFEST).is_file():  # a FIFO or a device is never read
+        return None
     try:
         manifest = json.loads((out_dir / MANIFEST).read_text())
     except (OSError, ValueError):
@@ -83,11 +89,14 @@ def prepare_out_dir(out_dir: Path, plan: DatasetPlan,
 
     The folder must hold nothing but files a run of this project can be shown to have
     written (:func:`swgsim.files.ownership.check`: listed with their SHA-256 in its ownership
-    stamp), whatever their names; this is checked before anything is touched. Then the
-    folder is claimed (:func:`swgsim.files.ownership.claim`: stamped, our temporary files of
-    dead processes removed). Our *unfinished* data set of another config (no manifest: a
-    run that failed or was stopped) is replaced, so that it never blocks a corrected
-    rerun; our *finished* one only with ``overwrite``: its files are deleted one by one,
+    stamp), whatever their names, and written as a data set by a generation run (the
+    stamp's writers, :mod:`swgsim.files.writers`: a monitor report, a calibration or any
+    other app's output is never replaced); this is checked before anything is touched.
+    Then the folder is claimed (:func:`swgsim.files.ownership.claim`: stamped, our temporary
+    files of dead processes removed). Our *unfinished* data set of another config (no
+    manifest: a run that failed or was stopped) is replaced, so that it never blocks a
+    corrected rerun; our *finished* one only with ``overwrite``, and so are files whose
+    stamp (an earlier version's) does not say which app wrote them: deleted one by one,
     each checked against the stamp again; the folder itself is kept.
 
     Returns
@@ -101,12 +110,16 @@ def prepare_out_dir(out_dir: Path, plan: DatasetPlan,
     ------
     ValueError
         Naming the folder: ``out_dir`` is not a folder, holds a file not provably ours
-        (named), holds a finished data set of another config without ``overwrite``, or
-        another run is writing our data set of another config into it; nothing is touched
-        then.
+        (named), a file of another app (named with its writer), a finished data set of
+        another config or files of an unknown app without ``overwrite``, or another run is
+        writing our data set of another config into it; nothing is touched then.
     """
     chash = plan.config_hash
     found = ownership.check(out_dir, "out_dir", share=chash)  # jobs of one data set share it
+    other = others(found.writers, APP)
+    known = {rel: w for rel, w in other if w is not None}
+    if known:  # another app's output: never ours to replace, with or without overwrite
+        refuse_others(out_dir, "out_dir", known, APP)
     old = _config_of(out_dir, found)
     replaced = None
     if old not in (None, chash):
@@ -114,6 +127,8 @@ def prepare_out_dir(out_dir: Path, plan: DatasetPlan,
         if found.live:
             raise ValueError(f"out_dir {out_dir}: another run is writing into it "
                              f"({found.live[0]}); wait for it or choose another out_dir")
+        if other and not overwrite:
+            refuse_others(out_dir, "out_dir", dict(other), APP, overwrite="overwrite")
         if done and not overwrite:
             raise ValueError(
                 f"out_dir {out_dir} holds a data set made with another config (config "
@@ -121,7 +136,7 @@ def prepare_out_dir(out_dir: Path, plan: DatasetPlan,
                 "overwrite=true to replace it")
         replaced = f"{'data set' if done else 'unfinished data set'} in {out_dir} " \
                    f"(config hash {old} -> {chash}"
-    claim = ownership.claim(out_dir, "swgsim-generate", found=found, share=chash)
+    claim = ownership.claim(out_dir, APP, found=found, share=chash)
     try:
         if replaced:
             n = claim.remove(found.owned)

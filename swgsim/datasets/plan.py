@@ -41,6 +41,7 @@ from swgsim.gear.friction import FrictionEffects, friction_effects_from_config
 from swgsim.gear.modes import linear_eigenvalues, rk4_stable, torsional_mode
 from swgsim.gear.sensors import signal_rows
 from swgsim.sensing.acquisition import check_acquisition
+from swgsim.sensing.angles import check_channels
 from swgsim.sensing.effects import SensorEffect, parse_sensor_effects
 
 MIN_GRID_LENGTH_MM = 0.2  # shortest foil strain-gauge grids on the market (0.2 mm)
@@ -346,6 +347,7 @@ def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
     """A profile within the gear's limits and stable for RK4 at standstill, and its
     window starts [s]; before any work."""
     pc, ch = cfg.profile, cfg.chain
+    check_channels(pc.angles.input_counts_per_rev, pc.angles.output_encoder_bits)
     prof = pc.to_profile()
     step = 1.0 / (float(ch.sample_rate_hz) * int(ch.substeps))
     for i, g in enumerate(cfg.gears):

@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from swgsim.files.digest import config_digest, sha256_file
+from swgsim.files.inputs import check_input_file
 from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import FAULTS
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
@@ -77,6 +78,8 @@ PER_SAMPLE = {
     "t_out_mean_nm": ("float64", "N m"),
 }
 MANIFEST = "manifest.json"
+#: Largest manifest read [bytes]: 64 MiB (a paper data set's is tens of kB) [choice].
+MAX_MANIFEST_BYTES = 64 * 2**20
 #: The signal variables: every value finite (refused on write and on load).
 SIGNALS = ("strain_signal",)
 #: Fault labels of the schema besides the registered classes: measured data's unknown state.
@@ -201,7 +204,13 @@ def read_manifest(path: str | os.PathLike) -> dict:
     path = Path(path)
     mf = path / MANIFEST
     if not mf.is_file():
+        if mf.exists():  # a FIFO, a device: never read
+            raise DataSetError(f"{mf} is not a regular file; nothing was read")
         raise DataSetError(f"{path} is not a data set: {MANIFEST} is missing")
+    try:
+        check_input_file(mf, "manifest", MAX_MANIFEST_BYTES)
+    except ValueError as e:
+        raise DataSetError(str(e)) from None
     try:
         manifest = json.loads(mf.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as e:
@@ -217,6 +226,11 @@ def read_manifest(path: str | os.PathLike) -> dict:
         raise DataSetError(f"{mf}: shards is {'missing' if shards is None else 'not a mapping'}"
                            " (schema v1: shard file name -> its sha256 and n_samples)")
     for name, entry in shards.items():
+        if not (name == Path(name).name and name not in ("", ".", "..")
+                and "\\" not in name and name.endswith(".nc")):
+            raise DataSetError(f"{mf}: shard {name!r} is not a file name in its folder "
+                               "(a path, '..' or not *.nc); a manifest names only the shards "
+                               "beside it")
         sha = entry.get("sha256") if isinstance(entry, dict) else None
         if not (isinstance(sha, str) and len(sha) == 64):
             raise DataSetError(f"{mf}: shards.{name}.sha256 is "
@@ -264,6 +278,8 @@ def verify(path: str | os.PathLike, shards: Iterable[str] | None = None) -> list
     for name in names:
         f = path / name
         if not f.is_file():
+            if f.exists():  # a FIFO, a device, a folder: never read
+                raise DataSetError(f"shard {f} is not a regular file")
             raise DataSetError(f"shard {f} is missing")
         if sha256_file(f) != entries[name]["sha256"]:
             raise DataSetError(

@@ -6,6 +6,9 @@
 - :mod:`swgsim.files.ownership`: ownership stamps (a run deletes or overwrites only what it
   can prove it wrote) and the writes recorded in them (:func:`~swgsim.files.ownership.
   atomic_write_bytes`, :func:`~swgsim.files.ownership.atomic_write_json`);
+- :mod:`swgsim.files.stamp`: the stamp as a file (names, reading, locked atomic updates);
+- :mod:`swgsim.files.writers`: which app and kind of output wrote each file (an app
+  replaces only its own kind);
 - :mod:`swgsim.files.provenance`: the package version, git commit and library versions a
   result was made with.
 

@@ -7,7 +7,9 @@ import json
 import os
 from typing import Any
 
-__all__ = ["config_digest", "sha256_file"]
+__all__ = ["config_digest", "sha256_cached", "sha256_file"]
+
+_HASHES: dict[tuple, str] = {}    # (path, dev, ino, size, mtime_ns, ctime_ns) -> SHA-256
 
 
 def config_digest(plain: Any) -> str:
@@ -40,3 +42,21 @@ def sha256_file(path: str | os.PathLike) -> str:
         for block in iter(lambda: f.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+def sha256_cached(path: str | os.PathLike) -> str:
+    """SHA-256 of a file, computed once per process while the file is unchanged (same
+    inode, size, modification and change time).
+
+    Raises
+    ------
+    OSError
+        If the file cannot be read.
+    """
+    st = os.stat(path)
+    key = (str(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+    if key not in _HASHES:
+        if len(_HASHES) > 4096:
+            _HASHES.clear()
+        _HASHES[key] = sha256_file(path)
+    return _HASHES[key]

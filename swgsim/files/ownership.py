@@ -4,20 +4,23 @@ A file's name proves nothing (a ``manifest.json`` of another tool, a user's
 ``report.md``). Every run therefore writes, before anything else, an *ownership stamp*
 :data:`STAMP` (``.swg-owner.json``) into its output folder::
 
-    {"writer": "swg-monitor", "version": 1, "apps": ["swgsim-calibrate"],
+    {"writer": "swg-monitor", "version": 2, "apps": ["swgsim-calibrate"],
      "files": {"report.md": ["<sha256>"], "figures/time.png": ["<sha256>"]},
+     "writers": {"report.md": {"app": "swgsim-calibrate", "kind": "calibration"}, ...},
      "runs": ["<host>-<pid>", ...]}
 
 ``writer`` is this project's signature; ``files`` maps each file a run of this project
 wrote (path relative to the folder) to its SHA-256 (the previous one is kept beside a
 new one until the next claim, so that a run stopped between recording and renaming
-still proves the file on disk); ``runs`` names the processes (``<host>-<pid>``,
-:func:`swgsim.files.atomic.temp_prefix`) that may leave temporary files there. A file is *ours*
-if a stamp of this project in its folder or an enclosing one (up to the folder checked)
-lists it with the SHA-256 it has now; a temporary file is ours if its name carries a run
-a stamp lists. Anything else, whatever its name, is *foreign*: it is never deleted nor
-overwritten, and a run whose folder holds one refuses (:func:`check`), naming it, before
-it touches anything, cleanup of temporary files included.
+still proves the file on disk); ``writers`` the app and kind of output that wrote it
+(:mod:`swgsim.files.writers`: an app replaces only its own kind); ``runs`` names the
+processes (``<host>-<pid>``, :func:`swgsim.files.atomic.temp_prefix`) that may leave
+temporary files there. A file is *ours* if a stamp of this project in its folder or an
+enclosing one (up to the folder checked) lists it with the SHA-256 it has now; a temporary
+file is ours if its name carries a run a stamp lists. Anything else, whatever its name, is
+*foreign*: it is never deleted nor overwritten, and a run whose folder holds one refuses
+(:func:`check`), naming it, before it touches anything, cleanup of temporary files
+included.
 
 Every write into a claimed folder is recorded: :func:`swgsim.files.ownership.atomic_write_bytes`
 and :func:`swgsim.datasets.schema.write_shard` record the file's SHA-256 before they rename it into
@@ -48,11 +51,10 @@ One helper serves every app: :func:`check` (read-only, to refuse before any work
 
 from __future__ import annotations
 
-import hashlib
+import fnmatch
 import json
 import logging
 import os
-import time
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -62,66 +64,35 @@ from typing import Any
 from filelock import FileLock, Timeout
 
 from swgsim.files.atomic import TEMP_NAME, pid_alive, replace_atomically, temp_host
+from swgsim.files.digest import sha256_cached as sha256
 from swgsim.files.digest import sha256_file
+from swgsim.files.stamp import (
+    EMPTY,
+    LOCK,
+    LOCKS,
+    SIGNATURE,
+    STAMP,
+    STAMP_LOCK,
+    is_lock,
+    lock_file,
+    read_stamp,
+    run_id,
+    slot,
+    update,
+    writers_of,
+)
+from swgsim.files.writers import Writer, entry, read_entry, refuse_others, writer_of
 
 log = logging.getLogger(__name__)
 
 __all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "Survey", "Claim", "survey", "check",
            "claim", "join", "before_replace", "sha256", "atomic_write_bytes",
-           "atomic_write_json"]
+           "atomic_write_json", "stop_note", "forget_stops"]
 
-#: This project's signature: the ``writer`` of every stamp it writes.
-SIGNATURE = "swg-monitor"
-#: Name of the ownership stamp in every folder a run of this project writes into.
-STAMP = ".swg-owner.json"
-#: Name of the gate of a folder: runs are admitted to it under this lock (:func:`claim`).
-LOCK = ".swg-owner.lock"
-#: Name of the lock that serialises updates of the stamp.
-STAMP_LOCK = ".swg-owner.json.lock"
-_LOCKS = (LOCK, STAMP_LOCK)
-_EMPTY = hashlib.sha256(b"").hexdigest()  # the SHA-256 of a lock file (always empty)
-_VERSION = 1
 _CLAIMS: dict[Path, Claim] = {}   # folders this process claimed (resolved) -> claim
 _HELD: dict[Path, list] = {}  # run locks held: resolved folder -> [lock, count, pid, folder]
+_STOPPED: list[tuple[Path, str]] = []  # claims a stop (Ctrl-C, SIGTERM) ended: folder, app
 _GATE_S = 30.0  # how long a run waits for the gate (held for milliseconds by others)
-_HASHES: dict[tuple, str] = {}    # (path, dev, ino, size, mtime_ns, ctime_ns) -> SHA-256
-
-
-def sha256(path: Path) -> str:
-    """SHA-256 of a file, computed once per process while the file is unchanged (same
-    inode, size, modification and change time)."""
-    st = os.stat(path)
-    key = (str(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
-    if key not in _HASHES:
-        if len(_HASHES) > 4096:
-            _HASHES.clear()
-        _HASHES[key] = sha256_file(path)
-    return _HASHES[key]
-
-
-def _run_id() -> str:
-    """This process as a stamp names it: ``<host>-<pid>``, as in its temporary files."""
-    return f"{temp_host()}-{os.getpid()}"
-
-
-def _read_stamp(folder: Path) -> dict | None:
-    """The stamp in ``folder`` if it is this project's, else None (absent, unreadable or
-    another tool's). An empty or half-created stamp is read again a few times."""
-    path = folder / STAMP
-    for attempt in range(4):
-        if not path.is_file() or path.is_symlink():
-            return None
-        try:
-            stamp = json.loads(path.read_bytes())
-        except (json.JSONDecodeError, UnicodeDecodeError):
-            time.sleep(0.05 * (attempt + 1))  # another process may be creating it
-            continue
-        except OSError:
-            return None
-        ok = (isinstance(stamp, dict) and stamp.get("writer") == SIGNATURE
-              and isinstance(stamp.get("files"), dict) and isinstance(stamp.get("runs"), list))
-        return stamp if ok else None
-    return None
 
 
 @dataclass
@@ -133,6 +104,9 @@ class Survey:
     folder : Path
     owned : dict of str to str
         Files proved ours: path relative to ``folder`` -> SHA-256 (stamps excluded).
+    writers : dict of str to Writer or None
+        The same files -> the app and kind of output that wrote them (None: the stamp does
+        not say, an earlier version's; :mod:`swgsim.files.writers`).
     foreign : list of str
         Files (relative paths) nothing proves ours, links and special files included.
     stale : list of Path
@@ -143,6 +117,7 @@ class Survey:
 
     folder: Path
     owned: dict[str, str] = field(default_factory=dict)
+    writers: dict[str, Writer | None] = field(default_factory=dict)
     foreign: list[str] = field(default_factory=list)
     stale: list[Path] = field(default_factory=list)
     live: list[str] = field(default_factory=list)
@@ -166,7 +141,7 @@ def _classify(s: Survey, path: Path, rel: str, stamps: list[tuple[Path, dict]]) 
         return
     if path.name == STAMP and stamps and stamps[0][0] == path.parent:
         return  # a stamp of ours
-    if _is_lock(path.name) and stamps and stamps[0][0] == path.parent:
+    if is_lock(path.name) and stamps and stamps[0][0] == path.parent:
         hashes = stamps[0][1]["files"].get(path.name)
         if isinstance(hashes, list) and sha256(path) in hashes:
             return  # a lock file of ours, listed by the stamp beside it: kept, as the stamp
@@ -179,9 +154,12 @@ def _classify(s: Survey, path: Path, rel: str, stamps: list[tuple[Path, dict]]) 
         s.live.append(rel)
         return
     for where, st in stamps:
-        hashes = st["files"].get(path.relative_to(where).as_posix())
+        inner = path.relative_to(where).as_posix()
+        hashes = st["files"].get(inner)
         if isinstance(hashes, list) and hashes and sha256(path) in hashes:
             s.owned[rel] = sha256(path)
+            w = st.get("writers")
+            s.writers[rel] = read_entry(w.get(inner)) if isinstance(w, dict) else None
             return
     s.foreign.append(rel)
 
@@ -226,13 +204,13 @@ def survey(folder: str | os.PathLike, only: Iterable[str] | None = None,
 def _survey_once(folder: Path, only: frozenset[str] | None) -> Survey:
     """One pass of :func:`survey` over an existing folder."""
     s = Survey(folder)
-    top = _read_stamp(folder)
+    top = read_stamp(folder)
     if only is not None:
         stamps = [(folder, top)] if top else []
         runs = {r for _, st in stamps for r in st["runs"]}
-        names = only | {STAMP, *_LOCKS}
+        names = only | {STAMP, *LOCKS}
         for p in sorted(folder.iterdir()):
-            if p.name in names or _is_lock(p.name) or _temp_owner(p.name, runs):
+            if p.name in names or is_lock(p.name) or _temp_owner(p.name, runs):
                 _classify(s, p, p.name, stamps)
         return s
     enclosing: dict[Path, list[tuple[Path, dict]]] = {folder: [(folder, top)] if top else []}
@@ -244,7 +222,7 @@ def _survey_once(folder: Path, only: frozenset[str] | None) -> Survey:
             if sub.is_symlink():
                 s.foreign.append(sub.relative_to(folder).as_posix())
                 continue
-            st = _read_stamp(sub)
+            st = read_stamp(sub)
             enclosing[sub] = ([(sub, st)] if st else []) + stamps
         dirnames[:] = [d for d in dirnames if not (here / d).is_symlink()]
         for f in sorted(filenames):
@@ -254,8 +232,10 @@ def _survey_once(folder: Path, only: frozenset[str] | None) -> Survey:
 
 
 def check(folder: str | os.PathLike, what: str = "out_dir",
-          only: Iterable[str] | None = None, share: str | None = None) -> Survey:
-    """:func:`survey`, refusing a folder that holds a file nothing proves ours.
+          only: Iterable[str] | None = None, share: str | None = None,
+          app: str | None = None) -> Survey:
+    """:func:`survey`, refusing a folder that holds a file nothing proves ours (or, given
+    ``app``, one of another kind of output).
 
     Parameters
     ----------
@@ -267,6 +247,10 @@ def check(folder: str | os.PathLike, what: str = "out_dir",
     share : str, optional
         See :func:`claim`: a run of another process holding the folder with the same
         ``share`` is no reason to refuse.
+    app : str, optional
+        The app about to write (a tag of :data:`swgsim.files.writers.WRITERS`): a file of
+        ours of another kind of output, or of an unknown app, is refused too
+        (:func:`swgsim.files.writers.refuse_others`). None: any file of ours is accepted.
 
     Returns
     -------
@@ -276,8 +260,9 @@ def check(folder: str | os.PathLike, what: str = "out_dir",
     Raises
     ------
     ValueError
-        One line naming the folder and its first foreign file, or the run of another
-        process holding its run lock (:func:`claim`); nothing was touched.
+        One line naming the folder and its first foreign file (or file of another app,
+        and its writer), or the run of another process holding its run lock
+        (:func:`claim`); nothing was touched.
     """
     s = survey(folder, only, what)
     if s.foreign:
@@ -286,35 +271,17 @@ def check(folder: str | os.PathLike, what: str = "out_dir",
             f"{what} {folder} holds {s.foreign[0]}{more}, which this project cannot show "
             f"it wrote (no ownership stamp {STAMP} lists it with its SHA-256); nothing was "
             f"touched: move it away or choose another {what}")
+    if app is not None:
+        refuse_others(folder, what, s.writers, app)
     _probe(Path(folder), what, share)
     return s
-
-
-def _slot(run: str) -> str:
-    """Name of the run lock of run ``run`` (``<host>-<pid>``) in a folder it claimed."""
-    return f".swg-owner.{run}.lock"
-
-
-def _is_lock(name: str) -> bool:
-    """Whether ``name`` is named as a lock file of this module (proof comes from a stamp)."""
-    return name.startswith(".swg-owner.") and name.endswith(".lock")
-
-
-def _lock_file(folder: Path, name: str) -> str:
-    """Absolute path of the lock file ``name`` of ``folder``, which is absent or an empty
-    plain file (ours are empty: a lock is never opened on anything else)."""
-    path = folder / name
-    if path.is_symlink() or (path.exists() and (not path.is_file() or path.stat().st_size)):
-        raise ValueError(f"{path} is not this project's lock file (not an empty file); "
-                         "nothing was touched: move it away")
-    return os.path.abspath(path)
 
 
 @contextmanager
 def _gate(folder: Path) -> Iterator[None]:
     """Hold the gate :data:`LOCK` of ``folder``, under which runs are admitted and leave
     (held for milliseconds; waited for up to :data:`_GATE_S`)."""
-    lock = FileLock(_lock_file(folder, LOCK), thread_local=False)
+    lock = FileLock(lock_file(folder, LOCK), thread_local=False)
     try:
         lock.acquire(timeout=_GATE_S)
     except Timeout:
@@ -332,11 +299,11 @@ def _holders(folder: Path, stamp: dict) -> tuple[dict, list[str]]:
     live, gone = {}, []
     held = stamp.get("holders")
     for run, info in sorted(held.items() if isinstance(held, dict) else []):
-        path = folder / _slot(run)
-        if run == _run_id() or path.is_symlink() or not path.is_file():
+        path = folder / slot(run)
+        if run == run_id() or path.is_symlink() or not path.is_file():
             gone.append(run)
             continue
-        lock = FileLock(_lock_file(folder, _slot(run)), thread_local=False)
+        lock = FileLock(lock_file(folder, slot(run)), thread_local=False)
         try:
             lock.acquire(timeout=0)
         except Timeout:
@@ -364,12 +331,12 @@ def _held_here(folder: Path) -> list | None:
 
 def _probe(folder: Path, what: str, share: str | None) -> None:
     """Refuse ``folder`` if a run of another process holds it (and does not share it)."""
-    stamp = _read_stamp(folder)
+    stamp = read_stamp(folder)
     if _held_here(folder) or not stamp or not stamp.get("holders") \
             or not (folder / LOCK).is_file():
         return
     with _gate(folder):
-        _conflict(folder, what, _holders(folder, _read_stamp(folder) or stamp)[0], share)
+        _conflict(folder, what, _holders(folder, read_stamp(folder) or stamp)[0], share)
 
 
 def _hold(folder: Path, what: str, app: str, share: str | None) -> None:
@@ -379,23 +346,23 @@ def _hold(folder: Path, what: str, app: str, share: str | None) -> None:
     if held is not None:
         held[1] += 1
         return
-    me, slot = _run_id(), _slot(_run_id())
+    me, mine = run_id(), slot(run_id())
     with _gate(folder):
-        live, gone = _holders(folder, _read_stamp(folder) or {})
+        live, gone = _holders(folder, read_stamp(folder) or {})
         _conflict(folder, what, live, share)
         for run in gone:  # their process is gone: its lock file goes before its entry
-            if os.path.exists(_lock_file(folder, _slot(run))) and run != me:
-                os.unlink(folder / _slot(run))
+            if os.path.exists(lock_file(folder, slot(run))) and run != me:
+                os.unlink(folder / slot(run))
 
         def admit(stamp: dict) -> None:
             held = stamp["holders"] = {r: h for r, h in (stamp.get("holders") or {}).items()
                                        if r not in gone}
             held[me] = {"app": app, "share": share}
             for run in gone:
-                stamp["files"].pop(_slot(run), None)
-            stamp["files"][slot] = [_EMPTY]  # listed before it appears
-        _update(folder, app, admit)
-        lock = FileLock(_lock_file(folder, slot), thread_local=False)
+                stamp["files"].pop(slot(run), None)
+            stamp["files"][mine] = [EMPTY]  # listed before it appears
+        update(folder, app, admit)
+        lock = FileLock(lock_file(folder, mine), thread_local=False)
         lock.acquire(timeout=0)  # this process's own lock: nobody else takes it
     _HELD[folder.resolve()] = [lock, 1, os.getpid(), folder]
 
@@ -411,54 +378,20 @@ def _let_go(key: Path) -> None:
     if held[1] > 0:
         return
     del _HELD[key]
-    lock, folder, me = held[0], held[3], _run_id()
+    lock, folder, me = held[0], held[3], run_id()
 
     def leave(stamp: dict) -> None:
         if isinstance(stamp.get("holders"), dict):
             stamp["holders"].pop(me, None)
-        stamp["files"].pop(_slot(me), None)
+        stamp["files"].pop(slot(me), None)
     try:
         with _gate(folder):
             lock.release()
-            os.unlink(folder / _slot(me))
-            if _read_stamp(folder) is not None:
-                _update(folder, "", leave)
+            os.unlink(folder / slot(me))
+            if read_stamp(folder) is not None:
+                update(folder, "", leave)
     except (OSError, ValueError):
         lock.release()
-
-
-def _new_stamp(app: str) -> dict:
-    """A stamp naming this process, so that its temporary files are ours from the start,
-    and listing the lock files (empty) before they are created."""
-    return {"writer": SIGNATURE, "version": _VERSION, "apps": [app],
-            "files": {name: [_EMPTY] for name in _LOCKS}, "runs": [_run_id()]}
-
-
-def _write_stamp(path: Path, stamp: dict) -> None:
-    replace_atomically(path, (json.dumps(stamp, indent=1, sort_keys=True) + "\n").encode())
-
-
-def _update(folder: Path, app: str, change) -> None:
-    """Apply ``change(stamp)`` to the stamp of ``folder`` under an exclusive lock and write
-    it atomically; the stamp is created (exclusively) when there is none."""
-    path = folder / STAMP
-    try:
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o666)
-    except FileExistsError:
-        pass
-    else:  # a new stamp: written in place (readers retry an empty one), then updated
-        with os.fdopen(fd, "wb") as f:
-            f.write((json.dumps(_new_stamp(app), indent=1) + "\n").encode())
-            f.flush()
-            os.fsync(f.fileno())
-    with FileLock(_lock_file(folder, STAMP_LOCK), thread_local=False):
-        stamp = _read_stamp(folder)
-        if stamp is None:
-            raise ValueError(f"{path} is not this project's ownership stamp (another "
-                             "tool's file, or damaged); nothing was touched: move it away")
-        change(stamp)
-        stamp["files"][STAMP_LOCK] = [_EMPTY]  # held, so an empty plain file: ours
-        _write_stamp(path, stamp)
 
 
 class Claim:
@@ -469,11 +402,13 @@ class Claim:
     ----------
     folder : Path
     app : str
-        The app that claimed it (recorded in the stamp's ``apps``).
+        The app that claimed it (recorded in the stamp's ``apps``, and as the writer of
+        each file it records, :mod:`swgsim.files.writers`).
     """
 
     def __init__(self, folder: Path, app: str) -> None:
         self.folder, self.app = Path(folder), app
+        self.written: list[str] = []  # files this process recorded (relative), in order
         self._key = self.folder.resolve()
         self._locked = False  # holds (a count of) the run lock: set by claim()
         _CLAIMS[self._key] = self
@@ -499,13 +434,15 @@ class Claim:
             p = Path(p)
             p = p if p.is_absolute() or not (self.folder / p).is_file() else self.folder / p
             if p.is_file() and not p.is_symlink() and p.name != STAMP \
-                    and not _is_lock(p.name):
+                    and not is_lock(p.name):
                 found[self._rel(p.absolute())] = sha256(p)
 
         def add(stamp: dict) -> None:
             stamp["files"].update({rel: [h] for rel, h in found.items()})
+            writers_of(stamp).update({rel: entry(self.app) for rel in found})
         if found:
-            _update(self.folder, self.app, add)
+            update(self.folder, self.app, add)
+            self.written.extend(r for r in found if r not in self.written)
 
     def remove(self, rels: Iterable[str]) -> int:
         """Delete files of the folder proved ours (each checked against the stamp again,
@@ -528,7 +465,8 @@ class Claim:
         def drop(stamp: dict) -> None:
             for rel in rels:
                 stamp["files"].pop(rel, None)
-        _update(self.folder, self.app, drop)
+                writers_of(stamp).pop(rel, None)
+        update(self.folder, self.app, drop)
         return len(rels)
 
     def close(self) -> None:
@@ -543,13 +481,15 @@ class Claim:
     def __enter__(self) -> Claim:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, exc_type, *exc) -> None:
+        if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+            _STOPPED.append((self.folder, self.app))  # for the line the app ends with
         self.close()
 
 
 def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
           only: Iterable[str] | None = None, found: Survey | None = None,
-          share: str | None = None) -> Claim:
+          share: str | None = None, strict: bool = False) -> Claim:
     """Make ``folder`` a folder of this run: check it, stamp it, clean it.
 
     The folder must hold nothing foreign (:func:`check`); then it is created, the run
@@ -575,6 +515,9 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
         Runs claiming the folder with the same ``share`` may write into it together (e.g.
         the cluster jobs of one data set, each computing some of its shards: its config
         hash); default None: this run alone.
+    strict : bool
+        Refuse files of another kind of output than ``app``'s too (:func:`check` with
+        ``app``): what every report app passes.
 
     Returns
     -------
@@ -587,14 +530,15 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
         folder's run lock, or if ``folder`` is not a folder; before anything is touched.
     """
     folder = Path(folder)
-    found = found if found is not None else check(folder, what, only, share)
+    found = found if found is not None else check(folder, what, only, share,
+                                                  app if strict else None)
     folder.mkdir(parents=True, exist_ok=True)
-    stamp = _read_stamp(folder)
-    if stamp is None or stamp["files"].get(LOCK) != [_EMPTY]:  # listed before it appears
+    stamp = read_stamp(folder)
+    if stamp is None or stamp["files"].get(LOCK) != [EMPTY]:  # listed before it appears
 
         def list_lock(stamp: dict) -> None:
-            stamp["files"][LOCK] = [_EMPTY]
-        _update(folder, app, list_lock)
+            stamp["files"][LOCK] = [EMPTY]
+        update(folder, app, list_lock)
     _hold(folder, what, app, share)
     try:
         c = _stamp_claim(folder, app, found)
@@ -610,7 +554,7 @@ def _stamp_claim(folder: Path, app: str, found: Survey) -> Claim:
     for f in found.stale:  # ours: a run of this project, gone, named in the stamp
         f.unlink(missing_ok=True)
         log.info("removed %s, left by a stopped run", f.name)
-    me = _run_id()
+    me = run_id()
 
     def refresh(stamp: dict) -> None:
         host = temp_host() + "-"
@@ -620,13 +564,16 @@ def _stamp_claim(folder: Path, app: str, found: Survey) -> Claim:
         stamp["apps"] = sorted(set(stamp.get("apps", [])) | {app})
         stamp["files"] = {rel: h for rel, h in stamp["files"].items()
                           if (folder / rel).is_file()}
-    _update(folder, app, refresh)
+        stamp["writers"] = {rel: w for rel, w in writers_of(stamp).items()
+                            if rel in stamp["files"]}
+    update(folder, app, refresh)
     return Claim(folder, app)
 
 
-def join(folder: str | os.PathLike, app: str = "worker") -> Claim:
+def join(folder: str | os.PathLike, app: str | None = None) -> Claim:
     """Register this process (a worker of a run that claimed ``folder``) in its stamp, so
-    that its temporary files and the files it writes are ours.
+    that its temporary files and the files it writes are ours, written by ``app`` (default:
+    the app of the runs holding the folder, when they agree; else ``worker``).
 
     Raises
     ------
@@ -634,15 +581,19 @@ def join(folder: str | os.PathLike, app: str = "worker") -> Claim:
         If ``folder`` holds no stamp of this project.
     """
     folder = Path(folder)
-    stamp = _read_stamp(folder)
+    stamp = read_stamp(folder)
     if stamp is None:
         raise ValueError(f"{folder} was not claimed by a run of this project (no {STAMP})")
-    me = _run_id()
+    me = run_id()
+    held = stamp.get("holders") if isinstance(stamp.get("holders"), dict) else {}
+    tags = {h.get("app") for h in held.values() if isinstance(h, dict)}
+    app = app or (tags.pop() if len(tags) == 1 and isinstance(next(iter(tags)), str)
+                  else "worker")
 
     def add(stamp: dict) -> None:
         stamp["runs"] = sorted(set(stamp["runs"]) | {me})
     if me not in stamp["runs"]:  # a run is removed from it only once it is gone
-        _update(folder, app, add)
+        update(folder, app, add)
     return Claim(folder, app)
 
 
@@ -669,7 +620,10 @@ def before_replace(path: str | os.PathLike, tmp: str | os.PathLike,
         old = stamp["files"].get(rel)
         stamp["files"][rel] = ([old[-1]] if isinstance(old, list) and old and old[-1] != h
                                else []) + [h]
-    _update(c.folder, c.app, add)
+        writers_of(stamp)[rel] = entry(c.app)
+    update(c.folder, c.app, add)
+    if rel not in c.written:
+        c.written.append(rel)
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes | memoryview,
@@ -691,3 +645,37 @@ def atomic_write_json(path: str | os.PathLike, obj: Any) -> None:
     """Write ``obj`` as indented JSON (keys sorted) to ``path`` atomically, recorded as
     :func:`atomic_write_bytes` records it."""
     atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=True) + "\n").encode())
+
+
+def stop_note() -> str:
+    """What the claims a stop (Ctrl-C, SIGTERM) ended keep, and what a rerun reuses: one
+    clause per folder (:class:`swgsim.files.writers.Writer`: its finished parts, proved by
+    the stamp), for the one line an app ends with; empty if the stop ended no claim."""
+    notes, seen = [], set()
+    for folder, app in _STOPPED:
+        if folder in seen:
+            continue
+        seen.add(folder)
+        w = writer_of(app)
+        try:
+            found = survey(folder)
+        except (OSError, ValueError):
+            continue
+        kept = sorted(r for r, by in found.writers.items() if w.parts and by is not None
+                      and by.kind == w.kind and fnmatch.fnmatch(r, w.parts))
+        names = ", ".join(kept[:2]) + (", ..." if len(kept) > 2 else "")
+        if w.parts:
+            what = (f"{len(kept)} finished {w.part}(s) of the {w.kind} kept ({names})"
+                    if kept else f"no {w.part} of the {w.kind} finished yet")
+            notes.append(f"{folder}: {what}; rerun the same command to resume: {w.resume}")
+        else:
+            notes.append(f"{folder}: nothing of the {w.kind} half-written (each file is "
+                         "written whole); rerun the same command")
+    _STOPPED.clear()
+    return "; ".join(notes)
+
+
+def forget_stops() -> None:
+    """Forget the claims earlier stops ended (a run starting in this process: its
+    :func:`stop_note` names its own)."""
+    _STOPPED.clear()

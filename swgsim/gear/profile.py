@@ -368,8 +368,9 @@ def validate(profile: Profile, j_out_kgm2: float, ratio: float = 100.0) -> None:
     ValueError
         One line naming the key and the limit: a speed beyond ±6500 rpm, an average input
         speed over the profile beyond 3500 rpm, a load beyond
-        ±107 N m, a step overshooting 191 N m, an acceleration whose torque
-        ``J_out a / N + max |T_L|`` exceeds 107 N m, a non-positive acceleration limit, a
+        ±107 N m, a step overshooting 191 N m or outside the profile's duration, an
+        acceleration whose torque ``J_out a / N + max |T_L|`` exceeds 107 N m, a
+        non-positive acceleration limit, a
         negative hold, a brake through 0 rpm, a non-finite number.
     """
     if not isinstance(profile, Profile):
@@ -387,3 +388,8 @@ def validate(profile: Profile, j_out_kgm2: float, ratio: float = 100.0) -> None:
                 raise ValueError(f"speed.segments[{i}].accel_rpm_s must be <= {a_max:.4g} "
                                  f"rpm/s: J_out a / N + max load = {need:.1f} N m exceeds "
                                  f"{REPEATED_PEAK_TORQUE_NM:g} N m (repeated peak torque)")
+    if isinstance(profile.load, LoadSteps):  # after the speed's checks: they set its length
+        for i, st in enumerate(profile.load.steps):
+            if not 0 <= float(st[0]) <= sp.duration_s:
+                raise ValueError(f"load.steps[{i}].time_s must lie in [0, {sp.duration_s:g}] "
+                                 f"s (the profile's duration), got {float(st[0]):g} s")

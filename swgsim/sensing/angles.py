@@ -41,14 +41,47 @@ _HALL_SRC = ("Hall sensor, 6 states per electrical revolution x pole pairs [src:
 _ENC_SRC = "encoder with 2**bits counts per revolution [choice: bits]"
 
 
-def _int_range(key: str, value, lo: int, hi: int | None = None) -> int:
-    """``value`` as an int in [lo, hi]; a one-line ValueError naming ``key`` otherwise."""
+#: Most counts per input revolution: a 32-bit encoder's (:meth:`InputAngleSensor.encoder`).
+MAX_COUNTS_PER_REV = 2 ** 32
+#: Output encoder resolutions allowed, bits (2**bits counts per revolution).
+ENCODER_BITS = (8, 32)
+
+
+def _int_range(key: str, value, lo: int, hi: int, what: str) -> int:
+    """``value`` as an int in [lo, hi]; a one-line ValueError naming ``key``, the range and
+    what the value is otherwise."""
     ok = (isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-          and value >= lo and (hi is None or value <= hi))
+          and lo <= value <= hi)
     if not ok:
-        rng = f"[{lo}, {hi}]" if hi is not None else f">= {lo}"
-        raise ValueError(f"{key} must be an integer in {rng}, got {value!r}")
+        raise ValueError(f"{key} must be an integer in [{lo}, {hi}] ({what}), got {value!r}")
     return int(value)
+
+
+def check_channels(input_counts_per_rev, output_encoder_bits,
+                   key: str = "dataset.profile.angles") -> None:
+    """Refuse angle channels the sensors cannot have, naming the config keys, before any
+    work.
+
+    Parameters
+    ----------
+    input_counts_per_rev : int
+        Counts per input revolution, in [1, :data:`MAX_COUNTS_PER_REV`].
+    output_encoder_bits : int or None
+        None: no output encoder; else bits in :data:`ENCODER_BITS`.
+    key : str
+        Where the two were given (``<key>.input_counts_per_rev``, ...).
+
+    Raises
+    ------
+    ValueError
+        ``dataset.profile.angles.input_counts_per_rev must be an integer in [1, ...]
+        (counts per input revolution), got 0``.
+    """
+    _int_range(f"{key}.input_counts_per_rev", input_counts_per_rev, 1, MAX_COUNTS_PER_REV,
+               "counts per input revolution")
+    if output_encoder_bits is not None:
+        _int_range(f"{key}.output_encoder_bits", output_encoder_bits, *ENCODER_BITS,
+                   "output encoder resolution: 2**bits counts per revolution; null: none")
 
 
 def _source(value) -> None:
@@ -80,20 +113,23 @@ class InputAngleSensor:
     source: str = _HALL_SRC
 
     def __post_init__(self):
-        _int_range("counts_per_rev", self.counts_per_rev, 1)
+        _int_range("InputAngleSensor.counts_per_rev", self.counts_per_rev, 1,
+                   MAX_COUNTS_PER_REV, "counts per input revolution")
         _source(self.source)
 
     @classmethod
     def hall(cls, pole_pairs: int = 4) -> InputAngleSensor:
         """Hall sensor: 6 states per electrical revolution times ``pole_pairs`` (>= 1)."""
-        pp = _int_range("pole_pairs", pole_pairs, 1)
+        pp = _int_range("InputAngleSensor.hall pole_pairs", pole_pairs, 1, 1000,
+                        "pole pairs of the motor's magnet")
         return cls(HALL_STATES_PER_ELEC_REV * pp, _HALL_SRC)
 
     @classmethod
     def encoder(cls, bits: int = 14) -> InputAngleSensor:
         """Incremental or absolute encoder of ``bits`` (in [8, 32]): 2**bits counts per
         revolution (for an incremental one: 4 counts per line in quadrature)."""
-        b = _int_range("bits", bits, 8, 32)
+        b = _int_range("InputAngleSensor.encoder bits", bits, *ENCODER_BITS,
+                       "2**bits counts per revolution")
         return cls(2 ** b, _ENC_SRC)
 
     @property
@@ -120,7 +156,8 @@ class OutputEncoder:
     source: str = "absolute output encoder, 2**bits counts per revolution [choice: 20 bits]"
 
     def __post_init__(self):
-        _int_range("bits", self.bits, 8, 32)
+        _int_range("OutputEncoder.bits", self.bits, *ENCODER_BITS,
+                   "2**bits counts per revolution")
         _source(self.source)
 
     @property
