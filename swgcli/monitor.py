@@ -16,6 +16,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
+from learn.monitor.model_io import load_model
 from learn.monitor.rule import check_rule, threshold
 from learn.monitor.stream import monitor_stream, select_gear, write_outputs
 from learn.tracking import log_run
@@ -25,40 +26,8 @@ from swgcli.schema import MonitorApp
 from swgsim.base.typed import check_range
 from swgsim.datasets.schema import load
 from swgsim.files import ownership
-from swgsim.files.inputs import check_input_file
 
 log = logging.getLogger(__name__)
-
-
-def load_model(path: str):
-    """A diagnosis model saved by the monitor evaluation.
-
-    Raises
-    ------
-    FileNotFoundError
-        If there is no file.
-    ValueError
-        If the file is not a diagnosis model, or not a regular file under
-        :data:`swgsim.files.inputs.MAX_INPUT_BYTES` (refused before it is read).
-    """
-    import joblib
-
-    from learn.monitor.model import DiagnosisModel
-
-    p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(2, "no diagnosis model (run swgsim-train experiment=monitor, "
-                                "which writes reports/monitor/models/*.joblib)", str(p))
-    check_input_file(p, "diagnosis_model")  # a regular file under 2 GiB, before reading
-    try:
-        m = joblib.load(p)
-    except Exception as e:  # noqa: BLE001 - any unpickling failure is the same answer
-        raise ValueError(f"diagnosis_model: {p} is not a diagnosis model "
-                         f"({type(e).__name__})") from None
-    if not isinstance(m, DiagnosisModel):
-        raise ValueError(f"diagnosis_model: {p} holds a {type(m).__name__}, not a diagnosis "
-                         "model")
-    return m
 
 
 def run_monitor_app(cfg) -> dict:
@@ -81,7 +50,8 @@ def run_monitor_app(cfg) -> dict:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(absolute_path(app.out_dir))
     ownership.check(out, "out_dir", app="swgsim-monitor")  # before any work
-    model = load_model(absolute_path(app.diagnosis_model))
+    model = load_model(absolute_path(app.diagnosis_model), "diagnosis_model",
+                       trust_pickle=app.trust_pickle)
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,

@@ -108,7 +108,9 @@ class MonitorApp:
     OUT_DIRS: ClassVar[tuple[str, ...]] = ("out_dir",)
 
     stream: str = MISSING                    # a life data set (swgsim-generate, dataset.life)
-    diagnosis_model: str = MISSING           # a .joblib of experiment=monitor (models/)
+    diagnosis_model: str = MISSING           # a .skops of experiment=monitor (models/), card beside
+    # open a legacy .joblib pickle: it runs any code it names when opened (your own files only)
+    trust_pickle: bool = False
     gear: int | None = None                  # the gear to monitor when the stream holds several
     out_dir: str = "reports/monitor_run"
     rule: RuleConfig = field(default_factory=RuleConfig)

@@ -5,19 +5,18 @@ its table and figures (:mod:`learn.reports.monitor_report`) and an MLflow run.
 Files in ``report_dir``: ``results.csv`` (one row per life and detector),
 ``false_alarms.csv``, ``table.md``, ``time_to_detect.png``, ``false_alarms_vs_ttd.png``,
 ``tradeoff.csv`` (false alarms and times to detect of the same rule at other design
-rates), ``timing.json``, ``models/<dataset>_without_gear<g>.joblib`` (the diagnosis
-models, for ``swgsim-monitor``) and ``parts/``: one finished part per (data set, held-out
-gear) for the monitor and per (data set, held-out gear, detector) for each per-window
-detector, each with the hash of the config that made it (a detector's without the list
-of the others), so that a rerun of the same config resumes from them and a detector added
-later runs alone.
+rates), ``timing.json``, ``models/<dataset>_without_gear<g>.skops`` with its
+``.card.json`` (the diagnosis models, for ``swgsim-monitor``) and ``parts/``: one finished
+part per (data set, held-out gear) for the monitor and per (data set, held-out gear,
+detector) for each per-window detector, each with the hash of the config that made it (a
+detector's without the list of the others), so that a rerun of the same config resumes
+from them and a detector added later runs alone.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import hashlib
-import io
 import json
 import logging
 import time
@@ -30,6 +29,7 @@ from tqdm.auto import tqdm
 
 from learn.monitor.detectors import DETECTORS
 from learn.monitor.evaluate import run_detectors, run_held_out, to_frames
+from learn.monitor.model_io import MODEL_SUFFIX, save_model
 from learn.monitor.study import MonitorStudyConfig, check_study
 from learn.reports.monitor_report import (
     false_alarm_table,
@@ -45,7 +45,7 @@ from swgsim.base.typed import allowed
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.plan import DatasetPlan, plan
 from swgsim.files import ownership
-from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
+from swgsim.files.ownership import atomic_write_json
 
 log = logging.getLogger(__name__)
 
@@ -246,10 +246,11 @@ def _job(plan: DatasetPlan, job: Job, study: MonitorStudyConfig, out: str
     ownership.join(out, "monitor")  # what this worker writes is recorded
     if job.detector is None:
         part = run_held_out(plan, job.dataset, job.gear, study)
-        buf = io.BytesIO()
-        joblib.dump(part.pop("model"), buf)
-        atomic_write_bytes(Path(out) / "models" / f"{job.dataset}_without_gear{job.gear}"
-                           ".joblib", buf.getvalue())
+        train = [int(x.id) for x in plan.config.gears if int(x.id) != job.gear]
+        save_model(part.pop("model"), Path(out) / "models" /
+                   f"{job.dataset}_without_gear{job.gear}{MODEL_SUFFIX}",
+                   [{"name": job.dataset, "config_hash": plan.config_hash, "gears": train,
+                     "simulated": "training lives of learn.monitor.training"}])
     else:
         (part,) = run_detectors(plan, job.dataset, job.gear, study, [job.detector])
     part["key"] = job.key

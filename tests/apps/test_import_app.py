@@ -27,8 +27,7 @@ def trained(tmp_path_factory):
     monitor's evaluation trains it): the round trip is under test, not the model's reach
     to unseen gears (tests/learn/test_monitor.py), so the stream's gear shares the
     records of the training lives and nothing is simulated twice."""
-    import joblib
-
+    from learn.monitor.model_io import save_model
     from learn.monitor.rule import RuleConfig
     from learn.monitor.stream import monitor_stream
     from learn.monitor.study import MonitorStudyConfig
@@ -47,8 +46,8 @@ def trained(tmp_path_factory):
     study = MonitorStudyConfig(commissioning_h=4.0, train_healthy_h=1.0, train_fault_h=0.5,
                                train_variants=1, faults=["eccentric_wg"])
     model = train_model(p, banks, [1, 3], study)
-    path = tmp_path_factory.mktemp("model") / "model.joblib"
-    joblib.dump(model, path)
+    path = save_model(model, tmp_path_factory.mktemp("model") / "model",
+                      [{"name": "tiny_bench", "gears": [1, 3]}])
     stream = life_dataset(sim)
     alarms = [a.as_dict() for a in monitor_stream(stream, model, RuleConfig()).alarms]
     return {"stream": stream, "model": model, "model_path": path, "alarms": alarms}

@@ -175,8 +175,7 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch)
     eccentric WG of severity 0.1 from 6 h on) with the model trained without gear 3."""
     import json
 
-    import joblib
-
+    from learn.monitor.model_io import save_model
     from swgcli import compose_app, dataset_preset
     from swgcli.monitor import run_monitor_app
     from swgsim.datasets.config import dataset_config
@@ -185,9 +184,9 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch)
     cfg = dataset_config(dataset_preset("tiny_life"))
     cfg.gears = [g for g in cfg.gears if g.id == 3]
     generate(cfg, tmp_path / "life", progress=False)
-    joblib.dump(tiny_eval["model"], tmp_path / "model.joblib")
+    model = save_model(tiny_eval["model"], tmp_path / "model", [{"name": "tiny_bench"}])
     app = compose_app("monitor", [f"stream={tmp_path / 'life'}",
-                                  f"diagnosis_model={tmp_path / 'model.joblib'}",
+                                  f"diagnosis_model={model}",
                                   f"out_dir={tmp_path / 'out'}", "~logger"])
     monkeypatch.chdir(tmp_path)  # where a default tracking store would land
     out = run_monitor_app(app)
