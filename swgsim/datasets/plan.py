@@ -29,7 +29,7 @@ from swgsim.datasets.config import (
     dataset_config,
 )
 from swgsim.datasets.gears import gear_params, layout_for
-from swgsim.datasets.schedule import check_life, schedule
+from swgsim.datasets.schedule import check_life, n_windows
 from swgsim.datasets.slots import slots_of
 from swgsim.files.digest import config_digest
 from swgsim.gear import profile as pf
@@ -343,12 +343,21 @@ def _profile_key(msg: str, profile: ProfileConfig) -> str:
     return re.sub(r"\bload([.:])", rf"{p}.load.{profile.load_kind()}\1", msg)
 
 
+#: Longest profile [s]: a joint's cycle lasts seconds to minutes, and a profile is
+#: integrated and held in memory whole (10 minutes at 10 kHz is 6 million samples).
+MAX_PROFILE_S = 600.0
+
+
 def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
     """A profile within the gear's limits and stable for RK4 at standstill, and its
     window starts [s]; before any work."""
     pc, ch = cfg.profile, cfg.chain
     check_channels(pc.angles.input_counts_per_rev, pc.angles.output_encoder_bits)
     prof = pc.to_profile()
+    dur = prof.speed.duration_s
+    _req(dur <= MAX_PROFILE_S, f"dataset.profile.segments last {dur:.4g} s; allowed: at most "
+                               f"{MAX_PROFILE_S:g} s (one cycle of a joint, integrated in "
+                               "memory)")
     step = 1.0 / (float(ch.sample_rate_hz) * int(ch.substeps))
     for i, g in enumerate(cfg.gears):
         p = gear_params(cfg, g).gear
@@ -372,7 +381,6 @@ def _check_profile(cfg: DatasetConfig) -> tuple[pf.Profile, tuple[float, ...]]:
          f"{rev_s:.4g} s")
     check_range(pc.start_jitter_s, 0.0, ch.window_s, "dataset.profile.start_jitter_s", "s",
                 why="a life's window starts within one window of their slot's")
-    dur = prof.speed.duration_s
     amp = cfg.acquisition.amplifier
     lead_s = 0.0 if amp is None else (amp.lead_samples(ch.sample_rate_hz) + 1) / ch.sample_rate_hz
     if pc.window_starts_s is None:
@@ -527,7 +535,6 @@ def _life_shards(cfg: DatasetConfig, prof, starts: tuple[float, ...]) -> tuple[S
     """One shard per gear holding its life; on a profile (the duty cycle is the profile,
     swgsim.datasets.slots) with the profile's window starts, and no duty points of its own."""
     check_life(cfg.life)
-    ops = cfg.operating_points
     life = cfg.life
     if prof is not None:
         _req(not life.duty, "dataset.life.duty must be empty with dataset.profile: the "
@@ -536,7 +543,7 @@ def _life_shards(cfg: DatasetConfig, prof, starts: tuple[float, ...]) -> tuple[S
              "dataset.life.conditions.payload: payload changes are for lives at steady "
              "operating points; on a profile, set dataset.profile.load.gravity.payload_kg")
         slots_of(cfg, prof, starts)  # refused here if no window of the profile turns enough
-    n = len(schedule(life, list(ops.n_in_rpm), list(ops.t_out_nm)).hour)
+    n = n_windows(life)  # arithmetic: nothing per window is built before the disk check
     return tuple(ShardSpec(f"gear{int(g.id)}_life.nc", int(g.id), 0, float("nan"), (), n,
                            starts) for g in cfg.gears)
 

@@ -595,7 +595,7 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
 def _survey(out: Path, overwrite: bool) -> ownership.Survey:
     """``out_dir`` checked (:func:`swgsim.files.ownership.check`); files of this project
     in it refused without ``overwrite``."""
-    found = ownership.check(out, "out_dir")
+    found = ownership.check(out, "out_dir", app=APP)  # another app's output refused
     if found.owned and not overwrite:
         raise ValueError(f"out_dir {out} holds {len(found.owned)} file(s) a run of this project "
                          "wrote (a stream or data set); pass overwrite=true to replace them, "
@@ -633,7 +633,7 @@ def write_stream(ds, out_dir: str | os.PathLike, overwrite: bool = False,
     found = _survey(out, overwrite) if found is None else found
     cfg = json.loads(ds.attrs["config"])
     name, chash = str(ds.attrs["shard"]), config_digest(cfg)
-    with ownership.claim(out, APP, found=found) as claim:
+    with ownership.claim(out, APP, found=found, strict=True) as claim:
         if found.owned:
             claim.remove(found.owned)
         entry = {"sha256": write_shard(ds, out / name), "n_samples": int(ds.sizes["sample"]),

@@ -23,8 +23,8 @@ from swgsim.datasets.conditions import ConditionsConfig, check_conditions
 from swgsim.gear.faults import get_fault
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS, is_sensor_fault
 
-__all__ = ["GROWTH", "DutyPoint", "FaultOnset", "LifeConfig", "Schedule", "check_life",
-           "duty_cycle", "schedule", "severity_at", "uses_position"]
+__all__ = ["GROWTH", "MAX_WINDOWS", "DutyPoint", "FaultOnset", "LifeConfig", "Schedule",
+           "check_life", "duty_cycle", "n_windows", "schedule", "severity_at", "uses_position"]
 
 GROWTH = ("step", "linear", "points")
 
@@ -156,6 +156,12 @@ def check_life(life: LifeConfig, key: str = "dataset.life") -> None:
     for k in ("hours", "interval_min"):
         v = float(getattr(life, k))
         _req(np.isfinite(v) and v > 0, f"{key}.{k} must be > 0, got {v}")
+    n = n_windows(life)
+    _req(n <= MAX_WINDOWS, f"{key}.hours={life.hours:g} h at interval_min="
+         f"{life.interval_min:g} min is {n:.3g} windows; allowed: at most {MAX_WINDOWS:.0e} "
+         f"(up to {MAX_WINDOWS * life.interval_min / 60:.3g} h at this interval)")
+    _req(n >= 1, f"{key}.hours={life.hours:g} h holds no window at interval_min="
+         f"{life.interval_min:g} min")
     c = float(life.commissioning_h)
     _req(np.isfinite(c) and 0 < c < life.hours, f"{key}.commissioning_h must lie in (0, "
          f"{life.hours:g}) h (a commissioning period known healthy, inside the life), got {c}")
@@ -191,9 +197,10 @@ def _check_fault(f: FaultOnset, commissioning_h: float, key: str) -> None:
     _req(f.onset_h >= commissioning_h, f"{key}.onset_h must be >= the commissioning period "
          f"({commissioning_h:g} h), got {f.onset_h}")
     _req(f.growth in GROWTH, f"{key}.growth must be one of {list(GROWTH)}, got {f.growth!r}")
-    sev = [p[1] for p in f.points] if f.growth == "points" else [f.severity]
-    for s in sev:
-        _req(lo <= s <= hi, f"{key}: severity {s} outside the allowed range [{lo}, {hi}] of "
+    sev = ([(f"{key}.points[{i}][1]", p[1]) for i, p in enumerate(f.points)]
+           if f.growth == "points" else [(f"{key}.severity", f.severity)])
+    for where, s in sev:
+        _req(lo <= s <= hi, f"{where}={s}: outside the allowed range [{lo}, {hi}] of "
              f"{f.fault}")
     if f.growth == "linear":
         _req(f.growth_h > 0, f"{key}.growth_h must be > 0 for linear growth, got {f.growth_h}")
@@ -203,6 +210,17 @@ def _check_fault(f: FaultOnset, commissioning_h: float, key: str) -> None:
              and all(b > a for a, b in zip(hrs, hrs[1:], strict=False))
              and hrs[0] >= f.onset_h, f"{key}.points must be [hour, severity] pairs with "
              f"increasing hours from onset_h on, got {f.points}")
+
+
+#: Most windows of one life: 5 million (about 9.5 years at one window a minute); its
+#: windows' signals alone are then about 12 GB (float32, 5 bridges, 1200 samples).
+MAX_WINDOWS = 5_000_000
+
+
+def n_windows(life: LifeConfig) -> int:
+    """Windows of a life, ``floor(hours · 60 / interval_min)``, computed without building
+    anything (:func:`schedule` builds them)."""
+    return int(math.floor(float(life.hours) * 60.0 / float(life.interval_min) + 1e-9))
 
 
 def severity_at(f: FaultOnset, hours: np.ndarray, levels: int) -> np.ndarray:
@@ -273,8 +291,7 @@ def schedule(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]) -> 
     the duty point held at that time.
     """
     duty = duty_cycle(life, n_in_rpm, t_out_nm)
-    n_w = int(math.floor(life.hours * 60.0 / life.interval_min + 1e-9))
-    minutes = np.arange(n_w) * float(life.interval_min)
+    minutes = np.arange(n_windows(life)) * float(life.interval_min)
     edges = np.cumsum([d.dwell_min for d in duty])
     idx = np.searchsorted(edges, minutes % edges[-1], side="right")
     hour = minutes / 60.0

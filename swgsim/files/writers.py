@@ -63,6 +63,7 @@ WRITERS: dict[str, Writer] = {
     "swgsim-calibrate": Writer("swgsim-calibrate", "calibration"),
     "swgsim-monitor": Writer("swgsim-monitor", "monitor report"),
     "swgsim-export": Writer("swgsim-export", "export"),
+    "swgsim-import": Writer("swgsim-import", "imported stream"),
     "swgsim-observability": Writer("swgsim-observability", "observability"),
     "swgsim-paper": Writer("swgsim-paper", "paper study"),
     "paper-study": Writer("swgsim-paper or swgsim-train task=paper_study", "paper study"),
