@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from learn.studies.runs import fit_with_groups
+
 log = logging.getLogger(__name__)
 
 SCHEMES = ("group_kfold", "kfold", "leave_one_gear")
@@ -117,6 +119,14 @@ PROTOCOLS: dict[str, ProtocolConfig] = {
 OOD_PROTOCOLS: tuple[str, ...] = tuple(n for n, p in PROTOCOLS.items()
                                        if p.out_of_distribution)
 ALL_PROTOCOLS: tuple[str, ...] = tuple(PROTOCOLS)
+
+
+def window_groups(meta: pd.DataFrame) -> np.ndarray:
+    """``gear:fault:variant`` of each window (:data:`GROUP_COLUMNS`), shape (n,): a fault
+    variant's windows at every operating point, which the CV folds and the torch nets'
+    early-stopping split keep together."""
+    return (meta["gear"].astype(str) + ":" + meta["fault"].astype(str) + ":"
+            + meta["variant"].astype(str)).to_numpy()
 
 
 def class_labels(y: Sequence[str]) -> list[str]:
@@ -300,14 +310,17 @@ def protocol_splits(meta: pd.DataFrame, protocol: str, random_state: int | None 
 
 
 def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Sequence[str],
-              warnings_out: list | None = None, return_model: bool = False):
+              warnings_out: list | None = None, return_model: bool = False,
+              groups: np.ndarray | None = None):
     """Fit a fresh clone of ``estimator`` on one split's training rows and score it.
 
     Parameters
     ----------
     estimator : classifier
         Unfitted scikit-learn-compatible classifier (cloned, never modified).
-    X : ndarray, shape (n_samples, n_features)
+    X : ndarray, shape (n_samples, n_features) or (n_samples, C, T)
+        Features, or signals for a model that reads them (``learn.learners.nets``,
+        ``learn.learners.rocket``).
     y : ndarray, shape (n_samples,)
         Class names.
     split : Split
@@ -320,6 +333,10 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
     return_model : bool, default False
         Also return the fitted clone (e.g. to log it; it travels back from a worker
         process by pickling).
+    groups : ndarray, shape (n_samples,), optional
+        Group of each window (:data:`GROUP_COLUMNS`), handed to a model whose ``fit``
+        takes groups (the torch nets' early-stopping split keeps groups of the training
+        rows apart, :func:`learn.studies.runs.fit_with_groups`); others ignore it.
 
     Returns
     -------
@@ -341,7 +358,10 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
         if warnings_out is not None:
             warnings.simplefilter("always")
         est = clone(estimator)
-        est.fit(X[split.train], y[split.train])
+        if groups is None:
+            est.fit(X[split.train], y[split.train])
+        else:
+            fit_with_groups(est, X[split.train], y[split.train], groups[split.train])
         pred_tr = est.predict(X[split.train])
         pred_te = est.predict(X[split.test])
     if warnings_out is not None:
@@ -376,6 +396,7 @@ def evaluate(
     splits: Sequence[Split],
     labels: Sequence[str] | None = None,
     n_jobs: int | None = 1,
+    groups: np.ndarray | None = None,
 ) -> ProtocolResult:
     """Train and test accuracy of ``estimator`` on every split.
 
@@ -391,6 +412,8 @@ def evaluate(
         Class order; default :func:`class_labels` of ``y``.
     n_jobs : int, optional
         Splits fitted in parallel (joblib); 1: sequential.
+    groups : ndarray, shape (n_samples,), optional
+        See :func:`fit_split`.
 
     Returns
     -------
@@ -401,9 +424,10 @@ def evaluate(
     y = np.asarray(y).astype(str)
     labels = class_labels(y) if labels is None else [str(c) for c in labels]
     if n_jobs == 1:
-        out = [fit_split(estimator, X, y, s, labels) for s in splits]
+        out = [fit_split(estimator, X, y, s, labels, groups=groups) for s in splits]
     else:
-        out = Parallel(n_jobs=n_jobs)(delayed(fit_split)(estimator, X, y, s, labels)
+        out = Parallel(n_jobs=n_jobs)(delayed(fit_split)(estimator, X, y, s, labels,
+                                                         groups=groups)
                                       for s in splits)
     return ProtocolResult(
         splits=list(splits),

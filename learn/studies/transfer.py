@@ -38,7 +38,7 @@ import copy
 import logging
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -46,7 +46,7 @@ import pandas as pd
 
 from learn.inputs.signals import ResidualSettings
 from learn.studies.kshot import KShotSplit, check_no_leak, kshot_split
-from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
+from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS, window_groups
 from learn.studies.runs import (
     ADAPT,
     RunRef,
@@ -65,6 +65,9 @@ RESULT_COLUMNS = ("dataset", "protocol", "split", "model", "input", "k_shot", "s
                   "accuracy", "train_s", "n_test")
 CONFUSION_COLUMNS = ("dataset", "protocol", "split", "seed", "model", "input", "k_shot",
                      "true", "predicted", "count")
+#: Wall and CPU time [s] of one run (model, input) in one job: fit, adaptations, scoring.
+RUN_TIME_COLUMNS = ("dataset", "protocol", "split", "seed", "model", "input", "seconds",
+                    "cpu_s")
 FT_MODES = ("all", "last")
 
 
@@ -272,8 +275,7 @@ def _run_cell(spec: RunSpec, est, inp, train, evaluation, kshot: KShotSplit | No
     ``evaluation``. Returns result rows (without data set, protocol and split; each with
     a ``confusion`` list) and the fitted estimator."""
     X, y = inp.X, inp.y
-    groups = (inp.meta["gear"].astype(str) + ":" + inp.meta["fault"].astype(str) + ":"
-              + inp.meta["variant"].astype(str)).to_numpy()
+    groups = window_groups(inp.meta)
     t0 = time.perf_counter()
     fit_with_groups(est, X[train], y[train], groups[train])
     sc = _Scorer(spec, X, y, evaluation, seed)
@@ -356,8 +358,10 @@ def _fine_tune(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
 
 def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int,
           k_shots, ft: FinetuneSettings, adapt_windows: int,
-          threads: int | None) -> list[dict]:
-    """Every (model, input) of one (protocol, split, seed): a unit of parallel work."""
+          threads: int | None) -> tuple[list[dict], dict[str, tuple[float, float]]]:
+    """Every (model, input) of one (protocol, split, seed): a unit of parallel work (a
+    *job*). Returns the result rows and, by run label, the wall and CPU time of each run
+    [s] (fit, adaptations, fine-tuning and scoring; CPU: this process's)."""
     if threads:
         import torch
 
@@ -368,16 +372,16 @@ def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int
         kshot = kshot_split(meta, split.test, k_max, seed, n_unlabelled=adapt_windows)
         evaluation = kshot.evaluation
         check_no_leak(meta, split.train, kshot)
-    rows = []
+    rows, seconds = [], {}
     for spec in specs:
+        t0, c0 = time.perf_counter(), time.process_time()
         inp = inputs[spec.input]
         est = make_estimator(model_cfgs[spec.model], seed, inp.n_aux, spec.params)
         out, _ = _run_cell(spec, est, inp, split.train, evaluation, kshot, k_shots, ft, seed)
         for r in out:
             rows.append({"protocol": protocol, "split": split.name, **r})
-        log.info("%s %s seed %d %s: %s", protocol, split.name, seed, spec.label,
-                 [round(r["accuracy"], 4) for r in out])
-    return rows
+        seconds[spec.label] = (time.perf_counter() - t0, time.process_time() - c0)
+    return rows, seconds
 
 
 # --------------------------------------------------------------------------- comparison
@@ -403,25 +407,105 @@ def _cells_of(meta, protocols: Sequence[str], tc: TransferConfig, split_seed: in
             for seed in (tc.seeds if p in OOD_PROTOCOLS else cv_seeds)]
 
 
-def _run_cells(cells: list, specs, tc: TransferConfig, inputs, bar, dataset: str) -> list[dict]:
-    """Every cell, in-process (``n_jobs`` 1) or in parallel processes."""
+class JobProgress:
+    """One progress line over every job of the comparison, all data sets together: jobs
+    done, jobs left and the time left estimated from the mean time per finished job; a
+    log line per finished job (its data set, protocol, split and seed, the wall time of
+    each run and their accuracies at k = 0).
+
+    Parameters
+    ----------
+    total : int
+        Jobs planned (:func:`planned_jobs` summed over the data sets); corrected with
+        :meth:`adjust` when a data set turns out to have other splits.
+    enabled : bool
+        Show the progress line (the log lines are written either way).
+    """
+
+    def __init__(self, total: int, enabled: bool = True):
+        from tqdm.auto import tqdm
+
+        self.total, self.done, self.t0 = int(total), 0, time.perf_counter()
+        self.bar = tqdm(total=self.total, desc="transfer", unit="job", smoothing=0.0,
+                        disable=not enabled, bar_format=(
+                            "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} jobs "
+                            "done{postfix} [{elapsed}, about {remaining} left]"))
+
+    def adjust(self, delta: int) -> None:
+        """Change the number of planned jobs by ``delta`` (a skipped protocol, a data set
+        with more or fewer splits than planned)."""
+        if delta:
+            self.total += int(delta)
+            self.bar.total = self.total
+            self.bar.refresh()
+
+    def finished(self, dataset: str, cell: tuple, seconds: Mapping[str, tuple],
+                 rows: Sequence[dict]) -> None:
+        """Count one finished job ``cell`` = (protocol, split, seed) and log it;
+        ``seconds``: run label -> (wall, CPU) [s], ``rows``: its result rows."""
+        self.done += 1
+        left = max(self.total - self.done, 0)
+        elapsed = time.perf_counter() - self.t0
+        protocol, split, seed = cell[0], cell[1].name, cell[2]
+        acc = {f"{r['model']}/{r['input']}": round(r["accuracy"], 4) for r in rows
+               if r["k_shot"] == 0}
+        log.info("job %d/%d done, %d left (about %.1f min): %s %s %s seed %d in %.1f s; "
+                 "run seconds %s; accuracy at k = 0 %s", self.done, self.total, left,
+                 elapsed / self.done * left / 60, dataset, protocol, split, seed,
+                 sum(v[0] for v in seconds.values()),
+                 {k: round(v[0], 1) for k, v in seconds.items()}, acc)
+        self.bar.set_postfix_str(f", {left} left ({dataset})", refresh=False)
+        self.bar.update(1)
+
+    def close(self) -> None:
+        self.bar.close()
+
+
+def planned_jobs(tc: TransferConfig) -> int:
+    """Jobs, (protocol, split, seed), that the comparison plans per data set: the splits
+    each protocol plans (:attr:`learn.studies.protocols.ProtocolConfig.n_planned`) times
+    its seeds."""
+    from learn.studies.protocols import PROTOCOLS
+
+    cv_seeds = tc.seeds if tc.cv_seeds is None else tc.cv_seeds
+    return sum(PROTOCOLS[p].n_planned * len(tc.seeds if p in OOD_PROTOCOLS else cv_seeds)
+               for p in tc.protocols)
+
+
+def _run_cells(cells: list, specs, tc: TransferConfig, inputs, progress: JobProgress,
+               dataset: str) -> tuple[list[dict], list[dict]]:
+    """Every cell, in-process (``n_jobs`` 1) or in parallel processes. Returns the result
+    rows and the wall time of every run of every cell (:data:`RUN_TIME_COLUMNS`)."""
     from joblib import Parallel, delayed
 
     k_shots = [int(k) for k in tc.k_shots]
     args = (specs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
             int(tc.adapt_windows))
     rows: list[dict] = []
+    times: list[dict] = []
+
+    def collect(c, out):
+        cell_rows, seconds = out
+        rows.extend(cell_rows)
+        labels = {s.label: s for s in specs}
+        times.extend({"dataset": dataset, "protocol": c[0], "split": c[1].name,
+                      "seed": c[2], "model": labels[k].model, "input": labels[k].input,
+                      "seconds": v[0], "cpu_s": v[1]} for k, v in seconds.items())
+        progress.finished(dataset, c, seconds, cell_rows)
+
     if tc.n_jobs == 1:
         for c in cells:
-            bar.set_description(f"{dataset} {c[0]} {c[1].name} seed {c[2]}")
-            rows += _cell(*c, *args, None)
-            bar.update(1)
-        return rows
-    jobs = (delayed(_cell)(*c, *args, tc.threads_per_job) for c in cells)
-    for out in Parallel(n_jobs=tc.n_jobs, return_as="generator_unordered")(jobs):
-        rows += out
-        bar.update(1)
-    return rows
+            collect(c, _cell(*c, *args, None))
+        return rows, times
+    jobs = (delayed(_with_cell)(c, *args, tc.threads_per_job) for c in cells)
+    for c, out in Parallel(n_jobs=tc.n_jobs, return_as="generator_unordered")(jobs):
+        collect(c, out)
+    return rows, times
+
+
+def _with_cell(c: tuple, *args):
+    """:func:`_cell` of ``c`` with ``c`` beside its result (results come back unordered)."""
+    return c, _cell(*c, *args)
 
 
 def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -440,7 +524,8 @@ def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]
 
 def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
                    feature_kwargs: Mapping[str, Any] | None = None, split_seed: int = 0,
-                   latency: bool | None = None, checked: bool = False) -> dict:
+                   latency: bool | None = None, checked: bool = False,
+                   progress: JobProgress | None = None) -> dict:
     """Run every (protocol, split, seed, model, input) of the comparison on one data set.
 
     Parameters
@@ -465,14 +550,19 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
     checked : bool
         ``tc`` has passed :func:`check_config` already (the task checks it once per run,
         before any work, and runs one comparison per data set).
+    progress : JobProgress, optional
+        The progress line of a comparison over several data sets (it counts this data
+        set's :func:`planned_jobs`); default: one of this data set's own, shown when
+        ``tc.progress``.
 
     Returns
     -------
     dict
         ``results`` (DataFrame, :data:`RESULT_COLUMNS`), ``confusion`` (DataFrame,
         :data:`CONFUSION_COLUMNS`, per split and seed), ``latency`` (DataFrame:
-        model, input, input_ms, model_ms), ``wall_s`` (total), ``input_s`` (building
-        inputs).
+        model, input, input_ms, model_ms), ``run_s`` (DataFrame,
+        :data:`RUN_TIME_COLUMNS`: the wall time of every run in every job), ``wall_s``
+        (total), ``input_s`` (building inputs).
 
     Raises
     ------
@@ -480,19 +570,17 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
         For a bad ``tc`` (:func:`check_config`), an unknown adaptation, or a k-shot split
         that would leak.
     """
-    from tqdm.auto import tqdm
-
     if not checked:
         check_config(tc)
     specs = tc.runs
     latency = tc.latency if latency is None else latency
     t_all, input_s = time.perf_counter(), 0.0
+    planned = planned_jobs(tc)  # jobs counted in progress and not yet run or adjusted
+    own = progress is None
+    progress = JobProgress(planned, tc.progress) if own else progress
     todo = _protocols_with_data(ds, tc.protocols)
-    cv_seeds = tc.seeds if tc.cv_seeds is None else tc.cv_seeds
-    n_cells = sum((3 if p in OOD_PROTOCOLS else 4)
-                  * len(tc.seeds if p in OOD_PROTOCOLS else cv_seeds) for p in todo)
-    bar = tqdm(total=n_cells, desc=f"transfer {dataset}", unit="cell", disable=not tc.progress)
     rows: list[dict] = []
+    times: list[dict] = []
     lat = None
     for flag in (False, True):
         prots = [p for p in todo if p.endswith("disturbed") == flag]
@@ -502,7 +590,12 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
         inputs = _inputs(ds, specs, tc, flag, feature_kwargs)
         input_s += time.perf_counter() - t0
         cells = _cells_of(next(iter(inputs.values())).meta, prots, tc, split_seed)
-        rows += _run_cells(cells, specs, tc, inputs, bar, dataset)
+        n_plan = planned_jobs(replace(tc, protocols=prots))
+        progress.adjust(len(cells) - n_plan)
+        planned -= n_plan
+        r, t = _run_cells(cells, specs, tc, inputs, progress, dataset)
+        rows += r
+        times += t
         if latency and lat is None:  # once, while this flag's inputs are in memory
             from learn.studies.latency import measure_latency
 
@@ -511,10 +604,13 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
                                   residual=tc.residual,
                                   repeats=tc.latency_repeats)
         del inputs
-    bar.close()
+    progress.adjust(-planned)  # protocols without data
+    if own:
+        progress.close()
     results, confusion = _tables(rows, dataset)
     return {"results": results, "confusion": confusion,
             "latency": lat if lat is not None else pd.DataFrame(),
+            "run_s": pd.DataFrame(times, columns=list(RUN_TIME_COLUMNS)),
             "wall_s": time.perf_counter() - t_all, "input_s": input_s}
 
 

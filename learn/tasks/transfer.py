@@ -15,7 +15,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.studies.transfer import TransferConfig, check_config, run_comparison
+from learn.studies.transfer import (
+    JobProgress,
+    TransferConfig,
+    check_config,
+    planned_jobs,
+    run_comparison,
+)
 from learn.tasks.config import plain, typed_app
 
 log = logging.getLogger(__name__)
@@ -27,6 +33,7 @@ class _Collected:
 
     results: list = field(default_factory=list)
     confusion: list = field(default_factory=list)
+    run_s: list = field(default_factory=list)
     latency: pd.DataFrame | None = None
     separability: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
@@ -116,20 +123,24 @@ def _compare(app, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected
 
     feature_kwargs = app.features.kwargs()
     got = _Collected()
+    progress = JobProgress(planned_jobs(tc) * len(data_sets), tc.progress)
     for name, path in data_sets:
         ds = load(path)
         log.info("transfer: %s, %d windows from %s, %d runs", name, ds.sizes["sample"], path,
                  len(tc.runs))
         out = run_comparison(ds, tc, dataset=name, feature_kwargs=feature_kwargs,
                              split_seed=app.seed,
-                             latency=tc.latency and got.latency is None, checked=True)
+                             latency=tc.latency and got.latency is None, checked=True,
+                             progress=progress)
         got.results.append(out["results"])
         got.confusion.append(out["confusion"])
+        got.run_s.append(out["run_s"])
         got.input_s += out["input_s"]
         if len(out["latency"]):
             got.latency = out["latency"]
         _separability(ds, name, tc, report_dir, got)
         del ds
+    progress.close()
     return got
 
 
