@@ -21,6 +21,7 @@ reference windows (see :mod:`learn.inputs.features`).
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import logging
 import time
 from collections.abc import Sequence
@@ -28,8 +29,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-
-from learn.studies.runs import fit_with_groups
 
 log = logging.getLogger(__name__)
 
@@ -309,6 +308,19 @@ def protocol_splits(meta: pd.DataFrame, protocol: str, random_state: int | None 
     return ProtocolConfig.paper(protocol, random_state=random_state).splits(meta)
 
 
+def fit_with_groups(est, X, y, groups):
+    """``est.fit``, passing ``groups`` (for a source-only early-stopping split) to an
+    estimator (or a pipeline's final one) whose ``fit`` takes them; returns ``est``."""
+    from sklearn.pipeline import Pipeline
+
+    final = est[-1] if isinstance(est, Pipeline) else est
+    if "groups" not in inspect.signature(final.fit).parameters:
+        return est.fit(X, y)
+    if isinstance(est, Pipeline):
+        return est.fit(X, y, **{f"{est.steps[-1][0]}__groups": groups})
+    return est.fit(X, y, groups=groups)
+
+
 def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Sequence[str],
               warnings_out: list | None = None, return_model: bool = False,
               groups: np.ndarray | None = None):
@@ -336,7 +348,7 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
     groups : ndarray, shape (n_samples,), optional
         Group of each window (:data:`GROUP_COLUMNS`), handed to a model whose ``fit``
         takes groups (the torch nets' early-stopping split keeps groups of the training
-        rows apart, :func:`learn.studies.runs.fit_with_groups`); others ignore it.
+        rows apart, :func:`fit_with_groups`); others ignore it.
 
     Returns
     -------

@@ -28,13 +28,18 @@ Files in ``report_dir`` (default ``reports/transfer``): ``results.csv`` (one row
 run: :data:`RESULT_COLUMNS`, accuracy in 0..1), ``confusion.csv``
 (:data:`CONFUSION_COLUMNS`, counts per split and seed),
 ``table.md`` (:func:`learn.reports.transfer_report.write_table`), ``accuracy_vs_k.png``,
-``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``. One MLflow run per
-(data set, protocol, model, input, k) with the per-split, per-seed accuracies, and a
-parent run holding the report and the resolved config. """
+``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``, ``run_times.csv``
+(:data:`RUN_TIME_COLUMNS`: wall and CPU seconds of every run in every job). One MLflow
+run per (data set, protocol, model, input, k) with the per-split, per-seed accuracies,
+and a parent run holding the report and the resolved config.
+
+A *job* is one (data set, protocol, split, seed) with every run; the jobs of all data
+sets share one pool of worker processes (:func:`run_comparisons`), and one progress line
+counts them (:class:`JobProgress`: done, left, time left; a log line per finished job).
+"""
 
 from __future__ import annotations
 
-import copy
 import logging
 import time
 from collections.abc import Mapping, Sequence
@@ -45,17 +50,16 @@ import numpy as np
 import pandas as pd
 
 from learn.inputs.signals import ResidualSettings
-from learn.studies.kshot import KShotSplit, check_no_leak, kshot_split
-from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS, window_groups
+from learn.studies.kshot import check_no_leak, kshot_split
+from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import (
     ADAPT,
+    FT_MODES,
+    FinetuneSettings,
     RunRef,
     RunSpec,
-    final_step,
-    fit_with_groups,
+    fit_and_adapt,
     make_estimator,
-    pre_transform,
-    score,
 )
 from swgsim.datasets.config import DatasetConfig
 
@@ -68,22 +72,9 @@ CONFUSION_COLUMNS = ("dataset", "protocol", "split", "seed", "model", "input", "
 #: Wall and CPU time [s] of one run (model, input) in one job: fit, adaptations, scoring.
 RUN_TIME_COLUMNS = ("dataset", "protocol", "split", "seed", "model", "input", "seconds",
                     "cpu_s")
-FT_MODES = ("all", "last")
 
 
 # --------------------------------------------------------------------------- config
-
-
-@dataclass
-class FinetuneSettings:
-    """Adaptation with k labelled target windows per class (and CORAL's ridge)."""
-
-    modes: list[str] = field(default_factory=lambda: list(FT_MODES))  # torch nets
-    steps: int = 50                 # fixed budget: no validation data exists on the target
-    lr_all: float | None = None     # null: model lr / 10
-    lr_last: float | None = None    # null: model lr
-    replay: float = 1.0             # source windows per target window (batches, weights)
-    coral_reg: float = 1.0          # CORAL's identity term
 
 
 @dataclass
@@ -254,108 +245,6 @@ def _check_targets(targets: Mapping[str, TargetSpec]) -> None:
 # --------------------------------------------------------------------------- runs
 
 
-class _Scorer:
-    """Collects the result rows of one (model, input) run and its adaptations."""
-
-    def __init__(self, spec: RunSpec, X, y, evaluation, seed: int):
-        self.X_eval, self.y_eval = X[evaluation], y[evaluation]
-        self.base = {"model": spec.model, "input": spec.input, "seed": seed,
-                     "n_test": len(evaluation)}
-        self.rows: list[dict] = []
-
-    def add(self, model: str, k: int, m, seconds: float, pred=None) -> None:
-        acc, conf = score(m, self.X_eval, self.y_eval, pred)
-        self.rows.append({**self.base, "model": model, "k_shot": k, "accuracy": acc,
-                          "train_s": seconds, "confusion": conf})
-
-
-def _run_cell(spec: RunSpec, est, inp, train, evaluation, kshot: KShotSplit | None,
-              k_shots: Sequence[int], ft: FinetuneSettings, seed: int):
-    """Fit one (model, input) on ``train``; score it (and its adaptations) on
-    ``evaluation``. Returns result rows (without data set, protocol and split; each with
-    a ``confusion`` list) and the fitted estimator."""
-    X, y = inp.X, inp.y
-    groups = window_groups(inp.meta)
-    t0 = time.perf_counter()
-    fit_with_groups(est, X[train], y[train], groups[train])
-    sc = _Scorer(spec, X, y, evaluation, seed)
-    sc.add(spec.model, 0, est, time.perf_counter() - t0)
-    if kshot is None:
-        return sc.rows, est
-    _adapt_unsupervised(sc, spec, est, X, y, train, kshot, ft)
-    if not spec.finetune:
-        return sc.rows, est
-    ks = [k for k in k_shots if k > 0]
-    if hasattr(final_step(est), "refit_head"):  # MiniRocket: the ridge only
-        _refit_heads(sc, spec, est, X, y, train, evaluation, kshot, ks, ft)
-    else:
-        _fine_tune(sc, spec, est, X, y, train, kshot, ks, ft, seed)
-    return sc.rows, est
-
-
-def _adapt_unsupervised(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
-                        ft: FinetuneSettings) -> None:
-    """AdaBN (torch nets) or CORAL (feature models) on the held-out gear's healthy
-    stream (``kshot.unlabelled``, labels unused)."""
-    if spec.adapt == "adabn":
-        if not hasattr(final_step(est), "adapt_bn"):
-            raise ValueError(f"{spec.label}: AdaBN needs a torch net")
-        t0 = time.perf_counter()
-        m = copy.deepcopy(est)
-        final_step(m).adapt_bn(pre_transform(m, X[kshot.unlabelled]))
-        sc.add(f"{spec.model}+adabn", 0, m, time.perf_counter() - t0)
-    elif spec.adapt == "coral":
-        from learn.learners.adapt import CoralClassifier
-
-        if X.ndim != 2:
-            raise ValueError(f"{spec.label}: CORAL needs a feature input")
-        t0 = time.perf_counter()
-        m = CoralClassifier(est, reg=float(ft.coral_reg))
-        m.fit(X[train], y[train], X[kshot.unlabelled])
-        sc.add(f"{spec.model}+coral", 0, m, time.perf_counter() - t0)
-    elif spec.adapt is not None:
-        raise ValueError(f"adapt must be one of {ADAPT} or null, got {spec.adapt!r}")
-
-
-def _refit_heads(sc: _Scorer, spec: RunSpec, est, X, y, train, evaluation,
-                 kshot: KShotSplit, ks: Sequence[int], ft: FinetuneSettings) -> None:
-    """MiniRocket: the ridge refitted on k shots per class, on cached kernel features."""
-    net = final_step(est)
-    t0 = time.perf_counter()
-    f_src = net.transform(pre_transform(est, X[train]))
-    cache_s = time.perf_counter() - t0
-    f_eval = net.transform(pre_transform(est, X[evaluation]))
-    for k in ks:
-        shots = kshot.shots(k)
-        t0 = time.perf_counter()
-        m = copy.deepcopy(est)
-        final_step(m).refit_head(pre_transform(m, X[shots]), y[shots], y_source=y[train],
-                                 source_features=f_src, replay=float(ft.replay))
-        seconds = cache_s + time.perf_counter() - t0
-        sc.add(f"{spec.model}+ft_head", k, m, seconds, final_step(m).ridge_.predict(f_eval))
-
-
-def _fine_tune(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
-               ks: Sequence[int], ft: FinetuneSettings, seed: int) -> None:
-    """Torch nets: fine-tuned on k shots per class, all layers and the last layer."""
-    if not hasattr(final_step(est), "fine_tune"):
-        raise ValueError(f"{spec.label}: k-shot adaptation needs a torch net or MiniRocket")
-    replay = float(ft.replay)
-    for mode in ft.modes:
-        for k in ks:
-            shots = kshot.shots(k)
-            t0 = time.perf_counter()
-            m = copy.deepcopy(est)
-            lr = getattr(ft, f"lr_{mode}")
-            final_step(m).fine_tune(
-                pre_transform(m, X[shots]), y[shots], mode=mode, steps=int(ft.steps),
-                lr=None if lr is None else float(lr),
-                X_replay=pre_transform(m, X[train]) if replay > 0 else None,
-                y_replay=y[train] if replay > 0 else None, replay=replay,
-                random_state=seed * 1000 + k)
-            sc.add(f"{spec.model}+ft_{mode}", k, m, time.perf_counter() - t0)
-
-
 def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int,
           k_shots, ft: FinetuneSettings, adapt_windows: int,
           threads: int | None) -> tuple[list[dict], dict[str, tuple[float, float]]]:
@@ -377,7 +266,8 @@ def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int
         t0, c0 = time.perf_counter(), time.process_time()
         inp = inputs[spec.input]
         est = make_estimator(model_cfgs[spec.model], seed, inp.n_aux, spec.params)
-        out, _ = _run_cell(spec, est, inp, split.train, evaluation, kshot, k_shots, ft, seed)
+        out = fit_and_adapt(spec, est, inp, split.train, evaluation, kshot, k_shots, ft,
+                            seed)
         for r in out:
             rows.append({"protocol": protocol, "split": split.name, **r})
         seconds[spec.label] = (time.perf_counter() - t0, time.process_time() - c0)
@@ -472,40 +362,62 @@ def planned_jobs(tc: TransferConfig) -> int:
                for p in tc.protocols)
 
 
-def _run_cells(cells: list, specs, tc: TransferConfig, inputs, progress: JobProgress,
-               dataset: str) -> tuple[list[dict], list[dict]]:
-    """Every cell, in-process (``n_jobs`` 1) or in parallel processes. Returns the result
-    rows and the wall time of every run of every cell (:data:`RUN_TIME_COLUMNS`)."""
-    from joblib import Parallel, delayed
+@dataclass
+class _Gathered:
+    """What the jobs of one data set gave back."""
 
+    rows: list = field(default_factory=list)
+    times: list = field(default_factory=list)
+    input_s: float = 0.0
+    latency: pd.DataFrame | None = None
+
+
+def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency: bool,
+          progress: JobProgress, got: dict[str, _Gathered], on_load):
+    """The jobs of every data set in turn, as ``(function, args, kwargs)``: a data set is
+    loaded and its inputs built when its first job is asked for, i.e. (in a pool) while
+    the workers run the previous data set's last jobs."""
     k_shots = [int(k) for k in tc.k_shots]
-    args = (specs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
-            int(tc.adapt_windows))
-    rows: list[dict] = []
-    times: list[dict] = []
+    threads = None if tc.n_jobs == 1 else tc.threads_per_job
+    for name, load in sources:
+        ds = load()
+        if on_load is not None:
+            on_load(name, ds)
+        planned = planned_jobs(tc)  # counted in progress, not yet adjusted
+        todo = _protocols_with_data(ds, tc.protocols)
+        for flag in (False, True):
+            prots = [p for p in todo if p.endswith("disturbed") == flag]
+            if not prots:
+                continue
+            t0 = time.perf_counter()
+            inputs = _inputs(ds, tc.runs, tc, flag, feature_kwargs)
+            got[name].input_s += time.perf_counter() - t0
+            cells = _cells_of(next(iter(inputs.values())).meta, prots, tc, split_seed)
+            n_plan = planned_jobs(replace(tc, protocols=prots))
+            progress.adjust(len(cells) - n_plan)
+            planned -= n_plan
+            if latency and all(g.latency is None for g in got.values()):
+                from learn.studies.latency import measure_latency
 
-    def collect(c, out):
-        cell_rows, seconds = out
-        rows.extend(cell_rows)
-        labels = {s.label: s for s in specs}
-        times.extend({"dataset": dataset, "protocol": c[0], "split": c[1].name,
-                      "seed": c[2], "model": labels[k].model, "input": labels[k].input,
-                      "seconds": v[0], "cpu_s": v[1]} for k, v in seconds.items())
-        progress.finished(dataset, c, seconds, cell_rows)
-
-    if tc.n_jobs == 1:
-        for c in cells:
-            collect(c, _cell(*c, *args, None))
-        return rows, times
-    jobs = (delayed(_with_cell)(c, *args, tc.threads_per_job) for c in cells)
-    for c, out in Parallel(n_jobs=tc.n_jobs, return_as="generator_unordered")(jobs):
-        collect(c, out)
-    return rows, times
+                # before this data set's jobs are handed out: the first data set's, on
+                # a machine without this comparison's jobs running
+                got[name].latency = measure_latency(
+                    ds, tc.runs, tc.models, inputs, aux=tc.aux,
+                    feature_kwargs=feature_kwargs, residual=tc.residual,
+                    repeats=tc.latency_repeats)
+            args = (tc.runs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
+                    int(tc.adapt_windows), threads)
+            for c in cells:
+                yield _with_cell, (name, c, *args), {}
+            del inputs
+        progress.adjust(-planned)  # protocols without data
+        del ds
 
 
-def _with_cell(c: tuple, *args):
-    """:func:`_cell` of ``c`` with ``c`` beside its result (results come back unordered)."""
-    return c, _cell(*c, *args)
+def _with_cell(name: str, c: tuple, *args):
+    """:func:`_cell` of ``c`` with its data set and ``c`` beside the result (results
+    come back unordered)."""
+    return name, c, _cell(*c, *args)
 
 
 def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -522,47 +434,55 @@ def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]
     return pd.DataFrame(rows, columns=list(RESULT_COLUMNS)), confusion
 
 
-def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
-                   feature_kwargs: Mapping[str, Any] | None = None, split_seed: int = 0,
-                   latency: bool | None = None, checked: bool = False,
-                   progress: JobProgress | None = None) -> dict:
-    """Run every (protocol, split, seed, model, input) of the comparison on one data set.
+def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
+                    feature_kwargs: Mapping[str, Any] | None = None, split_seed: int = 0,
+                    latency: bool | None = None, checked: bool = False,
+                    progress: JobProgress | None = None, on_load=None) -> dict[str, dict]:
+    """Run every (protocol, split, seed, model, input) of the comparison on several data
+    sets, with one pool of ``tc.n_jobs`` worker processes for all of them.
+
+    The jobs of all data sets form one queue: the next data set is loaded and its inputs
+    built while the workers run the last jobs of the previous one, and no worker waits
+    at a data set's end for the other's last job.
 
     Parameters
     ----------
-    ds : xarray.Dataset
-        Schema v1 with clean and/or disturbed windows and reference windows.
+    sources : sequence of (str, callable)
+        Name of a data set (its ``dataset`` column) and a function returning it
+        (xarray.Dataset, schema v1 with clean and/or disturbed windows and reference
+        windows), called when its jobs come up; one data set is in memory at a time.
     tc : TransferConfig
         The comparison: ``runs`` and ``models`` (:func:`check_config`), ``protocols`` (a
         protocol without data, no clean or no disturbed windows, is skipped with a
         warning), ``seeds`` and ``cv_seeds``, ``k_shots``, ``finetune``, ``aux``,
-        ``residual``, ``n_jobs`` ((protocol, split, seed) cells in parallel processes),
+        ``residual``, ``n_jobs`` (jobs in parallel processes; 1: in this process),
         ``threads_per_job``, ``latency_repeats`` and ``progress``.
-    dataset : str
-        Name written to the ``dataset`` column.
     feature_kwargs : mapping, optional
         ``orders``, ``floor_rel`` of :func:`learn.inputs.features.extract_features`.
     split_seed : int
         Seed of the CV folds (the same folds for every model seed).
     latency : bool, optional
-        Measure the inference latency (CPU, batch 1, one thread) of every (model, input);
-        default ``tc.latency``.
+        Measure the inference latency (CPU, batch 1, one thread) of every (model, input)
+        on the first data set, before its jobs start; default ``tc.latency``.
     checked : bool
-        ``tc`` has passed :func:`check_config` already (the task checks it once per run,
-        before any work, and runs one comparison per data set).
+        ``tc`` has passed :func:`check_config` already (the task checks it before any
+        work).
     progress : JobProgress, optional
-        The progress line of a comparison over several data sets (it counts this data
-        set's :func:`planned_jobs`); default: one of this data set's own, shown when
-        ``tc.progress``.
+        The progress line; default one over these data sets' :func:`planned_jobs`, shown
+        when ``tc.progress``.
+    on_load : callable, optional
+        ``on_load(name, ds)`` when a data set is loaded (e.g. its separability), in the
+        thread that hands out the jobs.
 
     Returns
     -------
-    dict
-        ``results`` (DataFrame, :data:`RESULT_COLUMNS`), ``confusion`` (DataFrame,
-        :data:`CONFUSION_COLUMNS`, per split and seed), ``latency`` (DataFrame:
-        model, input, input_ms, model_ms), ``run_s`` (DataFrame,
-        :data:`RUN_TIME_COLUMNS`: the wall time of every run in every job), ``wall_s``
-        (total), ``input_s`` (building inputs).
+    dict of str to dict
+        Per data set: ``results`` (DataFrame, :data:`RESULT_COLUMNS`), ``confusion``
+        (DataFrame, :data:`CONFUSION_COLUMNS`, per split and seed), ``latency``
+        (DataFrame: model, input, input_ms, model_ms; empty but for the first data
+        set), ``run_s`` (DataFrame, :data:`RUN_TIME_COLUMNS`: wall and CPU time of every
+        run in every job), ``input_s`` (building its inputs) and ``wall_s`` (the whole
+        call, every data set).
 
     Raises
     ------
@@ -570,55 +490,55 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
         For a bad ``tc`` (:func:`check_config`), an unknown adaptation, or a k-shot split
         that would leak.
     """
+    from joblib import Parallel
+
     if not checked:
         check_config(tc)
-    specs = tc.runs
     latency = tc.latency if latency is None else latency
-    t_all, input_s = time.perf_counter(), 0.0
-    planned = planned_jobs(tc)  # jobs counted in progress and not yet run or adjusted
+    t_all = time.perf_counter()
     own = progress is None
-    progress = JobProgress(planned, tc.progress) if own else progress
-    todo = _protocols_with_data(ds, tc.protocols)
-    rows: list[dict] = []
-    times: list[dict] = []
-    lat = None
-    for flag in (False, True):
-        prots = [p for p in todo if p.endswith("disturbed") == flag]
-        if not prots:
-            continue
-        t0 = time.perf_counter()
-        inputs = _inputs(ds, specs, tc, flag, feature_kwargs)
-        input_s += time.perf_counter() - t0
-        cells = _cells_of(next(iter(inputs.values())).meta, prots, tc, split_seed)
-        n_plan = planned_jobs(replace(tc, protocols=prots))
-        progress.adjust(len(cells) - n_plan)
-        planned -= n_plan
-        r, t = _run_cells(cells, specs, tc, inputs, progress, dataset)
-        rows += r
-        times += t
-        if latency and lat is None:  # once, while this flag's inputs are in memory
-            from learn.studies.latency import measure_latency
-
-            lat = measure_latency(ds, specs, tc.models, inputs, aux=tc.aux,
-                                  feature_kwargs=feature_kwargs,
-                                  residual=tc.residual,
-                                  repeats=tc.latency_repeats)
-        del inputs
-    progress.adjust(-planned)  # protocols without data
+    if own:
+        progress = JobProgress(planned_jobs(tc) * len(sources), tc.progress)
+    got = {name: _Gathered() for name, _ in sources}
+    jobs = _jobs(sources, tc, feature_kwargs, split_seed, latency, progress, got, on_load)
+    if tc.n_jobs == 1:
+        done = (f(*a, **kw) for f, a, kw in jobs)
+    else:
+        done = Parallel(n_jobs=tc.n_jobs, return_as="generator_unordered",
+                        batch_size=1)(jobs)
+    labels = {s.label: s for s in tc.runs}
+    for name, c, (rows, seconds) in done:
+        got[name].rows.extend(rows)
+        got[name].times.extend(
+            {"dataset": name, "protocol": c[0], "split": c[1].name, "seed": c[2],
+             "model": labels[k].model, "input": labels[k].input, "seconds": v[0],
+             "cpu_s": v[1]} for k, v in seconds.items())
+        progress.finished(name, c, seconds, rows)
     if own:
         progress.close()
-    results, confusion = _tables(rows, dataset)
-    return {"results": results, "confusion": confusion,
-            "latency": lat if lat is not None else pd.DataFrame(),
-            "run_s": pd.DataFrame(times, columns=list(RUN_TIME_COLUMNS)),
-            "wall_s": time.perf_counter() - t_all, "input_s": input_s}
+    wall = time.perf_counter() - t_all
+    out = {}
+    for name, g in got.items():
+        results, confusion = _tables(g.rows, name)
+        out[name] = {"results": results, "confusion": confusion,
+                     "latency": g.latency if g.latency is not None else pd.DataFrame(),
+                     "run_s": pd.DataFrame(g.times, columns=list(RUN_TIME_COLUMNS)),
+                     "input_s": g.input_s, "wall_s": wall}
+    return out
+
+
+def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data", **kwargs) -> dict:
+    """:func:`run_comparisons` on one data set ``ds`` (xarray.Dataset), named ``dataset``;
+    keywords as there. Returns its dict."""
+    return run_comparisons([(dataset, lambda: ds)], tc, **kwargs)[dataset]
 
 
 def _inputs(ds, specs, tc: TransferConfig, disturbed: bool, feature_kwargs) -> dict:
     """Every input kind of the runs, on the clean or the disturbed windows."""
     from learn.inputs.signals import build_input
 
+    cache: dict = {}  # the residual that the residual inputs share
     return {kind: build_input(ds, kind, aux=tuple(tc.aux), disturbed=disturbed,
                               feature_kwargs=dict(feature_kwargs or {}),
-                              residual=tc.residual)
+                              residual=tc.residual, cache=cache)
             for kind in sorted({s.input for s in specs})}
