@@ -242,10 +242,20 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         return X
 
     def prepare(self, X) -> torch.Tensor:
-        """``X`` checked and standardised with the statistics of ``fit``: a float32 tensor
-        of the same shape that every method taking ``X`` accepts in its place (a tensor is
-        taken as prepared), so that a fine-tuned or AdaBN copy, which keeps the statistics,
-        reuses it (the transfer study's inputs cached across k and adaptations)."""
+        """Windows checked and standardised with the statistics of ``fit``.
+
+        Parameters
+        ----------
+        X : array, shape (n, C, T) or (n, F), or torch.Tensor
+            A tensor is taken as prepared already and returned as it is.
+
+        Returns
+        -------
+        torch.Tensor, float32, shape of ``X``
+            What every method taking ``X`` accepts in its place; a fine-tuned or AdaBN
+            copy keeps the statistics and reuses it (the transfer study prepares a job's
+            evaluation and replay windows once for every k and adaptation).
+        """
         return X if isinstance(X, torch.Tensor) else self._scale(self._check_X(X))
 
     def _scale(self, X: np.ndarray) -> torch.Tensor:

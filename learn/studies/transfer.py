@@ -344,7 +344,7 @@ class JobProgress:
                  elapsed / self.done * left / 60, dataset, protocol, split, seed,
                  sum(v[0] for v in seconds.values()),
                  {k: round(v[0], 1) for k, v in seconds.items()}, acc)
-        self.bar.set_postfix_str(f", {left} left ({dataset})", refresh=False)
+        self.bar.set_postfix_str(f"{left} left ({dataset})", refresh=False)
         self.bar.update(1)
 
     def close(self) -> None:
