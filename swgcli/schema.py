@@ -150,6 +150,7 @@ class TrainApp:
     n_jobs: int = field(default=1, metadata=N_JOBS)
     stored: StoredDataset = field(default_factory=StoredDataset)
     features: FeatureSettings = field(default_factory=FeatureSettings)
+    input: str | None = None  # null: features; a learn.inputs.signals.INPUTS kind (raw, diff)
     model: Any = MISSING
     protocol: ProtocolConfig = field(default_factory=ProtocolConfig)
     logger: LoggerConfig | None = None

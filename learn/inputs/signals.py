@@ -579,7 +579,7 @@ def _append_aux(x: np.ndarray, aux: np.ndarray) -> np.ndarray:
 def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
                 disturbed: bool | None = None, feature_kwargs: dict | None = None,
                 residual: ResidualSettings | None = None,
-                psi: np.ndarray | None = None) -> InputSet:
+                psi: np.ndarray | None = None, cache: dict | None = None) -> InputSet:
     """Model input of kind ``kind`` for the non-reference windows of ``ds``.
 
     Parameters
@@ -603,6 +603,10 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     psi : ndarray, shape (N, T), optional
         WG angle of every window of ``ds`` [rad], for the residual inputs
         (:func:`reference_residual`); refused for the other kinds.
+    cache : dict, optional
+        Shared by the calls for several kinds on the same ``ds``: the reference residual
+        that ``raw_res``, ``diff_res`` and ``res_spec`` share is computed once (without
+        ``psi``).
 
     Returns
     -------
@@ -629,7 +633,12 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     eff_cols = [AUX.index(a) for a in aux]
     if kind in RESIDUAL_INPUTS:
         rs = residual or ResidualSettings()
-        res = reference_residual(ds, samples, refs, rs, psi)  # (n, 5, H+1)
+        key = ("residual", disturbed, repr(rs))
+        res = None if psi is not None or cache is None else cache.get(key)
+        if res is None:
+            res = reference_residual(ds, samples, refs, rs, psi)  # (n, 5, H+1)
+            if psi is None and cache is not None:
+                cache[key] = res
         eff = efficiency_features(ds, samples, refs)[:, eff_cols]  # (n, A)
         if kind == "res_spec":
             amp = np.log10(np.abs(res[:, :, int(rs.min_harmonic):]) + 1e-7)  # (n, 5, H')

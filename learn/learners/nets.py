@@ -241,6 +241,23 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
                              f"needs the {self.input_shape_[1]} of fit")
         return X
 
+    def prepare(self, X) -> torch.Tensor:
+        """Windows checked and standardised with the statistics of ``fit``.
+
+        Parameters
+        ----------
+        X : array, shape (n, C, T) or (n, F), or torch.Tensor
+            A tensor is taken as prepared already and returned as it is.
+
+        Returns
+        -------
+        torch.Tensor, float32, shape of ``X``
+            What every method taking ``X`` accepts in its place; a fine-tuned or AdaBN
+            copy keeps the statistics and reuses it (the transfer study prepares a job's
+            evaluation and replay windows once for every k and adaptation).
+        """
+        return X if isinstance(X, torch.Tensor) else self._scale(self._check_X(X))
+
     def _scale(self, X: np.ndarray) -> torch.Tensor:
         X = np.asarray(X, dtype=np.float32)
         if X.ndim == 3:
@@ -447,10 +464,10 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         if len(X) == 0 or steps <= 0:
             return self
         yt = torch.from_numpy(self._encode(y))
-        Xt = self._scale(self._check_X(X))
+        Xt = self.prepare(X)
         use_replay = X_replay is not None and replay > 0 and len(X_replay) > 0
         if use_replay:
-            Xr = self._scale(self._check_X(X_replay))
+            Xr = self.prepare(X_replay)
             yr = torch.from_numpy(self._encode(y_replay))
         module = self.module_
         params = list(module.head.parameters()) if mode == "last" else list(module.parameters())
@@ -514,7 +531,7 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         -------
         self
         """
-        Xt = self._scale(self._check_X(X))
+        Xt = self.prepare(X)
         bns = [m for m in self.module_.modules() if isinstance(m, nn.BatchNorm1d)]
         if not bns:
             return self
@@ -535,23 +552,23 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
 
     def predict_proba(self, X) -> np.ndarray:
         """Class probabilities, shape (n, n_classes), columns in ``classes_`` order."""
-        return torch.softmax(self._logits(self._scale(self._check_X(X))), dim=1).numpy()
+        return torch.softmax(self._logits(self.prepare(X)), dim=1).numpy()
 
     def decision_function(self, X) -> np.ndarray:
         """Logits, shape (n, n_classes); with two classes scikit-learn's binary form, the
         logit of ``classes_[1]`` minus that of ``classes_[0]``, shape (n,) (> 0: class 1)."""
-        logits = self._logits(self._scale(self._check_X(X))).numpy()
+        logits = self._logits(self.prepare(X)).numpy()
         return logits[:, 1] - logits[:, 0] if logits.shape[1] == 2 else logits
 
     def predict(self, X) -> np.ndarray:
         """Predicted labels, shape (n,): the class of the largest logit."""
-        logits = self._logits(self._scale(self._check_X(X))).numpy()
+        logits = self._logits(self.prepare(X)).numpy()
         return self.classes_[logits.argmax(axis=1)]
 
     @torch.no_grad()
     def embed(self, X, batch: int = 512) -> np.ndarray:
         """Penultimate-layer features, shape (n, width of the head's input)."""
-        Xt = self._scale(self._check_X(X))
+        Xt = self.prepare(X)
         self.module_.eval()
         return torch.cat([self.module_.embed(Xt[i:i + batch].to(self.device_)).cpu()
                           for i in range(0, Xt.shape[0], batch)]).numpy()

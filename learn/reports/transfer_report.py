@@ -236,7 +236,7 @@ def _paper_rows(protocol: str, splits: Sequence[str]) -> list[str]:
         if any(v is None for v in vals):
             continue
         out.append(f"| paper Table {table}: RF, Selection {sel[-1]} (its data) | "
-                   + " | ".join(f"{v:.2f}" for v in vals) + f" | **{min(vals):.2f}** |")
+                   + " | ".join(f"{v:.2f}" for v in vals) + f" | **{min(vals):.2f}** | |")
     return out
 
 
@@ -385,7 +385,8 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
                 targets: Mapping[str, TargetSpec] | None = None, primary: RunRef | None = None,
                 separability: Mapping[str, Mapping[str, pd.DataFrame]] | None = None,
                 latency: pd.DataFrame | None = None, timings: Mapping | None = None,
-                paper: bool = True, adapt_windows: int | None = None) -> Path:
+                paper: bool = True, adapt_windows: int | None = None,
+                run_times: pd.DataFrame | None = None) -> Path:
     """Write ``table.md``: headline, targets, per-class recall, then per data set and
     protocol the accuracy [%] per split and worst split, a diagnosis and the separability.
 
@@ -408,6 +409,9 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     adapt_windows : int, optional
         Windows of the held-out gear's healthy stream the unsupervised adaptations saw
         (``transfer.adapt_windows``); stated in the introduction.
+    run_times : pandas.DataFrame, optional
+        :data:`learn.studies.transfer.RUN_TIME_COLUMNS`: wall and CPU time of every run
+        in every job, summed per run and data set in the time section.
     """
     summ = summarise(results)
     recall = class_recall(confusion, summ) if len(confusion) else None
@@ -418,12 +422,14 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
         lines += _targets_md(target_table(summ, recall, targets, primary, separability))
     if recall is not None:
         lines += _recall_md(recall, summ, primary, separability, order)
+    train_s = results.groupby(CELL_KEYS)["train_s"].mean()
     for ds in order:
-        lines += _dataset_md(ds, summ, confusion, recall, separability, paper, primary)
+        lines += _dataset_md(ds, summ, confusion, recall, separability, paper, primary,
+                             train_s)
     if latency is not None and len(latency):
         lines += _latency_md(latency)
     if timings:
-        lines += _time_md(results, timings)
+        lines += _time_md(results, timings, run_times)
     path = Path(path)
     path.write_text("\n".join(lines) + "\n")
     return path
@@ -485,8 +491,10 @@ def _targets_md(tt: pd.DataFrame) -> list[str]:
 
 
 def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
-                separability, paper: bool, primary: RunRef | None) -> list[str]:
-    """One data set's section: diagnosis, separability, a table per protocol."""
+                separability, paper: bool, primary: RunRef | None,
+                train_s: pd.Series) -> list[str]:
+    """One data set's section: diagnosis, separability, a table per protocol (a row per
+    run and k, with its mean training time: ``train_s`` by :data:`CELL_KEYS`)."""
     lines = [f"## Data set `{ds}`", ""]
     sep = (separability or {}).get(ds)
     if recall is not None:
@@ -498,8 +506,10 @@ def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
         sp = sd[sd["protocol"] == p]
         splits = sorted({s for s in sp["split"] if s != "worst"},
                         key=lambda s: (_SPLIT_ORDER.get(s, 9), s))
-        lines += [f"### {ds}: {p}", "", "| run | " + " | ".join(splits) + " | worst |",
-                  "|---|" + "---:|" * (len(splits) + 1)]
+        lines += [f"### {ds}: {p}", "", "Training time: per split and seed, the fit on the "
+                  "source gears, or the adaptation alone.", "",
+                  "| run | " + " | ".join(splits) + " | worst | train [s] |",
+                  "|---|" + "---:|" * (len(splits) + 2)]
         order = sp[sp["split"] == "worst"].sort_values(
             ["k_shot", "model", "input"], key=lambda c: c.map(model_rank)
             if c.name == "model" else c)
@@ -510,6 +520,8 @@ def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
                        & (sp["k_shot"] == w["k_shot"]) & (sp["split"] == s)]
                 cells.append(_pct(r["mean"].iloc[0], r["std"].iloc[0]) if len(r) else "")
             cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
+            key = (ds, p, w["model"], w["input"], w["k_shot"])
+            cells.append(f"{train_s.get(key, np.nan):.1f}")
             lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
                          + " | ".join(cells) + " |")
         if paper and p in OOD_PROTOCOLS:
@@ -529,8 +541,11 @@ def _latency_md(latency: pd.DataFrame) -> list[str]:
     return lines
 
 
-def _time_md(results: pd.DataFrame, timings: Mapping) -> list[str]:
-    """The time section of ``table.md``."""
+def _time_md(results: pd.DataFrame, timings: Mapping,
+             run_times: pd.DataFrame | None = None) -> list[str]:
+    """The time section of ``table.md``: the whole comparison, then per run the sum of
+    its fit and adaptation times and, where measured, of its wall and CPU time in the
+    jobs (fit, adaptations and scoring) per data set."""
     tt = results.groupby(["model", "input"])["train_s"].sum().sort_values(ascending=False)
     lines = ["## Time", "",
              f"Whole comparison: {timings.get('wall_s', float('nan')) / 60:.1f} min wall "
@@ -543,4 +558,18 @@ def _time_md(results: pd.DataFrame, timings: Mapping) -> list[str]:
     for (m, i), v in tt.items():
         lines.append(f"| {m} | {i} | {v:.1f} |")
     lines.append("")
-    return lines
+    if run_times is None or not len(run_times):
+        return lines
+    per = run_times.groupby(["model", "input", "dataset"], sort=False)[
+        ["seconds", "cpu_s"]].sum()
+    order = list(dict.fromkeys(run_times["dataset"]))
+    lines += ["Each run in its jobs, fit, adaptations and scoring together, summed over "
+              "splits and seeds: wall / CPU seconds of its worker process per data set.",
+              "", "| run | " + " | ".join(order) + " | all, CPU [s] |",
+              "|---|" + "---:|" * (len(order) + 1)]
+    for (m, i), g in per.groupby(level=[0, 1], sort=False):
+        g = g.droplevel([0, 1])
+        cells = [f"{g.loc[d, 'seconds']:.0f} / {g.loc[d, 'cpu_s']:.0f}" if d in g.index
+                 else "" for d in order]
+        lines.append(f"| {m}/{i} | " + " | ".join(cells) + f" | {g['cpu_s'].sum():.0f} |")
+    return lines + [""]

@@ -21,6 +21,7 @@ reference windows (see :mod:`learn.inputs.features`).
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import logging
 import time
 from collections.abc import Sequence
@@ -117,6 +118,14 @@ PROTOCOLS: dict[str, ProtocolConfig] = {
 OOD_PROTOCOLS: tuple[str, ...] = tuple(n for n, p in PROTOCOLS.items()
                                        if p.out_of_distribution)
 ALL_PROTOCOLS: tuple[str, ...] = tuple(PROTOCOLS)
+
+
+def window_groups(meta: pd.DataFrame) -> np.ndarray:
+    """``gear:fault:variant`` of each window (:data:`GROUP_COLUMNS`), shape (n,): a fault
+    variant's windows at every operating point, which the CV folds and the torch nets'
+    early-stopping split keep together."""
+    return (meta["gear"].astype(str) + ":" + meta["fault"].astype(str) + ":"
+            + meta["variant"].astype(str)).to_numpy()
 
 
 def class_labels(y: Sequence[str]) -> list[str]:
@@ -299,15 +308,31 @@ def protocol_splits(meta: pd.DataFrame, protocol: str, random_state: int | None 
     return ProtocolConfig.paper(protocol, random_state=random_state).splits(meta)
 
 
+def fit_with_groups(est, X, y, groups):
+    """``est.fit``, passing ``groups`` (for a source-only early-stopping split) to an
+    estimator (or a pipeline's final one) whose ``fit`` takes them; returns ``est``."""
+    from sklearn.pipeline import Pipeline
+
+    final = est[-1] if isinstance(est, Pipeline) else est
+    if "groups" not in inspect.signature(final.fit).parameters:
+        return est.fit(X, y)
+    if isinstance(est, Pipeline):
+        return est.fit(X, y, **{f"{est.steps[-1][0]}__groups": groups})
+    return est.fit(X, y, groups=groups)
+
+
 def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Sequence[str],
-              warnings_out: list | None = None, return_model: bool = False):
+              warnings_out: list | None = None, return_model: bool = False,
+              groups: np.ndarray | None = None):
     """Fit a fresh clone of ``estimator`` on one split's training rows and score it.
 
     Parameters
     ----------
     estimator : classifier
         Unfitted scikit-learn-compatible classifier (cloned, never modified).
-    X : ndarray, shape (n_samples, n_features)
+    X : ndarray, shape (n_samples, n_features) or (n_samples, C, T)
+        Features, or signals for a model that reads them (``learn.learners.nets``,
+        ``learn.learners.rocket``).
     y : ndarray, shape (n_samples,)
         Class names.
     split : Split
@@ -320,6 +345,10 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
     return_model : bool, default False
         Also return the fitted clone (e.g. to log it; it travels back from a worker
         process by pickling).
+    groups : ndarray, shape (n_samples,), optional
+        Group of each window (:data:`GROUP_COLUMNS`), handed to a model whose ``fit``
+        takes groups (the torch nets' early-stopping split keeps groups of the training
+        rows apart, :func:`fit_with_groups`); others ignore it.
 
     Returns
     -------
@@ -341,7 +370,10 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
         if warnings_out is not None:
             warnings.simplefilter("always")
         est = clone(estimator)
-        est.fit(X[split.train], y[split.train])
+        if groups is None:
+            est.fit(X[split.train], y[split.train])
+        else:
+            fit_with_groups(est, X[split.train], y[split.train], groups[split.train])
         pred_tr = est.predict(X[split.train])
         pred_te = est.predict(X[split.test])
     if warnings_out is not None:
@@ -376,6 +408,7 @@ def evaluate(
     splits: Sequence[Split],
     labels: Sequence[str] | None = None,
     n_jobs: int | None = 1,
+    groups: np.ndarray | None = None,
 ) -> ProtocolResult:
     """Train and test accuracy of ``estimator`` on every split.
 
@@ -391,6 +424,8 @@ def evaluate(
         Class order; default :func:`class_labels` of ``y``.
     n_jobs : int, optional
         Splits fitted in parallel (joblib); 1: sequential.
+    groups : ndarray, shape (n_samples,), optional
+        See :func:`fit_split`.
 
     Returns
     -------
@@ -401,9 +436,10 @@ def evaluate(
     y = np.asarray(y).astype(str)
     labels = class_labels(y) if labels is None else [str(c) for c in labels]
     if n_jobs == 1:
-        out = [fit_split(estimator, X, y, s, labels) for s in splits]
+        out = [fit_split(estimator, X, y, s, labels, groups=groups) for s in splits]
     else:
-        out = Parallel(n_jobs=n_jobs)(delayed(fit_split)(estimator, X, y, s, labels)
+        out = Parallel(n_jobs=n_jobs)(delayed(fit_split)(estimator, X, y, s, labels,
+                                                         groups=groups)
                                       for s in splits)
     return ProtocolResult(
         splits=list(splits),

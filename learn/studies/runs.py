@@ -1,21 +1,43 @@
-"""One (model, input) run of the transfer comparison: its spec, estimator and scoring.
+"""One (model, input) run of the transfer comparison: its spec, estimator, fit, target-gear
+adaptations and scoring.
 
 A run names a model config (``transfer.models.<name>``, a ``_target_`` mapping as in
 ``conf/model/``) and an input of :data:`learn.inputs.signals.INPUTS`, and says which target-gear
-adaptations it gets (:mod:`learn.studies.transfer`).
+adaptations it gets (:mod:`learn.studies.transfer`). :func:`fit_and_adapt` fits it on the
+source gears of one split and scores it and its adaptations (AdaBN or CORAL on the held-out
+gear's healthy stream; fine-tuning or MiniRocket's ridge refit on k labelled windows per
+class) on the same evaluation windows. A torch net's input is standardised once per job
+(:meth:`learn.learners.nets.TorchClassifier.prepare`) and reused by its adapted copies.
 """
 
 from __future__ import annotations
 
-import inspect
-from collections.abc import Mapping
+import copy
+import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from learn.studies.kshot import KShotSplit
+from learn.studies.protocols import fit_with_groups, window_groups
+
 ADAPT = ("adabn", "coral")
+FT_MODES = ("all", "last")
+
+
+@dataclass
+class FinetuneSettings:
+    """Adaptation with k labelled target windows per class (and CORAL's ridge)."""
+
+    modes: list[str] = field(default_factory=lambda: list(FT_MODES))  # torch nets
+    steps: int = 50                 # fixed budget: no validation data exists on the target
+    lr_all: float | None = None     # null: model lr / 10
+    lr_last: float | None = None    # null: model lr
+    replay: float = 1.0             # source windows per target window (batches, weights)
+    coral_reg: float = 1.0          # CORAL's identity term
 
 
 @dataclass
@@ -97,19 +119,6 @@ def make_estimator(model_cfg: Mapping[str, Any], seed: int, n_aux: int,
     return est
 
 
-def fit_with_groups(est, X, y, groups):
-    """``est.fit``, passing ``groups`` (for a source-only early-stopping split) to an
-    estimator whose ``fit`` takes them."""
-    from sklearn.pipeline import Pipeline
-
-    final = final_step(est)
-    if "groups" not in inspect.signature(final.fit).parameters:
-        return est.fit(X, y)
-    if isinstance(est, Pipeline):
-        return est.fit(X, y, **{f"{est.steps[-1][0]}__groups": groups})
-    return est.fit(X, y, groups=groups)
-
-
 def score(est, X, y, pred=None) -> tuple[float, list[tuple[str, str, int]]]:
     """Accuracy and the confusion as (true, predicted, count) triples.
 
@@ -120,3 +129,145 @@ def score(est, X, y, pred=None) -> tuple[float, list[tuple[str, str, int]]]:
     y = np.asarray(y).astype(str)
     pairs = pd.Series(list(zip(y, pred, strict=True))).value_counts()
     return float(np.mean(pred == y)), [(t, p, int(c)) for (t, p), c in pairs.items()]
+
+
+class _Scorer:
+    """Collects the result rows of one (model, input) run and its adaptations."""
+
+    def __init__(self, spec: RunSpec, X, y, evaluation, seed: int):
+        self.X_eval, self.y_eval = X[evaluation], y[evaluation]
+        self.base = {"model": spec.model, "input": spec.input, "seed": seed,
+                     "n_test": len(evaluation)}
+        self.rows: list[dict] = []
+
+    def add(self, model: str, k: int, m, seconds: float, pred=None) -> None:
+        acc, conf = score(m, self.X_eval, self.y_eval, pred)
+        self.rows.append({**self.base, "model": model, "k_shot": k, "accuracy": acc,
+                          "train_s": seconds, "confusion": conf})
+
+
+def fit_and_adapt(spec: RunSpec, est, inp, train: np.ndarray, evaluation: np.ndarray,
+                  kshot: KShotSplit | None, k_shots: Sequence[int], ft: FinetuneSettings,
+                  seed: int) -> list[dict]:
+    """Fit one run on the training windows, adapt it, score every variant.
+
+    Parameters
+    ----------
+    spec : RunSpec
+    est : estimator
+        Unfitted (:func:`make_estimator`); fitted in place.
+    inp : learn.inputs.signals.InputSet
+        The run's input, all windows of the protocol's kind.
+    train, evaluation : ndarray of int
+        Rows of ``inp`` to fit on and to score on.
+    kshot : KShotSplit or None
+        The held-out gear's pool and healthy stream (leave-one-gear-out); None: no
+        adaptation.
+    k_shots : sequence of int
+        k labelled target windows per class (k > 0 fine-tuned or refitted).
+    ft : FinetuneSettings
+    seed : int
+        Seed of the fine-tuning batches.
+
+    Returns
+    -------
+    list of dict
+        One row per scored variant (model, input, seed, n_test, model name with its
+        adaptation, k_shot, accuracy, train_s [s], confusion as (true, predicted, count)).
+    """
+    X, y = inp.X, inp.y
+    groups = window_groups(inp.meta)
+    t0 = time.perf_counter()
+    fit_with_groups(est, X[train], y[train], groups[train])
+    fit_s = time.perf_counter() - t0
+    sc = _Scorer(spec, X, y, evaluation, seed)
+    sc.X_eval = _prepared(est, sc.X_eval)  # once for the run and its adaptations
+    net = final_step(est)
+    refit = kshot is not None and spec.finetune and hasattr(net, "refit_head")
+    f_eval = net.transform(pre_transform(est, sc.X_eval)) if refit else None  # MiniRocket
+    sc.add(spec.model, 0, est, fit_s, None if f_eval is None else net.ridge_.predict(f_eval))
+    if kshot is None:
+        return sc.rows
+    _adapt_unsupervised(sc, spec, est, X, y, train, kshot, ft)
+    if not spec.finetune:
+        return sc.rows
+    ks = [k for k in k_shots if k > 0]
+    if refit:  # MiniRocket: the ridge only, on the evaluation features computed above
+        _refit_heads(sc, spec, est, X, y, train, f_eval, kshot, ks, ft)
+    else:
+        _fine_tune(sc, spec, est, X, y, train, kshot, ks, ft, seed)
+    return sc.rows
+
+
+def _prepared(est, X):
+    """``X`` as a fitted torch net reads it (:meth:`learn.learners.nets.TorchClassifier.
+    prepare`: checked, standardised, a tensor), which its fine-tuned and AdaBN copies
+    reuse; ``X`` itself for other models and for pipelines with steps before the net."""
+    from sklearn.pipeline import Pipeline
+
+    net = final_step(est)
+    alone = not isinstance(est, Pipeline) or len(est) == 1
+    return net.prepare(X) if alone and hasattr(net, "prepare") else X
+
+
+def _adapt_unsupervised(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
+                        ft: FinetuneSettings) -> None:
+    """AdaBN (torch nets) or CORAL (feature models) on the held-out gear's healthy
+    stream (``kshot.unlabelled``, labels unused)."""
+    if spec.adapt == "adabn":
+        if not hasattr(final_step(est), "adapt_bn"):
+            raise ValueError(f"{spec.label}: AdaBN needs a torch net")
+        t0 = time.perf_counter()
+        m = copy.deepcopy(est)
+        final_step(m).adapt_bn(pre_transform(m, X[kshot.unlabelled]))
+        sc.add(f"{spec.model}+adabn", 0, m, time.perf_counter() - t0)
+    elif spec.adapt == "coral":
+        from learn.learners.adapt import CoralClassifier
+
+        if X.ndim != 2:
+            raise ValueError(f"{spec.label}: CORAL needs a feature input")
+        t0 = time.perf_counter()
+        m = CoralClassifier(est, reg=float(ft.coral_reg))
+        m.fit(X[train], y[train], X[kshot.unlabelled])
+        sc.add(f"{spec.model}+coral", 0, m, time.perf_counter() - t0)
+    elif spec.adapt is not None:
+        raise ValueError(f"adapt must be one of {ADAPT} or null, got {spec.adapt!r}")
+
+
+def _refit_heads(sc: _Scorer, spec: RunSpec, est, X, y, train, f_eval: np.ndarray,
+                 kshot: KShotSplit, ks: Sequence[int], ft: FinetuneSettings) -> None:
+    """MiniRocket: the ridge refitted on k shots per class, on cached kernel features."""
+    net = final_step(est)
+    t0 = time.perf_counter()
+    f_src = net.transform(pre_transform(est, X[train]))
+    cache_s = time.perf_counter() - t0
+    for k in ks:
+        shots = kshot.shots(k)
+        t0 = time.perf_counter()
+        m = copy.deepcopy(est)
+        final_step(m).refit_head(pre_transform(m, X[shots]), y[shots], y_source=y[train],
+                                 source_features=f_src, replay=float(ft.replay))
+        seconds = cache_s + time.perf_counter() - t0
+        sc.add(f"{spec.model}+ft_head", k, m, seconds, final_step(m).ridge_.predict(f_eval))
+
+
+def _fine_tune(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
+               ks: Sequence[int], ft: FinetuneSettings, seed: int) -> None:
+    """Torch nets: fine-tuned on k shots per class, all layers and the last layer."""
+    if not hasattr(final_step(est), "fine_tune"):
+        raise ValueError(f"{spec.label}: k-shot adaptation needs a torch net or MiniRocket")
+    replay = float(ft.replay)
+    x_src = _prepared(est, X[train]) if replay > 0 else None  # once for every mode and k
+    for mode in ft.modes:
+        for k in ks:
+            shots = kshot.shots(k)
+            t0 = time.perf_counter()
+            m = copy.deepcopy(est)
+            lr = getattr(ft, f"lr_{mode}")
+            final_step(m).fine_tune(
+                pre_transform(m, X[shots]), y[shots], mode=mode, steps=int(ft.steps),
+                lr=None if lr is None else float(lr),
+                X_replay=pre_transform(m, x_src) if replay > 0 else None,
+                y_replay=y[train] if replay > 0 else None, replay=replay,
+                random_state=seed * 1000 + k)
+            sc.add(f"{spec.model}+ft_{mode}", k, m, time.perf_counter() - t0)

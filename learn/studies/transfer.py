@@ -28,34 +28,38 @@ Files in ``report_dir`` (default ``reports/transfer``): ``results.csv`` (one row
 run: :data:`RESULT_COLUMNS`, accuracy in 0..1), ``confusion.csv``
 (:data:`CONFUSION_COLUMNS`, counts per split and seed),
 ``table.md`` (:func:`learn.reports.transfer_report.write_table`), ``accuracy_vs_k.png``,
-``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``. One MLflow run per
-(data set, protocol, model, input, k) with the per-split, per-seed accuracies, and a
-parent run holding the report and the resolved config. """
+``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``, ``run_times.csv``
+(:data:`RUN_TIME_COLUMNS`: wall and CPU seconds of every run in every job). One MLflow
+run per (data set, protocol, model, input, k) with the per-split, per-seed accuracies,
+and a parent run holding the report and the resolved config.
+
+A *job* is one (data set, protocol, split, seed) with every run; the jobs of all data
+sets share one pool of worker processes (:func:`run_comparisons`), and one progress line
+counts them (:class:`JobProgress`: done, left, time left; a log line per finished job).
+"""
 
 from __future__ import annotations
 
-import copy
 import logging
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from learn.inputs.signals import ResidualSettings
-from learn.studies.kshot import KShotSplit, check_no_leak, kshot_split
+from learn.studies.kshot import check_no_leak, kshot_split
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import (
     ADAPT,
+    FT_MODES,
+    FinetuneSettings,
     RunRef,
     RunSpec,
-    final_step,
-    fit_with_groups,
+    fit_and_adapt,
     make_estimator,
-    pre_transform,
-    score,
 )
 from swgsim.datasets.config import DatasetConfig
 
@@ -65,22 +69,12 @@ RESULT_COLUMNS = ("dataset", "protocol", "split", "model", "input", "k_shot", "s
                   "accuracy", "train_s", "n_test")
 CONFUSION_COLUMNS = ("dataset", "protocol", "split", "seed", "model", "input", "k_shot",
                      "true", "predicted", "count")
-FT_MODES = ("all", "last")
+#: Wall and CPU time [s] of one run (model, input) in one job: fit, adaptations, scoring.
+RUN_TIME_COLUMNS = ("dataset", "protocol", "split", "seed", "model", "input", "seconds",
+                    "cpu_s")
 
 
 # --------------------------------------------------------------------------- config
-
-
-@dataclass
-class FinetuneSettings:
-    """Adaptation with k labelled target windows per class (and CORAL's ridge)."""
-
-    modes: list[str] = field(default_factory=lambda: list(FT_MODES))  # torch nets
-    steps: int = 50                 # fixed budget: no validation data exists on the target
-    lr_all: float | None = None     # null: model lr / 10
-    lr_last: float | None = None    # null: model lr
-    replay: float = 1.0             # source windows per target window (batches, weights)
-    coral_reg: float = 1.0          # CORAL's identity term
 
 
 @dataclass
@@ -251,113 +245,12 @@ def _check_targets(targets: Mapping[str, TargetSpec]) -> None:
 # --------------------------------------------------------------------------- runs
 
 
-class _Scorer:
-    """Collects the result rows of one (model, input) run and its adaptations."""
-
-    def __init__(self, spec: RunSpec, X, y, evaluation, seed: int):
-        self.X_eval, self.y_eval = X[evaluation], y[evaluation]
-        self.base = {"model": spec.model, "input": spec.input, "seed": seed,
-                     "n_test": len(evaluation)}
-        self.rows: list[dict] = []
-
-    def add(self, model: str, k: int, m, seconds: float, pred=None) -> None:
-        acc, conf = score(m, self.X_eval, self.y_eval, pred)
-        self.rows.append({**self.base, "model": model, "k_shot": k, "accuracy": acc,
-                          "train_s": seconds, "confusion": conf})
-
-
-def _run_cell(spec: RunSpec, est, inp, train, evaluation, kshot: KShotSplit | None,
-              k_shots: Sequence[int], ft: FinetuneSettings, seed: int):
-    """Fit one (model, input) on ``train``; score it (and its adaptations) on
-    ``evaluation``. Returns result rows (without data set, protocol and split; each with
-    a ``confusion`` list) and the fitted estimator."""
-    X, y = inp.X, inp.y
-    groups = (inp.meta["gear"].astype(str) + ":" + inp.meta["fault"].astype(str) + ":"
-              + inp.meta["variant"].astype(str)).to_numpy()
-    t0 = time.perf_counter()
-    fit_with_groups(est, X[train], y[train], groups[train])
-    sc = _Scorer(spec, X, y, evaluation, seed)
-    sc.add(spec.model, 0, est, time.perf_counter() - t0)
-    if kshot is None:
-        return sc.rows, est
-    _adapt_unsupervised(sc, spec, est, X, y, train, kshot, ft)
-    if not spec.finetune:
-        return sc.rows, est
-    ks = [k for k in k_shots if k > 0]
-    if hasattr(final_step(est), "refit_head"):  # MiniRocket: the ridge only
-        _refit_heads(sc, spec, est, X, y, train, evaluation, kshot, ks, ft)
-    else:
-        _fine_tune(sc, spec, est, X, y, train, kshot, ks, ft, seed)
-    return sc.rows, est
-
-
-def _adapt_unsupervised(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
-                        ft: FinetuneSettings) -> None:
-    """AdaBN (torch nets) or CORAL (feature models) on the held-out gear's healthy
-    stream (``kshot.unlabelled``, labels unused)."""
-    if spec.adapt == "adabn":
-        if not hasattr(final_step(est), "adapt_bn"):
-            raise ValueError(f"{spec.label}: AdaBN needs a torch net")
-        t0 = time.perf_counter()
-        m = copy.deepcopy(est)
-        final_step(m).adapt_bn(pre_transform(m, X[kshot.unlabelled]))
-        sc.add(f"{spec.model}+adabn", 0, m, time.perf_counter() - t0)
-    elif spec.adapt == "coral":
-        from learn.learners.adapt import CoralClassifier
-
-        if X.ndim != 2:
-            raise ValueError(f"{spec.label}: CORAL needs a feature input")
-        t0 = time.perf_counter()
-        m = CoralClassifier(est, reg=float(ft.coral_reg))
-        m.fit(X[train], y[train], X[kshot.unlabelled])
-        sc.add(f"{spec.model}+coral", 0, m, time.perf_counter() - t0)
-    elif spec.adapt is not None:
-        raise ValueError(f"adapt must be one of {ADAPT} or null, got {spec.adapt!r}")
-
-
-def _refit_heads(sc: _Scorer, spec: RunSpec, est, X, y, train, evaluation,
-                 kshot: KShotSplit, ks: Sequence[int], ft: FinetuneSettings) -> None:
-    """MiniRocket: the ridge refitted on k shots per class, on cached kernel features."""
-    net = final_step(est)
-    t0 = time.perf_counter()
-    f_src = net.transform(pre_transform(est, X[train]))
-    cache_s = time.perf_counter() - t0
-    f_eval = net.transform(pre_transform(est, X[evaluation]))
-    for k in ks:
-        shots = kshot.shots(k)
-        t0 = time.perf_counter()
-        m = copy.deepcopy(est)
-        final_step(m).refit_head(pre_transform(m, X[shots]), y[shots], y_source=y[train],
-                                 source_features=f_src, replay=float(ft.replay))
-        seconds = cache_s + time.perf_counter() - t0
-        sc.add(f"{spec.model}+ft_head", k, m, seconds, final_step(m).ridge_.predict(f_eval))
-
-
-def _fine_tune(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
-               ks: Sequence[int], ft: FinetuneSettings, seed: int) -> None:
-    """Torch nets: fine-tuned on k shots per class, all layers and the last layer."""
-    if not hasattr(final_step(est), "fine_tune"):
-        raise ValueError(f"{spec.label}: k-shot adaptation needs a torch net or MiniRocket")
-    replay = float(ft.replay)
-    for mode in ft.modes:
-        for k in ks:
-            shots = kshot.shots(k)
-            t0 = time.perf_counter()
-            m = copy.deepcopy(est)
-            lr = getattr(ft, f"lr_{mode}")
-            final_step(m).fine_tune(
-                pre_transform(m, X[shots]), y[shots], mode=mode, steps=int(ft.steps),
-                lr=None if lr is None else float(lr),
-                X_replay=pre_transform(m, X[train]) if replay > 0 else None,
-                y_replay=y[train] if replay > 0 else None, replay=replay,
-                random_state=seed * 1000 + k)
-            sc.add(f"{spec.model}+ft_{mode}", k, m, time.perf_counter() - t0)
-
-
 def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int,
           k_shots, ft: FinetuneSettings, adapt_windows: int,
-          threads: int | None) -> list[dict]:
-    """Every (model, input) of one (protocol, split, seed): a unit of parallel work."""
+          threads: int | None) -> tuple[list[dict], dict[str, tuple[float, float]]]:
+    """Every (model, input) of one (protocol, split, seed): a unit of parallel work (a
+    *job*). Returns the result rows and, by run label, the wall and CPU time of each run
+    [s] (fit, adaptations, fine-tuning and scoring; CPU: this process's)."""
     if threads:
         import torch
 
@@ -368,16 +261,17 @@ def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int
         kshot = kshot_split(meta, split.test, k_max, seed, n_unlabelled=adapt_windows)
         evaluation = kshot.evaluation
         check_no_leak(meta, split.train, kshot)
-    rows = []
+    rows, seconds = [], {}
     for spec in specs:
+        t0, c0 = time.perf_counter(), time.process_time()
         inp = inputs[spec.input]
         est = make_estimator(model_cfgs[spec.model], seed, inp.n_aux, spec.params)
-        out, _ = _run_cell(spec, est, inp, split.train, evaluation, kshot, k_shots, ft, seed)
+        out = fit_and_adapt(spec, est, inp, split.train, evaluation, kshot, k_shots, ft,
+                            seed)
         for r in out:
             rows.append({"protocol": protocol, "split": split.name, **r})
-        log.info("%s %s seed %d %s: %s", protocol, split.name, seed, spec.label,
-                 [round(r["accuracy"], 4) for r in out])
-    return rows
+        seconds[spec.label] = (time.perf_counter() - t0, time.process_time() - c0)
+    return rows, seconds
 
 
 # --------------------------------------------------------------------------- comparison
@@ -403,25 +297,127 @@ def _cells_of(meta, protocols: Sequence[str], tc: TransferConfig, split_seed: in
             for seed in (tc.seeds if p in OOD_PROTOCOLS else cv_seeds)]
 
 
-def _run_cells(cells: list, specs, tc: TransferConfig, inputs, bar, dataset: str) -> list[dict]:
-    """Every cell, in-process (``n_jobs`` 1) or in parallel processes."""
-    from joblib import Parallel, delayed
+class JobProgress:
+    """One progress line over every job of the comparison, all data sets together: jobs
+    done, jobs left and the time left estimated from the mean time per finished job; a
+    log line per finished job (its data set, protocol, split and seed, the wall time of
+    each run and their accuracies at k = 0).
 
+    Parameters
+    ----------
+    total : int
+        Jobs planned (:func:`planned_jobs` summed over the data sets); corrected with
+        :meth:`adjust` when a data set turns out to have other splits.
+    enabled : bool
+        Show the progress line (the log lines are written either way).
+    """
+
+    def __init__(self, total: int, enabled: bool = True):
+        from tqdm.auto import tqdm
+
+        self.total, self.done, self.t0 = int(total), 0, time.perf_counter()
+        self.bar = tqdm(total=self.total, desc="transfer", unit="job", smoothing=0.0,
+                        disable=not enabled, bar_format=(
+                            "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} jobs "
+                            "done{postfix} [{elapsed}, about {remaining} left]"))
+
+    def adjust(self, delta: int) -> None:
+        """Change the number of planned jobs by ``delta`` (a skipped protocol, a data set
+        with more or fewer splits than planned)."""
+        if delta:
+            self.total += int(delta)
+            self.bar.total = self.total
+            self.bar.refresh()
+
+    def finished(self, dataset: str, cell: tuple, seconds: Mapping[str, tuple],
+                 rows: Sequence[dict]) -> None:
+        """Count one finished job ``cell`` = (protocol, split, seed) and log it;
+        ``seconds``: run label -> (wall, CPU) [s], ``rows``: its result rows."""
+        self.done += 1
+        left = max(self.total - self.done, 0)
+        elapsed = time.perf_counter() - self.t0
+        protocol, split, seed = cell[0], cell[1].name, cell[2]
+        acc = {f"{r['model']}/{r['input']}": round(r["accuracy"], 4) for r in rows
+               if r["k_shot"] == 0}
+        log.info("job %d/%d done, %d left (about %.1f min): %s %s %s seed %d in %.1f s; "
+                 "run seconds %s; accuracy at k = 0 %s", self.done, self.total, left,
+                 elapsed / self.done * left / 60, dataset, protocol, split, seed,
+                 sum(v[0] for v in seconds.values()),
+                 {k: round(v[0], 1) for k, v in seconds.items()}, acc)
+        self.bar.set_postfix_str(f"{left} left ({dataset})", refresh=False)
+        self.bar.update(1)
+
+    def close(self) -> None:
+        self.bar.close()
+
+
+def planned_jobs(tc: TransferConfig) -> int:
+    """Jobs, (protocol, split, seed), that the comparison plans per data set: the splits
+    each protocol plans (:attr:`learn.studies.protocols.ProtocolConfig.n_planned`) times
+    its seeds."""
+    from learn.studies.protocols import PROTOCOLS
+
+    cv_seeds = tc.seeds if tc.cv_seeds is None else tc.cv_seeds
+    return sum(PROTOCOLS[p].n_planned * len(tc.seeds if p in OOD_PROTOCOLS else cv_seeds)
+               for p in tc.protocols)
+
+
+@dataclass
+class _Gathered:
+    """What the jobs of one data set gave back."""
+
+    rows: list = field(default_factory=list)
+    times: list = field(default_factory=list)
+    input_s: float = 0.0
+    latency: pd.DataFrame | None = None
+
+
+def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency: bool,
+          progress: JobProgress, got: dict[str, _Gathered], on_load):
+    """The jobs of every data set in turn, as ``(function, args, kwargs)``: a data set is
+    loaded and its inputs built when its first job is asked for, i.e. (in a pool) while
+    the workers run the previous data set's last jobs."""
     k_shots = [int(k) for k in tc.k_shots]
-    args = (specs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
-            int(tc.adapt_windows))
-    rows: list[dict] = []
-    if tc.n_jobs == 1:
-        for c in cells:
-            bar.set_description(f"{dataset} {c[0]} {c[1].name} seed {c[2]}")
-            rows += _cell(*c, *args, None)
-            bar.update(1)
-        return rows
-    jobs = (delayed(_cell)(*c, *args, tc.threads_per_job) for c in cells)
-    for out in Parallel(n_jobs=tc.n_jobs, return_as="generator_unordered")(jobs):
-        rows += out
-        bar.update(1)
-    return rows
+    threads = None if tc.n_jobs == 1 else tc.threads_per_job
+    for name, load in sources:
+        ds = load()
+        if on_load is not None:
+            on_load(name, ds)
+        planned = planned_jobs(tc)  # counted in progress, not yet adjusted
+        todo = _protocols_with_data(ds, tc.protocols)
+        for flag in (False, True):
+            prots = [p for p in todo if p.endswith("disturbed") == flag]
+            if not prots:
+                continue
+            t0 = time.perf_counter()
+            inputs = _inputs(ds, tc.runs, tc, flag, feature_kwargs)
+            got[name].input_s += time.perf_counter() - t0
+            cells = _cells_of(next(iter(inputs.values())).meta, prots, tc, split_seed)
+            n_plan = planned_jobs(replace(tc, protocols=prots))
+            progress.adjust(len(cells) - n_plan)
+            planned -= n_plan
+            if latency and all(g.latency is None for g in got.values()):
+                from learn.studies.latency import measure_latency
+
+                # before this data set's jobs are handed out: the first data set's, on
+                # a machine without this comparison's jobs running
+                got[name].latency = measure_latency(
+                    ds, tc.runs, tc.models, inputs, aux=tc.aux,
+                    feature_kwargs=feature_kwargs, residual=tc.residual,
+                    repeats=tc.latency_repeats)
+            args = (tc.runs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
+                    int(tc.adapt_windows), threads)
+            for c in cells:
+                yield _with_cell, (name, c, *args), {}
+            del inputs
+        progress.adjust(-planned)  # protocols without data
+        del ds
+
+
+def _with_cell(name: str, c: tuple, *args):
+    """:func:`_cell` of ``c`` with its data set and ``c`` beside the result (results
+    come back unordered)."""
+    return name, c, _cell(*c, *args)
 
 
 def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -438,41 +434,55 @@ def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]
     return pd.DataFrame(rows, columns=list(RESULT_COLUMNS)), confusion
 
 
-def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
-                   feature_kwargs: Mapping[str, Any] | None = None, split_seed: int = 0,
-                   latency: bool | None = None, checked: bool = False) -> dict:
-    """Run every (protocol, split, seed, model, input) of the comparison on one data set.
+def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
+                    feature_kwargs: Mapping[str, Any] | None = None, split_seed: int = 0,
+                    latency: bool | None = None, checked: bool = False,
+                    progress: JobProgress | None = None, on_load=None) -> dict[str, dict]:
+    """Run every (protocol, split, seed, model, input) of the comparison on several data
+    sets, with one pool of ``tc.n_jobs`` worker processes for all of them.
+
+    The jobs of all data sets form one queue: the next data set is loaded and its inputs
+    built while the workers run the last jobs of the previous one, and no worker waits
+    at a data set's end for the other's last job.
 
     Parameters
     ----------
-    ds : xarray.Dataset
-        Schema v1 with clean and/or disturbed windows and reference windows.
+    sources : sequence of (str, callable)
+        Name of a data set (its ``dataset`` column) and a function returning it
+        (xarray.Dataset, schema v1 with clean and/or disturbed windows and reference
+        windows), called when its jobs come up; one data set is in memory at a time.
     tc : TransferConfig
         The comparison: ``runs`` and ``models`` (:func:`check_config`), ``protocols`` (a
         protocol without data, no clean or no disturbed windows, is skipped with a
         warning), ``seeds`` and ``cv_seeds``, ``k_shots``, ``finetune``, ``aux``,
-        ``residual``, ``n_jobs`` ((protocol, split, seed) cells in parallel processes),
+        ``residual``, ``n_jobs`` (jobs in parallel processes; 1: in this process),
         ``threads_per_job``, ``latency_repeats`` and ``progress``.
-    dataset : str
-        Name written to the ``dataset`` column.
     feature_kwargs : mapping, optional
         ``orders``, ``floor_rel`` of :func:`learn.inputs.features.extract_features`.
     split_seed : int
         Seed of the CV folds (the same folds for every model seed).
     latency : bool, optional
-        Measure the inference latency (CPU, batch 1, one thread) of every (model, input);
-        default ``tc.latency``.
+        Measure the inference latency (CPU, batch 1, one thread) of every (model, input)
+        on the first data set, before its jobs start; default ``tc.latency``.
     checked : bool
-        ``tc`` has passed :func:`check_config` already (the task checks it once per run,
-        before any work, and runs one comparison per data set).
+        ``tc`` has passed :func:`check_config` already (the task checks it before any
+        work).
+    progress : JobProgress, optional
+        The progress line; default one over these data sets' :func:`planned_jobs`, shown
+        when ``tc.progress``.
+    on_load : callable, optional
+        ``on_load(name, ds)`` when a data set is loaded (e.g. its separability), in the
+        thread that hands out the jobs.
 
     Returns
     -------
-    dict
-        ``results`` (DataFrame, :data:`RESULT_COLUMNS`), ``confusion`` (DataFrame,
-        :data:`CONFUSION_COLUMNS`, per split and seed), ``latency`` (DataFrame:
-        model, input, input_ms, model_ms), ``wall_s`` (total), ``input_s`` (building
-        inputs).
+    dict of str to dict
+        Per data set: ``results`` (DataFrame, :data:`RESULT_COLUMNS`), ``confusion``
+        (DataFrame, :data:`CONFUSION_COLUMNS`, per split and seed), ``latency``
+        (DataFrame: model, input, input_ms, model_ms; empty but for the first data
+        set), ``run_s`` (DataFrame, :data:`RUN_TIME_COLUMNS`: wall and CPU time of every
+        run in every job), ``input_s`` (building its inputs) and ``wall_s`` (the whole
+        call, every data set).
 
     Raises
     ------
@@ -480,49 +490,55 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data",
         For a bad ``tc`` (:func:`check_config`), an unknown adaptation, or a k-shot split
         that would leak.
     """
-    from tqdm.auto import tqdm
+    from joblib import Parallel
 
     if not checked:
         check_config(tc)
-    specs = tc.runs
     latency = tc.latency if latency is None else latency
-    t_all, input_s = time.perf_counter(), 0.0
-    todo = _protocols_with_data(ds, tc.protocols)
-    cv_seeds = tc.seeds if tc.cv_seeds is None else tc.cv_seeds
-    n_cells = sum((3 if p in OOD_PROTOCOLS else 4)
-                  * len(tc.seeds if p in OOD_PROTOCOLS else cv_seeds) for p in todo)
-    bar = tqdm(total=n_cells, desc=f"transfer {dataset}", unit="cell", disable=not tc.progress)
-    rows: list[dict] = []
-    lat = None
-    for flag in (False, True):
-        prots = [p for p in todo if p.endswith("disturbed") == flag]
-        if not prots:
-            continue
-        t0 = time.perf_counter()
-        inputs = _inputs(ds, specs, tc, flag, feature_kwargs)
-        input_s += time.perf_counter() - t0
-        cells = _cells_of(next(iter(inputs.values())).meta, prots, tc, split_seed)
-        rows += _run_cells(cells, specs, tc, inputs, bar, dataset)
-        if latency and lat is None:  # once, while this flag's inputs are in memory
-            from learn.studies.latency import measure_latency
+    t_all = time.perf_counter()
+    own = progress is None
+    if own:
+        progress = JobProgress(planned_jobs(tc) * len(sources), tc.progress)
+    got = {name: _Gathered() for name, _ in sources}
+    jobs = _jobs(sources, tc, feature_kwargs, split_seed, latency, progress, got, on_load)
+    if tc.n_jobs == 1:
+        done = (f(*a, **kw) for f, a, kw in jobs)
+    else:
+        done = Parallel(n_jobs=tc.n_jobs, return_as="generator_unordered",
+                        batch_size=1)(jobs)
+    labels = {s.label: s for s in tc.runs}
+    for name, c, (rows, seconds) in done:
+        got[name].rows.extend(rows)
+        got[name].times.extend(
+            {"dataset": name, "protocol": c[0], "split": c[1].name, "seed": c[2],
+             "model": labels[k].model, "input": labels[k].input, "seconds": v[0],
+             "cpu_s": v[1]} for k, v in seconds.items())
+        progress.finished(name, c, seconds, rows)
+    if own:
+        progress.close()
+    wall = time.perf_counter() - t_all
+    out = {}
+    for name, g in got.items():
+        results, confusion = _tables(g.rows, name)
+        out[name] = {"results": results, "confusion": confusion,
+                     "latency": g.latency if g.latency is not None else pd.DataFrame(),
+                     "run_s": pd.DataFrame(g.times, columns=list(RUN_TIME_COLUMNS)),
+                     "input_s": g.input_s, "wall_s": wall}
+    return out
 
-            lat = measure_latency(ds, specs, tc.models, inputs, aux=tc.aux,
-                                  feature_kwargs=feature_kwargs,
-                                  residual=tc.residual,
-                                  repeats=tc.latency_repeats)
-        del inputs
-    bar.close()
-    results, confusion = _tables(rows, dataset)
-    return {"results": results, "confusion": confusion,
-            "latency": lat if lat is not None else pd.DataFrame(),
-            "wall_s": time.perf_counter() - t_all, "input_s": input_s}
+
+def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data", **kwargs) -> dict:
+    """:func:`run_comparisons` on one data set ``ds`` (xarray.Dataset), named ``dataset``;
+    keywords as there. Returns its dict."""
+    return run_comparisons([(dataset, lambda: ds)], tc, **kwargs)[dataset]
 
 
 def _inputs(ds, specs, tc: TransferConfig, disturbed: bool, feature_kwargs) -> dict:
     """Every input kind of the runs, on the clean or the disturbed windows."""
     from learn.inputs.signals import build_input
 
+    cache: dict = {}  # the residual that the residual inputs share
     return {kind: build_input(ds, kind, aux=tuple(tc.aux), disturbed=disturbed,
                               feature_kwargs=dict(feature_kwargs or {}),
-                              residual=tc.residual)
+                              residual=tc.residual, cache=cache)
             for kind in sorted({s.input for s in specs})}

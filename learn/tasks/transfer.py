@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.studies.transfer import TransferConfig, check_config, run_comparison
+from learn.studies.transfer import TransferConfig, check_config, run_comparisons
 from learn.tasks.config import plain, typed_app
 
 log = logging.getLogger(__name__)
@@ -27,6 +27,7 @@ class _Collected:
 
     results: list = field(default_factory=list)
     confusion: list = field(default_factory=list)
+    run_s: list = field(default_factory=list)
     latency: pd.DataFrame | None = None
     separability: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
@@ -111,25 +112,29 @@ def _separability(ds, name: str, tc: TransferConfig, report_dir: Path, got: _Col
 
 
 def _compare(app, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected:
-    """The comparison and the separability on every data set, one loaded at a time."""
+    """The comparison and the separability on every data set, one pool of workers for
+    all of them (:func:`learn.studies.transfer.run_comparisons`); one data set in memory
+    at a time, its separability computed when it is loaded."""
+    from functools import partial
+
     from swgsim.datasets.schema import load
 
-    feature_kwargs = app.features.kwargs()
     got = _Collected()
-    for name, path in data_sets:
-        ds = load(path)
-        log.info("transfer: %s, %d windows from %s, %d runs", name, ds.sizes["sample"], path,
-                 len(tc.runs))
-        out = run_comparison(ds, tc, dataset=name, feature_kwargs=feature_kwargs,
-                             split_seed=app.seed,
-                             latency=tc.latency and got.latency is None, checked=True)
+
+    def loaded(name: str, ds) -> None:
+        log.info("transfer: %s, %d windows, %d runs", name, ds.sizes["sample"], len(tc.runs))
+        _separability(ds, name, tc, report_dir, got)
+
+    outs = run_comparisons([(name, partial(load, path)) for name, path in data_sets], tc,
+                           feature_kwargs=app.features.kwargs(), split_seed=app.seed,
+                           checked=True, on_load=loaded)
+    for out in outs.values():
         got.results.append(out["results"])
         got.confusion.append(out["confusion"])
+        got.run_s.append(out["run_s"])
         got.input_s += out["input_s"]
         if len(out["latency"]):
             got.latency = out["latency"]
-        _separability(ds, name, tc, report_dir, got)
-        del ds
     return got
 
 
@@ -143,7 +148,8 @@ def _timings(tc: TransferConfig, wall: float, input_s: float, generate_s: float)
 
 
 def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, timings) -> dict:
-    """results.csv, confusion.csv, latency.csv, table.md and accuracy_vs_k.png."""
+    """results.csv, confusion.csv, run_times.csv, latency.csv, table.md and
+    accuracy_vs_k.png."""
     from learn.reports.transfer_figure import plot_accuracy_vs_k
     from learn.reports.transfer_report import write_table
 
@@ -152,6 +158,10 @@ def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, tim
     res.to_csv(files["results"], index=False)
     files["confusion"] = report_dir / "confusion.csv"
     conf.to_csv(files["confusion"], index=False)
+    run_s = pd.concat(got.run_s, ignore_index=True) if got.run_s else None
+    if run_s is not None:
+        files["run_times"] = report_dir / "run_times.csv"
+        run_s.to_csv(files["run_times"], index=False)
     if got.latency is not None and len(got.latency):
         files["latency"] = report_dir / "latency.csv"
         got.latency.to_csv(files["latency"], index=False)
@@ -159,7 +169,7 @@ def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, tim
     files["table"] = write_table(res, conf, report_dir / "table.md", targets=targets,
                                  primary=tc.primary, separability=got.separability,
                                  latency=got.latency, timings=timings,
-                                 adapt_windows=int(tc.adapt_windows))
+                                 adapt_windows=int(tc.adapt_windows), run_times=run_s)
     files["figure"] = plot_accuracy_vs_k(res, report_dir / "accuracy_vs_k.png",
                                          targets=targets, separability=got.separability)
     return files

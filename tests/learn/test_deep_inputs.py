@@ -135,3 +135,43 @@ def test_basis_pseudo_inverse_where_lapacks_gesdd_fails():
     ang = 2 * np.pi * f0 * (1e-4 * np.arange(n_t))[:, None] * np.asarray(orders)[None, :]
     basis = np.concatenate([np.ones((n_t, 1)), np.cos(ang), np.sin(ang)], axis=1)
     np.testing.assert_allclose(pinv @ basis, np.eye(basis.shape[1]), atol=1e-12)
+
+
+@pytest.mark.parametrize("aux", [AUX, ("eta_rel",), ()])
+def test_raw_and_diff_are_the_documented_forms(toy, aux):
+    """``raw``: each bridge (s - m_ref) / r_ref with the mean and RMS about it of the
+    window's reference (same gear, operating point, disturbed flag), then the scalars as
+    channels constant in time; ``diff``: (s0, Δs13, Δs24) of those normalised channels,
+    then the same scalars (learn/inputs/signals.py, module docstring)."""
+    from learn.inputs.signals import efficiency_features
+
+    meta, refs = window_meta(toy, disturbed=True)
+    samples = meta["sample"].to_numpy()
+    sig = toy["strain_signal"].values.astype(np.float64)
+    ref = sig[refs]  # (n, 5, T)
+    m = ref.mean(axis=2, keepdims=True)
+    r = np.sqrt(((ref - m) ** 2).mean(axis=2, keepdims=True))
+    x = (sig[samples] - m) / r  # (n, 5, T)
+    eta = toy["efficiency"].values
+    rel = eta[samples] / eta[refs]
+    eff = np.stack([np.abs(1 - rel) ** 0.25, rel - 1], axis=1)[:, [AUX.index(a) for a in aux]]
+    np.testing.assert_allclose(efficiency_features(toy, samples, refs)[:, [
+        AUX.index(a) for a in aux]], eff)
+    raw = build_input(toy, "raw", aux=aux, disturbed=True)
+    diff = build_input(toy, "diff", aux=aux, disturbed=True)
+    n, n_t = len(samples), toy.sizes["time"]
+    assert raw.X.shape == (n, 5 + len(aux), n_t) and diff.X.shape == (n, 3 + len(aux), n_t)
+    assert raw.X.dtype == diff.X.dtype == np.float32
+    assert raw.n_aux == diff.n_aux == len(aux)
+    # float32 of signals of unit RMS: 1e-5 absolute
+    np.testing.assert_allclose(raw.X[:, :5], x, atol=1e-5)
+    want = np.stack([x[:, 0], x[:, 1] - x[:, 3], x[:, 2] - x[:, 4]], axis=1)
+    np.testing.assert_allclose(diff.X[:, :3], want, atol=1e-5)
+    for inp in (raw, diff):
+        c = inp.X.shape[1] - len(aux)
+        np.testing.assert_allclose(inp.X[:, c:], np.broadcast_to(
+            eff[:, :, None], (n, len(aux), n_t)), rtol=1e-6, atol=1e-7)
+    # a healthy window of any gear sits near its reference's scale: zero mean, RMS ~ 1
+    healthy = (meta["fault"] == "healthy").to_numpy()
+    rms = np.sqrt((raw.X[healthy, 1:5] ** 2).mean(axis=2))
+    assert 0.8 < np.median(rms) < 1.25  # toy: noise and disturbance on unit ripple

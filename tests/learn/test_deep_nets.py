@@ -111,6 +111,27 @@ def test_fine_tune_last_touches_head_only_and_adabn_keeps_weights():
         m.fine_tune(X, y, mode="middle")
 
 
+def test_prepared_input_stands_for_the_windows_in_every_method():
+    """prepare(X) is accepted wherever X is, by the net and by its fine-tuned copy (which
+    keeps the statistics of fit), with the same results: the transfer study's cache."""
+    import copy
+
+    X, y = separable()
+    Xte, _ = separable(seed=1)
+    m = _models()[0].fit(X, y)
+    p_te, p_tr = m.prepare(Xte), m.prepare(X)
+    assert p_te.dtype == torch.float32 and tuple(p_te.shape) == Xte.shape
+    assert m.prepare(p_te) is p_te
+    np.testing.assert_array_equal(m.predict(p_te), m.predict(Xte))
+    np.testing.assert_array_equal(m.predict_proba(p_te), m.predict_proba(Xte))
+    a, b = copy.deepcopy(m), copy.deepcopy(m)
+    a.fine_tune(X[:6], y[:6], steps=3, X_replay=X, y_replay=y, random_state=1)
+    b.fine_tune(m.prepare(X[:6]), y[:6], steps=3, X_replay=p_tr, y_replay=y, random_state=1)
+    np.testing.assert_array_equal(a.predict_proba(Xte), b.predict_proba(p_te))
+    # a tensor is taken as prepared: raw windows as a tensor give other results
+    assert not np.array_equal(m.predict_proba(torch.from_numpy(Xte)), m.predict_proba(Xte))
+
+
 def test_minirocket_fits_separable_set():
     X, y = separable(n_time=64)
     Xte, yte = separable(n_time=64, seed=1)
