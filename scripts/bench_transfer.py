@@ -7,7 +7,7 @@ held-out gear) and prints, per (model, input) run, the wall time summed over the
 AdaBN / CORAL; k-shot fine-tuning or ridge refits), beside its accuracy at every k
 (worst split). CPU seconds (this process's, one torch thread by default) are what a run
 costs on a core of its own; wall seconds grow with what else runs on the machine. The
-figures of docs/TRANSFER.md come from it::
+figures of docs/learners_transfer.md come from it::
 
     python scripts/bench_transfer.py data/bench
     python scripts/bench_transfer.py data/bench --runs mlp_torch/raw cnn/diff
