@@ -4,8 +4,13 @@
 95th-percentile time to detect [min], isolation at the alarm and one hour after (share of
 detected lives named correctly), severity error (median ``|estimate − true severity|`` at
 the alarm) and, per fault, the smallest severity detected in every life; then false alarms
-per 1000 h per held-out gear. Figures: time to detect against severity per fault, and
-false-alarm rate against time to detect per detector.
+per 1000 h per held-out gear. Lives under a nuisance of a real day (``nuisance`` other
+than ``none``: warm-ups, the hall's heat, run-in, a payload change, all together) are
+reported beside the stationary ones: per data set, detector and figure, one column per
+nuisance (gear-fault alarms and advisories per 1000 h counted apart, detection, time to
+detect at the mildest severity, naming), the per-window baselines under the same
+nuisance. Figures: time to detect against severity per fault, and false-alarm rate
+against time to detect per detector.
 """
 
 from __future__ import annotations
@@ -36,11 +41,27 @@ def labelled(df: pd.DataFrame | None) -> pd.DataFrame | None:
     return df.assign(dataset=np.where(enc, df["dataset"] + " (output encoder)", df["dataset"]))
 
 
+def with_nuisance(df: pd.DataFrame | None) -> pd.DataFrame | None:
+    """``df`` with the columns of a real day's evaluation where an older one lacks them:
+    ``nuisance`` (``none``), and in a false-alarm table ``gear_fault_alarms`` (every alarm
+    of a detector that names no fault, the per-window baselines) and ``advisories`` (0
+    where the detector gives none)."""
+    if df is None:
+        return df
+    df = df.assign(nuisance=df["nuisance"].fillna("none") if "nuisance" in df else "none")
+    if "false_alarms" in df and "healthy_hours" in df:
+        gf = df["gear_fault_alarms"] if "gear_fault_alarms" in df else np.nan
+        adv = df["advisories"] if "advisories" in df else np.nan
+        df = df.assign(gear_fault_alarms=pd.Series(gf, index=df.index).fillna(
+            df["false_alarms"]), advisories=pd.Series(adv, index=df.index).fillna(0))
+    return df
+
+
 def summary_table(res: pd.DataFrame) -> pd.DataFrame:
-    """Per dataset, detector, fault, severity and onset: the table's figures."""
-    res = labelled(res)
+    """Per dataset, nuisance, detector, fault, severity and onset: the table's figures."""
+    res = with_nuisance(labelled(res))
     rows = []
-    keys = ["dataset", "detector", "fault", "severity", "onset"]
+    keys = ["dataset", "nuisance", "detector", "fault", "severity", "onset"]
     for k, g in res.groupby(keys, sort=False):
         det = g[g.detected.astype(bool)]
         ttd = det.time_to_detect_h * 60.0
@@ -61,7 +82,8 @@ GEAR_TARGET_FAULTS = ("eccentric_wg", "reduced_damping", "root_tooth_crack", "ti
 
 
 def targets(res: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
-    """The issue's targets for the monitor, per data set, on the worst held-out gear.
+    """The issue's targets for the monitor, per data set, on the worst held-out gear, on
+    the stationary lives (``nuisance`` none; :func:`nuisance_targets` for the others).
 
     Rows: false alarms per 1000 h (worst gear; target 0 in 1000 h), per gear fault the
     detection rate over every severity and onset (worst gear; target 1), the median time
@@ -69,7 +91,8 @@ def targets(res: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
     correctly one hour after the alarm (all lives; target >= 0.99), sensor faults named
     as a gear fault (count; target 0) and with their faulty bridge (count).
     """
-    res, fa = labelled(res), labelled(fa)
+    res, fa = with_nuisance(labelled(res)), with_nuisance(labelled(fa))
+    res, fa = res[res.nuisance == "none"], fa[fa.nuisance == "none"]
     mon = res[res.detector == "monitor"].copy()
     mon["detected"] = mon.detected.astype(bool)
     rows = []
@@ -110,7 +133,7 @@ def targets(res: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
 def smallest_detectable(tab: pd.DataFrame) -> pd.DataFrame:
     """Per dataset, detector and fault: the smallest step severity detected in every life
     (NaN when none is)."""
-    step = tab[tab.onset == "step"]
+    step = tab[(tab.onset == "step") & (tab.nuisance == "none")]
     out = []
     for k, g in step.groupby(["dataset", "detector", "fault"], sort=False):
         ok = g[g.detection_rate >= 1.0].severity.abs()
@@ -120,11 +143,61 @@ def smallest_detectable(tab: pd.DataFrame) -> pd.DataFrame:
 
 
 def false_alarm_table(fa: pd.DataFrame) -> pd.DataFrame:
-    """False alarms per 1000 h per dataset, detector and held-out gear (all seeds)."""
-    g = labelled(fa).groupby(["dataset", "detector", "held_out_gear"], sort=False).agg(
-        healthy_hours=("healthy_hours", "sum"), false_alarms=("false_alarms", "sum"))
+    """Alarms per 1000 h of healthy operation per dataset, nuisance, detector and held-out
+    gear (all seeds): every alarm (``per_1000_h``), the gear-fault alarms among them and
+    the advisories ("outside what commissioning saw"), counted apart."""
+    g = with_nuisance(labelled(fa)).groupby(
+        ["dataset", "nuisance", "detector", "held_out_gear"], sort=False).agg(
+        healthy_hours=("healthy_hours", "sum"), false_alarms=("false_alarms", "sum"),
+        gear_fault_alarms=("gear_fault_alarms", "sum"), advisories=("advisories", "sum"))
     g["per_1000_h"] = g.false_alarms / g.healthy_hours * 1000.0
+    g["gear_fault_per_1000_h"] = g.gear_fault_alarms / g.healthy_hours * 1000.0
+    g["advisories_per_1000_h"] = g.advisories / g.healthy_hours * 1000.0
     return g.reset_index()
+
+
+def _real_day_figures(res: pd.DataFrame, fat: pd.DataFrame) -> list[tuple[str, str, float]]:
+    """One data set's, detector's and nuisance's lives: (figure, target, value) on the
+    worst held-out gear (:func:`nuisance_table`)."""
+    out = [("gear-fault alarms per 1000 h (worst gear)", "0",
+            float(fat.gear_fault_per_1000_h.max()) if len(fat) else np.nan),
+           ("advisories per 1000 h (worst gear)", "-",
+            float(fat.advisories_per_1000_h.max()) if len(fat) else np.nan),
+           ("healthy hours (all gears and seeds)", "-", float(fat.healthy_hours.sum()))]
+    x = res[res.fault.isin(GEAR_TARGET_FAULTS) & (res.onset == "step")]
+    if x.empty:
+        return out
+    x = x.assign(detected=x.detected.astype(bool))
+    det = x.groupby(["fault", "held_out_gear"]).detected.mean().min()
+    mild = x[x.severity.abs() == x.groupby("fault").severity.transform(
+        lambda v: v.abs().min())]
+    ttd = mild[mild.detected].groupby(["fault", "held_out_gear"]).time_to_detect_h.median()
+    named = (x[x.detected].fault_after_1h == x[x.detected].fault).mean()
+    return out + [("gear faults detected (worst fault and gear)", "1", float(det)),
+                  ("median time to detect at the mildest severity [min] (worst fault "
+                   "and gear)", "<= 60", float(ttd.max() * 60) if len(ttd) else np.nan),
+                  ("gear faults named right 1 h after the alarm", ">= 0.99", float(named))]
+
+
+def nuisance_table(res: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
+    """The stationary lives beside each nuisance's: per data set, detector and figure
+    (:func:`_real_day_figures`) one column per nuisance, ``none`` first; empty when no
+    life lived a nuisance."""
+    res, fa = with_nuisance(labelled(res)), with_nuisance(labelled(fa))
+    if set(fa.nuisance) <= {"none"}:
+        return pd.DataFrame()
+    fat = false_alarm_table(fa)
+    rows = []
+    for (ds, d, n), f in fat[fat.detector != "always"].groupby(
+            ["dataset", "detector", "nuisance"], sort=False):
+        r = res[(res.dataset == ds) & (res.detector == d) & (res.nuisance == n)]
+        rows += [{"dataset": ds, "detector": d, "what": w, "target": t, "nuisance": n,
+                  "value": v} for w, t, v in _real_day_figures(r, f)]
+    tab = pd.DataFrame(rows)
+    order = list(dict.fromkeys(["none", *tab.nuisance]))
+    wide = tab.set_index(["dataset", "detector", "what", "target", "nuisance"])[
+        "value"].unstack("nuisance", sort=False)
+    return wide.reindex(columns=order).reset_index()
 
 
 def _md(df: pd.DataFrame) -> str:
@@ -152,6 +225,11 @@ def write_table(res: pd.DataFrame, fa: pd.DataFrame, path: Path, header: str = "
             "seeds)\n", _md(tab), "\n## Smallest severity detected in every life (step "
             "onsets)\n", _md(small), "\n## False alarms in healthy operation\n",
             _md(false_alarm_table(fa)), ""]
+    real = nuisance_table(res, fa)
+    if len(real):
+        text[3:3] = ["\n## A real day: stationary lives beside each nuisance (held-out gears, "
+                     "worst gear, all seeds; per-window baselines under the same nuisance)\n",
+                     _md(real)]
     out = "\n".join(text)
     path.write_text(out)
     return out
@@ -161,10 +239,11 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
             curve: pd.DataFrame | None = None) -> list[Path]:
     """Time to detect against severity per fault; false-alarm rate against time to detect:
     the monitor's rule at the design rates of ``curve`` (``tradeoff.csv``), and the
-    per-window and always-alarm detectors."""
+    per-window and always-alarm detectors; on the stationary lives."""
     import matplotlib
 
-    res, fa, curve = labelled(res), labelled(fa), labelled(curve)
+    res, fa, curve = with_nuisance(labelled(res)), with_nuisance(labelled(fa)), labelled(curve)
+    res, fa = res[res.nuisance == "none"], fa[fa.nuisance == "none"]  # the stationary lives
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -241,5 +320,5 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
     return paths
 
 
-__all__ = ["display", "false_alarm_table", "figures", "smallest_detectable", "summary_table",
-           "targets", "write_table"]
+__all__ = ["display", "false_alarm_table", "figures", "nuisance_table", "smallest_detectable",
+           "summary_table", "targets", "with_nuisance", "write_table"]
