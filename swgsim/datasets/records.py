@@ -30,7 +30,11 @@ from swgsim.sensing.angles import measure_angles
 from swgsim.sensing.effects import apply_sensor_effects
 from swgsim.sensing.sensor_faults import is_sensor_fault
 
-__all__ = ["ProfileRecordBank", "RecordBank", "record_bank"]
+__all__ = ["SIGNAL_GROUP", "ProfileRecordBank", "RecordBank", "record_bank"]
+
+#: Records whose gauge signals are synthesised at once on the fine grid (memory:
+#: :mod:`swgsim.datasets.resources`).
+SIGNAL_GROUP = 16
 
 
 class RecordBank:
@@ -132,8 +136,8 @@ class RecordBank:
                                       res.message))
         chain = self._chain(params)
         win = slice(n_lead, n_lead + n_rec)
-        for c in range(0, len(keys), 16):  # gauge signals in small groups (memory)
-            rows = np.arange(c, min(c + 16, len(keys)))
+        for c in range(0, len(keys), SIGNAL_GROUP):  # gauge signals in small groups
+            rows = np.arange(c, min(c + SIGNAL_GROUP, len(keys)))
             psi, t_act = fine_motion(res, q, motion[rows])
             variants = [params[r] for r in rows]
             sig = self._measured(chain.signals_batch(variants, psi, t_act), n_in, n_lead)
