@@ -2,7 +2,7 @@
 app, config ``conf/import.yaml``).
 
 Reads a recording (CSV or Parquet, one row per sample) and its column mapping (a YAML,
-:class:`swgsim.datasets.recordings.RecordingMapping`; an example in
+:class:`swgsim.datasets.recording_mapping.RecordingMapping`; an example in
 ``examples/own_joint_mapping.yaml``), checks both before any work, and writes the windows
 as a schema-v1 stream with a manifest and an ownership stamp
 (:func:`swgsim.datasets.recordings.import_recording`). The walk-through is

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from swgsim.datasets.schema import TEMPERATURE_RANGE_C
+
 from .features import feature_names, health_features
 from .gear_monitor import Alarm, GearMonitor, Trace, check_commissioning
 from .normal import Conditions, NormalConfig
@@ -24,8 +26,6 @@ from .rule import RuleConfig
 
 #: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
 CONDITIONS = {1: "temperature", 2: "load", 4: "friction"}
-#: A joint temperature reading outside this range is refused [°C].
-TEMPERATURE_RANGE_C = (-40.0, 150.0)
 
 
 @dataclass

@@ -3,14 +3,16 @@
 A *recording* is a table (CSV or Parquet, one row per sample) of a joint's five bridges,
 its input speed and output torque, optionally its input and output angles, the joint's
 temperature, the input and output power, and a clock (operating hours or wall-clock
-time). A small YAML, the *mapping* (:class:`RecordingMapping`), names its columns and
+time). A small YAML, the *mapping*
+(:class:`~swgsim.datasets.recording_mapping.RecordingMapping`), names its columns and
 units and declares the gear's operating points and commissioning period;
 :func:`import_recording` checks both before any work, cuts the recording into windows and
 writes them as a schema-v1 stream (``docs/DATASET.md``, "Imported recordings"), the
 same a life of ``swgsim-generate`` is, so that ``swgsim-monitor`` reads it. The user's
 guide is ``docs/OWN_JOINT.md``; an example mapping is ``examples/own_joint_mapping.yaml``.
 
-How the windows are made (:mod:`swgsim.datasets.recording_table` does the array work):
+How the windows are made (:mod:`swgsim.datasets.recording_table` and
+:mod:`swgsim.datasets.recording_checks` do the array work):
 
 * **segments**: a new segment begins where the clock advances by more than one window
   since the previous row (a logger's bursts); inside a segment the time column advances
@@ -46,296 +48,42 @@ import json
 import logging
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from swgsim.base.typed import allowed, build, check_finite, complete
+from swgsim.datasets import recording_checks as rc
 from swgsim.datasets import recording_table as rt
-from swgsim.datasets.schedule import LifeConfig
-from swgsim.datasets.schema import MANIFEST, SCHEMA_VERSION, SENSORS, make_dataset, write_shard
+from swgsim.datasets.recording_mapping import (
+    MAX_BRIDGE_MVV,
+    SPEED_UNITS,
+    Angle,
+    RecordingMapping,
+    mapping_columns,
+    read_mapping,
+    recording_mapping,
+)
+from swgsim.datasets.schema import (
+    MANIFEST,
+    SCHEMA_VERSION,
+    TEMPERATURE_RANGE_C,
+    make_dataset,
+    write_shard,
+)
 from swgsim.files import ownership
 from swgsim.files.digest import config_digest, sha256_file
 from swgsim.files.ownership import atomic_write_json
 from swgsim.files.provenance import git_revision, library_versions, package_version
-from swgsim.gear.chain import ChainSettings
-from swgsim.gear.dynamics import GearParams
 from swgsim.gear.profile import MAX_INPUT_SPEED_RPM, MOMENTARY_PEAK_TORQUE_NM
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Angle", "BridgeCalibration", "Bridges", "Clock", "MAX_BRIDGE_MVV",
-           "MAX_MAPPING_BYTES", "OperatingPoints", "Power", "RecordingMapping", "Speed",
-           "TEMPERATURE_RANGE_C", "check_mapping", "import_recording", "read_mapping",
-           "recording_mapping", "recording_stream", "write_stream"]
+__all__ = ["APP", "import_recording", "read_samples", "recording_stream", "write_stream"]
 
-#: Units of the bridge columns.
-BRIDGE_UNITS = ("mV/V", "counts")
-#: Units of the speed column and their factor to rpm.
-SPEED_UNITS = {"rpm": 1.0, "rad/s": 60.0 / (2 * np.pi)}
-#: Units of an angle column.
-ANGLE_UNITS = ("rad", "counts")
-#: Units of the clock column: operating hours, seconds, or wall-clock time stamps.
-CLOCK_UNITS = ("h", "s", "datetime")
-#: Largest bridge output accepted [mV/V]: a full-bridge of gauges of factor 2 at 5000
-#: µm/m gives 10 mV/V, beyond a flexspline's elastic strain (the paper's bridges stay
-#: under 1 mV/V); a larger value is raw counts or another unit.
-MAX_BRIDGE_MVV = 10.0
-#: Joint temperatures accepted [degC]: beyond a grease's and a gauge's range; a value
-#: outside is kelvin or degF.
-TEMPERATURE_RANGE_C = (-50.0, 150.0)
-#: Largest mapping YAML read [bytes].
-MAX_MAPPING_BYTES = 1 << 20
 #: The app that writes imported streams (their ownership stamp's ``apps``).
 APP = "swgsim-import"
-
-
-@dataclass
-class BridgeCalibration:
-    """One bridge's raw counts to mV/V: ``mV/V = gain_mvv_per_count * (count -
-    offset_counts)``."""
-
-    gain_mvv_per_count: float
-    offset_counts: float = 0.0
-
-
-@dataclass
-class Bridges:
-    """The five bridge columns, s0..s4 in order (``docs/DATASET.md``)."""
-
-    columns: list[str] = field(default_factory=lambda: list(SENSORS))
-    unit: str = "mV/V"   # mV/V or counts (then a calibration per bridge)
-    calibration: list[BridgeCalibration] = field(default_factory=list)
-
-
-@dataclass
-class Speed:
-    """The input (wave-generator) speed column, positive where the input angle grows."""
-
-    column: str = "n_in_rpm"
-    unit: str = "rpm"    # rpm or rad/s
-
-
-@dataclass
-class Angle:
-    """An angle column: the input (drive) shaft's, or the output encoder's."""
-
-    column: str
-    counts_per_rev: int = field(metadata=allowed(1, 2**32, "sensor counts per revolution"))
-    unit: str = "rad"    # rad or counts
-
-
-@dataclass
-class Clock:
-    """The clock column: operating hours (``h``), seconds (``s``) or wall-clock time
-    stamps (``datetime``, ISO 8601)."""
-
-    column: str
-    unit: str = "h"
-
-
-@dataclass
-class Power:
-    """Input and output power columns [W], both positive when the motor drives the load."""
-
-    input: str
-    output: str
-
-
-@dataclass
-class OperatingPoints:
-    """The gear's operating points, [n_in_rpm, t_out_nm] each, and how near a window's
-    speed and torque must be to count as at one (module docstring)."""
-
-    points: list[list[float]]
-    speed_tolerance_rpm: float = field(default=100.0, metadata=allowed(0.0, 1000.0))
-    torque_tolerance_nm: float = field(default=3.0, metadata=allowed(0.0, 100.0))
-
-
-@dataclass
-class RecordingMapping:
-    """A recording's columns and units and how its windows are made (module docstring;
-    ``docs/OWN_JOINT.md``).
-
-    Attributes
-    ----------
-    operating_points : OperatingPoints
-    commissioning_h : float
-        The first hours of the recording, known healthy [h].
-    time : str
-        Time column [s].
-    bridges, speed : Bridges, Speed
-    torque : str
-        Output torque column [N m].
-    input_angle, output_angle : Angle or None
-    temperature : str or None
-        Joint temperature column [degC].
-    clock : Clock or None
-        None: the time column counts operating time.
-    power : Power or None
-    gear : int
-        The gear's id in the stream.
-    ratio : float
-        Gear ratio N (the output angle's check).
-    window_s : float
-        Window length [s] (the data sets' default).
-    interval_min : float
-        Minutes of operation between windows taken (0: every window).
-    sample_rate_hz : float or None
-        The logger's nominal rate [Hz]; None: from the time column's median step.
-    rate_tolerance : float
-        Largest relative deviation of a time step from the sample period.
-    """
-
-    operating_points: OperatingPoints
-    commissioning_h: float = field(metadata=allowed(0.0, 1e6, "h"))
-    time: str = "time_s"
-    bridges: Bridges = field(default_factory=Bridges)
-    speed: Speed = field(default_factory=Speed)
-    torque: str = "t_out_nm"
-    input_angle: Angle | None = None
-    output_angle: Angle | None = None
-    temperature: str | None = None
-    clock: Clock | None = None
-    power: Power | None = None
-    gear: int = field(default=1, metadata=allowed(0, None, "the stream's gear id"))
-    ratio: float = field(default=GearParams.ratio, metadata=allowed(1.0, 1000.0))
-    window_s: float = field(default=ChainSettings.window_s, metadata=allowed(0.0, 10.0, "s"))
-    interval_min: float = field(default=LifeConfig.interval_min,
-                                metadata=allowed(0.0, 1440.0, "min"))
-    sample_rate_hz: float | None = field(default=None, metadata=allowed(1.0, 1e7, "Hz"))
-    rate_tolerance: float = field(default=0.01, metadata=allowed(0.0, 0.5))
-
-
-def _one_of(value: str, options, key: str) -> None:
-    if value not in options:
-        raise ValueError(f"{key}: must be one of {', '.join(options)}, got {value!r}")
-
-
-def check_mapping(m: RecordingMapping) -> None:
-    """Refuse a mapping that cannot be right, before any work.
-
-    Raises
-    ------
-    ValueError
-        One line naming the key: a unit not of its list, a calibration missing or not
-        one per bridge (or a zero gain), not five bridge columns, a column mapped twice,
-        no operating point, a point not [speed, torque] or beyond the catalogue's limits,
-        two points whose tolerances overlap, a window or commissioning period of zero.
-    """
-    b = m.bridges
-    _one_of(b.unit, BRIDGE_UNITS, "bridges.unit")
-    if len(b.columns) != len(SENSORS):
-        raise ValueError(f"bridges.columns: {len(b.columns)} columns; the five bridges "
-                         f"s0..s4 in order")
-    if b.unit == "counts" and len(b.calibration) != len(SENSORS):
-        raise ValueError(f"bridges.calibration: {len(b.calibration)} entries; with "
-                         "unit counts one {gain_mvv_per_count, offset_counts} per bridge")
-    for i, c in enumerate(b.calibration):
-        if c.gain_mvv_per_count == 0:
-            raise ValueError(f"bridges.calibration[{i}].gain_mvv_per_count: 0")
-    _one_of(m.speed.unit, tuple(SPEED_UNITS), "speed.unit")
-    for k in ("input_angle", "output_angle"):
-        if getattr(m, k) is not None:
-            _one_of(getattr(m, k).unit, ANGLE_UNITS, f"{k}.unit")
-    if m.output_angle is not None and m.input_angle is None:
-        raise ValueError("output_angle: needs input_angle (the wave generator's "
-                         "angle is the input's less the output's)")
-    if m.clock is not None:
-        _one_of(m.clock.unit, CLOCK_UNITS, "clock.unit")
-    seen: dict[str, str] = {}
-    for key, col in _columns(m).items():
-        if col in seen:
-            raise ValueError(f"{key}: column {col!r} is mapped twice (also "
-                             f"{seen[col]})")
-        seen[col] = key
-    if m.window_s <= 0 or m.commissioning_h <= 0:
-        raise ValueError(f"{'window_s' if m.window_s <= 0 else 'commissioning_h'}: "
-                         "must be > 0")
-    _check_points(m.operating_points, "operating_points")
-
-
-def _check_points(op: OperatingPoints, key: str) -> None:
-    """Declared operating points: [speed, torque] within the catalogue, boxes apart."""
-    if not op.points:
-        raise ValueError(f"{key}.points: empty; declare the gear's operating points as "
-                         "[[n_in_rpm, t_out_nm], ...]")
-    for i, p in enumerate(op.points):
-        if len(p) != 2:
-            raise ValueError(f"{key}.points[{i}]: {p}; a point is [n_in_rpm, t_out_nm]")
-        if abs(p[0]) > MAX_INPUT_SPEED_RPM or abs(p[1]) > MOMENTARY_PEAK_TORQUE_NM:
-            raise ValueError(f"{key}.points[{i}]: {p} beyond the catalogue's "
-                             f"{MAX_INPUT_SPEED_RPM:g} rpm and {MOMENTARY_PEAK_TORQUE_NM:g} N m")
-    pts = np.asarray(op.points, float)
-    for i in range(len(pts)):
-        for j in range(i):
-            if (abs(pts[i, 0] - pts[j, 0]) <= 2 * op.speed_tolerance_rpm
-                    and abs(pts[i, 1] - pts[j, 1]) <= 2 * op.torque_tolerance_nm):
-                raise ValueError(f"{key}.points[{i}]: {op.points[i]} lies within twice the "
-                                 f"tolerances of points[{j}] {op.points[j]}: a window could "
-                                 "be at both; lower speed_tolerance_rpm or torque_tolerance_nm")
-
-
-def _columns(m: RecordingMapping) -> dict[str, str]:
-    """Mapping key -> column name of every column the mapping reads."""
-    out = {"time": m.time, **{f"bridges.columns[{i}]": c for i, c in enumerate(m.bridges.columns)},
-           "speed.column": m.speed.column, "torque": m.torque}
-    for k in ("input_angle", "output_angle"):
-        if getattr(m, k) is not None:
-            out[f"{k}.column"] = getattr(m, k).column
-    if m.temperature is not None:
-        out["temperature"] = m.temperature
-    if m.clock is not None:
-        out["clock.column"] = m.clock.column
-    if m.power is not None:
-        out.update({"power.input": m.power.input, "power.output": m.power.output})
-    return out
-
-
-def recording_mapping(cfg: Mapping[str, Any]) -> RecordingMapping:
-    """The typed mapping of plain data (a YAML's), every key and value checked.
-
-    Raises
-    ------
-    ValueError
-        One line naming the key by its full name: unknown (with the allowed ones),
-        missing, of the wrong type, out of its range, not finite, or
-        :func:`check_mapping`.
-    """
-    if not isinstance(cfg, Mapping):
-        raise ValueError(f"must be a mapping of keys (time, bridges, speed, ...), got "
-                         f"{type(cfg).__name__}")
-    m = build(complete(cfg, RecordingMapping, ""), RecordingMapping)
-    for f in dataclasses.fields(m):
-        check_finite(getattr(m, f.name), f.name)
-    check_mapping(m)
-    return m
-
-
-def read_mapping(path: str | os.PathLike) -> RecordingMapping:
-    """Read a mapping YAML (a regular file of at most :data:`MAX_MAPPING_BYTES`).
-
-    Raises
-    ------
-    FileNotFoundError
-        If there is no such file.
-    ValueError
-        ``<path>: <full key>: ...`` (:func:`recording_mapping`), or the file is not YAML.
-    """
-    import yaml
-
-    p = rt.check_file(path, "mapping", MAX_MAPPING_BYTES)
-    try:
-        cfg = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as e:
-        raise ValueError(f"mapping {p}: not YAML ({str(e).splitlines()[0]})") from None
-    try:
-        return recording_mapping(cfg if cfg is not None else {})
-    except ValueError as e:
-        raise ValueError(f"mapping {p}: {e}") from None
-
 
 
 # ------------------------------------------------------------------ the table's samples
@@ -365,14 +113,15 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
     Raises
     ------
     FileNotFoundError, ValueError
-        One line naming the file or the column and the row (:func:`swgsim.datasets.
-        recording_table.read_table`, :func:`~swgsim.datasets.recording_table.numeric`): a
+        One line naming the file or the column and the row
+        (:func:`swgsim.datasets.recording_table.read_table`,
+        :func:`~swgsim.datasets.recording_table.numeric`): a
         missing column, a non-numeric or non-finite value, a bridge beyond
         ±:data:`MAX_BRIDGE_MVV` mV/V, a speed beyond the catalogue's 6500 rpm, a torque
         beyond its momentary peak (191 N m), a temperature outside
         :data:`TEMPERATURE_RANGE_C`.
     """
-    cols = {c: k for k, c in _columns(m).items()}
+    cols = {c: k for k, c in mapping_columns(m).items()}
     df, fmt = rt.read_table(path, cols, max_bytes, progress)
     stamp = m.clock.column if m.clock is not None and m.clock.unit == "datetime" else None
     v = {c: (rt.datetime_seconds if c == stamp else rt.numeric)(df, c, k, fmt)
@@ -423,14 +172,14 @@ def _angles(s: Samples, m: RecordingMapping, starts: np.ndarray) -> dict[str, np
     a = m.input_angle
     res = 2 * np.pi / a.counts_per_rev
     name = rt.column_name(a.column, "input_angle.column")
-    out["phi_in_meas"] = rt.unwrap_segments(s.phi_in, starts, 2 * np.pi)
-    rt.check_angle_turns(out["phi_in_meas"], s.speed_rpm, starts, res, name, s.fmt)
-    rt.check_angle_speed(out["phi_in_meas"], s.speed_rpm, s.time_s, starts, res,
+    out["phi_in_meas"] = rc.unwrap_segments(s.phi_in, starts, 2 * np.pi)
+    rc.check_angle_turns(out["phi_in_meas"], s.speed_rpm, starts, res, name, s.fmt)
+    rc.check_angle_speed(out["phi_in_meas"], s.speed_rpm, s.time_s, starts, res,
                          (name, rt.column_name(m.speed.column, "speed.column")), s.fmt)
     if s.phi_out is not None:
         o = m.output_angle
-        out["phi_out_meas"] = rt.unwrap_segments(s.phi_out, starts, 2 * np.pi)
-        rt.check_output_angle(out["phi_out_meas"], out["phi_in_meas"], starts, m.ratio,
+        out["phi_out_meas"] = rc.unwrap_segments(s.phi_out, starts, 2 * np.pi)
+        rc.check_output_angle(out["phi_out_meas"], out["phi_in_meas"], starts, m.ratio,
                               2 * np.pi / o.counts_per_rev,
                               rt.column_name(o.column, "output_angle.column"), s.fmt)
     return out
@@ -542,8 +291,8 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
         (s.clock - s.clock[0]) * 3600.0 if m.clock.unit == "h" else s.clock)
     names = (rt.column_name(m.time, "time"), None if m.clock is None
              else rt.column_name(m.clock.column, "clock.column"))
-    starts = rt.segment_starts(s.time_s, clock_s, m.window_s, names, s.fmt)
-    fs, n_t = rt.check_sampling(s.time_s, starts, m.window_s, m.sample_rate_hz,
+    starts = rc.segment_starts(s.time_s, clock_s, m.window_s, names, s.fmt)
+    fs, n_t = rc.check_sampling(s.time_s, starts, m.window_s, m.sample_rate_hz,
                                 m.rate_tolerance, names[0], s.fmt)
     angles = _angles(s, m, starts)
     w0, seg = rt.window_starts(starts, n, n_t)
@@ -670,8 +419,8 @@ def import_recording(recording: str | os.PathLike,
     overwrite : bool
         Replace a stream or data set this project wrote there.
     max_bytes : int
-        Largest table read [bytes] (default :data:`swgsim.datasets.recording_table.
-        MAX_TABLE_BYTES`, 1 GiB).
+        Largest table read [bytes] (default
+        :data:`swgsim.datasets.recording_table.MAX_TABLE_BYTES`, 1 GiB).
     progress : bool
 
     Returns

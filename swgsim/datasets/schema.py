@@ -78,6 +78,11 @@ PER_SAMPLE = {
     "t_out_mean_nm": ("float64", "N m"),
 }
 MANIFEST = "manifest.json"
+#: The joint temperatures a stream's ``temperature_c`` may hold [degC]: a robot joint's
+#: grease and gauges stay well inside (industrial joints run at about 20-65 degC); a value
+#: outside is a fault of the sensor, kelvin or degF. The importer and the monitor refuse
+#: a window outside.
+TEMPERATURE_RANGE_C = (-40.0, 150.0)
 #: Largest manifest read [bytes]: 64 MiB (a paper data set's is tens of kB) [choice].
 MAX_MANIFEST_BYTES = 64 * 2**20
 #: The signal variables: every value finite (refused on write and on load).

@@ -34,7 +34,7 @@ from swgsim.files.writers import WRITERS
 TAGS = {"generate": "swgsim-generate", "calibrate": "swgsim-calibrate",
         "monitor": "swgsim-monitor", "observability": "swgsim-observability",
         "export": "swgsim-export", "paper": "paper-study", "monitor_evaluation": "monitor",
-        "transfer": "transfer"}
+        "transfer": "transfer", "import": "swgsim-import"}
 #: The files each app writes (names as the apps write them; several share summary.json,
 #: report.md, results.csv or table.md, which is how one app overwrote another's).
 OUTPUT = {
@@ -43,9 +43,15 @@ OUTPUT = {
     "export": ["swg_monitor.c", "swg_monitor.h", "size.json", "summary.json"],
     "paper": ["results.csv", "confusion.csv", "tables_vii_x.md"],
     "monitor_evaluation": ["results.csv", "table.md", "timing.json", "parts/tiny_g3.json",
-                           "models/tiny_without_gear3.joblib"],
+                           "models/tiny_without_gear3.skops",
+                           "models/tiny_without_gear3.card.json"],
     "transfer": ["results.csv", "table.md", "summary.md"],
+    "import": ["gear3_life.nc", "manifest.json"],
 }
+#: A mapping of a recording (swgsim.datasets.recordings), for swgsim-import's runs.
+MAPPING = {"time": "time_s", "clock": {"column": "hours", "unit": "h"},
+           "operating_points": {"points": [[4000.0, 7.0]]}, "commissioning_h": 1.0,
+           "gear": 3, "window_s": 0.06, "sample_rate_hz": 10000.0, "interval_min": 1.0}
 APPS = list(TAGS)
 
 
@@ -97,9 +103,12 @@ def written(root, csv) -> dict[str, Path]:
 def runners(root, csv):
     """App -> a call ``run(folder)`` running that app into ``folder`` (its config composed
     once, the folder set per call)."""
+    mapping = root / "mapping.json"  # YAML reads JSON
+    mapping.write_text(json.dumps(MAPPING))
     from learn.tasks.train import run_train
     from swgcli.calibrate import run_calibrate
     from swgcli.export import run_export_app
+    from swgcli.importer import run_import
     from swgcli.monitor import run_monitor_app
     from swgcli.observability import run_observability
     from swgcli.paper import run_paper
@@ -130,6 +139,9 @@ def runners(root, csv):
         "transfer": with_dir(compose_app("train", [
             "experiment=transfer", *train, "transfer.report_dir=x"]),
             "transfer.report_dir", run_train),
+        "import": with_dir(compose_app("import", [
+            f"recording={root}/none.csv", f"mapping={mapping}", "out_dir=x",
+            "progress=false"]), "out_dir", run_import),
     }
     paper = compose_app("paper", ["grid=tiny", "run_on=[bench]", f"data_root={root}/none",
                                   "report_root=x", f"tracking_uri=sqlite:///{root}/m.db"])
@@ -281,7 +293,7 @@ def test_every_app_stamps_its_files_with_its_writer(tmp_path, csv):
     life = dataset_config(dataset_preset("tiny_life"))
     life.gears = [g for g in life.gears if g.id == 3]
     gen.generate(life, tmp_path / "life", progress=False)
-    (model,) = (tmp_path / "meval" / "models").glob("*.joblib")
+    (model,) = (tmp_path / "meval" / "models").glob("*.skops")
     cfg = compose_app("monitor", [f"stream={tmp_path / 'life'}", f"diagnosis_model={model}",
                                   f"out_dir={tmp_path / 'calibrate'}", "~logger"])
     before = files(tmp_path / "calibrate")

@@ -14,8 +14,9 @@ import pandas as pd
 import pytest
 import yaml
 
+from swgsim.datasets.recording_mapping import read_mapping, recording_mapping
 from swgsim.datasets.recording_table import MIN_WINDOW_SAMPLES, stream_table
-from swgsim.datasets.recordings import import_recording, read_mapping, recording_mapping
+from swgsim.datasets.recordings import import_recording
 from swgsim.datasets.schema import load, read_manifest
 from swgsim.files.ownership import STAMP
 
