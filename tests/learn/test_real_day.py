@@ -16,11 +16,10 @@ from learn.monitor.study import MonitorStudyConfig
 from learn.monitor.training import train_model
 from swgcli import dataset_preset
 from swgsim.datasets.config import dataset_config
-from swgsim.datasets.generate import generate
+from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import plan
 from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import FaultOnset
-from swgsim.datasets.schema import load
 
 
 @pytest.fixture(scope="module")
@@ -38,17 +37,25 @@ def model():
 
 
 @pytest.fixture(scope="module")
-def healthy(tmp_path_factory):
-    """The preset's healthy gear through its real day, as a stream on disk."""
-    return _stream(tmp_path_factory.mktemp("healthy"))
+def day():
+    """The preset's plan and gear 3's records, shared by its healthy and faulty days."""
+    p = plan(dataset_preset("tiny_real_day"))
+    return p, record_bank(p, 3)
 
 
-def _stream(tmp_path, fault: FaultOnset | None = None):
-    cfg = dataset_config(dataset_preset("tiny_real_day"))
-    if fault is not None:
-        cfg = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, fault=fault))
-    generate(cfg, tmp_path / "day", progress=False)
-    return load(tmp_path / "day")
+@pytest.fixture(scope="module")
+def healthy(day):
+    """The preset's healthy gear through its real day, in memory as the generator makes
+    its shard (streams read from disk: tests/learn/test_monitor.py)."""
+    p, bank = day
+    return life_dataset(LifeSimulator(p, 3, p.config.life, bank))
+
+
+def _stream(day, fault: FaultOnset):
+    """The same day with a fault, in memory (its healthy records from ``day``)."""
+    p, bank = day
+    return life_dataset(LifeSimulator(p, 3, dataclasses.replace(p.config.life, fault=fault),
+                                      bank))
 
 
 def test_a_healthy_real_day_raises_no_gear_fault_alarm(model, healthy):
@@ -63,8 +70,8 @@ def test_a_healthy_real_day_raises_no_gear_fault_alarm(model, healthy):
     assert [e["kind"] for e in res.events()] == ["advisory"] * len(res.advisories)
 
 
-def test_a_fault_under_the_real_day_is_found_and_named(model, tmp_path):
-    ds = _stream(tmp_path, FaultOnset("eccentric_wg", 40.0, 0.1))
+def test_a_fault_under_the_real_day_is_found_and_named(model, day):
+    ds = _stream(day, FaultOnset("eccentric_wg", 40.0, 0.1))
     res = monitor_stream(ds, model, RuleConfig(), source="day")
     assert res.alarms, "the eccentric WG under the real day was not found"
     first = res.alarms[0]

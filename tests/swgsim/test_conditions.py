@@ -16,6 +16,7 @@ from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import plan
+from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import DutyPoint, LifeConfig
 from swgsim.gear.thermal import JointThermal
 from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
@@ -26,7 +27,10 @@ NEUTRAL = ConditionsConfig(thermal=None, viscosity=False, run_in=None, payload=[
 
 @pytest.fixture(scope="module")
 def tiny():
-    return plan(dataset_preset("tiny_bench"))
+    """The tiny bench's plan with gear 3's records, shared by every life of this module (a
+    record is simulated once, at its first window)."""
+    p = plan(dataset_preset("tiny_bench"))
+    return p, record_bank(p, 3)
 
 
 def _life(conditions, hours: float = 3.0) -> LifeConfig:
@@ -35,8 +39,12 @@ def _life(conditions, hours: float = 3.0) -> LifeConfig:
                       conditions=conditions)
 
 
-def _windows(p, conditions, hours: float = 3.0):
-    sim = LifeSimulator(p, 3, _life(conditions, hours))
+def _sim(tiny, conditions, hours: float = 3.0) -> LifeSimulator:
+    return LifeSimulator(tiny[0], 3, _life(conditions, hours), tiny[1])
+
+
+def _windows(tiny, conditions, hours: float = 3.0):
+    sim = _sim(tiny, conditions, hours)
     return sim.windows(0, len(sim))
 
 
@@ -52,8 +60,8 @@ def test_the_bridges_drift_by_their_gain_and_zero_at_the_temperature(tiny):
     thermal = ConditionsConfig(thermal=JointThermal(), viscosity=False, bridge_drift=None,
                                temperature_sensor=TemperatureSensor(0.0, 0.0))
     drift = dataclasses.replace(thermal, bridge_drift=BridgeDrift())
-    base = LifeSimulator(tiny, 3, _life(thermal))
-    sim = LifeSimulator(tiny, 3, _life(drift))
+    base = _sim(tiny, thermal)
+    sim = _sim(tiny, drift)
     rows = np.arange(len(sim))
     gain, zero = sim.conditions.bridge_gain_offset(rows)
     # the windows go through the converter after the drift: compare before it, by the
