@@ -1,7 +1,8 @@
 """Windows of simulated gear lives through the embedded stage's Python reference.
 
-Each gear lives as the monitor's training lives (:func:`learn.monitor.evaluate.
-training_lives`: a healthy life with its commissioning, then one life per class, severity
+Each gear lives as the monitor's training lives
+(:func:`learn.monitor.evaluate.training_lives`: a healthy life with its commissioning, then one
+life per class, severity
 and fault position or bridge); its normal behaviour comes from its own commissioning windows
 (every other one per operating point, :func:`learn.monitor.gear_monitor.normal_windows`, as
 the monitor builds it), and its labelled windows are the healthy ones after

@@ -200,8 +200,9 @@ def fit_and_adapt(spec: RunSpec, est, inp, train: np.ndarray, evaluation: np.nda
 
 
 def _prepared(est, X):
-    """``X`` as a fitted torch net reads it (:meth:`learn.learners.nets.TorchClassifier.
-    prepare`: checked, standardised, a tensor), which its fine-tuned and AdaBN copies
+    """``X`` as a fitted torch net reads it
+    (:meth:`learn.learners.nets.TorchClassifier.prepare`: checked, standardised, a tensor), which
+    its fine-tuned and AdaBN copies
     reuse; ``X`` itself for other models and for pipelines with steps before the net."""
     from sklearn.pipeline import Pipeline
 

@@ -1,7 +1,8 @@
 """The calibration's friction library: each simulator effect with what its fit needs.
 
-The forms are the simulator's (:mod:`swgsim.gear.friction.effects`, :mod:`swgsim.gear.friction.
-ripples`, the paper law of :mod:`swgsim.gear.friction.signals`); each class here subclasses
+The forms are the simulator's (:mod:`swgsim.gear.friction.effects`,
+:mod:`swgsim.gear.friction.ripples`, the paper law of :mod:`swgsim.gear.friction.signals`); each
+class here subclasses
 one of them and :class:`~swgcal.terms.FitTerm`, adding its residual signature, the probes
 whose structure it should explain, the physical ranges of its characterising parameters
 (values and sources in :mod:`.ranges`: a fit outside is not accepted as that effect),

@@ -22,9 +22,9 @@ How a window gets them (:func:`window_conditions`, used by
 :class:`swgsim.datasets.life.LifeSimulator`): its record is that of the nominal gear at
 the acting load (a payload factor's own record, simulated like any other,
 :mod:`swgsim.datasets.records`); the friction factor changes the window's efficiency by
-the ratio of the model's steady efficiencies (:func:`swgsim.gear.thermal.
-steady_efficiency`), and not its gauge signals, which the chain takes from the torque the
-gear delivers (:mod:`swgsim.gear.chain`): measured, a 25 K warmer gear moves the
+the ratio of the model's steady efficiencies
+(:func:`swgsim.gear.thermal.steady_efficiency`), and not its gauge signals, which the chain takes
+from the torque the gear delivers (:mod:`swgsim.gear.chain`): measured, a 25 K warmer gear moves the
 efficiency by 80-240 healthy standard deviations and every gauge feature by at most 1.1
 (the residual of s0 at 4000 rpm, 70 N m) - held constant [stated simplification]. What
 stays constant:
@@ -245,8 +245,8 @@ def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray
                      mu_factor: np.ndarray) -> np.ndarray:
     """The factor a window's efficiency changes by under its friction: the model's steady
     efficiency at the acting friction over that at the nominal one, at the record's
-    speed and load, shape of ``friction`` [-] (:func:`swgsim.gear.thermal.
-    steady_efficiency`)."""
+    speed and load, shape of ``friction`` [-]
+    (:func:`swgsim.gear.thermal.steady_efficiency`)."""
     n = np.abs(np.asarray(n_in_rpm, float))
     t = np.abs(np.asarray(t_out_nm, float))
     nominal = steady_efficiency(gear.gear, n, t)

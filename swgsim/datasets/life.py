@@ -90,8 +90,8 @@ class LifeSimulator:
                            strict=True)})
 
     def _conditions(self, life: LifeConfig) -> WindowConditions:
-        """The life's conditions per window (:func:`swgsim.datasets.conditions.
-        window_conditions`).
+        """The life's conditions per window
+        (:func:`swgsim.datasets.conditions.window_conditions`).
 
         Raises
         ------

@@ -5,9 +5,9 @@ revolution (the WG angle and the flexspline both return; N input revolutions, 3 
 2000 rpm). Each (operating point, state) is therefore simulated once, as one *record* of
 one output revolution plus a window (:class:`RecordBank`): the dynamics
 (:func:`swgsim.gear.dynamics.simulate`), the gauge signals and the measurement chain up to
-the converter's filter, exactly as a data set's windows (:mod:`swgsim.datasets.
-grid_shard`). On an operating profile (:class:`ProfileRecordBank`) each state is
-simulated once along the whole profile, and its record holds every slot
+the converter's filter, exactly as a data set's windows
+(:mod:`swgsim.datasets.grid_shard`). On an operating profile (:class:`ProfileRecordBank`) each
+state is simulated once along the whole profile, and its record holds every slot
 (:mod:`swgsim.datasets.slots`). The windows are cut by :mod:`swgsim.datasets.life`.
 """
 

@@ -74,8 +74,8 @@ def replace_atomically(path: str | os.PathLike, data: bytes | memoryview,
     data : bytes
     before_replace : callable, optional
         ``before_replace(path, tmp)`` runs between the flush and the rename (the
-        ownership stamp records the file there, :func:`swgsim.files.ownership.
-        atomic_write_bytes`).
+        ownership stamp records the file there,
+        :func:`swgsim.files.ownership.atomic_write_bytes`).
 
     Raises
     ------
