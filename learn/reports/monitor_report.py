@@ -8,7 +8,7 @@ per 1000 h per held-out gear. Lives under a nuisance of a real day (``nuisance``
 than ``none``: warm-ups, the hall's heat, run-in, a payload change, all together) are
 reported beside the stationary ones: per data set, detector and figure, one column per
 nuisance (gear-fault alarms and advisories per 1000 h counted apart, detection, time to
-detect at the mildest severity, naming), the per-window baselines under the same
+detect at the mildest severity, naming), the per-window detectors under the same
 nuisance. Figures: time to detect against severity per fault, and false-alarm rate
 against time to detect per detector.
 """
@@ -44,7 +44,7 @@ def labelled(df: pd.DataFrame | None) -> pd.DataFrame | None:
 def with_nuisance(df: pd.DataFrame | None) -> pd.DataFrame | None:
     """``df`` with the columns of a real day's evaluation where an older one lacks them:
     ``nuisance`` (``none``), and in a false-alarm table ``gear_fault_alarms`` (every alarm
-    of a detector that names no fault, the per-window baselines) and ``advisories`` (0
+    of a detector that names no fault, the per-window detectors) and ``advisories`` (0
     where the detector gives none)."""
     if df is None:
         return df
@@ -228,7 +228,7 @@ def write_table(res: pd.DataFrame, fa: pd.DataFrame, path: Path, header: str = "
     real = nuisance_table(res, fa)
     if len(real):
         text[3:3] = ["\n## A real day: stationary lives beside each nuisance (held-out gears, "
-                     "worst gear, all seeds; per-window baselines under the same nuisance)\n",
+                     "worst gear, all seeds; per-window detectors under the same nuisance)\n",
                      _md(real)]
     out = "\n".join(text)
     path.write_text(out)
