@@ -189,6 +189,26 @@ def override_message(override: str, argv: list[str] | None = None) -> str:
             f"characters (space, ~, =, brackets, quotes): '{key}=\"{value}\"'")
 
 
+def null_section_message(args: list[str]) -> str:
+    """The line for an override into a section that is null in the composed config
+    (OmegaConf asserts there, naming no key): the dotted overrides it may be, and which
+    config defines the sections that are null without it.
+
+    Parameters
+    ----------
+    args : list of str
+        The command line's arguments after the program.
+    """
+    dotted = [a.split("=", 1)[0].lstrip("+") for a in args
+              if "=" in a and "." in a.split("=", 1)[0]
+              and not a.lstrip("+").startswith(("-", "~", "hydra."))]
+    where = f" ({', '.join(dotted)})" if dotted else ""
+    return (f"an override{where} sets a key inside a section that is null in this config: "
+            "select the config that defines the section first (experiment=monitor for "
+            "monitor.*, experiment=transfer for transfer.*; a data-set section in a "
+            "preset, dataset=...)")
+
+
 def one_line(exc: BaseException) -> str | None:
     """The one-line message of a bad-input exception, or None for anything else."""
     from hydra.errors import (
@@ -236,6 +256,8 @@ def one_line(exc: BaseException) -> str | None:
         return (f"{key}: is null in this preset, and OmegaConf cannot merge a whole section "
                 f"into a null one from the command line; set {key} in a data-set preset "
                 "(conf/dataset/*.yaml, e.g. tiny_life.yaml) and select it with dataset=...")
+    if isinstance(cause, AssertionError) and re.match(r"Unexpected type.*None", str(cause)):
+        return null_section_message(sys.argv[1:])
     if isinstance(exc, (ConfigCompositionException, MissingConfigException)):
         text = str(exc).split("Config search path:")[0]
         lines = [s.strip() for s in text.splitlines() if s.strip()]

@@ -69,6 +69,15 @@ def test_1_unparsable_overrides_name_the_override_and_how_to_quote(tmp_path, mon
     assert sorted(p.name for p in tmp_path.iterdir()) in ([], ["outputs"])  # no work done
 
 
+def test_1_a_key_under_a_null_section_names_the_override(tmp_path, monkeypatch, capsys):
+    """``monitor.*`` without ``experiment=monitor``: the section is null (OmegaConf asserts
+    without a key); one line naming the override and the experiment that defines it."""
+    code, err = run_app("swgsim-train", ["monitor.report_dir=x"], tmp_path, monkeypatch,
+                        capsys)
+    line = one_error_line("swgsim-train", err)
+    assert code == 2 and "monitor.report_dir" in line and "experiment=monitor" in line, line
+
+
 def test_1_a_value_with_a_space_in_one_argument_is_taken_whole():
     cfg = compose_app("generate", ["dataset=tiny", "out_dir=/tmp/my data"])
     assert cfg.out_dir == "/tmp/my data"
