@@ -146,6 +146,16 @@ class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
             On non-finite or empty ``X``, ``X`` not 2-D or 3-D, ``len(y) != n``,
             continuous ``y`` or invalid ``sample_weight``.
         """
+        self.fit_transform(X, y, sample_weight=sample_weight)
+        return self
+
+    def fit_transform(self, X, y=None, sample_weight=None) -> np.ndarray:
+        """:meth:`fit`, returning the standardised features of ``X`` that the ridge was
+        fitted on, shape (n, n_features): :meth:`transform` of ``X`` without running the
+        MiniRocket transform again (the k-shot refits of :meth:`refit_head` reuse them).
+
+        Parameters and errors as :meth:`fit`; ``y`` is required.
+        """
         from aeon.transformations.collection.convolution_based import MiniRocket
 
         X, y = validate_data(self, X, y, dtype=np.float64, allow_nd=True)
@@ -155,19 +165,23 @@ class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
         sample_weight = _weights(sample_weight, X.shape[0])
         self.input_ndim_ = X.ndim
         sig, aux = self._split(X)
+        parts = []
         if sig is not None:
             self.rocket_ = MiniRocket(n_kernels=self.n_kernels,
                                       max_dilations_per_kernel=self.max_dilations_per_kernel,
                                       n_jobs=self.n_jobs, random_state=self.random_state)
             feats = self.rocket_.fit_transform(sig)
             self.scaler_ = StandardScaler().fit(feats, sample_weight=sample_weight)
+            parts.append(self.scaler_.transform(feats))
         if aux is not None and aux.shape[1]:
             self.aux_scaler_ = StandardScaler().fit(aux, sample_weight=sample_weight)
+            parts.append(self.aux_weight * self.aux_scaler_.transform(aux))
+        features = np.concatenate(parts, axis=1)
         ridge = RidgeClassifierCV(alphas=np.asarray(self.alphas))
-        ridge.fit(self._features(X), y, sample_weight=sample_weight)
+        ridge.fit(features, y, sample_weight=sample_weight)
         self.ridge_ = ridge
         self.classes_ = ridge.classes_
-        return self
+        return features
 
     def refit_head(self, X, y, *, y_source, source_features, replay: float = 1.0):
         """k-shot adaptation: refit only the ridge on the source windows plus k labelled

@@ -141,3 +141,49 @@ def test_minirocket_fits_separable_set():
     assert m.transform(Xte).shape[0] == len(yte)
     assert m.predict_proba(Xte).shape == (len(yte), 3)
     assert m.score(Xte, yte) > 0.8
+
+
+def test_minirocket_fit_transform_is_transform_of_the_fitted_model():
+    """The training features that fit_transform hands back (and the k-shot ridge refits
+    reuse) are those transform computes, and the model is the one fit makes."""
+    X, y = separable(n_time=64)
+    a = MiniRocketClassifier(n_kernels=84 * 3, n_aux=1, random_state=0)
+    b = clone(a)
+    f = a.fit_transform(X, y)
+    b.fit(X, y)
+    np.testing.assert_allclose(f, a.transform(X), rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(a.predict(X), b.predict(X))
+    assert a.ridge_.alpha_ == b.ridge_.alpha_
+
+
+@pytest.mark.parametrize("cls", [CNN1DClassifier, MLPClassifierTorch])
+def test_bfloat16_nets_fit_the_separable_set_with_float32_outputs(cls):
+    """Mixed precision (bfloat16 products, float32 weights and outputs) learns what
+    float32 learns and hands back float32 probabilities that sum to one."""
+    X, y = separable()
+    Xte, yte = separable(seed=1)
+    m = cls(n_aux=1, precision="bfloat16", **TINY).fit(X, y)
+    assert m.precision_ == "bfloat16"
+    assert next(m.module_.parameters()).dtype == torch.float32
+    p = m.predict_proba(Xte)
+    assert p.dtype == np.float32
+    np.testing.assert_allclose(p.sum(axis=1), 1.0, rtol=1e-5)
+    assert m.score(Xte, yte) > 0.8
+    f32 = cls(n_aux=1, **TINY).fit(X, y)
+    assert not np.array_equal(f32.predict_proba(Xte), p)  # the setting is used
+
+
+def test_precision_auto_follows_the_hardware(monkeypatch):
+    from learn.learners.nets import resolve_precision
+
+    cpu = torch.device("cpu")
+    assert resolve_precision("float32", cpu) == "float32"
+    assert resolve_precision("bfloat16", cpu) == "bfloat16"
+    monkeypatch.setattr(torch.backends.cpu, "get_cpu_capability", lambda: "AVX2")
+    assert resolve_precision("auto", cpu) == "float32"
+    monkeypatch.setattr(torch.backends.cpu, "get_cpu_capability", lambda: "AVX512")
+    assert resolve_precision("auto", cpu) == "bfloat16"
+    with pytest.raises(ValueError, match="precision must be one of"):
+        resolve_precision("float16", cpu)
+    with pytest.raises(ValueError, match="precision must be one of"):
+        CNN1DClassifier(precision="half", **TINY).fit(*separable())
