@@ -455,7 +455,7 @@ class GearMonitor:
         largest summed evidence (:meth:`evidence` rows ``ev``) and None."""
         b = self.normal
         opi = b.index(points)
-        z = b.z(feats, points, cond, friction, opi)
+        z, spread = b.z_and_spread(feats, points, cond, friction, opi)
         u = np.full((len(z), 2), 0.5)  # mid-p: the naming draws nothing from the monitor
 
         def median_p(zz: np.ndarray) -> float:
@@ -463,7 +463,7 @@ class GearMonitor:
             score = np.stack([self.model.score(lp), np.sum(zz ** 2, axis=1)], axis=1)
             return float(np.median(self.p_values(score, opi, u)))
 
-        fits = [f for f in fit_sensor_faults(z, b.mean[opi], b.std[opi])
+        fits = [f for f in fit_sensor_faults(z, b.mean[opi], spread)
                 if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
         p = [median_p(f.z) for f in fits]
         if p and max(p) >= SENSOR_P_MIN:
