@@ -319,6 +319,16 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
             xb = xb[:, :, start:start + n]
         return xb
 
+    def check_params(self) -> None:
+        """Refuse settings that ``fit`` would refuse, before any work.
+
+        Raises
+        ------
+        ValueError
+            For an unknown ``precision``.
+        """
+        resolve_precision(self.precision, torch.device("cpu"))
+
     def _autocast(self):
         """The context of a forward pass at :attr:`precision` (class docstring)."""
         if self.precision_ == "float32":
@@ -433,7 +443,7 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
             On non-finite or empty ``X``, ``X`` not 2-D or 3-D, ``len(y) != n`` or
             continuous ``y``, or an unknown ``precision``.
         """
-        resolve_precision(self.precision, torch.device("cpu"))  # refused before any work
+        self.check_params()
         X, y = validate_data(self, X, y, dtype=np.float32, allow_nd=True)
         if X.ndim not in (2, 3):
             raise ValueError(f"X must be (n, C, T) or (n, F); got shape {X.shape}")

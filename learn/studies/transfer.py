@@ -58,6 +58,7 @@ from learn.studies.runs import (
     FinetuneSettings,
     RunRef,
     RunSpec,
+    final_step,
     fit_and_adapt,
     make_estimator,
 )
@@ -225,10 +226,32 @@ def _check_runs(tc: TransferConfig) -> None:
         if s.adapt is not None and int(tc.adapt_windows) < 1:
             raise ValueError(f"transfer.runs[{i}].adapt: {s.adapt} needs unlabelled "
                              "target windows; set transfer.adapt_windows >= 1")
+        _check_model(tc, i, s)
     pr = tc.primary
     if pr is not None and pr.label not in {s.label for s in tc.runs}:
         raise ValueError(f"transfer.primary: {pr.label} is not one of transfer.runs; name "
                          "one of them, or transfer.primary=null for none")
+
+
+def _check_model(tc: TransferConfig, i: int, spec: RunSpec) -> None:
+    """The run's estimator instantiated (not fitted): its ``params`` and the settings its
+    ``check_params`` refuses, named by key."""
+    est = make_estimator(tc.models[spec.model], 0, 0)
+    final = final_step(est)
+    bad = sorted(set(spec.params or {}) - set(final.get_params(deep=False)))
+    if bad:
+        raise ValueError(f"transfer.runs[{i}].params: {bad} are not parameters of "
+                         f"{type(final).__name__}; it has "
+                         f"{sorted(final.get_params(deep=False))}")
+    final.set_params(**dict(spec.params or {}))
+    check = getattr(final, "check_params", None)
+    if check is not None:
+        try:
+            check()
+        except ValueError as e:
+            where = f"transfer.models.{spec.model}.estimator" + (
+                f" with transfer.runs[{i}].params" if spec.params else "")
+            raise ValueError(f"{where}: {e}") from None
 
 
 def _check_targets(targets: Mapping[str, TargetSpec]) -> None:

@@ -135,9 +135,9 @@ def _estimator(app, n_aux: int = 0):
     Raises
     ------
     ValueError
-        ``input`` not among :data:`learn.inputs.signals.INPUTS`, or a signal input
+        ``input`` not among :data:`learn.inputs.signals.INPUTS`, a signal input
         (:data:`learn.inputs.signals.SIGNAL_INPUTS`) for a model that reads no (n, C, T)
-        signals.
+        signals, or a model setting its ``check_params`` refuses.
     """
     from hydra.utils import instantiate
 
@@ -145,7 +145,7 @@ def _estimator(app, n_aux: int = 0):
     from learn.studies.runs import final_step, make_estimator
 
     if app.input is None:
-        return instantiate(app.model, _convert_="all")
+        return _checked(instantiate(app.model, _convert_="all"))
     if app.input not in INPUTS:
         raise ValueError(f"input must be null (the features) or one of {INPUTS}, got "
                          f"{app.input!r}")
@@ -155,6 +155,20 @@ def _estimator(app, n_aux: int = 0):
         raise ValueError(f"input={app.input}: (n, C, T) signals need a model that reads "
                          f"them (mlp_torch, cnn, minirocket), not model "
                          f"{_step_name(est)}")
+    return _checked(est)
+
+
+def _checked(est):
+    """``est`` after its final step's ``check_params`` (when it has one), errors named
+    ``model.estimator``."""
+    from learn.studies.runs import final_step
+
+    check = getattr(final_step(est), "check_params", None)
+    if check is not None:
+        try:
+            check()
+        except ValueError as e:
+            raise ValueError(f"model.estimator: {e}") from None
     return est
 
 

@@ -235,6 +235,29 @@ def test_transfer_experiment_composes():
         assert plan(tc["datasets"][name])
 
 
+@pytest.mark.parametrize("overrides, words", [
+    (["transfer.models.cnn.estimator.precision=half"],
+     ["transfer.models.cnn.estimator:", "precision", "'half'", "auto"]),
+    (["transfer.runs=[{model:cnn,input:raw,params:{precision:x}}]", "transfer.primary=null"],
+     ["transfer.models.cnn.estimator with transfer.runs[0].params:", "precision"]),
+    (["transfer.runs=[{model:cnn,input:raw,params:{nope:1}}]", "transfer.primary=null"],
+     ["transfer.runs[0].params:", "['nope']", "CNN1DClassifier", "precision"]),
+])
+def test_transfer_model_settings_refused_before_any_work(overrides, words):
+    """A learner's setting that fit would refuse (or a parameter the learner lacks) is one
+    line naming the key, from the config check, before a data set is generated."""
+    from omegaconf import OmegaConf
+
+    from learn.studies.transfer import check_config
+    from swgcli import compose_app
+
+    tc = OmegaConf.to_object(compose_app("train", ["experiment=transfer", *overrides]).transfer)
+    with pytest.raises(ValueError) as e:
+        check_config(tc)
+    line = str(e.value)
+    assert "\n" not in line and all(w in line for w in words), line
+
+
 def _synthetic_results():
     rows = []
     for ds, base in (("paper", 1.0), ("bench", 0.7)):
