@@ -39,6 +39,8 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
 
+from .torch_modules import CNN1DNet, MLPNet
+
 log = logging.getLogger(__name__)
 
 #: Arithmetic of the forward passes (:class:`TorchClassifier`, ``precision``).
@@ -89,98 +91,6 @@ def _seed_of(random_state) -> int:
     if random_state is None:
         return int(np.random.default_rng().integers(2**31 - 1))
     return int(random_state)
-
-
-# --------------------------------------------------------------------------- modules
-
-
-class MLPNet(nn.Module):
-    """Fully connected net: (B, F) or (B, C, T) -> logits (B, K).
-
-    A 3-D input is flattened over its signal channels; its ``n_aux`` trailing scalar
-    channels are read at t = 0 and concatenated, so they are not repeated T times.
-    """
-
-    def __init__(self, n_in: int, n_aux: int, n_classes: int, hidden: tuple[int, ...],
-                 dropout: float):
-        super().__init__()
-        self.n_aux = n_aux
-        layers: list[nn.Module] = []
-        width = n_in
-        for h in hidden:
-            layers += [nn.Linear(width, h), nn.BatchNorm1d(h), nn.ReLU(), nn.Dropout(dropout)]
-            width = h
-        self.body = nn.Sequential(*layers)
-        self.head = nn.Linear(width, n_classes)
-
-    def _flat(self, x: torch.Tensor) -> torch.Tensor:
-        if x.ndim == 2:
-            return x
-        c = x.shape[1] - self.n_aux
-        sig = x[:, :c].flatten(1)  # (B, c*T)
-        return torch.cat([sig, x[:, c:, 0]], dim=1) if self.n_aux else sig
-
-    def embed(self, x: torch.Tensor) -> torch.Tensor:
-        return self.body(self._flat(x))
-
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.head(self.embed(x))
-
-
-class CNN1DNet(nn.Module):
-    """1D-CNN: strided conv blocks, pooling, scalars joined, MLP head.
-
-    (B, C, T) -> conv blocks -> (B, ch[-1], T') -> pool -> (B, P)
-    -> concat aux scalars (B, n_aux) -> Linear-ReLU -> Linear -> logits (B, K).
-    ``pool="avg"``: mean over T' (P = ch[-1]), invariant to shifts in time, for signals;
-    ``pool="flatten"``: (B, ch[-1] * T') keeps the position, for inputs whose index has a
-    meaning (spectra, feature vectors; needs ``length`` = T).
-    A 2-D input (B, F) is read as one channel of length F.
-    """
-
-    def __init__(self, n_channels: int, n_aux: int, n_classes: int,
-                 channels: tuple[int, ...], kernel_sizes: tuple[int, ...],
-                 strides: tuple[int, ...], head_hidden: int, dropout: float,
-                 padding_mode: str = "zeros", pool: str = "avg", length: int | None = None):
-        super().__init__()
-        if not len(channels) == len(kernel_sizes) == len(strides):
-            raise ValueError("channels, kernel_sizes and strides must have the same length")
-        if pool not in ("avg", "flatten"):
-            raise ValueError(f"pool must be 'avg' or 'flatten', got {pool!r}")
-        if pool == "flatten" and not (length and length > 0):
-            raise ValueError("pool='flatten' needs the input length (length > 0)")
-        self.n_aux = n_aux
-        self.pool = pool
-        blocks: list[nn.Module] = []
-        c_in = n_channels - n_aux
-        for c_out, k, s in zip(channels, kernel_sizes, strides, strict=True):
-            blocks += [nn.Conv1d(c_in, c_out, k, stride=s, padding=k // 2, bias=False,
-                                 padding_mode=padding_mode),
-                       nn.BatchNorm1d(c_out), nn.ReLU()]
-            c_in = c_out
-        self.features = nn.Sequential(*blocks)
-        n_pooled = c_in
-        if pool == "flatten":
-            n_t = length
-            for k, s in zip(kernel_sizes, strides, strict=True):
-                n_t = (n_t + 2 * (k // 2) - k) // s + 1
-            n_pooled = c_in * n_t
-        self.body = nn.Sequential(nn.Linear(n_pooled + n_aux, head_hidden), nn.ReLU(),
-                                  nn.Dropout(dropout))
-        self.head = nn.Linear(head_hidden, n_classes)
-
-    def embed(self, x: torch.Tensor) -> torch.Tensor:
-        if x.ndim == 2:
-            x = x[:, None, :]  # (B, 1, F)
-        c = x.shape[1] - self.n_aux
-        z = self.features(x[:, :c])  # (B, ch[-1], T')
-        z = z.mean(dim=2) if self.pool == "avg" else z.flatten(1)  # (B, P)
-        if self.n_aux:
-            z = torch.cat([z, x[:, c:, 0]], dim=1)  # (B, ch[-1] + n_aux)
-        return self.body(z)
-
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.head(self.embed(x))
 
 
 # --------------------------------------------------------------------------- estimator
