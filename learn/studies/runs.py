@@ -99,6 +99,24 @@ def pre_transform(est, X):
     return est[:-1].transform(X) if isinstance(est, Pipeline) and len(est) > 1 else X
 
 
+def check_estimator(est, key: str):
+    """``est`` (a pipeline or an estimator) after its final step's ``check_params``, when
+    it has one: the settings ``fit`` would refuse, refused before any work.
+
+    Raises
+    ------
+    ValueError
+        One line, ``<key>: <what check_params said>``.
+    """
+    check = getattr(final_step(est), "check_params", None)
+    if check is not None:
+        try:
+            check()
+        except ValueError as e:
+            raise ValueError(f"{key}: {e}") from None
+    return est
+
+
 def make_estimator(model_cfg: Mapping[str, Any], seed: int, n_aux: int,
                    params: Mapping[str, Any] | None = None):
     """Instantiate a model config (``_target_``) and set its seed, ``n_aux`` and ``params``.

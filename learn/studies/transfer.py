@@ -58,6 +58,7 @@ from learn.studies.runs import (
     FinetuneSettings,
     RunRef,
     RunSpec,
+    check_estimator,
     final_step,
     fit_and_adapt,
     make_estimator,
@@ -244,14 +245,8 @@ def _check_model(tc: TransferConfig, i: int, spec: RunSpec) -> None:
                          f"{type(final).__name__}; it has "
                          f"{sorted(final.get_params(deep=False))}")
     final.set_params(**dict(spec.params or {}))
-    check = getattr(final, "check_params", None)
-    if check is not None:
-        try:
-            check()
-        except ValueError as e:
-            where = f"transfer.models.{spec.model}.estimator" + (
-                f" with transfer.runs[{i}].params" if spec.params else "")
-            raise ValueError(f"{where}: {e}") from None
+    check_estimator(est, f"transfer.models.{spec.model}.estimator" + (
+        f" with transfer.runs[{i}].params" if spec.params else ""))
 
 
 def _check_targets(targets: Mapping[str, TargetSpec]) -> None:

@@ -142,10 +142,10 @@ def _estimator(app, n_aux: int = 0):
     from hydra.utils import instantiate
 
     from learn.inputs.signals import INPUTS, SIGNAL_INPUTS
-    from learn.studies.runs import final_step, make_estimator
+    from learn.studies.runs import check_estimator, final_step, make_estimator
 
     if app.input is None:
-        return _checked(instantiate(app.model, _convert_="all"))
+        return check_estimator(instantiate(app.model, _convert_="all"), "model.estimator")
     if app.input not in INPUTS:
         raise ValueError(f"input must be null (the features) or one of {INPUTS}, got "
                          f"{app.input!r}")
@@ -155,21 +155,7 @@ def _estimator(app, n_aux: int = 0):
         raise ValueError(f"input={app.input}: (n, C, T) signals need a model that reads "
                          f"them (mlp_torch, cnn, minirocket), not model "
                          f"{_step_name(est)}")
-    return _checked(est)
-
-
-def _checked(est):
-    """``est`` after its final step's ``check_params`` (when it has one), errors named
-    ``model.estimator``."""
-    from learn.studies.runs import final_step
-
-    check = getattr(final_step(est), "check_params", None)
-    if check is not None:
-        try:
-            check()
-        except ValueError as e:
-            raise ValueError(f"model.estimator: {e}") from None
-    return est
+    return check_estimator(est, "model.estimator")
 
 
 def _step_name(estimator) -> str:
