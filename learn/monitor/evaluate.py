@@ -146,6 +146,7 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
         cond = Conditions.of(meta)
         mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed), normal=cfg.normal)
         mon.commission(f[:n_comm], p[:n_comm], cond[:n_comm])
+        commissioned = mon.fork()
         f, p, c = f[n_comm:], p[n_comm:], cond[n_comm:]
         tr = mon.run(f, p, meta["hour"][n_comm:], c, latch=False)
         key = _key(plan, dataset, g, seed, nuisance)
@@ -164,7 +165,8 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
             k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
             before = k0 - 1 - n_comm  # the healthy trace's window before the onset
             start = (0.0, None) if before < 0 else (tr.cusums[before], tr.state(before))
-            ftr, ff, pp, mm = _fault_life(mon, sim, k0, *start)
+            fmon = _monitor_at(commissioned, tr, before, f, p, c)
+            ftr, ff, pp, mm = _fault_life(fmon, sim, k0, *start)
             row = _fault_row(key, sim, fo, kind)
             if healthy_curve is not None:
                 _curve_fault(ftr, fo, before, healthy_curve, cfg, row, curve)
@@ -266,6 +268,20 @@ def _curve_fault(ftr: Trace, fo: FaultOnset, before: int, states: dict, cfg, row
         _, al = run_cusums(lf, h, start, latch=True)
         out.append({**row, "design_hours": d, "life": "fault",
                     "time_to_detect_h": float(ftr.hour[al[0]] - fo.onset_h) if al else np.nan})
+
+
+def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray,
+                p: np.ndarray, c: Conditions) -> GearMonitor:
+    """The monitor of the healthy run ``tr`` as it was after its window ``before``, for a
+    fault life that branches off there: a fork of the monitor at commissioning's end,
+    the healthy windows replayed through it where a point's load had left commissioning's
+    range by then (its recommissioning; :meth:`GearMonitor.run`)."""
+    if before < 0 or not (tr.outside[:before + 1] & 2).any():
+        return commissioned.fork()
+    m = commissioned.fork(fresh_draws=True)
+    w = slice(0, before + 1)
+    m.run(f[w], p[w], tr.hour[w], c[w], latch=False)
+    return m
 
 
 def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,

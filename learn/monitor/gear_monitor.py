@@ -19,7 +19,8 @@ kept in the monitor, at a fraction of the block path's overhead for a single win
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import copy
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -95,6 +96,9 @@ class Trace:
         The conditions commissioning did not see at each window
         (:meth:`learn.monitor.normal.NormalBehaviour.outside`: 1 temperature, 2 load,
         4 friction).
+    recommissioned : list of (int, int)
+        (window, operating point's row) where a point was recommissioned at its new load
+        after that window (:meth:`GearMonitor.run`).
     """
 
     hour: np.ndarray
@@ -106,6 +110,7 @@ class Trace:
     op_index: np.ndarray
     friction: np.ndarray
     outside: np.ndarray
+    recommissioned: list[tuple[int, int]] = field(default_factory=list)
 
     @classmethod
     def concat(cls, traces: list[Trace]) -> Trace:
@@ -115,7 +120,9 @@ class Trace:
                for k in ("hour", "score", "p", "cusums", "log_proba", "op_index", "friction",
                          "outside")}
         return cls(alarms=[int(a + o) for t, o in zip(traces, off, strict=True)
-                           for a in t.alarms], **cat)
+                           for a in t.alarms],
+                   recommissioned=[(int(a + o), k) for t, o in zip(traces, off, strict=True)
+                                   for a, k in t.recommissioned], **cat)
 
     def state(self, i: int) -> tuple[float, float]:
         """The friction-tracking start of a run that continues after window ``i``: the
@@ -219,6 +226,7 @@ class GearMonitor:
         self.model, self.rule = model, rule
         self.interval_min = float(interval_min)
         self.h = threshold(rule, interval_min)
+        self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
         self.confirm_h = float(confirm_h)
         self.normal_config = normal or NormalConfig()
@@ -226,6 +234,7 @@ class GearMonitor:
         self.calibration: dict[int, np.ndarray] = {}
         self.cusum = np.zeros(0)
         self.friction, self.last_hour = 1.0, None
+        self.learning: dict[int, list[tuple[np.ndarray, float]]] = {}
 
     def commission(self, feats: np.ndarray, points: np.ndarray,
                    cond: Conditions | None = None) -> None:
@@ -256,6 +265,20 @@ class GearMonitor:
         self._rows = {(float(a), float(b)): k for k, (a, b) in enumerate(self.normal.points)}
         self.cusum = np.zeros(log_bets(np.ones(1), self.rule).shape[1])
         self.friction, self.last_hour = 1.0, None
+        self.learning = {}
+
+    def fork(self, fresh_draws: bool = False) -> GearMonitor:
+        """A copy whose state (normal behaviour, recommissioning, CUSUMs, friction
+        factor) is its own; the diagnosis model is shared. ``fresh_draws``: its p-value
+        draws start again from the seed (a replay of the windows since commissioning
+        then gives the same numbers)."""
+        out = copy.copy(self)
+        out.normal = copy.deepcopy(self.normal)
+        out.learning = {k: list(v) for k, v in self.learning.items()}
+        out.cusum = self.cusum.copy()
+        if fresh_draws:
+            out.rng = np.random.default_rng(self.seed)
+        return out
 
     def evidence(self, lp: np.ndarray, opi: np.ndarray) -> np.ndarray:
         """Per window and class, the evidence against healthy relative to this gear's
@@ -279,9 +302,16 @@ class GearMonitor:
         novelty ``Σ z²`` of its health features (a change the model was not trained on,
         e.g. a bridge it never saw faulty, moves the latter).
         """
-        z = self.normal.z(feats, points, cond, friction, index)
+        score, lp, _ = self._scores(feats, points, cond, friction, index)
+        return score, lp
+
+    def _scores(self, feats, points, cond, friction, index):
+        """:meth:`scores` and the windows' features at the reference condition."""
+        z, spread = self.normal.z_and_spread(feats, points, cond, friction, index)
         lp = self.model.log_proba(design_matrix(z, points))
-        return np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp
+        i = self.normal.index(points) if index is None else index
+        return (np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp,
+                z * spread + self.normal.mean[i])
 
     def p_values(self, score: np.ndarray, opi: np.ndarray, u: np.ndarray | None = None
                  ) -> np.ndarray:
@@ -346,14 +376,56 @@ class GearMonitor:
         Trace
         """
         cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
+        hours = np.asarray(hours, float)
         opi = self.normal.index(points)
-        fr = self.track_friction(feats, points, np.asarray(hours, float), cond, opi,
-                                 friction_start)
-        score, lp = self.scores(feats, points, cond, fr, opi)
-        p = self.p_values(score, opi)
-        cus, alarms = run_cusums(log_bets(p, self.rule), self.h, start, latch)
-        return Trace(np.asarray(hours, float), score, p, cus, alarms, lp, opi, fr,
-                     self.normal.outside(points, cond, fr, opi))
+        fr = self.track_friction(feats, points, hours, cond, opi, friction_start)
+        u = self.rng.uniform(size=(len(feats), 2))
+        parts, i0, s = [], 0, start
+        while True:  # one pass per recommissioned point (its windows after it change)
+            w = slice(i0, None)
+            score, lp, ref = self._scores(feats[w], points[w], cond[w], fr[w], opi[w])
+            p = self.p_values(score, opi[w], u[w])
+            cus, alarms = run_cusums(log_bets(p, self.rule), self.h, s, latch)
+            out = self.normal.outside(points[w], cond[w], fr[w], opi[w])
+            j = self._learn(opi[w], out, ref, cond.torque_nm[w], alarms, latch)
+            n = len(p) if j is None else j + 1
+            parts.append(Trace(hours[w][:n], score[:n], p[:n], cus[:n],
+                               [a for a in alarms if a < n], lp[:n], opi[w][:n], fr[w][:n],
+                               out[:n], [] if j is None else [(j, int(opi[i0 + j]))]))
+            i0, s = i0 + n, cus[n - 1]
+            if j is None or i0 == len(feats):
+                return Trace.concat(parts)
+
+    def _learn(self, opi: np.ndarray, out: np.ndarray, ref: np.ndarray, torque: np.ndarray,
+               alarms: list[int], latch: bool) -> int | None:
+        """Windows in time order through the recommissioning of points whose acting load
+        left commissioning's range (:class:`~learn.monitor.normal.NormalConfig`
+        ``recommission_load``): a point's windows beyond its load range gather, in a row,
+        until ``rule.min_normal_windows`` of them recommission it
+        (:meth:`~learn.monitor.normal.NormalBehaviour.recommission`); a window back inside
+        the range clears its point's, an alarm every point's (the change may be a fault).
+        Returns the window after which a point was recommissioned (the monitor's normal
+        behaviour has changed from the next on), or None. ``ref``: the windows' features
+        at the reference condition, shape (n, F)."""
+        loaded = (out & 2) != 0
+        if not self.normal_config.recommission_load or not (loaded.any() or self.learning):
+            return None
+        alarm = set(alarms)
+        for i, k in enumerate(opi.tolist()):
+            if i in alarm:
+                self.learning = {}
+                if latch:
+                    return None
+            elif not loaded[i]:
+                self.learning.pop(k, None)
+            else:
+                buf = self.learning.setdefault(k, [])
+                buf.append((ref[i], float(torque[i])))
+                if len(buf) >= self.rule.min_normal_windows:
+                    rows, tq = zip(*self.learning.pop(k), strict=True)
+                    self.normal.recommission(k, np.array(rows), np.array(tq))
+                    return i
+        return None
 
     def step(self, feat: np.ndarray, point: tuple[float, float], hour: float,
              torque_nm: float | None = None, temperature_c: float | None = None) -> Trace:
@@ -394,16 +466,17 @@ class GearMonitor:
                           None if temperature_c is None else np.array([temperature_c], float))
         opi = np.array([k])
         fr = self.track_friction(f, pt, np.array([float(hour)]), cond, opi)
-        score, lp = self.scores(f, pt, cond, fr, opi)
+        score, lp, ref = self._scores(f, pt, cond, fr, opi)
         u = self.rng.uniform(size=(1, 2))
         cal = self.calibration[k]
         p = min(1.0, 2 * min(conformal_p(score[:, j], cal[:, j], u[:, j])[0] for j in (0, 1)))
         cus = np.maximum(0.0, self.cusum + log_bets(np.array([p]), self.rule)[0])
         alarm = bool((cus >= self.h).any())
         self.cusum = np.zeros_like(cus) if alarm else cus
+        out = self.normal.outside(pt, cond, fr, opi)
+        j = self._learn(opi, out, ref, cond.torque_nm, [0] if alarm else [], latch=False)
         return Trace(np.array([float(hour)]), score, np.array([p]), cus[None, :],
-                     [0] if alarm else [], lp, opi, fr,
-                     self.normal.outside(pt, cond, fr, opi))
+                     [0] if alarm else [], lp, opi, fr, out, [] if j is None else [(0, k)])
 
     def score_only(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray,
                    cond: Conditions | None = None,

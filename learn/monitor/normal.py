@@ -39,7 +39,10 @@ is then in the standard deviations). :meth:`NormalBehaviour.outside` flags windo
 condition commissioning did not see (temperature beyond its range by
 ``temperature_margin_k``, load beyond its by ``load_margin``, the friction factor beyond
 ``friction_margin``): the monitor advises to recommission (an advisory, not a gear fault)
-and keeps watching with the extrapolated model.
+and keeps watching with the extrapolated model, in a spread widened by the extrapolation's
+own size (:meth:`NormalBehaviour.z_and_spread`). Where the acting load at a point stays
+beyond commissioning's (a heavier tool), the monitor recommissions that point after
+enough windows without an alarm (:meth:`NormalBehaviour.recommission`).
 """
 
 from __future__ import annotations
@@ -81,13 +84,20 @@ class NormalConfig:
         The friction factor may leave 1 by this much before the condition is outside
         [-], > 0.
     extrapolation_uncertainty : float
-        κ, the relative uncertainty of the correction that carries the bridges' features
-        beyond the load and temperature commissioning saw at a point
+        κ, the relative uncertainty of the correction that carries a feature (the
+        bridges' and the efficiency) beyond the load and temperature commissioning saw at a point
         (:meth:`NormalBehaviour.z_and_spread`), >= 0; 0: the correction is trusted. 1, not
         tuned: an extrapolation known to its own order of magnitude. Behind a robot link
         (robot_joint, gear 3, seed 0) a 10 % heavier tool left the residual's RMS and the
         third harmonic 0.7-1.3 times the predicted correction away from it
         (docs/monitor.md, "A real day").
+    recommission_load : bool
+        Where an operating point's acting load stays beyond what commissioning saw there
+        for the rule's ``min_normal_windows`` windows in a row without an alarm (a
+        heavier tool), the monitor recommissions the point at its new load
+        (:meth:`NormalBehaviour.recommission`, done by
+        :class:`~learn.monitor.gear_monitor.GearMonitor`); False: it stays
+        commissioning's, with the widened spread.
     """
 
     friction_track_h: float = 4.0
@@ -95,6 +105,7 @@ class NormalConfig:
     load_margin: float = 0.03
     friction_margin: float = 0.05
     extrapolation_uncertainty: float = 1.0
+    recommission_load: bool = True
 
     def check(self, key: str = "normal") -> None:
         """Refuse a field out of range in one line naming ``<key>.<field>``.
@@ -298,10 +309,11 @@ class NormalBehaviour:
         loads commissioning saw at the speed) and drift law, trusted to
         ``extrapolation_uncertainty`` (κ) times its own size, so the spread is
         ``sqrt(σ² + (κ u)²)``. Inside the range ``u`` is zero and the spread σ. The
-        efficiency keeps σ: its loss law (A φ(T) + B τ, the catalogue's no-load torque over
-        temperature and a load-proportional mesh loss) is physics with two parameters,
-        which a mode near the excitation does not bend (it moves the bridges' ripple,
-        not the mean power).
+        efficiency's correction (its loss law A φ(T) + B τ carried beyond the loads it was
+        fitted at) widens its spread alike: behind a robot link a 10 % heavier tool left
+        the efficiency 1.2 σ above the law's extrapolation (docs/monitor.md, "A real
+        day"). The widening lasts until the point is recommissioned at its new load
+        (:meth:`recommission`).
 
         Raises
         ------
@@ -317,12 +329,41 @@ class NormalBehaviour:
         edge, beyond = self._edge(i, cond)
         kappa = self.config.extrapolation_uncertainty
         if kappa > 0 and beyond.any():
-            b = np.flatnonzero(beyond)
-            u = ref[b, :EFFICIENCY] - self._corrected(feats[b], i[b], edge[b], fr[b]
-                                                       )[:, :EFFICIENCY]
+            b, law = np.flatnonzero(beyond), slice(0, EFFICIENCY + 1)
+            u = ref[b, law] - self._corrected(feats[b], i[b], edge[b], fr[b])[:, law]
             spread = spread.copy()
-            spread[b, :EFFICIENCY] = np.sqrt(spread[b, :EFFICIENCY] ** 2 + (kappa * u) ** 2)
+            spread[b, law] = np.sqrt(spread[b, law] ** 2 + (kappa * u) ** 2)
         return (ref - self.mean[i]) / spread, spread
+
+    def recommission(self, k: int, ref: np.ndarray, torque_nm: np.ndarray) -> None:
+        """Take windows of operating point ``k`` at a load commissioning did not see as
+        its new normal: its mean, spread and load range become theirs; the load curves,
+        drift and loss laws stay commissioning's, and so does the rule's calibration (the
+        z-scores' distribution, standardised, is taken to keep its shape). For a
+        persistent change of the acting load, e.g. a heavier tool (:class:`NormalConfig`
+        ``recommission_load``): behind a robot link the bridges' ripple at the new load
+        is not only shifted but wider than commissioning's (a mode near the excitation).
+
+        Parameters
+        ----------
+        k : int
+            Row of the operating point.
+        ref : ndarray, shape (m, F)
+            The windows' features at the reference condition (:meth:`reference`), m >= 2.
+        torque_nm : ndarray, shape (m,)
+            Their acting load [N m].
+
+        Raises
+        ------
+        ValueError
+            If fewer than two windows are given.
+        """
+        if len(ref) < 2:
+            raise ValueError("recommissioning a point needs at least two windows")
+        ref = np.asarray(ref, float)
+        self.mean[k] = ref.mean(axis=0)
+        self.std[k] = np.maximum(ref.std(axis=0, ddof=1), 1e-12)
+        self.torque_range[k] = [float(np.min(torque_nm)), float(np.max(torque_nm))]
 
     def _edge(self, i: np.ndarray, cond: Conditions) -> tuple[Conditions, np.ndarray]:
         """Each window's conditions clipped into commissioning's range at its point, and

@@ -12,7 +12,7 @@ range). :func:`monitor_stream` runs :class:`~learn.monitor.gear_monitor.GearMoni
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -46,6 +46,9 @@ class StreamResult:
     onset_h : float or None
         The stream's true fault onset, where it records one (a simulated life).
     true_fault : str or None
+    recommissioned : list of dict
+        Where the monitor recommissioned an operating point at a load that stayed beyond
+        commissioning's (:func:`recommissionings`).
     """
 
     trace: Trace
@@ -54,13 +57,16 @@ class StreamResult:
     n_commissioning: int
     onset_h: float | None
     true_fault: str | None
+    recommissioned: list[dict] = field(default_factory=list)
 
     def events(self) -> list[dict]:
-        """Alarms and advisories in time order, each with its ``kind``: ``gear_fault``,
-        ``sensor_fault`` (named with its bridge) or ``advisory``."""
+        """Alarms, advisories and recommissioned points in time order, each with its
+        ``kind``: ``gear_fault``, ``sensor_fault`` (named with its bridge), ``advisory``
+        or ``recommissioned``."""
         ev = [{"kind": "sensor_fault" if a.bridge else "gear_fault", **a.as_dict()}
               for a in self.alarms]
         ev += [{"kind": "advisory", **a} for a in self.advisories]
+        ev += [{"kind": "recommissioned", **a} for a in self.recommissioned]
         return sorted(ev, key=lambda e: e["hour"])
 
 
@@ -193,7 +199,25 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     on = np.flatnonzero((fault != "healthy") & (fault != "unknown"))  # a recording: unknown
     return StreamResult(tr, alarms, advisories(tr, mon), n_c,
                         float(hours[on[0]]) if on.size else None,
-                        str(fault[on[0]]) if on.size else None)
+                        str(fault[on[0]]) if on.size else None, recommissionings(tr, mon))
+
+
+def recommissionings(tr: Trace, mon: GearMonitor) -> list[dict]:
+    """Each point the monitor recommissioned at a new load (:attr:`Trace.recommissioned`):
+    ``hour``, ``index``, ``operating_point`` and the ``load_range_nm`` it now holds normal
+    (the monitor's state at the end of the run; a point recommissioned twice shows its
+    last range at both)."""
+    out = []
+    for i, k in tr.recommissioned:
+        o = mon.normal.points[k]
+        lo, hi = mon.normal.torque_range[k]
+        out.append({"hour": float(tr.hour[i]), "index": int(i),
+                    "operating_point": [float(o[0]), float(o[1])],
+                    "load_range_nm": [float(lo), float(hi)],
+                    "note": f"the load at {o[0]:g} rpm, {o[1]:g} N m stayed beyond what "
+                            "commissioning saw: recommissioned there at "
+                            f"{lo:.4g}-{hi:.4g} N m"})
+    return out
 
 
 def advisories(tr: Trace, mon: GearMonitor, clear_h: float = 1.0) -> list[dict]:
@@ -269,6 +293,8 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
         lines.append("- no alarm")
     for a in res.advisories:
         lines.append(f"- advisory at {a['hour']:.2f} h: {a['advice']}")
+    for a in res.recommissioned:
+        lines.append(f"- recommissioned at {a['hour']:.2f} h: {a['note']}")
     if res.onset_h is not None:
         lines += ["", f"Ground truth in the stream: {res.true_fault} from {res.onset_h:.2f} h."]
     lines += ["", "![health indicators](health.png)", ""]
@@ -278,4 +304,4 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
 
 
 __all__ = ["CONDITIONS", "StreamResult", "advisories", "check_stream", "monitor_stream",
-           "select_gear", "write_outputs"]
+           "recommissionings", "select_gear", "write_outputs"]

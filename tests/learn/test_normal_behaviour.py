@@ -1,7 +1,7 @@
 """The gear's normal behaviour (learn/monitor/normal.py) against closed forms: features
 that follow the load laws it assumes are carried to a load commissioning did not see,
-and beyond commissioning's range the bridges' spread widens by the correction's own
-size."""
+beyond commissioning's range the spread widens by the correction's own size, and a point
+recommissioned at a new load holds it normal."""
 
 from __future__ import annotations
 
@@ -83,14 +83,40 @@ def test_spread_widens_beyond_commissioning_only(commissioned):
                                nb.torque_range[i, 1], nb.torque_range[i, 0]))
     ones = np.ones(len(f))
     u = nb._corrected(f, i, cond, ones) - nb._corrected(f, i, edge, ones)
-    bridges = slice(0, EFFICIENCY)
-    np.testing.assert_allclose(spread[:, bridges],
-                               np.sqrt(nb.std[i, bridges] ** 2 + (kappa * u[:, bridges]) ** 2),
+    law = slice(0, EFFICIENCY + 1)  # the bridges' features and the efficiency
+    np.testing.assert_allclose(spread[:, law],
+                               np.sqrt(nb.std[i, law] ** 2 + (kappa * u[:, law]) ** 2),
                                rtol=1e-12)
-    np.testing.assert_array_equal(spread[:, EFFICIENCY], nb.std[i, EFFICIENCY])  # a law
     np.testing.assert_allclose(z * spread, trusted.z(f, p, cond) * nb.std[i], rtol=1e-9,
                                atol=1e-12)
-    assert (np.abs(u[:, bridges]) > 10 * nb.std[i, bridges]).mean() > 0.5  # not small
+    assert (np.abs(u[:, law]) > 10 * nb.std[i, law]).mean() > 0.5  # not small
+
+
+def test_recommission_takes_the_new_load_as_normal(commissioned):
+    """Windows at a 10 % heavier load whose features the load law misses by a constant
+    (a mode near the excitation): beyond the range before, inside and centred after the
+    point is recommissioned with a first batch of them; the other points unchanged."""
+    nb, rng = commissioned
+    nb = dataclasses.replace(nb, mean=nb.mean.copy(), torque_range=nb.torque_range.copy())
+    f, p, cond = _windows(nb, rng, 1.1, n=100)
+    i = nb.index(p)
+    f[:, :EFFICIENCY] *= 1.0 + 5e-3  # 5 σ off the law's prediction
+    k, others = int(i[0]), nb.index(p) != int(i[0])
+    before_mean = nb.mean.copy()
+    assert (nb.outside(p, cond, 1.0)[i == k] & 2).all()
+    first = np.flatnonzero(i == k)[:60]
+    nb.recommission(k, nb.reference(f[first], p[first], cond[first]), cond.torque_nm[first])
+    later = np.flatnonzero(i == k)[60:]
+    assert later.size > 20
+    lo, hi = nb.torque_range[k]
+    inside = later[(cond.torque_nm[later] >= lo) & (cond.torque_nm[later] <= hi)]
+    assert inside.size > 0.8 * later.size
+    z = nb.z(f[inside], p[inside], cond[inside])
+    assert np.abs(z.mean(axis=0)).max() < 1.0  # centred: 60 windows' mean against 40's
+    np.testing.assert_array_equal(nb.mean[np.unique(i[others])],
+                                  before_mean[np.unique(i[others])])
+    with pytest.raises(ValueError, match="at least two windows"):
+        nb.recommission(k, f[:1], cond.torque_nm[:1])
 
 
 def test_extrapolation_uncertainty_out_of_range_refused():
