@@ -23,11 +23,16 @@ import copy
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.special import ndtri
 
 from .model import DiagnosisModel, design_matrix
 from .normal import Conditions, NormalBehaviour, NormalConfig
 from .rule import RuleConfig, conformal_p, log_bets, min_calibration, threshold
 from .sensor_check import REST_MAX, SENSOR_P_MIN, fit_sensor_faults
+
+#: One-sided level of the test whether commissioning's laws hold at a point's new load
+#: (:meth:`GearMonitor._recommission`): declared, not tuned.
+LAW_LEVEL = 0.01
 
 
 @dataclass
@@ -423,9 +428,31 @@ class GearMonitor:
                 buf.append((ref[i], float(torque[i])))
                 if len(buf) >= self.rule.min_normal_windows:
                     rows, tq = zip(*self.learning.pop(k), strict=True)
-                    self.normal.recommission(k, np.array(rows), np.array(tq))
+                    self._recommission(k, np.array(rows), np.array(tq))
                     return i
         return None
+
+    def _recommission(self, k: int, ref: np.ndarray, torque: np.ndarray) -> None:
+        """Point ``k`` at a new load, from its gathered windows (:meth:`_learn`): where
+        they agree with commissioning's normal behaviour carried there by its laws
+        (their p-values in σ, not the widened spread, uniform: the mean of their normal
+        scores Φ⁻¹(1 − p) within ``LAW_LEVEL``'s one-sided bound of N(0, 1/m)), the laws
+        hold and the point's load range grows to cover the new load; else the laws fail
+        there and the windows become the point's new normal
+        (:meth:`~learn.monitor.normal.NormalBehaviour.recommission`)."""
+        nb = self.normal
+        z = (ref - nb.mean[k]) / nb.std[k]
+        pts = np.broadcast_to(nb.points[k], (len(ref), 2))
+        lp = self.model.log_proba(design_matrix(z, pts))
+        score = np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1)
+        opi = np.full(len(ref), k)
+        p = self.p_values(score, opi, np.full(score.shape, 0.5))
+        t = np.sqrt(len(p)) * float(np.mean(ndtri(1.0 - np.clip(p, 1e-12, 1.0 - 1e-12))))
+        if t <= ndtri(1.0 - LAW_LEVEL):
+            nb.torque_range[k] = [min(nb.torque_range[k, 0], float(torque.min())),
+                                  max(nb.torque_range[k, 1], float(torque.max()))]
+        else:
+            nb.recommission(k, ref, torque)
 
     def step(self, feat: np.ndarray, point: tuple[float, float], hour: float,
              torque_nm: float | None = None, temperature_c: float | None = None) -> Trace:
