@@ -101,9 +101,10 @@ class Trace:
         The conditions commissioning did not see at each window
         (:meth:`learn.monitor.normal.NormalBehaviour.outside`: 1 temperature, 2 load,
         4 friction).
-    recommissioned : list of (int, int)
-        (window, operating point's row) where a point was recommissioned at its new load
-        after that window (:meth:`GearMonitor.run`).
+    recommissioned : list of (int, int, bool)
+        (window, operating point's row, relearnt) where a point was recommissioned at its
+        new load after that window (:meth:`GearMonitor.run`): relearnt True where the
+        windows became its new normal, False where its load range grew (the laws hold).
     """
 
     hour: np.ndarray
@@ -115,7 +116,7 @@ class Trace:
     op_index: np.ndarray
     friction: np.ndarray
     outside: np.ndarray
-    recommissioned: list[tuple[int, int]] = field(default_factory=list)
+    recommissioned: list[tuple[int, int, bool]] = field(default_factory=list)
 
     @classmethod
     def concat(cls, traces: list[Trace]) -> Trace:
@@ -126,8 +127,8 @@ class Trace:
                          "outside")}
         return cls(alarms=[int(a + o) for t, o in zip(traces, off, strict=True)
                            for a in t.alarms],
-                   recommissioned=[(int(a + o), k) for t, o in zip(traces, off, strict=True)
-                                   for a, k in t.recommissioned], **cat)
+                   recommissioned=[(int(a + o), k, r) for t, o in zip(traces, off, strict=True)
+                                   for a, k, r in t.recommissioned], **cat)
 
     def state(self, i: int) -> tuple[float, float]:
         """The friction-tracking start of a run that continues after window ``i``: the
@@ -392,17 +393,17 @@ class GearMonitor:
             p = self.p_values(score, opi[w], u[w])
             cus, alarms = run_cusums(log_bets(p, self.rule), self.h, s, latch)
             out = self.normal.outside(points[w], cond[w], fr[w], opi[w])
-            j = self._learn(opi[w], out, ref, cond.torque_nm[w], alarms, latch)
-            n = len(p) if j is None else j + 1
+            ev = self._learn(opi[w], out, ref, cond.torque_nm[w], alarms, latch)
+            n = len(p) if ev is None else ev[0] + 1
             parts.append(Trace(hours[w][:n], score[:n], p[:n], cus[:n],
                                [a for a in alarms if a < n], lp[:n], opi[w][:n], fr[w][:n],
-                               out[:n], [] if j is None else [(j, int(opi[i0 + j]))]))
+                               out[:n], [] if ev is None else [ev]))
             i0, s = i0 + n, cus[n - 1]
-            if j is None or i0 == len(feats):
+            if ev is None or i0 == len(feats):
                 return Trace.concat(parts)
 
     def _learn(self, opi: np.ndarray, out: np.ndarray, ref: np.ndarray, torque: np.ndarray,
-               alarms: list[int], latch: bool) -> int | None:
+               alarms: list[int], latch: bool) -> tuple[int, int, bool] | None:
         """Windows in time order through the recommissioning of points whose acting load
         left commissioning's range (:class:`~learn.monitor.normal.NormalConfig`
         ``recommission_load``): a point's windows beyond its load range gather, in a row,
@@ -410,8 +411,9 @@ class GearMonitor:
         (:meth:`~learn.monitor.normal.NormalBehaviour.recommission`); a window back inside
         the range clears its point's, an alarm every point's (the change may be a fault).
         Returns the window after which a point was recommissioned (the monitor's normal
-        behaviour has changed from the next on), or None. ``ref``: the windows' features
-        at the reference condition, shape (n, F)."""
+        behaviour has changed from the next on), the point's row and whether it was
+        relearnt (:meth:`_recommission`), or None. ``ref``: the windows' features at the
+        reference condition, shape (n, F)."""
         loaded = (out & 2) != 0
         if not self.normal_config.recommission_load or not (loaded.any() or self.learning):
             return None
@@ -428,18 +430,18 @@ class GearMonitor:
                 buf.append((ref[i], float(torque[i])))
                 if len(buf) >= self.rule.min_normal_windows:
                     rows, tq = zip(*self.learning.pop(k), strict=True)
-                    self._recommission(k, np.array(rows), np.array(tq))
-                    return i
+                    return i, k, self._recommission(k, np.array(rows), np.array(tq))
         return None
 
-    def _recommission(self, k: int, ref: np.ndarray, torque: np.ndarray) -> None:
+    def _recommission(self, k: int, ref: np.ndarray, torque: np.ndarray) -> bool:
         """Point ``k`` at a new load, from its gathered windows (:meth:`_learn`): where
         they agree with commissioning's normal behaviour carried there by its laws
         (their p-values in σ, not the widened spread, uniform: the mean of their normal
         scores Φ⁻¹(1 − p) within ``LAW_LEVEL``'s one-sided bound of N(0, 1/m)), the laws
         hold and the point's load range grows to cover the new load; else the laws fail
         there and the windows become the point's new normal
-        (:meth:`~learn.monitor.normal.NormalBehaviour.recommission`)."""
+        (:meth:`~learn.monitor.normal.NormalBehaviour.recommission`). Returns whether the
+        point was relearnt."""
         nb = self.normal
         z = (ref - nb.mean[k]) / nb.std[k]
         pts = np.broadcast_to(nb.points[k], (len(ref), 2))
@@ -451,8 +453,9 @@ class GearMonitor:
         if t <= ndtri(1.0 - LAW_LEVEL):
             nb.torque_range[k] = [min(nb.torque_range[k, 0], float(torque.min())),
                                   max(nb.torque_range[k, 1], float(torque.max()))]
-        else:
-            nb.recommission(k, ref, torque)
+            return False
+        nb.recommission(k, ref, torque)
+        return True
 
     def step(self, feat: np.ndarray, point: tuple[float, float], hour: float,
              torque_nm: float | None = None, temperature_c: float | None = None) -> Trace:
@@ -501,9 +504,9 @@ class GearMonitor:
         alarm = bool((cus >= self.h).any())
         self.cusum = np.zeros_like(cus) if alarm else cus
         out = self.normal.outside(pt, cond, fr, opi)
-        j = self._learn(opi, out, ref, cond.torque_nm, [0] if alarm else [], latch=False)
+        ev = self._learn(opi, out, ref, cond.torque_nm, [0] if alarm else [], latch=False)
         return Trace(np.array([float(hour)]), score, np.array([p]), cus[None, :],
-                     [0] if alarm else [], lp, opi, fr, out, [] if j is None else [(0, k)])
+                     [0] if alarm else [], lp, opi, fr, out, [] if ev is None else [ev])
 
     def score_only(self, feats: np.ndarray, points: np.ndarray, hours: np.ndarray,
                    cond: Conditions | None = None,

@@ -204,19 +204,21 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
 
 def recommissionings(tr: Trace, mon: GearMonitor) -> list[dict]:
     """Each point the monitor recommissioned at a new load (:attr:`Trace.recommissioned`):
-    ``hour``, ``index``, ``operating_point`` and the ``load_range_nm`` it now holds normal
-    (the monitor's state at the end of the run; a point recommissioned twice shows its
-    last range at both)."""
+    ``hour``, ``index``, ``operating_point``, ``relearnt`` (True: the windows at the new
+    load became its normal; False: commissioning's laws held there and its load range
+    grew) and the ``load_range_nm`` it now holds normal (the monitor's state at the end of
+    the run; a point recommissioned twice shows its last range at both)."""
     out = []
-    for i, k in tr.recommissioned:
+    for i, k, relearnt in tr.recommissioned:
         o = mon.normal.points[k]
         lo, hi = mon.normal.torque_range[k]
+        how = ("relearnt there (commissioning's laws did not hold)" if relearnt else
+               "commissioning's laws held there; its load range grew")
         out.append({"hour": float(tr.hour[i]), "index": int(i),
                     "operating_point": [float(o[0]), float(o[1])],
-                    "load_range_nm": [float(lo), float(hi)],
+                    "relearnt": bool(relearnt), "load_range_nm": [float(lo), float(hi)],
                     "note": f"the load at {o[0]:g} rpm, {o[1]:g} N m stayed beyond what "
-                            "commissioning saw: recommissioned there at "
-                            f"{lo:.4g}-{hi:.4g} N m"})
+                            f"commissioning saw: {how}, {lo:.4g}-{hi:.4g} N m"})
     return out
 
 
