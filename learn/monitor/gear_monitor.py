@@ -407,7 +407,7 @@ class GearMonitor:
         """Windows in time order through the recommissioning of points whose acting load
         left commissioning's range (:class:`~learn.monitor.normal.NormalConfig`
         ``recommission_load``): a point's windows beyond its load range gather, in a row,
-        until ``rule.min_normal_windows`` of them recommission it
+        until as many as commissioning gave its normal behaviour recommission it
         (:meth:`~learn.monitor.normal.NormalBehaviour.recommission`); a window back inside
         the range clears its point's, an alarm every point's (the change may be a fault).
         Returns the window after which a point was recommissioned (the monitor's normal
@@ -428,7 +428,7 @@ class GearMonitor:
             else:
                 buf = self.learning.setdefault(k, [])
                 buf.append((ref[i], float(torque[i])))
-                if len(buf) >= self.rule.min_normal_windows:
+                if len(buf) >= self.normal.count[k]:
                     rows, tq = zip(*self.learning.pop(k), strict=True)
                     return i, k, self._recommission(k, np.array(rows), np.array(tq))
         return None

@@ -93,8 +93,8 @@ class NormalConfig:
         (docs/monitor.md, "A real day").
     recommission_load : bool
         Where an operating point's acting load stays beyond what commissioning saw there
-        for the rule's ``min_normal_windows`` windows in a row without an alarm (a
-        heavier tool), the monitor recommissions the point at its new load
+        for as many windows in a row, without an alarm, as commissioning gave the point's
+        normal behaviour (a heavier tool), the monitor recommissions the point at its new load
         (:meth:`NormalBehaviour.recommission`, done by
         :class:`~learn.monitor.gear_monitor.GearMonitor`); False: it stays
         commissioning's, with the widened spread.
@@ -188,6 +188,9 @@ class NormalBehaviour:
         Per point, the quadratic in τ of each feature's load curve at its speed (squared
         amplitudes, offsets, residual power; unused columns zero).
     config : NormalConfig
+    count : ndarray of int, shape (P,), optional
+        Commissioning's windows per point (a point recommissioned at a new load gathers
+        as many).
     """
 
     points: np.ndarray
@@ -202,6 +205,7 @@ class NormalBehaviour:
     loss: np.ndarray
     load: np.ndarray
     config: NormalConfig = field(default_factory=NormalConfig)
+    count: np.ndarray | None = None
 
     # ------------------------------------------------------------------ fitting
     @classmethod
@@ -234,7 +238,8 @@ class NormalBehaviour:
         gain, zero = (_bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
         loss = _loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
-                 torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config)
+                 torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
+                 np.bincount(inv, minlength=n_p))
         warm = nb._temperature_corrected(feats, inv, dt)
         nb.load = _load_curves(warm, inv, ops, ref_torque)
         ref = nb._corrected(feats, inv, cond, np.ones(len(feats)))
