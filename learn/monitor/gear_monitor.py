@@ -11,7 +11,11 @@ interval): a sensor fault, with its bridge, where one bridge's offset step or ga
 explains them (:mod:`.sensor_check`), else by the diagnosis model's evidence relative to
 the gear's own healthy calibration windows (:meth:`GearMonitor.evidence`). The alarm
 latches: one alarm per stream until the gear is commissioned again; an evaluation of false
-alarms restarts the CUSUM after each (``latch=False``).
+alarms restarts the CUSUM after each (``latch=False``). Where an operating point's acting
+load stays beyond what commissioning saw there (a heavier tool), the monitor gathers the
+point's windows and recommissions it (:meth:`GearMonitor._learn`: its load range grows
+where commissioning's laws hold there, else the windows become its normal;
+:class:`~learn.monitor.normal.NormalConfig` ``recommission_load``).
 :meth:`GearMonitor.step` is the same monitor for one window at a time, as a live joint
 delivers them: the same numbers as :meth:`~GearMonitor.run` (tested), with the CUSUMs
 kept in the monitor, at a fraction of the block path's overhead for a single window.
@@ -459,8 +463,8 @@ class GearMonitor:
 
     def step(self, feat: np.ndarray, point: tuple[float, float], hour: float,
              torque_nm: float | None = None, temperature_c: float | None = None) -> Trace:
-        """Score one window after commissioning and update the monitor's own CUSUMs and
-        friction factor.
+        """Score one window after commissioning and update the monitor's own CUSUMs,
+        friction factor and recommissioning (:meth:`_learn`).
 
         Parameters
         ----------

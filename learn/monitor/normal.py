@@ -15,7 +15,11 @@ carry it to the conditions commissioning did not see:
   ``G_c = 1 + γ_c (T − T̄)`` (span and zero drift per K, one pair per bridge): every
   amplitude of bridge c scales by G_c, its offset by G_c plus ζ_c ΔT, its residual's RMS
   by G_c. γ_c and ζ_c are least-squares fits over all commissioning windows (pooled over
-  harmonics and operating points);
+  harmonics and operating points). What a bridge's common gain leaves, each feature's own
+  slope per K at each point, is fitted at commissioning too: a gauge's span drift unlike
+  its bridge partners' lets a harmonic the bridge cancels leak in with the temperature
+  (behind the robot link, the second harmonic of bridges 1 and 3 moved by ∓1.5 σ from the
+  warm joint to the cold start, robot_joint gear 2, seed 3);
 * **efficiency, temperature and load**: the loss torque ``L = τ (1/η − 1)`` at the output
   is ``A_n φ(T) + B_n τ`` per input speed n: a load-independent part following the
   grease's viscosity (φ, the catalogue law of :func:`swgsim.gear.thermal.friction_scale`;
@@ -191,6 +195,9 @@ class NormalBehaviour:
     count : ndarray of int, shape (P,), optional
         Commissioning's windows per point (a point recommissioned at a new load gathers
         as many).
+    slope : ndarray, shape (P, F), optional
+        Per point, each bridge feature's own change per K left after the bridges' gain
+        and zero drift [unit per K] (module docstring; 0 without temperature).
     """
 
     points: np.ndarray
@@ -206,6 +213,7 @@ class NormalBehaviour:
     load: np.ndarray
     config: NormalConfig = field(default_factory=NormalConfig)
     count: np.ndarray | None = None
+    slope: np.ndarray | None = None
 
     # ------------------------------------------------------------------ fitting
     @classmethod
@@ -240,6 +248,8 @@ class NormalBehaviour:
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
                  np.bincount(inv, minlength=n_p))
+        if use_t:
+            nb.slope = _feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
         warm = nb._temperature_corrected(feats, inv, dt)
         nb.load = _load_curves(warm, inv, ops, ref_torque)
         ref = nb._corrected(feats, inv, cond, np.ones(len(feats)))
@@ -432,6 +442,8 @@ class NormalBehaviour:
             out[:, j0] = (out[:, j0] - self.zero[c] * dt) / g[:, c]
             out[:, j0 + 1:j0 + BLOCK - 1] /= g[:, c:c + 1]
             out[:, j0 + BLOCK - 1] -= np.log10(g[:, c])
+        if self.slope is not None:
+            out[:, :EFFICIENCY] -= self.slope[i, :EFFICIENCY] * dt[:, None]
         return out
 
     def _loss(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
@@ -501,6 +513,21 @@ def _bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
             resid[m] = off[m] - off[m].mean() - gain[c] * off[m].mean() * dt[m]
         zero[c] = float(dt @ resid) / d2
     return gain, zero
+
+
+def _feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.ndarray:
+    """Per point, each feature's least-squares slope on ΔT (features with the bridges'
+    gain and zero drift taken out), shape (P, F); the efficiency's column zero (its loss
+    law has the temperature)."""
+    n_p = int(inv.max()) + 1
+    out = np.zeros((n_p, feats.shape[1]))
+    for k in range(n_p):
+        m = inv == k
+        x = dt[m] - dt[m].mean()
+        if float(x @ x) > 0:
+            out[k] = x @ (feats[m] - feats[m].mean(axis=0)) / float(x @ x)
+    out[:, EFFICIENCY:] = 0.0
+    return out
 
 
 def _loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,

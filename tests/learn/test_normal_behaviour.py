@@ -122,3 +122,30 @@ def test_recommission_takes_the_new_load_as_normal(commissioned):
 def test_extrapolation_uncertainty_out_of_range_refused():
     with pytest.raises(ValueError, match="normal.extrapolation_uncertainty"):
         NormalConfig(extrapolation_uncertainty=-0.1).check()
+
+
+def test_a_features_own_temperature_slope_is_taken_out():
+    """A second harmonic that leaks in with the temperature on one bridge (a gauge's span
+    mismatch; not the bridge's common gain): its own slope per point, fitted at
+    commissioning, carries windows across commissioning's temperatures at noise level,
+    where without it they move by many spreads."""
+    rng = np.random.default_rng(3)
+    commanded = np.repeat(LOADS, 120)
+    temp = rng.uniform(20.0, 50.0, commanded.size)
+    points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
+
+    def windows(t):
+        f = _features(commanded, rng)
+        f[:, BLOCK + 2] += 0.004 * (t - 35.0)  # bridge 1, harmonic 2
+        return f
+
+    cond = Conditions(commanded, temp)
+    nb = NormalBehaviour.fit(windows(temp), points, cond)
+    for t0 in (22.0, 48.0):
+        t = np.full(commanded.size, t0)
+        z = nb.z(windows(t), points, Conditions(commanded, t))
+        assert np.percentile(np.abs(z[:, BLOCK + 2]), 99) < 4.0
+        flat = dataclasses.replace(nb, slope=None)
+        assert np.median(np.abs(flat.z(windows(t), points, Conditions(commanded, t))
+                                [:, BLOCK + 2])) > 5.0
+    assert np.all(nb.slope[:, EFFICIENCY] == 0)
