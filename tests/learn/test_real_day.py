@@ -1,7 +1,8 @@
 """The monitor through a real joint's day (preset tiny_real_day: daily warm-ups, the hall
 warming, run-in, a heavier tool, the bridges' drift, a temperature sensor): no gear-fault
-alarm on the healthy gear, the changes that leave commissioning's range advised, and a
-fault under them still found and named (learn/monitor/normal.py)."""
+alarm on the healthy gear, the changes that leave commissioning's range advised, the
+heavier tool's points recommissioned, and a fault under them still found and named
+(learn/monitor/normal.py)."""
 
 from __future__ import annotations
 
@@ -67,7 +68,10 @@ def test_a_healthy_real_day_raises_no_gear_fault_alarm(model, healthy):
     kinds = {a["condition"] for a in res.advisories}
     assert "load" in kinds  # the heavier tool from 36 h is advised, not alarmed
     assert all(a["hour"] >= 24.0 for a in res.advisories)  # none inside commissioning
-    assert [e["kind"] for e in res.events()] == ["advisory"] * len(res.advisories)
+    kinds = [e["kind"] for e in res.events()]
+    assert kinds.count("advisory") == len(res.advisories)
+    assert set(kinds) == {"advisory", "recommissioned"}  # no fault named
+    assert all(r["hour"] >= 36.0 for r in res.recommissioned)  # the new tool's points
 
 
 def test_a_fault_under_the_real_day_is_found_and_named(model, day):
