@@ -27,11 +27,10 @@ import copy
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.special import ndtri
 
 from .model import DiagnosisModel, design_matrix
 from .normal import Conditions, NormalBehaviour, NormalConfig
-from .rule import RuleConfig, conformal_p, log_bets, min_calibration, threshold
+from .rule import RuleConfig, conformal_p, log_bets, min_calibration, normal_scores, threshold
 from .sensor_check import REST_MAX, SENSOR_P_MIN, fit_sensor_faults
 
 #: One-sided level of the test whether commissioning's laws hold at a point's new load
@@ -318,10 +317,14 @@ class GearMonitor:
     def _scores(self, feats, points, cond, friction, index):
         """:meth:`scores` and the windows' features at the reference condition."""
         z, spread = self.normal.z_and_spread(feats, points, cond, friction, index)
-        lp = self.model.log_proba(design_matrix(z, points))
+        score, lp = self._scores_of(z, points)
         i = self.normal.index(points) if index is None else index
-        return (np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp,
-                z * spread + self.normal.mean[i])
+        return score, lp, z * spread + self.normal.mean[i]
+
+    def _scores_of(self, z: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`scores` of windows' z-scores (n, F) at their points (n, 2)."""
+        lp = self.model.log_proba(design_matrix(z, points))
+        return np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp
 
     def p_values(self, score: np.ndarray, opi: np.ndarray, u: np.ndarray | None = None
                  ) -> np.ndarray:
@@ -448,15 +451,10 @@ class GearMonitor:
         point was relearnt."""
         nb = self.normal
         z = (ref - nb.mean[k]) / nb.std[k]
-        pts = np.broadcast_to(nb.points[k], (len(ref), 2))
-        lp = self.model.log_proba(design_matrix(z, pts))
-        score = np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1)
-        opi = np.full(len(ref), k)
-        p = self.p_values(score, opi, np.full(score.shape, 0.5))
-        t = np.sqrt(len(p)) * float(np.mean(ndtri(1.0 - np.clip(p, 1e-12, 1.0 - 1e-12))))
-        if t <= ndtri(1.0 - LAW_LEVEL):
-            nb.torque_range[k] = [min(nb.torque_range[k, 0], float(torque.min())),
-                                  max(nb.torque_range[k, 1], float(torque.max()))]
+        score, _ = self._scores_of(z, np.broadcast_to(nb.points[k], (len(ref), 2)))
+        p = self.p_values(score, np.full(len(ref), k), np.full(score.shape, 0.5))
+        if np.sqrt(len(p)) * float(np.mean(normal_scores(p))) <= normal_scores(LAW_LEVEL):
+            nb.extend_load_range(k, torque)
             return False
         nb.recommission(k, ref, torque)
         return True
@@ -566,9 +564,7 @@ class GearMonitor:
         u = np.full((len(z), 2), 0.5)  # mid-p: the naming draws nothing from the monitor
 
         def median_p(zz: np.ndarray) -> float:
-            lp = self.model.log_proba(design_matrix(zz, points))
-            score = np.stack([self.model.score(lp), np.sum(zz ** 2, axis=1)], axis=1)
-            return float(np.median(self.p_values(score, opi, u)))
+            return float(np.median(self.p_values(self._scores_of(zz, points)[0], opi, u)))
 
         fits = [f for f in fit_sensor_faults(z, b.mean[opi], spread)
                 if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]

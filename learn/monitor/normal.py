@@ -380,6 +380,12 @@ class NormalBehaviour:
         self.std[k] = np.maximum(ref.std(axis=0, ddof=1), 1e-12)
         self.torque_range[k] = [float(np.min(torque_nm)), float(np.max(torque_nm))]
 
+    def extend_load_range(self, k: int, torque_nm: np.ndarray) -> None:
+        """Grow operating point ``k``'s load range to cover ``torque_nm`` [N m] (where
+        commissioning's laws were found to hold there; mean and spread unchanged)."""
+        self.torque_range[k] = [min(self.torque_range[k, 0], float(np.min(torque_nm))),
+                                max(self.torque_range[k, 1], float(np.max(torque_nm)))]
+
     def _edge(self, i: np.ndarray, cond: Conditions) -> tuple[Conditions, np.ndarray]:
         """Each window's conditions clipped into commissioning's range at its point, and
         which windows were clipped, shape (n,) bool."""

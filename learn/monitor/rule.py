@@ -37,6 +37,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import ndtri
 
 from swgsim.base.typed import check_finite, check_range
 
@@ -74,12 +75,14 @@ def log_bet(p: np.ndarray) -> np.ndarray:
     return np.where(small, np.log(0.5), np.log(np.where(small, 1.0, f)))
 
 
+def normal_scores(p: np.ndarray) -> np.ndarray:
+    """Φ⁻¹(1 − p) of p-values in (0, 1]: standard normal while the p-values are uniform."""
+    return ndtri(1.0 - np.clip(np.asarray(p, float), 1e-300, 1.0 - 1e-12))
+
+
 def log_shift(p: np.ndarray, delta: float) -> np.ndarray:
     """ln f of Page's CUSUM on the normal scores of p-values: δ Φ⁻¹(1 − p) − δ²/2."""
-    from scipy.special import ndtri
-
-    z = ndtri(1.0 - np.clip(np.asarray(p, float), 1e-300, 1.0 - 1e-12))
-    return delta * z - 0.5 * delta * delta
+    return delta * normal_scores(p) - 0.5 * delta * delta
 
 
 def n_cusums(rule: RuleConfig) -> int:
@@ -172,4 +175,4 @@ def conformal_p(scores: np.ndarray, calibration: np.ndarray, u: np.ndarray) -> n
 
 
 __all__ = ["RuleConfig", "check_rule", "conformal_p", "log_bet", "log_bets", "log_shift",
-           "min_calibration", "n_cusums", "threshold"]
+           "min_calibration", "n_cusums", "normal_scores", "threshold"]
