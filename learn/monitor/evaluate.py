@@ -36,7 +36,7 @@ from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 from .detectors import References, WindowClassifier, window_inputs
 from .gear_monitor import GearMonitor, Trace, run_cusums
 from .model import DiagnosisModel
-from .normal import Conditions
+from .normal import OUTSIDE_LOAD, Conditions
 from .rule import log_bets, threshold
 from .stream import advisories
 from .study import MonitorStudyConfig
@@ -276,7 +276,7 @@ def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray
     fault life that branches off there: a fork of the monitor at commissioning's end,
     the healthy windows replayed through it where a point's load had left commissioning's
     range by then (its recommissioning; :meth:`GearMonitor.run`)."""
-    if before < 0 or not (tr.outside[:before + 1] & 2).any():
+    if before < 0 or not (tr.outside[:before + 1] & OUTSIDE_LOAD).any():
         return commissioned.fork()
     m = commissioned.fork(fresh_draws=True)
     w = slice(0, before + 1)

@@ -63,6 +63,8 @@ from .features import N_HARMONICS
 #: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
 BLOCK = N_HARMONICS + 2
 EFFICIENCY = 5 * BLOCK
+#: Bits of :meth:`NormalBehaviour.outside`: the condition commissioning did not see.
+OUTSIDE_TEMPERATURE, OUTSIDE_LOAD, OUTSIDE_FRICTION = 1, 2, 4
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
 #: An amplitude enters the fit of its bridge's gain when its mean is this many standard
@@ -411,20 +413,22 @@ class NormalBehaviour:
     def outside(self, points: np.ndarray, cond: Conditions, friction: np.ndarray | float,
                 index: np.ndarray | None = None) -> np.ndarray:
         """Which condition each window has that commissioning did not see: a bit field,
-        1 temperature, 2 load, 4 friction (0: none), shape (n,) int."""
+        :data:`OUTSIDE_TEMPERATURE` (1), :data:`OUTSIDE_LOAD` (2), :data:`OUTSIDE_FRICTION`
+        (4); 0: none; shape (n,) int."""
         i = self._check(points, index)
         c = self.config
         out = np.zeros(len(points), np.int64)
         if cond.temperature_c is not None and np.isfinite(self.ref_temp[i]).all():
             t = cond.temperature_c
             lo, hi = self.temp_range[i, 0], self.temp_range[i, 1]
-            out |= ((t < lo - c.temperature_margin_k) | (t > hi + c.temperature_margin_k)) * 1
+            out |= ((t < lo - c.temperature_margin_k) | (t > hi + c.temperature_margin_k)) \
+                * OUTSIDE_TEMPERATURE
         lo, hi = self.torque_range[i, 0], self.torque_range[i, 1]
         tq = cond.torque_nm
         span = c.load_margin * np.abs(self.ref_torque[i])
-        out |= ((tq < lo - span) | (tq > hi + span)) * 2
+        out |= ((tq < lo - span) | (tq > hi + span)) * OUTSIDE_LOAD
         fr = np.broadcast_to(np.asarray(friction, float), (len(points),))
-        out |= (np.abs(fr - 1.0) > c.friction_margin) * 4
+        out |= (np.abs(fr - 1.0) > c.friction_margin) * OUTSIDE_FRICTION
         return out
 
     # ------------------------------------------------------------------ internals
@@ -581,4 +585,5 @@ def _load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,
     return out
 
 
-__all__ = ["BLOCK", "Conditions", "EFFICIENCY", "NormalBehaviour", "NormalConfig"]
+__all__ = ["BLOCK", "Conditions", "EFFICIENCY", "NormalBehaviour", "NormalConfig",
+           "OUTSIDE_FRICTION", "OUTSIDE_LOAD", "OUTSIDE_TEMPERATURE"]

@@ -21,11 +21,18 @@ from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 
 from .features import feature_names, health_features
 from .gear_monitor import Alarm, GearMonitor, Trace, check_commissioning
-from .normal import Conditions, NormalConfig
+from .normal import (
+    OUTSIDE_FRICTION,
+    OUTSIDE_LOAD,
+    OUTSIDE_TEMPERATURE,
+    Conditions,
+    NormalConfig,
+)
 from .rule import RuleConfig
 
 #: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
-CONDITIONS = {1: "temperature", 2: "load", 4: "friction"}
+CONDITIONS = {OUTSIDE_TEMPERATURE: "temperature", OUTSIDE_LOAD: "load",
+              OUTSIDE_FRICTION: "friction"}
 
 
 @dataclass

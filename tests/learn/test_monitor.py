@@ -309,12 +309,14 @@ def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval):
 def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_eval):
     """A 10 % heavier tool from the end of commissioning (a simulated payload life): each
     point's windows beyond its load range gather until as many as commissioning gave its
-    normal behaviour recommission it; on the bench's physics the laws hold at 7.7 and
-    77 N m, so the ranges grow and the means stay. Windows off the laws by a spread are
-    relearnt instead. The block path, one window at a time and a fork's replay from
+    normal behaviour recommission it; on the bench's physics the laws hold at 7.7 N m,
+    so that point's range grows and its mean stays, but not at 77 N m (one feature 2.7
+    spreads off its law; a test on the combined p-value, 1 wherever both scores' exceed
+    1/2, let it pass): that point is relearnt. Windows off the laws by a spread are
+    relearnt. The block path, one window at a time and a fork's replay from
     commissioning give the same numbers and the same recommissionings."""
     from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.normal import Conditions
+    from learn.monitor.normal import OUTSIDE_LOAD, Conditions
     from learn.monitor.rule import RuleConfig
     from learn.monitor.training import features_of
     from swgcli import dataset_preset
@@ -333,7 +335,7 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     a, b = (GearMonitor(tiny_eval["model"], rule, 1.0, seed=5) for _ in range(2))
     for m in (a, b):
         m.commission(f[:240], pts[:240], cond[:240])
-    c, mean0 = a.fork(fresh_draws=True), a.normal.mean.copy()
+    c, mean0, std0 = a.fork(fresh_draws=True), a.normal.mean.copy(), a.normal.std.copy()
     blk, state = [], 0.0
     for i in range(240, 420, 20):
         blk.append(a.run(f[i:i + 20], pts[i:i + 20], hour[i:i + 20], cond[i:i + 20],
@@ -350,8 +352,9 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     assert events == whole.recommissioned
     assert events == [(i + 20 * j, k, r) for j, t in enumerate(blk)
                       for i, k, r in t.recommissioned]
-    assert {(k, r) for _, k, r in events} == {(0, False), (1, False)}
-    np.testing.assert_array_equal(a.normal.mean, mean0)
+    assert {(k, r) for _, k, r in events} == {(0, False), (1, True)}
+    np.testing.assert_array_equal(a.normal.mean[0], mean0[0])
+    assert np.abs((a.normal.mean[1] - mean0[1]) / std0[1]).max() > 2.0
     assert (a.normal.torque_range[:, 1] > 1.09 * a.normal.points[:, 1]).all()
     d = c.fork()  # the route: commissioning's own windows hold the laws, shifted ones not
     w = np.flatnonzero((pts[:240] == d.normal.points[0]).all(axis=1))
@@ -361,6 +364,29 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     np.testing.assert_allclose(d.normal.mean[0], own.mean(axis=0) + s0)
     for i, k, _ in events:  # a recommissioned point's later windows are inside its range
         later = [j for j in range(i + 1, 180) if whole.op_index[j] == k]
-        assert later and not (whole.outside[later] & 2).any()
+        assert later and not (whole.outside[later] & OUTSIDE_LOAD).any()
     np.testing.assert_array_equal(a.normal.mean, c.normal.mean)
     np.testing.assert_array_equal(a.normal.torque_range, b.normal.torque_range)
+
+
+def test_beyond_the_load_range_only_the_novelty_scores():
+    """A window whose acting load commissioning did not see at its point is scored by the
+    novelty alone (the widened spread bounds the z-scores' size, not their direction);
+    outside only in temperature or friction, both scores count (Bonferroni)."""
+    from learn.monitor.gear_monitor import GearMonitor
+    from learn.monitor.normal import OUTSIDE_FRICTION, OUTSIDE_LOAD, OUTSIDE_TEMPERATURE
+    from learn.monitor.rule import RuleConfig, conformal_p
+
+    mon = GearMonitor(None, RuleConfig(), 1.0)
+    cal = np.sort(np.random.default_rng(0).normal(size=(99, 2)), axis=0)
+    mon.calibration = {0: cal}
+    score = np.tile([[10.0, 0.0]], (4, 1))  # evidence beyond every calibration window
+    u = np.full(score.shape, 0.5)
+    out = np.array([0, OUTSIDE_LOAD, OUTSIDE_TEMPERATURE | OUTSIDE_FRICTION,
+                    OUTSIDE_LOAD | OUTSIDE_TEMPERATURE])
+    p = mon.p_values(score, np.zeros(4, int), u, out)
+    p_ev = conformal_p(score[:1, 0], cal[:, 0], u[:1, 0])[0]
+    p_nov = conformal_p(score[:1, 1], cal[:, 1], u[:1, 1])[0]
+    assert p_ev == 0.005 and 0.3 < p_nov < 0.7
+    np.testing.assert_allclose(p, [2 * p_ev, p_nov, 2 * p_ev, p_nov])
+    np.testing.assert_array_equal(mon.p_values(score, np.zeros(4, int), u), 2 * p_ev)
