@@ -220,9 +220,12 @@ class NormalBehaviour:
     # ------------------------------------------------------------------ fitting
     @classmethod
     def fit(cls, feats: np.ndarray, points: np.ndarray, cond: Conditions,
-            config: NormalConfig | None = None) -> NormalBehaviour:
+            config: NormalConfig | None = None, friction: np.ndarray | float = 1.0
+            ) -> NormalBehaviour:
         """From commissioning windows: features (n, F), operating points (n, 2) and
-        conditions.
+        conditions; ``friction``, the friction factor in force at each window, shape (n,)
+        (:meth:`friction_ratio` tracked over commissioning; default 1), sets the
+        efficiency's mean and spread at the reference condition (not its loss law).
 
         Raises
         ------
@@ -254,7 +257,7 @@ class NormalBehaviour:
             nb.slope = _feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
         warm = nb._temperature_corrected(feats, inv, dt)
         nb.load = _load_curves(warm, inv, ops, ref_torque)
-        ref = nb._corrected(feats, inv, cond, np.ones(len(feats)))
+        ref = nb._corrected(feats, inv, cond, np.broadcast_to(friction, (len(feats),)))
         nb.mean = np.stack([ref[inv == k].mean(axis=0) for k in range(n_p)])
         nb.std = np.maximum(np.stack([ref[inv == k].std(axis=0, ddof=1)
                                       for k in range(n_p)]), 1e-12)

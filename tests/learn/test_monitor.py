@@ -390,3 +390,37 @@ def test_beyond_the_load_range_only_the_novelty_scores():
     assert p_ev == 0.005 and 0.3 < p_nov < 0.7
     np.testing.assert_allclose(p, [2 * p_ev, p_nov, 2 * p_ev, p_nov])
     np.testing.assert_array_equal(mon.p_values(score, np.zeros(4, int), u), 2 * p_ev)
+
+
+def test_commissioning_tracks_a_running_in_gear_friction(tiny_eval):
+    """A gear whose friction runs in during commissioning: the friction factor tracked
+    over commissioning (as the run tracks it, here with a time constant of 0.5 h, short
+    beside the run-in's 16 h) leaves the drift out of the efficiency's spread and hands
+    its last value to the run; a gear that does not run in keeps its spread and a factor
+    of 1."""
+    from learn.monitor.gear_monitor import GearMonitor
+    from learn.monitor.normal import EFFICIENCY, Conditions, NormalConfig
+    from learn.monitor.rule import RuleConfig
+    from learn.monitor.training import features_of
+    from swgcli import dataset_preset
+    from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.schedule import LifeConfig
+
+    p = plan(dataset_preset("tiny_bench"))
+    std, fr = {}, {}
+    for run_in in (None, RunInConfig(drop=0.3, tau_h=16.0)):
+        sim = LifeSimulator(p, 3, LifeConfig(hours=4.0, commissioning_h=4.0, life_seed=9,
+                                             conditions=ConditionsConfig(run_in=run_in)))
+        f, pts, meta = features_of(sim, 0, len(sim))
+        for track in (0.0, 0.5):
+            mon = GearMonitor(tiny_eval["model"], RuleConfig(design_hours=1.0), 1.0,
+                              normal=NormalConfig(friction_track_h=track))
+            mon.commission(f, pts, Conditions.of(meta))
+            std[run_in is not None, track] = mon.normal.std[:, EFFICIENCY]
+            fr[run_in is not None, track] = mon.friction
+    assert (std[True, 0.5] < 0.5 * std[True, 0.0]).all()
+    np.testing.assert_allclose(std[False, 0.5], std[False, 0.0], rtol=0.05)
+    assert fr[True, 0.5] < 0.98 and abs(fr[False, 0.5] - 1.0) < 0.01
+    assert fr[True, 0.0] == fr[False, 0.0] == 1.0
