@@ -269,6 +269,8 @@ class GearMonitor:
         if self.normal_config.friction_track_h > 0:  # the efficiency's spread about it
             self.normal = NormalBehaviour.fit(feats[fit], points[fit], cond[fit],
                                               self.normal_config, fr[fit])
+        self.normal.friction_range = np.array([min(fr.min(), self.friction),
+                                               max(fr.max(), self.friction)])
         opi = self.normal.index(points[cal])
         scores, lp = self.scores(feats[cal], points[cal], cond[cal], fr[cal], opi)
         n_p = len(self.normal.points)

@@ -149,3 +149,17 @@ def test_a_features_own_temperature_slope_is_taken_out():
         assert np.median(np.abs(flat.z(windows(t), points, Conditions(commanded, t))
                                 [:, BLOCK + 2])) > 5.0
     assert np.all(nb.slope[:, EFFICIENCY] == 0)
+
+
+def test_friction_outside_the_range_commissioning_tracked(commissioned):
+    """The friction factor is outside where it leaves commissioning's tracked range by
+    more than the margin (0.05), not where it leaves 1."""
+    from learn.monitor.normal import OUTSIDE_FRICTION
+
+    nb, rng = commissioned
+    nb = dataclasses.replace(nb, friction_range=np.array([0.97, 1.02]))
+    f, p, cond = _windows(nb, rng, 1.0, n=5)
+    fr = np.resize([0.93, 0.919, 0.921, 1.069, 1.071], len(p))
+    bits = nb.outside(p, cond, fr) & OUTSIDE_FRICTION
+    np.testing.assert_array_equal(bits != 0, np.resize([False, True, False, False, True],
+                                                       len(p)))
