@@ -9,8 +9,9 @@ than ``none``: warm-ups, the hall's heat, run-in, a payload change, all together
 reported beside the stationary ones: per data set, detector and figure, one column per
 nuisance (gear-fault alarms and advisories per 1000 h counted apart, detection, time to
 detect at the mildest severity, naming), the per-window detectors under the same
-nuisance. Figures: time to detect against severity per fault, and false-alarm rate
-against time to detect per detector.
+nuisance. Figures: time to detect against severity per fault, false-alarm rate
+against time to detect per detector, and the real day (``real_day.png``: alarms and
+advisories per nuisance, gear faults at their mildest detected under each).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import FAULTS
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
@@ -231,7 +233,7 @@ def write_table(res: pd.DataFrame, fa: pd.DataFrame, path: Path, header: str = "
                      "worst gear, all seeds; per-window detectors under the same nuisance)\n",
                      _md(real)]
     out = "\n".join(text)
-    path.write_text(out)
+    atomic_write_bytes(path, out.encode())
     return out
 
 
@@ -239,9 +241,11 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
             curve: pd.DataFrame | None = None) -> list[Path]:
     """Time to detect against severity per fault; false-alarm rate against time to detect:
     the monitor's rule at the design rates of ``curve`` (``tradeoff.csv``), and the
-    per-window and always-alarm detectors; on the stationary lives."""
+    per-window and always-alarm detectors; on the stationary lives. Then, where lives
+    lived a nuisance, :func:`real_day_figure`."""
     import matplotlib
 
+    res_all, fa_all = res, fa
     res, fa, curve = with_nuisance(labelled(res)), with_nuisance(labelled(fa)), labelled(curve)
     res, fa = res[res.nuisance == "none"], fa[fa.nuisance == "none"]  # the stationary lives
     matplotlib.use("Agg")
@@ -317,8 +321,72 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
     fig.savefig(p, dpi=130)
     plt.close(fig)
     paths.append(p)
-    return paths
+    return paths + real_day_figure(res_all, fa_all, out_dir)
 
 
-__all__ = ["display", "false_alarm_table", "figures", "nuisance_table", "smallest_detectable",
+def _mildest_detected(res: pd.DataFrame) -> pd.DataFrame:
+    """Share of the monitor's step-onset lives detected at each gear fault's mildest
+    severity, per data set, nuisance and fault (all held-out gears and seeds)."""
+    x = res[(res.detector == "monitor") & (res.onset == "step")
+            & res.fault.isin(GEAR_TARGET_FAULTS)]
+    x = x[x.severity.abs() == x.groupby(["dataset", "fault"]).severity.transform(
+        lambda v: v.abs().min())]
+    return x.assign(detected=x.detected.astype(bool)).groupby(
+        ["dataset", "nuisance", "fault"], sort=False).detected.agg(["mean", "size"])
+
+
+def real_day_figure(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[Path]:
+    """``real_day.png``: per data set that lived a nuisance, the monitor's gear-fault alarms
+    and advisories per 1000 h (worst held-out gear) under each nuisance beside the
+    stationary lives, and the share of lives in which each gear fault at its mildest
+    severity was detected; ``[]`` when no life lived a nuisance."""
+    import matplotlib
+
+    res, fa = with_nuisance(labelled(res)), with_nuisance(labelled(fa))
+    sets = [d for d in dict.fromkeys(fa.dataset)
+            if set(fa[fa.dataset == d].nuisance) - {"none"}]
+    if not sets:
+        return []
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fat = false_alarm_table(fa)
+    fat = fat[fat.detector == "monitor"].groupby(["dataset", "nuisance"], sort=False)[
+        ["gear_fault_per_1000_h", "advisories_per_1000_h"]].max()
+    det = _mildest_detected(res)
+    fig, axes = plt.subplots(len(sets), 2, figsize=(11, 2.9 * len(sets)), squeeze=False)
+    for (a1, a2), ds in zip(axes, sets, strict=True):
+        f = fat.loc[ds]
+        x = np.arange(len(f))
+        for k, (col, lab) in enumerate((("gear_fault_per_1000_h", "gear-fault alarms"),
+                                        ("advisories_per_1000_h", "advisories"))):
+            bars = a1.bar(x + (k - 0.5) * 0.38, f[col], 0.38, label=lab,
+                          color=("C3", "0.6")[k])
+            a1.bar_label(bars, fmt="%.3g", fontsize=6)
+        a1.set_xticks(x, f.index, fontsize=7)
+        a1.tick_params(labelsize=7)
+        a1.set_ylabel("per 1000 h, worst gear", fontsize=8)
+        a1.set_title(f"{ds}: healthy lives (target: no gear-fault alarm)", fontsize=8)
+        a1.legend(fontsize=6)
+        if ds in det.index.get_level_values(0):
+            d = det.loc[ds]["mean"].unstack("fault")
+            d.plot.bar(ax=a2, rot=0, width=0.8, fontsize=7, legend=False)
+            a2.legend(a2.get_legend_handles_labels()[0], [display(c) for c in d.columns],
+                      fontsize=6, loc="lower left")
+            a2.axhline(1.0, color="0.5", lw=0.8, ls="--")
+            a2.set_ylim(0, 1.05)
+        a2.set_xlabel("")
+        a2.set_ylabel("share of lives detected", fontsize=8)
+        a2.set_title(f"{ds}: gear faults at their mildest severity", fontsize=8)
+    fig.suptitle("The monitor through a real day: each nuisance beside the stationary "
+                 "lives (none)", fontsize=9)
+    fig.tight_layout()
+    p = out_dir / "real_day.png"
+    fig.savefig(p, dpi=130)
+    plt.close(fig)
+    return [p]
+
+
+__all__ = ["display", "false_alarm_table", "figures", "nuisance_table", "real_day_figure",
+           "smallest_detectable",
            "summary_table", "targets", "with_nuisance", "write_table"]

@@ -8,8 +8,10 @@ import pandas as pd
 import pytest
 
 from learn.reports.monitor_report import (
+    _mildest_detected,
     false_alarm_table,
     nuisance_table,
+    real_day_figure,
     targets,
     with_nuisance,
     write_table,
@@ -85,3 +87,16 @@ def test_without_nuisance_lives_there_is_no_real_day_table(tmp_path):
     res, fa = res[res.nuisance == "none"], fa[fa.nuisance == "none"]
     assert nuisance_table(res, fa).empty
     assert "A real day" not in write_table(res, fa, tmp_path / "table.md")
+
+
+def test_the_real_day_figure_shows_each_nuisance_and_the_mildest_faults(tmp_path):
+    res, fa = _frames()
+    res.loc[(res.nuisance == "hall") & (res.held_out_gear == 2) & (res.severity == 0.05)
+            & (res.detector == "monitor"), "detected"] = False
+    det = _mildest_detected(res)
+    assert det.loc[("bench", "hall", "eccentric_wg"), "mean"] == pytest.approx(0.5)
+    assert det.loc[("bench", "none", "eccentric_wg"), "size"] == 2
+    (p,) = real_day_figure(res, fa, tmp_path)
+    assert p == tmp_path / "real_day.png" and p.stat().st_size > 10_000
+    none = res.nuisance == "none"
+    assert real_day_figure(res[none], fa[fa.nuisance == "none"], tmp_path / "x") == []
