@@ -105,15 +105,35 @@ def _lives(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: Monitor
     """The healthy life of held-out gear ``g`` for a seed, under a nuisance of
     ``cfg.nuisances`` or none, and its fault lives (:func:`fault_lives`,
     :func:`nuisance_fault_lives`), sharing its records."""
+    healthy = healthy_life(plan, banks[g], g, cfg, seed, nuisance)
+    base = healthy.life
+    onsets = (fault_lives if nuisance == "none" else nuisance_fault_lives)(plan, cfg,
+                                                                          int(seed))
+    faults = [(LifeSimulator(plan, g, dataclasses.replace(
+        base, hours=f.onset_h + cfg.horizon_h, fault=f), banks[g]), f, kind)
+        for f, kind in onsets]
+    return healthy, faults
+
+
+def healthy_life(plan: DatasetPlan, bank: RecordBank, g: int, cfg: MonitorStudyConfig,
+                 seed: int, nuisance: str = "none") -> LifeSimulator:
+    """The healthy life of held-out gear ``g`` that the evaluation lives for a seed:
+    ``healthy_hours`` without a nuisance, ``nuisance_hours`` under one of
+    ``cfg.nuisances`` (the same windows as :func:`evaluate_gear`'s, for a look at one
+    life: ``scripts/life_diagnostics.py``).
+
+    Raises
+    ------
+    KeyError
+        ``nuisance`` is neither ``none`` nor a key of ``cfg.nuisances``.
+    """
+    if nuisance != "none" and nuisance not in cfg.nuisances:
+        raise KeyError(f"nuisance {nuisance!r}: allowed none, {', '.join(cfg.nuisances)}")
     cond = None if nuisance == "none" else cfg.nuisances[nuisance]
     base = LifeConfig(hours=cfg.healthy_hours if cond is None else cfg.nuisance_hours,
                       interval_min=cfg.interval_min, commissioning_h=cfg.commissioning_h,
                       life_seed=int(seed), conditions=cond)
-    onsets = (fault_lives if cond is None else nuisance_fault_lives)(plan, cfg, int(seed))
-    faults = [(LifeSimulator(plan, g, dataclasses.replace(
-        base, hours=f.onset_h + cfg.horizon_h, fault=f), banks[g]), f, kind)
-        for f, kind in onsets]
-    return LifeSimulator(plan, g, base, banks[g]), faults
+    return LifeSimulator(plan, g, base, bank)
 
 
 def _key(plan: DatasetPlan, dataset: str, g: int, seed: int, nuisance: str) -> dict:
@@ -411,5 +431,5 @@ def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFra
 
 
 __all__ = ["COMPARED", "CURVE_DESIGN_HOURS", "evaluate_detectors", "evaluate_gear",
-           "fault_lives", "nuisance_fault_lives", "run_detectors", "run_held_out",
+           "fault_lives", "healthy_life", "nuisance_fault_lives", "run_detectors", "run_held_out",
            "to_frames"]
