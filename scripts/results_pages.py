@@ -38,10 +38,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from learn.reports.monitor_report import false_alarm_table, labelled, with_nuisance
 from learn.reports.paper_results import CELL_COLUMNS, our_cells, paper_cells
 from learn.reports.summary import recall
 from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import display_name
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = ROOT / "docs" / "results"
@@ -203,6 +205,70 @@ def monitor_targets(rep: Path) -> str:
     return tidy(f"{intro}\n\n{section(table, 'Targets')}")
 
 
+def _per_gear(v: pd.Series) -> str:
+    return " / ".join(f"{x:.2g}" for x in v)
+
+
+def monitor_real_day(rep: Path) -> str:
+    """The monitor's healthy lives per data set and nuisance, per held-out gear; then each
+    gear fault at its mildest severity per nuisance: detected lives and median time to
+    detect."""
+    folder = rep / "monitor"
+    res = with_nuisance(labelled(pd.read_csv(folder / "results.csv")))
+    fat = false_alarm_table(pd.read_csv(folder / "false_alarms.csv"))
+    fat = fat[fat.detector == "monitor"].sort_values("held_out_gear", kind="stable")
+    mon = res[(res.detector == "monitor") & ~res.fault.isin(list(SENSOR_FAULTS))]
+    mon = mon.assign(detected=mon.detected.astype(bool))
+    rows = []
+    for (ds, n), g in fat.groupby(["dataset", "nuisance"], sort=False):
+        d = mon[(mon.dataset == ds) & (mon.nuisance == n) & mon.detected]
+        rows.append({"data set": ds, "nuisance": n,
+                     "hours per gear": f"{g.healthy_hours.max():.0f}",
+                     "gear-fault alarms per 1000 h, gear 1 / 2 / 3":
+                         _per_gear(g.gear_fault_per_1000_h),
+                     "advisories per 1000 h": _per_gear(g.advisories_per_1000_h),
+                     "gear faults named right 1 h after the alarm":
+                         f"{int((d.fault_after_1h == d.fault).sum())} of {len(d)}"})
+    step = mon[mon.onset == "step"]
+    mild = step[step.severity.abs() == step.groupby(["dataset", "fault"]).severity.transform(
+        lambda v: v.abs().min())]
+    cells = mild.groupby(["dataset", "fault", "nuisance"], sort=False).agg(
+        n=("detected", "size"), k=("detected", "sum"), sev=("severity", "first"),
+        ttd=("time_to_detect_h", lambda t: float(np.nanmedian(t)) * 60 if t.notna().any()
+             else np.nan))
+    cells["cell"] = [f"{r.k}/{r.n}" + (f", {r.ttd:.3g} min" if np.isfinite(r.ttd) else "")
+                     for r in cells.itertuples()]
+    wide = cells.cell.unstack("nuisance", sort=False).reset_index()
+    wide.insert(2, "mildest", [f"{v:g}" for v in cells.sev.groupby(level=[0, 1],
+                                                                   sort=False).first()])
+    wide["fault"] = wide.fault.map(display_name)
+    wide = wide.rename(columns={"dataset": "data set"})
+    return ("Healthy lives of the monitor (held-out gears; five seeds of `nuisance_hours` "
+            "per nuisance, of `healthy_hours` stationary):\n\n"
+            f"{md_table(pd.DataFrame(rows))}\n\nGear faults at their mildest Table V "
+            "severity, step onsets: lives detected of those lived, median time to detect "
+            f"of the detected ones:\n\n{md_table(wide.fillna('-'))}")
+
+
+def monitor_timing(rep: Path) -> str:
+    """Worker-minutes per data set and stage (``timing.json``) and the wall time."""
+    t = json.loads((rep / "monitor" / "timing.json").read_text(encoding="utf-8"))
+    parts = pd.DataFrame(t["parts"])
+    parts["detector"] = parts.detector.fillna("monitor") if "detector" in parts else "monitor"
+    g = parts.groupby(["dataset", "detector"], sort=False)[["train_s", "evaluate_s"]].sum()
+    g = (g / 60.0).assign(total=lambda x: x.train_s + x.evaluate_s)
+    g.loc[("all", ""), :] = g.sum()
+    out = g.reset_index().rename(columns={"dataset": "data set", "detector": "part",
+                                          "train_s": "train [worker-min]",
+                                          "evaluate_s": "evaluate [worker-min]",
+                                          "total": "total [worker-min]"})
+    for c in out.columns[2:]:
+        out[c] = [f"{v:.1f}" for v in out[c]]
+    return (f"Wall time **{t['wall_s'] / 60:.1f} min**; per data set and part (the monitor "
+            "with its diagnosis model, each per-window detector), summed over the held-out "
+            f"gears:\n\n{md_table(out)}")
+
+
 def observability_map(rep: Path) -> str:
     t = pd.read_csv(rep / "observability" / "observability.csv")
     t = t[t.fault != "healthy"]
@@ -282,6 +348,11 @@ BLOCKS = (
           "swgsim-train -m experiment=transfer", transfer_recall),
     Block("monitor.targets", "monitor.md", ("monitor/table.md",),
           "swgsim-train experiment=monitor", monitor_targets),
+    Block("monitor.real_day", "monitor.md",
+          ("monitor/results.csv", "monitor/false_alarms.csv"),
+          "swgsim-train experiment=monitor", monitor_real_day),
+    Block("monitor.timing", "monitor.md", ("monitor/timing.json",),
+          "swgsim-train experiment=monitor", monitor_timing),
     Block("observability.map", "observability.md", ("observability/observability.csv",),
           "swgsim-observability", observability_map),
     Block("observability.motion", "observability.md",

@@ -1,0 +1,70 @@
+"""scripts/results_pages.py: the monitor's real-day and timing blocks, built from a
+hand-made run's reports whose figures are known, written between their markers only."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "scripts"))
+import results_pages  # noqa: E402
+
+
+def _run(tmp: Path) -> Path:
+    """A monitor run of one data set, two held-out gears, stationary and under 'hall':
+    gear 2 had one gear-fault alarm and two advisories in 200 h under the hall; its mild
+    eccentric WG under the hall was missed."""
+    fa, res = [], []
+    for n in ("none", "hall"):
+        for g in (1, 2):
+            key = {"dataset": "bench", "held_out_gear": g, "seed": 0, "nuisance": n,
+                   "output_encoder": False}
+            bad = n == "hall" and g == 2
+            fa.append({**key, "detector": "monitor", "healthy_hours": 200.0,
+                       "false_alarms": int(bad), "gear_fault_alarms": int(bad),
+                       "advisories": 2 * int(bad)})
+            for sev in (0.05, 0.2):
+                miss = bad and sev == 0.05
+                res.append({**key, "detector": "monitor", "fault": "eccentric_wg",
+                            "severity": sev, "onset": "step", "detected": not miss,
+                            "time_to_detect_h": float("nan") if miss else 0.2,
+                            "fault_after_1h": "" if miss else "eccentric_wg"})
+    out = tmp / "reports" / "monitor"
+    out.mkdir(parents=True)
+    pd.DataFrame(res).to_csv(out / "results.csv", index=False)
+    pd.DataFrame(fa).to_csv(out / "false_alarms.csv", index=False)
+    parts = [{"dataset": "bench", "held_out_gear": g, "detector": d, "train_s": 60.0,
+              "evaluate_s": 240.0} for g in (1, 2) for d in (None, "paper_rf")]
+    (out / "timing.json").write_text(json.dumps({"wall_s": 900.0, "parts": parts}))
+    return out.parent
+
+
+def test_the_monitor_blocks_hold_the_runs_figures(tmp_path):
+    rep = _run(tmp_path)
+    day = results_pages.monitor_real_day(rep)
+    assert "| bench | hall | 200 | 0 / 5 | 0 / 10 | 3 of 3 |" in day
+    assert "| bench | none | 200 | 0 / 0 | 0 / 0 | 4 of 4 |" in day
+    assert "| bench | eccentric WG | 0.05 | 2/2, 12 min | 1/2, 12 min |" in day
+    timing = results_pages.monitor_timing(rep)
+    assert "Wall time **15.0 min**" in timing
+    assert "| bench | monitor | 2.0 | 8.0 | 10.0 |" in timing
+    assert "| all |  | 4.0 | 16.0 | 20.0 |" in timing
+
+
+def test_only_the_blocks_between_their_markers_change(tmp_path):
+    rep = _run(tmp_path)
+    pages = tmp_path / "pages"
+    shutil.copytree(ROOT / "docs" / "results", pages)
+    before = (pages / "monitor.md").read_text(encoding="utf-8")
+    assert results_pages.main([str(rep), "--pages", str(pages), "--commit", "abc1234"]) == 0
+    after = (pages / "monitor.md").read_text(encoding="utf-8")
+    assert "at commit `abc1234`" in after and "0 / 5" in after
+    outside = results_pages.BLOCK_RE.sub("", before)
+    assert results_pages.BLOCK_RE.sub("", after) == outside
+    assert [p.name for p in pages.iterdir() if p.read_text(encoding="utf-8") !=
+            (ROOT / "docs" / "results" / p.name).read_text(encoding="utf-8")] == ["monitor.md"]
