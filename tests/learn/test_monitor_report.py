@@ -56,6 +56,7 @@ def test_gear_fault_alarms_and_advisories_are_counted_apart_per_nuisance():
     row = t[(t.nuisance == "hall") & (t.detector == "monitor") & (t.held_out_gear == 2)]
     assert row.gear_fault_per_1000_h.item() == pytest.approx(5.0)
     assert row.advisories_per_1000_h.item() == pytest.approx(10.0)
+    assert row.sensor_fault_per_1000_h.item() == 0.0
     pw = t[(t.nuisance == "hall") & (t.detector == "per_window")]
     assert (pw.gear_fault_per_1000_h == 200.0).all() and (pw.advisories == 0).all()
 
