@@ -130,6 +130,14 @@ class JointThermal:
         if np.any(np.diff(pts[:, 0]) <= 0):
             raise ValueError(f"{key}.ambient_points hours must increase strictly, got "
                              f"{pts[:, 0].tolist()}")
+        offsets = np.concatenate([[0.0], pts[:, 1]])
+        lo = self.ambient_c - self.ambient_swing_k + offsets.min()
+        hi = self.ambient_c + self.ambient_swing_k + offsets.max()
+        if lo < TEMP_RANGE_C[0] or hi > TEMP_RANGE_C[1]:
+            raise ValueError(f"{key}: the hall reaches {lo:g}..{hi:g} °C (ambient_c ± "
+                             "ambient_swing_k + ambient_points offsets); it must stay within "
+                             f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] °C, the viscosity "
+                             "law's range")
 
 
 def wall_clock_h(operating_h, run_h_per_day: float) -> np.ndarray:
