@@ -49,6 +49,7 @@ from swgsim.gear.thermal import (
     REF_TEMP_C,
     RUN_IN_DROP,
     RUN_IN_TAU_H,
+    TEMP_RANGE_C,
     JointThermal,
     friction_scale,
     joint_temperature,
@@ -223,6 +224,7 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     if cfg.thermal is not None:
         loss = loss_power_w(gear.gear, np.abs(n_in_rpm), np.abs(t_out_nm) * payload)
         temp = joint_temperature(hours, loss, cfg.thermal)
+        _check_joint_temperature(temp, hours, cfg.thermal)
     else:
         temp = np.full(hours.shape, REF_TEMP_C)
     run_in = (run_in_factor(hours, cfg.run_in.drop, cfg.run_in.tau_h)
@@ -239,6 +241,21 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
         ref = float(cfg.bridge_drift.ref_c)
     return WindowConditions(temp, reading, np.asarray(friction, float), run_in, payload,
                             zero, span, ref)
+
+
+def _check_joint_temperature(temp: np.ndarray, hours: np.ndarray, th: JointThermal) -> None:
+    """Refuse a joint temperature outside the viscosity law's range in one line naming
+    the thermal model's fields that set it (the hall and the loss times
+    ``r_th_k_per_w``)."""
+    lo, hi = TEMP_RANGE_C
+    bad = np.flatnonzero((temp < lo) | (temp > hi))
+    if bad.size:
+        i = int(bad[0])
+        raise ValueError(f"conditions.thermal: the joint reaches {temp[i]:.4g} °C at "
+                         f"operating hour {hours[i]:.4g} (the hall, ambient_c "
+                         f"{th.ambient_c:g} °C, plus the gear's loss times r_th_k_per_w "
+                         f"{th.r_th_k_per_w:g} K/W); the viscosity law takes "
+                         f"[{lo:g}, {hi:g}] °C")
 
 
 def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray,

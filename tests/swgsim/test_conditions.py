@@ -141,3 +141,10 @@ def test_the_presets_content_hashes_are_unchanged(preset, tmp_path):
     assert manifest["content_sha256"][:16] == CONTENT[preset]
     assert "conditions" not in manifest["config"]["life"] if manifest["config"].get("life") \
         else True
+
+
+def test_a_joint_heated_beyond_the_viscosity_laws_range_is_refused_naming_the_cause(tiny):
+    hot = dataclasses.replace(NEUTRAL, thermal=JointThermal(r_th_k_per_w=50.0))
+    with pytest.raises(ValueError, match=r"conditions.thermal: the joint reaches .* °C at "
+                                         r"operating hour .*r_th_k_per_w 50 K/W.*\[-40, 150\]"):
+        _sim(tiny, hot)
