@@ -80,7 +80,7 @@ def _cnn_res(seed: int):
 
     net = CNN1DClassifier(channels=(32, 64, 64), kernel_sizes=(7, 5, 5), strides=(2, 2, 2),
                           padding_mode="circular", n_aux=len(AUX), max_epochs=10,
-                          device="cpu", random_state=seed)
+                          device="auto", random_state=seed)  # a GPU where one is lent
     return make_pipeline(net, name="cnn")
 
 
