@@ -341,13 +341,14 @@ def _mildest_detected(res: pd.DataFrame) -> pd.DataFrame:
 
 
 def real_day_figure(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[Path]:
-    """``real_day.png``: per data set that lived a nuisance, the monitor's gear-fault alarms
+    """``real_day.png``: per data set whose monitor lived a nuisance, its gear-fault alarms
     and advisories per 1000 h (worst held-out gear) under each nuisance beside the
     stationary lives, and the share of lives in which each gear fault at its mildest
     severity was detected; ``[]`` when no life lived a nuisance."""
     import matplotlib
 
     res, fa = with_nuisance(labelled(res)), with_nuisance(labelled(fa))
+    fa = fa[fa.detector == "monitor"]
     sets = [d for d in dict.fromkeys(fa.dataset)
             if set(fa[fa.dataset == d].nuisance) - {"none"}]
     if not sets:
@@ -355,8 +356,7 @@ def real_day_figure(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fat = false_alarm_table(fa)
-    fat = fat[fat.detector == "monitor"].groupby(["dataset", "nuisance"], sort=False)[
+    fat = false_alarm_table(fa).groupby(["dataset", "nuisance"], sort=False)[
         ["gear_fault_per_1000_h", "advisories_per_1000_h"]].max()
     det = _mildest_detected(res)
     fig, axes = plt.subplots(len(sets), 2, figsize=(11, 2.9 * len(sets)), squeeze=False)
@@ -377,7 +377,8 @@ def real_day_figure(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[
             d = det.loc[ds]["mean"].unstack("fault")
             d.plot.bar(ax=a2, rot=0, width=0.8, fontsize=7, legend=False)
             a2.legend(a2.get_legend_handles_labels()[0], [display(c) for c in d.columns],
-                      fontsize=6, loc="lower left")
+                      fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=4,
+                      frameon=False)
             a2.axhline(1.0, color="0.5", lw=0.8, ls="--")
             a2.set_ylim(0, 1.05)
         a2.set_xlabel("")

@@ -101,3 +101,5 @@ def test_the_real_day_figure_shows_each_nuisance_and_the_mildest_faults(tmp_path
     assert p == tmp_path / "real_day.png" and p.stat().st_size > 10_000
     none = res.nuisance == "none"
     assert real_day_figure(res[none], fa[fa.nuisance == "none"], tmp_path / "x") == []
+    other = fa[fa.detector == "per_window"].assign(dataset="robot_joint")  # no monitor rows
+    (p,) = real_day_figure(res, pd.concat([fa, other]), tmp_path)  # as before: bench only
