@@ -284,10 +284,7 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
     axes[0, 0].legend(fontsize=7)
     fig.suptitle("Monitor: time to detect per life, held-out gears, step onsets (dashed: 30 "
                  "min; x: not detected within the horizon)", fontsize=9)
-    fig.tight_layout()
-    p = out_dir / "time_to_detect.png"
-    fig.savefig(p, dpi=130)
-    plt.close(fig)
+    p = _save(fig, out_dir / "time_to_detect.png")
     paths.append(p)
 
     fat = false_alarm_table(fa).groupby(["dataset", "detector"]).per_1000_h.max()
@@ -321,12 +318,19 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
     ax.set_title("False-alarm rate against time to detect (gear faults but stiffness; dotted: "
                  "at the design rate)", fontsize=8)
     ax.legend(fontsize=6)
-    fig.tight_layout()
-    p = out_dir / "false_alarms_vs_ttd.png"
-    fig.savefig(p, dpi=130)
-    plt.close(fig)
+    p = _save(fig, out_dir / "false_alarms_vs_ttd.png")
     paths.append(p)
     return paths + real_day_figure(res_all, fa_all, out_dir)
+
+
+def _save(fig, path: Path) -> Path:
+    """Lay out, write at 130 dpi and close a figure; its path."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
 
 
 def _mildest_detected(res: pd.DataFrame) -> pd.DataFrame:
@@ -386,10 +390,7 @@ def real_day_figure(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[
         a2.set_title(f"{ds}: gear faults at their mildest severity", fontsize=8)
     fig.suptitle("The monitor through a real day: each nuisance beside the stationary "
                  "lives (none)", fontsize=9)
-    fig.tight_layout()
-    p = out_dir / "real_day.png"
-    fig.savefig(p, dpi=130)
-    plt.close(fig)
+    p = _save(fig, out_dir / "real_day.png")
     return [p]
 
 
