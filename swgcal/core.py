@@ -34,11 +34,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.optimize import least_squares
 
+from swgsim.base.lazy import lazy_module
 from swgsim.gear.terms import Param, Term, design_matrix, evaluate_terms, linear_recurrence
 
 from .terms import FitTerm
+
+optimize = lazy_module("scipy.optimize")
 
 log = logging.getLogger(__name__)
 
@@ -311,7 +313,7 @@ def _optimise(resid: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], pk: 
 
             u0 = pk.to_u(base)[free]
             try:
-                sol = least_squares(lambda u: resid(full(u))[0], u0,
+                sol = optimize.least_squares(lambda u: resid(full(u))[0], u0,
                                     bounds=(lo_u[free], hi_u[free]), method="trf",
                                     x_scale="jac", max_nfev=max_nfev, diff_step=1e-5)
             except (np.linalg.LinAlgError, ValueError) as e:  # pragma: no cover

@@ -79,7 +79,10 @@ import logging
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
+
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
 

@@ -25,8 +25,8 @@ import dataclasses
 import time
 
 import numpy as np
-import pandas as pd
 
+from swgsim.base.lazy import lazy_module
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.records import RecordBank, record_bank
@@ -48,6 +48,8 @@ from .training import (
     train_detectors,
     train_model,
 )
+
+pd = lazy_module("pandas")
 
 #: The rows every evaluation has, beside the chosen per-window detectors.
 COMPARED = ("monitor", "per_window", "always")

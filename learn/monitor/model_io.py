@@ -19,8 +19,8 @@ import os
 from pathlib import Path
 
 import numpy as np
-import skops.io as sio
 
+from swgsim.base.lazy import lazy_module
 from swgsim.files.digest import sha256_file
 from swgsim.files.inputs import check_input_file
 from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
@@ -28,6 +28,8 @@ from swgsim.files.provenance import git_revision, library_versions, package_vers
 
 from .features import feature_names
 from .model import DiagnosisModel
+
+sio = lazy_module("skops.io")
 
 __all__ = ["CARD_SUFFIX", "MODEL_SUFFIX", "TRUSTED", "load_model", "model_card", "save_model"]
 

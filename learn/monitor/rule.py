@@ -37,9 +37,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ndtri
 
+from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_finite, check_range
+
+special = lazy_module("scipy.special")
 
 
 @dataclass
@@ -77,7 +79,7 @@ def log_bet(p: np.ndarray) -> np.ndarray:
 
 def normal_scores(p: np.ndarray) -> np.ndarray:
     """Φ⁻¹(1 − p) of p-values in (0, 1]: standard normal while the p-values are uniform."""
-    return ndtri(1.0 - np.clip(np.asarray(p, float), 1e-300, 1.0 - 1e-12))
+    return special.ndtri(1.0 - np.clip(np.asarray(p, float), 1e-300, 1.0 - 1e-12))
 
 
 def log_shift(p: np.ndarray, delta: float) -> np.ndarray:

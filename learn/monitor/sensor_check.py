@@ -39,9 +39,9 @@ parametric.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from statistics import NormalDist
 
 import numpy as np
-from scipy.stats import chi2
 
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
@@ -66,8 +66,9 @@ SENSOR_P_MIN = 0.3
 #: 2.5 is about the geometric middle of the gap.
 REST_MAX = 2.5
 #: Smallest reduction of Σ z² for a fit to count: the χ² (one degree of freedom) quantile
-#: 0.999, so that a bridge without a fault is fitted one in a thousand times.
-FIT_MIN = float(chi2.ppf(0.999, 1))
+#: 0.999, so that a bridge without a fault is fitted one in a thousand times: the square of
+#: the standard normal quantile 0.9995 (χ²₁ is the square of a standard normal variable).
+FIT_MIN = NormalDist().inv_cdf(0.9995) ** 2
 
 
 @dataclass(frozen=True)

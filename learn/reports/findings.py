@@ -15,12 +15,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
 from learn.inputs.features import SELECTIONS
 from learn.learners.models import model_label
 from learn.reports.paper_results import GEAR_SPLITS
 from learn.studies.tables import M5
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 #: Tolerance of "about X %" in the paper's text [points].
 ABOUT = 5.0

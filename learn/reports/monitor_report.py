@@ -19,11 +19,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
+from swgsim.base.lazy import lazy_module
 from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import FAULTS
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
+
+pd = lazy_module("pandas")
 
 
 def display(fault: str) -> str:

@@ -16,7 +16,6 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from learn.inputs.features import order_spectrum, reference_index
 from learn.learners.models import model_label
@@ -27,7 +26,10 @@ from learn.reports.paper_results import (
     SPLIT_LABELS,
     table_spec,
 )
+from swgsim.base.lazy import lazy_module
 from swgsim.gear.faults import display_name, fault_classes
+
+pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
 

@@ -17,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from learn.inputs.features import FeatureSettings
 from learn.learners.models import model_label
@@ -33,9 +32,12 @@ from learn.reports.paper_results import (
     table_spec,
 )
 from learn.studies.tables import StudyOptions
+from swgsim.base.lazy import lazy_module
 from swgsim.datasets.config import DatasetConfig
 from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
 from swgsim.gear.faults import display_name
+
+pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
 

@@ -11,11 +11,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
-import pandas as pd
-
 from learn.reports.transfer_report import model_rank, observable_share, row_label, summarise
 from learn.studies.protocols import OOD_PROTOCOLS
 from learn.studies.transfer import TargetSpec
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 
 def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,

@@ -18,11 +18,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import pandas as pd
-
 from learn.studies.protocols import OOD_PROTOCOLS
 from learn.studies.runs import RunRef
 from learn.studies.transfer import FT_MODES
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 PRIMARY = "primary, declared before the comparison"
 BEST = "best, chosen afterwards on the held-out windows"

@@ -18,7 +18,6 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from learn.learners.models import model_label
 from learn.reports.transfer_picks import (
@@ -30,6 +29,9 @@ from learn.reports.transfer_picks import (
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import RunRef
 from learn.studies.transfer import TargetSpec
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 _INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "Selection 3",
            "raw_res": "synchronous residual", "diff_res": "differenced residual",

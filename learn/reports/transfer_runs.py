@@ -8,11 +8,12 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-
 from learn.reports.transfer_report import CELL_KEYS
 from learn.studies.transfer import TransferConfig
 from learn.tracking.config import LoggerConfig
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 
 def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], logger: LoggerConfig,

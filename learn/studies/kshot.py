@@ -20,7 +20,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
+
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 #: The class whose windows a gear offers without labels (its commissioning stream).
 HEALTHY = "healthy"

@@ -11,10 +11,12 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from learn.inputs.signals import ResidualSettings
 from learn.studies.runs import RunSpec, final_step, make_estimator
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 
 def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs: Mapping[str, Any],

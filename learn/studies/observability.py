@@ -24,7 +24,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
+
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 #: The bench's output inertia: flange and load coupling [kg m²]
 #: (:attr:`swgsim.gear.dynamics.GearParams.j_out_kgm2`, from a public simulation script of the

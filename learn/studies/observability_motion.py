@@ -30,10 +30,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 
+from swgsim.base.lazy import lazy_module
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
+
+pd = lazy_module("pandas")
 
 #: Steady operating points of the ``steady`` view: (input speed [rpm], load [N m]), the
 #: robot profile's cruise speed order of magnitude at a light and a medium load.

@@ -21,7 +21,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from learn.inputs.features import Features, FeatureSettings, extract_features, selection_name
 from learn.learners.models import make_model
@@ -34,6 +33,9 @@ from learn.studies.protocols import (
 )
 from learn.studies.tables import StudyOptions
 from learn.tracking.config import LoggerConfig
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
 

@@ -19,10 +19,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from learn.studies.kshot import KShotSplit
 from learn.studies.protocols import fit_with_groups, window_groups
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 ADAPT = ("adabn", "coral")
 FT_MODES = ("all", "last")

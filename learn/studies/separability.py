@@ -30,7 +30,10 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
+
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 
 def separation_records(ds, disturbed: bool = False, n_harmonics: int = 8,

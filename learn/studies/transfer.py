@@ -47,7 +47,6 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from learn.inputs.signals import ResidualSettings
 from learn.studies.kshot import check_no_leak, kshot_split
@@ -63,7 +62,10 @@ from learn.studies.runs import (
     fit_and_adapt,
     make_estimator,
 )
+from swgsim.base.lazy import lazy_module
 from swgsim.datasets.config import DatasetConfig
+
+pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
 

@@ -23,8 +23,6 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import joblib
-import pandas as pd
 from tqdm.auto import tqdm
 
 from learn.monitor.detectors import DETECTORS
@@ -41,11 +39,15 @@ from learn.reports.monitor_report import (
 from learn.tasks.config import plain, typed_app
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
+from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import allowed
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.plan import DatasetPlan, plan
 from swgsim.files import ownership
 from swgsim.files.ownership import atomic_write_json
+
+pd = lazy_module("pandas")
+joblib = lazy_module("joblib")
 
 log = logging.getLogger(__name__)
 

@@ -13,10 +13,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from learn.studies.transfer import TransferConfig, check_config, run_comparisons
 from learn.tasks.config import plain, typed_app
+from swgsim.base.lazy import lazy_module
+
+pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
 

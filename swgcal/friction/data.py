@@ -21,14 +21,17 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
-from scipy.integrate import cumulative_trapezoid
-from scipy.signal import savgol_filter
 
+from swgsim.base.lazy import lazy_module
 from swgsim.files.inputs import HEADER_BYTES, check_input_file, read_head
 from swgsim.gear.friction.signals import FrictionSignals, Scales
 
 from .options import FrictionOptions
+
+integrate = lazy_module("scipy.integrate")
+signal = lazy_module("scipy.signal")
+
+pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
 
@@ -168,7 +171,7 @@ def estimate_acceleration(t_s: np.ndarray, dq: np.ndarray, n_window: int = 21) -
     w = n_window | 1
     if tu.size < w:
         w = tu.size - (1 - tu.size % 2)
-    au = savgol_filter(vu, w, 2, deriv=1, delta=dt)
+    au = signal.savgol_filter(vu, w, 2, deriv=1, delta=dt)
     return np.interp(t_s, tu, au)
 
 
@@ -445,7 +448,7 @@ def velocity_consistency(t_s: np.ndarray, q_rad: np.ndarray,
     VelocityConsistency
         Figures are infinite (or NaN) where the angle is constant or the velocity zero.
     """
-    integral = cumulative_trapezoid(dq_rad_s, t_s, initial=0.0)
+    integral = integrate.cumulative_trapezoid(dq_rad_s, t_s, initial=0.0)
     basis = np.column_stack([np.ones_like(t_s), t_s - t_s.mean()])
     coef, *_ = np.linalg.lstsq(basis, q_rad - integral, rcond=None)
     rest = q_rad - integral - basis @ coef
@@ -498,7 +501,7 @@ def velocity_scale(t_s: np.ndarray, q_rad: np.ndarray, dq_rad_s: np.ndarray) -> 
         k = velocity / (dq/dt) (2.0: the velocity twice the derivative, or the time
         column twice too long; -1: a sign error), or None if no pure factor fits.
     """
-    integral = cumulative_trapezoid(dq_rad_s, t_s, initial=0.0)
+    integral = integrate.cumulative_trapezoid(dq_rad_s, t_s, initial=0.0)
     basis = np.column_stack([integral - integral.mean(), np.ones_like(t_s)])
     coef, *_ = np.linalg.lstsq(basis, q_rad, rcond=None)
     excursion = _rms(q_rad - q_rad.mean())

@@ -58,8 +58,8 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from scipy import signal as sps
 
+from swgsim.base.lazy import lazy_module
 from swgsim.gear.terms import Param
 from swgsim.sensing import effects as ms
 from swgsim.sensing.dsp import fractional_delay, lowpass_coefficients
@@ -76,6 +76,8 @@ from .ranges import (
     OFFSET_RANGE_MVV,
 )
 from .signals import SENSORS, MappedBasis, StrainSignals, constraint_basis
+
+sps = lazy_module("scipy.signal")
 
 log = logging.getLogger(__name__)
 

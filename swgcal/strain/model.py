@@ -15,8 +15,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
+from swgsim.base.lazy import lazy_module
 from swgsim.gear.chain import ChainSettings, SimulationChain
 from swgsim.gear.dynamics import GearParams, rt1_size20
 from swgsim.gear.dynamics import simulate as simulate_dynamics
@@ -25,6 +25,8 @@ from swgsim.gear.influence import torque_influence
 from swgsim.sensing.effects import psi_rate
 
 from .effects import KE_ORDERS
+
+interpolate = lazy_module("scipy.interpolate")
 
 __all__ = ["StrainModel", "Realigner"]
 
@@ -39,10 +41,11 @@ class _OPModel:
     t0_s: float  # simulation time of window sample 0 at zero shift
     n_half: int  # ψ shifts searched by the alignment: half a WG revolution [samples]
     n_rev: int  # torque shifts searched: one input revolution [samples]
-    psi: CubicSpline
-    phi_in: CubicSpline
-    t_out: CubicSpline
-    d_t: dict[str, CubicSpline]  # "ke{k}_sin"/"_cos" -> ΔT per unit KE amplitude [N m/rad]
+    psi: interpolate.CubicSpline
+    phi_in: interpolate.CubicSpline
+    t_out: interpolate.CubicSpline
+    # "ke{k}_sin"/"_cos" -> ΔT per unit KE amplitude [N m/rad]
+    d_t: dict[str, interpolate.CubicSpline]
     d_t_long: dict[str, np.ndarray]  # the same on the simulation grid, each (n_l,)
     p_psi_long: np.ndarray  # (5, n_l) s_wg(ψ) + T̄ h(ψ) on the simulation grid
     t_long: np.ndarray  # (n_l,) output torque on the simulation grid [N m]
@@ -155,11 +158,12 @@ class StrainModel:
         t_mean = float(t_out.mean())
         d_t_long = {nm: (res.t_out[i] - t_out) / self.ke_unit_rad
                     for i, nm in enumerate(names) if i > 0}
-        d_t = {nm: CubicSpline(tl, v) for nm, v in d_t_long.items()}
+        d_t = {nm: interpolate.CubicSpline(tl, v) for nm, v in d_t_long.items()}
         s_wg, h, _ = self._signals(psi, t_mean)
         opm = _OPModel(n_in_rpm=float(n_in_rpm), t_out_nm=float(t_out_nm), fs=float(fs), t0_s=t0,
-                       n_half=n_half, n_rev=n_rev, psi=CubicSpline(tl, psi),
-                       phi_in=CubicSpline(tl, res.states[0, 0]), t_out=CubicSpline(tl, t_out),
+                       n_half=n_half, n_rev=n_rev, psi=interpolate.CubicSpline(tl, psi),
+                       phi_in=interpolate.CubicSpline(tl, res.states[0, 0]),
+                       t_out=interpolate.CubicSpline(tl, t_out),
                        d_t=d_t, d_t_long=d_t_long, p_psi_long=s_wg + t_mean * h, t_long=t_out,
                        t_mean=t_mean, efficiency=float(res.efficiency[0]))
         self._cache[key] = opm

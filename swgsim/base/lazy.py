@@ -1,10 +1,13 @@
-"""Lazily imported package attributes (PEP 562), shared by ``swgsim`` and ``learn``."""
+"""Lazy imports shared by ``swgsim`` and ``learn``: package attributes imported on first use
+(PEP 562, :func:`lazy_exports`) and heavy libraries imported on first use (:func:`lazy_module`)."""
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import sys
 from collections.abc import Callable, Mapping
+from types import ModuleType
 
 
 def lazy_exports(package: str, exports: Mapping[str, str]
@@ -42,3 +45,39 @@ def lazy_exports(package: str, exports: Mapping[str, str]
         return sorted(set(vars(sys.modules[package])) | {"__version__", *exports})
 
     return getattr_, dir_
+
+
+def lazy_module(name: str) -> ModuleType:
+    """A module that is imported on its first attribute access (the standard library's
+    :class:`importlib.util.LazyLoader`), so that a heavy library costs nothing to a
+    process that never uses it: an app's ``--help`` or a refused override answers before
+    pandas, the scipy submodules or skops are loaded.
+
+    Parameters
+    ----------
+    name : str
+        Absolute module name, e.g. ``"pandas"`` or ``"scipy.signal"``; the parent packages
+        of a dotted name are imported at once (keep them light: ``scipy`` is).
+
+    Returns
+    -------
+    types.ModuleType
+        The module from ``sys.modules`` if it is imported already, else the lazy module,
+        registered there (a later plain ``import`` gets the same object).
+
+    Raises
+    ------
+    ModuleNotFoundError
+        The module is not installed (found at once, not at first use).
+    """
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.loader is None:
+        raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+    loader = importlib.util.LazyLoader(spec.loader)
+    spec.loader = loader
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    loader.exec_module(module)
+    return module

@@ -9,8 +9,8 @@ workers need no truss.
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
+from swgsim.base.lazy import lazy_module
 from swgsim.datasets.gears import layout_for
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.gear import dynamics
@@ -18,6 +18,8 @@ from swgsim.gear.dynamics import rt1_size20
 from swgsim.gear.faults import NO_ROOT_CRACK, ChainParams, apply_fault
 from swgsim.gear.flexspline import FlexsplineGeometry, TrussModel
 from swgsim.gear.influence import Influence, InfluenceSolver
+
+interpolate = lazy_module("scipy.interpolate")
 
 __all__ = ["diverged", "fine_motion", "gear_influences", "influences_for", "unique_index"]
 
@@ -130,8 +132,8 @@ def fine_motion(res: dynamics.SimResult, q: int,
     t = res.time
     tf = np.arange(q * (t.size - 1)) * (t[1] - t[0]) / q
     dpsi = res.states[1][rows] - res.states[3][rows]
-    return (CubicHermiteSpline(t, psi, dpsi, axis=1)(tf),
-            CubicSpline(t, t_out, axis=1)(tf))
+    return (interpolate.CubicHermiteSpline(t, psi, dpsi, axis=1)(tf),
+            interpolate.CubicSpline(t, t_out, axis=1)(tf))
 
 
 def unique_index(keys: list) -> tuple[np.ndarray, np.ndarray]:

@@ -46,8 +46,10 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
+
+from swgsim.base.lazy import lazy_module
+
+sp = lazy_module("scipy.sparse")
 
 log = logging.getLogger(__name__)
 
@@ -60,7 +62,7 @@ def factorize(k: sp.spmatrix):
     Symmetric mode with minimum-degree ordering on Kᵀ + K and no pivoting: about 4x
     faster solves than the default COLAMD ordering on the flexspline (measured, 18k DOFs).
     """
-    return spla.splu(sp.csc_matrix(k), permc_spec="MMD_AT_PLUS_A",
+    return sp.linalg.splu(sp.csc_matrix(k), permc_spec="MMD_AT_PLUS_A",
                      diag_pivot_thresh=0.0, options={"SymmetricMode": True})
 
 

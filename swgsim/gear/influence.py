@@ -25,11 +25,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
+from swgsim.base.lazy import lazy_module
 from swgsim.gear.faults import angle_index, mesh_severity
 from swgsim.gear.flexspline import TrussModel
 from swgsim.gear.sensors import SensorLayout, signal_rows
+
+sp = lazy_module("scipy.sparse")
 
 
 @dataclass(frozen=True)

@@ -43,9 +43,11 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
+from swgsim.base.lazy import lazy_module
 from swgsim.gear.flexspline import INNER, OUTER, TrussModel
+
+sp = lazy_module("scipy.sparse")
 
 # The default layout, written once (docs/PHYSICS.md sec. 4): bridge radii on the collar,
 # active grid length, gauge factor of constantan foil gauges.

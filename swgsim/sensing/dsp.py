@@ -8,7 +8,11 @@ models (:mod:`swgcal.strain.effects`).
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage, signal
+
+from swgsim.base.lazy import lazy_module
+
+ndimage = lazy_module("scipy.ndimage")
+signal = lazy_module("scipy.signal")
 
 
 def _mirror(j: np.ndarray, n: int) -> np.ndarray:
