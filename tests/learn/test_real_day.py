@@ -92,6 +92,44 @@ def test_temperature_outside_its_range_is_refused_naming_the_window(model, healt
         monitor_stream(ds, model, RuleConfig(), source="day")
 
 
+def _hot_after_commissioning(day):
+    """The preset's healthy gear commissioned at a constant 30 °C (the hall at 30 °C, no
+    warm-up, no stops, no run-in, no new tool) that runs at 80 °C from 24.1 h on: the
+    grease and the bridges at 80 °C (issue 43, cause 2)."""
+    from swgsim.gear.thermal import JointThermal
+
+    p, bank = day
+    life = p.config.life
+    hot = JointThermal(r_th_k_per_w=1e-6, tau_min=0.1, ambient_c=30.0, ambient_swing_k=0.0,
+                       ambient_points=[[0.0, 0.0], [24.0, 0.0], [24.1, 50.0]],
+                       run_h_per_day=24.0)
+    cond = dataclasses.replace(life.conditions, thermal=hot, run_in=None, payload=[])
+    return life_dataset(LifeSimulator(p, 3, dataclasses.replace(
+        life, hours=28.0, conditions=cond), bank))
+
+
+def test_a_joint_commissioned_at_one_temperature_is_advised_not_alarmed_when_hot(model, day):
+    """Commissioning's temperature varied by less than the fit's least spread (2 K): the
+    temperature's range is still commissioning's, widened by the sensor's uncertainty;
+    at 80 °C every window is outside it, advised once, and not judged (no gear-fault
+    alarm: the eccentric WG this case raised before)."""
+    from learn.monitor.normal import OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
+
+    ds = _hot_after_commissioning(day)
+    t, comm = ds["temperature_c"].values, ds["commissioning"].values
+    assert np.ptp(t[comm]) < 2.0 and abs(t[comm].mean() - 30.0) < 0.5
+    assert (t[~comm][ds["hour"].values[~comm] > 25.0] > 79.0).all()
+    res = monitor_stream(ds, model, RuleConfig(), source="hot")
+    assert res.alarms == []
+    assert [a["condition"] for a in res.advisories][:1] == ["temperature"]
+    assert 24.0 <= res.advisories[0]["hour"] <= 24.5
+    hot = res.trace.hour > 25.0
+    assert (res.trace.outside[hot] & OUTSIDE_TEMPERATURE).all()
+    assert (res.trace.outside[hot] & OUTSIDE_UNJUDGED).all()
+    assert (res.trace.p[hot] == 1.0).all()  # not judged: the CUSUMs hold
+    assert (np.diff(res.trace.cusums[hot], axis=0) == 0.0).all()
+
+
 def test_the_threshold_reported_is_the_one_the_rule_used(model, healthy, tmp_path):
     """An unevenly spaced stream (window 1 missing: its first spacing 4 min, the median
     2 min): the result, summary.json and report.md carry h of the median spacing, the
