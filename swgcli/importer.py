@@ -11,7 +11,7 @@ as a schema-v1 stream with a manifest and an ownership stamp
 Examples
 --------
     swgsim-import recording=joint.csv mapping=joint.yaml out_dir=data/joint
-    swgsim-monitor stream=data/joint diagnosis_model=reports/monitor/models/<model>.joblib
+    swgsim-monitor stream=data/joint diagnosis_model=reports/monitor/models/<model>.skops
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Reads a stream (a gear's life: a schema-v1 data set with ``hour`` and ``commissioning``,
 e.g. ``swgsim-generate dataset=tiny_life``) and a diagnosis model trained on simulated
-gears (``models/*.joblib`` of ``swgsim-train experiment=monitor``), checks that they fit
+gears (``models/*.skops`` of ``swgsim-train experiment=monitor``), checks that they fit
 before any work, builds the gear's normal behaviour from its commissioning windows, runs the
 sequential rule (:mod:`learn.monitor`) and writes ``summary.json``, ``report.md``,
 ``health.png`` and an MLflow run. Config: ``conf/monitor.yaml``.
@@ -17,8 +17,8 @@ from pathlib import Path
 from omegaconf import DictConfig, OmegaConf
 
 from learn.monitor.model_io import load_model
-from learn.monitor.rule import check_rule, threshold
-from learn.monitor.stream import monitor_stream, select_gear, write_outputs
+from learn.monitor.rule import check_rule
+from learn.monitor.stream import event_line, monitor_stream, select_gear, write_outputs
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgcli.app import absolute_path, hydra_app
@@ -56,9 +56,8 @@ def run_monitor_app(cfg) -> dict:
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
                          source=str(src), normal=app.normal)
-    interval = float((ds["hour"].values[1] - ds["hour"].values[0]) * 60)
     with ownership.claim(out, "swgsim-monitor", strict=True) as claim:
-        files = write_outputs(res, out, threshold(app.rule, interval), str(src))
+        files = write_outputs(res, out, str(src))
         claim.record(files.values())
     if app.logger is not None:
         params = {"stream": str(src), "diagnosis_model": app.diagnosis_model,
@@ -67,25 +66,23 @@ def run_monitor_app(cfg) -> dict:
         with log_run(app.logger.experiment, app.logger.run_name,
                      tracking_uri=app.logger.tracking_uri, params=params,
                      config=dataclasses.asdict(app), dataset=src) as run:
-            run.log_metrics({"alarms": len(res.alarms)})
+            run.log_metrics({"alarms": len(res.alarms), "threshold": res.threshold})
             for f in files.values():
                 run.log_artifact(f)
     return {"alarms": [a.as_dict() for a in res.alarms], "events": res.events(),
-            "files": {k: str(v) for k, v in files.items()}}
+            "threshold": res.threshold, "files": {k: str(v) for k, v in files.items()}}
 
 
 @hydra_app("monitor", MonitorApp, "swgsim-monitor")
 def main(cfg: DictConfig) -> dict:
-    """Run the monitor and print its alarms and where the outputs went."""
+    """Run the monitor and print the threshold it used, its events (one line each, by
+    kind: :func:`learn.monitor.stream.event_line`) and where the outputs went."""
     out = run_monitor_app(cfg)
+    print(f"alarm threshold h = {out['threshold']:.2f}")
     if not out["alarms"]:
         print("no alarm")
     for e in out["events"]:
-        if e["kind"] == "advisory":
-            print(f"advisory at {e['hour']:.2f} h: {e['advice']}")
-        else:
-            print(f"alarm at {e['hour']:.2f} h: {e['fault']}, severity {e['severity']:.3g} "
-                  f"[{e['severity_low']:.3g}, {e['severity_high']:.3g}]")
+        print(event_line(e))
     for k, v in out["files"].items():
         print(f"{k}: {v}")
     return out

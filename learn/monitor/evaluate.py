@@ -34,10 +34,10 @@ from swgsim.datasets.schedule import FaultOnset, LifeConfig
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 from .detectors import References, WindowClassifier, window_inputs
-from .gear_monitor import GearMonitor, Trace, run_cusums
+from .gear_monitor import GearMonitor, Trace, judged_bets, run_cusums
 from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
-from .rule import log_bets, threshold
+from .rule import threshold
 from .stream import advisories
 from .study import MonitorStudyConfig
 from .training import (
@@ -269,7 +269,7 @@ def _curve_healthy(tr: Trace, cfg: MonitorStudyConfig, key: dict, hours_h: float
                    out: list[dict]) -> dict[float, np.ndarray]:
     """False alarms of the healthy life at each design rate of the curve; returns each
     rate's CUSUMs (the state a fault life starts from)."""
-    lf = log_bets(tr.p, cfg.rule)
+    lf = judged_bets(tr.p, tr.outside, cfg.rule)
     states = {}
     for d, h in _curve_thresholds(cfg).items():
         cus, al = run_cusums(lf, h, latch=False)
@@ -284,7 +284,7 @@ def _curve_fault(ftr: Trace, fo: FaultOnset, before: int, states: dict, cfg, row
     """Time to detect of a fault life at each design rate of the curve (NaN: not within
     the windows scored before the default rule's alarm, i.e. later than it)."""
     n = int(np.sum(~np.isnan(ftr.p)))
-    lf = log_bets(ftr.p[:n], cfg.rule)
+    lf = judged_bets(ftr.p[:n], ftr.outside[:n], cfg.rule)
     for d, h in _curve_thresholds(cfg).items():
         start = 0.0 if before < 0 else states[d][before]
         _, al = run_cusums(lf, h, start, latch=True)

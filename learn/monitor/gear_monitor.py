@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .model import DiagnosisModel, design_matrix
-from .normal import OUTSIDE_LOAD, Conditions, NormalBehaviour, NormalConfig
+from .normal import OUTSIDE_LOAD, OUTSIDE_UNJUDGED, Conditions, NormalBehaviour, NormalConfig
 from .rule import RuleConfig, conformal_p, log_bets, min_calibration, normal_scores, threshold
 from .sensor_check import REST_MAX, SENSOR_P_MIN, fit_sensor_faults
 
@@ -103,7 +103,7 @@ class Trace:
     outside : ndarray of int, shape (n,)
         The conditions commissioning did not see at each window
         (:meth:`learn.monitor.normal.NormalBehaviour.outside`: 1 temperature, 2 load,
-        4 friction).
+        4 friction; 8 not judged: p-value 1, the CUSUMs hold, :func:`judged_bets`).
     recommissioned : list of (int, int, bool)
         (window, operating point's row, relearnt) where a point was recommissioned at its
         new load after that window (:meth:`GearMonitor.run`): relearnt True where the
@@ -199,6 +199,16 @@ def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: floa
                 f"{rule.design_hours:g} h: {c} windows at {o[0]:g} rpm, {o[1]:g} N m, at least "
                 f"{need} needed ({min_calibration(rule, interval_min)} to calibrate, "
                 f"{rule.min_normal_windows} for the normal behaviour, alternately)")
+
+
+def judged_bets(p: np.ndarray, outside: np.ndarray, rule: RuleConfig) -> np.ndarray:
+    """ln f of every CUSUM of the rule per window (:func:`~.rule.log_bets`), shape
+    (n, k), 0 where the window is not judged (``outside`` has
+    :data:`~.normal.OUTSIDE_UNJUDGED`): the CUSUMs hold there, neither rising nor
+    draining."""
+    bets = log_bets(p, rule)
+    bets[(np.asarray(outside) & OUTSIDE_UNJUDGED) != 0] = 0.0
+    return bets
 
 
 def normal_windows(points: np.ndarray) -> np.ndarray:
@@ -361,12 +371,14 @@ class GearMonitor:
         ``Σ z²`` measures, not their direction, which the diagnosis model's evidence
         measures: behind a robot link a 10 % heavier tool left every bridge's residual
         0.7 spread above the extrapolation, a pattern the model took for a root crack
-        (10 gear-fault alarms in 200 h, robot_joint gear 3, seed 0)."""
+        (10 gear-fault alarms in 200 h, robot_joint gear 3, seed 0). A window not judged
+        (:data:`~.normal.OUTSIDE_UNJUDGED`) has p-value 1."""
         pe = self.p_each(score, opi, u)
         p = np.minimum(1.0, score.shape[1] * pe.min(axis=1))
         if outside is not None:
             beyond = (np.asarray(outside) & OUTSIDE_LOAD) != 0
             p[beyond] = pe[beyond, 1]
+            p[(np.asarray(outside) & OUTSIDE_UNJUDGED) != 0] = 1.0
         return p
 
     def p_each(self, score: np.ndarray, opi: np.ndarray, u: np.ndarray | None = None
@@ -441,7 +453,7 @@ class GearMonitor:
             score, lp, ref = self._scores(feats[w], points[w], cond[w], fr[w], opi[w])
             out = self.normal.outside(points[w], cond[w], fr[w], opi[w])
             p = self.p_values(score, opi[w], u[w], out)
-            cus, alarms = run_cusums(log_bets(p, self.rule), self.h, s, latch)
+            cus, alarms = run_cusums(judged_bets(p, out, self.rule), self.h, s, latch)
             ev = self._learn(opi[w], out, ref, cond.torque_nm[w], alarms, latch)
             n = len(p) if ev is None else ev[0] + 1
             parts.append(Trace(hours[w][:n], score[:n], p[:n], cus[:n],
@@ -547,7 +559,7 @@ class GearMonitor:
         score, lp, ref = self._scores(f, pt, cond, fr, opi)
         out = self.normal.outside(pt, cond, fr, opi)
         p = self.p_values(score, opi, self.rng.uniform(size=(1, 2)), out)
-        cus = np.maximum(0.0, self.cusum + log_bets(p, self.rule)[0])
+        cus = np.maximum(0.0, self.cusum + judged_bets(p, out, self.rule)[0])
         alarm = bool((cus >= self.h).any())
         self.cusum = np.zeros_like(cus) if alarm else cus
         ev = self._learn(opi, out, ref, cond.torque_nm, [0] if alarm else [], latch=False)
@@ -582,6 +594,7 @@ class GearMonitor:
         end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
         cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
         ev = self.evidence(trace.log_proba, trace.op_index)
+        ev[(trace.outside & OUTSIDE_UNJUDGED) != 0] = 0.0  # not judged: no evidence
         fr = trace.friction
         at_alarm, _ = self.name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
                                 cond[rise:a + 1], fr[rise:a + 1])
@@ -619,5 +632,5 @@ class GearMonitor:
         return self.model.name(ev), None
 
 
-__all__ = ["Alarm", "GearMonitor", "Trace", "normal_windows", "check_commissioning",
-           "run_cusums"]
+__all__ = ["Alarm", "GearMonitor", "Trace", "check_commissioning", "judged_bets",
+           "normal_windows", "run_cusums"]

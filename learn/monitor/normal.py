@@ -44,9 +44,16 @@ condition commissioning did not see (temperature beyond its range by
 ``temperature_margin_k``, load beyond its by ``load_margin``, the friction factor beyond
 its by ``friction_margin``): the monitor advises to recommission (an advisory, not a gear fault)
 and keeps watching with the extrapolated model, in a spread widened by the extrapolation's
-own size (:meth:`NormalBehaviour.z_and_spread`). Where the acting load at a point stays
-beyond commissioning's (a heavier tool), the monitor recommissions that point after
-enough windows without an alarm (:meth:`NormalBehaviour.recommission`).
+own size (:meth:`NormalBehaviour.z_and_spread`). Commissioning's temperature range is
+always its readings' range widened by the sensor's uncertainty
+(``temperature_uncertainty_k``), whatever its spread: where the spread was too small to
+fit the temperature terms (below :data:`MIN_SPREAD_K`), no law carries a window beyond
+that range, so it is outside without a margin and not judged
+(:data:`OUTSIDE_UNJUDGED`: the monitor's CUSUMs hold), advised, not alarmed (a joint
+commissioned at 30 °C that ran at 80 °C got an eccentric-WG alarm, issue 43). Where the
+acting load at a point stays beyond commissioning's (a heavier tool), the monitor
+recommissions that point after enough windows without an alarm
+(:meth:`NormalBehaviour.recommission`).
 """
 
 from __future__ import annotations
@@ -65,6 +72,9 @@ BLOCK = N_HARMONICS + 2
 EFFICIENCY = 5 * BLOCK
 #: Bits of :meth:`NormalBehaviour.outside`: the condition commissioning did not see.
 OUTSIDE_TEMPERATURE, OUTSIDE_LOAD, OUTSIDE_FRICTION = 1, 2, 4
+#: Bit of :meth:`NormalBehaviour.outside`: the window is not judged (its temperature is
+#: outside and no temperature law carries the normal behaviour there).
+OUTSIDE_UNJUDGED = 8
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
 #: An amplitude enters the fit of its bridge's gain when its mean is this many standard
@@ -82,8 +92,14 @@ class NormalConfig:
         Time constant of the friction factor's tracking [operating h], > 0; 0: not
         tracked (the factor stays 1).
     temperature_margin_k : float
-        A window's temperature may exceed commissioning's range at its operating point
-        by this much before it is outside [K], >= 0.
+        Where commissioning fitted the temperature terms, a window's temperature may
+        exceed commissioning's range at its operating point by this much before it is
+        outside [K], >= 0 (without them: by nothing, module docstring).
+    temperature_uncertainty_k : float
+        The temperature reading's uncertainty [K], in [0, 10]: commissioning's range is
+        its readings' widened by this on either side. 0.2, of the simulated sensor's
+        resolution (0.1 K) and noise (0.05 K sd, :class:`swgsim.sensing.bridge_drift.
+        TemperatureSensor`); a sensor's stated accuracy where it gives one.
     load_margin : float
         Relative margin on commissioning's acting load at the operating point [-], >= 0.
     friction_margin : float
@@ -109,6 +125,7 @@ class NormalConfig:
 
     friction_track_h: float = 4.0
     temperature_margin_k: float = 2.0
+    temperature_uncertainty_k: float = 0.2
     load_margin: float = 0.03
     friction_margin: float = 0.05
     extrapolation_uncertainty: float = 1.0
@@ -124,6 +141,9 @@ class NormalConfig:
         check_range(self.friction_track_h, 0.0, 1e4, f"{key}.friction_track_h", "h")
         check_range(self.temperature_margin_k, 0.0, 100.0, f"{key}.temperature_margin_k",
                     "K")
+        check_range(self.temperature_uncertainty_k, 0.0, 10.0,
+                    f"{key}.temperature_uncertainty_k", "K",
+                    why="the temperature reading's uncertainty")
         check_range(self.load_margin, 0.0, 1.0, f"{key}.load_margin")
         check_range(self.friction_margin, 0.0, 1.0, f"{key}.friction_margin", lo_open=True)
         check_range(self.extrapolation_uncertainty, 0.0, 10.0,
@@ -184,9 +204,11 @@ class NormalBehaviour:
     mean, std : ndarray, shape (P, F)
         Commissioning's features brought to the reference condition: mean and spread.
     ref_torque, ref_temp : ndarray, shape (P,)
-        Commissioning's mean acting load [N m] and temperature [°C] (NaN: none).
+        Commissioning's mean acting load [N m] and temperature [°C] (NaN: no temperature
+        terms, none measured or a spread below :data:`MIN_SPREAD_K`).
     torque_range, temp_range : ndarray, shape (P, 2)
-        Commissioning's range of acting load [N m] and temperature [°C].
+        Commissioning's range of acting load [N m] and temperature [°C], the latter
+        widened by ``temperature_uncertainty_k`` (NaN: none measured).
     gain, zero : ndarray, shape (5,)
         γ_c [1/K] and ζ_c [mV/V per K] of each bridge (0 without temperature).
     loss : ndarray, shape (P, 2)
@@ -252,8 +274,9 @@ class NormalBehaviour:
         temp = cond.temperature_c
         use_t = temp is not None and np.ptp(temp) >= MIN_SPREAD_K
         ref_temp = np.array([temp[inv == k].mean() if use_t else np.nan for k in range(n_p)])
-        temp_range = np.array([[temp[inv == k].min(), temp[inv == k].max()] if use_t
-                               else [np.nan, np.nan] for k in range(n_p)])
+        u = config.temperature_uncertainty_k
+        temp_range = np.array([[temp[inv == k].min() - u, temp[inv == k].max() + u]
+                               if temp is not None else [np.nan, np.nan] for k in range(n_p)])
         dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
         gain, zero = (_bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
         loss = _loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
@@ -420,19 +443,28 @@ class NormalBehaviour:
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(pred > 0, tq * (1.0 / eta - 1.0) / pred, 1.0)
 
+    @property
+    def temperature_law(self) -> bool:
+        """Whether commissioning fitted the temperature terms (module docstring)."""
+        return bool(np.isfinite(self.ref_temp).all())
+
     def outside(self, points: np.ndarray, cond: Conditions, friction: np.ndarray | float,
                 index: np.ndarray | None = None) -> np.ndarray:
         """Which condition each window has that commissioning did not see: a bit field,
         :data:`OUTSIDE_TEMPERATURE` (1), :data:`OUTSIDE_LOAD` (2), :data:`OUTSIDE_FRICTION`
-        (4); 0: none; shape (n,) int."""
+        (4), and :data:`OUTSIDE_UNJUDGED` (8) where the temperature is outside with no
+        temperature law (module docstring); 0: none; shape (n,) int."""
         i = self._check(points, index)
         c = self.config
         out = np.zeros(len(points), np.int64)
-        if cond.temperature_c is not None and np.isfinite(self.ref_temp[i]).all():
+        if cond.temperature_c is not None and np.isfinite(self.temp_range[i]).all():
             t = cond.temperature_c
+            law = self.temperature_law
+            margin = c.temperature_margin_k if law else 0.0
             lo, hi = self.temp_range[i, 0], self.temp_range[i, 1]
-            out |= ((t < lo - c.temperature_margin_k) | (t > hi + c.temperature_margin_k)) \
-                * OUTSIDE_TEMPERATURE
+            beyond = (t < lo - margin) | (t > hi + margin)
+            out |= beyond * (OUTSIDE_TEMPERATURE if law
+                             else OUTSIDE_TEMPERATURE | OUTSIDE_UNJUDGED)
         lo, hi = self.torque_range[i, 0], self.torque_range[i, 1]
         tq = cond.torque_nm
         span = c.load_margin * np.abs(self.ref_torque[i])
@@ -598,4 +630,4 @@ def _load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,
 
 
 __all__ = ["BLOCK", "Conditions", "EFFICIENCY", "NormalBehaviour", "NormalConfig",
-           "OUTSIDE_FRICTION", "OUTSIDE_LOAD", "OUTSIDE_TEMPERATURE"]
+           "OUTSIDE_FRICTION", "OUTSIDE_LOAD", "OUTSIDE_TEMPERATURE", "OUTSIDE_UNJUDGED"]

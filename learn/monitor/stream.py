@@ -6,8 +6,10 @@ first windows, known healthy), e.g. a life written by ``swgsim-generate`` with
 ``dataset.life`` set (:mod:`swgsim.datasets.life`). :func:`check_stream` refuses, before any work
 and in one line, a stream without commissioning, with hours out of order, or one that
 disagrees with the model (bridges, sample rate, operating points outside the training
-range). :func:`monitor_stream` runs :class:`~learn.monitor.gear_monitor.GearMonitor` and
-:func:`write_outputs` writes ``summary.json``, ``report.md`` and ``health.png``.
+range), or one with no window after commissioning. :func:`monitor_stream` runs
+:class:`~learn.monitor.gear_monitor.GearMonitor` and :func:`write_outputs` writes
+``summary.json``, ``report.md`` and ``health.png``; :func:`event_line` is the one line of
+each event (:meth:`StreamResult.events`) that the report and ``swgsim-monitor`` print.
 """
 
 from __future__ import annotations
@@ -53,6 +55,9 @@ class StreamResult:
     onset_h : float or None
         The stream's true fault onset, where it records one (a simulated life).
     true_fault : str or None
+    threshold : float
+        h, the alarm threshold the rule used (:func:`learn.monitor.rule.threshold` at the
+        stream's median window spacing, :func:`check_stream`); what the outputs report.
     recommissioned : list of dict
         Where the monitor recommissioned an operating point at a load that stayed beyond
         commissioning's (:func:`recommissionings`).
@@ -64,6 +69,7 @@ class StreamResult:
     n_commissioning: int
     onset_h: float | None
     true_fault: str | None
+    threshold: float
     recommissioned: list[dict] = field(default_factory=list)
 
     def events(self) -> list[dict]:
@@ -75,6 +81,46 @@ class StreamResult:
         ev += [{"kind": "advisory", **a} for a in self.advisories]
         ev += [{"kind": "recommissioned", **a} for a in self.recommissioned]
         return sorted(ev, key=lambda e: e["hour"])
+
+
+#: The kinds of event :meth:`StreamResult.events` gives, each printed by :func:`event_line`.
+EVENT_KINDS = ("gear_fault", "sensor_fault", "advisory", "recommissioned")
+
+
+def event_line(event: dict) -> str:
+    """One line saying what an event of :meth:`StreamResult.events` is, by its kind.
+
+    Parameters
+    ----------
+    event : dict
+        ``kind`` (one of :data:`EVENT_KINDS`), ``hour`` and the kind's own entries: an
+        alarm's (:meth:`~learn.monitor.gear_monitor.Alarm.as_dict`), an advisory's
+        ``advice`` (:func:`advisories`), a recommissioning's ``note``
+        (:func:`recommissionings`).
+
+    Returns
+    -------
+    str
+        E.g. ``alarm at 6.20 h: eccentric_wg (at the alarm: eccentric_wg), severity 0.1
+        [0.08, 0.12]``, ``advisory at 30.00 h: ...``, ``recommissioned at 37.10 h: ...``.
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not one of :data:`EVENT_KINDS`.
+    """
+    kind, hour = event.get("kind"), float(event["hour"])
+    if kind in ("gear_fault", "sensor_fault"):
+        where = (f" on bridge {event['bridge']} (check that gauge)"
+                 if kind == "sensor_fault" else "")
+        return (f"alarm at {hour:.2f} h: {event['fault']}{where} (at the alarm: "
+                f"{event['fault_at_alarm']}), severity {event['severity']:.3g} "
+                f"[{event['severity_low']:.3g}, {event['severity_high']:.3g}]")
+    if kind == "advisory":
+        return f"advisory at {hour:.2f} h: {event['advice']}"
+    if kind == "recommissioned":
+        return f"recommissioned at {hour:.2f} h: {event['note']}"
+    raise ValueError(f"event kind: {kind!r} is not one of {list(EVENT_KINDS)}")
 
 
 def select_gear(ds, gear: int | None):
@@ -101,7 +147,8 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
     Raises
     ------
     ValueError
-        One line naming the stream and what is wrong, with the allowed values.
+        One line naming the stream and what is wrong, with the allowed values (also a
+        stream that is all commissioning: nothing to monitor).
     """
     for v in ("hour", "commissioning"):
         if v not in ds:
@@ -120,6 +167,9 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
     if not comm.any() or not comm[0] or np.any(np.diff(comm.astype(int)) > 0):
         raise ValueError(f"{source}: the commissioning windows must be the first ones and "
                          f"there must be some (found {int(comm.sum())})")
+    if comm.all():
+        raise ValueError(f"{source}: all {comm.size} windows are commissioning; the stream "
+                         "has no windows after commissioning to monitor")
     sensors = [str(s) for s in ds["sensor"].values]
     if sensors != ["s0", "s1", "s2", "s3", "s4"]:
         raise ValueError(f"{source}: bridges {sensors}; the model was trained on s0..s4")
@@ -206,7 +256,8 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     on = np.flatnonzero((fault != "healthy") & (fault != "unknown"))  # a recording: unknown
     return StreamResult(tr, alarms, advisories(tr, mon), n_c,
                         float(hours[on[0]]) if on.size else None,
-                        str(fault[on[0]]) if on.size else None, recommissionings(tr, mon))
+                        str(fault[on[0]]) if on.size else None, mon.h,
+                        recommissionings(tr, mon))
 
 
 def recommissionings(tr: Trace, mon: GearMonitor) -> list[dict]:
@@ -254,8 +305,9 @@ def advisories(tr: Trace, mon: GearMonitor, clear_h: float = 1.0) -> list[dict]:
     return out
 
 
-def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> dict[str, Path]:
-    """``summary.json``, ``report.md`` and ``health.png`` (module docstring)."""
+def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Path]:
+    """``summary.json``, ``report.md`` and ``health.png`` (module docstring), each with
+    the threshold the rule used (:attr:`StreamResult.threshold`)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -263,6 +315,7 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
 
     from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
+    h = res.threshold
     out_dir.mkdir(parents=True, exist_ok=True)
     summary = {"stream": source, "alarms": [a.as_dict() for a in res.alarms],
                "events": res.events(), "threshold": h,
@@ -292,18 +345,9 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
     lines = [f"# Monitor report: {source}", "",
              f"{res.n_commissioning} commissioning windows, {tr.s.size} monitored; alarm "
              f"threshold h = {h:.2f}.", ""]
-    if res.alarms:
-        for a in res.alarms:
-            where = f" on bridge {a.bridge} (check that gauge)" if a.bridge else ""
-            lines.append(f"- alarm at {a.hour:.2f} h: **{a.fault}**{where} (at the alarm: "
-                         f"{a.fault_at_alarm}), severity {a.severity:.3g} "
-                         f"[{a.severity_low:.3g}, {a.severity_high:.3g}]")
-    else:
+    if not res.alarms:
         lines.append("- no alarm")
-    for a in res.advisories:
-        lines.append(f"- advisory at {a['hour']:.2f} h: {a['advice']}")
-    for a in res.recommissioned:
-        lines.append(f"- recommissioned at {a['hour']:.2f} h: {a['note']}")
+    lines += [f"- {event_line(e)}" for e in res.events()]
     if res.onset_h is not None:
         lines += ["", f"Ground truth in the stream: {res.true_fault} from {res.onset_h:.2f} h."]
     lines += ["", "![health indicators](health.png)", ""]
@@ -312,5 +356,5 @@ def write_outputs(res: StreamResult, out_dir: Path, h: float, source: str) -> di
                                         ("figure", "health.png"))}
 
 
-__all__ = ["CONDITIONS", "StreamResult", "advisories", "check_stream", "monitor_stream",
-           "recommissionings", "select_gear", "write_outputs"]
+__all__ = ["CONDITIONS", "EVENT_KINDS", "StreamResult", "advisories", "check_stream",
+           "event_line", "monitor_stream", "recommissionings", "select_gear", "write_outputs"]

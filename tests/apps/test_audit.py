@@ -303,6 +303,8 @@ STREAM_CASES = {
         ds.sizes["sample"], bool))), "commissioning windows must be the first"),
     "commissioning late": (lambda ds: ds.assign(commissioning=("sample", np.r_[
         False, ds["commissioning"].values[1:]])), "commissioning windows must be the first"),
+    "all commissioning": (lambda ds: ds.assign(commissioning=("sample", np.ones(
+        ds.sizes["sample"], bool))), "has no windows after commissioning to monitor"),
     "a bridge missing": (lambda ds: ds.isel(sensor=[0, 1, 2, 3]), "bridges"),
     "no hour variable (a grid data set)": (lambda ds: ds.drop_vars("hour"), "'hour'"),
     "sample rate off": (lambda ds: ds.assign_attrs(sample_rate_hz=2 * ds.attrs[

@@ -424,3 +424,36 @@ def test_commissioning_tracks_a_running_in_gear_friction(tiny_eval):
     np.testing.assert_allclose(std[False, 0.5], std[False, 0.0], rtol=0.05)
     assert fr[True, 0.5] < 0.98 and abs(fr[False, 0.5] - 1.0) < 0.01
     assert fr[True, 0.0] == fr[False, 0.0] == 1.0
+
+
+def test_every_event_kind_is_printed_in_one_line():
+    """Each kind :meth:`StreamResult.events` gives (alarms of a gear and of a sensor
+    fault, advisories, recommissionings) is one line by :func:`event_line`, which the app
+    and report.md print; a kind it does not know is refused naming the kinds (issue 43,
+    cause 1: a recommissioning printed as an alarm raised KeyError: 'fault')."""
+    from learn.monitor.gear_monitor import Alarm
+    from learn.monitor.stream import EVENT_KINDS, StreamResult, event_line
+
+    gear = Alarm(6.2, 10, 4, "eccentric_wg", "eccentric_wg", 0.1, 0.08, 0.12)
+    sensor = Alarm(7.0, 20, 18, "sensor_offset_step", "sensor_offset_step", 0.05, 0.04,
+                   0.06, bridge="s1")
+    adv = {"hour": 5.0, "index": 2, "condition": "temperature",
+           "operating_point": [4000.0, 7.0], "friction_factor": 1.0,
+           "advice": "the temperature left what commissioning saw at 4000 rpm, 7 N m: "
+                     "recommission the monitor"}
+    rec = {"hour": 8.0, "index": 30, "operating_point": [4000.0, 7.0], "relearnt": False,
+           "load_range_nm": [7.0, 7.7], "note": "the load at 4000 rpm, 7 N m stayed beyond"}
+    res = StreamResult(None, [gear, sensor], [adv], 10, None, None, 12.3, [rec])
+    events = res.events()
+    assert sorted({e["kind"] for e in events}) == sorted(EVENT_KINDS)
+    lines = [event_line(e) for e in events]
+    assert all("\n" not in s for s in lines)
+    assert lines == [
+        f"advisory at 5.00 h: {adv['advice']}",
+        "alarm at 6.20 h: eccentric_wg (at the alarm: eccentric_wg), severity 0.1 "
+        "[0.08, 0.12]",
+        "alarm at 7.00 h: sensor_offset_step on bridge s1 (check that gauge) (at the alarm: "
+        "sensor_offset_step), severity 0.05 [0.04, 0.06]",
+        f"recommissioned at 8.00 h: {rec['note']}"]
+    with pytest.raises(ValueError, match=r"event kind: 'x' is not one of \['gear_fault'"):
+        event_line({"kind": "x", "hour": 1.0})

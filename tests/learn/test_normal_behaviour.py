@@ -163,3 +163,30 @@ def test_friction_outside_the_range_commissioning_tracked(commissioned):
     bits = nb.outside(p, cond, fr) & OUTSIDE_FRICTION
     np.testing.assert_array_equal(bits != 0, np.resize([False, True, False, False, True],
                                                        len(p)))
+
+
+def test_a_constant_commissioning_temperature_keeps_its_range_widened_by_the_uncertainty():
+    """Commissioning at one temperature (a spread below MIN_SPREAD_K: no temperature
+    terms) still has a temperature range, its readings' widened by the sensor's
+    uncertainty: a window beyond it is outside and not judged, without the margin the
+    fitted law gets (issue 43, cause 2: temperature was never outside there)."""
+    from learn.monitor.normal import MIN_SPREAD_K, OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
+
+    rng = np.random.default_rng(4)
+    tq = np.repeat([7.0, 39.0, 70.0], 20)
+    temp = 30.0 + rng.uniform(-0.1, 0.1, tq.size)
+    assert np.ptp(temp) < MIN_SPREAD_K
+    pts = np.stack([np.full(tq.size, 4000.0), tq], axis=1)
+    cfg = NormalConfig(temperature_uncertainty_k=0.3)
+    nb = NormalBehaviour.fit(_features(tq, rng), pts, Conditions(tq, temp), cfg)
+    assert not nb.temperature_law
+    for k in range(3):
+        t = temp[tq == nb.points[k, 1]]
+        np.testing.assert_allclose(nb.temp_range[k], [t.min() - 0.3, t.max() + 0.3])
+    hi = nb.temp_range[0, 1]  # of the point probed, 4000 rpm, 7 N m
+    probe = np.array([30.0, hi - 0.01, hi + 0.05, 80.0])
+    out = nb.outside(np.repeat(pts[:1], 4, axis=0), Conditions(np.full(4, 7.0), probe), 1.0)
+    assert [int(o) for o in out] == [0, 0, OUTSIDE_TEMPERATURE | OUTSIDE_UNJUDGED,
+                                     OUTSIDE_TEMPERATURE | OUTSIDE_UNJUDGED]
+    with pytest.raises(ValueError, match="normal.temperature_uncertainty_k"):
+        NormalConfig(temperature_uncertainty_k=-1.0).check("normal")

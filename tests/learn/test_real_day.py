@@ -90,3 +90,94 @@ def test_temperature_outside_its_range_is_refused_naming_the_window(model, healt
     ds["temperature_c"].values[100] = 400.0
     with pytest.raises(ValueError, match=r"window 100 is 400 °C; allowed: finite, in \[-40"):
         monitor_stream(ds, model, RuleConfig(), source="day")
+
+
+def _hot_after_commissioning(day):
+    """The preset's healthy gear commissioned at a constant 30 °C (the hall at 30 °C, no
+    warm-up, no stops, no run-in, no new tool) that runs at 80 °C from 24.1 h on: the
+    grease and the bridges at 80 °C (issue 43, cause 2)."""
+    from swgsim.gear.thermal import JointThermal
+
+    p, bank = day
+    life = p.config.life
+    hot = JointThermal(r_th_k_per_w=1e-6, tau_min=0.1, ambient_c=30.0, ambient_swing_k=0.0,
+                       ambient_points=[[0.0, 0.0], [24.0, 0.0], [24.1, 50.0]],
+                       run_h_per_day=24.0)
+    cond = dataclasses.replace(life.conditions, thermal=hot, run_in=None, payload=[])
+    return life_dataset(LifeSimulator(p, 3, dataclasses.replace(
+        life, hours=28.0, conditions=cond), bank))
+
+
+def test_a_joint_commissioned_at_one_temperature_is_advised_not_alarmed_when_hot(model, day):
+    """Commissioning's temperature varied by less than the fit's least spread (2 K): the
+    temperature's range is still commissioning's, widened by the sensor's uncertainty;
+    at 80 °C every window is outside it, advised once, and not judged (no gear-fault
+    alarm: the eccentric WG this case raised before)."""
+    from learn.monitor.normal import OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
+
+    ds = _hot_after_commissioning(day)
+    t, comm = ds["temperature_c"].values, ds["commissioning"].values
+    assert np.ptp(t[comm]) < 2.0 and abs(t[comm].mean() - 30.0) < 0.5
+    assert (t[~comm][ds["hour"].values[~comm] > 25.0] > 79.0).all()
+    res = monitor_stream(ds, model, RuleConfig(), source="hot")
+    assert res.alarms == []
+    assert [a["condition"] for a in res.advisories][:1] == ["temperature"]
+    assert 24.0 <= res.advisories[0]["hour"] <= 24.5
+    hot = res.trace.hour > 25.0
+    assert (res.trace.outside[hot] & OUTSIDE_TEMPERATURE).all()
+    assert (res.trace.outside[hot] & OUTSIDE_UNJUDGED).all()
+    assert (res.trace.p[hot] == 1.0).all()  # not judged: the CUSUMs hold
+    assert (np.diff(res.trace.cusums[hot], axis=0) == 0.0).all()
+
+
+def test_the_threshold_reported_is_the_one_the_rule_used(model, healthy, tmp_path):
+    """An unevenly spaced stream (window 1 missing: its first spacing 4 min, the median
+    2 min): the result, summary.json and report.md carry h of the median spacing, the
+    rule's, not of the first two windows' (issue 43, cause 5)."""
+    import json
+
+    from learn.monitor.rule import threshold
+    from learn.monitor.stream import write_outputs
+
+    ds = healthy.isel(sample=np.r_[0, 2:healthy.sizes["sample"]])
+    hours = ds["hour"].values
+    assert (hours[1] - hours[0]) * 60 == pytest.approx(4.0)
+    res = monitor_stream(ds, model, RuleConfig(), source="uneven")
+    used = threshold(RuleConfig(), 60 * float(np.median(np.diff(hours))))
+    assert res.threshold == used != threshold(RuleConfig(), 4.0)
+    write_outputs(res, tmp_path, "uneven")
+    assert json.loads((tmp_path / "summary.json").read_text())["threshold"] == used
+    assert f"alarm threshold h = {used:.2f}." in (tmp_path / "report.md").read_text()
+
+
+def test_the_monitor_app_ends_well_on_a_day_with_recommissioned_points(model, tmp_path):
+    """swgsim-monitor on the preset tiny_real_day as swgsim-generate writes it (the heavier
+    tool's points recommissioned): every event printed by its kind, exit 0 (it printed a
+    recommissioning as an alarm and ended in KeyError: 'fault', issue 43, cause 1)."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from learn.monitor.model_io import save_model
+    from swgsim.datasets.generate import generate
+
+    generate(dataset_config(dataset_preset("tiny_real_day")), tmp_path / "day", n_jobs=1,
+             progress=False)
+    m = save_model(model, tmp_path / "model", [{"name": "tiny_bench"}])
+    run = subprocess.run(
+        [sys.executable, "-m", "swgcli.monitor", f"stream={tmp_path / 'day'}",
+         f"diagnosis_model={m}", f"out_dir={tmp_path / 'out'}", "~logger",
+         f"hydra.run.dir={tmp_path / 'hydra'}"],
+        capture_output=True, text=True, env={**os.environ, "HYDRA_FULL_ERROR": "0"},
+        timeout=600)
+    assert run.returncode == 0, run.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    kinds = [e["kind"] for e in summary["events"]]
+    assert "recommissioned" in kinds and "advisory" in kinds
+    lines = run.stdout.splitlines()
+    assert f"alarm threshold h = {summary['threshold']:.2f}" in lines
+    assert sum(s.startswith("recommissioned at ") for s in lines) == kinds.count(
+        "recommissioned")
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert report.count("- recommissioned at ") == kinds.count("recommissioned")
