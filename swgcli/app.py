@@ -26,6 +26,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import signal
@@ -35,6 +36,9 @@ from typing import Any
 
 from swgcli import CONF_DIR
 from swgsim.files.ownership import forget_stops
+
+#: the flags that ask for an app's help (:func:`app_help`)
+HELP_FLAGS = ("--help", "-h")
 
 
 class Terminated(KeyboardInterrupt):
@@ -231,8 +235,8 @@ def one_line(exc: BaseException) -> str | None:
         key = getattr(cause, "full_key", None) or "?"
         typ = getattr(cause, "object_type", None)
         allowed = ""
-        if typ is not None and hasattr(typ, "__dataclass_fields__"):
-            allowed = "; allowed: " + ", ".join(typ.__dataclass_fields__)
+        if typ is not None and dataclasses.is_dataclass(typ):  # ClassVars are no keys
+            allowed = "; allowed: " + ", ".join(f.name for f in dataclasses.fields(typ))
         return f"{key}: unknown key{allowed}"
     if isinstance(cause, MissingMandatoryValue):
         key = getattr(cause, "full_key", None) or "?"
@@ -311,6 +315,75 @@ def _stop(prog: str, code: int) -> None:
     sys.exit(code)
 
 
+def config_groups(cfg: Any) -> dict[str, list[str]]:
+    """The config groups an app accepts and their options, as its ``--help`` lists them.
+
+    A group is accepted when the app's config composes it (Hydra's
+    ``hydra.runtime.choices``, the key as a user overrides it: ``dataset``,
+    ``dataset@datasets.bench``); Hydra's own groups (``hydra/...``) are left to
+    ``--hydra-help``, and a group the app's defaults do not name is refused by its schema.
+
+    Parameters
+    ----------
+    cfg : omegaconf.DictConfig
+        The app's config composed with ``return_hydra_config=True``.
+
+    Returns
+    -------
+    dict of str to list of str
+        Override key -> option names (``conf/<group>/*.yaml`` and the schemas registered
+        in Hydra's ConfigStore), sorted.
+    """
+    from hydra.core.config_store import ConfigStore
+
+    repo = ConfigStore.instance().repo
+    keys = [k for k in cfg.hydra.runtime.choices if not k.startswith("hydra/")]
+    groups = {}
+    for key in keys:
+        group = key.split("@")[0]
+        names = {n.removesuffix(".yaml") for n in repo.get(group, {})}
+        folder = os.path.join(CONF_DIR, group)
+        if os.path.isdir(folder):
+            names |= {f.removesuffix(".yaml") for f in os.listdir(folder)
+                      if f.endswith(".yaml")}
+        groups[key] = sorted(names)
+    return groups
+
+
+def app_help(config_name: str, overrides: list[str]) -> str:
+    """An app's ``--help``: its header, the config groups it accepts
+    (:func:`config_groups`), its config with the command line's overrides, its footer.
+
+    Hydra's own help lists every group in the search path, those an app refuses among
+    them, and takes seconds to find their options; this one composes the config once.
+
+    Parameters
+    ----------
+    config_name : str
+        Primary config in ``conf/``.
+    overrides : list of str
+        The command line's overrides (``key=value``), applied to the config shown.
+
+    Raises
+    ------
+    hydra.errors.ConfigCompositionException, OverrideParseException
+        An override Hydra refuses (reported in one line by :func:`run`).
+    """
+    from hydra import compose, initialize_config_dir
+    from omegaconf import OmegaConf
+
+    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
+        cfg = compose(config_name=config_name, overrides=overrides,
+                      return_hydra_config=True)
+    groups = config_groups(cfg)
+    listed = "\n".join(f"{k}: {', '.join(v)}" for k, v in groups.items()) or "(none)"
+    shown = OmegaConf.to_yaml(OmegaConf.masked_copy(cfg, [k for k in cfg if k != "hydra"]))
+    head, foot = cfg.hydra.help.header, cfg.hydra.help.footer
+    return (f"{head}\n== Configuration groups ==\nCompose your configuration from those "
+            f"groups (group=option)\n\n{listed}\n\n== Config ==\nOverride anything in "
+            f"the config (foo.bar=value)\n\n{shown}\n{foot}")
+
+
 def hydra_app(config_name: str, schema: type, prog: str):
     """Decorator: a task function ``task(cfg)`` as a console entry point ``main()``.
 
@@ -352,7 +425,11 @@ def hydra_app(config_name: str, schema: type, prog: str):
         def entry():
             from swgcli.schema import check_renamed
 
-            check_renamed([a for a in sys.argv[1:] if not a.startswith("-")], config_name)
+            args = sys.argv[1:]
+            check_renamed([a for a in args if not a.startswith("-")], config_name)
+            if any(a in HELP_FLAGS for a in args):  # Hydra's own takes seconds (app_help)
+                print(app_help(config_name, [a for a in args if a not in HELP_FLAGS]))
+                return
             failed.clear()  # a run in the same process reports its own error
             _hydra_main()
             if failed:

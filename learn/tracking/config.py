@@ -16,7 +16,9 @@ class LoggerConfig:
         None: ``$MLFLOW_TRACKING_URI``, else ``sqlite:///<repo>/mlflow.db``
         (:func:`learn.tracking.store.default_tracking_uri`).
     experiment, run_name : str
-        MLflow experiment and run name; interpolations of the app's config.
+        MLflow experiment and run name; interpolations of the app's config (the protocol,
+        the features and the model of ``swgsim-train``; an app without them, e.g.
+        ``swgsim-monitor logger=mlflow``, gets ``swgsim`` and ``run``).
     confusion_plot : bool
         Store the confusion matrix as a figure.
     log_models : bool
@@ -28,7 +30,7 @@ class LoggerConfig:
     """
 
     tracking_uri: str | None = None
-    experiment: str = "${protocol.name}"
-    run_name: str = "${features.name}-${model.name}"
+    experiment: str = "${oc.select:protocol.name,swgsim}"
+    run_name: str = "${oc.select:features.name,run}-${oc.select:model.name,run}"
     confusion_plot: bool = True
     log_models: bool = True
