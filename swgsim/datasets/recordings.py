@@ -206,7 +206,7 @@ def _hours(s: Samples, m: RecordingMapping, starts: np.ndarray, seg: np.ndarray,
     if bad.size:  # only with a clock column: the time column alone never goes back
         k = int(bad[0]) + 1
         raise ValueError(f"{rt.column_name(m.clock.column, 'clock.column')}, "
-                         f"{rt.rowrt.column_name(int(w0[k]), s.fmt)}: the window there is at "
+                         f"{rt.row_name(int(w0[k]), s.fmt)}: the window there is at "
                          f"{hour[k]:.6f} h, not after the one before ({hour[k - 1]:.6f} h): the "
                          "clock must count operating time (a segment begins before the "
                          "previous one ended)")

@@ -202,6 +202,25 @@ def test_the_small_table_imports(tmp_path):
     assert read_mapping(yml).window_s == N_T / FS
 
 
+def test_bursts_overlapping_in_clock_hours_refused_naming_the_row(tmp_path):
+    """Clock-hour path (issue 43, cause 6): a burst of three windows at 1 min and the next
+    burst's clock 0.1 s later, inside the first burst's span (the clock is not operating
+    time): refused in one line naming the clock column and the row, not AttributeError."""
+    df, mapping = small()
+    del mapping["input_angle"], mapping["output_angle"]  # a burst repeated: not its angles
+    bursts = [df.iloc[k * N_T:(k + 1) * N_T].copy() for k in range(8)]
+    long = pd.concat([bursts[1]] * 3, ignore_index=True)  # three windows at 1/60 h
+    long["time_s"] = bursts[1]["time_s"].iloc[0] + np.arange(3 * N_T) / FS
+    bursts[2]["hours"] = 1 / 60 + 0.1 / 3600  # 0.1 s after it began: before it ended
+    df = pd.concat([bursts[0], long, *bursts[2:]], ignore_index=True)
+    rec, yml = _write(df, mapping, tmp_path)
+    with pytest.raises(ValueError, match=r"column 'hours' \(clock.column\), row 320 "
+                       r"\(line 322\): the window there is at 0.016694 h, not after the "
+                       r"one before \(0.016711 h\)") as info:
+        import_recording(rec, yml, tmp_path / "stream")
+    assert "\n" not in str(info.value) and not (tmp_path / "stream").exists()
+
+
 def test_a_continuous_recording_cut_one_window_per_interval(tmp_path):
     """30 s without a clock column (the time counts), a stretch at another speed from 10 s
     to 13 s: the windows touching it are left out and counted; one window taken every
