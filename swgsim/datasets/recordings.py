@@ -73,7 +73,7 @@ from swgsim.datasets.schema import (
     write_shard,
 )
 from swgsim.files import ownership
-from swgsim.files.digest import config_digest, sha256_file
+from swgsim.files.digest import config_digest
 from swgsim.files.ownership import atomic_write_json
 from swgsim.files.provenance import git_revision, library_versions, package_version
 from swgsim.gear.profile import MAX_INPUT_SPEED_RPM, MOMENTARY_PEAK_TORQUE_NM
@@ -104,6 +104,7 @@ class Samples:
     p_in_w: np.ndarray | None
     p_out_w: np.ndarray | None
     fmt: str
+    sha256: str  # of the bytes parsed (read once: a file changed meanwhile is not mixed in)
 
 
 def read_samples(path: str | os.PathLike, m: RecordingMapping,
@@ -122,7 +123,7 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
         :data:`TEMPERATURE_RANGE_C`.
     """
     cols = {c: k for k, c in mapping_columns(m).items()}
-    df, fmt = rt.read_table(path, cols, max_bytes, progress)
+    df, fmt, digest = rt.read_table(path, cols, max_bytes, progress)
     stamp = m.clock.column if m.clock is not None and m.clock.unit == "datetime" else None
     v = {c: (rt.datetime_seconds if c == stamp else rt.numeric)(df, c, k, fmt)
          for c, k in cols.items()}
@@ -159,7 +160,7 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
     return Samples(v[m.time], clock, mvv, speed, v[m.torque], angle(m.input_angle),
                    angle(m.output_angle), temp,
                    None if m.power is None else v[m.power.input],
-                   None if m.power is None else v[m.power.output], fmt)
+                   None if m.power is None else v[m.power.output], fmt, digest)
 
 
 # ------------------------------------------------------------------ windows and the stream
@@ -317,7 +318,7 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
             "reference": np.zeros(win.size, bool), "efficiency": eff,
             "n_in_mean_rpm": info.pop("mean_rpm"), "t_out_mean_nm": info.pop("mean_nm")}
     config = {"name": f"recording {p.name}", "recording": {"file": p.name, "rows": int(n),
-                                                           "sha256": sha256_file(p)},
+                                                           "sha256": s.sha256},
               "mapping": dataclasses.asdict(m),
               "chain": {"sample_rate_hz": fs, "window_s": n_t / fs}}
     if m.input_angle is not None:  # the input sensor, as a profile data set names it

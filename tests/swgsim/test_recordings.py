@@ -439,3 +439,52 @@ def test_out_dir_foreign_file_refused_and_our_stream_replaced_only_with_overwrit
     second = import_recording(rec, yml, tmp_path / "stream", overwrite=True)
     assert second["content_sha256"] != first["content_sha256"]
     assert load(tmp_path / "stream")["commissioning"].values.sum() == 5
+
+
+@pytest.mark.parametrize("name", ["rec.parquet", "rec.csv"])
+def test_a_table_is_bounded_by_its_cells_before_it_is_parsed(tmp_path, monkeypatch, name):
+    """Issue 43, cause 7b: a Parquet file compresses a long constant table to almost
+    nothing (50 MiB ran out of 4 GB): rows times mapped columns, from the Parquet metadata
+    or the CSV's line count, are checked against the cell limit before anything is parsed."""
+    import swgsim.datasets.recording_table as rt
+
+    df, mapping = small()
+    df = pd.concat([df] * 40, ignore_index=True)  # 25 600 rows of 14 mapped columns
+    rec, yml = _write(df, mapping, tmp_path, name)
+    monkeypatch.setattr(rt, "MAX_TABLE_CELLS", 100_000)
+
+    def no_parse(*a, **k):
+        raise AssertionError("parsed before the cell limit was checked")
+    monkeypatch.setattr(pd, "read_parquet", no_parse)
+    monkeypatch.setattr(pd, "read_csv", lambda *a, nrows=None, **k: (
+        pd.DataFrame(columns=df.columns) if nrows == 0 else no_parse()))
+    with pytest.raises(ValueError, match=r"rec\.\w+: 25600 rows of 14 mapped columns are "
+                       r"358400 values, more than the 100000 read") as info:
+        import_recording(rec, yml, tmp_path / "stream")
+    assert "\n" not in str(info.value) and not (tmp_path / "stream").exists()
+
+
+def test_the_recording_is_hashed_from_the_bytes_parsed(tmp_path, monkeypatch):
+    """Issue 43, cause 8: a recording appended to, then replaced, right after it was read:
+    the stream records the SHA-256 of the bytes it was made of, not of the file found later."""
+    import hashlib
+
+    import swgsim.datasets.recording_table as rt
+
+    df, mapping = small()
+    rec, yml = _write(df, mapping, tmp_path)
+    before = rec.read_bytes()
+    read = rt._read_bytes
+
+    def then_changed(p, max_bytes):
+        data = read(p, max_bytes)
+        with open(p, "ab") as f:
+            f.write(b"1,2,3\n")  # appended to ...
+        (tmp_path / "new.csv").write_bytes(data[: len(data) // 2])
+        (tmp_path / "new.csv").replace(p)  # ... then replaced
+        return data
+    monkeypatch.setattr(rt, "_read_bytes", then_changed)
+    import_recording(rec, yml, tmp_path / "stream")
+    cfg = json.loads(load(tmp_path / "stream").attrs["config"])
+    assert cfg["recording"]["sha256"] == hashlib.sha256(before).hexdigest()
+    assert cfg["recording"]["sha256"] != hashlib.sha256(rec.read_bytes()).hexdigest()
