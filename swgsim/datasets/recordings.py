@@ -353,6 +353,21 @@ def _survey(out: Path, overwrite: bool) -> ownership.Survey:
     return found
 
 
+def _unchanged_since(out: Path, found: ownership.Survey) -> None:
+    """Under the claim of ``out`` (no other run can write there now): refuse if a file
+    appeared, changed or went since ``found`` was surveyed, before the import's long read
+    (another import into the same folder finished meanwhile, issue 43); nothing replaced."""
+    now = ownership.survey(out)
+    changed = sorted({*now.foreign, *(r for r in {*now.owned, *found.owned}
+                                      if now.owned.get(r) != found.owned.get(r))})
+    if changed:
+        more = f" and {len(changed) - 1} more file(s)" if len(changed) > 1 else ""
+        raise ValueError(f"out_dir {out}: {changed[0]}{more} written there by another run "
+                         "since this import checked the folder; nothing was replaced: "
+                         "import again (with overwrite=true to replace it) or choose "
+                         "another out_dir")
+
+
 def write_stream(ds, out_dir: str | os.PathLike, overwrite: bool = False,
                  found: ownership.Survey | None = None) -> dict:
     """Write a stream of :func:`recording_stream` as a data set: its shard, sidecar and
@@ -377,13 +392,16 @@ def write_stream(ds, out_dir: str | os.PathLike, overwrite: bool = False,
     ------
     ValueError
         ``out_dir`` holds a file this project cannot show it wrote (named), or files of
-        this project without ``overwrite``; before anything is touched.
+        this project without ``overwrite``; before anything is touched. Or, checked again
+        under the folder's claim right before writing, a file written, changed or removed
+        there since ``found`` was made (another run's); nothing replaced.
     """
     out = Path(out_dir)
     found = _survey(out, overwrite) if found is None else found
     cfg = json.loads(ds.attrs["config"])
     name, chash = str(ds.attrs["shard"]), config_digest(cfg)
     with ownership.claim(out, APP, found=found, strict=True) as claim:
+        _unchanged_since(out, found)
         if found.owned:
             claim.remove(found.owned)
         entry = {"sha256": write_shard(ds, out / name), "n_samples": int(ds.sizes["sample"]),

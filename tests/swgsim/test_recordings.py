@@ -488,3 +488,41 @@ def test_the_recording_is_hashed_from_the_bytes_parsed(tmp_path, monkeypatch):
     cfg = json.loads(load(tmp_path / "stream").attrs["config"])
     assert cfg["recording"]["sha256"] == hashlib.sha256(before).hexdigest()
     assert cfg["recording"]["sha256"] != hashlib.sha256(rec.read_bytes()).hexdigest()
+
+
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_two_imports_into_one_folder_one_wins_the_other_is_refused(tmp_path, monkeypatch,
+                                                                   overwrite):
+    """Issue 43, cause 4: the slow import surveys out_dir, then, during its long read, a
+    fast one imports into the same folder and finishes; the slow one is refused in one line
+    when it comes to write (the folder checked again under its claim), and the fast one's
+    stream is left as it was, with or without overwrite=true."""
+    from swgsim.datasets import recordings
+
+    df, mapping = small()
+    rec, yml = _write(df, mapping, tmp_path)
+    other = dict(mapping, commissioning_h=4.5 / 60)  # another stream
+    (tmp_path / "other.yaml").write_text(yaml.safe_dump(other))
+    out = tmp_path / "stream"
+    if overwrite:
+        import_recording(rec, yml, out)  # a stream of this project there already
+    read = recordings.recording_stream
+    won = {}
+
+    def slow_read(*a, **k):
+        monkeypatch.setattr(recordings, "recording_stream", read)
+        won["summary"] = import_recording(rec, tmp_path / "other.yaml", out,
+                                          overwrite=overwrite)  # the fast one, meanwhile
+        won["files"] = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()
+                        and not p.name.startswith(".swg-owner")}
+        return read(*a, **k)
+    monkeypatch.setattr(recordings, "recording_stream", slow_read)
+    with pytest.raises(ValueError, match=rf"^out_dir {out}: \S+ (and \d more file\(s\) )?"
+                       r"written there by another run since this import checked the "
+                       r"folder; nothing was replaced") as info:
+        import_recording(rec, yml, out, overwrite=overwrite)
+    assert "\n" not in str(info.value)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()
+            and not p.name.startswith(".swg-owner")} == won["files"]
+    assert load(out)["commissioning"].values.sum() == 5  # the fast one's stream
+    assert read_manifest(out)["content_sha256"] == won["summary"]["content_sha256"]
