@@ -16,6 +16,7 @@ import pandas as pd
 from learn.reports.transfer_report import model_rank, observable_share, row_label, summarise
 from learn.studies.protocols import OOD_PROTOCOLS
 from learn.studies.transfer import TargetSpec
+from swgsim.files.ownership import write_owned
 
 
 def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
@@ -62,7 +63,7 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
     fig.legend(list(handles.values()), list(handles.keys()), loc="outside lower center",
                ncol=3, fontsize=7, frameon=False)
     path = Path(path)
-    fig.savefig(path, dpi=130)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
     return path
 
 

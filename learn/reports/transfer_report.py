@@ -30,6 +30,7 @@ from learn.reports.transfer_picks import (
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import RunRef
 from learn.studies.transfer import TargetSpec
+from swgsim.files.ownership import write_owned
 
 _INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "Selection 3",
            "raw_res": "synchronous residual", "diff_res": "differenced residual",
@@ -431,7 +432,7 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     if timings:
         lines += _time_md(results, timings, run_times)
     path = Path(path)
-    path.write_text("\n".join(lines) + "\n")
+    write_owned(path, lambda tmp: tmp.write_text("\n".join(lines) + "\n"))
     return path
 
 

@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from swgsim.files.ownership import write_owned
+
 #: The bench's output inertia: flange and load coupling [kg m²]
 #: (:attr:`swgsim.gear.dynamics.GearParams.j_out_kgm2`, from a public simulation script of the
 #: same model structure).
@@ -162,7 +164,7 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
                  "the healthy 95th percentile (dotted: 5 %, chance)", fontsize=10)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
     return path
 
 

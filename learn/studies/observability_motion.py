@@ -28,12 +28,14 @@ the monitor accumulates evidence over windows and sees less than that.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
+from swgsim.files.ownership import write_owned
 
 #: Steady operating points of the ``steady`` view: (input speed [rpm], load [N m]), the
 #: robot profile's cruise speed order of magnitude at a light and a medium load.
@@ -281,7 +283,7 @@ def plot_motion_map(table: pd.DataFrame, path):
     axes[0].set_ylabel("fault windows beyond healthy p95 [%]")
     fig.legend(loc="lower center", ncol=3, fontsize=7, frameon=False)
     fig.tight_layout(rect=(0, 0.18, 1, 1))
-    fig.savefig(path, dpi=120)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=120))
     plt.close(fig)
     return path
 

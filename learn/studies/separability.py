@@ -32,6 +32,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from swgsim.files.ownership import write_owned
+
 
 def separation_records(ds, disturbed: bool = False, n_harmonics: int = 8,
                        ratio: float = 100.0) -> pd.DataFrame:
@@ -170,7 +172,7 @@ def plot_separability(sep: dict[str, np.ndarray], path: str | Path,
     ax.set_title(title)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
     return path
 
 
