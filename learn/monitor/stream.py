@@ -313,7 +313,7 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
+    from swgsim.files.ownership import atomic_write_bytes, atomic_write_json, write_owned
 
     h = res.threshold
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -340,7 +340,7 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
                                    if res.onset_h is not None else "")
     a1.set_title(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(out_dir / "health.png", dpi=130)
+    write_owned(out_dir / "health.png", lambda tmp: fig.savefig(tmp, format="png", dpi=130))
     plt.close(fig)
     lines = [f"# Monitor report: {source}", "",
              f"{res.n_commissioning} commissioning windows, {tr.s.size} monitored; alarm "

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
-from swgsim.files.ownership import atomic_write_bytes
+from swgsim.files.ownership import atomic_write_bytes, write_owned
 from swgsim.gear.faults import FAULTS
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
@@ -330,7 +330,7 @@ def _save(fig, path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
     plt.close(fig)
     return path
 

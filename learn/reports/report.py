@@ -27,6 +27,7 @@ from learn.reports.paper_results import (
     table_spec,
 )
 from swgsim.base.lazy import lazy_module
+from swgsim.files.ownership import write_owned
 from swgsim.gear.faults import display_name, fault_classes
 
 pd = lazy_module("pandas")
@@ -119,7 +120,7 @@ def write_tables(
         lines += ["## Run time", "", "| step | wall time [s] |", "|---|---:|"]
         lines += [f"| {k} | {v:.1f} |" for k, v in timings_s.items()] + [""]
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines))
+    write_owned(path, lambda tmp: tmp.write_text("\n".join(lines)))
     return path
 
 
@@ -243,7 +244,7 @@ def _fig6(t, sig, rows: list[int], faults: list[str], where: str, path: Path) ->
     axes[0].legend(fontsize=7, ncol=5, title="solid: healthy, dashed: faulty",
                    title_fontsize=7)
     fig.suptitle(f"Healthy and faulty sensor signals ({where})", fontsize=10)
-    fig.savefig(path, dpi=110)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=110))
     return path
 
 
@@ -269,7 +270,7 @@ def _fig7(t, sig, f_in, faults: list[str], where: str, path: Path) -> Path:
         ax.set_ylabel("DFT amplitude [mV/V]")
     axes[0].legend(fontsize=7)
     fig.suptitle(f"DFT of sensor signals ({where})", fontsize=10)
-    fig.savefig(path, dpi=110)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=110))
     return path
 
 
@@ -287,7 +288,7 @@ def _fig8(t, clean, dist, cls: str, where: str, path: Path) -> Path:
     ax.legend(fontsize=7, ncol=5, title="solid: clean, dashed: disturbed (eq. 10)",
               title_fontsize=7)
     ax.set_title(f"Clean and disturbed signals, {display_name(cls)} ({where})", fontsize=10)
-    fig.savefig(path, dpi=110)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=110))
     return path
 
 
@@ -327,10 +328,10 @@ def write_report(
     files = {"tables": write_tables(results, report_dir / "tables_vii_x.md", timings_s,
                                     dataset_path)}
     files["csv"] = report_dir / "results.csv"
-    results.to_csv(files["csv"], index=False)
+    write_owned(files["csv"], lambda tmp: results.to_csv(tmp, index=False))
     if confusion is not None:
         files["confusion"] = report_dir / "confusion.csv"
-        confusion.to_csv(files["confusion"], index=False)
+        write_owned(files["confusion"], lambda tmp: confusion.to_csv(tmp, index=False))
     if ds is not None:
         files.update(write_figures(ds, report_dir))
     log.info("report written to %s", report_dir)

@@ -34,6 +34,7 @@ from learn.reports.paper_results import (
 from learn.studies.tables import StudyOptions
 from swgsim.base.lazy import lazy_module
 from swgsim.datasets.config import DatasetConfig
+from swgsim.files.ownership import write_owned
 from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
 from swgsim.gear.faults import display_name
 
@@ -240,7 +241,7 @@ def recall_figure(rec: Mapping[str, pd.DataFrame], path: str | Path,
     fig.suptitle(f"Per-class recall of {model_label(model)} (dotted: chance)",
                  fontsize=10)
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=110))
     return path
 
 
@@ -377,7 +378,7 @@ def write_summary(
     found = {n: check_findings(our_cells(results[n])) for n in names}
     rec = {n: recall(confusion[n]) for n in names}
     files = {k: root / f for k, f in zip(("csv", "recall", "md"), SUMMARY_FILES, strict=True)}
-    cells.to_csv(files["csv"], index=False)
+    write_owned(files["csv"], lambda tmp: cells.to_csv(tmp, index=False))
     recall_figure(rec, files["recall"])
     sp = spread_table(spread or {})
 

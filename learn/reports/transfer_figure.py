@@ -15,6 +15,7 @@ from learn.reports.transfer_report import model_rank, observable_share, row_labe
 from learn.studies.protocols import OOD_PROTOCOLS
 from learn.studies.transfer import TargetSpec
 from swgsim.base.lazy import lazy_module
+from swgsim.files.ownership import write_owned
 
 pd = lazy_module("pandas")
 
@@ -63,7 +64,7 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
     fig.legend(list(handles.values()), list(handles.keys()), loc="outside lower center",
                ncol=3, fontsize=7, frameon=False)
     path = Path(path)
-    fig.savefig(path, dpi=130)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
     return path
 
 

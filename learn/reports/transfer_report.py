@@ -30,6 +30,7 @@ from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import RunRef
 from learn.studies.transfer import TargetSpec
 from swgsim.base.lazy import lazy_module
+from swgsim.files.ownership import write_owned
 
 pd = lazy_module("pandas")
 
@@ -433,7 +434,7 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     if timings:
         lines += _time_md(results, timings, run_times)
     path = Path(path)
-    path.write_text("\n".join(lines) + "\n")
+    write_owned(path, lambda tmp: tmp.write_text("\n".join(lines) + "\n"))
     return path
 
 

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
+from swgsim.files.ownership import write_owned
 
 pd = lazy_module("pandas")
 
@@ -165,7 +166,7 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
                  "the healthy 95th percentile (dotted: 5 %, chance)", fontsize=10)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
     return path
 
 

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
+from swgsim.files.ownership import write_owned
 
 pd = lazy_module("pandas")
 
@@ -173,7 +174,7 @@ def plot_separability(sep: dict[str, np.ndarray], path: str | Path,
     ax.set_title(title)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
     return path
 
 

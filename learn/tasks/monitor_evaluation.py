@@ -44,7 +44,7 @@ from swgsim.base.typed import allowed
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.plan import DatasetPlan, plan
 from swgsim.files import ownership
-from swgsim.files.ownership import atomic_write_json
+from swgsim.files.ownership import atomic_write_json, write_owned
 
 pd = lazy_module("pandas")
 joblib = lazy_module("joblib")
@@ -167,9 +167,9 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim) -> dict
     parts = _run_jobs(plans, jobs, mc, out)
     wall = time.perf_counter() - t0
     res, fa, curve = to_frames(parts)
-    res.to_csv(out / "results.csv", index=False)
-    fa.to_csv(out / "false_alarms.csv", index=False)
-    curve.to_csv(out / "tradeoff.csv", index=False)
+    write_owned(out / "results.csv", lambda tmp: res.to_csv(tmp, index=False))
+    write_owned(out / "false_alarms.csv", lambda tmp: fa.to_csv(tmp, index=False))
+    write_owned(out / "tradeoff.csv", lambda tmp: curve.to_csv(tmp, index=False))
     timing = {"wall_s": wall, "parts": [{k: p.get(k) for k in ("dataset", "held_out_gear",
                                                               "detector", "train_s",
                                                               "evaluate_s")} for p in parts]}

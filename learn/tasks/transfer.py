@@ -17,6 +17,7 @@ import numpy as np
 from learn.studies.transfer import TransferConfig, check_config, run_comparisons
 from learn.tasks.config import plain, typed_app
 from swgsim.base.lazy import lazy_module
+from swgsim.files.ownership import write_owned
 
 pd = lazy_module("pandas")
 
@@ -157,16 +158,16 @@ def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, tim
 
     files = dict(got.files)
     files["results"] = report_dir / "results.csv"
-    res.to_csv(files["results"], index=False)
+    write_owned(files["results"], lambda tmp: res.to_csv(tmp, index=False))
     files["confusion"] = report_dir / "confusion.csv"
-    conf.to_csv(files["confusion"], index=False)
+    write_owned(files["confusion"], lambda tmp: conf.to_csv(tmp, index=False))
     run_s = pd.concat(got.run_s, ignore_index=True) if got.run_s else None
     if run_s is not None:
         files["run_times"] = report_dir / "run_times.csv"
-        run_s.to_csv(files["run_times"], index=False)
+        write_owned(files["run_times"], lambda tmp: run_s.to_csv(tmp, index=False))
     if got.latency is not None and len(got.latency):
         files["latency"] = report_dir / "latency.csv"
-        got.latency.to_csv(files["latency"], index=False)
+        write_owned(files["latency"], lambda tmp: got.latency.to_csv(tmp, index=False))
     targets = {d: t for d, t in tc.targets.items() if d in set(res["dataset"])}
     files["table"] = write_table(res, conf, report_dir / "table.md", targets=targets,
                                  primary=tc.primary, separability=got.separability,

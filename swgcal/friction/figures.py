@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.files.ownership import write_owned
+
 from ..loop import CalibrationResult
 from ..periodogram import periodogram_peaks
 
@@ -301,7 +303,9 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
     for key, draw in (("velocity", _fig_velocity), ("position", _fig_position),
                       ("hysteresis", _fig_hysteresis), ("time", _fig_time),
                       ("overlay", _fig_overlay)):
-        draw(d).savefig(out / "figures" / f"{key}.png", dpi=dpi)
+        fig = draw(d)
+        write_owned(out / "figures" / f"{key}.png",
+                    lambda tmp, fig=fig: fig.savefig(tmp, format="png", dpi=dpi))
         files[key] = f"figures/{key}.png"
     log.info("figures written to %s", out / "figures")
     return files

@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.files.ownership import write_owned
+
 from ..loop import CalibrationResult
 from .report import order2_components
 from .signals import SENSORS, StrainSignals
@@ -47,7 +49,8 @@ def make_figures(result: CalibrationResult, out_dir: str | Path,
                       ("speed_load", _speed_load), ("overlay", _overlay)):
         fig = draw(plt, v)
         name = f"{key}.{fmt}"
-        fig.savefig(out / name, dpi=110, bbox_inches="tight")
+        write_owned(out / name, lambda tmp, fig=fig: fig.savefig(
+            tmp, format=fmt, dpi=110, bbox_inches="tight"))
         plt.close(fig)
         figs[key] = f"{out.name}/{name}"
     return figs

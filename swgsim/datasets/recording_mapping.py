@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import yaml
 
 from swgsim.base.typed import allowed, build, check_finite, complete
+from swgsim.base.user_yaml import clip, user_yaml
 from swgsim.datasets import recording_table as rt
 from swgsim.datasets.schedule import LifeConfig
 from swgsim.datasets.schema import SENSORS
@@ -274,14 +274,13 @@ def read_mapping(path: str | os.PathLike) -> RecordingMapping:
     FileNotFoundError
         If there is no such file.
     ValueError
-        ``<path>: <full key>: ...`` (:func:`recording_mapping`), or the file is not YAML.
+        ``<path>: <full key>: ...`` (:func:`recording_mapping`), or the file is not YAML,
+        gives a key twice or expands to too many values
+        (:func:`swgsim.base.user_yaml.user_yaml`); one line, clipped.
     """
     p = rt.check_file(path, "mapping", MAX_MAPPING_BYTES)
-    try:
-        cfg = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as e:
-        raise ValueError(f"mapping {p}: not YAML ({str(e).splitlines()[0]})") from None
+    cfg = user_yaml(p, "mapping")
     try:
         return recording_mapping(cfg if cfg is not None else {})
     except ValueError as e:
-        raise ValueError(f"mapping {p}: {e}") from None
+        raise ValueError(clip(f"mapping {p}: {e}")) from None

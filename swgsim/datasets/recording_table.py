@@ -19,6 +19,7 @@ window every interval of operation.
 from __future__ import annotations
 
 import hashlib
+import io
 import logging
 import os
 import stat
@@ -29,15 +30,20 @@ import numpy as np
 
 log = logging.getLogger(__name__)
 
-__all__ = ["MAX_TABLE_BYTES", "MIN_WINDOW_SAMPLES", "TABLE_FORMATS", "assign_points",
-           "check_file", "check_limit", "column_name", "content_hash", "datetime_seconds",
-           "numeric", "read_table", "row_name", "stream_table", "thin", "window_reduce",
-           "window_starts"]
+__all__ = ["MAX_TABLE_BYTES", "MAX_TABLE_CELLS", "MIN_WINDOW_SAMPLES", "TABLE_FORMATS",
+           "assign_points", "check_file", "check_limit", "column_name", "content_hash",
+           "datetime_seconds", "numeric", "read_table", "row_name", "stream_table", "thin",
+           "window_reduce", "window_starts"]
 
 #: Largest table read [bytes] (1 GiB): a CSV of about 10 columns at 10 kHz holds some
 #: 1.5 h; pandas holds it in about 2-3 times its size of memory. Longer recordings: one
 #: file per day, or Parquet (compressed, typically 3-5 times smaller).
 MAX_TABLE_BYTES = 1 << 30
+#: Most cells (data rows times mapped columns) read from a table: 2**27, 1 GiB as float64,
+#: what a 1 GiB CSV of 8-character cells holds. The file's size alone does not bound it: a
+#: Parquet file compresses a constant column to almost nothing (a 50 MiB file ran out of
+#: 4 GB of memory, issue 43).
+MAX_TABLE_CELLS = 1 << 27
 #: The formats read, by file suffix.
 TABLE_FORMATS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet"}
 #: Fewest samples in a window: the monitor's least-squares series in the wave-generator
@@ -98,16 +104,21 @@ def check_file(path: str | os.PathLike, what: str, max_bytes: int) -> Path:
     return p
 
 
-def _header(p: Path, fmt: str) -> list[str]:
-    """The column names of a table, refusing a file that is not one."""
+def _header(p: Path, data: bytes, fmt: str) -> tuple[list[str], int]:
+    """The column names of a table held in ``data`` (the bytes of ``p``) and its number
+    of data rows (Parquet: from its metadata; CSV: line ends after the header, an upper
+    bound where a quoted field holds one), refusing bytes that are not a table."""
     import pandas as pd
 
     try:
         if fmt == "parquet":
             import pyarrow.parquet as pq
 
-            return [str(c) for c in pq.ParquetFile(p).schema_arrow.names]
-        return [str(c) for c in pd.read_csv(p, nrows=0, encoding="utf-8-sig").columns]
+            pf = pq.ParquetFile(io.BytesIO(data))
+            return [str(c) for c in pf.schema_arrow.names], int(pf.metadata.num_rows)
+        names = [str(c) for c in pd.read_csv(io.BytesIO(data), nrows=0,
+                                             encoding="utf-8-sig").columns]
+        return names, data.count(b"\n") - (1 if data.endswith(b"\n") else 0)
     except ImportError as e:
         raise ValueError(f"recording {p}: reading Parquet needs pyarrow ({e})") from None
     except (UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as e:
@@ -118,9 +129,29 @@ def _header(p: Path, fmt: str) -> list[str]:
                          f"{str(e).splitlines()[0] if str(e) else ''})") from None
 
 
+def _read_bytes(p: Path, max_bytes: int) -> bytes:
+    """The bytes of ``p``, read once and at most ``max_bytes`` of them (the file may have
+    grown since :func:`check_file`)."""
+    with open(p, "rb") as f:
+        data = f.read(max_bytes + 1)
+    if len(data) > max_bytes:
+        raise ValueError(f"recording {p}: grew beyond the {max_bytes / 2**20:g} MiB read "
+                         "while it was read; import a finished file")
+    if not data:
+        raise ValueError(f"recording {p}: the file is empty (0 bytes)")
+    return data
+
+
 def read_table(path: str | os.PathLike, columns: dict[str, str],
-               max_bytes: int = MAX_TABLE_BYTES, progress: bool = False):
+               max_bytes: int = MAX_TABLE_BYTES, progress: bool = False,
+               max_cells: int | None = None):
     """Read the mapped columns of a recording's table, bounded and checked.
+
+    The file is read once into memory and everything comes from those bytes: its
+    SHA-256, its header and row count, and the table parsed from them; a file replaced or
+    appended to meanwhile changes neither (issue 43, cause 8). What the table expands to
+    (data rows times mapped columns) is checked against ``max_cells`` before it is parsed:
+    a Parquet file compresses a long constant column to almost nothing (issue 43, cause 7).
 
     Parameters
     ----------
@@ -129,31 +160,37 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
     columns : dict of str to str
         Column name -> the mapping key it was given as (for messages).
     max_bytes : int
-        Largest file read (:func:`check_file`).
+        Largest file read (:func:`check_file`) [bytes].
     progress : bool
         A progress bar over the CSV's rows.
+    max_cells : int, optional
+        Most cells (rows times mapped columns) parsed; default :data:`MAX_TABLE_CELLS`.
 
     Returns
     -------
-    (pandas.DataFrame, str)
-        The mapped columns only, and the format (``csv`` or ``parquet``).
+    (pandas.DataFrame, str, str)
+        The mapped columns only, the format (``csv`` or ``parquet``) and the SHA-256 of
+        the bytes parsed.
 
     Raises
     ------
     FileNotFoundError, ValueError
-        One line naming the file: not a regular file, empty, too large, of another
-        suffix, not a table, a mapped column missing (named with its key and the columns
-        the table has), or no data row.
+        One line naming the file: not a regular file, empty, too large (as a file, or as
+        the cells it holds), of another suffix, not a table, a mapped column missing
+        (named with its key and the columns the table has), or no data row.
     """
     import pandas as pd
     from tqdm.auto import tqdm
 
+    max_cells = MAX_TABLE_CELLS if max_cells is None else max_cells
     p = check_file(path, "recording", max_bytes)
     fmt = TABLE_FORMATS.get(p.suffix.lower())
     if fmt is None:
         raise ValueError(f"recording {p}: suffix {p.suffix or '(none)'!r}; a table is read "
                          f"from {', '.join(TABLE_FORMATS)}")
-    have = _header(p, fmt)
+    data = _read_bytes(p, max_bytes)
+    digest = hashlib.sha256(data).hexdigest()
+    have, rows = _header(p, data, fmt)
     for col, key in columns.items():
         if col not in have:
             hint = ("; the header is one field: is the file separated by ';' or tabs? "
@@ -162,14 +199,18 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
             raise ValueError(f"recording {p}: column {col!r} ({key}) is missing; the table "
                              f"has {shown}{hint}")
     use = list(columns)
+    if rows * len(use) > max_cells:
+        raise ValueError(f"recording {p}: {rows} rows of {len(use)} mapped columns are "
+                         f"{rows * len(use)} values, more than the {max_cells} read (at 8 "
+                         f"bytes each {max_cells * 8 / 2**30:g} GiB); split the recording")
     try:
         if fmt == "parquet":
-            df = pd.read_parquet(p, columns=use)
+            df = pd.read_parquet(io.BytesIO(data), columns=use)
         else:
             parts = []
             with tqdm(desc=f"read {p.name}", unit="row", unit_scale=True, delay=2.0,
                       disable=not progress) as bar:  # shown when reading takes > 2 s
-                for chunk in pd.read_csv(p, usecols=use, encoding="utf-8-sig",
+                for chunk in pd.read_csv(io.BytesIO(data), usecols=use, encoding="utf-8-sig",
                                          chunksize=_CHUNK_ROWS, low_memory=False,
                                          float_precision="round_trip"):
                     parts.append(chunk)
@@ -179,7 +220,7 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
         raise ValueError(f"recording {p}: not a table: {str(e).splitlines()[0]}") from None
     if len(df) == 0:
         raise ValueError(f"recording {p}: the table has a header but no data row")
-    return df, fmt
+    return df, fmt, digest
 
 
 def numeric(df, column: str, key: str, fmt: str) -> np.ndarray:

@@ -73,7 +73,7 @@ from swgsim.datasets.schema import (
     write_shard,
 )
 from swgsim.files import ownership
-from swgsim.files.digest import config_digest, sha256_file
+from swgsim.files.digest import config_digest
 from swgsim.files.ownership import atomic_write_json
 from swgsim.files.provenance import git_revision, library_versions, package_version
 from swgsim.gear.profile import MAX_INPUT_SPEED_RPM, MOMENTARY_PEAK_TORQUE_NM
@@ -104,6 +104,7 @@ class Samples:
     p_in_w: np.ndarray | None
     p_out_w: np.ndarray | None
     fmt: str
+    sha256: str  # of the bytes parsed (read once: a file changed meanwhile is not mixed in)
 
 
 def read_samples(path: str | os.PathLike, m: RecordingMapping,
@@ -122,7 +123,7 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
         :data:`TEMPERATURE_RANGE_C`.
     """
     cols = {c: k for k, c in mapping_columns(m).items()}
-    df, fmt = rt.read_table(path, cols, max_bytes, progress)
+    df, fmt, digest = rt.read_table(path, cols, max_bytes, progress)
     stamp = m.clock.column if m.clock is not None and m.clock.unit == "datetime" else None
     v = {c: (rt.datetime_seconds if c == stamp else rt.numeric)(df, c, k, fmt)
          for c, k in cols.items()}
@@ -159,7 +160,7 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
     return Samples(v[m.time], clock, mvv, speed, v[m.torque], angle(m.input_angle),
                    angle(m.output_angle), temp,
                    None if m.power is None else v[m.power.input],
-                   None if m.power is None else v[m.power.output], fmt)
+                   None if m.power is None else v[m.power.output], fmt, digest)
 
 
 # ------------------------------------------------------------------ windows and the stream
@@ -206,7 +207,7 @@ def _hours(s: Samples, m: RecordingMapping, starts: np.ndarray, seg: np.ndarray,
     if bad.size:  # only with a clock column: the time column alone never goes back
         k = int(bad[0]) + 1
         raise ValueError(f"{rt.column_name(m.clock.column, 'clock.column')}, "
-                         f"{rt.rowrt.column_name(int(w0[k]), s.fmt)}: the window there is at "
+                         f"{rt.row_name(int(w0[k]), s.fmt)}: the window there is at "
                          f"{hour[k]:.6f} h, not after the one before ({hour[k - 1]:.6f} h): the "
                          "clock must count operating time (a segment begins before the "
                          "previous one ended)")
@@ -317,7 +318,7 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
             "reference": np.zeros(win.size, bool), "efficiency": eff,
             "n_in_mean_rpm": info.pop("mean_rpm"), "t_out_mean_nm": info.pop("mean_nm")}
     config = {"name": f"recording {p.name}", "recording": {"file": p.name, "rows": int(n),
-                                                           "sha256": sha256_file(p)},
+                                                           "sha256": s.sha256},
               "mapping": dataclasses.asdict(m),
               "chain": {"sample_rate_hz": fs, "window_s": n_t / fs}}
     if m.input_angle is not None:  # the input sensor, as a profile data set names it
@@ -352,6 +353,21 @@ def _survey(out: Path, overwrite: bool) -> ownership.Survey:
     return found
 
 
+def _unchanged_since(out: Path, found: ownership.Survey) -> None:
+    """Under the claim of ``out`` (no other run can write there now): refuse if a file
+    appeared, changed or went since ``found`` was surveyed, before the import's long read
+    (another import into the same folder finished meanwhile, issue 43); nothing replaced."""
+    now = ownership.survey(out)
+    changed = sorted({*now.foreign, *(r for r in {*now.owned, *found.owned}
+                                      if now.owned.get(r) != found.owned.get(r))})
+    if changed:
+        more = f" and {len(changed) - 1} more file(s)" if len(changed) > 1 else ""
+        raise ValueError(f"out_dir {out}: {changed[0]}{more} written there by another run "
+                         "since this import checked the folder; nothing was replaced: "
+                         "import again (with overwrite=true to replace it) or choose "
+                         "another out_dir")
+
+
 def write_stream(ds, out_dir: str | os.PathLike, overwrite: bool = False,
                  found: ownership.Survey | None = None) -> dict:
     """Write a stream of :func:`recording_stream` as a data set: its shard, sidecar and
@@ -376,13 +392,16 @@ def write_stream(ds, out_dir: str | os.PathLike, overwrite: bool = False,
     ------
     ValueError
         ``out_dir`` holds a file this project cannot show it wrote (named), or files of
-        this project without ``overwrite``; before anything is touched.
+        this project without ``overwrite``; before anything is touched. Or, checked again
+        under the folder's claim right before writing, a file written, changed or removed
+        there since ``found`` was made (another run's); nothing replaced.
     """
     out = Path(out_dir)
     found = _survey(out, overwrite) if found is None else found
     cfg = json.loads(ds.attrs["config"])
     name, chash = str(ds.attrs["shard"]), config_digest(cfg)
     with ownership.claim(out, APP, found=found, strict=True) as claim:
+        _unchanged_since(out, found)
         if found.owned:
             claim.remove(found.owned)
         entry = {"sha256": write_shard(ds, out / name), "n_samples": int(ds.sizes["sample"]),

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 __all__ = ["DiskFullError", "TEMP_NAME", "pid_alive", "replace_atomically", "temp_host",
-           "temp_prefix"]
+           "temp_prefix", "write_atomically"]
 
 
 class DiskFullError(ValueError):
@@ -64,8 +64,7 @@ def pid_alive(pid: int) -> bool:
 
 def replace_atomically(path: str | os.PathLike, data: bytes | memoryview,
                        before_replace: Callable[[Path, str], None] | None = None) -> None:
-    """Write ``data`` to ``path`` atomically: a temporary file in the same folder, flushed
-    to disk, then renamed over ``path``.
+    """Write ``data`` to ``path`` atomically (:func:`write_atomically` with the bytes).
 
     Parameters
     ----------
@@ -73,22 +72,47 @@ def replace_atomically(path: str | os.PathLike, data: bytes | memoryview,
         The target; its folder is created if needed.
     data : bytes
     before_replace : callable, optional
-        ``before_replace(path, tmp)`` runs between the flush and the rename (the
-        ownership stamp records the file there,
-        :func:`swgsim.files.ownership.atomic_write_bytes`).
+        See :func:`write_atomically`.
 
     Raises
     ------
     DiskFullError
         If the disk is full, naming the file and its folder; nothing is left behind.
     """
+    write_atomically(path, lambda tmp: tmp.write_bytes(data), before_replace)
+
+
+def write_atomically(path: str | os.PathLike, write: Callable[[Path], object],
+                     before_replace: Callable[[Path, str], None] | None = None) -> None:
+    """Have ``write`` write a file at a temporary path in the folder of ``path``, flush it
+    to disk, then rename it over ``path``: a reader, or a run after a kill or a full disk
+    at any point, sees the old file or the new one whole, never half of one.
+
+    Parameters
+    ----------
+    path : path-like
+        The target; its folder is created if needed.
+    write : callable
+        ``write(tmp)`` writes the whole file at ``tmp`` (a :class:`~pathlib.Path` ending
+        ``.tmp``: a figure is saved with an explicit ``format``); its return is ignored.
+    before_replace : callable, optional
+        ``before_replace(path, tmp)`` runs between the flush and the rename (the
+        ownership stamp records the file there, :func:`swgsim.files.ownership.write_owned`).
+
+    Raises
+    ------
+    DiskFullError
+        If the disk is full, naming the file and its folder; nothing is left behind.
+    Exception
+        Whatever ``write`` raises; the temporary file is removed and ``path`` untouched.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=temp_prefix(path), suffix=".tmp", dir=path.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
+        write(Path(tmp))
+        with open(tmp, "rb+") as f:
             os.fsync(f.fileno())
         os.chmod(tmp, _umask_mode())
         if before_replace is not None:

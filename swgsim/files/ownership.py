@@ -55,7 +55,7 @@ import fnmatch
 import json
 import logging
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -63,7 +63,7 @@ from typing import Any
 
 from filelock import FileLock, Timeout
 
-from swgsim.files.atomic import TEMP_NAME, pid_alive, replace_atomically, temp_host
+from swgsim.files.atomic import TEMP_NAME, pid_alive, temp_host, write_atomically
 from swgsim.files.digest import sha256_cached as sha256
 from swgsim.files.digest import sha256_file
 from swgsim.files.stamp import (
@@ -87,7 +87,7 @@ log = logging.getLogger(__name__)
 
 __all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "Survey", "Claim", "survey", "check",
            "claim", "join", "before_replace", "sha256", "atomic_write_bytes",
-           "atomic_write_json", "stop_note", "forget_stops"]
+           "atomic_write_json", "write_owned", "stop_note", "forget_stops"]
 
 _CLAIMS: dict[Path, Claim] = {}   # folders this process claimed (resolved) -> claim
 _HELD: dict[Path, list] = {}  # run locks held: resolved folder -> [lock, count, pid, folder]
@@ -638,7 +638,24 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes | memoryview,
     swgsim.files.atomic.DiskFullError
         If the disk is full (naming the file and its folder); nothing is left behind.
     """
-    replace_atomically(path, data, lambda p, tmp: before_replace(p, tmp, digest))
+    write_owned(path, lambda tmp: tmp.write_bytes(data), digest)
+
+
+def write_owned(path: str | os.PathLike, write: Callable[[Path], object],
+                digest: str | None = None) -> None:
+    """The one way a file of a run is written: ``write(tmp)`` writes it whole to a
+    temporary file beside ``path`` (a figure: ``fig.savefig(tmp, format="png")``), which is
+    flushed, listed in the stamp of the claimed folder holding it (:func:`before_replace`)
+    and renamed into place (:func:`swgsim.files.atomic.write_atomically`). A kill or a
+    full disk at any point leaves the old file (still proved ours) or the new one whole
+    and stamped, and at most a temporary file the next claim removes.
+
+    Raises
+    ------
+    swgsim.files.atomic.DiskFullError
+        If the disk is full (naming the file and its folder); nothing is left behind.
+    """
+    write_atomically(path, write, lambda p, tmp: before_replace(p, tmp, digest))
 
 
 def atomic_write_json(path: str | os.PathLike, obj: Any) -> None:

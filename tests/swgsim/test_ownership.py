@@ -304,3 +304,69 @@ def test_record_takes_paths_as_the_folder_was_given(tmp_path, monkeypatch):
             c.record([Path("elsewhere.csv")])
     assert "results.csv" in json.loads((out / ownership.STAMP).read_text())["files"]
     ownership.check(out, "monitor.report_dir")  # a rerun is allowed
+
+
+def _half_then_fail(tmp):
+    tmp.write_bytes(b"\x89PNG half a figure")  # a kill or a full disk in savefig
+    raise OSError(28, "No space left on device")
+
+
+@pytest.mark.parametrize("where", ["in the write", "between the stamp and the rename"])
+def test_a_report_file_is_whole_and_stamped_or_not_there(tmp_path, monkeypatch, where):
+    """Issue 43, cause 3: every report file goes through ownership.write_owned (temporary
+    file, stamp, rename). A failure while it is written, or after it is stamped and
+    before it is renamed, leaves the old file, still proved ours, and no temporary file;
+    the same run again (a new claim) replaces it."""
+    out = tmp_path / "report"
+    with ownership.claim(out, "swgsim-monitor", strict=True):
+        ownership.write_owned(out / "health.png", lambda tmp: tmp.write_bytes(b"old"))
+    with ownership.claim(out, "swgsim-monitor", strict=True):
+        if where == "in the write":
+            with pytest.raises(atomic.DiskFullError, match=r"disk full while writing "):
+                ownership.write_owned(out / "health.png", _half_then_fail)
+        else:
+            def killed(*a):
+                raise KeyboardInterrupt
+            monkeypatch.setattr(atomic.os, "replace", killed)
+            with pytest.raises(KeyboardInterrupt):
+                ownership.write_owned(out / "health.png", lambda tmp: tmp.write_bytes(b"new"))
+            monkeypatch.undo()
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".swg-owner")) \
+        == ["health.png"] and (out / "health.png").read_bytes() == b"old"
+    found = ownership.check(out, app="swgsim-monitor")
+    assert list(found.owned) == ["health.png"] and not found.foreign
+    with ownership.claim(out, "swgsim-monitor", strict=True):  # the same command again
+        ownership.write_owned(out / "health.png", lambda tmp: tmp.write_bytes(b"new"))
+    assert (out / "health.png").read_bytes() == b"new"
+    assert list(ownership.check(out, app="swgsim-monitor").owned) == ["health.png"]
+
+
+def test_the_monitors_figure_is_written_through_write_owned(tmp_path, monkeypatch):
+    """A savefig that fails half-way through health.png leaves no health.png at all."""
+    import matplotlib.figure
+
+    def half(self, fname, *a, **k):
+        Path(fname).write_bytes(b"\x89PNG half")
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", half)
+    from learn.monitor import stream
+
+    with pytest.raises(atomic.DiskFullError):
+        stream.write_outputs(_TinyResult(), tmp_path, 5.0, "s")
+    assert not (tmp_path / "health.png").exists()
+    assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
+
+
+class _TinyResult:
+    """What write_outputs reads of a StreamResult: ten monitored windows, no alarm."""
+
+    class trace:  # noqa: N801 - an attribute of the result
+        hour = np.arange(10.0)
+        p = np.full(10, 0.5)
+        s = np.zeros(10)
+
+    alarms, advisories, recommissioned = [], [], []
+    n_commissioning, onset_h, true_fault = 5, None, None
+
+    def events(self):
+        return []

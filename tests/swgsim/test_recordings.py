@@ -202,6 +202,25 @@ def test_the_small_table_imports(tmp_path):
     assert read_mapping(yml).window_s == N_T / FS
 
 
+def test_bursts_overlapping_in_clock_hours_refused_naming_the_row(tmp_path):
+    """Clock-hour path (issue 43, cause 6): a burst of three windows at 1 min and the next
+    burst's clock 0.1 s later, inside the first burst's span (the clock is not operating
+    time): refused in one line naming the clock column and the row, not AttributeError."""
+    df, mapping = small()
+    del mapping["input_angle"], mapping["output_angle"]  # a burst repeated: not its angles
+    bursts = [df.iloc[k * N_T:(k + 1) * N_T].copy() for k in range(8)]
+    long = pd.concat([bursts[1]] * 3, ignore_index=True)  # three windows at 1/60 h
+    long["time_s"] = bursts[1]["time_s"].iloc[0] + np.arange(3 * N_T) / FS
+    bursts[2]["hours"] = 1 / 60 + 0.1 / 3600  # 0.1 s after it began: before it ended
+    df = pd.concat([bursts[0], long, *bursts[2:]], ignore_index=True)
+    rec, yml = _write(df, mapping, tmp_path)
+    with pytest.raises(ValueError, match=r"column 'hours' \(clock.column\), row 320 "
+                       r"\(line 322\): the window there is at 0.016694 h, not after the "
+                       r"one before \(0.016711 h\)") as info:
+        import_recording(rec, yml, tmp_path / "stream")
+    assert "\n" not in str(info.value) and not (tmp_path / "stream").exists()
+
+
 def test_a_continuous_recording_cut_one_window_per_interval(tmp_path):
     """30 s without a clock column (the time counts), a stretch at another speed from 10 s
     to 13 s: the windows touching it are left out and counted; one window taken every
@@ -420,3 +439,90 @@ def test_out_dir_foreign_file_refused_and_our_stream_replaced_only_with_overwrit
     second = import_recording(rec, yml, tmp_path / "stream", overwrite=True)
     assert second["content_sha256"] != first["content_sha256"]
     assert load(tmp_path / "stream")["commissioning"].values.sum() == 5
+
+
+@pytest.mark.parametrize("name", ["rec.parquet", "rec.csv"])
+def test_a_table_is_bounded_by_its_cells_before_it_is_parsed(tmp_path, monkeypatch, name):
+    """Issue 43, cause 7b: a Parquet file compresses a long constant table to almost
+    nothing (50 MiB ran out of 4 GB): rows times mapped columns, from the Parquet metadata
+    or the CSV's line count, are checked against the cell limit before anything is parsed."""
+    import swgsim.datasets.recording_table as rt
+
+    df, mapping = small()
+    df = pd.concat([df] * 40, ignore_index=True)  # 25 600 rows of 14 mapped columns
+    rec, yml = _write(df, mapping, tmp_path, name)
+    monkeypatch.setattr(rt, "MAX_TABLE_CELLS", 100_000)
+
+    def no_parse(*a, **k):
+        raise AssertionError("parsed before the cell limit was checked")
+    monkeypatch.setattr(pd, "read_parquet", no_parse)
+    monkeypatch.setattr(pd, "read_csv", lambda *a, nrows=None, **k: (
+        pd.DataFrame(columns=df.columns) if nrows == 0 else no_parse()))
+    with pytest.raises(ValueError, match=r"rec\.\w+: 25600 rows of 14 mapped columns are "
+                       r"358400 values, more than the 100000 read") as info:
+        import_recording(rec, yml, tmp_path / "stream")
+    assert "\n" not in str(info.value) and not (tmp_path / "stream").exists()
+
+
+def test_the_recording_is_hashed_from_the_bytes_parsed(tmp_path, monkeypatch):
+    """Issue 43, cause 8: a recording appended to, then replaced, right after it was read:
+    the stream records the SHA-256 of the bytes it was made of, not of the file found later."""
+    import hashlib
+
+    import swgsim.datasets.recording_table as rt
+
+    df, mapping = small()
+    rec, yml = _write(df, mapping, tmp_path)
+    before = rec.read_bytes()
+    read = rt._read_bytes
+
+    def then_changed(p, max_bytes):
+        data = read(p, max_bytes)
+        with open(p, "ab") as f:
+            f.write(b"1,2,3\n")  # appended to ...
+        (tmp_path / "new.csv").write_bytes(data[: len(data) // 2])
+        (tmp_path / "new.csv").replace(p)  # ... then replaced
+        return data
+    monkeypatch.setattr(rt, "_read_bytes", then_changed)
+    import_recording(rec, yml, tmp_path / "stream")
+    cfg = json.loads(load(tmp_path / "stream").attrs["config"])
+    assert cfg["recording"]["sha256"] == hashlib.sha256(before).hexdigest()
+    assert cfg["recording"]["sha256"] != hashlib.sha256(rec.read_bytes()).hexdigest()
+
+
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_two_imports_into_one_folder_one_wins_the_other_is_refused(tmp_path, monkeypatch,
+                                                                   overwrite):
+    """Issue 43, cause 4: the slow import surveys out_dir, then, during its long read, a
+    fast one imports into the same folder and finishes; the slow one is refused in one line
+    when it comes to write (the folder checked again under its claim), and the fast one's
+    stream is left as it was, with or without overwrite=true."""
+    from swgsim.datasets import recordings
+
+    df, mapping = small()
+    rec, yml = _write(df, mapping, tmp_path)
+    other = dict(mapping, commissioning_h=4.5 / 60)  # another stream
+    (tmp_path / "other.yaml").write_text(yaml.safe_dump(other))
+    out = tmp_path / "stream"
+    if overwrite:
+        import_recording(rec, yml, out)  # a stream of this project there already
+    read = recordings.recording_stream
+    won = {}
+
+    def slow_read(*a, **k):
+        monkeypatch.setattr(recordings, "recording_stream", read)
+        won["summary"] = import_recording(rec, tmp_path / "other.yaml", out,
+                                          overwrite=overwrite)  # the fast one, meanwhile
+        won["files"] = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()
+                        and not p.name.startswith(".swg-owner")}
+        return read(*a, **k)
+    monkeypatch.setattr(recordings, "recording_stream", slow_read)
+    with pytest.raises(ValueError, match=rf"^out_dir {out}: \S+ (and \d more file\(s\) )?"
+                       r"written there by another run since this import checked the "
+                       r"folder; nothing was replaced") as info:
+        import_recording(rec, yml, out, overwrite=overwrite)
+    assert "\n" not in str(info.value)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()
+            and not p.name.startswith(".swg-owner")} == won["files"]
+    assert load(out)["commissioning"].values.sum() == 5  # the fast one's stream
+    assert read_manifest(out)["content_sha256"] == won["summary"]["content_sha256"]
