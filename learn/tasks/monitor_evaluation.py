@@ -217,6 +217,12 @@ def _finished(out: Path, jobs: list[Job]) -> tuple[list[dict], list[Job]]:
     return done, todo
 
 
+def save_part(out: Path, job: Job, part: dict) -> None:
+    """Write a finished part to ``parts/`` in its keys' order (not sorted), so that the
+    tables of a resumed run, read back by :func:`_finished`, keep a fresh run's columns."""
+    atomic_write_json(out / "parts" / job.file, part, sort_keys=False)
+
+
 def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path) -> list[dict]:
     """Each part, resumed from ``parts/`` when its key matches; one progress line over
     all of them (done, left, time left) and a log line per finished part."""
@@ -230,7 +236,7 @@ def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path) -> list[
     t0 = time.perf_counter()
     for part, job in par(joblib.delayed(_job)(plans[j.dataset], j, mc.study, str(out))
                          for j in todo):
-        atomic_write_json(out / "parts" / job.file, part)
+        save_part(out, job, part)
         done.append(part)
         bar.update()
         log.info("part %s done (%d of %d left, %.1f min so far)", job.file,

@@ -658,10 +658,11 @@ def write_owned(path: str | os.PathLike, write: Callable[[Path], object],
     write_atomically(path, write, lambda p, tmp: before_replace(p, tmp, digest))
 
 
-def atomic_write_json(path: str | os.PathLike, obj: Any) -> None:
-    """Write ``obj`` as indented JSON (keys sorted) to ``path`` atomically, recorded as
+def atomic_write_json(path: str | os.PathLike, obj: Any, sort_keys: bool = True) -> None:
+    """Write ``obj`` as indented JSON (keys sorted unless ``sort_keys`` is False: a record
+    read back as a table keeps its columns' order) to ``path`` atomically, recorded as
     :func:`atomic_write_bytes` records it."""
-    atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=True) + "\n").encode())
+    atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=sort_keys) + "\n").encode())
 
 
 def stop_note() -> str:
