@@ -117,3 +117,28 @@ def test_latency_records_what_it_timed_and_restores_torch_threads():
     assert table.set_index("model")["device"].to_dict() == {"minirocket": "cpu",
                                                              "cnn": expect}
     assert np.isfinite(table[["input_ms", "model_ms"]].to_numpy()).all()
+
+
+@no_cuda
+@pytest.mark.parametrize("detectors", [["cnn_res"], ["paper_rf"]])
+def test_the_monitor_refuses_cuda_here_before_any_work(tmp_path, detectors):
+    """monitor.device=cuda on a machine without CUDA: one line naming the key, nothing
+    written, when the CNN detector is evaluated; without it the device is only checked."""
+    from learn.tasks.monitor_evaluation import run_monitor_evaluation
+    from swgcli import compose_app
+
+    cfg = compose_app("train", ["experiment=monitor", "~logger", "monitor.device=cuda",
+                                "monitor.run_on=[bench]", "monitor.n_jobs=1",
+                                f"monitor.study.detectors=[{detectors[0]}]",
+                                f"monitor.report_dir={tmp_path}/rep"])
+    if detectors == ["paper_rf"]:
+        from omegaconf import OmegaConf
+
+        from learn.tasks.monitor_evaluation import _nets
+
+        assert _nets(OmegaConf.to_object(cfg).monitor) == {}
+        return
+    with pytest.raises(ValueError) as e:
+        run_monitor_evaluation(cfg)
+    assert str(e.value).startswith("monitor.device=cuda: this machine has no CUDA GPU")
+    assert not (tmp_path / "rep").exists()
