@@ -74,7 +74,13 @@ def run_monitor_app(cfg) -> dict:
             "files": {k: str(v) for k, v in files.items()}}
 
 
-@hydra_app("monitor", MonitorApp, "swgsim-monitor")
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "sklearn", "skops.io", "mlflow",
+         "matplotlib")
+
+
+@hydra_app("monitor", MonitorApp, "swgsim-monitor", NEEDS)
 def main(cfg: DictConfig) -> dict:
     """Run the monitor and print its alarms and where the outputs went."""
     out = run_monitor_app(cfg)
