@@ -148,5 +148,32 @@ def device_record(device: torch.device | str) -> dict[str, str | int | bool]:
             "cudnn_deterministic": cudnn_det, "cudnn_benchmark": cudnn_bench}
 
 
+def net_record(estimator) -> dict[str, str | int | bool]:
+    """:func:`device_record` of an estimator's torch net, or an empty dict for none.
+
+    Parameters
+    ----------
+    estimator : estimator or scikit-learn Pipeline
+        Its final step is a torch net if it has a ``device`` parameter; its device is
+        the fitted ``device_`` where fitted, else the setting resolved on this machine.
+
+    Returns
+    -------
+    dict
+        The record (MLflow params of a run with a torch net); empty for any other model.
+
+    Raises
+    ------
+    ValueError
+        An unfitted net's ``device`` that this machine does not have (:func:`resolve_device`).
+    """
+    final = estimator.steps[-1][1] if hasattr(estimator, "steps") else estimator
+    get = getattr(final, "get_params", None)
+    if get is None or "device" not in get(deep=False):
+        return {}
+    fitted = getattr(final, "device_", None)
+    return device_record(fitted if fitted is not None else resolve_device(final.device))
+
+
 __all__ = ["DEVICE_CHOICES", "check_device", "device_label", "device_record",
-           "resolve_device"]
+           "net_record", "resolve_device"]

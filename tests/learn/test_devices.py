@@ -142,3 +142,15 @@ def test_the_monitor_refuses_cuda_here_before_any_work(tmp_path, detectors):
         run_monitor_evaluation(cfg)
     assert str(e.value).startswith("monitor.device=cuda: this machine has no CUDA GPU")
     assert not (tmp_path / "rep").exists()
+
+
+def test_a_runs_net_record_is_that_of_its_torch_net_or_empty():
+    from sklearn.ensemble import RandomForestClassifier
+    from sklearn.pipeline import make_pipeline
+
+    from learn.learners.devices import net_record
+    from learn.learners.nets import MLPClassifierTorch
+
+    rec = net_record(make_pipeline(MLPClassifierTorch(device="cpu")))
+    assert rec["device"] == "cpu" and rec["deterministic"] is True
+    assert net_record(RandomForestClassifier()) == {}
