@@ -6,6 +6,9 @@
   :func:`swgcli.schema.validate` refuses keys the schema lacks and numbers outside their
   field's range, and :func:`check_out_dirs` output folders given as files, before any
   work;
+* every library the app's runs import is resolved next (``needs``,
+  :func:`learn.tracking.preflight.check_imports`): a broken install is one line naming the
+  package, before any work;
 * bad input ends in one line on stderr, ``<prog>: error: <what>``, naming the key or file,
   and exit code 2: Hydra's composition errors (unknown, missing or mistyped keys, unknown
   config options, overrides it cannot parse, with how to quote them), :class:`ValueError`
@@ -31,9 +34,10 @@ import os
 import re
 import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
+from learn.tracking.preflight import check_imports
 from swgcli import CONF_DIR
 from swgsim.files.ownership import forget_stops
 
@@ -384,7 +388,7 @@ def app_help(config_name: str, overrides: list[str]) -> str:
             f"the config (foo.bar=value)\n\n{shown}\n{foot}")
 
 
-def hydra_app(config_name: str, schema: type, prog: str):
+def hydra_app(config_name: str, schema: type, prog: str, needs: Sequence[str] = ()):
     """Decorator: a task function ``task(cfg)`` as a console entry point ``main()``.
 
     Parameters
@@ -395,6 +399,11 @@ def hydra_app(config_name: str, schema: type, prog: str):
         The app's schema (:mod:`swgcli.schema`), checked before the task runs.
     prog : str
         Program name for messages.
+    needs : sequence of str
+        The libraries the app's runs import (its module's ``NEEDS``), resolved after the
+        config is checked and before the task starts
+        (:func:`learn.tracking.preflight.check_imports`): a broken install is one line
+        naming the package, exit 2, before any work.
 
     Returns
     -------
@@ -414,6 +423,7 @@ def hydra_app(config_name: str, schema: type, prog: str):
             try:
                 validate(cfg, schema)
                 check_out_dirs(cfg, schema)
+                check_imports(needs)  # a broken install found before any work
                 return task(cfg)
             except Exception as e:  # noqa: BLE001
                 if _STOPPING or one_line(e) is None \

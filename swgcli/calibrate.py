@@ -219,7 +219,12 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     return {**summary, "out_dir": str(out_dir), "mlflow_run_id": run_id}
 
 
-main = hydra_app("calibrate", CalibrateApp, "swgsim-calibrate")(run_calibrate)
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "scipy", "pandas", "sklearn", "yaml", "matplotlib", "mlflow")
+
+
+main = hydra_app("calibrate", CalibrateApp, "swgsim-calibrate", NEEDS)(run_calibrate)
 
 if __name__ == "__main__":
     main()

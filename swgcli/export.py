@@ -67,7 +67,12 @@ def run_export_app(cfg) -> dict:
                       cross=app.cross)
 
 
-@hydra_app("export", ExportApp, "swgsim-export")
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "sklearn", "skops.io", "emlearn")
+
+
+@hydra_app("export", ExportApp, "swgsim-export", NEEDS)
 def main(cfg: DictConfig) -> dict:
     """Run the export and print the figures and where they went; a failed external tool
     (compiler, cross tool, QEMU) ends it with exit 2 and one line, after every file is

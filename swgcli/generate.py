@@ -46,7 +46,12 @@ def run_generate(cfg: DictConfig) -> dict:
                     progress=bool(cfg.progress))
 
 
-@hydra_app("generate", GenerateApp, "swgsim-generate")
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "scipy", "xarray", "h5netcdf", "joblib", "tqdm")
+
+
+@hydra_app("generate", GenerateApp, "swgsim-generate", NEEDS)
 def main(cfg: DictConfig) -> dict:
     """Generate the data set and print a one-line summary."""
     s = run_generate(cfg)

@@ -88,7 +88,12 @@ def summary_lines(s: dict) -> list[str]:
             f"speeds up to {s['speed_offset_rpm']:.3g} rpm from their point's"]
 
 
-@hydra_app("import", ImportApp, "swgsim-import")
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "pandas", "xarray", "h5netcdf", "pyarrow", "yaml")
+
+
+@hydra_app("import", ImportApp, "swgsim-import", NEEDS)
 def main(cfg: DictConfig) -> dict:
     """Import the recording and print a summary."""
     s = run_import(cfg)

@@ -73,7 +73,13 @@ def run_monitor_app(cfg) -> dict:
             "threshold": res.threshold, "files": {k: str(v) for k, v in files.items()}}
 
 
-@hydra_app("monitor", MonitorApp, "swgsim-monitor")
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "sklearn", "skops.io", "mlflow",
+         "matplotlib")
+
+
+@hydra_app("monitor", MonitorApp, "swgsim-monitor", NEEDS)
 def main(cfg: DictConfig) -> dict:
     """Run the monitor and print the threshold it used, its events (one line each, by
     kind: :func:`learn.monitor.stream.event_line`) and where the outputs went."""

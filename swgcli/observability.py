@@ -233,7 +233,12 @@ def run_motion_map(cfg: DictConfig, rep: Path) -> dict:
             "data_sets": {}, "wall_s": time.perf_counter() - t0}
 
 
-@hydra_app("observability", ObservabilityApp, "swgsim-observability")
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "scipy", "pandas", "xarray", "joblib", "matplotlib")
+
+
+@hydra_app("observability", ObservabilityApp, "swgsim-observability", NEEDS)
 def main(cfg: DictConfig) -> dict:
     """Run the map and print where it went and the share per fault and inertia."""
     out = run_observability(cfg)

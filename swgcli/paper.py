@@ -188,7 +188,13 @@ def run_paper(cfg: DictConfig) -> dict:
             "warnings": warn}
 
 
-main = hydra_app("paper", PaperApp, "swgsim-paper")(run_paper)
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "joblib", "sklearn", "torch", "mlflow",
+         "matplotlib")
+
+
+main = hydra_app("paper", PaperApp, "swgsim-paper", NEEDS)(run_paper)
 
 if __name__ == "__main__":
     main()

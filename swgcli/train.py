@@ -17,8 +17,13 @@ from omegaconf import DictConfig
 from swgcli.app import hydra_app
 from swgcli.schema import TrainApp
 
+#: The libraries its runs import, resolved before any work
+#: (:func:`learn.tracking.preflight.check_imports`).
+NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "joblib", "sklearn", "torch", "aeon",
+         "skops.io", "mlflow", "matplotlib")
 
-@hydra_app("train", TrainApp, "swgsim-train")
+
+@hydra_app("train", TrainApp, "swgsim-train", NEEDS)
 def main(cfg: DictConfig) -> dict:
     """Compose ``conf/train.yaml`` and run the task it names."""
     from learn.tasks.train import run_train

@@ -16,8 +16,9 @@ constant along time (see :mod:`learn.inputs.signals`), or (n, F) features. Input
 standardised per channel (per feature) with statistics of the training windows; a
 fine-tuned model keeps the source statistics.
 
-Device: ``device="auto"`` uses CUDA when present, else the CPU. The number of CPU threads
-is left to the caller (``torch.set_num_threads``).
+Device: ``device="auto"`` uses CUDA when present, else the CPU; ``"cuda"`` on a machine
+without CUDA is refused in one line (:func:`learn.learners.devices.resolve_device`). The
+number of CPU threads is left to the caller (``torch.set_num_threads``).
 
 Input checks are scikit-learn's (``validate_data``): finite values, at least one window,
 the number of features (2-D) or channels (3-D) of ``fit``; a method of an unfitted model
@@ -39,6 +40,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
 
+from .devices import check_device, resolve_device
 from .torch_modules import CNN1DNet, MLPNet
 
 log = logging.getLogger(__name__)
@@ -66,13 +68,6 @@ def resolve_precision(precision: str, device: torch.device) -> str:
         return "bfloat16" if torch.cuda.is_bf16_supported() else "float32"
     fast = device.type == "cpu" and torch.backends.cpu.get_cpu_capability().startswith("AVX512")
     return "bfloat16" if fast else "float32"
-
-
-def resolve_device(device: str = "auto") -> torch.device:
-    """``"auto"`` -> CUDA when available, else CPU; any other string is passed to torch."""
-    if device == "auto":
-        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
-    return torch.device(device)
 
 
 @contextlib.contextmanager
@@ -126,7 +121,8 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         Train on random crops of this fraction of the window (1: off); the global
         pooling makes the net length-agnostic, prediction uses the whole window.
     device : str
-        "auto" (CUDA if present), "cpu", "cuda", ...
+        "auto" (CUDA if present), "cpu", "cuda", "cuda:N"
+        (:data:`learn.learners.devices.DEVICE_CHOICES`).
     precision : {"float32", "bfloat16", "auto"}
         Arithmetic of the forward passes: float32, or mixed precision (``torch.autocast``:
         matrix products and convolutions in bfloat16; parameters, optimiser state, batch
@@ -235,9 +231,11 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         Raises
         ------
         ValueError
-            For an unknown ``precision``.
+            For an unknown ``precision`` or ``device``
+            (:data:`learn.learners.devices.DEVICE_CHOICES`).
         """
         resolve_precision(self.precision, torch.device("cpu"))
+        check_device(self.device, "device")
 
     def _autocast(self):
         """The context of a forward pass at :attr:`precision` (class docstring)."""
@@ -351,7 +349,8 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         ------
         ValueError
             On non-finite or empty ``X``, ``X`` not 2-D or 3-D, ``len(y) != n`` or
-            continuous ``y``, or an unknown ``precision``.
+            continuous ``y``, an unknown ``precision`` or ``device``, or a CUDA device
+            on a machine without one.
         """
         self.check_params()
         X, y = validate_data(self, X, y, dtype=np.float32, allow_nd=True)
@@ -363,7 +362,7 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         yi = self._encode(y)
         seed = _seed_of(self.random_state)
         rng = np.random.default_rng(seed)
-        self.device_ = resolve_device(self.device)
+        self.device_ = resolve_device(self.device, "device")
         self.precision_ = resolve_precision(self.precision, self.device_)
         axes = (0, 2) if X.ndim == 3 else (0,)
         self.mean_ = X.mean(axis=axes)

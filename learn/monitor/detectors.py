@@ -51,17 +51,22 @@ class DetectorSpec:
         An input of :func:`learn.inputs.signals.build_input` (e.g. ``sel1``, ``raw_res``),
         each window against one reference window of its operating point.
     make : callable
-        ``make(seed) -> estimator`` with ``fit(x, y)`` and ``predict(x)`` (class names).
+        ``make(seed, device) -> estimator`` with ``fit(x, y)`` and ``predict(x)`` (class
+        names); ``device`` a resolved torch device string (``cpu``, ``cuda:0``), used by
+        a torch net and ignored by the others.
     source : str
         Where the detector comes from (paper section, study).
     steady_only : bool
         Its input is defined at a steady input speed (a window at one operating point).
+    uses_device : bool
+        A torch net, run on ``monitor.device``.
     """
 
     input: str
-    make: Callable[[int], object]
+    make: Callable[[int, str], object]
     source: str
     steady_only: bool = True
+    uses_device: bool = False
 
     def cannot_run_on(self, plan: DatasetPlan) -> str | None:
         """Why this detector cannot run on a data set's lives, or None if it can."""
@@ -71,16 +76,16 @@ class DetectorSpec:
         return None
 
 
-def _paper_rf(seed: int):
+def _paper_rf(seed: int, device: str):  # noqa: ARG001 - no torch net
     return make_model("rf", random_state=seed)
 
 
-def _cnn_res(seed: int):
+def _cnn_res(seed: int, device: str):
     from learn.learners.nets import CNN1DClassifier  # torch, imported when a net is made
 
     net = CNN1DClassifier(channels=(32, 64, 64), kernel_sizes=(7, 5, 5), strides=(2, 2, 2),
                           padding_mode="circular", n_aux=len(AUX), max_epochs=10,
-                          device="auto", random_state=seed)  # a GPU where one is lent
+                          device=device, random_state=seed)  # monitor.device, resolved
     return make_pipeline(net, name="cnn")
 
 
@@ -88,7 +93,8 @@ def _cnn_res(seed: int):
 #: :func:`register_detector`.
 DETECTORS: dict[str, DetectorSpec] = {
     "paper_rf": DetectorSpec("sel1", _paper_rf, "paper Sec. III, Table III selection 1"),
-    "cnn_res": DetectorSpec("raw_res", _cnn_res, "transfer study, CNN on raw_res"),
+    "cnn_res": DetectorSpec("raw_res", _cnn_res, "transfer study, CNN on raw_res",
+                            uses_device=True),
 }
 
 
@@ -207,8 +213,9 @@ class WindowClassifier:
 
 
 def fit_detector(name: str, x: np.ndarray, y: np.ndarray, classes: list[str],
-                 seed: int = 0) -> WindowClassifier:
-    """Train detector ``name`` on inputs ``x`` (n, ...) and class names ``y`` (n,).
+                 seed: int = 0, device: str = "cpu") -> WindowClassifier:
+    """Train detector ``name`` on inputs ``x`` (n, ...) and class names ``y`` (n,), a
+    torch net on ``device`` (resolved: ``cpu``, ``cuda:0``; ``monitor.device``).
 
     Raises
     ------
@@ -217,7 +224,7 @@ def fit_detector(name: str, x: np.ndarray, y: np.ndarray, classes: list[str],
     """
     if classes[0] != HEALTHY:
         raise ValueError(f"classes must start with {HEALTHY!r}, got {classes[:1]}")
-    est = DETECTORS[name].make(seed)
+    est = DETECTORS[name].make(seed, device)
     est.fit(x, y)
     return WindowClassifier(name, est, list(classes))
 

@@ -405,14 +405,16 @@ def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfi
 
 
 def run_detectors(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfig,
-                  names: list[str]) -> list[dict]:
+                  names: list[str], device: str = "cpu") -> list[dict]:
     """Train the per-window detectors ``names`` on the other gears and evaluate them on
     held-out gear ``g`` (:func:`evaluate_detectors`) without and under every nuisance;
-    one part per detector (rows, false alarms, an empty curve, timing)."""
+    one part per detector (rows, false alarms, an empty curve, timing). A torch net runs
+    on ``device`` (resolved: ``cpu``, ``cuda:0``; ``monitor.device``)."""
     t0 = time.perf_counter()
     gears = [int(x.id) for x in plan.config.gears]
     banks = _banks(plan)
-    dets = train_detectors(plan, banks, [x for x in gears if x != g], cfg, names)
+    dets = train_detectors(plan, banks, [x for x in gears if x != g], cfg, names,
+                           device=device)
     t1 = time.perf_counter()
     rows, fa = [], []
     for nuisance in _runnable(plan, cfg):

@@ -172,12 +172,12 @@ def _inputs(sim: LifeSimulator, start: int, stop: int, refs: References, kinds: 
 
 
 def train_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
-                    cfg: MonitorStudyConfig, names: list[str], seed: int = 0
-                    ) -> list[WindowClassifier]:
+                    cfg: MonitorStudyConfig, names: list[str], seed: int = 0,
+                    device: str = "cpu") -> list[WindowClassifier]:
     """The per-window detectors ``names`` (keys of
     :data:`learn.monitor.detectors.DETECTORS`) trained on the windows the diagnosis model
     is trained on (:func:`train_model`), each against its gear's references, as many of
-    each class (:func:`_balanced`)."""
+    each class (:func:`_balanced`); a torch net on ``device`` (resolved)."""
     if not names:
         return []
     kinds = {DETECTORS[b].input for b in names}
@@ -195,7 +195,7 @@ def train_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list
     y = np.concatenate(ys).astype(str)
     keep = _balanced(y, seed)
     return [fit_detector(b, np.concatenate(xs[DETECTORS[b].input])[keep], y[keep],
-                         classes(plan, cfg), seed) for b in names]
+                         classes(plan, cfg), seed, device) for b in names]
 
 
 def _balanced(y: np.ndarray, seed: int) -> np.ndarray:

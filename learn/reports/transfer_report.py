@@ -26,6 +26,7 @@ from learn.reports.transfer_picks import (
     headline_table,
     picks,
 )
+from learn.studies.latency import latency_heading
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import RunRef
 from learn.studies.transfer import TargetSpec
@@ -404,7 +405,8 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     separability : mapping, optional
         Data set -> {"clean", "disturbed"} -> :func:`learn.studies.separability.summary_table`.
     latency : pandas.DataFrame, optional
-        Columns model, input, input_ms, model_ms.
+        :data:`learn.studies.latency.LATENCY_COLUMNS`; its heading says what was timed
+        (:func:`learn.studies.latency.latency_heading`).
     timings : mapping, optional
         ``wall_s``, ``input_s``, ``generate_s``, ``threads``, ``cpus``, ``device``.
     paper : bool
@@ -535,7 +537,7 @@ def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
 
 def _latency_md(latency: pd.DataFrame) -> list[str]:
     """The latency section of ``table.md``."""
-    lines = ["## Inference latency per window (CPU, batch 1, one thread)", "",
+    lines = [f"## Inference latency per window ({latency_heading(latency)})", "",
              "| model | input | input build [ms] | model [ms] |", "|---|---|---:|---:|"]
     for _, r in latency.iterrows():
         lines.append(f"| {model_label(r['model'])} | {r['input']} | "

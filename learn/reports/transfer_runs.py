@@ -24,8 +24,9 @@ def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], logger: Logge
 
     Two levels, each run with the git commit and its data set(s) as dataset inputs:
 
-    * a parent run: the ``transfer.*`` params, ``config.yaml``, the report files, metric
-      ``wall_s``, every data set compared;
+    * a parent run: the ``transfer.*`` params, where the nets ran (``timings["nets"]``:
+      ``device``, ``deterministic``, ... of :func:`learn.learners.devices.device_record`),
+      ``config.yaml``, the report files, metric ``wall_s``, every data set compared;
     * one child per (dataset, protocol, model, input, k): params of those five and
       ``seeds`` (the list), metrics over the seeds ``<split>/accuracy_mean``,
       ``<split>/accuracy_std`` (population), ``<split>/accuracy_min``,
@@ -50,7 +51,7 @@ def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], logger: Logge
         (name, path) of the compared data sets; those in ``results`` are logged as
         dataset inputs.
     timings : mapping
-        ``wall_s`` [s] at least.
+        ``wall_s`` [s] at least; ``nets``, a mapping of params, where given.
     latency : pandas.DataFrame, optional
         ``model``, ``input``, ``model_ms`` per (model, input).
     config : mapping, optional
@@ -69,7 +70,8 @@ def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], logger: Logge
     params = dataclasses.asdict(tc)
     params.pop("datasets")  # the data-set configs are in config.yaml
     with log_run(logger.experiment, logger.run_name, tracking_uri=logger.tracking_uri,
-                 params={"transfer": params}, config=config, dataset=list(refs.values()),
+                 params={"transfer": params, **dict(timings.get("nets", {}))},
+                 config=config, dataset=list(refs.values()),
                  tags={"task": "transfer"}) as parent:
         parent.log_metrics({"wall_s": float(timings["wall_s"])})
         for f in files.values():

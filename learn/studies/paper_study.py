@@ -364,6 +364,7 @@ def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
     str
         MLflow run id.
     """
+    from learn.learners.devices import net_record
     from learn.tracking import log_job
 
     est = make_model(job.model, random_state=random_state, scale=scale)
@@ -373,6 +374,7 @@ def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
         "scale": scale, "protocol_spec": protocol.spec(),
         "estimator": {k: v if isinstance(v, (bool, int, float, str, type(None))) else str(v)
                       for k, v in est.get_params(deep=True).items() if "__" in k},
+        **net_record(model if model is not None else est),  # where a torch net ran
     }
     return log_job(result, experiment=f"{tracking.experiment_prefix}{job.protocol}",
                    run_name=f"{job.selection_name}-{job.model}", params=params, config=params,

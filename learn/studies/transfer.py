@@ -270,11 +270,9 @@ def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int
           threads: int | None) -> tuple[list[dict], dict[str, tuple[float, float]]]:
     """Every (model, input) of one (protocol, split, seed): a unit of parallel work (a
     *job*). Returns the result rows and, by run label, the wall and CPU time of each run
-    [s] (fit, adaptations, fine-tuning and scoring; CPU: this process's)."""
-    if threads:
-        import torch
-
-        torch.set_num_threads(int(threads))
+    [s] (fit, adaptations, fine-tuning and scoring; CPU: this process's). ``threads``:
+    torch threads, set again before each run (fitting MiniRocket puts them back to the
+    number of cores, :mod:`learn.studies.latency`)."""
     meta = next(iter(inputs.values())).meta
     kshot, evaluation = None, split.test
     if protocol in OOD_PROTOCOLS:
@@ -282,15 +280,23 @@ def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int
         evaluation = kshot.evaluation
         check_no_leak(meta, split.train, kshot)
     rows, seconds = [], {}
-    for spec in specs:
-        t0, c0 = time.perf_counter(), time.process_time()
-        inp = inputs[spec.input]
-        est = make_estimator(model_cfgs[spec.model], seed, inp.n_aux, spec.params)
-        out = fit_and_adapt(spec, est, inp, split.train, evaluation, kshot, k_shots, ft,
-                            seed)
-        for r in out:
-            rows.append({"protocol": protocol, "split": split.name, **r})
-        seconds[spec.label] = (time.perf_counter() - t0, time.process_time() - c0)
+    import torch
+
+    before = torch.get_num_threads()
+    try:
+        for spec in specs:
+            if threads:
+                torch.set_num_threads(int(threads))
+            t0, c0 = time.perf_counter(), time.process_time()
+            inp = inputs[spec.input]
+            est = make_estimator(model_cfgs[spec.model], seed, inp.n_aux, spec.params)
+            out = fit_and_adapt(spec, est, inp, split.train, evaluation, kshot, k_shots,
+                                ft, seed)
+            for r in out:
+                rows.append({"protocol": protocol, "split": split.name, **r})
+            seconds[spec.label] = (time.perf_counter() - t0, time.process_time() - c0)
+    finally:
+        torch.set_num_threads(before)
     return rows, seconds
 
 
@@ -398,7 +404,7 @@ def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency:
     loaded and its inputs built when its first job is asked for, i.e. (in a pool) while
     the workers run the previous data set's last jobs."""
     k_shots = [int(k) for k in tc.k_shots]
-    threads = None if tc.n_jobs == 1 else tc.threads_per_job
+    threads = tc.n_threads if tc.n_jobs == 1 else tc.threads_per_job
     for name, load in sources:
         ds = load()
         if on_load is not None:
@@ -482,7 +488,8 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
     split_seed : int
         Seed of the CV folds (the same folds for every model seed).
     latency : bool, optional
-        Measure the inference latency (CPU, batch 1, one thread) of every (model, input)
+        Measure the inference latency (batch 1, one torch thread, on each model's
+        device: :mod:`learn.studies.latency`) of every (model, input)
         on the first data set, before its jobs start; default ``tc.latency``.
     checked : bool
         ``tc`` has passed :func:`check_config` already (the task checks it before any

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from tqdm.auto import tqdm
 
+from learn.learners.devices import check_device
 from learn.monitor.detectors import DETECTORS
 from learn.monitor.evaluate import run_detectors, run_held_out, to_frames
 from learn.monitor.model_io import MODEL_SUFFIX, save_model
@@ -68,6 +69,13 @@ class MonitorExperiment:
     n_jobs : int
         Worker processes, one part (data set, held-out gear, and detector) each.
     progress : bool
+    device : str
+        Where the torch detectors (``cnn_res``) run: ``cpu``, ``cuda``, ``cuda:N`` or
+        ``auto`` (a GPU where CUDA is present, else the CPU;
+        :data:`learn.learners.devices.DEVICE_CHOICES`); checked, and resolved on this
+        machine, before any work. A detector's part records the device it ran on (its
+        key holds it, so a part made on another device is not resumed), and the MLflow
+        run and ``table.md`` say where and whether deterministically.
     """
 
     run_on: list[str] = field(default_factory=lambda: ["bench", "robot_joint"])
@@ -76,6 +84,7 @@ class MonitorExperiment:
     report_dir: str = "reports/monitor"
     n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
     progress: bool = True
+    device: str = "auto"
 
 
 @dataclass(frozen=True)
@@ -98,9 +107,10 @@ def _hash(obj) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def plan_jobs(mc: MonitorExperiment, plans: dict[str, DatasetPlan]
+def plan_jobs(mc: MonitorExperiment, plans: dict[str, DatasetPlan], device: str = "cpu"
               ) -> tuple[list[Job], dict[str, dict[str, str]]]:
-    """The parts of an evaluation, and the detectors that cannot run on a data set.
+    """The parts of an evaluation, and the detectors that cannot run on a data set;
+    ``device``: where the torch detectors run (resolved), in their parts' keys.
 
     Returns
     -------
@@ -119,7 +129,9 @@ def plan_jobs(mc: MonitorExperiment, plans: dict[str, DatasetPlan]
             base = {"dataset": p.config_hash, "gear": g}
             jobs.append(Job(name, g, None, _hash({**base, "study": common})))
             jobs += [Job(name, g, d, _hash({**base, "study": common, "detector": d,
-                                             "detector_hours": mc.study.detector_hours}))
+                                             "detector_hours": mc.study.detector_hours,
+                                             **({"device": device}
+                                                if DETECTORS[d].uses_device else {})}))
                      for d in mc.study.detectors if not why[d]]
     return jobs, not_run
 
@@ -130,7 +142,8 @@ def run_monitor_evaluation(cfg) -> dict:
     Raises
     ------
     ValueError
-        A bad ``monitor`` key or data set, an unwritable MLflow store, or a
+        A bad ``monitor`` key or data set (``monitor.device`` outside its choices, or a
+        CUDA device on a machine without one), an unwritable MLflow store, or a
         ``report_dir`` holding a file this project cannot show it wrote (named); before
         any work.
     """
@@ -147,24 +160,39 @@ def run_monitor_evaluation(cfg) -> dict:
             plans[name] = plan(mc.datasets[name])
         except ValueError as e:
             raise ValueError(f"monitor.datasets.{name}: {e}") from None
+    nets = _nets(mc)  # a CUDA device on a machine without one: refused before any work
     if app.logger is not None:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(mc.report_dir)
     ownership.check(out, "monitor.report_dir", app="monitor")  # before any work
     with ownership.claim(out, "monitor", "monitor.report_dir", strict=True) as claim:
-        return _evaluate(app, mc, plans, out, claim)
+        return _evaluate(app, mc, plans, out, claim, nets)
 
 
-def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim) -> dict:
+def _nets(mc: MonitorExperiment) -> dict:
+    """``monitor.device`` checked and, where a torch detector is evaluated, resolved on
+    this machine: :func:`learn.learners.devices.device_record` plus ``torch_device`` (the
+    resolved device's string); empty without a torch detector (torch not imported)."""
+    check_device(mc.device, "monitor.device")
+    if not any(DETECTORS[d].uses_device for d in mc.study.detectors):
+        return {}
+    from learn.learners.devices import device_record, resolve_device
+
+    dev = resolve_device(mc.device, "monitor.device")
+    return {**device_record(dev), "torch_device": str(dev)}
+
+
+def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: dict) -> dict:
     """The evaluation into the claimed ``out`` (every file it writes recorded)."""
     (out / "parts").mkdir(parents=True, exist_ok=True)
     (out / "models").mkdir(exist_ok=True)
-    jobs, not_run = plan_jobs(mc, plans)
+    device = nets.get("torch_device", "cpu")
+    jobs, not_run = plan_jobs(mc, plans, device)
     for name, why in not_run.items():
         for d, w in why.items():
             log.warning("detector %s not run on %s: %s", d, name, w)
     t0 = time.perf_counter()
-    parts = _run_jobs(plans, jobs, mc, out)
+    parts = _run_jobs(plans, jobs, mc, out, device)
     wall = time.perf_counter() - t0
     res, fa, curve = to_frames(parts)
     write_owned(out / "results.csv", lambda tmp: res.to_csv(tmp, index=False))
@@ -179,7 +207,9 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim) -> dict
               f"{mc.study.healthy_hours:g} h per healthy life; design: one false alarm per "
               f"{mc.study.rule.design_hours:g} h. Wall time {wall / 60:.1f} min.\n"
               + "".join(f"\nDetector {d} not run on {n}: {w}.\n"
-                        for n, why in not_run.items() for d, w in why.items()))
+                        for n, why in not_run.items() for d, w in why.items())
+              + (f"\nTorch detectors on {nets['device']} ("
+                 f"{'' if nets['deterministic'] else 'not '}deterministic).\n" if nets else ""))
     write_table(res, fa, out / "table.md", header)
     figs = figures(res, fa, out, curve)
     claim.record([out / f for f in ("results.csv", "false_alarms.csv", "tradeoff.csv",
@@ -194,7 +224,7 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim) -> dict
         print(f"report: {out}/table.md (+ results.csv, false_alarms.csv, tradeoff.csv, "
               f"figures); wall time {wall / 60:.1f} min")
     if app.logger is not None:
-        _log(app, res, fa, out, wall, plans)
+        _log(app, res, fa, out, wall, plans, nets)
     det = res[(res.detector == "monitor")]
     return {"task": "monitor", "report_dir": str(out), "wall_s": wall,
             "lives": int(len(det)), "detected": float(det.detected.mean()),
@@ -223,7 +253,8 @@ def save_part(out: Path, job: Job, part: dict) -> None:
     atomic_write_json(out / "parts" / job.file, part, sort_keys=False)
 
 
-def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path) -> list[dict]:
+def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path,
+              device: str) -> list[dict]:
     """Each part, resumed from ``parts/`` when its key matches; one progress line over
     all of them (done, left, time left) and a log line per finished part."""
     done, todo = _finished(out, jobs)
@@ -234,7 +265,7 @@ def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path) -> list[
     par = joblib.Parallel(n_jobs=min(mc.n_jobs, max(1, len(todo))),
                           return_as="generator_unordered")
     t0 = time.perf_counter()
-    for part, job in par(joblib.delayed(_job)(plans[j.dataset], j, mc.study, str(out))
+    for part, job in par(joblib.delayed(_job)(plans[j.dataset], j, mc.study, str(out), device)
                          for j in todo):
         save_part(out, job, part)
         done.append(part)
@@ -247,7 +278,7 @@ def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path) -> list[
                                              p.get("detector"))])
 
 
-def _job(plan: DatasetPlan, job: Job, study: MonitorStudyConfig, out: str
+def _job(plan: DatasetPlan, job: Job, study: MonitorStudyConfig, out: str, device: str
          ) -> tuple[dict, Job]:
     """One part in a worker: the monitor's (and its diagnosis model, written to
     ``models/``) or one detector's."""
@@ -260,7 +291,8 @@ def _job(plan: DatasetPlan, job: Job, study: MonitorStudyConfig, out: str
                    [{"name": job.dataset, "config_hash": plan.config_hash, "gears": train,
                      "simulated": "training lives of learn.monitor.training"}])
     else:
-        (part,) = run_detectors(plan, job.dataset, job.gear, study, [job.detector])
+        (part,) = run_detectors(plan, job.dataset, job.gear, study, [job.detector],
+                                device=device)
     part["key"] = job.key
     for k in ("rows", "curve"):
         part[k] = pd.DataFrame(part[k]).to_dict("records")
@@ -268,7 +300,7 @@ def _job(plan: DatasetPlan, job: Job, study: MonitorStudyConfig, out: str
 
 
 def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
-         plans: dict[str, DatasetPlan]) -> None:
+         plans: dict[str, DatasetPlan], nets: dict) -> None:
     """The evaluation's MLflow run (:func:`learn.tracking.log_run`: commit, library
     versions, the resolved config)."""
     lcfg = app.logger
@@ -279,7 +311,8 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
     params = {"run_on": ",".join(mc.run_on), "seeds": str(mc.study.seeds),
               "healthy_hours": mc.study.healthy_hours,
               "design_hours": mc.study.rule.design_hours,
-              **{f"config_hash.{n}": p.config_hash for n, p in plans.items()}}
+              **{f"config_hash.{n}": p.config_hash for n, p in plans.items()},
+              **{k: v for k, v in nets.items() if k != "torch_device"}}
     with log_run("monitor", "monitor", tracking_uri=lcfg.tracking_uri, params=params,
                  config=plain(app)) as run:
         run.log_metrics({"detection_rate": float(mon.detection_rate.mean()),

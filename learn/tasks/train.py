@@ -172,6 +172,7 @@ def _log(app, result: ProtocolResult, protocol: str, estimator, X, y, last,
          model_name: str) -> str:
     """Log the job; with a signal input, a run name left at its default
     (``<features.name>-<model>``) becomes ``<input>-<model>``."""
+    from learn.learners.devices import net_record
     from learn.tracking import hydra_sweep, log_job
 
     lcfg = app.logger
@@ -182,7 +183,7 @@ def _log(app, result: ProtocolResult, protocol: str, estimator, X, y, last,
     model = _last_split_model(estimator, X, y, last) if lcfg.log_models else None
     return log_job(result, experiment=lcfg.experiment, run_name=run_name,
                    tracking_uri=lcfg.tracking_uri, confusion_plot=lcfg.confusion_plot,
-                   params=resolved, config=resolved,
+                   params={**resolved, **net_record(estimator)}, config=resolved,
                    tags={"task": "study", "protocol": protocol,
                          "input": app.input or app.features.name},
                    dataset=str(app.stored.path), model=model, model_tags={"split": last.label},

@@ -89,12 +89,42 @@ def print_summary(headline: list[str], targets: pd.DataFrame, report_dir: Path,
           f"{wall_s / 60:.1f} min on {device}")
 
 
-def _device() -> str:
-    import torch
+def net_devices(tc: TransferConfig) -> dict[str, str | int | bool]:
+    """Where the comparison's torch nets run on this machine, checked before any work.
 
-    if torch.cuda.is_available():
-        return f"GPU {torch.cuda.get_device_name(0)}"
-    return "CPU"
+    Every model of ``transfer.runs`` with a ``device`` parameter (the torch nets) has it
+    resolved (:func:`learn.learners.devices.resolve_device`; the jobs' worker processes
+    resolve it alike on this machine).
+
+    Returns
+    -------
+    dict
+        :func:`learn.learners.devices.device_record` of the nets' device (``device`` names
+        each, joined by " and ", when they differ); ``{"device": "none (no torch net)",
+        "deterministic": True}`` without a net.
+
+    Raises
+    ------
+    ValueError
+        One line naming ``transfer.models.<name>.estimator.device``: a setting outside
+        :data:`learn.learners.devices.DEVICE_CHOICES`, or a CUDA device on a machine
+        without one.
+    """
+    from learn.learners.devices import device_record, resolve_device
+    from learn.studies.runs import final_step, make_estimator
+
+    records = {}
+    for name in dict.fromkeys(s.model for s in tc.runs):
+        params = final_step(make_estimator(tc.models[name], 0, 0)).get_params(deep=False)
+        if "device" in params:
+            dev = resolve_device(params["device"], f"transfer.models.{name}.estimator.device")
+            records[str(dev)] = device_record(dev)
+    if not records:
+        return {"device": "none (no torch net)", "deterministic": True}
+    out = dict(next(iter(records.values())))
+    out["device"] = " and ".join(r["device"] for r in records.values())
+    out["deterministic"] = all(r["deterministic"] for r in records.values())
+    return out
 
 
 def _separability(ds, name: str, tc: TransferConfig, report_dir: Path, got: _Collected) -> None:
@@ -141,13 +171,14 @@ def _compare(app, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected
     return got
 
 
-def _timings(tc: TransferConfig, wall: float, input_s: float, generate_s: float) -> dict:
-    import torch
-
+def _timings(tc: TransferConfig, wall: float, input_s: float, generate_s: float,
+             nets: dict) -> dict:
     threads = (f"{tc.n_jobs} process(es) x {tc.threads_per_job or 'default'} torch thread(s)"
-               if tc.n_jobs > 1 else f"1 process x {torch.get_num_threads()} torch thread(s)")
+               if tc.n_jobs > 1 else f"1 process x {tc.n_threads} torch thread(s)")
+    det = "deterministic" if nets["deterministic"] else "not deterministic"
     return {"wall_s": wall, "input_s": input_s, "generate_s": generate_s, "threads": threads,
-            "cpus": os.cpu_count(), "device": _device()}
+            "cpus": os.cpu_count(), "device": f"{nets['device']} (the nets; {det})",
+            "nets": nets}
 
 
 def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, timings) -> dict:
@@ -203,7 +234,8 @@ def run_transfer(cfg) -> dict:
     Raises
     ------
     ValueError
-        A missing ``transfer`` config, a bad ``transfer`` key, or a ``report_dir``
+        A missing ``transfer`` config, a bad ``transfer`` key (a net's device that this
+        machine does not have among them, :func:`net_devices`), or a ``report_dir``
         holding a file this project cannot show it wrote (named); before any work.
     """
     import torch
@@ -220,6 +252,7 @@ def run_transfer(cfg) -> dict:
                          "transfer group of its own)")
     check_config(tc)
     report_dir = Path(tc.report_dir or Path(app.paths.report_dir) / "transfer")
+    nets = net_devices(tc)  # a CUDA device asked for on a machine without one: refused
     ownership.check(report_dir, "transfer.report_dir", app="transfer")  # before any work
     if tc.n_threads:
         torch.set_num_threads(int(tc.n_threads))
@@ -231,7 +264,7 @@ def run_transfer(cfg) -> dict:
         res = pd.concat(got.results, ignore_index=True)
         conf = pd.concat(got.confusion, ignore_index=True)
         wall = time.perf_counter() - t_all
-        timings = _timings(tc, wall, got.input_s, generate_s)
+        timings = _timings(tc, wall, got.input_s, generate_s, nets)
         files = _write(res, conf, got, tc, report_dir, timings)
         claim.record(files.values())
     summ = summarise(res)

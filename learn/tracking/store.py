@@ -23,6 +23,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from learn.tracking.preflight import import_failure
 from learn.tracking.provenance import repo_root
 
 #: How long a process waits for another one creating or migrating an SQLite store.
@@ -45,7 +46,12 @@ def _artifact_location(tracking_uri: str, experiment: str) -> str | None:
 
 
 def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -> str:
-    """Check that an MLflow store can be written, before any work is done.
+    """Check that an MLflow store can be written and opened, before any work is done.
+
+    After the checks of the file or folder, the store is opened as a run will open it
+    (:func:`tracking_client`: MLflow imported, an SQLite store's schema created or
+    checked, one query made), so that a broken MLflow install (a library it imports
+    missing) or a store MLflow cannot read is found before the first job.
 
     Parameters
     ----------
@@ -64,7 +70,10 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
     ValueError
         One line naming ``key`` and the URI: an SQLite store whose folder is missing or
         not writable, or whose file is not an SQLite database; a local folder store that
-        is not writable; an HTTP server that does not answer within 5 s.
+        is not writable; an HTTP server that does not answer within 5 s; a store MLflow
+        fails to open (its error's first line).
+    learn.tracking.preflight.BrokenInstall
+        MLflow (or a library it imports) cannot be imported: one line naming it.
     """
     import os
     import sqlite3
@@ -99,7 +108,26 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
         probe = folder if folder.exists() else folder.parent
         if not probe.is_dir() or not os.access(probe, os.W_OK):
             raise ValueError(f"{key}={uri}: {probe} is not a writable folder")
+    _open(uri, key)
     return uri
+
+
+def _open(uri: str, key: str) -> None:
+    """Open the store as a run will (:func:`tracking_client`); one line on failure."""
+    try:
+        import mlflow  # noqa: F401 - its import is what a broken install breaks
+    except Exception as e:  # noqa: BLE001 - any failure at import is a broken install
+        raise import_failure("mlflow", e) from None
+    try:
+        tracking_client(uri, key)
+    except ValueError:
+        raise
+    except ImportError as e:  # a store plugin or driver MLflow imports when opening
+        raise import_failure("mlflow", e) from None
+    except Exception as e:  # noqa: BLE001 - MLflow's and SQLAlchemy's errors, many types
+        first = (str(e).strip().splitlines() or [type(e).__name__])[0]
+        raise ValueError(f"{key}={uri}: MLflow cannot open the store "
+                         f"({type(e).__name__}: {first[:300]})") from None
 
 
 @contextmanager

@@ -602,6 +602,7 @@ EVAL_CASES = {  # case -> (overrides of swgsim-train experiment=monitor, the key
     "design_hours=0": (["monitor.study.rule.design_hours=0"],
                        "monitor.study.rule.design_hours"),
     "an old key": (["monitor.study.baselines=[paper_rf]"], "monitor.study.detectors"),
+    "a device that is none": (["monitor.device=gpu"], "monitor.device: must be one of"),
 }
 
 

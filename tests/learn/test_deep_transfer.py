@@ -14,6 +14,7 @@ from learn.inputs.signals import build_input
 from learn.learners.adapt import CoralClassifier
 from learn.reports.transfer_report import summarise
 from learn.studies.kshot import check_no_leak, kshot_split
+from learn.studies.latency import latency_heading
 from learn.studies.protocols import protocol_splits
 from learn.studies.transfer import CONFUSION_COLUMNS, RESULT_COLUMNS, TargetSpec
 
@@ -174,6 +175,18 @@ def test_transfer_end_to_end(tmp_path):
     table = (rep / "table.md").read_text()
     assert "worst" in table and "fine-tuned all layers, k=2" in table
     assert "latency" in table.lower()
+    lat = pd.read_csv(rep / "latency.csv")  # what was timed, and the heading says it
+    assert (lat["torch_threads"] == 1).all() and (lat["batch"] == 1).all()
+    assert f"## Inference latency per window ({latency_heading(lat)})" in table
+    import mlflow
+
+    params = mlflow.MlflowClient(f"sqlite:///{tmp_path}/mlflow.db").get_run(
+        out["run_id"]).data.params
+    from learn.learners.devices import device_label, resolve_device
+
+    here = device_label(resolve_device("auto"))  # the nets' "auto" on this machine
+    assert params["device"] == here and set(lat["device"]) <= {"cpu", here}
+    assert params["deterministic"] in ("True", "False") and "torch_threads" in params
     # the result is the declared primary, the best beside it marked as chosen afterwards
     from learn.reports.transfer_picks import BEST, PRIMARY
 
@@ -240,6 +253,8 @@ def test_transfer_experiment_composes():
      ["transfer.models.cnn.estimator:", "precision", "'half'", "auto"]),
     (["transfer.runs=[{model:cnn,input:raw,params:{precision:x}}]", "transfer.primary=null"],
      ["transfer.models.cnn.estimator with transfer.runs[0].params:", "precision"]),
+    (["transfer.models.cnn.estimator.device=gpu"],
+     ["transfer.models.cnn.estimator:", "device", "'gpu'", "cuda:N", "auto"]),
     (["transfer.runs=[{model:cnn,input:raw,params:{nope:1}}]", "transfer.primary=null"],
      ["transfer.runs[0].params:", "['nope']", "CNN1DClassifier", "precision"]),
 ])

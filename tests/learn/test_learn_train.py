@@ -110,6 +110,7 @@ def test_study_job_on_signals(tiny_dataset, tracking_uri, tmp_path, model, kind,
         assert out["mean_test_accuracy"] > least
     run = mlflow.MlflowClient(tracking_uri).get_run(out["run_id"])
     assert run.info.run_name == f"{kind}-{model}" and run.data.params["input"] == kind
+    assert run.data.params["device"] == "cpu" and run.data.params["deterministic"] == "True"
 
 
 def test_signal_input_refused_before_work(tracking_uri, tmp_path):

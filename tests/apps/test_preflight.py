@@ -1,0 +1,116 @@
+"""Everything a run needs is checked before its work: a broken install (a package that
+raises at import, planted on ``PYTHONPATH``) is one line naming the package, exit 2,
+nothing written; a tracking store MLflow cannot open is refused before any work."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from learn.tracking.preflight import BrokenInstall, check_imports
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _plant(tmp_path: Path, package: str) -> Path:
+    """A folder holding a package ``package`` that raises ImportError when imported."""
+    site = tmp_path / "broken"
+    (site / package).mkdir(parents=True)
+    (site / package / "__init__.py").write_text(
+        f"raise ImportError('{package} planted broken by the test')\n")
+    return site
+
+
+def test_check_imports_names_the_package_in_one_line(monkeypatch):
+    monkeypatch.setitem(sys.modules, "swg_missing_dep", None)  # import raises ImportError
+    check_imports(["json", "numpy"])
+    with pytest.raises(BrokenInstall) as e:
+        check_imports(["json", "swg_missing_dep", "numpy"])
+    line = str(e.value)
+    assert isinstance(e.value, ValueError) and "\n" not in line
+    assert line.startswith("broken install: swg_missing_dep cannot be imported (")
+    assert "reinstall with bash scripts/quickstart.sh" in line
+
+
+def test_any_failure_at_import_is_a_broken_install(tmp_path, monkeypatch):
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "swg_bad_dep.py").write_text("raise RuntimeError('bad build')\n")
+    monkeypatch.syspath_prepend(str(site))
+    with pytest.raises(BrokenInstall, match=r"swg_bad_dep cannot be imported \("
+                                            r"RuntimeError: bad build\)"):
+        check_imports(["swg_bad_dep"])
+
+
+def _app(tmp_path: Path, module: str, args: list[str], broken: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(_plant(tmp_path, broken)), str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    return subprocess.run([sys.executable, "-m", f"swgcli.{module}", *args,
+                           f"hydra.run.dir={tmp_path}/hydra"],
+                          capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
+
+
+@pytest.mark.parametrize(("module", "broken", "args", "out"), [
+    # mlflow imports cryptography (as in the issue's broken install): named through mlflow
+    ("train", "cryptography", ["experiment=transfer", "transfer.run_on=[]",
+                               "stored.path=nowhere"], "reports"),
+    ("generate", "h5netcdf", ["dataset=tiny"], "data"),
+])
+def test_a_broken_install_is_one_line_before_any_work(tmp_path, module, broken, args, out):
+    r = _app(tmp_path, module, [*args, f"paths.report_dir={tmp_path}/reports"
+                                if module == "train" else f"out_dir={tmp_path}/data"], broken)
+    lines = [s for s in r.stderr.splitlines() if s.strip()]
+    assert r.returncode == 2, r.stderr
+    assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    prog = "swgsim-import" if module == "importer" else f"swgsim-{module}"
+    assert lines[0].startswith(f"{prog}: error: broken install: "), lines[0]
+    assert broken in lines[0] and "reinstall with bash scripts/quickstart.sh" in lines[0]
+    assert not (tmp_path / out).exists()  # nothing written
+
+
+@pytest.mark.parametrize("kind", ["a folder", "a text file"])
+def test_a_store_mlflow_cannot_open_is_refused(tmp_path, kind):
+    from learn.tracking.store import check_tracking
+
+    db = tmp_path / "mlflow.db"
+    if kind == "a folder":
+        db.mkdir()
+    else:
+        db.write_text("not a database\n" * 100)
+    with pytest.raises(ValueError) as e:
+        check_tracking(f"sqlite:///{db}", "logger.tracking_uri")
+    line = str(e.value)
+    assert line.startswith(f"logger.tracking_uri=sqlite:///{db}: ") and "\n" not in line
+
+
+def test_check_tracking_opens_the_store(tmp_path):
+    """The store is opened (its schema created), not only its folder checked."""
+    import sqlite3
+
+    from learn.tracking.store import check_tracking
+
+    db = tmp_path / "mlflow.db"
+    check_tracking(f"sqlite:///{db}", "tracking_uri")
+    tables = {r[0] for r in sqlite3.connect(db).execute(
+        "select name from sqlite_master where type='table'")}
+    assert "experiments" in tables
+
+
+def test_a_broken_mlflow_is_found_by_the_tracking_check(tmp_path):
+    """A missing library inside MLflow (here cryptography, planted broken) is one line
+    naming it from check_tracking, in a fresh process."""
+    site = _plant(tmp_path, "cryptography")
+    code = ("from learn.tracking.store import check_tracking\n"
+            "try:\n"
+            f"    check_tracking('sqlite:///{tmp_path}/mlflow.db', 'logger.tracking_uri')\n"
+            "except ValueError as e:\n"
+            "    print(e)\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(site), str(ROOT)])}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       env=env, timeout=300)
+    assert r.stdout.startswith("broken install: mlflow cannot be imported"), r.stdout + r.stderr
+    assert "cryptography" in r.stdout
