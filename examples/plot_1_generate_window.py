@@ -21,7 +21,8 @@ from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.schema import load
 
-folder = Path(tempfile.mkdtemp()) / "tiny"
+work = tempfile.TemporaryDirectory(prefix="swg-example-")  # removed at the end
+folder = Path(work.name) / "tiny"
 cfg = dataset_config(dataset_preset("tiny"))
 cfg.gears = [g for g in cfg.gears if g.id == 1]  # one gear is enough for a look
 generate(cfg, folder, progress=False)
@@ -54,3 +55,7 @@ axes[0].legend(fontsize=8, loc="upper right")
 axes[-1].set_xlabel("time in the window [ms]")
 fig.suptitle("Gear 1 at 4000 rpm and 70 N m, clean windows", fontsize=10)
 fig.tight_layout()
+
+# %%
+# The simulated files were only for this page: remove them.
+work.cleanup()

@@ -22,7 +22,8 @@ from swgcli import dataset_preset
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 
-work = Path(tempfile.mkdtemp())
+scratch = tempfile.TemporaryDirectory(prefix="swg-example-")  # removed at the end
+work = Path(scratch.name)
 generate(dataset_config(dataset_preset("tiny")), work / "tiny", progress=False)
 run_paper_study(work / "tiny", work / "report",
                 StudyOptions(tables=["VII"], models=["rf", "knn"], figures=False),
@@ -49,3 +50,7 @@ ax.set_ylim(0, 105)
 ax.legend(fontsize=8, loc="lower right")
 ax.set_title("Table VII: 4-fold cross-validation on clean windows", fontsize=10)
 fig.tight_layout()
+
+# %%
+# The simulated files were only for this page: remove them.
+scratch.cleanup()

@@ -29,7 +29,8 @@ from swgsim.gear.faults import display_name
 
 preset = dataset_preset("tiny_bench")
 preset["variants"]["healthy"]["repeat"] = 12  # more healthy windows for the percentile
-folder = Path(tempfile.mkdtemp()) / "tiny_bench"
+work = tempfile.TemporaryDirectory(prefix="swg-example-")  # removed at the end
+folder = Path(work.name) / "tiny_bench"
 generate(dataset_config(preset), folder, progress=False)
 records = separation_records(load(folder), disturbed=False)
 table = observability_table(records, j_out=preset["load"]["j_out_kgm2"])
@@ -61,3 +62,7 @@ for ax, torque in zip(axes, loads, strict=True):
     ax.set_title(f"{torque:.0f} N m", fontsize=10)
 axes[0].set_ylabel("separation [healthy spreads]")
 fig.tight_layout()
+
+# %%
+# The simulated files were only for this page: remove them.
+work.cleanup()

@@ -36,7 +36,8 @@ model = train_model(bench, {g: record_bank(bench, g) for g in (1, 2)}, [1, 2], s
 
 life = dataset_config(dataset_preset("tiny_life"))
 life.gears = [g for g in life.gears if g.id == 3]
-folder = Path(tempfile.mkdtemp()) / "tiny_life"
+work = tempfile.TemporaryDirectory(prefix="swg-example-")  # removed at the end
+folder = Path(work.name) / "tiny_life"
 generate(life, folder, progress=False)
 rule = RuleConfig()
 result = monitor_stream(load(folder), model, rule)
@@ -64,3 +65,7 @@ ax2.set_ylabel("CUSUM")
 ax2.set_xlabel("operating hours")
 ax2.legend(fontsize=8)
 fig.tight_layout()
+
+# %%
+# The simulated files were only for this page: remove them.
+work.cleanup()
