@@ -29,14 +29,12 @@ HEAVY = ("torch", "sklearn", "skops.io", "mlflow", "aeon", "pandas", "matplotlib
 MODULES = {app: f"swgcli.{'importer' if app == 'import' else app}" for app in APPS}
 _PROBE = """import importlib, sys
 importlib.import_module(sys.argv[1])
-print(' '.join(m for m in sys.argv[2:] if m in sys.modules
-               and type(sys.modules[m]).__name__ != '_LazyModule'))"""
+print(' '.join(m for m in sys.argv[2:] if m in sys.modules))"""
 
 
 def heavy_loaded(module: str) -> list[str]:
     """The :data:`HEAVY` libraries that importing ``module`` in a fresh interpreter loads
-    (a module registered lazily, :func:`swgsim.base.lazy.lazy_module`, and not yet used
-    does not count)."""
+    (a stand-in of :func:`swgsim.base.lazy.lazy_module` not yet used is no import)."""
     out = subprocess.run([sys.executable, "-c", _PROBE, module, *HEAVY], check=True,
                          capture_output=True, text=True).stdout
     return out.split()

@@ -11,6 +11,8 @@ from __future__ import annotations
 import importlib
 from collections.abc import Sequence
 
+import numpy as np
+
 #: How a broken install is mended, said in every :class:`BrokenInstall` line.
 REINSTALL = "reinstall with bash scripts/quickstart.sh (or pip install -e .)"
 
@@ -58,10 +60,13 @@ def check_imports(modules: Sequence[str]) -> None:
         how to reinstall.
     """
     for name in modules:
+        old = np.geterr()  # kept: emlearn sets numpy.seterr(all='raise') when imported
         try:
             importlib.import_module(name)
         except Exception as e:  # noqa: BLE001 - any failure at import is a broken install
             raise import_failure(name, e) from None
+        finally:
+            np.seterr(**old)
 
 
 __all__ = ["REINSTALL", "BrokenInstall", "check_imports", "import_failure"]

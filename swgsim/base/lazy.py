@@ -47,11 +47,23 @@ def lazy_exports(package: str, exports: Mapping[str, str]
     return getattr_, dir_
 
 
+
+class _LazyModule(ModuleType):
+    """Stands in for a module not imported yet: the first attribute looked up imports it
+    (a plain import: one that fails raises and is tried again next time) and every
+    attribute is the real module's (what a test patches on it is seen here)."""
+
+    def __getattr__(self, attr: str) -> object:
+        return getattr(importlib.import_module(self.__name__), attr)
+
+    def __dir__(self) -> list[str]:
+        return dir(importlib.import_module(self.__name__))
+
+
 def lazy_module(name: str) -> ModuleType:
-    """A module that is imported on its first attribute access (the standard library's
-    :class:`importlib.util.LazyLoader`), so that a heavy library costs nothing to a
-    process that never uses it: an app's ``--help`` or a refused override answers before
-    pandas, the scipy submodules or skops are loaded.
+    """A module that is imported on its first attribute access, so that a heavy library
+    costs nothing to a process that never uses it: an app's ``--help`` or a refused
+    override answers before pandas, the scipy submodules or skops are loaded.
 
     Parameters
     ----------
@@ -62,8 +74,10 @@ def lazy_module(name: str) -> ModuleType:
     Returns
     -------
     types.ModuleType
-        The module from ``sys.modules`` if it is imported already, else the lazy module,
-        registered there (a later plain ``import`` gets the same object).
+        The module itself if it is imported already, else a stand-in that imports it on
+        first use and is not registered in ``sys.modules`` (the standard library's
+        ``importlib.util.LazyLoader`` is not used: in Python 3.11 a load that fails part
+        way, e.g. under a raising ``numpy.seterr``, leaves a half-built module behind).
 
     Raises
     ------
@@ -72,12 +86,6 @@ def lazy_module(name: str) -> ModuleType:
     """
     if name in sys.modules:
         return sys.modules[name]
-    spec = importlib.util.find_spec(name)
-    if spec is None or spec.loader is None:
+    if importlib.util.find_spec(name) is None:
         raise ModuleNotFoundError(f"No module named {name!r}", name=name)
-    loader = importlib.util.LazyLoader(spec.loader)
-    spec.loader = loader
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    loader.exec_module(module)
-    return module
+    return _LazyModule(name)

@@ -114,3 +114,10 @@ def test_a_broken_mlflow_is_found_by_the_tracking_check(tmp_path):
                        env=env, timeout=300)
     assert r.stdout.startswith("broken install: mlflow cannot be imported"), r.stdout + r.stderr
     assert "cryptography" in r.stdout
+
+
+def test_checking_imports_keeps_numpys_floating_point_state():
+    # in a fresh interpreter: emlearn sets numpy.seterr(all='raise') when first imported
+    code = ("import numpy as np\nfrom learn.tracking.preflight import check_imports\n"
+            "before = np.geterr()\ncheck_imports(['emlearn'])\nassert np.geterr() == before\n")
+    subprocess.run([sys.executable, "-c", code], check=True)
