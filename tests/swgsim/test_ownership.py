@@ -352,7 +352,7 @@ def test_the_monitors_figure_is_written_through_write_owned(tmp_path, monkeypatc
     from learn.monitor import stream
 
     with pytest.raises(atomic.DiskFullError):
-        stream.write_outputs(_TinyResult(), tmp_path, 5.0, "s")
+        stream.write_outputs(_TinyResult(), tmp_path, "s")
     assert not (tmp_path / "health.png").exists()
     assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
 
@@ -366,7 +366,7 @@ class _TinyResult:
         s = np.zeros(10)
 
     alarms, advisories, recommissioned = [], [], []
-    n_commissioning, onset_h, true_fault = 5, None, None
+    n_commissioning, onset_h, true_fault, threshold = 5, None, None, 5.0
 
     def events(self):
         return []
