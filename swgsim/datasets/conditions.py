@@ -8,8 +8,9 @@ lives through while its gear stays healthy, each with a sourced magnitude
 * **temperature**: operating days with stops, a cold start after each, a first-order
   warm-up towards a rise set by the power the gear loses at its operating point, and a
   hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`);
-* **friction**: the grease's viscosity with the temperature
-  (:func:`swgsim.gear.thermal.friction_scale`) and the run-in of a new gear
+* **friction**: its temperature law, the grease's viscosity law
+  (:func:`swgsim.gear.thermal.friction_scale`) or one drawn from a family of smooth monotone
+  laws (:class:`swgsim.gear.thermal.FrictionLaw`), and the run-in of a new gear
   (:func:`swgsim.gear.thermal.run_in_factor`);
 * **payload**: a heavier (or lighter) tool from set hours on, the acting load at every
   duty point times a factor, the commanded points unchanged;
@@ -50,8 +51,8 @@ from swgsim.gear.thermal import (
     RUN_IN_DROP,
     RUN_IN_TAU_H,
     TEMP_RANGE_C,
+    FrictionLaw,
     JointThermal,
-    friction_scale,
     joint_temperature,
     loss_power_w,
     run_in_factor,
@@ -94,7 +95,10 @@ class ConditionsConfig:
         The joint's temperature over the life; None: it stays at the catalogue's
         reference temperature (20 °C).
     viscosity : bool
-        Friction follows the grease's viscosity with the temperature.
+        Friction follows the temperature, by ``friction_law``.
+    friction_law : FrictionLaw
+        How (default: the grease's viscosity law, :func:`swgsim.gear.thermal.friction_scale`);
+        an evaluation draws it from the family.
     run_in : RunInConfig or None
         A new gear's friction running in from hour 0; None: the gear is run in.
     payload : list of [float, float]
@@ -109,6 +113,7 @@ class ConditionsConfig:
 
     thermal: JointThermal | None = field(default_factory=JointThermal)
     viscosity: bool = True
+    friction_law: FrictionLaw = field(default_factory=FrictionLaw)
     run_in: RunInConfig | None = None
     payload: list[list[float]] = field(default_factory=list)
     bridge_drift: BridgeDrift | None = field(default_factory=BridgeDrift)
@@ -132,6 +137,7 @@ def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
     """
     if cfg.thermal is not None:
         cfg.thermal.check(f"{key}.thermal")
+    cfg.friction_law.check(f"{key}.friction_law")
     if cfg.run_in is not None:
         check_range(cfg.run_in.drop, 0.0, 1.0, f"{key}.run_in.drop")
         check_range(cfg.run_in.tau_h, 0.0, 1e5, f"{key}.run_in.tau_h", "h", lo_open=True)
@@ -229,7 +235,7 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
         temp = np.full(hours.shape, REF_TEMP_C)
     run_in = (run_in_factor(hours, cfg.run_in.drop, cfg.run_in.tau_h)
               if cfg.run_in is not None else np.ones_like(hours))
-    friction = (friction_scale(temp) if cfg.viscosity else 1.0) * run_in
+    friction = (cfg.friction_law.factor(temp) if cfg.viscosity else 1.0) * run_in
     reading = None
     if cfg.temperature_sensor is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), int(life_seed), 2**22))

@@ -40,6 +40,7 @@ from swgsim.gear.flexspline import FlexsplineGeometry, TrussModel
 from swgsim.gear.friction import FrictionEffects, friction_effects_from_config
 from swgsim.gear.modes import linear_eigenvalues, rk4_stable, torsional_mode
 from swgsim.gear.sensors import signal_rows
+from swgsim.gear.thermal import FrictionLaw
 from swgsim.sensing.acquisition import check_acquisition
 from swgsim.sensing.angles import check_channels
 from swgsim.sensing.effects import SensorEffect, parse_sensor_effects
@@ -136,14 +137,20 @@ class DatasetPlan:
 
 def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
     """A data-set config as plain data, without ``profile`` and ``life.conditions`` when
-    they are None, so that a data set keeps the config (and :func:`config_hash`) it had
-    before these options."""
+    they are None and without ``life.conditions.friction_law`` when it is the default
+    (the viscosity law), so that a data set keeps the config (and :func:`config_hash`) it
+    had before these options."""
     out = dict(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
     if "profile" in out and out["profile"] is None:
         del out["profile"]
     life = out.get("life")
     if isinstance(life, dict) and "conditions" in life and life["conditions"] is None:
         out["life"] = {k: v for k, v in life.items() if k != "conditions"}
+    cond = (out.get("life") or {}).get("conditions") if isinstance(out.get("life"), dict) \
+        else None
+    if isinstance(cond, dict) and cond.get("friction_law") == dataclasses.asdict(FrictionLaw()):
+        out["life"] = {**out["life"], "conditions": {k: v for k, v in cond.items()
+                                                     if k != "friction_law"}}
     return out
 
 

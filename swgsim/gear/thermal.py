@@ -310,6 +310,83 @@ def friction_scale(temp_c, ref_c: float = REF_TEMP_C,
     return viscosity_ratio(temp_c, ref_c) ** exponent
 
 
+#: Forms of :class:`FrictionLaw` (how friction follows temperature).
+FRICTION_FORMS = ("exponential", "linear", "saturating")
+#: Width of the saturating form's tanh [K] [choice: it saturates over the −40..80 °C of a
+#: joint's life].
+SATURATING_WIDTH_K = 20.0
+
+
+@dataclass
+class FrictionLaw:
+    """How a joint's load-independent friction follows its temperature: a family of smooth
+    monotone laws, so that an evaluation can draw a joint's law instead of sharing one with
+    the method it scores (docs/PHYSICS.md; issue 44).
+
+    Every form gives the factor φ(T) on the load-independent friction, 1 at
+    :data:`REF_TEMP_C` and ``ratio_40c`` at 40 °C, the one point the sources fix (the
+    no-load running torque about ×0.63 at 40 °C against 20 °C, the issue's figure derived
+    from the grease's viscosity, :func:`friction_scale`) **[derived]**; they differ away
+    from it, where no source fixes the law:
+
+    * ``exponential``: φ = r^((T − 20)/20), the viscosity law's form (with ``ratio_40c``
+      None exactly :func:`friction_scale`): ×1.6 at 0 °C;
+    * ``linear``: φ = 1 + (r − 1)(T − 20)/20, floored at 0.2 (friction does not vanish):
+      ×1.37 at 0 °C;
+    * ``saturating``: φ = 1 − A tanh((T − 20)/w), A = (1 − r)/tanh(20/w), w =
+      :data:`SATURATING_WIDTH_K`: ×1.37 at 0 °C as the linear, ×0.51 at 80 °C (linear 0.2),
+      bounded by 1 ± A.
+
+    Attributes
+    ----------
+    form : {"exponential", "linear", "saturating"}
+    ratio_40c : float or None
+        r = φ(40 °C), in [0.3, 1]; None: the catalogue-anchored value of
+        :func:`friction_scale` (0.627).
+    """
+
+    form: str = "exponential"
+    ratio_40c: float | None = None
+
+    def check(self, key: str = "FrictionLaw") -> None:
+        """Refuse an unknown form or a ratio outside [0.3, 1], naming ``<key>.<field>``.
+
+        Raises
+        ------
+        ValueError
+        """
+        if self.form not in FRICTION_FORMS:
+            raise ValueError(f"{key}.form: {self.form!r}; allowed: {', '.join(FRICTION_FORMS)}")
+        if self.ratio_40c is not None:
+            _finite(self.ratio_40c, f"{key}.ratio_40c", 0.3, 1.0, "[0.3, 1]")
+
+    def factor(self, temp_c) -> np.ndarray:
+        """φ(T) on the load-independent friction [-].
+
+        Parameters
+        ----------
+        temp_c : array_like
+            Joint temperature, in [−40, 150] [°C].
+
+        Returns
+        -------
+        ndarray, shape of ``temp_c``
+            1 at 20 °C, ``ratio_40c`` at 40 °C; ValueError outside the temperature range.
+        """
+        if self.form == "exponential" and self.ratio_40c is None:
+            return friction_scale(temp_c)
+        t = _finite(temp_c, "temp_c", *TEMP_RANGE_C,
+                    f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] °C")
+        r = float(friction_scale(40.0)) if self.ratio_40c is None else float(self.ratio_40c)
+        x = (t - REF_TEMP_C) / 20.0
+        if self.form == "exponential":
+            return r ** x
+        if self.form == "linear":
+            return np.maximum(1.0 + (r - 1.0) * x, 0.2)
+        a = (1.0 - r) / np.tanh(20.0 / SATURATING_WIDTH_K)
+        return 1.0 - a * np.tanh((t - REF_TEMP_C) / SATURATING_WIDTH_K)
+
+
 def run_in_factor(operating_h, drop: float = RUN_IN_DROP,
                   tau_h: float = RUN_IN_TAU_H) -> np.ndarray:
     """Friction multiplier of a gear running in, 1 + drop · exp(−h / τ) [-].

@@ -15,10 +15,10 @@ from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.life import LifeSimulator
-from swgsim.datasets.plan import plan
+from swgsim.datasets.plan import config_hash, plain_config, plan
 from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import DutyPoint, LifeConfig
-from swgsim.gear.thermal import JointThermal
+from swgsim.gear.thermal import FRICTION_FORMS, FrictionLaw, JointThermal, friction_scale
 from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 
 NEUTRAL = ConditionsConfig(thermal=None, viscosity=False, run_in=None, payload=[],
@@ -88,6 +88,19 @@ def test_warmth_and_run_in_move_the_efficiency_as_the_friction_law_says(tiny):
     assert np.all(mn["efficiency"] < m0["efficiency"])  # a new gear's extra friction
 
 
+def test_the_friction_follows_the_law_drawn_for_the_joint(tiny):
+    warm = dataclasses.replace(NEUTRAL, thermal=JointThermal(ambient_swing_k=0.0),
+                               viscosity=True)
+    default = _sim(tiny, warm).conditions
+    temp = default.temperature_c
+    np.testing.assert_array_equal(default.friction, friction_scale(temp))  # as before
+    for form in FRICTION_FORMS:
+        law = FrictionLaw(form, 0.8)
+        c = _sim(tiny, dataclasses.replace(warm, friction_law=law)).conditions
+        np.testing.assert_array_equal(c.temperature_c, temp)
+        np.testing.assert_allclose(c.friction, law.factor(temp), rtol=1e-15)
+
+
 def test_a_heavier_tool_acts_at_its_load_while_the_commanded_point_stays(tiny):
     heavy = dataclasses.replace(NEUTRAL, payload=[[2.0, 1.1]])
     _, m0 = _windows(tiny, NEUTRAL)
@@ -147,3 +160,13 @@ def test_a_joint_heated_beyond_the_viscosity_laws_range_is_refused_naming_the_ca
     with pytest.raises(ValueError, match=r"conditions.thermal: the joint reaches .* °C at "
                                          r"operating hour .*r_th_k_per_w 50 K/W.*\[-40, 150\]"):
         _sim(tiny, hot)
+
+
+def test_the_default_friction_law_keeps_a_data_sets_config_hash():
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    assert "friction_law" not in plain_config(cfg)["life"]["conditions"]
+    drawn = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, conditions=(
+        dataclasses.replace(cfg.life.conditions, friction_law=FrictionLaw("linear", 0.7)))))
+    assert plain_config(drawn)["life"]["conditions"]["friction_law"] == \
+        {"form": "linear", "ratio_40c": 0.7}
+    assert config_hash(drawn) != config_hash(cfg)

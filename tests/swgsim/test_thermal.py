@@ -274,3 +274,31 @@ def test_sensor_quantises_and_adds_seeded_noise():
     assert raw.std() == pytest.approx(0.05, rel=0.03)  # 1 % sd of the estimate
     with pytest.raises(ValueError, match="TemperatureSensor.resolution_k"):
         bd.TemperatureSensor(resolution_k=-0.1).check()
+
+
+@pytest.mark.parametrize("form", th.FRICTION_FORMS)
+def test_every_friction_law_is_anchored_at_20_and_40_degc_and_falls_smoothly(form):
+    t = np.linspace(-40.0, 150.0, 1901)
+    for r in (0.3, 0.63, 0.8, 1.0):
+        phi = th.FrictionLaw(form, r).factor(t)
+        assert th.FrictionLaw(form, r).factor(20.0) == pytest.approx(1.0, abs=1e-15)
+        assert th.FrictionLaw(form, r).factor(40.0) == pytest.approx(r, rel=1e-12)
+        assert np.all(phi > 0) and np.all(np.diff(phi) <= 0)  # positive, monotone
+    far = th.FrictionLaw(form, 0.63).factor([0.0, 80.0])
+    assert far[0] > 1.3 and far[1] < 0.6  # each law warmer: less friction, colder: more
+
+
+def test_the_default_friction_law_is_the_viscosity_law_and_the_forms_differ_off_the_anchors():
+    t = np.array([-20.0, 0.0, 20.0, 40.0, 60.0, 100.0])
+    np.testing.assert_array_equal(th.FrictionLaw().factor(t), th.friction_scale(t))
+    at_80 = {f: float(th.FrictionLaw(f).factor(80.0)) for f in th.FRICTION_FORMS}
+    assert len({round(v, 2) for v in at_80.values()}) == 3  # three laws, not one
+
+
+@pytest.mark.parametrize(("law", "match"), [
+    (th.FrictionLaw("cubic"), r"c.form: 'cubic'; allowed: exponential, linear, saturating"),
+    (th.FrictionLaw("linear", 0.2), r"c.ratio_40c.*\[0.3, 1\]"),
+    (th.FrictionLaw("linear", float("nan")), r"c.ratio_40c")])
+def test_a_friction_law_out_of_range_is_refused_naming_the_key(law, match):
+    with pytest.raises(ValueError, match=match):
+        law.check("c")
