@@ -22,9 +22,13 @@ carry it to the conditions commissioning did not see:
   warm joint to the cold start, robot_joint gear 2, seed 3);
 * **efficiency, temperature and load**: the loss torque ``L = τ (1/η − 1)`` at the output
   is ``A_n φ(T) + B_n τ`` per input speed n: a load-independent part following the
-  grease's viscosity (φ, the catalogue law of :func:`swgsim.gear.thermal.friction_scale`;
-  Harmonic Drive engineering data: no-load running torque over temperature) and a part
-  proportional to the load (the mesh's); A_n and B_n fitted at commissioning;
+  temperature (φ = exp(θ (T − 20 °C)), the rate θ learnt from the joint's commissioning
+  windows over every ratio a smooth monotone law can have at 40 °C, :data:`FRICTION_RATES`,
+  not the catalogue's viscosity law; Harmonic Drive engineering data: no-load running
+  torque over temperature) and a part proportional to the load (the mesh's); A_n and B_n
+  fitted at commissioning with θ. Within commissioning's range any smooth monotone law is
+  close to one exponential; beyond it the learnt law is extrapolated, in the widened spread
+  of :meth:`NormalBehaviour.z_and_spread`;
 * **the acting load**: the gauges are linear in the output torque, so a Fourier
   coefficient is ``a + τ b`` and its squared amplitude a quadratic in τ, through the
   commissioning means at the loads of the same speed (exact with three); an offset is a
@@ -63,7 +67,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.base.typed import check_range
-from swgsim.gear.thermal import friction_scale
+from swgsim.gear.thermal import REF_TEMP_C
 
 from .features import N_HARMONICS
 
@@ -75,6 +79,12 @@ OUTSIDE_TEMPERATURE, OUTSIDE_LOAD, OUTSIDE_FRICTION = 1, 2, 4
 #: Bit of :meth:`NormalBehaviour.outside`: the window is not judged (its temperature is
 #: outside and no temperature law carries the normal behaviour there).
 OUTSIDE_UNJUDGED = 8
+#: Rates θ [1/K] of the friction's temperature law exp(θ (T − 20 °C)) that commissioning
+#: chooses from (:func:`_loss_model`): the friction at 40 °C 0.3 to 1 times that at 20 °C,
+#: every ratio a smooth monotone law can have there (0.63 the catalogue's,
+#: :class:`swgsim.gear.thermal.FrictionLaw`), in steps of 0.0005 1/K (about 1 % at 40 °C),
+#: refined between them; learnt from the joint's own windows, not the catalogue's law.
+FRICTION_RATES = np.linspace(np.log(0.3) / 20.0, 0.0, 121)
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
 #: An amplitude enters the fit of its bridge's gain when its mean is this many standard
@@ -245,6 +255,7 @@ class NormalBehaviour:
     count: np.ndarray | None = None
     slope: np.ndarray | None = None
     friction_range: np.ndarray = field(default_factory=lambda: np.ones(2))
+    friction_rate: float = 0.0
 
     # ------------------------------------------------------------------ fitting
     @classmethod
@@ -279,10 +290,10 @@ class NormalBehaviour:
                                if temp is not None else [np.nan, np.nan] for k in range(n_p)])
         dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
         gain, zero = (_bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
-        loss = _loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
+        loss, rate = _loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
-                 np.bincount(inv, minlength=n_p))
+                 np.bincount(inv, minlength=n_p), friction_rate=rate)
         if use_t:
             nb.slope = _feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
         warm = nb._temperature_corrected(feats, inv, dt)
@@ -503,7 +514,7 @@ class NormalBehaviour:
     def _loss(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
         """Predicted loss torque at each window's load and temperature [N m]."""
         tq = np.abs(cond.torque_nm)
-        phi = (friction_scale(cond.temperature_c)
+        phi = (np.exp(self.friction_rate * (cond.temperature_c - REF_TEMP_C))
                if cond.temperature_c is not None and np.isfinite(self.ref_temp).all()
                else np.ones(len(i)))
         return self.loss[i, 0] * phi + self.loss[i, 1] * tq
@@ -585,13 +596,34 @@ def _feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.nd
 
 
 def _loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
-                ops: np.ndarray, inv: np.ndarray) -> np.ndarray:
-    """(A, B) per point: the loss torque τ (1/η − 1) ≈ A φ(T) + B τ by least squares over
-    the windows at the point's speed (module docstring), shape (P, 2)."""
+                ops: np.ndarray, inv: np.ndarray) -> tuple[np.ndarray, float]:
+    """(A, B) per point and the joint's friction-temperature rate θ: the loss torque
+    τ (1/η − 1) ≈ A exp(θ (T − 20 °C)) + B τ by least squares over the windows at the
+    point's speed (module docstring), θ the one of :data:`FRICTION_RATES` that fits
+    commissioning best; shape (P, 2), and θ [1/K] (0 without temperature)."""
     tq = np.abs(torque)
     loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
-    phi = friction_scale(temp) if temp is not None else np.ones(len(eta))
-    out = np.zeros((len(ops), 2))
+    if temp is None:
+        return _loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], 0.0
+    def fit(rate):
+        return _loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)
+
+    sse = np.array([fit(r)[1] for r in FRICTION_RATES])
+    k = int(np.clip(np.argmin(sse), 1, len(sse) - 2))
+    rate = float(FRICTION_RATES[k])
+    curv = sse[k - 1] - 2.0 * sse[k] + sse[k + 1]
+    if curv > 0:  # the parabola's vertex through the best three, within their span
+        step = float(FRICTION_RATES[1] - FRICTION_RATES[0])
+        rate += step * float(np.clip(0.5 * (sse[k - 1] - sse[k + 1]) / curv, -1.0, 1.0))
+    rate = float(np.clip(rate, FRICTION_RATES[0], FRICTION_RATES[-1]))
+    return fit(rate)[0], rate
+
+
+def _loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np.ndarray,
+                       inv: np.ndarray) -> tuple[np.ndarray, float]:
+    """(A, B) per point for the friction factors ``phi`` of the windows, shape (P, 2), and
+    the sum of squared residuals [N² m²]."""
+    out, sse = np.zeros((len(ops), 2)), 0.0
     for n in np.unique(ops[:, 0]):
         ks = np.flatnonzero(ops[:, 0] == n)
         m = np.isin(inv, ks)
@@ -600,8 +632,9 @@ def _loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
             coef = np.array([np.mean(loss[m] / phi[m]), 0.0])
         else:
             coef = np.linalg.lstsq(x, loss[m], rcond=None)[0]
+        sse += float(np.sum((x @ coef - loss[m]) ** 2))
         out[ks] = coef
-    return out
+    return out, sse
 
 
 def _load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,

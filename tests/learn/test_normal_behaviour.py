@@ -190,3 +190,18 @@ def test_a_constant_commissioning_temperature_keeps_its_range_widened_by_the_unc
                                      OUTSIDE_TEMPERATURE | OUTSIDE_UNJUDGED]
     with pytest.raises(ValueError, match="normal.temperature_uncertainty_k"):
         NormalConfig(temperature_uncertainty_k=-1.0).check("normal")
+
+
+@pytest.mark.parametrize("rate", [-0.06, -0.0233, -0.011, 0.0])
+def test_the_friction_temperature_rate_is_learnt_from_commissioning(rate):
+    from learn.monitor.normal import _loss_model
+
+    rng = np.random.default_rng(3)
+    temp = rng.uniform(18.0, 45.0, 600)
+    ops = np.array([[2000.0, 10.0], [2000.0, 50.0], [2000.0, 90.0]])
+    inv = rng.integers(0, 3, 600)
+    tq = ops[inv, 1]
+    loss = 4.0 * np.exp(rate * (temp - 20.0)) + 0.1 * tq
+    coef, learnt = _loss_model(tq / (tq + loss), tq, temp, ops, inv)
+    assert learnt == pytest.approx(rate, abs=1e-4)
+    np.testing.assert_allclose(coef, [[4.0, 0.1]] * 3, rtol=1e-3)

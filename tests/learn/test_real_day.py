@@ -21,6 +21,7 @@ from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import plan
 from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import FaultOnset
+from swgsim.gear.thermal import FrictionLaw
 
 
 @pytest.fixture(scope="module")
@@ -181,3 +182,20 @@ def test_the_monitor_app_ends_well_on_a_day_with_recommissioned_points(model, tm
         "recommissioned")
     report = (tmp_path / "out" / "report.md").read_text()
     assert report.count("- recommissioned at ") == kinds.count("recommissioned")
+
+
+@pytest.mark.parametrize(("form", "ratio_40c"), [("linear", 0.8), ("exponential", 0.5),
+                                                 ("saturating", 0.8)])
+def test_a_joint_whose_friction_follows_another_law_raises_no_gear_fault_alarm(
+        model, day, form, ratio_40c):
+    """Daily warm-ups with the friction following a law the monitor does not share (the
+    catalogue's viscosity law gave an eccentric-WG alarm at 32.4 h for each of these): the
+    monitor learns the joint's law at commissioning (learn/monitor/normal.py)."""
+    p, bank = day
+    life = p.config.life
+    law = FrictionLaw(form, ratio_40c)
+    life = dataclasses.replace(life, conditions=dataclasses.replace(life.conditions,
+                                                                    friction_law=law))
+    ds = life_dataset(LifeSimulator(p, 3, life, bank))
+    res = monitor_stream(ds, model, RuleConfig(), source="day")
+    assert res.alarms == []
