@@ -26,7 +26,10 @@ carry it to the conditions commissioning did not see:
   windows over every ratio a smooth monotone law can have at 40 °C, :data:`FRICTION_RATES`,
   not the catalogue's viscosity law; Harmonic Drive engineering data: no-load running
   torque over temperature) and a part proportional to the load (the mesh's); A_n and B_n
-  fitted at commissioning with θ. Within commissioning's range any smooth monotone law is
+  fitted at commissioning with θ. θ is learnt only where commissioning saw the joint cool
+  (a cold start, :func:`_cools`): over a single warm-up a run-in lowers the loss as the
+  temperature rises and would pass for the law; there the catalogue's viscosity law is
+  kept (:data:`CATALOGUE_RATE`). Within commissioning's range any smooth monotone law is
   close to one exponential; beyond it the learnt law is extrapolated, in the widened spread
   of :meth:`NormalBehaviour.z_and_spread`;
 * **the acting load**: the gauges are linear in the output torque, so a Fourier
@@ -67,7 +70,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.base.typed import check_range
-from swgsim.gear.thermal import REF_TEMP_C
+from swgsim.gear.thermal import FRICTION_EXPONENT, REF_TEMP_C, VISCOSITY_COEFF_PER_K
 
 from .features import N_HARMONICS
 
@@ -85,6 +88,9 @@ OUTSIDE_UNJUDGED = 8
 #: :class:`swgsim.gear.thermal.FrictionLaw`), in steps of 0.0005 1/K (about 1 % at 40 °C),
 #: refined between them; learnt from the joint's own windows, not the catalogue's law.
 FRICTION_RATES = np.linspace(np.log(0.3) / 20.0, 0.0, 121)
+#: θ of the catalogue's viscosity law (:func:`swgsim.gear.thermal.friction_scale`, −0.0233
+#: 1/K), used only where commissioning cannot learn the joint's own (:func:`_cools`).
+CATALOGUE_RATE = -VISCOSITY_COEFF_PER_K * FRICTION_EXPONENT
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
 #: An amplitude enters the fit of its bridge's gain when its mean is this many standard
@@ -605,6 +611,9 @@ def _loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
     loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
     if temp is None:
         return _loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], 0.0
+    if not _cools(temp):  # one warm-up: a run-in would pass for the law; the catalogue's
+        rate = CATALOGUE_RATE
+        return _loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)[0], rate
     def fit(rate):
         return _loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)
 
@@ -618,6 +627,14 @@ def _loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
     rate = float(np.clip(rate, FRICTION_RATES[0], FRICTION_RATES[-1]))
     return fit(rate)[0], rate
 
+
+
+def _cools(temp: np.ndarray) -> bool:
+    """Whether commissioning's temperature (windows in time order) falls by at least
+    :data:`MIN_SPREAD_K` below an earlier reading somewhere (a cold start): only then can
+    the friction's temperature law be told from a slow drift in time (run-in), which over
+    a single warm-up falls as the temperature rises."""
+    return bool(np.max(np.maximum.accumulate(temp) - temp) >= MIN_SPREAD_K)
 
 def _loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np.ndarray,
                        inv: np.ndarray) -> tuple[np.ndarray, float]:

@@ -205,3 +205,20 @@ def test_the_friction_temperature_rate_is_learnt_from_commissioning(rate):
     coef, learnt = _loss_model(tq / (tq + loss), tq, temp, ops, inv)
     assert learnt == pytest.approx(rate, abs=1e-4)
     np.testing.assert_allclose(coef, [[4.0, 0.1]] * 3, rtol=1e-3)
+
+
+def test_over_a_single_warm_up_the_catalogues_law_is_kept_and_a_cold_start_lets_it_learn():
+    """Over one warm-up a run-in would pass for the friction's temperature law (learnt
+    only after commissioning saw the joint cool, learn/monitor/normal.py)."""
+    from learn.monitor.normal import CATALOGUE_RATE, _loss_model
+
+    hours = np.linspace(0.0, 8.0, 480)
+    warm = 20.0 + 20.0 * (1.0 - np.exp(-hours / 0.5))  # one warm-up, no cold start
+    day = np.where(hours < 4.0, warm, 20.0 + 20.0 * (1.0 - np.exp(-(hours - 4.0) / 0.5)))
+    ops = np.array([[2000.0, 10.0], [2000.0, 90.0]])
+    inv = np.arange(480) % 2
+    tq = ops[inv, 1]
+    for temp, want in ((warm, CATALOGUE_RATE), (day, -0.01)):
+        loss = 4.0 * np.exp(-0.01 * (temp - 20.0)) + 0.1 * tq
+        assert _loss_model(tq / (tq + loss), tq, temp, ops, inv)[1] == \
+            pytest.approx(want, abs=1e-4)
