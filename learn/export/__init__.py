@@ -23,11 +23,8 @@ def import_emlearn():
     """
     import numpy as np
 
-    old = np.geterr()
-    try:
+    with np.errstate():  # restores the state on the way out
         import emlearn
         import emlearn.trees  # noqa: F401
-    finally:
-        np.seterr(**old)
     return emlearn
 

@@ -60,13 +60,11 @@ def check_imports(modules: Sequence[str]) -> None:
         how to reinstall.
     """
     for name in modules:
-        old = np.geterr()  # kept: emlearn sets numpy.seterr(all='raise') when imported
         try:
-            importlib.import_module(name)
+            with np.errstate():  # kept: emlearn sets numpy.seterr(all='raise') when imported
+                importlib.import_module(name)
         except Exception as e:  # noqa: BLE001 - any failure at import is a broken install
             raise import_failure(name, e) from None
-        finally:
-            np.seterr(**old)
 
 
 __all__ = ["REINSTALL", "BrokenInstall", "check_imports", "import_failure"]
