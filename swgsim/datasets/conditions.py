@@ -17,7 +17,9 @@ lives through while its gear stays healthy, each with a sourced magnitude
 * **bridges**: each bridge's zero and span drift with the temperature, per gear
   (:func:`swgsim.sensing.bridge_drift.draw_bridge_drift`);
 * **temperature sensor**: the joint's reading, ``temperature_c`` of every window
-  (None: the stream has no temperature).
+  (None: the stream has no temperature), and its fault from a set hour on, stuck, drifting
+  or lost (NaN readings; :class:`swgsim.sensing.bridge_drift.TemperatureSensor`): the
+  reading alone is wrong, the joint's true temperature and all it drives stay.
 
 How a window gets them (:func:`window_conditions`, used by
 :class:`swgsim.datasets.life.LifeSimulator`): its record is that of the nominal gear at
@@ -168,7 +170,8 @@ class WindowConditions:
     temperature_c : ndarray, shape (W,)
         The joint's true temperature [°C].
     reading_c : ndarray, shape (W,) or None
-        The temperature sensor's reading [°C] (None without a sensor).
+        The temperature sensor's reading [°C] (None without a sensor; NaN where its fault
+        is a dropout).
     friction : ndarray, shape (W,)
         Factor on the load-independent friction (viscosity, run-in) [-].
     mu_factor : ndarray, shape (W,)
@@ -239,7 +242,8 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     reading = None
     if cfg.temperature_sensor is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), int(life_seed), 2**22))
-        reading = measure_temperature(temp, cfg.temperature_sensor, np.random.default_rng(ss))
+        reading = measure_temperature(temp, cfg.temperature_sensor, np.random.default_rng(ss),
+                                      hours=hours)
     zero, span, ref = np.zeros(5), np.zeros(5), REF_TEMP_C
     if cfg.bridge_drift is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), 2**21))

@@ -19,7 +19,11 @@ from swgsim.datasets.plan import config_hash, plain_config, plan
 from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import DutyPoint, LifeConfig
 from swgsim.gear.thermal import FRICTION_FORMS, FrictionLaw, JointThermal, friction_scale
-from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
+from swgsim.sensing.bridge_drift import (
+    TEMPERATURE_SENSOR_FAULTS,
+    BridgeDrift,
+    TemperatureSensor,
+)
 
 NEUTRAL = ConditionsConfig(thermal=None, viscosity=False, run_in=None, payload=[],
                            bridge_drift=None, temperature_sensor=None)
@@ -121,6 +125,11 @@ def test_a_heavier_tool_acts_at_its_load_while_the_commanded_point_stays(tiny):
     ({"thermal": {"tau_min": -1.0}}, "dataset.life.conditions.thermal.tau_min"),
     ({"temperature_sensor": {"noise_sd_k": -1.0}},
      "dataset.life.conditions.temperature_sensor.noise_sd_k"),
+    ({"temperature_sensor": {"fault": "frozen"}},
+     r"^dataset.life.conditions.temperature_sensor.fault: 'frozen'; allowed: none, stuck, "
+     r"drift, dropout$"),
+    ({"temperature_sensor": {"fault": "stuck", "fault_hour": -2.0}},
+     r"dataset.life.conditions.temperature_sensor.fault_hour must lie in \[0, inf\) h"),
 ])
 def test_bad_conditions_are_refused_naming_the_key(edit, key):
     cfg = dataset_preset("tiny_life")
@@ -170,3 +179,50 @@ def test_the_default_friction_law_keeps_a_data_sets_config_hash():
     assert plain_config(drawn)["life"]["conditions"]["friction_law"] == \
         {"form": "linear", "ratio_40c": 0.7}
     assert config_hash(drawn) != config_hash(cfg)
+
+
+def test_a_faulty_temperature_sensor_changes_the_reading_alone(tiny):
+    warm = dataclasses.replace(NEUTRAL, thermal=JointThermal(), viscosity=True,
+                               temperature_sensor=TemperatureSensor())
+    good = _sim(tiny, warm).conditions
+    hour = _sim(tiny, warm).schedule.hour
+    before = hour < 2.0
+    for fault in TEMPERATURE_SENSOR_FAULTS[1:]:
+        sensor = TemperatureSensor(fault=fault, fault_hour=2.0, drift_k_per_h=0.5)
+        c = _sim(tiny, dataclasses.replace(warm, temperature_sensor=sensor)).conditions
+        np.testing.assert_array_equal(c.temperature_c, good.temperature_c)
+        np.testing.assert_array_equal(c.friction, good.friction)
+        np.testing.assert_array_equal(c.reading_c[before], good.reading_c[before])
+        assert not np.array_equal(c.reading_c[~before], good.reading_c[~before],
+                                  equal_nan=True)
+
+
+def test_a_faultless_sensor_keeps_a_data_sets_config_hash():
+    """The faultless sensor's fields are left out of the config: tiny_real_day keeps the
+    hash it had before the faults (measured then, as every preset's)."""
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    assert config_hash(cfg) == "28bc082330ec940a"
+    assert plain_config(cfg)["life"]["conditions"]["temperature_sensor"] == \
+        {"resolution_k": 0.1, "noise_sd_k": 0.05}
+    stuck = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, conditions=(
+        dataclasses.replace(cfg.life.conditions, temperature_sensor=TemperatureSensor(
+            fault="stuck", fault_hour=30.0)))))
+    assert plain_config(stuck)["life"]["conditions"]["temperature_sensor"] == \
+        {"resolution_k": 0.1, "noise_sd_k": 0.05, "fault": "stuck", "fault_hour": 30.0}
+    assert config_hash(stuck) != config_hash(cfg)
+
+
+def test_a_life_whose_sensor_drops_out_is_written_and_read_back_with_nan(tmp_path):
+    from swgsim.datasets.schema import load
+
+    cfg = dataset_config(dataset_preset("tiny_life"))
+    cfg.gears = cfg.gears[:1]
+    cfg.life.hours, cfg.life.commissioning_h = 1.0, 0.5
+    cfg.life.conditions = ConditionsConfig(temperature_sensor=TemperatureSensor(
+        fault="dropout", fault_hour=0.6))
+    out = generate(cfg, tmp_path / "life", progress=False)
+    assert out["complete"] and out["windows"] == 60
+    ds = load(tmp_path / "life")
+    hour, temp = ds["hour"].values, ds["temperature_c"].values
+    assert np.all(np.isnan(temp[hour >= 0.6])) and np.all(np.isfinite(temp[hour < 0.6]))
+    assert np.all(np.isfinite(ds["strain_signal"].values))
