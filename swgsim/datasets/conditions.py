@@ -10,8 +10,9 @@ lives through while its gear stays healthy, each with a sourced magnitude
   hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`);
 * **friction**: its temperature law, the grease's viscosity law
   (:func:`swgsim.gear.thermal.friction_scale`) or one drawn from a family of smooth monotone
-  laws (:class:`swgsim.gear.thermal.FrictionLaw`), and the run-in of a new gear
-  (:func:`swgsim.gear.thermal.run_in_factor`);
+  laws (:class:`swgsim.gear.thermal.FrictionLaw`), the run-in of a new gear
+  (:func:`swgsim.gear.thermal.run_in_factor`) and its running in again after each
+  re-greasing in service (:func:`swgsim.gear.thermal.regrease_factor`);
 * **payload**: a heavier (or lighter) tool from set hours on, the acting load at every
   duty point times a factor, the commanded points unchanged;
 * **bridges**: each bridge's zero and span drift with the temperature, per gear
@@ -50,6 +51,8 @@ from swgsim.base.typed import check_range
 from swgsim.gear.faults import ChainParams
 from swgsim.gear.thermal import (
     REF_TEMP_C,
+    REGREASE_DROP,
+    REGREASE_TAU_H,
     RUN_IN_DROP,
     RUN_IN_TAU_H,
     TEMP_RANGE_C,
@@ -57,6 +60,7 @@ from swgsim.gear.thermal import (
     JointThermal,
     joint_temperature,
     loss_power_w,
+    regrease_factor,
     run_in_factor,
     steady_efficiency,
 )
@@ -67,7 +71,7 @@ from swgsim.sensing.bridge_drift import (
     measure_temperature,
 )
 
-__all__ = ["ConditionsConfig", "RunInConfig", "WindowConditions", "check_conditions",
+__all__ = ["ConditionsConfig", "Regrease", "RunInConfig", "WindowConditions", "check_conditions",
            "efficiency_ratio", "window_conditions"]
 
 
@@ -88,6 +92,28 @@ class RunInConfig:
 
 
 @dataclass
+class Regrease:
+    """Re-greasing in service: the friction steps up and runs in again
+    (:func:`swgsim.gear.thermal.regrease_factor`; the latest re-greasing counts).
+
+    Attributes
+    ----------
+    hours : list of float
+        Operating hours of the re-greasings, increasing, inside the life [h].
+    drop : float
+        Excess friction just after a re-greasing, in [0, 1] [-] (0.3) [choice: fresh
+        grease churns until it has redistributed].
+    tau_h : float
+        Time constant of running in again, > 0 [operating h] (8: over in about a day)
+        [choice].
+    """
+
+    hours: list[float]
+    drop: float = REGREASE_DROP
+    tau_h: float = REGREASE_TAU_H
+
+
+@dataclass
 class ConditionsConfig:
     """What changes while the gear stays healthy (module docstring).
 
@@ -103,6 +129,8 @@ class ConditionsConfig:
         an evaluation draws it from the family.
     run_in : RunInConfig or None
         A new gear's friction running in from hour 0; None: the gear is run in.
+    regrease : Regrease or None
+        Re-greasings in service, each followed by a run-in; None: none.
     payload : list of [float, float]
         ``[operating hour, factor]`` pairs, hours increasing: from each hour on, the acting
         load at every duty point is the commanded one times the factor (> 0); before the
@@ -117,6 +145,7 @@ class ConditionsConfig:
     viscosity: bool = True
     friction_law: FrictionLaw = field(default_factory=FrictionLaw)
     run_in: RunInConfig | None = None
+    regrease: Regrease | None = None
     payload: list[list[float]] = field(default_factory=list)
     bridge_drift: BridgeDrift | None = field(default_factory=BridgeDrift)
     temperature_sensor: TemperatureSensor | None = field(default_factory=TemperatureSensor)
@@ -143,6 +172,8 @@ def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
     if cfg.run_in is not None:
         check_range(cfg.run_in.drop, 0.0, 1.0, f"{key}.run_in.drop")
         check_range(cfg.run_in.tau_h, 0.0, 1e5, f"{key}.run_in.tau_h", "h", lo_open=True)
+    if cfg.regrease is not None:
+        _check_regrease(cfg.regrease, hours, f"{key}.regrease")
     last = -np.inf
     for i, step in enumerate(cfg.payload):
         if len(step) != 2:
@@ -161,6 +192,21 @@ def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
         cfg.temperature_sensor.check(f"{key}.temperature_sensor")
 
 
+def _check_regrease(cfg: Regrease, hours: float, key: str) -> None:
+    """Refuse re-greasing hours outside the life or not increasing, a drop or time
+    constant out of range, in one line naming ``<key>.<field>``."""
+    if len(cfg.hours) == 0:
+        raise ValueError(f"{key}.hours must name at least one operating hour (no "
+                         f"re-greasing: {key}: null)")
+    for i, h in enumerate(cfg.hours):
+        check_range(h, 0.0, hours, f"{key}.hours[{i}]", "h",
+                    why="an operating hour inside the life")
+    if any(b <= a for a, b in zip(cfg.hours[:-1], cfg.hours[1:], strict=True)):
+        raise ValueError(f"{key}.hours must increase, got {list(cfg.hours)}")
+    check_range(cfg.drop, 0.0, 1.0, f"{key}.drop")
+    check_range(cfg.tau_h, 0.0, 1e5, f"{key}.tau_h", "h", lo_open=True)
+
+
 @dataclass(frozen=True)
 class WindowConditions:
     """The conditions of every window of a life's schedule.
@@ -173,9 +219,9 @@ class WindowConditions:
         The temperature sensor's reading [°C] (None without a sensor; NaN where its fault
         is a dropout).
     friction : ndarray, shape (W,)
-        Factor on the load-independent friction (viscosity, run-in) [-].
+        Factor on the load-independent friction (viscosity, run-in, re-greasing) [-].
     mu_factor : ndarray, shape (W,)
-        Factor on the mesh's load-proportional friction μ (run-in) [-].
+        Factor on the mesh's load-proportional friction μ (run-in, re-greasing) [-].
     payload : ndarray, shape (W,)
         Factor on the acting load [-].
     zero_mvv_per_k, span_per_k : ndarray, shape (5,)
@@ -238,6 +284,9 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
         temp = np.full(hours.shape, REF_TEMP_C)
     run_in = (run_in_factor(hours, cfg.run_in.drop, cfg.run_in.tau_h)
               if cfg.run_in is not None else np.ones_like(hours))
+    if cfg.regrease is not None:
+        rg = cfg.regrease
+        run_in = run_in * regrease_factor(hours, rg.hours, rg.drop, rg.tau_h)
     friction = (cfg.friction_law.factor(temp) if cfg.viscosity else 1.0) * run_in
     reading = None
     if cfg.temperature_sensor is not None:

@@ -11,14 +11,20 @@ import numpy as np
 import pytest
 
 from swgcli import dataset_preset
-from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
+from swgsim.datasets.conditions import ConditionsConfig, Regrease, RunInConfig
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import config_hash, plain_config, plan
 from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import DutyPoint, LifeConfig
-from swgsim.gear.thermal import FRICTION_FORMS, FrictionLaw, JointThermal, friction_scale
+from swgsim.gear.thermal import (
+    FRICTION_FORMS,
+    FrictionLaw,
+    JointThermal,
+    friction_scale,
+    run_in_factor,
+)
 from swgsim.sensing.bridge_drift import (
     TEMPERATURE_SENSOR_FAULTS,
     BridgeDrift,
@@ -122,6 +128,17 @@ def test_a_heavier_tool_acts_at_its_load_while_the_commanded_point_stays(tiny):
     ({"payload": [[1.0, 0.0]]}, r"payload\[0\]\[1\] must lie in \(0, 10\]"),
     ({"payload": [[2.0, 1.1], [1.5, 1.2]]}, "hours must increase"),
     ({"run_in": {"drop": 2.0}}, r"dataset.life.conditions.run_in.drop must lie in \[0, 1\]"),
+    ({"regrease": {"hours": [1.0, 4.0]}},
+     r"^dataset.life.conditions.regrease.hours\[1\] must lie in \[0, 3\] h \(an operating "
+     r"hour inside the life\), got 4.0$"),
+    ({"regrease": {"hours": [2.0, 1.0]}},
+     r"^dataset.life.conditions.regrease.hours must increase, got \[2.0, 1.0\]$"),
+    ({"regrease": {"hours": []}}, r"dataset.life.conditions.regrease.hours must name at least"),
+    ({"regrease": {"hours": [1.0], "drop": 1.2}},
+     r"^dataset.life.conditions.regrease.drop must lie in \[0, 1\], got 1.2$"),
+    ({"regrease": {"hours": [1.0], "tau_h": 0.0}},
+     r"^dataset.life.conditions.regrease.tau_h must lie in \(0, 100000\] h, got 0.0$"),
+    ({"regrease": {"drop": 0.2}}, r"dataset.life.conditions.regrease.hours: missing key"),
     ({"thermal": {"tau_min": -1.0}}, "dataset.life.conditions.thermal.tau_min"),
     ({"temperature_sensor": {"noise_sd_k": -1.0}},
      "dataset.life.conditions.temperature_sensor.noise_sd_k"),
@@ -226,3 +243,33 @@ def test_a_life_whose_sensor_drops_out_is_written_and_read_back_with_nan(tmp_pat
     hour, temp = ds["hour"].values, ds["temperature_c"].values
     assert np.all(np.isnan(temp[hour >= 0.6])) and np.all(np.isfinite(temp[hour < 0.6]))
     assert np.all(np.isfinite(ds["strain_signal"].values))
+
+
+def test_regreasing_steps_the_friction_up_and_it_runs_in_again(tiny):
+    rg = dataclasses.replace(NEUTRAL, regrease=Regrease([1.5], drop=0.3, tau_h=0.5))
+    sim = _sim(tiny, rg)
+    c, hour = sim.conditions, sim.schedule.hour
+    after = hour >= 1.5
+    np.testing.assert_array_equal(c.friction[~after], 1.0)
+    np.testing.assert_allclose(c.friction[after], 1.0 + 0.3 * np.exp(-(hour[after] - 1.5) / 0.5),
+                               rtol=1e-14)
+    np.testing.assert_array_equal(c.mu_factor, c.friction)  # the mesh's μ too, as a run-in
+    assert c.friction[after][0] == pytest.approx(1.3, abs=0.3 * 2 / 60 / 0.5 + 1e-12)
+    _, m0 = _windows(tiny, NEUTRAL)
+    _, m1 = _windows(tiny, rg)
+    assert np.all(m1["efficiency"][after] < m0["efficiency"][after])  # more friction
+    np.testing.assert_array_equal(m1["efficiency"][~after], m0["efficiency"][~after])
+    both = dataclasses.replace(rg, run_in=RunInConfig())  # a new gear re-greased: the product
+    c2 = _sim(tiny, both).conditions
+    np.testing.assert_allclose(c2.friction, c.friction * run_in_factor(hour), rtol=1e-14)
+
+
+def test_no_regreasing_keeps_a_data_sets_config_hash():
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    assert "regrease" not in plain_config(cfg)["life"]["conditions"]
+    greased = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, conditions=(
+        dataclasses.replace(cfg.life.conditions, regrease=Regrease([30.0])))))
+    assert plain_config(greased)["life"]["conditions"]["regrease"] == \
+        {"hours": [30.0], "drop": 0.3, "tau_h": 8.0}
+    assert config_hash(greased) != config_hash(cfg)
+    plan(greased)  # checked and accepted

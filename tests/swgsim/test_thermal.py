@@ -369,3 +369,25 @@ def test_a_faulty_sensor_needs_the_readings_hours():
         bd.measure_temperature([20.0, 21.0], sensor, np.random.default_rng(0))
     with pytest.raises(ValueError, match=r"hours must be finite, of the readings' shape"):
         bd.measure_temperature([20.0, 21.0], sensor, np.random.default_rng(0), hours=[0.0])
+
+
+# ------------------------------------------------------------------- re-greasing
+def test_regreasing_steps_the_friction_up_by_drop_and_it_runs_in_with_tau():
+    h = np.array([0.0, 9.99, 10.0, 18.0, 34.0, 50.0, 60.0, 68.0])
+    f = th.regrease_factor(h, [10.0, 60.0], 0.3, 8.0)
+    np.testing.assert_allclose(f[:2], 1.0)  # before the first: as settled
+    assert f[2] == pytest.approx(1.3) and f[6] == pytest.approx(1.3)  # each steps up by drop
+    assert f[3] == pytest.approx(1.0 + 0.3 / np.e) and f[7] == pytest.approx(1.0 + 0.3 / np.e)
+    assert f[4] == pytest.approx(1.0 + 0.3 * np.exp(-3.0))  # run in again within a day
+    assert th.regrease_factor(30.0, [10.0], tau_h=th.REGREASE_TAU_H) < 1.1
+    assert th.regrease_factor(10.0, [10.0]) == pytest.approx(1.0 + th.REGREASE_DROP)
+
+
+@pytest.mark.parametrize(("kw", "match"), [
+    ({"at_h": [10.0, 5.0]}, "at_h must be increasing"),
+    ({"at_h": [-1.0]}, "at_h"),
+    ({"drop": 1.5}, r"drop.*\[0, 1\]"),
+    ({"tau_h": 0.0}, "tau_h")])
+def test_regreasing_out_of_range_is_refused(kw, match):
+    with pytest.raises(ValueError, match=match):
+        th.regrease_factor([1.0, 2.0], **{"at_h": [1.0], **kw})
