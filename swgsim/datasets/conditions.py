@@ -7,7 +7,8 @@ lives through while its gear stays healthy, each with a sourced magnitude
 
 * **temperature**: operating days with stops, a cold start after each, a first-order
   warm-up towards a rise set by the power the gear loses at its operating point, and a
-  hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`);
+  hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`), or, instead of the
+  first-order warm-up, a measured one (``temperature_trace``, :class:`TemperatureTrace`);
 * **friction**: its temperature law, the grease's viscosity law
   (:func:`swgsim.gear.thermal.friction_scale`) or one drawn from a family of smooth monotone
   laws (:class:`swgsim.gear.thermal.FrictionLaw`), the run-in of a new gear
@@ -44,6 +45,7 @@ touches a window's own stream.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -63,6 +65,7 @@ from swgsim.gear.thermal import (
     regrease_factor,
     run_in_factor,
     steady_efficiency,
+    traced_temperature,
 )
 from swgsim.sensing.bridge_drift import (
     BridgeDrift,
@@ -71,8 +74,14 @@ from swgsim.sensing.bridge_drift import (
     measure_temperature,
 )
 
-__all__ = ["ConditionsConfig", "Regrease", "RunInConfig", "WindowConditions", "check_conditions",
-           "efficiency_ratio", "window_conditions"]
+__all__ = ["ConditionsConfig", "Regrease", "RunInConfig", "TemperatureTrace", "WindowConditions",
+           "check_conditions", "efficiency_ratio", "trace_rise", "window_conditions"]
+
+#: A step of a temperature trace longer than this ends its first continuous segment [min]
+#: [choice: beyond a logger's hiccups (the UR3 CobotOps day has steps of 9 and 31 s),
+#: short against a joint's thermal time constant (0.5-0.9 h there), so that the rise is
+#: interpolated only over what a joint cannot do much in].
+TRACE_GAP_MIN = 5.0
 
 
 @dataclass
@@ -114,6 +123,117 @@ class Regrease:
 
 
 @dataclass
+class TemperatureTrace:
+    """A measured warm-up for the joint's temperature over a life, instead of the
+    first-order model's rise (:func:`swgsim.gear.thermal.traced_temperature`,
+    :func:`trace_rise`).
+
+    E.g. a UR3's joint temperatures over a working day: M. Tyrovolas, K. Aliev,
+    D. Antonelli and C. Stylios, "UR3 CobotOps", UCI Machine Learning Repository, 2024,
+    doi:10.24432/C5J891 (CC BY 4.0), column ``Temperature_J1``: a rise of 7.9 K over its
+    first 49 min (measured here), then a gap of 5.2 h. Held beyond the trace, its last value
+    stays: that joint was still warming (a first-order time constant of 0.5-0.9 h), so the
+    plateau of a longer day is underestimated. The file is the user's: the path is an
+    input, not part of the project.
+
+    Attributes
+    ----------
+    path : str
+        A CSV, ``;``-separated with decimal commas (the UR3 CobotOps format); relative to
+        the working directory. The config hash names the path, not the file's bytes.
+    column : str
+        The temperature column [°C], e.g. ``Temperature_J1``.
+    scale : float
+        Factor on the measured rise, in [0, 10] [-] (1).
+    time_column : str
+        The time column: ISO 8601 timestamps, or seconds where numeric (``Timestamp``).
+    """
+
+    path: str
+    column: str
+    scale: float = 1.0
+    time_column: str = "Timestamp"
+
+
+def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarray]:
+    """The rise of a measured warm-up over its first start: the temperature minus its
+    first reading against the hours since the first row, over the first continuous
+    segment (up to the first step over :data:`TRACE_GAP_MIN`), rows without a reading
+    left out.
+
+    Parameters
+    ----------
+    trace : TemperatureTrace
+    key : str
+        Full name of the trace, e.g. ``dataset.life.conditions.temperature_trace``.
+
+    Returns
+    -------
+    trace_h : ndarray, shape (N,)
+        Hours since the segment's first reading, 0 first, increasing [h].
+    rise_k : ndarray, shape (N,)
+        Temperature minus the first reading [K].
+
+    Raises
+    ------
+    ValueError
+        One line naming ``<key>.path`` (no such file, not a table), ``<key>.column`` or
+        ``<key>.time_column`` (missing, a cell not a number or time, times not increasing,
+        fewer than two readings before the first gap); an empty cell is a missing reading,
+        left out.
+    """
+    import pandas as pd
+
+    p = Path(trace.path)
+    if not p.is_file():
+        raise ValueError(f"{key}.path: no file {trace.path!r}")
+    try:
+        head = pd.read_csv(p, sep=";", decimal=",", nrows=0).columns
+    except (ValueError, UnicodeDecodeError) as e:
+        raise ValueError(f"{key}.path: {trace.path!r} is not a ;-separated table: "
+                         f"{str(e).splitlines()[0]}") from None
+    named = [str(c) for c in head if not str(c).startswith("Unnamed")]
+    for field_, col in (("column", trace.column), ("time_column", trace.time_column)):
+        if col not in head:
+            raise ValueError(f"{key}.{field_}: {col!r} is not a column of {trace.path!r}; "
+                             f"columns: {', '.join(named)}")
+    df = pd.read_csv(p, sep=";", decimal=",", usecols=[trace.time_column, trace.column])
+    t_s = _seconds(df[trace.time_column], f"{key}.time_column")
+    num = pd.to_numeric(df[trace.column], errors="coerce")
+    text = np.flatnonzero(num.isna().to_numpy() & df[trace.column].notna().to_numpy())
+    if text.size:
+        raise ValueError(f"{key}.column: {trace.column!r} of {trace.path!r}, row "
+                         f"{int(text[0]) + 1}: {df[trace.column].iloc[text[0]]!r} is not a "
+                         f"number")
+    temp = num.to_numpy(dtype=float)
+    steps = np.diff(t_s)
+    if np.any(steps <= 0):
+        raise ValueError(f"{key}.time_column: times of {trace.path!r} must increase")
+    gaps = np.flatnonzero(steps > TRACE_GAP_MIN * 60.0)
+    end = int(gaps[0]) + 1 if gaps.size else t_s.size
+    ok = np.isfinite(temp[:end])
+    if ok.sum() < 2:
+        raise ValueError(f"{key}.column: {trace.column!r} holds fewer than 2 readings before "
+                         f"the first gap of {trace.path!r}")
+    t_s, temp = t_s[:end][ok], temp[:end][ok]
+    return (t_s - t_s[0]) / 3600.0, temp - temp[0]
+
+
+def _seconds(col, key: str) -> np.ndarray:
+    """A time column as seconds: numbers as they are, else ISO 8601 timestamps."""
+    import pandas as pd
+
+    if col.dtype.kind in "fiu":
+        out = col.to_numpy(dtype=float)
+    else:
+        t = pd.to_datetime(col, utc=True, errors="coerce")
+        out = (t - t.iloc[0]).dt.total_seconds().to_numpy(dtype=float)
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"{key}: {col.name!r} holds a value that is not a time")
+    return out
+
+
+@dataclass
 class ConditionsConfig:
     """What changes while the gear stays healthy (module docstring).
 
@@ -122,6 +242,9 @@ class ConditionsConfig:
     thermal : JointThermal or None
         The joint's temperature over the life; None: it stays at the catalogue's
         reference temperature (20 °C).
+    temperature_trace : TemperatureTrace or None
+        A measured warm-up after every cold start of ``thermal``'s day, on the hall's
+        temperature, instead of the first-order rise; None: the model's.
     viscosity : bool
         Friction follows the temperature, by ``friction_law``.
     friction_law : FrictionLaw
@@ -142,6 +265,7 @@ class ConditionsConfig:
     """
 
     thermal: JointThermal | None = field(default_factory=JointThermal)
+    temperature_trace: TemperatureTrace | None = None
     viscosity: bool = True
     friction_law: FrictionLaw = field(default_factory=FrictionLaw)
     run_in: RunInConfig | None = None
@@ -168,6 +292,12 @@ def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
     """
     if cfg.thermal is not None:
         cfg.thermal.check(f"{key}.thermal")
+    if cfg.temperature_trace is not None:
+        if cfg.thermal is None:
+            raise ValueError(f"{key}.temperature_trace needs {key}.thermal (the hall and the "
+                             f"operating day), got thermal: null")
+        check_range(cfg.temperature_trace.scale, 0.0, 10.0, f"{key}.temperature_trace.scale")
+        trace_rise(cfg.temperature_trace, f"{key}.temperature_trace")
     cfg.friction_law.check(f"{key}.friction_law")
     if cfg.run_in is not None:
         check_range(cfg.run_in.drop, 0.0, 1.0, f"{key}.run_in.drop")
@@ -276,12 +406,7 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     WindowConditions
     """
     payload = _payload(cfg, hours)
-    if cfg.thermal is not None:
-        loss = loss_power_w(gear.gear, np.abs(n_in_rpm), np.abs(t_out_nm) * payload)
-        temp = joint_temperature(hours, loss, cfg.thermal)
-        _check_joint_temperature(temp, hours, cfg.thermal)
-    else:
-        temp = np.full(hours.shape, REF_TEMP_C)
+    temp = _temperature(cfg, hours, n_in_rpm, t_out_nm, payload, gear)
     run_in = (run_in_factor(hours, cfg.run_in.drop, cfg.run_in.tau_h)
               if cfg.run_in is not None else np.ones_like(hours))
     if cfg.regrease is not None:
@@ -302,19 +427,34 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
                             zero, span, ref)
 
 
-def _check_joint_temperature(temp: np.ndarray, hours: np.ndarray, th: JointThermal) -> None:
-    """Refuse a joint temperature outside the viscosity law's range in one line naming
-    the thermal model's fields that set it (the hall and the loss times
-    ``r_th_k_per_w``)."""
+def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
+                 t_out_nm: np.ndarray, payload: np.ndarray, gear: ChainParams) -> np.ndarray:
+    """The joint's true temperature at the windows [°C], shape (W,): the reference without
+    a thermal model, the measured warm-up with a trace, else the first-order model at the
+    acting loss; refused outside the viscosity law's range naming what sets it."""
+    th, tr = cfg.thermal, cfg.temperature_trace
+    if th is None:
+        return np.full(hours.shape, REF_TEMP_C)
+    if tr is not None:
+        t_h, rise = trace_rise(tr, "conditions.temperature_trace")
+        temp = traced_temperature(hours, t_h, rise, th, tr.scale)
+        key, cause = "conditions.temperature_trace", (
+            f"the hall, ambient_c {th.ambient_c:g} °C, plus scale {tr.scale:g} times the "
+            f"rise of {tr.column!r} in {tr.path!r}")
+    else:
+        loss = loss_power_w(gear.gear, np.abs(n_in_rpm), np.abs(t_out_nm) * payload)
+        temp = joint_temperature(hours, loss, th)
+        key, cause = "conditions.thermal", (
+            f"the hall, ambient_c {th.ambient_c:g} °C, plus the gear's loss times "
+            f"r_th_k_per_w {th.r_th_k_per_w:g} K/W")
     lo, hi = TEMP_RANGE_C
     bad = np.flatnonzero((temp < lo) | (temp > hi))
     if bad.size:
         i = int(bad[0])
-        raise ValueError(f"conditions.thermal: the joint reaches {temp[i]:.4g} °C at "
-                         f"operating hour {hours[i]:.4g} (the hall, ambient_c "
-                         f"{th.ambient_c:g} °C, plus the gear's loss times r_th_k_per_w "
-                         f"{th.r_th_k_per_w:g} K/W); the viscosity law takes "
+        raise ValueError(f"{key}: the joint reaches {temp[i]:.4g} °C at operating hour "
+                         f"{hours[i]:.4g} ({cause}); the viscosity law takes "
                          f"[{lo:g}, {hi:g}] °C")
+    return temp
 
 
 def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray,

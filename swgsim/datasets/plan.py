@@ -139,7 +139,7 @@ class DatasetPlan:
 #: Fields added to ``life.conditions`` (:class:`ConditionsConfig`) and to its
 #: ``temperature_sensor`` (:class:`TemperatureSensor`) after data sets were made: where one
 #: holds its default, :func:`plain_config` leaves it out.
-LATER_CONDITIONS = ("friction_law", "regrease")
+LATER_CONDITIONS = ("friction_law", "regrease", "temperature_trace")
 LATER_SENSOR = ("fault", "fault_hour", "drift_k_per_h")
 
 
@@ -152,9 +152,9 @@ def _without_defaults(d: dict, schema: type, names: tuple[str, ...]) -> dict:
 def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
     """A data-set config as plain data, without ``profile`` and ``life.conditions`` when
     they are None and without the fields of :data:`LATER_CONDITIONS` and
-    :data:`LATER_SENSOR` (the friction law, re-greasing, the sensor's fault) that hold their
-    defaults, so that a data set keeps the config (and :func:`config_hash`) it had before
-    these options."""
+    :data:`LATER_SENSOR` (the friction law, re-greasing, a temperature trace, the sensor's
+    fault) that hold their defaults, so that a data set keeps the config (and
+    :func:`config_hash`) it had before these options."""
     out = dict(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
     if "profile" in out and out["profile"] is None:
         del out["profile"]

@@ -257,6 +257,58 @@ def joint_temperature(operating_h, loss_w, cfg: JointThermal | None = None) -> n
     return np.fromiter(temps, float, g.size)[np.searchsorted(g, wall)]
 
 
+def traced_temperature(operating_h, trace_h, rise_k, cfg: JointThermal | None = None,
+                       scale: float = 1.0) -> np.ndarray:
+    """Joint temperature at each window of a life that follows a measured warm-up: the
+    hall's temperature plus ``scale`` times the measured rise since the day's cold start.
+
+    Every operating day of ``cfg`` starts cold (the stops of ``run_h_per_day``; a day of 24
+    h never stops: one start, at hour 0); at t operating hours since it the joint is
+    ``ambient_temperature(wall) + scale · rise(t)``, the rise linear between the trace's
+    points and held at its last beyond them. Held constant against
+    :func:`joint_temperature`: the rise does not depend on the life's operating point or
+    payload (it is the measured joint's, at its own duty), ``r_th_k_per_w`` and ``tau_min``
+    do not enter, a stop cools the joint completely, and the rise rides on the hall's
+    swing and drift as they are at each window.
+
+    Parameters
+    ----------
+    operating_h : array_like, shape (W,)
+        Operating hours of the windows since the first start, >= 0 [h].
+    trace_h : array_like, shape (N,)
+        Hours of the measured rise since its start, 0 first, increasing [h].
+    rise_k : array_like, shape (N,)
+        Measured temperature minus its first reading [K] (0 first).
+    cfg : JointThermal, optional
+        The hall and the operating day (``r_th_k_per_w``, ``tau_min`` unused).
+    scale : float
+        Factor on the rise, in [0, 10] [-].
+
+    Returns
+    -------
+    ndarray, shape (W,)
+        Joint temperature [°C].
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, shapes not as above, ``trace_h`` not increasing from 0.
+    """
+    cfg = cfg or JointThermal()
+    cfg.check()
+    h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
+    t = _finite(trace_h, "trace_h", 0.0, np.inf, "[0, inf) h")
+    r = _finite(rise_k, "rise_k", rng="finite K")
+    if t.ndim != 1 or t.size == 0 or r.shape != t.shape or t[0] != 0.0 \
+            or np.any(np.diff(t) <= 0):
+        raise ValueError(f"trace_h, rise_k must share a shape (N,), trace_h increasing from "
+                         f"0 h, got {t.shape}, {r.shape}")
+    k = float(_finite(scale, "scale", 0.0, 10.0, "[0, 10]"))
+    run = cfg.run_h_per_day
+    since = h if run >= _HOURS_PER_DAY else h - np.floor(h / run) * run
+    return ambient_temperature(wall_clock_h(h, run), cfg) + k * np.interp(since, t, r)
+
+
 def steady_rise_k(loss_w, cfg: JointThermal | None = None) -> np.ndarray:
     """Steady rise over ambient, R_th P_loss [K], shape of ``loss_w`` (loss [W])."""
     cfg = cfg or JointThermal()

@@ -6,12 +6,19 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from swgcli import dataset_preset
-from swgsim.datasets.conditions import ConditionsConfig, Regrease, RunInConfig
+from swgsim.datasets.conditions import (
+    ConditionsConfig,
+    Regrease,
+    RunInConfig,
+    TemperatureTrace,
+    trace_rise,
+)
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.life import LifeSimulator
@@ -273,3 +280,85 @@ def test_no_regreasing_keeps_a_data_sets_config_hash():
         {"hours": [30.0], "drop": 0.3, "tau_h": 8.0}
     assert config_hash(greased) != config_hash(cfg)
     plan(greased)  # checked and accepted
+
+
+#: The UR3 CobotOps day (M. Tyrovolas, K. Aliev, D. Antonelli, C. Stylios, "UR3 CobotOps",
+#: UCI Machine Learning Repository 2024, doi:10.24432/C5J891, CC BY 4.0), where the
+#: workplace holds it beside the repository.
+UR3_DAY = (Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ur3_cobotops"
+           / "ur3_cobotops_2022-10-26.csv")
+
+
+def _trace_csv(path: Path) -> Path:
+    """A tiny trace in the UR3 CobotOps format: 0-30 min warming 0.2 K a minute, a missing
+    reading at 10 min, then a 2-h gap and readings that must not count."""
+    rows = ["Num;Timestamp;Temperature_J1;Other;"]
+    t0 = np.datetime64("2022-10-26T08:00:00")
+    for i in range(31):
+        v = "" if i == 10 else f"{25.0 + 0.2 * i:.1f}".replace(".", ",")
+        rows.append(f"{i + 1};{t0 + np.timedelta64(60 * i, 's')}Z;{v};1;")
+    for i in range(5):
+        rows.append(f"{32 + i};{t0 + np.timedelta64(9000 + 60 * i, 's')}Z;60,0;1;")
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_a_trace_rise_is_its_first_segment_against_its_first_reading(tmp_path):
+    tr = TemperatureTrace(str(_trace_csv(tmp_path / "day.csv")), "Temperature_J1")
+    t_h, rise = trace_rise(tr, "k")
+    assert t_h.size == 30 and t_h[0] == 0.0 and t_h[-1] == pytest.approx(0.5)
+    np.testing.assert_allclose(rise, 0.2 * t_h * 60.0, atol=1e-9)  # the 60 °C after the gap: not
+
+
+def test_a_life_follows_the_measured_warm_up_after_every_cold_start(tiny, tmp_path):
+    tr = TemperatureTrace(str(_trace_csv(tmp_path / "day.csv")), "Temperature_J1", scale=2.0)
+    hall = JointThermal(ambient_swing_k=0.0, run_h_per_day=1.0)  # a cold start every hour
+    cond = dataclasses.replace(NEUTRAL, thermal=hall, viscosity=True, temperature_trace=tr)
+    sim = _sim(tiny, cond)
+    hour, c = sim.schedule.hour, sim.conditions
+    since = hour % 1.0
+    np.testing.assert_allclose(c.temperature_c, 20.0 + 2.0 * np.minimum(since, 0.5) * 12.0,
+                               atol=1e-9)  # 2 x 0.2 K/min, held from 30 min on
+    np.testing.assert_array_equal(c.friction, friction_scale(c.temperature_c))
+
+
+@pytest.mark.parametrize(("trace", "match"), [
+    ({"path": "no/such.csv", "column": "Temperature_J1"},
+     r"^dataset.life.conditions.temperature_trace.path: no file 'no/such.csv'$"),
+    ({"path": "{csv}", "column": "Temperature_J9"},
+     r"^dataset.life.conditions.temperature_trace.column: 'Temperature_J9' is not a column "
+     r"of .*; columns: Num, Timestamp, Temperature_J1, Other$"),
+    ({"path": "{csv}", "column": "Temperature_J1", "scale": 11.0},
+     r"^dataset.life.conditions.temperature_trace.scale must lie in \[0, 10\], got 11.0$"),
+])
+def test_a_bad_temperature_trace_is_refused_naming_the_key(trace, match, tmp_path):
+    csv = str(_trace_csv(tmp_path / "day.csv"))
+    cfg = dataset_preset("tiny_life")
+    cfg["life"].update(hours=3.0, commissioning_h=1.0, fault={"fault": "healthy"})
+    cfg["life"]["conditions"] = {"temperature_trace": {
+        k: (csv if v == "{csv}" else v) for k, v in trace.items()}}
+    with pytest.raises(ValueError, match=match):
+        plan(dataset_config(cfg))
+    cfg["life"]["conditions"]["thermal"] = None
+    with pytest.raises(ValueError, match=r"temperature_trace needs dataset.life.conditions."
+                                         r"thermal"):
+        plan(dataset_config(cfg))
+
+
+def test_no_temperature_trace_keeps_a_data_sets_config_hash(tmp_path):
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    assert "temperature_trace" not in plain_config(cfg)["life"]["conditions"]
+    tr = TemperatureTrace(str(_trace_csv(tmp_path / "day.csv")), "Temperature_J1")
+    traced = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, conditions=(
+        dataclasses.replace(cfg.life.conditions, temperature_trace=tr))))
+    assert config_hash(traced) != config_hash(cfg)
+    plan(traced)  # checked and accepted
+
+
+@pytest.mark.skipif(not UR3_DAY.is_file(), reason="the UR3 CobotOps day is not beside the "
+                                                  "repository")
+def test_the_ur3_days_first_warm_up_is_its_first_49_minutes():
+    t_h, rise = trace_rise(TemperatureTrace(str(UR3_DAY), "Temperature_J1"), "k")
+    assert t_h[-1] == pytest.approx(0.816, abs=1e-3)  # before the 5.2-h gap
+    assert t_h.size == 2859  # 2868 rows, 9 without a reading
+    assert rise[-1] == pytest.approx(7.875) and rise.min() >= -0.1  # warming, 0.0625-K steps

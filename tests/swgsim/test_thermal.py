@@ -391,3 +391,23 @@ def test_regreasing_steps_the_friction_up_by_drop_and_it_runs_in_with_tau():
 def test_regreasing_out_of_range_is_refused(kw, match):
     with pytest.raises(ValueError, match=match):
         th.regrease_factor([1.0, 2.0], **{"at_h": [1.0], **kw})
+
+
+# ---------------------------------------------------------- a measured warm-up
+def test_a_traced_temperature_restarts_the_measured_rise_after_every_cold_start():
+    trace_h, rise = np.array([0.0, 0.5, 1.0]), np.array([0.0, 4.0, 6.0])
+    cfg = th.JointThermal(ambient_swing_k=0.0, run_h_per_day=16.0)
+    h = np.array([0.0, 0.25, 1.0, 5.0, 15.99, 16.0, 16.5, 20.0])
+    t = th.traced_temperature(h, trace_h, rise, cfg, scale=2.0)
+    np.testing.assert_allclose(t, [20.0, 24.0, 32.0, 32.0, 32.0, 20.0, 28.0, 32.0])
+    flat = th.JointThermal(ambient_swing_k=0.0, run_h_per_day=24.0)  # one start, at hour 0
+    np.testing.assert_allclose(th.traced_temperature([0.5, 30.0], trace_h, rise, flat),
+                               [24.0, 26.0])
+    swing = th.JointThermal()  # the rise rides on the hall's swing
+    np.testing.assert_allclose(th.traced_temperature(h, trace_h, rise, swing) -
+                               th.ambient_temperature(th.wall_clock_h(h, 16.0), swing),
+                               np.interp(h % 16.0, trace_h, rise), atol=1e-12)
+    with pytest.raises(ValueError, match="trace_h, rise_k must share a shape"):
+        th.traced_temperature(h, [0.5, 1.0], [0.0, 1.0], cfg)
+    with pytest.raises(ValueError, match="scale"):
+        th.traced_temperature(h, trace_h, rise, cfg, scale=-1.0)
