@@ -176,7 +176,7 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
         named = [mon.diagnose(tr, a, f, p, c) for a in tr.alarms]
         fa_rows.append({**key, "detector": "monitor", "healthy_hours": hours_h,
                         "false_alarms": len(tr.alarms),
-                        "gear_fault_alarms": sum(a.bridge is None for a in named),
+                        "gear_fault_alarms": sum(not a.sensor_fault for a in named),
                         "advisories": len(advisories(tr, mon))})
         fa_rows += [{**key, "detector": d, "healthy_hours": hours_h, "false_alarms": n}
                     for d, n in (("per_window", int(_per_window(tr.log_proba).sum())),

@@ -31,7 +31,13 @@ import numpy as np
 from .model import DiagnosisModel, design_matrix
 from .normal import OUTSIDE_LOAD, OUTSIDE_UNJUDGED, Conditions, NormalBehaviour, NormalConfig
 from .rule import RuleConfig, conformal_p, log_bets, min_calibration, normal_scores, threshold
-from .sensor_check import REST_MAX, SENSOR_P_MIN, fit_sensor_faults
+from .sensor_check import (
+    REST_MAX,
+    SENSOR_P_MIN,
+    TEMPERATURE_SENSOR,
+    fit_sensor_faults,
+    fit_temperature,
+)
 
 #: One-sided level of the test whether commissioning's laws hold at a point's new load
 #: (:meth:`GearMonitor._recommission`): declared, not tuned.
@@ -55,7 +61,9 @@ class Alarm:
     fault : str
         Named from the windows of the rise up to ``confirm_h`` after the alarm.
     severity, severity_low, severity_high : float
-        Estimate of ``fault``'s severity and its 90 % interval.
+        Estimate of ``fault``'s severity and its 90 % interval; of the temperature
+        sensor's fault, the fitted temperature minus the reading [K], median and 5-95 %
+        over the windows.
     bridge : str or None
         The faulty bridge (``s0``..``s4``) where ``fault`` is a sensor fault that one
         bridge alone explains (:mod:`.sensor_check`).
@@ -70,6 +78,12 @@ class Alarm:
     severity_low: float
     severity_high: float
     bridge: str | None = None
+
+    @property
+    def sensor_fault(self) -> bool:
+        """Whether the fault named is a sensor's (a bridge's, or the temperature
+        sensor's), not the gear's."""
+        return self.bridge is not None or self.fault == TEMPERATURE_SENSOR
 
     def as_dict(self) -> dict:
         """The ``summary.json`` entry."""
@@ -120,6 +134,13 @@ class Trace:
     friction: np.ndarray
     outside: np.ndarray
     recommissioned: list[tuple[int, int, bool]] = field(default_factory=list)
+
+    def head(self, n: int) -> Trace:
+        """The trace of its first ``n`` windows."""
+        cut = {k: getattr(self, k)[:n] for k in ("hour", "score", "p", "cusums", "log_proba",
+                                                  "op_index", "friction", "outside")}
+        return Trace(alarms=[a for a in self.alarms if a < n],
+                     recommissioned=[r for r in self.recommissioned if r[0] < n], **cut)
 
     @classmethod
     def concat(cls, traces: list[Trace]) -> Trace:
@@ -254,6 +275,7 @@ class GearMonitor:
         self.cusum = np.zeros(0)
         self.friction, self.last_hour = 1.0, None
         self.learning: dict[int, list[tuple[np.ndarray, float]]] = {}
+        self.commissioned_on: tuple[np.ndarray, np.ndarray, Conditions] | None = None
 
     def commission(self, feats: np.ndarray, points: np.ndarray,
                    cond: Conditions | None = None) -> None:
@@ -291,6 +313,26 @@ class GearMonitor:
         self.cusum = np.zeros(log_bets(np.ones(1), self.rule).shape[1])
         self.last_hour = None  # the friction factor stays commissioning's last
         self.learning = {}
+        self.commissioned_on = (feats, points, cond)
+
+    def without_temperature(self) -> GearMonitor:
+        """The same monitor commissioned on the same windows without their temperature
+        readings, as for a joint without a temperature sensor (its spreads hold
+        commissioning's warm-ups): where the temperature sensor fails, the monitor goes
+        on with it (:func:`learn.monitor.stream.run_stream`).
+
+        Raises
+        ------
+        ValueError
+            If the monitor is not commissioned.
+        """
+        if self.normal is None:
+            raise ValueError("the monitor is not commissioned (GearMonitor.commission)")
+        feats, points, cond = self.commissioned_on
+        out = GearMonitor(self.model, self.rule, self.interval_min, self.seed,
+                          self.confirm_h, self.normal_config)
+        out.commission(feats, points, Conditions(cond.torque_nm, None))
+        return out
 
     def _commissioning_friction(self, feats: np.ndarray, points: np.ndarray,
                                 cond: Conditions) -> np.ndarray:
@@ -596,25 +638,36 @@ class GearMonitor:
         ev = self.evidence(trace.log_proba, trace.op_index)
         ev[(trace.outside & OUTSIDE_UNJUDGED) != 0] = 0.0  # not judged: no evidence
         fr = trace.friction
-        at_alarm, _ = self.name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
-                                cond[rise:a + 1], fr[rise:a + 1])
-        fault, bridge = self.name(ev[rise:end], feats[rise:end], points[rise:end],
-                                  cond[rise:end], fr[rise:end])
-        x = self.inputs(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end])
-        est, lo, hi = self.model.estimate(fault, x)
+        at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
+                                    cond[rise:a + 1], fr[rise:a + 1])
+        fault, bridge, hot = self._name(ev[rise:end], feats[rise:end], points[rise:end],
+                                        cond[rise:end], fr[rise:end])
+        if fault == TEMPERATURE_SENSOR:  # its severity: the reading's error [K]
+            err = hot.temperature_c - hot.reading_c
+            est, lo, hi = hot.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))
+        else:
+            x = self.inputs(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end])
+            est, lo, hi = self.model.estimate(fault, x)
         return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi,
                      None if bridge is None else f"s{bridge}")
 
     def name(self, ev: np.ndarray, feats: np.ndarray, points: np.ndarray,
              cond: Conditions | None = None, friction: np.ndarray | float = 1.0
              ) -> tuple[str, int | None]:
-        """Name the fault of windows since an alarm: a sensor fault where one bridge's
-        offset step or gain drift explains them (:mod:`.sensor_check`: a plausible fit
-        after which the windows look healthy, median p-value at least
+        """Name the fault of windows since an alarm: a sensor fault where one sensor's
+        fault explains them (:mod:`.sensor_check`): a bridge's offset step or gain drift
+        (a plausible fit after which the windows look healthy, median p-value at least
         :data:`~.sensor_check.SENSOR_P_MIN`, and the other bridges have not moved on
         average, :attr:`~.sensor_check.SensorFit.rest` at most
-        :data:`~.sensor_check.REST_MAX`), with its bridge; else the fault with the
-        largest summed evidence (:meth:`evidence` rows ``ev``) and None."""
+        :data:`~.sensor_check.REST_MAX`), with its bridge, or the temperature reading
+        (:func:`~.sensor_check.fit_temperature`, the same median p-value), named
+        :data:`~.sensor_check.TEMPERATURE_SENSOR`, bridge None; of those the one that
+        leaves the windows most healthy; else the fault with the largest summed evidence
+        (:meth:`evidence` rows ``ev``) and None."""
+        return self._name(ev, feats, points, cond, friction)[:2]
+
+    def _name(self, ev, feats, points, cond, friction):
+        """:meth:`name` and the temperature's fit (None where not fitted)."""
         b = self.normal
         opi = b.index(points)
         z, spread = b.z_and_spread(feats, points, cond, friction, opi)
@@ -626,10 +679,15 @@ class GearMonitor:
         fits = [f for f in fit_sensor_faults(z, b.mean[opi], spread)
                 if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
         p = [median_p(f.z) for f in fits]
-        if p and max(p) >= SENSOR_P_MIN:
+        hot = None if cond is None else fit_temperature(
+            b, feats, points, cond, np.broadcast_to(friction, (len(z),)), opi)
+        p_hot = median_p(hot.z) if hot is not None and hot.plausible() else -1.0
+        if max(p, default=-1.0) >= SENSOR_P_MIN or p_hot >= SENSOR_P_MIN:
+            if p_hot >= max(p, default=-1.0):
+                return TEMPERATURE_SENSOR, None, hot
             k = int(np.argmax(p))
-            return fits[k].fault, fits[k].bridge
-        return self.model.name(ev), None
+            return fits[k].fault, fits[k].bridge, hot
+        return self.model.name(ev), None, hot
 
 
 __all__ = ["Alarm", "GearMonitor", "Trace", "check_commissioning", "judged_bets",

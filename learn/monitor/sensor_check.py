@@ -1,4 +1,4 @@
-"""Is one bridge's fault enough to explain an alarm? The test that keeps sensor faults
+"""Is one sensor's fault enough to explain an alarm? The test that keeps sensor faults
 from being named as gear faults.
 
 A sensor fault acts on one bridge only and in one of two shapes
@@ -29,6 +29,19 @@ that falls, not rises):
 A hypothesis that passes both explains the alarm; of those, the one that leaves the
 windows most healthy is the sensor fault named.
 
+The joint's temperature sensor is checked the same way (:func:`fit_temperature`): the
+hypothesis "the reading is wrong" (stuck, drifting, off) gives each window the temperature
+that leaves its z-scores smallest, by the laws commissioning learnt (the bridges' span and
+zero drift, each feature's own slope, the friction's law, :mod:`.normal`); where that
+temperature lies at least :data:`TEMPERATURE_MIN_K` from the reading and leaves the windows
+as healthy as above (median p-value at least :data:`SENSOR_P_MIN`), the temperature sensor
+is named (:data:`TEMPERATURE_SENSOR`). It assumes what holds for any joint: its features
+move with its temperature by smooth laws that commissioning, with a cold start, saw. A gear
+fault moves them in a pattern no temperature gives (an eccentric WG moves the offsets of s1
+and s3 apart; a temperature moves every bridge alike). Once named, or where a reading is
+missing, the monitor goes on with the temperature those laws give each window
+(:func:`virtual_temperature`, :func:`learn.monitor.stream.run_stream`).
+
 Source: the structured-residual idea of sensor fault isolation (P. M. Frank, "Fault
 diagnosis in dynamic systems using analytical and knowledge-based redundancy",
 Automatica 26(3), 1990, sec. 4: one residual per sensor, insensitive to that sensor);
@@ -38,6 +51,7 @@ parametric.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from statistics import NormalDist
 
@@ -45,10 +59,8 @@ import numpy as np
 
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
-from .features import N_HARMONICS
+from .normal import BLOCK, Conditions, NormalBehaviour
 
-#: Per-bridge block of health features: offset, H amplitudes, log RMS of the rest.
-BLOCK = N_HARMONICS + 2
 #: Median conformal p-value of the corrected windows from which on a sensor fault explains
 #: the alarm. Chosen on the training gears (``scripts/naming_study.py``, bench, trained on
 #: gear 1, judged on gear 2, an hour of windows): the right fit of every sensor fault on
@@ -69,6 +81,25 @@ REST_MAX = 2.5
 #: 0.999, so that a bridge without a fault is fitted one in a thousand times: the square of
 #: the standard normal quantile 0.9995 (χ²₁ is the square of a standard normal variable).
 FIT_MIN = NormalDist().inv_cdf(0.9995) ** 2
+#: The name of a fault of the joint's temperature sensor (stuck, drifting, off), which
+#: :func:`fit_temperature` tests.
+TEMPERATURE_SENSOR = "temperature_sensor"
+#: Step of the temperatures :func:`fit_temperature` tries [K].
+TEMPERATURE_STEP_K = 0.25
+#: Least median distance of the fitted temperature from the reading for the reading to be
+#: wrong [K]: ten times the reading's uncertainty of 0.2 K
+#: (:class:`learn.monitor.normal.NormalConfig` ``temperature_uncertainty_k``).
+TEMPERATURE_MIN_K = 2.0
+#: Step of the coarse grid :func:`best_temperature` starts from [K], and how many fine
+#: steps it then tries on either side of the coarse best (to half a coarse step beyond).
+COARSE_STEP_K, COARSE_STEPS = 2.0, 6
+#: Windows :func:`best_temperature` fits at once.
+FIT_CHUNK = 512
+#: How far beyond commissioning's temperature range the fits look [K]: the hall's drift
+#: over a season, 10-20 K (:mod:`learn.monitor.families`).
+TEMPERATURE_BEYOND_K = 20.0
+#: Windows of the running median of :func:`virtual_temperature` (odd).
+VIRTUAL_WINDOWS = 7
 
 
 @dataclass(frozen=True)
@@ -160,4 +191,147 @@ def fit_sensor_faults(z: np.ndarray, mean: np.ndarray, std: np.ndarray) -> list[
     return out
 
 
-__all__ = ["BLOCK", "FIT_MIN", "REST_MAX", "SENSOR_P_MIN", "SensorFit", "fit_sensor_faults"]
+@dataclass(frozen=True)
+class TemperatureFit:
+    """The hypothesis "the temperature reading is wrong" fitted to the windows since an
+    alarm (:func:`fit_temperature`).
+
+    Attributes
+    ----------
+    temperature_c : ndarray, shape (n,)
+        Each window's temperature that leaves its z-scores smallest [°C].
+    reading_c : ndarray, shape (n,)
+        The sensor's readings [°C].
+    z : ndarray, shape (n, F)
+        The windows' z-scores at the fitted temperatures.
+    reduction : float
+        How much the fit lowers Σ z² over the windows.
+    """
+
+    temperature_c: np.ndarray
+    reading_c: np.ndarray
+    z: np.ndarray
+    reduction: float
+
+    @property
+    def offset_k(self) -> float:
+        """Median of the fitted temperature minus the reading [K]."""
+        return float(np.median(self.temperature_c - self.reading_c))
+
+    def plausible(self) -> bool:
+        """The fit moved the temperature by more than :data:`TEMPERATURE_MIN_K` at the
+        median window and lowered Σ z² by at least :data:`FIT_MIN` per window (each
+        window has its own temperature: one degree of freedom each)."""
+        return (abs(self.offset_k) >= TEMPERATURE_MIN_K
+                and self.reduction >= FIT_MIN * len(self.z))
+
+
+def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                    cond: Conditions, friction: np.ndarray, index: np.ndarray
+                    ) -> TemperatureFit | None:
+    """Fit the hypothesis "the temperature reading is wrong" (stuck, drifting, off):
+    each window's temperature chosen to leave Σ z² smallest (:func:`best_temperature`),
+    where that beats the reading. The
+    bridges' span and zero drift, their features' own slopes and the friction's law
+    learnt at commissioning (:mod:`.normal`) together say what temperature each window
+    was at; a gear fault moves them in a pattern no temperature gives.
+
+    Parameters
+    ----------
+    normal : NormalBehaviour
+        With temperature terms (:attr:`NormalBehaviour.temperature_law`).
+    feats : ndarray, shape (n, F)
+    points : ndarray, shape (n, 2)
+    cond : Conditions
+        With the readings.
+    friction : ndarray, shape (n,)
+        The friction factor in force at each window.
+    index : ndarray of int, shape (n,)
+        Each window's operating point's row in ``normal``.
+
+    Returns
+    -------
+    TemperatureFit or None
+        None where the normal behaviour has no temperature terms or the stream no
+        reading.
+    """
+    if cond.temperature_c is None or not normal.temperature_law:
+        return None
+    z0 = normal.z(feats, points, cond, friction, index)
+    temp, z = best_temperature(normal, feats, points, cond.torque_nm, friction, index)
+    s0, s = np.sum(z0 ** 2, axis=1), np.sum(z ** 2, axis=1)
+    worse = s0 <= s  # the reading is as good: kept
+    temp[worse], z[worse] = cond.temperature_c[worse], z0[worse]
+    return TemperatureFit(temp, cond.temperature_c, z, float(np.sum(s0 - np.minimum(s, s0))))
+
+
+def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                     torque_nm: np.ndarray, friction: np.ndarray, index: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Each window's temperature that leaves its z-scores smallest (Σ z²), on a grid of
+    :data:`COARSE_STEP_K` refined to :data:`TEMPERATURE_STEP_K` about its best, over the
+    range commissioning saw widened by :data:`TEMPERATURE_BEYOND_K` on either side, and
+    the z-scores there; shapes (n,) [°C] and (n, F). Beyond commissioning's range the
+    laws are extrapolated in commissioning's spread (not
+    :meth:`~learn.monitor.normal.NormalBehaviour.z_and_spread`'s widened one, which would
+    pull every fit to the grid's ends)."""
+    lo = float(np.min(normal.temp_range[:, 0])) - TEMPERATURE_BEYOND_K
+    hi = float(np.max(normal.temp_range[:, 1])) + TEMPERATURE_BEYOND_K
+    normal = dataclasses.replace(normal, config=dataclasses.replace(
+        normal.config, extrapolation_uncertainty=0.0))  # unwidened: no pull to the ends
+    fine = TEMPERATURE_STEP_K * np.arange(-COARSE_STEPS, COARSE_STEPS + 1)
+    grid = np.arange(lo, hi + COARSE_STEP_K, COARSE_STEP_K)  # coarse, then fine about it
+    temp, zb = np.empty(len(feats)), np.empty(feats.shape)
+    for a in range(0, len(feats), FIT_CHUNK):  # a bounded memory over long streams
+        w = slice(a, a + FIT_CHUNK)
+        args = (normal, feats[w], points[w], torque_nm[w], friction[w], index[w])
+        n = len(args[1])
+        best = grid[np.argmin(_sum_z2(*args, np.broadcast_to(grid, (n, len(grid))))[0],
+                              axis=1)]
+        cand = best[:, None] + fine[None, :]  # (n, G)
+        s, z = _sum_z2(*args, cand)
+        k = np.argmin(s, axis=1)
+        temp[w], zb[w] = cand[np.arange(n), k], z[np.arange(n), k]
+    return temp, zb
+
+
+def _sum_z2(normal: NormalBehaviour, feats, points, torque_nm, friction, index,
+            temps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Σ z² and z of each window (n) at each of its temperatures ``temps`` (n, G), in one
+    evaluation of the normal behaviour; shapes (n, G) and (n, G, F)."""
+    n, g = temps.shape
+    rep = np.repeat(np.arange(n), g)
+    z = normal.z(feats[rep], points[rep], Conditions(torque_nm[rep], temps.ravel()),
+                 friction[rep], index[rep]).reshape(n, g, -1)
+    return np.sum(z ** 2, axis=2), z
+
+
+def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                        torque_nm: np.ndarray, friction: float, index: np.ndarray
+                        ) -> np.ndarray:
+    """The temperature the bridges and the efficiency say each window was at, by the
+    laws learnt at commissioning (:func:`best_temperature`), as a running median over
+    :data:`VIRTUAL_WINDOWS` windows (a joint's temperature moves with a time constant of
+    tens of minutes, module docstring); the monitor's reading where its temperature sensor
+    has failed (:func:`learn.monitor.stream.run_stream`). Shape (n,) [°C].
+
+    Raises
+    ------
+    ValueError
+        If the normal behaviour has no temperature terms.
+    """
+    if not normal.temperature_law:
+        raise ValueError("virtual_temperature: the normal behaviour has no temperature law "
+                         "(commissioning without a temperature reading or without its "
+                         "spread)")
+    temp, _ = best_temperature(normal, feats, points, torque_nm,
+                               np.full(len(feats), float(friction)), index)
+    half = VIRTUAL_WINDOWS // 2
+    padded = np.pad(temp, half, mode="edge")
+    return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
+
+
+__all__ = ["BLOCK", "FIT_MIN", "REST_MAX", "SENSOR_P_MIN", "TEMPERATURE_BEYOND_K",
+           "TEMPERATURE_MIN_K", "TEMPERATURE_SENSOR", "TEMPERATURE_STEP_K", "SensorFit",
+           "TemperatureFit", "VIRTUAL_WINDOWS", "best_temperature", "fit_sensor_faults",
+           "fit_temperature", "virtual_temperature"]

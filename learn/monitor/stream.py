@@ -14,6 +14,7 @@ each event (:meth:`StreamResult.events`) that the report and ``swgsim-monitor`` 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from .normal import (
     NormalConfig,
 )
 from .rule import RuleConfig
+from .sensor_check import TEMPERATURE_SENSOR, virtual_temperature
 
 #: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
 CONDITIONS = {OUTSIDE_TEMPERATURE: "temperature", OUTSIDE_LOAD: "load",
@@ -76,7 +78,7 @@ class StreamResult:
         """Alarms, advisories and recommissioned points in time order, each with its
         ``kind``: ``gear_fault``, ``sensor_fault`` (named with its bridge), ``advisory``
         or ``recommissioned``."""
-        ev = [{"kind": "sensor_fault" if a.bridge else "gear_fault", **a.as_dict()}
+        ev = [{"kind": "sensor_fault" if a.sensor_fault else "gear_fault", **a.as_dict()}
               for a in self.alarms]
         ev += [{"kind": "advisory", **a} for a in self.advisories]
         ev += [{"kind": "recommissioned", **a} for a in self.recommissioned]
@@ -111,8 +113,9 @@ def event_line(event: dict) -> str:
     """
     kind, hour = event.get("kind"), float(event["hour"])
     if kind in ("gear_fault", "sensor_fault"):
-        where = (f" on bridge {event['bridge']} (check that gauge)"
-                 if kind == "sensor_fault" else "")
+        where = ("" if kind != "sensor_fault" else
+                 f" on bridge {event['bridge']} (check that gauge)" if event["bridge"] else
+                 " (check the joint's temperature sensor; the monitor goes on without it)")
         return (f"alarm at {hour:.2f} h: {event['fault']}{where} (at the alarm: "
                 f"{event['fault_at_alarm']}), severity {event['severity']:.3g} "
                 f"[{event['severity_low']:.3g}, {event['severity_high']:.3g}]")
@@ -198,10 +201,12 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
     if "temperature_c" in ds:
         t = ds["temperature_c"].values.astype(float)
         lo, hi = TEMPERATURE_RANGE_C
-        bad = np.flatnonzero(~np.isfinite(t) | (t < lo) | (t > hi))
+        bad = np.flatnonzero((t < lo) | (t > hi) | np.isinf(t))
         if bad.size:
             raise ValueError(f"{source}: temperature_c of window {int(bad[0])} is "
-                             f"{t[bad[0]]:g} °C; allowed: finite, in [{lo:g}, {hi:g}] °C")
+                             f"{t[bad[0]]:g} °C; allowed: in [{lo:g}, {hi:g}] °C, or NaN "
+                             "(no reading: the monitor reports the temperature sensor and "
+                             "goes on without it)")
     interval = float(np.median(np.diff(hours)) * 60.0)
     check_commissioning(pts[comm], rule, interval)
     return interval
@@ -242,14 +247,17 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
                           if k in ds})
     comm = ds["commissioning"].values.astype(bool)
     n_c = int(comm.sum())
-    mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h, normal=normal)
-    mon.commission(feats[:n_c], pts[:n_c], cond[:n_c])
     hours = ds["hour"].values.astype(float)
+    mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h, normal=normal)
+    lost = _lost_reading(cond, n_c, hours)
+    read = np.ones(n_c, bool) if lost is None else np.isfinite(cond.temperature_c[:n_c])
+    mon.commission(feats[:n_c][read], pts[:n_c][read], cond[:n_c][read])
     f, p, c = feats[n_c:], pts[n_c:], cond[n_c:]
-    tr = mon.run(f, p, hours[n_c:], c, latch=False)
-    alarms: list[Alarm] = []
-    for a in tr.alarms:
-        al = mon.diagnose(tr, a, f, p, c)
+    if lost is not None:  # the sensor failed: from the first window on, without it
+        c = Conditions(c.torque_nm, np.full(len(f), np.nan))
+    tr, named, mon = run_stream(mon, f, p, hours[n_c:], c)
+    alarms: list[Alarm] = [] if lost is None else [lost]
+    for al in named:
         if not alarms or alarms[-1].fault != al.fault:  # the same fault again: one alarm
             alarms.append(al)
     fault = ds["fault"].values.astype(str)
@@ -258,6 +266,90 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
                         float(hours[on[0]]) if on.size else None,
                         str(fault[on[0]]) if on.size else None, mon.h,
                         recommissionings(tr, mon))
+
+
+def _lost_reading(cond: Conditions, n_c: int, hours: np.ndarray) -> Alarm | None:
+    """The temperature sensor's fault where commissioning has a window without a
+    reading (the monitor is then commissioned on the windows with one and goes on without
+    the sensor, :func:`run_stream`), else None."""
+    t = cond.temperature_c
+    bad = np.array([], int) if t is None else np.flatnonzero(~np.isfinite(t[:n_c]))
+    return None if not bad.size else _no_reading(float(hours[bad[0]]), int(bad[0]) - n_c)
+
+
+def _no_reading(hour: float, index: int) -> Alarm:
+    """The temperature sensor's fault at a window without a reading."""
+    return Alarm(hour, index, index, TEMPERATURE_SENSOR, TEMPERATURE_SENSOR, np.nan,
+                 np.nan, np.nan)
+
+
+def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: np.ndarray,
+               cond: Conditions) -> tuple[Trace, list[Alarm], GearMonitor]:
+    """Monitor windows after commissioning, keep watching after every alarm, and go on
+    without the temperature sensor where it fails: from the first window without a
+    reading (missing, dropped out), or after an alarm named
+    :data:`~learn.monitor.sensor_check.TEMPERATURE_SENSOR` (a stuck or drifting reading,
+    :func:`~learn.monitor.sensor_check.fit_temperature`), the monitor is the one
+    commissioned without temperature (:meth:`GearMonitor.without_temperature`).
+
+    Parameters
+    ----------
+    mon : GearMonitor
+        Commissioned.
+    feats, points : ndarray, shapes (n, F), (n, 2)
+    hours : ndarray, shape (n,)
+        Operating hours, increasing.
+    cond : Conditions
+        Readings may be NaN (no reading).
+
+    Returns
+    -------
+    (Trace, list of Alarm, GearMonitor)
+        The trace of every window, every alarm named (indices into the windows; a
+        missing reading's alarm has no severity), and the monitor in force at the end.
+    """
+    traces, alarms, i0, n, fstart = [], [], 0, len(feats), None
+    while True:
+        t = cond.temperature_c
+        bad = np.array([], int) if t is None else np.flatnonzero(~np.isfinite(t[i0:]))
+        stop = n if not bad.size else i0 + int(bad[0])
+        w = slice(i0, stop)
+        tr = mon.run(feats[w], points[w], hours[w], cond[w], latch=False,
+                     friction_start=fstart) if stop > i0 else None
+        named = [] if tr is None else [mon.diagnose(tr, a, feats[w], points[w], cond[w])
+                                       for a in tr.alarms]
+        hot = [k for k, al in enumerate(named) if al.fault == TEMPERATURE_SENSOR]
+        if hot:
+            named = named[:hot[0] + 1]
+            stop = i0 + named[-1].index + 1
+            tr = tr.head(named[-1].index + 1)
+        alarms += [dataclasses.replace(al, index=al.index + i0, rise_index=al.rise_index + i0)
+                   for al in named]
+        traces += [] if tr is None else [tr]
+        if stop == n:
+            return Trace.concat(traces), alarms, mon
+        if not hot:
+            alarms.append(_no_reading(float(hours[stop]), stop))
+        fstart = None if tr is None else tr.state(len(tr.hour) - 1)
+        mon, cond = _without_reading(mon, feats, points, cond, stop, fstart)
+        i0 = stop
+
+
+def _without_reading(mon: GearMonitor, feats: np.ndarray, points: np.ndarray,
+                     cond: Conditions, stop: int, fstart: tuple[float, float] | None
+                     ) -> tuple[GearMonitor, Conditions]:
+    """The monitor and conditions from window ``stop`` on, where the temperature sensor
+    has failed there (:func:`run_stream`): where commissioning learnt the temperature's
+    laws, the same monitor on the temperature they say each window was at
+    (:func:`~learn.monitor.sensor_check.virtual_temperature`); else the monitor
+    commissioned without temperature."""
+    if not mon.normal.temperature_law:
+        return mon.without_temperature(), Conditions(cond.torque_nm)
+    rest = slice(stop, None)
+    fr = mon.friction if fstart is None else fstart[0]
+    virtual = virtual_temperature(mon.normal, feats[rest], points[rest], cond.torque_nm[rest],
+                                  fr, mon.normal.index(points[rest]))
+    return mon, Conditions(cond.torque_nm, np.concatenate([np.full(stop, np.nan), virtual]))
 
 
 def recommissionings(tr: Trace, mon: GearMonitor) -> list[dict]:
@@ -357,4 +449,5 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
 
 
 __all__ = ["CONDITIONS", "EVENT_KINDS", "StreamResult", "advisories", "check_stream",
-           "event_line", "monitor_stream", "recommissionings", "select_gear", "write_outputs"]
+           "event_line", "monitor_stream", "recommissionings", "run_stream", "select_gear",
+           "write_outputs"]
