@@ -7,17 +7,21 @@ lives through while its gear stays healthy, each with a sourced magnitude
 
 * **temperature**: operating days with stops, a cold start after each, a first-order
   warm-up towards a rise set by the power the gear loses at its operating point, and a
-  hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`);
+  hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`), or, instead of the
+  first-order warm-up, a measured one (``temperature_trace``, :class:`TemperatureTrace`);
 * **friction**: its temperature law, the grease's viscosity law
   (:func:`swgsim.gear.thermal.friction_scale`) or one drawn from a family of smooth monotone
-  laws (:class:`swgsim.gear.thermal.FrictionLaw`), and the run-in of a new gear
-  (:func:`swgsim.gear.thermal.run_in_factor`);
+  laws (:class:`swgsim.gear.thermal.FrictionLaw`), the run-in of a new gear
+  (:func:`swgsim.gear.thermal.run_in_factor`) and its running in again after each
+  re-greasing in service (:func:`swgsim.gear.thermal.regrease_factor`);
 * **payload**: a heavier (or lighter) tool from set hours on, the acting load at every
   duty point times a factor, the commanded points unchanged;
 * **bridges**: each bridge's zero and span drift with the temperature, per gear
   (:func:`swgsim.sensing.bridge_drift.draw_bridge_drift`);
 * **temperature sensor**: the joint's reading, ``temperature_c`` of every window
-  (None: the stream has no temperature).
+  (None: the stream has no temperature), and its fault from a set hour on, stuck, drifting
+  or lost (NaN readings; :class:`swgsim.sensing.bridge_drift.TemperatureSensor`): the
+  reading alone is wrong, the joint's true temperature and all it drives stay.
 
 How a window gets them (:func:`window_conditions`, used by
 :class:`swgsim.datasets.life.LifeSimulator`): its record is that of the nominal gear at
@@ -41,6 +45,7 @@ touches a window's own stream.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -48,6 +53,8 @@ from swgsim.base.typed import check_range
 from swgsim.gear.faults import ChainParams
 from swgsim.gear.thermal import (
     REF_TEMP_C,
+    REGREASE_DROP,
+    REGREASE_TAU_H,
     RUN_IN_DROP,
     RUN_IN_TAU_H,
     TEMP_RANGE_C,
@@ -55,8 +62,10 @@ from swgsim.gear.thermal import (
     JointThermal,
     joint_temperature,
     loss_power_w,
+    regrease_factor,
     run_in_factor,
     steady_efficiency,
+    traced_temperature,
 )
 from swgsim.sensing.bridge_drift import (
     BridgeDrift,
@@ -65,8 +74,14 @@ from swgsim.sensing.bridge_drift import (
     measure_temperature,
 )
 
-__all__ = ["ConditionsConfig", "RunInConfig", "WindowConditions", "check_conditions",
-           "efficiency_ratio", "window_conditions"]
+__all__ = ["ConditionsConfig", "Regrease", "RunInConfig", "TemperatureTrace", "WindowConditions",
+           "check_conditions", "efficiency_ratio", "trace_rise", "window_conditions"]
+
+#: A step of a temperature trace longer than this ends its first continuous segment [min]
+#: [choice: beyond a logger's hiccups (the UR3 CobotOps day has steps of 9 and 31 s),
+#: short against a joint's thermal time constant (0.5-0.9 h there), so that the rise is
+#: interpolated only over what a joint cannot do much in].
+TRACE_GAP_MIN = 5.0
 
 
 @dataclass
@@ -86,6 +101,139 @@ class RunInConfig:
 
 
 @dataclass
+class Regrease:
+    """Re-greasing in service: the friction steps up and runs in again
+    (:func:`swgsim.gear.thermal.regrease_factor`; the latest re-greasing counts).
+
+    Attributes
+    ----------
+    hours : list of float
+        Operating hours of the re-greasings, increasing, inside the life [h].
+    drop : float
+        Excess friction just after a re-greasing, in [0, 1] [-] (0.3) [choice: fresh
+        grease churns until it has redistributed].
+    tau_h : float
+        Time constant of running in again, > 0 [operating h] (8: over in about a day)
+        [choice].
+    """
+
+    hours: list[float]
+    drop: float = REGREASE_DROP
+    tau_h: float = REGREASE_TAU_H
+
+
+@dataclass
+class TemperatureTrace:
+    """A measured warm-up for the joint's temperature over a life, instead of the
+    first-order model's rise (:func:`swgsim.gear.thermal.traced_temperature`,
+    :func:`trace_rise`).
+
+    E.g. a UR3's joint temperatures over a working day: M. Tyrovolas, K. Aliev,
+    D. Antonelli and C. Stylios, "UR3 CobotOps", UCI Machine Learning Repository, 2024,
+    doi:10.24432/C5J891 (CC BY 4.0), column ``Temperature_J1``: a rise of 7.9 K over its
+    first 49 min (measured here), then a gap of 5.2 h. Held beyond the trace, its last value
+    stays: that joint was still warming (a first-order time constant of 0.5-0.9 h), so the
+    plateau of a longer day is underestimated. The file is the user's: the path is an
+    input, not part of the project.
+
+    Attributes
+    ----------
+    path : str
+        A CSV, ``;``-separated with decimal commas (the UR3 CobotOps format); relative to
+        the working directory. The config hash names the path, not the file's bytes.
+    column : str
+        The temperature column [°C], e.g. ``Temperature_J1``.
+    scale : float
+        Factor on the measured rise, in [0, 10] [-] (1).
+    time_column : str
+        The time column: ISO 8601 timestamps, or seconds where numeric (``Timestamp``).
+    """
+
+    path: str
+    column: str
+    scale: float = 1.0
+    time_column: str = "Timestamp"
+
+
+def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarray]:
+    """The rise of a measured warm-up over its first start: the temperature minus its
+    first reading against the hours since the first row, over the first continuous
+    segment (up to the first step over :data:`TRACE_GAP_MIN`), rows without a reading
+    left out.
+
+    Parameters
+    ----------
+    trace : TemperatureTrace
+    key : str
+        Full name of the trace, e.g. ``dataset.life.conditions.temperature_trace``.
+
+    Returns
+    -------
+    trace_h : ndarray, shape (N,)
+        Hours since the segment's first reading, 0 first, increasing [h].
+    rise_k : ndarray, shape (N,)
+        Temperature minus the first reading [K].
+
+    Raises
+    ------
+    ValueError
+        One line naming ``<key>.path`` (no such file, not a table), ``<key>.column`` or
+        ``<key>.time_column`` (missing, a cell not a number or time, times not increasing,
+        fewer than two readings before the first gap); an empty cell is a missing reading,
+        left out.
+    """
+    import pandas as pd
+
+    p = Path(trace.path)
+    if not p.is_file():
+        raise ValueError(f"{key}.path: no file {trace.path!r}")
+    try:
+        head = pd.read_csv(p, sep=";", decimal=",", nrows=0).columns
+    except (ValueError, UnicodeDecodeError) as e:
+        raise ValueError(f"{key}.path: {trace.path!r} is not a ;-separated table: "
+                         f"{str(e).splitlines()[0]}") from None
+    named = [str(c) for c in head if not str(c).startswith("Unnamed")]
+    for field_, col in (("column", trace.column), ("time_column", trace.time_column)):
+        if col not in head:
+            raise ValueError(f"{key}.{field_}: {col!r} is not a column of {trace.path!r}; "
+                             f"columns: {', '.join(named)}")
+    df = pd.read_csv(p, sep=";", decimal=",", usecols=[trace.time_column, trace.column])
+    t_s = _seconds(df[trace.time_column], f"{key}.time_column")
+    num = pd.to_numeric(df[trace.column], errors="coerce")
+    text = np.flatnonzero(num.isna().to_numpy() & df[trace.column].notna().to_numpy())
+    if text.size:
+        raise ValueError(f"{key}.column: {trace.column!r} of {trace.path!r}, row "
+                         f"{int(text[0]) + 1}: {df[trace.column].iloc[text[0]]!r} is not a "
+                         f"number")
+    temp = num.to_numpy(dtype=float)
+    steps = np.diff(t_s)
+    if np.any(steps <= 0):
+        raise ValueError(f"{key}.time_column: times of {trace.path!r} must increase")
+    gaps = np.flatnonzero(steps > TRACE_GAP_MIN * 60.0)
+    end = int(gaps[0]) + 1 if gaps.size else t_s.size
+    ok = np.isfinite(temp[:end])
+    if ok.sum() < 2:
+        raise ValueError(f"{key}.column: {trace.column!r} holds fewer than 2 readings before "
+                         f"the first gap of {trace.path!r}")
+    t_s, temp = t_s[:end][ok], temp[:end][ok]
+    return (t_s - t_s[0]) / 3600.0, temp - temp[0]
+
+
+def _seconds(col, key: str) -> np.ndarray:
+    """A time column as seconds: numbers as they are, else ISO 8601 timestamps."""
+    import pandas as pd
+
+    if col.dtype.kind in "fiu":
+        out = col.to_numpy(dtype=float)
+    else:
+        t = pd.to_datetime(col, utc=True, errors="coerce")
+        out = (t - t.iloc[0]).dt.total_seconds().to_numpy(dtype=float)
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"{key}: {col.name!r} holds a value that is not a time")
+    return out
+
+
+@dataclass
 class ConditionsConfig:
     """What changes while the gear stays healthy (module docstring).
 
@@ -94,6 +242,9 @@ class ConditionsConfig:
     thermal : JointThermal or None
         The joint's temperature over the life; None: it stays at the catalogue's
         reference temperature (20 °C).
+    temperature_trace : TemperatureTrace or None
+        A measured warm-up after every cold start of ``thermal``'s day, on the hall's
+        temperature, instead of the first-order rise; None: the model's.
     viscosity : bool
         Friction follows the temperature, by ``friction_law``.
     friction_law : FrictionLaw
@@ -101,6 +252,8 @@ class ConditionsConfig:
         an evaluation draws it from the family.
     run_in : RunInConfig or None
         A new gear's friction running in from hour 0; None: the gear is run in.
+    regrease : Regrease or None
+        Re-greasings in service, each followed by a run-in; None: none.
     payload : list of [float, float]
         ``[operating hour, factor]`` pairs, hours increasing: from each hour on, the acting
         load at every duty point is the commanded one times the factor (> 0); before the
@@ -112,9 +265,11 @@ class ConditionsConfig:
     """
 
     thermal: JointThermal | None = field(default_factory=JointThermal)
+    temperature_trace: TemperatureTrace | None = None
     viscosity: bool = True
     friction_law: FrictionLaw = field(default_factory=FrictionLaw)
     run_in: RunInConfig | None = None
+    regrease: Regrease | None = None
     payload: list[list[float]] = field(default_factory=list)
     bridge_drift: BridgeDrift | None = field(default_factory=BridgeDrift)
     temperature_sensor: TemperatureSensor | None = field(default_factory=TemperatureSensor)
@@ -137,10 +292,18 @@ def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
     """
     if cfg.thermal is not None:
         cfg.thermal.check(f"{key}.thermal")
+    if cfg.temperature_trace is not None:
+        if cfg.thermal is None:
+            raise ValueError(f"{key}.temperature_trace needs {key}.thermal (the hall and the "
+                             f"operating day), got thermal: null")
+        check_range(cfg.temperature_trace.scale, 0.0, 10.0, f"{key}.temperature_trace.scale")
+        trace_rise(cfg.temperature_trace, f"{key}.temperature_trace")
     cfg.friction_law.check(f"{key}.friction_law")
     if cfg.run_in is not None:
         check_range(cfg.run_in.drop, 0.0, 1.0, f"{key}.run_in.drop")
         check_range(cfg.run_in.tau_h, 0.0, 1e5, f"{key}.run_in.tau_h", "h", lo_open=True)
+    if cfg.regrease is not None:
+        _check_regrease(cfg.regrease, hours, f"{key}.regrease")
     last = -np.inf
     for i, step in enumerate(cfg.payload):
         if len(step) != 2:
@@ -159,6 +322,21 @@ def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
         cfg.temperature_sensor.check(f"{key}.temperature_sensor")
 
 
+def _check_regrease(cfg: Regrease, hours: float, key: str) -> None:
+    """Refuse re-greasing hours outside the life or not increasing, a drop or time
+    constant out of range, in one line naming ``<key>.<field>``."""
+    if len(cfg.hours) == 0:
+        raise ValueError(f"{key}.hours must name at least one operating hour (no "
+                         f"re-greasing: {key}: null)")
+    for i, h in enumerate(cfg.hours):
+        check_range(h, 0.0, hours, f"{key}.hours[{i}]", "h",
+                    why="an operating hour inside the life")
+    if any(b <= a for a, b in zip(cfg.hours[:-1], cfg.hours[1:], strict=True)):
+        raise ValueError(f"{key}.hours must increase, got {list(cfg.hours)}")
+    check_range(cfg.drop, 0.0, 1.0, f"{key}.drop")
+    check_range(cfg.tau_h, 0.0, 1e5, f"{key}.tau_h", "h", lo_open=True)
+
+
 @dataclass(frozen=True)
 class WindowConditions:
     """The conditions of every window of a life's schedule.
@@ -168,11 +346,12 @@ class WindowConditions:
     temperature_c : ndarray, shape (W,)
         The joint's true temperature [°C].
     reading_c : ndarray, shape (W,) or None
-        The temperature sensor's reading [°C] (None without a sensor).
+        The temperature sensor's reading [°C] (None without a sensor; NaN where its fault
+        is a dropout).
     friction : ndarray, shape (W,)
-        Factor on the load-independent friction (viscosity, run-in) [-].
+        Factor on the load-independent friction (viscosity, run-in, re-greasing) [-].
     mu_factor : ndarray, shape (W,)
-        Factor on the mesh's load-proportional friction μ (run-in) [-].
+        Factor on the mesh's load-proportional friction μ (run-in, re-greasing) [-].
     payload : ndarray, shape (W,)
         Factor on the acting load [-].
     zero_mvv_per_k, span_per_k : ndarray, shape (5,)
@@ -227,19 +406,18 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     WindowConditions
     """
     payload = _payload(cfg, hours)
-    if cfg.thermal is not None:
-        loss = loss_power_w(gear.gear, np.abs(n_in_rpm), np.abs(t_out_nm) * payload)
-        temp = joint_temperature(hours, loss, cfg.thermal)
-        _check_joint_temperature(temp, hours, cfg.thermal)
-    else:
-        temp = np.full(hours.shape, REF_TEMP_C)
+    temp = _temperature(cfg, hours, n_in_rpm, t_out_nm, payload, gear)
     run_in = (run_in_factor(hours, cfg.run_in.drop, cfg.run_in.tau_h)
               if cfg.run_in is not None else np.ones_like(hours))
+    if cfg.regrease is not None:
+        rg = cfg.regrease
+        run_in = run_in * regrease_factor(hours, rg.hours, rg.drop, rg.tau_h)
     friction = (cfg.friction_law.factor(temp) if cfg.viscosity else 1.0) * run_in
     reading = None
     if cfg.temperature_sensor is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), int(life_seed), 2**22))
-        reading = measure_temperature(temp, cfg.temperature_sensor, np.random.default_rng(ss))
+        reading = measure_temperature(temp, cfg.temperature_sensor, np.random.default_rng(ss),
+                                      hours=hours)
     zero, span, ref = np.zeros(5), np.zeros(5), REF_TEMP_C
     if cfg.bridge_drift is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), 2**21))
@@ -249,19 +427,34 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
                             zero, span, ref)
 
 
-def _check_joint_temperature(temp: np.ndarray, hours: np.ndarray, th: JointThermal) -> None:
-    """Refuse a joint temperature outside the viscosity law's range in one line naming
-    the thermal model's fields that set it (the hall and the loss times
-    ``r_th_k_per_w``)."""
+def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
+                 t_out_nm: np.ndarray, payload: np.ndarray, gear: ChainParams) -> np.ndarray:
+    """The joint's true temperature at the windows [°C], shape (W,): the reference without
+    a thermal model, the measured warm-up with a trace, else the first-order model at the
+    acting loss; refused outside the viscosity law's range naming what sets it."""
+    th, tr = cfg.thermal, cfg.temperature_trace
+    if th is None:
+        return np.full(hours.shape, REF_TEMP_C)
+    if tr is not None:
+        t_h, rise = trace_rise(tr, "conditions.temperature_trace")
+        temp = traced_temperature(hours, t_h, rise, th, tr.scale)
+        key, cause = "conditions.temperature_trace", (
+            f"the hall, ambient_c {th.ambient_c:g} °C, plus scale {tr.scale:g} times the "
+            f"rise of {tr.column!r} in {tr.path!r}")
+    else:
+        loss = loss_power_w(gear.gear, np.abs(n_in_rpm), np.abs(t_out_nm) * payload)
+        temp = joint_temperature(hours, loss, th)
+        key, cause = "conditions.thermal", (
+            f"the hall, ambient_c {th.ambient_c:g} °C, plus the gear's loss times "
+            f"r_th_k_per_w {th.r_th_k_per_w:g} K/W")
     lo, hi = TEMP_RANGE_C
     bad = np.flatnonzero((temp < lo) | (temp > hi))
     if bad.size:
         i = int(bad[0])
-        raise ValueError(f"conditions.thermal: the joint reaches {temp[i]:.4g} °C at "
-                         f"operating hour {hours[i]:.4g} (the hall, ambient_c "
-                         f"{th.ambient_c:g} °C, plus the gear's loss times r_th_k_per_w "
-                         f"{th.r_th_k_per_w:g} K/W); the viscosity law takes "
+        raise ValueError(f"{key}: the joint reaches {temp[i]:.4g} °C at operating hour "
+                         f"{hours[i]:.4g} ({cause}); the viscosity law takes "
                          f"[{lo:g}, {hi:g}] °C")
+    return temp
 
 
 def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray,

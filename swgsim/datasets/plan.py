@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from swgsim.base.typed import check_finite, check_range
+from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.config import (
     DatasetConfig,
     GearConfig,
@@ -40,9 +41,9 @@ from swgsim.gear.flexspline import FlexsplineGeometry, TrussModel
 from swgsim.gear.friction import FrictionEffects, friction_effects_from_config
 from swgsim.gear.modes import linear_eigenvalues, rk4_stable, torsional_mode
 from swgsim.gear.sensors import signal_rows
-from swgsim.gear.thermal import FrictionLaw
 from swgsim.sensing.acquisition import check_acquisition
 from swgsim.sensing.angles import check_channels
+from swgsim.sensing.bridge_drift import TemperatureSensor
 from swgsim.sensing.effects import SensorEffect, parse_sensor_effects
 
 MIN_GRID_LENGTH_MM = 0.2  # shortest foil strain-gauge grids on the market (0.2 mm)
@@ -135,11 +136,25 @@ class DatasetPlan:
         return plain_config(self.config)
 
 
+#: Fields added to ``life.conditions`` (:class:`ConditionsConfig`) and to its
+#: ``temperature_sensor`` (:class:`TemperatureSensor`) after data sets were made: where one
+#: holds its default, :func:`plain_config` leaves it out.
+LATER_CONDITIONS = ("friction_law", "regrease", "temperature_trace")
+LATER_SENSOR = ("fault", "fault_hour", "drift_k_per_h")
+
+
+def _without_defaults(d: dict, schema: type, names: tuple[str, ...]) -> dict:
+    """``d`` without the fields ``names`` that hold the schema's defaults."""
+    ref = dataclasses.asdict(schema())
+    return {k: v for k, v in d.items() if not (k in names and v == ref[k])}
+
+
 def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
     """A data-set config as plain data, without ``profile`` and ``life.conditions`` when
-    they are None and without ``life.conditions.friction_law`` when it is the default
-    (the viscosity law), so that a data set keeps the config (and :func:`config_hash`) it
-    had before these options."""
+    they are None and without the fields of :data:`LATER_CONDITIONS` and
+    :data:`LATER_SENSOR` (the friction law, re-greasing, a temperature trace, the sensor's
+    fault) that hold their defaults, so that a data set keeps the config (and
+    :func:`config_hash`) it had before these options."""
     out = dict(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
     if "profile" in out and out["profile"] is None:
         del out["profile"]
@@ -148,9 +163,12 @@ def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
         out["life"] = {k: v for k, v in life.items() if k != "conditions"}
     cond = (out.get("life") or {}).get("conditions") if isinstance(out.get("life"), dict) \
         else None
-    if isinstance(cond, dict) and cond.get("friction_law") == dataclasses.asdict(FrictionLaw()):
-        out["life"] = {**out["life"], "conditions": {k: v for k, v in cond.items()
-                                                     if k != "friction_law"}}
+    if isinstance(cond, dict):
+        cond = _without_defaults(cond, ConditionsConfig, LATER_CONDITIONS)
+        if isinstance(cond.get("temperature_sensor"), dict):
+            cond["temperature_sensor"] = _without_defaults(cond["temperature_sensor"],
+                                                           TemperatureSensor, LATER_SENSOR)
+        out["life"] = {**out["life"], "conditions": cond}
     return out
 
 

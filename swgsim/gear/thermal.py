@@ -47,6 +47,12 @@ FRICTION_EXPONENT = 2.0 / 3.0
 RUN_IN_DROP = 0.16
 RUN_IN_TAU_H = 30.0
 
+#: Re-greasing in service: excess friction just after fresh grease [-] and the time
+#: constant of running in again [operating h] [choice: fresh grease churns until it has
+#: redistributed, and Harmonic Drive's manuals ask for a run-in after relubrication
+#: [unverified]; no measured curve: +30 % falling over about a day (3 τ = 24 h)].
+REGREASE_DROP = 0.3
+REGREASE_TAU_H = 8.0
 _HOURS_PER_DAY = 24.0
 
 
@@ -251,6 +257,58 @@ def joint_temperature(operating_h, loss_w, cfg: JointThermal | None = None) -> n
     return np.fromiter(temps, float, g.size)[np.searchsorted(g, wall)]
 
 
+def traced_temperature(operating_h, trace_h, rise_k, cfg: JointThermal | None = None,
+                       scale: float = 1.0) -> np.ndarray:
+    """Joint temperature at each window of a life that follows a measured warm-up: the
+    hall's temperature plus ``scale`` times the measured rise since the day's cold start.
+
+    Every operating day of ``cfg`` starts cold (the stops of ``run_h_per_day``; a day of 24
+    h never stops: one start, at hour 0); at t operating hours since it the joint is
+    ``ambient_temperature(wall) + scale · rise(t)``, the rise linear between the trace's
+    points and held at its last beyond them. Held constant against
+    :func:`joint_temperature`: the rise does not depend on the life's operating point or
+    payload (it is the measured joint's, at its own duty), ``r_th_k_per_w`` and ``tau_min``
+    do not enter, a stop cools the joint completely, and the rise rides on the hall's
+    swing and drift as they are at each window.
+
+    Parameters
+    ----------
+    operating_h : array_like, shape (W,)
+        Operating hours of the windows since the first start, >= 0 [h].
+    trace_h : array_like, shape (N,)
+        Hours of the measured rise since its start, 0 first, increasing [h].
+    rise_k : array_like, shape (N,)
+        Measured temperature minus its first reading [K] (0 first).
+    cfg : JointThermal, optional
+        The hall and the operating day (``r_th_k_per_w``, ``tau_min`` unused).
+    scale : float
+        Factor on the rise, in [0, 10] [-].
+
+    Returns
+    -------
+    ndarray, shape (W,)
+        Joint temperature [°C].
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, shapes not as above, ``trace_h`` not increasing from 0.
+    """
+    cfg = cfg or JointThermal()
+    cfg.check()
+    h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
+    t = _finite(trace_h, "trace_h", 0.0, np.inf, "[0, inf) h")
+    r = _finite(rise_k, "rise_k", rng="finite K")
+    if t.ndim != 1 or t.size == 0 or r.shape != t.shape or t[0] != 0.0 \
+            or np.any(np.diff(t) <= 0):
+        raise ValueError(f"trace_h, rise_k must share a shape (N,), trace_h increasing from "
+                         f"0 h, got {t.shape}, {r.shape}")
+    k = float(_finite(scale, "scale", 0.0, 10.0, "[0, 10]"))
+    run = cfg.run_h_per_day
+    since = h if run >= _HOURS_PER_DAY else h - np.floor(h / run) * run
+    return ambient_temperature(wall_clock_h(h, run), cfg) + k * np.interp(since, t, r)
+
+
 def steady_rise_k(loss_w, cfg: JointThermal | None = None) -> np.ndarray:
     """Steady rise over ambient, R_th P_loss [K], shape of ``loss_w`` (loss [W])."""
     cfg = cfg or JointThermal()
@@ -412,6 +470,49 @@ def run_in_factor(operating_h, drop: float = RUN_IN_DROP,
     h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
     d = float(_finite(drop, "drop", 0.0, 1.0, "[0, 1]"))
     return 1.0 + d * np.exp(-h / _positive(tau_h, "tau_h", "h"))
+
+
+def regrease_factor(operating_h, at_h, drop: float = REGREASE_DROP,
+                    tau_h: float = REGREASE_TAU_H) -> np.ndarray:
+    """Friction multiplier of a gear re-greased in service, 1 + drop · exp(−(h − h_r) / τ)
+    from the latest re-greasing h_r <= h on, 1 before the first [-].
+
+    The latest re-greasing alone counts (not the product over all): fresh grease replaces
+    the old, and the churning starts again from the new fill whatever was left of the last
+    one [choice]. Like :func:`run_in_factor`, the nominal friction is the settled state.
+
+    Parameters
+    ----------
+    operating_h : array_like
+        Operating hours, >= 0 [h].
+    at_h : array_like, shape (R,)
+        Operating hours of the re-greasings, increasing, >= 0 [h].
+    drop : float
+        Relative excess friction just after a re-greasing, in [0, 1] [-]
+        (:data:`REGREASE_DROP`).
+    tau_h : float
+        Time constant of running in again, > 0 [operating h] (:data:`REGREASE_TAU_H`).
+
+    Returns
+    -------
+    ndarray, shape of ``operating_h``
+        Multiplier on all friction (:func:`gear_at_temperature`) [-]; 1 + drop at each
+        re-greasing, back towards 1 with τ.
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, ``at_h`` not increasing.
+    """
+    h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
+    at = np.atleast_1d(_finite(at_h, "at_h", 0.0, np.inf, "[0, inf) h"))
+    if at.ndim != 1 or np.any(np.diff(at) <= 0):
+        raise ValueError(f"at_h must be increasing operating hours, got {at.tolist()}")
+    d = float(_finite(drop, "drop", 0.0, 1.0, "[0, 1]"))
+    tau = _positive(tau_h, "tau_h", "h")
+    k = np.searchsorted(at, h, side="right") - 1  # the latest re-greasing, -1: none yet
+    since = h - at[np.maximum(k, 0)] if at.size else np.zeros_like(h)
+    return np.where(k >= 0, 1.0 + d * np.exp(-np.maximum(since, 0.0) / tau), 1.0)
 
 
 def gear_at_temperature(gear: GearParams, temp_c: float, run_in: float = 1.0) -> GearParams:

@@ -203,6 +203,10 @@ def apply_bridge_drift(signals, temp_c, zero_mvv_per_k, span_per_k,
     return (1.0 + span[None, :, None] * d) * x + zero[None, :, None] * d
 
 
+#: Faults of :class:`TemperatureSensor` (its docstring).
+TEMPERATURE_SENSOR_FAULTS = ("none", "stuck", "drift", "dropout")
+
+
 @dataclass
 class TemperatureSensor:
     """The joint's temperature channel (an NTC or PT1000 on the joint's housing).
@@ -216,12 +220,37 @@ class TemperatureSensor:
         Sd of the reading's white noise [K] (0.05), >= 0 [choice]. A sensor's offset
         (a PT1000 of class B: ``±(0.3 + 0.005 |T|)`` K, IEC 60751 [unverified]) is not
         modelled.
+    fault : {"none", "stuck", "drift", "dropout"}
+        The channel's fault from operating hour ``fault_hour`` on
+        (:data:`TEMPERATURE_SENSOR_FAULTS`):
 
-    :meth:`check` refuses a negative or non-finite value.
+        * ``none``: a working sensor;
+        * ``stuck``: the reading holds the last reading before ``fault_hour`` (the first
+          reading when ``fault_hour`` is at or before the first one): a frozen converter
+          or a bus that repeats its last value;
+        * ``drift``: the reading gains ``drift_k_per_h`` · (h − ``fault_hour``) K, before the
+          quantisation: a thermistor ageing or a sensor come loose from the housing
+          (reading towards the hall, a negative rate);
+        * ``dropout``: NaN (a broken wire, a lost channel); the true temperature, and all
+          that it drives, stays.
+    fault_hour : float
+        Operating hour from which the fault acts, >= 0 [h] (0).
+    drift_k_per_h : float
+        Rate of the ``drift`` fault, finite, either sign [K per operating h] (0). Typical
+        [choice]: an NTC ages by about 1 % of its resistance in its first year, 0.1 % a
+        year after [unverified, a vendor's note], about 0.2 K at its 4-5 %/K, so some
+        1e-5 K/h in continuous service, invisible over a life; a failing or loosened
+        sensor 0.01-0.5 K/h (a few K to tens of K over a week), the range a monitor is
+        meant to notice.
+
+    :meth:`check` refuses a negative or non-finite value, an unknown fault.
     """
 
     resolution_k: float = 0.1
     noise_sd_k: float = 0.05
+    fault: str = "none"
+    fault_hour: float = 0.0
+    drift_k_per_h: float = 0.0
 
     def check(self, key: str = "TemperatureSensor") -> None:
         """Refuse a field outside its range in one line naming ``<key>.<field>``.
@@ -234,29 +263,43 @@ class TemperatureSensor:
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"{key}.{name} must lie in [0, inf) K, got {v}")
+        if self.fault not in TEMPERATURE_SENSOR_FAULTS:
+            raise ValueError(f"{key}.fault: {self.fault!r}; allowed: "
+                             f"{', '.join(TEMPERATURE_SENSOR_FAULTS)}")
+        if not (np.isfinite(self.fault_hour) and self.fault_hour >= 0):
+            raise ValueError(f"{key}.fault_hour must lie in [0, inf) h, got {self.fault_hour}")
+        if not np.isfinite(self.drift_k_per_h):
+            raise ValueError(f"{key}.drift_k_per_h must be a finite number of K per h, "
+                             f"got {self.drift_k_per_h}")
 
 
-def measure_temperature(true_c, sensor: TemperatureSensor,
-                        rng: np.random.Generator) -> np.ndarray:
-    """Readings of the temperature channel: noisy, then quantised to the resolution.
+def measure_temperature(true_c, sensor: TemperatureSensor, rng: np.random.Generator, *,
+                        hours=None) -> np.ndarray:
+    """Readings of the temperature channel: noisy, then quantised to the resolution, and
+    the sensor's fault from its hour on (:class:`TemperatureSensor`).
 
     Parameters
     ----------
-    true_c : array_like
+    true_c : array_like, shape (W,)
         True temperatures [°C].
     sensor : TemperatureSensor
     rng : numpy.random.Generator
-        Seeded by the caller; one standard normal per reading.
+        Seeded by the caller; one standard normal per reading, whatever the fault (a
+        faultless sensor's readings are those of a faulty one before its hour).
+    hours : array_like, shape of ``true_c``, optional
+        Operating hours of the readings [h]; needed when ``sensor.fault`` is not ``none``.
 
     Returns
     -------
     ndarray, shape of ``true_c``
-        Readings [°C], float64, multiples of ``resolution_k``.
+        Readings [°C], float64, multiples of ``resolution_k`` (``drift`` included); NaN
+        from ``fault_hour`` on under ``dropout``.
 
     Raises
     ------
     ValueError
-        A non-finite true temperature.
+        A non-finite true temperature; a fault without ``hours`` (naming
+        ``TemperatureSensor.fault``), ``hours`` of another shape or not finite.
     TypeError
         ``rng`` is not a Generator.
     """
@@ -265,7 +308,34 @@ def measure_temperature(true_c, sensor: TemperatureSensor,
     t = np.asarray(true_c, dtype=np.float64)
     if not np.all(np.isfinite(t)):
         raise ValueError("true_c must be finite")
+    h = _fault_hours(hours, t.shape, sensor.fault)
     r = t + sensor.noise_sd_k * rng.standard_normal(t.shape)
+    if h is not None and sensor.fault == "drift":
+        r = r + sensor.drift_k_per_h * np.maximum(h - sensor.fault_hour, 0.0)
     if sensor.resolution_k > 0:
         r = np.round(r / sensor.resolution_k) * sensor.resolution_k
+    if h is None or sensor.fault == "drift":
+        return r
+    on = h >= sensor.fault_hour
+    if sensor.fault == "dropout":
+        r[on] = np.nan
+    elif on.any():  # stuck: the last reading before the hour, else the first
+        before = np.flatnonzero(~on)
+        held = before[np.argmax(h[before])] if before.size else int(np.argmin(h))
+        r[on] = r[held]
     return r
+
+
+def _fault_hours(hours, shape: tuple, fault: str) -> np.ndarray | None:
+    """The readings' hours as float64 when the sensor has a fault, else None; refuse them
+    missing, of another shape or not finite."""
+    if fault == "none":
+        return None
+    if hours is None:
+        raise ValueError(f"TemperatureSensor.fault {fault!r} needs the readings' operating "
+                         f"hours: measure_temperature(..., hours=...)")
+    h = np.asarray(hours, dtype=np.float64)
+    if h.shape != shape or not np.all(np.isfinite(h)):
+        raise ValueError(f"hours must be finite, of the readings' shape {shape}, got shape "
+                         f"{h.shape}")
+    return h

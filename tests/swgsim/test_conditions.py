@@ -6,20 +6,37 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from swgcli import dataset_preset
-from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
+from swgsim.datasets.conditions import (
+    ConditionsConfig,
+    Regrease,
+    RunInConfig,
+    TemperatureTrace,
+    trace_rise,
+)
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import config_hash, plain_config, plan
 from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import DutyPoint, LifeConfig
-from swgsim.gear.thermal import FRICTION_FORMS, FrictionLaw, JointThermal, friction_scale
-from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
+from swgsim.gear.thermal import (
+    FRICTION_FORMS,
+    FrictionLaw,
+    JointThermal,
+    friction_scale,
+    run_in_factor,
+)
+from swgsim.sensing.bridge_drift import (
+    TEMPERATURE_SENSOR_FAULTS,
+    BridgeDrift,
+    TemperatureSensor,
+)
 
 NEUTRAL = ConditionsConfig(thermal=None, viscosity=False, run_in=None, payload=[],
                            bridge_drift=None, temperature_sensor=None)
@@ -118,9 +135,25 @@ def test_a_heavier_tool_acts_at_its_load_while_the_commanded_point_stays(tiny):
     ({"payload": [[1.0, 0.0]]}, r"payload\[0\]\[1\] must lie in \(0, 10\]"),
     ({"payload": [[2.0, 1.1], [1.5, 1.2]]}, "hours must increase"),
     ({"run_in": {"drop": 2.0}}, r"dataset.life.conditions.run_in.drop must lie in \[0, 1\]"),
+    ({"regrease": {"hours": [1.0, 4.0]}},
+     r"^dataset.life.conditions.regrease.hours\[1\] must lie in \[0, 3\] h \(an operating "
+     r"hour inside the life\), got 4.0$"),
+    ({"regrease": {"hours": [2.0, 1.0]}},
+     r"^dataset.life.conditions.regrease.hours must increase, got \[2.0, 1.0\]$"),
+    ({"regrease": {"hours": []}}, r"dataset.life.conditions.regrease.hours must name at least"),
+    ({"regrease": {"hours": [1.0], "drop": 1.2}},
+     r"^dataset.life.conditions.regrease.drop must lie in \[0, 1\], got 1.2$"),
+    ({"regrease": {"hours": [1.0], "tau_h": 0.0}},
+     r"^dataset.life.conditions.regrease.tau_h must lie in \(0, 100000\] h, got 0.0$"),
+    ({"regrease": {"drop": 0.2}}, r"dataset.life.conditions.regrease.hours: missing key"),
     ({"thermal": {"tau_min": -1.0}}, "dataset.life.conditions.thermal.tau_min"),
     ({"temperature_sensor": {"noise_sd_k": -1.0}},
      "dataset.life.conditions.temperature_sensor.noise_sd_k"),
+    ({"temperature_sensor": {"fault": "frozen"}},
+     r"^dataset.life.conditions.temperature_sensor.fault: 'frozen'; allowed: none, stuck, "
+     r"drift, dropout$"),
+    ({"temperature_sensor": {"fault": "stuck", "fault_hour": -2.0}},
+     r"dataset.life.conditions.temperature_sensor.fault_hour must lie in \[0, inf\) h"),
 ])
 def test_bad_conditions_are_refused_naming_the_key(edit, key):
     cfg = dataset_preset("tiny_life")
@@ -170,3 +203,162 @@ def test_the_default_friction_law_keeps_a_data_sets_config_hash():
     assert plain_config(drawn)["life"]["conditions"]["friction_law"] == \
         {"form": "linear", "ratio_40c": 0.7}
     assert config_hash(drawn) != config_hash(cfg)
+
+
+def test_a_faulty_temperature_sensor_changes_the_reading_alone(tiny):
+    warm = dataclasses.replace(NEUTRAL, thermal=JointThermal(), viscosity=True,
+                               temperature_sensor=TemperatureSensor())
+    good = _sim(tiny, warm).conditions
+    hour = _sim(tiny, warm).schedule.hour
+    before = hour < 2.0
+    for fault in TEMPERATURE_SENSOR_FAULTS[1:]:
+        sensor = TemperatureSensor(fault=fault, fault_hour=2.0, drift_k_per_h=0.5)
+        c = _sim(tiny, dataclasses.replace(warm, temperature_sensor=sensor)).conditions
+        np.testing.assert_array_equal(c.temperature_c, good.temperature_c)
+        np.testing.assert_array_equal(c.friction, good.friction)
+        np.testing.assert_array_equal(c.reading_c[before], good.reading_c[before])
+        assert not np.array_equal(c.reading_c[~before], good.reading_c[~before],
+                                  equal_nan=True)
+
+
+def test_a_faultless_sensor_keeps_a_data_sets_config_hash():
+    """The faultless sensor's fields are left out of the config: tiny_real_day keeps the
+    hash it had before the faults (measured then, as every preset's)."""
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    assert config_hash(cfg) == "28bc082330ec940a"
+    assert plain_config(cfg)["life"]["conditions"]["temperature_sensor"] == \
+        {"resolution_k": 0.1, "noise_sd_k": 0.05}
+    stuck = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, conditions=(
+        dataclasses.replace(cfg.life.conditions, temperature_sensor=TemperatureSensor(
+            fault="stuck", fault_hour=30.0)))))
+    assert plain_config(stuck)["life"]["conditions"]["temperature_sensor"] == \
+        {"resolution_k": 0.1, "noise_sd_k": 0.05, "fault": "stuck", "fault_hour": 30.0}
+    assert config_hash(stuck) != config_hash(cfg)
+
+
+def test_a_life_whose_sensor_drops_out_is_written_and_read_back_with_nan(tmp_path):
+    from swgsim.datasets.schema import load
+
+    cfg = dataset_config(dataset_preset("tiny_life"))
+    cfg.gears = cfg.gears[:1]
+    cfg.life.hours, cfg.life.commissioning_h = 1.0, 0.5
+    cfg.life.conditions = ConditionsConfig(temperature_sensor=TemperatureSensor(
+        fault="dropout", fault_hour=0.6))
+    out = generate(cfg, tmp_path / "life", progress=False)
+    assert out["complete"] and out["windows"] == 60
+    ds = load(tmp_path / "life")
+    hour, temp = ds["hour"].values, ds["temperature_c"].values
+    assert np.all(np.isnan(temp[hour >= 0.6])) and np.all(np.isfinite(temp[hour < 0.6]))
+    assert np.all(np.isfinite(ds["strain_signal"].values))
+
+
+def test_regreasing_steps_the_friction_up_and_it_runs_in_again(tiny):
+    rg = dataclasses.replace(NEUTRAL, regrease=Regrease([1.5], drop=0.3, tau_h=0.5))
+    sim = _sim(tiny, rg)
+    c, hour = sim.conditions, sim.schedule.hour
+    after = hour >= 1.5
+    np.testing.assert_array_equal(c.friction[~after], 1.0)
+    np.testing.assert_allclose(c.friction[after], 1.0 + 0.3 * np.exp(-(hour[after] - 1.5) / 0.5),
+                               rtol=1e-14)
+    np.testing.assert_array_equal(c.mu_factor, c.friction)  # the mesh's μ too, as a run-in
+    assert c.friction[after][0] == pytest.approx(1.3, abs=0.3 * 2 / 60 / 0.5 + 1e-12)
+    _, m0 = _windows(tiny, NEUTRAL)
+    _, m1 = _windows(tiny, rg)
+    assert np.all(m1["efficiency"][after] < m0["efficiency"][after])  # more friction
+    np.testing.assert_array_equal(m1["efficiency"][~after], m0["efficiency"][~after])
+    both = dataclasses.replace(rg, run_in=RunInConfig())  # a new gear re-greased: the product
+    c2 = _sim(tiny, both).conditions
+    np.testing.assert_allclose(c2.friction, c.friction * run_in_factor(hour), rtol=1e-14)
+
+
+def test_no_regreasing_keeps_a_data_sets_config_hash():
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    assert "regrease" not in plain_config(cfg)["life"]["conditions"]
+    greased = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, conditions=(
+        dataclasses.replace(cfg.life.conditions, regrease=Regrease([30.0])))))
+    assert plain_config(greased)["life"]["conditions"]["regrease"] == \
+        {"hours": [30.0], "drop": 0.3, "tau_h": 8.0}
+    assert config_hash(greased) != config_hash(cfg)
+    plan(greased)  # checked and accepted
+
+
+#: The UR3 CobotOps day (M. Tyrovolas, K. Aliev, D. Antonelli, C. Stylios, "UR3 CobotOps",
+#: UCI Machine Learning Repository 2024, doi:10.24432/C5J891, CC BY 4.0), where the
+#: workplace holds it beside the repository.
+UR3_DAY = (Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ur3_cobotops"
+           / "ur3_cobotops_2022-10-26.csv")
+
+
+def _trace_csv(path: Path) -> Path:
+    """A tiny trace in the UR3 CobotOps format: 0-30 min warming 0.2 K a minute, a missing
+    reading at 10 min, then a 2-h gap and readings that must not count."""
+    rows = ["Num;Timestamp;Temperature_J1;Other;"]
+    t0 = np.datetime64("2022-10-26T08:00:00")
+    for i in range(31):
+        v = "" if i == 10 else f"{25.0 + 0.2 * i:.1f}".replace(".", ",")
+        rows.append(f"{i + 1};{t0 + np.timedelta64(60 * i, 's')}Z;{v};1;")
+    for i in range(5):
+        rows.append(f"{32 + i};{t0 + np.timedelta64(9000 + 60 * i, 's')}Z;60,0;1;")
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_a_trace_rise_is_its_first_segment_against_its_first_reading(tmp_path):
+    tr = TemperatureTrace(str(_trace_csv(tmp_path / "day.csv")), "Temperature_J1")
+    t_h, rise = trace_rise(tr, "k")
+    assert t_h.size == 30 and t_h[0] == 0.0 and t_h[-1] == pytest.approx(0.5)
+    np.testing.assert_allclose(rise, 0.2 * t_h * 60.0, atol=1e-9)  # the 60 °C after the gap: not
+
+
+def test_a_life_follows_the_measured_warm_up_after_every_cold_start(tiny, tmp_path):
+    tr = TemperatureTrace(str(_trace_csv(tmp_path / "day.csv")), "Temperature_J1", scale=2.0)
+    hall = JointThermal(ambient_swing_k=0.0, run_h_per_day=1.0)  # a cold start every hour
+    cond = dataclasses.replace(NEUTRAL, thermal=hall, viscosity=True, temperature_trace=tr)
+    sim = _sim(tiny, cond)
+    hour, c = sim.schedule.hour, sim.conditions
+    since = hour % 1.0
+    np.testing.assert_allclose(c.temperature_c, 20.0 + 2.0 * np.minimum(since, 0.5) * 12.0,
+                               atol=1e-9)  # 2 x 0.2 K/min, held from 30 min on
+    np.testing.assert_array_equal(c.friction, friction_scale(c.temperature_c))
+
+
+@pytest.mark.parametrize(("trace", "match"), [
+    ({"path": "no/such.csv", "column": "Temperature_J1"},
+     r"^dataset.life.conditions.temperature_trace.path: no file 'no/such.csv'$"),
+    ({"path": "{csv}", "column": "Temperature_J9"},
+     r"^dataset.life.conditions.temperature_trace.column: 'Temperature_J9' is not a column "
+     r"of .*; columns: Num, Timestamp, Temperature_J1, Other$"),
+    ({"path": "{csv}", "column": "Temperature_J1", "scale": 11.0},
+     r"^dataset.life.conditions.temperature_trace.scale must lie in \[0, 10\], got 11.0$"),
+])
+def test_a_bad_temperature_trace_is_refused_naming_the_key(trace, match, tmp_path):
+    csv = str(_trace_csv(tmp_path / "day.csv"))
+    cfg = dataset_preset("tiny_life")
+    cfg["life"].update(hours=3.0, commissioning_h=1.0, fault={"fault": "healthy"})
+    cfg["life"]["conditions"] = {"temperature_trace": {
+        k: (csv if v == "{csv}" else v) for k, v in trace.items()}}
+    with pytest.raises(ValueError, match=match):
+        plan(dataset_config(cfg))
+    cfg["life"]["conditions"]["thermal"] = None
+    with pytest.raises(ValueError, match=r"temperature_trace needs dataset.life.conditions."
+                                         r"thermal"):
+        plan(dataset_config(cfg))
+
+
+def test_no_temperature_trace_keeps_a_data_sets_config_hash(tmp_path):
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    assert "temperature_trace" not in plain_config(cfg)["life"]["conditions"]
+    tr = TemperatureTrace(str(_trace_csv(tmp_path / "day.csv")), "Temperature_J1")
+    traced = dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, conditions=(
+        dataclasses.replace(cfg.life.conditions, temperature_trace=tr))))
+    assert config_hash(traced) != config_hash(cfg)
+    plan(traced)  # checked and accepted
+
+
+@pytest.mark.skipif(not UR3_DAY.is_file(), reason="the UR3 CobotOps day is not beside the "
+                                                  "repository")
+def test_the_ur3_days_first_warm_up_is_its_first_49_minutes():
+    t_h, rise = trace_rise(TemperatureTrace(str(UR3_DAY), "Temperature_J1"), "k")
+    assert t_h[-1] == pytest.approx(0.816, abs=1e-3)  # before the 5.2-h gap
+    assert t_h.size == 2859  # 2868 rows, 9 without a reading
+    assert rise[-1] == pytest.approx(7.875) and rise.min() >= -0.1  # warming, 0.0625-K steps

@@ -302,3 +302,112 @@ def test_the_default_friction_law_is_the_viscosity_law_and_the_forms_differ_off_
 def test_a_friction_law_out_of_range_is_refused_naming_the_key(law, match):
     with pytest.raises(ValueError, match=match):
         law.check("c")
+
+
+# ------------------------------------------------------------ temperature sensor faults
+def _faulty(fault: str, fault_hour: float, drift: float = 0.0, noise: float = 0.05,
+            hours=None):
+    true = np.linspace(20.0, 40.0, 11)
+    h = np.arange(11.0) if hours is None else hours
+    sensor = bd.TemperatureSensor(0.1, noise, fault, fault_hour, drift)
+    good = bd.measure_temperature(true, bd.TemperatureSensor(0.1, noise),
+                                  np.random.default_rng(7))
+    return h, good, bd.measure_temperature(true, sensor, np.random.default_rng(7), hours=h)
+
+
+def test_a_faultless_sensor_reads_bit_for_bit_as_before():
+    true = np.linspace(18.0, 42.0, 1001)
+    old = true + 0.05 * np.random.default_rng(5).standard_normal(true.shape)  # the old code
+    old = np.round(old / 0.1) * 0.1
+    new = bd.measure_temperature(true, bd.TemperatureSensor(), np.random.default_rng(5))
+    assert np.array_equal(new, old)
+    with_hours = bd.measure_temperature(true, bd.TemperatureSensor(fault_hour=3.0,
+                                                                   drift_k_per_h=1.0),
+                                        np.random.default_rng(5), hours=np.arange(1001.0))
+    assert np.array_equal(with_hours, old)  # "none" ignores the fault's other fields
+
+
+def test_a_stuck_sensor_holds_its_last_reading_before_the_fault_hour():
+    h, good, r = _faulty("stuck", 5.5)
+    assert np.array_equal(r[:6], good[:6])
+    assert np.all(r[6:] == good[5]) and good[6:].std() > 1.0  # the joint warmed meanwhile
+    for first in (0.0, -0.0, 2.0):  # at or before the first reading: the first one
+        _, good, r = _faulty("stuck", first, hours=np.arange(11.0) + 2.0)
+        assert np.all(r == good[0])
+
+
+def test_a_drifting_sensor_gains_its_rate_times_the_hours_since_the_fault():
+    h, good, r = _faulty("drift", 4.0, drift=0.3, noise=0.0)
+    assert np.array_equal(r[:5], good[:5])
+    np.testing.assert_allclose(r[4:] - good[4:], 0.3 * (h[4:] - 4.0), atol=0.05 + 1e-9)
+    np.testing.assert_allclose(r * 10, np.round(r * 10), atol=1e-9)  # still quantised
+    _, good, r = _faulty("drift", 0.0, drift=-0.5, noise=0.0)
+    assert r[-1] - good[-1] == pytest.approx(-5.0, abs=0.05 + 1e-9)  # a loosened sensor
+
+
+def test_a_dropped_out_sensor_reads_nan_from_the_fault_hour():
+    h, good, r = _faulty("dropout", 3.0)
+    assert np.array_equal(r[:3], good[:3]) and np.all(np.isnan(r[3:]))
+
+
+@pytest.mark.parametrize(("sensor", "match"), [
+    (bd.TemperatureSensor(fault="broken"),
+     r"^c.fault: 'broken'; allowed: none, stuck, drift, dropout$"),
+    (bd.TemperatureSensor(fault="stuck", fault_hour=-1.0), r"c.fault_hour must lie in \[0, inf"),
+    (bd.TemperatureSensor(fault_hour=float("nan")), r"c.fault_hour must lie in \[0, inf"),
+    (bd.TemperatureSensor(fault="drift", drift_k_per_h=float("inf")),
+     r"c.drift_k_per_h must be a finite number")])
+def test_a_sensor_fault_out_of_range_is_refused_naming_the_key(sensor, match):
+    with pytest.raises(ValueError, match=match):
+        sensor.check("c")
+
+
+def test_a_faulty_sensor_needs_the_readings_hours():
+    sensor = bd.TemperatureSensor(fault="dropout", fault_hour=1.0)
+    with pytest.raises(ValueError, match=r"TemperatureSensor.fault 'dropout' needs the "
+                                         r"readings' operating hours"):
+        bd.measure_temperature([20.0, 21.0], sensor, np.random.default_rng(0))
+    with pytest.raises(ValueError, match=r"hours must be finite, of the readings' shape"):
+        bd.measure_temperature([20.0, 21.0], sensor, np.random.default_rng(0), hours=[0.0])
+
+
+# ------------------------------------------------------------------- re-greasing
+def test_regreasing_steps_the_friction_up_by_drop_and_it_runs_in_with_tau():
+    h = np.array([0.0, 9.99, 10.0, 18.0, 34.0, 50.0, 60.0, 68.0])
+    f = th.regrease_factor(h, [10.0, 60.0], 0.3, 8.0)
+    np.testing.assert_allclose(f[:2], 1.0)  # before the first: as settled
+    assert f[2] == pytest.approx(1.3) and f[6] == pytest.approx(1.3)  # each steps up by drop
+    assert f[3] == pytest.approx(1.0 + 0.3 / np.e) and f[7] == pytest.approx(1.0 + 0.3 / np.e)
+    assert f[4] == pytest.approx(1.0 + 0.3 * np.exp(-3.0))  # run in again within a day
+    assert th.regrease_factor(30.0, [10.0], tau_h=th.REGREASE_TAU_H) < 1.1
+    assert th.regrease_factor(10.0, [10.0]) == pytest.approx(1.0 + th.REGREASE_DROP)
+
+
+@pytest.mark.parametrize(("kw", "match"), [
+    ({"at_h": [10.0, 5.0]}, "at_h must be increasing"),
+    ({"at_h": [-1.0]}, "at_h"),
+    ({"drop": 1.5}, r"drop.*\[0, 1\]"),
+    ({"tau_h": 0.0}, "tau_h")])
+def test_regreasing_out_of_range_is_refused(kw, match):
+    with pytest.raises(ValueError, match=match):
+        th.regrease_factor([1.0, 2.0], **{"at_h": [1.0], **kw})
+
+
+# ---------------------------------------------------------- a measured warm-up
+def test_a_traced_temperature_restarts_the_measured_rise_after_every_cold_start():
+    trace_h, rise = np.array([0.0, 0.5, 1.0]), np.array([0.0, 4.0, 6.0])
+    cfg = th.JointThermal(ambient_swing_k=0.0, run_h_per_day=16.0)
+    h = np.array([0.0, 0.25, 1.0, 5.0, 15.99, 16.0, 16.5, 20.0])
+    t = th.traced_temperature(h, trace_h, rise, cfg, scale=2.0)
+    np.testing.assert_allclose(t, [20.0, 24.0, 32.0, 32.0, 32.0, 20.0, 28.0, 32.0])
+    flat = th.JointThermal(ambient_swing_k=0.0, run_h_per_day=24.0)  # one start, at hour 0
+    np.testing.assert_allclose(th.traced_temperature([0.5, 30.0], trace_h, rise, flat),
+                               [24.0, 26.0])
+    swing = th.JointThermal()  # the rise rides on the hall's swing
+    np.testing.assert_allclose(th.traced_temperature(h, trace_h, rise, swing) -
+                               th.ambient_temperature(th.wall_clock_h(h, 16.0), swing),
+                               np.interp(h % 16.0, trace_h, rise), atol=1e-12)
+    with pytest.raises(ValueError, match="trace_h, rise_k must share a shape"):
+        th.traced_temperature(h, [0.5, 1.0], [0.0, 1.0], cfg)
+    with pytest.raises(ValueError, match="scale"):
+        th.traced_temperature(h, trace_h, rise, cfg, scale=-1.0)
