@@ -54,7 +54,17 @@ ours, **[unverified]** as cited in the simulator's docstrings):
   **[choice]**. A duty change is not drawn: a life has one duty cycle
   (:class:`swgsim.datasets.schedule.LifeConfig.duty`), none that changes in service.
 * ``sensor``: the joint's temperature sensor in one of ``sensor_states``, drawn
-  uniformly: ``present`` or ``missing`` (no ``temperature_c`` in the stream).
+  uniformly: ``present``, ``missing`` (no ``temperature_c`` in the stream), or failing
+  from operating hour ``sensor_fault_h`` in [30, 120] h on (after commissioning)
+  **[choice]**: ``stuck``, ``drift`` at ``sensor_drift_k_per_h`` in [−0.5, 0.5] K/h (a
+  failing or loosened sensor 0.01-0.5 K/h, either sign:
+  :class:`~swgsim.sensing.bridge_drift.TemperatureSensor`) **[choice]** or ``dropout``
+  (NaN readings).
+* ``regrease``: a re-greasing in service at operating hour ``regrease_h`` in [30, 48] h
+  (after commissioning, inside the shortest fault life, as the payload's), fresh grease's
+  excess friction ``regrease_drop`` in [0.1, 0.5] and its time constant
+  ``regrease_tau_h`` in [4, 24] h, about the simulator's 0.3 and 8 h
+  (:class:`~swgsim.datasets.conditions.Regrease`) **[choice]**.
 
 Randomness: ``np.random.default_rng([seed, FAMILY_TAG])``, every range drawn in the
 order of :data:`RANGES` whichever parts the family draws, then the form and the sensor
@@ -69,19 +79,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
+from swgsim.datasets.conditions import ConditionsConfig, Regrease, RunInConfig
 from swgsim.gear.thermal import FRICTION_FORMS, FrictionLaw, JointThermal
-from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
+from swgsim.sensing.bridge_drift import (
+    TEMPERATURE_SENSOR_FAULTS,
+    BridgeDrift,
+    TemperatureSensor,
+)
 
 __all__ = ["FAMILY_TAG", "PARTS", "RANGES", "SENSOR_STATES", "NuisanceFamily",
            "default_families", "draw_conditions"]
 
 #: The parts of a joint's day a family can draw (module docstring).
-PARTS = ("friction_law", "warm_up", "drift", "ambient", "run_in", "payload", "sensor")
+PARTS = ("friction_law", "warm_up", "drift", "ambient", "run_in", "payload", "sensor",
+         "regrease")
 #: The parts that need the joint's temperature (refused in a ``still`` family).
 THERMAL_PARTS = ("friction_law", "warm_up", "drift", "ambient")
-#: States of the temperature sensor a family can draw.
-SENSOR_STATES = ("present", "missing")
+#: States of the temperature sensor a family can draw: a working sensor, none, or one of
+#: the sensor's faults (:data:`swgsim.sensing.bridge_drift.TEMPERATURE_SENSOR_FAULTS`).
+SENSOR_STATES = ("present", "missing", *TEMPERATURE_SENSOR_FAULTS[1:])
 #: Second word of every family draw's seed, ``default_rng([seed, FAMILY_TAG])``.
 FAMILY_TAG = 0x5F4A11
 
@@ -103,6 +119,11 @@ RANGES = {
     "run_in_tau_h": ("run_in", 0.1, 1e3, "h", "run-in time constant"),
     "payload_factor": ("payload", 0.1, 10.0, "", "factor on the acting load"),
     "payload_h": ("payload", 0.0, 1e5, "h", "operating hour of the tool change"),
+    "sensor_fault_h": ("sensor", 0.0, 1e5, "h", "operating hour of the sensor's fault"),
+    "sensor_drift_k_per_h": ("sensor", -10.0, 10.0, "K per h", "a drifting sensor's rate"),
+    "regrease_h": ("regrease", 0.0, 1e5, "h", "operating hour of the re-greasing"),
+    "regrease_drop": ("regrease", 0.0, 1.0, "", "excess friction of fresh grease"),
+    "regrease_tau_h": ("regrease", 0.1, 1e3, "h", "time constant of running in again"),
 }
 
 
@@ -136,6 +157,12 @@ class NuisanceFamily:
         A new gear's excess friction [-] and its time constant [operating h].
     payload_factor, payload_h : list of float
         Factor on the acting load [-] from operating hour ``payload_h`` [h] on.
+    sensor_fault_h, sensor_drift_k_per_h : list of float
+        Operating hour of the temperature sensor's fault [h]; a drifting sensor's rate
+        [K per operating h].
+    regrease_h, regrease_drop, regrease_tau_h : list of float
+        Operating hour of a re-greasing [h], its excess friction [-] and time constant
+        [operating h].
     """
 
     parts: list[str] = field(default_factory=lambda: list(PARTS))
@@ -157,6 +184,11 @@ class NuisanceFamily:
     run_in_tau_h: list[float] = _span(10.0, 60.0)
     payload_factor: list[float] = _span(0.8, 1.2)
     payload_h: list[float] = _span(30.0, 48.0)
+    sensor_fault_h: list[float] = _span(30.0, 120.0)
+    sensor_drift_k_per_h: list[float] = _span(-0.5, 0.5)
+    regrease_h: list[float] = _span(30.0, 48.0)
+    regrease_drop: list[float] = _span(0.1, 0.5)
+    regrease_tau_h: list[float] = _span(4.0, 24.0)
 
     def check(self, key: str = "NuisanceFamily") -> None:
         """Refuse a family outside its ranges in one line naming ``<key>.<field>`` and
@@ -204,10 +236,12 @@ def default_families() -> dict[str, NuisanceFamily]:
     -------
     dict of str to NuisanceFamily
         ``friction_law``, ``warm_up``, ``drift``, ``ambient``, ``run_in`` (still),
-        ``payload`` (still), ``sensor`` (missing) and ``all``.
+        ``payload`` (still), ``sensor`` (missing), ``sensor_stuck``, ``sensor_drift``,
+        ``sensor_dropout``, ``regrease`` (still) and ``all`` (every part, the sensor in any
+        of its states).
     """
-    def with_law(part: str) -> NuisanceFamily:
-        return NuisanceFamily(parts=[part, "friction_law"])
+    def with_law(part: str, **kw) -> NuisanceFamily:
+        return NuisanceFamily(parts=[part, "friction_law"], **kw)
 
     return {"friction_law": NuisanceFamily(parts=["friction_law"]),
             "warm_up": with_law("warm_up"),
@@ -215,8 +249,10 @@ def default_families() -> dict[str, NuisanceFamily]:
             "ambient": with_law("ambient"),
             "run_in": NuisanceFamily(parts=["run_in"], still=True),
             "payload": NuisanceFamily(parts=["payload"], still=True),
-            "sensor": NuisanceFamily(parts=["sensor", "friction_law"],
-                                     sensor_states=["missing"]),
+            "sensor": with_law("sensor", sensor_states=["missing"]),
+            **{f"sensor_{f}": with_law("sensor", sensor_states=[f])
+               for f in TEMPERATURE_SENSOR_FAULTS[1:]},
+            "regrease": NuisanceFamily(parts=["regrease"], still=True),
             "all": NuisanceFamily()}
 
 
@@ -265,6 +301,11 @@ def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
         start = v["ambient_start_h"]
         thermal.update(ambient_swing_k=v["ambient_swing_k"], ambient_points=[
             [0.0, 0.0], [start, 0.0], [start + v["ambient_ramp_h"], v["ambient_shift_k"]]])
+    sensor = TemperatureSensor()
+    if "sensor" in parts and state != "present":
+        sensor = None if state == "missing" else dataclasses.replace(
+            sensor, fault=state, fault_hour=v["sensor_fault_h"],
+            drift_k_per_h=v["sensor_drift_k_per_h"] if state == "drift" else 0.0)
     drift = {}
     if "drift" in parts:
         drift = {k: v[k] for k in ("gauge_mismatch_ue_per_k", "zero_mean_mvv_per_k",
@@ -275,10 +316,11 @@ def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
                       else FrictionLaw()),
         run_in=(RunInConfig(drop=v["run_in_drop"], tau_h=v["run_in_tau_h"])
                 if "run_in" in parts else None),
+        regrease=(Regrease(hours=[v["regrease_h"]], drop=v["regrease_drop"],
+                           tau_h=v["regrease_tau_h"]) if "regrease" in parts else None),
         payload=[[v["payload_h"], v["payload_factor"]]] if "payload" in parts else [],
         bridge_drift=dataclasses.replace(BridgeDrift(), **drift),
-        temperature_sensor=(None if "sensor" in parts and state == "missing"
-                            else TemperatureSensor()))
+        temperature_sensor=sensor)
     if family.still:
         cond = dataclasses.replace(cond, thermal=None, viscosity=False, bridge_drift=None)
     return cond

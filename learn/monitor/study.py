@@ -199,6 +199,10 @@ def _check_families(sc: MonitorStudyConfig, key: str) -> None:
     for name, fam in sc.families.items():
         _req(":" not in name, f"{key}.families: a key must not hold ':', got {name!r}")
         fam.check(f"{key}.families.{name}")
+        for k in ("sensor_fault_h", "regrease_h"):
+            _req(getattr(fam, k)[0] > sc.commissioning_h,
+                 f"{key}.families.{name}.{k} must lie after commissioning (> "
+                 f"{sc.commissioning_h:g} h), got {getattr(fam, k)}")
         for s in sc.design_seeds + sc.scored_seeds:
             check_conditions(draw_conditions(fam, int(s)), min(shortest, sc.nuisance_hours),
                              f"{key}.families.{name}[seed={s}]")

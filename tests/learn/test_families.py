@@ -12,6 +12,7 @@ import pytest
 
 from learn.monitor.families import (
     RANGES,
+    SENSOR_STATES,
     NuisanceFamily,
     _draws,
     default_families,
@@ -55,7 +56,9 @@ def test_draws_stay_inside_the_declared_ranges():
         assert 0.3 <= c.thermal.r_th_k_per_w <= 0.5 and 20.0 <= c.thermal.tau_min <= 60.0
         assert 0.0 <= c.bridge_drift.span_mean_per_k <= 4e-4
         assert 0.8 <= c.payload[0][1] <= 1.2 and 30.0 <= c.payload[0][0] <= 48.0
-    assert forms == set(FRICTION_FORMS) and states == {"present", "missing"}
+        if c.regrease is not None:
+            assert 30.0 <= c.regrease.hours[0] <= 48.0 and 0.1 <= c.regrease.drop <= 0.5
+    assert forms == set(FRICTION_FORMS) and states == set(SENSOR_STATES)
 
 
 def test_a_narrow_range_gives_its_value_and_the_parts_not_drawn_keep_defaults():
@@ -63,6 +66,7 @@ def test_a_narrow_range_gives_its_value_and_the_parts_not_drawn_keep_defaults():
     c = draw_conditions(fam, 3)
     assert c.thermal.r_th_k_per_w == 0.4
     assert c.friction_law.ratio_40c is None and c.run_in is None and c.payload == []
+    assert c.regrease is None
     assert c.temperature_sensor is not None and c.thermal.ambient_points == []
 
 
@@ -78,6 +82,22 @@ def test_still_and_sensor_families():
     assert run_in.thermal is None and not run_in.viscosity and run_in.bridge_drift is None
     assert all(draw_conditions(FAMILIES["sensor"], s).temperature_sensor is None
                for s in SEEDS)
+    for fault in ("stuck", "drift", "dropout"):
+        for seed in SEEDS:
+            ts = draw_conditions(FAMILIES[f"sensor_{fault}"], seed).temperature_sensor
+            assert ts.fault == fault and 30.0 <= ts.fault_hour <= 120.0
+            assert (ts.drift_k_per_h != 0.0) == (fault == "drift")
+            assert abs(ts.drift_k_per_h) <= 0.5
+    greased = draw_conditions(FAMILIES["regrease"], 0)
+    assert greased.thermal is None and len(greased.regrease.hours) == 1
+
+
+def test_a_fault_hour_inside_commissioning_is_refused():
+    fams = {"sensor_stuck": NuisanceFamily(parts=["sensor"], sensor_states=["stuck"],
+                                           sensor_fault_h=[10.0, 40.0])}
+    with pytest.raises(ValueError, match=r"families\.sensor_stuck\.sensor_fault_h must lie "
+                                         r"after commissioning \(> 24 h\)"):
+        check_study(MonitorStudyConfig(families=fams))
 
 
 @pytest.mark.parametrize("field", list(RANGES))
