@@ -39,7 +39,7 @@ from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
 from .rule import threshold
 from .stream import advisories
-from .study import MonitorStudyConfig
+from .study import MonitorStudyConfig, family_of, life_conditions
 from .training import (
     classes,
     features_of,
@@ -84,13 +84,31 @@ def _per_window(lp: np.ndarray) -> np.ndarray:
     return np.argmax(lp, axis=1) != 0
 
 
-def nuisance_fault_lives(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int
-                         ) -> list[tuple[FaultOnset, str]]:
-    """The faults lived under a nuisance by one held-out gear and seed: every gear fault
-    at its mildest and largest Table V severity, with a step onset drawn from the seed in
-    ``onset_window_h`` after commissioning."""
+def nuisance_fault_lives(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int,
+                         growing: bool = False) -> list[tuple[FaultOnset, str]]:
+    """The faults lived under a nuisance by one held-out gear and seed.
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+    cfg : MonitorStudyConfig
+    seed : int
+        The life's seed: the onsets are drawn from it, uniformly in ``onset_window_h``
+        after commissioning.
+    growing : bool
+        Also every gear fault at its mildest Table V severity growing linearly from 0 at
+        its onset to that severity ``cfg.family_growth_h`` later (a family's lives;
+        onsets from a stream of their own, so the step faults' are those without).
+
+    Returns
+    -------
+    list of (FaultOnset, str)
+        Every gear fault at its mildest and largest Table V severity with a step onset
+        (``step``), then, with ``growing``, the growing ones (``growing``).
+    """
     rng = np.random.default_rng([seed, 8])
-    out = []
+    grow = np.random.default_rng([seed, 9])
+    out, slow = [], []
     for c in classes(plan, cfg)[1:]:
         if c in SENSOR_FAULTS:
             continue
@@ -98,21 +116,28 @@ def nuisance_fault_lives(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int
         for s in sorted({min(sevs, key=abs), max(sevs, key=abs)}):
             on = cfg.commissioning_h + rng.uniform(*cfg.onset_window_h)
             out.append((FaultOnset(c, on, s), "step"))
-    return out
+        if growing:
+            on = cfg.commissioning_h + grow.uniform(*cfg.onset_window_h)
+            slow.append((FaultOnset(c, on, min(sevs, key=abs), growth="linear",
+                                    growth_h=cfg.family_growth_h), "growing"))
+    return out + slow
 
 
 def _lives(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: MonitorStudyConfig,
            seed: int, nuisance: str = "none"
            ) -> tuple[LifeSimulator, list[tuple[LifeSimulator, FaultOnset, str]]]:
     """The healthy life of held-out gear ``g`` for a seed, under a nuisance of
-    ``cfg.nuisances`` or none, and its fault lives (:func:`fault_lives`,
-    :func:`nuisance_fault_lives`), sharing its records."""
+    ``cfg.nuisances``, a family of ``cfg.families`` (``family:<key>``) or none, and its
+    fault lives (:func:`fault_lives`, :func:`nuisance_fault_lives`, growing ones under a
+    family), sharing its records; a fault life runs ``horizon_h`` after its onset, or
+    after its linear growth's end."""
     healthy = healthy_life(plan, banks[g], g, cfg, seed, nuisance)
     base = healthy.life
-    onsets = (fault_lives if nuisance == "none" else nuisance_fault_lives)(plan, cfg,
-                                                                          int(seed))
+    onsets = (fault_lives(plan, cfg, int(seed)) if nuisance == "none" else
+              nuisance_fault_lives(plan, cfg, int(seed), family_of(nuisance) is not None))
     faults = [(LifeSimulator(plan, g, dataclasses.replace(
-        base, hours=f.onset_h + cfg.horizon_h, fault=f), banks[g]), f, kind)
+        base, hours=f.onset_h + (f.growth_h if f.growth == "linear" else 0.0)
+        + cfg.horizon_h, fault=f), banks[g]), f, kind)
         for f, kind in onsets]
     return healthy, faults
 
@@ -121,17 +146,17 @@ def healthy_life(plan: DatasetPlan, bank: RecordBank, g: int, cfg: MonitorStudyC
                  seed: int, nuisance: str = "none") -> LifeSimulator:
     """The healthy life of held-out gear ``g`` that the evaluation lives for a seed:
     ``healthy_hours`` without a nuisance, ``nuisance_hours`` under one of
-    ``cfg.nuisances`` (the same windows as :func:`evaluate_gear`'s, for a look at one
-    life: ``scripts/life_diagnostics.py``).
+    ``cfg.nuisances`` or of ``cfg.families`` (``family:<key>``, its conditions drawn by
+    the seed: :func:`learn.monitor.study.life_conditions`) (the same windows as
+    :func:`evaluate_gear`'s, for a look at one life: ``scripts/life_diagnostics.py``).
 
     Raises
     ------
     KeyError
-        ``nuisance`` is neither ``none`` nor a key of ``cfg.nuisances``.
+        ``nuisance`` is neither ``none``, a key of ``cfg.nuisances`` nor ``family:`` and
+        a key of ``cfg.families``.
     """
-    if nuisance != "none" and nuisance not in cfg.nuisances:
-        raise KeyError(f"nuisance {nuisance!r}: allowed none, {', '.join(cfg.nuisances)}")
-    cond = None if nuisance == "none" else cfg.nuisances[nuisance]
+    cond = life_conditions(cfg, nuisance, seed)
     base = LifeConfig(hours=cfg.healthy_hours if cond is None else cfg.nuisance_hours,
                       interval_min=cfg.interval_min, commissioning_h=cfg.commissioning_h,
                       life_seed=int(seed), conditions=cond)
@@ -154,15 +179,19 @@ def _fault_row(key: dict, sim: LifeSimulator, fo: FaultOnset, kind: str) -> dict
 
 def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
                   model: DiagnosisModel, cfg: MonitorStudyConfig, dataset: str,
-                  nuisance: str = "none") -> tuple[list[dict], list[dict], list[dict]]:
+                  nuisance: str = "none", seeds: list[int] | None = None
+                  ) -> tuple[list[dict], list[dict], list[dict]]:
     """The monitor (and the per-window rule and ``always``) on every life of held-out gear
-    ``g`` for every seed, under a nuisance of ``cfg.nuisances`` or none: result rows,
-    false-alarm rows (every alarm, the gear-fault alarms among them, the advisories) and,
-    without a nuisance, the rows of the trade-off curve (:func:`_curve_healthy`,
-    :func:`_curve_fault`)."""
+    ``g`` for every seed, under a nuisance of ``cfg.nuisances``, a family
+    (``family:<key>``) or none: result rows, false-alarm rows (every alarm, the gear-fault
+    alarms among them, the advisories) and, without a nuisance, the rows of the trade-off
+    curve (:func:`_curve_healthy`, :func:`_curve_fault`). ``seeds`` None: ``cfg.seeds``,
+    and for a family ``cfg.scored_seeds``."""
     rows, fa_rows, curve = [], [], []
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
-    for seed in cfg.seeds:
+    if seeds is None:
+        seeds = cfg.scored_seeds if family_of(nuisance) is not None else cfg.seeds
+    for seed in seeds:
         healthy, sims = _lives(plan, banks, g, cfg, seed, nuisance)
         f, p, meta = features_of(healthy, 0, len(healthy))
         cond = Conditions.of(meta)
@@ -380,24 +409,47 @@ def _banks(plan: DatasetPlan) -> dict[int, RecordBank]:
     return {int(x.id): record_bank(plan, int(x.id)) for x in plan.config.gears}
 
 
-def _runnable(plan: DatasetPlan, cfg: MonitorStudyConfig) -> list[str]:
-    """The nuisances a data set can live: payload changes need steady operating points."""
-    return [n for n in _nuisances(cfg) if n == "none" or plan.profile is None
-            or not cfg.nuisances[n].payload]
+def _payload(cfg: MonitorStudyConfig, life: str) -> bool:
+    """Whether a life's conditions change the payload (a family: whether it draws one)."""
+    fam = family_of(life)
+    if fam is not None:
+        return "payload" in cfg.families[fam].parts
+    return life != "none" and bool(cfg.nuisances[life].payload)
 
 
-def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfig) -> dict:
+def _runnable(plan: DatasetPlan, cfg: MonitorStudyConfig, lives: list[str] | None = None
+              ) -> list[str]:
+    """The lives a data set can live (default: none and every fixed nuisance): payload
+    changes need steady operating points."""
+    return [n for n in (_nuisances(cfg) if lives is None else lives)
+            if plan.profile is None or not _payload(cfg, n)]
+
+
+def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfig,
+                 lives: list[str] | None = None, seeds: list[int] | None = None) -> dict:
     """Train the diagnosis model on the other gears and evaluate the monitor on held-out
     gear ``g`` (:func:`evaluate_gear`) without and under every nuisance: rows, false
-    alarms, curve, timing and the model."""
+    alarms, curve, timing and the model.
+
+    ``lives``: the lives evaluated instead (``none``, keys of ``cfg.nuisances``,
+    ``family:<key>`` of ``cfg.families``), those a data set cannot live left out;
+    ``seeds``: their seeds (None: :func:`evaluate_gear`'s).
+
+    Raises
+    ------
+    KeyError
+        A life that names no nuisance or family, before any work.
+    """
+    for life in lives or []:
+        life_conditions(cfg, life, 0)
     t0 = time.perf_counter()
     gears = [int(x.id) for x in plan.config.gears]
     banks = _banks(plan)
     model = train_model(plan, banks, [x for x in gears if x != g], cfg)
     t1 = time.perf_counter()
     rows, fa, curve = [], [], []
-    for nuisance in _runnable(plan, cfg):
-        r, a, c = evaluate_gear(plan, banks, g, model, cfg, dataset, nuisance)
+    for nuisance in _runnable(plan, cfg, lives):
+        r, a, c = evaluate_gear(plan, banks, g, model, cfg, dataset, nuisance, seeds)
         rows, fa, curve = rows + r, fa + a, curve + c
     t2 = time.perf_counter()
     return {"rows": rows, "false_alarms": fa, "curve": curve, "train_s": t1 - t0,

@@ -16,6 +16,7 @@ from swgsim.gear.thermal import JointThermal
 from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 
 from .detectors import DETECTORS
+from .families import NuisanceFamily, default_families, draw_conditions
 from .normal import NormalConfig
 from .rule import RuleConfig, check_rule
 
@@ -91,6 +92,25 @@ class MonitorStudyConfig:
         of a real day); empty: none.
     nuisance_hours : float
         Operating hours of each nuisance's healthy life, commissioning included.
+    families : dict of str to NuisanceFamily
+        Benign changes drawn from a family per seed (:mod:`learn.monitor.families`;
+        default: :func:`~learn.monitor.families.default_families`), lived as
+        ``family:<key>`` (:func:`life_conditions`) by a healthy life of
+        ``nuisance_hours`` per seed and by every gear fault at its mildest and largest
+        Table V severity, and at its mildest growing over ``family_growth_h``; not
+        lived unless asked for (:func:`learn.monitor.evaluate.run_held_out`'s ``lives``).
+    design_seeds : list of int
+        Seeds of the family draws (and of their lives) the monitor's settings may be
+        chosen on: its settings (``rule``, ``normal``, the naming rule) are chosen on
+        design draws only, never on scored ones. Those in force were set before the
+        families existed (the friction law's rate on nine hand-picked laws of
+        tiny_real_day, issue 44), on no family draw.
+    scored_seeds : list of int
+        Seeds of the family draws the monitor is scored on; disjoint from
+        ``design_seeds`` (:func:`check_study`).
+    family_growth_h : float
+        Hours over which a fault of a family life grows linearly from 0 to its mildest
+        Table V severity (40: slowly, under daily warm-ups).
     rule : RuleConfig
     normal : NormalConfig
         How the gear's normal behaviour follows the conditions (:mod:`learn.monitor.normal`).
@@ -113,8 +133,79 @@ class MonitorStudyConfig:
     detector_hours: float = 100.0
     nuisances: dict[str, ConditionsConfig] = field(default_factory=_nuisances)
     nuisance_hours: float = 224.0
+    families: dict[str, NuisanceFamily] = field(default_factory=default_families)
+    design_seeds: list[int] = field(default_factory=lambda: [100, 101, 102, 103, 104])
+    scored_seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
+    family_growth_h: float = 40.0
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)
+
+
+#: Prefix of a family's lives among the nuisances (``family:warm_up``): the fixed
+#: nuisances and the families share keys.
+FAMILY_PREFIX = "family:"
+
+
+def family_of(life: str) -> str | None:
+    """The family key of a life's name (``family:warm_up`` -> ``warm_up``), None for
+    ``none`` or a fixed nuisance."""
+    return life[len(FAMILY_PREFIX):] if life.startswith(FAMILY_PREFIX) else None
+
+
+def life_conditions(cfg: MonitorStudyConfig, life: str, seed: int) -> ConditionsConfig | None:
+    """The conditions a life of the evaluation lives for a seed.
+
+    Parameters
+    ----------
+    cfg : MonitorStudyConfig
+    life : str
+        ``none``, a key of ``cfg.nuisances`` (its fixed conditions, the same object for
+        every seed) or ``family:<key>`` of ``cfg.families`` (drawn from it by the seed,
+        :func:`learn.monitor.families.draw_conditions`).
+    seed : int
+        The life's seed, in [0, 2**32 - 1].
+
+    Returns
+    -------
+    ConditionsConfig or None
+        None for ``none``.
+
+    Raises
+    ------
+    KeyError
+        ``life`` names no nuisance or family (the allowed names listed).
+    """
+    fam = family_of(life)
+    if fam is not None and fam in cfg.families:
+        return draw_conditions(cfg.families[fam], int(seed))
+    if life == "none" or life in cfg.nuisances:
+        return None if life == "none" else cfg.nuisances[life]
+    raise KeyError(f"nuisance {life!r}: allowed none, {', '.join(cfg.nuisances)}, "
+                   + ", ".join(FAMILY_PREFIX + k for k in cfg.families))
+
+
+def _check_families(sc: MonitorStudyConfig, key: str) -> None:
+    """The families, their draws for every design and scored seed (a payload step inside
+    the shortest fault life, commissioning_h + onset_window_h[0] + horizon_h), the seeds
+    (disjoint) and the growth."""
+    for name, seeds in (("design_seeds", sc.design_seeds), ("scored_seeds", sc.scored_seeds)):
+        _req(len(seeds) >= 1, f"{key}.{name} must list at least one seed")
+        for i, s in enumerate(seeds):
+            check_range(s, 0, 2**32 - 1, f"{key}.{name}[{i}]")
+    both = sorted(set(sc.design_seeds) & set(sc.scored_seeds))
+    _req(not both, f"{key}.scored_seeds must be disjoint from design_seeds, both hold {both}")
+    check_range(sc.family_growth_h, 0.0, 1e5, f"{key}.family_growth_h", "h", lo_open=True)
+    shortest = sc.commissioning_h + sc.onset_window_h[0] + sc.horizon_h
+    for name, fam in sc.families.items():
+        _req(":" not in name, f"{key}.families: a key must not hold ':', got {name!r}")
+        fam.check(f"{key}.families.{name}")
+        for k in ("sensor_fault_h", "regrease_h"):
+            _req(getattr(fam, k)[0] > sc.commissioning_h,
+                 f"{key}.families.{name}.{k} must lie after commissioning (> "
+                 f"{sc.commissioning_h:g} h), got {getattr(fam, k)}")
+        for s in sc.design_seeds + sc.scored_seeds:
+            check_conditions(draw_conditions(fam, int(s)), min(shortest, sc.nuisance_hours),
+                             f"{key}.families.{name}[seed={s}]")
 
 
 def _req(cond: bool, msg: str) -> None:
@@ -164,6 +255,7 @@ def check_study(sc: MonitorStudyConfig, key: str = "monitor.study") -> None:
                 lo_open=True, why="longer than commissioning")
     for name, c in sc.nuisances.items():
         check_conditions(c, sc.nuisance_hours, f"{key}.nuisances.{name}")
+    _check_families(sc, key)
     bad = sorted(set(sc.detectors) - set(DETECTORS))
     _req(not bad, f"{key}.detectors: unknown {bad}; allowed: {sorted(DETECTORS)}")
     check_range(sc.detector_hours, 0.0, sc.healthy_hours - sc.commissioning_h,
@@ -171,4 +263,5 @@ def check_study(sc: MonitorStudyConfig, key: str = "monitor.study") -> None:
                 why="within each healthy life after commissioning")
 
 
-__all__ = ["MonitorStudyConfig", "check_study"]
+__all__ = ["FAMILY_PREFIX", "MonitorStudyConfig", "check_study", "family_of",
+           "life_conditions"]

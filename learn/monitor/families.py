@@ -1,0 +1,326 @@
+"""Families of benign changes (``monitor.study.families``): each nuisance life of the
+evaluation draws its change's law and magnitude from declared ranges, instead of living
+one fixed :class:`~swgsim.datasets.conditions.ConditionsConfig` made with the laws the
+monitor compensates with.
+
+A family (:class:`NuisanceFamily`) names the parts of the joint's day it draws
+(:data:`PARTS`) and holds one range ``[lo, hi]`` per drawn magnitude;
+:func:`draw_conditions` turns a family and a seed into the conditions of one life, the
+same for the same seed, every magnitude uniform in its range. A part the family does not
+draw keeps the simulator's default (:mod:`swgsim.datasets.conditions`); a ``still`` family
+lives at the catalogue's reference temperature (no warm-up, no friction-temperature law,
+no bridge drift), as the fixed ``run_in`` and ``payload`` nuisances do, so that the change
+is seen alone.
+
+The ranges and their origins (**[src]** sourced, **[derived]** from a source, **[choice]**
+ours, **[unverified]** as cited in the simulator's docstrings):
+
+* ``friction_law``: the form, one of :data:`swgsim.gear.thermal.FRICTION_FORMS`
+  (viscosity-exponential, linear, saturating), and ``ratio_40c``, the friction factor at
+  40 °C against 20 °C, in [0.3, 1]: the range :class:`~swgsim.gear.thermal.FrictionLaw`
+  takes, around the issue's ×0.63 from the grease's viscosity (the catalogue's no-load
+  running torque over −10..+40 °C could not be read) **[unverified; range: choice]**.
+  Every family with temperature draws it: no joint's law is the catalogue's by
+  construction.
+* ``warm_up``: ``r_th_k_per_w`` in [0.3, 0.5] K/W: the paper's duty cycle (mean loss
+  69 W) warms the joint by 21-35 K **[derived]**, from the issue's "about 20 K"
+  (:class:`~swgsim.gear.thermal.JointThermal`) **[choice]** to below the 40 K of a KUKA
+  KR10 joint heated by intensive motion (Nevmerzhitskiy et al. 2019: 25 -> 65 °C motor
+  temperature) **[src]**; ``tau_min`` in [20, 60] min, usual for small gearboxes
+  **[unverified]**.
+* ``drift`` (the bridges, :class:`~swgsim.sensing.bridge_drift.BridgeDrift`), from
+  compensated to uncompensated gauges: ``gauge_mismatch_ue_per_k`` in [0.1, 2] µε/K, from
+  half the default's 0.2 µε/K for gauges of one lot of self-temperature-compensated foil
+  gauges (Kyowa: a lot within ±1.8 µε/K) **[choice]** to a tenth of the thermal output of
+  gauges not self-temperature-compensated on steel, thousands of µε over −50..+250 °C,
+  order 10-20 µε/K (Micro-Measurements TN-504, fig. 1, read off a figure) **[src; the
+  tenth: choice]**; ``zero_mean_mvv_per_k`` in [−5e-4, 5e-4] mV/V per K, a bridge's arms
+  not at one temperature: about half of one uncancelled compensated gauge at Kyowa's
+  bound (1e3 · GF/4 · 1.8e-6 = 9e-4 mV/V per K) **[choice]**; ``span_mean_per_k`` in
+  [0, 4e-4] /K, from a finished, compensated torque transducer (≤ 0.1 % per 10 K, HBM
+  T10F) **[src]** to the bare bridge's +3.57e-4 /K (modulus, expansion, gauge factor;
+  :mod:`swgsim.sensing.bridge_drift`) **[derived]**; ``span_sd_per_k`` in [0, 1e-4] /K,
+  bridge to bridge, up to that transducer's bound **[src as a bound; choice]**.
+* ``ambient`` (the hall, :attr:`~swgsim.gear.thermal.JointThermal.ambient_points`): a
+  ramp by ``ambient_shift_k`` in [−10, 15] K, starting at wall-clock hour
+  ``ambient_start_h`` in [30, 120] h and lasting ``ambient_ramp_h`` in [6, 72] h, and a
+  day/night swing ``ambient_swing_k`` in [0, 6] K; the hall, starting at 20 °C, stays
+  within the 0-50 °C ambient of a robot's sealed joints (Universal Robots, *Robot
+  start-up in cold environments*) **[src; ranges: choice]**.
+* ``run_in``: ``run_in_drop`` in [0.05, 0.3] and ``run_in_tau_h`` in [10, 60] h, about
+  the issue's 0.16 and 30 h (+3 points of efficiency over about 30 h) **[choice]**.
+* ``payload``: a tool change by ``payload_factor`` in [0.8, 1.2] at operating hour
+  ``payload_h`` in [30, 48] h (after commissioning, inside the shortest fault life)
+  **[choice]**. A duty change is not drawn: a life has one duty cycle
+  (:class:`swgsim.datasets.schedule.LifeConfig.duty`), none that changes in service.
+* ``sensor``: the joint's temperature sensor in one of ``sensor_states``, drawn
+  uniformly: ``present``, ``missing`` (no ``temperature_c`` in the stream), or failing
+  from operating hour ``sensor_fault_h`` in [30, 120] h on (after commissioning)
+  **[choice]**: ``stuck``, ``drift`` at ``sensor_drift_k_per_h`` in [−0.5, 0.5] K/h (a
+  failing or loosened sensor 0.01-0.5 K/h, either sign:
+  :class:`~swgsim.sensing.bridge_drift.TemperatureSensor`) **[choice]** or ``dropout``
+  (NaN readings).
+* ``regrease``: a re-greasing in service at operating hour ``regrease_h`` in [30, 48] h
+  (after commissioning, inside the shortest fault life, as the payload's), fresh grease's
+  excess friction ``regrease_drop`` in [0.1, 0.5] and its time constant
+  ``regrease_tau_h`` in [4, 24] h, about the simulator's 0.3 and 8 h
+  (:class:`~swgsim.datasets.conditions.Regrease`) **[choice]**.
+
+Randomness: ``np.random.default_rng([seed, FAMILY_TAG])``, every range drawn in the
+order of :data:`RANGES` whichever parts the family draws, then the form and the sensor
+state: the same seed gives a part the same magnitude in every family that draws it (the
+``warm_up`` of a seed is that of its ``all``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swgsim.datasets.conditions import ConditionsConfig, Regrease, RunInConfig
+from swgsim.gear.thermal import FRICTION_FORMS, FrictionLaw, JointThermal
+from swgsim.sensing.bridge_drift import (
+    TEMPERATURE_SENSOR_FAULTS,
+    BridgeDrift,
+    TemperatureSensor,
+)
+
+__all__ = ["FAMILY_TAG", "PARTS", "RANGES", "SENSOR_STATES", "NuisanceFamily",
+           "default_families", "draw_conditions"]
+
+#: The parts of a joint's day a family can draw (module docstring).
+PARTS = ("friction_law", "warm_up", "drift", "ambient", "run_in", "payload", "sensor",
+         "regrease")
+#: The parts that need the joint's temperature (refused in a ``still`` family).
+THERMAL_PARTS = ("friction_law", "warm_up", "drift", "ambient")
+#: States of the temperature sensor a family can draw: a working sensor, none, or one of
+#: the sensor's faults (:data:`swgsim.sensing.bridge_drift.TEMPERATURE_SENSOR_FAULTS`).
+SENSOR_STATES = ("present", "missing", *TEMPERATURE_SENSOR_FAULTS[1:])
+#: Second word of every family draw's seed, ``default_rng([seed, FAMILY_TAG])``.
+FAMILY_TAG = 0x5F4A11
+
+#: Range fields, in draw order: (part, allowed lo, allowed hi, unit, what) - the bounds a
+#: range must lie within (:meth:`NuisanceFamily.check`), wider than the defaults.
+RANGES = {
+    "ratio_40c": ("friction_law", 0.3, 1.0, "", "FrictionLaw.ratio_40c"),
+    "r_th_k_per_w": ("warm_up", 1e-3, 5.0, "K/W", "thermal resistance"),
+    "tau_min": ("warm_up", 1.0, 600.0, "min", "thermal time constant"),
+    "gauge_mismatch_ue_per_k": ("drift", 0.0, 50.0, "µε/K", "gauge-to-gauge mismatch"),
+    "zero_mean_mvv_per_k": ("drift", -1e-2, 1e-2, "mV/V per K", "mean zero drift"),
+    "span_mean_per_k": ("drift", -2e-3, 2e-3, "1/K", "mean span drift"),
+    "span_sd_per_k": ("drift", 0.0, 1e-3, "1/K", "bridge-to-bridge span spread"),
+    "ambient_shift_k": ("ambient", -20.0, 30.0, "K", "the hall's slow change"),
+    "ambient_start_h": ("ambient", 1.0, 1e4, "h", "wall-clock start of the change"),
+    "ambient_ramp_h": ("ambient", 0.1, 1e3, "h", "duration of the change"),
+    "ambient_swing_k": ("ambient", 0.0, 20.0, "K", "day/night amplitude"),
+    "run_in_drop": ("run_in", 0.0, 1.0, "", "a new gear's excess friction"),
+    "run_in_tau_h": ("run_in", 0.1, 1e3, "h", "run-in time constant"),
+    "payload_factor": ("payload", 0.1, 10.0, "", "factor on the acting load"),
+    "payload_h": ("payload", 0.0, 1e5, "h", "operating hour of the tool change"),
+    "sensor_fault_h": ("sensor", 0.0, 1e5, "h", "operating hour of the sensor's fault"),
+    "sensor_drift_k_per_h": ("sensor", -10.0, 10.0, "K per h", "a drifting sensor's rate"),
+    "regrease_h": ("regrease", 0.0, 1e5, "h", "operating hour of the re-greasing"),
+    "regrease_drop": ("regrease", 0.0, 1.0, "", "excess friction of fresh grease"),
+    "regrease_tau_h": ("regrease", 0.1, 1e3, "h", "time constant of running in again"),
+}
+
+
+def _span(lo: float, hi: float):
+    return field(default_factory=lambda: [lo, hi])
+
+
+@dataclass
+class NuisanceFamily:
+    """A family of benign changes: the parts drawn and each magnitude's range ``[lo, hi]``
+    (units and origins: module docstring).
+
+    Attributes
+    ----------
+    parts : list of str
+        Parts of :data:`PARTS` drawn, at least one.
+    still : bool
+        Live at the reference temperature (no warm-up, friction law or bridge drift);
+        refused with a part of :data:`THERMAL_PARTS`.
+    friction_forms : list of str
+        Forms the friction law is drawn from (:data:`swgsim.gear.thermal.FRICTION_FORMS`).
+    sensor_states : list of str
+        States of the temperature sensor drawn from (:data:`SENSOR_STATES`).
+    ratio_40c, r_th_k_per_w, tau_min : list of float
+        Friction factor at 40 °C [-]; thermal resistance [K/W]; time constant [min].
+    gauge_mismatch_ue_per_k, zero_mean_mvv_per_k, span_mean_per_k, span_sd_per_k : list
+        The bridges' drift [µε/K, mV/V per K, 1/K, 1/K].
+    ambient_shift_k, ambient_start_h, ambient_ramp_h, ambient_swing_k : list of float
+        The hall's ramp [K], its start and duration [wall-clock h]; day/night swing [K].
+    run_in_drop, run_in_tau_h : list of float
+        A new gear's excess friction [-] and its time constant [operating h].
+    payload_factor, payload_h : list of float
+        Factor on the acting load [-] from operating hour ``payload_h`` [h] on.
+    sensor_fault_h, sensor_drift_k_per_h : list of float
+        Operating hour of the temperature sensor's fault [h]; a drifting sensor's rate
+        [K per operating h].
+    regrease_h, regrease_drop, regrease_tau_h : list of float
+        Operating hour of a re-greasing [h], its excess friction [-] and time constant
+        [operating h].
+    """
+
+    parts: list[str] = field(default_factory=lambda: list(PARTS))
+    still: bool = False
+    friction_forms: list[str] = field(default_factory=lambda: list(FRICTION_FORMS))
+    sensor_states: list[str] = field(default_factory=lambda: list(SENSOR_STATES))
+    ratio_40c: list[float] = _span(0.3, 1.0)
+    r_th_k_per_w: list[float] = _span(0.3, 0.5)
+    tau_min: list[float] = _span(20.0, 60.0)
+    gauge_mismatch_ue_per_k: list[float] = _span(0.1, 2.0)
+    zero_mean_mvv_per_k: list[float] = _span(-5e-4, 5e-4)
+    span_mean_per_k: list[float] = _span(0.0, 4e-4)
+    span_sd_per_k: list[float] = _span(0.0, 1e-4)
+    ambient_shift_k: list[float] = _span(-10.0, 15.0)
+    ambient_start_h: list[float] = _span(30.0, 120.0)
+    ambient_ramp_h: list[float] = _span(6.0, 72.0)
+    ambient_swing_k: list[float] = _span(0.0, 6.0)
+    run_in_drop: list[float] = _span(0.05, 0.3)
+    run_in_tau_h: list[float] = _span(10.0, 60.0)
+    payload_factor: list[float] = _span(0.8, 1.2)
+    payload_h: list[float] = _span(30.0, 48.0)
+    sensor_fault_h: list[float] = _span(30.0, 120.0)
+    sensor_drift_k_per_h: list[float] = _span(-0.5, 0.5)
+    regrease_h: list[float] = _span(30.0, 48.0)
+    regrease_drop: list[float] = _span(0.1, 0.5)
+    regrease_tau_h: list[float] = _span(4.0, 24.0)
+
+    def check(self, key: str = "NuisanceFamily") -> None:
+        """Refuse a family outside its ranges in one line naming ``<key>.<field>`` and
+        what it allows.
+
+        Parameters
+        ----------
+        key : str
+            Full name of the family, e.g. ``monitor.study.families.warm_up``.
+
+        Raises
+        ------
+        ValueError
+            An unknown or repeated part, form or sensor state, a ``still`` family with a
+            thermal part, or a range not ``[lo, hi]`` with ``lo <= hi`` inside its bounds
+            (:data:`RANGES`).
+        """
+        for name, allowed in (("parts", PARTS), ("friction_forms", FRICTION_FORMS),
+                              ("sensor_states", SENSOR_STATES)):
+            got = list(getattr(self, name))
+            if not got or len(set(got)) != len(got) or not set(got) <= set(allowed):
+                raise ValueError(f"{key}.{name} must list distinct values of "
+                                 f"{', '.join(allowed)}, got {got}")
+        hot = sorted(set(self.parts) & set(THERMAL_PARTS))
+        if self.still and hot:
+            raise ValueError(f"{key}.parts: a still family draws none of "
+                             f"{', '.join(THERMAL_PARTS)}, got {hot}")
+        for name, (_, lo, hi, unit, what) in RANGES.items():
+            r = list(getattr(self, name))
+            try:
+                ok = len(r) == 2 and lo <= float(r[0]) <= float(r[1]) <= hi
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise ValueError(f"{key}.{name} must be [lo, hi], lo <= hi, within "
+                                 f"[{lo:g}, {hi:g}]{' ' + unit if unit else ''} ({what}), "
+                                 f"got {r}")
+
+
+def default_families() -> dict[str, NuisanceFamily]:
+    """The families an evaluation lives by default: each part alone (with the friction
+    law drawn wherever the joint's temperature changes) and all together.
+
+    Returns
+    -------
+    dict of str to NuisanceFamily
+        ``friction_law``, ``warm_up``, ``drift``, ``ambient``, ``run_in`` (still),
+        ``payload`` (still), ``sensor`` (missing), ``sensor_stuck``, ``sensor_drift``,
+        ``sensor_dropout``, ``regrease`` (still) and ``all`` (every part, the sensor in any
+        of its states).
+    """
+    def with_law(part: str, **kw) -> NuisanceFamily:
+        return NuisanceFamily(parts=[part, "friction_law"], **kw)
+
+    return {"friction_law": NuisanceFamily(parts=["friction_law"]),
+            "warm_up": with_law("warm_up"),
+            "drift": with_law("drift"),
+            "ambient": with_law("ambient"),
+            "run_in": NuisanceFamily(parts=["run_in"], still=True),
+            "payload": NuisanceFamily(parts=["payload"], still=True),
+            "sensor": with_law("sensor", sensor_states=["missing"]),
+            **{f"sensor_{f}": with_law("sensor", sensor_states=[f])
+               for f in TEMPERATURE_SENSOR_FAULTS[1:]},
+            "regrease": NuisanceFamily(parts=["regrease"], still=True),
+            "all": NuisanceFamily()}
+
+
+def _draws(family: NuisanceFamily, seed: int) -> tuple[dict[str, float], str, str]:
+    """Every range's value, the friction form and the sensor state for a seed (drawn
+    in a fixed order whichever parts the family draws)."""
+    rng = np.random.default_rng([seed, FAMILY_TAG])
+    values = {name: float(rng.uniform(*getattr(family, name))) for name in RANGES}
+    form = family.friction_forms[int(rng.integers(len(family.friction_forms)))]
+    state = family.sensor_states[int(rng.integers(len(family.sensor_states)))]
+    return values, form, state
+
+
+def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
+    """One life's conditions drawn from a family (module docstring); pure and
+    deterministic.
+
+    Parameters
+    ----------
+    family : NuisanceFamily
+        Checked (:meth:`NuisanceFamily.check`).
+    seed : int
+        The draw's seed, in [0, 2**32 - 1] (a design or a scored seed of the study).
+
+    Returns
+    -------
+    ConditionsConfig
+        The joint's day: the simulator's defaults (a daily warm-up, the catalogue's
+        friction law, the default bridge drift, a temperature sensor) with the family's
+        parts drawn; a still family's without temperature.
+
+    Raises
+    ------
+    ValueError
+        ``seed`` not an integer in [0, 2**32 - 1].
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) \
+            or not 0 <= int(seed) <= 2**32 - 1:
+        raise ValueError(f"seed must be an integer in [0, 4294967295], got {seed!r}")
+    v, form, state = _draws(family, int(seed))
+    parts = set(family.parts)
+    thermal: dict = {}
+    if "warm_up" in parts:
+        thermal.update(r_th_k_per_w=v["r_th_k_per_w"], tau_min=v["tau_min"])
+    if "ambient" in parts:
+        start = v["ambient_start_h"]
+        thermal.update(ambient_swing_k=v["ambient_swing_k"], ambient_points=[
+            [0.0, 0.0], [start, 0.0], [start + v["ambient_ramp_h"], v["ambient_shift_k"]]])
+    sensor = TemperatureSensor()
+    if "sensor" in parts and state != "present":
+        sensor = None if state == "missing" else dataclasses.replace(
+            sensor, fault=state, fault_hour=v["sensor_fault_h"],
+            drift_k_per_h=v["sensor_drift_k_per_h"] if state == "drift" else 0.0)
+    drift = {}
+    if "drift" in parts:
+        drift = {k: v[k] for k in ("gauge_mismatch_ue_per_k", "zero_mean_mvv_per_k",
+                                   "span_mean_per_k", "span_sd_per_k")}
+    cond = ConditionsConfig(
+        thermal=dataclasses.replace(JointThermal(), **thermal),
+        friction_law=(FrictionLaw(form, v["ratio_40c"]) if "friction_law" in parts
+                      else FrictionLaw()),
+        run_in=(RunInConfig(drop=v["run_in_drop"], tau_h=v["run_in_tau_h"])
+                if "run_in" in parts else None),
+        regrease=(Regrease(hours=[v["regrease_h"]], drop=v["regrease_drop"],
+                           tau_h=v["regrease_tau_h"]) if "regrease" in parts else None),
+        payload=[[v["payload_h"], v["payload_factor"]]] if "payload" in parts else [],
+        bridge_drift=dataclasses.replace(BridgeDrift(), **drift),
+        temperature_sensor=sensor)
+    if family.still:
+        cond = dataclasses.replace(cond, thermal=None, viscosity=False, bridge_drift=None)
+    return cond

@@ -1,0 +1,164 @@
+"""The monitor through drawn benign changes: one table row per family of
+``monitor.study.families`` (learn/monitor/families.py).
+
+    python scripts/monitor_families.py [--dataset tiny_real_day] [--gear 3]
+        [--seeds scored|design] [--n-seeds N] [--families warm_up all]
+        [--study interval_min=2] [--study nuisance_hours=100]
+
+Trains the diagnosis model on the data set's other gears (as the evaluation does,
+:func:`learn.monitor.training.train_model`) and lives the held-out gear through every
+family's draws, one per seed (the study's scored seeds, or its design seeds, the only
+ones to choose the monitor's settings on): a healthy life of ``nuisance_hours`` and every
+gear fault at its mildest and largest Table V severity with a step onset and at its
+mildest growing over ``family_growth_h`` (:func:`learn.monitor.evaluate.evaluate_gear`).
+The monitor only: no per-window detectors.
+
+A preset with the held-out gear alone (the default, ``tiny_real_day``, as
+tests/learn/test_real_day.py trains) gets its training gears from ``--train-from``
+(default ``tiny_bench``: gears 1 and 2), at the preset's operating points.
+
+Printed per family: the healthy lives' gear-fault alarms and advisories per 1000 h after
+commissioning, fault lives detected of lived (growing ones apart), the median time to
+detect [h], the share of detected faults named right an hour after the alarm, and the
+family's wall time [s]. A bad preset, gear, family or study key ends in one line (exit 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+
+from swgsim.base.lazy import lazy_module
+
+np = lazy_module("numpy")
+pd = lazy_module("pandas")
+evaluate = lazy_module("learn.monitor.evaluate")
+study = lazy_module("learn.monitor.study")
+training = lazy_module("learn.monitor.training")
+swgcli = lazy_module("swgcli")
+plans = lazy_module("swgsim.datasets.plan")
+records = lazy_module("swgsim.datasets.records")
+
+
+def parse(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line (module docstring); ``--help`` without any heavy import."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog=__doc__.split("\n\n", 2)[2])
+    ap.add_argument("--dataset", default="tiny_real_day",
+                    help="data-set preset (default tiny_real_day)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="an override of the preset")
+    ap.add_argument("--train-from", default="tiny_bench",
+                    help="preset whose gears train the model where --dataset has the "
+                         "held-out gear alone (default tiny_bench)")
+    ap.add_argument("--gear", type=int, default=3, help="held-out gear (default 3)")
+    ap.add_argument("--seeds", choices=("scored", "design"), default="scored",
+                    help="the study's scored (default) or design seeds")
+    ap.add_argument("--n-seeds", type=int, default=None,
+                    help="the first N of those seeds (default all)")
+    ap.add_argument("--families", nargs="*", default=None,
+                    help="families lived (default every one of the study)")
+    ap.add_argument("--study", action="append", default=[], metavar="KEY=VALUE",
+                    help="a field of MonitorStudyConfig, the value as JSON (e.g. "
+                         "interval_min=2, faults='[\"eccentric_wg\"]')")
+    return ap.parse_args(argv)
+
+
+def study_config(overrides: list[str]):
+    """The study's design with ``KEY=VALUE`` overrides, checked (ValueError: one line)."""
+    cfg = study.MonitorStudyConfig()
+    names = {f.name for f in dataclasses.fields(cfg)}
+    changes = {}
+    for item in overrides:
+        key, sep, value = item.partition("=")
+        if not sep or key not in names:
+            raise ValueError(f"--study {item!r}: KEY=VALUE with KEY one of "
+                             f"{', '.join(sorted(names))}")
+        try:
+            changes[key] = json.loads(value)
+        except json.JSONDecodeError:
+            changes[key] = value
+    cfg = dataclasses.replace(cfg, **changes)
+    study.check_study(cfg)
+    return cfg
+
+
+def setup(args: argparse.Namespace):
+    """The plan, the study, the training gears, the families and the seeds; ValueError
+    in one line on bad input."""
+    cfg = study_config(args.study)
+    raw = swgcli.dataset_preset(args.dataset, args.set)
+    ids = [int(g["id"]) for g in raw["gears"]]
+    if args.gear not in ids:
+        raise ValueError(f"--gear {args.gear}: {args.dataset} has gears {ids}")
+    if len(ids) == 1:
+        extra = [g for g in swgcli.dataset_preset(args.train_from)["gears"]
+                 if int(g["id"]) != args.gear]
+        raw["gears"] = extra + raw["gears"]
+    p = plans.plan(raw)
+    fams = list(cfg.families) if args.families is None else args.families
+    bad = sorted(set(fams) - set(cfg.families))
+    if bad:
+        raise ValueError(f"--families: unknown {bad}; allowed: {', '.join(cfg.families)}")
+    seeds = cfg.scored_seeds if args.seeds == "scored" else cfg.design_seeds
+    if args.n_seeds is not None:
+        if not 1 <= args.n_seeds <= len(seeds):
+            raise ValueError(f"--n-seeds {args.n_seeds}: must lie in [1, {len(seeds)}]")
+        seeds = seeds[:args.n_seeds]
+    train = [int(g.id) for g in p.config.gears if int(g.id) != args.gear]
+    return p, cfg, train, fams, list(seeds)
+
+
+def summary(rows: list[dict], fa: list[dict]) -> dict:
+    """One family's row of the table from its result and false-alarm rows (the
+    monitor's)."""
+    r = pd.DataFrame(rows)
+    r = r[r.detector == "monitor"]
+    a = pd.DataFrame(fa)
+    a = a[a.detector == "monitor"]
+    hours = float(a.healthy_hours.sum())
+    det = r[r.detected.astype(bool)]
+    grow = r[r.onset == "growing"]
+    return {"gear_fault_alarms_per_1000h": 1000 * a.gear_fault_alarms.sum() / hours,
+            "advisories_per_1000h": 1000 * a.advisories.sum() / hours,
+            "detected": f"{len(det)}/{len(r)}",
+            "growing_detected": f"{int(grow.detected.astype(bool).sum())}/{len(grow)}",
+            "median_ttd_h": float(det.time_to_detect_h.median()) if len(det) else np.nan,
+            "named_right_1h": float((det.fault_after_1h == det.fault).mean())
+            if len(det) else np.nan}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the families (module docstring) and print the table; 2 on bad input."""
+    args = parse(argv)
+    try:
+        p, cfg, train, fams, seeds = setup(args)
+    except (ValueError, KeyError) as e:
+        print(f"monitor_families: error: {e}", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+    banks = {g: records.record_bank(p, g) for g in [*train, args.gear]}
+    model = training.train_model(p, banks, train, cfg)
+    print(f"{args.dataset}, held-out gear {args.gear}, trained on gears {train} in "
+          f"{time.perf_counter() - t0:.0f} s; {args.seeds} seeds {seeds}", flush=True)
+    table = []
+    for fam in fams:
+        t1 = time.perf_counter()
+        rows, fa, _ = evaluate.evaluate_gear(p, banks, args.gear, model, cfg, args.dataset,
+                                             study.FAMILY_PREFIX + fam, seeds)
+        table.append({"family": fam, **summary(rows, fa),
+                      "wall_s": time.perf_counter() - t1})
+        print(f"  {fam}: {time.perf_counter() - t1:.0f} s", flush=True)
+    out = pd.DataFrame(table).set_index("family")
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print(out.round(3).to_string())
+    print(f"wall time {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

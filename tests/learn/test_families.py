@@ -1,0 +1,170 @@
+"""Families of benign changes (learn.monitor.families): draws deterministic per seed and
+different between seeds, inside the declared ranges, accepted by check_conditions;
+design and scored seeds kept apart; a range out of its bounds refused in one line naming
+it; the evaluation's lives of a family (learn.monitor.study.life_conditions,
+learn.monitor.evaluate.nuisance_fault_lives)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from learn.monitor.families import (
+    RANGES,
+    SENSOR_STATES,
+    NuisanceFamily,
+    _draws,
+    default_families,
+    draw_conditions,
+)
+from learn.monitor.study import MonitorStudyConfig, check_study, life_conditions
+from swgsim.datasets.conditions import check_conditions
+from swgsim.gear.thermal import FRICTION_FORMS
+
+FAMILIES = default_families()
+SEEDS = [0, 1, 2, 3, 4, 100, 101, 102, 103, 104]
+
+
+@pytest.mark.parametrize("name", FAMILIES)
+def test_a_draw_is_the_same_for_a_seed_and_differs_between_seeds(name):
+    fam = FAMILIES[name]
+    assert draw_conditions(fam, 7) == draw_conditions(fam, 7)
+    assert draw_conditions(fam, 7) != draw_conditions(fam, 8)
+
+
+@pytest.mark.parametrize("name", FAMILIES)
+def test_every_draw_passes_check_conditions(name):
+    fam = FAMILIES[name]
+    fam.check(name)
+    for seed in SEEDS:
+        check_conditions(draw_conditions(fam, seed), 49.0, f"families.{name}")
+
+
+def test_draws_stay_inside_the_declared_ranges():
+    fam = NuisanceFamily()
+    forms, states = set(), set()
+    for seed in range(200):
+        values, form, state = _draws(fam, seed)
+        for k, v in values.items():
+            lo, hi = getattr(fam, k)
+            assert lo <= v <= hi, (k, v)
+        forms.add(form), states.add(state)
+        c = draw_conditions(fam, seed)
+        assert 0.3 <= c.friction_law.ratio_40c <= 1.0
+        assert c.friction_law.form in FRICTION_FORMS
+        assert 0.3 <= c.thermal.r_th_k_per_w <= 0.5 and 20.0 <= c.thermal.tau_min <= 60.0
+        assert 0.0 <= c.bridge_drift.span_mean_per_k <= 4e-4
+        assert 0.8 <= c.payload[0][1] <= 1.2 and 30.0 <= c.payload[0][0] <= 48.0
+        if c.regrease is not None:
+            assert 30.0 <= c.regrease.hours[0] <= 48.0 and 0.1 <= c.regrease.drop <= 0.5
+    assert forms == set(FRICTION_FORMS) and states == set(SENSOR_STATES)
+
+
+def test_a_narrow_range_gives_its_value_and_the_parts_not_drawn_keep_defaults():
+    fam = NuisanceFamily(parts=["warm_up"], r_th_k_per_w=[0.4, 0.4])
+    c = draw_conditions(fam, 3)
+    assert c.thermal.r_th_k_per_w == 0.4
+    assert c.friction_law.ratio_40c is None and c.run_in is None and c.payload == []
+    assert c.regrease is None
+    assert c.temperature_sensor is not None and c.thermal.ambient_points == []
+
+
+def test_a_part_draws_the_same_magnitude_alone_and_in_all():
+    alone, together = draw_conditions(FAMILIES["warm_up"], 5), draw_conditions(
+        FAMILIES["all"], 5)
+    assert alone.thermal.r_th_k_per_w == together.thermal.r_th_k_per_w
+    assert alone.friction_law == together.friction_law
+
+
+def test_still_and_sensor_families():
+    run_in = draw_conditions(FAMILIES["run_in"], 0)
+    assert run_in.thermal is None and not run_in.viscosity and run_in.bridge_drift is None
+    assert all(draw_conditions(FAMILIES["sensor"], s).temperature_sensor is None
+               for s in SEEDS)
+    for fault in ("stuck", "drift", "dropout"):
+        for seed in SEEDS:
+            ts = draw_conditions(FAMILIES[f"sensor_{fault}"], seed).temperature_sensor
+            assert ts.fault == fault and 30.0 <= ts.fault_hour <= 120.0
+            assert (ts.drift_k_per_h != 0.0) == (fault == "drift")
+            assert abs(ts.drift_k_per_h) <= 0.5
+    greased = draw_conditions(FAMILIES["regrease"], 0)
+    assert greased.thermal is None and len(greased.regrease.hours) == 1
+
+
+def test_a_fault_hour_inside_commissioning_is_refused():
+    fams = {"sensor_stuck": NuisanceFamily(parts=["sensor"], sensor_states=["stuck"],
+                                           sensor_fault_h=[10.0, 40.0])}
+    with pytest.raises(ValueError, match=r"families\.sensor_stuck\.sensor_fault_h must lie "
+                                         r"after commissioning \(> 24 h\)"):
+        check_study(MonitorStudyConfig(families=fams))
+
+
+@pytest.mark.parametrize("field", list(RANGES))
+def test_a_range_outside_its_bounds_is_one_line_naming_it(field):
+    hi = RANGES[field][2]
+    fam = NuisanceFamily(**{field: [hi, 2 * abs(hi) + 1.0]})
+    with pytest.raises(ValueError, match=rf"^fam\.{field} must be \[lo, hi\].*within \[") as e:
+        fam.check("fam")
+    assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"parts": ["bogus"]}, r"fam\.parts must list distinct values of friction_law"),
+    ({"parts": []}, r"fam\.parts"),
+    ({"friction_forms": ["cubic"]}, r"fam\.friction_forms"),
+    ({"sensor_states": ["loose"]}, r"fam\.sensor_states"),
+    ({"still": True}, r"fam\.parts: a still family draws none of"),
+    ({"tau_min": [60.0, 20.0]}, r"fam\.tau_min must be \[lo, hi\], lo <= hi"),
+])
+def test_a_bad_family_is_refused_naming_the_key(change, match):
+    with pytest.raises(ValueError, match=match):
+        NuisanceFamily(**change).check("fam")
+
+
+def test_a_seed_not_an_integer_in_range_is_refused():
+    with pytest.raises(ValueError, match="seed must be an integer"):
+        draw_conditions(NuisanceFamily(), -1)
+
+
+def test_design_and_scored_seeds_that_overlap_are_refused():
+    check_study(MonitorStudyConfig())
+    cfg = MonitorStudyConfig(design_seeds=[100, 3], scored_seeds=[0, 3])
+    with pytest.raises(ValueError, match=r"^monitor\.study\.scored_seeds must be disjoint "
+                                         r"from design_seeds, both hold \[3\]$"):
+        check_study(cfg)
+
+
+def test_a_family_out_of_range_in_the_study_is_refused_naming_it():
+    fams = {"warm_up": NuisanceFamily(parts=["warm_up"], tau_min=[0.0, 60.0])}
+    with pytest.raises(ValueError, match=r"monitor\.study\.families\.warm_up\.tau_min"):
+        check_study(MonitorStudyConfig(families=fams))
+    late = {"payload": NuisanceFamily(parts=["payload"], still=True, payload_h=[30.0, 60.0])}
+    with pytest.raises(ValueError, match=r"^monitor\.study\.families\.payload\[seed=\d+\]"
+                                         r"\.payload\[0\]\[0\] must lie in \[0, 49\] h"):
+        check_study(MonitorStudyConfig(families=late, design_seeds=list(range(100, 120))))
+
+
+def test_the_fixed_nuisances_are_lived_as_before_and_families_by_the_seed():
+    cfg = MonitorStudyConfig()
+    assert life_conditions(cfg, "none", 0) is None
+    assert life_conditions(cfg, "warm_up", 3) is cfg.nuisances["warm_up"]
+    assert life_conditions(cfg, "family:warm_up", 3) == draw_conditions(
+        cfg.families["warm_up"], 3)
+    with pytest.raises(KeyError, match="family:all"):
+        life_conditions(cfg, "family:bogus", 0)
+
+
+def test_a_family_life_also_lives_slowly_growing_faults():
+    from learn.monitor.evaluate import nuisance_fault_lives
+    from swgcli import dataset_preset
+    from swgsim.datasets.plan import plan
+
+    p = plan(dataset_preset("tiny_bench"))
+    cfg = dataclasses.replace(MonitorStudyConfig(), faults=["eccentric_wg"])
+    fixed = nuisance_fault_lives(p, cfg, 0)
+    lives = nuisance_fault_lives(p, cfg, 0, growing=True)
+    assert lives[:len(fixed)] == fixed  # the step faults as without
+    (grow, kind), = lives[len(fixed):]
+    assert kind == "growing" and grow.growth == "linear" and grow.growth_h == 40.0
+    assert grow.severity == min((f.severity for f, _ in fixed), key=abs)
