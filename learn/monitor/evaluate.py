@@ -38,7 +38,7 @@ from .gear_monitor import GearMonitor, Trace, judged_bets, run_cusums
 from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
 from .rule import threshold
-from .stream import advisories
+from .stream import advisories, run_stream
 from .study import MonitorStudyConfig, family_of, life_conditions
 from .training import (
     classes,
@@ -199,13 +199,13 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
         mon.commission(f[:n_comm], p[:n_comm], cond[:n_comm])
         commissioned = mon.fork()
         f, p, c = f[n_comm:], p[n_comm:], cond[n_comm:]
-        tr = mon.run(f, p, meta["hour"][n_comm:], c, latch=False)
+        tr, named, _ = run_stream(mon, f, p, meta["hour"][n_comm:], c)
         key = _key(plan, dataset, g, seed, nuisance)
         hours_h = float(healthy.life.hours - cfg.commissioning_h)
-        named = [mon.diagnose(tr, a, f, p, c) for a in tr.alarms]
         fa_rows.append({**key, "detector": "monitor", "healthy_hours": hours_h,
-                        "false_alarms": len(tr.alarms),
+                        "false_alarms": len(named),
                         "gear_fault_alarms": sum(not a.sensor_fault for a in named),
+                        "sensor_fault_alarms": sum(a.sensor_fault for a in named),
                         "advisories": len(advisories(tr, mon))})
         fa_rows += [{**key, "detector": d, "healthy_hours": hours_h, "false_alarms": n}
                     for d, n in (("per_window", int(_per_window(tr.log_proba).sum())),
