@@ -134,7 +134,7 @@ def events(mon: GearMonitor, tr: Trace, windows) -> pd.DataFrame:
     rows = []
     for a in tr.alarms:
         al = mon.diagnose(tr, a, f, pts, c)
-        kind = "sensor-fault alarm" if al.sensor_fault else "gear-fault alarm"
+        kind = al.kind.replace("_", "-") + " alarm"
         what = al.fault if al.bridge is None else f"{al.fault} on {al.bridge}"
         rows.append((al.hour, kind, f"{what}, severity {al.severity:.3g}", pts[a]))
     rows += [(x["hour"], "advisory", x["condition"], x["operating_point"])

@@ -36,6 +36,7 @@ from swgsim.base.lazy import lazy_module
 np = lazy_module("numpy")
 pd = lazy_module("pandas")
 evaluate = lazy_module("learn.monitor.evaluate")
+families = lazy_module("learn.monitor.families")
 study = lazy_module("learn.monitor.study")
 training = lazy_module("learn.monitor.training")
 swgcli = lazy_module("swgcli")
@@ -83,6 +84,8 @@ def study_config(overrides: list[str]):
         except json.JSONDecodeError:
             changes[key] = value
     cfg = dataclasses.replace(cfg, **changes)
+    if not cfg.families:  # the study lives none by default; this script every one
+        cfg = dataclasses.replace(cfg, families=families.default_families())
     study.check_study(cfg)
     return cfg
 

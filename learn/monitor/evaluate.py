@@ -34,10 +34,10 @@ from swgsim.datasets.schedule import FaultOnset, LifeConfig
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 from .detectors import References, WindowClassifier, window_inputs
-from .gear_monitor import GearMonitor, Trace, judged_bets, run_cusums
+from .gear_monitor import GearMonitor, Trace
 from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
-from .rule import threshold
+from .rule import judged_bets, run_cusums, threshold
 from .stream import advisories, run_stream
 from .study import MonitorStudyConfig, family_of, life_conditions
 from .training import (
@@ -204,8 +204,10 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
         hours_h = float(healthy.life.hours - cfg.commissioning_h)
         fa_rows.append({**key, "detector": "monitor", "healthy_hours": hours_h,
                         "false_alarms": len(named),
-                        "gear_fault_alarms": sum(not a.sensor_fault for a in named),
-                        "sensor_fault_alarms": sum(a.sensor_fault for a in named),
+                        "gear_fault_alarms": sum(a.kind == "gear_fault" for a in named),
+                        "sensor_fault_alarms": sum(a.kind == "sensor_fault" for a in named),
+                        "unexplained_changes": sum(a.kind == "unexplained_change"
+                                                   for a in named),
                         "advisories": len(advisories(tr, mon))})
         fa_rows += [{**key, "detector": d, "healthy_hours": hours_h, "false_alarms": n}
                     for d, n in (("per_window", int(_per_window(tr.log_proba).sum())),

@@ -30,11 +30,22 @@ import numpy as np
 
 from .model import DiagnosisModel, design_matrix
 from .normal import OUTSIDE_LOAD, OUTSIDE_UNJUDGED, Conditions, NormalBehaviour, NormalConfig
-from .rule import RuleConfig, conformal_p, log_bets, min_calibration, normal_scores, threshold
+from .rule import (
+    RuleConfig,
+    check_commissioning,
+    conformal_p,
+    judged_bets,
+    log_bets,
+    normal_scores,
+    run_cusums,
+    threshold,
+)
 from .sensor_check import (
     REST_MAX,
     SENSOR_P_MIN,
     TEMPERATURE_SENSOR,
+    UNEXPLAINED_CHANGE,
+    fit_friction,
     fit_sensor_faults,
     fit_temperature,
 )
@@ -63,7 +74,8 @@ class Alarm:
     severity, severity_low, severity_high : float
         Estimate of ``fault``'s severity and its 90 % interval; of the temperature
         sensor's fault, the fitted temperature minus the reading [K], median and 5-95 %
-        over the windows.
+        over the windows; of an unexplained change, the friction's relative change [-]
+        (all three).
     bridge : str or None
         The faulty bridge (``s0``..``s4``) where ``fault`` is a sensor fault that one
         bridge alone explains (:mod:`.sensor_check`).
@@ -84,6 +96,13 @@ class Alarm:
         """Whether the fault named is a sensor's (a bridge's, or the temperature
         sensor's), not the gear's."""
         return self.bridge is not None or self.fault == TEMPERATURE_SENSOR
+
+    @property
+    def kind(self) -> str:
+        """``sensor_fault``, ``unexplained_change`` (an even change of the friction,
+        :func:`~.sensor_check.fit_friction`) or ``gear_fault``."""
+        return ("sensor_fault" if self.sensor_fault else
+                "unexplained_change" if self.fault == UNEXPLAINED_CHANGE else "gear_fault")
 
     def as_dict(self) -> dict:
         """The ``summary.json`` entry."""
@@ -117,7 +136,7 @@ class Trace:
     outside : ndarray of int, shape (n,)
         The conditions commissioning did not see at each window
         (:meth:`learn.monitor.normal.NormalBehaviour.outside`: 1 temperature, 2 load,
-        4 friction; 8 not judged: p-value 1, the CUSUMs hold, :func:`judged_bets`).
+        4 friction; 8 not judged: p-value 1, the CUSUMs hold, :func:`~.rule.judged_bets`).
     recommissioned : list of (int, int, bool)
         (window, operating point's row, relearnt) where a point was recommissioned at its
         new load after that window (:meth:`GearMonitor.run`): relearnt True where the
@@ -164,72 +183,6 @@ class Trace:
     def s(self) -> np.ndarray:
         """The largest CUSUM of each window, shape (n,)."""
         return np.max(self.cusums, axis=1)
-
-
-def run_cusums(lf: np.ndarray, h: float, start: np.ndarray | float = 0.0,
-               latch: bool = True) -> tuple[np.ndarray, list[int]]:
-    """CUSUMs ``S = max(0, S + ln f)`` side by side, an alarm when any reaches ``h``.
-
-    Parameters
-    ----------
-    lf : ndarray, shape (n, k)
-        ln f of each CUSUM per window.
-    h : float
-    start : float or ndarray, shape (k,)
-        Values before the first window.
-    latch : bool
-        Stop at the first alarm (the rest NaN); else restart every CUSUM at zero after it.
-
-    Returns
-    -------
-    (ndarray, shape (n, k), list of int)
-        The CUSUMs and the alarm windows.
-    """
-    n, k = lf.shape
-    out = np.full((n, k), np.nan)
-    s = np.broadcast_to(np.asarray(start, float), (k,)).copy()
-    alarms = []
-    for i in range(n):
-        s = np.maximum(0.0, s + lf[i])
-        out[i] = s
-        if (s >= h).any():
-            alarms.append(i)
-            if latch:
-                break
-            s[:] = 0.0
-    return out, alarms
-
-
-def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: float) -> None:
-    """Refuse commissioning windows too few for the rule at any operating point.
-
-    Raises
-    ------
-    ValueError
-        Naming the operating point, the windows it has and the minimum.
-    """
-    need = 2 * max(rule.min_normal_windows, min_calibration(rule, interval_min))
-    if len(points) == 0:
-        raise ValueError("the stream has no commissioning windows (a period known healthy, "
-                         f"at least {need} windows per operating point)")
-    ops, counts = np.unique(points, axis=0, return_counts=True)
-    for o, c in zip(ops, counts, strict=True):
-        if c < need:
-            raise ValueError(
-                f"commissioning too short for the design of one false alarm per "
-                f"{rule.design_hours:g} h: {c} windows at {o[0]:g} rpm, {o[1]:g} N m, at least "
-                f"{need} needed ({min_calibration(rule, interval_min)} to calibrate, "
-                f"{rule.min_normal_windows} for the normal behaviour, alternately)")
-
-
-def judged_bets(p: np.ndarray, outside: np.ndarray, rule: RuleConfig) -> np.ndarray:
-    """ln f of every CUSUM of the rule per window (:func:`~.rule.log_bets`), shape
-    (n, k), 0 where the window is not judged (``outside`` has
-    :data:`~.normal.OUTSIDE_UNJUDGED`): the CUSUMs hold there, neither rising nor
-    draining."""
-    bets = log_bets(p, rule)
-    bets[(np.asarray(outside) & OUTSIDE_UNJUDGED) != 0] = 0.0
-    return bets
 
 
 def normal_windows(points: np.ndarray) -> np.ndarray:
@@ -640,11 +593,13 @@ class GearMonitor:
         fr = trace.friction
         at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
                                     cond[rise:a + 1], fr[rise:a + 1])
-        fault, bridge, hot = self._name(ev[rise:end], feats[rise:end], points[rise:end],
+        fault, bridge, fit = self._name(ev[rise:end], feats[rise:end], points[rise:end],
                                         cond[rise:end], fr[rise:end])
         if fault == TEMPERATURE_SENSOR:  # its severity: the reading's error [K]
-            err = hot.temperature_c - hot.reading_c
-            est, lo, hi = hot.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))
+            err = fit.temperature_c - fit.reading_c
+            est, lo, hi = fit.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))
+        elif fault == UNEXPLAINED_CHANGE:  # the friction's relative change [-]
+            est = lo = hi = fit.factor - 1.0
         else:
             x = self.inputs(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end])
             est, lo, hi = self.model.estimate(fault, x)
@@ -661,13 +616,17 @@ class GearMonitor:
         average, :attr:`~.sensor_check.SensorFit.rest` at most
         :data:`~.sensor_check.REST_MAX`), with its bridge, or the temperature reading
         (:func:`~.sensor_check.fit_temperature`, the same median p-value), named
-        :data:`~.sensor_check.TEMPERATURE_SENSOR`, bridge None; of those the one that
-        leaves the windows most healthy; else the fault with the largest summed evidence
-        (:meth:`evidence` rows ``ev``) and None."""
+        :data:`~.sensor_check.TEMPERATURE_SENSOR`, bridge None; or an even change of the
+        friction that no gear fault gives and no maintenance declared
+        (:func:`~.sensor_check.fit_friction`), named
+        :data:`~.sensor_check.UNEXPLAINED_CHANGE`; of those the one that leaves the windows
+        most healthy; else the fault with the largest summed evidence (:meth:`evidence`
+        rows ``ev``) and None."""
         return self._name(ev, feats, points, cond, friction)[:2]
 
     def _name(self, ev, feats, points, cond, friction):
-        """:meth:`name` and the temperature's fit (None where not fitted)."""
+        """:meth:`name` and the fit of the temperature or the friction that named it
+        (None where neither did)."""
         b = self.normal
         opi = b.index(points)
         z, spread = b.z_and_spread(feats, points, cond, friction, opi)
@@ -678,17 +637,17 @@ class GearMonitor:
 
         fits = [f for f in fit_sensor_faults(z, b.mean[opi], spread)
                 if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
-        p = [median_p(f.z) for f in fits]
-        hot = None if cond is None else fit_temperature(
-            b, feats, points, cond, np.broadcast_to(friction, (len(z),)), opi)
-        p_hot = median_p(hot.z) if hot is not None and hot.plausible() else -1.0
-        if max(p, default=-1.0) >= SENSOR_P_MIN or p_hot >= SENSOR_P_MIN:
-            if p_hot >= max(p, default=-1.0):
-                return TEMPERATURE_SENSOR, None, hot
-            k = int(np.argmax(p))
-            return fits[k].fault, fits[k].bridge, hot
-        return self.model.name(ev), None, hot
+        fr = np.broadcast_to(friction, (len(z),))
+        hot = None if cond is None else fit_temperature(b, feats, points, cond, fr, opi)
+        even = fit_friction(b, feats, points, cond, fr, opi)
+        cands = [(median_p(f.z), f.fault, f.bridge, None) for f in fits]
+        cands += [(median_p(h.z), name, None, h) for h, name in
+                  ((hot, TEMPERATURE_SENSOR), (even, UNEXPLAINED_CHANGE))
+                  if h is not None and h.plausible()]
+        best = max(cands, key=lambda c: c[0], default=None)
+        if best is not None and best[0] >= SENSOR_P_MIN:
+            return best[1:]
+        return self.model.name(ev), None, None
 
 
-__all__ = ["Alarm", "GearMonitor", "Trace", "check_commissioning", "judged_bets",
-           "normal_windows", "run_cusums"]
+__all__ = ["Alarm", "GearMonitor", "Trace", "normal_windows"]

@@ -41,6 +41,8 @@ import numpy as np
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_finite, check_range
 
+from .normal import OUTSIDE_UNJUDGED
+
 special = lazy_module("scipy.special")
 
 
@@ -176,5 +178,72 @@ def conformal_p(scores: np.ndarray, calibration: np.ndarray, u: np.ndarray) -> n
     return (above + u * (equal + 1)) / (n + 1)
 
 
-__all__ = ["RuleConfig", "check_rule", "conformal_p", "log_bet", "log_bets", "log_shift",
-           "min_calibration", "n_cusums", "normal_scores", "threshold"]
+def run_cusums(lf: np.ndarray, h: float, start: np.ndarray | float = 0.0,
+               latch: bool = True) -> tuple[np.ndarray, list[int]]:
+    """CUSUMs ``S = max(0, S + ln f)`` side by side, an alarm when any reaches ``h``.
+
+    Parameters
+    ----------
+    lf : ndarray, shape (n, k)
+        ln f of each CUSUM per window.
+    h : float
+    start : float or ndarray, shape (k,)
+        Values before the first window.
+    latch : bool
+        Stop at the first alarm (the rest NaN); else restart every CUSUM at zero after it.
+
+    Returns
+    -------
+    (ndarray, shape (n, k), list of int)
+        The CUSUMs and the alarm windows.
+    """
+    n, k = lf.shape
+    out = np.full((n, k), np.nan)
+    s = np.broadcast_to(np.asarray(start, float), (k,)).copy()
+    alarms = []
+    for i in range(n):
+        s = np.maximum(0.0, s + lf[i])
+        out[i] = s
+        if (s >= h).any():
+            alarms.append(i)
+            if latch:
+                break
+            s[:] = 0.0
+    return out, alarms
+
+
+def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: float) -> None:
+    """Refuse commissioning windows too few for the rule at any operating point.
+
+    Raises
+    ------
+    ValueError
+        Naming the operating point, the windows it has and the minimum.
+    """
+    need = 2 * max(rule.min_normal_windows, min_calibration(rule, interval_min))
+    if len(points) == 0:
+        raise ValueError("the stream has no commissioning windows (a period known healthy, "
+                         f"at least {need} windows per operating point)")
+    ops, counts = np.unique(points, axis=0, return_counts=True)
+    for o, c in zip(ops, counts, strict=True):
+        if c < need:
+            raise ValueError(
+                f"commissioning too short for the design of one false alarm per "
+                f"{rule.design_hours:g} h: {c} windows at {o[0]:g} rpm, {o[1]:g} N m, at least "
+                f"{need} needed ({min_calibration(rule, interval_min)} to calibrate, "
+                f"{rule.min_normal_windows} for the normal behaviour, alternately)")
+
+
+def judged_bets(p: np.ndarray, outside: np.ndarray, rule: RuleConfig) -> np.ndarray:
+    """ln f of every CUSUM of the rule per window (:func:`~.rule.log_bets`), shape
+    (n, k), 0 where the window is not judged (``outside`` has
+    :data:`~.normal.OUTSIDE_UNJUDGED`): the CUSUMs hold there, neither rising nor
+    draining."""
+    bets = log_bets(p, rule)
+    bets[(np.asarray(outside) & OUTSIDE_UNJUDGED) != 0] = 0.0
+    return bets
+
+
+__all__ = ["RuleConfig", "check_commissioning", "check_rule", "conformal_p", "judged_bets",
+           "log_bet", "log_bets", "log_shift", "min_calibration", "n_cusums", "normal_scores",
+           "run_cusums", "threshold"]

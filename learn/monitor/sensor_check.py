@@ -98,6 +98,11 @@ FIT_CHUNK = 512
 #: How far beyond commissioning's temperature range the fits look [K]: the hall's drift
 #: over a season, 10-20 K (:mod:`learn.monitor.families`).
 TEMPERATURE_BEYOND_K = 20.0
+#: The name of an alarm an even change of friction explains (:func:`fit_friction`): no
+#: gear fault's signature, and no declared maintenance.
+UNEXPLAINED_CHANGE = "unexplained_change"
+#: Factors on the friction :func:`fit_friction` tries: 1/3 to 3, in steps of about 1 %.
+FRICTION_FACTORS = np.exp(np.linspace(np.log(1 / 3), np.log(3.0), 221))
 #: Windows of the running median of :func:`virtual_temperature` (odd).
 VIRTUAL_WINDOWS = 7
 
@@ -331,7 +336,70 @@ def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.n
     return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
 
 
-__all__ = ["BLOCK", "FIT_MIN", "REST_MAX", "SENSOR_P_MIN", "TEMPERATURE_BEYOND_K",
-           "TEMPERATURE_MIN_K", "TEMPERATURE_SENSOR", "TEMPERATURE_STEP_K", "SensorFit",
-           "TemperatureFit", "VIRTUAL_WINDOWS", "best_temperature", "fit_sensor_faults",
+@dataclass(frozen=True)
+class FrictionFit:
+    """The hypothesis "the friction changed evenly" fitted to the windows since an alarm
+    (:func:`fit_friction`).
+
+    Attributes
+    ----------
+    factor : float
+        The fitted factor on the friction in force [-].
+    z : ndarray, shape (n, F)
+        The windows' z-scores with it.
+    reduction : float
+        How much it lowers Σ z² over the windows (χ² with one degree of freedom where the
+        friction did not change).
+    """
+
+    factor: float
+    z: np.ndarray
+    reduction: float
+
+    def plausible(self) -> bool:
+        """Significant (:data:`FIT_MIN`): where the efficiency's spread is small (a joint
+        at a steady temperature), a change of 1 % is many of them (the friction
+        tracking's lag behind a re-greasing running in again, tiny_real_day gear 3)."""
+        return self.reduction >= FIT_MIN
+
+
+def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                 cond: Conditions | None, friction: np.ndarray, index: np.ndarray
+                 ) -> FrictionFit:
+    """Fit the hypothesis "the friction changed evenly" (re-greasing, another grease, a
+    seal): one factor on the loss torque at every operating point, chosen on a
+    logarithmic grid (:data:`FRICTION_FACTORS`) to leave Σ z² over the windows smallest.
+    A gear fault that changes friction changes it unevenly (reduced damping lowers the
+    viscous term only, more at light loads, :mod:`.normal`) and moves the bridges too,
+    so the factor does not explain it.
+
+    Parameters
+    ----------
+    normal : NormalBehaviour
+    feats : ndarray, shape (n, F)
+    points : ndarray, shape (n, 2)
+    cond : Conditions or None
+    friction : ndarray, shape (n,)
+        The friction factor in force at each window.
+    index : ndarray of int, shape (n,)
+
+    Returns
+    -------
+    FrictionFit
+    """
+    n = len(feats)
+    rep = np.tile(np.arange(n), len(FRICTION_FACTORS))
+    fr = (friction[None, :] * FRICTION_FACTORS[:, None]).ravel()
+    c = None if cond is None else cond[rep]
+    z = normal.z(feats[rep], points[rep], c, fr, index[rep]).reshape(len(FRICTION_FACTORS),
+                                                                      n, -1)
+    s = np.sum(z ** 2, axis=(1, 2))
+    k, one = int(np.argmin(s)), int(np.argmin(np.abs(FRICTION_FACTORS - 1.0)))
+    return FrictionFit(float(FRICTION_FACTORS[k]), z[k], float(s[one] - s[k]))
+
+
+__all__ = ["BLOCK", "FIT_MIN", "FRICTION_FACTORS", "FrictionFit", "REST_MAX",
+           "SENSOR_P_MIN", "SensorFit", "TEMPERATURE_BEYOND_K", "TEMPERATURE_MIN_K",
+           "TEMPERATURE_SENSOR", "TEMPERATURE_STEP_K", "TemperatureFit", "UNEXPLAINED_CHANGE",
+           "VIRTUAL_WINDOWS", "best_temperature", "fit_friction", "fit_sensor_faults",
            "fit_temperature", "virtual_temperature"]

@@ -23,7 +23,7 @@ import numpy as np
 from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 
 from .features import feature_names, health_features
-from .gear_monitor import Alarm, GearMonitor, Trace, check_commissioning
+from .gear_monitor import Alarm, GearMonitor, Trace
 from .normal import (
     OUTSIDE_FRICTION,
     OUTSIDE_LOAD,
@@ -31,8 +31,8 @@ from .normal import (
     Conditions,
     NormalConfig,
 )
-from .rule import RuleConfig
-from .sensor_check import TEMPERATURE_SENSOR, virtual_temperature
+from .rule import RuleConfig, check_commissioning
+from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE, virtual_temperature
 
 #: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
 CONDITIONS = {OUTSIDE_TEMPERATURE: "temperature", OUTSIDE_LOAD: "load",
@@ -76,17 +76,22 @@ class StreamResult:
 
     def events(self) -> list[dict]:
         """Alarms, advisories and recommissioned points in time order, each with its
-        ``kind``: ``gear_fault``, ``sensor_fault`` (named with its bridge), ``advisory``
-        or ``recommissioned``."""
-        ev = [{"kind": "sensor_fault" if a.sensor_fault else "gear_fault", **a.as_dict()}
+        ``kind``: ``gear_fault``, ``sensor_fault`` (named with its bridge, or the
+        temperature sensor), ``unexplained_change``, ``advisory`` or ``recommissioned``."""
+        ev = [{"kind": a.kind, **a.as_dict()}
               for a in self.alarms]
         ev += [{"kind": "advisory", **a} for a in self.advisories]
         ev += [{"kind": "recommissioned", **a} for a in self.recommissioned]
         return sorted(ev, key=lambda e: e["hour"])
 
 
+#: Alarms after which the monitor's state changes (:func:`run_stream`): the temperature
+#: sensor's fault (the monitor goes on without it) and an unexplained change (the friction
+#: factor takes the fitted change, the monitor watches for what comes on top of it).
+CHANGES_STATE = (TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE)
 #: The kinds of event :meth:`StreamResult.events` gives, each printed by :func:`event_line`.
-EVENT_KINDS = ("gear_fault", "sensor_fault", "advisory", "recommissioned")
+EVENT_KINDS = ("gear_fault", "sensor_fault", "unexplained_change", "advisory",
+               "recommissioned")
 
 
 def event_line(event: dict) -> str:
@@ -112,6 +117,11 @@ def event_line(event: dict) -> str:
         If ``kind`` is not one of :data:`EVENT_KINDS`.
     """
     kind, hour = event.get("kind"), float(event["hour"])
+    if kind == "unexplained_change":
+        return (f"alarm at {hour:.2f} h: an unexplained change: the friction changed by "
+                f"{100 * event['severity']:+.0f} % evenly over the operating points (no "
+                "gear fault's signature; was the joint re-greased? the monitor goes on "
+                "from the new level)")
     if kind in ("gear_fault", "sensor_fault"):
         where = ("" if kind != "sensor_fault" else
                  f" on bridge {event['bridge']} (check that gauge)" if event["bridge"] else
@@ -289,8 +299,10 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
     without the temperature sensor where it fails: from the first window without a
     reading (missing, dropped out), or after an alarm named
     :data:`~learn.monitor.sensor_check.TEMPERATURE_SENSOR` (a stuck or drifting reading,
-    :func:`~learn.monitor.sensor_check.fit_temperature`), the monitor is the one
-    commissioned without temperature (:meth:`GearMonitor.without_temperature`).
+    :func:`~learn.monitor.sensor_check.fit_temperature`), the monitor goes on without the
+    reading (:func:`_without_reading`). After an alarm named an unexplained change (an
+    even change of the friction, :func:`~learn.monitor.sensor_check.fit_friction`) the
+    friction factor takes the fitted change and the monitor goes on from there.
 
     Parameters
     ----------
@@ -316,11 +328,13 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         w = slice(i0, stop)
         tr = mon.run(feats[w], points[w], hours[w], cond[w], latch=False,
                      friction_start=fstart) if stop > i0 else None
-        named = [] if tr is None else [mon.diagnose(tr, a, feats[w], points[w], cond[w])
-                                       for a in tr.alarms]
-        hot = [k for k, al in enumerate(named) if al.fault == TEMPERATURE_SENSOR]
-        if hot:
-            named = named[:hot[0] + 1]
+        named, cut = [], False
+        for a in [] if tr is None else tr.alarms:  # up to the first that changes the state
+            named.append(mon.diagnose(tr, a, feats[w], points[w], cond[w]))
+            if named[-1].fault in CHANGES_STATE:
+                cut = True
+                break
+        if cut:
             stop = i0 + named[-1].index + 1
             tr = tr.head(named[-1].index + 1)
         alarms += [dataclasses.replace(al, index=al.index + i0, rise_index=al.rise_index + i0)
@@ -328,10 +342,13 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         traces += [] if tr is None else [tr]
         if stop == n:
             return Trace.concat(traces), alarms, mon
-        if not hot:
-            alarms.append(_no_reading(float(hours[stop]), stop))
         fstart = None if tr is None else tr.state(len(tr.hour) - 1)
-        mon, cond = _without_reading(mon, feats, points, cond, stop, fstart)
+        if cut and named[-1].fault == UNEXPLAINED_CHANGE:  # the friction's new level
+            fstart = (fstart[0] * (1.0 + named[-1].severity), fstart[1])
+        else:
+            if not cut:
+                alarms.append(_no_reading(float(hours[stop]), stop))
+            mon, cond = _without_reading(mon, feats, points, cond, stop, fstart)
         i0 = stop
 
 

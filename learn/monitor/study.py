@@ -16,7 +16,7 @@ from swgsim.gear.thermal import JointThermal
 from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 
 from .detectors import DETECTORS
-from .families import NuisanceFamily, default_families, draw_conditions
+from .families import NuisanceFamily, draw_conditions
 from .normal import NormalConfig
 from .rule import RuleConfig, check_rule
 
@@ -93,12 +93,15 @@ class MonitorStudyConfig:
     nuisance_hours : float
         Operating hours of each nuisance's healthy life, commissioning included.
     families : dict of str to NuisanceFamily
-        Benign changes drawn from a family per seed (:mod:`learn.monitor.families`;
-        default: :func:`~learn.monitor.families.default_families`), lived as
-        ``family:<key>`` (:func:`life_conditions`) by a healthy life of
+        Benign changes drawn from a family per seed (:mod:`learn.monitor.families`),
+        lived as ``family:<key>`` (:func:`life_conditions`) by a healthy life of
         ``nuisance_hours`` per seed and by every gear fault at its mildest and largest
-        Table V severity, and at its mildest growing over ``family_growth_h``; not
-        lived unless asked for (:func:`learn.monitor.evaluate.run_held_out`'s ``lives``).
+        Table V severity, and at its mildest growing over ``family_growth_h``; default
+        none: the families live where asked for (:func:`learn.monitor.evaluate.
+        run_held_out`'s ``lives``; ``scripts/monitor_families.py`` lives
+        :func:`~learn.monitor.families.default_families`), and each draw is checked
+        against the study's lives only then (a study of 3-h lives is not refused for
+        families it does not live).
     design_seeds : list of int
         Seeds of the family draws (and of their lives) the monitor's settings may be
         chosen on: its settings (``rule``, ``normal``, the naming rule) are chosen on
@@ -133,7 +136,7 @@ class MonitorStudyConfig:
     detector_hours: float = 100.0
     nuisances: dict[str, ConditionsConfig] = field(default_factory=_nuisances)
     nuisance_hours: float = 224.0
-    families: dict[str, NuisanceFamily] = field(default_factory=default_families)
+    families: dict[str, NuisanceFamily] = field(default_factory=dict)
     design_seeds: list[int] = field(default_factory=lambda: [100, 101, 102, 103, 104])
     scored_seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
     family_growth_h: float = 40.0

@@ -128,7 +128,7 @@ def test_a_seed_not_an_integer_in_range_is_refused():
 
 
 def test_design_and_scored_seeds_that_overlap_are_refused():
-    check_study(MonitorStudyConfig())
+    check_study(MonitorStudyConfig(families=default_families()))
     cfg = MonitorStudyConfig(design_seeds=[100, 3], scored_seeds=[0, 3])
     with pytest.raises(ValueError, match=r"^monitor\.study\.scored_seeds must be disjoint "
                                          r"from design_seeds, both hold \[3\]$"):
@@ -146,7 +146,7 @@ def test_a_family_out_of_range_in_the_study_is_refused_naming_it():
 
 
 def test_the_fixed_nuisances_are_lived_as_before_and_families_by_the_seed():
-    cfg = MonitorStudyConfig()
+    cfg = MonitorStudyConfig(families=default_families())
     assert life_conditions(cfg, "none", 0) is None
     assert life_conditions(cfg, "warm_up", 3) is cfg.nuisances["warm_up"]
     assert life_conditions(cfg, "family:warm_up", 3) == draw_conditions(

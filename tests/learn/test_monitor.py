@@ -7,13 +7,14 @@ import types
 import numpy as np
 import pytest
 
-from learn.monitor.gear_monitor import check_commissioning, run_cusums
 from learn.monitor.rule import (
     RuleConfig,
+    check_commissioning,
     conformal_p,
     log_bet,
     log_bets,
     min_calibration,
+    run_cusums,
     threshold,
 )
 
@@ -427,8 +428,9 @@ def test_commissioning_tracks_a_running_in_gear_friction(tiny_eval):
 
 
 def test_every_event_kind_is_printed_in_one_line():
-    """Each kind :meth:`StreamResult.events` gives (alarms of a gear and of a sensor
-    fault, advisories, recommissionings) is one line by :func:`event_line`, which the app
+    """Each kind :meth:`StreamResult.events` gives (alarms of a gear fault, of a bridge's
+    and the temperature sensor's fault, of an unexplained change, advisories,
+    recommissionings) is one line by :func:`event_line`, which the app
     and report.md print; a kind it does not know is refused naming the kinds (issue 43,
     cause 1: a recommissioning printed as an alarm raised KeyError: 'fault')."""
     from learn.monitor.gear_monitor import Alarm
@@ -443,7 +445,9 @@ def test_every_event_kind_is_printed_in_one_line():
                      "recommission the monitor"}
     rec = {"hour": 8.0, "index": 30, "operating_point": [4000.0, 7.0], "relearnt": False,
            "load_range_nm": [7.0, 7.7], "note": "the load at 4000 rpm, 7 N m stayed beyond"}
-    res = StreamResult(None, [gear, sensor], [adv], 10, None, None, 12.3, [rec])
+    hot = Alarm(7.5, 25, 22, "temperature_sensor", "temperature_sensor", -6.0, -9.0, -2.0)
+    even = Alarm(7.8, 28, 26, "unexplained_change", "unexplained_change", 0.2, 0.2, 0.2)
+    res = StreamResult(None, [gear, sensor, hot, even], [adv], 10, None, None, 12.3, [rec])
     events = res.events()
     assert sorted({e["kind"] for e in events}) == sorted(EVENT_KINDS)
     lines = [event_line(e) for e in events]
@@ -454,6 +458,11 @@ def test_every_event_kind_is_printed_in_one_line():
         "[0.08, 0.12]",
         "alarm at 7.00 h: sensor_offset_step on bridge s1 (check that gauge) (at the alarm: "
         "sensor_offset_step), severity 0.05 [0.04, 0.06]",
+        "alarm at 7.50 h: temperature_sensor (check the joint's temperature sensor; the "
+        "monitor goes on without it) (at the alarm: temperature_sensor), severity -6 [-9, -2]",
+        "alarm at 7.80 h: an unexplained change: the friction changed by +20 % evenly over "
+        "the operating points (no gear fault's signature; was the joint re-greased? the "
+        "monitor goes on from the new level)",
         f"recommissioned at 8.00 h: {rec['note']}"]
     with pytest.raises(ValueError, match=r"event kind: 'x' is not one of \['gear_fault'"):
         event_line({"kind": "x", "hour": 1.0})
