@@ -44,6 +44,8 @@ def run_monitor_app(cfg) -> dict:
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
     check_rule(app.rule, "rule")
     app.normal.check("normal")
+    for i, e in enumerate(app.maintenance):
+        e.check(f"maintenance[{i}]")
     check_range(app.confirm_h, 0.0, 1000.0, "confirm_h", "h", lo_open=True,
                 why="hours after an alarm whose windows name the fault")
     if app.logger is not None:
@@ -55,7 +57,7 @@ def run_monitor_app(cfg) -> dict:
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
-                         source=str(src), normal=app.normal)
+                         source=str(src), normal=app.normal, maintenance=app.maintenance)
     with ownership.claim(out, "swgsim-monitor", strict=True) as claim:
         files = write_outputs(res, out, str(src))
         claim.record(files.values())

@@ -31,6 +31,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
 from learn.inputs.features import SELECTIONS, FeatureSettings
+from learn.monitor.gear_monitor import MaintenanceEvent
 from learn.monitor.normal import NormalConfig
 from learn.monitor.rule import RuleConfig
 from learn.studies.observability_motion import MotionMapConfig
@@ -116,6 +117,8 @@ class MonitorApp:
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)  # conditions (temperature, ...)
     confirm_h: float = 1.0                   # hours after an alarm that name the fault
+    # the joint's maintenance log: [{hour: 40.0, kind: regrease}, ...] (learn/monitor)
+    maintenance: list[MaintenanceEvent] = field(default_factory=list)
     seed: int = 0                            # the p-values' smoothing draws
     logger: LoggerConfig | None = None
 

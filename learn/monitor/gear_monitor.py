@@ -28,6 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from swgsim.base.typed import check_range
+
 from .model import DiagnosisModel, design_matrix
 from .normal import OUTSIDE_LOAD, OUTSIDE_UNJUDGED, Conditions, NormalBehaviour, NormalConfig
 from .rule import (
@@ -53,6 +55,40 @@ from .sensor_check import (
 #: One-sided level of the test whether commissioning's laws hold at a point's new load
 #: (:meth:`GearMonitor._recommission`): declared, not tuned.
 LAW_LEVEL = 0.01
+
+
+#: What the maintenance log may declare (:class:`MaintenanceEvent`).
+MAINTENANCE_KINDS = ("regrease",)
+
+
+@dataclass
+class MaintenanceEvent:
+    """One entry of the joint's maintenance log, an input of the monitor: what was done
+    and when. A declared event recommissions what it affects: a re-greasing the friction
+    (:class:`~learn.monitor.normal.NormalConfig` ``regrease_settle_h``).
+
+    Attributes
+    ----------
+    hour : float
+        Operating hours when it was done [h], >= 0.
+    kind : str
+        One of :data:`MAINTENANCE_KINDS`.
+    """
+
+    hour: float = 0.0
+    kind: str = "regrease"
+
+    def check(self, key: str = "maintenance") -> None:
+        """Refuse an hour or kind out of range in one line naming ``<key>.<field>``.
+
+        Raises
+        ------
+        ValueError
+        """
+        check_range(self.hour, 0.0, 1e7, f"{key}.hour", "h", why="operating hours")
+        if self.kind not in MAINTENANCE_KINDS:
+            raise ValueError(f"{key}.kind: {self.kind!r} is not one of "
+                             f"{list(MAINTENANCE_KINDS)}")
 
 
 @dataclass
@@ -229,6 +265,20 @@ class GearMonitor:
         self.friction, self.last_hour = 1.0, None
         self.learning: dict[int, list[tuple[np.ndarray, float]]] = {}
         self.commissioned_on: tuple[np.ndarray, np.ndarray, Conditions] | None = None
+        self.regreased: list[float] = []
+
+    def declare(self, events: list[MaintenanceEvent]) -> None:
+        """Take the maintenance log: after a declared re-greasing the friction factor
+        follows the windows one by one for ``regrease_settle_h`` (:meth:`track_friction`).
+
+        Raises
+        ------
+        ValueError
+            An event out of range (:meth:`MaintenanceEvent.check`).
+        """
+        for i, e in enumerate(events):
+            e.check(f"maintenance[{i}]")
+        self.regreased = sorted(float(e.hour) for e in events if e.kind == "regrease")
 
     def commission(self, feats: np.ndarray, points: np.ndarray,
                    cond: Conditions | None = None) -> None:
@@ -267,25 +317,6 @@ class GearMonitor:
         self.last_hour = None  # the friction factor stays commissioning's last
         self.learning = {}
         self.commissioned_on = (feats, points, cond)
-
-    def without_temperature(self) -> GearMonitor:
-        """The same monitor commissioned on the same windows without their temperature
-        readings, as for a joint without a temperature sensor (its spreads hold
-        commissioning's warm-ups): where the temperature sensor fails, the monitor goes
-        on with it (:func:`learn.monitor.stream.run_stream`).
-
-        Raises
-        ------
-        ValueError
-            If the monitor is not commissioned.
-        """
-        if self.normal is None:
-            raise ValueError("the monitor is not commissioned (GearMonitor.commission)")
-        feats, points, cond = self.commissioned_on
-        out = GearMonitor(self.model, self.rule, self.interval_min, self.seed,
-                          self.confirm_h, self.normal_config)
-        out.commission(feats, points, Conditions(cond.torque_nm, None))
-        return out
 
     def _commissioning_friction(self, feats: np.ndarray, points: np.ndarray,
                                 cond: Conditions) -> np.ndarray:
@@ -394,8 +425,10 @@ class GearMonitor:
                        start: tuple[float, float | None] | None = None) -> np.ndarray:
         """The friction factor in force at each window (before it updates it) and the
         monitor's own factor after the last (:mod:`.normal`: an exponential mean of the
-        windows' loss ratios over ``friction_track_h`` operating hours), shape (n,).
-        ``start``: (factor, hour of the window before), default the monitor's own."""
+        windows' loss ratios over ``friction_track_h`` operating hours; for
+        ``regrease_settle_h`` after a declared re-greasing, :meth:`declare`, over one
+        window's interval: the windows one by one), shape (n,). ``start``: (factor, hour
+        of the window before), default the monitor's own."""
         tau = self.normal_config.friction_track_h
         r, last = (self.friction, self.last_hour) if start is None else start
         out = np.empty(len(hours))
@@ -404,11 +437,13 @@ class GearMonitor:
             return out
         ratio = self.normal.friction_ratio(feats, points, cond, opi)
         default_dh = self.interval_min / 60.0
+        settle = self.normal_config.regrease_settle_h
         for i, (h, q) in enumerate(zip(hours.tolist(), ratio.tolist(), strict=True)):
             out[i] = r
             dh = default_dh if last is None else h - last
+            t = default_dh if any(0 <= h - g < settle for g in self.regreased) else tau
             if np.isfinite(q):
-                r += (1.0 - np.exp(-max(dh, 0.0) / tau)) * (q - r)
+                r += (1.0 - np.exp(-max(dh, 0.0) / t)) * (q - r)
             last = h
         self.friction, self.last_hour = r, last
         return out
@@ -650,4 +685,5 @@ class GearMonitor:
         return self.model.name(ev), None, None
 
 
-__all__ = ["Alarm", "GearMonitor", "Trace", "normal_windows"]
+__all__ = ["MAINTENANCE_KINDS", "Alarm", "GearMonitor", "MaintenanceEvent", "Trace",
+           "normal_windows"]

@@ -137,6 +137,13 @@ class NormalConfig:
         (:meth:`NormalBehaviour.recommission`, done by
         :class:`~learn.monitor.gear_monitor.GearMonitor`); False: it stays
         commissioning's, with the widened spread.
+    regrease_settle_h : float
+        After a re-greasing declared in the maintenance log
+        (:class:`~learn.monitor.gear_monitor.MaintenanceEvent`), the friction factor follows
+        the windows one by one for this many operating hours [h], >= 0, while the new
+        grease runs in again: 24, about three time constants of a running-in of 4-12 h
+        [choice; Harmonic Drive's manuals ask for a run-in after relubrication,
+        unverified]; the efficiency is not judged then, the bridges are.
     """
 
     friction_track_h: float = 4.0
@@ -146,6 +153,7 @@ class NormalConfig:
     friction_margin: float = 0.05
     extrapolation_uncertainty: float = 1.0
     recommission_load: bool = True
+    regrease_settle_h: float = 24.0
 
     def check(self, key: str = "normal") -> None:
         """Refuse a field out of range in one line naming ``<key>.<field>``.
@@ -164,6 +172,7 @@ class NormalConfig:
         check_range(self.friction_margin, 0.0, 1.0, f"{key}.friction_margin", lo_open=True)
         check_range(self.extrapolation_uncertainty, 0.0, 10.0,
                     f"{key}.extrapolation_uncertainty")
+        check_range(self.regrease_settle_h, 0.0, 1e4, f"{key}.regrease_settle_h", "h")
 
 
 @dataclass

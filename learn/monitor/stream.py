@@ -23,7 +23,7 @@ import numpy as np
 from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 
 from .features import feature_names, health_features
-from .gear_monitor import Alarm, GearMonitor, Trace
+from .gear_monitor import Alarm, GearMonitor, MaintenanceEvent, Trace
 from .normal import (
     OUTSIDE_FRICTION,
     OUTSIDE_LOAD,
@@ -245,11 +245,23 @@ def stream_features(ds) -> np.ndarray:
 
 
 def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
-                   source: str = "stream", normal: NormalConfig | None = None
-                   ) -> StreamResult:
+                   source: str = "stream", normal: NormalConfig | None = None,
+                   maintenance: list[MaintenanceEvent] | None = None) -> StreamResult:
     """Commission on the stream's commissioning windows and monitor the rest, with its
-    conditions (acting load, temperature where the stream has it; :mod:`.normal`); the
-    monitor keeps watching after every alarm and advisory."""
+    conditions (acting load, temperature where the stream has it; :mod:`.normal`) and
+    its maintenance log (:meth:`GearMonitor.declare`: each declared event is listed
+    among the recommissionings); the monitor keeps watching after every alarm and
+    advisory.
+
+    Raises
+    ------
+    ValueError
+        A stream the monitor cannot take (:func:`check_stream`) or a maintenance event
+        out of range, before any work.
+    """
+    log = list(maintenance or [])
+    for i, e in enumerate(log):
+        e.check(f"maintenance[{i}]")
     interval = check_stream(ds, model, rule, source)
     pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
     feats = stream_features(ds)
@@ -259,6 +271,7 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     n_c = int(comm.sum())
     hours = ds["hour"].values.astype(float)
     mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h, normal=normal)
+    mon.declare(log)
     lost = _lost_reading(cond, n_c, hours)
     read = np.ones(n_c, bool) if lost is None else np.isfinite(cond.temperature_c[:n_c])
     mon.commission(feats[:n_c][read], pts[:n_c][read], cond[:n_c][read])
@@ -275,7 +288,7 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     return StreamResult(tr, alarms, advisories(tr, mon), n_c,
                         float(hours[on[0]]) if on.size else None,
                         str(fault[on[0]]) if on.size else None, mon.h,
-                        recommissionings(tr, mon))
+                        recommissionings(tr, mon) + declared(log, mon))
 
 
 def _lost_reading(cond: Conditions, n_c: int, hours: np.ndarray) -> Alarm | None:
@@ -361,12 +374,44 @@ def _without_reading(mon: GearMonitor, feats: np.ndarray, points: np.ndarray,
     (:func:`~learn.monitor.sensor_check.virtual_temperature`); else the monitor
     commissioned without temperature."""
     if not mon.normal.temperature_law:
-        return mon.without_temperature(), Conditions(cond.torque_nm)
+        return without_temperature(mon), Conditions(cond.torque_nm)
     rest = slice(stop, None)
     fr = mon.friction if fstart is None else fstart[0]
     virtual = virtual_temperature(mon.normal, feats[rest], points[rest], cond.torque_nm[rest],
                                   fr, mon.normal.index(points[rest]))
     return mon, Conditions(cond.torque_nm, np.concatenate([np.full(stop, np.nan), virtual]))
+
+
+def declared(log: list[MaintenanceEvent], mon: GearMonitor) -> list[dict]:
+    """The recommissioning entry of each declared maintenance event (``hour``,
+    ``kind``, ``note``): what the monitor relearns after it."""
+    settle = mon.normal_config.regrease_settle_h
+    return [{"hour": float(e.hour), "kind": e.kind, "declared": True,
+             "note": f"re-greasing declared: the friction is followed window by window for "
+                     f"{settle:g} h while the new grease runs in (the efficiency is not "
+                     "judged then)"} for e in log]
+
+
+def without_temperature(mon: GearMonitor) -> GearMonitor:
+    """The same monitor commissioned on the same windows without their temperature
+    readings, as for a joint without a temperature sensor (its spreads hold
+    commissioning's warm-ups), with the same maintenance log: where the temperature sensor
+    fails and commissioning learnt no temperature law, the monitor goes on with it
+    (:func:`run_stream`).
+
+    Raises
+    ------
+    ValueError
+        If the monitor is not commissioned.
+    """
+    if mon.normal is None:
+        raise ValueError("the monitor is not commissioned (GearMonitor.commission)")
+    feats, points, cond = mon.commissioned_on
+    out = GearMonitor(mon.model, mon.rule, mon.interval_min, mon.seed, mon.confirm_h,
+                      mon.normal_config)
+    out.commission(feats, points, Conditions(cond.torque_nm, None))
+    out.regreased = list(mon.regreased)
+    return out
 
 
 def recommissionings(tr: Trace, mon: GearMonitor) -> list[dict]:
@@ -465,6 +510,6 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
                                         ("figure", "health.png"))}
 
 
-__all__ = ["CONDITIONS", "EVENT_KINDS", "StreamResult", "advisories", "check_stream",
-           "event_line", "monitor_stream", "recommissionings", "run_stream", "select_gear",
-           "write_outputs"]
+__all__ = ["CHANGES_STATE", "CONDITIONS", "EVENT_KINDS", "StreamResult", "advisories",
+           "check_stream", "declared", "event_line", "monitor_stream", "recommissionings",
+           "run_stream", "select_gear", "without_temperature", "write_outputs"]

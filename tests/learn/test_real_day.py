@@ -11,11 +11,13 @@ import dataclasses
 import numpy as np
 import pytest
 
+from learn.monitor.gear_monitor import MaintenanceEvent
 from learn.monitor.rule import RuleConfig
 from learn.monitor.stream import event_line, monitor_stream
 from learn.monitor.study import MonitorStudyConfig
 from learn.monitor.training import train_model
 from swgcli import dataset_preset
+from swgsim.datasets.conditions import Regrease
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import plan
@@ -270,3 +272,26 @@ def test_an_even_change_of_friction_is_named_an_unexplained_change_not_a_gear_fa
     assert 40.0 <= named[0]["hour"] <= 42.0
     assert 0.1 <= named[0]["severity"] <= 0.5
     assert "unexplained change" in event_line(named[0])
+
+
+def test_a_declared_regreasing_recommissions_the_friction_an_undeclared_one_is_unexplained(
+        model, day):
+    """The joint re-greased at 40 h (its friction 50 % up at once, running in again over
+    8 h) with the efficiency's law linear: declared in the maintenance log, the monitor
+    follows the friction window by window for a day (NormalConfig.regrease_settle_h) and
+    raises no alarm, listing the declared event; undeclared, the alarm names an
+    unexplained change (the friction up), not a gear fault."""
+    p, bank = day
+    life = p.config.life
+    cond = dataclasses.replace(life.conditions, friction_law=FrictionLaw("linear", 0.8),
+                               regrease=Regrease(hours=[40.0], drop=0.5, tau_h=8.0))
+    ds = life_dataset(LifeSimulator(p, 3, dataclasses.replace(life, conditions=cond), bank))
+    log = [MaintenanceEvent(40.0, "regrease")]
+    res = monitor_stream(ds, model, RuleConfig(), source="day", maintenance=log)
+    assert res.alarms == []
+    assert [r["kind"] for r in res.recommissioned if r.get("declared")] == ["regrease"]
+    res = monitor_stream(ds, model, RuleConfig(), source="day")
+    assert [a.kind for a in res.alarms] == ["unexplained_change"]  # measured: at 40.93 h
+    assert 40.0 <= res.alarms[0].hour <= 41.0 and res.alarms[0].severity > 0
+    with pytest.raises(ValueError, match=r"maintenance\[0\]\.kind: 'oil' is not one of"):
+        monitor_stream(ds, model, RuleConfig(), maintenance=[MaintenanceEvent(40.0, "oil")])
