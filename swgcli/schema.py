@@ -117,7 +117,8 @@ class MonitorApp:
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)  # conditions (temperature, ...)
     confirm_h: float = 1.0                   # hours after an alarm that name the fault
-    # the joint's maintenance log: [{hour: 40.0, kind: regrease}, ...] (learn/monitor)
+    # the joint's maintenance log: [{hour: 40.0, kind: regrease}, ...]; kinds regrease,
+    # tool_change, repair (learn/monitor/gear_monitor.py MaintenanceEvent)
     maintenance: list[MaintenanceEvent] = field(default_factory=list)
     seed: int = 0                            # the p-values' smoothing draws
     logger: LoggerConfig | None = None

@@ -58,14 +58,19 @@ LAW_LEVEL = 0.01
 
 
 #: What the maintenance log may declare (:class:`MaintenanceEvent`).
-MAINTENANCE_KINDS = ("regrease",)
+MAINTENANCE_KINDS = ("regrease", "tool_change", "repair")
+#: Declared events after which the monitor commissions anew: a new tool changes the load
+#: at every point, a repair the gear itself.
+RECOMMISSIONS = ("tool_change", "repair")
 
 
 @dataclass
 class MaintenanceEvent:
     """One entry of the joint's maintenance log, an input of the monitor: what was done
     and when. A declared event recommissions what it affects: a re-greasing the friction
-    (:class:`~learn.monitor.normal.NormalConfig` ``regrease_settle_h``).
+    (:class:`~learn.monitor.normal.NormalConfig` ``regrease_settle_h``); a tool change or a
+    repair (:data:`RECOMMISSIONS`) the whole monitor, on as many windows after it as
+    commissioning had (:func:`learn.monitor.stream.monitor_stream`).
 
     Attributes
     ----------
@@ -685,5 +690,5 @@ class GearMonitor:
         return self.model.name(ev), None, None
 
 
-__all__ = ["MAINTENANCE_KINDS", "Alarm", "GearMonitor", "MaintenanceEvent", "Trace",
-           "normal_windows"]
+__all__ = ["MAINTENANCE_KINDS", "RECOMMISSIONS", "Alarm", "GearMonitor", "MaintenanceEvent",
+           "Trace", "normal_windows"]

@@ -23,7 +23,7 @@ import numpy as np
 from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 
 from .features import feature_names, health_features
-from .gear_monitor import Alarm, GearMonitor, MaintenanceEvent, Trace
+from .gear_monitor import RECOMMISSIONS, Alarm, GearMonitor, MaintenanceEvent, Trace
 from .normal import (
     OUTSIDE_FRICTION,
     OUTSIDE_LOAD,
@@ -250,18 +250,66 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     """Commission on the stream's commissioning windows and monitor the rest, with its
     conditions (acting load, temperature where the stream has it; :mod:`.normal`) and
     its maintenance log (:meth:`GearMonitor.declare`: each declared event is listed
-    among the recommissionings); the monitor keeps watching after every alarm and
-    advisory.
+    among the recommissionings; after a declared tool change or repair,
+    :data:`~learn.monitor.gear_monitor.RECOMMISSIONS`, the monitor commissions anew on as
+    many windows as commissioning had, and monitors the rest); the monitor keeps
+    watching after every alarm and advisory.
 
     Raises
     ------
     ValueError
         A stream the monitor cannot take (:func:`check_stream`) or a maintenance event
-        out of range, before any work.
+        out of range (a tool change or repair inside commissioning), before any work.
     """
-    log = list(maintenance or [])
-    for i, e in enumerate(log):
+    log = sorted(maintenance or [], key=lambda e: e.hour)
+    check_stream(ds, model, rule, source)
+    hours = ds["hour"].values.astype(float)
+    n_c = int(ds["commissioning"].values.astype(bool).sum())
+    for i, e in enumerate(maintenance or []):
         e.check(f"maintenance[{i}]")
+        if e.kind in RECOMMISSIONS and e.hour <= hours[n_c]:
+            raise ValueError(f"maintenance[{i}].hour: a {e.kind} at {e.hour:g} h; allowed: "
+                             f"after the first window monitored, at {hours[n_c]:g} h")
+    again = [e for e in log if e.kind in RECOMMISSIONS]
+    if not again:
+        return _monitor_once(ds, model, rule, seed, confirm_h, source, normal, log)
+    cut = int(np.searchsorted(hours, again[0].hour))
+    before = [e for e in log if e.hour < again[0].hour]
+    first = _monitor_once(ds.isel(sample=slice(0, cut)), model, rule, seed, confirm_h,
+                          source, normal, before)
+    entry = declared([again[0]], None)
+    if hours.size - cut <= n_c:  # too few windows after it to commission and monitor
+        return dataclasses.replace(first, recommissioned=first.recommissioned + entry)
+    rest = ds.isel(sample=slice(cut, None)).copy()
+    rest["commissioning"] = rest["commissioning"].copy(data=np.arange(rest.sizes["sample"]) < n_c)
+    later = monitor_stream(rest, model, rule, seed, confirm_h, source, normal,
+                           [e for e in log if e.hour >= again[0].hour and e is not again[0]])
+    return _joined(first, later, entry)
+
+
+def _joined(first: StreamResult, later: StreamResult, entry: list[dict]) -> StreamResult:
+    """The result of a stream monitored up to a declared recommissioning (``first``) and
+    from it on (``later``, whose indices count after ``first``'s windows); the windows of
+    the new commissioning are in neither trace."""
+    off = len(first.trace.hour)
+    shift = [dict(d, index=d["index"] + off) if "index" in d else d
+             for d in later.advisories + later.recommissioned]
+    alarms = [dataclasses.replace(a, index=a.index + off, rise_index=a.rise_index + off)
+              for a in later.alarms]
+    on = first.onset_h if first.onset_h is not None else later.onset_h
+    fault = first.true_fault if first.onset_h is not None else later.true_fault
+    return StreamResult(Trace.concat([first.trace, later.trace]), first.alarms + alarms,
+                        first.advisories + shift[:len(later.advisories)],
+                        first.n_commissioning, on, fault, first.threshold,
+                        first.recommissioned + entry + shift[len(later.advisories):])
+
+
+def _monitor_once(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
+                   source: str = "stream", normal: NormalConfig | None = None,
+                   maintenance: list[MaintenanceEvent] | None = None) -> StreamResult:
+    """:func:`monitor_stream` on a stream without a declared recommissioning after its
+    commissioning."""
+    log = list(maintenance or [])
     interval = check_stream(ds, model, rule, source)
     pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
     feats = stream_features(ds)
@@ -274,10 +322,12 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     mon.declare(log)
     lost = _lost_reading(cond, n_c, hours)
     read = np.ones(n_c, bool) if lost is None else np.isfinite(cond.temperature_c[:n_c])
+    if not read.any():  # no reading in commissioning: as a joint without the sensor
+        cond, read = Conditions(cond.torque_nm), np.ones(n_c, bool)
     mon.commission(feats[:n_c][read], pts[:n_c][read], cond[:n_c][read])
     f, p, c = feats[n_c:], pts[n_c:], cond[n_c:]
-    if lost is not None:  # the sensor failed: from the first window on, without it
-        c = Conditions(c.torque_nm, np.full(len(f), np.nan))
+    if lost is not None and c.temperature_c is not None:  # from the first window on
+        c = Conditions(c.torque_nm, np.full(len(f), np.nan))  # without it
     tr, named, mon = run_stream(mon, f, p, hours[n_c:], c)
     alarms: list[Alarm] = [] if lost is None else [lost]
     for al in named:
@@ -382,14 +432,23 @@ def _without_reading(mon: GearMonitor, feats: np.ndarray, points: np.ndarray,
     return mon, Conditions(cond.torque_nm, np.concatenate([np.full(stop, np.nan), virtual]))
 
 
-def declared(log: list[MaintenanceEvent], mon: GearMonitor) -> list[dict]:
+def declared(log: list[MaintenanceEvent], mon: GearMonitor | None) -> list[dict]:
     """The recommissioning entry of each declared maintenance event (``hour``,
-    ``kind``, ``note``): what the monitor relearns after it."""
-    settle = mon.normal_config.regrease_settle_h
-    return [{"hour": float(e.hour), "kind": e.kind, "declared": True,
-             "note": f"re-greasing declared: the friction is followed window by window for "
-                     f"{settle:g} h while the new grease runs in (the efficiency is not "
-                     "judged then)"} for e in log]
+    ``kind``, ``note``): what the monitor relearns after it (``mon``: the monitor of a
+    re-greasing, for its settling time; None where the log holds none)."""
+    notes = {"tool_change": "tool change declared: the monitor commissions anew after it "
+                            "(the load at every point changed)",
+             "repair": "repair declared: the monitor commissions anew after it (a repaired "
+                       "gear is learnt as a new one)"}
+    out = []
+    for e in log:
+        note = notes.get(e.kind) or (
+            f"re-greasing declared: the friction is followed window by window for "
+            f"{mon.normal_config.regrease_settle_h:g} h while the new grease runs in (the "
+            "efficiency is not judged then)")
+        out.append({"hour": float(e.hour), "maintenance": e.kind, "declared": True,
+                    "note": note})
+    return out
 
 
 def without_temperature(mon: GearMonitor) -> GearMonitor:
@@ -455,7 +514,10 @@ def advisories(tr: Trace, mon: GearMonitor, clear_h: float = 1.0) -> list[dict]:
                         "operating_point": [float(o[0]), float(o[1])],
                         "friction_factor": float(tr.friction[i]),
                         "advice": f"the {what} left what commissioning saw at {o[0]:g} rpm, "
-                                  f"{o[1]:g} N m: recommission the monitor"})
+                                  f"{o[1]:g} N m: recommission the monitor if the gear is "
+                                  f"known healthy; that relearns as normal the features "
+                                  f"there as they read now and the friction at "
+                                  f"{tr.friction[i]:.2f}x commissioning's"})
     return out
 
 

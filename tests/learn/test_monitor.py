@@ -442,7 +442,7 @@ def test_every_event_kind_is_printed_in_one_line():
     adv = {"hour": 5.0, "index": 2, "condition": "temperature",
            "operating_point": [4000.0, 7.0], "friction_factor": 1.0,
            "advice": "the temperature left what commissioning saw at 4000 rpm, 7 N m: "
-                     "recommission the monitor"}
+                     "recommission the monitor if the gear is known healthy"}
     rec = {"hour": 8.0, "index": 30, "operating_point": [4000.0, 7.0], "relearnt": False,
            "load_range_nm": [7.0, 7.7], "note": "the load at 4000 rpm, 7 N m stayed beyond"}
     hot = Alarm(7.5, 25, 22, "temperature_sensor", "temperature_sensor", -6.0, -9.0, -2.0)
