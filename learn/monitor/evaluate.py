@@ -27,6 +27,7 @@ import time
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
+from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.records import RecordBank, record_bank
@@ -34,10 +35,11 @@ from swgsim.datasets.schedule import FaultOnset, LifeConfig
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 from .detectors import References, WindowClassifier, window_inputs
-from .gear_monitor import GearMonitor, Trace
+from .gear_monitor import Alarm, GearMonitor, MaintenanceEvent, Trace
 from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
 from .rule import judged_bets, run_cusums, threshold
+from .sensor_check import UNEXPLAINED_CHANGE
 from .stream import advisories, run_stream
 from .study import MonitorStudyConfig, family_of, life_conditions
 from .training import (
@@ -163,6 +165,17 @@ def healthy_life(plan: DatasetPlan, bank: RecordBank, g: int, cfg: MonitorStudyC
     return LifeSimulator(plan, g, base, bank)
 
 
+def maintenance_log(cfg: MonitorStudyConfig, life: str, cond: ConditionsConfig | None
+                    ) -> list[MaintenanceEvent]:
+    """The maintenance log the evaluation hands the monitor for a life: its re-greasings
+    where its family is ``logged`` (:class:`~learn.monitor.families.NuisanceFamily`),
+    else none (an undeclared re-greasing is to be named an unexplained change)."""
+    fam = family_of(life)
+    if fam is None or not cfg.families[fam].logged or cond is None or cond.regrease is None:
+        return []
+    return [MaintenanceEvent(float(h), "regrease") for h in cond.regrease.hours]
+
+
 def _key(plan: DatasetPlan, dataset: str, g: int, seed: int, nuisance: str) -> dict:
     """The columns that name a life's data set, gear, seed and nuisance in every table."""
     return {"dataset": plan.config.name if plan.profile is not None else dataset,
@@ -196,6 +209,7 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
         f, p, meta = features_of(healthy, 0, len(healthy))
         cond = Conditions.of(meta)
         mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed), normal=cfg.normal)
+        mon.declare(maintenance_log(cfg, nuisance, healthy.life.conditions))
         mon.commission(f[:n_comm], p[:n_comm], cond[:n_comm])
         commissioned = mon.fork()
         f, p, c = f[n_comm:], p[n_comm:], cond[n_comm:]
@@ -218,12 +232,13 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
             k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
             before = k0 - 1 - n_comm  # the healthy trace's window before the onset
             start = (0.0, None) if before < 0 else (tr.cusums[before], tr.state(before))
-            fmon = _monitor_at(commissioned, tr, before, f, p, c)
+            fmon = _monitor_at(commissioned, tr, before, f, p, c, named)
             ftr, ff, pp, mm = _fault_life(fmon, sim, k0, *start)
             row = _fault_row(key, sim, fo, kind)
             if healthy_curve is not None:
                 _curve_fault(ftr, fo, before, healthy_curve, cfg, row, curve)
-            rows.append({**row, **_monitor_row(mon, ftr, ff, pp, mm, fo)})
+            rows.append({**row, **_monitor_row(fmon, *_past_changes(fmon, sim, k0, ftr, ff,
+                                                                     pp, mm), fo)})
             rows.append({**row, **_per_window_row("per_window", model.classes,
                                                   np.argmax(ftr.log_proba, axis=1), mm, fo)})
             rows.append({**row, "detector": "always", "detected": True, "time_to_detect_h": 0.0,
@@ -324,17 +339,40 @@ def _curve_fault(ftr: Trace, fo: FaultOnset, before: int, states: dict, cfg, row
 
 
 def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray,
-                p: np.ndarray, c: Conditions) -> GearMonitor:
+                p: np.ndarray, c: Conditions, named: list[Alarm]) -> GearMonitor:
     """The monitor of the healthy run ``tr`` as it was after its window ``before``, for a
     fault life that branches off there: a fork of the monitor at commissioning's end,
     the healthy windows replayed through it where a point's load had left commissioning's
-    range by then (its recommissioning; :meth:`GearMonitor.run`)."""
+    range by then (its recommissioning; :meth:`GearMonitor.run`), following the friction
+    as after a re-greasing from each unexplained change ``named`` by then
+    (:func:`learn.monitor.stream.run_stream`)."""
     if before < 0 or not (tr.outside[:before + 1] & OUTSIDE_LOAD).any():
-        return commissioned.fork()
-    m = commissioned.fork(fresh_draws=True)
-    w = slice(0, before + 1)
-    m.run(f[w], p[w], tr.hour[w], c[w], latch=False)
+        m = commissioned.fork()
+    else:
+        m = commissioned.fork(fresh_draws=True)
+        w = slice(0, before + 1)
+        m.run(f[w], p[w], tr.hour[w], c[w], latch=False)
+    m.regreased = sorted(m.regreased + [a.hour for a in named if before >= 0 and a.fault
+                                        == UNEXPLAINED_CHANGE and a.hour <= tr.hour[before]])
     return m
+
+
+def _past_changes(mon: GearMonitor, sim: LifeSimulator, k0: int, tr: Trace, f, p, meta):
+    """A fault life's monitor trace (and its windows) from its first alarm that is not an
+    unexplained change: after one, the monitor goes on from the friction's new level as
+    :func:`learn.monitor.stream.run_stream` does (a re-greasing's alarm before the fault
+    shows is not its detection)."""
+    k = k0
+    while tr.alarms:
+        a = tr.alarms[0]
+        al = mon.diagnose(tr, a, f, p, Conditions.of(meta))
+        if al.fault != UNEXPLAINED_CHANGE or a + 1 >= len(tr.hour):
+            break
+        fr, hour = tr.state(a)
+        mon.regreased = sorted([*mon.regreased, al.hour])
+        k += a + 1
+        tr, f, p, meta = _fault_life(mon, sim, k, 0.0, (fr * (1.0 + al.severity), hour))
+    return tr, f, p, meta
 
 
 def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,

@@ -163,6 +163,10 @@ class NuisanceFamily:
     regrease_h, regrease_drop, regrease_tau_h : list of float
         Operating hour of a re-greasing [h], its excess friction [-] and time constant
         [operating h].
+    logged : bool
+        The re-greasing is in the maintenance log handed to the monitor
+        (:class:`learn.monitor.gear_monitor.MaintenanceEvent`); refused without the
+        ``regrease`` part.
     """
 
     parts: list[str] = field(default_factory=lambda: list(PARTS))
@@ -189,6 +193,7 @@ class NuisanceFamily:
     regrease_h: list[float] = _span(30.0, 48.0)
     regrease_drop: list[float] = _span(0.1, 0.5)
     regrease_tau_h: list[float] = _span(4.0, 24.0)
+    logged: bool = False
 
     def check(self, key: str = "NuisanceFamily") -> None:
         """Refuse a family outside its ranges in one line naming ``<key>.<field>`` and
@@ -216,6 +221,9 @@ class NuisanceFamily:
         if self.still and hot:
             raise ValueError(f"{key}.parts: a still family draws none of "
                              f"{', '.join(THERMAL_PARTS)}, got {hot}")
+        if self.logged and "regrease" not in self.parts:
+            raise ValueError(f"{key}.logged: only a family with the regrease part has a "
+                             f"maintenance log to hand over, parts {list(self.parts)}")
         for name, (_, lo, hi, unit, what) in RANGES.items():
             r = list(getattr(self, name))
             try:
@@ -237,8 +245,9 @@ def default_families() -> dict[str, NuisanceFamily]:
     dict of str to NuisanceFamily
         ``friction_law``, ``warm_up``, ``drift``, ``ambient``, ``run_in`` (still),
         ``payload`` (still), ``sensor`` (missing), ``sensor_stuck``, ``sensor_drift``,
-        ``sensor_dropout``, ``regrease`` (still) and ``all`` (every part, the sensor in any
-        of its states).
+        ``sensor_dropout``, ``regrease`` (still, not in the maintenance log),
+        ``regrease_logged`` (still, in it) and ``all`` (every part, the sensor in any of
+        its states, nothing logged).
     """
     def with_law(part: str, **kw) -> NuisanceFamily:
         return NuisanceFamily(parts=[part, "friction_law"], **kw)
@@ -253,6 +262,7 @@ def default_families() -> dict[str, NuisanceFamily]:
             **{f"sensor_{f}": with_law("sensor", sensor_states=[f])
                for f in TEMPERATURE_SENSOR_FAULTS[1:]},
             "regrease": NuisanceFamily(parts=["regrease"], still=True),
+            "regrease_logged": NuisanceFamily(parts=["regrease"], still=True, logged=True),
             "all": NuisanceFamily()}
 
 

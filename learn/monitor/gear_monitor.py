@@ -632,9 +632,9 @@ class GearMonitor:
         ev[(trace.outside & OUTSIDE_UNJUDGED) != 0] = 0.0  # not judged: no evidence
         fr = trace.friction
         at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
-                                    cond[rise:a + 1], fr[rise:a + 1])
+                                    cond[rise:a + 1], fr[rise:a + 1], trace.hour[rise:a + 1])
         fault, bridge, fit = self._name(ev[rise:end], feats[rise:end], points[rise:end],
-                                        cond[rise:end], fr[rise:end])
+                                        cond[rise:end], fr[rise:end], trace.hour[rise:end])
         if fault == TEMPERATURE_SENSOR:  # its severity: the reading's error [K]
             err = fit.temperature_c - fit.reading_c
             est, lo, hi = fit.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))
@@ -647,8 +647,8 @@ class GearMonitor:
                      None if bridge is None else f"s{bridge}")
 
     def name(self, ev: np.ndarray, feats: np.ndarray, points: np.ndarray,
-             cond: Conditions | None = None, friction: np.ndarray | float = 1.0
-             ) -> tuple[str, int | None]:
+             cond: Conditions | None = None, friction: np.ndarray | float = 1.0,
+             hours: np.ndarray | None = None) -> tuple[str, int | None]:
         """Name the fault of windows since an alarm: a sensor fault where one sensor's
         fault explains them (:mod:`.sensor_check`): a bridge's offset step or gain drift
         (a plausible fit after which the windows look healthy, median p-value at least
@@ -661,10 +661,10 @@ class GearMonitor:
         (:func:`~.sensor_check.fit_friction`), named
         :data:`~.sensor_check.UNEXPLAINED_CHANGE`; of those the one that leaves the windows
         most healthy; else the fault with the largest summed evidence (:meth:`evidence`
-        rows ``ev``) and None."""
-        return self._name(ev, feats, points, cond, friction)[:2]
+        rows ``ev``) and None. ``hours``: the windows' hours, for the friction's rate."""
+        return self._name(ev, feats, points, cond, friction, hours)[:2]
 
-    def _name(self, ev, feats, points, cond, friction):
+    def _name(self, ev, feats, points, cond, friction, hours=None):
         """:meth:`name` and the fit of the temperature or the friction that named it
         (None where neither did)."""
         b = self.normal
@@ -679,7 +679,7 @@ class GearMonitor:
                 if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
         fr = np.broadcast_to(friction, (len(z),))
         hot = None if cond is None else fit_temperature(b, feats, points, cond, fr, opi)
-        even = fit_friction(b, feats, points, cond, fr, opi)
+        even = fit_friction(b, feats, points, cond, fr, opi, hours)
         cands = [(median_p(f.z), f.fault, f.bridge, None) for f in fits]
         cands += [(median_p(h.z), name, None, h) for h, name in
                   ((hot, TEMPERATURE_SENSOR), (even, UNEXPLAINED_CHANGE))

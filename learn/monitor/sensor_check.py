@@ -103,6 +103,15 @@ TEMPERATURE_BEYOND_K = 20.0
 UNEXPLAINED_CHANGE = "unexplained_change"
 #: Factors on the friction :func:`fit_friction` tries: 1/3 to 3, in steps of about 1 %.
 FRICTION_FACTORS = np.exp(np.linspace(np.log(1 / 3), np.log(3.0), 221))
+#: Rates of change of the factor's logarithm :func:`fit_friction` tries [1/h]: to ±0.15/h,
+#: fresh grease running in again (excess friction up to 0.5 over 4 h or more, the
+#: families' ranges, learn/monitor/families.py), in steps of 0.01/h.
+FRICTION_RATES = np.linspace(-0.15, 0.15, 31)
+#: Smallest reduction of Σ z² for the fit with a step, a factor and a rate to count: the
+#: χ² (three degrees of freedom) quantile 0.999, as :data:`FIT_MIN` for one
+#: (``scipy.stats.chi2.ppf(0.999, 3)``, checked by tests/learn/test_monitor.py; scipy is
+#: not imported here, to keep the apps' start light).
+FIT_MIN_RATE = 16.26623619623813
 #: Windows of the running median of :func:`virtual_temperature` (odd).
 VIRTUAL_WINDOWS = 7
 
@@ -344,34 +353,40 @@ class FrictionFit:
     Attributes
     ----------
     factor : float
-        The fitted factor on the friction in force [-].
+        The fitted factor on the friction in force at the last window [-].
     z : ndarray, shape (n, F)
         The windows' z-scores with it.
     reduction : float
         How much it lowers Σ z² over the windows (χ² with one degree of freedom where the
-        friction did not change).
+        friction did not change, two with a rate).
+    rate_per_h : float or None
+        The fitted rate of change of the factor's logarithm [1/h]; None: not fitted.
     """
 
     factor: float
     z: np.ndarray
     reduction: float
+    rate_per_h: float | None = None
 
     def plausible(self) -> bool:
-        """Significant (:data:`FIT_MIN`): where the efficiency's spread is small (a joint
-        at a steady temperature), a change of 1 % is many of them (the friction
-        tracking's lag behind a re-greasing running in again, tiny_real_day gear 3)."""
-        return self.reduction >= FIT_MIN
+        """Significant (:data:`FIT_MIN`, :data:`FIT_MIN_RATE` with a rate): where the
+        efficiency's spread is small (a joint at a steady temperature), a change of 1 % is
+        many of them (the friction tracking's lag behind a re-greasing running in again,
+        tiny_real_day gear 3)."""
+        return self.reduction >= (FIT_MIN if self.rate_per_h is None else FIT_MIN_RATE)
 
 
 def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
-                 cond: Conditions | None, friction: np.ndarray, index: np.ndarray
-                 ) -> FrictionFit:
+                 cond: Conditions | None, friction: np.ndarray, index: np.ndarray,
+                 hours: np.ndarray | None = None) -> FrictionFit:
     """Fit the hypothesis "the friction changed evenly" (re-greasing, another grease, a
-    seal): one factor on the loss torque at every operating point, chosen on a
-    logarithmic grid (:data:`FRICTION_FACTORS`) to leave Σ z² over the windows smallest.
-    A gear fault that changes friction changes it unevenly (reduced damping lowers the
-    viscous term only, more at light loads, :mod:`.normal`) and moves the bridges too,
-    so the factor does not explain it.
+    seal): one factor on the loss torque at every operating point, on a logarithmic grid
+    (:data:`FRICTION_FACTORS`), and with ``hours`` a rate at which its logarithm changes
+    (:data:`FRICTION_RATES`: fresh grease running in again) from a window on (the
+    change's step; the windows before it as they were), chosen to leave Σ z² over the
+    windows smallest. A gear fault that changes friction changes it unevenly (reduced
+    damping lowers the viscous term only, more at light loads, :mod:`.normal`) and moves
+    the bridges too, so neither factor nor rate explains it.
 
     Parameters
     ----------
@@ -382,23 +397,45 @@ def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
     friction : ndarray, shape (n,)
         The friction factor in force at each window.
     index : ndarray of int, shape (n,)
+    hours : ndarray, shape (n,), optional
+        The windows' operating hours [h]; None: one factor over all windows, no step, no
+        rate.
 
     Returns
     -------
     FrictionFit
+        The factor at the last window.
     """
-    n = len(feats)
-    rep = np.tile(np.arange(n), len(FRICTION_FACTORS))
+    n, m = len(feats), len(FRICTION_FACTORS)
+    rep = np.tile(np.arange(n), m)
     fr = (friction[None, :] * FRICTION_FACTORS[:, None]).ravel()
     c = None if cond is None else cond[rep]
-    z = normal.z(feats[rep], points[rep], c, fr, index[rep]).reshape(len(FRICTION_FACTORS),
-                                                                      n, -1)
-    s = np.sum(z ** 2, axis=(1, 2))
-    k, one = int(np.argmin(s)), int(np.argmin(np.abs(FRICTION_FACTORS - 1.0)))
-    return FrictionFit(float(FRICTION_FACTORS[k]), z[k], float(s[one] - s[k]))
+    z = normal.z(feats[rep], points[rep], c, fr, index[rep]).reshape(m, n, -1)
+    s = np.sum(z ** 2, axis=2)  # (factor, window)
+    one = int(np.argmin(np.abs(FRICTION_FACTORS - 1.0)))
+    if hours is None:
+        k = int(np.argmin(s.sum(axis=1)))
+        return FrictionFit(float(FRICTION_FACTORS[k]), z[k], float(s[one].sum() - s[k].sum()))
+    step = np.log(FRICTION_FACTORS[1] / FRICTION_FACTORS[0])
+    dt = np.asarray(hours, float) - float(hours[-1])
+    before = np.concatenate([[0.0], np.cumsum(s[one])])[:n]  # windows before the step
+    best = (float(s[one].sum()), one, 0, 0.0, np.full(n, one))  # no change (NaN: none)
+    for rate in FRICTION_RATES.tolist():
+        k = np.clip(np.arange(m)[:, None] + np.rint(rate * dt / step).astype(int)[None, :],
+                    0, m - 1)  # (factor at the last window, window)
+        after = np.cumsum(s[k, np.arange(n)][:, ::-1], axis=1)[:, ::-1]  # from window j on
+        tot = before[None, :] + after  # (factor, step window)
+        i, j = np.unravel_index(int(np.argmin(tot)), tot.shape)
+        if tot[i, j] < best[0]:
+            best = (float(tot[i, j]), int(i), int(j), rate, k[i])
+    total, i, j, rate, k = best
+    k[:j] = one
+    return FrictionFit(float(FRICTION_FACTORS[i]), z[k, np.arange(n)],
+                       float(s[one].sum() - total), rate)
 
 
-__all__ = ["BLOCK", "FIT_MIN", "FRICTION_FACTORS", "FrictionFit", "REST_MAX",
+__all__ = ["BLOCK", "FIT_MIN", "FIT_MIN_RATE", "FRICTION_FACTORS", "FRICTION_RATES",
+           "FrictionFit", "REST_MAX",
            "SENSOR_P_MIN", "SensorFit", "TEMPERATURE_BEYOND_K", "TEMPERATURE_MIN_K",
            "TEMPERATURE_SENSOR", "TEMPERATURE_STEP_K", "TemperatureFit", "UNEXPLAINED_CHANGE",
            "VIRTUAL_WINDOWS", "best_temperature", "fit_friction", "fit_sensor_faults",

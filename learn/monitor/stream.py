@@ -406,8 +406,9 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         if stop == n:
             return Trace.concat(traces), alarms, mon
         fstart = None if tr is None else tr.state(len(tr.hour) - 1)
-        if cut and named[-1].fault == UNEXPLAINED_CHANGE:  # the friction's new level
-            fstart = (fstart[0] * (1.0 + named[-1].severity), fstart[1])
+        if cut and named[-1].fault == UNEXPLAINED_CHANGE:  # the friction's new level,
+            fstart = (fstart[0] * (1.0 + named[-1].severity), fstart[1])  # followed as
+            mon.regreased = sorted([*mon.regreased, named[-1].hour])  # after a re-greasing
         else:
             if not cut:
                 alarms.append(_no_reading(float(hours[stop]), stop))

@@ -10,6 +10,7 @@ import dataclasses
 
 import pytest
 
+from learn.monitor.evaluate import maintenance_log
 from learn.monitor.families import (
     RANGES,
     SENSOR_STATES,
@@ -116,6 +117,7 @@ def test_a_range_outside_its_bounds_is_one_line_naming_it(field):
     ({"sensor_states": ["loose"]}, r"fam\.sensor_states"),
     ({"still": True}, r"fam\.parts: a still family draws none of"),
     ({"tau_min": [60.0, 20.0]}, r"fam\.tau_min must be \[lo, hi\], lo <= hi"),
+    ({"parts": ["drift"], "logged": True}, r"fam\.logged: only a family with the regrease"),
 ])
 def test_a_bad_family_is_refused_naming_the_key(change, match):
     with pytest.raises(ValueError, match=match):
@@ -168,3 +170,17 @@ def test_a_family_life_also_lives_slowly_growing_faults():
     (grow, kind), = lives[len(fixed):]
     assert kind == "growing" and grow.growth == "linear" and grow.growth_h == 40.0
     assert grow.severity == min((f.severity for f, _ in fixed), key=abs)
+
+
+def test_only_a_logged_family_hands_its_regreasing_to_the_monitor():
+    """learn.monitor.evaluate.maintenance_log: the re-greasing drawn for the life, declared
+    where the family is logged, not where it is not (an unexplained change to name)."""
+    cfg = MonitorStudyConfig(families={k: FAMILIES[k] for k in ("regrease",
+                                                                "regrease_logged")})
+    for key, logged in (("regrease", False), ("regrease_logged", True)):
+        life = f"family:{key}"
+        cond = life_conditions(cfg, life, 3)
+        log = maintenance_log(cfg, life, cond)
+        assert [(e.hour, e.kind) for e in log] == (
+            [(cond.regrease.hours[0], "regrease")] if logged else [])
+    assert maintenance_log(cfg, "none", None) == []

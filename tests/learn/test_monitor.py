@@ -483,3 +483,14 @@ def test_a_resumed_evaluations_tables_keep_a_fresh_runs_columns(tmp_path):
     assert todo == []
     for fresh, back in zip(to_frames([part]), to_frames([resumed]), strict=True):
         assert list(back.columns) == list(fresh.columns)
+
+
+def test_the_friction_fits_thresholds_are_the_chi2_quantiles_they_say():
+    """sensor_check.FIT_MIN (one degree of freedom) and FIT_MIN_RATE (a step, a factor
+    and a rate: three) are the χ² quantiles 0.999, written without importing scipy."""
+    from scipy.stats import chi2
+
+    from learn.monitor.sensor_check import FIT_MIN, FIT_MIN_RATE
+
+    assert FIT_MIN == pytest.approx(chi2.ppf(0.999, 1), rel=1e-9)
+    assert FIT_MIN_RATE == pytest.approx(chi2.ppf(0.999, 3), rel=1e-12)
