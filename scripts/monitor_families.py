@@ -63,14 +63,18 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
                     help="the first N of those seeds (default all)")
     ap.add_argument("--families", nargs="*", default=None,
                     help="families lived (default every one of the study)")
+    ap.add_argument("--trace", default=None, metavar="CSV",
+                    help="a measured warm-up (UR3 CobotOps format): adds the family "
+                         "'trace' (its joints' rises, scaled, and a friction law drawn)")
     ap.add_argument("--study", action="append", default=[], metavar="KEY=VALUE",
                     help="a field of MonitorStudyConfig, the value as JSON (e.g. "
                          "interval_min=2, faults='[\"eccentric_wg\"]')")
     return ap.parse_args(argv)
 
 
-def study_config(overrides: list[str]):
-    """The study's design with ``KEY=VALUE`` overrides, checked (ValueError: one line)."""
+def study_config(overrides: list[str], trace: str | None = None):
+    """The study's design with ``KEY=VALUE`` overrides and, with ``trace``, the family
+    ``trace``, checked (ValueError: one line)."""
     cfg = study.MonitorStudyConfig()
     names = {f.name for f in dataclasses.fields(cfg)}
     changes = {}
@@ -86,6 +90,9 @@ def study_config(overrides: list[str]):
     cfg = dataclasses.replace(cfg, **changes)
     if not cfg.families:  # the study lives none by default; this script every one
         cfg = dataclasses.replace(cfg, families=families.default_families())
+    if trace is not None:
+        fam = families.NuisanceFamily(parts=["trace", "friction_law"], trace_path=trace)
+        cfg = dataclasses.replace(cfg, families={**cfg.families, "trace": fam})
     study.check_study(cfg)
     return cfg
 
@@ -93,7 +100,7 @@ def study_config(overrides: list[str]):
 def setup(args: argparse.Namespace):
     """The plan, the study, the training gears, the families and the seeds; ValueError
     in one line on bad input."""
-    cfg = study_config(args.study)
+    cfg = study_config(args.study, args.trace)
     raw = swgcli.dataset_preset(args.dataset, args.set)
     ids = [int(g["id"]) for g in raw["gears"]]
     if args.gear not in ids:

@@ -66,10 +66,21 @@ ours, **[unverified]** as cited in the simulator's docstrings):
   ``regrease_tau_h`` in [4, 24] h, about the simulator's 0.3 and 8 h
   (:class:`~swgsim.datasets.conditions.Regrease`) **[choice]**.
 
+* ``trace``: the joint's warm-up after every cold start follows a measured one
+  (:class:`~swgsim.datasets.conditions.TemperatureTrace`, the user's file
+  ``trace_path``), one of ``trace_columns`` drawn uniformly, its rise scaled by
+  ``trace_scale`` in [1, 4]: a UR3's joints rise by 6.6-9.9 K over their first 49 min
+  of a working day (UR3 CobotOps, measured by
+  :func:`~swgsim.datasets.conditions.trace_rise`), scaled to 7-40 K, about the
+  ``warm_up`` part's 21-35 K **[src; scale: choice]**. No default family draws it (the
+  file is the user's); ``scripts/monitor_families.py --trace`` adds one.
+
 Randomness: ``np.random.default_rng([seed, FAMILY_TAG])``, every range drawn in the
 order of :data:`RANGES` whichever parts the family draws, then the form and the sensor
 state: the same seed gives a part the same magnitude in every family that draws it (the
-``warm_up`` of a seed is that of its ``all``).
+``warm_up`` of a seed is that of its ``all``). The trace's column and scale are drawn
+from ``default_rng([seed, FAMILY_TAG, 1])``, so that the other draws are those of a
+family without it.
 """
 
 from __future__ import annotations
@@ -79,7 +90,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.datasets.conditions import ConditionsConfig, Regrease, RunInConfig
+from swgsim.datasets.conditions import (
+    ConditionsConfig,
+    Regrease,
+    RunInConfig,
+    TemperatureTrace,
+    trace_rise,
+)
 from swgsim.gear.thermal import FRICTION_FORMS, FrictionLaw, JointThermal
 from swgsim.sensing.bridge_drift import (
     TEMPERATURE_SENSOR_FAULTS,
@@ -87,14 +104,19 @@ from swgsim.sensing.bridge_drift import (
     TemperatureSensor,
 )
 
-__all__ = ["FAMILY_TAG", "PARTS", "RANGES", "SENSOR_STATES", "NuisanceFamily",
+__all__ = ["DEFAULT_PARTS", "FAMILY_TAG", "PARTS", "RANGES", "SENSOR_STATES", "UR3_COLUMNS",
+           "NuisanceFamily",
            "default_families", "draw_conditions"]
 
 #: The parts of a joint's day a family can draw (module docstring).
 PARTS = ("friction_law", "warm_up", "drift", "ambient", "run_in", "payload", "sensor",
-         "regrease")
+         "regrease", "trace")
+#: The parts a family draws by default: all but the ``trace`` (its file is the user's).
+DEFAULT_PARTS = PARTS[:-1]
 #: The parts that need the joint's temperature (refused in a ``still`` family).
-THERMAL_PARTS = ("friction_law", "warm_up", "drift", "ambient")
+THERMAL_PARTS = ("friction_law", "warm_up", "drift", "ambient", "trace")
+#: The UR3 CobotOps file's joint temperature columns (its first is named ``T0``).
+UR3_COLUMNS = ("Temperature_T0", *(f"Temperature_J{i}" for i in range(1, 6)))
 #: States of the temperature sensor a family can draw: a working sensor, none, or one of
 #: the sensor's faults (:data:`swgsim.sensing.bridge_drift.TEMPERATURE_SENSOR_FAULTS`).
 SENSOR_STATES = ("present", "missing", *TEMPERATURE_SENSOR_FAULTS[1:])
@@ -124,6 +146,7 @@ RANGES = {
     "regrease_h": ("regrease", 0.0, 1e5, "h", "operating hour of the re-greasing"),
     "regrease_drop": ("regrease", 0.0, 1.0, "", "excess friction of fresh grease"),
     "regrease_tau_h": ("regrease", 0.1, 1e3, "h", "time constant of running in again"),
+    "trace_scale": ("trace", 0.0, 10.0, "", "factor on the measured rise"),
 }
 
 
@@ -139,7 +162,7 @@ class NuisanceFamily:
     Attributes
     ----------
     parts : list of str
-        Parts of :data:`PARTS` drawn, at least one.
+        Parts of :data:`PARTS` drawn, at least one (default :data:`DEFAULT_PARTS`).
     still : bool
         Live at the reference temperature (no warm-up, friction law or bridge drift);
         refused with a part of :data:`THERMAL_PARTS`.
@@ -163,13 +186,20 @@ class NuisanceFamily:
     regrease_h, regrease_drop, regrease_tau_h : list of float
         Operating hour of a re-greasing [h], its excess friction [-] and time constant
         [operating h].
+    trace_path : str
+        The measured warm-up's file for the ``trace`` part (a ``;``-separated table,
+        :class:`~swgsim.datasets.conditions.TemperatureTrace`); "" without it.
+    trace_columns : list of str
+        Its temperature columns, one drawn per life.
+    trace_scale : list of float
+        Factor on the measured rise [-].
     logged : bool
         The re-greasing is in the maintenance log handed to the monitor
         (:class:`learn.monitor.gear_monitor.MaintenanceEvent`); refused without the
         ``regrease`` part.
     """
 
-    parts: list[str] = field(default_factory=lambda: list(PARTS))
+    parts: list[str] = field(default_factory=lambda: list(DEFAULT_PARTS))
     still: bool = False
     friction_forms: list[str] = field(default_factory=lambda: list(FRICTION_FORMS))
     sensor_states: list[str] = field(default_factory=lambda: list(SENSOR_STATES))
@@ -193,6 +223,9 @@ class NuisanceFamily:
     regrease_h: list[float] = _span(30.0, 48.0)
     regrease_drop: list[float] = _span(0.1, 0.5)
     regrease_tau_h: list[float] = _span(4.0, 24.0)
+    trace_path: str = ""
+    trace_columns: list[str] = field(default_factory=lambda: list(UR3_COLUMNS))
+    trace_scale: list[float] = _span(1.0, 4.0)
     logged: bool = False
 
     def check(self, key: str = "NuisanceFamily") -> None:
@@ -221,6 +254,12 @@ class NuisanceFamily:
         if self.still and hot:
             raise ValueError(f"{key}.parts: a still family draws none of "
                              f"{', '.join(THERMAL_PARTS)}, got {hot}")
+        if "trace" in self.parts:
+            if not self.trace_path or not self.trace_columns:
+                raise ValueError(f"{key}.trace_path: the trace part needs a measured "
+                                 f"warm-up's file and columns, got {self.trace_path!r}")
+            for col in self.trace_columns:  # one line naming <key>.trace.path or .column
+                trace_rise(TemperatureTrace(self.trace_path, col), f"{key}.trace")
         if self.logged and "regrease" not in self.parts:
             raise ValueError(f"{key}.logged: only a family with the regrease part has a "
                              f"maintenance log to hand over, parts {list(self.parts)}")
@@ -270,10 +309,19 @@ def _draws(family: NuisanceFamily, seed: int) -> tuple[dict[str, float], str, st
     """Every range's value, the friction form and the sensor state for a seed (drawn
     in a fixed order whichever parts the family draws)."""
     rng = np.random.default_rng([seed, FAMILY_TAG])
-    values = {name: float(rng.uniform(*getattr(family, name))) for name in RANGES}
+    values = {name: float(rng.uniform(*getattr(family, name))) for name, r in RANGES.items()
+              if r[0] != "trace"}
     form = family.friction_forms[int(rng.integers(len(family.friction_forms)))]
     state = family.sensor_states[int(rng.integers(len(family.sensor_states)))]
+    values["trace_scale"] = _trace_draw(family, seed)[0]
     return values, form, state
+
+
+def _trace_draw(family: NuisanceFamily, seed: int) -> tuple[float, str]:
+    """The trace's scale and column for a seed, from a stream of their own."""
+    rng = np.random.default_rng([seed, FAMILY_TAG, 1])
+    scale = float(rng.uniform(*family.trace_scale))
+    return scale, family.trace_columns[int(rng.integers(len(family.trace_columns)))]
 
 
 def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
@@ -330,7 +378,10 @@ def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
                            tau_h=v["regrease_tau_h"]) if "regrease" in parts else None),
         payload=[[v["payload_h"], v["payload_factor"]]] if "payload" in parts else [],
         bridge_drift=dataclasses.replace(BridgeDrift(), **drift),
-        temperature_sensor=sensor)
+        temperature_sensor=sensor,
+        temperature_trace=(TemperatureTrace(family.trace_path, _trace_draw(family, seed)[1],
+                                            scale=v["trace_scale"])
+                           if "trace" in parts else None))
     if family.still:
         cond = dataclasses.replace(cond, thermal=None, viscosity=False, bridge_drift=None)
     return cond

@@ -184,3 +184,35 @@ def test_only_a_logged_family_hands_its_regreasing_to_the_monitor():
         assert [(e.hour, e.kind) for e in log] == (
             [(cond.regrease.hours[0], "regrease")] if logged else [])
     assert maintenance_log(cfg, "none", None) == []
+
+
+def _day_csv(path):
+    """A measured warm-up in the UR3 CobotOps format: two joints warming 0.2 and 0.3 K a
+    minute for 30 min."""
+    rows = ["Num;Timestamp;Temperature_T0;Temperature_J1;"]
+    for i in range(31):
+        t = f"2022-10-26T08:{i:02d}:00Z"
+        rows.append(f"{i + 1};{t};{25.0 + 0.2 * i:.1f};{25.0 + 0.3 * i:.1f};".replace(".", ","))
+    path.write_text("\n".join(rows) + "\n")
+    return str(path)
+
+
+def test_a_trace_family_draws_a_measured_warm_up_and_leaves_the_other_draws(tmp_path):
+    """The trace part: a column of the user's file and a scale drawn from a stream of
+    their own, so the friction law of a seed is that of the friction_law family."""
+    fam = NuisanceFamily(parts=["trace", "friction_law"], trace_path=_day_csv(
+        tmp_path / "day.csv"), trace_columns=["Temperature_T0", "Temperature_J1"])
+    fam.check("fam")
+    seen = set()
+    for seed in SEEDS:
+        c = draw_conditions(fam, seed)
+        assert 1.0 <= c.temperature_trace.scale <= 4.0
+        seen.add(c.temperature_trace.column)
+        assert c.friction_law == draw_conditions(FAMILIES["friction_law"], seed).friction_law
+        check_conditions(c, 49.0, "c")
+    assert seen == {"Temperature_T0", "Temperature_J1"}
+    assert "trace" not in NuisanceFamily().parts  # the file is the user's
+    with pytest.raises(ValueError, match=r"^fam\.trace_path: the trace part needs"):
+        NuisanceFamily(parts=["trace"]).check("fam")
+    with pytest.raises(ValueError, match=r"^fam\.trace\.column: 'Temperature_J9' is not"):
+        dataclasses.replace(fam, trace_columns=["Temperature_J9"]).check("fam")
