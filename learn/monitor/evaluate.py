@@ -39,8 +39,8 @@ from .gear_monitor import Alarm, GearMonitor, MaintenanceEvent, Trace
 from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
 from .rule import judged_bets, run_cusums, threshold
-from .sensor_check import UNEXPLAINED_CHANGE
-from .stream import advisories, run_stream
+from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE, virtual_temperature
+from .stream import advisories, run_stream, without_temperature
 from .study import MonitorStudyConfig, family_of, life_conditions
 from .training import (
     classes,
@@ -214,6 +214,7 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
         commissioned = mon.fork()
         f, p, c = f[n_comm:], p[n_comm:], cond[n_comm:]
         tr, named, _ = run_stream(mon, f, p, meta["hour"][n_comm:], c)
+        lost_h = next((a.hour for a in named if a.fault == TEMPERATURE_SENSOR), None)
         key = _key(plan, dataset, g, seed, nuisance)
         hours_h = float(healthy.life.hours - cfg.commissioning_h)
         fa_rows.append({**key, "detector": "monitor", "healthy_hours": hours_h,
@@ -233,12 +234,15 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
             before = k0 - 1 - n_comm  # the healthy trace's window before the onset
             start = (0.0, None) if before < 0 else (tr.cusums[before], tr.state(before))
             fmon = _monitor_at(commissioned, tr, before, f, p, c, named)
-            ftr, ff, pp, mm = _fault_life(fmon, sim, k0, *start)
+            lost = lost_h is not None and before >= 0 and lost_h <= tr.hour[before]
+            if lost and not fmon.normal.temperature_law:
+                fmon = without_temperature(fmon)
+            life = _fault_life(fmon, sim, k0, *start, lost=lost)
+            ftr, mm = life[0], life[3]
             row = _fault_row(key, sim, fo, kind)
             if healthy_curve is not None:
                 _curve_fault(ftr, fo, before, healthy_curve, cfg, row, curve)
-            rows.append({**row, **_monitor_row(fmon, *_past_changes(fmon, sim, k0, ftr, ff,
-                                                                     pp, mm), fo)})
+            rows.append({**row, **_monitor_row(*_past_changes(fmon, sim, k0, life, lost), fo)})
             rows.append({**row, **_per_window_row("per_window", model.classes,
                                                   np.argmax(ftr.log_proba, axis=1), mm, fo)})
             rows.append({**row, "detector": "always", "detected": True, "time_to_detect_h": 0.0,
@@ -357,37 +361,21 @@ def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray
     return m
 
 
-def _past_changes(mon: GearMonitor, sim: LifeSimulator, k0: int, tr: Trace, f, p, meta):
-    """A fault life's monitor trace (and its windows) from its first alarm that is not an
-    unexplained change: after one, the monitor goes on from the friction's new level as
-    :func:`learn.monitor.stream.run_stream` does (a re-greasing's alarm before the fault
-    shows is not its detection)."""
-    k = k0
-    while tr.alarms:
-        a = tr.alarms[0]
-        al = mon.diagnose(tr, a, f, p, Conditions.of(meta))
-        if al.fault != UNEXPLAINED_CHANGE or a + 1 >= len(tr.hour):
-            break
-        fr, hour = tr.state(a)
-        mon.regreased = sorted([*mon.regreased, al.hour])
-        k += a + 1
-        tr, f, p, meta = _fault_life(mon, sim, k, 0.0, (fr * (1.0 + al.severity), hour))
-    return tr, f, p, meta
-
-
 def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
-                friction_start: tuple[float, float] | None):
+                friction_start: tuple[float, float] | None, lost: bool = False):
     """A fault life from its onset, in chunks of windows, until ``confirm_h`` after the
     monitor's alarm and the per-window rule's (or the horizon): what they need, and no
     more windows; the CUSUMs and the friction factor start from ``start`` and
     ``friction_start`` (the healthy life's before the onset; None: the monitor's own).
-    Returns the monitor's trace, features, operating points and metadata."""
-    traces, feats, pts, metas = [], [], [], []
+    ``lost``: the temperature sensor has failed, the monitor goes on without its reading
+    (:func:`_read`). Returns the monitor's trace, features, operating points, metadata and
+    conditions."""
+    traces, feats, pts, metas, conds = [], [], [], [], []
     first: dict[str, float | None] = {"monitor": None, "per_window": None}
     state, fstate = start, friction_start
     for a in range(k0, len(sim), CHUNK):
         f, p, m = features_of(sim, a, min(a + CHUNK, len(sim)))
-        cond = Conditions.of(m)
+        cond = _read(mon, f, p, Conditions.of(m), lost)
         t = mon.run(f, p, m["hour"], cond, latch=True, start=state, friction_start=fstate) \
             if first["monitor"] is None else mon.score_only(f, p, m["hour"], cond, fstate)
         fstate = None  # from the second chunk on, the monitor's own
@@ -398,21 +386,62 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
         bad = np.flatnonzero(_per_window(t.log_proba))
         if first["per_window"] is None and bad.size:
             first["per_window"] = float(t.hour[bad[0]])
-        traces.append(t), feats.append(f), pts.append(p), metas.append(m)
+        traces.append(t), feats.append(f), pts.append(p), metas.append(m), conds.append(cond)
         last = float(m["hour"][-1])
         if all(x is not None and last >= x + mon.confirm_h for x in first.values()):
             break
     meta = {k: np.concatenate([m[k] for m in metas]) for k in metas[0]}
-    return Trace.concat(traces), np.concatenate(feats), np.concatenate(pts), meta
+    return (Trace.concat(traces), np.concatenate(feats), np.concatenate(pts), meta,
+            Conditions.concat(conds))
 
 
-def _monitor_row(mon, tr, ff, pp, mm, fo) -> dict:
+def _read(mon: GearMonitor, f: np.ndarray, p: np.ndarray, cond: Conditions, lost: bool
+          ) -> Conditions:
+    """The windows' conditions as the monitor takes them: where the temperature sensor
+    has failed (``lost``), the temperature its laws say each window was at, or none
+    where it learnt no law (:func:`learn.monitor.stream.run_stream`)."""
+    if not lost:
+        return cond
+    if not mon.normal.temperature_law:
+        return Conditions(cond.torque_nm)
+    return Conditions(cond.torque_nm, virtual_temperature(
+        mon.normal, f, p, cond.torque_nm, mon.friction, mon.normal.index(p)))
+
+
+def _past_changes(mon: GearMonitor, sim: LifeSimulator, k0: int, life: tuple, lost: bool):
+    """The monitor and a fault life's trace (with its windows, :func:`_fault_life`) from
+    its first alarm that changes nothing of the monitor's state: after an unexplained
+    change the monitor goes on from the friction's new level, after the temperature
+    sensor's fault without the reading, as :func:`learn.monitor.stream.run_stream` does
+    (a re-greasing's or a failing sensor's alarm before the fault shows is not its
+    detection)."""
+    k, tr = k0, life[0]
+    while tr.alarms:
+        a = tr.alarms[0]
+        al = mon.diagnose(tr, a, *life[1:3], life[4])
+        if al.fault not in (UNEXPLAINED_CHANGE, TEMPERATURE_SENSOR) or a + 1 >= len(tr.hour) \
+                or (al.fault == TEMPERATURE_SENSOR and lost):
+            break
+        fr, hour = tr.state(a)
+        if al.fault == UNEXPLAINED_CHANGE:
+            fr *= 1.0 + al.severity
+            mon.regreased = sorted([*mon.regreased, al.hour])
+        else:
+            lost = True
+            mon = mon if mon.normal.temperature_law else without_temperature(mon)
+        k += a + 1
+        life = _fault_life(mon, sim, k, 0.0, (fr, hour), lost=lost)
+        tr = life[0]
+    return mon, *life
+
+
+def _monitor_row(mon, tr, ff, pp, mm, cond, fo) -> dict:
     if not tr.alarms:
         return {"detector": "monitor", "detected": False, "time_to_detect_h": np.nan,
                 "fault_at_alarm": "", "fault_after_1h": "", "severity_est": np.nan,
                 "severity_at_alarm": np.nan, "severity_low": np.nan, "severity_high": np.nan}
     a = tr.alarms[0]
-    al = mon.diagnose(tr, a, ff, pp, Conditions.of(mm))
+    al = mon.diagnose(tr, a, ff, pp, cond)
     return {"detector": "monitor", "detected": True, "time_to_detect_h": al.hour - fo.onset_h,
             "fault_at_alarm": al.fault_at_alarm, "fault_after_1h": al.fault,
             "severity_est": al.severity, "severity_at_alarm": float(mm["severity"][a]),
