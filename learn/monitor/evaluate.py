@@ -35,10 +35,10 @@ from swgsim.datasets.schedule import FaultOnset, LifeConfig
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 from .detectors import References, WindowClassifier, window_inputs
-from .gear_monitor import Alarm, GearMonitor, MaintenanceEvent, Trace
+from .gear_monitor import GearMonitor, MaintenanceEvent, Trace
 from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
-from .rule import judged_bets, run_cusums, threshold
+from .rule import Alarm, judged_bets, run_cusums, threshold
 from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE, virtual_temperature
 from .stream import advisories, run_stream, without_temperature
 from .study import MonitorStudyConfig, family_of, life_conditions

@@ -30,9 +30,11 @@ import numpy as np
 
 from swgsim.base.typed import check_range
 
+from .features import feature_names
 from .model import DiagnosisModel, design_matrix
 from .normal import OUTSIDE_LOAD, OUTSIDE_UNJUDGED, Conditions, NormalBehaviour, NormalConfig
 from .rule import (
+    Alarm,
     RuleConfig,
     check_commissioning,
     conformal_p,
@@ -50,6 +52,7 @@ from .sensor_check import (
     fit_friction,
     fit_sensor_faults,
     fit_temperature,
+    moved_features,
 )
 
 #: One-sided level of the test whether commissioning's laws hold at a point's new load
@@ -94,62 +97,6 @@ class MaintenanceEvent:
         if self.kind not in MAINTENANCE_KINDS:
             raise ValueError(f"{key}.kind: {self.kind!r} is not one of "
                              f"{list(MAINTENANCE_KINDS)}")
-
-
-@dataclass
-class Alarm:
-    """An alarm and what the monitor says about it.
-
-    Attributes
-    ----------
-    hour : float
-        Operating hours of the window that raised it.
-    index : int
-        That window's index in the stream.
-    rise_index : int
-        First window of the CUSUM's rise that led to it.
-    fault_at_alarm : str
-        Named from the windows of the rise.
-    fault : str
-        Named from the windows of the rise up to ``confirm_h`` after the alarm.
-    severity, severity_low, severity_high : float
-        Estimate of ``fault``'s severity and its 90 % interval; of the temperature
-        sensor's fault, the fitted temperature minus the reading [K], median and 5-95 %
-        over the windows; of an unexplained change, the friction's relative change [-]
-        (all three).
-    bridge : str or None
-        The faulty bridge (``s0``..``s4``) where ``fault`` is a sensor fault that one
-        bridge alone explains (:mod:`.sensor_check`).
-    """
-
-    hour: float
-    index: int
-    rise_index: int
-    fault_at_alarm: str
-    fault: str
-    severity: float
-    severity_low: float
-    severity_high: float
-    bridge: str | None = None
-
-    @property
-    def sensor_fault(self) -> bool:
-        """Whether the fault named is a sensor's (a bridge's, or the temperature
-        sensor's), not the gear's."""
-        return self.bridge is not None or self.fault == TEMPERATURE_SENSOR
-
-    @property
-    def kind(self) -> str:
-        """``sensor_fault``, ``unexplained_change`` (an even change of the friction,
-        :func:`~.sensor_check.fit_friction`) or ``gear_fault``."""
-        return ("sensor_fault" if self.sensor_fault else
-                "unexplained_change" if self.fault == UNEXPLAINED_CHANGE else "gear_fault")
-
-    def as_dict(self) -> dict:
-        """The ``summary.json`` entry."""
-        return {"hour": self.hour, "fault": self.fault, "fault_at_alarm": self.fault_at_alarm,
-                "severity": self.severity, "severity_low": self.severity_low,
-                "severity_high": self.severity_high, "bridge": self.bridge}
 
 
 @dataclass
@@ -643,8 +590,11 @@ class GearMonitor:
         else:
             x = self.inputs(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end])
             est, lo, hi = self.model.estimate(fault, x)
+        z = self.normal.z(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end],
+                          trace.op_index[rise:end])
+        names = feature_names(twist=z.shape[1] > len(feature_names()))
         return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi,
-                     None if bridge is None else f"s{bridge}")
+                     None if bridge is None else f"s{bridge}", moved_features(z, names))
 
     def name(self, ev: np.ndarray, feats: np.ndarray, points: np.ndarray,
              cond: Conditions | None = None, friction: np.ndarray | float = 1.0,
@@ -690,5 +640,5 @@ class GearMonitor:
         return self.model.name(ev), None, None
 
 
-__all__ = ["MAINTENANCE_KINDS", "RECOMMISSIONS", "Alarm", "GearMonitor", "MaintenanceEvent",
-           "Trace", "normal_windows"]
+__all__ = ["MAINTENANCE_KINDS", "RECOMMISSIONS", "GearMonitor", "MaintenanceEvent", "Trace",
+           "normal_windows"]

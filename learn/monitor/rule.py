@@ -34,7 +34,7 @@ delay (``max_delay_windows``) at all, ``max_delay_windows · ln f(1/(n + 1)) >= 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -42,6 +42,7 @@ from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_finite, check_range
 
 from .normal import OUTSIDE_UNJUDGED
+from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
 
 special = lazy_module("scipy.special")
 
@@ -244,6 +245,67 @@ def judged_bets(p: np.ndarray, outside: np.ndarray, rule: RuleConfig) -> np.ndar
     return bets
 
 
-__all__ = ["RuleConfig", "check_commissioning", "check_rule", "conformal_p", "judged_bets",
+@dataclass
+class Alarm:
+    """An alarm and what the monitor says about it.
+
+    Attributes
+    ----------
+    hour : float
+        Operating hours of the window that raised it.
+    index : int
+        That window's index in the stream.
+    rise_index : int
+        First window of the CUSUM's rise that led to it.
+    fault_at_alarm : str
+        Named from the windows of the rise.
+    fault : str
+        Named from the windows of the rise up to ``confirm_h`` after the alarm.
+    severity, severity_low, severity_high : float
+        Estimate of ``fault``'s severity and its 90 % interval; of the temperature
+        sensor's fault, the fitted temperature minus the reading [K], median and 5-95 %
+        over the windows; of an unexplained change, the friction's relative change [-]
+        (all three).
+    bridge : str or None
+        The faulty bridge (``s0``..``s4``) where ``fault`` is a sensor fault that one
+        bridge alone explains (:mod:`.sensor_check`).
+    moved : list of [str, float]
+        The features that moved most over the windows named from, with their mean
+        z-score [σ] (:func:`~.sensor_check.moved_features`): what the alarm saw.
+    """
+
+    hour: float
+    index: int
+    rise_index: int
+    fault_at_alarm: str
+    fault: str
+    severity: float
+    severity_low: float
+    severity_high: float
+    bridge: str | None = None
+    moved: list[list] = field(default_factory=list)
+
+    @property
+    def sensor_fault(self) -> bool:
+        """Whether the fault named is a sensor's (a bridge's, or the temperature
+        sensor's), not the gear's."""
+        return self.bridge is not None or self.fault == TEMPERATURE_SENSOR
+
+    @property
+    def kind(self) -> str:
+        """``sensor_fault``, ``unexplained_change`` (an even change of the friction,
+        :func:`~.sensor_check.fit_friction`) or ``gear_fault``."""
+        return ("sensor_fault" if self.sensor_fault else
+                "unexplained_change" if self.fault == UNEXPLAINED_CHANGE else "gear_fault")
+
+    def as_dict(self) -> dict:
+        """The ``summary.json`` entry."""
+        return {"hour": self.hour, "fault": self.fault, "fault_at_alarm": self.fault_at_alarm,
+                "severity": self.severity, "severity_low": self.severity_low,
+                "severity_high": self.severity_high, "bridge": self.bridge,
+                "moved": [list(m) for m in self.moved]}
+
+
+__all__ = ["Alarm", "RuleConfig", "check_commissioning", "check_rule", "conformal_p", "judged_bets",
            "log_bet", "log_bets", "log_shift", "min_calibration", "n_cusums", "normal_scores",
            "run_cusums", "threshold"]

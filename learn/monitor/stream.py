@@ -23,7 +23,7 @@ import numpy as np
 from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 
 from .features import feature_names, health_features
-from .gear_monitor import RECOMMISSIONS, Alarm, GearMonitor, MaintenanceEvent, Trace
+from .gear_monitor import RECOMMISSIONS, GearMonitor, MaintenanceEvent, Trace
 from .normal import (
     OUTSIDE_FRICTION,
     OUTSIDE_LOAD,
@@ -31,7 +31,7 @@ from .normal import (
     Conditions,
     NormalConfig,
 )
-from .rule import RuleConfig, check_commissioning
+from .rule import Alarm, RuleConfig, check_commissioning
 from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE, virtual_temperature
 
 #: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
@@ -117,18 +117,20 @@ def event_line(event: dict) -> str:
         If ``kind`` is not one of :data:`EVENT_KINDS`.
     """
     kind, hour = event.get("kind"), float(event["hour"])
+    moved = "".join(f"{'; moved: ' if i == 0 else ', '}{name} {z:+.1f} sigma"
+                    for i, (name, z) in enumerate(event.get("moved") or []))
     if kind == "unexplained_change":
         return (f"alarm at {hour:.2f} h: an unexplained change: the friction changed by "
                 f"{100 * event['severity']:+.0f} % evenly over the operating points (no "
                 "gear fault's signature; was the joint re-greased? the monitor goes on "
-                "from the new level)")
+                f"from the new level){moved}")
     if kind in ("gear_fault", "sensor_fault"):
         where = ("" if kind != "sensor_fault" else
                  f" on bridge {event['bridge']} (check that gauge)" if event["bridge"] else
                  " (check the joint's temperature sensor; the monitor goes on without it)")
         return (f"alarm at {hour:.2f} h: {event['fault']}{where} (at the alarm: "
                 f"{event['fault_at_alarm']}), severity {event['severity']:.3g} "
-                f"[{event['severity_low']:.3g}, {event['severity_high']:.3g}]")
+                f"[{event['severity_low']:.3g}, {event['severity_high']:.3g}]{moved}")
     if kind == "advisory":
         return f"advisory at {hour:.2f} h: {event['advice']}"
     if kind == "recommissioned":

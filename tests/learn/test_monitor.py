@@ -433,7 +433,7 @@ def test_every_event_kind_is_printed_in_one_line():
     recommissionings) is one line by :func:`event_line`, which the app
     and report.md print; a kind it does not know is refused naming the kinds (issue 43,
     cause 1: a recommissioning printed as an alarm raised KeyError: 'fault')."""
-    from learn.monitor.gear_monitor import Alarm
+    from learn.monitor.rule import Alarm
     from learn.monitor.stream import EVENT_KINDS, StreamResult, event_line
 
     gear = Alarm(6.2, 10, 4, "eccentric_wg", "eccentric_wg", 0.1, 0.08, 0.12)
@@ -494,3 +494,21 @@ def test_the_friction_fits_thresholds_are_the_chi2_quantiles_they_say():
 
     assert FIT_MIN == pytest.approx(chi2.ppf(0.999, 1), rel=1e-9)
     assert FIT_MIN_RATE == pytest.approx(chi2.ppf(0.999, 3), rel=1e-12)
+
+
+def test_an_alarm_says_which_features_moved():
+    """sensor_check.moved_features: the largest mean z-scores, at least 1 sigma, the first
+    always; event_line prints them after the alarm."""
+    from learn.monitor.rule import Alarm
+    from learn.monitor.sensor_check import moved_features
+    from learn.monitor.stream import event_line
+
+    z = np.zeros((4, 5))
+    z[:, 2], z[:, 4], z[:, 0] = -6.0, 1.5, 0.5
+    names = ["a", "b", "efficiency", "c", "s1_h2"]
+    assert moved_features(z, names) == [["efficiency", -6.0], ["s1_h2", 1.5]]
+    assert moved_features(np.full((2, 5), 0.1), names, k=2) == [["a", 0.1]]
+    al = Alarm(7.8, 28, 26, "unexplained_change", "unexplained_change", 0.2, 0.2, 0.2,
+               moved=moved_features(z, names))
+    line = event_line({"kind": al.kind, **al.as_dict()})
+    assert line.endswith("; moved: efficiency -6.0 sigma, s1_h2 +1.5 sigma")
