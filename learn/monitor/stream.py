@@ -101,7 +101,7 @@ def event_line(event: dict) -> str:
     ----------
     event : dict
         ``kind`` (one of :data:`EVENT_KINDS`), ``hour`` and the kind's own entries: an
-        alarm's (:meth:`~learn.monitor.gear_monitor.Alarm.as_dict`), an advisory's
+        alarm's (:meth:`~learn.monitor.rule.Alarm.as_dict`), an advisory's
         ``advice`` (:func:`advisories`), a recommissioning's ``note``
         (:func:`recommissionings`).
 
