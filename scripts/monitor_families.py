@@ -162,7 +162,9 @@ def main(argv: list[str] | None = None) -> int:
                                              study.FAMILY_PREFIX + fam, seeds)
         table.append({"family": fam, **summary(rows, fa),
                       "wall_s": time.perf_counter() - t1})
-        print(f"  {fam}: {time.perf_counter() - t1:.0f} s", flush=True)
+        row = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                        for k, v in table[-1].items() if k != "family")
+        print(f"  {fam}: {row}", flush=True)  # each family as it ends: a long run shows
     out = pd.DataFrame(table).set_index("family")
     with pd.option_context("display.width", 160, "display.max_columns", 20):
         print(out.round(3).to_string())
