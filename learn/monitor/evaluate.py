@@ -39,8 +39,8 @@ from .gear_monitor import GearMonitor, MaintenanceEvent, Trace
 from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
 from .rule import Alarm, judged_bets, run_cusums, threshold
-from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE, virtual_temperature
-from .stream import advisories, run_stream, without_temperature
+from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
+from .stream import adopt_change, advisories, read_without, reading_lost, run_stream
 from .study import MonitorStudyConfig, family_of, life_conditions
 from .training import (
     classes,
@@ -235,8 +235,7 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
             start = (0.0, None) if before < 0 else (tr.cusums[before], tr.state(before))
             fmon = _monitor_at(commissioned, tr, before, f, p, c, named)
             lost = lost_h is not None and before >= 0 and lost_h <= tr.hour[before]
-            if lost and not fmon.normal.temperature_law:
-                fmon = without_temperature(fmon)
+            fmon = reading_lost(fmon) if lost else fmon
             life = _fault_life(fmon, sim, k0, *start, lost=lost)
             ftr, mm = life[0], life[3]
             row = _fault_row(key, sim, fo, kind)
@@ -356,8 +355,9 @@ def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray
         m = commissioned.fork(fresh_draws=True)
         w = slice(0, before + 1)
         m.run(f[w], p[w], tr.hour[w], c[w], latch=False)
-    m.regreased = sorted(m.regreased + [a.hour for a in named if before >= 0 and a.fault
-                                        == UNEXPLAINED_CHANGE and a.hour <= tr.hour[before]])
+    for a in named:
+        if before >= 0 and a.fault == UNEXPLAINED_CHANGE and a.hour <= tr.hour[before]:
+            adopt_change(m, a, 1.0)  # the factor itself is in the trace's state
     return m
 
 
@@ -368,14 +368,15 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
     more windows; the CUSUMs and the friction factor start from ``start`` and
     ``friction_start`` (the healthy life's before the onset; None: the monitor's own).
     ``lost``: the temperature sensor has failed, the monitor goes on without its reading
-    (:func:`_read`). Returns the monitor's trace, features, operating points, metadata and
-    conditions."""
+    (:func:`learn.monitor.stream.read_without`). Returns the monitor's trace, features,
+    operating points, metadata and conditions."""
     traces, feats, pts, metas, conds = [], [], [], [], []
     first: dict[str, float | None] = {"monitor": None, "per_window": None}
     state, fstate = start, friction_start
     for a in range(k0, len(sim), CHUNK):
         f, p, m = features_of(sim, a, min(a + CHUNK, len(sim)))
-        cond = _read(mon, f, p, Conditions.of(m), lost)
+        cond = Conditions.of(m)
+        cond = read_without(mon, f, p, cond, mon.friction) if lost else cond
         t = mon.run(f, p, m["hour"], cond, latch=True, start=state, friction_start=fstate) \
             if first["monitor"] is None else mon.score_only(f, p, m["hour"], cond, fstate)
         fstate = None  # from the second chunk on, the monitor's own
@@ -395,19 +396,6 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
             Conditions.concat(conds))
 
 
-def _read(mon: GearMonitor, f: np.ndarray, p: np.ndarray, cond: Conditions, lost: bool
-          ) -> Conditions:
-    """The windows' conditions as the monitor takes them: where the temperature sensor
-    has failed (``lost``), the temperature its laws say each window was at, or none
-    where it learnt no law (:func:`learn.monitor.stream.run_stream`)."""
-    if not lost:
-        return cond
-    if not mon.normal.temperature_law:
-        return Conditions(cond.torque_nm)
-    return Conditions(cond.torque_nm, virtual_temperature(
-        mon.normal, f, p, cond.torque_nm, mon.friction, mon.normal.index(p)))
-
-
 def _past_changes(mon: GearMonitor, sim: LifeSimulator, k0: int, life: tuple, lost: bool):
     """The monitor and a fault life's trace (with its windows, :func:`_fault_life`) from
     its first alarm that changes nothing of the monitor's state: after an unexplained
@@ -424,11 +412,9 @@ def _past_changes(mon: GearMonitor, sim: LifeSimulator, k0: int, life: tuple, lo
             break
         fr, hour = tr.state(a)
         if al.fault == UNEXPLAINED_CHANGE:
-            fr *= 1.0 + al.severity
-            mon.regreased = sorted([*mon.regreased, al.hour])
+            fr = adopt_change(mon, al, fr)
         else:
-            lost = True
-            mon = mon if mon.normal.temperature_law else without_temperature(mon)
+            lost, mon = True, reading_lost(mon)
         k += a + 1
         life = _fault_life(mon, sim, k, 0.0, (fr, hour), lost=lost)
         tr = life[0]

@@ -365,9 +365,10 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
     reading (missing, dropped out), or after an alarm named
     :data:`~learn.monitor.sensor_check.TEMPERATURE_SENSOR` (a stuck or drifting reading,
     :func:`~learn.monitor.sensor_check.fit_temperature`), the monitor goes on without the
-    reading (:func:`_without_reading`). After an alarm named an unexplained change (an
-    even change of the friction, :func:`~learn.monitor.sensor_check.fit_friction`) the
-    friction factor takes the fitted change and the monitor goes on from there.
+    reading (:func:`reading_lost`, :func:`read_without`). After an alarm named an
+    unexplained change (an even change of the friction,
+    :func:`~learn.monitor.sensor_check.fit_friction`) the friction factor takes the fitted
+    change and the monitor goes on from there (:func:`adopt_change`).
 
     Parameters
     ----------
@@ -408,31 +409,45 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         if stop == n:
             return Trace.concat(traces), alarms, mon
         fstart = None if tr is None else tr.state(len(tr.hour) - 1)
-        if cut and named[-1].fault == UNEXPLAINED_CHANGE:  # the friction's new level,
-            fstart = (fstart[0] * (1.0 + named[-1].severity), fstart[1])  # followed as
-            mon.regreased = sorted([*mon.regreased, named[-1].hour])  # after a re-greasing
+        if cut and named[-1].fault == UNEXPLAINED_CHANGE:
+            fstart = (adopt_change(mon, named[-1], fstart[0]), fstart[1])
         else:
             if not cut:
                 alarms.append(_no_reading(float(hours[stop]), stop))
-            mon, cond = _without_reading(mon, feats, points, cond, stop, fstart)
+            mon = reading_lost(mon)
+            fr = mon.friction if fstart is None else fstart[0]
+            rest = read_without(mon, feats[stop:], points[stop:], cond[stop:], fr)
+            cond = Conditions.concat([Conditions(cond.torque_nm[:stop], None if
+                                                 rest.temperature_c is None else
+                                                 np.full(stop, np.nan)), rest])
         i0 = stop
 
 
-def _without_reading(mon: GearMonitor, feats: np.ndarray, points: np.ndarray,
-                     cond: Conditions, stop: int, fstart: tuple[float, float] | None
-                     ) -> tuple[GearMonitor, Conditions]:
-    """The monitor and conditions from window ``stop`` on, where the temperature sensor
-    has failed there (:func:`run_stream`): where commissioning learnt the temperature's
-    laws, the same monitor on the temperature they say each window was at
-    (:func:`~learn.monitor.sensor_check.virtual_temperature`); else the monitor
-    commissioned without temperature."""
+def adopt_change(mon: GearMonitor, alarm: Alarm, factor: float) -> float:
+    """After ``alarm`` named an unexplained change: the friction factor's new level
+    (``factor`` times one plus its severity), which ``mon`` follows from the alarm's hour
+    as after a declared re-greasing (:meth:`GearMonitor.track_friction`)."""
+    mon.regreased = sorted([*mon.regreased, alarm.hour])
+    return factor * (1.0 + alarm.severity)
+
+
+def reading_lost(mon: GearMonitor) -> GearMonitor:
+    """The monitor that goes on where the temperature sensor failed: ``mon`` where
+    commissioning learnt the temperature's laws, else ``mon`` commissioned again without
+    temperature (:func:`without_temperature`)."""
+    return mon if mon.normal.temperature_law else without_temperature(mon)
+
+
+def read_without(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, cond: Conditions,
+                 friction: float) -> Conditions:
+    """Windows' conditions without the temperature reading (:func:`reading_lost`'s
+    monitor): the temperature the laws say each window was at
+    (:func:`~learn.monitor.sensor_check.virtual_temperature`, at friction factor
+    ``friction``), or none where commissioning learnt no law."""
     if not mon.normal.temperature_law:
-        return without_temperature(mon), Conditions(cond.torque_nm)
-    rest = slice(stop, None)
-    fr = mon.friction if fstart is None else fstart[0]
-    virtual = virtual_temperature(mon.normal, feats[rest], points[rest], cond.torque_nm[rest],
-                                  fr, mon.normal.index(points[rest]))
-    return mon, Conditions(cond.torque_nm, np.concatenate([np.full(stop, np.nan), virtual]))
+        return Conditions(cond.torque_nm)
+    return Conditions(cond.torque_nm, virtual_temperature(
+        mon.normal, feats, points, cond.torque_nm, friction, mon.normal.index(points)))
 
 
 def declared(log: list[MaintenanceEvent], mon: GearMonitor | None) -> list[dict]:
