@@ -283,3 +283,20 @@ def test_a_life_without_the_option_has_the_schedule_it_had(fault):
     assert np.array_equal(s.fault, np.where(before != 0, fault.fault, "healthy"))
     assert np.isnan(s.failure_h)
     np.testing.assert_array_equal(severity_at(fault, s.hour, 7), before)
+
+
+def test_the_documented_example_is_a_valid_life_that_fails():
+    """The YAML example of docs/DATASET.md, "Lives that run to failure", on the tiny
+    bench: checked, planned, and its crack reaches the failure severity within the life."""
+    import yaml
+
+    text = (ROOT / "docs" / "DATASET.md").read_text(encoding="utf-8")
+    block = re.search(r"```yaml\n(life:\n.*?)```", text, re.S).group(1)
+    raw = dataset_preset("tiny_bench")
+    raw["life"] = yaml.safe_load(block)["life"]
+    p = plan(raw)
+    life = p.config.life
+    s = LifeSimulator(p, int(p.config.gears[0].id), life).schedule
+    assert life.fault.growth == "paris"
+    assert life.fault.onset_h < s.failure_h < life.hours
+    assert s.severity[-1] == life.fault.to_failure.failure
