@@ -281,8 +281,7 @@ def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     cfg = sim.plan.config
     n_t = sig.shape[-1]
     attrs = {"config": sim.plan.as_dict(), "seed": int(cfg.seed),
-             "life": {k: v for k, v in dataclasses.asdict(sim.life).items()
-                      if not (k == "conditions" and v is None)}, "gear_id": sim.gear_id,
+             "life": _life_attr(sim.life), "gear_id": sim.gear_id,
              "fault_position_deg": sim.position_deg, "fault_sensor": sim.sensor}
     ds = make_dataset(sig, np.arange(n_t) / cfg.chain.sample_rate_hz, meta, attrs)
     ds["hour"] = ("sample", extra["hour"], {"units": "h"})
@@ -293,6 +292,16 @@ def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     for k, v in angles.items():  # a profile's angle channels
         ds[k] = (("sample", "time"), v, {"units": "rad"})
     return ds
+
+
+def _life_attr(life: LifeConfig) -> dict:
+    """The life config as a shard's attribute: without ``conditions`` and
+    ``fault.to_failure`` when None (as before these options)."""
+    out = {k: v for k, v in dataclasses.asdict(life).items()
+           if not (k == "conditions" and v is None)}
+    if out["fault"]["to_failure"] is None:
+        out["fault"] = {k: v for k, v in out["fault"].items() if k != "to_failure"}
+    return out
 
 
 def simulate_life_shard(plan: DatasetPlan, shard: ShardSpec,

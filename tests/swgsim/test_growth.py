@@ -6,6 +6,7 @@ scatter driving the failure hour, the refusals, and a life without the option as
 from __future__ import annotations
 
 import dataclasses
+import json
 import re
 from pathlib import Path
 
@@ -300,3 +301,32 @@ def test_the_documented_example_is_a_valid_life_that_fails():
     assert life.fault.growth == "paris"
     assert life.fault.onset_h < s.failure_h < life.hours
     assert s.severity[-1] == life.fault.to_failure.failure
+
+
+def test_a_life_run_to_failure_writes_its_staircase_and_its_law(tiny):
+    """Windows before the onset, growing and failed carry the schedule's severity; the
+    shard's life attribute names the law, a life without it keeps its attribute as before."""
+    from swgsim.datasets.life import life_dataset
+
+    life = LifeConfig(hours=3.0, commissioning_h=1.0, interval_min=2.0, severity_levels=2,
+                      duty=[DutyPoint(4000.0, 70.0, 10.0)],
+                      fault=FaultOnset("eccentric_wg", 1.0, 0.0, growth="archard",
+                                       to_failure=RunToFailure(wear_coeff_m_per_nm_rev=1e-11)))
+    check_life(life)
+    sim = LifeSimulator(tiny[0], 3, life, tiny[1])
+    s = sim.schedule
+    assert 1.0 < s.failure_h < 3.0
+    assert s.severity[-1] == 0.3  # failed: the eccentric WG's failure severity
+    on = int(np.flatnonzero(s.hour >= 1.0)[0])
+    ds = life_dataset(sim, on - 1, on + 1)  # the last healthy window and the first faulty
+    np.testing.assert_array_equal(ds["severity"].values, s.severity[on - 1:on + 1])
+    assert ds["severity"].values[0] == 0 and ds["severity"].values[1] == 0.15
+    assert _attr(ds)["fault"]["to_failure"]["wear_coeff_m_per_nm_rev"] == 1e-11
+    plain = LifeSimulator(tiny[0], 3, dataclasses.replace(life, fault=FaultOnset()), tiny[1])
+    assert "to_failure" not in _attr(life_dataset(plain, 0, 1))["fault"]
+
+
+def _attr(ds) -> dict:
+    """The life attribute of a life's data set (JSON text once made)."""
+    life = ds.attrs["life"]
+    return json.loads(life) if isinstance(life, str) else life
