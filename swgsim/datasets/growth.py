@@ -16,9 +16,11 @@ shards and their sizes are planned as for any life].
   thickness for a root crack (its bars' stiffness lost in proportion to the cracked depth
   [choice]), the tooth's depth for a tip crack (its force lost in proportion [choice]).
 * **Archard's law** for wear (``eccentric_wg``: the wave generator's bearing worn on one
-  side, its centre shifted by the worn depth; ``wear``: the flanks, whose lost thickness at
-  the pitch radius is the backlash): worn depth rate ∝ load × sliding distance, the load
-  the acting torque, the sliding distance the input revolutions
+  side, its centre shifted by the worn depth [choice]; ``wear``: the flanks, whose lost
+  thickness at the pitch radius is the backlash [choice]): worn depth rate ∝ load ×
+  sliding distance, the load the acting torque, the sliding distance the input
+  revolutions [choice: the tooth and
+  bearing loads in proportion to the torque, no wear at zero load]
   [J. F. Archard, "Contact and rubbing of flat surfaces", J. Appl. Phys. 24 (1953) 981-988
   [unverified: not re-read]], times a film factor (ν(T)/ν(20 °C))^(−``film_exponent``):
   hotter grease, lower viscosity (:func:`swgsim.gear.thermal.viscosity_ratio`, the real
@@ -64,7 +66,8 @@ __all__ = ["DEPTH_AT_ONE_M", "FAILURE_SEVERITY", "LAWS", "RunToFailure", "archar
 LAWS: dict[str, tuple[str, ...]] = {"paris": ("root_tooth_crack", "tip_tooth_crack"),
                                     "archard": ("eccentric_wg", "wear")}
 
-#: Load cycles of a flexspline tooth per input revolution: the wave generator's two lobes.
+#: Load cycles of a flexspline tooth per input revolution: the wave generator's two lobes
+#: (each lobe meshes every flexspline tooth once a revolution) [derived].
 CYCLES_PER_REV = 2.0
 
 #: Pitch radius of the size-20 flexspline [m] (catalogue, docs/PHYSICS.md sec. 2).
