@@ -9,7 +9,9 @@ and records one window every ``interval_min`` of operation. It starts with a
 commissioning period known to be healthy; then, optionally, a fault of any class (a gear
 fault of :data:`swgsim.gear.faults.FAULTS` or a sensor fault of
 :data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`) sets in at ``onset_h`` and follows a severity
-schedule: a step, linear growth to a final severity, or (hour, severity) pairs.
+schedule: a step, linear growth to a final severity, (hour, severity) pairs, or growth to
+failure by Paris' or Archard's law under the life's load and temperature
+(:mod:`swgsim.datasets.growth`).
 
 How windows are made. A gear in a steady state at one operating point repeats its signals
 once per output revolution (the WG angle and the flexspline both return; N input
@@ -25,7 +27,8 @@ quantisation. A growing severity is simulated as a staircase of ``severity_level
 Randomness: the fault's position (gear faults) or bridge (sensor faults) from
 ``SeedSequence(seed, spawn_key=(gear, life_seed, 0))``; window k from its own stream,
 ``spawn_key=(gear, life_seed, 1 + k)`` (its start, eq. (10), noise), so a life is the same
-whatever slice of it is asked for, and any slice costs only its windows.
+whatever slice of it is asked for, and any slice costs only its windows; a fault growing
+to failure, its gear's scatter from ``spawn_key=(gear, life_seed, 2**23)``.
 """
 
 from __future__ import annotations
@@ -36,9 +39,10 @@ import hashlib
 import numpy as np
 
 from swgsim.datasets.conditions import WindowConditions, efficiency_ratio, window_conditions
+from swgsim.datasets.growth import LAWS, RunToFailure, draw_scale
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.datasets.records import RecordBank, record_bank
-from swgsim.datasets.schedule import LifeConfig, schedule, uses_position
+from swgsim.datasets.schedule import LifeConfig, Schedule, grow, schedule, uses_position
 from swgsim.datasets.schema import make_dataset
 from swgsim.files.provenance import git_revision, package_version
 from swgsim.gear.influence import Influence
@@ -82,6 +86,8 @@ class LifeSimulator:
         self.position_deg = float(360.0 * u[0] if f.position_deg is None else f.position_deg)
         self.sensor = int(5 * u[1]) if f.sensor is None else int(f.sensor)
         self.conditions = None if life.conditions is None else self._conditions(life)
+        if f.growth in LAWS and f.fault != "healthy":  # grown by the life's load and heat
+            self.schedule = self._grow(life)
         lam = (np.ones(len(self.schedule.hour)) if self.conditions is None
                else self.conditions.payload)
         self.bank.want(self._key(d, s, x) for d, s, x in
@@ -108,6 +114,17 @@ class LifeSimulator:
                                  np.array([d.n_in_rpm for d in duty]),
                                  np.array([d.t_out_nm for d in duty]), self.bank.healthy,
                                  int(self.plan.config.seed), self.gear_id, int(life.life_seed))
+
+    def _grow(self, life: LifeConfig) -> Schedule:
+        """The schedule with the fault grown to failure under the life's conditions (payload,
+        temperature) and this gear's scatter (:mod:`swgsim.datasets.growth`), drawn from
+        ``SeedSequence(seed, spawn_key=(gear, life_seed, 2**23))``."""
+        ss = np.random.SeedSequence(int(self.plan.config.seed),
+                                    spawn_key=(self.gear_id, int(life.life_seed), 2**23))
+        scale = draw_scale(life.fault.to_failure or RunToFailure(), np.random.default_rng(ss))
+        c = self.conditions
+        return grow(self.schedule, life, None if c is None else c.payload,
+                    None if c is None else c.temperature_c, scale)
 
     def _key(self, d: int, severity: float, payload: float = 1.0) -> tuple:
         """The record of duty point ``d`` in a state, at the acting load (the commanded
@@ -264,8 +281,7 @@ def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     cfg = sim.plan.config
     n_t = sig.shape[-1]
     attrs = {"config": sim.plan.as_dict(), "seed": int(cfg.seed),
-             "life": {k: v for k, v in dataclasses.asdict(sim.life).items()
-                      if not (k == "conditions" and v is None)}, "gear_id": sim.gear_id,
+             "life": _life_attr(sim.life), "gear_id": sim.gear_id,
              "fault_position_deg": sim.position_deg, "fault_sensor": sim.sensor}
     ds = make_dataset(sig, np.arange(n_t) / cfg.chain.sample_rate_hz, meta, attrs)
     ds["hour"] = ("sample", extra["hour"], {"units": "h"})
@@ -276,6 +292,16 @@ def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     for k, v in angles.items():  # a profile's angle channels
         ds[k] = (("sample", "time"), v, {"units": "rad"})
     return ds
+
+
+def _life_attr(life: LifeConfig) -> dict:
+    """The life config as a shard's attribute: without ``conditions`` and
+    ``fault.to_failure`` when None (as before these options)."""
+    out = {k: v for k, v in dataclasses.asdict(life).items()
+           if not (k == "conditions" and v is None)}
+    if out["fault"]["to_failure"] is None:
+        out["fault"] = {k: v for k, v in out["fault"].items() if k != "to_failure"}
+    return out
 
 
 def simulate_life_shard(plan: DatasetPlan, shard: ShardSpec,

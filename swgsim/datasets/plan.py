@@ -30,7 +30,7 @@ from swgsim.datasets.config import (
     dataset_config,
 )
 from swgsim.datasets.gears import gear_params, layout_for
-from swgsim.datasets.schedule import check_life, n_windows
+from swgsim.datasets.schedule import FaultOnset, check_life, n_windows
 from swgsim.datasets.slots import slots_of
 from swgsim.files.digest import config_digest
 from swgsim.gear import profile as pf
@@ -141,6 +141,7 @@ class DatasetPlan:
 #: holds its default, :func:`plain_config` leaves it out.
 LATER_CONDITIONS = ("friction_law", "regrease", "temperature_trace")
 LATER_SENSOR = ("fault", "fault_hour", "drift_k_per_h")
+LATER_FAULT = ("to_failure",)  # life.fault (:class:`FaultOnset`)
 
 
 def _without_defaults(d: dict, schema: type, names: tuple[str, ...]) -> dict:
@@ -150,17 +151,20 @@ def _without_defaults(d: dict, schema: type, names: tuple[str, ...]) -> dict:
 
 
 def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
-    """A data-set config as plain data, without ``profile`` and ``life.conditions`` when
-    they are None and without the fields of :data:`LATER_CONDITIONS` and
-    :data:`LATER_SENSOR` (the friction law, re-greasing, a temperature trace, the sensor's
-    fault) that hold their defaults, so that a data set keeps the config (and
-    :func:`config_hash`) it had before these options."""
+    """A data-set config as plain data, without ``profile``, ``life.conditions`` and
+    ``life.fault.to_failure`` when they are None and without the fields of
+    :data:`LATER_CONDITIONS` and :data:`LATER_SENSOR` (the friction law, re-greasing, a
+    temperature trace, the sensor's fault) that hold their defaults, so that a data set
+    keeps the config (and :func:`config_hash`) it had before these options."""
     out = dict(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
     if "profile" in out and out["profile"] is None:
         del out["profile"]
     life = out.get("life")
     if isinstance(life, dict) and "conditions" in life and life["conditions"] is None:
         out["life"] = {k: v for k, v in life.items() if k != "conditions"}
+    fault = life.get("fault") if isinstance(life, dict) else None
+    if isinstance(fault, dict):  # a fault not run to failure: as before the option
+        out["life"] = {**out["life"], "fault": _without_defaults(fault, FaultOnset, LATER_FAULT)}
     cond = (out.get("life") or {}).get("conditions") if isinstance(out.get("life"), dict) \
         else None
     if isinstance(cond, dict):

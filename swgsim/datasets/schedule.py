@@ -6,13 +6,16 @@ and records one window every ``interval_min`` of operation. It starts with a
 commissioning period known to be healthy; then, optionally, a fault of any class (a gear
 fault of :data:`swgsim.gear.faults.FAULTS` or a sensor fault of
 :data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`) sets in at ``onset_h`` and follows a
-severity schedule: a step, linear growth to a final severity, or (hour, severity) pairs.
-The types here are what the data-set config (:mod:`swgsim.datasets.config`) holds; the
-simulation of a life's windows is :mod:`swgsim.datasets.life`.
+severity schedule: a step, linear growth to a final severity, (hour, severity) pairs, or
+growth to failure by a law driven by what the joint does (Paris' law for cracks, Archard's
+for wear, :mod:`swgsim.datasets.growth`). The types here are what the data-set config
+(:mod:`swgsim.datasets.config`) holds; the simulation of a life's windows is
+:mod:`swgsim.datasets.life`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -20,13 +23,22 @@ import numpy as np
 
 from swgsim.base.typed import check_finite
 from swgsim.datasets.conditions import ConditionsConfig, check_conditions
+from swgsim.datasets.growth import (
+    LAWS,
+    RunToFailure,
+    check_to_failure,
+    failure_hour,
+    grown_severity,
+)
 from swgsim.gear.faults import get_fault
+from swgsim.gear.thermal import REF_TEMP_C
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS, is_sensor_fault
 
 __all__ = ["GROWTH", "MAX_WINDOWS", "DutyPoint", "FaultOnset", "LifeConfig", "Schedule",
-           "check_life", "duty_cycle", "n_windows", "schedule", "severity_at", "uses_position"]
+           "check_life", "duty_cycle", "grow", "n_windows", "schedule", "severity_at",
+           "staircase", "uses_position"]
 
-GROWTH = ("step", "linear", "points")
+GROWTH = ("step", "linear", "points", *LAWS)
 
 
 @dataclass
@@ -59,11 +71,15 @@ class FaultOnset:
     onset_h : float
         Operating hours at which the fault sets in, >= the commissioning period.
     severity : float
-        Final severity (``step``, ``linear``).
-    growth : {"step", "linear", "points"}
+        Final severity (``step``, ``linear``); the severity at the onset (``paris``,
+        ``archard``).
+    growth : {"step", "linear", "points", "paris", "archard"}
         ``step``: ``severity`` from the onset on; ``linear``: from 0 at the onset to
         ``severity`` ``growth_h`` hours later, then constant; ``points``: linear between
-        the (hour, severity) pairs of ``points``, 0 before the first.
+        the (hour, severity) pairs of ``points``, 0 before the first (a known degradation
+        replayed); ``paris`` (cracks), ``archard`` (wear): grown from ``severity`` at the
+        onset by the law, driven by each window's speed, acting load and temperature, to
+        the failure severity, then held there (:mod:`swgsim.datasets.growth`).
     growth_h : float
         Hours of linear growth, > 0 for ``linear``.
     points : list of [hour, severity]
@@ -73,6 +89,9 @@ class FaultOnset:
         uniformly from the life's seed.
     sensor : int or None
         Faulty bridge of a sensor fault (0..4); None draws it from the life's seed.
+    to_failure : RunToFailure or None
+        The law's constants and the failure severity (``paris``, ``archard``); None: their
+        defaults. Left out of the config hash when None.
     """
 
     fault: str = "healthy"
@@ -83,6 +102,7 @@ class FaultOnset:
     points: list[list[float]] = field(default_factory=list)
     position_deg: float | None = None
     sensor: int | None = None
+    to_failure: RunToFailure | None = None
 
 
 @dataclass
@@ -197,11 +217,15 @@ def _check_fault(f: FaultOnset, commissioning_h: float, key: str) -> None:
     _req(f.onset_h >= commissioning_h, f"{key}.onset_h must be >= the commissioning period "
          f"({commissioning_h:g} h), got {f.onset_h}")
     _req(f.growth in GROWTH, f"{key}.growth must be one of {list(GROWTH)}, got {f.growth!r}")
+    _req(f.to_failure is None or f.growth in LAWS, f"{key}.to_failure is for growth "
+         f"{' or '.join(LAWS)} (a fault that runs to failure), got growth {f.growth!r}")
     sev = ([(f"{key}.points[{i}][1]", p[1]) for i, p in enumerate(f.points)]
            if f.growth == "points" else [(f"{key}.severity", f.severity)])
     for where, s in sev:
         _req(lo <= s <= hi, f"{where}={s}: outside the allowed range [{lo}, {hi}] of "
              f"{f.fault}")
+    if f.growth in LAWS:
+        check_to_failure(f.to_failure or RunToFailure(), f.fault, f.growth, f.severity, key)
     if f.growth == "linear":
         _req(f.growth_h > 0, f"{key}.growth_h must be > 0 for linear growth, got {f.growth_h}")
     if f.growth == "points":
@@ -209,7 +233,7 @@ def _check_fault(f: FaultOnset, commissioning_h: float, key: str) -> None:
         _req(len(hrs) >= 1 and all(len(p) == 2 for p in f.points)
              and all(b > a for a, b in zip(hrs, hrs[1:], strict=False))
              and hrs[0] >= f.onset_h, f"{key}.points must be [hour, severity] pairs with "
-             f"increasing hours from onset_h on, got {f.points}")
+             f"strictly increasing hours from onset_h ({f.onset_h:g} h) on, got {f.points}")
 
 
 #: Most windows of one life: 5 million (about 9.5 years at one window a minute); its
@@ -227,15 +251,23 @@ def severity_at(f: FaultOnset, hours: np.ndarray, levels: int) -> np.ndarray:
     """Severity of the fault at each hour, on the staircase of ``levels`` steps.
 
     The exact schedule is rounded down to the nearest of ``levels`` equal steps of its
-    largest value (a step schedule is exact); 0 before the onset.
+    largest value (a step schedule is exact); 0 before the onset. A growth to failure
+    depends on the duty, the load and the temperature: :func:`grow`.
 
     Returns
     -------
     ndarray, shape like ``hours``
+
+    Raises
+    ------
+    ValueError
+        Growth ``paris`` or ``archard``.
     """
     h = np.asarray(hours, float)
     if f.fault == "healthy":
         return np.zeros_like(h)
+    _req(f.growth not in LAWS, f"severity_at: growth {f.growth!r} needs the life's duty "
+         "(schedule, grow)")
     if f.growth == "step":
         return np.where(h >= f.onset_h, f.severity, 0.0)
     if f.growth == "linear":
@@ -248,11 +280,33 @@ def severity_at(f: FaultOnset, hours: np.ndarray, levels: int) -> np.ndarray:
         set_in = h >= max(hp[0], f.onset_h)
         exact = np.interp(h, hp, sp)
         top = sp[np.argmax(np.abs(sp))]
+    return staircase(exact, top, levels, set_in)
+
+
+def staircase(exact: np.ndarray, top: float, levels: int, set_in: np.ndarray) -> np.ndarray:
+    """A growing severity rounded down to the nearest of ``levels`` equal steps of ``top``,
+    at least the first step where ``set_in`` (a growing fault is there from its onset), 0
+    elsewhere.
+
+    Parameters
+    ----------
+    exact : ndarray, shape (W,)
+        The exact severity [-].
+    top : float
+        Its largest value (signed) [-].
+    levels : int
+        Steps, >= 1.
+    set_in : ndarray of bool, shape (W,)
+        From the onset on.
+
+    Returns
+    -------
+    ndarray, shape (W,)
+    """
     if top == 0:
-        return np.zeros_like(h)
+        return np.zeros_like(exact)
     step = abs(top) / int(levels)
     q = np.floor(np.abs(exact) / step + 1e-9) * step
-    # a growing fault is there from its onset: its first step is taken at once
     q = np.maximum(q, step) * np.sign(np.where(exact != 0, exact, top))
     return np.where(set_in, q, 0.0)
 
@@ -274,6 +328,8 @@ class Schedule:
     commissioning : ndarray of bool, shape (W,)
         Inside the commissioning period.
     duty : list of DutyPoint
+    failure_h : float
+        Operating hour of failure of a fault growing to failure [h]; NaN: none in the life.
     """
 
     hour: np.ndarray
@@ -282,23 +338,66 @@ class Schedule:
     severity: np.ndarray
     commissioning: np.ndarray
     duty: list[DutyPoint]
+    failure_h: float = float("nan")
 
 
 def schedule(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]) -> Schedule:
     """The windows of a life (checked config), in time order.
 
     Window k is taken at ``k · interval_min`` minutes of operation; its operating point is
-    the duty point held at that time.
+    the duty point held at that time. A fault growing to failure grows at the commanded
+    load and 20 °C here (:func:`grow` for the life's conditions).
     """
     duty = duty_cycle(life, n_in_rpm, t_out_nm)
     minutes = np.arange(n_windows(life)) * float(life.interval_min)
     edges = np.cumsum([d.dwell_min for d in duty])
     idx = np.searchsorted(edges, minutes % edges[-1], side="right")
     hour = minutes / 60.0
+    if life.fault.growth in LAWS and life.fault.fault != "healthy":
+        sch = Schedule(hour, idx.astype(np.int64), np.full(hour.shape, "healthy", object),
+                       np.zeros_like(hour), hour < life.commissioning_h, duty)
+        return grow(sch, life)
     sev = severity_at(life.fault, hour, life.severity_levels)
     fault = np.where(sev != 0, life.fault.fault, "healthy")
     return Schedule(hour, idx.astype(np.int64), fault.astype(object), sev,
                     hour < life.commissioning_h, duty)
+
+
+def grow(sch: Schedule, life: LifeConfig, payload: np.ndarray | None = None,
+         temp_c: np.ndarray | None = None, scale: float = 1.0) -> Schedule:
+    """The schedule with the life's fault grown to failure (growth ``paris`` or
+    ``archard``, :func:`swgsim.datasets.growth.grown_severity`) on the staircase of
+    ``severity_levels`` steps of the failure severity.
+
+    Parameters
+    ----------
+    sch : Schedule
+    life : LifeConfig
+        Checked, its fault growing by a law.
+    payload, temp_c : ndarray, shape (W,), optional
+        Each window's factor on the load [-] (default 1) and the joint's temperature [°C]
+        (default 20, :data:`swgsim.gear.thermal.REF_TEMP_C`).
+    scale : float
+        The gear's factor on the law's coefficient (scatter) [-].
+
+    Returns
+    -------
+    Schedule
+        ``severity``, ``fault`` and ``failure_h`` (the exact law's) replaced.
+    """
+    f = life.fault
+    law = f.to_failure or RunToFailure()
+    n = np.array([d.n_in_rpm for d in sch.duty])[sch.duty_index]
+    t = np.array([d.t_out_nm for d in sch.duty])[sch.duty_index]
+    t = t if payload is None else t * payload
+    temp = np.full(sch.hour.shape, REF_TEMP_C) if temp_c is None else temp_c
+    exact = grown_severity(f.fault, f.growth, law, f.onset_h, f.severity, sch.hour,
+                           life.interval_min, n, t, temp, scale)
+    fail = law.failure_severity(f.fault)
+    sev = staircase(exact, fail, life.severity_levels, sch.hour >= f.onset_h)
+    fault = np.where(sev != 0, f.fault, "healthy").astype(object)
+    return dataclasses.replace(sch, severity=sev, fault=fault,
+                               failure_h=failure_hour(sch.hour, exact, fail))
 
 
 def uses_position(name: str) -> bool:

@@ -1,0 +1,75 @@
+"""Hours to failure of an example life that runs to failure (docs/DATASET.md, "Lives that
+run to failure"): the paper's duty (2000 and 4000 rpm, 7, 39 and 70 N m, 10 min each), one
+window every 10 min over 5000 h, the fault from 48 h on; per law, the failure hour
+without scatter at payload 1.0 and 1.2 and in a hall +0 K and +15 K (the real day's
+thermal model and viscosity law), then with the default scatter across five life seeds.
+Only schedules are computed (no window is simulated): seconds.
+
+    python scripts/failure_hours.py
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+
+from swgcli import dataset_preset
+from swgsim.datasets.conditions import ConditionsConfig
+from swgsim.datasets.growth import RunToFailure
+from swgsim.datasets.life import LifeSimulator
+from swgsim.datasets.plan import plan
+from swgsim.datasets.records import record_bank
+from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig, check_life
+from swgsim.gear.thermal import JointThermal
+
+PAPER_DUTY = [DutyPoint(n, t, 10.0) for n in (2000.0, 4000.0) for t in (7.0, 39.0, 70.0)]
+EXAMPLES = {"root_tooth_crack": ("paris", 0.05), "tip_tooth_crack": ("paris", 0.05),
+            "eccentric_wg": ("archard", 0.0), "wear": ("archard", 0.0)}
+
+
+def _conditions(payload: float = 1.0, hall_k: float = 0.0) -> ConditionsConfig:
+    """The life's conditions: the thermal day (16 h a day, a hall offset), a payload."""
+    return ConditionsConfig(thermal=JointThermal(ambient_points=[[0.0, hall_k]]),
+                            viscosity=True, payload=[[0.0, payload]], bridge_drift=None,
+                            temperature_sensor=None)
+
+
+def failure_h(p, bank, fault: str, conditions: ConditionsConfig, life_seed: int = 0,
+              **law) -> float:
+    """The failure hour of the example life [h] (NaN: none within it)."""
+    growth, s0 = EXAMPLES[fault]
+    life = LifeConfig(hours=5000.0, commissioning_h=24.0, interval_min=10.0, duty=PAPER_DUTY,
+                      fault=FaultOnset(fault, 48.0, s0, growth=growth,
+                                       to_failure=RunToFailure(**law)),
+                      life_seed=life_seed, conditions=conditions)
+    check_life(life)
+    return LifeSimulator(p, bank.gear_id, life, bank).schedule.failure_h
+
+
+def main() -> None:
+    p = plan(dataset_preset("tiny_bench"))
+    gear = int(p.config.gears[0].id)
+    bank = record_bank(p, gear)
+    out = {}
+    for fault in EXAMPLES:
+        row = {
+            "payload_1.0_h": failure_h(p, bank, fault, _conditions(), scatter=0.0),
+            "payload_1.2_h": failure_h(p, bank, fault, _conditions(1.2), scatter=0.0),
+            "hall_+15K_h": failure_h(p, bank, fault, _conditions(hall_k=15.0), scatter=0.0),
+        }
+        seeds = [failure_h(p, bank, fault, _conditions(), s) for s in range(5)]
+        row["scatter_0.3_seeds_h"] = [round(h, 1) for h in seeds]
+        row["scatter_0.3_cv_pct"] = float(100 * np.std(seeds) / np.mean(seeds))
+        out[fault] = {k: (round(v, 1) if isinstance(v, float) else v) for k, v in row.items()}
+        print(fault, out[fault])
+    ref = dataclasses.replace(_conditions(), thermal=None, viscosity=False)
+    out["root_tooth_crack_20C_no_day_h"] = round(failure_h(p, bank, "root_tooth_crack", ref,
+                                                           scatter=0.0), 1)
+    out["wear_20C_no_day_h"] = round(failure_h(p, bank, "wear", ref, scatter=0.0), 1)
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,329 @@
+"""Lives that run to failure: a fault's severity grown by what the joint does.
+
+``dataset.life.fault.growth`` ``paris`` or ``archard`` (:mod:`swgsim.datasets.schedule`) grows
+the fault from its severity at the onset (``dataset.life.fault.severity``) by a law driven by
+each window's operating point, acting load (the payload) and temperature, until a failure
+severity, at which it saturates: the life goes on, every later window at the failure
+severity [choice: a life's number of windows is fixed before any simulation, so that the
+shards and their sizes are planned as for any life].
+
+* **Paris' law** for the cracks (``root_tooth_crack``, ``tip_tooth_crack``):
+  da/dN = C (ΔK)^m, ΔK = Y Δσ √(π a) [MPa √m], Δσ = ``stress_mpa_per_nm`` × the acting
+  load [P. Paris and F. Erdogan, "A critical analysis of crack propagation laws", J. Basic
+  Eng. 85 (1963) 528-534 [unverified: not re-read]]. A flexspline tooth is loaded twice per
+  input revolution (the two lobes of the wave generator): N grows by 2 per revolution.
+  Crack depth a maps to severity as a / (the depth at severity 1): the rim's effective
+  thickness for a root crack (its bars' stiffness lost in proportion to the cracked depth
+  [choice]), the tooth's depth for a tip crack (its force lost in proportion [choice]).
+* **Archard's law** for wear (``eccentric_wg``: the wave generator's bearing worn on one
+  side, its centre shifted by the worn depth [choice]; ``wear``: the flanks, whose lost
+  thickness at the pitch radius is the backlash [choice]): worn depth rate ∝ load ×
+  sliding distance, the load the acting torque, the sliding distance the input
+  revolutions [choice: the tooth and
+  bearing loads in proportion to the torque, no wear at zero load]
+  [J. F. Archard, "Contact and rubbing of flat surfaces", J. Appl. Phys. 24 (1953) 981-988
+  [unverified: not re-read]], times a film factor (ν(T)/ν(20 °C))^(−``film_exponent``):
+  hotter grease, lower viscosity (:func:`swgsim.gear.thermal.viscosity_ratio`, the real
+  day's law), a thinner film, faster wear (the film thickness of an elastohydrodynamic
+  contact ∝ (η u)^0.67, Hamrock and Dowson [unverified: recalled, not re-read]; wear taken
+  ∝ 1 / film thickness [choice]). ``reduced_stiffness`` and ``reduced_damping`` are the
+  paper's parameter changes of the I/O model, not a mechanism: they have no law here
+  (``linear`` or ``points`` grow them).
+
+Both are integrated once per life on the window grid, exactly for a load held over each
+window's interval: Paris' law through its damage sum D = Σ C Δσ^m ΔN (a cumulative sum;
+a from D in closed form, :func:`paris_crack_depth`), Archard's as a cumulative sum.
+
+Per gear scatter: C or the wear coefficient times exp(``scatter`` z), z standard normal from
+``SeedSequence(seed, spawn_key=(gear, life_seed, 2**23))`` (drawn in
+:class:`swgsim.datasets.life.LifeSimulator`; no window's stream touched).
+
+The defaults make an *accelerated* life [choice]: at the paper's duty (2000 and 4000 rpm,
+7, 39 and 70 N m, 10 min each, 20 °C, onset at 48 h) a root crack from severity 0.05
+fails (0.5) at 432 h and a wear from 0 (failure 0.8) at 175.8 h (measured with
+``scripts/failure_hours.py``, docs/DATASET.md, "Lives that run to failure"). A real
+flexspline runs 10^4 h and more, and its crack at such stresses would stay below the
+threshold ΔK_th of steels (a few MPa √m [unverified]), which the law here leaves out: the
+Paris regime only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from swgsim.base.typed import check_range
+from swgsim.gear.faults import WEAR_BACKLASH_ARCMIN, ChainParams, get_fault
+from swgsim.gear.flexspline import FlexsplineGeometry
+from swgsim.gear.thermal import viscosity_ratio
+
+__all__ = ["DEPTH_AT_ONE_M", "FAILURE_SEVERITY", "LAWS", "RunToFailure", "archard_depth",
+           "check_to_failure", "draw_scale", "failure_hour", "film_factor", "grown_severity",
+           "load_cycles", "paris_crack_depth", "paris_damage"]
+
+#: The law of each growth and the faults it grows.
+LAWS: dict[str, tuple[str, ...]] = {"paris": ("root_tooth_crack", "tip_tooth_crack"),
+                                    "archard": ("eccentric_wg", "wear")}
+
+#: Load cycles of a flexspline tooth per input revolution: the wave generator's two lobes
+#: (each lobe meshes every flexspline tooth once a revolution) [derived].
+CYCLES_PER_REV = 2.0
+
+#: Pitch radius of the size-20 flexspline [m] (catalogue, docs/PHYSICS.md sec. 2).
+PITCH_RADIUS_M = 25.4e-3
+
+#: Depth of each law's fault at severity 1 [m]: a root crack through the rim's effective
+#: thickness (the truss's, :class:`swgsim.gear.flexspline.FlexsplineGeometry`); a tip crack
+#: through a tooth's depth, 0.5 mm, about two modules of the 200-tooth flexspline
+#: [choice]; the wave generator's centre shifted by w0 (``eccentric_wg``'s severity is
+#: e / w0, :class:`swgsim.gear.faults.ChainParams`); the flanks' lost thickness at the pitch
+#: radius that gives ``wear``'s backlash at severity 1 (3 arcmin: 22 µm) [derived].
+DEPTH_AT_ONE_M: dict[str, float] = {
+    "root_tooth_crack": FlexsplineGeometry.t_rim_m,
+    "tip_tooth_crack": 0.5e-3,
+    "eccentric_wg": ChainParams.w0_m,
+    "wear": PITCH_RADIUS_M * float(np.deg2rad(WEAR_BACKLASH_ARCMIN / 60.0)),
+}
+
+#: Severity at which each fault fails, the default of ``to_failure.failure`` [choice]: a
+#: root crack through half the rim, a tip crack through 80 % of the tooth, the wave
+#: generator 30 % of w0 off centre (76 µm), 80 % of the wear that gives 3 arcmin backlash.
+FAILURE_SEVERITY: dict[str, float] = {"root_tooth_crack": 0.5, "tip_tooth_crack": 0.8,
+                                      "eccentric_wg": 0.3, "wear": 0.8}
+
+
+@dataclass
+class RunToFailure:
+    """The constants of a fault's growth to failure (module docstring).
+
+    Attributes
+    ----------
+    failure : float or None
+        Failure severity, above the severity at the onset and within the fault's range;
+        None: :data:`FAILURE_SEVERITY` of the fault [choice].
+    scatter : float
+        σ of the lognormal factor on C or the wear coefficient, per gear, in [0, 2] (0.3:
+        a factor 0.55-1.8 for ±2σ) [choice: crack-growth rates of identical specimens
+        scatter by about a factor of 2, Virkler, Hillberry and Goel, J. Eng. Mater.
+        Technol. 101 (1979) 148-153 [unverified: recalled]].
+    paris_c : float
+        C of Paris' law [m/cycle per (MPa √m)^m] (6.9e-12, ferrite-pearlite steels,
+        Barsom and Rolfe, "Fracture and Fatigue Control in Structures" [unverified:
+        recalled]).
+    paris_m : float
+        m of Paris' law, in [1, 6] [-] (3, steels, the same source).
+    shape_factor : float
+        Y of ΔK = Y Δσ √(π a), in (0, 5] [-] (1.12, an edge crack, Tada, Paris and Irwin,
+        "The Stress Analysis of Cracks Handbook" [unverified: recalled]).
+    stress_mpa_per_nm : float
+        Δσ at the tooth per N m of acting load, in (0, 100] [MPa/(N m)] (0.6: 31 MPa at
+        the rated 52 N m) [choice: sets the accelerated life of the module docstring].
+    wear_coeff_m_per_nm_rev : float
+        Worn depth per N m of acting load per input revolution at 20 °C, in (0, 1e-9]
+        [m/(N m rev)] (2e-14) [choice: the accelerated life of the module docstring].
+    film_exponent : float
+        p of the film factor (ν(T)/ν(20 °C))^(−p), in [0, 3] [-] (0.67, module docstring).
+    """
+
+    failure: float | None = None
+    scatter: float = 0.3
+    paris_c: float = 6.9e-12
+    paris_m: float = 3.0
+    shape_factor: float = 1.12
+    stress_mpa_per_nm: float = 0.6
+    wear_coeff_m_per_nm_rev: float = 2e-14
+    film_exponent: float = 0.67
+
+    def failure_severity(self, fault: str) -> float:
+        """The failure severity of ``fault``: ``failure`` or its default [-]."""
+        return float(FAILURE_SEVERITY[fault] if self.failure is None else self.failure)
+
+
+def check_to_failure(cfg: RunToFailure, fault: str, growth: str, initial: float,
+                     key: str) -> None:
+    """Refuse a growth to failure outside its ranges, in one line naming the key.
+
+    Parameters
+    ----------
+    cfg : RunToFailure
+    fault, growth : str
+        The life's fault and its growth (a key of :data:`LAWS`).
+    initial : float
+        Severity at the onset [-].
+    key : str
+        Full name of the fault entry, e.g. ``dataset.life.fault``.
+
+    Raises
+    ------
+    ValueError
+        The law not for this fault, a crack of severity 0 at the onset, a failure severity
+        at or below the onset's or outside the fault's range, a constant out of range.
+    """
+    if fault not in LAWS[growth]:
+        others = [g for g, fs in LAWS.items() if fault in fs]
+        raise ValueError(f"{key}.growth={growth} grows {', '.join(LAWS[growth])}, not {fault}; "
+                         f"allowed for {fault}: {['step', 'linear', 'points', *others]}")
+    hi = get_fault(fault).severity_range[1]
+    if growth == "paris":
+        check_range(initial, 0.0, hi, f"{key}.severity", lo_open=True,
+                    why="the crack at the onset; Paris' law grows no crack from 0")
+    fail = cfg.failure_severity(fault)
+    check_range(fail, initial, hi, f"{key}.to_failure.failure", lo_open=True,
+                why=f"above the severity at the onset, within {fault}'s range")
+    check_range(cfg.scatter, 0.0, 2.0, f"{key}.to_failure.scatter")
+    check_range(cfg.paris_c, 0.0, 1e-6, f"{key}.to_failure.paris_c", "m/cycle", lo_open=True)
+    check_range(cfg.paris_m, 1.0, 6.0, f"{key}.to_failure.paris_m")
+    check_range(cfg.shape_factor, 0.0, 5.0, f"{key}.to_failure.shape_factor", lo_open=True)
+    check_range(cfg.stress_mpa_per_nm, 0.0, 100.0, f"{key}.to_failure.stress_mpa_per_nm",
+                "MPa/(N m)", lo_open=True)
+    check_range(cfg.wear_coeff_m_per_nm_rev, 0.0, 1e-9,
+                f"{key}.to_failure.wear_coeff_m_per_nm_rev", "m/(N m rev)", lo_open=True)
+    check_range(cfg.film_exponent, 0.0, 3.0, f"{key}.to_failure.film_exponent")
+
+
+def load_cycles(n_in_rpm: np.ndarray, minutes: float) -> np.ndarray:
+    """Load cycles of a flexspline tooth in ``minutes`` at input speeds ``n_in_rpm``,
+    2 per input revolution (:data:`CYCLES_PER_REV`), shape of ``n_in_rpm`` [-]."""
+    return CYCLES_PER_REV * np.abs(np.asarray(n_in_rpm, float)) * float(minutes)
+
+
+def paris_damage(cycles: np.ndarray, delta_sigma_mpa: np.ndarray, c: float,
+                 m: float) -> np.ndarray:
+    """Paris' damage sum after each block, D_k = Σ_{i<=k} C Δσ_i^m ΔN_i (module docstring).
+
+    Parameters
+    ----------
+    cycles, delta_sigma_mpa : ndarray, shape (K,)
+        Load cycles ΔN_i of each block [-] and their stress range Δσ_i [MPa].
+    c, m : float
+        Paris' C [m/cycle per (MPa √m)^m] and m [-].
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        D after each block [m^(1 − m/2)] (the crack depth from it: :func:`paris_crack_depth`).
+    """
+    return np.cumsum(c * np.asarray(delta_sigma_mpa, float) ** m * np.asarray(cycles, float))
+
+
+def paris_crack_depth(a0_m: float, damage: np.ndarray, m: float, y: float) -> np.ndarray:
+    """Crack depth after a damage sum, the closed form of da/dN = C (Y Δσ √(π a))^m.
+
+    a^(1 − m/2) = a0^(1 − m/2) + (1 − m/2) (Y √π)^m D for m ≠ 2, a = a0 exp((Y √π)^2 D)
+    for m = 2 [derived: separation of variables]; at constant Δσ, D = C Δσ^m N gives the
+    textbook a(N).
+
+    Parameters
+    ----------
+    a0_m : float
+        Depth at D = 0, > 0 [m].
+    damage : ndarray, shape (K,)
+        D (:func:`paris_damage`) [m^(1 − m/2)].
+    m, y : float
+        Paris' m and the shape factor Y [-].
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Crack depth [m]; inf where the crack has grown without bound (m > 2).
+    """
+    d = np.asarray(damage, float)
+    k = (y * np.sqrt(np.pi)) ** m
+    if m == 2.0:
+        return a0_m * np.exp(k * d)
+    e = 1.0 - m / 2.0
+    base = a0_m ** e + e * k * d
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(base > 0, np.abs(base) ** (1.0 / e), np.inf)
+
+
+def film_factor(temp_c: np.ndarray, exponent: float) -> np.ndarray:
+    """Factor on the wear rate at a grease temperature, (ν(T)/ν(20 °C))^(−p), shape of
+    ``temp_c`` [-] (:func:`swgsim.gear.thermal.viscosity_ratio`; ValueError outside its
+    −40..150 °C)."""
+    return viscosity_ratio(temp_c) ** (-float(exponent))
+
+
+def archard_depth(t_acting_nm: np.ndarray, revolutions: np.ndarray, temp_c: np.ndarray,
+                  coeff: float, exponent: float) -> np.ndarray:
+    """Worn depth after each block by Archard's law, Σ k |T| n_rev film(T_grease).
+
+    Parameters
+    ----------
+    t_acting_nm, revolutions, temp_c : ndarray, shape (K,)
+        Acting load [N m], input revolutions [-] and grease temperature [°C] of each block.
+    coeff : float
+        k [m/(N m rev)] at 20 °C.
+    exponent : float
+        The film factor's p (:func:`film_factor`).
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Depth after each block [m].
+    """
+    rate = coeff * np.abs(np.asarray(t_acting_nm, float)) * np.asarray(revolutions, float)
+    return np.cumsum(rate * film_factor(temp_c, exponent))
+
+
+def grown_severity(fault: str, growth: str, cfg: RunToFailure, onset_h: float,
+                   initial: float, hours: np.ndarray, interval_min: float,
+                   n_in_rpm: np.ndarray, t_acting_nm: np.ndarray, temp_c: np.ndarray,
+                   scale: float = 1.0) -> np.ndarray:
+    """The exact severity of a fault growing to failure at each window of a life.
+
+    Window k holds what grew over the windows before it since the onset, each holding its
+    operating point, load and temperature for ``interval_min``; 0 before the onset,
+    ``initial`` at the first window from it, the failure severity from failure on.
+
+    Parameters
+    ----------
+    fault, growth : str
+        A fault of ``LAWS[growth]`` (checked, :func:`check_to_failure`).
+    cfg : RunToFailure
+    onset_h, initial : float
+        Onset [h] and the severity then [-].
+    hours, n_in_rpm, t_acting_nm, temp_c : ndarray, shape (W,)
+        Each window's operating hour [h], input speed [rpm], acting load [N m] and grease
+        temperature [°C].
+    interval_min : float
+        Operating minutes between windows [min].
+    scale : float
+        The gear's factor on C or the wear coefficient (:func:`draw_scale`) [-].
+
+    Returns
+    -------
+    ndarray, shape (W,)
+        Severity [-].
+    """
+    h = np.asarray(hours, float)
+    on = h >= onset_h
+    depth0 = initial * DEPTH_AT_ONE_M[fault]
+    grown = np.zeros(h.shape)
+    n = np.where(on, np.asarray(n_in_rpm, float), 0.0)
+    if growth == "paris":
+        dmg = paris_damage(load_cycles(n, interval_min),
+                           cfg.stress_mpa_per_nm * np.abs(t_acting_nm), scale * cfg.paris_c,
+                           cfg.paris_m)
+        a = paris_crack_depth(depth0, dmg[:-1], cfg.paris_m, cfg.shape_factor)
+        grown[1:] = np.where(dmg[:-1] > 0, a - depth0, 0.0)  # exactly the onset's before
+    else:
+        revs = np.abs(n) * float(interval_min)
+        grown[1:] = archard_depth(t_acting_nm, revs, temp_c,
+                                  scale * cfg.wear_coeff_m_per_nm_rev, cfg.film_exponent)[:-1]
+    sev = np.minimum(initial + grown / DEPTH_AT_ONE_M[fault], cfg.failure_severity(fault))
+    return np.where(on, sev, 0.0)
+
+
+def failure_hour(hours: np.ndarray, severity: np.ndarray, failure: float) -> float:
+    """First operating hour [h] at which ``severity`` (shape (W,)) reaches ``failure``; NaN
+    if it does not within ``hours`` (shape (W,))."""
+    hit = np.flatnonzero(np.asarray(severity) >= failure)
+    return float(np.asarray(hours)[hit[0]]) if hit.size else float("nan")
+
+
+def draw_scale(cfg: RunToFailure, rng: np.random.Generator) -> float:
+    """The gear's lognormal factor on C or the wear coefficient, exp(``scatter`` z), z one
+    standard normal draw of ``rng`` [-] (median 1)."""
+    return float(np.exp(cfg.scatter * rng.standard_normal()))
