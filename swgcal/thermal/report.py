@@ -19,7 +19,8 @@ from swgsim.files.ownership import write_owned
 from ..loop import CalibrationResult
 from ..report import base_summary, caveat, fmt_value, option_yaml, param_rows, result_section
 
-__all__ = ["make_figures", "render_report", "simulation_files", "summarize", "ATTRIBUTION"]
+__all__ = ["ATTRIBUTION", "make_figures", "measured", "plot_joint", "render_report",
+           "simulation_files", "summarize"]
 
 #: The attribution the UR3 CobotOps day asks for (CC BY 4.0), wherever the file or a figure
 #: made from it appears: in every report and figure of this kind, whose format is that day's.
@@ -145,8 +146,7 @@ def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, st
     p = result.problem
     before, after = result.predictions()
     fig, ax = plt.subplots(figsize=(7, 3.2))
-    plot_joint(ax, p.t / 3600.0, p.y, before, after, p.split.fit_validation.min(),
-               p.split.fit.max())
+    plot_joint(ax, p.t / 3600.0, measured(p), before, after, p.split.fit.max())
     ax.set_title(p.name, fontsize=9)
     fig.text(0.01, 0.01, ATTRIBUTION, fontsize=5)
     out = Path(out_dir) / "figures"
@@ -157,10 +157,19 @@ def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, st
     return {"temperature": "figures/temperature.png"}
 
 
+def measured(problem: Any) -> np.ndarray:
+    """The problem's target [°C], NaN where the log has no reading (in no split)."""
+    sp = problem.split
+    out = np.full(problem.y.shape, np.nan)
+    idx = np.concatenate([sp.fit, sp.validation, sp.test])
+    out[idx] = problem.y[idx]
+    return out
+
+
 def plot_joint(ax: Any, hours: np.ndarray, y: np.ndarray, before: np.ndarray,
-               after: np.ndarray, first: int, last_fit: int) -> None:
-    """One joint's panel: measured [°C] and both models against hours, the held-out
-    part (after ``last_fit``) shaded; the gap drawn as a break."""
+               after: np.ndarray, last_fit: int) -> None:
+    """One joint's panel: measured ``y`` [°C] (NaN: no reading) and both models against
+    ``hours``, all shape (n,); the held-out part (after row ``last_fit``) shaded."""
     ax.plot(hours, y, ".", ms=1, color="0.3", label="measured")
     ax.plot(hours, before, lw=1, label="first-order (before)")
     ax.plot(hours, after, lw=1, ls="--", label="with kept effects (after)")
