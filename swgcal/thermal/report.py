@@ -45,14 +45,18 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         The keys of :func:`swgcal.report.base_summary` (RMSE before and after on the test
         part [K], ``effects_added`` with their parameters, ``unexplained``, ...) and
         ``joint_thermal``: the final model's first-order constants (``r_th_k_per_w``,
-        ``tau_min``) as fields of :class:`swgsim.gear.thermal.JointThermal`, with the
-        caveat where the run is unexplained.
+        ``tau_min``, ``ambient_c``) as fields of :class:`swgsim.gear.thermal.JointThermal`,
+        with a caveat where the run is unexplained.
     """
     s = base_summary(result, source)
     base = result.final.estimates_of(result.final.terms[0].name)
+    why = caveat(result) or (
+        "The final residual is still structured (" + result.residual_signature.rstrip(".")
+        + "): the first-order constants were fitted beside what no library effect explains."
+        if result.unexplained else None)
     s["joint_thermal"] = {"r_th_k_per_w": base["r_th_k_per_w"].value,
                           "tau_min": base["tau_min"].value,
-                          "ambient_c": base["ambient_c"].value, "caveat": caveat(result)}
+                          "ambient_c": base["ambient_c"].value, "caveat": why}
     s["attribution"] = ATTRIBUTION
     return s
 
@@ -75,11 +79,11 @@ def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
             "fields of swgsim.gear.thermal.JointThermal",
             "the loss proxy's constants scale r_th_k_per_w: see summary.json data"]
     if jt.pop("caveat", None):
-        head.append(f"caveat: {caveat_text(summary)}")
+        head.append(f"caveat: {_caveat_text(summary)}")
     return {"joint_thermal.yaml": option_yaml(head, jt)}
 
 
-def caveat_text(summary: Mapping[str, Any]) -> str:
+def _caveat_text(summary: Mapping[str, Any]) -> str:
     """The caveat of an unexplained run, one line."""
     return summary["joint_thermal"].get("caveat") or ""
 

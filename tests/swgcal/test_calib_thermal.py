@@ -12,6 +12,7 @@ import pytest
 import yaml
 
 from swgcal import build_problem, calibrate, detect_kind
+from swgcal.thermal import summarize
 from swgcal.thermal.synthetic import SyntheticThermal, synthetic_joint_log
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
@@ -62,6 +63,8 @@ def test_a_fan_switching_with_the_cycle_count_is_left_unexplained():
     assert res.added == []
     assert res.unexplained and "periodic in time" in res.residual_signature
     assert res.rmse["test"]["after"] > 5 * SyntheticThermal().noise_k
+    # the fitted constants go out with the caveat
+    assert "still structured" in summarize(res)["joint_thermal"]["caveat"]
 
 
 def test_a_bad_thermal_option_is_refused_naming_its_key():
