@@ -10,8 +10,9 @@ library defaults), fitted before the day's 5.2-h gap, effects chosen on the firs
 the part after it and the errors before and after on its second half; the table gives the
 RMSE before (the project's first-order model) and after (with the kept effects), the
 effects kept and their parameters, the base model's time constant and whether the
-residual stays unexplained. An effect is kept for the arm only where it is kept on the
-joints it was not fitted on, too (the count "kept on").
+residual stays unexplained. An effect kept on one joint is carried to the joints it was
+not fitted on (:func:`swgcal.thermal.arm.transfer_effects`): it holds for the arm where
+it lowers their held-out error with evidence on most of them.
 
     python scripts/thermal_ur3.py PATH/ur3_cobotops_2022-10-26.csv
     python scripts/thermal_ur3.py PATH/ur3.csv --figure docs/figures/thermal_ur3.png
@@ -85,6 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
     from swgcal.thermal import build_problem, calibrate
+    from swgcal.thermal.arm import transfer_effects
     from swgsim.datasets.joint_log import read_joint_log
 
     t0 = time.perf_counter()
@@ -105,6 +107,10 @@ def main(argv: list[str] | None = None) -> int:
               f"{m['test']['before']:.3f} -> {m['test']['after']:.3f} | {fx} | "
               f"{'yes' if r['unexplained'] else 'no'} |")
     print(f"\neffects kept on (of {len(rows)} joints): {dict(kept_on) or 'none'}")
+    for c in transfer_effects(results):
+        print(f"{c['effect']} of J{c['from_joint']} ({c['nonlinear']}) carried to the others: "
+              f"passes on {c['passes_on']} of {len(c['to'])}, holds for the arm: "
+              f"{c['holds_for_arm']}")
     for r in rows:
         print(f"J{r['joint']}: {r['signature']}" + (f" removed: {r['removed']}"
                                                     if r["removed"] else ""))

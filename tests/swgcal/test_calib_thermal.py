@@ -13,6 +13,7 @@ import yaml
 
 from swgcal import build_problem, calibrate, detect_kind
 from swgcal.thermal import summarize
+from swgcal.thermal.arm import transfer_effects
 from swgcal.thermal.synthetic import SyntheticThermal, synthetic_joint_log
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
@@ -104,3 +105,20 @@ def test_the_ur3_days_shoulder_warms_with_a_time_constant_of_its_first_look():
     assert 0.4 < tau_h < 1.0
     assert res.problem.split.description["hours"]["validation"][0] > 5.0  # after the gap
     assert np.isfinite(res.rmse["test"]["before"])
+
+
+def test_an_effect_kept_on_one_joint_is_checked_on_the_joints_not_fitted():
+    """Copper kept on two logs is carried, with its time constant, to the others: it
+    lowers the held-out error where the loss is there (even where too small to be kept
+    alone) and not on a clean log."""
+    logs = [SyntheticThermal(k_cu_k_per_a2=1.0, r_th_k_per_w=0.2, seed=0),
+            SyntheticThermal(k_cu_k_per_a2=1.0, r_th_k_per_w=0.2, seed=1),
+            SyntheticThermal(k_cu_k_per_a2=0.5, r_th_k_per_w=0.3, seed=2),
+            SyntheticThermal(seed=3)]
+    results = [_run(c) for c in logs]
+    assert [r.added for r in results] == [["copper"], ["copper"], [], []]
+    carried = transfer_effects(results)
+    assert [c["effect"] for c in carried] == ["copper", "copper"]
+    for c in carried:
+        passes = [t["passes"] for t in c["to"]]
+        assert passes == [True, True, False] and c["holds_for_arm"]
