@@ -17,6 +17,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from swgsim.datasets.joint_log import JointLog
 from swgsim.files.inputs import check_input_file
 from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
@@ -29,10 +30,15 @@ __all__ = ["KINDS", "MeasuredDataError", "detect_kind", "kind_module", "options_
            "write_outputs"]
 
 #: Data kind -> the subpackage that implements its steps.
-KINDS = {"friction": "swgcal.friction", "strain": "swgcal.strain"}
+KINDS = {"friction": "swgcal.friction", "strain": "swgcal.strain",
+         "thermal": "swgcal.thermal"}
 
 #: Data kind -> how messages name it.
-KIND_LABELS = {"friction": "friction recording (kind 1)", "strain": "strain data set (kind 2)"}
+KIND_LABELS = {"friction": "friction recording (kind 1)", "strain": "strain data set (kind 2)",
+               "thermal": "joint log (kind 3)"}
+
+#: Columns that mark a joint log's header (:data:`swgsim.datasets.joint_log.LOG_COLUMNS`).
+JOINT_LOG_MARK = frozenset({"Timestamp", "Temperature_T0", "Current_J0", "Speed_J0"})
 
 #: The step functions every kind subpackage defines.
 STEPS = ("build_problem", "calibrate", "summarize", "render_report", "make_figures",
@@ -53,8 +59,10 @@ def detect_kind(path: str | Path) -> str:
     Returns
     -------
     str
-        ``"friction"`` for a CSV whose header holds the friction columns, ``"strain"``
-        for a directory holding ``manifest.json`` (schema-v1 data set).
+        ``"friction"`` for a CSV whose header holds the friction columns, ``"thermal"``
+        for a joint log (:mod:`swgsim.datasets.joint_log`: its header holds
+        :data:`JOINT_LOG_MARK`), ``"strain"`` for a directory holding ``manifest.json``
+        (schema-v1 data set).
 
     Raises
     ------
@@ -65,8 +73,9 @@ def detect_kind(path: str | Path) -> str:
         message names the path and what was expected.
     """
     p = Path(path)
-    expected = (f"expected a friction CSV with columns {list(REQUIRED_COLUMNS)} or a "
-                "schema-v1 data-set directory holding manifest.json")
+    expected = (f"expected a friction CSV with columns {list(REQUIRED_COLUMNS)}, a joint log "
+                f"(';'-separated, with columns {sorted(JOINT_LOG_MARK)}) or a schema-v1 "
+                "data-set directory holding manifest.json")
     if not p.exists():
         raise MeasuredDataError(f"measured data {str(p)!r} does not exist; {expected}")
     if p.is_dir():
@@ -85,6 +94,8 @@ def detect_kind(path: str | Path) -> str:
         raise MeasuredDataError(f"{e}; {expected}") from None
     if all(c in header for c in REQUIRED_COLUMNS):
         return "friction"
+    if JOINT_LOG_MARK <= {f.strip() for h in header for f in h.split(";")}:
+        return "thermal"
     raise MeasuredDataError(f"{str(p)!r} is not a friction CSV (header {header[:8]}); "
                             f"{expected}")
 
@@ -161,6 +172,8 @@ def options_from_config(kind: str, given: Mapping[str, Any], measured: Any = Non
 def _kind_of_data(measured: Any) -> str:
     if isinstance(measured, FrictionRecording):
         return "friction"
+    if isinstance(measured, JointLog):
+        return "thermal"
     if isinstance(measured, (str, Path)):
         return detect_kind(measured)
     return "strain"  # an xarray.Dataset or StrainWindows (the strain builder checks)

@@ -1,10 +1,11 @@
 """``swgsim-calibrate``: Hydra app around :func:`run_calibrate`.
 
-Measured data in (a friction CSV, kind 1, or a schema-v1 data-set directory, kind 2,
-recognised automatically), a report out: ``out_dir/report.md``, ``summary.json``, the
-accepted effects as a simulation option (``friction_effects.yaml`` or
-``sensor_effects.yaml``) and ``figures/*.png``; the run is logged to MLflow. The app only
-parses, calls the kind-independent API of :mod:`swgcal` and writes.
+Measured data in (a friction CSV, kind 1, a schema-v1 data-set directory, kind 2, or a
+robot's joint log, kind 3, recognised automatically), a report out: ``out_dir/report.md``,
+``summary.json``, the accepted effects as a simulation option (``friction_effects.yaml``,
+``sensor_effects.yaml`` or ``joint_thermal.yaml``) and ``figures/*.png``; the run is
+logged to MLflow. The app only parses, calls the kind-independent API of :mod:`swgcal`
+and writes.
 
 Examples
 --------

@@ -104,10 +104,11 @@ def check_file(path: str | os.PathLike, what: str, max_bytes: int) -> Path:
     return p
 
 
-def _header(p: Path, data: bytes, fmt: str) -> tuple[list[str], int]:
-    """The column names of a table held in ``data`` (the bytes of ``p``) and its number
-    of data rows (Parquet: from its metadata; CSV: line ends after the header, an upper
-    bound where a quoted field holds one), refusing bytes that are not a table."""
+def _header(p: Path, data: bytes, fmt: str, sep: str = ",") -> tuple[list[str], int]:
+    """The column names of a table held in ``data`` (the bytes of ``p``; a CSV's fields
+    separated by ``sep``) and its number of data rows (Parquet: from its metadata; CSV:
+    line ends after the header, an upper bound where a quoted field holds one), refusing
+    bytes that are not a table."""
     import pandas as pd
 
     try:
@@ -116,7 +117,7 @@ def _header(p: Path, data: bytes, fmt: str) -> tuple[list[str], int]:
 
             pf = pq.ParquetFile(io.BytesIO(data))
             return [str(c) for c in pf.schema_arrow.names], int(pf.metadata.num_rows)
-        names = [str(c) for c in pd.read_csv(io.BytesIO(data), nrows=0,
+        names = [str(c) for c in pd.read_csv(io.BytesIO(data), nrows=0, sep=sep,
                                              encoding="utf-8-sig").columns]
         return names, data.count(b"\n") - (1 if data.endswith(b"\n") else 0)
     except ImportError as e:
@@ -144,7 +145,7 @@ def _read_bytes(p: Path, max_bytes: int) -> bytes:
 
 def read_table(path: str | os.PathLike, columns: dict[str, str],
                max_bytes: int = MAX_TABLE_BYTES, progress: bool = False,
-               max_cells: int | None = None):
+               max_cells: int | None = None, sep: str = ",", decimal: str = "."):
     """Read the mapped columns of a recording's table, bounded and checked.
 
     The file is read once into memory and everything comes from those bytes: its
@@ -165,6 +166,9 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
         A progress bar over the CSV's rows.
     max_cells : int, optional
         Most cells (rows times mapped columns) parsed; default :data:`MAX_TABLE_CELLS`.
+    sep, decimal : str
+        A CSV's field separator and decimal mark (``,`` and ``.``; a controller's log
+        written for a European locale: ``;`` and ``,``, :mod:`swgsim.datasets.joint_log`).
 
     Returns
     -------
@@ -190,7 +194,7 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
                          f"from {', '.join(TABLE_FORMATS)}")
     data = _read_bytes(p, max_bytes)
     digest = hashlib.sha256(data).hexdigest()
-    have, rows = _header(p, data, fmt)
+    have, rows = _header(p, data, fmt, sep)
     for col, key in columns.items():
         if col not in have:
             hint = ("; the header is one field: is the file separated by ';' or tabs? "
@@ -211,6 +215,7 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
             with tqdm(desc=f"read {p.name}", unit="row", unit_scale=True, delay=2.0,
                       disable=not progress) as bar:  # shown when reading takes > 2 s
                 for chunk in pd.read_csv(io.BytesIO(data), usecols=use, encoding="utf-8-sig",
+                                         sep=sep, decimal=decimal,
                                          chunksize=_CHUNK_ROWS, low_memory=False,
                                          float_precision="round_trip"):
                     parts.append(chunk)
@@ -223,7 +228,8 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
     return df, fmt, digest
 
 
-def numeric(df, column: str, key: str, fmt: str) -> np.ndarray:
+def numeric(df, column: str, key: str, fmt: str, missing: bool = False,
+            decimal: str = ".") -> np.ndarray:
     """A column as finite float64, refusing the first cell that is not.
 
     Parameters
@@ -234,6 +240,12 @@ def numeric(df, column: str, key: str, fmt: str) -> np.ndarray:
         The mapping key the column was given as.
     fmt : str
         ``csv`` or ``parquet`` (how rows are named, :func:`row_name`).
+    missing : bool
+        An empty cell is a missing reading, NaN (default False: refused); text that is
+        not a number and infinities are refused either way.
+    decimal : str
+        The decimal mark of cells read as text (a column that holds one cell not a
+        number stays text in pandas, its numbers too).
 
     Returns
     -------
@@ -252,13 +264,14 @@ def numeric(df, column: str, key: str, fmt: str) -> np.ndarray:
     if s.dtype.kind in "fiu":
         v = s.to_numpy(dtype=np.float64)
     else:
-        num = pd.to_numeric(s, errors="coerce")
+        text = s.astype(str).str.replace(decimal, ".", regex=False) if decimal != "." else s
+        num = pd.to_numeric(text.where(s.notna()), errors="coerce")
         bad = np.flatnonzero(num.isna().to_numpy() & s.notna().to_numpy())
         if bad.size:
             raise ValueError(f"column {column!r} ({key}), {row_name(int(bad[0]), fmt)}: "
                              f"{s.iloc[bad[0]]!r} is not a number")
         v = num.to_numpy(dtype=np.float64)
-    bad = np.flatnonzero(~np.isfinite(v))
+    bad = np.flatnonzero(np.isinf(v) if missing else ~np.isfinite(v))
     if bad.size:
         raise ValueError(f"column {column!r} ({key}), {row_name(int(bad[0]), fmt)}: "
                          f"{v[bad[0]]} is not a finite number (an empty cell, NaN or "

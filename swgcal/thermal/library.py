@@ -1,0 +1,198 @@
+"""The joint's thermal model as fitted terms: the project's first-order model (the base)
+and the library of candidate effects it lacks, each with a physical argument and range.
+
+The base is :func:`swgsim.gear.thermal.joint_temperature`'s model, C dT/dt = P − (T −
+T_amb)/R_th, τ = R_th C, heated by the gear's loss P: with the loss held constant between
+readings (a zero-order hold, as the simulator holds a window's loss), its exact discrete
+form is x_k = a_k x_{k−1} + (1 − a_k) P_{k−1}, a_k = exp(−Δt_k/τ) [derived], a unit-gain
+low-pass of the loss (:func:`first_order_lag`, one linear recurrence). The temperature
+T = T_amb + ΔT_0 e^{−(t − t_0)/τ} + R_th · lag_τ(P) is linear in (T_amb, ΔT_0, R_th) for a
+given τ: the separable fit of :mod:`swgcal.core`. Every effect adds columns of its own
+(its own time constant where it has one); none changes the base's.
+
+Ranges [choice where not sourced]: wide enough for any small to medium robot joint, so
+that a fit outside one is an effect absorbing something else, not a small joint.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from swgsim.gear.terms import Param, linear_recurrence
+
+from ..terms import FitTerm
+
+__all__ = ["THERMAL_LIBRARY", "AmbientDrift", "CopperLoss", "FirstOrderJoint", "HousingLag",
+           "NeighbourHeat", "StandstillCooling", "first_order_lag"]
+
+_TAU_BOUNDS_MIN = (2.0, 600.0)  # any time constant a fit may take [min] [choice]
+
+
+def first_order_lag(u_held: np.ndarray, dt_s: np.ndarray, tau_min: float) -> np.ndarray:
+    """Unit-gain first-order low-pass of an input held constant between samples, exact.
+
+    Parameters
+    ----------
+    u_held : ndarray, shape (n,)
+        Input over the interval ending at each sample (0 for the first) [any unit].
+    dt_s : ndarray, shape (n,)
+        Length of that interval [s] (0 for the first).
+    tau_min : float
+        Time constant, > 0 [min].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The lagged input at each sample, from 0 before the first [unit of ``u_held``].
+    """
+    a = np.exp(-dt_s / (60.0 * float(tau_min)))
+    return linear_recurrence(a, (1.0 - a) * u_held)
+
+
+class _Lagged(FitTerm):
+    """A term of one column, ``lag_τ(input)``, τ its nonlinear parameter."""
+
+    tau_range: tuple[float, float] = _TAU_BOUNDS_MIN
+    tau_starts: tuple[float, ...] = (30.0,)
+
+    def source_of(self, sig: Any) -> np.ndarray:
+        raise NotImplementedError
+
+    def columns(self, sig: Any, theta: np.ndarray) -> np.ndarray:
+        return first_order_lag(self.source_of(sig), sig.dt_s, theta[0])[:, None]
+
+    def bounds(self, sig: Any) -> list[tuple[float, float]]:
+        return [self.tau_range]
+
+    def starts(self, sig: Any, residual: np.ndarray, idx: np.ndarray) -> list[np.ndarray]:
+        return [np.array([t]) for t in self.tau_starts]
+
+
+class FirstOrderJoint(FitTerm):
+    """The project's thermal model (:class:`swgsim.gear.thermal.JointThermal`): the hall's
+    temperature, the start's offset decaying with τ, and R_th times the lagged loss."""
+
+    kind = "first_order"
+    linear = (Param("ambient_c", "°C", "hall temperature (constant)"),
+              Param("initial_k", "K", "offset at the first reading over the steady state"),
+              Param("r_th_k_per_w", "K/W", "thermal resistance joint -> hall"))
+    nonlinear = (Param("tau_min", "min", "thermal time constant R_th C", log=True),)
+    description = "first-order joint heated by the gear's loss (swgsim.gear.thermal)"
+    source = "swgsim.gear.thermal.joint_temperature"
+
+    def columns(self, sig: Any, theta: np.ndarray) -> np.ndarray:
+        tau_s = 60.0 * float(theta[0])
+        return np.column_stack([np.ones(sig.n), np.exp(-(sig.t_s - sig.t_s[0]) / tau_s),
+                                first_order_lag(sig.loss_w, sig.dt_s, theta[0])])
+
+    def bounds(self, sig: Any) -> list[tuple[float, float]]:
+        return [_TAU_BOUNDS_MIN]
+
+    def starts(self, sig: Any, residual: np.ndarray, idx: np.ndarray) -> list[np.ndarray]:
+        return [np.array([t]) for t in (15.0, 40.0, 120.0)]
+
+
+class CopperLoss(_Lagged):
+    """The motor's copper loss R_w I², heating the joint beside the gear: present at
+    standstill too, where a joint holds its link against gravity."""
+
+    kind = "copper"
+    linear = (Param("k_cu_k_per_a2", "K/A²", "steady rise per squared motor ampere, "
+                                             "R_th,cu R_w"),)
+    nonlinear = (Param("tau_cu_min", "min", "time constant of the winding's heat path",
+                       log=True),)
+    signature = "rises with the motor current squared, also at standstill"
+    description = "motor copper loss R_w I², lagged"
+    source = "Joule heating of the winding [textbook]"
+    probes = ("current_squared", "time")
+    #: R_w 0.2-5 Ω phase-to-phase of a small servo motor times R_th 0.2-2 K/W gives up to
+    #: 10 K/A² [unverified: no UR motor data sheet]; τ of a motor's winding and housing
+    #: 2-300 min [choice].
+    ranges = {"k_cu_k_per_a2": (0.0, 10.0, "R_w <= 5 Ohm, R_th <= 2 K/W [unverified]"),
+              "tau_cu_min": (2.0, 300.0, "a motor's thermal time constants [choice]")}
+    tau_starts = (10.0, 40.0)
+
+    def source_of(self, sig: Any) -> np.ndarray:
+        return sig.current_sq_a2
+
+
+class HousingLag(_Lagged):
+    """A second, slower time constant: the housing and the link store heat the winding's
+    short path does not see (a two-node network)."""
+
+    kind = "housing"
+    linear = (Param("r2_k_per_w", "K/W", "thermal resistance of the slow path"),)
+    nonlinear = (Param("tau2_min", "min", "slow time constant", log=True),)
+    signature = "a warm-up that keeps creeping after the first time constant"
+    description = "second, slow first-order path of the gear's loss"
+    source = "two-node thermal network [textbook]"
+    probes = ("time",)
+    ranges = {"r2_k_per_w": (0.0, 5.0, "a small joint's housing [choice]"),
+              "tau2_min": (60.0, 600.0, "slower than the joint's own (>= 1 h), a housing of "
+                                        "a few kg of aluminium [choice]")}
+    tau_range = (30.0, 600.0)
+    tau_starts = (120.0, 300.0)
+
+    def source_of(self, sig: Any) -> np.ndarray:
+        return sig.loss_w
+
+
+class NeighbourHeat(_Lagged):
+    """Heat from the neighbouring joints through the link: their copper losses, lagged."""
+
+    kind = "neighbour"
+    linear = (Param("k_nb_k_per_a2", "K/A²", "rise per squared ampere of the neighbours"),)
+    nonlinear = (Param("tau_nb_min", "min", "time constant of the path", log=True),)
+    signature = "follows the neighbouring joints' currents"
+    description = "neighbours' copper loss (joints j-1, j+1), lagged"
+    source = "conduction through the link [textbook]"
+    probes = ("neighbour_current_squared", "time")
+    ranges = {"k_nb_k_per_a2": (0.0, 2.0, "weaker than a joint's own winding [choice]"),
+              "tau_nb_min": (10.0, 600.0, "through the link, slower than the winding "
+                                          "[choice]")}
+    tau_starts = (60.0,)
+
+    def source_of(self, sig: Any) -> np.ndarray:
+        return sig.neighbour_sq_a2
+
+
+class StandstillCooling(_Lagged):
+    """Standstill: no windage and the brakes engaged, the joint cools towards the hall
+    differently from what the loss alone says (a negative step, lagged)."""
+
+    kind = "standstill"
+    linear = (Param("dt_still_k", "K", "steady change at standstill"),)
+    nonlinear = (Param("tau_still_min", "min", "time constant", log=True),)
+    signature = "lower after standing still than the loss says"
+    description = "standstill indicator, lagged"
+    source = "convection changing with motion [textbook]"
+    probes = ("speed", "time")
+    ranges = {"dt_still_k": (-10.0, 0.0, "cooling, at most the joint's rise [choice]"),
+              "tau_still_min": (2.0, 300.0, "a joint's time constants [choice]")}
+
+    def source_of(self, sig: Any) -> np.ndarray:
+        return sig.still
+
+
+class AmbientDrift(FitTerm):
+    """The hall warming or cooling over the day: a linear drift of T_amb."""
+
+    kind = "ambient_drift"
+    linear = (Param("drift_k_per_h", "K/h", "hall's drift"),)
+    signature = "a slow trend over the day"
+    description = "hall temperature drifting linearly"
+    source = "a hall's day [choice]"
+    probes = ("time",)
+    ranges = {"drift_k_per_h": (-1.0, 1.0, "a hall drifts a few K over a day, "
+                                           "cf. JointThermal.ambient_swing_k 3 K [choice]")}
+
+    def columns(self, sig: Any, theta: np.ndarray) -> np.ndarray:
+        return ((sig.t_s - sig.t_s[0]) / 3600.0)[:, None]
+
+
+#: Candidate effects by key (the base, :class:`FirstOrderJoint`, is not one).
+THERMAL_LIBRARY: dict[str, type[FitTerm]] = {
+    c.kind: c for c in (CopperLoss, HousingLag, AmbientDrift, NeighbourHeat,
+                        StandstillCooling)}

@@ -1,0 +1,321 @@
+"""A joint log (data kind 3) as a thermal calibration problem, and its calibration.
+
+:func:`build_problem` reads a joint log (:func:`swgsim.datasets.joint_log.read_joint_log`)
+and wraps one joint: the measured temperature the target, the project's first-order model
+the base (:class:`.library.FirstOrderJoint`), the candidate effects
+(:data:`.library.THERMAL_LIBRARY`), the residual probes and the held-out split: the part
+before the log's first gap is fitted, the part after it held out (its first half chooses
+the effects, its second half gives the errors before and after). The model runs through
+the whole log from its first reading, the gap included, with the joint standing still
+there, powered and holding its link: no gear loss, the motor's squared current that of
+its standstill readings [choice: the log does not say what the robot did; in the UR3 day
+the cycle count does not advance over the 5.2-h gap (105 either side) while every joint
+comes back 1.6-3.6 K warmer than it left: powered, not cycling].
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from swgsim.datasets.joint_log import JOINTS, JointLog, read_joint_log
+
+from ..core import fit_terms
+from ..diagnose import BinnedProbe, PeriodicProbe, Probe, TrendProbe, diagnose
+from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
+from ..options import build
+from ..split import HeldOutSplit
+from .library import THERMAL_LIBRARY, FirstOrderJoint, first_order_lag
+from .options import STANDSTILL_RAD_S, ThermalKindOptions, ThermalOptions
+
+__all__ = ["OPTIONS", "ThermalSignals", "build_problem", "calibrate", "thermal_probes",
+           "thermal_problem", "thermal_signals"]
+
+#: The typed options of this kind's problem (read by :func:`swgcal.api.options_from_config`).
+OPTIONS = ThermalKindOptions
+#: Fewest readings in each of fit, validation and test [-] [choice: several time
+#: constants' worth of the 0.0625-K steps of a joint sensor at 1 Hz].
+MIN_READINGS = 60
+_PROBE_LAG_MIN = 10.0  # lag of the probes' inputs [min] [choice: a winding's time scale]
+
+
+@dataclass(frozen=True)
+class ThermalSignals:
+    """What a joint reports, as the thermal terms see it; inputs are held over the
+    interval that ends at each reading (zero-order hold); over a gap the joint stands,
+    powered (module docstring).
+
+    Attributes
+    ----------
+    t_s, dt_s : ndarray, shape (n,)
+        Seconds since the first reading; the interval ending at each (0 first) [s].
+    loss_w : ndarray, shape (n,)
+        The gear's loss proxy (1 − η) k_τ |I| |ω| [W].
+    current_sq_a2, neighbour_sq_a2 : ndarray, shape (n,)
+        The joint's squared motor current; that of joints j−1 and j+1 summed [A²].
+    still : ndarray, shape (n,)
+        1 where the joint stands (|ω| below :data:`.options.STANDSTILL_RAD_S`, or a gap).
+    speed_abs : ndarray, shape (n,)
+        |ω| held [rad/s].
+    cycle : ndarray, shape (n,)
+        The log's cycle count [-].
+    joint : int
+    """
+
+    t_s: np.ndarray
+    dt_s: np.ndarray
+    loss_w: np.ndarray
+    current_sq_a2: np.ndarray
+    neighbour_sq_a2: np.ndarray
+    still: np.ndarray
+    speed_abs: np.ndarray
+    cycle: np.ndarray
+    joint: int
+
+    @property
+    def n(self) -> int:
+        return int(self.t_s.size)
+
+
+def _held(x: np.ndarray, gap_rows: np.ndarray, at_gap: float = 0.0) -> np.ndarray:
+    """x over the interval ending at each row: the previous row's (missing: the last
+    reading before it), ``at_gap`` over a gap, 0 before the first row."""
+    x = np.asarray(x, float)
+    ok = np.isfinite(x)
+    last = np.maximum.accumulate(np.where(ok, np.arange(x.size), 0))
+    filled = np.where(ok[last], x[last], 0.0)
+    out = np.concatenate([[0.0], filled[:-1]])
+    out[gap_rows] = at_gap
+    return out
+
+
+def thermal_signals(log: JointLog, joint: int, torque_per_amp_nm: float,
+                    gear_efficiency: float) -> ThermalSignals:
+    """The signals of one joint of a log (:class:`ThermalSignals`).
+
+    Parameters
+    ----------
+    log : JointLog
+    joint : int
+        0-5.
+    torque_per_amp_nm, gear_efficiency : float
+        k_τ [N m/A] and η [-] of the loss proxy (:mod:`.options`).
+
+    Returns
+    -------
+    ThermalSignals
+    """
+    i, w = log.current_a[:, joint], log.speed_rad_s[:, joint]
+    nb = [k for k in (joint - 1, joint + 1) if 0 <= k < JOINTS]
+    loss = (1.0 - gear_efficiency) * torque_per_amp_nm * np.abs(i) * np.abs(w)
+    g = log.gap_rows
+    dt = np.concatenate([[0.0], np.diff(log.t_s)])
+    stands = np.abs(w) < STANDSTILL_RAD_S
+    nb_sq = np.nansum(log.current_a[:, nb] ** 2, axis=1)
+
+    def holding(x):  # the mean over the standstill readings, over a gap
+        return float(np.nanmean(x[stands])) if np.any(stands & np.isfinite(x)) else 0.0
+
+    return ThermalSignals(
+        t_s=log.t_s, dt_s=dt, loss_w=_held(loss, g),
+        current_sq_a2=_held(i * i, g, holding(i * i)),
+        neighbour_sq_a2=_held(nb_sq, g, holding(nb_sq)),
+        still=_held((np.abs(w) < STANDSTILL_RAD_S).astype(float), g, 1.0),
+        speed_abs=_held(np.abs(w), g), cycle=log.cycle.astype(float), joint=joint)
+
+
+def thermal_probes() -> list[Probe]:
+    """The residual probes of the thermal side (one per residual signature).
+
+    Returns
+    -------
+    list of Probe
+        current_squared, neighbour_current_squared, speed (bins over the input lagged by
+        10 min), time (cubic trend), time_periodic (best sinusoid over t, 2 min to a
+        third of the log), cycle (bins over the cycle count).
+    """
+
+    def lagged(name):
+        return lambda s: first_order_lag(getattr(s, name), s.dt_s, _PROBE_LAG_MIN)
+
+    def t_range(s):
+        return 120.0, (s.t_s[-1] - s.t_s[0]) / 3.0
+
+    return [
+        BinnedProbe("current_squared", "follows the motor current squared (lagged 10 min)",
+                    lagged("current_sq_a2"), 20),
+        BinnedProbe("neighbour_current_squared", "follows the neighbours' current squared "
+                    "(lagged 10 min)", lagged("neighbour_sq_a2"), 20),
+        BinnedProbe("speed", "follows the joint's speed (lagged 10 min)", lagged("speed_abs"),
+                    20),
+        TrendProbe("time", "drifts over the day", lambda s: s.t_s),
+        PeriodicProbe("time_periodic", "periodic in time", lambda s: s.t_s, t_range,
+                      unit="s"),
+        BinnedProbe("cycle", "depends on the cycle count", lambda s: s.cycle, 20),
+    ]
+
+
+def _split(log: JointLog, valid: np.ndarray, fit_frac: float) -> HeldOutSplit:
+    """Fit before the first gap (or the first ``fit_frac`` of the log), then the rest's
+    first half validation, its second half test; rows without a reading in none."""
+    rows = np.arange(log.n)
+    if log.gap_rows.size:
+        cut, how = int(log.gap_rows[0]), "before the log's first gap"
+    else:
+        cut, how = int(np.searchsorted(log.t_s, fit_frac * log.t_s[-1])), \
+            f"the first {fit_frac:g} of the log (no gap)"
+    rest = rows[cut:]
+    mid = int(rest[0] + np.searchsorted(log.t_s[rest], 0.5 * (log.t_s[rest[0]]
+                                                             + log.t_s[-1])))
+    fit, val, test = (r[valid[r]] for r in (rows[:cut], rows[cut:mid], rows[mid:]))
+    for name, r in (("fit", fit), ("validation", val), ("test", test)):
+        if r.size < MIN_READINGS:
+            raise ValueError(f"joint log {log.name!r}: {r.size} readings to {name}, fewer "
+                             f"than {MIN_READINGS}; fit: {how}, the rest halved into "
+                             "validation and test")
+    return HeldOutSplit(fit, val, test, {
+        "kind": "after_gap", "fit": how, "validation": "the first half of the rest",
+        "test": "the second half of the rest",
+        "hours": {k: [float(log.t_s[r[0]] / 3600), float(log.t_s[r[-1]] / 3600)]
+                  for k, r in (("fit", fit), ("validation", val), ("test", test))}})
+
+
+def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
+                    torque_per_amp_nm: float = ThermalOptions.torque_per_amp_nm,
+                    gear_efficiency: float = ThermalOptions.gear_efficiency,
+                    fit_frac: float = ThermalOptions.fit_frac,
+                    candidates: Sequence[str] | None = None) -> Problem:
+    """Calibration problem of one joint of a log (module docstring).
+
+    Parameters
+    ----------
+    log : JointLog
+    joint, torque_per_amp_nm, gear_efficiency, fit_frac
+        :class:`.options.ThermalOptions` (defaults and ranges there).
+    candidates : sequence of str, optional
+        Library keys (default all of :data:`THERMAL_LIBRARY`).
+
+    Returns
+    -------
+    Problem
+        ``kind="thermal"``, the target the joint's temperature [°C].
+
+    Raises
+    ------
+    ValueError
+        An option outside its range (named by its app key, e.g. ``thermal.joint``), an
+        unknown candidate, too few
+        readings to fit, validate or test.
+    """
+    build(ThermalKindOptions, {"thermal": {
+        "joint": joint, "torque_per_amp_nm": torque_per_amp_nm,
+        "gear_efficiency": gear_efficiency, "fit_frac": fit_frac}})
+    keys = list(candidates) if candidates is not None else list(THERMAL_LIBRARY)
+    unknown = [k for k in keys if k not in THERMAL_LIBRARY]
+    if unknown:
+        raise ValueError(f"selection.candidates: unknown thermal effects {unknown}; library: "
+                         f"{sorted(THERMAL_LIBRARY)}")
+    y = log.temperature_c[:, joint]
+    split = _split(log, np.isfinite(y), fit_frac)
+    sig = thermal_signals(log, joint, torque_per_amp_nm, gear_efficiency)
+    return Problem(
+        name=f"{log.name}_J{joint}", kind="thermal", units="K", signals=sig,
+        y=np.where(np.isfinite(y), y, np.nanmean(y)), t=log.t_s,
+        base_model=(FirstOrderJoint(),), library={k: THERMAL_LIBRARY[k] for k in keys},
+        probes=thermal_probes(), split=split,
+        meta={"joint": joint, "n_samples": log.n, "start": log.start,
+              "duration_h": float(log.t_s[-1] / 3600), "gaps_h": [
+                  float((log.t_s[g] - log.t_s[g - 1]) / 3600) for g in log.gap_rows],
+              "missing_readings": int(np.sum(~np.isfinite(y))),
+              "protective_stops": int(log.protective_stop.sum()),
+              "grip_losses": int(log.grip_lost.sum()),
+              "torque_per_amp_nm": torque_per_amp_nm, "gear_efficiency": gear_efficiency})
+
+
+def build_problem(measured: str | os.PathLike | JointLog, **options: Any) -> Problem:
+    """Calibration problem of a joint log (data kind 3).
+
+    Parameters
+    ----------
+    measured : path-like or JointLog
+        A joint log in the UR3 CobotOps format, or one read.
+    **options
+        ``joint``, ``torque_per_amp_nm``, ``gear_efficiency``, ``fit_frac``,
+        ``candidates``: see :func:`thermal_problem`.
+
+    Returns
+    -------
+    Problem
+
+    Raises
+    ------
+    TypeError
+        An unknown option (the message lists the allowed ones).
+    ValueError
+        See :func:`swgsim.datasets.joint_log.read_joint_log` and :func:`thermal_problem`.
+    """
+    allowed = [k for k in inspect.signature(thermal_problem).parameters if k != "log"]
+    unknown = sorted(set(options) - set(allowed))
+    if unknown:
+        raise TypeError(f"unknown thermal problem options {unknown}; allowed: {allowed}")
+    log = measured if isinstance(measured, JointLog) else read_joint_log(measured)
+    return thermal_problem(log, **options)
+
+
+def calibrate(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
+    """Calibrate a thermal problem: the selection loop (:func:`swgcal.loop.select_effects`),
+    then every kept effect whose primary parameters the final fit (fit + validation) does
+    not pin down is removed and the model refitted, as the friction side removes a
+    ripple without support of its own (:func:`swgcal.friction.calibrate`): a pair the
+    loop accepted while the base's time constant was held can carry a member that the
+    joint refit leaves at zero.
+
+    Parameters
+    ----------
+    problem : Problem
+    config : SelectionConfig, optional
+
+    Returns
+    -------
+    CalibrationResult
+        ``problem.meta["removed"]``: the effects removed and why.
+    """
+    return _drop_unpinned(select_effects(problem, config))
+
+
+def _drop_unpinned(result: CalibrationResult) -> CalibrationResult:
+    """Remove the kept effects whose primary parameters are weak in the final model."""
+    p, cfg, final = result.problem, result.config, result.final
+    weak = {}
+    for term in result.effect_terms():
+        est = final.estimates_of(term.name)
+        bad = [f"{k} {est[k].flag}" for k in term.primary() if k in est and est[k].flag]
+        if bad:
+            weak[term.name] = "; ".join(bad)
+    meta = {**p.meta, "removed": [{"name": k, "why": v} for k, v in weak.items()]}
+    if not weak:
+        return dataclasses.replace(result, problem=dataclasses.replace(p, meta=meta))
+    sp, sig, y = p.split, p.signals, p.y
+    keep = [i for i, t in enumerate(final.terms) if t.name not in weak]
+    terms = [final.terms[i] for i in keep]
+    starts = [[final.thetas[i]] for i in keep]
+    kw = dict(max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr, max_starts=1)
+    cur = fit_terms(terms, sig, y, sp.fit, starts, uncertainty=False, **kw)
+    new = fit_terms(terms, sig, y, sp.fit_validation, [[th] for th in cur.thetas], **kw)
+    r_fit, r_new = y - cur.predict(sig), y - new.predict(sig)
+    rmse = {k: dict(v) for k, v in result.rmse.items()}
+    for k, r in (("fit", r_fit), ("validation", r_fit), ("test", r_new)):
+        rmse[k]["after"] = float(np.sqrt(np.mean(r[getattr(sp, k)] ** 2)))
+    d_after = diagnose(sig, p.t, r_new, sp.fit_validation, p.probes, p.units,
+                       cfg.structure_threshold)
+    return dataclasses.replace(
+        result, problem=dataclasses.replace(p, meta=meta), final=new,
+        added=[n for n in result.added if n not in weak], rmse=rmse, diag_after=d_after,
+        unexplained=bool(d_after.structured or result.implausible),
+        residual_signature=d_after.signature)

@@ -1,0 +1,184 @@
+"""Summary, report, figure and simulation option of a thermal calibration (data kind 3).
+
+The shared parts (:func:`swgcal.report.base_summary`, :func:`swgcal.report.result_section`)
+carry the errors before and after, the effects and their parameters; here what a joint's
+warm-up adds: the fitted first-order constants as a :class:`swgsim.gear.thermal.JointThermal`
+option, and the figure of the measured temperature against both models.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from swgsim.files.ownership import write_owned
+
+from ..loop import CalibrationResult
+from ..report import base_summary, caveat, fmt_value, option_yaml, param_rows, result_section
+
+__all__ = ["ATTRIBUTION", "make_figures", "measured", "plot_joint", "render_report",
+           "simulation_files", "summarize"]
+
+#: The attribution the UR3 CobotOps day asks for (CC BY 4.0), wherever the file or a figure
+#: made from it appears: in every report and figure of this kind, whose format is that day's.
+ATTRIBUTION = ("Joint log format, and the UR3 day where it is the data: M. Tyrovolas, K. Aliev, "
+               "D. Antonelli and C. Stylios, \"UR3 CobotOps\", UCI Machine Learning "
+               "Repository, 2024, doi:10.24432/C5J891, CC BY 4.0.")
+
+
+def summarize(result: CalibrationResult, source: str | None = None) -> dict[str, Any]:
+    """Machine-readable summary of a thermal calibration (``summary.json``).
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        Of a thermal problem (:func:`swgcal.thermal.build_problem`).
+    source : str, optional
+        Path of the joint log.
+
+    Returns
+    -------
+    dict
+        The keys of :func:`swgcal.report.base_summary` (RMSE before and after on the test
+        part [K], ``effects_added`` with their parameters, ``unexplained``, ...) and
+        ``joint_thermal``: the final model's first-order constants (``r_th_k_per_w``,
+        ``tau_min``, ``ambient_c``) as fields of :class:`swgsim.gear.thermal.JointThermal`,
+        with a caveat where the run is unexplained.
+    """
+    s = base_summary(result, source)
+    base = result.final.estimates_of(result.final.terms[0].name)
+    why = caveat(result) or (
+        "The final residual is still structured (" + result.residual_signature.rstrip(".")
+        + "): the first-order constants were fitted beside what no library effect explains."
+        if result.unexplained else None)
+    s["joint_thermal"] = {"r_th_k_per_w": base["r_th_k_per_w"].value,
+                          "tau_min": base["tau_min"].value,
+                          "ambient_c": base["ambient_c"].value, "caveat": why}
+    s["attribution"] = ATTRIBUTION
+    return s
+
+
+def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
+    """The fitted first-order constants as a ``JointThermal`` option (``joint_thermal.yaml``).
+
+    Parameters
+    ----------
+    summary : mapping
+        From :func:`summarize`.
+
+    Returns
+    -------
+    dict of str to str
+        File name -> text.
+    """
+    jt = dict(summary["joint_thermal"])
+    head = [f"first-order constants of {summary['name']} (swgsim-calibrate, thermal); "
+            "fields of swgsim.gear.thermal.JointThermal",
+            "the loss proxy's constants scale r_th_k_per_w: see summary.json data"]
+    if jt.pop("caveat", None):
+        head.append(f"caveat: {_caveat_text(summary)}")
+    return {"joint_thermal.yaml": option_yaml(head, jt)}
+
+
+def _caveat_text(summary: Mapping[str, Any]) -> str:
+    """The caveat of an unexplained run, one line."""
+    return summary["joint_thermal"].get("caveat") or ""
+
+
+def render_report(result: CalibrationResult, summary: Mapping[str, Any],
+                  figures: Mapping[str, str] | None = None) -> str:
+    """Markdown report of a thermal calibration.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    summary : mapping
+        From :func:`summarize`.
+    figures : mapping of str to str, optional
+        Figure key (``"temperature"``) -> path relative to the report.
+
+    Returns
+    -------
+    str
+    """
+    s, d = summary, summary["data"]
+    lines = [f"# Thermal calibration: {s['name']}", "", s["attribution"], "",
+             f"Joint {d['joint']}, {d['n_samples']} readings from {d['start']} over "
+             f"{fmt_value(d['duration_h'], 3)} h, gaps {d['gaps_h']} h, "
+             f"{d['missing_readings']} rows without a reading. Loss proxy (1 − η) k_τ |I| |ω| "
+             f"with k_τ = {d['torque_per_amp_nm']} N m/A, η = {d['gear_efficiency']}.", "",
+             f"Held out: {s['heldout']}", ""]
+    lines += result_section(s, "first-order model", "")
+    lines += ["## Base model (final fit)", "", "| parameter | value | std | unit | |",
+              "|---|---|---|---|---|"]
+    lines += param_rows(s["base_model"]["params_in_final_model"])
+    for e in s["effects_added"]:
+        lines += ["", f"## Effect {e['name']}: {e['description']}", "",
+                  "| parameter | value | std | unit | |", "|---|---|---|---|---|"]
+        lines += param_rows(e["params"])
+    lines += ["", "## Candidates of the last iteration", "", "| candidate | validation RMSE "
+              "| status |", "|---|---|---|"]
+    for c in (s["iterations"][-1]["candidates"] if s["iterations"] else []):
+        lines.append(f"| {c['name']} | {fmt_value(c['val_rmse'])} K | {c['status']} |")
+    for key, path in dict(figures or {}).items():
+        lines += ["", f"![{key}]({path})"]
+    return "\n".join([*lines, ""])
+
+
+def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, str]:
+    """The measured temperature against the base and the final model, the held-out part
+    shaded (``figures/temperature.png``).
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    out_dir : str or Path
+
+    Returns
+    -------
+    dict of str to str
+        ``{"temperature": "figures/temperature.png"}``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    p = result.problem
+    before, after = result.predictions()
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    plot_joint(ax, p.t / 3600.0, measured(p), before, after, p.split.fit.max())
+    ax.set_title(p.name, fontsize=9)
+    fig.text(0.01, 0.01, ATTRIBUTION, fontsize=5)
+    out = Path(out_dir) / "figures"
+    out.mkdir(parents=True, exist_ok=True)
+    write_owned(out / "temperature.png",
+                lambda tmp: fig.savefig(tmp, format="png", dpi=110))
+    plt.close(fig)
+    return {"temperature": "figures/temperature.png"}
+
+
+def measured(problem: Any) -> np.ndarray:
+    """The problem's target [°C], NaN where the log has no reading (in no split)."""
+    sp = problem.split
+    out = np.full(problem.y.shape, np.nan)
+    idx = np.concatenate([sp.fit, sp.validation, sp.test])
+    out[idx] = problem.y[idx]
+    return out
+
+
+def plot_joint(ax: Any, hours: np.ndarray, y: np.ndarray, before: np.ndarray,
+               after: np.ndarray, last_fit: int) -> None:
+    """One joint's panel: measured ``y`` [°C] (NaN: no reading) and both models against
+    ``hours``, all shape (n,); the held-out part (after row ``last_fit``) shaded."""
+    ax.plot(hours, y, ".", ms=1, color="0.3", label="measured")
+    ax.plot(hours, before, lw=1, label="first-order (before)")
+    ax.plot(hours, after, lw=1, ls="--", label="with kept effects (after)")
+    ax.axvspan(hours[last_fit + 1] if last_fit + 1 < hours.size else hours[-1], hours[-1],
+               color="0.9", zorder=0, label="held out")
+    ax.set_xlabel("h since the first reading")
+    ax.set_ylabel("°C")
+    ax.legend(fontsize=6, loc="lower right")

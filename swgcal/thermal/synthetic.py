@@ -1,0 +1,98 @@
+"""Synthetic joint logs with known thermal constants, for the thermal calibration's tests.
+
+A log of one joint (the others quiet) at one reading a second: a pick-and-place duty whose
+speed level changes every 4 cycles and its holding current (a payload's) every 6, a gap
+standing still, and the temperature from the project's first-order model
+(:class:`.library.FirstOrderJoint`) with the given constants, plus, where asked, the
+motor's copper loss (a library effect) or a cooling fan switching with the cycle count (an
+effect outside the library), plus white noise. Nothing here is a measurement.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from swgsim.datasets.joint_log import JOINTS, JointLog
+
+from .library import FirstOrderJoint, first_order_lag
+from .options import GEAR_EFFICIENCY, TORQUE_PER_AMP_NM
+from .problem import thermal_signals
+
+__all__ = ["SyntheticThermal", "synthetic_joint_log"]
+
+
+@dataclass(frozen=True)
+class SyntheticThermal:
+    """Known constants of a synthetic log (all [choice], of the UR3 day's size).
+
+    Attributes
+    ----------
+    r_th_k_per_w, tau_min, ambient_c, initial_k : float
+        The base model's constants [K/W], [min], [°C], [K].
+    k_cu_k_per_a2, tau_cu_min : float
+        Copper loss (0: none) [K/A²], [min].
+    fan_k, fan_cycles : float, int
+        A fan cooling by ``fan_k`` [K] (lagged 3 min) during every other block of
+        ``fan_cycles`` cycles (0: none): outside the library.
+    noise_k : float
+        White noise on the temperature [K].
+    hours_before, gap_h, hours_after : float
+        Parts of the log [h].
+    seed : int
+    """
+
+    r_th_k_per_w: float = 0.5
+    tau_min: float = 35.0
+    ambient_c: float = 24.0
+    initial_k: float = 3.0
+    k_cu_k_per_a2: float = 0.0
+    tau_cu_min: float = 15.0
+    fan_k: float = 0.0
+    fan_cycles: int = 12
+    noise_k: float = 0.02
+    hours_before: float = 1.5
+    gap_h: float = 1.0
+    hours_after: float = 1.5
+    seed: int = 0
+
+
+def synthetic_joint_log(c: SyntheticThermal) -> JointLog:
+    """A synthetic joint log of joint 1 (module docstring).
+
+    Parameters
+    ----------
+    c : SyntheticThermal
+
+    Returns
+    -------
+    JointLog
+        Name ``synthetic``, the temperature of joint 1 the model's plus noise, the other
+        joints' readings constant.
+    """
+    rng = np.random.default_rng(c.seed)
+    n1, n2 = int(c.hours_before * 3600), int(c.hours_after * 3600)
+    t = np.concatenate([np.arange(n1), n1 - 1 + c.gap_h * 3600 + np.arange(n2)]).astype(float)
+    n = t.size
+    cycle = (np.arange(n) // 30 + 1).astype(np.int64)  # a cycle every 30 readings
+    block = rng.uniform(0.3, 1.0, size=cycle.max() // 4 + 2)[cycle // 4]  # duty level
+    hold = rng.uniform(0.5, 3.0, size=cycle.max() // 6 + 2)[cycle // 6]  # payload's [A]
+    phase = np.sin(2 * np.pi * np.arange(n) / 30.0)
+    speed = np.zeros((n, JOINTS))
+    current = np.full((n, JOINTS), 0.1)
+    speed[:, 1] = block * 2.0 * phase
+    current[:, 1] = hold + block * 2.0 * np.abs(phase)
+    temp = np.full((n, JOINTS), c.ambient_c)
+    log = JointLog("synthetic", "2026-01-01T08:00:00Z", t, temp, current, speed,
+                   np.zeros(n), cycle, np.zeros(n, bool), np.zeros(n, bool),
+                   np.array([n1]))
+    sig = thermal_signals(log, 1, TORQUE_PER_AMP_NM, GEAR_EFFICIENCY)
+    y = FirstOrderJoint().predict(sig, np.array([c.ambient_c, c.initial_k, c.r_th_k_per_w]),
+                                  np.array([c.tau_min]))
+    y = y + c.k_cu_k_per_a2 * first_order_lag(sig.current_sq_a2, sig.dt_s, c.tau_cu_min)
+    if c.fan_k and c.fan_cycles:
+        fan = ((cycle // c.fan_cycles) % 2 == 1).astype(float)
+        y = y - c.fan_k * first_order_lag(np.concatenate([[0.0], fan[:-1]]), sig.dt_s, 3.0)
+    temp[:, 1] = y + c.noise_k * rng.standard_normal(n)
+    return log

@@ -1,0 +1,192 @@
+"""A robot controller's log of its joints: temperatures, motor currents and speeds.
+
+The format read is that of the UR3 CobotOps day (M. Tyrovolas, K. Aliev, D. Antonelli and
+C. Stylios, "UR3 CobotOps", UCI Machine Learning Repository, 2024, doi:10.24432/C5J891,
+CC BY 4.0): a Universal Robots UR3 (six joints, each a strain wave gear) read once a
+second from its controller. Fields separated by ``;``, decimal commas, ISO 8601 time stamps,
+trailing empty columns; the column names as published (``Temperature_T0`` for joint 0,
+``cycle`` with a trailing space). The file is the user's: its path is an input, the
+project holds no copy.
+
+The table is read by :func:`swgsim.datasets.recording_table.read_table` (the reader of
+``swgsim-import``; bounded, one refusal line naming the file, the column and the row);
+here only the mapping of its columns to a :class:`JointLog`. An empty cell is a missing
+reading (NaN; the UR3 day has 54 such rows); text where a number or a flag belongs is
+refused, naming row and column. Steps over :data:`LOG_GAP_S` are the log's gaps
+(:attr:`JointLog.gap_rows`), kept as they are: what the joint did there is unknown.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from swgsim.datasets import recording_table as rt
+from swgsim.files.ownership import atomic_write_bytes
+
+__all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "JointLog", "read_joint_log",
+           "write_joint_log"]
+
+#: Joints of the arm [-] (a UR3: base, shoulder, elbow, three wrists).
+JOINTS = 6
+#: A time step longer than this is a gap of the log [s] (5 min, as
+#: :data:`swgsim.datasets.conditions.TRACE_GAP_MIN`: beyond a logger's hiccups of 9 and
+#: 31 s, short against a joint's thermal time constant) [choice].
+LOG_GAP_S = 300.0
+
+
+def _joint_columns() -> dict[str, str]:
+    cols = {"Timestamp": "time"}
+    for j in range(JOINTS):
+        cols[f"Current_J{j}"] = f"current[{j}]"
+        cols["Temperature_T0" if j == 0 else f"Temperature_J{j}"] = f"temperature[{j}]"
+        cols[f"Speed_J{j}"] = f"speed[{j}]"
+    cols.update({"Tool_current": "tool_current", "cycle ": "cycle",
+                 "Robot_ProtectiveStop": "protective_stop", "grip_lost": "grip_lost"})
+    return cols
+
+
+#: Column of the file -> the field it fills (as messages name it).
+LOG_COLUMNS = _joint_columns()
+
+
+@dataclass(frozen=True)
+class JointLog:
+    """A joint log, one row per reading, in the file's order.
+
+    Attributes
+    ----------
+    name : str
+        The file's stem.
+    start : str
+        The first time stamp, ISO 8601 as written.
+    t_s : ndarray, shape (n,)
+        Seconds since the first row, increasing [s].
+    temperature_c : ndarray, shape (n, 6)
+        Joint temperature sensors [°C] (resolution 0.0625 K in the UR3 day); NaN: missing.
+    current_a : ndarray, shape (n, 6)
+        Motor currents, signed [A]; NaN: missing.
+    speed_rad_s : ndarray, shape (n, 6)
+        Joint speeds, signed [rad/s]; NaN: missing.
+    tool_current_a : ndarray, shape (n,)
+        Tool flange current [A]; NaN: missing.
+    cycle : ndarray of int, shape (n,)
+        Pick-and-place cycle count [-].
+    protective_stop, grip_lost : ndarray of bool, shape (n,)
+        Event flags (a missing flag: False).
+    gap_rows : ndarray of int, shape (g,)
+        Rows that follow a step over :data:`LOG_GAP_S` (a gap before them).
+    """
+
+    name: str
+    start: str
+    t_s: np.ndarray
+    temperature_c: np.ndarray
+    current_a: np.ndarray
+    speed_rad_s: np.ndarray
+    tool_current_a: np.ndarray
+    cycle: np.ndarray
+    protective_stop: np.ndarray
+    grip_lost: np.ndarray
+    gap_rows: np.ndarray
+
+    @property
+    def n(self) -> int:
+        """Rows [-]."""
+        return int(self.t_s.size)
+
+
+def _flag(df, column: str, key: str, fmt: str) -> np.ndarray:
+    """A True/False column as bool, a missing cell False, anything else refused naming
+    the row."""
+    s = df[column]
+    text = s.astype(str).str.strip().str.lower()
+    ok = s.isna().to_numpy() | text.isin(["true", "false", "1", "0", "1.0", "0.0"]).to_numpy()
+    bad = np.flatnonzero(~ok)
+    if bad.size:
+        raise ValueError(f"column {column!r} ({key}), {rt.row_name(int(bad[0]), fmt)}: "
+                         f"{s.iloc[bad[0]]!r} is not a flag (True or False)")
+    return text.isin(["true", "1", "1.0"]).to_numpy() & ~s.isna().to_numpy()
+
+
+def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES) -> JointLog:
+    """Read a joint log in the UR3 CobotOps format (module docstring).
+
+    Parameters
+    ----------
+    path : path-like
+        The CSV (``;``-separated, decimal commas).
+    max_bytes : int
+        Largest file read [bytes] (:data:`swgsim.datasets.recording_table.MAX_TABLE_BYTES`).
+
+    Returns
+    -------
+    JointLog
+
+    Raises
+    ------
+    ValueError
+        One line naming the file and, where it applies, the column (with its field, e.g.
+        ``column 'Current_J3' (current[3]), row 12 (line 14): 'x' is not a number``): no
+        such file, not a table, a column missing, a cell not a number, a time stamp or a
+        flag, times not increasing.
+    """
+    df, fmt, _ = rt.read_table(path, LOG_COLUMNS, max_bytes, sep=";", decimal=",")
+    t_s = rt.datetime_seconds(df, "Timestamp", "time", fmt)
+    back = np.flatnonzero(np.diff(t_s) <= 0)
+    if back.size:
+        raise ValueError(f"column 'Timestamp' (time), {rt.row_name(int(back[0]) + 1, fmt)}: "
+                         f"{df['Timestamp'].iloc[back[0] + 1]!r} is not after the row "
+                         "before; the times must increase")
+
+    def block(prefix: str, t0: str | None = None) -> np.ndarray:  # (n, 6)
+        names = [t0 if (j == 0 and t0) else f"{prefix}{j}" for j in range(JOINTS)]
+        return np.column_stack([rt.numeric(df, c, LOG_COLUMNS[c], fmt, True, ",")
+                                for c in names])
+
+    cycle = rt.numeric(df, "cycle ", "cycle", fmt, decimal=",")
+    if np.any(cycle != np.round(cycle)):
+        i = int(np.flatnonzero(cycle != np.round(cycle))[0])
+        raise ValueError(f"column 'cycle ' (cycle), {rt.row_name(i, fmt)}: {cycle[i]:g} is "
+                         "not a whole count")
+    return JointLog(
+        name=os.path.splitext(os.path.basename(os.fspath(path)))[0],
+        start=str(df["Timestamp"].iloc[0]), t_s=t_s,
+        temperature_c=block("Temperature_J", "Temperature_T0"),
+        current_a=block("Current_J"), speed_rad_s=block("Speed_J"),
+        tool_current_a=rt.numeric(df, "Tool_current", "tool_current", fmt, True, ","),
+        cycle=cycle.astype(np.int64),
+        protective_stop=_flag(df, "Robot_ProtectiveStop", "protective_stop", fmt),
+        grip_lost=_flag(df, "grip_lost", "grip_lost", fmt),
+        gap_rows=np.flatnonzero(np.diff(t_s) > LOG_GAP_S) + 1)
+
+
+def write_joint_log(log: JointLog, path: str | os.PathLike) -> None:
+    """Write a joint log in the format :func:`read_joint_log` reads (``;``, decimal commas,
+    ISO 8601 times from ``log.start``, the published column names, two trailing empty
+    columns), atomically: a synthetic log as a file, e.g. for ``swgsim-calibrate``.
+
+    Parameters
+    ----------
+    log : JointLog
+    path : path-like
+        The CSV written.
+    """
+    import pandas as pd
+
+    stamps = (pd.Timestamp(log.start) + pd.to_timedelta(log.t_s, unit="s"))
+    cols: dict[str, object] = {"Num": np.arange(1, log.n + 1),
+                               "Timestamp": stamps.strftime("%Y-%m-%dT%H:%M:%S.%f").str[:-3]
+                               + "Z"}
+    for j in range(JOINTS):
+        cols[f"Current_J{j}"] = log.current_a[:, j]
+        cols["Temperature_T0" if j == 0 else f"Temperature_J{j}"] = log.temperature_c[:, j]
+    for j in range(JOINTS):
+        cols[f"Speed_J{j}"] = log.speed_rad_s[:, j]
+    cols.update({"Tool_current": log.tool_current_a, "cycle ": log.cycle,
+                 "Robot_ProtectiveStop": log.protective_stop, "grip_lost": log.grip_lost,
+                 "": "", " ": ""})
+    text = pd.DataFrame(cols).to_csv(sep=";", decimal=",", index=False, na_rep="")
+    atomic_write_bytes(path, text.encode())
