@@ -105,6 +105,11 @@ class PrognosisConfig:
     horizon_h : float
         Remaining hours beyond which a sample counts as "no failure in sight" (inf), in
         (0, 10^7] [h] (10^6 [choice]).
+    max_bins : int
+        Most groups of consecutive estimates the fit sees, in [8, 10^5] (256 [choice]): a
+        longer track is fitted on each group's inverse-variance weighted mean severity and
+        mean exposure, their weight the group's sum (exact for a law straight within a
+        group; a 100 h track then costs what 256 estimates cost).
     to_failure : RunToFailure
         The growth's constants (:class:`swgsim.datasets.growth.RunToFailure`): the laws'
         m, Y, Δσ per N m, film exponent, the median C and wear coefficient (s = 1), the
@@ -118,6 +123,7 @@ class PrognosisConfig:
     log_scale_span: float = 5.0
     interval_scale: float = 1.0
     horizon_h: float = 1e6
+    max_bins: int = 256
     to_failure: RunToFailure = field(default_factory=RunToFailure)
 
     def check(self) -> PrognosisConfig:
@@ -130,6 +136,7 @@ class PrognosisConfig:
         check_range(self.log_scale_span, 0.0, 10.0, "prognosis.log_scale_span", lo_open=True)
         check_range(self.interval_scale, 0.0, 20.0, "prognosis.interval_scale", lo_open=True)
         check_range(self.horizon_h, 0.0, 1e7, "prognosis.horizon_h", "h", lo_open=True)
+        check_range(self.max_bins, 8, 1e5, "prognosis.max_bins")
         for law, faults in LAWS.items():
             for fault in faults:  # the onset's severity is not the prognosis's: any > 0
                 check_to_failure(self.to_failure, fault, law, 1e-9, "prognosis")
@@ -322,7 +329,7 @@ def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
     ``cfg.horizon_h`` inf, its interval's log half-widths about the median times
     ``cfg.interval_scale``."""
     r = np.where(remaining > cfg.horizon_h, np.inf, np.maximum(remaining, 0.0))
-    q05, med, q95 = np.quantile(r, [0.05, 0.5, 0.95])
+    q05, med, q95 = np.quantile(r, [0.05, 0.5, 0.95], method="inverted_cdf")  # inf-safe
     if cfg.interval_scale != 1.0 and 0 < med < np.inf:
         k = cfg.interval_scale
         q05 = med * (q05 / med) ** k if q05 > 0 else 0.0
@@ -561,6 +568,11 @@ def predict_growth(track: Track, fault: str, alarm_hour: float | None, recorded:
     tf = cfg.to_failure
     w = ((2.0 * Z90) / (hi - lo)) ** 2  # 1/σ² of each estimate
     x = _track_exposure(fault, h, recorded, wh, tf)
+    if y.size > cfg.max_bins:  # groups of consecutive estimates (PrognosisConfig.max_bins)
+        first = np.unique(np.linspace(0, y.size, cfg.max_bins, endpoint=False).astype(int))
+        wsum = np.add.reduceat(w, first)
+        y, x = np.add.reduceat(w * y, first) / wsum, np.add.reduceat(w * x, first) / wsum
+        w = wsum
     s, u0 = _posterior_draws(y, w, x, fault, cfg, np.random.default_rng(seed))
     u_fail, b = transformed(fault, np.array([thr]), tf)
     u_fail = float(u_fail[0])

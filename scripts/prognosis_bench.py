@@ -1,0 +1,161 @@
+"""The prognosis's cost per update and its intervals' coverage on synthetic lives
+(learn/monitor/prognosis.py; docs/monitor.md, "Prognosis (groundwork)").
+
+A synthetic life: the paper's duty (2000 and 4000 rpm, 7, 39 and 70 N m, 10 min each,
+20 °C), a window every 2 min, the fault grown from hour 0 by swgsim.datasets.growth's law
+with the gear's scale drawn with the default scatter, the monitor's estimates the true
+severity plus N(0, σ) with the matching 90 % interval, the alarm at a fixed severity.
+
+Cost: one update of each predictor for a track of 100 h since the alarm, an estimate per
+window (3000 estimates), one core (BLAS and OpenMP threads set to 1 here), the median of
+repeats, per update and per hour of operation. Coverage: the share of lives whose true
+failure hour lies in the 90 % interval, and the interval's median width over the true
+remaining hours, at 10, 30 and 60 % of the way from the alarm to failure.
+
+    python scripts/prognosis_bench.py [--lives 100]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # one core, before numpy loads its BLAS
+
+import argparse  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from learn.monitor.prognosis import Z90, Duty, Track, predict_growth  # noqa: E402
+from learn.monitor.prognosis_baselines import predict_linear, predict_wiener  # noqa: E402
+from swgsim.datasets.growth import (  # noqa: E402
+    LAWS,
+    RunToFailure,
+    failure_hour,
+    grown_severity,
+)
+
+#: The paper's duty's speeds [rpm] and loads [N m], 10 min each; a window every 2 min.
+SPEEDS, LOADS, WINDOW_H = (2000.0, 4000.0), (7.0, 39.0, 70.0), 2.0 / 60.0
+#: Severity at which the synthetic monitor alarms, the severity at hour 0 and the hours
+#: simulated (beyond failure at the default scatter's ±3σ) [choice].
+ALARM = {"root_tooth_crack": 0.1, "wear": 0.15}
+INITIAL = {"root_tooth_crack": 0.05, "wear": 0.0}
+HOURS = {"root_tooth_crack": 1500.0, "wear": 800.0}
+#: The estimates' σ (about the diagnosis model's on the bench lives [choice]).
+SIGMA = 0.03
+
+
+def paper_duty(h: np.ndarray, load_factor: float = 1.0, temp_c: float = 20.0
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Input speed [rpm], acting load [N m] and temperature [°C] of the paper's duty at
+    operating hours ``h`` (shape (W,)), the loads times ``load_factor``."""
+    blk = np.floor(h * 6).astype(int) % 6
+    n = np.where(blk < 3, SPEEDS[0], SPEEDS[1])
+    return n, np.array(LOADS)[blk % 3] * load_factor, np.full(h.shape, temp_c)
+
+
+def synthetic_life(fault: str, seed: int, frac: float, sigma: float = SIGMA, every: int = 15,
+                   track_h: float | None = None) -> tuple[Track, float, Duty, np.ndarray,
+                                                          float]:
+    """A gear's life to failure and the monitor's track of it (module docstring).
+
+    Parameters
+    ----------
+    fault : str
+        ``root_tooth_crack`` or ``wear``.
+    seed : int
+        The gear's scale and the estimates' noise.
+    frac : float
+        The track ends this share of the way from the alarm to failure.
+    sigma : float
+        The estimates' σ [-].
+    every : int
+        An estimate every this many windows.
+    track_h : float or None
+        The track's hours since the alarm instead of ``frac``.
+
+    Returns
+    -------
+    track, alarm_hour, recorded duty, the recorded windows' hours (shape (W,)), the true
+    failure hour [h].
+    """
+    rng = np.random.default_rng(seed)
+    tf = RunToFailure()
+    law = next(g for g, fs in LAWS.items() if fault in fs)
+    h = np.arange(0.0, HOURS[fault], WINDOW_H)
+    n, t, tc = paper_duty(h)
+    scale = float(np.exp(tf.scatter * rng.standard_normal()))
+    sev = grown_severity(fault, law, tf, 0.0, INITIAL[fault], h, 2.0, n, t, tc, scale=scale)
+    fail = failure_hour(h, sev, tf.failure_severity(fault))
+    alarm = float(h[np.argmax(sev >= ALARM[fault])])
+    now = alarm + (frac * (fail - alarm) if track_h is None else track_h)
+    since = (h >= alarm) & (h <= now)
+    idx = np.flatnonzero(since)[::every]
+    est = sev[idx] + sigma * rng.standard_normal(idx.size)
+    track = Track(h[idx], est, est - Z90 * sigma, est + Z90 * sigma)
+    return (track, alarm, Duty.from_windows(h[since], n[since], t[since], tc[since]),
+            h[since], fail)
+
+
+def cost(fault: str, repeats: int = 7) -> dict[str, float]:
+    """Median seconds of one update of each predictor on a 100 h track, an estimate per
+    window."""
+    track, alarm, duty, wh, _ = synthetic_life(fault, 0, 0.0, every=1, track_h=100.0)
+    calls = {"growth": lambda: predict_growth(track, fault, alarm, duty, wh),
+             "linear": lambda: predict_linear(track, fault, alarm),
+             "wiener": lambda: predict_wiener(track, fault, alarm)}
+    out = {}
+    for name, call in calls.items():
+        call()  # imports and caches out of the timing
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            call()
+            times.append(time.perf_counter() - t0)
+        out[name] = float(np.median(times))
+    out["estimates"] = float(track.hours.size)
+    out["track_h"] = float(track.hours[-1] - alarm)
+    return out
+
+
+def coverage(fault: str, frac: float, lives: int) -> dict[str, tuple[float, float]]:
+    """Per predictor: the share of ``lives`` whose failure hour the 90 % interval holds,
+    and the interval's median width / true remaining hours (inf: an open interval)."""
+    hits: dict[str, list[float]] = {"growth": [], "linear": [], "wiener": []}
+    width: dict[str, list[float]] = {k: [] for k in hits}
+    for seed in range(lives):
+        track, alarm, duty, wh, fail = synthetic_life(fault, seed, frac)
+        for name, p in (("growth", predict_growth(track, fault, alarm, duty, wh, seed=seed)),
+                        ("linear", predict_linear(track, fault, alarm, seed=seed)),
+                        ("wiener", predict_wiener(track, fault, alarm, seed=seed))):
+            hits[name].append(p.failure_hour_q05 <= fail <= p.failure_hour_q95)
+            open_ = np.isinf(p.failure_hour_q95)
+            width[name].append(np.inf if open_ else
+                               (p.failure_hour_q95 - p.failure_hour_q05) / (fail - p.hour))
+    return {k: (float(np.mean(hits[k])), float(np.median(width[k]))) for k in hits}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--lives", type=int, default=100, help="synthetic lives per cell")
+    args = ap.parse_args()
+    print("cost of one update, 100 h track, an estimate every 2 min, one core:")
+    for fault in ALARM:
+        c = cost(fault)
+        for name in ("growth", "linear", "wiener"):
+            print(f"  {fault:17s} {name:7s} {c[name] * 1e3:7.1f} ms per update, "
+                  f"{c[name] * 1e3 / c['track_h']:6.2f} ms per hour of operation "
+                  f"({c['estimates']:.0f} estimates)")
+    print(f"coverage of the 90 % interval and its median width / true remaining hours, "
+          f"{args.lives} lives, an estimate every 30 min, sigma {SIGMA}:")
+    for fault in ALARM:
+        for frac in (0.1, 0.3, 0.6):
+            row = coverage(fault, frac, args.lives)
+            cells = "  ".join(f"{k} {v[0]:.2f} (width {v[1]:.2f})" for k, v in row.items())
+            print(f"  {fault:17s} at {frac:.0%} of the way: {cells}")
+
+
+if __name__ == "__main__":
+    main()
