@@ -10,7 +10,9 @@ Cost: one update of each predictor for a track of 100 h since the alarm, an esti
 window (3000 estimates), one core (BLAS and OpenMP threads set to 1 here), the median of
 repeats, per update and per hour of operation. Coverage: the share of lives whose true
 failure hour lies in the 90 % interval, and the interval's median width over the true
-remaining hours, at 10, 30 and 60 % of the way from the alarm to failure.
+remaining hours, at 10, 30 and 60 % of the way from the alarm to failure. Calibration:
+the estimates' errors correlated (AR(1)), the split-conformal scale from half the lives,
+the other half's coverage without and with it.
 
     python scripts/prognosis_bench.py [--lives 100]
 """
@@ -26,9 +28,11 @@ import argparse  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+from scipy.signal import lfilter  # noqa: E402
 
-from learn.monitor.prognosis import Z90, Duty, Track, predict_growth  # noqa: E402
+from learn.monitor.prognosis import Z90, Duty, Prognosis, Track, predict_growth  # noqa: E402
 from learn.monitor.prognosis_baselines import predict_linear, predict_wiener  # noqa: E402
+from learn.monitor.prognosis_calibration import conformal_interval_scale  # noqa: E402
 from swgsim.datasets.growth import (  # noqa: E402
     LAWS,
     RunToFailure,
@@ -45,6 +49,8 @@ INITIAL = {"root_tooth_crack": 0.05, "wear": 0.0}
 HOURS = {"root_tooth_crack": 1500.0, "wear": 800.0}
 #: The estimates' σ (about the diagnosis model's on the bench lives [choice]).
 SIGMA = 0.03
+#: Correlation of consecutive estimates' errors in the calibration's lives [choice].
+PHI = 0.9
 
 
 def paper_duty(h: np.ndarray, load_factor: float = 1.0, temp_c: float = 20.0
@@ -57,8 +63,8 @@ def paper_duty(h: np.ndarray, load_factor: float = 1.0, temp_c: float = 20.0
 
 
 def synthetic_life(fault: str, seed: int, frac: float, sigma: float = SIGMA, every: int = 15,
-                   track_h: float | None = None) -> tuple[Track, float, Duty, np.ndarray,
-                                                          float]:
+                   track_h: float | None = None, phi: float = 0.0
+                   ) -> tuple[Track, float, Duty, np.ndarray, float]:
     """A gear's life to failure and the monitor's track of it (module docstring).
 
     Parameters
@@ -75,6 +81,9 @@ def synthetic_life(fault: str, seed: int, frac: float, sigma: float = SIGMA, eve
         An estimate every this many windows.
     track_h : float or None
         The track's hours since the alarm instead of ``frac``.
+    phi : float
+        Correlation of consecutive estimates' errors, an AR(1) process of stationary σ
+        ``sigma``, in [0, 1) (0: independent).
 
     Returns
     -------
@@ -93,7 +102,11 @@ def synthetic_life(fault: str, seed: int, frac: float, sigma: float = SIGMA, eve
     now = alarm + (frac * (fail - alarm) if track_h is None else track_h)
     since = (h >= alarm) & (h <= now)
     idx = np.flatnonzero(since)[::every]
-    est = sev[idx] + sigma * rng.standard_normal(idx.size)
+    z = rng.standard_normal(idx.size)
+    if phi > 0:  # AR(1): e_k = phi e_(k-1) + sqrt(1 - phi^2) z_k, e_0 = z_0
+        z[1:] *= np.sqrt(1.0 - phi ** 2)
+        z = lfilter([1.0], [1.0, -phi], z)
+    est = sev[idx] + sigma * z
     track = Track(h[idx], est, est - Z90 * sigma, est + Z90 * sigma)
     return (track, alarm, Duty.from_windows(h[since], n[since], t[since], tc[since]),
             h[since], fail)
@@ -137,6 +150,28 @@ def coverage(fault: str, frac: float, lives: int) -> dict[str, tuple[float, floa
     return {k: (float(np.mean(hits[k])), float(np.median(width[k]))) for k in hits}
 
 
+def calibration(fault: str, frac: float, lives: int, phi: float) -> tuple[float, ...]:
+    """Split conformal with correlated estimates: the scale from lives 0 .. lives/2 − 1
+    (the training gears'), the coverage of lives/2 .. lives − 1 without and with it."""
+    half = lives // 2
+    ps, fails = [], []
+    for seed in range(lives):
+        track, alarm, duty, wh, fail = synthetic_life(fault, seed, frac, phi=phi)
+        ps.append(predict_growth(track, fault, alarm, duty, wh, seed=seed))
+        fails.append(fail)
+    fails_a = np.array(fails)
+    scale = conformal_interval_scale(ps[:half], fails_a[:half])
+
+    def held(p: Prognosis, f: float, k: float) -> bool:
+        lo = p.remaining_h_median * (p.remaining_h_q05 / p.remaining_h_median) ** k
+        hi = p.remaining_h_median * (p.remaining_h_q95 / p.remaining_h_median) ** k
+        return p.hour + lo <= f <= p.hour + hi
+
+    test = list(zip(ps[half:], fails_a[half:], strict=True))
+    return (scale, float(np.mean([held(p, f, 1.0) for p, f in test])),
+            float(np.mean([held(p, f, scale) for p, f in test])))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--lives", type=int, default=100, help="synthetic lives per cell")
@@ -155,6 +190,12 @@ def main() -> None:
             row = coverage(fault, frac, args.lives)
             cells = "  ".join(f"{k} {v[0]:.2f} (width {v[1]:.2f})" for k, v in row.items())
             print(f"  {fault:17s} at {frac:.0%} of the way: {cells}")
+    print(f"split conformal, estimates' errors AR(1) with phi {PHI} (neighbours share "
+          f"windows), at 30 % of the way: scale from {args.lives // 2} lives, coverage "
+          f"of the other {args.lives - args.lives // 2} without and with it:")
+    for fault in ALARM:
+        scale, before, after = calibration(fault, 0.3, args.lives, PHI)
+        print(f"  {fault:17s} scale {scale:.2f}: coverage {before:.2f} -> {after:.2f}")
 
 
 if __name__ == "__main__":
