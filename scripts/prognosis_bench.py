@@ -12,7 +12,8 @@ repeats, per update and per hour of operation. Coverage: the share of lives whos
 failure hour lies in the 90 % interval, and the interval's median width over the true
 remaining hours, at 10, 30 and 60 % of the way from the alarm to failure. Calibration:
 the estimates' errors correlated (AR(1)), the split-conformal scale from half the lives,
-the other half's coverage without and with it.
+the other half's coverage without and with it. The tiny_failure preset's lives: the data
+set's own (staircase) severity plus noise.
 
     python scripts/prognosis_bench.py [--lives 100]
 """
@@ -30,7 +31,14 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.signal import lfilter  # noqa: E402
 
-from learn.monitor.prognosis import Z90, Duty, Prognosis, Track, predict_growth  # noqa: E402
+from learn.monitor.prognosis import (  # noqa: E402
+    Z90,
+    Duty,
+    Prognosis,
+    PrognosisConfig,
+    Track,
+    predict_growth,
+)
 from learn.monitor.prognosis_baselines import predict_linear, predict_wiener  # noqa: E402
 from learn.monitor.prognosis_calibration import conformal_interval_scale  # noqa: E402
 from swgsim.datasets.growth import (  # noqa: E402
@@ -172,6 +180,40 @@ def calibration(fault: str, frac: float, lives: int, phi: float) -> tuple[float,
             float(np.mean([held(p, f, scale) for p, f in test])))
 
 
+def tiny_failure(fracs: tuple[float, ...] = (0.2, 0.4), seeds: int = 5
+                 ) -> dict[float, tuple[int, int]]:
+    """The ``tiny_failure`` preset's lives (the schedule only, no window simulated): the
+    data set's severity (a staircase of ``severity_levels`` steps, what the windows hold)
+    plus N(0, σ) at every window from the first at 0.15 to ``frac`` of the way to the
+    exact law's failure hour; per ``frac``, (intervals holding it, prognoses) over the
+    gears and ``seeds`` noise seeds, the growth constants the preset's."""
+    from swgcli import dataset_preset
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import record_bank
+
+    p = plan(dataset_preset("tiny_failure"))
+    life = p.config.life
+    cfg = PrognosisConfig(min_track_h=0.25, to_failure=life.fault.to_failure)
+    out = {f: [0, 0] for f in fracs}
+    for g in p.config.gears:
+        sch = LifeSimulator(p, int(g.id), life, record_bank(p, int(g.id))).schedule
+        n = np.array([sch.duty[d].n_in_rpm for d in sch.duty_index])
+        t = np.array([sch.duty[d].t_out_nm for d in sch.duty_index])
+        alarm = float(sch.hour[np.argmax(sch.severity >= 0.15)])
+        for frac, seed in ((f, k) for f in fracs for k in range(seeds)):
+            on = (sch.hour >= alarm) & (sch.hour <= alarm + frac * (sch.failure_h - alarm))
+            est = sch.severity[on] + SIGMA * np.random.default_rng(seed).standard_normal(
+                on.sum())
+            track = Track(sch.hour[on], est, est - Z90 * SIGMA, est + Z90 * SIGMA)
+            duty = Duty.from_windows(sch.hour[on], n[on], t[on], np.full(on.sum(), 20.0))
+            pr = predict_growth(track, life.fault.fault, alarm, duty, sch.hour[on], cfg,
+                                seed=seed)
+            out[frac][0] += pr.failure_hour_q05 <= sch.failure_h <= pr.failure_hour_q95
+            out[frac][1] += 1
+    return {f: (a, b) for f, (a, b) in out.items()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--lives", type=int, default=100, help="synthetic lives per cell")
@@ -196,6 +238,10 @@ def main() -> None:
     for fault in ALARM:
         scale, before, after = calibration(fault, 0.3, args.lives, PHI)
         print(f"  {fault:17s} scale {scale:.2f}: coverage {before:.2f} -> {after:.2f}")
+    print(f"tiny_failure preset, the data set's staircase severity + N(0, {SIGMA}), "
+          f"intervals holding the failure hour (gears x 5 noise seeds):")
+    for frac, (hit, total) in tiny_failure().items():
+        print(f"  at {frac:.0%} of the way: {hit}/{total}")
 
 
 if __name__ == "__main__":
