@@ -31,12 +31,15 @@ from pathlib import Path
 def _row(res) -> dict:
     """One joint's table row from its CalibrationResult."""
     base = res.base_model_final.estimates_of("first_order")
-    effects = {n: {k: e.value for k, e in res.final.estimates_of(n).items()}
+    effects = {n: {k: (e.value, e.std) for k, e in res.final.estimates_of(n).items()}
                for n in res.added}
+    kept = [c for it in res.iterations for c in it.candidates if c.accepted]
     return {"joint": res.problem.meta["joint"], "rmse": res.rmse,
             "tau_min": base["tau_min"].value, "tau_std": base["tau_min"].std,
             "r_th": base["r_th_k_per_w"].value, "r_th_std": base["r_th_k_per_w"].std,
-            "ambient_c": base["ambient_c"].value, "effects": effects,
+            "ambient_c": base["ambient_c"].value, "effects": effects, "kept": kept,
+            "final_base": {k: (e.value, e.std)
+                           for k, e in res.final.estimates_of("first_order").items()},
             "unexplained": res.unexplained, "signature": res.residual_signature,
             "removed": res.problem.meta.get("removed", []),
             "best": (min(res.iterations[-1].candidates, key=lambda c: c.val_rmse)
@@ -99,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         m = r["rmse"]
-        fx = "; ".join(f"{n} ({', '.join(f'{k} {v:.3g}' for k, v in p.items())})"
+        fx = "; ".join(f"{n} ({', '.join(f'{k} {v:.3g} ± {s:.2g}' for k, (v, s) in p.items())})"
                        for n, p in r["effects"].items()) or "none"
         print(f"| J{r['joint']} | {r['tau_min']:.1f} ± {r['tau_std']:.1f} | {r['r_th']:.3g} ± "
               f"{r['r_th_std']:.2g} | {r['ambient_c']:.1f} | {m['fit']['before']:.3f} | "
@@ -114,6 +117,11 @@ def main(argv: list[str] | None = None) -> int:
     for r in rows:
         print(f"J{r['joint']}: {r['signature']}" + (f" removed: {r['removed']}"
                                                     if r["removed"] else ""))
+        for c in r["kept"]:
+            print(f"    kept {c.name}: validation gain {100 * c.rel_improvement:.3g} %, held-out "
+                  f"2 ln Λ {c.heldout_evidence:.3g}, effective ΔBIC {c.delta_bic_eff:+.4g}; "
+                  "base with it: " + ", ".join(f"{k} {v:.4g} ± {s:.2g}"
+                                               for k, (v, s) in r["final_base"].items()))
         if r["best"] is not None:
             b = r["best"]
             print(f"    best candidate {b.name}: validation RMSE {b.val_rmse:.3f} K, "

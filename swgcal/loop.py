@@ -9,8 +9,9 @@ the held-out split. Each data kind builds one (:func:`swgcal.friction.build_prob
 
 Acceptance rule: evidence, on one scale for every kind of data. Every candidate is added
 to the current model and refitted on the fit samples (its own nonlinear parameters
-optimised, those of the current model held, all linear coefficients refitted);
-candidates are ranked by validation RMSE. Going down the ranking, the first candidate that
+optimised, those of the current model held, or refitted with it where the problem says
+so, :attr:`Problem.screen_jointly`; all linear coefficients refitted); candidates are
+ranked by validation RMSE. Going down the ranking, the first candidate that
 passes all of
 
 1. *held-out evidence*: twice the log-likelihood ratio of the validation samples,
@@ -89,12 +90,8 @@ class Problem:
 
     Attributes
     ----------
-    name : str
-        Data name (file stem).
-    kind : str
-        ``"friction"`` or ``"strain"``.
-    units : str
-        Units of the target.
+    name, kind, units : str
+        Data name (file stem); ``"friction"``, ``"strain"`` or ``"thermal"``; the target's.
     signals : object
         Passed to terms and probes.
     y : ndarray, shape (n,)
@@ -108,6 +105,9 @@ class Problem:
     split : HeldOutSplit
     meta : dict
         Anything to carry into the report.
+    screen_jointly : bool, default False
+        Refit the current model's nonlinear parameters with each candidate (from their
+        values) instead of holding them: effects that trade off against the base's own.
     """
 
     name: str
@@ -121,6 +121,7 @@ class Problem:
     probes: Sequence[Probe]
     split: HeldOutSplit
     meta: dict[str, Any] = field(default_factory=dict)
+    screen_jointly: bool = False
 
 
 @dataclass(frozen=True)
@@ -194,8 +195,7 @@ class CandidateScore:
         BIC change with the effective number of samples n / τ_int (used for the rule).
     heldout_evidence : float
         2 ln Λ_val: twice the log-likelihood ratio of the validation samples, candidate
-        against the current model, with n_val / τ_int effective samples (used for the
-        rule).
+        against the current model, n_val / τ_int effective samples (used for the rule).
     accepted : bool
     status : str
         Why it was accepted or rejected.
@@ -249,8 +249,7 @@ class Iteration:
     def as_dict(self) -> dict[str, Any]:
         return {"index": self.index, "model": self.model, "val_rmse": self.val_rmse,
                 "bic": self.bic, "diagnosis": self.diagnosis.as_dict(),
-                "candidates": [c.as_dict() for c in self.candidates],
-                "accepted": self.accepted}
+                "candidates": [c.as_dict() for c in self.candidates], "accepted": self.accepted}
 
 
 @dataclass
@@ -307,9 +306,8 @@ class CalibrationResult:
         """Single candidates of the last iteration rejected only for lack of evidence
         although their held-out gain is positive (:attr:`CandidateScore.small`), best
         first: effects that may be there but that these data cannot establish."""
-        if not self.iterations:
-            return []
-        return [c for c in self.iterations[-1].candidates if c.small and " + " not in c.name]
+        last = self.iterations[-1].candidates if self.iterations else []
+        return [c for c in last if c.small and " + " not in c.name]
 
     def effect_terms(self) -> list[Term]:
         """Accepted effect terms of the final model, in order of acceptance."""
@@ -344,13 +342,14 @@ def _score(problem: Problem, fit: FitResult) -> tuple[np.ndarray, float]:
 def _fit_candidate(problem: Problem, current: FitResult, new_terms: Sequence[Term],
                    starts_new: Sequence[Sequence[np.ndarray]], fit_kw: dict[str, Any],
                    val_cur: float, kind: str) -> CandidateScore | None:
-    """Add ``new_terms`` to the current model: their θ optimised, the rest held."""
+    """Add ``new_terms`` to the current model: their θ optimised, the rest held (or
+    optimised too, from the current values: :attr:`Problem.screen_jointly`)."""
     sig, sp = problem.signals, problem.split
     cur_th = {t.name: th for t, th in zip(current.terms, current.thetas, strict=True)}
     new_st = {t.name: st for t, st in zip(new_terms, starts_new, strict=True)}
     terms = _order(list(current.terms) + list(new_terms))
     starts = [[cur_th[t.name]] if t.name in cur_th else new_st[t.name] for t in terms]
-    fixed = [t.name in cur_th for t in terms]
+    fixed = [t.name in cur_th and not problem.screen_jointly for t in terms]
     try:
         f = fit_terms(terms, sig, problem.y, sp.fit, starts, fixed=fixed, uncertainty=False,
                       **fit_kw)
@@ -421,8 +420,9 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
     Returns the candidates and the noise model's τ_int: the smallest integrated
     autocorrelation time of the residuals of the current model, of every candidate that
     helps on the validation data, and of the richest model of the iteration (the current
-    model plus all those candidates, nonlinear parameters as fitted singly, linear ones
-    refitted jointly). Like Mallows' Cp, which takes σ² from the full model, the noise
+    model plus all those candidates, nonlinear parameters as fitted singly - or refitted
+    jointly from there under :attr:`Problem.screen_jointly` -, linear ones refitted
+    jointly). Like Mallows' Cp, which takes σ² from the full model, the noise
     model then reflects what the library can explain: residual structure that library
     effects explain does not count against a candidate; structure nothing explains does.
     Only candidates that could be accepted enter the noise model (in range, primary
@@ -454,7 +454,8 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
         terms = _order(terms)
         try:
             full = fit_terms(terms, sig, problem.y, sp.fit, [[thetas[t.name]] for t in terms],
-                             fixed=[True] * len(terms), uncertainty=False, **fit_kw)
+                             fixed=[not problem.screen_jointly] * len(terms),
+                             uncertainty=False, **{**fit_kw, "max_starts": 1})
             tau = min(full.tau_int, tau)
         except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
             log.debug("full model failed: %s", e)
@@ -575,9 +576,8 @@ def _iteration(problem: Problem, cfg: SelectionConfig, keys: Sequence[str], it: 
     record = Iteration(it, [t.name for t in current.terms], val_cur, current.bic, diag, cands,
                        accepted.name if accepted else None)
     best = cands[0] if cands else None
-    log.info("%s iteration %d: val RMSE %.4g, best %s (%.4g), accepted %s", problem.name,
-             it, val_cur, best.name if best else None, best.val_rmse if best else np.nan,
-             accepted.name if accepted else None)
+    log.info("%s iteration %d: val RMSE %.4g, best %s (%.4g), accepted %s", problem.name, it,
+             val_cur, best and best.name, best.val_rmse if best else np.nan, record.accepted)
     return record, accepted
 
 
@@ -640,9 +640,8 @@ def _final_result(problem: Problem, cfg: SelectionConfig, sel: _Selection,
     }
     d_before = diagnose(sig, problem.t, r_b, idx_fv, problem.probes, problem.units,
                         cfg.structure_threshold)
-    d_after = d_before if not sel.added else diagnose(sig, problem.t, r_a, idx_fv,
-                                                      problem.probes, problem.units,
-                                                      cfg.structure_threshold)
+    d_after = d_before if not sel.added else diagnose(
+        sig, problem.t, r_a, idx_fv, problem.probes, problem.units, cfg.structure_threshold)
     return CalibrationResult(
         problem=problem, config=cfg, iterations=sel.iterations, added=sel.added,
         base_model_final=base_final, final=final, rmse=rmse, diag_before=d_before,

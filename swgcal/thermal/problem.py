@@ -228,7 +228,7 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
         name=f"{log.name}_J{joint}", kind="thermal", units="K", signals=sig,
         y=np.where(np.isfinite(y), y, np.nanmean(y)), t=log.t_s,
         base_model=(FirstOrderJoint(),), library={k: THERMAL_LIBRARY[k] for k in keys},
-        probes=thermal_probes(), split=split,
+        probes=thermal_probes(), split=split, screen_jointly=True,
         meta={"joint": joint, "n_samples": log.n, "start": log.start,
               "duration_h": float(log.t_s[-1] / 3600), "gaps_h": [
                   float((log.t_s[g] - log.t_s[g - 1]) / 3600) for g in log.gap_rows],
@@ -273,8 +273,12 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     then every kept effect whose primary parameters the final fit (fit + validation) does
     not pin down is removed and the model refitted, as the friction side removes a
     ripple without support of its own (:func:`swgcal.friction.calibrate`): a pair the
-    loop accepted while the base's time constant was held can carry a member that the
-    joint refit leaves at zero.
+    loop accepted can carry a member that the final fit on fit + validation leaves at
+    zero. The problem screens every candidate with the base's τ, gain and offset refitted
+    with it (:attr:`swgcal.loop.Problem.screen_jointly`): a second heat source trades off
+    against the base's own time constant, and held at its value fitted without the
+    effect, the base leaves a single effect too little to show (a planted copper loss
+    came through only as a pair, a second time constant not at all).
 
     Parameters
     ----------

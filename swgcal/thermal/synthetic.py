@@ -1,11 +1,12 @@
 """Synthetic joint logs with known thermal constants, for the thermal calibration's tests.
 
 A log of one joint (the others quiet) at one reading a second: a pick-and-place duty whose
-speed level changes every 4 cycles and its holding current (a payload's) every 6, a gap
-standing still, and the temperature from the project's first-order model
-(:class:`.library.FirstOrderJoint`) with the given constants, plus, where asked, the
-motor's copper loss (a library effect) or a cooling fan switching with the cycle count (an
-effect outside the library), plus white noise. Nothing here is a measurement.
+speed level changes every 4 cycles and its holding current (a payload's) every 6, where
+asked pauses standing still, a gap standing still, and the temperature from the project's
+first-order model (:class:`.library.FirstOrderJoint`) with the given constants, plus, where
+asked, one or more library effects (the motor's copper loss, a second slow time constant,
+cooling at standstill) or a cooling fan switching with the cycle count (an effect outside
+the library), plus white noise. Nothing here is a measurement.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import numpy as np
 
 from swgsim.datasets.joint_log import JOINTS, JointLog
 
-from .library import FirstOrderJoint, first_order_lag
+from .library import CopperLoss, FirstOrderJoint, HousingLag, StandstillCooling, first_order_lag
 from .options import GEAR_EFFICIENCY, TORQUE_PER_AMP_NM
 from .problem import thermal_signals
 
@@ -32,7 +33,15 @@ class SyntheticThermal:
     r_th_k_per_w, tau_min, ambient_c, initial_k : float
         The base model's constants [K/W], [min], [°C], [K].
     k_cu_k_per_a2, tau_cu_min : float
-        Copper loss (0: none) [K/A²], [min].
+        Copper loss (0: none) [K/A²], [min] (:class:`.library.CopperLoss`).
+    r2_k_per_w, tau2_min : float
+        A second, slow path of the gear's loss (0: none) [K/W], [min]
+        (:class:`.library.HousingLag`).
+    dt_still_k, tau_still_min : float
+        Cooling at standstill (0: none) [K], [min] (:class:`.library.StandstillCooling`).
+    pause_blocks : int
+        The joint stands still (holding current only) through every ``pause_blocks``-th
+        block of 4 cycles (0: never).
     fan_k, fan_cycles : float, int
         A fan cooling by ``fan_k`` [K] (lagged 3 min) during every other block of
         ``fan_cycles`` cycles (0: none): outside the library.
@@ -49,6 +58,11 @@ class SyntheticThermal:
     initial_k: float = 3.0
     k_cu_k_per_a2: float = 0.0
     tau_cu_min: float = 15.0
+    r2_k_per_w: float = 0.0
+    tau2_min: float = 150.0
+    dt_still_k: float = 0.0
+    tau_still_min: float = 20.0
+    pause_blocks: int = 0
     fan_k: float = 0.0
     fan_cycles: int = 12
     noise_k: float = 0.02
@@ -79,6 +93,8 @@ def synthetic_joint_log(c: SyntheticThermal) -> JointLog:
     block = rng.uniform(0.3, 1.0, size=cycle.max() // 4 + 2)[cycle // 4]  # duty level
     hold = rng.uniform(0.5, 3.0, size=cycle.max() // 6 + 2)[cycle // 6]  # payload's [A]
     phase = np.sin(2 * np.pi * np.arange(n) / 30.0)
+    if c.pause_blocks:
+        phase[(cycle // 4) % c.pause_blocks == c.pause_blocks - 1] = 0.0
     speed = np.zeros((n, JOINTS))
     current = np.full((n, JOINTS), 0.1)
     speed[:, 1] = block * 2.0 * phase
@@ -90,7 +106,10 @@ def synthetic_joint_log(c: SyntheticThermal) -> JointLog:
     sig = thermal_signals(log, 1, TORQUE_PER_AMP_NM, GEAR_EFFICIENCY)
     y = FirstOrderJoint().predict(sig, np.array([c.ambient_c, c.initial_k, c.r_th_k_per_w]),
                                   np.array([c.tau_min]))
-    y = y + c.k_cu_k_per_a2 * first_order_lag(sig.current_sq_a2, sig.dt_s, c.tau_cu_min)
+    for term, gain, tau in ((CopperLoss(), c.k_cu_k_per_a2, c.tau_cu_min),
+                            (HousingLag(), c.r2_k_per_w, c.tau2_min),
+                            (StandstillCooling(), c.dt_still_k, c.tau_still_min)):
+        y = y + term.predict(sig, np.array([gain]), np.array([tau]))
     if c.fan_k and c.fan_cycles:
         fan = ((cycle // c.fan_cycles) % 2 == 1).astype(float)
         y = y - c.fan_k * first_order_lag(np.concatenate([[0.0], fan[:-1]]), sig.dt_s, 3.0)

@@ -8,7 +8,9 @@ lives through while its gear stays healthy, each with a sourced magnitude
 * **temperature**: operating days with stops, a cold start after each, a first-order
   warm-up towards a rise set by the power the gear loses at its operating point, and a
   hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`), or, instead of the
-  first-order warm-up, a measured one (``temperature_trace``, :class:`TemperatureTrace`);
+  first-order warm-up, a measured one (``temperature_trace``, :class:`TemperatureTrace`),
+  or a measured joint's temperature replayed on the life's operating hours (its mode
+  ``hours``);
 * **friction**: its temperature law, the grease's viscosity law
   (:func:`swgsim.gear.thermal.friction_scale`) or one drawn from a family of smooth monotone
   laws (:class:`swgsim.gear.thermal.FrictionLaw`), the run-in of a new gear
@@ -74,14 +76,23 @@ from swgsim.sensing.bridge_drift import (
     measure_temperature,
 )
 
-__all__ = ["ConditionsConfig", "Regrease", "RunInConfig", "TemperatureTrace", "WindowConditions",
-           "check_conditions", "efficiency_ratio", "trace_rise", "window_conditions"]
+__all__ = ["HOURS_TABLE_COLUMNS", "TRACE_MODES", "ConditionsConfig", "Regrease", "RunInConfig",
+           "TemperatureTrace", "WindowConditions", "check_conditions", "efficiency_ratio",
+           "trace_rise", "trace_table", "window_conditions"]
 
 #: A step of a temperature trace longer than this ends its first continuous segment [min]
 #: [choice: beyond a logger's hiccups (the UR3 CobotOps day has steps of 9 and 31 s),
 #: short against a joint's thermal time constant (0.5-0.9 h there), so that the rise is
 #: interpolated only over what a joint cannot do much in].
 TRACE_GAP_MIN = 5.0
+#: Modes of a temperature trace (:class:`TemperatureTrace`): the rise of a UR3-format
+#: warm-up after every cold start, or a table of the joint's temperature on the life's
+#: operating hours.
+TRACE_MODES = ("rise", "hours")
+#: The header of a table of mode ``hours``, as
+#: :func:`swgsim.datasets.joint_log.write_temperature_table` writes it: operating hours
+#: [h], the joint's temperature [°C].
+HOURS_TABLE_COLUMNS = ("hour", "temperature_c")
 
 
 @dataclass
@@ -126,7 +137,12 @@ class Regrease:
 class TemperatureTrace:
     """A measured warm-up for the joint's temperature over a life, instead of the
     first-order model's rise (:func:`swgsim.gear.thermal.traced_temperature`,
-    :func:`trace_rise`).
+    :func:`trace_rise`); or, in mode ``hours``, the joint's temperature itself on the
+    life's operating hours (:func:`trace_table`): a two-column CSV ``hour,temperature_c``
+    (comma-separated, decimal points, hours increasing from >= 0, temperatures in the
+    viscosity law's [-40, 150] °C), interpolated linearly between its rows, its first
+    value held before them and its last beyond; the hall and the day of ``thermal`` do not
+    enter (it may be null), nor ``scale`` (1).
 
     E.g. a UR3's joint temperatures over a working day: M. Tyrovolas, K. Aliev,
     D. Antonelli and C. Stylios, "UR3 CobotOps", UCI Machine Learning Repository, 2024,
@@ -139,20 +155,27 @@ class TemperatureTrace:
     Attributes
     ----------
     path : str
-        A CSV, ``;``-separated with decimal commas (the UR3 CobotOps format); relative to
-        the working directory. The config hash names the path, not the file's bytes.
-    column : str
-        The temperature column [°C], e.g. ``Temperature_J1``.
+        A CSV, ``;``-separated with decimal commas (the UR3 CobotOps format; mode
+        ``hours``: the table above); relative to the working directory. The config hash
+        names the path, not the file's bytes.
+    column : str or None
+        The temperature column [°C], e.g. ``Temperature_J1`` (mode ``rise``: needed;
+        ``hours``: not read).
     scale : float
-        Factor on the measured rise, in [0, 10] [-] (1).
+        Factor on the measured rise, in [0, 10] [-] (1; mode ``hours``: 1).
     time_column : str
-        The time column: ISO 8601 timestamps, or seconds where numeric (``Timestamp``).
+        The time column: ISO 8601 timestamps, or seconds where numeric (``Timestamp``;
+        mode ``hours``: not read).
+    mode : str
+        ``rise`` (the default) or ``hours`` (:data:`TRACE_MODES`); left out of a data
+        set's config hash at its default (:data:`swgsim.datasets.plan.LATER_TRACE`).
     """
 
     path: str
-    column: str
+    column: str | None = None
     scale: float = 1.0
     time_column: str = "Timestamp"
+    mode: str = TRACE_MODES[0]
 
 
 def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarray]:
@@ -187,6 +210,9 @@ def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarra
     p = Path(trace.path)
     if not p.is_file():
         raise ValueError(f"{key}.path: no file {trace.path!r}")
+    if trace.column is None:
+        raise ValueError(f"{key}.column: name the temperature column of {trace.path!r} "
+                         f"(mode {trace.mode!r}), got none")
     try:
         head = pd.read_csv(p, sep=";", decimal=",", nrows=0).columns
     except (ValueError, UnicodeDecodeError) as e:
@@ -219,6 +245,85 @@ def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarra
     return (t_s - t_s[0]) / 3600.0, temp - temp[0]
 
 
+def trace_table(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarray]:
+    """The table of a trace of mode ``hours``: operating hours and the joint's
+    temperature (:class:`TemperatureTrace`).
+
+    Parameters
+    ----------
+    trace : TemperatureTrace
+    key : str
+        Full name of the trace, e.g. ``dataset.life.conditions.temperature_trace``.
+
+    Returns
+    -------
+    hour : ndarray, shape (N,)
+        Operating hours, >= 0, increasing [h].
+    temperature_c : ndarray, shape (N,)
+        The joint's temperature, in :data:`swgsim.gear.thermal.TEMP_RANGE_C` [°C].
+
+    Raises
+    ------
+    ValueError
+        One line naming ``<key>.path``: no such file, not a comma-separated table with
+        the columns :data:`HOURS_TABLE_COLUMNS`, no row, a cell not a number, hours
+        negative or not increasing, a temperature outside [-40, 150] °C (the viscosity
+        law's range, :data:`swgsim.gear.thermal.TEMP_RANGE_C`).
+    """
+    import pandas as pd
+
+    p, name = Path(trace.path), f"{key}.path"
+    if not p.is_file():
+        raise ValueError(f"{name}: no file {trace.path!r}")
+    try:
+        df = pd.read_csv(p)
+    except (ValueError, UnicodeDecodeError) as e:
+        raise ValueError(f"{name}: {trace.path!r} is not a comma-separated table: "
+                         f"{str(e).splitlines()[0]}") from None
+    if tuple(str(c).strip() for c in df.columns) != HOURS_TABLE_COLUMNS or df.empty:
+        raise ValueError(f"{name}: {trace.path!r} must hold the columns "
+                         f"{','.join(HOURS_TABLE_COLUMNS)} and a row (mode 'hours'), got "
+                         f"{','.join(map(str, df.columns))} and {len(df)} rows")
+    num = df.apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
+    bad = np.argwhere(~np.isfinite(num))
+    if bad.size:
+        i, j = (int(v) for v in bad[0])
+        raise ValueError(f"{name}: {HOURS_TABLE_COLUMNS[j]} of {trace.path!r}, row {i + 1}: "
+                         f"{df.iloc[i, j]!r} is not a number")
+    hour, temp = num[:, 0], num[:, 1]
+    back = np.flatnonzero(np.diff(hour) <= 0)
+    if hour[0] < 0 or back.size:
+        i = int(back[0]) + 1 if hour[0] >= 0 else 0
+        raise ValueError(f"{name}: hour of {trace.path!r} must increase from >= 0 h, got "
+                         f"{hour[i]:g} at row {i + 1}" + (f" after {hour[i - 1]:g}" if i else ""))
+    lo, hi = TEMP_RANGE_C
+    out = np.flatnonzero((temp < lo) | (temp > hi))
+    if out.size:
+        i = int(out[0])
+        raise ValueError(f"{name}: temperature_c of {trace.path!r} must lie in [{lo:g}, "
+                         f"{hi:g}] °C, got {temp[i]:g} at row {i + 1}")
+    return hour, temp
+
+
+def _check_trace(tr: TemperatureTrace, has_thermal: bool, key: str) -> None:
+    """Refuse a temperature trace outside its ranges or unreadable, in one line naming
+    ``<key>.<field>`` (``key``: the conditions')."""
+    k = f"{key}.temperature_trace"
+    if tr.mode not in TRACE_MODES:
+        raise ValueError(f"{k}.mode must be one of {', '.join(TRACE_MODES)}, got {tr.mode!r}")
+    if tr.mode == "hours":
+        if tr.scale != 1.0:
+            raise ValueError(f"{k}.scale must be 1 in mode 'hours' (the table is the "
+                             f"joint's temperature), got {tr.scale:g}")
+        trace_table(tr, k)
+        return
+    if not has_thermal:
+        raise ValueError(f"{k} needs {key}.thermal (the hall and the operating day), got "
+                         f"thermal: null")
+    check_range(tr.scale, 0.0, 10.0, f"{k}.scale")
+    trace_rise(tr, k)
+
+
 def _seconds(col, key: str) -> np.ndarray:
     """A time column as seconds: numbers as they are, else ISO 8601 timestamps."""
     import pandas as pd
@@ -244,7 +349,8 @@ class ConditionsConfig:
         reference temperature (20 °C).
     temperature_trace : TemperatureTrace or None
         A measured warm-up after every cold start of ``thermal``'s day, on the hall's
-        temperature, instead of the first-order rise; None: the model's.
+        temperature, instead of the first-order rise, or (mode ``hours``) the joint's
+        temperature on the life's operating hours; None: the model's.
     viscosity : bool
         Friction follows the temperature, by ``friction_law``.
     friction_law : FrictionLaw
@@ -293,11 +399,7 @@ def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
     if cfg.thermal is not None:
         cfg.thermal.check(f"{key}.thermal")
     if cfg.temperature_trace is not None:
-        if cfg.thermal is None:
-            raise ValueError(f"{key}.temperature_trace needs {key}.thermal (the hall and the "
-                             f"operating day), got thermal: null")
-        check_range(cfg.temperature_trace.scale, 0.0, 10.0, f"{key}.temperature_trace.scale")
-        trace_rise(cfg.temperature_trace, f"{key}.temperature_trace")
+        _check_trace(cfg.temperature_trace, cfg.thermal is not None, key)
     cfg.friction_law.check(f"{key}.friction_law")
     if cfg.run_in is not None:
         check_range(cfg.run_in.drop, 0.0, 1.0, f"{key}.run_in.drop")
@@ -429,10 +531,14 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
 
 def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
                  t_out_nm: np.ndarray, payload: np.ndarray, gear: ChainParams) -> np.ndarray:
-    """The joint's true temperature at the windows [°C], shape (W,): the reference without
-    a thermal model, the measured warm-up with a trace, else the first-order model at the
-    acting loss; refused outside the viscosity law's range naming what sets it."""
+    """The joint's true temperature at the windows [°C], shape (W,): a trace's table on
+    the operating hours (mode ``hours``), the reference without a thermal model, the
+    measured warm-up with a trace, else the first-order model at the acting loss; refused
+    outside the viscosity law's range naming what sets it."""
     th, tr = cfg.thermal, cfg.temperature_trace
+    if tr is not None and tr.mode == "hours":
+        t_h, temp_c = trace_table(tr, "conditions.temperature_trace")
+        return np.interp(hours, t_h, temp_c)
     if th is None:
         return np.full(hours.shape, REF_TEMP_C)
     if tr is not None:

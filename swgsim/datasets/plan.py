@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from swgsim.base.typed import check_finite, check_range
-from swgsim.datasets.conditions import ConditionsConfig
+from swgsim.datasets.conditions import ConditionsConfig, TemperatureTrace
 from swgsim.datasets.config import (
     DatasetConfig,
     GearConfig,
@@ -142,19 +142,25 @@ class DatasetPlan:
 LATER_CONDITIONS = ("friction_law", "regrease", "temperature_trace")
 LATER_SENSOR = ("fault", "fault_hour", "drift_k_per_h")
 LATER_FAULT = ("to_failure",)  # life.fault (:class:`FaultOnset`)
+LATER_TRACE = ("mode",)  # life.conditions.temperature_trace (:class:`TemperatureTrace`)
 
 
 def _without_defaults(d: dict, schema: type, names: tuple[str, ...]) -> dict:
-    """``d`` without the fields ``names`` that hold the schema's defaults."""
-    ref = dataclasses.asdict(schema())
+    """``d`` without the fields ``names`` that hold the schema's defaults (read from its
+    fields: a schema with required fields, such as :class:`TemperatureTrace`, works too)."""
+    ref = {}
+    for f in dataclasses.fields(schema):
+        v = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+        ref[f.name] = dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v
     return {k: v for k, v in d.items() if not (k in names and v == ref[k])}
 
 
 def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
     """A data-set config as plain data, without ``profile``, ``life.conditions`` and
     ``life.fault.to_failure`` when they are None and without the fields of
-    :data:`LATER_CONDITIONS` and :data:`LATER_SENSOR` (the friction law, re-greasing, a
-    temperature trace, the sensor's fault) that hold their defaults, so that a data set
+    :data:`LATER_CONDITIONS`, :data:`LATER_SENSOR` and :data:`LATER_TRACE` (the friction
+    law, re-greasing, a temperature trace, the sensor's fault, the trace's mode) that hold
+    their defaults, so that a data set
     keeps the config (and :func:`config_hash`) it had before these options."""
     out = dict(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
     if "profile" in out and out["profile"] is None:
@@ -172,6 +178,9 @@ def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
         if isinstance(cond.get("temperature_sensor"), dict):
             cond["temperature_sensor"] = _without_defaults(cond["temperature_sensor"],
                                                            TemperatureSensor, LATER_SENSOR)
+        if isinstance(cond.get("temperature_trace"), dict):
+            cond["temperature_trace"] = _without_defaults(cond["temperature_trace"],
+                                                          TemperatureTrace, LATER_TRACE)
         out["life"] = {**out["life"], "conditions": cond}
     return out
 

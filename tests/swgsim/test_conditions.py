@@ -18,6 +18,7 @@ from swgsim.datasets.conditions import (
     RunInConfig,
     TemperatureTrace,
     trace_rise,
+    trace_table,
 )
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
@@ -353,6 +354,61 @@ def test_no_temperature_trace_keeps_a_data_sets_config_hash(tmp_path):
         dataclasses.replace(cfg.life.conditions, temperature_trace=tr))))
     assert config_hash(traced) != config_hash(cfg)
     plan(traced)  # checked and accepted
+
+
+def _hours_table(path: Path, rows=((0.5, 30.0), (1.5, 50.0), (2.0, 40.0))) -> Path:
+    """A tiny table of mode 'hours': the joint's temperature on operating hours."""
+    path.write_text("hour,temperature_c\n" + "".join(f"{h},{t}\n" for h, t in rows))
+    return path
+
+
+def test_a_life_replays_a_table_of_the_joints_temperature_on_its_hours(tiny, tmp_path):
+    """Mode 'hours': the table's temperature on the life's operating hours, linear between
+    its rows, the first held before them and the last beyond; no hall, no cold starts."""
+    tr = TemperatureTrace(str(_hours_table(tmp_path / "j1.csv")), mode="hours")
+    h, t = trace_table(tr, "k")
+    np.testing.assert_array_equal(h, [0.5, 1.5, 2.0])
+    sim = _sim(tiny, dataclasses.replace(NEUTRAL, viscosity=True, temperature_trace=tr))
+    hour, c = sim.schedule.hour, sim.conditions
+    assert hour.min() < 0.5 and hour.max() > 2.0  # both ends held
+    np.testing.assert_allclose(c.temperature_c, np.interp(hour, h, t), atol=1e-12)
+    np.testing.assert_array_equal(c.friction, friction_scale(c.temperature_c))
+
+
+@pytest.mark.parametrize(("rows", "extra", "match"), [
+    (((0.5, 30.0), (1.5, 50.0), (1.0, 40.0)), {},
+     r"\.path: hour of .* must increase from >= 0 h, got 1 at row 3 after 1\.5$"),
+    (((-1.0, 30.0), (1.5, 50.0)), {}, r"\.path: hour of .* must increase from >= 0 h, got -1 "
+                                      r"at row 1$"),
+    (((0.5, 30.0), (1.5, 170.0)), {},
+     r"\.path: temperature_c of .* must lie in \[-40, 150\] °C, got 170 at row 2$"),
+    (((0.5, 30.0),), {"scale": 2.0}, r"\.scale must be 1 in mode 'hours' \(the table is the "
+                                     r"joint's temperature\), got 2$"),
+    (((0.5, 30.0),), {"mode": "table"}, r"\.mode must be one of rise, hours, got 'table'$"),
+])
+def test_a_bad_temperature_table_is_refused_naming_the_key(rows, extra, match, tmp_path):
+    cfg = dataset_preset("tiny_life")
+    cfg["life"].update(hours=3.0, commissioning_h=1.0, fault={"fault": "healthy"})
+    cfg["life"]["conditions"] = {"thermal": None, "temperature_trace": {
+        "path": str(_hours_table(tmp_path / "j1.csv", rows)), "mode": "hours", **extra}}
+    with pytest.raises(ValueError, match=r"^dataset\.life\.conditions\.temperature_trace"
+                                         + match):
+        plan(dataset_config(cfg))
+
+
+def test_a_traces_mode_is_out_of_the_config_hash_at_its_default(tmp_path):
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+
+    def traced(tr):
+        return dataclasses.replace(cfg, life=dataclasses.replace(cfg.life, conditions=(
+            dataclasses.replace(cfg.life.conditions, temperature_trace=tr))))
+
+    rise = traced(TemperatureTrace(str(_trace_csv(tmp_path / "day.csv")), "Temperature_J1"))
+    assert "mode" not in plain_config(rise)["life"]["conditions"]["temperature_trace"]
+    hours = traced(TemperatureTrace(str(_hours_table(tmp_path / "j1.csv")), mode="hours"))
+    assert plain_config(hours)["life"]["conditions"]["temperature_trace"]["mode"] == "hours"
+    assert len({config_hash(c) for c in (cfg, rise, hours)}) == 3
+    plan(hours)  # checked and accepted
 
 
 @pytest.mark.skipif(not UR3_DAY.is_file(), reason="the UR3 CobotOps day is not beside the "

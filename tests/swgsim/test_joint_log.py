@@ -8,7 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swgsim.datasets.joint_log import LOG_COLUMNS, read_joint_log, write_joint_log
+from swgsim.datasets.conditions import TemperatureTrace, trace_table
+from swgsim.datasets.joint_log import (
+    LOG_COLUMNS,
+    read_joint_log,
+    write_joint_log,
+    write_temperature_table,
+)
 
 #: The UR3 CobotOps day (M. Tyrovolas, K. Aliev, D. Antonelli, C. Stylios, "UR3 CobotOps",
 #: UCI Machine Learning Repository 2024, doi:10.24432/C5J891, CC BY 4.0).
@@ -103,3 +109,28 @@ def test_a_written_log_reads_back(tmp_path):
     for name in ("temperature_c", "current_a", "speed_rad_s", "cycle", "protective_stop",
                  "grip_lost", "gap_rows"):
         np.testing.assert_array_equal(getattr(back, name), getattr(log, name))
+
+
+def test_a_joints_temperature_table_cuts_the_gap_or_keeps_it(tmp_path):
+    """Joint 1's readings (the row without one left out) as hour,temperature_c, read back
+    as a trace of mode 'hours'; the 2-h gap cut to the log's median step, or kept."""
+    log = read_joint_log(_cut(tmp_path / "day.csv"))
+    temp = [28.875, 28.9375, 29.0, 31.5, 31.5625]
+    for keep, gap_s in ((False, 1.005), (True, 7200.0)):
+        path = tmp_path / f"j1_{keep}.csv"
+        write_temperature_table(log, 1, path, keep_gaps=keep)
+        h, t = trace_table(TemperatureTrace(str(path), mode="hours"), "k")
+        np.testing.assert_allclose(h * 3600, [0, 1.005, 3.016, 3.016 + gap_s, 4.016 + gap_s],
+                                   atol=0.004)  # written to 1e-6 h
+        np.testing.assert_array_equal(t, temp)
+    with pytest.raises(ValueError, match=r"^joint must lie in \[0, 5\], got 6$"):
+        write_temperature_table(log, 6, tmp_path / "j6.csv")
+
+
+@pytest.mark.skipif(not UR3_DAY.is_file(), reason="the UR3 CobotOps day is not beside the "
+                                                  "repository")
+def test_the_real_shoulders_table_spans_its_operating_hours(tmp_path):
+    """docs/DATASET.md: the shoulder's table, the 5.2-h gap cut, 2.09 operating hours."""
+    rows = write_temperature_table(read_joint_log(UR3_DAY), 1, tmp_path / "j1.csv")
+    assert rows.shape == (7355, 2) and rows[-1, 0] == pytest.approx(2.087, abs=1e-3)
+    assert (rows[:, 1].min(), rows[:, 1].max()) == (29.3125, 40.5)
