@@ -23,13 +23,13 @@ carry it to the conditions commissioning did not see:
 * **efficiency, temperature and load**: the loss torque ``L = τ (1/η − 1)`` at the output
   is ``A_n φ(T) + B_n τ`` per input speed n: a load-independent part following the
   temperature (φ = exp(θ (T − 20 °C)), the rate θ learnt from the joint's commissioning
-  windows over every ratio a smooth monotone law can have at 40 °C, :data:`FRICTION_RATES`,
+  windows over every ratio a smooth monotone law can have at 40 °C, :data:`~.laws.FRICTION_RATES`,
   not the catalogue's viscosity law; Harmonic Drive engineering data: no-load running
   torque over temperature) and a part proportional to the load (the mesh's); A_n and B_n
   fitted at commissioning with θ. θ is learnt only where commissioning saw the joint cool
-  (a cold start, :func:`_cools`): over a single warm-up a run-in lowers the loss as the
+  (a cold start, :func:`~.laws.cools`): over a single warm-up a run-in lowers the loss as the
   temperature rises and would pass for the law; there the catalogue's viscosity law is
-  kept (:data:`CATALOGUE_RATE`). Within commissioning's range any smooth monotone law is
+  kept (:data:`~.laws.CATALOGUE_RATE`). Within commissioning's range any smooth monotone law is
   close to one exponential; beyond it the learnt law is extrapolated, in the widened spread
   of :meth:`NormalBehaviour.z_and_spread`;
 * **the acting load**: the gauges are linear in the output torque, so a Fourier
@@ -45,8 +45,16 @@ carry it to the conditions commissioning did not see:
 :meth:`NormalBehaviour.reference` brings a window's features to the reference condition of
 its operating point (commissioning's mean temperature and load); the z-scores are their
 deviations from commissioning's corrected mean in its spread. Where the stream has no
-temperature, the temperature terms are left out (the spread of commissioning's warm-ups
-is then in the standard deviations). :meth:`NormalBehaviour.outside` flags windows whose
+temperature, the temperature terms are left out: the spread of commissioning's warm-ups
+is then in the standard deviations, and the directions in which they moved the z-scores
+together (at most ``warm_up_components`` per point, each beyond the noise's largest
+eigenvalue, :func:`~.laws.warm_up_directions`) are taken out of every window within the
+range commissioning saw along them: a latent temperature, in the joint's own units,
+that can only take values commissioning's warm-ups took. What it assumes: a warm-up
+moves the features the same way at every cold start (the drifts are smooth laws of the
+temperature, and commissioning saw the cold starts, 24 h with two of them); what it
+costs: a fault whose pattern lies along those directions is seen only beyond the
+warm-ups' range there. :meth:`NormalBehaviour.outside` flags windows whose
 condition commissioning did not see (temperature beyond its range by
 ``temperature_margin_k``, load beyond its by ``load_margin``, the friction factor beyond
 its by ``friction_margin``): the monitor advises to recommission (an advisory, not a gear fault)
@@ -70,33 +78,24 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.base.typed import check_range
-from swgsim.gear.thermal import FRICTION_EXPONENT, REF_TEMP_C, VISCOSITY_COEFF_PER_K
+from swgsim.gear.thermal import REF_TEMP_C
 
-from .features import N_HARMONICS
+from .laws import (
+    BLOCK,
+    EFFICIENCY,
+    MIN_SPREAD_K,
+    bridge_drift,
+    feature_slopes,
+    load_curves,
+    loss_model,
+    warm_up_directions,
+)
 
-#: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
-BLOCK = N_HARMONICS + 2
-EFFICIENCY = 5 * BLOCK
 #: Bits of :meth:`NormalBehaviour.outside`: the condition commissioning did not see.
 OUTSIDE_TEMPERATURE, OUTSIDE_LOAD, OUTSIDE_FRICTION = 1, 2, 4
 #: Bit of :meth:`NormalBehaviour.outside`: the window is not judged (its temperature is
 #: outside and no temperature law carries the normal behaviour there).
 OUTSIDE_UNJUDGED = 8
-#: Rates θ [1/K] of the friction's temperature law exp(θ (T − 20 °C)) that commissioning
-#: chooses from (:func:`_loss_model`): the friction at 40 °C 0.3 to 1 times that at 20 °C,
-#: every ratio a smooth monotone law can have there (0.63 the catalogue's,
-#: :class:`swgsim.gear.thermal.FrictionLaw`), in steps of 0.0005 1/K (about 1 % at 40 °C),
-#: refined between them; learnt from the joint's own windows, not the catalogue's law.
-FRICTION_RATES = np.linspace(np.log(0.3) / 20.0, 0.0, 121)
-#: θ of the catalogue's viscosity law (:func:`swgsim.gear.thermal.friction_scale`, −0.0233
-#: 1/K), used only where commissioning cannot learn the joint's own (:func:`_cools`).
-CATALOGUE_RATE = -VISCOSITY_COEFF_PER_K * FRICTION_EXPONENT
-#: Least temperature spread of commissioning to fit the temperature terms [K].
-MIN_SPREAD_K = 2.0
-#: An amplitude enters the fit of its bridge's gain when its mean is this many standard
-#: deviations above zero (its log is then well defined).
-SIGNIFICANT = 20.0
-
 
 @dataclass
 class NormalConfig:
@@ -147,6 +146,16 @@ class NormalConfig:
         re-greasing at 41.7 h, +11 %, 12 h, gave a reduced-damping alarm at 66.9 h: the
         friction still fell faster than its tracking over ``friction_track_h``); the
         efficiency is not judged then, the bridges are. Also after an unexplained change.
+    warm_up_components : int
+        Without a temperature reading at commissioning: at most this many directions in
+        which commissioning's z-scores at a point varied together beyond noise
+        (:func:`~.laws.warm_up_directions`), taken out of every window's z-scores within
+        the range commissioning saw along them (:attr:`NormalBehaviour.warm_dir`), in
+        [0, 5]; 0: none. 2 [choice]: on the bench's joint without a sensor (gear 3,
+        family ``sensor``, design seed 100) one direction left the hour after each cold
+        start at -1.1 to -1.6 σ on the second harmonic of bridges 1 and 3 and 5 alarms in
+        200 h; two left none, and both of each point's largest eigenvalues lay above the
+        noise's edge.
     """
 
     friction_track_h: float = 4.0
@@ -157,6 +166,7 @@ class NormalConfig:
     extrapolation_uncertainty: float = 1.0
     recommission_load: bool = True
     regrease_settle_h: float = 72.0
+    warm_up_components: int = 2
 
     def check(self, key: str = "normal") -> None:
         """Refuse a field out of range in one line naming ``<key>.<field>``.
@@ -176,6 +186,11 @@ class NormalConfig:
         check_range(self.extrapolation_uncertainty, 0.0, 10.0,
                     f"{key}.extrapolation_uncertainty")
         check_range(self.regrease_settle_h, 0.0, 1e4, f"{key}.regrease_settle_h", "h")
+        if (isinstance(self.warm_up_components, bool)
+                or not isinstance(self.warm_up_components, int)
+                or not 0 <= self.warm_up_components <= 5):
+            raise ValueError(f"{key}.warm_up_components must be an integer in [0, 5], got "
+                             f"{self.warm_up_components!r}")
 
 
 @dataclass
@@ -210,15 +225,6 @@ class Conditions:
         temps = [p.temperature_c for p in parts]
         t = None if any(x is None for x in temps) else np.concatenate(temps)
         return cls(np.concatenate([p.torque_nm for p in parts]), t)
-
-
-def _poly(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
-    """Coefficients (c0, c1, c2) of y ≈ c0 + c1 x + c2 x² of at most ``degree`` (and one
-    less than the points), by least squares, for each column of y (k, F); shape (3, F)."""
-    deg = min(degree, len(x) - 1)
-    v = np.vander(x, deg + 1, increasing=True)  # (k, deg + 1)
-    coef = np.linalg.lstsq(v, y, rcond=None)[0]
-    return np.vstack([coef, np.zeros((2 - deg, y.shape[1]))])
 
 
 @dataclass
@@ -256,6 +262,16 @@ class NormalBehaviour:
         [1, 1]). On the joint in motion the factor's own noise spans ±5 % over 1000 h
         (robot_joint_motion gear 1, seed 0: 0.94-1.03), which a margin about 1 alone
         advised as a friction change 11 times on a gear with none.
+    friction_rate : float
+        θ of the loss torque's temperature law [1/K] (:func:`~.laws.loss_model`).
+    warm_dir, warm_range : ndarray, shapes (P, K, F) and (P, K, 2), or None
+        Without a temperature reading at commissioning: per point, the directions in
+        which commissioning's z-scores varied together beyond noise (unit vectors; zero
+        rows where fewer than K did) and the range of commissioning's windows along each
+        (:func:`~.laws.warm_up_directions`). :meth:`z_and_spread` takes each window's
+        part along them out, clipped to that range: a joint without a sensor warms up
+        and cools down as commissioning saw, and a change beyond what its warm-ups did
+        stays in the z-scores. None with a reading.
     """
 
     points: np.ndarray
@@ -274,6 +290,8 @@ class NormalBehaviour:
     slope: np.ndarray | None = None
     friction_range: np.ndarray = field(default_factory=lambda: np.ones(2))
     friction_rate: float = 0.0
+    warm_dir: np.ndarray | None = None
+    warm_range: np.ndarray | None = None
 
     # ------------------------------------------------------------------ fitting
     @classmethod
@@ -307,19 +325,22 @@ class NormalBehaviour:
         temp_range = np.array([[temp[inv == k].min() - u, temp[inv == k].max() + u]
                                if temp is not None else [np.nan, np.nan] for k in range(n_p)])
         dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
-        gain, zero = (_bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
-        loss, rate = _loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
+        gain, zero = (bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
+        loss, rate = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
                  np.bincount(inv, minlength=n_p), friction_rate=rate)
         if use_t:
-            nb.slope = _feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
+            nb.slope = feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
         warm = nb._temperature_corrected(feats, inv, dt)
-        nb.load = _load_curves(warm, inv, ops, ref_torque)
+        nb.load = load_curves(warm, inv, ops, ref_torque)
         ref = nb._corrected(feats, inv, cond, np.broadcast_to(friction, (len(feats),)))
         nb.mean = np.stack([ref[inv == k].mean(axis=0) for k in range(n_p)])
         nb.std = np.maximum(np.stack([ref[inv == k].std(axis=0, ddof=1)
                                       for k in range(n_p)]), 1e-12)
+        if temp is None and config.warm_up_components > 0:
+            nb.warm_dir, nb.warm_range = warm_up_directions(
+                (ref - nb.mean[inv]) / nb.std[inv], inv, config.warm_up_components)
         return nb
 
     # ------------------------------------------------------------------ using it
@@ -412,7 +433,12 @@ class NormalBehaviour:
             u = ref[b, law] - self._corrected(feats[b], i[b], edge[b], fr[b])[:, law]
             spread = spread.copy()
             spread[b, law] = np.sqrt(spread[b, law] ** 2 + (kappa * u) ** 2)
-        return (ref - self.mean[i]) / spread, spread
+        z = (ref - self.mean[i]) / spread
+        if self.warm_dir is not None:  # no reading: commissioning's warm-up directions out
+            d, r = self.warm_dir[i], self.warm_range[i]  # (n, K, F), (n, K, 2)
+            u = np.clip(np.einsum("nf,nkf->nk", z, d), r[..., 0], r[..., 1])
+            z = z - np.einsum("nk,nkf->nf", u, d)
+        return z, spread
 
     def recommission(self, k: int, ref: np.ndarray, torque_nm: np.ndarray) -> None:
         """Take windows of operating point ``k`` at a load commissioning did not see as
@@ -567,128 +593,6 @@ class NormalBehaviour:
         out[:, EFFICIENCY] = eta - eta_pred + eta_ref
         return out
 
-
-def _bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """γ_c and ζ_c of the five bridges (module docstring): the gain from the significant
-    amplitudes' logs, the zero from the offsets, by least squares pooled over points."""
-    gain, zero = np.zeros(5), np.zeros(5)
-    d2 = float(dt @ dt)
-    if d2 <= 0:
-        return gain, zero
-    for c in range(5):
-        j0 = c * BLOCK
-        amp = feats[:, j0 + 1:j0 + BLOCK - 1]
-        num = den = 0.0
-        for k in np.unique(inv):
-            m = inv == k
-            a = amp[m]
-            sig = a.mean(axis=0) > SIGNIFICANT * a.std(axis=0, ddof=1)
-            if sig.any():  # Σ_j Σ_i ΔT_i (ln a_ij − mean_i ln a_ij) over Σ_j Σ_i ΔT_i²
-                la = np.log(a[:, sig])
-                num += float(dt[m] @ (la - la.mean(axis=0)).sum(axis=1))
-                den += float(dt[m] @ dt[m]) * int(sig.sum())
-        gain[c] = num / den if den > 0 else 0.0
-        off = feats[:, j0]
-        resid = np.zeros(len(off))
-        for k in np.unique(inv):
-            m = inv == k
-            resid[m] = off[m] - off[m].mean() - gain[c] * off[m].mean() * dt[m]
-        zero[c] = float(dt @ resid) / d2
-    return gain, zero
-
-
-def _feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.ndarray:
-    """Per point, each feature's least-squares slope on ΔT (features with the bridges'
-    gain and zero drift taken out), shape (P, F); the efficiency's column zero (its loss
-    law has the temperature)."""
-    n_p = int(inv.max()) + 1
-    out = np.zeros((n_p, feats.shape[1]))
-    for k in range(n_p):
-        m = inv == k
-        x = dt[m] - dt[m].mean()
-        if float(x @ x) > 0:
-            out[k] = x @ (feats[m] - feats[m].mean(axis=0)) / float(x @ x)
-    out[:, EFFICIENCY:] = 0.0
-    return out
-
-
-def _loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
-                ops: np.ndarray, inv: np.ndarray) -> tuple[np.ndarray, float]:
-    """(A, B) per point and the joint's friction-temperature rate θ: the loss torque
-    τ (1/η − 1) ≈ A exp(θ (T − 20 °C)) + B τ by least squares over the windows at the
-    point's speed (module docstring), θ the one of :data:`FRICTION_RATES` that fits
-    commissioning best; shape (P, 2), and θ [1/K] (0 without temperature)."""
-    tq = np.abs(torque)
-    loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
-    if temp is None:
-        return _loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], 0.0
-    if not _cools(temp):  # one warm-up: a run-in would pass for the law; the catalogue's
-        rate = CATALOGUE_RATE
-        return _loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)[0], rate
-    def fit(rate):
-        return _loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)
-
-    sse = np.array([fit(r)[1] for r in FRICTION_RATES])
-    k = int(np.clip(np.argmin(sse), 1, len(sse) - 2))
-    rate = float(FRICTION_RATES[k])
-    curv = sse[k - 1] - 2.0 * sse[k] + sse[k + 1]
-    if curv > 0:  # the parabola's vertex through the best three, within their span
-        step = float(FRICTION_RATES[1] - FRICTION_RATES[0])
-        rate += step * float(np.clip(0.5 * (sse[k - 1] - sse[k + 1]) / curv, -1.0, 1.0))
-    rate = float(np.clip(rate, FRICTION_RATES[0], FRICTION_RATES[-1]))
-    return fit(rate)[0], rate
-
-
-
-def _cools(temp: np.ndarray) -> bool:
-    """Whether commissioning's temperature (windows in time order) falls by at least
-    :data:`MIN_SPREAD_K` below an earlier reading somewhere (a cold start): only then can
-    the friction's temperature law be told from a slow drift in time (run-in), which over
-    a single warm-up falls as the temperature rises."""
-    return bool(np.max(np.maximum.accumulate(temp) - temp) >= MIN_SPREAD_K)
-
-def _loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np.ndarray,
-                       inv: np.ndarray) -> tuple[np.ndarray, float]:
-    """(A, B) per point for the friction factors ``phi`` of the windows, shape (P, 2), and
-    the sum of squared residuals [N² m²]."""
-    out, sse = np.zeros((len(ops), 2)), 0.0
-    for n in np.unique(ops[:, 0]):
-        ks = np.flatnonzero(ops[:, 0] == n)
-        m = np.isin(inv, ks)
-        x = np.stack([phi[m], tq[m]], axis=1)
-        if np.unique(ops[ks, 1]).size < 2:  # one load: the loss's level only
-            coef = np.array([np.mean(loss[m] / phi[m]), 0.0])
-        else:
-            coef = np.linalg.lstsq(x, loss[m], rcond=None)[0]
-        sse += float(np.sum((x @ coef - loss[m]) ** 2))
-        out[ks] = coef
-    return out, sse
-
-
-def _load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,
-                 ref_torque: np.ndarray) -> np.ndarray:
-    """Per point, the quadratics in τ of the load curves at its speed (module docstring):
-    squared amplitudes, offsets (a line), residual power, shape (P, 3, F)."""
-    n_p, n_f = len(ops), feats.shape[1]
-    y = np.zeros((n_p, n_f))
-    for k in range(n_p):
-        f = feats[inv == k]
-        for c in range(5):
-            j0 = c * BLOCK
-            y[k, j0] = f[:, j0].mean()
-            y[k, j0 + 1:j0 + BLOCK - 1] = (f[:, j0 + 1:j0 + BLOCK - 1] ** 2).mean(axis=0)
-            y[k, j0 + BLOCK - 1] = (10.0 ** (2 * f[:, j0 + BLOCK - 1])).mean()
-    out = np.zeros((n_p, 3, n_f))
-    offsets = [c * BLOCK for c in range(5)]
-    for n in np.unique(ops[:, 0]):
-        ks = np.flatnonzero(ops[:, 0] == n)
-        x = np.abs(ref_torque[ks])
-        coef = _poly(x, y[ks], 2)  # (3, F): squared amplitudes, residual power
-        coef[:, offsets] = _poly(x, y[ks][:, offsets], 1)  # offsets: a line
-        out[ks] = coef
-    out[:, :, EFFICIENCY:] = 0.0  # the efficiency has its loss model; twist: none
-    return out
 
 
 __all__ = ["BLOCK", "Conditions", "EFFICIENCY", "NormalBehaviour", "NormalConfig",

@@ -194,7 +194,7 @@ def test_a_constant_commissioning_temperature_keeps_its_range_widened_by_the_unc
 
 @pytest.mark.parametrize("rate", [-0.06, -0.0233, -0.011, 0.0])
 def test_the_friction_temperature_rate_is_learnt_from_commissioning(rate):
-    from learn.monitor.normal import _loss_model
+    from learn.monitor.laws import loss_model as _loss_model
 
     rng = np.random.default_rng(3)
     temp = rng.uniform(18.0, 45.0, 600)
@@ -210,7 +210,8 @@ def test_the_friction_temperature_rate_is_learnt_from_commissioning(rate):
 def test_over_a_single_warm_up_the_catalogues_law_is_kept_and_a_cold_start_lets_it_learn():
     """Over one warm-up a run-in would pass for the friction's temperature law (learnt
     only after commissioning saw the joint cool, learn/monitor/normal.py)."""
-    from learn.monitor.normal import CATALOGUE_RATE, _loss_model
+    from learn.monitor.laws import CATALOGUE_RATE
+    from learn.monitor.laws import loss_model as _loss_model
 
     hours = np.linspace(0.0, 8.0, 480)
     warm = 20.0 + 20.0 * (1.0 - np.exp(-hours / 0.5))  # one warm-up, no cold start

@@ -1,0 +1,218 @@
+"""Commissioning's laws: how a gear's health features follow the operating variables,
+fitted from the joint's own windows (:mod:`.normal` uses them; its module docstring gives
+the physics and the sources).
+
+* the bridges' span and zero drift per K (:func:`bridge_drift`) and each feature's own
+  slope per K left after them (:func:`feature_slopes`);
+* the loss torque's law A_n exp(θ (T − 20 °C)) + B_n τ per input speed, θ learnt where
+  commissioning saw the joint cool (:func:`loss_model`, :func:`cools`);
+* the load curves: quadratics in the acting torque at each speed (:func:`load_curves`);
+* without a temperature reading, the directions in which commissioning's warm-ups moved
+  the z-scores at each point (:func:`warm_up_directions`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swgsim.gear.thermal import FRICTION_EXPONENT, REF_TEMP_C, VISCOSITY_COEFF_PER_K
+
+from .features import N_HARMONICS
+
+#: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
+BLOCK = N_HARMONICS + 2
+EFFICIENCY = 5 * BLOCK
+
+#: Rates θ [1/K] of the friction's temperature law exp(θ (T − 20 °C)) that commissioning
+#: chooses from (:func:`loss_model`): the friction at 40 °C 0.3 to 1 times that at 20 °C,
+#: every ratio a smooth monotone law can have there (0.63 the catalogue's,
+#: :class:`swgsim.gear.thermal.FrictionLaw`), in steps of 0.0005 1/K (about 1 % at 40 °C),
+#: refined between them; learnt from the joint's own windows, not the catalogue's law.
+FRICTION_RATES = np.linspace(np.log(0.3) / 20.0, 0.0, 121)
+#: θ of the catalogue's viscosity law (:func:`swgsim.gear.thermal.friction_scale`, −0.0233
+#: 1/K), used only where commissioning cannot learn the joint's own (:func:`cools`).
+CATALOGUE_RATE = -VISCOSITY_COEFF_PER_K * FRICTION_EXPONENT
+#: Least temperature spread of commissioning to fit the temperature terms [K].
+MIN_SPREAD_K = 2.0
+#: An amplitude enters the fit of its bridge's gain when its mean is this many standard
+#: deviations above zero (its log is then well defined).
+SIGNIFICANT = 20.0
+
+
+def poly(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
+    """Coefficients (c0, c1, c2) of y ≈ c0 + c1 x + c2 x² of at most ``degree`` (and one
+    less than the points), by least squares, for each column of y (k, F); shape (3, F)."""
+    deg = min(degree, len(x) - 1)
+    v = np.vander(x, deg + 1, increasing=True)  # (k, deg + 1)
+    coef = np.linalg.lstsq(v, y, rcond=None)[0]
+    return np.vstack([coef, np.zeros((2 - deg, y.shape[1]))])
+
+
+
+def bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """γ_c and ζ_c of the five bridges (module docstring): the gain from the significant
+    amplitudes' logs, the zero from the offsets, by least squares pooled over points."""
+    gain, zero = np.zeros(5), np.zeros(5)
+    d2 = float(dt @ dt)
+    if d2 <= 0:
+        return gain, zero
+    for c in range(5):
+        j0 = c * BLOCK
+        amp = feats[:, j0 + 1:j0 + BLOCK - 1]
+        num = den = 0.0
+        for k in np.unique(inv):
+            m = inv == k
+            a = amp[m]
+            sig = a.mean(axis=0) > SIGNIFICANT * a.std(axis=0, ddof=1)
+            if sig.any():  # Σ_j Σ_i ΔT_i (ln a_ij − mean_i ln a_ij) over Σ_j Σ_i ΔT_i²
+                la = np.log(a[:, sig])
+                num += float(dt[m] @ (la - la.mean(axis=0)).sum(axis=1))
+                den += float(dt[m] @ dt[m]) * int(sig.sum())
+        gain[c] = num / den if den > 0 else 0.0
+        off = feats[:, j0]
+        resid = np.zeros(len(off))
+        for k in np.unique(inv):
+            m = inv == k
+            resid[m] = off[m] - off[m].mean() - gain[c] * off[m].mean() * dt[m]
+        zero[c] = float(dt @ resid) / d2
+    return gain, zero
+
+
+def feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.ndarray:
+    """Per point, each feature's least-squares slope on ΔT (features with the bridges'
+    gain and zero drift taken out), shape (P, F); the efficiency's column zero (its loss
+    law has the temperature)."""
+    n_p = int(inv.max()) + 1
+    out = np.zeros((n_p, feats.shape[1]))
+    for k in range(n_p):
+        m = inv == k
+        x = dt[m] - dt[m].mean()
+        if float(x @ x) > 0:
+            out[k] = x @ (feats[m] - feats[m].mean(axis=0)) / float(x @ x)
+    out[:, EFFICIENCY:] = 0.0
+    return out
+
+
+def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
+                ops: np.ndarray, inv: np.ndarray) -> tuple[np.ndarray, float]:
+    """(A, B) per point and the joint's friction-temperature rate θ: the loss torque
+    τ (1/η − 1) ≈ A exp(θ (T − 20 °C)) + B τ by least squares over the windows at the
+    point's speed (module docstring), θ the one of :data:`FRICTION_RATES` that fits
+    commissioning best; shape (P, 2), and θ [1/K] (0 without temperature)."""
+    tq = np.abs(torque)
+    loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
+    if temp is None:
+        return loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], 0.0
+    if not cools(temp):  # one warm-up: a run-in would pass for the law; the catalogue's
+        rate = CATALOGUE_RATE
+        return loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)[0], rate
+    def fit(rate):
+        return loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)
+
+    sse = np.array([fit(r)[1] for r in FRICTION_RATES])
+    k = int(np.clip(np.argmin(sse), 1, len(sse) - 2))
+    rate = float(FRICTION_RATES[k])
+    curv = sse[k - 1] - 2.0 * sse[k] + sse[k + 1]
+    if curv > 0:  # the parabola's vertex through the best three, within their span
+        step = float(FRICTION_RATES[1] - FRICTION_RATES[0])
+        rate += step * float(np.clip(0.5 * (sse[k - 1] - sse[k + 1]) / curv, -1.0, 1.0))
+    rate = float(np.clip(rate, FRICTION_RATES[0], FRICTION_RATES[-1]))
+    return fit(rate)[0], rate
+
+
+
+def cools(temp: np.ndarray) -> bool:
+    """Whether commissioning's temperature (windows in time order) falls by at least
+    :data:`MIN_SPREAD_K` below an earlier reading somewhere (a cold start): only then can
+    the friction's temperature law be told from a slow drift in time (run-in), which over
+    a single warm-up falls as the temperature rises."""
+    return bool(np.max(np.maximum.accumulate(temp) - temp) >= MIN_SPREAD_K)
+
+def loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np.ndarray,
+                       inv: np.ndarray) -> tuple[np.ndarray, float]:
+    """(A, B) per point for the friction factors ``phi`` of the windows, shape (P, 2), and
+    the sum of squared residuals [N² m²]."""
+    out, sse = np.zeros((len(ops), 2)), 0.0
+    for n in np.unique(ops[:, 0]):
+        ks = np.flatnonzero(ops[:, 0] == n)
+        m = np.isin(inv, ks)
+        x = np.stack([phi[m], tq[m]], axis=1)
+        if np.unique(ops[ks, 1]).size < 2:  # one load: the loss's level only
+            coef = np.array([np.mean(loss[m] / phi[m]), 0.0])
+        else:
+            coef = np.linalg.lstsq(x, loss[m], rcond=None)[0]
+        sse += float(np.sum((x @ coef - loss[m]) ** 2))
+        out[ks] = coef
+    return out, sse
+
+
+def load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,
+                 ref_torque: np.ndarray) -> np.ndarray:
+    """Per point, the quadratics in τ of the load curves at its speed (module docstring):
+    squared amplitudes, offsets (a line), residual power, shape (P, 3, F)."""
+    n_p, n_f = len(ops), feats.shape[1]
+    y = np.zeros((n_p, n_f))
+    for k in range(n_p):
+        f = feats[inv == k]
+        for c in range(5):
+            j0 = c * BLOCK
+            y[k, j0] = f[:, j0].mean()
+            y[k, j0 + 1:j0 + BLOCK - 1] = (f[:, j0 + 1:j0 + BLOCK - 1] ** 2).mean(axis=0)
+            y[k, j0 + BLOCK - 1] = (10.0 ** (2 * f[:, j0 + BLOCK - 1])).mean()
+    out = np.zeros((n_p, 3, n_f))
+    offsets = [c * BLOCK for c in range(5)]
+    for n in np.unique(ops[:, 0]):
+        ks = np.flatnonzero(ops[:, 0] == n)
+        x = np.abs(ref_torque[ks])
+        coef = poly(x, y[ks], 2)  # (3, F): squared amplitudes, residual power
+        coef[:, offsets] = poly(x, y[ks][:, offsets], 1)  # offsets: a line
+        out[ks] = coef
+    out[:, :, EFFICIENCY:] = 0.0  # the efficiency has its loss model; twist: none
+    return out
+
+
+def warm_up_directions(z: np.ndarray, inv: np.ndarray, k: int
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Per operating point, the directions in which commissioning's z-scores varied
+    together beyond noise, and their range: what a joint without a temperature reading
+    saw its warm-ups do (the bridges' span and zero drift move every bridge alike, the
+    grease's viscosity the efficiency, module docstring of :mod:`.normal`).
+
+    A direction counts where its eigenvalue of the windows' covariance lies above the
+    largest a covariance of independent unit-variance features has, the Marchenko-Pastur
+    edge (1 + sqrt(F / m))² for m windows of F features (V. A. Marchenko and L. A.
+    Pastur, Math. USSR-Sbornik 1(4), 1967; I. M. Johnstone, Ann. Statist. 29(2), 2001,
+    for the largest eigenvalue's spike): on the bench's joint without a sensor (gear 3,
+    family ``sensor``) the two largest were 3.3-5.3 against an edge of 3.1.
+
+    Parameters
+    ----------
+    z : ndarray, shape (n, F)
+        Commissioning's z-scores (features at the reference condition, standardised per
+        point).
+    inv : ndarray of int, shape (n,)
+        Each window's point.
+    k : int
+        Most directions per point.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Directions, shape (P, k, F) (unit vectors; zero where fewer than k count), and
+        commissioning's range along each, shape (P, k, 2).
+    """
+    n_p, n_f = int(inv.max()) + 1, z.shape[1]
+    dirs, rng = np.zeros((n_p, k, n_f)), np.zeros((n_p, k, 2))
+    for p in range(n_p):
+        zp = z[inv == p]
+        m = len(zp)
+        if m < 3:
+            continue
+        _, s, vt = np.linalg.svd(zp - zp.mean(axis=0), full_matrices=False)
+        edge = (1.0 + np.sqrt(n_f / m)) ** 2
+        for c in np.flatnonzero(s[:k] ** 2 / (m - 1) > edge):
+            u = zp @ vt[c]
+            dirs[p, c], rng[p, c] = vt[c], [u.min(), u.max()]
+    return dirs, rng
+
