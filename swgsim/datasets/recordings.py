@@ -169,6 +169,15 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
 
 
 # ------------------------------------------------------------------ windows and the stream
+def _plain_mapping(m: RecordingMapping) -> dict:
+    """The mapping as the stream's config records it: ``stops`` left out when none, so
+    that a stream keeps the config hash it had before stops were mapped."""
+    out = dataclasses.asdict(m)
+    if not m.stops:
+        del out["stops"]
+    return out
+
+
 def _angles(s: Samples, m: RecordingMapping, starts: np.ndarray) -> dict[str, np.ndarray]:
     """The angle channels unwrapped inside each segment and checked against the speed and
     each other (:mod:`swgsim.datasets.recording_table`): name -> shape (n,) [rad]."""
@@ -329,7 +338,7 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
             "n_in_mean_rpm": info.pop("mean_rpm"), "t_out_mean_nm": info.pop("mean_nm")}
     config = {"name": f"recording {p.name}", "recording": {"file": p.name, "rows": int(n),
                                                            "sha256": s.sha256},
-              "mapping": dataclasses.asdict(m),
+              "mapping": _plain_mapping(m),
               "chain": {"sample_rate_hz": fs, "window_s": n_t / fs}}
     if m.input_angle is not None:  # the input sensor, as a profile data set names it
         config["profile"] = {"angles": {"input_counts_per_rev": m.input_angle.counts_per_rev}}

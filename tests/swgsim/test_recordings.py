@@ -600,3 +600,16 @@ def test_a_cell_that_is_no_flag_is_refused_naming_the_row(cells, bad):
     with pytest.raises(ValueError, match=rf"^column 'stop' \(stops\[0\]\), row 1 \(line 3\): "
                                          rf"{bad} is not a flag \(true/false or a number\)$"):
         flag(pd.DataFrame({"stop": cells}), "stop", "stops[0]", "csv")
+
+
+def test_no_stops_keeps_an_imported_streams_config_and_a_stop_enters_it(tmp_path):
+    df, mapping = _continuous(3)
+    mapping["commissioning_h"] = 1 / 3600
+    plain = {k: v for k, v in mapping.items() if k != "stops"}
+    for name, m in (("none", plain), ("stops", mapping)):
+        (tmp_path / name).mkdir()
+        import_recording(*_write(df, m, tmp_path / name), tmp_path / name / "stream")
+    none, stops = (read_manifest(tmp_path / n / "stream") for n in ("none", "stops"))
+    assert "stops" not in none["config"]["mapping"]
+    assert stops["config"]["mapping"]["stops"] == ["protective_stop"]
+    assert none["config_hash"] != stops["config_hash"]
