@@ -83,8 +83,9 @@ def summary_lines(s: dict) -> list[str]:
     return [f"swgsim-import: {s['windows']} windows of {s['window_samples']} samples at "
             f"{s['sample_rate_hz']:g} Hz from {s['rows']} rows in {s['segments']} segment(s), "
             f"{s['hours'][0]:.2f}-{s['hours'][1]:.2f} h -> {s['out_dir']}",
-            f"swgsim-import: commissioning {comm}; {s['outside_points']} of "
-            f"{s['windows_cut']} whole windows outside the declared operating points; mean "
+            f"swgsim-import: commissioning {comm}; of {s['windows_cut']} whole windows "
+            f"{s['stopped_windows']} in a stop left out, {s['outside_points']} outside the "
+            f"declared operating points; mean "
             f"speeds up to {s['speed_offset_rpm']:.3g} rpm from their point's"]
 
 

@@ -43,6 +43,7 @@ from learn.tasks.monitor_evaluation import MonitorExperiment
 from learn.tracking.config import LoggerConfig
 from swgsim.base.typed import allowed, check_keys
 from swgsim.datasets.config import DatasetConfig
+from swgsim.gear.thermal import THERMAL_PRESETS
 
 #: ``n_jobs`` of every app: worker processes, one or more (0 or a negative count is
 #: refused with the keys, before any work)
@@ -235,6 +236,8 @@ def register() -> None:
         cs.store(group="model", name=name, node=model_config(name))
     for k, name in SELECTIONS.items():
         cs.store(group="features", name=name, node=FeatureSettings(name=name, selection=k))
+    for name, changes in THERMAL_PRESETS.items():  # the fields each joint changes
+        cs.store(group="thermal", name=name, node=dict(changes))
     cs.store(group="paths", name="default", node=PathsConfig)
     cs.store(group="logger", name="mlflow", node=LoggerConfig)
     # swgsim-monitor's tracking as a group option, so that `~logger` removes all of it

@@ -124,6 +124,11 @@ class RecordingMapping:
     input_angle, output_angle : Angle or None
     temperature : str or None
         Joint temperature column [degC].
+    stops : list of str
+        Event flag columns during which the joint is stopped (a protective stop, an
+        emergency stop): true/false, or numbers, nonzero true. A window holding a flagged
+        row is left out of the stream (a stopped joint has no load cycle to judge); none:
+        every window is operation.
     clock : Clock or None
         None: the time column counts operating time.
     power : Power or None
@@ -150,6 +155,7 @@ class RecordingMapping:
     input_angle: Angle | None = None
     output_angle: Angle | None = None
     temperature: str | None = None
+    stops: list[str] = field(default_factory=list)
     clock: Clock | None = None
     power: Power | None = None
     gear: int = field(default=1, metadata=allowed(0, None, "the stream's gear id"))
@@ -239,6 +245,7 @@ def mapping_columns(m: RecordingMapping) -> dict[str, str]:
             out[f"{k}.column"] = getattr(m, k).column
     if m.temperature is not None:
         out["temperature"] = m.temperature
+    out.update({f"stops[{i}]": c for i, c in enumerate(m.stops)})
     if m.clock is not None:
         out["clock.column"] = m.clock.column
     if m.power is not None:

@@ -279,6 +279,49 @@ def numeric(df, column: str, key: str, fmt: str, missing: bool = False,
     return v
 
 
+#: Texts of an event flag's cells, case-insensitive (the UR3 CobotOps log writes True and
+#: False) [choice].
+FLAG_TEXTS = {"true": True, "false": False, "1": True, "0": False}
+
+
+def flag(df, column: str, key: str, fmt: str) -> np.ndarray:
+    """An event flag column as booleans: true/false (booleans or their text,
+    :data:`FLAG_TEXTS`) or finite numbers, nonzero true.
+
+    Returns
+    -------
+    ndarray of bool, shape (n_rows,)
+
+    Raises
+    ------
+    ValueError
+        ``column 'x' (key), row i: 'abc' is not a flag (true/false or a number)``; an
+        empty cell is refused likewise.
+    """
+    import pandas as pd
+
+    s = df[column]
+    if s.dtype.kind == "b":
+        return s.to_numpy(dtype=bool)
+    if s.dtype.kind in "fiu":
+        v = s.to_numpy(dtype=np.float64)
+        ok = np.isfinite(v)
+    else:
+        text = s.astype(str).str.strip().str.lower()
+        v = pd.to_numeric(text, errors="coerce").to_numpy(dtype=np.float64)
+        named = text.map(FLAG_TEXTS)
+        v = np.where(named.notna(), named.fillna(False).astype(float), v)
+        ok = np.isfinite(v) & s.notna().to_numpy()
+    bad = np.flatnonzero(~ok)
+    if bad.size:
+        i = int(bad[0])
+        cell = ("an empty cell" if pd.isna(s.iloc[i]) else repr(s.iloc[i])
+                ) if s.dtype.kind == "O" else f"{v[i]:g}"
+        raise ValueError(f"column {column!r} ({key}), {row_name(i, fmt)}: {cell} is not a "
+                         "flag (true/false or a number)")
+    return v != 0
+
+
 def datetime_seconds(df, column: str, key: str, fmt: str) -> np.ndarray:
     """A wall-clock column (ISO 8601 text or datetime values) as seconds since its first
     row, float64, shape (n_rows,).

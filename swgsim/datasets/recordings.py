@@ -27,7 +27,10 @@ How the windows are made (:mod:`swgsim.datasets.recording_table` and
   tolerance (a steady window); other windows are counted and left out;
 * **interval**: of the windows at a point, the first is taken, then each first one at
   least ``interval_min`` minutes of operation (less one window) after the last taken;
-* **commissioning**: the windows of the first ``commissioning_h`` hours, known healthy.
+* **commissioning**: the windows of the first ``commissioning_h`` hours, known healthy;
+* **stops**: a window holding a row flagged by a ``stops`` column (a protective stop) is
+  left out before the operating points are assigned (a stopped joint has no load cycle to
+  judge; counted as ``stopped_windows``); the windows around it keep their hours.
 
 Per window the stream holds the bridges (mV/V; raw counts through each bridge's
 calibration, ``mV/V = gain * (count - offset)``), ``n_in_mean_rpm`` and ``t_out_mean_nm``
@@ -103,6 +106,7 @@ class Samples:
     temperature_c: np.ndarray | None
     p_in_w: np.ndarray | None
     p_out_w: np.ndarray | None
+    stopped: np.ndarray | None  # bool: a row flagged by a ``stops`` column
     fmt: str
     sha256: str  # of the bytes parsed (read once: a file changed meanwhile is not mixed in)
 
@@ -125,9 +129,10 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
     cols = {c: k for k, c in mapping_columns(m).items()}
     df, fmt, digest = rt.read_table(path, cols, max_bytes, progress)
     stamp = m.clock.column if m.clock is not None and m.clock.unit == "datetime" else None
-    v = {c: (rt.datetime_seconds if c == stamp else rt.numeric)(df, c, k, fmt)
-         for c, k in cols.items()}
+    v = {c: (rt.datetime_seconds if c == stamp else rt.flag if c in m.stops else rt.numeric)(
+        df, c, k, fmt) for c, k in cols.items()}
     del df
+    stopped = np.any([v[c] for c in m.stops], axis=0) if m.stops else None
     b = m.bridges
     mvv = np.stack([v[c] for c in b.columns])
     if b.unit == "counts":
@@ -160,10 +165,19 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
     return Samples(v[m.time], clock, mvv, speed, v[m.torque], angle(m.input_angle),
                    angle(m.output_angle), temp,
                    None if m.power is None else v[m.power.input],
-                   None if m.power is None else v[m.power.output], fmt, digest)
+                   None if m.power is None else v[m.power.output], stopped, fmt, digest)
 
 
 # ------------------------------------------------------------------ windows and the stream
+def _plain_mapping(m: RecordingMapping) -> dict:
+    """The mapping as the stream's config records it: ``stops`` left out when none, so
+    that a stream keeps the config hash it had before stops were mapped."""
+    out = dataclasses.asdict(m)
+    if not m.stops:
+        del out["stops"]
+    return out
+
+
 def _angles(s: Samples, m: RecordingMapping, starts: np.ndarray) -> dict[str, np.ndarray]:
     """The angle channels unwrapped inside each segment and checked against the speed and
     each other (:mod:`swgsim.datasets.recording_table`): name -> shape (n,) [rad]."""
@@ -217,13 +231,16 @@ def _hours(s: Samples, m: RecordingMapping, starts: np.ndarray, seg: np.ndarray,
 def _select(s: Samples, m: RecordingMapping, w0: np.ndarray, n_t: int, hour: np.ndarray,
             h0: float) -> tuple[np.ndarray, np.ndarray, dict]:
     """The windows taken (indices into ``w0``), their operating points (indices into the
-    declared ones) and the counts of the summary."""
+    declared ones) and the counts of the summary; a window in a stop is never taken."""
     op = m.operating_points
     pts = np.asarray(op.points, float)
     sp, tq = rt.window_reduce(s.speed_rpm, w0, n_t), rt.window_reduce(s.torque_nm, w0, n_t)
     k = rt.assign_points(sp, rt.window_reduce(s.speed_rpm, w0, n_t, "min"),
                          rt.window_reduce(s.speed_rpm, w0, n_t, "max"), tq, pts,
                          op.speed_tolerance_rpm, op.torque_tolerance_nm)
+    stopped = (np.zeros(w0.size, bool) if s.stopped is None
+               else rt.window_reduce(s.stopped.astype(float), w0, n_t, "max") > 0)
+    k[stopped] = -1
     cand = np.flatnonzero(k >= 0)
     if cand.size == 0:
         raise ValueError(f"operating_points: no window is at a declared point within "
@@ -245,7 +262,8 @@ def _select(s: Samples, m: RecordingMapping, w0: np.ndarray, n_t: int, hour: np.
                          f"operating_points.points[{unseen[0]}] {op.points[unseen[0]]}, which "
                          "later windows are at; lengthen the commissioning or drop the point")
     return take, k[take], {
-        "windows_cut": int(w0.size), "outside_points": int(w0.size - cand.size),
+        "windows_cut": int(w0.size), "stopped_windows": int(stopped.sum()),
+        "outside_points": int(w0.size - stopped.sum() - cand.size),
         "windows": int(take.size), "commissioning_windows": {
             f"{pts[i, 0]:g} rpm, {pts[i, 1]:g} N m": int(c) for i, c in zip(names, counts,
                                                                               strict=True)},
@@ -273,7 +291,8 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
         The stream (schema v1 with ``hour``, ``commissioning``, ``recording_row`` and,
         where the recording has them, ``temperature_c``, ``phi_in_meas``,
         ``phi_out_meas``) and a summary: ``rows``, ``segments``, ``sample_rate_hz``,
-        ``window_samples``, ``windows_cut``, ``outside_points``, ``windows``,
+        ``window_samples``, ``windows_cut``, ``stopped_windows`` (in a stop, left out),
+        ``outside_points`` (of the others), ``windows``,
         ``commissioning_windows`` per operating point, ``hours`` (first, last),
         ``speed_offset_rpm`` (the largest distance of a window's mean speed from its
         point's [rpm]: without an input angle the monitor fits at the point's speed).
@@ -319,7 +338,7 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
             "n_in_mean_rpm": info.pop("mean_rpm"), "t_out_mean_nm": info.pop("mean_nm")}
     config = {"name": f"recording {p.name}", "recording": {"file": p.name, "rows": int(n),
                                                            "sha256": s.sha256},
-              "mapping": dataclasses.asdict(m),
+              "mapping": _plain_mapping(m),
               "chain": {"sample_rate_hz": fs, "window_s": n_t / fs}}
     if m.input_angle is not None:  # the input sensor, as a profile data set names it
         config["profile"] = {"angles": {"input_counts_per_rev": m.input_angle.counts_per_rev}}

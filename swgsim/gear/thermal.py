@@ -115,6 +115,20 @@ class JointThermal:
     ambient_points: list[list[float]] = field(default_factory=list)
     run_h_per_day: float = 16.0
 
+    @classmethod
+    def preset(cls, name: str, **changes) -> JointThermal:
+        """A named joint (:data:`THERMAL_PRESETS`), fields replaced by ``changes``.
+
+        Raises
+        ------
+        ValueError
+            One line listing the allowed names, for a name not in :data:`THERMAL_PRESETS`.
+        """
+        if name not in THERMAL_PRESETS:
+            raise ValueError(f"thermal preset must be one of {', '.join(THERMAL_PRESETS)}, "
+                             f"got {name!r}")
+        return cls(**{**THERMAL_PRESETS[name], **changes})
+
     def check(self, key: str = "JointThermal") -> None:
         """Refuse a field outside its range in one line naming ``<key>.<field>``.
 
@@ -145,6 +159,30 @@ class JointThermal:
                              "ambient_swing_k + ambient_points offsets); it must stay within "
                              f"[{TEMP_RANGE_C[0]:g}, {TEMP_RANGE_C[1]:g}] °C, the viscosity "
                              "law's range")
+
+
+#: The small cobot joint's time constant [min]: the median of a UR3's six joints, 32.1-45.9
+#: min (docs/calibration.md, "A joint's warm-up": the Universal Robots UR3 CobotOps day,
+#: one first-order fit per joint) [derived].
+SMALL_COBOT_TAU_MIN = 35.45
+#: Named joints, the fields each changes from :class:`JointThermal`'s defaults, selected
+#: with :meth:`JointThermal.preset` or the config group ``thermal`` (``+thermal@dataset.
+#: life.conditions.thermal=small_cobot``):
+#:
+#: * ``industrial``: the defaults (an industrial robot's joint, the paper's gear's duty);
+#: * ``small_cobot``: a UR3-size joint, ``tau_min`` :data:`SMALL_COBOT_TAU_MIN`;
+#:   ``r_th_k_per_w`` stays 0.3 K/W **[unverified]**: on one steady duty R_th is not
+#:   separable from the hall's temperature (the fits give −9.6 to 26 K/W; J1's 2.2 ± 0.7
+#:   K/W holds only with its copper term, whose gain follows the hall at r = −1.00), and
+#:   2.2 K/W on this model's gear loss (mean 69 W) would warm the joint by about 150 K
+#:   [derived].
+#:
+#: The defaults stay the industrial joint's: changing them would move every data set and
+#: the monitor's figures, and the small cobot's τ lies inside the families' drawn 20-60 min.
+THERMAL_PRESETS: dict[str, dict[str, float]] = {
+    "industrial": {},
+    "small_cobot": {"tau_min": SMALL_COBOT_TAU_MIN},
+}
 
 
 def wall_clock_h(operating_h, run_h_per_day: float) -> np.ndarray:

@@ -10,8 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 
-from swgcli import dataset_preset
+from swgcli import compose_app, dataset_preset
+from swgcli.app import one_line
 from swgsim.datasets.conditions import (
     ConditionsConfig,
     Regrease,
@@ -418,3 +420,27 @@ def test_the_ur3_days_first_warm_up_is_its_first_49_minutes():
     assert t_h[-1] == pytest.approx(0.816, abs=1e-3)  # before the 5.2-h gap
     assert t_h.size == 2859  # 2868 rows, 9 without a reading
     assert rise[-1] == pytest.approx(7.875) and rise.min() >= -0.1  # warming, 0.0625-K steps
+
+
+def _with_joint(name: str):
+    """tiny_real_day composed with the named joint of the ``thermal`` config group."""
+    cfg = compose_app("generate", ["dataset=tiny_real_day",
+                                   f"+thermal@dataset.life.conditions.thermal={name}"])
+    return dataset_config(OmegaConf.to_container(cfg.dataset, resolve=True))
+
+
+def test_a_named_joint_is_selected_in_the_config_and_the_industrial_keeps_the_hash():
+    base = dataset_config(dataset_preset("tiny_real_day"))
+    assert config_hash(_with_joint("industrial")) == config_hash(base)
+    cobot = _with_joint("small_cobot")
+    # the preset's tau over the data set's own hall (its ambient_points kept)
+    assert cobot.life.conditions.thermal == JointThermal.preset(
+        "small_cobot", ambient_points=base.life.conditions.thermal.ambient_points)
+    assert config_hash(cobot) != config_hash(base)
+
+
+def test_an_unknown_named_joint_is_refused_in_one_line():
+    with pytest.raises(Exception) as err:
+        _with_joint("kuka")
+    assert one_line(err.value) == ("Could not find 'thermal/kuka'; available: industrial, "
+                                   "small_cobot")

@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from swgsim.datasets.recording_mapping import read_mapping, recording_mapping
-from swgsim.datasets.recording_table import MIN_WINDOW_SAMPLES, stream_table
+from swgsim.datasets.recording_table import MIN_WINDOW_SAMPLES, flag, stream_table
 from swgsim.datasets.recordings import import_recording
 from swgsim.datasets.schema import load, read_manifest
 from swgsim.files.ownership import STAMP
@@ -526,3 +526,90 @@ def test_two_imports_into_one_folder_one_wins_the_other_is_refused(tmp_path, mon
             and not p.name.startswith(".swg-owner")} == won["files"]
     assert load(out)["commissioning"].values.sum() == 5  # the fast one's stream
     assert read_manifest(out)["content_sha256"] == won["summary"]["content_sha256"]
+
+
+def _continuous(seconds: int = 30) -> tuple[pd.DataFrame, dict]:
+    """A continuous recording at the one operating point, no clock column (the time counts),
+    every window taken, commissioning its first 10 s; a protective stop flag, all false."""
+    t = np.arange(seconds * int(FS)) / FS
+    psi = 2 * np.pi * RPM / 60.0 * t
+    df = pd.DataFrame({"time_s": t, **{f"s{i}": 0.2 * np.sin(2 * psi + i) for i in range(5)},
+                       "n_in_rpm": RPM, "t_out_nm": NM + 0.1 * np.sin(psi),
+                       "protective_stop": False})
+    mapping = {"time": "time_s", "operating_points": {"points": [[RPM, NM]]},
+               "commissioning_h": 10 / 3600, "window_s": N_T / FS, "interval_min": 0.0,
+               "stops": ["protective_stop"]}
+    return df, mapping
+
+
+def test_windows_in_a_stop_are_left_out_and_the_rest_is_the_recording_without_it(tmp_path):
+    """Two protective stops on whole windows, one inside commissioning (windows 20-22) and one
+    after it (200-204), the signals left as they were (only the flag says the joint stands):
+    the stream is the one of the table without the stop's rows, window for window (the
+    hours to rounding), but for the table rows it names; commissioning is shorter by its
+    stop's windows."""
+    df, mapping = _continuous()
+    stops = [(20, 23), (200, 205)]  # windows [first, end)
+    rows = np.concatenate([np.arange(a * N_T, b * N_T) for a, b in stops])
+    df.loc[rows, "protective_stop"] = True
+    (tmp_path / "flag").mkdir()
+    (tmp_path / "cut").mkdir()
+    s = import_recording(*_write(df, mapping, tmp_path / "flag", "rec.parquet"),
+                         tmp_path / "flag" / "stream")
+    cut = df.drop(index=rows).reset_index(drop=True)
+    ref = import_recording(*_write(cut, mapping, tmp_path / "cut", "rec.parquet"),
+                           tmp_path / "cut" / "stream")
+    got, want = load(tmp_path / "flag" / "stream"), load(tmp_path / "cut" / "stream")
+    n_stop = sum(b - a for a, b in stops)
+    assert s["stopped_windows"] == n_stop and s["outside_points"] == 0
+    assert s["windows"] == s["windows_cut"] - n_stop == ref["windows"]
+    # the hours to rounding: the cut table's are summed from its later segments' first rows
+    _same_stream(want, got, tuple(v for v in EXACT if v != "hour") + ("fault",))
+    np.testing.assert_allclose(got["hour"].values, want["hour"].values, rtol=1e-15, atol=0)
+    kept = np.delete(np.arange(len(df)), rows)  # the cut table's rows in the recording
+    np.testing.assert_array_equal(got["recording_row"].values,
+                                  kept[want["recording_row"].values])
+    first = got["recording_row"].values // N_T  # the windows taken, by their index
+    assert not np.isin(first, np.concatenate([np.arange(a, b) for a, b in stops])).any()
+    assert got["commissioning"].values.sum() == 10 * FS // N_T - (stops[0][1] - stops[0][0])
+
+
+def test_one_flagged_row_leaves_its_window_out(tmp_path):
+    df, mapping = _continuous(3)
+    df.loc[7 * N_T + 5, "protective_stop"] = True
+    mapping["commissioning_h"] = 1 / 3600
+    s = import_recording(*_write(df, mapping, tmp_path), tmp_path / "stream")
+    got = load(tmp_path / "stream")
+    assert s["stopped_windows"] == 1
+    np.testing.assert_array_equal(got["recording_row"].values // N_T,
+                                  np.delete(np.arange(3 * int(FS) // N_T), 7))
+
+
+@pytest.mark.parametrize("cells, want", [
+    ([True, False], [True, False]), (["True", " false", "1", "0", "TRUE"],
+                                     [True, False, True, False, True]),
+    ([0.0, 2.0, -1.0], [False, True, True]),
+])
+def test_a_flag_column_reads_booleans_their_text_or_numbers(cells, want):
+    assert flag(pd.DataFrame({"stop": cells}), "stop", "stops[0]", "csv").tolist() == want
+
+
+@pytest.mark.parametrize("cells, bad", [(["True", "maybe"], "'maybe'"), ([1.0, np.nan], "nan"),
+                                        (["True", None], "an empty cell")])
+def test_a_cell_that_is_no_flag_is_refused_naming_the_row(cells, bad):
+    with pytest.raises(ValueError, match=rf"^column 'stop' \(stops\[0\]\), row 1 \(line 3\): "
+                                         rf"{bad} is not a flag \(true/false or a number\)$"):
+        flag(pd.DataFrame({"stop": cells}), "stop", "stops[0]", "csv")
+
+
+def test_no_stops_keeps_an_imported_streams_config_and_a_stop_enters_it(tmp_path):
+    df, mapping = _continuous(3)
+    mapping["commissioning_h"] = 1 / 3600
+    plain = {k: v for k, v in mapping.items() if k != "stops"}
+    for name, m in (("none", plain), ("stops", mapping)):
+        (tmp_path / name).mkdir()
+        import_recording(*_write(df, m, tmp_path / name), tmp_path / name / "stream")
+    none, stops = (read_manifest(tmp_path / n / "stream") for n in ("none", "stops"))
+    assert "stops" not in none["config"]["mapping"]
+    assert stops["config"]["mapping"]["stops"] == ["protective_stop"]
+    assert none["config_hash"] != stops["config_hash"]

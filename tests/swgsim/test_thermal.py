@@ -411,3 +411,25 @@ def test_a_traced_temperature_restarts_the_measured_rise_after_every_cold_start(
         th.traced_temperature(h, [0.5, 1.0], [0.0, 1.0], cfg)
     with pytest.raises(ValueError, match="scale"):
         th.traced_temperature(h, trace_h, rise, cfg, scale=-1.0)
+
+
+# ---------------------------------------------------------------- named joints
+#: The UR3 day's six fitted time constants, J0..J5 [min] (docs/calibration.md's table).
+UR3_TAU_MIN = [45.9, 40.3, 37.8, 33.1, 32.1, 33.1]
+
+
+def test_the_industrial_joint_is_the_default_and_the_small_cobot_the_ur3s_median_tau():
+    assert th.JointThermal.preset("industrial") == th.JointThermal()
+    cobot = th.JointThermal.preset("small_cobot")
+    assert cobot.tau_min == pytest.approx(float(np.median(UR3_TAU_MIN)), abs=1e-12)
+    assert min(UR3_TAU_MIN) <= cobot.tau_min <= max(UR3_TAU_MIN)
+    # only tau was identified: every other field the default's
+    assert dataclasses.replace(cobot, tau_min=th.JointThermal().tau_min) == th.JointThermal()
+    assert th.JointThermal.preset("small_cobot", ambient_c=25.0).ambient_c == 25.0
+    cobot.check()
+
+
+def test_an_unknown_joint_is_refused_naming_the_allowed_ones():
+    with pytest.raises(ValueError, match=r"^thermal preset must be one of industrial, "
+                                         r"small_cobot, got 'kuka'$"):
+        th.JointThermal.preset("kuka")
