@@ -611,21 +611,25 @@ def test_no_prognosis_before_an_alarm(growing_life, tiny_eval):
 
 
 def test_a_planned_duty_outside_the_models_is_refused_by_the_app(growing_life, tiny_eval,
-                                                                  tmp_path):
-    """swgsim-monitor with a planned duty at 9000 rpm (the model: 4000 rpm): exit 2, one
-    line naming prognosis.planned.n_in_rpm, nothing written."""
-    import subprocess
+                                                                  tmp_path, monkeypatch,
+                                                                  capsys):
+    """swgsim-monitor (in-process, as its command line runs it) with a planned duty at
+    9000 rpm (the model: 4000 rpm): exit 2, one line naming prognosis.planned.n_in_rpm,
+    nothing written."""
     import sys
-    from pathlib import Path
 
+    import swgcli.monitor
     from learn.monitor.model_io import save_model
 
     model = save_model(tiny_eval["model"], tmp_path / "model", [{"name": "tiny_bench"}])
-    r = subprocess.run([str(Path(sys.executable).parent / "swgsim-monitor"),
-                        f"stream={growing_life['folder']}", f"diagnosis_model={model}",
-                        f"out_dir={tmp_path / 'out'}", "~logger", "prognosis.enabled=true",
-                        "prognosis.planned=[{minutes: 60, n_in_rpm: 9000, t_acting_nm: 40, "
-                        "temp_c: 30}]"], capture_output=True, text=True, timeout=300)
-    lines = [s for s in r.stderr.splitlines() if s.strip()]
-    assert r.returncode == 2 and len(lines) == 1, r.stderr
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "argv", [
+        "swgsim-monitor", f"stream={growing_life['folder']}", f"diagnosis_model={model}",
+        f"out_dir={tmp_path / 'out'}", "~logger", "prognosis.enabled=true",
+        "prognosis.planned=[{minutes: 60, n_in_rpm: 9000, t_acting_nm: 40, temp_c: 30}]"])
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as info:
+        swgcli.monitor.main()
+    lines = [s for s in capsys.readouterr().err.splitlines() if s.strip()]
+    assert info.value.code == 2 and len(lines) == 1, lines
     assert "prognosis.planned.n_in_rpm" in lines[0] and not (tmp_path / "out").exists()
