@@ -5,7 +5,9 @@ e.g. ``swgsim-generate dataset=tiny_life``) and a diagnosis model trained on sim
 gears (``models/*.skops`` of ``swgsim-train experiment=monitor``), checks that they fit
 before any work, builds the gear's normal behaviour from its commissioning windows, runs the
 sequential rule (:mod:`learn.monitor`) and writes ``summary.json``, ``report.md``,
-``health.png`` and an MLflow run. Config: ``conf/monitor.yaml``.
+``health.png`` and an MLflow run; with ``prognosis.enabled=true`` the prognosis after each
+gear-fault alarm (:mod:`learn.monitor.stream_prognosis`) and ``prognosis.png``.
+Config: ``conf/monitor.yaml``.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from omegaconf import DictConfig, OmegaConf
 from learn.monitor.model_io import load_model
 from learn.monitor.rule import check_rule
 from learn.monitor.stream import event_line, monitor_stream, select_gear, write_outputs
+from learn.monitor.stream_prognosis import prognosis_line, trained_duty
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgcli.app import absolute_path, hydra_app
@@ -39,13 +42,17 @@ def run_monitor_app(cfg) -> dict:
         Before any work: a rule option or ``confirm_h`` out of range
         (:func:`learn.monitor.rule.check_rule`), an unwritable MLflow store, ``out_dir``
         holding a file this project cannot show it wrote (named,
-        :func:`swgsim.files.ownership.check`), or a model or stream that is unfit.
+        :func:`swgsim.files.ownership.check`), a model or stream that is unfit, or a
+        prognosis option out of range (a planned duty outside the model's operating
+        points or the data sets' temperatures: ``prognosis.planned.<quantity>``).
     """
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
     check_rule(app.rule, "rule")
     app.normal.check("normal")
     for i, e in enumerate(app.maintenance):
         e.check(f"maintenance[{i}]")
+    if app.prognosis.enabled:
+        app.prognosis.check()  # the planned duty against the model's once it is loaded
     check_range(app.confirm_h, 0.0, 1000.0, "confirm_h", "h", lo_open=True,
                 why="hours after an alarm whose windows name the fault")
     if app.logger is not None:
@@ -54,10 +61,13 @@ def run_monitor_app(cfg) -> dict:
     ownership.check(out, "out_dir", app="swgsim-monitor")  # before any work
     model = load_model(absolute_path(app.diagnosis_model), "diagnosis_model",
                        trust_pickle=app.trust_pickle)
+    if app.prognosis.enabled:
+        app.prognosis.check(trained_duty(model))
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
-                         source=str(src), normal=app.normal, maintenance=app.maintenance)
+                         source=str(src), normal=app.normal, maintenance=app.maintenance,
+                         prognosis=app.prognosis)
     with ownership.claim(out, "swgsim-monitor", strict=True) as claim:
         files = write_outputs(res, out, str(src))
         claim.record(files.values())
@@ -72,6 +82,7 @@ def run_monitor_app(cfg) -> dict:
             for f in files.values():
                 run.log_artifact(f)
     return {"alarms": [a.as_dict() for a in res.alarms], "events": res.events(),
+            "prognosis": None if res.prognosis is None else res.prognosis.events,
             "threshold": res.threshold, "files": {k: str(v) for k, v in files.items()}}
 
 
@@ -91,6 +102,8 @@ def main(cfg: DictConfig) -> dict:
         print("no alarm")
     for e in out["events"]:
         print(event_line(e))
+    for e in out["prognosis"] or []:
+        print(prognosis_line(e))
     for k, v in out["files"].items():
         print(f"{k}: {v}")
     return out

@@ -34,6 +34,7 @@ from learn.inputs.features import SELECTIONS, FeatureSettings
 from learn.monitor.gear_monitor import MaintenanceEvent
 from learn.monitor.normal import NormalConfig
 from learn.monitor.rule import RuleConfig
+from learn.monitor.stream_prognosis import StreamPrognosis
 from learn.studies.observability_motion import MotionMapConfig
 from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
@@ -121,6 +122,10 @@ class MonitorApp:
     # the joint's maintenance log: [{hour: 40.0, kind: regrease}, ...]; kinds regrease,
     # tool_change, repair (learn/monitor/gear_monitor.py MaintenanceEvent)
     maintenance: list[MaintenanceEvent] = field(default_factory=list)
+    # after a gear-fault alarm the hours to failure: prognosis.enabled=true; a planned duty
+    # prognosis.planned=[{minutes: 60, n_in_rpm: 2500, t_acting_nm: 40, temp_c: 30}]
+    # (learn/monitor/stream_prognosis.py StreamPrognosis)
+    prognosis: StreamPrognosis = field(default_factory=StreamPrognosis)
     seed: int = 0                            # the p-values' smoothing draws
     logger: LoggerConfig | None = None
 

@@ -1,5 +1,5 @@
 """Prognosis after an alarm: the hours left until the named fault's severity reaches its
-failure threshold, as a distribution (groundwork; not wired into the stream yet).
+failure threshold, as a distribution (in the stream: :mod:`.stream_prognosis`).
 
 The physics-based predictor (:func:`predict_growth`) takes the fault's growth law from
 :mod:`swgsim.datasets.growth` (Paris' law for the cracks, Archard's law for the wave

@@ -33,6 +33,8 @@ from .normal import (
 )
 from .rule import Alarm, RuleConfig, check_commissioning
 from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE, virtual_temperature
+from .stream_figures import health_figure, prognosis_figure
+from .stream_prognosis import StreamPrognoses, StreamPrognosis, stream_prognoses, trained_duty
 
 #: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
 CONDITIONS = {OUTSIDE_TEMPERATURE: "temperature", OUTSIDE_LOAD: "load",
@@ -63,6 +65,8 @@ class StreamResult:
     recommissioned : list of dict
         Where the monitor recommissioned an operating point at a load that stayed beyond
         commissioning's (:func:`recommissionings`).
+    prognosis : StreamPrognoses or None
+        With the prognosis option on (:mod:`.stream_prognosis`), its tracks and prognoses.
     """
 
     trace: Trace
@@ -73,6 +77,7 @@ class StreamResult:
     true_fault: str | None
     threshold: float
     recommissioned: list[dict] = field(default_factory=list)
+    prognosis: StreamPrognoses | None = None
 
     def events(self) -> list[dict]:
         """Alarms, advisories and recommissioned points in time order, each with its
@@ -248,22 +253,26 @@ def stream_features(ds) -> np.ndarray:
 
 def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
                    source: str = "stream", normal: NormalConfig | None = None,
-                   maintenance: list[MaintenanceEvent] | None = None) -> StreamResult:
+                   maintenance: list[MaintenanceEvent] | None = None,
+                   prognosis: StreamPrognosis | None = None) -> StreamResult:
     """Commission on the stream's commissioning windows and monitor the rest, with its
     conditions (acting load, temperature where the stream has it; :mod:`.normal`) and
     its maintenance log (:meth:`GearMonitor.declare`: each declared event is listed
     among the recommissionings; after a declared tool change or repair,
     :data:`~learn.monitor.gear_monitor.RECOMMISSIONS`, the monitor commissions anew on as
     many windows as commissioning had, and monitors the rest); the monitor keeps
-    watching after every alarm and advisory.
+    watching after every alarm and advisory; with ``prognosis`` enabled, the prognoses
+    after its gear-fault alarms (:func:`.stream_prognosis.stream_prognoses`).
 
     Raises
     ------
     ValueError
-        A stream the monitor cannot take (:func:`check_stream`) or a maintenance event
-        out of range (a tool change or repair inside commissioning), before any work.
+        A stream the monitor cannot take (:func:`check_stream`), a maintenance event out
+        of range (a tool change or repair inside commissioning) or a prognosis option out
+        of range (a planned duty outside the model's), before any work.
     """
     log = sorted(maintenance or [], key=lambda e: e.hour)
+    prognosis = prognosis.check(trained_duty(model)) if prognosis and prognosis.enabled else None
     check_stream(ds, model, rule, source)
     hours = ds["hour"].values.astype(float)
     n_c = int(ds["commissioning"].values.astype(bool).sum())
@@ -274,18 +283,19 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
                              f"after the first window monitored, at {hours[n_c]:g} h")
     again = [e for e in log if e.kind in RECOMMISSIONS]
     if not again:
-        return _monitor_once(ds, model, rule, seed, confirm_h, source, normal, log)
+        return _monitor_once(ds, model, rule, seed, confirm_h, source, normal, log, prognosis)
     cut = int(np.searchsorted(hours, again[0].hour))
     before = [e for e in log if e.hour < again[0].hour]
     first = _monitor_once(ds.isel(sample=slice(0, cut)), model, rule, seed, confirm_h,
-                          source, normal, before)
+                          source, normal, before, prognosis)
     entry = declared([again[0]], None)
     if hours.size - cut <= n_c:  # too few windows after it to commission and monitor
         return dataclasses.replace(first, recommissioned=first.recommissioned + entry)
     rest = ds.isel(sample=slice(cut, None)).copy()
     rest["commissioning"] = rest["commissioning"].copy(data=np.arange(rest.sizes["sample"]) < n_c)
     later = monitor_stream(rest, model, rule, seed, confirm_h, source, normal,
-                           [e for e in log if e.hour >= again[0].hour and e is not again[0]])
+                           [e for e in log if e.hour >= again[0].hour and e is not again[0]],
+                           prognosis)
     return _joined(first, later, entry)
 
 
@@ -303,12 +313,16 @@ def _joined(first: StreamResult, later: StreamResult, entry: list[dict]) -> Stre
     return StreamResult(Trace.concat([first.trace, later.trace]), first.alarms + alarms,
                         first.advisories + shift[:len(later.advisories)],
                         first.n_commissioning, on, fault, first.threshold,
-                        first.recommissioned + entry + shift[len(later.advisories):])
+                        first.recommissioned + entry + shift[len(later.advisories):],
+                        None if first.prognosis is None else StreamPrognoses(
+                            first.prognosis.events + later.prognosis.events,
+                            first.prognosis.tracks + later.prognosis.tracks))
 
 
 def _monitor_once(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
                    source: str = "stream", normal: NormalConfig | None = None,
-                   maintenance: list[MaintenanceEvent] | None = None) -> StreamResult:
+                   maintenance: list[MaintenanceEvent] | None = None,
+                   prognosis: StreamPrognosis | None = None) -> StreamResult:
     """:func:`monitor_stream` on a stream without a declared recommissioning after its
     commissioning."""
     log = list(maintenance or [])
@@ -340,7 +354,9 @@ def _monitor_once(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float =
     return StreamResult(tr, alarms, advisories(tr, mon), n_c,
                         float(hours[on[0]]) if on.size else None,
                         str(fault[on[0]]) if on.size else None, mon.h,
-                        recommissionings(tr, mon) + declared(log, mon))
+                        recommissionings(tr, mon) + declared(log, mon),
+                        None if prognosis is None else
+                        stream_prognoses(tr, alarms, mon, f, p, c, prognosis))
 
 
 def _lost_reading(cond: Conditions, n_c: int, hours: np.ndarray) -> Alarm | None:
@@ -541,13 +557,9 @@ def advisories(tr: Trace, mon: GearMonitor, clear_h: float = 1.0) -> list[dict]:
 
 def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Path]:
     """``summary.json``, ``report.md`` and ``health.png`` (module docstring), each with
-    the threshold the rule used (:attr:`StreamResult.threshold`)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from swgsim.files.ownership import atomic_write_bytes, atomic_write_json, write_owned
+    the threshold the rule used (:attr:`StreamResult.threshold`); with the prognosis on,
+    ``summary.json``'s ``prognosis``, a report line per valid one and ``prognosis.png``."""
+    from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
     h = res.threshold
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -555,39 +567,26 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
                "events": res.events(), "threshold": h,
                "windows_monitored": int(res.trace.s.size),
                "commissioning_windows": res.n_commissioning}
+    if res.prognosis is not None:
+        summary["prognosis"] = res.prognosis.events
+        prognosis_figure(res.prognosis, out_dir / "prognosis.png")
     atomic_write_json(out_dir / "summary.json", summary)
     tr = res.trace
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
-    a1.plot(tr.hour, -np.log10(tr.p), ".", ms=1.5, color="0.4")
-    a1.set_ylabel("−log10 p")
-    a2.plot(tr.hour, tr.s, lw=0.8)
-    a2.axhline(h, color="r", lw=0.8, ls="--", label=f"threshold h = {h:.1f}")
-    for ax in (a1, a2):
-        if res.onset_h is not None:
-            ax.axvline(res.onset_h, color="k", lw=0.8, ls=":")
-        for al in res.alarms:
-            ax.axvline(al.hour, color="r", lw=0.8)
-    a2.set_ylabel("CUSUM")
-    a2.set_xlabel("operating hours")
-    a2.legend(fontsize=7)
-    title = "health indicators" + (f"; true onset ({res.true_fault}) dotted"
-                                   if res.onset_h is not None else "")
-    a1.set_title(title, fontsize=9)
-    fig.tight_layout()
-    write_owned(out_dir / "health.png", lambda tmp: fig.savefig(tmp, format="png", dpi=130))
-    plt.close(fig)
+    health_figure(res, out_dir / "health.png")
     lines = [f"# Monitor report: {source}", "",
              f"{res.n_commissioning} commissioning windows, {tr.s.size} monitored; alarm "
              f"threshold h = {h:.2f}.", ""]
     if not res.alarms:
         lines.append("- no alarm")
     lines += [f"- {event_line(e)}" for e in res.events()]
+    lines += res.prognosis.report_lines() if res.prognosis is not None else []
     if res.onset_h is not None:
         lines += ["", f"Ground truth in the stream: {res.true_fault} from {res.onset_h:.2f} h."]
     lines += ["", "![health indicators](health.png)", ""]
     atomic_write_bytes(out_dir / "report.md", "\n".join(lines).encode())
     return {k: out_dir / v for k, v in (("summary", "summary.json"), ("report", "report.md"),
-                                        ("figure", "health.png"))}
+                                        ("figure", "health.png"), ("prognosis", "prognosis.png"))
+            if k != "prognosis" or res.prognosis is not None}
 
 
 __all__ = ["CHANGES_STATE", "CONDITIONS", "EVENT_KINDS", "StreamResult", "advisories",

@@ -183,3 +183,29 @@ def test_bad_input_ends_in_one_line_and_exit_2(tmp_path, monkeypatch, capsys, ar
     assert sorted(p.name for p in tmp_path.iterdir()) in (before, sorted([*before,
                                                                           "outputs"]))
     assert [p.name for p in (tmp_path / "theirs").iterdir()] == ["notes.txt"]
+
+
+def test_an_imported_recording_gets_the_prognosis(trained, tmp_path, monkeypatch, capsys):
+    """swgsim-import, then swgsim-monitor with prognosis.enabled=true: the alarm's fault
+    (eccentric WG, a step of 0.1 at 6 h) followed, a prognosis each 0.5 h after it in
+    summary.json (the step does not grow: valid ones need not be finite), the figure."""
+    from swgcli.monitor import run_monitor_app
+
+    df, mapping = stream_table(trained["stream"])
+    df.to_parquet(tmp_path / "joint.parquet")
+    (tmp_path / "joint.yaml").write_text(yaml.safe_dump(mapping))
+    code, _, err = run_app("import", ["recording=joint.parquet", "mapping=joint.yaml",
+                                      "out_dir=stream", "progress=false"],
+                           tmp_path, monkeypatch, capsys)
+    assert code == 0 and err == ""
+    out = run_monitor_app(compose_app("monitor", [
+        f"stream={tmp_path / 'stream'}", f"diagnosis_model={trained['model_path']}",
+        f"out_dir={tmp_path / 'mon'}", "~logger", "prognosis.enabled=true",
+        "prognosis.every_h=0.5", "prognosis.min_track_h=0.5", "prognosis.min_estimates=3"]))
+    summary = json.loads((tmp_path / "mon" / "summary.json").read_text())
+    (alarm,) = summary["alarms"]
+    events = summary["prognosis"]
+    assert events == json.loads(json.dumps(out["prognosis"])) and len(events) >= 2
+    assert all(e["fault"] == alarm["fault"] and e["hour"] > alarm["hour"] for e in events)
+    assert not events[0]["valid"] and events[0]["reason"].startswith("prognosis not yet")
+    assert (tmp_path / "mon" / "prognosis.png").stat().st_size > 10_000

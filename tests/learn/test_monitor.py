@@ -512,3 +512,124 @@ def test_an_alarm_says_which_features_moved():
                moved=moved_features(z, names))
     line = event_line({"kind": al.kind, **al.as_dict()})
     assert line.endswith("; moved: efficiency -6.0 sigma, s1_h2 +1.5 sigma")
+
+
+# ------------------------------------------------------------------ prognosis in the stream
+#: The growing fault's life: tiny_life's gear 3, an eccentric wave generator growing by
+#: Archard's law from 4.5 h on to its failure at severity 0.1 (the largest the tiny grid
+#: trains) [choice: a wear coefficient that fails the gear within the 8 h life, at 7.67 h].
+GROWING = dict(growth="archard", onset_h=4.5, severity=0.0,
+               to_failure={"failure": 0.1, "wear_coeff_m_per_nm_rev": 7e-13})
+
+
+@pytest.fixture(scope="module")
+def growing_life(tiny_eval, tmp_path_factory):
+    """The life (GROWING, 480 windows), its true failure hour, and the monitor's result
+    on it with the prognosis off (None and disabled) and on (an estimate per 0.25 h, a
+    prognosis per 0.5 h, valid after 0.5 h and 3 estimates)."""
+    from threadpoolctl import threadpool_limits
+
+    from learn.monitor.stream import monitor_stream
+    from learn.monitor.stream_prognosis import StreamPrognosis
+    from swgcli import dataset_preset
+    from swgsim.datasets.config import dataset_config
+    from swgsim.datasets.generate import generate
+    from swgsim.datasets.growth import RunToFailure
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import record_bank
+    from swgsim.datasets.schema import load
+
+    raw = dataset_preset("tiny_life")
+    raw["life"]["fault"].update(GROWING)
+    cfg = dataset_config(raw)
+    cfg.gears = [g for g in cfg.gears if g.id == 3]
+    folder = tmp_path_factory.mktemp("growing") / "life"
+    generate(cfg, folder, progress=False)
+    p = plan(cfg)
+    failure_h = LifeSimulator(p, 3, cfg.life, record_bank(p, 3)).schedule.failure_h
+    ds, model = load(folder), tiny_eval["model"]
+    on = StreamPrognosis(enabled=True, every_h=0.5, min_track_h=0.5, min_estimates=3,
+                         to_failure=RunToFailure(**GROWING["to_failure"]))
+    with threadpool_limits(1):  # the trees' predictions on 2 shared cores: 16 times faster
+        runs = {k: monitor_stream(ds, model, RuleConfig(), prognosis=v)
+                for k, v in (("none", None), ("off", StreamPrognosis()), ("on", on))}
+    return {"ds": ds, "folder": folder, "failure_h": float(failure_h), "config": on, **runs}
+
+
+def test_the_prognosis_interval_after_the_alarm_holds_the_true_failure_hour(growing_life):
+    """Every valid prognosis made before the true failure (7.67 h) holds it within its
+    5-95 % interval; the first, 0.5 h after the alarm with 2 estimates, is not yet valid
+    and says so."""
+    res, failure_h = growing_life["on"], growing_life["failure_h"]
+    (alarm,) = res.alarms
+    assert alarm.fault == "eccentric_wg" and 4.5 <= alarm.hour < failure_h
+    events = res.prognosis.events
+    assert events[0]["reason"].startswith("prognosis not yet valid") and not events[0]["valid"]
+    before = [e for e in events if e["valid"] and e["hour"] < failure_h]
+    assert len(before) >= 3
+    for e in before:
+        assert e["failure_h_q05"] <= failure_h <= e["failure_h_q95"], e
+        assert e["remaining_h_q05"] <= e["remaining_h"] <= e["remaining_h_q95"]
+    assert all(e["hour"] > alarm.hour and e["fault"] == alarm.fault for e in events)
+
+
+def test_the_prognosis_is_written_and_off_leaves_every_output_as_it_was(growing_life,
+                                                                         tmp_path):
+    """Off (None or enabled false): summary.json, report.md and health.png byte for byte
+    the same, no prognosis.png; on: the same alarms, summary.json's ``prognosis`` the
+    events, a report line per valid one, the figure."""
+    import json
+
+    from learn.monitor.stream import write_outputs
+
+    files = {k: write_outputs(growing_life[k], tmp_path / k, "life")
+             for k in ("none", "off", "on")}
+    for name in ("summary", "report", "figure"):
+        assert files["none"][name].read_bytes() == files["off"][name].read_bytes()
+    assert "prognosis" not in files["off"] and not (tmp_path / "off" / "prognosis.png").exists()
+    off, on = (json.loads((tmp_path / k / "summary.json").read_text()) for k in ("off", "on"))
+    assert on.pop("prognosis") == json.loads(json.dumps(growing_life["on"].prognosis.events))
+    assert on == off
+    valid = [e for e in growing_life["on"].prognosis.events if e["valid"]]
+    assert (tmp_path / "on" / "report.md").read_text().count("- prognosis at ") == len(valid)
+    assert files["on"]["prognosis"].stat().st_size > 10_000
+
+
+def test_no_prognosis_before_an_alarm(growing_life, tiny_eval):
+    """The life cut before the fault's onset: no alarm, no prognosis, an empty list."""
+    from threadpoolctl import threadpool_limits
+
+    from learn.monitor.stream import monitor_stream
+
+    ds = growing_life["ds"]
+    healthy = ds.isel(sample=np.flatnonzero(ds["hour"].values < GROWING["onset_h"]))
+    with threadpool_limits(1):
+        res = monitor_stream(healthy, tiny_eval["model"], RuleConfig(),
+                             prognosis=growing_life["config"])
+    assert res.alarms == [] and res.prognosis.events == [] and res.prognosis.tracks == []
+
+
+def test_a_planned_duty_outside_the_models_is_refused_by_the_app(growing_life, tiny_eval,
+                                                                  tmp_path, monkeypatch,
+                                                                  capsys):
+    """swgsim-monitor (in-process, as its command line runs it) with a planned duty at
+    9000 rpm (the model: 4000 rpm): exit 2, one line naming prognosis.planned.n_in_rpm,
+    nothing written."""
+    import sys
+
+    import swgcli.monitor
+    from learn.monitor.model_io import save_model
+
+    model = save_model(tiny_eval["model"], tmp_path / "model", [{"name": "tiny_bench"}])
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "argv", [
+        "swgsim-monitor", f"stream={growing_life['folder']}", f"diagnosis_model={model}",
+        f"out_dir={tmp_path / 'out'}", "~logger", "prognosis.enabled=true",
+        "prognosis.planned=[{minutes: 60, n_in_rpm: 9000, t_acting_nm: 40, temp_c: 30}]"])
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as info:
+        swgcli.monitor.main()
+    lines = [s for s in capsys.readouterr().err.splitlines() if s.strip()]
+    assert info.value.code == 2 and len(lines) == 1, lines
+    assert "prognosis.planned.n_in_rpm" in lines[0] and not (tmp_path / "out").exists()

@@ -367,6 +367,7 @@ class _TinyResult:
 
     alarms, advisories, recommissioned = [], [], []
     n_commissioning, onset_h, true_fault, threshold = 5, None, None, 5.0
+    prognosis = None  # the option off
 
     def events(self):
         return []

@@ -1,0 +1,275 @@
+"""The prognosis in the monitor's stream: after a gear-fault alarm whose fault has a growth
+law, the severity track since the alarm and the time to the failure threshold.
+
+:func:`stream_prognoses` takes a monitored stream (its trace, named alarms and the monitor
+that ran it, :func:`learn.monitor.stream.monitor_stream`) and, for each such alarm, estimates
+the fault's severity on consecutive blocks of ``block_h`` operating hours of windows after
+the alarm (:meth:`GearMonitor.inputs <learn.monitor.gear_monitor.GearMonitor.inputs>` and
+:meth:`DiagnosisModel.estimate <learn.monitor.model.DiagnosisModel.estimate>`, the calls
+that give an alarm its severity) and every ``every_h`` hours after it predicts the remaining
+hours (:func:`learn.monitor.prognosis.predict_growth`) under the duty the windows recorded
+(input speed, acting load ``t_out_mean_nm``, temperature ``temperature_c``) or a planned
+duty the user declares. The option is off by default (:class:`StreamPrognosis`): off, the
+monitor's outputs are those without it, bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swgsim.base.typed import check_range
+from swgsim.datasets.growth import LAWS, RunToFailure
+from swgsim.datasets.schema import TEMPERATURE_RANGE_C
+
+from .gear_monitor import GearMonitor, Trace
+from .normal import Conditions
+from .prognosis import Duty, DutyRange, PrognosisConfig, Track, predict_growth
+from .rule import Alarm
+
+__all__ = ["DutyBlock", "StreamPrognosis", "StreamPrognoses", "planned_duty",
+           "prognosis_line", "stream_prognoses", "trained_duty"]
+
+#: Grease temperature of a window without a reading [°C] (20 °C [choice]: the growth's
+#: reference, where the film factor is 1, :func:`swgsim.datasets.growth.film_factor`).
+REFERENCE_TEMP_C = 20.0
+
+
+@dataclass
+class DutyBlock:
+    """One block of a planned duty (each field required: NaN refused).
+
+    Attributes
+    ----------
+    minutes : float
+        Operating minutes of the block, in (0, 10^6] [min].
+    n_in_rpm, t_acting_nm, temp_c : float
+        Input speed [rpm], acting load [N m] and grease temperature [°C], within the duty
+        the diagnosis model was trained on (:func:`trained_duty`).
+    """
+
+    minutes: float = math.nan
+    n_in_rpm: float = math.nan
+    t_acting_nm: float = math.nan
+    temp_c: float = math.nan
+
+
+@dataclass
+class StreamPrognosis:
+    """The stream's prognosis option (``prognosis.*`` of ``swgsim-monitor``; not frozen:
+    Hydra overrides it).
+
+    Attributes
+    ----------
+    enabled : bool
+        Off (default): no prognosis, the outputs as without the option.
+    every_h : float
+        Operating hours between prognoses after an alarm, in (0, 1000] [h] (1 h [choice]:
+        the issue's "every hour of operation").
+    block_h : float
+        Operating hours of windows per severity estimate, in (0, 100] [h] (0.25 h
+        [choice]: 15 windows of a minute, a quarter of the alarm's naming hour).
+    threshold : float or None
+        The failure severity [-]; None: the fault's
+        (:data:`swgsim.datasets.growth.FAILURE_SEVERITY`, ``config.to_failure``).
+    planned : list of DutyBlock
+        A future duty the user declares, repeated from its first block; empty: the
+        recorded duty's mean rate.
+    min_track_h, min_estimates, interval_scale : float, int, float
+        The predictor's (:class:`learn.monitor.prognosis.PrognosisConfig`, its defaults
+        and ranges).
+    to_failure : RunToFailure
+        The growth's constants the gear is taken to follow
+        (:class:`swgsim.datasets.growth.RunToFailure`; a life's ``dataset.life.fault.
+        to_failure``), the prior of the gear's scale.
+    seed : int
+        Seed of the Monte-Carlo draws, >= 0.
+    """
+
+    enabled: bool = False
+    every_h: float = 1.0
+    block_h: float = 0.25
+    threshold: float | None = None
+    planned: list[DutyBlock] = field(default_factory=list)
+    min_track_h: float = PrognosisConfig.min_track_h
+    min_estimates: int = PrognosisConfig.min_estimates
+    interval_scale: float = PrognosisConfig.interval_scale
+    to_failure: RunToFailure = field(default_factory=RunToFailure)
+    seed: int = 0
+
+    @property
+    def config(self) -> PrognosisConfig:
+        """The predictor's config of these fields (the others its defaults)."""
+        return PrognosisConfig(min_track_h=self.min_track_h, min_estimates=self.min_estimates,
+                               interval_scale=self.interval_scale, to_failure=self.to_failure)
+
+    def check(self, trained: DutyRange | None = None) -> StreamPrognosis:
+        """Refuse a field out of range, or a planned duty outside ``trained``, in one line
+        naming ``prognosis.<field>``; return self. Raises ValueError."""
+        check_range(self.every_h, 0.0, 1000.0, "prognosis.every_h", "h", lo_open=True)
+        check_range(self.block_h, 0.0, 100.0, "prognosis.block_h", "h", lo_open=True)
+        if self.threshold is not None:
+            check_range(self.threshold, 0.0, 10.0, "prognosis.threshold", lo_open=True)
+        check_range(self.seed, 0, 2 ** 32 - 1, "prognosis.seed")
+        self.config.check()
+        duty = planned_duty(self)
+        if duty is not None:
+            duty.check("prognosis.planned")
+            if trained is not None:
+                trained.check(duty, "prognosis.planned")
+        return self
+
+
+def planned_duty(cfg: StreamPrognosis) -> Duty | None:
+    """The planned duty of ``cfg`` as a :class:`~learn.monitor.prognosis.Duty`, K blocks;
+    None where none is declared."""
+    if not cfg.planned:
+        return None
+    a = np.array([[b.minutes, b.n_in_rpm, b.t_acting_nm, b.temp_c] for b in cfg.planned],
+                 float)
+    return Duty(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
+
+
+def trained_duty(model) -> DutyRange | None:
+    """The duty range of a diagnosis model: its operating points' speed and load
+    (``points_range``, shape (2, 2)) and the data sets' temperature range
+    (:data:`swgsim.datasets.schema.TEMPERATURE_RANGE_C`; a model records none); None
+    where the model records no points."""
+    pr = getattr(model, "points_range", None)
+    if pr is None:
+        return None
+    pr = np.abs(np.asarray(pr, float))
+    return DutyRange((float(pr[:, 0].min()), float(pr[:, 0].max())),
+                     (float(pr[:, 1].min()), float(pr[:, 1].max())),
+                     tuple(map(float, TEMPERATURE_RANGE_C)))
+
+
+@dataclass
+class StreamPrognoses:
+    """The prognoses of a stream.
+
+    Attributes
+    ----------
+    events : list of dict
+        One per prognosis: ``hour``, ``fault``, ``valid``, ``reason``, ``severity`` (the
+        last estimate), ``threshold``, ``remaining_h`` (median), ``remaining_h_q05``,
+        ``remaining_h_q95`` (from ``hour``) and ``failure_h`` (median), ``failure_h_q05``,
+        ``failure_h_q95`` (operating hours) [h]; None where not valid or beyond the
+        horizon.
+    tracks : list of dict
+        Per alarm followed: ``fault``, ``alarm_h`` and its estimates ``hours``,
+        ``severity``, ``lo``, ``hi`` (lists, the 90 % interval).
+    """
+
+    events: list[dict]
+    tracks: list[dict]
+
+    def report_lines(self) -> list[str]:
+        """One line per valid prognosis (for ``report.md``, :func:`prognosis_line`) and
+        the figure's."""
+        return [f"- {prognosis_line(e)}" for e in self.events if e["valid"]] + [
+            "", "![prognosis](prognosis.png)"]
+
+
+def prognosis_line(event: dict) -> str:
+    """One line saying what a prognosis of :attr:`StreamPrognoses.events` is: e.g.
+    ``prognosis at 7.00 h: wear reaches severity 0.8 in 1.20 h [0.90 h, 1.60 h] (5-95 %)``,
+    or ``prognosis at 5.00 h: wear: prognosis not yet valid: ...``."""
+    e = event
+    if not e["valid"]:
+        return f"prognosis at {e['hour']:.2f} h: {e['fault']}: {e['reason']}"
+    return (f"prognosis at {e['hour']:.2f} h: {e['fault']} reaches severity "
+            f"{e['threshold']:.3g} in {_h(e['remaining_h'])} [{_h(e['remaining_h_q05'])}, "
+            f"{_h(e['remaining_h_q95'])}] (5-95 %)")
+
+
+def _h(x: float | None) -> str:
+    return "beyond the horizon" if x is None else f"{x:.2f} h"
+
+
+def _num(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+def stream_prognoses(tr: Trace, alarms: list[Alarm], mon: GearMonitor, feats: np.ndarray,
+                     points: np.ndarray, cond: Conditions, cfg: StreamPrognosis
+                     ) -> StreamPrognoses:
+    """The prognoses after each gear-fault alarm whose fault has a growth law.
+
+    Parameters
+    ----------
+    tr : Trace
+        The monitored windows, n of them.
+    alarms : list of Alarm
+        The named alarms (:attr:`learn.monitor.stream.StreamResult.alarms`).
+    mon : GearMonitor
+        The monitor that ran them (its normal behaviour gives the estimates' inputs).
+    feats, points : ndarray, shape (n, F) and (n, 2)
+        The windows' health features and operating points (speed [rpm], torque [N m]).
+    cond : Conditions
+        The windows' conditions (acting load, temperature where read).
+    cfg : StreamPrognosis
+        The option (checked by the caller).
+
+    Returns
+    -------
+    StreamPrognoses
+        Empty where no alarm's fault has a growth law or the model has no severity
+        regressor for it.
+    """
+    grown = {f for fs in LAWS.values() for f in fs}
+    out = StreamPrognoses([], [])
+    for al in alarms:
+        if al.kind == "gear_fault" and al.fault in grown and al.fault in mon.model.severity:
+            _follow(tr, al, mon, feats, points, cond, cfg, out)
+    return out
+
+
+def _follow(tr, al, mon, feats, points, cond, cfg, out) -> None:
+    """Append the track and prognoses of one alarm to ``out`` (:func:`stream_prognoses`)."""
+    idx = np.arange(al.index, tr.hour.size)
+    hours = tr.hour[idx]
+    block = np.floor((hours - al.hour) / cfg.block_h).astype(int)
+    est = []
+    for b in np.unique(block):
+        w = idx[block == b]
+        x = mon.inputs(feats[w], points[w], cond[w], tr.friction[w])
+        est.append((float(tr.hour[w[-1]]), *mon.model.estimate(al.fault, x)))
+    h, y, lo, hi = np.array(est, float).T
+    out.tracks.append({"fault": al.fault, "alarm_h": al.hour, "hours": h.tolist(),
+                       "severity": y.tolist(), "lo": lo.tolist(), "hi": hi.tolist()})
+    temp = (np.full(hours.size, REFERENCE_TEMP_C) if cond.temperature_c is None else
+            np.where(np.isfinite(cond.temperature_c[idx]), cond.temperature_c[idx],
+                     REFERENCE_TEMP_C))
+    thr = cfg.threshold if cfg.threshold is not None else cfg.config.threshold(al.fault)
+    planned = planned_duty(cfg)
+    for k in range(1, int((hours[-1] - al.hour) / cfg.every_h) + 1):
+        now = al.hour + k * cfg.every_h
+        n, m = int(np.searchsorted(h, now, side="right")), int(np.searchsorted(
+            hours, now, side="right"))
+        ev = {"hour": now, "fault": al.fault, "valid": False, "severity": None,
+              "threshold": thr}
+        if n == 0:
+            ev["reason"] = "prognosis not yet valid: no severity estimate since the alarm"
+        elif y[n - 1] >= thr:
+            ev.update(severity=float(y[n - 1]), reason="the severity estimate has reached "
+                      "the failure threshold")
+        else:
+            duty = Duty.from_windows(hours[:m], np.abs(points[idx[:m], 0]),
+                                     cond.torque_nm[idx[:m]], temp[:m])
+            p = predict_growth(Track(h[:n], y[:n], lo[:n], hi[:n]), al.fault, al.hour,
+                               duty, hours[:m], cfg.config, planned=planned, threshold=thr,
+                               seed=cfg.seed)
+            ev.update(valid=p.valid, reason=p.reason, severity=p.severity_now)
+            if p.valid:  # from the last estimate's hour to the prognosis's
+                for q, f in (("", p.failure_hour_median), ("_q05", p.failure_hour_q05),
+                             ("_q95", p.failure_hour_q95)):
+                    ev.update({f"failure_h{q}": _num(f),
+                               f"remaining_h{q}": _num(max(f - now, 0.0))})
+        for key in ("remaining_h", "remaining_h_q05", "remaining_h_q95", "failure_h",
+                    "failure_h_q05", "failure_h_q95"):
+            ev.setdefault(key, None)
+        out.events.append(ev)
+
