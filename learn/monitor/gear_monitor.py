@@ -489,7 +489,7 @@ class GearMonitor:
         (:meth:`~learn.monitor.normal.NormalBehaviour.recommission`). Returns whether the
         point was relearnt."""
         nb = self.normal
-        z = (ref - nb.mean[k]) / nb.std[k]
+        z = nb.without_warm_ups((ref - nb.mean[k]) / nb.std[k], np.full(len(ref), k))
         score, _ = self._scores_of(z, np.broadcast_to(nb.points[k], (len(ref), 2)))
         p = self.p_each(score, np.full(len(ref), k), np.full(score.shape, 0.5))
         stat = np.sqrt(len(p)) * np.mean(normal_scores(p), axis=0)

@@ -433,12 +433,18 @@ class NormalBehaviour:
             u = ref[b, law] - self._corrected(feats[b], i[b], edge[b], fr[b])[:, law]
             spread = spread.copy()
             spread[b, law] = np.sqrt(spread[b, law] ** 2 + (kappa * u) ** 2)
-        z = (ref - self.mean[i]) / spread
-        if self.warm_dir is not None:  # no reading: commissioning's warm-up directions out
-            d, r = self.warm_dir[i], self.warm_range[i]  # (n, K, F), (n, K, 2)
-            u = np.clip(np.einsum("nf,nkf->nk", z, d), r[..., 0], r[..., 1])
-            z = z - np.einsum("nk,nkf->nf", u, d)
-        return z, spread
+        return self.without_warm_ups((ref - self.mean[i]) / spread, i), spread
+
+    def without_warm_ups(self, z: np.ndarray, index: np.ndarray) -> np.ndarray:
+        """z-scores (n, F) of windows at the points ``index`` (n,) with their parts along
+        commissioning's warm-up directions taken out, each clipped to the range
+        commissioning saw (:attr:`warm_dir`); ``z`` itself where there are none (a
+        temperature reading)."""
+        if self.warm_dir is None:
+            return z
+        d, r = self.warm_dir[index], self.warm_range[index]  # (n, K, F), (n, K, 2)
+        u = np.clip(np.einsum("nf,nkf->nk", z, d), r[..., 0], r[..., 1])
+        return z - np.einsum("nk,nkf->nf", u, d)
 
     def recommission(self, k: int, ref: np.ndarray, torque_nm: np.ndarray) -> None:
         """Take windows of operating point ``k`` at a load commissioning did not see as
@@ -469,6 +475,10 @@ class NormalBehaviour:
         self.mean[k] = ref.mean(axis=0)
         self.std[k] = np.maximum(ref.std(axis=0, ddof=1), 1e-12)
         self.torque_range[k] = [float(np.min(torque_nm)), float(np.max(torque_nm))]
+        if self.warm_dir is not None:  # the point's warm-ups, in its new spread
+            d, r = warm_up_directions((ref - self.mean[k]) / self.std[k],
+                                      np.zeros(len(ref), int), self.warm_dir.shape[1])
+            self.warm_dir[k], self.warm_range[k] = d[0], r[0]
 
     def extend_load_range(self, k: int, torque_nm: np.ndarray) -> None:
         """Grow operating point ``k``'s load range to cover ``torque_nm`` [N m] (where
