@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swgsim.datasets import recording_table as rt
-from swgsim.datasets.conditions import HOURS_TABLE_COLUMNS
+from swgsim.datasets.conditions import HOURS_TABLE_COLUMNS, TRACE_GAP_MIN
 from swgsim.files.ownership import atomic_write_bytes
 
 __all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "JointLog", "read_joint_log",
@@ -37,10 +37,10 @@ __all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "JointLog", "read_joint_log",
 
 #: Joints of the arm [-] (a UR3: base, shoulder, elbow, three wrists).
 JOINTS = 6
-#: A time step longer than this is a gap of the log [s] (5 min, as
-#: :data:`swgsim.datasets.conditions.TRACE_GAP_MIN`: beyond a logger's hiccups of 9 and
-#: 31 s, short against a joint's thermal time constant) [choice].
-LOG_GAP_S = 300.0
+#: A time step longer than this is a gap of the log [s]: a temperature trace's,
+#: :data:`swgsim.datasets.conditions.TRACE_GAP_MIN` (5 min: beyond a logger's hiccups of 9
+#: and 31 s, short against a joint's thermal time constant) [choice].
+LOG_GAP_S = TRACE_GAP_MIN * 60.0
 
 
 def _joint_columns() -> dict[str, str]:
