@@ -104,19 +104,6 @@ class JointLog:
         return int(self.t_s.size)
 
 
-def _flag(df, column: str, key: str, fmt: str) -> np.ndarray:
-    """A True/False column as bool, a missing cell False, anything else refused naming
-    the row."""
-    s = df[column]
-    text = s.astype(str).str.strip().str.lower()
-    ok = s.isna().to_numpy() | text.isin(["true", "false", "1", "0", "1.0", "0.0"]).to_numpy()
-    bad = np.flatnonzero(~ok)
-    if bad.size:
-        raise ValueError(f"column {column!r} ({key}), {rt.row_name(int(bad[0]), fmt)}: "
-                         f"{s.iloc[bad[0]]!r} is not a flag (True or False)")
-    return text.isin(["true", "1", "1.0"]).to_numpy() & ~s.isna().to_numpy()
-
-
 def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES) -> JointLog:
     """Read a joint log in the UR3 CobotOps format (module docstring).
 
@@ -164,8 +151,9 @@ def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES)
         current_a=block("Current_J"), speed_rad_s=block("Speed_J"),
         tool_current_a=rt.numeric(df, "Tool_current", "tool_current", fmt, True, ","),
         cycle=cycle.astype(np.int64),
-        protective_stop=_flag(df, "Robot_ProtectiveStop", "protective_stop", fmt),
-        grip_lost=_flag(df, "grip_lost", "grip_lost", fmt),
+        protective_stop=rt.flag(df, "Robot_ProtectiveStop", "protective_stop", fmt,
+                                missing=False),
+        grip_lost=rt.flag(df, "grip_lost", "grip_lost", fmt, missing=False),
         gap_rows=np.flatnonzero(np.diff(t_s) > LOG_GAP_S) + 1)
 
 

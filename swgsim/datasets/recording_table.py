@@ -284,9 +284,23 @@ def numeric(df, column: str, key: str, fmt: str, missing: bool = False,
 FLAG_TEXTS = {"true": True, "false": False, "1": True, "0": False}
 
 
-def flag(df, column: str, key: str, fmt: str) -> np.ndarray:
+def flag(df, column: str, key: str, fmt: str, missing: bool | None = None) -> np.ndarray:
     """An event flag column as booleans: true/false (booleans or their text,
     :data:`FLAG_TEXTS`) or finite numbers, nonzero true.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table read (:func:`read_table`).
+    column : str
+        The flag's column.
+    key : str
+        The column's field, named in a refusal.
+    fmt : str
+        The table's format (``csv`` or ``parquet``), for the row's name in a refusal.
+    missing : bool or None
+        What an empty cell reads as; None (default) refuses it (a controller's log that
+        leaves a flag empty where it logged nothing passes False).
 
     Returns
     -------
@@ -296,22 +310,25 @@ def flag(df, column: str, key: str, fmt: str) -> np.ndarray:
     ------
     ValueError
         ``column 'x' (key), row i: 'abc' is not a flag (true/false or a number)``; an
-        empty cell is refused likewise.
+        empty cell likewise unless ``missing`` is given.
     """
     import pandas as pd
 
     s = df[column]
     if s.dtype.kind == "b":
         return s.to_numpy(dtype=bool)
+    empty = s.isna().to_numpy()
     if s.dtype.kind in "fiu":
         v = s.to_numpy(dtype=np.float64)
-        ok = np.isfinite(v)
     else:
         text = s.astype(str).str.strip().str.lower()
         v = pd.to_numeric(text, errors="coerce").to_numpy(dtype=np.float64)
         named = text.map(FLAG_TEXTS)
         v = np.where(named.notna(), named.fillna(False).astype(float), v)
-        ok = np.isfinite(v) & s.notna().to_numpy()
+    ok = np.isfinite(v) & ~empty
+    if missing is not None:
+        ok |= empty
+        v = np.where(empty, float(missing), v)
     bad = np.flatnonzero(~ok)
     if bad.size:
         i = int(bad[0])
