@@ -106,6 +106,25 @@ def write_dataset(ds, path) -> None:
     })
 
 
+#: Where the UR3 CobotOps day is read from (M. Tyrovolas, K. Aliev, D. Antonelli and
+#: C. Stylios, "UR3 CobotOps", UCI Machine Learning Repository, 2024, doi:10.24432/C5J891,
+#: CC BY 4.0): the environment variable's path if set, else the workplace's copy beside the
+#: checkout (a fresh clone with ``shared/`` next to it, as CI has).
+UR3_DAY_ENV = "SWG_UR3_DAY"
+UR3_DAY_BESIDE = (Path(__file__).resolve().parents[1].parent / "shared" / "data"
+                  / "ur3_cobotops" / "ur3_cobotops_2022-10-26.csv")
+
+
+@pytest.fixture(scope="session")
+def ur3_day() -> Path:
+    """Path of the real UR3 CobotOps day (see :data:`UR3_DAY_ENV`); the test is skipped
+    where the file is absent."""
+    path = Path(os.environ.get(UR3_DAY_ENV) or UR3_DAY_BESIDE)
+    if not path.is_file():
+        pytest.skip(f"the UR3 CobotOps day is not at {path} (set {UR3_DAY_ENV})")
+    return path
+
+
 @pytest.fixture(scope="session")
 def synthetic_ds():
     """In-memory synthetic data set (see :func:`make_synthetic`); do not modify."""

@@ -19,6 +19,10 @@ from swgsim.gear.thermal import FRICTION_EXPONENT, REF_TEMP_C, VISCOSITY_COEFF_P
 
 from .features import N_HARMONICS
 
+__all__ = ["BLOCK", "CATALOGUE_RATE", "EFFICIENCY", "FRICTION_RATES", "MIN_SPREAD_K",
+           "SIGNIFICANT", "bridge_drift", "cools", "feature_slopes", "load_curves",
+           "loss_coefficients", "loss_model", "poly", "warm_up_directions"]
+
 #: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
 BLOCK = N_HARMONICS + 2
 EFFICIENCY = 5 * BLOCK
@@ -41,18 +45,49 @@ SIGNIFICANT = 20.0
 
 def poly(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
     """Coefficients (c0, c1, c2) of y ≈ c0 + c1 x + c2 x² of at most ``degree`` (and one
-    less than the points), by least squares, for each column of y (k, F); shape (3, F)."""
+    less than the points), by least squares, for each column of y.
+
+    Parameters
+    ----------
+    x : ndarray, shape (k,)
+        The abscissae (here the acting torque [N m]).
+    y : ndarray, shape (k, F)
+        The values, one column per feature (in the feature's unit).
+    degree : int
+        Highest power fitted, at most 2.
+
+    Returns
+    -------
+    ndarray, shape (3, F)
+        c0, c1, c2 per column (in y's unit per power of x's); the powers above the degree
+        fitted zero.
+    """
     deg = min(degree, len(x) - 1)
     v = np.vander(x, deg + 1, increasing=True)  # (k, deg + 1)
     coef = np.linalg.lstsq(v, y, rcond=None)[0]
     return np.vstack([coef, np.zeros((2 - deg, y.shape[1]))])
 
 
-
 def bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray]:
-    """γ_c and ζ_c of the five bridges (module docstring): the gain from the significant
-    amplitudes' logs, the zero from the offsets, by least squares pooled over points."""
+    """γ_c and ζ_c of the five bridges (module docstring of :mod:`.normal`): the gain from
+    the significant amplitudes' logs (means over :data:`SIGNIFICANT` standard deviations),
+    the zero from the offsets, by least squares pooled over points.
+
+    Parameters
+    ----------
+    feats : ndarray, shape (n, F)
+        Commissioning's health features (:data:`BLOCK` per bridge, then the efficiency).
+    inv : ndarray of int, shape (n,)
+        Each window's operating point.
+    dt : ndarray, shape (n,)
+        Each window's temperature less its point's mean [K].
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        γ [1/K] and ζ [mV/V per K] of each bridge, shape (5,) each; zero where ``dt`` is.
+    """
     gain, zero = np.zeros(5), np.zeros(5)
     d2 = float(dt @ dt)
     if d2 <= 0:
@@ -81,8 +116,23 @@ def bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
 
 def feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.ndarray:
     """Per point, each feature's least-squares slope on ΔT (features with the bridges'
-    gain and zero drift taken out), shape (P, F); the efficiency's column zero (its loss
-    law has the temperature)."""
+    gain and zero drift taken out); the efficiency's columns zero (its loss law has the
+    temperature).
+
+    Parameters
+    ----------
+    feats : ndarray, shape (n, F)
+        Commissioning's health features, the bridges' drift taken out.
+    inv : ndarray of int, shape (n,)
+        Each window's operating point, 0 to P − 1.
+    dt : ndarray, shape (n,)
+        Each window's temperature less its point's mean [K].
+
+    Returns
+    -------
+    ndarray, shape (P, F)
+        Slopes [the feature's unit per K]; zero at a point without temperature spread.
+    """
     n_p = int(inv.max()) + 1
     out = np.zeros((n_p, feats.shape[1]))
     for k in range(n_p):
@@ -98,8 +148,28 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
                 ops: np.ndarray, inv: np.ndarray) -> tuple[np.ndarray, float]:
     """(A, B) per point and the joint's friction-temperature rate θ: the loss torque
     τ (1/η − 1) ≈ A exp(θ (T − 20 °C)) + B τ by least squares over the windows at the
-    point's speed (module docstring), θ the one of :data:`FRICTION_RATES` that fits
-    commissioning best; shape (P, 2), and θ [1/K] (0 without temperature)."""
+    point's speed (module docstring of :mod:`.normal`), θ the one of
+    :data:`FRICTION_RATES` that fits commissioning best (refined between the best three);
+    :data:`CATALOGUE_RATE` where commissioning did not cool (:func:`cools`).
+
+    Parameters
+    ----------
+    eta : ndarray, shape (n,)
+        Each window's efficiency [-].
+    torque : ndarray, shape (n,)
+        Each window's acting output torque τ [N m] (its magnitude used).
+    temp : ndarray, shape (n,), or None
+        Each window's temperature [°C], in time order; None: no temperature law.
+    ops : ndarray, shape (P, 2)
+        The operating points (input speed [rpm], torque [N m]).
+    inv : ndarray of int, shape (n,)
+        Each window's operating point.
+
+    Returns
+    -------
+    (ndarray, float)
+        A [N m] and B [-] per point, shape (P, 2); θ [1/K] (0 without temperature).
+    """
     tq = np.abs(torque)
     loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
     if temp is None:
@@ -107,6 +177,7 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
     if not cools(temp):  # one warm-up: a run-in would pass for the law; the catalogue's
         rate = CATALOGUE_RATE
         return loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)[0], rate
+
     def fit(rate):
         return loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)
 
@@ -121,18 +192,48 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
     return fit(rate)[0], rate
 
 
-
 def cools(temp: np.ndarray) -> bool:
     """Whether commissioning's temperature (windows in time order) falls by at least
     :data:`MIN_SPREAD_K` below an earlier reading somewhere (a cold start): only then can
     the friction's temperature law be told from a slow drift in time (run-in), which over
-    a single warm-up falls as the temperature rises."""
+    a single warm-up falls as the temperature rises.
+
+    Parameters
+    ----------
+    temp : ndarray, shape (n,)
+        Commissioning's temperatures [°C], in time order.
+
+    Returns
+    -------
+    bool
+        True where some reading lies :data:`MIN_SPREAD_K` [K] or more below an earlier one.
+    """
     return bool(np.max(np.maximum.accumulate(temp) - temp) >= MIN_SPREAD_K)
+
 
 def loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np.ndarray,
                        inv: np.ndarray) -> tuple[np.ndarray, float]:
-    """(A, B) per point for the friction factors ``phi`` of the windows, shape (P, 2), and
-    the sum of squared residuals [N² m²]."""
+    """(A, B) per point for the friction factors ``phi`` of the windows: loss ≈ A φ + B τ
+    by least squares over the windows at each speed (A alone where the speed has one load).
+
+    Parameters
+    ----------
+    loss : ndarray, shape (n,)
+        Each window's loss torque τ (1/η − 1) [N m].
+    tq : ndarray, shape (n,)
+        Each window's acting torque's magnitude τ [N m].
+    phi : ndarray, shape (n,)
+        Each window's friction factor exp(θ (T − 20 °C)) [-].
+    ops : ndarray, shape (P, 2)
+        The operating points (input speed [rpm], torque [N m]).
+    inv : ndarray of int, shape (n,)
+        Each window's operating point.
+
+    Returns
+    -------
+    (ndarray, float)
+        A [N m] and B [-] per point, shape (P, 2); the sum of squared residuals [N² m²].
+    """
     out, sse = np.zeros((len(ops), 2)), 0.0
     for n in np.unique(ops[:, 0]):
         ks = np.flatnonzero(ops[:, 0] == n)
@@ -149,8 +250,26 @@ def loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np
 
 def load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,
                  ref_torque: np.ndarray) -> np.ndarray:
-    """Per point, the quadratics in τ of the load curves at its speed (module docstring):
-    squared amplitudes, offsets (a line), residual power, shape (P, 3, F)."""
+    """Per point, the quadratics in τ of the load curves at its speed (module docstring of
+    :mod:`.normal`): squared amplitudes, offsets (a line), residual power; the
+    efficiency's and the twist's columns zero (the efficiency has its loss law).
+
+    Parameters
+    ----------
+    feats : ndarray, shape (n, F)
+        Commissioning's health features, temperature-corrected.
+    inv : ndarray of int, shape (n,)
+        Each window's operating point.
+    ops : ndarray, shape (P, 2)
+        The operating points (input speed [rpm], torque [N m]).
+    ref_torque : ndarray, shape (P,)
+        Each point's mean acting torque [N m].
+
+    Returns
+    -------
+    ndarray, shape (P, 3, F)
+        c0, c1, c2 of each curve (its quantity's unit per N m to the power).
+    """
     n_p, n_f = len(ops), feats.shape[1]
     y = np.zeros((n_p, n_f))
     for k in range(n_p):

@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swgsim.base.typed import check_range
+from swgsim.gear.dynamics import GearParams
 from swgsim.gear.faults import WEAR_BACKLASH_ARCMIN, ChainParams, get_fault
 from swgsim.gear.flexspline import FlexsplineGeometry
 from swgsim.gear.thermal import viscosity_ratio
@@ -70,20 +71,18 @@ LAWS: dict[str, tuple[str, ...]] = {"paris": ("root_tooth_crack", "tip_tooth_cra
 #: (each lobe meshes every flexspline tooth once a revolution) [derived].
 CYCLES_PER_REV = 2.0
 
-#: Pitch radius of the size-20 flexspline [m] (catalogue, docs/PHYSICS.md sec. 2).
-PITCH_RADIUS_M = 25.4e-3
-
 #: Depth of each law's fault at severity 1 [m]: a root crack through the rim's effective
 #: thickness (the truss's, :class:`swgsim.gear.flexspline.FlexsplineGeometry`); a tip crack
 #: through a tooth's depth, 0.5 mm, about two modules of the 200-tooth flexspline
 #: [choice]; the wave generator's centre shifted by w0 (``eccentric_wg``'s severity is
 #: e / w0, :class:`swgsim.gear.faults.ChainParams`); the flanks' lost thickness at the pitch
-#: radius that gives ``wear``'s backlash at severity 1 (3 arcmin: 22 µm) [derived].
+#: radius (:class:`swgsim.gear.dynamics.GearParams`) that gives ``wear``'s backlash at
+#: severity 1 (3 arcmin: 22 µm) [derived].
 DEPTH_AT_ONE_M: dict[str, float] = {
     "root_tooth_crack": FlexsplineGeometry.t_rim_m,
     "tip_tooth_crack": 0.5e-3,
     "eccentric_wg": ChainParams.w0_m,
-    "wear": PITCH_RADIUS_M * float(np.deg2rad(WEAR_BACKLASH_ARCMIN / 60.0)),
+    "wear": GearParams.pitch_radius_m * float(np.deg2rad(WEAR_BACKLASH_ARCMIN / 60.0)),
 }
 
 #: Severity at which each fault fails, the default of ``to_failure.failure`` [choice]: a

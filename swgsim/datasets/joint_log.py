@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swgsim.datasets import recording_table as rt
-from swgsim.datasets.conditions import HOURS_TABLE_COLUMNS
+from swgsim.datasets.conditions import HOURS_TABLE_COLUMNS, TRACE_GAP_MIN
 from swgsim.files.ownership import atomic_write_bytes
 
 __all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "JointLog", "read_joint_log",
@@ -37,10 +37,10 @@ __all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "JointLog", "read_joint_log",
 
 #: Joints of the arm [-] (a UR3: base, shoulder, elbow, three wrists).
 JOINTS = 6
-#: A time step longer than this is a gap of the log [s] (5 min, as
-#: :data:`swgsim.datasets.conditions.TRACE_GAP_MIN`: beyond a logger's hiccups of 9 and
-#: 31 s, short against a joint's thermal time constant) [choice].
-LOG_GAP_S = 300.0
+#: A time step longer than this is a gap of the log [s]: a temperature trace's,
+#: :data:`swgsim.datasets.conditions.TRACE_GAP_MIN` (5 min: beyond a logger's hiccups of 9
+#: and 31 s, short against a joint's thermal time constant) [choice].
+LOG_GAP_S = TRACE_GAP_MIN * 60.0
 
 
 def _joint_columns() -> dict[str, str]:
@@ -104,19 +104,6 @@ class JointLog:
         return int(self.t_s.size)
 
 
-def _flag(df, column: str, key: str, fmt: str) -> np.ndarray:
-    """A True/False column as bool, a missing cell False, anything else refused naming
-    the row."""
-    s = df[column]
-    text = s.astype(str).str.strip().str.lower()
-    ok = s.isna().to_numpy() | text.isin(["true", "false", "1", "0", "1.0", "0.0"]).to_numpy()
-    bad = np.flatnonzero(~ok)
-    if bad.size:
-        raise ValueError(f"column {column!r} ({key}), {rt.row_name(int(bad[0]), fmt)}: "
-                         f"{s.iloc[bad[0]]!r} is not a flag (True or False)")
-    return text.isin(["true", "1", "1.0"]).to_numpy() & ~s.isna().to_numpy()
-
-
 def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES) -> JointLog:
     """Read a joint log in the UR3 CobotOps format (module docstring).
 
@@ -164,8 +151,9 @@ def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES)
         current_a=block("Current_J"), speed_rad_s=block("Speed_J"),
         tool_current_a=rt.numeric(df, "Tool_current", "tool_current", fmt, True, ","),
         cycle=cycle.astype(np.int64),
-        protective_stop=_flag(df, "Robot_ProtectiveStop", "protective_stop", fmt),
-        grip_lost=_flag(df, "grip_lost", "grip_lost", fmt),
+        protective_stop=rt.flag(df, "Robot_ProtectiveStop", "protective_stop", fmt,
+                                missing=False),
+        grip_lost=rt.flag(df, "grip_lost", "grip_lost", fmt, missing=False),
         gap_rows=np.flatnonzero(np.diff(t_s) > LOG_GAP_S) + 1)
 
 

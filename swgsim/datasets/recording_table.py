@@ -143,6 +143,25 @@ def _read_bytes(p: Path, max_bytes: int) -> bytes:
     return data
 
 
+def _read_csv_chunks(data: bytes, use: list[str], name: str, progress: bool, sep: str,
+                     decimal: str):
+    """The columns ``use`` of a CSV's bytes, parsed in chunks of :data:`_CHUNK_ROWS` rows
+    (a progress bar over them named ``name``, shown when reading takes > 2 s); an empty
+    frame of those columns when there is no data row. Raises pandas' parser errors."""
+    import pandas as pd
+    from tqdm.auto import tqdm
+
+    parts = []
+    with tqdm(desc=f"read {name}", unit="row", unit_scale=True, delay=2.0,
+              disable=not progress) as bar:
+        for chunk in pd.read_csv(io.BytesIO(data), usecols=use, encoding="utf-8-sig",
+                                 sep=sep, decimal=decimal, chunksize=_CHUNK_ROWS,
+                                 low_memory=False, float_precision="round_trip"):
+            parts.append(chunk)
+            bar.update(len(chunk))
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=use)
+
+
 def read_table(path: str | os.PathLike, columns: dict[str, str],
                max_bytes: int = MAX_TABLE_BYTES, progress: bool = False,
                max_cells: int | None = None, sep: str = ",", decimal: str = "."):
@@ -184,7 +203,6 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
         (named with its key and the columns the table has), or no data row.
     """
     import pandas as pd
-    from tqdm.auto import tqdm
 
     max_cells = MAX_TABLE_CELLS if max_cells is None else max_cells
     p = check_file(path, "recording", max_bytes)
@@ -211,16 +229,7 @@ def read_table(path: str | os.PathLike, columns: dict[str, str],
         if fmt == "parquet":
             df = pd.read_parquet(io.BytesIO(data), columns=use)
         else:
-            parts = []
-            with tqdm(desc=f"read {p.name}", unit="row", unit_scale=True, delay=2.0,
-                      disable=not progress) as bar:  # shown when reading takes > 2 s
-                for chunk in pd.read_csv(io.BytesIO(data), usecols=use, encoding="utf-8-sig",
-                                         sep=sep, decimal=decimal,
-                                         chunksize=_CHUNK_ROWS, low_memory=False,
-                                         float_precision="round_trip"):
-                    parts.append(chunk)
-                    bar.update(len(chunk))
-            df = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=use)
+            df = _read_csv_chunks(data, use, p.name, progress, sep, decimal)
     except (UnicodeDecodeError, pd.errors.ParserError) as e:
         raise ValueError(f"recording {p}: not a table: {str(e).splitlines()[0]}") from None
     if len(df) == 0:
@@ -284,9 +293,23 @@ def numeric(df, column: str, key: str, fmt: str, missing: bool = False,
 FLAG_TEXTS = {"true": True, "false": False, "1": True, "0": False}
 
 
-def flag(df, column: str, key: str, fmt: str) -> np.ndarray:
+def flag(df, column: str, key: str, fmt: str, missing: bool | None = None) -> np.ndarray:
     """An event flag column as booleans: true/false (booleans or their text,
     :data:`FLAG_TEXTS`) or finite numbers, nonzero true.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table read (:func:`read_table`).
+    column : str
+        The flag's column.
+    key : str
+        The column's field, named in a refusal.
+    fmt : str
+        The table's format (``csv`` or ``parquet``), for the row's name in a refusal.
+    missing : bool or None
+        What an empty cell reads as; None (default) refuses it (a controller's log that
+        leaves a flag empty where it logged nothing passes False).
 
     Returns
     -------
@@ -296,22 +319,25 @@ def flag(df, column: str, key: str, fmt: str) -> np.ndarray:
     ------
     ValueError
         ``column 'x' (key), row i: 'abc' is not a flag (true/false or a number)``; an
-        empty cell is refused likewise.
+        empty cell likewise unless ``missing`` is given.
     """
     import pandas as pd
 
     s = df[column]
     if s.dtype.kind == "b":
         return s.to_numpy(dtype=bool)
+    empty = s.isna().to_numpy()
     if s.dtype.kind in "fiu":
         v = s.to_numpy(dtype=np.float64)
-        ok = np.isfinite(v)
     else:
         text = s.astype(str).str.strip().str.lower()
         v = pd.to_numeric(text, errors="coerce").to_numpy(dtype=np.float64)
         named = text.map(FLAG_TEXTS)
         v = np.where(named.notna(), named.fillna(False).astype(float), v)
-        ok = np.isfinite(v) & s.notna().to_numpy()
+    ok = np.isfinite(v) & ~empty
+    if missing is not None:
+        ok |= empty
+        v = np.where(empty, float(missing), v)
     bad = np.flatnonzero(~ok)
     if bad.size:
         i = int(bad[0])

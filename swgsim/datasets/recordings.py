@@ -326,25 +326,11 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
     idx = win[:, None] + np.arange(n_t)  # (n_w, n_t) rows of each window
     comm = hour[take] - h0 < m.commissioning_h
     pts = np.asarray(m.operating_points.points, float)[point]
-    eff = np.full(win.size, np.nan)
-    if s.p_in_w is not None:
-        pin, pout = rt.window_reduce(s.p_in_w, win, n_t), rt.window_reduce(s.p_out_w, win, n_t)
-        eff = np.divide(pout, pin, out=eff, where=pin != 0)
-    meta = {"gear": np.full(win.size, m.gear), "fault": np.where(comm, "healthy", "unknown"),
-            "variant": np.zeros(win.size, np.int64), "severity": np.where(comm, 0.0, np.nan),
-            "position_deg": np.full(win.size, np.nan), "n_in_rpm": pts[:, 0],
-            "t_out_nm": pts[:, 1], "disturbed": np.zeros(win.size, bool),
-            "reference": np.zeros(win.size, bool), "efficiency": eff,
-            "n_in_mean_rpm": info.pop("mean_rpm"), "t_out_mean_nm": info.pop("mean_nm")}
-    config = {"name": f"recording {p.name}", "recording": {"file": p.name, "rows": int(n),
-                                                           "sha256": s.sha256},
-              "mapping": _plain_mapping(m),
-              "chain": {"sample_rate_hz": fs, "window_s": n_t / fs}}
-    if m.input_angle is not None:  # the input sensor, as a profile data set names it
-        config["profile"] = {"angles": {"input_counts_per_rev": m.input_angle.counts_per_rev}}
+    meta = _window_meta(s, m, win, n_t, comm, pts, info)
     sig = s.bridges_mvv[:, idx].transpose(1, 0, 2)  # (n_w, 5, n_t)
     ds = make_dataset(sig, np.arange(n_t) / fs, meta,
-                      {"config": config, "gear_id": int(m.gear),
+                      {"config": _stream_config(p, m, n, s.sha256, fs, n_t),
+                       "gear_id": int(m.gear),
                        "shard": f"gear{int(m.gear)}_recording.nc"})
     ds["hour"] = ("sample", hour[take], {"units": "h"})
     ds["commissioning"] = ("sample", comm)
@@ -356,8 +342,48 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
         ds[k] = (("sample", "time"), v[idx], {"units": "rad"})
     ds.attrs.update({"content_sha256": rt.content_hash(ds), "package_version": package_version(),
                      "git_revision": git_revision()})
-    return ds, {"recording": str(p), "rows": int(n), "segments": int(starts.size),
-                "sample_rate_hz": fs, "window_samples": n_t, **info}
+    return ds, _stream_summary(p, n, starts.size, fs, n_t, info)
+
+
+def _window_meta(s, m: RecordingMapping, win: np.ndarray, n_t: int, comm: np.ndarray,
+                 pts: np.ndarray, info: dict) -> dict:
+    """The windows' metadata (schema v1): commissioning's windows healthy at severity 0,
+    the rest unknown; each window's operating point ``pts`` (n_w, 2) [rpm, N m], its mean
+    speed and torque (taken out of ``info``), and its efficiency where the recording has
+    both powers (NaN otherwise). ``win``: the windows' first rows, shape (n_w,)."""
+    eff = np.full(win.size, np.nan)
+    if s.p_in_w is not None:
+        pin, pout = rt.window_reduce(s.p_in_w, win, n_t), rt.window_reduce(s.p_out_w, win, n_t)
+        eff = np.divide(pout, pin, out=eff, where=pin != 0)
+    return {"gear": np.full(win.size, m.gear), "fault": np.where(comm, "healthy", "unknown"),
+            "variant": np.zeros(win.size, np.int64), "severity": np.where(comm, 0.0, np.nan),
+            "position_deg": np.full(win.size, np.nan), "n_in_rpm": pts[:, 0],
+            "t_out_nm": pts[:, 1], "disturbed": np.zeros(win.size, bool),
+            "reference": np.zeros(win.size, bool), "efficiency": eff,
+            "n_in_mean_rpm": info.pop("mean_rpm"), "t_out_mean_nm": info.pop("mean_nm")}
+
+
+def _stream_config(p: Path, m: RecordingMapping, n: int, sha256: str, fs: float,
+                   n_t: int) -> dict:
+    """The stream's ``config`` attribute: the recording (file, ``n`` rows, its SHA-256),
+    the mapping, the chain's sampling ``fs`` [Hz] and window of ``n_t`` samples, and the
+    input sensor where the recording has one (as a profile data set names it)."""
+    config = {"name": f"recording {p.name}", "recording": {"file": p.name, "rows": int(n),
+                                                           "sha256": sha256},
+              "mapping": _plain_mapping(m),
+              "chain": {"sample_rate_hz": fs, "window_s": n_t / fs}}
+    if m.input_angle is not None:
+        config["profile"] = {"angles": {"input_counts_per_rev": m.input_angle.counts_per_rev}}
+    return config
+
+
+def _stream_summary(p: Path, n: int, n_segments: int, fs: float, n_t: int,
+                    info: dict) -> dict:
+    """The summary :func:`recording_stream` returns: the recording, its ``n`` rows and
+    segments, the sampling [Hz], the window's samples, and what the selection found
+    (``info``)."""
+    return {"recording": str(p), "rows": int(n), "segments": int(n_segments),
+            "sample_rate_hz": fs, "window_samples": n_t, **info}
 
 
 # ------------------------------------------------------------------ writing

@@ -89,9 +89,11 @@ class JointThermal:
         by about 21 K, the issue's "about 20 K" [choice]; the rated point alone (2000 rpm,
         52 N m, 32.5 W) by about 10 K [derived].
     tau_min : float
-        Thermal time constant R_th C (30) [min]: a UR3's six joints 32-46 min, measured
-        (docs/calibration.md, "A joint's warm-up"); C = 3000 J/K, e.g. 3.3 kg of aluminium
-        at 900 J/(kg K) [derived]. Kept: the day could not calibrate R_th (its duty steady).
+        Thermal time constant R_th C [min]: 30 [choice, an industrial joint]; measured on
+        a UR3's six joints 32-46 min (docs/calibration.md, "A joint's warm-up"; preset
+        ``small_cobot``, :data:`SMALL_COBOT_TAU_MIN`); C = 3000 J/K, e.g. 3.3 kg of
+        aluminium at 900 J/(kg K) [derived]. Kept: the day could not calibrate R_th (its
+        duty steady).
     ambient_c : float
         Hall temperature at the first start (20, the catalogue's reference) [°C].
     ambient_swing_k : float

@@ -5,7 +5,6 @@ unexplained, the app path, and the real UR3 day where it lies beside the reposit
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,11 +17,6 @@ from swgcal.thermal.synthetic import SyntheticThermal, synthetic_joint_log
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
 from swgsim.datasets.joint_log import write_joint_log
-
-#: The UR3 CobotOps day (M. Tyrovolas, K. Aliev, D. Antonelli, C. Stylios, "UR3 CobotOps",
-#: UCI Machine Learning Repository 2024, doi:10.24432/C5J891, CC BY 4.0).
-UR3_DAY = (Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ur3_cobotops"
-           / "ur3_cobotops_2022-10-26.csv")
 
 
 def _run(c: SyntheticThermal):
@@ -111,12 +105,10 @@ def test_swgsim_calibrate_takes_a_joint_log(tmp_path):
                                                 "logger.enabled=false", "thermal.joint=6"]))
 
 
-@pytest.mark.skipif(not UR3_DAY.is_file(), reason="the UR3 CobotOps day is not beside the "
-                                                  "repository")
-def test_the_ur3_days_shoulder_warms_with_a_time_constant_of_its_first_look():
+def test_the_ur3_days_shoulder_warms_with_a_time_constant_of_its_first_look(ur3_day):
     """The README's first look: time constants of roughly 0.5-0.9 h; held out: after the
     gap."""
-    res = calibrate(build_problem(UR3_DAY, joint=1))
+    res = calibrate(build_problem(ur3_day, joint=1))
     tau_h = res.base_model_final.estimates_of("first_order")["tau_min"].value / 60.0
     assert 0.4 < tau_h < 1.0
     assert res.problem.split.description["hours"]["validation"][0] > 5.0  # after the gap

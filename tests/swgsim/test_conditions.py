@@ -285,13 +285,6 @@ def test_no_regreasing_keeps_a_data_sets_config_hash():
     plan(greased)  # checked and accepted
 
 
-#: The UR3 CobotOps day (M. Tyrovolas, K. Aliev, D. Antonelli, C. Stylios, "UR3 CobotOps",
-#: UCI Machine Learning Repository 2024, doi:10.24432/C5J891, CC BY 4.0), where the
-#: workplace holds it beside the repository.
-UR3_DAY = (Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ur3_cobotops"
-           / "ur3_cobotops_2022-10-26.csv")
-
-
 def _trace_csv(path: Path) -> Path:
     """A tiny trace in the UR3 CobotOps format: 0-30 min warming 0.2 K a minute, a missing
     reading at 10 min, then a 2-h gap and readings that must not count."""
@@ -413,10 +406,8 @@ def test_a_traces_mode_is_out_of_the_config_hash_at_its_default(tmp_path):
     plan(hours)  # checked and accepted
 
 
-@pytest.mark.skipif(not UR3_DAY.is_file(), reason="the UR3 CobotOps day is not beside the "
-                                                  "repository")
-def test_the_ur3_days_first_warm_up_is_its_first_49_minutes():
-    t_h, rise = trace_rise(TemperatureTrace(str(UR3_DAY), "Temperature_J1"), "k")
+def test_the_ur3_days_first_warm_up_is_its_first_49_minutes(ur3_day):
+    t_h, rise = trace_rise(TemperatureTrace(str(ur3_day), "Temperature_J1"), "k")
     assert t_h[-1] == pytest.approx(0.816, abs=1e-3)  # before the 5.2-h gap
     assert t_h.size == 2859  # 2868 rows, 9 without a reading
     assert rise[-1] == pytest.approx(7.875) and rise.min() >= -0.1  # warming, 0.0625-K steps

@@ -16,10 +16,6 @@ from swgsim.datasets.joint_log import (
     write_temperature_table,
 )
 
-#: The UR3 CobotOps day (M. Tyrovolas, K. Aliev, D. Antonelli, C. Stylios, "UR3 CobotOps",
-#: UCI Machine Learning Repository 2024, doi:10.24432/C5J891, CC BY 4.0).
-UR3_DAY = (Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ur3_cobotops"
-           / "ur3_cobotops_2022-10-26.csv")
 HEADER = ("Num;Timestamp;Current_J0;Temperature_T0;Current_J1;Temperature_J1;Current_J2;"
           "Temperature_J2;Current_J3;Temperature_J3;Current_J4;Temperature_J4;Current_J5;"
           "Temperature_J5;Speed_J0;Speed_J1;Speed_J2;Speed_J3;Speed_J4;Speed_J5;"
@@ -90,10 +86,8 @@ def test_a_missing_column_is_refused_naming_it(tmp_path):
     assert "cycle " in LOG_COLUMNS
 
 
-@pytest.mark.skipif(not UR3_DAY.is_file(), reason="the UR3 CobotOps day is not beside the "
-                                                  "repository")
-def test_the_real_day_reads_as_published():
-    log = read_joint_log(UR3_DAY)
+def test_the_real_day_reads_as_published(ur3_day):
+    log = read_joint_log(ur3_day)
     assert log.n == 7409 and log.gap_rows.tolist() == [2869]
     assert (log.t_s[2869] - log.t_s[2868]) / 3600 == pytest.approx(5.226, abs=1e-3)
     assert np.isnan(log.temperature_c).any(axis=1).sum() == 54
@@ -127,10 +121,8 @@ def test_a_joints_temperature_table_cuts_the_gap_or_keeps_it(tmp_path):
         write_temperature_table(log, 6, tmp_path / "j6.csv")
 
 
-@pytest.mark.skipif(not UR3_DAY.is_file(), reason="the UR3 CobotOps day is not beside the "
-                                                  "repository")
-def test_the_real_shoulders_table_spans_its_operating_hours(tmp_path):
+def test_the_real_shoulders_table_spans_its_operating_hours(tmp_path, ur3_day):
     """docs/DATASET.md: the shoulder's table, the 5.2-h gap cut, 2.09 operating hours."""
-    rows = write_temperature_table(read_joint_log(UR3_DAY), 1, tmp_path / "j1.csv")
+    rows = write_temperature_table(read_joint_log(ur3_day), 1, tmp_path / "j1.csv")
     assert rows.shape == (7355, 2) and rows[-1, 0] == pytest.approx(2.087, abs=1e-3)
     assert (rows[:, 1].min(), rows[:, 1].max()) == (29.3125, 40.5)
