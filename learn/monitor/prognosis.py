@@ -141,9 +141,16 @@ class PrognosisConfig:
         check_range(self.interval_scale, 0.0, 20.0, "prognosis.interval_scale", lo_open=True)
         check_range(self.horizon_h, 0.0, 1e7, "prognosis.horizon_h", "h", lo_open=True)
         check_range(self.max_bins, 8, 1e5, "prognosis.max_bins")
+        # the constants for every law; ``failure`` only within the widest fault's range
+        # here, against the followed fault's own range in :func:`check_track`
+        unset = dataclasses.replace(self.to_failure, failure=None)
         for law, faults in LAWS.items():
             for fault in faults:  # the onset's severity is not the prognosis's: any > 0
-                check_to_failure(self.to_failure, fault, law, 1e-9, "prognosis")
+                check_to_failure(unset, fault, law, 1e-9, "prognosis")
+        if self.to_failure.failure is not None:
+            top = max(get_fault(f).severity_range[1] for fs in LAWS.values() for f in fs)
+            check_range(self.to_failure.failure, 0.0, top, "prognosis.to_failure.failure",
+                        lo_open=True, why="within a fault's severity range")
         return self
 
     def threshold(self, fault: str) -> float:
@@ -312,7 +319,8 @@ def check_track(track: Track, fault: str, alarm_hour: float | None, threshold: f
     check_range(h.min(), alarm_hour, np.inf, "prognosis.track.hours", "h",
                 why="no estimate before the alarm hour")
     thr = cfg.threshold(fault) if threshold is None else threshold
-    check_range(thr, y[-1], get_fault(fault).severity_range[1], "prognosis.threshold",
+    key = "prognosis.to_failure.failure" if threshold is None else "prognosis.threshold"
+    check_range(thr, y[-1], get_fault(fault).severity_range[1], key,
                 lo_open=True, why=f"above the current severity, within {fault}'s range")
     return h, y, lo, hi, float(thr)
 
