@@ -23,6 +23,7 @@ import numpy as np
 from swgsim.base.typed import check_range
 from swgsim.datasets.growth import LAWS, RunToFailure
 from swgsim.datasets.schema import TEMPERATURE_RANGE_C
+from swgsim.gear.thermal import REF_TEMP_C
 
 from .gear_monitor import GearMonitor, Trace
 from .normal import Conditions
@@ -31,11 +32,6 @@ from .rule import Alarm
 
 __all__ = ["DutyBlock", "StreamPrognosis", "StreamPrognoses", "planned_duty",
            "prognosis_line", "stream_prognoses", "trained_duty"]
-
-#: Grease temperature of a window without a reading [°C] (20 °C [choice]: the growth's
-#: reference, where the film factor is 1, :func:`swgsim.datasets.growth.film_factor`).
-REFERENCE_TEMP_C = 20.0
-
 
 @dataclass
 class DutyBlock:
@@ -240,9 +236,11 @@ def _follow(tr, al, mon, feats, points, cond, cfg, out) -> None:
     h, y, lo, hi = np.array(est, float).T
     out.tracks.append({"fault": al.fault, "alarm_h": al.hour, "hours": h.tolist(),
                        "severity": y.tolist(), "lo": lo.tolist(), "hi": hi.tolist()})
-    temp = (np.full(hours.size, REFERENCE_TEMP_C) if cond.temperature_c is None else
+    # a window without a reading at the viscosity's reference, where the growth's film
+    # factor is 1 (:func:`swgsim.datasets.growth.film_factor`) [choice]
+    temp = (np.full(hours.size, REF_TEMP_C) if cond.temperature_c is None else
             np.where(np.isfinite(cond.temperature_c[idx]), cond.temperature_c[idx],
-                     REFERENCE_TEMP_C))
+                     REF_TEMP_C))
     thr = cfg.threshold if cfg.threshold is not None else cfg.config.threshold(al.fault)
     planned = planned_duty(cfg)
     for k in range(1, int((hours[-1] - al.hour) / cfg.every_h) + 1):
