@@ -53,6 +53,7 @@ autograd, formulaic, numdifftools and pint for what scipy's ``invgauss`` gives t
 from __future__ import annotations
 
 import dataclasses
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -133,6 +134,10 @@ class PrognosisConfig:
     def check(self) -> PrognosisConfig:
         """Refuse a field out of range in one line naming ``prognosis.<field>``; return
         self. Raises ValueError."""
+        for name in ("min_estimates", "n_samples", "n_grid", "max_bins"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, numbers.Integral):
+                raise ValueError(f"prognosis.{name} must be an integer, got {v!r}")
         check_range(self.min_track_h, 0.0, 1000.0, "prognosis.min_track_h", "h", lo_open=True)
         check_range(self.min_estimates, 3, 1e6, "prognosis.min_estimates")
         check_range(self.n_samples, 100, 1e6, "prognosis.n_samples")

@@ -133,6 +133,8 @@ def test_refusals_name_the_key_in_one_line():
         (dict(threshold=1.5), r"prognosis.threshold must lie"),
         (dict(fault="reduced_stiffness"), "prognosis.fault=reduced_stiffness"),
         (dict(cfg=PrognosisConfig(n_samples=5)), r"prognosis.n_samples must lie in \[100"),
+        (dict(cfg=PrognosisConfig(n_samples=1000.5)), "prognosis.n_samples must be an integer"),
+        (dict(cfg=PrognosisConfig(max_bins=256.0)), "prognosis.max_bins must be an integer"),
         (dict(cfg=PrognosisConfig(to_failure=RunToFailure(paris_m=9.0))),
          "prognosis.to_failure.paris_m"),
         (dict(planned=dataclasses.replace(duty, t_acting_nm=duty.t_acting_nm * 2),
