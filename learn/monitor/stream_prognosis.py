@@ -164,7 +164,9 @@ class StreamPrognoses:
 
     def report_lines(self) -> list[str]:
         """One line per valid prognosis (for ``report.md``, :func:`prognosis_line`) and
-        the figure's."""
+        the figure's; none where no alarm was followed (no figure then)."""
+        if not self.tracks:
+            return []
         return [f"- {prognosis_line(e)}" for e in self.events if e["valid"]] + [
             "", "![prognosis](prognosis.png)"]
 

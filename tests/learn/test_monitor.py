@@ -596,11 +596,12 @@ def test_the_prognosis_is_written_and_off_leaves_every_output_as_it_was(growing_
     assert files["on"]["prognosis"].stat().st_size > 10_000
 
 
-def test_no_prognosis_before_an_alarm(growing_life, tiny_eval):
-    """The life cut before the fault's onset: no alarm, no prognosis, an empty list."""
+def test_no_prognosis_before_an_alarm(growing_life, tiny_eval, tmp_path):
+    """The life cut before the fault's onset: no alarm, no prognosis, an empty list, no
+    prognosis.png and no line of it in report.md."""
     from threadpoolctl import threadpool_limits
 
-    from learn.monitor.stream import monitor_stream
+    from learn.monitor.stream import monitor_stream, write_outputs
 
     ds = growing_life["ds"]
     healthy = ds.isel(sample=np.flatnonzero(ds["hour"].values < GROWING["onset_h"]))
@@ -608,6 +609,9 @@ def test_no_prognosis_before_an_alarm(growing_life, tiny_eval):
         res = monitor_stream(healthy, tiny_eval["model"], RuleConfig(),
                              prognosis=growing_life["config"])
     assert res.alarms == [] and res.prognosis.events == [] and res.prognosis.tracks == []
+    files = write_outputs(res, tmp_path, "healthy")
+    assert "prognosis" not in files and not (tmp_path / "prognosis.png").exists()
+    assert "prognosis" not in (tmp_path / "report.md").read_text()
 
 
 def test_a_planned_duty_outside_the_models_is_refused_by_the_app(growing_life, tiny_eval,
