@@ -149,7 +149,8 @@ class StreamPrognoses:
     Attributes
     ----------
     events : list of dict
-        One per prognosis: ``hour``, ``fault``, ``valid``, ``reason``, ``severity`` (the
+        One per prognosis: ``hour``, ``fault``, ``alarm_h`` (the operating hour of the
+        alarm it follows [h]), ``valid``, ``reason``, ``severity`` (the
         last estimate), ``threshold``, ``remaining_h`` (median), ``remaining_h_q05``,
         ``remaining_h_q95`` (from ``hour``) and ``failure_h`` (median), ``failure_h_q05``,
         ``failure_h_q95`` (operating hours) [h]; None where not valid or beyond the
@@ -169,6 +170,13 @@ class StreamPrognoses:
             return []
         return [f"- {prognosis_line(e)}" for e in self.events if e["valid"]] + [
             "", "![prognosis](prognosis.png)"]
+
+
+    def of_track(self, track: dict) -> list[dict]:
+        """The events of the alarm a track of :attr:`tracks` follows (its ``fault`` and
+        ``alarm_h``; another alarm of the same fault keeps its own), in hour order."""
+        return [e for e in self.events
+                if e["fault"] == track["fault"] and e["alarm_h"] == track["alarm_h"]]
 
 
 def prognosis_line(event: dict) -> str:
@@ -249,8 +257,8 @@ def _follow(tr, al, mon, feats, points, cond, cfg, out) -> None:
         now = al.hour + k * cfg.every_h
         n, m = int(np.searchsorted(h, now, side="right")), int(np.searchsorted(
             hours, now, side="right"))
-        ev = {"hour": now, "fault": al.fault, "valid": False, "severity": None,
-              "threshold": thr}
+        ev = {"hour": now, "fault": al.fault, "alarm_h": al.hour, "valid": False,
+              "severity": None, "threshold": thr}
         if n == 0:
             ev["reason"] = "prognosis not yet valid: no severity estimate since the alarm"
         elif y[n - 1] >= thr:

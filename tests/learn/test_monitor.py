@@ -637,3 +637,18 @@ def test_a_planned_duty_outside_the_models_is_refused_by_the_app(growing_life, t
     lines = [s for s in capsys.readouterr().err.splitlines() if s.strip()]
     assert info.value.code == 2 and len(lines) == 1, lines
     assert "prognosis.planned.n_in_rpm" in lines[0] and not (tmp_path / "out").exists()
+
+
+def test_two_alarms_of_one_fault_keep_their_own_prognoses():
+    """Two wear alarms (2 h and 5 h), both followed to the stream's end, their prognoses
+    at overlapping hours: each track gets its own alarm's events, not the later one's."""
+    from learn.monitor.stream_prognosis import StreamPrognoses
+
+    tracks = [{"fault": "wear", "alarm_h": a, "hours": [a + 1.0], "severity": [0.1],
+               "lo": [0.0], "hi": [0.2]} for a in (2.0, 5.0)]
+    events = [{"hour": a + k, "fault": "wear", "alarm_h": a, "valid": True}
+              for a in (2.0, 5.0) for k in (1.0, 2.0, 3.0)]
+    prog = StreamPrognoses(events, tracks)
+    first, second = (prog.of_track(t) for t in tracks)
+    assert [e["hour"] for e in first] == [3.0, 4.0, 5.0]
+    assert [e["hour"] for e in second] == [6.0, 7.0, 8.0]
