@@ -68,6 +68,7 @@ from swgsim.datasets.growth import (
     load_cycles,
     paris_damage,
 )
+from swgsim.datasets.schedule import LifeConfig
 from swgsim.gear.faults import get_fault
 
 __all__ = ["Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track", "check_track",
@@ -81,6 +82,11 @@ Z90 = 1.6448536269514722
 #: quarter's mean, 3, 6 and 12 steps gave the same quantiles to 1e-13 on synthetic root
 #: crack and wear tracks as in tests/learn/test_prognosis.py).
 GAUSS_NEWTON_STEPS = 6
+
+#: Operating hours a lone recorded window holds, where no interval between windows gives
+#: a median: the data sets' recording interval
+#: (:attr:`swgsim.datasets.schedule.LifeConfig.interval_min`, 1 min) [choice].
+LONE_WINDOW_H = LifeConfig.interval_min / 60.0
 
 
 @dataclass(frozen=True)
@@ -106,7 +112,7 @@ class PrognosisConfig:
         e^5 = 148 of the growth's constants [choice]).
     interval_scale : float
         Factor on the interval's log half-widths about the median, in (0, 20] [-] (1: the
-        posterior's own; :func:`conformal_interval_scale` calibrates it).
+        posterior's own; :func:`~.prognosis_calibration.conformal_interval_scale` calibrates it).
     horizon_h : float
         Remaining hours beyond which a sample counts as "no failure in sight" (inf), in
         (0, 10^7] [h] (10^6 [choice]).
@@ -185,10 +191,11 @@ class Duty:
     def from_windows(cls, hours: np.ndarray, n_in_rpm: np.ndarray, t_acting_nm: np.ndarray,
                      temp_c: np.ndarray) -> Duty:
         """The duty of windows at operating ``hours`` (shape (W,), increasing), each
-        holding until the next; the last for the median interval [choice]."""
+        holding until the next; the last for the median interval [choice], a lone one
+        for :data:`LONE_WINDOW_H`."""
         h = np.asarray(hours, float)
         dt = np.diff(h)
-        last = float(np.median(dt)) if dt.size else 1.0 / 30.0
+        last = float(np.median(dt)) if dt.size else LONE_WINDOW_H
         return cls(np.append(dt, last) * 60.0, np.asarray(n_in_rpm, float),
                    np.asarray(t_acting_nm, float), np.asarray(temp_c, float))
 
