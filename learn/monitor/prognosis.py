@@ -42,12 +42,7 @@ Two baselines take the same inputs and ignore the duty
 (:mod:`learn.monitor.prognosis_baselines`): a weighted straight line of severity in
 operating hours, and a Wiener process with drift in operating hours, no load covariate.
 
-ProgPy (1.9) and SurPyval (0.25) were read and not used. ProgPy's state estimators and
-Monte-Carlo predictor step a Python model per sample and time step and pull in
-matplotlib, filterpy and fastdtw, where here the law integrates in closed form over the
-recorded duty; SurPyval's Wiener and Gamma processes with log-linked stress covariates fit
-populations of units in calendar time, not a physical law's exposure, and would add
-autograd, formulaic, numdifftools and pint for what scipy's ``invgauss`` gives the baseline.
+ProgPy (1.9) and SurPyval (0.25) were read and not used (docs/monitor.md says why).
 """
 
 from __future__ import annotations
@@ -83,9 +78,8 @@ Z90 = 1.6448536269514722
 #: crack and wear tracks as in tests/learn/test_prognosis.py).
 GAUSS_NEWTON_STEPS = 6
 
-#: Operating hours a lone recorded window holds, where no interval between windows gives
-#: a median: the data sets' recording interval
-#: (:attr:`swgsim.datasets.schedule.LifeConfig.interval_min`, 1 min) [choice].
+#: Operating hours a lone recorded window holds (no interval to take the median of): the
+#: data sets' recording interval (:attr:`~swgsim.datasets.schedule.LifeConfig.interval_min`).
 LONE_WINDOW_H = LifeConfig.interval_min / 60.0
 
 
@@ -138,22 +132,18 @@ class PrognosisConfig:
     to_failure: RunToFailure = field(default_factory=RunToFailure)
 
     def check(self) -> PrognosisConfig:
-        """Refuse a field out of range in one line naming ``prognosis.<field>``; return
-        self. Raises ValueError."""
-        for name in ("min_estimates", "n_samples", "n_grid", "max_bins"):
+        """Refuse a field out of range in one line naming ``prognosis.<field>`` (the fault's
+        own range of ``failure``: :func:`check_track`); return self. Raises ValueError."""
+        for name, lo, hi in (("min_estimates", 3, 1e6), ("n_samples", 100, 1e6),
+                             ("n_grid", 21, 10001), ("max_bins", 8, 1e5)):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, numbers.Integral):
+            if isinstance(v, bool) or not isinstance(v, numbers.Integral):  # 1000.5, True
                 raise ValueError(f"prognosis.{name} must be an integer, got {v!r}")
+            check_range(v, lo, hi, f"prognosis.{name}")
         check_range(self.min_track_h, 0.0, 1000.0, "prognosis.min_track_h", "h", lo_open=True)
-        check_range(self.min_estimates, 3, 1e6, "prognosis.min_estimates")
-        check_range(self.n_samples, 100, 1e6, "prognosis.n_samples")
-        check_range(self.n_grid, 21, 10001, "prognosis.n_grid")
         check_range(self.log_scale_span, 0.0, 10.0, "prognosis.log_scale_span", lo_open=True)
         check_range(self.interval_scale, 0.0, 20.0, "prognosis.interval_scale", lo_open=True)
         check_range(self.horizon_h, 0.0, 1e7, "prognosis.horizon_h", "h", lo_open=True)
-        check_range(self.max_bins, 8, 1e5, "prognosis.max_bins")
-        # the constants for every law; ``failure`` only within the widest fault's range
-        # here, against the followed fault's own range in :func:`check_track`
         unset = dataclasses.replace(self.to_failure, failure=None)
         for law, faults in LAWS.items():
             for fault in faults:  # the onset's severity is not the prognosis's: any > 0

@@ -33,6 +33,7 @@ from .rule import Alarm
 __all__ = ["DutyBlock", "StreamPrognosis", "StreamPrognoses", "planned_duty",
            "prognosis_line", "stream_prognoses", "trained_duty"]
 
+
 @dataclass
 class DutyBlock:
     """One block of a planned duty (each field required: NaN refused).
