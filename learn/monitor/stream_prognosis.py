@@ -26,6 +26,7 @@ from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 from swgsim.gear.thermal import REF_TEMP_C
 
 from .gear_monitor import GearMonitor, Trace
+from .model import DiagnosisModel
 from .normal import Conditions
 from .prognosis import Duty, DutyRange, PrognosisConfig, Track, predict_growth
 from .rule import Alarm
@@ -129,11 +130,22 @@ def planned_duty(cfg: StreamPrognosis) -> Duty | None:
     return Duty(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
 
 
-def trained_duty(model) -> DutyRange | None:
-    """The duty range of a diagnosis model: its operating points' speed and load
-    (``points_range``, shape (2, 2)) and the data sets' temperature range
-    (:data:`swgsim.datasets.schema.TEMPERATURE_RANGE_C`; a model records none); None
-    where the model records no points."""
+def trained_duty(model: DiagnosisModel) -> DutyRange | None:
+    """The duty range of a diagnosis model.
+
+    Parameters
+    ----------
+    model : DiagnosisModel
+        Its ``points_range`` (shape (2, 2): speed [rpm] and torque [N m], low and high)
+        or None.
+
+    Returns
+    -------
+    DutyRange or None
+        Its operating points' speed and load and the data sets' temperature range
+        (:data:`swgsim.datasets.schema.TEMPERATURE_RANGE_C` [°C]; a model records none);
+        None where the model records no points.
+    """
     pr = getattr(model, "points_range", None)
     if pr is None:
         return None
