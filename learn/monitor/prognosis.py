@@ -128,11 +128,23 @@ def transformed(fault: str, severity: np.ndarray, tf: RunToFailure) -> tuple[np.
 
 
 def exposure(fault: str, duty: Duty, tf: RunToFailure) -> np.ndarray:
-    """The exposure at s = 1 after each block of a duty, cumulative, shape (K,).
+    """The exposure at s = 1 after each block of a duty, cumulative.
 
-    Paris: the damage sum D (:func:`swgsim.datasets.growth.paris_damage`, two load cycles
-    per input revolution, Δσ = ``stress_mpa_per_nm`` |load|) [m^(1 − m/2)]; Archard: the
-    worn depth (:func:`swgsim.datasets.growth.archard_depth`) [m].
+    Parameters
+    ----------
+    fault : str
+        A fault of :data:`swgsim.datasets.growth.LAWS`.
+    duty : Duty
+        K blocks.
+    tf : RunToFailure
+        The law's constants.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Paris: the damage sum D (:func:`swgsim.datasets.growth.paris_damage`, two load
+        cycles per input revolution, Δσ = ``stress_mpa_per_nm`` |load|) [m^(1 − m/2)];
+        Archard: the worn depth (:func:`swgsim.datasets.growth.archard_depth`) [m].
     """
     minutes = np.asarray(duty.minutes, float)
     if _law(fault) == "paris":
@@ -188,9 +200,23 @@ def _track_exposure(fault: str, hours: np.ndarray, recorded: Duty, windows_h: np
 
 
 def severity_of(fault: str, u: np.ndarray, tf: RunToFailure) -> tuple[np.ndarray, np.ndarray]:
-    """The inverse of :func:`transformed`: severity [-] and d(severity)/du at ``u`` (any
-    shape, both of its shape); a crack grown without bound (u ≤ 0 for m > 2) is clipped
-    at 10^3 [choice: far beyond any failure severity, its slope then 0]."""
+    """The inverse of :func:`transformed`.
+
+    Parameters
+    ----------
+    fault : str
+        A fault of :data:`swgsim.datasets.growth.LAWS`.
+    u : ndarray, any shape
+        Transformed severity (:func:`transformed`).
+    tf : RunToFailure
+        The law's constants.
+
+    Returns
+    -------
+    severity, slope : ndarray, each of ``u``'s shape
+        Severity [-] and d(severity)/du; a crack grown without bound (u ≤ 0 for m > 2)
+        clipped at severity 10^3 [choice: far beyond any failure severity], its slope 0.
+    """
     v = np.asarray(u, float)
     if _law(fault) == "archard":
         return v, np.ones_like(v)

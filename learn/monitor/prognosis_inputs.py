@@ -122,9 +122,21 @@ class Duty:
     @classmethod
     def from_windows(cls, hours: np.ndarray, n_in_rpm: np.ndarray, t_acting_nm: np.ndarray,
                      temp_c: np.ndarray) -> Duty:
-        """The duty of windows at operating ``hours`` (shape (W,), increasing), each
-        holding until the next; the last for the median interval [choice], a lone one
-        for :data:`LONE_WINDOW_H`."""
+        """The duty of recorded windows, each holding until the next.
+
+        Parameters
+        ----------
+        hours : ndarray, shape (W,)
+            Operating hour of each window, increasing [h].
+        n_in_rpm, t_acting_nm, temp_c : ndarray, shape (W,)
+            Each window's input speed [rpm], acting load [N m], grease temperature [°C].
+
+        Returns
+        -------
+        Duty
+            W blocks; the last for the median interval [choice], a lone one for
+            :data:`LONE_WINDOW_H`.
+        """
         h = np.asarray(hours, float)
         dt = np.diff(h)
         last = float(np.median(dt)) if dt.size else LONE_WINDOW_H
@@ -234,8 +246,25 @@ class Prognosis:
 # ------------------------------------------------------------------ inputs and refusals
 def check_track(track: Track, fault: str, alarm_hour: float | None, threshold: float | None,
                 cfg: PrognosisConfig) -> tuple[np.ndarray, ...]:
-    """The track's hours, severity, lo, hi (each shape (n,)) and the threshold [-], after
-    every refusal of a prognosis's inputs.
+    """The track and the threshold after every refusal of a prognosis's inputs.
+
+    Parameters
+    ----------
+    track : Track
+        The severity estimates since the alarm, n of them.
+    fault : str
+        The alarm's fault, one of :data:`swgsim.datasets.growth.LAWS`.
+    alarm_hour : float or None
+        Operating hour of the alarm [h]; None: no alarm (refused).
+    threshold : float or None
+        Failure severity [-]; None: ``cfg.threshold(fault)`` (refused under the key
+        ``prognosis.to_failure.failure``).
+    cfg : PrognosisConfig
+
+    Returns
+    -------
+    tuple of ndarray and float
+        The track's hours [h], severity, lo, hi [-] (each shape (n,)) and the threshold [-].
 
     Raises
     ------
@@ -270,8 +299,22 @@ def check_track(track: Track, fault: str, alarm_hour: float | None, threshold: f
 
 
 def not_yet_valid(h: np.ndarray, cfg: PrognosisConfig, alarm_hour: float) -> str:
-    """Why the track (estimate hours ``h``, shape (n,)) is too short for a prediction
-    (``cfg.min_track_h``, ``cfg.min_estimates``), or ""."""
+    """Why a track is too short for a prediction, or "".
+
+    Parameters
+    ----------
+    h : ndarray, shape (n,)
+        The estimates' operating hours [h].
+    cfg : PrognosisConfig
+        Its ``min_track_h`` and ``min_estimates``.
+    alarm_hour : float
+        Operating hour of the alarm [h].
+
+    Returns
+    -------
+    str
+        "prognosis not yet valid: ..." with the hours and estimates had and needed, or "".
+    """
     span = float(h[-1] - alarm_hour)
     if span < cfg.min_track_h or h.size < cfg.min_estimates:
         return (f"prognosis not yet valid: {span:.2f} h and {h.size} estimates since the "
@@ -281,9 +324,27 @@ def not_yet_valid(h: np.ndarray, cfg: PrognosisConfig, alarm_hour: float) -> str
 
 def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
                  remaining: np.ndarray, cfg: PrognosisConfig) -> Prognosis:
-    """The valid prognosis from samples of the remaining hours (shape (N,), [h]), beyond
-    ``cfg.horizon_h`` inf, its interval's log half-widths about the median times
-    ``cfg.interval_scale``."""
+    """The valid prognosis from samples of the remaining hours.
+
+    Parameters
+    ----------
+    hour : float
+        Operating hour of the prognosis [h].
+    fault, method : str
+        The named fault and the predictor's name.
+    now, thr : float
+        The last severity estimate and the failure severity [-].
+    remaining : ndarray, shape (N,)
+        Samples of the remaining operating hours [h]; beyond ``cfg.horizon_h`` inf.
+    cfg : PrognosisConfig
+        Its ``horizon_h`` and ``interval_scale``.
+
+    Returns
+    -------
+    Prognosis
+        Median, 5 % and 95 % quantiles, the interval's log half-widths about the median
+        times ``cfg.interval_scale``.
+    """
     r = np.where(remaining > cfg.horizon_h, np.inf, np.maximum(remaining, 0.0))
     q05, med, q95 = np.quantile(r, [0.05, 0.5, 0.95], method="inverted_cdf")  # inf-safe
     if cfg.interval_scale != 1.0 and 0 < med < np.inf:
@@ -297,5 +358,22 @@ def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
 
 def not_valid(hour: float, fault: str, method: str, now: float, thr: float,
               reason: str) -> Prognosis:
-    """The prognosis "not yet valid" at ``hour`` for ``reason`` (every figure NaN)."""
+    """The prognosis "not yet valid".
+
+    Parameters
+    ----------
+    hour : float
+        Operating hour of the prognosis [h].
+    fault, method : str
+        The named fault and the predictor's name.
+    now, thr : float
+        The last severity estimate and the failure severity [-].
+    reason : str
+        Why (:func:`not_yet_valid`).
+
+    Returns
+    -------
+    Prognosis
+        ``valid`` False, every figure NaN.
+    """
     return Prognosis(hour, fault, method, False, reason, now, thr)
