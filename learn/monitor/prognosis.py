@@ -42,32 +42,33 @@ Two baselines take the same inputs and ignore the duty
 (:mod:`learn.monitor.prognosis_baselines`): a weighted straight line of severity in
 operating hours, and a Wiener process with drift in operating hours, no load covariate.
 
-ProgPy (1.9) and SurPyval (0.25) were read and not used. ProgPy's state estimators and
-Monte-Carlo predictor step a Python model per sample and time step and pull in
-matplotlib, filterpy and fastdtw, where here the law integrates in closed form over the
-recorded duty; SurPyval's Wiener and Gamma processes with log-linked stress covariates fit
-populations of units in calendar time, not a physical law's exposure, and would add
-autograd, formulaic, numdifftools and pint for what scipy's ``invgauss`` gives the baseline.
+ProgPy (1.9) and SurPyval (0.25) were read and not used (docs/monitor.md says why).
 """
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass, field
-
 import numpy as np
 
-from swgsim.base.typed import check_range
 from swgsim.datasets.growth import (
     DEPTH_AT_ONE_M,
     LAWS,
     RunToFailure,
     archard_depth,
-    check_to_failure,
     load_cycles,
     paris_damage,
 )
-from swgsim.gear.faults import get_fault
+
+from .prognosis_inputs import (
+    Duty,
+    DutyRange,
+    Prognosis,
+    PrognosisConfig,
+    Track,
+    check_track,
+    from_samples,
+    not_valid,
+    not_yet_valid,
+)
 
 __all__ = ["Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track", "check_track",
            "exposure", "from_samples", "hours_for_exposure", "not_valid", "not_yet_valid",
@@ -80,273 +81,6 @@ Z90 = 1.6448536269514722
 #: quarter's mean, 3, 6 and 12 steps gave the same quantiles to 1e-13 on synthetic root
 #: crack and wear tracks as in tests/learn/test_prognosis.py).
 GAUSS_NEWTON_STEPS = 6
-
-
-@dataclass(frozen=True)
-class PrognosisConfig:
-    """What the prognosis needs beyond its inputs (checks itself: :meth:`check`).
-
-    Attributes
-    ----------
-    min_track_h : float
-        Operating hours of severity estimates since the alarm before a prediction is
-        valid, in (0, 1000] [h] (2 h [choice]: at the accelerated lives of
-        :mod:`swgsim.datasets.growth`, about 1 % of a crack's life).
-    min_estimates : int
-        Severity estimates since the alarm before a prediction is valid, in [3, 10^6]
-        (10 [choice]).
-    n_samples : int
-        Monte-Carlo samples of the remaining life, in [100, 10^6] (4000 [choice]: the 5 %
-        quantile from 200 samples beyond it).
-    n_grid : int
-        Points of the grid posterior of ln s, in [21, 10001] (401 [choice]).
-    log_scale_span : float
-        Half-width of that grid around ln s = 0, in (0, 10] [-] (5: s within a factor
-        e^5 = 148 of the growth's constants [choice]).
-    interval_scale : float
-        Factor on the interval's log half-widths about the median, in (0, 20] [-] (1: the
-        posterior's own; :func:`conformal_interval_scale` calibrates it).
-    horizon_h : float
-        Remaining hours beyond which a sample counts as "no failure in sight" (inf), in
-        (0, 10^7] [h] (10^6 [choice]).
-    max_bins : int
-        Most groups of consecutive estimates the fit sees, in [8, 10^5] (256 [choice]): a
-        longer track is fitted on each group's inverse-variance weighted mean severity and
-        mean exposure, their weight the group's sum (exact for a law straight within a
-        group; a 100 h track then costs what 256 estimates cost).
-    to_failure : RunToFailure
-        The growth's constants (:class:`swgsim.datasets.growth.RunToFailure`): the laws'
-        m, Y, Δσ per N m, film exponent, the median C and wear coefficient (s = 1), the
-        per-gear scatter (the prior σ of ln s) and the failure severities.
-    """
-
-    min_track_h: float = 2.0
-    min_estimates: int = 10
-    n_samples: int = 4000
-    n_grid: int = 401
-    log_scale_span: float = 5.0
-    interval_scale: float = 1.0
-    horizon_h: float = 1e6
-    max_bins: int = 256
-    to_failure: RunToFailure = field(default_factory=RunToFailure)
-
-    def check(self) -> PrognosisConfig:
-        """Refuse a field out of range in one line naming ``prognosis.<field>``; return
-        self. Raises ValueError."""
-        check_range(self.min_track_h, 0.0, 1000.0, "prognosis.min_track_h", "h", lo_open=True)
-        check_range(self.min_estimates, 3, 1e6, "prognosis.min_estimates")
-        check_range(self.n_samples, 100, 1e6, "prognosis.n_samples")
-        check_range(self.n_grid, 21, 10001, "prognosis.n_grid")
-        check_range(self.log_scale_span, 0.0, 10.0, "prognosis.log_scale_span", lo_open=True)
-        check_range(self.interval_scale, 0.0, 20.0, "prognosis.interval_scale", lo_open=True)
-        check_range(self.horizon_h, 0.0, 1e7, "prognosis.horizon_h", "h", lo_open=True)
-        check_range(self.max_bins, 8, 1e5, "prognosis.max_bins")
-        for law, faults in LAWS.items():
-            for fault in faults:  # the onset's severity is not the prognosis's: any > 0
-                check_to_failure(self.to_failure, fault, law, 1e-9, "prognosis")
-        return self
-
-    def threshold(self, fault: str) -> float:
-        """The failure severity of ``fault`` (``to_failure``'s, by default
-        :data:`swgsim.datasets.growth.FAILURE_SEVERITY`) [-]."""
-        return self.to_failure.failure_severity(fault)
-
-
-@dataclass(frozen=True, eq=False)
-class Duty:
-    """A duty as blocks, each holding an operating point, load and temperature.
-
-    Attributes
-    ----------
-    minutes : ndarray, shape (K,)
-        Operating minutes of each block, > 0 [min].
-    n_in_rpm, t_acting_nm, temp_c : ndarray, shape (K,)
-        Input speed [rpm], acting load [N m] and grease temperature [°C] of each block.
-    """
-
-    minutes: np.ndarray
-    n_in_rpm: np.ndarray
-    t_acting_nm: np.ndarray
-    temp_c: np.ndarray
-
-    @classmethod
-    def from_windows(cls, hours: np.ndarray, n_in_rpm: np.ndarray, t_acting_nm: np.ndarray,
-                     temp_c: np.ndarray) -> Duty:
-        """The duty of windows at operating ``hours`` (shape (W,), increasing), each
-        holding until the next; the last for the median interval [choice]."""
-        h = np.asarray(hours, float)
-        dt = np.diff(h)
-        last = float(np.median(dt)) if dt.size else 1.0 / 30.0
-        return cls(np.append(dt, last) * 60.0, np.asarray(n_in_rpm, float),
-                   np.asarray(t_acting_nm, float), np.asarray(temp_c, float))
-
-    def check(self, key: str) -> None:
-        """Refuse blocks of unequal length, none, or a non-positive or non-finite
-        duration, in one line naming ``key``. Raises ValueError."""
-        arrays = [np.asarray(getattr(self, f.name), float) for f in dataclasses.fields(self)]
-        k = arrays[0].shape
-        if len(k) != 1 or k[0] == 0 or any(a.shape != k for a in arrays):
-            raise ValueError(f"{key}: minutes, n_in_rpm, t_acting_nm and temp_c must be "
-                             f"1-D of one length >= 1, got shapes {[a.shape for a in arrays]}")
-        bad = ~np.isfinite(np.stack(arrays)).all(axis=0) | (arrays[0] <= 0)
-        if bad.any():
-            raise ValueError(f"{key}.minutes must be finite and > 0 min with finite speed, "
-                             f"load and temperature; block {int(np.argmax(bad))} is not")
-
-
-@dataclass(frozen=True)
-class DutyRange:
-    """The duty the model was trained on: (low, high) of input speed [rpm], acting load
-    [N m] and grease temperature [°C] (e.g. :meth:`of` the training lives' windows)."""
-
-    n_in_rpm: tuple[float, float]
-    t_acting_nm: tuple[float, float]
-    temp_c: tuple[float, float]
-
-    @classmethod
-    def of(cls, duty: Duty) -> DutyRange:
-        """The range a duty spans (absolute speed and load)."""
-        def span(a: np.ndarray) -> tuple[float, float]:
-            return float(np.min(a)), float(np.max(a))
-        return cls(span(np.abs(duty.n_in_rpm)), span(np.abs(duty.t_acting_nm)),
-                   span(duty.temp_c))
-
-    def check(self, duty: Duty, key: str) -> None:
-        """Refuse a duty outside this range, one line naming ``<key>.<quantity>``."""
-        units = {"n_in_rpm": "rpm", "t_acting_nm": "N m", "temp_c": "°C"}
-        for name, unit in units.items():
-            lo, hi = getattr(self, name)
-            a = np.asarray(getattr(duty, name), float)
-            a = a if name == "temp_c" else np.abs(a)
-            worst = float(a[np.argmax(np.maximum(lo - a, a - hi))])
-            check_range(worst, lo, hi, f"{key}.{name}", unit,
-                        why="the duty the model was trained on")
-
-
-@dataclass(frozen=True, eq=False)
-class Track:
-    """The monitor's severity estimates of one fault since its alarm.
-
-    Attributes
-    ----------
-    hours : ndarray, shape (n,)
-        Operating hour of each estimate, non-decreasing [h].
-    severity, lo, hi : ndarray, shape (n,)
-        The estimate and its 90 % interval [-] (:meth:`DiagnosisModel.estimate
-        <learn.monitor.model.DiagnosisModel.estimate>`).
-    """
-
-    hours: np.ndarray
-    severity: np.ndarray
-    lo: np.ndarray
-    hi: np.ndarray
-
-
-@dataclass(frozen=True)
-class Prognosis:
-    """A prognosis at ``hour`` (the last estimate's) for ``fault``.
-
-    Attributes
-    ----------
-    hour : float
-        Operating hour of the prognosis [h].
-    fault, method : str
-        The named fault; ``growth``, ``linear`` or ``wiener``.
-    valid : bool
-        False before enough track (then every figure NaN and ``reason`` says why).
-    reason : str
-        "" or "prognosis not yet valid: ...".
-    severity_now, threshold : float
-        The last estimate and the failure severity [-].
-    remaining_h_median, remaining_h_q05, remaining_h_q95 : float
-        Quantiles of the remaining operating hours to the threshold [h] (inf: beyond
-        ``PrognosisConfig.horizon_h``).
-    failure_hour_median, failure_hour_q05, failure_hour_q95 : float
-        The same as operating hours, ``hour`` + remaining [h].
-    """
-
-    hour: float
-    fault: str
-    method: str
-    valid: bool
-    reason: str
-    severity_now: float
-    threshold: float
-    remaining_h_median: float = float("nan")
-    remaining_h_q05: float = float("nan")
-    remaining_h_q95: float = float("nan")
-    failure_hour_median: float = float("nan")
-    failure_hour_q05: float = float("nan")
-    failure_hour_q95: float = float("nan")
-
-
-# ------------------------------------------------------------------ inputs and refusals
-def check_track(track: Track, fault: str, alarm_hour: float | None, threshold: float | None,
-                cfg: PrognosisConfig) -> tuple[np.ndarray, ...]:
-    """The track's hours, severity, lo, hi (each shape (n,)) and the threshold [-], after
-    every refusal of a prognosis's inputs.
-
-    Raises
-    ------
-    ValueError
-        In one line naming the key: a fault without a growth law, no alarm (None), a
-        malformed track, an estimate before the alarm hour, a threshold at or below the
-        last estimate or beyond the fault's severity range.
-    """
-    if not any(fault in fs for fs in LAWS.values()):
-        raise ValueError(f"prognosis.fault={fault} has no growth law; allowed: "
-                         f"{sorted(f for fs in LAWS.values() for f in fs)}")
-    if alarm_hour is None:
-        raise ValueError("prognosis.alarm_hour: no alarm, no prognosis (it starts at the "
-                         "alarm that named the fault)")
-    check_range(alarm_hour, 0.0, np.inf, "prognosis.alarm_hour", "h")
-    h, y, lo, hi = (np.asarray(a, float) for a in (track.hours, track.severity, track.lo,
-                                                   track.hi))
-    if h.ndim != 1 or h.size == 0 or any(a.shape != h.shape for a in (y, lo, hi)):
-        raise ValueError("prognosis.track: hours, severity, lo and hi must be 1-D of one "
-                         f"length >= 1, got shapes {[a.shape for a in (h, y, lo, hi)]}")
-    if not np.isfinite(np.stack([h, y, lo, hi])).all() or np.any(np.diff(h) < 0) \
-            or np.any(hi - lo <= 0):
-        raise ValueError("prognosis.track must be finite, its hours non-decreasing and "
-                         "each interval hi > lo")
-    check_range(h.min(), alarm_hour, np.inf, "prognosis.track.hours", "h",
-                why="no estimate before the alarm hour")
-    thr = cfg.threshold(fault) if threshold is None else threshold
-    check_range(thr, y[-1], get_fault(fault).severity_range[1], "prognosis.threshold",
-                lo_open=True, why=f"above the current severity, within {fault}'s range")
-    return h, y, lo, hi, float(thr)
-
-
-def not_yet_valid(h: np.ndarray, cfg: PrognosisConfig, alarm_hour: float) -> str:
-    """Why the track (estimate hours ``h``, shape (n,)) is too short for a prediction
-    (``cfg.min_track_h``, ``cfg.min_estimates``), or ""."""
-    span = float(h[-1] - alarm_hour)
-    if span < cfg.min_track_h or h.size < cfg.min_estimates:
-        return (f"prognosis not yet valid: {span:.2f} h and {h.size} estimates since the "
-                f"alarm, {cfg.min_track_h:g} h and {cfg.min_estimates} needed")
-    return ""
-
-
-def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
-                 remaining: np.ndarray, cfg: PrognosisConfig) -> Prognosis:
-    """The valid prognosis from samples of the remaining hours (shape (N,), [h]), beyond
-    ``cfg.horizon_h`` inf, its interval's log half-widths about the median times
-    ``cfg.interval_scale``."""
-    r = np.where(remaining > cfg.horizon_h, np.inf, np.maximum(remaining, 0.0))
-    q05, med, q95 = np.quantile(r, [0.05, 0.5, 0.95], method="inverted_cdf")  # inf-safe
-    if cfg.interval_scale != 1.0 and 0 < med < np.inf:
-        k = cfg.interval_scale
-        q05 = med * (q05 / med) ** k if q05 > 0 else 0.0
-        q95 = med * (q95 / med) ** k
-    q05, med, q95 = (float(q) for q in (q05, med, q95))
-    return Prognosis(hour, fault, method, True, "", now, thr, med, q05, q95,
-                     hour + med, hour + q05, hour + q95)
-
-
-def not_valid(hour: float, fault: str, method: str, now: float, thr: float,
-              reason: str) -> Prognosis:
-    """The prognosis "not yet valid" at ``hour`` for ``reason`` (every figure NaN)."""
-    return Prognosis(hour, fault, method, False, reason, now, thr)
 
 
 # ------------------------------------------------------------------ the growth law
@@ -394,11 +128,23 @@ def transformed(fault: str, severity: np.ndarray, tf: RunToFailure) -> tuple[np.
 
 
 def exposure(fault: str, duty: Duty, tf: RunToFailure) -> np.ndarray:
-    """The exposure at s = 1 after each block of a duty, cumulative, shape (K,).
+    """The exposure at s = 1 after each block of a duty, cumulative.
 
-    Paris: the damage sum D (:func:`swgsim.datasets.growth.paris_damage`, two load cycles
-    per input revolution, Δσ = ``stress_mpa_per_nm`` |load|) [m^(1 − m/2)]; Archard: the
-    worn depth (:func:`swgsim.datasets.growth.archard_depth`) [m].
+    Parameters
+    ----------
+    fault : str
+        A fault of :data:`swgsim.datasets.growth.LAWS`.
+    duty : Duty
+        K blocks.
+    tf : RunToFailure
+        The law's constants.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Paris: the damage sum D (:func:`swgsim.datasets.growth.paris_damage`, two load
+        cycles per input revolution, Δσ = ``stress_mpa_per_nm`` |load|) [m^(1 − m/2)];
+        Archard: the worn depth (:func:`swgsim.datasets.growth.archard_depth`) [m].
     """
     minutes = np.asarray(duty.minutes, float)
     if _law(fault) == "paris":
@@ -454,9 +200,23 @@ def _track_exposure(fault: str, hours: np.ndarray, recorded: Duty, windows_h: np
 
 
 def severity_of(fault: str, u: np.ndarray, tf: RunToFailure) -> tuple[np.ndarray, np.ndarray]:
-    """The inverse of :func:`transformed`: severity [-] and d(severity)/du at ``u`` (any
-    shape, both of its shape); a crack grown without bound (u ≤ 0 for m > 2) is clipped
-    at 10^3 [choice: far beyond any failure severity, its slope then 0]."""
+    """The inverse of :func:`transformed`.
+
+    Parameters
+    ----------
+    fault : str
+        A fault of :data:`swgsim.datasets.growth.LAWS`.
+    u : ndarray, any shape
+        Transformed severity (:func:`transformed`).
+    tf : RunToFailure
+        The law's constants.
+
+    Returns
+    -------
+    severity, slope : ndarray, each of ``u``'s shape
+        Severity [-] and d(severity)/du; a crack grown without bound (u ≤ 0 for m > 2)
+        clipped at severity 10^3 [choice: far beyond any failure severity], its slope 0.
+    """
     v = np.asarray(u, float)
     if _law(fault) == "archard":
         return v, np.ones_like(v)

@@ -558,7 +558,8 @@ def advisories(tr: Trace, mon: GearMonitor, clear_h: float = 1.0) -> list[dict]:
 def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Path]:
     """``summary.json``, ``report.md`` and ``health.png`` (module docstring), each with
     the threshold the rule used (:attr:`StreamResult.threshold`); with the prognosis on,
-    ``summary.json``'s ``prognosis``, a report line per valid one and ``prognosis.png``."""
+    ``summary.json``'s ``prognosis``, a report line per valid one and, where an alarm was
+    followed, ``prognosis.png``."""
     from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
     h = res.threshold
@@ -567,8 +568,10 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
                "events": res.events(), "threshold": h,
                "windows_monitored": int(res.trace.s.size),
                "commissioning_windows": res.n_commissioning}
+    followed = res.prognosis is not None and bool(res.prognosis.tracks)
     if res.prognosis is not None:
         summary["prognosis"] = res.prognosis.events
+    if followed:
         prognosis_figure(res.prognosis, out_dir / "prognosis.png")
     atomic_write_json(out_dir / "summary.json", summary)
     tr = res.trace
@@ -586,7 +589,7 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
     atomic_write_bytes(out_dir / "report.md", "\n".join(lines).encode())
     return {k: out_dir / v for k, v in (("summary", "summary.json"), ("report", "report.md"),
                                         ("figure", "health.png"), ("prognosis", "prognosis.png"))
-            if k != "prognosis" or res.prognosis is not None}
+            if k != "prognosis" or followed}
 
 
 __all__ = ["CHANGES_STATE", "CONDITIONS", "EVENT_KINDS", "StreamResult", "advisories",

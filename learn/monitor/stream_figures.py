@@ -64,8 +64,7 @@ def prognosis_figure(prog: StreamPrognoses, path: Path) -> None:
         h, y = np.array(t["hours"]), np.array(t["severity"])
         ax.errorbar(h, y, yerr=[y - np.array(t["lo"]), np.array(t["hi"]) - y], fmt=".",
                     ms=3, lw=0.6, color="0.3", label="severity estimate (90 %)")
-        ev = [e for e in prog.events if e["fault"] == t["fault"] and e["valid"]
-              and t["alarm_h"] <= e["hour"]]
+        ev = [e for e in prog.of_track(t) if e["valid"]]
         thr = ev[-1]["threshold"] if ev else None
         if thr is not None:
             ax.axhline(thr, color="r", lw=0.8, ls="--", label=f"failure at {thr:.3g}")

@@ -23,18 +23,16 @@ import numpy as np
 from swgsim.base.typed import check_range
 from swgsim.datasets.growth import LAWS, RunToFailure
 from swgsim.datasets.schema import TEMPERATURE_RANGE_C
+from swgsim.gear.thermal import REF_TEMP_C
 
 from .gear_monitor import GearMonitor, Trace
+from .model import DiagnosisModel
 from .normal import Conditions
 from .prognosis import Duty, DutyRange, PrognosisConfig, Track, predict_growth
 from .rule import Alarm
 
 __all__ = ["DutyBlock", "StreamPrognosis", "StreamPrognoses", "planned_duty",
            "prognosis_line", "stream_prognoses", "trained_duty"]
-
-#: Grease temperature of a window without a reading [°C] (20 °C [choice]: the growth's
-#: reference, where the film factor is 1, :func:`swgsim.datasets.growth.film_factor`).
-REFERENCE_TEMP_C = 20.0
 
 
 @dataclass
@@ -132,11 +130,22 @@ def planned_duty(cfg: StreamPrognosis) -> Duty | None:
     return Duty(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
 
 
-def trained_duty(model) -> DutyRange | None:
-    """The duty range of a diagnosis model: its operating points' speed and load
-    (``points_range``, shape (2, 2)) and the data sets' temperature range
-    (:data:`swgsim.datasets.schema.TEMPERATURE_RANGE_C`; a model records none); None
-    where the model records no points."""
+def trained_duty(model: DiagnosisModel) -> DutyRange | None:
+    """The duty range of a diagnosis model.
+
+    Parameters
+    ----------
+    model : DiagnosisModel
+        Its ``points_range`` (shape (2, 2): speed [rpm] and torque [N m], low and high)
+        or None.
+
+    Returns
+    -------
+    DutyRange or None
+        Its operating points' speed and load and the data sets' temperature range
+        (:data:`swgsim.datasets.schema.TEMPERATURE_RANGE_C` [°C]; a model records none);
+        None where the model records no points.
+    """
     pr = getattr(model, "points_range", None)
     if pr is None:
         return None
@@ -153,7 +162,8 @@ class StreamPrognoses:
     Attributes
     ----------
     events : list of dict
-        One per prognosis: ``hour``, ``fault``, ``valid``, ``reason``, ``severity`` (the
+        One per prognosis: ``hour``, ``fault``, ``alarm_h`` (the operating hour of the
+        alarm it follows [h]), ``valid``, ``reason``, ``severity`` (the
         last estimate), ``threshold``, ``remaining_h`` (median), ``remaining_h_q05``,
         ``remaining_h_q95`` (from ``hour``) and ``failure_h`` (median), ``failure_h_q05``,
         ``failure_h_q95`` (operating hours) [h]; None where not valid or beyond the
@@ -168,9 +178,18 @@ class StreamPrognoses:
 
     def report_lines(self) -> list[str]:
         """One line per valid prognosis (for ``report.md``, :func:`prognosis_line`) and
-        the figure's."""
+        the figure's; none where no alarm was followed (no figure then)."""
+        if not self.tracks:
+            return []
         return [f"- {prognosis_line(e)}" for e in self.events if e["valid"]] + [
             "", "![prognosis](prognosis.png)"]
+
+
+    def of_track(self, track: dict) -> list[dict]:
+        """The events of the alarm a track of :attr:`tracks` follows (its ``fault`` and
+        ``alarm_h``; another alarm of the same fault keeps its own), in hour order."""
+        return [e for e in self.events
+                if e["fault"] == track["fault"] and e["alarm_h"] == track["alarm_h"]]
 
 
 def prognosis_line(event: dict) -> str:
@@ -240,17 +259,19 @@ def _follow(tr, al, mon, feats, points, cond, cfg, out) -> None:
     h, y, lo, hi = np.array(est, float).T
     out.tracks.append({"fault": al.fault, "alarm_h": al.hour, "hours": h.tolist(),
                        "severity": y.tolist(), "lo": lo.tolist(), "hi": hi.tolist()})
-    temp = (np.full(hours.size, REFERENCE_TEMP_C) if cond.temperature_c is None else
+    # a window without a reading at the viscosity's reference, where the growth's film
+    # factor is 1 (:func:`swgsim.datasets.growth.film_factor`) [choice]
+    temp = (np.full(hours.size, REF_TEMP_C) if cond.temperature_c is None else
             np.where(np.isfinite(cond.temperature_c[idx]), cond.temperature_c[idx],
-                     REFERENCE_TEMP_C))
+                     REF_TEMP_C))
     thr = cfg.threshold if cfg.threshold is not None else cfg.config.threshold(al.fault)
     planned = planned_duty(cfg)
     for k in range(1, int((hours[-1] - al.hour) / cfg.every_h) + 1):
         now = al.hour + k * cfg.every_h
         n, m = int(np.searchsorted(h, now, side="right")), int(np.searchsorted(
             hours, now, side="right"))
-        ev = {"hour": now, "fault": al.fault, "valid": False, "severity": None,
-              "threshold": thr}
+        ev = {"hour": now, "fault": al.fault, "alarm_h": al.hour, "valid": False,
+              "severity": None, "threshold": thr}
         if n == 0:
             ev["reason"] = "prognosis not yet valid: no severity estimate since the alarm"
         elif y[n - 1] >= thr:

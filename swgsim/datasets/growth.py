@@ -316,8 +316,22 @@ def grown_severity(fault: str, growth: str, cfg: RunToFailure, onset_h: float,
 
 
 def failure_hour(hours: np.ndarray, severity: np.ndarray, failure: float) -> float:
-    """First operating hour [h] at which ``severity`` (shape (W,)) reaches ``failure``; NaN
-    if it does not within ``hours`` (shape (W,))."""
+    """The first operating hour at which a severity reaches the failure severity.
+
+    Parameters
+    ----------
+    hours : ndarray, shape (W,)
+        Operating hour of each window [h].
+    severity : ndarray, shape (W,)
+        Severity at each window [-].
+    failure : float
+        Failure severity [-] (reached: severity >= failure).
+
+    Returns
+    -------
+    float
+        The hour of the first window at or above ``failure`` [h]; NaN where none is.
+    """
     hit = np.flatnonzero(np.asarray(severity) >= failure)
     return float(np.asarray(hours)[hit[0]]) if hit.size else float("nan")
 

@@ -596,11 +596,12 @@ def test_the_prognosis_is_written_and_off_leaves_every_output_as_it_was(growing_
     assert files["on"]["prognosis"].stat().st_size > 10_000
 
 
-def test_no_prognosis_before_an_alarm(growing_life, tiny_eval):
-    """The life cut before the fault's onset: no alarm, no prognosis, an empty list."""
+def test_no_prognosis_before_an_alarm(growing_life, tiny_eval, tmp_path):
+    """The life cut before the fault's onset: no alarm, no prognosis, an empty list, no
+    prognosis.png and no line of it in report.md."""
     from threadpoolctl import threadpool_limits
 
-    from learn.monitor.stream import monitor_stream
+    from learn.monitor.stream import monitor_stream, write_outputs
 
     ds = growing_life["ds"]
     healthy = ds.isel(sample=np.flatnonzero(ds["hour"].values < GROWING["onset_h"]))
@@ -608,6 +609,9 @@ def test_no_prognosis_before_an_alarm(growing_life, tiny_eval):
         res = monitor_stream(healthy, tiny_eval["model"], RuleConfig(),
                              prognosis=growing_life["config"])
     assert res.alarms == [] and res.prognosis.events == [] and res.prognosis.tracks == []
+    files = write_outputs(res, tmp_path, "healthy")
+    assert "prognosis" not in files and not (tmp_path / "prognosis.png").exists()
+    assert "prognosis" not in (tmp_path / "report.md").read_text()
 
 
 def test_a_planned_duty_outside_the_models_is_refused_by_the_app(growing_life, tiny_eval,
@@ -633,3 +637,18 @@ def test_a_planned_duty_outside_the_models_is_refused_by_the_app(growing_life, t
     lines = [s for s in capsys.readouterr().err.splitlines() if s.strip()]
     assert info.value.code == 2 and len(lines) == 1, lines
     assert "prognosis.planned.n_in_rpm" in lines[0] and not (tmp_path / "out").exists()
+
+
+def test_two_alarms_of_one_fault_keep_their_own_prognoses():
+    """Two wear alarms (2 h and 5 h), both followed to the stream's end, their prognoses
+    at overlapping hours: each track gets its own alarm's events, not the later one's."""
+    from learn.monitor.stream_prognosis import StreamPrognoses
+
+    tracks = [{"fault": "wear", "alarm_h": a, "hours": [a + 1.0], "severity": [0.1],
+               "lo": [0.0], "hi": [0.2]} for a in (2.0, 5.0)]
+    events = [{"hour": a + k, "fault": "wear", "alarm_h": a, "valid": True}
+              for a in (2.0, 5.0) for k in (1.0, 2.0, 3.0)]
+    prog = StreamPrognoses(events, tracks)
+    first, second = (prog.of_track(t) for t in tracks)
+    assert [e["hour"] for e in first] == [3.0, 4.0, 5.0]
+    assert [e["hour"] for e in second] == [6.0, 7.0, 8.0]

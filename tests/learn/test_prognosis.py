@@ -133,6 +133,8 @@ def test_refusals_name_the_key_in_one_line():
         (dict(threshold=1.5), r"prognosis.threshold must lie"),
         (dict(fault="reduced_stiffness"), "prognosis.fault=reduced_stiffness"),
         (dict(cfg=PrognosisConfig(n_samples=5)), r"prognosis.n_samples must lie in \[100"),
+        (dict(cfg=PrognosisConfig(n_samples=1000.5)), "prognosis.n_samples must be an integer"),
+        (dict(cfg=PrognosisConfig(max_bins=256.0)), "prognosis.max_bins must be an integer"),
         (dict(cfg=PrognosisConfig(to_failure=RunToFailure(paris_m=9.0))),
          "prognosis.to_failure.paris_m"),
         (dict(planned=dataclasses.replace(duty, t_acting_nm=duty.t_acting_nm * 2),
@@ -209,3 +211,20 @@ def test_split_conformal_across_lives_restores_coverage_under_correlated_estimat
     of 20 Bernoulli trials)."""
     scale, before, after = calibration(fault, 0.3, 40, 0.9)
     assert scale > 1.0 and before < 0.6 and after >= 0.8
+
+
+def test_a_failure_severity_is_checked_against_the_followed_fault_only():
+    """0.8 (wear's own default) is beyond eccentric_wg's range (0.5) but within a root
+    crack's: the config takes it, a root crack's track is predicted to it, and only a
+    track of eccentric_wg refuses it, naming the key."""
+    cfg = PrognosisConfig(to_failure=RunToFailure(failure=0.8)).check()
+    track, alarm, duty, wh, _ = life("root_tooth_crack", 0, 0.3)
+    p = predict_growth(track, "root_tooth_crack", alarm, duty, wh, cfg)
+    assert p.valid and p.threshold == 0.8
+    ecc = dataclasses.replace(track, severity=np.minimum(track.severity, 0.2),
+                              lo=np.minimum(track.lo, 0.1), hi=np.minimum(track.hi, 0.3))
+    with one_line(r"prognosis.to_failure.failure must lie in \(\S+, 0.5\] .*eccentric_wg") as err:
+        predict_growth(ecc, "eccentric_wg", alarm, duty, wh, cfg)
+    assert "\n" not in str(err.value)
+    with one_line(r"prognosis.to_failure.failure must lie in \(0, 1\]"):
+        PrognosisConfig(to_failure=RunToFailure(failure=1.2)).check()
