@@ -143,7 +143,7 @@ def exposure(fault: str, duty: Duty, tf: RunToFailure) -> np.ndarray:
     -------
     ndarray, shape (K,)
         Paris: the damage sum D (:func:`swgsim.datasets.growth.paris_damage`, two load
-        cycles per input revolution, Δσ = ``stress_mpa_per_nm`` |load|) [m^(1 − m/2)];
+        cycles per input revolution, Δσ = ``stress_mpa_per_nm`` · abs(load)) [m^(1 − m/2)];
         Archard: the worn depth (:func:`swgsim.datasets.growth.archard_depth`) [m].
     """
     minutes = np.asarray(duty.minutes, float)

@@ -56,13 +56,13 @@ class ThermalSignals:
     t_s, dt_s : ndarray, shape (n,)
         Seconds since the first reading; the interval ending at each (0 first) [s].
     loss_w : ndarray, shape (n,)
-        The gear's loss proxy (1 − η) k_τ |I| |ω| [W].
+        The gear's loss proxy (1 − η) k_τ abs(I) abs(ω) [W].
     current_sq_a2, neighbour_sq_a2 : ndarray, shape (n,)
         The joint's squared motor current; that of joints j−1 and j+1 summed [A²].
     still : ndarray, shape (n,)
-        1 where the joint stands (|ω| below :data:`.options.STANDSTILL_RAD_S`, or a gap).
+        1 where the joint stands (abs(ω) below :data:`.options.STANDSTILL_RAD_S`, or a gap).
     speed_abs : ndarray, shape (n,)
-        |ω| held [rad/s].
+        abs(ω) held [rad/s].
     cycle : ndarray, shape (n,)
         The log's cycle count [-].
     joint : int

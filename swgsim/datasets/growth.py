@@ -246,7 +246,7 @@ def film_factor(temp_c: np.ndarray, exponent: float) -> np.ndarray:
 
 def archard_depth(t_acting_nm: np.ndarray, revolutions: np.ndarray, temp_c: np.ndarray,
                   coeff: float, exponent: float) -> np.ndarray:
-    """Worn depth after each block by Archard's law, Σ k |T| n_rev film(T_grease).
+    """Worn depth after each block by Archard's law, Σ k abs(T) n_rev film(T_grease).
 
     Parameters
     ----------
