@@ -441,10 +441,17 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
 
 def adopt_change(mon: GearMonitor, alarm: Alarm, factor: float) -> float:
     """After ``alarm`` named an unexplained change: the friction factor's new level
-    (``factor`` times one plus its severity), which ``mon`` follows from the alarm's hour
-    as after a declared re-greasing (:meth:`GearMonitor.track_friction`)."""
-    mon.regreased = sorted([*mon.regreased, alarm.hour])
-    return factor * (1.0 + alarm.severity)
+    (``factor`` times one plus its severity). Where that level lies outside the range
+    commissioning's friction took (:attr:`~learn.monitor.normal.NormalBehaviour.friction_range`),
+    a change the joint never showed, ``mon`` follows it from the alarm's hour as after a
+    declared re-greasing, window by window (:meth:`GearMonitor.track_friction`: fresh
+    grease runs in); within it, at its usual pace, so that a change as small as
+    commissioning's own spread does not blind the efficiency for ``regrease_settle_h``."""
+    new = factor * (1.0 + alarm.severity)
+    lo, hi = mon.normal.friction_range
+    if not lo <= new <= hi:
+        mon.regreased = sorted([*mon.regreased, alarm.hour])
+    return new
 
 
 def reading_lost(mon: GearMonitor) -> GearMonitor:
