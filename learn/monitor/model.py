@@ -18,9 +18,11 @@ on the other gives the 5 % and 95 % quantiles (a split-conformal interval across
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 HEALTHY = "healthy"
 
@@ -73,7 +75,8 @@ class DiagnosisModel:
                 self._trees = CompiledTrees(self.classifier)
             p = self._trees.predict_proba(x)
         else:
-            p = self.classifier.predict_proba(x)
+            with one_thread():
+                p = self.classifier.predict_proba(x)
         return np.log(np.clip(p, 1e-12, 1.0))
 
     def score(self, log_p: np.ndarray) -> np.ndarray:
@@ -90,8 +93,30 @@ class DiagnosisModel:
     def estimate(self, fault: str, x: np.ndarray) -> tuple[float, float, float]:
         """Severity estimate and its interval from windows ``x`` of one fault."""
         reg, (q05, q95) = self.severity[fault]
-        est = float(np.median(reg.predict(x)))
+        with one_thread():
+            est = float(np.median(reg.predict(x)))
         return est, est - q95, est - q05
+
+
+@functools.cache
+def _controller() -> ThreadpoolController:
+    from sklearn import ensemble  # noqa: F401  (its OpenMP runtime, for the controller to see)
+
+    return ThreadpoolController()
+
+
+def one_thread():
+    """A context in which scikit-learn's gradient boosting runs on one OpenMP thread.
+
+    The fitted trees and their predictions are the same with any number of threads (the
+    bench's diagnosis model trained with one and with two: identical probabilities and
+    severities); but on a machine with other work running, OpenMP's waiting threads made
+    the bench model's training 13 times slower (1254 s against 94 s, two cores) and the
+    stream's predictions of small blocks 16 times slower (docs/monitor.md, Prognosis).
+    Work runs in parallel as processes instead (the evaluation's parts, ``n_jobs``).
+    The controller is made once (``threadpoolctl``: 0.05 ms a call, against 12 ms for a
+    fresh ``threadpool_limits``)."""
+    return _controller().limit(limits=1, user_api="openmp")
 
 
 def _classifier(seed: int):
@@ -142,10 +167,18 @@ def fit_diagnosis(x: np.ndarray, fault: np.ndarray, severity: np.ndarray, gear: 
     if gears.size < 2:
         raise ValueError(f"the severity intervals need two training gears, got {gears.tolist()}")
     y = np.array([classes.index(f) for f in fault])
-    clf = _classifier(seed).fit(x, y)
-    model = DiagnosisModel(list(classes), clf)
+    clf = _classifier(seed)
+    with one_thread():
+        model = DiagnosisModel(list(classes), clf.fit(x, y))
+        return _severity_regressors(model, x, fault, severity, gear, seed, n_agg)
+
+
+def _severity_regressors(model: DiagnosisModel, x, fault, severity, gear, seed, n_agg
+                         ) -> DiagnosisModel:
+    """:func:`fit_diagnosis`'s severity regressors and their intervals across gears."""
+    gears = np.unique(gear)
     rng = np.random.default_rng(seed)
-    for c in classes[1:]:
+    for c in model.classes[1:]:
         m = fault == c
         errs = []
         for g in gears:  # fitted without gear g, judged on it
@@ -161,4 +194,4 @@ def fit_diagnosis(x: np.ndarray, fault: np.ndarray, severity: np.ndarray, gear: 
     return model
 
 
-__all__ = ["DiagnosisModel", "design_matrix", "fit_diagnosis", "HEALTHY"]
+__all__ = ["DiagnosisModel", "design_matrix", "fit_diagnosis", "one_thread", "HEALTHY"]

@@ -652,3 +652,31 @@ def test_two_alarms_of_one_fault_keep_their_own_prognoses():
     first, second = (prog.of_track(t) for t in tracks)
     assert [e["hour"] for e in first] == [3.0, 4.0, 5.0]
     assert [e["hour"] for e in second] == [6.0, 7.0, 8.0]
+
+
+def test_the_diagnosis_models_boosting_runs_on_one_openmp_thread_with_the_same_trees():
+    """``one_thread`` (learn/monitor/model.py) limits scikit-learn's OpenMP runtime to one
+    thread and puts the limit back after; the trees fitted inside are those fitted with
+    two threads (what makes the limit safe: the model does not depend on it)."""
+    from sklearn.ensemble import HistGradientBoostingClassifier
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from learn.monitor.model import one_thread
+
+    def omp() -> list[int]:
+        return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "openmp"]
+
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(3000, 8))
+    y = (x[:, 0] + x[:, 1] ** 2 > 1).astype(int) + (x[:, 2] > 1)
+    proba = []
+    with threadpool_limits(limits=2, user_api="openmp"):
+        assert omp() and set(omp()) == {2}
+        for limit in (one_thread, lambda: threadpool_limits(limits=2, user_api="openmp")):
+            with limit():
+                if limit is one_thread:
+                    assert set(omp()) == {1}
+                clf = HistGradientBoostingClassifier(max_iter=30, random_state=0).fit(x, y)
+                proba.append(clf.predict_proba(x))
+        assert set(omp()) == {2}
+    np.testing.assert_array_equal(proba[0], proba[1])
