@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from swgsim.datasets.schema import TEMPERATURE_RANGE_C
+from swgsim.datasets.schema import SENSORS, TEMPERATURE_RANGE_C
 
 from .features import feature_names, health_features
 from .gear_monitor import RECOMMISSIONS, GearMonitor, MaintenanceEvent, Trace
@@ -191,7 +191,7 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
         raise ValueError(f"{source}: all {comm.size} windows are commissioning; the stream "
                          "has no windows after commissioning to monitor")
     sensors = [str(s) for s in ds["sensor"].values]
-    if sensors != ["s0", "s1", "s2", "s3", "s4"]:
+    if sensors != list(SENSORS):
         raise ValueError(f"{source}: bridges {sensors}; the model was trained on s0..s4")
     fs = float(ds.attrs.get("sample_rate_hz", np.nan))
     if not np.isclose(fs, model.sample_rate_hz):

@@ -27,9 +27,10 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.gear.sensors import SENSORS
+
 __all__ = ["SENSORS", "MappedBasis", "StrainSignals", "constraint_basis"]
 
-SENSORS = ("s0", "s1", "s2", "s3", "s4")
 
 
 # ---------------------------------------------------------------------------------------

@@ -29,6 +29,7 @@ from swgsim.files.ownership import atomic_write_json
 from swgsim.gear.chain import SimulationChain
 from swgsim.gear.dynamics import gear_with_ke, rt1_size20
 from swgsim.gear.faults import NO_ROOT_CRACK, ChainParams
+from swgsim.gear.sensors import SENSORS
 from swgsim.sensing.effects import apply_sensor_effects
 
 __all__ = ["PLANTED", "HIDDEN", "CleanWindows", "simulate_windows", "bench_dataset",
@@ -182,7 +183,7 @@ def simulate_windows(chain: SimulationChain, ops: Sequence[tuple[float, float]] 
 
 def _hidden(clean: CleanWindows, spec: Mapping[str, Any], rng: np.random.Generator) -> np.ndarray:
     n_w, _, n = clean.signals.shape
-    sensors = ("s0", "s1", "s2", "s3", "s4")
+    sensors = SENSORS
     load = np.asarray(clean.t_out_nm, float)[:, None]
     if spec["kind"] == "tone":
         amp = spec["amplitude_mvv"] + spec.get("amplitude_mvv_per_nm", 0.0) * load
@@ -324,7 +325,7 @@ def expected_values(key: str, effect: Mapping[str, Any],
         Parameter -> true value of the other reported per-channel parameters.
     """
     chk = PLANTED[key]["check"] if check is None else check
-    sensors = ("s0", "s1", "s2", "s3", "s4")
+    sensors = SENSORS
     opts = effect.get("options", {})
     est = np.asarray(opts.get("estimable", np.ones(5, bool)), bool)
     w = np.asarray(opts.get("weights", np.ones(5)), float) * est

@@ -57,12 +57,12 @@ from swgsim.files.digest import config_digest, sha256_file
 from swgsim.files.inputs import check_input_file
 from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import FAULTS
+from swgsim.gear.sensors import SENSORS
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 log = logging.getLogger(__name__)
 
 SCHEMA_VERSION = 1
-SENSORS = ("s0", "s1", "s2", "s3", "s4")
 PER_SAMPLE = {
     "gear": ("int64", ""),
     "fault": ("str", ""),

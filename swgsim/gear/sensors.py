@@ -239,15 +239,21 @@ def gear_layout(sensors: SensorsConfig, tolerances: TolerancesConfig,
     return lay.perturbed(np.random.default_rng(int(tolerance_seed)), tolerances)
 
 
+#: The five strain-gauge bridges' names, in the layout's order (:func:`default_signals`):
+#: s0 the torque bridge, s1-s4 the half bridges at 0, 90, 180 and 270° (paper Sec. III-B).
+SENSORS = ("s0", "s1", "s2", "s3", "s4")
+
+
 def default_signals(r_torque_m: float = R_TORQUE_MM * 1e-3,
                     r_pairs_m: float = R_PAIRS_MM * 1e-3) -> tuple[Signal, ...]:
     """Default five-signal layout (module docstring); radii [m]."""
+    s0, s1, s2, s3, s4 = SENSORS
     return (
-        Signal("s0", _shear_pair(r_torque_m, 22.5) + _shear_pair(r_torque_m, 112.5), "full"),
-        Signal("s1", _poisson_pair(r_pairs_m, 0.0), "half"),
-        Signal("s2", _shear_pair(r_pairs_m, 90.0), "half"),
-        Signal("s3", _poisson_pair(r_pairs_m, 180.0), "half"),
-        Signal("s4", _shear_pair(r_pairs_m, 270.0), "half"),
+        Signal(s0, _shear_pair(r_torque_m, 22.5) + _shear_pair(r_torque_m, 112.5), "full"),
+        Signal(s1, _poisson_pair(r_pairs_m, 0.0), "half"),
+        Signal(s2, _shear_pair(r_pairs_m, 90.0), "half"),
+        Signal(s3, _poisson_pair(r_pairs_m, 180.0), "half"),
+        Signal(s4, _shear_pair(r_pairs_m, 270.0), "half"),
     )
 
 

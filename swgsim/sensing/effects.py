@@ -73,6 +73,7 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.gear.sensors import SENSORS
 from swgsim.sensing.dsp import fractional_delay, lowpass, spline_at
 
 log = logging.getLogger(__name__)
@@ -98,8 +99,6 @@ __all__ = [
     "offset",
     "thermal_drift",
 ]
-
-SENSORS = ("s0", "s1", "s2", "s3", "s4")
 
 QUARTER_BRIDGE_K = 2.0e-3
 """k of the exact quarter bridge s / (1 + k s) [1/(mV/V)]: GF ε / (4 + 2 GF ε) in V/V

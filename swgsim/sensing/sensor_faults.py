@@ -39,8 +39,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-SENSORS = ("s0", "s1", "s2", "s3", "s4")
-
 
 @dataclass(frozen=True)
 class SensorFault:
