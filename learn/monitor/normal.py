@@ -535,10 +535,16 @@ class NormalBehaviour:
         span = c.load_margin * np.abs(self.ref_torque[i])
         out |= ((tq < lo - span) | (tq > hi + span)) * OUTSIDE_LOAD
         fr = np.broadcast_to(np.asarray(friction, float), (len(points),))
-        lo, hi = self.friction_range
-        out |= ((fr < lo - c.friction_margin) | (fr > hi + c.friction_margin)) \
-            * OUTSIDE_FRICTION
+        out |= self.beyond_friction(fr) * OUTSIDE_FRICTION
         return out
+
+    def beyond_friction(self, friction: np.ndarray | float) -> np.ndarray:
+        """Whether each friction factor lies beyond commissioning's range
+        (:attr:`friction_range`) by more than ``friction_margin``: a friction commissioning
+        did not see; bool, the shape of ``friction``."""
+        lo, hi = self.friction_range
+        fr, m = np.asarray(friction, float), self.config.friction_margin
+        return (fr < lo - m) | (fr > hi + m)
 
     # ------------------------------------------------------------------ internals
     def _gain(self, dt: np.ndarray) -> np.ndarray:

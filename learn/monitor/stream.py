@@ -441,15 +441,15 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
 
 def adopt_change(mon: GearMonitor, alarm: Alarm, factor: float) -> float:
     """After ``alarm`` named an unexplained change: the friction factor's new level
-    (``factor`` times one plus its severity). Where that level lies outside the range
-    commissioning's friction took (:attr:`~learn.monitor.normal.NormalBehaviour.friction_range`),
-    a change the joint never showed, ``mon`` follows it from the alarm's hour as after a
-    declared re-greasing, window by window (:meth:`GearMonitor.track_friction`: fresh
-    grease runs in); within it, at its usual pace, so that a change as small as
-    commissioning's own spread does not blind the efficiency for ``regrease_settle_h``."""
+    (``factor`` times one plus its severity). Where that level is a friction
+    commissioning did not see (beyond its range by more than ``friction_margin``,
+    :meth:`~learn.monitor.normal.NormalBehaviour.beyond_friction`: fresh grease), ``mon``
+    follows it from the alarm's hour as after a declared re-greasing, window by window
+    (:meth:`GearMonitor.track_friction`); else at its usual pace, so that a change within
+    what healthy operation moves the friction by does not blind the efficiency for
+    ``regrease_settle_h``."""
     new = factor * (1.0 + alarm.severity)
-    lo, hi = mon.normal.friction_range
-    if not lo <= new <= hi:
+    if mon.normal.beyond_friction(new):
         mon.regreased = sorted([*mon.regreased, alarm.hour])
     return new
 

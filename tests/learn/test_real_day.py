@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from learn.monitor.gear_monitor import MaintenanceEvent
+from learn.monitor.normal import NormalBehaviour, NormalConfig
 from learn.monitor.rule import Alarm, RuleConfig
 from learn.monitor.stream import adopt_change, event_line, monitor_stream
 from learn.monitor.study import MonitorStudyConfig
@@ -297,20 +298,26 @@ def test_a_declared_regreasing_recommissions_the_friction_an_undeclared_one_is_u
         monitor_stream(ds, model, RuleConfig(), maintenance=[MaintenanceEvent(40.0, "oil")])
 
 
-@pytest.mark.parametrize(("change", "settles"), [(0.0025, False), (0.3, True)])
-def test_an_unexplained_change_within_commissionings_friction_is_not_followed_window_by_window(
+@pytest.mark.parametrize(("change", "settles"), [(0.0025, False), (0.04, False), (0.3, True)])
+def test_an_unexplained_change_within_seen_friction_is_not_followed_window_by_window(
         change, settles):
-    """A change the friction fit found as small as commissioning's own spread (a false
-    alarm on bench sensor_stuck seed 1: +0.25 % at 32.85 h) is adopted at its level but
-    followed at the usual pace: followed window by window for regrease_settle_h, the
-    tracking absorbed the stuck reading's efficiency evidence at 94.5 h (root crack named
-    28 times). A re-greasing's step (+30 %) leaves the range and is followed so."""
-    normal = dataclasses.make_dataclass("N", ["friction_range"])(np.array([0.996, 1.002]))
-    mon = dataclasses.make_dataclass("M", ["normal", "regreased"])(normal, [])
-    alarm = Alarm(32.85, 0, 0, "unexplained_change", "unexplained_change", change, change,
+    """A change the friction fit found within what commissioning saw (its range widened by
+    friction_margin, 5 %; a false alarm on bench sensor_stuck scored seeds 1 and 2: about
+    0.25 % at 32-33 h) is adopted at its level but followed at the usual pace: followed
+    window by window for regrease_settle_h, the tracking absorbed the stuck reading's
+    efficiency evidence later (root crack named 28 and 219 times). A re-greasing's step
+    (+30 %) is a friction commissioning did not see, and is followed so."""
+
+    class Normal:  # what adopt_change asks of the monitor's normal behaviour
+        friction_range = np.array([0.9998, 1.0002])
+        config = NormalConfig()
+        beyond_friction = NormalBehaviour.beyond_friction
+
+    mon = dataclasses.make_dataclass("M", ["normal", "regreased"])(Normal(), [])
+    alarm = Alarm(32.35, 0, 0, "unexplained_change", "unexplained_change", change, change,
                   change, None, [])
-    assert adopt_change(mon, alarm, 0.9985) == pytest.approx(0.9985 * (1 + change))
-    assert mon.regreased == ([32.85] if settles else [])
+    assert adopt_change(mon, alarm, 1.0) == pytest.approx(1.0 + change)
+    assert mon.regreased == ([32.35] if settles else [])
 
 
 def test_a_slowly_growing_fault_under_warm_ups_is_alarmed_not_absorbed(model, day):
