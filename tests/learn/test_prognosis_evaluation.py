@@ -125,3 +125,32 @@ def test_a_fault_without_a_growth_law_is_refused_naming_it():
     with pytest.raises(ValueError, match=r"^prognosis.study.faults.reduced_damping: no growth "
                                          r"law; allowed: \['eccentric_wg'"):
         check_prognosis_study(sc)
+
+
+def test_an_alarm_naming_a_fault_whose_range_ends_below_the_threshold_is_not_predicted():
+    """A root crack's life fails at 0.9; an alarm that names the eccentric wave generator
+    (range up to 0.5) is followed, each event saying why it is not predicted, instead of
+    the stream failing (stream_prognosis._follow)."""
+    from types import SimpleNamespace
+
+    from learn.monitor.normal import Conditions
+    from learn.monitor.stream_prognosis import StreamPrognosis, stream_prognoses
+
+    n = 120
+    hours = 10.0 + np.arange(n) / 60.0
+
+    class Model:
+        severity = {"eccentric_wg": None}
+
+        def estimate(self, fault, x):
+            return 0.05, 0.03, 0.07
+
+    mon = SimpleNamespace(model=Model(), inputs=lambda f, p, c, fr: f)
+    tr = SimpleNamespace(hour=hours, friction=np.ones(n))
+    alarm = SimpleNamespace(kind="gear_fault", fault="eccentric_wg", index=0, hour=hours[0])
+    cfg = StreamPrognosis(enabled=True, threshold=0.9, min_track_h=0.25, min_estimates=3)
+    out = stream_prognoses(tr, [alarm], mon, np.zeros((n, 3)), np.tile([4000.0, 7.0], (n, 1)),
+                           Conditions(np.full(n, 7.0)), cfg)
+    assert len(out.tracks) == 1 and len(out.events) == 1
+    (ev,) = out.events
+    assert not ev["valid"] and "beyond eccentric_wg's range (up to 0.5)" in ev["reason"]
