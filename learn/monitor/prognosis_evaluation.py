@@ -334,6 +334,7 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
         Per method, the prognoses after the followed alarm up to the failure (empty
         without one).
     """
+    t0 = time.perf_counter()
     fo = sim.life.fault
     fail_h = float(sim.schedule.failure_h)
     cond = sim.life.conditions
@@ -360,6 +361,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     for m in METHODS[1:]:
         events[m] = baseline_events(track, events["growth"], m, dataclasses.replace(
             opt.config, interval_scale=scales[m]), int(seed))
+    log.info("life of gear %d, seed %d, %s: %d windows, %.1f s", sim.gear_id, seed, fo.fault,
+             n_end, time.perf_counter() - t0)
     return life, events
 
 
