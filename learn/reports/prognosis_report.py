@@ -139,6 +139,8 @@ def targets(buckets: pd.DataFrame, summary: pd.DataFrame) -> pd.DataFrame:
                     "result": ("pass" if ok else "fail") if judged else
                     f"not judged (< {MIN_BUCKET})"})
     for (ds, fault), s in summary.groupby(["dataset", "fault"]):
+        if not (s.method == "growth").any():
+            continue
         gr = s[s.method == "growth"].iloc[0]
         base = s[s.method != "growth"].abs_error_median_h.min()
         out += [{"dataset": ds, "fault": fault, "what": what, "target": tgt,
