@@ -135,9 +135,11 @@ def _job(plan_: DatasetPlan, job: Job, study: PrognosisStudyConfig, out: str) ->
     return json.loads(json.dumps(part, default=float)), job
 
 
-def _run_parts(plans: dict, jobs: list[Job], pc: PrognosisExperiment, out: Path) -> list[dict]:
-    """Each part, resumed from ``parts/`` when its key matches."""
+def _run_parts(plans: dict, jobs: list[Job], pc: PrognosisExperiment, out: Path
+               ) -> tuple[list[dict], int]:
+    """Each part, resumed from ``parts/`` when its key matches; with the number resumed."""
     done, todo = finished_parts(out, jobs)
+    resumed = len(done)
     if done:
         log.info("resuming: %d of %d part(s) already done", len(done), len(jobs))
     bar = tqdm(total=len(todo), desc="prognosis evaluation", unit="part",
@@ -151,7 +153,7 @@ def _run_parts(plans: dict, jobs: list[Job], pc: PrognosisExperiment, out: Path)
         bar.update()
     bar.close()
     order = {(j.dataset, j.gear): i for i, j in enumerate(jobs)}
-    return sorted(done, key=lambda p: order[(p["dataset"], p["held_out_gear"])])
+    return sorted(done, key=lambda p: order[(p["dataset"], p["held_out_gear"])]), resumed
 
 
 def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
@@ -168,7 +170,7 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
     (out / "parts").mkdir(parents=True, exist_ok=True)
     jobs = plan_parts(pc, plans)
     t0 = time.perf_counter()
-    parts = _run_parts(plans, jobs, pc, out)
+    parts, resumed = _run_parts(plans, jobs, pc, out)
     wall = time.perf_counter() - t0
     rows, lives, cal = _frames(parts)
     if rows.empty:
@@ -191,7 +193,9 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
               f"{sc.calibration_seeds} on the training gears; payload factors "
               f"{sc.payloads} by seed, from {sc.payload_after_h:g} h after the onset; a "
               f"prognosis every {sc.prognosis.every_h:g} h after the alarm. Wall time "
-              f"{wall / 60:.1f} min.\n"
+              f"{wall / 60:.1f} min"
+              + (f" ({resumed} of {len(jobs)} parts resumed from parts/, not timed here)"
+                 if resumed else "") + ".\n"
               + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
     write_table(out / "table.md", header, tgt, summary, buckets, lives, cal)
     fig = figure(buckets, rows, out / "prognosis.png")

@@ -85,6 +85,7 @@ def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):
     monkeypatch.setattr(task, "run_prognosis_part", fail)
     _run(out)
     assert (out / "results.csv").read_bytes() == before
+    assert "(1 of 1 parts resumed from parts/" in (out / "table.md").read_text()
 
 
 BAD = {  # case -> (override, the start of the one line)
