@@ -41,6 +41,7 @@ from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions
 from learn.studies.transfer import TransferConfig
 from learn.tasks.monitor_evaluation import MonitorExperiment
+from learn.tasks.prognosis_evaluation import PrognosisExperiment
 from learn.tracking.config import LoggerConfig
 from swgsim.base.typed import allowed, check_keys
 from swgsim.datasets.config import DatasetConfig
@@ -153,7 +154,8 @@ class TrainApp:
     """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.tasks.train.TASKS`."""
 
     OUT_DIRS: ClassVar[tuple[str, ...]] = ("paths.report_dir", "monitor.report_dir",
-                                           "transfer.report_dir", "transfer.data_root")
+                                           "prognosis.report_dir", "transfer.report_dir",
+                                           "transfer.data_root")
 
     task: str = "study"
     seed: int = 0
@@ -168,6 +170,7 @@ class TrainApp:
     study: StudyOptions = field(default_factory=StudyOptions)
     transfer: TransferConfig | None = None
     monitor: MonitorExperiment | None = None
+    prognosis: PrognosisExperiment | None = None
 
 
 #: Keys and groups renamed, per app: old name -> the new one and why. An override that

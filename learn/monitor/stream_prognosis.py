@@ -23,6 +23,7 @@ import numpy as np
 from swgsim.base.typed import check_range
 from swgsim.datasets.growth import LAWS, RunToFailure
 from swgsim.datasets.schema import TEMPERATURE_RANGE_C
+from swgsim.gear.faults import get_fault
 from swgsim.gear.thermal import REF_TEMP_C
 
 from .gear_monitor import GearMonitor, Trace
@@ -71,7 +72,9 @@ class StreamPrognosis:
         [choice]: 15 windows of a minute, a quarter of the alarm's naming hour).
     threshold : float or None
         The failure severity [-]; None: the fault's
-        (:data:`swgsim.datasets.growth.FAILURE_SEVERITY`, ``config.to_failure``).
+        (:data:`swgsim.datasets.growth.FAILURE_SEVERITY`, ``config.to_failure``). An alarm
+        naming a fault whose severity range ends below it is followed without a
+        prediction (each event says why), not refused: one threshold serves every fault.
     planned : list of DutyBlock
         A future duty the user declares, repeated from its first block; empty: the
         recorded duty's mean rate.
@@ -277,6 +280,9 @@ def _follow(tr, al, mon, feats, points, cond, cfg, out) -> None:
         elif y[n - 1] >= thr:
             ev.update(severity=float(y[n - 1]), reason="the severity estimate has reached "
                       "the failure threshold")
+        elif thr > (top := get_fault(al.fault).severity_range[1]):
+            ev.update(severity=float(y[n - 1]), reason=f"the failure severity {thr:g} lies "
+                      f"beyond {al.fault}'s range (up to {top:g}): not predicted")
         else:
             duty = Duty.from_windows(hours[:m], np.abs(points[idx[:m], 0]),
                                      cond.torque_nm[idx[:m]], temp[:m])

@@ -103,7 +103,9 @@ class Job:
         return f"{self.dataset}_gear{self.gear}{'_' + self.detector if self.detector else ''}.json"
 
 
-def _hash(obj) -> str:
+def part_key(obj: object) -> str:
+    """The key of a part: the first 16 hex digits of the SHA-256 of ``obj`` as sorted JSON
+    (what made it: the data set's config hash, the gear, the study)."""
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -127,8 +129,8 @@ def plan_jobs(mc: MonitorExperiment, plans: dict[str, DatasetPlan], device: str 
         not_run[name] = {d: w for d, w in why.items() if w}
         for g in mc.study.gears or [int(x.id) for x in p.config.gears]:
             base = {"dataset": p.config_hash, "gear": g}
-            jobs.append(Job(name, g, None, _hash({**base, "study": common})))
-            jobs += [Job(name, g, d, _hash({**base, "study": common, "detector": d,
+            jobs.append(Job(name, g, None, part_key({**base, "study": common})))
+            jobs += [Job(name, g, d, part_key({**base, "study": common, "detector": d,
                                              "detector_hours": mc.study.detector_hours,
                                              **({"device": device}
                                                 if DETECTORS[d].uses_device else {})}))
@@ -231,8 +233,8 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
             "false_alarms": int(fa[fa.detector == "monitor"].false_alarms.sum())}
 
 
-def _finished(out: Path, jobs: list[Job]) -> tuple[list[dict], list[Job]]:
-    """Parts already done (their key matches) and the jobs left."""
+def finished_parts(out: Path, jobs: list[Job]) -> tuple[list[dict], list[Job]]:
+    """Parts already done in ``out/parts`` (their key matches) and the jobs left."""
     done, todo = [], []
     for j in jobs:
         f = out / "parts" / j.file
@@ -249,7 +251,7 @@ def _finished(out: Path, jobs: list[Job]) -> tuple[list[dict], list[Job]]:
 
 def save_part(out: Path, job: Job, part: dict) -> None:
     """Write a finished part to ``parts/`` in its keys' order (not sorted), so that the
-    tables of a resumed run, read back by :func:`_finished`, keep a fresh run's columns."""
+    tables of a resumed run, read back by :func:`finished_parts`, keep a fresh run's columns."""
     atomic_write_json(out / "parts" / job.file, part, sort_keys=False)
 
 
@@ -257,7 +259,7 @@ def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path,
               device: str) -> list[dict]:
     """Each part, resumed from ``parts/`` when its key matches; one progress line over
     all of them (done, left, time left) and a log line per finished part."""
-    done, todo = _finished(out, jobs)
+    done, todo = finished_parts(out, jobs)
     if done:
         log.info("resuming: %d of %d part(s) already done", len(done), len(jobs))
     bar = tqdm(total=len(todo), desc="monitor evaluation", unit="part",
@@ -327,4 +329,5 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
                 run.log_artifact(out / f)
 
 
-__all__ = ["Job", "MonitorExperiment", "plan_jobs", "run_monitor_evaluation"]
+__all__ = ["Job", "MonitorExperiment", "finished_parts", "part_key", "plan_jobs",
+           "run_monitor_evaluation", "save_part"]

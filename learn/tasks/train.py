@@ -20,6 +20,7 @@ TASKS: dict[str, str] = {
     "paper_study": "learn.tasks.paper.run_paper_study_task",
     "transfer": "learn.tasks.transfer.run_transfer",
     "monitor": "learn.tasks.monitor_evaluation.run_monitor_evaluation",
+    "prognosis": "learn.tasks.prognosis_evaluation.run_prognosis_evaluation",
 }
 
 

@@ -471,7 +471,7 @@ def test_every_event_kind_is_printed_in_one_line():
 
 def test_a_resumed_evaluations_tables_keep_a_fresh_runs_columns(tmp_path):
     from learn.monitor.evaluate import to_frames
-    from learn.tasks.monitor_evaluation import Job, _finished, save_part
+    from learn.tasks.monitor_evaluation import Job, finished_parts, save_part
 
     job = Job("tiny", 3, None, "k1")
     part = {"key": "k1", "dataset": "tiny", "held_out_gear": 3,
@@ -480,7 +480,7 @@ def test_a_resumed_evaluations_tables_keep_a_fresh_runs_columns(tmp_path):
             "curve": [{"design_hours": 1000.0, "delay_h": 1.0, "afar": 0.0}]}
     (tmp_path / "parts").mkdir()
     save_part(tmp_path, job, part)
-    (resumed,), todo = _finished(tmp_path, [job])
+    (resumed,), todo = finished_parts(tmp_path, [job])
     assert todo == []
     for fresh, back in zip(to_frames([part]), to_frames([resumed]), strict=True):
         assert list(back.columns) == list(fresh.columns)

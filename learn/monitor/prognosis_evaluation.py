@@ -1,0 +1,487 @@
+"""Evaluation of the prognosis (:mod:`.prognosis`) on lives that run to failure,
+leave-one-gear-out (``swgsim-train experiment=prognosis``, :mod:`learn.tasks.prognosis_evaluation`).
+
+For a data set (a checked :class:`~swgsim.datasets.plan.DatasetPlan`) and a held-out gear,
+the diagnosis model is trained on the other gears (:func:`learn.monitor.training.train_model`,
+the monitor evaluation's training). Each seed gives the held-out gear one life per fault that
+can grow (a fault of :data:`swgsim.datasets.growth.LAWS` the data set has a class for), its
+severity grown from ``initial`` at an onset drawn from the seed by its law to the failure
+severity (:class:`GrowingFault`), its acting load changed by a payload factor some hours after
+the onset in some lives (``payloads``). Each life runs through the monitor as a stream does
+(:func:`learn.monitor.stream.monitor_stream` on its windows up to the true failure, the
+prognosis option on: :func:`learn.monitor.stream_prognosis.stream_prognoses`); every prognosis
+is kept with the life's true failure hour (its own growth: the exact law's, the schedule's
+``failure_h``), and the two baselines (:mod:`.prognosis_baselines`) predict on the same tracks
+at the same hours.
+
+The intervals are calibrated by split conformal prediction
+(:func:`.prognosis_calibration.conformal_interval_scale`) on lives of the *training* gears
+(``calibration_seeds``, disjoint from ``seeds``), one prognosis per life at a fraction of its
+way from alarm to failure drawn from the seed, per method; the held-out gear is never seen
+before it is scored.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swgsim.base.typed import check_range
+from swgsim.datasets.conditions import ConditionsConfig
+from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
+from swgsim.datasets.life import LifeSimulator, life_dataset
+from swgsim.datasets.plan import DatasetPlan
+from swgsim.datasets.records import RecordBank, record_bank
+from swgsim.datasets.schedule import FaultOnset, LifeConfig, check_life
+
+from .model import DiagnosisModel
+from .prognosis import Prognosis, PrognosisConfig, Track
+from .prognosis_baselines import predict_linear, predict_wiener
+from .prognosis_calibration import conformal_interval_scale
+from .stream import monitor_stream
+from .stream_prognosis import StreamPrognosis
+from .study import MonitorStudyConfig, check_study
+from .training import train_model
+
+log = logging.getLogger(__name__)
+
+#: The predictors compared: the growth law (the stream's) and the two baselines.
+METHODS = ("growth", "linear", "wiener")
+#: Largest interval scale a calibration may set (``PrognosisConfig.interval_scale``'s
+#: range); a calibration that asks for more (too few lives for its coverage) is capped here
+#: and says so in the part.
+MAX_SCALE = 20.0
+
+
+@dataclass
+class GrowingFault:
+    """A fault's lives to failure in the evaluation.
+
+    Attributes
+    ----------
+    initial : float
+        Severity at the onset [-] (> 0 for a crack: Paris' law grows none from 0).
+    to_failure : RunToFailure
+        The law's constants and the failure severity; the prognosis takes the same
+        constants (its prior on the gear's scale is their scatter).
+    """
+
+    initial: float = 0.0
+    to_failure: RunToFailure = field(default_factory=RunToFailure)
+
+
+def _growing() -> dict[str, GrowingFault]:
+    """The default lives [choice]: each fault fails at the largest severity the bench and
+    tiny grids train (paper Table V: root crack 0.9, tip crack 1.0, eccentric WG 0.1), so
+    that the diagnosis model's severity regressor spans the way to failure; the cracks start
+    at 0.25, half the bench's mildest trained crack; the constants make the lives fail
+    within hours at the bench's duty (the evaluation's time: the monitor diagnoses every
+    alarm it raises again while a fault grows, about 0.85 s each, some 7 per hour of a
+    growing fault on bench gear 2): Δσ 2 MPa per N m (3.3 times the growth module's
+    default) and a wear coefficient 1e-12 m/(N m rev) (50 times it) fail the bench's and
+    robot_joint's lives 1.7-8.2 h after the onset, medians 3.3, 4.4 and 3.9 h for root
+    crack, tip crack and eccentric WG (21 lives each: three gears, the seeds and
+    calibration seeds; measured on the lives' schedules)."""
+    return {"root_tooth_crack": GrowingFault(0.25, RunToFailure(failure=0.9,
+                                                                stress_mpa_per_nm=2.0)),
+            "tip_tooth_crack": GrowingFault(0.25, RunToFailure(failure=1.0,
+                                                               stress_mpa_per_nm=2.0)),
+            "eccentric_wg": GrowingFault(0.0, RunToFailure(failure=0.1,
+                                                           wear_coeff_m_per_nm_rev=1e-12)),
+            "wear": GrowingFault(0.0, RunToFailure(failure=0.8, wear_coeff_m_per_nm_rev=1e-12))}
+
+
+def _training() -> MonitorStudyConfig:
+    """The diagnosis model's training design: the monitor evaluation's, its classes the
+    faults that grow [choice: a model that names healthy and the growing faults; the
+    monitor evaluation's other classes are its own study], no nuisances, no detectors."""
+    return MonitorStudyConfig(faults=["eccentric_wg", "root_tooth_crack", "tip_tooth_crack"],
+                              nuisances={}, detectors=[])
+
+
+@dataclass
+class PrognosisStudyConfig:
+    """The prognosis evaluation's design, declared before it runs.
+
+    Attributes
+    ----------
+    train : MonitorStudyConfig
+        The diagnosis model's training and the monitor's settings (its ``commissioning_h``,
+        ``interval_min``, ``rule``, ``normal``; ``faults``: the classes it learns).
+    seeds : list of int
+        Life seeds of the held-out gear.
+    calibration_seeds : list of int
+        Life seeds of the training gears' calibration lives, disjoint from ``seeds``.
+    gears : list of int
+        Held-out gears; empty: every gear of the data set.
+    faults : dict of str to GrowingFault
+        The faults that grow and their lives; those the data set has no class for (or the
+        model no severity regressor) are left out and reported.
+    onset_window_h : list of float
+        The onset is drawn uniformly this many hours after commissioning, [lo, hi].
+    max_life_h : float
+        Hours after the onset a life is planned for, in (0, 10^4] [h]; a life that has not
+        failed by then is cut there (reported, not scored).
+    payloads : list of float
+        Payload factor of each seed's lives (seed i: ``payloads[i % len]``), each in
+        (0, 2]; 1: no change [-].
+    payload_after_h : float
+        Hours after the onset the payload changes, > 0 [h] (1.5 h [choice]: before the
+        shortest default life fails).
+    prognosis : StreamPrognosis
+        The stream's prognosis option (``every_h``, ``block_h``, ``min_track_h``,
+        ``min_estimates``, ``seed``; a prognosis every 0.25 h, an estimate per 0.25 h,
+        valid after 0.5 h and 3 estimates [choice: several prognoses in a life of a few
+        hours]); ``enabled``, ``threshold``, ``to_failure`` and ``interval_scale`` are set
+        per life and method.
+    coverage : float
+        The calibrated interval's target coverage, in (0, 1) (0.9: the 5-95 % interval).
+    """
+
+    train: MonitorStudyConfig = field(default_factory=_training)
+    seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
+    calibration_seeds: list[int] = field(default_factory=lambda: [100, 101])
+    gears: list[int] = field(default_factory=list)
+    faults: dict[str, GrowingFault] = field(default_factory=_growing)
+    onset_window_h: list[float] = field(default_factory=lambda: [0.5, 2.0])
+    max_life_h: float = 100.0
+    payloads: list[float] = field(default_factory=lambda: [1.0, 1.1, 0.9])
+    payload_after_h: float = 1.5
+    prognosis: StreamPrognosis = field(default_factory=lambda: StreamPrognosis(
+        every_h=0.25, min_track_h=0.5, min_estimates=3))
+    coverage: float = 0.9
+
+
+def _law(fault: str) -> str | None:
+    return next((g for g, fs in LAWS.items() if fault in fs), None)
+
+
+def check_prognosis_study(sc: PrognosisStudyConfig, key: str = "prognosis.study") -> None:
+    """Refuse a design outside its ranges, in one line naming the key, before any work.
+
+    Parameters
+    ----------
+    sc : PrognosisStudyConfig
+    key : str
+        Full name of ``sc`` for messages.
+
+    Raises
+    ------
+    ValueError
+        A value outside its range (named with the range), seeds shared between the
+        evaluation and the calibration, a fault without a growth law.
+    """
+    check_study(sc.train, f"{key}.train")
+    for name in ("seeds", "calibration_seeds"):
+        seeds = getattr(sc, name)
+        if not seeds:
+            raise ValueError(f"{key}.{name} must list at least one seed")
+        for i, s in enumerate(seeds):
+            check_range(s, 0, 2**32 - 1, f"{key}.{name}[{i}]")
+    both = sorted(set(sc.seeds) & set(sc.calibration_seeds))
+    if both:
+        raise ValueError(f"{key}.calibration_seeds must be disjoint from seeds, both hold {both}")
+    if not sc.faults:
+        raise ValueError(f"{key}.faults must name at least one fault; allowed: "
+                         f"{sorted(f for fs in LAWS.values() for f in fs)}")
+    for fault, gf in sc.faults.items():
+        law = _law(fault)
+        if law is None:
+            raise ValueError(f"{key}.faults.{fault}: no growth law; allowed: "
+                             f"{sorted(f for fs in LAWS.values() for f in fs)}")
+        check_to_failure(gf.to_failure, fault, law, gf.initial, f"{key}.faults.{fault}")
+    if len(sc.onset_window_h) != 2 or not 0 <= sc.onset_window_h[0] <= sc.onset_window_h[1]:
+        raise ValueError(f"{key}.onset_window_h must be [lo, hi] with 0 <= lo <= hi, got "
+                         f"{sc.onset_window_h}")
+    check_range(sc.onset_window_h[1], 0.0, 1e4, f"{key}.onset_window_h[1]", "h")
+    check_range(sc.max_life_h, 0.0, 1e4, f"{key}.max_life_h", "h", lo_open=True)
+    if not sc.payloads:
+        raise ValueError(f"{key}.payloads must list at least one factor (1: no change)")
+    for i, f in enumerate(sc.payloads):
+        check_range(f, 0.0, 2.0, f"{key}.payloads[{i}]", lo_open=True)
+    check_range(sc.payload_after_h, 0.0, sc.max_life_h, f"{key}.payload_after_h", "h",
+                lo_open=True, hi_open=True, why="inside the life after the onset")
+    try:
+        dataclasses.replace(sc.prognosis, enabled=True).check()
+    except ValueError as e:
+        raise ValueError(f"{key}.{e}") from None
+    check_range(sc.coverage, 0.0, 1.0, f"{key}.coverage", lo_open=True, hi_open=True)
+
+
+def evaluated_faults(plan: DatasetPlan, sc: PrognosisStudyConfig) -> tuple[list[str], dict]:
+    """The faults of ``sc.faults`` a data set's lives can evaluate (a class of the data set
+    and of the model's training), and why each other is not."""
+    ok, why = [], {}
+    for f in sc.faults:
+        if f not in plan.config.variants:
+            why[f] = "the data set has no class for it (no severity estimate)"
+        elif sc.train.faults and f not in sc.train.faults:
+            why[f] = "not among the diagnosis model's classes (prognosis.study.train.faults)"
+        else:
+            ok.append(f)
+    return ok, why
+
+
+def life_of(plan: DatasetPlan, bank: RecordBank, g: int, sc: PrognosisStudyConfig,
+            fault: str, seed: int, i_seed: int) -> LifeSimulator:
+    """The life to failure of gear ``g`` for a fault and seed (module docstring): onset drawn
+    from the seed (the same for every fault of it), payload ``payloads[i_seed % len]`` from
+    ``payload_after_h`` after the onset."""
+    tr = sc.train
+    onset = tr.commissioning_h + np.random.default_rng([seed, 47]).uniform(*sc.onset_window_h)
+    factor = float(sc.payloads[i_seed % len(sc.payloads)])
+    cond = None if factor == 1.0 else ConditionsConfig(
+        thermal=None, viscosity=False, bridge_drift=None, temperature_sensor=None,
+        payload=[[float(onset + sc.payload_after_h), factor]])
+    gf = sc.faults[fault]
+    life = LifeConfig(hours=float(onset + sc.max_life_h), interval_min=tr.interval_min,
+                      commissioning_h=tr.commissioning_h, life_seed=int(seed), conditions=cond,
+                      fault=FaultOnset(fault, float(onset), gf.initial, growth=_law(fault),
+                                       to_failure=gf.to_failure))
+    check_life(life, "prognosis.study.life")
+    return LifeSimulator(plan, g, life, bank)
+
+
+def _as_prognosis(ev: dict, method: str) -> Prognosis:
+    """A stream event (:attr:`~.stream_prognosis.StreamPrognoses.events`) as a Prognosis
+    made at its hour (remaining hours from it), for the conformal calibration."""
+    nan = float("nan")
+    q = {k: nan if ev[k] is None else ev[k] for k in ("remaining_h", "remaining_h_q05",
+                                                      "remaining_h_q95")}
+    return Prognosis(ev["hour"], ev["fault"], method, bool(ev["valid"]), ev["reason"] or "",
+                     nan if ev["severity"] is None else ev["severity"], ev["threshold"],
+                     q["remaining_h"], q["remaining_h_q05"], q["remaining_h_q95"])
+
+
+def baseline_events(track: dict, events: list[dict], method: str, cfg: PrognosisConfig,
+                    seed: int) -> list[dict]:
+    """A baseline's prognoses on a stream's track, at the hours of its events and from the
+    estimates up to each, as :func:`~.stream_prognosis.stream_prognoses` makes the growth
+    law's (remaining hours from the event's hour; not valid where the last estimate has
+    reached the threshold).
+
+    Parameters
+    ----------
+    track : dict
+        One of :attr:`~.stream_prognosis.StreamPrognoses.tracks`.
+    events : list of dict
+        Its events (:meth:`~.stream_prognosis.StreamPrognoses.of_track`).
+    method : {"linear", "wiener"}
+    cfg : PrognosisConfig
+        Its ``interval_scale`` the method's.
+    seed : int
+
+    Returns
+    -------
+    list of dict
+        As ``events``: ``hour``, ``fault``, ``alarm_h``, ``valid``, ``reason``,
+        ``severity``, ``threshold``, ``remaining_h``, ``remaining_h_q05``,
+        ``remaining_h_q95`` [h].
+    """
+    predict = {"linear": predict_linear, "wiener": predict_wiener}[method]
+    h = np.asarray(track["hours"], float)
+    out = []
+    for ev in events:
+        n = int(np.searchsorted(h, ev["hour"], side="right"))
+        new = {k: ev[k] for k in ("hour", "fault", "alarm_h", "threshold")}
+        new.update(valid=False, severity=None, remaining_h=None, remaining_h_q05=None,
+                   remaining_h_q95=None, reason=ev["reason"])
+        if n > 0 and track["severity"][n - 1] < ev["threshold"]:
+            tk = Track(h[:n], *(np.asarray(track[k][:n], float) for k in ("severity", "lo",
+                                                                            "hi")))
+            p = predict(tk, track["fault"], track["alarm_h"], cfg, threshold=ev["threshold"],
+                        seed=seed)
+            new.update(valid=p.valid, reason=p.reason, severity=p.severity_now)
+            if p.valid:
+                for q, f in (("", p.failure_hour_median), ("_q05", p.failure_hour_q05),
+                             ("_q95", p.failure_hour_q95)):
+                    new[f"remaining_h{q}"] = max(f - ev["hour"], 0.0) if np.isfinite(f) \
+                        else None
+        out.append(new)
+    return out
+
+
+def _track_of(res, fault: str, onset_h: float) -> dict | None:
+    """The track of the first alarm after the onset that names the life's fault."""
+    tracks = [] if res.prognosis is None else res.prognosis.tracks
+    return next((t for t in tracks if t["fault"] == fault and t["alarm_h"] >= onset_h), None)
+
+
+def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig,
+             scales: dict[str, float], seed: int) -> tuple[dict, dict[str, list[dict]]]:
+    """One life to failure through the monitor with the prognosis on, and the baselines on
+    its track.
+
+    Parameters
+    ----------
+    sim : LifeSimulator
+        A life of :func:`life_of`.
+    model : DiagnosisModel
+        Trained without the life's gear.
+    sc : PrognosisStudyConfig
+    scales : dict of str to float
+        Interval scale of each of :data:`METHODS` [-].
+    seed : int
+        The life's seed (the monitor's and the prognoses' draws).
+
+    Returns
+    -------
+    life : dict
+        ``fault``, ``onset_h``, ``failure_h`` (NaN: not failed within ``max_life_h``),
+        ``payload``, ``first_alarm_h``, ``first_alarm_fault`` (the first gear-fault alarm
+        after the onset), ``alarm_h`` (that of the followed alarm, naming the life's
+        fault; NaN: none) [h].
+    events : dict of str to list of dict
+        Per method, the prognoses after the followed alarm up to the failure (empty
+        without one).
+    """
+    t0 = time.perf_counter()
+    fo = sim.life.fault
+    fail_h = float(sim.schedule.failure_h)
+    cond = sim.life.conditions
+    life = {"fault": fo.fault, "onset_h": fo.onset_h, "failure_h": fail_h,
+            "payload": cond.payload[0][1] if cond is not None else 1.0,
+            "first_alarm_h": np.nan, "first_alarm_fault": "", "alarm_h": np.nan}
+    if not np.isfinite(fail_h):
+        return life, {}
+    n_end = int(np.searchsorted(sim.schedule.hour, fail_h, side="left"))
+    opt = dataclasses.replace(sc.prognosis, enabled=True, threshold=None,
+                              to_failure=sc.faults[fo.fault].to_failure,
+                              interval_scale=scales["growth"], seed=int(seed))
+    res = monitor_stream(life_dataset(sim, 0, n_end), model, sc.train.rule, seed=int(seed),
+                         normal=sc.train.normal, prognosis=opt, source="prognosis life")
+    first = next((a for a in res.alarms if a.kind == "gear_fault" and a.hour >= fo.onset_h),
+                 None)
+    if first is not None:
+        life.update(first_alarm_h=first.hour, first_alarm_fault=first.fault)
+    track = _track_of(res, fo.fault, fo.onset_h)
+    if track is None:
+        return life, {}
+    life["alarm_h"] = track["alarm_h"]
+    events = {"growth": res.prognosis.of_track(track)}
+    for m in METHODS[1:]:
+        events[m] = baseline_events(track, events["growth"], m, dataclasses.replace(
+            opt.config, interval_scale=scales[m]), int(seed))
+    log.info("life of gear %d, seed %d, %s: %d windows, %.1f s", sim.gear_id, seed, fo.fault,
+             n_end, time.perf_counter() - t0)
+    return life, events
+
+
+def _rows(key: dict, life: dict, events: dict[str, list[dict]], scales: dict) -> list[dict]:
+    """One row per prognosis before the failure and method (remaining hours from its
+    hour; an open interval's end inf)."""
+    rows = []
+    for m, evs in events.items():
+        for e in evs:
+            if e["hour"] >= life["failure_h"]:
+                continue
+            inf = np.inf if e["valid"] else np.nan
+            rows.append({**key, "fault": life["fault"], "payload": life["payload"],
+                         "method": m, "interval_scale": scales[m], "alarm_h": life["alarm_h"],
+                         "hour": e["hour"], "failure_h": life["failure_h"],
+                         "true_remaining_h": life["failure_h"] - e["hour"],
+                         "valid": bool(e["valid"]),
+                         **{k: inf if e[k] is None else e[k]
+                            for k in ("remaining_h", "remaining_h_q05", "remaining_h_q95")}})
+    return rows
+
+
+def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
+              model: DiagnosisModel, sc: PrognosisStudyConfig, faults: list[str]
+              ) -> tuple[dict[str, float], list[dict]]:
+    """The interval scale of each method by split conformal prediction on lives of the
+    training ``gears`` (``calibration_seeds``; module docstring).
+
+    Each life gives one prognosis per method: of its valid ones with finite, positive
+    quantiles, the one at a fraction λ of them, λ uniform in [0, 1] from the life's seed
+    and gear [choice: every horizon calibrated]; a life without one gives none.
+
+    Returns
+    -------
+    scales : dict of str to float
+        Per method, in (0, :data:`MAX_SCALE`] (capped; 1 without a scored life) [-].
+    info : list of dict
+        Per method: ``method``, ``lives`` (scored), ``scale`` (uncapped, inf where too few
+        lives for the coverage), ``scale_used``.
+    """
+    ones = dict.fromkeys(METHODS, 1.0)
+    sims = [(g, s, life_of(plan, banks[g], g, sc, f, s, i))
+            for g in gears for i, s in enumerate(sc.calibration_seeds) for f in faults]
+    picked: dict[str, list] = {m: [] for m in METHODS}
+    for g, s, sim in sims:
+        life, events = run_life(sim, model, sc, ones, s)
+        lam = np.random.default_rng([s, g, 48]).uniform()
+        for m, evs in events.items():
+            ok = [_as_prognosis(e, m) for e in evs if e["valid"] and e["hour"] < life["failure_h"]]
+            ok = [p for p in ok if 0 < p.remaining_h_q05 and np.isfinite(p.remaining_h_q95)]
+            if ok:
+                picked[m].append((ok[int(round(lam * (len(ok) - 1)))], life["failure_h"]))
+    scales, info = {}, []
+    for m in METHODS:
+        raw = conformal_interval_scale([p for p, _ in picked[m]],
+                                       np.array([f for _, f in picked[m]]),
+                                       sc.coverage) if picked[m] else 1.0
+        scales[m] = float(min(raw, MAX_SCALE))
+        info.append({"method": m, "lives": len(picked[m]), "scale": raw,
+                     "scale_used": scales[m]})
+        if raw > MAX_SCALE:
+            log.warning("calibration of %s: scale %s capped at %g (%d lives)", m, raw,
+                        MAX_SCALE, len(picked[m]))
+    return scales, info
+
+
+def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStudyConfig
+                       ) -> dict:
+    """Train on the other gears, calibrate on their lives, and evaluate the prognosis on
+    every life to failure of held-out gear ``g`` (module docstring).
+
+    Parameters
+    ----------
+    plan : DatasetPlan
+    dataset : str
+        Its name in the tables.
+    g : int
+        The held-out gear.
+    sc : PrognosisStudyConfig
+        Checked (:func:`check_prognosis_study`).
+
+    Returns
+    -------
+    dict
+        ``rows`` (one per prognosis and method, :func:`_rows`), ``lives`` (one per life,
+        :func:`run_life`'s), ``calibration`` (:func:`calibrate`'s info), ``not_run`` (fault
+        -> why), ``train_s``, ``calibrate_s``, ``evaluate_s`` [s], ``dataset``,
+        ``held_out_gear``.
+    """
+    t0 = time.perf_counter()
+    gears = [int(x.id) for x in plan.config.gears]
+    banks = {x: record_bank(plan, x) for x in gears}
+    faults, not_run = evaluated_faults(plan, sc)
+    train = dataclasses.replace(sc.train, faults=sc.train.faults or faults)
+    model = train_model(plan, banks, [x for x in gears if x != g], train)
+    for f in [f for f in faults if f not in model.severity]:
+        not_run[f] = "the diagnosis model has no severity regressor for it"
+    faults = [f for f in faults if f in model.severity]
+    t1 = time.perf_counter()
+    scales, info = calibrate(plan, banks, [x for x in gears if x != g], model, sc, faults)
+    t2 = time.perf_counter()
+    sims = [(s, life_of(plan, banks[g], g, sc, f, s, i))  # every record wanted at once
+            for i, s in enumerate(sc.seeds) for f in faults]
+    rows, lives = [], []
+    for s, sim in sims:
+        life, events = run_life(sim, model, sc, scales, s)
+        key = {"dataset": dataset, "held_out_gear": g, "seed": s}
+        lives.append({**key, **life})
+        rows += _rows(key, life, events, scales)
+    return {"rows": rows, "lives": lives, "calibration": info, "not_run": not_run,
+            "train_s": t1 - t0, "calibrate_s": t2 - t1, "evaluate_s": time.perf_counter() - t2,
+            "dataset": dataset, "held_out_gear": g}
+
+
+__all__ = ["METHODS", "GrowingFault", "PrognosisStudyConfig", "baseline_events", "calibrate",
+           "check_prognosis_study", "evaluated_faults", "life_of", "run_life",
+           "run_prognosis_part"]

@@ -1,0 +1,238 @@
+"""Task ``prognosis`` (``swgsim-train experiment=prognosis``): the prognosis's
+leave-one-gear-out evaluation on lives that run to failure
+(:mod:`learn.monitor.prognosis_evaluation`), its tables, targets and figure
+(:mod:`learn.reports.prognosis_report`) and an MLflow run.
+
+Files in ``report_dir``: ``results.csv`` (one row per prognosis and method), ``lives.csv``
+(one row per life), ``calibration.csv`` (the conformal scale per held-out gear and method),
+``scores.csv`` (each life's scores per method), ``table.md``, ``prognosis.png``,
+``timing.json`` and ``parts/``: one finished part per (data set, held-out gear) with the
+hash of the config that made it (:func:`learn.tasks.monitor_evaluation.part_key`), so that a
+rerun of the same config resumes from them (the monitor evaluation's part machinery).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tqdm.auto import tqdm
+
+from learn.monitor.prognosis_evaluation import (
+    PrognosisStudyConfig,
+    check_prognosis_study,
+    run_prognosis_part,
+)
+from learn.reports.prognosis_report import (
+    bucket_table,
+    figure,
+    life_scores,
+    summary_table,
+    targets,
+    write_table,
+)
+from learn.tasks.config import plain, typed_app
+from learn.tasks.monitor_evaluation import Job, finished_parts, part_key, save_part
+from learn.tracking import log_run
+from learn.tracking.store import check_tracking
+from swgsim.base.lazy import lazy_module
+from swgsim.base.typed import allowed
+from swgsim.datasets.config import DatasetConfig
+from swgsim.datasets.plan import DatasetPlan, plan
+from swgsim.files import ownership
+from swgsim.files.ownership import atomic_write_json, write_owned
+
+pd = lazy_module("pandas")
+joblib = lazy_module("joblib")
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class PrognosisExperiment:
+    """``prognosis`` group of ``swgsim-train``.
+
+    Attributes
+    ----------
+    run_on : list of str
+        Keys of ``datasets`` to evaluate, in order.
+    datasets : dict of str to DatasetConfig
+        Data-set presets whose gears live (chain, acquisition, gears, Table V grid); their
+        own ``life`` is not used (the study makes the lives).
+    study : PrognosisStudyConfig
+        The evaluation's design.
+    report_dir : str
+    n_jobs : int
+        Worker processes, one part (data set, held-out gear) each.
+    progress : bool
+    """
+
+    run_on: list[str] = field(default_factory=lambda: ["bench", "robot_joint"])
+    datasets: dict[str, DatasetConfig] = field(default_factory=dict)
+    study: PrognosisStudyConfig = field(default_factory=PrognosisStudyConfig)
+    report_dir: str = "reports/prognosis"
+    n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
+    progress: bool = True
+
+
+def plan_parts(pc: PrognosisExperiment, plans: dict[str, DatasetPlan]) -> list[Job]:
+    """One part per data set and held-out gear (``study.gears``, default all), its key the
+    hash of the data set's config, the gear and the study."""
+    study = dataclasses.asdict(pc.study)
+    return [Job(name, g, None, part_key({"dataset": p.config_hash, "gear": g,
+                                         "study": study, "task": "prognosis"}))
+            for name, p in plans.items()
+            for g in pc.study.gears or [int(x.id) for x in p.config.gears]]
+
+
+def run_prognosis_evaluation(cfg) -> dict:
+    """Run the evaluation (module docstring); return its summary.
+
+    Raises
+    ------
+    ValueError
+        A bad ``prognosis`` key or data set, a held-out gear a data set lacks, an
+        unwritable MLflow store, or a ``report_dir`` holding a file this project cannot
+        show it wrote (named); before any work.
+    """
+    app = typed_app(cfg)
+    pc: PrognosisExperiment = app.prognosis
+    check_prognosis_study(pc.study, "prognosis.study")
+    unknown = [d for d in pc.run_on if d not in pc.datasets]
+    if unknown or not pc.run_on:
+        raise ValueError(f"prognosis.run_on: {unknown or 'empty'}; allowed: keys of "
+                         f"prognosis.datasets {sorted(pc.datasets)}")
+    if pc.n_jobs < 1:
+        raise ValueError(f"prognosis.n_jobs must be >= 1, got {pc.n_jobs}")
+    plans = {}
+    for name in pc.run_on:  # every config checked before any work
+        try:
+            plans[name] = plan(pc.datasets[name])
+        except ValueError as e:
+            raise ValueError(f"prognosis.datasets.{name}: {e}") from None
+        have = [int(x.id) for x in plans[name].config.gears]
+        bad = sorted(set(pc.study.gears) - set(have))
+        if bad:
+            raise ValueError(f"prognosis.study.gears: {bad} not in prognosis.datasets.{name}; "
+                             f"allowed: {have}")
+    if app.logger is not None:
+        check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
+    out = Path(pc.report_dir)
+    ownership.check(out, "prognosis.report_dir", app="prognosis")
+    with ownership.claim(out, "prognosis", "prognosis.report_dir", strict=True) as claim:
+        return _evaluate(app, pc, plans, out, claim)
+
+
+def _job(plan_: DatasetPlan, job: Job, study: PrognosisStudyConfig, out: str) -> tuple:
+    """One part in a worker."""
+    ownership.join(out, "prognosis")
+    part = run_prognosis_part(plan_, job.dataset, job.gear, study)
+    part["key"] = job.key
+    return json.loads(json.dumps(part, default=float)), job
+
+
+def _run_parts(plans: dict, jobs: list[Job], pc: PrognosisExperiment, out: Path
+               ) -> tuple[list[dict], int]:
+    """Each part, resumed from ``parts/`` when its key matches; with the number resumed."""
+    done, todo = finished_parts(out, jobs)
+    resumed = len(done)
+    if done:
+        log.info("resuming: %d of %d part(s) already done", len(done), len(jobs))
+    bar = tqdm(total=len(todo), desc="prognosis evaluation", unit="part",
+               disable=not pc.progress)
+    par = joblib.Parallel(n_jobs=min(pc.n_jobs, max(1, len(todo))),
+                          return_as="generator_unordered")
+    for part, job in par(joblib.delayed(_job)(plans[j.dataset], j, pc.study, str(out))
+                         for j in todo):
+        save_part(out, job, part)
+        done.append(part)
+        bar.update()
+    bar.close()
+    order = {(j.dataset, j.gear): i for i, j in enumerate(jobs)}
+    return sorted(done, key=lambda p: order[(p["dataset"], p["held_out_gear"])]), resumed
+
+
+def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
+    """Results, lives and calibration tables of the parts."""
+    rows = pd.DataFrame([r for p in parts for r in p["rows"]])
+    lives = pd.DataFrame([r for p in parts for r in p["lives"]])
+    cal = pd.DataFrame([{"dataset": p["dataset"], "held_out_gear": p["held_out_gear"], **c}
+                        for p in parts for c in p["calibration"]])
+    return rows, lives, cal
+
+
+def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> dict:
+    """The evaluation into the claimed ``out`` (every file it writes recorded)."""
+    (out / "parts").mkdir(parents=True, exist_ok=True)
+    jobs = plan_parts(pc, plans)
+    t0 = time.perf_counter()
+    parts, resumed = _run_parts(plans, jobs, pc, out)
+    wall = time.perf_counter() - t0
+    rows, lives, cal = _frames(parts)
+    if rows.empty:
+        raise ValueError("prognosis: no life was followed to a prognosis (no alarm named "
+                         "a growing fault); nothing to score")
+    rows["valid"] = rows["valid"].astype(bool)
+    scores = life_scores(rows, lives)
+    buckets, summary = bucket_table(rows), summary_table(scores)
+    tgt = targets(buckets, summary)
+    for name, df in (("results.csv", rows), ("lives.csv", lives), ("calibration.csv", cal),
+                     ("scores.csv", scores)):
+        write_owned(out / name, lambda tmp, df=df: df.to_csv(tmp, index=False))
+    not_run = {f"{p['dataset']}: {f}": w for p in parts for f, w in p["not_run"].items()}
+    atomic_write_json(out / "timing.json", {"wall_s": wall, "parts": [
+        {k: p.get(k) for k in ("dataset", "held_out_gear", "train_s", "calibrate_s",
+                               "evaluate_s")} for p in parts]})
+    sc = pc.study
+    header = (f"# Prognosis: leave-one-gear-out over lives to failure\n\n"
+              f"Data sets {', '.join(pc.run_on)}; seeds {sc.seeds}; calibration seeds "
+              f"{sc.calibration_seeds} on the training gears; payload factors "
+              f"{sc.payloads} by seed, from {sc.payload_after_h:g} h after the onset; a "
+              f"prognosis every {sc.prognosis.every_h:g} h after the alarm. Wall time "
+              f"{wall / 60:.1f} min"
+              + (f" ({resumed} of {len(jobs)} parts resumed from parts/, not timed here)"
+                 if resumed else "") + ".\n"
+              + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
+    write_table(out / "table.md", header, tgt, summary, buckets, lives, cal)
+    fig = figure(buckets, rows, out / "prognosis.png")
+    claim.record([out / f for f in ("results.csv", "lives.csv", "calibration.csv",
+                                    "scores.csv", "table.md")] + [fig])
+    if pc.progress:
+        print("\ntargets (prognosis, the growth law; held-out gears):")
+        for r in tgt.itertuples(index=False):
+            print(f"  {r.dataset:<12s} {r.fault:<17s} {r.what:<62s} {r.target:>9s} "
+                  f"{r.measured:>7s} {r.result}")
+        print(f"report: {out}/table.md; wall time {wall / 60:.1f} min")
+    if app.logger is not None:
+        _log(app, summary, tgt, out, wall, plans)
+    return {"task": "prognosis", "report_dir": str(out), "wall_s": wall,
+            "lives": int(len(lives)), "prognoses": int(rows.valid.sum()) if len(rows) else 0,
+            "targets_passed": int((tgt.result == "pass").sum()),
+            "targets_judged": int(tgt.result.isin(["pass", "fail"]).sum())}
+
+
+def _log(app, summary: pd.DataFrame, tgt: pd.DataFrame, out: Path, wall: float,
+         plans: dict[str, DatasetPlan]) -> None:
+    """The evaluation's MLflow run (:func:`learn.tracking.log_run`)."""
+    pc: PrognosisExperiment = app.prognosis
+    gr = summary[summary.method == "growth"]
+    params = {"run_on": ",".join(pc.run_on), "seeds": str(pc.study.seeds),
+              "calibration_seeds": str(pc.study.calibration_seeds),
+              **{f"config_hash.{n}": p.config_hash for n, p in plans.items()}}
+    with log_run(app.logger.experiment, app.logger.run_name,
+                 tracking_uri=app.logger.tracking_uri, params=params,
+                 config=plain(app)) as run:
+        run.log_metrics({"ra_half_life_median": float(gr.ra_median.median()),
+                         "alpha_lambda_share": float(gr.alpha_lambda_share.mean()),
+                         "targets_passed": float((tgt.result == "pass").sum()),
+                         "wall_s": wall})
+        for f in ("results.csv", "lives.csv", "scores.csv", "table.md", "prognosis.png"):
+            if (out / f).is_file():
+                run.log_artifact(out / f)
+
+
+__all__ = ["PrognosisExperiment", "plan_parts", "run_prognosis_evaluation"]

@@ -1,0 +1,157 @@
+"""The prognosis's evaluation (swgsim-train experiment=prognosis,
+learn/tasks/prognosis_evaluation.py): a tiny part end to end through the task, its files
+and columns, the resume from parts/, and bad input refused in one line before any work."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from bad_input import message
+
+#: The tiny evaluation: tiny_bench's gear 3 held out, one seed, one fault (an eccentric wave
+#: generator worn by Archard's law to 0.1, the largest severity the tiny grid trains, in
+#: about 3 h: the wear coefficient of tests/learn/test_monitor.py's growing life).
+TINY = ["prognosis.run_on=[tiny]", "+dataset@prognosis.datasets.tiny=tiny_bench",
+        "prognosis.study.seeds=[1]", "prognosis.study.calibration_seeds=[100]",
+        "prognosis.study.gears=[3]", "prognosis.study.train.commissioning_h=4",
+        "prognosis.study.train.healthy_hours=10", "prognosis.study.train.train_healthy_h=2",
+        "prognosis.study.train.train_variants=2", "prognosis.study.train.faults=[eccentric_wg]",
+        "prognosis.study.train.detector_hours=2", "prognosis.study.train.onset_window_h=[0.5,1]",
+        "~prognosis.study.faults.root_tooth_crack", "~prognosis.study.faults.tip_tooth_crack",
+        "~prognosis.study.faults.wear",
+        "prognosis.study.faults.eccentric_wg.to_failure.wear_coeff_m_per_nm_rev=7e-13",
+        "prognosis.study.onset_window_h=[0.5,1]", "prognosis.study.max_life_h=6",
+        "prognosis.study.payload_after_h=1", "prognosis.study.payloads=[1.1]",
+        "prognosis.study.prognosis.min_track_h=0.5", "prognosis.study.prognosis.min_estimates=3",
+        "prognosis.n_jobs=1", "prognosis.progress=false"]
+#: The columns of results.csv: one row per prognosis and method.
+COLUMNS = ["dataset", "held_out_gear", "seed", "fault", "payload", "method", "interval_scale",
+           "alarm_h", "hour", "failure_h", "true_remaining_h", "valid", "remaining_h",
+           "remaining_h_q05", "remaining_h_q95"]
+
+
+def _run(out, *extra):
+    from learn.tasks.train import run_train
+    from swgcli import compose_app
+
+    return run_train(compose_app("train", ["experiment=prognosis", "~logger",
+                                           f"prognosis.report_dir={out}", *TINY, *extra]))
+
+
+@pytest.fixture(scope="module")
+def tiny_prognosis(tmp_path_factory):
+    out = tmp_path_factory.mktemp("prognosis") / "rep"
+    return out, _run(out)
+
+
+def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
+    """One life (gear 3, seed 1, payload 1.1 from 1 h after the onset): its prognoses of
+    the growth law and both baselines at the same hours, before the true failure, against
+    the life's own failure hour; the table with the targets judged from them."""
+    out, summary = tiny_prognosis
+    rows = pd.read_csv(out / "results.csv")
+    assert list(rows.columns) == COLUMNS
+    assert set(rows.method) == {"growth", "linear", "wiener"}
+    hours = {m: r.hour.tolist() for m, r in rows.groupby("method")}
+    assert hours["growth"] == hours["linear"] == hours["wiener"]
+    assert (rows.hour < rows.failure_h).all() and (rows.hour > rows.alarm_h).all()
+    assert np.allclose(rows.true_remaining_h, rows.failure_h - rows.hour)
+    assert (rows.payload == 1.1).all() and rows.fault.eq("eccentric_wg").all()
+    valid = rows[rows.valid & (rows.method == "growth")]
+    assert len(valid) >= 2
+    assert (valid.remaining_h_q05 <= valid.remaining_h).all()
+    assert (valid.remaining_h <= valid.remaining_h_q95).all()
+    lives = pd.read_csv(out / "lives.csv")
+    assert len(lives) == 1 and lives.failure_h.iloc[0] > lives.onset_h.iloc[0]
+    table = (out / "table.md").read_text()
+    assert "## Targets" in table and ("pass" in table or "fail" in table)
+    assert summary["lives"] == 1 and (out / "prognosis.png").stat().st_size > 10_000
+    cal = pd.read_csv(out / "calibration.csv")
+    assert set(cal.method) == {"growth", "linear", "wiener"} and (cal.scale_used > 0).all()
+
+
+def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):
+    """The same config again: the part is read back from parts/, nothing recomputed, the
+    same results."""
+    import learn.tasks.prognosis_evaluation as task
+
+    out, _ = tiny_prognosis
+    before = (out / "results.csv").read_bytes()
+
+    def fail(*args, **kwargs):
+        raise AssertionError("a finished part was computed again")
+
+    monkeypatch.setattr(task, "run_prognosis_part", fail)
+    _run(out)
+    assert (out / "results.csv").read_bytes() == before
+    assert "(1 of 1 parts resumed from parts/" in (out / "table.md").read_text()
+
+
+BAD = {  # case -> (override, the start of the one line)
+    "seeds shared with the calibration": (
+        "prognosis.study.calibration_seeds=[1]", "prognosis.study.calibration_seeds must be "
+        "disjoint from seeds"),
+    "a payload factor of 3": ("prognosis.study.payloads=[3.0]",
+                              "prognosis.study.payloads[0] must lie in (0, 2]"),
+    "a failure below the onset's severity": (
+        "prognosis.study.faults.eccentric_wg.to_failure.failure=0.0",
+        "prognosis.study.faults.eccentric_wg.to_failure.failure must lie in"),
+    "every_h 0": ("prognosis.study.prognosis.every_h=0",
+                  "prognosis.study.prognosis.every_h must lie in (0, 1000]"),
+    "an unknown data set": ("prognosis.run_on=[nope]", "prognosis.run_on: ['nope']"),
+    "a gear the data set lacks": ("prognosis.study.gears=[7]",
+                                  "prognosis.study.gears: [7] not in"),
+    "coverage 1": ("prognosis.study.coverage=1.0", "prognosis.study.coverage must lie in"),
+}
+
+
+@pytest.mark.parametrize("case", BAD)
+def test_bad_input_is_one_line_before_any_work(tmp_path, case):
+    over, start = BAD[case]
+    msg = message(lambda: _run(tmp_path / "rep", over))
+    assert msg.startswith(start), msg
+    assert not (tmp_path / "rep").exists()
+
+
+def test_a_fault_without_a_growth_law_is_refused_naming_it():
+    """(A new key of ``faults`` from the command line is refused by OmegaConf itself.)"""
+    from learn.monitor.prognosis_evaluation import (
+        GrowingFault,
+        PrognosisStudyConfig,
+        check_prognosis_study,
+    )
+
+    sc = PrognosisStudyConfig(faults={"reduced_damping": GrowingFault(0.1)})
+    with pytest.raises(ValueError, match=r"^prognosis.study.faults.reduced_damping: no growth "
+                                         r"law; allowed: \['eccentric_wg'"):
+        check_prognosis_study(sc)
+
+
+def test_an_alarm_naming_a_fault_whose_range_ends_below_the_threshold_is_not_predicted():
+    """A root crack's life fails at 0.9; an alarm that names the eccentric wave generator
+    (range up to 0.5) is followed, each event saying why it is not predicted, instead of
+    the stream failing (stream_prognosis._follow)."""
+    from types import SimpleNamespace
+
+    from learn.monitor.normal import Conditions
+    from learn.monitor.stream_prognosis import StreamPrognosis, stream_prognoses
+
+    n = 120
+    hours = 10.0 + np.arange(n) / 60.0
+
+    class Model:
+        severity = {"eccentric_wg": None}
+
+        def estimate(self, fault, x):
+            return 0.05, 0.03, 0.07
+
+    mon = SimpleNamespace(model=Model(), inputs=lambda f, p, c, fr: f)
+    tr = SimpleNamespace(hour=hours, friction=np.ones(n))
+    alarm = SimpleNamespace(kind="gear_fault", fault="eccentric_wg", index=0, hour=hours[0])
+    cfg = StreamPrognosis(enabled=True, threshold=0.9, min_track_h=0.25, min_estimates=3)
+    out = stream_prognoses(tr, [alarm], mon, np.zeros((n, 3)), np.tile([4000.0, 7.0], (n, 1)),
+                           Conditions(np.full(n, 7.0)), cfg)
+    assert len(out.tracks) == 1 and len(out.events) == 1
+    (ev,) = out.events
+    assert not ev["valid"] and "beyond eccentric_wg's range (up to 0.5)" in ev["reason"]
