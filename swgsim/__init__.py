@@ -7,7 +7,7 @@ calibration loop against measured data is the separate package :mod:`swgcal`). S
 
 Sub-packages, each a floor above the ones it uses (docs/ARCHITECTURE.md):
 
-* :mod:`swgsim.base` - typed configs, lazy exports, moved module paths;
+* :mod:`swgsim.base` - typed configs, lazy exports;
   :mod:`swgsim.files` - atomic writes, digests, ownership stamps, provenance;
 * :mod:`swgsim.gear` - the gear and its physics: dynamics, operating profiles, the
   flexspline truss, gauges, the simulation chain, faults, friction;
@@ -28,7 +28,6 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
-from swgsim.base import moved
 from swgsim.base.lazy import lazy_exports
 
 try:
@@ -53,47 +52,6 @@ _EXPORTS = {
     "DatasetConfig": "datasets.config", "dataset_config": "datasets.config",
     "DatasetPlan": "datasets.plan", "load": "datasets.schema", "DataSetError": "datasets.schema",
 }
-
-#: Module paths before the sub-packages (release 0.1) -> the modules that now hold their
-#: names: they still import, with a DeprecationWarning, until release 0.3.
-MOVED = {
-    "swgsim.acquisition": ["swgsim.sensing.acquisition"],
-    "swgsim.angles": ["swgsim.sensing.angles"],
-    "swgsim.chain": ["swgsim.gear.chain"],
-    "swgsim.config": ["swgsim.datasets.config", "swgsim.base.typed"],
-    "swgsim.data": ["swgsim.datasets.schema", "swgsim.files.atomic", "swgsim.files.digest",
-                    "swgsim.files.ownership"],
-    "swgsim.disturbance": ["swgsim.sensing.disturbance"],
-    "swgsim.dsp": ["swgsim.sensing.dsp"],
-    "swgsim.dynamics": ["swgsim.gear.dynamics"],
-    "swgsim.faults": ["swgsim.gear.faults"],
-    "swgsim.flexspline": ["swgsim.gear.flexspline"],
-    "swgsim.friction": ["swgsim.gear.friction"],
-    "swgsim.friction.effects": ["swgsim.gear.friction.effects"],
-    "swgsim.friction.ripples": ["swgsim.gear.friction.ripples"],
-    "swgsim.friction.signals": ["swgsim.gear.friction.signals"],
-    "swgsim.friction.simulation": ["swgsim.gear.friction.simulation"],
-    "swgsim.generate": ["swgsim.datasets.generate"],
-    "swgsim.influence": ["swgsim.gear.influence"],
-    "swgsim.lazy": ["swgsim.base.lazy"],
-    "swgsim.life": ["swgsim.datasets.life", "swgsim.datasets.records",
-                    "swgsim.datasets.schedule"],
-    "swgsim.life_profile": ["swgsim.datasets.slots", "swgsim.datasets.records"],
-    "swgsim.measurement": ["swgsim.sensing.effects"],
-    "swgsim.modes": ["swgsim.gear.modes"],
-    "swgsim.outdir": ["swgsim.datasets.outdir", "swgsim.files.provenance"],
-    "swgsim.ownership": ["swgsim.files.ownership"],
-    "swgsim.plan": ["swgsim.datasets.plan", "swgsim.datasets.gears"],
-    "swgsim.profile": ["swgsim.gear.profile"],
-    "swgsim.profile_dynamics": ["swgsim.gear.profile_dynamics"],
-    "swgsim.resources": ["swgsim.datasets.resources"],
-    "swgsim.sensor_faults": ["swgsim.sensing.sensor_faults"],
-    "swgsim.sensors": ["swgsim.gear.sensors"],
-    "swgsim.shard": ["swgsim.datasets.grid_shard", "swgsim.datasets.generate",
-                     "swgsim.datasets.profile_shard", "swgsim.datasets.steps"],
-    "swgsim.terms": ["swgsim.gear.terms"],
-}
-moved.install(MOVED, "0.3")
 
 __all__ = ["__version__", *_EXPORTS]
 

@@ -31,7 +31,7 @@ import numpy as np
 
 from swgsim.gear.dynamics import RPM, GearParams
 
-#: Reference temperature of the catalogue and so of :func:`swgsim.dynamics.rt1_size20`
+#: Reference temperature of the catalogue and so of :func:`swgsim.gear.dynamics.rt1_size20`
 #: [°C] (efficiency at 20 °C, docs/PHYSICS.md sec. 2).
 REF_TEMP_C = 20.0
 #: Temperatures the viscosity law accepts [°C] (the issue's range; anchored on 0..40 °C).
@@ -386,12 +386,12 @@ def friction_scale(temp_c, ref_c: float = REF_TEMP_C,
                    exponent: float = FRICTION_EXPONENT) -> np.ndarray:
     """Factor on the load-independent friction at a temperature, (ν(T)/ν(ref))^m [-].
 
-    For b0_nm, b1_nms, b2_nms3, b3_nm of :class:`swgsim.dynamics.GearParams` (churning,
+    For b0_nm, b1_nms, b2_nms3, b3_nm of :class:`swgsim.gear.dynamics.GearParams` (churning,
     the wave generator's bearing, seals); μ, the mesh's load-proportional term, is kept
     [choice: boundary friction taken as independent of temperature]. The no-load running
     torque scales by the factor exactly: ×1.595 at 0 °C, ×0.627 at 40 °C, the issue's ×1.6
     and ×0.63 [unverified: the catalogue curves could not be read]; rated-point efficiency
-    of :func:`swgsim.dynamics.rt1_size20` 70.5 / 77.0 / 81.7 % at 0 / 20 / 40 °C, the
+    of :func:`swgsim.gear.dynamics.rt1_size20` 70.5 / 77.0 / 81.7 % at 0 / 20 / 40 °C, the
     issue's roughly 69 / 77 / 82 % (tests/swgsim/test_thermal.py).
 
     Parameters
@@ -566,7 +566,7 @@ def gear_at_temperature(gear: GearParams, temp_c: float, run_in: float = 1.0) ->
     Parameters
     ----------
     gear : GearParams
-        Nominal gear, run in, at 20 °C (:func:`swgsim.dynamics.rt1_size20`).
+        Nominal gear, run in, at 20 °C (:func:`swgsim.gear.dynamics.rt1_size20`).
     temp_c, run_in : float
         Joint temperature, in [−40, 150] [°C]; run-in multiplier, > 0
         (:func:`run_in_factor`) [-].

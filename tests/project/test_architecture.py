@@ -1,7 +1,6 @@
 """The layout's rules, held by a test (docs/ARCHITECTURE.md, "Floors"): no import cycle
 anywhere in the project (imports inside functions included), every package's declared
-floors respected, no module over 700 lines, no function over 100 lines, and nothing of the
-project importing a module path that moved."""
+floors respected, no module over 700 lines, no function over 100 lines."""
 
 from __future__ import annotations
 
@@ -110,32 +109,6 @@ def test_no_function_over_100_lines():
                 if size > MAX_FUNCTION_LINES and key not in LONG_FUNCTIONS_JUSTIFIED:
                     long.append(f"{key} ({size})")
     assert long == []
-
-
-def test_nothing_imports_a_moved_module_path():
-    """The old paths (swgsim.MOVED) serve code outside the project for one release."""
-    import swgsim
-
-    old = set(swgsim.MOVED)
-    bad = []
-    for f in _python_files():
-        for n in ast.walk(ast.parse(f.read_text(encoding="utf-8"))):
-            names = ([a.name for a in n.names] if isinstance(n, ast.Import)
-                     else [n.module or ""] + [f"{n.module}.{a.name}" for a in n.names]
-                     if isinstance(n, ast.ImportFrom) and n.level == 0 else [])
-            bad += [f"{f.relative_to(ROOT)}:{n.lineno} {x}" for x in names if x in old]
-    assert bad == []
-
-
-def test_a_moved_path_still_imports_with_a_warning():
-    import importlib
-
-    with pytest.warns(DeprecationWarning, match="swgsim.plan moved to swgsim.datasets.plan"):
-        old = importlib.import_module("swgsim.plan")
-    from swgsim.datasets.gears import gear_params
-    from swgsim.datasets.plan import plan
-
-    assert old.plan is plan and old.gear_params is gear_params
 
 
 def test_the_checker_finds_a_planted_cycle_and_a_floor_breach(tmp_path):
