@@ -16,7 +16,7 @@ prediction per operating point, alignment), :mod:`.signals` (signals, constraint
 :mod:`.align` (input angle modulo 180° or 360°), :mod:`.checks` (withheld parameters,
 too-small effects, caveats), :mod:`.discovery` (terms beyond the library), :mod:`.report`
 (summary, report, simulation option), :mod:`.figures`, :mod:`.synthetic` (windows with
-planted effects), :mod:`.power` (planted-effect power study).
+planted effects; their power study is ``scripts/strain_power.py``).
 """
 
 from .data import StrainWindows, strain_windows
