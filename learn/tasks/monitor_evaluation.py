@@ -20,6 +20,7 @@ import hashlib
 import json
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -194,7 +195,9 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
         for d, w in why.items():
             log.warning("detector %s not run on %s: %s", d, name, w)
     t0 = time.perf_counter()
-    parts = _run_jobs(plans, jobs, mc, out, device)
+    parts, _ = run_parts(out, jobs, lambda j: joblib.delayed(_job)(
+        plans[j.dataset], j, mc.study, str(out), device), "monitor evaluation", mc.progress,
+        mc.n_jobs)
     wall = time.perf_counter() - t0
     res, fa, curve = to_frames(parts)
     write_owned(out / "results.csv", lambda tmp: res.to_csv(tmp, index=False))
@@ -255,29 +258,46 @@ def save_part(out: Path, job: Job, part: dict) -> None:
     atomic_write_json(out / "parts" / job.file, part, sort_keys=False)
 
 
-def _run_jobs(plans, jobs: list[Job], mc: MonitorExperiment, out: Path,
-              device: str) -> list[dict]:
-    """Each part, resumed from ``parts/`` when its key matches; one progress line over
-    all of them (done, left, time left) and a log line per finished part."""
+def run_parts(out: Path, jobs: list[Job], delayed: Callable, desc: str, progress: bool,
+              n_jobs: int) -> tuple[list[dict], int]:
+    """Each part, resumed from ``out/parts`` when its key matches (:func:`finished_parts`),
+    the others run by ``n_jobs`` workers, each saved as it ends (:func:`save_part`); one
+    progress line over all of them and a log line per finished part.
+
+    Parameters
+    ----------
+    out : Path
+        The report folder.
+    jobs : list of Job
+    delayed : callable
+        Job -> the ``joblib.delayed`` call that runs it and returns ``(part, job)``.
+    desc : str
+        The progress line's label.
+    progress : bool
+    n_jobs : int
+
+    Returns
+    -------
+    (list of dict, int)
+        The parts in the jobs' order, and how many were resumed.
+    """
     done, todo = finished_parts(out, jobs)
+    resumed = len(done)
     if done:
         log.info("resuming: %d of %d part(s) already done", len(done), len(jobs))
-    bar = tqdm(total=len(todo), desc="monitor evaluation", unit="part",
-               disable=not mc.progress)
-    par = joblib.Parallel(n_jobs=min(mc.n_jobs, max(1, len(todo))),
+    bar = tqdm(total=len(todo), desc=desc, unit="part", disable=not progress)
+    par = joblib.Parallel(n_jobs=min(n_jobs, max(1, len(todo))),
                           return_as="generator_unordered")
     t0 = time.perf_counter()
-    for part, job in par(joblib.delayed(_job)(plans[j.dataset], j, mc.study, str(out), device)
-                         for j in todo):
+    for part, job in par(delayed(j) for j in todo):
         save_part(out, job, part)
         done.append(part)
         bar.update()
         log.info("part %s done (%d of %d left, %.1f min so far)", job.file,
                  bar.total - bar.n, bar.total, (time.perf_counter() - t0) / 60)
     bar.close()
-    order = {(j.dataset, j.gear, j.detector): i for i, j in enumerate(jobs)}
-    return sorted(done, key=lambda p: order[(p["dataset"], p["held_out_gear"],
-                                             p.get("detector"))])
+    order = {j.key: i for i, j in enumerate(jobs)}
+    return sorted(done, key=lambda p: order[p["key"]]), resumed
 
 
 def _job(plan: DatasetPlan, job: Job, study: MonitorStudyConfig, out: str, device: str

@@ -20,8 +20,6 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from tqdm.auto import tqdm
-
 from learn.monitor.prognosis_evaluation import (
     PrognosisStudyConfig,
     check_prognosis_study,
@@ -36,7 +34,7 @@ from learn.reports.prognosis_report import (
     write_table,
 )
 from learn.tasks.config import plain, typed_app
-from learn.tasks.monitor_evaluation import Job, finished_parts, part_key, save_part
+from learn.tasks.monitor_evaluation import Job, part_key, run_parts
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
@@ -135,27 +133,6 @@ def _job(plan_: DatasetPlan, job: Job, study: PrognosisStudyConfig, out: str) ->
     return json.loads(json.dumps(part, default=float)), job
 
 
-def _run_parts(plans: dict, jobs: list[Job], pc: PrognosisExperiment, out: Path
-               ) -> tuple[list[dict], int]:
-    """Each part, resumed from ``parts/`` when its key matches; with the number resumed."""
-    done, todo = finished_parts(out, jobs)
-    resumed = len(done)
-    if done:
-        log.info("resuming: %d of %d part(s) already done", len(done), len(jobs))
-    bar = tqdm(total=len(todo), desc="prognosis evaluation", unit="part",
-               disable=not pc.progress)
-    par = joblib.Parallel(n_jobs=min(pc.n_jobs, max(1, len(todo))),
-                          return_as="generator_unordered")
-    for part, job in par(joblib.delayed(_job)(plans[j.dataset], j, pc.study, str(out))
-                         for j in todo):
-        save_part(out, job, part)
-        done.append(part)
-        bar.update()
-    bar.close()
-    order = {(j.dataset, j.gear): i for i, j in enumerate(jobs)}
-    return sorted(done, key=lambda p: order[(p["dataset"], p["held_out_gear"])]), resumed
-
-
 def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
     """Results, lives and calibration tables of the parts."""
     rows = pd.DataFrame([r for p in parts for r in p["rows"]])
@@ -170,7 +147,9 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
     (out / "parts").mkdir(parents=True, exist_ok=True)
     jobs = plan_parts(pc, plans)
     t0 = time.perf_counter()
-    parts, resumed = _run_parts(plans, jobs, pc, out)
+    parts, resumed = run_parts(out, jobs, lambda j: joblib.delayed(_job)(
+        plans[j.dataset], j, pc.study, str(out)), "prognosis evaluation", pc.progress,
+        pc.n_jobs)
     wall = time.perf_counter() - t0
     rows, lives, cal = _frames(parts)
     if rows.empty:
