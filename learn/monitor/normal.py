@@ -435,6 +435,50 @@ class NormalBehaviour:
             spread[b, law] = np.sqrt(spread[b, law] ** 2 + (kappa * u) ** 2)
         return self.without_warm_ups((ref - self.mean[i]) / spread, i), spread
 
+    def z_over_friction(self, feats: np.ndarray, points: np.ndarray,
+                        cond: Conditions | None, friction: np.ndarray,
+                        index: np.ndarray | None = None) -> np.ndarray:
+        """z-scores of the same windows at many friction factors, shape (m, n, F): equal to
+        :meth:`z` of the windows repeated m times (``friction.ravel()`` the factor of each),
+        at a fraction of its cost, for the friction fits
+        (:func:`learn.monitor.sensor_check.fit_friction`): a factor moves only the
+        efficiency (its loss law, module docstring) and, beyond commissioning's range, its
+        spread, so every other feature is corrected once.
+
+        Parameters
+        ----------
+        feats : ndarray, shape (n, F)
+        points : ndarray, shape (n, 2)
+        cond : Conditions or None
+        friction : ndarray, shape (m, n)
+            The friction factors tried, m per window.
+        index : ndarray of int, shape (n,), optional
+
+        Raises
+        ------
+        ValueError
+            If a window's operating point was not seen at commissioning.
+        """
+        i = self._check(points, index)
+        if cond is None:
+            cond = Conditions(self.ref_torque[i], None)
+        m, n, law = len(friction), len(feats), slice(0, EFFICIENCY + 1)
+        ref = np.repeat(self._corrected(feats, i, cond, np.ones(n))[None], m, axis=0)
+        ref[..., EFFICIENCY] = self._efficiency(feats, i, cond, friction)
+        spread = np.repeat(self.std[i][None], m, axis=0)
+        edge, beyond = self._edge(i, cond)
+        kappa = self.config.extrapolation_uncertainty
+        if kappa > 0 and beyond.any():
+            b = np.flatnonzero(beyond)
+            at_edge = np.repeat(self._corrected(feats[b], i[b], edge[b], np.ones(len(b)))[None],
+                                m, axis=0)
+            at_edge[..., EFFICIENCY] = self._efficiency(feats[b], i[b], edge[b],
+                                                        friction[:, b])
+            u = ref[:, b, law] - at_edge[..., law]
+            spread[:, b, law] = np.sqrt(spread[:, b, law] ** 2 + (kappa * u) ** 2)
+        z = ((ref - self.mean[i][None]) / spread).reshape(m * n, -1)
+        return self.without_warm_ups(z, np.tile(i, m)).reshape(m, n, -1)
+
     def without_warm_ups(self, z: np.ndarray, index: np.ndarray) -> np.ndarray:
         """z-scores (n, F) of windows at the points ``index`` (n,) with their parts along
         commissioning's warm-up directions taken out, each clipped to the range
@@ -598,7 +642,15 @@ class NormalBehaviour:
             out[:, j0] -= (at - at0)[:, j0]  # the offset's line
             out[:, j0 + 1:j0 + BLOCK - 1] /= np.sqrt(ratio[:, j0 + 1:j0 + BLOCK - 1])
             out[:, j0 + BLOCK - 1] -= 0.5 * np.log10(ratio[:, j0 + BLOCK - 1])
-        eta = feats[:, EFFICIENCY]
+        out[:, EFFICIENCY] = self._efficiency(feats, i, cond, friction)
+        return out
+
+    def _efficiency(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
+                    friction: np.ndarray) -> np.ndarray:
+        """The efficiency at the reference condition of its point with friction factors
+        ``friction`` (n,) or (m, n): its loss law's prediction at the window's load and
+        temperature taken out, the reference's put in; the shape of ``friction``."""
+        tq, t0 = np.abs(cond.torque_nm), np.abs(self.ref_torque[i])
         ref_cond = Conditions(t0, None if cond.temperature_c is None
                               else self.ref_temp[i])
         pred = friction * self._loss(i, cond)
@@ -606,8 +658,7 @@ class NormalBehaviour:
         with np.errstate(divide="ignore", invalid="ignore"):
             eta_pred = np.where(tq > 0, tq / (tq + pred), 0.0)
             eta_ref = np.where(t0 > 0, t0 / (t0 + pred0), 0.0)
-        out[:, EFFICIENCY] = eta - eta_pred + eta_ref
-        return out
+        return feats[:, EFFICIENCY] - eta_pred + eta_ref
 
 
 

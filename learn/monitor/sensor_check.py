@@ -420,10 +420,8 @@ def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
         The factor at the last window.
     """
     n, m = len(feats), len(FRICTION_FACTORS)
-    rep = np.tile(np.arange(n), m)
-    fr = (friction[None, :] * FRICTION_FACTORS[:, None]).ravel()
-    c = None if cond is None else cond[rep]
-    z = normal.z(feats[rep], points[rep], c, fr, index[rep]).reshape(m, n, -1)
+    z = normal.z_over_friction(feats, points, cond,
+                               friction[None, :] * FRICTION_FACTORS[:, None], index)
     s = np.sum(z ** 2, axis=2)  # (factor, window)
     one = int(np.argmin(np.abs(FRICTION_FACTORS - 1.0)))
     if hours is None:
@@ -460,12 +458,11 @@ def _refined(normal: NormalBehaviour, feats, points, cond, friction, index, dt, 
     fs = factor * np.exp(step * np.linspace(-1.0, 1.0, REFINE))
     rs = rate + (FRICTION_RATES[1] - FRICTION_RATES[0]) * np.linspace(-1.0, 1.0, REFINE)
     combos = np.stack(np.meshgrid(fs, rs, indexing="ij"), axis=-1).reshape(-1, 2)  # (m, 2)
-    m, after = len(combos), np.arange(j, n)
-    rep = np.tile(after, m)
+    after = np.arange(j, n)
     fr = (friction[after][None, :] * combos[:, :1]
-          * np.exp(combos[:, 1:] * dt[after][None, :])).ravel()  # (m, n - j) flattened
-    c = None if cond is None else cond[rep]
-    za = normal.z(feats[rep], points[rep], c, fr, index[rep]).reshape(m, n - j, -1)
+          * np.exp(combos[:, 1:] * dt[after][None, :]))  # (combo, window)
+    za = normal.z_over_friction(feats[after], points[after],
+                                None if cond is None else cond[after], fr, index[after])
     sa = np.sum(za ** 2, axis=(1, 2))
     z0 = normal.z(feats[:j], points[:j], None if cond is None else cond[:j], friction[:j],
                   index[:j])

@@ -223,3 +223,32 @@ def test_over_a_single_warm_up_the_catalogues_law_is_kept_and_a_cold_start_lets_
         loss = 4.0 * np.exp(-0.01 * (temp - 20.0)) + 0.1 * tq
         assert _loss_model(tq / (tq + loss), tq, temp, ops, inv)[1] == \
             pytest.approx(want, abs=1e-4)
+
+
+def test_z_over_friction_equals_z_of_the_repeated_windows():
+    """The friction fits' fast path (NormalBehaviour.z_over_friction: the features a
+    friction factor does not move corrected once) gives the same bits as the slow one,
+    z of the windows repeated once per factor: with a temperature law, warm-up
+    directions and windows beyond commissioning's loads and temperatures (the widened
+    spread), and without conditions."""
+    rng = np.random.default_rng(5)
+    commanded = np.repeat(LOADS, 80)
+    temp = rng.uniform(20.0, 45.0, commanded.size)
+    points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
+    nb = NormalBehaviour.fit(_features(commanded, rng), points, Conditions(commanded, temp))
+    k, f_n = 2, EFFICIENCY + 1
+    d = rng.standard_normal((len(nb.points), k, f_n))
+    nb = dataclasses.replace(nb, warm_dir=d / np.linalg.norm(d, axis=2, keepdims=True),
+                             warm_range=np.tile([-1.5, 2.0], (len(nb.points), k, 1)))
+    n = 24
+    p = points[rng.choice(len(points), n)]
+    acting = p[:, 1] * rng.uniform(0.95, 1.15, n)
+    feats = _features(acting, rng)
+    factors = np.exp(rng.uniform(-1.0, 1.0, (7, n)))
+    for cond in (Conditions(acting, rng.uniform(10.0, 60.0, n)), None):
+        fast = nb.z_over_friction(feats, p, cond, factors)
+        rep = np.tile(np.arange(n), len(factors))
+        slow = nb.z(feats[rep], p[rep], None if cond is None else cond[rep],
+                    factors.ravel()).reshape(fast.shape)
+        assert np.array_equal(fast, slow)
+    assert np.any(nb._edge(nb.index(p), Conditions(acting, None))[1])  # spread widened
