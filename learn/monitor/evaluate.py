@@ -459,8 +459,10 @@ def _nuisances(cfg: MonitorStudyConfig) -> list[str]:
     return ["none", *cfg.nuisances]
 
 
-def _banks(plan: DatasetPlan) -> dict[int, RecordBank]:
-    """Every gear's records, shared by all its lives."""
+def banks_of(plan: DatasetPlan) -> dict[int, RecordBank]:
+    """Every gear's records, shared by all its lives (and by the parts of one held-out
+    gear run in one worker: :func:`learn.tasks.monitor_evaluation.run_parts`; a record is
+    the same whichever batch simulated it)."""
     return {int(x.id): record_bank(plan, int(x.id)) for x in plan.config.gears}
 
 
@@ -481,14 +483,16 @@ def _runnable(plan: DatasetPlan, cfg: MonitorStudyConfig, lives: list[str] | Non
 
 
 def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfig,
-                 lives: list[str] | None = None, seeds: list[int] | None = None) -> dict:
+                 lives: list[str] | None = None, seeds: list[int] | None = None,
+                 banks: dict[int, RecordBank] | None = None) -> dict:
     """Train the diagnosis model on the other gears and evaluate the monitor on held-out
     gear ``g`` (:func:`evaluate_gear`) without and under every nuisance: rows, false
     alarms, curve, timing and the model.
 
     ``lives``: the lives evaluated instead (``none``, keys of ``cfg.nuisances``,
     ``family:<key>`` of ``cfg.families``), those a data set cannot live left out;
-    ``seeds``: their seeds (None: :func:`evaluate_gear`'s).
+    ``seeds``: their seeds (None: :func:`evaluate_gear`'s); ``banks``: the gears' records
+    (:func:`banks_of`; None: new ones), shared with other parts of the same plan.
 
     Raises
     ------
@@ -499,7 +503,7 @@ def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfi
         life_conditions(cfg, life, 0)
     t0 = time.perf_counter()
     gears = [int(x.id) for x in plan.config.gears]
-    banks = _banks(plan)
+    banks = banks_of(plan) if banks is None else banks
     model = train_model(plan, banks, [x for x in gears if x != g], cfg)
     t1 = time.perf_counter()
     rows, fa, curve = [], [], []
@@ -512,14 +516,16 @@ def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfi
 
 
 def run_detectors(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfig,
-                  names: list[str], device: str = "cpu") -> list[dict]:
+                  names: list[str], device: str = "cpu",
+                  banks: dict[int, RecordBank] | None = None) -> list[dict]:
     """Train the per-window detectors ``names`` on the other gears and evaluate them on
     held-out gear ``g`` (:func:`evaluate_detectors`) without and under every nuisance;
     one part per detector (rows, false alarms, an empty curve, timing). A torch net runs
-    on ``device`` (resolved: ``cpu``, ``cuda:0``; ``monitor.device``)."""
+    on ``device`` (resolved: ``cpu``, ``cuda:0``; ``monitor.device``); ``banks`` as
+    :func:`run_held_out`'s."""
     t0 = time.perf_counter()
     gears = [int(x.id) for x in plan.config.gears]
-    banks = _banks(plan)
+    banks = banks_of(plan) if banks is None else banks
     dets = train_detectors(plan, banks, [x for x in gears if x != g], cfg, names,
                            device=device)
     t1 = time.perf_counter()
@@ -541,6 +547,6 @@ def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFra
                  for k in ("rows", "false_alarms", "curve"))
 
 
-__all__ = ["COMPARED", "CURVE_DESIGN_HOURS", "evaluate_detectors", "evaluate_gear",
+__all__ = ["COMPARED", "CURVE_DESIGN_HOURS", "banks_of", "evaluate_detectors", "evaluate_gear",
            "fault_lives", "healthy_life", "nuisance_fault_lives", "run_detectors", "run_held_out",
            "to_frames"]

@@ -10,7 +10,10 @@ rates), ``timing.json``, ``models/<dataset>_without_gear<g>.skops`` with its
 part per (data set, held-out gear) for the monitor and per (data set, held-out gear,
 detector) for each per-window detector, each with the hash of the config that made it (a
 detector's without the list of the others), so that a rerun of the same config resumes
-from them and a detector added later runs alone.
+from them and a detector added later runs alone. The parts of one (data set, held-out gear)
+run in one worker, in order, and share its gears' records (simulated once, not once per
+part: :func:`run_parts`), so a detector's ``train_s`` in ``timing.json`` holds only the
+records its monitor part did not already simulate.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from tqdm.auto import tqdm
 
 from learn.learners.devices import check_device
 from learn.monitor.detectors import DETECTORS
-from learn.monitor.evaluate import run_detectors, run_held_out, to_frames
+from learn.monitor.evaluate import banks_of, run_detectors, run_held_out, to_frames
 from learn.monitor.model_io import MODEL_SUFFIX, save_model
 from learn.monitor.study import MonitorStudyConfig, check_study
 from learn.reports.monitor_report import (
@@ -195,8 +198,8 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
         for d, w in why.items():
             log.warning("detector %s not run on %s: %s", d, name, w)
     t0 = time.perf_counter()
-    parts, _ = run_parts(out, jobs, lambda j: joblib.delayed(_job)(
-        plans[j.dataset], j, mc.study, str(out), device), "monitor evaluation", mc.progress,
+    parts, _ = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
+        plans[js[0].dataset], js, mc.study, str(out), device), "monitor evaluation", mc.progress,
         mc.n_jobs)
     wall = time.perf_counter() - t0
     res, fa, curve = to_frames(parts)
@@ -261,8 +264,10 @@ def save_part(out: Path, job: Job, part: dict) -> None:
 def run_parts(out: Path, jobs: list[Job], delayed: Callable, desc: str, progress: bool,
               n_jobs: int) -> tuple[list[dict], int]:
     """Each part, resumed from ``out/parts`` when its key matches (:func:`finished_parts`),
-    the others run by ``n_jobs`` workers, each saved as it ends (:func:`save_part`); one
-    progress line over all of them and a log line per finished part.
+    the others run by ``n_jobs`` workers, those of one (data set, held-out gear) in one
+    worker, in order, so that they share its gears' records (simulated once instead of once
+    per part); each part is saved as it ends (:func:`save_part`, by the worker); one
+    progress line over all of them and a log line per finished group.
 
     Parameters
     ----------
@@ -270,7 +275,9 @@ def run_parts(out: Path, jobs: list[Job], delayed: Callable, desc: str, progress
         The report folder.
     jobs : list of Job
     delayed : callable
-        Job -> the ``joblib.delayed`` call that runs it and returns ``(part, job)``.
+        A list of jobs (one data set, one held-out gear) -> the ``joblib.delayed`` call
+        that runs them in order, saves each part as it ends and returns the list of
+        ``(part, job)``.
     desc : str
         The progress line's label.
     progress : bool
@@ -285,40 +292,62 @@ def run_parts(out: Path, jobs: list[Job], delayed: Callable, desc: str, progress
     resumed = len(done)
     if done:
         log.info("resuming: %d of %d part(s) already done", len(done), len(jobs))
+    groups: dict[tuple, list[Job]] = {}
+    for j in todo:
+        groups.setdefault((j.dataset, j.gear), []).append(j)
     bar = tqdm(total=len(todo), desc=desc, unit="part", disable=not progress)
-    par = joblib.Parallel(n_jobs=min(n_jobs, max(1, len(todo))),
+    par = joblib.Parallel(n_jobs=min(n_jobs, max(1, len(groups))),
                           return_as="generator_unordered")
     t0 = time.perf_counter()
-    for part, job in par(delayed(j) for j in todo):
-        save_part(out, job, part)
-        done.append(part)
-        bar.update()
-        log.info("part %s done (%d of %d left, %.1f min so far)", job.file,
-                 bar.total - bar.n, bar.total, (time.perf_counter() - t0) / 60)
+    for finished in par(delayed(g) for g in groups.values()):
+        done += [part for part, _ in finished]
+        bar.update(len(finished))
+        log.info("part(s) %s done (%d of %d left, %.1f min so far)",
+                 ", ".join(job.file for _, job in finished), bar.total - bar.n, bar.total,
+                 (time.perf_counter() - t0) / 60)
     bar.close()
     order = {j.key: i for i, j in enumerate(jobs)}
     return sorted(done, key=lambda p: order[p["key"]]), resumed
 
 
-def _job(plan: DatasetPlan, job: Job, study: MonitorStudyConfig, out: str, device: str
-         ) -> tuple[dict, Job]:
-    """One part in a worker: the monitor's (and its diagnosis model, written to
-    ``models/``) or one detector's."""
+def run_group(out: str | Path, jobs: list[Job], run_one: Callable[[Job], dict]
+              ) -> list[tuple[dict, Job]]:
+    """In a worker: each job's part by ``run_one``, in order, its key set, made plain JSON
+    and saved as it ends (:func:`save_part`); returns the ``(part, job)`` pairs
+    (:func:`run_parts`'s ``delayed``)."""
+    finished = []
+    for job in jobs:
+        part = run_one(job)
+        part["key"] = job.key
+        part = json.loads(json.dumps(part, default=float))
+        save_part(Path(out), job, part)
+        finished.append((part, job))
+    return finished
+
+
+def _job(plan: DatasetPlan, jobs: list[Job], study: MonitorStudyConfig, out: str,
+         device: str) -> list[tuple[dict, Job]]:
+    """The parts of one held-out gear in a worker, sharing its gears' records: the
+    monitor's (and its diagnosis model, written to ``models/``) and each detector's."""
     ownership.join(out, "monitor")  # what this worker writes is recorded
-    if job.detector is None:
-        part = run_held_out(plan, job.dataset, job.gear, study)
-        train = [int(x.id) for x in plan.config.gears if int(x.id) != job.gear]
-        save_model(part.pop("model"), Path(out) / "models" /
-                   f"{job.dataset}_without_gear{job.gear}{MODEL_SUFFIX}",
-                   [{"name": job.dataset, "config_hash": plan.config_hash, "gears": train,
-                     "simulated": "training lives of learn.monitor.training"}])
-    else:
-        (part,) = run_detectors(plan, job.dataset, job.gear, study, [job.detector],
-                                device=device)
-    part["key"] = job.key
-    for k in ("rows", "curve"):
-        part[k] = pd.DataFrame(part[k]).to_dict("records")
-    return json.loads(json.dumps(part, default=float)), job
+    banks = banks_of(plan)
+
+    def one(job: Job) -> dict:
+        if job.detector is None:
+            part = run_held_out(plan, job.dataset, job.gear, study, banks=banks)
+            train = [int(x.id) for x in plan.config.gears if int(x.id) != job.gear]
+            save_model(part.pop("model"), Path(out) / "models" /
+                       f"{job.dataset}_without_gear{job.gear}{MODEL_SUFFIX}",
+                       [{"name": job.dataset, "config_hash": plan.config_hash,
+                         "gears": train, "simulated": "training lives of "
+                         "learn.monitor.training"}])
+        else:
+            (part,) = run_detectors(plan, job.dataset, job.gear, study, [job.detector],
+                                    device=device, banks=banks)
+        for k in ("rows", "curve"):
+            part[k] = pd.DataFrame(part[k]).to_dict("records")
+        return part
+    return run_group(out, jobs, one)
 
 
 def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
@@ -349,5 +378,5 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
                 run.log_artifact(out / f)
 
 
-__all__ = ["Job", "MonitorExperiment", "finished_parts", "part_key", "plan_jobs",
+__all__ = ["Job", "MonitorExperiment", "finished_parts", "part_key", "plan_jobs", "run_group",
            "run_monitor_evaluation", "save_part"]

@@ -14,7 +14,6 @@ rerun of the same config resumes from them (the monitor evaluation's part machin
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
 import time
 from dataclasses import dataclass, field
@@ -34,7 +33,7 @@ from learn.reports.prognosis_report import (
     write_table,
 )
 from learn.tasks.config import plain, typed_app
-from learn.tasks.monitor_evaluation import Job, part_key, run_parts
+from learn.tasks.monitor_evaluation import Job, part_key, run_group, run_parts
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
@@ -125,12 +124,11 @@ def run_prognosis_evaluation(cfg) -> dict:
         return _evaluate(app, pc, plans, out, claim)
 
 
-def _job(plan_: DatasetPlan, job: Job, study: PrognosisStudyConfig, out: str) -> tuple:
-    """One part in a worker."""
+def _job(plan_: DatasetPlan, jobs: list[Job], study: PrognosisStudyConfig, out: str
+         ) -> list[tuple[dict, Job]]:
+    """The part of one held-out gear in a worker, saved as it ends."""
     ownership.join(out, "prognosis")
-    part = run_prognosis_part(plan_, job.dataset, job.gear, study)
-    part["key"] = job.key
-    return json.loads(json.dumps(part, default=float)), job
+    return run_group(out, jobs, lambda j: run_prognosis_part(plan_, j.dataset, j.gear, study))
 
 
 def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
@@ -147,8 +145,8 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
     (out / "parts").mkdir(parents=True, exist_ok=True)
     jobs = plan_parts(pc, plans)
     t0 = time.perf_counter()
-    parts, resumed = run_parts(out, jobs, lambda j: joblib.delayed(_job)(
-        plans[j.dataset], j, pc.study, str(out)), "prognosis evaluation", pc.progress,
+    parts, resumed = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
+        plans[js[0].dataset], js, pc.study, str(out)), "prognosis evaluation", pc.progress,
         pc.n_jobs)
     wall = time.perf_counter() - t0
     rows, lives, cal = _frames(parts)

@@ -117,15 +117,24 @@ TINY_STUDY = dict(seeds=[0], healthy_hours=10.0, commissioning_h=4.0, horizon_h=
 
 
 @pytest.fixture(scope="module")
-def tiny_eval():
-    """The monitor's part of held-out gear 3 of tiny_bench (the diagnosis model with it)."""
-    from learn.monitor.evaluate import run_held_out
-    from learn.monitor.study import MonitorStudyConfig
+def tiny_banks():
+    """tiny_bench's plan and its gears' records, shared by its parts as in a worker."""
+    from learn.monitor.evaluate import banks_of
     from swgcli import dataset_preset
     from swgsim.datasets.plan import plan
 
-    return run_held_out(plan(dataset_preset("tiny_bench")), "tiny_bench", 3,
-                        MonitorStudyConfig(**TINY_STUDY))
+    p = plan(dataset_preset("tiny_bench"))
+    return p, banks_of(p)
+
+
+@pytest.fixture(scope="module")
+def tiny_eval(tiny_banks):
+    """The monitor's part of held-out gear 3 of tiny_bench (the diagnosis model with it)."""
+    from learn.monitor.evaluate import run_held_out
+    from learn.monitor.study import MonitorStudyConfig
+
+    p, banks = tiny_banks
+    return run_held_out(p, "tiny_bench", 3, MonitorStudyConfig(**TINY_STUDY), banks=banks)
 
 
 def test_planted_step_fault_detected_and_named(tiny_eval):
@@ -144,22 +153,26 @@ def test_planted_step_fault_detected_and_named(tiny_eval):
     assert fa.loc["always", "false_alarms"] == 360
 
 
-def test_per_window_detectors_beside_the_monitor(tiny_eval):
+def test_per_window_detectors_beside_the_monitor(tiny_eval, tiny_banks, monkeypatch):
     """The paper's pipeline and the CNN run as monitors on the monitor's lives, each a part
     of its own: one row per life and detector, the same lives as the monitor's; their false
-    alarms counted over detector_hours (2 h: 120 windows)."""
+    alarms counted over detector_hours (2 h: 120 windows). Run after the monitor's part
+    with its records, as in a worker, they simulate no record again."""
     import pandas as pd
 
     from learn.monitor.evaluate import COMPARED, run_detectors
     from learn.monitor.study import MonitorStudyConfig
-    from swgcli import dataset_preset
-    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import RecordBank
 
     res = pd.DataFrame(tiny_eval["rows"])
     lives = res.groupby(["fault", "severity", "onset"]).detector.apply(tuple)
     assert all(t == COMPARED for t in lives)
-    parts = run_detectors(plan(dataset_preset("tiny_bench")), "tiny_bench", 3,
-                          MonitorStudyConfig(**TINY_STUDY), ["paper_rf", "cnn_res"])
+    simulated = []
+    monkeypatch.setattr(RecordBank, "_simulate", lambda self, keys: simulated.append(keys))
+    p, banks = tiny_banks
+    parts = run_detectors(p, "tiny_bench", 3, MonitorStudyConfig(**TINY_STUDY),
+                          ["paper_rf", "cnn_res"], banks=banks)
+    assert simulated == []
     assert [p["detector"] for p in parts] == ["paper_rf", "cnn_res"]
     for part in parts:
         rows = pd.DataFrame(part["rows"])
