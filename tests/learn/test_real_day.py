@@ -57,11 +57,14 @@ def healthy(day):
     return life_dataset(LifeSimulator(p, 3, p.config.life, bank))
 
 
-def _stream(day, fault: FaultOnset):
-    """The same day with a fault, in memory (its healthy records from ``day``)."""
+def _stream(day, fault: FaultOnset, hours: float | None = None):
+    """The same day with a fault, in memory (its healthy records from ``day``), to
+    ``hours`` (None: the whole day; a life's windows do not depend on its length)."""
     p, bank = day
-    return life_dataset(LifeSimulator(p, 3, dataclasses.replace(p.config.life, fault=fault),
-                                      bank))
+    life = dataclasses.replace(p.config.life, fault=fault)
+    if hours is not None:
+        life = dataclasses.replace(life, hours=hours)
+    return life_dataset(LifeSimulator(p, 3, life, bank))
 
 
 def test_a_healthy_real_day_raises_no_gear_fault_alarm(model, healthy):
@@ -80,7 +83,9 @@ def test_a_healthy_real_day_raises_no_gear_fault_alarm(model, healthy):
 
 
 def test_a_fault_under_the_real_day_is_found_and_named(model, day):
-    ds = _stream(day, FaultOnset("eccentric_wg", 40.0, 0.1))
+    """The eccentric WG from 40 h, through warm-ups and the heavier tool (from 36 h): the
+    day to 42 h (the rest of it would only be named again at each alarm)."""
+    ds = _stream(day, FaultOnset("eccentric_wg", 40.0, 0.1), hours=42.0)
     res = monitor_stream(ds, model, RuleConfig(), source="day")
     assert res.alarms, "the eccentric WG under the real day was not found"
     first = res.alarms[0]
@@ -97,13 +102,15 @@ def test_temperature_outside_its_range_is_refused_naming_the_window(model, healt
         monitor_stream(ds, model, RuleConfig(), source="day")
 
 
-def _day_with(day, law: FrictionLaw, sensor: TemperatureSensor, fault=None):
+def _day_with(day, law: FrictionLaw, sensor: TemperatureSensor, fault=None,
+             hours: float | None = None):
     """The preset's day with the friction following ``law`` and the temperature read by
-    ``sensor``, and a gear fault where given."""
+    ``sensor``, and a gear fault where given, to ``hours`` (None: the whole day)."""
     p, bank = day
     life = p.config.life
     cond = dataclasses.replace(life.conditions, friction_law=law, temperature_sensor=sensor)
-    life = dataclasses.replace(life, conditions=cond)
+    life = dataclasses.replace(life, conditions=cond,
+                               hours=life.hours if hours is None else hours)
     if fault is not None:
         life = dataclasses.replace(life, fault=fault)
     return life_dataset(LifeSimulator(p, 3, life, bank))
@@ -139,7 +146,7 @@ def test_a_fault_after_the_temperature_sensor_failed_is_found_and_named(model, d
     it and names it."""
     ds = _day_with(day, FrictionLaw("linear", 0.8),
                    TemperatureSensor(fault="stuck", fault_hour=30.0),
-                   FaultOnset("eccentric_wg", 40.0, 0.1))
+                   FaultOnset("eccentric_wg", 40.0, 0.1), hours=42.0)
     res = monitor_stream(ds, model, RuleConfig(), source="day")
     faults = [a.fault for a in res.alarms]
     assert faults[0] == "temperature_sensor" and res.alarms[0].hour < 40.0
