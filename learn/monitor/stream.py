@@ -582,7 +582,8 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
         prognosis_figure(res.prognosis, out_dir / "prognosis.png")
     atomic_write_json(out_dir / "summary.json", summary)
     tr = res.trace
-    health_figure(res, out_dir / "health.png")
+    health_figure(res.trace, res.threshold, res.alarms, res.onset_h, res.true_fault,
+                  out_dir / "health.png")
     lines = [f"# Monitor report: {source}", "",
              f"{res.n_commissioning} commissioning windows, {tr.s.size} monitored; alarm "
              f"threshold h = {h:.2f}.", ""]

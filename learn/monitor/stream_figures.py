@@ -11,6 +11,8 @@ import numpy as np
 
 from swgsim.files.ownership import write_owned
 
+from .gear_monitor import Trace
+from .rule import Alarm
 from .stream_prognosis import StreamPrognoses
 
 __all__ = ["health_figure", "prognosis_figure"]
@@ -26,27 +28,42 @@ def _pyplot():
     return plt
 
 
-def health_figure(res, path: Path) -> None:
+def health_figure(trace: Trace, threshold: float, alarms: list[Alarm], onset_h: float | None,
+                  true_fault: str | None, path: Path) -> None:
     """``health.png`` at ``path``: the windows' −log10 p-values and the CUSUM against the
-    rule's threshold (``res``: a :class:`learn.monitor.stream.StreamResult`), the alarms
-    (red) and the stream's true onset (dotted) where it records one."""
+    rule's threshold, the alarms (red) and the stream's true onset (dotted) where it
+    records one (the fields of a :class:`learn.monitor.stream.StreamResult`); written
+    atomically.
+
+    Parameters
+    ----------
+    trace : Trace
+        The monitored windows' p-values ``p`` and CUSUM ``s`` by ``hour`` [h].
+    threshold : float
+        h, the rule's alarm threshold.
+    alarms : list of Alarm
+    onset_h : float or None
+        The true onset [h] (a simulated stream), else None.
+    true_fault : str or None
+    path : Path
+    """
     plt = _pyplot()
-    tr, h = res.trace, res.threshold
+    tr, h = trace, threshold
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
     a1.plot(tr.hour, -np.log10(tr.p), ".", ms=1.5, color="0.4")
     a1.set_ylabel("−log10 p")
     a2.plot(tr.hour, tr.s, lw=0.8)
     a2.axhline(h, color="r", lw=0.8, ls="--", label=f"threshold h = {h:.1f}")
     for ax in (a1, a2):
-        if res.onset_h is not None:
-            ax.axvline(res.onset_h, color="k", lw=0.8, ls=":")
-        for al in res.alarms:
+        if onset_h is not None:
+            ax.axvline(onset_h, color="k", lw=0.8, ls=":")
+        for al in alarms:
             ax.axvline(al.hour, color="r", lw=0.8)
     a2.set_ylabel("CUSUM")
     a2.set_xlabel("operating hours")
     a2.legend(fontsize=7)
-    title = "health indicators" + (f"; true onset ({res.true_fault}) dotted"
-                                   if res.onset_h is not None else "")
+    title = "health indicators" + (f"; true onset ({true_fault}) dotted"
+                                   if onset_h is not None else "")
     a1.set_title(title, fontsize=9)
     fig.tight_layout()
     write_owned(path, lambda tmp: fig.savefig(tmp, format="png", dpi=130))
