@@ -30,6 +30,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from swgsim.base.registry import Registry
+
 if TYPE_CHECKING:
     from sklearn.base import ClassifierMixin
     from sklearn.pipeline import Pipeline
@@ -87,10 +89,10 @@ class ModelSpec:
 
 
 #: Every registered classifier, by name (:func:`register_model`).
-MODELS: dict[str, ModelSpec] = {}
+MODELS: Registry[ModelSpec] = Registry("learner", __name__, "MODELS")
 #: Display name of every model, registered or a deep model of ``conf/model/*.yaml``.
-MODEL_LABELS: dict[str, str] = {"mlp_torch": "MLP (torch)", "cnn": "CNN",
-                                "minirocket": "MiniRocket"}
+MODEL_LABELS: Registry[str] = Registry("learner label", __name__, "MODEL_LABELS", {
+    "mlp_torch": "MLP (torch)", "cnn": "CNN", "minirocket": "MiniRocket"}.items())
 
 
 def register_model(spec: ModelSpec) -> ModelSpec:
@@ -115,9 +117,8 @@ def register_model(spec: ModelSpec) -> ModelSpec:
         raise ValueError(f"model name must be a lower-case identifier, got {spec.name!r}")
     if spec.name in MODELS or spec.name in MODEL_LABELS:
         raise ValueError(f"model {spec.name!r} is registered already")
-    MODELS[spec.name] = spec
-    MODEL_LABELS[spec.name] = spec.label
-    return spec
+    MODEL_LABELS.add(spec.name, spec.label)
+    return MODELS.add(spec.name, spec)
 
 
 def model_label(name: str) -> str:

@@ -34,6 +34,7 @@ import numpy as np
 
 from learn.inputs.signals import AUX, build_input
 from learn.learners.models import make_model, make_pipeline
+from swgsim.base.registry import Registry
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.schema import PER_SAMPLE, make_dataset
@@ -91,11 +92,11 @@ def _cnn_res(seed: int, device: str):
 
 #: The per-window detectors by name (module docstring); add one with
 #: :func:`register_detector`.
-DETECTORS: dict[str, DetectorSpec] = {
+DETECTORS: Registry[DetectorSpec] = Registry("detector", __name__, "DETECTORS", {
     "paper_rf": DetectorSpec("sel1", _paper_rf, "paper Sec. III, Table III selection 1"),
     "cnn_res": DetectorSpec("raw_res", _cnn_res, "transfer study, CNN on raw_res",
                             uses_device=True),
-}
+}.items())
 
 
 def register_detector(name: str, spec: DetectorSpec) -> None:
@@ -116,7 +117,7 @@ def register_detector(name: str, spec: DetectorSpec) -> None:
     """
     if name in DETECTORS or name in ("monitor", "per_window", "always"):
         raise ValueError(f"detector {name!r} is already registered or reserved")
-    DETECTORS[name] = spec
+    DETECTORS.add(name, spec)
 
 
 @dataclass

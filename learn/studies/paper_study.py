@@ -34,6 +34,7 @@ from learn.studies.protocols import (
 from learn.studies.tables import StudyOptions
 from learn.tracking.config import LoggerConfig
 from swgsim.base.lazy import lazy_module
+from swgsim.base.registry import travelling
 
 pd = lazy_module("pandas")
 
@@ -156,14 +157,14 @@ def fit_tasks(jobs: list[StudyJob], feats: Mapping[int, Features],
 
     from learn.studies.protocols import fit_split_quiet
 
-    tasks = []
+    tasks, fit = [], travelling(fit_split_quiet)  # a user's learners travel with the fits
     for j in jobs:
         f = feats[j.selection]
         y = f.meta["fault"].to_numpy()
         est = make_model(j.model, random_state=random_state, scale=scale)
         sps = splits_of[(j.protocol, j.selection)]
         for sp in sps:
-            tasks.append(delayed(fit_split_quiet)(est, f.X, y, sp, class_labels(y),
+            tasks.append(delayed(fit)(est, f.X, y, sp, class_labels(y),
                                                   return_model=return_models and sp is sps[-1]))
     return tasks
 

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
+from swgsim.base.registry import travelling
 
 pd = lazy_module("pandas")
 
@@ -441,8 +442,8 @@ def evaluate(
     if n_jobs == 1:
         out = [fit_split(estimator, X, y, s, labels, groups=groups) for s in splits]
     else:
-        out = Parallel(n_jobs=n_jobs)(delayed(fit_split)(estimator, X, y, s, labels,
-                                                         groups=groups)
+        fit = travelling(fit_split)
+        out = Parallel(n_jobs=n_jobs)(delayed(fit)(estimator, X, y, s, labels, groups=groups)
                                       for s in splits)
     return ProtocolResult(
         splits=list(splits),

@@ -63,6 +63,7 @@ from learn.studies.runs import (
     make_estimator,
 )
 from swgsim.base.lazy import lazy_module
+from swgsim.base.registry import travelling
 from swgsim.datasets.config import DatasetConfig
 
 pd = lazy_module("pandas")
@@ -405,6 +406,7 @@ def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency:
     the workers run the previous data set's last jobs."""
     k_shots = [int(k) for k in tc.k_shots]
     threads = tc.n_threads if tc.n_jobs == 1 else tc.threads_per_job
+    cell = travelling(_with_cell)  # a user's learners travel with the jobs
     for name, load in sources:
         ds = load()
         if on_load is not None:
@@ -434,7 +436,7 @@ def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency:
             args = (tc.runs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
                     int(tc.adapt_windows), threads)
             for c in cells:
-                yield _with_cell, (name, c, *args), {}
+                yield cell, (name, c, *args), {}
             del inputs
         progress.adjust(-planned)  # protocols without data
         del ds

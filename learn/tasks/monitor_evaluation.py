@@ -45,6 +45,7 @@ from learn.tasks.config import plain, typed_app
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
+from swgsim.base.registry import travelling
 from swgsim.base.typed import allowed
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.plan import DatasetPlan, plan
@@ -299,7 +300,9 @@ def run_parts(out: Path, jobs: list[Job], delayed: Callable, desc: str, progress
     par = joblib.Parallel(n_jobs=min(n_jobs, max(1, len(groups))),
                           return_as="generator_unordered")
     t0 = time.perf_counter()
-    for finished in par(delayed(g) for g in groups.values()):
+    # each group's call, with this process's registries (a user's detectors, faults, ...)
+    calls = (delayed(g) for g in groups.values())  # (function, args, kwargs)
+    for finished in par((travelling(f), a, kw) for f, a, kw in calls):
         done += [part for part, _ in finished]
         bar.update(len(finished))
         log.info("part(s) %s done (%d of %d left, %.1f min so far)",

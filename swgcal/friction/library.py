@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.base.registry import Registry
 from swgsim.gear.friction import effects as fx
 from swgsim.gear.friction import ripples as rp
 from swgsim.gear.friction import signals as fsig
@@ -239,11 +240,12 @@ class VelocityLag(fx.VelocityLag, FitTerm):
         return [np.array([np.clip(f * sig.scales.dt_med, lo, hi)]) for f in (2, 10, 50)]
 
 
-FRICTION_LIBRARY: dict[str, type[FitTerm]] = {
-    cls.kind: cls for cls in (
+FRICTION_LIBRARY: Registry[type[FitTerm]] = Registry("fitted friction effect", __name__,
+                                                     "FRICTION_LIBRARY", (
+    (cls.kind, cls) for cls in (
         AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
         LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
-}
+))
 """Library key -> fitted effect class: the candidates of every friction calibration
 (the simulator's forms, :data:`swgsim.gear.friction.FRICTION_LIBRARY`, with their fit)."""
 
@@ -290,8 +292,7 @@ def register_effect(cls: type[FitTerm]) -> type[FitTerm]:
     elif not issubclass(cls, form):
         raise ValueError(f"friction effect {cls.kind!r}: the simulator holds the form "
                          f"{form.__qualname__}, which {cls.__qualname__} does not subclass")
-    FRICTION_LIBRARY[cls.kind] = cls
-    return cls
+    return FRICTION_LIBRARY.add(cls.kind, cls)
 
 
 def make_effect(kind: str, name: str | None = None, **kwargs: Any) -> FitTerm:

@@ -29,6 +29,7 @@ from typing import Any
 from joblib import Parallel, delayed
 from tqdm.auto import tqdm
 
+from swgsim.base.registry import travelling
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.grid_shard import simulate_grid_shard
 from swgsim.datasets.life import simulate_life_shard
@@ -122,8 +123,9 @@ def _run(p: DatasetPlan, todo: list[ShardSpec], out: Path, n_workers: int, bar) 
         for _ in range(n_workers):
             yield delayed(_warm)()
         infl = gear_influences(p, todo)
+        run = travelling(_run_shard_in_worker)  # a user's sensor faults, effects, ...
         for s in todo:
-            yield delayed(_run_shard_in_worker)(p, s, out, infl[s.gear])
+            yield delayed(run)(p, s, out, infl[s.gear])
 
     par = Parallel(n_jobs=n_workers, return_as="generator_unordered",
                    pre_dispatch=f"{n_workers + 1}")

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swgsim.base.registry import Registry
 from swgsim.gear.dynamics import GearParams
 
 NO_ROOT_CRACK = None
@@ -234,8 +235,8 @@ def _wear(p: ChainParams, s: float, pos: float) -> ChainParams:
 
 #: The registry of fault classes, in the schema's class order (healthy first): the one
 #: place that lists them, with their display names. Extend it with :func:`register_fault`.
-FAULTS: dict[str, Fault] = {
-    f.name: f
+FAULTS: Registry[Fault] = Registry("gear fault", __name__, "FAULTS", (
+    (f.name, f)
     for f in (
         Fault("healthy", "-", (0.0, 0.0), False, _healthy, "reference signals"),
         Fault("reduced_damping", "I/O dynamics", (0.0, 0.9), False, _damping,
@@ -251,7 +252,7 @@ FAULTS: dict[str, Fault] = {
               "short deviations when a mesh zone passes the crack (Fig. 6e)",
               display="tip crack"),
     )
-}
+))
 
 #: The paper's six classes (Table I and healthy), in the schema's order; registered
 #: classes (``wear`` below, a user's) come after them.
@@ -296,14 +297,11 @@ def register_fault(fault: Fault) -> Fault:
     """
     if not fault.name.isidentifier() or fault.name != fault.name.lower():
         raise ValueError(f"fault name must be a lower-case identifier, got {fault.name!r}")
-    if fault.name in FAULTS:
-        raise ValueError(f"fault {fault.name!r} is registered already")
     lo, hi = fault.severity_range
     if not (lo <= 0.0 <= hi):
         raise ValueError(f"fault {fault.name}: severity_range {fault.severity_range} must "
                          "hold 0 (the healthy gear)")
-    FAULTS[fault.name] = fault
-    return fault
+    return FAULTS.add(fault.name, fault)
 
 
 #: Wear (docs/PHYSICS.md sec. 8.1): registered after the paper's classes, so the schema's

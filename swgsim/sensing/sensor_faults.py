@@ -39,6 +39,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swgsim.base.registry import Registry
+
 
 @dataclass(frozen=True)
 class SensorFault:
@@ -66,20 +68,21 @@ class SensorFault:
     display: str
 
 
-SENSOR_FAULTS: dict[str, SensorFault] = {
-    f.name: f for f in (
+SENSOR_FAULTS: Registry[SensorFault] = Registry("sensor fault", __name__, "SENSOR_FAULTS", (
+    (f.name, f) for f in (
         SensorFault("sensor_gain_drift", (0.0, 0.5), "-", lambda x, s: x * (1.0 - s),
                     "sensor gain drift"),
         SensorFault("sensor_offset_step", (-0.5, 0.5), "mV/V", lambda x, s: x + s,
                     "sensor offset step"),
     )
-}
+))
 
 #: Severities of the evaluation (module docstring): mild and severe.
-SEVERITIES: dict[str, tuple[float, ...]] = {
+SEVERITIES: Registry[tuple[float, ...]] = Registry("sensor fault severities", __name__,
+                                                   "SEVERITIES", {
     "sensor_gain_drift": (0.02, 0.10),
     "sensor_offset_step": (0.005, 0.05),
-}
+}.items())
 
 
 def register_sensor_fault(fault: SensorFault, severities: tuple[float, float]) -> SensorFault:
@@ -109,9 +112,8 @@ def register_sensor_fault(fault: SensorFault, severities: tuple[float, float]) -
     if len(severities) != 2 or not all(lo <= s <= hi for s in severities):
         raise ValueError(f"sensor fault {fault.name!r}: severities {severities} must be two "
                          f"values in [{lo}, {hi}]")
-    SENSOR_FAULTS[fault.name] = fault
-    SEVERITIES[fault.name] = tuple(float(s) for s in severities)
-    return fault
+    SEVERITIES.add(fault.name, tuple(float(s) for s in severities))
+    return SENSOR_FAULTS.add(fault.name, fault)
 
 
 def is_sensor_fault(name: str) -> bool:

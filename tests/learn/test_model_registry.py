@@ -30,11 +30,11 @@ class CentroidClassifier(ClassifierMixin, BaseEstimator):
 
 
 @pytest.fixture
-def registered(monkeypatch):
-    """Register the classifier in copies of the registries (undone after the test)."""
-    monkeypatch.setattr(model_registry, "MODELS", dict(model_registry.MODELS))
-    monkeypatch.setattr(model_registry, "MODEL_LABELS", dict(model_registry.MODEL_LABELS))
-    return register_model(ModelSpec("centroid", CentroidClassifier, label="Centroid"))
+def registered():
+    """Register the classifier (removed from the registries after the test)."""
+    yield register_model(ModelSpec("centroid", CentroidClassifier, label="Centroid"))
+    model_registry.MODELS.pop("centroid")
+    model_registry.MODEL_LABELS.pop("centroid")
 
 
 def test_registered_classifier_runs_in_the_paper_study(registered, tiny_dataset, tmp_path):

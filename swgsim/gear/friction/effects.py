@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.base.registry import Registry
 from swgsim.gear.friction.ripples import FrictionRipple, PositionRipple
 from swgsim.gear.friction.signals import FrictionSignals
 from swgsim.gear.terms import Param, Term, linear_recurrence
@@ -382,11 +383,12 @@ class VelocityLag(Term):
         return sig.replace(v_eff=first_order_lag(sig.t_s, sig.v_eff, float(theta[0])))
 
 
-FRICTION_LIBRARY: dict[str, type[Term]] = {
-    cls.kind: cls for cls in (
+FRICTION_LIBRARY: Registry[type[Term]] = Registry("friction effect", __name__,
+                                                  "FRICTION_LIBRARY", (
+    (cls.kind, cls) for cls in (
         AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
         LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
-}
+))
 """Library key -> effect class. Instantiate with ``FRICTION_LIBRARY[key](name)``."""
 
 
@@ -421,8 +423,7 @@ def register_effect(cls: type[Term]) -> type[Term]:
     if cls.kind in FRICTION_LIBRARY:
         raise ValueError(f"friction effect {cls.kind!r} is already registered "
                          f"({FRICTION_LIBRARY[cls.kind].__qualname__})")
-    FRICTION_LIBRARY[cls.kind] = cls
-    return cls
+    return FRICTION_LIBRARY.add(cls.kind, cls)
 
 
 def make_effect(kind: str, name: str | None = None, **kwargs: Any) -> Term:

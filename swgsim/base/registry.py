@@ -1,0 +1,97 @@
+"""One registry type for every kind of plug-in, and the registries travelling with the work.
+
+The project's extension points are registries: gear faults
+(:data:`swgsim.gear.faults.FAULTS`), sensor faults
+(:data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS` with their evaluation severities),
+friction effects (:data:`swgsim.gear.friction.FRICTION_LIBRARY`, and their fits in
+:data:`swgcal.friction.library.FRICTION_LIBRARY`), learners
+(:data:`learn.learners.models.MODELS`) and the monitor's detectors
+(:data:`learn.monitor.detectors.DETECTORS`). Each is a :class:`Registry`: a dict of name to
+entry that knows its kind and where it lives, and refuses a name taken.
+
+A user registers an entry from their own script. Worker processes (joblib's loky) import
+the project afresh, so they would not know it: every call that runs in a worker is made
+through :func:`travelling`, which takes the registries of this process with it (their
+entries pickled by value where they are not importable, as loky pickles) and adds what a
+worker lacks before the call. Only registries whose module this process imported travel.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+from collections.abc import Callable, Iterable
+from typing import Any, TypeVar
+
+T = TypeVar("T")
+
+#: Every registry made, by ``"module:NAME"`` (:attr:`Registry.where`).
+REGISTRIES: dict[str, Registry] = {}
+
+
+class Registry(dict[str, T]):
+    """Entries of one kind by name, e.g. ``Registry("gear fault", __name__, "FAULTS",
+    ...)``; a dict in every other respect.
+
+    Parameters
+    ----------
+    kind : str
+        What an entry is, in errors (``gear fault``, ``learner``, ...).
+    module, name : str
+        Where it lives (``swgsim.gear.faults``, ``FAULTS``): a worker imports the module
+        to find it (:func:`install`).
+    entries : iterable of (str, entry)
+        The built-in ones.
+    """
+
+    def __init__(self, kind: str, module: str, name: str,
+                 entries: Iterable[tuple[str, T]] = ()) -> None:
+        super().__init__(entries)
+        self.kind = kind
+        self.where = f"{module}:{name}"
+        REGISTRIES[self.where] = self
+
+    def add(self, name: str, entry: T) -> T:
+        """Register ``entry`` under ``name``; returns it.
+
+        Raises
+        ------
+        ValueError
+            ``name`` is taken.
+        """
+        if name in self:
+            raise ValueError(f"{self.kind} {name!r} is registered already")
+        self[name] = entry
+        return entry
+
+
+def carried() -> dict[str, dict[str, Any]]:
+    """The entries of every registry this process made, by :attr:`Registry.where`."""
+    return {w: dict(r) for w, r in REGISTRIES.items()}
+
+
+def install(entries: dict[str, dict[str, Any]]) -> None:
+    """Add to this process's registries the entries of :func:`carried` they lack (a
+    registry's module is imported first, so that its built-ins come from it)."""
+    for where, items in entries.items():
+        if where not in REGISTRIES:
+            importlib.import_module(where.split(":")[0])
+        reg = REGISTRIES[where]
+        for name, entry in items.items():
+            reg.setdefault(name, entry)
+
+
+def travelling(fn: Callable[..., T]) -> Callable[..., T]:
+    """``fn``, to be run in another process with this one's registries (module docstring):
+    ``joblib.delayed(travelling(fn))(*args)``. Take it once per batch of calls: the
+    registries are read when it is made."""
+    return functools.partial(_with_registries, carried(), fn)
+
+
+def _with_registries(entries: dict[str, dict[str, Any]], fn: Callable[..., T], *args: Any,
+                     **kwargs: Any) -> T:
+    install(entries)
+    return fn(*args, **kwargs)
+
+
+__all__ = ["REGISTRIES", "Registry", "carried", "install", "travelling"]
