@@ -10,8 +10,8 @@ the five bridge signals of many gear variants at one operating point
 (:mod:`swgsim.gear.influence`), with ψ = φ_in − φ_out and T_out from the dynamic model.
 An eccentric WG also shifts load between the two mesh zones: the zone whose engagement the
 eccentricity deepens carries the share 1 + κ_e (e / w0) cos(ψ − θ_e) [unverified, κ_e = 1:
-load share proportional to engagement depth]. :meth:`SimulationChain.signals_naive` is
-the reference path: one sparse solve of the whole truss per time step.
+load share proportional to engagement depth]. The reference path, one sparse solve of
+the whole truss per time step, is ``signals_naive`` in ``tests/physics_reference.py``.
 """
 
 from __future__ import annotations
@@ -22,18 +22,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from swgsim.gear import dynamics, profile_dynamics
-from swgsim.gear.faults import ChainParams, angle_index, mesh_severity
-from swgsim.gear.flexspline import FlexsplineGeometry, Mesh, TrussModel, factorize
+from swgsim.gear.faults import ChainParams
+from swgsim.gear.flexspline import FlexsplineGeometry, Mesh, TrussModel
 from swgsim.gear.influence import (
     TABLE_SUBDIVISIONS,
     Influence,
     InfluenceSolver,
-    contact_window,
     torque_influence,
     zone_table,
 )
 from swgsim.gear.profile import Profile
-from swgsim.gear.sensors import SensorLayout, signal_rows
+from swgsim.gear.sensors import SensorLayout
 
 log = logging.getLogger(__name__)
 
@@ -301,43 +300,4 @@ class SimulationChain:
                                 for k in idx])  # (m, 2)
                 sig += (ecc[:, :1] * inf.Ex + ecc[:, 1:] * inf.Ey)[:, :, None]
                 out[idx] = sig + t_out[idx][:, None, :] * h
-        return out
-
-    def signals_naive(self, p: ChainParams, psi: np.ndarray, t_out: np.ndarray) -> np.ndarray:
-        """Reference path: one sparse solve of the truss per time step.
-
-        Builds the WG displacements and tooth forces of every time step, solves
-        K_FF u_F = f_F − K_FP u_P with the (cracked) structure's factorisation and applies
-        the gauge rows to u. Same result as :meth:`signals_from_motion`, far slower.
-
-        Returns
-        -------
-        ndarray, shape (5, n_t)
-        """
-        m = self.model
-        if p.has_root_crack:
-            n = m.mesh.n_theta
-            mc = m.cracked(angle_index(p.root_crack_deg, n),
-                           mesh_severity(p.root_crack_severity, n))
-            lu = factorize(mc.K[m.free][:, m.free])
-            k_fp = mc.K[m.free][:, m.prescribed].tocsc()
-        else:
-            lu, k_fp = m.lu, m.K_FP
-        rows = signal_rows(m, self.layout)
-        loads = m.unit_tooth_loads(self.solver.alpha).tocsr()
-        c = self._tooth_factors(p)
-        hw = np.deg2rad(self.settings.contact_half_width_deg)
-        wg_pos = np.searchsorted(m.prescribed, m.wg_dofs)
-        out = np.empty((5, psi.size))
-        share = self.load_share(p, psi)
-        for k in range(psi.size):
-            w = (share[k] * contact_window(m.theta - psi[k], hw)
-                 + (2 - share[k]) * contact_window(m.theta - psi[k] - np.pi, hw)) * c
-            f = loads @ (w / w.sum()) * t_out[k]
-            u_p = np.zeros(m.prescribed.size)
-            u_p[wg_pos] = m.wg_displacement(psi[k:k + 1], p.w0_m, p.ecc_m, p.ecc_theta_rad)[0]
-            u = np.zeros(m.n_dof)
-            u[m.free] = lu.solve(f[m.free] - k_fp @ u_p)
-            u[m.prescribed] = u_p
-            out[:, k] = rows @ u
         return out

@@ -46,8 +46,8 @@ Equations of motion:
     T_m         = K_p (ω_d − ω_in) + K_i ∫(ω_d − ω_in) dt
 
 Integration: all variants as one vectorised system with classical RK4 at a fixed step
-(:func:`simulate`); :func:`simulate_reference` integrates one variant with
-``scipy.integrate.solve_ivp`` (DOP853) for tests.
+(:func:`simulate`); ``simulate_reference`` in ``tests/physics_reference.py`` integrates one
+variant with ``scipy.integrate.solve_ivp`` (DOP853) to check it.
 """
 
 from __future__ import annotations
@@ -621,31 +621,3 @@ def _result(rec, bk, w_d, t_load, fs, ok, msg=""):
     return SimResult(time=np.arange(n) / fs, states=rec, t_out=t_out, p_in=p_in,
                      p_out=p_out, efficiency=eff, success=ok,
                      message=msg or ("ok" if ok else "non-finite states"))
-
-
-def simulate_reference(params: GearParams, n_in_rpm: float, t_out_nm: float,
-                       phi_in0: float = 0.0, sample_rate_hz: float = 10e3,
-                       window_s: float = 0.12, settle_s: float = 0.1,
-                       rtol: float = 1e-10, atol: float = 1e-12) -> SimResult:
-    """One variant with ``scipy.integrate.solve_ivp`` (DOP853), for testing :func:`simulate`.
-
-    Same arguments and result as :func:`simulate` for a single variant.
-    """
-    from scipy.integrate import solve_ivp
-
-    check_inputs(n_in_rpm, t_out_nm, sample_rate_hz, window_s, settle_s)
-    bk = ke_batch(Batch.of([params]))
-    w_d = np.array([n_in_rpm * RPM])
-    t_load = np.array([float(t_out_nm)])
-    x0 = steady_state(bk, w_d, t_load, np.array([phi_in0]))[:, 0]
-    n_win = int(round(window_s * sample_rate_hz))
-    n_set = int(round(settle_s * sample_rate_hz))
-    t_eval = (n_set + np.arange(n_win)) / sample_rate_hz
-
-    def f(t, y):
-        return rhs(t, y[:, None], bk, w_d, t_load)[:, 0]
-
-    sol = solve_ivp(f, (0.0, t_eval[-1]), x0, method="DOP853", t_eval=t_eval,
-                    rtol=rtol, atol=atol)
-    rec = sol.y[:, None, :]
-    return _result(rec, bk, w_d, t_load, sample_rate_hz, sol.success, sol.message)
