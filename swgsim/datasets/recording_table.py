@@ -22,11 +22,12 @@ import hashlib
 import io
 import logging
 import os
-import stat
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from swgsim.files.inputs import check_input_file
 
 log = logging.getLogger(__name__)
 
@@ -86,21 +87,22 @@ def check_file(path: str | os.PathLike, what: str, max_bytes: int) -> Path:
     FileNotFoundError
         If there is no such file.
     ValueError
-        If it is a folder, a device, a pipe or a socket, is empty, or is larger than
-        ``max_bytes``.
+        If it is a folder, larger than ``max_bytes``, not a regular file or a sparse one
+        (:func:`swgsim.files.inputs.check_input_file`, every input file's checks), or
+        empty.
     """
     p = Path(path).expanduser()
     if not p.exists():
         raise FileNotFoundError(2, f"no {what} file", str(p))
-    st = p.stat()
-    if not stat.S_ISREG(st.st_mode):
-        kind = "a folder" if p.is_dir() else "not a regular file (a device, pipe or socket)"
-        raise ValueError(f"{what} {p}: is {kind}; give a file")
-    if st.st_size == 0:
-        raise ValueError(f"{what} {p}: the file is empty (0 bytes)")
-    if st.st_size > max_bytes:
-        raise ValueError(f"{what} {p}: {st.st_size / 2**20:.1f} MiB, more than the "
+    if p.is_dir():
+        raise ValueError(f"{what} {p}: is a folder; give a file")
+    size = p.stat().st_size
+    if size > max_bytes:
+        raise ValueError(f"{what} {p}: {size / 2**20:.1f} MiB, more than the "
                          f"{max_bytes / 2**20:g} MiB read; split it or write it as Parquet")
+    check_input_file(p, what, max_bytes)
+    if size == 0:
+        raise ValueError(f"{what} {p}: the file is empty (0 bytes)")
     return p
 
 

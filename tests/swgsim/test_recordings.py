@@ -415,6 +415,11 @@ def test_reads_are_bounded_and_of_regular_files(tmp_path):
         import_recording(rec, yml, tmp_path / "stream", max_bytes=1049)
     with pytest.raises(ValueError, match=r"recording .*: is a folder; give a file"):
         import_recording(tmp_path, yml, tmp_path / "stream")
+    sparse = tmp_path / "holes.csv"  # the guard every input file has (files/inputs.py)
+    with open(sparse, "wb") as f:
+        f.truncate(64 << 20)
+    with pytest.raises(ValueError, match=r"recording .*holes.csv: a sparse file"):
+        import_recording(sparse, yml, tmp_path / "stream")
     with pytest.raises(FileNotFoundError):
         import_recording(tmp_path / "none.csv", yml, tmp_path / "stream")
     (tmp_path / "bad.yaml").write_text("operating_points: [")
