@@ -74,6 +74,12 @@ class MonitorExperiment:
     n_jobs : int
         Worker processes, one part (data set, held-out gear, and detector) each.
     progress : bool
+    group : int or None
+        Evaluate only the (data set, held-out gear) of this index, in the order of
+        ``run_on`` and the gears (a job of a cluster array: ``monitor.group=range(0,N)``
+        with a submitit launcher, docs/scale_out.md), writing its parts to ``parts/`` and
+        no report; the jobs of one evaluation share ``report_dir``. None: every one still
+        to do, then the report.
     device : str
         Where the torch detectors (``cnn_res``) run: ``cpu``, ``cuda``, ``cuda:N`` or
         ``auto`` (a GPU where CUDA is present, else the CPU;
@@ -89,6 +95,7 @@ class MonitorExperiment:
     report_dir: str = "reports/monitor"
     n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
     progress: bool = True
+    group: int | None = field(default=None, metadata=allowed(0, None, "group index"))
     device: str = "auto"
 
 
@@ -168,12 +175,58 @@ def run_monitor_evaluation(cfg) -> dict:
         except ValueError as e:
             raise ValueError(f"monitor.datasets.{name}: {e}") from None
     nets = _nets(mc)  # a CUDA device on a machine without one: refused before any work
-    if app.logger is not None:
+    jobs, not_run = plan_jobs(mc, plans, nets.get("torch_device", "cpu"))
+    jobs = group_jobs(jobs, mc.group)
+    if app.logger is not None and mc.group is None:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(mc.report_dir)
-    ownership.check(out, "monitor.report_dir", app="monitor")  # before any work
-    with ownership.claim(out, "monitor", "monitor.report_dir", strict=True) as claim:
-        return _evaluate(app, mc, plans, out, claim, nets)
+    # the jobs of one evaluation (its data sets and design) may write into it together
+    share = part_key([p.config_hash for p in plans.values()] + [dataclasses.asdict(mc.study)])
+    ownership.check(out, "monitor.report_dir", share=share, app="monitor")  # before any work
+    with ownership.claim(out, "monitor", "monitor.report_dir", share=share,
+                         strict=True) as claim:
+        if mc.group is not None:
+            return _evaluate_group(mc, plans, out, jobs, nets)
+        return _evaluate(app, mc, plans, out, claim, nets, jobs, not_run)
+
+
+def group_jobs(jobs: list[Job], group: int | None) -> list[Job]:
+    """The jobs of the (data set, held-out gear) of index ``group`` (in the jobs' order),
+    or all of them for None.
+
+    Raises
+    ------
+    ValueError
+        ``group`` beyond the evaluation's (data set, held-out gear) pairs, naming them.
+    """
+    if group is None:
+        return jobs
+    keys = list(dict.fromkeys((j.dataset, j.gear) for j in jobs))
+    if not 0 <= group < len(keys):
+        pairs = ", ".join(f"{k}: {d} gear {g}" for k, (d, g) in enumerate(keys))
+        raise ValueError(f"monitor.group must lie in [0, {len(keys) - 1}] ({pairs}), "
+                         f"got {group}")
+    return [j for j in jobs if (j.dataset, j.gear) == keys[group]]
+
+
+def _evaluate_group(mc: MonitorExperiment, plans: dict, out: Path, jobs: list[Job],
+                    nets: dict) -> dict:
+    """One (data set, held-out gear)'s parts into ``out/parts`` (a job of an array), no
+    report."""
+    (out / "parts").mkdir(parents=True, exist_ok=True)
+    (out / "models").mkdir(exist_ok=True)
+    device = nets.get("torch_device", "cpu")
+    t0 = time.perf_counter()
+    parts, resumed = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
+        plans[js[0].dataset], js, mc.study, str(out), device), "monitor evaluation",
+        mc.progress, mc.n_jobs)
+    wall = time.perf_counter() - t0
+    if mc.progress:
+        print(f"monitor.group {mc.group} ({jobs[0].dataset}, held-out gear {jobs[0].gear}): "
+              f"{len(parts)} part(s) in {out}/parts ({resumed} already there), "
+              f"{wall / 60:.1f} min; the report: the same command without monitor.group")
+    return {"task": "monitor", "report_dir": str(out), "group": mc.group,
+            "parts": [j.file for j in jobs], "wall_s": wall}
 
 
 def _nets(mc: MonitorExperiment) -> dict:
@@ -189,12 +242,12 @@ def _nets(mc: MonitorExperiment) -> dict:
     return {**device_record(dev), "torch_device": str(dev)}
 
 
-def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: dict) -> dict:
+def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: dict,
+              jobs: list[Job], not_run: dict) -> dict:
     """The evaluation into the claimed ``out`` (every file it writes recorded)."""
     (out / "parts").mkdir(parents=True, exist_ok=True)
     (out / "models").mkdir(exist_ok=True)
     device = nets.get("torch_device", "cpu")
-    jobs, not_run = plan_jobs(mc, plans, device)
     for name, why in not_run.items():
         for d, w in why.items():
             log.warning("detector %s not run on %s: %s", d, name, w)
@@ -381,5 +434,6 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
                 run.log_artifact(out / f)
 
 
-__all__ = ["Job", "MonitorExperiment", "finished_parts", "part_key", "plan_jobs", "run_group",
+__all__ = ["Job", "MonitorExperiment", "finished_parts", "group_jobs", "part_key", "plan_jobs",
+           "run_group",
            "run_monitor_evaluation", "save_part"]

@@ -1,7 +1,8 @@
 """SIGTERM and Ctrl-C end every app cleanly (swgcli.app.run, the one place for all apps):
 exit 143 / 130, one line naming what was finished and kept and how a rerun resumes, no
 traceback from worker pools, no worker left behind; a second signal during the cleanup is
-ignored; the resumed monitor evaluation reuses only the parts its stamp and key prove.
+ignored; the resumed monitor evaluation reuses only the parts its stamp and key prove, and
+runs as a job array whose last run builds the report.
 """
 
 from __future__ import annotations
@@ -140,3 +141,41 @@ def test_resumed_evaluation_reuses_only_the_parts_proved_complete(tmp_path):
     r = _evaluation(out, "[1,2,3]")
     err = r.communicate(timeout=120)[1]
     assert r.returncode == 2 and f"parts/{part.name}" in err and len(_lines(err)) == 1
+
+
+@pytest.mark.slow  # two tiny parts as submitit_local jobs, then the report: about 2 min
+def test_an_evaluation_runs_as_a_job_array_and_a_last_run_builds_the_report(tmp_path):
+    """A cluster's way (docs/scale_out.md): one submitit job per (data set, held-out gear)
+    (``monitor.group``) into one report folder, then the same command without
+    ``monitor.group`` finds every part done and builds the report, recomputing none."""
+    out = tmp_path / "meval"
+    cmd = [sys.executable, "-m", "swgcli.train", "-m", *TINY_MONITOR,
+           "monitor.study.gears=[2,3]", "monitor.group=0,1", f"monitor.report_dir={out}",
+           "hydra/launcher=submitit_local", "hydra.launcher.timeout_min=10",
+           f"hydra.sweep.dir={tmp_path / 'sweep'}"]
+    r = subprocess.run(cmd, cwd=tmp_path, env=ENV, capture_output=True, text=True,
+                       timeout=900)
+    assert r.returncode == 0, r.stderr[-3000:]
+    parts = {f.name: f.stat().st_mtime_ns for f in (out / "parts").glob("*.json")}
+    assert sorted(parts) == ["tiny_bench_gear2.json", "tiny_bench_gear3.json"]
+    assert not (out / "table.md").exists()
+    r = _evaluation(out, "[2,3]")
+    err = r.communicate(timeout=400)[1]
+    assert r.returncode == 0, err
+    assert {f.name: f.stat().st_mtime_ns for f in (out / "parts").glob("*.json")} == parts
+    assert (out / "table.md").is_file()
+    res = (out / "results.csv").read_text()
+    assert ",2," in res and ",3," in res
+
+
+def test_a_group_beyond_the_evaluations_pairs_is_refused_before_any_work(tmp_path):
+    from learn.tasks.train import run_train
+    from swgcli import compose_app
+
+    out = tmp_path / "meval"
+    cfg = compose_app("train", [*TINY_MONITOR, "monitor.study.gears=[2,3]",
+                                "monitor.group=2", f"monitor.report_dir={out}"])
+    with pytest.raises(ValueError, match=r"monitor.group must lie in \[0, 1\] \(0: "
+                                         r"tiny_bench gear 2, 1: tiny_bench gear 3\), got 2"):
+        run_train(cfg)
+    assert not out.exists()
