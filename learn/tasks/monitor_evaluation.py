@@ -181,7 +181,7 @@ def run_monitor_evaluation(cfg) -> dict:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(mc.report_dir)
     # the jobs of one evaluation (its data sets and design) may write into it together
-    share = part_key([p.config_hash for p in plans.values()] + [dataclasses.asdict(mc.study)])
+    share = share_key(plans, mc.study)
     ownership.check(out, "monitor.report_dir", share=share, app="monitor")  # before any work
     with ownership.claim(out, "monitor", "monitor.report_dir", share=share,
                          strict=True) as claim:
@@ -190,9 +190,17 @@ def run_monitor_evaluation(cfg) -> dict:
         return _evaluate(app, mc, plans, out, claim, nets, jobs, not_run)
 
 
-def group_jobs(jobs: list[Job], group: int | None) -> list[Job]:
+def share_key(plans: dict[str, DatasetPlan], study: object) -> str:
+    """What the jobs of one evaluation share their report folder by
+    (:func:`swgsim.files.ownership.claim`'s ``share``): its data sets' config hashes and
+    its design."""
+    return part_key([p.config_hash for p in plans.values()] + [dataclasses.asdict(study)])
+
+
+def group_jobs(jobs: list[Job], group: int | None, key: str = "monitor.group"
+               ) -> list[Job]:
     """The jobs of the (data set, held-out gear) of index ``group`` (in the jobs' order),
-    or all of them for None.
+    or all of them for None; ``key``: the option's name in messages.
 
     Raises
     ------
@@ -204,29 +212,35 @@ def group_jobs(jobs: list[Job], group: int | None) -> list[Job]:
     keys = list(dict.fromkeys((j.dataset, j.gear) for j in jobs))
     if not 0 <= group < len(keys):
         pairs = ", ".join(f"{k}: {d} gear {g}" for k, (d, g) in enumerate(keys))
-        raise ValueError(f"monitor.group must lie in [0, {len(keys) - 1}] ({pairs}), "
-                         f"got {group}")
+        raise ValueError(f"{key} must lie in [0, {len(keys) - 1}] ({pairs}), got {group}")
     return [j for j in jobs if (j.dataset, j.gear) == keys[group]]
+
+
+def run_one_group(out: Path, jobs: list[Job], delayed: Callable, desc: str, progress: bool,
+                  n_jobs: int, key: str, group: int) -> dict:
+    """One (data set, held-out gear)'s parts into ``out/parts`` (a job of an array, option
+    ``key`` = ``group``; :func:`run_parts`), no report; returns its summary."""
+    (out / "parts").mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    parts, resumed = run_parts(out, jobs, delayed, desc, progress, n_jobs)
+    wall = time.perf_counter() - t0
+    if progress:
+        print(f"{key} {group} ({jobs[0].dataset}, held-out gear {jobs[0].gear}): "
+              f"{len(parts)} part(s) in {out}/parts ({resumed} already there), "
+              f"{wall / 60:.1f} min; the report: the same command without {key}")
+    return {"report_dir": str(out), "group": group, "parts": [j.file for j in jobs],
+            "wall_s": wall}
 
 
 def _evaluate_group(mc: MonitorExperiment, plans: dict, out: Path, jobs: list[Job],
                     nets: dict) -> dict:
-    """One (data set, held-out gear)'s parts into ``out/parts`` (a job of an array), no
-    report."""
-    (out / "parts").mkdir(parents=True, exist_ok=True)
-    (out / "models").mkdir(exist_ok=True)
+    """One (data set, held-out gear)'s parts (a job of an array), no report."""
+    (out / "models").mkdir(parents=True, exist_ok=True)
     device = nets.get("torch_device", "cpu")
-    t0 = time.perf_counter()
-    parts, resumed = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
-        plans[js[0].dataset], js, mc.study, str(out), device), "monitor evaluation",
-        mc.progress, mc.n_jobs)
-    wall = time.perf_counter() - t0
-    if mc.progress:
-        print(f"monitor.group {mc.group} ({jobs[0].dataset}, held-out gear {jobs[0].gear}): "
-              f"{len(parts)} part(s) in {out}/parts ({resumed} already there), "
-              f"{wall / 60:.1f} min; the report: the same command without monitor.group")
-    return {"task": "monitor", "report_dir": str(out), "group": mc.group,
-            "parts": [j.file for j in jobs], "wall_s": wall}
+    return {"task": "monitor", **run_one_group(
+        out, jobs, lambda js: joblib.delayed(_job)(plans[js[0].dataset], js, mc.study,
+                                                   str(out), device),
+        "monitor evaluation", mc.progress, mc.n_jobs, "monitor.group", mc.group)}
 
 
 def _nets(mc: MonitorExperiment) -> dict:
@@ -435,5 +449,5 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
 
 
 __all__ = ["Job", "MonitorExperiment", "finished_parts", "group_jobs", "part_key", "plan_jobs",
-           "run_group",
+           "run_group", "run_one_group", "share_key",
            "run_monitor_evaluation", "save_part"]

@@ -33,7 +33,15 @@ from learn.reports.prognosis_report import (
     write_table,
 )
 from learn.tasks.config import plain, typed_app
-from learn.tasks.monitor_evaluation import Job, part_key, run_group, run_parts
+from learn.tasks.monitor_evaluation import (
+    Job,
+    group_jobs,
+    part_key,
+    run_group,
+    run_one_group,
+    run_parts,
+    share_key,
+)
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
@@ -66,6 +74,10 @@ class PrognosisExperiment:
     n_jobs : int
         Worker processes, one part (data set, held-out gear) each.
     progress : bool
+    group : int or None
+        Evaluate only the (data set, held-out gear) of this index, writing its part and
+        no report (a job of a cluster array, as ``monitor.group``: docs/scale_out.md).
+        None: every one still to do, then the report.
     """
 
     run_on: list[str] = field(default_factory=lambda: ["bench", "robot_joint"])
@@ -74,6 +86,7 @@ class PrognosisExperiment:
     report_dir: str = "reports/prognosis"
     n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
     progress: bool = True
+    group: int | None = field(default=None, metadata=allowed(0, None, "group index"))
 
 
 def plan_parts(pc: PrognosisExperiment, plans: dict[str, DatasetPlan]) -> list[Job]:
@@ -116,11 +129,19 @@ def run_prognosis_evaluation(cfg) -> dict:
         if bad:
             raise ValueError(f"prognosis.study.gears: {bad} not in prognosis.datasets.{name}; "
                              f"allowed: {have}")
-    if app.logger is not None:
+    jobs = group_jobs(plan_parts(pc, plans), pc.group, "prognosis.group")
+    if app.logger is not None and pc.group is None:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(pc.report_dir)
-    ownership.check(out, "prognosis.report_dir", app="prognosis")
-    with ownership.claim(out, "prognosis", "prognosis.report_dir", strict=True) as claim:
+    share = share_key(plans, pc.study)  # the jobs of one evaluation write into it together
+    ownership.check(out, "prognosis.report_dir", share=share, app="prognosis")
+    with ownership.claim(out, "prognosis", "prognosis.report_dir", share=share,
+                         strict=True) as claim:
+        if pc.group is not None:
+            return {"task": "prognosis", **run_one_group(
+                out, jobs, lambda js: joblib.delayed(_job)(plans[js[0].dataset], js,
+                                                           pc.study, str(out)),
+                "prognosis evaluation", pc.progress, pc.n_jobs, "prognosis.group", pc.group)}
         return _evaluate(app, pc, plans, out, claim)
 
 

@@ -88,6 +88,25 @@ def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):
     assert "(1 of 1 parts resumed from parts/" in (out / "table.md").read_text()
 
 
+def test_a_job_of_an_array_runs_its_group_alone_and_writes_no_report(tiny_prognosis,
+                                                                     monkeypatch, capsys):
+    """``prognosis.group=0`` (a job of a cluster array, docs/scale_out.md) into the same
+    folder: its part is found done, nothing is computed and the report stays as it was."""
+    import learn.tasks.prognosis_evaluation as task
+
+    out, _ = tiny_prognosis
+    before = {f: (out / f).read_bytes() for f in ("results.csv", "table.md")}
+
+    def fail(*args, **kwargs):
+        raise AssertionError("a finished part was computed again")
+
+    monkeypatch.setattr(task, "run_prognosis_part", fail)
+    summary = _run(out, "prognosis.group=0", "prognosis.progress=true")
+    assert summary["group"] == 0 and summary["parts"] == ["tiny_gear3.json"]
+    assert "prognosis.group 0 (tiny, held-out gear 3): 1 part(s)" in capsys.readouterr().out
+    assert {f: (out / f).read_bytes() for f in before} == before
+
+
 BAD = {  # case -> (override, the start of the one line)
     "seeds shared with the calibration": (
         "prognosis.study.calibration_seeds=[1]", "prognosis.study.calibration_seeds must be "
@@ -103,6 +122,8 @@ BAD = {  # case -> (override, the start of the one line)
     "a gear the data set lacks": ("prognosis.study.gears=[7]",
                                   "prognosis.study.gears: [7] not in"),
     "coverage 1": ("prognosis.study.coverage=1.0", "prognosis.study.coverage must lie in"),
+    "a group beyond the pairs": ("prognosis.group=1", "prognosis.group must lie in [0, 0] "
+                                 "(0: tiny gear 3), got 1"),
 }
 
 
