@@ -388,7 +388,8 @@ def app_help(config_name: str, overrides: list[str]) -> str:
             f"the config (foo.bar=value)\n\n{shown}\n{foot}")
 
 
-def hydra_app(config_name: str, schema: type, prog: str, needs: Sequence[str] = ()):
+def hydra_app(config_name: str, schema: type, prog: str, needs: Sequence[str] = (),
+              inputs: Callable[[Any], Any] | None = None):
     """Decorator: a task function ``task(cfg)`` as a console entry point ``main()``.
 
     Parameters
@@ -404,6 +405,11 @@ def hydra_app(config_name: str, schema: type, prog: str, needs: Sequence[str] = 
         config is checked and before the task starts
         (:func:`learn.tracking.preflight.check_imports`): a broken install is one line
         naming the package, exit 2, before any work.
+    inputs : callable, optional
+        ``inputs(cfg)``: the app's checks of what it reads and where it writes (a file or
+        data set that must exist, a folder it must own), run after the schema and before
+        the libraries in ``needs`` are imported, so that a bad input is refused in about a
+        second rather than after seconds of imports; it must not import those libraries.
 
     Returns
     -------
@@ -423,6 +429,8 @@ def hydra_app(config_name: str, schema: type, prog: str, needs: Sequence[str] = 
             try:
                 validate(cfg, schema)
                 check_out_dirs(cfg, schema)
+                if inputs is not None:
+                    inputs(cfg)
                 check_imports(needs)  # a broken install found before any work
                 return task(cfg)
             except Exception as e:  # noqa: BLE001

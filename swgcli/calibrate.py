@@ -30,8 +30,18 @@ from typing import Any
 from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
-from swgcal import KINDS, SelectionConfig, kind_module
+from swgcal import (
+    KINDS,
+    SelectionConfig,
+    build_problem,
+    calibrate,
+    detect_kind,
+    kind_module,
+    options_from_config,
+    write_outputs,
+)
 from swgcli.app import hydra_app
+from swgsim.files import ownership
 
 log = logging.getLogger(__name__)
 
@@ -165,6 +175,36 @@ def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
     return run.run_id
 
 
+def check_inputs(cfg: DictConfig) -> tuple[Path, Path, str]:
+    """What ``swgsim-calibrate`` reads and writes, checked before any work and before its
+    libraries are imported (:func:`swgcli.app.hydra_app`'s ``inputs``).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        Composed ``conf/calibrate.yaml`` (``measured``, ``out_dir``).
+
+    Returns
+    -------
+    measured : Path
+    out_dir : Path
+    kind : str
+        ``"friction"``, ``"thermal"`` or ``"strain"`` (:func:`swgcal.detect_kind`).
+
+    Raises
+    ------
+    swgcal.MeasuredDataError
+        ``measured`` is missing or of no known kind (named).
+    ValueError
+        ``out_dir`` holds a file this project cannot show it wrote
+        (:func:`swgsim.files.ownership.check`).
+    """
+    measured = Path(cfg.measured).expanduser()
+    out_dir = Path(cfg.out_dir).expanduser()
+    ownership.check(out_dir, "out_dir", app="swgsim-calibrate")
+    return measured, out_dir, detect_kind(measured)
+
+
 def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     """Calibrate the model against measured data (the task behind ``swgsim-calibrate``).
 
@@ -192,13 +232,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
         ``out_dir`` holds a file this project cannot show it wrote (named; before any
         work, :func:`swgsim.files.ownership.check`); the app's own earlier output is replaced.
     """
-    from swgcal import build_problem, calibrate, detect_kind, options_from_config, write_outputs
-    from swgsim.files import ownership
-
-    measured = Path(cfg.measured).expanduser()
-    out_dir = Path(cfg.out_dir).expanduser()
-    ownership.check(out_dir, "out_dir", app="swgsim-calibrate")  # before any work
-    kind = detect_kind(measured)
+    measured, out_dir, kind = check_inputs(cfg)
     options, selection = options_from_config(
         kind, OmegaConf.to_container(cfg, resolve=True), measured)
     if cfg.logger.enabled:
@@ -225,7 +259,8 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
 NEEDS = ("numpy", "scipy", "pandas", "sklearn", "yaml", "matplotlib", "mlflow")
 
 
-main = hydra_app("calibrate", CalibrateApp, "swgsim-calibrate", NEEDS)(run_calibrate)
+main = hydra_app("calibrate", CalibrateApp, "swgsim-calibrate", NEEDS,
+                 inputs=check_inputs)(run_calibrate)
 
 if __name__ == "__main__":
     main()

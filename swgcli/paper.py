@@ -23,8 +23,10 @@ from collections import Counter
 
 from omegaconf import DictConfig, OmegaConf
 
+from learn.reports.summary import SUMMARY_FILES
 from swgcli.app import absolute_path, hydra_app
 from swgcli.schema import PaperApp
+from swgsim.files import ownership
 
 log = logging.getLogger(__name__)
 
@@ -44,6 +46,36 @@ def _check(cfg: DictConfig) -> list[str]:
     if int(cfg.n_jobs) < 1:
         raise ValueError(f"n_jobs must be >= 1, got {cfg.n_jobs}")
     return names
+
+
+def check_inputs(cfg: DictConfig) -> dict:
+    """Every key, data set and report folder of the run checked once, before any work and
+    before the libraries are imported (:func:`swgcli.app.hydra_app`'s ``inputs``).
+
+    Parameters
+    ----------
+    cfg : DictConfig
+        Composed ``conf/paper.yaml``.
+
+    Returns
+    -------
+    dict
+        Data-set name -> :class:`swgsim.datasets.plan.DatasetPlan`, in ``run_on`` order.
+
+    Raises
+    ------
+    ValueError
+        A bad key or data-set config (named), or a report folder holding a file this
+        project cannot show it wrote (:func:`swgsim.files.ownership.check`): in
+        ``report_root`` one of the summary's files, anything in ``<report_root>/<name>``.
+    """
+    plans = _plans(cfg, _check(cfg))
+    root_rep = absolute_path(str(cfg.report_root))
+    ownership.check(root_rep, "report_root", only=SUMMARY_FILES,
+                    app="swgsim-paper")  # shared: our files only
+    for n in plans:
+        ownership.check(f"{root_rep}/{n}", "report_root", app="paper-study")
+    return plans
 
 
 def _plans(cfg: DictConfig, names: list[str]) -> dict:
@@ -144,18 +176,13 @@ def run_paper(cfg: DictConfig) -> dict:
         anything in ``<report_root>/<name>`` (both before any work) or in
         ``<data_root>/<name>`` (when that data set is due).
     """
-    from learn.reports.summary import SUMMARY_FILES, write_summary
+    from learn.reports.summary import write_summary
     from learn.tracking.store import check_tracking
-    from swgsim.files import ownership
 
-    names = _check(cfg)
-    plans = _plans(cfg, names)
+    plans = check_inputs(cfg)
+    names = list(plans)
     check_tracking(cfg.tracking_uri, "tracking_uri")  # before any work
     root_data, root_rep = absolute_path(str(cfg.data_root)), absolute_path(str(cfg.report_root))
-    ownership.check(root_rep, "report_root", only=SUMMARY_FILES,
-                    app="swgsim-paper")  # shared: our files only
-    for n in names:
-        ownership.check(f"{root_rep}/{n}", "report_root", app="paper-study")
     counter, n_stages = itertools.count(1), 2 * len(names) + 1
 
     def stage() -> str:
@@ -194,7 +221,7 @@ NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "joblib", "sklearn", 
          "matplotlib")
 
 
-main = hydra_app("paper", PaperApp, "swgsim-paper", NEEDS)(run_paper)
+main = hydra_app("paper", PaperApp, "swgsim-paper", NEEDS, inputs=check_inputs)(run_paper)
 
 if __name__ == "__main__":
     main()

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from omegaconf import DictConfig
 
+from learn.tasks.train import check_inputs, run_train
 from swgcli.app import hydra_app
 from swgcli.schema import TrainApp
 
@@ -23,11 +24,9 @@ NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "joblib", "sklearn", 
          "skops.io", "mlflow", "matplotlib")
 
 
-@hydra_app("train", TrainApp, "swgsim-train", NEEDS)
+@hydra_app("train", TrainApp, "swgsim-train", NEEDS, inputs=check_inputs)
 def main(cfg: DictConfig) -> dict:
     """Compose ``conf/train.yaml`` and run the task it names."""
-    from learn.tasks.train import run_train
-
     return run_train(cfg)
 
 

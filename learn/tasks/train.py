@@ -11,6 +11,7 @@ import numpy as np
 from learn.inputs.features import extract_features
 from learn.studies.protocols import ProtocolResult, class_labels, evaluate, window_groups
 from learn.tasks.config import plain, typed_app
+from swgsim.datasets.schema import read_manifest
 
 log = logging.getLogger(__name__)
 
@@ -22,6 +23,31 @@ TASKS: dict[str, str] = {
     "monitor": "learn.tasks.monitor_evaluation.run_monitor_evaluation",
     "prognosis": "learn.tasks.prognosis_evaluation.run_prognosis_evaluation",
 }
+
+
+def check_inputs(cfg) -> None:
+    """What ``swgsim-train`` reads, checked before any work and before its libraries are
+    imported (:func:`swgcli.app.hydra_app`'s ``inputs``): the task's name and, for a task
+    that reads a data set already on disk (``study``, ``paper_study``, ``transfer``
+    without ``transfer.run_on``), that data set's manifest.
+
+    Parameters
+    ----------
+    cfg : omegaconf.DictConfig or swgcli.schema.TrainApp
+        Composed ``conf/train.yaml``.
+
+    Raises
+    ------
+    ValueError
+        A task not in :data:`TASKS`, or ``stored.path`` not a data set
+        (:class:`swgsim.datasets.schema.DataSetError`, naming the path).
+    """
+    if cfg.task not in TASKS:
+        raise ValueError(f"task must be one of {sorted(TASKS)}, got {cfg.task!r}")
+    reads_stored = cfg.task in ("study", "paper_study") or (
+        cfg.task == "transfer" and cfg.transfer is not None and not cfg.transfer.run_on)
+    if reads_stored:
+        read_manifest(cfg.stored.path)
 
 
 def run_train(cfg) -> dict:
@@ -46,8 +72,7 @@ def run_train(cfg) -> dict:
     from hydra.utils import get_method
 
     app = typed_app(cfg)
-    if app.task not in TASKS:
-        raise ValueError(f"task must be one of {sorted(TASKS)}, got {app.task!r}")
+    check_inputs(app)
     if app.logger is not None:
         from learn.tracking.store import check_tracking
 
