@@ -269,3 +269,23 @@ def test_hydra_sweep_jobs_share_one_parent(tiny_dataset, tracking_uri, tmp_path)
     parent = client.get_run(pid)
     assert parent.data.tags[GROUP_PARENT_TAG] == f"sweep {sweep.resolve()}"
     assert all(len(r.outputs.model_outputs) == 1 for r in jobs)  # log_models default: a job's
+
+
+@pytest.mark.parametrize("labels", [["a", "b"], ["healthy", "eccentric_wg", "reduced_damping",
+                                                  "root_crack", "tip_crack", "wear"]])
+def test_the_confusion_figure_holds_every_label_and_its_title(labels):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from learn.tracking.mlflow_runs import confusion_figure
+
+    n = len(labels)
+    fig = confusion_figure(np.arange(n * n).reshape(n, n), labels,
+                           "selection2-svm: mean test accuracy 87.5 %")
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()  # places the axis labels
+    renderer = canvas.get_renderer()
+    inside = fig.bbox.padded(1.0)  # pixels
+    for text in [*fig.axes[0].get_xticklabels(), *fig.axes[0].get_yticklabels(),
+                 fig.axes[0].xaxis.label, fig.axes[0].yaxis.label, fig._suptitle]:
+        box = text.get_window_extent(renderer)
+        assert inside.contains(box.x0, box.y0) and inside.contains(box.x1, box.y1), text
