@@ -1,6 +1,8 @@
 """The project's import graph and function lengths, from the source (no imports run).
 
-Prints modules and lines per package, the import cycles between modules (strongly
+Prints modules and lines per package (the library's size, :func:`library_lines`: the
+``.py`` files of swgsim, swgcal, learn and swgcli; the architecture test prints it too),
+the import cycles between modules (strongly
 connected components of the graph of intra-project imports, TYPE_CHECKING imports
 included), imports that climb back up a declared layer, and the longest functions.
 
@@ -12,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import ast
-from collections import defaultdict
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -111,6 +112,17 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
+def library_lines(mods: dict[str, Path] | None = None) -> dict[str, tuple[int, int]]:
+    """Package -> (modules, lines) of the library's ``.py`` files, and ``"all"``."""
+    per_pkg = {k: [0, 0] for k in (*PACKAGES, "all")}
+    for m, f in (modules() if mods is None else mods).items():
+        n = len(f.read_text(encoding="utf-8").splitlines())
+        for key in (m.split(".")[0], "all"):
+            per_pkg[key][0] += 1
+            per_pkg[key][1] += n
+    return {k: (v[0], v[1]) for k, v in per_pkg.items()}
+
+
 def long_functions(mods: dict[str, Path], top: int) -> list[tuple[int, str]]:
     """(lines, 'file:line name') of the longest functions outside tests."""
     rows = []
@@ -128,12 +140,8 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     mods = modules()
     graph = {m: imports(m, f, set(mods)) for m, f in mods.items()}
-    per_pkg: dict[str, list[int]] = defaultdict(lambda: [0, 0])
-    for m, f in mods.items():
-        per_pkg[m.split(".")[0]][0] += 1
-        per_pkg[m.split(".")[0]][1] += len(f.read_text(encoding="utf-8").splitlines())
     print("modules and lines per package:")
-    for pkg, (n, lines) in per_pkg.items():
+    for pkg, (n, lines) in library_lines(mods).items():
         print(f"  {pkg:<8s} {n:>3d} modules {lines:>6d} lines")
     cyc = cycles(graph)
     print(f"import cycles: {len(cyc)}")
@@ -146,10 +154,10 @@ def main(argv: list[str] | None = None) -> None:
     for m, d in up:
         print(f"  {m} -> {d}")
     lengths = long_functions(mods, args.top)
-    n100 = sum(1 for f in mods.values() for n in ast.walk(ast.parse(f.read_text()))
-               if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
-               and n.end_lineno - n.lineno + 1 >= 100)
-    print(f"functions of 100 lines or more: {n100}; longest:")
+    n80 = sum(1 for f in mods.values() for n in ast.walk(ast.parse(f.read_text()))
+              if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
+              and n.end_lineno - n.lineno + 1 > 80)
+    print(f"functions over 80 lines: {n80}; longest:")
     for n, where in lengths:
         print(f"  {n:>4d}  {where}")
 

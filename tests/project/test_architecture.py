@@ -1,6 +1,7 @@
 """The layout's rules, held by a test (docs/ARCHITECTURE.md, "Floors"): no import cycle
 anywhere in the project (imports inside functions included), every package's declared
-floors respected, no module over 700 lines, no function over 100 lines."""
+floors respected, no module over 600 lines and no function over 80 lines but those
+listed with a reason; the library's size printed (``pytest -s -k library_size``)."""
 
 from __future__ import annotations
 
@@ -33,10 +34,58 @@ FLOORS: dict[str, list[tuple[str, int]]] = {
 #: Which packages a package may import (besides itself).
 USES = {"swgsim": set(), "swgcal": {"swgsim"}, "learn": {"swgsim"},
         "swgcli": {"swgsim", "swgcal", "learn"}}
-MAX_MODULE_LINES = 700
-MAX_FUNCTION_LINES = 100
-#: Functions allowed beyond MAX_FUNCTION_LINES: "path:name" -> why. Empty.
-LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {}
+MAX_MODULE_LINES = 600
+MAX_FUNCTION_LINES = 80
+#: Modules allowed beyond MAX_MODULE_LINES: path -> why. An entry back under the limit
+#: fails the test, so the list stays true; shrinking it is work still to do (issue 46).
+LONG_MODULES_JUSTIFIED: dict[str, str] = {
+    "swgsim/files/ownership.py": "stamps, claims and the proof a file is ours: one chain of "
+                                 "custody, split it and each half trusts the other blindly",
+    "swgcal/loop.py": "the calibration loop and its before/after error: one algorithm",
+    "swgsim/sensing/effects.py": "every measurement-chain effect with its source; to be split "
+                                 "by effect kind",
+    "learn/inputs/signals.py": "the nets' inputs (raw, diff, features) and their checks; to be "
+                               "split from the transfer study's windows",
+    "learn/monitor/normal.py": "the normal-behaviour model and its operating-variable laws; "
+                               "the laws to move beside learn/monitor/laws.py",
+    "learn/learners/nets.py": "the torch wrapper: fit, fine-tune, devices; fine-tuning to "
+                              "move with learn/learners/adapt.py",
+    "swgsim/gear/thermal.py": "joint temperature and its friction law, with the measured "
+                              "UR3 trace's import",
+    "learn/monitor/gear_monitor.py": "commissioning, scoring, alarm, naming: one gear's "
+                                     "monitor state machine",
+    "swgsim/gear/dynamics.py": "eq. (1)-(6) and their integrator; the steady and the "
+                               "profile integrators are still two (issue 46)",
+    "swgsim/datasets/plan.py": "checks, variants and shards; the checks to move into the "
+                               "configs' own check() (issue 46: plan at most 300 lines)",
+    "learn/monitor/stream.py": "a stream's input checks, the run and its outputs",
+    "swgcal/friction/data.py": "friction recordings: loading, checks and the real data "
+                               "sets' metadata",
+    "tests/learn/test_monitor.py": "the monitor's tests: to be split by what they hold",
+    "tests/apps/test_audit.py": "the audit's table of stranger's inputs, one row a case",
+    "tests/swgsim/test_recordings.py": "every table format and bad mapping of a recording",
+}
+#: Functions allowed beyond MAX_FUNCTION_LINES: "path:name" -> why (most are over by
+#: their numpydoc docstring, which the style asks for; the code lines follow).
+LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
+    "swgsim/datasets/generate.py:generate": "docstring 38 lines, code 44",
+    "swgsim/datasets/profile_shard.py:simulate_profile_shard": "docstring 25, code 66",
+    "swgsim/gear/dynamics.py:simulate": "docstring 39, code 42",
+    "swgsim/gear/profile_dynamics.py:simulate_profile": "docstring 39, code 48",
+    "swgcal/core.py:_uncertainty": "one covariance derivation, 81 lines of code: to split",
+    "swgcal/diagnose.py:diagnose": "docstring 28, code 57",
+    "swgcal/report.py:base_summary": "docstring 22, code 61",
+    "learn/inputs/signals.py:build_input": "docstring 39, code 52",
+    "learn/learners/nets.py:fine_tune": "docstring 38, code 61",
+    "learn/studies/latency.py:measure_latency": "docstring 35, code 53",
+    "learn/studies/paper_study.py:paper_study": "docstring 35, code 47",
+    "learn/studies/protocols.py:make_splits": "docstring 33, code 58",
+    "learn/studies/transfer.py:run_comparisons": "docstring 53, code 39",
+    "learn/tracking/mlflow_runs.py:log_run": "docstring 49, code 40",
+    "scripts/bench_generate.py:main": "a benchmark's report, 81 lines: to split",
+    "scripts/naming_study.py:main": "a study's report, 83 lines: to split",
+    "scripts/paper_sensitivity.py:main": "a study's report, 86 lines: to split",
+}
 
 
 @pytest.fixture(scope="module")
@@ -91,92 +140,40 @@ def _python_files() -> list[Path]:
     return sorted(f for d in dirs for f in (ROOT / d).rglob("*.py"))
 
 
-def test_no_module_over_700_lines():
-    long = {str(f.relative_to(ROOT)): n for f in _python_files()
+def _long_modules() -> dict[str, int]:
+    return {str(f.relative_to(ROOT)): n for f in _python_files()
             if (n := len(f.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES}
-    assert long == {}
 
 
-def test_no_function_over_100_lines():
-    long = []
+def _long_functions() -> dict[str, int]:
+    out = {}
     for f in _python_files():
         if f.is_relative_to(ROOT / "tests"):
             continue
         for n in ast.walk(ast.parse(f.read_text(encoding="utf-8"))):
             if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 size = n.end_lineno - n.lineno + 1
-                key = f"{f.relative_to(ROOT)}:{n.name}"
-                if size > MAX_FUNCTION_LINES and key not in LONG_FUNCTIONS_JUSTIFIED:
-                    long.append(f"{key} ({size})")
-    assert long == []
+                if size > MAX_FUNCTION_LINES:
+                    out[f"{f.relative_to(ROOT)}:{n.name}"] = size
+    return out
 
 
-def test_the_checker_finds_a_planted_cycle_and_a_floor_breach(tmp_path):
-    """The rules can fail: a planted cycle and an import up a floor are found."""
-    g = {"swgsim.gear.a": {"swgsim.gear.b"}, "swgsim.gear.b": {"swgsim.gear.a"},
-         "swgsim.gear.c": {"swgsim.datasets.plan"}, "swgsim.datasets.plan": set()}
-    assert import_graph.cycles(g) == [["swgsim.gear.a", "swgsim.gear.b"]]
-    um, ud = unit("swgsim.gear.c"), unit("swgsim.datasets.plan")
-    assert ud[1] >= um[1] and ud[0] != um[0]
+def test_no_module_over_600_lines_without_a_reason():
+    long = _long_modules()
+    assert {k: v for k, v in long.items() if k not in LONG_MODULES_JUSTIFIED} == {}
+    assert sorted(set(LONG_MODULES_JUSTIFIED) - set(long)) == []  # back under: unlist it
 
 
-# ------------------------------------------------------------- the architecture page
-DOC = ROOT / "docs" / "ARCHITECTURE.md"
+def test_no_function_over_80_lines_without_a_reason():
+    long = _long_functions()
+    assert {k: v for k, v in long.items() if k not in LONG_FUNCTIONS_JUSTIFIED} == {}
+    assert sorted(set(LONG_FUNCTIONS_JUSTIFIED) - set(long)) == []  # back under: unlist it
 
 
-def _apps() -> set[str]:
-    import tomllib
-
-    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    return set(scripts)
-
-
-def _presets() -> set[str]:
-    return {f.stem for f in (ROOT / "conf" / "dataset").glob("*.yaml")}
-
-
-def test_architecture_names_every_app_and_preset():
-    import re
-
-    text = DOC.read_text(encoding="utf-8")
-    named_apps = set(re.findall(r"`(swgsim-[a-z]+)`", text))
-    assert _apps() - named_apps == set(), "apps missing from docs/ARCHITECTURE.md"
-    presets = text.split("Data-set presets (`conf/dataset/`):", 1)[1].split("\n\n", 1)[0]
-    listed = set(re.findall(r"`([a-z_]+)`", presets))
-    assert listed == _presets()
-
-
-def test_everything_the_architecture_names_exists():
-    import re
-
-    text = DOC.read_text(encoding="utf-8")
-    missing = [p for p in re.findall(r"`((?:swgsim|learn|swgcal|swgcli|tests|scripts)/"
-                                     r"[\w/]+\.py)`", text) if not (ROOT / p).is_file()]
-    for pkg, rows in (("swgsim", r"\| `((?:base|files|gear|sensing|datasets)/[\w/]+\.py)`"),):
-        missing += [f"{pkg}/{m}" for m in re.findall(rows, text)
-                    if not (ROOT / pkg / m).is_file()]
-    table = text.split("### `learn/`", 1)[1].split("### `swgcli/`", 1)[0]
-    pkg = None
-    for line in table.splitlines():
-        cells = [c.strip() for c in line.split("|")[1:-1]]
-        if len(cells) < 3 or cells[0].startswith("---") or cells[0] == "package":
-            continue
-        pkg = cells[0].strip("`/") or pkg
-        missing += [f"learn/{pkg}/{m}" for m in re.findall(r"`(\w+\.py)`", cells[1])
-                    if not (ROOT / "learn" / pkg / m).is_file()]
-    dotted = re.findall(r"`((?:swgsim|learn|swgcal)(?:\.\w+)+)`", text)
-    import importlib
-
-    for d in dotted:
-        parts = d.split(".")
-        for k in range(len(parts), 0, -1):  # the longest module prefix, then attributes
-            try:
-                obj = importlib.import_module(".".join(parts[:k]))
-            except ImportError:
-                continue
-            for a in parts[k:]:
-                obj = getattr(obj, a, None)
-            if obj is None:
-                missing.append(d)
-            break
-    assert missing == []
+def test_library_size_is_counted_and_printed():
+    size = import_graph.library_lines()
+    n_files = sum(1 for p in import_graph.PACKAGES for _ in (ROOT / p).rglob("*.py"))
+    parts = [size[p] for p in import_graph.PACKAGES]
+    assert size["all"] == (sum(m for m, _ in parts), sum(n for _, n in parts))
+    assert size["all"][0] == n_files
+    print("library lines: " + ", ".join(f"{k} {v[1]}" for k, v in size.items()))
