@@ -13,6 +13,7 @@ class) on the same evaluation windows. A torch net's input is standardised once 
 from __future__ import annotations
 
 import copy
+import logging
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -25,6 +26,7 @@ from learn.studies.protocols import fit_with_groups, window_groups
 from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
+log = logging.getLogger(__name__)
 
 ADAPT = ("adabn", "coral")
 FT_MODES = ("all", "last")
@@ -292,3 +294,58 @@ def _fine_tune(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
                 y_replay=y[train] if replay > 0 else None, replay=replay,
                 random_state=seed * 1000 + k)
             sc.add(f"{spec.model}+ft_{mode}", k, m, time.perf_counter() - t0)
+
+
+class JobProgress:
+    """One progress line over every job of the comparison, all data sets together: jobs
+    done, jobs left and the time left estimated from the mean time per finished job; a
+    log line per finished job (its data set, protocol, split and seed, the wall time of
+    each run and their accuracies at k = 0).
+
+    Parameters
+    ----------
+    total : int
+        Jobs planned (:func:`learn.studies.transfer.planned_jobs` summed over the data
+        sets); corrected with :meth:`adjust` when a data set turns out to have other
+        splits.
+    enabled : bool
+        Show the progress line (the log lines are written either way).
+    """
+
+    def __init__(self, total: int, enabled: bool = True):
+        from tqdm.auto import tqdm
+
+        self.total, self.done, self.t0 = int(total), 0, time.perf_counter()
+        self.bar = tqdm(total=self.total, desc="transfer", unit="job", smoothing=0.0,
+                        disable=not enabled, bar_format=(
+                            "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} jobs "
+                            "done{postfix} [{elapsed}, about {remaining} left]"))
+
+    def adjust(self, delta: int) -> None:
+        """Change the number of planned jobs by ``delta`` (a skipped protocol, a data set
+        with more or fewer splits than planned)."""
+        if delta:
+            self.total += int(delta)
+            self.bar.total = self.total
+            self.bar.refresh()
+
+    def finished(self, dataset: str, cell: tuple, seconds: Mapping[str, tuple],
+                 rows: Sequence[dict]) -> None:
+        """Count one finished job ``cell`` = (protocol, split, seed) and log it;
+        ``seconds``: run label -> (wall, CPU) [s], ``rows``: its result rows."""
+        self.done += 1
+        left = max(self.total - self.done, 0)
+        elapsed = time.perf_counter() - self.t0
+        protocol, split, seed = cell[0], cell[1].name, cell[2]
+        acc = {f"{r['model']}/{r['input']}": round(r["accuracy"], 4) for r in rows
+               if r["k_shot"] == 0}
+        log.info("job %d/%d done, %d left (about %.1f min): %s %s %s seed %d in %.1f s; "
+                 "run seconds %s; accuracy at k = 0 %s", self.done, self.total, left,
+                 elapsed / self.done * left / 60, dataset, protocol, split, seed,
+                 sum(v[0] for v in seconds.values()),
+                 {k: round(v[0], 1) for k, v in seconds.items()}, acc)
+        self.bar.set_postfix_str(f"{left} left ({dataset})", refresh=False)
+        self.bar.update(1)
+
+    def close(self) -> None:
+        self.bar.close()

@@ -48,13 +48,14 @@ from typing import Any
 
 import numpy as np
 
-from learn.inputs.signals import ResidualSettings
+from learn.inputs.signals import ResidualSettings, window_meta
 from learn.studies.kshot import check_no_leak, kshot_split
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import (
     ADAPT,
     FT_MODES,
     FinetuneSettings,
+    JobProgress,
     RunRef,
     RunSpec,
     check_estimator,
@@ -144,6 +145,10 @@ class TransferConfig:
         processes; torch threads per process.
     latency, latency_repeats, progress : bool, int, bool
     report_dir : str
+    group : int or None
+        One data set of ``run_on`` by index (a job of an array): its cells saved in
+        ``report_dir/parts``, no report; None: every data set, the finished cells resumed
+        from ``parts``, then the report.
     models : dict
         Model name -> ``_target_`` config (``conf/model/*.yaml``).
     """
@@ -169,6 +174,7 @@ class TransferConfig:
     latency_repeats: int = 100
     progress: bool = True
     report_dir: str = "reports/transfer"
+    group: int | None = None
     models: dict[str, Any] = field(default_factory=dict)
 
 
@@ -190,6 +196,11 @@ def check_config(tc: TransferConfig) -> None:
                          f"{sorted(tc.datasets)}")
     if len(set(tc.run_on)) != len(tc.run_on):
         raise ValueError(f"transfer.run_on must not repeat, got {list(tc.run_on)}")
+    names = list(tc.run_on) or ["the stored data set"]
+    if tc.group is not None and not 0 <= int(tc.group) < len(names):
+        pairs = ", ".join(f"{k}: {n}" for k, n in enumerate(names))
+        raise ValueError(f"transfer.group must lie in [0, {len(names) - 1}] ({pairs}), "
+                         f"got {tc.group}")
     if not tc.seeds:
         raise ValueError("transfer.seeds: must list at least one seed")
     if any(int(k) < 0 for k in tc.k_shots) or 0 not in [int(k) for k in tc.k_shots]:
@@ -324,60 +335,6 @@ def _cells_of(meta, protocols: Sequence[str], tc: TransferConfig, split_seed: in
             for seed in (tc.seeds if p in OOD_PROTOCOLS else cv_seeds)]
 
 
-class JobProgress:
-    """One progress line over every job of the comparison, all data sets together: jobs
-    done, jobs left and the time left estimated from the mean time per finished job; a
-    log line per finished job (its data set, protocol, split and seed, the wall time of
-    each run and their accuracies at k = 0).
-
-    Parameters
-    ----------
-    total : int
-        Jobs planned (:func:`planned_jobs` summed over the data sets); corrected with
-        :meth:`adjust` when a data set turns out to have other splits.
-    enabled : bool
-        Show the progress line (the log lines are written either way).
-    """
-
-    def __init__(self, total: int, enabled: bool = True):
-        from tqdm.auto import tqdm
-
-        self.total, self.done, self.t0 = int(total), 0, time.perf_counter()
-        self.bar = tqdm(total=self.total, desc="transfer", unit="job", smoothing=0.0,
-                        disable=not enabled, bar_format=(
-                            "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} jobs "
-                            "done{postfix} [{elapsed}, about {remaining} left]"))
-
-    def adjust(self, delta: int) -> None:
-        """Change the number of planned jobs by ``delta`` (a skipped protocol, a data set
-        with more or fewer splits than planned)."""
-        if delta:
-            self.total += int(delta)
-            self.bar.total = self.total
-            self.bar.refresh()
-
-    def finished(self, dataset: str, cell: tuple, seconds: Mapping[str, tuple],
-                 rows: Sequence[dict]) -> None:
-        """Count one finished job ``cell`` = (protocol, split, seed) and log it;
-        ``seconds``: run label -> (wall, CPU) [s], ``rows``: its result rows."""
-        self.done += 1
-        left = max(self.total - self.done, 0)
-        elapsed = time.perf_counter() - self.t0
-        protocol, split, seed = cell[0], cell[1].name, cell[2]
-        acc = {f"{r['model']}/{r['input']}": round(r["accuracy"], 4) for r in rows
-               if r["k_shot"] == 0}
-        log.info("job %d/%d done, %d left (about %.1f min): %s %s %s seed %d in %.1f s; "
-                 "run seconds %s; accuracy at k = 0 %s", self.done, self.total, left,
-                 elapsed / self.done * left / 60, dataset, protocol, split, seed,
-                 sum(v[0] for v in seconds.values()),
-                 {k: round(v[0], 1) for k, v in seconds.items()}, acc)
-        self.bar.set_postfix_str(f"{left} left ({dataset})", refresh=False)
-        self.bar.update(1)
-
-    def close(self) -> None:
-        self.bar.close()
-
-
 def planned_jobs(tc: TransferConfig) -> int:
     """Jobs, (protocol, split, seed), that the comparison plans per data set: the splits
     each protocol plans (:attr:`learn.studies.protocols.ProtocolConfig.n_planned`) times
@@ -400,46 +357,82 @@ class _Gathered:
 
 
 def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency: bool,
-          progress: JobProgress, got: dict[str, _Gathered], on_load):
+          progress: JobProgress, got: dict[str, _Gathered], on_load, parts):
     """The jobs of every data set in turn, as ``(function, args, kwargs)``: a data set is
     loaded and its inputs built when its first job is asked for, i.e. (in a pool) while
-    the workers run the previous data set's last jobs."""
+    the workers run the previous data set's last jobs. A cell that ``parts`` holds is
+    gathered from it instead, and a data set whose cells it all holds builds no input."""
     k_shots = [int(k) for k in tc.k_shots]
     threads = tc.n_threads if tc.n_jobs == 1 else tc.threads_per_job
     cell = travelling(_with_cell)  # a user's learners travel with the jobs
+    labels = {s.label: s for s in tc.runs}
     for name, load in sources:
         ds = load()
         if on_load is not None:
             on_load(name, ds)
         planned = planned_jobs(tc)  # counted in progress, not yet adjusted
         todo = _protocols_with_data(ds, tc.protocols)
+        first = all(g.latency is None for g in got.values())
         for flag in (False, True):
             prots = [p for p in todo if p.endswith("disturbed") == flag]
             if not prots:
+                continue
+            n_plan = planned_jobs(replace(tc, protocols=prots))
+            planned -= n_plan
+            cells = [] if parts is None else _cells_of(window_meta(ds, flag)[0], prots, tc,
+                                                      split_seed)
+            if cells and all(parts.load(name, c) is not None for c in cells):
+                progress.adjust(len(cells) - n_plan)
+                for c in cells:
+                    _gather(got, labels, name, c, *parts.load(name, c), progress)
+                if latency and first:
+                    got[name].latency = parts.latency(name)
                 continue
             t0 = time.perf_counter()
             inputs = _inputs(ds, tc.runs, tc, flag, feature_kwargs)
             got[name].input_s += time.perf_counter() - t0
             cells = _cells_of(next(iter(inputs.values())).meta, prots, tc, split_seed)
-            n_plan = planned_jobs(replace(tc, protocols=prots))
             progress.adjust(len(cells) - n_plan)
-            planned -= n_plan
-            if latency and all(g.latency is None for g in got.values()):
-                from learn.studies.latency import measure_latency
-
-                # before this data set's jobs are handed out: the first data set's, on
-                # a machine without this comparison's jobs running
-                got[name].latency = measure_latency(
-                    ds, tc.runs, tc.models, inputs, aux=tc.aux,
-                    feature_kwargs=feature_kwargs, residual=tc.residual,
-                    repeats=tc.latency_repeats)
+            if latency and first and got[name].latency is None:
+                got[name].latency = _latency(ds, name, tc, inputs, feature_kwargs, parts)
             args = (tc.runs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
                     int(tc.adapt_windows), threads)
             for c in cells:
-                yield cell, (name, c, *args), {}
+                done = None if parts is None else parts.load(name, c)
+                if done is not None:
+                    _gather(got, labels, name, c, *done, progress)
+                else:
+                    yield cell, (name, c, *args), {}
             del inputs
         progress.adjust(-planned)  # protocols without data
         del ds
+
+
+def _latency(ds, name, tc, inputs, feature_kwargs, parts):
+    """The inference latency on the first data set, before its jobs are handed out (on a
+    machine without this comparison's jobs running), or as ``parts`` kept it."""
+    from learn.studies.latency import measure_latency
+
+    kept = None if parts is None else parts.latency(name)
+    if kept is not None:
+        return kept
+    lat = measure_latency(ds, tc.runs, tc.models, inputs, aux=tc.aux,
+                          feature_kwargs=feature_kwargs, residual=tc.residual,
+                          repeats=tc.latency_repeats)
+    if parts is not None:
+        parts.save_latency(name, lat)
+    return lat
+
+
+def _gather(got: dict[str, _Gathered], labels: Mapping, name: str, c: tuple, rows: list,
+            seconds: Mapping, progress: JobProgress) -> None:
+    """One finished cell's rows and run times into ``got`` and the progress line."""
+    got[name].rows.extend(rows)
+    got[name].times.extend(
+        {"dataset": name, "protocol": c[0], "split": c[1].name, "seed": c[2],
+         "model": labels[k].model, "input": labels[k].input, "seconds": v[0],
+         "cpu_s": v[1]} for k, v in seconds.items())
+    progress.finished(name, c, seconds, rows)
 
 
 def _with_cell(name: str, c: tuple, *args):
@@ -465,7 +458,8 @@ def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]
 def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
                     feature_kwargs: Mapping[str, Any] | None = None, split_seed: int = 0,
                     latency: bool | None = None, checked: bool = False,
-                    progress: JobProgress | None = None, on_load=None) -> dict[str, dict]:
+                    progress: JobProgress | None = None, on_load=None,
+                    parts=None) -> dict[str, dict]:
     """Run every (protocol, split, seed, model, input) of the comparison on several data
     sets, with one pool of ``tc.n_jobs`` worker processes for all of them.
 
@@ -502,6 +496,11 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
     on_load : callable, optional
         ``on_load(name, ds)`` when a data set is loaded (e.g. its separability), in the
         thread that hands out the jobs.
+    parts : learn.tasks.transfer.CellParts, optional
+        Finished cells kept on disk: ``load(name, cell)`` -> ``(rows, seconds)`` or None,
+        ``save(name, cell, rows, seconds)`` (returns them as they will be read back),
+        ``latency(name)`` and ``save_latency(name, table)``; a cell it holds is not run
+        again (a stopped comparison resumes, the data sets of a job array meet).
 
     Returns
     -------
@@ -529,7 +528,8 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
     if own:
         progress = JobProgress(planned_jobs(tc) * len(sources), tc.progress)
     got = {name: _Gathered() for name, _ in sources}
-    jobs = _jobs(sources, tc, feature_kwargs, split_seed, latency, progress, got, on_load)
+    jobs = _jobs(sources, tc, feature_kwargs, split_seed, latency, progress, got, on_load,
+                 parts)
     if tc.n_jobs == 1:
         done = (f(*a, **kw) for f, a, kw in jobs)
     else:
@@ -537,12 +537,9 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
                         batch_size=1)(jobs)
     labels = {s.label: s for s in tc.runs}
     for name, c, (rows, seconds) in done:
-        got[name].rows.extend(rows)
-        got[name].times.extend(
-            {"dataset": name, "protocol": c[0], "split": c[1].name, "seed": c[2],
-             "model": labels[k].model, "input": labels[k].input, "seconds": v[0],
-             "cpu_s": v[1]} for k, v in seconds.items())
-        progress.finished(name, c, seconds, rows)
+        if parts is not None:
+            rows, seconds = parts.save(name, c, rows, seconds)
+        _gather(got, labels, name, c, rows, seconds, progress)
     if own:
         progress.close()
     wall = time.perf_counter() - t_all

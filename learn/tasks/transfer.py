@@ -6,6 +6,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import logging
 import os
 import time
@@ -16,8 +18,10 @@ import numpy as np
 
 from learn.studies.transfer import TransferConfig, check_config, run_comparisons
 from learn.tasks.config import plain, typed_app
+from learn.tasks.monitor_evaluation import part_key
 from swgsim.base.lazy import lazy_module
-from swgsim.files.ownership import write_owned
+from swgsim.datasets.schema import read_manifest
+from swgsim.files.ownership import atomic_write_json, write_owned
 
 pd = lazy_module("pandas")
 
@@ -37,27 +41,105 @@ class _Collected:
     input_s: float = 0.0
 
 
-def _data_sets(app, tc: TransferConfig) -> tuple[list[tuple[str, str]], float]:
-    """(name, path) of every data set to run on, generating the missing ones."""
-    from hydra.utils import to_absolute_path
-
-    from swgsim.datasets.generate import generate
+def _hashes(app, tc: TransferConfig) -> tuple[dict[str, str], dict]:
+    """The config hash of every data set of the comparison (``run_on``'s plans, checked
+    here once before any work, or the stored data set's manifest) and the plans."""
     from swgsim.datasets.plan import plan
 
     if not tc.run_on:
-        return [(str(app.stored.name or Path(app.stored.path).name), str(app.stored.path))], 0.0
+        name = str(app.stored.name or Path(app.stored.path).name)
+        return {name: str(read_manifest(app.stored.path).get("config_hash"))}, {}
     plans = {}
-    for name in tc.run_on:  # every data-set config is checked once, before any work
+    for name in tc.run_on:
         try:
             plans[name] = plan(tc.datasets[name])
         except ValueError as e:
             raise ValueError(f"transfer.datasets.{name}: {e}") from None
+    return {n: p.config_hash for n, p in plans.items()}, plans
+
+
+def _content(tc: TransferConfig) -> dict:
+    """What a cell's result depends on beside its data set, split and seed."""
+    keep = ("k_shots", "adapt_windows", "aux", "residual", "finetune", "runs", "models")
+    return {k: v for k, v in dataclasses.asdict(tc).items() if k in keep}
+
+
+@dataclass
+class CellParts:
+    """The comparison's finished cells on disk (:func:`learn.studies.transfer.run_comparisons`'s
+    ``parts``): ``<folder>/<data set>/<protocol>_<split>_seed<seed>.json`` with a cell's
+    result rows and run times, and ``latency.json``; read back only where its key, what
+    made it (the data set's config hash, the runs and models, the features, the split
+    seed), is the data set's in ``keys``."""
+
+    folder: Path
+    keys: dict[str, str]
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    def _read(self, path: Path, name: str) -> dict | None:
+        try:
+            part = json.loads(path.read_text()) if path.is_file() else None
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            part = None
+        ok = isinstance(part, dict) and part.get("key") == self.keys.get(name)
+        return part if ok else None
+
+    def _file(self, name: str, c: tuple) -> Path:
+        return self.folder / name / f"{c[0]}_{c[1].name}_seed{int(c[2])}.json"
+
+    def load(self, name: str, c: tuple) -> tuple[list, dict] | None:
+        """The rows and run seconds of cell ``c`` = (protocol, split, seed), or None."""
+        f = self._file(name, c)
+        if f not in self._cache:
+            part = self._read(f, name)
+            self._cache[f] = None if part is None else (
+                part["rows"], {k: tuple(v) for k, v in part["seconds"].items()})
+        return self._cache[f]
+
+    def save(self, name: str, c: tuple, rows: list, seconds: dict) -> tuple[list, dict]:
+        """Write a finished cell (atomically); return it as :meth:`load` reads it back, so
+        that a fresh and a resumed run gather the same values."""
+        part = json.loads(json.dumps({"key": self.keys[name], "rows": rows,
+                                      "seconds": seconds}, default=_plain))
+        f = self._file(name, c)
+        f.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_json(f, part, sort_keys=False)
+        self._cache.pop(f, None)
+        return self.load(name, c)
+
+    def latency(self, name: str):
+        """The latency table measured on data set ``name``, or None."""
+        part = self._read(self.folder / name / "latency.json", name)
+        return None if part is None else pd.DataFrame(part["rows"])
+
+    def save_latency(self, name: str, table) -> None:
+        """Keep the latency table measured on data set ``name``."""
+        (self.folder / name).mkdir(parents=True, exist_ok=True)
+        atomic_write_json(self.folder / name / "latency.json", json.loads(json.dumps(
+            {"key": self.keys[name], "rows": table.to_dict("records")}, default=_plain)),
+            sort_keys=False)
+
+
+def _plain(x):
+    """A numpy scalar or array as plain JSON."""
+    return x.tolist() if hasattr(x, "tolist") else str(x)
+
+
+def _data_sets(app, tc: TransferConfig, plans: dict, names: list[str]
+               ) -> tuple[list[tuple[str, str]], float]:
+    """(name, path) of the data sets ``names``, generating the missing ones."""
+    from hydra.utils import to_absolute_path
+
+    from swgsim.datasets.generate import generate
+
+    if not tc.run_on:
+        return [(str(app.stored.name or Path(app.stored.path).name), str(app.stored.path))], 0.0
     try:
         root = to_absolute_path(str(tc.data_root))
     except ValueError:  # outside a Hydra run
         root = str(tc.data_root)
     out, t0 = [], time.perf_counter()
-    for name in tc.run_on:
+    for name in names:
         path = f"{root}/{name}"
         g = generate(plans[name], path, n_jobs=int(tc.n_jobs), overwrite=True,
                      progress=tc.progress)
@@ -144,7 +226,8 @@ def _separability(ds, name: str, tc: TransferConfig, report_dir: Path, got: _Col
             f"Class separability, data set {name} ({kind} windows)")
 
 
-def _compare(app, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected:
+def _compare(app, tc: TransferConfig, data_sets, report_dir: Path, parts: CellParts
+             ) -> _Collected:
     """The comparison and the separability on every data set, one pool of workers for
     all of them (:func:`learn.studies.transfer.run_comparisons`); one data set in memory
     at a time, its separability computed when it is loaded."""
@@ -160,7 +243,7 @@ def _compare(app, tc: TransferConfig, data_sets, report_dir: Path) -> _Collected
 
     outs = run_comparisons([(name, partial(load, path)) for name, path in data_sets], tc,
                            feature_kwargs=app.features.kwargs(), split_seed=app.seed,
-                           checked=True, on_load=loaded)
+                           checked=True, on_load=loaded, parts=parts)
     for out in outs.values():
         got.results.append(out["results"])
         got.confusion.append(out["confusion"])
@@ -209,6 +292,15 @@ def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, tim
     return files
 
 
+def _group_done(tc: TransferConfig, name: str, report_dir: Path, wall: float) -> dict:
+    """One data set's cells done (a job of an array): said, and returned."""
+    if tc.progress:
+        print(f"transfer.group {tc.group} ({name}): its cells in {report_dir}/parts/{name}, "
+              f"{wall / 60:.1f} min; the report: the same command without transfer.group")
+    return {"task": "transfer", "report_dir": str(report_dir), "group": tc.group,
+            "dataset": name, "wall_s": wall}
+
+
 def run_transfer(cfg) -> dict:
     """Task ``transfer``: the whole comparison over the data sets, report and MLflow.
 
@@ -240,8 +332,6 @@ def run_transfer(cfg) -> dict:
     """
     import torch
 
-    from learn.reports.transfer_picks import headline_lines, headline_table
-    from learn.reports.transfer_report import class_recall, row_label, summarise, target_table
     from learn.reports.transfer_runs import log_transfer
     from swgsim.files import ownership
 
@@ -253,20 +343,45 @@ def run_transfer(cfg) -> dict:
     check_config(tc)
     report_dir = Path(tc.report_dir or Path(app.paths.report_dir) / "transfer")
     nets = net_devices(tc)  # a CUDA device asked for on a machine without one: refused
-    ownership.check(report_dir, "transfer.report_dir", app="transfer")  # before any work
+    hashes, plans = _hashes(app, tc)
+    # the jobs of one comparison (its data sets and runs) may write into it together
+    share = part_key([sorted(hashes.items()), _content(tc)])
+    ownership.check(report_dir, "transfer.report_dir", share=share,
+                    app="transfer")  # before any work
     if tc.n_threads:
         torch.set_num_threads(int(tc.n_threads))
     t_all = time.perf_counter()
-    data_sets, generate_s = _data_sets(app, tc)
-    with ownership.claim(report_dir, "transfer", "transfer.report_dir",
+    names = list(hashes) if tc.group is None else [list(hashes)[tc.group]]
+    data_sets, generate_s = _data_sets(app, tc, plans, names)
+    keys = {n: part_key([h, _content(tc), app.features.kwargs(), app.seed])
+            for n, h in hashes.items()}
+    with ownership.claim(report_dir, "transfer", "transfer.report_dir", share=share,
                          strict=True) as claim:
-        got = _compare(app, tc, data_sets, report_dir)
+        got = _compare(app, tc, data_sets, report_dir, CellParts(report_dir / "parts", keys))
+        if tc.group is not None:
+            return _group_done(tc, names[0], report_dir, time.perf_counter() - t_all)
         res = pd.concat(got.results, ignore_index=True)
         conf = pd.concat(got.confusion, ignore_index=True)
         wall = time.perf_counter() - t_all
         timings = _timings(tc, wall, got.input_s, generate_s, nets)
         files = _write(res, conf, got, tc, report_dir, timings)
         claim.record(files.values())
+    run_id = None if app.logger is None else log_transfer(
+        res, files, app.logger, tc, data_sets, timings, got.latency, config=plain(app))
+    log.info("transfer report in %s (%.1f min)", report_dir, wall / 60)
+    return {"task": "transfer", "report_dir": str(report_dir),
+            "files": {k: str(v) for k, v in files.items()}, "wall_s": wall,
+            "n_runs": len(res), "run_id": run_id,
+            **_summary(res, conf, got, tc, report_dir, wall, timings["device"])}
+
+
+def _summary(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, wall: float,
+             device: str) -> dict:
+    """The worst split per run, the headline and the targets (printed with
+    :func:`print_summary` when ``tc.progress``)."""
+    from learn.reports.transfer_picks import headline_lines, headline_table
+    from learn.reports.transfer_report import class_recall, row_label, summarise, target_table
+
     summ = summarise(res)
     w = summ[(summ["protocol"] == "ood_disturbed") & (summ["split"] == "worst")]
     worst = {f"{r.dataset}/{r.model}/{r.input}/k{int(r.k_shot)}": float(r.mean)
@@ -275,13 +390,7 @@ def run_transfer(cfg) -> dict:
     tt = (target_table(summ, class_recall(conf, summ), targets, tc.primary, got.separability)
           if len(conf) else pd.DataFrame())
     head = headline_table(summ, tc.primary)
-    run_id = None if app.logger is None else log_transfer(
-        res, files, app.logger, tc, data_sets, timings, got.latency, config=plain(app))
-    log.info("transfer report in %s (%.1f min)", report_dir, wall / 60)
     if tc.progress:  # the console's summary (the log holds every cell)
-        print_summary(headline_lines(head, row_label), tt, report_dir, wall,
-                      timings["device"])
-    return {"task": "transfer", "report_dir": str(report_dir),
-            "files": {k: str(v) for k, v in files.items()}, "wall_s": wall,
-            "n_runs": len(res), "worst_split": worst, "headline": head.to_dict("records"),
-            "targets": tt.to_dict("records"), "run_id": run_id}
+        print_summary(headline_lines(head, row_label), tt, report_dir, wall, device)
+    return {"worst_split": worst, "headline": head.to_dict("records"),
+            "targets": tt.to_dict("records")}

@@ -376,3 +376,83 @@ def test_primary_at_k_is_fixed_before_the_results():
     assert primary_row(w, RunRef("cnn", "raw"), 5)["model"] == "cnn+ft_all"
     assert primary_row(w, RunRef("rf", "raw"), 5)["k_shot"] == 0
     assert primary_row(w, RunRef("rf", "sel1"), 0) is None
+
+
+def _toy_comparison(tmp_path: Path, *extra: str):
+    """A small comparison (the RF and the CNN) on the toy data set, the report in
+    ``tmp_path/reports/transfer``: the composed config."""
+    from swgcli import compose_app
+
+    return compose_app("train", _toy_overrides(tmp_path, *extra))
+
+
+def _toy_overrides(tmp_path: Path, *extra: str) -> list[str]:
+    """:func:`_toy_comparison`'s overrides (the toy data set written when missing)."""
+    data = tmp_path / "toy"
+    if not data.exists():
+        write_toy_dataset(data, n_variants=4, n_time=64)
+    return [
+        "experiment=transfer", "transfer.run_on=[]", f"stored.path={data}", "stored.name=toy",
+        f"paths.report_dir={tmp_path}/reports", "features.order_step=2.0", "~logger",
+        "transfer.protocols=[cv_disturbed,ood_disturbed]", "transfer.seeds=[0,1]",
+        "transfer.cv_seeds=[0]", "transfer.k_shots=[0,1]", "transfer.adapt_windows=4",
+        "transfer.latency_repeats=3", "transfer.progress=false", "transfer.n_jobs=1",
+        "transfer.runs=[{model:rf,input:sel3},{model:cnn,input:raw}]",
+        "transfer.primary={model:rf,input:sel3}", "transfer.models.cnn.estimator.max_epochs=2",
+        "transfer.models.rf.estimator.n_estimators=10", *extra]
+
+
+def test_a_stopped_comparison_runs_only_its_unfinished_cells_again(tmp_path, monkeypatch):
+    from learn.studies import transfer as study
+    from learn.tasks.train import run_train
+
+    rep = Path(run_train(_toy_comparison(tmp_path))["report_dir"])
+    first = pd.read_csv(rep / "results.csv")
+    (rep / "parts" / "toy" / "ood_disturbed_gear2_seed1.json").unlink()  # stopped before it
+    ran, cell = [], study._cell
+    monkeypatch.setattr(study, "_cell", lambda *a: ran.append(a[:3]) or cell(*a))
+    run_train(_toy_comparison(tmp_path))
+    assert [(p, sp.name, seed) for p, sp, seed in ran] == [("ood_disturbed", "gear2", 1)]
+    again = pd.read_csv(rep / "results.csv")
+    pd.testing.assert_frame_equal(again.drop(columns="train_s"), first.drop(columns="train_s"))
+
+
+def test_a_comparison_runs_as_a_job_array_then_builds_its_report(tmp_path, monkeypatch):
+    from learn.studies import transfer as study
+    from learn.tasks.train import run_train
+
+    out = run_train(_toy_comparison(tmp_path, "transfer.group=0"))
+    rep = Path(out["report_dir"])
+    assert out["group"] == 0 and not (rep / "table.md").exists()
+    cells = sorted(f.stem for f in (rep / "parts" / "toy").glob("*_seed*.json"))
+    assert len(cells) == 4 + 3 * 2 and (rep / "parts" / "toy" / "latency.json").is_file()
+
+    def no_cell(*a):
+        raise AssertionError(f"cell {a[:3]} run again")
+    monkeypatch.setattr(study, "_cell", no_cell)  # the report's run finds every cell done
+    run_train(_toy_comparison(tmp_path))
+    assert (rep / "table.md").is_file() and (rep / "latency.csv").is_file()
+    with pytest.raises(ValueError, match=r"transfer.group must lie in \[0, 0\] \(0: the "
+                                         r"stored data set\), got 1"):
+        run_train(_toy_comparison(tmp_path, "transfer.group=1"))
+
+
+@pytest.mark.slow  # a submitit_local job, then the report's run: about a minute
+def test_a_comparison_runs_as_a_submitit_job_array(tmp_path):
+    """A cluster's way (docs/scale_out.md): one job per data set (``transfer.group``) as
+    a submitit job, then the same command without it writes the report from the cells."""
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-m", "swgcli.train", "-m", *_toy_overrides(tmp_path),
+           "transfer.group=0", "hydra/launcher=submitit_local",
+           "hydra.launcher.timeout_min=10", f"hydra.sweep.dir={tmp_path / 'sweep'}"]
+    r = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    rep = tmp_path / "reports" / "transfer"
+    assert len(list((rep / "parts" / "toy").glob("*_seed*.json"))) == 10
+    assert not (rep / "table.md").exists()
+    r = subprocess.run([sys.executable, "-m", "swgcli.train", *_toy_overrides(tmp_path)],
+                       cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert (rep / "table.md").is_file()

@@ -12,8 +12,8 @@ import pytest
 from omegaconf import OmegaConf
 from test_deep_toy import make_toy_dataset
 
-from learn.studies.runs import RunRef
-from learn.studies.transfer import RUN_TIME_COLUMNS, JobProgress, planned_jobs, run_comparison
+from learn.studies.runs import JobProgress, RunRef
+from learn.studies.transfer import RUN_TIME_COLUMNS, planned_jobs, run_comparison
 from swgcli import compose_app
 
 pytestmark = pytest.mark.usefixtures("torch_one_thread")
@@ -81,7 +81,7 @@ def test_progress_counts_jobs_and_logs_each(caplog):
     sp = Split("gear3", "1,2 -> 3", np.arange(2), np.arange(2, 4))
     rows = [{"model": "cnn", "input": "raw", "k_shot": 0, "accuracy": 0.5},
             {"model": "cnn+ft_all", "input": "raw", "k_shot": 5, "accuracy": 0.6}]
-    with caplog.at_level(logging.INFO, logger="learn.studies.transfer"):
+    with caplog.at_level(logging.INFO, logger="learn.studies.runs"):
         p.finished("bench", ("ood_disturbed", sp, 0), {"cnn/raw": (2.0, 1.5)}, rows)
         p.adjust(-1)
         p.finished("paper", ("ood_disturbed", sp, 1), {"cnn/raw": (3.0, 2.5)}, rows)
