@@ -1,11 +1,12 @@
 """One calibration API for both data kinds: recognise the measured data, then the kind's
 steps build problem -> calibrate -> summarise -> render -> write.
 
-Each kind is a subpackage with the same step functions (:mod:`swgcal.friction`
-for friction CSVs, :mod:`swgcal.strain` for schema-v1 strain data sets);
-the functions here pick the kind from the data or from ``problem.kind``, and every step
-returns the same types whatever the kind: a :class:`~swgcal.loop.Problem`, a
-:class:`~swgcal.loop.CalibrationResult`, a JSON-ready summary dict, markdown.
+Each kind (:mod:`swgcal.friction`, :mod:`swgcal.strain`, :mod:`swgcal.thermal`) is a
+subpackage with the same step functions and ``REPORT``, its part of the one renderer
+(:mod:`swgcal.report`); the functions here pick the kind from the data or from
+``problem.kind``, and every step returns the same types whatever the kind: a
+:class:`~swgcal.loop.Problem`, a :class:`~swgcal.loop.CalibrationResult`, a JSON-ready
+summary dict, markdown.
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 from .friction.data import REQUIRED_COLUMNS, FrictionRecording, read_csv_header
 from .loop import CalibrationResult, Problem, SelectionConfig
 from .options import build, plain
+from .report import render_report as render_parts
+from .report import simulation_files
 
 __all__ = ["KINDS", "MeasuredDataError", "detect_kind", "kind_module", "options_from_config",
            "build_problem", "calibrate", "summarize", "render_report", "make_figures",
@@ -40,9 +43,8 @@ KIND_LABELS = {"friction": "friction recording (kind 1)", "strain": "strain data
 #: Columns that mark a joint log's header (:data:`swgsim.datasets.joint_log.LOG_COLUMNS`).
 JOINT_LOG_MARK = frozenset({"Timestamp", "Temperature_T0", "Current_J0", "Speed_J0"})
 
-#: The step functions every kind subpackage defines.
-STEPS = ("build_problem", "calibrate", "summarize", "render_report", "make_figures",
-         "simulation_files")
+#: The step functions every kind subpackage defines (and ``REPORT``, its ReportParts).
+STEPS = ("build_problem", "calibrate", "summarize", "make_figures")
 
 
 class MeasuredDataError(ValueError):
@@ -244,7 +246,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
 
 def render_report(result: CalibrationResult, summary: dict[str, Any],
                   figures: dict[str, str] | None = None) -> str:
-    """Markdown report of a calibration.
+    """Markdown report of a calibration (:func:`swgcal.report.render_report`).
 
     Parameters
     ----------
@@ -258,7 +260,7 @@ def render_report(result: CalibrationResult, summary: dict[str, Any],
     -------
     str
     """
-    return kind_module(result.problem.kind).render_report(result, summary, figures)
+    return render_parts(kind_module(result.problem.kind).REPORT, result, summary, figures)
 
 
 def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, str]:
@@ -276,7 +278,7 @@ def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
                   source: str | None = None, figures: bool = True) -> dict[str, Any]:
     """Write a calibration's files: ``report.md``, ``summary.json``, the accepted effects
     as a simulation option (friction: ``friction_effects.yaml``, strain:
-    ``sensor_effects.yaml``) and ``figures/*.png``.
+    ``sensor_effects.yaml``, thermal: ``joint_thermal.yaml``) and ``figures/*.png``.
 
     Each file is written atomically (a temporary file renamed into place); nothing else
     in ``out_dir`` is touched.
@@ -301,11 +303,11 @@ def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
     out.mkdir(parents=True, exist_ok=True)
     summary = kind.summarize(result, source)
     summary["figures"] = kind.make_figures(result, out) if figures else {}
-    extra = kind.simulation_files(summary)
+    extra = simulation_files(kind.REPORT, summary)
     summary["files"] = ["report.md", "summary.json", *extra]
     atomic_write_json(out / "summary.json", summary)
     atomic_write_bytes(out / "report.md",
-                            kind.render_report(result, summary, summary["figures"]).encode())
+                       render_parts(kind.REPORT, result, summary, summary["figures"]).encode())
     for name, text in extra.items():
         atomic_write_bytes(out / name, text.encode())
     return summary

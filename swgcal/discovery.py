@@ -486,14 +486,19 @@ def tone_group(key: str, kind: str, value: float, coord: np.ndarray, r: np.ndarr
 # report
 
 
-def proposals_section(proposed: Sequence[Mapping[str, Any]]) -> list[str]:
+def proposals_section(summary: Mapping[str, Any]) -> list[str]:
     """Markdown lines of the report section "Proposed terms (not in the library)".
 
     Parameters
     ----------
-    proposed : sequence of mapping
-        :meth:`Proposal.as_dict` entries (``summary["proposed"]``).
+    summary : mapping
+        Its ``proposed``: :meth:`Proposal.as_dict` entries (none when absent).
+
+    Returns
+    -------
+    list of str
     """
+    proposed = summary.get("proposed", [])
     lines = ["## Proposed terms (not in the library)", "",
              "Not part of the fitted model. Candidate terms from a generic basis (strain: "
              "crosstalk between channels; friction: ripples over the joint angle and velocity "

@@ -1,30 +1,34 @@
-"""Summary (JSON-ready dict) and markdown parts shared by both data kinds.
+"""Summary (JSON-ready dict), the one markdown renderer and the parts every data kind shares.
 
-:func:`base_summary` gives the machine-readable account both data kinds share
+:func:`base_summary` gives the machine-readable account every data kind shares
 (``summary.json``): errors before and after on the test data, the accepted effects with
 parameters and uncertainties (and against their physical ranges), whether the final
 residual is still structured and how, what candidates rejected as physically implausible
 would have absorbed, how the held-out data were chosen, every iteration's candidate
-ranking. The markdown helpers (:func:`result_section`, :func:`param_rows`,
-:func:`effect_range_lines`, ...) are shared by the kinds' reports
-(:mod:`swgcal.friction.report`, :mod:`swgcal.strain.report`).
+ranking. :func:`render_report` writes every kind's ``report.md`` from one skeleton and
+:func:`simulation_files` its simulation option; a kind declares only what is its own in a
+:class:`ReportParts` (``REPORT`` of :mod:`swgcal.friction.report`,
+:mod:`swgcal.strain.report`, :mod:`swgcal.thermal.report`), drawing on the sections kinds
+share (:func:`iteration_lines`, :func:`accepted_lines`, :func:`diagnosis_lines`, ...).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .core import FitResult, Term
 from .loop import CalibrationResult
 
-__all__ = ["base_summary", "caveat", "option_yaml", "UNCERTAINTY_METHOD", "to_jsonable",
-           "fmt_value", "param_rows",
-           "result_section", "implausible_candidates", "implausible_lines",
-           "effect_range_lines"]
+__all__ = ["base_summary", "caveat", "UNCERTAINTY_METHOD", "to_jsonable", "fmt_value",
+           "param_table", "implausible_candidates", "implausible_lines", "effect_range_lines",
+           "ReportInput", "Section", "SimulationOption", "ReportParts", "render_report",
+           "simulation_files", "iteration_lines", "accepted_lines", "diagnosis_lines",
+           "uncertainty_lines"]
 
 UNCERTAINTY_METHOD = (
     "Jacobian of the full parameter vector at the optimum (linear coefficients exactly, "
@@ -129,7 +133,7 @@ def _library_entry(key: str, cls: type) -> dict[str, Any]:
 
 
 def base_summary(result: CalibrationResult, source: str | None = None) -> dict[str, Any]:
-    """Machine-readable summary of a calibration: the keys both data kinds share.
+    """Machine-readable summary of a calibration: the keys every data kind shares.
 
     Parameters
     ----------
@@ -148,8 +152,7 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
         ``iterations``, ``implausible_candidates`` (:func:`implausible_candidates`),
         ``ripples`` (``problem.meta["ripples"]`` when a kind records it, else None),
         ``final_model``, ``library``. Each kind's ``summarize`` adds its own keys
-        (:func:`swgcal.friction.summarize`,
-        :func:`swgcal.strain.summarize`).
+        (:func:`swgcal.friction.summarize`, :func:`swgcal.strain.summarize`, ...).
     """
     p = result.problem
     final = result.final
@@ -177,8 +180,6 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
             "ranges": _ranges_of(term, final),
         })
     base_term = result.base_model_final.terms[0]
-    base_params = result.base_model_final.estimates_of(base_term.name)
-    final_base = final.estimates_of(base_term.name)
     meta = dict(p.meta)
     ripples = meta.pop("ripples", None)
     out = {
@@ -189,8 +190,8 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
         "rmse": result.rmse,
         "noise_floor": result.diag_after.noise_floor,
         "base_model": {"name": base_term.name, "description": base_term.description,
-                     "params": {k: e.as_dict() for k, e in base_params.items()},
-                     "params_in_final_model": {k: e.as_dict() for k, e in final_base.items()}},
+                     "params": _params(result.base_model_final, base_term.name),
+                     "params_in_final_model": _params(final, base_term.name)},
         "effects_added": effects,
         "unexplained": bool(result.unexplained),
         "residual_signature": result.residual_signature,
@@ -237,26 +238,6 @@ def caveat(result: CalibrationResult) -> str | None:
             "without that structure, or once the structure is modelled.")
 
 
-def option_yaml(comments: Sequence[str], option: Mapping[str, Any]) -> str:
-    """A simulation option as YAML text, with comment lines above it.
-
-    Parameters
-    ----------
-    comments : sequence of str
-        One comment per line, without the ``#``.
-    option : mapping
-        The option (JSON-ready values).
-
-    Returns
-    -------
-    str
-    """
-    import yaml
-
-    return "".join(f"# {c}\n" for c in comments) + yaml.safe_dump(dict(option),
-                                                                   sort_keys=False)
-
-
 # ---------------------------------------------------------------------------------------
 # markdown
 
@@ -282,65 +263,31 @@ def fmt_value(x: Any, digits: int = 4) -> str:
     return str(x)
 
 
-def param_rows(params: Mapping[str, Mapping[str, Any]]) -> list[str]:
-    """Markdown rows ``| name | value | std | unit | pinned down |`` of reported parameters.
+def param_table(params: Mapping[str, Mapping[str, Any]],
+                head: Sequence[str] = ("| parameter | value | s.e. | unit | identifiable |",
+                                       "|---|---|---|---|---|")) -> list[str]:
+    """Markdown table ``| name | value | std | unit | pinned down |`` of reported parameters,
+    and a blank line.
 
     Parameters
     ----------
     params : mapping of str to mapping
         ``name -> {"value", "std", "unit", "identifiable", ...}`` (summary entries).
+    head : sequence of str, optional
+        The table's head and separator lines.
 
     Returns
     -------
     list of str
     """
-    rows = []
+    rows = list(head)
     for k, e in params.items():
         ok = "yes" if e["identifiable"] else "no: " + e["flag"]
         if e.get("note"):
             ok += f" ({e['note']})"
         rows.append(f"| {k} | {fmt_value(e['value'])} | {fmt_value(e['std'], 2)} | {e['unit']} "
                     f"| {ok} |")
-    return rows
-
-
-def result_section(summary: Mapping[str, Any], base_model: str, extra: str) -> list[str]:
-    """Markdown lines of a report's "Result" section (friction and strain reports).
-
-    Parameters
-    ----------
-    summary : mapping
-        Summary with ``units``, ``rmse`` (fit / validation / test, before / after),
-        ``rmse_before``, ``rmse_after``, ``effects_added``, ``unexplained`` and
-        ``residual_signature``.
-    base model : str
-        Name of the model before calibration, e.g. ``"paper law"``.
-    extra : str
-        Text right after the held-out RMSE and its unit, e.g. ``" (ratio 0.5)"``.
-
-    Returns
-    -------
-    list of str
-    """
-    s, u = summary, summary["units"]
-    lines = ["## Result", "", f"| | RMSE before ({base_model}) | RMSE after | after / before |",
-             "|---|---|---|---|"]
-    for k in ("fit", "validation", "test"):
-        b, a = s["rmse"][k]["before"], s["rmse"][k]["after"]
-        lines.append(f"| {k} | {fmt_value(b)} {u} | {fmt_value(a)} {u} | "
-                     f"{fmt_value(a / b if b else None, 3)} |")
-    lines += ["", f"Held-out (test) RMSE {fmt_value(s['rmse_before'])} "
-                  f"→ {fmt_value(s['rmse_after'])} "
-              f"{u}{extra}. Effects added: "
-              + (", ".join(f"**{e['name']}**" for e in s["effects_added"]) or "none") + ".", ""]
-    if s["unexplained"]:
-        lines += ["**The final residual is still structured and no library effect explains "
-                  "it.** " + s["residual_signature"], ""]
-    else:
-        lines += ["The final residual shows no structure along the probed variables: "
-                  + s["residual_signature"], ""]
-    lines += implausible_lines(s)
-    return lines
+    return rows + [""]
 
 
 def implausible_lines(summary: Mapping[str, Any]) -> list[str]:
@@ -434,3 +381,233 @@ def effect_range_lines(effect: Mapping[str, Any]) -> list[str]:
     return lines
 
 
+# ---------------------------------------------------------------------------------------
+# the one renderer: a kind's parts in the shared skeleton
+
+
+class ReportInput(dict):
+    """The summary a report renders (a copy), the calibration ``result`` beside it."""
+
+    def __init__(self, summary: Mapping[str, Any], result: CalibrationResult) -> None:
+        super().__init__(summary)
+        self.result = result
+
+
+#: A report section: markdown lines of the summary, ending with a blank line (or none).
+Section = Callable[[ReportInput], list[str]]
+
+
+class SimulationOption(NamedTuple):
+    """A kind's simulation option (:func:`simulation_files`): file name, comment lines
+    above it (without ``#``), the option (JSON-ready) and its caveat (or None)."""
+
+    file: str
+    comments: list[str]
+    option: dict[str, Any]
+    caveat: str | None
+
+
+@dataclass(frozen=True)
+class ReportParts:
+    """What a data kind contributes to the one renderer (:func:`render_report`): the
+    ``title`` (before ``": <data name>"``), the ``data`` section under it, the name of the
+    ``base_model`` in the Result table (``result_note(summary)`` right after the held-out
+    RMSE), the ``sections`` after it, the figure ``captions`` (None: figures without a
+    heading or captions), the ``closing`` sections, whether the report ends with the
+    ``run_time``, and its simulation ``option`` (:func:`simulation_files`)."""
+
+    title: str
+    data: Section
+    base_model: str
+    sections: tuple[Section, ...]
+    option: Callable[[Mapping[str, Any]], SimulationOption]
+    result_note: Callable[[Mapping[str, Any]], str] | None = None
+    captions: Mapping[str, str] | None = None
+    closing: tuple[Section, ...] = ()
+    run_time: bool = True
+
+
+def render_report(parts: ReportParts, result: CalibrationResult, summary: Mapping[str, Any],
+                  figures: Mapping[str, str] | None = None) -> str:
+    """Markdown report of a calibration (``report.md``), any data kind: the title, the
+    kind's data section, the Result section (RMSE before and after on fit, validation and
+    test data, the effects added, whether the final residual is still structured, the
+    candidates rejected as implausible: :func:`implausible_lines`), the kind's sections,
+    the figures, its closing sections and the run time (:class:`ReportParts`).
+
+    Parameters
+    ----------
+    parts : ReportParts
+        The kind's (``REPORT`` of its report module).
+    result : CalibrationResult
+    summary : mapping
+        From the kind's ``summarize``.
+    figures : mapping of str to str, optional
+        Figure key (the kind's ``make_figures``) -> path relative to the report.
+
+    Returns
+    -------
+    str
+    """
+    s, u = ReportInput(summary, result), summary["units"]
+    lines = [f"# {parts.title}: {s['name']}", "", *parts.data(s), "## Result", "",
+             f"| | RMSE before ({parts.base_model}) | RMSE after | after / before |",
+             "|---|---|---|---|"]
+    for k in ("fit", "validation", "test"):
+        b, a = s["rmse"][k]["before"], s["rmse"][k]["after"]
+        lines.append(f"| {k} | {fmt_value(b)} {u} | {fmt_value(a)} {u} | "
+                     f"{fmt_value(a / b if b else None, 3)} |")
+    lines += ["", f"Held-out (test) RMSE {fmt_value(s['rmse_before'])} → "
+              f"{fmt_value(s['rmse_after'])} {u}"
+              + (parts.result_note(s) if parts.result_note else "") + ". Effects added: "
+              + (", ".join(f"**{e['name']}**" for e in s["effects_added"]) or "none") + ".", "",
+              ("**The final residual is still structured and no library effect explains it.** "
+               if s["unexplained"] else
+               "The final residual shows no structure along the probed variables: ")
+              + s["residual_signature"], "", *implausible_lines(s)]
+    for section in parts.sections:
+        lines += section(s)
+    figures = dict(figures or {})
+    if figures and parts.captions is not None:
+        lines += ["## Figures", ""]
+    for k, path in figures.items():
+        lines += [f"![{k}]({path})", ""]
+        if parts.captions is not None:
+            lines += [f"*{parts.captions.get(k, k)}*", ""]
+    for section in parts.closing:
+        lines += section(s)
+    if parts.run_time:
+        lines += [f"Run time {fmt_value(s['elapsed_s'], 3)} s.", ""]
+    return "\n".join(lines)
+
+
+def simulation_files(parts: ReportParts, summary: Mapping[str, Any]) -> dict[str, str]:
+    """The kind's simulation option as YAML, its comments and caveat above it.
+
+    Parameters
+    ----------
+    parts : ReportParts
+    summary : mapping
+        From the kind's ``summarize``.
+
+    Returns
+    -------
+    dict of str to str
+        File name (e.g. ``friction_effects.yaml``) -> text.
+    """
+    import yaml
+
+    o = parts.option(summary)
+    head = [*o.comments, *([f"caveat: {o.caveat}"] if o.caveat else [])]
+    return {o.file: "".join(f"# {c}\n" for c in head)
+            + yaml.safe_dump(dict(o.option), sort_keys=False)}
+
+
+def iteration_lines(summary: Mapping[str, Any], *, evidence: bool = False,
+                    detail: Callable[[Any, Any], list[str]] | None = None) -> list[str]:
+    """Markdown lines of every iteration: its model, validation RMSE and ranked candidates.
+
+    Parameters
+    ----------
+    summary : mapping
+    evidence : bool, default False
+        With a column of each candidate's held-out evidence 2 ln Λ.
+    detail : callable, optional
+        ``detail(iteration, next iteration or None)`` -> lines before the candidates.
+
+    Returns
+    -------
+    list of str
+    """
+    its, u = summary["iterations"], summary["units"]
+    lines: list[str] = []
+    for n, it in enumerate(its):
+        lines += [f"### Iteration {it['index']}: model {' + '.join(it['model'])}, validation "
+                  f"RMSE {fmt_value(it['val_rmse'])} {u}", ""]
+        if detail is not None:
+            lines += detail(it, its[n + 1] if n + 1 < len(its) else None)
+        if not it["candidates"]:
+            lines += ["(no candidates tried: iteration limit)", ""]
+            continue
+        cols = ["rank", "candidate", "val. RMSE", "gain", *(["2 ln Λ (held out)"] * evidence),
+                "ΔBIC", "eff. ΔBIC", "status"]
+        lines += ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+        for r, c in enumerate(it["candidates"], 1):
+            ev = f"{fmt_value(c.get('heldout_evidence'), 4)} | " if evidence else ""
+            lines.append(f"| {r} | {c['name']} | {fmt_value(c['val_rmse'])} | "
+                         f"{fmt_value(100 * c['rel_improvement'], 3)} % | {ev}"
+                         f"{fmt_value(c['delta_bic'], 5)} | "
+                         f"{fmt_value(c['delta_bic_eff'], 4)} | {c['status']} |")
+        lines.append("")
+    return lines
+
+
+def accepted_lines(summary: Mapping[str, Any], *, selection: bool = False) -> list[str]:
+    """Markdown section "Accepted effects": each effect's description and parameters.
+
+    Parameters
+    ----------
+    summary : mapping
+    selection : bool, default False
+        Also how each was accepted and its parameters against their physical ranges.
+
+    Returns
+    -------
+    list of str
+    """
+    lines = ["## Accepted effects", ""]
+    if not summary["effects_added"]:
+        lines += ["None.", ""]
+    for e in summary["effects_added"]:
+        text = f"{e['description']}. Signature: {e['signature']}. Source: {e['source']}."
+        if selection:
+            text += (f" Accepted in iteration {e['accepted_in_iteration']}"
+                     + (f" (as {e['accepted_as']})" if e["accepted_as"] != e["name"] else "")
+                     + f": validation gain {fmt_value(100 * (e['validation_gain'] or 0), 3)} "
+                     f"%, ΔBIC {fmt_value(e['delta_bic'], 5)}, effective ΔBIC "
+                     f"{fmt_value(e['delta_bic_eff'], 4)}.")
+        lines += [f"### {e['name']}", "", text, "", *param_table(e["params"])]
+        if selection:
+            lines += effect_range_lines(e)
+    return lines
+
+
+def diagnosis_lines(summary: Mapping[str, Any], how: str = "") -> list[str]:
+    """Markdown section "Residual diagnosis": probe scores before and after, signatures.
+
+    Parameters
+    ----------
+    summary : mapping
+    how : str, default ""
+        How the probes are scored, before "structured above" (e.g. ``"two halves of time
+        blocks, "``).
+
+    Returns
+    -------
+    list of str
+    """
+    s = summary
+    lines = ["## Residual diagnosis", "",
+             "Probe scores: out-of-sample fraction of the residual mean square explained by a "
+             f"nonparametric model along one variable ({how}structured above "
+             f"{fmt_value(s['diagnosis_after']['threshold'])}).", "",
+             "| probe | base model residual | final residual |", "|---|---|---|"]
+    pb, pa = s["diagnosis_before"]["probes"], s["diagnosis_after"]["probes"]
+    for k in pb:
+        lines.append(f"| {k} | {fmt_value(pb[k]['score'], 3)} | {fmt_value(pa[k]['score'], 3)} |")
+    return lines + ["", f"Base model residual: {s['residual_signature_before']}", "",
+                    f"Final residual: {s['residual_signature']}", ""]
+
+
+def uncertainty_lines(summary: Mapping[str, Any]) -> list[str]:
+    """Markdown section "Uncertainty" (the summary's ``uncertainty_method``).
+
+    Parameters
+    ----------
+    summary : mapping
+
+    Returns
+    -------
+    list of str
+    """
+    return ["## Uncertainty", "", summary["uncertainty_method"], ""]

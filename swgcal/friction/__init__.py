@@ -3,10 +3,10 @@
 The kind's steps, with the same names and shapes as :mod:`swgcal.strain`:
 :func:`build_problem` (recording -> :class:`~swgcal.loop.Problem`),
 :func:`calibrate` (-> :class:`~swgcal.loop.CalibrationResult`),
-:func:`summarize` (-> ``summary.json``), :func:`render_report` (-> ``report.md``),
-:func:`make_figures` (-> ``figures/*.png``), :func:`simulation_files`
-(-> ``friction_effects.yaml``). The kind-independent entry points are in
-:mod:`swgcal`.
+:func:`summarize` (-> ``summary.json``), :func:`make_figures` (-> ``figures/*.png``),
+and :data:`REPORT`, what its report (-> ``report.md``) and simulation option
+(-> ``friction_effects.yaml``) add to the shared renderer (:mod:`swgcal.report`). The
+kind-independent entry points are in :mod:`swgcal`.
 
 Modules: :mod:`.library` (the fitted effects: the simulator's forms with their fit;
 :func:`~.library.register_effect` adds one to both), :mod:`.ranges` (physical ranges
@@ -23,11 +23,12 @@ from .figures import make_figures
 from .library import FRICTION_LIBRARY, register_effect
 from .options import FrictionOptions
 from .problem import OPTIONS, build_problem, calibrate, friction_problem
-from .report import render_report, simulation_files, summarize
+from .report import REPORT, summarize
 
 __all__ = [
     "FRICTION_LIBRARY",
     "OPTIONS",
+    "REPORT",
     "FrictionOptions",
     "FrictionRecording",
     "build_problem",
@@ -36,8 +37,6 @@ __all__ = [
     "load_friction_csv",
     "make_figures",
     "register_effect",
-    "render_report",
-    "simulation_files",
     "summarize",
     "write_friction_csv",
 ]

@@ -4,8 +4,8 @@ calibration.
 :func:`summarize` adds to the shared keys (:func:`swgcal.report.base_summary`)
 the ripples' wave-generator orders, the harmonic grouping, the proposals beyond the
 library and the accepted effects as a simulation option (``friction_effects``);
-:func:`render_report` turns it into markdown (figures: :mod:`.figures`, passed in by
-file name); :func:`simulation_files` gives ``friction_effects.yaml``.
+:data:`REPORT` is what the report (figures: :mod:`.figures`) and ``friction_effects.yaml``
+add to the shared ones (:mod:`swgcal.report`).
 """
 
 from __future__ import annotations
@@ -19,19 +19,23 @@ from ..core import FitResult, Term
 from ..discovery import proposals_section
 from ..loop import CalibrationResult
 from ..report import (
+    ReportInput,
+    ReportParts,
+    SimulationOption,
+    accepted_lines,
     base_summary,
     caveat,
-    effect_range_lines,
+    diagnosis_lines,
     fmt_value,
-    option_yaml,
-    param_rows,
-    result_section,
+    iteration_lines,
+    param_table,
     to_jsonable,
+    uncertainty_lines,
 )
 from .discovery import propose
 from .ripple_groups import HARMONIC_REL_TOL
 
-__all__ = ["summarize", "render_report", "ripple_lines", "simulation_files"]
+__all__ = ["REPORT", "summarize", "ripple_lines"]
 
 
 def _orders_of(term: Term, fit: FitResult) -> dict[str, Any] | None:
@@ -83,8 +87,6 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
     by_name = {t.name: t for t in result.effect_terms()}
     for e in s["effects_added"]:
         e["orders"] = to_jsonable(_orders_of(by_name[e["name"]], final))
-    base_name = result.base_model_final.terms[0].name
-    final_base = final.estimates_of(base_name)
     meta = result.problem.meta
     s["proposed"] = [x.as_dict() for x in propose(result)]
     s["friction_effects"] = [
@@ -92,7 +94,7 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
          **({"options": e["options"]} if e["options"] else {})} for e in s["effects_added"]]
     s["simulation"] = {
         "v_s_rad_s": meta.get("v_s_rad_s"), "t0_s": meta.get("t0_s"),
-        "base_model": {k: e.value for k, e in final_base.items()},
+        "base_model": {k: e["value"] for k, e in s["base_model"]["params_in_final_model"].items()},
         "caveat": caveat(result),
         "call": "swgsim.gear.friction.FrictionEffects(summary['friction_effects'], "
                 "v_s=summary['simulation']['v_s_rad_s'], base_model=summary['simulation']"
@@ -100,28 +102,15 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
     return to_jsonable(s)
 
 
-def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
-    """The accepted effects as a simulation option: ``friction_effects.yaml`` for
-    ``conf/friction_effects/`` (:func:`swgsim.gear.friction.friction_effects_from_config`).
-
-    Parameters
-    ----------
-    summary : mapping
-        From :func:`summarize`.
-
-    Returns
-    -------
-    dict of str to str
-        File name -> text.
-    """
+def _option(summary: Mapping[str, Any]) -> SimulationOption:
+    """``friction_effects.yaml`` (:func:`swgsim.gear.friction.friction_effects_from_config`)."""
     sim = summary.get("simulation") or {}
     fx = {"v_s": sim.get("v_s_rad_s"), "t0_s": sim.get("t0_s"),
           "base_model": sim.get("base_model"), "effects": summary["friction_effects"]}
-    head = [f"accepted friction effects of {summary['name']} (swgsim-calibrate); a config "
-            "option for conf/friction_effects/"]
-    if sim.get("caveat"):
-        head.append(f"caveat: {sim['caveat']}")
-    return {"friction_effects.yaml": option_yaml(head, fx)}
+    return SimulationOption(
+        "friction_effects.yaml", [f"accepted friction effects of {summary['name']} "
+                                  "(swgsim-calibrate); a config option for "
+                                  "conf/friction_effects/"], fx, sim.get("caveat"))
 
 
 def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
@@ -194,14 +183,13 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
 
 
 def _data_lines(s: Mapping[str, Any]) -> list[str]:
-    """Title and what the measured data are."""
+    """What the measured data are."""
     d = s["data"]
-    lines = [f"# Calibration report: {s['name']}", ""]
-    lines += [f"Measured data: `{s['source']}` (kind: {s['kind']}). "
-              f"{d.get('n_samples')} samples over {fmt_value(d.get('duration_s'))} s, median "
-              f"sample interval {fmt_value(d.get('dt_median_s'))} s; acceleration "
-              f"{d.get('ddq_source')}; smooth-sign velocity v_s = {fmt_value(d.get('v_s_rad_s'))} "
-              "rad/s.", ""]
+    lines = [f"Measured data: `{s['source']}` (kind: {s['kind']}). "
+             f"{d.get('n_samples')} samples over {fmt_value(d.get('duration_s'))} s, median "
+             f"sample interval {fmt_value(d.get('dt_median_s'))} s; acceleration "
+             f"{d.get('ddq_source')}; smooth-sign velocity v_s = {fmt_value(d.get('v_s_rad_s'))} "
+             "rad/s.", ""]
     if d.get("data_notes"):
         lines += ["Data checks on loading: " + "; ".join(d["data_notes"]) + ".", ""]
     return lines
@@ -209,201 +197,118 @@ def _data_lines(s: Mapping[str, Any]) -> list[str]:
 
 def _heldout_lines(s: Mapping[str, Any]) -> list[str]:
     """The held-out time blocks."""
-    lines: list[str] = []
     h = s["heldout"]
-    lines += ["## Held-out data", "",
-              f"{h.get('method')}: {h.get('n_blocks')} blocks of {fmt_value(h.get('block_s'))} s; "
-              f"validation blocks {h.get('validation_blocks')}, test blocks "
-              f"{h.get('test_blocks')}"
-              + (" (the last block is a test block, so drift terms must extrapolate)"
-                 if h.get("n_blocks") and h["n_blocks"] - 1 in (h.get("test_blocks") or [])
-                 else "")
-              + f"; guard of {fmt_value(h.get('guard_s'))} s dropped at every boundary "
-              f"between roles; samples {h.get('n_samples')}. {h.get('note', '')}.", ""]
-    return lines
+    return ["## Held-out data", "",
+            f"{h.get('method')}: {h.get('n_blocks')} blocks of {fmt_value(h.get('block_s'))} s; "
+            f"validation blocks {h.get('validation_blocks')}, test blocks "
+            f"{h.get('test_blocks')}"
+            + (" (the last block is a test block, so drift terms must extrapolate)"
+               if h.get("n_blocks") and h["n_blocks"] - 1 in (h.get("test_blocks") or [])
+               else "")
+            + f"; guard of {fmt_value(h.get('guard_s'))} s dropped at every boundary "
+            f"between roles; samples {h.get('n_samples')}. {h.get('note', '')}.", ""]
 
 
 def _base_model_lines(s: Mapping[str, Any]) -> list[str]:
     """The paper-law base model and its parameters."""
-    lines: list[str] = []
-    lines += ["## Base model: paper law (eq. 5-6 on the joint)", "",
-              "τ = b0 tanh(q̇/v_s) + b1 q̇ + b2 q̇³ + b3 sin(q + θ_b), fitted on fit + "
-              "validation blocks.", "",
-              "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
-    lines += param_rows(s["base_model"]["params"]) + [""]
-    return lines
+    return ["## Base model: paper law (eq. 5-6 on the joint)", "",
+            "τ = b0 tanh(q̇/v_s) + b1 q̇ + b2 q̇³ + b3 sin(q + θ_b), fitted on fit + "
+            "validation blocks.", "", *param_table(s["base_model"]["params"])]
 
 
-def _selection_lines(s: Mapping[str, Any]) -> list[str]:
-    """The acceptance rule."""
-    lines: list[str] = []
-    lines += ["## Selection", "",
-              "Each iteration adds every library candidate to the current model and refits "
-              "on the fit blocks; candidates are ranked by validation RMSE. Accepted: the "
-              "first in the ranking with validation gain > "
-              f"{100 * s['selection']['min_rel_improvement']:.0f} %, "
-              f"{'effective ' if s['selection'].get('effective_bic') else ''}ΔBIC < "
-              f"{s['selection']['max_delta_bic']:g} and primary parameters pinned down "
-              f"(rel. s.e. < {s['selection']['max_rel_se']:g}). When no single candidate "
-              "passes, pairs of the best candidates are tried jointly. Effective ΔBIC: "
-              "n/τ_int samples (τ_int of the best residual of the iteration).", ""]
-    return lines
+def _selection_lines(s: ReportInput) -> list[str]:
+    """The acceptance rule, then every iteration with its residual and ranked candidates."""
+    library = s.result.problem.library
+    return ["## Selection", "",
+            "Each iteration adds every library candidate to the current model and refits "
+            "on the fit blocks; candidates are ranked by validation RMSE. Accepted: the "
+            "first in the ranking with validation gain > "
+            f"{100 * s['selection']['min_rel_improvement']:.0f} %, "
+            f"{'effective ' if s['selection'].get('effective_bic') else ''}ΔBIC < "
+            f"{s['selection']['max_delta_bic']:g} and primary parameters pinned down "
+            f"(rel. s.e. < {s['selection']['max_rel_se']:g}). When no single candidate "
+            "passes, pairs of the best candidates are tried jointly. Effective ΔBIC: "
+            "n/τ_int samples (τ_int of the best residual of the iteration).", "",
+            *iteration_lines(s, detail=lambda it, nxt: _residual_lines(library, it, nxt))]
 
 
-def _iteration_lines(result: CalibrationResult, its: list, n_it: int, u: str) -> list[str]:
-    """One iteration: the residual, the probe trace of the accepted effect, the
-    ranked candidates."""
-    it = its[n_it]
-    lines: list[str] = []
-    lines += [f"### Iteration {it['index']}: model {' + '.join(it['model'])}, "
-              f"validation RMSE {fmt_value(it['val_rmse'])} {u}", "",
-              f"Residual (fit blocks): {it['diagnosis']['signature']}", ""]
-    if it["accepted"]:
-        nxt = (its[n_it + 1]["diagnosis"] if n_it + 1 < len(its) else None)
-        trace = []
-        for name in it["accepted"].split(" + "):
-            kind = name.split("#")[0]
-            cls = result.problem.library.get(kind)
-            for pr in getattr(cls, "probes", ()):
-                b = it["diagnosis"]["probes"].get(pr, {}).get("score")
-                a = nxt["probes"].get(pr, {}).get("score") if nxt else None
-                if b is not None:
-                    trace.append(f"{name} ↔ probe {pr}: {fmt_value(b, 2)} → {fmt_value(a, 2)}")
-        if trace:
-            lines += ["Trace (the accepted effect's signature probes, score before → "
-                      "after): " + "; ".join(trace) + ".", ""]
-    if not it["candidates"]:
-        return lines + ["(no candidates tried: iteration limit)", ""]
-    lines += ["| rank | candidate | val. RMSE | gain | ΔBIC | eff. ΔBIC | status |",
-              "|---|---|---|---|---|---|---|"]
-    for r, c in enumerate(it["candidates"], 1):
-        lines.append(f"| {r} | {c['name']} | {fmt_value(c['val_rmse'])} | "
-                     f"{fmt_value(100 * c['rel_improvement'], 3)} "
-                     f"% | {fmt_value(c['delta_bic'], 5)} | "
-                     f"{fmt_value(c['delta_bic_eff'], 4)} | {c['status']} |")
-    lines.append("")
+def _residual_lines(library: Mapping[str, type], it: Mapping[str, Any],
+                    nxt: Mapping[str, Any] | None) -> list[str]:
+    """An iteration's residual and the probe scores of the effect it accepted, before/after."""
+    lines = [f"Residual (fit blocks): {it['diagnosis']['signature']}", ""]
+    if not it["accepted"]:
+        return lines
+    trace = []
+    for name in it["accepted"].split(" + "):
+        for pr in getattr(library.get(name.split("#")[0]), "probes", ()):
+            b = it["diagnosis"]["probes"].get(pr, {}).get("score")
+            a = nxt["diagnosis"]["probes"].get(pr, {}).get("score") if nxt else None
+            if b is not None:
+                trace.append(f"{name} ↔ probe {pr}: {fmt_value(b, 2)} → {fmt_value(a, 2)}")
+    if trace:
+        lines += ["Trace (the accepted effect's signature probes, score before → "
+                  "after): " + "; ".join(trace) + ".", ""]
     return lines
 
 
 def _accepted_lines(s: Mapping[str, Any]) -> list[str]:
     """The accepted effects and the final model."""
-    lines: list[str] = []
-    lines += ["## Accepted effects", ""]
-    if not s["effects_added"]:
-        lines += ["None.", ""]
-    for e in s["effects_added"]:
-        lines += [f"### {e['name']}", "",
-                  f"{e['description']}. Signature: {e['signature']}. Source: {e['source']}. "
-                  f"Accepted in iteration {e['accepted_in_iteration']}"
-                  + (f" (as {e['accepted_as']})" if e["accepted_as"] != e["name"] else "")
-                  + f": validation gain {fmt_value(100 * (e['validation_gain'] or 0), 3)} %, ΔBIC "
-                  f"{fmt_value(e['delta_bic'], 5)}, effective ΔBIC "
-                  f"{fmt_value(e['delta_bic_eff'], 4)}.",
-                  "", "| parameter | value | s.e. | unit | identifiable |",
-                  "|---|---|---|---|---|"]
-        lines += param_rows(e["params"]) + [""]
-        lines += effect_range_lines(e)
-    lines += ["Paper-law parameters in the final model:", "",
-              "| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
-    lines += param_rows(s["base_model"]["params_in_final_model"]) + [""]
     fm = s["final_model"]
-    lines += [f"Final model: {fm['n_params']} parameters, condition number of the scaled "
-              f"JᵀJ {fmt_value(fm['condition_number'], 3)}, residual τ_int "
-              f"{fmt_value(fm['tau_int'], 3)} samples.", ""]
-    return lines
+    return [*accepted_lines(s, selection=True), "Paper-law parameters in the final model:", "",
+            *param_table(s["base_model"]["params_in_final_model"]),
+            f"Final model: {fm['n_params']} parameters, condition number of the scaled "
+            f"JᵀJ {fmt_value(fm['condition_number'], 3)}, residual τ_int "
+            f"{fmt_value(fm['tau_int'], 3)} samples.", ""]
 
 
 def _diagnosis_lines(s: Mapping[str, Any]) -> list[str]:
     """Probe scores before/after, signatures, noise floor."""
-    u = s["units"]
-    lines: list[str] = []
-    lines += ["## Residual diagnosis", "",
-              "Probe scores: out-of-sample fraction of the residual mean square explained "
-              "by a nonparametric model along one variable (two halves of time blocks, "
-              f"structured above {fmt_value(s['diagnosis_after']['threshold'])}).", "",
-              "| probe | base model residual | final residual |", "|---|---|---|"]
-    pb, pa = s["diagnosis_before"]["probes"], s["diagnosis_after"]["probes"]
-    for k in pb:
-        lines.append(f"| {k} | {fmt_value(pb[k]['score'], 3)} | {fmt_value(pa[k]['score'], 3)} |")
-    lines += ["", f"Base model residual: {s['residual_signature_before']}", "",
-              f"Final residual: {s['residual_signature']}", "",
-              f"Noise floor (difference-based, Gasser et al. 1986): "
-              f"{fmt_value(s['noise_floor'])} {u}; test RMSE after is "
-              f"{fmt_value(s['rmse_after'] / s['noise_floor'] if s['noise_floor'] else None, 3)}× "
-              "that (the estimator removes smooth structure and underestimates coloured "
-              "noise).", ""]
-    return lines
+    return [*diagnosis_lines(s, "two halves of time blocks, "),
+            f"Noise floor (difference-based, Gasser et al. 1986): "
+            f"{fmt_value(s['noise_floor'])} {s['units']}; test RMSE after is "
+            f"{fmt_value(s['rmse_after'] / s['noise_floor'] if s['noise_floor'] else None, 3)}× "
+            "that (the estimator removes smooth structure and underestimates coloured "
+            "noise).", ""]
 
 
-def _figure_lines(figures: Mapping[str, str]) -> list[str]:
-    """The figures with captions."""
-    lines: list[str] = []
-    captions = {
-        "velocity": "Residual against velocity (base model and final), coloured by the sign "
-                    "of the acceleration.",
-        "position": "Residual against joint angle per direction of motion, and its "
-                    "spectrum over q.",
-        "hysteresis": "Residual near reversals: against velocity split by the sign of "
-                      "q̇·q̈, and against acceleration.",
-        "time": "Residual against time with the block roles, and its spectrum in time.",
-        "overlay": "Measured torque and the predictions of the paper law and the final "
-                   "model on held-out (test) data.",
-    }
-    if figures:
-        lines += ["## Figures", ""]
-        for k, path in figures.items():
-            lines += [f"![{k}]({path})", "", f"*{captions.get(k, k)}*", ""]
-    return lines
+_CAPTIONS = {
+    "velocity": "Residual against velocity (base model and final), coloured by the sign "
+                "of the acceleration.",
+    "position": "Residual against joint angle per direction of motion, and its "
+                "spectrum over q.",
+    "hysteresis": "Residual near reversals: against velocity split by the sign of "
+                  "q̇·q̈, and against acceleration.",
+    "time": "Residual against time with the block roles, and its spectrum in time.",
+    "overlay": "Measured torque and the predictions of the paper law and the final "
+               "model on held-out (test) data.",
+}
 
 
 def _simulation_lines(s: Mapping[str, Any]) -> list[str]:
     """The accepted effects as a simulation option."""
-    lines: list[str] = []
-    if s["friction_effects"]:
-        sim = s["simulation"]
-        lines += ["## As a simulation option", "",
-                  "The accepted effects, for `swgsim.gear.friction.FrictionEffects` (or a "
-                  "`friction_effects` config list):", "", "```yaml", "friction_effects:"]
-        for e in s["friction_effects"]:
-            ps = ", ".join(f"{k}: {fmt_value(v, 6)}" for k, v in e["params"].items())
-            opt = (", options: {" + ", ".join(f"{k}: {v}" for k, v in e["options"].items())
-                   + "}") if e.get("options") else ""
-            lines.append(f"  - {{kind: {e['kind']}, name: '{e['name']}', params: {{{ps}}}{opt}}}")
-        lines += [f"friction_v_s: {fmt_value(sim.get('v_s_rad_s'), 6)}",
-                  f"friction_t0_s: {fmt_value(sim.get('t0_s'), 6)}", "```", ""]
-        if sim.get("caveat"):
-            lines += [f"**Caveat.** {sim['caveat']}", ""]
+    if not s["friction_effects"]:
+        return []
+    sim = s["simulation"]
+    lines = ["## As a simulation option", "",
+             "The accepted effects, for `swgsim.gear.friction.FrictionEffects` (or a "
+             "`friction_effects` config list):", "", "```yaml", "friction_effects:"]
+    for e in s["friction_effects"]:
+        ps = ", ".join(f"{k}: {fmt_value(v, 6)}" for k, v in e["params"].items())
+        opt = (", options: {" + ", ".join(f"{k}: {v}" for k, v in e["options"].items())
+               + "}") if e.get("options") else ""
+        lines.append(f"  - {{kind: {e['kind']}, name: '{e['name']}', params: {{{ps}}}{opt}}}")
+    lines += [f"friction_v_s: {fmt_value(sim.get('v_s_rad_s'), 6)}",
+              f"friction_t0_s: {fmt_value(sim.get('t0_s'), 6)}", "```", ""]
+    if sim.get("caveat"):
+        lines += [f"**Caveat.** {sim['caveat']}", ""]
     return lines
 
 
-def render_report(result: CalibrationResult, summary: Mapping[str, Any],
-                  figures: Mapping[str, str] | None = None) -> str:
-    """Markdown report of a friction calibration.
-
-    Parameters
-    ----------
-    result : CalibrationResult
-    summary : mapping
-        From :func:`summarize`.
-    figures : mapping of str to str, optional
-        Figure key (``"velocity"``, ``"position"``, ``"hysteresis"``, ``"time"``,
-        ``"overlay"``) to a path relative to the report.
-
-    Returns
-    -------
-    str
-    """
-    s = summary
-    lines = _data_lines(s)
-    lines += result_section(s, "paper law", f" (ratio {fmt_value(s['rmse_ratio'], 3)})")
-    lines += _heldout_lines(s) + _base_model_lines(s) + _selection_lines(s)
-    for n_it in range(len(s["iterations"])):
-        lines += _iteration_lines(result, s["iterations"], n_it, s["units"])
-    lines += _accepted_lines(s)
-    lines += ripple_lines(s)
-    lines += proposals_section(s.get("proposed", []))
-    lines += _diagnosis_lines(s) + _figure_lines(dict(figures or {}))
-    lines += ["## Uncertainty", "", s["uncertainty_method"], ""]
-    lines += _simulation_lines(s)
-    lines += [f"Run time {fmt_value(s['elapsed_s'], 3)} s.", ""]
-    return "\n".join(lines)
+#: What a friction report adds to the shared skeleton (:func:`swgcal.report.render_report`;
+#: figure keys of :func:`~swgcal.friction.figures.make_figures`), and its simulation option.
+REPORT = ReportParts(
+    title="Calibration report", data=_data_lines, base_model="paper law",
+    result_note=lambda s: f" (ratio {fmt_value(s['rmse_ratio'], 3)})",
+    sections=(_heldout_lines, _base_model_lines, _selection_lines, _accepted_lines,
+              ripple_lines, proposals_section, _diagnosis_lines),
+    captions=_CAPTIONS, closing=(uncertainty_lines, _simulation_lines), option=_option)

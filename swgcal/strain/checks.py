@@ -19,9 +19,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
-
 from ..loop import CalibrationResult
+from ..report import fmt_value
 
 __all__ = ["withheld_parameters", "simulation_option", "too_small_rows", "result_extras"]
 
@@ -107,12 +106,6 @@ def too_small_rows(result: CalibrationResult) -> list[dict[str, Any]]:
              "status": c.status} for c in result.too_small()]
 
 
-def _g(x: Any, digits: int = 3) -> str:
-    if x is None or (isinstance(x, float) and not np.isfinite(x)):
-        return "–"
-    return f"{x:.{digits}g}" if isinstance(x, float) else str(x)
-
-
 def result_extras(summary: Mapping[str, Any]) -> list[str]:
     """Markdown lines for the Result section: too-small candidates, withheld
     parameters, caveat."""
@@ -121,17 +114,18 @@ def result_extras(summary: Mapping[str, Any]) -> list[str]:
     sel = summary.get("selection", {})
     if small:
         lines += ["Too small for these data (rejected only for lack of evidence: held-out "
-                  f"evidence 2 ln Λ <= {_g(sel.get('min_heldout_evidence'))} or effective "
-                  f"ΔBIC >= {_g(sel.get('max_delta_bic'))}, although the held-out gain is "
-                  "positive; they may be there, more or longer windows would tell): "
-                  + "; ".join(f"**{r['name']}** (validation gain "
-                              f"{_g(100 * r['validation_gain'], 2)} %, 2 ln Λ "
-                              f"{_g(r['heldout_evidence'])}, effective ΔBIC "
-                              f"{_g(r['delta_bic_eff'])})" for r in small) + ".", ""]
+                  f"evidence 2 ln Λ <= {fmt_value(sel.get('min_heldout_evidence'), 3)} or "
+                  f"effective ΔBIC >= {fmt_value(sel.get('max_delta_bic'), 3)}, although the "
+                  "held-out gain is positive; they may be there, more or longer windows would "
+                  "tell): " + "; ".join(f"**{r['name']}** (validation gain "
+                                        f"{fmt_value(100 * r['validation_gain'], 2)} %, 2 ln Λ "
+                                        f"{fmt_value(r['heldout_evidence'], 3)}, effective ΔBIC "
+                                        f"{fmt_value(r['delta_bic_eff'], 3)})" for r in small)
+                  + ".", ""]
     wh = summary.get("withheld") or []
     if wh:
         lines += ["Kept out of the simulation option (not pinned down by the data): "
-                  + "; ".join(f"{w['effect']}.{w['parameter']} = {_g(w['value'])} "
+                  + "; ".join(f"{w['effect']}.{w['parameter']} = {fmt_value(w['value'], 3)} "
                               f"({w['reason']})" for w in wh) + ".", ""]
     cv = (summary.get("simulation") or {}).get("caveat")
     if cv:

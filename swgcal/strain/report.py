@@ -1,8 +1,8 @@
 """Summary, markdown report and simulation option of a strain calibration.
 
-:func:`summarize` (``summary.json``), :func:`order2_table`, :func:`render_report`
-(``report.md``) and :func:`simulation_files` (``sensor_effects.yaml``); figures:
-:mod:`.figures`.
+:func:`summarize` (``summary.json``), :func:`order2_table`, and :data:`REPORT`: what the
+report (``report.md``; figures: :mod:`.figures`) and ``sensor_effects.yaml`` add to the
+shared ones (:mod:`swgcal.report`).
 """
 
 from __future__ import annotations
@@ -16,14 +16,18 @@ import numpy as np
 from ..discovery import proposals_section
 from ..loop import CalibrationResult
 from ..report import (
-    UNCERTAINTY_METHOD,
+    ReportInput,
+    ReportParts,
+    SimulationOption,
+    accepted_lines,
     base_summary,
     caveat,
+    diagnosis_lines,
     fmt_value,
-    option_yaml,
-    param_rows,
-    result_section,
+    iteration_lines,
+    param_table,
     to_jsonable,
+    uncertainty_lines,
 )
 from .align import flipped_ke, input_angle_evidence
 from .checks import (
@@ -38,11 +42,10 @@ from .signals import SENSORS, StrainSignals
 
 __all__ = [
     "IDENTIFIABILITY",
+    "REPORT",
     "summarize",
     "order2_components",
     "order2_table",
-    "render_report",
-    "simulation_files",
 ]
 
 IDENTIFIABILITY = (
@@ -174,7 +177,6 @@ def _summarize(result: CalibrationResult, source: str | None) -> dict[str, Any]:
     s["identifiability"] = {"declared": IDENTIFIABILITY, "flagged": flagged,
                             "condition_number": final.cond}
     diag = result.diag_after
-    s["noise_floor"] = diag.noise_floor
     s["rmse_over_noise_floor"] = (result.rmse_after / diag.noise_floor
                                   if diag.noise_floor and diag.noise_floor > 0 else None)
     s["order2"] = to_jsonable(order2_table(result))
@@ -229,47 +231,10 @@ def order2_table(result: CalibrationResult) -> list[dict[str, Any]]:
     return rows
 
 
-def render_report(result: CalibrationResult, summary: Mapping[str, Any],
-                  figures: Mapping[str, str] | None = None) -> str:
-    """Markdown report of a strain calibration.
-
-    Parameters
-    ----------
-    result : CalibrationResult
-    summary : mapping
-        From :func:`summarize`.
-    figures : mapping of str to str, optional
-        Figure key to a path relative to the report.
-    """
-    s = summary
-    lines = _data_section(s)
-    lines += result_section(s, "nominal chain",
-                            f"; difference-based noise floor {fmt_value(s['noise_floor'])} "
-                            f"{s['units']} (ratio "
-                            f"{fmt_value(s['rmse_over_noise_floor'], 3)})")
-    lines += result_extras(s)
-    lines += ["## Held-out data", "", s["heldout"], ""]
-    lines += _base_model_section(result, s)
-    lines += _alignment_section(s)
-    lines += _selection_section(s)
-    lines += _accepted_section(s)
-    lines += _diagnosis_section(s)
-    lines += proposals_section(s.get("proposed", []))
-    lines += _figures_section(figures)
-    lines += _simulation_section(s)
-    lines += ["## Uncertainty", "", UNCERTAINTY_METHOD, "",
-              f"Run time {fmt_value(s['elapsed_s'], 3)} s.", ""]
-    return "\n".join(lines)
-
-
-_PARAM_HEAD = ["| parameter | value | s.e. | unit | identifiable |", "|---|---|---|---|---|"]
-
-
 def _data_section(s: Mapping[str, Any]) -> list[str]:
-    """Title and the measured data."""
+    """The measured data."""
     d = s["data"]
-    return [f"# Strain calibration report: {s['name']}", "",
-            f"Measured data: `{s['source']}` (kind: strain, schema v1). {d['n_windows']} "
+    return [f"Measured data: `{s['source']}` (kind: strain, schema v1). {d['n_windows']} "
             f"windows of {fmt_value(d['window_s'] * 1e3, 3)} "
             f"ms at {fmt_value(d['sample_rate_hz'])} Hz; "
             "operating points (n_in [rpm], T_out [N m]) "
@@ -277,13 +242,24 @@ def _data_section(s: Mapping[str, Any]) -> list[str]:
                         zip(d["operating_points"], d["windows_per_op"], strict=True)) + ".", ""]
 
 
-def _base_model_section(result: CalibrationResult, s: Mapping[str, Any]) -> list[str]:
+def _result_note(s: Mapping[str, Any]) -> str:
+    """The noise floor after the held-out RMSE."""
+    return (f"; difference-based noise floor {fmt_value(s['noise_floor'])} {s['units']} "
+            f"(ratio {fmt_value(s['rmse_over_noise_floor'], 3)})")
+
+
+def _heldout_section(s: Mapping[str, Any]) -> list[str]:
+    """The held-out windows."""
+    return ["## Held-out data", "", s["heldout"], ""]
+
+
+def _base_model_section(s: ReportInput) -> list[str]:
     """The nominal chain's fitted scales, alone and in the final model."""
-    lines = ["## Base model: nominal simulation chain", "", result.problem.base_model[0].description
-             + ". Fitted on fit + validation windows:", "", *_PARAM_HEAD]
-    lines += param_rows(s["base_model"]["params"]) + [""]
-    lines += ["In the final model (with the accepted effects):", "", *_PARAM_HEAD]
-    return lines + param_rows(s["base_model"]["params_in_final_model"]) + [""]
+    return ["## Base model: nominal simulation chain", "",
+            s.result.problem.base_model[0].description + ". Fitted on fit + validation "
+            "windows:", "", *param_table(s["base_model"]["params"]),
+            "In the final model (with the accepted effects):", "",
+            *param_table(s["base_model"]["params_in_final_model"])]
 
 
 def _alignment_section(s: Mapping[str, Any]) -> list[str]:
@@ -305,75 +281,41 @@ def _alignment_section(s: Mapping[str, Any]) -> list[str]:
                      f"{fmt_value(a['phi_in0_final_deg'], 4)} | "
                      f"{fmt_value(a.get('phi_in0_final_period_deg'), 3)}° | "
                      f"{fmt_value(a.get('phi_in0_final_flip_evidence'), 3)} |")
-    return lines
+    return lines + [""]
 
 
 def _selection_section(s: Mapping[str, Any]) -> list[str]:
     """The acceptance rule and every iteration's ranked candidates."""
-    u = s["units"]
-    lines = ["", "## Selection", "",
-             "Each iteration adds every library candidate to the current model and refits on "
-             "the fit windows; candidates are ranked by validation RMSE. Accepted: the first "
-             "with very strong evidence on the 2 ln B scale of Kass & Raftery (1995): "
-             "held-out evidence 2 ln Λ (validation log-likelihood ratio, n/τ_int effective "
-             f"samples) > {s['selection']['min_heldout_evidence']:g} and effective ΔBIC on "
-             f"the fit windows < {s['selection']['max_delta_bic']:g}"
-             + (f", validation gain > {100 * s['selection']['min_rel_improvement']:.2g} %"
-                if s['selection']['min_rel_improvement'] > 0 else "")
-             + f", its primary parameter pinned down (rel. s.e. < "
-             f"{s['selection']['max_rel_se']:g}) and every parameter inside its physical "
-             "range (the effect's declared source).", ""]
-    for it in s["iterations"]:
-        lines += [f"### Iteration {it['index']}: model {' + '.join(it['model'])}, validation "
-                  f"RMSE {fmt_value(it['val_rmse'])} {u}", ""]
-        if not it["candidates"]:
-            lines += ["(no candidates tried: iteration limit)", ""]
-            continue
-        lines += ["| rank | candidate | val. RMSE | gain | 2 ln Λ (held out) | ΔBIC | eff. ΔBIC "
-                  "| status |", "|---|---|---|---|---|---|---|---|"]
-        for r, c in enumerate(it["candidates"], 1):
-            lines.append(f"| {r} | {c['name']} | {fmt_value(c['val_rmse'])} | "
-                         f"{fmt_value(100 * c['rel_improvement'], 3)} % | "
-                         f"{fmt_value(c.get('heldout_evidence'), 4)} "
-                         f"| {fmt_value(c['delta_bic'], 5)} | "
-                         f"{fmt_value(c['delta_bic_eff'], 4)} | {c['status']} |")
-        lines.append("")
-    return lines
+    return ["## Selection", "",
+            "Each iteration adds every library candidate to the current model and refits on "
+            "the fit windows; candidates are ranked by validation RMSE. Accepted: the first "
+            "with very strong evidence on the 2 ln B scale of Kass & Raftery (1995): "
+            "held-out evidence 2 ln Λ (validation log-likelihood ratio, n/τ_int effective "
+            f"samples) > {s['selection']['min_heldout_evidence']:g} and effective ΔBIC on "
+            f"the fit windows < {s['selection']['max_delta_bic']:g}"
+            + (f", validation gain > {100 * s['selection']['min_rel_improvement']:.2g} %"
+               if s['selection']['min_rel_improvement'] > 0 else "")
+            + f", its primary parameter pinned down (rel. s.e. < "
+            f"{s['selection']['max_rel_se']:g}) and every parameter inside its physical "
+            "range (the effect's declared source).", "", *iteration_lines(s, evidence=True)]
 
 
 def _accepted_section(s: Mapping[str, Any]) -> list[str]:
     """The accepted effects with their parameters, and identifiability."""
-    lines = ["## Accepted effects", ""]
-    if not s["effects_added"]:
-        lines += ["None.", ""]
-    for e in s["effects_added"]:
-        lines += [f"### {e['name']}", "", f"{e['description']}. Signature: {e['signature']}. "
-                  f"Source: {e['source']}.", "", *_PARAM_HEAD]
-        lines += param_rows(e["params"]) + [""]
-    return lines + ["## Identifiability", "", s["identifiability"]["declared"], "",
-                    f"Condition number of the scaled JᵀJ of the final model: "
-                    f"{fmt_value(s['identifiability']['condition_number'], 3)}. Flagged "
-                    "parameters: " + ("; ".join(s["identifiability"]["flagged"]) or "none")
-                    + ".", ""]
+    return [*accepted_lines(s), "## Identifiability", "", s["identifiability"]["declared"], "",
+            f"Condition number of the scaled JᵀJ of the final model: "
+            f"{fmt_value(s['identifiability']['condition_number'], 3)}. Flagged "
+            "parameters: " + ("; ".join(s["identifiability"]["flagged"]) or "none") + ".", ""]
 
 
 def _diagnosis_section(s: Mapping[str, Any]) -> list[str]:
     """Probe scores before and after, residual signatures, the order-2 table."""
-    lines = ["## Residual diagnosis", "",
-             "Probe scores: out-of-sample fraction of the residual mean square explained by a "
-             "nonparametric model along one variable (structured above "
-             f"{fmt_value(s['diagnosis_after']['threshold'])}).", "",
-             "| probe | base model residual | final residual |", "|---|---|---|"]
-    pb, pa = s["diagnosis_before"]["probes"], s["diagnosis_after"]["probes"]
-    for k in pb:
-        lines.append(f"| {k} | {fmt_value(pb[k]['score'], 3)} | {fmt_value(pa[k]['score'], 3)} |")
-    lines += ["", f"Base model residual: {s['residual_signature_before']}", "",
-              f"Final residual: {s['residual_signature']}", "",
-              "Order-2 component of ψ (amplitude [mV/V] / phase [deg]) per operating point and "
-              "channel, mean over its windows: how amplitude and phase change with speed and "
-              "load.", "",
-              "| n_in [rpm] | T_out [N m] | channel | measured | base model | final |",
-              "|---|---|---|---|---|---|"]
+    lines = [*diagnosis_lines(s),
+             "Order-2 component of ψ (amplitude [mV/V] / phase [deg]) per operating point and "
+             "channel, mean over its windows: how amplitude and phase change with speed and "
+             "load.", "",
+             "| n_in [rpm] | T_out [N m] | channel | measured | base model | final |",
+             "|---|---|---|---|---|---|"]
 
     def ap(x):
         return f"{x[0]:.4f} / {x[1]:+.1f}"
@@ -397,16 +339,6 @@ _CAPTIONS = {
 }
 
 
-def _figures_section(figures: Mapping[str, str] | None) -> list[str]:
-    """The figures with their captions."""
-    if not figures:
-        return []
-    lines = ["## Figures", ""]
-    for k, path in figures.items():
-        lines += [f"![{k}]({path})", "", f"*{_CAPTIONS.get(k, k)}*", ""]
-    return lines
-
-
 def _simulation_section(s: Mapping[str, Any]) -> list[str]:
     """The accepted effects as a simulation option (sensor effects, KE harmonics)."""
     lines = ["## As a simulation option", ""]
@@ -424,28 +356,25 @@ def _simulation_section(s: Mapping[str, Any]) -> list[str]:
                     f"m, gauge gain {fmt_value(s['chain']['gauge_gain'])}.", ""]
 
 
-def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
-    """The accepted effects as a simulation option: ``sensor_effects.yaml``, the list for
-    the data-set option ``sensor_effects`` (:func:`swgsim.sensing.effects.parse_sensor_effects`),
-    with the accepted kinematic-error harmonics and the caveat as comments.
-
-    Parameters
-    ----------
-    summary : mapping
-        From :func:`summarize`.
-
-    Returns
-    -------
-    dict of str to str
-        File name -> text.
-    """
+def _option(summary: Mapping[str, Any]) -> SimulationOption:
+    """``sensor_effects.yaml``, the data-set option ``sensor_effects``
+    (:func:`swgsim.sensing.effects.parse_sensor_effects`), KE harmonics as a comment."""
     sim = summary.get("simulation") or {}
     head = [f"accepted sensor effects of {summary['name']} (swgsim-calibrate); the data-set "
             "option sensor_effects"]
     if sim.get("gear_ke_harmonics"):
         head.append("kinematic-error harmonics (swgsim.gear.dynamics.gear_with_ke): "
                     + json.dumps(sim["gear_ke_harmonics"]))
-    if sim.get("caveat"):
-        head.append(f"caveat: {sim['caveat']}")
-    return {"sensor_effects.yaml": option_yaml(
-        head, {"sensor_effects": list(sim.get("sensor_effects") or [])})}
+    return SimulationOption("sensor_effects.yaml", head,
+                            {"sensor_effects": list(sim.get("sensor_effects") or [])},
+                            sim.get("caveat"))
+
+
+#: What a strain report adds to the shared skeleton (:func:`swgcal.report.render_report`;
+#: figure keys of :func:`~swgcal.strain.figures.make_figures`), and its simulation option.
+REPORT = ReportParts(
+    title="Strain calibration report", data=_data_section, base_model="nominal chain",
+    result_note=_result_note,
+    sections=(result_extras, _heldout_section, _base_model_section, _alignment_section,
+              _selection_section, _accepted_section, _diagnosis_section, proposals_section),
+    captions=_CAPTIONS, closing=(_simulation_section, uncertainty_lines), option=_option)

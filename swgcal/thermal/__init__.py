@@ -2,8 +2,8 @@
 
 The kind's steps, with the same names and shapes as :mod:`swgcal.friction` and
 :mod:`swgcal.strain`: :func:`build_problem` (joint log -> :class:`~swgcal.loop.Problem`,
-one joint), :func:`calibrate`, :func:`summarize`, :func:`render_report`,
-:func:`make_figures`, :func:`simulation_files` (-> ``joint_thermal.yaml``).
+one joint), :func:`calibrate`, :func:`summarize`, :func:`make_figures`, and :data:`REPORT`
+(its report and simulation option, ``joint_thermal.yaml``, for :mod:`swgcal.report`).
 
 Modules: :mod:`.library` (the project's first-order model as the base and the candidate
 effects it lacks, with ranges), :mod:`.options`, :mod:`.problem` (signals, probes,
@@ -17,8 +17,7 @@ constants and planted effects). The log is read by
 from .library import THERMAL_LIBRARY
 from .options import ThermalOptions
 from .problem import OPTIONS, build_problem, calibrate, thermal_problem
-from .report import make_figures, render_report, simulation_files, summarize
+from .report import REPORT, make_figures, summarize
 
-__all__ = ["OPTIONS", "THERMAL_LIBRARY", "ThermalOptions", "build_problem", "calibrate",
-           "make_figures", "render_report", "simulation_files", "summarize",
-           "thermal_problem"]
+__all__ = ["OPTIONS", "REPORT", "THERMAL_LIBRARY", "ThermalOptions", "build_problem",
+           "calibrate", "make_figures", "summarize", "thermal_problem"]

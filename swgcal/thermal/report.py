@@ -1,9 +1,10 @@
 """Summary, report, figure and simulation option of a thermal calibration (data kind 3).
 
-The shared parts (:func:`swgcal.report.base_summary`, :func:`swgcal.report.result_section`)
-carry the errors before and after, the effects and their parameters; here what a joint's
-warm-up adds: the fitted first-order constants as a :class:`swgsim.gear.thermal.JointThermal`
-option, and the figure of the measured temperature against both models.
+The shared parts (:func:`swgcal.report.base_summary`, :func:`swgcal.report.render_report`)
+carry the errors before and after, the effects and their parameters; here (:data:`REPORT`)
+what a joint's warm-up adds: the fitted first-order constants as a
+:class:`swgsim.gear.thermal.JointThermal` option, and the figure of the measured
+temperature against both models.
 """
 
 from __future__ import annotations
@@ -17,10 +18,9 @@ import numpy as np
 from swgsim.files.ownership import write_owned
 
 from ..loop import CalibrationResult
-from ..report import base_summary, caveat, fmt_value, option_yaml, param_rows, result_section
+from ..report import ReportParts, SimulationOption, base_summary, caveat, fmt_value, param_table
 
-__all__ = ["ATTRIBUTION", "make_figures", "measured", "plot_joint", "render_report",
-           "simulation_files", "summarize"]
+__all__ = ["ATTRIBUTION", "REPORT", "make_figures", "measured", "plot_joint", "summarize"]
 
 #: The attribution the UR3 CobotOps day asks for (CC BY 4.0), wherever the file or a figure
 #: made from it appears: in every report and figure of this kind, whose format is that day's.
@@ -61,71 +61,56 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
     return s
 
 
-def simulation_files(summary: Mapping[str, Any]) -> dict[str, str]:
-    """The fitted first-order constants as a ``JointThermal`` option (``joint_thermal.yaml``).
-
-    Parameters
-    ----------
-    summary : mapping
-        From :func:`summarize`.
-
-    Returns
-    -------
-    dict of str to str
-        File name -> text.
-    """
+def _option(summary: Mapping[str, Any]) -> SimulationOption:
+    """The fitted first-order constants as a ``JointThermal`` option
+    (``joint_thermal.yaml``)."""
     jt = dict(summary["joint_thermal"])
-    head = [f"first-order constants of {summary['name']} (swgsim-calibrate, thermal); "
-            "fields of swgsim.gear.thermal.JointThermal",
-            "the loss proxy's constants scale r_th_k_per_w: see summary.json data"]
-    if jt.pop("caveat", None):
-        head.append(f"caveat: {_caveat_text(summary)}")
-    return {"joint_thermal.yaml": option_yaml(head, jt)}
+    why = jt.pop("caveat", None)
+    return SimulationOption(
+        "joint_thermal.yaml", [f"first-order constants of {summary['name']} (swgsim-calibrate, "
+                               "thermal); fields of swgsim.gear.thermal.JointThermal",
+                               "the loss proxy's constants scale r_th_k_per_w: see "
+                               "summary.json data"], jt, why)
 
 
-def _caveat_text(summary: Mapping[str, Any]) -> str:
-    """The caveat of an unexplained run, one line."""
-    return summary["joint_thermal"].get("caveat") or ""
+def _data_lines(s: Mapping[str, Any]) -> list[str]:
+    """The attribution, the joint's log and the loss proxy, what is held out."""
+    d = s["data"]
+    return [s["attribution"], "",
+            f"Joint {d['joint']}, {d['n_samples']} readings from {d['start']} over "
+            f"{fmt_value(d['duration_h'], 3)} h, gaps {d['gaps_h']} h, "
+            f"{d['missing_readings']} rows without a reading. Loss proxy (1 − η) k_τ |I| |ω| "
+            f"with k_τ = {d['torque_per_amp_nm']} N m/A, η = {d['gear_efficiency']}.", "",
+            f"Held out: {s['heldout']}", ""]
 
 
-def render_report(result: CalibrationResult, summary: Mapping[str, Any],
-                  figures: Mapping[str, str] | None = None) -> str:
-    """Markdown report of a thermal calibration.
+_HEAD = ("| parameter | value | std | unit | |", "|---|---|---|---|---|")
 
-    Parameters
-    ----------
-    result : CalibrationResult
-    summary : mapping
-        From :func:`summarize`.
-    figures : mapping of str to str, optional
-        Figure key (``"temperature"``) -> path relative to the report.
 
-    Returns
-    -------
-    str
-    """
-    s, d = summary, summary["data"]
-    lines = [f"# Thermal calibration: {s['name']}", "", s["attribution"], "",
-             f"Joint {d['joint']}, {d['n_samples']} readings from {d['start']} over "
-             f"{fmt_value(d['duration_h'], 3)} h, gaps {d['gaps_h']} h, "
-             f"{d['missing_readings']} rows without a reading. Loss proxy (1 − η) k_τ |I| |ω| "
-             f"with k_τ = {d['torque_per_amp_nm']} N m/A, η = {d['gear_efficiency']}.", "",
-             f"Held out: {s['heldout']}", ""]
-    lines += result_section(s, "first-order model", "")
-    lines += ["## Base model (final fit)", "", "| parameter | value | std | unit | |",
-              "|---|---|---|---|---|"]
-    lines += param_rows(s["base_model"]["params_in_final_model"])
+def _fit_lines(s: Mapping[str, Any]) -> list[str]:
+    """The base model's constants in the final fit, and each kept effect's."""
+    lines = ["## Base model (final fit)", "",
+             *param_table(s["base_model"]["params_in_final_model"], _HEAD)]
     for e in s["effects_added"]:
-        lines += ["", f"## Effect {e['name']}: {e['description']}", "",
-                  "| parameter | value | std | unit | |", "|---|---|---|---|---|"]
-        lines += param_rows(e["params"])
-    lines += ["", "## Candidates of the last iteration", "", "| candidate | validation RMSE "
-              "| status |", "|---|---|---|"]
+        lines += [f"## Effect {e['name']}: {e['description']}", "",
+                  *param_table(e["params"], _HEAD)]
+    return lines
+
+
+def _candidates_lines(s: Mapping[str, Any]) -> list[str]:
+    """The candidates of the last iteration."""
+    lines = ["## Candidates of the last iteration", "",
+             "| candidate | validation RMSE | status |", "|---|---|---|"]
     for c in (s["iterations"][-1]["candidates"] if s["iterations"] else []):
         lines.append(f"| {c['name']} | {fmt_value(c['val_rmse'])} K | {c['status']} |")
-    for key, path in dict(figures or {}).items():
-        lines += ["", f"![{key}]({path})"]
-    return "\n".join([*lines, ""])
+    return lines + [""]
+
+
+#: What a thermal report adds to the shared skeleton (:func:`swgcal.report.render_report`;
+#: figure keys of :func:`make_figures`), and its simulation option.
+REPORT = ReportParts(
+    title="Thermal calibration", data=_data_lines, base_model="first-order model",
+    sections=(_fit_lines, _candidates_lines), option=_option, run_time=False)
 
 
 def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, str]:

@@ -10,6 +10,7 @@ import pytest
 
 from swgcal import KINDS, kind_module
 from swgcal.api import STEPS
+from swgcal.report import ReportParts
 
 
 @pytest.mark.parametrize("kind", sorted(KINDS))
@@ -25,6 +26,8 @@ def test_every_kind_has_the_same_steps_with_the_same_signatures(kind):
         pos_ref = [p.name for p in inspect.signature(getattr(ref, step)).parameters.values()
                    if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
         assert pos[:2] == pos_ref[:2], (kind, step, pos, pos_ref)
+    # what its report adds to the one renderer (swgcal.report.render_report)
+    assert isinstance(mod.REPORT, ReportParts), kind
 
 
 def test_unknown_kind_and_unknown_options_are_named():

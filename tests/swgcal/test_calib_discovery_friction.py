@@ -19,8 +19,8 @@ import re
 import numpy as np
 import pytest
 
-from swgcal import select_effects
-from swgcal.friction import friction_problem, render_report, summarize
+from swgcal import render_report, select_effects
+from swgcal.friction import friction_problem, summarize
 from swgcal.friction.discovery import propose
 from swgcal.friction.synthetic import PLANTED, synthetic_recording
 

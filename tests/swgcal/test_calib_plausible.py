@@ -19,8 +19,8 @@ import re
 import numpy as np
 import pytest
 
-from swgcal import SelectionConfig
-from swgcal.friction import calibrate, friction_problem, render_report, summarize
+from swgcal import SelectionConfig, render_report
+from swgcal.friction import calibrate, friction_problem, summarize
 from swgcal.friction.library import FRICTION_LIBRARY, PositionRipple
 from swgcal.friction.ripple_groups import harmonic_groups
 from swgcal.friction.synthetic import synthetic_recording
