@@ -1,6 +1,6 @@
 """Calibrate the friction model on the six real joint-friction recordings and print a table.
 
-For every recording (``/work/shared/data/joint_friction/*.csv``, see its README): the
+For every recording (``shared/data/joint_friction/*.csv`` beside the checkout, see its README): the
 held-out (test-block) RMSE of the paper-law fit, the RMSE after the calibration loop, their
 ratio against the target 0.6, the published classical-model errors on the Franka files
 (README table; fitted by the source's authors, protocol not stated) and the effects added.
@@ -21,7 +21,9 @@ import sys
 import time
 from pathlib import Path
 
-DEFAULT_DATA = Path(os.environ.get("SWG_FRICTION_DATA", "/work/shared/data/joint_friction"))
+#: The recordings: SWG_FRICTION_DATA if set, else shared/data/joint_friction beside the checkout.
+DEFAULT_DATA = Path(os.environ.get("SWG_FRICTION_DATA", Path(__file__).resolve().parents[1].parent
+                                   / "shared" / "data" / "joint_friction"))
 FILES = ("franka_joint2_slow", "franka_joint2_middle", "franka_joint2_high",
          "fairino_joint3_S_slow", "fairino_joint3_spiral_slow", "fairino_joint3_arc_slow")
 # README table: RMS error [N m] of classical models fitted by the data's authors

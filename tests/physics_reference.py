@@ -1,19 +1,25 @@
 """Closed-form references and slow reference paths shared by the physics tests and the
 benchmarks (not a test module): the steady motion's closed form, one variant integrated by
 scipy (:func:`simulate_reference`) and the gauge signals by one truss solve per time step
-(:func:`signals_naive`), against which the fast paths are checked."""
+(:func:`signals_naive`), against which the fast paths are checked; the energy and powers
+along a window (:func:`power_terms`) and the ring-down after a load step (:func:`ring_down`,
+its poles by :func:`modes`)."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from swgsim.gear import dynamics as dy
+from swgsim.gear import profile as pf
+from swgsim.gear import profile_dynamics as pd
 from swgsim.gear.chain import SimulationChain
 from swgsim.gear.faults import ChainParams, angle_index, mesh_severity
 from swgsim.gear.flexspline import factorize
 from swgsim.gear.influence import contact_window
+from swgsim.gear.modes import torsional_mode
 from swgsim.gear.sensors import signal_rows
 
 
@@ -109,3 +115,72 @@ def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out
         u[m.prescribed] = u_p
         out[:, k] = rows @ u
     return out
+
+
+def power_terms(p: dy.GearParams, res: dy.SimResult, t_load_nm: np.ndarray) -> dict:
+    """Energy [J] and powers [W] along simulated windows, shape (V, n_t) each, from the
+    equations of the module docstring (eq. 2-6), written out independently of the simulator.
+
+    Energy balance of eq. (1) [derived]: with the elastic energy V = k1 Δφ_k²/2 + k2 Δφ_k⁴/4
+    and Δφ_k = tan α_in φ_in + c φ_out + φ_err(φ_in),
+
+        d/dt (J_in ω_in²/2 + J_out ω_out²/2 + V)
+            = T_m ω_in + T_stiff φ_err'(φ_in) ω_in − T_fric φ̇_b − P_load,
+
+    P_load = T_load tanh(N ω_out / v_s) ω_out >= 0 delivered to the load, T_fric φ̇_b lost in
+    the mesh. The second term is the power of the kinematic error: eq. (1) lets it strain
+    the flexspline without a reaction torque on the input, so it is a source of its own
+    next to the motor's T_m ω_in (0.2 % of it at 2000 rpm, 52 N m; the steady-state check
+    of the module docstring leaves it out).
+    """
+    phi_in, w_in, phi_out, w_out, _ = res.states
+    tl = np.asarray(t_load_nm, float)[:, None]
+    c = p.c_out
+    sa, ca = np.sin(p.alpha_tooth_rad), np.cos(p.alpha_tooth_rad)
+    k, a, th = (np.asarray(v, float)[:, None, None]
+                for v in (p.ke_orders, p.ke_amp_rad, p.ke_phase_rad))
+    phi_err = c * (a * np.sin(k * phi_in + th)).sum(axis=0)
+    dphi_err = c * (a * k * np.cos(k * phi_in + th)).sum(axis=0)  # d φ_err / d φ_in
+    d = p.tan_alpha_in * phi_in + c * phi_out + phi_err
+    t_stiff = p.k1_nm_per_rad * d + p.k2_nm_per_rad3 * d**3
+    v_b = -w_out / sa
+    t_fric = ((p.b0_nm + p.mu * c * np.abs(t_stiff) / ca) * np.tanh(v_b / p.v_smooth_rad_s)
+              + (p.b1_nms + p.b2_nms3 * v_b**2) * v_b
+              + p.b3_nm * np.sin(phi_out + p.theta_b_rad))
+    return {
+        "energy": (p.j_in_kgm2 * w_in**2 / 2 + p.j_out_kgm2 * w_out**2 / 2
+                   + p.k1_nm_per_rad * d**2 / 2 + p.k2_nm_per_rad3 * d**4 / 4),
+        "p_in": res.p_in,
+        "p_ke": t_stiff * dphi_err * w_in,
+        "p_fric": t_fric * v_b,
+        "p_load": tl * np.tanh(w_out * p.ratio / p.v_smooth_rad_s) * w_out,
+    }
+
+
+def modes(y: np.ndarray, dt: float, order: int) -> tuple[np.ndarray, np.ndarray]:
+    """Poles [1/s] and amplitudes of y as a sum of ``order`` damped exponentials (matrix
+    pencil: shift invariance of the Hankel matrix's leading right singular vectors)."""
+    hank = np.lib.stride_tricks.sliding_window_view(y, y.size // 2 + 1)
+    v = np.linalg.svd(hank, full_matrices=False)[2][:order].T
+    z = np.linalg.eigvals(np.linalg.pinv(v[:-1]) @ v[1:]).astype(complex)
+    amp = np.linalg.lstsq(z[None, :] ** np.arange(y.size)[:, None], y.astype(complex),
+                          rcond=None)[0]
+    return np.log(z) / dt, np.abs(amp)
+
+
+def ring_down(p: dy.GearParams, dec: int):
+    """Gear ``p`` at 2000 rpm under a load step 7 -> 39 N m at 10 ms, simulated at 20 kHz
+    to 8.5 decay times after the step: the dominant oscillatory pole [1/s] of the
+    delivered torque from 2 to 8 decay times after the step (six damped exponentials,
+    every ``dec``-th sample), the predicted (frequency [Hz], decay time [s]) of
+    ``torsional_mode`` at 39 N m, and the simulation."""
+    f_hz, tau = torsional_mode(p, 2000.0, 39.0)
+    fs, t_s = 20e3, 0.01
+    prof = pf.Profile(pf.SpeedProfile(2000.0, (pf.Hold(t_s + 8.5 * tau),)),
+                      pf.LoadSteps(7.0, ((t_s, 39.0),)))
+    res = pd.simulate_profile([p], prof, 0.0, sample_rate_hz=fs, substeps=1)
+    assert res.t_out[0, int(t_s * fs) - 1] == pytest.approx(7.0, rel=1e-9)  # steady before
+    i0, i1 = int(round((t_s + 2 * tau) * fs)), int(round((t_s + 8 * tau) * fs))
+    lam, amp = modes(res.t_out[0, i0:i1:dec] - 39.0, dec / fs, 6)
+    osc = np.flatnonzero(lam.imag > 1.0)
+    return lam[osc[np.argmax(amp[osc])]], (f_hz, tau), res

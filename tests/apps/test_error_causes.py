@@ -230,7 +230,7 @@ def test_6_a_full_disk_ends_in_one_line_with_the_workers_stopped(tmp_path):
     assert (tmp_path / "keep.txt").read_text() == "mine"
     # and in-process: no HDF5 file is left open to be touched after the error
     code = (_DEV_FULL + "import sys, h5py\nsys.path.insert(0, sys.argv[2])\n"
-            "from conftest import make_synthetic\nfrom swgsim.datasets import schema\n"
+            "from data_sets import make_synthetic\nfrom swgsim.datasets import schema\n"
             "from swgsim.files.atomic import DiskFullError\n"
             "try:\n    schema.write_shard(make_synthetic(n_variants=1), "
             "__import__('pathlib').Path(sys.argv[1]) / 's.nc')\n"

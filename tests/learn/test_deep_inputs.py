@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_deep_toy import make_toy_dataset
+from data_sets import make_toy_dataset, write_toy_dataset
 
 from learn.inputs.signals import (
     AUX,
@@ -13,6 +13,8 @@ from learn.inputs.signals import (
     normalise_signals,
     window_meta,
 )
+from swgsim.datasets.schema import load
+from swgsim.gear.faults import PAPER_CLASSES
 
 
 @pytest.fixture(scope="module")
@@ -175,3 +177,11 @@ def test_raw_and_diff_are_the_documented_forms(toy, aux):
     healthy = (meta["fault"] == "healthy").to_numpy()
     rms = np.sqrt((raw.X[healthy, 1:5] ** 2).mean(axis=2))
     assert 0.8 < np.median(rms) < 1.25  # toy: noise and disturbance on unit ripple
+
+
+def test_toy_dataset_is_schema_v1(tmp_path):
+    path = write_toy_dataset(tmp_path / "toy", n_variants=3, n_time=64)
+    ds = load(path)
+    assert ds["strain_signal"].shape == (3 * 2 * 4 * (6 * 3 + 1), 5, 64)
+    assert int(ds["reference"].sum()) == 3 * 2 * 4
+    assert set(np.unique(ds["fault"].values)) == set(PAPER_CLASSES)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from test_deep_toy import make_toy_dataset, write_toy_dataset
+from data_sets import make_toy_dataset, write_toy_dataset
 
 from learn.inputs.signals import build_input
 from learn.learners.adapt import CoralClassifier

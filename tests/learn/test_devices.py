@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import torch
-from test_deep_toy import make_toy_dataset
+from data_sets import make_toy_dataset
 
 from learn.learners.devices import (
     DEVICE_CHOICES,

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from test_deep_toy import make_toy_dataset
+from data_sets import make_toy_dataset
 
 from learn.studies.separability import plot_separability, separations, summary_table
 

@@ -9,8 +9,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from data_sets import make_toy_dataset
 from omegaconf import OmegaConf
-from test_deep_toy import make_toy_dataset
 
 from learn.studies.runs import JobProgress, RunRef
 from learn.studies.transfer import RUN_TIME_COLUMNS, planned_jobs, run_comparison

@@ -178,3 +178,17 @@ def test_library_size_is_counted_and_printed():
     assert size["all"] == (sum(m for m, _ in parts), sum(n for _, n in parts))
     assert size["all"][0] == n_files
     print("library lines: " + ", ".join(f"{k} {v[1]}" for k, v in size.items()))
+
+
+def test_no_test_module_imports_another():
+    """Set-ups tests share live in fixtures (``conftest.py``) or in the tests' helper
+    modules (``data_sets``, ``physics_reference``, ``bad_input``, ``strain_run``), never in
+    a test module another imports."""
+    bad = []
+    for f in sorted((ROOT / "tests").rglob("*.py")):
+        for n in ast.walk(ast.parse(f.read_text(encoding="utf-8"))):
+            names = ([n.module or ""] if isinstance(n, ast.ImportFrom)
+                     else [a.name for a in n.names] if isinstance(n, ast.Import) else [])
+            bad += [f"{f.relative_to(ROOT)}: {m}" for m in names
+                    if m.split(".")[0].startswith("test_") or m.split(".")[0] == "conftest"]
+    assert bad == []

@@ -11,6 +11,7 @@ import importlib.util
 from pathlib import Path
 
 import pytest
+from data_sets import DATA, needs_data
 
 from swgcal import build_problem, calibrate
 
@@ -18,8 +19,10 @@ SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "calibrate_real.py"
 spec = importlib.util.spec_from_file_location("calibrate_real", SCRIPT)
 calibrate_real = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(calibrate_real)
-DATA = calibrate_real.DEFAULT_DATA
-needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"no real data at {DATA}")
+
+
+def test_the_script_and_the_tests_find_the_recordings_in_one_place():
+    assert calibrate_real.DEFAULT_DATA == DATA
 
 
 @needs_data

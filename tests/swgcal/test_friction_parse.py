@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from data_sets import DATA, needs_data
 from scipy.signal import butter, filtfilt, lfilter
-from test_calib_real import DATA, needs_data
 
 from swgcal.api import detect_kind
 from swgcal.friction.data import DQ_CONSISTENCY_SURE, load_friction_csv, velocity_consistency

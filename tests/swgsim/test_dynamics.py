@@ -9,7 +9,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from physics_reference import simulate_reference, steady_motion
+from physics_reference import power_terms, simulate_reference, steady_motion
 from scipy.integrate import simpson
 from scipy.optimize import brentq
 
@@ -153,46 +153,6 @@ def test_torsional_mode_matches_the_simulated_ring_down(j_out, tol_tau, tol_f):
     tc = (i - x[i] / (x[i + 1] - x[i])) / fs
     f_sim = (tc.size - 1) / 2 / (tc[-1] - tc[0])
     assert f_sim == pytest.approx(f_hz, rel=tol_f)
-
-
-def power_terms(p: dy.GearParams, res: dy.SimResult, t_load_nm: np.ndarray) -> dict:
-    """Energy [J] and powers [W] along simulated windows, shape (V, n_t) each, from the
-    equations of the module docstring (eq. 2-6), written out independently of the simulator.
-
-    Energy balance of eq. (1) [derived]: with the elastic energy V = k1 Δφ_k²/2 + k2 Δφ_k⁴/4
-    and Δφ_k = tan α_in φ_in + c φ_out + φ_err(φ_in),
-
-        d/dt (J_in ω_in²/2 + J_out ω_out²/2 + V)
-            = T_m ω_in + T_stiff φ_err'(φ_in) ω_in − T_fric φ̇_b − P_load,
-
-    P_load = T_load tanh(N ω_out / v_s) ω_out >= 0 delivered to the load, T_fric φ̇_b lost in
-    the mesh. The second term is the power of the kinematic error: eq. (1) lets it strain
-    the flexspline without a reaction torque on the input, so it is a source of its own
-    next to the motor's T_m ω_in (0.2 % of it at 2000 rpm, 52 N m; the steady-state check
-    of the module docstring leaves it out).
-    """
-    phi_in, w_in, phi_out, w_out, _ = res.states
-    tl = np.asarray(t_load_nm, float)[:, None]
-    c = p.c_out
-    sa, ca = np.sin(p.alpha_tooth_rad), np.cos(p.alpha_tooth_rad)
-    k, a, th = (np.asarray(v, float)[:, None, None]
-                for v in (p.ke_orders, p.ke_amp_rad, p.ke_phase_rad))
-    phi_err = c * (a * np.sin(k * phi_in + th)).sum(axis=0)
-    dphi_err = c * (a * k * np.cos(k * phi_in + th)).sum(axis=0)  # d φ_err / d φ_in
-    d = p.tan_alpha_in * phi_in + c * phi_out + phi_err
-    t_stiff = p.k1_nm_per_rad * d + p.k2_nm_per_rad3 * d**3
-    v_b = -w_out / sa
-    t_fric = ((p.b0_nm + p.mu * c * np.abs(t_stiff) / ca) * np.tanh(v_b / p.v_smooth_rad_s)
-              + (p.b1_nms + p.b2_nms3 * v_b**2) * v_b
-              + p.b3_nm * np.sin(phi_out + p.theta_b_rad))
-    return {
-        "energy": (p.j_in_kgm2 * w_in**2 / 2 + p.j_out_kgm2 * w_out**2 / 2
-                   + p.k1_nm_per_rad * d**2 / 2 + p.k2_nm_per_rad3 * d**4 / 4),
-        "p_in": res.p_in,
-        "p_ke": t_stiff * dphi_err * w_in,
-        "p_fric": t_fric * v_b,
-        "p_load": tl * np.tanh(w_out * p.ratio / p.v_smooth_rad_s) * w_out,
-    }
 
 
 def test_energy_balance_holds_along_a_simulated_trajectory():

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import xarray as xr
 from bad_input import small_cfg
-from conftest import make_synthetic, write_dataset
+from data_sets import make_synthetic, write_dataset
 from omegaconf import OmegaConf
 
 from swgcli import compose_app, dataset_preset

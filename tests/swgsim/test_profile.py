@@ -11,13 +11,12 @@ import dataclasses
 
 import numpy as np
 import pytest
+from physics_reference import power_terms, ring_down
 from scipy.integrate import simpson
-from test_dynamics import power_terms
 
 from swgsim.gear import dynamics as dy
 from swgsim.gear import profile as pf
 from swgsim.gear import profile_dynamics as pd
-from swgsim.gear.modes import torsional_mode
 
 
 def test_speed_profile_matches_the_trapezoid_closed_forms():
@@ -59,17 +58,6 @@ def test_steady_profile_reproduces_simulate():
     np.testing.assert_allclose(res.load_nm, 39.0, rtol=1e-12)
 
 
-def modes(y: np.ndarray, dt: float, order: int) -> tuple[np.ndarray, np.ndarray]:
-    """Poles [1/s] and amplitudes of y as a sum of ``order`` damped exponentials (matrix
-    pencil: shift invariance of the Hankel matrix's leading right singular vectors)."""
-    hank = np.lib.stride_tricks.sliding_window_view(y, y.size // 2 + 1)
-    v = np.linalg.svd(hank, full_matrices=False)[2][:order].T
-    z = np.linalg.eigvals(np.linalg.pinv(v[:-1]) @ v[1:]).astype(complex)
-    amp = np.linalg.lstsq(z[None, :] ** np.arange(y.size)[:, None], y.astype(complex),
-                          rcond=None)[0]
-    return np.log(z) / dt, np.abs(amp)
-
-
 @pytest.mark.parametrize("j_out, dec, tol_f, tol_tau", [
     (8.8e-3, 1, 0.006, 0.02), (0.69, 5, 0.003, 0.01)])
 def test_ring_down_after_a_load_step_matches_the_torsional_mode(j_out, dec, tol_f, tol_tau):
@@ -88,24 +76,6 @@ def test_ring_down_after_a_load_step_matches_the_torsional_mode(j_out, dec, tol_
     top, (f_hz, tau), _ = ring_down(p, dec)
     assert top.imag / (2 * np.pi) == pytest.approx(f_hz, rel=tol_f)
     assert -1.0 / top.real == pytest.approx(tau, rel=tol_tau)
-
-
-def ring_down(p: dy.GearParams, dec: int):
-    """Gear ``p`` at 2000 rpm under a load step 7 -> 39 N m at 10 ms, simulated at 20 kHz
-    to 8.5 decay times after the step: the dominant oscillatory pole [1/s] of the
-    delivered torque from 2 to 8 decay times after the step (six damped exponentials,
-    every ``dec``-th sample), the predicted (frequency [Hz], decay time [s]) of
-    ``torsional_mode`` at 39 N m, and the simulation."""
-    f_hz, tau = torsional_mode(p, 2000.0, 39.0)
-    fs, t_s = 20e3, 0.01
-    prof = pf.Profile(pf.SpeedProfile(2000.0, (pf.Hold(t_s + 8.5 * tau),)),
-                      pf.LoadSteps(7.0, ((t_s, 39.0),)))
-    res = pd.simulate_profile([p], prof, 0.0, sample_rate_hz=fs, substeps=1)
-    assert res.t_out[0, int(t_s * fs) - 1] == pytest.approx(7.0, rel=1e-9)  # steady before
-    i0, i1 = int(round((t_s + 2 * tau) * fs)), int(round((t_s + 8 * tau) * fs))
-    lam, amp = modes(res.t_out[0, i0:i1:dec] - 39.0, dec / fs, 6)
-    osc = np.flatnonzero(lam.imag > 1.0)
-    return lam[osc[np.argmax(amp[osc])]], (f_hz, tau), res
 
 
 def _energy_residual(p, prof, fs, t_s, tl_steps):

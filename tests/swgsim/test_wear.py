@@ -12,7 +12,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from test_profile import ring_down
+from physics_reference import ring_down
 
 from swgsim.gear import dynamics as dy
 from swgsim.gear import modes
