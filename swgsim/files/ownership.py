@@ -668,7 +668,9 @@ def atomic_write_json(path: str | os.PathLike, obj: Any, sort_keys: bool = True)
 def stop_note() -> str:
     """What the claims a stop (Ctrl-C, SIGTERM) ended keep, and what a rerun reuses: one
     clause per folder (:class:`swgsim.files.writers.Writer`: its finished parts, proved by
-    the stamp), for the one line an app ends with; empty if the stop ended no claim."""
+    the stamp), for the one line an app ends with; empty if the stop ended no claim. Called
+    once the workers are gone: the temporary files they left half-written (a worker killed
+    while it wrote) are removed here, as the next claim would."""
     notes, seen = [], set()
     for folder, app in _STOPPED:
         if folder in seen:
@@ -679,6 +681,8 @@ def stop_note() -> str:
             found = survey(folder)
         except (OSError, ValueError):
             continue
+        for f in found.stale:  # ours, of a process now gone
+            f.unlink(missing_ok=True)
         kept = sorted(r for r, by in found.writers.items() if w.parts and by is not None
                       and by.kind == w.kind and fnmatch.fnmatch(r, w.parts))
         names = ", ".join(kept[:2]) + (", ..." if len(kept) > 2 else "")

@@ -371,3 +371,20 @@ class _TinyResult:
 
     def events(self):
         return []
+
+
+def test_a_stop_removes_what_its_killed_workers_left_half_written(tmp_path):
+    """A worker of the run, killed while it wrote (here: gone, its temporary file left),
+    leaves nothing once the stop's line is made: the next run would remove it anyway,
+    but a stopped run's folder holds only whole files."""
+    out = tmp_path / "rep"
+    child = ("import os, sys\nfrom pathlib import Path\nfrom swgsim.files import ownership\n"
+             "from swgsim.files.atomic import temp_prefix\nout = Path(sys.argv[1])\n"
+             "ownership.join(out)\n(out / (temp_prefix(out / 'part.json') + 'x.tmp'))"
+             ".write_text('half')\nos._exit(0)\n")
+    with pytest.raises(KeyboardInterrupt), ownership.claim(out, "monitor", strict=True):
+        subprocess.run([sys.executable, "-c", child, str(out)], check=True, timeout=120)
+        assert len(list(out.glob("*.tmp"))) == 1
+        raise KeyboardInterrupt
+    assert "rerun" in ownership.stop_note()
+    assert list(out.glob("*.tmp")) == []
