@@ -348,12 +348,21 @@ def planned_jobs(tc: TransferConfig) -> int:
 
 @dataclass
 class _Gathered:
-    """What the jobs of one data set gave back."""
+    """What the jobs of one data set gave back, cell by cell in the planned order: its
+    tables do not depend on the order the workers finished in, nor on a resume."""
 
-    rows: list = field(default_factory=list)
-    times: list = field(default_factory=list)
+    order: list = field(default_factory=list)
+    cells: dict = field(default_factory=dict)
     input_s: float = 0.0
     latency: pd.DataFrame | None = None
+
+    def planned(self, c: tuple) -> None:
+        """Cell ``c`` = (protocol, split, seed) is next in the order."""
+        self.order.append((c[0], c[1].name, c[2]))
+
+    def rows(self, i: int = 0) -> list:
+        """The result rows (``i`` 0) or the run times (1) of the finished cells, in order."""
+        return [r for k in self.order if k in self.cells for r in self.cells[k][i]]
 
 
 def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency: bool,
@@ -384,6 +393,7 @@ def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency:
             if cells and all(parts.load(name, c) is not None for c in cells):
                 progress.adjust(len(cells) - n_plan)
                 for c in cells:
+                    got[name].planned(c)
                     _gather(got, labels, name, c, *parts.load(name, c), progress)
                 if latency and first:
                     got[name].latency = parts.latency(name)
@@ -398,6 +408,7 @@ def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency:
             args = (tc.runs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
                     int(tc.adapt_windows), threads)
             for c in cells:
+                got[name].planned(c)
                 done = None if parts is None else parts.load(name, c)
                 if done is not None:
                     _gather(got, labels, name, c, *done, progress)
@@ -427,11 +438,10 @@ def _latency(ds, name, tc, inputs, feature_kwargs, parts):
 def _gather(got: dict[str, _Gathered], labels: Mapping, name: str, c: tuple, rows: list,
             seconds: Mapping, progress: JobProgress) -> None:
     """One finished cell's rows and run times into ``got`` and the progress line."""
-    got[name].rows.extend(rows)
-    got[name].times.extend(
+    got[name].cells[(c[0], c[1].name, c[2])] = (rows, [
         {"dataset": name, "protocol": c[0], "split": c[1].name, "seed": c[2],
          "model": labels[k].model, "input": labels[k].input, "seconds": v[0],
-         "cpu_s": v[1]} for k, v in seconds.items())
+         "cpu_s": v[1]} for k, v in seconds.items()])
     progress.finished(name, c, seconds, rows)
 
 
@@ -545,10 +555,10 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
     wall = time.perf_counter() - t_all
     out = {}
     for name, g in got.items():
-        results, confusion = _tables(g.rows, name)
+        results, confusion = _tables(g.rows(), name)
         out[name] = {"results": results, "confusion": confusion,
                      "latency": g.latency if g.latency is not None else pd.DataFrame(),
-                     "run_s": pd.DataFrame(g.times, columns=list(RUN_TIME_COLUMNS)),
+                     "run_s": pd.DataFrame(g.rows(1), columns=list(RUN_TIME_COLUMNS)),
                      "input_s": g.input_s, "wall_s": wall}
     return out
 
