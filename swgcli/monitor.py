@@ -27,10 +27,45 @@ from learn.tracking.store import check_tracking
 from swgcli.app import absolute_path, hydra_app
 from swgcli.schema import MonitorApp
 from swgsim.base.typed import check_range
-from swgsim.datasets.schema import load
+from swgsim.datasets.schema import load, read_manifest
 from swgsim.files import ownership
 
 log = logging.getLogger(__name__)
+
+
+def check_inputs(cfg) -> MonitorApp:
+    """The options, the output folder and the stream checked before any work and before
+    the libraries are imported (:func:`swgcli.app.hydra_app`'s ``inputs``).
+
+    Parameters
+    ----------
+    cfg : DictConfig or MonitorApp
+        Composed ``conf/monitor.yaml``.
+
+    Returns
+    -------
+    MonitorApp
+        The typed config.
+
+    Raises
+    ------
+    ValueError
+        A rule, normal-behaviour, maintenance or prognosis option or ``confirm_h`` out of
+        range (named), ``out_dir`` holding a file this project cannot show it wrote
+        (:func:`swgsim.files.ownership.check`), or a ``stream`` that is not a data set.
+    """
+    app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
+    check_rule(app.rule, "rule")
+    app.normal.check("normal")
+    for i, e in enumerate(app.maintenance):
+        e.check(f"maintenance[{i}]")
+    if app.prognosis.enabled:
+        app.prognosis.check()  # the planned duty against the model's once it is loaded
+    check_range(app.confirm_h, 0.0, 1000.0, "confirm_h", "h", lo_open=True,
+                why="hours after an alarm whose windows name the fault")
+    ownership.check(Path(absolute_path(app.out_dir)), "out_dir", app="swgsim-monitor")
+    read_manifest(absolute_path(app.stream))
+    return app
 
 
 def run_monitor_app(cfg) -> dict:
@@ -46,19 +81,10 @@ def run_monitor_app(cfg) -> dict:
         prognosis option out of range (a planned duty outside the model's operating
         points or the data sets' temperatures: ``prognosis.planned.<quantity>``).
     """
-    app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
-    check_rule(app.rule, "rule")
-    app.normal.check("normal")
-    for i, e in enumerate(app.maintenance):
-        e.check(f"maintenance[{i}]")
-    if app.prognosis.enabled:
-        app.prognosis.check()  # the planned duty against the model's once it is loaded
-    check_range(app.confirm_h, 0.0, 1000.0, "confirm_h", "h", lo_open=True,
-                why="hours after an alarm whose windows name the fault")
+    app = check_inputs(cfg)
     if app.logger is not None:
         check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
     out = Path(absolute_path(app.out_dir))
-    ownership.check(out, "out_dir", app="swgsim-monitor")  # before any work
     model = load_model(absolute_path(app.diagnosis_model), "diagnosis_model",
                        trust_pickle=app.trust_pickle)
     if app.prognosis.enabled:
@@ -92,7 +118,7 @@ NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "sklearn", "skops.io"
          "matplotlib")
 
 
-@hydra_app("monitor", MonitorApp, "swgsim-monitor", NEEDS)
+@hydra_app("monitor", MonitorApp, "swgsim-monitor", NEEDS, inputs=check_inputs)
 def main(cfg: DictConfig) -> dict:
     """Run the monitor and print the threshold it used, its events (one line each, by
     kind: :func:`learn.monitor.stream.event_line`) and where the outputs went."""

@@ -42,12 +42,16 @@ def check_inputs(cfg) -> None:
         A task not in :data:`TASKS`, or ``stored.path`` not a data set
         (:class:`swgsim.datasets.schema.DataSetError`, naming the path).
     """
-    if cfg.task not in TASKS:
-        raise ValueError(f"task must be one of {sorted(TASKS)}, got {cfg.task!r}")
+    _check_task(cfg.task)
     reads_stored = cfg.task in ("study", "paper_study") or (
         cfg.task == "transfer" and cfg.transfer is not None and not cfg.transfer.run_on)
     if reads_stored:
         read_manifest(cfg.stored.path)
+
+
+def _check_task(task: str) -> None:
+    if task not in TASKS:
+        raise ValueError(f"task must be one of {sorted(TASKS)}, got {task!r}")
 
 
 def run_train(cfg) -> dict:
@@ -72,7 +76,7 @@ def run_train(cfg) -> dict:
     from hydra.utils import get_method
 
     app = typed_app(cfg)
-    check_inputs(app)
+    _check_task(app.task)  # the rest of check_inputs, the app's, in the task's own order
     if app.logger is not None:
         from learn.tracking.store import check_tracking
 
