@@ -3,7 +3,7 @@
 The torch nets' adaptation (AdaBN: batch-norm statistics re-estimated on unlabelled
 target windows) is a method of the nets (:meth:`learn.learners.nets.TorchClassifier.adapt_bn`);
 feature models get CORAL here. In the transfer comparison both see the held-out gear's
-healthy stream without labels (:mod:`learn.studies.kshot`): what a real gear offers. The
+unlabelled healthy windows (:mod:`learn.studies.kshot`): what a real gear offers. The
 source statistics are those of every class, the target's of the healthy class alone, so
 both align a mixture to one of its components; the report says so.
 """

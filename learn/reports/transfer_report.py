@@ -412,7 +412,7 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
     paper : bool
         Add the paper's RF rows of Tables IX and X.
     adapt_windows : int, optional
-        Windows of the held-out gear's healthy stream the unsupervised adaptations saw
+        The held-out gear's unlabelled healthy windows the unsupervised adaptations saw
         (``transfer.adapt_windows``); stated in the introduction.
     run_times : pandas.DataFrame, optional
         :data:`learn.studies.transfer.RUN_TIME_COLUMNS`: wall and CPU time of every run
@@ -449,7 +449,7 @@ def _intro_md(adapt_windows: int | None) -> list[str]:
             "Accuracy [%] on the test windows, mean ± std over seeds; `worst` = the split "
             "with the lowest mean. Leave-one-gear-out splits `gearN` hold out gear N "
             "(paper: `1,2 → 3` is `gear3`); they are scored on the held-out gear's windows "
-            "outside the k-shot pool and the healthy stream, for every k and every run "
+            "outside the k-shot pool and the unlabelled healthy windows, for every k and every run "
             "alike. The result of a data set is the *primary* run, declared before the "
             "comparison (`transfer.primary`); the *best* run stands beside it, marked "
             f"\"{BEST}\": it describes the results, nothing more.", "",
@@ -461,7 +461,8 @@ def _intro_md(adapt_windows: int | None) -> list[str]:
             "with k target windows; fine-tuning runs a fixed number of steps with "
             "source replay. Nothing is chosen on an evaluation window.", "",
             "Unsupervised adaptation (AdaBN, CORAL) sees what a real gear offers without "
-            f"labels: its healthy stream, {stream} of the held-out gear's healthy class "
+            f"labels: its unlabelled healthy windows, {stream} of the held-out gear's "
+            "healthy class "
             "(whole healthy variants, each one pass over the operating points; "
             "`transfer.adapt_windows`), removed from the evaluation windows; never the "
             "class-balanced k-shot pool. Both align statistics of every source class to "

@@ -1,4 +1,5 @@
-"""The split of a held-out gear: labelled pool, healthy stream and evaluation windows.
+"""The split of a held-out gear: labelled pool, unlabelled healthy windows and evaluation
+windows.
 
 For the held-out gear of a leave-one-gear-out split, a seeded draw picks, per class,
 whole fault *variants* until they hold at least ``max(k_shots)`` windows: the *pool*.
@@ -6,7 +7,7 @@ The k labelled windows of a class are the first k of a seeded permutation of its
 windows (so the k = 1 windows are among the k = 5 ones).
 
 The unsupervised adaptations (AdaBN, CORAL: :mod:`learn.learners.adapt`) see what a real
-gear offers without labels: its *healthy stream*, the healthy windows recorded at
+gear offers without labels: its *unlabelled healthy windows*, recorded at
 commissioning, not the class-balanced pool. A second seeded draw (its own random
 stream, so the pool is the same with or without it) picks whole healthy variants outside
 the pool, each one pass over the operating points, until they hold at least
@@ -25,13 +26,13 @@ from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
 
-#: The class whose windows a gear offers without labels (its commissioning stream).
+#: The class whose windows a gear offers without labels (its commissioning windows).
 HEALTHY = "healthy"
 
 
 @dataclass(frozen=True)
 class KShotSplit:
-    """Labelled pool, healthy stream and evaluation windows of a held-out gear.
+    """Labelled pool, unlabelled healthy windows and evaluation windows of a held-out gear.
 
     Attributes
     ----------
@@ -44,10 +45,10 @@ class KShotSplit:
     pool_groups : set of (str, int)
         (fault, variant) of the pool.
     unlabelled : ndarray of int
-        Positions of the healthy stream: the unlabelled target windows of the
+        Positions of the unlabelled healthy windows: the target windows of the
         unsupervised adaptations (empty when none was asked for).
     unlabelled_groups : set of (str, int)
-        (fault, variant) of the healthy stream.
+        (fault, variant) of the unlabelled healthy windows.
     """
 
     pool: np.ndarray
@@ -69,7 +70,7 @@ class KShotSplit:
 
 def kshot_split(meta: pd.DataFrame, target: np.ndarray, k_max: int, seed: int, *,
                 n_unlabelled: int) -> KShotSplit:
-    """Split the windows of a held-out gear into a labelled pool, a healthy stream and
+    """Split the windows of a held-out gear into a labelled pool, unlabelled healthy windows and
     evaluation windows.
 
     Parameters
@@ -83,7 +84,7 @@ def kshot_split(meta: pd.DataFrame, target: np.ndarray, k_max: int, seed: int, *
     seed : int
         Seed of the variant draws and of the window order.
     n_unlabelled : int
-        Least number of healthy windows in the healthy stream (whole healthy variants
+        Least number of unlabelled healthy windows (whole healthy variants
         outside the pool); 0: none (``transfer.adapt_windows``).
 
     Returns
@@ -111,11 +112,11 @@ def kshot_split(meta: pd.DataFrame, target: np.ndarray, k_max: int, seed: int, *
         pool.append(pos)
         groups.update((c, int(v)) for v in chosen)
     pool_arr = np.sort(np.concatenate(pool)) if pool else np.array([], dtype=np.int64)
-    stream, stream_groups = _healthy_stream(target, faults, variants, groups, n_unlabelled,
-                                            np.random.default_rng([int(seed), gear, 1]))
-    evaluation = np.setdiff1d(target, np.concatenate([pool_arr, stream]))
-    return KShotSplit(pool_arr, evaluation, order, frozenset(groups), stream,
-                      frozenset(stream_groups))
+    unlabelled, unlabelled_groups = _unlabelled(target, faults, variants, groups, n_unlabelled,
+                                                np.random.default_rng([int(seed), gear, 1]))
+    evaluation = np.setdiff1d(target, np.concatenate([pool_arr, unlabelled]))
+    return KShotSplit(pool_arr, evaluation, order, frozenset(groups), unlabelled,
+                      frozenset(unlabelled_groups))
 
 
 def _draw_variants(rng: np.random.Generator, variants: np.ndarray, n_min: int, what: str,
@@ -136,24 +137,23 @@ def _draw_variants(rng: np.random.Generator, variants: np.ndarray, n_min: int, w
     return chosen
 
 
-def _healthy_stream(target: np.ndarray, faults: np.ndarray, variants: np.ndarray,
-                    pool_groups: set, n: int, rng: np.random.Generator
-                    ) -> tuple[np.ndarray, set]:
-    """Positions and (fault, variant) groups of the healthy stream: whole healthy
+def _unlabelled(target: np.ndarray, faults: np.ndarray, variants: np.ndarray,
+                pool_groups: set, n: int, rng: np.random.Generator) -> tuple[np.ndarray, set]:
+    """Positions and (fault, variant) groups of the unlabelled healthy windows: whole healthy
     variants outside the pool, at least ``n`` windows."""
     if n <= 0:
         return np.array([], dtype=np.int64), set()
     free = (faults == HEALTHY) & ~np.isin(
         variants, [v for c, v in pool_groups if c == HEALTHY])
     chosen = _draw_variants(rng, variants[free], n, "the healthy class",
-                            f"a healthy stream of {n} windows outside the k-shot pool")
+                            f"{n} unlabelled healthy windows outside the k-shot pool")
     return np.sort(target[free & np.isin(variants, chosen)]), {(HEALTHY, int(v))
                                                                for v in chosen}
 
 
 def check_no_leak(meta: pd.DataFrame, train: np.ndarray, kshot: KShotSplit) -> None:
-    """Raise if evaluation windows meet the training, pool or healthy-stream windows, a
-    variant of the pool or of the stream is evaluated, the stream holds a window that is
+    """Raise if evaluation windows meet the training, pool or unlabelled windows, a
+    variant of the pool or of the unlabelled windows is evaluated, these hold a window that is
     not healthy or one of training, or the held-out gear is in training.
 
     Raises
@@ -161,19 +161,19 @@ def check_no_leak(meta: pd.DataFrame, train: np.ndarray, kshot: KShotSplit) -> N
     ValueError
         Naming the leak.
     """
-    ev, stream = kshot.evaluation, kshot.unlabelled
+    ev, unlabelled = kshot.evaluation, kshot.unlabelled
     if np.intersect1d(ev, train).size or np.intersect1d(ev, kshot.pool).size:
         raise ValueError("k-shot split leaks: evaluation windows in training or pool")
-    if np.intersect1d(ev, stream).size or np.intersect1d(stream, train).size:
-        raise ValueError("healthy stream leaks: its windows are evaluated or in training")
-    if (meta["fault"].astype(str).to_numpy()[stream] != HEALTHY).any():
-        raise ValueError("healthy stream leaks labels: it holds windows that are not "
+    if np.intersect1d(ev, unlabelled).size or np.intersect1d(unlabelled, train).size:
+        raise ValueError("unlabelled windows leak: they are evaluated or in training")
+    if (meta["fault"].astype(str).to_numpy()[unlabelled] != HEALTHY).any():
+        raise ValueError("unlabelled windows leak labels: they hold windows that are not "
                          "healthy")
     groups = set(zip(meta["fault"].astype(str).to_numpy()[ev],
                      meta["variant"].to_numpy()[ev].astype(int).tolist(), strict=True))
     if groups & set(kshot.pool_groups):
         raise ValueError("k-shot split leaks: a pool variant is also evaluated")
     if groups & set(kshot.unlabelled_groups):
-        raise ValueError("healthy stream leaks: a stream variant is also evaluated")
+        raise ValueError("unlabelled windows leak: an unlabelled variant is also evaluated")
     if set(meta["gear"].to_numpy()[train]) & set(meta["gear"].to_numpy()[ev]):
         raise ValueError("leave-one-gear-out split leaks: the target gear is in training")

@@ -5,7 +5,7 @@ A run names a model config (``transfer.models.<name>``, a ``_target_`` mapping a
 ``conf/model/``) and an input of :data:`learn.inputs.signals.INPUTS`, and says which target-gear
 adaptations it gets (:mod:`learn.studies.transfer`). :func:`fit_and_adapt` fits it on the
 source gears of one split and scores it and its adaptations (AdaBN or CORAL on the held-out
-gear's healthy stream; fine-tuning or MiniRocket's ridge refit on k labelled windows per
+gear's unlabelled healthy windows; fine-tuning or MiniRocket's ridge refit on k labelled windows per
 class) on the same evaluation windows. A torch net's input is standardised once per job
 (:meth:`learn.learners.nets.TorchClassifier.prepare`) and reused by its adapted copies.
 """
@@ -183,7 +183,7 @@ def fit_and_adapt(spec: RunSpec, est, inp, train: np.ndarray, evaluation: np.nda
     train, evaluation : ndarray of int
         Rows of ``inp`` to fit on and to score on.
     kshot : KShotSplit or None
-        The held-out gear's pool and healthy stream (leave-one-gear-out); None: no
+        The held-out gear's pool and unlabelled healthy windows (leave-one-gear-out); None: no
         adaptation.
     k_shots : sequence of int
         k labelled target windows per class (k > 0 fine-tuned or refitted).

@@ -14,12 +14,13 @@ leave-one-gear-out protocols it also
 * runs the unsupervised adaptations: AdaBN for the torch nets (batch-norm statistics
   re-estimated on unlabelled target windows) and CORAL for feature models
   (:mod:`learn.learners.adapt`). Their unlabelled windows are the held-out gear's
-  *healthy stream* (``adapt_windows`` healthy windows, whole healthy variants), what a
+  *unlabelled healthy windows* (``adapt_windows`` healthy windows, whole healthy variants), what a
   real gear offers at commissioning, not the class-balanced k-shot pool.
 
-The k-shot split and the healthy stream are :func:`learn.studies.kshot.kshot_split`; both
-are removed from the evaluation windows of every run. Nothing in training, early stopping,
-model choice or hyper-parameters sees an evaluation window: early stopping, where
+The k-shot split and the unlabelled healthy windows are
+:func:`learn.studies.kshot.kshot_split`; both are removed from the evaluation windows of
+every run. Nothing in training, early stopping, model choice or hyper-parameters sees an
+evaluation window: early stopping, where
 enabled, splits the *source* gears; fine-tuning has a fixed step budget; MiniRocket's
 ridge penalty stays the one chosen on the source windows. Model sizes, epochs and
 kernels were set for the CPU budget on the earlier default data set, not on these.
@@ -122,7 +123,7 @@ class TransferConfig:
     k_shots : list of int
         Labelled windows per class of the held-out gear, >= 0.
     adapt_windows : int
-        Least number of windows of the held-out gear's healthy stream, the unlabelled
+        Least number of the held-out gear's unlabelled healthy windows, the
         target data of the unsupervised adaptations (whole healthy variants outside the
         k-shot pool, removed from the evaluation windows); 0: none (no run may adapt).
         60 = ten healthy passes over the paper grid's six operating points, about the

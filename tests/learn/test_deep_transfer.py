@@ -34,7 +34,7 @@ def test_kshot_split_keeps_evaluation_windows_apart(meta, seed):
     for sp in protocol_splits(meta, "ood_disturbed"):
         ks = kshot_split(meta, sp.test, k_max=5, seed=seed, n_unlabelled=6)
         target = set(sp.test)
-        # pool, healthy stream and evaluation partition the held-out gear
+        # pool, unlabelled healthy windows and evaluation partition the held-out gear
         assert set(ks.pool) | set(ks.unlabelled) | set(ks.evaluation) == target
         assert not set(ks.pool) & set(ks.evaluation)
         assert not set(ks.pool) & set(ks.unlabelled)
@@ -68,7 +68,7 @@ def test_kshot_split_keeps_evaluation_windows_apart(meta, seed):
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_healthy_stream_is_healthy_held_out_and_never_evaluated(meta, seed):
+def test_unlabelled_windows_are_healthy_held_out_and_never_evaluated(meta, seed):
     """The unsupervised adaptations' windows: healthy windows of the held-out gear only,
     whole variants, none of them (nor a window of their variants) evaluated."""
     for sp in protocol_splits(meta, "ood_disturbed"):
@@ -97,8 +97,8 @@ def test_leak_guard_raises(meta):
         kshot_split(meta, sp.test, k_max=10_000, seed=0, n_unlabelled=0)
     with pytest.raises(ValueError, match="too few"):
         kshot_split(meta, sp.test, k_max=2, seed=0, n_unlabelled=10_000)
-    # a stream window that is evaluated, or one that is not healthy, is refused
-    with pytest.raises(ValueError, match="healthy stream leaks"):
+    # an unlabelled window that is evaluated, or one that is not healthy, is refused
+    with pytest.raises(ValueError, match="unlabelled windows leak"):
         check_no_leak(meta, sp.train, replace(ks, unlabelled=np.concatenate(
             [ks.unlabelled, ks.evaluation[:1]])))
     faulty = ks.pool[meta["fault"].to_numpy()[ks.pool] != "healthy"][:1]
