@@ -99,11 +99,8 @@ class CellParts:
     def save(self, name: str, c: tuple, rows: list, seconds: dict) -> tuple[list, dict]:
         """Write a finished cell (atomically); return it as :meth:`load` reads it back, so
         that a fresh and a resumed run gather the same values."""
-        part = json.loads(json.dumps({"key": self.keys[name], "rows": rows,
-                                      "seconds": seconds}, default=_plain))
         f = self._file(name, c)
-        f.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write_json(f, part, sort_keys=False)
+        _write_plain(f, {"key": self.keys[name], "rows": rows, "seconds": seconds})
         self._cache.pop(f, None)
         return self.load(name, c)
 
@@ -114,15 +111,16 @@ class CellParts:
 
     def save_latency(self, name: str, table) -> None:
         """Keep the latency table measured on data set ``name``."""
-        (self.folder / name).mkdir(parents=True, exist_ok=True)
-        atomic_write_json(self.folder / name / "latency.json", json.loads(json.dumps(
-            {"key": self.keys[name], "rows": table.to_dict("records")}, default=_plain)),
-            sort_keys=False)
+        _write_plain(self.folder / name / "latency.json",
+                     {"key": self.keys[name], "rows": table.to_dict("records")})
 
 
-def _plain(x):
-    """A numpy scalar or array as plain JSON."""
-    return x.tolist() if hasattr(x, "tolist") else str(x)
+def _write_plain(path: Path, obj: dict) -> None:
+    """``obj`` as plain JSON (numpy scalars and arrays as numbers and lists), written
+    atomically in its keys' order."""
+    atomic_write_json(path, json.loads(json.dumps(obj, default=lambda x: x.tolist()
+                                                  if hasattr(x, "tolist") else str(x))),
+                      sort_keys=False)
 
 
 def _data_sets(app, tc: TransferConfig, plans: dict, names: list[str]
