@@ -423,6 +423,7 @@ def hydra_app(config_name: str, schema: type, prog: str, needs: Sequence[str] = 
 
     def deco(task: Callable[[Any], Any]) -> Callable[[], Any]:
         failed: list[BaseException] = []
+        home = {"pid": os.getpid()}  # the process of entry(); a launcher's job may run elsewhere
 
         @hydra.main(version_base="1.3", config_path=CONF_DIR, config_name=config_name)
         def _hydra_main(cfg):
@@ -434,9 +435,9 @@ def hydra_app(config_name: str, schema: type, prog: str, needs: Sequence[str] = 
                 check_imports(needs)  # a broken install found before any work
                 return task(cfg)
             except Exception as e:  # noqa: BLE001
-                if _STOPPING or one_line(e) is None \
+                if _STOPPING or one_line(e) is None or os.getpid() != home["pid"] \
                         or os.environ.get("SWG_USER_FULL_ERROR") == "1":
-                    raise
+                    raise  # in a job of another process (submitit): the job must fail
                 failed.append(e)  # reported once by main(), not by Hydra's job runner
                 return None
 
@@ -449,6 +450,7 @@ def hydra_app(config_name: str, schema: type, prog: str, needs: Sequence[str] = 
                 print(app_help(config_name, [a for a in args if a not in HELP_FLAGS]))
                 return
             failed.clear()  # a run in the same process reports its own error
+            home["pid"] = os.getpid()
             _hydra_main()
             if failed:
                 raise failed[0]

@@ -233,7 +233,7 @@ def test_paper_protocol_healthy_windows_are_bit_identical(tiny_set):
 
 def test_shared_motions_equal_simulating_each_window(tiny_set):
     """Each distinct motion and window is simulated once; the result is the per-window one."""
-    from swgsim.datasets.gears import gear_params, layout_for
+    from swgsim.datasets.config import gear_params, layout_for
     from swgsim.datasets.plan import plan
     from swgsim.datasets.steps import gear_influences
     from swgsim.gear.chain import ChainSettings, SimulationChain
@@ -244,7 +244,7 @@ def test_shared_motions_equal_simulating_each_window(tiny_set):
     shard = p.shards[0]
     ds = dsio.load(out)
     infl = gear_influences(p, [shard])[shard.gear]
-    gear = p.gear(shard.gear)
+    gear = p.gears[shard.gear]
     ch = p.config.chain
     chain = SimulationChain.from_influences(layout_for(p.config, gear), infl, ChainSettings(
         sample_rate_hz=ch.sample_rate_hz, window_s=ch.window_s, settle_s=ch.settle_s,
@@ -284,18 +284,23 @@ def test_bench_windows_differ_and_carry_the_stated_noise(tmp_path):
 
 @pytest.mark.slow
 def test_submitit_local_launcher_one_job_per_shard(tmp_path):
-    """Cluster scale-out path: one Hydra submitit job per shard, manifest by the last."""
+    """Cluster scale-out path: one Hydra submitit job per shard, manifest by the last; a
+    job that fails fails the array, with its message (it once ended with exit 0 and no
+    data: the one-line error was kept for a parent process the job does not have)."""
     out = tmp_path / "ds"
     exe = Path(sys.executable).parent / "swgsim-generate"
     cmd = [str(exe), "-m", "dataset=tiny", f"out_dir={out}", "shard=0,1,2",
            "hydra/launcher=submitit_local", "hydra.launcher.timeout_min=10", "progress=false",
-           "dataset.chain.window_s=0.02", "dataset.operating_points.t_out_nm=[39.0]"]
+           "dataset.chain.window_s=0.06", "dataset.operating_points.t_out_nm=[39.0]"]
     r = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr[-3000:]
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["complete"] and len(manifest["shards"]) == 3
+    bad = [c if not c.startswith("shard=") else "shard=7" for c in cmd]
+    r = subprocess.run(bad, cwd=tmp_path, capture_output=True, text=True, timeout=900)
+    assert r.returncode != 0 and "shard must lie in [0, 2], got 7" in r.stdout + r.stderr
     cfg = dataset_preset("tiny")
-    cfg["chain"]["window_s"] = 0.02
+    cfg["chain"]["window_s"] = 0.06
     cfg["operating_points"]["t_out_nm"] = [39.0]
     s = gen.generate(cfg, tmp_path / "local", n_jobs=1, progress=False)
     assert s["content_sha256"] == manifest["content_sha256"]
@@ -362,8 +367,8 @@ def test_friction_effects_config_option_and_errors():
 
 
 def test_settling_shorter_than_the_torsional_ring_down_is_refused():
-    from swgsim.datasets.config import dataset_config
-    from swgsim.datasets.plan import min_settle_s, plan
+    from swgsim.datasets.config import dataset_config, min_settle_s
+    from swgsim.datasets.plan import plan
 
     cfg = dataset_config({"load": {"j_out_kgm2": 0.69}})
     need = min_settle_s(cfg)
