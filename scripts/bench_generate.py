@@ -100,7 +100,7 @@ def main(argv: list[str] | None = None) -> dict:
     from physics_reference import signals_naive
 
     from swgcli import dataset_preset
-    from swgsim.datasets.gears import gear_params, layout_for
+    from swgsim.datasets.config import gear_params, layout_for
     from swgsim.datasets.generate import generate
     from swgsim.datasets.plan import plan
     from swgsim.gear.chain import SimulationChain

@@ -60,14 +60,15 @@ def data_set_configs(cfg: DictConfig) -> dict[float, DatasetPlan]:
     dict
         J_out [kg m²] -> the checked data set (:class:`swgsim.datasets.plan.DatasetPlan`;
         ``load.j_out_kgm2`` set, ``chain.settle_s`` raised to
-        :func:`swgsim.datasets.plan.min_settle_s` rounded up to 10 ms).
+        :func:`swgsim.datasets.config.min_settle_s` rounded up to 10 ms).
 
     Raises
     ------
     ValueError
         Naming the key: ``j_out_kgm2`` / ``n_j_out`` out of range, or a data-set key.
     """
-    from swgsim.datasets.plan import min_settle_s, plan
+    from swgsim.datasets.config import min_settle_s
+    from swgsim.datasets.plan import plan
 
     values = j_out_values(cfg)
     for key in ("n_jobs", "harmonics"):
@@ -173,7 +174,8 @@ def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
         Naming the key (``j_out_kgm2``, ``n_j_out``, ``motion.*`` or a data-set key).
     """
     from learn.studies.observability_motion import check_motion_map
-    from swgsim.datasets.plan import min_settle_s, plan
+    from swgsim.datasets.config import min_settle_s
+    from swgsim.datasets.plan import plan
 
     check_motion_map(OmegaConf.to_object(cfg.motion))
     out = {}

@@ -8,6 +8,12 @@ A config travels as a dataclass; plain data (YAML, JSON, a notebook's dict) ente
 anywhere in a config tree: every comparison with NaN is false, so NaN passes a range
 check written ``if v < lo or v > hi: raise``, and any key that has no range check.
 
+A typed config checks itself in one pass, :func:`check_tree`: every part (a dataclass) may
+define ``check(self, where)`` with its own rules, the ones across its fields included
+(scikit-learn's ``_parameter_constraints`` idea); the pass refuses NaN and infinity first,
+then runs the parts' range metadata and ``check`` methods, each part's after its
+children's, so that a part's rule may rely on its parts being valid.
+
 Used by every schema of the project: the data set's (:mod:`swgsim.datasets.config`) and
 the apps' (``swgcli.schema``).
 """
@@ -25,7 +31,7 @@ from typing import Any, Union
 import numpy as np
 
 __all__ = ["MISSING", "NONFINITE", "RANGE", "allowed", "build", "check_finite", "check_keys",
-           "check_range", "complete"]
+           "check_range", "check_tree", "complete"]
 
 MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
 
@@ -339,3 +345,44 @@ def check_range(value: Any, lo: float, hi: float, key: str, unit: str = "", *,
         raise ValueError(f"{key} must lie in {rng}{' ' + unit if unit else ''}"
                          f"{' (' + why + ')' if why else ''}, got {value}")
 
+
+
+def _check_parts(obj: Any, where: str) -> None:
+    """Range metadata and ``check(where)`` of every dataclass in ``obj``, children first."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        for f in dataclasses.fields(obj):
+            value = getattr(obj, f.name)
+            _check_parts(value, f"{where}.{f.name}")
+            if RANGE in f.metadata:
+                _check_range(value, f.metadata[RANGE], f"{where}.{f.name}")
+        hook = getattr(obj, "check", None)
+        if callable(hook):
+            hook(where)
+    elif isinstance(obj, Mapping):
+        for k, v in obj.items():
+            _check_parts(v, f"{where}.{k}")
+    elif isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            _check_parts(v, f"{where}[{i}]")
+
+
+def check_tree(obj: Any, where: str) -> None:
+    """Check a typed config in one pass: finiteness, field ranges, then each part's rules.
+
+    Parameters
+    ----------
+    obj : dataclass
+        The config, e.g. a :class:`~swgsim.datasets.config.DatasetConfig`.
+    where : str
+        Full name of ``obj`` for messages, e.g. ``"dataset"``.
+
+    Raises
+    ------
+    ValueError
+        One line naming the first bad key: a NaN or infinity anywhere
+        (:func:`check_finite`, first, so that no range check compares with a NaN), a number
+        outside its field's :data:`RANGE`, or what a part's ``check(where)`` refuses (parts
+        are checked depth first, in field order, each after its own parts).
+    """
+    check_finite(obj, where)
+    _check_parts(obj, where)

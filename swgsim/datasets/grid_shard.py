@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swgsim.datasets.gears import gear_params, layout_for
+from swgsim.datasets.config import gear_params, layout_for
 from swgsim.datasets.plan import DatasetPlan, ShardSpec, WindowSpec
 from swgsim.datasets.schema import make_dataset
 from swgsim.datasets.steps import diverged, fine_motion, unique_index
@@ -195,7 +195,7 @@ def assemble(plan: DatasetPlan, shard: ShardSpec, sig: np.ndarray, motions: Moti
     for k in sorted(meta):
         h.update(np.ascontiguousarray(meta[k]).astype(str if k == "fault" else meta[k].dtype)
                  .tobytes())
-    attrs = {"config": plan.as_dict(), "seed": int(plan.config.seed), "shard": shard.name,
+    attrs = {"config": plan.plain, "seed": int(plan.config.seed), "shard": shard.name,
              "content_sha256": h.hexdigest(), "package_version": package_version(),
              "git_revision": git_revision(), "sample_rate_hz": fs}
     return make_dataset(strain32, time_s, meta, attrs), order.size
@@ -221,7 +221,7 @@ def simulate_grid_shard(plan: DatasetPlan, shard: ShardSpec,
     simulating every window on its own.
     """
     cfg = plan.config
-    gear = plan.gear(shard.gear)
+    gear = plan.gears[shard.gear]
     amp = cfg.acquisition.amplifier
     q = 1 if amp is None else amp.oversample
     fs = cfg.chain.sample_rate_hz

@@ -280,7 +280,7 @@ def life_dataset(sim: LifeSimulator, start: int = 0, stop: int | None = None):
     angles = {k: meta.pop(k) for k in [k for k, v in meta.items() if v.ndim == 2]}
     cfg = sim.plan.config
     n_t = sig.shape[-1]
-    attrs = {"config": sim.plan.as_dict(), "seed": int(cfg.seed),
+    attrs = {"config": sim.plan.plain, "seed": int(cfg.seed),
              "life": _life_attr(sim.life), "gear_id": sim.gear_id,
              "fault_position_deg": sim.position_deg, "fault_sensor": sim.sensor}
     ds = make_dataset(sig, np.arange(n_t) / cfg.chain.sample_rate_hz, meta, attrs)

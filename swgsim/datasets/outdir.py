@@ -144,7 +144,7 @@ def prepare_out_dir(out_dir: Path, plan: DatasetPlan,
             log.info("%s", replaced)  # the caller reports it (summary["replaced"])
         if not (out_dir / ".config.json").is_file():
             atomic_write_json(out_dir / ".config.json",
-                                   {"config_hash": chash, "config": plan.as_dict()})
+                                   {"config_hash": chash, "config": plan.plain})
     except BaseException:
         claim.close()
         raise
@@ -182,7 +182,7 @@ def finalize(out_dir: Path, plan: DatasetPlan) -> dict:
     content = hashlib.sha256("".join(entries[s.name]["content_sha256"]
                                      for s in shards).encode()).hexdigest()
     manifest = {"schema_version": SCHEMA_VERSION, "complete": True,
-                "config_hash": plan.config_hash, "config": plan.as_dict(),
+                "config_hash": plan.config_hash, "config": plan.plain,
                 "seed": int(plan.config.seed),
                 "n_shards": len(shards),
                 "shards": entries, "content_sha256": content, "package_version": package_version(),

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swgsim.datasets.gears import gear_params, layout_for
+from swgsim.datasets.config import gear_params, layout_for
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.datasets.schema import make_dataset
 from swgsim.datasets.steps import diverged, fine_motion
@@ -78,7 +78,7 @@ def profile_motion(plan: DatasetPlan, shard: ShardSpec,
     fs = ch.sample_rate_hz
     n_t = int(round(ch.window_s * fs))
     n_lead = 0 if amp is None else amp.lead_samples(fs)
-    healthy = gear_params(cfg, plan.gear(shard.gear))
+    healthy = gear_params(cfg, plan.gears[shard.gear])
     if rng_start is None:
         ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(shard.gear, shard.speed_index))
         rng_start = np.random.default_rng(ss.spawn(3)[0])
@@ -137,7 +137,7 @@ def simulate_profile_shard(plan: DatasetPlan, shard: ShardSpec,
     rng_start, _, rng_noise = (np.random.default_rng(s) for s in ss.spawn(3))
     mo = profile_motion(plan, shard, rng_start)
     res, starts = mo.res, mo.starts
-    chain = SimulationChain.from_influences(layout_for(cfg, plan.gear(shard.gear)),
+    chain = SimulationChain.from_influences(layout_for(cfg, plan.gears[shard.gear]),
                                             influences, cfg.chain)
     n_v, n_w = len(shard.windows), starts.size
     # the cut of each window, with n_lead samples of history on each side
@@ -208,7 +208,7 @@ def _profile_dataset(plan: DatasetPlan, shard: ShardSpec, strain32: np.ndarray, 
         h.update(np.ascontiguousarray(extra[k][0]).tobytes())
     for k in sorted(meas):
         h.update(np.ascontiguousarray(meas[k]).tobytes())
-    attrs = {"config": plan.as_dict(), "seed": int(cfg.seed), "shard": shard.name,
+    attrs = {"config": plan.plain, "seed": int(cfg.seed), "shard": shard.name,
              "content_sha256": h.hexdigest(), "package_version": package_version(),
              "git_revision": git_revision(), "sample_rate_hz": fs}
     ds = make_dataset(strain32, np.arange(strain32.shape[-1]) / fs, meta, attrs)

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from swgsim.datasets.gears import gear_params, layout_for
+from swgsim.datasets.config import gear_params, layout_for
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.schedule import DutyPoint, uses_position
 from swgsim.datasets.slots import jitter_samples, profile_slots
@@ -55,7 +55,7 @@ class RecordBank:
 
     def __init__(self, plan: DatasetPlan, gear_id: int, chunk: int = 96) -> None:
         self.plan, self.gear_id, self.chunk = plan, int(gear_id), int(chunk)
-        self.healthy = gear_params(plan.config, plan.gear(self.gear_id))
+        self.healthy = gear_params(plan.config, plan.gears[self.gear_id])
         self._pending: set[tuple] = set()
         self._records: dict[tuple, dict] = {}
         self._influences: dict = {}
@@ -112,7 +112,7 @@ class RecordBank:
         if keys or not self._influences:
             self._influences.update(influences_for(self.plan, [self.gear_id], keys)[self.gear_id])
         cfg = self.plan.config
-        return SimulationChain.from_influences(layout_for(cfg, self.plan.gear(self.gear_id)),
+        return SimulationChain.from_influences(layout_for(cfg, self.plan.gears[self.gear_id]),
                                                self._influences, cfg.chain)
 
     def _simulate(self, keys: list[tuple]) -> None:

@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 import os
 
-from swgsim.datasets.gears import gear_params
+from swgsim.datasets.config import gear_params
 from swgsim.datasets.life import BLOCK
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.datasets.records import SIGNAL_GROUP

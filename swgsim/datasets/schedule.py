@@ -143,6 +143,10 @@ class LifeConfig:
     life_seed: int = 0
     conditions: ConditionsConfig | None = None
 
+    def check(self, where: str = "dataset.life") -> None:
+        """Refuse a life outside its ranges (:func:`check_life`)."""
+        check_life(self, where)
+
 
 def _req(cond: bool, msg: str) -> None:
     if not cond:

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swgsim.datasets.gears import gear_params
+from swgsim.datasets.config import gear_params
 from swgsim.datasets.schedule import DutyPoint
 from swgsim.gear import profile as pf
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
-from swgsim.datasets.gears import layout_for
+from swgsim.datasets.config import layout_for
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.gear import dynamics
 from swgsim.gear.dynamics import rt1_size20
@@ -68,7 +68,7 @@ def influences_for(plan: DatasetPlan, gear_ids: list[int], crack_keys
     solver = InfluenceSolver(TrussModel(FlexsplineGeometry(), plan.config.mesh))
     out = {}
     for gid in gear_ids:
-        lay = layout_for(plan.config, plan.gear(gid))
+        lay = layout_for(plan.config, plan.gears[gid])
         adj = solver.adjoint(lay)
         healthy = solver.coefficients(*adj)
         inf = {NO_ROOT_CRACK: healthy}

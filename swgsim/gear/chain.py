@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swgsim.base.typed import check_range
 from swgsim.gear import dynamics, profile_dynamics
 from swgsim.gear.faults import ChainParams
 from swgsim.gear.flexspline import FlexsplineGeometry, Mesh, TrussModel
@@ -64,6 +65,21 @@ class ChainSettings:
     substeps: int = 1
     contact_half_width_deg: float = 20.0
     ecc_load_share: float = 1.0
+
+    def check(self, where: str = "chain") -> None:
+        """Refuse a setting outside its range, naming ``<where>.<key>``; the contact width
+        and the eccentric load share are judged with the mesh and the faults by the data
+        set (:meth:`swgsim.datasets.config.DatasetConfig.check`).
+
+        Raises
+        ------
+        ValueError
+            ``<where>.window_s must lie in (0, 10] s, got ...`` and the like.
+        """
+        check_range(self.sample_rate_hz, 0.0, 1e6, f"{where}.sample_rate_hz", "Hz", lo_open=True)
+        check_range(self.window_s, 0.0, 10.0, f"{where}.window_s", "s", lo_open=True)
+        check_range(self.settle_s, 0.0, 10.0, f"{where}.settle_s", "s")
+        check_range(self.substeps, 1, 100, f"{where}.substeps")
 
 
 class SimulationChain:

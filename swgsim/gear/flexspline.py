@@ -124,6 +124,20 @@ class Mesh:
     n_theta: int = 120
     aspect: float = 1.0
 
+    def check(self, where: str = "mesh") -> None:
+        """Refuse a ``n_theta`` that is not a multiple of 20 in [20, 2000], naming
+        ``<where>.n_theta``.
+
+        Raises
+        ------
+        ValueError
+            ``<where>.n_theta must be a multiple of 20 in [20, 2000], got ...``.
+        """
+        n = int(self.n_theta)
+        if n % 20 or not 20 <= n <= 2000:
+            raise ValueError(f"{where}.n_theta must be a multiple of 20 in [20, 2000], got "
+                             f"{self.n_theta}")
+
 
 def _meridian(geo: FlexsplineGeometry, mesh: Mesh):
     """Stations along the meridian: positions, normals, thickness, region flags.

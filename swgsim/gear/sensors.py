@@ -45,7 +45,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
-from swgsim.gear.flexspline import INNER, OUTER, TrussModel
+from swgsim.base.typed import check_range
+from swgsim.gear.flexspline import INNER, OUTER, FlexsplineGeometry, TrussModel
 
 sp = lazy_module("scipy.sparse")
 
@@ -55,6 +56,7 @@ R_TORQUE_MM = 29.0     # radius of the s0 torque bridge [mm]
 R_PAIRS_MM = 32.0      # radius of the s1..s4 half bridges [mm]
 GRID_LENGTH_MM = 3.0   # active grid length [mm]
 GAUGE_FACTOR = 2.0     # [-]
+MIN_GRID_LENGTH_MM = 0.2  # shortest foil strain-gauge grids on the market [mm]
 
 
 @dataclass
@@ -75,6 +77,33 @@ class SensorsConfig:
     r_pairs_mm: float = R_PAIRS_MM
     grid_length_mm: float = GRID_LENGTH_MM
     gauge_factor: float = GAUGE_FACTOR
+
+    def check(self, where: str = "sensors") -> None:
+        """The layout's own ranges, before a mesh resolves it (:func:`signal_rows`): radii
+        inside the collar's clamped edge, a grid from :data:`MIN_GRID_LENGTH_MM` up to the
+        collar's radial extent, a gauge factor of foil (about 2) up to semiconductor gauges
+        (about 150; Hoffmann, *An Introduction to Measurements using Strain Gages*, HBM
+        1989, sec. 2).
+
+        Raises
+        ------
+        ValueError
+            ``<where>.r_pairs_mm must lie in (0, ...] mm (inside the collar's clamped edge),
+            got ...`` and the like.
+        """
+        geo = FlexsplineGeometry()
+        r_c = geo.r_collar_m * 1e3
+        for key in ("r_torque_mm", "r_pairs_mm"):
+            check_range(getattr(self, key), 0.0, r_c, f"{where}.{key}", "mm", lo_open=True,
+                        why="inside the collar's clamped edge")
+        # no mesh resolves a grid shorter than the shortest foil grids sold or lays one
+        # longer than the collar's radial extent (sleeve to clamped edge): the grid's own
+        # range, so that the mesh (n_theta) is not blamed for it
+        check_range(self.grid_length_mm, MIN_GRID_LENGTH_MM, r_c - geo.r_mid_m * 1e3,
+                    f"{where}.grid_length_mm", "mm",
+                    why="foil grids from 0.2 mm, no longer than the collar's radial extent")
+        check_range(self.gauge_factor, 0.0, 200.0, f"{where}.gauge_factor", lo_open=True,
+                    why="foil gauges about 2, semiconductor gauges up to about 150")
 
 
 @dataclass
@@ -97,6 +126,18 @@ class TolerancesConfig:
     sd_r_mm: float = 0.1
     sd_beta_deg: float = 0.5
     sd_gain: float = 0.01
+
+    def check(self, where: str = "tolerances") -> None:
+        """Refuse a standard deviation outside its range, naming ``<where>.<key>``.
+
+        Raises
+        ------
+        ValueError
+            ``<where>.sd_theta_deg must lie in [0, 5] deg, got ...`` and the like.
+        """
+        for key, hi, unit in (("sd_theta_deg", 5.0, "deg"), ("sd_r_mm", 2.0, "mm"),
+                              ("sd_beta_deg", 10.0, "deg"), ("sd_gain", 0.2, "")):
+            check_range(getattr(self, key), 0.0, hi, f"{where}.{key}", unit)
 
 
 @dataclass(frozen=True)

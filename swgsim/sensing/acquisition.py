@@ -118,6 +118,11 @@ class Acquisition:
     wg_start_deg: float = 0.0
     amplifier: Amplifier | None = None
 
+    def check(self, where: str = "acquisition") -> None:
+        """Refuse a start mode or amplifier setting outside its range
+        (:func:`check_acquisition`)."""
+        check_acquisition(self, where)
+
 
 _AMP_RANGES = {  # key: (lower, upper, lower inclusive)
     "noise_uv_rms": (0.0, 1e4, True),
@@ -130,14 +135,16 @@ _AMP_RANGES = {  # key: (lower, upper, lower inclusive)
 }
 
 
-def check_acquisition(acq: Acquisition) -> Acquisition:
-    """Check the ``dataset.acquisition`` option before any work.
+def check_acquisition(acq: Acquisition, key: str = "dataset.acquisition") -> Acquisition:
+    """Check the ``dataset.acquisition`` option before any work (:meth:`Acquisition.check`).
 
     Parameters
     ----------
     acq : Acquisition
         The typed option (its keys and types were checked where it was built,
         :func:`swgsim.datasets.config.dataset_config`).
+    key : str
+        Its full name, for messages.
 
     Returns
     -------
@@ -150,10 +157,10 @@ def check_acquisition(acq: Acquisition) -> Acquisition:
         Naming the key (``dataset.acquisition.<key>``), the value and the allowed range.
     """
     if acq.start not in START_MODES:
-        raise ValueError(f"dataset.acquisition.start must be one of {list(START_MODES)}, "
+        raise ValueError(f"{key}.start must be one of {list(START_MODES)}, "
                          f"got {acq.start!r}")
     if not np.isfinite(float(acq.wg_start_deg)):
-        raise ValueError("dataset.acquisition.wg_start_deg must be finite [deg], got "
+        raise ValueError(f"{key}.wg_start_deg must be finite [deg], got "
                          f"{acq.wg_start_deg}")
     amp = acq.amplifier
     if amp is None:
@@ -165,7 +172,7 @@ def check_acquisition(acq: Acquisition) -> Acquisition:
             ok = ok and v == int(v)
         if not ok:
             br = "[" if incl else "("
-            raise ValueError(f"dataset.acquisition.amplifier.{k} must lie in "
+            raise ValueError(f"{key}.amplifier.{k} must lie in "
                              f"{br}{lo}, {hi}], got {getattr(amp, k)}")
     return acq
 

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swgsim.base.typed import check_range
+
 
 @dataclass
 class DisturbanceSpec:
@@ -30,6 +32,17 @@ class DisturbanceSpec:
 
     offset_mvv: float = 0.01
     harmonic_mvv: float = 0.01
+
+    def check(self, where: str = "disturbance") -> None:
+        """Refuse an amplitude outside [0, 1] mV/V, naming ``<where>.<key>``.
+
+        Raises
+        ------
+        ValueError
+            ``<where>.offset_mvv must lie in [0, 1] mV/V, got ...``.
+        """
+        for key in ("offset_mvv", "harmonic_mvv"):
+            check_range(getattr(self, key), 0.0, 1.0, f"{where}.{key}", "mV/V")
 
 
 def disturb(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndarray,

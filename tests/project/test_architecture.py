@@ -58,8 +58,6 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
                                      "monitor state machine",
     "swgsim/gear/dynamics.py": "eq. (1)-(6) and their integrator; the steady and the "
                                "profile integrators are still two (issue 46)",
-    "swgsim/datasets/plan.py": "checks, variants and shards; the checks to move into the "
-                               "configs' own check() (issue 46: plan at most 300 lines)",
     "learn/monitor/stream.py": "a stream's input checks, the run and its outputs",
     "swgcal/friction/data.py": "friction recordings: loading, checks and the real data "
                                "sets' metadata",

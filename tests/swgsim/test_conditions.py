@@ -179,13 +179,13 @@ def test_payload_changes_on_a_profile_are_refused():
 def test_the_presets_leave_the_conditions_off(preset):
     """The presets set no conditions, so their windows are those of a life without them
     (:func:`test_neutral_conditions_change_no_window`, two runs in one environment); the
-    config their data sets store (``plan.as_dict()``, what every shard and the manifest
+    config their data sets store (``plan.plain``, what every shard and the manifest
     write) names none. Across machines the arrays agree to the tolerance of
     ``test_reproducibility.py`` (a content hash is the bytes' identity, and the bytes
     depend on the processor's BLAS kernel)."""
     cfg = dataset_config(dataset_preset(preset))
     assert cfg.life is None or cfg.life.conditions is None
-    assert "conditions" not in (plan(cfg).as_dict().get("life") or {})
+    assert "conditions" not in (plan(cfg).plain.get("life") or {})
 
 
 def test_a_joint_heated_beyond_the_viscosity_laws_range_is_refused_naming_the_cause(tiny):

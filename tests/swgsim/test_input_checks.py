@@ -10,7 +10,7 @@ from bad_input import small_cfg
 
 from swgcli import dataset_preset
 from swgsim.datasets import generate as gen
-from swgsim.datasets.gears import gear_params
+from swgsim.datasets.config import gear_params
 from swgsim.datasets.plan import plan
 from swgsim.datasets.resources import (
     BYTES_PER_FINE_SAMPLE,

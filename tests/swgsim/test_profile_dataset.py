@@ -91,7 +91,7 @@ def test_input_angle_tracks_the_simulated_psi(motion_set):
 def test_steady_presets_keep_their_config_hash():
     for name, want in STEADY_HASHES.items():
         assert plan(dataset_preset(name)).config_hash == want, name
-    assert "profile" not in plan(dataset_preset("tiny")).as_dict()
+    assert "profile" not in plan(dataset_preset("tiny")).plain
     assert "profile" not in plain_config(DatasetConfig())
 
 
@@ -128,7 +128,7 @@ def test_window_shorter_than_one_wg_revolution_refused():
 def test_profile_config_round_trips():
     cfg = dataset_config(dataset_preset("tiny_motion"))
     pl = plan(cfg)
-    stored = json.loads(json.dumps(pl.as_dict()))
+    stored = json.loads(json.dumps(pl.plain))
     assert plan(stored).config_hash == pl.config_hash
     assert pl.profile == cfg.profile.to_profile()
 
