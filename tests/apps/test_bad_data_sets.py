@@ -1,8 +1,8 @@
 """Stored data sets spoiled on disk: a manifest naming a shard outside its folder, manifests
 and shards that are not regular files, flipped bytes, extra, missing, miscounted or unhashed
-shards, a sample rate that is none or differs. Each is refused on load in one line naming
-the file, by every reader (the monitor, training, calibration), the data set left as it
-was."""
+shards, a sample rate that is none or differs, metadata contradicting the shards. Each is
+refused on load in one line naming the file, by every reader (the monitor, training,
+calibration), the data set left as it was."""
 
 from __future__ import annotations
 
@@ -212,3 +212,48 @@ def test_shards_of_another_rate_are_named_not_the_features(copy_of, tmp_path):
     assert "attribute sample_rate_hz=10000.0 Hz and its time axis" in msg
     assert f"shard {f})" not in msg and str(f) in msg and "feature" not in msg
     assert snapshot(folder) == before
+
+
+# ------------------------------------------------------------------ manifest metadata
+def _rehash(m: dict) -> None:
+    from swgsim.datasets.plan import config_hash
+
+    m["config_hash"] = config_hash(m["config"])
+
+
+def _load_message(folder: Path) -> str:
+    with pytest.raises(dsio.DataSetError) as info:
+        dsio.load(folder)
+    msg = str(info.value)
+    assert "\n" not in msg
+    return msg
+
+
+@pytest.mark.parametrize("edit, where, words", [
+    (lambda m, s: (m["shards"][s].update(n_samples=m["shards"][s]["n_samples"] + 1),
+                   m.update(n_samples=m["n_samples"] + 1)), "shard", ["holds 10 samples", "11"]),
+    (lambda m, s: m.update(n_shards=m["n_shards"] + 1), "manifest", ["n_shards=3"]),
+    (lambda m, s: (m["config"]["chain"].update(sample_rate_hz=20e3), _rehash(m)), "shard",
+     ["sample_rate_hz=10000 Hz", "config.chain.sample_rate_hz=20000"]),
+    (lambda m, s: (m["config"]["chain"].update(window_s=0.1), _rehash(m)), "shard",
+     ["variable time holds 600 samples", "says 1000"]),
+    (lambda m, s: m["config"]["chain"].update(window_s=0.1), "manifest",
+     ["config_hash", "contradicts its config"]),
+    (lambda m, s: (m["config"].update(name="other"), _rehash(m)), "shard",
+     ["attribute config contradicts"]),
+    (lambda m, s: m.update(seed=m["seed"] + 1), "shard", ["attribute seed=", "contradicts"]),
+    (lambda m, s: m["shards"][s].update(content_sha256="0" * 64), "shard",
+     ["attribute content_sha256="]),
+], ids=["entry_n_samples", "n_shards", "sample_rate", "window_length", "config_hash",
+        "config", "seed", "content_sha256"])
+def test_load_refuses_manifest_metadata_that_contradicts_the_shards(copy_of, edit, where,
+                                                                     words):
+    folder = copy_of()
+    m = _manifest(folder)
+    name = sorted(m["shards"])[0]
+    edit(m, name)
+    (folder / dsio.MANIFEST).write_text(json.dumps(m))
+    msg = _load_message(folder)
+    assert (f"shard {folder / name}" if where == "shard" else str(folder / dsio.MANIFEST)) in msg
+    for w in words:
+        assert w in msg

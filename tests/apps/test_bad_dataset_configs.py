@@ -95,6 +95,15 @@ def test_an_empty_or_zero_grid_is_named_not_the_mesh(tmp_path, edit, words):
     assert not (tmp_path / "never").exists()
 
 
+@pytest.mark.parametrize("key, value", [("grid_length_mm", 0.0), ("gauge_factor", -2.0),
+                                        ("r_pairs_mm", 50.0), ("r_torque_mm", 0.0)])
+def test_gauge_layout_keys_are_blamed_not_the_mesh(key, value):
+    cfg = small_cfg()
+    cfg["sensors"] = {**cfg.get("sensors", {}), key: value}
+    with pytest.raises(ValueError, match=rf"^dataset\.sensors\.{key} must lie in"):
+        plan(cfg)
+
+
 # ------------------------------------------------------------------ lives
 LIFE_CASES = {  # case -> (change to the tiny_life preset, the key the line must name)
     "hours=-1": ({"hours": -1.0}, "dataset.life.hours"),
