@@ -54,7 +54,8 @@ APPS = {"swgsim-generate": "generate", "swgsim-calibrate": "calibrate",
 
 
 def run_app(prog: str, args: list[str], cwd: Path, monkeypatch, capsys) -> tuple[int, str]:
-    """Run an app in-process as its command line would: exit code and stderr."""
+    """Run an app in-process as its command line would: exit code and stderr (a case runs
+    the app in a process of its own only where that process must die)."""
     main = importlib.import_module(f"swgcli.{APPS[prog]}").main
     monkeypatch.chdir(cwd)
     monkeypatch.setattr(sys, "argv", [prog, *args])
@@ -73,7 +74,9 @@ def one_error_line(prog: str, err: str) -> str:
 
 
 def app_line(module: str, args: list[str], tmp_path: Path) -> str:
-    """Run ``swgcli.<module>.main`` in-process as the console would; its one line (exit 2)."""
+    """Run ``swgcli.<module>.main`` in-process as the console would; its one line (exit 2).
+    For the cases where the console (Hydra, the one-line wrapper) is what is tested; the
+    others call the apps' task functions."""
     main = importlib.import_module(f"swgcli.{module}").main
     argv, sys.argv = sys.argv, [module, *args, f"hydra.run.dir={tmp_path}/hydra"]
     err = io.StringIO()
