@@ -1,10 +1,15 @@
 """Helpers of the bad-input tests (tests/apps, tests/swgsim): a small data set, snapshots
-of folders, the one-line message of a refused call, a friction CSV, the calibration app as
-a call, and the live members of a process group."""
+of folders, the one-line message of a refused call, an app run in-process as its console
+would run it (its exit code and one line), a friction CSV, the calibration app as a call,
+and the live members of a process group."""
 
 from __future__ import annotations
 
+import contextlib
+import importlib
+import io
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +45,50 @@ def message(call) -> str:
     assert msg is not None, f"not reported as bad input: {info.value!r}"
     assert "\n" not in msg
     return msg
+
+
+#: The console apps run in-process by :func:`run_app`: command name -> ``swgcli`` module.
+APPS = {"swgsim-generate": "generate", "swgsim-calibrate": "calibrate",
+        "swgsim-monitor": "monitor", "swgsim-observability": "observability",
+        "swgsim-paper": "paper", "swgsim-train": "train"}
+
+
+def run_app(prog: str, args: list[str], cwd: Path, monkeypatch, capsys) -> tuple[int, str]:
+    """Run an app in-process as its command line would: exit code and stderr (a case runs
+    the app in a process of its own only where that process must die)."""
+    main = importlib.import_module(f"swgcli.{APPS[prog]}").main
+    monkeypatch.chdir(cwd)
+    monkeypatch.setattr(sys, "argv", [prog, *args])
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as info:
+        main()
+    return info.value.code, capsys.readouterr().err
+
+
+def one_error_line(prog: str, err: str) -> str:
+    """The single line of stderr, ``<prog>: error: ...``, without a traceback."""
+    lines = [s for s in err.splitlines() if s.strip()]
+    assert len(lines) == 1 and lines[0].startswith(f"{prog}: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def app_line(module: str, args: list[str], tmp_path: Path) -> str:
+    """Run ``swgcli.<module>.main`` in-process as the console would; its one line (exit 2).
+    For the cases where the console (Hydra, the one-line wrapper) is what is tested; the
+    others call the apps' task functions."""
+    main = importlib.import_module(f"swgcli.{module}").main
+    argv, sys.argv = sys.argv, [module, *args, f"hydra.run.dir={tmp_path}/hydra"]
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as info:
+            main()
+    finally:
+        sys.argv = argv
+    lines = [s for s in err.getvalue().splitlines() if s.strip()]
+    assert info.value.code == 2 and len(lines) == 1, err.getvalue()
+    assert "Traceback" not in err.getvalue()
+    return lines[0]
 
 
 def friction_csv(path: Path, t, q, dq, tau=None, extra: str = "") -> Path:

@@ -15,7 +15,7 @@ import shutil  # noqa: E402
 from pathlib import Path
 
 import pytest
-from data_sets import make_synthetic, write_dataset  # noqa: E402
+from data_sets import built_once, make_synthetic, write_dataset  # noqa: E402
 
 #: Where the UR3 CobotOps day is read from (M. Tyrovolas, K. Aliev, D. Antonelli and
 #: C. Stylios, "UR3 CobotOps", UCI Machine Learning Repository, 2024, doi:10.24432/C5J891,
@@ -67,16 +67,16 @@ def torch_one_thread():
     torch.set_num_threads(n)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def small(tmp_path_factory) -> Path:
-    """A finished two-gear data set of ``bad_input.small_cfg`` (about a second)."""
+    """A finished two-gear data set of ``bad_input.small_cfg`` (about a second), made once
+    per test run (:func:`data_sets.built_once`); read it, or edit a copy (:func:`copy_of`)."""
     from bad_input import small_cfg
 
     from swgsim.datasets import generate as gen
 
-    out = tmp_path_factory.mktemp("small") / "small"
-    gen.generate(small_cfg(), out, n_jobs=1, progress=False)
-    return out
+    return built_once(tmp_path_factory, "small", lambda out: gen.generate(
+        small_cfg(), out, n_jobs=1, progress=False))
 
 
 @pytest.fixture

@@ -1,7 +1,9 @@
 """Data sets the tests share (not a test module): two small synthetic schema-v1 data sets
 with planted class signatures (:func:`make_toy_dataset` for the nets, :func:`make_synthetic`
 for the paper's features; written by :func:`write_toy_dataset`, :func:`write_dataset`) and the
-real joint-friction recordings where present (:data:`DATA`, :data:`needs_data`).
+real joint-friction recordings where present (:data:`DATA`, :data:`needs_data`); and
+:func:`built_once`, a folder a session fixture builds once per test run, not once per
+pytest-xdist worker.
 
 The toy is not physics: a few lines of trigonometry that look like the paper's Fig. 6 in
 spirit (2nd-order ripple of the wave generator, s1 ~ s3 and s2 ~ s4 on a healthy gear,
@@ -204,6 +206,28 @@ def make_synthetic(
     meta = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     return make_dataset(np.stack(sigs), t, meta, attrs={"seed": seed, "generator": "tests"})
 
+
+
+def built_once(tmp_path_factory, name: str, build) -> Path:
+    """The folder ``name``, made by ``build(path)`` once per test run and shared by the
+    pytest-xdist workers (the first builds it under a lock, the others wait for it and
+    reuse it), so that a session fixture costs one build, not one per worker; without
+    xdist, in the session's own temporary folder."""
+    import shutil
+
+    from filelock import FileLock
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # this run's folder, common to its workers
+    path, done = root / f"shared-{name}" / name, root / f"shared-{name}.done"
+    with FileLock(root / f"shared-{name}.lock"):
+        if not done.exists():
+            shutil.rmtree(path.parent, ignore_errors=True)  # a build that failed
+            path.parent.mkdir()
+            build(path)
+            done.touch()
+    return path
 
 
 def write_dataset(ds, path) -> None:

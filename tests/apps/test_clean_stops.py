@@ -1,8 +1,9 @@
 """SIGTERM and Ctrl-C end every app cleanly (swgcli.app.run, the one place for all apps):
 exit 143 / 130, one line naming what was finished and kept and how a rerun resumes, no
-traceback from worker pools, no worker left behind; a second signal during the cleanup is
-ignored; the resumed monitor evaluation reuses only the parts its stamp and key prove, and
-runs as a job array whose last run builds the report.
+traceback from worker pools, no worker left behind (the generator's when only it is
+signalled, the evaluation's when its whole group is); a second signal during the cleanup
+is ignored; the resumed monitor evaluation reuses only the parts its stamp and key prove,
+and runs as a job array whose last run builds the report.
 """
 
 from __future__ import annotations
@@ -79,6 +80,31 @@ def test_a_running_evaluation_stops_in_one_line_with_its_workers(tmp_path, sig, 
     assert "rerun the same command to resume" in lines[0]
     assert _group_gone(p.pid)  # no worker left behind
     assert not list(out.rglob("*.tmp"))
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
+def test_stopping_the_generator_stops_its_workers(tmp_path, sig, code):
+    out = tmp_path / "ds"
+    # 12 speeds (2000-4200 rpm): 36 shards, minutes of work, so that the signal always meets running
+    # workers, even on a loaded machine (the paper grid alone can finish before it)
+    speeds = ",".join(str(2000.0 + 200.0 * k) for k in range(12))
+    p = subprocess.Popen([str(Path(sys.executable).parent / "swgsim-generate"), "dataset=paper",
+                          f"out_dir={out}", f"dataset.operating_points.n_in_rpm=[{speeds}]",
+                          "n_jobs=2", "progress=false"], start_new_session=True,
+                         stderr=subprocess.PIPE, text=True,
+                         # as from a terminal: a runner started in the background (no job
+                         # control) passes SIGINT on as ignored, and Python keeps it so
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.time() + 180
+    while len(process_group(p.pid)) < 3 and time.time() < deadline:  # parent + 2 workers
+        time.sleep(0.2)
+    assert len(process_group(p.pid)) >= 3, "the generator's workers never started"
+    time.sleep(1.0)
+    os.kill(p.pid, sig)
+    assert p.wait(timeout=30) == code, p.stderr.read()
+    time.sleep(0.5)
+    assert process_group(p.pid) == []  # no worker goes on writing
+    assert not list(out.glob("*.tmp"))
 
 
 def _stopped(call, capsys) -> tuple[int, str]:

@@ -134,3 +134,23 @@ def test_a_bad_input_is_refused_before_the_libraries_are_imported(tmp_path, modu
     lines = [s for s in r.stderr.splitlines() if s.strip()]
     assert r.returncode == 2 and len(lines) == 1, r.stderr
     assert words in lines[0] and "broken install" not in lines[0], lines[0]
+
+
+def _console(name: str, *args: str, cwd: Path) -> subprocess.CompletedProcess:
+    """Run the console script ``name`` as a user would."""
+    return subprocess.run([str(Path(sys.executable).parent / name), *args],
+                          capture_output=True, text=True, cwd=cwd, env={**os.environ},
+                          timeout=300)
+
+
+def test_tracking_store_is_checked_before_any_work(tmp_path):
+    bad = tmp_path / "not_a_db.db"
+    bad.write_text("not sqlite")
+    r = _console("swgsim-paper", "grid=tiny", f"data_root={tmp_path}/data",
+                 f"report_root={tmp_path}/reports", f"tracking_uri=sqlite:///{bad}",
+                 cwd=tmp_path)
+    assert r.returncode == 2 and f"tracking_uri=sqlite:///{bad}" in r.stderr
+    assert not (tmp_path / "data").exists() and bad.read_text() == "not sqlite"
+    r = _console("swgsim-paper", "grid=tiny", f"data_root={tmp_path}/data",
+                 "tracking_uri=sqlite:////nowhere/at/all/mlflow.db", cwd=tmp_path)
+    assert r.returncode == 2 and "/nowhere/at/all does not exist" in r.stderr
