@@ -15,10 +15,12 @@ not trivial without the reference normalisation.
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
+from filelock import FileLock
 
 from swgsim.datasets.schema import MANIFEST, SCHEMA_VERSION, make_dataset, write_shard
 from swgsim.files.ownership import atomic_write_json
@@ -213,10 +215,6 @@ def built_once(tmp_path_factory, name: str, build) -> Path:
     pytest-xdist workers (the first builds it under a lock, the others wait for it and
     reuse it), so that a session fixture costs one build, not one per worker; without
     xdist, in the session's own temporary folder."""
-    import shutil
-
-    from filelock import FileLock
-
     root = tmp_path_factory.getbasetemp()
     if os.environ.get("PYTEST_XDIST_WORKER"):
         root = root.parent  # this run's folder, common to its workers
