@@ -17,6 +17,7 @@ import pytest
 
 from swgcli import compose_app, dataset_preset
 from swgcli.app import one_line
+from swgsim.datasets import schema as dsio
 
 
 def small_cfg(**chain) -> dict:
@@ -35,6 +36,15 @@ def snapshot(folder: Path) -> dict[str, tuple[int, float]]:
     """Every file below ``folder``: size and modification time."""
     return {str(p.relative_to(folder)): (p.stat().st_size, p.stat().st_mtime)
             for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def load_message(folder: Path) -> str:
+    """The one-line error of loading a spoiled data set (:func:`swgsim.datasets.schema.load`)."""
+    with pytest.raises(dsio.DataSetError) as info:
+        dsio.load(folder)
+    msg = str(info.value)
+    assert "\n" not in msg
+    return msg
 
 
 def message(call) -> str:

@@ -12,10 +12,11 @@ import shutil
 from pathlib import Path
 
 import pytest
-from bad_input import app_line, calibrate_call, message, snapshot
+from bad_input import app_line, calibrate_call, load_message, message, snapshot
 
 from swgcli import compose_app
 from swgsim.datasets import schema as dsio
+from swgsim.datasets.plan import config_hash
 
 
 def _manifest(folder: Path) -> dict:
@@ -216,17 +217,7 @@ def test_shards_of_another_rate_are_named_not_the_features(copy_of, tmp_path):
 
 # ------------------------------------------------------------------ manifest metadata
 def _rehash(m: dict) -> None:
-    from swgsim.datasets.plan import config_hash
-
     m["config_hash"] = config_hash(m["config"])
-
-
-def _load_message(folder: Path) -> str:
-    with pytest.raises(dsio.DataSetError) as info:
-        dsio.load(folder)
-    msg = str(info.value)
-    assert "\n" not in msg
-    return msg
 
 
 @pytest.mark.parametrize("edit, where, words", [
@@ -253,7 +244,7 @@ def test_load_refuses_manifest_metadata_that_contradicts_the_shards(copy_of, edi
     name = sorted(m["shards"])[0]
     edit(m, name)
     (folder / dsio.MANIFEST).write_text(json.dumps(m))
-    msg = _load_message(folder)
+    msg = load_message(folder)
     assert (f"shard {folder / name}" if where == "shard" else str(folder / dsio.MANIFEST)) in msg
     for w in words:
         assert w in msg

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from bad_input import small_cfg
+from bad_input import load_message, small_cfg
 from data_sets import make_synthetic, write_dataset
 from omegaconf import OmegaConf
 
@@ -177,14 +177,6 @@ def _set(var: str, index, value):
     return edit
 
 
-def _load_message(folder: Path) -> str:
-    with pytest.raises(dsio.DataSetError) as info:
-        dsio.load(folder)
-    msg = str(info.value)
-    assert "\n" not in msg
-    return msg
-
-
 @pytest.mark.parametrize("edit, words", [
     (_set("strain_signal", (0, 2, slice(0, 10)), NAN),
      ["strain_signal", "10 non-finite value(s)"]),
@@ -200,7 +192,7 @@ def _load_message(folder: Path) -> str:
 def test_load_refuses_a_shard_with_bad_content_naming_file_and_variable(copy_of, edit, words):
     folder = copy_of()
     f = _rewrite_shard(folder, edit)
-    msg = _load_message(folder)
+    msg = load_message(folder)
     assert f"shard {f}" in msg
     for w in words:
         assert w in msg
@@ -213,7 +205,7 @@ def test_measured_and_user_registered_labels_load(tmp_path, small):
     ds["fault"].values[0] = "worn_bearing"
     folder = tmp_path / "measured"
     write_dataset(ds, folder)
-    assert "'worn_bearing'" in _load_message(folder)
+    assert "'worn_bearing'" in load_message(folder)
     m = _manifest(folder)
     m["config"] = {"variants": {"worn_bearing": {"severities": [1.0]}}}  # its own class
     (folder / dsio.MANIFEST).write_text(json.dumps(m))
