@@ -25,7 +25,6 @@ from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import config_hash, plain_config, plan
-from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import DutyPoint, LifeConfig
 from swgsim.gear.thermal import (
     FRICTION_FORMS,
@@ -45,11 +44,12 @@ NEUTRAL = ConditionsConfig(thermal=None, viscosity=False, run_in=None, payload=[
 
 
 @pytest.fixture(scope="module")
-def tiny():
-    """The tiny bench's plan with gear 3's records, shared by every life of this module (a
-    record is simulated once, at its first window)."""
-    p = plan(dataset_preset("tiny_bench"))
-    return p, record_bank(p, 3)
+def tiny(tiny_bench):
+    """The tiny bench's plan with gear 3's records, shared by every life of this module and
+    the worker's other tests of the bench (tests/conftest.py; a record is simulated once,
+    at its first window)."""
+    p, banks = tiny_bench
+    return p, banks[3]
 
 
 def _life(conditions, hours: float = 3.0) -> LifeConfig:

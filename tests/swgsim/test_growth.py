@@ -29,7 +29,6 @@ from swgsim.datasets.growth import (
 )
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import config_hash, plain_config, plan
-from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import (
     DutyPoint,
     FaultOnset,
@@ -128,9 +127,10 @@ def _paris_pole(a0, law, t_nm):
 
 
 @pytest.fixture(scope="module")
-def tiny():
-    p = plan(dataset_preset("tiny_bench"))
-    return p, record_bank(p, 3)
+def tiny(tiny_bench):
+    """The tiny bench's plan with gear 3's records (shared: tests/conftest.py)."""
+    p, banks = tiny_bench
+    return p, banks[3]
 
 
 NEUTRAL = ConditionsConfig(thermal=None, viscosity=False, run_in=None, payload=[],
