@@ -116,10 +116,39 @@ TINY_STUDY = dict(seeds=[0], healthy_hours=10.0, commissioning_h=4.0, horizon_h=
                   nuisances={})
 
 
+def _offset_life(fault):
+    """Gear 3's 5-h life (seed 9) with ``fault`` from the end of commissioning (4 h)."""
+    from swgsim.datasets.schedule import LifeConfig
+
+    return LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9, fault=fault)
+
+
+def _heavier_tool_life():
+    """Gear 3's 7-h life (seed 9) with a 10 % heavier tool from the end of commissioning."""
+    from swgsim.datasets.conditions import ConditionsConfig
+    from swgsim.datasets.schedule import LifeConfig
+
+    return LifeConfig(hours=7.0, commissioning_h=4.0, life_seed=9,
+                      conditions=ConditionsConfig(payload=[[4.0, 1.1]]))
+
+
+#: The faults of test_offset_on_a_wg_bending_bridge_named_a_sensor_fault's lives.
+OFFSET_VS_WG = [("sensor_offset_step", 4.0, 0.02, 1), ("eccentric_wg", 4.0, 0.1, None)]
+
+
 @pytest.fixture(scope="module")
 def tiny_banks(tiny_bench):
     """tiny_bench's plan and its gears' records, shared by its parts as in a worker (and
-    with the worker's other tests of the bench: tests/conftest.py)."""
+    with the worker's other tests of the bench: tests/conftest.py). The records of this
+    module's own lives of gear 3 (an eccentric WG at its position, the heavier tool's
+    loads) are asked for here, to be simulated with the evaluation's, in one batch."""
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.schedule import FaultOnset
+
+    p, banks = tiny_bench
+    for life in (_heavier_tool_life(), *(_offset_life(FaultOnset(f, h, s, sensor=b))
+                                         for f, h, s, b in OFFSET_VS_WG)):
+        LifeSimulator(p, 3, life, banks[3])  # asks for its records
     return tiny_bench
 
 
@@ -296,15 +325,13 @@ def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval, tiny_bank
     from learn.monitor.gear_monitor import GearMonitor
     from learn.monitor.training import features_of
     from swgsim.datasets.life import LifeSimulator
-    from swgsim.datasets.schedule import FaultOnset, LifeConfig
+    from swgsim.datasets.schedule import FaultOnset
 
     p, banks = tiny_banks
     mon = GearMonitor(tiny_eval["model"], RuleConfig(), 1.0)
     named = {}
-    for fo in (FaultOnset("sensor_offset_step", 4.0, 0.02, sensor=1),
-               FaultOnset("eccentric_wg", 4.0, 0.1)):
-        sim = LifeSimulator(p, 3, LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9,
-                                             fault=fo), banks[3])
+    for fo in (FaultOnset(f, h, s, sensor=b) for f, h, s, b in OFFSET_VS_WG):
+        sim = LifeSimulator(p, 3, _offset_life(fo), banks[3])
         f, pts, _ = features_of(sim, 0, len(sim))
         mon.commission(f[:240], pts[:240])
         _, lp = mon.scores(f[240:], pts[240:])
@@ -328,14 +355,10 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     from learn.monitor.normal import OUTSIDE_LOAD, Conditions
     from learn.monitor.rule import RuleConfig
     from learn.monitor.training import features_of
-    from swgsim.datasets.conditions import ConditionsConfig
     from swgsim.datasets.life import LifeSimulator
-    from swgsim.datasets.schedule import LifeConfig
 
     p, banks = tiny_banks
-    sim = LifeSimulator(p, 3, LifeConfig(hours=7.0, commissioning_h=4.0, life_seed=9,
-                                         conditions=ConditionsConfig(payload=[[4.0, 1.1]])),
-                        banks[3])
+    sim = LifeSimulator(p, 3, _heavier_tool_life(), banks[3])
     f, pts, meta = features_of(sim, 0, len(sim))
     cond, hour, tq = Conditions.of(meta), meta["hour"], meta["t_out_mean_nm"]
     temp = cond.temperature_c if cond.temperature_c is not None else [None] * len(f)
