@@ -56,6 +56,23 @@ def tracking_uri(tmp_path_factory) -> str:
     return f"sqlite:///{tmp_path_factory.mktemp('mlflow') / 'mlflow.db'}"
 
 
+@pytest.fixture(scope="session")
+def tiny_bench():
+    """The tiny bench's plan (preset ``tiny_bench``) and a record bank per gear, shared by
+    every test of the worker that takes the bench's lives as its input (a trained model, a
+    monitored stream): a record is simulated once per worker, with the others its first
+    window asks for, instead of once per test file (a batch costs 2-4 s whatever it holds).
+    A record is the same whichever batch simulates it
+    (tests/swgsim/test_life.py::test_a_record_is_the_same_whichever_batch_simulates_it);
+    a test of the simulation of records makes its own banks. Do not modify."""
+    from swgcli import dataset_preset
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import record_bank
+
+    p = plan(dataset_preset("tiny_bench"))
+    return p, {int(g.id): record_bank(p, int(g.id)) for g in p.config.gears}
+
+
 @pytest.fixture
 def torch_one_thread():
     """torch on one thread during a test (small nets; results independent of the cores)."""

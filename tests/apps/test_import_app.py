@@ -20,26 +20,23 @@ from swgsim.datasets.recording_table import stream_table
 
 
 @pytest.fixture(scope="module")
-def trained(tmp_path_factory):
+def trained(tmp_path_factory, tiny_bench):
     """Gear 3's life of the tiny_life preset (8 h, commissioning 4 h, an eccentric WG of
     severity 0.1 at 180° from 6 h) and a diagnosis model trained on gears 1 and 3
     (healthy and eccentric WG lives, learn.monitor.training.train_model, as the
     monitor's evaluation trains it): the round trip is under test, not the model's reach
     to unseen gears (tests/learn/test_monitor.py), so the stream's gear shares the
-    records of the training lives and nothing is simulated twice."""
+    records of the training lives and nothing is simulated twice (the bench's records are
+    shared with the worker's other tests: tests/conftest.py)."""
     from learn.monitor.model_io import save_model
     from learn.monitor.rule import RuleConfig
     from learn.monitor.stream import monitor_stream
     from learn.monitor.study import MonitorStudyConfig
     from learn.monitor.training import train_model
-    from swgcli import dataset_preset
     from swgsim.datasets.life import LifeSimulator, life_dataset
-    from swgsim.datasets.plan import plan
-    from swgsim.datasets.records import record_bank
     from swgsim.datasets.schedule import FaultOnset, LifeConfig
 
-    p = plan(dataset_preset("tiny_bench"))
-    banks = {g: record_bank(p, g) for g in (1, 3)}
+    p, banks = tiny_bench
     life = LifeConfig(hours=8.0, commissioning_h=4.0,
                       fault=FaultOnset("eccentric_wg", 6.0, 0.1, position_deg=180.0))
     sim = LifeSimulator(p, 3, life, banks[3])

@@ -7,16 +7,19 @@ from swgcli import compose_app
 from swgcli.paper import run_paper
 
 
-def main_cfg(tmp_path, *extra):
+def main_cfg(tmp_path, tracking_uri, *extra):
+    """The main job on the tiny grid into ``tmp_path``, its runs in the session's MLflow
+    store (a new store's tables take seconds to create; the runs are told apart by their
+    ids)."""
     return compose_app("paper", [
             "grid=tiny", f"data_root={tmp_path}/data", f"report_root={tmp_path}/reports",
-            f"tracking_uri=sqlite:///{tmp_path}/mlflow.db", "study.figures=false",
+            f"tracking_uri={tracking_uri}", "study.figures=false",
             "study.tables=[VII,X]", "study.models=[rf,nb]",
             *extra])
 
 
-def test_main_job_runs_both_recordings_side_by_side(tmp_path, capsys):
-    out = run_paper(main_cfg(tmp_path))
+def test_main_job_runs_both_recordings_side_by_side(tmp_path, tracking_uri, capsys):
+    out = run_paper(main_cfg(tmp_path, tracking_uri))
     printed = capsys.readouterr().out
     for p in ("paper", "bench"):
         res = pd.read_csv(tmp_path / "reports" / p / "results.csv")
@@ -33,7 +36,7 @@ def test_main_job_runs_both_recordings_side_by_side(tmp_path, capsys):
     # every study job is an MLflow run with the data set as input and its last-split model
     import mlflow
 
-    client = mlflow.MlflowClient(f"sqlite:///{tmp_path}/mlflow.db")
+    client = mlflow.MlflowClient(tracking_uri)
     exps = [e.experiment_id for e in client.search_experiments()
             if e.name.startswith("paper_study/")]
     run_ids = set()
@@ -44,17 +47,19 @@ def test_main_job_runs_both_recordings_side_by_side(tmp_path, capsys):
     for rid in run_ids:
         assert runs[rid].inputs.dataset_inputs and len(runs[rid].outputs.model_outputs) == 1
         assert runs[rid].data.tags["mlflow.source.git.commit"]
-    # the second run finds both data sets valid and simulates nothing
-    again = run_paper(main_cfg(tmp_path))
+    # the second run finds both data sets valid and simulates nothing (its study the
+    # smallest, one model and table without its models logged: only generation is asked)
+    again = run_paper(main_cfg(tmp_path, tracking_uri, "study.tables=[X]",
+                               "study.models=[nb]", "log_models=false"))
     assert all(not g["computed"] for g in again["generate"].values())
 
 
-def test_main_job_never_deletes_what_it_did_not_create(tmp_path):
+def test_main_job_never_deletes_what_it_did_not_create(tmp_path, tracking_uri):
     folder = tmp_path / "data" / "paper"
     folder.mkdir(parents=True)
     (folder / "thesis.pdf").write_bytes(b"%PDF years of work")
     with pytest.raises(ValueError, match=f"{folder}.*thesis.pdf"):
-        run_paper(main_cfg(tmp_path))
+        run_paper(main_cfg(tmp_path, tracking_uri))
     assert (folder / "thesis.pdf").read_bytes() == b"%PDF years of work"
 
 
@@ -64,9 +69,9 @@ def test_main_job_never_deletes_what_it_did_not_create(tmp_path):
     ("datasets.bench.acquisition.start=sometimes", "datasets.bench: dataset.acquisition.start"),
     ("n_jobs=0", r"n_jobs=0: out of range; allowed: >= 1"),
 ])
-def test_main_job_refuses_bad_input_before_any_work(tmp_path, override, match):
+def test_main_job_refuses_bad_input_before_any_work(tmp_path, tracking_uri, override, match):
     with pytest.raises(ValueError, match=match):
-        run_paper(main_cfg(tmp_path, override))
+        run_paper(main_cfg(tmp_path, tracking_uri, override))
     assert not (tmp_path / "data").exists()
 
 

@@ -87,6 +87,7 @@ def test_paper_study_task(tiny_dataset, tracking_uri, tmp_path):
     assert (tmp_path / "reports" / "paper" / "tables_vii_x.md").is_file()
 
 
+@pytest.mark.usefixtures("torch_one_thread")  # as every torch test: a core per worker
 @pytest.mark.parametrize(("model", "kind", "least"), [("mlp_torch", "raw", None),
                                                      ("cnn", "diff", 0.4)])
 def test_study_job_on_signals(tiny_dataset, tracking_uri, tmp_path, model, kind, least):

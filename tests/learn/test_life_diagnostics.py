@@ -16,29 +16,26 @@ from learn.monitor.evaluate import _lives, healthy_life
 from learn.monitor.model_io import save_model
 from learn.monitor.study import MonitorStudyConfig
 from learn.monitor.training import train_model
-from swgcli import dataset_preset
-from swgsim.datasets.plan import plan
-from swgsim.datasets.records import record_bank
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 import life_diagnostics  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def tiny_model(tmp_path_factory):
-    """A diagnosis model of the tiny bench trained on gears 1 and 2, saved with its card."""
-    p = plan(dataset_preset("tiny_bench"))
+def tiny_model(tmp_path_factory, tiny_bench):
+    """A diagnosis model of the tiny bench trained on gears 1 and 2, saved with its card
+    (the bench's records shared with the worker's other tests: tests/conftest.py)."""
+    p, banks = tiny_bench
     design = MonitorStudyConfig(commissioning_h=4.0, train_healthy_h=2.0, train_variants=1,
                                 faults=["eccentric_wg"], nuisances={})
-    model = train_model(p, {g: record_bank(p, g) for g in (1, 2)}, [1, 2], design)
+    model = train_model(p, banks, [1, 2], design)
     return save_model(model, tmp_path_factory.mktemp("model") / "tiny_bench_without_gear3",
                       [{"name": "tiny_bench", "config_hash": p.config_hash}])
 
 
-def test_healthy_life_is_the_evaluations():
-    p = plan(dataset_preset("tiny_bench"))
+def test_healthy_life_is_the_evaluations(tiny_bench):
+    p, banks = tiny_bench
     cfg = MonitorStudyConfig(healthy_hours=30.0, nuisance_hours=30.0)
-    banks = {3: record_bank(p, 3)}
     for nuisance in ("none", "warm_up"):
         ours = healthy_life(p, banks[3], 3, cfg, 4, nuisance)
         theirs, _ = _lives(p, banks, 3, cfg, 4, nuisance)

@@ -116,15 +116,40 @@ TINY_STUDY = dict(seeds=[0], healthy_hours=10.0, commissioning_h=4.0, horizon_h=
                   nuisances={})
 
 
-@pytest.fixture(scope="module")
-def tiny_banks():
-    """tiny_bench's plan and its gears' records, shared by its parts as in a worker."""
-    from learn.monitor.evaluate import banks_of
-    from swgcli import dataset_preset
-    from swgsim.datasets.plan import plan
+def _offset_life(fault):
+    """Gear 3's 5-h life (seed 9) with ``fault`` from the end of commissioning (4 h)."""
+    from swgsim.datasets.schedule import LifeConfig
 
-    p = plan(dataset_preset("tiny_bench"))
-    return p, banks_of(p)
+    return LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9, fault=fault)
+
+
+def _heavier_tool_life():
+    """Gear 3's 7-h life (seed 9) with a 10 % heavier tool from the end of commissioning."""
+    from swgsim.datasets.conditions import ConditionsConfig
+    from swgsim.datasets.schedule import LifeConfig
+
+    return LifeConfig(hours=7.0, commissioning_h=4.0, life_seed=9,
+                      conditions=ConditionsConfig(payload=[[4.0, 1.1]]))
+
+
+#: The faults of test_offset_on_a_wg_bending_bridge_named_a_sensor_fault's lives.
+OFFSET_VS_WG = [("sensor_offset_step", 4.0, 0.02, 1), ("eccentric_wg", 4.0, 0.1, None)]
+
+
+@pytest.fixture(scope="module")
+def tiny_banks(tiny_bench):
+    """tiny_bench's plan and its gears' records, shared by its parts as in a worker (and
+    with the worker's other tests of the bench: tests/conftest.py). The records of this
+    module's own lives of gear 3 (an eccentric WG at its position, the heavier tool's
+    loads) are asked for here, to be simulated with the evaluation's, in one batch."""
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.schedule import FaultOnset
+
+    p, banks = tiny_bench
+    for life in (_heavier_tool_life(), *(_offset_life(FaultOnset(f, h, s, sensor=b))
+                                         for f, h, s, b in OFFSET_VS_WG)):
+        LifeSimulator(p, 3, life, banks[3])  # asks for its records
+    return tiny_bench
 
 
 @pytest.fixture(scope="module")
@@ -229,19 +254,18 @@ def test_compiled_trees_equal_scikit_learn(tiny_eval):
     np.testing.assert_allclose(ct.predict_proba(x), clf.predict_proba(x), rtol=0, atol=1e-12)
 
 
-def test_one_window_at_a_time_equals_the_block_path(tiny_eval):
+def test_one_window_at_a_time_equals_the_block_path(tiny_eval, tiny_banks):
     """GearMonitor.step, window by window, gives run()'s scores, p-values, CUSUMs and
     alarms (a CUSUM pushed over h by a shifted stretch: one alarm, then a restart)."""
     from learn.monitor.gear_monitor import GearMonitor
     from learn.monitor.rule import RuleConfig
     from learn.monitor.training import features_of
-    from swgcli import dataset_preset
     from swgsim.datasets.life import LifeSimulator
-    from swgsim.datasets.plan import plan
     from swgsim.datasets.schedule import LifeConfig
 
-    p = plan(dataset_preset("tiny_bench"))
-    sim = LifeSimulator(p, 3, LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9))
+    p, banks = tiny_banks
+    sim = LifeSimulator(p, 3, LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9),
+                        banks[3])
     f, pts, meta = features_of(sim, 0, len(sim))
     f[270:290] += 3 * f[:240].std(axis=0)  # a stretch no healthy window looks like
     rule = RuleConfig(design_hours=1.0)
@@ -295,23 +319,19 @@ def test_one_bridge_fits_recover_planted_sensor_faults():
         fit_sensor_faults(z[:, :-1], mean, std)
 
 
-def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval):
+def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval, tiny_banks):
     """An offset step on s1 alone (whose eccentric WG moves s1 and s3 oppositely) is named
     a sensor fault on s1; an eccentric WG is not explained by one bridge."""
     from learn.monitor.gear_monitor import GearMonitor
     from learn.monitor.training import features_of
-    from swgcli import dataset_preset
     from swgsim.datasets.life import LifeSimulator
-    from swgsim.datasets.plan import plan
-    from swgsim.datasets.schedule import FaultOnset, LifeConfig
+    from swgsim.datasets.schedule import FaultOnset
 
-    p = plan(dataset_preset("tiny_bench"))
+    p, banks = tiny_banks
     mon = GearMonitor(tiny_eval["model"], RuleConfig(), 1.0)
     named = {}
-    for fo in (FaultOnset("sensor_offset_step", 4.0, 0.02, sensor=1),
-               FaultOnset("eccentric_wg", 4.0, 0.1)):
-        sim = LifeSimulator(p, 3, LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9,
-                                             fault=fo))
+    for fo in (FaultOnset(f, h, s, sensor=b) for f, h, s, b in OFFSET_VS_WG):
+        sim = LifeSimulator(p, 3, _offset_life(fo), banks[3])
         f, pts, _ = features_of(sim, 0, len(sim))
         mon.commission(f[:240], pts[:240])
         _, lp = mon.scores(f[240:], pts[240:])
@@ -321,7 +341,8 @@ def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval):
                      "eccentric_wg": ("eccentric_wg", None)}
 
 
-def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_eval):
+def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_eval,
+                                                                          tiny_banks):
     """A 10 % heavier tool from the end of commissioning (a simulated payload life): each
     point's windows beyond its load range gather until as many as commissioning gave its
     normal behaviour recommission it; on the bench's physics the laws hold at 7.7 N m,
@@ -334,15 +355,10 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     from learn.monitor.normal import OUTSIDE_LOAD, Conditions
     from learn.monitor.rule import RuleConfig
     from learn.monitor.training import features_of
-    from swgcli import dataset_preset
-    from swgsim.datasets.conditions import ConditionsConfig
     from swgsim.datasets.life import LifeSimulator
-    from swgsim.datasets.plan import plan
-    from swgsim.datasets.schedule import LifeConfig
 
-    p = plan(dataset_preset("tiny_bench"))
-    sim = LifeSimulator(p, 3, LifeConfig(hours=7.0, commissioning_h=4.0, life_seed=9,
-                                         conditions=ConditionsConfig(payload=[[4.0, 1.1]])))
+    p, banks = tiny_banks
+    sim = LifeSimulator(p, 3, _heavier_tool_life(), banks[3])
     f, pts, meta = features_of(sim, 0, len(sim))
     cond, hour, tq = Conditions.of(meta), meta["hour"], meta["t_out_mean_nm"]
     temp = cond.temperature_c if cond.temperature_c is not None else [None] * len(f)
@@ -407,7 +423,7 @@ def test_beyond_the_load_range_only_the_novelty_scores():
     np.testing.assert_array_equal(mon.p_values(score, np.zeros(4, int), u), 2 * p_ev)
 
 
-def test_commissioning_tracks_a_running_in_gear_friction(tiny_eval):
+def test_commissioning_tracks_a_running_in_gear_friction(tiny_eval, tiny_banks):
     """A gear whose friction runs in during commissioning: the friction factor tracked
     over commissioning (as the run tracks it, here with a time constant of 0.5 h, short
     beside the run-in's 16 h) leaves the drift out of the efficiency's spread and hands
@@ -417,17 +433,16 @@ def test_commissioning_tracks_a_running_in_gear_friction(tiny_eval):
     from learn.monitor.normal import EFFICIENCY, Conditions, NormalConfig
     from learn.monitor.rule import RuleConfig
     from learn.monitor.training import features_of
-    from swgcli import dataset_preset
     from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
     from swgsim.datasets.life import LifeSimulator
-    from swgsim.datasets.plan import plan
     from swgsim.datasets.schedule import LifeConfig
 
-    p = plan(dataset_preset("tiny_bench"))
+    p, banks = tiny_banks
     std, fr = {}, {}
     for run_in in (None, RunInConfig(drop=0.3, tau_h=16.0)):
         sim = LifeSimulator(p, 3, LifeConfig(hours=4.0, commissioning_h=4.0, life_seed=9,
-                                             conditions=ConditionsConfig(run_in=run_in)))
+                                             conditions=ConditionsConfig(run_in=run_in)),
+                            banks[3])
         f, pts, meta = features_of(sim, 0, len(sim))
         for track in (0.0, 0.5):
             mon = GearMonitor(tiny_eval["model"], RuleConfig(design_hours=1.0), 1.0,

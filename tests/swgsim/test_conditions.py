@@ -25,7 +25,6 @@ from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import config_hash, plain_config, plan
-from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import DutyPoint, LifeConfig
 from swgsim.gear.thermal import (
     FRICTION_FORMS,
@@ -44,12 +43,18 @@ NEUTRAL = ConditionsConfig(thermal=None, viscosity=False, run_in=None, payload=[
                            bridge_drift=None, temperature_sensor=None)
 
 
+#: A 10 % heavier tool from 2 h on.
+HEAVY = dataclasses.replace(NEUTRAL, payload=[[2.0, 1.1]])
+
+
 @pytest.fixture(scope="module")
-def tiny():
-    """The tiny bench's plan with gear 3's records, shared by every life of this module (a
-    record is simulated once, at its first window)."""
-    p = plan(dataset_preset("tiny_bench"))
-    return p, record_bank(p, 3)
+def tiny(tiny_bench):
+    """The tiny bench's plan with gear 3's records, shared by every life of this module and
+    the worker's other tests of the bench (tests/conftest.py; a record is simulated once,
+    at its first window); the heavier tool's loads asked for with the first life's."""
+    p, banks = tiny_bench
+    LifeSimulator(p, 3, _life(HEAVY), banks[3])  # asks for its records
+    return p, banks[3]
 
 
 def _life(conditions, hours: float = 3.0) -> LifeConfig:
@@ -121,9 +126,8 @@ def test_the_friction_follows_the_law_drawn_for_the_joint(tiny):
 
 
 def test_a_heavier_tool_acts_at_its_load_while_the_commanded_point_stays(tiny):
-    heavy = dataclasses.replace(NEUTRAL, payload=[[2.0, 1.1]])
     _, m0 = _windows(tiny, NEUTRAL)
-    _, m1 = _windows(tiny, heavy)
+    _, m1 = _windows(tiny, HEAVY)
     after = m1["hour"] >= 2.0
     assert np.array_equal(m1["t_out_nm"], m0["t_out_nm"])
     np.testing.assert_allclose(m1["t_out_mean_nm"][after], 1.1 * m0["t_out_mean_nm"][after],

@@ -117,10 +117,13 @@ def test_a_record_is_the_same_whichever_batch_simulates_it(tiny):
 
 
 def test_sensor_fault_on_one_bridge_after_onset(tiny):
+    """(One bank for both lives: a sensor fault's records are the healthy gear's; that a
+    life does not depend on its bank is test_windows_deterministic_and_slice_independent's.)"""
     healthy = LifeConfig(hours=1.2, commissioning_h=1.0)
-    h = LifeSimulator(tiny, 1, healthy)
+    bank = RecordBank(tiny, 1)
+    h = LifeSimulator(tiny, 1, healthy, bank)
     f = LifeSimulator(tiny, 1, dataclasses.replace(
-        healthy, fault=FaultOnset("sensor_offset_step", 1.1, 0.05, sensor=2)))
+        healthy, fault=FaultOnset("sensor_offset_step", 1.1, 0.05, sensor=2)), bank)
     sh, _ = h.windows(0, len(h))
     sf, mf = f.windows(0, len(f))
     on = mf["fault"] == "sensor_offset_step"
