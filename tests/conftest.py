@@ -84,9 +84,10 @@ def torch_one_thread():
     torch.set_num_threads(n)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def small(tmp_path_factory) -> Path:
-    """A finished two-gear data set of ``bad_input.small_cfg`` (about a second)."""
+    """A finished two-gear data set of ``bad_input.small_cfg`` (about a second), shared by
+    the worker's tests; do not modify (:func:`copy_of` gives a copy to edit)."""
     from bad_input import small_cfg
 
     from swgsim.datasets import generate as gen
