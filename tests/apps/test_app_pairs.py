@@ -8,7 +8,8 @@ replaces only an unfinished data set that a generation run wrote; a stamp of an 
 version (no writers) is an unknown app's, replaced only by generation with ``overwrite``.
 
 The writers' folders are made once per module: generation and the calibration for real (a
-second each); the other apps' through the same claim and atomic writes they use, with the
+second each; generation's a copy of the session's generated ``small_cfg`` set,
+tests/conftest.py); the other apps' through the same claim and atomic writes they use, with the
 files they write (a real run of each takes 10-40 s: the slow test at the end runs every one
 and checks that its stamp names it, so that the folders made here are what they make).
 """
@@ -83,14 +84,14 @@ def csv(root) -> Path:
 
 
 @pytest.fixture(scope="module")
-def written(root, csv) -> dict[str, Path]:
+def written(root, csv, small) -> dict[str, Path]:
     """App -> a folder holding its finished output (in ``<root>/<app>/bench``, so that the
     main job's study folder ``<report_root>/bench`` can be pointed at it)."""
     out = {}
     for app in APPS:
         folder = root / app / "bench"
         if app == "generate":
-            gen.generate(small_cfg(), folder, n_jobs=1, progress=False)
+            shutil.copytree(small, folder)  # gen.generate(small_cfg(), folder)'s output
         elif app == "calibrate":
             calibrate_call(csv, folder, "figures=false")()
         else:
@@ -206,9 +207,8 @@ def test_files_of_an_unknown_app_are_refused_saying_so(runners, old_output, runn
     assert files(old_output) == before
 
 
-def test_generation_replaces_an_unknown_apps_files_only_with_overwrite(tmp_path):
-    folder = tmp_path / "ds"
-    gen.generate(small_cfg(), folder, n_jobs=1, progress=False)
+def test_generation_replaces_an_unknown_apps_files_only_with_overwrite(copy_of):
+    folder = copy_of("ds")  # gen.generate(small_cfg(), folder)'s output
     _old_stamp(folder)
     other = small_cfg()
     other["seed"] = 5

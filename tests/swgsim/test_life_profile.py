@@ -70,13 +70,13 @@ def test_profile_life_windows_cycle_through_the_slots(motion, bank):
     assert ds["phi_out_meas"].dims == ("sample", "time") and ds["phi_out_meas"].shape == (4, n_t)
 
 
-def test_start_jitter_spreads_a_slots_windows_and_is_refused_beyond_one_window():
+def test_start_jitter_spreads_a_slots_windows_and_is_refused_beyond_one_window(motion, bank):
     life = LifeConfig(hours=0.1, interval_min=1.0, commissioning_h=0.05)
-    phi = {}
-    for jit in (0.0, 0.025):
-        p = plan(dataset_config(dataset_preset(
-            "tiny_motion", [*OVERRIDES, f"profile.start_jitter_s={jit}"])))
-        phi[jit] = LifeSimulator(p, 1, life).windows(0, 6)[1]["phi_in_meas"]
+    assert motion.config.profile.start_jitter_s == 0.025  # the preset's: the module's records
+    phi = {0.025: LifeSimulator(motion, 1, life, bank).windows(0, 6)[1]["phi_in_meas"]}
+    p = plan(dataset_config(dataset_preset(
+        "tiny_motion", [*OVERRIDES, "profile.start_jitter_s=0.0"])))
+    phi[0.0] = LifeSimulator(p, 1, life).windows(0, 6)[1]["phi_in_meas"]
     assert np.array_equal(phi[0.0][0], phi[0.0][2]) and np.array_equal(phi[0.0][1], phi[0.0][5])
     assert not np.array_equal(phi[0.025][0], phi[0.025][2])
     with pytest.raises(ValueError, match=r"^dataset.profile.start_jitter_s must lie in "
