@@ -45,9 +45,11 @@ Equations of motion:
     J_out ω̇_out = −c T_stiff + T_fric / sin α_tooth + T_load sgn(−ω_out)... (T_load > 0)
     T_m         = K_p (ω_d − ω_in) + K_i ∫(ω_d − ω_in) dt
 
-Integration: all variants as one vectorised system with classical RK4 at a fixed step
-(:func:`simulate`); ``simulate_reference`` in ``tests/physics_reference.py`` integrates one
-variant with ``scipy.integrate.solve_ivp`` (DOP853) to check it.
+Integration: classical RK4 at a fixed step (:func:`simulate`), each variant compiled in
+:mod:`swgsim.gear.integrator`; :func:`rhs` is the same right-hand side on arrays (for the
+linearisation, extra friction effects and the tests' reference); ``simulate_reference``
+in ``tests/physics_reference.py`` integrates one variant with ``scipy.integrate.solve_ivp``
+(DOP853) to check it.
 """
 
 from __future__ import annotations
@@ -57,6 +59,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from swgsim.gear.integrator import StageInputs, integrate, rk4_record
 
 RPM = 2 * np.pi / 60.0
 
@@ -530,23 +534,16 @@ def simulate(params: list[GearParams] | Batch, n_in_rpm, t_out_nm, phi_in0=0.0,
     if fx is not None and fx.n_states:
         x = np.concatenate([x, fx.initial_state((v,), dq0=x[3])])
 
-    def f(tt, xx):
-        return _rhs_effects(tt, xx, bk, w_d, t_load, fx)
     n_win = int(round(window_s * sample_rate_hz))
     n_set = int(round(settle_s * sample_rate_hz))
     h = 1.0 / (sample_rate_hz * substeps)
-    rec = np.empty((x.shape[0], v, n_win))
-    t = 0.0
-    for k in range(n_set + n_win):
-        if k >= n_set:
-            rec[:, :, k - n_set] = x
-        for _ in range(substeps):
-            k1 = f(t, x)
-            k2 = f(t + h / 2, x + h / 2 * k1)
-            k3 = f(t + h / 2, x + h / 2 * k2)
-            k4 = f(t + h, x + h * k3)
-            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            t += h
+    if fx is None:
+        rec = integrate(bk, x, StageInputs(w_d=w_d, t_opposing=t_load), n_set, n_win,
+                        substeps, h)
+    else:
+        rec = rk4_record(lambda j, xx, last=False: _rhs_effects(j * h / 2, xx, bk, w_d, t_load,
+                                                                fx),
+                         x, n_set, n_win, substeps, h)
     ok = bool(np.all(np.isfinite(rec)))
     res = _result(rec[:5], bk, w_d, t_load, sample_rate_hz, ok)
     if fx is not None:  # the delivered torque loses the extra friction

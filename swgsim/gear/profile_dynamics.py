@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from swgsim.gear import profile as pf
-from swgsim.gear.dynamics import Batch, GearParams, SimResult, ke_batch, outputs, rhs, steady_state
+from swgsim.gear.dynamics import Batch, GearParams, SimResult, ke_batch, outputs, steady_state
+from swgsim.gear.integrator import StageInputs, integrate
 from swgsim.gear.modes import rk4_stable
 from swgsim.gear.profile import Profile, max_load_nm
 
@@ -145,7 +146,6 @@ def simulate_profile(params: list[GearParams] | Batch, profile: Profile, phi_in0
     tl_l = pf.load_at(load, th, side="left") if kind == "steps" else None
     g_max = load.max_torque_nm if kind == "gravity" else 0.0
     q0 = load.q0_rad if kind == "gravity" else 0.0
-    inv_j_out = 1.0 / bk.j_out_kgm2
     j_ff = bk.j_in_kgm2 + bk.j_out_kgm2 / bk.ratio**2
     ff_in = j_ff / bk.j_in_kgm2 if feedforward else None
 
@@ -157,37 +157,12 @@ def simulate_profile(params: list[GearParams] | Batch, profile: Profile, phi_in0
             tl0 = tl_h[0] if kind == "steps" else g_max * np.cos(q0 - x[2])
             x = steady_state(bk, w0, np.broadcast_to(tl0, (v,)).astype(float), phi0)
 
-    def f(j, xx, last=False):
-        d = rhs(0.0, xx, bk, wd_h[j], t_opp)
-        if ff_in is not None:
-            d[1] += ff_in * (ad_l[j] if last else ad_h[j])
-        if kind == "steps":
-            d[3] += (tl_l[j] if last else tl_h[j]) * inv_j_out
-        elif kind == "gravity":
-            d[3] += g_max * np.cos(q0 - xx[2]) * inv_j_out
-        return d
-
-    rec = _rk4_record(f, x, n, sub, h)
+    inputs = StageInputs(w_d=np.zeros(v), t_opposing=np.full(v, t_opp), w_d_stage=wd_h,
+                         ff=ff_in, a_d=ad_h, a_d_left=ad_l,
+                         t_load=tl_h, t_load_left=tl_l,
+                         gravity_nm=g_max, q0_rad=q0)
+    rec = integrate(bk, x, inputs, 0, n, sub, h)
     return _profile_result(rec, bk, profile, kind, sample_rate_hz, j_ff if feedforward else None)
-
-
-def _rk4_record(f, x: np.ndarray, n: int, sub: int, h: float) -> np.ndarray:
-    """Classic RK4 from state ``x`` (5, V), ``sub`` steps of ``h`` per recorded sample, n
-    samples from t = 0; ``f(j, x, last)`` is the right-hand side at stage time j h / 2
-    (``last``: the step's end, taking left limits of steps in the inputs)."""
-    rec = np.empty((x.shape[0], x.shape[1], n))
-    for k in range(n):
-        rec[:, :, k] = x
-        if k == n - 1:
-            break
-        for s in range(sub):
-            j = 2 * (k * sub + s)
-            k1 = f(j, x)
-            k2 = f(j + 1, x + h / 2 * k1)
-            k3 = f(j + 1, x + h / 2 * k2)
-            k4 = f(j + 2, x + h * k3, last=True)
-            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return rec
 
 
 def _profile_result(rec, bk, profile, kind, fs, j_ff) -> ProfileResult:
