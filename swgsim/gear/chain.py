@@ -29,6 +29,7 @@ from swgsim.gear.influence import (
     TABLE_SUBDIVISIONS,
     Influence,
     InfluenceSolver,
+    ZoneTable,
     torque_influence,
     zone_table,
 )
@@ -36,6 +37,9 @@ from swgsim.gear.profile import Profile
 from swgsim.gear.sensors import SensorLayout
 
 log = logging.getLogger(__name__)
+
+#: Zone tables a chain keeps (about 0.5-1 MB each), one per (root crack, tip crack) group.
+MAX_TABLES = 32
 
 
 @dataclass
@@ -108,6 +112,7 @@ class SimulationChain:
         self.layout = layout or SensorLayout()
         self.settings = settings or ChainSettings()
         self._influence: dict[tuple | None, Influence] = {}
+        self._tables: dict[tuple, ZoneTable] = {}
         if solver is None:
             solver = InfluenceSolver(TrussModel(geometry, mesh), alpha_tooth_rad)
         self.solver = solver
@@ -128,6 +133,7 @@ class SimulationChain:
         chain.layout, chain.settings = layout, settings or ChainSettings()
         chain.solver = chain.model = chain._rows_lam = None
         chain._influence = dict(influences)
+        chain._tables = {}
         return chain
 
     # ------------------------------------------------------------------ influence
@@ -264,6 +270,15 @@ class SimulationChain:
             raise RuntimeError(f"dynamic simulation of profile {profile} failed: {res.message}")
         return self.signals_batch(variants, res.psi, res.t_out), res
 
+    def _table(self, key: tuple, inf: Influence, c: np.ndarray, hw: float) -> ZoneTable:
+        """The zone table of a group of variants (root crack, tip crack), kept for the
+        chain's next calls (the :data:`MAX_TABLES` latest)."""
+        if key not in self._tables:
+            if len(self._tables) >= MAX_TABLES:
+                del self._tables[next(iter(self._tables))]
+            self._tables[key] = zone_table(inf.g, inf.theta, c, hw)
+        return self._tables[key]
+
     def signals_batch(self, variants: list[ChainParams], psi: np.ndarray, t_out: np.ndarray,
                       chunk: int = 64) -> np.ndarray:
         """Signals of many variants; the same as :meth:`signals_from_motion` per variant.
@@ -294,12 +309,12 @@ class SimulationChain:
                 p.tip_crack_deg, p.tip_crack_severity, p.crack_width_deg)
             groups.setdefault((p.root_crack_key(), tip), []).append(k)
         hw = np.deg2rad(self.settings.contact_half_width_deg)
-        for members in groups.values():
+        for key, members in groups.items():
             p0 = variants[members[0]]
             inf = self.influence(p0)
             c = self._tooth_factors(p0)
             # a table pays when the group has more time steps than the table has points
-            table = (zone_table(inf.g, inf.theta, c, hw)
+            table = (self._table((*key, hw), inf, c, hw)
                      if len(members) * n_t > 2 * inf.theta.size * TABLE_SUBDIVISIONS else None)
             for start in range(0, len(members), chunk):
                 idx = np.asarray(members[start:start + chunk])

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
@@ -324,17 +325,33 @@ class ZoneTable:
         -------
         ndarray, shape (5, n_t)
         """
-        m = self.values.shape[0] - 1
-        scale = m / (2 * np.pi)
-        sa = np.broadcast_to(np.asarray(share_a, float), psi.shape)[:, None]
-        acc = None
-        for centre, share in ((psi, sa), (psi + np.pi, 2.0 - sa)):
+        psi = np.ascontiguousarray(psi, dtype=float)
+        sa = np.ascontiguousarray(np.broadcast_to(np.asarray(share_a, float), psi.shape))
+        out = np.empty((5, psi.size))
+        _lookup(self.values, psi, sa, out)
+        return out
+
+
+@numba.njit(cache=True)
+def _lookup(values, psi, share_a, out):
+    """:meth:`ZoneTable.torque_influence` sample by sample, compiled: the two zones' rows
+    interpolated linearly and added, the five signals divided by the weight (the same
+    operations in the same order as on arrays, so the same numbers)."""
+    m = values.shape[0] - 1
+    scale = m / (2 * np.pi)
+    acc = np.empty(6)
+    for t in range(psi.size):
+        for zone in range(2):
+            centre = psi[t] if zone == 0 else psi[t] + np.pi
+            share = share_a[t] if zone == 0 else 2.0 - share_a[t]
             u = np.mod(centre, 2 * np.pi) * scale
-            i = np.minimum(u.astype(np.int64), m - 1)
-            f = (u - i)[:, None]
-            z = (self.values[i] * (1.0 - f) + self.values[i + 1] * f) * share  # (n_t, 6)
-            acc = z if acc is None else acc + z
-        return (acc[:, :5] / acc[:, 5:]).T
+            i = min(int(u), m - 1)
+            f = u - i
+            for k in range(6):
+                z = (values[i, k] * (1.0 - f) + values[i + 1, k] * f) * share
+                acc[k] = z if zone == 0 else acc[k] + z
+        for k in range(5):
+            out[k, t] = acc[k] / acc[5]
 
 
 #: Grid points per node spacing of :func:`zone_table`.

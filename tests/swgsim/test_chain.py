@@ -7,7 +7,7 @@ import pytest
 from physics_reference import signals_naive, steady_motion
 
 from swgsim.gear import dynamics as dy
-from swgsim.gear.chain import ChainSettings, SimulationChain
+from swgsim.gear.chain import MAX_TABLES, ChainSettings, SimulationChain
 from swgsim.gear.faults import FAULTS, ChainParams, apply_fault
 from swgsim.gear.sensors import SensorLayout
 
@@ -144,3 +144,18 @@ def test_table_iv_b1_factor_shows_in_the_simulated_output(chain, healthy):
     d_psi = np.mean(res.psi[1] - res.psi[0])
     assert d_psi == pytest.approx(-(wind_b - wind_a), rel=5e-3)
     np.testing.assert_allclose(res.t_out.mean(axis=1), T_OUT, atol=1e-6)
+
+
+def test_zone_tables_kept_per_group(chain, healthy):
+    """The chain keeps one zone table per (root crack, tip crack) group: signals of a
+    tip-cracked gear after another crack's table was kept equal a fresh chain's, and no
+    more than MAX_TABLES are kept."""
+    psi = np.linspace(0.0, 40.0, 30_000)[None, :]  # enough steps for a table
+    t_out = np.full_like(psi, T_OUT)
+    a = apply_fault(healthy, "tip_tooth_crack", 0.5, 54.0)
+    b = apply_fault(healthy, "tip_tooth_crack", 0.5, 200.0)
+    fresh = SimulationChain(chain.layout, settings=chain.settings, solver=chain.solver)
+    chain.signals_batch([a], psi, t_out)
+    np.testing.assert_array_equal(chain.signals_batch([b], psi, t_out),
+                                  fresh.signals_batch([b], psi, t_out))
+    assert 2 <= len(chain._tables) <= MAX_TABLES

@@ -160,6 +160,22 @@ def test_influence_matches_naive_solver(solver):
     assert np.abs(fast - naive).max() <= 1e-9 * np.abs(naive).max()
 
 
+@pytest.mark.parametrize("crack, tol", [(0.0, 5e-8), (0.8, 2e-7)])
+def test_zone_table_matches_the_direct_sum(solver, crack, tol):
+    """The tabulated torque influence (compiled look-up, both zones, eccentric load share)
+    against the direct sum over the nodes: within 5e-8 of the signal range on a healthy
+    gear (64 grid points per node spacing; measured 4.1e-8), within 2e-7 with a tip
+    crack's sharp step in the tooth factors (measured 1.1e-7)."""
+    i = solver.healthy(SensorLayout())
+    c = 1.0 - crack * (np.abs(np.angle(np.exp(1j * (i.theta - 1.0)))) < 0.05)
+    hw = np.deg2rad(20.0)
+    psi = np.random.default_rng(3).uniform(-40.0, 40.0, 2000)
+    share = 1.0 + 0.05 * np.cos(psi - 0.4)
+    direct = inf.torque_influence(psi, i.g, i.theta, c, hw, share)
+    table = inf.zone_table(i.g, i.theta, c, hw).torque_influence(psi, share)
+    assert 0 < np.abs(table - direct).max() <= tol * np.ptp(direct)
+
+
 def test_woodbury_root_crack_matches_refactorised_solver(solver):
     lay = SensorLayout()
     psi = np.array([0.05, 0.1, 0.15, 3.2])
