@@ -429,10 +429,13 @@ class GearMonitor:
         opi = self.normal.index(points)
         fr = self.track_friction(feats, points, hours, cond, opi, friction_start)
         u = self.rng.uniform(size=(len(feats), 2))
-        parts, i0, s = [], 0, start
+        parts, i0, s, ev = [], 0, start, None
+        score, lp, ref = self._scores(feats, points, cond, fr, opi)
         while True:  # one pass per recommissioned point (its windows after it change)
             w = slice(i0, None)
-            score, lp, ref = self._scores(feats[w], points[w], cond[w], fr[w], opi[w])
+            if ev is not None:  # only the changed point's windows score anew
+                score, lp, ref = self._rescore(score, lp, ref, ev[0] + 1, ev[1], feats[w],
+                                               points[w], cond[w], fr[w], opi[w])
             out = self.normal.outside(points[w], cond[w], fr[w], opi[w])
             p = self.p_values(score, opi[w], u[w], out)
             cus, alarms = run_cusums(judged_bets(p, out, self.rule), self.h, s, latch)
@@ -444,6 +447,18 @@ class GearMonitor:
             i0, s = i0 + n, cus[n - 1]
             if ev is None or i0 == len(feats):
                 return Trace.concat(parts)
+
+    def _rescore(self, score, lp, ref, n: int, k: int, feats, points, cond, fr, opi):
+        """The scores of the windows after the first ``n`` of a pass, where point ``k`` was
+        recommissioned after window ``n − 1``: its windows scored anew, every other
+        point's kept (a point's normal behaviour is its own row; the same numbers as
+        scoring them all again). ``feats`` .. ``opi``: the windows after the first n."""
+        score, lp, ref = score[n:].copy(), lp[n:].copy(), ref[n:].copy()
+        m = np.flatnonzero(opi == k)
+        if m.size:
+            score[m], lp[m], ref[m] = self._scores(feats[m], points[m], cond[m], fr[m],
+                                                   opi[m])
+        return score, lp, ref
 
     def _learn(self, opi: np.ndarray, out: np.ndarray, ref: np.ndarray, torque: np.ndarray,
                alarms: list[int], latch: bool) -> tuple[int, int, bool] | None:
