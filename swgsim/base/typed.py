@@ -250,9 +250,13 @@ def _hints(schema: type) -> dict[str, Any]:
 
 def _check_range(value: Any, rng: Range, where: str, nullable: bool) -> None:
     """Refuse a value outside its field's :data:`RANGE` in one line naming the full key,
-    the value and the range: ``selection.max_rel_se=-1: out of range; allowed: > 0``."""
+    the value and the range: ``selection.max_rel_se=-1: out of range; allowed: > 0``; NaN
+    and infinity as :func:`check_finite` does."""
     if (value is None and nullable) or rng.contains(value):
         return
+    if (isinstance(value, numbers.Real) and not isinstance(value, bool)
+            and not math.isfinite(value)):
+        raise ValueError(f"{where} must be a finite number, got {value}")
     shown = repr(value) if isinstance(value, str) else value
     raise ValueError(f"{where}={shown}: out of range; allowed: {rng.text(nullable)}")
 
@@ -273,9 +277,10 @@ def check_ranges(obj: Any, where: str = "") -> None:
     ------
     ValueError
         For the first field outside its range, in field order, e.g.
-        ``max_rel_se=-1: out of range; allowed: > 0``: not a finite number, outside the
-        bounds, not odd where odd integers are asked for, or None where its type does not
-        admit it.
+        ``max_rel_se=-1: out of range; allowed: > 0``: not a number, outside the bounds,
+        not odd where odd integers are asked for, or None where its type does not admit
+        it; NaN and infinity as :func:`check_finite` words them
+        (``max_rel_se must be a finite number, got nan``).
     """
     hints = _hints(type(obj))
     for f in dataclasses.fields(obj):
