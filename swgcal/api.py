@@ -18,13 +18,13 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from swgsim.base.typed import build, complete, plain
 from swgsim.datasets.joint_log import JointLog
 from swgsim.files.inputs import check_input_file
 from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
 from .friction.data import REQUIRED_COLUMNS, FrictionRecording, read_csv_header
 from .loop import CalibrationResult, Problem, SelectionConfig
-from .options import build, plain
 from .report import render_report as render_parts
 from .report import simulation_files
 
@@ -163,8 +163,9 @@ def options_from_config(kind: str, given: Mapping[str, Any], measured: Any = Non
                 raise ValueError(f"{changed[0]} applies to a {KIND_LABELS[other]}; "
                                  f"{measured} is a {KIND_LABELS[kind]}, whose calibration "
                                  f"takes none of {names}")
-    selection = build(SelectionConfig, given.get("selection"), "selection.")
-    opts = build(own, {k: v for k, v in given.items() if k in own_keys})
+    picked = complete(given.get("selection") or {}, SelectionConfig, "selection")
+    selection = build(picked, SelectionConfig, "selection")
+    opts = build(complete({k: v for k, v in given.items() if k in own_keys}, own, ""), own, "")
     kwargs = opts.problem_kwargs()
     if selection.candidates is not None:
         kwargs["candidates"] = list(selection.candidates)

@@ -73,9 +73,10 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.base.typed import allowed, check_ranges
+
 from .core import FitResult, Term, fit_terms, with_uncertainty
 from .diagnose import Diagnosis, Probe, diagnose
-from .options import check_ranges, ranged
 from .split import HeldOutSplit
 
 log = logging.getLogger(__name__)
@@ -127,7 +128,7 @@ class Problem:
 @dataclass(frozen=True)
 class SelectionConfig:
     """Settings of the selection loop. Each numeric setting declares its allowed range
-    once (:func:`~swgcal.options.ranged`), checked on construction; apps read the
+    once (:func:`swgsim.base.typed.allowed`), checked on construction; apps read the
     defaults and ranges from here.
 
     Attributes
@@ -162,17 +163,17 @@ class SelectionConfig:
         RSS) are tried jointly (0 or 1: no look-ahead).
     """
 
-    min_rel_improvement: float = ranged(0.0, 0, 1, hi_open=True)
-    max_delta_bic: float = ranged(-10.0, hi=0)
-    min_heldout_evidence: float = ranged(10.0, 0)
-    max_iter: int = ranged(12, 0)
+    min_rel_improvement: float = field(default=0.0, metadata=allowed(0, 1, hi_open=True))
+    max_delta_bic: float = field(default=-10.0, metadata=allowed(None, 0))
+    min_heldout_evidence: float = field(default=10.0, metadata=allowed(0, None))
+    max_iter: int = field(default=12, metadata=allowed(0, None))
     candidates: Sequence[str] | None = None
-    structure_threshold: float = ranged(0.03, 0, 1)
-    max_rel_se: float = ranged(0.5, 0, lo_open=True)
-    max_abs_corr: float = ranged(0.98, 0, 1)
-    max_starts: int = ranged(3, 1, 50)
+    structure_threshold: float = field(default=0.03, metadata=allowed(0, 1))
+    max_rel_se: float = field(default=0.5, metadata=allowed(0, None, lo_open=True))
+    max_abs_corr: float = field(default=0.98, metadata=allowed(0, 1))
+    max_starts: int = field(default=3, metadata=allowed(1, 50))
     effective_bic: bool = True
-    pair_candidates: int = ranged(4, 0, 50)
+    pair_candidates: int = field(default=4, metadata=allowed(0, 50))
 
     def __post_init__(self) -> None:
         check_ranges(self)

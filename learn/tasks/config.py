@@ -3,7 +3,6 @@ config into the dataclasses that travel on (:func:`typed_app`)."""
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 
@@ -36,9 +35,3 @@ def typed_app(cfg: Any) -> Any:
     from omegaconf import DictConfig, OmegaConf
 
     return OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
-
-
-def plain(app: Any) -> dict:
-    """A typed config (:func:`typed_app`) as nested dicts and lists: the resolved config
-    that a run logs."""
-    return dataclasses.asdict(app)

@@ -41,12 +41,12 @@ from learn.reports.monitor_report import (
     targets,
     write_table,
 )
-from learn.tasks.config import plain, typed_app
+from learn.tasks.config import typed_app
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
 from swgsim.base.registry import travelling
-from swgsim.base.typed import allowed
+from swgsim.base.typed import allowed, plain
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.plan import DatasetPlan, plan
 from swgsim.files import ownership

@@ -10,7 +10,8 @@ import numpy as np
 
 from learn.inputs.features import extract_features
 from learn.studies.protocols import ProtocolResult, class_labels, evaluate, window_groups
-from learn.tasks.config import plain, typed_app
+from learn.tasks.config import typed_app
+from swgsim.base.typed import plain
 from swgsim.datasets.schema import read_manifest
 
 log = logging.getLogger(__name__)

@@ -17,9 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from learn.studies.transfer import TransferConfig, check_config, run_comparisons
-from learn.tasks.config import plain, typed_app
+from learn.tasks.config import typed_app
 from learn.tasks.monitor_evaluation import part_key
 from swgsim.base.lazy import lazy_module
+from swgsim.base.typed import plain
 from swgsim.datasets.schema import read_manifest
 from swgsim.files.ownership import atomic_write_json, write_owned
 

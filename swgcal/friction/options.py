@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..options import check_ranges, ranged
+from swgsim.base.typed import allowed, check_ranges
 
 __all__ = ["BaseModelOptions", "SplitOptions", "FrictionOptions"]
 
@@ -27,8 +27,8 @@ class BaseModelOptions:
         Fraction of the 99th percentile of ``|q̇|`` [-].
     """
 
-    v_s: float | None = ranged(None, 0, lo_open=True)
-    v_s_rel: float = ranged(0.01, 0, 1, lo_open=True)
+    v_s: float | None = field(default=None, metadata=allowed(0, None, "rad/s", lo_open=True))
+    v_s_rel: float = field(default=0.01, metadata=allowed(0, 1, lo_open=True))
 
     def __post_init__(self) -> None:
         check_ranges(self)
@@ -51,10 +51,10 @@ class SplitOptions:
         Samples dropped at role boundaries [blocks].
     """
 
-    n_blocks: int = ranged(10, 3)
+    n_blocks: int = field(default=10, metadata=allowed(3, None))
     validation_blocks: tuple[int, ...] = (3, 7)
     test_blocks: tuple[int, ...] = (5, 9)
-    guard_frac: float = ranged(0.05, 0, 0.45)
+    guard_frac: float = field(default=0.05, metadata=allowed(0, 0.45))
 
     def __post_init__(self) -> None:
         check_ranges(self)
@@ -82,8 +82,8 @@ class FrictionOptions:
     """
 
     base_model: BaseModelOptions = field(default_factory=BaseModelOptions)
-    gear_ratio: float | None = ranged(None, 1, 10_000, lo_open=True)
-    accel_window: int = ranged(21, 5, 1001, odd=True)
+    gear_ratio: float | None = field(default=None, metadata=allowed(1, 10_000, lo_open=True))
+    accel_window: int = field(default=21, metadata=allowed(5, 1001, "samples", odd=True))
     split: SplitOptions = field(default_factory=SplitOptions)
 
     def __post_init__(self) -> None:

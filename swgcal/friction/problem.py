@@ -14,8 +14,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from swgsim.base.typed import build, complete
+
 from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
-from ..options import build
 from ..split import time_block_split
 from .data import FrictionRecording, load_friction_csv
 from .library import FRICTION_LIBRARY, PaperLaw
@@ -76,11 +77,11 @@ def friction_problem(
         An option outside its range (named by its app key, e.g. ``split.n_blocks``),
         an unknown candidate key, or too few samples for the held-out blocks.
     """
-    build(FrictionOptions, {"base_model": {"v_s": v_s, "v_s_rel": v_s_rel},
-                            "gear_ratio": gear_ratio,
-                            "split": {"n_blocks": n_blocks, "guard_frac": guard_frac,
-                                      "validation_blocks": list(validation_blocks),
-                                      "test_blocks": list(test_blocks)}})
+    given = {"base_model": {"v_s": v_s, "v_s_rel": v_s_rel}, "gear_ratio": gear_ratio,
+             "split": {"n_blocks": n_blocks, "guard_frac": guard_frac,
+                       "validation_blocks": list(validation_blocks),
+                       "test_blocks": list(test_blocks)}}
+    build(complete(given, FrictionOptions, ""), FrictionOptions, "")
     sig = rec.signals(v_s=v_s, v_s_rel=v_s_rel, gear_ratio=gear_ratio)
     keys = list(candidates) if candidates is not None else list(FRICTION_LIBRARY)
     unknown = [k for k in keys if k not in FRICTION_LIBRARY]
@@ -138,7 +139,7 @@ def build_problem(measured: str | Path | FrictionRecording, *,
     if unknown:
         raise TypeError(f"unknown friction problem options {unknown}; allowed: "
                         f"{sorted(allowed + ['accel_window'])}")
-    build(FrictionOptions, {"accel_window": accel_window})
+    build(complete({"accel_window": accel_window}, FrictionOptions, ""), FrictionOptions, "")
     rec = (measured if isinstance(measured, FrictionRecording)
            else load_friction_csv(measured, accel_window=accel_window))
     return friction_problem(rec, **options)

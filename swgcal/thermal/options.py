@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..options import check_ranges, ranged
+from swgsim.base.typed import allowed, check_ranges
 
 __all__ = ["ThermalKindOptions", "ThermalOptions", "TORQUE_PER_AMP_NM", "GEAR_EFFICIENCY",
            "STANDSTILL_RAD_S"]
@@ -43,10 +43,12 @@ class ThermalOptions:
         [choice]; with one, the part before the first gap is fitted.
     """
 
-    joint: int = ranged(1, 0, 5)
-    torque_per_amp_nm: float = ranged(TORQUE_PER_AMP_NM, 0, lo_open=True)
-    gear_efficiency: float = ranged(GEAR_EFFICIENCY, 0, 1, lo_open=True, hi_open=True)
-    fit_frac: float = ranged(0.6, 0, 1, lo_open=True, hi_open=True)
+    joint: int = field(default=1, metadata=allowed(0, 5))
+    torque_per_amp_nm: float = field(default=TORQUE_PER_AMP_NM,
+                                     metadata=allowed(0, None, "N m/A", lo_open=True))
+    gear_efficiency: float = field(default=GEAR_EFFICIENCY,
+                                   metadata=allowed(0, 1, lo_open=True, hi_open=True))
+    fit_frac: float = field(default=0.6, metadata=allowed(0, 1, lo_open=True, hi_open=True))
 
     def __post_init__(self) -> None:
         check_ranges(self)

@@ -24,12 +24,12 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.base.typed import build, complete
 from swgsim.datasets.joint_log import JOINTS, JointLog, read_joint_log
 
 from ..core import fit_terms
 from ..diagnose import BinnedProbe, PeriodicProbe, Probe, TrendProbe, diagnose
 from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
-from ..options import build
 from ..split import HeldOutSplit
 from .library import THERMAL_LIBRARY, FirstOrderJoint, first_order_lag
 from .options import STANDSTILL_RAD_S, ThermalKindOptions, ThermalOptions
@@ -213,9 +213,9 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
         unknown candidate, too few
         readings to fit, validate or test.
     """
-    build(ThermalKindOptions, {"thermal": {
-        "joint": joint, "torque_per_amp_nm": torque_per_amp_nm,
-        "gear_efficiency": gear_efficiency, "fit_frac": fit_frac}})
+    given = {"thermal": {"joint": joint, "torque_per_amp_nm": torque_per_amp_nm,
+                         "gear_efficiency": gear_efficiency, "fit_frac": fit_frac}}
+    build(complete(given, ThermalKindOptions, ""), ThermalKindOptions, "")
     keys = list(candidates) if candidates is not None else list(THERMAL_LIBRARY)
     unknown = [k for k in keys if k not in THERMAL_LIBRARY]
     if unknown:

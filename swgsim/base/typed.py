@@ -4,7 +4,11 @@ A config travels as a dataclass; plain data (YAML, JSON, a notebook's dict) ente
 :func:`complete` (every unknown, missing or mistyped key refused with its full name, e.g.
 ``dataset.chain.windows_s: unknown key; allowed: sample_rate_hz, window_s, ...``) and
 :func:`build` (the typed object). A field may declare its allowed range in its metadata
-(:func:`allowed`), checked with the keys. :func:`check_finite` refuses NaN and infinity
+(:func:`allowed`: bounds, open or closed, odd integers; None where the field's type admits
+it), checked with the keys and, by :func:`check_ranges` in ``__post_init__``, on
+construction, in one line naming the full key, the value and the range, e.g.
+``selection.max_rel_se=-1: out of range; allowed: > 0``. :func:`plain` is the way back
+from a typed config to plain data. :func:`check_finite` refuses NaN and infinity
 anywhere in a config tree: every comparison with NaN is false, so NaN passes a range
 check written ``if v < lo or v > hi: raise``, and any key that has no range check.
 
@@ -14,13 +18,16 @@ define ``check(self, where)`` with its own rules, the ones across its fields inc
 then runs the parts' range metadata and ``check`` methods, each part's after its
 children's, so that a part's rule may rely on its parts being valid.
 
-Used by every schema of the project: the data set's (:mod:`swgsim.datasets.config`) and
-the apps' (``swgcli.schema``).
+Used by every schema of the project: the data set's (:mod:`swgsim.datasets.config`), the
+calibration's options (:mod:`swgcal.loop`, ``swgcal.friction.options``, ...) and the apps'
+(``swgcli.schema``).
 """
 
 from __future__ import annotations
 
+import collections.abc
 import dataclasses
+import functools
 import math
 import numbers
 import types
@@ -30,19 +37,20 @@ from typing import Any, Union
 
 import numpy as np
 
-__all__ = ["MISSING", "NONFINITE", "RANGE", "allowed", "build", "check_finite", "check_keys",
-           "check_range", "check_tree", "complete"]
+__all__ = ["MISSING", "NONFINITE", "RANGE", "Range", "allowed", "build", "check_finite",
+           "check_keys", "check_range", "check_ranges", "check_tree", "complete", "plain"]
 
 MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
 
 _SCALARS = {int: "an integer", float: "a number", str: "a string", bool: "true or false"}
+_LISTS = (list, tuple, collections.abc.Sequence)  # origins of the types held as lists
 
 
 def _describe(tp) -> str:
     origin = typing.get_origin(tp)
     if tp in _SCALARS:
         return _SCALARS[tp]
-    if origin in (list, tuple):
+    if origin in _LISTS:
         return "a list"
     if origin in (dict, Mapping) or dataclasses.is_dataclass(tp):
         return "a mapping"
@@ -62,16 +70,30 @@ def _default(schema: type, name: str) -> Any:
         value = f.default
     else:
         value = MISSING
-    return _plain(value)
+    return plain(value)
 
 
-def _plain(value: Any) -> Any:
-    if dataclasses.is_dataclass(value):
-        return dataclasses.asdict(value)
-    if isinstance(value, list):
-        return [_plain(v) for v in value]
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
+def plain(value: Any) -> Any:
+    """A typed config as plain data, as YAML, an app's config or a run's log holds it.
+
+    Parameters
+    ----------
+    value : Any
+        A dataclass instance (e.g. :class:`swgcal.SelectionConfig`), a mapping, a list,
+        a tuple or a scalar.
+
+    Returns
+    -------
+    Any
+        Dataclasses and mappings as dicts (field order), lists and tuples as lists,
+        recursively; anything else as it is.
+    """
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, Mapping):
+        return {k: plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
     return value
 
 
@@ -94,7 +116,7 @@ def _value(value: Any, tp, where: str, fill: bool) -> Any:
             raise ValueError(f"{where}: must be a mapping of {', '.join(_fields(tp))}, "
                              f"got {value!r}")
         return _mapping(value, tp, where, fill)
-    if origin in (list, tuple):
+    if origin in _LISTS:
         if not isinstance(value, (list, tuple)):
             raise ValueError(f"{where}: must be a list, got {value!r}")
         (item,) = typing.get_args(tp)[:1] or (Any,)
@@ -106,10 +128,10 @@ def _value(value: Any, tp, where: str, fill: bool) -> Any:
         return {k: _value(v, item, f"{where}.{k}", fill) for k, v in value.items()}
     if tp is bool:
         ok = isinstance(value, bool)
-    elif tp is int:
-        ok = isinstance(value, int) and not isinstance(value, bool)
+    elif tp is int:  # numpy's integers and floats too, from a program
+        ok = isinstance(value, numbers.Integral) and not isinstance(value, bool)
     elif tp is float:
-        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
     elif tp is str:
         ok = isinstance(value, str)
     else:
@@ -119,40 +141,153 @@ def _value(value: Any, tp, where: str, fill: bool) -> Any:
     return value
 
 
-#: Key of a field's metadata holding its allowed range ``(lo, hi, what)`` (None: an open
-#: end), checked with the keys (:func:`check_keys`, :func:`complete`), so before any work:
+#: Key of a field's metadata holding its allowed range, a :class:`Range`, checked with the
+#: keys (:func:`check_keys`, :func:`complete`), so before any work, and on a typed config
+#: (:func:`check_ranges` in ``__post_init__``, :func:`check_tree`):
 #: ``n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))``.
 RANGE = "range"
 
 
-def allowed(lo: float | None, hi: float | None, what: str = "") -> dict[str, tuple]:
+@dataclasses.dataclass(frozen=True)
+class Range:
+    """Allowed values of a number field (:func:`allowed`): finite, within the bounds.
+
+    Attributes
+    ----------
+    lo, hi : float or None
+        Bounds; None leaves that end open (any finite number beyond).
+    what : str
+        What the value is or its unit, for the message (e.g. ``"worker processes"``).
+    lo_open, hi_open : bool
+        Whether the bound itself is excluded.
+    odd : bool
+        Only odd integers (e.g. a filter's window length).
+
+    Notes
+    -----
+    None is allowed where the field's type admits it (``float | None``), nowhere else.
+    """
+
+    lo: float | None = None
+    hi: float | None = None
+    what: str = ""
+    lo_open: bool = False
+    hi_open: bool = False
+    odd: bool = False
+
+    def contains(self, value: Any) -> bool:
+        """Whether ``value`` is an allowed number (booleans, None, NaN and infinities
+        are not)."""
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            return False
+        v = float(value)
+        if not math.isfinite(v) or (self.odd and not (v.is_integer() and int(v) % 2 == 1)):
+            return False
+        above = self.lo is None or (v > self.lo if self.lo_open else v >= self.lo)
+        below = self.hi is None or (v < self.hi if self.hi_open else v <= self.hi)
+        return above and below
+
+    def text(self, nullable: bool = False) -> str:
+        """The allowed values in words, e.g. ``"(0, 1]"``, ``"> 0 or null"``, ``"odd
+        integers in [5, 1001]"``, ``">= 1 (worker processes)"``."""
+        lo, hi = self.lo, self.hi
+        if lo is not None and hi is not None:
+            rng = f"{'(' if self.lo_open else '['}{lo:g}, {hi:g}{')' if self.hi_open else ']'}"
+        elif lo is not None:
+            rng = f"{'>' if self.lo_open else '>='} {lo:g}"
+        elif hi is not None:
+            rng = f"{'<' if self.hi_open else '<='} {hi:g}"
+        else:
+            rng = "" if self.odd else "finite numbers"
+        if self.odd:
+            rng = f"odd integers{' in ' if rng.startswith(('[', '(')) else ' '}{rng}".rstrip()
+        return (f"{rng}{' or null' if nullable else ''}"
+                f"{' (' + self.what + ')' if self.what else ''}")
+
+
+def allowed(lo: float | None, hi: float | None, what: str = "", *, lo_open: bool = False,
+            hi_open: bool = False, odd: bool = False) -> dict[str, Range]:
     """Field metadata declaring the allowed range of a number (:data:`RANGE`).
 
     Parameters
     ----------
     lo, hi : float or None
-        Inclusive bounds; None leaves that end open.
+        Bounds, inclusive unless ``lo_open``/``hi_open``; None leaves that end open.
     what : str
-        What the value is, for the message (e.g. ``"worker processes"``).
+        What the value is or its unit, for the message (e.g. ``"worker processes"``).
+    lo_open, hi_open : bool
+        Exclude the bound itself.
+    odd : bool
+        Only odd integers.
 
     Returns
     -------
     dict
-        ``{RANGE: (lo, hi, what)}``, for ``dataclasses.field(metadata=...)``.
+        ``{RANGE: Range(...)}``, for ``dataclasses.field(metadata=...)``; None is allowed
+        where the field's type admits it.
     """
-    return {RANGE: (lo, hi, what)}
+    return {RANGE: Range(lo, hi, what, lo_open, hi_open, odd)}
 
 
-def _check_range(value: Any, spec: tuple, where: str) -> None:
-    """Refuse a number outside its field's :data:`RANGE`, naming the key and the range."""
-    lo, hi, what = spec
-    if value is None or isinstance(value, bool) or not isinstance(value, numbers.Real):
+def _nullable(tp: Any) -> bool:
+    """Whether a field type admits None (``X | None``, ``Optional[X]``, ``Any``)."""
+    if tp is Any:
+        return True
+    if isinstance(tp, str):  # an annotation left unresolved
+        return "None" in tp or "Optional" in tp
+    return (typing.get_origin(tp) in (Union, types.UnionType)
+            and type(None) in typing.get_args(tp))
+
+
+@functools.cache
+def _hints(schema: type) -> dict[str, Any]:
+    """Field types of a dataclass, resolved where they can be (else the annotations)."""
+    try:
+        return _fields(schema)
+    except (NameError, TypeError):
+        return {f.name: f.type for f in dataclasses.fields(schema)}
+
+
+def _check_range(value: Any, rng: Range, where: str, nullable: bool) -> None:
+    """Refuse a value outside its field's :data:`RANGE` in one line naming the full key,
+    the value and the range: ``selection.max_rel_se=-1: out of range; allowed: > 0``; NaN
+    and infinity as :func:`check_finite` does."""
+    if (value is None and nullable) or rng.contains(value):
         return
-    if (lo is not None and value < lo) or (hi is not None and value > hi):
-        rng = (f"[{lo:g}, {hi:g}]" if lo is not None and hi is not None
-               else f">= {lo:g}" if lo is not None else f"<= {hi:g}")
-        raise ValueError(f"{where}={value}: out of range; allowed: {rng}"
-                         f"{' (' + what + ')' if what else ''}")
+    if (isinstance(value, numbers.Real) and not isinstance(value, bool)
+            and not math.isfinite(value)):
+        raise ValueError(f"{where} must be a finite number, got {value}")
+    shown = repr(value) if isinstance(value, str) else value
+    raise ValueError(f"{where}={shown}: out of range; allowed: {rng.text(nullable)}")
+
+
+def check_ranges(obj: Any, where: str = "") -> None:
+    """Refuse a field of a dataclass instance outside its declared range (:func:`allowed`).
+
+    Called from a dataclass's ``__post_init__``, it refuses a bad value on construction,
+    before any work; its parts (nested dataclasses) check their own fields.
+
+    Parameters
+    ----------
+    obj : dataclass instance
+    where : str
+        Full name of ``obj`` for the message (``""``: the field's name alone).
+
+    Raises
+    ------
+    ValueError
+        For the first field outside its range, in field order, e.g.
+        ``max_rel_se=-1: out of range; allowed: > 0``: not a number, outside the bounds,
+        not odd where odd integers are asked for, or None where its type does not admit
+        it; NaN and infinity as :func:`check_finite` words them
+        (``max_rel_se must be a finite number, got nan``).
+    """
+    hints = _hints(type(obj))
+    for f in dataclasses.fields(obj):
+        if RANGE in f.metadata:
+            _check_range(getattr(obj, f.name), f.metadata[RANGE],
+                         f"{where}.{f.name}" if where else f.name,
+                         _nullable(hints.get(f.name, Any)))
 
 
 def _mapping(cfg: Mapping[str, Any], schema: type, where: str, fill: bool) -> dict:
@@ -168,7 +303,7 @@ def _mapping(cfg: Mapping[str, Any], schema: type, where: str, fill: bool) -> di
         if name in cfg:
             out[name] = _value(cfg[name], tp, f"{pre}{name}", fill)
             if name in ranges:
-                _check_range(out[name], ranges[name], f"{pre}{name}")
+                _check_range(out[name], ranges[name], f"{pre}{name}", _nullable(tp))
         elif fill:
             default = _default(schema, name)
             if isinstance(default, str) and default == MISSING:
@@ -223,27 +358,60 @@ def complete(cfg: Mapping[str, Any], schema: type, where: str) -> dict:
     return _mapping(cfg, schema, where, fill=True)
 
 
-def build(value: Any, tp: Any) -> Any:
+def build(value: Any, tp: Any, where: str | None = None) -> Any:
     """A typed object of schema ``tp`` from a checked plain value (:func:`complete`).
 
-    Dataclasses are built from their mappings, recursively through lists, dicts and
-    optional fields; fields typed ``Any`` keep their plain value.
+    Dataclasses are built from their mappings, recursively through lists, tuples, dicts and
+    optional fields; fields typed ``Any`` keep their plain value; ``tuple`` and
+    ``Sequence`` fields become tuples, ``float`` fields floats.
+
+    Parameters
+    ----------
+    value : Any
+        Plain, complete config (:func:`complete`).
+    tp : type
+        Its schema, e.g. :class:`swgcal.SelectionConfig`.
+    where : str, optional
+        Full name of ``value`` (``""`` for a root config): given, the message of a
+        ``ValueError`` that a dataclass raises on construction (its ``__post_init__``
+        checks) starts with the full name of that dataclass, e.g.
+        ``split.validation_blocks must list blocks in [-10, 9], got [12]``.
+
+    Returns
+    -------
+    Any
+        The typed object.
+
+    Raises
+    ------
+    ValueError
+        What a dataclass refuses on construction, prefixed as above.
     """
     origin = typing.get_origin(tp)
     if tp is Any or value is None:
         return value
     if origin in (Union, types.UnionType):
         inner = [a for a in typing.get_args(tp) if a is not type(None)]
-        return build(value, inner[0])
+        return build(value, inner[0], where)
     if dataclasses.is_dataclass(tp):
         hints = _fields(tp)
-        return tp(**{k: build(v, hints[k]) for k, v in value.items()})
-    if origin in (list, tuple):
+        sub = (lambda k: None) if where is None else (lambda k: f"{where}.{k}" if where else k)
+        kwargs = {k: build(v, hints[k], sub(k)) for k, v in value.items()}
+        if not where:
+            return tp(**kwargs)
+        try:
+            return tp(**kwargs)
+        except ValueError as e:
+            raise ValueError(f"{where}.{e}") from None
+    if origin in _LISTS:
         (item,) = typing.get_args(tp)[:1] or (Any,)
-        return [build(v, item) for v in value]
+        items = [build(v, item, None if where is None else f"{where}[{i}]")
+                 for i, v in enumerate(value)]
+        return items if origin is list else tuple(items)
     if origin is dict:
         _, item = typing.get_args(tp)
-        return {k: build(v, item) for k, v in value.items()}
+        return {k: build(v, item, None if where is None else f"{where}.{k}")
+                for k, v in value.items()}
     if tp is float:
         return float(value)
     return value
@@ -350,11 +518,13 @@ def check_range(value: Any, lo: float, hi: float, key: str, unit: str = "", *,
 def _check_parts(obj: Any, where: str) -> None:
     """Range metadata and ``check(where)`` of every dataclass in ``obj``, children first."""
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        hints = _hints(type(obj))
         for f in dataclasses.fields(obj):
             value = getattr(obj, f.name)
             _check_parts(value, f"{where}.{f.name}")
             if RANGE in f.metadata:
-                _check_range(value, f.metadata[RANGE], f"{where}.{f.name}")
+                _check_range(value, f.metadata[RANGE], f"{where}.{f.name}",
+                             _nullable(hints.get(f.name, Any)))
         hook = getattr(obj, "check", None)
         if callable(hook):
             hook(where)
