@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from learn.monitor.trees import CompiledTrees
+
 HEALTHY = "healthy"
 
 
@@ -63,21 +65,12 @@ class DiagnosisModel:
     window_s: float = 0.0
 
     def log_proba(self, x: np.ndarray) -> np.ndarray:
-        """ln P(class | window), shape (n, n_classes), columns in ``classes`` order.
-
-        A few windows at a time through the flat-array walk of the trees
-        (:class:`learn.monitor.trees.CompiledTrees`, the same probabilities), many through
-        scikit-learn."""
-        from .trees import SMALL_BATCH, CompiledTrees
-
-        if len(x) <= SMALL_BATCH:
-            if getattr(self, "_trees", None) is None:
-                self._trees = CompiledTrees(self.classifier)
-            p = self._trees.predict_proba(x)
-        else:
-            with one_thread():
-                p = self.classifier.predict_proba(x)
-        return np.log(np.clip(p, 1e-12, 1.0))
+        """ln P(class | window), shape (n, n_classes), columns in ``classes`` order: the
+        classifier's probabilities through the compiled walk of its trees
+        (:class:`learn.monitor.trees.CompiledTrees`, the same numbers)."""
+        if getattr(self, "_trees", None) is None:
+            self._trees = CompiledTrees(self.classifier)
+        return np.log(np.clip(self._trees.predict_proba(x), 1e-12, 1.0))
 
     def score(self, log_p: np.ndarray) -> np.ndarray:
         """Evidence against healthy, ln(1 − P(healthy)) − ln P(healthy), shape (n,)."""
