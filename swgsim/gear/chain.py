@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from swgsim.base.typed import check_range
@@ -322,13 +323,27 @@ class SimulationChain:
                 share = np.stack([self.load_share(variants[k], psi[k]) for k in idx])
                 h = (torque_influence(ps.ravel(), inf.g, inf.theta, c, hw, share.ravel())
                      if table is None else table.torque_influence(ps.ravel(), share.ravel()))
-                h = h.reshape(5, idx.size, n_t).transpose(1, 0, 2)  # (m, 5, n_t)
-                w0 = np.array([variants[k].w0_m for k in idx])[:, None, None]
-                sig = w0 * (inf.A[None, :, None] * np.cos(2 * ps)[:, None, :]
-                            + inf.B[None, :, None] * np.sin(2 * ps)[:, None, :])
+                w0 = np.array([variants[k].w0_m for k in idx])
                 ecc = np.array([[variants[k].ecc_m * np.cos(variants[k].ecc_theta_rad),
                                  variants[k].ecc_m * np.sin(variants[k].ecc_theta_rad)]
                                 for k in idx])  # (m, 2)
-                sig += (ecc[:, :1] * inf.Ex + ecc[:, 1:] * inf.Ey)[:, :, None]
-                out[idx] = sig + t_out[idx][:, None, :] * h
+                sig = np.empty((idx.size, 5, n_t))
+                _compose(np.ascontiguousarray(ps), np.ascontiguousarray(t_out[idx]),
+                         np.ascontiguousarray(h).reshape(5, idx.size, n_t), w0, inf.A, inf.B,
+                         np.ascontiguousarray(ecc), inf.Ex, inf.Ey, sig)
+                out[idx] = sig
         return out
+
+
+@numba.njit(cache=True)
+def _compose(psi, t_out, h, w0, a, b, ecc, ex, ey, out):
+    """Signals of m variants (:meth:`SimulationChain.signals_batch`), sample by sample:
+    w0 (A cos 2ψ + B sin 2ψ) + (e_x Ex + e_y Ey) + T_out h(ψ), into ``out`` (m, 5, n_t);
+    the same operations in the same order as on arrays."""
+    for i in range(psi.shape[0]):
+        for t in range(psi.shape[1]):
+            c, s = np.cos(2 * psi[i, t]), np.sin(2 * psi[i, t])
+            for k in range(5):
+                out[i, k, t] = ((w0[i] * (a[k] * c + b[k] * s)
+                                 + (ecc[i, 0] * ex[k] + ecc[i, 1] * ey[k]))
+                                + t_out[i, t] * h[k, i, t])

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from swgsim.base.typed import check_range
@@ -93,17 +94,49 @@ def apply_disturbance(signals: np.ndarray, time_s: np.ndarray, n_in_rpm: np.ndar
                       draws: tuple[np.ndarray, np.ndarray, np.ndarray],
                       phi_in: np.ndarray | None = None) -> np.ndarray:
     """eq. (10) with given draws (:func:`draw_disturbance`) on windows (n_w, n_s, n_t);
-    arguments as :func:`disturb`."""
+    arguments as :func:`disturb`.
+
+    Compiled (:func:`_add_harmonics`): per window the four sub-harmonics' sines and
+    cosines once, a sin(wt + α) = a cos α sin wt + a sin α cos wt summed over j in order
+    for each sensor; the same numbers as the array form in tests/swgsim/test_life_profile.py.
+    """
     a0, aj, alpha = draws
     f_in = np.asarray(n_in_rpm, float) / 60.0  # rev/s
-    j = np.arange(1, 5)
-    # (n_w, 4, n_t)
-    if phi_in is None:
-        wt = 2 * np.pi * (f_in[:, None] / j[None, :])[:, :, None] * time_s[None, None, :]
-    else:
-        wt = np.asarray(phi_in, float)[:, None, :] / j[None, :, None]
-    # a sin(wt + alpha) = a cos(alpha) sin(wt) + a sin(alpha) cos(wt)
-    cs = (aj * np.cos(alpha))[..., 0]  # (n_w, n_s, 4)
-    sn = (aj * np.sin(alpha))[..., 0]
-    harm = np.einsum("wsj,wjt->wst", cs, np.sin(wt)) + np.einsum("wsj,wjt->wst", sn, np.cos(wt))
-    return signals + a0 + harm
+    sig = np.ascontiguousarray(signals, dtype=float)
+    n_w, n_s, _ = sig.shape
+    out = np.empty_like(sig)
+    use_phi = phi_in is not None
+    phi = np.ascontiguousarray(phi_in, dtype=float) if use_phi else np.empty((1, 1))
+    _add_harmonics(sig, np.ascontiguousarray(time_s, dtype=float),
+                   np.ascontiguousarray(np.broadcast_to(f_in, (n_w,)), dtype=float),
+                   np.ascontiguousarray(np.broadcast_to(a0, (n_w, n_s, 1)), dtype=float),
+                   np.ascontiguousarray(np.broadcast_to(aj, (n_w, n_s, 4, 1)), dtype=float),
+                   np.ascontiguousarray(np.broadcast_to(alpha, (n_w, n_s, 4, 1)), dtype=float),
+                   phi, use_phi, out)
+    return out
+
+
+@numba.njit(cache=True)
+def _add_harmonics(signals, time_s, f_in, a0, aj, alpha, phi_in, use_phi, out):
+    """out = signals + a0 + Σ_j (a_j cos α_j sin w_j t + a_j sin α_j cos w_j t), window by
+    window (w_j t = 2π f_in t / j, or φ_in / j along a measured angle)."""
+    n_w, n_s, n_t = signals.shape
+    sw, cw = np.empty((4, n_t)), np.empty((4, n_t))
+    cs, sn = np.empty((n_s, 4)), np.empty((n_s, 4))
+    for w in range(n_w):
+        for j in range(4):
+            c = 2 * np.pi * (f_in[w] / (j + 1.0))
+            for t in range(n_t):
+                x = phi_in[w, t] / (j + 1.0) if use_phi else c * time_s[t]
+                sw[j, t], cw[j, t] = np.sin(x), np.cos(x)
+        for s in range(n_s):
+            for j in range(4):
+                cs[s, j] = aj[w, s, j, 0] * np.cos(alpha[w, s, j, 0])
+                sn[s, j] = aj[w, s, j, 0] * np.sin(alpha[w, s, j, 0])
+        for s in range(n_s):
+            for t in range(n_t):
+                h1 = (cs[s, 0] * sw[0, t] + cs[s, 1] * sw[1, t] + cs[s, 2] * sw[2, t]
+                      + cs[s, 3] * sw[3, t])
+                h2 = (sn[s, 0] * cw[0, t] + sn[s, 1] * cw[1, t] + sn[s, 2] * cw[2, t]
+                      + sn[s, 3] * cw[3, t])
+                out[w, s, t] = (signals[w, s, t] + a0[w, s, 0]) + (h1 + h2)

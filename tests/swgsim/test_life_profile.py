@@ -16,7 +16,12 @@ from swgsim.datasets.plan import plan
 from swgsim.datasets.records import ProfileRecordBank, record_bank
 from swgsim.datasets.schedule import FaultOnset, LifeConfig
 from swgsim.datasets.slots import profile_slots
-from swgsim.sensing.disturbance import DisturbanceSpec, disturb
+from swgsim.sensing.disturbance import (
+    DisturbanceSpec,
+    apply_disturbance,
+    disturb,
+    draw_disturbance,
+)
 
 # tiny_motion with 0.07 s windows: two slots turn the WG 2 revolutions one way, at
 # +2000 rpm under 7 N m and at -2000 rpm under 30 N m (the load step at 0.2 s)
@@ -94,6 +99,38 @@ def test_disturbance_in_the_input_angle_equals_the_time_form_at_steady_speed():
     b = disturb(x, t, n, spec, np.random.default_rng(3),
                 phi_in=2 * np.pi * n[:, None] / 60 * t[None, :])
     assert np.max(np.abs(a - b)) < 1e-15
+
+
+def _disturbance_arrays(signals, time_s, n_in_rpm, draws, phi_in=None):
+    """eq. (10) on arrays, as apply_disturbance computed it before it was compiled."""
+    a0, aj, alpha = draws
+    f_in = np.asarray(n_in_rpm, float) / 60.0
+    j = np.arange(1, 5)
+    if phi_in is None:
+        wt = 2 * np.pi * (f_in[:, None] / j[None, :])[:, :, None] * time_s[None, None, :]
+    else:
+        wt = np.asarray(phi_in, float)[:, None, :] / j[None, :, None]
+    cs = (aj * np.cos(alpha))[..., 0]
+    sn = (aj * np.sin(alpha))[..., 0]
+    harm = np.einsum("wsj,wjt->wst", cs, np.sin(wt)) + np.einsum("wsj,wjt->wst", sn, np.cos(wt))
+    return signals + a0 + harm
+
+
+@pytest.mark.parametrize("angle", [False, True])
+def test_compiled_disturbance_equals_the_array_form(angle):
+    """apply_disturbance (compiled) gives the array form's numbers, in time and along a
+    measured input angle (bit for bit on the developers' machine; 1e-14 of the signal
+    range allowed for another libm)."""
+    rng = np.random.default_rng(5)
+    t = np.arange(1000) / 10e3
+    n = rng.uniform(100.0, 3000.0, 7)
+    x = rng.normal(0.0, 0.1, (7, 5, t.size))
+    draws = draw_disturbance(DisturbanceSpec(0.01, 0.02), rng, (7, 5))
+    phi = 2 * np.pi * n[:, None] / 60 * t[None, :] + rng.normal(0, 0.01, (7, t.size)) \
+        if angle else None
+    ref = _disturbance_arrays(x, t, n, draws, phi)
+    got = apply_disturbance(x, t, n, draws, phi)
+    assert np.max(np.abs(got - ref)) <= 1e-14 * np.ptp(ref)
 
 
 def test_twist_features_follow_the_stiffness_closed_form(motion, bank):
