@@ -32,6 +32,20 @@ def small_cfg(**chain) -> dict:
     return cfg
 
 
+def fail_second_shard(monkeypatch, gen) -> None:
+    """Make the generator's second shard raise, as a machine going down mid-run would;
+    ``monkeypatch.undo()`` or a new ``setattr`` brings the real shard back."""
+    calls, real = [], gen.run_shard
+
+    def fail_second(*a, **k):
+        calls.append(1)
+        if len(calls) == 2:
+            raise RuntimeError("the machine went down")
+        return real(*a, **k)
+
+    monkeypatch.setattr(gen, "run_shard", fail_second)
+
+
 def snapshot(folder: Path) -> dict[str, tuple[int, float]]:
     """Every file below ``folder``: size and modification time."""
     return {str(p.relative_to(folder)): (p.stat().st_size, p.stat().st_mtime)

@@ -17,6 +17,7 @@ from bad_input import (
     APPS,
     app_line,
     calibrate_call,
+    fail_second_shard,
     friction_csv,
     message,
     one_error_line,
@@ -198,16 +199,8 @@ def test_main_job_refuses_a_data_root_with_other_files(tmp_path):
 
 # ------------------------------------------------------------------ an interrupted run
 def test_an_unfinished_run_never_blocks_a_corrected_rerun(tmp_path, monkeypatch):
-    calls = []
     real = gen.run_shard
-
-    def fail_second(*a, **k):
-        calls.append(1)
-        if len(calls) == 2:
-            raise RuntimeError("the machine went down")
-        return real(*a, **k)
-
-    monkeypatch.setattr(gen, "run_shard", fail_second)
+    fail_second_shard(monkeypatch, gen)
     out = tmp_path / "ds"
     with pytest.raises(RuntimeError):
         gen.generate(small_cfg(), out, n_jobs=1, progress=False)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from bad_input import fail_second_shard
 
 from swgcli import compose_app, dataset_preset
 from swgcli.app import one_line
@@ -168,15 +169,8 @@ def test_rerun_into_our_own_folders(ours, tmp_path, monkeypatch):
     stamp = json.loads((folder / ownership.STAMP).read_text())
     assert stamp["writer"] == ownership.SIGNATURE
     assert set(stamp["files"]) == {p.name for p in folder.iterdir()} - {ownership.STAMP}
-    calls, real = [], gen.run_shard
-
-    def fail_second(*a, **k):
-        calls.append(1)
-        if len(calls) == 2:
-            raise RuntimeError("the machine went down")
-        return real(*a, **k)
-
-    monkeypatch.setattr(gen, "run_shard", fail_second)
+    real = gen.run_shard
+    fail_second_shard(monkeypatch, gen)
     with pytest.raises(RuntimeError):
         gen.generate(small_cfg(), folder, progress=False, overwrite=True)
     monkeypatch.setattr(gen, "run_shard", real)
