@@ -6,11 +6,12 @@ A config travels as a dataclass; plain data (YAML, JSON, a notebook's dict) ente
 :func:`build` (the typed object). A field may declare its allowed range in its metadata
 (:func:`allowed`: bounds, open or closed, odd integers; None where the field's type admits
 it), checked with the keys and, by :func:`check_ranges` in ``__post_init__``, on
-construction, in one line naming the full key, the value and the range, e.g.
-``selection.max_rel_se=-1: out of range; allowed: > 0``. :func:`plain` is the way back
-from a typed config to plain data. :func:`check_finite` refuses NaN and infinity
-anywhere in a config tree: every comparison with NaN is false, so NaN passes a range
-check written ``if v < lo or v > hi: raise``, and any key that has no range check.
+construction, in one line naming the full key, the range and the value, e.g.
+``selection.max_rel_se must lie in (0, inf), got -1`` (:func:`check_range`'s words).
+:func:`plain` is the way back from a typed config to plain data. :func:`check_finite`
+refuses NaN and infinity anywhere in a config tree: every comparison with NaN is false,
+so NaN passes a range check written ``if v < lo or v > hi: raise``, and any key that has
+no range check.
 
 A typed config checks itself in one pass, :func:`check_tree`: every part (a dataclass) may
 define ``check(self, where)`` with its own rules, the ones across its fields included
@@ -188,21 +189,20 @@ class Range:
         return above and below
 
     def text(self, nullable: bool = False) -> str:
-        """The allowed values in words, e.g. ``"(0, 1]"``, ``"> 0 or null"``, ``"odd
-        integers in [5, 1001]"``, ``">= 1 (worker processes)"``."""
-        lo, hi = self.lo, self.hi
-        if lo is not None and hi is not None:
-            rng = f"{'(' if self.lo_open else '['}{lo:g}, {hi:g}{')' if self.hi_open else ']'}"
-        elif lo is not None:
-            rng = f"{'>' if self.lo_open else '>='} {lo:g}"
-        elif hi is not None:
-            rng = f"{'<' if self.hi_open else '<='} {hi:g}"
-        else:
-            rng = "" if self.odd else "finite numbers"
-        if self.odd:
-            rng = f"odd integers{' in ' if rng.startswith(('[', '(')) else ' '}{rng}".rstrip()
-        return (f"{rng}{' or null' if nullable else ''}"
+        """The allowed values in the words of :func:`check_range`, e.g. ``"must lie in
+        (0, 1]"``, ``"must lie in (0, inf) or be null"``, ``"must be an odd integer in
+        [5, 1001] (samples)"``, ``"must lie in [1, inf) (worker processes)"``."""
+        rng = _interval(-math.inf if self.lo is None else self.lo,
+                        math.inf if self.hi is None else self.hi, self.lo_open, self.hi_open)
+        return (f"must {'be an odd integer in' if self.odd else 'lie in'} {rng}"
+                f"{' or be null' if nullable else ''}"
                 f"{' (' + self.what + ')' if self.what else ''}")
+
+
+def _interval(lo: float, hi: float, lo_open: bool, hi_open: bool) -> str:
+    """``[lo, hi]`` with round brackets at open or infinite ends, e.g. ``(0, inf)``."""
+    return (f"{'(' if lo_open or math.isinf(lo) else '['}{lo:g}, "
+            f"{hi:g}{')' if hi_open or math.isinf(hi) else ']'}")
 
 
 def allowed(lo: float | None, hi: float | None, what: str = "", *, lo_open: bool = False,
@@ -250,15 +250,16 @@ def _hints(schema: type) -> dict[str, Any]:
 
 def _check_range(value: Any, rng: Range, where: str, nullable: bool) -> None:
     """Refuse a value outside its field's :data:`RANGE` in one line naming the full key,
-    the value and the range: ``selection.max_rel_se=-1: out of range; allowed: > 0``; NaN
-    and infinity as :func:`check_finite` does."""
+    the range and the value, in :func:`check_range`'s words:
+    ``selection.max_rel_se must lie in (0, inf), got -1``; NaN and infinity as
+    :func:`check_finite` does."""
     if (value is None and nullable) or rng.contains(value):
         return
     if (isinstance(value, numbers.Real) and not isinstance(value, bool)
             and not math.isfinite(value)):
         raise ValueError(f"{where} must be a finite number, got {value}")
     shown = repr(value) if isinstance(value, str) else value
-    raise ValueError(f"{where}={shown}: out of range; allowed: {rng.text(nullable)}")
+    raise ValueError(f"{where} {rng.text(nullable)}, got {shown}")
 
 
 def check_ranges(obj: Any, where: str = "") -> None:
@@ -277,7 +278,7 @@ def check_ranges(obj: Any, where: str = "") -> None:
     ------
     ValueError
         For the first field outside its range, in field order, e.g.
-        ``max_rel_se=-1: out of range; allowed: > 0``: not a number, outside the bounds,
+        ``max_rel_se must lie in (0, inf), got -1``: not a number, outside the bounds,
         not odd where odd integers are asked for, or None where its type does not admit
         it; NaN and infinity as :func:`check_finite` words them
         (``max_rel_se must be a finite number, got nan``).
@@ -509,7 +510,7 @@ def check_range(value: Any, lo: float, hi: float, key: str, unit: str = "", *,
         v = float("nan")
     ok = math.isfinite(v) and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
     if not ok:
-        rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+        rng = _interval(lo, hi, lo_open, hi_open)
         raise ValueError(f"{key} must lie in {rng}{' ' + unit if unit else ''}"
                          f"{' (' + why + ')' if why else ''}, got {value}")
 

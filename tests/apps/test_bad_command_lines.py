@@ -81,14 +81,14 @@ def test_unknown_missing_mistyped_keys_are_refused(app, overrides, key):
 @pytest.mark.parametrize("value", [0, -1])
 def test_n_jobs_out_of_range_is_refused_at_composition(app, extra, key, value):
     msg = message(lambda: compose_app(app, [*extra, f"{key}={value}"]))
-    assert msg == f"{key}={value}: out of range; allowed: >= 1 (worker processes)"
+    assert msg == f"{key} must lie in [1, inf) (worker processes), got {value}"
 
 
 def test_n_jobs_is_refused_before_the_data_set_is_read(tmp_path, monkeypatch, capsys):
     code, err = run_app("swgsim-train", ["stored.path=/nowhere/data", "~logger", "n_jobs=0"],
                         tmp_path, monkeypatch, capsys)
     assert code == 2 and one_error_line("swgsim-train", err).endswith(
-        "n_jobs=0: out of range; allowed: >= 1 (worker processes)")
+        "n_jobs must lie in [1, inf) (worker processes), got 0")
     assert sorted(p.name for p in tmp_path.iterdir()) in ([], ["outputs"])
 
 

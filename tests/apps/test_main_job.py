@@ -67,7 +67,7 @@ def test_main_job_never_deletes_what_it_did_not_create(tmp_path, tracking_uri):
     ("run_on=[paper,robot]", "not among the configured data sets"),
     ("run_on=[]", "at least one"),
     ("datasets.bench.acquisition.start=sometimes", "datasets.bench: dataset.acquisition.start"),
-    ("n_jobs=0", r"n_jobs=0: out of range; allowed: >= 1"),
+    ("n_jobs=0", r"n_jobs must lie in \[1, inf\)"),
 ])
 def test_main_job_refuses_bad_input_before_any_work(tmp_path, tracking_uri, override, match):
     with pytest.raises(ValueError, match=match):

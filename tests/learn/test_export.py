@@ -115,8 +115,8 @@ def test_app_refuses_bad_options_with_exit_code_2(tmp_path):
     res = subprocess.run([sys.executable, "-m", "swgcli.export", "export.n_trees=0",
                           f"out_dir={tmp_path}"], capture_output=True, text=True)
     assert res.returncode == 2
-    assert res.stderr.strip() == ("swgsim-export: error: export.n_trees=0: out of range; "
-                                  "allowed: [1, 255] (trees)")
+    assert res.stderr.strip() == ("swgsim-export: error: export.n_trees must lie in [1, 255] "
+                                  "(trees), got 0")
 
 
 def test_foreign_file_in_out_dir_refused_before_any_work(tmp_path):

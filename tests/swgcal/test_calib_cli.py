@@ -140,7 +140,7 @@ def test_gear_ratio_option_is_checked_and_reaches_the_summary(tmp_path, planted_
     cfg = _cfg([f"measured={path}", f"out_dir={tmp_path / 'o'}", "logger.enabled=false",
                 "gear_ratio=0.5"])
     with pytest.raises(ValueError,
-                       match=r"^gear_ratio=0.5: out of range; allowed: \(1, 10000\] or null$"):
+                       match=r"^gear_ratio must lie in \(1, 10000\] or be null, got 0.5$"):
         run_calibrate(cfg)
     out = tmp_path / "ok"
     cfg = _cfg([f"measured={path}", f"out_dir={out}", "logger.enabled=false", "figures=false",
@@ -169,11 +169,11 @@ def test_app_defaults_and_ranges_are_the_librarys(tmp_path, planted_csv):
     assert {k: cfg[k] for k in plain(FrictionOptions())} == plain(FrictionOptions())
     path, _ = planted_csv
     for override, words in [
-        ("selection.max_rel_se=-1", "selection.max_rel_se=-1.0: out of range; allowed: > 0"),
-        ("selection.max_iter=-1", "selection.max_iter=-1: out of range; allowed: >= 0"),
-        ("split.n_blocks=2", "split.n_blocks=2: out of range; allowed: >= 3"),
+        ("selection.max_rel_se=-1", "selection.max_rel_se must lie in (0, inf), got -1.0"),
+        ("selection.max_iter=-1", "selection.max_iter must lie in [0, inf), got -1"),
+        ("split.n_blocks=2", "split.n_blocks must lie in [3, inf), got 2"),
         ("accel_window=20",
-         "accel_window=20: out of range; allowed: odd integers in [5, 1001] (samples)"),
+         "accel_window must be an odd integer in [5, 1001] (samples), got 20"),
         ("split.test_blocks=[12]", "split.test_blocks must list blocks in [-10, 9]")]:
         out = tmp_path / override.split("=")[0]
         with pytest.raises(ValueError) as err:
@@ -183,7 +183,7 @@ def test_app_defaults_and_ranges_are_the_librarys(tmp_path, planted_csv):
         assert not out.exists()
         # the library refuses the same value with the same words
         key, value = override.split("=")
-        with pytest.raises(ValueError, match=key.split(".")[-1] + "(=| must)"):
+        with pytest.raises(ValueError, match=key.split(".")[-1] + " must"):
             if key.startswith("selection."):
                 SelectionConfig(**{key.split(".")[1]: int(value)})
             else:

@@ -80,7 +80,7 @@ def test_a_fan_switching_with_the_cycle_count_is_left_unexplained():
 
 def test_a_bad_thermal_option_is_refused_naming_its_key():
     log = synthetic_joint_log(SyntheticThermal(hours_before=0.3, hours_after=0.3))
-    with pytest.raises(ValueError, match=r"^thermal.joint=7: out of range; allowed: \[0, 5\]$"):
+    with pytest.raises(ValueError, match=r"^thermal.joint must lie in \[0, 5\], got 7$"):
         build_problem(log, joint=7)
     with pytest.raises(ValueError, match=r"unknown thermal effects \['fan'\]"):
         build_problem(log, candidates=["fan"])
@@ -100,7 +100,7 @@ def test_swgsim_calibrate_takes_a_joint_log(tmp_path):
     assert jt["tau_min"] == pytest.approx(SyntheticThermal().tau_min, rel=0.02)
     assert (out / "figures" / "temperature.png").stat().st_size > 10_000
     assert "doi:10.24432/C5J891" in (out / "report.md").read_text()
-    with pytest.raises(ValueError, match=r"^thermal.joint=6: out of range; allowed: \[0, 5\]$"):
+    with pytest.raises(ValueError, match=r"^thermal.joint must lie in \[0, 5\], got 6$"):
         run_calibrate(compose_app("calibrate", [f"measured={path}", f"out_dir={out}2",
                                                 "logger.enabled=false", "thermal.joint=6"]))
 

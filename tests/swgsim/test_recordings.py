@@ -372,7 +372,7 @@ MAPPINGS = [
     ("a column mapped twice", lambda m: m.update(torque="n_in_rpm"),
      r"torque: column 'n_in_rpm' is mapped twice \(also speed.column\)"),
     ("counts per revolution of 0", lambda m: m["input_angle"].update(counts_per_rev=0),
-     r"input_angle.counts_per_rev=0: out of range"),
+     r"input_angle.counts_per_rev must lie in "),
     ("missing commissioning", lambda m: m.pop("commissioning_h"), r"commissioning_h: missing"),
     ("a NaN", lambda m: m.update(commissioning_h=float("nan")),
      r"commissioning_h must be a finite number"),
