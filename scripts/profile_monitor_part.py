@@ -1,8 +1,10 @@
 """Where one part of the monitor's evaluation spends its time, by stage.
 
-Runs one part of ``swgsim-train experiment=monitor`` (a data set, a held-out gear, its seeds;
-the monitor, or one per-window detector) in this process under :mod:`cProfile` and sums
-the time of the functions that make each stage:
+Runs one job of ``swgsim-train experiment=monitor`` (a data set, a held-out gear, its seeds)
+in this process under :mod:`cProfile` and sums the time of the functions that make each
+stage. The job is the monitor's part, and with ``--detector`` that detector's part too
+(a job runs the monitor and its detectors in turn on one set of records), so then the
+stages hold both: subtract the monitor's run alone to see the detector's. The stages:
 
 - simulating lives: the gears' records and the windows cut from them, under the life's
   conditions and through the measurement chain (``LifeSimulator.windows``),
@@ -19,7 +21,7 @@ the part's wall time without the profiler is in its ``timing.json`` (``swgsim-tr
 The last line is one JSON object.
 
     python scripts/profile_monitor_part.py                        # bench, gear 3, seed 0
-    python scripts/profile_monitor_part.py --dataset robot_joint --detector paper_rf
+    python scripts/profile_monitor_part.py --dataset robot_joint --detector paper_rf  # both
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--gear", type=int, default=3, help="held-out gear")
     ap.add_argument("--seeds", default="0", help="life seeds, comma-separated")
     ap.add_argument("--detector", default=None,
-                    help="a per-window detector's part instead of the monitor's")
+                    help="also this per-window detector's part (after the monitor's)")
     args = ap.parse_args(argv)
     from swgcli.train import main as train
 
@@ -89,13 +91,13 @@ def main(argv: list[str] | None = None) -> dict:
         wall = time.perf_counter() - t0
     sec = stage_seconds(pstats.Stats(prof))
     sec["other"] = max(0.0, wall - sum(sec.values()))
-    print(f"part {args.dataset} gear {args.gear} seeds {args.seeds} "
-          f"{args.detector or 'monitor'}, {wall:.1f} s under the profiler "
-          f"({platform.machine()}, {platform.python_version()}):")
+    part = f"monitor + {args.detector}" if args.detector else "monitor"
+    print(f"part {args.dataset} gear {args.gear} seeds {args.seeds} {part}, {wall:.1f} s "
+          f"under the profiler ({platform.machine()}, {platform.python_version()}):")
     for k, v in sec.items():
         print(f"  {k:<22s} {v:7.1f} s  {100 * v / wall:5.1f} %")
     out = {"dataset": args.dataset, "gear": args.gear, "seeds": args.seeds,
-           "part": args.detector or "monitor", "wall_s": round(wall, 1),
+           "part": part, "wall_s": round(wall, 1),
            "stages_s": {k: round(v, 1) for k, v in sec.items()}}
     print(json.dumps(out))
     return out
