@@ -290,8 +290,12 @@ def digitise(sampled: np.ndarray, amp: Amplifier, rng: np.random.Generator) -> n
 
 def quantise(sampled: np.ndarray, amp: Amplifier, noise: np.ndarray | None) -> np.ndarray:
     """:func:`digitise` with the noise already drawn (``noise`` None: none), on the
-    converter's LSB grid and within its range [mV/V]."""
-    out = sampled if noise is None else sampled + noise
+    converter's LSB grid and within its range [mV/V]. In place on one new array: the
+    same operations as ``clip(round((sampled + noise) / lsb) * lsb)``, bit for bit, a
+    quarter of the time (docs/results/speed.md)."""
+    out = sampled.copy() if noise is None else sampled + noise
     lsb = amp.lsb_mvv
-    out = np.round(out / lsb) * lsb
-    return np.clip(out, -amp.range_mvv, amp.range_mvv)
+    np.divide(out, lsb, out=out)
+    np.round(out, out=out)
+    np.multiply(out, lsb, out=out)
+    return np.clip(out, -amp.range_mvv, amp.range_mvv, out=out)

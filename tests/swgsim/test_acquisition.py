@@ -9,6 +9,7 @@ from swgsim.sensing.acquisition import (
     Amplifier,
     acquire,
     check_acquisition,
+    quantise,
     sinc_taps,
     start_angles,
 )
@@ -105,3 +106,19 @@ def test_acquire_refuses_bad_lengths():
         acquire(np.zeros((1, 5, 4 * 10 + 1)), AMP, np.random.default_rng(0), 4)
     with pytest.raises(ValueError, match="n_lead"):
         acquire(np.zeros((1, 5, 4 * 40)), AMP, np.random.default_rng(0), 1)
+
+
+def test_quantise_in_place_is_the_array_form_bit_for_bit():
+    """quantise's in-place operations against clip(round((x + noise) / lsb) * lsb), with
+    values beyond the range and on half-LSB ties; the input is left as it was."""
+    amp = AMP
+    rng = np.random.default_rng(3)
+    x = rng.normal(0.0, 2.0, (7, 5, 300))
+    x[0, 0, :4] = np.array([0.5, 1.5, -2.5, 1e3]) * amp.lsb_mvv  # ties, and beyond range
+    noise = rng.normal(0.0, amp.noise_mvv, x.shape)
+    before = x.copy()
+    for nz in (noise, None):
+        want = np.clip(np.round((x if nz is None else x + nz) / amp.lsb_mvv) * amp.lsb_mvv,
+                       -amp.range_mvv, amp.range_mvv)
+        assert np.array_equal(quantise(x, amp, nz), want)
+    assert np.array_equal(x, before)
