@@ -70,6 +70,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--seeds", default="0", help="life seeds, comma-separated")
     ap.add_argument("--detector", default=None,
                     help="also this per-window detector's part (after the monitor's)")
+    ap.add_argument("--save", default=None, metavar="FILE",
+                    help="also write the profile (pstats) to FILE, to read by function")
     args = ap.parse_args(argv)
     from swgcli.train import main as train
 
@@ -89,6 +91,8 @@ def main(argv: list[str] | None = None) -> dict:
             if e.code:
                 raise
         wall = time.perf_counter() - t0
+    if args.save:
+        prof.dump_stats(args.save)
     sec = stage_seconds(pstats.Stats(prof))
     sec["other"] = max(0.0, wall - sum(sec.values()))
     part = f"monitor + {args.detector}" if args.detector else "monitor"
