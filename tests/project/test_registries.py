@@ -155,3 +155,25 @@ def test_a_life_with_a_registered_sensor_fault_is_generated_by_two_workers(tmp_p
     finally:
         sensor_faults.SENSOR_FAULTS.pop("sensor_" + name)
         sensor_faults.SEVERITIES.pop("sensor_" + name)
+
+
+def _made(name: str) -> str:
+    """In a worker: the class the simulator makes for the friction effect ``name``."""
+    return type(effects.make_effect(name)).__name__
+
+
+def test_an_entry_extended_here_is_extended_in_workers_that_knew_it():
+    """A friction effect's form, then its fit registered in its place (a subclass takes
+    the place of the class it extends): workers that got the form get the fit."""
+    name = _unique("x")
+    form = type(name + "_form", (Term,), {"kind": name, "linear": _Churn.linear,
+                                          "columns": _Churn.columns})
+    effects.register_effect(form)
+    try:
+        assert Parallel(n_jobs=2)(delayed(travelling(_made))(name) for _ in range(2)) == [
+            form.__name__] * 2
+        fitted = effects.register_effect(type(name + "_fit", (form, FitTerm), {}))
+        assert Parallel(n_jobs=2)(delayed(travelling(_made))(name) for _ in range(2)) == [
+            fitted.__name__] * 2
+    finally:
+        effects.FRICTION_LIBRARY.pop(name)

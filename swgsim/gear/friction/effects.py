@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.base.registry import Registry
+from swgsim.base.registry import Registry, extends
 from swgsim.gear.friction.ripples import FrictionRipple, PositionRipple
 from swgsim.gear.friction.signals import FrictionSignals
 from swgsim.gear.terms import Param, Term, linear_recurrence
@@ -400,12 +400,13 @@ def register_effect(cls: type[Term]) -> type[Term]:
     class defines the form (:meth:`~swgsim.gear.terms.Term.columns` or ``transform``) and its
     parameters. To have it fitted as well, give it its fit metadata and register it with
     :func:`swgcal.friction.library.register_effect` instead, which calls this function;
-    see docs/ARCHITECTURE.md, "To add a calibration effect: touch these files".
+    see docs/ARCHITECTURE.md, "To add a calibration effect: touch these files". A class
+    subclassing the one registered under its kind takes its place.
 
     Parameters
     ----------
     cls : subclass of Term
-        With a ``kind`` not yet in the library.
+        With a ``kind`` not yet registered, or registered to a class it subclasses.
 
     Returns
     -------
@@ -416,13 +417,14 @@ def register_effect(cls: type[Term]) -> type[Term]:
     TypeError
         Not a :class:`~swgsim.gear.terms.Term` subclass.
     ValueError
-        Its ``kind`` is already taken.
+        Its ``kind`` is taken (by this class, or by one it does not subclass).
     """
     if not (isinstance(cls, type) and issubclass(cls, Term)):
         raise TypeError(f"a friction effect must subclass swgsim.gear.terms.Term, got {cls!r}")
-    if cls.kind in FRICTION_LIBRARY:
+    held = FRICTION_LIBRARY.get(cls.kind)
+    if held is not None and not extends(cls, held):
         raise ValueError(f"friction effect {cls.kind!r} is already registered "
-                         f"({FRICTION_LIBRARY[cls.kind].__qualname__})")
+                         f"({held.__qualname__}; only a subclass of it may take its place)")
     return FRICTION_LIBRARY.add(cls.kind, cls)
 
 
