@@ -3,8 +3,7 @@
 The project's extension points are registries: gear faults
 (:data:`swgsim.gear.faults.FAULTS`), sensor faults
 (:data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS` with their evaluation severities),
-friction effects (:data:`swgsim.gear.friction.FRICTION_LIBRARY`, and their fits in
-:data:`swgcal.friction.library.FRICTION_LIBRARY`), learners
+friction effects (:data:`swgsim.gear.friction.FRICTION_LIBRARY`), learners
 (:data:`learn.learners.models.MODELS`) and the monitor's detectors
 (:data:`learn.monitor.detectors.DETECTORS`). Each is a :class:`Registry`: a dict of name to
 entry that knows its kind and where it lives, and refuses a name taken, except by an

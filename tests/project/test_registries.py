@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 from joblib import Parallel, delayed
 
-from swgcal.friction import library as fit_library
 from swgcal.terms import FitTerm
 from swgsim.base.registry import REGISTRIES, Registry, travelling
 from swgsim.gear import faults
@@ -66,11 +65,8 @@ def _register(kind: str, name: str) -> None:
     elif kind == "sensor fault":
         sensor_faults.register_sensor_fault(sensor_faults.SensorFault(
             "sensor_" + name, (0.0, 1.0), "-", _twice, "twice"), (0.1, 0.5))
-    elif kind == "friction effect":
-        effects.register_effect(type(name, (Term,), {"kind": name, "linear": (),
-                                                     "columns": _Churn.columns}))
-    elif kind == "fitted friction effect":
-        fit_library.register_effect(type(name, (_Churn,), {"kind": name}))
+    elif kind == "friction effect":  # its form and its fit, for the simulator and calibration
+        effects.register_effect(type(name, (_Churn,), {"kind": name}))
     elif kind == "learner":
         register_model(ModelSpec(name, "sklearn.naive_bayes.GaussianNB", {}))
     elif kind == "detector":
@@ -89,8 +85,6 @@ def _use(kind: str, name: str) -> str:
         return str(sensor_faults.apply_sensor_fault(x, "sensor_" + name, 0.5, 2)[0, 2, 0])
     if kind == "friction effect":
         return effects.make_effect(name).kind
-    if kind == "fitted friction effect":
-        return fit_library.make_effect(name).kind
     if kind == "learner":
         return type(make_model(name).fit(np.eye(2), ["a", "b"])[-1]).__name__
     return DETECTORS[name].make(0, "cpu")
@@ -99,7 +93,6 @@ def _use(kind: str, name: str) -> str:
 KINDS = {"gear fault": "swgsim.gear.faults:FAULTS",
          "sensor fault": "swgsim.sensing.sensor_faults:SENSOR_FAULTS",
          "friction effect": "swgsim.gear.friction.effects:FRICTION_LIBRARY",
-         "fitted friction effect": "swgcal.friction.library:FRICTION_LIBRARY",
          "learner": "learn.learners.models:MODELS",
          "detector": "learn.monitor.detectors:DETECTORS"}
 
