@@ -8,25 +8,23 @@ and :data:`REPORT`, what its report (-> ``report.md``) and simulation option
 (-> ``friction_effects.yaml``) add to the shared renderer (:mod:`swgcal.report`). The
 kind-independent entry points are in :mod:`swgcal`.
 
-Modules: :mod:`.library` (the fitted effects: the simulator's forms with their fit;
-:func:`~.library.register_effect` adds one to both), :mod:`.ranges` (physical ranges
-with sources), :mod:`.data` (recordings: loading, checks), :mod:`.problem` (problem
-builder, calibration), :mod:`.probes` (residual probes), :mod:`.ripple_groups` (ripples grouped by
-harmonics, pruned without held-out support), :mod:`.discovery` (terms beyond the
-library), :mod:`.report` (summary, report, simulation option), :mod:`.figures`,
-:mod:`.synthetic` (recordings with planted effects). The effect forms are simulator
-inputs: :mod:`swgsim.gear.friction`.
+Modules: :mod:`.library` (the built-in effects' fits, registered in place of their
+forms in the one registry, :data:`swgsim.gear.friction.FRICTION_LIBRARY`), :mod:`.ranges`
+(physical ranges with sources), :mod:`.data` (recordings: loading, checks),
+:mod:`.problem` (problem builder, calibration), :mod:`.probes` (residual probes),
+:mod:`.ripple_groups` (ripples grouped by harmonics, pruned without held-out support),
+:mod:`.discovery` (terms beyond the library), :mod:`.report` (summary, report, simulation
+option), :mod:`.figures`, :mod:`.synthetic` (recordings with planted effects). The effect
+forms are simulator inputs: :mod:`swgsim.gear.friction`.
 """
 
 from .data import FrictionRecording, load_friction_csv, write_friction_csv
 from .figures import make_figures
-from .library import FRICTION_LIBRARY, register_effect
 from .options import FrictionOptions
 from .problem import OPTIONS, build_problem, calibrate, friction_problem
 from .report import REPORT, summarize
 
 __all__ = [
-    "FRICTION_LIBRARY",
     "OPTIONS",
     "REPORT",
     "FrictionOptions",
@@ -36,7 +34,6 @@ __all__ = [
     "friction_problem",
     "load_friction_csv",
     "make_figures",
-    "register_effect",
     "summarize",
     "write_friction_csv",
 ]

@@ -1,12 +1,16 @@
-"""The calibration's friction library: each simulator effect with what its fit needs.
+"""The fit of each built-in friction effect, registered in place of its form.
 
 The forms are the simulator's (:mod:`swgsim.gear.friction.effects`,
-:mod:`swgsim.gear.friction.ripples`, the paper law of :mod:`swgsim.gear.friction.signals`); each
-class here subclasses
-one of them and :class:`~swgcal.terms.FitTerm`, adding its residual signature, the probes
-whose structure it should explain, the physical ranges of its characterising parameters
-(values and sources in :mod:`.ranges`: a fit outside is not accepted as that effect),
-how often a model may hold it, and the bounds and starts of its nonlinear parameters.
+:mod:`swgsim.gear.friction.ripples`, the paper law of :mod:`swgsim.gear.friction.signals`);
+each class here subclasses one of them and :class:`~swgcal.terms.FitTerm`, adding its
+residual signature, the probes whose structure it should explain, the physical ranges of
+its characterising parameters (values and sources in :mod:`.ranges`: a fit outside is not
+accepted as that effect), how often a model may hold it, and the bounds and starts of its
+nonlinear parameters.
+Importing this module registers each with :func:`swgsim.gear.friction.register_effect`,
+in place of its form: the one registry, :data:`swgsim.gear.friction.FRICTION_LIBRARY`,
+then holds one class per kind, which the simulator instantiates and a calibration fits
+(its candidates are the entries that are :class:`~swgcal.terms.FitTerm`).
 
 ==================  ===================================================================
 name                residual signature
@@ -26,24 +30,21 @@ velocity_lag        hysteresis vs q̇, sign of q̈ matters
 
 Repeatable effects may enter a model again: ripples up to six times (further periods:
 wave-generator orders, cogging), load_coulomb and gravity_residual up to three times
-(higher orders). A new effect is one class (its form and its fit) registered with
-:func:`register_effect`, which makes it known to the simulator as well
-(docs/ARCHITECTURE.md, "To add a calibration effect: touch these files").
+(higher orders). A new effect is one class (its form and its fit) registered once with
+:func:`swgsim.gear.friction.register_effect` (docs/ARCHITECTURE.md, "To add a calibration
+effect: touch these files").
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
-from swgsim.base.registry import Registry
 from swgsim.gear.friction import effects as fx
 from swgsim.gear.friction import ripples as rp
 from swgsim.gear.friction import signals as fsig
 from swgsim.gear.friction.signals import FrictionSignals
-from swgsim.gear.terms import Term
 
 from ..periodogram import periodogram_peaks
 from ..terms import FitTerm
@@ -67,7 +68,6 @@ from .ranges import (
 )
 
 __all__ = [
-    "FRICTION_LIBRARY",
     "PaperLaw",
     "AsymmetricCoulomb",
     "Stribeck",
@@ -80,8 +80,6 @@ __all__ = [
     "ThermalDrift",
     "SensorDrift",
     "VelocityLag",
-    "make_effect",
-    "register_effect",
 ]
 
 
@@ -240,72 +238,6 @@ class VelocityLag(fx.VelocityLag, FitTerm):
         return [np.array([np.clip(f * sig.scales.dt_med, lo, hi)]) for f in (2, 10, 50)]
 
 
-FRICTION_LIBRARY: Registry[type[FitTerm]] = Registry("fitted friction effect", __name__,
-                                                     "FRICTION_LIBRARY", (
-    (cls.kind, cls) for cls in (
-        AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
-        LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
-))
-"""Library key -> fitted effect class: the candidates of every friction calibration
-(the simulator's forms, :data:`swgsim.gear.friction.FRICTION_LIBRARY`, with their fit)."""
-
-
-def register_effect(cls: type[FitTerm]) -> type[FitTerm]:
-    """Add a fitted friction effect to the simulator and the calibration (one call;
-    usable as a class decorator).
-
-    The class is the effect's form (a :class:`swgsim.gear.terms.Term`: parameters,
-    ``columns`` or ``transform``) and its fit (a :class:`~swgcal.terms.FitTerm`:
-    ``probes``, ``ranges`` with sources, ``bounds``/``starts`` of nonlinear parameters,
-    ``signature``). Its form goes into :data:`swgsim.gear.friction.FRICTION_LIBRARY`
-    (:func:`swgsim.gear.friction.effects.register_effect`; a ``friction_effects`` entry of
-    its kind) unless that already holds a form the class subclasses (physics registered
-    on its own, fit added here); the class becomes a candidate of every friction
-    calibration built afterwards.
-
-    Parameters
-    ----------
-    cls : subclass of FitTerm
-        With a ``kind`` not yet in :data:`FRICTION_LIBRARY`.
-
-    Returns
-    -------
-    The class itself.
-
-    Raises
-    ------
-    TypeError
-        Not a subclass of both :class:`swgsim.gear.terms.Term` and :class:`FitTerm`.
-    ValueError
-        Its ``kind`` is already in the calibration's library, or the simulator's holds
-        another form of that kind.
-    """
-    if not (isinstance(cls, type) and issubclass(cls, Term) and issubclass(cls, FitTerm)):
-        raise TypeError("a fitted friction effect must subclass swgsim.gear.terms.Term (its form) "
-                        f"and swgcal.terms.FitTerm (its fit), got {cls!r}")
-    if cls.kind in FRICTION_LIBRARY:
-        raise ValueError(f"friction effect {cls.kind!r} is already registered "
-                         f"({FRICTION_LIBRARY[cls.kind].__qualname__})")
-    form = fx.FRICTION_LIBRARY.get(cls.kind)
-    if form is None:
-        fx.register_effect(cls)
-    elif not issubclass(cls, form):
-        raise ValueError(f"friction effect {cls.kind!r}: the simulator holds the form "
-                         f"{form.__qualname__}, which {cls.__qualname__} does not subclass")
-    return FRICTION_LIBRARY.add(cls.kind, cls)
-
-
-def make_effect(kind: str, name: str | None = None, **kwargs: Any) -> FitTerm:
-    """Instantiate a fitted library effect by key.
-
-    Raises
-    ------
-    KeyError
-        Unknown key; the message lists the library.
-    """
-    try:
-        cls = FRICTION_LIBRARY[kind]
-    except KeyError:
-        raise KeyError(f"unknown friction effect {kind!r}; the calibration's library has "
-                       f"{sorted(FRICTION_LIBRARY)}") from None
-    return cls(name, **kwargs)
+for _fitted in (AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
+                LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag):
+    fx.register_effect(_fitted)  # in place of its form

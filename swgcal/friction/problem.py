@@ -1,8 +1,9 @@
 """A friction recording (data kind 1) as a calibration problem, and its calibration.
 
 :func:`build_problem` loads a friction CSV (or takes a recording) and wraps it:
-paper-law base model, the effect library (:data:`.library.FRICTION_LIBRARY`), the
-residual probes (:mod:`.probes`) and a held-out split in time blocks;
+paper-law base model, the effects with a fit in the one registry
+(:data:`swgsim.gear.friction.FRICTION_LIBRARY`, :mod:`.library`), the residual probes
+(:mod:`.probes`) and a held-out split in time blocks;
 :func:`calibrate` runs the selection loop and groups ripples by harmonics.
 """
 
@@ -15,11 +16,13 @@ from pathlib import Path
 from typing import Any
 
 from swgsim.base.typed import build, complete
+from swgsim.gear.friction import FRICTION_LIBRARY
 
 from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
 from ..split import time_block_split
+from ..terms import FitTerm
 from .data import FrictionRecording, load_friction_csv
-from .library import FRICTION_LIBRARY, PaperLaw
+from .library import PaperLaw
 from .options import BaseModelOptions, FrictionOptions, SplitOptions
 from .probes import friction_probes
 from .ripple_groups import group_ripples
@@ -61,7 +64,8 @@ def friction_problem(
         Held-out split, see :func:`~swgcal.split.time_block_split`. Defaults and ranges
         of every option: :mod:`swgcal.friction.options`.
     candidates : sequence of str, optional
-        Library keys (default all of :data:`FRICTION_LIBRARY`).
+        Kinds of :data:`~swgsim.gear.friction.FRICTION_LIBRARY` with a fit
+        (:class:`~swgcal.terms.FitTerm`); default all of them.
     gear_ratio : float, optional
         Reduction ratio N of the strain wave gear (wave-generator turns per output
         turn), when known: ripple periods over q are then expressed and checked as
@@ -83,11 +87,12 @@ def friction_problem(
                        "test_blocks": list(test_blocks)}}
     build(complete(given, FrictionOptions, ""), FrictionOptions, "")
     sig = rec.signals(v_s=v_s, v_s_rel=v_s_rel, gear_ratio=gear_ratio)
-    keys = list(candidates) if candidates is not None else list(FRICTION_LIBRARY)
-    unknown = [k for k in keys if k not in FRICTION_LIBRARY]
+    fitted = {k: c for k, c in FRICTION_LIBRARY.items() if issubclass(c, FitTerm)}
+    keys = list(candidates) if candidates is not None else list(fitted)
+    unknown = [k for k in keys if k not in fitted]
     if unknown:
-        raise ValueError(f"selection.candidates: unknown friction effects {unknown}; library: "
-                         f"{sorted(FRICTION_LIBRARY)}")
+        raise ValueError(f"selection.candidates: unknown friction effects {unknown}; library "
+                         f"(the effects with a fit): {sorted(fitted)}")
     if rec.n < MIN_ROWS_PER_BLOCK * n_blocks:
         raise ValueError(f"recording {rec.name!r}: {rec.n} samples are too few for "
                          f"split.n_blocks={n_blocks} held-out blocks of at least "
@@ -96,7 +101,7 @@ def friction_problem(
     split = time_block_split(rec.t_s, n_blocks, validation_blocks, test_blocks, guard_frac)
     return Problem(
         name=rec.name, kind="friction", units="N m", signals=sig, y=rec.tau_nm, t=rec.t_s,
-        base_model=(PaperLaw(),), library={k: FRICTION_LIBRARY[k] for k in keys},
+        base_model=(PaperLaw(),), library={k: fitted[k] for k in keys},
         probes=friction_probes(), split=split,
         meta={"n_samples": rec.n, "duration_s": float(rec.t_s[-1] - rec.t_s[0]),
               "dt_median_s": sig.scales.dt_med, "v_s_rad_s": sig.v_s,

@@ -3,17 +3,19 @@
 The project's extension points are registries: gear faults
 (:data:`swgsim.gear.faults.FAULTS`), sensor faults
 (:data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS` with their evaluation severities),
-friction effects (:data:`swgsim.gear.friction.FRICTION_LIBRARY`, and their fits in
-:data:`swgcal.friction.library.FRICTION_LIBRARY`), learners
+friction effects (:data:`swgsim.gear.friction.FRICTION_LIBRARY`), learners
 (:data:`learn.learners.models.MODELS`) and the monitor's detectors
 (:data:`learn.monitor.detectors.DETECTORS`). Each is a :class:`Registry`: a dict of name to
-entry that knows its kind and where it lives, and refuses a name taken.
+entry that knows its kind and where it lives, and refuses a name taken, except by an
+extension of its entry (:func:`extends`: a subclass of the class registered under it,
+which takes its place; the calibration adds its fit to a friction effect's form so).
 
 A user registers an entry from their own script. Worker processes (joblib's loky) import
 the project afresh, so they would not know it: every call that runs in a worker is made
 through :func:`travelling`, which takes the registries of this process with it (their
 entries pickled by value where they are not importable, as loky pickles) and adds what a
-worker lacks before the call. Only registries whose module this process imported travel.
+worker lacks, or extends, before the call. Only registries whose module this process
+imported travel.
 """
 
 from __future__ import annotations
@@ -52,17 +54,36 @@ class Registry(dict[str, T]):
         REGISTRIES[self.where] = self
 
     def add(self, name: str, entry: T) -> T:
-        """Register ``entry`` under ``name``; returns it.
+        """Register ``entry`` under ``name``, or in place of an entry it
+        :func:`extends`; returns it.
 
         Raises
         ------
         ValueError
-            ``name`` is taken.
+            ``name`` is taken (by another entry, or by this one).
         """
-        if name in self:
+        if name in self and not extends(entry, self[name]):
             raise ValueError(f"{self.kind} {name!r} is registered already")
         self[name] = entry
         return entry
+
+
+def extends(entry: Any, held: Any) -> bool:
+    """Whether ``entry`` may take the place of ``held`` under its name.
+
+    Parameters
+    ----------
+    entry, held : object
+        The entry offered and the one registered.
+
+    Returns
+    -------
+    bool
+        True when both are classes and ``entry`` subclasses ``held`` and is not it (a
+        friction effect's form with its fit, :mod:`swgcal.friction.library`).
+    """
+    return (isinstance(entry, type) and isinstance(held, type) and entry is not held
+            and issubclass(entry, held))
 
 
 def carried() -> dict[str, dict[str, Any]]:
@@ -71,14 +92,16 @@ def carried() -> dict[str, dict[str, Any]]:
 
 
 def install(entries: dict[str, dict[str, Any]]) -> None:
-    """Add to this process's registries the entries of :func:`carried` they lack (a
-    registry's module is imported first, so that its built-ins come from it)."""
+    """Add to this process's registries the entries of :func:`carried` they lack or that
+    :func:`extends` theirs (a registry's module is imported first, so that its built-ins
+    come from it)."""
     for where, items in entries.items():
         if where not in REGISTRIES:
             importlib.import_module(where.split(":")[0])
         reg = REGISTRIES[where]
         for name, entry in items.items():
-            reg.setdefault(name, entry)
+            if name not in reg or extends(entry, reg[name]):
+                reg[name] = entry
 
 
 def travelling(fn: Callable[..., T]) -> Callable[..., T]:
@@ -94,4 +117,4 @@ def _with_registries(entries: dict[str, dict[str, Any]], fn: Callable[..., T], *
     return fn(*args, **kwargs)
 
 
-__all__ = ["REGISTRIES", "Registry", "carried", "install", "travelling"]
+__all__ = ["REGISTRIES", "Registry", "carried", "extends", "install", "travelling"]

@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 from joblib import Parallel, delayed
 
-from swgcal.friction import library as fit_library
 from swgcal.terms import FitTerm
 from swgsim.base.registry import REGISTRIES, Registry, travelling
 from swgsim.gear import faults
@@ -66,11 +65,8 @@ def _register(kind: str, name: str) -> None:
     elif kind == "sensor fault":
         sensor_faults.register_sensor_fault(sensor_faults.SensorFault(
             "sensor_" + name, (0.0, 1.0), "-", _twice, "twice"), (0.1, 0.5))
-    elif kind == "friction effect":
-        effects.register_effect(type(name, (Term,), {"kind": name, "linear": (),
-                                                     "columns": _Churn.columns}))
-    elif kind == "fitted friction effect":
-        fit_library.register_effect(type(name, (_Churn,), {"kind": name}))
+    elif kind == "friction effect":  # its form and its fit, for the simulator and calibration
+        effects.register_effect(type(name, (_Churn,), {"kind": name}))
     elif kind == "learner":
         register_model(ModelSpec(name, "sklearn.naive_bayes.GaussianNB", {}))
     elif kind == "detector":
@@ -89,8 +85,6 @@ def _use(kind: str, name: str) -> str:
         return str(sensor_faults.apply_sensor_fault(x, "sensor_" + name, 0.5, 2)[0, 2, 0])
     if kind == "friction effect":
         return effects.make_effect(name).kind
-    if kind == "fitted friction effect":
-        return fit_library.make_effect(name).kind
     if kind == "learner":
         return type(make_model(name).fit(np.eye(2), ["a", "b"])[-1]).__name__
     return DETECTORS[name].make(0, "cpu")
@@ -99,7 +93,6 @@ def _use(kind: str, name: str) -> str:
 KINDS = {"gear fault": "swgsim.gear.faults:FAULTS",
          "sensor fault": "swgsim.sensing.sensor_faults:SENSOR_FAULTS",
          "friction effect": "swgsim.gear.friction.effects:FRICTION_LIBRARY",
-         "fitted friction effect": "swgcal.friction.library:FRICTION_LIBRARY",
          "learner": "learn.learners.models:MODELS",
          "detector": "learn.monitor.detectors:DETECTORS"}
 
@@ -155,3 +148,25 @@ def test_a_life_with_a_registered_sensor_fault_is_generated_by_two_workers(tmp_p
     finally:
         sensor_faults.SENSOR_FAULTS.pop("sensor_" + name)
         sensor_faults.SEVERITIES.pop("sensor_" + name)
+
+
+def _made(name: str) -> str:
+    """In a worker: the class the simulator makes for the friction effect ``name``."""
+    return type(effects.make_effect(name)).__name__
+
+
+def test_an_entry_extended_here_is_extended_in_workers_that_knew_it():
+    """A friction effect's form, then its fit registered in its place (a subclass takes
+    the place of the class it extends): workers that got the form get the fit."""
+    name = _unique("x")
+    form = type(name + "_form", (Term,), {"kind": name, "linear": _Churn.linear,
+                                          "columns": _Churn.columns})
+    effects.register_effect(form)
+    try:
+        assert Parallel(n_jobs=2)(delayed(travelling(_made))(name) for _ in range(2)) == [
+            form.__name__] * 2
+        fitted = effects.register_effect(type(name + "_fit", (form, FitTerm), {}))
+        assert Parallel(n_jobs=2)(delayed(travelling(_made))(name) for _ in range(2)) == [
+            fitted.__name__] * 2
+    finally:
+        effects.FRICTION_LIBRARY.pop(name)

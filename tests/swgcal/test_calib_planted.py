@@ -14,8 +14,8 @@ import pytest
 
 from swgcal import select_effects
 from swgcal.friction import friction_problem
-from swgcal.friction.library import FRICTION_LIBRARY, make_effect
 from swgcal.friction.synthetic import PLANTED, synthetic_recording
+from swgsim.gear.friction import FRICTION_LIBRARY, make_effect
 
 
 def run(kinds=(), seed=0, hidden=None):

@@ -21,9 +21,10 @@ import pytest
 
 from swgcal import SelectionConfig, render_report
 from swgcal.friction import calibrate, friction_problem, summarize
-from swgcal.friction.library import FRICTION_LIBRARY, PositionRipple
+from swgcal.friction.library import PositionRipple
 from swgcal.friction.ripple_groups import harmonic_groups
 from swgcal.friction.synthetic import synthetic_recording
+from swgsim.gear.friction import FRICTION_LIBRARY
 from swgsim.gear.friction.ripples import RippleTerm
 
 N = 50  # gear ratio of the harmonic-group case

@@ -6,8 +6,9 @@ The dynamics add an extra friction torque τ(t, q, q̇, q̈) [N m] in the joint 
 (:class:`swgsim.gear.terms.Term`) that a calibration against measured joint friction fits
 (:mod:`swgcal.friction`, which adds the fit: bounds, starts, probes, physical ranges)
 and whose accepted list a data set takes as the option ``friction_effects``
-(:func:`friction_effects_from_config`). A new effect's form enters with
-:func:`register_effect`.
+(:func:`friction_effects_from_config`). A new effect, its form and its fit, enters
+both with one :func:`register_effect` into the one registry, :data:`FRICTION_LIBRARY`
+(:mod:`.effects`).
 
 Modules: :mod:`.signals` (what friction terms see, the paper law), :mod:`.effects` (the
 effect library: Stribeck, presliding, velocity lag, load-dependent Coulomb, drifts, ...),

@@ -7,6 +7,19 @@ lagged q̇ once ``velocity_lag`` is in the model). Each entry documents its form
 its source; how it shows in a residual, its fit bounds and starts and its physical
 range are the calibration's (:mod:`swgcal.friction.library`).
 
+:data:`FRICTION_LIBRARY` is the one registry of friction effects, for the simulator and
+the calibration alike, and :func:`register_effect` the one way into it: the simulator
+makes an entry by its kind (:func:`make_effect`, under the ``friction_effects`` option),
+a calibration offers every entry that carries its fit (a :class:`swgcal.terms.FitTerm`).
+A new effect is one class, its form and its fit, registered once. The built-ins are
+registered here as forms (the fit's ranges, sources and starting values are the
+calibration's business, and swgsim never imports swgcal); importing
+:mod:`swgcal.friction.library` registers each one's subclass with its fit in its place
+(a subclass of the registered class may take its place:
+:func:`swgsim.base.registry.extends`). Either way a kind has one class, the one the
+simulator instantiates, and the registry travels to worker processes as every other
+(:mod:`swgsim.base.registry`).
+
 ==================  ===============================================
 name                form
 ==================  ===============================================
@@ -46,7 +59,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.base.registry import Registry
+from swgsim.base.registry import Registry, extends
 from swgsim.gear.friction.ripples import FrictionRipple, PositionRipple
 from swgsim.gear.friction.signals import FrictionSignals
 from swgsim.gear.terms import Param, Term, linear_recurrence
@@ -66,6 +79,7 @@ __all__ = [
     "ThermalDrift",
     "SensorDrift",
     "VelocityLag",
+    "make_effect",
     "register_effect",
     "dahl_state",
     "first_order_lag",
@@ -389,23 +403,28 @@ FRICTION_LIBRARY: Registry[type[Term]] = Registry("friction effect", __name__,
         AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
         LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
 ))
-"""Library key -> effect class. Instantiate with ``FRICTION_LIBRARY[key](name)``."""
+"""Kind -> effect class, the one registry of friction effects (module docstring):
+instantiate with :func:`make_effect`."""
 
 
 def register_effect(cls: type[Term]) -> type[Term]:
-    """Add an effect class to :data:`FRICTION_LIBRARY` (usable as a class decorator).
+    """Add a friction effect to :data:`FRICTION_LIBRARY`, for the simulator and the
+    calibration (one call; usable as a class decorator).
 
-    The step that makes a new friction effect known to the simulation (a
-    ``friction_effects`` entry of its kind, :func:`~swgsim.gear.friction.parse_effects`). The
-    class defines the form (:meth:`~swgsim.gear.terms.Term.columns` or ``transform``) and its
-    parameters. To have it fitted as well, give it its fit metadata and register it with
-    :func:`swgcal.friction.library.register_effect` instead, which calls this function;
-    see docs/ARCHITECTURE.md, "To add a calibration effect: touch these files".
+    The class is the effect's form (a :class:`~swgsim.gear.terms.Term`: ``kind``, the
+    parameters ``linear``/``nonlinear``, ``columns`` or ``transform``): a
+    ``friction_effects`` entry of its kind then makes it
+    (:func:`~swgsim.gear.friction.parse_effects`). When it is a
+    :class:`swgcal.terms.FitTerm` too (``probes``, ``ranges`` with sources,
+    ``bounds``/``starts``, ``signature``), every friction calibration built afterwards
+    offers it. A class subclassing the one registered under its kind takes its place (a
+    fit added to a form registered before); see docs/ARCHITECTURE.md, "To add a
+    calibration effect: touch these files".
 
     Parameters
     ----------
     cls : subclass of Term
-        With a ``kind`` not yet in the library.
+        With a ``kind`` not yet registered, or registered to a class it subclasses.
 
     Returns
     -------
@@ -416,23 +435,37 @@ def register_effect(cls: type[Term]) -> type[Term]:
     TypeError
         Not a :class:`~swgsim.gear.terms.Term` subclass.
     ValueError
-        Its ``kind`` is already taken.
+        Its ``kind`` is taken (by this class, or by one it does not subclass).
     """
     if not (isinstance(cls, type) and issubclass(cls, Term)):
         raise TypeError(f"a friction effect must subclass swgsim.gear.terms.Term, got {cls!r}")
-    if cls.kind in FRICTION_LIBRARY:
+    held = FRICTION_LIBRARY.get(cls.kind)
+    if held is not None and not extends(cls, held):
         raise ValueError(f"friction effect {cls.kind!r} is already registered "
-                         f"({FRICTION_LIBRARY[cls.kind].__qualname__})")
+                         f"({held.__qualname__}; only a subclass of it may take its place)")
     return FRICTION_LIBRARY.add(cls.kind, cls)
 
 
 def make_effect(kind: str, name: str | None = None, **kwargs: Any) -> Term:
-    """Instantiate a library effect by key.
+    """Instantiate the registered effect of a kind.
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`FRICTION_LIBRARY`.
+    name : str, optional
+        Instance name (default ``kind``; ``kind#k`` for a repeat).
+    **kwargs
+        Constructor options (e.g. ``use_load``).
+
+    Returns
+    -------
+    Term
 
     Raises
     ------
     KeyError
-        Unknown key; the message lists the library.
+        Unknown kind; the message lists the registered ones.
     """
     try:
         cls = FRICTION_LIBRARY[kind]
