@@ -10,8 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from swgsim.base.typed import check_finite, check_range
 from swgsim.datasets.conditions import ConditionsConfig, RunInConfig, check_conditions
+from swgsim.gear.faults import FAULTS
 from swgsim.gear.thermal import JointThermal
 from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 
@@ -77,6 +80,13 @@ class MonitorStudyConfig:
         Hours of each training gear's healthy life after commissioning.
     faults : list of str
         Classes evaluated; empty: every gear fault of the data set and every sensor fault.
+    fault_severities : dict of str to list of float
+        Training severities of a gear fault in place of its Table V ones
+        (:func:`learn.monitor.training.train_severities`): increasing, inside the fault's
+        severity range; empty: Table V's for every fault. A severity regressor estimates
+        only what it was trained on (a tree ensemble neither extrapolates nor interpolates
+        well between far levels), so the prognosis's study trains its growing faults on
+        the levels their lives pass through (:mod:`learn.monitor.prognosis_evaluation`).
     gears : list of int
         Held-out gears; empty: every gear of the data set.
     detectors : list of str
@@ -131,6 +141,7 @@ class MonitorStudyConfig:
     sensor_train_levels: int = 2
     train_healthy_h: float = 10.0
     faults: list[str] = field(default_factory=list)
+    fault_severities: dict[str, list[float]] = field(default_factory=dict)
     gears: list[int] = field(default_factory=list)
     detectors: list[str] = field(default_factory=lambda: list(DETECTORS))
     detector_hours: float = 100.0
@@ -252,6 +263,13 @@ def check_study(sc: MonitorStudyConfig, key: str = "monitor.study") -> None:
     check_range(sc.train_variants, 1, 1000, f"{key}.train_variants")
     check_range(sc.sensor_train_levels, 2, 100, f"{key}.sensor_train_levels",
                 why="mild and severe at least")
+    for f, sevs in sc.fault_severities.items():
+        _req(f in FAULTS, f"{key}.fault_severities: {f!r} is no gear fault; allowed: "
+                          f"{', '.join(sorted(FAULTS))}")
+        top = FAULTS[f].severity_range[1]
+        _req(len(sevs) >= 1 and all(np.diff([0.0, *sevs]) > 0)
+             and sevs[-1] <= top, f"{key}.fault_severities.{f} must be increasing in (0, "
+             f"{top:g}] ({f}'s severity range), got {sevs}")
     check_rule(sc.rule, f"{key}.rule")
     sc.normal.check(f"{key}.normal")
     check_range(sc.nuisance_hours, sc.commissioning_h, 1e6, f"{key}.nuisance_hours", "h",

@@ -47,8 +47,11 @@ def table_v_severities(plan: DatasetPlan, fault: str) -> list[float]:
 
 
 def train_severities(plan: DatasetPlan, fault: str, cfg: MonitorStudyConfig) -> list[float]:
-    """Severities of a class's training lives: a gear fault's Table V ones, a sensor
-    fault's ``cfg.sensor_train_levels`` from its mild to its severe one, geometrically."""
+    """Severities of a class's training lives: a gear fault's ``cfg.fault_severities``
+    or else its Table V ones, a sensor fault's ``cfg.sensor_train_levels`` from its mild to
+    its severe one, geometrically."""
+    if fault in cfg.fault_severities:
+        return [float(v) for v in cfg.fault_severities[fault]]
     sevs = table_v_severities(plan, fault)
     if fault not in SENSOR_FAULTS:
         return sevs

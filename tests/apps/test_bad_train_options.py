@@ -36,6 +36,12 @@ EVAL_CASES = {  # case -> (overrides of swgsim-train experiment=monitor, the key
                        "monitor.study.rule.design_hours"),
     "an old key": (["monitor.study.baselines=[paper_rf]"], "monitor.study.detectors"),
     "a device that is none": (["monitor.device=gpu"], "monitor.device: must be one of"),
+    "training severities not increasing": (
+        ["+monitor.study.fault_severities.root_tooth_crack=[0.5,0.3]"],
+        "monitor.study.fault_severities.root_tooth_crack must be increasing in (0, "),
+    "training severities of no gear fault": (
+        ["+monitor.study.fault_severities.sensor_stuck=[0.5]"],
+        "monitor.study.fault_severities: 'sensor_stuck' is no gear fault; allowed: "),
 }
 
 

@@ -121,6 +121,9 @@ BAD = {  # case -> (override, the start of the one line)
     "an unknown data set": ("prognosis.run_on=[nope]", "prognosis.run_on: ['nope']"),
     "a gear the data set lacks": ("prognosis.study.gears=[7]",
                                   "prognosis.study.gears: [7] not in"),
+    "severity_levels not a multiple of 4": (
+        "prognosis.study.severity_levels=30",
+        "prognosis.study.severity_levels must be a multiple of 4 in [8, 256]"),
     "coverage 1": ("prognosis.study.coverage=1.0", "prognosis.study.coverage must lie in"),
     "a group beyond the pairs": ("prognosis.group=1", "prognosis.group must lie in [0, 0] "
                                  "(0: tiny gear 3), got 1"),
@@ -176,3 +179,28 @@ def test_an_alarm_naming_a_fault_whose_range_ends_below_the_threshold_is_not_pre
     assert len(out.tracks) == 1 and len(out.events) == 1
     (ev,) = out.events
     assert not ev["valid"] and "beyond eccentric_wg's range (up to 0.5)" in ev["reason"]
+
+
+def test_the_model_is_trained_on_every_severity_a_life_passes_through():
+    """The severities a growing fault's lives take after the onset lie on their staircase
+    (life_levels), and the diagnosis model's training severities, every fourth step of
+    it, span them to the failure from within a step of the first: a severity regressor is not asked
+    for what it never saw (the bench's, trained on Table V's three, read root cracks of
+    0.225-0.45 as 0.49-0.53)."""
+    from learn.monitor.prognosis_evaluation import PrognosisStudyConfig, life_levels, life_of
+    from swgcli import dataset_preset
+    from swgsim.datasets.config import dataset_config
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import record_bank
+
+    p = plan(dataset_config(dataset_preset("tiny_bench")))
+    sc = PrognosisStudyConfig()
+    for f in ("root_tooth_crack", "eccentric_wg"):
+        every = life_levels(sc.faults[f], sc.severity_levels)
+        trained = life_levels(sc.faults[f], sc.severity_levels // 4)
+        assert set(trained) <= set(every) and trained[-1] == sc.faults[f].to_failure.failure
+        for seed in (0, 1):
+            sim = life_of(p, record_bank(p, 3), 3, sc, f, seed, seed)
+            lived = np.unique(sim.schedule.severity[sim.schedule.severity > 0])
+            assert lived.size >= 8 and set(lived.tolist()) <= set(every), (f, lived)
+            assert trained[0] <= lived[0] + trained[1] - trained[0] and lived[-1] <= trained[-1]
