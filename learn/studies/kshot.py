@@ -9,7 +9,7 @@ windows (so the k = 1 windows are among the k = 5 ones).
 The unsupervised adaptations (AdaBN, CORAL: :mod:`learn.learners.adapt`) see what a real
 gear offers without labels: its *unlabelled healthy windows*, recorded at
 commissioning, not the class-balanced pool. A second seeded draw (its own random
-stream, so the pool is the same with or without it) picks whole healthy variants outside
+generator, so the pool is the same with or without it) picks whole healthy variants outside
 the pool, each one pass over the operating points, until they hold at least
 ``n_unlabelled`` windows. Every model, k = 0 included, is evaluated on the same remaining
 windows of the gear (other variants), so accuracies are comparable across k and across

@@ -237,8 +237,8 @@ def _prepared(est, X):
 
 def _adapt_unsupervised(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KShotSplit,
                         ft: FinetuneSettings) -> None:
-    """AdaBN (torch nets) or CORAL (feature models) on the held-out gear's healthy
-    stream (``kshot.unlabelled``, labels unused)."""
+    """AdaBN (torch nets) or CORAL (feature models) on the held-out gear's unlabelled
+    healthy windows (``kshot.unlabelled``, labels unused)."""
     if spec.adapt == "adabn":
         if not hasattr(final_step(est), "adapt_bn"):
             raise ValueError(f"{spec.label}: AdaBN needs a torch net")
