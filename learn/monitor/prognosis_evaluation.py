@@ -134,14 +134,14 @@ class PrognosisStudyConfig:
         shortest default life fails).
     severity_levels : int
         Steps of the failure severity on which a life's severity grows
-        (``LifeConfig.severity_levels``: the exact law rounded down to them), a multiple of 4
-        in [8, 256]
-        (32 [choice]: with the simulator's 8, a root crack's step is 0.11, and the
-        staircase lags the exact law the failure hour is scored on by up to a step: on
-        bench gears 1-3 the calibration asked for intervals 7.4 times as wide as the law's
-        and the median predicted remaining hours were 1.9-4.0 times the true ones for root
-        cracks; with 32, 4.2 times and 1.2-2.3 (three seeds, 2026-11-26)). The diagnosis
-        model trains on every fourth of them (:func:`life_levels`).
+        (``LifeConfig.severity_levels``: the exact law rounded down to them), a multiple
+        of 4 in [8, 256]. 32 [choice]: with the simulator's 8, a root crack's step is
+        0.11, and the staircase lags the exact law the failure hour is scored on by up to
+        a step; on bench, gear 3 held out, seeds 0-2, the calibration asked for intervals
+        7.4 times as wide as the law's and the median predicted remaining hours of root
+        cracks were 1.9-4.0 times the true ones; with 32, 4.2 times and 1.2-2.3
+        (2026-11-26). The diagnosis model trains on every fourth step
+        (:func:`life_levels`).
     prognosis : StreamPrognosis
         The stream's prognosis option (``every_h``, ``block_h``, ``min_track_h``,
         ``min_estimates``, ``seed``; a prognosis every 0.25 h, an estimate per 0.25 h,
@@ -249,7 +249,7 @@ def life_levels(gf: GrowingFault, levels: int) -> list[float]:
     steps (``MonitorStudyConfig.fault_severities``; a subset of the lives' own): trained
     on Table V's three alone (0.5, 0.7, 0.9), the bench's root-crack regressor read every
     severity from 0.225 to 0.45 as 0.49-0.53, and its interval (half-width 0.014) held
-    none of them (bench gears 1-3, 2026-11-26)."""
+    0-17 % of the true severities along a track (bench, gear 3 held out, 2026-11-26)."""
     top = float(gf.to_failure.failure)
     exact = np.linspace(gf.initial, top, 4 * int(levels) + 1)
     return np.unique(staircase(exact, top, levels, np.ones(exact.size, bool))).tolist()
