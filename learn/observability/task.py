@@ -43,6 +43,7 @@ from swgsim.datasets.generate import generate
 from swgsim.datasets.plan import plan
 from swgsim.datasets.schema import load
 from swgsim.files import ownership
+from swgsim.files.inputs import absolute_path
 from swgsim.files.ownership import atomic_write_bytes
 
 if TYPE_CHECKING:
@@ -51,18 +52,6 @@ if TYPE_CHECKING:
 pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
-
-
-def _absolute_path(path: str) -> str:
-    """``path`` relative to the directory the app was started in (Hydra changes into its
-    run folder); unchanged outside a Hydra run (tests calling the task directly). As
-    :func:`swgcli.app.absolute_path`, which ``learn`` cannot import."""
-    from hydra.utils import to_absolute_path
-
-    try:
-        return to_absolute_path(path)
-    except ValueError:  # outside a Hydra run
-        return path
 
 
 def j_out_values(cfg: DictConfig) -> list[float]:
@@ -134,7 +123,7 @@ def run_observability(cfg: DictConfig) -> dict:
         ``report_dir`` or a data-set folder holds a file this project cannot show it
         wrote (named; the report folder before any work, :func:`swgsim.files.ownership.check`).
     """
-    rep = Path(_absolute_path(str(cfg.report_dir)))
+    rep = Path(absolute_path(str(cfg.report_dir)))
     csv = rep / "observability.csv"
     if cfg.map not in ("steady", "motion"):
         raise ValueError(f"map: must be one of ['steady', 'motion'], got {cfg.map!r}")
@@ -153,7 +142,7 @@ def run_observability(cfg: DictConfig) -> dict:
             claim.record([fig])
         return {"table": table, "files": {"figure": str(fig)}, "data_sets": {}, "wall_s": 0.0}
     configs = data_set_configs(cfg)
-    root = Path(_absolute_path(str(cfg.data_root)))
+    root = Path(absolute_path(str(cfg.data_root)))
     t0 = time.perf_counter()
     parts, folders = [], {}
     for n, (j, c) in enumerate(configs.items(), 1):
