@@ -9,7 +9,7 @@ the wave-generator angle in the five bridges and the efficiency, and its *separa
 its largest distance from the healthy windows, in their spreads
 (:func:`learn.studies.separability.separation_records`). A fault window is *beyond* when
 its separation exceeds the healthy windows' 95th percentile
-(:func:`learn.studies.observability.observability_table`); 5 % is chance. This is the
+(:func:`learn.observability.study.observability_table`); 5 % is chance. This is the
 measure of ``swgsim-observability``, here at one output inertia (the bench's).
 """
 
@@ -19,7 +19,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from learn.studies.observability import observability_table
+from learn.observability.study import observability_table
 from learn.studies.separability import separation_records
 from swgcli import dataset_preset
 from swgsim.datasets.config import dataset_config

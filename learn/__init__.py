@@ -7,9 +7,11 @@ Layers, each importing only those before it:
 * :mod:`learn.learners` - the classifiers (the paper's Table VI and the model registry,
   torch MLP and 1D-CNN, MiniRocket, CORAL);
 * :mod:`learn.studies` - protocols, the study of Tables VII-X, transfer to the gear not
-  seen in training, the observability of faults in the signals;
+  seen in training, the separability of faults in the signals;
 * :mod:`learn.reports` - tables, figures and summaries of the studies' results;
-* :mod:`learn.tasks` - what the apps run: a study and its report.
+* :mod:`learn.tasks` - what the apps run: a study and its report;
+  :mod:`learn.observability` - one workflow's folder beside them: the observability of
+  faults in the signals, its study and the task ``swgsim-observability`` runs.
 
 The public API is listed in ``__all__``; names are imported on first use (torch only
 when a net is asked for).
@@ -37,7 +39,7 @@ _EXPORTS = {
     "StudyOptions": "studies.tables", "run_paper_study": "tasks.paper",
     "run_comparison": "studies.transfer", "TransferConfig": "studies.transfer",
     "separation_records": "studies.separability",
-    "observability_table": "studies.observability",
+    "observability_table": "observability.study",
 }
 
 __all__ = ["__version__", *_EXPORTS]

@@ -8,7 +8,7 @@ compared here with steady windows at the *same* loads as well as at the motion m
 steady points, and with the two things a joint's operation can change: the UR3e's rated
 payload, and windows triggered from the controller's motion command
 (``dataset.profile.start_jitter_s``). Each row is
-:func:`learn.studies.observability_motion.fault_visibility`: the share of one fault's
+:func:`learn.observability.motion.fault_visibility`: the share of one fault's
 windows beyond the healthy 95th percentile of their point or slot (0.05: unseen), per
 fault life (each seed its own fault position), on training gear 1 of the data set.
 
@@ -31,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from learn.studies.observability_motion import (  # noqa: E402
+from learn.observability.motion import (  # noqa: E402
     STEADY_POINTS,
     fault_visibility,
 )

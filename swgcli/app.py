@@ -39,6 +39,7 @@ from typing import Any
 
 from learn.tracking.preflight import check_imports
 from swgcli import CONF_DIR
+from swgsim.files.inputs import absolute_path
 from swgsim.files.ownership import forget_stops
 
 #: the flags that ask for an app's help (:func:`app_help`)
@@ -116,23 +117,13 @@ def stop_line(prog: str, code: int) -> str:
                                  "yet; rerun the same command to start again")
 
 
-def absolute_path(path: str) -> str:
-    """``path`` relative to the directory the app was started in (Hydra changes into its
-    run folder); unchanged outside a Hydra run (tests calling a task directly)."""
-    from hydra.utils import to_absolute_path
-
-    try:
-        return to_absolute_path(path)
-    except ValueError:  # outside a Hydra run
-        return path
-
-
 def check_out_dirs(cfg: Any, schema: type) -> None:
     """Refuse an output folder given as a file, before any work.
 
     Every key the schema lists in ``OUT_DIRS`` (e.g. ``out_dir``, ``report_dir``) is
-    resolved from the directory the app was started in (:func:`absolute_path`); the
-    path and every parent that exists must be folders.
+    resolved from the directory the app was started in
+    (:func:`swgsim.files.inputs.absolute_path`); the path and every parent that exists must
+    be folders.
 
     Parameters
     ----------

@@ -28,8 +28,9 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from learn.export.pipeline import ExportOptions
-from swgcli.app import absolute_path, hydra_app
+from swgcli.app import hydra_app
 from swgsim.datasets.config import DatasetConfig
+from swgsim.files.inputs import absolute_path
 
 log = logging.getLogger(__name__)
 

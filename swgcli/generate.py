@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import logging
 
-from hydra.utils import to_absolute_path
 from omegaconf import DictConfig, OmegaConf
 
 from swgcli.app import hydra_app
 from swgcli.schema import GenerateApp
+from swgsim.files.inputs import absolute_path
 
 log = logging.getLogger(__name__)
 
@@ -37,10 +37,7 @@ def run_generate(cfg: DictConfig) -> dict:
     from swgsim.datasets.generate import generate
 
     ds_cfg = OmegaConf.to_object(cfg.dataset)  # the typed DatasetConfig
-    try:
-        out_dir = to_absolute_path(str(cfg.out_dir))
-    except ValueError:  # not inside a Hydra run
-        out_dir = str(cfg.out_dir)
+    out_dir = absolute_path(str(cfg.out_dir))
     return generate(ds_cfg, out_dir, n_jobs=int(cfg.n_jobs), overwrite=bool(cfg.overwrite),
                     shard_index=None if cfg.shard is None else int(cfg.shard),
                     progress=bool(cfg.progress))

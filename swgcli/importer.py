@@ -23,10 +23,11 @@ from typing import ClassVar
 from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
-from swgcli.app import absolute_path, hydra_app
+from swgcli.app import hydra_app
 from swgsim.base.typed import allowed
 from swgsim.datasets.recording_table import MAX_TABLE_BYTES
 from swgsim.datasets.recordings import import_recording
+from swgsim.files.inputs import absolute_path
 
 log = logging.getLogger(__name__)
 

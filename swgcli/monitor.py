@@ -24,11 +24,12 @@ from learn.monitor.stream import event_line, monitor_stream, select_gear, write_
 from learn.monitor.stream_prognosis import prognosis_line, trained_duty
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
-from swgcli.app import absolute_path, hydra_app
+from swgcli.app import hydra_app
 from swgcli.schema import MonitorApp
 from swgsim.base.typed import check_range
 from swgsim.datasets.schema import load, read_manifest
 from swgsim.files import ownership
+from swgsim.files.inputs import absolute_path
 
 log = logging.getLogger(__name__)
 

@@ -24,9 +24,10 @@ from collections import Counter
 from omegaconf import DictConfig, OmegaConf
 
 from learn.reports.summary import SUMMARY_FILES
-from swgcli.app import absolute_path, hydra_app
+from swgcli.app import hydra_app
 from swgcli.schema import PaperApp
 from swgsim.files import ownership
+from swgsim.files.inputs import absolute_path
 
 log = logging.getLogger(__name__)
 

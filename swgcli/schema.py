@@ -35,7 +35,7 @@ from learn.monitor.gear_monitor import MaintenanceEvent
 from learn.monitor.normal import NormalConfig
 from learn.monitor.rule import RuleConfig
 from learn.monitor.stream_prognosis import StreamPrognosis
-from learn.studies.observability_motion import MotionMapConfig
+from learn.observability.motion import MotionMapConfig
 from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions

@@ -22,6 +22,7 @@ from learn.tasks.monitor_evaluation import part_key
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import plain
 from swgsim.datasets.schema import read_manifest
+from swgsim.files.inputs import absolute_path
 from swgsim.files.ownership import atomic_write_json, write_owned
 
 pd = lazy_module("pandas")
@@ -127,16 +128,11 @@ def _write_plain(path: Path, obj: dict) -> None:
 def _data_sets(app, tc: TransferConfig, plans: dict, names: list[str]
                ) -> tuple[list[tuple[str, str]], float]:
     """(name, path) of the data sets ``names``, generating the missing ones."""
-    from hydra.utils import to_absolute_path
-
     from swgsim.datasets.generate import generate
 
     if not tc.run_on:
         return [(str(app.stored.name or Path(app.stored.path).name), str(app.stored.path))], 0.0
-    try:
-        root = to_absolute_path(str(tc.data_root))
-    except ValueError:  # outside a Hydra run
-        root = str(tc.data_root)
+    root = absolute_path(str(tc.data_root))
     out, t0 = [], time.perf_counter()
     for name in names:
         path = f"{root}/{name}"

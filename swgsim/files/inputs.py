@@ -12,7 +12,7 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["MAX_INPUT_BYTES", "HEADER_BYTES", "check_input_file", "read_head"]
+__all__ = ["MAX_INPUT_BYTES", "HEADER_BYTES", "absolute_path", "check_input_file", "read_head"]
 
 #: Largest input file read [bytes]: 2 GiB. A measured recording, a data set's manifest or
 #: a diagnosis model of this project is far smaller (the Franka friction CSVs are a few
@@ -88,3 +88,25 @@ def read_head(path: str | os.PathLike, n: int = HEADER_BYTES) -> bytes:
     """
     with open(path, "rb") as f:
         return f.read(n)
+
+
+def absolute_path(path: str) -> str:
+    """A path the user named, relative to the directory the app was started in (a Hydra
+    app runs in its own run folder: :func:`hydra.utils.to_absolute_path`); unchanged
+    outside a Hydra run (a task called directly, as the tests do).
+
+    Parameters
+    ----------
+    path : str
+        As given in the config.
+
+    Returns
+    -------
+    str
+    """
+    from hydra.utils import to_absolute_path  # hydra only where an app resolves a path
+
+    try:
+        return to_absolute_path(path)
+    except ValueError:  # outside a Hydra run
+        return path

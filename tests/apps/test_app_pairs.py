@@ -106,12 +106,12 @@ def runners(root, csv):
     once, the folder set per call)."""
     mapping = root / "mapping.json"  # YAML reads JSON
     mapping.write_text(json.dumps(MAPPING))
+    from learn.observability.task import run_observability
     from learn.tasks.train import run_train
     from swgcli.calibrate import run_calibrate
     from swgcli.export import run_export_app
     from swgcli.importer import run_import
     from swgcli.monitor import run_monitor_app
-    from swgcli.observability import run_observability
     from swgcli.paper import run_paper
 
     def with_dir(cfg, key, task):
@@ -251,9 +251,9 @@ def test_generation_still_replaces_its_own_unfinished_data_set(tmp_path, monkeyp
 @pytest.mark.slow  # runs every app for real on its tiny preset: about 2 min on 2 cores
 def test_every_app_stamps_its_files_with_its_writer(tmp_path, csv):
     """What the fixtures above fake: each app's stamp names it for every file it wrote."""
+    from learn.observability.task import run_observability
     from learn.tasks.train import run_train
     from swgcli.export import run_export_app
-    from swgcli.observability import run_observability
     from swgcli.paper import run_paper
 
     runs = {

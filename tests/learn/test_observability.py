@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.studies.observability import (
+from learn.observability.study import (
     COLUMNS,
     J_OUT_BENCH,
     J_OUT_ROBOT,
@@ -70,8 +70,8 @@ def test_torsional_mode_follows_the_inertia():
 
 
 def test_app_end_to_end_on_the_tiny_bench_grid(tmp_path):
+    from learn.observability.task import data_set_configs, run_observability
     from swgcli import compose_app
-    from swgcli.observability import data_set_configs, run_observability
 
     cfg = compose_app("observability", [
         "dataset=tiny_bench", "j_out_kgm2=[0.0088,0.2]", f"data_root={tmp_path}/data",
@@ -95,8 +95,8 @@ def test_app_end_to_end_on_the_tiny_bench_grid(tmp_path):
 
 
 def test_app_refuses_bad_input_before_any_work(tmp_path):
+    from learn.observability.task import data_set_configs, run_observability
     from swgcli import compose_app
-    from swgcli.observability import data_set_configs, run_observability
 
     for over, msg in ((["n_j_out=1"], "n_j_out: must be in"),
                       (["j_out_kgm2=[0.1,0.1]"], "j_out_kgm2: must list distinct"),

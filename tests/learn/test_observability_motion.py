@@ -1,4 +1,4 @@
-"""The motion map (learn.studies.observability_motion, swgsim-observability map=motion):
+"""The motion map (learn.observability.motion, swgsim-observability map=motion):
 its separation measure, the smallest detectable severity, refusals, and (slow) one output
 inertia end to end."""
 
@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.studies.observability_motion import (
+from learn.observability.motion import (
     MotionMapConfig,
     check_motion_map,
     separations,
@@ -47,8 +47,8 @@ def test_bad_designs_are_refused_naming_the_key(change, key):
 
 
 def test_the_app_refuses_an_unknown_map_and_names_a_bad_preset_key(tmp_path):
+    from learn.observability.task import run_observability
     from swgcli import compose_app
-    from swgcli.observability import run_observability
 
     cfg = compose_app("observability", ["map=steadyy", f"report_dir={tmp_path}/r"])
     with pytest.raises(ValueError, match=r"^map: must be one of \['steady', 'motion'\]"):
@@ -65,8 +65,8 @@ def test_the_app_refuses_an_unknown_map_and_names_a_bad_preset_key(tmp_path):
 def test_motion_map_on_the_robot_link_end_to_end(tmp_path):
     """One output inertia, 20 windows per state: the files, healthy near 5 % at the steady
     points, wear at its largest severity seen in every view."""
+    from learn.observability.task import run_observability
     from swgcli import compose_app
-    from swgcli.observability import run_observability
 
     cfg = compose_app("observability", ["map=motion", "j_out_kgm2=[0.69]", "motion.windows=20",
                                         "motion.reduced_stiffness=[0.25]", "motion.wear=[1.0]",

@@ -29,7 +29,8 @@ FLOORS: dict[str, list[tuple[str, int]]] = {
                ("swgcal.api", 6), ("swgcal", 7)],
     "learn": [("learn.inputs", 0), ("learn.tracking", 0), ("learn.learners", 1),
               ("learn.monitor", 2), ("learn.studies", 3), ("learn.export", 3),
-              ("learn.reports", 4), ("learn.tasks", 5), ("learn", 6)],
+              ("learn.reports", 4), ("learn.tasks", 5), ("learn.observability", 5),
+              ("learn", 6)],
 }
 #: Which packages a package may import (besides itself).
 USES = {"swgsim": set(), "swgcal": {"swgsim"}, "learn": {"swgsim"},

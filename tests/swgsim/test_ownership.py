@@ -267,7 +267,7 @@ def test_calibrate_rerun_replaces_its_own_files_only(tmp_path):
 def test_observability_and_transfer_refuse_before_any_work(tmp_path, app, key):
     out = user_folder(tmp_path / "mine", {"table.md": b"mine\n"})
     if app == "observability":
-        from swgcli.observability import run_observability
+        from learn.observability.task import run_observability
 
         cfg = compose_app("observability", [f"report_dir={out}",
                                             f"data_root={tmp_path}/data"])

@@ -1,6 +1,6 @@
 """Observability of stiffness loss and wear: steady windows against a joint in motion.
 
-The steady map (:mod:`learn.studies.observability`) found reduced stiffness nearly
+The steady map (:mod:`learn.observability.study`) found reduced stiffness nearly
 invisible at every steady operating point: below the torsional mode the kinematic-error
 torque ripple changes with stiffness only as r²/(1 − r²). This study asks what a joint in
 motion adds, per output inertia J_out, for three views of the same gear:

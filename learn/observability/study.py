@@ -14,7 +14,7 @@ the output follows the error and the torque ripple is small, set by J_out; near 
 it the ripple is the stiffness times the error, so a stiffness fault changes it
 (:func:`torsional_modes` gives the mode per J_out and load).
 
-The runner is ``swgsim-observability`` (:mod:`swgcli.observability`); the end points of
+The runner is ``swgsim-observability`` (:mod:`learn.observability.task`); the end points of
 J_out are :data:`J_OUT_BENCH` and :data:`J_OUT_ROBOT`.
 """
 
