@@ -18,7 +18,7 @@ def test_every_package_and_config_folder_is_listed():
     conf = {"swgcli.conf", *("swgcli.conf." + ".".join(d.relative_to(ROOT / "conf").parts)
                              for d in (ROOT / "conf").rglob("*") if d.is_dir()
                              and any(d.glob("*.yaml")))}
-    assert listed == found | conf, (sorted(listed - found - conf), sorted(found | conf - listed))
+    assert listed == found | conf, (sorted(listed - found - conf), sorted((found | conf) - listed))
     assert cfg["package-dir"]["swgcli.conf"] == "conf"
 
 
