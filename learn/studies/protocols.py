@@ -37,6 +37,11 @@ pd = lazy_module("pandas")
 log = logging.getLogger(__name__)
 
 SCHEMES = ("group_kfold", "kfold", "leave_one_gear")
+#: Training accuracy is read on at most this many of a split's training windows, evenly
+#: spaced over them (a systematic sample: every class and gear in proportion; standard error
+#: at most 0.011). Predicting every training window cost the RBF SVM twice its fit (6.7 s
+#: against 3.5 s on 10 000 windows of the paper grid); the test windows are always all read.
+TRAIN_ACCURACY_ROWS = 2000
 GROUP_COLUMNS = ("gear", "fault", "variant")
 
 
@@ -357,6 +362,7 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
     Returns
     -------
     train_acc : float
+        On at most :data:`TRAIN_ACCURACY_ROWS` training windows (:func:`training_accuracy_rows`).
     test_acc : float
     confusion : ndarray of int, shape (n_classes, n_classes)
     seconds : float
@@ -378,16 +384,36 @@ def fit_split(estimator, X: np.ndarray, y: np.ndarray, split: Split, labels: Seq
             est.fit(X[split.train], y[split.train])
         else:
             fit_with_groups(est, X[split.train], y[split.train], groups[split.train])
-        pred_tr = est.predict(X[split.train])
+        rows = training_accuracy_rows(split.train)
+        pred_tr = est.predict(X[rows])
         pred_te = est.predict(X[split.test])
     if warnings_out is not None:
         warnings_out.extend((w.category.__name__, str(w.message).splitlines()[0])
                             for w in caught)
-    train_acc = float(np.mean(pred_tr == y[split.train]))
+    train_acc = float(np.mean(pred_tr == y[rows]))
     test_acc = float(np.mean(pred_te == y[split.test]))
     cm = confusion_matrix(y[split.test], pred_te, labels=list(labels))
     out = (train_acc, test_acc, cm, time.perf_counter() - t0)
     return (*out, est) if return_model else out
+
+
+def training_accuracy_rows(train: np.ndarray) -> np.ndarray:
+    """The training rows a split's training accuracy is read on.
+
+    Parameters
+    ----------
+    train : ndarray of int, shape (n_train,)
+        A split's training rows.
+
+    Returns
+    -------
+    ndarray of int, shape (min(n_train, TRAIN_ACCURACY_ROWS),)
+        ``train`` itself when it has at most :data:`TRAIN_ACCURACY_ROWS` rows, else that many
+        of them, evenly spaced (first and last included).
+    """
+    if len(train) <= TRAIN_ACCURACY_ROWS:
+        return train
+    return train[np.linspace(0, len(train) - 1, TRAIN_ACCURACY_ROWS).round().astype(int)]
 
 
 def fit_split_quiet(estimator, X: np.ndarray, y: np.ndarray, split: Split,

@@ -61,3 +61,37 @@ def test_bad_arguments(meta):
         make_splits(meta, "shuffle", disturbed=False)
     with pytest.raises(ValueError, match="test gear 7 is not in the data"):
         make_splits(meta, "leave_one_gear", disturbed=False, test_gears=[7])
+
+
+def test_training_accuracy_is_read_on_evenly_spaced_training_rows(monkeypatch):
+    """At most TRAIN_ACCURACY_ROWS training windows, first and last among them, in proportion
+    to each class; a split with fewer is read whole; the test windows always whole."""
+    from learn.studies import protocols
+    from learn.studies.protocols import Split, fit_split, training_accuracy_rows
+
+    monkeypatch.setattr(protocols, "TRAIN_ACCURACY_ROWS", 40)
+    train = np.arange(1, 201)  # 200 windows, two classes in blocks of 50
+    rows = training_accuracy_rows(train)
+    assert len(rows) == 40 and rows[0] == 1 and rows[-1] == 200
+    assert np.all(np.diff(rows) > 0) and np.isin(rows, train).all()
+    assert np.array_equal(training_accuracy_rows(train[:40]), train[:40])
+
+    class Recorder:  # predicts class "a" and records how many windows it was asked for
+        seen: list = []
+
+        def get_params(self, deep=True):
+            return {}
+
+        def fit(self, X, y):
+            return self
+
+        def predict(self, X):
+            Recorder.seen.append(len(X))
+            return np.full(len(X), "a")
+
+    X = np.zeros((260, 1))
+    y = np.where((np.arange(260) // 50) % 2 == 0, "a", "b")
+    out = fit_split(Recorder(), X, y, Split("s", "s", train, np.arange(201, 260)), ["a", "b"])
+    assert Recorder.seen == [40, 59]
+    assert out[0] == pytest.approx(np.mean(y[rows] == "a"))
+    assert abs(out[0] - np.mean(y[train] == "a")) < 0.05
