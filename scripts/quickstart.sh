@@ -27,6 +27,10 @@ if [ ! -f "$stamp" ]; then
         echo "== set-up failed (the whole log: $log)" >&2
         exit 1
     fi
+    # numba keeps compiled kernels beside their sources: compile them once here, so that the
+    # first test run or study does not pay for it in each of its processes (about 25 s)
+    .venv/bin/python scripts/warm_jit.py >>"$log" 2>&1 ||
+        echo "== compiling the numba kernels failed (they compile on first use; log: $log)" >&2
     rm -f .venv/.installed-*
     touch "$stamp"
 fi
