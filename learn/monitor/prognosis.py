@@ -346,4 +346,5 @@ def predict_growth(track: Track, fault: str, alarm_hour: float | None, recorded:
         remaining = np.where(need > 0, need / rec if rec > 0 else np.inf, 0.0)
     else:
         remaining = hours_for_exposure(need, planned, exposure(fault, planned, tf))
-    return from_samples(float(h[-1]), fault, "growth", float(y[-1]), thr, remaining, cfg)
+    return from_samples(float(h[-1]), fault, "growth", float(y[-1]), thr, remaining, cfg,
+                        alarm_hour)

@@ -44,7 +44,8 @@ def predict_linear(track: Track, fault: str, alarm_hour: float | None,
     draws = np.random.default_rng(seed).multivariate_normal(coef, cov, cfg.n_samples)
     level, slope = draws[:, 0], draws[:, 1]
     remaining = np.where(slope > 0, (thr - level) / np.where(slope > 0, slope, 1.0), np.inf)
-    return from_samples(float(h[-1]), fault, "linear", float(y[-1]), thr, remaining, cfg)
+    return from_samples(float(h[-1]), fault, "linear", float(y[-1]), thr, remaining, cfg,
+                        alarm_hour)
 
 
 def predict_wiener(track: Track, fault: str, alarm_hour: float | None,
@@ -88,4 +89,5 @@ def predict_wiener(track: Track, fault: str, alarm_hour: float | None,
         shape = d ** 2 / var
         remaining = invgauss(mu=(d / mu) / shape, scale=shape).rvs(
             size=n, random_state=np.random.default_rng(seed))
-    return from_samples(float(h[-1]), fault, "wiener", float(y[-1]), thr, remaining, cfg)
+    return from_samples(float(h[-1]), fault, "wiener", float(y[-1]), thr, remaining, cfg,
+                        alarm_hour)

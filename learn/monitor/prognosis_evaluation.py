@@ -16,9 +16,10 @@ at the same hours.
 
 The intervals are calibrated by split conformal prediction
 (:func:`.prognosis_calibration.conformal_interval_scale`) on lives of the *training* gears
-(``calibration_seeds``, disjoint from ``seeds``), one prognosis per life at a fraction of its
-way from alarm to failure drawn from the seed, per method; the held-out gear is never seen
-before it is scored.
+(``calibration_seeds``, disjoint from ``seeds``), per method and per quarter of the remaining
+share the prognosis itself predicts, one prognosis per life and quarter at a fraction of the
+way drawn from the seed (:func:`calibrate`); the held-out gear is never seen before it is
+scored.
 """
 
 from __future__ import annotations
@@ -42,6 +43,8 @@ from .model import DiagnosisModel
 from .prognosis import Prognosis, PrognosisConfig, Track
 from .prognosis_baselines import predict_linear, predict_wiener
 from .prognosis_calibration import conformal_interval_scale
+from .prognosis_inputs import interval_scale_of, predicted_share, share_bucket
+from .prognosis_scores import HORIZON_BUCKETS
 from .stream import monitor_stream
 from .stream_prognosis import StreamPrognosis
 from .study import MonitorStudyConfig, check_study
@@ -342,7 +345,8 @@ def _track_of(res, fault: str, onset_h: float) -> dict | None:
 
 
 def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig,
-             scales: dict[str, float], seed: int) -> tuple[dict, dict[str, list[dict]]]:
+             scales: dict[str, tuple[float, ...]], seed: int
+             ) -> tuple[dict, dict[str, list[dict]]]:
     """One life to failure through the monitor with the prognosis on, and the baselines on
     its track.
 
@@ -353,8 +357,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     model : DiagnosisModel
         Trained without the life's gear.
     sc : PrognosisStudyConfig
-    scales : dict of str to float
-        Interval scale of each of :data:`METHODS` [-].
+    scales : dict of str to tuple of float
+        Interval scales of each of :data:`METHODS` (``PrognosisConfig.interval_scale``) [-].
     seed : int
         The life's seed (the monitor's and the prognoses' draws).
 
@@ -411,7 +415,9 @@ def _rows(key: dict, life: dict, events: dict[str, list[dict]], scales: dict) ->
                 continue
             inf = np.inf if e["valid"] else np.nan
             rows.append({**key, "fault": life["fault"], "payload": life["payload"],
-                         "method": m, "interval_scale": scales[m], "alarm_h": life["alarm_h"],
+                         "method": m, "interval_scale": interval_scale_of(
+                             scales[m], e["hour"], life["alarm_h"], e["remaining_h"])
+                         if e["valid"] else np.nan, "alarm_h": life["alarm_h"],
                          "hour": e["hour"], "failure_h": life["failure_h"],
                          "true_remaining_h": life["failure_h"] - e["hour"],
                          "valid": bool(e["valid"]),
@@ -422,45 +428,61 @@ def _rows(key: dict, life: dict, events: dict[str, list[dict]], scales: dict) ->
 
 def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
               model: DiagnosisModel, sc: PrognosisStudyConfig, faults: list[str]
-              ) -> tuple[dict[str, float], list[dict]]:
-    """The interval scale of each method by split conformal prediction on lives of the
-    training ``gears`` (``calibration_seeds``; module docstring).
+              ) -> tuple[dict[str, tuple[float, ...]], list[dict]]:
+    """The interval scales of each method by split conformal prediction on lives of the
+    training ``gears`` (``calibration_seeds``; module docstring), one per quarter of the
+    predicted remaining share (:func:`~.prognosis_inputs.predicted_share`).
 
-    Each life gives one prognosis per method: of its valid ones with finite, positive
-    quantiles, the one at a fraction λ of them, λ uniform in [0, 1] from the life's seed
-    and gear [choice: every horizon calibrated]; a life without one gives none.
+    Of a life's valid prognoses with finite, positive quantiles, each quarter gets the one
+    at a fraction λ of those in it, λ uniform in [0, 1] from the life's seed and gear (one
+    per life and quarter: the lives stay exchangeable); a quarter without enough lives for
+    the coverage takes the scale of one prognosis per life at λ over all quarters
+    [choice: the posterior's width is off by a different factor late and early in a span,
+    measured: one scale for all left the last quarter's coverage at 0.68 and the middle's
+    at 1.00].
 
     Returns
     -------
-    scales : dict of str to float
-        Per method, in (0, :data:`MAX_SCALE`] (capped; 1 without a scored life) [-].
+    scales : dict of str to tuple of float
+        Per method, one per quarter, each in (0, :data:`MAX_SCALE`] (capped; 1 without a
+        scored life) [-].
     info : list of dict
-        Per method: ``method``, ``lives`` (scored), ``scale`` (uncapped, inf where too few
-        lives for the coverage), ``scale_used``.
+        Per method and quarter (and ``all``): ``method``, ``quarter``, ``lives`` (scored),
+        ``scale`` (uncapped, inf where too few lives for the coverage), ``scale_used``.
     """
-    ones = dict.fromkeys(METHODS, 1.0)
+    labels = [f"[{lo:g}, {hi:g})" for lo, hi in HORIZON_BUCKETS] + ["all"]
     sims = [(g, s, life_of(plan, banks[g], g, sc, f, s, i))
             for g in gears for i, s in enumerate(sc.calibration_seeds) for f in faults]
-    picked: dict[str, list] = {m: [] for m in METHODS}
+    picked: dict[str, list[list]] = {m: [[] for _ in labels] for m in METHODS}
+    ones = dict.fromkeys(METHODS, (1.0,))
     for g, s, sim in sims:
         life, events = run_life(sim, model, sc, ones, s)
         lam = np.random.default_rng([s, g, 48]).uniform()
         for m, evs in events.items():
             ok = [_as_prognosis(e, m) for e in evs if e["valid"] and e["hour"] < life["failure_h"]]
             ok = [p for p in ok if 0 < p.remaining_h_q05 and np.isfinite(p.remaining_h_q95)]
-            if ok:
-                picked[m].append((ok[int(round(lam * (len(ok) - 1)))], life["failure_h"]))
+            quarter = [share_bucket(predicted_share(p.hour, life["alarm_h"],
+                                                    p.remaining_h_median)) for p in ok]
+            for b in range(len(labels)):  # the last: all quarters
+                inb = [p for p, q in zip(ok, quarter, strict=True)
+                       if b == len(labels) - 1 or q == b]
+                if inb:
+                    picked[m][b].append((inb[int(round(lam * (len(inb) - 1)))],
+                                         life["failure_h"]))
     scales, info = {}, []
     for m in METHODS:
-        raw = conformal_interval_scale([p for p, _ in picked[m]],
-                                       np.array([f for _, f in picked[m]]),
-                                       sc.coverage) if picked[m] else 1.0
-        scales[m] = float(min(raw, MAX_SCALE))
-        info.append({"method": m, "lives": len(picked[m]), "scale": raw,
-                     "scale_used": scales[m]})
-        if raw > MAX_SCALE:
-            log.warning("calibration of %s: scale %s capped at %g (%d lives)", m, raw,
-                        MAX_SCALE, len(picked[m]))
+        raw = [conformal_interval_scale([p for p, _ in pk], np.array([f for _, f in pk]),
+                                        sc.coverage) if pk else np.inf for pk in picked[m]]
+        pooled = raw[-1] if picked[m][-1] else 1.0
+        used = [min(r if np.isfinite(r) else pooled, MAX_SCALE) for r in raw[:-1]]
+        used.append(min(pooled, MAX_SCALE))
+        scales[m] = tuple(float(u) for u in used[:-1])
+        info += [{"method": m, "quarter": q, "lives": len(pk), "scale": r, "scale_used": u}
+                 for q, pk, r, u in zip(labels, picked[m], raw, used, strict=True)]
+        if max(r if np.isfinite(r) else pooled for r in raw[:-1]) > MAX_SCALE:
+            log.warning("calibration of %s: scales %s capped at %g (%s lives)", m,
+                        [round(r, 2) for r in raw[:-1]], MAX_SCALE,
+                        [len(pk) for pk in picked[m][:-1]])
     return scales, info
 
 

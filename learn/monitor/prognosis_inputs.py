@@ -16,8 +16,11 @@ from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
 from swgsim.datasets.schedule import LifeConfig
 from swgsim.gear.faults import get_fault
 
+from .prognosis_scores import HORIZON_BUCKETS
+
 __all__ = ["LONE_WINDOW_H", "Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track",
-           "check_track", "from_samples", "not_valid", "not_yet_valid"]
+           "check_track", "from_samples", "interval_scale_of", "not_valid", "not_yet_valid",
+           "predicted_share", "share_bucket"]
 
 
 #: Operating hours a lone recorded window holds (no interval to take the median of): the
@@ -46,9 +49,13 @@ class PrognosisConfig:
     log_scale_span : float
         Half-width of that grid around ln s = 0, in (0, 10] [-] (5: s within a factor
         e^5 = 148 of the growth's constants [choice]).
-    interval_scale : float
-        Factor on the interval's log half-widths about the median, in (0, 20] [-] (1: the
-        posterior's own; :func:`~.prognosis_calibration.conformal_interval_scale` calibrates it).
+    interval_scale : tuple of float
+        Factor on the interval's log half-widths about the median, each in (0, 20] [-]: one
+        for every prognosis, or one per quarter of the predicted remaining share
+        (:func:`predicted_share`, quarters as
+        :data:`~.prognosis_scores.HORIZON_BUCKETS`: late in the span first). (1,): the
+        posterior's own; :func:`~.prognosis_calibration.conformal_interval_scale`
+        calibrates each.
     horizon_h : float
         Remaining hours beyond which a sample counts as "no failure in sight" (inf), in
         (0, 10^7] [h] (10^6 [choice]).
@@ -68,7 +75,7 @@ class PrognosisConfig:
     n_samples: int = 4000
     n_grid: int = 401
     log_scale_span: float = 5.0
-    interval_scale: float = 1.0
+    interval_scale: tuple[float, ...] = (1.0,)
     horizon_h: float = 1e6
     max_bins: int = 256
     to_failure: RunToFailure = field(default_factory=RunToFailure)
@@ -84,7 +91,14 @@ class PrognosisConfig:
             check_range(v, lo, hi, f"prognosis.{name}")
         check_range(self.min_track_h, 0.0, 1000.0, "prognosis.min_track_h", "h", lo_open=True)
         check_range(self.log_scale_span, 0.0, 10.0, "prognosis.log_scale_span", lo_open=True)
-        check_range(self.interval_scale, 0.0, 20.0, "prognosis.interval_scale", lo_open=True)
+        k = self.interval_scale
+        if isinstance(k, (str, bytes)) or not isinstance(k, (tuple, list)) \
+                or len(k) not in (1, len(HORIZON_BUCKETS)):
+            raise ValueError(f"prognosis.interval_scale must be a list of 1 or "
+                             f"{len(HORIZON_BUCKETS)} factors (one per quarter of the "
+                             f"predicted remaining share), got {k!r}")
+        for i, v in enumerate(k):
+            check_range(v, 0.0, 20.0, f"prognosis.interval_scale[{i}]", lo_open=True)
         check_range(self.horizon_h, 0.0, 1e7, "prognosis.horizon_h", "h", lo_open=True)
         unset = dataclasses.replace(self.to_failure, failure=None)
         for law, faults in LAWS.items():
@@ -322,8 +336,39 @@ def not_yet_valid(h: np.ndarray, cfg: PrognosisConfig, alarm_hour: float) -> str
     return ""
 
 
+def predicted_share(hour: float, alarm_hour: float, remaining_h: float) -> float:
+    """The share of the prognosis's span still to come, as the prognosis itself sees it:
+    r / (t − t_alarm + r), r its median remaining hours (the known counterpart of
+    :func:`~.prognosis_scores.remaining_fraction`, which needs the true failure).
+
+    Parameters
+    ----------
+    hour, alarm_hour : float
+        Operating hours of the prognosis and of the alarm it follows [h].
+    remaining_h : float
+        Median remaining hours [h], >= 0 (inf: 1).
+
+    Returns
+    -------
+    float
+        In [0, 1] [-]; 1 at the alarm.
+    """
+    if not np.isfinite(remaining_h):
+        return 1.0
+    span = hour - alarm_hour + remaining_h
+    return float(remaining_h / span) if span > 0 else 1.0
+
+
+def share_bucket(share: float) -> int:
+    """Index into :data:`~.prognosis_scores.HORIZON_BUCKETS` of a share in [0, 1] (the
+    last bucket holds 1)."""
+    return min(int(np.searchsorted([hi for _, hi in HORIZON_BUCKETS], share, side="right")),
+               len(HORIZON_BUCKETS) - 1)
+
+
 def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
-                 remaining: np.ndarray, cfg: PrognosisConfig) -> Prognosis:
+                 remaining: np.ndarray, cfg: PrognosisConfig, alarm_hour: float
+                 ) -> Prognosis:
     """The valid prognosis from samples of the remaining hours.
 
     Parameters
@@ -338,22 +383,46 @@ def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
         Samples of the remaining operating hours [h]; beyond ``cfg.horizon_h`` inf.
     cfg : PrognosisConfig
         Its ``horizon_h`` and ``interval_scale``.
+    alarm_hour : float
+        Operating hour of the alarm the prognosis follows [h] (its predicted share picks
+        the interval scale).
 
     Returns
     -------
     Prognosis
         Median, 5 % and 95 % quantiles, the interval's log half-widths about the median
-        times ``cfg.interval_scale``.
+        times ``cfg.interval_scale`` (:func:`interval_scale_of`).
     """
     r = np.where(remaining > cfg.horizon_h, np.inf, np.maximum(remaining, 0.0))
     q05, med, q95 = np.quantile(r, [0.05, 0.5, 0.95], method="inverted_cdf")  # inf-safe
-    if cfg.interval_scale != 1.0 and 0 < med < np.inf:
-        k = cfg.interval_scale
+    k = interval_scale_of(cfg.interval_scale, hour, alarm_hour, float(med))
+    if k != 1.0 and 0 < med < np.inf:
         q05 = med * (q05 / med) ** k if q05 > 0 else 0.0
         q95 = med * (q95 / med) ** k
     q05, med, q95 = (float(q) for q in (q05, med, q95))
     return Prognosis(hour, fault, method, True, "", now, thr, med, q05, q95,
                      hour + med, hour + q05, hour + q95)
+
+
+def interval_scale_of(scales: tuple[float, ...], hour: float, alarm_hour: float,
+                      remaining_h: float) -> float:
+    """The factor of ``PrognosisConfig.interval_scale`` a prognosis gets: the only one, or
+    that of the quarter its :func:`predicted_share` falls in.
+
+    Parameters
+    ----------
+    scales : tuple of float, length 1 or len(HORIZON_BUCKETS)
+    hour, alarm_hour, remaining_h : float
+        As :func:`predicted_share` [h].
+
+    Returns
+    -------
+    float
+        [-]
+    """
+    if len(scales) == 1:
+        return float(scales[0])
+    return float(scales[share_bucket(predicted_share(hour, alarm_hour, remaining_h))])
 
 
 def not_valid(hour: float, fault: str, method: str, now: float, thr: float,

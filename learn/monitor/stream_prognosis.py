@@ -78,7 +78,7 @@ class StreamPrognosis:
     planned : list of DutyBlock
         A future duty the user declares, repeated from its first block; empty: the
         recorded duty's mean rate.
-    min_track_h, min_estimates, interval_scale : float, int, float
+    min_track_h, min_estimates, interval_scale : float, int, tuple of float
         The predictor's (:class:`learn.monitor.prognosis.PrognosisConfig`, its defaults
         and ranges).
     to_failure : RunToFailure
@@ -96,7 +96,7 @@ class StreamPrognosis:
     planned: list[DutyBlock] = field(default_factory=list)
     min_track_h: float = PrognosisConfig.min_track_h
     min_estimates: int = PrognosisConfig.min_estimates
-    interval_scale: float = PrognosisConfig.interval_scale
+    interval_scale: tuple[float, ...] = PrognosisConfig.interval_scale
     to_failure: RunToFailure = field(default_factory=RunToFailure)
     seed: int = 0
 

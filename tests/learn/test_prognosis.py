@@ -185,10 +185,31 @@ def test_conformal_scale_widens_a_too_narrow_interval_to_its_coverage():
 def test_the_config_scales_the_interval_about_the_median():
     track, alarm, duty, wh, _ = life("wear", 0, 0.3)
     a = predict_growth(track, "wear", alarm, duty, wh)
-    b = predict_growth(track, "wear", alarm, duty, wh, PrognosisConfig(interval_scale=2.0))
+    b = predict_growth(track, "wear", alarm, duty, wh, PrognosisConfig(interval_scale=(2.0,)))
     assert b.remaining_h_median == a.remaining_h_median
     assert b.remaining_h_q95 / b.remaining_h_median == pytest.approx(
         (a.remaining_h_q95 / a.remaining_h_median) ** 2)
+
+
+def test_each_quarter_of_the_predicted_share_gets_its_own_scale():
+    """Four factors: the prognosis takes the one of the quarter its own predicted remaining
+    share falls in; a list of another length, or a factor out of range, is one line."""
+    from learn.monitor.prognosis_inputs import predicted_share, share_bucket
+
+    track, alarm, duty, wh, _ = life("wear", 0, 0.3)
+    a = predict_growth(track, "wear", alarm, duty, wh)
+    q = share_bucket(predicted_share(a.hour, alarm, a.remaining_h_median))
+    scales = tuple(2.0 if i == q else 5.0 for i in range(4))
+    b = predict_growth(track, "wear", alarm, duty, wh, PrognosisConfig(interval_scale=scales))
+    assert b.remaining_h_q95 / b.remaining_h_median == pytest.approx(
+        (a.remaining_h_q95 / a.remaining_h_median) ** 2)
+    assert [share_bucket(x) for x in (0.0, 0.2499, 0.25, 0.74, 0.75, 1.0)] == [0, 0, 1, 2, 3, 3]
+    assert predicted_share(10.0, 4.0, 2.0) == pytest.approx(0.25)
+    assert predicted_share(10.0, 4.0, np.inf) == 1.0
+    with one_line("prognosis.interval_scale must be a list of 1 or 4"):
+        PrognosisConfig(interval_scale=(1.0, 2.0)).check()
+    with one_line(r"prognosis.interval_scale\[1\]"):
+        PrognosisConfig(interval_scale=(1.0, 0.0, 1.0, 1.0)).check()
 
 
 @pytest.mark.parametrize("fault", ["root_tooth_crack", "wear"])

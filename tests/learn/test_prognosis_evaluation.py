@@ -69,6 +69,9 @@ def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
     assert summary["lives"] == 1 and (out / "prognosis.png").stat().st_size > 10_000
     cal = pd.read_csv(out / "calibration.csv")
     assert set(cal.method) == {"growth", "linear", "wiener"} and (cal.scale_used > 0).all()
+    assert cal.groupby("method").quarter.apply(list).map(len).eq(5).all()  # 4 and all
+    used = rows[rows.valid].interval_scale
+    assert used.notna().all() and used.isin(cal.scale_used.to_numpy()).all()
 
 
 def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):
