@@ -414,10 +414,11 @@ def _rows(key: dict, life: dict, events: dict[str, list[dict]], scales: dict) ->
             if e["hour"] >= life["failure_h"]:
                 continue
             inf = np.inf if e["valid"] else np.nan
+            med = inf if e["remaining_h"] is None else e["remaining_h"]
+            k = interval_scale_of(scales[m], e["hour"], life["alarm_h"], med) \
+                if e["valid"] else np.nan  # the factor this prognosis got
             rows.append({**key, "fault": life["fault"], "payload": life["payload"],
-                         "method": m, "interval_scale": interval_scale_of(
-                             scales[m], e["hour"], life["alarm_h"], e["remaining_h"])
-                         if e["valid"] else np.nan, "alarm_h": life["alarm_h"],
+                         "method": m, "interval_scale": k, "alarm_h": life["alarm_h"],
                          "hour": e["hour"], "failure_h": life["failure_h"],
                          "true_remaining_h": life["failure_h"] - e["hour"],
                          "valid": bool(e["valid"]),

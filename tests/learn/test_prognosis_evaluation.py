@@ -207,3 +207,18 @@ def test_the_model_is_trained_on_every_severity_a_life_passes_through():
             lived = np.unique(sim.schedule.severity[sim.schedule.severity > 0])
             assert lived.size >= 8 and set(lived.tolist()) <= set(every), (f, lived)
             assert trained[0] <= lived[0] + trained[1] - trained[0] and lived[-1] <= trained[-1]
+
+
+def test_a_prognosis_beyond_the_horizon_gets_the_earliest_quarters_scale():
+    """A valid prognosis whose median lies beyond the horizon (null remaining hours):
+    predicted share 1, the scale of the quarter that holds the alarm; a prognosis not
+    yet valid gets none."""
+    from learn.monitor.prognosis_evaluation import _rows
+
+    life = {"fault": "wear", "payload": 1.0, "alarm_h": 1.0, "failure_h": 10.0}
+    ev = {"hour": 2.0, "valid": True, "remaining_h": None, "remaining_h_q05": 5.0,
+          "remaining_h_q95": None}
+    rows = _rows({}, life, {"growth": [ev, {**ev, "valid": False, "remaining_h_q05": None}]},
+                 {"growth": (1.0, 2.0, 3.0, 4.0)})
+    assert rows[0]["interval_scale"] == 4.0 and rows[0]["remaining_h"] == np.inf
+    assert np.isnan(rows[1]["interval_scale"]) and np.isnan(rows[1]["remaining_h"])
