@@ -6,12 +6,15 @@ Layers, each importing only those before it:
   :mod:`learn.tracking` - MLflow runs and their provenance;
 * :mod:`learn.learners` - the classifiers (the paper's Table VI and the model registry,
   torch MLP and 1D-CNN, MiniRocket, CORAL);
-* :mod:`learn.studies` - protocols, the study of Tables VII-X, transfer to the gear not
-  seen in training, the separability of faults in the signals;
+* :mod:`learn.studies` - protocols, the study of Tables VII-X, the runs and k-shot
+  splits of transfer to the gear not seen in training, the separability of faults in the
+  signals;
 * :mod:`learn.reports` - tables, figures and summaries of the studies' results;
 * :mod:`learn.tasks` - what the apps run: a study and its report;
   :mod:`learn.observability` - one workflow's folder beside them: the observability of
-  faults in the signals, its study and the task ``swgsim-observability`` runs.
+  faults in the signals, its study and the task ``swgsim-observability`` runs;
+  :mod:`learn.transfer` - the transfer comparison's folder above them: its study, report
+  and the task ``transfer`` (``swgsim-train -m experiment=transfer``).
 
 The public API is listed in ``__all__``; names are imported on first use (torch only
 when a net is asked for).
@@ -37,7 +40,7 @@ _EXPORTS = {
     "ProtocolConfig": "studies.protocols", "make_splits": "studies.protocols",
     "evaluate": "studies.protocols",
     "StudyOptions": "studies.tables", "run_paper_study": "tasks.paper",
-    "run_comparison": "studies.transfer", "TransferConfig": "studies.transfer",
+    "run_comparison": "transfer.study", "TransferConfig": "transfer.study",
     "separation_records": "studies.separability",
     "observability_table": "observability.study",
 }

@@ -49,9 +49,9 @@ def main(argv=None) -> dict:
     import torch
     from omegaconf import OmegaConf
 
-    from learn.reports.transfer_picks import primary_row
-    from learn.reports.transfer_report import summarise
-    from learn.studies.transfer import check_config, run_comparison
+    from learn.transfer.picks import primary_row
+    from learn.transfer.report import summarise
+    from learn.transfer.study import check_config, run_comparison
     from swgcli import compose_app
     from swgsim.datasets.schema import load
 
@@ -84,7 +84,7 @@ def main(argv=None) -> dict:
         kind = mine["model"].str.partition("+")[2]
         w = worst[(worst["model"].str.partition("+")[0] == spec.model)
                   & (worst["input"] == spec.input)]
-        acc = {}  # at k > 0 its first adaptation in the declared order (transfer_picks)
+        acc = {}  # at k > 0 its first adaptation in the declared order (learn/transfer/picks.py)
         for k in ks:
             r = primary_row(w, spec, k)
             if r is not None and int(r["k_shot"]) == k:

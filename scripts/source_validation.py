@@ -71,7 +71,7 @@ def evaluate(data: str, overrides: list[str], labels: list[str], seed: int,
 
     from learn.studies.protocols import fit_with_groups, protocol_splits, window_groups
     from learn.studies.runs import make_estimator
-    from learn.studies.transfer import _inputs, check_config
+    from learn.transfer.study import _inputs, check_config
     from swgcli import compose_app
     from swgsim.datasets.schema import load
 

@@ -39,10 +39,10 @@ from learn.observability.motion import MotionMapConfig
 from learn.studies.paper_study import StudyTracking
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.studies.tables import StudyOptions
-from learn.studies.transfer import TransferConfig
 from learn.tasks.monitor_evaluation import MonitorExperiment
 from learn.tasks.prognosis_evaluation import PrognosisExperiment
 from learn.tracking.config import LoggerConfig
+from learn.transfer.study import TransferConfig
 from swgsim.base.typed import allowed, check_keys
 from swgsim.datasets.config import DatasetConfig
 from swgsim.gear.thermal import THERMAL_PRESETS

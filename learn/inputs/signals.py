@@ -1,6 +1,6 @@
 """Model inputs built from a schema-v1 data set: raw signals, differenced signals, features.
 
-The learners of the transfer study (``learn.studies.transfer``) take these inputs:
+The learners of the transfer study (``learn.transfer.study``) take these inputs:
 
 ``raw``
     The five bridge outputs s0..s4, each normalised with the healthy reference window of

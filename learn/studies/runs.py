@@ -3,7 +3,7 @@ adaptations and scoring.
 
 A run names a model config (``transfer.models.<name>``, a ``_target_`` mapping as in
 ``conf/model/``) and an input of :data:`learn.inputs.signals.INPUTS`, and says which target-gear
-adaptations it gets (:mod:`learn.studies.transfer`). :func:`fit_and_adapt` fits it on the
+adaptations it gets (:mod:`learn.transfer.study`). :func:`fit_and_adapt` fits it on the
 source gears of one split and scores it and its adaptations (AdaBN or CORAL on the held-out
 gear's unlabelled healthy windows; fine-tuning or MiniRocket's ridge refit on k labelled windows per
 class) on the same evaluation windows. A torch net's input is standardised once per job
@@ -305,7 +305,7 @@ class JobProgress:
     Parameters
     ----------
     total : int
-        Jobs planned (:func:`learn.studies.transfer.planned_jobs` summed over the data
+        Jobs planned (:func:`learn.transfer.study.planned_jobs` summed over the data
         sets); corrected with :meth:`adjust` when a data set turns out to have other
         splits.
     enabled : bool

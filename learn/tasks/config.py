@@ -23,7 +23,7 @@ def typed_app(cfg: Any) -> Any:
         :class:`learn.studies.protocols.ProtocolConfig`,
         :class:`learn.tracking.config.LoggerConfig`,
         :class:`learn.studies.tables.StudyOptions`,
-        :class:`learn.studies.transfer.TransferConfig`, ...); ``_target_`` configs (the
+        :class:`learn.transfer.study.TransferConfig`, ...); ``_target_`` configs (the
         models) stay mappings for :func:`hydra.utils.instantiate`.
 
     Raises

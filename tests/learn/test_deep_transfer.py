@@ -1,4 +1,4 @@
-"""learn.studies.transfer: the k-shot split keeps the evaluation windows apart; CORAL; one
+"""learn.transfer.study: the k-shot split keeps the evaluation windows apart; CORAL; one
 transfer run end to end through the Hydra config (tiny grid)."""
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ from data_sets import make_toy_dataset, write_toy_dataset
 
 from learn.inputs.signals import build_input
 from learn.learners.adapt import CoralClassifier
-from learn.reports.transfer_report import summarise
 from learn.studies.kshot import check_no_leak, kshot_split
 from learn.studies.latency import latency_heading
 from learn.studies.protocols import protocol_splits
-from learn.studies.transfer import CONFUSION_COLUMNS, RESULT_COLUMNS, TargetSpec
+from learn.transfer.report import summarise
+from learn.transfer.study import CONFUSION_COLUMNS, RESULT_COLUMNS, TargetSpec
 
 CONF = Path(__file__).resolve().parents[2] / "conf"
 
@@ -188,7 +188,7 @@ def test_transfer_end_to_end(tmp_path):
     assert params["device"] == here and set(lat["device"]) <= {"cpu", here}
     assert params["deterministic"] in ("True", "False") and "torch_threads" in params
     # the result is the declared primary, the best beside it marked as chosen afterwards
-    from learn.reports.transfer_picks import BEST, PRIMARY
+    from learn.transfer.picks import BEST, PRIMARY
 
     assert table.index("## Headline") < table.index("## Per-class recall")
     ood0 = [h for h in out["headline"] if h["protocol"] == "ood_disturbed" and h["k_shot"] == 0]
@@ -218,7 +218,7 @@ def test_transfer_experiment_composes():
 
     from learn.inputs.signals import INPUTS
     from learn.studies.runs import ADAPT, RunRef, RunSpec, make_estimator
-    from learn.studies.transfer import TransferConfig, check_config
+    from learn.transfer.study import TransferConfig, check_config
     from swgcli import compose_app
 
     cfg = compose_app("train", ["experiment=transfer"])
@@ -263,7 +263,7 @@ def test_transfer_model_settings_refused_before_any_work(overrides, words):
     line naming the key, from the config check, before a data set is generated."""
     from omegaconf import OmegaConf
 
-    from learn.studies.transfer import check_config
+    from learn.transfer.study import check_config
     from swgcli import compose_app
 
     tc = OmegaConf.to_object(compose_app("train", ["experiment=transfer", *overrides]).transfer)
@@ -308,7 +308,7 @@ def _synthetic_confusion():
 def test_recall_is_on_the_accuracys_basis():
     """Per-class recall on the worst split of the run's accuracy, mean over seeds, not
     pooled over splits (pooled, the tip crack would read 26 / 30)."""
-    from learn.reports.transfer_report import class_recall
+    from learn.transfer.report import class_recall
 
     res, conf = _synthetic_results(), _synthetic_confusion()
     summ = summarise(res)
@@ -323,9 +323,9 @@ def test_recall_is_on_the_accuracys_basis():
 
 
 def test_targets_put_the_primary_first_and_mark_the_best_chosen_afterwards(tmp_path):
-    from learn.reports.transfer_picks import BEST, NO_PRIMARY, PRIMARY
-    from learn.reports.transfer_report import class_recall, target_table, write_table
     from learn.studies.runs import RunRef
+    from learn.transfer.picks import BEST, NO_PRIMARY, PRIMARY
+    from learn.transfer.report import class_recall, target_table, write_table
 
     res, conf = _synthetic_results(), _synthetic_confusion()
     summ = summarise(res)
@@ -366,8 +366,8 @@ def test_targets_put_the_primary_first_and_mark_the_best_chosen_afterwards(tmp_p
 def test_primary_at_k_is_fixed_before_the_results():
     """At k > 0 the primary is its first adaptation in the declared order, not its
     better one; a run without one keeps its k = 0 result."""
-    from learn.reports.transfer_picks import primary_row
     from learn.studies.runs import RunRef
+    from learn.transfer.picks import primary_row
 
     w = pd.DataFrame({"model": ["cnn", "cnn+adabn", "cnn+ft_all", "cnn+ft_last", "rf"],
                       "input": "raw", "k_shot": [0, 0, 5, 5, 0],
@@ -403,8 +403,8 @@ def _toy_overrides(tmp_path: Path, *extra: str) -> list[str]:
 
 
 def test_a_stopped_comparison_runs_only_its_unfinished_cells_again(tmp_path, monkeypatch):
-    from learn.studies import transfer as study
     from learn.tasks.train import run_train
+    from learn.transfer import study
 
     rep = Path(run_train(_toy_comparison(tmp_path))["report_dir"])
     first = pd.read_csv(rep / "results.csv")
@@ -418,8 +418,8 @@ def test_a_stopped_comparison_runs_only_its_unfinished_cells_again(tmp_path, mon
 
 
 def test_a_comparison_runs_as_a_job_array_then_builds_its_report(tmp_path, monkeypatch):
-    from learn.studies import transfer as study
     from learn.tasks.train import run_train
+    from learn.transfer import study
 
     out = run_train(_toy_comparison(tmp_path, "transfer.group=0"))
     rep = Path(out["report_dir"])

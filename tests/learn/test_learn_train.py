@@ -56,7 +56,7 @@ def test_task_dispatch(monkeypatch, tmp_path):
                         raising=False)
     cfg = compose_train(["task=probe"])
     assert run_train(cfg) == {"ok": 1} and calls == [cfg]
-    assert TASKS["transfer"] == "learn.tasks.transfer.run_transfer"
+    assert TASKS["transfer"] == "learn.transfer.task.run_transfer"
     assert TASKS["study"].rsplit(".", 1) == [train_task.__name__, "run_study_job"]
 
 

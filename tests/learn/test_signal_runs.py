@@ -13,7 +13,7 @@ from data_sets import make_toy_dataset
 from omegaconf import OmegaConf
 
 from learn.studies.runs import JobProgress, RunRef
-from learn.studies.transfer import RUN_TIME_COLUMNS, planned_jobs, run_comparison
+from learn.transfer.study import RUN_TIME_COLUMNS, planned_jobs, run_comparison
 from swgcli import compose_app
 
 pytestmark = pytest.mark.usefixtures("torch_one_thread")

@@ -213,9 +213,9 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
 
 
 def test_transfer_cells_log_seed_statistics_not_steps(tiny_dataset, tracking_uri):
-    from learn.reports.transfer_runs import log_transfer
-    from learn.studies.transfer import TransferConfig
     from learn.tracking.config import LoggerConfig
+    from learn.transfer.runs import log_transfer
+    from learn.transfer.study import TransferConfig
 
     rows = [{"dataset": "tiny", "protocol": "ood_disturbed", "split": f"gear{g}", "model": m,
              "input": "sel1", "k_shot": 0, "seed": sd, "accuracy": 0.5 + 0.1 * g + 0.01 * sd,

@@ -1,8 +1,8 @@
 """Task ``transfer`` (``swgsim-train -m experiment=transfer``): the transfer comparison
-(:func:`learn.studies.transfer.run_comparison`) on every data set of ``transfer.run_on``
+(:func:`learn.transfer.study.run_comparison`) on every data set of ``transfer.run_on``
 (generated when missing), the separability of its classes, and its report
-(:mod:`learn.reports.transfer_report`) and MLflow runs. Files in ``report_dir``: see
-:mod:`learn.studies.transfer`."""
+(:mod:`learn.transfer.report`) and MLflow runs. Files in ``report_dir``: see
+:mod:`learn.transfer.study`."""
 
 from __future__ import annotations
 
@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from learn.studies.transfer import TransferConfig, check_config, run_comparisons
 from learn.tasks.config import typed_app
 from learn.tasks.monitor_evaluation import part_key
+from learn.transfer.study import TransferConfig, check_config, run_comparisons
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import plain
 from swgsim.datasets.schema import read_manifest
@@ -68,7 +68,7 @@ def _content(tc: TransferConfig) -> dict:
 
 @dataclass
 class CellParts:
-    """The comparison's finished cells on disk (:func:`learn.studies.transfer.run_comparisons`'s
+    """The comparison's finished cells on disk (:func:`learn.transfer.study.run_comparisons`'s
     ``parts``): ``<folder>/<data set>/<protocol>_<split>_seed<seed>.json`` with a cell's
     result rows and run times, and ``latency.json``; read back only where its key, what
     made it (the data set's config hash, the runs and models, the features, the split
@@ -224,7 +224,7 @@ def _separability(ds, name: str, tc: TransferConfig, report_dir: Path, got: _Col
 def _compare(app, tc: TransferConfig, data_sets, report_dir: Path, parts: CellParts
              ) -> _Collected:
     """The comparison and the separability on every data set, one pool of workers for
-    all of them (:func:`learn.studies.transfer.run_comparisons`); one data set in memory
+    all of them (:func:`learn.transfer.study.run_comparisons`); one data set in memory
     at a time, its separability computed when it is loaded."""
     from functools import partial
 
@@ -262,8 +262,8 @@ def _timings(tc: TransferConfig, wall: float, input_s: float, generate_s: float,
 def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, timings) -> dict:
     """results.csv, confusion.csv, run_times.csv, latency.csv, table.md and
     accuracy_vs_k.png."""
-    from learn.reports.transfer_figure import plot_accuracy_vs_k
-    from learn.reports.transfer_report import write_table
+    from learn.transfer.figure import plot_accuracy_vs_k
+    from learn.transfer.report import write_table
 
     files = dict(got.files)
     files["results"] = report_dir / "results.csv"
@@ -299,7 +299,7 @@ def _group_done(tc: TransferConfig, name: str, report_dir: Path, wall: float) ->
 def run_transfer(cfg) -> dict:
     """Task ``transfer``: the whole comparison over the data sets, report and MLflow.
 
-    Reads ``transfer`` (:class:`learn.studies.transfer.TransferConfig`,
+    Reads ``transfer`` (:class:`learn.transfer.study.TransferConfig`,
     ``conf/experiment/transfer.yaml``), ``stored`` (when ``transfer.run_on`` is empty),
     ``features`` (orders, floor), ``logger`` (:class:`learn.tracking.config.LoggerConfig`;
     None: no tracking) and ``seed`` (CV folds).
@@ -314,9 +314,9 @@ def run_transfer(cfg) -> dict:
     dict
         ``report_dir``, ``files``, ``wall_s``, ``n_runs``, ``worst_split`` (per data set,
         ood_disturbed worst-split mean accuracy per model/input/k), ``headline`` (rows of
-        :func:`learn.reports.transfer_picks.headline_table`: the primary run first, the
+        :func:`learn.transfer.picks.headline_table`: the primary run first, the
         best beside it), ``targets`` (rows of
-        :func:`learn.reports.transfer_report.target_table`), ``run_id`` (parent MLflow run).
+        :func:`learn.transfer.report.target_table`), ``run_id`` (parent MLflow run).
 
     Raises
     ------
@@ -327,7 +327,7 @@ def run_transfer(cfg) -> dict:
     """
     import torch
 
-    from learn.reports.transfer_runs import log_transfer
+    from learn.transfer.runs import log_transfer
     from swgsim.files import ownership
 
     app = typed_app(cfg)
@@ -374,8 +374,8 @@ def _summary(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, w
              device: str) -> dict:
     """The worst split per run, the headline and the targets (printed with
     :func:`print_summary` when ``tc.progress``)."""
-    from learn.reports.transfer_picks import headline_lines, headline_table
-    from learn.reports.transfer_report import class_recall, row_label, summarise, target_table
+    from learn.transfer.picks import headline_lines, headline_table
+    from learn.transfer.report import class_recall, row_label, summarise, target_table
 
     summ = summarise(res)
     w = summ[(summ["protocol"] == "ood_disturbed") & (summ["split"] == "worst")]

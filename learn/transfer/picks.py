@@ -20,7 +20,7 @@ from collections.abc import Sequence
 
 from learn.studies.protocols import OOD_PROTOCOLS
 from learn.studies.runs import RunRef
-from learn.studies.transfer import FT_MODES
+from learn.transfer.study import FT_MODES
 from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
@@ -82,7 +82,7 @@ def headline_table(summ: pd.DataFrame, primary: RunRef | None) -> pd.DataFrame:
     Parameters
     ----------
     summ : pandas.DataFrame
-        :func:`learn.reports.transfer_report.summarise`.
+        :func:`learn.transfer.report.summarise`.
     primary : RunRef, optional
         ``transfer.primary``.
 

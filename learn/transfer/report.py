@@ -1,13 +1,13 @@
-"""Report of the transfer comparison (:mod:`learn.studies.transfer`): tables and targets
-(its figure: :mod:`learn.reports.transfer_figure`; its MLflow runs:
-:mod:`learn.reports.transfer_runs`).
+"""Report of the transfer comparison (:mod:`learn.transfer.study`): tables and targets
+(its figure: :mod:`learn.transfer.figure`; its MLflow runs:
+:mod:`learn.transfer.runs`).
 
 Everything here reads the comparison's two tables: ``results`` (one row per run:
-:data:`learn.studies.transfer.RESULT_COLUMNS`) and ``confusion``
-(:data:`learn.studies.transfer.CONFUSION_COLUMNS`, counts per split and seed). Nothing is
+:data:`learn.transfer.study.RESULT_COLUMNS`) and ``confusion``
+(:data:`learn.transfer.study.CONFUSION_COLUMNS`, counts per split and seed). Nothing is
 fitted or chosen here. The result of a data set is the primary run declared before the
 comparison (``transfer.primary``); the "best" run, a statement about the evaluation
-windows made afterwards, stands beside it, marked so (:mod:`learn.reports.transfer_picks`).
+windows made afterwards, stands beside it, marked so (:mod:`learn.transfer.picks`).
 Accuracies are worst-split means over seeds, and so are the per-class recalls beside them
 (:func:`class_recall`).
 """
@@ -20,16 +20,16 @@ from pathlib import Path
 import numpy as np
 
 from learn.learners.models import model_label
-from learn.reports.transfer_picks import (
+from learn.studies.latency import latency_heading
+from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
+from learn.studies.runs import RunRef
+from learn.transfer.picks import (
     BEST,
     headline_md,
     headline_table,
     picks,
 )
-from learn.studies.latency import latency_heading
-from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
-from learn.studies.runs import RunRef
-from learn.studies.transfer import TargetSpec
+from learn.transfer.study import TargetSpec
 from swgsim.base.lazy import lazy_module
 from swgsim.files.ownership import write_owned
 
@@ -67,7 +67,7 @@ def summarise(results: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     results : pandas.DataFrame
-        :data:`learn.studies.transfer.RESULT_COLUMNS`.
+        :data:`learn.transfer.study.RESULT_COLUMNS`.
 
     Returns
     -------
@@ -92,7 +92,7 @@ def class_recall(confusion: pd.DataFrame, summ: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     confusion : pandas.DataFrame
-        :data:`learn.studies.transfer.CONFUSION_COLUMNS` (counts per split and seed).
+        :data:`learn.transfer.study.CONFUSION_COLUMNS` (counts per split and seed).
     summ : pandas.DataFrame
         :func:`summarise` of the same comparison.
 
@@ -142,7 +142,7 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str,
                  primary: RunRef | None = None,
                  separability: Mapping | None = None) -> pd.DataFrame:
     """Check the targets of ``transfer.targets`` per data set: the primary run's first,
-    the best run's beside it (:func:`learn.reports.transfer_picks.picks`).
+    the best run's beside it (:func:`learn.transfer.picks.picks`).
 
     Parameters
     ----------
@@ -151,7 +151,7 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str,
     recall : pandas.DataFrame
         :func:`class_recall` (the worst split, mean over seeds: the accuracy's basis).
     targets : mapping of str to TargetSpec
-        Data set -> :class:`learn.studies.transfer.TargetSpec` (protocol, accuracy: {k: min
+        Data set -> :class:`learn.transfer.study.TargetSpec` (protocol, accuracy: {k: min
         worst-split mean}, recall: {class: min recall at k = 0}; fractions).
     primary : RunRef, optional
         The run declared before the comparison (``transfer.primary``): the result; the
@@ -162,7 +162,7 @@ def target_table(summ: pd.DataFrame, recall: pd.DataFrame, targets: Mapping[str,
     Returns
     -------
     pandas.DataFrame
-        :data:`TARGET_COLUMNS`: who (:data:`~learn.reports.transfer_picks.PRIMARY`, ``BEST``
+        :data:`TARGET_COLUMNS`: who (:data:`~learn.transfer.picks.PRIMARY`, ``BEST``
         or why there is no primary: then run is empty, reached NaN, met None), split
         (the run's worst split), observable: for a recall, the class's share beyond the
         healthy p95; for an accuracy, the mean of those shares over the classes (healthy:
@@ -415,7 +415,7 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
         The held-out gear's unlabelled healthy windows the unsupervised adaptations saw
         (``transfer.adapt_windows``); stated in the introduction.
     run_times : pandas.DataFrame, optional
-        :data:`learn.studies.transfer.RUN_TIME_COLUMNS`: wall and CPU time of every run
+        :data:`learn.transfer.study.RUN_TIME_COLUMNS`: wall and CPU time of every run
         in every job, summed per run and data set in the time section.
     """
     summ = summarise(results)

@@ -1,5 +1,5 @@
 """The transfer comparison's MLflow runs (:func:`log_transfer`): a parent run with the
-report and one child per cell of :data:`learn.reports.transfer_report.CELL_KEYS`."""
+report and one child per cell of :data:`learn.transfer.report.CELL_KEYS`."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from learn.reports.transfer_report import CELL_KEYS
-from learn.studies.transfer import TransferConfig
 from learn.tracking.config import LoggerConfig
+from learn.transfer.report import CELL_KEYS
+from learn.transfer.study import TransferConfig
 from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
@@ -39,7 +39,7 @@ def log_transfer(results: pd.DataFrame, files: Mapping[str, Path], logger: Logge
     Parameters
     ----------
     results : pandas.DataFrame
-        :data:`learn.studies.transfer.RESULT_COLUMNS`, one row per (cell, split, seed).
+        :data:`learn.transfer.study.RESULT_COLUMNS`, one row per (cell, split, seed).
     files : mapping of str to Path
         Report files, stored as artifacts of the parent.
     logger : LoggerConfig

@@ -1,9 +1,9 @@
-"""Figure of the transfer comparison (:mod:`learn.studies.transfer`): worst-split accuracy
+"""Figure of the transfer comparison (:mod:`learn.transfer.study`): worst-split accuracy
 against the number of labelled windows of the held-out gear, ``accuracy_vs_k.png``.
 
-It reads the comparison's ``results`` table (:data:`learn.studies.transfer.RESULT_COLUMNS`)
-through :func:`learn.reports.transfer_report.summarise`; its tables are in
-:mod:`learn.reports.transfer_report`.
+It reads the comparison's ``results`` table (:data:`learn.transfer.study.RESULT_COLUMNS`)
+through :func:`learn.transfer.report.summarise`; its tables are in
+:mod:`learn.transfer.report`.
 """
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
-from learn.reports.transfer_report import model_rank, observable_share, row_label, summarise
 from learn.studies.protocols import OOD_PROTOCOLS
-from learn.studies.transfer import TargetSpec
+from learn.transfer.report import model_rank, observable_share, row_label, summarise
+from learn.transfer.study import TargetSpec
 from swgsim.base.lazy import lazy_module
 from swgsim.files.ownership import write_owned
 

@@ -28,7 +28,7 @@ kernels were set for the CPU budget on the earlier default data set, not on thes
 Files in ``report_dir`` (default ``reports/transfer``): ``results.csv`` (one row per
 run: :data:`RESULT_COLUMNS`, accuracy in 0..1), ``confusion.csv``
 (:data:`CONFUSION_COLUMNS`, counts per split and seed),
-``table.md`` (:func:`learn.reports.transfer_report.write_table`), ``accuracy_vs_k.png``,
+``table.md`` (:func:`learn.transfer.report.write_table`), ``accuracy_vs_k.png``,
 ``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``, ``run_times.csv``
 (:data:`RUN_TIME_COLUMNS`: wall and CPU seconds of every run in every job). One MLflow
 run per (data set, protocol, model, input, k) with the per-split, per-seed accuracies,
@@ -116,7 +116,7 @@ class TransferConfig:
     data_root : str
         Folder of the generated data sets (shared with ``swgsim-paper``'s).
     protocols : list of str
-        Evaluation protocols (:data:`learn.reports.transfer_report.ALL_PROTOCOLS`).
+        Evaluation protocols (:data:`learn.transfer.report.ALL_PROTOCOLS`).
     seeds, cv_seeds : list of int
         Model seeds and k-shot draws (leave-one-gear-out); model seeds of the CV
         protocols (null: ``seeds``).
@@ -507,7 +507,7 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
     on_load : callable, optional
         ``on_load(name, ds)`` when a data set is loaded (e.g. its separability), in the
         thread that hands out the jobs.
-    parts : learn.tasks.transfer.CellParts, optional
+    parts : learn.transfer.task.CellParts, optional
         Finished cells kept on disk: ``load(name, cell)`` -> ``(rows, seconds)`` or None,
         ``save(name, cell, rows, seconds)`` (returns them as they will be read back),
         ``latency(name)`` and ``save_latency(name, table)``; a cell it holds is not run
