@@ -13,7 +13,7 @@ Examples
 
     swgsim-calibrate measured=/work/shared/data/joint_friction/franka_joint2_slow.csv \\
         out_dir=reports/calibration/franka_joint2_slow
-    swgsim-calibrate measured=my.csv out_dir=out logger.enabled=false figures=false
+    swgsim-calibrate measured=my.csv out_dir=out ~logger figures=false
 """
 
 from __future__ import annotations
@@ -23,13 +23,14 @@ import dataclasses
 import logging
 import types
 import typing
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 from typing import Any
 
 from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
+from learn.tracking.config import LoggerConfig
 from swgcal import (
     KINDS,
     SelectionConfig,
@@ -105,16 +106,6 @@ def kind_option_fields() -> list[tuple[str, Any, Any]]:
     return out
 
 
-@dataclass
-class CalibrateLogger:
-    """MLflow tracking of ``swgsim-calibrate``."""
-
-    enabled: bool = True
-    tracking_uri: str | None = None
-    experiment: str = "calibration"
-    run_name: str | None = None
-
-
 #: The ``selection`` group: the keys of :class:`swgcal.SelectionConfig`.
 SelectionOptions = schema_of(SelectionConfig, "SelectionOptions")
 
@@ -124,7 +115,7 @@ CalibrateApp = dataclasses.make_dataclass("CalibrateApp", [
     *kind_option_fields(),
     ("selection", SelectionOptions, field(default_factory=SelectionOptions)),
     ("figures", bool, field(default=True)),
-    ("logger", CalibrateLogger, field(default_factory=CalibrateLogger)),
+    ("logger", LoggerConfig | None, field(default=None)),
 ])
 CalibrateApp.__module__ = __name__
 CalibrateApp.OUT_DIRS = ("out_dir",)  # folders written (swgcli.app.check_out_dirs)
@@ -134,10 +125,15 @@ CalibrateApp.__doc__ = """``swgsim-calibrate``: calibrate the model against meas
 ``out_dir``: created if absent; the keys of every kind's problem options with the
 library's defaults and ranges (friction: :class:`swgcal.friction.FrictionOptions`:
 ``base model``, ``gear_ratio``, ``accel_window``, ``split``); ``selection``:
-:class:`swgcal.SelectionConfig`; ``figures``; ``logger`` (MLflow).
+:class:`swgcal.SelectionConfig`; ``figures``; ``logger`` (MLflow, the one tracking config
+of every app, :class:`learn.tracking.config.LoggerConfig`: experiment ``calibration``, the
+run named after the measured data; ``~logger``: no tracking).
 """
 
 ConfigStore.instance().store(name="calibrate_schema", node=CalibrateApp)
+# the tracking as a group option, so that `~logger` removes all of it (as swgsim-monitor's)
+ConfigStore.instance().store(group="logger", name="calibration",
+                             node=LoggerConfig(experiment="calibration", run_name=""))
 
 
 def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
@@ -235,7 +231,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     measured, out_dir, kind = check_inputs(cfg)
     options, selection = options_from_config(
         kind, OmegaConf.to_container(cfg, resolve=True), measured)
-    if cfg.logger.enabled:
+    if cfg.get("logger") is not None:
         from learn.tracking.store import check_tracking
 
         check_tracking(cfg.logger.tracking_uri, "logger.tracking_uri")
@@ -246,7 +242,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
         summary = write_outputs(result, out_dir, source=str(measured),
                                 figures=bool(cfg.figures))
         claim.record([*summary["files"], *summary["figures"].values()])
-    run_id = _log_mlflow(cfg, summary, out_dir) if cfg.logger.enabled else None
+    run_id = _log_mlflow(cfg, summary, out_dir) if cfg.get("logger") is not None else None
     log.info("%s: test RMSE %.4g -> %.4g %s, added %s, unexplained %s; report %s",
              summary["name"], summary["rmse_before"], summary["rmse_after"], summary["units"],
              [e["name"] for e in summary["effects_added"]], summary["unexplained"],

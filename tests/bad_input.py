@@ -126,7 +126,7 @@ def calibrate_call(measured: Path, out: Path, *extra):
     from swgcli.calibrate import run_calibrate
 
     cfg = compose_app("calibrate", [f"measured={measured}", f"out_dir={out}",
-                                    "logger.enabled=false", "figures=false", *extra])
+                                    "~logger", "figures=false", *extra])
     return lambda: run_calibrate(cfg)
 
 

@@ -124,7 +124,7 @@ def runners(root, csv):
     train = ["~logger", f"paths.data_dir={root}/none"]
     out = {
         "calibrate": with_dir(compose_app("calibrate", [
-            f"measured={csv}", "out_dir=x", "logger.enabled=false", "figures=false"]),
+            f"measured={csv}", "out_dir=x", "~logger", "figures=false"]),
             "out_dir", run_calibrate),
         "monitor": with_dir(compose_app("monitor", [
             f"stream={root}/none", f"diagnosis_model={root}/none.joblib", "out_dir=x",

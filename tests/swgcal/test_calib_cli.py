@@ -99,7 +99,7 @@ def test_run_calibrate_end_to_end(tmp_path, planted_csv, tracking_uri):
 def test_run_calibrate_rejects_unknown_data(tmp_path):
     bad = tmp_path / "x.txt"
     bad.write_text("hello\n")
-    cfg = _cfg([f"measured={bad}", f"out_dir={tmp_path / 'o'}", "logger.enabled=false"])
+    cfg = _cfg([f"measured={bad}", f"out_dir={tmp_path / 'o'}", "~logger"])
     with pytest.raises(MeasuredDataError, match="x.txt"):
         run_calibrate(cfg)
 
@@ -137,13 +137,13 @@ def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
 def test_gear_ratio_option_is_checked_and_reaches_the_summary(tmp_path, planted_csv):
     """gear_ratio (friction option): refused below 1, carried into the summary."""
     path, truth = planted_csv
-    cfg = _cfg([f"measured={path}", f"out_dir={tmp_path / 'o'}", "logger.enabled=false",
+    cfg = _cfg([f"measured={path}", f"out_dir={tmp_path / 'o'}", "~logger",
                 "gear_ratio=0.5"])
     with pytest.raises(ValueError,
                        match=r"^gear_ratio must lie in \(1, 10000\] or be null, got 0.5$"):
         run_calibrate(cfg)
     out = tmp_path / "ok"
-    cfg = _cfg([f"measured={path}", f"out_dir={out}", "logger.enabled=false", "figures=false",
+    cfg = _cfg([f"measured={path}", f"out_dir={out}", "~logger", "figures=false",
                 f"base_model.v_s={truth.v_s}", "gear_ratio=100",
                 "selection.candidates=[stribeck,position_ripple]"])
     run_calibrate(cfg)
@@ -177,7 +177,7 @@ def test_app_defaults_and_ranges_are_the_librarys(tmp_path, planted_csv):
         ("split.test_blocks=[12]", "split.test_blocks must list blocks in [-10, 9]")]:
         out = tmp_path / override.split("=")[0]
         with pytest.raises(ValueError) as err:
-            run_calibrate(_cfg([f"measured={path}", f"out_dir={out}", "logger.enabled=false",
+            run_calibrate(_cfg([f"measured={path}", f"out_dir={out}", "~logger",
                                 override]))
         assert str(err.value).startswith(words), (override, str(err.value))
         assert not out.exists()

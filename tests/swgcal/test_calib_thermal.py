@@ -92,7 +92,7 @@ def test_swgsim_calibrate_takes_a_joint_log(tmp_path):
     assert detect_kind(path) == "thermal"
     out = tmp_path / "out"
     run_calibrate(compose_app("calibrate", [f"measured={path}", f"out_dir={out}",
-                                            "logger.enabled=false", "thermal.joint=1"]))
+                                            "~logger", "thermal.joint=1"]))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["kind"] == "thermal" and summary["data"]["joint"] == 1
     assert summary["effects_added"] == [] and summary["unexplained"] is False
@@ -102,7 +102,7 @@ def test_swgsim_calibrate_takes_a_joint_log(tmp_path):
     assert "doi:10.24432/C5J891" in (out / "report.md").read_text()
     with pytest.raises(ValueError, match=r"^thermal.joint must lie in \[0, 5\], got 6$"):
         run_calibrate(compose_app("calibrate", [f"measured={path}", f"out_dir={out}2",
-                                                "logger.enabled=false", "thermal.joint=6"]))
+                                                "~logger", "thermal.joint=6"]))
 
 
 def test_the_ur3_days_shoulder_warms_with_a_time_constant_of_its_first_look(ur3_day):

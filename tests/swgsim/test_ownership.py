@@ -209,7 +209,7 @@ def _friction_csv(path: Path) -> Path:
 
 
 @pytest.mark.parametrize("app, args, key", [
-    ("swgsim-calibrate", ["measured={csv}", "out_dir={out}", "logger.enabled=false"],
+    ("swgsim-calibrate", ["measured={csv}", "out_dir={out}", "~logger"],
      "out_dir"),
     ("swgsim-monitor", ["stream={out}/../life", "diagnosis_model={out}/../m.joblib",
                         "out_dir={out}", "~logger"], "out_dir"),
@@ -250,7 +250,7 @@ def test_calibrate_rerun_replaces_its_own_files_only(tmp_path):
     csv = _friction_csv(tmp_path / "rec.csv")
     out = tmp_path / "out"
     cfg = compose_app("calibrate", [f"measured={csv}", f"out_dir={out}",
-                                    "logger.enabled=false"])
+                                    "~logger"])
     run_calibrate(cfg)
     stamp = json.loads((out / ownership.STAMP).read_text())
     assert {"report.md", "summary.json", "figures/time.png"} <= set(stamp["files"])
