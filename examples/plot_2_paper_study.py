@@ -4,7 +4,7 @@ The paper's study on the tiny grid
 
 The study of *Fault detection in gauge-sensorized strain wave gears* (its Table III
 features, Table VI classifiers, 4-fold cross-validation over groups) run with
-:func:`learn.tasks.paper.run_paper_study` on the tiny data set, for Table VII and two of
+:func:`learn.paper.task.run_paper_study` on the tiny data set, for Table VII and two of
 its classifiers, and set beside the paper's numbers. The main job (``swgsim-paper``) runs
 all four tables under two acquisitions on the paper's full grid.
 """
@@ -15,9 +15,9 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import pandas as pd
 
-from learn.reports.paper_results import CELL_COLUMNS, our_cells, paper_cells
-from learn.studies.tables import StudyOptions
-from learn.tasks.paper import run_paper_study
+from learn.paper.results import CELL_COLUMNS, our_cells, paper_cells
+from learn.paper.tables import StudyOptions
+from learn.paper.task import run_paper_study
 from swgcli import dataset_preset
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate

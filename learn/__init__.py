@@ -6,15 +6,17 @@ Layers, each importing only those before it:
   :mod:`learn.tracking` - MLflow runs and their provenance;
 * :mod:`learn.learners` - the classifiers (the paper's Table VI and the model registry,
   torch MLP and 1D-CNN, MiniRocket, CORAL);
-* :mod:`learn.studies` - protocols, the study of Tables VII-X, the runs and k-shot
-  splits of transfer to the gear not seen in training, the separability of faults in the
-  signals;
-* :mod:`learn.reports` - tables, figures and summaries of the studies' results;
+* :mod:`learn.studies` - protocols, the runs and k-shot splits of transfer to the gear
+  not seen in training, the separability of faults in the signals;
+* :mod:`learn.reports` - the monitor's and the prognosis's reports;
 * :mod:`learn.tasks` - what the apps run: a study and its report;
   :mod:`learn.observability` - one workflow's folder beside them: the observability of
   faults in the signals, its study and the task ``swgsim-observability`` runs;
-  :mod:`learn.transfer` - the transfer comparison's folder above them: its study, report
-  and the task ``transfer`` (``swgsim-train -m experiment=transfer``).
+  :mod:`learn.paper` - the paper study's folder above them: Tables VII-X, its report and
+  summary, the task ``paper_study`` and ``run_paper_study`` (``swgsim-paper``);
+  :mod:`learn.transfer` - the transfer comparison's folder above that (its report quotes
+  the paper's numbers): its study, report and the task ``transfer``
+  (``swgsim-train -m experiment=transfer``).
 
 The public API is listed in ``__all__``; names are imported on first use (torch only
 when a net is asked for).
@@ -39,7 +41,7 @@ _EXPORTS = {
     "MiniRocketClassifier": "learners.rocket",
     "ProtocolConfig": "studies.protocols", "make_splits": "studies.protocols",
     "evaluate": "studies.protocols",
-    "StudyOptions": "studies.tables", "run_paper_study": "tasks.paper",
+    "StudyOptions": "paper.tables", "run_paper_study": "paper.task",
     "run_comparison": "transfer.study", "TransferConfig": "transfer.study",
     "separation_records": "studies.separability",
     "observability_table": "observability.study",

@@ -54,10 +54,10 @@ def main(argv: list[str] | None = None) -> int:
     if any(not np.isfinite(a) or a < 0 for a in args.amplitudes):
         ap.error(f"--amplitudes must be >= 0, got {args.amplitudes}")
 
-    from learn.reports.paper_results import scorecard, side_by_side
+    from learn.paper.results import scorecard, side_by_side
+    from learn.paper.tables import StudyOptions
+    from learn.paper.task import run_paper_study
     from learn.studies.protocols import ProtocolConfig
-    from learn.studies.tables import StudyOptions
-    from learn.tasks.paper import run_paper_study
     from swgcli import dataset_preset
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.generate import generate
@@ -123,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
 def _sweep_figure(sweep: dict[float, pd.DataFrame], out: Path) -> None:
     """Table X cells (mean over the held-out gears) and Table VIII cells against the
     eq. (10) amplitude factor, with the paper's values; writes eq10_sweep.csv and .png."""
-    from learn.reports.paper_results import scorecard, side_by_side
+    from learn.paper.results import scorecard, side_by_side
 
     rows = []
     for a, res in sorted(sweep.items()):
@@ -148,7 +148,7 @@ def plot_sweep(df: pd.DataFrame, path: Path) -> None:
     model, score)."""
     from matplotlib.figure import Figure
 
-    from learn.reports.paper_results import PAPER_RESULTS
+    from learn.paper.results import PAPER_RESULTS
 
     factors = sorted(df["factor"].unique())
     fig = Figure(figsize=(15, 4.2), layout="constrained")

@@ -4,9 +4,9 @@ For each data set in ``run_on`` (default: the paper's acquisition, phase-locked 
 noise-free windows, and a real bench's): (1) generate ``<data_root>/<name>`` (shards
 already there and valid are skipped; a data set of another config there is replaced only
 if every file in the folder is provably this project's, :mod:`swgsim.files.ownership`), (2) the
-study of Tables VII-X (:func:`learn.tasks.paper.run_paper_study`), every job logged to
+study of Tables VII-X (:func:`learn.paper.task.run_paper_study`), every job logged to
 MLflow, with its report in ``<report_root>/<name>``; then (3) the summary side by side
-with the paper and the reproduction scorecard (:func:`learn.reports.summary.write_summary`)
+with the paper and the reproduction scorecard (:func:`learn.paper.summary.write_summary`)
 in ``report_root``, a folder shared with the other apps' reports, where only the summary's
 own files must be this project's. One progress bar per stage; the console ends with the
 scorecard, where everything went, the time of each stage and the warnings, counted once.
@@ -23,7 +23,7 @@ from collections import Counter
 
 from omegaconf import DictConfig, OmegaConf
 
-from learn.reports.summary import SUMMARY_FILES
+from learn.paper.summary import SUMMARY_FILES
 from swgcli.app import hydra_app
 from swgcli.schema import PaperApp
 from swgsim.files import ownership
@@ -114,7 +114,7 @@ def _generate(cfg: DictConfig, plans: dict, root_data: str, stage, stages: dict)
 def _studies(cfg: DictConfig, names: list[str], root_data: str, root_rep: str, stage,
              stages: dict, caught: Counter) -> dict:
     """Stage 2: the paper's study on each data set, its report and MLflow runs."""
-    from learn.tasks.paper import run_paper_study
+    from learn.paper.task import run_paper_study
 
     study = {}
     for n in names:
@@ -135,7 +135,7 @@ def _studies(cfg: DictConfig, names: list[str], root_data: str, root_rep: str, s
 def _print_end(cfg: DictConfig, names: list[str], summary: dict, root_data: str,
                root_rep: str, stages: dict, warn: list[dict]) -> None:
     """The console's last words: scorecard, findings, where everything went, times."""
-    from learn.reports.summary import format_scorecard
+    from learn.paper.summary import format_scorecard
     from learn.tracking.store import default_tracking_uri
 
     print("\nReproduction scorecard (test cells of Tables VII, IX, X against the paper):")
@@ -177,7 +177,7 @@ def run_paper(cfg: DictConfig) -> dict:
         anything in ``<report_root>/<name>`` (both before any work) or in
         ``<data_root>/<name>`` (when that data set is due).
     """
-    from learn.reports.summary import write_summary
+    from learn.paper.summary import write_summary
     from learn.tracking.store import check_tracking
 
     plans = check_inputs(cfg)

@@ -17,7 +17,7 @@ group           source
 ``protocol``    :data:`learn.studies.protocols.PROTOCOLS` (the paper's four protocols)
 ``model``       :data:`learn.learners.models.MODELS` (Table VI); deep models stay YAML
 ``features``    :data:`learn.inputs.features.SELECTIONS` (Table III selections)
-``experiment``  ``table_vii`` .. ``table_x`` from :data:`learn.studies.tables.PAPER_TABLES`
+``experiment``  ``table_vii`` .. ``table_x`` from :data:`learn.paper.tables.PAPER_TABLES`
 ``dataset``     :class:`swgsim.datasets.config.DatasetConfig` (the paper preset is its defaults)
 ==============  =====================================================================
 """
@@ -36,9 +36,9 @@ from learn.monitor.normal import NormalConfig
 from learn.monitor.rule import RuleConfig
 from learn.monitor.stream_prognosis import StreamPrognosis
 from learn.observability.motion import MotionMapConfig
-from learn.studies.paper_study import StudyTracking
+from learn.paper.study import StudyTracking
+from learn.paper.tables import StudyOptions
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
-from learn.studies.tables import StudyOptions
 from learn.tasks.monitor_evaluation import MonitorExperiment
 from learn.tasks.prognosis_evaluation import PrognosisExperiment
 from learn.tracking.config import LoggerConfig
@@ -229,7 +229,7 @@ def check_renamed(overrides: list[str], app: str) -> None:
 def register() -> None:
     """Register the schemas and the generated config groups in Hydra's ConfigStore."""
     from learn.learners.models import MODELS, model_config
-    from learn.studies.tables import PAPER_TABLES
+    from learn.paper.tables import PAPER_TABLES
 
     cs = ConfigStore.instance()
     cs.store(name="generate_schema", node=GenerateApp)

@@ -22,7 +22,7 @@ def typed_app(cfg: Any) -> Any:
         dataclasses (:class:`learn.inputs.features.FeatureSettings`,
         :class:`learn.studies.protocols.ProtocolConfig`,
         :class:`learn.tracking.config.LoggerConfig`,
-        :class:`learn.studies.tables.StudyOptions`,
+        :class:`learn.paper.tables.StudyOptions`,
         :class:`learn.transfer.study.TransferConfig`, ...); ``_target_`` configs (the
         models) stay mappings for :func:`hydra.utils.instantiate`.
 

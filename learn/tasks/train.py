@@ -19,7 +19,7 @@ log = logging.getLogger(__name__)
 #: Task name -> function ``f(cfg) -> dict`` (dotted path, imported on use).
 TASKS: dict[str, str] = {
     "study": "learn.tasks.train.run_study_job",
-    "paper_study": "learn.tasks.paper.run_paper_study_task",
+    "paper_study": "learn.paper.task.run_paper_study_task",
     "transfer": "learn.transfer.task.run_transfer",
     "monitor": "learn.tasks.monitor_evaluation.run_monitor_evaluation",
     "prognosis": "learn.tasks.prognosis_evaluation.run_prognosis_evaluation",

@@ -228,7 +228,7 @@ def model_rank(m: str) -> int:
 
 
 def _paper_rows(protocol: str, splits: Sequence[str]) -> list[str]:
-    from learn.reports.paper_results import PAPER_RESULTS
+    from learn.paper.results import PAPER_RESULTS
 
     table = {"ood_clean": "IX", "ood_disturbed": "X"}[protocol]
     out = []

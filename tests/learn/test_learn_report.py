@@ -1,4 +1,4 @@
-"""Paper study and its report (learn.tasks.paper.run_paper_study, learn.reports.report)."""
+"""Paper study and its report (learn.paper.task.run_paper_study, learn.paper.report)."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.reports.paper_results import PAPER_RESULTS
-from learn.reports.report import write_report, write_tables
-from learn.studies.tables import PAPER_TABLES, StudyOptions
-from learn.tasks.paper import run_paper_study
+from learn.paper.report import write_report, write_tables
+from learn.paper.results import PAPER_RESULTS
+from learn.paper.tables import PAPER_TABLES, StudyOptions
+from learn.paper.task import run_paper_study
 
 
 def _fake_results() -> pd.DataFrame:

@@ -4,16 +4,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.reports.findings import FINDINGS, check_findings
-from learn.reports.paper_results import (
+from learn.paper.findings import FINDINGS, check_findings
+from learn.paper.results import (
     PAPER_RESULTS,
     our_cells,
     paper_cells,
     scorecard,
     side_by_side,
 )
-from learn.reports.summary import recall, write_summary
-from learn.studies.tables import StudyOptions
+from learn.paper.summary import recall, write_summary
+from learn.paper.tables import StudyOptions
 from swgcli import dataset_preset
 from swgsim.datasets.config import dataset_config
 from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES

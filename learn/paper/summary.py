@@ -2,9 +2,9 @@
 
 :func:`write_summary` writes ``<report_root>/summary.md`` and ``summary.csv``: every cell
 of Tables VII-X as *paper | ours, acquisition A | ours, acquisition B*, the reproduction
-scorecard of each acquisition (:func:`learn.reports.paper_results.scorecard`), the paper's
-qualitative findings checked under each acquisition (:mod:`learn.reports.findings`), the choices the
-paper leaves open (:mod:`learn.reports.open_choices`), and what changes when windows are not
+scorecard of each acquisition (:func:`learn.paper.results.scorecard`), the paper's
+qualitative findings checked under each acquisition (:mod:`learn.paper.findings`), the choices the
+paper leaves open (:mod:`learn.paper.open_choices`), and what changes when windows are not
 phase-locked: per-class recall of RF on Selections 1 and 3 (``recall_rf.png``) with the
 measured spread of healthy features behind it.
 """
@@ -20,9 +20,9 @@ import numpy as np
 
 from learn.inputs.features import FeatureSettings
 from learn.learners.models import model_label
-from learn.reports.findings import check_findings
-from learn.reports.open_choices import open_choices
-from learn.reports.paper_results import (
+from learn.paper.findings import check_findings
+from learn.paper.open_choices import open_choices
+from learn.paper.results import (
     GEAR_SPLITS,
     PAPER_TABLES,
     SPLIT_LABELS,
@@ -31,7 +31,7 @@ from learn.reports.paper_results import (
     side_by_side,
     table_spec,
 )
-from learn.studies.tables import StudyOptions
+from learn.paper.tables import StudyOptions
 from swgsim.base.lazy import lazy_module
 from swgsim.datasets.config import DatasetConfig
 from swgsim.files.ownership import write_owned
@@ -53,7 +53,7 @@ def format_scorecard(cards: Mapping[str, pd.DataFrame]) -> list[str]:
     Parameters
     ----------
     cards : mapping of str to pandas.DataFrame
-        Acquisition (data-set name) -> :func:`learn.reports.paper_results.scorecard`.
+        Acquisition (data-set name) -> :func:`learn.paper.results.scorecard`.
 
     Returns
     -------
@@ -347,7 +347,7 @@ def write_summary(
     ----------
     results, confusion : mapping of str to pandas.DataFrame
         Data-set name -> that study's ``results`` and ``confusion``
-        (:func:`learn.tasks.paper.run_paper_study`), in display order (e.g. paper, bench).
+        (:func:`learn.paper.task.run_paper_study`), in display order (e.g. paper, bench).
     report_root : path-like
         Folder of ``summary.md``, ``summary.csv`` and ``recall_rf.png``.
     datasets : mapping of str to DatasetConfig

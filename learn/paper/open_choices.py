@@ -8,7 +8,7 @@ them was tuned against the paper's scores.
 from __future__ import annotations
 
 from learn.inputs.features import FeatureSettings
-from learn.studies.tables import StudyOptions
+from learn.paper.tables import StudyOptions
 from swgsim.datasets.config import DatasetConfig
 from swgsim.sensing.acquisition import Acquisition
 

@@ -5,8 +5,8 @@ Every statement the paper makes about Tables VII-X (Sec. IV-A to IV-D) is one
 whether it holds and the numbers it looked at. "About X %" in the paper is read as
 within ±5 points of X (:data:`ABOUT`); "below / above X %" literally.
 
-    >>> from learn.reports.findings import check_findings
-    >>> rows = check_findings(cells)  # cells: learn.reports.paper_results.our_cells(results)
+    >>> from learn.paper.findings import check_findings
+    >>> rows = check_findings(cells)  # cells: learn.paper.results.our_cells(results)
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import numpy as np
 
 from learn.inputs.features import SELECTIONS
 from learn.learners.models import model_label
-from learn.reports.paper_results import GEAR_SPLITS
-from learn.studies.tables import M5
+from learn.paper.results import GEAR_SPLITS
+from learn.paper.tables import M5
 from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
@@ -32,7 +32,7 @@ _NAMES = {m: model_label(m) for m in M5}  # the paper's models, in its order
 
 class Scores:
     """Our scores [%] by table, selection, model and split
-    (:func:`learn.reports.paper_results.our_cells`).
+    (:func:`learn.paper.results.our_cells`).
 
     Parameters
     ----------
@@ -308,7 +308,7 @@ def check_findings(cells: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     cells : pandas.DataFrame
-        :func:`learn.reports.paper_results.our_cells` of one study (columns ``table``,
+        :func:`learn.paper.results.our_cells` of one study (columns ``table``,
         ``selection``, ``model``, ``split``, ``ours``).
 
     Returns

@@ -77,7 +77,7 @@ PAPER_TABLES: dict[str, PaperTable] = {
 
 @dataclass
 class StudyOptions:
-    """What a run of the paper's study (:func:`learn.tasks.paper.run_paper_study`) may
+    """What a run of the paper's study (:func:`learn.paper.task.run_paper_study`) may
     change; the defaults are the paper's study.
 
     Attributes

@@ -19,7 +19,7 @@ import numpy as np
 
 from learn.inputs.features import order_spectrum, reference_index
 from learn.learners.models import model_label
-from learn.reports.paper_results import (
+from learn.paper.results import (
     GEAR_SPLITS,
     PAPER_RESULTS,
     PAPER_TABLES,
@@ -93,7 +93,7 @@ def write_tables(
         One row per (table, selection, model, split) with columns ``table``
         ("VII".."X"), ``selection`` ("selection1"..), ``model`` ("mlp"..), ``split``
         ("fold0".. or "gear1".."gear3"), ``train_accuracy``, ``test_accuracy`` [-]
-        (as returned by :func:`learn.tasks.paper.run_paper_study`). Missing jobs read "–".
+        (as returned by :func:`learn.paper.task.run_paper_study`). Missing jobs read "–".
     path : path-like
         Markdown file to write.
     timings_s : mapping, optional
@@ -110,7 +110,7 @@ def write_tables(
     if dataset_path:
         lines += [f"Data set: `{dataset_path}`.", ""]
     lines += ["Each cell reads *ours (paper)* in per cent; the paper's numbers are "
-              "`learn.reports.paper_results.PAPER_RESULTS`, transcribed from its Tables VII, "
+              "`learn.paper.results.PAPER_RESULTS`, transcribed from its Tables VII, "
               "IX and X. "
               "CV tables: mean over 4 folds whose groups are (gear, fault, variant); "
               "out-of-distribution tables: test score on the held-out gear.", ""]

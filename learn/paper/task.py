@@ -8,9 +8,9 @@ import time
 from pathlib import Path
 
 from learn.inputs.features import FeatureSettings
-from learn.studies.paper_study import StudyTracking, paper_study
+from learn.paper.study import StudyTracking, paper_study
+from learn.paper.tables import StudyOptions
 from learn.studies.protocols import ProtocolConfig
-from learn.studies.tables import StudyOptions
 from learn.tasks.config import typed_app
 
 
@@ -30,8 +30,8 @@ def run_paper_study(
     protocols: dict[str, ProtocolConfig] | None = None,
     name: str = "",
 ) -> dict:
-    """Run the paper's study, Tables VII-X (:func:`learn.studies.paper_study.paper_study`),
-    and write its report (:func:`learn.reports.report.write_report`).
+    """Run the paper's study, Tables VII-X (:func:`learn.paper.study.paper_study`),
+    and write its report (:func:`learn.paper.report.write_report`).
 
     Parameters
     ----------
@@ -51,13 +51,13 @@ def run_paper_study(
         With ``track``, also log each job's model fitted on its last split (no refit).
     experiment_prefix : str, default "paper_study/"
     n_jobs, progress, random_state, features, protocols, name
-        See :func:`learn.studies.paper_study.paper_study`.
+        See :func:`learn.paper.study.paper_study`.
 
     Returns
     -------
     dict
         ``results``, ``confusion``, ``spread``, ``warnings``, ``timings_s``, ``n_jobs_run``
-        (:class:`learn.studies.paper_study.PaperStudyResult`) and ``files`` (report files
+        (:class:`learn.paper.study.PaperStudyResult`) and ``files`` (report files
         by kind).
 
     Raises
@@ -66,7 +66,7 @@ def run_paper_study(
         For an unknown table or model, or a ``report_dir`` holding a file this project
         cannot show it wrote (named; before any work, :func:`swgsim.files.ownership.check`).
     """
-    from learn.reports.report import write_report
+    from learn.paper.report import write_report
     from swgsim.files import ownership
 
     ownership.check(report_dir, "report_dir", app="paper-study")  # before any work
@@ -96,7 +96,7 @@ def run_paper_study_task(cfg) -> dict:
     (:class:`learn.tracking.config.LoggerConfig`; None: no tracking; its ``tracking_uri``
     and ``log_models``), ``n_jobs``, ``seed``, ``features`` (orders and floor; the
     selections are those of the tables) and ``study``
-    (:class:`learn.studies.tables.StudyOptions`).
+    (:class:`learn.paper.tables.StudyOptions`).
 
     Parameters
     ----------

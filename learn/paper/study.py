@@ -1,10 +1,10 @@
 """The paper's fault-classification study (Sec. IV, Tables VII-X), computed.
 
 :func:`paper_study` runs every job (table, protocol, feature selection, model) of the
-tables chosen by :class:`learn.studies.tables.StudyOptions` on one data set: the
+tables chosen by :class:`learn.paper.tables.StudyOptions` on one data set: the
 features of each selection once, the splits of each (protocol, selection) once, every
 (job, split) fit in one stream of joblib processes, one MLflow run per job. It writes no
-report; :func:`learn.tasks.paper.run_paper_study` adds it. The steps, in order:
+report; :func:`learn.paper.task.run_paper_study` adds it. The steps, in order:
 :func:`plan_jobs`, :func:`compute_features`, :func:`plan_splits`, :func:`fit_tasks`,
 :func:`collect_job` per job, :func:`feature_spreads`.
 """
@@ -24,6 +24,7 @@ import numpy as np
 
 from learn.inputs.features import Features, FeatureSettings, extract_features, selection_name
 from learn.learners.models import make_model
+from learn.paper.tables import StudyOptions
 from learn.studies.protocols import (
     PROTOCOLS,
     ProtocolConfig,
@@ -31,7 +32,6 @@ from learn.studies.protocols import (
     Split,
     class_labels,
 )
-from learn.studies.tables import StudyOptions
 from learn.tracking.config import LoggerConfig
 from swgsim.base.lazy import lazy_module
 from swgsim.base.registry import travelling

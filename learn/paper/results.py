@@ -14,7 +14,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from learn.studies.tables import M4, M5, PAPER_TABLES
+from learn.paper.tables import M4, M5, PAPER_TABLES
 from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
@@ -79,7 +79,7 @@ PAPER_RESULTS: dict[str, dict | None] = {
 
 def table_spec(table: str) -> tuple[str, str, tuple[str, ...], tuple[str, ...]]:
     """Title, protocol, models and selection names of one of the paper's tables
-    (:data:`learn.studies.tables.PAPER_TABLES`)."""
+    (:data:`learn.paper.tables.PAPER_TABLES`)."""
     t = PAPER_TABLES[table]
     return t.title, t.protocol, t.models, t.selection_names
 
@@ -115,7 +115,7 @@ def our_cells(results: pd.DataFrame) -> pd.DataFrame:
     ----------
     results : pandas.DataFrame
         One row per (table, selection, model, split) with ``test_accuracy`` in [0, 1]
-        (``results.csv`` of :func:`learn.tasks.paper.run_paper_study`).
+        (``results.csv`` of :func:`learn.paper.task.run_paper_study`).
 
     Returns
     -------
