@@ -8,13 +8,15 @@ Layers, each importing only those before it:
   torch MLP and 1D-CNN, MiniRocket, CORAL);
 * :mod:`learn.studies` - protocols, the runs and k-shot splits of transfer to the gear
   not seen in training, the separability of faults in the signals;
-* :mod:`learn.reports` - the monitor's and the prognosis's reports;
-* :mod:`learn.tasks` - what the apps run: a study and its report;
+* :mod:`learn.tasks` - what the apps run: a study and its report, the resumable parts of
+  an evaluation;
   :mod:`learn.observability` - one workflow's folder beside them: the observability of
   faults in the signals, its study and the task ``swgsim-observability`` runs;
   :mod:`learn.paper` - the paper study's folder above them: Tables VII-X, its report and
   summary, the task ``paper_study`` and ``run_paper_study`` (``swgsim-paper``);
-  :mod:`learn.transfer` - the transfer comparison's folder above that (its report quotes
+  :mod:`learn.monitor_evaluation` - the monitor's and the prognosis's evaluations beside
+  it: their tasks ``monitor`` and ``prognosis`` and their reports;
+  :mod:`learn.transfer` - the transfer comparison's folder above the paper's (its report quotes
   the paper's numbers): its study, report and the task ``transfer``
   (``swgsim-train -m experiment=transfer``).
 

@@ -46,7 +46,7 @@ STAGES = {
     "monitoring": [("learn/monitor/gear_monitor.py", n) for n in
                    ("commission", "run", "score_only", "diagnose", "fork")]
     + [("learn/monitor/detectors.py", "labels")],
-    "reports and tracking": [("learn/reports/monitor_report.py", n) for n in
+    "reports and tracking": [("learn/monitor_evaluation/report.py", n) for n in
                              ("figures", "write_table")]
     + [("learn/monitor/model_io.py", "save_model"),
        ("learn/tracking/mlflow_runs.py", "log_run")],

@@ -35,12 +35,12 @@ from learn.monitor.gear_monitor import MaintenanceEvent
 from learn.monitor.normal import NormalConfig
 from learn.monitor.rule import RuleConfig
 from learn.monitor.stream_prognosis import StreamPrognosis
+from learn.monitor_evaluation.prognosis_task import PrognosisExperiment
+from learn.monitor_evaluation.task import MonitorExperiment
 from learn.observability.motion import MotionMapConfig
 from learn.paper.study import StudyTracking
 from learn.paper.tables import StudyOptions
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
-from learn.tasks.monitor_evaluation import MonitorExperiment
-from learn.tasks.prognosis_evaluation import PrognosisExperiment
 from learn.tracking.config import LoggerConfig
 from learn.transfer.study import TransferConfig
 from swgsim.base.typed import allowed, check_keys

@@ -461,7 +461,7 @@ def _nuisances(cfg: MonitorStudyConfig) -> list[str]:
 
 def banks_of(plan: DatasetPlan) -> dict[int, RecordBank]:
     """Every gear's records, shared by all its lives (and by the parts of one held-out
-    gear run in one worker: :func:`learn.tasks.monitor_evaluation.run_parts`; a record is
+    gear run in one worker: :func:`learn.tasks.parts.run_parts`; a record is
     the same whichever batch simulated it)."""
     return {int(x.id): record_bank(plan, int(x.id)) for x in plan.config.gears}
 

@@ -1,5 +1,6 @@
 """Evaluation of the prognosis (:mod:`.prognosis`) on lives that run to failure,
-leave-one-gear-out (``swgsim-train experiment=prognosis``, :mod:`learn.tasks.prognosis_evaluation`).
+leave-one-gear-out (``swgsim-train experiment=prognosis``,
+:mod:`learn.monitor_evaluation.prognosis_task`).
 
 For a data set (a checked :class:`~swgsim.datasets.plan.DatasetPlan`) and a held-out gear,
 the diagnosis model is trained on the other gears (:func:`learn.monitor.training.train_model`,

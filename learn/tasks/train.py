@@ -21,8 +21,8 @@ TASKS: dict[str, str] = {
     "study": "learn.tasks.train.run_study_job",
     "paper_study": "learn.paper.task.run_paper_study_task",
     "transfer": "learn.transfer.task.run_transfer",
-    "monitor": "learn.tasks.monitor_evaluation.run_monitor_evaluation",
-    "prognosis": "learn.tasks.prognosis_evaluation.run_prognosis_evaluation",
+    "monitor": "learn.monitor_evaluation.task.run_monitor_evaluation",
+    "prognosis": "learn.monitor_evaluation.prognosis_task.run_prognosis_evaluation",
 }
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from learn.tasks.config import typed_app
-from learn.tasks.monitor_evaluation import part_key
+from learn.tasks.parts import part_key
 from learn.transfer.study import TransferConfig, check_config, run_comparisons
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import plain

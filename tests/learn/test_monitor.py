@@ -501,7 +501,7 @@ def test_every_event_kind_is_printed_in_one_line():
 
 def test_a_resumed_evaluations_tables_keep_a_fresh_runs_columns(tmp_path):
     from learn.monitor.evaluate import to_frames
-    from learn.tasks.monitor_evaluation import Job, finished_parts, save_part
+    from learn.tasks.parts import Job, finished_parts, save_part
 
     job = Job("tiny", 3, None, "k1")
     part = {"key": "k1", "dataset": "tiny", "held_out_gear": 3,

@@ -1,5 +1,5 @@
 """The monitor evaluation's tables with lives of a real day beside the stationary ones
-(learn.reports.monitor_report), on small hand-made result frames whose figures are known."""
+(learn.monitor_evaluation.report), on small hand-made result frames whose figures are known."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.reports.monitor_report import (
+from learn.monitor_evaluation.report import (
     _mildest_detected,
     false_alarm_table,
     nuisance_table,

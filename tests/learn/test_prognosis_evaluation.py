@@ -1,5 +1,5 @@
 """The prognosis's evaluation (swgsim-train experiment=prognosis,
-learn/tasks/prognosis_evaluation.py): a tiny part end to end through the task, its files
+learn/monitor_evaluation/prognosis_task.py): a tiny part end to end through the task, its files
 and columns, the resume from parts/, and bad input refused in one line before any work."""
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
 def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):
     """The same config again: the part is read back from parts/, nothing recomputed, the
     same results."""
-    import learn.tasks.prognosis_evaluation as task
+    import learn.monitor_evaluation.prognosis_task as task
 
     out, _ = tiny_prognosis
     before = (out / "results.csv").read_bytes()
@@ -95,7 +95,7 @@ def test_a_job_of_an_array_runs_its_group_alone_and_writes_no_report(tiny_progno
                                                                      monkeypatch, capsys):
     """``prognosis.group=0`` (a job of a cluster array, docs/scale_out.md) into the same
     folder: its part is found done, nothing is computed and the report stays as it was."""
-    import learn.tasks.prognosis_evaluation as task
+    import learn.monitor_evaluation.prognosis_task as task
 
     out, _ = tiny_prognosis
     before = {f: (out / f).read_bytes() for f in ("results.csv", "table.md")}

@@ -29,8 +29,8 @@ FLOORS: dict[str, list[tuple[str, int]]] = {
                ("swgcal.api", 6), ("swgcal", 7)],
     "learn": [("learn.inputs", 0), ("learn.tracking", 0), ("learn.learners", 1),
               ("learn.monitor", 2), ("learn.studies", 3), ("learn.export", 3),
-              ("learn.reports", 4), ("learn.tasks", 5), ("learn.observability", 5),
-              ("learn.paper", 6), ("learn.transfer", 7), ("learn", 8)],
+              ("learn.tasks", 4), ("learn.observability", 4), ("learn.paper", 5),
+              ("learn.monitor_evaluation", 5), ("learn.transfer", 6), ("learn", 7)],
 }
 #: Which packages a package may import (besides itself).
 USES = {"swgsim": set(), "swgcal": {"swgsim"}, "learn": {"swgsim"},

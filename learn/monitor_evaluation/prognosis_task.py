@@ -1,14 +1,14 @@
 """Task ``prognosis`` (``swgsim-train experiment=prognosis``): the prognosis's
 leave-one-gear-out evaluation on lives that run to failure
 (:mod:`learn.monitor.prognosis_evaluation`), its tables, targets and figure
-(:mod:`learn.reports.prognosis_report`) and an MLflow run.
+(:mod:`learn.monitor_evaluation.prognosis_report`) and an MLflow run.
 
 Files in ``report_dir``: ``results.csv`` (one row per prognosis and method), ``lives.csv``
 (one row per life), ``calibration.csv`` (the conformal scale per held-out gear and method),
 ``scores.csv`` (each life's scores per method), ``table.md``, ``prognosis.png``,
 ``timing.json`` and ``parts/``: one finished part per (data set, held-out gear) with the
-hash of the config that made it (:func:`learn.tasks.monitor_evaluation.part_key`), so that a
-rerun of the same config resumes from them (the monitor evaluation's part machinery).
+hash of the config that made it (:func:`learn.tasks.parts.part_key`), so that a rerun of
+the same config resumes from them (the part machinery of :mod:`learn.tasks.parts`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from learn.monitor.prognosis_evaluation import (
     check_prognosis_study,
     run_prognosis_part,
 )
-from learn.reports.prognosis_report import (
+from learn.monitor_evaluation.prognosis_report import (
     bucket_table,
     figure,
     life_scores,
@@ -33,7 +33,7 @@ from learn.reports.prognosis_report import (
     write_table,
 )
 from learn.tasks.config import typed_app
-from learn.tasks.monitor_evaluation import (
+from learn.tasks.parts import (
     Job,
     group_jobs,
     part_key,

@@ -1,0 +1,185 @@
+"""Resumable parts of an evaluation, saved as each ends, grouped for job arrays: a part's
+key (:func:`part_key`, the hash of what made it), the parts of one (data set, held-out
+gear) run in one worker, in order (:func:`run_parts`, :func:`run_group`), resumed from
+``parts/`` when their key matches (:func:`finished_parts`), and one (data set, held-out
+gear) alone as a job of a cluster array (:func:`group_jobs`, :func:`run_one_group`). Used by
+the monitor's and the prognosis's evaluations (:mod:`learn.monitor_evaluation`) and the
+transfer comparison (:mod:`learn.transfer.task`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from tqdm.auto import tqdm
+
+from swgsim.base.lazy import lazy_module
+from swgsim.base.registry import travelling
+from swgsim.datasets.plan import DatasetPlan
+from swgsim.files.ownership import atomic_write_json
+
+joblib = lazy_module("joblib")
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Job:
+    """One resumable part: the monitor (``detector`` None) or one per-window detector on
+    one held-out gear of one data set."""
+
+    dataset: str
+    gear: int
+    detector: str | None
+    key: str
+
+    @property
+    def file(self) -> str:
+        """Its part's file name in ``parts/``."""
+        return f"{self.dataset}_gear{self.gear}{'_' + self.detector if self.detector else ''}.json"
+
+
+def part_key(obj: object) -> str:
+    """The key of a part: the first 16 hex digits of the SHA-256 of ``obj`` as sorted JSON
+    (what made it: the data set's config hash, the gear, the study)."""
+    return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def share_key(plans: dict[str, DatasetPlan], study: object) -> str:
+    """What the jobs of one evaluation share their report folder by
+    (:func:`swgsim.files.ownership.claim`'s ``share``): its data sets' config hashes and
+    its design."""
+    return part_key([p.config_hash for p in plans.values()] + [dataclasses.asdict(study)])
+
+
+def group_jobs(jobs: list[Job], group: int | None, key: str = "monitor.group"
+               ) -> list[Job]:
+    """The jobs of the (data set, held-out gear) of index ``group`` (in the jobs' order),
+    or all of them for None; ``key``: the option's name in messages.
+
+    Raises
+    ------
+    ValueError
+        ``group`` beyond the evaluation's (data set, held-out gear) pairs, naming them.
+    """
+    if group is None:
+        return jobs
+    keys = list(dict.fromkeys((j.dataset, j.gear) for j in jobs))
+    if not 0 <= group < len(keys):
+        pairs = ", ".join(f"{k}: {d} gear {g}" for k, (d, g) in enumerate(keys))
+        raise ValueError(f"{key} must lie in [0, {len(keys) - 1}] ({pairs}), got {group}")
+    return [j for j in jobs if (j.dataset, j.gear) == keys[group]]
+
+
+def run_one_group(out: Path, jobs: list[Job], delayed: Callable, desc: str, progress: bool,
+                  n_jobs: int, key: str, group: int) -> dict:
+    """One (data set, held-out gear)'s parts into ``out/parts`` (a job of an array, option
+    ``key`` = ``group``; :func:`run_parts`), no report; returns its summary."""
+    (out / "parts").mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    parts, resumed = run_parts(out, jobs, delayed, desc, progress, n_jobs)
+    wall = time.perf_counter() - t0
+    if progress:
+        print(f"{key} {group} ({jobs[0].dataset}, held-out gear {jobs[0].gear}): "
+              f"{len(parts)} part(s) in {out}/parts ({resumed} already there), "
+              f"{wall / 60:.1f} min; the report: the same command without {key}")
+    return {"report_dir": str(out), "group": group, "parts": [j.file for j in jobs],
+            "wall_s": wall}
+
+
+def finished_parts(out: Path, jobs: list[Job]) -> tuple[list[dict], list[Job]]:
+    """Parts already done in ``out/parts`` (their key matches) and the jobs left."""
+    done, todo = [], []
+    for j in jobs:
+        f = out / "parts" / j.file
+        try:
+            part = json.loads(f.read_text()) if f.is_file() else None
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            part = None
+        if part is not None and part.get("key") == j.key:
+            done.append(part)
+        else:
+            todo.append(j)
+    return done, todo
+
+
+def save_part(out: Path, job: Job, part: dict) -> None:
+    """Write a finished part to ``parts/`` in its keys' order (not sorted), so that the
+    tables of a resumed run, read back by :func:`finished_parts`, keep a fresh run's columns."""
+    atomic_write_json(out / "parts" / job.file, part, sort_keys=False)
+
+
+def run_parts(out: Path, jobs: list[Job], delayed: Callable, desc: str, progress: bool,
+              n_jobs: int) -> tuple[list[dict], int]:
+    """Each part, resumed from ``out/parts`` when its key matches (:func:`finished_parts`),
+    the others run by ``n_jobs`` workers, those of one (data set, held-out gear) in one
+    worker, in order, so that they share its gears' records (simulated once instead of once
+    per part); each part is saved as it ends (:func:`save_part`, by the worker); one
+    progress line over all of them and a log line per finished group.
+
+    Parameters
+    ----------
+    out : Path
+        The report folder.
+    jobs : list of Job
+    delayed : callable
+        A list of jobs (one data set, one held-out gear) -> the ``joblib.delayed`` call
+        that runs them in order, saves each part as it ends and returns the list of
+        ``(part, job)``.
+    desc : str
+        The progress line's label.
+    progress : bool
+    n_jobs : int
+
+    Returns
+    -------
+    (list of dict, int)
+        The parts in the jobs' order, and how many were resumed.
+    """
+    done, todo = finished_parts(out, jobs)
+    resumed = len(done)
+    if done:
+        log.info("resuming: %d of %d part(s) already done", len(done), len(jobs))
+    groups: dict[tuple, list[Job]] = {}
+    for j in todo:
+        groups.setdefault((j.dataset, j.gear), []).append(j)
+    bar = tqdm(total=len(todo), desc=desc, unit="part", disable=not progress)
+    par = joblib.Parallel(n_jobs=min(n_jobs, max(1, len(groups))),
+                          return_as="generator_unordered")
+    t0 = time.perf_counter()
+    # each group's call, with this process's registries (a user's detectors, faults, ...)
+    calls = (delayed(g) for g in groups.values())  # (function, args, kwargs)
+    for finished in par((travelling(f), a, kw) for f, a, kw in calls):
+        done += [part for part, _ in finished]
+        bar.update(len(finished))
+        log.info("part(s) %s done (%d of %d left, %.1f min so far)",
+                 ", ".join(job.file for _, job in finished), bar.total - bar.n, bar.total,
+                 (time.perf_counter() - t0) / 60)
+    bar.close()
+    order = {j.key: i for i, j in enumerate(jobs)}
+    return sorted(done, key=lambda p: order[p["key"]]), resumed
+
+
+def run_group(out: str | Path, jobs: list[Job], run_one: Callable[[Job], dict]
+              ) -> list[tuple[dict, Job]]:
+    """In a worker: each job's part by ``run_one``, in order, its key set, made plain JSON
+    and saved as it ends (:func:`save_part`); returns the ``(part, job)`` pairs
+    (:func:`run_parts`'s ``delayed``)."""
+    finished = []
+    for job in jobs:
+        part = run_one(job)
+        part["key"] = job.key
+        part = json.loads(json.dumps(part, default=float))
+        save_part(Path(out), job, part)
+        finished.append((part, job))
+    return finished
+
+
+__all__ = ["Job", "finished_parts", "group_jobs", "part_key", "run_group", "run_one_group",
+           "run_parts", "save_part", "share_key"]
