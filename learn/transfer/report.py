@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from learn.learners.models import model_label
+from learn.paper.results import PAPER_RESULTS
 from learn.studies.latency import latency_heading
 from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
 from learn.studies.runs import RunRef
@@ -228,8 +229,6 @@ def model_rank(m: str) -> int:
 
 
 def _paper_rows(protocol: str, splits: Sequence[str]) -> list[str]:
-    from learn.paper.results import PAPER_RESULTS
-
     table = {"ood_clean": "IX", "ood_disturbed": "X"}[protocol]
     out = []
     for sel in ("selection1", "selection3"):
