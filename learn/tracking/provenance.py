@@ -222,6 +222,13 @@ def model_requirements(fmt: str, own_classes: bool) -> list[str]:
     list of str
         scikit-learn (and skops or cloudpickle) pinned to the installed versions.
     """
+    return list(_requirements(fmt, own_classes))
+
+
+@functools.cache
+def _requirements(fmt: str, own_classes: bool) -> tuple[str, ...]:
+    """:func:`model_requirements`, read once per process and format (reading the installed
+    distributions' metadata costs milliseconds, and a study logs a model per job)."""
     import importlib.metadata
 
     import mlflow.sklearn
@@ -233,4 +240,4 @@ def model_requirements(fmt: str, own_classes: bool) -> list[str]:
             reqs.append(f"swg-monitor=={importlib.metadata.version('swg-monitor')}")
         except importlib.metadata.PackageNotFoundError:
             pass
-    return reqs
+    return tuple(reqs)

@@ -5,6 +5,7 @@ BLAS kernel they run on this processor (which can change the last bits of a numb
 
 from __future__ import annotations
 
+import functools
 import subprocess
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -77,11 +78,17 @@ def library_versions() -> dict[str, str]:
         Distribution name -> version, e.g. ``{"numpy": "2.1.3", ..., "blas": "openblas
         0.3.30 Haswell (...)"}``.
     """
+    return {**_versions(), "blas": blas_kernels()}
+
+
+@functools.cache
+def _versions() -> dict[str, str]:
+    """:data:`LIBRARIES`' versions, read once per process (reading a distribution's
+    metadata costs milliseconds, and a study logs hundreds of runs); copied by the caller."""
     out = {}
     for name in LIBRARIES:
         try:
             out[name] = version(name)
         except PackageNotFoundError:
             out[name] = "not installed"
-    out["blas"] = blas_kernels()
     return out
