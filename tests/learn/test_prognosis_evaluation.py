@@ -32,7 +32,7 @@ COLUMNS = ["dataset", "held_out_gear", "seed", "fault", "payload", "method", "in
 
 
 def _run(out, *extra):
-    from learn.tasks.train import run_train
+    from learn.train import run_train
     from swgcli import compose_app
 
     return run_train(compose_app("train", ["experiment=prognosis", "~logger",
