@@ -68,8 +68,8 @@ class EvaluationExperiment:
     report_dir : str
         The report's folder (its default: the evaluation's).
     n_jobs : int
-        Worker processes, one part (data set, held-out gear, and detector) each; default 2
-        [choice].
+        Worker processes, one part each (a data set and held-out gear; the monitor's: and
+        one detector); default 2 [choice].
     progress : bool
     group : int or None
         Evaluate only the (data set, held-out gear) of this index, in the order of
