@@ -8,17 +8,20 @@ Layers, each importing only those before it:
   torch MLP and 1D-CNN, MiniRocket, CORAL);
 * :mod:`learn.studies` - protocols, the runs and k-shot splits of transfer to the gear
   not seen in training, the separability of faults in the signals;
-* :mod:`learn.tasks` - what the apps run: a study and its report, the resumable parts of
-  an evaluation;
+* :mod:`learn.tasks` - what the workflows' tasks share: the typed app config, the
+  resumable parts of an evaluation;
   :mod:`learn.observability` - one workflow's folder beside them: the observability of
   faults in the signals, its study and the task ``swgsim-observability`` runs;
   :mod:`learn.paper` - the paper study's folder above them: Tables VII-X, its report and
-  summary, the task ``paper_study`` and ``run_paper_study`` (``swgsim-paper``);
+  summary, the task ``paper_study`` and ``run_paper_study`` (``swgsim-paper``) and one job
+  of the study, the task ``study``;
   :mod:`learn.monitor_evaluation` - the monitor's and the prognosis's evaluations beside
   it: their tasks ``monitor`` and ``prognosis`` and their reports;
   :mod:`learn.transfer` - the transfer comparison's folder above the paper's (its report quotes
   the paper's numbers): its study, report and the task ``transfer``
-  (``swgsim-train -m experiment=transfer``).
+  (``swgsim-train -m experiment=transfer``);
+* :mod:`learn.train` - ``swgsim-train``'s dispatch on top of them all: each task's
+  function by its name (:data:`learn.train.TASKS`).
 
 The public API is listed in ``__all__``; names are imported on first use (torch only
 when a net is asked for).

@@ -151,7 +151,7 @@ class PathsConfig:
 
 @dataclass
 class TrainApp:
-    """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.tasks.train.TASKS`."""
+    """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.train.TASKS`."""
 
     OUT_DIRS: ClassVar[tuple[str, ...]] = ("paths.report_dir", "monitor.report_dir",
                                            "prognosis.report_dir", "transfer.report_dir",

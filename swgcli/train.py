@@ -1,4 +1,4 @@
-"""``swgsim-train``: Hydra app around :func:`learn.tasks.train.run_train`.
+"""``swgsim-train``: Hydra app around :func:`learn.train.run_train`.
 
 Examples
 --------
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from omegaconf import DictConfig
 
-from learn.tasks.train import check_inputs, run_train
+from learn.train import check_inputs, run_train
 from swgcli.app import hydra_app
 from swgcli.schema import TrainApp
 

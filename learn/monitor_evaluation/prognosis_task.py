@@ -34,6 +34,7 @@ from learn.monitor_evaluation.prognosis_report import (
 )
 from learn.tasks.config import typed_app
 from learn.tasks.parts import (
+    EvaluationExperiment,
     Job,
     group_jobs,
     part_key,
@@ -45,9 +46,8 @@ from learn.tasks.parts import (
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
-from swgsim.base.typed import allowed, plain
-from swgsim.datasets.config import DatasetConfig
-from swgsim.datasets.plan import DatasetPlan, plan
+from swgsim.base.typed import plain
+from swgsim.datasets.plan import DatasetPlan
 from swgsim.files import ownership
 from swgsim.files.ownership import atomic_write_json, write_owned
 
@@ -58,35 +58,22 @@ log = logging.getLogger(__name__)
 
 
 @dataclass
-class PrognosisExperiment:
-    """``prognosis`` group of ``swgsim-train``.
+class PrognosisExperiment(EvaluationExperiment):
+    """``prognosis`` group of ``swgsim-train``: the shared keys
+    (:class:`learn.tasks.parts.EvaluationExperiment`: ``run_on``, ``datasets`` - their
+    own ``life`` is not used, the study makes the lives -, ``report_dir``, ``n_jobs``,
+    ``progress``, ``group``) and the prognosis's study.
 
     Attributes
     ----------
-    run_on : list of str
-        Keys of ``datasets`` to evaluate, in order.
-    datasets : dict of str to DatasetConfig
-        Data-set presets whose gears live (chain, acquisition, gears, Table V grid); their
-        own ``life`` is not used (the study makes the lives).
     study : PrognosisStudyConfig
         The evaluation's design.
     report_dir : str
-    n_jobs : int
-        Worker processes, one part (data set, held-out gear) each.
-    progress : bool
-    group : int or None
-        Evaluate only the (data set, held-out gear) of this index, writing its part and
-        no report (a job of a cluster array, as ``monitor.group``: docs/scale_out.md).
-        None: every one still to do, then the report.
+        Default ``reports/prognosis`` [choice].
     """
 
-    run_on: list[str] = field(default_factory=lambda: ["bench", "robot_joint"])
-    datasets: dict[str, DatasetConfig] = field(default_factory=dict)
     study: PrognosisStudyConfig = field(default_factory=PrognosisStudyConfig)
     report_dir: str = "reports/prognosis"
-    n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
-    progress: bool = True
-    group: int | None = field(default=None, metadata=allowed(0, None, "group index"))
 
 
 def plan_parts(pc: PrognosisExperiment, plans: dict[str, DatasetPlan]) -> list[Job]:
@@ -112,18 +99,8 @@ def run_prognosis_evaluation(cfg) -> dict:
     app = typed_app(cfg)
     pc: PrognosisExperiment = app.prognosis
     check_prognosis_study(pc.study, "prognosis.study")
-    unknown = [d for d in pc.run_on if d not in pc.datasets]
-    if unknown or not pc.run_on:
-        raise ValueError(f"prognosis.run_on: {unknown or 'empty'}; allowed: keys of "
-                         f"prognosis.datasets {sorted(pc.datasets)}")
-    if pc.n_jobs < 1:
-        raise ValueError(f"prognosis.n_jobs must be >= 1, got {pc.n_jobs}")
-    plans = {}
-    for name in pc.run_on:  # every config checked before any work
-        try:
-            plans[name] = plan(pc.datasets[name])
-        except ValueError as e:
-            raise ValueError(f"prognosis.datasets.{name}: {e}") from None
+    plans = pc.plans("prognosis")  # every data set's config checked before any work
+    for name in plans:
         have = [int(x.id) for x in plans[name].config.gears]
         bad = sorted(set(pc.study.gears) - set(have))
         if bad:

@@ -38,6 +38,7 @@ from learn.monitor_evaluation.report import (
 )
 from learn.tasks.config import typed_app
 from learn.tasks.parts import (
+    EvaluationExperiment,
     Job,
     group_jobs,
     part_key,
@@ -49,9 +50,8 @@ from learn.tasks.parts import (
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
-from swgsim.base.typed import allowed, plain
-from swgsim.datasets.config import DatasetConfig
-from swgsim.datasets.plan import DatasetPlan, plan
+from swgsim.base.typed import plain
+from swgsim.datasets.plan import DatasetPlan
 from swgsim.files import ownership
 from swgsim.files.ownership import atomic_write_json, write_owned
 
@@ -62,27 +62,17 @@ log = logging.getLogger(__name__)
 
 
 @dataclass
-class MonitorExperiment:
-    """``monitor`` group of ``swgsim-train``.
+class MonitorExperiment(EvaluationExperiment):
+    """``monitor`` group of ``swgsim-train``: the shared keys
+    (:class:`learn.tasks.parts.EvaluationExperiment`: ``run_on``, ``datasets``,
+    ``report_dir``, ``n_jobs``, ``progress``, ``group``) and the monitor's own.
 
     Attributes
     ----------
-    run_on : list of str
-        Keys of ``datasets`` to evaluate, in order.
-    datasets : dict of str to DatasetConfig
-        Data-set presets whose gears live (their chain, acquisition, gears, Table V grid).
     study : MonitorStudyConfig
         The evaluation's design.
     report_dir : str
-    n_jobs : int
-        Worker processes, one part (data set, held-out gear, and detector) each.
-    progress : bool
-    group : int or None
-        Evaluate only the (data set, held-out gear) of this index, in the order of
-        ``run_on`` and the gears (a job of a cluster array: ``monitor.group=range(0,N)``
-        with a submitit launcher, docs/scale_out.md), writing its parts to ``parts/`` and
-        no report; the jobs of one evaluation share ``report_dir``. None: every one still
-        to do, then the report.
+        Default ``reports/monitor`` [choice].
     device : str
         Where the torch detectors (``cnn_res``) run: ``cpu``, ``cuda``, ``cuda:N`` or
         ``auto`` (a GPU where CUDA is present, else the CPU;
@@ -92,13 +82,8 @@ class MonitorExperiment:
         run and ``table.md`` say where and whether deterministically.
     """
 
-    run_on: list[str] = field(default_factory=lambda: ["bench", "robot_joint"])
-    datasets: dict[str, DatasetConfig] = field(default_factory=dict)
     study: MonitorStudyConfig = field(default_factory=MonitorStudyConfig)
     report_dir: str = "reports/monitor"
-    n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
-    progress: bool = True
-    group: int | None = field(default=None, metadata=allowed(0, None, "group index"))
     device: str = "auto"
 
 
@@ -145,16 +130,7 @@ def run_monitor_evaluation(cfg) -> dict:
     app = typed_app(cfg)
     mc: MonitorExperiment = app.monitor
     check_study(mc.study)
-    unknown = [d for d in mc.run_on if d not in mc.datasets]
-    if unknown:
-        raise ValueError(f"monitor.run_on: {unknown} not among monitor.datasets "
-                         f"{sorted(mc.datasets)}")
-    plans = {}
-    for name in mc.run_on:  # every config checked before any work
-        try:
-            plans[name] = plan(mc.datasets[name])
-        except ValueError as e:
-            raise ValueError(f"monitor.datasets.{name}: {e}") from None
+    plans = mc.plans("monitor")  # every data set's config checked before any work
     nets = _nets(mc)  # a CUDA device on a machine without one: refused before any work
     jobs, not_run = plan_jobs(mc, plans, nets.get("torch_device", "cpu"))
     jobs = group_jobs(jobs, mc.group)

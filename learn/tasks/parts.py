@@ -2,7 +2,8 @@
 key (:func:`part_key`, the hash of what made it), the parts of one (data set, held-out
 gear) run in one worker, in order (:func:`run_parts`, :func:`run_group`), resumed from
 ``parts/`` when their key matches (:func:`finished_parts`), and one (data set, held-out
-gear) alone as a job of a cluster array (:func:`group_jobs`, :func:`run_one_group`). Used by
+gear) alone as a job of a cluster array (:func:`group_jobs`, :func:`run_one_group`); the
+options an evaluation's group of ``swgsim-train`` shares (:class:`EvaluationExperiment`). Used by
 the monitor's and the prognosis's evaluations (:mod:`learn.monitor_evaluation`) and the
 transfer comparison (:mod:`learn.transfer.task`)."""
 
@@ -14,14 +15,17 @@ import json
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from tqdm.auto import tqdm
 
 from swgsim.base.lazy import lazy_module
 from swgsim.base.registry import travelling
-from swgsim.datasets.plan import DatasetPlan
+from swgsim.base.typed import allowed
+from swgsim.datasets.config import DatasetConfig
+from swgsim.datasets.plan import DatasetPlan, plan
 from swgsim.files.ownership import atomic_write_json
 
 joblib = lazy_module("joblib")
@@ -43,6 +47,79 @@ class Job:
     def file(self) -> str:
         """Its part's file name in ``parts/``."""
         return f"{self.dataset}_gear{self.gear}{'_' + self.detector if self.detector else ''}.json"
+
+
+@dataclass(kw_only=True)
+class EvaluationExperiment:
+    """What the ``monitor`` and ``prognosis`` groups of ``swgsim-train`` share
+    (:class:`learn.monitor_evaluation.task.MonitorExperiment`,
+    :class:`learn.monitor_evaluation.prognosis_task.PrognosisExperiment` add their study's
+    type and default, their ``report_dir`` default and what only they have).
+
+    Attributes
+    ----------
+    run_on : list of str
+        Keys of ``datasets`` to evaluate, in order; default the bench and the robot joint
+        [choice].
+    datasets : dict of str to DatasetConfig
+        Data-set presets whose gears live (their chain, acquisition, gears, Table V grid).
+    study : dataclass
+        The evaluation's design (its type and default: the evaluation's).
+    report_dir : str
+        The report's folder (its default: the evaluation's).
+    n_jobs : int
+        Worker processes, one part each (a data set and held-out gear; the monitor's: and
+        one detector); default 2 [choice].
+    progress : bool
+    group : int or None
+        Evaluate only the (data set, held-out gear) of this index, in the order of
+        ``run_on`` and the gears (a job of a cluster array: ``monitor.group=range(0,N)``
+        with a submitit launcher, docs/scale_out.md), writing its parts to ``parts/`` and
+        no report; the jobs of one evaluation share ``report_dir``. None: every one still
+        to do, then the report.
+    """
+
+    run_on: list[str] = field(default_factory=lambda: ["bench", "robot_joint"])
+    datasets: dict[str, DatasetConfig] = field(default_factory=dict)
+    study: Any
+    report_dir: str
+    n_jobs: int = field(default=2, metadata=allowed(1, None, "worker processes"))
+    progress: bool = True
+    group: int | None = field(default=None, metadata=allowed(0, None, "group index"))
+
+    def plans(self, where: str) -> dict[str, DatasetPlan]:
+        """The shared keys checked and each data set of ``run_on`` planned
+        (:func:`swgsim.datasets.plan.plan`, which checks its config), before any work.
+
+        Parameters
+        ----------
+        where : str
+            The group's name in messages (``monitor``, ``prognosis``).
+
+        Returns
+        -------
+        dict of str to DatasetPlan
+            Per key of ``run_on``, in its order.
+
+        Raises
+        ------
+        ValueError
+            ``run_on`` empty or naming a key not in ``datasets``, ``n_jobs`` < 1, or a
+            data set's config out of its ranges (``<where>.datasets.<name>: ...``).
+        """
+        unknown = [d for d in self.run_on if d not in self.datasets]
+        if unknown or not self.run_on:
+            raise ValueError(f"{where}.run_on: {unknown or 'empty'}; allowed: keys of "
+                             f"{where}.datasets {sorted(self.datasets)}")
+        if self.n_jobs < 1:
+            raise ValueError(f"{where}.n_jobs must be >= 1, got {self.n_jobs}")
+        plans = {}
+        for name in self.run_on:
+            try:
+                plans[name] = plan(self.datasets[name])
+            except ValueError as e:
+                raise ValueError(f"{where}.datasets.{name}: {e}") from None
+        return plans
 
 
 def part_key(obj: object) -> str:
@@ -181,5 +258,5 @@ def run_group(out: str | Path, jobs: list[Job], run_one: Callable[[Job], dict]
     return finished
 
 
-__all__ = ["Job", "finished_parts", "group_jobs", "part_key", "run_group", "run_one_group",
-           "run_parts", "save_part", "share_key"]
+__all__ = ["EvaluationExperiment", "Job", "finished_parts", "group_jobs", "part_key",
+           "run_group", "run_one_group", "run_parts", "save_part", "share_key"]

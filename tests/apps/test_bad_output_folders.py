@@ -80,7 +80,7 @@ OUT_CASES = {  # case -> (app, how the output folder is prepared, name)
 
 
 def _run_into(app: str, out: Path, tmp_path: Path, life: Path):
-    from learn.tasks.train import run_train
+    from learn.train import run_train
     from swgcli.export import run_export_app
     from swgcli.monitor import run_monitor_app
 

@@ -15,7 +15,7 @@ from swgcli import compose_app
     ("features.order_step=0.05", "features.order_step=0.05"),  # finer than the window
 ])
 def test_feature_orders_the_data_cannot_carry_are_refused(small, tmp_path, override, key):
-    from learn.tasks.train import run_train
+    from learn.train import run_train
 
     cfg = compose_app("train", [f"stored.path={small}", "~logger", "features=selection3",
                                 override, f"paths.report_dir={tmp_path}"])
@@ -28,6 +28,8 @@ EVAL_CASES = {  # case -> (overrides of swgsim-train experiment=monitor, the key
     "a gear the data sets lack": (["monitor.study.gears=[7]"], "monitor.study.gears: [7]"),
     "an unknown detector": (["monitor.study.detectors=[bogus]"], "monitor.study.detectors"),
     "an unknown data set": (["monitor.run_on=[nope]"], "monitor.run_on"),
+    "no data set": (["monitor.run_on=[]"], "monitor.run_on: empty; allowed: keys of "
+                                           "monitor.datasets ["),
     "n_jobs=0": (["monitor.n_jobs=0"], "monitor.n_jobs"),
     "commissioning as long as the life": (["monitor.study.commissioning_h=1000"],
                                           "monitor.study.commissioning_h"),

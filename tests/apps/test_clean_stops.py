@@ -195,7 +195,7 @@ def test_an_evaluation_runs_as_a_job_array_and_a_last_run_builds_the_report(tmp_
 
 
 def test_a_group_beyond_the_evaluations_pairs_is_refused_before_any_work(tmp_path):
-    from learn.tasks.train import run_train
+    from learn.train import run_train
     from swgcli import compose_app
 
     out = tmp_path / "meval"

@@ -121,7 +121,7 @@ def test_coral_recovers_a_shifted_domain():
 
 def test_transfer_end_to_end(tmp_path):
     """Compose the real experiment, shrink it, run it; check the report."""
-    from learn.tasks.train import run_train
+    from learn.train import run_train
     from swgcli import compose_app
 
     data = write_toy_dataset(tmp_path / "toy", n_variants=4, n_time=64)
@@ -403,7 +403,7 @@ def _toy_overrides(tmp_path: Path, *extra: str) -> list[str]:
 
 
 def test_a_stopped_comparison_runs_only_its_unfinished_cells_again(tmp_path, monkeypatch):
-    from learn.tasks.train import run_train
+    from learn.train import run_train
     from learn.transfer import study
 
     rep = Path(run_train(_toy_comparison(tmp_path))["report_dir"])
@@ -418,7 +418,7 @@ def test_a_stopped_comparison_runs_only_its_unfinished_cells_again(tmp_path, mon
 
 
 def test_a_comparison_runs_as_a_job_array_then_builds_its_report(tmp_path, monkeypatch):
-    from learn.tasks.train import run_train
+    from learn.train import run_train
     from learn.transfer import study
 
     out = run_train(_toy_comparison(tmp_path, "transfer.group=0"))

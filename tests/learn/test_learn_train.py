@@ -7,8 +7,9 @@ import sys
 
 import pytest
 
-from learn.tasks import train as train_task
-from learn.tasks.train import TASKS, run_train
+from learn.paper.job import run_study_job
+from learn.train import TASKS, run_train
+from learn.transfer.task import run_transfer
 from swgcli import compose_app
 
 
@@ -51,13 +52,10 @@ def test_unknown_task_is_rejected(tiny_dataset, tracking_uri, tmp_path):
 
 def test_task_dispatch(monkeypatch, tmp_path):
     calls = []
-    monkeypatch.setitem(TASKS, "probe", f"{__name__}._probe")
-    monkeypatch.setattr(sys.modules[__name__], "_probe", lambda cfg: calls.append(cfg) or {"ok": 1},
-                        raising=False)
+    monkeypatch.setitem(TASKS, "probe", lambda cfg: calls.append(cfg) or {"ok": 1})
     cfg = compose_train(["task=probe"])
     assert run_train(cfg) == {"ok": 1} and calls == [cfg]
-    assert TASKS["transfer"] == "learn.transfer.task.run_transfer"
-    assert TASKS["study"].rsplit(".", 1) == [train_task.__name__, "run_study_job"]
+    assert TASKS["transfer"] is run_transfer and TASKS["study"] is run_study_job
 
 
 def test_multirun_cli(tiny_dataset, tracking_uri, tmp_path):

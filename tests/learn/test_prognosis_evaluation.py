@@ -32,7 +32,7 @@ COLUMNS = ["dataset", "held_out_gear", "seed", "fault", "payload", "method", "in
 
 
 def _run(out, *extra):
-    from learn.tasks.train import run_train
+    from learn.train import run_train
     from swgcli import compose_app
 
     return run_train(compose_app("train", ["experiment=prognosis", "~logger",
@@ -122,6 +122,8 @@ BAD = {  # case -> (override, the start of the one line)
     "every_h 0": ("prognosis.study.prognosis.every_h=0",
                   "prognosis.study.prognosis.every_h must lie in (0, 1000]"),
     "an unknown data set": ("prognosis.run_on=[nope]", "prognosis.run_on: ['nope']"),
+    "no data set": ("prognosis.run_on=[]", "prognosis.run_on: empty; allowed: keys of "
+                                           "prognosis.datasets ['bench', 'robot_joint', 'tiny']"),
     "a gear the data set lacks": ("prognosis.study.gears=[7]",
                                   "prognosis.study.gears: [7] not in"),
     "severity_levels not a multiple of 4": (

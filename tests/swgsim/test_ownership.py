@@ -273,7 +273,7 @@ def test_observability_and_transfer_refuse_before_any_work(tmp_path, app, key):
                                             f"data_root={tmp_path}/data"])
         call = lambda: run_observability(cfg)  # noqa: E731
     else:
-        from learn.tasks.train import run_train
+        from learn.train import run_train
 
         cfg = compose_app("train", [f"experiment={app}", "~logger",
                                     f"{key}={out}", f"paths.data_dir={tmp_path}/data"])

@@ -1,6 +1,5 @@
-"""``swgsim-train``'s task dispatch (:func:`run_train`, :data:`TASKS`) and one job of the
-paper's study (:func:`run_study_job`: one protocol, one feature selection or signal input,
-one model, all splits)."""
+"""One job of the paper's study (:func:`run_study_job`, ``swgsim-train``'s task ``study``:
+one protocol, one feature selection or signal input, one model, all splits)."""
 
 from __future__ import annotations
 
@@ -12,78 +11,8 @@ from learn.inputs.features import extract_features
 from learn.studies.protocols import ProtocolResult, class_labels, evaluate, window_groups
 from learn.tasks.config import typed_app
 from swgsim.base.typed import plain
-from swgsim.datasets.schema import read_manifest
 
 log = logging.getLogger(__name__)
-
-#: Task name -> function ``f(cfg) -> dict`` (dotted path, imported on use).
-TASKS: dict[str, str] = {
-    "study": "learn.tasks.train.run_study_job",
-    "paper_study": "learn.paper.task.run_paper_study_task",
-    "transfer": "learn.transfer.task.run_transfer",
-    "monitor": "learn.monitor_evaluation.task.run_monitor_evaluation",
-    "prognosis": "learn.monitor_evaluation.prognosis_task.run_prognosis_evaluation",
-}
-
-
-def check_inputs(cfg) -> None:
-    """What ``swgsim-train`` reads, checked before any work and before its libraries are
-    imported (:func:`swgcli.app.hydra_app`'s ``inputs``): the task's name and, for a task
-    that reads a data set already on disk (``study``, ``paper_study``, ``transfer``
-    without ``transfer.run_on``), that data set's manifest.
-
-    Parameters
-    ----------
-    cfg : omegaconf.DictConfig or swgcli.schema.TrainApp
-        Composed ``conf/train.yaml``.
-
-    Raises
-    ------
-    ValueError
-        A task not in :data:`TASKS`, or ``stored.path`` not a data set
-        (:class:`swgsim.datasets.schema.DataSetError`, naming the path).
-    """
-    _check_task(cfg.task)
-    reads_stored = cfg.task in ("study", "paper_study") or (
-        cfg.task == "transfer" and cfg.transfer is not None and not cfg.transfer.run_on)
-    if reads_stored:
-        read_manifest(cfg.stored.path)
-
-
-def _check_task(task: str) -> None:
-    if task not in TASKS:
-        raise ValueError(f"task must be one of {sorted(TASKS)}, got {task!r}")
-
-
-def run_train(cfg) -> dict:
-    """Run the task named by ``cfg.task``.
-
-    Parameters
-    ----------
-    cfg : omegaconf.DictConfig or swgcli.schema.TrainApp
-        Composed ``conf/train.yaml`` (:class:`swgcli.schema.TrainApp`); turned into the
-        typed object here, once (:func:`learn.tasks.config.typed_app`), and handed on.
-
-    Returns
-    -------
-    dict
-        Whatever the task returns (metrics, run ids, paths).
-
-    Raises
-    ------
-    ValueError
-        For a task not in :data:`TASKS`.
-    """
-    from hydra.utils import get_method
-
-    app = typed_app(cfg)
-    _check_task(app.task)  # the rest of check_inputs, the app's, in the task's own order
-    if app.logger is not None:
-        from learn.tracking.store import check_tracking
-
-        check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
-    log.info("task %s -> %s", app.task, TASKS[app.task])
-    return get_method(TASKS[app.task])(app)
 
 
 def run_study_job(cfg) -> dict:
