@@ -150,8 +150,8 @@ def _print_end(cfg: DictConfig, names: list[str], summary: dict, root_data: str,
         print(f"  report {n:<10s} {root_rep}/{n}/ (tables_vii_x.md, results.csv, "
               "confusion.csv, figures)")
     print(f"  summary          {summary['files']['md']} (+ summary.csv, recall_rf.png)")
-    print(f"  MLflow runs      {cfg.tracking_uri or default_tracking_uri()}  (browse: mlflow "
-          "ui --backend-store-uri sqlite:///mlflow.db)")
+    uri = cfg.tracking_uri or default_tracking_uri()
+    print(f"  MLflow runs      {uri}  (browse: mlflow ui --backend-store-uri {uri})")
     print("wall time per stage: " + ", ".join(f"{n} {v:.1f} s" for n, v in stages.items()))
     if warn:
         print("warnings (each counted once here, full text in the log):")
