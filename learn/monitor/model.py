@@ -18,6 +18,7 @@ on the other gives the 5 % and 95 % quantiles (a split-conformal interval across
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass, field
 
@@ -54,6 +55,10 @@ class DiagnosisModel:
         Of the training windows.
     window_s : float
         Length of the training windows [s].
+    severity_without : dict of int to dict of str to regressor
+        Per training gear, the severity regressors fitted without it (those that
+        calibrate the intervals across gears; :meth:`without`); kept in the process that
+        trained the model, not saved with it (:mod:`.model_io`).
     """
 
     classes: list[str]
@@ -63,6 +68,7 @@ class DiagnosisModel:
     n_features: int = 0
     sample_rate_hz: float = 0.0
     window_s: float = 0.0
+    severity_without: dict[int, dict[str, object]] = field(default_factory=dict, repr=False)
 
     def log_proba(self, x: np.ndarray) -> np.ndarray:
         """ln P(class | window), shape (n, n_classes), columns in ``classes`` order: the
@@ -82,6 +88,27 @@ class DiagnosisModel:
         excluded: an alarm has been raised)."""
         tot = log_p.sum(axis=0)
         return self.classes[1 + int(np.argmax(tot[1:]))]
+
+    def without(self, gear: int) -> DiagnosisModel:
+        """This model with the severity regressors fitted without training gear ``gear``
+        (the classifier and the intervals unchanged): its estimates on that gear's windows
+        are out of sample, as on a held-out gear's (the prognosis calibrates its intervals
+        on training gears' lives so, :func:`learn.monitor.prognosis_evaluation.calibrate`).
+
+        Raises
+        ------
+        ValueError
+            ``gear`` is not a training gear of this model, or the model was loaded (the
+            regressors without each gear are not saved).
+        """
+        if gear not in self.severity_without:
+            raise ValueError(f"no severity regressors fitted without gear {gear}: the "
+                             f"model's are for {sorted(self.severity_without)} (a loaded "
+                             "model has none)")
+        out = dataclasses.replace(self, severity={
+            c: (self.severity_without[gear][c], q) for c, (_, q) in self.severity.items()})
+        out._trees = getattr(self, "_trees", None)  # the same classifier, compiled once
+        return out
 
     def estimate(self, fault: str, x: np.ndarray) -> tuple[float, float, float]:
         """Severity estimate and its interval from windows ``x`` of one fault."""
@@ -177,6 +204,7 @@ def _severity_regressors(model: DiagnosisModel, x, fault, severity, gear, seed, 
         for g in gears:  # fitted without gear g, judged on it
             tr, te = m & (gear != g), m & (gear == g)
             reg = _regressor(seed).fit(x[tr], severity[tr])
+            model.severity_without.setdefault(int(g), {})[c] = reg
             pred, true = reg.predict(x[te]), severity[te]
             for s in np.unique(true):
                 ps = pred[true == s]

@@ -19,8 +19,9 @@ The intervals are calibrated by split conformal prediction
 (:func:`.prognosis_calibration.conformal_interval_scale`) on lives of the *training* gears
 (``calibration_seeds``, disjoint from ``seeds``), per method and per quarter of the remaining
 share the prognosis itself predicts, one prognosis per life and quarter at a fraction of the
-way drawn from the seed (:func:`calibrate`); the held-out gear is never seen before it is
-scored.
+way drawn from the seed (:func:`calibrate`), each training gear's lives read with the
+severity regressors fitted without it (out of sample); the held-out gear is never seen
+before it is scored.
 """
 
 from __future__ import annotations
@@ -438,6 +439,11 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     training ``gears`` (``calibration_seeds``; module docstring), one per quarter of the
     predicted remaining share (:func:`~.prognosis_inputs.predicted_share`).
 
+    A training gear's lives are read with the severity regressors fitted without it
+    (:meth:`~.model.DiagnosisModel.without`): out of sample, as the held-out gear's will
+    be (read with the model's own, they were in sample: the severity track, and so the
+    remaining life's error, was the training gears' own, smaller than a new gear's).
+
     Of a life's valid prognoses with finite, positive quantiles, each quarter gets the one
     at a fraction λ of those in it, λ uniform in [0, 1] from the life's seed and gear (one
     per life and quarter: the lives stay exchangeable); a quarter without enough lives for
@@ -460,8 +466,9 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
             for g in gears for i, s in enumerate(sc.calibration_seeds) for f in faults]
     picked: dict[str, list[list]] = {m: [[] for _ in labels] for m in METHODS}
     ones = dict.fromkeys(METHODS, (1.0,))
+    read_by = {g: model.without(g) for g in gears}
     for g, s, sim in sims:
-        life, events = run_life(sim, model, sc, ones, s)
+        life, events = run_life(sim, read_by[g], sc, ones, s)
         lam = np.random.default_rng([s, g, 48]).uniform()
         for m, evs in events.items():
             ok = [_as_prognosis(e, m) for e in evs if e["valid"] and e["hour"] < life["failure_h"]]

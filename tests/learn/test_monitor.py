@@ -711,3 +711,42 @@ def test_the_diagnosis_models_boosting_runs_on_one_openmp_thread_with_the_same_t
                 proba.append(clf.predict_proba(x))
         assert _openmp_effective_n_threads() == two
     np.testing.assert_array_equal(proba[0], proba[1])
+
+
+def test_a_training_gears_severity_is_read_out_of_sample_for_the_prognosis_calibration(
+        tmp_path):
+    """``DiagnosisModel.without(g)`` (learn/monitor/model.py): the severity regressors
+    fitted without training gear ``g`` - on its windows the estimate is out of sample, as
+    on a held-out gear's - with the classifier and the intervals unchanged; a gear the
+    model did not train on, and a loaded model, are refused."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
+    from learn.monitor.model import fit_diagnosis
+    from learn.monitor.model_io import load_model, save_model
+
+    rng = np.random.default_rng(0)
+    n = 600
+    gear = np.repeat([1, 2], n // 2)
+    fault = np.where(np.arange(n) % 2, "x", "healthy")
+    severity = np.where(fault == "x", rng.uniform(0.1, 1.0, n), 0.0)
+    # gear 2's feature reads the severity at a larger gain: its own regressor knows that
+    x = np.column_stack([severity * np.where(gear == 1, 1.0, 1.5) + 0.01 * rng.normal(size=n),
+                         (fault == "x") + 0.1 * rng.normal(size=n), np.ones(n), np.ones(n)])
+    model = fit_diagnosis(x, fault, severity, gear, ["healthy", "x"], n_agg=10)
+    out = model.without(2)
+    assert out.classifier is model.classifier and out.classes == model.classes
+    assert out.severity["x"][1] == model.severity["x"][1]  # the same interval
+    on2 = x[(gear == 2) & (fault == "x")]
+    alone = HistGradientBoostingRegressor(max_iter=100, early_stopping=False, random_state=0)
+    m1 = (gear == 1) & (fault == "x")
+    np.testing.assert_array_equal(out.severity["x"][0].predict(on2),
+                                  alone.fit(x[m1], severity[m1]).predict(on2))
+    truth = severity[(gear == 2) & (fault == "x")]
+    err_in = np.abs(model.severity["x"][0].predict(on2) - truth).mean()
+    err_out = np.abs(out.severity["x"][0].predict(on2) - truth).mean()
+    assert err_out > 2 * err_in  # out of sample: gear 1's gain does not fit gear 2
+    with pytest.raises(ValueError, match="no severity regressors fitted without gear 3"):
+        model.without(3)
+    loaded = load_model(save_model(model, tmp_path / "m", []))
+    with pytest.raises(ValueError, match="a loaded model has none"):
+        loaded.without(1)
