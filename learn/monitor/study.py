@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import check_finite, check_range
+from swgsim.base.typed import check_finite, check_range, check_tree
 from swgsim.datasets.conditions import ConditionsConfig, RunInConfig, check_conditions
 from swgsim.gear.faults import FAULTS
 from swgsim.gear.thermal import JointThermal
@@ -21,7 +21,7 @@ from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 from .detectors import DETECTORS
 from .families import NuisanceFamily, draw_conditions
 from .normal import NormalConfig
-from .rule import RuleConfig, check_rule
+from .rule import RuleConfig
 
 
 def _nuisances() -> dict[str, ConditionsConfig]:
@@ -270,7 +270,7 @@ def check_study(sc: MonitorStudyConfig, key: str = "monitor.study") -> None:
         _req(len(sevs) >= 1 and all(np.diff([0.0, *sevs]) > 0)
              and sevs[-1] <= top, f"{key}.fault_severities.{f} must be increasing in (0, "
              f"{top:g}] ({f}'s severity range), got {sevs}")
-    check_rule(sc.rule, f"{key}.rule")
+    check_tree(sc.rule, f"{key}.rule")
     sc.normal.check(f"{key}.normal")
     check_range(sc.nuisance_hours, sc.commissioning_h, 1e6, f"{key}.nuisance_hours", "h",
                 lo_open=True, why="longer than commissioning")
