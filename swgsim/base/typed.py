@@ -163,6 +163,9 @@ class Range:
         Whether the bound itself is excluded.
     odd : bool
         Only odd integers (e.g. a filter's window length).
+    unit : str
+        Unit for the message, after the range (e.g. ``"h"``), as :func:`check_range`
+        writes it.
 
     Notes
     -----
@@ -175,6 +178,7 @@ class Range:
     lo_open: bool = False
     hi_open: bool = False
     odd: bool = False
+    unit: str = ""
 
     def contains(self, value: Any) -> bool:
         """Whether ``value`` is an allowed number (booleans, None, NaN and infinities
@@ -191,11 +195,12 @@ class Range:
     def text(self, nullable: bool = False) -> str:
         """The allowed values in the words of :func:`check_range`, e.g. ``"must lie in
         (0, 1]"``, ``"must lie in (0, inf) or be null"``, ``"must be an odd integer in
-        [5, 1001] (samples)"``, ``"must lie in [1, inf) (worker processes)"``."""
+        [5, 1001] (samples)"``, ``"must lie in [1, inf) (worker processes)"``,
+        ``"must lie in (0, 100000] h"``."""
         rng = _interval(-math.inf if self.lo is None else self.lo,
                         math.inf if self.hi is None else self.hi, self.lo_open, self.hi_open)
         return (f"must {'be an odd integer in' if self.odd else 'lie in'} {rng}"
-                f"{' or be null' if nullable else ''}"
+                f"{' ' + self.unit if self.unit else ''}{' or be null' if nullable else ''}"
                 f"{' (' + self.what + ')' if self.what else ''}")
 
 
@@ -206,7 +211,7 @@ def _interval(lo: float, hi: float, lo_open: bool, hi_open: bool) -> str:
 
 
 def allowed(lo: float | None, hi: float | None, what: str = "", *, lo_open: bool = False,
-            hi_open: bool = False, odd: bool = False) -> dict[str, Range]:
+            hi_open: bool = False, odd: bool = False, unit: str = "") -> dict[str, Range]:
     """Field metadata declaring the allowed range of a number (:data:`RANGE`).
 
     Parameters
@@ -219,6 +224,8 @@ def allowed(lo: float | None, hi: float | None, what: str = "", *, lo_open: bool
         Exclude the bound itself.
     odd : bool
         Only odd integers.
+    unit : str
+        Unit for the message, after the range, e.g. ``"h"``: ``must lie in (0, 100000] h``.
 
     Returns
     -------
@@ -226,7 +233,7 @@ def allowed(lo: float | None, hi: float | None, what: str = "", *, lo_open: bool
         ``{RANGE: Range(...)}``, for ``dataclasses.field(metadata=...)``; None is allowed
         where the field's type admits it.
     """
-    return {RANGE: Range(lo, hi, what, lo_open, hi_open, odd)}
+    return {RANGE: Range(lo, hi, what, lo_open, hi_open, odd, unit)}
 
 
 def _nullable(tp: Any) -> bool:

@@ -20,7 +20,7 @@ from data_sets import make_synthetic, write_dataset
 from omegaconf import OmegaConf
 
 from swgcli import compose_app, dataset_preset
-from swgsim.base.typed import NONFINITE, check_finite
+from swgsim.base.typed import NONFINITE, allowed, check_finite, check_keys, check_range, check_tree
 from swgsim.datasets import generate as gen
 from swgsim.datasets import schema as dsio
 from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig, check_life
@@ -121,6 +121,22 @@ def test_check_finite_walks_every_container_and_honours_the_field_metadata():
         with pytest.raises(ValueError, match=rf"^{key} must be a finite number, got -?(nan|inf)$"):
             check_finite(Part(**change), "part")
 
+
+
+def test_a_range_with_a_unit_reads_as_check_range_writes_it():
+    @dataclasses.dataclass
+    class Part:
+        horizon_h: float = dataclasses.field(default=1.0, metadata=allowed(
+            0.0, 1e5, "after the onset", lo_open=True, unit="h"))
+
+    with pytest.raises(ValueError) as by_hand:
+        check_range(-1.0, 0.0, 1e5, "part.horizon_h", "h", lo_open=True, why="after the onset")
+    for refuse in (lambda: check_tree(Part(horizon_h=-1.0), "part"),
+                   lambda: check_keys({"horizon_h": -1.0}, Part, "part")):
+        with pytest.raises(ValueError) as e:
+            refuse()
+        assert str(e.value) == str(by_hand.value) == (
+            "part.horizon_h must lie in (0, 100000] h (after the onset), got -1.0")
 
 # ------------------------------------------------------------------ writing
 def test_write_shard_refuses_nonfinite_signals_before_writing(tmp_path):
