@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import check_range
+from swgsim.base.typed import check_range, check_tree
 from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
 from swgsim.datasets.life import LifeSimulator, life_dataset
@@ -48,7 +48,7 @@ from .prognosis_inputs import interval_scale_of, predicted_share, share_bucket
 from .prognosis_scores import HORIZON_BUCKETS
 from .stream import monitor_stream
 from .stream_prognosis import StreamPrognosis
-from .study import MonitorStudyConfig, check_study
+from .study import MonitorStudyConfig
 from .training import train_model
 
 log = logging.getLogger(__name__)
@@ -193,7 +193,7 @@ def check_prognosis_study(sc: PrognosisStudyConfig, key: str = "prognosis.study"
         A value outside its range (named with the range), seeds shared between the
         evaluation and the calibration, a fault without a growth law.
     """
-    check_study(sc.train, f"{key}.train")
+    check_tree(sc.train, f"{key}.train")
     for name in ("seeds", "calibration_seeds"):
         seeds = getattr(sc, name)
         if not seeds:
