@@ -88,7 +88,7 @@ def run_monitor_app(cfg) -> dict:
     model = load_model(absolute_path(app.diagnosis_model), "diagnosis_model",
                        trust_pickle=app.trust_pickle)
     if app.prognosis.enabled:
-        app.prognosis.check(trained_duty(model))
+        app.prognosis.check(trained=trained_duty(model))
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
