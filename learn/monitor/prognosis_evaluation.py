@@ -32,13 +32,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import allowed, check_range
+from swgsim.base.typed import allowed, check_range, check_tree
 from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.records import RecordBank, record_bank
-from swgsim.datasets.schedule import FaultOnset, LifeConfig, check_life, staircase
+from swgsim.datasets.schedule import FaultOnset, LifeConfig, staircase
 
 from .model import DiagnosisModel
 from .prognosis import Prognosis, PrognosisConfig, Track
@@ -281,7 +281,7 @@ def life_of(plan: DatasetPlan, bank: RecordBank, g: int, sc: PrognosisStudyConfi
                       commissioning_h=tr.commissioning_h, life_seed=int(seed), conditions=cond,
                       fault=FaultOnset(fault, float(onset), gf.initial, growth=_law(fault),
                                        to_failure=gf.to_failure))
-    check_life(life, "prognosis.study.life")
+    check_tree(life, "prognosis.study.life")
     return LifeSimulator(plan, g, life, bank)
 
 

@@ -23,7 +23,7 @@ from swgcli import compose_app, dataset_preset
 from swgsim.base.typed import NONFINITE, allowed, check_finite, check_keys, check_range, check_tree
 from swgsim.datasets import generate as gen
 from swgsim.datasets import schema as dsio
-from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig, check_life
+from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
 
 NAN, INF = float("nan"), float("inf")
 
@@ -99,7 +99,7 @@ def test_nan_from_the_command_line_and_from_yaml_is_refused(tmp_path):
 ], ids=["hours", "dwell_min", "position_deg"])
 def test_check_life_refuses_nonfinite_values_naming_the_key(life, key):
     with pytest.raises(ValueError, match=rf"^{re.escape(key)} must be a finite number"):
-        check_life(life)
+        check_tree(life, "dataset.life")
 
 
 def test_check_finite_walks_every_container_and_honours_the_field_metadata():
