@@ -432,6 +432,11 @@ def build(value: Any, tp: Any, where: str | None = None) -> Any:
 NONFINITE = "nonfinite"
 
 
+def _key(where: str, name: Any) -> str:
+    """The full key of a part ``name`` of ``where`` (``name`` alone at a root named "")."""
+    return f"{where}.{name}" if where else str(name)
+
+
 def _nonfinite(value: Any, where: str) -> Iterator[tuple[str, Any]]:
     """(full key, value) of every NaN or infinity in ``value``, depth first, in field order.
 
@@ -442,10 +447,10 @@ def _nonfinite(value: Any, where: str) -> Iterator[tuple[str, Any]]:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         for f in dataclasses.fields(value):
             if NONFINITE not in f.metadata:
-                yield from _nonfinite(getattr(value, f.name), f"{where}.{f.name}")
+                yield from _nonfinite(getattr(value, f.name), _key(where, f.name))
     elif isinstance(value, Mapping):
         for k, v in value.items():
-            yield from _nonfinite(v, f"{where}.{k}")
+            yield from _nonfinite(v, _key(where, k))
     elif isinstance(value, (list, tuple)):
         for i, v in enumerate(value):
             yield from _nonfinite(v, f"{where}[{i}]")
@@ -475,7 +480,8 @@ def check_finite(obj: Any, where: str) -> None:
     obj : Any
         The config: a dataclass (e.g. :class:`DatasetConfig`), a mapping, a list, ...
     where : str
-        Full name of ``obj`` for the message, e.g. ``"dataset"``.
+        Full name of ``obj`` for the message, e.g. ``"dataset"`` (``""`` for a root
+        config: its keys by their names alone, ``bridges.unit``).
 
     Raises
     ------
@@ -529,16 +535,16 @@ def _check_parts(obj: Any, where: str) -> None:
         hints = _hints(type(obj))
         for f in dataclasses.fields(obj):
             value = getattr(obj, f.name)
-            _check_parts(value, f"{where}.{f.name}")
+            _check_parts(value, _key(where, f.name))
             if RANGE in f.metadata:
-                _check_range(value, f.metadata[RANGE], f"{where}.{f.name}",
+                _check_range(value, f.metadata[RANGE], _key(where, f.name),
                              _nullable(hints.get(f.name, Any)))
         hook = getattr(obj, "check", None)
         if callable(hook):
             hook(where)
     elif isinstance(obj, Mapping):
         for k, v in obj.items():
-            _check_parts(v, f"{where}.{k}")
+            _check_parts(v, _key(where, k))
     elif isinstance(obj, (list, tuple)):
         for i, v in enumerate(obj):
             _check_parts(v, f"{where}[{i}]")
@@ -552,7 +558,8 @@ def check_tree(obj: Any, where: str) -> None:
     obj : dataclass
         The config, e.g. a :class:`~swgsim.datasets.config.DatasetConfig`.
     where : str
-        Full name of ``obj`` for messages, e.g. ``"dataset"``.
+        Full name of ``obj`` for messages, e.g. ``"dataset"`` (``""`` for a root config:
+        its keys by their names alone, e.g. ``bridges.unit``).
 
     Raises
     ------

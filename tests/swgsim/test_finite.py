@@ -138,6 +138,24 @@ def test_a_range_with_a_unit_reads_as_check_range_writes_it():
         assert str(e.value) == str(by_hand.value) == (
             "part.horizon_h must lie in (0, 100000] h (after the onset), got -1.0")
 
+
+def test_a_root_config_named_empty_names_its_keys_alone():
+    @dataclasses.dataclass
+    class Inner:
+        gain: float = dataclasses.field(default=1.0, metadata=allowed(0.0, None, lo_open=True))
+
+    @dataclasses.dataclass
+    class Root:
+        inner: Inner = dataclasses.field(default_factory=Inner)
+        table: dict = dataclasses.field(default_factory=lambda: {"a": 1.0})
+
+    for bad, words in ((Root(Inner(0.0)), "inner.gain must lie in (0, inf), got 0.0"),
+                       (Root(Inner(NAN)), "inner.gain must be a finite number, got nan"),
+                       (Root(table={"a": INF}), "table.a must be a finite number, got inf")):
+        with pytest.raises(ValueError) as e:
+            check_tree(bad, "")
+        assert str(e.value) == words
+
 # ------------------------------------------------------------------ writing
 def test_write_shard_refuses_nonfinite_signals_before_writing(tmp_path):
     ds = make_synthetic(gears=(1,), n_variants=1, ops=((2000.0, 7.0),), n_time=64)
