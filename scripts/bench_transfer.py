@@ -51,8 +51,9 @@ def main(argv=None) -> dict:
 
     from learn.transfer.picks import primary_row
     from learn.transfer.report import summarise
-    from learn.transfer.study import check_config, run_comparison
+    from learn.transfer.study import run_comparison
     from swgcli import compose_app
+    from swgsim.base.typed import check_tree
     from swgsim.datasets.schema import load
 
     a = _args(argv)
@@ -65,7 +66,7 @@ def main(argv=None) -> dict:
     primary = tc.primary if tc.primary and tc.primary.label in {r.label for r in runs} else None
     tc = replace(tc, runs=runs, primary=primary, seeds=[a.seed], cv_seeds=[a.seed],
                  n_jobs=a.jobs, latency=False, progress=False)
-    check_config(tc)
+    check_tree(tc, "transfer")
     torch.set_num_threads(a.threads)
     ds = load(a.data)
     t0 = time.perf_counter()

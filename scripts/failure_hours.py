@@ -16,12 +16,13 @@ import json
 import numpy as np
 
 from swgcli import dataset_preset
+from swgsim.base.typed import check_tree
 from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.growth import RunToFailure
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import plan
 from swgsim.datasets.records import record_bank
-from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig, check_life
+from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
 from swgsim.gear.thermal import JointThermal
 
 PAPER_DUTY = [DutyPoint(n, t, 10.0) for n in (2000.0, 4000.0) for t in (7.0, 39.0, 70.0)]
@@ -44,7 +45,7 @@ def failure_h(p, bank, fault: str, conditions: ConditionsConfig, life_seed: int 
                       fault=FaultOnset(fault, 48.0, s0, growth=growth,
                                        to_failure=RunToFailure(**law)),
                       life_seed=life_seed, conditions=conditions)
-    check_life(life)
+    check_tree(life, "dataset.life")
     return LifeSimulator(p, bank.gear_id, life, bank).schedule.failure_h
 
 

@@ -39,6 +39,7 @@ evaluate = lazy_module("learn.monitor.evaluate")
 families = lazy_module("learn.monitor.families")
 study = lazy_module("learn.monitor.study")
 training = lazy_module("learn.monitor.training")
+typed = lazy_module("swgsim.base.typed")
 swgcli = lazy_module("swgcli")
 plans = lazy_module("swgsim.datasets.plan")
 records = lazy_module("swgsim.datasets.records")
@@ -93,7 +94,7 @@ def study_config(overrides: list[str], trace: str | None = None):
     if trace is not None:
         fam = families.NuisanceFamily(parts=["trace", "friction_law"], trace_path=trace)
         cfg = dataclasses.replace(cfg, families={**cfg.families, "trace": fam})
-    study.check_study(cfg)
+    typed.check_tree(cfg, "monitor.study")
     return cfg
 
 

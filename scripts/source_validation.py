@@ -71,8 +71,9 @@ def evaluate(data: str, overrides: list[str], labels: list[str], seed: int,
 
     from learn.studies.protocols import fit_with_groups, protocol_splits, window_groups
     from learn.studies.runs import make_estimator
-    from learn.transfer.study import _inputs, check_config
+    from learn.transfer.study import _inputs
     from swgcli import compose_app
+    from swgsim.base.typed import check_tree
     from swgsim.datasets.schema import load
 
     cfg = compose_app("train", ["experiment=transfer", *overrides])
@@ -83,7 +84,7 @@ def evaluate(data: str, overrides: list[str], labels: list[str], seed: int,
         raise SystemExit(f"--runs: {sorted(missing)} not in transfer.runs "
                          f"{[r.label for r in tc.runs]}")
     tc = replace(tc, runs=runs, primary=None)
-    check_config(tc)
+    check_tree(tc, "transfer")
     inputs = _inputs(load(data), runs, tc, True,
                      OmegaConf.to_object(cfg.features).kwargs())
     out = {}

@@ -19,14 +19,13 @@ from pathlib import Path
 from omegaconf import DictConfig, OmegaConf
 
 from learn.monitor.model_io import load_model
-from learn.monitor.rule import check_rule
 from learn.monitor.stream import event_line, monitor_stream, select_gear, write_outputs
 from learn.monitor.stream_prognosis import prognosis_line, trained_duty
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgcli.app import hydra_app
 from swgcli.schema import MonitorApp
-from swgsim.base.typed import check_range
+from swgsim.base.typed import check_range, check_tree
 from swgsim.datasets.schema import load, read_manifest
 from swgsim.files import ownership
 from swgsim.files.inputs import absolute_path
@@ -56,7 +55,7 @@ def check_inputs(cfg) -> MonitorApp:
         (:func:`swgsim.files.ownership.check`), or a ``stream`` that is not a data set.
     """
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
-    check_rule(app.rule, "rule")
+    check_tree(app.rule, "rule")  # its fields' ranges and RuleConfig.check
     app.normal.check("normal")
     for i, e in enumerate(app.maintenance):
         e.check(f"maintenance[{i}]")
@@ -76,7 +75,7 @@ def run_monitor_app(cfg) -> dict:
     ------
     ValueError
         Before any work: a rule option or ``confirm_h`` out of range
-        (:func:`learn.monitor.rule.check_rule`), an unwritable MLflow store, ``out_dir``
+        (:meth:`learn.monitor.rule.RuleConfig.check`), an unwritable MLflow store, ``out_dir``
         holding a file this project cannot show it wrote (named,
         :func:`swgsim.files.ownership.check`), a model or stream that is unfit, or a
         prognosis option out of range (a planned duty outside the model's operating
@@ -89,7 +88,7 @@ def run_monitor_app(cfg) -> dict:
     model = load_model(absolute_path(app.diagnosis_model), "diagnosis_model",
                        trust_pickle=app.trust_pickle)
     if app.prognosis.enabled:
-        app.prognosis.check(trained_duty(model))
+        app.prognosis.check(trained=trained_duty(model))
     src = absolute_path(app.stream)
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,

@@ -33,13 +33,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import check_range
+from swgsim.base.typed import allowed, check_range, check_tree
 from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.records import RecordBank, record_bank
-from swgsim.datasets.schedule import FaultOnset, LifeConfig, check_life, staircase
+from swgsim.datasets.schedule import FaultOnset, LifeConfig, staircase
 
 from .model import DiagnosisModel
 from .prognosis import Prognosis, PrognosisConfig, Track
@@ -49,7 +49,7 @@ from .prognosis_inputs import interval_scale_of, predicted_share, share_bucket
 from .prognosis_scores import HORIZON_BUCKETS
 from .stream import monitor_stream
 from .stream_prognosis import StreamPrognosis
-from .study import MonitorStudyConfig, check_study
+from .study import MonitorStudyConfig
 from .training import train_model
 
 log = logging.getLogger(__name__)
@@ -110,7 +110,8 @@ def _training() -> MonitorStudyConfig:
 
 @dataclass
 class PrognosisStudyConfig:
-    """The prognosis evaluation's design, declared before it runs.
+    """The prognosis evaluation's design, declared before it runs; it checks itself (its
+    fields' ranges and :meth:`check`, run by :func:`swgsim.base.typed.check_tree`).
 
     Attributes
     ----------
@@ -166,72 +167,73 @@ class PrognosisStudyConfig:
     gears: list[int] = field(default_factory=list)
     faults: dict[str, GrowingFault] = field(default_factory=_growing)
     onset_window_h: list[float] = field(default_factory=lambda: [0.5, 2.0])
-    max_life_h: float = 100.0
+    max_life_h: float = field(default=100.0, metadata=allowed(0.0, 1e4, lo_open=True,
+                                                              unit="h"))
     payloads: list[float] = field(default_factory=lambda: [1.0, 1.1, 0.9])
     payload_after_h: float = 1.5
     severity_levels: int = 32
     prognosis: StreamPrognosis = field(default_factory=lambda: StreamPrognosis(
         every_h=0.25, min_track_h=0.5, min_estimates=3))
-    coverage: float = 0.9
+    coverage: float = field(default=0.9, metadata=allowed(0.0, 1.0, lo_open=True,
+                                                          hi_open=True))
+
+    def check(self, where: str) -> None:
+        """Refuse a design whose rules across fields fail, in one line naming the key,
+        before any work (the fields' ranges are their metadata; the training design and
+        the prognosis option check themselves, before, in the same pass,
+        :func:`swgsim.base.typed.check_tree`).
+
+        Parameters
+        ----------
+        where : str
+            Full name of the design for messages, ``prognosis.study``.
+
+        Raises
+        ------
+        ValueError
+            Seeds none, out of [0, 2**32 - 1] or shared between the evaluation and the
+            calibration; no fault, a fault without a growth law or its growth to failure
+            out of range; ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi <= 10^4 h;
+            no payload; ``severity_levels`` not a multiple of 4 in [8, 256];
+            ``payload_after_h`` outside the life after the onset.
+        """
+        for name in ("seeds", "calibration_seeds"):
+            seeds = getattr(self, name)
+            if not seeds:
+                raise ValueError(f"{where}.{name} must list at least one seed")
+            for i, s in enumerate(seeds):
+                check_range(s, 0, 2**32 - 1, f"{where}.{name}[{i}]")
+        both = sorted(set(self.seeds) & set(self.calibration_seeds))
+        if both:
+            raise ValueError(f"{where}.calibration_seeds must be disjoint from seeds, both "
+                             f"hold {both}")
+        growing = sorted(f for fs in LAWS.values() for f in fs)
+        if not self.faults:
+            raise ValueError(f"{where}.faults must name at least one fault; allowed: {growing}")
+        for fault, gf in self.faults.items():
+            law = _law(fault)
+            if law is None:
+                raise ValueError(f"{where}.faults.{fault}: no growth law; allowed: {growing}")
+            check_to_failure(gf.to_failure, fault, law, gf.initial, f"{where}.faults.{fault}")
+        w = self.onset_window_h
+        if len(w) != 2 or not 0 <= w[0] <= w[1]:
+            raise ValueError(f"{where}.onset_window_h must be [lo, hi] with 0 <= lo <= hi, "
+                             f"got {w}")
+        check_range(w[1], 0.0, 1e4, f"{where}.onset_window_h[1]", "h")
+        if not self.payloads:
+            raise ValueError(f"{where}.payloads must list at least one factor (1: no change)")
+        for i, f in enumerate(self.payloads):
+            check_range(f, 0.0, 2.0, f"{where}.payloads[{i}]", lo_open=True)
+        if self.severity_levels % 4 or not 8 <= self.severity_levels <= 256:
+            raise ValueError(f"{where}.severity_levels must be a multiple of 4 in [8, 256] "
+                             "(the training's steps are every fourth), got "
+                             f"{self.severity_levels}")
+        check_range(self.payload_after_h, 0.0, self.max_life_h, f"{where}.payload_after_h",
+                    "h", lo_open=True, hi_open=True, why="inside the life after the onset")
 
 
 def _law(fault: str) -> str | None:
     return next((g for g, fs in LAWS.items() if fault in fs), None)
-
-
-def check_prognosis_study(sc: PrognosisStudyConfig, key: str = "prognosis.study") -> None:
-    """Refuse a design outside its ranges, in one line naming the key, before any work.
-
-    Parameters
-    ----------
-    sc : PrognosisStudyConfig
-    key : str
-        Full name of ``sc`` for messages.
-
-    Raises
-    ------
-    ValueError
-        A value outside its range (named with the range), seeds shared between the
-        evaluation and the calibration, a fault without a growth law.
-    """
-    check_study(sc.train, f"{key}.train")
-    for name in ("seeds", "calibration_seeds"):
-        seeds = getattr(sc, name)
-        if not seeds:
-            raise ValueError(f"{key}.{name} must list at least one seed")
-        for i, s in enumerate(seeds):
-            check_range(s, 0, 2**32 - 1, f"{key}.{name}[{i}]")
-    both = sorted(set(sc.seeds) & set(sc.calibration_seeds))
-    if both:
-        raise ValueError(f"{key}.calibration_seeds must be disjoint from seeds, both hold {both}")
-    if not sc.faults:
-        raise ValueError(f"{key}.faults must name at least one fault; allowed: "
-                         f"{sorted(f for fs in LAWS.values() for f in fs)}")
-    for fault, gf in sc.faults.items():
-        law = _law(fault)
-        if law is None:
-            raise ValueError(f"{key}.faults.{fault}: no growth law; allowed: "
-                             f"{sorted(f for fs in LAWS.values() for f in fs)}")
-        check_to_failure(gf.to_failure, fault, law, gf.initial, f"{key}.faults.{fault}")
-    if len(sc.onset_window_h) != 2 or not 0 <= sc.onset_window_h[0] <= sc.onset_window_h[1]:
-        raise ValueError(f"{key}.onset_window_h must be [lo, hi] with 0 <= lo <= hi, got "
-                         f"{sc.onset_window_h}")
-    check_range(sc.onset_window_h[1], 0.0, 1e4, f"{key}.onset_window_h[1]", "h")
-    check_range(sc.max_life_h, 0.0, 1e4, f"{key}.max_life_h", "h", lo_open=True)
-    if not sc.payloads:
-        raise ValueError(f"{key}.payloads must list at least one factor (1: no change)")
-    for i, f in enumerate(sc.payloads):
-        check_range(f, 0.0, 2.0, f"{key}.payloads[{i}]", lo_open=True)
-    if sc.severity_levels % 4 or not 8 <= sc.severity_levels <= 256:
-        raise ValueError(f"{key}.severity_levels must be a multiple of 4 in [8, 256] (the "
-                         f"training's steps are every fourth), got {sc.severity_levels}")
-    check_range(sc.payload_after_h, 0.0, sc.max_life_h, f"{key}.payload_after_h", "h",
-                lo_open=True, hi_open=True, why="inside the life after the onset")
-    try:
-        dataclasses.replace(sc.prognosis, enabled=True).check()
-    except ValueError as e:
-        raise ValueError(f"{key}.{e}") from None
-    check_range(sc.coverage, 0.0, 1.0, f"{key}.coverage", lo_open=True, hi_open=True)
 
 
 def evaluated_faults(plan: DatasetPlan, sc: PrognosisStudyConfig) -> tuple[list[str], dict]:
@@ -280,7 +282,7 @@ def life_of(plan: DatasetPlan, bank: RecordBank, g: int, sc: PrognosisStudyConfi
                       commissioning_h=tr.commissioning_h, life_seed=int(seed), conditions=cond,
                       fault=FaultOnset(fault, float(onset), gf.initial, growth=_law(fault),
                                        to_failure=gf.to_failure))
-    check_life(life, "prognosis.study.life")
+    check_tree(life, "prognosis.study.life")
     return LifeSimulator(plan, g, life, bank)
 
 
@@ -511,7 +513,7 @@ def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStu
     g : int
         The held-out gear.
     sc : PrognosisStudyConfig
-        Checked (:func:`check_prognosis_study`).
+        Checked (:meth:`PrognosisStudyConfig.check`).
 
     Returns
     -------
@@ -549,5 +551,5 @@ def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStu
 
 
 __all__ = ["METHODS", "GrowingFault", "PrognosisStudyConfig", "baseline_events", "calibrate",
-           "check_prognosis_study", "evaluated_faults", "life_levels", "life_of", "run_life",
+           "evaluated_faults", "life_levels", "life_of", "run_life",
            "run_prognosis_part"]

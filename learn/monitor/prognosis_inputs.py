@@ -80,33 +80,50 @@ class PrognosisConfig:
     max_bins: int = 256
     to_failure: RunToFailure = field(default_factory=RunToFailure)
 
-    def check(self) -> PrognosisConfig:
-        """Refuse a field out of range in one line naming ``prognosis.<field>`` (the fault's
-        own range of ``failure``: :func:`check_track`); return self. Raises ValueError."""
+    def check(self, where: str = "prognosis") -> PrognosisConfig:
+        """Refuse a field out of range in one line naming ``<where>.<field>`` (the fault's
+        own range of ``failure``: :func:`check_track`); return self.
+
+        Parameters
+        ----------
+        where : str
+            Full name of the config for messages (``prognosis``,
+            ``prognosis.study.prognosis``).
+
+        Returns
+        -------
+        PrognosisConfig
+            ``self``.
+
+        Raises
+        ------
+        ValueError
+            A field outside its range (the ranges in the attributes above).
+        """
         for name, lo, hi in (("min_estimates", 3, 1e6), ("n_samples", 100, 1e6),
                              ("n_grid", 21, 10001), ("max_bins", 8, 1e5)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, numbers.Integral):  # 1000.5, True
-                raise ValueError(f"prognosis.{name} must be an integer, got {v!r}")
-            check_range(v, lo, hi, f"prognosis.{name}")
-        check_range(self.min_track_h, 0.0, 1000.0, "prognosis.min_track_h", "h", lo_open=True)
-        check_range(self.log_scale_span, 0.0, 10.0, "prognosis.log_scale_span", lo_open=True)
+                raise ValueError(f"{where}.{name} must be an integer, got {v!r}")
+            check_range(v, lo, hi, f"{where}.{name}")
+        check_range(self.min_track_h, 0.0, 1000.0, f"{where}.min_track_h", "h", lo_open=True)
+        check_range(self.log_scale_span, 0.0, 10.0, f"{where}.log_scale_span", lo_open=True)
         k = self.interval_scale
         if isinstance(k, (str, bytes)) or not isinstance(k, (tuple, list)) \
                 or len(k) not in (1, len(HORIZON_BUCKETS)):
-            raise ValueError(f"prognosis.interval_scale must be a list of 1 or "
+            raise ValueError(f"{where}.interval_scale must be a list of 1 or "
                              f"{len(HORIZON_BUCKETS)} factors (one per quarter of the "
                              f"predicted remaining share), got {k!r}")
         for i, v in enumerate(k):
-            check_range(v, 0.0, 20.0, f"prognosis.interval_scale[{i}]", lo_open=True)
-        check_range(self.horizon_h, 0.0, 1e7, "prognosis.horizon_h", "h", lo_open=True)
+            check_range(v, 0.0, 20.0, f"{where}.interval_scale[{i}]", lo_open=True)
+        check_range(self.horizon_h, 0.0, 1e7, f"{where}.horizon_h", "h", lo_open=True)
         unset = dataclasses.replace(self.to_failure, failure=None)
         for law, faults in LAWS.items():
             for fault in faults:  # the onset's severity is not the prognosis's: any > 0
-                check_to_failure(unset, fault, law, 1e-9, "prognosis")
+                check_to_failure(unset, fault, law, 1e-9, where)
         if self.to_failure.failure is not None:
             top = max(get_fault(f).severity_range[1] for fs in LAWS.values() for f in fs)
-            check_range(self.to_failure.failure, 0.0, top, "prognosis.to_failure.failure",
+            check_range(self.to_failure.failure, 0.0, top, f"{where}.to_failure.failure",
                         lo_open=True, why="within a fault's severity range")
         return self
 

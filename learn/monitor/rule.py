@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
-from swgsim.base.typed import check_finite, check_range
+from swgsim.base.typed import allowed, check_range
 
 from .normal import OUTSIDE_UNJUDGED
 from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
@@ -49,25 +49,47 @@ special = lazy_module("scipy.special")
 
 @dataclass
 class RuleConfig:
-    """The sequential rule's design.
+    """The sequential rule's design; it checks itself (:meth:`check`, run by
+    :func:`swgsim.base.typed.check_tree`).
 
     Attributes
     ----------
     design_hours : float
-        One false alarm per this many operating hours, > 0 (default 1000 h).
+        One false alarm per this many operating hours, in (0, 1e6] h (default 1000 h).
     shift_sigma : float
-        δ of the second CUSUM (module docstring), >= 0; 0 runs the mixture alone.
+        δ of the second CUSUM (module docstring), in [0, 10]; 0 runs the mixture alone.
     max_delay_windows : int
         Windows in which a fault that gives every window the smallest p-value must be
-        detectable (sets the shortest commissioning), >= 1.
+        detectable (sets the shortest commissioning), in [1, 1e5] (0 can never alarm).
     min_normal_windows : int
-        Fewest normal-behaviour windows per operating point (its mean and spread), >= 2.
+        Fewest normal-behaviour windows per operating point (its mean and spread), in
+        [2, 1e5] (a spread needs two windows).
     """
 
     design_hours: float = 1000.0
-    shift_sigma: float = 0.5
-    max_delay_windows: int = 30
-    min_normal_windows: int = 30
+    shift_sigma: float = field(default=0.5, metadata=allowed(
+        0.0, 10.0, "the shift CUSUM's delta in standard deviations; 0 leaves it out"))
+    max_delay_windows: int = field(default=30, metadata=allowed(
+        1, 100_000, "windows in which the strongest evidence must reach the threshold"))
+    min_normal_windows: int = field(default=30, metadata=allowed(
+        2, 100_000, "a mean and a spread per operating point"))
+
+    def check(self, where: str) -> None:
+        """Refuse a design false-alarm rate out of range, in one line naming the key
+        (the other fields' ranges are their metadata, :func:`swgsim.base.typed.allowed`).
+
+        Parameters
+        ----------
+        where : str
+            Full name of the rule for messages (``rule``, ``monitor.study.rule``).
+
+        Raises
+        ------
+        ValueError
+            ``design_hours`` outside (0, 1e6] h.
+        """
+        check_range(self.design_hours, 0.0, 1e6, f"{where}.design_hours", "h", lo_open=True,
+                    why="one false alarm per this many operating hours")
 
 
 def log_bet(p: np.ndarray) -> np.ndarray:
@@ -107,33 +129,6 @@ def threshold(rule: RuleConfig, interval_min: float) -> float:
     """h = ln(windows in ``design_hours``) + ln(CUSUMs): the design false-alarm rate
     (module docstring)."""
     return math.log(rule.design_hours * 60.0 / float(interval_min) * n_cusums(rule))
-
-
-def check_rule(rule: RuleConfig, key: str = "rule") -> None:
-    """Refuse a rule outside its ranges, in one line naming the key, before any work.
-
-    Parameters
-    ----------
-    rule : RuleConfig
-    key : str
-        Full name of ``rule`` for messages (``rule``, ``monitor.study.rule``).
-
-    Raises
-    ------
-    ValueError
-        NaN or infinity anywhere; ``design_hours`` outside (0, 1e6] h; ``shift_sigma``
-        outside [0, 10]; ``max_delay_windows`` outside [1, 1e5] (0 can never alarm);
-        ``min_normal_windows`` outside [2, 1e5] (a spread needs two windows).
-    """
-    check_finite(rule, key)
-    check_range(rule.design_hours, 0.0, 1e6, f"{key}.design_hours", "h", lo_open=True,
-                why="one false alarm per this many operating hours")
-    check_range(rule.shift_sigma, 0.0, 10.0, f"{key}.shift_sigma",
-                why="the shift CUSUM's delta in standard deviations; 0 leaves it out")
-    check_range(rule.max_delay_windows, 1, 100_000, f"{key}.max_delay_windows",
-                why="windows in which the strongest evidence must reach the threshold")
-    check_range(rule.min_normal_windows, 2, 100_000, f"{key}.min_normal_windows",
-                why="a mean and a spread per operating point")
 
 
 def min_calibration(rule: RuleConfig, interval_min: float) -> int:
@@ -306,6 +301,6 @@ class Alarm:
                 "moved": [list(m) for m in self.moved]}
 
 
-__all__ = ["Alarm", "RuleConfig", "check_commissioning", "check_rule", "conformal_p", "judged_bets",
+__all__ = ["Alarm", "RuleConfig", "check_commissioning", "conformal_p", "judged_bets",
            "log_bet", "log_bets", "log_shift", "min_calibration", "n_cusums", "normal_scores",
            "run_cusums", "threshold"]

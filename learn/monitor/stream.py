@@ -272,7 +272,8 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
         of range (a planned duty outside the model's), before any work.
     """
     log = sorted(maintenance or [], key=lambda e: e.hour)
-    prognosis = prognosis.check(trained_duty(model)) if prognosis and prognosis.enabled else None
+    prognosis = (prognosis.check(trained=trained_duty(model))
+                 if prognosis and prognosis.enabled else None)
     check_stream(ds, model, rule, source)
     hours = ds["hour"].values.astype(float)
     n_c = int(ds["commissioning"].values.astype(bool).sum())

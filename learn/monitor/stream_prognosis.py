@@ -106,20 +106,42 @@ class StreamPrognosis:
         return PrognosisConfig(min_track_h=self.min_track_h, min_estimates=self.min_estimates,
                                interval_scale=self.interval_scale, to_failure=self.to_failure)
 
-    def check(self, trained: DutyRange | None = None) -> StreamPrognosis:
+    def check(self, where: str = "prognosis", trained: DutyRange | None = None
+              ) -> StreamPrognosis:
         """Refuse a field out of range, or a planned duty outside ``trained``, in one line
-        naming ``prognosis.<field>``; return self. Raises ValueError."""
-        check_range(self.every_h, 0.0, 1000.0, "prognosis.every_h", "h", lo_open=True)
-        check_range(self.block_h, 0.0, 100.0, "prognosis.block_h", "h", lo_open=True)
+        naming ``<where>.<field>``; return self.
+
+        Parameters
+        ----------
+        where : str
+            Full name of the option for messages (``prognosis``,
+            ``prognosis.study.prognosis``).
+        trained : DutyRange, optional
+            The duty the diagnosis model was trained on (:func:`trained_duty`); given, a
+            planned duty outside it is refused.
+
+        Returns
+        -------
+        StreamPrognosis
+            ``self``.
+
+        Raises
+        ------
+        ValueError
+            A field outside its range (the attributes above), or the planned duty outside
+            ``trained`` (``<where>.planned.<quantity>``).
+        """
+        check_range(self.every_h, 0.0, 1000.0, f"{where}.every_h", "h", lo_open=True)
+        check_range(self.block_h, 0.0, 100.0, f"{where}.block_h", "h", lo_open=True)
         if self.threshold is not None:
-            check_range(self.threshold, 0.0, 10.0, "prognosis.threshold", lo_open=True)
-        check_range(self.seed, 0, 2 ** 32 - 1, "prognosis.seed")
-        self.config.check()
+            check_range(self.threshold, 0.0, 10.0, f"{where}.threshold", lo_open=True)
+        check_range(self.seed, 0, 2 ** 32 - 1, f"{where}.seed")
+        self.config.check(where)
         duty = planned_duty(self)
         if duty is not None:
-            duty.check("prognosis.planned")
+            duty.check(f"{where}.planned")
             if trained is not None:
-                trained.check(duty, "prognosis.planned")
+                trained.check(duty, f"{where}.planned")
         return self
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import check_finite, check_range
+from swgsim.base.typed import allowed, check_range
 from swgsim.datasets.conditions import ConditionsConfig, RunInConfig, check_conditions
 from swgsim.gear.faults import FAULTS
 from swgsim.gear.thermal import JointThermal
@@ -21,7 +21,7 @@ from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 from .detectors import DETECTORS
 from .families import NuisanceFamily, draw_conditions
 from .normal import NormalConfig
-from .rule import RuleConfig, check_rule
+from .rule import RuleConfig
 
 
 def _nuisances() -> dict[str, ConditionsConfig]:
@@ -44,9 +44,19 @@ def _nuisances() -> dict[str, ConditionsConfig]:
                        payload=[[36.0, 1.1]])}
 
 
+def _req(cond: bool, msg: str) -> None:
+    if not cond:
+        raise ValueError(msg)
+
+
+#: Range of a duration of the study, (0, 1e5] h.
+_HOURS = allowed(0.0, 1e5, lo_open=True, unit="h")
+
+
 @dataclass
 class MonitorStudyConfig:
-    """The evaluation's design, declared before it runs.
+    """The evaluation's design, declared before it runs; it checks itself (its fields'
+    ranges and :meth:`check`, run by :func:`swgsim.base.typed.check_tree`).
 
     Attributes
     ----------
@@ -120,7 +130,7 @@ class MonitorStudyConfig:
         tiny_real_day, issue 44), on no family draw.
     scored_seeds : list of int
         Seeds of the family draws the monitor is scored on; disjoint from
-        ``design_seeds`` (:func:`check_study`).
+        ``design_seeds`` (:meth:`check`).
     family_growth_h : float
         Hours over which a fault of a family life grows linearly from 0 to its mildest
         Table V severity (40: slowly, under daily warm-ups).
@@ -130,16 +140,19 @@ class MonitorStudyConfig:
     """
 
     seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
-    healthy_hours: float = 1000.0
+    healthy_hours: float = field(default=1000.0, metadata=allowed(0.0, 1e6, lo_open=True,
+                                                                  unit="h"))
     commissioning_h: float = 24.0
-    interval_min: float = 1.0
-    horizon_h: float = 24.0
+    interval_min: float = field(default=1.0, metadata=allowed(0.0, 1440.0, lo_open=True,
+                                                              unit="min"))
+    horizon_h: float = field(default=24.0, metadata=_HOURS)
     onset_window_h: list[float] = field(default_factory=lambda: [1.0, 100.0])
-    growth_h: float = 10.0
-    train_fault_h: float = 0.5
-    train_variants: int = 15
-    sensor_train_levels: int = 2
-    train_healthy_h: float = 10.0
+    growth_h: float = field(default=10.0, metadata=_HOURS)
+    train_fault_h: float = field(default=0.5, metadata=_HOURS)
+    train_variants: int = field(default=15, metadata=allowed(1, 1000))
+    sensor_train_levels: int = field(default=2, metadata=allowed(
+        2, 100, "mild and severe at least"))
+    train_healthy_h: float = field(default=10.0, metadata=_HOURS)
     faults: list[str] = field(default_factory=list)
     fault_severities: dict[str, list[float]] = field(default_factory=dict)
     gears: list[int] = field(default_factory=list)
@@ -150,9 +163,89 @@ class MonitorStudyConfig:
     families: dict[str, NuisanceFamily] = field(default_factory=dict)
     design_seeds: list[int] = field(default_factory=lambda: [100, 101, 102, 103, 104])
     scored_seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
-    family_growth_h: float = 40.0
+    family_growth_h: float = field(default=40.0, metadata=_HOURS)
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)
+
+
+    def check(self, where: str) -> None:
+        """Refuse a design whose rules across fields fail, in one line naming the key,
+        before any work (the fields' ranges are their metadata; the rule, the normal
+        behaviour and each family check themselves, before, in the same pass).
+
+        Parameters
+        ----------
+        where : str
+            Full name of the study for messages, e.g. ``monitor.study``.
+
+        Raises
+        ------
+        ValueError
+            No seed or one outside [0, 2**32 - 1]; ``commissioning_h`` outside the healthy
+            life; ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi and the latest
+            onset inside the healthy life; training severities not increasing inside the
+            fault's range; ``nuisance_hours`` not longer than commissioning; a nuisance's
+            conditions out of range; the families' seeds, keys and draws
+            (:meth:`_check_families`); an unknown detector; ``detector_hours`` outside each
+            healthy life after commissioning.
+        """
+        _req(len(self.seeds) >= 1, f"{where}.seeds must list at least one seed")
+        for i, s in enumerate(self.seeds):
+            check_range(s, 0, 2**32 - 1, f"{where}.seeds[{i}]")
+        check_range(self.commissioning_h, 0.0, self.healthy_hours, f"{where}.commissioning_h",
+                    "h", lo_open=True, hi_open=True, why="inside the healthy life")
+        _req(len(self.onset_window_h) == 2, f"{where}.onset_window_h must be [lo, hi], got "
+                                            f"{self.onset_window_h}")
+        lo, hi = self.onset_window_h
+        _req(0 <= lo <= hi, f"{where}.onset_window_h must be [lo, hi] with 0 <= lo <= hi, "
+                            f"got {self.onset_window_h}")
+        _req(self.commissioning_h + hi <= self.healthy_hours, f"{where}.onset_window_h: the "
+             f"latest onset, commissioning_h + {hi:g} h, must lie within the healthy life "
+             f"(healthy_hours={self.healthy_hours:g} h), whose monitor state a fault life "
+             "starts from")
+        for f, sevs in self.fault_severities.items():
+            _req(f in FAULTS, f"{where}.fault_severities: {f!r} is no gear fault; allowed: "
+                              f"{', '.join(sorted(FAULTS))}")
+            top = FAULTS[f].severity_range[1]
+            _req(len(sevs) >= 1 and all(np.diff([0.0, *sevs]) > 0)
+                 and sevs[-1] <= top, f"{where}.fault_severities.{f} must be increasing in "
+                 f"(0, {top:g}] ({f}'s severity range), got {sevs}")
+        check_range(self.nuisance_hours, self.commissioning_h, 1e6, f"{where}.nuisance_hours",
+                    "h", lo_open=True, why="longer than commissioning")
+        for name, c in self.nuisances.items():
+            check_conditions(c, self.nuisance_hours, f"{where}.nuisances.{name}")
+        self._check_families(where)
+        bad = sorted(set(self.detectors) - set(DETECTORS))
+        _req(not bad, f"{where}.detectors: unknown {bad}; allowed: {sorted(DETECTORS)}")
+        check_range(self.detector_hours, 0.0, self.healthy_hours - self.commissioning_h,
+                    f"{where}.detector_hours", "h", lo_open=True,
+                    why="within each healthy life after commissioning")
+
+    def _check_families(self, where: str) -> None:
+        """The design and scored seeds (disjoint), and each family against the study: its
+        sensor fault and re-greasing after commissioning, its draws for every seed (a
+        payload step inside the shortest fault life, commissioning_h + onset_window_h[0] +
+        horizon_h). Each family's own ranges: :meth:`NuisanceFamily.check
+        <learn.monitor.families.NuisanceFamily.check>`, before, in the same pass."""
+        for name in ("design_seeds", "scored_seeds"):
+            seeds = getattr(self, name)
+            _req(len(seeds) >= 1, f"{where}.{name} must list at least one seed")
+            for i, s in enumerate(seeds):
+                check_range(s, 0, 2**32 - 1, f"{where}.{name}[{i}]")
+        both = sorted(set(self.design_seeds) & set(self.scored_seeds))
+        _req(not both, f"{where}.scored_seeds must be disjoint from design_seeds, both hold "
+                       f"{both}")
+        shortest = self.commissioning_h + self.onset_window_h[0] + self.horizon_h
+        for name, fam in self.families.items():
+            _req(":" not in name, f"{where}.families: a key must not hold ':', got {name!r}")
+            for k in ("sensor_fault_h", "regrease_h"):
+                _req(getattr(fam, k)[0] > self.commissioning_h,
+                     f"{where}.families.{name}.{k} must lie after commissioning (> "
+                     f"{self.commissioning_h:g} h), got {getattr(fam, k)}")
+            for s in self.design_seeds + self.scored_seeds:
+                check_conditions(draw_conditions(fam, int(s)),
+                                 min(shortest, self.nuisance_hours),
+                                 f"{where}.families.{name}[seed={s}]")
 
 
 #: Prefix of a family's lives among the nuisances (``family:warm_up``): the fixed
@@ -198,91 +291,5 @@ def life_conditions(cfg: MonitorStudyConfig, life: str, seed: int) -> Conditions
                    + ", ".join(FAMILY_PREFIX + k for k in cfg.families))
 
 
-def _check_families(sc: MonitorStudyConfig, key: str) -> None:
-    """The families, their draws for every design and scored seed (a payload step inside
-    the shortest fault life, commissioning_h + onset_window_h[0] + horizon_h), the seeds
-    (disjoint) and the growth."""
-    for name, seeds in (("design_seeds", sc.design_seeds), ("scored_seeds", sc.scored_seeds)):
-        _req(len(seeds) >= 1, f"{key}.{name} must list at least one seed")
-        for i, s in enumerate(seeds):
-            check_range(s, 0, 2**32 - 1, f"{key}.{name}[{i}]")
-    both = sorted(set(sc.design_seeds) & set(sc.scored_seeds))
-    _req(not both, f"{key}.scored_seeds must be disjoint from design_seeds, both hold {both}")
-    check_range(sc.family_growth_h, 0.0, 1e5, f"{key}.family_growth_h", "h", lo_open=True)
-    shortest = sc.commissioning_h + sc.onset_window_h[0] + sc.horizon_h
-    for name, fam in sc.families.items():
-        _req(":" not in name, f"{key}.families: a key must not hold ':', got {name!r}")
-        fam.check(f"{key}.families.{name}")
-        for k in ("sensor_fault_h", "regrease_h"):
-            _req(getattr(fam, k)[0] > sc.commissioning_h,
-                 f"{key}.families.{name}.{k} must lie after commissioning (> "
-                 f"{sc.commissioning_h:g} h), got {getattr(fam, k)}")
-        for s in sc.design_seeds + sc.scored_seeds:
-            check_conditions(draw_conditions(fam, int(s)), min(shortest, sc.nuisance_hours),
-                             f"{key}.families.{name}[seed={s}]")
-
-
-def _req(cond: bool, msg: str) -> None:
-    if not cond:
-        raise ValueError(msg)
-
-
-def check_study(sc: MonitorStudyConfig, key: str = "monitor.study") -> None:
-    """Refuse a study design outside its ranges, in one line naming the key, before any
-    work.
-
-    Parameters
-    ----------
-    sc : MonitorStudyConfig
-    key : str
-        Full name of ``sc`` for messages.
-
-    Raises
-    ------
-    ValueError
-        NaN or infinity anywhere, or a value outside its range (named with the range).
-    """
-    check_finite(sc, key)
-    _req(len(sc.seeds) >= 1, f"{key}.seeds must list at least one seed")
-    for i, s in enumerate(sc.seeds):
-        check_range(s, 0, 2**32 - 1, f"{key}.seeds[{i}]")
-    check_range(sc.healthy_hours, 0.0, 1e6, f"{key}.healthy_hours", "h", lo_open=True)
-    check_range(sc.commissioning_h, 0.0, sc.healthy_hours, f"{key}.commissioning_h", "h",
-                lo_open=True, hi_open=True, why="inside the healthy life")
-    check_range(sc.interval_min, 0.0, 1440.0, f"{key}.interval_min", "min", lo_open=True)
-    _req(len(sc.onset_window_h) == 2, f"{key}.onset_window_h must be [lo, hi], got "
-                                      f"{sc.onset_window_h}")
-    lo, hi = sc.onset_window_h
-    _req(0 <= lo <= hi, f"{key}.onset_window_h must be [lo, hi] with 0 <= lo <= hi, got "
-                        f"{sc.onset_window_h}")
-    _req(sc.commissioning_h + hi <= sc.healthy_hours, f"{key}.onset_window_h: the latest "
-         f"onset, commissioning_h + {hi:g} h, must lie within the healthy life (healthy_hours="
-         f"{sc.healthy_hours:g} h), whose monitor state a fault life starts from")
-    for k in ("horizon_h", "growth_h", "train_fault_h", "train_healthy_h"):
-        check_range(getattr(sc, k), 0.0, 1e5, f"{key}.{k}", "h", lo_open=True)
-    check_range(sc.train_variants, 1, 1000, f"{key}.train_variants")
-    check_range(sc.sensor_train_levels, 2, 100, f"{key}.sensor_train_levels",
-                why="mild and severe at least")
-    for f, sevs in sc.fault_severities.items():
-        _req(f in FAULTS, f"{key}.fault_severities: {f!r} is no gear fault; allowed: "
-                          f"{', '.join(sorted(FAULTS))}")
-        top = FAULTS[f].severity_range[1]
-        _req(len(sevs) >= 1 and all(np.diff([0.0, *sevs]) > 0)
-             and sevs[-1] <= top, f"{key}.fault_severities.{f} must be increasing in (0, "
-             f"{top:g}] ({f}'s severity range), got {sevs}")
-    check_rule(sc.rule, f"{key}.rule")
-    sc.normal.check(f"{key}.normal")
-    check_range(sc.nuisance_hours, sc.commissioning_h, 1e6, f"{key}.nuisance_hours", "h",
-                lo_open=True, why="longer than commissioning")
-    for name, c in sc.nuisances.items():
-        check_conditions(c, sc.nuisance_hours, f"{key}.nuisances.{name}")
-    _check_families(sc, key)
-    bad = sorted(set(sc.detectors) - set(DETECTORS))
-    _req(not bad, f"{key}.detectors: unknown {bad}; allowed: {sorted(DETECTORS)}")
-    check_range(sc.detector_hours, 0.0, sc.healthy_hours - sc.commissioning_h,
-                f"{key}.detector_hours", "h", lo_open=True,
-                why="within each healthy life after commissioning")
-
-
-__all__ = ["FAMILY_PREFIX", "MonitorStudyConfig", "check_study", "family_of",
+__all__ = ["FAMILY_PREFIX", "MonitorStudyConfig", "family_of",
            "life_conditions"]

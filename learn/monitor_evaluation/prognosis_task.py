@@ -19,11 +19,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from learn.monitor.prognosis_evaluation import (
-    PrognosisStudyConfig,
-    check_prognosis_study,
-    run_prognosis_part,
-)
+from learn.monitor.prognosis_evaluation import PrognosisStudyConfig, run_prognosis_part
 from learn.monitor_evaluation.prognosis_report import (
     bucket_table,
     figure,
@@ -46,7 +42,7 @@ from learn.tasks.parts import (
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
-from swgsim.base.typed import plain
+from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.files import ownership
 from swgsim.files.ownership import atomic_write_json, write_owned
@@ -98,7 +94,7 @@ def run_prognosis_evaluation(cfg) -> dict:
     """
     app = typed_app(cfg)
     pc: PrognosisExperiment = app.prognosis
-    check_prognosis_study(pc.study, "prognosis.study")
+    check_tree(pc.study, "prognosis.study")  # its training design, ..., then its rules
     plans = pc.plans("prognosis")  # every data set's config checked before any work
     for name in plans:
         have = [int(x.id) for x in plans[name].config.gears]

@@ -28,7 +28,7 @@ from learn.learners.devices import check_device
 from learn.monitor.detectors import DETECTORS
 from learn.monitor.evaluate import banks_of, run_detectors, run_held_out, to_frames
 from learn.monitor.model_io import MODEL_SUFFIX, save_model
-from learn.monitor.study import MonitorStudyConfig, check_study
+from learn.monitor.study import MonitorStudyConfig
 from learn.monitor_evaluation.report import (
     false_alarm_table,
     figures,
@@ -50,7 +50,7 @@ from learn.tasks.parts import (
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
-from swgsim.base.typed import plain
+from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.files import ownership
 from swgsim.files.ownership import atomic_write_json, write_owned
@@ -129,7 +129,7 @@ def run_monitor_evaluation(cfg) -> dict:
     """
     app = typed_app(cfg)
     mc: MonitorExperiment = app.monitor
-    check_study(mc.study)
+    check_tree(mc.study, "monitor.study")  # its ranges, its rule, ... then its own rules
     plans = mc.plans("monitor")  # every data set's config checked before any work
     nets = _nets(mc)  # a CUDA device on a machine without one: refused before any work
     jobs, not_run = plan_jobs(mc, plans, nets.get("torch_device", "cpu"))

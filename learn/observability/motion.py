@@ -49,7 +49,8 @@ COLUMNS = ("j_out_kgm2", "view", "fault", "severity", "stiffness_left", "fractio
 
 @dataclass
 class MotionMapConfig:
-    """The motion study's design (``motion`` group of ``swgsim-observability``).
+    """The motion study's design (``motion`` group of ``swgsim-observability``); it checks
+    itself (:meth:`check`).
 
     Attributes
     ----------
@@ -72,21 +73,28 @@ class MotionMapConfig:
                                                        1.0])
     seed: int = 0
 
+    def check(self, where: str) -> None:
+        """Refuse a design outside its ranges in one line naming the key (run by
+        :func:`swgsim.base.typed.check_tree`).
 
-def check_motion_map(mc: MotionMapConfig, key: str = "motion") -> None:
-    """Refuse a design outside its ranges in one line naming the key.
+        Parameters
+        ----------
+        where : str
+            Full name of the design for messages, ``motion``.
 
-    Raises
-    ------
-    ValueError
-    """
-    if int(mc.windows) < 20:
-        raise ValueError(f"{key}.windows must be >= 20, got {mc.windows}")
-    for name, hi in (("reduced_stiffness", 0.25), ("wear", 1.0)):
-        bad = [s for s in getattr(mc, name) if not 0 < float(s) <= hi]
-        if bad or not getattr(mc, name):
-            raise ValueError(f"{key}.{name} must list severities in (0, {hi}], got "
-                             f"{getattr(mc, name)}")
+        Raises
+        ------
+        ValueError
+            ``windows`` below 20; a severity list empty or with a severity outside
+            (0, 0.25] (``reduced_stiffness``) or (0, 1] (``wear``).
+        """
+        if int(self.windows) < 20:
+            raise ValueError(f"{where}.windows must be >= 20, got {self.windows}")
+        for name, hi in (("reduced_stiffness", 0.25), ("wear", 1.0)):
+            bad = [s for s in getattr(self, name) if not 0 < float(s) <= hi]
+            if bad or not getattr(self, name):
+                raise ValueError(f"{where}.{name} must list severities in (0, {hi}], got "
+                                 f"{getattr(self, name)}")
 
 
 def plan_slots(plan):
@@ -303,6 +311,6 @@ def smallest_detectable(table: pd.DataFrame, level: float = 0.5) -> pd.DataFrame
     return pd.DataFrame(out)
 
 
-__all__ = ["COLUMNS", "STEADY_POINTS", "VIEWS", "MotionMapConfig", "check_motion_map",
+__all__ = ["COLUMNS", "STEADY_POINTS", "VIEWS", "MotionMapConfig",
            "motion_map_rows", "plot_motion_map", "separations", "smallest_detectable",
            "stiffness_left"]

@@ -25,7 +25,6 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from learn.observability.motion import (
-    check_motion_map,
     motion_map_rows,
     plot_motion_map,
     smallest_detectable,
@@ -38,6 +37,7 @@ from learn.observability.study import (
 )
 from learn.studies.separability import separation_records
 from swgsim.base.lazy import lazy_module
+from swgsim.base.typed import check_tree
 from swgsim.datasets.config import min_settle_s
 from swgsim.datasets.generate import generate
 from swgsim.datasets.plan import plan
@@ -182,7 +182,7 @@ def motion_plans(cfg: DictConfig) -> dict[float, dict[str, DatasetPlan]]:
     ValueError
         Naming the key (``j_out_kgm2``, ``n_j_out``, ``motion.*`` or a data-set key).
     """
-    check_motion_map(OmegaConf.to_object(cfg.motion))
+    check_tree(OmegaConf.to_object(cfg.motion), "motion")  # MotionMapConfig.check
     out = {}
     for j in j_out_values(cfg):
         if not 1e-4 <= j <= 100.0:

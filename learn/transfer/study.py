@@ -66,6 +66,7 @@ from learn.studies.runs import (
 )
 from swgsim.base.lazy import lazy_module
 from swgsim.base.registry import travelling
+from swgsim.base.typed import check_tree
 from swgsim.datasets.config import DatasetConfig
 
 pd = lazy_module("pandas")
@@ -178,100 +179,108 @@ class TransferConfig:
     group: int | None = None
     models: dict[str, Any] = field(default_factory=dict)
 
+    def check(self, where: str) -> None:
+        """Refuse a comparison the study cannot run, before any work (run by
+        :func:`swgsim.base.typed.check_tree`, after its data sets' own checks).
 
-def check_config(tc: TransferConfig) -> None:
-    """Check ``transfer`` before any work.
+        Parameters
+        ----------
+        where : str
+            Full name of the config for messages, ``transfer``.
 
-    Raises
-    ------
-    ValueError
-        One line naming the key (``transfer.<key>``) and what is allowed.
-    """
-    bad = [p for p in tc.protocols if p not in ALL_PROTOCOLS]
-    if bad or not tc.protocols:
-        raise ValueError(f"transfer.protocols: must list some of {ALL_PROTOCOLS}, got "
-                         f"{list(tc.protocols)}")
-    unknown = [d for d in tc.run_on if d not in tc.datasets]
-    if unknown:
-        raise ValueError(f"transfer.run_on: {unknown} not among transfer.datasets "
-                         f"{sorted(tc.datasets)}")
-    if len(set(tc.run_on)) != len(tc.run_on):
-        raise ValueError(f"transfer.run_on must not repeat, got {list(tc.run_on)}")
-    names = list(tc.run_on) or ["the stored data set"]
-    if tc.group is not None and not 0 <= int(tc.group) < len(names):
-        pairs = ", ".join(f"{k}: {n}" for k, n in enumerate(names))
-        raise ValueError(f"transfer.group must lie in [0, {len(names) - 1}] ({pairs}), "
-                         f"got {tc.group}")
-    if not tc.seeds:
-        raise ValueError("transfer.seeds: must list at least one seed")
-    if any(int(k) < 0 for k in tc.k_shots) or 0 not in [int(k) for k in tc.k_shots]:
-        raise ValueError(f"transfer.k_shots: must hold 0 and values >= 0, got "
-                         f"{list(tc.k_shots)}")
-    for key in ("n_jobs", "n_threads", "latency_repeats"):
-        if int(getattr(tc, key)) < 1:
-            raise ValueError(f"transfer.{key}: must be >= 1, got {getattr(tc, key)}")
-    if int(tc.adapt_windows) < 0:
-        raise ValueError(f"transfer.adapt_windows: must be >= 0, got {tc.adapt_windows}")
-    _check_finetune(tc.finetune)
-    _check_runs(tc)
-    _check_targets(tc.targets)
+        Raises
+        ------
+        ValueError
+            One line naming the key (``transfer.<key>``) and what is allowed: protocols,
+            ``run_on`` and ``group`` against ``datasets``, seeds, k-shots, worker and
+            thread counts, the fine-tuning, each run (its model, input, adaptation and
+            the estimator's settings), the primary run, the targets.
+        """
+        bad = [p for p in self.protocols if p not in ALL_PROTOCOLS]
+        if bad or not self.protocols:
+            raise ValueError(f"{where}.protocols: must list some of {ALL_PROTOCOLS}, got "
+                             f"{list(self.protocols)}")
+        unknown = [d for d in self.run_on if d not in self.datasets]
+        if unknown:
+            raise ValueError(f"{where}.run_on: {unknown} not among {where}.datasets "
+                             f"{sorted(self.datasets)}")
+        if len(set(self.run_on)) != len(self.run_on):
+            raise ValueError(f"{where}.run_on must not repeat, got {list(self.run_on)}")
+        names = list(self.run_on) or ["the stored data set"]
+        if self.group is not None and not 0 <= int(self.group) < len(names):
+            pairs = ", ".join(f"{k}: {n}" for k, n in enumerate(names))
+            raise ValueError(f"{where}.group must lie in [0, {len(names) - 1}] ({pairs}), "
+                             f"got {self.group}")
+        if not self.seeds:
+            raise ValueError(f"{where}.seeds: must list at least one seed")
+        if any(int(k) < 0 for k in self.k_shots) or 0 not in [int(k) for k in self.k_shots]:
+            raise ValueError(f"{where}.k_shots: must hold 0 and values >= 0, got "
+                             f"{list(self.k_shots)}")
+        for key in ("n_jobs", "n_threads", "latency_repeats"):
+            if int(getattr(self, key)) < 1:
+                raise ValueError(f"{where}.{key}: must be >= 1, got {getattr(self, key)}")
+        if int(self.adapt_windows) < 0:
+            raise ValueError(f"{where}.adapt_windows: must be >= 0, got {self.adapt_windows}")
+        _check_finetune(self.finetune, where)
+        _check_runs(self, where)
+        _check_targets(self.targets, where)
 
 
-def _check_finetune(ft: FinetuneSettings) -> None:
+def _check_finetune(ft: FinetuneSettings, where: str) -> None:
     if not float(ft.replay) > 0:
-        raise ValueError(f"transfer.finetune.replay: must be > 0, got {ft.replay}")
+        raise ValueError(f"{where}.finetune.replay: must be > 0, got {ft.replay}")
     bad = [m for m in ft.modes if m not in FT_MODES]
     if bad:
-        raise ValueError(f"transfer.finetune.modes: must be among {FT_MODES}, got {bad}")
+        raise ValueError(f"{where}.finetune.modes: must be among {FT_MODES}, got {bad}")
 
 
-def _check_runs(tc: TransferConfig) -> None:
+def _check_runs(tc: TransferConfig, where: str) -> None:
     from learn.inputs.signals import INPUTS
 
     if not tc.runs:
-        raise ValueError("transfer.runs: must list at least one {model, input}")
+        raise ValueError(f"{where}.runs: must list at least one {{model, input}}")
     for i, s in enumerate(tc.runs):
         if s.model not in tc.models:
-            raise ValueError(f"transfer.runs[{i}].model: {s.model!r} not among "
-                             f"transfer.models {sorted(tc.models)}")
+            raise ValueError(f"{where}.runs[{i}].model: {s.model!r} not among "
+                             f"{where}.models {sorted(tc.models)}")
         if s.input not in INPUTS:
-            raise ValueError(f"transfer.runs[{i}].input: {s.input!r} not among {INPUTS}")
+            raise ValueError(f"{where}.runs[{i}].input: {s.input!r} not among {INPUTS}")
         if s.adapt not in (None, *ADAPT):
-            raise ValueError(f"transfer.runs[{i}].adapt: must be one of {ADAPT} or null, "
+            raise ValueError(f"{where}.runs[{i}].adapt: must be one of {ADAPT} or null, "
                              f"got {s.adapt!r}")
         if s.adapt is not None and int(tc.adapt_windows) < 1:
-            raise ValueError(f"transfer.runs[{i}].adapt: {s.adapt} needs unlabelled "
-                             "target windows; set transfer.adapt_windows >= 1")
-        _check_model(tc, i, s)
+            raise ValueError(f"{where}.runs[{i}].adapt: {s.adapt} needs unlabelled "
+                             f"target windows; set {where}.adapt_windows >= 1")
+        _check_model(tc, i, s, where)
     pr = tc.primary
     if pr is not None and pr.label not in {s.label for s in tc.runs}:
-        raise ValueError(f"transfer.primary: {pr.label} is not one of transfer.runs; name "
-                         "one of them, or transfer.primary=null for none")
+        raise ValueError(f"{where}.primary: {pr.label} is not one of {where}.runs; name "
+                         f"one of them, or {where}.primary=null for none")
 
 
-def _check_model(tc: TransferConfig, i: int, spec: RunSpec) -> None:
+def _check_model(tc: TransferConfig, i: int, spec: RunSpec, where: str) -> None:
     """The run's estimator instantiated (not fitted): its ``params`` and the settings its
     ``check_params`` refuses, named by key."""
     est = make_estimator(tc.models[spec.model], 0, 0)
     final = final_step(est)
     bad = sorted(set(spec.params or {}) - set(final.get_params(deep=False)))
     if bad:
-        raise ValueError(f"transfer.runs[{i}].params: {bad} are not parameters of "
+        raise ValueError(f"{where}.runs[{i}].params: {bad} are not parameters of "
                          f"{type(final).__name__}; it has "
                          f"{sorted(final.get_params(deep=False))}")
     final.set_params(**dict(spec.params or {}))
-    check_estimator(est, f"transfer.models.{spec.model}.estimator" + (
-        f" with transfer.runs[{i}].params" if spec.params else ""))
+    check_estimator(est, f"{where}.models.{spec.model}.estimator" + (
+        f" with {where}.runs[{i}].params" if spec.params else ""))
 
 
-def _check_targets(targets: Mapping[str, TargetSpec]) -> None:
+def _check_targets(targets: Mapping[str, TargetSpec], where: str) -> None:
     for name, t in targets.items():
         if t.protocol not in ALL_PROTOCOLS:
-            raise ValueError(f"transfer.targets.{name}.protocol: must be one of "
+            raise ValueError(f"{where}.targets.{name}.protocol: must be one of "
                              f"{ALL_PROTOCOLS}, got {t.protocol!r}")
         for k, v in {**t.accuracy, **t.recall}.items():
             if not 0.0 <= float(v) <= 1.0:
-                raise ValueError(f"transfer.targets.{name}.{k}: a fraction in [0, 1], "
+                raise ValueError(f"{where}.targets.{name}.{k}: a fraction in [0, 1], "
                                  f"got {v}")
 
 
@@ -485,7 +494,7 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
         (xarray.Dataset, schema v1 with clean and/or disturbed windows and reference
         windows), called when its jobs come up; one data set is in memory at a time.
     tc : TransferConfig
-        The comparison: ``runs`` and ``models`` (:func:`check_config`), ``protocols`` (a
+        The comparison: ``runs`` and ``models`` (:meth:`TransferConfig.check`), ``protocols`` (a
         protocol without data, no clean or no disturbed windows, is skipped with a
         warning), ``seeds`` and ``cv_seeds``, ``k_shots``, ``finetune``, ``aux``,
         ``residual``, ``n_jobs`` (jobs in parallel processes; 1: in this process),
@@ -499,7 +508,7 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
         device: :mod:`learn.studies.latency`) of every (model, input)
         on the first data set, before its jobs start; default ``tc.latency``.
     checked : bool
-        ``tc`` has passed :func:`check_config` already (the task checks it before any
+        ``tc`` has passed :meth:`TransferConfig.check` already (the task checks it before any
         work).
     progress : JobProgress, optional
         The progress line; default one over these data sets' :func:`planned_jobs`, shown
@@ -526,13 +535,13 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
     Raises
     ------
     ValueError
-        For a bad ``tc`` (:func:`check_config`), an unknown adaptation, or a k-shot split
+        For a bad ``tc`` (:meth:`TransferConfig.check`), an unknown adaptation, or a k-shot split
         that would leak.
     """
     from joblib import Parallel
 
     if not checked:
-        check_config(tc)
+        check_tree(tc, "transfer")
     latency = tc.latency if latency is None else latency
     t_all = time.perf_counter()
     own = progress is None

@@ -18,9 +18,9 @@ import numpy as np
 
 from learn.tasks.config import typed_app
 from learn.tasks.parts import part_key
-from learn.transfer.study import TransferConfig, check_config, run_comparisons
+from learn.transfer.study import TransferConfig, run_comparisons
 from swgsim.base.lazy import lazy_module
-from swgsim.base.typed import plain
+from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.schema import read_manifest
 from swgsim.files.inputs import absolute_path
 from swgsim.files.ownership import atomic_write_json, write_owned
@@ -335,7 +335,7 @@ def run_transfer(cfg) -> dict:
     if tc is None:
         raise ValueError("transfer: missing; the task needs experiment=transfer (or a "
                          "transfer group of its own)")
-    check_config(tc)
+    check_tree(tc, "transfer")  # its data sets, then TransferConfig.check
     report_dir = Path(tc.report_dir or Path(app.paths.report_dir) / "transfer")
     nets = net_devices(tc)  # a CUDA device asked for on a machine without one: refused
     hashes, plans = _hashes(app, tc)

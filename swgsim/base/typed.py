@@ -163,6 +163,9 @@ class Range:
         Whether the bound itself is excluded.
     odd : bool
         Only odd integers (e.g. a filter's window length).
+    unit : str
+        Unit for the message, after the range (e.g. ``"h"``), as :func:`check_range`
+        writes it.
 
     Notes
     -----
@@ -175,6 +178,7 @@ class Range:
     lo_open: bool = False
     hi_open: bool = False
     odd: bool = False
+    unit: str = ""
 
     def contains(self, value: Any) -> bool:
         """Whether ``value`` is an allowed number (booleans, None, NaN and infinities
@@ -191,11 +195,12 @@ class Range:
     def text(self, nullable: bool = False) -> str:
         """The allowed values in the words of :func:`check_range`, e.g. ``"must lie in
         (0, 1]"``, ``"must lie in (0, inf) or be null"``, ``"must be an odd integer in
-        [5, 1001] (samples)"``, ``"must lie in [1, inf) (worker processes)"``."""
+        [5, 1001] (samples)"``, ``"must lie in [1, inf) (worker processes)"``,
+        ``"must lie in (0, 100000] h"``."""
         rng = _interval(-math.inf if self.lo is None else self.lo,
                         math.inf if self.hi is None else self.hi, self.lo_open, self.hi_open)
         return (f"must {'be an odd integer in' if self.odd else 'lie in'} {rng}"
-                f"{' or be null' if nullable else ''}"
+                f"{' ' + self.unit if self.unit else ''}{' or be null' if nullable else ''}"
                 f"{' (' + self.what + ')' if self.what else ''}")
 
 
@@ -206,7 +211,7 @@ def _interval(lo: float, hi: float, lo_open: bool, hi_open: bool) -> str:
 
 
 def allowed(lo: float | None, hi: float | None, what: str = "", *, lo_open: bool = False,
-            hi_open: bool = False, odd: bool = False) -> dict[str, Range]:
+            hi_open: bool = False, odd: bool = False, unit: str = "") -> dict[str, Range]:
     """Field metadata declaring the allowed range of a number (:data:`RANGE`).
 
     Parameters
@@ -219,6 +224,8 @@ def allowed(lo: float | None, hi: float | None, what: str = "", *, lo_open: bool
         Exclude the bound itself.
     odd : bool
         Only odd integers.
+    unit : str
+        Unit for the message, after the range, e.g. ``"h"``: ``must lie in (0, 100000] h``.
 
     Returns
     -------
@@ -226,7 +233,7 @@ def allowed(lo: float | None, hi: float | None, what: str = "", *, lo_open: bool
         ``{RANGE: Range(...)}``, for ``dataclasses.field(metadata=...)``; None is allowed
         where the field's type admits it.
     """
-    return {RANGE: Range(lo, hi, what, lo_open, hi_open, odd)}
+    return {RANGE: Range(lo, hi, what, lo_open, hi_open, odd, unit)}
 
 
 def _nullable(tp: Any) -> bool:
@@ -425,6 +432,11 @@ def build(value: Any, tp: Any, where: str | None = None) -> Any:
 NONFINITE = "nonfinite"
 
 
+def _key(where: str, name: Any) -> str:
+    """The full key of a part ``name`` of ``where`` (``name`` alone at a root named "")."""
+    return f"{where}.{name}" if where else str(name)
+
+
 def _nonfinite(value: Any, where: str) -> Iterator[tuple[str, Any]]:
     """(full key, value) of every NaN or infinity in ``value``, depth first, in field order.
 
@@ -435,10 +447,10 @@ def _nonfinite(value: Any, where: str) -> Iterator[tuple[str, Any]]:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         for f in dataclasses.fields(value):
             if NONFINITE not in f.metadata:
-                yield from _nonfinite(getattr(value, f.name), f"{where}.{f.name}")
+                yield from _nonfinite(getattr(value, f.name), _key(where, f.name))
     elif isinstance(value, Mapping):
         for k, v in value.items():
-            yield from _nonfinite(v, f"{where}.{k}")
+            yield from _nonfinite(v, _key(where, k))
     elif isinstance(value, (list, tuple)):
         for i, v in enumerate(value):
             yield from _nonfinite(v, f"{where}[{i}]")
@@ -468,7 +480,8 @@ def check_finite(obj: Any, where: str) -> None:
     obj : Any
         The config: a dataclass (e.g. :class:`DatasetConfig`), a mapping, a list, ...
     where : str
-        Full name of ``obj`` for the message, e.g. ``"dataset"``.
+        Full name of ``obj`` for the message, e.g. ``"dataset"`` (``""`` for a root
+        config: its keys by their names alone, ``bridges.unit``).
 
     Raises
     ------
@@ -522,16 +535,16 @@ def _check_parts(obj: Any, where: str) -> None:
         hints = _hints(type(obj))
         for f in dataclasses.fields(obj):
             value = getattr(obj, f.name)
-            _check_parts(value, f"{where}.{f.name}")
+            _check_parts(value, _key(where, f.name))
             if RANGE in f.metadata:
-                _check_range(value, f.metadata[RANGE], f"{where}.{f.name}",
+                _check_range(value, f.metadata[RANGE], _key(where, f.name),
                              _nullable(hints.get(f.name, Any)))
         hook = getattr(obj, "check", None)
         if callable(hook):
             hook(where)
     elif isinstance(obj, Mapping):
         for k, v in obj.items():
-            _check_parts(v, f"{where}.{k}")
+            _check_parts(v, _key(where, k))
     elif isinstance(obj, (list, tuple)):
         for i, v in enumerate(obj):
             _check_parts(v, f"{where}[{i}]")
@@ -545,7 +558,8 @@ def check_tree(obj: Any, where: str) -> None:
     obj : dataclass
         The config, e.g. a :class:`~swgsim.datasets.config.DatasetConfig`.
     where : str
-        Full name of ``obj`` for messages, e.g. ``"dataset"``.
+        Full name of ``obj`` for messages, e.g. ``"dataset"`` (``""`` for a root config:
+        its keys by their names alone, e.g. ``bridges.unit``).
 
     Raises
     ------

@@ -65,7 +65,8 @@ class LifeSimulator:
         The checked data set: chain, gear, acquisition, disturbance, sensor effects.
     gear_id : int
     life : LifeConfig
-        Checked (:func:`check_life`).
+        Checked (:meth:`LifeConfig.check <swgsim.datasets.schedule.LifeConfig.check>`, by
+        :func:`swgsim.base.typed.check_tree`).
     bank : RecordBank, optional
         The gear's records, shared with other lives of it; a new one when not given. The
         life's records are asked for at once, and simulated at the first window.

@@ -6,7 +6,6 @@ imports the recording with it; the user's guide is ``docs/OWN_JOINT.md``, an exa
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -14,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.base.typed import allowed, build, check_finite, complete
+from swgsim.base.typed import allowed, build, check_tree, complete
 from swgsim.base.user_yaml import clip, user_yaml
 from swgsim.datasets import recording_table as rt
 from swgsim.datasets.schedule import LifeConfig
@@ -25,7 +24,7 @@ from swgsim.gear.profile import MAX_INPUT_SPEED_RPM, MOMENTARY_PEAK_TORQUE_NM
 
 __all__ = ["ANGLE_UNITS", "Angle", "BRIDGE_UNITS", "BridgeCalibration", "Bridges",
            "CLOCK_UNITS", "Clock", "MAX_BRIDGE_MVV", "MAX_MAPPING_BYTES", "OperatingPoints",
-           "Power", "RecordingMapping", "SPEED_UNITS", "Speed", "check_mapping",
+           "Power", "RecordingMapping", "SPEED_UNITS", "Speed",
            "mapping_columns", "read_mapping", "recording_mapping"]
 
 #: Units of the bridge columns.
@@ -166,53 +165,61 @@ class RecordingMapping:
     sample_rate_hz: float | None = field(default=None, metadata=allowed(1.0, 1e7, "Hz"))
     rate_tolerance: float = field(default=0.01, metadata=allowed(0.0, 0.5))
 
+    def check(self, where: str) -> None:
+        """Refuse a mapping that cannot be right, before any work (run by
+        :func:`swgsim.base.typed.check_tree`; its fields' ranges are their metadata).
+
+        Parameters
+        ----------
+        where : str
+            Full name of the mapping for messages (``""``: a mapping file's root, its keys
+            by their names alone).
+
+        Raises
+        ------
+        ValueError
+            One line naming the key: a unit not of its list, a calibration missing or not
+            one per bridge (or a zero gain), not five bridge columns, a column mapped
+            twice, no operating point, a point not [speed, torque] or beyond the
+            catalogue's limits, two points whose tolerances overlap, a window or
+            commissioning period of zero.
+        """
+        pre = f"{where}." if where else ""
+        b = self.bridges
+        _one_of(b.unit, BRIDGE_UNITS, f"{pre}bridges.unit")
+        if len(b.columns) != len(SENSORS):
+            raise ValueError(f"{pre}bridges.columns: {len(b.columns)} columns; the five bridges "
+                             f"s0..s4 in order")
+        if b.unit == "counts" and len(b.calibration) != len(SENSORS):
+            raise ValueError(f"{pre}bridges.calibration: {len(b.calibration)} entries; with "
+                             "unit counts one {gain_mvv_per_count, offset_counts} per bridge")
+        for i, c in enumerate(b.calibration):
+            if c.gain_mvv_per_count == 0:
+                raise ValueError(f"{pre}bridges.calibration[{i}].gain_mvv_per_count: 0")
+        _one_of(self.speed.unit, tuple(SPEED_UNITS), f"{pre}speed.unit")
+        for k in ("input_angle", "output_angle"):
+            if getattr(self, k) is not None:
+                _one_of(getattr(self, k).unit, ANGLE_UNITS, f"{pre}{k}.unit")
+        if self.output_angle is not None and self.input_angle is None:
+            raise ValueError(f"{pre}output_angle: needs input_angle (the wave generator's "
+                             "angle is the input's less the output's)")
+        if self.clock is not None:
+            _one_of(self.clock.unit, CLOCK_UNITS, f"{pre}clock.unit")
+        seen: dict[str, str] = {}
+        for key, col in mapping_columns(self).items():
+            if col in seen:
+                raise ValueError(f"{pre}{key}: column {col!r} is mapped twice (also "
+                                 f"{seen[col]})")
+            seen[col] = key
+        if self.window_s <= 0 or self.commissioning_h <= 0:
+            raise ValueError(f"{pre}{'window_s' if self.window_s <= 0 else 'commissioning_h'}: "
+                             "must be > 0")
+        _check_points(self.operating_points, f"{pre}operating_points")
+
 
 def _one_of(value: str, options, key: str) -> None:
     if value not in options:
         raise ValueError(f"{key}: must be one of {', '.join(options)}, got {value!r}")
-
-
-def check_mapping(m: RecordingMapping) -> None:
-    """Refuse a mapping that cannot be right, before any work.
-
-    Raises
-    ------
-    ValueError
-        One line naming the key: a unit not of its list, a calibration missing or not
-        one per bridge (or a zero gain), not five bridge columns, a column mapped twice,
-        no operating point, a point not [speed, torque] or beyond the catalogue's limits,
-        two points whose tolerances overlap, a window or commissioning period of zero.
-    """
-    b = m.bridges
-    _one_of(b.unit, BRIDGE_UNITS, "bridges.unit")
-    if len(b.columns) != len(SENSORS):
-        raise ValueError(f"bridges.columns: {len(b.columns)} columns; the five bridges "
-                         f"s0..s4 in order")
-    if b.unit == "counts" and len(b.calibration) != len(SENSORS):
-        raise ValueError(f"bridges.calibration: {len(b.calibration)} entries; with "
-                         "unit counts one {gain_mvv_per_count, offset_counts} per bridge")
-    for i, c in enumerate(b.calibration):
-        if c.gain_mvv_per_count == 0:
-            raise ValueError(f"bridges.calibration[{i}].gain_mvv_per_count: 0")
-    _one_of(m.speed.unit, tuple(SPEED_UNITS), "speed.unit")
-    for k in ("input_angle", "output_angle"):
-        if getattr(m, k) is not None:
-            _one_of(getattr(m, k).unit, ANGLE_UNITS, f"{k}.unit")
-    if m.output_angle is not None and m.input_angle is None:
-        raise ValueError("output_angle: needs input_angle (the wave generator's "
-                         "angle is the input's less the output's)")
-    if m.clock is not None:
-        _one_of(m.clock.unit, CLOCK_UNITS, "clock.unit")
-    seen: dict[str, str] = {}
-    for key, col in mapping_columns(m).items():
-        if col in seen:
-            raise ValueError(f"{key}: column {col!r} is mapped twice (also "
-                             f"{seen[col]})")
-        seen[col] = key
-    if m.window_s <= 0 or m.commissioning_h <= 0:
-        raise ValueError(f"{'window_s' if m.window_s <= 0 else 'commissioning_h'}: "
-                         "must be > 0")
-    _check_points(m.operating_points, "operating_points")
 
 
 def _check_points(op: OperatingPoints, key: str) -> None:
@@ -261,15 +268,13 @@ def recording_mapping(cfg: Mapping[str, Any]) -> RecordingMapping:
     ValueError
         One line naming the key by its full name: unknown (with the allowed ones),
         missing, of the wrong type, out of its range, not finite, or
-        :func:`check_mapping`.
+        :meth:`RecordingMapping.check`.
     """
     if not isinstance(cfg, Mapping):
         raise ValueError(f"must be a mapping of keys (time, bridges, speed, ...), got "
                          f"{type(cfg).__name__}")
     m = build(complete(cfg, RecordingMapping, ""), RecordingMapping)
-    for f in dataclasses.fields(m):
-        check_finite(getattr(m, f.name), f.name)
-    check_mapping(m)
+    check_tree(m, "")  # NaN and infinity, then RecordingMapping.check
     return m
 
 

@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import check_finite
 from swgsim.datasets.conditions import ConditionsConfig, check_conditions
 from swgsim.datasets.growth import (
     LAWS,
@@ -35,7 +34,7 @@ from swgsim.gear.thermal import REF_TEMP_C
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS, is_sensor_fault
 
 __all__ = ["GROWTH", "MAX_WINDOWS", "DutyPoint", "FaultOnset", "LifeConfig", "Schedule",
-           "check_life", "duty_cycle", "grow", "n_windows", "schedule", "severity_at",
+           "duty_cycle", "grow", "n_windows", "schedule", "severity_at",
            "staircase", "uses_position"]
 
 GROWTH = ("step", "linear", "points", *LAWS)
@@ -143,9 +142,50 @@ class LifeConfig:
     life_seed: int = 0
     conditions: ConditionsConfig | None = None
 
-    def check(self, where: str = "dataset.life") -> None:
-        """Refuse a life outside its ranges (:func:`check_life`)."""
-        check_life(self, where)
+    def check(self, where: str) -> None:
+        """Refuse a life config outside its ranges, in one line naming the key (run by
+        :func:`swgsim.base.typed.check_tree`, which refuses NaN and infinity first).
+
+        Parameters
+        ----------
+        where : str
+            Full name of the life for messages, e.g. ``dataset.life``.
+
+        Raises
+        ------
+        ValueError
+            A value outside its range, naming the key: ``hours``, ``interval_min`` not
+            > 0, too many windows or none, ``commissioning_h`` outside the life or
+            holding no window, a duty point outside its range, ``severity_levels`` < 1,
+            ``life_seed`` < 0, the fault (unknown, before commissioning, its growth and
+            severity), the conditions (:func:`~swgsim.datasets.conditions.check_conditions`).
+        """
+        for k in ("hours", "interval_min"):
+            v = float(getattr(self, k))
+            _req(np.isfinite(v) and v > 0, f"{where}.{k} must be > 0, got {v}")
+        n = n_windows(self)
+        _req(n <= MAX_WINDOWS, f"{where}.hours={self.hours:g} h at interval_min="
+             f"{self.interval_min:g} min is {n:.3g} windows; allowed: at most {MAX_WINDOWS:.0e} "
+             f"(up to {MAX_WINDOWS * self.interval_min / 60:.3g} h at this interval)")
+        _req(n >= 1, f"{where}.hours={self.hours:g} h holds no window at interval_min="
+             f"{self.interval_min:g} min")
+        c = float(self.commissioning_h)
+        _req(np.isfinite(c) and 0 < c < self.hours, f"{where}.commissioning_h must lie in (0, "
+             f"{self.hours:g}) h (a commissioning period known healthy, inside the life), got {c}")
+        _req(c * 60.0 / self.interval_min >= 1, f"{where}.commissioning_h={c:g} h holds no window "
+             f"at interval_min={self.interval_min:g}")
+        for i, d in enumerate(self.duty):
+            _req(d.dwell_min > 0, f"{where}.duty[{i}].dwell_min must be > 0, got {d.dwell_min}")
+            _req(0 < d.n_in_rpm <= 6500, f"{where}.duty[{i}].n_in_rpm must lie in (0, 6500] rpm, "
+                 f"got {d.n_in_rpm}")
+            _req(0 <= d.t_out_nm <= 107, f"{where}.duty[{i}].t_out_nm must lie in [0, 107] N m, "
+                 f"got {d.t_out_nm}")
+        _req(int(self.severity_levels) >= 1, f"{where}.severity_levels must be >= 1, got "
+             f"{self.severity_levels}")
+        _req(int(self.life_seed) >= 0, f"{where}.life_seed must be >= 0, got {self.life_seed}")
+        _check_fault(self.fault, c, f"{where}.fault")
+        if self.conditions is not None:
+            check_conditions(self.conditions, float(self.hours), f"{where}.conditions")
 
 
 def _req(cond: bool, msg: str) -> None:
@@ -159,50 +199,6 @@ def duty_cycle(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]
     if life.duty:
         return list(life.duty)
     return [DutyPoint(float(n), float(t)) for n in n_in_rpm for t in t_out_nm]
-
-
-def check_life(life: LifeConfig, key: str = "dataset.life") -> None:
-    """Refuse a life config outside its ranges, in one line naming the key.
-
-    Parameters
-    ----------
-    life : LifeConfig
-    key : str
-        Full name of ``life`` for messages.
-
-    Raises
-    ------
-    ValueError
-        NaN or infinity in any float (checked first, :func:`swgsim.base.typed.check_finite`),
-        or a value outside its range, naming the key.
-    """
-    check_finite(life, key)
-    for k in ("hours", "interval_min"):
-        v = float(getattr(life, k))
-        _req(np.isfinite(v) and v > 0, f"{key}.{k} must be > 0, got {v}")
-    n = n_windows(life)
-    _req(n <= MAX_WINDOWS, f"{key}.hours={life.hours:g} h at interval_min="
-         f"{life.interval_min:g} min is {n:.3g} windows; allowed: at most {MAX_WINDOWS:.0e} "
-         f"(up to {MAX_WINDOWS * life.interval_min / 60:.3g} h at this interval)")
-    _req(n >= 1, f"{key}.hours={life.hours:g} h holds no window at interval_min="
-         f"{life.interval_min:g} min")
-    c = float(life.commissioning_h)
-    _req(np.isfinite(c) and 0 < c < life.hours, f"{key}.commissioning_h must lie in (0, "
-         f"{life.hours:g}) h (a commissioning period known healthy, inside the life), got {c}")
-    _req(c * 60.0 / life.interval_min >= 1, f"{key}.commissioning_h={c:g} h holds no window "
-         f"at interval_min={life.interval_min:g}")
-    for i, d in enumerate(life.duty):
-        _req(d.dwell_min > 0, f"{key}.duty[{i}].dwell_min must be > 0, got {d.dwell_min}")
-        _req(0 < d.n_in_rpm <= 6500, f"{key}.duty[{i}].n_in_rpm must lie in (0, 6500] rpm, "
-             f"got {d.n_in_rpm}")
-        _req(0 <= d.t_out_nm <= 107, f"{key}.duty[{i}].t_out_nm must lie in [0, 107] N m, "
-             f"got {d.t_out_nm}")
-    _req(int(life.severity_levels) >= 1, f"{key}.severity_levels must be >= 1, got "
-         f"{life.severity_levels}")
-    _req(int(life.life_seed) >= 0, f"{key}.life_seed must be >= 0, got {life.life_seed}")
-    _check_fault(life.fault, c, f"{key}.fault")
-    if life.conditions is not None:
-        check_conditions(life.conditions, float(life.hours), f"{key}.conditions")
 
 
 def _check_fault(f: FaultOnset, commissioning_h: float, key: str) -> None:

@@ -90,6 +90,31 @@ class Amplifier:
         """Quantisation step [mV/V]."""
         return 2.0 * self.range_mvv / 2.0**self.bits
 
+    def check(self, where: str) -> None:
+        """Refuse a setting outside its range, in one line naming the key (run by
+        :func:`swgsim.base.typed.check_tree`).
+
+        Parameters
+        ----------
+        where : str
+            Full name of the amplifier for messages, e.g. ``dataset.acquisition.amplifier``.
+
+        Raises
+        ------
+        ValueError
+            ``<where>.<field> must lie in [lo, hi], got ...`` (the ranges above; ``bits``,
+            ``order`` and ``oversample`` whole numbers).
+        """
+        for k, (lo, hi, incl) in _AMP_RANGES.items():
+            v = float(getattr(self, k))
+            ok = (lo <= v if incl else lo < v) and v <= hi and np.isfinite(v)
+            if k in ("bits", "order", "oversample"):
+                ok = ok and v == int(v)
+            if not ok:
+                br = "[" if incl else "("
+                raise ValueError(f"{where}.{k} must lie in {br}{lo}, {hi}], got "
+                                 f"{getattr(self, k)}")
+
     def lead_samples(self, fs_hz: float) -> int:
         """Output samples simulated before and after a window so that the filter sees
         the signal's history [-] (the filter spans ``order`` output periods)."""
@@ -118,10 +143,27 @@ class Acquisition:
     wg_start_deg: float = 0.0
     amplifier: Amplifier | None = None
 
-    def check(self, where: str = "acquisition") -> None:
-        """Refuse a start mode or amplifier setting outside its range
-        (:func:`check_acquisition`)."""
-        check_acquisition(self, where)
+    def check(self, where: str) -> None:
+        """Refuse a start mode or start angle outside its range, in one line naming the
+        key (run by :func:`swgsim.base.typed.check_tree` when a data set is planned, after
+        its amplifier's :meth:`Amplifier.check`).
+
+        Parameters
+        ----------
+        where : str
+            Full name of the option for messages, e.g. ``dataset.acquisition``.
+
+        Raises
+        ------
+        ValueError
+            ``start`` not one of :data:`START_MODES`; ``wg_start_deg`` not finite.
+        """
+        if self.start not in START_MODES:
+            raise ValueError(f"{where}.start must be one of {list(START_MODES)}, "
+                             f"got {self.start!r}")
+        if not np.isfinite(float(self.wg_start_deg)):
+            raise ValueError(f"{where}.wg_start_deg must be finite [deg], got "
+                             f"{self.wg_start_deg}")
 
 
 _AMP_RANGES = {  # key: (lower, upper, lower inclusive)
@@ -133,48 +175,6 @@ _AMP_RANGES = {  # key: (lower, upper, lower inclusive)
     "order": (1, 5, True),
     "oversample": (1, 64, True),
 }
-
-
-def check_acquisition(acq: Acquisition, key: str = "dataset.acquisition") -> Acquisition:
-    """Check the ``dataset.acquisition`` option before any work (:meth:`Acquisition.check`).
-
-    Parameters
-    ----------
-    acq : Acquisition
-        The typed option (its keys and types were checked where it was built,
-        :func:`swgsim.datasets.config.dataset_config`).
-    key : str
-        Its full name, for messages.
-
-    Returns
-    -------
-    Acquisition
-        ``acq`` itself.
-
-    Raises
-    ------
-    ValueError
-        Naming the key (``dataset.acquisition.<key>``), the value and the allowed range.
-    """
-    if acq.start not in START_MODES:
-        raise ValueError(f"{key}.start must be one of {list(START_MODES)}, "
-                         f"got {acq.start!r}")
-    if not np.isfinite(float(acq.wg_start_deg)):
-        raise ValueError(f"{key}.wg_start_deg must be finite [deg], got "
-                         f"{acq.wg_start_deg}")
-    amp = acq.amplifier
-    if amp is None:
-        return acq
-    for k, (lo, hi, incl) in _AMP_RANGES.items():
-        v = float(getattr(amp, k))
-        ok = (lo <= v if incl else lo < v) and v <= hi and np.isfinite(v)
-        if k in ("bits", "order", "oversample"):
-            ok = ok and v == int(v)
-        if not ok:
-            br = "[" if incl else "("
-            raise ValueError(f"{key}.amplifier.{k} must lie in "
-                             f"{br}{lo}, {hi}], got {getattr(amp, k)}")
-    return acq
 
 
 def start_angles(acq: Acquisition, n: int, rng: np.random.Generator,

@@ -218,14 +218,15 @@ def test_transfer_experiment_composes():
 
     from learn.inputs.signals import INPUTS
     from learn.studies.runs import ADAPT, RunRef, RunSpec, make_estimator
-    from learn.transfer.study import TransferConfig, check_config
+    from learn.transfer.study import TransferConfig
     from swgcli import compose_app
+    from swgsim.base.typed import check_tree
 
     cfg = compose_app("train", ["experiment=transfer"])
     assert cfg.task == "transfer"
     typed = OmegaConf.to_object(cfg.transfer)
     assert isinstance(typed, TransferConfig)
-    check_config(typed)
+    check_tree(typed, "transfer")
     specs = typed.runs
     assert all(type(s) is RunSpec for s in specs)
     assert typed.primary == RunRef("minirocket", "raw_res")
@@ -263,12 +264,12 @@ def test_transfer_model_settings_refused_before_any_work(overrides, words):
     line naming the key, from the config check, before a data set is generated."""
     from omegaconf import OmegaConf
 
-    from learn.transfer.study import check_config
     from swgcli import compose_app
+    from swgsim.base.typed import check_tree
 
     tc = OmegaConf.to_object(compose_app("train", ["experiment=transfer", *overrides]).transfer)
     with pytest.raises(ValueError) as e:
-        check_config(tc)
+        check_tree(tc, "transfer")
     line = str(e.value)
     assert "\n" not in line and all(w in line for w in words), line
 

@@ -19,7 +19,8 @@ from learn.monitor.families import (
     default_families,
     draw_conditions,
 )
-from learn.monitor.study import MonitorStudyConfig, check_study, life_conditions
+from learn.monitor.study import MonitorStudyConfig, life_conditions
+from swgsim.base.typed import check_tree
 from swgsim.datasets.conditions import check_conditions
 from swgsim.gear.thermal import FRICTION_FORMS
 
@@ -98,7 +99,7 @@ def test_a_fault_hour_inside_commissioning_is_refused():
                                            sensor_fault_h=[10.0, 40.0])}
     with pytest.raises(ValueError, match=r"families\.sensor_stuck\.sensor_fault_h must lie "
                                          r"after commissioning \(> 24 h\)"):
-        check_study(MonitorStudyConfig(families=fams))
+        check_tree(MonitorStudyConfig(families=fams), "monitor.study")
 
 
 @pytest.mark.parametrize("field", list(RANGES))
@@ -130,21 +131,22 @@ def test_a_seed_not_an_integer_in_range_is_refused():
 
 
 def test_design_and_scored_seeds_that_overlap_are_refused():
-    check_study(MonitorStudyConfig(families=default_families()))
+    check_tree(MonitorStudyConfig(families=default_families()), "monitor.study")
     cfg = MonitorStudyConfig(design_seeds=[100, 3], scored_seeds=[0, 3])
     with pytest.raises(ValueError, match=r"^monitor\.study\.scored_seeds must be disjoint "
                                          r"from design_seeds, both hold \[3\]$"):
-        check_study(cfg)
+        check_tree(cfg, "monitor.study")
 
 
 def test_a_family_out_of_range_in_the_study_is_refused_naming_it():
     fams = {"warm_up": NuisanceFamily(parts=["warm_up"], tau_min=[0.0, 60.0])}
     with pytest.raises(ValueError, match=r"monitor\.study\.families\.warm_up\.tau_min"):
-        check_study(MonitorStudyConfig(families=fams))
+        check_tree(MonitorStudyConfig(families=fams), "monitor.study")
     late = {"payload": NuisanceFamily(parts=["payload"], still=True, payload_h=[30.0, 60.0])}
     with pytest.raises(ValueError, match=r"^monitor\.study\.families\.payload\[seed=\d+\]"
                                          r"\.payload\[0\]\[0\] must lie in \[0, 49\] h"):
-        check_study(MonitorStudyConfig(families=late, design_seeds=list(range(100, 120))))
+        check_tree(MonitorStudyConfig(families=late, design_seeds=list(range(100, 120))),
+                   "monitor.study")
 
 
 def test_the_fixed_nuisances_are_lived_as_before_and_families_by_the_seed():

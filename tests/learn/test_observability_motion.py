@@ -8,11 +8,11 @@ import pytest
 
 from learn.observability.motion import (
     MotionMapConfig,
-    check_motion_map,
     separations,
     smallest_detectable,
     stiffness_left,
 )
+from swgsim.base.typed import check_tree
 
 
 def test_separation_is_the_mean_square_z_score_per_point():
@@ -43,7 +43,7 @@ def test_smallest_detectable_and_stiffness_left():
                                          ({"reduced_stiffness": []}, "motion.reduced_stiffness")])
 def test_bad_designs_are_refused_naming_the_key(change, key):
     with pytest.raises(ValueError, match=f"^{key} must"):
-        check_motion_map(MotionMapConfig(**change))
+        check_tree(MotionMapConfig(**change), "motion")
 
 
 def test_the_app_refuses_an_unknown_map_and_names_a_bad_preset_key(tmp_path):

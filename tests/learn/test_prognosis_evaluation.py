@@ -145,16 +145,13 @@ def test_bad_input_is_one_line_before_any_work(tmp_path, case):
 
 def test_a_fault_without_a_growth_law_is_refused_naming_it():
     """(A new key of ``faults`` from the command line is refused by OmegaConf itself.)"""
-    from learn.monitor.prognosis_evaluation import (
-        GrowingFault,
-        PrognosisStudyConfig,
-        check_prognosis_study,
-    )
+    from learn.monitor.prognosis_evaluation import GrowingFault, PrognosisStudyConfig
+    from swgsim.base.typed import check_tree
 
     sc = PrognosisStudyConfig(faults={"reduced_damping": GrowingFault(0.1)})
     with pytest.raises(ValueError, match=r"^prognosis.study.faults.reduced_damping: no growth "
                                          r"law; allowed: \['eccentric_wg'"):
-        check_prognosis_study(sc)
+        check_tree(sc, "prognosis.study")
 
 
 def test_an_alarm_naming_a_fault_whose_range_ends_below_the_threshold_is_not_predicted():

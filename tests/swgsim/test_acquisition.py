@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from swgcli import dataset_preset
+from swgsim.base.typed import check_tree
 from swgsim.datasets.config import dataset_config
 from swgsim.sensing.acquisition import (
     Amplifier,
     acquire,
-    check_acquisition,
     quantise,
     sinc_taps,
     start_angles,
@@ -17,7 +17,9 @@ from swgsim.sensing.acquisition import (
 
 def parse_acquisition(cfg):
     """The acquisition option through the data-set door, then its range checks."""
-    return check_acquisition(dataset_config({"acquisition": cfg}).acquisition)
+    acq = dataset_config({"acquisition": cfg}).acquisition
+    check_tree(acq, "dataset.acquisition")
+    return acq
 
 AMP = Amplifier(name="test", noise_uv_rms=2.4, excitation_v=3.3, vref_v=1.2, gain=128.0,
                 bits=24, order=3, oversample=4)

@@ -20,10 +20,10 @@ from data_sets import make_synthetic, write_dataset
 from omegaconf import OmegaConf
 
 from swgcli import compose_app, dataset_preset
-from swgsim.base.typed import NONFINITE, check_finite
+from swgsim.base.typed import NONFINITE, allowed, check_finite, check_keys, check_range, check_tree
 from swgsim.datasets import generate as gen
 from swgsim.datasets import schema as dsio
-from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig, check_life
+from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
 
 NAN, INF = float("nan"), float("inf")
 
@@ -99,7 +99,7 @@ def test_nan_from_the_command_line_and_from_yaml_is_refused(tmp_path):
 ], ids=["hours", "dwell_min", "position_deg"])
 def test_check_life_refuses_nonfinite_values_naming_the_key(life, key):
     with pytest.raises(ValueError, match=rf"^{re.escape(key)} must be a finite number"):
-        check_life(life)
+        check_tree(life, "dataset.life")
 
 
 def test_check_finite_walks_every_container_and_honours_the_field_metadata():
@@ -121,6 +121,40 @@ def test_check_finite_walks_every_container_and_honours_the_field_metadata():
         with pytest.raises(ValueError, match=rf"^{key} must be a finite number, got -?(nan|inf)$"):
             check_finite(Part(**change), "part")
 
+
+
+def test_a_range_with_a_unit_reads_as_check_range_writes_it():
+    @dataclasses.dataclass
+    class Part:
+        horizon_h: float = dataclasses.field(default=1.0, metadata=allowed(
+            0.0, 1e5, "after the onset", lo_open=True, unit="h"))
+
+    with pytest.raises(ValueError) as by_hand:
+        check_range(-1.0, 0.0, 1e5, "part.horizon_h", "h", lo_open=True, why="after the onset")
+    for refuse in (lambda: check_tree(Part(horizon_h=-1.0), "part"),
+                   lambda: check_keys({"horizon_h": -1.0}, Part, "part")):
+        with pytest.raises(ValueError) as e:
+            refuse()
+        assert str(e.value) == str(by_hand.value) == (
+            "part.horizon_h must lie in (0, 100000] h (after the onset), got -1.0")
+
+
+def test_a_root_config_named_empty_names_its_keys_alone():
+    @dataclasses.dataclass
+    class Inner:
+        gain: float = dataclasses.field(default=1.0, metadata=allowed(0.0, None, lo_open=True))
+
+    @dataclasses.dataclass
+    class Root:
+        inner: Inner = dataclasses.field(default_factory=Inner)
+        table: dict = dataclasses.field(default_factory=lambda: {"a": 1.0})
+
+    for bad, words in ((Root(Inner(0.0)), "inner.gain must lie in (0, inf), got 0.0"),
+                       (Root(Inner(NAN)), "inner.gain must be a finite number, got nan"),
+                       (Root(table={"a": INF}), "table.a must be a finite number, got inf")):
+        with pytest.raises(ValueError) as e:
+            check_tree(bad, "")
+        assert str(e.value) == words
 
 # ------------------------------------------------------------------ writing
 def test_write_shard_refuses_nonfinite_signals_before_writing(tmp_path):

@@ -15,6 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from swgcli import dataset_preset
+from swgsim.base.typed import check_tree
 from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.growth import (
@@ -33,7 +34,6 @@ from swgsim.datasets.schedule import (
     DutyPoint,
     FaultOnset,
     LifeConfig,
-    check_life,
     schedule,
     severity_at,
 )
@@ -143,7 +143,7 @@ def _failure_h(tiny, fault="wear", growth="archard", s0=0.0, conditions=None,
                       fault=FaultOnset(fault, 48.0, s0, growth=growth,
                                        to_failure=RunToFailure(**law)),
                       life_seed=life_seed, conditions=conditions)
-    check_life(life)
+    check_tree(life, "dataset.life")
     # its schedule alone: a bank of its own, whose records (asked for by the life, at
     # 2000 rpm too) are never simulated, not the shared one's
     return LifeSimulator(tiny[0], 3, life).schedule.failure_h
@@ -282,7 +282,7 @@ def _severity_before(f: FaultOnset, hours: np.ndarray, levels: int) -> np.ndarra
 ])
 def test_a_life_without_the_option_has_the_schedule_it_had(fault):
     life = LifeConfig(hours=120.0, commissioning_h=24.0, severity_levels=7, fault=fault)
-    check_life(life)
+    check_tree(life, "dataset.life")
     s = schedule(life, [2000.0, 4000.0], [7.0, 39.0, 70.0])
     before = _severity_before(fault, s.hour, 7)
     assert np.array_equal(s.severity, before)
@@ -317,7 +317,7 @@ def test_a_life_run_to_failure_writes_its_staircase_and_its_law(tiny):
                       duty=[DutyPoint(4000.0, 70.0, 10.0)],
                       fault=FaultOnset("eccentric_wg", 1.0, 0.0, growth="archard",
                                        to_failure=RunToFailure(wear_coeff_m_per_nm_rev=1e-11)))
-    check_life(life)
+    check_tree(life, "dataset.life")
     sim = LifeSimulator(tiny[0], 3, life, tiny[1])
     s = sim.schedule
     assert 1.0 < s.failure_h < 3.0

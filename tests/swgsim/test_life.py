@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from swgcli import dataset_preset
+from swgsim.base.typed import check_tree
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import plan
@@ -16,7 +17,6 @@ from swgsim.datasets.schedule import (
     DutyPoint,
     FaultOnset,
     LifeConfig,
-    check_life,
     schedule,
     severity_at,
 )
@@ -68,7 +68,7 @@ def test_growth_is_a_staircase_of_the_schedule():
 def test_check_life_refuses_bad_values(change, key):
     life = dataclasses.replace(LifeConfig(hours=4, commissioning_h=1), **change)
     with pytest.raises(ValueError, match=key):
-        check_life(life)
+        check_tree(life, "dataset.life")
 
 
 def test_windows_deterministic_and_slice_independent(tiny):
