@@ -494,28 +494,6 @@ def _check_finite(X: np.ndarray, names: list[str]) -> None:
         )
 
 
-def feature_meta(ds) -> pd.DataFrame:
-    """Metadata of the windows whose features :func:`extract_features` computes, the same
-    for every selection: ``Features.meta`` without computing a feature.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        Schema-v1 data set with reference windows.
-
-    Returns
-    -------
-    pandas.DataFrame
-        ``sample`` and :data:`META_COLUMNS`, one row per non-reference window.
-
-    Raises
-    ------
-    ValueError
-        A data set without (or with ambiguous) reference windows.
-    """
-    return _feature_meta(ds, reference_index(ds)[0])
-
-
 def _feature_meta(ds, samples: np.ndarray) -> pd.DataFrame:
     """Metadata of the windows ``samples`` (:data:`META_COLUMNS`)."""
     meta = pd.DataFrame({"sample": samples})

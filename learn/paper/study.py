@@ -5,17 +5,14 @@ tables chosen by :class:`learn.paper.tables.StudyOptions` on one data set: the
 features of each selection once, the splits of each (protocol, selection) once, every
 (job, split) fit in one stream of joblib processes, one MLflow run per job. It writes no
 report; :func:`learn.paper.task.run_paper_study` adds it. The steps, in order:
-:func:`plan_jobs`, :func:`plan_splits`, :func:`fit_tasks` (each selection's features
-computed when its first fit is handed to a worker, :class:`SelectionFeatures`, so that
-the workers fit the first selection's jobs meanwhile), :func:`collect_job` per job,
-:func:`feature_spreads`.
+:func:`plan_jobs`, :func:`compute_features`, :func:`plan_splits`, :func:`fit_tasks`,
+:func:`collect_job` per job, :func:`feature_spreads`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import logging
-import threading
 import time
 from collections import Counter
 from collections.abc import Iterator, Mapping
@@ -25,13 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from learn.inputs.features import (
-    Features,
-    FeatureSettings,
-    extract_features,
-    feature_meta,
-    selection_name,
-)
+from learn.inputs.features import Features, FeatureSettings, extract_features, selection_name
 from learn.learners.models import make_model
 from learn.paper.tables import StudyOptions
 from learn.studies.protocols import (
@@ -134,86 +125,48 @@ def plan_jobs(options: StudyOptions) -> list[StudyJob]:
             for s in t.selections for m in options.table_models(t)]
 
 
-class SelectionFeatures(Mapping[int, Features]):
-    """Each selection's features, computed on first use and kept.
-
-    The fits' inputs are made as joblib hands them to its workers (:func:`fit_tasks` is
-    a generator): the first selection's features before the first fit, the others in
-    joblib's dispatching thread while the workers fit the jobs before them. A lock keeps
-    that thread and the main one (which logs the jobs) from computing one selection
-    twice.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        The data set (:func:`swgsim.datasets.schema.load`).
-    settings : FeatureSettings
-    bar : tqdm, optional
-        Advanced by one per selection computed.
-    """
-
-    def __init__(self, ds, settings: FeatureSettings, bar=None) -> None:
-        self.ds, self.settings, self.bar = ds, settings, bar
-        self.seconds = 0.0  # spent computing [s]
-        self._done: dict[int, Features] = {}
-        self._lock = threading.Lock()
-
-    def __getitem__(self, selection: int) -> Features:
-        with self._lock:
-            if selection not in self._done:
-                t0 = time.perf_counter()
-                self._done[selection] = extract_features(self.ds, selection,
-                                                         **self.settings.kwargs())
-                self.seconds += time.perf_counter() - t0
-                log.info("features of selection %d in %.1f s", selection,
-                         time.perf_counter() - t0)
-                if self.bar is not None:
-                    self.bar.update()
-            return self._done[selection]
-
-    def __contains__(self, selection: object) -> bool:
-        return selection in self._done  # computed (not: computable)
-
-    def __iter__(self) -> Iterator[int]:
-        return iter(list(self._done))  # the selections computed so far
-
-    def __len__(self) -> int:
-        return len(self._done)
+def compute_features(ds, selections: list[int], settings: FeatureSettings,
+                     bar=None) -> dict[int, Features]:
+    """Features of each selection, computed once for every table that uses it."""
+    out = {}
+    for s in selections:
+        out[s] = extract_features(ds, s, **settings.kwargs())
+        if bar is not None:
+            bar.update()
+    return out
 
 
-def plan_splits(jobs: list[StudyJob], meta: pd.DataFrame,
+def plan_splits(jobs: list[StudyJob], feats: Mapping[int, Features],
                 protocols: Mapping[str, ProtocolConfig],
                 random_state: int) -> dict[tuple[str, int], list[Split]]:
-    """Splits of each (protocol, selection), the CV shuffled by ``random_state``; ``meta``:
-    the windows' metadata (:func:`learn.inputs.features.feature_meta`, every selection's
-    rows), so the splits of one protocol are the same for every selection."""
+    """Splits of each (protocol, selection), the CV shuffled by ``random_state``."""
     out: dict[tuple[str, int], list[Split]] = {}
     for j in jobs:
         if (j.protocol, j.selection) not in out:
             p = dataclasses.replace(protocols[j.protocol], random_state=random_state)
-            out[(j.protocol, j.selection)] = p.splits(meta)
+            out[(j.protocol, j.selection)] = p.splits(feats[j.selection].meta)
     return out
 
 
 def fit_tasks(jobs: list[StudyJob], feats: Mapping[int, Features],
               splits_of: Mapping[tuple[str, int], list[Split]], scale: bool,
-              random_state: int, return_models: bool) -> Iterator:
+              random_state: int, return_models: bool) -> list:
     """One delayed :func:`learn.studies.protocols.fit_split_quiet` per (job, split), in job
-    order, made as they are asked for (``feats[s]`` is read at a job's first split); the
-    last split of a job returns its model if ``return_models``."""
+    order; the last split of a job returns its model if ``return_models``."""
     from joblib import delayed
 
     from learn.studies.protocols import fit_split_quiet
 
-    fit = travelling(fit_split_quiet)  # a user's learners travel with the fits
+    tasks, fit = [], travelling(fit_split_quiet)  # a user's learners travel with the fits
     for j in jobs:
         f = feats[j.selection]
         y = f.meta["fault"].to_numpy()
         est = make_model(j.model, random_state=random_state, scale=scale)
         sps = splits_of[(j.protocol, j.selection)]
         for sp in sps:
-            yield delayed(fit)(est, f.X, y, sp, class_labels(y),
-                               return_model=return_models and sp is sps[-1])
+            tasks.append(delayed(fit)(est, f.X, y, sp, class_labels(y),
+                                                  return_model=return_models and sp is sps[-1]))
+    return tasks
 
 
 def collect_job(outs: Iterator, splits: list[Split], labels: list[str]
@@ -314,7 +267,8 @@ def paper_study(
     options = options or StudyOptions()
     protocols = {**PROTOCOLS, **dict(protocols or {})}
     jobs = plan_jobs(options)
-    timings: dict[str, float] = {"features": 0.0}
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
     selections = sorted({s for t in options.selected_tables() for s in t.selections})
     n_fits = sum(protocols[j.protocol].n_planned for j in jobs)
     # one bar for the stage: loading, each selection's features, then every fit
@@ -322,19 +276,17 @@ def paper_study(
                unit="step", disable=not progress)
     ds = load(dataset_path)
     bar.update()
-    meta = feature_meta(ds)
-    splits_of = plan_splits(jobs, meta, protocols, random_state)
-    # the protocols may change split counts
-    bar.total = 1 + len(selections) + sum(len(splits_of[(j.protocol, j.selection)])
-                                          for j in jobs)
-    bar.refresh()
-    feats = SelectionFeatures(ds, features or FeatureSettings(), bar)
+    feats = compute_features(ds, selections, features or FeatureSettings(), bar)
+    timings["features"] = time.perf_counter() - t0
+    log.info("features of selections %s in %.1f s", selections, timings["features"])
+    splits_of = plan_splits(jobs, feats, protocols, random_state)
     log_models = tracking is not None and tracking.log_models
     tasks = fit_tasks(jobs, feats, splits_of, options.scale, random_state, log_models)
+    bar.total = 1 + len(selections) + len(tasks)  # the protocols may change split counts
+    bar.refresh()
     run = _JobLogging(str(dataset_path), random_state, options.scale, protocols, tracking)
     outs = Parallel(n_jobs=n_jobs, return_as="generator")(tasks)
     rows, confusion, caught = _collect_jobs(jobs, outs, splits_of, feats, run, bar, timings)
-    timings["features"] = feats.seconds  # computed while the fits went on
     bar.close()
     return PaperStudyResult(
         results=pd.DataFrame(rows),

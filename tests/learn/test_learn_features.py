@@ -3,20 +3,15 @@
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 import pytest
 
 from learn.inputs.features import (
     META_COLUMNS,
-    FeatureSettings,
     extract_features,
-    feature_meta,
     feature_names,
     order_spectrum,
     paper_orders,
 )
-from learn.paper.study import SelectionFeatures, StudyJob, fit_tasks, plan_splits
-from learn.studies.protocols import PROTOCOLS
 from swgsim.datasets.schema import PER_SAMPLE, make_dataset
 
 FS = 10_000.0
@@ -121,23 +116,3 @@ def test_errors_name_parameter_and_allowed_values(synthetic_ds):
     gear3_ref = (synthetic_ds["reference"] & (synthetic_ds["gear"] == 3)).values
     with pytest.raises(ValueError, match="have no reference window"):
         extract_features(synthetic_ds.isel(sample=~gear3_ref), 1)
-
-
-def test_selection_features_are_made_when_first_asked_for_and_once(synthetic_ds):
-    """The paper study's features (learn.paper.study.SelectionFeatures): each selection's
-    computed at its first fit task, not before, and once; the windows' metadata read
-    without features is every selection's."""
-    meta = feature_meta(synthetic_ds)
-    feats = SelectionFeatures(synthetic_ds, FeatureSettings())
-    jobs = [StudyJob("VII", "cv_clean", 1, "nb"), StudyJob("VII", "cv_clean", 3, "nb")]
-    splits = plan_splits(jobs, meta, PROTOCOLS, 0)
-    tasks = fit_tasks(jobs, feats, splits, False, 0, False)
-    assert len(feats) == 0 and 1 not in feats  # a generator: nothing made yet
-    first = [next(tasks) for _ in splits[("cv_clean", 1)]]
-    assert list(feats) == [1] and len(first) == len(splits[("cv_clean", 1)])
-    rest = list(tasks)
-    assert list(feats) == [1, 3] and len(rest) == len(splits[("cv_clean", 3)])
-    made = feats[3]
-    assert feats[3] is made  # kept, not made again
-    pd.testing.assert_frame_equal(made.meta, meta)
-    np.testing.assert_array_equal(made.X, extract_features(synthetic_ds, 3).X)
