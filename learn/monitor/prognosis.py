@@ -326,7 +326,7 @@ def predict_growth(track: Track, fault: str, alarm_hour: float | None, recorded:
     if planned is not None:
         planned.check("prognosis.planned")
         if trained is not None:
-            trained.check(planned, "prognosis.planned")
+            trained.refuse_outside(planned, "prognosis.planned")
     if reason := not_yet_valid(h, cfg, alarm_hour):
         return not_valid(float(h[-1]), fault, "growth", float(y[-1]), thr, reason)
     tf = cfg.to_failure

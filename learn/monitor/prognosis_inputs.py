@@ -205,8 +205,9 @@ class DutyRange:
         return cls(span(np.abs(duty.n_in_rpm)), span(np.abs(duty.t_acting_nm)),
                    span(duty.temp_c))
 
-    def check(self, duty: Duty, key: str) -> None:
-        """Refuse a duty outside this range, one line naming ``<key>.<quantity>``."""
+    def refuse_outside(self, duty: Duty, key: str) -> None:
+        """Refuse a duty outside this range, one line naming ``<key>.<quantity>`` (not a
+        config's ``check``: the range judges another object)."""
         units = {"n_in_rpm": "rpm", "t_acting_nm": "N m", "temp_c": "°C"}
         for name, unit in units.items():
             lo, hi = getattr(self, name)

@@ -141,7 +141,7 @@ class StreamPrognosis:
         if duty is not None:
             duty.check(f"{where}.planned")
             if trained is not None:
-                trained.check(duty, f"{where}.planned")
+                trained.refuse_outside(duty, f"{where}.planned")
         return self
 
 

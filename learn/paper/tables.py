@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from learn.inputs.features import selection_name
-from learn.learners.models import PAPER_MODELS
+from learn.learners.models import MODELS, PAPER_MODELS
 
 #: The paper's five models in the order of its tables (Table VI).
 M5: tuple[str, ...] = tuple(PAPER_MODELS)
@@ -100,22 +100,26 @@ class StudyOptions:
     scale: bool = False
     figures: bool = True
 
-    def check(self) -> None:
-        """Refuse unknown tables and models.
+    def check(self, where: str = "study") -> None:
+        """Refuse unknown tables and models (run by
+        :func:`swgsim.base.typed.check_tree` as any config part's).
+
+        Parameters
+        ----------
+        where : str
+            Full name of the options for messages.
 
         Raises
         ------
         ValueError
-            ``study.tables`` or ``study.models`` naming what is not registered.
+            ``<where>.tables`` or ``<where>.models`` naming what is not registered.
         """
-        from learn.learners.models import MODELS
-
         bad = sorted(set(self.tables or ()) - set(PAPER_TABLES))
         if bad:
-            raise ValueError(f"study.tables must be among {list(PAPER_TABLES)}, got {bad}")
+            raise ValueError(f"{where}.tables must be among {list(PAPER_TABLES)}, got {bad}")
         bad = sorted(set(self.models or ()) - set(MODELS))
         if bad:
-            raise ValueError(f"study.models must be among {list(MODELS)}, got {bad}")
+            raise ValueError(f"{where}.models must be among {list(MODELS)}, got {bad}")
 
     def selected_tables(self) -> list[PaperTable]:
         """The tables to run, in the paper's order of :data:`PAPER_TABLES` as given."""
