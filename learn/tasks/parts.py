@@ -113,13 +113,26 @@ class EvaluationExperiment:
                              f"{where}.datasets {sorted(self.datasets)}")
         if self.n_jobs < 1:
             raise ValueError(f"{where}.n_jobs must be >= 1, got {self.n_jobs}")
-        plans = {}
-        for name in self.run_on:
-            try:
-                plans[name] = plan(self.datasets[name])
-            except ValueError as e:
-                raise ValueError(f"{where}.datasets.{name}: {e}") from None
-        return plans
+        return plan_datasets(self.datasets, self.run_on, where)
+
+
+def plan_datasets(datasets: dict[str, DatasetConfig], names: list[str], where: str
+                  ) -> dict[str, DatasetPlan]:
+    """Each data set of ``names`` planned (:func:`swgsim.datasets.plan.plan`, which checks
+    its config), in their order.
+
+    Raises
+    ------
+    ValueError
+        A data set's config out of its ranges, named ``<where>.datasets.<name>: ...``.
+    """
+    plans = {}
+    for name in names:
+        try:
+            plans[name] = plan(datasets[name])
+        except ValueError as e:
+            raise ValueError(f"{where}.datasets.{name}: {e}") from None
+    return plans
 
 
 def part_key(obj: object) -> str:
@@ -259,4 +272,4 @@ def run_group(out: str | Path, jobs: list[Job], run_one: Callable[[Job], dict]
 
 
 __all__ = ["EvaluationExperiment", "Job", "finished_parts", "group_jobs", "part_key",
-           "run_group", "run_one_group", "run_parts", "save_part", "share_key"]
+           "plan_datasets", "run_group", "run_one_group", "run_parts", "save_part", "share_key"]

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from learn.tasks.config import typed_app
-from learn.tasks.parts import part_key
+from learn.tasks.parts import part_key, plan_datasets
 from learn.transfer.study import TransferConfig, run_comparisons
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_tree, plain
@@ -46,17 +46,10 @@ class _Collected:
 def _hashes(app, tc: TransferConfig) -> tuple[dict[str, str], dict]:
     """The config hash of every data set of the comparison (``run_on``'s plans, checked
     here once before any work, or the stored data set's manifest) and the plans."""
-    from swgsim.datasets.plan import plan
-
     if not tc.run_on:
         name = str(app.stored.name or Path(app.stored.path).name)
         return {name: str(read_manifest(app.stored.path).get("config_hash"))}, {}
-    plans = {}
-    for name in tc.run_on:
-        try:
-            plans[name] = plan(tc.datasets[name])
-        except ValueError as e:
-            raise ValueError(f"transfer.datasets.{name}: {e}") from None
+    plans = plan_datasets(tc.datasets, tc.run_on, "transfer")
     return {n: p.config_hash for n, p in plans.items()}, plans
 
 
