@@ -25,7 +25,7 @@ from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgcli.app import hydra_app
 from swgcli.schema import MonitorApp
-from swgsim.base.typed import check_range, check_tree
+from swgsim.base.typed import check_tree
 from swgsim.datasets.schema import load, read_manifest
 from swgsim.files import ownership
 from swgsim.files.inputs import absolute_path
@@ -55,14 +55,9 @@ def check_inputs(cfg) -> MonitorApp:
         (:func:`swgsim.files.ownership.check`), or a ``stream`` that is not a data set.
     """
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
-    check_tree(app.rule, "rule")  # its fields' ranges and RuleConfig.check
-    app.normal.check("normal")
-    for i, e in enumerate(app.maintenance):
-        e.check(f"maintenance[{i}]")
-    if app.prognosis.enabled:
-        app.prognosis.check()  # the planned duty against the model's once it is loaded
-    check_range(app.confirm_h, 0.0, 1000.0, "confirm_h", "h", lo_open=True,
-                why="hours after an alarm whose windows name the fault")
+    # every part's ranges and check (the rule, the normal behaviour, each maintenance
+    # event, the prognosis; its planned duty against the model's once it is loaded)
+    check_tree(app, "")
     ownership.check(Path(absolute_path(app.out_dir)), "out_dir", app="swgsim-monitor")
     read_manifest(absolute_path(app.stream))
     return app

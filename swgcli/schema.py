@@ -119,7 +119,9 @@ class MonitorApp:
     out_dir: str = "reports/monitor_run"
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)  # conditions (temperature, ...)
-    confirm_h: float = 1.0                   # hours after an alarm that name the fault
+    confirm_h: float = field(default=1.0, metadata=allowed(  # hours after an alarm that name
+        0.0, 1000.0, "hours after an alarm whose windows name the fault",  # the fault
+        lo_open=True, unit="h"))
     # the joint's maintenance log: [{hour: 40.0, kind: regrease}, ...]; kinds regrease,
     # tool_change, repair (learn/monitor/gear_monitor.py MaintenanceEvent)
     maintenance: list[MaintenanceEvent] = field(default_factory=list)
