@@ -37,10 +37,8 @@ from learn.tasks.parts import (
     run_group,
     run_one_group,
     run_parts,
-    share_key,
 )
 from learn.tracking import log_run
-from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.plan import DatasetPlan
@@ -103,13 +101,7 @@ def run_prognosis_evaluation(cfg) -> dict:
             raise ValueError(f"prognosis.study.gears: {bad} not in prognosis.datasets.{name}; "
                              f"allowed: {have}")
     jobs = group_jobs(plan_parts(pc, plans), pc.group, "prognosis.group")
-    if app.logger is not None and pc.group is None:
-        check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
-    out = Path(pc.report_dir)
-    share = share_key(plans, pc.study)  # the jobs of one evaluation write into it together
-    ownership.check(out, "prognosis.report_dir", share=share, app="prognosis")
-    with ownership.claim(out, "prognosis", "prognosis.report_dir", share=share,
-                         strict=True) as claim:
+    with pc.claimed_report("prognosis", plans, app.logger) as (out, claim):
         if pc.group is not None:
             return {"task": "prognosis", **run_one_group(
                 out, jobs, lambda js: joblib.delayed(_job)(plans[js[0].dataset], js,

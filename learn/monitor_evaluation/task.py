@@ -45,10 +45,8 @@ from learn.tasks.parts import (
     run_group,
     run_one_group,
     run_parts,
-    share_key,
 )
 from learn.tracking import log_run
-from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.plan import DatasetPlan
@@ -134,14 +132,7 @@ def run_monitor_evaluation(cfg) -> dict:
     nets = _nets(mc)  # a CUDA device on a machine without one: refused before any work
     jobs, not_run = plan_jobs(mc, plans, nets.get("torch_device", "cpu"))
     jobs = group_jobs(jobs, mc.group)
-    if app.logger is not None and mc.group is None:
-        check_tracking(app.logger.tracking_uri, "logger.tracking_uri")
-    out = Path(mc.report_dir)
-    # the jobs of one evaluation (its data sets and design) may write into it together
-    share = share_key(plans, mc.study)
-    ownership.check(out, "monitor.report_dir", share=share, app="monitor")  # before any work
-    with ownership.claim(out, "monitor", "monitor.report_dir", share=share,
-                         strict=True) as claim:
+    with mc.claimed_report("monitor", plans, app.logger) as (out, claim):
         if mc.group is not None:
             return _evaluate_group(mc, plans, out, jobs, nets)
         return _evaluate(app, mc, plans, out, claim, nets, jobs, not_run)

@@ -14,18 +14,21 @@ import hashlib
 import json
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from tqdm.auto import tqdm
 
+from learn.tracking.store import check_tracking
 from swgsim.base.lazy import lazy_module
 from swgsim.base.registry import travelling
 from swgsim.base.typed import allowed
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.plan import DatasetPlan, plan
+from swgsim.files import ownership
 from swgsim.files.ownership import atomic_write_json
 
 joblib = lazy_module("joblib")
@@ -114,6 +117,36 @@ class EvaluationExperiment:
         if self.n_jobs < 1:
             raise ValueError(f"{where}.n_jobs must be >= 1, got {self.n_jobs}")
         return plan_datasets(self.datasets, self.run_on, where)
+
+    @contextmanager
+    def claimed_report(self, where: str, plans: dict[str, DatasetPlan], logger
+                       ) -> Iterator[tuple[Path, Any]]:
+        """The report folder checked and claimed for this evaluation, before any work: the
+        MLflow store (``logger``, where not a job of an array), then ``report_dir``
+        (:func:`swgsim.files.ownership.check`, ``claim``), shared by the jobs of one
+        evaluation (:func:`share_key`: the same data sets and design).
+
+        Yields
+        ------
+        out : Path
+            ``report_dir``.
+        claim
+            The claim (:func:`swgsim.files.ownership.claim`).
+
+        Raises
+        ------
+        ValueError
+            An unwritable MLflow store, or a ``report_dir`` holding a file this project
+            cannot show it wrote (named ``<where>.report_dir``).
+        """
+        if logger is not None and self.group is None:
+            check_tracking(logger.tracking_uri, "logger.tracking_uri")
+        out = Path(self.report_dir)
+        share = share_key(plans, self.study)
+        ownership.check(out, f"{where}.report_dir", share=share, app=where)
+        with ownership.claim(out, where, f"{where}.report_dir", share=share,
+                             strict=True) as claim:
+            yield out, claim
 
 
 def plan_datasets(datasets: dict[str, DatasetConfig], names: list[str], where: str
