@@ -46,7 +46,7 @@ from .prognosis import Prognosis, PrognosisConfig, Track
 from .prognosis_baselines import predict_linear, predict_wiener
 from .prognosis_calibration import conformal_interval_scale
 from .prognosis_inputs import interval_scale_of, predicted_share, share_bucket
-from .prognosis_scores import HORIZON_BUCKETS
+from .prognosis_scores import HORIZON_BUCKETS, change_response
 from .stream import monitor_stream
 from .stream_prognosis import StreamPrognosis
 from .study import MonitorStudyConfig
@@ -266,13 +266,14 @@ def life_levels(gf: GrowingFault, levels: int) -> list[float]:
 
 
 def life_of(plan: DatasetPlan, bank: RecordBank, g: int, sc: PrognosisStudyConfig,
-            fault: str, seed: int, i_seed: int) -> LifeSimulator:
+            fault: str, seed: int, i_seed: int, payload: float | None = None
+            ) -> LifeSimulator:
     """The life to failure of gear ``g`` for a fault and seed (module docstring): onset drawn
-    from the seed (the same for every fault of it), payload ``payloads[i_seed % len]`` from
-    ``payload_after_h`` after the onset."""
+    from the seed (the same for every fault of it), payload ``payloads[i_seed % len]`` (or
+    ``payload``: a twin without the change, 1) from ``payload_after_h`` after the onset."""
     tr = sc.train
     onset = tr.commissioning_h + np.random.default_rng([seed, 47]).uniform(*sc.onset_window_h)
-    factor = float(sc.payloads[i_seed % len(sc.payloads)])
+    factor = float(sc.payloads[i_seed % len(sc.payloads)] if payload is None else payload)
     cond = None if factor == 1.0 else ConditionsConfig(
         thermal=None, viscosity=False, bridge_drift=None, temperature_sensor=None,
         payload=[[float(onset + sc.payload_after_h), factor]])
@@ -434,6 +435,36 @@ def _rows(key: dict, life: dict, events: dict[str, list[dict]], scales: dict) ->
     return rows
 
 
+def _changes(key: dict, life: dict, events: dict[str, list[dict]], twin: dict,
+             twin_events: dict[str, list[dict]], change_h: float, every_h: float
+             ) -> list[dict]:
+    """Per method, whether a life's predicted failure moved after its payload change the
+    way the law says, against its twin without the change
+    (:func:`~.prognosis_scores.change_response`; each prognosis paired with the twin's
+    last valid one less than ``every_h`` before it, both before either failure)."""
+    law = np.sign(life["failure_h"] - twin["failure_h"])
+    out = []
+    for m, evs in events.items():
+        mine = [e for e in evs if e["valid"] and e["remaining_h"] is not None
+                and e["hour"] < min(life["failure_h"], twin["failure_h"])]
+        other = [e for e in twin_events.get(m, []) if e["valid"]
+                 and e["remaining_h"] is not None]
+        th = np.array([e["hour"] for e in other])
+        pairs = []
+        for e in mine:
+            j = int(np.searchsorted(th, e["hour"] + 1e-9)) - 1
+            if j >= 0 and e["hour"] - th[j] < every_h:
+                pairs.append((e["hour"], e["hour"] + e["remaining_h"],
+                              other[j]["hour"] + other[j]["remaining_h"]))
+        moved, lag = (None, np.nan) if law == 0 or not pairs else change_response(
+            *(np.array(c, float) for c in zip(*pairs, strict=True)), change_h, float(law))
+        out.append({**key, "fault": life["fault"], "payload": life["payload"], "method": m,
+                    "change_h": change_h, "failure_h": life["failure_h"],
+                    "twin_failure_h": twin["failure_h"], "paired": len(pairs),
+                    "moved": moved, "lag_h": lag})
+    return out
+
+
 def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
               model: DiagnosisModel, sc: PrognosisStudyConfig, faults: list[str]
               ) -> tuple[dict[str, tuple[float, ...]], list[dict]]:
@@ -519,9 +550,10 @@ def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStu
     -------
     dict
         ``rows`` (one per prognosis and method, :func:`_rows`), ``lives`` (one per life,
-        :func:`run_life`'s), ``calibration`` (:func:`calibrate`'s info), ``not_run`` (fault
-        -> why), ``train_s``, ``calibrate_s``, ``evaluate_s`` [s], ``dataset``,
-        ``held_out_gear``.
+        :func:`run_life`'s), ``changes`` (per life with a payload change and method, run
+        again as a twin without it: :func:`_changes`), ``calibration``
+        (:func:`calibrate`'s info), ``not_run`` (fault -> why), ``train_s``,
+        ``calibrate_s``, ``evaluate_s`` [s], ``dataset``, ``held_out_gear``.
     """
     t0 = time.perf_counter()
     gears = [int(x.id) for x in plan.config.gears]
@@ -537,15 +569,21 @@ def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStu
     t1 = time.perf_counter()
     scales, info = calibrate(plan, banks, [x for x in gears if x != g], model, sc, faults)
     t2 = time.perf_counter()
-    sims = [(s, life_of(plan, banks[g], g, sc, f, s, i))  # every record wanted at once
+    sims = [(s, life_of(plan, banks[g], g, sc, f, s, i),  # every record wanted at once
+             life_of(plan, banks[g], g, sc, f, s, i, payload=1.0)
+             if sc.payloads[i % len(sc.payloads)] != 1.0 else None)
             for i, s in enumerate(sc.seeds) for f in faults]
-    rows, lives = [], []
-    for s, sim in sims:
+    rows, lives, changes = [], [], []
+    for s, sim, twin in sims:
         life, events = run_life(sim, model, sc, scales, s)
         key = {"dataset": dataset, "held_out_gear": g, "seed": s}
         lives.append({**key, **life})
         rows += _rows(key, life, events, scales)
-    return {"rows": rows, "lives": lives, "calibration": info, "not_run": not_run,
+        if twin is not None:
+            changes += _changes(key, life, events, *run_life(twin, model, sc, scales, s),
+                                life["onset_h"] + sc.payload_after_h, sc.prognosis.every_h)
+    return {"rows": rows, "lives": lives, "changes": changes, "calibration": info,
+            "not_run": not_run,
             "train_s": t1 - t0, "calibrate_s": t2 - t1, "evaluate_s": time.perf_counter() - t2,
             "dataset": dataset, "held_out_gear": g}
 

@@ -18,8 +18,8 @@ import numpy as np
 from swgsim.base.typed import check_range
 
 __all__ = ["HORIZON_BUCKETS", "PHM08_EARLY", "PHM08_LATE", "alpha_lambda", "at_lambda",
-           "horizon_bucket", "interval_hit", "phm08_score", "prognostic_horizon",
-           "relative_accuracy", "remaining_fraction"]
+           "change_response", "horizon_bucket", "interval_hit", "phm08_score",
+           "prognostic_horizon", "relative_accuracy", "remaining_fraction"]
 
 #: Remaining-life fraction buckets, [lo, hi) and the last [0.75, 1] [choice: quarters].
 HORIZON_BUCKETS: tuple[tuple[float, float], ...] = ((0.0, 0.25), (0.25, 0.5), (0.5, 0.75),
@@ -248,3 +248,60 @@ def at_lambda(hour: np.ndarray, failure_h: float, lam: float = 0.5) -> int | Non
         return None
     t_lam = h[0] + lam * (failure_h - h[0])
     return int(np.searchsorted(h, t_lam, side="right")) - 1
+
+
+def change_response(hour: np.ndarray, changed_h: np.ndarray, twin_h: np.ndarray,
+                    change_h: float, law_sign: float, within_h: float = 24.0
+                    ) -> tuple[bool | None, float]:
+    """Whether the predicted failure moved the way the growth law says after a change of
+    duty: one life with the change against its twin without it (the same gear, seed and
+    onset), paired prognoses at the same hours [choice: against the twin, so that what the
+    track would have done anyway cancels].
+
+    Parameters
+    ----------
+    hour : ndarray, shape (n,)
+        Hours of the paired prognoses, increasing, both valid [h].
+    changed_h, twin_h : ndarray, shape (n,)
+        The predicted failure hour (median) of the life with the change and of its twin [h].
+    change_h : float
+        Operating hour of the change [h].
+    law_sign : float
+        The sign of the change of the failure hour the law implies: -1 for a heavier
+        payload or a hotter joint (earlier), +1 for a lighter or cooler one.
+    within_h : float
+        Hours after the change within which the prediction must have moved, > 0 [h] (24,
+        issue 47).
+
+    Returns
+    -------
+    moved : bool or None
+        The last paired prognosis up to ``within_h`` after the change lies on the law's
+        side of the twin's (strictly); None without a paired prognosis after the change.
+    lag_h : float
+        Hours from the change to the first paired prognosis from which every later one up to
+        ``within_h`` lies on that side; NaN where ``moved`` is not True.
+
+    Raises
+    ------
+    ValueError
+        Shapes differ, hours not increasing, ``law_sign`` not ±1, ``within_h`` not positive.
+    """
+    check_range(within_h, 0.0, np.inf, "prognosis.scores.within_h", lo_open=True)
+    if law_sign not in (-1.0, 1.0):
+        raise ValueError(f"prognosis.scores.law_sign must be -1 or 1, got {law_sign}")
+    h, a, b = (np.asarray(x, float) for x in (hour, changed_h, twin_h))
+    if a.shape != b.shape:
+        raise ValueError(f"change_response: the changed life's and the twin's predictions "
+                         f"must have one shape, got {a.shape} and {b.shape}")
+    if h.shape != a.shape or np.any(np.diff(h) <= 0):
+        raise ValueError("change_response: hour must be increasing, one per prognosis")
+    after = (h > change_h) & (h <= change_h + within_h)
+    if not after.any():
+        return None, float("nan")
+    right = law_sign * (a[after] - b[after]) > 0
+    if not right[-1]:
+        return False, float("nan")
+    wrong = np.flatnonzero(~right)
+    first = 0 if wrong.size == 0 else wrong[-1] + 1
+    return True, float(h[after][first] - change_h)

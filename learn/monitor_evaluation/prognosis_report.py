@@ -6,7 +6,8 @@ The targets (issue 47): the 90 % interval's coverage (PICP) in [0.85, 0.95] in e
 bucket with at least 20 prognoses; the relative accuracy at half the way from the first
 prognosis to failure (its median over lives) >= 0.8; the alpha-lambda criterion (alpha 0.2,
 lambda 0.5) met in >= 80 % of the lives; the median absolute error at half-life <= 0.7 times
-the better baseline's.
+the better baseline's; after a payload change, the predicted failure moves the way the
+growth law says within 24 h of operation in every life (against its twin without the change).
 """
 
 from __future__ import annotations
@@ -37,6 +38,11 @@ PICP_RANGE, MIN_BUCKET, RA_MIN, AL_SHARE, ERROR_RATIO = (0.85, 0.95), 20, 0.8, 0
 ALPHA, LAMBDA = 0.2, 0.5
 #: Columns naming a life.
 LIFE = ["dataset", "held_out_gear", "seed", "fault"]
+#: ``changes.csv``'s columns (:func:`learn.monitor.prognosis_evaluation.run_prognosis_part`).
+CHANGE_COLUMNS = [*LIFE, "payload", "method", "change_h", "failure_h", "twin_failure_h",
+                  "paired", "moved", "lag_h"]
+#: Hours of operation after a change within which the prediction must have moved (issue 47).
+WITHIN_H = 24.0
 
 
 def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
@@ -113,6 +119,31 @@ def life_scores(rows: pd.DataFrame, lives: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def change_table(changes: pd.DataFrame) -> pd.DataFrame:
+    """Per data set, fault and method, the lives with a payload change: how many, how
+    many were judged (a paired prognosis after the change), the share of judged ones whose
+    predicted failure moved the law's way within :data:`WITHIN_H` and the median lag.
+
+    Parameters
+    ----------
+    changes : DataFrame
+        ``changes.csv`` (:data:`CHANGE_COLUMNS`).
+
+    Returns
+    -------
+    DataFrame
+        ``dataset``, ``fault``, ``method``, ``lives``, ``judged``, ``moved_share`` (NaN
+        where none judged), ``lag_median_h``.
+    """
+    c = changes.assign(judged=changes.moved.notna(),
+                       ok=changes.moved.eq(True) & (changes.lag_h <= WITHIN_H))
+    g = c.groupby(["dataset", "fault", "method"], sort=True)
+    out = g.agg(lives=("judged", "size"), judged=("judged", "sum"), ok=("ok", "sum"),
+                lag_median_h=("lag_h", "median")).reset_index()
+    out.insert(5, "moved_share", out.ok / out.judged.where(out.judged > 0))
+    return out.drop(columns="ok")
+
+
 def summary_table(scores: pd.DataFrame) -> pd.DataFrame:
     """Per data set, fault and method: lives, lives followed to half-life, the median
     relative accuracy and absolute error at half-life over the followed lives, the share
@@ -125,10 +156,12 @@ def summary_table(scores: pd.DataFrame) -> pd.DataFrame:
                  horizon_share_median=("horizon_share", "median")).reset_index()
 
 
-def targets(buckets: pd.DataFrame, summary: pd.DataFrame) -> pd.DataFrame:
+def targets(buckets: pd.DataFrame, summary: pd.DataFrame, moved: pd.DataFrame
+            ) -> pd.DataFrame:
     """The issue's targets for the growth law per data set and fault, each with its
     measured value and pass or fail (module docstring); a bucket with fewer than
-    :data:`MIN_BUCKET` prognoses is listed as not judged."""
+    :data:`MIN_BUCKET` prognoses, and a fault without a judged payload change
+    (:func:`change_table`), are listed as not judged."""
     out = []
     for b in buckets[buckets.method == "growth"].itertuples(index=False):
         judged = b.n >= MIN_BUCKET
@@ -154,6 +187,13 @@ def targets(buckets: pd.DataFrame, summary: pd.DataFrame) -> pd.DataFrame:
                     ("median abs error at half-life / the better baseline's",
                      f"<= {ERROR_RATIO:g}", gr.abs_error_median_h / base,
                      gr.abs_error_median_h <= ERROR_RATIO * base))]
+    for m in moved[moved.method == "growth"].itertuples(index=False):
+        out.append({"dataset": m.dataset, "fault": m.fault,
+                    "what": f"after a payload change the predicted failure moves the law's "
+                            f"way within {WITHIN_H:g} h ({m.judged} of {m.lives} lives judged)",
+                    "target": "every life", "measured": f"{m.moved_share:.2f}",
+                    "result": ("pass" if m.moved_share == 1.0 else "fail") if m.judged
+                    else "not judged (no paired prognosis)"})
     return pd.DataFrame(out, columns=["dataset", "fault", "what", "target", "measured",
                                       "result"])
 
@@ -169,9 +209,11 @@ def _md(df: pd.DataFrame) -> str:
 
 
 def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFrame,
-                buckets: pd.DataFrame, lives: pd.DataFrame, calibration: pd.DataFrame) -> None:
+                buckets: pd.DataFrame, lives: pd.DataFrame, calibration: pd.DataFrame,
+                moved: pd.DataFrame) -> None:
     """``table.md``: the header, the targets with pass or fail, the scores per fault and
-    method, the coverage per horizon bucket, the lives and the calibration."""
+    method, the coverage per horizon bucket, the payload changes (:func:`change_table`),
+    the lives and the calibration."""
     lv = lives.assign(after_onset_h=lives.failure_h - lives.onset_h,
                       alarm_after_onset_h=lives.alarm_h - lives.onset_h)
     alarms = lv.groupby(["dataset", "fault"]).agg(
@@ -183,7 +225,8 @@ def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFram
             + "\n## Scores per fault and method (held-out gears)\n\n" + _md(summary)
             + "\n## The 90 % interval per horizon bucket (remaining share of the way from "
               "the alarm to failure)\n\n" + _md(buckets)
-            + "\n## Lives\n\n" + _md(alarms)
+            + "\n## After a payload change, against the same life without it\n\n"
+            + _md(moved) + "\n## Lives\n\n" + _md(alarms)
             + "\n## Calibration (split conformal on the training gears' lives)\n\n"
             + _md(calibration) + "\n![prognosis](prognosis.png)\n")
     write_owned(path, lambda tmp: Path(tmp).write_text(text))

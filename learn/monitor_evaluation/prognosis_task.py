@@ -5,7 +5,8 @@ leave-one-gear-out evaluation on lives that run to failure
 
 Files in ``report_dir``: ``results.csv`` (one row per prognosis and method), ``lives.csv``
 (one row per life), ``calibration.csv`` (the conformal scale per held-out gear and method),
-``scores.csv`` (each life's scores per method), ``table.md``, ``prognosis.png``,
+``scores.csv`` (each life's scores per method), ``changes.csv`` (each life with a payload
+change against its twin without it, per method), ``table.md``, ``prognosis.png``,
 ``timing.json`` and ``parts/``: one finished part per (data set, held-out gear) with the
 hash of the config that made it (:func:`learn.tasks.parts.part_key`), so that a rerun of
 the same config resumes from them (the part machinery of :mod:`learn.tasks.parts`).
@@ -21,7 +22,9 @@ from pathlib import Path
 
 from learn.monitor.prognosis_evaluation import PrognosisStudyConfig, run_prognosis_part
 from learn.monitor_evaluation.prognosis_report import (
+    CHANGE_COLUMNS,
     bucket_table,
+    change_table,
     figure,
     life_scores,
     summary_table,
@@ -118,12 +121,14 @@ def _job(plan_: DatasetPlan, jobs: list[Job], study: PrognosisStudyConfig, out: 
 
 
 def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
-    """Results, lives and calibration tables of the parts."""
+    """Results, lives, payload changes and calibration tables of the parts."""
     rows = pd.DataFrame([r for p in parts for r in p["rows"]])
     lives = pd.DataFrame([r for p in parts for r in p["lives"]])
+    changes = pd.DataFrame([r for p in parts for r in p.get("changes", [])],
+                           columns=CHANGE_COLUMNS)
     cal = pd.DataFrame([{"dataset": p["dataset"], "held_out_gear": p["held_out_gear"], **c}
                         for p in parts for c in p["calibration"]])
-    return rows, lives, cal
+    return rows, lives, changes, cal
 
 
 def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> dict:
@@ -135,16 +140,17 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
         plans[js[0].dataset], js, pc.study, str(out)), "prognosis evaluation", pc.progress,
         pc.n_jobs)
     wall = time.perf_counter() - t0
-    rows, lives, cal = _frames(parts)
+    rows, lives, changes, cal = _frames(parts)
     if rows.empty:
         raise ValueError("prognosis: no life was followed to a prognosis (no alarm named "
                          "a growing fault); nothing to score")
     rows["valid"] = rows["valid"].astype(bool)
     scores = life_scores(rows, lives)
     buckets, summary = bucket_table(rows), summary_table(scores)
-    tgt = targets(buckets, summary)
+    moved = change_table(changes)
+    tgt = targets(buckets, summary, moved)
     for name, df in (("results.csv", rows), ("lives.csv", lives), ("calibration.csv", cal),
-                     ("scores.csv", scores)):
+                     ("scores.csv", scores), ("changes.csv", changes)):
         write_owned(out / name, lambda tmp, df=df: df.to_csv(tmp, index=False))
     not_run = {f"{p['dataset']}: {f}": w for p in parts for f, w in p["not_run"].items()}
     atomic_write_json(out / "timing.json", {"wall_s": wall, "parts": [
@@ -160,10 +166,10 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
               + (f" ({resumed} of {len(jobs)} parts resumed from parts/, not timed here)"
                  if resumed else "") + ".\n"
               + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
-    write_table(out / "table.md", header, tgt, summary, buckets, lives, cal)
+    write_table(out / "table.md", header, tgt, summary, buckets, lives, cal, moved)
     fig = figure(buckets, rows, out / "prognosis.png")
     claim.record([out / f for f in ("results.csv", "lives.csv", "calibration.csv",
-                                    "scores.csv", "table.md")] + [fig])
+                                    "scores.csv", "changes.csv", "table.md")] + [fig])
     if pc.progress:
         print("\ntargets (prognosis, the growth law; held-out gears):")
         for r in tgt.itertuples(index=False):
@@ -193,7 +199,8 @@ def _log(app, summary: pd.DataFrame, tgt: pd.DataFrame, out: Path, wall: float,
                          "alpha_lambda_share": float(gr.alpha_lambda_share.mean()),
                          "targets_passed": float((tgt.result == "pass").sum()),
                          "wall_s": wall})
-        for f in ("results.csv", "lives.csv", "scores.csv", "table.md", "prognosis.png"):
+        for f in ("results.csv", "lives.csv", "scores.csv", "changes.csv", "table.md",
+                  "prognosis.png"):
             if (out / f).is_file():
                 run.log_artifact(out / f)
 

@@ -72,6 +72,12 @@ def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
     assert cal.groupby("method").quarter.apply(list).map(len).eq(5).all()  # 4 and all
     used = rows[rows.valid].interval_scale
     assert used.notna().all() and used.isin(cal.scale_used.to_numpy()).all()
+    changes = pd.read_csv(out / "changes.csv")  # the life again as a twin at payload 1
+    assert list(changes.method) == ["growth", "linear", "wiener"]
+    assert (changes.failure_h < changes.twin_failure_h).all()  # heavier: earlier (the law)
+    assert (changes.change_h == lives.onset_h.iloc[0] + 1.0).all()
+    assert (changes.paired >= 1).all() and changes.moved.notna().all()
+    assert "## After a payload change" in table
 
 
 def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):

@@ -9,6 +9,7 @@ import pytest
 from learn.monitor.prognosis_scores import (
     alpha_lambda,
     at_lambda,
+    change_response,
     horizon_bucket,
     interval_hit,
     phm08_score,
@@ -80,6 +81,29 @@ def test_the_prediction_at_half_life():
     assert at_lambda(h, 20.0, 0.5) == 3 and at_lambda(h[:3], 20.0, 0.5) == 2
     assert at_lambda(h, 20.0, 0.0) == 0 and at_lambda(np.array([]), 20.0) is None
     assert at_lambda(np.array([21.0]), 20.0) is None
+
+
+def test_the_response_to_a_change_against_the_twin_by_hand():
+    """A heavier payload at 10 h (the law: earlier, sign -1). Paired prognoses at 9-13 h:
+    equal before the change, the changed life's predicted failure earlier from 12 h on, so
+    it moved, 2 h after the change; one later prognosis on the wrong side undoes it; a
+    lighter payload (+1) reads the same pairs as not moved; nothing after the change (or
+    only beyond 24 h) is not judged."""
+    h = np.array([9.0, 10.5, 11.0, 12.0, 13.0])
+    twin = np.array([20.0, 20.0, 20.0, 20.0, 20.0])
+    changed = np.array([20.0, 20.1, 20.0, 19.0, 18.5])
+    assert change_response(h, changed, twin, 10.0, -1.0) == (True, 2.0)
+    moved, lag = change_response(h, changed, twin, 10.0, 1.0)
+    assert moved is False and np.isnan(lag)
+    back = np.array([20.0, 20.1, 20.0, 19.0, 20.5])
+    assert change_response(h, back, twin, 10.0, -1.0)[0] is False
+    assert change_response(h, changed, twin, 13.0, -1.0)[0] is None
+    assert change_response(h, changed, twin, 10.0, -1.0, within_h=1.5)[0] is False
+    assert change_response(h + 30.0, changed, twin, 10.0, -1.0)[0] is None
+    with pytest.raises(ValueError, match="^prognosis.scores.law_sign must be -1 or 1"):
+        change_response(h, changed, twin, 10.0, 0.0)
+    with pytest.raises(ValueError, match="^change_response: the changed life's and the twin's"):
+        change_response(h, changed[:2], twin, 10.0, -1.0)
 
 
 def test_a_bad_input_is_one_line():
