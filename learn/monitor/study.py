@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import allowed, check_range
-from swgsim.datasets.conditions import ConditionsConfig, RunInConfig, check_conditions
+from swgsim.base.typed import allowed, check_range, check_tree
+from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
 from swgsim.gear.faults import FAULTS
 from swgsim.gear.thermal import JointThermal
 from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
@@ -212,8 +212,8 @@ class MonitorStudyConfig:
                  f"(0, {top:g}] ({f}'s severity range), got {sevs}")
         check_range(self.nuisance_hours, self.commissioning_h, 1e6, f"{where}.nuisance_hours",
                     "h", lo_open=True, why="longer than commissioning")
-        for name, c in self.nuisances.items():
-            check_conditions(c, self.nuisance_hours, f"{where}.nuisances.{name}")
+        for name, c in self.nuisances.items():  # their own rules: checked as parts, before
+            c.check_inside(self.nuisance_hours, f"{where}.nuisances.{name}")
         self._check_families(where)
         bad = sorted(set(self.detectors) - set(DETECTORS))
         _req(not bad, f"{where}.detectors: unknown {bad}; allowed: {sorted(DETECTORS)}")
@@ -243,9 +243,9 @@ class MonitorStudyConfig:
                      f"{where}.families.{name}.{k} must lie after commissioning (> "
                      f"{self.commissioning_h:g} h), got {getattr(fam, k)}")
             for s in self.design_seeds + self.scored_seeds:
-                check_conditions(draw_conditions(fam, int(s)),
-                                 min(shortest, self.nuisance_hours),
-                                 f"{where}.families.{name}[seed={s}]")
+                draw, key = draw_conditions(fam, int(s)), f"{where}.families.{name}[seed={s}]"
+                check_tree(draw, key)
+                draw.check_inside(min(shortest, self.nuisance_hours), key)
 
 
 #: Prefix of a family's lives among the nuisances (``family:warm_up``): the fixed

@@ -51,7 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
-from swgsim.base.typed import check_range
+from swgsim.base.typed import allowed, check_range
 from swgsim.gear.faults import ChainParams
 from swgsim.gear.thermal import (
     REF_TEMP_C,
@@ -77,7 +77,7 @@ from swgsim.sensing.bridge_drift import (
 )
 
 __all__ = ["HOURS_TABLE_COLUMNS", "TRACE_MODES", "ConditionsConfig", "Regrease", "RunInConfig",
-           "TemperatureTrace", "WindowConditions", "check_conditions", "efficiency_ratio",
+           "TemperatureTrace", "WindowConditions", "efficiency_ratio",
            "trace_rise", "trace_table", "window_conditions"]
 
 #: A step of a temperature trace longer than this ends its first continuous segment [min]
@@ -107,8 +107,9 @@ class RunInConfig:
         Time constant, > 0 [operating h].
     """
 
-    drop: float = RUN_IN_DROP
-    tau_h: float = RUN_IN_TAU_H
+    drop: float = field(default=RUN_IN_DROP, metadata=allowed(0.0, 1.0))
+    tau_h: float = field(default=RUN_IN_TAU_H, metadata=allowed(0.0, 1e5, lo_open=True,
+                                                                unit="h"))
 
 
 @dataclass
@@ -129,8 +130,19 @@ class Regrease:
     """
 
     hours: list[float]
-    drop: float = REGREASE_DROP
-    tau_h: float = REGREASE_TAU_H
+    drop: float = field(default=REGREASE_DROP, metadata=allowed(0.0, 1.0))
+    tau_h: float = field(default=REGREASE_TAU_H, metadata=allowed(0.0, 1e5, lo_open=True,
+                                                                  unit="h"))
+
+    def check(self, where: str) -> None:
+        """Refuse no hour or hours not increasing, in one line naming ``<where>.hours``
+        (the ranges are the fields'; the life's length, :meth:`ConditionsConfig.check_inside`).
+        """
+        if len(self.hours) == 0:
+            raise ValueError(f"{where}.hours must name at least one operating hour (no "
+                             f"re-greasing: {where}: null)")
+        if any(b <= a for a, b in zip(self.hours[:-1], self.hours[1:], strict=True)):
+            raise ValueError(f"{where}.hours must increase, got {list(self.hours)}")
 
 
 @dataclass
@@ -381,62 +393,40 @@ class ConditionsConfig:
     temperature_sensor: TemperatureSensor | None = field(default_factory=TemperatureSensor)
 
 
-def check_conditions(cfg: ConditionsConfig, hours: float, key: str) -> None:
-    """Refuse conditions outside their ranges, in one line naming the key.
+    def check(self, where: str) -> None:
+        """Refuse conditions outside their ranges, in one line naming the key (run by
+        :func:`swgsim.base.typed.check_tree` after the parts' own: the thermal model, the
+        friction law, the re-greasing, the bridges' drift, the temperature sensor); the
+        hours that must lie inside a life, by :meth:`check_inside`.
 
-    Parameters
-    ----------
-    cfg : ConditionsConfig
-    hours : float
-        The life's length [h] (payload steps must lie inside it).
-    key : str
-        Full name, e.g. ``dataset.life.conditions``.
+        Raises
+        ------
+        ValueError
+            A temperature trace unreadable or outside its ranges (or without ``thermal``
+            in mode ``rise``), a payload step not ``[hour, factor]``, its factor outside
+            (0, 10] or its hours not increasing.
+        """
+        if self.temperature_trace is not None:
+            _check_trace(self.temperature_trace, self.thermal is not None, where)
+        for i, step in enumerate(self.payload):
+            if len(step) != 2:
+                raise ValueError(f"{where}.payload[{i}] must be [hour, factor], got {step}")
+            check_range(step[1], 0.0, 10.0, f"{where}.payload[{i}][1]", lo_open=True,
+                        why="factor on the acting load")
+        hours = [step[0] for step in self.payload]
+        if any(b <= a for a, b in zip(hours[:-1], hours[1:], strict=True)):
+            raise ValueError(f"{where}.payload: hours must increase, got {hours}")
 
-    Raises
-    ------
-    ValueError
-    """
-    if cfg.thermal is not None:
-        cfg.thermal.check(f"{key}.thermal")
-    if cfg.temperature_trace is not None:
-        _check_trace(cfg.temperature_trace, cfg.thermal is not None, key)
-    cfg.friction_law.check(f"{key}.friction_law")
-    if cfg.run_in is not None:
-        check_range(cfg.run_in.drop, 0.0, 1.0, f"{key}.run_in.drop")
-        check_range(cfg.run_in.tau_h, 0.0, 1e5, f"{key}.run_in.tau_h", "h", lo_open=True)
-    if cfg.regrease is not None:
-        _check_regrease(cfg.regrease, hours, f"{key}.regrease")
-    last = -np.inf
-    for i, step in enumerate(cfg.payload):
-        if len(step) != 2:
-            raise ValueError(f"{key}.payload[{i}] must be [hour, factor], got {step}")
-        check_range(step[0], 0.0, hours, f"{key}.payload[{i}][0]", "h",
-                    why="an operating hour inside the life")
-        check_range(step[1], 0.0, 10.0, f"{key}.payload[{i}][1]", lo_open=True,
-                    why="factor on the acting load")
-        if step[0] <= last:
-            raise ValueError(f"{key}.payload: hours must increase, got "
-                             f"{[s[0] for s in cfg.payload]}")
-        last = step[0]
-    if cfg.bridge_drift is not None:
-        cfg.bridge_drift.check(f"{key}.bridge_drift")
-    if cfg.temperature_sensor is not None:
-        cfg.temperature_sensor.check(f"{key}.temperature_sensor")
-
-
-def _check_regrease(cfg: Regrease, hours: float, key: str) -> None:
-    """Refuse re-greasing hours outside the life or not increasing, a drop or time
-    constant out of range, in one line naming ``<key>.<field>``."""
-    if len(cfg.hours) == 0:
-        raise ValueError(f"{key}.hours must name at least one operating hour (no "
-                         f"re-greasing: {key}: null)")
-    for i, h in enumerate(cfg.hours):
-        check_range(h, 0.0, hours, f"{key}.hours[{i}]", "h",
-                    why="an operating hour inside the life")
-    if any(b <= a for a, b in zip(cfg.hours[:-1], cfg.hours[1:], strict=True)):
-        raise ValueError(f"{key}.hours must increase, got {list(cfg.hours)}")
-    check_range(cfg.drop, 0.0, 1.0, f"{key}.drop")
-    check_range(cfg.tau_h, 0.0, 1e5, f"{key}.tau_h", "h", lo_open=True)
+    def check_inside(self, hours: float, where: str) -> None:
+        """Refuse a payload step or a re-greasing outside a life of ``hours`` [h], in one
+        line naming ``<where>.payload[i][0]`` or ``<where>.regrease.hours[i]`` (run by
+        :meth:`swgsim.datasets.schedule.LifeConfig.check`, after :meth:`check`)."""
+        for i, step in enumerate(self.payload):
+            check_range(step[0], 0.0, hours, f"{where}.payload[{i}][0]", "h",
+                        why="an operating hour inside the life")
+        for i, h in enumerate(self.regrease.hours if self.regrease is not None else ()):
+            check_range(h, 0.0, hours, f"{where}.regrease.hours[{i}]", "h",
+                        why="an operating hour inside the life")
 
 
 @dataclass(frozen=True)
@@ -493,7 +483,7 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     Parameters
     ----------
     cfg : ConditionsConfig
-        Checked (:func:`check_conditions`).
+        Checked (:meth:`ConditionsConfig.check`, :meth:`ConditionsConfig.check_inside`).
     hours : ndarray, shape (W,)
         Operating hours of the windows, increasing [h].
     n_in_rpm, t_out_nm : ndarray, shape (W,)

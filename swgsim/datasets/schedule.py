@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.datasets.conditions import ConditionsConfig, check_conditions
+from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.growth import (
     LAWS,
     RunToFailure,
@@ -158,7 +158,8 @@ class LifeConfig:
             > 0, too many windows or none, ``commissioning_h`` outside the life or
             holding no window, a duty point outside its range, ``severity_levels`` < 1,
             ``life_seed`` < 0, the fault (unknown, before commissioning, its growth and
-            severity), the conditions (:func:`~swgsim.datasets.conditions.check_conditions`).
+            severity), a payload step or re-greasing outside the life
+            (:meth:`~swgsim.datasets.conditions.ConditionsConfig.check_inside`).
         """
         for k in ("hours", "interval_min"):
             v = float(getattr(self, k))
@@ -185,7 +186,7 @@ class LifeConfig:
         _req(int(self.life_seed) >= 0, f"{where}.life_seed must be >= 0, got {self.life_seed}")
         _check_fault(self.fault, c, f"{where}.fault")
         if self.conditions is not None:
-            check_conditions(self.conditions, float(self.hours), f"{where}.conditions")
+            self.conditions.check_inside(float(self.hours), f"{where}.conditions")
 
 
 def _req(cond: bool, msg: str) -> None:

@@ -1,5 +1,5 @@
 """Families of benign changes (learn.monitor.families): draws deterministic per seed and
-different between seeds, inside the declared ranges, accepted by check_conditions;
+different between seeds, inside the declared ranges, accepted by the conditions' checks;
 design and scored seeds kept apart; a range out of its bounds refused in one line naming
 it; the evaluation's lives of a family (learn.monitor.study.life_conditions,
 learn.monitor.evaluate.nuisance_fault_lives)."""
@@ -21,7 +21,6 @@ from learn.monitor.families import (
 )
 from learn.monitor.study import MonitorStudyConfig, life_conditions
 from swgsim.base.typed import check_tree
-from swgsim.datasets.conditions import check_conditions
 from swgsim.gear.thermal import FRICTION_FORMS
 
 FAMILIES = default_families()
@@ -36,11 +35,13 @@ def test_a_draw_is_the_same_for_a_seed_and_differs_between_seeds(name):
 
 
 @pytest.mark.parametrize("name", FAMILIES)
-def test_every_draw_passes_check_conditions(name):
+def test_every_draw_passes_the_conditions_checks(name):
     fam = FAMILIES[name]
     fam.check(name)
     for seed in SEEDS:
-        check_conditions(draw_conditions(fam, seed), 49.0, f"families.{name}")
+        draw = draw_conditions(fam, seed)
+        check_tree(draw, f"families.{name}")
+        draw.check_inside(49.0, f"families.{name}")
 
 
 def test_draws_stay_inside_the_declared_ranges():
@@ -211,7 +212,8 @@ def test_a_trace_family_draws_a_measured_warm_up_and_leaves_the_other_draws(tmp_
         assert 1.0 <= c.temperature_trace.scale <= 4.0
         seen.add(c.temperature_trace.column)
         assert c.friction_law == draw_conditions(FAMILIES["friction_law"], seed).friction_law
-        check_conditions(c, 49.0, "c")
+        check_tree(c, "c")
+        c.check_inside(49.0, "c")
     assert seen == {"Temperature_T0", "Temperature_J1"}
     assert "trace" not in NuisanceFamily().parts  # the file is the user's
     with pytest.raises(ValueError, match=r"^fam\.trace_path: the trace part needs"):
