@@ -9,7 +9,8 @@ Each generated table of a results page sits between two markers in its Markdown 
 
 This script reads a run's ``reports/`` folder (it reruns nothing: the reports of
 ``swgsim-paper``, ``swgsim-train experiment=transfer``, ``swgsim-train
-experiment=monitor``, ``swgsim-observability``, ``swgsim-export`` and
+experiment=monitor``, ``swgsim-train experiment=prognosis``, ``swgsim-observability``,
+``swgsim-export`` and
 ``scripts/calibrate_real.py --out``) and writes each block whose report is there, with
 the run named: the command, the commit (``--commit``, else the checkout's HEAD) and the
 date the report was written (its modification time). A block whose report is missing is
@@ -271,6 +272,27 @@ def monitor_timing(rep: Path) -> str:
             f"gears:\n\n{md_table(out)}")
 
 
+def prognosis_section(title: str) -> Callable[[Path], str]:
+    """A builder copying the tables of one section of the prognosis's ``table.md``."""
+    def build(rep: Path) -> str:
+        return tables_of(section(rep / "prognosis" / "table.md", title))
+    return build
+
+
+def prognosis_timing(rep: Path) -> str:
+    """Seconds per part and stage of the prognosis's evaluation (``timing.json``)."""
+    t = json.loads((rep / "prognosis" / "timing.json").read_text(encoding="utf-8"))
+    parts = pd.DataFrame(t["parts"])[["dataset", "held_out_gear", "train_s", "calibrate_s",
+                                      "evaluate_s"]]
+    for c in ("train_s", "calibrate_s", "evaluate_s"):
+        parts[c] = [f"{v:.0f}" for v in parts[c]]
+    parts = parts.rename(columns={"dataset": "data set", "held_out_gear": "held-out gear",
+                                  "train_s": "train [s]", "calibrate_s": "calibrate [s]",
+                                  "evaluate_s": "evaluate [s]"})
+    return (f"Wall time **{t['wall_s'] / 60:.1f} min** (target 20); per part, seconds of one "
+            f"worker:\n\n{md_table(parts)}")
+
+
 def observability_map(rep: Path) -> str:
     t = pd.read_csv(rep / "observability" / "observability.csv")
     t = t[t.fault != "healthy"]
@@ -355,6 +377,16 @@ BLOCKS = (
           "swgsim-train experiment=monitor", monitor_real_day),
     Block("monitor.timing", "monitor.md", ("monitor/timing.json",),
           "swgsim-train experiment=monitor", monitor_timing),
+    Block("prognosis.targets", "prognosis.md", ("prognosis/table.md",),
+          "swgsim-train experiment=prognosis", prognosis_section("Targets")),
+    Block("prognosis.scores", "prognosis.md", ("prognosis/table.md",),
+          "swgsim-train experiment=prognosis", prognosis_section("Scores per fault")),
+    Block("prognosis.buckets", "prognosis.md", ("prognosis/table.md",),
+          "swgsim-train experiment=prognosis", prognosis_section("The 90 % interval")),
+    Block("prognosis.changes", "prognosis.md", ("prognosis/table.md",),
+          "swgsim-train experiment=prognosis", prognosis_section("After a payload change")),
+    Block("prognosis.timing", "prognosis.md", ("prognosis/timing.json",),
+          "swgsim-train experiment=prognosis", prognosis_timing),
     Block("observability.map", "observability.md", ("observability/observability.csv",),
           "swgsim-observability", observability_map),
     Block("observability.motion", "observability.md",

@@ -69,3 +69,23 @@ def test_only_the_blocks_between_their_markers_change(tmp_path):
     assert results_pages.BLOCK_RE.sub("", after) == outside
     assert [p.name for p in pages.iterdir() if p.read_text(encoding="utf-8") !=
             (ROOT / "docs" / "results" / p.name).read_text(encoding="utf-8")] == ["monitor.md"]
+
+
+def test_the_prognosis_blocks_copy_the_tables_of_their_sections(tmp_path):
+    """A hand-made prognosis report: each block holds its own section's table, not the
+    next one's; the timing block the wall time and each part's seconds."""
+    out = tmp_path / "reports" / "prognosis"
+    out.mkdir(parents=True)
+    (out / "table.md").write_text(
+        "# Prognosis\n\nheader\n\n## Targets (the growth law)\n\n| a |\n|---|\n| t1 |\n"
+        "\n## Scores per fault and method (held-out gears)\n\n| b |\n|---|\n| s1 |\n"
+        "\n## After a payload change, against the same life without it\n\n| c |\n|---|\n"
+        "| c1 |\n\n## Lives\n\n| d |\n|---|\n| l1 |\n")
+    (out / "timing.json").write_text(json.dumps({"wall_s": 600.0, "parts": [
+        {"dataset": "bench", "held_out_gear": 1, "train_s": 80.4, "calibrate_s": 100.0,
+         "evaluate_s": 60.6}]}))
+    rep = out.parent
+    assert results_pages.prognosis_section("Targets")(rep) == "| a |\n|---|\n| t1 |"
+    assert results_pages.prognosis_section("After a payload change")(rep).endswith("| c1 |")
+    timing = results_pages.prognosis_timing(rep)
+    assert "Wall time **10.0 min**" in timing and "| bench | 1 | 80 | 100 | 61 |" in timing
