@@ -86,12 +86,15 @@ def walk(preset: str) -> list[tuple[str, str, str, str]]:
     calls: list[tuple[str, str, str, str]] = []
     root = str(import_graph.ROOT)
 
+    kept = []  # the holders, alive: a freed holder's id, reused, would count another
+
     def holds(v) -> bool:
         if id(v) in ids:
             return True
         d = getattr(v, "__dict__", None)
         if isinstance(d, dict) and any(id(x) in ids for x in d.values()):
             ids.add(id(v))  # a holder (a plan, a record bank): its holders count too
+            kept.append(v)
             return True
         return False
 

@@ -17,7 +17,7 @@ the whole truss per time step, is ``signals_naive`` in ``tests/physics_reference
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numba
 import numpy as np
@@ -111,7 +111,8 @@ class SimulationChain:
                  settings: ChainSettings | None = None, solver: InfluenceSolver | None = None,
                  alpha_tooth_rad: float = np.deg2rad(20.0)):
         self.layout = layout or SensorLayout()
-        self.settings = settings or ChainSettings()
+        # a copy: the chain owns its settings (a config changed later changes nothing here)
+        self.settings = replace(settings) if settings is not None else ChainSettings()
         self._influence: dict[tuple | None, Influence] = {}
         self._tables: dict[tuple, ZoneTable] = {}
         if solver is None:
@@ -131,7 +132,8 @@ class SimulationChain:
         naive reference path is not available.
         """
         chain = cls.__new__(cls)  # no truss in this process
-        chain.layout, chain.settings = layout, settings or ChainSettings()
+        chain.layout = layout
+        chain.settings = replace(settings) if settings is not None else ChainSettings()
         chain.solver = chain.model = chain._rows_lam = None
         chain._influence = dict(influences)
         chain._tables = {}

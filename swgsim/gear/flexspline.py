@@ -227,7 +227,9 @@ class TrussModel:
 
     def __init__(self, geometry: FlexsplineGeometry | None = None, mesh: Mesh | None = None):
         self.geometry = geometry or FlexsplineGeometry()
-        self.mesh = mesh or Mesh()
+        # a copy: the model owns its mesh, so a config changed after the model was built
+        # cannot change its node numbering
+        self.mesh = dataclasses.replace(mesh) if mesh is not None else Mesh()
         if self.mesh.n_theta < 20 or self.mesh.n_theta % 20:
             raise ValueError(
                 f"mesh.n_theta must be a multiple of 20 and >= 20, got {self.mesh.n_theta}"
