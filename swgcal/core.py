@@ -182,11 +182,6 @@ class FitResult:
         return design_matrix(self.terms, sig, self.thetas) @ np.concatenate(
             [c for c in self.coefs] or [np.empty(0)])
 
-    def term_params(self, term: Term) -> dict[str, float]:
-        """Raw parameters of one term."""
-        i = self.terms.index(term)
-        return term.to_params(self.coefs[i], self.thetas[i])
-
     def estimates_of(self, term_name: str) -> dict[str, ParamEstimate]:
         return {e.name: e for e in self.estimates if e.term == term_name}
 
@@ -239,9 +234,6 @@ class _Packer:
     def to_u(self, theta: np.ndarray) -> np.ndarray:
         t = self.clip(np.asarray(theta, float))
         return np.where(self.logs, np.log(np.where(self.logs, t, 1.0)), t)
-
-    def from_u(self, u: np.ndarray) -> np.ndarray:
-        return np.where(self.logs, np.exp(np.where(self.logs, u, 0.0)), u)
 
     def from_u_partial(self, u: np.ndarray, mask: np.ndarray) -> np.ndarray:
         lg = self.logs[mask]
@@ -526,11 +518,6 @@ def refit(result: FitResult, sig: Any, y: np.ndarray, idx: np.ndarray,
     """Fit the same terms again on other samples, starting from ``result``'s θ."""
     starts = [[np.asarray(th, float)] for th in result.thetas]
     return fit_terms(result.terms, sig, y, idx, starts=starts, **kwargs)
-
-
-def replace_terms(result: FitResult, **changes: Any) -> FitResult:
-    """``dataclasses.replace`` for FitResult (helper for tests)."""
-    return dataclasses.replace(result, **changes)
 
 
 Objective = Callable[[np.ndarray], np.ndarray]

@@ -154,7 +154,8 @@ def order_spectrum(
     ``exp(-i ω (t_a + τ_b)) = exp(-i ω t_a) exp(-i ω τ_b)``, so each window needs the
     trigonometric functions at about 2 sqrt(n_time) points per order instead of n_time,
     and the rest is one batched matrix product; the same sums as
-    :func:`order_spectrum_direct` to round-off (tested).
+    the term-by-term sums to round-off (tested against them,
+    ``tests/learn/test_learn_features.py``).
 
     Parameters
     ----------
@@ -211,22 +212,6 @@ def order_spectrum(
         sum_im = (re * si + im * co).sum(axis=2)
         out[sl] = np.hypot(sum_re, sum_im) * scale
     return out
-
-
-def order_spectrum_direct(x: np.ndarray, time_s: np.ndarray, f_in_hz: np.ndarray,
-                          orders: np.ndarray) -> np.ndarray:
-    """Reference for :func:`order_spectrum`: the sums evaluated term by term.
-
-    Same arguments and result; memory (n_samples, n_orders, n_time), for tests.
-    """
-    x, time_s, f_in_hz, orders = _spectrum_args(x, time_s, f_in_hz, orders)
-    n_time = x.shape[-1]
-    w = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(n_time) / n_time)
-    xw = (x - x.mean(axis=-1, keepdims=True)) * w  # (N, C, T)
-    phase = (2.0 * np.pi) * f_in_hz[:, None, None] * orders[None, :, None] * time_s
-    re = np.matmul(xw, np.cos(phase).transpose(0, 2, 1))  # (N, C, K)
-    im = np.matmul(xw, np.sin(phase).transpose(0, 2, 1))
-    return np.hypot(re, im) * (2.0 / w.sum())
 
 
 def _spectrum_args(x, time_s, f_in_hz, orders):

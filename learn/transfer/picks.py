@@ -34,16 +34,6 @@ PRIMARY_NOT_RUN = "the declared primary did not run here"
 PRIMARY_ADAPTATIONS = ("ft_head", *(f"ft_{m}" for m in FT_MODES))
 
 
-def best_rows(summ: pd.DataFrame, k: int = 0) -> pd.DataFrame:
-    """Per (dataset, protocol), the run with the highest worst-split mean at k labelled
-    target windows per class, chosen on the evaluation windows: a statement about the
-    results made afterwards, not a model selection."""
-    w = summ[(summ["split"] == "worst") & (summ["k_shot"] == int(k))]
-    if w.empty:
-        return w
-    return w.loc[w.groupby(["dataset", "protocol"])["mean"].idxmax()]
-
-
 def primary_row(w: pd.DataFrame, primary: RunRef | None, k: int) -> pd.Series | None:
     """The primary's worst-split row at ``k`` among one (dataset, protocol)'s worst-split
     rows ``w`` (every k); None when none is declared or it did not run."""

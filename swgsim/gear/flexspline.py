@@ -549,7 +549,3 @@ class TrussModel:
         k[self.root_crack_bars(theta_index)] *= 1.0 - severity
         new.k_bar = k
         return new
-
-    def with_geometry(self, **changes) -> TrussModel:
-        """A new model with geometry fields replaced (``dataclasses.replace``)."""
-        return TrussModel(dataclasses.replace(self.geometry, **changes), self.mesh)

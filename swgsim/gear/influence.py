@@ -234,7 +234,8 @@ def torque_influence(psi: np.ndarray, g: np.ndarray, theta: np.ndarray, c: np.nd
 
     Only nodes within the zone half-width carry load, so each zone is summed over the
     2K + 1 nodes nearest its centre (K = ceil(half-width / Δθ) + 1) instead of all nodes:
-    the same sum as :func:`torque_influence_exact`, at O(n_t K) cost.
+    the same sum as over all nodes (tested against one truss solve per angle with every
+    node's weight, ``tests/swgsim/test_flexspline.py``), at O(n_t K) cost.
 
     Parameters
     ----------
@@ -283,16 +284,6 @@ def torque_influence(psi: np.ndarray, g: np.ndarray, theta: np.ndarray, c: np.nd
                          shape=(n_t, n))
     num = wmat @ g.T  # (n_t, 5)
     return (num / w.sum(axis=1)[:, None]).T
-
-
-def torque_influence_exact(psi: np.ndarray, g: np.ndarray, theta: np.ndarray, c: np.ndarray,
-                           half_width_rad: float, share_a=1.0) -> np.ndarray:
-    """Reference for :func:`torque_influence` evaluated without tables, shape (5, n_t)."""
-    sa = np.broadcast_to(share_a, psi.shape)[:, None]
-    w = (sa * contact_window(theta[None, :] - psi[:, None], half_width_rad)
-         + (2 - sa) * contact_window(theta[None, :] - psi[:, None] - np.pi, half_width_rad))
-    w = w * c[None, :]
-    return ((w @ g.T) / w.sum(axis=1)[:, None]).T
 
 
 @dataclass(frozen=True)
