@@ -52,6 +52,7 @@ from .sensor_check import (
     fit_friction,
     fit_sensor_faults,
     fit_temperature,
+    fit_temperature_drift,
     moved_features,
 )
 
@@ -218,6 +219,9 @@ class GearMonitor:
         self.learning: dict[int, list[tuple[np.ndarray, float]]] = {}
         self.commissioned_on: tuple[np.ndarray, np.ndarray, Conditions] | None = None
         self.regreased: list[float] = []
+        # the readings are the laws' virtual temperature (the sensor failed): no sensor
+        # left to name (learn.monitor.stream.reading_lost)
+        self.reading_virtual = False
 
     def declare(self, events: list[MaintenanceEvent]) -> None:
         """Take the maintenance log: after a declared re-greasing the friction factor
@@ -643,11 +647,14 @@ class GearMonitor:
         fits = [f for f in fit_sensor_faults(z, b.mean[opi], spread)
                 if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
         fr = np.broadcast_to(friction, (len(z),))
-        hot = None if cond is None else fit_temperature(b, feats, points, cond, fr, opi)
+        read = cond is not None and not self.reading_virtual
+        hot = fit_temperature(b, feats, points, cond, fr, opi) if read else None
+        drift = fit_temperature_drift(b, feats, points, cond, fr, opi, hours) if read else None
         even = fit_friction(b, feats, points, cond, fr, opi, hours)
         cands = [(median_p(f.z), f.fault, f.bridge, None) for f in fits]
         cands += [(median_p(h.z), name, None, h) for h, name in
-                  ((hot, TEMPERATURE_SENSOR), (even, UNEXPLAINED_CHANGE))
+                  ((hot, TEMPERATURE_SENSOR), (drift, TEMPERATURE_SENSOR),
+                   (even, UNEXPLAINED_CHANGE))
                   if h is not None and h.plausible()]
         best = max(cands, key=lambda c: c[0], default=None)
         if best is not None and best[0] >= SENSOR_P_MIN:

@@ -95,6 +95,13 @@ TEMPERATURE_STEP_K = 0.25
 #: family ``sensor_stuck``, design seed 100, stuck at 68.7 h), and the alarm named a gear
 #: fault.
 TEMPERATURE_MIN_K = 2.0
+#: Least median distance of a drift's fitted temperature from the reading
+#: (:func:`fit_temperature_drift`) [K]: twice the reading's uncertainty of 0.2 K
+#: (:class:`learn.monitor.normal.NormalConfig` ``temperature_uncertainty_k``) [choice].
+DRIFT_MIN_K = 0.4
+#: Rates of a drifting reading :func:`fit_temperature_drift` tries first [K/h]: the
+#: families' ±0.5 K/h (:mod:`learn.monitor.families`) and a little beyond.
+DRIFT_RATES = np.linspace(-0.6, 0.6, 13)
 #: Step of the coarse grid :func:`best_temperature` starts from [K], and how many fine
 #: steps it then tries on either side of the coarse best (to half a coarse step beyond).
 COARSE_STEP_K, COARSE_STEPS = 2.0, 6
@@ -234,6 +241,7 @@ class TemperatureFit:
     reading_c: np.ndarray
     z: np.ndarray
     reduction: float
+    rate_k_per_h: float | None = None
 
     @property
     def offset_k(self) -> float:
@@ -246,11 +254,15 @@ class TemperatureFit:
         return float(np.median(np.abs(self.temperature_c - self.reading_c)))
 
     def plausible(self) -> bool:
-        """The fit moved the temperature by at least :data:`TEMPERATURE_MIN_K`, either
-        way, at the median window and lowered Σ z² by at least :data:`FIT_MIN` per window (each
-        window has its own temperature: one degree of freedom each)."""
-        return (self.error_k >= TEMPERATURE_MIN_K
-                and self.reduction >= FIT_MIN * len(self.z))
+        """Window by window (``rate_k_per_h`` None): the fit moved the temperature by at
+        least :data:`TEMPERATURE_MIN_K`, either way, at the median window and lowered Σ z²
+        by at least :data:`FIT_MIN` per window (each window has its own temperature: one
+        degree of freedom each). A drift (an offset and a rate): by at least
+        :data:`DRIFT_MIN_K` and Σ z² by :data:`FIT_MIN_RATE` over all windows."""
+        if self.rate_k_per_h is None:
+            return (self.error_k >= TEMPERATURE_MIN_K
+                    and self.reduction >= FIT_MIN * len(self.z))
+        return self.error_k >= DRIFT_MIN_K and self.reduction >= FIT_MIN_RATE
 
 
 def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
@@ -290,6 +302,49 @@ def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarr
     worse = s0 <= s  # the reading is as good: kept
     temp[worse], z[worse] = cond.temperature_c[worse], z0[worse]
     return TemperatureFit(temp, cond.temperature_c, z, float(np.sum(s0 - np.minimum(s, s0))))
+
+
+def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                          cond: Conditions, friction: np.ndarray, index: np.ndarray,
+                          hours: np.ndarray | None) -> TemperatureFit | None:
+    """Fit the hypothesis "the temperature reading drifts" (a loosened or ageing sensor:
+    :class:`~swgsim.sensing.bridge_drift.TemperatureSensor` ``drift``): the true
+    temperature is the reading plus an offset and a rate, a + r (t − t₀), the same for
+    every window since the alarm (two parameters in all, where :func:`fit_temperature`
+    gives each window its own: a drift is named while its error is still small, before
+    a gear-fault alarm has fired on the features it moves). Offsets within
+    :data:`TEMPERATURE_BEYOND_K`, rates within :data:`DRIFT_RATES` (the families' ±0.5
+    K/h), on a coarse grid refined about its best; the z-scores by the laws commissioning
+    learnt, unwidened beyond its range (as :func:`best_temperature`).
+
+    Returns
+    -------
+    TemperatureFit or None
+        ``rate_k_per_h`` the fitted rate; None where the normal behaviour has no
+        temperature terms, the stream no reading (or a missing one among these windows)
+        or no hours are given.
+    """
+    if (cond.temperature_c is None or not normal.temperature_law or hours is None
+            or not np.all(np.isfinite(cond.temperature_c))):
+        return None
+    z0 = normal.z(feats, points, cond, friction, index)
+    flat = dataclasses.replace(normal, config=dataclasses.replace(
+        normal.config, extrapolation_uncertainty=0.0))
+    dt = np.asarray(hours, float) - float(hours[0])
+    args = (flat, feats, points, cond.torque_nm, friction, index)
+
+    def best(offsets: np.ndarray, rates: np.ndarray) -> tuple[float, float]:
+        tot = [_sum_z2(*args, (cond.temperature_c + r * dt)[:, None] + offsets[None, :])[0]
+               .sum(axis=0) for r in rates]  # (R, G)
+        i, j = np.unravel_index(int(np.argmin(tot)), (len(rates), len(offsets)))
+        return float(offsets[j]), float(rates[i])
+
+    a, r = best(np.arange(-TEMPERATURE_BEYOND_K, TEMPERATURE_BEYOND_K + 0.5, 1.0), DRIFT_RATES)
+    a, r = best(a + np.arange(-0.5, 0.51, 0.125), r + np.arange(-0.05, 0.051, 0.01))
+    temp = cond.temperature_c + a + r * dt
+    s, z = _sum_z2(*args, temp[:, None])
+    return TemperatureFit(temp, cond.temperature_c, z[:, 0],
+                          float(np.sum(z0 ** 2) - s.sum()), r)
 
 
 def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
@@ -490,7 +545,10 @@ def moved_features(z: np.ndarray, names: list[str], k: int = 3) -> list[list]:
     list of [str, float]
         Name and mean z-score [σ], largest magnitude first.
     """
-    mean = np.nanmean(z, axis=0) if len(z) else np.zeros(z.shape[1])
+    ok = ~np.isnan(z)
+    with np.errstate(invalid="ignore"):  # a feature never read: NaN, as np.nanmean's
+        mean = (np.where(ok, z, 0.0).sum(axis=0) / ok.sum(axis=0) if len(z)
+                else np.zeros(z.shape[1]))
     top = np.argsort(-np.abs(np.nan_to_num(mean)))[:k]
     return [[names[j], round(float(mean[j]), 2)] for i, j in enumerate(top)
             if i == 0 or abs(mean[j]) >= 1.0]
@@ -499,6 +557,7 @@ def moved_features(z: np.ndarray, names: list[str], k: int = 3) -> list[list]:
 __all__ = ["BLOCK", "FIT_MIN", "FIT_MIN_RATE", "FRICTION_FACTORS", "FRICTION_RATES",
            "FrictionFit", "REST_MAX",
            "SENSOR_P_MIN", "SensorFit", "TEMPERATURE_BEYOND_K", "TEMPERATURE_MIN_K",
+           "DRIFT_MIN_K", "DRIFT_RATES",
            "TEMPERATURE_SENSOR", "TEMPERATURE_STEP_K", "TemperatureFit", "UNEXPLAINED_CHANGE",
            "VIRTUAL_WINDOWS", "best_temperature", "fit_friction", "fit_sensor_faults",
-           "fit_temperature", "moved_features", "virtual_temperature"]
+           "fit_temperature", "fit_temperature_drift", "moved_features", "virtual_temperature"]

@@ -141,17 +141,20 @@ def _day_with(day, law: FrictionLaw, sensor: TemperatureSensor, fault=None,
     return life_dataset(LifeSimulator(p, 3, life, bank))
 
 
-@pytest.mark.parametrize("fault", ["stuck", "dropout", "lost_at_commissioning"])
+@pytest.mark.parametrize("fault", ["stuck", "dropout", "drift", "lost_at_commissioning"])
 def test_a_failed_temperature_sensor_is_reported_and_no_gear_fault_alarm_follows(
         model, day, fault):
     """A linear friction law (not the catalogue's) and daily warm-ups; the temperature
-    sensor sticks or drops out at 30 h, through the cold start at 32 h (stuck: an
-    eccentric-WG alarm at 32.1 h when the stuck reading was trusted; dropout: the stream
-    was refused), or drops a reading inside commissioning. The monitor names the
-    temperature sensor within a day and goes on without it (learn/monitor/stream.py)."""
+    sensor sticks, drops out or drifts (-0.3 K/h) from 30 h, through the cold start at 32 h
+    (stuck: an eccentric-WG alarm at 32.1 h when the stuck reading was trusted; dropout:
+    the stream was refused; drift: an eccentric-WG alarm at 40.9 h and the sensor named
+    1.3 h later, when only the window-by-window fit was tried), or drops a reading inside
+    commissioning. The
+    monitor names the temperature sensor within a day and goes on without it
+    (learn/monitor/stream.py)."""
     kind = "dropout" if fault == "lost_at_commissioning" else fault
-    ds = _day_with(day, FrictionLaw("linear", 0.8), TemperatureSensor(fault=kind,
-                                                                       fault_hour=30.0))
+    ds = _day_with(day, FrictionLaw("linear", 0.8), TemperatureSensor(
+        fault=kind, fault_hour=30.0, drift_k_per_h=-0.3 if kind == "drift" else 0.0))
     if fault == "lost_at_commissioning":
         ds = ds.copy(deep=True)
         t = ds["temperature_c"].values
