@@ -328,8 +328,7 @@ def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np
             or not np.all(np.isfinite(cond.temperature_c))):
         return None
     z0 = normal.z(feats, points, cond, friction, index)
-    flat = dataclasses.replace(normal, config=dataclasses.replace(
-        normal.config, extrapolation_uncertainty=0.0))
+    flat = _unwidened(normal)
     dt = np.asarray(hours, float) - float(hours[0])
     args = (flat, feats, points, cond.torque_nm, friction, index)
 
@@ -359,8 +358,7 @@ def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndar
     pull every fit to the grid's ends)."""
     lo = float(np.min(normal.temp_range[:, 0])) - TEMPERATURE_BEYOND_K
     hi = float(np.max(normal.temp_range[:, 1])) + TEMPERATURE_BEYOND_K
-    normal = dataclasses.replace(normal, config=dataclasses.replace(
-        normal.config, extrapolation_uncertainty=0.0))  # unwidened: no pull to the ends
+    normal = _unwidened(normal)  # no pull to the ends
     fine = TEMPERATURE_STEP_K * np.arange(-COARSE_STEPS, COARSE_STEPS + 1)
     grid = np.arange(lo, hi + COARSE_STEP_K, COARSE_STEP_K)  # coarse, then fine about it
     temp, zb = np.empty(len(feats)), np.empty(feats.shape)
@@ -375,6 +373,13 @@ def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndar
         k = np.argmin(s, axis=1)
         temp[w], zb[w] = cand[np.arange(n), k], z[np.arange(n), k]
     return temp, zb
+
+
+def _unwidened(normal: NormalBehaviour) -> NormalBehaviour:
+    """``normal`` extrapolating beyond commissioning's range in commissioning's spread
+    (not widened: a fit over temperatures would be pulled to its grid's ends)."""
+    return dataclasses.replace(normal, config=dataclasses.replace(
+        normal.config, extrapolation_uncertainty=0.0))
 
 
 def _sum_z2(normal: NormalBehaviour, feats, points, torque_nm, friction, index,
