@@ -17,7 +17,7 @@ from swgsim.gear import profile as pf
 from swgsim.gear import profile_dynamics as pd
 from swgsim.gear.chain import SimulationChain
 from swgsim.gear.faults import ChainParams, angle_index, mesh_severity
-from swgsim.gear.flexspline import factorize
+from swgsim.gear.flexspline import TrussModel, factorize
 from swgsim.gear.influence import contact_window
 from swgsim.gear.modes import torsional_mode
 from swgsim.gear.sensors import signal_rows
@@ -75,6 +75,21 @@ def simulate_reference(params: dy.GearParams, n_in_rpm: float, t_out_nm: float,
     return dy._result(rec, bk, w_d, t_load, sample_rate_hz, sol.success, sol.message)
 
 
+def cracked(model: TrussModel, theta_index: int, severity: float) -> TrussModel:
+    """A copy of ``model`` with the root-crack bars at ``theta_index`` scaled by
+    (1 − severity): the naive reference path's structure (the fast path uses
+    :class:`swgsim.gear.influence.Influence` with a Woodbury update instead)."""
+    new = object.__new__(TrussModel)
+    new.__dict__.update({k: v for k, v in model.__dict__.items()
+                         if k in ("geometry", "mesh", "mer", "h", "theta", "n_st",
+                                  "layer_r", "layer_z", "node_theta", "nodes_m",
+                                  "n_nodes", "n_dof", "bars", "bar_kind")})
+    k = model.k_bar.copy()
+    k[model.root_crack_bars(theta_index)] *= 1.0 - severity
+    new.k_bar = k
+    return new
+
+
 def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out: np.ndarray
                   ) -> np.ndarray:
     """Reference path: one sparse solve of the truss per time step.
@@ -91,8 +106,8 @@ def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out
     m = chain.model
     if p.has_root_crack:
         n = m.mesh.n_theta
-        mc = m.cracked(angle_index(p.root_crack_deg, n),
-                       mesh_severity(p.root_crack_severity, n))
+        mc = cracked(m, angle_index(p.root_crack_deg, n),
+                     mesh_severity(p.root_crack_severity, n))
         lu = factorize(mc.K[m.free][:, m.free])
         k_fp = mc.K[m.free][:, m.prescribed].tocsc()
     else:

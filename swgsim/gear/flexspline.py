@@ -533,19 +533,3 @@ class TrussModel:
         q, ang = np.divmod(np.asarray(nodes), n_t)
         st, layer = np.divmod(q, 2)
         return st, layer, ang
-
-    def cracked(self, theta_index: int, severity: float) -> TrussModel:
-        """A copy with the root-crack bars at ``theta_index`` scaled by (1 − severity).
-
-        Used by the naive reference path; the fast path uses :class:`Influence` with a
-        Woodbury update instead.
-        """
-        new = object.__new__(TrussModel)
-        new.__dict__.update({k: v for k, v in self.__dict__.items()
-                             if k in ("geometry", "mesh", "mer", "h", "theta", "n_st",
-                                      "layer_r", "layer_z", "node_theta", "nodes_m",
-                                      "n_nodes", "n_dof", "bars", "bar_kind")})
-        k = self.k_bar.copy()
-        k[self.root_crack_bars(theta_index)] *= 1.0 - severity
-        new.k_bar = k
-        return new

@@ -9,6 +9,7 @@ from functools import lru_cache
 import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
+from physics_reference import cracked as crack_copy
 
 from swgsim.gear import influence as inf
 from swgsim.gear.flexspline import INNER, FlexsplineGeometry, Mesh, TrussModel
@@ -180,7 +181,7 @@ def test_woodbury_root_crack_matches_refactorised_solver(solver):
     lay = SensorLayout()
     psi = np.array([0.05, 0.1, 0.15, 3.2])
     torque = np.full(4, 39.0)
-    cracked = solver.model.cracked(3, 0.9)
+    cracked = crack_copy(solver.model, 3, 0.9)
     # naive: a fresh factorisation of the cracked structure
     cracked_lu = spla.splu(cracked.K[solver.model.free][:, solver.model.free].tocsc())
     rows = signal_rows(solver.model, lay)
