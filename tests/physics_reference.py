@@ -1,9 +1,9 @@
 """Closed-form references and slow reference paths shared by the physics tests and the
 benchmarks (not a test module): the steady motion's closed form, one variant integrated by
-scipy (:func:`simulate_reference`) and the gauge signals by one truss solve per time step
-(:func:`signals_naive`), against which the fast paths are checked; the energy and powers
-along a window (:func:`power_terms`) and the ring-down after a load step (:func:`ring_down`,
-its poles by :func:`modes`)."""
+scipy (:func:`simulate_reference`), the gauge signals by one truss solve per time step
+(:func:`signals_naive`; :func:`solve_displacements`, :func:`cracked`), against which the fast
+paths are checked; the energy and powers along a window (:func:`power_terms`) and the
+ring-down after a load step (:func:`ring_down`, its poles by :func:`modes`)."""
 
 from __future__ import annotations
 
@@ -88,6 +88,28 @@ def cracked(model: TrussModel, theta_index: int, severity: float) -> TrussModel:
     k[model.root_crack_bars(theta_index)] *= 1.0 - severity
     new.k_bar = k
     return new
+
+
+def solve_displacements(model: TrussModel, f: np.ndarray, u_p: np.ndarray) -> np.ndarray:
+    """Naive reference: solve K_FF u_F = f_F − K_FP u_P of ``model`` for each load case.
+
+    Parameters
+    ----------
+    f : ndarray, shape (n_dof,) or (n_dof, n_cases)
+        Nodal forces [N] (entries on prescribed DOFs are ignored).
+    u_p : ndarray, shape (n_p,) or (n_p, n_cases)
+        Prescribed displacements [m] in the order of ``model.prescribed``.
+
+    Returns
+    -------
+    ndarray, shape (n_dof,) or (n_dof, n_cases)
+        Displacements in cylindrical components [m].
+    """
+    rhs = f[model.free] - model.K_FP @ u_p
+    u = np.zeros((model.n_dof,) + np.shape(f)[1:])
+    u[model.free] = model.lu.solve(np.asarray(rhs))
+    u[model.prescribed] = u_p
+    return u
 
 
 def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out: np.ndarray
