@@ -1,9 +1,9 @@
 """Closed-form references and slow reference paths shared by the physics tests and the
 benchmarks (not a test module): the steady motion's closed form, one variant integrated by
-scipy (:func:`simulate_reference`) and the gauge signals by one truss solve per time step
-(:func:`signals_naive`), against which the fast paths are checked; the energy and powers
-along a window (:func:`power_terms`) and the ring-down after a load step (:func:`ring_down`,
-its poles by :func:`modes`)."""
+scipy (:func:`simulate_reference`), the gauge signals by one truss solve per time step
+(:func:`signals_naive`; :func:`solve_displacements`, :func:`cracked`), against which the fast
+paths are checked; the energy and powers along a window (:func:`power_terms`) and the
+ring-down after a load step (:func:`ring_down`, its poles by :func:`modes`)."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from swgsim.gear import profile as pf
 from swgsim.gear import profile_dynamics as pd
 from swgsim.gear.chain import SimulationChain
 from swgsim.gear.faults import ChainParams, angle_index, mesh_severity
-from swgsim.gear.flexspline import factorize
+from swgsim.gear.flexspline import TrussModel, factorize
 from swgsim.gear.influence import contact_window
 from swgsim.gear.modes import torsional_mode
 from swgsim.gear.sensors import signal_rows
@@ -75,6 +75,43 @@ def simulate_reference(params: dy.GearParams, n_in_rpm: float, t_out_nm: float,
     return dy._result(rec, bk, w_d, t_load, sample_rate_hz, sol.success, sol.message)
 
 
+def cracked(model: TrussModel, theta_index: int, severity: float) -> TrussModel:
+    """A copy of ``model`` with the root-crack bars at ``theta_index`` scaled by
+    (1 − severity): the naive reference path's structure (the fast path uses
+    :class:`swgsim.gear.influence.Influence` with a Woodbury update instead)."""
+    new = object.__new__(TrussModel)
+    new.__dict__.update({k: v for k, v in model.__dict__.items()
+                         if k in ("geometry", "mesh", "mer", "h", "theta", "n_st",
+                                  "layer_r", "layer_z", "node_theta", "nodes_m",
+                                  "n_nodes", "n_dof", "bars", "bar_kind")})
+    k = model.k_bar.copy()
+    k[model.root_crack_bars(theta_index)] *= 1.0 - severity
+    new.k_bar = k
+    return new
+
+
+def solve_displacements(model: TrussModel, f: np.ndarray, u_p: np.ndarray) -> np.ndarray:
+    """Naive reference: solve K_FF u_F = f_F − K_FP u_P of ``model`` for each load case.
+
+    Parameters
+    ----------
+    f : ndarray, shape (n_dof,) or (n_dof, n_cases)
+        Nodal forces [N] (entries on prescribed DOFs are ignored).
+    u_p : ndarray, shape (n_p,) or (n_p, n_cases)
+        Prescribed displacements [m] in the order of ``model.prescribed``.
+
+    Returns
+    -------
+    ndarray, shape (n_dof,) or (n_dof, n_cases)
+        Displacements in cylindrical components [m].
+    """
+    rhs = f[model.free] - model.K_FP @ u_p
+    u = np.zeros((model.n_dof,) + np.shape(f)[1:])
+    u[model.free] = model.lu.solve(np.asarray(rhs))
+    u[model.prescribed] = u_p
+    return u
+
+
 def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out: np.ndarray
                   ) -> np.ndarray:
     """Reference path: one sparse solve of the truss per time step.
@@ -91,8 +128,8 @@ def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out
     m = chain.model
     if p.has_root_crack:
         n = m.mesh.n_theta
-        mc = m.cracked(angle_index(p.root_crack_deg, n),
-                       mesh_severity(p.root_crack_severity, n))
+        mc = cracked(m, angle_index(p.root_crack_deg, n),
+                     mesh_severity(p.root_crack_severity, n))
         lu = factorize(mc.K[m.free][:, m.free])
         k_fp = mc.K[m.free][:, m.prescribed].tocsc()
     else:

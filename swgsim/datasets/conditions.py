@@ -392,7 +392,6 @@ class ConditionsConfig:
     bridge_drift: BridgeDrift | None = field(default_factory=BridgeDrift)
     temperature_sensor: TemperatureSensor | None = field(default_factory=TemperatureSensor)
 
-
     def check(self, where: str) -> None:
         """Refuse conditions outside their ranges, in one line naming the key (run by
         :func:`swgsim.base.typed.check_tree` after the parts' own: the thermal model, the
@@ -468,13 +467,6 @@ class WindowConditions:
         return 1.0 + self.span_per_k[None, :] * dt, self.zero_mvv_per_k[None, :] * dt
 
 
-def _payload(cfg: ConditionsConfig, hours: np.ndarray) -> np.ndarray:
-    out = np.ones_like(hours)
-    for h, f in cfg.payload:
-        out[hours >= h] = f
-    return out
-
-
 def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
                       t_out_nm: np.ndarray, gear: ChainParams, seed: int, gear_id: int,
                       life_seed: int) -> WindowConditions:
@@ -497,7 +489,9 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     -------
     WindowConditions
     """
-    payload = _payload(cfg, hours)
+    payload = np.ones_like(hours)
+    for h, f in cfg.payload:
+        payload[hours >= h] = f
     temp = _temperature(cfg, hours, n_in_rpm, t_out_nm, payload, gear)
     run_in = (run_in_factor(hours, cfg.run_in.drop, cfg.run_in.tau_h)
               if cfg.run_in is not None else np.ones_like(hours))

@@ -169,15 +169,6 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
 
 
 # ------------------------------------------------------------------ windows and the stream
-def _plain_mapping(m: RecordingMapping) -> dict:
-    """The mapping as the stream's config records it: ``stops`` left out when none, so
-    that a stream keeps the config hash it had before stops were mapped."""
-    out = dataclasses.asdict(m)
-    if not m.stops:
-        del out["stops"]
-    return out
-
-
 def _angles(s: Samples, m: RecordingMapping, starts: np.ndarray) -> dict[str, np.ndarray]:
     """The angle channels unwrapped inside each segment and checked against the speed and
     each other (:mod:`swgsim.datasets.recording_table`): name -> shape (n,) [rad]."""
@@ -342,7 +333,8 @@ def recording_stream(path: str | os.PathLike, m: RecordingMapping,
         ds[k] = (("sample", "time"), v[idx], {"units": "rad"})
     ds.attrs.update({"content_sha256": rt.content_hash(ds), "package_version": package_version(),
                      "git_revision": git_revision()})
-    return ds, _stream_summary(p, n, starts.size, fs, n_t, info)
+    return ds, {"recording": str(p), "rows": int(n), "segments": int(starts.size),
+                "sample_rate_hz": fs, "window_samples": n_t, **info}
 
 
 def _window_meta(s, m: RecordingMapping, win: np.ndarray, n_t: int, comm: np.ndarray,
@@ -367,23 +359,19 @@ def _stream_config(p: Path, m: RecordingMapping, n: int, sha256: str, fs: float,
                    n_t: int) -> dict:
     """The stream's ``config`` attribute: the recording (file, ``n`` rows, its SHA-256),
     the mapping, the chain's sampling ``fs`` [Hz] and window of ``n_t`` samples, and the
-    input sensor where the recording has one (as a profile data set names it)."""
+    input sensor where the recording has one (as a profile data set names it); the
+    mapping's ``stops`` left out when none, so that a stream keeps the config hash it had
+    before stops were mapped."""
+    plain = dataclasses.asdict(m)
+    if not m.stops:
+        del plain["stops"]
     config = {"name": f"recording {p.name}", "recording": {"file": p.name, "rows": int(n),
                                                            "sha256": sha256},
-              "mapping": _plain_mapping(m),
+              "mapping": plain,
               "chain": {"sample_rate_hz": fs, "window_s": n_t / fs}}
     if m.input_angle is not None:
         config["profile"] = {"angles": {"input_counts_per_rev": m.input_angle.counts_per_rev}}
     return config
-
-
-def _stream_summary(p: Path, n: int, n_segments: int, fs: float, n_t: int,
-                    info: dict) -> dict:
-    """The summary :func:`recording_stream` returns: the recording, its ``n`` rows and
-    segments, the sampling [Hz], the window's samples, and what the selection found
-    (``info``)."""
-    return {"recording": str(p), "rows": int(n), "segments": int(n_segments),
-            "sample_rate_hz": fs, "window_samples": n_t, **info}
 
 
 # ------------------------------------------------------------------ writing

@@ -9,44 +9,35 @@ A file's name proves nothing (a ``manifest.json`` of another tool, a user's
      "writers": {"report.md": {"app": "swgsim-calibrate", "kind": "calibration"}, ...},
      "runs": ["<host>-<pid>", ...]}
 
-``writer`` is this project's signature; ``files`` maps each file a run of this project
-wrote (path relative to the folder) to its SHA-256 (the previous one is kept beside a
-new one until the next claim, so that a run stopped between recording and renaming
-still proves the file on disk); ``writers`` the app and kind of output that wrote it
-(:mod:`swgsim.files.writers`: an app replaces only its own kind); ``runs`` names the
-processes (``<host>-<pid>``, :func:`swgsim.files.atomic.temp_prefix`) that may leave
-temporary files there. A file is *ours* if a stamp of this project in its folder or an
-enclosing one (up to the folder checked) lists it with the SHA-256 it has now; a temporary
-file is ours if its name carries a run a stamp lists. Anything else, whatever its name, is
-*foreign*: it is never deleted nor overwritten, and a run whose folder holds one refuses
-(:func:`check`), naming it, before it touches anything, cleanup of temporary files
-included.
+``writer`` is this project's signature; ``files`` maps each file a run wrote (relative
+path) to its SHA-256 (the previous one kept beside a new one until the next claim, so that
+a run stopped between recording and renaming still proves the file on disk); ``writers``
+the app and kind of output that wrote it (:mod:`swgsim.files.writers`: an app replaces
+only its own kind); ``runs`` the processes (``<host>-<pid>``,
+:func:`swgsim.files.atomic.temp_prefix`) that may leave temporary files there. A file is
+*ours* if a stamp of this project in its folder or an enclosing one lists it with the
+SHA-256 it has now; a temporary file is ours if its name carries a run a stamp lists.
+Anything else is *foreign*: never deleted nor overwritten, and a run whose folder holds
+one refuses (:func:`check`), naming it, before it touches anything (temporary files
+included).
 
-Every write into a claimed folder is recorded: :func:`swgsim.files.ownership.atomic_write_bytes`
-and :func:`swgsim.datasets.schema.write_shard` record the file's SHA-256 before they rename it into
-place (:func:`before_replace`), and an app records what its writers wrote otherwise
-(:meth:`Claim.record`). Stamp updates are serialised by a file lock (``filelock``) on
-:data:`STAMP_LOCK` and written atomically, so that worker processes and cluster jobs can
-share a folder.
+Every write into a claimed folder is recorded before its rename (:func:`before_replace`,
+called by :func:`atomic_write_bytes` and :func:`swgsim.datasets.schema.write_shard`), or
+by the app (:meth:`Claim.record`). Stamp updates are serialised by a file lock
+(``filelock``) on :data:`STAMP_LOCK` and written atomically, so that worker processes and
+cluster jobs can share a folder.
 
-One run at a time: :func:`claim` admits a run to its folder under the folder's *gate*
-:data:`LOCK` (a lock held for milliseconds) and the run then holds its own *run lock*
+One run at a time: :func:`claim` admits a run under the folder's *gate* :data:`LOCK` (held
+for milliseconds) and the run then holds its own *run lock*
 ``.swg-owner.<host>-<pid>.lock`` until the claim is closed; the stamp's ``holders`` name
-the runs and their app. A second run claiming the folder meanwhile (another process: the
-workers of a run, :func:`join`, take no lock) finds a holder's run lock held and is
-refused in one line naming the folder and that run, before it touches anything, unless
+the runs and their app. Another process claiming the folder meanwhile (a run's workers,
+:func:`join`, take no lock) is refused in one line naming the folder and that run, unless
 both passed the same ``share`` (e.g. cluster jobs of one data set); :func:`check` looks
-too, so that an app is refused before any work. A run that was killed leaves a free run
-lock, removed by the next admission. Lock files are proved ours as every other file is,
-not by their names: each is listed in the stamp, empty (its SHA-256), before it is
-created, and a lock file is opened only if it is an empty plain file (no link), so that a
-lock never changes what another tool wrote. Proved ours, they are neither foreign nor
-``owned``: like the stamp, no run deletes them as output (the gate and the stamp's lock
-:data:`STAMP_LOCK` stay: removing a lock file others wait on would split them onto two
-files).
-
-One helper serves every app: :func:`check` (read-only, to refuse before any work) and
-:func:`claim` (check, stamp, register this process, remove our stale temporary files).
+too. A killed run leaves a free run lock, removed by the next admission. Lock files are
+proved ours as every other file: each is listed in the stamp, empty, before it is
+created, and opened only if it is an empty plain file (no link). Like the stamp, they are
+neither foreign nor ``owned``, and no run deletes them as output (the gate and
+:data:`STAMP_LOCK` stay: removing a lock file others wait on would split them).
 """
 
 from __future__ import annotations
@@ -133,6 +124,12 @@ def _temp_owner(name: str, runs: set[str]) -> str | None:
     return "stale" if not pid_alive(int(m["pid"])) else "live"
 
 
+def _listed(stamp: dict, rel: str, path: Path) -> bool:
+    """Whether ``stamp`` lists ``rel`` with the SHA-256 ``path`` has now."""
+    hashes = stamp["files"].get(rel)
+    return isinstance(hashes, list) and sha256(path) in hashes
+
+
 def _classify(s: Survey, path: Path, rel: str, stamps: list[tuple[Path, dict]]) -> None:
     """Sort one entry of the folder into ``s`` (``stamps``: enclosing stamps, innermost
     first, with their folders)."""
@@ -141,10 +138,9 @@ def _classify(s: Survey, path: Path, rel: str, stamps: list[tuple[Path, dict]]) 
         return
     if path.name == STAMP and stamps and stamps[0][0] == path.parent:
         return  # a stamp of ours
-    if is_lock(path.name) and stamps and stamps[0][0] == path.parent:
-        hashes = stamps[0][1]["files"].get(path.name)
-        if isinstance(hashes, list) and sha256(path) in hashes:
-            return  # a lock file of ours, listed by the stamp beside it: kept, as the stamp
+    if is_lock(path.name) and stamps and stamps[0][0] == path.parent \
+            and _listed(stamps[0][1], path.name, path):
+        return  # a lock file of ours, listed by the stamp beside it: kept, as the stamp
     runs = {r for _, st in stamps for r in st["runs"]}
     kind = _temp_owner(path.name, runs)
     if kind == "stale":
@@ -155,8 +151,7 @@ def _classify(s: Survey, path: Path, rel: str, stamps: list[tuple[Path, dict]]) 
         return
     for where, st in stamps:
         inner = path.relative_to(where).as_posix()
-        hashes = st["files"].get(inner)
-        if isinstance(hashes, list) and hashes and sha256(path) in hashes:
+        if _listed(st, inner, path):
             s.owned[rel] = sha256(path)
             w = st.get("writers")
             s.writers[rel] = read_entry(w.get(inner)) if isinstance(w, dict) else None
@@ -413,11 +408,6 @@ class Claim:
         self._locked = False  # holds (a count of) the run lock: set by claim()
         _CLAIMS[self._key] = self
 
-    def _rel(self, path: str | os.PathLike) -> str:
-        p = Path(path)
-        p = p if p.is_absolute() else self.folder / p
-        return p.resolve().relative_to(self.folder.resolve()).as_posix()
-
     def record(self, paths: Iterable[str | os.PathLike]) -> None:
         """List files this run wrote in the stamp with their SHA-256; folders, missing
         files and the stamp are skipped. A path is absolute, relative to the folder (a
@@ -435,7 +425,7 @@ class Claim:
             p = p if p.is_absolute() or not (self.folder / p).is_file() else self.folder / p
             if p.is_file() and not p.is_symlink() and p.name != STAMP \
                     and not is_lock(p.name):
-                found[self._rel(p.absolute())] = sha256(p)
+                found[p.resolve().relative_to(self.folder.resolve()).as_posix()] = sha256(p)
 
         def add(stamp: dict) -> None:
             stamp["files"].update({rel: [h] for rel, h in found.items()})
@@ -492,13 +482,11 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
           share: str | None = None, strict: bool = False) -> Claim:
     """Make ``folder`` a folder of this run: check it, stamp it, clean it.
 
-    The folder must hold nothing foreign (:func:`check`); then it is created, the run
-    admitted under its gate :data:`LOCK` (refused if a run of another process holds the
-    folder, unless both give the same ``share``) and its run lock taken, held until the
-    claim is closed (a process may claim a folder it holds again); our temporary files of
-    dead processes are removed, its stamp written (or updated: this process added to
-    ``runs`` and ``holders``, runs of this host that are gone removed, entries of vanished
-    files dropped), and every later write of this process into it recorded.
+    After :func:`check`, the folder is created, the run admitted under its gate
+    :data:`LOCK` and its run lock taken until the claim is closed (a process may claim a
+    folder it holds again); our temporary files of dead processes are removed, the stamp
+    updated (this process added to ``runs`` and ``holders``, gone runs of this host and
+    vanished files dropped), and every later write of this process into it recorded.
 
     Parameters
     ----------
@@ -628,10 +616,7 @@ def before_replace(path: str | os.PathLike, tmp: str | os.PathLike,
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes | memoryview,
                        digest: str | None = None) -> None:
-    """Write ``data`` to ``path`` atomically (:func:`swgsim.files.atomic.replace_atomically`);
-    in a folder this process claimed, the file is listed in its ownership stamp first
-    (:func:`before_replace`, with ``digest``, the SHA-256 of ``data``, when the caller has
-    it).
+    """:func:`write_owned` of ``data`` (``digest``: its SHA-256, when the caller has it).
 
     Raises
     ------

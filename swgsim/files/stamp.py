@@ -19,8 +19,7 @@ from filelock import FileLock
 from swgsim.files.atomic import replace_atomically, temp_host
 
 __all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "LOCKS", "EMPTY", "VERSION", "run_id",
-           "read_stamp", "slot", "is_lock", "lock_file", "new_stamp", "writers_of",
-           "write_stamp", "update"]
+           "read_stamp", "slot", "is_lock", "lock_file", "writers_of", "update"]
 
 #: This project's signature: the ``writer`` of every stamp it writes.
 SIGNATURE = "swg-monitor"
@@ -82,23 +81,11 @@ def lock_file(folder: Path, name: str) -> str:
     return os.path.abspath(path)
 
 
-def new_stamp(app: str) -> dict:
-    """A stamp naming this process, so that its temporary files are ours from the start,
-    and listing the lock files (empty) before they are created."""
-    return {"writer": SIGNATURE, "version": VERSION, "apps": [app],
-            "files": {name: [EMPTY] for name in LOCKS}, "runs": [run_id()]}
-
-
 def writers_of(stamp: dict) -> dict:
     """The stamp's ``writers`` (created; an earlier version's stamp has none)."""
     if not isinstance(stamp.get("writers"), dict):
         stamp["writers"] = {}
     return stamp["writers"]
-
-
-def write_stamp(path: Path, stamp: dict) -> None:
-    """Write ``stamp`` to ``path`` atomically (indented JSON, keys sorted)."""
-    replace_atomically(path, (json.dumps(stamp, indent=1, sort_keys=True) + "\n").encode())
 
 
 def update(folder: Path, app: str, change: Callable[[dict], None]) -> None:
@@ -109,9 +96,13 @@ def update(folder: Path, app: str, change: Callable[[dict], None]) -> None:
         fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o666)
     except FileExistsError:
         pass
-    else:  # a new stamp: written in place (readers retry an empty one), then updated
+    else:  # a new stamp: written in place (readers retry an empty one), then updated;
+        # it names this process (its temporary files ours from the start) and lists the
+        # lock files (empty) before they are created
+        new = {"writer": SIGNATURE, "version": VERSION, "apps": [app],
+               "files": {name: [EMPTY] for name in LOCKS}, "runs": [run_id()]}
         with os.fdopen(fd, "wb") as f:
-            f.write((json.dumps(new_stamp(app), indent=1) + "\n").encode())
+            f.write((json.dumps(new, indent=1) + "\n").encode())
             f.flush()
             os.fsync(f.fileno())
     with FileLock(lock_file(folder, STAMP_LOCK), thread_local=False):
@@ -122,4 +113,4 @@ def update(folder: Path, app: str, change: Callable[[dict], None]) -> None:
         change(stamp)
         stamp["version"] = max(VERSION, int(stamp.get("version", 1) or 1))
         stamp["files"][STAMP_LOCK] = [EMPTY]  # held, so an empty plain file: ours
-        write_stamp(path, stamp)
+        replace_atomically(path, (json.dumps(stamp, indent=1, sort_keys=True) + "\n").encode())

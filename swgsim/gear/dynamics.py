@@ -85,8 +85,7 @@ class GearParams:
     j_in_kgm2 : float
         Input inertia: WG 0.193e-4 (catalogue) + motor rotor 1.0e-4 [unverified] [kg m²].
     j_out_kgm2 : float
-        Output inertia incl. flange and load coupling [kg m²] (8.8e-3, public script
-        seed, docs/PHYSICS.md sec. 1).
+        Output inertia incl. flange and load coupling [kg m²] (:data:`J_OUT_BENCH_KGM2`).
     k1_nm_per_rad, k2_nm_per_rad3 : float
         Linear and cubic stiffness on Δφ_k [N m/rad], [N m/rad³] (eq. 2), fitted to
         catalogue K1, K3 (:func:`fit_stiffness`).
@@ -301,11 +300,6 @@ def gear_with_ke(gear: GearParams,
                                ke_phase_rad=tuple(p))
 
 
-# ---------------------------------------------------------------------------------------
-# the calibration problem
-
-
-# ---------------------------------------------------------------------------- model
 @dataclass
 class Batch:
     """Parameters of many variants as arrays, shape (V,) each (one per variant)."""
@@ -315,12 +309,8 @@ class Batch:
     @classmethod
     def of(cls, params: list[GearParams]) -> Batch:
         """Stack a list of GearParams (scalar fields) into arrays."""
-        names = [f.name for f in dataclasses.fields(GearParams)]
-        out = {}
-        for n in names:
-            vals = [getattr(p, n) for p in params]
-            out[n] = np.asarray(vals, dtype=float)
-        b = cls(out)
+        b = cls({f.name: np.asarray([getattr(p, f.name) for p in params], dtype=float)
+                 for f in dataclasses.fields(GearParams)})
         b.fields["tan_alpha_in"] = np.array([p.tan_alpha_in for p in params])
         b.fields["c_out"] = np.array([p.c_out for p in params])
         return b
@@ -363,9 +353,8 @@ def rhs(t, x, b: Batch, w_d, t_load):
         States [φ_in, ω_in, φ_out, ω_out, ∫e_ω] [rad, rad/s, rad, rad/s, rad].
     b : Batch
         Parameters of V variants as built by :meth:`Batch.of` (arrays of shape (V,);
-        the kinematic-error fields (V, n_k)). The derived constants the integrator needs
-        are added here when missing, so a batch that :func:`simulate` prepared is used as
-        it is and gives the same result.
+        the kinematic-error fields (V, n_k)), or as :func:`ke_batch` prepared it (its
+        derived constants are added when missing; the same result).
     w_d : float or ndarray, shape (V,)
         Desired input speed [rad/s].
     t_load : float or ndarray, shape (V,)
@@ -559,8 +548,6 @@ def simulate(params: list[GearParams] | Batch, n_in_rpm, t_out_nm, phi_in0=0.0,
 def _rhs_effects(t, x, b, w_d, t_load, fx):
     """:func:`rhs` plus extra output friction and its states (rows 5.. of x)."""
     d = rhs(t, x[:5], b, w_d, t_load)
-    if fx is None:
-        return d
     z = x[5:] if x.shape[0] > 5 else None
     tau = fx.torque(t, x[2], x[3], 0.0, z)
     d[3] = d[3] - tau / b.j_out_kgm2
@@ -575,9 +562,7 @@ def ke_batch(b: Batch) -> Batch:
     v = f["ratio"].size
     for n in ("ke_amp_rad", "ke_orders", "ke_phase_rad"):
         a = np.atleast_2d(np.asarray(f[n], dtype=float))
-        if a.shape[0] != v:
-            a = np.broadcast_to(a, (v, a.shape[-1]))
-        f[n] = np.ascontiguousarray(a.T)
+        f[n] = np.ascontiguousarray(np.broadcast_to(a, (v, a.shape[-1])).T)
     a = f["alpha_tooth_rad"]
     f["inv_tan_a"] = 1.0 / np.tan(a)
     f["inv_sin_a"] = 1.0 / np.sin(a)

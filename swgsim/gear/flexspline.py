@@ -34,8 +34,8 @@ linear functional ``s = c · u`` of the displacements. With the free DOFs F and 
 DOFs P, ``K_FF u_F = f_F − K_FP u_P``; one adjoint solve ``K_FF λ = c_F`` per gauge signal
 gives ``s = λ · f_F + (c_P − K_PF λ) · u_P``. A root-tooth crack scales a few bars, a
 low-rank change of K_FF handled by the Woodbury identity on top of the healthy
-factorisation. :class:`TrussModel.solve_displacements` is the naive reference path (one
-sparse solve per load case).
+factorisation. The naive reference path (one sparse solve per load case) is
+``solve_displacements`` in ``tests/physics_reference.py``.
 """
 
 from __future__ import annotations
@@ -485,31 +485,6 @@ class TrussModel:
             shape=(self.n_dof, n_t),
         )
 
-    # ------------------------------------------------------------------ solvers
-    def solve_displacements(self, f: np.ndarray, u_p: np.ndarray, lu=None) -> np.ndarray:
-        """Naive reference: solve K_FF u_F = f_F − K_FP u_P for each load case.
-
-        Parameters
-        ----------
-        f : ndarray, shape (n_dof,) or (n_dof, n_cases)
-            Nodal forces [N] (entries on prescribed DOFs are ignored).
-        u_p : ndarray, shape (n_p,) or (n_p, n_cases)
-            Prescribed displacements [m] in the order of :attr:`prescribed`.
-        lu : SuperLU, optional
-            Factorisation to use (default: the healthy :attr:`lu`).
-
-        Returns
-        -------
-        ndarray, shape (n_dof,) or (n_dof, n_cases)
-            Displacements in cylindrical components [m].
-        """
-        lu = lu or self.lu
-        rhs = f[self.free] - self.K_FP @ u_p
-        u = np.zeros((self.n_dof,) + np.shape(f)[1:])
-        u[self.free] = lu.solve(np.asarray(rhs))
-        u[self.prescribed] = u_p
-        return u
-
     def root_crack_bars(self, theta_index: int) -> np.ndarray:
         """Bars cut by a root tooth crack between the nodes at θ_i and θ_{i+1}.
 
@@ -533,19 +508,3 @@ class TrussModel:
         q, ang = np.divmod(np.asarray(nodes), n_t)
         st, layer = np.divmod(q, 2)
         return st, layer, ang
-
-    def cracked(self, theta_index: int, severity: float) -> TrussModel:
-        """A copy with the root-crack bars at ``theta_index`` scaled by (1 − severity).
-
-        Used by the naive reference path; the fast path uses :class:`Influence` with a
-        Woodbury update instead.
-        """
-        new = object.__new__(TrussModel)
-        new.__dict__.update({k: v for k, v in self.__dict__.items()
-                             if k in ("geometry", "mesh", "mer", "h", "theta", "n_st",
-                                      "layer_r", "layer_z", "node_theta", "nodes_m",
-                                      "n_nodes", "n_dof", "bars", "bar_kind")})
-        k = self.k_bar.copy()
-        k[self.root_crack_bars(theta_index)] *= 1.0 - severity
-        new.k_bar = k
-        return new

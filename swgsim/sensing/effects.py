@@ -188,17 +188,6 @@ class SensorEffectConfig:
     params: dict[str, Any] = field(default_factory=dict)
 
 
-def _entry(e: Any, i: int) -> SensorEffectConfig:
-    """One entry as the typed option; a plain mapping ``{name | kind, params}`` is taken as
-    one (a calibration's list read as YAML or JSON)."""
-    if isinstance(e, SensorEffectConfig):
-        return e
-    if not isinstance(e, Mapping):
-        raise ValueError(f"sensor_effects[{i}] must be a mapping {{name, params}}, got {e!r}")
-    return SensorEffectConfig(str(e.get("name") or e.get("kind") or ""),
-                              dict(e.get("params") or {}))
-
-
 def parse_sensor_effects(effects: Sequence[SensorEffectConfig | Mapping[str, Any]] | None
                          ) -> list[SensorEffect]:
     """Validate a ``sensor_effects`` list.
@@ -223,8 +212,13 @@ def parse_sensor_effects(effects: Sequence[SensorEffectConfig | Mapping[str, Any
     """
     out: list[SensorEffect] = []
     seen: set[str] = set()
-    for i, raw in enumerate(effects or ()):
-        e = _entry(raw, i)
+    for i, e in enumerate(effects or ()):
+        if not isinstance(e, SensorEffectConfig):  # a calibration's list read as YAML or JSON
+            if not isinstance(e, Mapping):
+                raise ValueError(f"sensor_effects[{i}] must be a mapping {{name, params}}, "
+                                 f"got {e!r}")
+            e = SensorEffectConfig(str(e.get("name") or e.get("kind") or ""),
+                                   dict(e.get("params") or {}))
         name = e.name.split("#")[0]
         if name not in SENSOR_EFFECTS:
             raise ValueError(f"sensor_effects[{i}]: unknown effect {name!r}; allowed: "
