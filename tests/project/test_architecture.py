@@ -60,8 +60,6 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "swgsim/gear/dynamics.py": "eq. (1)-(6) and their integrator; the steady and the "
                                "profile integrators are still two (issue 46)",
     "learn/monitor/stream.py": "a stream's input checks, the run and its outputs",
-    "swgcal/friction/data.py": "friction recordings: loading, checks and the real data "
-                               "sets' metadata",
     "tests/learn/test_monitor.py": "the monitor's tests: to be split by what they hold",
     "tests/swgsim/test_recordings.py": "every table format and bad mapping of a recording",
 }
