@@ -54,10 +54,6 @@ class MeasuredDataError(ValueError):
 def detect_kind(path: str | Path) -> str:
     """Recognise the kind of measured data at ``path``.
 
-    Parameters
-    ----------
-    path : str or Path
-
     Returns
     -------
     str
@@ -196,10 +192,6 @@ def build_problem(measured: Any, **options: Any) -> Problem:
         :func:`swgcal.strain.build_problem` (``model``, ``select``,
         ``heldout``, ``candidates``, ...).
 
-    Returns
-    -------
-    Problem
-
     Raises
     ------
     MeasuredDataError
@@ -219,10 +211,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     problem : Problem
         From :func:`build_problem`.
     config : SelectionConfig, optional
-
-    Returns
-    -------
-    CalibrationResult
     """
     return kind_module(problem.kind).calibrate(problem, config)
 
@@ -256,10 +244,6 @@ def render_report(result: CalibrationResult, summary: dict[str, Any],
         From :func:`summarize`.
     figures : dict of str to str, optional
         Figure key -> path relative to the report.
-
-    Returns
-    -------
-    str
     """
     return render_parts(kind_module(result.problem.kind).REPORT, result, summary, figures)
 

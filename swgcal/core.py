@@ -385,10 +385,6 @@ def fit_terms(
     uncertainty : bool, default True
         Compute standard errors (skip for fast candidate screening).
 
-    Returns
-    -------
-    FitResult
-
     Raises
     ------
     ValueError

@@ -368,10 +368,6 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
         The residual also counts as structured when its integrated autocorrelation time
         exceeds ``coloured_tau`` samples *and* its RMS exceeds ``coloured_ratio`` times
         the noise floor (not white, and well above the sample-to-sample noise).
-
-    Returns
-    -------
-    Diagnosis
     """
     idx = np.asarray(idx)
     ra = r[idx]

@@ -493,10 +493,6 @@ def proposals_section(summary: Mapping[str, Any]) -> list[str]:
     ----------
     summary : mapping
         Its ``proposed``: :meth:`Proposal.as_dict` entries (none when absent).
-
-    Returns
-    -------
-    list of str
     """
     proposed = summary.get("proposed", [])
     lines = ["## Proposed terms (not in the library)", "",

@@ -670,15 +670,6 @@ def select_effects(problem: Problem, config: SelectionConfig | None = None) -> C
     """The selection loop on a problem: fit the base model, add the library effect the
     residual needs while held-out evidence supports it, stop with a verdict.
 
-    Parameters
-    ----------
-    problem : Problem
-    config : SelectionConfig, optional
-
-    Returns
-    -------
-    CalibrationResult
-
     Raises
     ------
     KeyError

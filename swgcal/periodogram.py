@@ -34,6 +34,7 @@ def periodogram_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float,
     Returns
     -------
     list of (period, normalised power)
+        Period [units of x], power [-].
     """
     x = np.asarray(x, float)
     r = np.asarray(r, float)

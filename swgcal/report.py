@@ -87,10 +87,6 @@ def implausible_candidates(result: CalibrationResult) -> list[dict[str, Any]]:
     """Candidates that passed the evidence rule but were rejected for a parameter outside
     its physical range: structure in the residual that they would have absorbed.
 
-    Parameters
-    ----------
-    result : CalibrationResult
-
     Returns
     -------
     list of dict
@@ -218,10 +214,6 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
 def caveat(result: CalibrationResult) -> str | None:
     """Caveat for the simulation option of a run that ends unexplained, else None.
 
-    Parameters
-    ----------
-    result : CalibrationResult
-
     Returns
     -------
     str or None
@@ -243,17 +235,7 @@ def caveat(result: CalibrationResult) -> str | None:
 
 
 def fmt_value(x: Any, digits: int = 4) -> str:
-    """A number for a markdown table: ``digits`` significant digits, "–" for None/NaN.
-
-    Parameters
-    ----------
-    x : float or None
-    digits : int, default 4
-
-    Returns
-    -------
-    str
-    """
+    """A number for a markdown table: ``digits`` significant digits, "–" for None/NaN."""
     if x is None:
         return "–"
     if isinstance(x, float):
@@ -275,10 +257,6 @@ def param_table(params: Mapping[str, Mapping[str, Any]],
         ``name -> {"value", "std", "unit", "identifiable", ...}`` (summary entries).
     head : sequence of str, optional
         The table's head and separator lines.
-
-    Returns
-    -------
-    list of str
     """
     rows = list(head)
     for k, e in params.items():
@@ -294,10 +272,6 @@ def implausible_lines(summary: Mapping[str, Any]) -> list[str]:
     """Markdown lines on the candidates rejected as implausible (summary key
     ``implausible_candidates``): those of the last iteration as structure of the final
     residual that they would have absorbed, earlier ones in one sentence.
-
-    Parameters
-    ----------
-    summary : mapping
 
     Returns
     -------
@@ -348,10 +322,6 @@ def effect_range_lines(effect: Mapping[str, Any]) -> list[str]:
     ----------
     effect : mapping
         An entry of the summary's ``effects_added``.
-
-    Returns
-    -------
-    list of str
     """
     lines = []
     rng = effect.get("ranges") or {}
@@ -444,10 +414,6 @@ def render_report(parts: ReportParts, result: CalibrationResult, summary: Mappin
         From the kind's ``summarize``.
     figures : mapping of str to str, optional
         Figure key (the kind's ``make_figures``) -> path relative to the report.
-
-    Returns
-    -------
-    str
     """
     s, u = ReportInput(summary, result), summary["units"]
     lines = [f"# {parts.title}: {s['name']}", "", *parts.data(s), "## Result", "",
@@ -514,10 +480,6 @@ def iteration_lines(summary: Mapping[str, Any], *, evidence: bool = False,
         With a column of each candidate's held-out evidence 2 ln Λ.
     detail : callable, optional
         ``detail(iteration, next iteration or None)`` -> lines before the candidates.
-
-    Returns
-    -------
-    list of str
     """
     its, u = summary["iterations"], summary["units"]
     lines: list[str] = []
@@ -550,10 +512,6 @@ def accepted_lines(summary: Mapping[str, Any], *, selection: bool = False) -> li
     summary : mapping
     selection : bool, default False
         Also how each was accepted and its parameters against their physical ranges.
-
-    Returns
-    -------
-    list of str
     """
     lines = ["## Accepted effects", ""]
     if not summary["effects_added"]:
@@ -581,10 +539,6 @@ def diagnosis_lines(summary: Mapping[str, Any], how: str = "") -> list[str]:
     how : str, default ""
         How the probes are scored, before "structured above" (e.g. ``"two halves of time
         blocks, "``).
-
-    Returns
-    -------
-    list of str
     """
     s = summary
     lines = ["## Residual diagnosis", "",
@@ -600,14 +554,5 @@ def diagnosis_lines(summary: Mapping[str, Any], how: str = "") -> list[str]:
 
 
 def uncertainty_lines(summary: Mapping[str, Any]) -> list[str]:
-    """Markdown section "Uncertainty" (the summary's ``uncertainty_method``).
-
-    Parameters
-    ----------
-    summary : mapping
-
-    Returns
-    -------
-    list of str
-    """
+    """Markdown section "Uncertainty" (the summary's ``uncertainty_method``)."""
     return ["## Uncertainty", "", summary["uncertainty_method"], ""]

@@ -575,17 +575,7 @@ def _check_velocity(path: Path, t: np.ndarray, q: np.ndarray, dq: np.ndarray,
 
 def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:
     """Write a recording as a friction CSV (data kind 1) readable by
-    :func:`load_friction_csv`.
-
-    Parameters
-    ----------
-    rec : FrictionRecording
-    path : str or Path
-
-    Returns
-    -------
-    Path
-    """
+    :func:`load_friction_csv`."""
     path = Path(path)
     cols = {"time_s": rec.t_s, "q_rad": rec.q_rad, "dq_rad_per_s": rec.dq_rad_s,
             "ddq_rad_per_s2": rec.ddq_rad_s2, "tau_friction_Nm": rec.tau_nm}

@@ -71,10 +71,6 @@ def friction_problem(
         turn), when known: ripple periods over q are then expressed and checked as
         wave-generator orders k = 2π / (period · N) (:mod:`swgsim.gear.friction.ripples`).
 
-    Returns
-    -------
-    Problem
-
     Raises
     ------
     ValueError

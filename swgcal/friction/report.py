@@ -119,10 +119,6 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
     ripple instances were added, harmonic groups, ripples removed for lack of held-out
     support, the held-out evidence of each ripple kept.
 
-    Parameters
-    ----------
-    summary : mapping
-
     Returns
     -------
     list of str

@@ -164,10 +164,6 @@ def synthetic_recording(
         See :func:`synthetic_trajectory`.
     rng : numpy.random.Generator, optional
     name : str
-
-    Returns
-    -------
-    FrictionRecording, SyntheticTruth
     """
     if not 0 <= noise_rho < 1:
         raise ValueError(f"noise_rho must be in [0, 1), got {noise_rho}")

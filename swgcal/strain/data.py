@@ -95,10 +95,6 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
     name : str, optional
         Name for the report; default the data set's ``name`` attribute, else its folder.
 
-    Returns
-    -------
-    StrainWindows
-
     Raises
     ------
     ValueError

@@ -114,10 +114,6 @@ def check_candidates(candidates: Sequence[str] | None, model: StrainModel) -> li
     model : StrainModel
         Its kinematic-error orders add the ``ke_order{k}`` keys.
 
-    Returns
-    -------
-    list of str
-
     Raises
     ------
     ValueError
@@ -161,10 +157,6 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
     ke_bound_rad : float, default 2e-3
         Bound of the extra kinematic-error coefficients [rad] (7 arcmin, far above the
         catalogue's about 1 arcmin in total).
-
-    Returns
-    -------
-    Problem
 
     Raises
     ------
@@ -393,10 +385,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     problem : Problem
         From :func:`build_problem`.
     config : SelectionConfig, optional
-
-    Returns
-    -------
-    CalibrationResult
 
     Raises
     ------

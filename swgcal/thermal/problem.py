@@ -106,10 +106,6 @@ def thermal_signals(log: JointLog, joint: int, torque_per_amp_nm: float,
         0-5.
     torque_per_amp_nm, gear_efficiency : float
         k_τ [N m/A] and η [-] of the loss proxy (:mod:`.options`).
-
-    Returns
-    -------
-    ThermalSignals
     """
     i, w = log.current_a[:, joint], log.speed_rad_s[:, joint]
     nb = [k for k in (joint - 1, joint + 1) if 0 <= k < JOINTS]
@@ -249,10 +245,6 @@ def build_problem(measured: str | os.PathLike | JointLog, **options: Any) -> Pro
         ``joint``, ``torque_per_amp_nm``, ``gear_efficiency``, ``fit_frac``,
         ``candidates``: see :func:`thermal_problem`.
 
-    Returns
-    -------
-    Problem
-
     Raises
     ------
     TypeError
@@ -279,11 +271,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     against the base's own time constant, and held at its value fitted without the
     effect, the base leaves a single effect too little to show (a planted copper loss
     came through only as a pair, a second time constant not at all).
-
-    Parameters
-    ----------
-    problem : Problem
-    config : SelectionConfig, optional
 
     Returns
     -------

@@ -75,10 +75,6 @@ class SyntheticThermal:
 def synthetic_joint_log(c: SyntheticThermal) -> JointLog:
     """A synthetic joint log of joint 1 (module docstring).
 
-    Parameters
-    ----------
-    c : SyntheticThermal
-
     Returns
     -------
     JointLog

@@ -43,8 +43,6 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "swgsim/files/ownership.py": "stamps, claims and the proof a file is ours: one chain of "
                                  "custody, split it and each half trusts the other blindly",
     "swgcal/loop.py": "the calibration loop and its before/after error: one algorithm",
-    "swgcal/report.py": "the summary and the one report renderer of every data kind (three "
-                        "renderers merged into it)",
     "swgsim/sensing/effects.py": "every measurement-chain effect with its source; to be split "
                                  "by effect kind",
     "learn/inputs/signals.py": "the nets' inputs (raw, diff, features) and their checks; to be "
