@@ -185,11 +185,6 @@ class FitResult:
     def estimates_of(self, term_name: str) -> dict[str, ParamEstimate]:
         return {e.name: e for e in self.estimates if e.term == term_name}
 
-    def spec(self) -> list[dict[str, Any]]:
-        """Effect list ``[{name, kind, params}]`` (raw parameters) for every term."""
-        return [{"name": t.name, "kind": t.kind, "params": t.to_params(c, th)}
-                for t, c, th in zip(self.terms, self.coefs, self.thetas, strict=True)]
-
 
 # ---------------------------------------------------------------------------------------
 # fitting
@@ -507,13 +502,3 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
             note = f"correlated with {names[j][0]}.{names[j][1]} (r = {corr[i, j]:+.3f})"
         est.append(ParamEstimate(tn, pn, unit, float(d0[i]), float(sd[i]), flag, note))
     res.estimates = est
-
-
-def refit(result: FitResult, sig: Any, y: np.ndarray, idx: np.ndarray,
-          **kwargs: Any) -> FitResult:
-    """Fit the same terms again on other samples, starting from ``result``'s θ."""
-    starts = [[np.asarray(th, float)] for th in result.thetas]
-    return fit_terms(result.terms, sig, y, idx, starts=starts, **kwargs)
-
-
-Objective = Callable[[np.ndarray], np.ndarray]

@@ -5,7 +5,7 @@ split into patterns on an extended time grid) are defined in :mod:`.signals`,
 the residual probes in :mod:`.probes` (both re-exported here).
 
 The base model (:class:`ChainBaseModel`) scales the two patterns (the WG deflection w0 and
-an overall gauge gain). Candidate effects (:data:`STRAIN_LIBRARY`) add columns or are
+an overall gauge gain). Candidate effects (:func:`strain_library`) add columns or are
 transforms of the basis: the amplifier low-pass and the bridge nonlinearity map it,
 a kinematic-error harmonic replaces the torque pattern (its unit torque responses ΔT
 come with the signals) and re-aligns each window's input angle. Each documents its
@@ -92,7 +92,6 @@ __all__ = [
     "AmplifierLowpass",
     "KinematicErrorHarmonic",
     "ThermalDrift",
-    "STRAIN_LIBRARY",
     "strain_library",
     "strain_probes",
     "constraint_basis",
@@ -555,6 +554,3 @@ def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[Fit
         lib[f"ke_order{k}"] = _ke_class(int(k))
     lib["thermal_drift"] = ThermalDrift
     return lib
-
-
-STRAIN_LIBRARY = strain_library()
