@@ -210,7 +210,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     ----------
     problem : Problem
         From :func:`build_problem`.
-    config : SelectionConfig, optional
     """
     return kind_module(problem.kind).calibrate(problem, config)
 
@@ -221,7 +220,6 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
 
     Parameters
     ----------
-    result : CalibrationResult
     source : str, optional
         Path of the measured data.
 
@@ -239,7 +237,6 @@ def render_report(result: CalibrationResult, summary: dict[str, Any],
 
     Parameters
     ----------
-    result : CalibrationResult
     summary : dict
         From :func:`summarize`.
     figures : dict of str to str, optional
@@ -270,12 +267,10 @@ def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
 
     Parameters
     ----------
-    result : CalibrationResult
     out_dir : str or Path
         Created if absent.
     source : str, optional
         Path of the measured data (recorded in the summary).
-    figures : bool, default True
 
     Returns
     -------

@@ -367,7 +367,6 @@ def fit_terms(
         Per term, a list of starting θ vectors; default each term's :meth:`Term.starts`
         with a zero residual. Every combination is scored and the best ``max_starts``
         are optimised.
-    max_starts : int, default 3
     max_nfev : int, default 200
         Function evaluations per optimisation.
     fixed : sequence of bool, optional

@@ -88,10 +88,8 @@ class BinnedProbe(Probe):
 
     Parameters
     ----------
-    name, label : str
     key : callable sig -> ndarray (n,)
         The variable.
-    n_bins : int
     odd : bool
         Model r = sgn(q̇) g(x) (odd in the direction of motion) instead of r = g(x).
     split_by : callable sig -> ndarray (n,) of int, optional
@@ -161,10 +159,8 @@ class PeriodicProbe(Probe):
 
     Parameters
     ----------
-    name, label : str
     coord : callable sig -> ndarray (n,)
     period_range : callable sig -> (p_min, p_max)
-    odd : bool
     unit : str
         Unit of the coordinate (for the text).
     wg_order : bool, default False
@@ -357,7 +353,6 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
         Residual [data units]; only ``r[idx]`` is used.
     idx : ndarray of int
         Samples to diagnose.
-    probes : sequence of Probe
     units : str
         Data units, for the text.
     threshold : float, default 0.03

@@ -309,7 +309,6 @@ def discover(target: np.ndarray, groups: Sequence[Group], fit: np.ndarray,
     ----------
     target : ndarray, shape (n_rows,)
         The data (with ``projector`` holding the final model) or the final residual.
-    groups : sequence of Group
     fit, validation : ndarray of int
         Row indices (disjoint).
     projector : Projector, optional

@@ -28,8 +28,6 @@ def periodogram_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float,
         Coordinate (q [rad] or t [s]) and signal.
     p_min, p_max : float
         Period range [units of x], 0 < p_min < p_max.
-    n_peaks : int, default 3
-    oversample : float, default 5
 
     Returns
     -------

@@ -133,7 +133,6 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
 
     Parameters
     ----------
-    result : CalibrationResult
     source : str, optional
         Path of the measured data.
 
@@ -409,7 +408,6 @@ def render_report(parts: ReportParts, result: CalibrationResult, summary: Mappin
     ----------
     parts : ReportParts
         The kind's (``REPORT`` of its report module).
-    result : CalibrationResult
     summary : mapping
         From the kind's ``summarize``.
     figures : mapping of str to str, optional
@@ -452,7 +450,6 @@ def simulation_files(parts: ReportParts, summary: Mapping[str, Any]) -> dict[str
 
     Parameters
     ----------
-    parts : ReportParts
     summary : mapping
         From the kind's ``summarize``.
 
@@ -475,7 +472,6 @@ def iteration_lines(summary: Mapping[str, Any], *, evidence: bool = False,
 
     Parameters
     ----------
-    summary : mapping
     evidence : bool, default False
         With a column of each candidate's held-out evidence 2 ln Λ.
     detail : callable, optional
@@ -509,7 +505,6 @@ def accepted_lines(summary: Mapping[str, Any], *, selection: bool = False) -> li
 
     Parameters
     ----------
-    summary : mapping
     selection : bool, default False
         Also how each was accepted and its parameters against their physical ranges.
     """
@@ -535,7 +530,6 @@ def diagnosis_lines(summary: Mapping[str, Any], how: str = "") -> list[str]:
 
     Parameters
     ----------
-    summary : mapping
     how : str, default ""
         How the probes are scored, before "structured above" (e.g. ``"two halves of time
         blocks, "``).

@@ -108,7 +108,6 @@ class FrictionRecording:
         v_s : float, optional
             Smooth-sign velocity [rad/s]; default ``v_s_rel`` times the 99th percentile
             of ``|q̇|``.
-        v_s_rel : float, default 0.01
         gear_ratio : float, optional
             Reduction ratio N (wave-generator turns per output turn), when known: ripples
             over q are then labelled with wave-generator orders k = 2π / (period · N).

@@ -282,7 +282,6 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
         A friction calibration.
     out_dir : str or Path
         Directory; figures go to ``out_dir/figures/``.
-    dpi : int, default 110
 
     Returns
     -------

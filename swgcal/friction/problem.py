@@ -55,7 +55,6 @@ def friction_problem(
 
     Parameters
     ----------
-    rec : FrictionRecording
     v_s : float, optional
         Smooth-sign velocity of the base model [rad/s]; default ``v_s_rel`` times the 99th
         percentile of ``|q̇|``.
@@ -160,7 +159,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None
     ----------
     problem : Problem
         From :func:`friction_problem` or :func:`build_problem`.
-    config : SelectionConfig, optional
 
     Returns
     -------

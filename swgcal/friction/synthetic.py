@@ -162,8 +162,6 @@ def synthetic_recording(
         An out-of-library term [N m].
     duration_s, dt_s : float
         See :func:`synthetic_trajectory`.
-    rng : numpy.random.Generator, optional
-    name : str
     """
     if not 0 <= noise_rho < 1:
         raise ValueError(f"noise_rho must be in [0, 1), got {noise_rho}")

@@ -138,7 +138,6 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
 
     Parameters
     ----------
-    win : StrainWindows
     model : StrainModel, optional
         Reused across calls to share simulated operating points.
     heldout : {"windows", "operating_points"}
@@ -384,7 +383,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     ----------
     problem : Problem
         From :func:`build_problem`.
-    config : SelectionConfig, optional
 
     Raises
     ------

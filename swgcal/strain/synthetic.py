@@ -222,7 +222,6 @@ def bench_dataset(clean: CleanWindows, sensor_effects: Sequence[Mapping[str, Any
 
     Parameters
     ----------
-    clean : CleanWindows
     sensor_effects : sequence of mapping
         Planted measurement effects (:mod:`swgsim.sensing.effects`).
     hidden : sequence of mapping
@@ -231,7 +230,6 @@ def bench_dataset(clean: CleanWindows, sensor_effects: Sequence[Mapping[str, Any
         White-noise standard deviation relative to the range of the noise-free signals.
     seed : int
         Noise (and glitch phases).
-    name : str
     window_period_s : float, optional
         Time between the starts of consecutive windows [s] (thermal drift); default the
         window length (back-to-back windows).

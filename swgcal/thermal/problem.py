@@ -101,7 +101,6 @@ def thermal_signals(log: JointLog, joint: int, torque_per_amp_nm: float,
 
     Parameters
     ----------
-    log : JointLog
     joint : int
         0-5.
     torque_per_amp_nm, gear_efficiency : float
@@ -191,7 +190,6 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
 
     Parameters
     ----------
-    log : JointLog
     joint, torque_per_amp_nm, gear_efficiency, fit_frac
         :class:`.options.ThermalOptions` (defaults and ranges there).
     candidates : sequence of str, optional

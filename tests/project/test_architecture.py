@@ -67,7 +67,6 @@ LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
     "swgsim/datasets/generate.py:generate": "docstring 38 lines, code 44",
     "swgsim/datasets/profile_shard.py:simulate_profile_shard": "docstring 25, code 66",
     "swgcal/core.py:_uncertainty": "one covariance derivation, 81 lines of code: to split",
-    "swgcal/diagnose.py:diagnose": "docstring 28, code 57",
     "learn/inputs/signals.py:build_input": "docstring 39, code 52",
     "learn/learners/nets.py:fine_tune": "docstring 38, code 61",
     "learn/studies/latency.py:measure_latency": "docstring 35, code 53",
