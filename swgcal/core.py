@@ -107,7 +107,6 @@ class ParamEstimate:
 
     Attributes
     ----------
-    term, name, unit : str
     value, std : float
         Estimate and standard error (corrected for residual autocorrelation).
     flag : str
@@ -142,7 +141,6 @@ class FitResult:
 
     Attributes
     ----------
-    terms : tuple of Term
     thetas, coefs : tuple of ndarray
         Nonlinear and linear parameters per term [natural units].
     n, k : int
@@ -159,8 +157,6 @@ class FitResult:
         Reported (derived) parameters with standard errors and flags.
     cond : float
         Condition number of the column-scaled JᵀJ.
-    success : bool
-    message : str
     """
 
     terms: tuple[Term, ...]

@@ -242,11 +242,8 @@ class ProbeResult:
 
     Attributes
     ----------
-    name : str
     score : float
         Out-of-sample fraction of the residual mean square explained (two-fold, mean).
-    detail : dict
-    text : str
     """
 
     name: str
@@ -270,10 +267,8 @@ class Diagnosis:
         Difference-based noise estimate [data units].
     tau_int : float
         Integrated autocorrelation time [samples].
-    probes : dict of str to ProbeResult
     structured : bool
         Some probe explains at least ``threshold`` of the residual out of sample.
-    threshold : float
     signature : str
         Plain-text description of the structure (or of its absence).
     """

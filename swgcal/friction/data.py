@@ -66,7 +66,6 @@ class FrictionRecording:
         Friction torque [N m].
     load_nm : ndarray, shape (n,), optional
         Transmitted load torque [N m] (for the load-dependent Coulomb term).
-    name : str
     ddq_source : str
         ``"measured"`` or how it was estimated.
     notes : tuple of str

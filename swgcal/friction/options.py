@@ -72,13 +72,11 @@ class FrictionOptions:
 
     Attributes
     ----------
-    base model : BaseModelOptions
     gear_ratio : float or None
         Reduction ratio N (wave-generator turns per output turn) when known: ripple
         periods are then reported and checked as wave-generator orders.
     accel_window : int, default 21
         Samples of the Savitzky-Golay estimate of q̈ when the CSV has none.
-    split : SplitOptions
     """
 
     base_model: BaseModelOptions = field(default_factory=BaseModelOptions)

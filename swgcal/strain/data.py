@@ -49,8 +49,6 @@ class StrainWindows:
         Operating-point index into ``ops``.
     ops : tuple of (float, float)
         Distinct operating points (n_in [rpm], T_out [N m]), sorted.
-    name : str
-    source : str or None
     """
 
     y: np.ndarray

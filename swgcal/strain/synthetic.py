@@ -104,7 +104,6 @@ class CleanWindows:
         [mV/V].
     time_s : ndarray, shape (n_lead + n_t,)
         [s]; the window starts at ``time_s[n_lead]``.
-    n_lead : int
     phi_in : ndarray, shape (n_windows, n_lead + n_t)
         Input angle [rad].
     n_in_rpm, t_out_nm, n_in_mean_rpm, t_out_mean_nm, efficiency : ndarray, (n_windows,)

@@ -65,7 +65,6 @@ class ThermalSignals:
         abs(ω) held [rad/s].
     cycle : ndarray, shape (n,)
         The log's cycle count [-].
-    joint : int
     """
 
     t_s: np.ndarray

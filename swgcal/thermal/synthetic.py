@@ -49,7 +49,6 @@ class SyntheticThermal:
         White noise on the temperature [K].
     hours_before, gap_h, hours_after : float
         Parts of the log [h].
-    seed : int
     """
 
     r_th_k_per_w: float = 0.5
