@@ -33,8 +33,6 @@ __all__ = ["friction_problem", "build_problem", "calibrate", "MIN_ROWS_PER_BLOCK
 
 #: The typed options of this kind's problem (read by :func:`swgcal.api.options_from_config`).
 OPTIONS = FrictionOptions
-
-
 #: Fewest samples a held-out time block of a friction recording must hold.
 MIN_ROWS_PER_BLOCK = 20
 
@@ -145,15 +143,11 @@ def build_problem(measured: str | Path | FrictionRecording, *,
     return friction_problem(rec, **options)
 
 
-def calibrate(problem: Problem, config: SelectionConfig | None = None
-                       ) -> CalibrationResult:
-    """Calibrate a friction problem: the selection loop, then ripple grouping.
-
-    :func:`~swgcal.loop.select_effects`, then
-    :func:`~swgcal.friction.ripple_groups.group_ripples`: ripple instances that are
-    harmonics of one fundamental become one effect (wave-generator orders when the gear
-    ratio is known), and a ripple without held-out evidence of its own in the final
-    model is removed.
+def calibrate(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
+    """Calibrate a friction problem: :func:`~swgcal.loop.select_effects`, then
+    :func:`~swgcal.friction.ripple_groups.group_ripples` (ripple instances that are
+    harmonics of one fundamental become one effect; a ripple without held-out evidence of
+    its own in the final model is removed).
 
     Parameters
     ----------
