@@ -56,6 +56,7 @@ from typing import Any
 
 import numpy as np
 
+from .core import integrated_autocorr_time
 from .loop import CalibrationResult
 
 log = logging.getLogger(__name__)
@@ -229,8 +230,6 @@ def _lasso_columns(zf: np.ndarray, rf: np.ndarray, gram: _Gram, ok: np.ndarray,
     with the effective number of samples; group -> the columns it keeps."""
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.linear_model import lars_path_gram
-
-    from .core import integrated_autocorr_time
 
     gf, bf, n_f = gram.gf, gram.bf, rf.size
     with warnings.catch_warnings():  # collinear candidates: LARS drops them, says so
