@@ -89,10 +89,8 @@ def synthetic_trajectory(duration_s: float = 60.0, dt_s: float = 0.01, jitter: f
 
     Parameters
     ----------
-    duration_s : float, default 40
-        [s]
-    dt_s : float, default 0.01
-        Mean sample interval [s].
+    duration_s, dt_s : float, default 60 and 0.01
+        Duration and mean sample interval [s].
     jitter : float, default 0.2
         Relative uniform jitter of the sample interval, in [0, 0.9].
     rng : numpy.random.Generator, optional
