@@ -252,9 +252,8 @@ def _start_vectors(terms: Sequence[Term], sig: Any, y: np.ndarray, idx: np.ndarr
     if starts is None:
         z = np.zeros_like(y)
         starts = [t.starts(sig, z, idx) for t in terms]
-    combos = list(itertools.product(*[list(s) if len(s) else [np.empty(0)] for s in starts]))
-    if len(combos) > 64:
-        combos = combos[:64]
+    combos = itertools.islice(itertools.product(
+        *[list(s) if len(s) else [np.empty(0)] for s in starts]), 64)
     return [pk.clip(np.concatenate([np.asarray(c, float) for c in combo]))
             if pk.lo.size else np.empty(0) for combo in combos]
 
