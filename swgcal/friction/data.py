@@ -552,8 +552,7 @@ def _check_velocity(path: Path, t: np.ndarray, q: np.ndarray, dq: np.ndarray,
             raise ValueError(
                 f"{path}: dq_rad_per_s is not the time derivative of q_rad but {_factor(k)} "
                 f"times it (a pure factor: consistency figure {c.figure:.2f}, allowed "
-                f"{DQ_CONSISTENCY_TOL}); "
-                f"{scale_cause(k)}")
+                f"{DQ_CONSISTENCY_TOL}); {scale_cause(k)}")
         raise ValueError(
             f"{path}: dq_rad_per_s is not the time derivative of q_rad: consistency figure "
             f"{c.figure:.2f} ({parts}; allowed {DQ_CONSISTENCY_TOL}); check units (rad, "

@@ -62,8 +62,7 @@ class SplitOptions:
         for key in ("validation_blocks", "test_blocks"):
             blocks = getattr(self, key)
             if not blocks or any(not -n <= int(b) < n for b in blocks):
-                raise ValueError(f"{key} must list blocks in [{-n}, {n - 1}], got "
-                                 f"{list(blocks)}")
+                raise ValueError(f"{key} must list blocks in [{-n}, {n - 1}], got {list(blocks)}")
 
 
 @dataclass(frozen=True)
