@@ -79,7 +79,10 @@ from .split import HeldOutSplit
 log = logging.getLogger(__name__)
 
 __all__ = ["Problem", "SelectionConfig", "CandidateScore", "Iteration", "CalibrationResult",
-           "select_effects"]
+           "select_effects", "IMPLAUSIBLE_PREFIX"]
+
+#: Status of a candidate rejected for a parameter outside its physical range, before them.
+IMPLAUSIBLE_PREFIX = "rejected: outside its physical range: "
 
 
 @dataclass
@@ -532,7 +535,7 @@ def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
             implausible += [f"{term.name}.{v}" for v in
                             term.range_violations({k: e.value for k, e in est.items()})]
         if implausible:
-            c.status = "rejected: outside its physical range: " + ", ".join(implausible)
+            c.status = IMPLAUSIBLE_PREFIX + ", ".join(implausible)
             c.implausible = True
             continue
         c.accepted = True

@@ -22,7 +22,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .core import FitResult, Term
-from .loop import CalibrationResult
+from .loop import IMPLAUSIBLE_PREFIX, CalibrationResult
 
 __all__ = ["base_summary", "caveat", "UNCERTAINTY_METHOD", "to_jsonable", "fmt_value",
            "param_table", "implausible_candidates", "implausible_lines", "effect_range_lines",
@@ -62,9 +62,6 @@ def to_jsonable(x: Any) -> Any:
 
 def _params(fit: FitResult, term_name: str) -> dict[str, dict[str, Any]]:
     return {k: e.as_dict() for k, e in fit.estimates_of(term_name).items()}
-
-
-IMPLAUSIBLE_PREFIX = "rejected: outside its physical range: "
 
 
 def _ranges_of(term: Term, fit: FitResult) -> dict[str, dict[str, Any]]:
