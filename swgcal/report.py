@@ -232,13 +232,9 @@ def caveat(result: CalibrationResult) -> str | None:
 
 def fmt_value(x: Any, digits: int = 4) -> str:
     """A number for a markdown table: ``digits`` significant digits, "–" for None/NaN."""
-    if x is None:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "–"
-    if isinstance(x, float):
-        if not math.isfinite(x):
-            return "–"
-        return f"{x:.{digits}g}"
-    return str(x)
+    return f"{x:.{digits}g}" if isinstance(x, float) else str(x)
 
 
 def param_table(params: Mapping[str, Mapping[str, Any]],
