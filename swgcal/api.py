@@ -54,10 +54,6 @@ class MeasuredDataError(ValueError):
 def detect_kind(path: str | Path) -> str:
     """Recognise the kind of measured data at ``path``.
 
-    Parameters
-    ----------
-    path : str or Path
-
     Returns
     -------
     str
@@ -196,10 +192,6 @@ def build_problem(measured: Any, **options: Any) -> Problem:
         :func:`swgcal.strain.build_problem` (``model``, ``select``,
         ``heldout``, ``candidates``, ...).
 
-    Returns
-    -------
-    Problem
-
     Raises
     ------
     MeasuredDataError
@@ -218,11 +210,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     ----------
     problem : Problem
         From :func:`build_problem`.
-    config : SelectionConfig, optional
-
-    Returns
-    -------
-    CalibrationResult
     """
     return kind_module(problem.kind).calibrate(problem, config)
 
@@ -233,7 +220,6 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
 
     Parameters
     ----------
-    result : CalibrationResult
     source : str, optional
         Path of the measured data.
 
@@ -251,15 +237,10 @@ def render_report(result: CalibrationResult, summary: dict[str, Any],
 
     Parameters
     ----------
-    result : CalibrationResult
     summary : dict
         From :func:`summarize`.
     figures : dict of str to str, optional
         Figure key -> path relative to the report.
-
-    Returns
-    -------
-    str
     """
     return render_parts(kind_module(result.problem.kind).REPORT, result, summary, figures)
 
@@ -286,12 +267,10 @@ def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
 
     Parameters
     ----------
-    result : CalibrationResult
     out_dir : str or Path
         Created if absent.
     source : str, optional
         Path of the measured data (recorded in the summary).
-    figures : bool, default True
 
     Returns
     -------

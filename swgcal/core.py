@@ -107,7 +107,6 @@ class ParamEstimate:
 
     Attributes
     ----------
-    term, name, unit : str
     value, std : float
         Estimate and standard error (corrected for residual autocorrelation).
     flag : str
@@ -142,7 +141,6 @@ class FitResult:
 
     Attributes
     ----------
-    terms : tuple of Term
     thetas, coefs : tuple of ndarray
         Nonlinear and linear parameters per term [natural units].
     n, k : int
@@ -159,8 +157,6 @@ class FitResult:
         Reported (derived) parameters with standard errors and flags.
     cond : float
         Condition number of the column-scaled JᵀJ.
-    success : bool
-    message : str
     """
 
     terms: tuple[Term, ...]
@@ -184,11 +180,6 @@ class FitResult:
 
     def estimates_of(self, term_name: str) -> dict[str, ParamEstimate]:
         return {e.name: e for e in self.estimates if e.term == term_name}
-
-    def spec(self) -> list[dict[str, Any]]:
-        """Effect list ``[{name, kind, params}]`` (raw parameters) for every term."""
-        return [{"name": t.name, "kind": t.kind, "params": t.to_params(c, th)}
-                for t, c, th in zip(self.terms, self.coefs, self.thetas, strict=True)]
 
 
 # ---------------------------------------------------------------------------------------
@@ -261,9 +252,8 @@ def _start_vectors(terms: Sequence[Term], sig: Any, y: np.ndarray, idx: np.ndarr
     if starts is None:
         z = np.zeros_like(y)
         starts = [t.starts(sig, z, idx) for t in terms]
-    combos = list(itertools.product(*[list(s) if len(s) else [np.empty(0)] for s in starts]))
-    if len(combos) > 64:
-        combos = combos[:64]
+    combos = itertools.islice(itertools.product(
+        *[list(s) if len(s) else [np.empty(0)] for s in starts]), 64)
     return [pk.clip(np.concatenate([np.asarray(c, float) for c in combo]))
             if pk.lo.size else np.empty(0) for combo in combos]
 
@@ -372,7 +362,6 @@ def fit_terms(
         Per term, a list of starting θ vectors; default each term's :meth:`Term.starts`
         with a zero residual. Every combination is scored and the best ``max_starts``
         are optimised.
-    max_starts : int, default 3
     max_nfev : int, default 200
         Function evaluations per optimisation.
     fixed : sequence of bool, optional
@@ -384,10 +373,6 @@ def fit_terms(
         Note a reported parameter whose correlation with another exceeds this.
     uncertainty : bool, default True
         Compute standard errors (skip for fast candidate screening).
-
-    Returns
-    -------
-    FitResult
 
     Raises
     ------
@@ -511,13 +496,3 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
             note = f"correlated with {names[j][0]}.{names[j][1]} (r = {corr[i, j]:+.3f})"
         est.append(ParamEstimate(tn, pn, unit, float(d0[i]), float(sd[i]), flag, note))
     res.estimates = est
-
-
-def refit(result: FitResult, sig: Any, y: np.ndarray, idx: np.ndarray,
-          **kwargs: Any) -> FitResult:
-    """Fit the same terms again on other samples, starting from ``result``'s θ."""
-    starts = [[np.asarray(th, float)] for th in result.thetas]
-    return fit_terms(result.terms, sig, y, idx, starts=starts, **kwargs)
-
-
-Objective = Callable[[np.ndarray], np.ndarray]

@@ -88,10 +88,8 @@ class BinnedProbe(Probe):
 
     Parameters
     ----------
-    name, label : str
     key : callable sig -> ndarray (n,)
         The variable.
-    n_bins : int
     odd : bool
         Model r = sgn(q̇) g(x) (odd in the direction of motion) instead of r = g(x).
     split_by : callable sig -> ndarray (n,) of int, optional
@@ -161,10 +159,8 @@ class PeriodicProbe(Probe):
 
     Parameters
     ----------
-    name, label : str
     coord : callable sig -> ndarray (n,)
     period_range : callable sig -> (p_min, p_max)
-    odd : bool
     unit : str
         Unit of the coordinate (for the text).
     wg_order : bool, default False
@@ -246,11 +242,8 @@ class ProbeResult:
 
     Attributes
     ----------
-    name : str
     score : float
         Out-of-sample fraction of the residual mean square explained (two-fold, mean).
-    detail : dict
-    text : str
     """
 
     name: str
@@ -274,10 +267,8 @@ class Diagnosis:
         Difference-based noise estimate [data units].
     tau_int : float
         Integrated autocorrelation time [samples].
-    probes : dict of str to ProbeResult
     structured : bool
         Some probe explains at least ``threshold`` of the residual out of sample.
-    threshold : float
     signature : str
         Plain-text description of the structure (or of its absence).
     """
@@ -357,7 +348,6 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
         Residual [data units]; only ``r[idx]`` is used.
     idx : ndarray of int
         Samples to diagnose.
-    probes : sequence of Probe
     units : str
         Data units, for the text.
     threshold : float, default 0.03
@@ -368,10 +358,6 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
         The residual also counts as structured when its integrated autocorrelation time
         exceeds ``coloured_tau`` samples *and* its RMS exceeds ``coloured_ratio`` times
         the noise floor (not white, and well above the sample-to-sample noise).
-
-    Returns
-    -------
-    Diagnosis
     """
     idx = np.asarray(idx)
     ra = r[idx]

@@ -56,6 +56,7 @@ from typing import Any
 
 import numpy as np
 
+from .core import integrated_autocorr_time
 from .loop import CalibrationResult
 
 log = logging.getLogger(__name__)
@@ -230,8 +231,6 @@ def _lasso_columns(zf: np.ndarray, rf: np.ndarray, gram: _Gram, ok: np.ndarray,
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.linear_model import lars_path_gram
 
-    from .core import integrated_autocorr_time
-
     gf, bf, n_f = gram.gf, gram.bf, rf.size
     with warnings.catch_warnings():  # collinear candidates: LARS drops them, says so
         warnings.simplefilter("ignore", ConvergenceWarning)
@@ -309,7 +308,6 @@ def discover(target: np.ndarray, groups: Sequence[Group], fit: np.ndarray,
     ----------
     target : ndarray, shape (n_rows,)
         The data (with ``projector`` holding the final model) or the final residual.
-    groups : sequence of Group
     fit, validation : ndarray of int
         Row indices (disjoint).
     projector : Projector, optional
@@ -493,10 +491,6 @@ def proposals_section(summary: Mapping[str, Any]) -> list[str]:
     ----------
     summary : mapping
         Its ``proposed``: :meth:`Proposal.as_dict` entries (none when absent).
-
-    Returns
-    -------
-    list of str
     """
     proposed = summary.get("proposed", [])
     lines = ["## Proposed terms (not in the library)", "",

@@ -1,18 +1,15 @@
 """The calibration loop: fit, diagnose, try every candidate effect, keep the best one if
 it earns its place, repeat; then report the error before and after on test data.
 
-Generic over the domain: a :class:`Problem` bundles the signals, the target, the
-base model terms, a library of candidate effects (term classes), the residual probes and
-the held-out split. Each data kind builds one (:func:`swgcal.friction.build_problem`,
-:func:`swgcal.strain.build_problem`) and calls :func:`select_effects` in its
+Generic over the domain: each data kind builds a :class:`Problem`
+(:func:`swgcal.friction.build_problem`, ...) and calls :func:`select_effects` in its
 ``calibrate`` step.
 
 Acceptance rule: evidence, on one scale for every kind of data. Every candidate is added
 to the current model and refitted on the fit samples (its own nonlinear parameters
 optimised, those of the current model held, or refitted with it where the problem says
 so, :attr:`Problem.screen_jointly`; all linear coefficients refitted); candidates are
-ranked by validation RMSE. Going down the ranking, the first candidate that
-passes all of
+ranked by validation RMSE. Going down the ranking, the first candidate that passes all of
 
 1. *held-out evidence*: twice the log-likelihood ratio of the validation samples,
    candidate against current model, each with its parameters fitted on the fit samples
@@ -82,7 +79,10 @@ from .split import HeldOutSplit
 log = logging.getLogger(__name__)
 
 __all__ = ["Problem", "SelectionConfig", "CandidateScore", "Iteration", "CalibrationResult",
-           "select_effects"]
+           "select_effects", "IMPLAUSIBLE_PREFIX"]
+
+#: Status of a candidate rejected for a parameter outside its physical range, before them.
+IMPLAUSIBLE_PREFIX = "rejected: outside its physical range: "
 
 
 @dataclass
@@ -99,11 +99,8 @@ class Problem:
         Target.
     t : ndarray, shape (n,)
         Time [s] (probes' halves, noise floor).
-    base model : tuple of Term
     library : mapping of str to Term class
         Candidate effects by key.
-    probes : sequence of Probe
-    split : HeldOutSplit
     meta : dict
         Anything to carry into the report.
     screen_jointly : bool, default False
@@ -185,7 +182,6 @@ class CandidateScore:
 
     Attributes
     ----------
-    name, kind : str
     val_rmse : float
         Validation RMSE with the candidate added [data units].
     rel_improvement : float
@@ -197,12 +193,10 @@ class CandidateScore:
     heldout_evidence : float
         2 ln Λ_val: twice the log-likelihood ratio of the validation samples, candidate
         against the current model, n_val / τ_int effective samples (used for the rule).
-    accepted : bool
     status : str
         Why it was accepted or rejected.
     params : dict
         Derived parameters of the candidate (values only).
-    fit : FitResult
     implausible : bool
         Passed the evidence rule but a parameter lies outside its physical range
         (:attr:`~swgcal.terms.FitTerm.ranges`): the residual holds structure that
@@ -259,9 +253,6 @@ class CalibrationResult:
 
     Attributes
     ----------
-    problem : Problem
-    config : SelectionConfig
-    iterations : list of Iteration
     added : list of str
         Names of the accepted effects, in order.
     base_model_final, final : FitResult
@@ -274,8 +265,6 @@ class CalibrationResult:
     unexplained : bool
         The final residual is still structured, or a candidate outside its physical range
         still passes the evidence rule on it.
-    residual_signature : str
-    elapsed_s : float
     implausible : list of str
         Candidates of the last iteration that passed the evidence rule but lie outside
         their physical range, with their gain and the violated range.
@@ -546,7 +535,7 @@ def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
             implausible += [f"{term.name}.{v}" for v in
                             term.range_violations({k: e.value for k, e in est.items()})]
         if implausible:
-            c.status = "rejected: outside its physical range: " + ", ".join(implausible)
+            c.status = IMPLAUSIBLE_PREFIX + ", ".join(implausible)
             c.implausible = True
             continue
         c.accepted = True
@@ -669,15 +658,6 @@ def _flag_implausible(res: CalibrationResult) -> None:
 def select_effects(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
     """The selection loop on a problem: fit the base model, add the library effect the
     residual needs while held-out evidence supports it, stop with a verdict.
-
-    Parameters
-    ----------
-    problem : Problem
-    config : SelectionConfig, optional
-
-    Returns
-    -------
-    CalibrationResult
 
     Raises
     ------

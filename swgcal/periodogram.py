@@ -28,12 +28,11 @@ def periodogram_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float,
         Coordinate (q [rad] or t [s]) and signal.
     p_min, p_max : float
         Period range [units of x], 0 < p_min < p_max.
-    n_peaks : int, default 3
-    oversample : float, default 5
 
     Returns
     -------
     list of (period, normalised power)
+        Period [units of x], power [-].
     """
     x = np.asarray(x, float)
     r = np.asarray(r, float)

@@ -22,7 +22,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .core import FitResult, Term
-from .loop import CalibrationResult
+from .loop import IMPLAUSIBLE_PREFIX, CalibrationResult
 
 __all__ = ["base_summary", "caveat", "UNCERTAINTY_METHOD", "to_jsonable", "fmt_value",
            "param_table", "implausible_candidates", "implausible_lines", "effect_range_lines",
@@ -64,9 +64,6 @@ def _params(fit: FitResult, term_name: str) -> dict[str, dict[str, Any]]:
     return {k: e.as_dict() for k, e in fit.estimates_of(term_name).items()}
 
 
-IMPLAUSIBLE_PREFIX = "rejected: outside its physical range: "
-
-
 def _ranges_of(term: Term, fit: FitResult) -> dict[str, dict[str, Any]]:
     """Declared physical ranges of a term with the fitted values (``high``/``low`` None
     in JSON for an open side)."""
@@ -86,10 +83,6 @@ def _ranges_of(term: Term, fit: FitResult) -> dict[str, dict[str, Any]]:
 def implausible_candidates(result: CalibrationResult) -> list[dict[str, Any]]:
     """Candidates that passed the evidence rule but were rejected for a parameter outside
     its physical range: structure in the residual that they would have absorbed.
-
-    Parameters
-    ----------
-    result : CalibrationResult
 
     Returns
     -------
@@ -137,7 +130,6 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
 
     Parameters
     ----------
-    result : CalibrationResult
     source : str, optional
         Path of the measured data.
 
@@ -218,10 +210,6 @@ def base_summary(result: CalibrationResult, source: str | None = None) -> dict[s
 def caveat(result: CalibrationResult) -> str | None:
     """Caveat for the simulation option of a run that ends unexplained, else None.
 
-    Parameters
-    ----------
-    result : CalibrationResult
-
     Returns
     -------
     str or None
@@ -243,24 +231,10 @@ def caveat(result: CalibrationResult) -> str | None:
 
 
 def fmt_value(x: Any, digits: int = 4) -> str:
-    """A number for a markdown table: ``digits`` significant digits, "–" for None/NaN.
-
-    Parameters
-    ----------
-    x : float or None
-    digits : int, default 4
-
-    Returns
-    -------
-    str
-    """
-    if x is None:
+    """A number for a markdown table: ``digits`` significant digits, "–" for None/NaN."""
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "–"
-    if isinstance(x, float):
-        if not math.isfinite(x):
-            return "–"
-        return f"{x:.{digits}g}"
-    return str(x)
+    return f"{x:.{digits}g}" if isinstance(x, float) else str(x)
 
 
 def param_table(params: Mapping[str, Mapping[str, Any]],
@@ -275,10 +249,6 @@ def param_table(params: Mapping[str, Mapping[str, Any]],
         ``name -> {"value", "std", "unit", "identifiable", ...}`` (summary entries).
     head : sequence of str, optional
         The table's head and separator lines.
-
-    Returns
-    -------
-    list of str
     """
     rows = list(head)
     for k, e in params.items():
@@ -294,10 +264,6 @@ def implausible_lines(summary: Mapping[str, Any]) -> list[str]:
     """Markdown lines on the candidates rejected as implausible (summary key
     ``implausible_candidates``): those of the last iteration as structure of the final
     residual that they would have absorbed, earlier ones in one sentence.
-
-    Parameters
-    ----------
-    summary : mapping
 
     Returns
     -------
@@ -348,10 +314,6 @@ def effect_range_lines(effect: Mapping[str, Any]) -> list[str]:
     ----------
     effect : mapping
         An entry of the summary's ``effects_added``.
-
-    Returns
-    -------
-    list of str
     """
     lines = []
     rng = effect.get("ranges") or {}
@@ -439,15 +401,10 @@ def render_report(parts: ReportParts, result: CalibrationResult, summary: Mappin
     ----------
     parts : ReportParts
         The kind's (``REPORT`` of its report module).
-    result : CalibrationResult
     summary : mapping
         From the kind's ``summarize``.
     figures : mapping of str to str, optional
         Figure key (the kind's ``make_figures``) -> path relative to the report.
-
-    Returns
-    -------
-    str
     """
     s, u = ReportInput(summary, result), summary["units"]
     lines = [f"# {parts.title}: {s['name']}", "", *parts.data(s), "## Result", "",
@@ -486,7 +443,6 @@ def simulation_files(parts: ReportParts, summary: Mapping[str, Any]) -> dict[str
 
     Parameters
     ----------
-    parts : ReportParts
     summary : mapping
         From the kind's ``summarize``.
 
@@ -509,15 +465,10 @@ def iteration_lines(summary: Mapping[str, Any], *, evidence: bool = False,
 
     Parameters
     ----------
-    summary : mapping
     evidence : bool, default False
         With a column of each candidate's held-out evidence 2 ln Λ.
     detail : callable, optional
         ``detail(iteration, next iteration or None)`` -> lines before the candidates.
-
-    Returns
-    -------
-    list of str
     """
     its, u = summary["iterations"], summary["units"]
     lines: list[str] = []
@@ -547,13 +498,8 @@ def accepted_lines(summary: Mapping[str, Any], *, selection: bool = False) -> li
 
     Parameters
     ----------
-    summary : mapping
     selection : bool, default False
         Also how each was accepted and its parameters against their physical ranges.
-
-    Returns
-    -------
-    list of str
     """
     lines = ["## Accepted effects", ""]
     if not summary["effects_added"]:
@@ -577,14 +523,9 @@ def diagnosis_lines(summary: Mapping[str, Any], how: str = "") -> list[str]:
 
     Parameters
     ----------
-    summary : mapping
     how : str, default ""
         How the probes are scored, before "structured above" (e.g. ``"two halves of time
         blocks, "``).
-
-    Returns
-    -------
-    list of str
     """
     s = summary
     lines = ["## Residual diagnosis", "",
@@ -600,14 +541,5 @@ def diagnosis_lines(summary: Mapping[str, Any], how: str = "") -> list[str]:
 
 
 def uncertainty_lines(summary: Mapping[str, Any]) -> list[str]:
-    """Markdown section "Uncertainty" (the summary's ``uncertainty_method``).
-
-    Parameters
-    ----------
-    summary : mapping
-
-    Returns
-    -------
-    list of str
-    """
+    """Markdown section "Uncertainty" (the summary's ``uncertainty_method``)."""
     return ["## Uncertainty", "", summary["uncertainty_method"], ""]

@@ -79,10 +79,6 @@ def time_block_split(
         At every boundary between blocks of different roles, samples closer than
         ``guard_frac`` block durations to the boundary are dropped from all sets.
 
-    Returns
-    -------
-    HeldOutSplit
-
     Raises
     ------
     ValueError
@@ -152,10 +148,6 @@ def group_split(
         Group label of every sample.
     validation_groups, test_groups : sequence
         Labels held out for validation and for the test.
-
-    Returns
-    -------
-    HeldOutSplit
 
     Raises
     ------

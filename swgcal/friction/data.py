@@ -6,17 +6,17 @@ A friction recording (data kind 1) is a CSV with the columns of the project's re
 and the target ``tau_friction_Nm`` [N m]. Sampling may be irregular.
 
 The recording becomes the signals of the friction terms
-(:class:`swgsim.gear.friction.FrictionSignals`, smooth-sign velocity v_s by default 1 % of
-the 99th percentile of ``|q̇|``, so that least squares is well posed); the base model is the
-paper's law on the joint (:class:`swgsim.gear.friction.PaperLaw`).
+(:class:`swgsim.gear.friction.FrictionSignals`, :meth:`FrictionRecording.signals`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import itertools
 import logging
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -66,7 +66,6 @@ class FrictionRecording:
         Friction torque [N m].
     load_nm : ndarray, shape (n,), optional
         Transmitted load torque [N m] (for the load-dependent Coulomb term).
-    name : str
     ddq_source : str
         ``"measured"`` or how it was estimated.
     notes : tuple of str
@@ -108,11 +107,9 @@ class FrictionRecording:
         v_s : float, optional
             Smooth-sign velocity [rad/s]; default ``v_s_rel`` times the 99th percentile
             of ``|q̇|``.
-        v_s_rel : float, default 0.01
         gear_ratio : float, optional
-            Reduction ratio N of the strain wave gear (wave-generator turns per output
-            turn), when known: ripples over q are then labelled with wave-generator
-            orders k = 2π / (period · N).
+            Reduction ratio N (wave-generator turns per output turn), when known: ripples
+            over q are then labelled with wave-generator orders k = 2π / (period · N).
 
         Raises
         ------
@@ -184,9 +181,7 @@ def estimate_acceleration(t_s: np.ndarray, dq: np.ndarray, n_window: int = 21) -
 #: Butterworth filter at 5, 2 or 1 Hz (zero-phase filtering changes nothing). Errors: a
 #: velocity scaled by 2 or 1/2 gives 0.63-0.71, of the wrong sign 1.77-2.0, in deg/s
 #: beside an angle in rad 6.6-7.4, q and dq swapped 1.01-6.7, dq and tau swapped
-#: 0.56-28, an angle frozen half-way 0.74-0.95. (The former check, RMS(dq − d/dt q) /
-#: RMS(dq) at most 0.5, gave 0.02-0.12 as published but 0.22-2.2 at 14 bit and
-#: 0.87-4.5 at 12 bit, and 0.50 for a velocity scaled by 2.)
+#: 0.56-28, an angle frozen half-way 0.74-0.95.
 DQ_CONSISTENCY_TOL = 0.5
 #: Consistency figure above which the check is unsure [-]: the recording is accepted, with
 #: a note and one warning. Between this and :data:`DQ_CONSISTENCY_TOL` lie a lagging
@@ -272,7 +267,7 @@ def read_csv_header(path: str | Path) -> list[str]:
     ValueError
         Naming the file: not UTF-8 text, or not readable as CSV.
     """
-    rows = _read_rows(Path(path), header_only=True)
+    rows = _head_rows(Path(path))
     return [h.strip() for h in rows[0]] if rows else []
 
 
@@ -289,8 +284,15 @@ def _head_rows(path: Path) -> list[list[str]]:
         raise ValueError(f"{path}: not a text CSV (no line end in its first "
                          f"{HEADER_BYTES // 1024} KiB: no header line)")
     line = head if end < 0 else head[:end]
-    try:
+    with _not_csv(path):
         return list(itertools.islice(csv.reader(io.StringIO(line.decode("utf-8-sig"))), 1))
+
+
+@contextlib.contextmanager
+def _not_csv(path: Path) -> Iterator[None]:
+    """A decoding or CSV error within the block as a one-line ValueError naming ``path``."""
+    try:
+        yield
     except UnicodeDecodeError as e:
         raise ValueError(f"{path}: not a text CSV (UTF-8 expected; {e.reason}: "
                          f"{e.object[e.start:e.end]!r})") from None
@@ -298,23 +300,15 @@ def _head_rows(path: Path) -> list[list[str]]:
         raise ValueError(f"{path}: not a text CSV ({e})") from None
 
 
-def _read_rows(path: Path, header_only: bool = False) -> list[list[str]]:
+def _read_rows(path: Path) -> list[list[str]]:
     """The CSV records of ``path`` (csv module, ``utf-8-sig``: BOM and quoting undone),
     after the header's bounded checks (:func:`_head_rows`)."""
-    first = _head_rows(path)
-    if header_only:
-        return first
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as fh:
-            rows = list(csv.reader(fh))
-        if any("\0" in c for r in rows for c in r):
-            raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary file)")
-        return rows
-    except UnicodeDecodeError as e:
-        raise ValueError(f"{path}: not a text CSV (UTF-8 expected; {e.reason}: "
-                         f"{e.object[e.start:e.end]!r})") from None
-    except csv.Error as e:
-        raise ValueError(f"{path}: not a text CSV ({e})") from None
+    _head_rows(path)
+    with _not_csv(path), path.open(newline="", encoding="utf-8-sig") as fh:
+        rows = list(csv.reader(fh))
+    if any("\0" in c for r in rows for c in r):
+        raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary file)")
+    return rows
 
 
 def _line_of(path: Path, record: int) -> int:
@@ -558,8 +552,7 @@ def _check_velocity(path: Path, t: np.ndarray, q: np.ndarray, dq: np.ndarray,
             raise ValueError(
                 f"{path}: dq_rad_per_s is not the time derivative of q_rad but {_factor(k)} "
                 f"times it (a pure factor: consistency figure {c.figure:.2f}, allowed "
-                f"{DQ_CONSISTENCY_TOL}); "
-                f"{scale_cause(k)}")
+                f"{DQ_CONSISTENCY_TOL}); {scale_cause(k)}")
         raise ValueError(
             f"{path}: dq_rad_per_s is not the time derivative of q_rad: consistency figure "
             f"{c.figure:.2f} ({parts}; allowed {DQ_CONSISTENCY_TOL}); check units (rad, "
@@ -579,25 +572,15 @@ def _check_velocity(path: Path, t: np.ndarray, q: np.ndarray, dq: np.ndarray,
 
 def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:
     """Write a recording as a friction CSV (data kind 1) readable by
-    :func:`load_friction_csv`.
-
-    Parameters
-    ----------
-    rec : FrictionRecording
-    path : str or Path
-
-    Returns
-    -------
-    Path
-    """
+    :func:`load_friction_csv`."""
     path = Path(path)
     cols = {"time_s": rec.t_s, "q_rad": rec.q_rad, "dq_rad_per_s": rec.dq_rad_s,
             "ddq_rad_per_s2": rec.ddq_rad_s2, "tau_friction_Nm": rec.tau_nm}
     if rec.load_nm is not None:
         cols["load_Nm"] = rec.load_nm
-    data = np.column_stack(list(cols.values()))
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
+    np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols),
+               comments="", fmt="%.10g")
     return path
 
 

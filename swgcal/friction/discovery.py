@@ -74,8 +74,6 @@ def line_peaks(x: np.ndarray, r: np.ndarray, p_min: float, p_max: float, n_peaks
         Coordinate (q [rad] or t [s]) and residual.
     p_min, p_max : float
         Period range [units of x].
-    n_peaks : int
-    harmonics : sequence of int
     exclude : sequence of float
         Line frequencies found already (e.g. by another search).
 
@@ -399,7 +397,6 @@ def propose(result: CalibrationResult, max_terms: int = 5, min_gain: float = MIN
     ----------
     result : CalibrationResult
         A friction calibration.
-    max_terms : int, default 5
     min_gain : float, default :data:`~swgcal.discovery.MIN_GAIN`
     only_if_structured : bool, default True
         Propose nothing when the loop's final residual is not structured

@@ -117,10 +117,9 @@ def _fig_velocity(d: _FigureData) -> Any:
     """Residual before and after against q̇, coloured by accelerating/decelerating."""
     from matplotlib.figure import Figure
 
-    v, a, idx, rb, ra, u, title, acc_dec = (d.v, d.a, d.idx, d.rb, d.ra, d.u, d.title, d.acc_dec)
+    v, idx, rb, ra, u, title, acc_dec = (d.v, d.idx, d.rb, d.ra, d.u, d.title, d.acc_dec)
     fig = Figure(figsize=(11, 4.2), layout="constrained")
     axs = fig.subplots(1, 2, sharey=True)
-    acc_dec = np.sign(v * a)
     for ax, r, lab in ((axs[0], rb, "before"), (axs[1], ra, "after")):
         ax.scatter(v[idx], r[idx], c=acc_dec[idx], cmap="coolwarm", s=2, vmin=-1, vmax=1,
                    rasterized=True)
@@ -133,7 +132,6 @@ def _fig_velocity(d: _FigureData) -> Any:
         ax.legend(fontsize=8, loc="upper left")
     axs[0].set_ylabel(f"residual [{u}]")
     fig.suptitle(title + "; colour: red accelerating, blue decelerating", fontsize=10)
-
     return fig
 
 
@@ -155,7 +153,6 @@ def _fig_position(d: _FigureData) -> Any:
         ax.set_xlabel("q [rad]")
         ax.set_ylabel(f"residual {lab} [{u}]")
         ax.legend(fontsize=8, markerscale=4)
-    sc = sig.scales
     p_min, p_max = max(4 * sc.dq_med, sc.q_span / 2000), sc.q_span / 2
     ax = axs[1, 0]
     for r, lab, col in ((rb, "before", BEFORE), (ra, "after", AFTER)):
@@ -182,7 +179,6 @@ def _fig_position(d: _FigureData) -> Any:
     ax.set_title("spectrum of residual · sgn(q̇) over q (flips with direction)", fontsize=9)
     ax.legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
-
     return fig
 
 
@@ -217,7 +213,6 @@ def _fig_hysteresis(d: _FigureData) -> Any:
     ax.set_title("residual against acceleration", fontsize=9)
     ax.legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
-
     return fig
 
 
@@ -229,7 +224,6 @@ def _fig_time(d: _FigureData) -> Any:
     fig = Figure(figsize=(11, 6.5), layout="constrained")
     axs = fig.subplots(2, 1)
     ax = axs[0]
-    roles = sp.description.get("time_ranges_s", {})
     for role, col in (("validation", "tab:orange"), ("test", "tab:green")):
         for i, (lo, hi) in enumerate(roles.get(role, [])):
             ax.axvspan(lo, hi, color=col, alpha=0.12, label=role if i == 0 else None)
@@ -252,7 +246,6 @@ def _fig_time(d: _FigureData) -> Any:
                  "frequency, log-binned)", fontsize=9)
     ax.legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
-
     return fig
 
 
@@ -289,7 +282,6 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
         A friction calibration.
     out_dir : str or Path
         Directory; figures go to ``out_dir/figures/``.
-    dpi : int, default 110
 
     Returns
     -------

@@ -62,8 +62,7 @@ class SplitOptions:
         for key in ("validation_blocks", "test_blocks"):
             blocks = getattr(self, key)
             if not blocks or any(not -n <= int(b) < n for b in blocks):
-                raise ValueError(f"{key} must list blocks in [{-n}, {n - 1}], got "
-                                 f"{list(blocks)}")
+                raise ValueError(f"{key} must list blocks in [{-n}, {n - 1}], got {list(blocks)}")
 
 
 @dataclass(frozen=True)
@@ -72,13 +71,11 @@ class FrictionOptions:
 
     Attributes
     ----------
-    base model : BaseModelOptions
     gear_ratio : float or None
         Reduction ratio N (wave-generator turns per output turn) when known: ripple
         periods are then reported and checked as wave-generator orders.
     accel_window : int, default 21
         Samples of the Savitzky-Golay estimate of q̈ when the CSV has none.
-    split : SplitOptions
     """
 
     base_model: BaseModelOptions = field(default_factory=BaseModelOptions)

@@ -33,8 +33,6 @@ __all__ = ["friction_problem", "build_problem", "calibrate", "MIN_ROWS_PER_BLOCK
 
 #: The typed options of this kind's problem (read by :func:`swgcal.api.options_from_config`).
 OPTIONS = FrictionOptions
-
-
 #: Fewest samples a held-out time block of a friction recording must hold.
 MIN_ROWS_PER_BLOCK = 20
 
@@ -55,7 +53,6 @@ def friction_problem(
 
     Parameters
     ----------
-    rec : FrictionRecording
     v_s : float, optional
         Smooth-sign velocity of the base model [rad/s]; default ``v_s_rel`` times the 99th
         percentile of ``|q̇|``.
@@ -70,10 +67,6 @@ def friction_problem(
         Reduction ratio N of the strain wave gear (wave-generator turns per output
         turn), when known: ripple periods over q are then expressed and checked as
         wave-generator orders k = 2π / (period · N) (:mod:`swgsim.gear.friction.ripples`).
-
-    Returns
-    -------
-    Problem
 
     Raises
     ------
@@ -150,21 +143,16 @@ def build_problem(measured: str | Path | FrictionRecording, *,
     return friction_problem(rec, **options)
 
 
-def calibrate(problem: Problem, config: SelectionConfig | None = None
-                       ) -> CalibrationResult:
-    """Calibrate a friction problem: the selection loop, then ripple grouping.
-
-    :func:`~swgcal.loop.select_effects`, then
-    :func:`~swgcal.friction.ripple_groups.group_ripples`: ripple instances that are
-    harmonics of one fundamental become one effect (wave-generator orders when the gear
-    ratio is known), and a ripple without held-out evidence of its own in the final
-    model is removed.
+def calibrate(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
+    """Calibrate a friction problem: :func:`~swgcal.loop.select_effects`, then
+    :func:`~swgcal.friction.ripple_groups.group_ripples` (ripple instances that are
+    harmonics of one fundamental become one effect; a ripple without held-out evidence of
+    its own in the final model is removed).
 
     Parameters
     ----------
     problem : Problem
         From :func:`friction_problem` or :func:`build_problem`.
-    config : SelectionConfig, optional
 
     Returns
     -------

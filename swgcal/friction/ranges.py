@@ -111,16 +111,15 @@ OPEN_DIRECTION_NM = (-INF, INF, "either direction may carry the higher Coulomb l
                      "(Armstrong-Hélouvry et al. 1994); bounded by the Coulomb level, "
                      "which the term does not see")
 OPEN_CONFIGURATION_NM = (0.0, INF, "configuration-dependent torque (paper eq. (5) b3 term, "
-                         "rigid-body compensation); its bound needs the "
-                         "rigid-body model, which the data do not carry")
+                         "rigid-body compensation); its bound needs the rigid-body model, "
+                         "which the data do not carry")
 OPEN_INERTIA_KGM2 = (-INF, INF, "the rigid-body model may under- or over-compensate the "
                      "inertia (reflected rotor inertia N² J_in, docs/PHYSICS.md sec. 2)")
 OPEN_THERMAL_NM = (-INF, INF, "friction falls as the joint warms (d > 0) or rises as a "
                    "warm joint cools (d < 0); docs/PHYSICS.md sec. 5")
 OPEN_SENSOR_NM = (-INF, INF, "zero drift of either sign (docs/PHYSICS.md sec. 5)")
 RIPPLE_AMPLITUDE_NM = (0.0, INF, "ripple amplitude, non-negative by construction (Tuttle & "
-                       "Seering 1996); its bound "
-                       "needs the Coulomb level")
+                       "Seering 1996); its bound needs the Coulomb level")
 GEAR_RATIO_CATALOGUE = (30.0, 160.0)
 """Reduction ratios of the Harmonic Drive CSG/SHG series (30, 50, 80, 100, 120, 160)."""
 

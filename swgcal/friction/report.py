@@ -119,10 +119,6 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
     ripple instances were added, harmonic groups, ripples removed for lack of held-out
     support, the held-out evidence of each ripple kept.
 
-    Parameters
-    ----------
-    summary : mapping
-
     Returns
     -------
     list of str
@@ -150,8 +146,7 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
                 f"| {h['iteration']} | {h['name']} | "
                 f"{', '.join(fmt_value(x) for x in h['periods']) or '–'} | "
                 f"{', '.join(fmt_value(x, 4) for x in h['orders'] or []) or '–'} | "
-                f"{fmt_value(h['val_rmse_before'])} → "
-                f"{fmt_value(h['val_rmse_after'])} {u} | "
+                f"{fmt_value(h['val_rmse_before'])} → {fmt_value(h['val_rmse_after'])} {u} | "
                 f"{fmt_value(100 * (h['validation_gain'] or 0), 3)} % | "
                 f"{fmt_value(h['heldout_evidence'], 4)} | "
                 + ("yes" if h["accepted"] else f"no: {h['status']}") + " |")
@@ -200,8 +195,7 @@ def _heldout_lines(s: Mapping[str, Any]) -> list[str]:
     h = s["heldout"]
     return ["## Held-out data", "",
             f"{h.get('method')}: {h.get('n_blocks')} blocks of {fmt_value(h.get('block_s'))} s; "
-            f"validation blocks {h.get('validation_blocks')}, test blocks "
-            f"{h.get('test_blocks')}"
+            f"validation blocks {h.get('validation_blocks')}, test blocks {h.get('test_blocks')}"
             + (" (the last block is a test block, so drift terms must extrapolate)"
                if h.get("n_blocks") and h["n_blocks"] - 1 in (h.get("test_blocks") or [])
                else "")

@@ -115,10 +115,6 @@ def harmonic_groups(periods: Sequence[float], rel_se: Sequence[float] | None = N
         Reduction ratio N.
     rel_tol : float, default :data:`HARMONIC_REL_TOL`
 
-    Returns
-    -------
-    list of RippleGroupProposal
-
     Raises
     ------
     ValueError
@@ -235,10 +231,6 @@ def _is_ripple(problem_library: dict, kind: str) -> bool:
 def ripple_history(result: CalibrationResult) -> list[dict[str, Any]]:
     """Validation RMSE as ripple instances were added, and the ripple candidate the loop
     turned down last.
-
-    Parameters
-    ----------
-    result : CalibrationResult
 
     Returns
     -------

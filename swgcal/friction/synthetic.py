@@ -89,10 +89,8 @@ def synthetic_trajectory(duration_s: float = 60.0, dt_s: float = 0.01, jitter: f
 
     Parameters
     ----------
-    duration_s : float, default 40
-        [s]
-    dt_s : float, default 0.01
-        Mean sample interval [s].
+    duration_s, dt_s : float, default 60 and 0.01
+        Duration and mean sample interval [s].
     jitter : float, default 0.2
         Relative uniform jitter of the sample interval, in [0, 0.9].
     rng : numpy.random.Generator, optional
@@ -162,12 +160,6 @@ def synthetic_recording(
         An out-of-library term [N m].
     duration_s, dt_s : float
         See :func:`synthetic_trajectory`.
-    rng : numpy.random.Generator, optional
-    name : str
-
-    Returns
-    -------
-    FrictionRecording, SyntheticTruth
     """
     if not 0 <= noise_rho < 1:
         raise ValueError(f"noise_rho must be in [0, 1), got {noise_rho}")

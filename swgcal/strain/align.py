@@ -101,10 +101,6 @@ def input_angle_evidence(objectives: Sequence[np.ndarray], fs: float,
         The objectives with the odd extra kinematic-error harmonics flipped
         (:func:`flipped_ke`), to score the global flip.
 
-    Returns
-    -------
-    InputAngle
-
     Raises
     ------
     ValueError

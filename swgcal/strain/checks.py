@@ -35,10 +35,6 @@ def withheld_parameters(result: CalibrationResult) -> list[dict[str, Any]]:
     channels can be set neutral (``channel_param``). The summary's simulation option sets
     both to the neutral value (:func:`simulation_option`).
 
-    Parameters
-    ----------
-    result : CalibrationResult
-
     Returns
     -------
     list of dict

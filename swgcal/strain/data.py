@@ -49,8 +49,6 @@ class StrainWindows:
         Operating-point index into ``ops``.
     ops : tuple of (float, float)
         Distinct operating points (n_in [rpm], T_out [N m]), sorted.
-    name : str
-    source : str or None
     """
 
     y: np.ndarray
@@ -95,10 +93,6 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
     name : str, optional
         Name for the report; default the data set's ``name`` attribute, else its folder.
 
-    Returns
-    -------
-    StrainWindows
-
     Raises
     ------
     ValueError
@@ -106,7 +100,6 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
         signals, bridge outputs beyond a strain-gauge bridge's range (the unit's factor
         named, :func:`check_bridge_scale`), or an operating point with non-positive speed.
     """
-    source = None
     if not hasattr(ds, "data_vars"):
         source = str(ds)
         ds = dsio.load(ds)
@@ -150,7 +143,6 @@ def strain_windows(ds: Any, select: Mapping[str, Any] | None = None,
         sel = np.sort(np.concatenate([np.flatnonzero(op == i)[:int(max_windows)]
                                       for i in range(len(ops))]))
     t = np.asarray(ds["time"].values, float)
-    # the data set's own name (its attribute), else its folder
     nm = name or str(ds.attrs.get("name") or (Path(source).name if source else "strain"))
     return StrainWindows(y=y[sel], time_s=t, n_in_rpm=n_op[sel], t_out_nm=t_op[sel],
                          n_in_mean_rpm=n_mean[sel], t_out_mean_nm=t_mean[sel],

@@ -5,7 +5,7 @@ split into patterns on an extended time grid) are defined in :mod:`.signals`,
 the residual probes in :mod:`.probes` (both re-exported here).
 
 The base model (:class:`ChainBaseModel`) scales the two patterns (the WG deflection w0 and
-an overall gauge gain). Candidate effects (:data:`STRAIN_LIBRARY`) add columns or are
+an overall gauge gain). Candidate effects (:func:`strain_library`) add columns or are
 transforms of the basis: the amplifier low-pass and the bridge nonlinearity map it,
 a kinematic-error harmonic replaces the torque pattern (its unit torque responses ΔT
 come with the signals) and re-aligns each window's input angle. Each documents its
@@ -92,7 +92,6 @@ __all__ = [
     "AmplifierLowpass",
     "KinematicErrorHarmonic",
     "ThermalDrift",
-    "STRAIN_LIBRARY",
     "strain_library",
     "strain_probes",
     "constraint_basis",
@@ -148,7 +147,39 @@ def _rms(v: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(v))))
 
 
-class ChannelOffset(FitTerm):
+class _PerChannel(FitTerm):
+    """A value per channel (:meth:`channel_values`, reported as ``derived_fmt`` in
+    ``derived_unit``, on the ``estimable`` channels) and their RMS, ``rms_name``, the
+    primary parameter."""
+
+    derived_fmt = "{}"
+    derived_unit = "-"
+    rms_name = ""
+    estimable = np.ones(5, bool)
+
+    def channel_values(self, coef: np.ndarray) -> np.ndarray:
+        """Per-channel values in ``derived_unit``, shape (5,)."""
+        return np.asarray(coef, float)
+
+    def channel_param(self, c: int) -> str:
+        """Name of the derived parameter of channel ``c``."""
+        return self.derived_fmt.format(SENSORS[c])
+
+    def derived(self, coef, theta):
+        v = self.channel_values(coef)
+        out = {self.channel_param(c): float(v[c]) for c in range(5) if self.estimable[c]}
+        out[self.rms_name] = _rms(v[self.estimable])
+        return out
+
+    def derived_units(self):
+        return {**{self.channel_param(c): self.derived_unit for c in range(5)
+                   if self.estimable[c]}, self.rms_name: self.derived_unit}
+
+    def primary(self):
+        return (self.rms_name,)
+
+
+class ChannelOffset(_PerChannel):
     """Zero offset of each bridge channel."""
 
     kind = "offset"
@@ -159,27 +190,17 @@ class ChannelOffset(FitTerm):
     ranges = {f"o_{s}": (-OFFSET_RANGE_MVV, OFFSET_RANGE_MVV,
                          "input range of the bench converter, ADS131M04 at gain 128")
               for s in SENSORS}
+    derived_fmt, derived_unit, rms_name = "o_{}", "mV/V", "offset_rms"
 
     def columns(self, sig: StrainSignals, theta: np.ndarray) -> np.ndarray:
         return ms.offset(0.0, sig.onehot)  # a unit offset of each channel
-
-    def derived(self, coef, theta):
-        out = {f"o_{s}": float(v) for s, v in zip(SENSORS, coef, strict=True)}
-        out["offset_rms"] = _rms(coef)
-        return out
-
-    def derived_units(self):
-        return {**{f"o_{s}": "mV/V" for s in SENSORS}, "offset_rms": "mV/V"}
-
-    def primary(self):
-        return ("offset_rms",)
 
     def sensor_effect(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, Any]:
         """The ``sensor_effects`` entry of :mod:`swgsim.sensing.effects`."""
         return {"name": "offset", "params": {"offset_mvv": [float(v) for v in coef]}}
 
 
-class ThermalDrift(FitTerm):
+class ThermalDrift(_PerChannel):
     """Zero drift of each channel over the recording sequence."""
 
     kind = "thermal_drift"
@@ -191,26 +212,16 @@ class ThermalDrift(FitTerm):
     ranges = {f"r_{s}": (-DRIFT_RANGE_MVV_S, DRIFT_RANGE_MVV_S,
                          "thermal output ±1.8 µε/K (Kyowa SELCOM, Vishay TN-504) at <= 1 K/s")
               for s in SENSORS}
+    derived_fmt, derived_unit, rms_name = "r_{}", "mV/V/s", "drift_rms"
 
     def columns(self, sig, theta):
         return ms.thermal_drift(0.0, sig.onehot, sig.t_seq_s[:, None])  # unit rates
-
-    def derived(self, coef, theta):
-        out = {f"r_{s}": float(v) for s, v in zip(SENSORS, coef, strict=True)}
-        out["drift_rms"] = _rms(coef)
-        return out
-
-    def derived_units(self):
-        return {**{f"r_{s}": "mV/V/s" for s in SENSORS}, "drift_rms": "mV/V/s"}
-
-    def primary(self):
-        return ("drift_rms",)
 
     def sensor_effect(self, coef, theta):
         return {"name": "thermal_drift", "params": {"rate_mvv_per_s": [float(v) for v in coef]}}
 
 
-class _Relative(FitTerm):
+class _Relative(_PerChannel):
     """Per-channel values v_c with Σ w_c v_c = 0 over the estimable channels: one raw
     parameter per estimable channel but one.
 
@@ -223,7 +234,6 @@ class _Relative(FitTerm):
     weight_key = ""
     raw_prefix = ""
     raw_unit = "-"
-    derived_fmt = "{}"
     min_weight_share = 0.0
 
     def __init__(self, name: str | None = None, weights: Any = None,
@@ -249,9 +259,8 @@ class _Relative(FitTerm):
         """Per-channel values v = Q r, shape (5,) (0 on channels not estimated)."""
         return self.q @ np.asarray(coef, float)
 
-    def channel_param(self, c: int) -> str:
-        """Name of the derived parameter of channel ``c``."""
-        return self.derived_fmt.format(SENSORS[c])
+    def channel_values(self, coef: np.ndarray) -> np.ndarray:
+        return self.values(coef)
 
     def withheld(self, coef: np.ndarray, theta: np.ndarray, sig: Any = None
                  ) -> dict[int, tuple[str, str]]:
@@ -284,24 +293,10 @@ class GainMismatch(_Relative):
                          "gauge factor ±1 %, amplifier gain, lead wires, axial position")
               for s in SENSORS}
 
+    derived_fmt, rms_name = "g_{}", "gain_rms"
+
     def columns(self, sig, theta):
         return ms.gain_mismatch(sig.prediction()[:, None], sig.onehot) @ self.q
-
-    derived_fmt = "g_{}"
-
-    def derived(self, coef, theta):
-        v = self.values(coef)
-        out = {f"g_{s}": float(x) for s, x, e in zip(SENSORS, v, self.estimable, strict=True)
-               if e}
-        out["gain_rms"] = _rms(v[self.estimable])
-        return out
-
-    def derived_units(self):
-        return {**{f"g_{s}": "-" for s, e in zip(SENSORS, self.estimable, strict=True) if e},
-                "gain_rms": "-"}
-
-    def primary(self):
-        return ("gain_rms",)
 
     def sensor_effect(self, coef, theta, neutral=()):
         """The ``sensor_effects`` entry; channels in ``neutral`` get gain 1."""
@@ -339,25 +334,13 @@ class GaugeMisplacement(_Relative):
                                  "placement tolerance of bonded gauges, Vishay TN-511")
               for s in SENSORS}
 
+    derived_fmt, derived_unit, rms_name = "delta_{}_deg", "deg", "misplacement_rms_deg"
+
     def columns(self, sig, theta):
         return ms.gauge_misplacement_linear(sig.col("dpsi")[:, None], sig.onehot) @ self.q
 
-    derived_fmt = "delta_{}_deg"
-
-    def derived(self, coef, theta):
-        v = np.rad2deg(self.values(coef))
-        out = {f"delta_{s}_deg": float(x)
-               for s, x, e in zip(SENSORS, v, self.estimable, strict=True) if e}
-        out["misplacement_rms_deg"] = _rms(v[self.estimable])
-        return out
-
-    def derived_units(self):
-        return {**{f"delta_{s}_deg": "deg"
-                   for s, e in zip(SENSORS, self.estimable, strict=True) if e},
-                "misplacement_rms_deg": "deg"}
-
-    def primary(self):
-        return ("misplacement_rms_deg",)
+    def channel_values(self, coef: np.ndarray) -> np.ndarray:
+        return np.rad2deg(self.values(coef))
 
     def sensor_effect(self, coef, theta, neutral=()):
         """The ``sensor_effects`` entry; channels in ``neutral`` get 0°."""
@@ -555,6 +538,3 @@ def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[Fit
         lib[f"ke_order{k}"] = _ke_class(int(k))
     lib["thermal_drift"] = ThermalDrift
     return lib
-
-
-STRAIN_LIBRARY = strain_library()

@@ -25,10 +25,8 @@ def make_figures(result: CalibrationResult, out_dir: str | Path,
 
     Parameters
     ----------
-    result : CalibrationResult
     out_dir : path-like
         Report folder; figures go to ``out_dir/figures/`` (created).
-    fmt : str, default "png"
 
     Returns
     -------

@@ -203,7 +203,6 @@ class StrainModel:
 
         Parameters
         ----------
-        opm : _OPModel
         y : ndarray, shape (n_w, 5, n_t)
             Measured windows of this operating point [mV/V].
 
@@ -267,7 +266,6 @@ class Realigner:
 
     Parameters
     ----------
-    model : StrainModel
     opms : list of _OPModel
         One per operating point.
     op_of : ndarray of int, shape (n_w,)
@@ -275,7 +273,6 @@ class Realigner:
         :meth:`StrainModel.psi_parts` of all windows, arrays (n_w, 5, m).
     y : ndarray, shape (n_w, 5, n_t)
         Measured windows [mV/V].
-    n_lead : int
     """
 
     def __init__(self, model: StrainModel, opms: list[_OPModel], op_of: np.ndarray,

@@ -112,7 +112,6 @@ class ToneProbe(Probe):
 
     Parameters
     ----------
-    name, label : str
     coord : callable sig -> ndarray (n,)
         Phase coordinate per sample: φ_in [rad] for orders, 2π t [rad·Hz⁻¹] for
         frequencies.

@@ -114,10 +114,6 @@ def check_candidates(candidates: Sequence[str] | None, model: StrainModel) -> li
     model : StrainModel
         Its kinematic-error orders add the ``ke_order{k}`` keys.
 
-    Returns
-    -------
-    list of str
-
     Raises
     ------
     ValueError
@@ -142,7 +138,6 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
 
     Parameters
     ----------
-    win : StrainWindows
     model : StrainModel, optional
         Reused across calls to share simulated operating points.
     heldout : {"windows", "operating_points"}
@@ -161,10 +156,6 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
     ke_bound_rad : float, default 2e-3
         Bound of the extra kinematic-error coefficients [rad] (7 arcmin, far above the
         catalogue's about 1 arcmin in total).
-
-    Returns
-    -------
-    Problem
 
     Raises
     ------
@@ -392,11 +383,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     ----------
     problem : Problem
         From :func:`build_problem`.
-    config : SelectionConfig, optional
-
-    Returns
-    -------
-    CalibrationResult
 
     Raises
     ------

@@ -189,7 +189,6 @@ def order2_components(sig: StrainSignals, x: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    sig : StrainSignals
     x : ndarray, shape (n_windows * 5 * n_t,)
         Signals on the problem's rows [mV/V].
 

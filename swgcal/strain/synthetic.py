@@ -104,7 +104,6 @@ class CleanWindows:
         [mV/V].
     time_s : ndarray, shape (n_lead + n_t,)
         [s]; the window starts at ``time_s[n_lead]``.
-    n_lead : int
     phi_in : ndarray, shape (n_windows, n_lead + n_t)
         Input angle [rad].
     n_in_rpm, t_out_nm, n_in_mean_rpm, t_out_mean_nm, efficiency : ndarray, (n_windows,)
@@ -183,35 +182,33 @@ def simulate_windows(chain: SimulationChain, ops: Sequence[tuple[float, float]] 
 
 def _hidden(clean: CleanWindows, spec: Mapping[str, Any], rng: np.random.Generator) -> np.ndarray:
     n_w, _, n = clean.signals.shape
-    sensors = SENSORS
     load = np.asarray(clean.t_out_nm, float)[:, None]
+    out = np.zeros_like(clean.signals)
     if spec["kind"] == "tone":
         amp = spec["amplitude_mvv"] + spec.get("amplitude_mvv_per_nm", 0.0) * load
         x = amp * np.sin(spec["order"] * clean.phi_in + spec["phase_rad"])
-        return np.broadcast_to(x[:, None, :], (n_w, 5, n))
-    if spec["kind"] == "square":
+    elif spec["kind"] == "square":
         ph = rng.uniform(0, 1, n_w)[:, None]
         frac = np.mod(clean.time_s[None, :] / spec["period_s"] + ph, 1.0)
         x = spec["amplitude_mvv"] * np.where(frac < 0.5, 1.0, -1.0)
-        return np.broadcast_to(x[:, None, :], (n_w, 5, n))
-    if spec["kind"] == "hum":
+    elif spec["kind"] == "hum":
         ph = rng.uniform(0, 2 * np.pi, n_w)[:, None]
         arg = 2 * np.pi * spec["frequency_hz"] * clean.time_s[None, :] + ph
         x = spec["amplitude_mvv"] * np.sin(arg)
         for h, rel in spec.get("harmonics", {}).items():
             x = x + rel * spec["amplitude_mvv"] * np.sin(int(h) * arg)
-        return np.broadcast_to(x[:, None, :], (n_w, 5, n))
-    out = np.zeros_like(clean.signals)
-    if spec["kind"] == "crosstalk":
-        a, b = sensors.index(spec["source"]), sensors.index(spec["target"])
+    elif spec["kind"] == "crosstalk":
+        a, b = SENSORS.index(spec["source"]), SENSORS.index(spec["target"])
         out[:, b] = spec["fraction"] * clean.signals[:, a]
         return out
-    if spec["kind"] == "load_gain":
-        c = sensors.index(spec["channel"])
+    elif spec["kind"] == "load_gain":
+        c = SENSORS.index(spec["channel"])
         out[:, c] = spec["gain_per_nm"] * load * clean.signals[:, c]
         return out
-    raise ValueError(f"unknown hidden disturbance kind {spec['kind']!r}; allowed tone, square, "
-                     "hum, crosstalk, load_gain")
+    else:
+        raise ValueError(f"unknown hidden disturbance kind {spec['kind']!r}; allowed tone, "
+                         "square, hum, crosstalk, load_gain")
+    return np.broadcast_to(x[:, None, :], (n_w, 5, n))
 
 
 def bench_dataset(clean: CleanWindows, sensor_effects: Sequence[Mapping[str, Any]] = (),
@@ -222,7 +219,6 @@ def bench_dataset(clean: CleanWindows, sensor_effects: Sequence[Mapping[str, Any
 
     Parameters
     ----------
-    clean : CleanWindows
     sensor_effects : sequence of mapping
         Planted measurement effects (:mod:`swgsim.sensing.effects`).
     hidden : sequence of mapping
@@ -231,7 +227,6 @@ def bench_dataset(clean: CleanWindows, sensor_effects: Sequence[Mapping[str, Any
         White-noise standard deviation relative to the range of the noise-free signals.
     seed : int
         Noise (and glitch phases).
-    name : str
     window_period_s : float, optional
         Time between the starts of consecutive windows [s] (thermal drift); default the
         window length (back-to-back windows).
@@ -325,19 +320,18 @@ def expected_values(key: str, effect: Mapping[str, Any],
         Parameter -> true value of the other reported per-channel parameters.
     """
     chk = PLANTED[key]["check"] if check is None else check
-    sensors = SENSORS
     opts = effect.get("options", {})
     est = np.asarray(opts.get("estimable", np.ones(5, bool)), bool)
     w = np.asarray(opts.get("weights", np.ones(5)), float) * est
     if key == "gain_mismatch":
         g = np.asarray(chk["gain"], float)
         rel = g / (np.sum(w * g) / np.sum(w)) - 1.0
-        names = [f"g_{s}" for s in sensors]
+        names = [f"g_{s}" for s in SENSORS]
         planted = np.flatnonzero(g != 1.0)
     elif key == "gauge_misplacement":
         d = np.asarray(chk["delta_deg"], float)
         rel = d - np.sum(w * d) / np.sum(w)
-        names = [f"delta_{s}_deg" for s in sensors]
+        names = [f"delta_{s}_deg" for s in SENSORS]
         planted = np.flatnonzero(d != 0.0)
     else:
         return dict(chk), {}

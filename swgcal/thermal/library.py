@@ -52,16 +52,15 @@ def first_order_lag(u_held: np.ndarray, dt_s: np.ndarray, tau_min: float) -> np.
 
 
 class _Lagged(FitTerm):
-    """A term of one column, ``lag_τ(input)``, τ its nonlinear parameter."""
+    """A term of one column, ``lag_τ(input)``, τ its nonlinear parameter; the input is the
+    signals' attribute ``input_name``."""
 
+    input_name = ""
     tau_range: tuple[float, float] = _TAU_BOUNDS_MIN
     tau_starts: tuple[float, ...] = (30.0,)
 
-    def source_of(self, sig: Any) -> np.ndarray:
-        raise NotImplementedError
-
     def columns(self, sig: Any, theta: np.ndarray) -> np.ndarray:
-        return first_order_lag(self.source_of(sig), sig.dt_s, theta[0])[:, None]
+        return first_order_lag(getattr(sig, self.input_name), sig.dt_s, theta[0])[:, None]
 
     def bounds(self, sig: Any) -> list[tuple[float, float]]:
         return [self.tau_range]
@@ -99,6 +98,7 @@ class CopperLoss(_Lagged):
     standstill too, where a joint holds its link against gravity."""
 
     kind = "copper"
+    input_name = "current_sq_a2"
     linear = (Param("k_cu_k_per_a2", "K/A²", "steady rise per squared motor ampere, "
                                              "R_th,cu R_w"),)
     nonlinear = (Param("tau_cu_min", "min", "time constant of the winding's heat path",
@@ -114,15 +114,13 @@ class CopperLoss(_Lagged):
               "tau_cu_min": (2.0, 300.0, "a motor's thermal time constants [choice]")}
     tau_starts = (10.0, 40.0)
 
-    def source_of(self, sig: Any) -> np.ndarray:
-        return sig.current_sq_a2
-
 
 class HousingLag(_Lagged):
     """A second, slower time constant: the housing and the link store heat the winding's
     short path does not see (a two-node network)."""
 
     kind = "housing"
+    input_name = "loss_w"
     linear = (Param("r2_k_per_w", "K/W", "thermal resistance of the slow path"),)
     nonlinear = (Param("tau2_min", "min", "slow time constant", log=True),)
     signature = "a warm-up that keeps creeping after the first time constant"
@@ -135,14 +133,12 @@ class HousingLag(_Lagged):
     tau_range = (30.0, 600.0)
     tau_starts = (120.0, 300.0)
 
-    def source_of(self, sig: Any) -> np.ndarray:
-        return sig.loss_w
-
 
 class NeighbourHeat(_Lagged):
     """Heat from the neighbouring joints through the link: their copper losses, lagged."""
 
     kind = "neighbour"
+    input_name = "neighbour_sq_a2"
     linear = (Param("k_nb_k_per_a2", "K/A²", "rise per squared ampere of the neighbours"),)
     nonlinear = (Param("tau_nb_min", "min", "time constant of the path", log=True),)
     signature = "follows the neighbouring joints' currents"
@@ -154,15 +150,13 @@ class NeighbourHeat(_Lagged):
                                           "[choice]")}
     tau_starts = (60.0,)
 
-    def source_of(self, sig: Any) -> np.ndarray:
-        return sig.neighbour_sq_a2
-
 
 class StandstillCooling(_Lagged):
     """Standstill: no windage and the brakes engaged, the joint cools towards the hall
     differently from what the loss alone says (a negative step, lagged)."""
 
     kind = "standstill"
+    input_name = "still"
     linear = (Param("dt_still_k", "K", "steady change at standstill"),)
     nonlinear = (Param("tau_still_min", "min", "time constant", log=True),)
     signature = "lower after standing still than the loss says"
@@ -171,9 +165,6 @@ class StandstillCooling(_Lagged):
     probes = ("speed", "time")
     ranges = {"dt_still_k": (-10.0, 0.0, "cooling, at most the joint's rise [choice]"),
               "tau_still_min": (2.0, 300.0, "a joint's time constants [choice]")}
-
-    def source_of(self, sig: Any) -> np.ndarray:
-        return sig.still
 
 
 class AmbientDrift(FitTerm):

@@ -61,12 +61,8 @@ class ThermalOptions:
 
 @dataclass(frozen=True)
 class ThermalKindOptions:
-    """The thermal kind's keys of ``swgsim-calibrate``: one group, ``thermal``.
-
-    Attributes
-    ----------
-    thermal : ThermalOptions
-    """
+    """The thermal kind's keys of ``swgsim-calibrate``: one group, ``thermal``
+    (:class:`ThermalOptions`)."""
 
     thermal: ThermalOptions = field(default_factory=ThermalOptions)
 

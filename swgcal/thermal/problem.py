@@ -65,7 +65,6 @@ class ThermalSignals:
         abs(ω) held [rad/s].
     cycle : ndarray, shape (n,)
         The log's cycle count [-].
-    joint : int
     """
 
     t_s: np.ndarray
@@ -101,15 +100,10 @@ def thermal_signals(log: JointLog, joint: int, torque_per_amp_nm: float,
 
     Parameters
     ----------
-    log : JointLog
     joint : int
         0-5.
     torque_per_amp_nm, gear_efficiency : float
         k_τ [N m/A] and η [-] of the loss proxy (:mod:`.options`).
-
-    Returns
-    -------
-    ThermalSignals
     """
     i, w = log.current_a[:, joint], log.speed_rad_s[:, joint]
     nb = [k for k in (joint - 1, joint + 1) if 0 <= k < JOINTS]
@@ -195,7 +189,6 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
 
     Parameters
     ----------
-    log : JointLog
     joint, torque_per_amp_nm, gear_efficiency, fit_frac
         :class:`.options.ThermalOptions` (defaults and ranges there).
     candidates : sequence of str, optional
@@ -210,8 +203,7 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
     ------
     ValueError
         An option outside its range (named by its app key, e.g. ``thermal.joint``), an
-        unknown candidate, too few
-        readings to fit, validate or test.
+        unknown candidate, too few readings to fit, validate or test.
     """
     given = {"thermal": {"joint": joint, "torque_per_amp_nm": torque_per_amp_nm,
                          "gear_efficiency": gear_efficiency, "fit_frac": fit_frac}}
@@ -249,10 +241,6 @@ def build_problem(measured: str | os.PathLike | JointLog, **options: Any) -> Pro
         ``joint``, ``torque_per_amp_nm``, ``gear_efficiency``, ``fit_frac``,
         ``candidates``: see :func:`thermal_problem`.
 
-    Returns
-    -------
-    Problem
-
     Raises
     ------
     TypeError
@@ -271,19 +259,11 @@ def build_problem(measured: str | os.PathLike | JointLog, **options: Any) -> Pro
 def calibrate(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:
     """Calibrate a thermal problem: the selection loop (:func:`swgcal.loop.select_effects`),
     then every kept effect whose primary parameters the final fit (fit + validation) does
-    not pin down is removed and the model refitted, as the friction side removes a
-    ripple without support of its own (:func:`swgcal.friction.calibrate`): a pair the
-    loop accepted can carry a member that the final fit on fit + validation leaves at
-    zero. The problem screens every candidate with the base's τ, gain and offset refitted
-    with it (:attr:`swgcal.loop.Problem.screen_jointly`): a second heat source trades off
-    against the base's own time constant, and held at its value fitted without the
-    effect, the base leaves a single effect too little to show (a planted copper loss
-    came through only as a pair, a second time constant not at all).
-
-    Parameters
-    ----------
-    problem : Problem
-    config : SelectionConfig, optional
+    not pin down is removed and the model refitted (a pair the loop accepted can carry a
+    member that the final fit leaves at zero). The problem screens every candidate with
+    the base's τ, gain and offset refitted with it (:attr:`swgcal.loop.Problem.screen_jointly`):
+    a second heat source trades off against the base's own time constant, which, held at
+    its value fitted without the effect, leaves a single effect too little to show.
 
     Returns
     -------

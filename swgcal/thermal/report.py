@@ -117,11 +117,6 @@ def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, st
     """The measured temperature against the base and the final model, the held-out part
     shaded (``figures/temperature.png``).
 
-    Parameters
-    ----------
-    result : CalibrationResult
-    out_dir : str or Path
-
     Returns
     -------
     dict of str to str

@@ -49,7 +49,6 @@ class SyntheticThermal:
         White noise on the temperature [K].
     hours_before, gap_h, hours_after : float
         Parts of the log [h].
-    seed : int
     """
 
     r_th_k_per_w: float = 0.5
@@ -74,10 +73,6 @@ class SyntheticThermal:
 
 def synthetic_joint_log(c: SyntheticThermal) -> JointLog:
     """A synthetic joint log of joint 1 (module docstring).
-
-    Parameters
-    ----------
-    c : SyntheticThermal
 
     Returns
     -------

@@ -43,8 +43,6 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "swgsim/files/ownership.py": "stamps, claims and the proof a file is ours: one chain of "
                                  "custody, split it and each half trusts the other blindly",
     "swgcal/loop.py": "the calibration loop and its before/after error: one algorithm",
-    "swgcal/report.py": "the summary and the one report renderer of every data kind (three "
-                        "renderers merged into it)",
     "swgsim/sensing/effects.py": "every measurement-chain effect with its source; to be split "
                                  "by effect kind",
     "learn/inputs/signals.py": "the nets' inputs (raw, diff, features) and their checks; to be "
@@ -60,8 +58,6 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "swgsim/gear/dynamics.py": "eq. (1)-(6) and their integrator; the steady and the "
                                "profile integrators are still two (issue 46)",
     "learn/monitor/stream.py": "a stream's input checks, the run and its outputs",
-    "swgcal/friction/data.py": "friction recordings: loading, checks and the real data "
-                               "sets' metadata",
     "tests/learn/test_monitor.py": "the monitor's tests: to be split by what they hold",
     "tests/swgsim/test_recordings.py": "every table format and bad mapping of a recording",
 }
@@ -71,7 +67,6 @@ LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
     "swgsim/datasets/generate.py:generate": "docstring 38 lines, code 44",
     "swgsim/datasets/profile_shard.py:simulate_profile_shard": "docstring 25, code 66",
     "swgcal/core.py:_uncertainty": "one covariance derivation, 81 lines of code: to split",
-    "swgcal/diagnose.py:diagnose": "docstring 28, code 57",
     "learn/inputs/signals.py:build_input": "docstring 39, code 52",
     "learn/learners/nets.py:fine_tune": "docstring 38, code 61",
     "learn/studies/latency.py:measure_latency": "docstring 35, code 53",
