@@ -139,14 +139,6 @@ class InputSet:
     n_aux: int
     kind: str
 
-    def subset(self, idx: np.ndarray) -> InputSet:
-        """The windows at positions ``idx`` (integer array or boolean mask)."""
-        idx = np.asarray(idx)
-        if idx.dtype == bool:
-            idx = np.flatnonzero(idx)
-        return InputSet(self.X[idx], self.y[idx], self.meta.iloc[idx].reset_index(drop=True),
-                        self.n_aux, self.kind)
-
 
 def window_meta(ds, disturbed: bool | None = None) -> tuple[pd.DataFrame, np.ndarray]:
     """Metadata of the non-reference windows of ``ds`` and their reference windows.

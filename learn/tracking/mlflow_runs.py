@@ -135,7 +135,7 @@ def confusion_figure(confusion: np.ndarray, labels: Sequence[str], title: str = 
 class TrackedRun:
     """An open MLflow run, yielded by :func:`log_run`; every method logs to it.
 
-    Params, metrics and tags are buffered and sent in as few ``log_batch`` calls as MLflow
+    Params and metrics are buffered and sent in as few ``log_batch`` calls as MLflow
     allows (each call is a database transaction, ~15 ms on a local SQLite store) when the
     run ends, or on :meth:`flush`; artifacts, data sets and models are sent at once.
 
@@ -150,7 +150,6 @@ class TrackedRun:
     experiment_id: str
     _params: list = field(default_factory=list, repr=False)
     _metrics: list = field(default_factory=list, repr=False)
-    _tags: list = field(default_factory=list, repr=False)
 
     def log_params(self, params: Mapping[str, Any]) -> None:
         """Log params, nested mappings flattened with dots (:func:`flatten_config`)."""
@@ -167,25 +166,14 @@ class TrackedRun:
         ts = int(time.time() * 1000)
         self._metrics += [Metric(k, float(v), ts, int(step)) for k, v in metrics.items()]
 
-    def set_tags(self, tags: Mapping[str, Any]) -> None:
-        """Set run tags (values as strings)."""
-        from mlflow.entities import RunTag
-
-        self._tags += [RunTag(k, str(v)) for k, v in tags.items()]
-
     def flush(self) -> None:
-        """Send the buffered params, metrics and tags (MLflow: per batch <= 100 params,
-        <= 100 tags, <= 1000 entries in all)."""
-        while self._params or self._metrics or self._tags:
+        """Send the buffered params and metrics (MLflow: per batch <= 100 params, <= 1000
+        entries in all)."""
+        while self._params or self._metrics:
             params, self._params = self._params[:100], self._params[100:]
-            tags, self._tags = self._tags[:100], self._tags[100:]
-            n = 1000 - len(params) - len(tags)
+            n = 1000 - len(params)
             metrics, self._metrics = self._metrics[:n], self._metrics[n:]
-            self.client.log_batch(self.run_id, metrics=metrics, params=params, tags=tags)
-
-    def log_config(self, config: Mapping[str, Any], name: str = "config.yaml") -> None:
-        """Store a resolved config as a YAML (or JSON, by ``name``) artifact."""
-        self.client.log_dict(self.run_id, dict(config), name)
+            self.client.log_batch(self.run_id, metrics=metrics, params=params)
 
     def log_figure(self, figure, name: str) -> None:
         """Store a matplotlib figure as the artifact ``name`` (e.g. ``"confusion.png"``)."""
@@ -470,7 +458,7 @@ def log_run(
         if params is not None:
             tracked.log_params(params)
         if config is not None:
-            tracked.log_config(config)
+            client.log_dict(tracked.run_id, dict(config), "config.yaml")
         yield tracked
         status = "FINISHED"
     finally:

@@ -75,7 +75,6 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
     learn.tracking.preflight.BrokenInstall
         MLflow (or a library it imports) cannot be imported: one line naming it.
     """
-    import os
     import sqlite3
 
     uri = tracking_uri or default_tracking_uri()
