@@ -40,6 +40,9 @@ _INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "
            "raw_res": "synchronous residual", "diff_res": "differenced residual",
            "res_spec": "residual spectrum"}
 _SPLIT_ORDER = {"gear3": 0, "gear1": 1, "gear2": 2}
+_ADAPTED = {"ft_all": ", fine-tuned all layers, k={k}", "ft_last": ", fine-tuned last layer, k={k}",
+            "ft_head": ", ridge refitted with k={k}", "adabn": ", AdaBN (unsupervised)",
+            "coral": ", CORAL (unsupervised)"}
 #: The columns that name one cell of the comparison (a run summarised over seeds).
 CELL_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
 
@@ -47,18 +50,8 @@ CELL_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
 def row_label(model: str, inp: str, k: int) -> str:
     """Human-readable row name, e.g. ``CNN, raw, fine-tuned all layers, k=5``."""
     base, _, suffix = model.partition("+")
-    name = f"{model_label(base)}, {_INPUTS.get(inp, inp)}"
-    if suffix == "ft_all":
-        name += f", fine-tuned all layers, k={k}"
-    elif suffix == "ft_last":
-        name += f", fine-tuned last layer, k={k}"
-    elif suffix == "ft_head":
-        name += f", ridge refitted with k={k}"
-    elif suffix == "adabn":
-        name += ", AdaBN (unsupervised)"
-    elif suffix == "coral":
-        name += ", CORAL (unsupervised)"
-    return name
+    return (f"{model_label(base)}, {_INPUTS.get(inp, inp)}"
+            + _ADAPTED.get(suffix, "").format(k=k))
 
 
 def summarise(results: pd.DataFrame) -> pd.DataFrame:
@@ -214,10 +207,6 @@ def _recall_targets(ds: str, spec: TargetSpec, w: pd.DataFrame, recall: pd.DataF
             rows.append(_target_row(ds, f"recall of {cls}, worst split, k = 0", tgt, who, b,
                                     float(r.get(cls, np.nan)), obs))
     return rows
-
-
-def _pct(m: float, s: float) -> str:
-    return f"{100 * m:.2f} ± {100 * s:.2f}"
 
 
 def model_rank(m: str) -> int:
@@ -461,8 +450,7 @@ def _intro_md(adapt_windows: int | None) -> list[str]:
             "source replay. Nothing is chosen on an evaluation window.", "",
             "Unsupervised adaptation (AdaBN, CORAL) sees what a real gear offers without "
             f"labels: its unlabelled healthy windows, {stream} of the held-out gear's "
-            "healthy class "
-            "(whole healthy variants, each one pass over the operating points; "
+            "healthy class (whole healthy variants, each one pass over the operating points; "
             "`transfer.adapt_windows`), removed from the evaluation windows; never the "
             "class-balanced k-shot pool. Both align statistics of every source class to "
             "those of the target's healthy windows alone: AdaBN's batch-norm statistics and "
@@ -523,7 +511,8 @@ def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
             for s in splits:
                 r = sp[(sp["model"] == w["model"]) & (sp["input"] == w["input"])
                        & (sp["k_shot"] == w["k_shot"]) & (sp["split"] == s)]
-                cells.append(_pct(r["mean"].iloc[0], r["std"].iloc[0]) if len(r) else "")
+                cells.append(f"{100 * r['mean'].iloc[0]:.2f} ± {100 * r['std'].iloc[0]:.2f}"
+                             if len(r) else "")
             cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
             key = (ds, p, w["model"], w["input"], w["k_shot"])
             cells.append(f"{train_s.get(key, np.nan):.1f}")
