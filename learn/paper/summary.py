@@ -34,7 +34,7 @@ from learn.paper.results import (
 from learn.paper.tables import StudyOptions
 from swgsim.base.lazy import lazy_module
 from swgsim.datasets.config import DatasetConfig
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import atomic_write_bytes, write_owned
 from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
 from swgsim.gear.faults import display_name
 
@@ -393,8 +393,6 @@ def write_summary(
               *_phase_lock_md(rec, sp, datasets, files["recall"]),
               "## Tables VII-X side by side", "", *_tables_md(cells, names),
               *_open_choices_md(names, datasets, options, seed, features)]
-    from swgsim.files.ownership import atomic_write_bytes
-
     atomic_write_bytes(files["md"], ("\n".join(lines) + "\n").encode())
     log.info("summary written to %s", files["md"])
     return {"files": files, "scorecards": cards, "findings": found}
