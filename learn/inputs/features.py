@@ -448,7 +448,7 @@ def extract_features(
     assert X.shape[1] == len(names), (X.shape, len(names))
     _check_finite(X, names)
     log.info("selection %d: %d windows x %d features", sel, X.shape[0], X.shape[1])
-    return Features(X, names, _feature_meta(ds, samples))
+    return Features(X, names, meta_table(ds, samples))
 
 
 def _dft_rel(ds, s: np.ndarray, used: np.ndarray, i_s: np.ndarray, i_r: np.ndarray,
@@ -479,10 +479,12 @@ def _check_finite(X: np.ndarray, names: list[str]) -> None:
         )
 
 
-def _feature_meta(ds, samples: np.ndarray) -> pd.DataFrame:
-    """Metadata of the windows ``samples`` (:data:`META_COLUMNS`)."""
+def meta_table(ds, samples: np.ndarray, columns: Sequence[str] = META_COLUMNS
+               ) -> pd.DataFrame:
+    """Metadata of the windows ``samples``: ``sample`` and ``columns`` (fault as str,
+    disturbed as bool), one row per window."""
     meta = pd.DataFrame({"sample": samples})
-    for k in META_COLUMNS:
+    for k in columns:
         meta[k] = np.asarray(ds[k].values)[samples]
     meta["fault"] = meta["fault"].astype(str)
     meta["disturbed"] = meta["disturbed"].astype(bool)

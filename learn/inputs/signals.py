@@ -80,6 +80,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from learn.inputs.features import extract_features, meta_table, reference_index
 from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
@@ -163,18 +164,11 @@ def window_meta(ds, disturbed: bool | None = None) -> tuple[pd.DataFrame, np.nda
     ValueError
         From :func:`learn.inputs.features.reference_index` (no or ambiguous reference window).
     """
-    from learn.inputs.features import reference_index
-
     samples, refs = reference_index(ds)
     if disturbed is not None:
         keep = ds["disturbed"].values[samples].astype(bool) == bool(disturbed)
         samples, refs = samples[keep], refs[keep]
-    meta = pd.DataFrame({"sample": samples})
-    for k in _META:
-        meta[k] = np.asarray(ds[k].values)[samples]
-    meta["fault"] = meta["fault"].astype(str)
-    meta["disturbed"] = meta["disturbed"].astype(bool)
-    return meta, refs
+    return meta_table(ds, samples, _META), refs
 
 
 def normalise_signals(ds, samples: np.ndarray, refs: np.ndarray) -> np.ndarray:
@@ -654,8 +648,6 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
         x = _append_aux(x, eff[:, eff_cols])
         return InputSet(np.ascontiguousarray(x, dtype=np.float32), y, meta, len(eff_cols),
                         kind)
-    from learn.inputs.features import extract_features
-
     feats = extract_features(ds, int(kind[-1]), **dict(feature_kwargs or {}))
     fs = feats.meta["sample"].to_numpy()
     pos = np.searchsorted(fs, samples)
