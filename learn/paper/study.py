@@ -31,6 +31,7 @@ from learn.studies.protocols import (
     ProtocolResult,
     Split,
     class_labels,
+    fit_split_quiet,
 )
 from learn.tracking.config import LoggerConfig
 from swgsim.base.lazy import lazy_module
@@ -154,8 +155,6 @@ def fit_tasks(jobs: list[StudyJob], feats: Mapping[int, Features],
     """One delayed :func:`learn.studies.protocols.fit_split_quiet` per (job, split), in job
     order; the last split of a job returns its model if ``return_models``."""
     from joblib import delayed
-
-    from learn.studies.protocols import fit_split_quiet
 
     tasks, fit = [], travelling(fit_split_quiet)  # a user's learners travel with the fits
     for j in jobs:

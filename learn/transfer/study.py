@@ -48,9 +48,9 @@ from typing import Any
 
 import numpy as np
 
-from learn.inputs.signals import ResidualSettings, window_meta
+from learn.inputs.signals import INPUTS, ResidualSettings, build_input, window_meta
 from learn.studies.kshot import check_no_leak, kshot_split
-from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
+from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS, PROTOCOLS, protocol_splits
 from learn.studies.runs import (
     ADAPT,
     FT_MODES,
@@ -232,8 +232,6 @@ def _check_finetune(ft: FinetuneSettings, where: str) -> None:
 
 
 def _check_runs(tc: TransferConfig, where: str) -> None:
-    from learn.inputs.signals import INPUTS
-
     if not tc.runs:
         raise ValueError(f"{where}.runs: must list at least one {{model, input}}")
     for i, s in enumerate(tc.runs):
@@ -334,8 +332,6 @@ def _protocols_with_data(ds, protocols: Sequence[str]) -> list[str]:
 def _cells_of(meta, protocols: Sequence[str], tc: TransferConfig, split_seed: int) -> list:
     """(protocol, split, seed) of every cell: model seeds per split, the splits fixed by
     ``split_seed`` so that a split name means the same windows for every seed."""
-    from learn.studies.protocols import protocol_splits
-
     cv_seeds = tc.seeds if tc.cv_seeds is None else tc.cv_seeds
     return [(p, sp, int(seed)) for p in protocols
             for sp in protocol_splits(meta, p, random_state=split_seed)
@@ -346,8 +342,6 @@ def planned_jobs(tc: TransferConfig) -> int:
     """Jobs, (protocol, split, seed), that the comparison plans per data set: the splits
     each protocol plans (:attr:`learn.studies.protocols.ProtocolConfig.n_planned`) times
     its seeds."""
-    from learn.studies.protocols import PROTOCOLS
-
     cv_seeds = tc.seeds if tc.cv_seeds is None else tc.cv_seeds
     return sum(PROTOCOLS[p].n_planned * len(tc.seeds if p in OOD_PROTOCOLS else cv_seeds)
                for p in tc.protocols)
@@ -578,8 +572,6 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data", **kwargs) -
 
 def _inputs(ds, specs, tc: TransferConfig, disturbed: bool, feature_kwargs) -> dict:
     """Every input kind of the runs, on the clean or the disturbed windows."""
-    from learn.inputs.signals import build_input
-
     cache: dict = {}  # the residual that the residual inputs share
     return {kind: build_input(ds, kind, aux=tuple(tc.aux), disturbed=disturbed,
                               feature_kwargs=dict(feature_kwargs or {}),
