@@ -490,27 +490,15 @@ def log_job(
     parent_run_id: str | None = None,
     group: str | None = None,
 ) -> str:
-    """Log one job (all splits of one model under one protocol) as one MLflow run.
-
-    Through :func:`log_run`, so the run carries the git commit, the data set and the
-    config.
+    """Log one job (all splits of one model under one protocol) as one MLflow run, through
+    :func:`log_run`.
 
     Parameters
     ----------
     result : learn.studies.protocols.ProtocolResult
         Per-split accuracies and the summed confusion matrix.
-    experiment : str
-        MLflow experiment name (created if absent).
-    run_name : str
-        Run name, e.g. ``"selection3-rf"``.
-    params : mapping
-        Parameters; nested mappings are flattened with dots (:func:`flatten_config`).
-    config : mapping, optional
-        Resolved config, stored as the artifact ``config.yaml``.
-    tracking_uri : str, optional
-        Default :func:`learn.tracking.store.default_tracking_uri`.
-    tags : mapping, optional
-        Run tags.
+    experiment, run_name, params, config, tracking_uri, tags, parent_run_id, group
+        As :func:`log_run` (``run_name`` e.g. ``"selection3-rf"``).
     confusion_plot : bool, default True
         Store ``confusion_matrix.png``.
     dataset : path-like or DatasetRef, optional
@@ -521,8 +509,6 @@ def log_job(
         Tags of the logged model (e.g. ``{"split": "gear3"}``).
     X_sample : ndarray, shape (n, n_features), optional
         Rows for the model's signature.
-    parent_run_id, group : str, optional
-        See :func:`log_run`.
 
     Returns
     -------
