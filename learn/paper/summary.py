@@ -29,7 +29,6 @@ from learn.paper.results import (
     our_cells,
     scorecard,
     side_by_side,
-    table_spec,
 )
 from learn.paper.tables import StudyOptions
 from swgsim.base.lazy import lazy_module
@@ -107,8 +106,8 @@ def _cell(v: float) -> str:
 def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
     lines = []
     cols = [f"ours_{n}" for n in names]
-    for table in PAPER_TABLES:
-        title, protocol, models, selections = table_spec(table)
+    for table, t in PAPER_TABLES.items():
+        title, protocol, models, selections = t.title, t.protocol, t.models, t.selection_names
         sub = cells[cells["table"] == table]
         if sub.empty:
             continue
