@@ -253,8 +253,6 @@ def _adapt_unsupervised(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KSh
         m = CoralClassifier(est, reg=float(ft.coral_reg))
         m.fit(X[train], y[train], X[kshot.unlabelled])
         sc.add(f"{spec.model}+coral", 0, m, time.perf_counter() - t0)
-    elif spec.adapt is not None:
-        raise ValueError(f"adapt must be one of {ADAPT} or null, got {spec.adapt!r}")
 
 
 def _refit_heads(sc: _Scorer, spec: RunSpec, est, X, y, train, f_src: np.ndarray,
