@@ -1,19 +1,13 @@
 """MLflow tracking: one helper, :func:`log_run`, through which every run is logged.
 
 Every run that :func:`log_run` opens carries the provenance a result needs to be
-reproduced:
-
-* the git commit of the checkout (tag ``mlflow.source.git.commit``, which MLflow's UI
-  shows) and whether the work tree had uncommitted changes (tag ``git_dirty``); both are
-  ``"unknown"`` where there is no git or no checkout, never an error;
-* the data set as an MLflow dataset input (``mlflow.data``): its path and a content
-  digest, the data set's own ``content_sha256`` from ``manifest.json`` (written by the
-  generator over the signals and per-window metadata, see ``docs/DATASET.md``), else a
-  hash of the shards' SHA-256 listed in the manifest, else the SHA-256 of a file (a
-  friction CSV, hashed whole); a data-set folder costs one small JSON read, no shard is
-  re-hashed;
-* the resolved config: flattened into params and stored whole as ``config.yaml``;
-* the fitted model where there is one (:meth:`TrackedRun.log_model`, ``mlflow.sklearn``).
+reproduced (:mod:`learn.tracking.provenance`): the git commit of the checkout and whether
+its work tree had uncommitted changes (tags ``mlflow.source.git.commit``, ``git_dirty``;
+``"unknown"`` where there is no git or no checkout, never an error); the data set as an
+MLflow dataset input (``mlflow.data``) with the content digest its ``manifest.json``
+gives (:class:`learn.tracking.provenance.DatasetRef`; no shard is re-hashed); the resolved
+config, flattened into params and stored whole as ``config.yaml``; the fitted model where
+there is one (:meth:`TrackedRun.log_model`, ``mlflow.sklearn``).
 
 Runs that belong together (a Hydra sweep, the jobs of one study, the cells of the transfer
 comparison) are children of one parent run (tag ``mlflow.parentRunId``): pass
@@ -25,10 +19,8 @@ selection, model), holding every split: params (the flattened config), metrics
 as ``config.yaml`` and the test confusion matrix summed over splits as
 ``confusion_matrix.png``. One MLflow experiment per protocol (or per study). Everything
 goes through an explicit :class:`mlflow.MlflowClient`, so nothing here changes MLflow's
-global state (tracking URI, active run).
-
-How a process opens the MLflow store, its default URI and where its artifacts go: see
-:mod:`learn.tracking.store`.
+global state (tracking URI, active run); how a process opens the store, its default URI
+and where its artifacts go: :mod:`learn.tracking.store`.
 """
 
 from __future__ import annotations
