@@ -107,7 +107,7 @@ class ResidualSettings:
         default_factory=lambda: [0.25, 1 / 3, 0.5, 1.0])
     min_harmonic: int = 2       # synthesised from (0: offset; 1: order-1 disturbance out)
     n_points: int = 192         # samples of one WG revolution
-    compress: float | None = 1e-4  # asinh(x / compress); fault residuals span 4 decades
+    compress: float | None = 1e-4  # asinh(x / compress), 0 or None: none; residuals span 4 decades
 
 
 AUX = ("eta2_rel", "eta_rel")
@@ -491,10 +491,9 @@ def reference_residual(ds, samples: np.ndarray, refs: np.ndarray,
     samples, refs : ndarray of int, shape (n,)
         Windows and their reference windows (:func:`window_meta`).
     settings : ResidualSettings, optional
-        Uses ``ratio``, the gear ratio N (catalogue, 100 for the paper's gears;
-        docs/PHYSICS.md sec. 2), ``n_harmonics``, the harmonics H of ψ, and
-        ``nuisance_orders``, the input-rotation orders fitted and discarded (eq. 10
-        sub-harmonics); default :class:`ResidualSettings`.
+        Uses ``ratio`` (the gear ratio N: catalogue, 100 for the paper's gears;
+        docs/PHYSICS.md sec. 2), ``n_harmonics`` and ``nuisance_orders``; default
+        :class:`ResidualSettings`.
     psi : ndarray, shape (N, T), optional
         WG angle ψ of every sample of every window of ``ds`` [rad] (row i: window i; the
         data set does not carry it): windows and references are fitted in their own angle
@@ -586,9 +585,7 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     feature_kwargs : dict, optional
         ``orders``, ``floor_rel`` of :func:`learn.inputs.features.extract_features`.
     residual : ResidualSettings, optional
-        Settings of the residual inputs: ``ratio``, ``n_harmonics``, ``nuisance_orders``,
-        ``min_harmonic``, ``n_points``, ``compress`` (asinh scale; 0 or None: none);
-        default :class:`ResidualSettings`.
+        Settings of the residual inputs; default :class:`ResidualSettings`.
     psi : ndarray, shape (N, T), optional
         WG angle of every window of ``ds`` [rad], for the residual inputs
         (:func:`reference_residual`); refused for the other kinds.
