@@ -526,8 +526,8 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
     Raises
     ------
     ValueError
-        For a bad ``tc`` (:meth:`TransferConfig.check`), an unknown adaptation, or a k-shot split
-        that would leak.
+        For a bad ``tc`` (:meth:`TransferConfig.check`), an adaptation a run's model cannot
+        take, or a k-shot split that would leak.
     """
     from joblib import Parallel
 
