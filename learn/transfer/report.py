@@ -377,10 +377,11 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
                 targets: Mapping[str, TargetSpec] | None = None, primary: RunRef | None = None,
                 separability: Mapping[str, Mapping[str, pd.DataFrame]] | None = None,
                 latency: pd.DataFrame | None = None, timings: Mapping | None = None,
-                paper: bool = True, adapt_windows: int | None = None,
-                run_times: pd.DataFrame | None = None) -> Path:
+                adapt_windows: int | None = None, run_times: pd.DataFrame | None = None
+                ) -> Path:
     """Write ``table.md``: headline, targets, per-class recall, then per data set and
-    protocol the accuracy [%] per split and worst split, a diagnosis and the separability.
+    protocol the accuracy [%] per split and worst split (and the paper's RF rows of Tables
+    IX and X), a diagnosis and the separability.
 
     Parameters
     ----------
@@ -397,8 +398,6 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
         (:func:`learn.studies.latency.latency_heading`).
     timings : mapping, optional
         ``wall_s``, ``input_s``, ``generate_s``, ``threads``, ``cpus``, ``device``.
-    paper : bool
-        Add the paper's RF rows of Tables IX and X.
     adapt_windows : int, optional
         The held-out gear's unlabelled healthy windows the unsupervised adaptations saw
         (``transfer.adapt_windows``); stated in the introduction.
@@ -417,8 +416,7 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
         lines += _recall_md(recall, summ, primary, separability, order)
     train_s = results.groupby(CELL_KEYS)["train_s"].mean()
     for ds in order:
-        lines += _dataset_md(ds, summ, confusion, recall, separability, paper, primary,
-                             train_s)
+        lines += _dataset_md(ds, summ, confusion, recall, separability, primary, train_s)
     if latency is not None and len(latency):
         lines += _latency_md(latency)
     if timings:
@@ -484,8 +482,7 @@ def _targets_md(tt: pd.DataFrame) -> list[str]:
 
 
 def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
-                separability, paper: bool, primary: RunRef | None,
-                train_s: pd.Series) -> list[str]:
+                separability, primary: RunRef | None, train_s: pd.Series) -> list[str]:
     """One data set's section: diagnosis, separability, a table per protocol (a row per
     run and k, with its mean training time: ``train_s`` by :data:`CELL_KEYS`)."""
     lines = [f"## Data set `{ds}`", ""]
@@ -518,7 +515,7 @@ def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
             cells.append(f"{train_s.get(key, np.nan):.1f}")
             lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
                          + " | ".join(cells) + " |")
-        if paper and p in OOD_PROTOCOLS:
+        if p in OOD_PROTOCOLS:
             lines += _paper_rows(p, splits)
         lines.append("")
     return lines
