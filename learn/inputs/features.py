@@ -281,7 +281,7 @@ def feature_names(selection: int | str, orders: Sequence[float] | None = None) -
     return dft("ds13") + dft("ds24") + ["eta2_rel"]
 
 
-def check_orders(ds, orders: Sequence[float], what: str = "features") -> None:
+def check_orders(ds, orders: Sequence[float]) -> None:
     """Refuse DFT orders that a data set cannot carry.
 
     The highest order must lie below the Nyquist frequency at the highest input speed,
@@ -294,14 +294,12 @@ def check_orders(ds, orders: Sequence[float], what: str = "features") -> None:
         Schema-v1 data set (``sample_rate_hz`` attribute, ``time``, ``n_in_rpm``).
     orders : sequence of float
         Orders of the input rotation [-].
-    what : str
-        Config name of the orders for messages (``features``, ``inputs``).
 
     Raises
     ------
     ValueError
-        Naming ``<what>.max_order`` / ``<what>.order_step``, the value, the limit and the
-        data set.
+        Naming ``features.max_order`` / ``features.order_step``, the value, the limit and
+        the data set.
     """
     orders = np.asarray(orders, dtype=np.float64)
     t = np.asarray(ds["time"].values, dtype=np.float64)
@@ -311,14 +309,14 @@ def check_orders(ds, orders: Sequence[float], what: str = "features") -> None:
     f_hi = orders.max() * n_in.max() / 60.0
     if f_hi >= fs / 2:
         raise ValueError(
-            f"{what}.max_order={orders.max():g} is {f_hi:.0f} Hz at {n_in.max():g} rpm, at or "
+            f"features.max_order={orders.max():g} is {f_hi:.0f} Hz at {n_in.max():g} rpm, at or "
             f"above the Nyquist frequency {fs / 2:g} Hz of {src}; allowed: max_order < "
             f"{fs / 2 * 60 / n_in.max():.4g}")
     rev = t.size / fs * n_in.min() / 60.0  # input revolutions per window at the lowest speed
     step = float(np.min(np.diff(np.concatenate([[0.0], np.sort(orders)]))))
     if step * rev < 1.0 - 1e-6:
         raise ValueError(
-            f"{what}.order_step={step:g} needs windows of at least {1 / step:g} input "
+            f"features.order_step={step:g} needs windows of at least {1 / step:g} input "
             f"revolutions; {src} holds {rev:.3g} at {n_in.min():g} rpm; allowed: order_step "
             f">= {1 / rev:.3g}")
 
