@@ -13,7 +13,7 @@ speed (:func:`learn.export.reference.nominal_angle`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -77,8 +77,7 @@ def base_tables(plan, n_harmonics: int = ref.N_HARMONICS) -> ref.StageTables:
     """
     ch = plan.config.chain
     fs, n_t = float(ch.sample_rate_hz), int(round(ch.window_s * ch.sample_rate_hz))
-    ops = plan.config.operating_points
-    points = np.array([(float(v), float(t)) for v in ops.n_in_rpm for t in ops.t_out_nm])
+    points = plan_points(plan)
     speeds = np.unique(points[:, 0])
     ne = [ref.normal_equations(v, fs, n_t, n_harmonics) for v in speeds]
     inputs = np.stack([np.round(points[:, 0]), np.round(points[:, 1] * 10)], axis=1)
@@ -90,6 +89,19 @@ def base_tables(plan, n_harmonics: int = ref.N_HARMONICS) -> ref.StageTables:
         mean=np.zeros((len(points), f), np.float32),
         inv_std=np.ones((len(points), f), np.float32),
         point_inputs=inputs.astype(np.int16))
+
+
+def plan_points(plan) -> np.ndarray:
+    """Operating points (n_in_rpm, t_out_nm) of a data set, rows as the stage's tables."""
+    ops = plan.config.operating_points
+    return np.array([(float(v), float(t)) for v in ops.n_in_rpm for t in ops.t_out_nm])
+
+
+def nominal_phi(tables: ref.StageTables, op: np.ndarray) -> np.ndarray:
+    """Each window's nominal input angle at its operating point's speed
+    (:func:`learn.export.reference.nominal_angle`), shape (n, n_t) [rad]."""
+    return np.stack([ref.nominal_angle(tables.points[o, 0], tables.fs_hz, tables.n_t)
+                     for o in op]) if len(op) else np.empty((0, tables.n_t), np.float32)
 
 
 def op_rows(tables: ref.StageTables, n_in_rpm: np.ndarray, t_out_nm: np.ndarray
@@ -119,8 +131,7 @@ def life_windows(sim, start: int, stop: int, tables: ref.StageTables, keep: bool
     for a in range(start, stop, BLOCK):
         sig, meta = sim.windows(a, min(a + BLOCK, stop))
         op = op_rows(tables, meta["n_in_rpm"], meta["t_out_nm"])
-        phi = np.stack([ref.nominal_angle(tables.points[o, 0], tables.fs_hz, tables.n_t)
-                        for o in op])
+        phi = nominal_phi(tables, op)
         e = meta["efficiency"].astype(np.float32)
         feats.append(ref.stage_features(sig, phi, e, op, tables))
         f64.append(window_features(sig, meta["n_in_rpm"], meta["efficiency"], tables.fs_hz,
@@ -181,6 +192,4 @@ def gear_windows(plan, g: int, cfg: MonitorStudyConfig, tables: ref.StageTables,
 
 def with_normal(tables: ref.StageTables, gw: GearWindows) -> ref.StageTables:
     """``tables`` with gear ``gw``'s normal behaviour."""
-    import dataclasses
-
-    return dataclasses.replace(tables, mean=gw.mean, inv_std=gw.inv_std)
+    return replace(tables, mean=gw.mean, inv_std=gw.inv_std)

@@ -29,7 +29,7 @@ from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 from . import cgen, forest, host, target
 from . import reference as ref
-from .data import base_tables, gear_windows, with_normal
+from .data import base_tables, gear_windows, nominal_phi, plan_points, with_normal
 
 log = logging.getLogger(__name__)
 
@@ -77,11 +77,6 @@ class ExportOptions:
                                   train_fault_h=self.train_fault_h,
                                   train_variants=self.train_variants,
                                   faults=list(self.faults), detectors=[])
-
-
-def _phi(tables: ref.StageTables, op: np.ndarray) -> np.ndarray:
-    return np.stack([ref.nominal_angle(tables.points[o, 0], tables.fs_hz, tables.n_t)
-                     for o in op]) if len(op) else np.empty((0, tables.n_t), np.float32)
 
 
 def feature_error(feats32: np.ndarray, feats64: np.ndarray, n_harmonics: int) -> dict:
@@ -153,12 +148,6 @@ def full_model_accuracy(plan, tr, held, seed: int) -> float:
     return float(np.mean(clf.predict(rows(held)) == held.y))
 
 
-def plan_points(plan) -> np.ndarray:
-    """Operating points (n_in_rpm, t_out_nm) of a data set, rows as the stage's tables."""
-    ops = plan.config.operating_points
-    return np.array([(float(v), float(t)) for v in ops.n_in_rpm for t in ops.t_out_nm])
-
-
 def host_check(out: Path, tables: ref.StageTables, held, py_cls, py_ph) -> dict:
     """The C compiled for the host on every held-out window against the Python
     pipeline (classes, P(healthy), features)."""
@@ -170,7 +159,7 @@ def host_check(out: Path, tables: ref.StageTables, held, py_cls, py_ph) -> dict:
         except RuntimeError as e:  # the compiler failed: reported, the run goes on
             return {"host_c": f"not checked: {e}", "failed": str(e)}
         cls, ph, feats = host.HostStage(lib, tables.n_features).run(
-            held.signals, _phi(tables, held.op), held.op, held.efficiency)
+            held.signals, nominal_phi(tables, held.op), held.op, held.efficiency)
     d = np.abs(feats.astype(float) - held.feats.astype(float))
     return {"windows": int(len(cls)), "classes_equal": int(np.sum(cls == py_cls)),
             "p_healthy_max_abs_diff": float(np.max(np.abs(ph - py_ph))) if len(ph) else 0.0,
@@ -216,7 +205,6 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
 
     out = Path(out)
     ownership.check(out, "out_dir", app=app)
-    check_gears(plan, opts)
     tables, rf, held, tr = train_stage(plan, opts)
     code, info = forest.to_c(rf)
     xh = ref.design_rows(held.feats, tables, held.op)
@@ -257,7 +245,7 @@ def target_figures(out: Path, tables: ref.StageTables, held, c_cls, cross: bool)
         return {"measured": False, "why": why}
     i = 0
     try:
-        res = target.measure(out, held.signals[i], _phi(tables, held.op[i:i + 1])[0],
+        res = target.measure(out, held.signals[i], nominal_phi(tables, held.op[i:i + 1])[0],
                              int(held.op[i]), float(held.efficiency[i]))
     except target.ToolError as e:  # reported in size.json and summary.json, not raised
         return {"measured": False, "why": str(e), "failed": str(e)}

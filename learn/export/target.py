@@ -211,8 +211,7 @@ def cycle_range(mnemonic: str, ops: str) -> tuple[int, int]:
 def count_cycles(log: Path, elf: Path) -> dict:
     """Instructions and the cycle range of the window between the markers."""
     dis, counts = trace(log, _symbol(elf, "swg_mark_begin"), _symbol(elf, "swg_mark_end"))
-    lo = hi = n = 0
-    unknown = 0
+    lo = hi = n = unknown = 0
     for pc, k in counts.items():
         n += k
         if pc not in dis:
@@ -267,18 +266,17 @@ def measure(src: Path, x: np.ndarray, phi: np.ndarray, op: int, efficiency: floa
         cyc = count_cycles(work / "trace.log", elf)
     words = out.split()
     stack = int(words[3], 16)
-    res = {**{f"image_{k}": v for k, v in stage.items()},
-           **{f"startup_only_{k}": v for k, v in empty.items()},
-           "flash_bytes": stage["text"] + stage["data"],
-           "ram_bytes": stage["data"] + stage["bss"] + stack, "stack_bytes": stack,
-           **cyc, "cycles_per_window": cyc["cycles_high"],
-           "ms_per_window_at_168mhz": cyc["cycles_high"] / clock_hz * 1e3,
-           "target_class": int(words[1], 16) - (1 << 32 if int(words[1], 16) >> 31 else 0),
-           "target_p_healthy_bits": words[5], "target_feature_bits": words[7:],
-           "compiler": _run([CROSS, "--version"], Path.cwd()).splitlines()[0],
-           "cflags": " ".join(CFLAGS), "method_size": "arm-none-eabi-size of the stage "
-           "image (flash = text + data; RAM = data + bss + stack high-water mark)",
-           "method_cycles": "QEMU mps2-an386 instruction trace between markers, each "
-           "instruction given its Cortex-M4 cycle range (TRM tables 3-1, 7-1); "
-           "cycles_per_window = the high bound; no flash wait states modelled"}
-    return res
+    return {**{f"image_{k}": v for k, v in stage.items()},
+            **{f"startup_only_{k}": v for k, v in empty.items()},
+            "flash_bytes": stage["text"] + stage["data"],
+            "ram_bytes": stage["data"] + stage["bss"] + stack, "stack_bytes": stack,
+            **cyc, "cycles_per_window": cyc["cycles_high"],
+            "ms_per_window_at_168mhz": cyc["cycles_high"] / clock_hz * 1e3,
+            "target_class": int(words[1], 16) - (1 << 32 if int(words[1], 16) >> 31 else 0),
+            "target_p_healthy_bits": words[5], "target_feature_bits": words[7:],
+            "compiler": _run([CROSS, "--version"], Path.cwd()).splitlines()[0],
+            "cflags": " ".join(CFLAGS), "method_size": "arm-none-eabi-size of the stage "
+            "image (flash = text + data; RAM = data + bss + stack high-water mark)",
+            "method_cycles": "QEMU mps2-an386 instruction trace between markers, each "
+            "instruction given its Cortex-M4 cycle range (TRM tables 3-1, 7-1); "
+            "cycles_per_window = the high bound; no flash wait states modelled"}

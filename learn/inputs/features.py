@@ -281,7 +281,7 @@ def feature_names(selection: int | str, orders: Sequence[float] | None = None) -
     return dft("ds13") + dft("ds24") + ["eta2_rel"]
 
 
-def check_orders(ds, orders: Sequence[float], what: str = "features") -> None:
+def check_orders(ds, orders: Sequence[float]) -> None:
     """Refuse DFT orders that a data set cannot carry.
 
     The highest order must lie below the Nyquist frequency at the highest input speed,
@@ -294,14 +294,12 @@ def check_orders(ds, orders: Sequence[float], what: str = "features") -> None:
         Schema-v1 data set (``sample_rate_hz`` attribute, ``time``, ``n_in_rpm``).
     orders : sequence of float
         Orders of the input rotation [-].
-    what : str
-        Config name of the orders for messages (``features``, ``inputs``).
 
     Raises
     ------
     ValueError
-        Naming ``<what>.max_order`` / ``<what>.order_step``, the value, the limit and the
-        data set.
+        Naming ``features.max_order`` / ``features.order_step``, the value, the limit and
+        the data set.
     """
     orders = np.asarray(orders, dtype=np.float64)
     t = np.asarray(ds["time"].values, dtype=np.float64)
@@ -311,14 +309,14 @@ def check_orders(ds, orders: Sequence[float], what: str = "features") -> None:
     f_hi = orders.max() * n_in.max() / 60.0
     if f_hi >= fs / 2:
         raise ValueError(
-            f"{what}.max_order={orders.max():g} is {f_hi:.0f} Hz at {n_in.max():g} rpm, at or "
+            f"features.max_order={orders.max():g} is {f_hi:.0f} Hz at {n_in.max():g} rpm, at or "
             f"above the Nyquist frequency {fs / 2:g} Hz of {src}; allowed: max_order < "
             f"{fs / 2 * 60 / n_in.max():.4g}")
     rev = t.size / fs * n_in.min() / 60.0  # input revolutions per window at the lowest speed
     step = float(np.min(np.diff(np.concatenate([[0.0], np.sort(orders)]))))
     if step * rev < 1.0 - 1e-6:
         raise ValueError(
-            f"{what}.order_step={step:g} needs windows of at least {1 / step:g} input "
+            f"features.order_step={step:g} needs windows of at least {1 / step:g} input "
             f"revolutions; {src} holds {rev:.3g} at {n_in.min():g} rpm; allowed: order_step "
             f">= {1 / rev:.3g}")
 
@@ -448,7 +446,7 @@ def extract_features(
     assert X.shape[1] == len(names), (X.shape, len(names))
     _check_finite(X, names)
     log.info("selection %d: %d windows x %d features", sel, X.shape[0], X.shape[1])
-    return Features(X, names, _feature_meta(ds, samples))
+    return Features(X, names, meta_table(ds, samples))
 
 
 def _dft_rel(ds, s: np.ndarray, used: np.ndarray, i_s: np.ndarray, i_r: np.ndarray,
@@ -479,10 +477,12 @@ def _check_finite(X: np.ndarray, names: list[str]) -> None:
         )
 
 
-def _feature_meta(ds, samples: np.ndarray) -> pd.DataFrame:
-    """Metadata of the windows ``samples`` (:data:`META_COLUMNS`)."""
+def meta_table(ds, samples: np.ndarray, columns: Sequence[str] = META_COLUMNS
+               ) -> pd.DataFrame:
+    """Metadata of the windows ``samples``: ``sample`` and ``columns`` (fault as str,
+    disturbed as bool), one row per window."""
     meta = pd.DataFrame({"sample": samples})
-    for k in META_COLUMNS:
+    for k in columns:
         meta[k] = np.asarray(ds[k].values)[samples]
     meta["fault"] = meta["fault"].astype(str)
     meta["disturbed"] = meta["disturbed"].astype(bool)

@@ -80,6 +80,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from learn.inputs.features import extract_features, meta_table, reference_index
 from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
@@ -106,7 +107,7 @@ class ResidualSettings:
         default_factory=lambda: [0.25, 1 / 3, 0.5, 1.0])
     min_harmonic: int = 2       # synthesised from (0: offset; 1: order-1 disturbance out)
     n_points: int = 192         # samples of one WG revolution
-    compress: float | None = 1e-4  # asinh(x / compress); fault residuals span 4 decades
+    compress: float | None = 1e-4  # asinh(x / compress), 0 or None: none; residuals span 4 decades
 
 
 AUX = ("eta2_rel", "eta_rel")
@@ -139,14 +140,6 @@ class InputSet:
     n_aux: int
     kind: str
 
-    def subset(self, idx: np.ndarray) -> InputSet:
-        """The windows at positions ``idx`` (integer array or boolean mask)."""
-        idx = np.asarray(idx)
-        if idx.dtype == bool:
-            idx = np.flatnonzero(idx)
-        return InputSet(self.X[idx], self.y[idx], self.meta.iloc[idx].reset_index(drop=True),
-                        self.n_aux, self.kind)
-
 
 def window_meta(ds, disturbed: bool | None = None) -> tuple[pd.DataFrame, np.ndarray]:
     """Metadata of the non-reference windows of ``ds`` and their reference windows.
@@ -171,18 +164,11 @@ def window_meta(ds, disturbed: bool | None = None) -> tuple[pd.DataFrame, np.nda
     ValueError
         From :func:`learn.inputs.features.reference_index` (no or ambiguous reference window).
     """
-    from learn.inputs.features import reference_index
-
     samples, refs = reference_index(ds)
     if disturbed is not None:
         keep = ds["disturbed"].values[samples].astype(bool) == bool(disturbed)
         samples, refs = samples[keep], refs[keep]
-    meta = pd.DataFrame({"sample": samples})
-    for k in _META:
-        meta[k] = np.asarray(ds[k].values)[samples]
-    meta["fault"] = meta["fault"].astype(str)
-    meta["disturbed"] = meta["disturbed"].astype(bool)
-    return meta, refs
+    return meta_table(ds, samples, _META), refs
 
 
 def normalise_signals(ds, samples: np.ndarray, refs: np.ndarray) -> np.ndarray:
@@ -505,10 +491,9 @@ def reference_residual(ds, samples: np.ndarray, refs: np.ndarray,
     samples, refs : ndarray of int, shape (n,)
         Windows and their reference windows (:func:`window_meta`).
     settings : ResidualSettings, optional
-        Uses ``ratio``, the gear ratio N (catalogue, 100 for the paper's gears;
-        docs/PHYSICS.md sec. 2), ``n_harmonics``, the harmonics H of ψ, and
-        ``nuisance_orders``, the input-rotation orders fitted and discarded (eq. 10
-        sub-harmonics); default :class:`ResidualSettings`.
+        Uses ``ratio`` (the gear ratio N: catalogue, 100 for the paper's gears;
+        docs/PHYSICS.md sec. 2), ``n_harmonics`` and ``nuisance_orders``; default
+        :class:`ResidualSettings`.
     psi : ndarray, shape (N, T), optional
         WG angle ψ of every sample of every window of ``ds`` [rad] (row i: window i; the
         data set does not carry it): windows and references are fitted in their own angle
@@ -600,9 +585,7 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     feature_kwargs : dict, optional
         ``orders``, ``floor_rel`` of :func:`learn.inputs.features.extract_features`.
     residual : ResidualSettings, optional
-        Settings of the residual inputs: ``ratio``, ``n_harmonics``, ``nuisance_orders``,
-        ``min_harmonic``, ``n_points``, ``compress`` (asinh scale; 0 or None: none);
-        default :class:`ResidualSettings`.
+        Settings of the residual inputs; default :class:`ResidualSettings`.
     psi : ndarray, shape (N, T), optional
         WG angle of every window of ``ds`` [rad], for the residual inputs
         (:func:`reference_residual`); refused for the other kinds.
@@ -662,8 +645,6 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
         x = _append_aux(x, eff[:, eff_cols])
         return InputSet(np.ascontiguousarray(x, dtype=np.float32), y, meta, len(eff_cols),
                         kind)
-    from learn.inputs.features import extract_features
-
     feats = extract_features(ds, int(kind[-1]), **dict(feature_kwargs or {}))
     fs = feats.meta["sample"].to_numpy()
     pos = np.searchsorted(fs, samples)

@@ -1,15 +1,12 @@
 """Torch MLP and 1D-CNN classifiers behind the scikit-learn interface.
 
-One small wrapper (:class:`TorchClassifier`) instead of skorch, because the transfer study
-needs three things beyond ``fit``/``predict``: fine-tuning on a few target windows with
-all layers or the last layer only (:meth:`TorchClassifier.fine_tune`), re-estimating the
-batch-norm statistics on unlabelled target windows (AdaBN, :meth:`TorchClassifier.adapt_bn`)
-and the penultimate embedding (:meth:`TorchClassifier.embed`).
-
-Conventions (scikit-learn): ``__init__`` stores arguments only; learned state ends in
-``_`` and is set in ``fit``, which returns ``self``; ``random_state`` seeds weight
-initialisation, shuffling, augmentation and the validation split, through local
-generators (``torch.random.fork_rng``), never the global seed.
+One small wrapper (:class:`TorchClassifier`) instead of skorch: the transfer study also
+fine-tunes on a few target windows, all layers or the last only
+(:meth:`TorchClassifier.fine_tune`), re-estimates the batch-norm statistics on unlabelled
+target windows (AdaBN, :meth:`TorchClassifier.adapt_bn`) and reads the penultimate
+embedding (:meth:`TorchClassifier.embed`). ``random_state`` seeds weight initialisation,
+shuffling, augmentation and the validation split through local generators
+(``torch.random.fork_rng``), never the global seed.
 
 Input ``X``: (n, C, T) signals whose last ``n_aux`` channels are per-window scalars held
 constant along time (see :mod:`learn.inputs.signals`), or (n, F) features. Inputs are
@@ -81,14 +78,9 @@ def _local_seed(seed: int, device: torch.device):
 
 
 def _seed_of(random_state) -> int:
-    if isinstance(random_state, np.random.Generator):
-        return int(random_state.integers(2**31 - 1))
-    if random_state is None:
-        return int(np.random.default_rng().integers(2**31 - 1))
+    if random_state is None or isinstance(random_state, np.random.Generator):
+        return int(np.random.default_rng(random_state).integers(2**31 - 1))
     return int(random_state)
-
-
-# --------------------------------------------------------------------------- estimator
 
 
 class TorchClassifier(ClassifierMixin, BaseEstimator):
@@ -149,10 +141,6 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         Loss per epoch (and validation loss and accuracy with ``val_fraction`` > 0).
     """
 
-    _common = ("n_aux", "max_epochs", "batch_size", "lr", "weight_decay", "label_smoothing",
-               "val_fraction", "patience", "aug_gain", "aug_offset", "aug_crop", "device",
-               "precision", "random_state", "verbose")
-
     # ---------------------------------------------------------------- to override
     def _build_module(self, x_shape: tuple[int, ...], n_classes: int) -> nn.Module:
         raise NotImplementedError
@@ -162,6 +150,12 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         return False
 
     # ---------------------------------------------------------------- helpers
+    def _store(self, args: dict) -> None:
+        """Keep the ``__init__`` arguments (its ``locals()``) as attributes, unchanged."""
+        for name, value in args.items():
+            if name != "self":
+                setattr(self, name, value)
+
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
         tags.input_tags.three_d_array = True  # (n, C, T) signals
@@ -199,10 +193,8 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
 
     def _scale(self, X: np.ndarray) -> torch.Tensor:
         X = np.asarray(X, dtype=np.float32)
-        if X.ndim == 3:
-            X = (X - self.mean_[None, :, None]) / self.scale_[None, :, None]
-        else:
-            X = (X - self.mean_[None]) / self.scale_[None]
+        shape = (1, -1, 1) if X.ndim == 3 else (1, -1)
+        X = (X - self.mean_.reshape(shape)) / self.scale_.reshape(shape)
         return torch.from_numpy(np.ascontiguousarray(X, dtype=np.float32))
 
     def _augment(self, xb: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
@@ -251,7 +243,7 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         except KeyError as e:
             raise ValueError(f"label {e.args[0]!r} not among the classes seen in fit") from e
 
-    def _val_split(self, n: int, y: np.ndarray, groups, rng: np.random.Generator):
+    def _val_split(self, n: int, groups, rng: np.random.Generator):
         if self.val_fraction <= 0:
             return np.arange(n), np.array([], dtype=int)
         if groups is None:
@@ -264,16 +256,12 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         return np.flatnonzero(~is_val), np.flatnonzero(is_val)
 
     def _run_epochs(self, X: torch.Tensor, yi: np.ndarray, params, lr: float, n_steps_epoch,
-                    n_epochs: int, gen: torch.Generator, X_val=None, y_val=None) -> list[dict]:
+                    n_epochs: int, gen: torch.Generator, X_val: torch.Tensor,
+                    y_val: np.ndarray) -> list[dict]:
         """Train ``params`` for ``n_epochs`` with AdamW + cosine decay; early stopping on
-        (X_val, y_val) when given. Returns the history; restores the best state."""
-        dev = self.device_
+        (X_val, y_val) unless empty. Returns the history; restores the best state."""
         module = self.module_
-        opt = torch.optim.AdamW(params, lr=lr, weight_decay=self.weight_decay)
-        total = max(1, n_epochs * n_steps_epoch)
-        sched = torch.optim.lr_scheduler.LambdaLR(
-            opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, total) / total)))
-        loss_fn = nn.CrossEntropyLoss(label_smoothing=self.label_smoothing)
+        opt, sched, loss_fn = self._optimiser(params, lr, max(1, n_epochs * n_steps_epoch))
         yt = torch.from_numpy(yi)
         n = X.shape[0]
         bs = min(self.batch_size, n)
@@ -286,19 +274,14 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
                 idx = perm[s * bs:(s + 1) * bs]
                 if idx.numel() < 2:  # batch norm needs two windows
                     continue
-                xb = self._augment(X[idx], gen).to(dev)
-                yb = yt[idx].to(dev)
-                opt.zero_grad(set_to_none=True)
-                with self._autocast():
-                    loss = loss_fn(module(xb).float(), yb)
-                loss.backward()
-                opt.step()
-                sched.step()
+                loss = self._step(X[idx], yt[idx], gen, opt, sched, loss_fn)
                 tot += float(loss.detach()) * idx.numel()
                 seen += idx.numel()
             rec = {"epoch": epoch, "loss": tot / max(seen, 1)}
-            if X_val is not None and len(X_val):
-                vl, va = self._evaluate(X_val, y_val, loss_fn)
+            if len(X_val):
+                logits, yv = self._logits(X_val), torch.from_numpy(y_val)
+                vl = float(loss_fn(logits, yv))
+                va = float((logits.argmax(1) == yv).float().mean())
                 rec.update(val_loss=vl, val_accuracy=va)
                 if vl < best - 1e-4:
                     best, bad = vl, 0
@@ -308,24 +291,39 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
             history.append(rec)
             if self.verbose:
                 log.info("epoch %d %s", epoch, rec)
-            if X_val is not None and len(X_val) and bad >= self.patience:
+            if len(X_val) and bad >= self.patience:
                 break
         if best_state is not None:
             module.load_state_dict(best_state)
         module.eval()
         return history
 
-    @torch.no_grad()
-    def _evaluate(self, X: torch.Tensor, yi: np.ndarray, loss_fn) -> tuple[float, float]:
-        logits = self._logits(X)
-        yt = torch.from_numpy(yi)
-        return float(loss_fn(logits, yt)), float((logits.argmax(1) == yt).float().mean())
+    def _optimiser(self, params, lr: float, total: int):
+        """AdamW at peak ``lr`` with cosine decay over ``total`` steps, and the loss."""
+        opt = torch.optim.AdamW(params, lr=lr, weight_decay=self.weight_decay)
+        sched = torch.optim.lr_scheduler.LambdaLR(
+            opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, total) / total)))
+        return opt, sched, nn.CrossEntropyLoss(label_smoothing=self.label_smoothing)
+
+    def _step(self, xb: torch.Tensor, yb: torch.Tensor, gen: torch.Generator, opt, sched,
+              loss_fn) -> torch.Tensor:
+        """One optimiser step on the augmented batch (xb, yb); returns its loss."""
+        xb = self._augment(xb, gen).to(self.device_)
+        opt.zero_grad(set_to_none=True)
+        with self._autocast():
+            loss = loss_fn(self.module_(xb).float(), yb.to(self.device_))
+        loss.backward()
+        opt.step()
+        sched.step()
+        return loss
 
     @torch.no_grad()
-    def _logits(self, X: torch.Tensor, batch: int = 512) -> torch.Tensor:
+    def _logits(self, X: torch.Tensor, batch: int = 512, embed: bool = False) -> torch.Tensor:
+        """The net's outputs (or penultimate features), batch by batch, on the CPU."""
         self.module_.eval()
+        net = self.module_.embed if embed else self.module_
         with self._autocast():
-            out = [self.module_(X[i:i + batch].to(self.device_)).float().cpu()
+            out = [net(X[i:i + batch].to(self.device_)).float().cpu()
                    for i in range(0, X.shape[0], batch)]
         return torch.cat(out)
 
@@ -361,7 +359,6 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         self.input_shape_ = X.shape[1:]
         yi = self._encode(y)
         seed = _seed_of(self.random_state)
-        rng = np.random.default_rng(seed)
         self.device_ = resolve_device(self.device, "device")
         self.precision_ = resolve_precision(self.precision, self.device_)
         axes = (0, 2) if X.ndim == 3 else (0,)
@@ -369,15 +366,14 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         sd = X.std(axis=axes)
         self.scale_ = np.where(sd > 1e-8, sd, 1.0).astype(np.float32)
         Xt = self._scale(X)
-        tr, va = self._val_split(len(y), y, groups, rng)
+        tr, va = self._val_split(len(y), groups, np.random.default_rng(seed))
         gen = torch.Generator().manual_seed(seed)
         steps = max(1, math.ceil(len(tr) / self.batch_size))
         with _local_seed(seed, self.device_):  # weights and dropout; global RNG untouched
             self.module_ = self._build_module(X.shape, len(self.classes_)).to(self.device_)
             self.history_ = self._run_epochs(
                 Xt[tr], yi[tr], list(self.module_.parameters()), self.lr, steps,
-                self.max_epochs, gen, Xt[va] if va.size else None,
-                yi[va] if va.size else None)
+                self.max_epochs, gen, Xt[va], yi[va])
         return self
 
     def fine_tune(self, X, y, mode: str = "all", steps: int = 100, lr: float | None = None,
@@ -441,12 +437,9 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
             p.requires_grad_(id(p) in trainable)
         seed = _seed_of(self.random_state if random_state is None else random_state) + 1
         gen = torch.Generator().manual_seed(seed)
-        opt = torch.optim.AdamW(params, lr=lr, weight_decay=self.weight_decay)
-        sched = torch.optim.lr_scheduler.LambdaLR(
-            opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, steps) / steps)))
-        loss_fn = nn.CrossEntropyLoss(label_smoothing=self.label_smoothing)
-        bs = min(self.batch_size, len(X))
+        opt, sched, loss_fn = self._optimiser(params, lr, steps)
         n = len(X)
+        bs = min(self.batch_size, n)
         history = []
         try:
             with _local_seed(seed, self.device_):
@@ -465,13 +458,7 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
                         ridx = torch.randint(0, len(Xr), (max(1, int(round(replay * bs))),),
                                              generator=gen)
                         xb, yb = torch.cat([xb, Xr[ridx]]), torch.cat([yb, yr[ridx]])
-                    xb = self._augment(xb, gen).to(self.device_)
-                    opt.zero_grad(set_to_none=True)
-                    with self._autocast():
-                        loss = loss_fn(module(xb).float(), yb.to(self.device_))
-                    loss.backward()
-                    opt.step()
-                    sched.step()
+                    loss = self._step(xb, yb, gen, opt, sched, loss_fn)
                     history.append(float(loss.detach()))
         finally:
             for p in module.parameters():
@@ -505,10 +492,9 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         self.module_.eval()  # dropout off: only the batch-norm statistics are re-estimated
         for m in bns:
             m.train()
-        with torch.no_grad():
-            for i in range(0, Xt.shape[0], batch):
-                with self._autocast():
-                    self.module_(Xt[i:i + batch].to(self.device_))
+        for i in range(0, Xt.shape[0], batch):
+            with self._autocast():
+                self.module_(Xt[i:i + batch].to(self.device_))
         for m, mom in zip(bns, saved, strict=True):
             m.momentum = mom
         self.module_.eval()
@@ -529,14 +515,9 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         logits = self._logits(self.prepare(X)).numpy()
         return self.classes_[logits.argmax(axis=1)]
 
-    @torch.no_grad()
     def embed(self, X, batch: int = 512) -> np.ndarray:
         """Penultimate-layer features, shape (n, width of the head's input)."""
-        Xt = self.prepare(X)
-        self.module_.eval()
-        with self._autocast():
-            return torch.cat([self.module_.embed(Xt[i:i + batch].to(self.device_)).float().cpu()
-                              for i in range(0, Xt.shape[0], batch)]).numpy()
+        return self._logits(self.prepare(X), batch, embed=True).numpy()
 
 
 class MLPClassifierTorch(TorchClassifier):
@@ -554,23 +535,7 @@ class MLPClassifierTorch(TorchClassifier):
                  batch_size=64, lr=3e-3, weight_decay=1e-2, label_smoothing=0.0,
                  val_fraction=0.0, patience=8, aug_gain=0.0, aug_offset=0.0, aug_crop=1.0,
                  device="auto", precision="float32", random_state=None, verbose=False):
-        self.hidden = hidden
-        self.dropout = dropout
-        self.n_aux = n_aux
-        self.max_epochs = max_epochs
-        self.batch_size = batch_size
-        self.lr = lr
-        self.weight_decay = weight_decay
-        self.label_smoothing = label_smoothing
-        self.val_fraction = val_fraction
-        self.patience = patience
-        self.aug_gain = aug_gain
-        self.aug_offset = aug_offset
-        self.aug_crop = aug_crop
-        self.device = device
-        self.precision = precision
-        self.random_state = random_state
-        self.verbose = verbose
+        self._store(locals())
 
     def _build_module(self, x_shape, n_classes):
         if len(x_shape) == 3:
@@ -612,35 +577,11 @@ class CNN1DClassifier(TorchClassifier):
 
     def __init__(self, channels=(16, 32, 64, 64), kernel_sizes=(9, 7, 7, 5),
                  strides=(4, 2, 2, 2), head_hidden=64, dropout=0.1, padding_mode="zeros",
-                 pool="avg", *,
-                 n_aux=0,
-                 max_epochs=30, batch_size=64, lr=3e-3, weight_decay=1e-2,
-                 label_smoothing=0.0, val_fraction=0.0, patience=8, aug_gain=0.0,
-                 aug_offset=0.0, aug_crop=1.0, device="auto", precision="float32",
-                 random_state=None,
-                 verbose=False):
-        self.channels = channels
-        self.kernel_sizes = kernel_sizes
-        self.strides = strides
-        self.head_hidden = head_hidden
-        self.dropout = dropout
-        self.padding_mode = padding_mode
-        self.pool = pool
-        self.n_aux = n_aux
-        self.max_epochs = max_epochs
-        self.batch_size = batch_size
-        self.lr = lr
-        self.weight_decay = weight_decay
-        self.label_smoothing = label_smoothing
-        self.val_fraction = val_fraction
-        self.patience = patience
-        self.aug_gain = aug_gain
-        self.aug_offset = aug_offset
-        self.aug_crop = aug_crop
-        self.device = device
-        self.precision = precision
-        self.random_state = random_state
-        self.verbose = verbose
+                 pool="avg", *, n_aux=0, max_epochs=30, batch_size=64, lr=3e-3,
+                 weight_decay=1e-2, label_smoothing=0.0, val_fraction=0.0, patience=8,
+                 aug_gain=0.0, aug_offset=0.0, aug_crop=1.0, device="auto",
+                 precision="float32", random_state=None, verbose=False):
+        self._store(locals())
 
     def _build_module(self, x_shape, n_classes):
         n_ch = x_shape[1] if len(x_shape) == 3 else 1

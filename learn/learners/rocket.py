@@ -22,7 +22,7 @@ import logging
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
-from sklearn.linear_model import RidgeClassifierCV
+from sklearn.linear_model import RidgeClassifier, RidgeClassifierCV
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
@@ -177,10 +177,9 @@ class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
             self.aux_scaler_ = StandardScaler().fit(aux, sample_weight=sample_weight)
             parts.append(self.aux_weight * self.aux_scaler_.transform(aux))
         features = np.concatenate(parts, axis=1)
-        ridge = RidgeClassifierCV(alphas=np.asarray(self.alphas))
-        ridge.fit(features, y, sample_weight=sample_weight)
-        self.ridge_ = ridge
-        self.classes_ = ridge.classes_
+        self.ridge_ = RidgeClassifierCV(alphas=np.asarray(self.alphas)).fit(
+            features, y, sample_weight=sample_weight)
+        self.classes_ = self.ridge_.classes_
         return features
 
     def refit_head(self, X, y, *, y_source, source_features, replay: float = 1.0):
@@ -213,8 +212,6 @@ class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
         ValueError
             ``replay`` <= 0 or shapes that do not match.
         """
-        from sklearn.linear_model import RidgeClassifier
-
         if not replay > 0:
             raise ValueError(f"replay must be > 0, got {replay}")
         f_t = self.transform(X)
@@ -224,12 +221,10 @@ class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
                              f"{len(y_source)} labels and {f_t.shape[1]} features")
         w_t = f_s.shape[0] / (replay * max(f_t.shape[0], 1))
         weight = np.concatenate([np.ones(f_s.shape[0]), np.full(f_t.shape[0], w_t)])
-        ridge = RidgeClassifier(alpha=float(self.ridge_.alpha_))
-        ridge.fit(np.concatenate([f_s, f_t]), np.concatenate([np.asarray(y_source),
-                                                             np.asarray(y)]),
-                  sample_weight=weight)
-        self.ridge_ = ridge
-        self.classes_ = ridge.classes_
+        self.ridge_ = RidgeClassifier(alpha=float(self.ridge_.alpha_)).fit(
+            np.concatenate([f_s, f_t]), np.concatenate([np.asarray(y_source), np.asarray(y)]),
+            sample_weight=weight)
+        self.classes_ = self.ridge_.classes_
         return self
 
     def decision_function(self, X) -> np.ndarray:

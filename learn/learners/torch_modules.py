@@ -33,15 +33,12 @@ class MLPNet(nn.Module):
         self.body = nn.Sequential(*layers)
         self.head = nn.Linear(width, n_classes)
 
-    def _flat(self, x: torch.Tensor) -> torch.Tensor:
-        if x.ndim == 2:
-            return x
-        c = x.shape[1] - self.n_aux
-        sig = x[:, :c].flatten(1)  # (B, c*T)
-        return torch.cat([sig, x[:, c:, 0]], dim=1) if self.n_aux else sig
-
     def embed(self, x: torch.Tensor) -> torch.Tensor:
-        return self.body(self._flat(x))
+        if x.ndim == 3:
+            c = x.shape[1] - self.n_aux
+            sig = x[:, :c].flatten(1)  # (B, c*T)
+            x = torch.cat([sig, x[:, c:, 0]], dim=1) if self.n_aux else sig
+        return self.body(x)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.head(self.embed(x))

@@ -35,6 +35,7 @@ import numpy as np
 from swgsim.base.lazy import lazy_module
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
+from swgsim.datasets.slots import profile_slots
 from swgsim.files.ownership import write_owned
 
 pd = lazy_module("pandas")
@@ -97,13 +98,6 @@ class MotionMapConfig:
                                  f"{getattr(self, name)}")
 
 
-def plan_slots(plan):
-    """The slots of a profile data set (:func:`swgsim.datasets.slots.profile_slots`)."""
-    from swgsim.datasets.slots import profile_slots
-
-    return profile_slots(plan).starts
-
-
 def stiffness_left(fault: str, severity: float) -> float:
     """k1 after the fault as a fraction of nominal [-] (swgsim.gear.faults)."""
     if fault == "reduced_stiffness":
@@ -139,7 +133,7 @@ def _reference(plan, windows: int, seed: int, points=None):
     """Healthy windows of each view split into reference and test halves: the reference
     (features, points), the test windows' p95 of separation per point, and the test
     windows' separations and points."""
-    n_pts = len(points) if points is not None else len(plan_slots(plan))
+    n_pts = len(points) if points is not None else len(profile_slots(plan).starts)
     hf, hp = _windows(plan, "healthy", 0.0, 2 * windows * n_pts, seed, points)
     half = _alternate(hp)  # reference and test halves, every point in both
     ref, thr, test = {}, {}, {}

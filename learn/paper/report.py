@@ -24,7 +24,6 @@ from learn.paper.results import (
     PAPER_RESULTS,
     PAPER_TABLES,
     SPLIT_LABELS,
-    table_spec,
 )
 from swgsim.base.lazy import lazy_module
 from swgsim.files.ownership import write_owned
@@ -41,7 +40,8 @@ def _cell(ours: float | None, paper: float | None) -> str:
 
 
 def _table_md(name: str, results: pd.DataFrame) -> list[str]:
-    title, protocol, models, selections = table_spec(name)
+    t = PAPER_TABLES[name]
+    title, protocol, models, selections = t.title, t.protocol, t.models, t.selection_names
     paper = PAPER_RESULTS[name]
     res = results[results["table"] == name] if "table" in results else results.iloc[:0]
     lines = [f"## Table {name}: {title}", "", f"Protocol `{protocol}`. Cells: ours (paper) [%].",

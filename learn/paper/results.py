@@ -77,12 +77,6 @@ PAPER_RESULTS: dict[str, dict | None] = {
     },
 }
 
-def table_spec(table: str) -> tuple[str, str, tuple[str, ...], tuple[str, ...]]:
-    """Title, protocol, models and selection names of one of the paper's tables
-    (:data:`learn.paper.tables.PAPER_TABLES`)."""
-    t = PAPER_TABLES[table]
-    return t.title, t.protocol, t.models, t.selection_names
-
 
 CELL_COLUMNS = ("table", "selection", "model", "split")
 

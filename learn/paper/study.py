@@ -20,8 +20,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from learn.inputs.features import Features, FeatureSettings, extract_features, selection_name
 from learn.learners.models import make_model
 from learn.paper.tables import StudyOptions
@@ -31,6 +29,7 @@ from learn.studies.protocols import (
     ProtocolResult,
     Split,
     class_labels,
+    fit_split_quiet,
 )
 from learn.tracking.config import LoggerConfig
 from swgsim.base.lazy import lazy_module
@@ -155,8 +154,6 @@ def fit_tasks(jobs: list[StudyJob], feats: Mapping[int, Features],
     order; the last split of a job returns its model if ``return_models``."""
     from joblib import delayed
 
-    from learn.studies.protocols import fit_split_quiet
-
     tasks, fit = [], travelling(fit_split_quiet)  # a user's learners travel with the fits
     for j in jobs:
         f = feats[j.selection]
@@ -177,15 +174,8 @@ def collect_job(outs: Iterator, splits: list[Split], labels: list[str]
     caught: Counter = Counter()
     for o in part:
         caught.update(o[4])
-    result = ProtocolResult(
-        splits=splits,
-        train_accuracy=np.array([o[0] for o in part]),
-        test_accuracy=np.array([o[1] for o in part]),
-        confusion=np.sum([o[2] for o in part], axis=0),
-        labels=labels,
-        fit_time_s=np.array([o[3] for o in part]),
-    )
-    return result, caught, part[-1][5] if len(part[-1]) > 5 else None
+    return (ProtocolResult.from_fits(splits, part, labels), caught,
+            part[-1][5] if len(part[-1]) > 5 else None)
 
 
 def job_rows(job: StudyJob, result: ProtocolResult, run_id: str | None

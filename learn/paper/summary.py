@@ -29,12 +29,11 @@ from learn.paper.results import (
     our_cells,
     scorecard,
     side_by_side,
-    table_spec,
 )
 from learn.paper.tables import StudyOptions
 from swgsim.base.lazy import lazy_module
 from swgsim.datasets.config import DatasetConfig
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import atomic_write_bytes, write_owned
 from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
 from swgsim.gear.faults import display_name
 
@@ -69,16 +68,6 @@ def format_scorecard(cards: Mapping[str, pd.DataFrame]) -> list[str]:
     return lines
 
 
-def frame_md(df: pd.DataFrame, floatfmt: str = ".1f") -> list[str]:
-    """A data frame as the lines of a markdown table (floats with ``floatfmt``)."""
-    def fmt(v):
-        return format(v, floatfmt) if isinstance(v, float) else str(v)
-    return ["| " + " | ".join(map(str, df.columns)) + " |",
-            "|" + "---|" * len(df.columns),
-            *("| " + " | ".join(fmt(v) for v in row) + " |"
-              for row in df.itertuples(index=False))]
-
-
 def recall(confusion: pd.DataFrame) -> pd.DataFrame:
     """Per-class recall from confusion counts.
 
@@ -107,8 +96,8 @@ def _cell(v: float) -> str:
 def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
     lines = []
     cols = [f"ours_{n}" for n in names]
-    for table in PAPER_TABLES:
-        title, protocol, models, selections = table_spec(table)
+    for table, t in PAPER_TABLES.items():
+        title, protocol, models, selections = t.title, t.protocol, t.models, t.selection_names
         sub = cells[cells["table"] == table]
         if sub.empty:
             continue
@@ -338,7 +327,6 @@ def write_summary(
     options: StudyOptions,
     seed: int,
     spread: Mapping[str, pd.DataFrame] | None = None,
-    sensitivity: pd.DataFrame | None = None,
     features: FeatureSettings | None = None,
 ) -> dict[str, Any]:
     """Write the side-by-side summary of the paper's study under several acquisitions.
@@ -358,9 +346,6 @@ def write_summary(
         The studies' seed.
     spread : mapping of str to pandas.DataFrame, optional
         Data-set name -> :func:`learn.inputs.features.feature_spread` (``spread`` of the study).
-    sensitivity : pandas.DataFrame, optional
-        Scorecards under alternative open choices (``scripts/paper_sensitivity.py``),
-        shown if given.
     features : FeatureSettings, optional
         DFT orders and floor of the studies; default the paper's.
 
@@ -381,20 +366,12 @@ def write_summary(
     write_owned(files["csv"], lambda tmp: cells.to_csv(tmp, index=False))
     recall_figure(rec, files["recall"])
     sp = spread_table(spread or {})
-
-    lines = _intro_md(names, datasets, cards)
-    if sensitivity is not None and not sensitivity.empty:
-        lines += ["### Against the paper's open choices", "",
-                  "The same scorecard with one open choice changed at a time "
-                  "(`scripts/paper_sensitivity.py`):", "",
-                  *frame_md(sensitivity), ""]
-    lines += ["## Qualitative findings of Sec. IV", "", *_findings_md(found), "",
-              "## What changes when windows are not phase-locked", "",
-              *_phase_lock_md(rec, sp, datasets, files["recall"]),
-              "## Tables VII-X side by side", "", *_tables_md(cells, names),
-              *_open_choices_md(names, datasets, options, seed, features)]
-    from swgsim.files.ownership import atomic_write_bytes
-
+    lines = [*_intro_md(names, datasets, cards),
+             "## Qualitative findings of Sec. IV", "", *_findings_md(found), "",
+             "## What changes when windows are not phase-locked", "",
+             *_phase_lock_md(rec, sp, datasets, files["recall"]),
+             "## Tables VII-X side by side", "", *_tables_md(cells, names),
+             *_open_choices_md(names, datasets, options, seed, features)]
     atomic_write_bytes(files["md"], ("\n".join(lines) + "\n").encode())
     log.info("summary written to %s", files["md"])
     return {"files": files, "scorecards": cards, "findings": found}

@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from learn.inputs.signals import ResidualSettings
+from learn.inputs.features import reference_index
+from learn.inputs.signals import ResidualSettings, build_input
 from learn.learners.devices import device_label
 from learn.studies.runs import RunSpec, final_step, make_estimator
 from swgsim.base.lazy import lazy_module
@@ -73,9 +74,6 @@ def measure_latency(ds, specs: Sequence[RunSpec], model_cfgs: Mapping[str, Any],
         count read while the model was timed).
     """
     import torch
-
-    from learn.inputs.features import reference_index
-    from learn.inputs.signals import build_input
 
     threads = torch.get_num_threads()
     torch.set_num_threads(1)

@@ -192,6 +192,15 @@ class ProtocolResult:
     labels: list[str]
     fit_time_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
+    @classmethod
+    def from_fits(cls, splits: Sequence[Split], fits: Sequence[tuple], labels: list[str]
+                  ) -> ProtocolResult:
+        """The result of :func:`fit_split`'s outputs ``fits``, one per split, in order."""
+        return cls(splits=list(splits), train_accuracy=np.array([o[0] for o in fits]),
+                   test_accuracy=np.array([o[1] for o in fits]),
+                   confusion=np.sum([o[2] for o in fits], axis=0), labels=labels,
+                   fit_time_s=np.array([o[3] for o in fits]))
+
     @property
     def mean_train_accuracy(self) -> float:
         """Mean training accuracy over splits [-]."""
@@ -253,27 +262,21 @@ def make_splits(
     if rows.size == 0:
         raise ValueError(f"no windows with disturbed={bool(disturbed)} in the data")
     sub = meta.iloc[rows]
-    if scheme == "group_kfold":
-        groups = sub.groupby(list(GROUP_COLUMNS), sort=True).ngroup().to_numpy()
-        n_groups = int(groups.max()) + 1
-        if n_groups < n_splits:
-            raise ValueError(f"n_splits={n_splits} exceeds the number of groups ({n_groups})")
-        cv = StratifiedGroupKFold(
-            n_splits=n_splits, shuffle=random_state is not None, random_state=random_state
-        )
+    if scheme in ("group_kfold", "kfold"):
+        kw = {"n_splits": n_splits, "shuffle": random_state is not None,
+              "random_state": random_state}
         y = sub["fault"].astype(str).to_numpy()
-        return [
-            Split(f"fold{i}", f"fold {i + 1}/{n_splits}", rows[tr], rows[te])
-            for i, (tr, te) in enumerate(cv.split(np.zeros(len(sub)), y, groups))
-        ]
-    if scheme == "kfold":
-        y = sub["fault"].astype(str).to_numpy()
-        cv = StratifiedKFold(n_splits=n_splits, shuffle=random_state is not None,
-                             random_state=random_state)
-        return [
-            Split(f"fold{i}", f"fold {i + 1}/{n_splits}", rows[tr], rows[te])
-            for i, (tr, te) in enumerate(cv.split(np.zeros(len(sub)), y))
-        ]
+        if scheme == "group_kfold":
+            groups = sub.groupby(list(GROUP_COLUMNS), sort=True).ngroup().to_numpy()
+            n_groups = int(groups.max()) + 1
+            if n_groups < n_splits:
+                raise ValueError(f"n_splits={n_splits} exceeds the number of groups "
+                                 f"({n_groups})")
+            folds = StratifiedGroupKFold(**kw).split(np.zeros(len(sub)), y, groups)
+        else:
+            folds = StratifiedKFold(**kw).split(np.zeros(len(sub)), y)
+        return [Split(f"fold{i}", f"fold {i + 1}/{n_splits}", rows[tr], rows[te])
+                for i, (tr, te) in enumerate(folds)]
     if scheme == "leave_one_gear":
         gear = sub["gear"].to_numpy()
         present = sorted(int(g) for g in np.unique(gear))
@@ -471,11 +474,4 @@ def evaluate(
         fit = travelling(fit_split)
         out = Parallel(n_jobs=n_jobs)(delayed(fit)(estimator, X, y, s, labels, groups=groups)
                                       for s in splits)
-    return ProtocolResult(
-        splits=list(splits),
-        train_accuracy=np.array([o[0] for o in out]),
-        test_accuracy=np.array([o[1] for o in out]),
-        confusion=np.sum([o[2] for o in out], axis=0),
-        labels=labels,
-        fit_time_s=np.array([o[3] for o in out]),
-    )
+    return ProtocolResult.from_fits(splits, out, labels)

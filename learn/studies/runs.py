@@ -2,12 +2,13 @@
 adaptations and scoring.
 
 A run names a model config (``transfer.models.<name>``, a ``_target_`` mapping as in
-``conf/model/``) and an input of :data:`learn.inputs.signals.INPUTS`, and says which target-gear
-adaptations it gets (:mod:`learn.transfer.study`). :func:`fit_and_adapt` fits it on the
-source gears of one split and scores it and its adaptations (AdaBN or CORAL on the held-out
-gear's unlabelled healthy windows; fine-tuning or MiniRocket's ridge refit on k labelled windows per
-class) on the same evaluation windows. A torch net's input is standardised once per job
-(:meth:`learn.learners.nets.TorchClassifier.prepare`) and reused by its adapted copies.
+``conf/model/``) and an input of :data:`learn.inputs.signals.INPUTS`, and says which
+target-gear adaptations it gets (:mod:`learn.transfer.study`). :func:`fit_and_adapt` fits
+it on the source gears of one split and scores it and its adaptations (AdaBN or CORAL on
+the held-out gear's unlabelled healthy windows; fine-tuning or MiniRocket's ridge refit on
+k labelled windows per class) on the same evaluation windows. A torch net's input is
+standardised once per job (:meth:`learn.learners.nets.TorchClassifier.prepare`) and
+reused by its adapted copies.
 """
 
 from __future__ import annotations
@@ -70,10 +71,8 @@ class RunSpec(RunRef):
 
     Attributes
     ----------
-    model : str
-        Key into the model configs (``transfer.models``).
-    input : str
-        One of :data:`learn.inputs.signals.INPUTS`.
+    model, input : str
+        As :class:`RunRef`.
     finetune : bool
         Adapt with k labelled target windows per class (leave-one-gear-out protocols):
         torch nets are fine-tuned, MiniRocket's ridge is refitted.
@@ -224,10 +223,9 @@ def fit_and_adapt(spec: RunSpec, est, inp, train: np.ndarray, evaluation: np.nda
 
 
 def _prepared(est, X):
-    """``X`` as a fitted torch net reads it
-    (:meth:`learn.learners.nets.TorchClassifier.prepare`: checked, standardised, a tensor), which
-    its fine-tuned and AdaBN copies
-    reuse; ``X`` itself for other models and for pipelines with steps before the net."""
+    """``X`` as a fitted torch net reads it (:meth:`learn.learners.nets.TorchClassifier.prepare`:
+    checked, standardised, a tensor), which its fine-tuned and AdaBN copies reuse; ``X``
+    itself for other models and for pipelines with steps before the net."""
     from sklearn.pipeline import Pipeline
 
     net = final_step(est)
@@ -255,8 +253,6 @@ def _adapt_unsupervised(sc: _Scorer, spec: RunSpec, est, X, y, train, kshot: KSh
         m = CoralClassifier(est, reg=float(ft.coral_reg))
         m.fit(X[train], y[train], X[kshot.unlabelled])
         sc.add(f"{spec.model}+coral", 0, m, time.perf_counter() - t0)
-    elif spec.adapt is not None:
-        raise ValueError(f"adapt must be one of {ADAPT} or null, got {spec.adapt!r}")
 
 
 def _refit_heads(sc: _Scorer, spec: RunSpec, est, X, y, train, f_src: np.ndarray,

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from learn.inputs.signals import ResidualSettings, harmonic_coefficients
 from swgsim.base.lazy import lazy_module
 from swgsim.files.ownership import write_owned
 
@@ -68,8 +69,6 @@ def separation_records(ds, disturbed: bool = False, n_harmonics: int = 8,
     ValueError
         ``n_harmonics`` < 1.
     """
-    from learn.inputs.signals import ResidualSettings, harmonic_coefficients
-
     if int(n_harmonics) < 1:
         raise ValueError(f"n_harmonics must be >= 1, got {n_harmonics}")
     keys = ("gear", "fault", "variant", "severity", "n_in_rpm", "t_out_nm", "disturbed",

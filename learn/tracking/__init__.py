@@ -15,7 +15,7 @@ _EXPORTS = {
     **dict.fromkeys(("GROUP_PARENT_TAG", "TrackedRun", "flatten_config", "hydra_sweep",
                      "log_job", "log_run"), "mlflow_runs"),
     **dict.fromkeys(("check_tracking", "default_tracking_uri", "quiet_mlflow", "store_lock",
-                     "tracking_client", "use_tracking"), "store"),
+                     "tracking_client"), "store"),
     **dict.fromkeys(("DatasetRef", "dataset_ref", "git_tags", "provenance_tags", "repo_root"),
                     "provenance"),
     "LoggerConfig": "config",

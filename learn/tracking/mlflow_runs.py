@@ -1,19 +1,13 @@
 """MLflow tracking: one helper, :func:`log_run`, through which every run is logged.
 
 Every run that :func:`log_run` opens carries the provenance a result needs to be
-reproduced:
-
-* the git commit of the checkout (tag ``mlflow.source.git.commit``, which MLflow's UI
-  shows) and whether the work tree had uncommitted changes (tag ``git_dirty``); both are
-  ``"unknown"`` where there is no git or no checkout, never an error;
-* the data set as an MLflow dataset input (``mlflow.data``): its path and a content
-  digest, the data set's own ``content_sha256`` from ``manifest.json`` (written by the
-  generator over the signals and per-window metadata, see ``docs/DATASET.md``), else a
-  hash of the shards' SHA-256 listed in the manifest, else the SHA-256 of a file (a
-  friction CSV, hashed whole); a data-set folder costs one small JSON read, no shard is
-  re-hashed;
-* the resolved config: flattened into params and stored whole as ``config.yaml``;
-* the fitted model where there is one (:meth:`TrackedRun.log_model`, ``mlflow.sklearn``).
+reproduced (:mod:`learn.tracking.provenance`): the git commit of the checkout and whether
+its work tree had uncommitted changes (tags ``mlflow.source.git.commit``, ``git_dirty``;
+``"unknown"`` where there is no git or no checkout, never an error); the data set as an
+MLflow dataset input (``mlflow.data``) with the content digest its ``manifest.json``
+gives (:class:`learn.tracking.provenance.DatasetRef`; no shard is re-hashed); the resolved
+config, flattened into params and stored whole as ``config.yaml``; the fitted model where
+there is one (:meth:`TrackedRun.log_model`, ``mlflow.sklearn``).
 
 Runs that belong together (a Hydra sweep, the jobs of one study, the cells of the transfer
 comparison) are children of one parent run (tag ``mlflow.parentRunId``): pass
@@ -25,10 +19,8 @@ selection, model), holding every split: params (the flattened config), metrics
 as ``config.yaml`` and the test confusion matrix summed over splits as
 ``confusion_matrix.png``. One MLflow experiment per protocol (or per study). Everything
 goes through an explicit :class:`mlflow.MlflowClient`, so nothing here changes MLflow's
-global state (tracking URI, active run).
-
-How a process opens the MLflow store, its default URI and where its artifacts go: see
-:mod:`learn.tracking.store`.
+global state (tracking URI, active run); how a process opens the store, its default URI
+and where its artifacts go: :mod:`learn.tracking.store`.
 """
 
 from __future__ import annotations
@@ -135,7 +127,7 @@ def confusion_figure(confusion: np.ndarray, labels: Sequence[str], title: str = 
 class TrackedRun:
     """An open MLflow run, yielded by :func:`log_run`; every method logs to it.
 
-    Params, metrics and tags are buffered and sent in as few ``log_batch`` calls as MLflow
+    Params and metrics are buffered and sent in as few ``log_batch`` calls as MLflow
     allows (each call is a database transaction, ~15 ms on a local SQLite store) when the
     run ends, or on :meth:`flush`; artifacts, data sets and models are sent at once.
 
@@ -150,7 +142,6 @@ class TrackedRun:
     experiment_id: str
     _params: list = field(default_factory=list, repr=False)
     _metrics: list = field(default_factory=list, repr=False)
-    _tags: list = field(default_factory=list, repr=False)
 
     def log_params(self, params: Mapping[str, Any]) -> None:
         """Log params, nested mappings flattened with dots (:func:`flatten_config`)."""
@@ -167,25 +158,14 @@ class TrackedRun:
         ts = int(time.time() * 1000)
         self._metrics += [Metric(k, float(v), ts, int(step)) for k, v in metrics.items()]
 
-    def set_tags(self, tags: Mapping[str, Any]) -> None:
-        """Set run tags (values as strings)."""
-        from mlflow.entities import RunTag
-
-        self._tags += [RunTag(k, str(v)) for k, v in tags.items()]
-
     def flush(self) -> None:
-        """Send the buffered params, metrics and tags (MLflow: per batch <= 100 params,
-        <= 100 tags, <= 1000 entries in all)."""
-        while self._params or self._metrics or self._tags:
+        """Send the buffered params and metrics (MLflow: per batch <= 100 params, <= 1000
+        entries in all)."""
+        while self._params or self._metrics:
             params, self._params = self._params[:100], self._params[100:]
-            tags, self._tags = self._tags[:100], self._tags[100:]
-            n = 1000 - len(params) - len(tags)
+            n = 1000 - len(params)
             metrics, self._metrics = self._metrics[:n], self._metrics[n:]
-            self.client.log_batch(self.run_id, metrics=metrics, params=params, tags=tags)
-
-    def log_config(self, config: Mapping[str, Any], name: str = "config.yaml") -> None:
-        """Store a resolved config as a YAML (or JSON, by ``name``) artifact."""
-        self.client.log_dict(self.run_id, dict(config), name)
+            self.client.log_batch(self.run_id, metrics=metrics, params=params)
 
     def log_figure(self, figure, name: str) -> None:
         """Store a matplotlib figure as the artifact ``name`` (e.g. ``"confusion.png"``)."""
@@ -470,7 +450,7 @@ def log_run(
         if params is not None:
             tracked.log_params(params)
         if config is not None:
-            tracked.log_config(config)
+            client.log_dict(tracked.run_id, dict(config), "config.yaml")
         yield tracked
         status = "FINISHED"
     finally:
@@ -502,27 +482,15 @@ def log_job(
     parent_run_id: str | None = None,
     group: str | None = None,
 ) -> str:
-    """Log one job (all splits of one model under one protocol) as one MLflow run.
-
-    Through :func:`log_run`, so the run carries the git commit, the data set and the
-    config.
+    """Log one job (all splits of one model under one protocol) as one MLflow run, through
+    :func:`log_run`.
 
     Parameters
     ----------
     result : learn.studies.protocols.ProtocolResult
         Per-split accuracies and the summed confusion matrix.
-    experiment : str
-        MLflow experiment name (created if absent).
-    run_name : str
-        Run name, e.g. ``"selection3-rf"``.
-    params : mapping
-        Parameters; nested mappings are flattened with dots (:func:`flatten_config`).
-    config : mapping, optional
-        Resolved config, stored as the artifact ``config.yaml``.
-    tracking_uri : str, optional
-        Default :func:`learn.tracking.store.default_tracking_uri`.
-    tags : mapping, optional
-        Run tags.
+    experiment, run_name, params, config, tracking_uri, tags, parent_run_id, group
+        As :func:`log_run` (``run_name`` e.g. ``"selection3-rf"``).
     confusion_plot : bool, default True
         Store ``confusion_matrix.png``.
     dataset : path-like or DatasetRef, optional
@@ -533,8 +501,6 @@ def log_job(
         Tags of the logged model (e.g. ``{"split": "gear3"}``).
     X_sample : ndarray, shape (n, n_features), optional
         Rows for the model's signature.
-    parent_run_id, group : str, optional
-        See :func:`log_run`.
 
     Returns
     -------

@@ -1,10 +1,9 @@
 """MLflow tracking stores: opening one, checking it can be written, its experiments.
 
-Every process opens a store through :func:`tracking_client` (or, for MLflow's fluent API,
-:func:`use_tracking`): MLflow creates or migrates an SQLite store's schema when a process
-first opens it, and two processes doing so at once break it for one of them, so the
-first opening in a process holds the store's lock ``<database file>.lock`` (``filelock``;
-waited for up to 120 s).
+Every process opens a store through :func:`tracking_client`: MLflow creates or migrates
+an SQLite store's schema when a process first opens it, and two processes doing so at
+once break it for one of them, so the first opening in a process holds the store's lock
+``<database file>.lock`` (``filelock``; waited for up to 120 s).
 
 The default tracking URI is ``sqlite:///<repo root>/mlflow.db`` (MLflow 3's database
 store; its file store is deprecated): ``MLFLOW_TRACKING_URI`` wins if set, as in MLflow
@@ -75,7 +74,6 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
     learn.tracking.preflight.BrokenInstall
         MLflow (or a library it imports) cannot be imported: one line naming it.
     """
-    import os
     import sqlite3
 
     uri = tracking_uri or default_tracking_uri()
@@ -205,29 +203,6 @@ def tracking_client(tracking_uri: str | None = None, key: str = "tracking_uri"):
     return client
 
 
-def use_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -> str:
-    """Open a store (:func:`tracking_client`) and point MLflow's fluent API
-    (``mlflow.start_run``, ``mlflow.log_metric``) at it.
-
-    Parameters
-    ----------
-    tracking_uri : str, optional
-        Default :func:`default_tracking_uri`.
-    key : str
-        Config key named in messages.
-
-    Returns
-    -------
-    str
-        The URI.
-    """
-    import mlflow
-
-    uri = tracking_client(tracking_uri, key).tracking_uri
-    mlflow.set_tracking_uri(uri)
-    return uri
-
-
 def quiet_mlflow() -> None:
     """Keep MLflow's own INFO messages (database set-up, migrations) off the console.
 
@@ -240,7 +215,6 @@ def quiet_mlflow() -> None:
     """
     import warnings
 
-    # SQLAlchemy's deprecation of a loader strategy MLflow's own store uses: not ours to fix
     warnings.filterwarnings("ignore", message="The ``noload`` loader strategy is deprecated",
                             category=DeprecationWarning)
     lg = logging.getLogger("mlflow")

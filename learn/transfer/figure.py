@@ -11,6 +11,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+from matplotlib import colormaps
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
 from learn.studies.protocols import OOD_PROTOCOLS
 from learn.transfer.report import model_rank, observable_share, row_label, summarise
 from learn.transfer.study import TargetSpec
@@ -35,8 +39,6 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
     p95, :func:`observable_share`), when ``separability`` is given. One legend below the
     panels.
     """
-    from matplotlib.figure import Figure
-
     summ = summarise(results)
     panels = [(d, p) for d in dict.fromkeys(results["dataset"]) for p in OOD_PROTOCOLS
               if ((results["dataset"] == d) & (results["protocol"] == p)).any()]
@@ -70,8 +72,6 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
 
 def _run_colours(w_all: pd.DataFrame) -> dict:
     """One colour per (model, input, unsupervised adaptation) in every panel."""
-    from matplotlib import colormaps
-
     keys = sorted({(m.split("+")[0], i, m.partition("+")[2])
                    for m, i in zip(w_all["model"], w_all["input"], strict=True)
                    if not m.partition("+")[2].startswith("ft_")},
@@ -83,8 +83,6 @@ def _run_colours(w_all: pd.DataFrame) -> dict:
 def _draw_adapted(ax, w: pd.DataFrame, colour: Mapping, handles: dict) -> None:
     """Accuracy against k of every run adapted with k labelled windows (k = 0: the
     source model)."""
-    from matplotlib.lines import Line2D
-
     styles = {"ft_all": "-", "ft_last": "--", "ft_head": "-."}
     for (m, i), g in w[w["model"].str.contains(r"\+ft_")].groupby(["model", "input"]):
         base_name, _, mode = m.partition("+")
@@ -101,8 +99,6 @@ def _draw_adapted(ax, w: pd.DataFrame, colour: Mapping, handles: dict) -> None:
 def _draw_unlabelled(ax, w: pd.DataFrame, colour: Mapping, handles: dict) -> None:
     """Horizontal lines of the runs without target labels (and the unsupervised
     adaptations), but for those drawn as the k = 0 point of adapted lines."""
-    from matplotlib.lines import Line2D
-
     ft_pairs = {(m.partition("+")[0], i) for m, i in zip(w["model"], w["input"],
                                                          strict=True) if "+ft_" in m}
     for _, r in w[w["k_shot"] == 0].iterrows():
@@ -117,8 +113,6 @@ def _draw_unlabelled(ax, w: pd.DataFrame, colour: Mapping, handles: dict) -> Non
 
 def _draw_targets(ax, tgt: TargetSpec | None, protocol: str, handles: dict) -> None:
     """Stars at the data set's accuracy targets, when they refer to ``protocol``."""
-    from matplotlib.lines import Line2D
-
     acc_t = tgt.accuracy if tgt is not None else {}
     if acc_t and protocol == tgt.protocol:
         tk = sorted((int(k), 100 * float(v)) for k, v in acc_t.items())
@@ -129,8 +123,6 @@ def _draw_targets(ax, tgt: TargetSpec | None, protocol: str, handles: dict) -> N
 
 def _draw_observable(ax, share: pd.Series | None, handles: dict) -> None:
     """Grey band at the observability estimate (mean share beyond the healthy p95)."""
-    from matplotlib.lines import Line2D
-
     if share is not None:
         ax.axhline(100 * float(share.mean()), color="0.6", lw=6, alpha=0.35, zorder=0)
         handles.setdefault("observability estimate (signals)",

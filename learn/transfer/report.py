@@ -40,6 +40,9 @@ _INPUTS = {"raw": "raw", "diff": "differenced", "sel1": "Selection 1", "sel3": "
            "raw_res": "synchronous residual", "diff_res": "differenced residual",
            "res_spec": "residual spectrum"}
 _SPLIT_ORDER = {"gear3": 0, "gear1": 1, "gear2": 2}
+_ADAPTED = {"ft_all": ", fine-tuned all layers, k={k}", "ft_last": ", fine-tuned last layer, k={k}",
+            "ft_head": ", ridge refitted with k={k}", "adabn": ", AdaBN (unsupervised)",
+            "coral": ", CORAL (unsupervised)"}
 #: The columns that name one cell of the comparison (a run summarised over seeds).
 CELL_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
 
@@ -47,18 +50,8 @@ CELL_KEYS = ["dataset", "protocol", "model", "input", "k_shot"]
 def row_label(model: str, inp: str, k: int) -> str:
     """Human-readable row name, e.g. ``CNN, raw, fine-tuned all layers, k=5``."""
     base, _, suffix = model.partition("+")
-    name = f"{model_label(base)}, {_INPUTS.get(inp, inp)}"
-    if suffix == "ft_all":
-        name += f", fine-tuned all layers, k={k}"
-    elif suffix == "ft_last":
-        name += f", fine-tuned last layer, k={k}"
-    elif suffix == "ft_head":
-        name += f", ridge refitted with k={k}"
-    elif suffix == "adabn":
-        name += ", AdaBN (unsupervised)"
-    elif suffix == "coral":
-        name += ", CORAL (unsupervised)"
-    return name
+    return (f"{model_label(base)}, {_INPUTS.get(inp, inp)}"
+            + _ADAPTED.get(suffix, "").format(k=k))
 
 
 def summarise(results: pd.DataFrame) -> pd.DataFrame:
@@ -214,10 +207,6 @@ def _recall_targets(ds: str, spec: TargetSpec, w: pd.DataFrame, recall: pd.DataF
             rows.append(_target_row(ds, f"recall of {cls}, worst split, k = 0", tgt, who, b,
                                     float(r.get(cls, np.nan)), obs))
     return rows
-
-
-def _pct(m: float, s: float) -> str:
-    return f"{100 * m:.2f} ± {100 * s:.2f}"
 
 
 def model_rank(m: str) -> int:
@@ -388,10 +377,11 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
                 targets: Mapping[str, TargetSpec] | None = None, primary: RunRef | None = None,
                 separability: Mapping[str, Mapping[str, pd.DataFrame]] | None = None,
                 latency: pd.DataFrame | None = None, timings: Mapping | None = None,
-                paper: bool = True, adapt_windows: int | None = None,
-                run_times: pd.DataFrame | None = None) -> Path:
+                adapt_windows: int | None = None, run_times: pd.DataFrame | None = None
+                ) -> Path:
     """Write ``table.md``: headline, targets, per-class recall, then per data set and
-    protocol the accuracy [%] per split and worst split, a diagnosis and the separability.
+    protocol the accuracy [%] per split and worst split (and the paper's RF rows of Tables
+    IX and X), a diagnosis and the separability.
 
     Parameters
     ----------
@@ -408,8 +398,6 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
         (:func:`learn.studies.latency.latency_heading`).
     timings : mapping, optional
         ``wall_s``, ``input_s``, ``generate_s``, ``threads``, ``cpus``, ``device``.
-    paper : bool
-        Add the paper's RF rows of Tables IX and X.
     adapt_windows : int, optional
         The held-out gear's unlabelled healthy windows the unsupervised adaptations saw
         (``transfer.adapt_windows``); stated in the introduction.
@@ -428,8 +416,7 @@ def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path
         lines += _recall_md(recall, summ, primary, separability, order)
     train_s = results.groupby(CELL_KEYS)["train_s"].mean()
     for ds in order:
-        lines += _dataset_md(ds, summ, confusion, recall, separability, paper, primary,
-                             train_s)
+        lines += _dataset_md(ds, summ, confusion, recall, separability, primary, train_s)
     if latency is not None and len(latency):
         lines += _latency_md(latency)
     if timings:
@@ -461,8 +448,7 @@ def _intro_md(adapt_windows: int | None) -> list[str]:
             "source replay. Nothing is chosen on an evaluation window.", "",
             "Unsupervised adaptation (AdaBN, CORAL) sees what a real gear offers without "
             f"labels: its unlabelled healthy windows, {stream} of the held-out gear's "
-            "healthy class "
-            "(whole healthy variants, each one pass over the operating points; "
+            "healthy class (whole healthy variants, each one pass over the operating points; "
             "`transfer.adapt_windows`), removed from the evaluation windows; never the "
             "class-balanced k-shot pool. Both align statistics of every source class to "
             "those of the target's healthy windows alone: AdaBN's batch-norm statistics and "
@@ -496,8 +482,7 @@ def _targets_md(tt: pd.DataFrame) -> list[str]:
 
 
 def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
-                separability, paper: bool, primary: RunRef | None,
-                train_s: pd.Series) -> list[str]:
+                separability, primary: RunRef | None, train_s: pd.Series) -> list[str]:
     """One data set's section: diagnosis, separability, a table per protocol (a row per
     run and k, with its mean training time: ``train_s`` by :data:`CELL_KEYS`)."""
     lines = [f"## Data set `{ds}`", ""]
@@ -523,13 +508,14 @@ def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
             for s in splits:
                 r = sp[(sp["model"] == w["model"]) & (sp["input"] == w["input"])
                        & (sp["k_shot"] == w["k_shot"]) & (sp["split"] == s)]
-                cells.append(_pct(r["mean"].iloc[0], r["std"].iloc[0]) if len(r) else "")
+                cells.append(f"{100 * r['mean'].iloc[0]:.2f} ± {100 * r['std'].iloc[0]:.2f}"
+                             if len(r) else "")
             cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
             key = (ds, p, w["model"], w["input"], w["k_shot"])
             cells.append(f"{train_s.get(key, np.nan):.1f}")
             lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
                          + " | ".join(cells) + " |")
-        if paper and p in OOD_PROTOCOLS:
+        if p in OOD_PROTOCOLS:
             lines += _paper_rows(p, splits)
         lines.append("")
     return lines

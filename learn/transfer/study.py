@@ -3,8 +3,8 @@
 ``swgsim-train -m experiment=transfer`` -> :func:`run_transfer`. For every data set of
 ``transfer.run_on`` (presets: the paper's protocol, a bench's, a robot joint's; generated
 in ``transfer.data_root`` when missing), every evaluation protocol
-(:data:`learn.studies.protocols.PROTOCOLS`, default the leave-one-gear-out one on disturbed
-data), split and seed it trains each configured (model, input) run
+(:data:`learn.studies.protocols.PROTOCOLS`, default the leave-one-gear-out one on
+disturbed data), split and seed it trains each configured (model, input) run
 (:class:`learn.studies.runs.RunSpec`) on the training windows and scores it; under the
 leave-one-gear-out protocols it also
 
@@ -14,25 +14,24 @@ leave-one-gear-out protocols it also
 * runs the unsupervised adaptations: AdaBN for the torch nets (batch-norm statistics
   re-estimated on unlabelled target windows) and CORAL for feature models
   (:mod:`learn.learners.adapt`). Their unlabelled windows are the held-out gear's
-  *unlabelled healthy windows* (``adapt_windows`` healthy windows, whole healthy variants), what a
-  real gear offers at commissioning, not the class-balanced k-shot pool.
+  *unlabelled healthy windows* (``adapt_windows`` healthy windows, whole healthy
+  variants), what a real gear offers at commissioning, not the class-balanced k-shot pool.
 
 The k-shot split and the unlabelled healthy windows are
 :func:`learn.studies.kshot.kshot_split`; both are removed from the evaluation windows of
 every run. Nothing in training, early stopping, model choice or hyper-parameters sees an
-evaluation window: early stopping, where
-enabled, splits the *source* gears; fine-tuning has a fixed step budget; MiniRocket's
-ridge penalty stays the one chosen on the source windows. Model sizes, epochs and
-kernels were set for the CPU budget on the earlier default data set, not on these.
+evaluation window: early stopping, where enabled, splits the *source* gears; fine-tuning
+has a fixed step budget; MiniRocket's ridge penalty stays the one chosen on the source
+windows. Model sizes, epochs and kernels were set for the CPU budget on the earlier
+default data set, not on these.
 
 Files in ``report_dir`` (default ``reports/transfer``): ``results.csv`` (one row per
-run: :data:`RESULT_COLUMNS`, accuracy in 0..1), ``confusion.csv``
-(:data:`CONFUSION_COLUMNS`, counts per split and seed),
-``table.md`` (:func:`learn.transfer.report.write_table`), ``accuracy_vs_k.png``,
-``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``, ``run_times.csv``
-(:data:`RUN_TIME_COLUMNS`: wall and CPU seconds of every run in every job). One MLflow
-run per (data set, protocol, model, input, k) with the per-split, per-seed accuracies,
-and a parent run holding the report and the resolved config.
+run: :data:`RESULT_COLUMNS`, accuracy in 0..1), ``confusion.csv`` (:data:`CONFUSION_COLUMNS`,
+counts per split and seed), ``table.md`` (:func:`learn.transfer.report.write_table`),
+``accuracy_vs_k.png``, ``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``,
+``run_times.csv`` (:data:`RUN_TIME_COLUMNS`: wall and CPU seconds of every run in every
+job). One MLflow run per (data set, protocol, model, input, k) with the per-split,
+per-seed accuracies, and a parent run holding the report and the resolved config.
 
 A *job* is one (data set, protocol, split, seed) with every run; the jobs of all data
 sets share one pool of worker processes (:func:`run_comparisons`), and one progress line
@@ -49,9 +48,9 @@ from typing import Any
 
 import numpy as np
 
-from learn.inputs.signals import ResidualSettings, window_meta
+from learn.inputs.signals import INPUTS, ResidualSettings, build_input, window_meta
 from learn.studies.kshot import check_no_leak, kshot_split
-from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS
+from learn.studies.protocols import ALL_PROTOCOLS, OOD_PROTOCOLS, PROTOCOLS, protocol_splits
 from learn.studies.runs import (
     ADAPT,
     FT_MODES,
@@ -124,13 +123,11 @@ class TransferConfig:
     k_shots : list of int
         Labelled windows per class of the held-out gear, >= 0.
     adapt_windows : int
-        Least number of the held-out gear's unlabelled healthy windows, the
-        target data of the unsupervised adaptations (whole healthy variants outside the
-        k-shot pool, removed from the evaluation windows); 0: none (no run may adapt).
-        60 = ten healthy passes over the paper grid's six operating points, about the
-        size of the class-balanced pool the adaptations saw before (72 windows), so the
-        rule changes what they see, not how much; it leaves 288 of a gear's 360 healthy
-        windows of a kind for evaluation.
+        Least number of the held-out gear's unlabelled healthy windows, the target data of
+        the unsupervised adaptations (whole healthy variants outside the k-shot pool,
+        removed from the evaluation windows); 0: none (no run may adapt). 60 = ten healthy
+        passes over the paper grid's six operating points [choice]; it leaves 288 of a
+        gear's 360 healthy windows of a kind for evaluation.
     aux : list of str
         Scalars appended to the signal inputs (:data:`learn.inputs.signals.AUX`).
     residual : ResidualSettings
@@ -235,8 +232,6 @@ def _check_finetune(ft: FinetuneSettings, where: str) -> None:
 
 
 def _check_runs(tc: TransferConfig, where: str) -> None:
-    from learn.inputs.signals import INPUTS
-
     if not tc.runs:
         raise ValueError(f"{where}.runs: must list at least one {{model, input}}")
     for i, s in enumerate(tc.runs):
@@ -337,8 +332,6 @@ def _protocols_with_data(ds, protocols: Sequence[str]) -> list[str]:
 def _cells_of(meta, protocols: Sequence[str], tc: TransferConfig, split_seed: int) -> list:
     """(protocol, split, seed) of every cell: model seeds per split, the splits fixed by
     ``split_seed`` so that a split name means the same windows for every seed."""
-    from learn.studies.protocols import protocol_splits
-
     cv_seeds = tc.seeds if tc.cv_seeds is None else tc.cv_seeds
     return [(p, sp, int(seed)) for p in protocols
             for sp in protocol_splits(meta, p, random_state=split_seed)
@@ -349,8 +342,6 @@ def planned_jobs(tc: TransferConfig) -> int:
     """Jobs, (protocol, split, seed), that the comparison plans per data set: the splits
     each protocol plans (:attr:`learn.studies.protocols.ProtocolConfig.n_planned`) times
     its seeds."""
-    from learn.studies.protocols import PROTOCOLS
-
     cv_seeds = tc.seeds if tc.cv_seeds is None else tc.cv_seeds
     return sum(PROTOCOLS[p].n_planned * len(tc.seeds if p in OOD_PROTOCOLS else cv_seeds)
                for p in tc.protocols)
@@ -535,8 +526,8 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
     Raises
     ------
     ValueError
-        For a bad ``tc`` (:meth:`TransferConfig.check`), an unknown adaptation, or a k-shot split
-        that would leak.
+        For a bad ``tc`` (:meth:`TransferConfig.check`), an adaptation a run's model cannot
+        take, or a k-shot split that would leak.
     """
     from joblib import Parallel
 
@@ -581,8 +572,6 @@ def run_comparison(ds, tc: TransferConfig, *, dataset: str = "data", **kwargs) -
 
 def _inputs(ds, specs, tc: TransferConfig, disturbed: bool, feature_kwargs) -> dict:
     """Every input kind of the runs, on the clean or the disturbed windows."""
-    from learn.inputs.signals import build_input
-
     cache: dict = {}  # the residual that the residual inputs share
     return {kind: build_input(ds, kind, aux=tuple(tc.aux), disturbed=disturbed,
                               feature_kwargs=dict(feature_kwargs or {}),

@@ -259,17 +259,13 @@ def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, tim
     from learn.transfer.report import write_table
 
     files = dict(got.files)
-    files["results"] = report_dir / "results.csv"
-    write_owned(files["results"], lambda tmp: res.to_csv(tmp, index=False))
-    files["confusion"] = report_dir / "confusion.csv"
-    write_owned(files["confusion"], lambda tmp: conf.to_csv(tmp, index=False))
     run_s = pd.concat(got.run_s, ignore_index=True) if got.run_s else None
-    if run_s is not None:
-        files["run_times"] = report_dir / "run_times.csv"
-        write_owned(files["run_times"], lambda tmp: run_s.to_csv(tmp, index=False))
-    if got.latency is not None and len(got.latency):
-        files["latency"] = report_dir / "latency.csv"
-        write_owned(files["latency"], lambda tmp: got.latency.to_csv(tmp, index=False))
+    latency = got.latency if got.latency is not None and len(got.latency) else None
+    for key, table in {"results": res, "confusion": conf, "run_times": run_s,
+                       "latency": latency}.items():
+        if table is not None:
+            files[key] = report_dir / f"{key}.csv"
+            write_owned(files[key], lambda tmp, t=table: t.to_csv(tmp, index=False))
     targets = {d: t for d, t in tc.targets.items() if d in set(res["dataset"])}
     files["table"] = write_table(res, conf, report_dir / "table.md", targets=targets,
                                  primary=tc.primary, separability=got.separability,

@@ -49,8 +49,6 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
                                "split from the transfer study's windows",
     "learn/monitor/normal.py": "the normal-behaviour model and its operating-variable laws; "
                                "the laws to move beside learn/monitor/laws.py",
-    "learn/learners/nets.py": "the torch wrapper: fit, fine-tune, devices; fine-tuning to "
-                              "move with learn/learners/adapt.py",
     "swgsim/gear/thermal.py": "joint temperature and its friction law, with the measured "
                               "UR3 trace's import",
     "learn/monitor/gear_monitor.py": "commissioning, scoring, alarm, naming: one gear's "
