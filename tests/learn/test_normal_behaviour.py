@@ -252,3 +252,92 @@ def test_z_over_friction_equals_z_of_the_repeated_windows():
                     factors.ravel()).reshape(fast.shape)
         assert np.array_equal(fast, slow)
     assert np.any(nb._edge(nb.index(p), Conditions(acting, None))[1])  # spread widened
+
+
+
+def _warm(commissioned, lo: float, hi: float, kappa: float = 1.0):
+    """The commissioned normal behaviour as a joint without a reading has it: one warm-up
+    direction per point over three bridges' offsets and the efficiency (a zero drift
+    moves the offsets, the grease the efficiency), commissioning's range [lo, hi] along
+    it [σ]; arrays copied (recommissioning writes into them)."""
+    nb, rng = commissioned
+    d = np.zeros((len(nb.points), 1, EFFICIENCY + 1))
+    d[:, 0, [0, BLOCK, 2 * BLOCK, EFFICIENCY]] = [0.6, 0.5, -0.4, 0.48]
+    d /= np.linalg.norm(d, axis=2, keepdims=True)
+    return dataclasses.replace(
+        nb, mean=nb.mean.copy(), std=nb.std.copy(), torque_range=nb.torque_range.copy(),
+        warm_dir=d, warm_range=np.tile([lo, hi], (len(nb.points), 1, 1)),
+        config=NormalConfig(extrapolation_uncertainty=kappa)), rng
+
+
+def _warmed(nb, f, p, xi: float):
+    """The windows ``f`` moved by ``xi`` σ along their points' warm-up direction (offsets
+    and efficiency: the load correction leaves an additive move as it is)."""
+    i = nb.index(p)
+    return f + xi * nb.warm_dir[i, 0] * nb.std[i]
+
+
+def test_a_warm_up_beyond_the_load_range_is_taken_out_before_the_widening(commissioned):
+    """A joint without a reading at a 10 % heavier load (the spread widened unequally):
+    a cold start inside commissioning's range along the warm-up direction leaves the
+    z-scores as they are at the mean state. The directions were learnt in σ; taken out in
+    the widened spread, the move was bent off them and part of it stayed (design life of
+    family ``all``, bench gear 3, seed 101: a root crack named at cold starts after a
+    lighter tool)."""
+    nb, rng = _warm(commissioned, -50.0, 50.0)
+    f, p, cond = _windows(nb, rng, 1.1)
+    i = nb.index(p)
+    assert (nb.outside(p, cond, 1.0) & 2).all()  # beyond the load range
+    z0, s0 = nb.z_and_spread(f, p, cond)
+    z1, s1 = nb.z_and_spread(_warmed(nb, f, p, 4.0), p, cond)
+    np.testing.assert_array_equal(s1, s0)
+    np.testing.assert_allclose(z1, z0, atol=1e-6)
+    ratio = s0[:, [0, BLOCK, 2 * BLOCK, EFFICIENCY]] / nb.std[i][:, [0, BLOCK, 2 * BLOCK,
+                                                                    EFFICIENCY]]
+    assert ratio.max() > 2 * ratio.min()  # widened unequally: the case that bent it
+
+
+def test_a_warm_up_beyond_commissionings_range_widens_the_spread(commissioned):
+    """A joint hotter than commissioning saw (12 σ along its warm-up direction, the range
+    ±5): the part beyond, e, is taken out as an extrapolation of the latent temperature
+    trusted to κ times its size, so the spread grows to sqrt(σ² + (κ σ e)²) and the
+    z-scores are the mean state's in it; 0.5 σ (inside) widens nothing."""
+    kappa = 0.8
+    nb, rng = _warm(commissioned, -5.0, 5.0, kappa)
+    f, p, cond = _windows(nb, rng, 1.0)
+    i = nb.index(p)
+    cond = Conditions(np.clip(cond.torque_nm, *nb.torque_range[i].T))
+    u0 = np.einsum("nf,nf->n", (nb.reference(f, p, cond) - nb.mean[i]) / nb.std[i],
+                   nb.warm_dir[i, 0])
+    assert np.abs(u0).max() < 4.5  # the noise alone stays inside
+    z0, s0 = nb.z_and_spread(f, p, cond)
+    np.testing.assert_array_equal(s0, nb.std[i])
+    _, s_in = nb.z_and_spread(_warmed(nb, f, p, 0.5), p, cond)
+    np.testing.assert_array_equal(s_in, nb.std[i])
+    z1, s1 = nb.z_and_spread(_warmed(nb, f, p, 12.0), p, cond)
+    e = (u0 + 12.0 - 5.0)[:, None] * nb.warm_dir[i, 0]
+    np.testing.assert_allclose(s1, np.sqrt(nb.std[i] ** 2 + (kappa * nb.std[i] * e) ** 2),
+                               rtol=1e-9)
+    np.testing.assert_allclose(z1 * s1, z0 * s0, atol=1e-6 * nb.std[i].max())
+
+
+def test_a_point_relearnt_without_a_reading_keeps_commissionings_warm_ups(commissioned):
+    """A point relearnt at a new load from windows of one warm state (its gathering spans
+    no cold start): a later cold start there, inside what commissioning's warm-ups
+    spanned, leaves the z-scores as the mean state's, and the point's spread is no
+    smaller than commissioning's. Learnt from the gathered windows alone, the point had
+    no warm-up direction and a cold start read as a fault (design life of family
+    ``all``, bench gear 3, seed 101: 47 gear-fault alarms in 200 h)."""
+    nb, rng = _warm(commissioned, -6.0, 6.0)
+    f, p, cond = _windows(nb, rng, 1.1, n=100)
+    f[:, :EFFICIENCY] *= 1.0 + 5e-3  # the load law missed: relearnt, not extended
+    i = nb.index(p)
+    k = int(i[0])
+    first, later = np.flatnonzero(i == k)[:60], np.flatnonzero(i == k)[60:]
+    std0 = nb.std[k].copy()
+    hot = _warmed(nb, f[first], p[first], 2.0)
+    nb.recommission(k, nb.reference(hot, p[first], cond[first]), cond.torque_nm[first])
+    assert (nb.std[k] >= std0).all()
+    z_hot = nb.z(_warmed(nb, f[later], p[later], 2.0), p[later], cond[later])
+    z_cold = nb.z(_warmed(nb, f[later], p[later], -3.0), p[later], cond[later])
+    np.testing.assert_allclose(z_cold, z_hot, atol=1e-6)
