@@ -32,6 +32,7 @@ from learn.studies.protocols import (
     fit_split_quiet,
 )
 from learn.tracking.config import LoggerConfig
+from learn.tracking.mlflow_runs import ConfusionFigure
 from swgsim.base.lazy import lazy_module
 from swgsim.base.registry import travelling
 
@@ -288,20 +289,22 @@ def paper_study(
 
 @dataclass
 class _JobLogging:
-    """What logging a job of one study call needs (:func:`log_study_job`)."""
+    """What logging a job of one study call needs (:func:`log_study_job`), and the
+    confusion figure its jobs are drawn on."""
 
     dataset_path: str
     random_state: int
     scale: bool
     protocols: Mapping[str, ProtocolConfig]
     tracking: StudyTracking | None
+    figure: ConfusionFigure = field(default_factory=ConfusionFigure)
 
     def log(self, job: StudyJob, result: ProtocolResult, model, X_sample) -> str | None:
         if self.tracking is None:
             return None
         return log_study_job(result, job, self.dataset_path, self.random_state, self.scale,
                              self.protocols[job.protocol], self.tracking, model=model,
-                             X_sample=X_sample)
+                             X_sample=X_sample, figure=self.figure)
 
 
 def _collect_jobs(jobs: list[StudyJob], outs, splits_of: Mapping, feats: Mapping,
@@ -332,7 +335,8 @@ def _collect_jobs(jobs: list[StudyJob], outs, splits_of: Mapping, feats: Mapping
 
 def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
                   random_state: int, scale: bool, protocol: ProtocolConfig,
-                  tracking: StudyTracking, model=None, X_sample=None) -> str:
+                  tracking: StudyTracking, model=None, X_sample=None,
+                  figure: ConfusionFigure | None = None) -> str:
     """Log one job of the study (:func:`learn.tracking.log_job`); return its run id.
 
     Parameters
@@ -349,6 +353,8 @@ def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
         Fitted on the last split, to be logged.
     X_sample : ndarray, optional
         A few rows of the features (the model's input example).
+    figure : ConfusionFigure, optional
+        Where the confusion matrix is drawn (one for all jobs of a study).
 
     Returns
     -------
@@ -371,6 +377,6 @@ def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
                    run_name=f"{job.selection_name}-{job.model}", params=params, config=params,
                    tracking_uri=tracking.tracking_uri,
                    tags={"task": "paper_study", "table": job.table}, dataset=dataset_path,
-                   group=tracking.group or None, model=model,
+                   group=tracking.group or None, model=model, figure=figure,
                    model_tags={"split": result.splits[-1].label}, X_sample=X_sample)
 
