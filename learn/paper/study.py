@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from learn.inputs.features import Features, FeatureSettings, extract_features, selection_name
+from learn.inputs.features import Features, FeatureSettings, iter_features, selection_name
 from learn.learners.models import make_model
 from learn.paper.tables import StudyOptions
 from learn.studies.protocols import (
@@ -127,10 +127,12 @@ def plan_jobs(options: StudyOptions) -> list[StudyJob]:
 
 def compute_features(ds, selections: list[int], settings: FeatureSettings,
                      bar=None) -> dict[int, Features]:
-    """Features of each selection, computed once for every table that uses it."""
+    """Features of each selection, computed once for every table that uses it (what the
+    selections share read once, :func:`learn.inputs.features.iter_features`)."""
     out = {}
-    for s in selections:
-        out[s] = extract_features(ds, s, **settings.kwargs())
+    for s, feats in zip(selections, iter_features(ds, selections, **settings.kwargs()),
+                        strict=True):
+        out[s] = feats
         if bar is not None:
             bar.update()
     return out
