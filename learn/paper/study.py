@@ -158,14 +158,15 @@ def fit_tasks(jobs: list[StudyJob], feats: Mapping[int, Features],
     from joblib import delayed
 
     tasks, fit = [], travelling(fit_split_quiet)  # a user's learners travel with the fits
+    y_of = {s: f.meta["fault"].to_numpy() for s, f in feats.items()}
+    labels_of = {s: class_labels(y) for s, y in y_of.items()}  # once per selection
     for j in jobs:
-        f = feats[j.selection]
-        y = f.meta["fault"].to_numpy()
+        y, labels = y_of[j.selection], labels_of[j.selection]
         est = make_model(j.model, random_state=random_state, scale=scale)
         sps = splits_of[(j.protocol, j.selection)]
         for sp in sps:
-            tasks.append(delayed(fit)(est, f.X, y, sp, class_labels(y),
-                                                  return_model=return_models and sp is sps[-1]))
+            tasks.append(delayed(fit)(est, feats[j.selection].X, y, sp, labels,
+                                      return_model=return_models and sp is sps[-1]))
     return tasks
 
 
@@ -317,11 +318,12 @@ def _collect_jobs(jobs: list[StudyJob], outs, splits_of: Mapping, feats: Mapping
     table's time [s]."""
     rows, confusion, caught = [], [], Counter()
     last_of_table = {j.table: j for j in jobs}
+    labels_of = {s: class_labels(f.meta["fault"].to_numpy()) for s, f in feats.items()}
     t_table = time.perf_counter()
     for j in jobs:  # results arrive in order; log each job while fits go on
         splits = splits_of[(j.protocol, j.selection)]
         f = feats[j.selection]
-        result, c, model = collect_job(outs, splits, class_labels(f.meta["fault"].to_numpy()))
+        result, c, model = collect_job(outs, splits, labels_of[j.selection])
         bar.update(len(splits))
         caught.update(c)
         run_id = run.log(j, result, model, f.X[splits[-1].test[:5]])
