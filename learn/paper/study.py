@@ -141,12 +141,20 @@ def compute_features(ds, selections: list[int], settings: FeatureSettings,
 def plan_splits(jobs: list[StudyJob], feats: Mapping[int, Features],
                 protocols: Mapping[str, ProtocolConfig],
                 random_state: int) -> dict[tuple[str, int], list[Split]]:
-    """Splits of each (protocol, selection), the CV shuffled by ``random_state``."""
+    """Splits of each (protocol, selection), the CV shuffled by ``random_state``; made
+    once per protocol for selections of the same windows (equal ``meta``: those of one
+    data set)."""
     out: dict[tuple[str, int], list[Split]] = {}
     for j in jobs:
-        if (j.protocol, j.selection) not in out:
+        if (j.protocol, j.selection) in out:
+            continue
+        meta = feats[j.selection].meta
+        made = next((sps for (p, s), sps in out.items()
+                     if p == j.protocol and feats[s].meta.equals(meta)), None)
+        if made is None:
             p = dataclasses.replace(protocols[j.protocol], random_state=random_state)
-            out[(j.protocol, j.selection)] = p.splits(feats[j.selection].meta)
+            made = p.splits(meta)
+        out[(j.protocol, j.selection)] = made
     return out
 
 
