@@ -2,11 +2,11 @@
 
 :func:`paper_study` runs every job (table, protocol, feature selection, model) of the
 tables chosen by :class:`learn.paper.tables.StudyOptions` on one data set: the
-features of each selection once, the splits of each (protocol, selection) once, every
-(job, split) fit in one stream of joblib processes, one MLflow run per job. It writes no
-report; :func:`learn.paper.task.run_paper_study` adds it. The steps, in order:
-:func:`plan_jobs`, :func:`compute_features`, :func:`plan_splits`, :func:`fit_tasks`,
-:func:`collect_job` per job, :func:`feature_spreads`.
+features of each selection once, the splits of each protocol once, every (job, split) fit
+in one stream of joblib processes, one MLflow run per job (one confusion figure redrawn
+for all). It writes no report; :func:`learn.paper.task.run_paper_study` adds it. The
+steps, in order: :func:`plan_jobs`, :func:`compute_features`, :func:`plan_splits`,
+:func:`fit_tasks`, :func:`collect_job` per job, :func:`feature_spreads`.
 """
 
 from __future__ import annotations
