@@ -37,7 +37,7 @@ exactly 1 in every bin. Relative mean and variance follow eq. (7) literally (no 
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -413,40 +413,75 @@ def extract_features(
         windows, a bad ``floor_rel``, or non-finite features (e.g. a reference mean of
         exactly zero in eq. (7)).
     """
-    sel = _selection_id(selection)
+    return next(iter_features(ds, [selection], orders, floor_rel))
+
+
+def iter_features(
+    ds,
+    selections: Sequence[int | str],
+    orders: Sequence[float] | None = None,
+    floor_rel: float = FeatureSettings.floor_rel,
+) -> Iterator[Features]:
+    """:func:`extract_features` of several selections, in order, reading what they share
+    once: the pairing with the reference windows, the windows' signals as float64 and the
+    relative means and variances (Selections 1 and 2). The same features as one call of
+    :func:`extract_features` per selection.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        See :func:`extract_features`.
+    selections : sequence of {1, 2, 3, "selection1", "selection2", "selection3"}
+    orders, floor_rel
+        See :func:`extract_features`.
+
+    Yields
+    ------
+    Features
+        One per selection, in the order of ``selections``.
+
+    Raises
+    ------
+    ValueError
+        See :func:`extract_features` (every argument checked before the first is made).
+    """
+    sels = [_selection_id(s) for s in selections]
     if not floor_rel >= 0:
         raise ValueError(f"floor_rel must be >= 0, got {floor_rel}")
     orders = paper_orders() if orders is None else np.asarray(orders, dtype=np.float64)
-    names = feature_names(sel, orders)
+    names = [feature_names(sel, orders) for sel in sels]
     samples, refs = reference_index(ds)
     used = np.unique(np.concatenate([samples, refs]))  # windows whose raw values we need
     pos = np.full(ds.sizes["sample"], -1, dtype=np.int64)
     pos[used] = np.arange(used.size)
     i_s, i_r = pos[samples], pos[refs]  # rows into the `used` arrays
 
-    if sel in (2, 3):
+    if any(sel in (2, 3) for sel in sels):
         check_orders(ds, orders)
     s = np.asarray(ds["strain_signal"].values[used], dtype=np.float64)  # (U, 5, T)
     if s.shape[1] != N_SENSORS:
         raise ValueError(f"strain_signal must have {N_SENSORS} sensors, got {s.shape[1]}")
     eta = np.asarray(ds["efficiency"].values[used], dtype=np.float64)  # (U,)
     eta_rel = eta[i_s] / eta[i_r]  # (n,)
-
-    cols: list[np.ndarray] = []
-    if sel in (1, 2):
-        m = s.mean(axis=-1)  # (U, 5)
-        v = s.var(axis=-1)  # (U, 5)
-        cols += [m[i_s] / m[i_r], v[i_s] / v[i_r], eta_rel[:, None]]
-    if sel in (2, 3):
-        rel = _dft_rel(ds, s, used, i_s, i_r, sel, orders, floor_rel)  # (n, C, K)
-        cols.append(rel.reshape(rel.shape[0], -1))  # (n, C*K), signal-major
-    if sel == 3:
-        cols.append(np.abs(1.0 - eta_rel)[:, None] ** 0.25)  # eq. (9)
-    X = np.concatenate(cols, axis=1)
-    assert X.shape[1] == len(names), (X.shape, len(names))
-    _check_finite(X, names)
-    log.info("selection %d: %d windows x %d features", sel, X.shape[0], X.shape[1])
-    return Features(X, names, meta_table(ds, samples))
+    moments: list[np.ndarray] = []  # m_rel, var_rel: Selections 1 and 2
+    for sel, sel_names in zip(sels, names, strict=True):
+        cols: list[np.ndarray] = []
+        if sel in (1, 2):
+            if not moments:
+                m = s.mean(axis=-1)  # (U, 5)
+                v = s.var(axis=-1)  # (U, 5)
+                moments = [m[i_s] / m[i_r], v[i_s] / v[i_r]]
+            cols += [*moments, eta_rel[:, None]]
+        if sel in (2, 3):
+            rel = _dft_rel(ds, s, used, i_s, i_r, sel, orders, floor_rel)  # (n, C, K)
+            cols.append(rel.reshape(rel.shape[0], -1))  # (n, C*K), signal-major
+        if sel == 3:
+            cols.append(np.abs(1.0 - eta_rel)[:, None] ** 0.25)  # eq. (9)
+        X = np.concatenate(cols, axis=1)
+        assert X.shape[1] == len(sel_names), (X.shape, len(sel_names))
+        _check_finite(X, sel_names)
+        log.info("selection %d: %d windows x %d features", sel, X.shape[0], X.shape[1])
+        yield Features(X, sel_names, meta_table(ds, samples))
 
 
 def _dft_rel(ds, s: np.ndarray, used: np.ndarray, i_s: np.ndarray, i_r: np.ndarray,

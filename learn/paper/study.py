@@ -2,11 +2,11 @@
 
 :func:`paper_study` runs every job (table, protocol, feature selection, model) of the
 tables chosen by :class:`learn.paper.tables.StudyOptions` on one data set: the
-features of each selection once, the splits of each (protocol, selection) once, every
-(job, split) fit in one stream of joblib processes, one MLflow run per job. It writes no
-report; :func:`learn.paper.task.run_paper_study` adds it. The steps, in order:
-:func:`plan_jobs`, :func:`compute_features`, :func:`plan_splits`, :func:`fit_tasks`,
-:func:`collect_job` per job, :func:`feature_spreads`.
+features of each selection once, the splits of each protocol once, every (job, split) fit
+in one stream of joblib processes, one MLflow run per job (one confusion figure redrawn
+for all). It writes no report; :func:`learn.paper.task.run_paper_study` adds it. The
+steps, in order: :func:`plan_jobs`, :func:`compute_features`, :func:`plan_splits`,
+:func:`fit_tasks`, :func:`collect_job` per job, :func:`feature_spreads`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from learn.inputs.features import Features, FeatureSettings, extract_features, selection_name
+from learn.inputs.features import Features, FeatureSettings, iter_features, selection_name
 from learn.learners.models import make_model
 from learn.paper.tables import StudyOptions
 from learn.studies.protocols import (
@@ -32,6 +32,7 @@ from learn.studies.protocols import (
     fit_split_quiet,
 )
 from learn.tracking.config import LoggerConfig
+from learn.tracking.mlflow_runs import ConfusionFigure
 from swgsim.base.lazy import lazy_module
 from swgsim.base.registry import travelling
 
@@ -126,10 +127,12 @@ def plan_jobs(options: StudyOptions) -> list[StudyJob]:
 
 def compute_features(ds, selections: list[int], settings: FeatureSettings,
                      bar=None) -> dict[int, Features]:
-    """Features of each selection, computed once for every table that uses it."""
+    """Features of each selection, computed once for every table that uses it (what the
+    selections share read once, :func:`learn.inputs.features.iter_features`)."""
     out = {}
-    for s in selections:
-        out[s] = extract_features(ds, s, **settings.kwargs())
+    for s, feats in zip(selections, iter_features(ds, selections, **settings.kwargs()),
+                        strict=True):
+        out[s] = feats
         if bar is not None:
             bar.update()
     return out
@@ -138,12 +141,20 @@ def compute_features(ds, selections: list[int], settings: FeatureSettings,
 def plan_splits(jobs: list[StudyJob], feats: Mapping[int, Features],
                 protocols: Mapping[str, ProtocolConfig],
                 random_state: int) -> dict[tuple[str, int], list[Split]]:
-    """Splits of each (protocol, selection), the CV shuffled by ``random_state``."""
+    """Splits of each (protocol, selection), the CV shuffled by ``random_state``; made
+    once per protocol for selections of the same windows (equal ``meta``: those of one
+    data set)."""
     out: dict[tuple[str, int], list[Split]] = {}
     for j in jobs:
-        if (j.protocol, j.selection) not in out:
+        if (j.protocol, j.selection) in out:
+            continue
+        meta = feats[j.selection].meta
+        made = next((sps for (p, s), sps in out.items()
+                     if p == j.protocol and feats[s].meta.equals(meta)), None)
+        if made is None:
             p = dataclasses.replace(protocols[j.protocol], random_state=random_state)
-            out[(j.protocol, j.selection)] = p.splits(feats[j.selection].meta)
+            made = p.splits(meta)
+        out[(j.protocol, j.selection)] = made
     return out
 
 
@@ -155,14 +166,15 @@ def fit_tasks(jobs: list[StudyJob], feats: Mapping[int, Features],
     from joblib import delayed
 
     tasks, fit = [], travelling(fit_split_quiet)  # a user's learners travel with the fits
+    y_of = {s: f.meta["fault"].to_numpy() for s, f in feats.items()}
+    labels_of = {s: class_labels(y) for s, y in y_of.items()}  # once per selection
     for j in jobs:
-        f = feats[j.selection]
-        y = f.meta["fault"].to_numpy()
+        y, labels = y_of[j.selection], labels_of[j.selection]
         est = make_model(j.model, random_state=random_state, scale=scale)
         sps = splits_of[(j.protocol, j.selection)]
         for sp in sps:
-            tasks.append(delayed(fit)(est, f.X, y, sp, class_labels(y),
-                                                  return_model=return_models and sp is sps[-1]))
+            tasks.append(delayed(fit)(est, feats[j.selection].X, y, sp, labels,
+                                      return_model=return_models and sp is sps[-1]))
     return tasks
 
 
@@ -288,20 +300,22 @@ def paper_study(
 
 @dataclass
 class _JobLogging:
-    """What logging a job of one study call needs (:func:`log_study_job`)."""
+    """What logging a job of one study call needs (:func:`log_study_job`), and the
+    confusion figure its jobs are drawn on."""
 
     dataset_path: str
     random_state: int
     scale: bool
     protocols: Mapping[str, ProtocolConfig]
     tracking: StudyTracking | None
+    figure: ConfusionFigure = field(default_factory=ConfusionFigure)
 
     def log(self, job: StudyJob, result: ProtocolResult, model, X_sample) -> str | None:
         if self.tracking is None:
             return None
         return log_study_job(result, job, self.dataset_path, self.random_state, self.scale,
                              self.protocols[job.protocol], self.tracking, model=model,
-                             X_sample=X_sample)
+                             X_sample=X_sample, figure=self.figure)
 
 
 def _collect_jobs(jobs: list[StudyJob], outs, splits_of: Mapping, feats: Mapping,
@@ -312,11 +326,12 @@ def _collect_jobs(jobs: list[StudyJob], outs, splits_of: Mapping, feats: Mapping
     table's time [s]."""
     rows, confusion, caught = [], [], Counter()
     last_of_table = {j.table: j for j in jobs}
+    labels_of = {s: class_labels(f.meta["fault"].to_numpy()) for s, f in feats.items()}
     t_table = time.perf_counter()
     for j in jobs:  # results arrive in order; log each job while fits go on
         splits = splits_of[(j.protocol, j.selection)]
         f = feats[j.selection]
-        result, c, model = collect_job(outs, splits, class_labels(f.meta["fault"].to_numpy()))
+        result, c, model = collect_job(outs, splits, labels_of[j.selection])
         bar.update(len(splits))
         caught.update(c)
         run_id = run.log(j, result, model, f.X[splits[-1].test[:5]])
@@ -332,7 +347,8 @@ def _collect_jobs(jobs: list[StudyJob], outs, splits_of: Mapping, feats: Mapping
 
 def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
                   random_state: int, scale: bool, protocol: ProtocolConfig,
-                  tracking: StudyTracking, model=None, X_sample=None) -> str:
+                  tracking: StudyTracking, model=None, X_sample=None,
+                  figure: ConfusionFigure | None = None) -> str:
     """Log one job of the study (:func:`learn.tracking.log_job`); return its run id.
 
     Parameters
@@ -349,6 +365,8 @@ def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
         Fitted on the last split, to be logged.
     X_sample : ndarray, optional
         A few rows of the features (the model's input example).
+    figure : ConfusionFigure, optional
+        Where the confusion matrix is drawn (one for all jobs of a study).
 
     Returns
     -------
@@ -371,6 +389,6 @@ def log_study_job(result: ProtocolResult, job: StudyJob, dataset_path: str,
                    run_name=f"{job.selection_name}-{job.model}", params=params, config=params,
                    tracking_uri=tracking.tracking_uri,
                    tags={"task": "paper_study", "table": job.table}, dataset=dataset_path,
-                   group=tracking.group or None, model=model,
+                   group=tracking.group or None, model=model, figure=figure,
                    model_tags={"split": result.splits[-1].label}, X_sample=X_sample)
 

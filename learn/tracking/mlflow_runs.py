@@ -78,11 +78,84 @@ def flatten_config(config: Mapping[str, Any]) -> dict[str, str]:
     return {k: str(v)[:6000] for k, v in _flatten(config)}
 
 
-def confusion_figure(confusion: np.ndarray, labels: Sequence[str], title: str = ""):
-    """Confusion-matrix figure (matplotlib, no pyplot state).
+class ConfusionFigure:
+    """A confusion-matrix figure (matplotlib, no pyplot state), laid out once and redrawn
+    for each job (:meth:`draw`).
 
     The axes are placed from the longest class name (no layout engine: a figure is drawn
     for every logged job, and the constrained layout's extra draws doubled its cost).
+    Building the figure (axes, colour bar, ticks, a text per cell) costs a third of
+    rendering it, and the jobs of a study share their classes: the figure is kept and only
+    its colours, counts, title and width change from job to job; other labels build it anew.
+    """
+
+    def __init__(self) -> None:
+        self._fig: Any = None
+        self._labels: tuple[str, ...] = ()
+
+    def draw(self, confusion: np.ndarray, labels: Sequence[str], title: str = ""):
+        """The figure of one confusion matrix.
+
+        Parameters
+        ----------
+        confusion : ndarray of int, shape (n_classes, n_classes)
+            Rows: true class, columns: predicted class.
+        labels : sequence of str, length n_classes
+        title : str, optional
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Colours: row-normalised rate; numbers: counts. The same figure each call, until
+            the labels change: save it before the next call.
+        """
+        labels = tuple(str(s) for s in labels)
+        if self._fig is None or labels != self._labels:
+            self._build(labels)
+        cm = np.asarray(confusion)
+        rate = cm / np.maximum(cm.sum(axis=1, keepdims=True), 1)
+        fig = self._fig
+        self._image.set_data(rate)
+        for (i, j), text in np.ndenumerate(self._cells):
+            text.set_text(str(int(cm[i, j])))
+            text.set_color("white" if rate[i, j] > 0.5 else "black")
+        # the figure is as wide as the title (9 pt, about 0.075 in a character)
+        left, bottom, side, h = self._inches
+        w = max(left + side + 1.2, 0.075 * len(title) + 0.4)
+        fig.set_size_inches(w, h)
+        fig.axes[0].set_position((left / w, bottom / h, side / w, side / h))
+        fig.axes[1].set_position(((left + side + 0.2) / w, bottom / h, 0.15 / w, side / h))
+        self._title.set_text(title)
+        return fig
+
+    def _build(self, labels: tuple[str, ...]) -> None:
+        """The figure's artists for ``labels``, at zero counts."""
+        from matplotlib.figure import Figure
+
+        n = len(labels)
+        # inches: class names at 8 pt (about 0.07 in a character) and the axis label beside
+        left = 0.07 * max(len(s) for s in labels) + 0.3
+        bottom, side = 0.75 * left + 0.2, 0.6 * n
+        h = bottom + side + 0.6
+        self._inches = (left, bottom, side, h)
+        fig = Figure(figsize=(left + side + 1.2, h))
+        ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+        self._image = ax.imshow(np.zeros((n, n)), vmin=0.0, vmax=1.0, cmap="Blues")
+        self._cells = np.array([[ax.text(j, i, "", ha="center", va="center", fontsize=8)
+                                 for j in range(n)] for i in range(n)], dtype=object)
+        ax.set_xticks(range(n), labels, rotation=45, ha="right", fontsize=8)
+        ax.set_yticks(range(n), labels, fontsize=8)
+        ax.set_xlabel("predicted class", fontsize=9)
+        ax.set_ylabel("true class", fontsize=9)
+        self._title = fig.suptitle("", fontsize=9, y=1.0 - 0.15 / h, va="center")
+        cax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+        fig.colorbar(self._image, cax=cax, label="fraction of true class")
+        self._fig, self._labels = fig, labels
+
+
+def confusion_figure(confusion: np.ndarray, labels: Sequence[str], title: str = ""):
+    """Confusion-matrix figure (matplotlib, no pyplot state): :meth:`ConfusionFigure.draw`
+    on a new figure.
 
     Parameters
     ----------
@@ -96,31 +169,7 @@ def confusion_figure(confusion: np.ndarray, labels: Sequence[str], title: str = 
     matplotlib.figure.Figure
         Colours: row-normalised rate; numbers: counts.
     """
-    from matplotlib.figure import Figure
-
-    cm = np.asarray(confusion)
-    rate = cm / np.maximum(cm.sum(axis=1, keepdims=True), 1)
-    n = len(labels)
-    # inches: class names at 8 pt (about 0.07 in a character) and the axis label beside
-    left = 0.07 * max(len(str(s)) for s in labels) + 0.3
-    bottom, side = 0.75 * left + 0.2, 0.6 * n
-    w, h = max(left + side + 1.2, 0.075 * len(title) + 0.4), bottom + side + 0.6
-    fig = Figure(figsize=(w, h))
-    ax = fig.add_axes((left / w, bottom / h, side / w, side / h))
-    im = ax.imshow(rate, vmin=0.0, vmax=1.0, cmap="Blues")
-    for i in range(n):
-        for j in range(n):
-            ax.text(j, i, str(int(cm[i, j])), ha="center", va="center",
-                    color="white" if rate[i, j] > 0.5 else "black", fontsize=8)
-    ax.set_xticks(range(n), labels, rotation=45, ha="right", fontsize=8)
-    ax.set_yticks(range(n), labels, fontsize=8)
-    ax.set_xlabel("predicted class", fontsize=9)
-    ax.set_ylabel("true class", fontsize=9)
-    if title:  # over the figure, which is as wide as the title (9 pt, about 0.075 in a character)
-        fig.suptitle(title, fontsize=9, y=1.0 - 0.15 / h, va="center")
-    cax = fig.add_axes(((left + side + 0.2) / w, bottom / h, 0.15 / w, side / h))
-    fig.colorbar(im, cax=cax, label="fraction of true class")
-    return fig
+    return ConfusionFigure().draw(confusion, labels, title)
 
 
 @dataclass
@@ -475,6 +524,7 @@ def log_job(
     tracking_uri: str | None = None,
     tags: Mapping[str, str] | None = None,
     confusion_plot: bool = True,
+    figure: ConfusionFigure | None = None,
     dataset: str | os.PathLike | DatasetRef | None = None,
     model=None,
     model_tags: Mapping[str, Any] | None = None,
@@ -493,6 +543,9 @@ def log_job(
         As :func:`log_run` (``run_name`` e.g. ``"selection3-rf"``).
     confusion_plot : bool, default True
         Store ``confusion_matrix.png``.
+    figure : ConfusionFigure, optional
+        Where the confusion matrix is drawn; a caller logging many jobs passes one for all
+        (laid out once). Default a new one.
     dataset : path-like or DatasetRef, optional
         The data set the job read (a dataset input of the run).
     model : fitted estimator, optional
@@ -521,10 +574,10 @@ def log_job(
             metrics["fit_time_s"] = float(np.sum(result.fit_time_s))
         run.log_metrics(metrics)
         if confusion_plot:
-            run.log_figure(confusion_figure(result.confusion, result.labels,
-                                            f"{run_name}: mean test accuracy "
-                                            f"{100 * result.mean_test_accuracy:.1f} %"),
-                           "confusion_matrix.png")
+            run.log_figure((figure or ConfusionFigure()).draw(
+                result.confusion, result.labels,
+                f"{run_name}: mean test accuracy {100 * result.mean_test_accuracy:.1f} %"),
+                "confusion_matrix.png")
         if model is not None:
             run.log_model(model, X_sample=X_sample, tags=model_tags)
     log.info("MLflow run %s (%s/%s)", run.run_id, experiment, run_name)

@@ -9,6 +9,7 @@ from learn.inputs.features import (
     META_COLUMNS,
     extract_features,
     feature_names,
+    iter_features,
     order_spectrum,
     paper_orders,
 )
@@ -53,6 +54,14 @@ def test_shapes_and_names(synthetic_ds, selection, n_features):
         assert names[0] == "dft_rel_ds13_o0.25" and names[32] == "dft_rel_ds24_o0.25"
         assert names[-1] == "eta2_rel"
 
+
+
+def test_the_selections_made_together_are_those_made_one_by_one(synthetic_ds):
+    together = list(iter_features(synthetic_ds, [3, "selection1", 2]))
+    for sel, feats in zip((3, 1, 2), together, strict=True):
+        X, names, meta = extract_features(synthetic_ds, sel)
+        np.testing.assert_array_equal(feats.X, X)
+        assert feats.names == names and feats.meta.equals(meta)
 
 def test_paper_orders():
     o = paper_orders()

@@ -289,3 +289,22 @@ def test_the_confusion_figure_holds_every_label_and_its_title(labels):
                  fig.axes[0].xaxis.label, fig.axes[0].yaxis.label, fig._suptitle]:
         box = text.get_window_extent(renderer)
         assert inside.contains(box.x0, box.y0) and inside.contains(box.x1, box.y1), text
+
+
+def test_a_reused_confusion_figure_draws_what_a_new_one_draws():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from learn.tracking.mlflow_runs import ConfusionFigure, confusion_figure
+
+    def pixels(fig):
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba()).copy()
+
+    labels = ["healthy", "eccentric_wg", "tip_crack"]
+    cm = np.array([[9, 1, 0], [2, 7, 1], [0, 0, 10]])
+    reused = ConfusionFigure()
+    for earlier in (np.eye(3, dtype=int) * 5, np.ones((2, 2), dtype=int)):  # other counts,
+        reused.draw(earlier, labels[:len(earlier)], "x" * 80)  # labels and width first
+        np.testing.assert_array_equal(pixels(reused.draw(cm, labels, "selection1-rf: 86.7 %")),
+                                      pixels(confusion_figure(cm, labels, "selection1-rf: 86.7 %")))
