@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from bad_input import run_app
 
 from learn.tracking.preflight import BrokenInstall, check_imports
 
@@ -136,21 +137,17 @@ def test_a_bad_input_is_refused_before_the_libraries_are_imported(tmp_path, modu
     assert words in lines[0] and "broken install" not in lines[0], lines[0]
 
 
-def _console(name: str, *args: str, cwd: Path) -> subprocess.CompletedProcess:
-    """Run the console script ``name`` as a user would."""
-    return subprocess.run([str(Path(sys.executable).parent / name), *args],
-                          capture_output=True, text=True, cwd=cwd, env={**os.environ},
-                          timeout=300)
-
-
-def test_tracking_store_is_checked_before_any_work(tmp_path):
+def test_tracking_store_is_checked_before_any_work(tmp_path, monkeypatch, capsys):
+    # the console's entry point in this process, as its command line runs it (run_app; a
+    # fresh process per case cost an import of the stack: the planted cases above need one)
     bad = tmp_path / "not_a_db.db"
     bad.write_text("not sqlite")
-    r = _console("swgsim-paper", "grid=tiny", f"data_root={tmp_path}/data",
-                 f"report_root={tmp_path}/reports", f"tracking_uri=sqlite:///{bad}",
-                 cwd=tmp_path)
-    assert r.returncode == 2 and f"tracking_uri=sqlite:///{bad}" in r.stderr
+    code, err = run_app("swgsim-paper", [
+        "grid=tiny", f"data_root={tmp_path}/data", f"report_root={tmp_path}/reports",
+        f"tracking_uri=sqlite:///{bad}"], tmp_path, monkeypatch, capsys)
+    assert code == 2 and f"tracking_uri=sqlite:///{bad}" in err
     assert not (tmp_path / "data").exists() and bad.read_text() == "not sqlite"
-    r = _console("swgsim-paper", "grid=tiny", f"data_root={tmp_path}/data",
-                 "tracking_uri=sqlite:////nowhere/at/all/mlflow.db", cwd=tmp_path)
-    assert r.returncode == 2 and "/nowhere/at/all does not exist" in r.stderr
+    code, err = run_app("swgsim-paper", [
+        "grid=tiny", f"data_root={tmp_path}/data",
+        "tracking_uri=sqlite:////nowhere/at/all/mlflow.db"], tmp_path, monkeypatch, capsys)
+    assert code == 2 and "/nowhere/at/all does not exist" in err

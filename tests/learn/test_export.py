@@ -5,11 +5,10 @@ refusals of models the C cannot represent, and the Cortex-M4F build (skipped wit
 cross tools)."""
 
 import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from bad_input import app_line
 
 from learn.export import reference as ref
 
@@ -112,11 +111,9 @@ def test_forest_size_follows_the_flash_budget():
 
 
 def test_app_refuses_bad_options_with_exit_code_2(tmp_path):
-    res = subprocess.run([sys.executable, "-m", "swgcli.export", "export.n_trees=0",
-                          f"out_dir={tmp_path}"], capture_output=True, text=True)
-    assert res.returncode == 2
-    assert res.stderr.strip() == ("swgsim-export: error: export.n_trees must lie in [1, 255] "
-                                  "(trees), got 0")
+    # the console's entry point in this process (app_line: exit 2, stderr one line)
+    line = app_line("export", ["export.n_trees=0", f"out_dir={tmp_path}"], tmp_path)
+    assert line == "swgsim-export: error: export.n_trees must lie in [1, 255] (trees), got 0"
 
 
 def test_foreign_file_in_out_dir_refused_before_any_work(tmp_path):

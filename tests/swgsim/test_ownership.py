@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bad_input import fail_second_shard
+from bad_input import fail_second_shard, run_app
 
 from swgcli import compose_app, dataset_preset
 from swgcli.app import one_line
@@ -195,11 +195,6 @@ def user_folder(path: Path, names=USER_FILES) -> Path:
     return path
 
 
-def _app(name: str, *args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([str(BIN / name), *args], capture_output=True, text=True, cwd=cwd,
-                          env={**os.environ, "HYDRA_FULL_ERROR": "0"}, timeout=300)
-
-
 def _friction_csv(path: Path) -> Path:
     t = np.arange(2000) * 0.002
     rows = "\n".join(f"{a},{np.sin(a)},{np.cos(a)},{0.1 * np.tanh(20 * np.cos(a))}"
@@ -216,14 +211,18 @@ def _friction_csv(path: Path) -> Path:
     ("swgsim-paper", ["grid=tiny", "data_root={out}/../data", "report_root={out}",
                       "tracking_uri=sqlite:///{out}/../m.db"], "report_root"),
 ])
-def test_report_apps_refuse_a_users_folder_and_leave_no_hydra_files(tmp_path, app, args, key):
+def test_report_apps_refuse_a_users_folder_and_leave_no_hydra_files(tmp_path, app, args, key,
+                                                                     monkeypatch, capsys):
+    # the console's entry point in this process, as its command line runs it (run_app)
     names = ({"summary.md": b"# my summary\n", "summary.csv": b"mine\n"}
              if app == "swgsim-paper" else USER_FILES)
     out = user_folder(tmp_path / "mine", names)
     csv = _friction_csv(tmp_path / "rec.csv")
-    r = _app(app, *(a.format(out=out, csv=csv) for a in args), cwd=tmp_path)
-    assert r.returncode == 2, r.stderr
-    lines = [s for s in r.stderr.splitlines() if s.strip()]
+    monkeypatch.setenv("HYDRA_FULL_ERROR", "0")
+    code, err = run_app(app, [a.format(out=out, csv=csv) for a in args], tmp_path,
+                        monkeypatch, capsys)
+    assert code == 2, err
+    lines = [s for s in err.splitlines() if s.strip()]
     assert lines == [f"{app}: error: {key} {out} holds {sorted(names)[0]} and 1 more such "
                      "file(s), which this project cannot show it wrote (no ownership stamp "
                      f".swg-owner.json lists it with its SHA-256); nothing was touched: move "
