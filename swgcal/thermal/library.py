@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.base.registry import Registry
 from swgsim.gear.terms import Param, linear_recurrence
 
 from ..terms import FitTerm
@@ -183,7 +184,10 @@ class AmbientDrift(FitTerm):
         return ((sig.t_s - sig.t_s[0]) / 3600.0)[:, None]
 
 
-#: Candidate effects by key (the base, :class:`FirstOrderJoint`, is not one).
-THERMAL_LIBRARY: dict[str, type[FitTerm]] = {
-    c.kind: c for c in (CopperLoss, HousingLag, AmbientDrift, NeighbourHeat,
-                        StandstillCooling)}
+#: Candidate effects by key (the base, :class:`FirstOrderJoint`, is not one): a registry
+#: of the project's one type (:class:`swgsim.base.registry.Registry`; an effect of your own
+#: joins with ``THERMAL_LIBRARY.add(kind, cls)``).
+THERMAL_LIBRARY: Registry[type[FitTerm]] = Registry("thermal effect", __name__,
+                                                    "THERMAL_LIBRARY", (
+    (c.kind, c) for c in (CopperLoss, HousingLag, AmbientDrift, NeighbourHeat,
+                          StandstillCooling)))

@@ -15,6 +15,7 @@ import pytest
 from joblib import Parallel, delayed
 
 from swgcal.terms import FitTerm
+from swgcal.thermal.library import THERMAL_LIBRARY
 from swgsim.base.registry import REGISTRIES, Registry, travelling
 from swgsim.gear import faults
 from swgsim.gear.friction import effects
@@ -71,6 +72,8 @@ def _register(kind: str, name: str) -> None:
         register_model(ModelSpec(name, "sklearn.naive_bayes.GaussianNB", {}))
     elif kind == "detector":
         register_detector(name, DetectorSpec("sel1", lambda seed, device: name, "made-up"))
+    elif kind == "thermal effect":
+        THERMAL_LIBRARY.add(name, type(name, (_Churn,), {"kind": name}))
 
 
 def _use(kind: str, name: str) -> str:
@@ -87,6 +90,8 @@ def _use(kind: str, name: str) -> str:
         return effects.make_effect(name).kind
     if kind == "learner":
         return type(make_model(name).fit(np.eye(2), ["a", "b"])[-1]).__name__
+    if kind == "thermal effect":
+        return THERMAL_LIBRARY[name].kind
     return DETECTORS[name].make(0, "cpu")
 
 
@@ -94,7 +99,8 @@ KINDS = {"gear fault": "swgsim.gear.faults:FAULTS",
          "sensor fault": "swgsim.sensing.sensor_faults:SENSOR_FAULTS",
          "friction effect": "swgsim.gear.friction.effects:FRICTION_LIBRARY",
          "learner": "learn.learners.models:MODELS",
-         "detector": "learn.monitor.detectors:DETECTORS"}
+         "detector": "learn.monitor.detectors:DETECTORS",
+         "thermal effect": "swgcal.thermal.library:THERMAL_LIBRARY"}
 
 
 @pytest.fixture
