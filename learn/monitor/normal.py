@@ -438,7 +438,7 @@ class NormalBehaviour:
             u = ref[b, law] - self._corrected(feats[b], i[b], edge[b], fr[b])[:, law]
             spread = spread.copy()
             spread[b, law] = np.sqrt(spread[b, law] ** 2 + (kappa * u) ** 2)
-        return self._in_spread(ref - self.mean[i], i, spread)
+        return self._in_spread(ref - self.mean[i], i, spread, self._loaded(i, cond))
 
     def z_over_friction(self, feats: np.ndarray, points: np.ndarray,
                         cond: Conditions | None, friction: np.ndarray,
@@ -482,21 +482,26 @@ class NormalBehaviour:
             u = ref[:, b, law] - at_edge[..., law]
             spread[:, b, law] = np.sqrt(spread[:, b, law] ** 2 + (kappa * u) ** 2)
         dev = (ref - self.mean[i][None]).reshape(m * n, -1)
-        z, _ = self._in_spread(dev, np.tile(i, m), spread.reshape(m * n, -1))
+        z, _ = self._in_spread(dev, np.tile(i, m), spread.reshape(m * n, -1),
+                               np.tile(self._loaded(i, cond), m))
         return z.reshape(m, n, -1)
 
-    def _in_spread(self, dev: np.ndarray, index: np.ndarray, spread: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray]:
+    def _in_spread(self, dev: np.ndarray, index: np.ndarray, spread: np.ndarray,
+                   loaded: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """z-scores of deviations from the mean (n, F) in ``spread`` (n, F), and the spread,
         without a reading the warm-ups taken out (:meth:`without_warm_ups`) in σ, where
         their directions were learnt, before any widening: a cold start beyond the load
         range is taken out as commissioning saw it, not bent by the features' unequal
-        widening. Beyond the range commissioning spanned along a direction (a joint
-        hotter than commissioning saw it, e.g. under a heavier tool) the part beyond is
-        taken out too, as an extrapolation of the latent temperature's law trusted to
-        ``extrapolation_uncertainty`` (κ) times its size, as a reading's drift law is
-        beyond its range: the spread of each feature grows to ``sqrt(s² + (κ σ e)²)``, e
-        its share of the part beyond [σ]. Inside the ranges the spread is unchanged."""
+        widening. At a load beyond commissioning's by more than ``load_margin``
+        (``loaded``, shape (n,) bool: a heavier tool heats the joint beyond anything
+        commissioning saw), the part beyond the range commissioning spanned along a
+        direction is taken out too, as an extrapolation of the latent temperature's law
+        trusted to ``extrapolation_uncertainty`` (κ) times its size, as a reading's drift
+        law is beyond its range: the spread of each feature grows to
+        ``sqrt(s² + (κ σ e)²)``, e its share of the part beyond [σ]. At commissioning's
+        loads it stays in the z-scores (there a joint warms no further than commissioning
+        saw, and a root crack's pattern lies along the bridges' warm-up: in the training
+        lives of bench gear 1, 776 of 1,350 root-crack windows lay beyond the range)."""
         if self.warm_dir is None:
             return dev / spread, spread
         sd = self.std[index]
@@ -504,7 +509,8 @@ class NormalBehaviour:
         d, u, inside = self._along_warm_ups(zs, index)
         z = zs - np.einsum("nk,nkf->nf", inside, d)
         kappa = self.config.extrapolation_uncertainty
-        b = np.flatnonzero((u != inside).any(axis=1)) if kappa > 0 else np.array([], int)
+        b = np.flatnonzero((u != inside).any(axis=1) & loaded) if kappa > 0 \
+            else np.array([], int)
         if b.size:
             e = np.einsum("nk,nkf->nf", (u - inside)[b], d[b])
             z[b] -= e
@@ -595,6 +601,13 @@ class NormalBehaviour:
         self.torque_range[k] = [min(self.torque_range[k, 0], float(np.min(torque_nm))),
                                 max(self.torque_range[k, 1], float(np.max(torque_nm)))]
 
+    def _loaded(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
+        """Windows whose acting load lies beyond commissioning's range at their point by
+        more than ``load_margin`` (the advisory's :data:`OUTSIDE_LOAD`), shape (n,) bool."""
+        lo, hi = self.torque_range[i, 0], self.torque_range[i, 1]
+        span = self.config.load_margin * np.abs(self.ref_torque[i])
+        return (cond.torque_nm < lo - span) | (cond.torque_nm > hi + span)
+
     def _edge(self, i: np.ndarray, cond: Conditions) -> tuple[Conditions, np.ndarray]:
         """Each window's conditions clipped into commissioning's range at its point, and
         which windows were clipped, shape (n,) bool."""
@@ -639,10 +652,7 @@ class NormalBehaviour:
             beyond = (t < lo - margin) | (t > hi + margin)
             out |= beyond * (OUTSIDE_TEMPERATURE if law
                              else OUTSIDE_TEMPERATURE | OUTSIDE_UNJUDGED)
-        lo, hi = self.torque_range[i, 0], self.torque_range[i, 1]
-        tq = cond.torque_nm
-        span = c.load_margin * np.abs(self.ref_torque[i])
-        out |= ((tq < lo - span) | (tq > hi + span)) * OUTSIDE_LOAD
+        out |= self._loaded(i, cond) * OUTSIDE_LOAD
         fr = np.broadcast_to(np.asarray(friction, float), (len(points),))
         out |= self.beyond_friction(fr) * OUTSIDE_FRICTION
         return out
