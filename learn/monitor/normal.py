@@ -50,13 +50,14 @@ is then in the standard deviations, and the directions in which they moved the z
 together (at most ``warm_up_components`` per point, each beyond the noise's largest
 eigenvalue, :func:`~.laws.warm_up_directions`) are taken out of every window, in σ: a
 latent temperature, in the joint's own units, trusted within the range commissioning's
-warm-ups took and, beyond it, as an extrapolation that widens the spread by its own size
-(a joint hotter than commissioning saw, as the reading's laws are beyond their range).
+warm-ups took and, at a load beyond commissioning's (a heavier tool heats the joint
+further), beyond it as an extrapolation that widens the spread by its own size, as the
+reading's laws are beyond their range.
 What it assumes: a warm-up moves the features the same way at every cold start and load
 (the drifts are smooth laws of the temperature, and commissioning saw the cold starts,
 24 h with two of them); what it costs: a fault whose pattern lies along those directions
 is seen within the warm-ups' range there only through the features off them, and beyond
-it through a wider spread. A point relearnt at a new load keeps them
+it at a new load through a wider spread. A point relearnt at a new load keeps them
 (:meth:`NormalBehaviour.recommission`). :meth:`NormalBehaviour.outside` flags windows whose
 condition commissioning did not see (temperature beyond its range by
 ``temperature_margin_k``, load beyond its by ``load_margin``, the friction factor beyond
@@ -272,11 +273,11 @@ class NormalBehaviour:
         which commissioning's z-scores varied together beyond noise (unit vectors; zero
         rows where fewer than K did) and the range of commissioning's windows along each
         (:func:`~.laws.warm_up_directions`). :meth:`z_and_spread` takes each window's
-        part along them out, in σ: a joint without a sensor warms up and cools down as
-        commissioning saw; beyond that range the part beyond is an extrapolation and
-        widens the spread by its own size (:meth:`_in_spread`), so a change beyond what
-        the warm-ups did is seen through a wider spread, and a change across them stays
-        in the z-scores. None with a reading.
+        part along them out, in σ, clipped to that range: a joint without a sensor warms
+        up and cools down as commissioning saw, and a change beyond what its warm-ups did
+        stays in the z-scores; at a load beyond commissioning's the part beyond is an
+        extrapolation that widens the spread by its own size (:meth:`_in_spread`). None
+        with a reading.
     """
 
     points: np.ndarray
