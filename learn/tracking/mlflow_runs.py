@@ -154,21 +154,9 @@ class ConfusionFigure:
 
 
 def confusion_figure(confusion: np.ndarray, labels: Sequence[str], title: str = ""):
-    """Confusion-matrix figure (matplotlib, no pyplot state): :meth:`ConfusionFigure.draw`
-    on a new figure.
-
-    Parameters
-    ----------
-    confusion : ndarray of int, shape (n_classes, n_classes)
-        Rows: true class, columns: predicted class.
-    labels : sequence of str, length n_classes
-    title : str, optional
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Colours: row-normalised rate; numbers: counts.
-    """
+    """Confusion-matrix figure (matplotlib, no pyplot state) on a new figure: the
+    parameters and the figure of :meth:`ConfusionFigure.draw`, whose figure this one does
+    not share."""
     return ConfusionFigure().draw(confusion, labels, title)
 
 
