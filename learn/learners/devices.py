@@ -1,6 +1,6 @@
 """Where the torch nets run, and what a run records about it.
 
-One place for the device setting of the nets (``device`` of
+One place for the device setting of the nets and their arithmetic (``device`` of
 :class:`learn.learners.nets.TorchClassifier`, ``monitor.device`` of the monitor's CNN
 detector): its check (:func:`check_device`, a string check that needs no torch, so that a
 config is refused before torch is imported), its choice on this machine
@@ -98,6 +98,33 @@ def resolve_device(value: str = "auto", key: str = "device") -> torch.device:
     return dev
 
 
+#: Arithmetic of the forward passes (:class:`learn.learners.nets.TorchClassifier`, ``precision``).
+PRECISIONS = ("float32", "bfloat16", "auto")
+
+
+def resolve_precision(precision: str, device: torch.device) -> str:
+    """The arithmetic a ``precision`` setting gives on ``device``: ``"auto"`` is bfloat16
+    where the hardware has fast bfloat16 kernels (a CUDA GPU that supports it; a CPU
+    with AVX-512, whose oneDNN kernels run bfloat16), else float32; the others are
+    themselves.
+
+    Raises
+    ------
+    ValueError
+        For a setting not in :data:`PRECISIONS`.
+    """
+    import torch
+
+    if precision not in PRECISIONS:
+        raise ValueError(f"precision must be one of {PRECISIONS}, got {precision!r}")
+    if precision != "auto":
+        return precision
+    if device.type == "cuda":
+        return "bfloat16" if torch.cuda.is_bf16_supported() else "float32"
+    fast = device.type == "cpu" and torch.backends.cpu.get_cpu_capability().startswith("AVX512")
+    return "bfloat16" if fast else "float32"
+
+
 def device_label(device: torch.device | str) -> str:
     """``cpu``, or ``cuda:<index> (<the GPU's name>)``.
 
@@ -175,5 +202,5 @@ def net_record(estimator) -> dict[str, str | int | bool]:
     return device_record(fitted if fitted is not None else resolve_device(final.device))
 
 
-__all__ = ["DEVICE_CHOICES", "check_device", "device_label", "device_record",
-           "net_record", "resolve_device"]
+__all__ = ["DEVICE_CHOICES", "PRECISIONS", "check_device", "device_label", "device_record",
+           "net_record", "resolve_device", "resolve_precision"]

@@ -15,7 +15,11 @@ fine-tuned model keeps the source statistics.
 
 Device: ``device="auto"`` uses CUDA when present, else the CPU; ``"cuda"`` on a machine
 without CUDA is refused in one line (:func:`learn.learners.devices.resolve_device`). The
-number of CPU threads is left to the caller (``torch.set_num_threads``).
+number of CPU threads is left to the caller (``torch.set_num_threads``). ``fit`` and
+``fine_tune`` put their windows on the device once, and read the loss once per epoch;
+:func:`learn.learners.stacked.fit_seeds` trains several seeds of one net at once
+(stacked parameters, one vectorised step), which fills a GPU that one small net leaves
+idle.
 
 Input checks are scikit-learn's (``validate_data``): finite values, at least one window,
 the number of features (2-D) or channels (3-D) of ``fit``; a method of an unfitted model
@@ -37,35 +41,10 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
 
-from .devices import check_device, resolve_device
+from .devices import check_device, resolve_device, resolve_precision
 from .torch_modules import CNN1DNet, MLPNet
 
 log = logging.getLogger(__name__)
-
-#: Arithmetic of the forward passes (:class:`TorchClassifier`, ``precision``).
-PRECISIONS = ("float32", "bfloat16", "auto")
-
-
-def resolve_precision(precision: str, device: torch.device) -> str:
-    """The arithmetic a ``precision`` setting gives on ``device``: ``"auto"`` is bfloat16
-    where the hardware has fast bfloat16 kernels (a CUDA GPU that supports it; a CPU
-    with AVX-512, whose oneDNN kernels run bfloat16), else float32; the others are
-    themselves.
-
-    Raises
-    ------
-    ValueError
-        For a setting not in :data:`PRECISIONS`.
-    """
-    if precision not in PRECISIONS:
-        raise ValueError(f"precision must be one of {PRECISIONS}, got {precision!r}")
-    if precision != "auto":
-        return precision
-    if device.type == "cuda":
-        return "bfloat16" if torch.cuda.is_bf16_supported() else "float32"
-    fast = device.type == "cpu" and torch.backends.cpu.get_cpu_capability().startswith("AVX512")
-    return "bfloat16" if fast else "float32"
-
 
 @contextlib.contextmanager
 def _local_seed(seed: int, device: torch.device):
@@ -119,9 +98,10 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         Arithmetic of the forward passes: float32, or mixed precision (``torch.autocast``:
         matrix products and convolutions in bfloat16; parameters, optimiser state, batch
         norm, losses and outputs in float32); "auto": bfloat16 where the device has fast
-        kernels for it (:func:`resolve_precision`), so results differ in the last digits
-        between machines. bfloat16 about halves the CNN's time on an AVX-512 CPU
-        (``docs/results/transfer.md``); elsewhere it is emulated and slower.
+        kernels for it (:func:`learn.learners.devices.resolve_precision`), so results
+        differ in the last digits between machines. bfloat16 about halves the CNN's time
+        on an AVX-512 CPU (``docs/results/transfer.md``); elsewhere it is emulated and
+        slower.
     random_state : int, numpy Generator or None
     verbose : bool
         Log the loss per epoch.
@@ -135,7 +115,8 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         Shape of one training window, (F,) or (C, T); later inputs must have as many
         dimensions, and the length T where the net needs it (MLP, ``pool="flatten"``).
     precision_ : str
-        The arithmetic in use, "float32" or "bfloat16" (:func:`resolve_precision`).
+        The arithmetic in use, "float32" or "bfloat16"
+        (:func:`learn.learners.devices.resolve_precision`).
     module_ : torch.nn.Module
     history_ : list of dict
         Loss per epoch (and validation loss and accuracy with ``val_fraction`` > 0).
@@ -262,22 +243,23 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         (X_val, y_val) unless empty. Returns the history; restores the best state."""
         module = self.module_
         opt, sched, loss_fn = self._optimiser(params, lr, max(1, n_epochs * n_steps_epoch))
-        yt = torch.from_numpy(yi)
+        yt = torch.from_numpy(yi).to(X.device)
         n = X.shape[0]
         bs = min(self.batch_size, n)
         history, best, best_state, bad = [], math.inf, None, 0
         for epoch in range(n_epochs):
             module.train()
             perm = torch.randperm(n, generator=gen)
-            tot, seen = 0.0, 0
+            # summed where the losses are, read once an epoch: no wait on a GPU per step
+            tot, seen = torch.zeros((), dtype=torch.float64, device=X.device), 0
             for s in range(n_steps_epoch):
                 idx = perm[s * bs:(s + 1) * bs]
                 if idx.numel() < 2:  # batch norm needs two windows
                     continue
                 loss = self._step(X[idx], yt[idx], gen, opt, sched, loss_fn)
-                tot += float(loss.detach()) * idx.numel()
+                tot += loss.detach().double() * idx.numel()
                 seen += idx.numel()
-            rec = {"epoch": epoch, "loss": tot / max(seen, 1)}
+            rec = {"epoch": epoch, "loss": float(tot) / max(seen, 1)}
             if len(X_val):
                 logits, yv = self._logits(X_val), torch.from_numpy(y_val)
                 vl = float(loss_fn(logits, yv))
@@ -350,6 +332,21 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
             continuous ``y``, an unknown ``precision`` or ``device``, or a CUDA device
             on a machine without one.
         """
+        Xt, yi = self._begin_fit(X, y)
+        seed = _seed_of(self.random_state)
+        tr, va = self._val_split(len(yi), groups, np.random.default_rng(seed))
+        gen = torch.Generator().manual_seed(seed)
+        steps = max(1, math.ceil(len(tr) / self.batch_size))
+        with _local_seed(seed, self.device_):  # weights and dropout; global RNG untouched
+            self.module_ = self._new_module(len(yi))
+            self.history_ = self._run_epochs(
+                Xt[tr], yi[tr], list(self.module_.parameters()), self.lr, steps,
+                self.max_epochs, gen, Xt[va], yi[va])
+        return self
+
+    def _begin_fit(self, X, y) -> tuple[torch.Tensor, np.ndarray]:
+        """The checks, classes, device, arithmetic and standardisation of ``fit``; returns
+        the standardised windows on the device and the class indices."""
         self.check_params()
         X, y = validate_data(self, X, y, dtype=np.float32, allow_nd=True)
         if X.ndim not in (2, 3):
@@ -357,24 +354,19 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         check_classification_targets(y)
         self.classes_ = np.unique(y)
         self.input_shape_ = X.shape[1:]
-        yi = self._encode(y)
-        seed = _seed_of(self.random_state)
         self.device_ = resolve_device(self.device, "device")
         self.precision_ = resolve_precision(self.precision, self.device_)
         axes = (0, 2) if X.ndim == 3 else (0,)
         self.mean_ = X.mean(axis=axes)
         sd = X.std(axis=axes)
         self.scale_ = np.where(sd > 1e-8, sd, 1.0).astype(np.float32)
-        Xt = self._scale(X)
-        tr, va = self._val_split(len(y), groups, np.random.default_rng(seed))
-        gen = torch.Generator().manual_seed(seed)
-        steps = max(1, math.ceil(len(tr) / self.batch_size))
-        with _local_seed(seed, self.device_):  # weights and dropout; global RNG untouched
-            self.module_ = self._build_module(X.shape, len(self.classes_)).to(self.device_)
-            self.history_ = self._run_epochs(
-                Xt[tr], yi[tr], list(self.module_.parameters()), self.lr, steps,
-                self.max_epochs, gen, Xt[va], yi[va])
-        return self
+        return self._scale(X).to(self.device_), self._encode(y)
+
+    def _new_module(self, n: int) -> nn.Module:
+        """A freshly initialised net for ``n`` windows of ``input_shape_``, on the device
+        (its weights drawn from torch's default generator)."""
+        shape = (n, *self.input_shape_)
+        return self._build_module(shape, len(self.classes_)).to(self.device_)
 
     def fine_tune(self, X, y, mode: str = "all", steps: int = 100, lr: float | None = None,
                   X_replay=None, y_replay=None, replay: float = 1.0, random_state=None):
@@ -421,12 +413,13 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         check_is_fitted(self, "module_")
         if len(X) == 0 or steps <= 0:
             return self
-        yt = torch.from_numpy(self._encode(y))
-        Xt = self.prepare(X)
+        dev = self.device_
+        yt = torch.from_numpy(self._encode(y)).to(dev)
+        Xt = self.prepare(X).to(dev)
         use_replay = X_replay is not None and replay > 0 and len(X_replay) > 0
         if use_replay:
-            Xr = self.prepare(X_replay)
-            yr = torch.from_numpy(self._encode(y_replay))
+            Xr = self.prepare(X_replay).to(dev)
+            yr = torch.from_numpy(self._encode(y_replay)).to(dev)
         module = self.module_
         params = list(module.head.parameters()) if mode == "last" else list(module.parameters())
         if lr is None:
@@ -459,12 +452,12 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
                                              generator=gen)
                         xb, yb = torch.cat([xb, Xr[ridx]]), torch.cat([yb, yr[ridx]])
                     loss = self._step(xb, yb, gen, opt, sched, loss_fn)
-                    history.append(float(loss.detach()))
+                    history.append(loss.detach())  # read after the steps: no wait per step
         finally:
             for p in module.parameters():
                 p.requires_grad_(saved[id(p)])
             module.eval()
-        self.finetune_history_ = history
+        self.finetune_history_ = [float(v) for v in history]
         return self
 
     @torch.no_grad()
@@ -598,3 +591,4 @@ class CNN1DClassifier(TorchClassifier):
             raise ValueError("aug_crop < 1 is not possible with pool='flatten' (fixed input "
                              "length)")
         return super()._augment(xb, gen)
+

@@ -10,6 +10,7 @@ from sklearn.base import clone
 
 from learn.learners.nets import CNN1DClassifier, MLPClassifierTorch
 from learn.learners.rocket import MiniRocketClassifier
+from learn.learners.stacked import fit_seeds
 
 pytestmark = pytest.mark.usefixtures("torch_one_thread")
 
@@ -77,6 +78,68 @@ def test_same_seed_same_model():
     a = _models()[0].fit(X, y).predict_proba(X)
     b = _models()[0].fit(X, y).predict_proba(X)
     np.testing.assert_array_equal(a, b)
+
+
+def _no_dropout():
+    """A CNN with a validation split, early stopping and augmentation, and an MLP; no
+    dropout, whose masks alone fit_seeds draws otherwise than fit."""
+    return [CNN1DClassifier(channels=(8, 8), kernel_sizes=(9, 9), strides=(2, 2),
+                            head_hidden=16, n_aux=1, dropout=0.0, val_fraction=0.3,
+                            patience=3, aug_gain=0.1, aug_crop=0.8, **TINY),
+            MLPClassifierTorch(hidden=(32,), n_aux=1, dropout=0.0, **TINY)]
+
+
+@pytest.mark.parametrize("est", _no_dropout(), ids=["cnn", "mlp"])
+def test_fit_seeds_gives_each_seed_the_model_of_its_own_fit(est):
+    """Stacked training keeps each copy's initial weights, split, batches, augmentation
+    and early stopping: its outputs are those of a fit one by one, to rounding (an MLP's
+    first bias before batch norm has no gradient but rounding, so its weights alone may
+    differ; its outputs not)."""
+    X, y = separable(30)
+    groups = np.repeat(np.arange(len(y) // 5), 5)
+    seeds = [0, 1, 2]
+    stacked = fit_seeds(est, X, y, seeds, groups=groups)
+    epochs = []
+    for seed, m in zip(seeds, stacked, strict=True):
+        one = clone(est).set_params(random_state=seed).fit(X, y, groups)
+        assert m.random_state == seed
+        assert [h["epoch"] for h in m.history_] == [h["epoch"] for h in one.history_]
+        np.testing.assert_allclose([h["loss"] for h in m.history_],
+                                   [h["loss"] for h in one.history_], rtol=1e-4)
+        np.testing.assert_allclose(m.predict_proba(X), one.predict_proba(X), atol=1e-4)
+        epochs.append(len(m.history_))
+    if est.val_fraction > 0:  # early stopping ended one copy before the others
+        assert min(epochs) < max(epochs) == est.max_epochs
+    assert not np.allclose(stacked[0].predict_proba(X), stacked[1].predict_proba(X))
+
+
+def test_fit_seeds_of_unequal_training_sets_fit_one_by_one():
+    """Validation splits of whole groups of unequal size leave unequal training sets:
+    their batches cannot stack, and each copy is its own fit, bit for bit."""
+    X, y = separable(30)
+    groups = np.r_[np.zeros(30, dtype=int), np.arange(1, len(y) - 29)]  # one big group
+    est = CNN1DClassifier(channels=(8,), kernel_sizes=(9,), strides=(2,), head_hidden=8,
+                          n_aux=1, val_fraction=0.3, **{**TINY, "max_epochs": 3})
+    seeds = [0, 1, 2, 3, 4]
+    sizes = {len(est._val_split(len(y), groups, np.random.default_rng(s))[0]) for s in seeds}
+    assert len(sizes) > 1
+    for seed, m in zip(seeds, fit_seeds(est, X, y, seeds, groups=groups), strict=True):
+        one = clone(est).set_params(random_state=seed).fit(X, y, groups)
+        np.testing.assert_array_equal(m.predict_proba(X), one.predict_proba(X))
+    with pytest.raises(ValueError, match="seeds"):
+        fit_seeds(est, X, y, [])
+
+
+@pytest.mark.slow
+def test_fit_seeds_compiled_gives_the_models_of_the_stacked_fit():
+    """torch.compile of the stacked forward pass (tens of seconds to compile on a CPU):
+    the same models to rounding, dropout and batch-norm statistics included."""
+    X, y = separable(30)
+    est = CNN1DClassifier(channels=(8, 8), kernel_sizes=(9, 9), strides=(2, 2),
+                          head_hidden=16, n_aux=1, **TINY)
+    compiled = fit_seeds(est, X, y, [0, 1], compile=True)
+    for a, b in zip(compiled, fit_seeds(est, X, y, [0, 1]), strict=True):
+        np.testing.assert_allclose(a.predict_proba(X), b.predict_proba(X), atol=1e-5)
 
 
 def test_feature_input_and_early_stopping():
@@ -174,7 +237,7 @@ def test_bfloat16_nets_fit_the_separable_set_with_float32_outputs(cls):
 
 
 def test_precision_auto_follows_the_hardware(monkeypatch):
-    from learn.learners.nets import resolve_precision
+    from learn.learners.devices import resolve_precision
 
     cpu = torch.device("cpu")
     assert resolve_precision("float32", cpu) == "float32"
