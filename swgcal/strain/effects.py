@@ -60,6 +60,7 @@ from typing import Any
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
+from swgsim.base.registry import Registry
 from swgsim.gear.terms import Param
 from swgsim.sensing import effects as ms
 from swgsim.sensing.dsp import fractional_delay, lowpass_coefficients
@@ -92,6 +93,7 @@ __all__ = [
     "AmplifierLowpass",
     "KinematicErrorHarmonic",
     "ThermalDrift",
+    "STRAIN_LIBRARY",
     "strain_library",
     "strain_probes",
     "constraint_basis",
@@ -519,22 +521,35 @@ KE_ORDERS = (1, 2, 3, 4)
 docs/PHYSICS.md sec. 1; 3 for completeness)."""
 
 
+#: The strain-side effects the calibration may add, by name (a user's joins with
+#: ``STRAIN_LIBRARY.add(name, cls)`` and travels to worker processes,
+#: :mod:`swgsim.base.registry`); the kinematic-error candidates of :data:`KE_ORDERS`
+#: among them, one ``ke_order{k}`` each.
+STRAIN_LIBRARY: Registry[type[FitTerm]] = Registry("strain effect", __name__,
+                                                    "STRAIN_LIBRARY", (
+    ("offset", ChannelOffset),
+    ("gain_mismatch", GainMismatch),
+    ("gauge_misplacement", GaugeMisplacement),
+    ("bridge_nonlinearity", BridgeNonlinearity),
+    ("amplifier_lowpass", AmplifierLowpass),
+    *((f"ke_order{k}", _ke_class(k)) for k in KE_ORDERS),
+    ("thermal_drift", ThermalDrift),
+))
+
+
 def strain_library(ke_orders: tuple[int, ...] = KE_ORDERS) -> dict[str, type[FitTerm]]:
-    """The declared strain-side library, keyed by effect name.
+    """The declared strain-side library, keyed by effect name: :data:`STRAIN_LIBRARY` in
+    its order, its kinematic-error candidates those of ``ke_orders`` (an order it lacks
+    made and added last).
 
     Parameters
     ----------
     ke_orders : tuple of int
         Orders of the kinematic-error candidates (one key ``ke_order{k}`` each).
     """
-    lib: dict[str, type[FitTerm]] = {
-        "offset": ChannelOffset,
-        "gain_mismatch": GainMismatch,
-        "gauge_misplacement": GaugeMisplacement,
-        "bridge_nonlinearity": BridgeNonlinearity,
-        "amplifier_lowpass": AmplifierLowpass,
-    }
-    for k in ke_orders:
-        lib[f"ke_order{k}"] = _ke_class(int(k))
-    lib["thermal_drift"] = ThermalDrift
+    wanted = {f"ke_order{int(k)}": int(k) for k in ke_orders}
+    lib = {name: cls for name, cls in STRAIN_LIBRARY.items()
+           if not issubclass(cls, KinematicErrorHarmonic) or name in wanted}
+    for name, k in wanted.items():
+        lib.setdefault(name, _ke_class(k))
     return lib

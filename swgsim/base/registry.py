@@ -4,7 +4,8 @@ The project's extension points are registries: gear faults
 (:data:`swgsim.gear.faults.FAULTS`), sensor faults
 (:data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS` with their evaluation severities),
 friction effects (:data:`swgsim.gear.friction.FRICTION_LIBRARY`), the thermal calibration's
-effects (``swgcal.thermal.library.THERMAL_LIBRARY``), learners
+effects (``swgcal.thermal.library.THERMAL_LIBRARY``), the strain calibration's
+(``swgcal.strain.effects.STRAIN_LIBRARY``), learners
 (:data:`learn.learners.models.MODELS`) and the monitor's detectors
 (:data:`learn.monitor.detectors.DETECTORS`). Each is a :class:`Registry`: a dict of name to
 entry that knows its kind and where it lives, and refuses a name taken, except by an

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from joblib import Parallel, delayed
 
+from swgcal.strain.effects import STRAIN_LIBRARY, strain_library
 from swgcal.terms import FitTerm
 from swgcal.thermal.library import THERMAL_LIBRARY
 from swgsim.base.registry import REGISTRIES, Registry, travelling
@@ -74,6 +75,8 @@ def _register(kind: str, name: str) -> None:
         register_detector(name, DetectorSpec("sel1", lambda seed, device: name, "made-up"))
     elif kind == "thermal effect":
         THERMAL_LIBRARY.add(name, type(name, (_Churn,), {"kind": name}))
+    elif kind == "strain effect":
+        STRAIN_LIBRARY.add(name, type(name, (_Churn,), {"kind": name}))
 
 
 def _use(kind: str, name: str) -> str:
@@ -92,6 +95,8 @@ def _use(kind: str, name: str) -> str:
         return type(make_model(name).fit(np.eye(2), ["a", "b"])[-1]).__name__
     if kind == "thermal effect":
         return THERMAL_LIBRARY[name].kind
+    if kind == "strain effect":  # the library the strain calibration tries
+        return strain_library()[name].kind
     return DETECTORS[name].make(0, "cpu")
 
 
@@ -100,7 +105,8 @@ KINDS = {"gear fault": "swgsim.gear.faults:FAULTS",
          "friction effect": "swgsim.gear.friction.effects:FRICTION_LIBRARY",
          "learner": "learn.learners.models:MODELS",
          "detector": "learn.monitor.detectors:DETECTORS",
-         "thermal effect": "swgcal.thermal.library:THERMAL_LIBRARY"}
+         "thermal effect": "swgcal.thermal.library:THERMAL_LIBRARY",
+         "strain effect": "swgcal.strain.effects:STRAIN_LIBRARY"}
 
 
 @pytest.fixture
