@@ -278,6 +278,11 @@ class NormalBehaviour:
         stays in the z-scores; at a load beyond commissioning's the part beyond is an
         extrapolation that widens the spread by its own size (:meth:`_in_spread`). None
         with a reading.
+    warm_torque : ndarray, shape (P, 2), or None
+        Without a reading: the load range at which each point's warm-ups were seen,
+        commissioning's :attr:`torque_range`, kept when that range grows or the point is
+        relearnt at a new load (the warm-ups are carried, not seen again): a heavier tool
+        heats the joint beyond them for as long as it stays. None with a reading.
     """
 
     points: np.ndarray
@@ -298,6 +303,7 @@ class NormalBehaviour:
     friction_rate: float = 0.0
     warm_dir: np.ndarray | None = None
     warm_range: np.ndarray | None = None
+    warm_torque: np.ndarray | None = None
 
     # ------------------------------------------------------------------ fitting
     @classmethod
@@ -347,6 +353,7 @@ class NormalBehaviour:
         if temp is None and config.warm_up_components > 0:
             nb.warm_dir, nb.warm_range = warm_up_directions(
                 (ref - nb.mean[inv]) / nb.std[inv], inv, config.warm_up_components)
+            nb.warm_torque = torque_range.copy()
         return nb
 
     # ------------------------------------------------------------------ using it
@@ -439,7 +446,7 @@ class NormalBehaviour:
             u = ref[b, law] - self._corrected(feats[b], i[b], edge[b], fr[b])[:, law]
             spread = spread.copy()
             spread[b, law] = np.sqrt(spread[b, law] ** 2 + (kappa * u) ** 2)
-        return self._in_spread(ref - self.mean[i], i, spread, self._loaded(i, cond))
+        return self._in_spread(ref - self.mean[i], i, spread, self._heavier(i, cond))
 
     def z_over_friction(self, feats: np.ndarray, points: np.ndarray,
                         cond: Conditions | None, friction: np.ndarray,
@@ -484,7 +491,7 @@ class NormalBehaviour:
             spread[:, b, law] = np.sqrt(spread[:, b, law] ** 2 + (kappa * u) ** 2)
         dev = (ref - self.mean[i][None]).reshape(m * n, -1)
         z, _ = self._in_spread(dev, np.tile(i, m), spread.reshape(m * n, -1),
-                               np.tile(self._loaded(i, cond), m))
+                               np.tile(self._heavier(i, cond), m))
         return z.reshape(m, n, -1)
 
     def _in_spread(self, dev: np.ndarray, index: np.ndarray, spread: np.ndarray,
@@ -493,16 +500,17 @@ class NormalBehaviour:
         without a reading the warm-ups taken out (:meth:`without_warm_ups`) in σ, where
         their directions were learnt, before any widening: a cold start beyond the load
         range is taken out as commissioning saw it, not bent by the features' unequal
-        widening. At a load beyond commissioning's by more than ``load_margin``
-        (``loaded``, shape (n,) bool: a heavier tool heats the joint beyond anything
-        commissioning saw), the part beyond the range commissioning spanned along a
-        direction is taken out too, as an extrapolation of the latent temperature's law
-        trusted to ``extrapolation_uncertainty`` (κ) times its size, as a reading's drift
-        law is beyond its range: the spread of each feature grows to
-        ``sqrt(s² + (κ σ e)²)``, e its share of the part beyond [σ]. At commissioning's
-        loads it stays in the z-scores (there a joint warms no further than commissioning
-        saw, and a root crack's pattern lies along the bridges' warm-up: in the training
-        lives of bench gear 1, 776 of 1,350 root-crack windows lay beyond the range)."""
+        widening. At a load beyond the one the warm-ups were seen at by more than
+        ``load_margin`` (``loaded``, shape (n,) bool, :meth:`_heavier`: a heavier tool
+        heats the joint beyond anything commissioning saw), the part beyond the range
+        commissioning spanned along a direction is taken out too, as an extrapolation of
+        the latent temperature's law trusted to ``extrapolation_uncertainty`` (κ) times
+        its size, as a reading's drift law is beyond its range: the spread of each feature
+        grows to ``sqrt(s² + (κ σ e)²)``, e its share of the part beyond [σ]. At
+        commissioning's loads it stays in the z-scores (there a joint warms no further
+        than commissioning saw, and a root crack's pattern lies along the bridges'
+        warm-up: in the training lives of bench gear 1, 776 of 1,350 root-crack windows
+        lay beyond the range)."""
         if self.warm_dir is None:
             return dev / spread, spread
         sd = self.std[index]
@@ -602,12 +610,19 @@ class NormalBehaviour:
         self.torque_range[k] = [min(self.torque_range[k, 0], float(np.min(torque_nm))),
                                 max(self.torque_range[k, 1], float(np.max(torque_nm)))]
 
-    def _loaded(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
-        """Windows whose acting load lies beyond commissioning's range at their point by
-        more than ``load_margin`` (the advisory's :data:`OUTSIDE_LOAD`), shape (n,) bool."""
-        lo, hi = self.torque_range[i, 0], self.torque_range[i, 1]
+    def _loaded(self, i: np.ndarray, cond: Conditions,
+                ranges: np.ndarray | None = None) -> np.ndarray:
+        """Windows whose acting load lies beyond ``ranges`` (P, 2) at their point, by default
+        the point's load range (the advisory's :data:`OUTSIDE_LOAD`), by more than
+        ``load_margin``, shape (n,) bool."""
+        r = self.torque_range if ranges is None else ranges
         span = self.config.load_margin * np.abs(self.ref_torque[i])
-        return (cond.torque_nm < lo - span) | (cond.torque_nm > hi + span)
+        return (cond.torque_nm < r[i, 0] - span) | (cond.torque_nm > r[i, 1] + span)
+
+    def _heavier(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
+        """Windows at a load beyond the one their point's warm-ups were seen at
+        (:attr:`warm_torque`; without it the load range), shape (n,) bool."""
+        return self._loaded(i, cond, self.warm_torque)
 
     def _edge(self, i: np.ndarray, cond: Conditions) -> tuple[Conditions, np.ndarray]:
         """Each window's conditions clipped into commissioning's range at its point, and

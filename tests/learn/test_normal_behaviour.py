@@ -10,7 +10,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from learn.monitor.normal import BLOCK, EFFICIENCY, Conditions, NormalBehaviour, NormalConfig
+from learn.monitor.normal import (
+    BLOCK,
+    EFFICIENCY,
+    OUTSIDE_LOAD,
+    Conditions,
+    NormalBehaviour,
+    NormalConfig,
+)
 
 LOADS = (7.0, 39.0, 70.0)  # N m, the duty points' loads at one speed
 A_LOSS, B_LOSS = 1.2, 0.08  # loss torque A + B τ [N m], [-]
@@ -329,6 +336,38 @@ def test_a_warm_up_beyond_commissionings_range_widens_the_spread_at_a_new_load(c
     np.testing.assert_array_equal(s1, nb.std[i])
     np.testing.assert_allclose(z1 - z0, (u0 + 12.0 - 5.0)[:, None] * nb.warm_dir[i, 0],
                                atol=1e-6)
+
+
+def test_the_warm_ups_keep_the_load_they_were_seen_at(commissioned):
+    """A joint hotter than commissioning saw (12 σ along its warm-up direction, the range
+    ±5) at a 10 % heavier load stays an extrapolation of the latent temperature (the spread
+    widened by κ σ e) once the point's load range grew to that load (commissioning's laws
+    held there) and once the point was relearnt there: its warm-ups were seen at
+    commissioning's load and never since. With the grown range the hot part stayed in the
+    z-scores (design life of family ``all``, bench gear 3, seed 103: a 15 % heavier tool,
+    379 gear-fault alarms in 200 h; 48 keeping the warm-ups' load)."""
+    kappa = 0.8
+    nb, rng = _warm(commissioned, -5.0, 5.0, kappa)
+    f, p, cond = _windows(nb, rng, 1.1)
+    i = nb.index(p)
+    for k in np.unique(i):
+        nb.extend_load_range(k, cond.torque_nm[i == k])
+    assert not (nb.outside(p, cond, 1.0) & OUTSIDE_LOAD).any()  # the new load is known
+    u0 = np.einsum("nf,nf->n", (nb.reference(f, p, cond) - nb.mean[i]) / nb.std[i],
+                   nb.warm_dir[i, 0])
+    z0, s0 = nb.z_and_spread(f, p, cond)
+    np.testing.assert_array_equal(s0, nb.std[i])  # inside the grown range, no hot part
+    z1, s1 = nb.z_and_spread(_warmed(nb, f, p, 12.0), p, cond)
+    e = (u0 + 12.0 - 5.0)[:, None] * nb.warm_dir[i, 0]
+    np.testing.assert_allclose(s1, np.sqrt(s0 ** 2 + (kappa * nb.std[i] * e) ** 2),
+                               rtol=1e-9)
+    np.testing.assert_allclose(z1 * s1, z0 * s0, atol=1e-6 * nb.std[i].max())
+    k = int(i[0])
+    at_k = np.flatnonzero(i == k)
+    nb.recommission(k, nb.reference(f[at_k], p[at_k], cond[at_k]), cond.torque_nm[at_k])
+    np.testing.assert_array_equal(nb.warm_torque, commissioned[0].torque_range)
+    _, s2 = nb.z_and_spread(_warmed(nb, f[at_k], p[at_k], 12.0), p[at_k], cond[at_k])
+    assert (s2[:, EFFICIENCY] > 2 * nb.std[k, EFFICIENCY]).all()
 
 
 def test_a_point_relearnt_without_a_reading_keeps_commissionings_warm_ups(commissioned):
