@@ -5,9 +5,11 @@ runs its jobs for one seed on one data set (leave-one-gear-out: three jobs, one 
 held-out gear) and prints, per (model, input) run, the wall time summed over the jobs
 (fit, adaptations, fine-tuning and scoring) and how it divides (fit on the source gears;
 AdaBN / CORAL; k-shot fine-tuning or ridge refits), beside its accuracy at every k
-(worst split). CPU seconds (this process's, one torch thread by default) are what a run
-costs on a core of its own; wall seconds grow with what else runs on the machine. The
-figures of docs/learners_transfer.md come from it::
+(worst split); then the same by stage over all runs, with building the inputs (scoring
+and the rest: predicting every variant's evaluation windows, k-shot draws, bookkeeping).
+CPU seconds (this process's, one torch thread by default) are what a run costs on a core
+of its own; wall seconds grow with what else runs on the machine. The figures of
+docs/learners_transfer.md come from it::
 
     python scripts/bench_transfer.py data/bench
     python scripts/bench_transfer.py data/bench --runs mlp_torch/raw cnn/diff
@@ -112,9 +114,17 @@ def main(argv=None) -> dict:
                   for k in ks))
     print(f"{'sum':<22s} {sum(r['wall_s'] for r in table.values()):8.1f} "
           f"{sum(r['cpu_s'] for r in table.values()):8.1f}")
+    stages = {"inputs": out["input_s"]}
+    for key, label in (("fit_s", "fitting"), ("adapt_s", "adaptation"),
+                       ("finetune_s", "fine-tuning")):
+        stages[label] = sum(r[key] for r in table.values())
+    stages["scoring and the rest"] = (sum(r["wall_s"] for r in table.values())
+                                      - sum(stages[k] for k in list(stages)[1:]))
+    print("by stage: " + ", ".join(f"{k} {v:.1f} s ({100 * v / wall:.0f} %)"
+                                   for k, v in stages.items()) + f" of {wall:.1f} s wall")
     result = {"data": str(a.data), "seed": a.seed, "overrides": a.overrides,
               "jobs": a.jobs, "threads": a.threads, "input_s": out["input_s"],
-              "wall_s": wall, "runs": table}
+              "wall_s": wall, "stages_s": stages, "runs": table}
     if a.json:
         Path(a.json).write_text(json.dumps(result, indent=1, default=float))
     return result
