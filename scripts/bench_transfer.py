@@ -46,6 +46,19 @@ def _args(argv=None) -> argparse.Namespace:
     return p.parse_args(argv)
 
 
+def _by_stage(table: dict, input_s: float, wall: float) -> dict[str, float]:
+    """Seconds by stage over every run, printed (module docstring)."""
+    stages = {"inputs": input_s}
+    for key, label in (("fit_s", "fitting"), ("adapt_s", "adaptation"),
+                       ("finetune_s", "fine-tuning")):
+        stages[label] = sum(r[key] for r in table.values())
+    stages["scoring and the rest"] = (sum(r["wall_s"] for r in table.values())
+                                      - sum(stages[k] for k in list(stages)[1:]))
+    print("by stage: " + ", ".join(f"{k} {v:.1f} s ({100 * v / wall:.0f} %)"
+                                   for k, v in stages.items()) + f" of {wall:.1f} s wall")
+    return stages
+
+
 def main(argv=None) -> dict:
     """Run the benchmark; returns what it prints, by run label."""
     import torch
@@ -114,14 +127,7 @@ def main(argv=None) -> dict:
                   for k in ks))
     print(f"{'sum':<22s} {sum(r['wall_s'] for r in table.values()):8.1f} "
           f"{sum(r['cpu_s'] for r in table.values()):8.1f}")
-    stages = {"inputs": out["input_s"]}
-    for key, label in (("fit_s", "fitting"), ("adapt_s", "adaptation"),
-                       ("finetune_s", "fine-tuning")):
-        stages[label] = sum(r[key] for r in table.values())
-    stages["scoring and the rest"] = (sum(r["wall_s"] for r in table.values())
-                                      - sum(stages[k] for k in list(stages)[1:]))
-    print("by stage: " + ", ".join(f"{k} {v:.1f} s ({100 * v / wall:.0f} %)"
-                                   for k, v in stages.items()) + f" of {wall:.1f} s wall")
+    stages = _by_stage(table, out["input_s"], wall)
     result = {"data": str(a.data), "seed": a.seed, "overrides": a.overrides,
               "jobs": a.jobs, "threads": a.threads, "input_s": out["input_s"],
               "wall_s": wall, "stages_s": stages, "runs": table}
