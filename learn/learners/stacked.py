@@ -116,12 +116,15 @@ class _StackedRun:
     def _one(self, params, buffers, x):
         return torch.func.functional_call(self.base, (params, buffers), (x,))
 
-    def _losses(self, xb: torch.Tensor, yb: torch.Tensor) -> torch.Tensor:
-        """Mean cross-entropy of each copy on its batch: (K, B, ...) -> (K,)."""
+    def _logits_and_losses(self, xb: torch.Tensor, yb: torch.Tensor
+                           ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Each copy's logits on its batch, (K, B, classes), and the cross-entropy of each
+        window, (K, B)."""
         with self.first._autocast():
-            logits = self.forward(self.params, self.buffers, xb).float()  # (K, B, classes)
-        return nn.functional.cross_entropy(logits.transpose(1, 2), yb, reduction="none",
-                                           label_smoothing=self.first.label_smoothing).mean(1)
+            logits = self.forward(self.params, self.buffers, xb).float()
+        return logits, nn.functional.cross_entropy(
+            logits.transpose(1, 2), yb, reduction="none",
+            label_smoothing=self.first.label_smoothing)
 
     def _epoch(self, opt, sched, steps: int, bs: int) -> torch.Tensor:
         """One epoch of every copy; returns the mean training loss of each, shape (K,)."""
@@ -137,7 +140,7 @@ class _StackedRun:
                               in zip(self.nets, idx, self.plans, strict=True)])
             yb = torch.stack([self.yt[i] for i in idx])
             opt.zero_grad(set_to_none=True)
-            losses = self._losses(xb.to(self.Xt.device), yb)
+            losses = self._logits_and_losses(xb.to(self.Xt.device), yb)[1].mean(1)
             losses.sum().backward()  # the copies' parameters are apart: each its own gradient
             opt.step()
             sched.step()
@@ -154,11 +157,8 @@ class _StackedRun:
         for i in range(0, len(vas[0]), batch):
             idx = [v[i:i + batch] for v in vas]
             xb, yb = torch.stack([self.Xt[j] for j in idx]), torch.stack([self.yt[j] for j in idx])
-            with self.first._autocast():
-                logits = self.forward(self.params, self.buffers, xb).float()
-            loss = loss + nn.functional.cross_entropy(
-                logits.transpose(1, 2), yb, reduction="none",
-                label_smoothing=self.first.label_smoothing).sum(1)
+            logits, each = self._logits_and_losses(xb, yb)
+            loss = loss + each.sum(1)
             hits = hits + (logits.argmax(2) == yb).sum(1)
         n = len(vas[0])
         return (loss / n).cpu().numpy(), (hits / n).cpu().numpy()
