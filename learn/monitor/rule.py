@@ -40,6 +40,7 @@ import numpy as np
 
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import allowed, check_range
+from swgsim.sensing.sensor_faults import is_sensor_fault
 
 from .normal import OUTSIDE_UNJUDGED
 from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
@@ -282,9 +283,11 @@ class Alarm:
 
     @property
     def sensor_fault(self) -> bool:
-        """Whether the fault named is a sensor's (a bridge's, or the temperature
-        sensor's), not the gear's."""
-        return self.bridge is not None or self.fault == TEMPERATURE_SENSOR
+        """Whether the fault named is a sensor's, not the gear's: the temperature
+        sensor's, a bridge's, or a sensor fault that no one bridge explains (a class of
+        :data:`~swgsim.sensing.sensor_faults.SENSOR_FAULTS` named without a bridge)."""
+        return (self.bridge is not None or self.fault == TEMPERATURE_SENSOR
+                or is_sensor_fault(self.fault))
 
     @property
     def kind(self) -> str:

@@ -132,7 +132,9 @@ def event_line(event: dict) -> str:
     if kind in ("gear_fault", "sensor_fault"):
         where = ("" if kind != "sensor_fault" else
                  f" on bridge {event['bridge']} (check that gauge)" if event["bridge"] else
-                 " (check the joint's temperature sensor; the monitor goes on without it)")
+                 " (check the joint's temperature sensor; the monitor goes on without it)"
+                 if event["fault"] == TEMPERATURE_SENSOR else
+                 " (no one bridge explains it: check the gauges and their wiring)")
         return (f"alarm at {hour:.2f} h: {event['fault']}{where} (at the alarm: "
                 f"{event['fault_at_alarm']}), severity {event['severity']:.3g} "
                 f"[{event['severity_low']:.3g}, {event['severity_high']:.3g}]{moved}")

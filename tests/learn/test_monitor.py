@@ -499,6 +499,20 @@ def test_every_event_kind_is_printed_in_one_line():
         event_line({"kind": "x", "hour": 1.0})
 
 
+def test_a_sensor_fault_named_without_a_bridge_is_a_sensor_fault_not_a_gear_fault():
+    """A sensor-fault class that no one bridge explains (``bridge`` None) is counted and
+    printed as a sensor fault: before, only a named bridge or the temperature sensor made
+    an alarm a sensor fault's, so this one was counted as a gear-fault alarm."""
+    from learn.monitor.rule import Alarm
+    from learn.monitor.stream import event_line
+
+    al = Alarm(7.0, 20, 18, "sensor_offset_step", "sensor_offset_step", 0.05, 0.04, 0.06)
+    assert al.sensor_fault and al.kind == "sensor_fault"
+    assert Alarm(6.2, 10, 4, "root_crack", "root_crack", 0.1, 0.08, 0.12).kind == "gear_fault"
+    line = event_line({"kind": al.kind, **al.as_dict()})
+    assert "no one bridge explains it" in line and "temperature sensor" not in line
+
+
 def test_a_resumed_evaluations_tables_keep_a_fresh_runs_columns(tmp_path):
     from learn.monitor.evaluate import to_frames
     from learn.tasks.parts import Job, finished_parts, save_part
