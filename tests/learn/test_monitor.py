@@ -508,7 +508,8 @@ def test_a_sensor_fault_named_without_a_bridge_is_a_sensor_fault_not_a_gear_faul
 
     al = Alarm(7.0, 20, 18, "sensor_offset_step", "sensor_offset_step", 0.05, 0.04, 0.06)
     assert al.sensor_fault and al.kind == "sensor_fault"
-    assert Alarm(6.2, 10, 4, "root_crack", "root_crack", 0.1, 0.08, 0.12).kind == "gear_fault"
+    assert Alarm(6.2, 10, 4, "root_tooth_crack", "root_tooth_crack", 0.1, 0.08, 0.12).kind \
+        == "gear_fault"
     line = event_line({"kind": al.kind, **al.as_dict()})
     assert "no one bridge explains it" in line and "temperature sensor" not in line
 
