@@ -12,7 +12,9 @@ from learn.inputs.features import (
     iter_features,
     order_spectrum,
     paper_orders,
+    reference_index,
 )
+from learn.inputs.features import _reference_index_frame as reference_index_merge
 from swgsim.datasets.schema import PER_SAMPLE, make_dataset
 
 FS = 10_000.0
@@ -149,3 +151,21 @@ def test_errors_name_parameter_and_allowed_values(synthetic_ds):
     gear3_ref = (synthetic_ds["reference"] & (synthetic_ds["gear"] == 3)).values
     with pytest.raises(ValueError, match="have no reference window"):
         extract_features(synthetic_ds.isel(sample=~gear3_ref), 1)
+
+
+def test_the_coded_reference_pairs_are_the_merge(synthetic_ds):
+    """The windows paired with their reference windows by integer key codes are those of
+    the table merge (the slow path), in any order of the windows; two reference windows
+    of one key are refused as by the merge."""
+    order = np.random.default_rng(3).permutation(synthetic_ds.sizes["sample"])
+    shuffled = synthetic_ds.isel(sample=order)
+    for ds in (synthetic_ds, shuffled):
+        fast, slow = reference_index(ds), reference_index_merge(ds)
+        for a, b in zip(fast, slow, strict=True):
+            assert np.array_equal(a, b) and a.dtype == b.dtype
+    twice = synthetic_ds.copy()
+    ref = twice["reference"].values.copy()
+    ref[np.flatnonzero(~ref)[0]] = True  # a fault window of a key with a reference already
+    twice["reference"] = ("sample", ref)
+    with pytest.raises(ValueError, match="more than one reference window"):
+        reference_index(twice)
