@@ -34,8 +34,10 @@ def main(argv=None) -> dict:
 
     from swgcal import build_problem, calibrate, summarize, write_outputs
     from swgcal.strain import StrainModel
-    from swgcal.strain import synthetic as syn
     from swgsim.gear.chain import SimulationChain
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    import planted_strain as syn  # the planted bench data (tests/planted_strain.py)
 
     t0 = time.perf_counter()
     chain = SimulationChain()

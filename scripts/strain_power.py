@@ -2,16 +2,16 @@
 
 For each seed, bench windows (2 operating points × 5 windows of 40 ms) are simulated
 through the chain's standard path with their own random WG start angles
-(:func:`swgcal.strain.synthetic.simulate_windows`), white noise of ``noise_rel`` of the
-signal range (1 % by default) with its own seed, once with a planted effect and once
-clean; both are calibrated (:mod:`swgcal.strain.problem`). A planted effect is *found*
-when it is accepted and every planted parameter is recovered within ``rel_tol`` of its
-true value (relative values for gains and gauge angles,
-:func:`swgcal.strain.synthetic.expected_values`); clean data are *left alone* when no
-effect is accepted. Power = found seeds / seeds; the false-alarm side = 1 − left alone /
-seeds. Prints the table (effect, planted parameter, true value, seeds found / seeds,
-median estimate, clean seeds left alone / seeds, wall time) and, per seed, what was
-added and the planted candidate's evidence. The last line is JSON.
+(``simulate_windows`` of the tests' ``tests/planted_strain.py``), white noise of
+``noise_rel`` of the signal range (1 % by default) with its own seed, once with a planted
+effect and once clean; both are calibrated (:mod:`swgcal.strain.problem`). A planted
+effect is *found* when it is accepted and every planted parameter is recovered within
+``rel_tol`` of its true value (relative values for gains and gauge angles,
+``expected_values`` there); clean data are *left alone* when no effect is accepted.
+Power = found seeds / seeds; the false-alarm side = 1 − left alone / seeds. Prints the
+table (effect, planted parameter, true value, seeds found / seeds, median estimate, clean
+seeds left alone / seeds, wall time) and, per seed, what was added and the planted
+candidate's evidence. The last line is JSON.
 
     python scripts/strain_power.py [--seeds 10] [--effects gauge_misplacement_s2 ...]
 """
@@ -24,16 +24,19 @@ import sys
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from swgcal.loop import SelectionConfig
-from swgcal.strain import synthetic as syn
 from swgcal.strain.model import StrainModel
 from swgcal.strain.problem import build_problem, calibrate
 from swgcal.strain.report import summarize
 from swgsim.gear.chain import SimulationChain
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import planted_strain as syn  # noqa: E402  (the planted bench data, tests/planted_strain.py)
 
 POWER_EFFECTS: dict[str, dict[str, Any]] = {
     "gauge_misplacement_s2": {
@@ -49,7 +52,7 @@ POWER_EFFECTS: dict[str, dict[str, Any]] = {
 }
 """Planted cases of the power study: a 1.5° misplacement of one gauge (s2: a torque
 half bridge; s1: a WG-bending half bridge); every key of
-:data:`.synthetic.PLANTED` that is not marked implausible is accepted too."""
+``PLANTED`` of ``tests/planted_strain.py`` that is not marked implausible is accepted too."""
 
 
 @dataclass
@@ -135,7 +138,7 @@ def power_study(effects: Sequence[str], seeds: Iterable[int] = range(10), *,
     ----------
     effects : sequence of str
         Keys of :data:`POWER_EFFECTS` or plausible keys of
-        :data:`.synthetic.PLANTED`.
+        ``PLANTED`` (``tests/planted_strain.py``).
     seeds : iterable of int
         Seed k draws the WG start angles (``k``) and the noise (``1000 + k``).
     noise_rel : float, default 0.01
@@ -273,7 +276,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--effects", nargs="+", default=["gauge_misplacement_s2",
                                                      "gauge_misplacement_s1"],
-                    help="keys of POWER_EFFECTS or swgcal.strain.synthetic.PLANTED")
+                    help="keys of POWER_EFFECTS or PLANTED of tests/planted_strain.py")
     ap.add_argument("--noise", type=float, default=0.01,
                     help="noise standard deviation relative to the signal range")
     ap.add_argument("--no-clean", action="store_true", help="skip the clean runs")

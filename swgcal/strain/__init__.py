@@ -15,8 +15,8 @@ prediction per operating point, alignment), :mod:`.signals` (signals, constraint
 :mod:`.probes` (residual probes), :mod:`.problem` (problem builder, calibration),
 :mod:`.align` (input angle modulo 180° or 360°), :mod:`.checks` (withheld parameters,
 too-small effects, caveats), :mod:`.discovery` (terms beyond the library), :mod:`.report`
-(summary, report, simulation option), :mod:`.figures`, :mod:`.synthetic` (windows with
-planted effects; their power study is ``scripts/strain_power.py``).
+(summary, report, simulation option), :mod:`.figures`. Windows with planted effects are
+the tests' (``tests/planted_strain.py``; their power study is ``scripts/strain_power.py``).
 """
 
 from .data import StrainWindows, strain_windows

@@ -106,7 +106,8 @@ def test_run_calibrate_rejects_unknown_data(tmp_path):
 
 def test_run_calibrate_strain_data_set(tmp_path, tracking_uri):
     """Kind 2: a schema-v1 data-set directory is recognised and calibrated end to end."""
-    from swgcal.strain import synthetic as syn
+    import planted_strain as syn
+
     from swgsim.datasets import schema as dsio
     from swgsim.files.ownership import atomic_write_json
     from swgsim.gear.chain import SimulationChain

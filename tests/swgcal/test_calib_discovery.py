@@ -1,6 +1,6 @@
 """Discovery of terms beyond the strain library (swgcal.discovery).
 
-Planted out-of-library effects (:data:`swgcal.strain.synthetic.HIDDEN`):
+Planted out-of-library effects (``HIDDEN`` of ``tests/planted_strain.py``):
 crosstalk of s2 into s1, mains hum at 50 Hz with its third harmonic, a tone at order 2.7
 of the input rotation whose amplitude is proportional to the load, and a gauge gain of
 s1 that grows with the load. Each must be proposed in words that name it, with a
@@ -15,13 +15,13 @@ from __future__ import annotations
 import re
 
 import numpy as np
+import planted_strain as syn
 import pytest
 from strain_run import run_strain
 
 from swgcal import discovery as disc
 from swgcal.strain import StrainModel
 from swgcal.strain import discovery as strain_discovery
-from swgcal.strain import synthetic as syn
 from swgsim.gear.chain import SimulationChain
 
 OPS3 = ((2000.0, 7.0), (4000.0, 70.0), (4000.0, 7.0))

@@ -3,7 +3,7 @@ clean data, two effects, out-of-library residuals, held-out split.
 
 "Measured" data come from the chain's standard path (random WG start angles, settling
 transient) with planted measurement effects and white noise of 1 % of the signal range
-(:mod:`swgcal.strain.synthetic`); the calibration models them with one
+(``tests/planted_strain.py``); the calibration models them with one
 steady trajectory per operating point. Tiny: 2 operating points × 5 windows of 40 ms.
 """
 
@@ -12,11 +12,11 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import planted_strain as syn
 import pytest
 from strain_run import run_strain
 
 from swgcal.strain import StrainModel
-from swgcal.strain import synthetic as syn
 from swgsim.gear.chain import SimulationChain
 from swgsim.gear.dynamics import gear_with_ke, rt1_size20
 from swgsim.sensing.dsp import fractional_delay, lowpass

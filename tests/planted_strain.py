@@ -1,4 +1,6 @@
-"""Bench-like strain data with planted effects, for tests and examples.
+"""Bench-like strain data with planted effects, shared by the strain calibration's tests and
+the scripts ``scripts/calibrate_strain_demo.py`` and ``scripts/strain_power.py`` (not a test
+module; the scripts put ``tests/`` on their path).
 
 The "measured" windows come from the simulation chain's standard path
 (:meth:`swgsim.gear.chain.SimulationChain.simulate`: a random WG start angle per window, a
@@ -63,7 +65,7 @@ noise over a channel (offsets 4σ, gain 5 %, a gauge 1.5° off), the low-pass at
 (order 2 of 4000 rpm at 135 Hz), a KE harmonic of 1.5e-4 rad (the nominal order 2 has
 1e-4 rad), a zero drift of 4e-4 mV/V/s on windows recorded every 5 s (``window_period_s``:
 pass it to :func:`bench_dataset` and the calibration), within the physical ranges of
-:mod:`.effects`. ``"implausible": True`` marks a value outside its physical
+:mod:`swgcal.strain.effects`. ``"implausible": True`` marks a value outside its physical
 range, planted to check that the calibration refuses it: the bridge nonlinearity at 75×
 the exact quarter bridge's 2e-3 per mV/V (the physical value is far below 1 % noise)."""
 
@@ -263,7 +265,7 @@ def bench_dataset(clean: CleanWindows, sensor_effects: Sequence[Mapping[str, Any
         "n_in_mean_rpm": clean.n_in_mean_rpm, "t_out_mean_nm": clean.t_out_mean_nm,
     }
     ds = dsio.make_dataset(y, clean.time_s[clean.n_lead:] - clean.time_s[clean.n_lead], meta,
-                           {"name": name, "source": "swgcal.strain.synthetic",
+                           {"name": name, "source": "tests/planted_strain.py",
                             "sensor_effects": list(sensor_effects), "hidden": list(hidden),
                             "noise_sigma_mvv": sigma, "window_period_s": period})
     return ds, {"sigma": sigma, "sensor_effects": list(sensor_effects), "hidden": list(hidden)}
