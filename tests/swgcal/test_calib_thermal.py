@@ -9,11 +9,11 @@ import json
 import numpy as np
 import pytest
 import yaml
+from planted_thermal import SyntheticThermal, synthetic_joint_log
 
 from swgcal import build_problem, calibrate, detect_kind
 from swgcal.thermal import summarize
 from swgcal.thermal.arm import transfer_effects
-from swgcal.thermal.synthetic import SyntheticThermal, synthetic_joint_log
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
 from swgsim.datasets.joint_log import write_joint_log

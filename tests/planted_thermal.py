@@ -1,12 +1,14 @@
-"""Synthetic joint logs with known thermal constants, for the thermal calibration's tests.
+"""Synthetic joint logs with known thermal constants, for the thermal calibration's tests
+(not a test module).
 
 A log of one joint (the others quiet) at one reading a second: a pick-and-place duty whose
 speed level changes every 4 cycles and its holding current (a payload's) every 6, where
 asked pauses standing still, a gap standing still, and the temperature from the project's
-first-order model (:class:`.library.FirstOrderJoint`) with the given constants, plus, where
-asked, one or more library effects (the motor's copper loss, a second slow time constant,
-cooling at standstill) or a cooling fan switching with the cycle count (an effect outside
-the library), plus white noise. Nothing here is a measurement.
+first-order model (:class:`swgcal.thermal.library.FirstOrderJoint`) with the given
+constants, plus, where asked, one or more library effects (the motor's copper loss, a
+second slow time constant, cooling at standstill) or a cooling fan switching with the
+cycle count (an effect outside the library), plus white noise. Nothing here is a
+measurement.
 """
 
 from __future__ import annotations
@@ -15,11 +17,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swgcal.thermal.library import (
+    CopperLoss,
+    FirstOrderJoint,
+    HousingLag,
+    StandstillCooling,
+    first_order_lag,
+)
+from swgcal.thermal.options import GEAR_EFFICIENCY, TORQUE_PER_AMP_NM
+from swgcal.thermal.problem import thermal_signals
 from swgsim.datasets.joint_log import JOINTS, JointLog
-
-from .library import CopperLoss, FirstOrderJoint, HousingLag, StandstillCooling, first_order_lag
-from .options import GEAR_EFFICIENCY, TORQUE_PER_AMP_NM
-from .problem import thermal_signals
 
 __all__ = ["SyntheticThermal", "synthetic_joint_log"]
 
@@ -33,12 +40,13 @@ class SyntheticThermal:
     r_th_k_per_w, tau_min, ambient_c, initial_k : float
         The base model's constants [K/W], [min], [°C], [K].
     k_cu_k_per_a2, tau_cu_min : float
-        Copper loss (0: none) [K/A²], [min] (:class:`.library.CopperLoss`).
+        Copper loss (0: none) [K/A²], [min] (:class:`swgcal.thermal.library.CopperLoss`).
     r2_k_per_w, tau2_min : float
         A second, slow path of the gear's loss (0: none) [K/W], [min]
-        (:class:`.library.HousingLag`).
+        (:class:`swgcal.thermal.library.HousingLag`).
     dt_still_k, tau_still_min : float
-        Cooling at standstill (0: none) [K], [min] (:class:`.library.StandstillCooling`).
+        Cooling at standstill (0: none) [K], [min]
+        (:class:`swgcal.thermal.library.StandstillCooling`).
     pause_blocks : int
         The joint stands still (holding current only) through every ``pause_blocks``-th
         block of 4 cycles (0: never).
