@@ -5,6 +5,8 @@ unexplained, the app path, and the real UR3 day where it lies beside the reposit
 from __future__ import annotations
 
 import json
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,10 +15,12 @@ from planted_thermal import SyntheticThermal, synthetic_joint_log
 
 from swgcal import build_problem, calibrate, detect_kind
 from swgcal.thermal import summarize
-from swgcal.thermal.arm import transfer_effects
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
 from swgsim.datasets.joint_log import write_joint_log
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+from thermal_ur3 import transfer_effects  # noqa: E402  (a study, in scripts/)
 
 
 def _run(c: SyntheticThermal):
