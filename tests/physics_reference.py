@@ -1,11 +1,16 @@
 """Closed-form references and slow reference paths shared by the physics tests and the
 benchmarks (not a test module): the steady motion's closed form, one variant integrated by
 scipy (:func:`simulate_reference`), the gauge signals by one truss solve per time step
-(:func:`signals_naive`; :func:`solve_displacements`, :func:`cracked`), against which the fast
-paths are checked; the energy and powers along a window (:func:`power_terms`) and the
-ring-down after a load step (:func:`ring_down`, its poles by :func:`modes`)."""
+(:func:`signals_naive`; :func:`solve_displacements`, :func:`cracked`, the truss's coupling
+block :func:`k_fp` and wave-generator displacements :func:`wg_displacement`) and of one
+variant from its motion (:func:`signals_from_motion`), against which the fast paths are
+checked; the energy and powers along a window (:func:`power_terms`) and the ring-down after
+a load step (:func:`ring_down`, its poles by :func:`modes`); the bridges' drift at a
+temperature written out (:func:`apply_bridge_drift`)."""
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 import pytest
@@ -18,9 +23,10 @@ from swgsim.gear import profile_dynamics as pd
 from swgsim.gear.chain import SimulationChain
 from swgsim.gear.faults import ChainParams, angle_index, mesh_severity
 from swgsim.gear.flexspline import TrussModel, factorize
-from swgsim.gear.influence import contact_window
+from swgsim.gear.influence import contact_window, torque_influence
 from swgsim.gear.modes import torsional_mode
 from swgsim.gear.sensors import signal_rows
+from swgsim.sensing.bridge_drift import N_BRIDGES, REF_TEMP_C
 
 
 def steady_motion(p: dy.GearParams, n_in_rpm: float, t_gear_nm: float) -> tuple[float, float]:
@@ -90,6 +96,40 @@ def cracked(model: TrussModel, theta_index: int, severity: float) -> TrussModel:
     return new
 
 
+@functools.lru_cache(maxsize=8)
+def k_fp(model: TrussModel):
+    """Coupling block K_FP of ``model``'s stiffness, free rows and prescribed columns
+    (``model.free``, ``model.prescribed``), shape (n_free, n_prescribed) [N/m], CSC; kept
+    per model, as its factorisation is, so that a timed naive solve does not build it."""
+    return model.K[model.free][:, model.prescribed].tocsc()
+
+
+def wg_displacement(model: TrussModel, psi: np.ndarray, w0_m: float, ecc_m: float = 0.0,
+                    ecc_theta: float = 0.0) -> np.ndarray:
+    """Radial displacement of the inner rim nodes imposed by the wave generator.
+
+    Parameters
+    ----------
+    model : TrussModel
+    psi : ndarray, shape (n_t,)
+        Wave-generator angle relative to the flexspline [rad].
+    w0_m : float
+        Radial deflection at the major axis [m].
+    ecc_m, ecc_theta : float
+        Eccentricity of the wave generator [m] and its direction [rad] in the
+        flexspline frame (paper: u_ecc = [r, θ, 0]).
+
+    Returns
+    -------
+    ndarray, shape (n_t, n_wg_dofs)
+        u_r of ``model.wg_dofs`` [m], w0 cos 2(θ − ψ) + e cos(θ − θ_e).
+    """
+    n_rim = model.rim_stations.size
+    th = np.tile(model.theta, n_rim)
+    psi = np.atleast_1d(psi)[:, None]
+    return w0_m * np.cos(2 * (th[None, :] - psi)) + ecc_m * np.cos(th - ecc_theta)[None, :]
+
+
 def solve_displacements(model: TrussModel, f: np.ndarray, u_p: np.ndarray) -> np.ndarray:
     """Naive reference: solve K_FF u_F = f_F − K_FP u_P of ``model`` for each load case.
 
@@ -105,7 +145,7 @@ def solve_displacements(model: TrussModel, f: np.ndarray, u_p: np.ndarray) -> np
     ndarray, shape (n_dof,) or (n_dof, n_cases)
         Displacements in cylindrical components [m].
     """
-    rhs = f[model.free] - model.K_FP @ u_p
+    rhs = f[model.free] - k_fp(model) @ u_p
     u = np.zeros((model.n_dof,) + np.shape(f)[1:])
     u[model.free] = model.lu.solve(np.asarray(rhs))
     u[model.prescribed] = u_p
@@ -118,8 +158,7 @@ def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out
 
     Builds the WG displacements and tooth forces of every time step, solves
     K_FF u_F = f_F − K_FP u_P with the (cracked) structure's factorisation and applies
-    the gauge rows to u. Same result as :meth:`SimulationChain.signals_from_motion`, far
-    slower.
+    the gauge rows to u. Same result as :func:`signals_from_motion`, far slower.
 
     Returns
     -------
@@ -131,12 +170,12 @@ def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out
         mc = cracked(m, angle_index(p.root_crack_deg, n),
                      mesh_severity(p.root_crack_severity, n))
         lu = factorize(mc.K[m.free][:, m.free])
-        k_fp = mc.K[m.free][:, m.prescribed].tocsc()
+        k_fp_m = mc.K[m.free][:, m.prescribed].tocsc()
     else:
-        lu, k_fp = m.lu, m.K_FP
+        lu, k_fp_m = m.lu, k_fp(m)
     rows = signal_rows(m, chain.layout)
     loads = m.unit_tooth_loads(chain.solver.alpha).tocsr()
-    c = chain._tooth_factors(p)
+    c = p.tooth_factors(chain.influence(p).theta)
     hw = np.deg2rad(chain.settings.contact_half_width_deg)
     wg_pos = np.searchsorted(m.prescribed, m.wg_dofs)
     out = np.empty((5, psi.size))
@@ -146,12 +185,42 @@ def signals_naive(chain: SimulationChain, p: ChainParams, psi: np.ndarray, t_out
              + (2 - share[k]) * contact_window(m.theta - psi[k] - np.pi, hw)) * c
         f = loads @ (w / w.sum()) * t_out[k]
         u_p = np.zeros(m.prescribed.size)
-        u_p[wg_pos] = m.wg_displacement(psi[k:k + 1], p.w0_m, p.ecc_m, p.ecc_theta_rad)[0]
+        u_p[wg_pos] = wg_displacement(m, psi[k:k + 1], p.w0_m, p.ecc_m, p.ecc_theta_rad)[0]
         u = np.zeros(m.n_dof)
-        u[m.free] = lu.solve(f[m.free] - k_fp @ u_p)
+        u[m.free] = lu.solve(f[m.free] - k_fp_m @ u_p)
         u[m.prescribed] = u_p
         out[:, k] = rows @ u
     return out
+
+
+def signals_from_motion(chain: SimulationChain, p: ChainParams, psi: np.ndarray,
+                        t_out: np.ndarray) -> np.ndarray:
+    """Five bridge signals of one variant from its motion, by the chain's influences one
+    variant at a time (what :meth:`SimulationChain.signals_batch` does for many).
+
+    Parameters
+    ----------
+    chain : SimulationChain
+    p : ChainParams
+    psi : ndarray, shape (n_t,)
+        WG angle relative to the flexspline [rad].
+    t_out : ndarray, shape (n_t,)
+        Acting output torque [N m].
+
+    Returns
+    -------
+    ndarray, shape (5, n_t)
+        s0..s4 [mV/V].
+    """
+    inf = chain.influence(p)
+    s = p.w0_m * (inf.A[:, None] * np.cos(2 * psi) + inf.B[:, None] * np.sin(2 * psi))
+    if p.ecc_m:
+        s = s + p.ecc_m * (inf.Ex * np.cos(p.ecc_theta_rad)
+                           + inf.Ey * np.sin(p.ecc_theta_rad))[:, None]
+    h = torque_influence(psi, inf.g, inf.theta, p.tooth_factors(inf.theta),
+                         np.deg2rad(chain.settings.contact_half_width_deg),
+                         chain.load_share(p, psi))
+    return s + t_out[None, :] * h
 
 
 def power_terms(p: dy.GearParams, res: dy.SimResult, t_load_nm: np.ndarray) -> dict:
@@ -221,3 +290,54 @@ def ring_down(p: dy.GearParams, dec: int):
     lam, amp = modes(res.t_out[0, i0:i1:dec] - 39.0, dec / fs, 6)
     osc = np.flatnonzero(lam.imag > 1.0)
     return lam[osc[np.argmax(amp[osc])]], (f_hz, tau), res
+
+
+def _bridge_vector(x, name: str) -> np.ndarray:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (N_BRIDGES,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be {N_BRIDGES} finite values, got shape {a.shape}")
+    return a
+
+
+def apply_bridge_drift(signals, temp_c, zero_mvv_per_k, span_per_k,
+                       ref_c: float = REF_TEMP_C) -> np.ndarray:
+    """Bridge outputs at the joint's temperature: (1 + span_c ΔT) s + zero_c ΔT
+    (:mod:`swgsim.sensing.bridge_drift`; the data sets apply it per window through
+    :meth:`swgsim.datasets.conditions.WindowConditions.bridge_gain_offset`).
+
+    Parameters
+    ----------
+    signals : array_like, shape (W, 5, T)
+        Bridge outputs s0..s4 of W windows of T samples at ``ref_c`` [mV/V].
+    temp_c : array_like, shape (W,)
+        Temperature of the gauges in each window [°C]
+        (:func:`swgsim.gear.thermal.joint_temperature`).
+    zero_mvv_per_k, span_per_k : array_like, shape (5,)
+        One gear's coefficients (:func:`swgsim.sensing.bridge_drift.draw_bridge_drift`)
+        [mV/V per K], [1/K].
+    ref_c : float
+        Reference temperature of the coefficients [°C] (20).
+
+    Returns
+    -------
+    ndarray, shape (W, 5, T)
+        Drifted outputs [mV/V], float64 (a new array).
+
+    Raises
+    ------
+    ValueError
+        Shapes other than above or values not finite.
+    """
+    x = np.asarray(signals, dtype=float)
+    if x.ndim != 3 or x.shape[1] != N_BRIDGES:
+        raise ValueError(f"signals must have shape (W, {N_BRIDGES}, T), got {x.shape}")
+    t = np.asarray(temp_c, dtype=float)
+    if t.shape != (x.shape[0],) or not np.all(np.isfinite(t)):
+        raise ValueError(f"temp_c must be {x.shape[0]} finite values (one per window), "
+                         f"got shape {t.shape}")
+    zero = _bridge_vector(zero_mvv_per_k, "zero_mvv_per_k")
+    span = _bridge_vector(span_per_k, "span_per_k")
+    if not np.isfinite(ref_c):
+        raise ValueError(f"ref_c must be finite, got {ref_c}")
+    d = (t - ref_c)[:, None, None]  # (W, 1, 1)
+    return (1.0 + span[None, :, None] * d) * x + zero[None, :, None] * d

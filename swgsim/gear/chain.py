@@ -165,33 +165,6 @@ class SimulationChain:
             psi - p.ecc_theta_rad)
 
     # ------------------------------------------------------------------ signals
-    def signals_from_motion(self, p: ChainParams, psi: np.ndarray,
-                            t_out: np.ndarray) -> np.ndarray:
-        """Five bridge signals of one variant from its motion (fast path).
-
-        Parameters
-        ----------
-        p : ChainParams
-        psi : ndarray, shape (n_t,)
-            WG angle relative to the flexspline [rad].
-        t_out : ndarray, shape (n_t,)
-            Acting output torque [N m].
-
-        Returns
-        -------
-        ndarray, shape (5, n_t)
-            s0..s4 [mV/V].
-        """
-        inf = self.influence(p)
-        s = p.w0_m * (inf.A[:, None] * np.cos(2 * psi) + inf.B[:, None] * np.sin(2 * psi))
-        if p.ecc_m:
-            s = s + p.ecc_m * (inf.Ex * np.cos(p.ecc_theta_rad)
-                               + inf.Ey * np.sin(p.ecc_theta_rad))[:, None]
-        h = torque_influence(psi, inf.g, inf.theta, self._tooth_factors(p),
-                             np.deg2rad(self.settings.contact_half_width_deg),
-                             self.load_share(p, psi))
-        return s + t_out[None, :] * h
-
     def simulate(self, variants: list[ChainParams], n_in_rpm, t_out_nm,
                  phi_in0: np.ndarray | float = 0.0, friction_effects=None):
         """Simulate variants at one operating point.
@@ -284,7 +257,8 @@ class SimulationChain:
 
     def signals_batch(self, variants: list[ChainParams], psi: np.ndarray, t_out: np.ndarray,
                       chunk: int = 64) -> np.ndarray:
-        """Signals of many variants; the same as :meth:`signals_from_motion` per variant.
+        """Signals of many variants from their motions (one variant at a time, the tests'
+        reference: ``signals_from_motion`` in ``tests/physics_reference.py``).
 
         Variants that share a structure and tooth factors are evaluated together, in
         chunks of ``chunk`` windows, to keep Python overhead and temporaries small; their

@@ -424,41 +424,12 @@ class TrussModel:
         return self.K[self.free][:, self.free].tocsc()
 
     @cached_property
-    def K_FP(self) -> sp.csc_matrix:
-        """Coupling of free and prescribed DOFs."""
-        return self.K[self.free][:, self.prescribed].tocsc()
-
-    @cached_property
     def lu(self):
         """Sparse LU factorisation of K_FF (scipy SuperLU), computed once."""
         log.debug("factorising K_FF (%d free DOFs)", self.free.size)
         return factorize(self.K_FF)
 
     # ------------------------------------------------------------------ loads
-    def wg_displacement(self, psi: np.ndarray, w0_m: float, ecc_m: float = 0.0,
-                        ecc_theta: float = 0.0) -> np.ndarray:
-        """Radial displacement of the inner rim nodes imposed by the wave generator.
-
-        Parameters
-        ----------
-        psi : ndarray, shape (n_t,)
-            Wave-generator angle relative to the flexspline [rad].
-        w0_m : float
-            Radial deflection at the major axis [m].
-        ecc_m, ecc_theta : float
-            Eccentricity of the wave generator [m] and its direction [rad] in the
-            flexspline frame (paper: u_ecc = [r, θ, 0]).
-
-        Returns
-        -------
-        ndarray, shape (n_t, n_wg_dofs)
-            u_r of ``wg_dofs`` [m], w0 cos 2(θ − ψ) + e cos(θ − θ_e).
-        """
-        n_rim = self.rim_stations.size
-        th = np.tile(self.theta, n_rim)
-        psi = np.atleast_1d(psi)[:, None]
-        return w0_m * np.cos(2 * (th[None, :] - psi)) + ecc_m * np.cos(th - ecc_theta)[None, :]
-
     def unit_tooth_loads(self, alpha_tooth_rad: float) -> sp.csr_matrix:
         """Nodal forces of a unit output torque carried at each angle index.
 

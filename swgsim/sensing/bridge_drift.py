@@ -6,6 +6,9 @@ coefficients' reference (20 °C; the temperature at commissioning is not known i
 
     s' = (1 + span_c ΔT) s + zero_c ΔT        [mV/V]
 
+(a life's windows get it through
+:meth:`swgsim.datasets.conditions.WindowConditions.bridge_gain_offset`).
+
 * **Zero drift** (``zero_c``, mV/V per K). A gauge bonded to steel reads an apparent
   strain when its temperature changes; self-temperature-compensated foil gauges on the
   matching steel keep it within ±1.8 µε/K, representative value, some series within
@@ -154,53 +157,6 @@ def draw_bridge_drift(cfg: BridgeDrift, rng: np.random.Generator
     zero = cfg.zero_mean_mvv_per_k + cfg.zero_sd_mvv_per_k * z[0]
     span = cfg.span_mean_per_k + cfg.span_sd_per_k * z[1]
     return zero, span
-
-
-def _vector(x, name: str) -> np.ndarray:
-    a = np.asarray(x, dtype=float)
-    if a.shape != (N_BRIDGES,) or not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be {N_BRIDGES} finite values, got shape {a.shape}")
-    return a
-
-
-def apply_bridge_drift(signals, temp_c, zero_mvv_per_k, span_per_k,
-                       ref_c: float = REF_TEMP_C) -> np.ndarray:
-    """Bridge outputs at the joint's temperature: (1 + span_c ΔT) s + zero_c ΔT.
-
-    Parameters
-    ----------
-    signals : array_like, shape (W, 5, T)
-        Bridge outputs s0..s4 of W windows of T samples at ``ref_c`` [mV/V].
-    temp_c : array_like, shape (W,)
-        Temperature of the gauges in each window [°C]
-        (:func:`swgsim.gear.thermal.joint_temperature`).
-    zero_mvv_per_k, span_per_k : array_like, shape (5,)
-        One gear's coefficients (:func:`draw_bridge_drift`) [mV/V per K], [1/K].
-    ref_c : float
-        Reference temperature of the coefficients [°C] (20).
-
-    Returns
-    -------
-    ndarray, shape (W, 5, T)
-        Drifted outputs [mV/V], float64 (a new array).
-
-    Raises
-    ------
-    ValueError
-        Shapes other than above or values not finite.
-    """
-    x = np.asarray(signals, dtype=float)
-    if x.ndim != 3 or x.shape[1] != N_BRIDGES:
-        raise ValueError(f"signals must have shape (W, {N_BRIDGES}, T), got {x.shape}")
-    t = np.asarray(temp_c, dtype=float)
-    if t.shape != (x.shape[0],) or not np.all(np.isfinite(t)):
-        raise ValueError(f"temp_c must be {x.shape[0]} finite values (one per window), "
-                         f"got shape {t.shape}")
-    zero, span = _vector(zero_mvv_per_k, "zero_mvv_per_k"), _vector(span_per_k, "span_per_k")
-    if not np.isfinite(ref_c):
-        raise ValueError(f"ref_c must be finite, got {ref_c}")
-    d = (t - ref_c)[:, None, None]  # (W, 1, 1)
-    return (1.0 + span[None, :, None] * d) * x + zero[None, :, None] * d
 
 
 #: Faults of :class:`TemperatureSensor` (its docstring).

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 from physics_reference import cracked as crack_copy
-from physics_reference import solve_displacements
+from physics_reference import solve_displacements, wg_displacement
 
 from swgsim.gear import influence as inf
 from swgsim.gear.flexspline import INNER, FlexsplineGeometry, Mesh, TrussModel
@@ -143,7 +143,7 @@ def _naive_signals(solver, lay, psi, torque, w0, model=None, c=None):
          + inf.contact_window(theta[None, :] - psi[:, None] - np.pi, hw)) * c
     f = (m.unit_tooth_loads(solver.alpha) @ (w / w.sum(1, keepdims=True)).T) * torque
     up = np.zeros((m.prescribed.size, psi.size))
-    up[np.searchsorted(m.prescribed, m.wg_dofs)] = m.wg_displacement(psi, w0).T
+    up[np.searchsorted(m.prescribed, m.wg_dofs)] = wg_displacement(m, psi, w0).T
     return rows @ solve_displacements(m, np.asarray(f), up)
 
 
@@ -192,8 +192,8 @@ def test_woodbury_root_crack_matches_refactorised_solver(solver):
         th[None, :] - psi[:, None] - np.pi, hw)
     f = (cracked.unit_tooth_loads(solver.alpha) @ (w / w.sum(1, keepdims=True)).T) * torque
     up = np.zeros((cracked.prescribed.size, psi.size))
-    up[np.searchsorted(cracked.prescribed, cracked.wg_dofs)] = cracked.wg_displacement(
-        psi, 0.254e-3).T
+    up[np.searchsorted(cracked.prescribed, cracked.wg_dofs)] = wg_displacement(
+        cracked, psi, 0.254e-3).T
     k_fp = cracked.K[cracked.free][:, cracked.prescribed]
     u = np.zeros((cracked.n_dof, psi.size))
     u[cracked.free] = cracked_lu.solve(np.asarray(f)[cracked.free] - k_fp @ up)

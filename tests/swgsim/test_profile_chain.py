@@ -8,6 +8,7 @@ Tolerances are set near the accuracy reached, each stated with its measured valu
 
 import numpy as np
 import pytest
+from physics_reference import signals_from_motion
 
 from swgsim.gear import dynamics as dy
 from swgsim.gear import profile as pf
@@ -90,7 +91,7 @@ def test_overhauling_torque_passes_signed(chain, healthy):
     prof = pf.Profile(pf.SpeedProfile(N_IN, (pf.Hold(0.02),)), pf.LoadSteps(-20.0))
     sig, res = chain.simulate_profile([healthy], prof)
     assert res.t_out.max() < 0
-    np.testing.assert_array_equal(sig[0], chain.signals_from_motion(healthy, res.psi[0],
+    np.testing.assert_array_equal(sig[0], signals_from_motion(chain, healthy, res.psi[0],
                                                                      res.t_out[0]))
 
 
@@ -128,11 +129,11 @@ def test_misplacement_at_varying_speed_is_the_signal_at_psi_minus_delta(chain, h
                                                pf.Hold(0.005))), pf.ConstantLoad(T_OUT))
     _, res = chain.simulate_profile([healthy], prof)
     zero, lead = np.zeros(res.time.size), 50
-    kin = chain.signals_from_motion(healthy, res.psi[0], zero)[None]
+    kin = signals_from_motion(chain, healthy, res.psi[0], zero)[None]
     delta = np.deg2rad(EFFECTS["gauge_misplacement"]["delta_deg"])
     eff = [{"name": "gauge_misplacement", "params": EFFECTS["gauge_misplacement"]}]
     got = ms.apply_sensor_effects(kin, res.time, None, eff, n_lead=lead, psi=res.psi)
-    exact = np.stack([chain.signals_from_motion(healthy, res.psi[0] - d, zero)[c]
+    exact = np.stack([signals_from_motion(chain, healthy, res.psi[0] - d, zero)[c]
                       for c, d in enumerate(delta)])[None, :, lead:]
     err = np.abs(got - exact)[..., :-lead].max()
     assert err < 2e-5
