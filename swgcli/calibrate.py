@@ -18,11 +18,8 @@ Examples
 
 from __future__ import annotations
 
-import collections.abc
 import dataclasses
 import logging
-import types
-import typing
 from dataclasses import field
 from pathlib import Path
 from typing import Any
@@ -42,54 +39,10 @@ from swgcal import (
     write_outputs,
 )
 from swgcli.app import hydra_app
+from swgsim.base.typed import schema_of
 from swgsim.files import ownership
 
 log = logging.getLogger(__name__)
-
-
-def _omegaconf_type(tp: Any) -> Any:
-    """The structured-config type of a library field type (tuples and sequences become
-    lists, ``X | None`` becomes ``Optional[X]``)."""
-    args = typing.get_args(tp)
-    origin = typing.get_origin(tp)
-    if origin in (types.UnionType, typing.Union) and type(None) in args:
-        (inner,) = [a for a in args if a is not type(None)]
-        return typing.Optional[_omegaconf_type(inner)]  # noqa: UP045 (OmegaConf needs it)
-    if origin in (tuple, list, collections.abc.Sequence):
-        return list[args[0]] if args else list
-    return tp
-
-
-def schema_of(cls: type, name: str | None = None) -> type:
-    """The app schema of a library option dataclass: the same keys, types and defaults
-    (the library's, written once), nested dataclasses included.
-
-    Parameters
-    ----------
-    cls : dataclass type
-        E.g. :class:`swgcal.SelectionConfig`.
-    name : str, optional
-        Name of the schema class (default: the library class's).
-
-    Returns
-    -------
-    dataclass type
-        Usable as a Hydra structured config.
-    """
-    hints = typing.get_type_hints(cls)
-    out = []
-    for f in dataclasses.fields(cls):
-        if f.default_factory is not dataclasses.MISSING:
-            sub = schema_of(type(f.default_factory()))
-            out.append((f.name, sub, field(default_factory=sub)))
-        elif isinstance(f.default, tuple):
-            out.append((f.name, _omegaconf_type(hints[f.name]),
-                        field(default_factory=lambda d=f.default: list(d))))
-        else:
-            out.append((f.name, _omegaconf_type(hints[f.name]), field(default=f.default)))
-    schema = dataclasses.make_dataclass(name or cls.__name__, out)
-    schema.__doc__ = f"App keys of :class:`{cls.__module__}.{cls.__qualname__}`."
-    return schema
 
 
 def kind_option_fields() -> list[tuple[str, Any, Any]]:

@@ -8,7 +8,8 @@ A config travels as a dataclass; plain data (YAML, JSON, a notebook's dict) ente
 it), checked with the keys and, by :func:`check_ranges` in ``__post_init__``, on
 construction, in one line naming the full key, the range and the value, e.g.
 ``selection.max_rel_se must lie in (0, inf), got -1`` (:func:`check_range`'s words).
-:func:`plain` is the way back from a typed config to plain data. :func:`check_finite`
+:func:`plain` is the way back from a typed config to plain data, :func:`schema_of` the
+way to an app's Hydra structured config. :func:`check_finite`
 refuses NaN and infinity anywhere in a config tree: every comparison with NaN is false,
 so NaN passes a range check written ``if v < lo or v > hi: raise``, and any key that has
 no range check.
@@ -39,7 +40,8 @@ from typing import Any, Union
 import numpy as np
 
 __all__ = ["MISSING", "NONFINITE", "RANGE", "Range", "allowed", "build", "check_finite",
-           "check_keys", "check_range", "check_ranges", "check_tree", "complete", "plain"]
+           "check_keys", "check_range", "check_ranges", "check_tree", "complete", "plain",
+           "schema_of"]
 
 MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
 
@@ -571,3 +573,50 @@ def check_tree(obj: Any, where: str) -> None:
     """
     check_finite(obj, where)
     _check_parts(obj, where)
+
+
+def _structured_type(tp: Any) -> Any:
+    """The structured-config type of a library field type (tuples and sequences become
+    lists, ``X | None`` becomes ``Optional[X]``)."""
+    args = typing.get_args(tp)
+    origin = typing.get_origin(tp)
+    if origin in (types.UnionType, typing.Union) and type(None) in args:
+        (inner,) = [a for a in args if a is not type(None)]
+        return typing.Optional[_structured_type(inner)]  # noqa: UP045 (OmegaConf needs it)
+    if origin in (tuple, list, collections.abc.Sequence):
+        return list[args[0]] if args else list
+    return tp
+
+
+def schema_of(cls: type, name: str | None = None) -> type:
+    """The app schema of a library option dataclass: the same keys, types and defaults
+    (the library's, written once), nested dataclasses included; the way from a typed
+    config to a Hydra structured config, as :func:`plain` is the way to plain data.
+
+    Parameters
+    ----------
+    cls : dataclass type
+        E.g. :class:`swgcal.SelectionConfig`.
+    name : str, optional
+        Name of the schema class (default: the library class's).
+
+    Returns
+    -------
+    dataclass type
+        Usable as a Hydra structured config.
+    """
+    hints = typing.get_type_hints(cls)
+    out = []
+    for f in dataclasses.fields(cls):
+        if f.default_factory is not dataclasses.MISSING:
+            sub = schema_of(type(f.default_factory()))
+            out.append((f.name, sub, dataclasses.field(default_factory=sub)))
+        elif isinstance(f.default, tuple):
+            out.append((f.name, _structured_type(hints[f.name]),
+                        dataclasses.field(default_factory=lambda d=f.default: list(d))))
+        else:
+            out.append((f.name, _structured_type(hints[f.name]),
+                        dataclasses.field(default=f.default)))
+    schema = dataclasses.make_dataclass(name or cls.__name__, out)
+    schema.__doc__ = f"App keys of :class:`{cls.__module__}.{cls.__qualname__}`."
+    return schema
