@@ -396,18 +396,32 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
             Conditions.concat(conds))
 
 
+def _benign(al: Alarm, cond: ConditionsConfig | None) -> bool:
+    """Whether the life itself holds what an alarm names: a re-greasing at or before an
+    alarm named an unexplained change, a temperature sensor failed at or before one named
+    it. Any other alarm after a fault's onset is that fault's detection, named right or
+    not (an unexplained change the life holds no re-greasing for is the fault's alarm)."""
+    if cond is None:
+        return False
+    if al.fault == UNEXPLAINED_CHANGE:
+        return cond.regrease is not None and min(cond.regrease.hours) <= al.hour
+    sensor = cond.temperature_sensor
+    return (al.fault == TEMPERATURE_SENSOR and sensor is not None and sensor.fault != "none"
+            and sensor.fault_hour <= al.hour)
+
+
 def _past_changes(mon: GearMonitor, sim: LifeSimulator, k0: int, life: tuple, lost: bool):
     """The monitor and a fault life's trace (with its windows, :func:`_fault_life`) from
-    its first alarm that changes nothing of the monitor's state: after an unexplained
-    change the monitor goes on from the friction's new level, after the temperature
-    sensor's fault without the reading, as :func:`learn.monitor.stream.run_stream` does
-    (a re-greasing's or a failing sensor's alarm before the fault shows is not its
-    detection)."""
+    its first alarm that is not the fault's (:func:`_benign`: a re-greasing's or a failed
+    temperature sensor's alarm, named so, is not the fault's detection): after such an
+    unexplained change the monitor goes on from the friction's new level, after the
+    temperature sensor's fault without the reading, as
+    :func:`learn.monitor.stream.run_stream` does."""
     k, tr = k0, life[0]
     while tr.alarms:
         a = tr.alarms[0]
         al = mon.diagnose(tr, a, *life[1:3], life[4])
-        if al.fault not in (UNEXPLAINED_CHANGE, TEMPERATURE_SENSOR) or a + 1 >= len(tr.hour) \
+        if not _benign(al, sim.life.conditions) or a + 1 >= len(tr.hour) \
                 or (al.fault == TEMPERATURE_SENSOR and lost):
             break
         fr, hour = tr.state(a)

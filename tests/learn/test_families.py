@@ -10,7 +10,7 @@ import dataclasses
 
 import pytest
 
-from learn.monitor.evaluate import maintenance_log
+from learn.monitor.evaluate import _benign, maintenance_log
 from learn.monitor.families import (
     RANGES,
     SENSOR_STATES,
@@ -19,6 +19,8 @@ from learn.monitor.families import (
     default_families,
     draw_conditions,
 )
+from learn.monitor.rule import Alarm
+from learn.monitor.sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
 from learn.monitor.study import MonitorStudyConfig, life_conditions
 from swgsim.base.typed import check_tree
 from swgsim.gear.thermal import FRICTION_FORMS
@@ -188,6 +190,32 @@ def test_only_a_logged_family_hands_its_regreasing_to_the_monitor():
             [(cond.regrease.hours[0], "regrease")] if logged else [])
     assert maintenance_log(cfg, "none", None) == []
 
+
+
+def _alarm(fault: str, hour: float) -> Alarm:
+    return Alarm(hour, 0, 0, fault, fault, 0.0, 0.0, 0.0)
+
+
+def test_a_fault_life_passes_only_the_alarms_its_own_benign_events_explain():
+    """learn.monitor.evaluate._benign: after a fault's onset an alarm is that fault's
+    detection unless the life holds what it names - a re-greasing at or before an
+    unexplained change, a temperature sensor failed at or before an alarm naming it. An
+    unexplained change in a life with no re-greasing (reduced damping under a warm-up,
+    read as an even friction change) is the fault's alarm, named wrong, not passed by."""
+    cfg = MonitorStudyConfig(families={k: FAMILIES[k] for k in ("regrease", "sensor_stuck")})
+    greased = life_conditions(cfg, "family:regrease", 3)
+    h = greased.regrease.hours[0]
+    assert _benign(_alarm(UNEXPLAINED_CHANGE, h + 0.5), greased)
+    assert not _benign(_alarm(UNEXPLAINED_CHANGE, h - 0.5), greased)
+    assert not _benign(_alarm("reduced_damping", h + 0.5), greased)
+    stuck = life_conditions(cfg, "family:sensor_stuck", 3)
+    f = stuck.temperature_sensor.fault_hour
+    assert _benign(_alarm(TEMPERATURE_SENSOR, f + 0.5), stuck)
+    assert not _benign(_alarm(TEMPERATURE_SENSOR, f - 0.5), stuck)
+    plain = life_conditions(cfg, "warm_up", 3)
+    for fault in (UNEXPLAINED_CHANGE, TEMPERATURE_SENSOR):
+        assert not _benign(_alarm(fault, 100.0), plain)
+        assert not _benign(_alarm(fault, 100.0), None)
 
 def _day_csv(path):
     """A measured warm-up in the UR3 CobotOps format: two joints warming 0.2 and 0.3 K a
