@@ -49,8 +49,8 @@ from .sensor_check import (
     SENSOR_P_MIN,
     TEMPERATURE_SENSOR,
     UNEXPLAINED_CHANGE,
+    fit_bridge_faults,
     fit_friction,
-    fit_sensor_faults,
     fit_temperature,
     fit_temperature_drift,
     moved_features,
@@ -644,9 +644,10 @@ class GearMonitor:
         def median_p(zz: np.ndarray) -> float:
             return float(np.median(self.p_values(self._scores_of(zz, points)[0], opi, u)))
 
-        fits = [f for f in fit_sensor_faults(z, b.mean[opi], spread)
-                if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
         fr = np.broadcast_to(friction, (len(z),))
+        fits = [f for f in fit_bridge_faults(b, feats, points, cond, fr, opi, z, spread,
+                                                 hours)
+                if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
         read = cond is not None and not self.reading_virtual
         hot = fit_temperature(b, feats, points, cond, fr, opi) if read else None
         drift = fit_temperature_drift(b, feats, points, cond, fr, opi, hours) if read else None

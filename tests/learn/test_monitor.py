@@ -321,6 +321,36 @@ def test_one_bridge_fits_recover_planted_sensor_faults():
         fit_sensor_faults(z[:, :-1], mean, std)
 
 
+
+def test_a_drifting_gain_is_fitted_with_its_rate():
+    """sensor_check.fit_sensor_faults with hours: a gain on s1 falling 0.01 an hour over
+    two hours of windows comes back with its level at the last window and its rate, and
+    leaves noise behind on s1's features; one level leaves the ramp there.
+    The threshold of a level and a rate is the χ²₂ quantile 0.999."""
+    from scipy.stats import chi2
+
+    from learn.monitor.sensor_check import BLOCK, FIT_MIN_GAIN_RATE, fit_sensor_faults
+
+    assert FIT_MIN_GAIN_RATE == pytest.approx(chi2.ppf(0.999, 2), rel=1e-12)
+    rng = np.random.default_rng(1)
+    n, f = 120, 5 * BLOCK + 1
+    hours = np.linspace(50.0, 52.0, n)
+    mean = np.tile(rng.uniform(0.5, 2.0, f), (n, 1))
+    std = np.tile(rng.uniform(0.01, 0.02, f), (n, 1))
+    noise = rng.normal(size=(n, f))
+    z = noise.copy()
+    cols = slice(BLOCK, 2 * BLOCK - 1)
+    loss = 0.01 * (hours - hours[0])  # 1 - g: 0 to 0.02
+    z[:, cols] += -loss[:, None] * mean[:, cols] / std[:, cols]
+    drift = {(x.fault, x.bridge): x for x in fit_sensor_faults(z, mean, std, hours)}
+    level = {(x.fault, x.bridge): x for x in fit_sensor_faults(z, mean, std)}
+    fit, one = drift[("sensor_gain_drift", 1)], level[("sensor_gain_drift", 1)]
+    assert fit.severity == pytest.approx(0.02, abs=5e-4)
+    assert fit.rate_per_h == pytest.approx(0.01, abs=5e-4)
+    assert fit.plausible() and one.rate_per_h is None
+    rest = [np.sum(x[:, cols] ** 2) for x in (fit.z, noise, one.z)]  # s1's features
+    assert rest[0] < 1.05 * rest[1] < rest[2] / 1.25
+
 def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval, tiny_banks):
     """An offset step on s1 alone (whose eccentric WG moves s1 and s3 oppositely) is named
     a sensor fault on s1; an eccentric WG is not explained by one bridge."""

@@ -56,6 +56,9 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "swgsim/gear/dynamics.py": "eq. (1)-(6) and their integrator; the steady and the "
                                "profile integrators are still two (issue 46)",
     "learn/monitor/stream.py": "a stream's input checks, the run and its outputs",
+    "learn/monitor/sensor_check.py": "every hypothesis the naming weighs against a gear fault "
+                                     "(a bridge's fault, the reading's, the friction's): "
+                                     "one family of fits sharing their thresholds",
     "tests/learn/test_monitor.py": "the monitor's tests: to be split by what they hold",
     "tests/swgsim/test_recordings.py": "every table format and bad mapping of a recording",
     "swgsim/base/typed.py": "the one config toolkit: ranges, finiteness, keys, the build, "
