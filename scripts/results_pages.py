@@ -228,8 +228,8 @@ def monitor_real_day(rep: Path) -> str:
                      "gear-fault alarms per 1000 h, gear 1 / 2 / 3":
                          _per_gear(g.gear_fault_per_1000_h),
                      "advisories per 1000 h": _per_gear(g.advisories_per_1000_h),
-                     "sensor-fault alarms of one bridge per 1000 h":
-                         _per_gear(g.sensor_fault_per_1000_h),
+                     "sensor-fault alarms per 1000 h": _per_gear(g.sensor_fault_per_1000_h),
+                     "unexplained changes per 1000 h": _per_gear(g.unexplained_per_1000_h),
                      "gear faults named right 1 h after the alarm":
                          f"{int((d.fault_after_1h == d.fault).sum())} of {len(d)}"})
     step = mon[mon.onset == "step"]

@@ -149,17 +149,28 @@ def smallest_detectable(tab: pd.DataFrame) -> pd.DataFrame:
 def false_alarm_table(fa: pd.DataFrame) -> pd.DataFrame:
     """Alarms per 1000 h of healthy operation per dataset, nuisance, detector and held-out
     gear (all seeds): every alarm (``per_1000_h``), the gear-fault alarms among them, the
-    others (``sensor_fault_per_1000_h``: the monitor named a sensor fault of one bridge)
-    and the advisories ("outside what commissioning saw"), counted apart."""
-    g = with_nuisance(labelled(fa)).groupby(
+    sensor-fault alarms (``sensor_fault_per_1000_h``: the monitor named a sensor fault of
+    one bridge or the temperature sensor), the unexplained changes
+    (``unexplained_per_1000_h``) and the advisories ("outside what commissioning saw"),
+    counted apart. A table from before the monitor named unexplained changes (no
+    ``sensor_fault_alarms`` column) counts every alarm that is not a gear fault's as a
+    sensor fault's, as it was then."""
+    fa = with_nuisance(labelled(fa))
+    if "sensor_fault_alarms" not in fa:
+        fa = fa.assign(sensor_fault_alarms=fa.false_alarms - fa.gear_fault_alarms)
+    fa = fa.assign(sensor_fault_alarms=fa.sensor_fault_alarms.fillna(0),
+                   unexplained_changes=fa.get("unexplained_changes", 0.0))
+    g = fa.assign(unexplained_changes=fa.unexplained_changes.fillna(0)).groupby(
         ["dataset", "nuisance", "detector", "held_out_gear"], sort=False).agg(
         healthy_hours=("healthy_hours", "sum"), false_alarms=("false_alarms", "sum"),
-        gear_fault_alarms=("gear_fault_alarms", "sum"), advisories=("advisories", "sum"))
-    g["per_1000_h"] = g.false_alarms / g.healthy_hours * 1000.0
-    g["gear_fault_per_1000_h"] = g.gear_fault_alarms / g.healthy_hours * 1000.0
-    g["sensor_fault_per_1000_h"] = (g.false_alarms - g.gear_fault_alarms) / g.healthy_hours \
-        * 1000.0
-    g["advisories_per_1000_h"] = g.advisories / g.healthy_hours * 1000.0
+        gear_fault_alarms=("gear_fault_alarms", "sum"), advisories=("advisories", "sum"),
+        sensor_fault_alarms=("sensor_fault_alarms", "sum"),
+        unexplained_changes=("unexplained_changes", "sum"))
+    for col, n in (("per_1000_h", "false_alarms"), ("gear_fault_per_1000_h", "gear_fault_alarms"),
+                   ("sensor_fault_per_1000_h", "sensor_fault_alarms"),
+                   ("unexplained_per_1000_h", "unexplained_changes"),
+                   ("advisories_per_1000_h", "advisories")):
+        g[col] = g[n] / g.healthy_hours * 1000.0
     return g.reset_index()
 
 
@@ -168,8 +179,10 @@ def _real_day_figures(res: pd.DataFrame, fat: pd.DataFrame) -> list[tuple[str, s
     worst held-out gear (:func:`nuisance_table`)."""
     out = [("gear-fault alarms per 1000 h (worst gear)", "0",
             float(fat.gear_fault_per_1000_h.max()) if len(fat) else np.nan),
-           ("alarms naming a sensor fault of one bridge per 1000 h (worst gear)", "0",
+           ("alarms naming a sensor fault per 1000 h (worst gear)", "0",
             float(fat.sensor_fault_per_1000_h.max()) if len(fat) else np.nan),
+           ("unexplained changes per 1000 h (worst gear)", "-",
+            float(fat.unexplained_per_1000_h.max()) if len(fat) else np.nan),
            ("advisories per 1000 h (worst gear)", "-",
             float(fat.advisories_per_1000_h.max()) if len(fat) else np.nan),
            ("healthy hours (all gears and seeds)", "-", float(fat.healthy_hours.sum()))]

@@ -50,6 +50,22 @@ def test_an_older_table_reads_as_stationary_with_every_alarm_a_gear_fault_alarm(
     assert out.gear_fault_alarms.tolist() == [3] and out.advisories.tolist() == [0]
 
 
+
+def test_sensor_faults_and_unexplained_changes_are_counted_apart():
+    """false_alarm_table: of 5 alarms in 100 h, 1 a gear fault's, 1 a sensor fault's and 3
+    unexplained changes: 10, 10 and 30 per 1000 h (an unexplained change is not a sensor
+    fault: the real-day table called both 'sensor-fault alarms' until the rerun at
+    55b9bf7); a table without the kinds counts every other alarm a sensor fault's."""
+    fa = pd.DataFrame({"dataset": ["b"], "detector": ["monitor"], "held_out_gear": [1],
+                       "nuisance": ["all"], "healthy_hours": [100.0], "false_alarms": [5],
+                       "gear_fault_alarms": [1], "sensor_fault_alarms": [1],
+                       "unexplained_changes": [3], "advisories": [0]})
+    row = false_alarm_table(fa).iloc[0]
+    assert (row.gear_fault_per_1000_h, row.sensor_fault_per_1000_h,
+            row.unexplained_per_1000_h) == pytest.approx((10.0, 10.0, 30.0))
+    old = false_alarm_table(fa.drop(columns=["sensor_fault_alarms", "unexplained_changes"]))
+    assert (old.sensor_fault_per_1000_h.item(), old.unexplained_per_1000_h.item()) == (40.0, 0.0)
+
 def test_gear_fault_alarms_and_advisories_are_counted_apart_per_nuisance():
     _, fa = _frames()
     t = false_alarm_table(fa)

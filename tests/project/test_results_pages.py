@@ -28,6 +28,7 @@ def _run(tmp: Path) -> Path:
             bad = n == "hall" and g == 2
             fa.append({**key, "detector": "monitor", "healthy_hours": 200.0,
                        "false_alarms": 2 * int(bad), "gear_fault_alarms": int(bad),
+                       "sensor_fault_alarms": int(bad), "unexplained_changes": 0,
                        "advisories": 2 * int(bad)})
             for sev in (0.05, 0.2):
                 miss = bad and sev == 0.05
@@ -48,8 +49,8 @@ def _run(tmp: Path) -> Path:
 def test_the_monitor_blocks_hold_the_runs_figures(tmp_path):
     rep = _run(tmp_path)
     day = results_pages.monitor_real_day(rep)
-    assert "| bench | hall | 200 | 0 / 5 | 0 / 10 | 0 / 5 | 3 of 3 |" in day
-    assert "| bench | none | 200 | 0 / 0 | 0 / 0 | 0 / 0 | 4 of 4 |" in day
+    assert "| bench | hall | 200 | 0 / 5 | 0 / 10 | 0 / 5 | 0 / 0 | 3 of 3 |" in day
+    assert "| bench | none | 200 | 0 / 0 | 0 / 0 | 0 / 0 | 0 / 0 | 4 of 4 |" in day
     assert "| bench | eccentric WG | 0.05 | 2/2, 12 min | 1/2, 12 min |" in day
     timing = results_pages.monitor_timing(rep)
     assert "Wall time **15.0 min**" in timing
