@@ -158,9 +158,9 @@ def false_alarm_table(fa: pd.DataFrame) -> pd.DataFrame:
     fa = with_nuisance(labelled(fa))
     if "sensor_fault_alarms" not in fa:
         fa = fa.assign(sensor_fault_alarms=fa.false_alarms - fa.gear_fault_alarms)
-    fa = fa.assign(sensor_fault_alarms=fa.sensor_fault_alarms.fillna(0),
-                   unexplained_changes=fa.get("unexplained_changes", 0.0))
-    g = fa.assign(unexplained_changes=fa.unexplained_changes.fillna(0)).groupby(
+    if "unexplained_changes" not in fa:
+        fa = fa.assign(unexplained_changes=0)
+    g = fa.fillna({"sensor_fault_alarms": 0, "unexplained_changes": 0}).groupby(
         ["dataset", "nuisance", "detector", "held_out_gear"], sort=False).agg(
         healthy_hours=("healthy_hours", "sum"), false_alarms=("false_alarms", "sum"),
         gear_fault_alarms=("gear_fault_alarms", "sum"), advisories=("advisories", "sum"),
