@@ -12,13 +12,23 @@ steps then read the same numbers)::
 
     python scripts/bench_nets.py save data/bench bench_nets.npz --input diff --gear 3
 
+``save-monitor``: the same for the monitor's CNN detector (``cnn_res`` of
+:mod:`learn.monitor.detectors`, as ``swgsim-train experiment=monitor`` makes it): its
+training set of one part (:func:`learn.monitor.training.detector_windows` of the gears
+other than the held-out one) and, to score, the same windows of the held-out gear's
+training lives (no data set on disk needed; the records are simulated, minutes)::
+
+    python scripts/bench_nets.py save-monitor bench_cnn_res.npz --dataset bench --gear 3
+
 ``run``: for each net and device, ``--seeds`` models trained one by one
 (:meth:`learn.learners.nets.TorchClassifier.fit`) and at once
 (:func:`learn.learners.stacked.fit_seeds`; ``compiled``: the same with ``torch.compile``,
-its compilation counted); prints seconds per model (fit only; the data
-on the device included) and the held-out gear's accuracy (mean and spread over the
-seeds), and whether each mode's mean accuracy agrees with the first mode's of that net
-within the seed spread (the larger standard deviation of the two, at least one window)::
+its compilation counted); prints seconds per model (fit only; the data on the device
+included), milliseconds per 1000 windows to predict (the held-out windows, as a monitor's
+evaluation labels every window of its lives) and the held-out gear's accuracy (mean and
+spread over the seeds), and whether each mode's mean accuracy agrees with the first
+mode's of that net within the seed spread (the larger standard deviation of the two, at
+least one window)::
 
     python scripts/bench_nets.py run bench_nets.npz --devices cpu cuda --json out.json
 
@@ -39,6 +49,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 NETS = ("cnn", "mlp_torch")
+#: The monitor's torch detector (``save-monitor``).
+DETECTOR = "cnn_res"
 
 
 def _args(argv=None) -> argparse.Namespace:
@@ -50,9 +62,17 @@ def _args(argv=None) -> argparse.Namespace:
     s.add_argument("--input", default="diff", help="input kind (learn.inputs.signals)")
     s.add_argument("--gear", type=int, default=3, help="held-out gear")
     s.add_argument("overrides", nargs="*", help="Hydra overrides of swgsim-train")
+    m = sub.add_parser("save-monitor", help="write the monitor's CNN detector and one "
+                       "part's windows to an .npz")
+    m.add_argument("out", help="the .npz to write")
+    m.add_argument("--dataset", default="bench", help="data set of the evaluation")
+    m.add_argument("--gear", type=int, default=3, help="held-out gear")
+    m.add_argument("--seed", type=int, default=0, help="the part's seed (class balance)")
+    m.add_argument("overrides", nargs="*", help="Hydra overrides of swgsim-train")
     r = sub.add_parser("run", help="time the nets of an .npz written by save")
     r.add_argument("file", help="the .npz of save")
-    r.add_argument("--nets", nargs="*", default=list(NETS), choices=NETS)
+    r.add_argument("--nets", nargs="*", default=None, choices=[*NETS, DETECTOR],
+                   help="default: every net in the file")
     r.add_argument("--devices", nargs="*", default=["cpu"], help="cpu, cuda, cuda:N")
     r.add_argument("--modes", nargs="*", default=["one", "stacked"],
                    choices=["one", "stacked", "compiled"],
@@ -94,6 +114,36 @@ def save(a: argparse.Namespace) -> None:
           f"shape {inp.X.shape[1:]}, nets {list(nets)}")
 
 
+def save_monitor(a: argparse.Namespace) -> None:
+    """The ``save-monitor`` step (module docstring)."""
+    from learn.monitor.detectors import DETECTORS
+    from learn.monitor.evaluate import banks_of
+    from learn.monitor.training import detector_windows
+    from learn.tasks.config import typed_app
+    from swgcli import compose_app
+
+    mc = typed_app(compose_app("train", ["experiment=monitor", *a.overrides])).monitor
+    plan = mc.plans("monitor").get(a.dataset)
+    if plan is None:
+        raise SystemExit(f"--dataset: {a.dataset} is not in monitor.run_on {mc.run_on}")
+    gears = [int(x.id) for x in plan.config.gears]
+    if a.gear not in gears:
+        raise SystemExit(f"--gear: {a.gear} is not a gear of {a.dataset} {gears}")
+    kind = DETECTORS[DETECTOR].input
+    banks = banks_of(plan)
+    x, y = detector_windows(plan, banks, [g for g in gears if g != a.gear], mc.study, {kind},
+                            a.seed)
+    xt, yt = detector_windows(plan, banks, [a.gear], mc.study, {kind}, a.seed)
+    est = DETECTORS[DETECTOR].make(a.seed, "cpu")[-1]
+    nets = {DETECTOR: {"class": type(est).__name__, "params": est.get_params(deep=False)}}
+    np.savez_compressed(
+        a.out, X_train=x[kind].astype(np.float16), y_train=y,
+        X_test=xt[kind].astype(np.float16), y_test=yt,
+        about=json.dumps({"data": a.dataset, "input": kind, "gear": a.gear, "nets": nets}))
+    print(f"{a.out}: {len(y)} training and {len(yt)} test windows of shape "
+          f"{x[kind].shape[1:]}, net {DETECTOR}")
+
+
 def _timed(fn) -> float:
     import torch
 
@@ -119,9 +169,12 @@ def _one_row(est, data, mode: str, seeds: list[int]) -> dict:
     else:
         seconds = _timed(lambda: models.extend(
             fit_seeds(est, X, y, seeds, compile=mode == "compiled")))
-    acc = np.array([np.mean(m.predict(X_test) == y_test) for m in models])
+    pred = []
+    predict_s = _timed(lambda: pred.extend(m.predict(X_test) for m in models))
+    acc = np.array([np.mean(p == y_test) for p in pred])
     return {"device": models[0].device_.type, "mode": mode,
             "precision": models[0].precision_, "s_per_model": seconds / len(seeds),
+            "predict_ms_per_1000": 1e6 * predict_s / (len(models) * len(y_test)),
             "accuracy_mean": float(acc.mean()), "accuracy_sd": float(acc.std(ddof=1)),
             "accuracy": acc.tolist()}
 
@@ -147,8 +200,8 @@ def run(a: argparse.Namespace) -> dict:
           f"threads of {os.cpu_count()} cores")
     rows = []
     print(f"{'net':<10s} {'device':<26s} {'mode':<8s} {'arith':<9s} {'s/model':>8s} "
-          f"{'accuracy %':>14s}  agrees")
-    for name in a.nets:
+          f"{'ms/1000':>8s} {'accuracy %':>14s}  agrees")
+    for name in a.nets or list(about["nets"]):
         spec = about["nets"][name]
         first = None
         for device in a.devices:
@@ -163,7 +216,8 @@ def run(a: argparse.Namespace) -> dict:
                 r["agrees"] = bool(abs(r["accuracy_mean"] - first["accuracy_mean"]) <= spread)
                 rows.append(r)
                 print(f"{name:<10s} {r['device'][:26]:<26s} {mode:<8s} {r['precision']:<9s} "
-                      f"{r['s_per_model']:8.2f} {100 * r['accuracy_mean']:7.2f} "
+                      f"{r['s_per_model']:8.2f} {r['predict_ms_per_1000']:8.1f} "
+                      f"{100 * r['accuracy_mean']:7.2f} "
                       f"± {100 * r['accuracy_sd']:4.2f}  {'yes' if r['agrees'] else 'NO'}")
     result = {"about": {k: v for k, v in about.items() if k != "nets"}, "seeds": seeds,
               "threads": torch.get_num_threads(), "cores": os.cpu_count(),
@@ -175,7 +229,7 @@ def run(a: argparse.Namespace) -> dict:
 
 def main(argv=None):
     a = _args(argv)
-    return save(a) if a.step == "save" else run(a)
+    return {"save": save, "save-monitor": save_monitor, "run": run}[a.step](a)
 
 
 if __name__ == "__main__":

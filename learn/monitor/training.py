@@ -174,16 +174,20 @@ def _inputs(sim: LifeSimulator, start: int, stop: int, refs: References, kinds: 
     return {k: np.concatenate(v) for k, v in out.items()}
 
 
-def train_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
-                    cfg: MonitorStudyConfig, names: list[str], seed: int = 0,
-                    device: str = "cpu") -> list[WindowClassifier]:
-    """The per-window detectors ``names`` (keys of
-    :data:`learn.monitor.detectors.DETECTORS`) trained on the windows the diagnosis model
-    is trained on (:func:`train_model`), each against its gear's references, as many of
-    each class (:func:`_balanced`); a torch net on ``device`` (resolved)."""
-    if not names:
-        return []
-    kinds = {DETECTORS[b].input for b in names}
+def detector_windows(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
+                     cfg: MonitorStudyConfig, kinds: set[str], seed: int = 0
+                     ) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The per-window detectors' training set: the windows the diagnosis model is trained
+    on (:func:`train_model`) as inputs ``kinds`` (of :func:`learn.inputs.signals.build_input`),
+    each against its gear's references, as many of each class (:func:`_balanced`).
+
+    Returns
+    -------
+    x : dict of ndarray, float32
+        Per input kind, (n, F) or (n, C, T).
+    y : ndarray of str, shape (n,)
+        Class names.
+    """
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     xs: dict[str, list] = {k: [] for k in kinds}
     ys = []
@@ -197,8 +201,21 @@ def train_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list
             ys.append(np.full(len(x[next(iter(kinds))]), c, object))
     y = np.concatenate(ys).astype(str)
     keep = _balanced(y, seed)
-    return [fit_detector(b, np.concatenate(xs[DETECTORS[b].input])[keep], y[keep],
-                         classes(plan, cfg), seed, device) for b in names]
+    return {k: np.concatenate(v)[keep] for k, v in xs.items()}, y[keep]
+
+
+def train_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
+                    cfg: MonitorStudyConfig, names: list[str], seed: int = 0,
+                    device: str = "cpu") -> list[WindowClassifier]:
+    """The per-window detectors ``names`` (keys of
+    :data:`learn.monitor.detectors.DETECTORS`) trained on :func:`detector_windows`; a
+    torch net on ``device`` (resolved)."""
+    if not names:
+        return []
+    x, y = detector_windows(plan, banks, gears, cfg, {DETECTORS[b].input for b in names},
+                            seed)
+    return [fit_detector(b, x[DETECTORS[b].input], y, classes(plan, cfg), seed, device)
+            for b in names]
 
 
 def _balanced(y: np.ndarray, seed: int) -> np.ndarray:
@@ -212,5 +229,6 @@ def _balanced(y: np.ndarray, seed: int) -> np.ndarray:
                                    for c in names]))
 
 
-__all__ = ["classes", "features_of", "has_twist", "life_features", "table_v_severities",
-           "train_detectors", "train_model", "train_severities", "training_lives"]
+__all__ = ["classes", "detector_windows", "features_of", "has_twist", "life_features",
+           "table_v_severities", "train_detectors", "train_model", "train_severities",
+           "training_lives"]

@@ -210,6 +210,21 @@ def test_per_window_detectors_beside_the_monitor(tiny_eval, tiny_banks, monkeypa
         assert (det.time_to_detect_h >= 0).all()
 
 
+def test_the_detectors_training_set_holds_every_class_alike(tiny_banks):
+    """detector_windows: every input kind asked for, one row per window, as many windows of
+    each class the diagnosis model knows (the paper's balanced data set)."""
+    from learn.monitor.study import MonitorStudyConfig
+    from learn.monitor.training import classes, detector_windows
+
+    p, banks = tiny_banks
+    cfg = MonitorStudyConfig(**TINY_STUDY)
+    x, y = detector_windows(p, banks, [1, 2], cfg, {"sel1", "raw_res"})
+    names, counts = np.unique(y, return_counts=True)
+    assert sorted(names) == sorted(classes(p, cfg))
+    assert counts.min() == counts.max() > 0
+    assert len(x["sel1"]) == len(x["raw_res"]) == len(y)
+
+
 def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch):
     """swgsim-monitor on a life written by swgsim-generate (preset tiny_life, gear 3: an
     eccentric WG of severity 0.1 from 6 h on) with the model trained without gear 3."""
