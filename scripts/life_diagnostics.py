@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.monitor.evaluate import healthy_life
+from learn.monitor.evaluate import healthy_life, monitor_healthy
 from learn.monitor.features import feature_names
 from learn.monitor.gear_monitor import GearMonitor, Trace
 from learn.monitor.model_io import CARD_SUFFIX, MODEL_SUFFIX, load_model
@@ -43,11 +43,11 @@ from learn.monitor.normal import (
     OUTSIDE_FRICTION,
     OUTSIDE_LOAD,
     OUTSIDE_TEMPERATURE,
-    Conditions,
 )
+from learn.monitor.rule import Alarm
 from learn.monitor.stream import advisories, recommissionings
 from learn.monitor.study import MonitorStudyConfig
-from learn.monitor.training import features_of, has_twist
+from learn.monitor.training import has_twist
 from swgcli import dataset_preset
 from swgsim.datasets.plan import plan as make_plan
 from swgsim.datasets.records import record_bank
@@ -114,29 +114,15 @@ def trained_on(path: Path, p, dataset: str) -> None:
                          "card; --set overrides count)")
 
 
-def run(model, cfg: MonitorStudyConfig, life, seed: int):
-    """Commission and run the monitor over the life as the evaluation does; the trace,
-    the run's windows (features, points, conditions) and the monitor as commissioned."""
-    f, p, meta = features_of(life, 0, len(life))
-    cond = Conditions.of(meta)
-    n_c = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
-    mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=seed, normal=cfg.normal)
-    mon.commission(f[:n_c], p[:n_c], cond[:n_c])
-    commissioned = mon.fork()
-    w = slice(n_c, None)
-    tr = mon.run(f[w], p[w], meta["hour"][w], cond[w], latch=False)
-    return mon, commissioned, tr, (f[w], p[w], cond[w])
-
-
-def events(mon: GearMonitor, tr: Trace, windows) -> pd.DataFrame:
+def events(mon: GearMonitor, tr: Trace, alarms: list[Alarm], windows) -> pd.DataFrame:
     """Alarms, advisories and recommissionings of a run, in time order."""
-    f, pts, c = windows
+    pts = windows[1]
     rows = []
-    for a in tr.alarms:
-        al = mon.diagnose(tr, a, f, pts, c)
+    for al in alarms:
         kind = al.kind.replace("_", "-") + " alarm"
         what = al.fault if al.bridge is None else f"{al.fault} on {al.bridge}"
-        rows.append((al.hour, kind, f"{what}, severity {al.severity:.3g}", pts[a]))
+        sev = f", severity {al.severity:.3g}" if np.isfinite(al.severity) else ""
+        rows.append((al.hour, kind, what + sev, pts[al.index]))
     rows += [(x["hour"], "advisory", x["condition"], x["operating_point"])
              for x in advisories(tr, mon)]
     rows += [(x["hour"], "recommissioned", "relearnt" if x["relearnt"] else "range grew",
@@ -192,12 +178,13 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, ValueError) as e:
         print(f"life_diagnostics: {e}", file=sys.stderr)
         return 2
-    mon, commissioned, tr, windows = run(model, cfg, life, args.seed)
+    commissioned, mon, tr, alarms, windows = monitor_healthy(model, cfg, life, args.seed,
+                                                             args.nuisance)
     hours = float(tr.hour[-1] - tr.hour[0]) if len(tr.hour) else 0.0
     print(f"{args.dataset} gear {args.gear}, seed {args.seed}, nuisance {args.nuisance}: "
           f"{len(tr.hour)} windows after commissioning ({hours:.0f} h), threshold "
           f"h = {mon.h:.2f}")
-    ev = events(mon, tr, windows)
+    ev = events(mon, tr, alarms, windows)
     with pd.option_context("display.width", 200, "display.max_colwidth", 90,
                            "display.max_rows", 500, "display.float_format", "{:.3f}".format):
         print(f"\n{len(ev)} events" + (":\n" + ev.to_string(index=False) if len(ev) else ""))

@@ -176,6 +176,52 @@ def maintenance_log(cfg: MonitorStudyConfig, life: str, cond: ConditionsConfig |
     return [MaintenanceEvent(float(h), "regrease") for h in cond.regrease.hours]
 
 
+def monitor_healthy(model: DiagnosisModel, cfg: MonitorStudyConfig, life: LifeSimulator,
+                    seed: int, nuisance: str = "none"
+                    ) -> tuple[GearMonitor, GearMonitor, Trace, list[Alarm], tuple]:
+    """The monitor on a healthy life as the evaluation counts its false alarms: the life's
+    maintenance log declared (:func:`maintenance_log`), commissioned on its first
+    ``commissioning_h``, then run over the rest by :func:`~learn.monitor.stream.run_stream`
+    (watching on after every alarm, without the temperature sensor where it fails, an
+    unexplained change adopted).
+
+    Parameters
+    ----------
+    model : DiagnosisModel
+    cfg : MonitorStudyConfig
+    life : LifeSimulator
+        A healthy life (:func:`healthy_life`).
+    seed : int
+        The monitor's seed (the life's).
+    nuisance : str
+        The life's nuisance, for its maintenance log.
+
+    Returns
+    -------
+    commissioned : GearMonitor
+        As commissioned (a fork, untouched by the run).
+    monitor : GearMonitor
+        The monitor that ran (its advisories and recommissionings).
+    trace : Trace
+        Every window after commissioning.
+    alarms : list of Alarm
+        Every alarm, named.
+    windows : tuple
+        Features (n, F), operating points (n, 2) and :class:`Conditions` of the windows
+        after commissioning.
+    """
+    n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
+    f, p, meta = features_of(life, 0, len(life))
+    cond = Conditions.of(meta)
+    mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed), normal=cfg.normal)
+    mon.declare(maintenance_log(cfg, nuisance, life.life.conditions))
+    mon.commission(f[:n_comm], p[:n_comm], cond[:n_comm])
+    commissioned = mon.fork()
+    f, p, c = f[n_comm:], p[n_comm:], cond[n_comm:]
+    tr, named, _ = run_stream(mon, f, p, meta["hour"][n_comm:], c)
+    return commissioned, mon, tr, named, (f, p, c)
+
+
 def _key(plan: DatasetPlan, dataset: str, g: int, seed: int, nuisance: str) -> dict:
     """The columns that name a life's data set, gear, seed and nuisance in every table."""
     return {"dataset": plan.config.name if plan.profile is not None else dataset,
@@ -206,14 +252,8 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
         seeds = cfg.scored_seeds if family_of(nuisance) is not None else cfg.seeds
     for seed in seeds:
         healthy, sims = _lives(plan, banks, g, cfg, seed, nuisance)
-        f, p, meta = features_of(healthy, 0, len(healthy))
-        cond = Conditions.of(meta)
-        mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed), normal=cfg.normal)
-        mon.declare(maintenance_log(cfg, nuisance, healthy.life.conditions))
-        mon.commission(f[:n_comm], p[:n_comm], cond[:n_comm])
-        commissioned = mon.fork()
-        f, p, c = f[n_comm:], p[n_comm:], cond[n_comm:]
-        tr, named, _ = run_stream(mon, f, p, meta["hour"][n_comm:], c)
+        commissioned, mon, tr, named, (f, p, c) = monitor_healthy(model, cfg, healthy, seed,
+                                                                  nuisance)
         lost_h = next((a.hour for a in named if a.fault == TEMPERATURE_SENSOR), None)
         key = _key(plan, dataset, g, seed, nuisance)
         hours_h = float(healthy.life.hours - cfg.commissioning_h)
@@ -562,5 +602,5 @@ def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFra
 
 
 __all__ = ["COMPARED", "CURVE_DESIGN_HOURS", "banks_of", "evaluate_detectors", "evaluate_gear",
-           "fault_lives", "healthy_life", "nuisance_fault_lives", "run_detectors", "run_held_out",
-           "to_frames"]
+           "fault_lives", "healthy_life", "monitor_healthy", "nuisance_fault_lives",
+           "run_detectors", "run_held_out", "to_frames"]
