@@ -179,36 +179,21 @@ def maintenance_log(cfg: MonitorStudyConfig, life: str, cond: ConditionsConfig |
 def monitor_healthy(model: DiagnosisModel, cfg: MonitorStudyConfig, life: LifeSimulator,
                     seed: int, nuisance: str = "none"
                     ) -> tuple[GearMonitor, GearMonitor, Trace, list[Alarm], tuple]:
-    """The monitor on a healthy life as the evaluation counts its false alarms: the life's
-    maintenance log declared (:func:`maintenance_log`), commissioned on its first
-    ``commissioning_h``, then run over the rest by :func:`~learn.monitor.stream.run_stream`
-    (watching on after every alarm, without the temperature sensor where it fails, an
-    unexplained change adopted).
-
-    Parameters
-    ----------
-    model : DiagnosisModel
-    cfg : MonitorStudyConfig
-    life : LifeSimulator
-        A healthy life (:func:`healthy_life`).
-    seed : int
-        The monitor's seed (the life's).
-    nuisance : str
-        The life's nuisance, for its maintenance log.
+    """The monitor on a healthy ``life`` (:func:`healthy_life`) as the evaluation counts
+    its false alarms: the life's maintenance log (``nuisance``'s) declared, commissioned on
+    its first ``commissioning_h``, then run over the rest by
+    :func:`~learn.monitor.stream.run_stream`; ``seed`` the monitor's (the life's).
 
     Returns
     -------
-    commissioned : GearMonitor
-        As commissioned (a fork, untouched by the run).
-    monitor : GearMonitor
-        The monitor that ran (its advisories and recommissionings).
+    commissioned, monitor : GearMonitor
+        As commissioned (a fork the run leaves alone), and the one that ran.
     trace : Trace
         Every window after commissioning.
     alarms : list of Alarm
         Every alarm, named.
     windows : tuple
-        Features (n, F), operating points (n, 2) and :class:`Conditions` of the windows
-        after commissioning.
+        Features (n, F), operating points (n, 2) and :class:`Conditions` of those windows.
     """
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     f, p, meta = features_of(life, 0, len(life))
