@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure
 
 from .gear_monitor import Trace
 from .rule import Alarm
@@ -66,8 +66,7 @@ def health_figure(trace: Trace, threshold: float, alarms: list[Alarm], onset_h: 
                                    if onset_h is not None else "")
     a1.set_title(title, fontsize=9)
     fig.tight_layout()
-    write_owned(path, lambda tmp: fig.savefig(tmp, format="png", dpi=130))
-    plt.close(fig)
+    save_figure(fig, path, 130)
 
 
 def prognosis_figure(prog: StreamPrognoses, path: Path) -> None:
@@ -96,5 +95,4 @@ def prognosis_figure(prog: StreamPrognoses, path: Path) -> None:
         ax.legend(fontsize=7, loc="upper left")
     axes[-1, 0].set_xlabel("operating hours")
     fig.tight_layout()
-    write_owned(path, lambda tmp: fig.savefig(tmp, format="png", dpi=130))
-    plt.close(fig)
+    save_figure(fig, path, 130)

@@ -28,7 +28,7 @@ from learn.monitor.prognosis_scores import (
     remaining_fraction,
 )
 from swgsim.base.lazy import lazy_module
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure, write_owned
 
 pd = lazy_module("pandas")
 
@@ -263,9 +263,7 @@ def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path) -> Path:
     for a in ax:
         a.legend(fontsize=8)
     fig.tight_layout()
-    write_owned(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110))
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, 110)
 
 
 __all__ = ["ALPHA", "LAMBDA", "bucket_table", "figure", "life_scores", "summary_table",

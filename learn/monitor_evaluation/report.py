@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
-from swgsim.files.ownership import atomic_write_bytes, write_owned
+from swgsim.files.ownership import atomic_write_bytes, save_figure
 from swgsim.gear.faults import FAULTS
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
@@ -340,12 +340,8 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
 
 def _save(fig, path: Path) -> Path:
     """Lay out, write at 130 dpi and close a figure; its path."""
-    import matplotlib.pyplot as plt
-
     fig.tight_layout()
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, 130)
 
 
 def _mildest_detected(res: pd.DataFrame) -> pd.DataFrame:

@@ -28,7 +28,6 @@ the monitor accumulates evidence over windows and sees less than that.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -36,7 +35,7 @@ from swgsim.base.lazy import lazy_module
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
 from swgsim.datasets.slots import profile_slots
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure
 
 pd = lazy_module("pandas")
 
@@ -287,8 +286,7 @@ def plot_motion_map(table: pd.DataFrame, path):
     axes[0].set_ylabel("fault windows beyond healthy p95 [%]")
     fig.legend(loc="lower center", ncol=3, fontsize=7, frameon=False)
     fig.tight_layout(rect=(0, 0.18, 1, 1))
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=120))
-    plt.close(fig)
+    save_figure(fig, path, 120)
     return path
 
 

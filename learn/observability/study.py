@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure
 
 pd = lazy_module("pandas")
 
@@ -166,8 +166,7 @@ def plot_observability(table: pd.DataFrame, path: str | Path,
                  "the healthy 95th percentile (dotted: 5 %, chance)", fontsize=10)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
-    return path
+    return save_figure(fig, path, 130)
 
 
 def _fault_panels(fig, gs, table: pd.DataFrame, faults: list[str], loads: list[float],

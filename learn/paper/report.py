@@ -26,7 +26,7 @@ from learn.paper.results import (
     SPLIT_LABELS,
 )
 from swgsim.base.lazy import lazy_module
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure, write_owned
 from swgsim.gear.faults import display_name, fault_classes
 
 pd = lazy_module("pandas")
@@ -244,8 +244,7 @@ def _fig6(t, sig, rows: list[int], faults: list[str], where: str, path: Path) ->
     axes[0].legend(fontsize=7, ncol=5, title="solid: healthy, dashed: faulty",
                    title_fontsize=7)
     fig.suptitle(f"Healthy and faulty sensor signals ({where})", fontsize=10)
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=110))
-    return path
+    return save_figure(fig, path, 110)
 
 
 def _fig7(t, sig, f_in, faults: list[str], where: str, path: Path) -> Path:
@@ -270,8 +269,7 @@ def _fig7(t, sig, f_in, faults: list[str], where: str, path: Path) -> Path:
         ax.set_ylabel("DFT amplitude [mV/V]")
     axes[0].legend(fontsize=7)
     fig.suptitle(f"DFT of sensor signals ({where})", fontsize=10)
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=110))
-    return path
+    return save_figure(fig, path, 110)
 
 
 def _fig8(t, clean, dist, cls: str, where: str, path: Path) -> Path:
@@ -288,8 +286,7 @@ def _fig8(t, clean, dist, cls: str, where: str, path: Path) -> Path:
     ax.legend(fontsize=7, ncol=5, title="solid: clean, dashed: disturbed (eq. 10)",
               title_fontsize=7)
     ax.set_title(f"Clean and disturbed signals, {display_name(cls)} ({where})", fontsize=10)
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=110))
-    return path
+    return save_figure(fig, path, 110)
 
 
 def write_report(

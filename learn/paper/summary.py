@@ -33,7 +33,7 @@ from learn.paper.results import (
 from learn.paper.tables import StudyOptions
 from swgsim.base.lazy import lazy_module
 from swgsim.datasets.config import DatasetConfig
-from swgsim.files.ownership import atomic_write_bytes, write_owned
+from swgsim.files.ownership import atomic_write_bytes, save_figure, write_owned
 from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
 from swgsim.gear.faults import display_name
 
@@ -229,9 +229,7 @@ def recall_figure(rec: Mapping[str, pd.DataFrame], path: str | Path,
     fig.legend(handles, labels, loc="outside upper right", ncol=len(names), fontsize=8)
     fig.suptitle(f"Per-class recall of {model_label(model)} (dotted: chance)",
                  fontsize=10)
-    path = Path(path)
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=110))
-    return path
+    return save_figure(fig, path, 110)
 
 
 def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,

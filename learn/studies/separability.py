@@ -33,7 +33,7 @@ import numpy as np
 
 from learn.inputs.signals import ResidualSettings, harmonic_coefficients
 from swgsim.base.lazy import lazy_module
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure
 
 pd = lazy_module("pandas")
 
@@ -173,8 +173,7 @@ def plot_separability(sep: dict[str, np.ndarray], path: str | Path,
     ax.set_title(title)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
-    return path
+    return save_figure(fig, path, 130)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -19,7 +19,7 @@ from learn.studies.protocols import OOD_PROTOCOLS
 from learn.transfer.report import model_rank, observable_share, row_label, summarise
 from learn.transfer.study import TargetSpec
 from swgsim.base.lazy import lazy_module
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure
 
 pd = lazy_module("pandas")
 
@@ -65,9 +65,7 @@ def plot_accuracy_vs_k(results: pd.DataFrame, path: str | Path,
         ax.grid(alpha=0.3)
     fig.legend(list(handles.values()), list(handles.keys()), loc="outside lower center",
                ncol=3, fontsize=7, frameon=False)
-    path = Path(path)
-    write_owned(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:], dpi=130))
-    return path
+    return save_figure(fig, path, 130)
 
 
 def _run_colours(w_all: pd.DataFrame) -> dict:

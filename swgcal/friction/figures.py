@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure
 
 from ..loop import CalibrationResult
 from ..periodogram import periodogram_peaks
@@ -296,8 +296,7 @@ def make_figures(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
                       ("hysteresis", _fig_hysteresis), ("time", _fig_time),
                       ("overlay", _fig_overlay)):
         fig = draw(d)
-        write_owned(out / "figures" / f"{key}.png",
-                    lambda tmp, fig=fig: fig.savefig(tmp, format="png", dpi=dpi))
+        save_figure(fig, out / "figures" / f"{key}.png", dpi)
         files[key] = f"figures/{key}.png"
     log.info("figures written to %s", out / "figures")
     return files

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure
 
 from ..loop import CalibrationResult
 from .report import order2_components
@@ -47,9 +47,7 @@ def make_figures(result: CalibrationResult, out_dir: str | Path,
                       ("speed_load", _speed_load), ("overlay", _overlay)):
         fig = draw(plt, v)
         name = f"{key}.{fmt}"
-        write_owned(out / name, lambda tmp, fig=fig: fig.savefig(
-            tmp, format=fmt, dpi=110, bbox_inches="tight"))
-        plt.close(fig)
+        save_figure(fig, out / name, 110, bbox_inches="tight")
         figs[key] = f"{out.name}/{name}"
     return figs
 

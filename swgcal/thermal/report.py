@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.files.ownership import write_owned
+from swgsim.files.ownership import save_figure
 
 from ..loop import CalibrationResult
 from ..report import ReportParts, SimulationOption, base_summary, caveat, fmt_value, param_table
@@ -135,9 +135,7 @@ def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, st
     fig.text(0.01, 0.01, ATTRIBUTION, fontsize=5)
     out = Path(out_dir) / "figures"
     out.mkdir(parents=True, exist_ok=True)
-    write_owned(out / "temperature.png",
-                lambda tmp: fig.savefig(tmp, format="png", dpi=110))
-    plt.close(fig)
+    save_figure(fig, out / "temperature.png", 110)
     return {"temperature": "figures/temperature.png"}
 
 

@@ -78,7 +78,7 @@ log = logging.getLogger(__name__)
 
 __all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "Survey", "Claim", "survey", "check",
            "claim", "join", "before_replace", "sha256", "atomic_write_bytes",
-           "atomic_write_json", "write_owned", "stop_note", "forget_stops"]
+           "atomic_write_json", "write_owned", "save_figure", "stop_note", "forget_stops"]
 
 _CLAIMS: dict[Path, Claim] = {}   # folders this process claimed (resolved) -> claim
 _HELD: dict[Path, list] = {}  # run locks held: resolved folder -> [lock, count, pid, folder]
@@ -629,7 +629,7 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes | memoryview,
 def write_owned(path: str | os.PathLike, write: Callable[[Path], object],
                 digest: str | None = None) -> None:
     """The one way a file of a run is written: ``write(tmp)`` writes it whole to a
-    temporary file beside ``path`` (a figure: ``fig.savefig(tmp, format="png")``), which is
+    temporary file beside ``path`` (a figure: :func:`save_figure`), which is
     flushed, listed in the stamp of the claimed folder holding it (:func:`before_replace`)
     and renamed into place (:func:`swgsim.files.atomic.write_atomically`). A kill or a
     full disk at any point leaves the old file (still proved ours) or the new one whole
@@ -641,6 +641,47 @@ def write_owned(path: str | os.PathLike, write: Callable[[Path], object],
         If the disk is full (naming the file and its folder); nothing is left behind.
     """
     write_atomically(path, write, lambda p, tmp: before_replace(p, tmp, digest))
+
+
+def save_figure(fig: Any, path: str | os.PathLike, dpi: int,
+                bbox_inches: str | None = None) -> Path:
+    """Write a matplotlib figure to ``path`` as :func:`write_owned` writes a file, in the
+    format its suffix names (``.png``, ``.pdf``, ``.svg``); a figure pyplot made is then
+    closed (pyplot would hold it until the process ends), a ``Figure`` made without pyplot
+    is left as it is.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure, drawn.
+    path : str or os.PathLike
+        The file; its suffix names the format.
+    dpi : int
+        Resolution [dots per inch].
+    bbox_inches : str, optional
+        ``"tight"``: the saved area shrunk to the figure's content (matplotlib's
+        ``savefig``); None: the figure's size.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        If matplotlib has no writer for the suffix.
+    swgsim.files.atomic.DiskFullError
+        If the disk is full (naming the file and its folder); nothing is left behind.
+    """
+    path = Path(path)
+    write_owned(path, lambda tmp: fig.savefig(tmp, format=path.suffix[1:], dpi=dpi,
+                                              bbox_inches=bbox_inches))
+    if fig.canvas.manager is not None:  # a pyplot figure: pyplot is imported already
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+    return path
 
 
 def atomic_write_json(path: str | os.PathLike, obj: Any, sort_keys: bool = True) -> None:

@@ -350,6 +350,29 @@ def test_the_monitors_figure_is_written_through_write_owned(tmp_path, monkeypatc
     assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
 
 
+def test_save_figure_writes_in_the_suffixs_format_and_closes_a_pyplot_figure(tmp_path):
+    """save_figure: the format the path's suffix names, the file recorded as ours; a
+    figure pyplot made is closed, a Figure made without it is left as it is."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+
+    out = tmp_path / "rep"
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [1, 0])
+    bare = Figure()
+    bare.subplots().plot([0, 1], [0, 1])
+    with ownership.claim(out, "swgsim-monitor", strict=True):
+        assert ownership.save_figure(fig, str(out / "a.png"), 50) == out / "a.png"
+        ownership.save_figure(bare, out / "b.svg", 50, bbox_inches="tight")
+    assert (out / "a.png").read_bytes()[:4] == b"\x89PNG"
+    assert b"<svg" in (out / "b.svg").read_bytes()
+    assert not plt.fignum_exists(fig.number) and bare.axes  # the Figure still drawn
+    assert sorted(ownership.check(out, app="swgsim-monitor").owned) == ["a.png", "b.svg"]
+
+
 class _TinyResult:
     """What write_outputs reads of a StreamResult: ten monitored windows, no alarm."""
 
