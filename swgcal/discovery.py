@@ -56,6 +56,8 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.base.markdown import md_table
+
 from .core import integrated_autocorr_time
 from .loop import CalibrationResult
 
@@ -503,7 +505,7 @@ def proposals_section(summary: Mapping[str, Any]) -> list[str]:
              "(swgcal.discovery).", ""]
     if not proposed:
         return lines + ["None.", ""]
-    lines += ["| proposed term | held-out gain |", "|---|---|"]
-    lines += [f"| {p['expression'].replace('|', '/')} | {100 * float(p['heldout_gain']):.1f} % |"
-              for p in proposed]
-    return lines + [""]
+    return lines + [md_table(["proposed term", "held-out gain"],
+                             [[p["expression"].replace("|", "/"),
+                               f"{100 * float(p['heldout_gain']):.1f} %"] for p in proposed]),
+                    ""]

@@ -21,6 +21,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from swgsim.base.markdown import md_table
+
 from .core import FitResult, Term
 from .loop import IMPLAUSIBLE_PREFIX, CalibrationResult
 
@@ -238,8 +240,8 @@ def fmt_value(x: Any, digits: int = 4) -> str:
 
 
 def param_table(params: Mapping[str, Mapping[str, Any]],
-                head: Sequence[str] = ("| parameter | value | s.e. | unit | identifiable |",
-                                       "|---|---|---|---|---|")) -> list[str]:
+                head: Sequence[str | None] = ("parameter", "value", "s.e.", "unit",
+                                              "identifiable")) -> list[str]:
     """Markdown table ``| name | value | std | unit | pinned down |`` of reported parameters,
     and a blank line.
 
@@ -247,17 +249,16 @@ def param_table(params: Mapping[str, Mapping[str, Any]],
     ----------
     params : mapping of str to mapping
         ``name -> {"value", "std", "unit", "identifiable", ...}`` (summary entries).
-    head : sequence of str, optional
-        The table's head and separator lines.
+    head : sequence of str or None, optional
+        The columns' names (None: a blank one, :func:`swgsim.base.markdown.md_table`).
     """
-    rows = list(head)
+    rows = []
     for k, e in params.items():
         ok = "yes" if e["identifiable"] else "no: " + e["flag"]
         if e.get("note"):
             ok += f" ({e['note']})"
-        rows.append(f"| {k} | {fmt_value(e['value'])} | {fmt_value(e['std'], 2)} | {e['unit']} "
-                    f"| {ok} |")
-    return rows + [""]
+        rows.append([k, fmt_value(e["value"]), fmt_value(e["std"], 2), f"{e['unit']}", ok])
+    return [md_table(head, rows), ""]
 
 
 def implausible_lines(summary: Mapping[str, Any]) -> list[str]:
@@ -282,15 +283,13 @@ def implausible_lines(summary: Mapping[str, Any]) -> list[str]:
                   + " that these library effects would absorb, but only with a parameter "
                   "outside its physical range, so they were rejected as implausible (the "
                   "structure is something else, not explained by the library):", "",
-                  "| candidate | would absorb: validation gain | val. RMSE with it | "
-                  "held-out evidence | parameter against its range (source) |",
-                  "|---|---|---|---|---|"]
-        for c in last:
-            lines.append(f"| {c['name']} | {fmt_value(100 * (c['validation_gain'] or 0), 3)} % | "
-                         f"{fmt_value(c['val_rmse'])} {u} "
-                         f"(from {fmt_value(c['val_rmse_current'])}) | "
-                         f"{fmt_value(c.get('heldout_evidence'), 4)} | {c['violations']} |")
-        lines.append("")
+                  md_table(["candidate", "would absorb: validation gain", "val. RMSE with it",
+                            "held-out evidence", "parameter against its range (source)"],
+                           [[f"{c['name']}", f"{fmt_value(100 * (c['validation_gain'] or 0), 3)} %",
+                             f"{fmt_value(c['val_rmse'])} {u} "
+                             f"(from {fmt_value(c['val_rmse_current'])})",
+                             fmt_value(c.get("heldout_evidence"), 4), f"{c['violations']}"]
+                            for c in last]), ""]
     early = [c for c in imp if not c.get("final_iteration")]
     if early:
         lines += ["Rejected as implausible in earlier iterations: " + "; ".join(
@@ -407,21 +406,20 @@ def render_report(parts: ReportParts, result: CalibrationResult, summary: Mappin
         Figure key (the kind's ``make_figures``) -> path relative to the report.
     """
     s, u = ReportInput(summary, result), summary["units"]
+    rmse = [(k, s["rmse"][k]["before"], s["rmse"][k]["after"])
+            for k in ("fit", "validation", "test")]
     lines = [f"# {parts.title}: {s['name']}", "", *parts.data(s), "## Result", "",
-             f"| | RMSE before ({parts.base_model}) | RMSE after | after / before |",
-             "|---|---|---|---|"]
-    for k in ("fit", "validation", "test"):
-        b, a = s["rmse"][k]["before"], s["rmse"][k]["after"]
-        lines.append(f"| {k} | {fmt_value(b)} {u} | {fmt_value(a)} {u} | "
-                     f"{fmt_value(a / b if b else None, 3)} |")
-    lines += ["", f"Held-out (test) RMSE {fmt_value(s['rmse_before'])} → "
-              f"{fmt_value(s['rmse_after'])} {u}"
-              + (parts.result_note(s) if parts.result_note else "") + ". Effects added: "
-              + (", ".join(f"**{e['name']}**" for e in s["effects_added"]) or "none") + ".", "",
-              ("**The final residual is still structured and no library effect explains it.** "
-               if s["unexplained"] else
-               "The final residual shows no structure along the probed variables: ")
-              + s["residual_signature"], "", *implausible_lines(s)]
+             md_table([None, f"RMSE before ({parts.base_model})", "RMSE after", "after / before"],
+                      [[k, f"{fmt_value(b)} {u}", f"{fmt_value(a)} {u}",
+                        fmt_value(a / b if b else None, 3)] for k, b, a in rmse]),
+             "", f"Held-out (test) RMSE {fmt_value(s['rmse_before'])} → "
+             f"{fmt_value(s['rmse_after'])} {u}"
+             + (parts.result_note(s) if parts.result_note else "") + ". Effects added: "
+             + (", ".join(f"**{e['name']}**" for e in s["effects_added"]) or "none") + ".", "",
+             ("**The final residual is still structured and no library effect explains it.** "
+              if s["unexplained"] else
+              "The final residual shows no structure along the probed variables: ")
+             + s["residual_signature"], "", *implausible_lines(s)]
     for section in parts.sections:
         lines += section(s)
     figures = dict(figures or {})
@@ -482,14 +480,12 @@ def iteration_lines(summary: Mapping[str, Any], *, evidence: bool = False,
             continue
         cols = ["rank", "candidate", "val. RMSE", "gain", *(["2 ln Λ (held out)"] * evidence),
                 "ΔBIC", "eff. ΔBIC", "status"]
-        lines += ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-        for r, c in enumerate(it["candidates"], 1):
-            ev = f"{fmt_value(c.get('heldout_evidence'), 4)} | " if evidence else ""
-            lines.append(f"| {r} | {c['name']} | {fmt_value(c['val_rmse'])} | "
-                         f"{fmt_value(100 * c['rel_improvement'], 3)} % | {ev}"
-                         f"{fmt_value(c['delta_bic'], 5)} | "
-                         f"{fmt_value(c['delta_bic_eff'], 4)} | {c['status']} |")
-        lines.append("")
+        lines += [md_table(cols, [
+            [r, f"{c['name']}", fmt_value(c["val_rmse"]),
+             f"{fmt_value(100 * c['rel_improvement'], 3)} %",
+             *[fmt_value(c.get("heldout_evidence"), 4)] * evidence,
+             fmt_value(c["delta_bic"], 5), fmt_value(c["delta_bic_eff"], 4), f"{c['status']}"]
+            for r, c in enumerate(it["candidates"], 1)]), ""]
     return lines
 
 
@@ -528,16 +524,16 @@ def diagnosis_lines(summary: Mapping[str, Any], how: str = "") -> list[str]:
         blocks, "``).
     """
     s = summary
-    lines = ["## Residual diagnosis", "",
-             "Probe scores: out-of-sample fraction of the residual mean square explained by a "
-             f"nonparametric model along one variable ({how}structured above "
-             f"{fmt_value(s['diagnosis_after']['threshold'])}).", "",
-             "| probe | base model residual | final residual |", "|---|---|---|"]
     pb, pa = s["diagnosis_before"]["probes"], s["diagnosis_after"]["probes"]
-    for k in pb:
-        lines.append(f"| {k} | {fmt_value(pb[k]['score'], 3)} | {fmt_value(pa[k]['score'], 3)} |")
-    return lines + ["", f"Base model residual: {s['residual_signature_before']}", "",
-                    f"Final residual: {s['residual_signature']}", ""]
+    return ["## Residual diagnosis", "",
+            "Probe scores: out-of-sample fraction of the residual mean square explained by a "
+            f"nonparametric model along one variable ({how}structured above "
+            f"{fmt_value(s['diagnosis_after']['threshold'])}).", "",
+            md_table(["probe", "base model residual", "final residual"],
+                     [[k, fmt_value(pb[k]["score"], 3), fmt_value(pa[k]["score"], 3)]
+                      for k in pb]),
+            "", f"Base model residual: {s['residual_signature_before']}", "",
+            f"Final residual: {s['residual_signature']}", ""]
 
 
 def uncertainty_lines(summary: Mapping[str, Any]) -> list[str]:

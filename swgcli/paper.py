@@ -139,7 +139,7 @@ def _print_end(cfg: DictConfig, names: list[str], summary: dict, root_data: str,
     from learn.tracking.store import default_tracking_uri
 
     print("\nReproduction scorecard (test cells of Tables VII, IX, X against the paper):")
-    print("\n".join(format_scorecard(summary["scorecards"])))
+    print(format_scorecard(summary["scorecards"]))
     for n in names:
         f = summary["findings"][n]
         print(f"qualitative findings of Sec. IV reproduced, {n} acquisition: "

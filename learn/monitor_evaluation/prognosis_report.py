@@ -28,6 +28,7 @@ from learn.monitor.prognosis_scores import (
     remaining_fraction,
 )
 from swgsim.base.lazy import lazy_module
+from swgsim.base.markdown import md_table
 from swgsim.files.ownership import save_figure, write_owned
 
 pd = lazy_module("pandas")
@@ -198,16 +199,6 @@ def targets(buckets: pd.DataFrame, summary: pd.DataFrame, moved: pd.DataFrame
                                       "result"])
 
 
-def _md(df: pd.DataFrame) -> str:
-    """A table as markdown, numbers to 3 significant digits."""
-    cols = list(df.columns)
-    body = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    for r in df.itertuples(index=False):
-        body.append("| " + " | ".join(f"{v:.3g}" if isinstance(v, float) else str(v)
-                                      for v in r) + " |")
-    return "\n".join(body) + "\n"
-
-
 def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFrame,
                 buckets: pd.DataFrame, lives: pd.DataFrame, calibration: pd.DataFrame,
                 moved: pd.DataFrame) -> None:
@@ -221,14 +212,16 @@ def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFram
         followed=("alarm_h", lambda a: int(np.isfinite(a).sum())),
         median_failure_after_onset_h=("after_onset_h", "median"),
         median_alarm_after_onset_h=("alarm_after_onset_h", "median")).reset_index()
-    text = (header + "\n## Targets (the growth law)\n\n" + _md(tgt)
-            + "\n## Scores per fault and method (held-out gears)\n\n" + _md(summary)
-            + "\n## The 90 % interval per horizon bucket (remaining share of the way from "
-              "the alarm to failure)\n\n" + _md(buckets)
-            + "\n## After a payload change, against the same life without it\n\n"
-            + _md(moved) + "\n## Lives\n\n" + _md(alarms)
-            + "\n## Calibration (split conformal on the training gears' lives)\n\n"
-            + _md(calibration) + "\n![prognosis](prognosis.png)\n")
+    text = header + "".join(
+        f"\n## {title}\n\n{md_table(t.columns, t.itertuples(index=False))}\n" for title, t in (
+            ("Targets (the growth law)", tgt),
+            ("Scores per fault and method (held-out gears)", summary),
+            ("The 90 % interval per horizon bucket (remaining share of the way from the "
+             "alarm to failure)", buckets),
+            ("After a payload change, against the same life without it", moved),
+            ("Lives", alarms),
+            ("Calibration (split conformal on the training gears' lives)", calibration))
+    ) + "\n![prognosis](prognosis.png)\n"
     write_owned(path, lambda tmp: Path(tmp).write_text(text))
 
 

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
+from swgsim.base.markdown import md_table
 from swgsim.files.ownership import atomic_write_bytes, save_figure
 from swgsim.gear.faults import FAULTS
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
@@ -222,18 +223,6 @@ def nuisance_table(res: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
     return wide.reindex(columns=order).reset_index()
 
 
-def _md(df: pd.DataFrame) -> str:
-    """A markdown table; numbers to 3 significant digits, NaN as a dash."""
-    def cell(v) -> str:
-        if isinstance(v, (float, np.floating)):
-            return "-" if np.isnan(v) else f"{v:.3g}"
-        return str(v)
-    lines = ["| " + " | ".join(map(str, df.columns)) + " |",
-             "|" + "|".join("---" for _ in df.columns) + "|"]
-    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in df.itertuples(index=False)]
-    return "\n".join(lines)
-
-
 def write_table(res: pd.DataFrame, fa: pd.DataFrame, path: Path, header: str = "") -> str:
     """``table.md`` (module docstring); returns its text."""
     tab = summary_table(res)
@@ -241,17 +230,17 @@ def write_table(res: pd.DataFrame, fa: pd.DataFrame, path: Path, header: str = "
     small = smallest_detectable(summary_table(res))
     small["fault"] = small.fault.map(display)
     seeds = res.seed.nunique() if "seed" in res else 0
-    text = [header, f"## Targets (monitor; held-out gears, {seeds} seed(s))\n",
-            _md(targets(res, fa)),
-            "\n## Detection and isolation per fault and severity (held-out gears, all "
-            "seeds)\n", _md(tab), "\n## Smallest severity detected in every life (step "
-            "onsets)\n", _md(small), "\n## False alarms in healthy operation\n",
-            _md(false_alarm_table(fa)), ""]
     real = nuisance_table(res, fa)
-    if len(real):
-        text[3:3] = ["\n## A real day: stationary lives beside each nuisance (held-out gears, "
-                     "worst gear, all seeds; per-window detectors under the same nuisance)\n",
-                     _md(real)]
+    sections = [(f"## Targets (monitor; held-out gears, {seeds} seed(s))\n", targets(res, fa)),
+                *[("\n## A real day: stationary lives beside each nuisance (held-out gears, "
+                   "worst gear, all seeds; per-window detectors under the same nuisance)\n",
+                   real)] * bool(len(real)),
+                ("\n## Detection and isolation per fault and severity (held-out gears, all "
+                 "seeds)\n", tab),
+                ("\n## Smallest severity detected in every life (step onsets)\n", small),
+                ("\n## False alarms in healthy operation\n", false_alarm_table(fa))]
+    text = [header] + [x for title, t in sections for x in
+                       (title, md_table(t.columns, t.itertuples(index=False), nan="-"))] + [""]
     out = "\n".join(text)
     atomic_write_bytes(path, out.encode())
     return out

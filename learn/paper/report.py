@@ -26,6 +26,7 @@ from learn.paper.results import (
     SPLIT_LABELS,
 )
 from swgsim.base.lazy import lazy_module
+from swgsim.base.markdown import md_table
 from swgsim.files.ownership import save_figure, write_owned
 from swgsim.gear.faults import display_name, fault_classes
 
@@ -117,8 +118,9 @@ def write_tables(
     for name in PAPER_TABLES:
         lines += _table_md(name, results)
     if timings_s:
-        lines += ["## Run time", "", "| step | wall time [s] |", "|---|---:|"]
-        lines += [f"| {k} | {v:.1f} |" for k, v in timings_s.items()] + [""]
+        lines += ["## Run time", "", md_table(["step", "wall time [s]"],
+                                              [[k, f"{v:.1f}"] for k, v in timings_s.items()],
+                                              "lr"), ""]
     path.parent.mkdir(parents=True, exist_ok=True)
     write_owned(path, lambda tmp: tmp.write_text("\n".join(lines)))
     return path

@@ -32,6 +32,7 @@ from learn.paper.results import (
 )
 from learn.paper.tables import StudyOptions
 from swgsim.base.lazy import lazy_module
+from swgsim.base.markdown import md_table
 from swgsim.datasets.config import DatasetConfig
 from swgsim.files.ownership import atomic_write_bytes, save_figure, write_owned
 from swgsim.gear.faults import PAPER_CLASSES as FAULT_CLASSES
@@ -46,7 +47,7 @@ RECALL_PANELS = (("VII", "selection1"), ("VII", "selection3"), ("X", "selection1
                  ("X", "selection3"))
 
 
-def format_scorecard(cards: Mapping[str, pd.DataFrame]) -> list[str]:
+def format_scorecard(cards: Mapping[str, pd.DataFrame]) -> str:
     """Markdown table of the scorecards of several acquisitions.
 
     Parameters
@@ -56,16 +57,15 @@ def format_scorecard(cards: Mapping[str, pd.DataFrame]) -> list[str]:
 
     Returns
     -------
-    list of str
-        Lines of one table: acquisition, table, cells, within ±3/±5/±10, mean abs. deviation.
+    str
+        One table (its lines joined by newlines): acquisition, table, cells, within
+        ±3/±5/±10, mean abs. deviation.
     """
-    lines = ["| acquisition | table | cells | within ±3 | within ±5 | within ±10 | "
-             "mean abs. deviation [points] |", "|---|---|---:|---:|---:|---:|---:|"]
-    for name, card in cards.items():
-        for r in card.itertuples():
-            lines.append(f"| {name} | {r.table} | {r.cells} | {r.within_3} | {r.within_5} | "
-                         f"{r.within_10} | {r.mad:.1f} |")
-    return lines
+    return md_table(["acquisition", "table", "cells", "within ±3", "within ±5", "within ±10",
+                     "mean abs. deviation [points]"],
+                    [[name, *map(str, (r.table, r.cells, r.within_3, r.within_5, r.within_10)),
+                      f"{r.mad:.1f}"] for name, card in cards.items() for r in card.itertuples()],
+                    "llrrrrr")
 
 
 def recall(confusion: pd.DataFrame) -> pd.DataFrame:
@@ -126,19 +126,18 @@ def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
 def _findings_md(found: Mapping[str, pd.DataFrame]) -> list[str]:
     names = list(found)
     mark = {True: "yes", False: "no", None: "–"}
-    lines = ["| | finding (paper, Sec. IV) | " + " | ".join(
-        f"{n}: reproduced | {n}: measured" for n in names) + " |",
-        "|---|---|" + "---|---|" * len(names)]
-    first = found[names[0]]
-    for i, r in first.iterrows():
+    rows = []
+    for i, r in found[names[0]].iterrows():
         cells = []
         for n in names:
             f = found[n].iloc[i]
             cells += [mark[f["reproduced"]], f["measured"]]
-        lines.append(f"| {r['key']} | {r['text']} | " + " | ".join(cells) + " |")
+        rows.append([f"{r['key']}", f"{r['text']}", *cells])
     totals = ", ".join(f"{n}: {int((found[n]['reproduced'] == True).sum())} of "  # noqa: E712
                        f"{int(found[n]['reproduced'].notna().sum())}" for n in names)
-    return [f"Reproduced: {totals}. 'About X %' counts as within ±5 points.", "", *lines]
+    return [f"Reproduced: {totals}. 'About X %' counts as within ±5 points.", "",
+            md_table([None, "finding (paper, Sec. IV)",
+                      *(f"{n}: {w}" for n in names for w in ("reproduced", "measured"))], rows)]
 
 
 def spread_table(spread: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
@@ -248,19 +247,17 @@ def _phase_lock_md(rec: Mapping[str, pd.DataFrame], spread: pd.DataFrame,
 
 def _spread_md(spread: pd.DataFrame) -> list[str]:
     """The table of the clean healthy windows' feature spread and the classes' distance."""
-    head = "| acquisition | feature | healthy std | " + " | ".join(
-        display_name(c) for c in FAULT_CLASSES[1:]) + " |"
     lines = ["Spread of the clean healthy windows' features (std over every gear and "
              "operating point) and how far each fault class lies from the healthy median "
              "(median over its windows of the absolute difference), in the features' own "
-             "units (ratios of eq. 7):", "", head,
-             "|---|---|---:|" + "---:|" * (len(FAULT_CLASSES) - 1)]
-    for r in spread.itertuples(index=False):
-        d = r._asdict()
-        lines.append(f"| {d['acquisition']} | {d['feature']} | {d['healthy_std']:.2e} | "
-                     + " | ".join(f"{d.get(c, np.nan):.2e}" for c in FAULT_CLASSES[1:])
-                     + " |")
-    lines.append("")
+             "units (ratios of eq. 7):", "",
+             md_table(["acquisition", "feature", "healthy std",
+                       *map(display_name, FAULT_CLASSES[1:])],
+                      [[f"{d['acquisition']}", f"{d['feature']}", f"{d['healthy_std']:.2e}",
+                        *(f"{d.get(c, np.nan):.2e}" for c in FAULT_CLASSES[1:])]
+                       for d in (r._asdict() for r in spread.itertuples(index=False))],
+                      "llr" + "r" * (len(FAULT_CLASSES) - 1)),
+             ""]
     return lines
 
 
@@ -389,7 +386,7 @@ def _intro_md(names: list[str], datasets: Mapping[str, DatasetConfig],
             "## Reproduction scorecard", "",
             "Test cells of Tables VII, IX and X (the paper gives no numbers for Table "
             "VIII) within ±3, ±5 and ±10 points of the paper, and the mean absolute "
-            "deviation.", "", *format_scorecard(cards), ""]
+            "deviation.", "", format_scorecard(cards), ""]
 
 
 def _open_choices_md(names: list[str], datasets: Mapping[str, DatasetConfig],
@@ -397,16 +394,15 @@ def _open_choices_md(names: list[str], datasets: Mapping[str, DatasetConfig],
                      features: FeatureSettings | None) -> list[str]:
     """The open choices of the first data set and the acquisition rows of the others."""
     first = names[0]
-    lines = ["## Choices the paper leaves open", "",
-             f"Values of the {first} acquisition; the others differ only in the acquisition "
-             "rows (their own `conf/dataset/<name>.yaml`).", "",
-             "| choice | value taken | reason or source |", "|---|---|---|"]
-    lines += [f"| {c['choice']} | {c['value']} | {c['reason']} |"
-              for c in open_choices(datasets[first], options, seed, features)]
-    for n in names[1:]:
-        for c in open_choices(datasets[n], options, seed, features)[:2]:
-            lines.append(f"| {c['choice']}, {n} | {c['value']} | {c['reason']} |")
-    return lines
+    return ["## Choices the paper leaves open", "",
+            f"Values of the {first} acquisition; the others differ only in the acquisition "
+            "rows (their own `conf/dataset/<name>.yaml`).", "",
+            md_table(["choice", "value taken", "reason or source"],
+                     [[f"{c['choice']}", f"{c['value']}", f"{c['reason']}"]
+                      for c in open_choices(datasets[first], options, seed, features)]
+                     + [[f"{c['choice']}, {n}", f"{c['value']}", f"{c['reason']}"]
+                        for n in names[1:]
+                        for c in open_choices(datasets[n], options, seed, features)[:2]])]
 
 
 def _acquisition_words(cfg: DatasetConfig) -> str:

@@ -22,6 +22,7 @@ from learn.studies.protocols import OOD_PROTOCOLS
 from learn.studies.runs import RunRef
 from learn.transfer.study import FT_MODES
 from swgsim.base.lazy import lazy_module
+from swgsim.base.markdown import md_table
 
 pd = lazy_module("pandas")
 
@@ -119,16 +120,13 @@ def headline_md(head: pd.DataFrame, label, order: Sequence[str]) -> list[str]:
     as for :func:`headline_lines`, ``order``: the data sets."""
     if not len(head):
         return []
-    lines = ["## Headline", "",
-             "Accuracy on the worst split, mean over seeds. The result of a data set is the "
-             "primary run, declared before the comparison; beside it the best run, chosen "
-             "afterwards on the held-out gear's evaluation windows (a statement about the "
-             "runs compared, not a result one could have chosen in advance).", "",
-             "| data set | protocol | k | result (primary) | beside it (best) |",
-             "|---|---|---:|---|---|"]
-    for ds in order:
-        for (prot, k), g in head[head["dataset"] == ds].groupby(["protocol", "k_shot"],
-                                                                sort=False):
-            lines.append(f"| {ds} | {prot} | {k} | "
-                         + " | ".join(_cell(r, label, True) for r in g.itertuples()) + " |")
-    return lines + [""]
+    rows = [[f"{ds}", f"{prot}", f"{k}", *(_cell(r, label, True) for r in g.itertuples())]
+            for ds in order for (prot, k), g in head[head["dataset"] == ds].groupby(
+                ["protocol", "k_shot"], sort=False)]
+    return ["## Headline", "",
+            "Accuracy on the worst split, mean over seeds. The result of a data set is the "
+            "primary run, declared before the comparison; beside it the best run, chosen "
+            "afterwards on the held-out gear's evaluation windows (a statement about the "
+            "runs compared, not a result one could have chosen in advance).", "",
+            md_table(["data set", "protocol", "k", "result (primary)", "beside it (best)"], rows,
+                     "llrll"), ""]

@@ -32,6 +32,7 @@ from learn.transfer.picks import (
 )
 from learn.transfer.study import TargetSpec
 from swgsim.base.lazy import lazy_module
+from swgsim.base.markdown import md_table
 from swgsim.files.ownership import write_owned
 
 pd = lazy_module("pandas")
@@ -217,7 +218,7 @@ def model_rank(m: str) -> int:
     return order.index(m) if m in order else len(order)
 
 
-def _paper_rows(protocol: str, splits: Sequence[str]) -> list[str]:
+def _paper_rows(protocol: str, splits: Sequence[str]) -> list[list[str | None]]:
     table = {"ood_clean": "IX", "ood_disturbed": "X"}[protocol]
     out = []
     for sel in ("selection1", "selection3"):
@@ -227,8 +228,8 @@ def _paper_rows(protocol: str, splits: Sequence[str]) -> list[str]:
         vals = [res[sel].get(s, {}).get("rf") for s in splits]
         if any(v is None for v in vals):
             continue
-        out.append(f"| paper Table {table}: RF, Selection {sel[-1]} (its data) | "
-                   + " | ".join(f"{v:.2f}" for v in vals) + f" | **{min(vals):.2f}** | |")
+        out.append([f"paper Table {table}: RF, Selection {sel[-1]} (its data)",
+                    *(f"{v:.2f}" for v in vals), f"**{min(vals):.2f}**", None])
     return out
 
 
@@ -325,16 +326,16 @@ def _separability_md(tabs: Mapping[str, pd.DataFrame]) -> list[str]:
              "distance from the healthy windows of the same gear and operating point, in "
              "their spreads (`learn/studies/separability.py`). Healthy windows scored "
              f"leave-one-out reach {p95} at their 95th percentile by chance. Share of each "
-             "class beyond it:", "",
-             "| class | " + " | ".join(f"{k} windows" for k in kinds) + " | median ("
-             + kinds[-1] + ") |", "|---|" + "---:|" * (len(kinds) + 1)]
+             "class beyond it:", ""]
     base = tabs[kinds[-1]].set_index("fault")
+    rows = []
     for f in base.index:
         cells = [f"{100 * tabs[k].set_index('fault').loc[f, 'beyond_p95']:.1f} %"
                  for k in kinds]
         med = base["median"].get(f, np.nan) if "median" in base else np.nan
-        lines.append(f"| {f} | " + " | ".join(cells) + f" | {med:.3g} |")
-    return lines + [""]
+        rows.append([f"{f}", *cells, f"{med:.3g}"])
+    return lines + [md_table(["class", *(f"{k} windows" for k in kinds),
+                              f"median ({kinds[-1]})"], rows, "l" + "r" * (len(kinds) + 1)), ""]
 
 
 def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: RunRef | None,
@@ -349,28 +350,27 @@ def _recall_md(recall: pd.DataFrame, summ: pd.DataFrame, primary: RunRef | None,
              "On the accuracy's basis: each run's worst split (the split of its worst-split "
              "mean accuracy), mean over seeds. The primary run (declared before the "
              "comparison) first; the best run chosen afterwards on the held-out windows "
-             "beside it.", "",
-             "| data set | run | worst split | accuracy | " + " | ".join(classes) + " |",
-             "|---|---|---|---:|" + "---:|" * len(classes)]
+             "beside it.", ""]
+    rows: list[list[str | None]] = []
     for ds in order:
         w = summ[(summ["dataset"] == ds) & (summ["protocol"] == "ood_disturbed")
                  & (summ["split"] == "worst")]
         for who, b in picks(w, primary, 0):
             if b is None:
-                lines.append(f"| {ds} | *{who}* | | |" + " |" * len(classes))
+                rows.append([f"{ds}", f"*{who}*", *[None] * (2 + len(classes))])
                 continue
             r = rec[(rec["dataset"] == ds) & (rec["model"] == b["model"])
                     & (rec["input"] == b["input"])].set_index("true")["recall"]
-            lines.append(f"| {ds} | {row_label(b['model'], b['input'], 0)} ({who}) | "
-                         f"{b['worst_of']} | {100 * b['mean']:.2f} | "
-                         + " | ".join(f"{100 * r.get(c, np.nan):.1f}" for c in classes) + " |")
+            rows.append([f"{ds}", f"{row_label(b['model'], b['input'], 0)} ({who})",
+                         f"{b['worst_of']}", f"{100 * b['mean']:.2f}",
+                         *(f"{100 * r.get(c, np.nan):.1f}" for c in classes)])
         share = observable_share(separability, ds, "ood_disturbed")
         if share is not None:
-            lines.append(f"| {ds} | *observable: share beyond the healthy p95 (healthy: "
-                         "within), all splits* | | | "
-                         + " | ".join(f"*{100 * share.get(c, np.nan):.1f}*" for c in classes)
-                         + " |")
-    return lines + [""]
+            rows.append([f"{ds}", "*observable: share beyond the healthy p95 (healthy: "
+                         "within), all splits*", None, None,
+                         *(f"*{100 * share.get(c, np.nan):.1f}*" for c in classes)])
+    return lines + [md_table(["data set", "run", "worst split", "accuracy", *classes], rows,
+                             "lllr" + "r" * len(classes)), ""]
 
 
 def write_table(results: pd.DataFrame, confusion: pd.DataFrame, path: str | Path, *,
@@ -467,18 +467,17 @@ def _targets_md(tt: pd.DataFrame) -> list[str]:
              "accuracy, their mean over the classes (healthy: 95 %), an estimate of what the "
              "signals carry, not a bound. Accuracies and recalls alike: the run's worst "
              "split, mean over seeds; the primary run first, the best beside it chosen "
-             "afterwards on the held-out windows.", "",
-             "| data set | condition | target | run | worst split | reached | observable |",
-             "|---|---|---:|---|---|---:|---:|"]
+             "afterwards on the held-out windows.", ""]
+    rows = []
     for r in tt.itertuples():
         obs = "" if np.isnan(r.observable) else f"{100 * r.observable:.1f} %"
         reached = ("—" if r.met is None else
                    f"{100 * r.reached:.2f} % ({'met' if r.met else 'not met'})")
         run = f"{r.run} ({r.who})" if r.run else f"*{r.who}*"
-        lines.append(f"| {r.dataset} | {r.condition} | {100 * r.target:.1f} % | {run} | "
-                     f"{r.split} | {reached} | {obs} |")
-    lines.append("")
-    return lines
+        rows.append([f"{r.dataset}", f"{r.condition}", f"{100 * r.target:.1f} %", run,
+                     f"{r.split}", reached, obs])
+    return lines + [md_table(["data set", "condition", "target", "run", "worst split", "reached",
+                              "observable"], rows, "llrllrr"), ""]
 
 
 def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
@@ -497,9 +496,8 @@ def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
         splits = sorted({s for s in sp["split"] if s != "worst"},
                         key=lambda s: (_SPLIT_ORDER.get(s, 9), s))
         lines += [f"### {ds}: {p}", "", "Training time: per split and seed, the fit on the "
-                  "source gears, or the adaptation alone.", "",
-                  "| run | " + " | ".join(splits) + " | worst | train [s] |",
-                  "|---|" + "---:|" * (len(splits) + 2)]
+                  "source gears, or the adaptation alone.", ""]
+        rows: list[list[str | None]] = []
         order = sp[sp["split"] == "worst"].sort_values(
             ["k_shot", "model", "input"], key=lambda c: c.map(model_rank)
             if c.name == "model" else c)
@@ -513,23 +511,20 @@ def _dataset_md(ds: str, summ: pd.DataFrame, confusion: pd.DataFrame, recall,
             cells.append(f"**{100 * w['mean']:.2f}** ({w['worst_of']})")
             key = (ds, p, w["model"], w["input"], w["k_shot"])
             cells.append(f"{train_s.get(key, np.nan):.1f}")
-            lines.append(f"| {row_label(w['model'], w['input'], int(w['k_shot']))} | "
-                         + " | ".join(cells) + " |")
+            rows.append([row_label(w["model"], w["input"], int(w["k_shot"])), *cells])
         if p in OOD_PROTOCOLS:
-            lines += _paper_rows(p, splits)
-        lines.append("")
+            rows += _paper_rows(p, splits)
+        lines += [md_table(["run", *splits, "worst", "train [s]"], rows,
+                           "l" + "r" * (len(splits) + 2)), ""]
     return lines
 
 
 def _latency_md(latency: pd.DataFrame) -> list[str]:
     """The latency section of ``table.md``."""
-    lines = [f"## Inference latency per window ({latency_heading(latency)})", "",
-             "| model | input | input build [ms] | model [ms] |", "|---|---|---:|---:|"]
-    for _, r in latency.iterrows():
-        lines.append(f"| {model_label(r['model'])} | {r['input']} | "
-                     f"{r['input_ms']:.2f} | {r['model_ms']:.2f} |")
-    lines.append("")
-    return lines
+    return [f"## Inference latency per window ({latency_heading(latency)})", "",
+            md_table(["model", "input", "input build [ms]", "model [ms]"],
+                     [[model_label(r["model"]), f"{r['input']}", f"{r['input_ms']:.2f}",
+                       f"{r['model_ms']:.2f}"] for _, r in latency.iterrows()], "llrr"), ""]
 
 
 def _time_md(results: pd.DataFrame, timings: Mapping,
@@ -545,22 +540,20 @@ def _time_md(results: pd.DataFrame, timings: Mapping,
              f"{timings.get('generate_s', 0.0):.1f} s, inputs "
              f"{timings.get('input_s', float('nan')):.1f} s). Sum of fit times per run "
              "over data sets, splits and seeds (adaptation: the adaptation alone):", "",
-             "| model | input | train [s] |", "|---|---|---:|"]
-    for (m, i), v in tt.items():
-        lines.append(f"| {m} | {i} | {v:.1f} |")
-    lines.append("")
+             md_table(["model", "input", "train [s]"],
+                      [[f"{m}", f"{i}", f"{v:.1f}"] for (m, i), v in tt.items()], "llr"), ""]
     if run_times is None or not len(run_times):
         return lines
     per = run_times.groupby(["model", "input", "dataset"], sort=False)[
         ["seconds", "cpu_s"]].sum()
     order = list(dict.fromkeys(run_times["dataset"]))
     lines += ["Each run in its jobs, fit, adaptations and scoring together, summed over "
-              "splits and seeds: wall / CPU seconds of its worker process per data set.",
-              "", "| run | " + " | ".join(order) + " | all, CPU [s] |",
-              "|---|" + "---:|" * (len(order) + 1)]
+              "splits and seeds: wall / CPU seconds of its worker process per data set.", ""]
+    rows = []
     for (m, i), g in per.groupby(level=[0, 1], sort=False):
         g = g.droplevel([0, 1])
         cells = [f"{g.loc[d, 'seconds']:.0f} / {g.loc[d, 'cpu_s']:.0f}" if d in g.index
                  else "" for d in order]
-        lines.append(f"| {m}/{i} | " + " | ".join(cells) + f" | {g['cpu_s'].sum():.0f} |")
-    return lines + [""]
+        rows.append([f"{m}/{i}", *cells, f"{g['cpu_s'].sum():.0f}"])
+    return lines + [md_table(["run", *order, "all, CPU [s]"], rows,
+                             "l" + "r" * (len(order) + 1)), ""]

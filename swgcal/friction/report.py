@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from swgsim.base.markdown import md_table
 from swgsim.gear.friction.ripples import RippleTerm
 
 from ..core import FitResult, Term
@@ -139,18 +140,17 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
         lines += ["Validation RMSE as ripple instances were added (an instance enters only "
                   "with held-out evidence, see Selection; the last row is the best ripple "
                   "candidate the loop turned down):", "",
-                  "| iteration | ripple | period [rad] | order | val. RMSE before → after | "
-                  "gain | held-out evidence | added |", "|---|---|---|---|---|---|---|---|"]
-        for h in hist:
-            lines.append(
-                f"| {h['iteration']} | {h['name']} | "
-                f"{', '.join(fmt_value(x) for x in h['periods']) or '–'} | "
-                f"{', '.join(fmt_value(x, 4) for x in h['orders'] or []) or '–'} | "
-                f"{fmt_value(h['val_rmse_before'])} → {fmt_value(h['val_rmse_after'])} {u} | "
-                f"{fmt_value(100 * (h['validation_gain'] or 0), 3)} % | "
-                f"{fmt_value(h['heldout_evidence'], 4)} | "
-                + ("yes" if h["accepted"] else f"no: {h['status']}") + " |")
-        lines.append("")
+                  md_table(["iteration", "ripple", "period [rad]", "order",
+                            "val. RMSE before → after", "gain", "held-out evidence", "added"],
+                           [[f"{h['iteration']}", f"{h['name']}",
+                             ", ".join(fmt_value(x) for x in h["periods"]) or "–",
+                             ", ".join(fmt_value(x, 4) for x in h["orders"] or []) or "–",
+                             f"{fmt_value(h['val_rmse_before'])} → "
+                             f"{fmt_value(h['val_rmse_after'])} {u}",
+                             f"{fmt_value(100 * (h['validation_gain'] or 0), 3)} %",
+                             fmt_value(h["heldout_evidence"], 4),
+                             "yes" if h["accepted"] else f"no: {h['status']}"] for h in hist]),
+                  ""]
     for g in rp.get("groups") or []:
         orders = (", ".join(f"{k:.3f}" for k in g["orders"]) if g.get("orders") else None)
         lines += [f"Harmonic group {', '.join(g['members'])}: periods "

@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.base.markdown import md_table
+
 from ..discovery import proposals_section
 from ..loop import CalibrationResult
 from ..report import (
@@ -264,23 +266,22 @@ def _base_model_section(s: ReportInput) -> list[str]:
 def _alignment_section(s: Mapping[str, Any]) -> list[str]:
     """WG and input angle of every window."""
     d = s["data"]
-    lines = ["WG angle of each window (alignment, nominal chain, per window on its own data; "
-             "s.e. from the curvature with the final residual σ). The input angle φ_in is "
-             "known modulo 360° only where the odd orders of the torque ripple rise above "
-             "the noise (evidence 2 ln Λ against the peak 180° away > 10); elsewhere it is "
-             "given modulo 180° (ambiguous: the order-2 ripple repeats every half "
-             "revolution).", "",
-             "| sample | role | operating point | ψ(0) mod 180° [deg] | s.e. [deg] | "
-             "φ_in(0) [deg] (final model) | known modulo | 2 ln Λ (flip) |",
-             "|---|---|---|---|---|---|---|---|"]
-    for a in s["alignment"]:
-        o = d["operating_points"][a["op"]]
-        lines.append(f"| {a['sample']} | {a['role']} | {o[0]:g} rpm, {o[1]:g} N m | "
-                     f"{fmt_value(a['psi0_deg'], 4)} | {fmt_value(a['psi0_se_deg'], 2)} | "
-                     f"{fmt_value(a['phi_in0_final_deg'], 4)} | "
-                     f"{fmt_value(a.get('phi_in0_final_period_deg'), 3)}° | "
-                     f"{fmt_value(a.get('phi_in0_final_flip_evidence'), 3)} |")
-    return lines + [""]
+    return ["WG angle of each window (alignment, nominal chain, per window on its own data; "
+            "s.e. from the curvature with the final residual σ). The input angle φ_in is "
+            "known modulo 360° only where the odd orders of the torque ripple rise above "
+            "the noise (evidence 2 ln Λ against the peak 180° away > 10); elsewhere it is "
+            "given modulo 180° (ambiguous: the order-2 ripple repeats every half "
+            "revolution).", "",
+            md_table(["sample", "role", "operating point", "ψ(0) mod 180° [deg]", "s.e. [deg]",
+                      "φ_in(0) [deg] (final model)", "known modulo", "2 ln Λ (flip)"],
+                     [[f"{a['sample']}", f"{a['role']}",
+                       "{:g} rpm, {:g} N m".format(*d["operating_points"][a["op"]]),
+                       fmt_value(a["psi0_deg"], 4), fmt_value(a["psi0_se_deg"], 2),
+                       fmt_value(a["phi_in0_final_deg"], 4),
+                       f"{fmt_value(a.get('phi_in0_final_period_deg'), 3)}°",
+                       fmt_value(a.get("phi_in0_final_flip_evidence"), 3)]
+                      for a in s["alignment"]]),
+            ""]
 
 
 def _selection_section(s: Mapping[str, Any]) -> list[str]:
@@ -309,20 +310,16 @@ def _accepted_section(s: Mapping[str, Any]) -> list[str]:
 
 def _diagnosis_section(s: Mapping[str, Any]) -> list[str]:
     """Probe scores before and after, residual signatures, the order-2 table."""
-    lines = [*diagnosis_lines(s),
-             "Order-2 component of ψ (amplitude [mV/V] / phase [deg]) per operating point and "
-             "channel, mean over its windows: how amplitude and phase change with speed and "
-             "load.", "",
-             "| n_in [rpm] | T_out [N m] | channel | measured | base model | final |",
-             "|---|---|---|---|---|---|"]
-
-    def ap(x):
-        return f"{x[0]:.4f} / {x[1]:+.1f}"
-
-    for r in s["order2"]:
-        lines.append(f"| {r['n_in_rpm']:g} | {r['t_out_nm']:g} | {r['channel']} | "
-                     f"{ap(r['measured'])} | {ap(r['base_model'])} | {ap(r['final'])} |")
-    return lines + [""]
+    return [*diagnosis_lines(s),
+            "Order-2 component of ψ (amplitude [mV/V] / phase [deg]) per operating point and "
+            "channel, mean over its windows: how amplitude and phase change with speed and "
+            "load.", "",
+            md_table(["n_in [rpm]", "T_out [N m]", "channel", "measured", "base model", "final"],
+                     [[f"{r['n_in_rpm']:g}", f"{r['t_out_nm']:g}", f"{r['channel']}",
+                       *(f"{r[k][0]:.4f} / {r[k][1]:+.1f}"
+                         for k in ("measured", "base_model", "final"))]
+                      for r in s["order2"]]),
+            ""]
 
 
 _CAPTIONS = {

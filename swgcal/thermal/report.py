@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from swgsim.base.markdown import md_table
 from swgsim.files.ownership import save_figure
 
 from ..loop import CalibrationResult
@@ -84,7 +85,7 @@ def _data_lines(s: Mapping[str, Any]) -> list[str]:
             f"Held out: {s['heldout']}", ""]
 
 
-_HEAD = ("| parameter | value | std | unit | |", "|---|---|---|---|---|")
+_HEAD = ("parameter", "value", "std", "unit", None)
 
 
 def _fit_lines(s: Mapping[str, Any]) -> list[str]:
@@ -99,11 +100,11 @@ def _fit_lines(s: Mapping[str, Any]) -> list[str]:
 
 def _candidates_lines(s: Mapping[str, Any]) -> list[str]:
     """The candidates of the last iteration."""
-    lines = ["## Candidates of the last iteration", "",
-             "| candidate | validation RMSE | status |", "|---|---|---|"]
-    for c in (s["iterations"][-1]["candidates"] if s["iterations"] else []):
-        lines.append(f"| {c['name']} | {fmt_value(c['val_rmse'])} K | {c['status']} |")
-    return lines + [""]
+    return ["## Candidates of the last iteration", "",
+            md_table(["candidate", "validation RMSE", "status"],
+                     [[f"{c['name']}", f"{fmt_value(c['val_rmse'])} K", f"{c['status']}"]
+                      for c in (s["iterations"][-1]["candidates"] if s["iterations"] else [])]),
+            ""]
 
 
 #: What a thermal report adds to the shared skeleton (:func:`swgcal.report.render_report`;
