@@ -24,6 +24,7 @@ from learn.paper.results import (
     PAPER_RESULTS,
     PAPER_TABLES,
     SPLIT_LABELS,
+    score_text,
 )
 from swgsim.base.lazy import lazy_module
 from swgsim.base.markdown import md_table
@@ -33,12 +34,6 @@ from swgsim.gear.faults import display_name, fault_classes
 pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
-
-def _cell(ours: float | None, paper: float | None) -> str:
-    o = "–" if ours is None or not np.isfinite(ours) else f"{ours:.2f}"
-    p = "–" if paper is None else f"{paper:.2f}"
-    return f"{o} ({p})"
-
 
 def _table_md(name: str, results: pd.DataFrame) -> list[str]:
     t = PAPER_TABLES[name]
@@ -53,10 +48,9 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
                   "47 %), so the paper's cells read (–).", ""]
     # a registered model beyond the paper's (learn.learners.models.register_model)
     models = (*models, *(m for m in dict.fromkeys(res["model"]) if m not in models))
-    lines += ["| | " + " | ".join(model_label(m) for m in models) + " |",
-              "|---|" + "---:|" * len(models)]
+    rows = []
     for sel in selections:
-        lines.append(f"| **Selection {sel[-1]}** |" + " |" * len(models))
+        rows.append([f"**Selection {sel[-1]}**", *[None] * len(models)])
         rs = res[res["selection"] == sel]
         if name in ("VII", "VIII"):
             for kind, label in (("train", "Avg. training score [%]"),
@@ -66,8 +60,8 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
                     v = rs.loc[rs["model"] == m, f"{kind}_accuracy"]
                     ours = 100 * float(v.mean()) if len(v) else None
                     ref = paper[sel][m][kind] if paper and m in paper[sel] else None
-                    cells.append(_cell(ours, ref))
-                lines.append(f"| {label} | " + " | ".join(cells) + " |")
+                    cells.append(f"{score_text(ours, 2)} ({score_text(ref, 2)})")
+                rows.append([label, *cells])
         else:
             for split in GEAR_SPLITS:
                 cells = []
@@ -75,9 +69,10 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
                     v = rs.loc[(rs["model"] == m) & (rs["split"] == split), "test_accuracy"]
                     ours = 100 * float(v.mean()) if len(v) else None
                     ref = paper[sel][split].get(m) if paper and sel in paper else None
-                    cells.append(_cell(ours, ref))
-                lines.append(f"| {SPLIT_LABELS[split]} | " + " | ".join(cells) + " |")
-    return [*lines, ""]
+                    cells.append(f"{score_text(ours, 2)} ({score_text(ref, 2)})")
+                rows.append([SPLIT_LABELS[split], *cells])
+    return [*lines, md_table([None, *map(model_label, models)], rows, "l" + "r" * len(models)),
+            ""]
 
 
 def write_tables(

@@ -81,6 +81,24 @@ PAPER_RESULTS: dict[str, dict | None] = {
 CELL_COLUMNS = ("table", "selection", "model", "split")
 
 
+def score_text(v: float | None, digits: int) -> str:
+    """A score [%] as a table cell shows it.
+
+    Parameters
+    ----------
+    v : float or None
+        The score; None or not finite where there is none.
+    digits : int
+        Decimals.
+
+    Returns
+    -------
+    str
+        ``v`` to ``digits`` decimals, or "–" where there is no score.
+    """
+    return "–" if v is None or not np.isfinite(v) else f"{v:.{digits}f}"
+
+
 def paper_cells() -> pd.DataFrame:
     """The paper's test cells, one per row.
 

@@ -27,6 +27,7 @@ from learn.paper.results import (
     PAPER_TABLES,
     SPLIT_LABELS,
     our_cells,
+    score_text,
     scorecard,
     side_by_side,
 )
@@ -89,10 +90,6 @@ def recall(confusion: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns="hit")
 
 
-def _cell(v: float) -> str:
-    return "–" if v is None or not np.isfinite(v) else f"{v:.1f}"
-
-
 def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
     lines = []
     cols = [f"ours_{n}" for n in names]
@@ -103,10 +100,9 @@ def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
             continue
         lines += [f"### Table {table}: {title}", "",
                   f"Evaluation protocol `{protocol}`. Cells: paper / " + " / ".join(
-                      f"ours, {n} acquisition" for n in names) + " [%]", "",
-                  "| | " + " | ".join(model_label(m) for m in models) + " |",
-                  "|---|" + "---:|" * len(models)]
+                      f"ours, {n} acquisition" for n in names) + " [%]", ""]
         splits = ("mean",) if table in ("VII", "VIII") else GEAR_SPLITS
+        rows = []
         for sel in selections:
             for split in splits:
                 label = (f"Selection {sel[-1]}" if split == "mean"
@@ -117,9 +113,10 @@ def _tables_md(cells: pd.DataFrame, names: list[str]) -> list[str]:
                             & (sub["model"] == m)]
                     vals = [r["paper"].iloc[0] if len(r) else None] + \
                            [r[c].iloc[0] if len(r) and c in r else None for c in cols]
-                    row.append(" / ".join(_cell(x) for x in vals))
-                lines.append(f"| {label} | " + " | ".join(row) + " |")
-        lines.append("")
+                    row.append(" / ".join(score_text(x, 1) for x in vals))
+                rows.append([label, *row])
+        lines += [md_table([None, *map(model_label, models)], rows, "l" + "r" * len(models)),
+                  ""]
     return lines
 
 
