@@ -46,6 +46,7 @@ import fnmatch
 import json
 import logging
 import os
+import sys
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -677,10 +678,8 @@ def save_figure(fig: Any, path: str | os.PathLike, dpi: int,
     path = Path(path)
     write_owned(path, lambda tmp: fig.savefig(tmp, format=path.suffix[1:], dpi=dpi,
                                               bbox_inches=bbox_inches))
-    if fig.canvas.manager is not None:  # a pyplot figure: pyplot is imported already
-        import matplotlib.pyplot as plt
-
-        plt.close(fig)
+    if fig.canvas.manager is not None:  # a figure pyplot made, so pyplot is imported
+        sys.modules["matplotlib.pyplot"].close(fig)
     return path
 
 
