@@ -1,37 +1,12 @@
 """Hand-crafted features of the paper, Table III and eq. (7)-(9).
 
-Every feature of a window is normalised by the same quantity of its *reference window*:
-the commissioning recording of the same gear, at the same operating point
-(``n_in_rpm``, ``t_out_nm``) and with the same ``disturbed`` flag, flagged
-``reference == True`` in the data set (schema v1, see :mod:`swgsim.datasets.schema`). The paper
-normalises "for each operating point by the value of the healthy gear" (eq. 7); taking
-the healthy value from a commissioning window of the *same* gear is what makes this
-possible for a gear that was never seen in training (leave-one-gear-out protocols):
-reference windows only ever serve as denominators, they are never training or test
-samples.
-
-Selections (paper Table III):
-
-=========  ==========================================================  ===========
-selection  features                                                    count (K=32)
-=========  ==========================================================  ===========
-1          m_rel(s0..s4), var_rel(s0..s4), eta_rel                     11
-2          selection 1 + DFT_rel of each zero-mean s0..s4              11 + 5 K
-3          DFT_rel of zero-mean ds13 = s1 - s3 and ds24 = s2 - s4,     2 K + 1
-           ``eta2_rel = |1 - eta_rel|^(1/4)`` (eq. 9)
-=========  ==========================================================  ===========
-
-DFT: the amplitude spectrum of the Hann-windowed zero-mean signal at orders of the input
-rotation (default 0.25, 0.5, ..., 8), computed by projecting onto
-``exp(-i 2 pi k f_in t)`` at the exact frequencies ``k * f_in``, with
-``f_in = n_in_mean_rpm / 60`` of that window, so that it needs neither an integer number
-of revolutions nor a particular window length (see :func:`order_spectrum`).
-
-DFT_rel (our choice; the paper only says "normalised component-wise similar to (7)"):
-``(|X| + eps) / (|X_ref| + eps)`` with ``eps = floor_rel * max_k |X_ref|`` per reference
-signal (default ``floor_rel = 1e-3``). Bins where the reference has almost no energy then
-give a ratio near 1 instead of exploding, and a window identical to its reference gives
-exactly 1 in every bin. Relative mean and variance follow eq. (7) literally (no floor).
+Every feature of a window is normalised by the same quantity of its *reference window*,
+the commissioning recording of the same gear, operating point and ``disturbed`` flag
+(schema v1, :mod:`swgsim.datasets.schema`): reference windows only ever serve as
+denominators. :func:`extract_features` (and :func:`iter_features`, in chunks) gives
+Selections 1-3 of Table III; :func:`order_spectrum` the DFT at orders of the input rotation.
+Design (the selections' table, the DFT, the DFT_rel floor, our choice):
+docs/paper_study.md, "The paper's features".
 """
 
 from __future__ import annotations
@@ -422,7 +397,7 @@ def extract_features(
         Schema-v1 data set with reference windows (:func:`swgsim.datasets.schema.load`).
         ``strain_signal`` (sample, sensor=5, time) [mV/V].
     selection : {1, 2, 3, "selection1", "selection2", "selection3"}
-        Paper Table III (see the module docstring).
+        Paper Table III (docs/paper_study.md, "The paper's features").
     orders : sequence of float, optional
         Orders of the input rotation for the DFT features [-]; default
         :func:`paper_orders` (0.25, 0.5, ..., 8).

@@ -1,75 +1,12 @@
 """Model inputs built from a schema-v1 data set: raw signals, differenced signals, features.
 
-The learners of the transfer study (``learn.transfer.study``) take these inputs:
-
-``raw``
-    The five bridge outputs s0..s4, each normalised with the healthy reference window of
-    the same gear, operating point and disturbed flag (see below). Shape (n, 5 + n_aux, T).
-``diff``
-    The differences of the redundant gauges (paper eq. 8) plus the torque bridge:
-    (s0, Δs13, Δs24), formed from the *normalised* channels. Shape (n, 3 + n_aux, T).
-``sel3``, ``sel1``
-    The paper's feature Selections 3 and 1 (Table III) from :mod:`learn.inputs.features`.
-    Shape (n, n_features).
-``raw_res``, ``diff_res``
-    Synchronous residuals: each window minus its phase-aligned reference window, in the
-    angle domain of the wave generator relative to the flexspline (see below). Shape
-    (n, 5 + n_aux, M) and (n, 3 + n_aux, M), one WG revolution of M points.
-``res_spec``
-    The residual's harmonic amplitudes, log10, per channel, plus the efficiency scalars.
-    Shape (n, 5 * (H - 1) + n_aux).
-
-Reference normalisation (the time-signal analogue of paper eq. 7). For each gear,
-operating point (n_in, T_out) and disturbed flag the data set holds one commissioning
-window of the healthy gear (``reference``). Each channel c of a window is mapped to
-
-    x_c <- (x_c - m_c) / r_c,     m_c = mean of the reference channel over time,
-                                  r_c = RMS of the reference channel about m_c,
-
-i.e. a healthy window of *any* gear at *any* operating point becomes a zero-mean signal
-of unit RMS, and a fault shows as a departure from that. Why this form:
-
-- the three gears differ in gauge gain and bridge offset (sensor models fitted to three
-  real gears); dividing by the gear's own RMS removes the gain, subtracting its own mean
-  removes the offset, so a model trained on two gears sees the third on the same scale;
-- the mean and the ripple amplitude grow with the load torque and change with speed;
-  normalising per operating point removes that, as eq. (7) does for the features;
-- an affine map instead of eq. (7)'s ratio, because channel means can be near zero
-  (a ratio would explode) and because offsets are fault information (eccentric WG);
-- differences are formed *after* normalisation, so a gain mismatch between s1 and s3 of
-  a healthy gear cancels (Δs13 ~ 0) instead of leaking a gear-specific residual.
-
-Synchronous residual (the ``*_res`` inputs). Every strain signal of the chain is a
-function of the wave-generator angle ψ relative to the flexspline (which carries the
-gauges) and of the load; at constant speed ψ advances at (1 + 1/N) times the input
-angle (N = ``ratio``). A window and its reference are each fitted by least squares with
-a Fourier series in ψ (harmonics h = 1..H) plus the disturbance's sub-harmonics of the
-input rotation (eq. 10: orders 1/4, 1/3, 1/2, 1; order 1 lies close to h = 1 at order
-1 + 1/N, yet fitting both lowers the healthy residual at h = 2 twelvefold on disturbed
-data) and a constant. The reference's series is rotated to the
-window's phase (the shift δ minimising the squared difference of all harmonics of
-s1..s4; started from the 2nd harmonic's phase, both roots δ, δ + π tried, refined by
-damped Newton steps) and subtracted; each channel is divided by the reference's RMS. What
-remains is what the fault adds, on the same scale for every gear: the gear's own
-tolerance signature (which differs between gears as much as a fault does, e.g. in
-Δs13) cancels, and so do the disturbance's sub-harmonics. The residual is synthesised
-on M points of one ψ revolution from harmonics ``min_harmonic``..H (h = 0 holds the
-random disturbance offset, h = 1 what is left of the order-1 disturbance), compressed by
-asinh(x / ``compress``) since fault signatures span four decades. At varying speed each
-window's own ψ(t) may be passed (``psi`` of :func:`harmonic_coefficients`,
-:func:`reference_residual`, :func:`build_input`; the data set does not carry it): the
-series is then fitted in the angle domain (computed order tracking by least squares,
-:func:`angle_coefficients`, as ``learn.monitor.features``), the nuisance orders as
-multiples of φ_in = ψ N / (N + 1).
-
-Reference windows are used for nothing else: they are never training or test samples.
-
-Auxiliary scalars. Reduced damping barely changes the strain signals (paper Sec. II-C);
-it shows in the efficiency. The signal inputs therefore carry ``n_aux`` extra channels,
-each constant along time, holding per-window scalars (default: η2_rel of eq. 9 and
-η_rel - 1, with η_rel = η / η_ref as in eq. 7). Models read them at t = 0 and route them
-past the convolutions (``learn.learners.nets``, ``learn.learners.rocket``); Selection 3
-already contains η2_rel.
+The transfer study's learners (``learn.transfer.study``) take them from :func:`build_input`:
+``raw``/``diff`` (the bridges normalised by the gear's healthy reference window; the
+redundant gauges' differences, paper eq. 8), ``sel3``/``sel1`` (Table III) and
+``raw_res``/``diff_res``/``res_spec``, the synchronous residual against the reference
+rotated to the window's phase (:func:`harmonic_coefficients`, :func:`reference_residual`).
+Design (the normalisation's form and why, the residual, the auxiliary scalars, shapes):
+docs/learners_transfer.md, "Reference normalisation and the synchronous residual".
 """
 
 from __future__ import annotations
@@ -99,7 +36,8 @@ MAX_CONDITION = 1e6
 
 @dataclass
 class ResidualSettings:
-    """Settings of the synchronous residual inputs (see the module docstring)."""
+    """Settings of the synchronous residual inputs
+    (docs/learners_transfer.md, "Reference normalisation and the synchronous residual")."""
 
     ratio: float = 100.0        # gear ratio N: the WG turns at 1 + 1/N per input revolution
     n_harmonics: int = 48       # harmonics of the WG angle fitted per window
@@ -184,7 +122,8 @@ def normalise_signals(ds, samples: np.ndarray, refs: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray, float32, shape (n, 5, T)
-        (s - m_ref) / r_ref per channel, dimensionless (see the module docstring).
+        (s - m_ref) / r_ref per channel, dimensionless
+        (docs/learners_transfer.md, "Reference normalisation and the synchronous residual").
     """
     sig = ds["strain_signal"].values  # (N, 5, T) [mV/V]
     uref, inv = np.unique(refs, return_inverse=True)
@@ -575,7 +514,7 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     ds : xarray.Dataset
         Schema v1 with reference windows.
     kind : {"raw", "diff", "sel1", "sel3", "raw_res", "diff_res", "res_spec"}
-        See the module docstring.
+        See docs/learners_transfer.md, "Reference normalisation and the synchronous residual".
     aux : sequence of {"eta2_rel", "eta_rel"}
         Per-window scalars appended as constant channels to a signal input, or as
         columns to ``res_spec`` (ignored for sel1/sel3, which carry their own efficiency

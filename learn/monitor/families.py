@@ -1,86 +1,12 @@
 """Families of benign changes (``monitor.study.families``): each nuisance life of the
 evaluation draws its change's law and magnitude from declared ranges, instead of living
-one fixed :class:`~swgsim.datasets.conditions.ConditionsConfig` made with the laws the
-monitor compensates with.
+one fixed :class:`~swgsim.datasets.conditions.ConditionsConfig` made with the monitor's laws.
 
-A family (:class:`NuisanceFamily`) names the parts of the joint's day it draws
-(:data:`PARTS`) and holds one range ``[lo, hi]`` per drawn magnitude;
-:func:`draw_conditions` turns a family and a seed into the conditions of one life, the
-same for the same seed, every magnitude uniform in its range. A part the family does not
-draw keeps the simulator's default (:mod:`swgsim.datasets.conditions`); a ``still`` family
-lives at the catalogue's reference temperature (no warm-up, no friction-temperature law,
-no bridge drift), as the fixed ``run_in`` and ``payload`` nuisances do, so that the change
-is seen alone.
-
-The ranges and their origins (**[src]** sourced, **[derived]** from a source, **[choice]**
-ours, **[unverified]** as cited in the simulator's docstrings):
-
-* ``friction_law``: the form, one of :data:`swgsim.gear.thermal.FRICTION_FORMS`
-  (viscosity-exponential, linear, saturating), and ``ratio_40c``, the friction factor at
-  40 °C against 20 °C, in [0.3, 1]: the range :class:`~swgsim.gear.thermal.FrictionLaw`
-  takes, around the issue's ×0.63 from the grease's viscosity (the catalogue's no-load
-  running torque over −10..+40 °C could not be read) **[unverified; range: choice]**.
-  Every family with temperature draws it: no joint's law is the catalogue's by
-  construction.
-* ``warm_up``: ``r_th_k_per_w`` in [0.3, 0.5] K/W: the paper's duty cycle (mean loss
-  69 W) warms the joint by 21-35 K **[derived]**, from the issue's "about 20 K"
-  (:class:`~swgsim.gear.thermal.JointThermal`) **[choice]** to below the 40 K of a KUKA
-  KR10 joint heated by intensive motion (Nevmerzhitskiy et al. 2019: 25 -> 65 °C motor
-  temperature) **[src]**; ``tau_min`` in [20, 60] min, usual for small gearboxes
-  **[unverified]**.
-* ``drift`` (the bridges, :class:`~swgsim.sensing.bridge_drift.BridgeDrift`), from
-  compensated to uncompensated gauges: ``gauge_mismatch_ue_per_k`` in [0.1, 2] µε/K, from
-  half the default's 0.2 µε/K for gauges of one lot of self-temperature-compensated foil
-  gauges (Kyowa: a lot within ±1.8 µε/K) **[choice]** to a tenth of the thermal output of
-  gauges not self-temperature-compensated on steel, thousands of µε over −50..+250 °C,
-  order 10-20 µε/K (Micro-Measurements TN-504, fig. 1, read off a figure) **[src; the
-  tenth: choice]**; ``zero_mean_mvv_per_k`` in [−5e-4, 5e-4] mV/V per K, a bridge's arms
-  not at one temperature: about half of one uncancelled compensated gauge at Kyowa's
-  bound (1e3 · GF/4 · 1.8e-6 = 9e-4 mV/V per K) **[choice]**; ``span_mean_per_k`` in
-  [0, 4e-4] /K, from a finished, compensated torque transducer (≤ 0.1 % per 10 K, HBM
-  T10F) **[src]** to the bare bridge's +3.57e-4 /K (modulus, expansion, gauge factor;
-  :mod:`swgsim.sensing.bridge_drift`) **[derived]**; ``span_sd_per_k`` in [0, 1e-4] /K,
-  bridge to bridge, up to that transducer's bound **[src as a bound; choice]**.
-* ``ambient`` (the hall, :attr:`~swgsim.gear.thermal.JointThermal.ambient_points`): a
-  ramp by ``ambient_shift_k`` in [−10, 15] K, starting at wall-clock hour
-  ``ambient_start_h`` in [30, 120] h and lasting ``ambient_ramp_h`` in [6, 72] h, and a
-  day/night swing ``ambient_swing_k`` in [0, 6] K; the hall, starting at 20 °C, stays
-  within the 0-50 °C ambient of a robot's sealed joints (Universal Robots, *Robot
-  start-up in cold environments*) **[src; ranges: choice]**.
-* ``run_in``: ``run_in_drop`` in [0.05, 0.3] and ``run_in_tau_h`` in [10, 60] h, about
-  the issue's 0.16 and 30 h (+3 points of efficiency over about 30 h) **[choice]**.
-* ``payload``: a tool change by ``payload_factor`` in [0.8, 1.2] at operating hour
-  ``payload_h`` in [30, 48] h (after commissioning, inside the shortest fault life)
-  **[choice]**. A duty change is not drawn: a life has one duty cycle
-  (:class:`swgsim.datasets.schedule.LifeConfig.duty`), none that changes in service.
-* ``sensor``: the joint's temperature sensor in one of ``sensor_states``, drawn
-  uniformly: ``present``, ``missing`` (no ``temperature_c`` in the stream), or failing
-  from operating hour ``sensor_fault_h`` in [30, 120] h on (after commissioning)
-  **[choice]**: ``stuck``, ``drift`` at ``sensor_drift_k_per_h`` in [−0.5, 0.5] K/h (a
-  failing or loosened sensor 0.01-0.5 K/h, either sign:
-  :class:`~swgsim.sensing.bridge_drift.TemperatureSensor`) **[choice]** or ``dropout``
-  (NaN readings).
-* ``regrease``: a re-greasing in service at operating hour ``regrease_h`` in [30, 48] h
-  (after commissioning, inside the shortest fault life, as the payload's), fresh grease's
-  excess friction ``regrease_drop`` in [0.1, 0.5] and its time constant
-  ``regrease_tau_h`` in [4, 24] h, about the simulator's 0.3 and 8 h
-  (:class:`~swgsim.datasets.conditions.Regrease`) **[choice]**.
-
-* ``trace``: the joint's warm-up after every cold start follows a measured one
-  (:class:`~swgsim.datasets.conditions.TemperatureTrace`, the user's file
-  ``trace_path``), one of ``trace_columns`` drawn uniformly, its rise scaled by
-  ``trace_scale`` in [1, 4]: a UR3's joints rise by 6.6-9.9 K over their first 49 min
-  of a working day (UR3 CobotOps, measured by
-  :func:`~swgsim.datasets.conditions.trace_rise`), scaled to 7-40 K, about the
-  ``warm_up`` part's 21-35 K **[src; scale: choice]**. No default family draws it (the
-  file is the user's); ``scripts/monitor_families.py --trace`` adds one.
-
-Randomness: ``np.random.default_rng([seed, FAMILY_TAG])``, every range drawn in the
-order of :data:`RANGES` whichever parts the family draws, then the form and the sensor
-state: the same seed gives a part the same magnitude in every family that draws it (the
-``warm_up`` of a seed is that of its ``all``). The trace's column and scale are drawn
-from ``default_rng([seed, FAMILY_TAG, 1])``, so that the other draws are those of a
-family without it.
+:class:`NuisanceFamily` names the parts it draws (:data:`PARTS`) and one range ``[lo, hi]``
+per magnitude; :func:`draw_conditions` turns a family and a seed into one life's
+conditions, the same for the same seed; :func:`default_families` gives the study's.
+Design and sources (every range's origin, the draws' order):
+docs/monitor.md, "Families of benign changes".
 """
 
 from __future__ import annotations
@@ -108,7 +34,7 @@ __all__ = ["DEFAULT_PARTS", "FAMILY_TAG", "PARTS", "RANGES", "SENSOR_STATES", "U
            "NuisanceFamily",
            "default_families", "draw_conditions"]
 
-#: The parts of a joint's day a family can draw (module docstring).
+#: The parts of a joint's day a family can draw (docs/monitor.md, "Families of benign changes").
 PARTS = ("friction_law", "warm_up", "drift", "ambient", "run_in", "payload", "sensor",
          "regrease", "trace")
 #: The parts a family draws by default: all but the ``trace`` (its file is the user's).
@@ -157,7 +83,7 @@ def _span(lo: float, hi: float):
 @dataclass
 class NuisanceFamily:
     """A family of benign changes: the parts drawn and each magnitude's range ``[lo, hi]``
-    (units and origins: module docstring).
+    (units and origins: docs/monitor.md, "Families of benign changes").
 
     Attributes
     ----------
@@ -325,8 +251,8 @@ def _trace_draw(family: NuisanceFamily, seed: int) -> tuple[float, str]:
 
 
 def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
-    """One life's conditions drawn from a family (module docstring); pure and
-    deterministic.
+    """One life's conditions drawn from a family (docs/monitor.md, "Families of benign changes");
+    pure and deterministic.
 
     Parameters
     ----------

@@ -1,78 +1,12 @@
 """The gear's normal behaviour: its health features as the operating conditions set them,
-learnt at commissioning.
+learnt at commissioning (a normal-behaviour model with the physics' shape).
 
-A window's features (:mod:`.features`) depend on the gear's health and on what a real
-joint's day does to it: the temperature (the bridges' gain and zero drift, the grease's
-viscosity in the friction), the acting load (a heavier tool) and a slow, even change of
-the friction (run-in). Condition-monitoring practice regresses the indicators on the
-operating variables before thresholding them (normal-behaviour models: Tautz-Weinert and
-Watson, *IET Renew. Power Gener.* 11(4), 2017; Bittencourt and Axelsson, *IEEE/ASME Trans.
-Mechatronics* 19(5), 2014, for robot-joint friction against temperature and load). Here
-the regression has the physics' shape, so that a few parameters learnt at commissioning
-carry it to the conditions commissioning did not see:
-
-* **bridges and temperature**: each bridge's output is ``G_c(T) s + ζ_c (T − T̄)`` with
-  ``G_c = 1 + γ_c (T − T̄)`` (span and zero drift per K, one pair per bridge): every
-  amplitude of bridge c scales by G_c, its offset by G_c plus ζ_c ΔT, its residual's RMS
-  by G_c. γ_c and ζ_c are least-squares fits over all commissioning windows (pooled over
-  harmonics and operating points). What a bridge's common gain leaves, each feature's own
-  slope per K at each point, is fitted at commissioning too: a gauge's span drift unlike
-  its bridge partners' lets a harmonic the bridge cancels leak in with the temperature
-  (behind the robot link, the second harmonic of bridges 1 and 3 moved by ∓1.5 σ from the
-  warm joint to the cold start, robot_joint gear 2, seed 3);
-* **efficiency, temperature and load**: the loss torque ``L = τ (1/η − 1)`` at the output
-  is ``A_n φ(T) + B_n τ`` per input speed n: a load-independent part following the
-  temperature (φ = exp(θ (T − 20 °C)), the rate θ learnt from the joint's commissioning
-  windows over every ratio a smooth monotone law can have at 40 °C, :data:`~.laws.FRICTION_RATES`,
-  not the catalogue's viscosity law; Harmonic Drive engineering data: no-load running
-  torque over temperature) and a part proportional to the load (the mesh's); A_n and B_n
-  fitted at commissioning with θ. θ is learnt only where commissioning saw the joint cool
-  (a cold start, :func:`~.laws.cools`): over a single warm-up a run-in lowers the loss as the
-  temperature rises and would pass for the law; there the catalogue's viscosity law is
-  kept (:data:`~.laws.CATALOGUE_RATE`). Within commissioning's range any smooth monotone law is
-  close to one exponential; beyond it the learnt law is extrapolated, in the widened spread
-  of :meth:`NormalBehaviour.z_and_spread`;
-* **the acting load**: the gauges are linear in the output torque, so a Fourier
-  coefficient is ``a + τ b`` and its squared amplitude a quadratic in τ, through the
-  commissioning means at the loads of the same speed (exact with three); an offset is a
-  line in τ; the residual's power a quadratic;
-* **a slow, even change of the friction** (run-in, grease): tracked as one factor r on the
-  loss torque (an exponential mean of the windows' ratio to the prediction over
-  ``friction_track_h`` operating hours). A gear fault that changes friction changes it
-  unevenly (reduced damping lowers the viscous term only: more at light loads), so its
-  pattern over the operating points stays in the z-scores.
-
-:meth:`NormalBehaviour.reference` brings a window's features to the reference condition of
-its operating point (commissioning's mean temperature and load); the z-scores are their
-deviations from commissioning's corrected mean in its spread. Where the stream has no
-temperature, the temperature terms are left out: the spread of commissioning's warm-ups
-is then in the standard deviations, and the directions in which they moved the z-scores
-together (at most ``warm_up_components`` per point, each beyond the noise's largest
-eigenvalue, :func:`~.laws.warm_up_directions`) are taken out of every window, in σ: a
-latent temperature, in the joint's own units, trusted within the range commissioning's
-warm-ups took and, at a load beyond commissioning's (a heavier tool heats the joint
-further), beyond it as an extrapolation that widens the spread by its own size, as the
-reading's laws are beyond their range.
-What it assumes: a warm-up moves the features the same way at every cold start and load
-(the drifts are smooth laws of the temperature, and commissioning saw the cold starts,
-24 h with two of them); what it costs: a fault whose pattern lies along those directions
-is seen within the warm-ups' range there only through the features off them, and beyond
-it at a new load through a wider spread. A point relearnt at a new load keeps them
-(:meth:`NormalBehaviour.recommission`). :meth:`NormalBehaviour.outside` flags windows whose
-condition commissioning did not see (temperature beyond its range by
-``temperature_margin_k``, load beyond its by ``load_margin``, the friction factor beyond
-its by ``friction_margin``): the monitor advises to recommission (an advisory, not a gear fault)
-and keeps watching with the extrapolated model, in a spread widened by the extrapolation's
-own size (:meth:`NormalBehaviour.z_and_spread`). Commissioning's temperature range is
-always its readings' range widened by the sensor's uncertainty
-(``temperature_uncertainty_k``), whatever its spread: where the spread was too small to
-fit the temperature terms (below :data:`MIN_SPREAD_K`), no law carries a window beyond
-that range, so it is outside without a margin and not judged
-(:data:`OUTSIDE_UNJUDGED`: the monitor's CUSUMs hold), advised, not alarmed (a joint
-commissioned at 30 °C that ran at 80 °C got an eccentric-WG alarm, issue 43). Where the
-acting load at a point stays beyond commissioning's (a heavier tool), the monitor
-recommissions that point after enough windows without an alarm
-(:meth:`NormalBehaviour.recommission`).
+:class:`NormalBehaviour` fits, per operating point, the bridges' span and zero drift with
+the temperature, the loss torque's law of temperature and load, each feature's law of the
+acting load and a tracked friction factor; :meth:`NormalBehaviour.reference` brings a
+window's features to commissioning's condition, :meth:`NormalBehaviour.outside` flags a
+condition commissioning did not see, :meth:`NormalBehaviour.recommission` relearns a point.
+Design and sources: docs/monitor.md, "The normal behaviour's laws" (and "A real day").
 """
 
 from __future__ import annotations

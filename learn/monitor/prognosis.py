@@ -1,48 +1,12 @@
 """Prognosis after an alarm: the hours left until the named fault's severity reaches its
 failure threshold, as a distribution (in the stream: :mod:`.stream_prognosis`).
 
-The physics-based predictor (:func:`predict_growth`) takes the fault's growth law from
-:mod:`swgsim.datasets.growth` (Paris' law for the cracks, Archard's law for the wave
-generator's eccentricity and the flanks' wear) with its one unknown, the gear's factor
-``s`` on Paris' C or on the wear coefficient. Under the duty the gear ran (each window's
-input speed, acting load and grease temperature) the law gives the exposure X(t) the
-gear took at s = 1: Paris' damage sum D (:func:`swgsim.datasets.growth.paris_damage`) or
-the worn depth (:func:`swgsim.datasets.growth.archard_depth`). In a transformed severity u
-both laws are straight lines in X [derived: the closed form of
-:func:`swgsim.datasets.growth.paris_crack_depth` solved for a]:
-
-* Archard: u = severity, u = u0 + s X / d1 (d1 the depth at severity 1,
-  :data:`swgsim.datasets.growth.DEPTH_AT_ONE_M`);
-* Paris (m ≠ 2): u = (severity d1)^(1 − m/2), u = u0 + (1 − m/2) (Y √π)^m s X; m = 2:
-  u = ln(severity d1), u = u0 + (Y √π)^2 s X.
-
-The likelihood of the monitor's severity estimates is Gaussian in severity, σ from each
-estimate's 90 % interval (:meth:`learn.monitor.model.DiagnosisModel.estimate`, σ = its
-width / 3.29), the model severity = u⁻¹(u0 + b s X). The unknown u0 (the severity at the
-alarm, transformed) is integrated out by Laplace's method about its Gauss-Newton fit at
-each s, and ln s gets a grid posterior whose prior is normal with the growth's per-gear
-scatter (:attr:`swgsim.datasets.growth.RunToFailure.scatter`: the fleet the model was
-trained on). [A weighted straight-line fit in u, with the intervals mapped to u, was
-tried first: on root cracks with σ = 0.03 it overestimated the remaining hours by 17 %
-(median of 20 lives at 60 % of the way) and its interval held 45 % of the true failure
-hours, the transform's curvature biasing the noisy estimates.]
-Monte-Carlo draws of (s, u0) give the exposure still needed to the failure threshold and,
-through the future duty (the recorded one's mean exposure per hour, or a planned one the
-user declares, repeated as a cycle), the remaining hours. Everything is vectorised; the
-cost is O(windows + grid points × estimates + samples).
-
-Assumptions: the estimates' errors are independent with the stated intervals (they are
-not: neighbouring estimates share windows, so the posterior is too narrow unless widened:
-``PrognosisConfig.interval_scale``, calibrated by split conformal across the training
-gears' lives: :mod:`learn.monitor.prognosis_calibration`); the law and its exponent m are
-right and only the scale is unknown; the future runs at the recorded duty's mean rate or
-repeats the planned duty from its first block.
-
-Two baselines take the same inputs and ignore the duty
-(:mod:`learn.monitor.prognosis_baselines`): a weighted straight line of severity in
-operating hours, and a Wiener process with drift in operating hours, no load covariate.
-
-ProgPy (1.9) and SurPyval (0.25) were read and not used (docs/monitor.md says why).
+:func:`predict_growth` takes the fault's growth law from :mod:`swgsim.datasets.growth`
+(Paris' law for the cracks, Archard's for the eccentricity and wear) with one unknown, the
+gear's scale s; in a transformed severity (:func:`transformed`) the law is a straight line
+in the exposure the duty gave, ln s gets a grid posterior, Monte-Carlo draws give the
+remaining hours. Baselines: :mod:`learn.monitor.prognosis_baselines`. Design, formulas and
+assumptions (and why not ProgPy or SurPyval): docs/monitor.md, "Prognosis".
 """
 
 from __future__ import annotations
@@ -111,7 +75,7 @@ def transformed(fault: str, severity: np.ndarray, tf: RunToFailure) -> tuple[np.
     -------
     u : ndarray, shape (n,)
         Archard: the severity; Paris: (severity d1)^(1 − m/2), ln(severity d1) for m = 2
-        (module docstring) [derived].
+        (docs/monitor.md, "Prognosis") [derived].
     b : float
         du/dX per unit scale: u = u0 + b s X [-/exposure].
     """
@@ -234,7 +198,8 @@ def severity_of(fault: str, u: np.ndarray, tf: RunToFailure) -> tuple[np.ndarray
 def _grid_posterior(ls: np.ndarray, y: np.ndarray, w: np.ndarray, x: np.ndarray,
                     fault: str, tf: RunToFailure) -> tuple[np.ndarray, ...]:
     """Log posterior of ln s at grid ``ls`` (shape (G,)), u0's fit and precision there,
-    each shape (G,); y, w = 1/σ², x: the estimates, shape (n,) (module docstring)."""
+    each shape (G,); y, w = 1/σ², x: the estimates, shape (n,)
+    (docs/monitor.md, "Prognosis")."""
     u, b = transformed(fault, y, tf)
     beta = b * np.exp(ls)[:, None]  # (G, 1)
     early = slice(0, max(3, y.size // 4))  # the start: the first quarter's mean [choice]

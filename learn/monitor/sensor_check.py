@@ -1,52 +1,12 @@
 """Is one sensor's fault enough to explain an alarm? The test that keeps sensor faults
-from being named as gear faults.
+from being named as gear faults (the analytical redundancy of sensor fault isolation).
 
-A sensor fault acts on one bridge only and in one of two shapes
-(:mod:`swgsim.sensing.sensor_faults`): an offset step moves that bridge's offset c0 by δ [mV/V]
-and nothing else; a gain drift multiplies its whole output by g = 1 − severity, i.e.
-its offset and every harmonic amplitude by g (its residual's RMS, which also holds the
-converter's noise, is left free). A gear fault is seen by every bridge through the
-flexspline (an eccentric WG moves the offsets of s1 and s3 by equal and opposite
-amounts, and s0's; a crack changes the harmonics of several bridges, not in proportion).
-This is the analytical redundancy of sensor fault isolation: each hypothesis "bridge c
-has fault f" is fitted to the windows since the alarm by its one parameter (least
-squares in the z-scores against the gear's normal behaviour), the fitted effect is taken out,
-and what is left is judged twice, where the fit is plausible (significant, and a gain
-that falls, not rises):
-
-* window by window, as the alarm was: the diagnosis model's score and the novelty Σ z²,
-  as conformal p-values against the gear's calibration windows
-  (:meth:`learn.monitor.gear_monitor.GearMonitor.p_values`), whose median must be at least
-  :data:`SENSOR_P_MIN` (the windows look as healthy as the gear's own healthy ones);
-* over all the windows together, on the other bridges and the efficiency, which a
-  sensor fault leaves alone: their mean z-scores over the n windows, as
-  ``n · mean_j(mean_i z_ij)²`` (:attr:`SensorFit.rest`; about 1 where nothing else
-  moved, growing with n where something did), must be at most :data:`REST_MAX`. A gear
-  fault that one bridge explains window by window, because its share on the other
-  bridges is inside their window-to-window spread (an eccentric WG's s3 on the robot
-  link), still moves their mean: an hour of windows sees it.
-
-A hypothesis that passes both explains the alarm; of those, the one that leaves the
-windows most healthy is the sensor fault named.
-
-The joint's temperature sensor is checked the same way (:func:`fit_temperature`): the
-hypothesis "the reading is wrong" (stuck, drifting, off) gives each window the temperature
-that leaves its z-scores smallest, by the laws commissioning learnt (the bridges' span and
-zero drift, each feature's own slope, the friction's law, :mod:`.normal`); where that
-temperature lies at least :data:`TEMPERATURE_MIN_K` from the reading and leaves the windows
-as healthy as above (median p-value at least :data:`SENSOR_P_MIN`), the temperature sensor
-is named (:data:`TEMPERATURE_SENSOR`). It assumes what holds for any joint: its features
-move with its temperature by smooth laws that commissioning, with a cold start, saw. A gear
-fault moves them in a pattern no temperature gives (an eccentric WG moves the offsets of s1
-and s3 apart; a temperature moves every bridge alike). Once named, or where a reading is
-missing, the monitor goes on with the temperature those laws give each window
-(:func:`virtual_temperature`, :func:`learn.monitor.stream.run_stream`).
-
-Source: the structured-residual idea of sensor fault isolation (P. M. Frank, "Fault
-diagnosis in dynamic systems using analytical and knowledge-based redundancy",
-Automatica 26(3), 1990, sec. 4: one residual per sensor, insensitive to that sensor);
-here the "observer" is the gear's own normal behaviour and the fault model is
-parametric.
+:func:`fit_bridge_faults` and :func:`fit_sensor_faults` fit each one-bridge fault to the
+windows since the alarm (:class:`SensorFit`), judged window by window
+(:data:`SENSOR_P_MIN`) and on the other bridges together (:data:`REST_MAX`);
+:func:`fit_temperature` and :func:`fit_temperature_drift` test the joint's temperature
+sensor, :func:`virtual_temperature` replaces a failed one. Design and source (Frank 1990):
+docs/monitor.md, "Naming a sensor fault" and "The monitor checks its temperature sensor".
 """
 
 from __future__ import annotations

@@ -1,41 +1,12 @@
 """Deep learners and transfer to the unseen gear: the whole comparison in one task.
 
-``swgsim-train -m experiment=transfer`` -> :func:`run_transfer`. For every data set of
-``transfer.run_on`` (presets: the paper's protocol, a bench's, a robot joint's; generated
-in ``transfer.data_root`` when missing), every evaluation protocol
-(:data:`learn.studies.protocols.PROTOCOLS`, default the leave-one-gear-out one on
-disturbed data), split and seed it trains each configured (model, input) run
-(:class:`learn.studies.runs.RunSpec`) on the training windows and scores it; under the
-leave-one-gear-out protocols it also
-
-* adapts every run marked ``finetune`` with k labelled windows per class of the held-out
-  gear, for each k in ``k_shots``: torch nets fine-tuned on all layers and on the last
-  layer only, MiniRocket's ridge refitted (its kernels stay);
-* runs the unsupervised adaptations: AdaBN for the torch nets (batch-norm statistics
-  re-estimated on unlabelled target windows) and CORAL for feature models
-  (:mod:`learn.learners.adapt`). Their unlabelled windows are the held-out gear's
-  *unlabelled healthy windows* (``adapt_windows`` healthy windows, whole healthy
-  variants), what a real gear offers at commissioning, not the class-balanced k-shot pool.
-
-The k-shot split and the unlabelled healthy windows are
-:func:`learn.studies.kshot.kshot_split`; both are removed from the evaluation windows of
-every run. Nothing in training, early stopping, model choice or hyper-parameters sees an
-evaluation window: early stopping, where enabled, splits the *source* gears; fine-tuning
-has a fixed step budget; MiniRocket's ridge penalty stays the one chosen on the source
-windows. Model sizes, epochs and kernels were set for the CPU budget on the earlier
-default data set, not on these.
-
-Files in ``report_dir`` (default ``reports/transfer``): ``results.csv`` (one row per
-run: :data:`RESULT_COLUMNS`, accuracy in 0..1), ``confusion.csv`` (:data:`CONFUSION_COLUMNS`,
-counts per split and seed), ``table.md`` (:func:`learn.transfer.report.write_table`),
-``accuracy_vs_k.png``, ``separability_<dataset>_<clean|disturbed>.png``, ``latency.csv``,
-``run_times.csv`` (:data:`RUN_TIME_COLUMNS`: wall and CPU seconds of every run in every
-job). One MLflow run per (data set, protocol, model, input, k) with the per-split,
-per-seed accuracies, and a parent run holding the report and the resolved config.
-
-A *job* is one (data set, protocol, split, seed) with every run; the jobs of all data
-sets share one pool of worker processes (:func:`run_comparisons`), and one progress line
-counts them (:class:`JobProgress`: done, left, time left; a log line per finished job).
+``swgsim-train -m experiment=transfer`` -> :func:`run_transfer`: per data set, protocol
+(:data:`learn.studies.protocols.PROTOCOLS`), split and seed, every (model, input) run
+trained, adapted with k shots or unlabelled healthy windows, and scored; the jobs share
+one pool of workers (:func:`run_comparisons`, :class:`JobProgress`). Files: ``results.csv``
+(:data:`RESULT_COLUMNS`), ``confusion.csv`` (:data:`CONFUSION_COLUMNS`), ``run_times.csv``
+(:data:`RUN_TIME_COLUMNS`), ``table.md``. Design (which windows each step sees, the files,
+MLflow): docs/learners_transfer.md, "The comparison" and "What was chosen on what data".
 """
 
 from __future__ import annotations
