@@ -1,47 +1,12 @@
 """A healthy joint's changing day: temperature, run-in, payload and the bridges' drift.
 
 ``dataset.life.conditions`` (:class:`ConditionsConfig`; None, the default: nothing changes
-but the fault, every preset's content as before) gives a life the variation a real joint
-lives through while its gear stays healthy, each with a sourced magnitude
-(:mod:`swgsim.gear.thermal`, :mod:`swgsim.sensing.bridge_drift`):
-
-* **temperature**: operating days with stops, a cold start after each, a first-order
-  warm-up towards a rise set by the power the gear loses at its operating point, and a
-  hall that can drift (:func:`swgsim.gear.thermal.joint_temperature`), or, instead of the
-  first-order warm-up, a measured one (``temperature_trace``, :class:`TemperatureTrace`),
-  or a measured joint's temperature replayed on the life's operating hours (its mode
-  ``hours``);
-* **friction**: its temperature law, the grease's viscosity law
-  (:func:`swgsim.gear.thermal.friction_scale`) or one drawn from a family of smooth monotone
-  laws (:class:`swgsim.gear.thermal.FrictionLaw`), the run-in of a new gear
-  (:func:`swgsim.gear.thermal.run_in_factor`) and its running in again after each
-  re-greasing in service (:func:`swgsim.gear.thermal.regrease_factor`);
-* **payload**: a heavier (or lighter) tool from set hours on, the acting load at every
-  duty point times a factor, the commanded points unchanged;
-* **bridges**: each bridge's zero and span drift with the temperature, per gear
-  (:func:`swgsim.sensing.bridge_drift.draw_bridge_drift`);
-* **temperature sensor**: the joint's reading, ``temperature_c`` of every window
-  (None: the stream has no temperature), and its fault from a set hour on, stuck, drifting
-  or lost (NaN readings; :class:`swgsim.sensing.bridge_drift.TemperatureSensor`): the
-  reading alone is wrong, the joint's true temperature and all it drives stay.
-
-How a window gets them (:func:`window_conditions`, used by
-:class:`swgsim.datasets.life.LifeSimulator`): its record is that of the nominal gear at
-the acting load (a payload factor's own record, simulated like any other,
-:mod:`swgsim.datasets.records`); the friction factor changes the window's efficiency by
-the ratio of the model's steady efficiencies
-(:func:`swgsim.gear.thermal.steady_efficiency`), and not its gauge signals, which the chain takes
-from the torque the gear delivers (:mod:`swgsim.gear.chain`): measured, a 25 K warmer gear moves the
-efficiency by 80-240 healthy standard deviations and every gauge feature by at most 1.1
-(the residual of s0 at 4000 rpm, 70 N m) - held constant [stated simplification]. What
-stays constant:
-the thermal model's parameters over a life, the gear's stiffness and backlash (the
-catalogue gives no temperature dependence), the sensor's calibration offset.
-
-Randomness: the bridges' coefficients from ``SeedSequence(seed, spawn_key=(gear,
-2**21))`` (a property of the gear, the same in all its lives), the sensor's noise from
-``spawn_key=(gear, life_seed, 2**22)``, drawn for the whole schedule at once; neither
-touches a window's own stream.
+but the fault) gives a life what a real joint lives through while its gear stays healthy,
+each with a sourced magnitude (:mod:`swgsim.gear.thermal`, :mod:`swgsim.sensing.bridge_drift`):
+the joint's temperature (modelled, or measured: :class:`TemperatureTrace`), the friction's
+temperature law, run-in and re-greasing, the payload, the bridges' drift and the
+temperature sensor; :func:`window_conditions` gives each window its own. What changes, how,
+what stays, the random streams: docs/DATASET.md, "Gear lives", *A life through a real day*.
 """
 
 from __future__ import annotations
@@ -352,7 +317,7 @@ def _seconds(col, key: str) -> np.ndarray:
 
 @dataclass
 class ConditionsConfig:
-    """What changes while the gear stays healthy (module docstring).
+    """What changes while the gear stays healthy (DATASET.md, "Gear lives").
 
     Attributes
     ----------
@@ -470,7 +435,7 @@ class WindowConditions:
 def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
                       t_out_nm: np.ndarray, gear: ChainParams, seed: int, gear_id: int,
                       life_seed: int) -> WindowConditions:
-    """The conditions of a life's windows (module docstring).
+    """The conditions of a life's windows (DATASET.md, "Gear lives").
 
     Parameters
     ----------
@@ -483,7 +448,7 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     gear : ChainParams
         The healthy gear (its loss heats the joint).
     seed, gear_id, life_seed : int
-        The data set's seed, the gear, the life (random streams, module docstring).
+        The data set's seed, the gear, the life (random streams: DATASET.md, "Gear lives").
 
     Returns
     -------

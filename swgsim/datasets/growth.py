@@ -1,50 +1,12 @@
 """Lives that run to failure: a fault's severity grown by what the joint does.
 
-``dataset.life.fault.growth`` ``paris`` or ``archard`` (:mod:`swgsim.datasets.schedule`) grows
-the fault from its severity at the onset (``dataset.life.fault.severity``) by a law driven by
-each window's operating point, acting load (the payload) and temperature, until a failure
-severity, at which it saturates: the life goes on, every later window at the failure
-severity [choice: a life's number of windows is fixed before any simulation, so that the
-shards and their sizes are planned as for any life].
-
-* **Paris' law** for the cracks (``root_tooth_crack``, ``tip_tooth_crack``):
-  da/dN = C (ΔK)^m, ΔK = Y Δσ √(π a) [MPa √m], Δσ = ``stress_mpa_per_nm`` × the acting
-  load [P. Paris and F. Erdogan, "A critical analysis of crack propagation laws", J. Basic
-  Eng. 85 (1963) 528-534 [unverified: not re-read]]. A flexspline tooth is loaded twice per
-  input revolution (the two lobes of the wave generator): N grows by 2 per revolution.
-  Crack depth a maps to severity as a / (the depth at severity 1): the rim's effective
-  thickness for a root crack (its bars' stiffness lost in proportion to the cracked depth
-  [choice]), the tooth's depth for a tip crack (its force lost in proportion [choice]).
-* **Archard's law** for wear (``eccentric_wg``: the wave generator's bearing worn on one
-  side, its centre shifted by the worn depth [choice]; ``wear``: the flanks, whose lost
-  thickness at the pitch radius is the backlash [choice]): worn depth rate ∝ load ×
-  sliding distance, the load the acting torque, the sliding distance the input
-  revolutions [choice: the tooth and
-  bearing loads in proportion to the torque, no wear at zero load]
-  [J. F. Archard, "Contact and rubbing of flat surfaces", J. Appl. Phys. 24 (1953) 981-988
-  [unverified: not re-read]], times a film factor (ν(T)/ν(20 °C))^(−``film_exponent``):
-  hotter grease, lower viscosity (:func:`swgsim.gear.thermal.viscosity_ratio`, the real
-  day's law), a thinner film, faster wear (the film thickness of an elastohydrodynamic
-  contact ∝ (η u)^0.67, Hamrock and Dowson [unverified: recalled, not re-read]; wear taken
-  ∝ 1 / film thickness [choice]). ``reduced_stiffness`` and ``reduced_damping`` are the
-  paper's parameter changes of the I/O model, not a mechanism: they have no law here
-  (``linear`` or ``points`` grow them).
-
-Both are integrated once per life on the window grid, exactly for a load held over each
-window's interval: Paris' law through its damage sum D = Σ C Δσ^m ΔN (a cumulative sum;
-a from D in closed form, :func:`paris_crack_depth`), Archard's as a cumulative sum.
-
-Per gear scatter: C or the wear coefficient times exp(``scatter`` z), z standard normal from
-``SeedSequence(seed, spawn_key=(gear, life_seed, 2**23))`` (drawn in
-:class:`swgsim.datasets.life.LifeSimulator`; no window's stream touched).
-
-The defaults make an *accelerated* life [choice]: at the paper's duty (2000 and 4000 rpm,
-7, 39 and 70 N m, 10 min each, 20 °C, onset at 48 h) a root crack from severity 0.05
-fails (0.5) at 432 h and a wear from 0 (failure 0.8) at 175.8 h (measured with
-``scripts/failure_hours.py``, docs/DATASET.md, "Lives that run to failure"). A real
-flexspline runs 10^4 h and more, and its crack at such stresses would stay below the
-threshold ΔK_th of steels (a few MPa √m [unverified]), which the law here leaves out: the
-Paris regime only.
+``dataset.life.fault.growth`` ``paris`` (the cracks) or ``archard`` (the wave generator's
+eccentricity, the flanks' wear) grows the fault from its severity at the onset by a law
+driven by each window's operating point, acting load and temperature, up to a failure
+severity at which it saturates (constants: :class:`RunToFailure`). Both are integrated
+once per life on the window grid (:func:`paris_damage`, :func:`paris_crack_depth`,
+:func:`archard_depth`; the life's severities :func:`grown_severity`). Laws, choices,
+sources, the accelerated life: docs/DATASET.md, "Lives that run to failure".
 """
 
 from __future__ import annotations
@@ -94,7 +56,7 @@ FAILURE_SEVERITY: dict[str, float] = {"root_tooth_crack": 0.5, "tip_tooth_crack"
 
 @dataclass
 class RunToFailure:
-    """The constants of a fault's growth to failure (module docstring).
+    """The constants of a fault's growth to failure (DATASET.md, "Lives that run to failure").
 
     Attributes
     ----------
@@ -117,12 +79,15 @@ class RunToFailure:
         "The Stress Analysis of Cracks Handbook" [unverified: recalled]).
     stress_mpa_per_nm : float
         Δσ at the tooth per N m of acting load, in (0, 100] [MPa/(N m)] (0.6: 31 MPa at
-        the rated 52 N m) [choice: sets the accelerated life of the module docstring].
+        the rated 52 N m) [choice: sets the accelerated life of
+        DATASET.md, "Lives that run to failure"].
     wear_coeff_m_per_nm_rev : float
         Worn depth per N m of acting load per input revolution at 20 °C, in (0, 1e-9]
-        [m/(N m rev)] (2e-14) [choice: the accelerated life of the module docstring].
+        [m/(N m rev)] (2e-14) [choice: the accelerated life of
+        DATASET.md, "Lives that run to failure"].
     film_exponent : float
-        p of the film factor (ν(T)/ν(20 °C))^(−p), in [0, 3] [-] (0.67, module docstring).
+        p of the film factor (ν(T)/ν(20 °C))^(−p), in [0, 3] [-] (0.67,
+        DATASET.md, "Lives that run to failure").
     """
 
     failure: float | None = None
@@ -189,7 +154,8 @@ def load_cycles(n_in_rpm: np.ndarray, minutes: float) -> np.ndarray:
 
 def paris_damage(cycles: np.ndarray, delta_sigma_mpa: np.ndarray, c: float,
                  m: float) -> np.ndarray:
-    """Paris' damage sum after each block, D_k = Σ_{i<=k} C Δσ_i^m ΔN_i (module docstring).
+    """Paris' damage sum after each block, D_k = Σ_{i<=k} C Δσ_i^m ΔN_i
+    (DATASET.md, "Lives that run to failure").
 
     Parameters
     ----------

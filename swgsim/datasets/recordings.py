@@ -1,46 +1,12 @@
 """A user's recording of a sensorized joint as a stream the condition monitor reads.
 
-A *recording* is a table (CSV or Parquet, one row per sample) of a joint's five bridges,
-its input speed and output torque, optionally its input and output angles, the joint's
-temperature, the input and output power, and a clock (operating hours or wall-clock
-time). A small YAML, the *mapping*
-(:class:`~swgsim.datasets.recording_mapping.RecordingMapping`), names its columns and
-units and declares the gear's operating points and commissioning period;
-:func:`import_recording` checks both before any work, cuts the recording into windows and
-writes them as a schema-v1 stream (``docs/DATASET.md``, "Imported recordings"), the
-same a life of ``swgsim-generate`` is, so that ``swgsim-monitor`` reads it. The user's
-guide is ``docs/OWN_JOINT.md``; an example mapping is ``examples/own_joint_mapping.yaml``.
-
-How the windows are made (:mod:`swgsim.datasets.recording_table` and
-:mod:`swgsim.datasets.recording_checks` do the array work):
-
-* **segments**: a new segment begins where the clock advances by more than one window
-  since the previous row (a logger's bursts); inside a segment the time column advances
-  by the sample period (within ``rate_tolerance``), a longer gap is refused;
-* **windows**: each segment is cut from its first row into consecutive windows of
-  ``round(window_s * rate)`` samples; a window's ``hour`` is the clock at its segment's
-  first row plus the time since that row (operating hours as the clock column counts
-  them; with a wall clock or none, hours since the recording's first row);
-* **operating points**: a window is at a declared point (``n_in_rpm``, ``t_out_nm`` of
-  the stream, the keys of the monitor's normal behaviour) when its mean speed and mean
-  torque lie within the tolerances of it and every sample's speed within the speed
-  tolerance (a steady window); other windows are counted and left out;
-* **interval**: of the windows at a point, the first is taken, then each first one at
-  least ``interval_min`` minutes of operation (less one window) after the last taken;
-* **commissioning**: the windows of the first ``commissioning_h`` hours, known healthy;
-* **stops**: a window holding a row flagged by a ``stops`` column (a protective stop) is
-  left out before the operating points are assigned (a stopped joint has no load cycle to
-  judge; counted as ``stopped_windows``); the windows around it keep their hours.
-
-Per window the stream holds the bridges (mV/V; raw counts through each bridge's
-calibration, ``mV/V = gain * (count - offset)``), ``n_in_mean_rpm`` and ``t_out_mean_nm``
-(the means of the speed and torque columns), ``efficiency`` (mean output power over mean
-input power, NaN without power columns or where the input power averages to zero), the
-angle channels ``phi_in_meas`` and ``phi_out_meas`` [rad] (unwrapped inside each segment,
-on the window's samples), ``temperature_c`` (the window's mean), ``hour``,
-``commissioning`` and ``recording_row`` (the table row of the window's first sample).
-``fault`` is ``healthy`` in commissioning (declared so) and ``unknown`` after it;
-``severity`` 0 and NaN likewise.
+A *recording* is a table (CSV or Parquet, one row per sample) of a joint's bridges, speed
+and torque, optionally angles, temperature, powers, stop flags and a clock; its *mapping*
+(:class:`~swgsim.datasets.recording_mapping.RecordingMapping`) names columns, units,
+operating points and commissioning. :func:`import_recording` checks both, cuts the
+recording into windows (:func:`recording_stream`; arrays: :mod:`.recording_table`,
+:mod:`.recording_checks`) and writes a schema-v1 stream. Segments, windows, points, stops,
+variables: docs/DATASET.md, "Imported recordings"; user's guide docs/OWN_JOINT.md sec. 2-3.
 """
 
 from __future__ import annotations

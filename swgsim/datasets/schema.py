@@ -1,44 +1,12 @@
-"""Data set on disk, schema v1 (see ``docs/DATASET.md``).
+"""Data set on disk, schema v1.
 
-A data set is a directory of NetCDF4/HDF5 shards written through xarray + h5netcdf plus a
-``manifest.json``. Every shard holds whole windows along the ``sample`` dimension; the
-loader joins them. Writes are atomic (temporary name, then ``os.replace``) and every shard's
-SHA-256 is recorded in the manifest and checked on load, so a truncated or altered shard
-is reported with its file name instead of silently giving wrong data.
-
-Variables (dims, dtype, units):
-
-=====================  ======================  =======  ======  ==========================
-name                   dims                    dtype    units   meaning
-=====================  ======================  =======  ======  ==========================
-strain_signal          (sample, sensor, time)  float32  mV/V    bridge outputs s0..s4
-sensor                 (sensor)                str              "s0".."s4"
-time                   (time)                  float64  s       time since window start
-gear                   (sample)                int64            SWG model 1, 2, 3
-fault                  (sample)                str              class name or "unknown"
-variant                (sample)                int64            0..59 (-1: reference)
-severity               (sample)                float64          0 = healthy
-position_deg           (sample)                float64  deg     fault position (NaN: none)
-n_in_rpm               (sample)                float64  rpm     desired input speed
-t_out_nm               (sample)                float64  N m     desired load torque
-disturbed              (sample)                bool             eq. (10) applied
-reference              (sample)                bool             commissioning window
-efficiency             (sample)                float64          mean P_out / mean P_in
-n_in_mean_rpm          (sample)                float64  rpm     acting input speed
-t_out_mean_nm          (sample)                float64  N m     acting output torque
-=====================  ======================  =======  ======  ==========================
-
-Content is checked where it is written and where it is read: :func:`write_shard` refuses a
-shard whose signals hold NaN or infinity, and :func:`load` (``check=True``) refuses a shard
-that lacks a variable of the schema, holds a variable of the wrong dims or dtype, a
-non-finite signal, a fault label that is not a class of the schema, or metadata that
-contradicts ``manifest.json`` (:func:`check_shard`), each in one line naming the file and
-the variable.
-
-``reference`` marks the commissioning windows: one recording of each gear while known to
-be healthy, per operating point and per clean/disturbed, taken before the gear is put into
-service. Features are normalised by them (paper eq. 7); they are never training or test
-samples. This is how a gear that was never seen in training gets its healthy reference.
+A data set is a directory of NetCDF4/HDF5 shards (xarray + h5netcdf), whole windows along
+``sample``, plus a ``manifest.json`` holding every shard's SHA-256. :func:`write_shard`
+writes a shard atomically and refuses non-finite signals; :func:`load` joins the shards,
+checking each against the manifest and, with ``check=True``, its content against the
+schema (:func:`check_shard`), each failure in one line naming the file and the variable.
+Variables, reference windows, attributes, manifest and checks: docs/DATASET.md,
+"Variables" and "Integrity checks".
 """
 
 from __future__ import annotations
@@ -113,7 +81,7 @@ def make_dataset(
     time_s : ndarray, shape (n_time,)
         Time since window start [s], uniformly spaced.
     meta : dict of ndarray, each shape (n_sample,)
-        Every per-sample variable of the schema (see module docstring).
+        Every per-sample variable of the schema (docs/DATASET.md, "Variables").
     attrs : dict, optional
         Extra global attributes (config, seed, ...); non-scalar values are stored as JSON.
 

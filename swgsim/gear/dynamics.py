@@ -1,55 +1,12 @@
 """Dynamic input/output model of the SWG, paper eq. (1)-(6) (Tuttle & Seering 1996 lineage).
 
-States per variant: x = [φ_in, ω_in, φ_out, ω_out, ∫e_ω] (rad, rad/s, rad, rad/s, rad).
-
-* Nonlinear twist (eq. 3-4): Δφ_k = tan α_in (φ_in − φ_out) + φ_out / tan α_tooth + φ_err,
-  tan α_in = 1 / ((N + 1) tan α_tooth). Δφ_k = 0 when φ_out = −φ_in/N (circular spline
-  fixed, flexspline output, direction reversed; docs/PHYSICS.md sec. 1).
-* Stiffness torque (eq. 2): T_stiff = k1 Δφ_k + k2 Δφ_k³, a generalised force on Δφ_k:
-  it acts on the input with tan α_in and on the output with c = N / ((N + 1) tan α_tooth).
-  With backlash (lost motion b at the output, ``GearParams.backlash_rad``) it acts on the
-  dead-zoned twist d = Δφ_k − clip(Δφ_k, −g, g), g = c b / 2 (docs/PHYSICS.md sec. 8.1).
-* Kinematic error φ_err = c Σ_k A_k sin(k φ_in + θ_k): harmonics of the input angle,
-  amplitudes A_k given as output angle [rad].
-* Friction (eq. 5-6) is a generalised force on the flank sliding coordinate φ_b with
-  φ̇_b = −φ̇_out / sin α_tooth: T_fric = b0 sgn + b1 φ̇_b + b2 φ̇_b³ + b3 sin(φ_out + θ_b)
-  + μ F_n r_p sgn, ``F_n = |c T_stiff| / (r_p cos α_tooth)`` the tooth normal force; sgn is
-  tanh(φ̇_b / v_s), a smooth sign. It acts on the output with 1 / sin α_tooth and
-  dissipates T_fric φ̇_b.
-* Input: a motor with a PI speed loop tracking n_in,d; output: inertia J_out with the load
-  torque T_out,d opposing its motion.
-
-Energy balance [derived]: with the elastic energy V = k1 d²/2 + k2 d⁴/4 (d = Δφ_k
-without backlash),
-
-    d/dt (J_in ω_in²/2 + J_out ω_out²/2 + V) = T_m ω_in + T_stiff φ_err'(φ_in) ω_in
-                                               − T_fric φ̇_b − P_load.
-
-The second term is the power of the kinematic error: eq. (1) lets it strain the
-flexspline without a reaction torque on the input, so it is a source of its own beside
-the motor (0.02-0.2 % of the motor's energy at the bench's operating points). Without it,
-``tan α_in ω_in = c |ω_out|`` at Δφ̇_k = 0, so P_in = P_out + T_fric φ̇_b in steady state and
-η = T_load / (T_load + T_fric / sin α). Tested along simulated trajectories to 2e-7 of the
-supplied energy, converging at RK4's order 4 (tests/swgsim/test_dynamics.py).
-
-Along an operating profile (:func:`swgsim.gear.profile_dynamics.simulate_profile`,
-docs/PHYSICS.md sec. 1.8) the same balance holds with the time-varying load power
-P_load = T_L(t, q, q̇) q̇, q = −φ_out the joint angle and T_L > 0 resisting forward
-motion (negative when the load drives the gear), and T_m including the acceleration
-feed-forward; tested along a reversal with a load step to 2.5e-10 of the supplied energy,
-order 4 (tests/swgsim/test_profile.py).
-
-Equations of motion:
-
-    J_in ω̇_in   = T_m − tan α_in T_stiff
-    J_out ω̇_out = −c T_stiff + T_fric / sin α_tooth + T_load sgn(−ω_out)... (T_load > 0)
-    T_m         = K_p (ω_d − ω_in) + K_i ∫(ω_d − ω_in) dt
-
-Integration: classical RK4 at a fixed step (:func:`simulate`), each variant compiled in
-:mod:`swgsim.gear.integrator`; :func:`rhs` is the same right-hand side on arrays (for the
-linearisation, extra friction effects and the tests' reference); ``simulate_reference``
-in ``tests/physics_reference.py`` integrates one variant with ``scipy.integrate.solve_ivp``
-(DOP853) to check it.
+States per variant: x = [φ_in, ω_in, φ_out, ω_out, ∫e_ω] (rad, rad/s, rad, rad/s, rad):
+the nonlinear twist (eq. 3-4), its stiffness torque (eq. 2, with backlash a dead zone), the
+kinematic error, friction on the flank sliding coordinate (eq. 5-6), a PI speed loop on
+the input and the load on the output. :func:`simulate` integrates it by classical RK4 at a
+fixed step (compiled in :mod:`swgsim.gear.integrator`), :func:`rhs` is the same right-hand
+side on arrays, :func:`rt1_size20` fits the gear to the catalogue. Equations, energy
+balance and its tests: docs/PHYSICS.md sec. 1.1-1.5 (profiles sec. 1.8, backlash sec. 8.1).
 """
 
 from __future__ import annotations
@@ -205,7 +162,7 @@ def fit_friction(p: GearParams, cat: Catalogue) -> tuple[float, float]:
 
     Steady state at speed ω_in: v = φ̇_b = ω_in / (N sin α). With A = b0 + b1 v + b2 v³
     (+ b3 averaging out), T_fric (1 − μ / (sin α cos α)) = A + μ T_load / cos α, and
-    P_in = P_out + T_fric v [derived, module docstring]. No load gives T_fric from the
+    P_in = P_out + T_fric v [derived, docs/PHYSICS.md sec. 1.5]. No load gives T_fric from the
     running torque; rated load gives T_fric = T_load sin α (1/η − 1). Two linear
     equations in b1 and μ.
 

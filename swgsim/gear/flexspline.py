@@ -1,41 +1,12 @@
 """Flexspline as a space truss (paper Sec. II-B, Fig. 5) and its influence functionals.
 
-Geometry: a hat-type flexspline, a surface of revolution whose meridian runs from the open
-end of the toothed rim (z = 0) along the sleeve to the corner (r = R_m, z = L) and then
-radially outwards along the collar to its clamped edge (r = R_c). The meridian is cut into
-stations; every station carries ``n_theta`` nodes on each of two layers (inner and outer
-wall), offset by ±h/2 along the wall normal.
-
-Bars (lattice analogy, Hrennikoff 1941 / McHenry 1943, docs/PHYSICS.md sec. 3):
-
-* in each layer, per cell of sides a (meridional) × b (circumferential), edge bars and both
-  diagonals whose stiffnesses reproduce the plane-stress stiffness of a plate of thickness
-  t/2 with ν = 1/3 exactly (Cauchy relation of a bar lattice):
-  k_diag = 3 E t_L d² / (16 a b), k_a = 9 E t_L b / (8 a) − 3 E t_L a / (8 b) (meridional
-  edges; half from each adjacent cell), k_b likewise with a ↔ b; t_L = t/2;
-* through-thickness bars between the layers (normal stiffness E a b / h);
-* crossing diagonals between the layers in the meridional and circumferential planes, which
-  give the wall a transverse shear stiffness κ_s G t; their in-plane share is taken off the
-  edge bars so that the membrane stiffness stays exact;
-* the layer offset h is chosen so that the bending stiffness 2 k (h/2)² equals E t³/12 of
-  the solid wall for the edge bars that remain (h = t/√3 without transverse-shear bars).
-
-DOFs are cylindrical components (u_r, u_theta, u_z) of every node, so that the wave
-generator can prescribe the radial displacement of the inner rim nodes only (lubricated
-contact: tangential slip free) and tooth forces are given in r and theta directly.
-
-Boundary conditions (paper Fig. 5): collar edge clamped (both layers, all components);
-inner-layer rim nodes follow the wave generator radially, w(θ) = w0 cos 2(θ − ψ)
-(+ e cos(θ − θ_e) for an eccentric wave generator); tooth forces act on the outer-layer rim
-nodes.
-
-Performance design (docs/ARCHITECTURE.md): the truss is linear, so every gauge signal is a
-linear functional ``s = c · u`` of the displacements. With the free DOFs F and prescribed
-DOFs P, ``K_FF u_F = f_F − K_FP u_P``; one adjoint solve ``K_FF λ = c_F`` per gauge signal
-gives ``s = λ · f_F + (c_P − K_PF λ) · u_P``. A root-tooth crack scales a few bars, a
-low-rank change of K_FF handled by the Woodbury identity on top of the healthy
-factorisation. The naive reference path (one sparse solve per load case) is
-``solve_displacements`` in ``tests/physics_reference.py``.
+A hat-type flexspline (:class:`FlexsplineGeometry`, meshed by :class:`Mesh`) as two layers
+of nodes joined by bars whose stiffnesses reproduce the wall's membrane, bending and
+transverse-shear stiffness (lattice analogy, Hrennikoff 1941 / McHenry 1943); DOFs are
+cylindrical, the collar clamped, the wave generator prescribing the inner rim's radial
+displacement. :class:`TrussModel` assembles and factorises it once, so that every gauge
+signal is a linear functional of the displacements (:mod:`swgsim.gear.influence`).
+Geometry, bar stiffnesses, boundary conditions, validation: docs/PHYSICS.md sec. 3.1-3.6.
 """
 
 from __future__ import annotations
@@ -186,7 +157,7 @@ def _meridian(geo: FlexsplineGeometry, mesh: Mesh):
 
 
 def _layer_offsets(geo: FlexsplineGeometry, mesh: Mesh, mer: dict) -> np.ndarray:
-    """Layer separation h per station [m], matching bending stiffness (module docstring)."""
+    """Layer separation h per station [m], matching bending stiffness (docs/PHYSICS.md sec. 3.3)."""
     t = mer["t"]
     # in-plane share of the crossing bars per unit width, relative to E t (square cell):
     # k_c a²/c² per layer edge with k_c = kappa G t b c² / (2 a h0²) (see _bars)

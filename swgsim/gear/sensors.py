@@ -1,40 +1,12 @@
 """Strain-gauge sensor model: surface strain on the flexspline, grids, bridges, mV/V.
 
-Surface strain from the truss. In each layer, displacements (u_r, u_θ, u_z) are
-interpolated bilinearly in the meridional coordinate ξ and the angle θ of a cell; the
-strains of a surface of revolution with a straight meridian segment are
-
-    ε_ss = ∂u_s/∂s,    ε_θθ = (∂u_θ/∂θ + u_r) / r,
-    γ_sθ = ∂u_θ/∂s + (1/r) ∂u_s/∂θ − u_θ (dr/ds) / r,
-
-with u_s = t_r u_r + t_z u_z the meridional component (Flügge, *Stresses in Shells*,
-1973, ch. 5). The strain of a face at ±t/2 is extrapolated from the two layers at ±h/2:
-ε_face = ε_mid ± (t / 2h)(ε_outer − ε_inner). A grid of length l measures the mean normal
-strain along its axis, sampled at ``n_points`` points.
-
-Bridges (docs/PHYSICS.md sec. 4, Hoffmann, *An Introduction to Measurements using Strain
-Gages*, HBM 1989): output [mV/V] = 1e3 · GF/4 · Σ_k a_k ε_k · gain, with arm signs
-a_k = ±1 (quarter bridge: one grid; half bridge: two grids in adjacent arms; full bridge:
-four). The bridge is linearised (the exact quarter bridge GF ε / (4 + 2 GF ε) differs by
-GF ε / 2 ≈ 3e-4 relative at ε = 3e-4).
-
-Default layout (the paper's Fig. 3 is not in its text; chosen to meet its constraints, all
-on the back face of the collar, i.e. the face away from the toothed rim):
-
-====  ============  ==========  ============================  =============================
-sig   bridge        radius      grids (angle θ, orientation)  sensitive to
-====  ============  ==========  ============================  =============================
-s0    full          29 mm       ±45° at θ = 22.5° and 112.5°  torque; order-2 WG ripple
-                                                              cancels (grids 90° apart)
-s1    half          32 mm       0° (radial), 90° at θ = 0°    WG bending (ε_r − ε_θ)
-s2    half          32 mm       ±45° at θ = 90°               torque + mesh-zone shear ripple
-s3    half          32 mm       0°, 90° at θ = 180°           as s1 (180° apart: s1 ≈ s3)
-s4    half          32 mm       ±45° at θ = 270°              as s2 (s2 ≈ s4)
-====  ============  ==========  ============================  =============================
-
-Orientation β is measured from the radial (meridional) direction towards +θ. The
-WG-bending pair is s1/s3 as in the paper, whose s1 and s3 carry the eccentric-WG offsets
-and the sinusoidal shape (Sec. II-C, Fig. 6c, Fig. 7b).
+The truss's layer displacements give the surface strains of a shell of revolution (Flügge
+1973) extrapolated to the face (:func:`face_strain_rows`); a grid measures the mean normal
+strain along its axis (:func:`grid_row`); a bridge sums its arms, 1e3 · GF/4 · Σ ±ε_k
+[mV/V], linearised (Hoffmann 1989; :func:`signal_rows`). :class:`SensorLayout` holds the
+five bridges s0..s4 (the default :func:`default_signals`: the paper's Fig. 3 constraints
+met on the back of the collar), :func:`gear_layout` a gear's with its tolerances.
+Strains, bridges and the layout's table: docs/PHYSICS.md sec. 4.1-4.4.
 """
 
 from __future__ import annotations
@@ -203,7 +175,7 @@ class SensorLayout:
     Attributes
     ----------
     signals : tuple of Signal
-        s0..s4 in order (see module docstring for the default layout).
+        s0..s4 in order (the default layout: docs/PHYSICS.md sec. 4.3).
     gauge_factor : float
         Gauge factor GF [-] (2.0, constantan foil gauges, docs/PHYSICS.md sec. 4).
     n_points : int
@@ -287,7 +259,7 @@ SENSORS = ("s0", "s1", "s2", "s3", "s4")
 
 def default_signals(r_torque_m: float = R_TORQUE_MM * 1e-3,
                     r_pairs_m: float = R_PAIRS_MM * 1e-3) -> tuple[Signal, ...]:
-    """Default five-signal layout (module docstring); radii [m]."""
+    """Default five-signal layout (docs/PHYSICS.md sec. 4.3); radii [m]."""
     s0, s1, s2, s3, s4 = SENSORS
     return (
         Signal(s0, _shear_pair(r_torque_m, 22.5) + _shear_pair(r_torque_m, 112.5), "full"),

@@ -1,35 +1,12 @@
 """How a window is recorded: its start, and the amplifier that samples the bridges.
 
-The data-set option ``acquisition`` is the *acquisition* of a data set (its two presets are
-``conf/dataset/paper.yaml`` and ``bench.yaml``)::
-
-    acquisition:
-      start: fixed        # fixed | random
-      wg_start_deg: 0.0   # input (WG) angle at the start of every simulation, start: fixed
-      amplifier: null     # null: ideal sampling; or the mapping below
-
-``start: fixed`` reads the paper (Sec. III-B): every window is simulated from the same
-initial state, so the healthy class is "sixty times the same SWG model", identical
-windows. ``start: random`` is what a bench records: windows cut at arbitrary times, i.e.
-at a random input angle φ_in and a random output angle φ_out. Drawing φ_in(0) uniformly
-over [0, 2π N) makes both uniform: the WG angle φ_in mod 2π and the output angle
-φ_out ≈ −φ_in / N (circular spline fixed, paper eq. 3-4).
-
-``amplifier`` models a delta-sigma bridge ADC (:class:`Amplifier`): the bridge signal is
-synthesised ``oversample`` times faster than the data rate, filtered by the converter's
-sinc^order decimation filter (its anti-aliasing filter, one boxcar of ``oversample`` fine
-samples per stage), sampled at the data rate, given the converter's input-referred
-noise and quantised to its LSB, then clipped to its input range. All in mV/V: a voltage
-v at the ADC input is v / V_exc of the bridge excitation.
-
-Source of the bench preset (``conf/dataset/bench.yaml``): Texas Instruments ADS131M04,
-4-channel simultaneous-sampling 24-bit delta-sigma ADC with PGA (data sheet SBAS890 /
-ADS131M04-Q1 SBASAS2, sec. 7.1 "Noise Measurements", Table 7-1: input-referred noise
-2.40 µV rms at gain 128 and OSR 256, inputs shorted, 25 °C; the noise depends on OSR and
-gain only, not on the clock; internal reference 1.2 V, full scale ±V_REF / gain; sinc3
-decimation filter, −3 dB at 0.262 f_DATA). TI's bridge-measurement guide (SBAA532A) lists
-it among its bridge ADCs. Excitation 3.3 V from the analog supply (assumed), so the noise
-is 0.73 µV/V rms and the range ±2.84 mV/V.
+The data-set option ``acquisition`` (:class:`Acquisition`; presets ``conf/dataset/paper.yaml``
+and ``bench.yaml``): ``start: fixed`` simulates every window from the same initial state,
+as the paper (Sec. III-B), ``start: random`` cuts windows at arbitrary times, as a bench
+(:func:`start_angles`). ``amplifier`` (:class:`Amplifier`, :func:`acquire`) models a
+delta-sigma bridge ADC: oversampled synthesis, sinc^order decimation, sampling, input
+noise, quantisation and clipping, all in mV/V. The option's keys, the derivation and the
+bench preset's source (TI ADS131M04, SBAS890 Table 7-1): docs/PHYSICS.md sec. 9.
 """
 
 from __future__ import annotations
@@ -182,7 +159,7 @@ def start_angles(acq: Acquisition, n: int, rng: np.random.Generator,
     """Input angle φ_in at the start of each window's simulation [rad], shape (n,).
 
     ``fixed``: ``wg_start_deg`` for every window. ``random``: uniform over [0, 2π N), so
-    that the WG angle and the output angle are both uniform (module docstring). Draws from
+    that the WG angle and the output angle are both uniform (docs/PHYSICS.md sec. 9). Draws from
     ``rng`` in both cases, so that other streams do not depend on the mode.
     """
     u = rng.uniform(0.0, 1.0, size=n)

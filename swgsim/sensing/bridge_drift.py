@@ -1,46 +1,12 @@
 """What the joint's temperature does to the five strain-gauge bridges s0..s4, and the
 temperature sensor that measures it.
 
-Two effects per bridge, linear in the temperature difference ΔT = T − T_ref from the
-coefficients' reference (20 °C; the temperature at commissioning is not known in advance):
-
-    s' = (1 + span_c ΔT) s + zero_c ΔT        [mV/V]
-
-(a life's windows get it through
-:meth:`swgsim.datasets.conditions.WindowConditions.bridge_gain_offset`).
-
-* **Zero drift** (``zero_c``, mV/V per K). A gauge bonded to steel reads an apparent
-  strain when its temperature changes; self-temperature-compensated foil gauges on the
-  matching steel keep it within ±1.8 µε/K, representative value, some series within
-  ±1 µε/K at 20-40 °C (Kyowa, *Self-temperature-compensation gages*) **[src]**. In a
-  bridge the arms' common apparent strain cancels (equal arms, opposite signs: the mean
-  drift is 0 **[derived]**); what is left is the gauge-to-gauge mismatch within the
-  bridge. With a mismatch of sd σ per gauge and n active arms of signs ±1 the bridge
-  reads 1e3 · GF/4 · Σ ±δ_k [mV/V] (docs/PHYSICS.md sec. 4.2), sd 1e3 · GF/4 · √n · σ
-  **[derived]**: s0 is a full bridge (n = 4), s1..s4 half bridges (n = 2,
-  docs/PHYSICS.md sec. 4.3). σ = 0.2 µε/K, about a ninth of Kyowa's bound on a lot's
-  apparent strain, for gauges of one lot on one part **[choice; no within-lot spread
-  found]**: sd 2.0e-4 mV/V per K (s0), 1.41e-4 (s1..s4).
-* **Span drift** (``span_c``, per K). For the same torque the steel strains more as it
-  warms: the modulus falls, −2.9e-4 /K (carbon-molybdenum steels, 206.2 / 201.3 /
-  196.5 GPa at −73 / 21 / 93 °C, central difference; Roark's *Formulas for Stress and
-  Strain*, table of elastic moduli against temperature) **[src; derived]**, shear
-  modulus alike at constant ν **[choice]**; the collar grows (the shear stress of a
-  torque, T / (2π r² t), falls by 3 α per K, α = 11e-6 /K, the expansion to which gauges
-  for steel are compensated: suffix "-11" of TML gauges) **[src, suffix; derived]**; the
-  gauge factor of constantan rises, about +1e-4 /K **[unverified]**. Together
-  +3.57e-4 /K, +1.1 % over 30 K, a gain common to every bridge; bridge-to-bridge spread
-  sd 5e-5 /K **[choice: half of 1e-4 /K, the temperature effect on sensitivity of a
-  finished, compensated torque transducer, ≤ 0.1 % per 10 K (HBM T10F, in HBM's glossary
-  of torque transducer terms, which gives 0.05 % per 10 K on the zero) [src]]**. The
-  zero drifts above are 14 times that transducer's (s0: 0.05 % of 0.284 mV/V at 70 N m,
-  docs/PHYSICS.md sec. 4.6, per 10 K = 1.4e-5 mV/V per K): bare bridges, no compensation. For strain
-  imposed by a displacement (the wave generator's bending, s1 and s3) the modulus does
-  not enter; one gain per bridge is applied here all the same (a simplification).
-
-Not modelled: self-heating of the gauges by their excitation (below 1 µm/m at room
-temperature by HBM's account **[unverified]**) and temperature gradients across the
-flexspline.
+Two effects per bridge, linear in ΔT = T − T_ref: s' = (1 + span_c ΔT) s + zero_c ΔT [mV/V],
+the zero drift from the gauges' mismatched apparent strain, the span drift from the steel's
+modulus, its expansion and the gauge factor. :class:`BridgeDrift` holds the coefficients'
+means and spreads, :func:`draw_bridge_drift` draws a gear's; :class:`TemperatureSensor` and
+:func:`measure_temperature` give the joint's reading and its faults. Derivation, sources
+and what is not modelled: docs/PHYSICS.md sec. 5.4.
 """
 
 from __future__ import annotations
@@ -49,17 +15,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-#: Reference temperature of the drift coefficients [°C] (module docstring).
+#: Reference temperature of the drift coefficients [°C] (the temperature at commissioning
+#: is not known in advance; docs/PHYSICS.md sec. 5.4).
 REF_TEMP_C = 20.0
 
 #: Number of bridges s0..s4.
 N_BRIDGES = 5
 
-#: Relative change of the steel's modulus [1/K] (carbon-moly steels, Roark; docstring).
+#: Relative change of the steel's modulus [1/K]: carbon-molybdenum steels, 206.2 / 201.3 /
+#: 196.5 GPa at −73 / 21 / 93 °C, central difference (Roark's *Formulas for Stress and
+#: Strain*, table of elastic moduli against temperature) [src; derived].
 MODULUS_TC_PER_K = -2.9e-4
-#: Linear expansion of steel [1/K] (gauge compensation suffix -11; docstring).
+#: Linear expansion of steel [1/K]: the expansion to which gauges for steel are
+#: compensated, suffix "-11" of TML gauges [src, suffix].
 STEEL_EXPANSION_PER_K = 11e-6
-#: Relative change of the gauge factor of constantan [1/K] [unverified; docstring].
+#: Relative change of the gauge factor of constantan [1/K], about +1e-4 [unverified].
 GAUGE_FACTOR_TC_PER_K = 1.0e-4
 
 
@@ -71,7 +41,7 @@ class BridgeDrift:
     ----------
     zero_mean_mvv_per_k : float
         Mean zero drift of every bridge [mV/V per K] (0: the arms' common apparent strain
-        cancels, module docstring).
+        cancels, docs/PHYSICS.md sec. 5.4).
     gauge_mismatch_ue_per_k : float
         Sd of one gauge's apparent strain about its bridge's common value [µε/K] (0.2)
         [choice]; sets the zero drift's spread (:attr:`zero_sd_mvv_per_k`).
@@ -82,7 +52,7 @@ class BridgeDrift:
         (docs/PHYSICS.md sec. 4.3).
     span_mean_per_k : float
         Mean relative gain change [1/K]: −modulus + gauge factor − 3 × expansion terms,
-        +3.57e-4 (module docstring) [derived].
+        +3.57e-4 (docs/PHYSICS.md sec. 5.4) [derived].
     span_sd_per_k : float
         Bridge-to-bridge sd of the gain change [1/K] (5e-5) [choice].
     ref_c : float

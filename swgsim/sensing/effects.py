@@ -1,67 +1,12 @@
 """Measurement-chain effects on simulated bridge signals (the ``sensor_effects`` option).
 
-The chain (:mod:`swgsim.gear.chain`) gives ideal, linear, perfectly placed and calibrated
-bridges. A real bench adds the measurement chain: gauges a little off their nominal
-angle, the bridge's own nonlinearity, per-channel amplifier gains, the amplifier's
-low-pass, sampling delay, offsets and a thermal drift of the zero. This module applies
-such effects to simulated windows, given each window's time axis and operating point,
-so that generated data can include what a calibration found
-(:func:`swgcal.strain.calibrate` writes them as ``sensor_effects``).
-
-A ``sensor_effects`` option is a list of ``{name, params}``::
-
-    sensor_effects:
-      - {name: offset, params: {offset_mvv: {s1: 0.02, s3: -0.015}}}
-      - {name: amplifier_lowpass, params: {f_c_hz: 250.0}}
-
-Per-channel parameters take a scalar (all channels), a list of five values (s0..s4) or
-a mapping ``{"s1": value}`` (unnamed channels keep the neutral value).
-
-==================== ============================================== ======================
-name                 effect on channel c (s in mV/V)                 parameters [unit]
-==================== ============================================== ======================
-gauge_misplacement   s_c(ψ − δ_c): the gauge sits δ_c further along  delta_deg [deg]
-                     θ, i.e. a delay of δ_c / ψ̇ of channel c
-                     (with ``psi``: angle domain, any ψ̇)
-bridge_nonlinearity  s / (1 + k_c s)                                k_per_mvv [1/(mV/V)]
-                                                                    or bridge: quarter
-gain_mismatch        g_c s                                          gain [-]
-amplifier_lowpass    first-order low-pass, cut-off f_c (Tustin,     f_c_hz [Hz]
-                     pre-warped), DC gain 1, all channels
-time_delay           s(t − τ), all channels                         delay_s [s]
-offset               s + o_c                                        offset_mvv [mV/V]
-thermal_drift        s + r_c (t_start + t)                          rate_mvv_per_s
-                                                                    [mV/V/s]
-==================== ============================================== ======================
-
-The effects are applied in that (physical) order whatever the order of the list: gauge
-geometry, bridge, amplifier gain, amplifier filter, sampling, then the additive zero
-errors. Each effect is one function of this module named like it (:func:`offset`,
-:func:`gain_mismatch`, ...; :func:`gauge_misplacement_linear` and
-:func:`bridge_denominator` give the first-order and common-denominator forms): the
-simulation applies them here and the calibration's fit terms
-(:mod:`swgcal.strain.effects`) evaluate the same functions, adding only what a fit needs
-(free parameters, starts, bounds, physical ranges).
-
-Sources: quarter-bridge output GF ε / (4 + 2 GF ε), i.e. k = 2e-3 per mV/V
-independent of GF (Hoffmann, *An Introduction to Measurements using Strain Gages*,
-HBM 1989; docs/PHYSICS.md sec. 4); gauge positioning as the dominant ripple source of
-sensorised SWGs (Schuller et al. 2024) and per-gauge gain tuning (Godler et al.); a
-first-order amplifier low-pass and sampling delay give a phase error growing with speed
-(docs/PHYSICS.md sec. 5). Half bridges of a ±45° pair and full bridges with ±ε arms are
-linear exactly; their residual nonlinearity depends on the sum of the arm strains,
-which the signal alone does not carry, so ``bridge_nonlinearity`` is a per-channel
-``k`` (``bridge: quarter`` sets the quarter-bridge value).
-
-Speed: only ``gauge_misplacement`` depends on the motion. Given the constant ψ̇ of a
-steady window (``n_in_rpm``) it is a constant delay; given ψ(t) itself (``psi``, windows
-of an operating profile) it acts in the angle domain, a delay δ / ψ̇(t) varying with the
-speed, and refuses a window in which ψ reverses or stands still. The other effects act
-in time (filters, delays) or sample by sample and hold at any speed.
-
-Edges: filters start in the steady state of the first sample and shifts extrapolate by
-mirroring; pass ``n_lead`` leading samples of history (dropped from the output, at least
-five filter time constants and the largest delay) for exact windows.
+A real bench adds to the chain's ideal bridges (:mod:`swgsim.gear.chain`) gauges off their
+nominal angle, the bridge's nonlinearity, amplifier gains and low-pass, sampling delay,
+offsets and a thermal drift of the zero. Each effect is one function named like it
+(:func:`offset`, :func:`gain_mismatch`, ...), applied in physical order whatever the list's
+order by :func:`apply_sensor_effects`; the calibration's fit terms
+(:mod:`swgcal.strain.effects`) evaluate the same functions. Effects, parameters, sources,
+speed and edges: docs/PHYSICS.md sec. 5.1.
 """
 
 from __future__ import annotations

@@ -1,35 +1,11 @@
 """Faults of the sensors themselves: classes of their own, named ``sensor_*``.
 
-A gauge or its bridge can fail while the gear is sound. A monitor must name such a fault
-as a sensor fault, never as a gear fault, so the gear lives (:mod:`swgsim.datasets.life`) carry
-them as classes of their own. Each acts on one bridge's output, after the bridge and
-before the converter's noise (gain and offset commute with the linear anti-aliasing
-filter, so applying them to the sampled signal is exact):
-
-===================== ========================================== ===================
-name                  effect on bridge c (s in mV/V)             severity
-===================== ========================================== ===================
-sensor_gain_drift     (1 − severity) s: the strain reaching the   relative gain loss
-                      grid falls as the adhesive creeps or the    [-], in [0, 0.5]
-                      gauge debonds from its edges
-sensor_offset_step    s + severity: the zero shifts when a gauge  zero shift [mV/V],
-                      or its solder tab is fatigue-damaged or     in [-0.5, 0.5]
-                      partly debonds
-===================== ========================================== ===================
-
-Magnitudes (the evaluation's severities, ``SEVERITIES``). Gain: sound installations hold
-their gain within 0.2 % to a little over 1 % under load for more than a year (Espion and
-Halleux, *Long-term measurements of strains with strain-gauges and stability of
-strain-gauge transducers*, HBM Reports in Applied Measurement, RAM 2000/1), and a falling
-output of more than 0.1 % of full scale marks a faulty installation (Vishay Measurements
-Group, *Transducer-class strain gages: creep compensation*); the mild drift, 2 %, is twice
-the worst sound installation, the severe one, 10 %, a gauge partly debonded (our choice;
-no source gives a percentage for debonding). Offset: fatigue damage of a gauge shows first
-as a permanent zero shift (Vishay Micro-Measurements, Tech Note TN-508-1, *Fatigue
-Characteristics of Micro-Measurements Strain Gages*; ASTM E1949, sec. 4.4), whose failure
-criterion is of the order of 100 µε (the exact number is not in the parts of TN-508 we
-could read), i.e. GF ε / 4 = 0.05 mV/V on a quarter bridge with GF = 2: the severe step;
-a tenth of it, 0.005 mV/V, the mild one.
+A gauge or its bridge can fail while the gear is sound; a monitor must name that a sensor
+fault, never a gear fault, so the gear lives (:mod:`swgsim.datasets.life`) carry them as
+classes of their own. Each (:class:`SensorFault`, in :data:`SENSOR_FAULTS`; add one with
+:func:`register_sensor_fault`) acts on one bridge's output before the converter's noise:
+``sensor_gain_drift`` (1 − severity) s, ``sensor_offset_step`` s + severity.
+Effects, causes, magnitudes and their sources: docs/PHYSICS.md sec. 8.2.
 """
 
 from __future__ import annotations
@@ -77,7 +53,11 @@ SENSOR_FAULTS: Registry[SensorFault] = Registry("sensor fault", __name__, "SENSO
     )
 ))
 
-#: Severities of the evaluation (module docstring): mild and severe.
+#: Severities of the evaluation: mild and severe. Gain: 2 %, twice the worst sound
+#: installation's drift over a year (0.2 % to a little over 1 %, Espion and Halleux, HBM RAM
+#: 2000/1), 10 % a gauge partly debonded [choice]. Offset: 0.05 mV/V, GF ε / 4 of fatigue's
+#: failure criterion of about 100 µε (Vishay TN-508-1; ASTM E1949 sec. 4.4), a tenth of it
+#: mild (docs/PHYSICS.md sec. 8.2).
 SEVERITIES: Registry[tuple[float, ...]] = Registry("sensor fault severities", __name__,
                                                    "SEVERITIES", {
     "sensor_gain_drift": (0.02, 0.10),

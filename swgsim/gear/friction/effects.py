@@ -1,55 +1,12 @@
 """Library of friction effects: their forms, as inputs of the simulation.
 
-Every effect is a :class:`~swgsim.gear.terms.Term` in the joint coordinate q
-(gear output angle [rad]) with the friction torque τ [N m] positive along q̇. ``sgn``
-is the smooth sign tanh(v / v_s) of the velocity v the friction law sees (q̇, or a
-lagged q̇ once ``velocity_lag`` is in the model). Each entry documents its form and
-its source; how it shows in a residual, its fit bounds and starts and its physical
-range are the calibration's (:mod:`swgcal.friction.library`).
-
-:data:`FRICTION_LIBRARY` is the one registry of friction effects, for the simulator and
-the calibration alike, and :func:`register_effect` the one way into it: the simulator
-makes an entry by its kind (:func:`make_effect`, under the ``friction_effects`` option),
-a calibration offers every entry that carries its fit (a :class:`swgcal.terms.FitTerm`).
-A new effect is one class, its form and its fit, registered once. The built-ins are
-registered here as forms (the fit's ranges, sources and starting values are the
-calibration's business, and swgsim never imports swgcal); importing
-:mod:`swgcal.friction.library` registers each one's subclass with its fit in its place
-(a subclass of the registered class may take its place:
-:func:`swgsim.base.registry.extends`). Either way a kind has one class, the one the
-simulator instantiates, and the registry travels to worker processes as every other
-(:mod:`swgsim.base.registry`).
-
-==================  ===============================================
-name                form
-==================  ===============================================
-asymmetric_coulomb  ``Δc |sgn|``
-stribeck            F_s sgn exp(−(v/v_st)²)
-presliding          F_d (z − sgn), dz/dq = (1 − z sgn(q̇)) / q_c
-position_ripple     Σ_h a_h sin(2πhq/P) + b_h cos(2πhq/P)
-friction_ripple     sgn Σ_h (a_h sin(2πhq/P) + b_h cos(2πhq/P))
-load_coulomb        sgn Σ c_n P_n(x), n = 1, 2  or  ``μ sgn |load|``
-gravity_residual    Σ c_n P_n(x), n = 2, 3
-inertia             J_a q̈
-thermal_drift       d exp(−(t − t0)/T_th) sgn
-sensor_drift        c (1 − exp(−(t − t0)/T_d))
-velocity_lag        friction law acts on v = q̇ low-passed by T_L
-==================  ===============================================
-
-P_n are Legendre polynomials of x, the joint angle scaled to [−1, 1] over the calibrated
-range and held constant outside it (a well-conditioned basis for a smooth dependence on
-the configuration however short the range). Instance k of the polynomial effects
-(``load_coulomb#k``, ``gravity_residual#k``) takes the next two orders. Ripples live in
-:mod:`.ripples` (a fundamental period and its harmonics, wave-generator orders
-when the gear ratio is known).
-
-Sources: Armstrong-Hélouvry, Dupont & Canudas de Wit 1994 (survey, Automatica 30(7)):
-Coulomb, viscous, Stribeck, presliding, frictional memory, position dependence; Dahl
-1968 (Aerospace Corp. TR-0158(3107-18)-1): presliding state; Canudas de Wit, Olsson,
-Åström & Lischinsky 1995 (IEEE TAC 40(3), LuGre); Hess & Soom 1990 (ASME J. Tribology
-112): frictional lag; Tuttle & Seering 1996 (IEEE T-RA 12(3)): SWG friction varying
-periodically with rotation, kinematic error; docs/PHYSICS.md sec. 5 (temperature, load
-and direction dependence of friction; gauge temperature drift); paper eq. (5) (μ F_n).
+Every effect is a :class:`~swgsim.gear.terms.Term` in the joint coordinate q (output angle
+[rad]), the friction torque τ [N m] positive along q̇, ``sgn`` the smooth sign of the
+velocity the friction law sees. :data:`FRICTION_LIBRARY` is the one registry of friction
+effects for the simulator and the calibration alike, :func:`register_effect` the one way
+into it, :func:`make_effect` makes an entry by its kind (the ``friction_effects`` option);
+the fits are :mod:`swgcal.friction.library`'s. Forms, sources and the Legendre basis:
+docs/PHYSICS.md sec. 5.3; the registry's design: ARCHITECTURE.md, "To add a calibration effect".
 """
 
 from __future__ import annotations
@@ -403,7 +360,8 @@ FRICTION_LIBRARY: Registry[type[Term]] = Registry("friction effect", __name__,
         AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
         LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
 ))
-"""Kind -> effect class, the one registry of friction effects (module docstring):
+"""Kind -> effect class, the one registry of friction effects (ARCHITECTURE.md,
+"To add a calibration effect"):
 instantiate with :func:`make_effect`."""
 
 
