@@ -1,48 +1,12 @@
 """Discovery: terms beyond the effect library, proposed by sparse regression.
 
-When the calibration loop (:mod:`.loop`) ends with a structured residual, no library
-effect explains it. Instead of only naming the structure, this module proposes terms
-from a generic basis built from the data's own context (another channel's signal, tones
-at a free order of the input rotation or at a fixed frequency with their harmonics,
-products of a column with the load or the speed, slow polynomials in time), selected
-sparsely on the fit data and scored on held-out data: SINDy's idea (Brunton, Proctor &
-Kutz 2016, "Discovering governing equations from data by sparse identification of
-nonlinear dynamical systems", PNAS 113:3932), a large library of candidate functions
-and a sparse regression that keeps few of them. One mechanism, :func:`discover`:
-
-1. *Nuisance*: the final model's linear design (at its fitted nonlinear parameters) and
-   the library's own linear directions, fitted on the fit rows, and local nuisances
-   (each window's WG-angle shift) fitted on each window's own rows, are projected off
-   the data and every candidate column (Frisch-Waugh-Lovell: a coefficient fitted on
-   the projected columns is that of the joint fit), so nothing the library or the
-   alignment can say is proposed again.
-2. *Screening*: the lasso path on the fit rows (standardised columns; LARS, Efron et al.
-   2004, Ann. Stat. 32:407; Tibshirani 1996, "Regression shrinkage and selection via the
-   lasso", JRSS B 58:267), the point on it chosen by BIC with the effective number of
-   samples n / τ_int (the loop's correction for autocorrelated residuals). A *group* is
-   the columns of one phenomenon (a tone's harmonics, channels and load/speed products,
-   a crosstalk path); it is kept with the columns the lasso selected.
-3. *Held-out scoring*: forward selection over the kept groups, best alone first: a group
-   is proposed when least squares on the fit rows of the proposed groups plus its own
-   lowers the validation RMSE by more than ``min_gain``; ``heldout_gain`` is that drop,
-   1 − RMSE_val(with) / RMSE_val(without). Of its variants (plain, × load, × speed) the
-   fewest that do as well on the validation rows are kept (within ``min_gain / 2``).
-4. *Words*: each group describes itself from its coefficients in the joint fit of all
-   proposed groups, e.g. ``"crosstalk: 8 % of s2 in s1"``.
-
-Each data kind builds its own basis and calls :func:`discover`:
-:mod:`swgcal.strain.discovery` (tones whose phase the model cannot know, a
-free order or mains hum, get one phase per window and harmonic, estimated on that
-window's own residual like the WG-angle alignment, so held-out windows are treated
-exactly like fit windows) and :mod:`swgcal.friction.discovery`.
-
-Limits. Discovery proposes; nothing enters the model or the simulation options. The
-final model's nonlinear parameters were fitted on fit + validation data, the local
-nuisances of a validation window on its own data: held-out gains are slightly
-optimistic (for every group alike). Load and speed products are told apart only when
-the operating points are not on one line in the (speed, load) plane (else the words say
-so). Crosstalk of one channel's order-2 pattern into another is a gain and a gauge
-misplacement of the target, which the library fits: only the rest can be proposed.
+When the calibration loop (:mod:`.loop`) ends with a structured residual, :func:`discover`
+proposes terms from a generic basis of the data's context (SINDy's idea, Brunton, Proctor
+& Kutz 2016): the final model and local nuisances projected off (:class:`Projector`),
+groups screened by the lasso path with the effective-sample BIC, forward selection scored
+on held-out rows, each :class:`Proposal` in words. Each data kind builds its :class:`Group`
+basis (:mod:`swgcal.strain.discovery`, :mod:`swgcal.friction.discovery`). The four steps,
+sources and limits: docs/calibration.md, "Discovery beyond the library".
 """
 
 from __future__ import annotations
@@ -313,7 +277,8 @@ def discover(target: np.ndarray, groups: Sequence[Group], fit: np.ndarray,
     fit, validation : ndarray of int
         Row indices (disjoint).
     projector : Projector, optional
-        Nuisance projected off the target and the columns (module docstring, step 1).
+        Nuisance projected off the target and the columns, step 1 of
+        docs/calibration.md, "Discovery beyond the library".
     max_terms : int, default 5
         At most this many proposals.
     min_gain : float, default :data:`MIN_GAIN`

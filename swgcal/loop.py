@@ -3,61 +3,10 @@ it earns its place, repeat; then report the error before and after on test data.
 
 Generic over the domain: each data kind builds a :class:`Problem`
 (:func:`swgcal.friction.build_problem`, ...) and calls :func:`select_effects` in its
-``calibrate`` step.
-
-Acceptance rule: evidence, on one scale for every kind of data. Every candidate is added
-to the current model and refitted on the fit samples (its own nonlinear parameters
-optimised, those of the current model held, or refitted with it where the problem says
-so, :attr:`Problem.screen_jointly`; all linear coefficients refitted); candidates are
-ranked by validation RMSE. Going down the ranking, the first candidate that passes all of
-
-1. *held-out evidence*: twice the log-likelihood ratio of the validation samples,
-   candidate against current model, each with its parameters fitted on the fit samples
-   (Gaussian errors, variance from the validation residual):
-   ``2 ln Λ_val = (n_val / τ_int) · ln(RMSE_val,current² / RMSE_val,candidate²)``,
-   above ``min_heldout_evidence`` (default 10). This is the predictive (plug-in) form of
-   a partial Bayes factor, the fit samples playing the training sample (O'Hagan 1995,
-   "Fractional Bayes factors for model comparison", JRSS B 57; Berger & Pericchi 1996,
-   "The intrinsic Bayes factor", JASA 91), i.e. a cross-validated likelihood (Smyth 2000,
-   Statistics and Computing 10). An effect that does not generalise to held-out data
-   earns nothing here, however well it fits.
-2. *fit evidence*: the BIC change on the fit samples below ``max_delta_bic`` (default
-   −10), where the BIC counts the *effective* number of samples n / τ_int. −ΔBIC / 2
-   approximates ln B, the log Bayes factor (Schwarz 1978; Kass & Raftery 1995, "Bayes
-   factors", JASA 90, sec. 4.1.3); it charges ln(n_eff) per parameter, which the held-out
-   likelihood does not.
-3. its primary parameters pinned down by the data (relative standard error, corrected
-   for autocorrelation, below ``max_rel_se``), and
-4. every parameter with a declared physical range inside it
-   (:attr:`~swgcal.terms.FitTerm.ranges`).
-
-Both thresholds of 10 are on the 2 ln B scale of Kass & Raftery (1995, sec. 3.2: 2 ln B
-above 10 is "very strong" evidence, posterior odds above 150:1); ΔBIC differences of 10
-are also where Burnham & Anderson (2002, "Model selection and multimodel inference",
-sec. 2.6) call the weaker model "essentially no support". τ_int (Sokal 1997) is the
-integrated autocorrelation time of the residual of the noise model (see
-:func:`_candidates`): a structured residual is strongly autocorrelated, and counting
-its samples as independent would reward any term that soaks up a few per cent of an
-unrelated structure (hundreds of BIC points on 10⁴ samples). The same τ_int scales the
-validation samples, which come from the same process at the same sample spacing. No
-fixed percentage of validation RMSE is required (``min_rel_improvement`` is an optional
-floor of practical size, off by default): the evidence grows with the data, so a small
-effect measured on many samples passes and a large-looking gain on few samples does
-not. A candidate with a positive held-out gain that fails 1-2 is reported as "too
-small" (:attr:`CandidateScore.small`); the plain ΔBIC is reported too.
-
-The loop accepts the first passing candidate, refits the whole model jointly and starts
-the next iteration; it stops when no candidate passes. When no single candidate passes
-but some show evidence (held-out or fit), pairs are tried (:func:`_pairs`). After the
-loop the final residual is diagnosed; if it is still structured the result says so
-(``unexplained``) and describes the signature, whatever was added. A candidate of the
-last iteration that passed the evidence rule but lies outside its physical range also
-makes the run ``unexplained``: the residual holds structure, with very strong evidence,
-that no plausible library effect explains (the probes may not see it); the signature
-names the candidate and what it would have absorbed.
-
-Errors before and after are computed on the test samples, which neither the fit nor the
-selection has seen, by the base model and the final model refitted on fit + validation.
+``calibrate`` step (a :class:`CalibrationResult`). A candidate is accepted on held-out and
+fit evidence on one scale (2 ln B above 10, with the effective sample count n / τ_int),
+well-determined parameters and a physical range (:class:`SelectionConfig`). The rule, its
+sources, stopping and pairs: docs/calibration.md, "The acceptance rule in full".
 """
 
 from __future__ import annotations
@@ -133,7 +82,7 @@ class SelectionConfig:
     min_rel_improvement : float, default 0
         Optional floor on the relative drop of the validation RMSE (a practical size
         below which an effect is not wanted, whatever the evidence); 0: none, the rule
-        rests on evidence alone (module docstring).
+        rests on evidence alone (docs/calibration.md, "The acceptance rule in full").
     max_delta_bic : float, default -10
         Required BIC change on the fit samples (more negative is better): fit evidence,
         −ΔBIC ≈ 2 ln B (Kass & Raftery 1995).

@@ -1,40 +1,11 @@
 """Discovery on the friction side: the candidate basis of a friction calibration.
 
 The friction adapter of :mod:`swgcal.discovery` (same mechanism,
-:func:`~swgcal.discovery.discover`: the final model's design projected off,
-lasso with the effective-sample BIC on the fit rows, forward selection scored on the
-validation rows). The basis is built from the friction signals
-(:class:`swgsim.gear.friction.FrictionSignals`: time t, joint angle q, velocity q̇, acceleration q̈,
-load when recorded):
-
-* *ripples over the joint angle* at free periods, the strongest lines of the residual's
-  periodogram over q and of the residual times sgn(q̇) (a ripple of the friction level
-  changes sign with the direction of motion), with harmonics; columns cos, sin of
-  2π h q / P, plain and times sgn(q̇) (friction-level ripple), each also times ``|q̇| / v_ref``
-  and the load (an amplitude that grows with speed or load). With the gear ratio N
-  the period is also quoted as the wave-generator order k = 2π / (P N)
-  (:func:`~swgsim.gear.friction.ripples.wave_generator_order`);
-* *tones in time* at fixed frequencies (the strongest lines of the residual's spectrum
-  over t: a vibration or a hidden periodic process, not periodic in q), with harmonics,
-  plain and times ``|q̇| / v_ref``;
-* *load*: sgn(q̇) · load and q̇ · load (friction level and viscous friction growing with
-  the load; only when a load column is recorded);
-* *slow trends in time*: Legendre P1-P3 of the normalised time (an offset that drifts)
-  and sgn(q̇) times P1, P2 (a friction level that drifts);
-* *velocity law*: ``sgn(q̇) |q̇ / v_ref|^p`` (p = 0.5, 1.5, 2: a viscous law other than the
-  paper's q̇ and q̇³) and *acceleration*: q̈ (an inertia-like term).
-
-The nuisance is the final model's linear design at its fitted nonlinear parameters
-(:func:`~swgcal.discovery.model_design`) and a constant, fitted on the fit
-rows: what the model already spans is not proposed again. Rows: the problem's fit and
-validation samples (time blocks, :mod:`swgcal.split`); the test blocks are
-not used.
-
-Limits. Free periods and frequencies come from the residual of the fit and validation
-rows together (the line search sees the held-out rows, as the strain adapter's does);
-the validation score then decides. A tone in time at a frequency of the trajectory
-(the joint's own motion) is indistinguishable from a velocity or angle effect; its
-words say "in time" only because the basis column is a function of t.
+:func:`~swgcal.discovery.discover`): :func:`friction_basis` builds from the friction
+signals ripples over the joint angle at free periods (:func:`line_peaks`), tones in time,
+load products, slow trends, other velocity laws and the acceleration; :func:`propose` runs
+discovery on a calibration's result. The basis column by column, its nuisance and rows,
+and the limits: docs/calibration.md, "Discovery beyond the library".
 """
 
 from __future__ import annotations
@@ -331,7 +302,8 @@ def friction_basis(result: CalibrationResult, n_peaks: int = 2,
                    harmonics: Sequence[int] = (1, 2, 3),
                    powers: Sequence[float] = (0.5, 1.5, 2.0)
                    ) -> tuple[np.ndarray, list[Group], np.ndarray, np.ndarray, Projector]:
-    """Candidate basis of a friction calibration (module docstring).
+    """Candidate basis of a friction calibration
+    (docs/calibration.md, "Discovery beyond the library").
 
     Parameters
     ----------

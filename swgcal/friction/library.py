@@ -3,36 +3,10 @@
 The forms are the simulator's (:mod:`swgsim.gear.friction.effects`,
 :mod:`swgsim.gear.friction.ripples`, the paper law of :mod:`swgsim.gear.friction.signals`);
 each class here subclasses one of them and :class:`~swgcal.terms.FitTerm`, adding its
-residual signature, the probes whose structure it should explain, the physical ranges of
-its characterising parameters (values and sources in :mod:`.ranges`: a fit outside is not
-accepted as that effect), how often a model may hold it, and the bounds and starts of its
-nonlinear parameters.
-Importing this module registers each with :func:`swgsim.gear.friction.register_effect`,
-in place of its form: the one registry, :data:`swgsim.gear.friction.FRICTION_LIBRARY`,
-then holds one class per kind, which the simulator instantiates and a calibration fits
-(its candidates are the entries that are :class:`~swgcal.terms.FitTerm`).
-
-==================  ===================================================================
-name                residual signature
-==================  ===================================================================
-asymmetric_coulomb  same offset in both directions, 0 at rest
-stribeck            odd bump at low ``|v|``
-presliding          transient after each reversal vs travel
-position_ripple     peak over q, even in direction
-friction_ripple     peak over q, odd in direction
-load_coulomb        odd, slow trend in q
-gravity_residual    even, slow trend in q
-inertia             ∝ q̈: loops vs q̇
-thermal_drift       odd, decays in time
-sensor_drift        even, creeps in time
-velocity_lag        hysteresis vs q̇, sign of q̈ matters
-==================  ===================================================================
-
-Repeatable effects may enter a model again: ripples up to six times (further periods:
-wave-generator orders, cogging), load_coulomb and gravity_residual up to three times
-(higher orders). A new effect is one class (its form and its fit) registered once with
-:func:`swgsim.gear.friction.register_effect` (docs/ARCHITECTURE.md, "To add a calibration
-effect: touch these files").
+residual signature, probes, physical ranges (:mod:`.ranges`), how often a model may hold
+it, and its nonlinear parameters' bounds and starts. Importing this module registers each
+with :func:`swgsim.gear.friction.register_effect` in place of its form. The signatures'
+table: docs/PHYSICS.md sec. 5.3; the registry: ARCHITECTURE.md, "To add a calibration effect".
 """
 
 from __future__ import annotations

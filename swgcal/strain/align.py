@@ -1,35 +1,12 @@
 """How well a window's input angle is known from its own data.
 
-Each window's input angle φ_in (the wave generator's angle in the housing frame) is a
-nuisance found by aligning the simulated output torque ripple to the window
-(:mod:`.problem`): the torque ripple of the kinematic error carries the input angle.
-The dominant harmonic is order 2 (two teeth zones per WG revolution), which repeats every
-half revolution, so the alignment objective has two near-equal peaks 180° apart. Only the
-odd orders (order 1 of the nominal gear: 0.4e-4 rad, eccentricity) tell them apart. When
-their signal is below the noise the window's φ_in is known modulo 180° only; choosing one
-of the two peaks then flips φ_in by 180° at random (measured on planted bench data at
-1 % noise: 2-5 windows of 12 off by ~180°, none without noise). The model's prediction
-barely depends on the choice (that is what "below the noise" means), but a reported
-angle must not claim more than the data hold.
-
-:func:`input_angle_evidence` gives, per window, the evidence for the chosen peak against
-the best shift half a revolution away, 2 ln Λ = ΔJ / σ² (J: the drop of the residual sum
-of squares with per-channel gains and offsets, σ² the residual variance per sample): the
-log-likelihood ratio of the two alignments (Gaussian errors, gains profiled out). Above
-``min_evidence`` (10, "very strong" on the 2 ln B scale of Kass & Raftery 1995, as the
-acceptance rule of :mod:`swgcal.loop`) φ_in is reported modulo 360°, else
-modulo 180° and marked ambiguous. The standard error of φ_in comes from the curvature of
-the objective at its peak (Fisher information −J'' / 2σ²).
-
-A fitted kinematic-error harmonic of odd order k re-aligns every window and adds odd
-content, but it brings a second ambiguity: flipping every window by 180° and the
-harmonic's sign, (a_sin, a_cos) → (−1)^k (a_sin, a_cos) (:func:`flipped_ke`), predicts
-the same signals except for the nominal odd orders. Measured on planted data (order 3,
-1.5e-4 rad, 1 % noise): every window decided against its own flip (2 ln Λ 20-900), yet in
-one seed of two all windows sat 180° off with the harmonic's phase off by π. The global
-flip is therefore scored too (``flipped`` objectives: the sum over windows of the same
-log-likelihood ratio), and φ_in counts as known modulo 360° only where both exceed the
-threshold; the phase of an odd harmonic is then known modulo π only.
+The torque ripple's dominant order 2 repeats every half revolution, so a window's input
+angle φ_in is known modulo 180° unless the odd orders rise above the noise.
+:func:`input_angle_evidence` gives per window (and for the global flip an odd
+kinematic-error harmonic brings, :func:`flipped_ke`) the log-likelihood ratio of the chosen
+alignment against the one half a revolution away; above ``min_evidence`` (10) φ_in is
+reported modulo 360° (:class:`InputAngle`). Derivation and measurements:
+docs/calibration.md, "How well a window's input angle is known".
 """
 
 from __future__ import annotations

@@ -1,54 +1,12 @@
 """Strain side of the calibration: base model and declared effect library.
 
-The signals and their basis (s_wg, s_t, dpsi: the chain's prediction of each window,
-split into patterns on an extended time grid) are defined in :mod:`.signals`,
-the residual probes in :mod:`.probes` (both re-exported here).
-
-The base model (:class:`ChainBaseModel`) scales the two patterns (the WG deflection w0 and
-an overall gauge gain). Candidate effects (:func:`strain_library`) add columns or are
-transforms of the basis: the amplifier low-pass and the bridge nonlinearity map it,
-a kinematic-error harmonic replaces the torque pattern (its unit torque responses ΔT
-come with the signals) and re-aligns each window's input angle. Each documents its
-parametrisation, residual signature and source; every accepted one maps to the
-``sensor_effects`` option of :mod:`swgsim.sensing.effects` or, for the kinematic error, to
-the gear's ``ke_*`` parameters (:mod:`swgsim.gear.dynamics`).
-
-====================  =================================  =================================
-effect                parametrisation                    residual signature
-====================  =================================  =================================
-offset                o_c per channel [mV/V]             constant per channel, all windows
-gain_mismatch         g_c per channel, relative to the   WG/torque pattern of one channel
-                      mean gain (Σ g_c = 0) [-]          scaled, same at all speeds
-gauge_misplacement    δ_c per channel, relative to the   order-2 (ψ) pattern of a channel
-                      alignment-weighted mean [rad]      shifted in phase, 90° from it
-bridge_nonlinearity   s/(1 + k s) [1/(mV/V)]             ∝ s²: order 4 of ψ on s1/s3, a
-                      (transform of the basis)           load-squared offset on s0
-amplifier_lowpass     first order, cut-off f_c [Hz]      amplitudes fall and phases lag
-                      (transform of the basis)           with order × speed
-ke_order{k}           extra kinematic error              order k of the input (sidebands
-                      A sin(k φ_in + φ) at the output    k ± 2) in the torque channels
-                      [rad] (transform, re-aligns φ_in)
-thermal_drift         r_c per channel, offset r_c t_seq  offset growing over the sequence
-                      [mV/V/s]                           of windows
-====================  =================================  =================================
-
-Identifiability (declared): without an encoder angle in the data the WG angle of each
-window is a nuisance fitted by alignment, so (i) a delay common to all channels is a
-shift of that angle and cannot be seen (``time_delay`` is a simulation option only);
-(ii) only *relative* gauge angles are observable: misplacements are reported relative
-to the alignment-weighted mean (weights: sensitivity of the alignment to each
-channel); (iii) a gain common to all channels is the base model's gauge gain, so gains
-are reported relative to their mean; (iv) the angle of a channel with less than 1 % of
-the alignment weight (the full bridge s0 of the default layout) is not estimated
-(:attr:`GaugeMisplacement.min_weight_share`).
-
-The forms are those the simulation applies (one function per effect in
-:mod:`swgsim.sensing.effects`, evaluated here on the basis: a linear effect's columns are its
-function at one-hot parameters); the terms add only the fit (free parameters, their
-constraint, starts, bounds, ranges).
-
-Every effect declares the physical range of its parameters (``ranges``, bounds and
-sources in :mod:`.ranges`); a fit outside is not accepted as the effect.
+The signals and their basis are defined in :mod:`.signals`, the residual probes in
+:mod:`.probes` (both re-exported here). :class:`ChainBaseModel` scales the chain's two
+patterns (the WG deflection and an overall gauge gain); :func:`strain_library` gives the
+candidate effects, each a fit term over the form :mod:`swgsim.sensing.effects` applies,
+mapping to a ``sensor_effects`` entry or, for the kinematic error, to the gear's ``ke_*``.
+Parametrisations, residual signatures and what is identifiable without an encoder:
+docs/PHYSICS.md sec. 5.2; ranges and sources: :mod:`.ranges`.
 """
 
 from __future__ import annotations

@@ -1,60 +1,12 @@
 """Measured strain windows (data kind 2) as a calibration problem, and its calibration.
 
-Input: a schema-v1 data set (``swgsim.datasets.schema``) of bench windows, fault possibly
-``"unknown"``, each with its operating point (``n_in_rpm``, ``t_out_nm``,
-``n_in_mean_rpm``, ``t_out_mean_nm``). Output: a report of the fitted chain, the effects
-the data need from the declared library (:mod:`.effects`), the error before and
-after on held-out windows, and the accepted effects as a simulation option
-(``sensor_effects`` of :mod:`swgsim.sensing.effects`, kinematic-error harmonics for
-:class:`swgsim.gear.dynamics.GearParams`).
-
-Model of a window. The chain is deterministic and periodic in steady state, so each
-operating point is simulated once (:class:`StrainModel`): the dynamics with φ_in(0) = 0
-over one input revolution more than a window, plus one run per unit kinematic-error
-harmonic (linear response of the output torque), all in one vectorised integration.
-The bridge signals follow from the chain's influence coefficients,
-s = w0 (A cos 2ψ + B sin 2ψ) + T_out(t) h(ψ) (paper Fig. 2, :mod:`swgsim.gear.influence`).
-A window has two unknown phases: the WG angle relative to the flexspline ψ (the gauge
-pattern) and the input angle φ_in (the torque ripple of the kinematic error), which
-advance at rates in the ratio 1 + 1/N and are independent at a window's start (the
-output angle is their difference). Both are nuisances fitted per window on that
-window's own data: ψ by cross-correlation of the gauge pattern over half a WG
-revolution, then the torque phase over one input revolution, each at every sample with
-an objective invariant to per-channel positive gains and offsets, refined by a parabola;
-ψ(t) and T_out(t) are then cubic splines of the simulation at the two shifts. The
-alignment uses the nominal chain (plus, for a kinematic-error candidate, its own
-ripple: the torque phase is re-aligned, see :class:`.model.Realigner`), never a fitted effect
-parameter, so held-out windows are aligned exactly like fit windows.
-
-Fit and selection: :func:`swgcal.loop.calibrate` (separable least squares,
-uncertainties from the Jacobian with an autocorrelation correction, acceptance on
-evidence: held-out likelihood and effective BIC, physical ranges; 'unexplained' verdict).
-Held-out data are whole windows chosen by metadata (per operating point: the last window
-of the sequence is a test window, the middle one a validation window), or whole
-operating points.
-
-Limitations. Only relative gauge angles and relative channel gains are observable, and a
-delay common to all channels is not (module :mod:`.effects`). A kinematic-error
-candidate re-aligns each window's input angle, so it can absorb part of a tone that is
-not locked to the rotation but lies within ~10 % of k n_in / 60 at one speed. A
-placement error of single grids inside a bridge (not a rigid rotation of the bridge)
-leaks the WG pattern into a channel, e.g. order 2 of ψ into the full bridge s0; no
-candidate models it, and ``ke_order2`` can absorb part of it. Holding out operating
-points leaves the fit with fewer speeds: speed-dependent effects (low-pass) need at
-least two speeds among the fit windows. A window's input angle is known modulo 180° only
-unless the odd orders of the torque ripple rise above the noise (:mod:`.align`;
-at 1 % noise they do not for the nominal gear). Structure that no library effect
-explains lowers the evidence of every candidate (fewer effective samples): with an
-out-of-library tone at order 3.5 (0.012 mV/V, 2.5 times the noise), a 1.5°
-misplacement of s2 was reported as too small (2 ln Λ 7.3) instead of accepted (2 ln Λ
-117-186 without it).
-
-Typical use (or the kind-independent :mod:`swgcal` API)::
-
-    from swgcal import strain
-    problem = strain.build_problem("data/bench_run_7")
-    result = strain.calibrate(problem)
-    summary = strain.summarize(result)
+Input: a schema-v1 data set of bench windows with their operating points; output: the
+fitted chain, the effects the data need from the declared library (:mod:`.effects`), the
+error before and after on held-out windows and the accepted effects as a simulation option.
+:func:`build_problem` (or :func:`strain_problem`) simulates each operating point once
+(:class:`StrainModel`), aligns every window's two phases on its own data and splits whole
+windows or operating points; :func:`calibrate` runs :mod:`swgcal.loop`. The window's
+model, the held-out split, the limitations: docs/calibration.md, "Strain windows (kind 2)".
 """
 
 from __future__ import annotations
@@ -144,7 +96,8 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
         Hold out whole windows (default) or whole operating points.
     validation, test : sequence of int, optional
         Data-set sample indices (``heldout="windows"``) or operating-point indices
-        (``"operating_points"``); default chosen by metadata (see module docstring).
+        (``"operating_points"``); default chosen by metadata (docs/calibration.md,
+        "Strain windows (kind 2)").
     candidates : sequence of str, optional
         Library keys to try (default: all of :func:`strain_library`).
     window_period_s : float, optional
