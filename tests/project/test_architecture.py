@@ -45,20 +45,13 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "swgcal/loop.py": "the calibration loop and its before/after error: one algorithm",
     "swgsim/sensing/effects.py": "every measurement-chain effect with its source; to be split "
                                  "by effect kind",
-    "learn/inputs/signals.py": "the nets' inputs (raw, diff, features) and their checks; to be "
-                               "split from the transfer study's windows",
     "learn/monitor/normal.py": "the normal-behaviour model and its operating-variable laws; "
                                "the laws to move beside learn/monitor/laws.py",
     "swgsim/gear/thermal.py": "joint temperature and its friction law, with the measured "
                               "UR3 trace's import",
     "learn/monitor/gear_monitor.py": "commissioning, scoring, alarm, naming: one gear's "
                                      "monitor state machine",
-    "swgsim/gear/dynamics.py": "eq. (1)-(6) and their integrator; the steady and the "
-                               "profile integrators are still two (issue 46)",
     "learn/monitor/stream.py": "a stream's input checks, the run and its outputs",
-    "learn/monitor/sensor_check.py": "every hypothesis the naming weighs against a gear fault "
-                                     "(a bridge's fault, the reading's, the friction's): "
-                                     "one family of fits sharing their thresholds",
     "tests/learn/test_monitor.py": "the monitor's tests: to be split by what they hold",
     "tests/swgsim/test_recordings.py": "every table format and bad mapping of a recording",
     "swgsim/base/typed.py": "the one config toolkit: ranges, finiteness, keys, the build, "
