@@ -266,8 +266,9 @@ def _proposals(gram: _Gram, groups: Sequence[Group], cols: dict[int, np.ndarray]
 def discover(target: np.ndarray, groups: Sequence[Group], fit: np.ndarray,
              validation: np.ndarray, projector: Projector | None = None, *,
              max_terms: int = 5, min_gain: float = MIN_GAIN) -> list[Proposal]:
-    """Select groups sparsely on the fit rows, score them on the validation rows (module
-    docstring, steps 2-4; ``sklearn.linear_model.lars_path_gram``; τ_int of the residual
+    """Select groups sparsely on the fit rows, score them on the validation rows (steps
+    2-4 of docs/calibration.md, "Discovery beyond the library";
+    ``sklearn.linear_model.lars_path_gram``; τ_int of the residual
     of all candidate columns fitted together, Sokal's window).
 
     Parameters

@@ -402,8 +402,8 @@ def extract_features(
         Orders of the input rotation for the DFT features [-]; default
         :func:`paper_orders` (0.25, 0.5, ..., 8).
     floor_rel : float, default 1e-3
-        Floor of DFT_rel as a fraction of the reference spectrum's maximum (see the module
-        docstring).
+        Floor of DFT_rel as a fraction of the reference spectrum's maximum
+        (docs/paper_study.md, "The paper's features").
 
     Returns
     -------

@@ -37,7 +37,8 @@ OUTSIDE_UNJUDGED = 8
 
 @dataclass
 class NormalConfig:
-    """How the normal behaviour follows the conditions (module docstring).
+    """How the normal behaviour follows the conditions
+    (docs/monitor.md, "The normal behaviour's laws").
 
     Attributes
     ----------
@@ -47,7 +48,8 @@ class NormalConfig:
     temperature_margin_k : float
         Where commissioning fitted the temperature terms, a window's temperature may
         exceed commissioning's range at its operating point by this much before it is
-        outside [K], >= 0 (without them: by nothing, module docstring).
+        outside [K], >= 0 (without them: by nothing,
+        docs/monitor.md, "The normal behaviour's laws").
     temperature_uncertainty_k : float
         The temperature reading's uncertainty [K], in [0, 10]: commissioning's range is
         its readings' widened by this on either side. 0.2, of the simulated sensor's
@@ -167,7 +169,8 @@ class Conditions:
 
 @dataclass
 class NormalBehaviour:
-    """The gear's normal behaviour per operating point (module docstring).
+    """The gear's normal behaviour per operating point
+    (docs/monitor.md, "The normal behaviour's laws").
 
     Attributes
     ----------
@@ -194,7 +197,8 @@ class NormalBehaviour:
         as many).
     slope : ndarray, shape (P, F), optional
         Per point, each bridge feature's own change per K left after the bridges' gain
-        and zero drift [unit per K] (module docstring; 0 without temperature).
+        and zero drift [unit per K] (0 without temperature;
+        docs/monitor.md, "The normal behaviour's laws").
     friction_range : ndarray, shape (2,)
         The friction factor's range over commissioning, as tracked there [-] (default
         [1, 1]). On the joint in motion the factor's own noise spans ±5 % over 1000 h
@@ -311,7 +315,7 @@ class NormalBehaviour:
                   friction: np.ndarray | float = 1.0, index: np.ndarray | None = None
                   ) -> np.ndarray:
         """Windows' features brought to the reference condition of their operating point
-        (module docstring), shape (n, F).
+        (docs/monitor.md, "The normal behaviour's laws"), shape (n, F).
 
         Parameters
         ----------
@@ -389,8 +393,8 @@ class NormalBehaviour:
         :meth:`z` of the windows repeated m times (``friction.ravel()`` the factor of each),
         at a fraction of its cost, for the friction fits
         (:func:`learn.monitor.sensor_check.fit_friction`): a factor moves only the
-        efficiency (its loss law, module docstring) and, beyond commissioning's range, its
-        spread, so every other feature is corrected once.
+        efficiency (its loss law, docs/monitor.md, "The normal behaviour's laws") and,
+        beyond commissioning's range, its spread, so every other feature is corrected once.
 
         Parameters
         ----------
@@ -582,7 +586,8 @@ class NormalBehaviour:
 
     @property
     def temperature_law(self) -> bool:
-        """Whether commissioning fitted the temperature terms (module docstring)."""
+        """Whether commissioning fitted the temperature terms
+        (docs/monitor.md, "The normal behaviour's laws")."""
         return bool(np.isfinite(self.ref_temp).all())
 
     def outside(self, points: np.ndarray, cond: Conditions, friction: np.ndarray | float,
@@ -590,7 +595,8 @@ class NormalBehaviour:
         """Which condition each window has that commissioning did not see: a bit field,
         :data:`OUTSIDE_TEMPERATURE` (1), :data:`OUTSIDE_LOAD` (2), :data:`OUTSIDE_FRICTION`
         (4), and :data:`OUTSIDE_UNJUDGED` (8) where the temperature is outside with no
-        temperature law (module docstring); 0: none; shape (n,) int."""
+        temperature law (docs/monitor.md, "The normal behaviour's laws"); 0: none;
+        shape (n,) int."""
         i = self._check(points, index)
         c = self.config
         out = np.zeros(len(points), np.int64)
@@ -650,7 +656,8 @@ class NormalBehaviour:
 
     def _corrected(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
                    friction: np.ndarray) -> np.ndarray:
-        """Features at the reference condition of their point (module docstring)."""
+        """Features at the reference condition of their point
+        (docs/monitor.md, "The normal behaviour's laws")."""
         out = self._temperature_corrected(feats, i, self._dt(i, cond))
         tq = np.abs(cond.torque_nm)
         t0 = np.abs(self.ref_torque[i])

@@ -128,7 +128,7 @@ class SensorFit:
         """``n · mean_j(mean_i z_ij)²`` over the n windows and the features j outside
         the fitted bridge (the other bridges, the efficiency and the twist): the χ² per degree of
         freedom of their mean shift where the windows are independent and nothing but
-        this bridge moved (module docstring)."""
+        this bridge moved (docs/monitor.md, "Naming a sensor fault")."""
         keep = np.ones(self.z.shape[1], bool)
         keep[self.bridge * BLOCK:(self.bridge + 1) * BLOCK] = False
         m = self.z[:, keep].mean(axis=0)
@@ -144,7 +144,7 @@ class SensorFit:
 
 def fit_sensor_faults(z: np.ndarray, mean: np.ndarray, std: np.ndarray,
                       hours: np.ndarray | None = None) -> list[SensorFit]:
-    """Fit every one-bridge sensor fault to windows (module docstring).
+    """Fit every one-bridge sensor fault to windows (docs/monitor.md, "Naming a sensor fault").
 
     Parameters
     ----------
@@ -419,8 +419,8 @@ def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.n
     """The temperature the bridges and the efficiency say each window was at, by the
     laws learnt at commissioning (:func:`best_temperature`), as a running median over
     :data:`VIRTUAL_WINDOWS` windows (a joint's temperature moves with a time constant of
-    tens of minutes, module docstring); the monitor's reading where its temperature sensor
-    has failed (:func:`learn.monitor.stream.run_stream`). Shape (n,) [°C].
+    tens of minutes, docs/DATASET.md, "Gear lives"); the monitor's reading where its
+    temperature sensor has failed (:func:`learn.monitor.stream.run_stream`). Shape (n,) [°C].
 
     Raises
     ------

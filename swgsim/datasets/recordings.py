@@ -159,7 +159,8 @@ def _angles(s: Samples, m: RecordingMapping, starts: np.ndarray) -> dict[str, np
 
 def _hours(s: Samples, m: RecordingMapping, starts: np.ndarray, seg: np.ndarray,
            w0: np.ndarray) -> tuple[np.ndarray, float]:
-    """Each window's hour and the hour of the recording's first row (module docstring).
+    """Each window's hour and the hour of the recording's first row
+    (DATASET.md, "Imported recordings").
 
     Raises
     ------
@@ -231,7 +232,7 @@ def _select(s: Samples, m: RecordingMapping, w0: np.ndarray, n_t: int, hour: np.
 
 def recording_stream(path: str | os.PathLike, m: RecordingMapping,
                      max_bytes: int = rt.MAX_TABLE_BYTES, progress: bool = False):
-    """A recording as a stream in memory (module docstring); nothing is written.
+    """A recording as a stream in memory (DATASET.md, "Imported recordings"); nothing is written.
 
     Parameters
     ----------
@@ -420,7 +421,7 @@ def import_recording(recording: str | os.PathLike,
                      mapping: RecordingMapping | Mapping[str, Any] | str | os.PathLike,
                      out_dir: str | os.PathLike, overwrite: bool = False,
                      max_bytes: int = rt.MAX_TABLE_BYTES, progress: bool = False) -> dict:
-    """Import a recording as a stream the monitor reads (module docstring).
+    """Import a recording as a stream the monitor reads (DATASET.md, "Imported recordings").
 
     Everything is checked before anything is written: the mapping, ``out_dir``
     (:func:`write_stream`'s refusals), the table and its windows

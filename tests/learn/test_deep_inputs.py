@@ -144,7 +144,8 @@ def test_raw_and_diff_are_the_documented_forms(toy, aux):
     """``raw``: each bridge (s - m_ref) / r_ref with the mean and RMS about it of the
     window's reference (same gear, operating point, disturbed flag), then the scalars as
     channels constant in time; ``diff``: (s0, Δs13, Δs24) of those normalised channels,
-    then the same scalars (learn/inputs/signals.py, module docstring)."""
+    then the same scalars
+    (docs/learners_transfer.md, "Reference normalisation and the synchronous residual")."""
     from learn.inputs.signals import efficiency_features
 
     meta, refs = window_meta(toy, disturbed=True)
