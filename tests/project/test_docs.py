@@ -35,9 +35,11 @@ SCANNED_DIRS = ("swgsim", "learn", "swgcli", "scripts", "conf", "tests")
 SUFFIXES = {".py", ".yaml", ".yml", ".sh", ".toml", ".cfg", ".txt"}
 THIS_FILE = Path(__file__).resolve()  # holds planted bad citations
 
-# a document name in capitals, optionally with a path; not part of a longer token or URL
+# a document name in capitals, optionally with a path; not part of a longer token or URL;
+# or any page of docs/ named with its folder (docs/monitor.md)
 DOC_RE = re.compile(
-    r"(?<![\w./~:-])(?P<path>(?:/|~/|(?:\.\.?/)+)?(?:[\w.-]+/)*[A-Z][A-Z0-9_]*\.md)(?![\w/-])")
+    r"(?<![\w./~:-])(?P<path>(?:/|~/|(?:\.\.?/)+)?(?:[\w.-]+/)*[A-Z][A-Z0-9_]*\.md"
+    r"|docs/(?:[\w-]+/)*[\w-]+\.md)(?![\w/-])")
 # what may stand between a document name and its section: quotes/backticks, comment marks,
 # line breaks and an optional comma
 _GAP = r"[`'\s#*\]()]*,?[\s#*]*"
@@ -259,7 +261,9 @@ docs/PHYSICS.md sec. 2-66, one across a line:
 see PHYSICS.md
     sec. 77. A document that does not exist: NOSUCHDOC{md}; outside the repository:
 ``/work/shared/data/joint_friction/README{md}``, ../ELSEWHERE{md} and ~/NOTES{md}.
-A heading that is not there: ARCHITECTURE.md, "No such heading".
+A heading that is not there: ARCHITECTURE.md, "No such heading". A lower-case page of
+the docs that is not there: docs/nosuchpage{md}; one whose heading is not: docs/monitor.md,
+"No such section".
 """
 # comment citing docs/PHYSICS.md
 # sec. 88
@@ -271,14 +275,16 @@ def test_checker_reports_planted_bad_citations():
     text = "\n".join(problems)
     for needle in ("sec. 99", "sec. 42", "sec. 66", "sec. 77", "sec. 88", "NOSUCHDOC" + MD,
                    "/work/shared/data/joint_friction/README" + MD, "../ELSEWHERE" + MD,
-                   "~/NOTES" + MD, "No such heading"):
+                   "~/NOTES" + MD, "No such heading", "docs/nosuchpage" + MD,
+                   "No such section"):
         assert needle in text, f"planted citation {needle!r} not reported:\n{text}"
     assert "sec. 1," not in text and "sec. 2," not in text  # sections 1 and 2 exist
-    assert len(problems) == 10, text
+    assert len(problems) == 12, text
 
 
 def test_checker_accepts_good_citations():
     good = ('"""docs/PHYSICS.md sec. 3.6, PHYSICS.md sec. 1, 5 and STYLE.md; README.md;\n'
             'ARCHITECTURE.md, "Calibration loop"; docs/DATASET.md; lower case report.md,\n'
+            'docs/monitor.md, "Prognosis"; docs/calibration.md;\n'
             'a URL https://example.org/SOMETHING' + MD + '."""')
     assert citation_problems(good, "good.py") == []
