@@ -20,7 +20,7 @@ CONF = Path(__file__).resolve().parents[1] / "conf"
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("data", help="data-set directory (schema v1)")
     parser.add_argument("--repeats", type=int, default=200, help="timed windows per model")
     parser.add_argument("--out", default=None, help="write the table as CSV here")

@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--dataset", default="bench", help="data-set preset (default bench)")
     ap.add_argument("--windows", type=int, default=3000, help="windows timed (default 3000)")
     args = ap.parse_args()

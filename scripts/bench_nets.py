@@ -54,7 +54,7 @@ DETECTOR = "cnn_res"
 
 
 def _args(argv=None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="step", required=True)
     s = sub.add_parser("save", help="write the nets' settings and one split to an .npz")
     s.add_argument("data", help="a data set (folder of swgsim-generate)")

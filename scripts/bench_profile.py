@@ -55,7 +55,7 @@ def cases(window_s: float) -> dict[str, pf.Profile]:
 
 
 def main(argv: list[str] | None = None) -> dict:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--variants", type=int, default=3)
     ap.add_argument("--window-s", type=float, default=0.12)
     ap.add_argument("--sample-rate-hz", type=float, default=10e3)

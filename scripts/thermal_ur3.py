@@ -154,7 +154,7 @@ def _figure(results, path: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run every joint, print the table (and write the figure)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("path", type=Path, help="ur3_cobotops_2022-10-26.csv")
     ap.add_argument("--joints", type=int, nargs="*", default=list(range(6)))
     ap.add_argument("--figure", type=Path, default=None)
