@@ -22,11 +22,13 @@ from typing import Any
 
 import numpy as np
 
+from learn.learners.devices import resolve_device
 from learn.studies.kshot import KShotSplit
 from learn.studies.protocols import fit_with_groups, window_groups
 from swgsim.base.lazy import lazy_module
 
 pd = lazy_module("pandas")
+stacked = lazy_module("learn.learners.stacked")
 log = logging.getLogger(__name__)
 
 ADAPT = ("adabn", "coral")
@@ -169,7 +171,7 @@ class _Scorer:
 
 def fit_and_adapt(spec: RunSpec, est, inp, train: np.ndarray, evaluation: np.ndarray,
                   kshot: KShotSplit | None, k_shots: Sequence[int], ft: FinetuneSettings,
-                  seed: int) -> list[dict]:
+                  seed: int, fitted_s: float | None = None) -> list[dict]:
     """Fit one run on the training windows, adapt it, score every variant.
 
     Parameters
@@ -189,20 +191,32 @@ def fit_and_adapt(spec: RunSpec, est, inp, train: np.ndarray, evaluation: np.nda
     ft : FinetuneSettings
     seed : int
         Seed of the fine-tuning batches.
+    fitted_s : float, optional
+        ``est`` is fitted already (a torch net trained with other seeds at once,
+        :func:`learn.learners.stacked.fit_seeds`), its share of that fit taking
+        ``fitted_s`` seconds; not for a model whose head is refitted (MiniRocket).
 
     Returns
     -------
     list of dict
         One row per scored variant (model, input, seed, n_test, model name with its
         adaptation, k_shot, accuracy, train_s [s], confusion as (true, predicted, count)).
+
+    Raises
+    ------
+    ValueError
+        ``fitted_s`` given for a run whose head is refitted.
     """
     X, y = inp.X, inp.y
     net = final_step(est)
     refit = kshot is not None and spec.finetune and hasattr(net, "refit_head")
-    t0 = time.perf_counter()
+    if refit and fitted_s is not None:
+        raise ValueError(f"{spec.label}: a refitted head needs its training features; fit "
+                         "it here (fitted_s=None)")
+    t0 = time.perf_counter() - (fitted_s or 0.0)
     if refit:  # MiniRocket: the training features, kept for the ridge refits
         f_src = est.fit_transform(X[train], y[train])
-    else:
+    elif fitted_s is None:
         fit_with_groups(est, X[train], y[train], window_groups(inp.meta)[train])
     fit_s = time.perf_counter() - t0
     sc = _Scorer(spec, X, y, evaluation, seed)
@@ -220,6 +234,62 @@ def fit_and_adapt(spec: RunSpec, est, inp, train: np.ndarray, evaluation: np.nda
     else:
         _fine_tune(sc, spec, est, X, y, train, kshot, ks, ft, seed)
     return sc.rows
+
+
+def fit_at_once(spec: RunSpec, model_cfg: Mapping[str, Any], inp, train: np.ndarray,
+                seeds: Sequence[int]) -> list | None:
+    """A run's torch net fitted for every seed at once on the training rows
+    (:func:`learn.learners.stacked.fit_seeds`), to pass to :func:`fit_and_adapt`.
+
+    Parameters
+    ----------
+    spec : RunSpec
+    model_cfg : mapping
+        The run's model config (``_target_``), as :func:`make_estimator` takes it.
+    inp : learn.inputs.signals.InputSet
+        The run's input, all windows of the protocol's kind.
+    train : ndarray of int
+        Rows of ``inp`` to fit on (the same for every seed: one split).
+    seeds : sequence of int
+        ``random_state`` of each copy.
+
+    Returns
+    -------
+    list of TorchClassifier or None
+        One fitted copy per seed, in order (a one-step pipeline stays one); None for one
+        seed or a run that is not a torch net alone (one with a scaler before it, say):
+        those are fitted seed by seed.
+    """
+    from sklearn.pipeline import Pipeline
+
+    est = make_estimator(model_cfg, int(seeds[0]), inp.n_aux, spec.params)
+    net = est[0] if isinstance(est, Pipeline) and len(est) == 1 else est
+    if len(seeds) < 2 or not isinstance(net, stacked.TorchClassifier):
+        return None
+    nets = stacked.fit_seeds(net, inp.X[train], inp.y[train], [int(s) for s in seeds],
+                             window_groups(inp.meta)[train])
+    return [n if net is est else Pipeline([(est.steps[0][0], n)]) for n in nets]
+
+
+def net_device_settings(runs: Sequence[RunRef], models: Mapping[str, Any]) -> dict[str, Any]:
+    """The ``torch.device`` of each torch net of ``runs`` (a model of ``models`` with a
+    ``device`` parameter), resolved on this machine
+    (:func:`learn.learners.devices.resolve_device`; the jobs' workers resolve it alike).
+
+    Raises
+    ------
+    ValueError
+        One line naming ``transfer.models.<name>.estimator.device``: a setting outside
+        :data:`learn.learners.devices.DEVICE_CHOICES`, or a CUDA device on a machine
+        without one.
+    """
+    out = {}
+    for name in dict.fromkeys(r.model for r in runs):
+        params = final_step(make_estimator(models[name], 0, 0)).get_params(deep=False)
+        if "device" in params:
+            out[name] = resolve_device(params["device"],
+                                       f"transfer.models.{name}.estimator.device")
+    return out
 
 
 def _prepared(est, X):

@@ -32,7 +32,9 @@ from learn.studies.runs import (
     check_estimator,
     final_step,
     fit_and_adapt,
+    fit_at_once,
     make_estimator,
+    net_device_settings,
 )
 from swgsim.base.lazy import lazy_module
 from swgsim.base.registry import travelling
@@ -40,6 +42,7 @@ from swgsim.base.typed import check_tree
 from swgsim.datasets.config import DatasetConfig
 
 pd = lazy_module("pandas")
+torch = lazy_module("torch")
 
 log = logging.getLogger(__name__)
 
@@ -113,6 +116,11 @@ class TransferConfig:
     n_threads, n_jobs, threads_per_job : int
         Torch threads of the main process; (protocol, split, seed) cells in parallel
         processes; torch threads per process.
+    stack_seeds : bool or None
+        Run the seeds of a split as one job whose torch nets are trained at once
+        (:func:`learn.learners.stacked.fit_seeds`; with dropout, in distribution what one
+        by one gives); None: where a net runs on a GPU, which stacking fills (on a CPU it
+        is no faster: ``docs/results/speed.md``, "Nets on a GPU").
     latency, latency_repeats, progress : bool, int, bool
     report_dir : str
     group : int or None
@@ -140,6 +148,7 @@ class TransferConfig:
     n_threads: int = 1
     n_jobs: int = 2
     threads_per_job: int | None = 1
+    stack_seeds: bool | None = None
     latency: bool = True
     latency_repeats: int = 100
     progress: bool = True
@@ -253,39 +262,60 @@ def _check_targets(targets: Mapping[str, TargetSpec], where: str) -> None:
 # --------------------------------------------------------------------------- runs
 
 
-def _cell(protocol: str, split, seed: int, specs, model_cfgs, inputs, k_max: int,
-          k_shots, ft: FinetuneSettings, adapt_windows: int,
-          threads: int | None) -> tuple[list[dict], dict[str, tuple[float, float]]]:
-    """Every (model, input) of one (protocol, split, seed): a unit of parallel work (a
-    *job*). Returns the result rows and, by run label, the wall and CPU time of each run
-    [s] (fit, adaptations, fine-tuning and scoring; CPU: this process's). ``threads``:
-    torch threads, set again before each run (fitting MiniRocket puts them back to the
-    number of cores, :mod:`learn.studies.latency`)."""
+def _cell(protocol: str, split, seeds: Sequence[int], specs, model_cfgs, inputs, k_max: int,
+          k_shots, ft: FinetuneSettings, adapt_windows: int, threads: int | None,
+          stack: bool) -> list[tuple[list[dict], dict[str, tuple[float, float]]]]:
+    """Every (model, input) of one (protocol, split) for each of ``seeds`` (a *job*); with
+    ``stack`` each torch net trained for all seeds at once (:func:`fit_at_once`). Returns
+    per seed the result rows and, by run label, the wall and CPU time of each run [s] (fit
+    or a stacked fit's share, adaptations, fine-tuning, scoring; CPU: this process's).
+    ``threads``: torch threads, set again before each run (fitting MiniRocket puts them
+    back to the number of cores, :mod:`learn.studies.latency`)."""
     meta = next(iter(inputs.values())).meta
-    kshot, evaluation = None, split.test
-    if protocol in OOD_PROTOCOLS:
-        kshot = kshot_split(meta, split.test, k_max, seed, n_unlabelled=adapt_windows)
-        evaluation = kshot.evaluation
-        check_no_leak(meta, split.train, kshot)
-    rows, seconds = [], {}
-    import torch
-
+    shots = [_shots(meta, protocol, split, seed, k_max, adapt_windows) for seed in seeds]
+    out = [([], {}) for _ in seeds]
     before = torch.get_num_threads()
     try:
         for spec in specs:
             if threads:
                 torch.set_num_threads(int(threads))
-            t0, c0 = time.perf_counter(), time.process_time()
             inp = inputs[spec.input]
-            est = make_estimator(model_cfgs[spec.model], seed, inp.n_aux, spec.params)
-            out = fit_and_adapt(spec, est, inp, split.train, evaluation, kshot, k_shots,
-                                ft, seed)
-            for r in out:
-                rows.append({"protocol": protocol, "split": split.name, **r})
-            seconds[spec.label] = (time.perf_counter() - t0, time.process_time() - c0)
+            t0, c0 = time.perf_counter(), time.process_time()
+            fitted = fit_at_once(spec, model_cfgs[spec.model], inp, split.train, seeds) \
+                if stack else None
+            share = ((time.perf_counter() - t0) / len(seeds),
+                     (time.process_time() - c0) / len(seeds)) if fitted else (None, 0.0)
+            for i, seed in enumerate(seeds):
+                t0, c0 = time.perf_counter(), time.process_time()
+                est = fitted[i] if fitted else make_estimator(model_cfgs[spec.model], seed,
+                                                              inp.n_aux, spec.params)
+                rows = fit_and_adapt(spec, est, inp, split.train, shots[i][1], shots[i][0],
+                                     k_shots, ft, seed, fitted_s=share[0])
+                out[i][0].extend({"protocol": protocol, "split": split.name, **r}
+                                 for r in rows)
+                out[i][1][spec.label] = (time.perf_counter() - t0 + (share[0] or 0.0),
+                                         time.process_time() - c0 + share[1])
     finally:
         torch.set_num_threads(before)
-    return rows, seconds
+    return out
+
+
+def _shots(meta, protocol: str, split, seed: int, k_max: int, adapt_windows: int):
+    """The held-out gear's k-shot split of ``seed`` (None outside leave-one-gear-out) and
+    the windows scored."""
+    if protocol not in OOD_PROTOCOLS:
+        return None, split.test
+    kshot = kshot_split(meta, split.test, k_max, seed, n_unlabelled=adapt_windows)
+    check_no_leak(meta, split.train, kshot)
+    return kshot, kshot.evaluation
+
+
+def stacks_seeds(tc: TransferConfig) -> bool:
+    """Whether the comparison runs each split's seeds as one job (``tc.stack_seeds``;
+    None: where a run's torch net resolves to a GPU on this machine)."""
+    if tc.stack_seeds is not None:
+        return bool(tc.stack_seeds)
+    return any(d.type == "cuda" for d in net_device_settings(tc.runs, tc.models).values())
 
 
 # --------------------------------------------------------------------------- comparison
@@ -345,7 +375,8 @@ def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency:
     gathered from it instead, and a data set whose cells it all holds builds no input."""
     k_shots = [int(k) for k in tc.k_shots]
     threads = tc.n_threads if tc.n_jobs == 1 else tc.threads_per_job
-    cell = travelling(_with_cell)  # a user's learners travel with the jobs
+    stack = stacks_seeds(tc)
+    cell = travelling(_with_cells)  # a user's learners travel with the jobs
     labels = {s.label: s for s in tc.runs}
     for name, load in sources:
         ds = load()
@@ -378,14 +409,17 @@ def _jobs(sources, tc: TransferConfig, feature_kwargs, split_seed: int, latency:
             if latency and first and got[name].latency is None:
                 got[name].latency = _latency(ds, name, tc, inputs, feature_kwargs, parts)
             args = (tc.runs, tc.models, inputs, max([0, *k_shots]), k_shots, tc.finetune,
-                    int(tc.adapt_windows), threads)
+                    int(tc.adapt_windows), threads, stack)
+            left = []
             for c in cells:
                 got[name].planned(c)
                 done = None if parts is None else parts.load(name, c)
                 if done is not None:
                     _gather(got, labels, name, c, *done, progress)
                 else:
-                    yield cell, (name, c, *args), {}
+                    left.append(c)
+            for group in _job_cells(left, stack):
+                yield cell, (name, group, *args), {}
             del inputs
         progress.adjust(-planned)  # protocols without data
         del ds
@@ -417,10 +451,21 @@ def _gather(got: dict[str, _Gathered], labels: Mapping, name: str, c: tuple, row
     progress.finished(name, c, seconds, rows)
 
 
-def _with_cell(name: str, c: tuple, *args):
-    """:func:`_cell` of ``c`` with its data set and ``c`` beside the result (results
-    come back unordered)."""
-    return name, c, _cell(*c, *args)
+def _job_cells(cells: list, stack: bool) -> list[list]:
+    """The cells of each job: one each, or with ``stack`` a (protocol, split)'s together."""
+    if not stack:
+        return [[c] for c in cells]
+    groups: dict[tuple, list] = {}
+    for c in cells:
+        groups.setdefault((c[0], c[1].name), []).append(c)
+    return list(groups.values())
+
+
+def _with_cells(name: str, cells: list, *args) -> list[tuple]:
+    """:func:`_cell` of ``cells`` (one protocol and split), each result beside its data
+    set and cell (results come back unordered)."""
+    out = _cell(cells[0][0], cells[0][1], [c[2] for c in cells], *args)
+    return [(name, c, o) for c, o in zip(cells, out, strict=True)]
 
 
 def _tables(rows: list[dict], dataset: str) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -518,7 +563,7 @@ def run_comparisons(sources: Sequence[tuple[str, Any]], tc: TransferConfig, *,
         done = Parallel(n_jobs=tc.n_jobs, return_as="generator_unordered",
                         batch_size=1)(jobs)
     labels = {s.label: s for s in tc.runs}
-    for name, c, (rows, seconds) in done:
+    for name, c, (rows, seconds) in (r for job in done for r in job):
         if parts is not None:
             rows, seconds = parts.save(name, c, rows, seconds)
         _gather(got, labels, name, c, rows, seconds, progress)

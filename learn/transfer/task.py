@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from learn.studies.runs import net_device_settings
 from learn.tasks.config import typed_app
 from learn.tasks.parts import part_key, plan_datasets
 from learn.transfer.study import TransferConfig, run_comparisons
@@ -176,19 +177,12 @@ def net_devices(tc: TransferConfig) -> dict[str, str | int | bool]:
     Raises
     ------
     ValueError
-        One line naming ``transfer.models.<name>.estimator.device``: a setting outside
-        :data:`learn.learners.devices.DEVICE_CHOICES`, or a CUDA device on a machine
-        without one.
+        As :func:`learn.studies.runs.net_device_settings`.
     """
-    from learn.learners.devices import device_record, resolve_device
-    from learn.studies.runs import final_step, make_estimator
+    from learn.learners.devices import device_record
 
-    records = {}
-    for name in dict.fromkeys(s.model for s in tc.runs):
-        params = final_step(make_estimator(tc.models[name], 0, 0)).get_params(deep=False)
-        if "device" in params:
-            dev = resolve_device(params["device"], f"transfer.models.{name}.estimator.device")
-            records[str(dev)] = device_record(dev)
+    records = {str(dev): device_record(dev)
+               for dev in net_device_settings(tc.runs, tc.models).values()}
     if not records:
         return {"device": "none (no torch net)", "deterministic": True}
     out = dict(next(iter(records.values())))
