@@ -1,14 +1,11 @@
 """Windows of simulated gear lives through the embedded stage's Python reference.
 
 Each gear lives as the monitor's training lives
-(:func:`learn.monitor.evaluate.training_lives`: a healthy life with its commissioning, then one
-life per class, severity
-and fault position or bridge); its normal behaviour comes from its own commissioning windows
-(every other one per operating point, :func:`learn.monitor.gear_monitor.normal_windows`, as
-the monitor builds it), and its labelled windows are the healthy ones after
-commissioning and each fault life's after its first (as ``train_model``). The lives are
-steady, so each window's input angle is the nominal one, φ = 2π n t / 60 at its desired
-speed (:func:`learn.export.reference.nominal_angle`).
+(:func:`learn.monitor.evaluate.training_lives`); its normal behaviour comes from its own
+commissioning windows (:func:`learn.monitor.gear_monitor.normal_windows`), its labelled
+windows are the healthy ones after commissioning and each fault life's after its first.
+The lives are steady: each window's input angle is the nominal one
+(:func:`learn.export.reference.nominal_angle`). ``docs/EXPORT.md``, "Method".
 """
 
 from __future__ import annotations

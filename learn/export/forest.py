@@ -1,14 +1,10 @@
 """The exported classifier: a random forest on the stage's int16 inputs, through emlearn.
 
-The forest is trained on :func:`learn.export.reference.design_rows` (quantized z-scores
-and the operating point) of the training gears' windows, its size set by the flash
-budget alone (``max_leaf_nodes`` from the bytes left for nodes; nothing is chosen on the
-held-out gear). emlearn's "loadable" format stores a decision node in 8 bytes (int8
-feature, int16 threshold, int16 relative child jumps; ``eml_trees.h``) and a leaf as one
-class byte (hard voting); the C compares ``x < t`` on int16 inputs where scikit-learn
-compares ``x <= t`` on floats, so each threshold is exported as ⌊t⌋ + 1 (the same split
-of integer inputs). The Python model predicts as the C: each tree's class, then the
-first class with the most votes.
+Trained on :func:`learn.export.reference.design_rows` of the training gears' windows, its
+size set by the flash budget alone. emlearn's C compares ``x < t`` on int16 inputs where
+scikit-learn compares ``x <= t``, so each threshold is exported as ⌊t⌋ + 1; the Python
+model predicts as the C (each tree's class, then the first class with the most votes).
+Node format, budget and refusals: ``docs/EXPORT.md``, "Method".
 """
 
 from __future__ import annotations

@@ -1,31 +1,14 @@
 """Python reference of the embedded per-window stage: the C's arithmetic, op for op.
 
-The microcontroller sees one window sample by sample: five bridge outputs x [mV/V] and
-the input angle φ [rad] since the window's first sample (the motor encoder, unwrapped).
-Per sample it builds the monitor's basis (:mod:`learn.monitor.features`: 1, cos/sin of
-the WG harmonics h (1 + 1/N) φ, h = 1..H, and of the nuisance orders 1/4, 1/3, 1/2 of
-φ) and accumulates, per bridge, the single-bin DFTs b = Bᵀy (one projection per order:
-the angle-domain DFT at that order) and the energy yᵀy of y = x − x₀ (the window's first
-sample subtracted: the fit does not change, the energy to cancel shrinks by the
-offset's). Sums run in float32 over blocks of :data:`BLOCK` samples, each block's sums
-added into float32 totals with Kahan compensation (a plain float32 running sum over 1200
-samples loses the residual energy, 1e-5 of the total on the WG-bending bridges). At the
-window's end the normal equations of the operating point's speed (G = BᵀB of the nominal
-angle φ = 2π n t / 60, the monitor's basis; G and G⁻¹ stored per speed) turn the DFTs
-into the least-squares coefficients c = G⁻¹ b; the features are the offset c₀ + x₀, the
-amplitudes √(c_cos,h² + c_sin,h²), log10 of the RMS of what the fit leaves, from
-yᵀy − 2 cᵀb + cᵀGc (stationary in c: c's float32 rounding enters to second order; cᵀb
-alone lost 4 % of the residual energy), and the efficiency; then z-scores against the
-gear's normal behaviour and the classifier's int16 inputs (:func:`quantize`).
-
-At the nominal angle this is the monitor's least-squares fit (the same basis, the same
-normal equations); the differences are float32 rounding, largest on the residual RMS
-(≤ 0.011 in log10 on the bench held-out windows, ``docs/EXPORT.md``). Sines and cosines
-come from a quadrant reduction and Taylor polynomials (:func:`sincos32`), the harmonics
-from complex products of the first, log10 from frexp and an atanh series
-(:func:`log10_32`): every step IEEE float32 arithmetic in a fixed order, so that the C,
-compiled without fused multiply-add (``-ffp-contract=off``; the Cortex-M4's VMLA is not
-fused), gives the same bits — what :mod:`learn.export.host` and the target check show.
+Per sample the monitor's basis (:mod:`learn.monitor.features`) at the input angle φ, and
+per bridge the single-bin DFTs b = Bᵀy and the energy yᵀy of y = x − x₀, summed in float32
+over blocks of :data:`BLOCK` samples into Kahan-compensated totals; at the window's end
+c = G⁻¹ b with the operating point's stored normal equations, the features (offset,
+amplitudes, log10 residual RMS from yᵀy − 2 cᵀb + cᵀGc, efficiency), their z-scores and
+the classifier's int16 inputs (:func:`quantize`). Sines and cosines come from
+:func:`sincos32`, log10 from :func:`log10_32`: IEEE float32 in a fixed order, so that the
+C compiled with ``-ffp-contract=off`` gives the same bits. Method and measured error
+against the monitor's float64 least squares: ``docs/EXPORT.md``, "Method".
 """
 
 from __future__ import annotations

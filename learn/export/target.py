@@ -1,26 +1,17 @@
 """Cortex-M4F measurements of the exported stage: flash, RAM and cycles per window.
 
-**Size.** ``arm-none-eabi-gcc -mcpu=cortex-m4 -mthumb -mfloat-abi=hard
--mfpu=fpv4-sp-d16 -Os -ffp-contract=off``, sections garbage-collected, newlib-nano's libm
-and libc: the image of the stage alone (:data:`learn.export.firmware.MAIN_SIZE`: vector
-table, start-up, the stage, its tables and forest, the library code it pulls in) measured
-by ``arm-none-eabi-size``: flash = text + data, RAM = data + bss (the window state is a
-static: the streamed window's buffer) + the stack high-water mark of a real window (a
-painted stack, read back after it ran under QEMU). The image of an empty ``main`` is
-reported beside it (start-up alone).
+**Size.** The image of the stage alone (:data:`learn.export.firmware.MAIN_SIZE`), built
+with :data:`CFLAGS` and :data:`LDFLAGS`, measured by ``arm-none-eabi-size``: flash = text
++ data, RAM = data + bss + the stack high-water mark of a real window run under QEMU; an
+empty ``main``'s image beside it (start-up alone).
 
-**Cycles.** QEMU does not model cycles. The bench image runs one held-out window under
-``qemu-system-arm -M mps2-an386`` (a Cortex-M4 with FPU) one instruction per translation
-block (``-singlestep``, ``-d exec,nochain``): every executed instruction's address is
-logged; those between the two marker functions are counted and classified by their
-mnemonic (from ``-d in_asm``), and each class is given the Cortex-M4's cycle counts (ARM
-Cortex-M4 Technical Reference Manual, r0p1, Table 3-1, and the FPU's, Table 7-1: ALU 1;
-load 1-2 (1 when pipelined behind another load/store); load/store multiple 1 + N;
-branch 1 not taken, 2-4 taken (pipeline refill 1-3); multiply 1; divide 2-12; VADD/VSUB/
-VMUL/VCVT/VMOV 1; VLDR/VSTR 2; VLDM/VSTM/VPUSH/VPOP 1 + N; VMLA/VFMA 3; VDIV/VSQRT 14).
-The low bound takes every instruction at its fewest cycles, the high bound at its most;
-neither models flash wait states (zero at 168 MHz only with an accelerator/cache such as
-the STM32F4's ART, whose misses cost more), bus contention or interrupts.
+**Cycles.** The bench image runs one held-out window under ``qemu-system-arm -M
+mps2-an386`` one instruction per translation block; the instructions between the two
+marker functions are counted and classified by mnemonic, each class given the
+Cortex-M4's cycle counts (ARM Cortex-M4 Technical Reference Manual, r0p1, Table 3-1, and
+the FPU's, Table 7-1): a low bound (every instruction at its fewest cycles) and a high
+bound (at its most); no flash wait states, bus contention or interrupts. Method, limits
+and figures: ``docs/EXPORT.md``, "Size and cycles (Cortex-M4F)".
 """
 
 from __future__ import annotations
