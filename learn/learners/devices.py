@@ -2,11 +2,7 @@
 
 One place for the device setting of the nets and their arithmetic (``device`` of
 :class:`learn.learners.nets.TorchClassifier`, ``monitor.device`` of the monitor's CNN
-detector): its check (:func:`check_device`, a string check that needs no torch, so that a
-config is refused before torch is imported), its choice on this machine
-(:func:`resolve_device`), its name (:func:`device_label`: ``cpu`` or the GPU's name) and
-the parameters a run records (:func:`device_record`: device, torch threads and whether
-the arithmetic is deterministic).
+detector): its check, its choice on this machine, its name and what a run records.
 
 Torch is imported by the functions that need a :class:`torch.device`, never at import of
 this module (:mod:`swgcli.schema` reaches the configs that name a device).

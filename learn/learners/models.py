@@ -13,11 +13,7 @@ nb     ``GaussianNB()``                                Gaussian distribution
 Everything else is scikit-learn's default, as in the paper ("standard settings").
 
 :data:`MODELS` is the one registry of the classifiers a study can name: the paper's five
-(:data:`PAPER_MODELS`) and any added with :func:`register_model`, each a
-:class:`ModelSpec` (estimator, settings, display name). :func:`make_model` builds an
-estimator from it, :func:`model_config` gives the Hydra config (``_target_``) that the apps
-register as ``model=<name>``, and :func:`model_label` is the display name of every model,
-the deep ones of ``conf/model/*.yaml`` too (:data:`MODEL_LABELS`). Each estimator is
+(:data:`PAPER_MODELS`) and any added with :func:`register_model`. Each estimator is
 wrapped in a :class:`~sklearn.pipeline.Pipeline`, behind a
 :class:`~sklearn.preprocessing.StandardScaler` only if asked (``scale=True``): the paper does
 not scale its features.

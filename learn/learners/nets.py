@@ -1,30 +1,19 @@
 """Torch MLP and 1D-CNN classifiers behind the scikit-learn interface.
 
 One small wrapper (:class:`TorchClassifier`) instead of skorch: the transfer study also
-fine-tunes on a few target windows, all layers or the last only
-(:meth:`TorchClassifier.fine_tune`), re-estimates the batch-norm statistics on unlabelled
-target windows (AdaBN, :meth:`TorchClassifier.adapt_bn`) and reads the penultimate
-embedding (:meth:`TorchClassifier.embed`). ``random_state`` seeds weight initialisation,
-shuffling, augmentation and the validation split through local generators
-(``torch.random.fork_rng``), never the global seed.
+fine-tunes (:meth:`TorchClassifier.fine_tune`), re-estimates the batch-norm statistics on
+unlabelled target windows (AdaBN, :meth:`TorchClassifier.adapt_bn`) and reads the
+penultimate embedding (:meth:`TorchClassifier.embed`). ``random_state`` seeds everything
+through local generators (``torch.random.fork_rng``), never the global seed.
 
 Input ``X``: (n, C, T) signals whose last ``n_aux`` channels are per-window scalars held
-constant along time (see :mod:`learn.inputs.signals`), or (n, F) features. Inputs are
-standardised per channel (per feature) with statistics of the training windows; a
-fine-tuned model keeps the source statistics.
-
-Device: ``device="auto"`` uses CUDA when present, else the CPU; ``"cuda"`` on a machine
-without CUDA is refused in one line (:func:`learn.learners.devices.resolve_device`). The
-number of CPU threads is left to the caller (``torch.set_num_threads``). ``fit`` and
-``fine_tune`` put their windows on the device once, and read the loss once per epoch;
-:func:`learn.learners.stacked.fit_seeds` trains several seeds of one net at once
-(stacked parameters, one vectorised step), which fills a GPU that one small net leaves
-idle.
-
-Input checks are scikit-learn's (``validate_data``): finite values, at least one window,
-the number of features (2-D) or channels (3-D) of ``fit``; a method of an unfitted model
-raises ``NotFittedError``. The classifiers pass ``sklearn.utils.estimator_checks.
-check_estimator`` (``tests/learn/test_estimator_checks.py``), whose data are 2-D only.
+constant along time (:mod:`learn.inputs.signals`), or (n, F) features, standardised per
+channel (per feature) with the training windows' statistics, which a fine-tuned model
+keeps. Device: :func:`learn.learners.devices.resolve_device`; CPU threads are the
+caller's (``torch.set_num_threads``); several seeds at once on a GPU:
+:func:`learn.learners.stacked.fit_seeds` (``docs/learners_transfer.md``, "The learners").
+Input checks are scikit-learn's (``validate_data``); the classifiers pass
+``check_estimator`` (``tests/learn/test_estimator_checks.py``, 2-D data only).
 """
 
 from __future__ import annotations

@@ -1,28 +1,15 @@
 """Observability of stiffness loss and wear: steady windows against a joint in motion.
 
-The steady map (:mod:`learn.observability.study`) found reduced stiffness nearly
-invisible at every steady operating point: below the torsional mode the kinematic-error
-torque ripple changes with stiffness only as r²/(1 − r²). This study asks what a joint in
-motion adds, per output inertia J_out, for three views of the same gear:
-
-* ``steady``: windows at steady operating points (the ``robot_joint`` preset's recording at
-  :data:`STEADY_POINTS`), each window starting anywhere in an output revolution;
-* ``profile``: windows of the robot joint's raise-and-lower profile
-  (``robot_joint_motion``: accelerations ring the torsional mode, whose frequency moves
-  with √k, and the gravity load changes along the pose), with the input angle only (a
-  24-count Hall sensor; the features in the WG angle estimated from it);
-* ``profile + output encoder``: the same windows with a 20-bit output encoder, adding the
-  output twist (its mean and RMS: the torque over the stiffness, first order in k).
-
-Every window is a gear life's (:class:`swgsim.datasets.life.LifeSimulator`): its own start (steady:
-in an output revolution; profile: within the slot's jitter), eq. (10) draws and converter
-noise. Per window the monitor's health features (:func:`learn.monitor.training.life_features`)
-are z-scored against healthy reference windows of the same operating point or slot, and
-its *separation* is the mean square z-score; a fault window is *beyond* when its separation
-exceeds the 95th percentile of healthy test windows' at its point (so a fault the features
-cannot see stays near 5 %). The smallest detectable loss of a view is the smallest
-severity with at least half its windows beyond (one window tells more often than not);
-the monitor accumulates evidence over windows and sees less than that.
+Per output inertia J_out, three views of the same gear: ``steady`` (the ``robot_joint``
+recording at :data:`STEADY_POINTS`), ``profile`` (the ``robot_joint_motion`` profile, input
+angle only) and ``profile + output encoder`` (the output twist's mean and RMS added). Every
+window is a gear life's (:class:`swgsim.datasets.life.LifeSimulator`); its monitor health
+features (:func:`learn.monitor.training.life_features`) are z-scored against healthy
+reference windows of its operating point or slot, and its *separation* is the mean square
+z-score; a fault window is *beyond* above the healthy test windows' 95th percentile at its
+point. The smallest detectable loss of a view: the smallest severity with at least half
+its windows beyond. Views, physics and outputs: ``docs/observability.md``, "Steady windows
+against a joint in motion".
 """
 
 from __future__ import annotations

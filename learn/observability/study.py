@@ -8,11 +8,7 @@ with what healthy windows reach by chance: the share of a fault's windows beyond
 load). A fault at 5 % is indistinguishable from a healthy gear in these windows; at
 100 % every window shows it.
 
-Why J_out matters: the kinematic error of orders 1, 2 and 4 of the input angle drives the
-torsional mode (output inertia on the gear's stiffness). Far below the mode's frequency
-the output follows the error and the torque ripple is small, set by J_out; near and above
-it the ripple is the stiffness times the error, so a stiffness fault changes it
-(:func:`torsional_modes` gives the mode per J_out and load).
+Why J_out matters (the torsional mode, :func:`torsional_modes`): ``docs/observability.md``.
 
 The runner is ``swgsim-observability`` (:mod:`learn.observability.task`); the end points of
 J_out are :data:`J_OUT_BENCH` and :data:`J_OUT_ROBOT`.

@@ -1,19 +1,13 @@
 """The split of a held-out gear: labelled pool, unlabelled healthy windows and evaluation
 windows.
 
-For the held-out gear of a leave-one-gear-out split, a seeded draw picks, per class,
-whole fault *variants* until they hold at least ``max(k_shots)`` windows: the *pool*.
-The k labelled windows of a class are the first k of a seeded permutation of its pool
-windows (so the k = 1 windows are among the k = 5 ones).
-
-The unsupervised adaptations (AdaBN, CORAL: :mod:`learn.learners.adapt`) see what a real
-gear offers without labels: its *unlabelled healthy windows*, recorded at
-commissioning, not the class-balanced pool. A second seeded draw (its own random
-generator, so the pool is the same with or without it) picks whole healthy variants outside
-the pool, each one pass over the operating points, until they hold at least
-``n_unlabelled`` windows. Every model, k = 0 included, is evaluated on the same remaining
-windows of the gear (other variants), so accuracies are comparable across k and across
-adaptations.
+Per class a seeded draw picks whole fault *variants* until they hold at least
+``max(k_shots)`` windows: the *pool*; the k labelled windows of a class are the first k
+of a seeded permutation of its pool (the k = 1 windows are among the k = 5 ones). A
+second draw (its own generator: the pool is the same without it) picks whole healthy
+variants outside the pool until they hold ``n_unlabelled`` windows, the unsupervised
+adaptations' data (:mod:`learn.learners.adapt`). Every model and k is evaluated on the
+same remaining windows. Why: ``docs/learners_transfer.md``, "What was chosen on what data".
 """
 
 from __future__ import annotations

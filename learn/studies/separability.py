@@ -2,26 +2,18 @@
 
 For every gear and operating point, each window is reduced to phase-invariant numbers:
 the amplitudes ``|c_h|`` of the harmonics h = 0..H of the wave-generator angle in every
-bridge (least-squares fit, :func:`learn.inputs.signals.harmonic_coefficients`; for disturbed
-windows the disturbance's sub-harmonics fitted and dropped) and the efficiency η. The
-healthy windows of that gear and operating point (copies that differ only in their start
-angle and noise) give a mean and a spread per number; a window's separation is the
-largest ``|x - mean| / spread`` over the numbers. A class whose windows stay within a few
-spreads of the healthy cloud cannot be told from a healthy gear by any classifier of
-these data.
+bridge (:func:`learn.inputs.signals.harmonic_coefficients`; for disturbed windows the
+disturbance's sub-harmonics fitted and dropped) and the efficiency η. A window's
+separation is the largest ``|x - mean| / spread`` over the numbers, mean and spread of
+the healthy windows of its gear and operating point; healthy windows are scored
+leave-one-out, which gives the separation they reach by chance. Used by the transfer
+report and the observability map (:func:`separation_records`).
 
     python -m learn.studies.separability                      # data/paper, clean windows
     python -m learn.studies.separability --disturbed --out reports/transfer
 
-The transfer report (``swgsim-train -m experiment=transfer``) includes the table and the
-figure per data set; the observability map (``swgsim-observability``) uses the per-window
-records (:func:`separation_records`) over the output inertia, speed and load.
-
-Healthy windows are scored leave-one-out against the other healthy windows, which gives
-the separation a healthy window reaches by chance (the maximum over ~46 numbers is
-about 3 spreads). Prints, per class, the share of windows beyond the healthy windows'
-95th and 99th percentile and the median separation, and, with ``--out``, writes
-``separability.png`` there.
+prints, per class, the share of windows beyond the healthy windows' 95th and 99th
+percentile and the median separation, and, with ``--out``, writes ``separability.png``.
 """
 
 from __future__ import annotations

@@ -1,26 +1,13 @@
 """MLflow tracking: one helper, :func:`log_run`, through which every run is logged.
 
-Every run that :func:`log_run` opens carries the provenance a result needs to be
-reproduced (:mod:`learn.tracking.provenance`): the git commit of the checkout and whether
-its work tree had uncommitted changes (tags ``mlflow.source.git.commit``, ``git_dirty``;
-``"unknown"`` where there is no git or no checkout, never an error); the data set as an
-MLflow dataset input (``mlflow.data``) with the content digest its ``manifest.json``
-gives (:class:`learn.tracking.provenance.DatasetRef`; no shard is re-hashed); the resolved
-config, flattened into params and stored whole as ``config.yaml``; the fitted model where
-there is one (:meth:`TrackedRun.log_model`, ``mlflow.sklearn``).
-
-Runs that belong together (a Hydra sweep, the jobs of one study, the cells of the transfer
-comparison) are children of one parent run (tag ``mlflow.parentRunId``): pass
-``parent_run_id`` or a ``group`` name, whose parent is created on first use.
-
-Study jobs (:func:`log_job`): one MLflow run per job, i.e. per (protocol, feature
-selection, model), holding every split: params (the flattened config), metrics
-``<split>/train_accuracy``, ``<split>/test_accuracy`` and their means, the resolved config
-as ``config.yaml`` and the test confusion matrix summed over splits as
-``confusion_matrix.png``. One MLflow experiment per protocol (or per study). Everything
-goes through an explicit :class:`mlflow.MlflowClient`, so nothing here changes MLflow's
-global state (tracking URI, active run); how a process opens the store, its default URI
-and where its artifacts go: :mod:`learn.tracking.store`.
+Every run carries the provenance a result needs to be reproduced
+(:mod:`learn.tracking.provenance`): git commit and dirty flag, the data set as an MLflow
+dataset input with its manifest's digest, the resolved config (params and
+``config.yaml``) and the fitted model where there is one (:meth:`TrackedRun.log_model`).
+Runs that belong together are children of one parent run (``parent_run_id`` or
+``group``). A study job is one run holding every split (:func:`log_job`). Everything goes
+through an explicit :class:`mlflow.MlflowClient`: nothing here changes MLflow's global
+state; how a process opens the store: :mod:`learn.tracking.store`.
 """
 
 from __future__ import annotations

@@ -1,17 +1,12 @@
 """Which run a line of the transfer report states: the declared primary first, the best
 beside it, marked as chosen afterwards.
 
-The *primary* run (``transfer.primary``) was declared before the comparison: it is the
-result of a data set. The *best* run, the highest worst-split mean on the held-out gear's
-evaluation windows, is a choice made afterwards on those windows; wherever it appears it
-says so (:data:`BEST`). Every line that states "the" result of a data set (the headline,
-the targets, the per-class recall, the diagnosis) goes through :func:`picks`.
-
-At k = 0 the primary is the declared (model, input) as trained on the source gears (no
-adaptation); at k > 0 its first k-shot adaptation in the fixed order of
-:data:`PRIMARY_ADAPTATIONS` (MiniRocket's ridge refitted; a net fine-tuned on all layers,
-then on the last one), or, for a run without one, its k = 0 result (it ignores the shots;
-every k is scored on the same windows).
+The *primary* run (``transfer.primary``, declared before the comparison) is the result of
+a data set; the *best* run, the highest worst-split mean on the evaluation windows, is
+chosen afterwards and says so (:data:`BEST`). Every line that states "the" result goes
+through :func:`picks`. At k > 0 the primary is its first k-shot adaptation in the order of
+:data:`PRIMARY_ADAPTATIONS`, or its k = 0 result for a run without one
+(``docs/learners_transfer.md``, "What was chosen on what data").
 """
 
 from __future__ import annotations
