@@ -55,24 +55,23 @@ def _table_md(name: str, results: pd.DataFrame) -> list[str]:
         if name in ("VII", "VIII"):
             for kind, label in (("train", "Avg. training score [%]"),
                                 ("test", "Avg. test score [%]")):
-                cells = []
-                for m in models:
-                    v = rs.loc[rs["model"] == m, f"{kind}_accuracy"]
-                    ours = 100 * float(v.mean()) if len(v) else None
-                    ref = paper[sel][m][kind] if paper and m in paper[sel] else None
-                    cells.append(f"{score_text(ours, 2)} ({score_text(ref, 2)})")
-                rows.append([label, *cells])
+                rows.append([label, *(_cell(rs.loc[rs["model"] == m, f"{kind}_accuracy"],
+                                            paper[sel][m][kind] if paper and m in paper[sel]
+                                            else None) for m in models)])
         else:
             for split in GEAR_SPLITS:
-                cells = []
-                for m in models:
-                    v = rs.loc[(rs["model"] == m) & (rs["split"] == split), "test_accuracy"]
-                    ours = 100 * float(v.mean()) if len(v) else None
-                    ref = paper[sel][split].get(m) if paper and sel in paper else None
-                    cells.append(f"{score_text(ours, 2)} ({score_text(ref, 2)})")
-                rows.append([SPLIT_LABELS[split], *cells])
+                rows.append([SPLIT_LABELS[split], *(_cell(
+                    rs.loc[(rs["model"] == m) & (rs["split"] == split), "test_accuracy"],
+                    paper[sel][split].get(m) if paper and sel in paper else None)
+                    for m in models)])
     return [*lines, md_table([None, *map(model_label, models)], rows, "l" + "r" * len(models)),
             ""]
+
+
+def _cell(v: pd.Series, ref: float | None) -> str:
+    """``ours (paper)`` [%]: the mean of the accuracies ``v`` [-] (– if none), the paper's."""
+    ours = 100 * float(v.mean()) if len(v) else None
+    return f"{score_text(ours, 2)} ({score_text(ref, 2)})"
 
 
 def write_tables(
