@@ -14,20 +14,18 @@ the recording.
 
 from __future__ import annotations
 
-import hashlib
 import logging
 from dataclasses import dataclass
 
 import numpy as np
 
+from swgsim.datasets import steps
 from swgsim.datasets.config import gear_params, layout_for
 from swgsim.datasets.plan import DatasetPlan, ShardSpec, WindowSpec
 from swgsim.datasets.schema import make_dataset
-from swgsim.datasets.steps import diverged, fine_motion, unique_index
-from swgsim.files.provenance import git_revision, package_version
 from swgsim.gear import dynamics
 from swgsim.gear.chain import SimulationChain
-from swgsim.gear.faults import ChainParams, apply_fault
+from swgsim.gear.faults import ChainParams
 from swgsim.gear.influence import Influence
 from swgsim.sensing.acquisition import acquire, start_angles
 from swgsim.sensing.disturbance import disturb
@@ -83,8 +81,8 @@ def simulate_motions(plan: DatasetPlan, shard: ShardSpec, params: list[ChainPara
     fs = ch.sample_rate_hz
     n_t = int(round(ch.window_s * fs))
     t_out = np.array([w.t_out_nm for w in shard.windows])
-    m_idx, m_inv = unique_index([_motion_key(p, t, a) for p, t, a in zip(params, t_out, phi0,
-                                                                        strict=True)])
+    m_idx, m_inv = steps.unique_index([_motion_key(p, t, a) for p, t, a
+                                       in zip(params, t_out, phi0, strict=True)])
     # the window plus n_lead samples before and after it (history of the amplifier's
     # filter), and one more to interpolate the last fine sample
     n_rec = n_t + 2 * n_lead + (oversample > 1)
@@ -94,9 +92,10 @@ def simulate_motions(plan: DatasetPlan, shard: ShardSpec, params: list[ChainPara
     if not res.success:
         bad = int(np.argmin(np.isfinite(res.states).all(axis=(0, 2))))  # first diverged
         w = shard.windows[m_idx[bad]]
-        raise ValueError(diverged(plan, f"shard {shard.name} (gear {shard.gear}, "
-                                        f"{shard.n_in_rpm:g} rpm, {w.t_out_nm:g} N m, fault "
-                                        f"{w.fault} severity {w.severity:g})", res.message))
+        raise ValueError(steps.diverged(plan, f"shard {shard.name} (gear {shard.gear}, "
+                                              f"{shard.n_in_rpm:g} rpm, {w.t_out_nm:g} N m, "
+                                              f"fault {w.fault} severity {w.severity:g})",
+                                        res.message))
     win = slice(n_lead, n_lead + n_t)  # the window's samples
     eff = (res.p_out[:, win].mean(axis=1) / res.p_in[:, win].mean(axis=1))[m_inv]
     n_mean = res.states[1][:, win].mean(axis=1)[m_inv] * 60 / (2 * np.pi)
@@ -114,9 +113,9 @@ def synthesise(chain: SimulationChain, shard: ShardSpec, params: list[ChainParam
     ndarray, shape (V, 5, oversample · n_rec')
         [mV/V]; windows that are copies of one another are views of one array.
     """
-    s_idx, s_inv = unique_index([_signal_key(w, a) for w, a in zip(shard.windows, phi0,
-                                                                strict=True)])
-    psi, t_act = fine_motion(motions.res, oversample, motions.inverse[s_idx])
+    s_idx, s_inv = steps.unique_index([_signal_key(w, a) for w, a
+                                       in zip(shard.windows, phi0, strict=True)])
+    psi, t_act = steps.fine_motion(motions.res, oversample, motions.inverse[s_idx])
     sig_u = chain.signals_batch([params[k] for k in s_idx], psi, t_act)
     return sig_u[s_inv]
 
@@ -178,26 +177,15 @@ def assemble(plan: DatasetPlan, shard: ShardSpec, sig: np.ndarray, motions: Moti
     disturbed = np.concatenate([np.zeros(n_clean, bool), np.ones(n_clean, bool),
                                 np.zeros(ref.sum(), bool), np.ones(ref.sum(), bool)])
     meta = {
-        "gear": np.array([wins[k].gear for k in order]),
-        "fault": np.array([wins[k].fault for k in order]),
-        "variant": np.array([wins[k].variant for k in order]),
-        "severity": np.array([wins[k].severity for k in order]),
-        "position_deg": np.array([wins[k].position_deg for k in order]),
+        **steps.window_meta([wins[k] for k in order]),
         "n_in_rpm": np.full(order.size, shard.n_in_rpm),
         "t_out_nm": np.array([wins[k].t_out_nm for k in order]),
         "disturbed": disturbed,
-        "reference": np.array([wins[k].reference for k in order]),
         "efficiency": motions.efficiency[order],
         "n_in_mean_rpm": n_mean[order],
         "t_out_mean_nm": motions.t_mean_nm[order],
     }
-    h = hashlib.sha256(strain32.tobytes())
-    for k in sorted(meta):
-        h.update(np.ascontiguousarray(meta[k]).astype(str if k == "fault" else meta[k].dtype)
-                 .tobytes())
-    attrs = {"config": plan.plain, "seed": int(plan.config.seed), "shard": shard.name,
-             "content_sha256": h.hexdigest(), "package_version": package_version(),
-             "git_revision": git_revision(), "sample_rate_hz": fs}
+    attrs = steps.shard_attrs(plan, shard, strain32, meta)
     return make_dataset(strain32, time_s, meta, attrs), order.size
 
 
@@ -229,14 +217,9 @@ def simulate_grid_shard(plan: DatasetPlan, shard: ShardSpec,
     n_lead = 0 if amp is None else amp.lead_samples(fs)
     chain = SimulationChain.from_influences(layout_for(cfg, gear), influences, cfg.chain)
     healthy = gear_params(cfg, gear)
-    ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(shard.gear, shard.speed_index))
-    rng_start, rng_dist, rng_noise = (np.random.default_rng(s) for s in ss.spawn(3))
-    wins = shard.windows
-    phi0 = start_angles(cfg.acquisition, len(wins), rng_start, healthy.gear.ratio)
-    params = [apply_fault(healthy, w.fault, w.severity,
-                          0.0 if np.isnan(w.position_deg) else w.position_deg,
-                          faults=plan.faults)
-              for w in wins]
+    rng_start, rng_dist, rng_noise = steps.shard_streams(plan, shard)
+    phi0 = start_angles(cfg.acquisition, len(shard.windows), rng_start, healthy.gear.ratio)
+    params = steps.window_params(plan, shard, healthy)
     motions = simulate_motions(plan, shard, params, phi0, n_lead, q)
     sig = synthesise(chain, shard, params, phi0, motions, q)
     if amp is None:

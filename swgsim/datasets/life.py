@@ -34,13 +34,13 @@ to failure, its gear's scatter from ``spawn_key=(gear, life_seed, 2**23)``.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 
 import numpy as np
 
 from swgsim.datasets.conditions import WindowConditions, efficiency_ratio, window_conditions
 from swgsim.datasets.growth import LAWS, RunToFailure, draw_scale
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
+from swgsim.datasets.recording_table import content_hash
 from swgsim.datasets.records import RecordBank, record_bank
 from swgsim.datasets.schedule import LifeConfig, Schedule, grow, schedule, uses_position
 from swgsim.datasets.schema import make_dataset
@@ -319,10 +319,6 @@ def simulate_life_shard(plan: DatasetPlan, shard: ShardSpec,
     """
     sim = LifeSimulator(plan, shard.gear, plan.config.life)
     ds = life_dataset(sim)
-    h = hashlib.sha256(ds["strain_signal"].values.tobytes())
-    for k in sorted(v for v in ds.data_vars if v != "strain_signal"):
-        v = ds[k].values
-        h.update(np.ascontiguousarray(v.astype(str) if v.dtype.kind in "OU" else v).tobytes())
-    ds.attrs.update({"shard": shard.name, "content_sha256": h.hexdigest(),
+    ds.attrs.update({"shard": shard.name, "content_sha256": content_hash(ds),
                      "package_version": package_version(), "git_revision": git_revision()})
     return ds, len(sim)

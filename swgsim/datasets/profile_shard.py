@@ -9,19 +9,17 @@ are recorded with every window.
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass
 
 import numpy as np
 
+from swgsim.datasets import steps
 from swgsim.datasets.config import gear_params, layout_for
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.datasets.schema import make_dataset
-from swgsim.datasets.steps import diverged, fine_motion
-from swgsim.files.provenance import git_revision, package_version
 from swgsim.gear import profile_dynamics
 from swgsim.gear.chain import SimulationChain
-from swgsim.gear.faults import ChainParams, apply_fault
+from swgsim.gear.faults import ChainParams
 from swgsim.gear.influence import Influence
 from swgsim.sensing.acquisition import acquire, start_angles
 from swgsim.sensing.angles import measure_angles
@@ -80,23 +78,19 @@ def profile_motion(plan: DatasetPlan, shard: ShardSpec,
     n_lead = 0 if amp is None else amp.lead_samples(fs)
     healthy = gear_params(cfg, plan.gears[shard.gear])
     if rng_start is None:
-        ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(shard.gear, shard.speed_index))
-        rng_start = np.random.default_rng(ss.spawn(3)[0])
+        rng_start = steps.shard_streams(plan, shard)[0]
     # the wave generator's angle as drawn, the output (the link's pose) within one
     # wave-generator revolution / N of its zero: the profile's load acts on that pose
     phi0 = np.mod(start_angles(cfg.acquisition, len(shard.windows), rng_start,
                                healthy.gear.ratio), 2 * np.pi)
-    params = [apply_fault(healthy, w.fault, w.severity,
-                          0.0 if np.isnan(w.position_deg) else w.position_deg,
-                          faults=plan.faults)
-              for w in shard.windows]
+    params = steps.window_params(plan, shard, healthy)
     starts = np.round(np.asarray(shard.window_starts_s) * fs).astype(np.int64)
     n_rec = int(starts.max()) + n_t + n_lead + 1
     res = profile_dynamics.simulate_profile([p.gear for p in params], plan.profile, phi0, fs,
                                     n_rec / fs, ch.substeps, cfg.profile.feedforward)
     if not res.success:
-        raise ValueError(diverged(plan, f"shard {shard.name} (gear {shard.gear}, profile)",
-                                  res.message))
+        raise ValueError(steps.diverged(
+            plan, f"shard {shard.name} (gear {shard.gear}, profile)", res.message))
     return ProfileMotion(params, phi0, res, starts)
 
 
@@ -133,8 +127,7 @@ def simulate_profile_shard(plan: DatasetPlan, shard: ShardSpec,
     q = 1 if amp is None else amp.oversample
     n_t = int(round(ch.window_s * fs))
     n_lead = 0 if amp is None else amp.lead_samples(fs)
-    ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(shard.gear, shard.speed_index))
-    rng_start, _, rng_noise = (np.random.default_rng(s) for s in ss.spawn(3))
+    rng_start, _, rng_noise = steps.shard_streams(plan, shard)
     mo = profile_motion(plan, shard, rng_start)
     res, starts = mo.res, mo.starts
     chain = SimulationChain.from_influences(layout_for(cfg, plan.gears[shard.gear]),
@@ -146,7 +139,7 @@ def simulate_profile_shard(plan: DatasetPlan, shard: ShardSpec,
     t_fine = np.arange(n_cut) / (fs * q)
     cuts = []
     for v in range(n_v):  # one variant at a time: the fine grid of a whole profile is long
-        psi_f, t_f = fine_motion(res, q, np.array([v]))
+        psi_f, t_f = steps.fine_motion(res, q, np.array([v]))
         cut = chain.signals_batch([mo.params[v]], psi_f, t_f)[0][:, idx].transpose(1, 0, 2)
         if plan.sensor_effects:  # (W, 5, n_cut), the windows in time order
             cut = apply_sensor_effects(cut, t_fine, None, plan.sensor_effects,
@@ -166,15 +159,10 @@ def simulate_profile_shard(plan: DatasetPlan, shard: ShardSpec,
         eff = np.where(p_in != 0, p_out / np.where(p_in != 0, p_in, 1.0), np.nan)
     wins = [shard.windows[v] for v in range(n_v) for _ in range(n_w)]
     meta = {
-        "gear": np.array([w.gear for w in wins]),
-        "fault": np.array([w.fault for w in wins]),
-        "variant": np.array([w.variant for w in wins]),
-        "severity": np.array([w.severity for w in wins]),
-        "position_deg": np.array([w.position_deg for w in wins]),
+        **steps.window_meta(wins),
         "n_in_rpm": w_d.mean(axis=1),
         "t_out_nm": load.mean(axis=1),
         "disturbed": np.zeros(len(wins), bool),
-        "reference": np.array([w.reference for w in wins]),
         "efficiency": eff,
         "n_in_mean_rpm": per_window(res.states[1]).mean(axis=1) * 60 / (2 * np.pi),
         "t_out_mean_nm": per_window(res.t_out).mean(axis=1),
@@ -199,19 +187,11 @@ def _profile_dataset(plan: DatasetPlan, shard: ShardSpec, strain32: np.ndarray, 
     per-window ``meta`` of every data set, the profile's ``extra`` per-window variables
     (name -> (values, units)) and the angle channels ``meas`` (name -> (sample, time)
     [rad]), all of them in its ``content_sha256``."""
-    cfg, fs = plan.config, plan.config.chain.sample_rate_hz
-    h = hashlib.sha256(strain32.tobytes())
-    for k in sorted(meta):
-        h.update(np.ascontiguousarray(meta[k]).astype(str if k == "fault" else meta[k].dtype)
-                 .tobytes())
-    for k in sorted(extra):
-        h.update(np.ascontiguousarray(extra[k][0]).tobytes())
-    for k in sorted(meas):
-        h.update(np.ascontiguousarray(meas[k]).tobytes())
-    attrs = {"config": plan.plain, "seed": int(cfg.seed), "shard": shard.name,
-             "content_sha256": h.hexdigest(), "package_version": package_version(),
-             "git_revision": git_revision(), "sample_rate_hz": fs}
-    ds = make_dataset(strain32, np.arange(strain32.shape[-1]) / fs, meta, attrs)
+    attrs = steps.shard_attrs(plan, shard, strain32, meta,
+                              *(extra[k][0] for k in sorted(extra)),
+                              *(meas[k] for k in sorted(meas)))
+    ds = make_dataset(strain32, np.arange(strain32.shape[-1]) / attrs["sample_rate_hz"], meta,
+                      attrs)
     for k, (v, units) in extra.items():
         ds[k] = ("sample", v, {"units": units})
     for k, v in meas.items():

@@ -1,5 +1,5 @@
-"""Steps every shard runner shares: the gears' influences on the truss, the motion on a
-finer grid, and the message of a simulation that diverged.
+"""Steps every shard runner shares: the gears' influences, the random streams, the windows'
+parameters and metadata, the motion on a finer grid, a divergence's message, the attributes.
 
 The influences are computed once in the parent process (one factorisation of the healthy
 truss, one adjoint solve per gear, a Woodbury update per root crack), so that the shard
@@ -8,11 +8,14 @@ workers need no truss.
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
 from swgsim.datasets.config import layout_for
-from swgsim.datasets.plan import DatasetPlan, ShardSpec
+from swgsim.datasets.plan import DatasetPlan, ShardSpec, WindowSpec
+from swgsim.files.provenance import git_revision, package_version
 from swgsim.gear import dynamics
 from swgsim.gear.dynamics import rt1_size20
 from swgsim.gear.faults import NO_ROOT_CRACK, ChainParams, apply_fault
@@ -21,7 +24,8 @@ from swgsim.gear.influence import Influence, InfluenceSolver
 
 interpolate = lazy_module("scipy.interpolate")
 
-__all__ = ["diverged", "fine_motion", "gear_influences", "influences_for", "unique_index"]
+__all__ = ["diverged", "fine_motion", "gear_influences", "influences_for", "shard_attrs",
+           "shard_streams", "unique_index", "window_meta", "window_params"]
 
 
 def gear_influences(plan: DatasetPlan, shards: list[ShardSpec] | tuple[ShardSpec, ...]
@@ -76,6 +80,45 @@ def influences_for(plan: DatasetPlan, gear_ids: list[int], crack_keys
             inf[(pos, sev)] = solver.root_crack_at(lay, pos, sev, adjoint=adj, healthy=healthy)
         out[int(gid)] = inf
     return out
+
+
+def shard_streams(plan: DatasetPlan, shard: ShardSpec) -> list[np.random.Generator]:
+    """The shard's random streams of start angles, eq. (10) draws and amplifier noise."""
+    ss = np.random.SeedSequence(int(plan.config.seed), spawn_key=(shard.gear, shard.speed_index))
+    return [np.random.default_rng(s) for s in ss.spawn(3)]
+
+
+def window_params(plan: DatasetPlan, shard: ShardSpec, healthy: ChainParams
+                  ) -> list[ChainParams]:
+    """The chain parameters of each of the shard's windows: ``healthy`` with the window's
+    fault (at position 0 where the window has none)."""
+    return [apply_fault(healthy, w.fault, w.severity,
+                        0.0 if np.isnan(w.position_deg) else w.position_deg,
+                        faults=plan.faults)
+            for w in shard.windows]
+
+
+def window_meta(wins: list[WindowSpec]) -> dict[str, np.ndarray]:
+    """The per-window variables the windows' specs hold: gear, fault, variant, severity,
+    position_deg, reference; each shape (len(wins),)."""
+    return {k: np.array([getattr(w, k) for w in wins])
+            for k in ("gear", "fault", "variant", "severity", "position_deg", "reference")}
+
+
+def shard_attrs(plan: DatasetPlan, shard: ShardSpec, strain32: np.ndarray, meta: dict,
+                *more: np.ndarray) -> dict:
+    """A simulated shard's attributes: config, seed, shard, sample rate, provenance and
+    ``content_sha256`` of the float32 signals, the per-window ``meta`` in sorted order
+    (``fault`` as text) and the arrays ``more`` in turn."""
+    h = hashlib.sha256(strain32.tobytes())
+    for k in sorted(meta):
+        h.update(np.ascontiguousarray(meta[k]).astype(str if k == "fault" else meta[k].dtype)
+                 .tobytes())
+    for v in more:
+        h.update(np.ascontiguousarray(v).tobytes())
+    return {"config": plan.plain, "seed": int(plan.config.seed), "shard": shard.name,
+            "content_sha256": h.hexdigest(), "package_version": package_version(),
+            "git_revision": git_revision(), "sample_rate_hz": plan.config.chain.sample_rate_hz}
 
 
 def diverged(plan: DatasetPlan, where: str, why: str) -> str:
