@@ -14,7 +14,6 @@ the recording.
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,8 +29,6 @@ from swgsim.gear.influence import Influence
 from swgsim.sensing.acquisition import acquire, start_angles
 from swgsim.sensing.disturbance import disturb
 from swgsim.sensing.effects import apply_sensor_effects
-
-log = logging.getLogger(__name__)
 
 
 def _motion_key(p: ChainParams, t_out_nm: float, phi0: float) -> tuple:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import hashlib
 import io
-import logging
 import os
 from pathlib import Path
 from typing import Any
@@ -28,8 +27,6 @@ from typing import Any
 import numpy as np
 
 from swgsim.files.inputs import check_input_file
-
-log = logging.getLogger(__name__)
 
 __all__ = ["MAX_TABLE_BYTES", "MAX_TABLE_CELLS", "MIN_WINDOW_SAMPLES", "TABLE_FORMATS",
            "assign_points", "check_file", "check_limit", "column_name", "content_hash",

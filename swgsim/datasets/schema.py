@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import logging
 import os
 from collections.abc import Iterable
 from pathlib import Path
@@ -27,8 +26,6 @@ from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import FAULTS
 from swgsim.gear.sensors import SENSORS
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
-
-log = logging.getLogger(__name__)
 
 SCHEMA_VERSION = 1
 PER_SAMPLE = {

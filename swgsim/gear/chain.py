@@ -16,7 +16,6 @@ the whole truss per time step, is ``signals_naive`` in ``tests/physics_reference
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass, replace
 
 import numba
@@ -36,8 +35,6 @@ from swgsim.gear.influence import (
 )
 from swgsim.gear.profile import Profile
 from swgsim.gear.sensors import SensorLayout
-
-log = logging.getLogger(__name__)
 
 #: Zone tables a chain keeps (about 0.5-1 MB each), one per (root crack, tip crack) group.
 MAX_TABLES = 32

@@ -11,7 +11,6 @@ speed and edges: docs/PHYSICS.md sec. 5.1.
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,29 +20,11 @@ import numpy as np
 from swgsim.gear.sensors import SENSORS
 from swgsim.sensing.dsp import fractional_delay, lowpass, spline_at
 
-log = logging.getLogger(__name__)
-
-__all__ = [
-    "SENSOR_EFFECTS",
-    "APPLY_ORDER",
-    "QUARTER_BRIDGE_K",
-    "SensorEffect",
-    "parse_sensor_effects",
-    "apply_sensor_effects",
-    "per_channel",
-    "psi_rate",
-    "gauge_misplacement",
-    "gauge_misplacement_linear",
-    "gauge_misplacement_angle",
-    "angle_positions",
-    "bridge_denominator",
-    "bridge_nonlinearity",
-    "gain_mismatch",
-    "amplifier_lowpass",
-    "time_delay",
-    "offset",
-    "thermal_drift",
-]
+__all__ = ["SENSOR_EFFECTS", "APPLY_ORDER", "QUARTER_BRIDGE_K", "SensorEffect",
+           "parse_sensor_effects", "apply_sensor_effects", "per_channel", "psi_rate",
+           "gauge_misplacement", "gauge_misplacement_linear", "gauge_misplacement_angle",
+           "angle_positions", "bridge_denominator", "bridge_nonlinearity", "gain_mismatch",
+           "amplifier_lowpass", "time_delay", "offset", "thermal_drift"]
 
 QUARTER_BRIDGE_K = 2.0e-3
 """k of the exact quarter bridge s / (1 + k s) [1/(mV/V)]: GF ε / (4 + 2 GF ε) in V/V

@@ -43,8 +43,6 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "swgsim/files/ownership.py": "stamps, claims and the proof a file is ours: one chain of "
                                  "custody, split it and each half trusts the other blindly",
     "swgcal/loop.py": "the calibration loop and its before/after error: one algorithm",
-    "swgsim/sensing/effects.py": "every measurement-chain effect with its source; to be split "
-                                 "by effect kind",
     "learn/monitor/normal.py": "the normal-behaviour model and its operating-variable laws; "
                                "the laws to move beside learn/monitor/laws.py",
     "swgsim/gear/thermal.py": "joint temperature and its friction law, with the measured "

@@ -25,15 +25,6 @@ from swgsim.gear.friction.simulation import (
     parse_effects,
 )
 
-__all__ = [
-    "FRICTION_LIBRARY",
-    "FrictionEffects",
-    "FrictionEffectsConfig",
-    "FrictionSignals",
-    "PaperLaw",
-    "Scales",
-    "friction_effects_from_config",
-    "make_effect",
-    "parse_effects",
-    "register_effect",
-]
+__all__ = ["FRICTION_LIBRARY", "FrictionEffects", "FrictionEffectsConfig", "FrictionSignals",
+           "PaperLaw", "Scales", "friction_effects_from_config", "make_effect", "parse_effects",
+           "register_effect"]

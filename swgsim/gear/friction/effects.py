@@ -11,7 +11,6 @@ docs/PHYSICS.md sec. 5.3; the registry's design: ARCHITECTURE.md, "To add a cali
 
 from __future__ import annotations
 
-import logging
 from typing import Any
 
 import numpy as np
@@ -21,26 +20,10 @@ from swgsim.gear.friction.ripples import FrictionRipple, PositionRipple
 from swgsim.gear.friction.signals import FrictionSignals
 from swgsim.gear.terms import Param, Term, linear_recurrence
 
-log = logging.getLogger(__name__)
-
-__all__ = [
-    "FRICTION_LIBRARY",
-    "AsymmetricCoulomb",
-    "Stribeck",
-    "Presliding",
-    "PositionRipple",
-    "FrictionRipple",
-    "LoadCoulomb",
-    "GravityResidual",
-    "Inertia",
-    "ThermalDrift",
-    "SensorDrift",
-    "VelocityLag",
-    "make_effect",
-    "register_effect",
-    "dahl_state",
-    "first_order_lag",
-]
+__all__ = ["FRICTION_LIBRARY", "AsymmetricCoulomb", "Stribeck", "Presliding", "PositionRipple",
+           "FrictionRipple", "LoadCoulomb", "GravityResidual", "Inertia", "ThermalDrift",
+           "SensorDrift", "VelocityLag", "make_effect", "register_effect", "dahl_state",
+           "first_order_lag"]
 
 
 # ---------------------------------------------------------------------------------------

@@ -22,12 +22,7 @@ import numpy as np
 from swgsim.gear.friction.signals import FrictionSignals
 from swgsim.gear.terms import Param, Term
 
-__all__ = [
-    "RippleTerm",
-    "PositionRipple",
-    "FrictionRipple",
-    "wave_generator_order",
-]
+__all__ = ["RippleTerm", "PositionRipple", "FrictionRipple", "wave_generator_order"]
 
 
 def wave_generator_order(period_rad: float, gear_ratio: float) -> float:
