@@ -4,15 +4,6 @@ The schedule (duty cycle, commissioning, fault onset and severity) is
 :mod:`swgsim.datasets.schedule`; the records the windows are cut from are
 :mod:`swgsim.datasets.records`.
 
-A life runs a duty cycle over operating points (each held for its dwell time, in turn)
-and records one window every ``interval_min`` of operation. It starts with a
-commissioning period known to be healthy; then, optionally, a fault of any class (a gear
-fault of :data:`swgsim.gear.faults.FAULTS` or a sensor fault of
-:data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`) sets in at ``onset_h`` and follows a severity
-schedule: a step, linear growth to a final severity, (hour, severity) pairs, or growth to
-failure by Paris' or Archard's law under the life's load and temperature
-(:mod:`swgsim.datasets.growth`).
-
 How windows are made. A gear in a steady state at one operating point repeats its signals
 once per output revolution (the WG angle and the flexspline both return; N input
 revolutions, 3 s at 2000 rpm). Each (operating point, state) is therefore simulated

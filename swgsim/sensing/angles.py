@@ -173,6 +173,14 @@ def _finite(key: str, x) -> np.ndarray:
     return a
 
 
+def _like(key: str, x, key_of: str, of) -> np.ndarray:
+    """``x`` as :func:`_finite` takes it, refused unless of the shape of ``of``."""
+    a = _finite(key, x)
+    if a.shape != np.shape(of):
+        raise ValueError(f"{key} must have {key_of}'s shape {np.shape(of)}, got {a.shape}")
+    return a
+
+
 def quantise(phi, resolution_rad: float) -> np.ndarray:
     """Recorded angle of a counting sensor: floor(φ / res) · res, on the unwrapped
     (continuous) count, so 0 <= φ − recorded < res.
@@ -231,10 +239,7 @@ def measure_angles(phi_in, phi_out=None, *, input_sensor: InputAngleSensor | Non
     if output_encoder is not None:
         if phi_out is None:
             raise ValueError("phi_out is required with an output_encoder")
-        po = _finite("phi_out", phi_out)
-        if po.shape != np.shape(phi_in):
-            raise ValueError(f"phi_out must have phi_in's shape {np.shape(phi_in)}, "
-                             f"got {po.shape}")
+        po = _like("phi_out", phi_out, "phi_in", phi_in)
         out["phi_out"] = quantise(po, output_encoder.resolution_rad)
     return out
 
@@ -271,11 +276,7 @@ def psi_estimate(phi_in_meas, phi_out_meas=None, ratio: float = 100.0) -> np.nda
     pin = _finite("phi_in_meas", phi_in_meas)
     if phi_out_meas is None:
         return pin * (1.0 + 1.0 / n)
-    pout = _finite("phi_out_meas", phi_out_meas)
-    if pout.shape != pin.shape:
-        raise ValueError(f"phi_out_meas must have phi_in_meas's shape {pin.shape}, "
-                         f"got {pout.shape}")
-    return pin - pout
+    return pin - _like("phi_out_meas", phi_out_meas, "phi_in_meas", pin)
 
 
 def twist_estimate(phi_in_meas, phi_out_meas, ratio: float = 100.0) -> np.ndarray:
@@ -293,11 +294,7 @@ def twist_estimate(phi_in_meas, phi_out_meas, ratio: float = 100.0) -> np.ndarra
         raise ValueError("phi_out_meas is required: the twist needs an output encoder")
     n = _ratio(ratio)
     pin = _finite("phi_in_meas", phi_in_meas)
-    pout = _finite("phi_out_meas", phi_out_meas)
-    if pout.shape != pin.shape:
-        raise ValueError(f"phi_out_meas must have phi_in_meas's shape {pin.shape}, "
-                         f"got {pout.shape}")
-    return pout + pin / n
+    return _like("phi_out_meas", phi_out_meas, "phi_in_meas", pin) + pin / n
 
 
 def twist_bound_rad(gear: GearParams, mesh_torque_nm: float) -> float:
