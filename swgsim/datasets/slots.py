@@ -1,30 +1,19 @@
 """The slots of a gear life on an operating profile: the data set's profile is the duty
-cycle.
+cycle (docs/DATASET.md, "Gear lives": "A life on a profile").
 
-A joint that repeats one motion (``dataset.profile``: moves, dwells, a gravity load)
-returns to the same pose every cycle, so each state of the gear (healthy, a fault at one
-severity and position) is simulated once along the whole profile
-(:func:`swgsim.gear.profile_dynamics.simulate_profile`, as a profile data set's shard,
-:mod:`swgsim.datasets.profile_shard`; the records: :mod:`swgsim.datasets.records`) and
-every window of the life is a cut of that motion. The cuts are the data set's window
-starts, those in which the wave generator turns at least
-:data:`MIN_WG_REVOLUTIONS` revolutions one way (*slots*), each window starting up to
-``dataset.profile.start_jitter_s`` after its slot's start (uniformly): a monitor records while the
-joint moves, and the angle-domain features need about 1.45 revolutions
-(:mod:`learn.monitor.features`); a window holding a reversal is left out too (the gauge
-misplacement is defined along a monotone ψ, :mod:`swgsim.sensing.effects`).
-
-Window k of a life lies in slot k mod S (one window every ``interval_min`` of operation,
-as a steady life's duty points). Its operating point, the key of the monitor's normal behaviour,
-is the slot's *commanded* one: the mean desired input speed and the mean load along the
-desired motion (the link's pose integrated from the desired speed), the same for every
-state of the gear. What differs from cycle to cycle: the window's start within its
-slot's jitter (as a steady life's window starts anywhere in an output revolution),
-eq. (10)'s draws, taken in the input angle (:func:`swgsim.sensing.disturbance.disturb`), and the
-converter's noise and quantisation; what is the same: the motion (the gear returns to
-its pose every cycle; no payload, temperature or speed variation between cycles is
-modelled). The angle channels (input sensor, optional output encoder,
-:mod:`swgsim.sensing.angles`) are recorded with every window.
+Each state of the gear (healthy, a fault at one severity and position) is simulated once
+along the whole profile (:func:`swgsim.gear.profile_dynamics.simulate_profile`; the
+records: :mod:`swgsim.datasets.records`) and every window of the life is a cut of that
+motion, in a *slot*: a window of the data set in which the wave generator turns at least
+:data:`MIN_WG_REVOLUTIONS` revolutions one way (the angle-domain features need about 1.45
+revolutions, :mod:`learn.monitor.features`; gauge misplacement needs a monotone ψ,
+:mod:`swgsim.sensing.effects`). Window k lies in slot k mod S, starting up to
+``dataset.profile.start_jitter_s`` after the slot's start; its operating point is the
+slot's *commanded* one, the same for every state of the gear. From cycle to cycle only
+the start within the jitter, eq. (10)'s draws (in the input angle,
+:func:`swgsim.sensing.disturbance.disturb`) and the converter's noise and quantisation
+differ: the gear returns to its pose every cycle (no payload, temperature or speed
+variation between cycles is modelled).
 """
 
 from __future__ import annotations

@@ -1,25 +1,13 @@
 """Ownership of output folders: a run deletes or overwrites only what it can prove it wrote.
 
-A file's name proves nothing (a ``manifest.json`` of another tool, a user's
-``report.md``). Every run therefore writes, before anything else, an *ownership stamp*
-:data:`STAMP` (``.swg-owner.json``) into its output folder::
-
-    {"writer": "swg-monitor", "version": 2, "apps": ["swgsim-calibrate"],
-     "files": {"report.md": ["<sha256>"], "figures/time.png": ["<sha256>"]},
-     "writers": {"report.md": {"app": "swgsim-calibrate", "kind": "calibration"}, ...},
-     "runs": ["<host>-<pid>", ...]}
-
-``writer`` is this project's signature; ``files`` maps each file a run wrote (relative
-path) to its SHA-256 (the previous one kept beside a new one until the next claim, so that
-a run stopped between recording and renaming still proves the file on disk); ``writers``
-the app and kind of output that wrote it (:mod:`swgsim.files.writers`: an app replaces
-only its own kind); ``runs`` the processes (``<host>-<pid>``,
-:func:`swgsim.files.atomic.temp_prefix`) that may leave temporary files there. A file is
-*ours* if a stamp of this project in its folder or an enclosing one lists it with the
-SHA-256 it has now; a temporary file is ours if its name carries a run a stamp lists.
-Anything else is *foreign*: never deleted nor overwritten, and a run whose folder holds
-one refuses (:func:`check`), naming it, before it touches anything (temporary files
-included).
+The rule, the *ownership stamp* :data:`STAMP` (``.swg-owner.json``) a run writes into its
+output folder before anything else, its fields (``writer``, ``files``, ``writers``,
+``runs``, ``holders``), the locks and what is *ours* or *foreign*: docs/DATASET.md,
+"Files" ("What a run may delete or overwrite"). ``files`` keeps a file's previous SHA-256
+beside a new one until the next claim, so that a run stopped between recording and
+renaming still proves the file on disk. A foreign file is never deleted nor overwritten,
+and a run whose folder holds one refuses (:func:`check`), naming it, before it touches
+anything.
 
 Every write into a claimed folder is recorded before its rename (:func:`before_replace`,
 called by :func:`atomic_write_bytes` and :func:`swgsim.datasets.schema.write_shard`), or
@@ -27,17 +15,14 @@ by the app (:meth:`Claim.record`). Stamp updates are serialised by a file lock
 (``filelock``) on :data:`STAMP_LOCK` and written atomically, so that worker processes and
 cluster jobs can share a folder.
 
-One run at a time: :func:`claim` admits a run under the folder's *gate* :data:`LOCK` (held
-for milliseconds) and the run then holds its own *run lock*
-``.swg-owner.<host>-<pid>.lock`` until the claim is closed; the stamp's ``holders`` name
-the runs and their app. Another process claiming the folder meanwhile (a run's workers,
-:func:`join`, take no lock) is refused in one line naming the folder and that run, unless
-both passed the same ``share`` (e.g. cluster jobs of one data set); :func:`check` looks
-too. A killed run leaves a free run lock, removed by the next admission. Lock files are
-proved ours as every other file: each is listed in the stamp, empty, before it is
-created, and opened only if it is an empty plain file (no link). Like the stamp, they are
-neither foreign nor ``owned``, and no run deletes them as output (the gate and
-:data:`STAMP_LOCK` stay: removing a lock file others wait on would split them).
+One run at a time: :func:`claim` admits a run under the folder's gate :data:`LOCK` (held
+for milliseconds) and the run then holds its own run lock until the claim is closed;
+another process claiming the folder meanwhile (a run's workers, :func:`join`, take no
+lock) is refused unless both passed the same ``share``. A killed run leaves a free run
+lock, removed by the next admission. A lock file is opened only if it is an empty plain
+file (no link); like the stamp, it is neither foreign nor ``owned``, and no run deletes it
+as output (the gate and :data:`STAMP_LOCK` stay: removing a lock file others wait on
+would split them).
 """
 
 from __future__ import annotations
