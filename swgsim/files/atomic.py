@@ -18,8 +18,8 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["DiskFullError", "TEMP_NAME", "pid_alive", "replace_atomically", "temp_host",
-           "temp_prefix", "write_atomically"]
+__all__ = ["DiskFullError", "TEMP_NAME", "pid_alive", "temp_host", "temp_prefix",
+           "write_atomically"]
 
 
 class DiskFullError(ValueError):
@@ -60,26 +60,6 @@ def pid_alive(pid: int) -> bool:
     except PermissionError:  # alive, another user's
         return True
     return True
-
-
-def replace_atomically(path: str | os.PathLike, data: bytes | memoryview,
-                       before_replace: Callable[[Path, str], None] | None = None) -> None:
-    """Write ``data`` to ``path`` atomically (:func:`write_atomically` with the bytes).
-
-    Parameters
-    ----------
-    path : path-like
-        The target; its folder is created if needed.
-    data : bytes
-    before_replace : callable, optional
-        See :func:`write_atomically`.
-
-    Raises
-    ------
-    DiskFullError
-        If the disk is full, naming the file and its folder; nothing is left behind.
-    """
-    write_atomically(path, lambda tmp: tmp.write_bytes(data), before_replace)
 
 
 def write_atomically(path: str | os.PathLike, write: Callable[[Path], object],

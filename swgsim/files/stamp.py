@@ -16,7 +16,7 @@ from pathlib import Path
 
 from filelock import FileLock
 
-from swgsim.files.atomic import replace_atomically, temp_host
+from swgsim.files.atomic import temp_host, write_atomically
 
 __all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "LOCKS", "EMPTY", "VERSION", "run_id",
            "read_stamp", "slot", "is_lock", "lock_file", "writers_of", "update"]
@@ -113,4 +113,5 @@ def update(folder: Path, app: str, change: Callable[[dict], None]) -> None:
         change(stamp)
         stamp["version"] = max(VERSION, int(stamp.get("version", 1) or 1))
         stamp["files"][STAMP_LOCK] = [EMPTY]  # held, so an empty plain file: ours
-        replace_atomically(path, (json.dumps(stamp, indent=1, sort_keys=True) + "\n").encode())
+        data = (json.dumps(stamp, indent=1, sort_keys=True) + "\n").encode()
+        write_atomically(path, lambda tmp: tmp.write_bytes(data))
