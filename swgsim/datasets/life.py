@@ -1,19 +1,12 @@
 """Gear lives: one gear's operation as a time-ordered stream of windows.
 
 The schedule (duty cycle, commissioning, fault onset and severity) is
-:mod:`swgsim.datasets.schedule`; the records the windows are cut from are
-:mod:`swgsim.datasets.records`.
-
-How windows are made. A gear in a steady state at one operating point repeats its signals
-once per output revolution (the WG angle and the flexspline both return; N input
-revolutions, 3 s at 2000 rpm). Each (operating point, state) is therefore simulated
-once, as one *record* of one output revolution plus a window (:class:`LifeSimulator`):
-the dynamics (:func:`swgsim.gear.dynamics.simulate`), the gauge signals and the measurement
-chain up to the converter's filter, exactly as a data set's windows
-(:mod:`swgsim.datasets.grid_shard`). A window is cut from its record at a random start, and gets its
-own eq. (10) draws (if ``disturbed``), its sensor fault and the converter's noise and
-quantisation. A growing severity is simulated as a staircase of ``severity_levels`` steps
-(the window's ``severity`` is the step's, i.e. what its signals hold).
+:mod:`swgsim.datasets.schedule`. Each (operating point, state) is simulated once, as one
+*record* (:mod:`swgsim.datasets.records`, through :class:`LifeSimulator`); a window is cut
+from its record at a random start, and gets its own eq. (10) draws (if ``disturbed``), its
+sensor fault and the converter's noise and quantisation. A growing severity is simulated
+as a staircase of ``severity_levels`` steps (the window's ``severity`` is the step's, i.e.
+what its signals hold).
 
 Randomness: the fault's position (gear faults) or bridge (sensor faults) from
 ``SeedSequence(seed, spawn_key=(gear, life_seed, 0))``; window k from its own stream,
