@@ -189,8 +189,7 @@ class SensorLayout:
     def __post_init__(self):
         if len(self.signals) != 5:
             raise ValueError(f"layout needs 5 signals s0..s4, got {len(self.signals)}")
-        if not 1.0 <= self.gauge_factor <= 5.0:
-            raise ValueError(f"gauge_factor must lie in [1, 5], got {self.gauge_factor}")
+        check_range(self.gauge_factor, 1.0, 5.0, "gauge_factor")
 
     def perturbed(self, rng: np.random.Generator,
                   tolerances: TolerancesConfig | None = None) -> SensorLayout:

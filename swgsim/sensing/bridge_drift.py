@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from swgsim.base.typed import check_range
+
 #: Reference temperature of the drift coefficients [°C] (the temperature at commissioning
 #: is not known in advance; docs/PHYSICS.md sec. 5.4).
 REF_TEMP_C = 20.0
@@ -82,11 +84,8 @@ class BridgeDrift:
             if not np.isfinite(getattr(self, name)):
                 raise ValueError(f"{key}.{name} must be finite, got {getattr(self, name)}")
         for name in ("gauge_mismatch_ue_per_k", "span_sd_per_k"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"{key}.{name} must lie in [0, inf), got {v}")
-        if not 1.0 <= self.gauge_factor <= 5.0:
-            raise ValueError(f"{key}.gauge_factor must lie in [1, 5], got {self.gauge_factor}")
+            check_range(getattr(self, name), 0.0, np.inf, f"{key}.{name}")
+        check_range(self.gauge_factor, 1.0, 5.0, f"{key}.gauge_factor")
         arms = list(self.active_arms)
         if len(arms) != N_BRIDGES or any(a not in (1, 2, 4) for a in arms):
             raise ValueError(f"{key}.active_arms must be {N_BRIDGES} values of 1, 2 or 4, "
@@ -186,14 +185,11 @@ class TemperatureSensor:
         ValueError
         """
         for name in ("resolution_k", "noise_sd_k"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"{key}.{name} must lie in [0, inf) K, got {v}")
+            check_range(getattr(self, name), 0.0, np.inf, f"{key}.{name}", "K")
         if self.fault not in TEMPERATURE_SENSOR_FAULTS:
             raise ValueError(f"{key}.fault: {self.fault!r}; allowed: "
                              f"{', '.join(TEMPERATURE_SENSOR_FAULTS)}")
-        if not (np.isfinite(self.fault_hour) and self.fault_hour >= 0):
-            raise ValueError(f"{key}.fault_hour must lie in [0, inf) h, got {self.fault_hour}")
+        check_range(self.fault_hour, 0.0, np.inf, f"{key}.fault_hour", "h")
         if not np.isfinite(self.drift_k_per_h):
             raise ValueError(f"{key}.drift_k_per_h must be a finite number of K per h, "
                              f"got {self.drift_k_per_h}")
