@@ -6,12 +6,9 @@ set, a monitor report, a calibration, ...)::
 
     "writers": {"report.md": {"app": "swgsim-monitor", "kind": "monitor report"}}
 
-An app replaces only its own kind of output: generation only an unfinished data set that a
-generation run wrote (a finished one of another config with ``overwrite``), every report app
-only its own earlier output; a file of another kind is refused in one line naming the file
-and its writer (:func:`refuse_others`), before any work. A stamp of an earlier version lists
-files without writers: their app is unknown, and they are refused as well (generation
-replaces them with ``overwrite``).
+An app replaces only its own kind of output (docs/DATASET.md, "Files"); a file of another
+kind, or of an unknown app (a stamp of version 1), is refused in one line naming the file
+and its writer (:func:`refuse_others`), before any work.
 
 :data:`WRITERS` is the one list of the apps, by the tag they claim a folder with.
 """
