@@ -75,8 +75,7 @@ def simulate_motions(plan: DatasetPlan, shard: ShardSpec, params: list[ChainPara
         (:func:`diverged`).
     """
     ch = plan.config.chain
-    fs = ch.sample_rate_hz
-    n_t = int(round(ch.window_s * fs))
+    fs, _, n_t, _ = steps.sampling(plan.config)
     t_out = np.array([w.t_out_nm for w in shard.windows])
     m_idx, m_inv = steps.unique_index([_motion_key(p, t, a) for p, t, a
                                        in zip(params, t_out, phi0, strict=True)])
@@ -133,8 +132,7 @@ def record(plan: DatasetPlan, sig: np.ndarray, n_mean: np.ndarray, n_lead: int,
         [mV/V] at the data rate.
     """
     ch, amp = plan.config.chain, plan.config.acquisition.amplifier
-    fs = ch.sample_rate_hz
-    q = 1 if amp is None else amp.oversample
+    fs, q, _, _ = steps.sampling(plan.config)
     if plan.sensor_effects:
         # windows are taken one after another in shard order (thermal drift)
         t_fine = np.arange(sig.shape[-1]) / (fs * q)
@@ -156,8 +154,7 @@ def assemble(plan: DatasetPlan, shard: ShardSpec, sig: np.ndarray, motions: Moti
         The shard (clean windows, disturbed twins, clean references, disturbed
         references, in that order) and its number of windows.
     """
-    ch = plan.config.chain
-    fs = ch.sample_rate_hz
+    fs = plan.config.chain.sample_rate_hz
     wins = shard.windows
     time_s = np.arange(sig.shape[-1]) / fs
     ref = np.array([w.reference for w in wins])
@@ -208,10 +205,7 @@ def simulate_grid_shard(plan: DatasetPlan, shard: ShardSpec,
     cfg = plan.config
     gear = plan.gears[shard.gear]
     amp = cfg.acquisition.amplifier
-    q = 1 if amp is None else amp.oversample
-    fs = cfg.chain.sample_rate_hz
-    n_t = int(round(cfg.chain.window_s * fs))
-    n_lead = 0 if amp is None else amp.lead_samples(fs)
+    _, q, n_t, n_lead = steps.sampling(cfg)
     chain = SimulationChain.from_influences(layout_for(cfg, gear), influences, cfg.chain)
     healthy = gear_params(cfg, gear)
     rng_start, rng_dist, rng_noise = steps.shard_streams(plan, shard)

@@ -72,10 +72,8 @@ def profile_motion(plan: DatasetPlan, shard: ShardSpec,
         Naming the chain's keys if the integration fails (:func:`diverged`).
     """
     cfg = plan.config
-    ch, amp = cfg.chain, cfg.acquisition.amplifier
-    fs = ch.sample_rate_hz
-    n_t = int(round(ch.window_s * fs))
-    n_lead = 0 if amp is None else amp.lead_samples(fs)
+    ch = cfg.chain
+    fs, _, n_t, n_lead = steps.sampling(cfg)
     healthy = gear_params(cfg, plan.gears[shard.gear])
     if rng_start is None:
         rng_start = steps.shard_streams(plan, shard)[0]
@@ -121,12 +119,8 @@ def simulate_profile_shard(plan: DatasetPlan, shard: ShardSpec,
         ``load_mean_nm``) and the angle channels ``phi_in_meas`` (and ``phi_out_meas``
         with an output encoder), (sample, time) [rad]; and its number of windows.
     """
-    cfg = plan.config
-    ch, amp = cfg.chain, cfg.acquisition.amplifier
-    fs = ch.sample_rate_hz
-    q = 1 if amp is None else amp.oversample
-    n_t = int(round(ch.window_s * fs))
-    n_lead = 0 if amp is None else amp.lead_samples(fs)
+    cfg, amp = plan.config, plan.config.acquisition.amplifier
+    fs, q, n_t, n_lead = steps.sampling(cfg)
     rng_start, _, rng_noise = steps.shard_streams(plan, shard)
     mo = profile_motion(plan, shard, rng_start)
     res, starts = mo.res, mo.starts
@@ -167,17 +161,13 @@ def simulate_profile_shard(plan: DatasetPlan, shard: ShardSpec,
         "n_in_mean_rpm": per_window(res.states[1]).mean(axis=1) * 60 / (2 * np.pi),
         "t_out_mean_nm": per_window(res.t_out).mean(axis=1),
     }
-    extra = {
-        "window_start_s": (np.tile(starts / fs, n_v), "s"),
-        "n_d_mean_rpm": (w_d.mean(axis=1), "rpm"),
-        "n_d_min_rpm": (w_d.min(axis=1), "rpm"),
-        "n_d_max_rpm": (w_d.max(axis=1), "rpm"),
-        "load_mean_nm": (load.mean(axis=1), "N m"),
-    }
+    extra = {"window_start_s": (np.tile(starts / fs, n_v), "s"),  # name: (values, units)
+             "n_d_mean_rpm": (w_d.mean(axis=1), "rpm"), "n_d_min_rpm": (w_d.min(axis=1), "rpm"),
+             "n_d_max_rpm": (w_d.max(axis=1), "rpm"), "load_mean_nm": (load.mean(axis=1), "N m")}
     angles = cfg.profile.angles
-    enc = angles.output_encoder()
     meas = measure_angles(per_window(res.states[0]), per_window(res.states[2]),
-                          input_sensor=angles.input_sensor(), output_encoder=enc)
+                          input_sensor=angles.input_sensor(),
+                          output_encoder=angles.output_encoder())
     return _profile_dataset(plan, shard, np.concatenate(cuts), meta, extra, meas), len(wins)
 
 

@@ -21,7 +21,7 @@ from swgsim.datasets.config import gear_params, layout_for
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.schedule import DutyPoint, uses_position
 from swgsim.datasets.slots import jitter_samples, profile_slots
-from swgsim.datasets.steps import diverged, fine_motion, influences_for, unique_index
+from swgsim.datasets.steps import diverged, fine_motion, influences_for, sampling, unique_index
 from swgsim.gear import dynamics, profile_dynamics
 from swgsim.gear.chain import SimulationChain
 from swgsim.gear.faults import ChainParams, apply_fault
@@ -117,11 +117,8 @@ class RecordBank:
 
     def _simulate(self, keys: list[tuple]) -> None:
         cfg = self.plan.config
-        ch, amp = cfg.chain, cfg.acquisition.amplifier
-        fs, n_in = ch.sample_rate_hz, keys[0][0]
-        q = 1 if amp is None else amp.oversample
-        n_lead = 0 if amp is None else amp.lead_samples(fs)
-        n_t = int(round(ch.window_s * fs))
+        ch, n_in = cfg.chain, keys[0][0]
+        fs, q, n_t, n_lead = sampling(cfg)
         n_period = int(math.ceil(self.healthy.gear.ratio * 60.0 / n_in * fs))
         n_rec = n_period + n_t
         params = [self.params(k) for k in keys]
@@ -188,10 +185,8 @@ class ProfileRecordBank(RecordBank):
     def _simulate(self, keys: list[tuple]) -> None:
         cfg = self.plan.config
         ch, amp = cfg.chain, cfg.acquisition.amplifier
-        fs = ch.sample_rate_hz
-        q = 1 if amp is None else amp.oversample
-        n_lead = 0 if amp is None else amp.lead_samples(fs)
-        n_t = int(round(ch.window_s * fs)) + jitter_samples(cfg)  # window + jitter
+        fs, q, n_t, n_lead = sampling(cfg)
+        n_t += jitter_samples(cfg)  # window + jitter
         params = [self.params(k) for k in keys]
         # the same pose every cycle: one start angle per gear, within one WG revolution
         ss = np.random.SeedSequence(int(cfg.seed), spawn_key=(self.gear_id, 2 ** 20))

@@ -13,7 +13,7 @@ import hashlib
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
-from swgsim.datasets.config import layout_for
+from swgsim.datasets.config import DatasetConfig, layout_for
 from swgsim.datasets.plan import DatasetPlan, ShardSpec, WindowSpec
 from swgsim.files.provenance import git_revision, package_version
 from swgsim.gear import dynamics
@@ -25,7 +25,7 @@ from swgsim.gear.influence import Influence, InfluenceSolver
 interpolate = lazy_module("scipy.interpolate")
 
 __all__ = ["diverged", "fine_motion", "gear_influences", "influences_for", "shard_attrs",
-           "shard_streams", "unique_index", "window_meta", "window_params"]
+           "sampling", "shard_streams", "unique_index", "window_meta", "window_params"]
 
 
 def gear_influences(plan: DatasetPlan, shards: list[ShardSpec] | tuple[ShardSpec, ...]
@@ -80,6 +80,14 @@ def influences_for(plan: DatasetPlan, gear_ids: list[int], crack_keys
             inf[(pos, sev)] = solver.root_crack_at(lay, pos, sev, adjoint=adj, healthy=healthy)
         out[int(gid)] = inf
     return out
+
+
+def sampling(cfg: DatasetConfig) -> tuple[float, int, int, int]:
+    """The data rate fs [Hz], the amplifier's fine samples per sample q (1 without one), a
+    window's samples n_t and the amplifier's samples of history n_lead (0 without one)."""
+    amp, fs = cfg.acquisition.amplifier, cfg.chain.sample_rate_hz
+    return (fs, 1 if amp is None else amp.oversample, int(round(cfg.chain.window_s * fs)),
+            0 if amp is None else amp.lead_samples(fs))
 
 
 def shard_streams(plan: DatasetPlan, shard: ShardSpec) -> list[np.random.Generator]:
