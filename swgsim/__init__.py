@@ -5,16 +5,9 @@ bridges in mV/V, the paper's five faults, data-set acquisitions and generation (
 calibration loop against measured data is the separate package :mod:`swgcal`). See
 ``docs/ARCHITECTURE.md`` for the data flow.
 
-Sub-packages, each a floor above the ones it uses (docs/ARCHITECTURE.md):
-
-* :mod:`swgsim.base` - typed configs, lazy exports;
-  :mod:`swgsim.files` - atomic writes, digests, ownership stamps, provenance;
-* :mod:`swgsim.gear` - the gear and its physics: dynamics, operating profiles, the
-  flexspline truss, gauges, the simulation chain, faults, friction;
-* :mod:`swgsim.sensing` - the measurement chain: sensor effects, the bench amplifier,
-  angle channels, eq. (10), sensor faults;
-* :mod:`swgsim.datasets` - data sets: config and schedules, plan, shard runners, lives,
-  the schema on disk, generation.
+Sub-packages, each a floor above the ones it uses: :mod:`swgsim.base` and
+:mod:`swgsim.files`, :mod:`swgsim.gear`, :mod:`swgsim.sensing`, :mod:`swgsim.datasets`
+(docs/ARCHITECTURE.md, "Floors" and "Layout").
 
 The public API is listed in ``__all__``; names are imported on first use, so that
 ``import swgsim`` stays cheap::
