@@ -12,9 +12,7 @@ simulated in worker processes, each by the runner of its data set's kind
 Resumable and atomic: a shard file is written to a temporary name and renamed, then a
 sidecar ``<shard>.json`` records its SHA-256; a rerun skips shards whose file matches its
 sidecar. The manifest is written last, when every shard is there. A run writes only into a
-folder it claimed (:mod:`swgsim.files.ownership`): every file it writes is listed with
-its SHA-256 in the folder's ownership stamp before it is renamed into place, and it
-deletes or overwrites nothing that is not listed there.
+folder it claimed and replaces only what it can prove it wrote (:mod:`swgsim.files.ownership`).
 """
 
 from __future__ import annotations

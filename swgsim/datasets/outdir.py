@@ -2,9 +2,8 @@
 the manifest.
 
 A run never deletes nor overwrites what it cannot prove it wrote: the folder is claimed
-through its ownership stamp (:mod:`swgsim.files.ownership`), which lists every file a run of
-this project wrote there with its SHA-256; a file's name proves nothing. Every write is
-atomic (:func:`swgsim.files.ownership.atomic_write_json`). Used by
+through its ownership stamp (:mod:`swgsim.files.ownership`); every write is atomic
+(:func:`swgsim.files.ownership.atomic_write_json`). Used by
 :func:`swgsim.datasets.generate.generate`; takes the checked
 :class:`swgsim.datasets.plan.DatasetPlan`.
 """

@@ -4,13 +4,10 @@ the mapping's fields; the table itself: :mod:`swgsim.datasets.recording_table`).
 refusal is one ``ValueError`` line naming the file, the column (with the mapping key it
 was given as) and the row.
 
-**Segments.** A recording may hold several continuous stretches (a condition-monitoring
-logger's bursts). A new segment begins at a row where the clock (the operating-hours or
-wall-clock column; without one, the time column itself) advances by more than one window
-length since the previous row; inside a segment the time column must advance by the
-sample period, within the tolerance, and a longer step is refused as a gap (a clock that
-does not jump there says the logger did not stop). The time column may restart at a
-segment's first row (time since the burst's start).
+**Segments** (a logger's bursts; where one begins: docs/DATASET.md, "Imported
+recordings"). Inside a segment a time step longer than the sample period (within the
+tolerance) is refused as a gap: a clock that does not jump there says the logger did not
+stop. The time column may restart at a segment's first row (time since the burst's start).
 """
 
 from __future__ import annotations

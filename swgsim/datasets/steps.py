@@ -1,9 +1,5 @@
 """Steps every shard runner shares: the gears' influences, the random streams, the windows'
 parameters and metadata, the motion on a finer grid, a divergence's message, the attributes.
-
-The influences are computed once in the parent process (one factorisation of the healthy
-truss, one adjoint solve per gear, a Woodbury update per root crack), so that the shard
-workers need no truss.
 """
 
 from __future__ import annotations
