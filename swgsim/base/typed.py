@@ -3,22 +3,15 @@
 A config travels as a dataclass; plain data (YAML, JSON, a notebook's dict) enters through
 :func:`complete` (every unknown, missing or mistyped key refused with its full name, e.g.
 ``dataset.chain.windows_s: unknown key; allowed: sample_rate_hz, window_s, ...``) and
-:func:`build` (the typed object). A field may declare its allowed range in its metadata
-(:func:`allowed`: bounds, open or closed, odd integers; None where the field's type admits
-it), checked with the keys and, by :func:`check_ranges` in ``__post_init__``, on
-construction, in one line naming the full key, the range and the value, e.g.
-``selection.max_rel_se must lie in (0, inf), got -1`` (:func:`check_range`'s words).
-:func:`plain` is the way back from a typed config to plain data, :func:`schema_of` the
-way to an app's Hydra structured config. :func:`check_finite`
-refuses NaN and infinity anywhere in a config tree: every comparison with NaN is false,
-so NaN passes a range check written ``if v < lo or v > hi: raise``, and any key that has
-no range check.
-
-A typed config checks itself in one pass, :func:`check_tree`: every part (a dataclass) may
-define ``check(self, where)`` with its own rules, the ones across its fields included
-(scikit-learn's ``_parameter_constraints`` idea); the pass refuses NaN and infinity first,
-then runs the parts' range metadata and ``check`` methods, each part's after its
-children's, so that a part's rule may rely on its parts being valid.
+:func:`build` (the typed object); :func:`plain` is the way back to plain data,
+:func:`schema_of` the way to an app's Hydra structured config. A field may declare its
+allowed range in its metadata (:func:`allowed`), refused in one line naming the full key,
+the range and the value, e.g. ``selection.max_rel_se must lie in (0, inf), got -1``
+(:func:`check_range`'s words). :func:`check_tree` checks a typed config in one pass: NaN
+and infinity first (:func:`check_finite`: every comparison with NaN is false, so NaN
+passes a range check written ``if v < lo or v > hi: raise``), then every part's ranges and
+its own ``check(self, where)`` (scikit-learn's ``_parameter_constraints`` idea), each part
+after its children's, so that a part's rule may rely on its parts being valid.
 
 Used by every schema of the project: the data set's (:mod:`swgsim.datasets.config`), the
 calibration's options (:mod:`swgcal.loop`, ``swgcal.friction.options``, ...) and the apps'
@@ -528,7 +521,6 @@ def check_range(value: Any, lo: float, hi: float, key: str, unit: str = "", *,
         rng = _interval(lo, hi, lo_open, hi_open)
         raise ValueError(f"{key} must lie in {rng}{' ' + unit if unit else ''}"
                          f"{' (' + why + ')' if why else ''}, got {value}")
-
 
 
 def _check_parts(obj: Any, where: str) -> None:
