@@ -11,6 +11,7 @@ sources, stopping and pairs: docs/calibration.md, "The acceptance rule in full".
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Mapping, Sequence
@@ -28,7 +29,7 @@ from .split import HeldOutSplit
 log = logging.getLogger(__name__)
 
 __all__ = ["Problem", "SelectionConfig", "CandidateScore", "Iteration", "CalibrationResult",
-           "select_effects", "IMPLAUSIBLE_PREFIX"]
+           "select_effects", "refit_final", "IMPLAUSIBLE_PREFIX"]
 
 #: Status of a candidate rejected for a parameter outside its physical range, before them.
 IMPLAUSIBLE_PREFIX = "rejected: outside its physical range: "
@@ -602,6 +603,48 @@ def _flag_implausible(res: CalibrationResult) -> None:
             "physical range still explains part of the residual with very strong evidence, "
             "so an effect the library does not hold is there: " + "; ".join(res.implausible)
             + ".")
+
+
+def refit_final(result: CalibrationResult, cur: FitResult, meta: dict[str, Any], *,
+                keep_note: bool = True) -> CalibrationResult:
+    """``result`` with a changed model (after the loop: ripples grouped or pruned, unpinned
+    effects dropped): ``cur`` refitted on fit + validation samples from its values.
+
+    Parameters
+    ----------
+    cur : FitResult
+        The changed model, fitted on the fit samples.
+    meta : dict
+        The problem's new ``meta``.
+    keep_note : bool, default True
+        Keep what :func:`select_effects` appended to the final diagnosis' signature (the
+        candidates outside their physical range).
+
+    Returns
+    -------
+    CalibrationResult
+        A copy with the final model, the errors after, the final diagnosis, ``added``
+        (the effects ``cur`` keeps) and ``unexplained`` updated.
+    """
+    p, cfg = result.problem, result.config
+    sp, sig, y = p.split, p.signals, p.y
+    final = fit_terms(cur.terms, sig, y, sp.fit_validation, [[th] for th in cur.thetas],
+                      max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr, max_starts=1)
+    r_fit, r_a = y - cur.predict(sig), y - final.predict(sig)
+    rmse = {k: dict(v) for k, v in result.rmse.items()}
+    for k, r in (("fit", r_fit), ("validation", r_fit), ("test", r_a)):
+        rmse[k]["after"] = _rmse(r[getattr(sp, k)])
+    d_after = diagnose(sig, p.t, r_a, sp.fit_validation, p.probes, p.units,
+                       cfg.structure_threshold)
+    names = {t.name for t in cur.terms}
+    head, text = result.diag_after.signature.rstrip("."), result.residual_signature
+    extra = text[len(head):] if keep_note and head and text.startswith(head) else ""
+    return dataclasses.replace(
+        result, problem=dataclasses.replace(p, meta=meta), final=final,
+        added=[n for n in result.added if n in names], rmse=rmse, diag_after=d_after,
+        unexplained=bool(d_after.structured or result.implausible),
+        residual_signature=(d_after.signature.rstrip(".") + extra) if extra
+        else d_after.signature)
 
 
 def select_effects(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:

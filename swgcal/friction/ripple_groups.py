@@ -38,8 +38,7 @@ import numpy as np
 from swgsim.gear.friction.ripples import RippleTerm, wave_generator_order
 
 from ..core import FitResult, Term, fit_terms, with_uncertainty
-from ..diagnose import diagnose
-from ..loop import CalibrationResult
+from ..loop import CalibrationResult, refit_final
 
 log = logging.getLogger(__name__)
 
@@ -332,7 +331,7 @@ def group_ripples(result: CalibrationResult, *, rel_tol: float = HARMONIC_REL_TO
     meta = {**p.meta, "ripples": info}
     if not st.changed:
         return dataclasses.replace(result, problem=dataclasses.replace(p, meta=meta))
-    return _finish(result, st.cur, meta, st.val_cur, st.fit_kw)
+    return refit_final(result, st.cur, meta)
 
 
 @dataclass
@@ -487,33 +486,3 @@ def _support(st: _Pruning, r: Term) -> tuple[float, Term, FitResult, float] | No
     v0 = _val_rmse(st.result, f0)
     ev = heldout_evidence(st.val_cur, v0, st.n_val, min(st.cur.tau_int, f0.tau_int))
     return ev, r, f0, v0
-
-
-def _finish(result: CalibrationResult, cur: FitResult, meta: dict[str, Any],
-            val_cur: float, fit_kw: dict[str, Any]) -> CalibrationResult:
-    """Refit the changed model on fit + validation samples; test errors and diagnosis."""
-    p, cfg = result.problem, result.config
-    sp, sig, y = p.split, p.signals, p.y
-    names = {t.name for t in cur.terms}
-    final = fit_terms(cur.terms, sig, y, sp.fit_validation, [[th] for th in cur.thetas],
-                      **{**fit_kw, "max_starts": 1})
-    r_a = y - final.predict(sig)
-    r_fit = y - cur.predict(sig)
-    rmse = {k: dict(v) for k, v in result.rmse.items()}
-    rmse["fit"]["after"] = float(np.sqrt(np.mean(r_fit[sp.fit] ** 2)))
-    rmse["validation"]["after"] = val_cur
-    rmse["test"]["after"] = float(np.sqrt(np.mean(r_a[sp.test] ** 2)))
-    d_after = diagnose(sig, p.t, r_a, sp.fit_validation, p.probes, p.units,
-                       cfg.structure_threshold)
-    added = [n for n in result.added if n in names]
-    # keep what the loop appended to the diagnosis' signature (e.g. the candidates of the
-    # last iteration outside their physical range, which also make a run unexplained)
-    head = result.diag_after.signature.rstrip(".")
-    sig_text = result.residual_signature
-    extra = sig_text[len(head):] if head and sig_text.startswith(head) else ""
-    implausible = bool(getattr(result, "implausible", None))
-    return dataclasses.replace(
-        result, problem=dataclasses.replace(p, meta=meta), final=final, added=added,
-        rmse=rmse, diag_after=d_after, unexplained=bool(d_after.structured or implausible),
-        residual_signature=(d_after.signature.rstrip(".") + extra) if extra
-        else d_after.signature)

@@ -28,8 +28,8 @@ from swgsim.base.typed import build, complete
 from swgsim.datasets.joint_log import JOINTS, JointLog, read_joint_log
 
 from ..core import fit_terms
-from ..diagnose import BinnedProbe, PeriodicProbe, Probe, TrendProbe, diagnose
-from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
+from ..diagnose import BinnedProbe, PeriodicProbe, Probe, TrendProbe
+from ..loop import CalibrationResult, Problem, SelectionConfig, refit_final, select_effects
 from ..split import HeldOutSplit
 from .library import THERMAL_LIBRARY, FirstOrderJoint, first_order_lag
 from .options import STANDSTILL_RAD_S, ThermalKindOptions, ThermalOptions
@@ -285,21 +285,8 @@ def _drop_unpinned(result: CalibrationResult) -> CalibrationResult:
     meta = {**p.meta, "removed": [{"name": k, "why": v} for k, v in weak.items()]}
     if not weak:
         return dataclasses.replace(result, problem=dataclasses.replace(p, meta=meta))
-    sp, sig, y = p.split, p.signals, p.y
     keep = [i for i, t in enumerate(final.terms) if t.name not in weak]
-    terms = [final.terms[i] for i in keep]
-    starts = [[final.thetas[i]] for i in keep]
-    kw = dict(max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr, max_starts=1)
-    cur = fit_terms(terms, sig, y, sp.fit, starts, uncertainty=False, **kw)
-    new = fit_terms(terms, sig, y, sp.fit_validation, [[th] for th in cur.thetas], **kw)
-    r_fit, r_new = y - cur.predict(sig), y - new.predict(sig)
-    rmse = {k: dict(v) for k, v in result.rmse.items()}
-    for k, r in (("fit", r_fit), ("validation", r_fit), ("test", r_new)):
-        rmse[k]["after"] = float(np.sqrt(np.mean(r[getattr(sp, k)] ** 2)))
-    d_after = diagnose(sig, p.t, r_new, sp.fit_validation, p.probes, p.units,
-                       cfg.structure_threshold)
-    return dataclasses.replace(
-        result, problem=dataclasses.replace(p, meta=meta), final=new,
-        added=[n for n in result.added if n not in weak], rmse=rmse, diag_after=d_after,
-        unexplained=bool(d_after.structured or result.implausible),
-        residual_signature=d_after.signature)
+    cur = fit_terms([final.terms[i] for i in keep], p.signals, p.y, p.split.fit,
+                    [[final.thetas[i]] for i in keep], uncertainty=False,
+                    max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr, max_starts=1)
+    return refit_final(result, cur, meta, keep_note=False)
