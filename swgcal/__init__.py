@@ -13,21 +13,9 @@ returns the same types whatever the kind::
 or step by step: :func:`summarize` (JSON-ready dict), :func:`render_report` (markdown),
 :func:`make_figures`.
 
-Layout: the kind-independent parts here, the kinds in subpackages of the same shape
-(build problem -> calibrate -> summarise -> render -> write):
-
-* :mod:`.api` (kind detection and dispatch, writing the files), :mod:`.loop` (problem,
-  selection loop, result), :mod:`.core` (separable least squares, uncertainties),
-  :mod:`.split` (held-out splits), :mod:`.diagnose` (residual probes, noise floor),
-  :mod:`.discovery` (terms beyond the library: the engine), :mod:`.report` (summary keys
-  and markdown parts both kinds share), :mod:`.terms` (:class:`~swgcal.terms.FitTerm`:
-  what a fit adds to a term's form), :mod:`.periodogram`;
-* :mod:`.friction` (data kind 1) and :mod:`.strain` (data kind 2).
-
-The model terms (:mod:`swgsim.gear.terms`), the friction effect forms (:mod:`swgsim.gear.friction`)
-and the measurement effects (:mod:`swgsim.sensing.effects`) belong to the simulator; the
-calibration fits them and holds what only a fit needs (bounds, starts, probes, physical
-ranges).
+Layout: the kind-independent parts here, each data kind a subpackage of the same shape
+(build problem -> calibrate -> summarise -> render -> write); the module map and what
+belongs to the simulator: docs/ARCHITECTURE.md, "Calibration loop".
 """
 
 from .api import (

@@ -8,14 +8,7 @@ and :data:`REPORT`, what its report (-> ``report.md``) and simulation option
 (-> ``friction_effects.yaml``) add to the shared renderer (:mod:`swgcal.report`). The
 kind-independent entry points are in :mod:`swgcal`.
 
-Modules: :mod:`.library` (the built-in effects' fits, registered in place of their
-forms in the one registry, :data:`swgsim.gear.friction.FRICTION_LIBRARY`), :mod:`.ranges`
-(physical ranges with sources), :mod:`.data` (recordings: loading, checks),
-:mod:`.problem` (problem builder, calibration), :mod:`.probes` (residual probes),
-:mod:`.ripple_groups` (ripples grouped by harmonics, pruned without held-out support),
-:mod:`.discovery` (terms beyond the library), :mod:`.report` (summary, report, simulation
-option), :mod:`.figures`, :mod:`.synthetic` (recordings with planted effects). The effect
-forms are simulator inputs: :mod:`swgsim.gear.friction`.
+Modules: docs/ARCHITECTURE.md, "Calibration loop".
 """
 
 from .data import FrictionRecording, load_friction_csv, write_friction_csv

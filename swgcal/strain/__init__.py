@@ -9,14 +9,7 @@ and :data:`REPORT`, what its report (-> ``report.md``) and simulation option
 (-> ``sensor_effects.yaml``) add to the shared renderer (:mod:`swgcal.report`). The
 kind-independent entry points are in :mod:`swgcal`.
 
-Modules: :mod:`.data` (measured windows, held-out split), :mod:`.model` (chain
-prediction per operating point, alignment), :mod:`.signals` (signals, constraint basis),
-:mod:`.effects` (effect library), :mod:`.ranges` (physical ranges with sources),
-:mod:`.probes` (residual probes), :mod:`.problem` (problem builder, calibration),
-:mod:`.align` (input angle modulo 180° or 360°), :mod:`.checks` (withheld parameters,
-too-small effects, caveats), :mod:`.discovery` (terms beyond the library), :mod:`.report`
-(summary, report, simulation option), :mod:`.figures`. Windows with planted effects are
-the tests' (``tests/planted_strain.py``; their power study is ``scripts/strain_power.py``).
+Modules: docs/ARCHITECTURE.md, "Calibration loop".
 """
 
 from .data import StrainWindows, strain_windows
