@@ -11,7 +11,7 @@ docstring).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -303,6 +303,13 @@ class Realigner:
             t += a_s * opm.d_t_long[f"ke{k}_sin"] + a_c * opm.d_t_long[f"ke{k}_cos"]
         return t
 
+    def _by_op(self) -> Iterator[tuple[int, _OPModel, np.ndarray]]:
+        """(index, model, windows) of every operating point with windows."""
+        for i, opm in enumerate(self.opms):
+            ws = np.flatnonzero(self.op_of == i)
+            if ws.size:
+                yield i, opm, ws
+
     def objectives(self, ke: tuple) -> list[np.ndarray]:
         """The alignment objective of every window over its torque shifts.
 
@@ -315,10 +322,7 @@ class Realigner:
         """
         out: list[np.ndarray] = [np.empty(0)] * self.n_w
         n_t = self.n_t
-        for i, opm in enumerate(self.opms):
-            ws = np.flatnonzero(self.op_of == i)
-            if ws.size == 0:
-                continue
+        for i, opm, ws in self._by_op():
             i0 = int(round(opm.t0_s * opm.fs))
             seg = np.ascontiguousarray(np.lib.stride_tricks.sliding_window_view(
                 self._torque_long(i, ke), n_t)[i0:i0 + opm.n_rev + 1])  # (n_j, n_t)
@@ -352,10 +356,7 @@ class Realigner:
         sh = self.shifts(key)
         torque = np.empty((self.n_w, self.m))
         phi = np.empty((self.n_w, self.m))
-        for i, opm in enumerate(self.opms):
-            ws = np.flatnonzero(self.op_of == i)
-            if ws.size == 0:
-                continue
+        for _, opm, ws in self._by_op():
             tt = self._times(sh, ws)
             t = opm.t_out(tt)
             for k, a_s, a_c in key:
@@ -371,20 +372,16 @@ class Realigner:
         self._memo[key] = out
         return out
 
-    def unit(self, order: int, ke: tuple = ()) -> np.ndarray:
-        """Unit responses ΔT_sin h, ΔT_cos h of an order at the alignment for ``ke``,
-        shape (2, n_w, 5, m) [mV/V / rad]."""
-        if order in self._unit and not ke:
+    def unit(self, order: int) -> np.ndarray:
+        """Unit responses ΔT_sin h, ΔT_cos h of an order at the alignment without extra
+        harmonics, shape (2, n_w, 5, m) [mV/V / rad]."""
+        if order in self._unit:
             return self._unit[order]
-        sh = self(ke)["shift_t"]
+        sh = self()["shift_t"]
         out = np.empty((2, self.n_w, 5, self.m))
-        for i, opm in enumerate(self.opms):
-            ws = np.flatnonzero(self.op_of == i)
-            if ws.size == 0:
-                continue
+        for _, opm, ws in self._by_op():
             tt = self._times(sh, ws)
             for j, nm in enumerate((f"ke{order}_sin", f"ke{order}_cos")):
                 out[j, ws] = opm.d_t[nm](tt).reshape(ws.size, 1, self.m) * self.parts["h"][ws]
-        if not ke:
-            self._unit[order] = out
+        self._unit[order] = out
         return out
