@@ -203,6 +203,12 @@ def _solve_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return c / norms
 
 
+def _pieces(v: np.ndarray, sizes: Sequence[int]) -> list[np.ndarray]:
+    """``v`` cut into consecutive pieces of the given sizes."""
+    ends = np.cumsum(sizes, dtype=int)
+    return [v[e - n:e] for n, e in zip(sizes, ends, strict=True)]
+
+
 class _Packer:
     """Map between the concatenated nonlinear parameters and the optimiser's space."""
 
@@ -236,11 +242,7 @@ class _Packer:
         return lo, hi
 
     def split(self, theta: np.ndarray) -> list[np.ndarray]:
-        out, i = [], 0
-        for s in self.sizes:
-            out.append(np.asarray(theta[i:i + s], float))
-            i += s
-        return out
+        return _pieces(np.asarray(theta, float), self.sizes)
 
 
 def _start_vectors(terms: Sequence[Term], sig: Any, y: np.ndarray, idx: np.ndarray,
@@ -319,13 +321,9 @@ def _fit_result(terms: tuple[Term, ...], pk: _Packer, theta: np.ndarray,
     if n <= k:
         raise ValueError(f"{n} fit samples for {k} parameters: need more samples")
     rss = float(np.sum(r * r))
-    thetas = tuple(pk.split(theta))
-    coefs, i = [], 0
-    for t in terms:
-        coefs.append(np.asarray(c[i:i + t.n_linear], float))
-        i += t.n_linear
+    coefs = _pieces(np.asarray(c, float), [t.n_linear for t in terms])
     return FitResult(
-        terms=terms, thetas=thetas, coefs=tuple(coefs), n=n, k=k, rss=rss,
+        terms=terms, thetas=tuple(pk.split(theta)), coefs=tuple(coefs), n=n, k=k, rss=rss,
         sigma=float(np.sqrt(rss / (n - k))), tau_int=integrated_autocorr_time(r),
         bic=float(n * np.log(max(rss, 1e-300) / n) + k * np.log(n)), success=bool(ok),
         message=str(msg))
@@ -448,18 +446,9 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
     # order of raw parameters: all linear (term order), then all nonlinear (term order)
     raw_values = np.concatenate([c_all] + [np.asarray(t, float) for t in thetas])
 
-    def unpack(v: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
-        cs, ts, i = [], [], 0
-        for t in terms:
-            cs.append(v[i:i + t.n_linear])
-            i += t.n_linear
-        for t in terms:
-            ts.append(v[i:i + t.n_nonlinear])
-            i += t.n_nonlinear
-        return cs, ts
-
     def derived_vec(v: np.ndarray) -> tuple[list[tuple[str, str, str]], np.ndarray]:
-        cs, ts = unpack(v)
+        parts = _pieces(v, [t.n_linear for t in terms] + [t.n_nonlinear for t in terms])
+        cs, ts = parts[:len(terms)], parts[len(terms):]
         names, vals = [], []
         for t, cc, tt in zip(terms, cs, ts, strict=True):
             units = t.derived_units()
