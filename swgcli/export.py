@@ -19,7 +19,6 @@ Examples
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
@@ -31,8 +30,6 @@ from learn.export.pipeline import ExportOptions
 from swgcli.app import hydra_app
 from swgsim.datasets.config import DatasetConfig
 from swgsim.files.inputs import absolute_path
-
-log = logging.getLogger(__name__)
 
 
 @dataclass

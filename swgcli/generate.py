@@ -9,15 +9,11 @@ Examples
 
 from __future__ import annotations
 
-import logging
-
 from omegaconf import DictConfig, OmegaConf
 
 from swgcli.app import hydra_app
 from swgcli.schema import GenerateApp
 from swgsim.files.inputs import absolute_path
-
-log = logging.getLogger(__name__)
 
 
 def run_generate(cfg: DictConfig) -> dict:

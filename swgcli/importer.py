@@ -16,7 +16,6 @@ Examples
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -28,8 +27,6 @@ from swgsim.base.typed import allowed
 from swgsim.datasets.recording_table import MAX_TABLE_BYTES
 from swgsim.datasets.recordings import import_recording
 from swgsim.files.inputs import absolute_path
-
-log = logging.getLogger(__name__)
 
 
 @dataclass

@@ -13,7 +13,6 @@ Config: ``conf/monitor.yaml``.
 from __future__ import annotations
 
 import dataclasses
-import logging
 from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
@@ -29,8 +28,6 @@ from swgsim.base.typed import check_tree
 from swgsim.datasets.schema import load, read_manifest
 from swgsim.files import ownership
 from swgsim.files.inputs import absolute_path
-
-log = logging.getLogger(__name__)
 
 
 def check_inputs(cfg) -> MonitorApp:

@@ -16,7 +16,6 @@ Config: ``conf/paper.yaml``.
 from __future__ import annotations
 
 import itertools
-import logging
 import time
 import warnings
 from collections import Counter
@@ -28,8 +27,6 @@ from swgcli.app import hydra_app
 from swgcli.schema import PaperApp
 from swgsim.files import ownership
 from swgsim.files.inputs import absolute_path
-
-log = logging.getLogger(__name__)
 
 
 def _check(cfg: DictConfig) -> list[str]:

@@ -10,7 +10,6 @@ paper-law base model, the effects with a fit in the one registry
 from __future__ import annotations
 
 import inspect
-import logging
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -26,8 +25,6 @@ from .library import PaperLaw
 from .options import BaseModelOptions, FrictionOptions, SplitOptions
 from .probes import friction_probes
 from .ripple_groups import group_ripples
-
-log = logging.getLogger(__name__)
 
 __all__ = ["friction_problem", "build_problem", "calibrate", "MIN_ROWS_PER_BLOCK", "OPTIONS"]
 

@@ -11,7 +11,6 @@ docs/PHYSICS.md sec. 5.2; ranges and sources: :mod:`.ranges`.
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Mapping
 from typing import Any
 
@@ -37,8 +36,6 @@ from .ranges import (
 from .signals import SENSORS, MappedBasis, StrainSignals, constraint_basis
 
 sps = lazy_module("scipy.signal")
-
-log = logging.getLogger(__name__)
 
 __all__ = [
     "SENSORS",
