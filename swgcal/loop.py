@@ -269,11 +269,6 @@ def _order(terms: Sequence[Term]) -> tuple[Term, ...]:
     return tuple([t for t in terms if t.is_transform] + [t for t in terms if not t.is_transform])
 
 
-def _instance_name(kind: str, terms: Sequence[Term]) -> str:
-    k = sum(1 for t in terms if t.kind == kind)
-    return kind if k == 0 else f"{kind}#{k + 1}"
-
-
 def _score(problem: Problem, fit: FitResult) -> tuple[np.ndarray, float]:
     r = problem.y - fit.predict(problem.signals)
     return r, _rmse(r[problem.split.validation])
@@ -374,7 +369,7 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
     for key in keys:
         cls = problem.library[key]
         present = sum(1 for t in current.terms if t.kind == key)
-        term = cls.for_signals(sig, _instance_name(key, current.terms))
+        term = cls.for_signals(sig, f"{key}#{present + 1}" if present else key)
         if present >= term.repeatable or not term.applicable(sig):
             continue
         c = _fit_candidate(problem, current, [term], [term.starts(sig, r_cur, sp.fit)],

@@ -48,13 +48,9 @@ def _orders_of(term: Term, fit: FitResult) -> dict[str, Any] | None:
     orders = term.orders(period)
     return {"harmonics": list(term.harmonics), "fundamental_period": period,
             "gear_ratio": term.gear_ratio, "orders": orders,
-            "integer_order": None if orders is None else [_integer_order(k) for k in orders]}
-
-
-def _integer_order(k: float) -> bool:
-    h = round(k)
-    return bool(h >= 1 and abs(k / h - 1.0) <= HARMONIC_REL_TOL)
-
+            "integer_order": None if orders is None else [
+                bool(round(k) >= 1 and abs(k / round(k) - 1.0) <= HARMONIC_REL_TOL)
+                for k in orders]}
 
 
 def summarize(result: CalibrationResult, source: str | None = None) -> dict[str, Any]:

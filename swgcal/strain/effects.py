@@ -100,10 +100,6 @@ class ChainBaseModel(FitTerm):
 # effects
 
 
-def _rms(v: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(v))))
-
-
 class _PerChannel(FitTerm):
     """A value per channel (:meth:`channel_values`, reported as ``derived_fmt`` in
     ``derived_unit``, on the ``estimable`` channels) and their RMS, ``rms_name``, the
@@ -125,7 +121,7 @@ class _PerChannel(FitTerm):
     def derived(self, coef, theta):
         v = self.channel_values(coef)
         out = {self.channel_param(c): float(v[c]) for c in range(5) if self.estimable[c]}
-        out[self.rms_name] = _rms(v[self.estimable])
+        out[self.rms_name] = float(np.sqrt(np.mean(np.square(v[self.estimable]))))
         return out
 
     def derived_units(self):
