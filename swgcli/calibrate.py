@@ -160,12 +160,8 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     Parameters
     ----------
     cfg : DictConfig
-        Composed ``conf/calibrate.yaml``: ``measured`` (a friction CSV, kind 1, or a
-        schema-v1 strain data-set directory, kind 2), ``out_dir``, ``base model``,
-        ``gear_ratio``, ``accel_window``, ``split`` (friction only), ``selection``,
-        ``figures``, ``logger``. Parses them, calls :func:`swgcal.build_problem`,
-        :func:`swgcal.calibrate` and :func:`swgcal.write_outputs`,
-        and logs the run.
+        Composed ``conf/calibrate.yaml`` (:class:`CalibrateApp`); the steps are
+        :func:`swgcal.build_problem`, :func:`swgcal.calibrate`, :func:`swgcal.write_outputs`.
 
     Returns
     -------
@@ -175,11 +171,8 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
 
     Raises
     ------
-    swgcal.MeasuredDataError
-        ``measured`` is neither a friction CSV nor a data-set directory.
-    ValueError
-        ``out_dir`` holds a file this project cannot show it wrote (named; before any
-        work, :func:`swgsim.files.ownership.check`); the app's own earlier output is replaced.
+    swgcal.MeasuredDataError, ValueError
+        Before any work, as :func:`check_inputs`; the app's own earlier output is replaced.
     """
     measured, out_dir, kind = check_inputs(cfg)
     options, selection = options_from_config(
