@@ -607,6 +607,8 @@ def refit_final(result: CalibrationResult, cur: FitResult, meta: dict[str, Any],
 
     Parameters
     ----------
+    result : CalibrationResult
+        What :func:`select_effects` returned.
     cur : FitResult
         The changed model, fitted on the fit samples.
     meta : dict
