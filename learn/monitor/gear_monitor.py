@@ -471,7 +471,9 @@ class GearMonitor:
         ``recommission_load``): a point's windows beyond its load range gather, in a row,
         until as many as commissioning gave its normal behaviour recommission it
         (:meth:`~learn.monitor.normal.NormalBehaviour.recommission`); a window back inside
-        the range clears its point's, an alarm every point's (the change may be a fault).
+        the range clears its point's, an alarm every point's (the change may be a fault);
+        a window whose features could not be brought to the reference condition (NaN
+        where its temperature reading dropped out) is neither gathered nor clears.
         Returns the window after which a point was recommissioned (the monitor's normal
         behaviour has changed from the next on), the point's row and whether it was
         relearnt (:meth:`_recommission`), or None. ``ref``: the windows' features at the
@@ -487,7 +489,7 @@ class GearMonitor:
                     return None
             elif not loaded[i]:
                 self.learning.pop(k, None)
-            else:
+            elif np.isfinite(ref[i]).all():  # a lost reading's window is no evidence
                 buf = self.learning.setdefault(k, [])
                 buf.append((ref[i], float(torque[i])))
                 if len(buf) >= self.normal.count[k]:

@@ -447,6 +447,35 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     np.testing.assert_array_equal(a.normal.torque_range, b.normal.torque_range)
 
 
+def test_a_window_without_its_reference_features_is_not_gathered_for_recommissioning(
+        tiny_eval, tiny_banks):
+    """A window whose features could not be brought to the reference condition (NaN where
+    its temperature reading dropped out) is no evidence of a point's new normal: it is
+    neither gathered nor clears what was gathered. Gathered, three such windows of 120
+    gave a relearnt point a NaN mean, and the naming's least squares failed
+    (LinAlgError: robot_joint, gear 3 held out, family ``all``, scored seeds)."""
+    from learn.monitor.gear_monitor import GearMonitor
+    from learn.monitor.normal import OUTSIDE_LOAD, Conditions
+    from learn.monitor.rule import RuleConfig
+    from learn.monitor.training import features_of
+    from swgsim.datasets.life import LifeSimulator
+
+    p, banks = tiny_banks
+    f, pts, meta = features_of(LifeSimulator(p, 3, _heavier_tool_life(), banks[3]), 0, 420)
+    cond = Conditions.of(meta)
+    mon = GearMonitor(tiny_eval["model"], RuleConfig(design_hours=1.0), 1.0, seed=5)
+    mon.commission(f[:240], pts[:240], cond[:240])
+    k, nb = 1, mon.normal
+    w = 240 + np.flatnonzero((pts[240:] == nb.points[k]).all(axis=1))
+    n = int(nb.count[k])
+    ref = nb.reference(f[w], pts[w], cond[w])[np.arange(n + 3) % len(w)]
+    ref[[5, 6, 7]] = np.nan
+    torque = np.full(n + 3, 1.1 * nb.points[k, 1])
+    ev = mon._learn(np.full(n + 3, k), np.full(n + 3, OUTSIDE_LOAD), ref, torque, [], False)
+    assert ev is not None and ev[:2] == (n + 2, k)
+    assert np.isfinite(nb.mean[k]).all() and np.isfinite(nb.std[k]).all()
+
+
 def test_beyond_the_load_range_only_the_novelty_scores():
     """A window whose acting load commissioning did not see at its point is scored by the
     novelty alone (the widened spread bounds the z-scores' size, not their direction);
