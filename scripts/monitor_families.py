@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import os
 import sys
 import time
 
@@ -43,6 +44,7 @@ typed = lazy_module("swgsim.base.typed")
 swgcli = lazy_module("swgcli")
 plans = lazy_module("swgsim.datasets.plan")
 records = lazy_module("swgsim.datasets.records")
+ownership = lazy_module("swgsim.files.ownership")
 
 
 def parse(argv: list[str] | None = None) -> argparse.Namespace:
@@ -67,6 +69,9 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--trace", default=None, metavar="CSV",
                     help="a measured warm-up (UR3 CobotOps format): adds the family "
                          "'trace' (its joints' rises, scaled, and a friction law drawn)")
+    ap.add_argument("--out", default=None, metavar="DIR",
+                    help="also write each family's rows: DIR/<family>_results.csv and "
+                         "DIR/<family>_false_alarms.csv (as the evaluation's)")
     ap.add_argument("--study", action="append", default=[], metavar="KEY=VALUE",
                     help="a field of MonitorStudyConfig, the value as JSON (e.g. "
                          "interval_min=2, faults='[\"eccentric_wg\"]')")
@@ -124,9 +129,9 @@ def setup(args: argparse.Namespace):
     return p, cfg, train, fams, list(seeds)
 
 
-def summary(rows: list[dict], fa: list[dict]) -> dict:
+def summary(rows: list[dict], fa: list[dict], cfg) -> dict:
     """One family's row of the table from its result and false-alarm rows (the
-    monitor's)."""
+    monitor's); ``cfg`` the study (the lives' drawn conditions)."""
     r = pd.DataFrame(rows)
     r = r[r.detector == "monitor"]
     a = pd.DataFrame(fa)
@@ -140,7 +145,25 @@ def summary(rows: list[dict], fa: list[dict]) -> dict:
             "growing_detected": f"{int(grow.detected.astype(bool).sum())}/{len(grow)}",
             "median_ttd_h": float(det.time_to_detect_h.median()) if len(det) else np.nan,
             "named_right_1h": float((det.fault_after_1h == det.fault).mean())
-            if len(det) else np.nan}
+            if len(det) else np.nan,
+            "sensor_reported_h": sensor_delays(a, cfg)}
+
+
+def sensor_delays(fa, cfg) -> str:
+    """The healthy lives whose temperature sensor failed (stuck, drifting, dropped out)
+    before their end: how many named it, and the longest operating hours from its failure
+    to the first alarm naming it, e.g. ``"2/3, 0.35"`` (``"-"``: no such life)."""
+    delays = []
+    for row in fa.itertuples(index=False):
+        ts = study.life_conditions(cfg, row.nuisance, int(row.seed)).temperature_sensor
+        end = cfg.commissioning_h + row.healthy_hours
+        if ts is not None and ts.fault != "none" and ts.fault_hour < end:
+            delays.append(float(row.temperature_sensor_h) - ts.fault_hour)
+    if not delays:
+        return "-"
+    d = np.asarray(delays)
+    named = d[np.isfinite(d)]
+    return f"{named.size}/{d.size}, {named.max():.2f}" if named.size else f"0/{d.size}"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -161,8 +184,13 @@ def main(argv: list[str] | None = None) -> int:
         t1 = time.perf_counter()
         rows, fa, _ = evaluate.evaluate_gear(p, banks, args.gear, model, cfg, args.dataset,
                                              study.FAMILY_PREFIX + fam, seeds)
-        table.append({"family": fam, **summary(rows, fa),
+        table.append({"family": fam, **summary(rows, fa, cfg),
                       "wall_s": time.perf_counter() - t1})
+        if args.out is not None:
+            os.makedirs(args.out, exist_ok=True)
+            for name, part in (("results", rows), ("false_alarms", fa)):
+                ownership.atomic_write_bytes(os.path.join(args.out, f"{fam}_{name}.csv"),
+                                             pd.DataFrame(part).to_csv(index=False).encode())
         row = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
                         for k, v in table[-1].items() if k != "family")
         print(f"  {fam}: {row}", flush=True)  # each family as it ends: a long run shows

@@ -228,9 +228,10 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
     """The monitor (and the per-window rule and ``always``) on every life of held-out gear
     ``g`` for every seed, under a nuisance of ``cfg.nuisances``, a family
     (``family:<key>``) or none: result rows, false-alarm rows (every alarm, the gear-fault
-    alarms among them, the advisories) and, without a nuisance, the rows of the trade-off
-    curve (:func:`_curve_healthy`, :func:`_curve_fault`). ``seeds`` None: ``cfg.seeds``,
-    and for a family ``cfg.scored_seeds``."""
+    alarms among them, the advisories, the hour of the first alarm naming the temperature
+    sensor, ``temperature_sensor_h``, NaN: none) and, without a nuisance, the rows of the
+    trade-off curve (:func:`_curve_healthy`, :func:`_curve_fault`). ``seeds`` None:
+    ``cfg.seeds``, and for a family ``cfg.scored_seeds``."""
     rows, fa_rows, curve = [], [], []
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     if seeds is None:
@@ -248,7 +249,8 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
                         "sensor_fault_alarms": sum(a.kind == "sensor_fault" for a in named),
                         "unexplained_changes": sum(a.kind == "unexplained_change"
                                                    for a in named),
-                        "advisories": len(advisories(tr, mon))})
+                        "advisories": len(advisories(tr, mon)),
+                        "temperature_sensor_h": np.nan if lost_h is None else float(lost_h)})
         fa_rows += [{**key, "detector": d, "healthy_hours": hours_h, "false_alarms": n}
                     for d, n in (("per_window", int(_per_window(tr.log_proba).sum())),
                                  ("always", len(tr.score)))]

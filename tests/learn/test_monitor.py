@@ -175,6 +175,7 @@ def test_planted_step_fault_detected_and_named(tiny_eval):
     assert sen.bridge_named == sen.bridge and sen.bridge in {f"s{i}" for i in range(5)}
     fa = pd.DataFrame(tiny_eval["false_alarms"]).set_index("detector")
     assert fa.loc["monitor", "false_alarms"] == 0
+    assert pd.isna(fa.loc["monitor", "temperature_sensor_h"])  # no sensor named
     assert fa.loc["always", "false_alarms"] == 360
 
 
