@@ -414,3 +414,16 @@ def test_a_joint_whose_sensor_never_reads_is_monitored_without_it(model, day, fa
         assert gear == []
     else:
         assert [a.fault for a in gear] == ["eccentric_wg"] and 40.0 <= gear[0].hour <= 41.0
+
+
+def test_a_reading_lost_within_the_hour_after_a_gear_fault_alarm_leaves_its_name(model, day):
+    """An eccentric WG from 40 h and the temperature sensor dropping out at 40.3 h, inside
+    the hour after the fault's alarm that names it (``confirm_h``): the naming's fits see
+    windows without a reading (NaN) among those with one, and the fault is still named."""
+    ds = _day_with(day, FrictionLaw("linear", 0.8),
+                   TemperatureSensor(fault="dropout", fault_hour=40.3),
+                   FaultOnset("eccentric_wg", 40.0, 0.1), hours=42.0)
+    res = monitor_stream(ds, model, RuleConfig(), source="day")
+    gear = [a for a in res.alarms if not a.sensor_fault]
+    assert gear and gear[0].fault == "eccentric_wg" and 40.0 <= gear[0].hour <= 40.3
+    assert "temperature_sensor" in [a.fault for a in res.alarms]
