@@ -268,7 +268,7 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
             row = _fault_row(key, sim, fo, kind)
             if healthy_curve is not None:
                 _curve_fault(ftr, fo, before, healthy_curve, cfg, row, curve)
-            rows.append({**row, **_monitor_row(*_past_changes(fmon, sim, k0, life, lost), fo)})
+            rows.append({**row, **_monitor_row(*_past_changes(sim, k0, life), fo)})
             rows.append({**row, **_per_window_row("per_window", model.classes,
                                                   np.argmax(ftr.log_proba, axis=1), mm, fo)})
             rows.append({**row, "detector": "always", "detected": True, "time_to_detect_h": 0.0,
@@ -395,32 +395,55 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
     more windows; the CUSUMs and the friction factor start from ``start`` and
     ``friction_start`` (the healthy life's before the onset; None: the monitor's own).
     ``lost``: the temperature sensor has failed, the monitor goes on without its reading
-    (:func:`learn.monitor.stream.read_without`). Returns the monitor's trace, features,
-    operating points, metadata and conditions."""
+    (:func:`learn.monitor.stream.read_without`); from a window whose reading is missing
+    (NaN: it dropped out after the onset) it goes on so, its CUSUMs started anew, as
+    :func:`learn.monitor.stream.run_stream` does (that window's alarm naming the sensor,
+    which the life's own failure explains, is not the fault's). Returns the monitor's
+    trace, features, operating points, metadata and conditions, the monitor in force at
+    the end and whether the reading was lost by then."""
     traces, feats, pts, metas, conds = [], [], [], [], []
     first: dict[str, float | None] = {"monitor": None, "per_window": None}
     state, fstate = start, friction_start
     for a in range(k0, len(sim), CHUNK):
         f, p, m = features_of(sim, a, min(a + CHUNK, len(sim)))
         cond = Conditions.of(m)
-        cond = read_without(mon, f, p, cond, mon.friction) if lost else cond
-        t = mon.run(f, p, m["hour"], cond, latch=True, start=state, friction_start=fstate) \
-            if first["monitor"] is None else mon.score_only(f, p, m["hour"], cond, fstate)
-        fstate = None  # from the second chunk on, the monitor's own
-        if first["monitor"] is None and t.alarms:
-            first["monitor"] = float(t.hour[t.alarms[0]])
-        elif first["monitor"] is None:
-            state = t.cusums[-1]
-        bad = np.flatnonzero(_per_window(t.log_proba))
-        if first["per_window"] is None and bad.size:
-            first["per_window"] = float(t.hour[bad[0]])
-        traces.append(t), feats.append(f), pts.append(p), metas.append(m), conds.append(cond)
+        for w, lose in _reading_spans(cond, len(f), lost):
+            if lose:  # the reading lost at window w.start
+                lost, mon = True, reading_lost(mon)
+                state = 0.0 if first["monitor"] is None else state
+                fstate = traces[-1].state(len(traces[-1].hour) - 1) if traces else fstate
+            c = read_without(mon, f[w], p[w], cond[w], mon.friction) if lost else cond[w]
+            hours = m["hour"][w]
+            t = mon.run(f[w], p[w], hours, c, latch=True, start=state, friction_start=fstate) \
+                if first["monitor"] is None else mon.score_only(f[w], p[w], hours, c, fstate)
+            fstate = None  # from the next span on, the monitor's own
+            if first["monitor"] is None and t.alarms:
+                first["monitor"] = float(t.hour[t.alarms[0]])
+            elif first["monitor"] is None:
+                state = t.cusums[-1]
+            bad = np.flatnonzero(_per_window(t.log_proba))
+            if first["per_window"] is None and bad.size:
+                first["per_window"] = float(t.hour[bad[0]])
+            traces.append(t), feats.append(f[w]), pts.append(p[w]), conds.append(c)
+            metas.append({k: v[w] for k, v in m.items()})
         last = float(m["hour"][-1])
         if all(x is not None and last >= x + mon.confirm_h for x in first.values()):
             break
     meta = {k: np.concatenate([m[k] for m in metas]) for k in metas[0]}
     return (Trace.concat(traces), np.concatenate(feats), np.concatenate(pts), meta,
-            Conditions.concat(conds))
+            Conditions.concat(conds), mon, lost)
+
+
+def _reading_spans(cond: Conditions, n: int, lost: bool) -> list[tuple[slice, bool]]:
+    """A chunk's ``n`` windows as spans, each with whether the reading is lost at its
+    first window: before the chunk's first missing temperature reading and from it (one
+    span where none is missing, the reading is already lost, or there is none)."""
+    t = cond.temperature_c
+    miss = np.array([], int) if lost or t is None else np.flatnonzero(~np.isfinite(t))
+    if not miss.size:
+        return [(slice(0, n), False)]
+    j = int(miss[0])
+    return [(slice(j, n), True)] if j == 0 else [(slice(0, j), False), (slice(j, n), True)]
 
 
 def _benign(al: Alarm, cond: ConditionsConfig | None) -> bool:
@@ -437,14 +460,14 @@ def _benign(al: Alarm, cond: ConditionsConfig | None) -> bool:
             and sensor.fault_hour <= al.hour)
 
 
-def _past_changes(mon: GearMonitor, sim: LifeSimulator, k0: int, life: tuple, lost: bool):
-    """The monitor and a fault life's trace (with its windows, :func:`_fault_life`) from
-    its first alarm that is not the fault's (:func:`_benign`: a re-greasing's or a failed
-    temperature sensor's alarm, named so, is not the fault's detection): after such an
-    unexplained change the monitor goes on from the friction's new level, after the
-    temperature sensor's fault without the reading, as
+def _past_changes(sim: LifeSimulator, k0: int, life: tuple):
+    """The monitor and a fault life's trace (with its windows, :func:`_fault_life`'s
+    ``life``, from window ``k0``) from its first alarm that is not the fault's
+    (:func:`_benign`: a re-greasing's or a failed temperature sensor's alarm, named so, is
+    not the fault's detection): after such an unexplained change the monitor goes on from
+    the friction's new level, after the temperature sensor's fault without the reading, as
     :func:`learn.monitor.stream.run_stream` does."""
-    k, tr = k0, life[0]
+    k, tr, mon, lost = k0, life[0], life[5], life[6]
     while tr.alarms:
         a = tr.alarms[0]
         al = mon.diagnose(tr, a, *life[1:3], life[4])
@@ -458,8 +481,8 @@ def _past_changes(mon: GearMonitor, sim: LifeSimulator, k0: int, life: tuple, lo
             lost, mon = True, reading_lost(mon)
         k += a + 1
         life = _fault_life(mon, sim, k, 0.0, (fr, hour), lost=lost)
-        tr = life[0]
-    return mon, *life
+        tr, mon, lost = life[0], life[5], life[6]
+    return mon, *life[:5]
 
 
 def _monitor_row(mon, tr, ff, pp, mm, cond, fo) -> dict:

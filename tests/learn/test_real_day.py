@@ -427,3 +427,33 @@ def test_a_reading_lost_within_the_hour_after_a_gear_fault_alarm_leaves_its_name
     gear = [a for a in res.alarms if not a.sensor_fault]
     assert gear and gear[0].fault == "eccentric_wg" and 40.0 <= gear[0].hour <= 40.3
     assert "temperature_sensor" in [a.fault for a in res.alarms]
+
+
+def test_the_evaluation_goes_on_without_a_reading_lost_after_the_onset(model, day):
+    """learn.monitor.evaluate: a fault life whose temperature reading drops out after the
+    onset (an eccentric WG from 40 h, the reading lost at 40.1 h, before the alarm) goes on
+    without the reading from that window, as the stream does, and the fault is found and
+    named. Before, the life ran on with NaN readings and the naming's least squares met
+    them (LinAlgError: robot_joint, gear 3 held out, family sensor_dropout)."""
+    from learn.monitor.evaluate import _fault_life, _past_changes
+    from learn.monitor.gear_monitor import GearMonitor
+    from learn.monitor.normal import Conditions
+    from learn.monitor.training import features_of
+
+    p, bank = day
+    life = p.config.life
+    cond = dataclasses.replace(life.conditions, friction_law=FrictionLaw("linear", 0.8),
+                               temperature_sensor=TemperatureSensor(fault="dropout",
+                                                                    fault_hour=40.1))
+    sim = LifeSimulator(p, 3, dataclasses.replace(
+        life, hours=42.0, conditions=cond, fault=FaultOnset("eccentric_wg", 40.0, 0.1)), bank)
+    n_comm = int(round(life.commissioning_h * 60 / life.interval_min))
+    f, pts, meta = features_of(sim, 0, n_comm)
+    mon = GearMonitor(model, RuleConfig(), life.interval_min)
+    mon.commission(f, pts, Conditions.of(meta))
+    k0 = int(np.searchsorted(sim.schedule.hour, 40.0))
+    run = _fault_life(mon, sim, k0, 0.0, None)
+    assert run[6] and np.isfinite(run[4].temperature_c).all()  # lost; the laws' readings
+    mon, tr, *_ = _past_changes(sim, k0, run)
+    assert tr.alarms and 40.1 <= tr.hour[tr.alarms[0]] <= 41.0
+    assert mon.diagnose(tr, tr.alarms[0], *_[:2], _[3]).fault == "eccentric_wg"
