@@ -3,7 +3,8 @@
 
     python scripts/monitor_families.py [--dataset tiny_real_day] [--gear 3]
         [--seeds scored|design] [--n-seeds N] [--families warm_up all]
-        [--study interval_min=2] [--study nuisance_hours=100]
+        [--study interval_min=2] [--study nuisance_hours=100] [--out DIR]
+    python scripts/monitor_families.py --dataset robot_joint --read DIR
 
 Trains the diagnosis model on the data set's other gears (as the evaluation does,
 :func:`learn.monitor.training.train_model`) and lives the held-out gear through every
@@ -19,8 +20,12 @@ tests/learn/test_real_day.py trains) gets its training gears from ``--train-from
 
 Printed per family: the healthy lives' gear-fault alarms and advisories per 1000 h after
 commissioning, fault lives detected of lived (growing ones apart), the median time to
-detect [h], the share of detected faults named right an hour after the alarm, and the
-family's wall time [s]. A bad preset, gear, family or study key ends in one line (exit 2).
+detect [h], the share of detected faults named right an hour after the alarm, the same
+for the issue's target faults (eccentric WG, reduced damping, root and tip crack; the
+time to detect of their step onsets at the mildest severity), how many failed temperature
+sensors were named and the longest hours to it, and the family's wall time [s]. With
+``--out DIR`` every family's rows are written there; ``--read DIR`` prints their table
+again without running. A bad preset, gear, family or study key ends in one line (exit 2).
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ swgcli = lazy_module("swgcli")
 plans = lazy_module("swgsim.datasets.plan")
 records = lazy_module("swgsim.datasets.records")
 ownership = lazy_module("swgsim.files.ownership")
+report = lazy_module("learn.monitor_evaluation.report")
 
 
 def parse(argv: list[str] | None = None) -> argparse.Namespace:
@@ -72,6 +78,9 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--out", default=None, metavar="DIR",
                     help="also write each family's rows: DIR/<family>_results.csv and "
                          "DIR/<family>_false_alarms.csv (as the evaluation's)")
+    ap.add_argument("--read", default=None, metavar="DIR",
+                    help="print the table of rows an earlier run wrote with --out DIR "
+                         "(nothing is run; --study as that run's)")
     ap.add_argument("--study", action="append", default=[], metavar="KEY=VALUE",
                     help="a field of MonitorStudyConfig, the value as JSON (e.g. "
                          "interval_min=2, faults='[\"eccentric_wg\"]')")
@@ -131,7 +140,10 @@ def setup(args: argparse.Namespace):
 
 def summary(rows: list[dict], fa: list[dict], cfg) -> dict:
     """One family's row of the table from its result and false-alarm rows (the
-    monitor's); ``cfg`` the study (the lives' drawn conditions)."""
+    monitor's); ``cfg`` the study (the lives' drawn conditions). Beside every fault, the
+    issue's target faults (``report.GEAR_TARGET_FAULTS``: eccentric WG, reduced damping,
+    root and tip crack): detected of lived, the median time to detect of their step
+    onsets at the mildest severity, and the share named right an hour after the alarm."""
     r = pd.DataFrame(rows)
     r = r[r.detector == "monitor"]
     a = pd.DataFrame(fa)
@@ -139,6 +151,11 @@ def summary(rows: list[dict], fa: list[dict], cfg) -> dict:
     hours = float(a.healthy_hours.sum())
     det = r[r.detected.astype(bool)]
     grow = r[r.onset == "growing"]
+    t = r[r.fault.isin(report.GEAR_TARGET_FAULTS)]
+    step = t[t.onset == "step"]
+    mild = step[step.severity.abs() == step.groupby("fault").severity.transform(
+        lambda v: v.abs().min()).abs()]
+    t_det, mild_det = t[t.detected.astype(bool)], mild[mild.detected.astype(bool)]
     return {"gear_fault_alarms_per_1000h": 1000 * a.gear_fault_alarms.sum() / hours,
             "advisories_per_1000h": 1000 * a.advisories.sum() / hours,
             "detected": f"{len(det)}/{len(r)}",
@@ -146,6 +163,11 @@ def summary(rows: list[dict], fa: list[dict], cfg) -> dict:
             "median_ttd_h": float(det.time_to_detect_h.median()) if len(det) else np.nan,
             "named_right_1h": float((det.fault_after_1h == det.fault).mean())
             if len(det) else np.nan,
+            "targets_detected": f"{len(t_det)}/{len(t)}",
+            "mildest_step_ttd_h": float(mild_det.time_to_detect_h.median())
+            if len(mild_det) else np.nan,
+            "targets_named_right": float((t_det.fault_after_1h == t_det.fault).mean())
+            if len(t_det) else np.nan,
             "sensor_reported_h": sensor_delays(a, cfg)}
 
 
@@ -174,6 +196,8 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, KeyError) as e:
         print(f"monitor_families: error: {e}", file=sys.stderr)
         return 2
+    if args.read is not None:
+        return read_table(args.read, fams, cfg)
     t0 = time.perf_counter()
     banks = {g: records.record_bank(p, g) for g in [*train, args.gear]}
     model = training.train_model(p, banks, train, cfg)
@@ -194,10 +218,32 @@ def main(argv: list[str] | None = None) -> int:
         row = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
                         for k, v in table[-1].items() if k != "family")
         print(f"  {fam}: {row}", flush=True)  # each family as it ends: a long run shows
-    out = pd.DataFrame(table).set_index("family")
-    with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(out.round(3).to_string())
+    show(table)
     print(f"wall time {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def show(table: list[dict]) -> None:
+    """Print the families' rows as one table."""
+    out = pd.DataFrame(table).set_index("family")
+    with pd.option_context("display.width", 250, "display.max_columns", 20):
+        print(out.round(3).to_string())
+
+
+def read_table(folder: str, fams: list[str], cfg) -> int:
+    """The table of the families whose rows ``folder`` holds (``--out`` of an earlier
+    run); 2 where it holds none of them."""
+    table = []
+    for fam in fams:
+        paths = [os.path.join(folder, f"{fam}_{n}.csv") for n in ("results", "false_alarms")]
+        if all(os.path.isfile(q) for q in paths):
+            rows, fa = (pd.read_csv(q).to_dict("records") for q in paths)
+            table.append({"family": fam, **summary(rows, fa, cfg)})
+    if not table:
+        print(f"monitor_families: error: --read {folder}: no family's rows there "
+              f"(<family>_results.csv and <family>_false_alarms.csv)", file=sys.stderr)
+        return 2
+    show(table)
     return 0
 
 
