@@ -1,22 +1,11 @@
-"""Evaluation of the monitor: leave-one-gear-out over simulated gear lives.
-
-For each data set (a checked :class:`~swgsim.datasets.plan.DatasetPlan`) and held-out gear,
-the diagnosis model is trained on the other gears' lives
-(:func:`learn.monitor.training.train_model`); then, per seed, the held-out gear lives
-``healthy_hours`` of healthy operation (false alarms, counted with the CUSUM restarted
-after each) and, from the same commissioning, one life per fault, severity and onset kind
-(:func:`fault_lives`). A fault life is the healthy life up to its onset (same seed, so the
-same windows: its monitor state at the onset is the healthy life's) and the fault after
-it, for ``horizon_h`` hours. Nothing is chosen on the held-out gear: the model, its
-settings and the rule's threshold are fixed before.
-
-Compared side by side (:data:`COMPARED`): ``monitor`` (the conformal CUSUM,
-:mod:`.gear_monitor`); ``per_window`` (an alarm whenever one window is classified faulty
-by the same diagnosis model); ``always`` (an alarm at every window); and the per-window
-detectors of :mod:`.detectors` chosen by ``monitor.study.detectors``, each trained on the
-same lives and evaluated on its own (:func:`run_detectors`: its false alarms over the
-first ``detector_hours`` of each healthy life, its fault lives until an hour after its
-alarm), so that a detector added later is evaluated without the rest again.
+"""Evaluation of the monitor: leave-one-gear-out over simulated gear lives
+(docs/monitor.md, "The evaluation"). Per data set and held-out gear the diagnosis model
+is trained on the other gears' lives; per seed the held-out gear lives healthy (false
+alarms, the CUSUM restarted after each) and, from the same commissioning, once per fault,
+severity and onset kind, a fault life being the healthy life up to its onset. Nothing is
+chosen on the held-out gear. Compared side by side (:data:`COMPARED`): the monitor, the
+per-window rule, ``always`` and the per-window detectors of :mod:`.detectors`, each
+evaluated on its own (:func:`run_detectors`).
 """
 
 from __future__ import annotations
@@ -391,16 +380,13 @@ def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray
 def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
                 friction_start: tuple[float, float] | None, lost: bool = False):
     """A fault life from its onset, in chunks of windows, until ``confirm_h`` after the
-    monitor's alarm and the per-window rule's (or the horizon): what they need, and no
-    more windows; the CUSUMs and the friction factor start from ``start`` and
-    ``friction_start`` (the healthy life's before the onset; None: the monitor's own).
-    ``lost``: the temperature sensor has failed, the monitor goes on without its reading
-    (:func:`learn.monitor.stream.read_without`); from a window whose reading is missing
-    (NaN: it dropped out after the onset) it goes on so, its CUSUMs started anew, as
-    :func:`learn.monitor.stream.run_stream` does (that window's alarm naming the sensor,
-    which the life's own failure explains, is not the fault's). Returns the monitor's
-    trace, features, operating points, metadata and conditions, the monitor in force at
-    the end and whether the reading was lost by then."""
+    monitor's alarm and the per-window rule's (or the horizon); the CUSUMs and the
+    friction factor start from ``start`` and ``friction_start`` (the healthy life's before
+    the onset; None: the monitor's own). ``lost``: the temperature sensor has failed, the
+    monitor goes on without its reading (:func:`~.stream.read_without`), as it does from a
+    reading that drops out (NaN), its CUSUMs anew, as :func:`~.stream.run_stream` does.
+    Returns the trace, features, operating points, metadata and conditions, the monitor in
+    force at the end and whether the reading was lost by then."""
     traces, feats, pts, metas, conds = [], [], [], [], []
     first: dict[str, float | None] = {"monitor": None, "per_window": None}
     state, fstate = start, friction_start
@@ -435,15 +421,11 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
 
 
 def _reading_spans(cond: Conditions, n: int, lost: bool) -> list[tuple[slice, bool]]:
-    """A chunk's ``n`` windows as spans, each with whether the reading is lost at its
-    first window: before the chunk's first missing temperature reading and from it (one
-    span where none is missing, the reading is already lost, or there is none)."""
-    t = cond.temperature_c
-    miss = np.array([], int) if lost or t is None else np.flatnonzero(~np.isfinite(t))
-    if not miss.size:
-        return [(slice(0, n), False)]
-    j = int(miss[0])
-    return [(slice(j, n), True)] if j == 0 else [(slice(0, j), False), (slice(j, n), True)]
+    """A chunk's windows before its first missing reading and from it, each with whether
+    the reading is lost at its first window."""
+    t = None if lost else cond.temperature_c
+    j = int(np.argmin(np.isfinite(t))) if t is not None and not np.isfinite(t).all() else n
+    return [(w, w.start == j) for w in (slice(0, j), slice(j, n)) if w.stop > w.start]
 
 
 def _benign(al: Alarm, cond: ConditionsConfig | None) -> bool:
