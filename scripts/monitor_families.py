@@ -152,9 +152,7 @@ def summary(rows: list[dict], fa: list[dict], cfg) -> dict:
     det = r[r.detected.astype(bool)]
     grow = r[r.onset == "growing"]
     t = r[r.fault.isin(report.GEAR_TARGET_FAULTS)]
-    step = t[t.onset == "step"]
-    mild = step[step.severity.abs() == step.groupby("fault").severity.transform(
-        lambda v: v.abs().min()).abs()]
+    mild = report.mildest_steps(r)
     t_det, mild_det = t[t.detected.astype(bool)], mild[mild.detected.astype(bool)]
     return {"gear_fault_alarms_per_1000h": 1000 * a.gear_fault_alarms.sum() / hours,
             "advisories_per_1000h": 1000 * a.advisories.sum() / hours,

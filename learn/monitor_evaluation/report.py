@@ -192,8 +192,7 @@ def _real_day_figures(res: pd.DataFrame, fat: pd.DataFrame) -> list[tuple[str, s
         return out
     x = x.assign(detected=x.detected.astype(bool))
     det = x.groupby(["fault", "held_out_gear"]).detected.mean().min()
-    mild = x[x.severity.abs() == x.groupby("fault").severity.transform(
-        lambda v: v.abs().min())]
+    mild = mildest_steps(x)
     ttd = mild[mild.detected].groupby(["fault", "held_out_gear"]).time_to_detect_h.median()
     named = (x[x.detected].fault_after_1h == x[x.detected].fault).mean()
     return out + [("gear faults detected (worst fault and gear)", "1", float(det)),
@@ -333,13 +332,18 @@ def _save(fig, path: Path) -> Path:
     return save_figure(fig, path, 130)
 
 
+def mildest_steps(res: pd.DataFrame, by: tuple[str, ...] = ("fault",)) -> pd.DataFrame:
+    """The rows of the target gear faults' (:data:`GEAR_TARGET_FAULTS`) step-onset lives
+    at each fault's mildest severity (the smallest magnitude per ``by`` group)."""
+    x = res[res.fault.isin(GEAR_TARGET_FAULTS) & (res.onset == "step")]
+    return x[x.severity.abs() == x.groupby(list(by)).severity.transform(
+        lambda v: v.abs().min())]
+
+
 def _mildest_detected(res: pd.DataFrame) -> pd.DataFrame:
     """Share of the monitor's step-onset lives detected at each gear fault's mildest
     severity, per data set, nuisance and fault (all held-out gears and seeds)."""
-    x = res[(res.detector == "monitor") & (res.onset == "step")
-            & res.fault.isin(GEAR_TARGET_FAULTS)]
-    x = x[x.severity.abs() == x.groupby(["dataset", "fault"]).severity.transform(
-        lambda v: v.abs().min())]
+    x = mildest_steps(res[res.detector == "monitor"], ("dataset", "fault"))
     return x.assign(detected=x.detected.astype(bool)).groupby(
         ["dataset", "nuisance", "fault"], sort=False).detected.agg(["mean", "size"])
 
@@ -394,6 +398,7 @@ def real_day_figure(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path) -> list[
     return [p]
 
 
-__all__ = ["display", "false_alarm_table", "figures", "nuisance_table", "real_day_figure",
+__all__ = ["display", "false_alarm_table", "figures", "mildest_steps", "nuisance_table",
+           "real_day_figure",
            "smallest_detectable",
            "summary_table", "targets", "with_nuisance", "write_table"]
