@@ -20,8 +20,8 @@ from swgsim.gear.thermal import FRICTION_EXPONENT, REF_TEMP_C, VISCOSITY_COEFF_P
 from .features import N_HARMONICS
 
 __all__ = ["BLOCK", "CATALOGUE_RATE", "EFFICIENCY", "FRICTION_RATES", "MIN_SPREAD_K",
-           "SIGNIFICANT", "bridge_drift", "cools", "feature_slopes", "load_curves",
-           "loss_coefficients", "loss_model", "poly", "warm_up_directions"]
+           "SIGNIFICANT", "WARM_UP_AVERAGE", "bridge_drift", "cools", "feature_slopes",
+           "load_curves", "loss_coefficients", "loss_model", "poly", "warm_up_directions"]
 
 #: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
 BLOCK = N_HARMONICS + 2
@@ -38,6 +38,12 @@ FRICTION_RATES = np.linspace(np.log(0.3) / 20.0, 0.0, 121)
 CATALOGUE_RATE = -VISCOSITY_COEFF_PER_K * FRICTION_EXPONENT
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
+#: Consecutive windows of an operating point whose z-scores :func:`warm_up_directions`
+#: averages before it looks for directions: 7, as many as the running median of the
+#: temperature the bridges say (:data:`learn.monitor.sensor_check.VIRTUAL_WINDOWS`), which
+#: divides a window-to-window scatter's variance by 7 while a warm-up, slow, keeps its
+#: direction [choice; chosen on the design seeds, robot_joint gear 1, family ``sensor``].
+WARM_UP_AVERAGE = 7
 #: An amplitude enters the fit of its bridge's gain when its mean is this many standard
 #: deviations above zero (its log is then well defined).
 SIGNIFICANT = 20.0
@@ -296,42 +302,81 @@ def warm_up_directions(z: np.ndarray, inv: np.ndarray, k: int
     """Per operating point, the directions in which commissioning's z-scores varied
     together beyond noise, and their range: what a joint without a temperature reading
     saw its warm-ups do (the bridges' span and zero drift move every bridge alike, the
-    grease's viscosity the efficiency, module docstring of :mod:`.normal`).
+    grease's viscosity the efficiency, module docstring of :mod:`.normal`), and what
+    else moved its features together.
 
-    A direction counts where its eigenvalue of the windows' covariance lies above the
-    largest a covariance of independent unit-variance features has, the Marchenko-Pastur
-    edge (1 + sqrt(F / m))² for m windows of F features (V. A. Marchenko and L. A.
-    Pastur, Math. USSR-Sbornik 1(4), 1967; I. M. Johnstone, Ann. Statist. 29(2), 2001,
-    for the largest eigenvalue's spike): on the bench's joint without a sensor (gear 3,
-    family ``sensor``) the two largest were 3.3-5.3 against an edge of 3.1.
+    First, at most ``k`` directions of the windows themselves: those whose eigenvalue of
+    the windows' covariance lies above the largest a covariance of independent
+    unit-variance features has, the Marchenko-Pastur edge (1 + sqrt(F / m))² for m
+    windows of F features (V. A. Marchenko and L. A. Pastur, Math. USSR-Sbornik 1(4),
+    1967; I. M. Johnstone, Ann. Statist. 29(2), 2001, for the largest eigenvalue's spike):
+    on the bench's joint without a sensor (gear 3, family ``sensor``) the two largest were
+    3.3-5.3 against an edge of 3.1, the warm-ups. Then, in what those leave, at most ``k``
+    slow ones: the same test on running means of :data:`WARM_UP_AVERAGE` consecutive
+    windows of the point, edge (1 + sqrt(F' L / m))² / L (the overlapping means taken as
+    m / L independent ones, F' the features left). Behind a robot link the first are the
+    torque ripple, which scatters every bridge's orders 2 and 4 together from window to
+    window (one acting torque, its phase against the window's start drawn anew; robot_joint
+    gear 1, family ``sensor``, scored seed 0), larger than a warm-up: without the slow
+    ones every later cold start, which moves s1_h2, s3_h2 and the efficiency, was alarmed
+    as a root crack (docs/monitor.md, "Scored under every family"). Where no slow one
+    counts (a joint at a steady temperature) the result is the first alone, shape (P, k,
+    F), as before the slow ones were added. The range along a direction is that of the
+    windows themselves.
 
     Parameters
     ----------
     z : ndarray, shape (n, F)
         Commissioning's z-scores (features at the reference condition, standardised per
-        point).
+        point), each point's windows in time order.
     inv : ndarray of int, shape (n,)
         Each window's point.
     k : int
-        Most directions per point.
+        Most directions per point of each kind.
 
     Returns
     -------
     (ndarray, ndarray)
-        Directions, shape (P, k, F) (unit vectors; zero where fewer than k count), and
-        commissioning's range along each, shape (P, k, 2).
+        Orthonormal directions, shape (P, K, F), K = ``k`` plus the most slow ones a point
+        has (zero rows where a point has fewer), and commissioning's range along each,
+        shape (P, K, 2).
     """
     n_p, n_f = int(inv.max()) + 1, z.shape[1]
-    dirs, rng = np.zeros((n_p, k, n_f)), np.zeros((n_p, k, 2))
+    each = []  # per point: (first (j, F), slow (i, F))
     for p in range(n_p):
         zp = z[inv == p]
         m = len(zp)
         if m < 3:
+            each.append((np.zeros((0, n_f)), np.zeros((0, n_f))))
             continue
-        _, s, vt = np.linalg.svd(zp - zp.mean(axis=0), full_matrices=False)
-        edge = (1.0 + np.sqrt(n_f / m)) ** 2
-        for c in np.flatnonzero(s[:k] ** 2 / (m - 1) > edge):
-            u = zp @ vt[c]
-            dirs[p, c], rng[p, c] = vt[c], [u.min(), u.max()]
+        first = _beyond_noise(zp - zp.mean(axis=0), m, k)
+        rest = zp - (zp @ first.T) @ first  # in the complement of the first
+        avg = max(1, min(WARM_UP_AVERAGE, m // 3))
+        run = np.cumsum(np.vstack([np.zeros(n_f), rest]), axis=0)
+        means = (run[avg:] - run[:-avg]) / avg  # running means (m - avg + 1, F)
+        each.append((first, _beyond_noise(means - means.mean(axis=0), m / avg, k, avg,
+                                          n_f - len(first))))
+    n_k = k + max(len(slow) for _, slow in each)
+    dirs, rng = np.zeros((n_p, n_k, n_f)), np.zeros((n_p, n_k, 2))
+    for p, (first, slow) in enumerate(each):
+        if len(first) + len(slow) == 0:
+            continue
+        zp = z[inv == p]
+        for row, d in zip((*range(len(first)), *range(k, k + len(slow))), (*first, *slow),
+                          strict=True):
+            u = zp @ d
+            dirs[p, row], rng[p, row] = d, [u.min(), u.max()]
     return dirs, rng
+
+
+def _beyond_noise(x: np.ndarray, m: float, k: int, avg: int = 1, dim: int | None = None
+                  ) -> np.ndarray:
+    """At most ``k`` leading principal directions of ``x`` (rows: windows, or running
+    means of ``avg`` windows; centred) whose eigenvalue lies above the Marchenko-Pastur
+    edge (1 + sqrt(dim / m))² / avg of ``m`` independent windows' worth of ``dim``
+    unit-variance features, shape (j, F), j <= k."""
+    dim = x.shape[1] if dim is None else dim
+    _, s, vt = np.linalg.svd(x, full_matrices=False)
+    edge = (1.0 + np.sqrt(dim / m)) ** 2 / avg
+    return vt[:k][s[:k] ** 2 / (len(x) - 1) > edge]
 
