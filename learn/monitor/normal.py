@@ -88,8 +88,8 @@ class NormalConfig:
         efficiency is not judged then, the bridges are. Also after an unexplained change.
     warm_up_components : int
         Without a temperature reading at commissioning: at most this many directions in
-        which commissioning's z-scores at a point varied together beyond noise
-        (:func:`~.laws.warm_up_directions`), taken out of every window's z-scores within
+        which commissioning's z-scores at a point varied together beyond noise, and as
+        many slow ones beside them (:func:`~.laws.warm_up_directions`), taken out of every window's z-scores within
         the range commissioning saw along them (:attr:`NormalBehaviour.warm_dir`), in
         [0, 5]; 0: none. 2 [choice]: on the bench's joint without a sensor (gear 3,
         family ``sensor``, design seed 100) one direction left the hour after each cold
