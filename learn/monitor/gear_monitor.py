@@ -40,6 +40,7 @@ from .rule import (
     conformal_p,
     judged_bets,
     log_bets,
+    moved_features,
     normal_scores,
     run_cusums,
     threshold,
@@ -53,7 +54,6 @@ from .sensor_check import (
     fit_friction,
     fit_temperature,
     fit_temperature_drift,
-    moved_features,
 )
 
 #: One-sided level of the test whether commissioning's laws hold at a point's new load

@@ -89,13 +89,13 @@ class NormalConfig:
     warm_up_components : int
         Without a temperature reading at commissioning: at most this many directions in
         which commissioning's z-scores at a point varied together beyond noise, and as
-        many slow ones beside them (:func:`~.laws.warm_up_directions`), taken out of every window's z-scores within
-        the range commissioning saw along them (:attr:`NormalBehaviour.warm_dir`), in
-        [0, 5]; 0: none. 2 [choice]: on the bench's joint without a sensor (gear 3,
-        family ``sensor``, design seed 100) one direction left the hour after each cold
-        start at -1.1 to -1.6 σ on the second harmonic of bridges 1 and 3 and 5 alarms in
-        200 h; two left none, and both of each point's largest eigenvalues lay above the
-        noise's edge.
+        many slow ones beside them (:func:`~.laws.warm_up_directions`), taken out of
+        every window's z-scores within the range commissioning saw along them
+        (:attr:`NormalBehaviour.warm_dir`), in [0, 5]; 0: none. 2 [choice]: on the
+        bench's joint without a sensor (gear 3, family ``sensor``, design seed 100) one
+        direction left the hour after each cold start at -1.1 to -1.6 σ on the second
+        harmonic of bridges 1 and 3 and 5 alarms in 200 h; two left none, and both of
+        each point's largest eigenvalues lay above the noise's edge.
     """
 
     friction_track_h: float = 4.0

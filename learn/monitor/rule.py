@@ -267,7 +267,7 @@ class Alarm:
         bridge alone explains (:mod:`.sensor_check`).
     moved : list of [str, float]
         The features that moved most over the windows named from, with their mean
-        z-score [σ] (:func:`~.sensor_check.moved_features`): what the alarm saw.
+        z-score [σ] (:func:`moved_features`): what the alarm saw.
     """
 
     hour: float
@@ -304,6 +304,33 @@ class Alarm:
                 "moved": [list(m) for m in self.moved]}
 
 
+def moved_features(z: np.ndarray, names: list[str], k: int = 3) -> list[list]:
+    """Up to ``k`` features whose mean z-score over the windows lies farthest from zero,
+    at least 1 σ (the first always): what an alarm saw, whatever it is named (a gear
+    fault, a sensor's, an unexplained change).
+
+    Parameters
+    ----------
+    z : ndarray, shape (n, F)
+        The windows' z-scores against the gear's normal behaviour.
+    names : list of str
+        The features' names, F of them or more (:func:`learn.monitor.features.feature_names`).
+    k : int
+
+    Returns
+    -------
+    list of [str, float]
+        Name and mean z-score [σ], largest magnitude first.
+    """
+    ok = ~np.isnan(z)
+    with np.errstate(invalid="ignore"):  # a feature never read: NaN, as np.nanmean's
+        mean = (np.where(ok, z, 0.0).sum(axis=0) / ok.sum(axis=0) if len(z)
+                else np.zeros(z.shape[1]))
+    top = np.argsort(-np.abs(np.nan_to_num(mean)))[:k]
+    return [[names[j], round(float(mean[j]), 2)] for i, j in enumerate(top)
+            if i == 0 or abs(mean[j]) >= 1.0]
+
+
 __all__ = ["Alarm", "RuleConfig", "check_commissioning", "conformal_p", "judged_bets",
-           "log_bet", "log_bets", "log_shift", "min_calibration", "n_cusums", "normal_scores",
-           "run_cusums", "threshold"]
+           "log_bet", "log_bets", "log_shift", "min_calibration", "moved_features", "n_cusums",
+           "normal_scores", "run_cusums", "threshold"]

@@ -552,36 +552,9 @@ def _refined(normal: NormalBehaviour, feats, points, cond, friction, index, dt, 
                        float(combos[b, 1]))
 
 
-def moved_features(z: np.ndarray, names: list[str], k: int = 3) -> list[list]:
-    """Up to ``k`` features whose mean z-score over the windows lies farthest from zero,
-    at least 1 σ (the first always): what an alarm saw, whatever it is named (a gear
-    fault, a sensor's, an unexplained change).
-
-    Parameters
-    ----------
-    z : ndarray, shape (n, F)
-        The windows' z-scores against the gear's normal behaviour.
-    names : list of str
-        The features' names, F of them or more (:func:`learn.monitor.features.feature_names`).
-    k : int
-
-    Returns
-    -------
-    list of [str, float]
-        Name and mean z-score [σ], largest magnitude first.
-    """
-    ok = ~np.isnan(z)
-    with np.errstate(invalid="ignore"):  # a feature never read: NaN, as np.nanmean's
-        mean = (np.where(ok, z, 0.0).sum(axis=0) / ok.sum(axis=0) if len(z)
-                else np.zeros(z.shape[1]))
-    top = np.argsort(-np.abs(np.nan_to_num(mean)))[:k]
-    return [[names[j], round(float(mean[j]), 2)] for i, j in enumerate(top)
-            if i == 0 or abs(mean[j]) >= 1.0]
-
-
 __all__ = ["BLOCK", "DRIFT_MIN_K", "DRIFT_RATES", "FIT_MIN", "FIT_MIN_GAIN_RATE", "FIT_MIN_RATE",
            "FRICTION_FACTORS", "FRICTION_RATES", "FrictionFit", "REST_MAX", "SENSOR_P_MIN",
            "SensorFit", "TEMPERATURE_BEYOND_K", "TEMPERATURE_MIN_K", "TEMPERATURE_SENSOR",
            "TEMPERATURE_STEP_K", "TemperatureFit", "UNEXPLAINED_CHANGE", "VIRTUAL_WINDOWS",
            "best_temperature", "fit_bridge_faults", "fit_friction", "fit_sensor_faults",
-           "fit_temperature", "fit_temperature_drift", "moved_features", "virtual_temperature"]
+           "fit_temperature", "fit_temperature_drift", "virtual_temperature"]

@@ -618,10 +618,9 @@ def test_the_friction_fits_thresholds_are_the_chi2_quantiles_they_say():
 
 
 def test_an_alarm_says_which_features_moved():
-    """sensor_check.moved_features: the largest mean z-scores, at least 1 sigma, the first
+    """rule.moved_features: the largest mean z-scores, at least 1 sigma, the first
     always; event_line prints them after the alarm."""
-    from learn.monitor.rule import Alarm
-    from learn.monitor.sensor_check import moved_features
+    from learn.monitor.rule import Alarm, moved_features
     from learn.monitor.stream import event_line
 
     z = np.zeros((4, 5))
