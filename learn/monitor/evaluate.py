@@ -28,7 +28,7 @@ from .gear_monitor import GearMonitor, MaintenanceEvent, Trace
 from .model import DiagnosisModel
 from .normal import OUTSIDE_LOAD, Conditions
 from .rule import Alarm, judged_bets, run_cusums, threshold
-from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
+from .sensor_check import TEMPERATURE_SENSOR
 from .stream import adopt_change, advisories, read_without, reading_lost, run_stream
 from .study import MonitorStudyConfig, family_of, life_conditions
 from .training import (
@@ -39,6 +39,7 @@ from .training import (
     train_detectors,
     train_model,
 )
+from .unexplained import UNEXPLAINED_CHANGE
 
 pd = lazy_module("pandas")
 

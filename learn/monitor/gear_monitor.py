@@ -49,12 +49,11 @@ from .sensor_check import (
     REST_MAX,
     SENSOR_P_MIN,
     TEMPERATURE_SENSOR,
-    UNEXPLAINED_CHANGE,
     fit_bridge_faults,
-    fit_friction,
     fit_temperature,
     fit_temperature_drift,
 )
+from .unexplained import UNEXPLAINED_CHANGE, fit_friction
 
 #: One-sided level of the test whether commissioning's laws hold at a point's new load
 #: (:meth:`GearMonitor._recommission`): declared, not tuned.
@@ -629,8 +628,8 @@ class GearMonitor:
         (:func:`~.sensor_check.fit_temperature`, the same median p-value), named
         :data:`~.sensor_check.TEMPERATURE_SENSOR`, bridge None; or an even change of the
         friction that no gear fault gives and no maintenance declared
-        (:func:`~.sensor_check.fit_friction`), named
-        :data:`~.sensor_check.UNEXPLAINED_CHANGE`; of those the one that leaves the windows
+        (:func:`~.unexplained.fit_friction`), named
+        :data:`~.unexplained.UNEXPLAINED_CHANGE`; of those the one that leaves the windows
         most healthy; else the fault with the largest summed evidence (:meth:`evidence`
         rows ``ev``) and None. ``hours``: the windows' hours, for the friction's rate."""
         return self._name(ev, feats, points, cond, friction, hours)[:2]

@@ -392,7 +392,7 @@ class NormalBehaviour:
         """z-scores of the same windows at many friction factors, shape (m, n, F): equal to
         :meth:`z` of the windows repeated m times (``friction.ravel()`` the factor of each),
         at a fraction of its cost, for the friction fits
-        (:func:`learn.monitor.sensor_check.fit_friction`): a factor moves only the
+        (:func:`learn.monitor.unexplained.fit_friction`): a factor moves only the
         efficiency (its loss law, docs/monitor.md, "The normal behaviour's laws") and,
         beyond commissioning's range, its spread, so every other feature is corrected once.
 

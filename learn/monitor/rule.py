@@ -43,7 +43,8 @@ from swgsim.base.typed import allowed, check_range
 from swgsim.sensing.sensor_faults import is_sensor_fault
 
 from .normal import OUTSIDE_UNJUDGED
-from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
+from .sensor_check import TEMPERATURE_SENSOR
+from .unexplained import UNEXPLAINED_CHANGE
 
 special = lazy_module("scipy.special")
 
@@ -292,7 +293,7 @@ class Alarm:
     @property
     def kind(self) -> str:
         """``sensor_fault``, ``unexplained_change`` (an even change of the friction,
-        :func:`~.sensor_check.fit_friction`) or ``gear_fault``."""
+        :func:`~.unexplained.fit_friction`) or ``gear_fault``."""
         return ("sensor_fault" if self.sensor_fault else
                 "unexplained_change" if self.fault == UNEXPLAINED_CHANGE else "gear_fault")
 

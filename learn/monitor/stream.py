@@ -32,9 +32,10 @@ from .normal import (
     NormalConfig,
 )
 from .rule import Alarm, RuleConfig, check_commissioning
-from .sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE, virtual_temperature
+from .sensor_check import TEMPERATURE_SENSOR, virtual_temperature
 from .stream_figures import health_figure, prognosis_figure
 from .stream_prognosis import StreamPrognoses, StreamPrognosis, stream_prognoses, trained_duty
+from .unexplained import UNEXPLAINED_CHANGE
 
 #: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
 CONDITIONS = {OUTSIDE_TEMPERATURE: "temperature", OUTSIDE_LOAD: "load",
@@ -386,7 +387,7 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
     :func:`~learn.monitor.sensor_check.fit_temperature`), the monitor goes on without the
     reading (:func:`reading_lost`, :func:`read_without`). After an alarm named an
     unexplained change (an even change of the friction,
-    :func:`~learn.monitor.sensor_check.fit_friction`) the friction factor takes the fitted
+    :func:`~learn.monitor.unexplained.fit_friction`) the friction factor takes the fitted
     change and the monitor goes on from there (:func:`adopt_change`).
 
     Parameters

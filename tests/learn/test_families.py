@@ -20,8 +20,9 @@ from learn.monitor.families import (
     draw_conditions,
 )
 from learn.monitor.rule import Alarm
-from learn.monitor.sensor_check import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
+from learn.monitor.sensor_check import TEMPERATURE_SENSOR
 from learn.monitor.study import MonitorStudyConfig, life_conditions
+from learn.monitor.unexplained import UNEXPLAINED_CHANGE
 from swgsim.base.typed import check_tree
 from swgsim.gear.thermal import FRICTION_FORMS
 
