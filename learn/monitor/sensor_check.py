@@ -4,10 +4,10 @@ from being named as gear faults (the analytical redundancy of sensor fault isola
 :func:`fit_bridge_faults` and :func:`fit_sensor_faults` fit each one-bridge fault to the
 windows since the alarm (:class:`SensorFit`), judged window by window
 (:data:`SENSOR_P_MIN`) and on the other bridges together (:data:`REST_MAX`);
-:func:`fit_temperature` and :func:`fit_temperature_drift` test the joint's temperature
-sensor, :func:`virtual_temperature` replaces a failed one (an even change of friction, the
-other hypothesis: :mod:`.unexplained`). Design and source (Frank 1990): docs/monitor.md,
-"Naming a sensor fault" and "The monitor checks its temperature sensor".
+:func:`fit_temperature`, :func:`fit_temperature_drift` and :func:`still_reading` test the
+joint's temperature sensor, :func:`virtual_temperature` replaces a failed one (an even
+change of friction, the other hypothesis: :mod:`.unexplained`). Design and source (Frank
+1990): docs/monitor.md, "Naming a sensor fault" and "The monitor checks its temperature sensor".
 """
 
 from __future__ import annotations
@@ -82,6 +82,20 @@ TEMPERATURE_BEYOND_K = 20.0
 FIT_MIN_RATE = 16.26623619623813
 #: Windows of the running median of :func:`virtual_temperature` (odd).
 VIRTUAL_WINDOWS = 7
+#: Least time a temperature reading stays the same, to the bit, for :func:`still_reading`
+#: to judge it [h]. A working reading moves with its noise and the joint's duty: the UR3's
+#: six joint readings over a working day (UR3 CobotOps, Tyrovolas et al. 2024, CC BY 4.0),
+#: one a second at 0.0625 K, held one value for at most 85 readings (1.4 min;
+#: docs/monitor.md, "The monitor checks its temperature sensor") [choice: 15 minutes].
+STILL_H = 0.25
+#: Least range of the temperature the bridges and the efficiency say
+#: (:func:`virtual_temperature`) over such a run for the reading to be stuck [K]: twice
+#: :data:`TEMPERATURE_MIN_K` [choice]. At :data:`TEMPERATURE_MIN_K` itself the tiny real
+#: day's readings in whole kelvin, without noise, were taken for stuck (the virtual
+#: temperature's own scatter; tests/learn/test_real_day.py); at twice, not.
+STILL_MOVED_K = 2.0 * TEMPERATURE_MIN_K
+#: Windows :func:`still_reading` takes the virtual temperature of at once.
+STILL_CHUNK = 240
 
 
 @dataclass(frozen=True)
@@ -427,10 +441,64 @@ def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.n
     return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
 
 
+def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                  cond: Conditions, friction: float, hours: np.ndarray) -> int | None:
+    """The first window at which the temperature reading is stuck: it has stayed the same,
+    to the bit, for at least :data:`STILL_H` while the temperature the bridges and the
+    efficiency say (:func:`virtual_temperature`, at friction factor ``friction``) moved by
+    at least :data:`STILL_MOVED_K` since the run began (a frozen converter, a bus that
+    repeats its last value: a flat-line test, with the bridges telling a stuck reading from
+    a joint at a steady temperature read without noise). Judged without an alarm and
+    without the spreads: a reading stuck beyond commissioning's range is cheap in the
+    spread widened there (docs/monitor.md, "The monitor checks its temperature sensor").
+
+    Parameters
+    ----------
+    normal : NormalBehaviour
+    feats, points : ndarray, shapes (n, F), (n, 2)
+    cond : Conditions
+        The readings [°C] (NaN: none).
+    friction : float
+        The friction factor in force.
+    hours : ndarray, shape (n,)
+        Operating hours, increasing [h].
+
+    Returns
+    -------
+    int or None
+        The window's index (the running median's half-width after the first whose
+        virtual temperature has moved enough, within the run); None where no reading is
+        stuck, or the stream has no reading or the normal behaviour no temperature law.
+    """
+    t = cond.temperature_c
+    if t is None or not normal.temperature_law or not len(t):
+        return None
+    starts = np.flatnonzero(np.r_[True, t[1:] != t[:-1]])  # NaN: a run of its own
+    ends = np.r_[starts[1:], len(t)]
+    long = hours[ends - 1] - hours[starts] >= STILL_H
+    half = VIRTUAL_WINDOWS // 2
+    for s, e in zip(starts[long], ends[long], strict=True):
+        judged = s + int(np.searchsorted(hours[s:e], hours[s] + STILL_H))
+        lo, hi = np.inf, -np.inf
+        for a in range(s, e, STILL_CHUNK):
+            b = min(e, a + STILL_CHUNK)
+            w = slice(max(s, a - half), min(e, b + half))  # the running median's edges
+            v = virtual_temperature(normal, feats[w], points[w], cond.torque_nm[w], friction,
+                                    normal.index(points[w]))[a - w.start:b - w.start]
+            moved = (np.maximum.accumulate(np.maximum(v, hi))
+                     - np.minimum.accumulate(np.minimum(v, lo)))
+            hit = (moved >= STILL_MOVED_K) & (np.arange(a, b) >= judged)
+            if hit.any():
+                return min(e - 1, a + int(np.argmax(hit)) + half)
+            lo, hi = min(lo, float(v.min())), max(hi, float(v.max()))
+    return None
+
+
 __all__ = ["BLOCK", "DRIFT_MIN_K", "DRIFT_RATES", "FIT_MIN", "FIT_MIN_GAIN_RATE", "FIT_MIN_RATE",
            "REST_MAX", "SENSOR_P_MIN",
-           "SensorFit", "TEMPERATURE_BEYOND_K",
+           "STILL_CHUNK", "STILL_H", "STILL_MOVED_K", "SensorFit", "TEMPERATURE_BEYOND_K",
            "TEMPERATURE_MIN_K", "TEMPERATURE_SENSOR", "TEMPERATURE_STEP_K", "TemperatureFit",
            "VIRTUAL_WINDOWS",
            "best_temperature", "fit_bridge_faults", "fit_sensor_faults",
-           "fit_temperature", "fit_temperature_drift", "virtual_temperature"]
+           "fit_temperature", "fit_temperature_drift", "still_reading",
+           "virtual_temperature"]

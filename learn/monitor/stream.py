@@ -32,7 +32,7 @@ from .normal import (
     NormalConfig,
 )
 from .rule import Alarm, RuleConfig, check_commissioning
-from .sensor_check import TEMPERATURE_SENSOR, virtual_temperature
+from .sensor_check import TEMPERATURE_SENSOR, still_reading, virtual_temperature
 from .stream_figures import health_figure, prognosis_figure
 from .stream_prognosis import StreamPrognoses, StreamPrognosis, stream_prognoses, trained_duty
 from .unexplained import UNEXPLAINED_CHANGE
@@ -382,7 +382,8 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
                cond: Conditions) -> tuple[Trace, list[Alarm], GearMonitor]:
     """Monitor windows after commissioning, keep watching after every alarm, and go on
     without the temperature sensor where it fails: from the first window without a
-    reading (missing, dropped out), or after an alarm named
+    reading (missing, dropped out), from the first at which the reading is stuck
+    (:func:`~learn.monitor.sensor_check.still_reading`), or after an alarm named
     :data:`~learn.monitor.sensor_check.TEMPERATURE_SENSOR` (a stuck or drifting reading,
     :func:`~learn.monitor.sensor_check.fit_temperature`), the monitor goes on without the
     reading (:func:`reading_lost`, :func:`read_without`). After an alarm named an
@@ -411,6 +412,10 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         t = cond.temperature_c
         bad = np.array([], int) if t is None else np.flatnonzero(~np.isfinite(t[i0:]))
         stop = n if not bad.size else i0 + int(bad[0])
+        still = None if mon.reading_virtual else still_reading(
+            mon.normal, feats[i0:stop], points[i0:stop], cond[i0:stop],
+            mon.friction if fstart is None else fstart[0], hours[i0:stop])
+        stop = stop if still is None else i0 + still
         w = slice(i0, stop)
         tr = mon.run(feats[w], points[w], hours[w], cond[w], latch=False,
                      friction_start=fstart) if stop > i0 else None
