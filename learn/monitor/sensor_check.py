@@ -442,7 +442,8 @@ def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.n
 
 
 def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
-                  cond: Conditions, friction: float, hours: np.ndarray) -> int | None:
+                  cond: Conditions, friction: float, hours: np.ndarray
+                  ) -> tuple[int, int] | None:
     """The first window at which the temperature reading is stuck: it has stayed the same,
     to the bit, for at least :data:`STILL_H` while the temperature the bridges and the
     efficiency say (:func:`virtual_temperature`, at friction factor ``friction``) moved by
@@ -465,10 +466,11 @@ def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray
 
     Returns
     -------
-    int or None
-        The window's index (the running median's half-width after the first whose
-        virtual temperature has moved enough, within the run); None where no reading is
-        stuck, or the stream has no reading or the normal behaviour no temperature law.
+    (int, int) or None
+        The first window of the run of one reading, and the window at which it is found
+        stuck (the running median's half-width after the first whose virtual temperature
+        has moved enough, within the run); None where no reading is stuck, or the stream
+        has no reading or the normal behaviour no temperature law.
     """
     t = cond.temperature_c
     if t is None or not normal.temperature_law or not len(t):
@@ -489,7 +491,7 @@ def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray
                      - np.minimum.accumulate(np.minimum(v, lo)))
             hit = (moved >= STILL_MOVED_K) & (np.arange(a, b) >= judged)
             if hit.any():
-                return min(e - 1, a + int(np.argmax(hit)) + half)
+                return int(s), min(int(e) - 1, a + int(np.argmax(hit)) + half)
             lo, hi = min(lo, float(v.min())), max(hi, float(v.max()))
     return None
 

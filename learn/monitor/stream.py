@@ -382,8 +382,10 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
                cond: Conditions) -> tuple[Trace, list[Alarm], GearMonitor]:
     """Monitor windows after commissioning, keep watching after every alarm, and go on
     without the temperature sensor where it fails: from the first window without a
-    reading (missing, dropped out), from the first at which the reading is stuck
-    (:func:`~learn.monitor.sensor_check.still_reading`), or after an alarm named
+    reading (missing, dropped out), from the first at which the reading is found stuck
+    (:func:`~learn.monitor.sensor_check.still_reading`; an alarm raised while it was
+    already stuck and found so within the alarm's ``confirm_h`` is named the sensor's
+    fault), or after an alarm named
     :data:`~learn.monitor.sensor_check.TEMPERATURE_SENSOR` (a stuck or drifting reading,
     :func:`~learn.monitor.sensor_check.fit_temperature`), the monitor goes on without the
     reading (:func:`reading_lost`, :func:`read_without`). After an alarm named an
@@ -415,13 +417,16 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         still = None if mon.reading_virtual else still_reading(
             mon.normal, feats[i0:stop], points[i0:stop], cond[i0:stop],
             mon.friction if fstart is None else fstart[0], hours[i0:stop])
-        stop = stop if still is None else i0 + still
+        stop = stop if still is None else i0 + still[1]
+        stuck_h = np.inf if still is None else float(hours[stop]) - mon.confirm_h
         w = slice(i0, stop)
         tr = mon.run(feats[w], points[w], hours[w], cond[w], latch=False,
                      friction_start=fstart) if stop > i0 else None
         named, cut = [], False
         for a in [] if tr is None else tr.alarms:  # up to the first that changes the state
             named.append(mon.diagnose(tr, a, feats[w], points[w], cond[w]))
+            if still is not None and a >= still[0] and tr.hour[a] >= stuck_h:
+                named[-1] = _stuck(named[-1])
             if named[-1].fault in CHANGES_STATE:
                 cut = True
                 break
@@ -446,6 +451,16 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
                                                  rest.temperature_c is None else
                                                  np.full(stop, np.nan)), rest])
         i0 = stop
+
+
+def _stuck(alarm: Alarm) -> Alarm:
+    """``alarm``, raised while the reading was already stuck and found stuck within the
+    hour its name is decided in (``confirm_h``), named the temperature sensor's fault (no
+    severity), unless a bridge's fault named it."""
+    if alarm.sensor_fault and alarm.fault != TEMPERATURE_SENSOR:
+        return alarm
+    return dataclasses.replace(alarm, fault=TEMPERATURE_SENSOR, severity=np.nan,
+                               severity_low=np.nan, severity_high=np.nan, bridge=None)
 
 
 def adopt_change(mon: GearMonitor, alarm: Alarm, factor: float) -> float:

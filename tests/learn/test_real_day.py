@@ -210,6 +210,20 @@ def test_a_reading_stuck_beyond_commissionings_range_is_named_before_any_gear_fa
     assert 32.0 <= named[0]["hour"] <= 32.5
 
 
+def test_an_alarm_raised_while_the_reading_was_already_stuck_names_the_sensor(model, day):
+    """The reading stuck from 32.2 h, as the joint warms after the cold start at 32 h: an
+    alarm at 32.5 h, before the reading has been the same for 15 min, was named an
+    eccentric WG, the sensor found stuck 2 min later (stream._stuck off). Raised while
+    the reading was already stuck and found so within the hour its name is decided in
+    (confirm_h), it is named the temperature sensor's fault."""
+    ds = _day_with(day, FrictionLaw("linear", 0.8),
+                   TemperatureSensor(fault="stuck", fault_hour=32.2))
+    res = monitor_stream(ds, model, RuleConfig(), source="day")
+    named = [e for e in res.events() if e["kind"] in ("gear_fault", "sensor_fault")]
+    assert [(e["kind"], e["fault"]) for e in named] == [("sensor_fault", "temperature_sensor")]
+    assert 32.2 <= named[0]["hour"] <= 32.7
+
+
 def test_a_coarse_reading_without_noise_is_not_taken_for_a_stuck_one(model, healthy):
     """The day's readings in whole kelvin, without noise (a coarse readout): long runs of
     one value while the joint moves by less than a kelvin; the bridges' temperature moves
