@@ -28,6 +28,7 @@ from .normal import (
     OUTSIDE_FRICTION,
     OUTSIDE_LOAD,
     OUTSIDE_TEMPERATURE,
+    OUTSIDE_UNJUDGED,
     Conditions,
     NormalConfig,
 )
@@ -426,7 +427,7 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         for a in [] if tr is None else tr.alarms:  # up to the first that changes the state
             named.append(mon.diagnose(tr, a, feats[w], points[w], cond[w]))
             if still is not None and a >= still[0] and tr.hour[a] >= stuck_h:
-                named[-1] = _stuck(named[-1])
+                named[-1] = _sensor_named(named[-1])
             if named[-1].fault in CHANGES_STATE:
                 cut = True
                 break
@@ -439,7 +440,12 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         if stop == n:
             return Trace.concat(traces), alarms, mon
         fstart = None if tr is None else tr.state(len(tr.hour) - 1)
-        if cut and named[-1].fault == UNEXPLAINED_CHANGE:
+        undo = None if not cut or named[-1].fault != UNEXPLAINED_CHANGE else \
+            _drifting(mon, Trace.concat(traces), alarms, feats, points, hours, cond)
+        if undo is not None:  # a drifting reading, not the friction: the changes undone
+            alarms[-1] = _sensor_named(alarms[-1])
+            fstart = (fstart[0] / undo, fstart[1])
+        if cut and named[-1].fault == UNEXPLAINED_CHANGE and undo is None:
             fstart = (adopt_change(mon, named[-1], fstart[0]), fstart[1])
         else:
             if not cut:
@@ -453,10 +459,44 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         i0 = stop
 
 
-def _stuck(alarm: Alarm) -> Alarm:
-    """``alarm``, raised while the reading was already stuck and found stuck within the
-    hour its name is decided in (``confirm_h``), named the temperature sensor's fault (no
-    severity), unless a bridge's fault named it."""
+#: How far back an earlier unexplained change makes the next one recurring
+#: (:func:`_drifting`) [h]: a day, in which a drifting reading's ±0.5 K/h (the families'
+#: range, :mod:`learn.monitor.families`) reach 12 K [choice].
+RECUR_H = 24.0
+
+
+def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.ndarray,
+              points: np.ndarray, hours: np.ndarray, cond: Conditions) -> float | None:
+    """Where the unexplained change of ``alarms[-1]`` recurs within :data:`RECUR_H` of an
+    earlier one while the reading is in use: the windows since the earlier one's rise
+    named again (:meth:`GearMonitor.name`) with the friction as it was before it, the
+    changes taken since undone. Where the reading's drift
+    (:func:`~learn.monitor.sensor_check.fit_temperature_drift`) names them, the factor
+    the friction was taken to have changed by since (to divide out), else None: under a
+    steep friction law a drifting reading moves the efficiency before the bridges, and
+    each change taken hid a part of it (docs/monitor.md, "Scored under every family,
+    every held-out gear")."""
+    last = alarms[-1]
+    earlier = [a for a in alarms[:-1] if a.fault == UNEXPLAINED_CHANGE
+               and a.hour >= last.hour - RECUR_H]
+    if mon.reading_virtual or cond.temperature_c is None or not earlier:
+        return None
+    w = slice(earlier[0].rise_index, last.index + 1)
+    taken = np.ones(len(trace.hour))
+    for a in earlier:  # each taken from the window after its alarm
+        taken[a.index + 1:] *= 1.0 + a.severity
+    ev = mon.evidence(trace.log_proba[w], trace.op_index[w])
+    ev[(trace.outside[w] & OUTSIDE_UNJUDGED) != 0] = 0.0
+    fault, _ = mon.name(ev, feats[w], points[w], cond[w], trace.friction[w] / taken[w],
+                        hours[w])
+    return float(taken[-1]) if fault == TEMPERATURE_SENSOR else None
+
+
+def _sensor_named(alarm: Alarm) -> Alarm:
+    """``alarm`` named the temperature sensor's fault (no severity), unless a bridge's
+    fault named it: raised while the reading was already stuck and found stuck within the
+    hour its name is decided in (``confirm_h``), or a recurring unexplained change that
+    the reading's drift explains (:func:`_drifting`)."""
     if alarm.sensor_fault and alarm.fault != TEMPERATURE_SENSOR:
         return alarm
     return dataclasses.replace(alarm, fault=TEMPERATURE_SENSOR, severity=np.nan,
