@@ -5,7 +5,8 @@ the physics and the sources).
 * the bridges' span and zero drift per K (:func:`bridge_drift`) and each feature's own
   slope per K left after them (:func:`feature_slopes`);
 * the loss torque's law A_n exp(θ (T − 20 °C)) + B_n τ per input speed, θ learnt where
-  commissioning saw the joint cool (:func:`loss_model`, :func:`cools`);
+  commissioning saw the joint cool (:func:`loss_model`, :func:`cools`), over a single
+  warm-up bounded by it and kept with its bounds;
 * the load curves: quadratics in the acting torque at each speed (:func:`load_curves`);
 * without a temperature reading, the directions in which commissioning's warm-ups moved
   the z-scores at each point (:func:`warm_up_directions`).
@@ -15,11 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from swgsim.gear.thermal import FRICTION_EXPONENT, REF_TEMP_C, VISCOSITY_COEFF_PER_K
+from swgsim.gear.thermal import REF_TEMP_C
 
 from .features import N_HARMONICS
 
-__all__ = ["BLOCK", "CATALOGUE_RATE", "EFFICIENCY", "FRICTION_RATES", "MIN_SPREAD_K",
+__all__ = ["BLOCK", "EFFICIENCY", "FRICTION_RATES", "MIN_SPREAD_K",
            "SIGNIFICANT", "WARM_UP_AVERAGE", "bridge_drift", "cools", "feature_slopes",
            "load_curves", "loss_coefficients", "loss_model", "poly", "warm_up_directions"]
 
@@ -33,9 +34,6 @@ EFFICIENCY = 5 * BLOCK
 #: :class:`swgsim.gear.thermal.FrictionLaw`), in steps of 0.0005 1/K (about 1 % at 40 °C),
 #: refined between them; learnt from the joint's own windows, not the catalogue's law.
 FRICTION_RATES = np.linspace(np.log(0.3) / 20.0, 0.0, 121)
-#: θ of the catalogue's viscosity law (:func:`swgsim.gear.thermal.friction_scale`, −0.0233
-#: 1/K), used only where commissioning cannot learn the joint's own (:func:`cools`).
-CATALOGUE_RATE = -VISCOSITY_COEFF_PER_K * FRICTION_EXPONENT
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
 #: Consecutive windows of an operating point whose z-scores :func:`warm_up_directions`
@@ -151,12 +149,17 @@ def feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.nda
 
 
 def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
-                ops: np.ndarray, inv: np.ndarray) -> tuple[np.ndarray, float]:
+               ops: np.ndarray, inv: np.ndarray) -> tuple[np.ndarray, float, tuple | None]:
     """(A, B) per point and the joint's friction-temperature rate θ: the loss torque
     τ (1/η − 1) ≈ A exp(θ (T − 20 °C)) + B τ by least squares over the windows at the
     point's speed (module docstring of :mod:`.normal`), θ the one of
-    :data:`FRICTION_RATES` that fits commissioning best (refined between the best three);
-    :data:`CATALOGUE_RATE` where commissioning did not cool (:func:`cools`).
+    :data:`FRICTION_RATES` that fits commissioning best (refined between the best three).
+
+    Where commissioning did not cool (:func:`cools`) the rate that fits, θ_w, is not the
+    law's alone: a run-in lowers the loss while the joint warms, so the law is no steeper
+    than θ_w (θ_w <= θ <= 0; friction does not rise over commissioning on a sound joint).
+    Then θ_w is kept (what commissioning saw), and the laws at both bounds, fitted to the
+    same windows, are returned as its uncertainty.
 
     Parameters
     ----------
@@ -173,16 +176,15 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
 
     Returns
     -------
-    (ndarray, float)
-        A [N m] and B [-] per point, shape (P, 2); θ [1/K] (0 without temperature).
+    (ndarray, float, tuple or None)
+        A [N m] and B [-] per point, shape (P, 2); θ [1/K] (0 without temperature); where
+        θ is only bounded, the laws at its bounds, ((A, B), θ_w) and ((A, B), 0), else
+        None.
     """
     tq = np.abs(torque)
     loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
     if temp is None:
-        return loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], 0.0
-    if not cools(temp):  # one warm-up: a run-in would pass for the law; the catalogue's
-        rate = CATALOGUE_RATE
-        return loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)[0], rate
+        return loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], 0.0, None
 
     def fit(rate):
         return loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)
@@ -195,7 +197,10 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
         step = float(FRICTION_RATES[1] - FRICTION_RATES[0])
         rate += step * float(np.clip(0.5 * (sse[k - 1] - sse[k + 1]) / curv, -1.0, 1.0))
     rate = float(np.clip(rate, FRICTION_RATES[0], FRICTION_RATES[-1]))
-    return fit(rate)[0], rate
+    if cools(temp):
+        return fit(rate)[0], rate, None
+    coef = fit(rate)[0]  # one warm-up: what it showed, and the law's other bound
+    return coef, rate, ((coef, rate), (fit(0.0)[0], 0.0))
 
 
 def cools(temp: np.ndarray) -> bool:

@@ -206,6 +206,12 @@ class NormalBehaviour:
         advised as a friction change 11 times on a gear with none.
     friction_rate : float
         θ of the loss torque's temperature law [1/K] (:func:`~.laws.loss_model`).
+    loss_band : tuple or None
+        Where commissioning did not cool (:func:`~.laws.cools`) and θ is only bounded, the
+        laws at its bounds, ((A, B) per point shape (P, 2), θ) twice
+        (:func:`~.laws.loss_model`): the efficiency is judged in its spread widened by the
+        difference they make at the window's condition (:meth:`_law_spread`). None where
+        θ was learnt.
     warm_dir, warm_range : ndarray, shapes (P, K, F) and (P, K, 2), or None
         Without a temperature reading at commissioning: per point, the directions in
         which commissioning's z-scores varied together beyond noise (unit vectors; zero
@@ -239,6 +245,7 @@ class NormalBehaviour:
     slope: np.ndarray | None = None
     friction_range: np.ndarray = field(default_factory=lambda: np.ones(2))
     friction_rate: float = 0.0
+    loss_band: tuple | None = None
     warm_dir: np.ndarray | None = None
     warm_range: np.ndarray | None = None
     warm_torque: np.ndarray | None = None
@@ -276,10 +283,11 @@ class NormalBehaviour:
                                if temp is not None else [np.nan, np.nan] for k in range(n_p)])
         dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
         gain, zero = (bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
-        loss, rate = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
+        loss, rate, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops,
+                                      inv)
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
-                 np.bincount(inv, minlength=n_p), friction_rate=rate)
+                 np.bincount(inv, minlength=n_p), friction_rate=rate, loss_band=band)
         if use_t:
             nb.slope = feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
         warm = nb._temperature_corrected(feats, inv, dt)
@@ -384,6 +392,10 @@ class NormalBehaviour:
             u = ref[b, law] - self._corrected(feats[b], i[b], edge[b], fr[b])[:, law]
             spread = spread.copy()
             spread[b, law] = np.sqrt(spread[b, law] ** 2 + (kappa * u) ** 2)
+        w = self._law_spread(feats, i, cond, fr)
+        if w is not None:
+            spread = spread.copy()
+            spread[:, EFFICIENCY] = np.sqrt(spread[:, EFFICIENCY] ** 2 + w ** 2)
         return self._in_spread(ref - self.mean[i], i, spread, self._heavier(i, cond))
 
     def z_over_friction(self, feats: np.ndarray, points: np.ndarray,
@@ -427,6 +439,9 @@ class NormalBehaviour:
                                                         friction[:, b])
             u = ref[:, b, law] - at_edge[..., law]
             spread[:, b, law] = np.sqrt(spread[:, b, law] ** 2 + (kappa * u) ** 2)
+        w = self._law_spread(feats, i, cond, friction)
+        if w is not None:
+            spread[..., EFFICIENCY] = np.sqrt(spread[..., EFFICIENCY] ** 2 + w ** 2)
         dev = (ref - self.mean[i][None]).reshape(m * n, -1)
         z, _ = self._in_spread(dev, np.tile(i, m), spread.reshape(m * n, -1),
                                np.tile(self._heavier(i, cond), m))
@@ -646,13 +661,16 @@ class NormalBehaviour:
             out[:, :EFFICIENCY] -= self.slope[i, :EFFICIENCY] * dt[:, None]
         return out
 
-    def _loss(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
-        """Predicted loss torque at each window's load and temperature [N m]."""
+    def _loss(self, i: np.ndarray, cond: Conditions,
+              law: tuple[np.ndarray, float] | None = None) -> np.ndarray:
+        """Predicted loss torque at each window's load and temperature [N m], by the
+        loss law ``law`` ((A, B) per point, θ; None: commissioning's)."""
+        coef, rate = (self.loss, self.friction_rate) if law is None else law
         tq = np.abs(cond.torque_nm)
-        phi = (np.exp(self.friction_rate * (cond.temperature_c - REF_TEMP_C))
+        phi = (np.exp(rate * (cond.temperature_c - REF_TEMP_C))
                if cond.temperature_c is not None and np.isfinite(self.ref_temp).all()
                else np.ones(len(i)))
-        return self.loss[i, 0] * phi + self.loss[i, 1] * tq
+        return coef[i, 0] * phi + coef[i, 1] * tq
 
     def _corrected(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
                    friction: np.ndarray) -> np.ndarray:
@@ -678,20 +696,32 @@ class NormalBehaviour:
         return out
 
     def _efficiency(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
-                    friction: np.ndarray) -> np.ndarray:
+                    friction: np.ndarray, law: tuple[np.ndarray, float] | None = None
+                    ) -> np.ndarray:
         """The efficiency at the reference condition of its point with friction factors
-        ``friction`` (n,) or (m, n): its loss law's prediction at the window's load and
-        temperature taken out, the reference's put in; the shape of ``friction``."""
+        ``friction`` (n,) or (m, n): its loss law's prediction (``law``, :meth:`_loss`) at
+        the window's load and temperature taken out, the reference's put in; the shape of
+        ``friction``."""
         tq, t0 = np.abs(cond.torque_nm), np.abs(self.ref_torque[i])
         ref_cond = Conditions(t0, None if cond.temperature_c is None
                               else self.ref_temp[i])
-        pred = friction * self._loss(i, cond)
-        pred0 = self._loss(i, ref_cond)
+        pred = friction * self._loss(i, cond, law)
+        pred0 = self._loss(i, ref_cond, law)
         with np.errstate(divide="ignore", invalid="ignore"):
             eta_pred = np.where(tq > 0, tq / (tq + pred), 0.0)
             eta_ref = np.where(t0 > 0, t0 / (t0 + pred0), 0.0)
         return feats[:, EFFICIENCY] - eta_pred + eta_ref
 
+    def _law_spread(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
+                    friction: np.ndarray) -> np.ndarray | None:
+        """The difference the laws at θ's bounds (:attr:`loss_band`) make to the
+        efficiency at the reference condition, with friction factors ``friction`` (n,) or
+        (m, n): what commissioning could not learn, in the efficiency's spread; the shape
+        of ``friction``. None where θ was learnt or the windows have no temperature."""
+        if self.loss_band is None or cond.temperature_c is None:
+            return None
+        lo, hi = (self._efficiency(feats, i, cond, friction, law) for law in self.loss_band)
+        return np.abs(lo - hi)
 
 
 __all__ = ["BLOCK", "Conditions", "EFFICIENCY", "NormalBehaviour", "NormalConfig",

@@ -210,15 +210,16 @@ def test_the_friction_temperature_rate_is_learnt_from_commissioning(rate):
     inv = rng.integers(0, 3, 600)
     tq = ops[inv, 1]
     loss = 4.0 * np.exp(rate * (temp - 20.0)) + 0.1 * tq
-    coef, learnt = _loss_model(tq / (tq + loss), tq, temp, ops, inv)
-    assert learnt == pytest.approx(rate, abs=1e-4)
+    coef, learnt, band = _loss_model(tq / (tq + loss), tq, temp, ops, inv)
+    assert learnt == pytest.approx(rate, abs=1e-4) and band is None
     np.testing.assert_allclose(coef, [[4.0, 0.1]] * 3, rtol=1e-3)
 
 
-def test_over_a_single_warm_up_the_catalogues_law_is_kept_and_a_cold_start_lets_it_learn():
+def test_over_a_single_warm_up_the_law_is_bounded_not_assumed_and_a_cold_start_learns_it():
     """Over one warm-up a run-in would pass for the friction's temperature law (learnt
-    only after commissioning saw the joint cool, learn/monitor/normal.py)."""
-    from learn.monitor.laws import CATALOGUE_RATE
+    only after commissioning saw the joint cool, learn/monitor/laws.py): the rate that
+    fits the warm-up is kept as one bound of the law (a run-in only steepens it), 0 the
+    other, and no catalogue's law is taken (-0.0233 1/K, the simulator's)."""
     from learn.monitor.laws import loss_model as _loss_model
 
     hours = np.linspace(0.0, 8.0, 480)
@@ -227,10 +228,48 @@ def test_over_a_single_warm_up_the_catalogues_law_is_kept_and_a_cold_start_lets_
     ops = np.array([[2000.0, 10.0], [2000.0, 90.0]])
     inv = np.arange(480) % 2
     tq = ops[inv, 1]
-    for temp, want in ((warm, CATALOGUE_RATE), (day, -0.01)):
+    for temp in (warm, day):
         loss = 4.0 * np.exp(-0.01 * (temp - 20.0)) + 0.1 * tq
-        assert _loss_model(tq / (tq + loss), tq, temp, ops, inv)[1] == \
-            pytest.approx(want, abs=1e-4)
+        coef, rate, band = _loss_model(tq / (tq + loss), tq, temp, ops, inv)
+        assert rate == pytest.approx(-0.01, abs=1e-4)
+        np.testing.assert_allclose(coef, [[4.0, 0.1]] * 2, rtol=1e-3)
+        if temp is day:
+            assert band is None
+        else:
+            (c_w, r_w), (c_0, r_0) = band
+            assert (r_w, r_0) == (rate, 0.0) and np.array_equal(c_w, coef)
+            assert c_0[0, 0] < c_w[0, 0]  # the loss's mean over the warm-up, no law
+
+
+def test_a_law_only_bounded_widens_the_efficiency_spread_and_nothing_else():
+    """Commissioned over one warm-up whose friction falls with the temperature, the
+    efficiency is judged in a spread that holds what the law's bounds make of it
+    (NormalBehaviour.loss_band), more the farther the window's temperature from
+    commissioning's; the bridges' features keep their σ."""
+    rng = np.random.default_rng(11)
+    commanded = np.repeat(LOADS, 80)[np.argsort(rng.uniform(size=3 * 80))]
+    temp = 20.0 + 25.0 * (1.0 - np.exp(-np.arange(commanded.size) / 60.0))  # one warm-up
+
+    def windows(tq, t):
+        f = _features(tq, rng)
+        f[:, EFFICIENCY] = tq / (tq + A_LOSS * np.exp(-0.02 * (t - 20.0)) + B_LOSS * tq)
+        return f
+
+    points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
+    nb = NormalBehaviour.fit(windows(commanded, temp), points, Conditions(commanded, temp))
+    assert nb.friction_rate == pytest.approx(-0.02, abs=1e-3)
+    n = 12
+    p, i = points[:n], nb.index(points[:n])
+    near, cold = (nb.z_and_spread(windows(p[:, 1], np.full(n, t)), p,
+                                  Conditions(p[:, 1], np.full(n, t)))[1]
+                  for t in (float(nb.ref_temp.mean()), 24.0))
+    np.testing.assert_array_equal(cold[:, :EFFICIENCY], nb.std[i, :EFFICIENCY])
+    assert (cold[:, EFFICIENCY] > 2.0 * near[:, EFFICIENCY]).all()
+    assert (near[:, EFFICIENCY] >= nb.std[i, EFFICIENCY]).all()
+    bare = dataclasses.replace(nb, loss_band=None)
+    np.testing.assert_array_equal(bare.z_and_spread(
+        windows(p[:, 1], np.full(n, 24.0)), p, Conditions(p[:, 1], np.full(n, 24.0)))[1],
+        nb.std[i])
 
 
 def test_z_over_friction_equals_z_of_the_repeated_windows():
@@ -238,7 +277,8 @@ def test_z_over_friction_equals_z_of_the_repeated_windows():
     friction factor does not move corrected once) gives the same bits as the slow one,
     z of the windows repeated once per factor: with a temperature law, warm-up
     directions and windows beyond commissioning's loads and temperatures (the widened
-    spread), and without conditions."""
+    spread), without conditions, and with a friction law commissioning could not learn
+    (the efficiency's spread widened by its range's ends)."""
     rng = np.random.default_rng(5)
     commanded = np.repeat(LOADS, 80)
     temp = rng.uniform(20.0, 45.0, commanded.size)
@@ -253,11 +293,13 @@ def test_z_over_friction_equals_z_of_the_repeated_windows():
     acting = p[:, 1] * rng.uniform(0.95, 1.15, n)
     feats = _features(acting, rng)
     factors = np.exp(rng.uniform(-1.0, 1.0, (7, n)))
-    for cond in (Conditions(acting, rng.uniform(10.0, 60.0, n)), None):
-        fast = nb.z_over_friction(feats, p, cond, factors)
+    band = dataclasses.replace(nb, loss_band=((nb.loss * 1.3, -0.03), (nb.loss * 0.8, 0.0)))
+    for law, cond in ((nb, Conditions(acting, rng.uniform(10.0, 60.0, n))), (nb, None),
+                     (band, Conditions(acting, rng.uniform(10.0, 60.0, n)))):
+        fast = law.z_over_friction(feats, p, cond, factors)
         rep = np.tile(np.arange(n), len(factors))
-        slow = nb.z(feats[rep], p[rep], None if cond is None else cond[rep],
-                    factors.ravel()).reshape(fast.shape)
+        slow = law.z(feats[rep], p[rep], None if cond is None else cond[rep],
+                     factors.ravel()).reshape(fast.shape)
         assert np.array_equal(fast, slow)
     assert np.any(nb._edge(nb.index(p), Conditions(acting, None))[1])  # spread widened
 
