@@ -372,7 +372,9 @@ class NormalBehaviour:
         fitted at) widens its spread alike: behind a robot link a 10 % heavier tool left
         the efficiency 1.2 σ above the law's extrapolation (docs/monitor.md, "A real
         day"). The widening lasts until the point is recommissioned at its new load
-        (:meth:`recommission`).
+        (:meth:`recommission`). Where commissioning only bounded the friction's
+        temperature law (:attr:`loss_band`), the efficiency's spread also holds the
+        difference its bounds make (:meth:`_law_spread`).
 
         Raises
         ------
