@@ -4,9 +4,10 @@ the physics and the sources).
 
 * the bridges' span and zero drift per K (:func:`bridge_drift`) and each feature's own
   slope per K left after them (:func:`feature_slopes`);
-* the loss torque's law A_n exp(θ (T − 20 °C)) + B_n τ per input speed, θ learnt where
-  commissioning saw the joint cool (:func:`loss_model`, :func:`cools`), over a single
-  warm-up bounded by it and kept with its bounds;
+* the loss torque's law A_n φ(T) + B_n τ per input speed, the friction factor's law φ
+  (:class:`TemperatureLaw`: exponential, linear or saturating) learnt where commissioning
+  saw the joint cool (:func:`loss_model`, :func:`cools`), over a single warm-up bounded
+  by it and kept with its bounds;
 * the load curves: quadratics in the acting torque at each speed (:func:`load_curves`);
 * without a temperature reading, the directions in which commissioning's warm-ups moved
   the z-scores at each point (:func:`warm_up_directions`).
@@ -14,26 +15,35 @@ the physics and the sources).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from swgsim.gear.thermal import REF_TEMP_C
 
 from .features import N_HARMONICS
 
-__all__ = ["BLOCK", "EFFICIENCY", "FRICTION_RATES", "MIN_SPREAD_K",
-           "SIGNIFICANT", "WARM_UP_AVERAGE", "bridge_drift", "cools", "feature_slopes",
-           "load_curves", "loss_coefficients", "loss_model", "poly", "warm_up_directions"]
+__all__ = ["BLOCK", "EFFICIENCY", "FACTOR_FLOOR", "LAW_CURVATURES", "LAW_FACTORS_40C",
+           "MIN_SPREAD_K", "SIGNIFICANT", "TemperatureLaw", "WARM_UP_AVERAGE", "best_law",
+           "bridge_drift", "cools", "feature_slopes", "load_curves", "loss_coefficients",
+           "loss_model", "poly", "warm_up_directions"]
 
 #: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
 BLOCK = N_HARMONICS + 2
 EFFICIENCY = 5 * BLOCK
 
-#: Rates θ [1/K] of the friction's temperature law exp(θ (T − 20 °C)) that commissioning
-#: chooses from (:func:`loss_model`): the friction at 40 °C 0.3 to 1 times that at 20 °C,
-#: every ratio a smooth monotone law can have there (0.63 the catalogue's,
-#: :class:`swgsim.gear.thermal.FrictionLaw`), in steps of 0.0005 1/K (about 1 % at 40 °C),
-#: refined between them; learnt from the joint's own windows, not the catalogue's law.
-FRICTION_RATES = np.linspace(np.log(0.3) / 20.0, 0.0, 121)
+#: Curvatures b [1/K] of the friction factor's law (:class:`TemperatureLaw`) that
+#: commissioning chooses from (:func:`best_law`): saturating (b < 0, the factor levelling
+#: off as the grease thins), linear (b = 0) and exponential (b > 0, the viscosity law's
+#: form where a = b) alike, in steps of 0.0025 1/K.
+LAW_CURVATURES = np.linspace(-0.15, 0.05, 81)
+#: The factor at 40 °C, φ(40 °C), that sets a law's slope a for each curvature: 0.3 to 1,
+#: every ratio a sound joint's friction has there (0.63 the catalogue's viscosity law,
+#: Harmonic Drive engineering data: no-load running torque over temperature), in steps
+#: of 0.0025 (learnt from the joint's own windows, not the catalogue's law).
+LAW_FACTORS_40C = np.linspace(0.3, 1.0, 281)
+#: Least friction factor a law may give within commissioning's temperatures [-].
+FACTOR_FLOOR = 0.05
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
 #: Consecutive windows of an operating point whose z-scores :func:`warm_up_directions`
@@ -45,6 +55,47 @@ WARM_UP_AVERAGE = 7
 #: An amplitude enters the fit of its bridge's gain when its mean is this many standard
 #: deviations above zero (its log is then well defined).
 SIGNIFICANT = 20.0
+
+
+def _growth(b: np.ndarray | float, x: np.ndarray | float) -> np.ndarray:
+    """(exp(b x) − 1) / b, x where b = 0 (the law's shape, rising with x for any b)."""
+    b, x = np.asarray(b, float), np.asarray(x, float)
+    safe = np.where(b == 0.0, 1.0, b)
+    return np.where(b == 0.0, x, np.expm1(b * x) / safe)
+
+
+@dataclass(frozen=True)
+class TemperatureLaw:
+    """The friction factor's temperature law commissioning learnt (:func:`best_law`):
+    φ(T) = 1 + a (exp(b ΔT) − 1) / b with ΔT = T − 20 °C (1 + a ΔT where b = 0): one
+    monotone family that holds the exponential (viscosity) law (a = b), the linear one
+    (b = 0) and saturating ones (b < 0). Beyond commissioning's temperatures [lo, hi]
+    it is continued along its tangent (no curvature commissioning did not see), and
+    it never falls under :data:`FACTOR_FLOOR`.
+
+    Parameters
+    ----------
+    a : float
+        Slope at 20 °C [1/K] (negative: friction falls as the joint warms).
+    b : float
+        Curvature [1/K].
+    lo, hi : float
+        Commissioning's least and greatest temperature [°C].
+    """
+
+    a: float = 0.0
+    b: float = 0.0
+    lo: float = -np.inf
+    hi: float = np.inf
+
+    def factor(self, temp: np.ndarray) -> np.ndarray:
+        """φ at the temperatures ``temp`` [°C], the shape of ``temp`` [-]."""
+        t = np.asarray(temp, float)
+        edge = np.clip(t, self.lo, self.hi)
+        x = edge - REF_TEMP_C
+        slope = self.a * np.exp(self.b * x)  # dφ/dT at the edge
+        return np.maximum(1.0 + self.a * _growth(self.b, x) + slope * (t - edge),
+                          FACTOR_FLOOR)
 
 
 def poly(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
@@ -149,17 +200,19 @@ def feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.nda
 
 
 def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
-               ops: np.ndarray, inv: np.ndarray) -> tuple[np.ndarray, float, tuple | None]:
-    """(A, B) per point and the joint's friction-temperature rate θ: the loss torque
-    τ (1/η − 1) ≈ A exp(θ (T − 20 °C)) + B τ by least squares over the windows at the
-    point's speed (module docstring of :mod:`.normal`), θ the one of
-    :data:`FRICTION_RATES` that fits commissioning best (refined between the best three).
+               ops: np.ndarray, inv: np.ndarray
+               ) -> tuple[np.ndarray, TemperatureLaw, tuple | None]:
+    """(A, B) per point and the joint's friction factor law φ(T) (:class:`TemperatureLaw`):
+    the loss torque τ (1/η − 1) ≈ A φ(T) + B τ by least squares over the windows at the
+    point's speed (module docstring of :mod:`.normal`), (a, b) the pair of the grid
+    (:data:`LAW_CURVATURES`, :data:`LAW_FACTORS_40C`) that fits commissioning best.
 
-    Where commissioning did not cool (:func:`cools`) the rate that fits, θ_w, is not the
-    law's alone: a run-in lowers the loss while the joint warms, so the law is no steeper
-    than θ_w (θ_w <= θ <= 0; friction does not rise over commissioning on a sound joint).
-    Then θ_w is kept (what commissioning saw), and the laws at both bounds, fitted to the
-    same windows, are returned as its uncertainty.
+    Where commissioning did not cool (:func:`cools`) the law that fits is not the
+    friction's alone: a run-in lowers the loss while the joint warms, so the law is no
+    steeper than the fitted one, and no flatter than none (friction does not rise over
+    commissioning on a sound joint). Then the fitted law is kept (what commissioning saw),
+    and the laws at both bounds, fitted to the same windows, are returned as its
+    uncertainty.
 
     Parameters
     ----------
@@ -176,31 +229,70 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
 
     Returns
     -------
-    (ndarray, float, tuple or None)
-        A [N m] and B [-] per point, shape (P, 2); θ [1/K] (0 without temperature); where
-        θ is only bounded, the laws at its bounds, ((A, B), θ_w) and ((A, B), 0), else
-        None.
+    (ndarray, TemperatureLaw, tuple or None)
+        A [N m] and B [-] per point, shape (P, 2); the law (φ = 1 without temperature);
+        where the law is only bounded, the laws at its bounds, ((A, B), law) and
+        ((A, B), φ = 1), else None.
     """
     tq = np.abs(torque)
     loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
+    flat = TemperatureLaw()
     if temp is None:
-        return loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], 0.0, None
-
-    def fit(rate):
-        return loss_coefficients(loss, tq, np.exp(rate * (temp - REF_TEMP_C)), ops, inv)
-
-    sse = np.array([fit(r)[1] for r in FRICTION_RATES])
-    k = int(np.clip(np.argmin(sse), 1, len(sse) - 2))
-    rate = float(FRICTION_RATES[k])
-    curv = sse[k - 1] - 2.0 * sse[k] + sse[k + 1]
-    if curv > 0:  # the parabola's vertex through the best three, within their span
-        step = float(FRICTION_RATES[1] - FRICTION_RATES[0])
-        rate += step * float(np.clip(0.5 * (sse[k - 1] - sse[k + 1]) / curv, -1.0, 1.0))
-    rate = float(np.clip(rate, FRICTION_RATES[0], FRICTION_RATES[-1]))
+        return loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], flat, None
+    law = best_law(loss, tq, temp, ops, inv)
+    coef = loss_coefficients(loss, tq, law.factor(temp), ops, inv)[0]
     if cools(temp):
-        return fit(rate)[0], rate, None
-    coef = fit(rate)[0]  # one warm-up: what it showed, and the law's other bound
-    return coef, rate, ((coef, rate), (fit(0.0)[0], 0.0))
+        return coef, law, None
+    bare = loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0]
+    return coef, law, ((coef, law), (bare, flat))  # one warm-up: what it showed, and none
+
+
+def best_law(loss: np.ndarray, tq: np.ndarray, temp: np.ndarray, ops: np.ndarray,
+             inv: np.ndarray) -> TemperatureLaw:
+    """The law of the grid whose loss fit (:func:`loss_coefficients`) leaves the least
+    squared residual over every candidate at once: for a curvature b and a slope a the
+    fit at each speed is a 2×2 least-squares problem whose normal equations are sums
+    over the windows linear and quadratic in a, so each curvature costs one pass.
+    Candidates whose factor falls under :data:`FACTOR_FLOOR` within commissioning's
+    temperatures are not tried.
+
+    Parameters
+    ----------
+    loss, tq, temp : ndarray, shape (n,)
+        Each window's loss torque [N m], acting torque's magnitude [N m] and temperature
+        [°C].
+    ops : ndarray, shape (P, 2)
+    inv : ndarray of int, shape (n,)
+        As :func:`loss_coefficients`.
+
+    Returns
+    -------
+    TemperatureLaw
+        The best law, continued along its tangent beyond commissioning's temperatures.
+    """
+    lo, hi = float(np.min(temp)), float(np.max(temp))
+    b = LAW_CURVATURES[:, None]  # (B, 1)
+    g = _growth(b, temp[None, :] - REF_TEMP_C)  # (B, n)
+    a = (LAW_FACTORS_40C[None, :] - 1.0) / _growth(b, 20.0)  # (B, K)
+    ok = 1.0 + a * _growth(b, hi - REF_TEMP_C) >= FACTOR_FLOOR
+    sse = np.zeros(a.shape)
+    for n in np.unique(ops[:, 0]):
+        ks = np.flatnonzero(ops[:, 0] == n)
+        m = np.isin(inv, ks)
+        gm, y, t = g[:, m], loss[m], tq[m]
+        s = {k: v[:, None] for k, v in (("g", gm.sum(1)), ("gg", (gm * gm).sum(1)),
+                                        ("gt", gm @ t), ("gy", gm @ y))}
+        pp = m.sum() + 2.0 * a * s["g"] + a * a * s["gg"]  # Σ φ², Σ φ τ, Σ φ y
+        pt, py = t.sum() + a * s["gt"], y.sum() + a * s["gy"]
+        if np.unique(ops[ks, 1]).size < 2:  # one load: the loss's level only
+            sse += y @ y - py * py / pp
+        else:
+            tt, ty = t @ t, t @ y
+            det = pp * tt - pt * pt
+            c_a, c_b = (py * tt - pt * ty) / det, (pp * ty - pt * py) / det
+            sse += y @ y - c_a * py - c_b * ty
+    j, k = np.unravel_index(np.argmin(np.where(ok, sse, np.inf)), sse.shape)
+    return TemperatureLaw(float(a[j, k]), float(LAW_CURVATURES[j]), lo, hi)
 
 
 def cools(temp: np.ndarray) -> bool:
@@ -234,7 +326,7 @@ def loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np
     tq : ndarray, shape (n,)
         Each window's acting torque's magnitude τ [N m].
     phi : ndarray, shape (n,)
-        Each window's friction factor exp(θ (T − 20 °C)) [-].
+        Each window's friction factor φ(T) (:meth:`TemperatureLaw.factor`) [-].
     ops : ndarray, shape (P, 2)
         The operating points (input speed [rpm], torque [N m]).
     inv : ndarray of int, shape (n,)
@@ -251,7 +343,7 @@ def loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np
         m = np.isin(inv, ks)
         x = np.stack([phi[m], tq[m]], axis=1)
         if np.unique(ops[ks, 1]).size < 2:  # one load: the loss's level only
-            coef = np.array([np.mean(loss[m] / phi[m]), 0.0])
+            coef = np.array([phi[m] @ loss[m] / (phi[m] @ phi[m]), 0.0])
         else:
             coef = np.linalg.lstsq(x, loss[m], rcond=None)[0]
         sse += float(np.sum((x @ coef - loss[m]) ** 2))

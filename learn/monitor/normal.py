@@ -16,12 +16,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.base.typed import check_range
-from swgsim.gear.thermal import REF_TEMP_C
 
 from .laws import (
     BLOCK,
     EFFICIENCY,
     MIN_SPREAD_K,
+    TemperatureLaw,
     bridge_drift,
     feature_slopes,
     load_curves,
@@ -204,14 +204,15 @@ class NormalBehaviour:
         [1, 1]). On the joint in motion the factor's own noise spans ±5 % over 1000 h
         (robot_joint_motion gear 1, seed 0: 0.94-1.03), which a margin about 1 alone
         advised as a friction change 11 times on a gear with none.
-    friction_rate : float
-        θ of the loss torque's temperature law [1/K] (:func:`~.laws.loss_model`).
+    friction_law : TemperatureLaw
+        The friction factor's temperature law φ(T) of the loss torque
+        (:func:`~.laws.loss_model`; φ = 1 without temperature).
     loss_band : tuple or None
-        Where commissioning did not cool (:func:`~.laws.cools`) and θ is only bounded, the
-        laws at its bounds, ((A, B) per point shape (P, 2), θ) twice
+        Where commissioning did not cool (:func:`~.laws.cools`) and the law is only
+        bounded, the laws at its bounds, ((A, B) per point shape (P, 2), law) twice
         (:func:`~.laws.loss_model`): the efficiency is judged in its spread widened by the
         difference they make at the window's condition (:meth:`_law_spread`). None where
-        θ was learnt.
+        the law was learnt.
     warm_dir, warm_range : ndarray, shapes (P, K, F) and (P, K, 2), or None
         Without a temperature reading at commissioning: per point, the directions in
         which commissioning's z-scores varied together beyond noise (unit vectors; zero
@@ -244,7 +245,7 @@ class NormalBehaviour:
     count: np.ndarray | None = None
     slope: np.ndarray | None = None
     friction_range: np.ndarray = field(default_factory=lambda: np.ones(2))
-    friction_rate: float = 0.0
+    friction_law: TemperatureLaw = field(default_factory=TemperatureLaw)
     loss_band: tuple | None = None
     warm_dir: np.ndarray | None = None
     warm_range: np.ndarray | None = None
@@ -283,11 +284,11 @@ class NormalBehaviour:
                                if temp is not None else [np.nan, np.nan] for k in range(n_p)])
         dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
         gain, zero = (bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
-        loss, rate, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops,
+        loss, law, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops,
                                       inv)
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
-                 np.bincount(inv, minlength=n_p), friction_rate=rate, loss_band=band)
+                 np.bincount(inv, minlength=n_p), friction_law=law, loss_band=band)
         if use_t:
             nb.slope = feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
         warm = nb._temperature_corrected(feats, inv, dt)
@@ -664,12 +665,13 @@ class NormalBehaviour:
         return out
 
     def _loss(self, i: np.ndarray, cond: Conditions,
-              law: tuple[np.ndarray, float] | None = None) -> np.ndarray:
+              law: tuple[np.ndarray, TemperatureLaw] | None = None) -> np.ndarray:
         """Predicted loss torque at each window's load and temperature [N m], by the
-        loss law ``law`` ((A, B) per point, θ; None: commissioning's)."""
-        coef, rate = (self.loss, self.friction_rate) if law is None else law
+        loss law ``law`` ((A, B) per point, the friction factor's law; None:
+        commissioning's)."""
+        coef, factor_law = (self.loss, self.friction_law) if law is None else law
         tq = np.abs(cond.torque_nm)
-        phi = (np.exp(rate * (cond.temperature_c - REF_TEMP_C))
+        phi = (factor_law.factor(cond.temperature_c)
                if cond.temperature_c is not None and np.isfinite(self.ref_temp).all()
                else np.ones(len(i)))
         return coef[i, 0] * phi + coef[i, 1] * tq
@@ -698,7 +700,8 @@ class NormalBehaviour:
         return out
 
     def _efficiency(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
-                    friction: np.ndarray, law: tuple[np.ndarray, float] | None = None
+                    friction: np.ndarray,
+                    law: tuple[np.ndarray, TemperatureLaw] | None = None
                     ) -> np.ndarray:
         """The efficiency at the reference condition of its point with friction factors
         ``friction`` (n,) or (m, n): its loss law's prediction (``law``, :meth:`_loss`) at
@@ -716,10 +719,10 @@ class NormalBehaviour:
 
     def _law_spread(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
                     friction: np.ndarray) -> np.ndarray | None:
-        """The difference the laws at θ's bounds (:attr:`loss_band`) make to the
+        """The difference the laws at its bounds (:attr:`loss_band`) make to the
         efficiency at the reference condition, with friction factors ``friction`` (n,) or
         (m, n): what commissioning could not learn, in the efficiency's spread; the shape
-        of ``friction``. None where θ was learnt or the windows have no temperature."""
+        of ``friction``. None where the law was learnt or the windows have no temperature."""
         if self.loss_band is None or cond.temperature_c is None:
             return None
         lo, hi = (self._efficiency(feats, i, cond, friction, law) for law in self.loss_band)
