@@ -33,9 +33,9 @@ BLOCK = N_HARMONICS + 2
 EFFICIENCY = 5 * BLOCK
 
 #: Curvatures b [1/K] of the friction factor's law (:class:`TemperatureLaw`) that
-#: commissioning chooses from (:func:`best_law`): saturating (b < 0, the factor levelling
-#: off as the grease thins), linear (b = 0) and exponential (b > 0, the viscosity law's
-#: form where a = b) alike, in steps of 0.0025 1/K.
+#: commissioning chooses from (:func:`best_law`), in steps of 0.0025 1/K: b < 0 a fall
+#: that levels off as the grease thins (at 1 − a/b; the viscosity law's exponential is
+#: a = b, levelling off at 0), b = 0 a linear fall, b > 0 one that steepens.
 LAW_CURVATURES = np.linspace(-0.15, 0.05, 81)
 #: The factor at 40 °C, φ(40 °C), that sets a law's slope a for each curvature: 0.3 to 1,
 #: every ratio a sound joint's friction has there (0.63 the catalogue's viscosity law,
@@ -69,9 +69,9 @@ class TemperatureLaw:
     """The friction factor's temperature law commissioning learnt (:func:`best_law`):
     φ(T) = 1 + a (exp(b ΔT) − 1) / b with ΔT = T − 20 °C (1 + a ΔT where b = 0): one
     monotone family that holds the exponential (viscosity) law (a = b), the linear one
-    (b = 0) and saturating ones (b < 0). Beyond commissioning's temperatures [lo, hi]
-    it is continued along its tangent (no curvature commissioning did not see), and
-    it never falls under :data:`FACTOR_FLOOR`.
+    (b = 0), ones that level off at 1 − a/b (b < 0) and ones that steepen (b > 0).
+    Beyond commissioning's temperatures [lo, hi] it is continued along its tangent (no
+    curvature commissioning did not see), and it never falls under :data:`FACTOR_FLOOR`.
 
     Parameters
     ----------
