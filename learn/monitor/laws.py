@@ -4,10 +4,10 @@ the physics and the sources).
 
 * the bridges' span and zero drift per K (:func:`bridge_drift`) and each feature's own
   slope per K left after them (:func:`feature_slopes`);
-* the loss torque's law A_n φ(T) + B_n τ per input speed, the friction factor's law φ
-  (:class:`TemperatureLaw`: exponential, linear or saturating) learnt where commissioning
-  saw the joint cool (:func:`loss_model`, :func:`cools`), over a single warm-up bounded
-  by it and kept with its bounds;
+* the loss torque's law per input speed, a load-independent part falling with the
+  temperature by any monotone law and a part proportional to the load
+  (:class:`LossLaw`), learnt where commissioning saw the joint cool (:func:`loss_model`,
+  :func:`cools`), over a single warm-up bounded by it and kept with its bounds;
 * the load curves: quadratics in the acting torque at each speed (:func:`load_curves`);
 * without a temperature reading, the directions in which commissioning's warm-ups moved
   the z-scores at each point (:func:`warm_up_directions`).
@@ -15,34 +15,32 @@ the physics and the sources).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
-
-from swgsim.gear.thermal import REF_TEMP_C
+from scipy.optimize import lsq_linear
 
 from .features import N_HARMONICS
 
-__all__ = ["BLOCK", "EFFICIENCY", "FACTOR_FLOOR", "LAW_CURVATURES", "LAW_FACTORS_40C",
-           "MIN_SPREAD_K", "SIGNIFICANT", "TemperatureLaw", "WARM_UP_AVERAGE", "best_law",
-           "bridge_drift", "cools", "feature_slopes", "load_curves", "loss_coefficients",
-           "loss_model", "poly", "warm_up_directions"]
+__all__ = ["BLOCK", "EFFICIENCY", "FACTOR_FLOOR", "LossLaw", "MIN_SPREAD_K", "SEGMENT_K",
+           "SIGNIFICANT", "SMOOTHING", "WARM_UP_AVERAGE", "bridge_drift", "cools",
+           "feature_slopes", "load_curves", "loss_model", "poly", "warm_up_directions"]
 
 #: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
 BLOCK = N_HARMONICS + 2
 EFFICIENCY = 5 * BLOCK
 
-#: Curvatures b [1/K] of the friction factor's law (:class:`TemperatureLaw`) that
-#: commissioning chooses from (:func:`best_law`), in steps of 0.0025 1/K: b < 0 a fall
-#: that levels off as the grease thins (at 1 − a/b; the viscosity law's exponential is
-#: a = b, levelling off at 0), b = 0 a linear fall, b > 0 one that steepens.
-LAW_CURVATURES = np.linspace(-0.15, 0.05, 81)
-#: The factor at 40 °C, φ(40 °C), that sets a law's slope a for each curvature: 0.3 to 1,
-#: every ratio a sound joint's friction has there (0.63 the catalogue's viscosity law,
-#: Harmonic Drive engineering data: no-load running torque over temperature), in steps
-#: of 0.0025 (learnt from the joint's own windows, not the catalogue's law).
-LAW_FACTORS_40C = np.linspace(0.3, 1.0, 281)
-#: Least friction factor a law may give within commissioning's temperatures [-].
+#: Width of the loss law's temperature segments over commissioning's temperatures [K]
+#: (:class:`LossLaw`): its range in as many equal segments as come nearest this width,
+#: at least one [choice: 5 K and 2.5 K fitted the design seeds' lives alike (bench, gear
+#: 3, families ``friction_law`` and ``trace``, seeds 100-104)].
+SEGMENT_K = 5.0
+#: Weight of the penalty on unequal slopes of neighbouring segments, relative to the
+#: segments' own weight in the fit: it decides only a slope the windows do not (a
+#: segment a speed did not run in) [choice].
+SMOOTHING = 1e-3
+#: Least share of its value at commissioning's coldest that the load-independent loss
+#: keeps when its law is carried beyond commissioning's temperatures [-].
 FACTOR_FLOOR = 0.05
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
@@ -57,45 +55,48 @@ WARM_UP_AVERAGE = 7
 SIGNIFICANT = 20.0
 
 
-def _growth(b: np.ndarray | float, x: np.ndarray | float) -> np.ndarray:
-    """(exp(b x) − 1) / b, x where b = 0 (the law's shape, rising with x for any b)."""
-    b, x = np.asarray(b, float), np.asarray(x, float)
-    safe = np.where(b == 0.0, 1.0, b)
-    return np.where(b == 0.0, x, np.expm1(b * x) / safe)
-
-
 @dataclass(frozen=True)
-class TemperatureLaw:
-    """The friction factor's temperature law commissioning learnt (:func:`best_law`):
-    φ(T) = 1 + a (exp(b ΔT) − 1) / b with ΔT = T − 20 °C (1 + a ΔT where b = 0): one
-    monotone family that holds the exponential (viscosity) law (a = b), the linear one
-    (b = 0), ones that level off at 1 − a/b (b < 0) and ones that steepen (b > 0).
-    Beyond commissioning's temperatures [lo, hi] it is continued along its tangent (no
-    curvature commissioning did not see), and it never falls under :data:`FACTOR_FLOOR`.
+class LossLaw:
+    """The loss torque's law at each operating point, learnt at commissioning
+    (:func:`loss_model`): L(T, τ) = D + Σ_j E_j h_j(T) + B τ, the load-independent part
+    D + Σ_j E_j h_j(T) a continuous piecewise-linear function of the temperature over
+    commissioning's range cut at :attr:`knots` (h_j the ramp over segment j: 0 below it,
+    its width above), never rising with the temperature (E_j <= 0): any monotone law, its
+    own per input speed. Beyond commissioning's temperatures the end segments' slopes go
+    on (no curvature commissioning did not see), and the load-independent part keeps at
+    least :data:`FACTOR_FLOOR` of D.
 
     Parameters
     ----------
-    a : float
-        Slope at 20 °C [1/K] (negative: friction falls as the joint warms).
-    b : float
-        Curvature [1/K].
-    lo, hi : float
-        Commissioning's least and greatest temperature [°C].
+    coef : ndarray, shape (P, K + 2)
+        Per operating point: D [N m] (the load-independent loss at ``knots[0]``), the
+        slopes E_1..E_K [N m/K] and B [-]; K = 0 without a temperature law.
+    knots : ndarray, shape (K + 1,) or (0,)
+        The segments' ends [°C]; empty without a temperature law.
     """
 
-    a: float = 0.0
-    b: float = 0.0
-    lo: float = -np.inf
-    hi: float = np.inf
+    coef: np.ndarray
+    knots: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
-    def factor(self, temp: np.ndarray) -> np.ndarray:
-        """φ at the temperatures ``temp`` [°C], the shape of ``temp`` [-]."""
-        t = np.asarray(temp, float)
-        edge = np.clip(t, self.lo, self.hi)
-        x = edge - REF_TEMP_C
-        slope = self.a * np.exp(self.b * x)  # dφ/dT at the edge
-        return np.maximum(1.0 + self.a * _growth(self.b, x) + slope * (t - edge),
-                          FACTOR_FLOOR)
+    def ramps(self, temp: np.ndarray) -> np.ndarray:
+        """h_j at the temperatures ``temp`` (n,) [°C], shape (n, K) [K]: each segment's
+        ramp, the end segments' going on beyond the range."""
+        t, k = np.asarray(temp, float), self.knots
+        h = np.clip(t[:, None] - k[None, :-1], 0.0, np.diff(k)[None, :])
+        h[:, -1] += np.maximum(t - k[-1], 0.0)
+        h[:, 0] += np.minimum(t - k[0], 0.0)
+        return h
+
+    def predict(self, i: np.ndarray, tq: np.ndarray, temp: np.ndarray | None) -> np.ndarray:
+        """The loss torque [N m] of windows at points ``i`` (n,), acting torques' magnitudes
+        ``tq`` (n,) [N m] and temperatures ``temp`` (n,) [°C] (None: at ``knots[0]``),
+        shape (n,)."""
+        c = self.coef[i]
+        free = c[:, 0]
+        if temp is not None and self.knots.size:
+            free = np.maximum(free + np.sum(self.ramps(temp) * c[:, 1:-1], axis=1),
+                              FACTOR_FLOOR * free)
+        return free + c[:, -1] * tq
 
 
 def poly(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
@@ -200,12 +201,12 @@ def feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.nda
 
 
 def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
-               ops: np.ndarray, inv: np.ndarray
-               ) -> tuple[np.ndarray, TemperatureLaw, tuple | None]:
-    """(A, B) per point and the joint's friction factor law φ(T) (:class:`TemperatureLaw`):
-    the loss torque τ (1/η − 1) ≈ A φ(T) + B τ by least squares over the windows at the
-    point's speed (module docstring of :mod:`.normal`), (a, b) the pair of the grid
-    (:data:`LAW_CURVATURES`, :data:`LAW_FACTORS_40C`) that fits commissioning best.
+               ops: np.ndarray, inv: np.ndarray) -> tuple[LossLaw, tuple | None]:
+    """The loss torque's law (:class:`LossLaw`) fitted to commissioning's windows: at each
+    input speed the loss τ (1/η − 1) by least squares over its windows with the slopes
+    bounded (friction does not rise with the temperature; module docstring of
+    :mod:`.normal`), the temperature's range cut into segments of about
+    :data:`SEGMENT_K`.
 
     Where commissioning did not cool (:func:`cools`) the law that fits is not the
     friction's alone: a run-in lowers the loss while the joint warms, so the law is no
@@ -229,70 +230,52 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
 
     Returns
     -------
-    (ndarray, TemperatureLaw, tuple or None)
-        A [N m] and B [-] per point, shape (P, 2); the law (φ = 1 without temperature);
-        where the law is only bounded, the laws at its bounds, ((A, B), law) and
-        ((A, B), φ = 1), else None.
+    (LossLaw, tuple or None)
+        The law; where it is only bounded, the laws at its bounds (the fitted one, and
+        one without temperature), else None.
     """
     tq = np.abs(torque)
     loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
-    flat = TemperatureLaw()
+    flat = _fit_law(loss, tq, None, ops, inv, np.zeros(0))
     if temp is None:
-        return loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0], flat, None
-    law = best_law(loss, tq, temp, ops, inv)
-    coef = loss_coefficients(loss, tq, law.factor(temp), ops, inv)[0]
-    if cools(temp):
-        return coef, law, None
-    bare = loss_coefficients(loss, tq, np.ones(len(eta)), ops, inv)[0]
-    return coef, law, ((coef, law), (bare, flat))  # one warm-up: what it showed, and none
-
-
-def best_law(loss: np.ndarray, tq: np.ndarray, temp: np.ndarray, ops: np.ndarray,
-             inv: np.ndarray) -> TemperatureLaw:
-    """The law of the grid whose loss fit (:func:`loss_coefficients`) leaves the least
-    squared residual over every candidate at once: for a curvature b and a slope a the
-    fit at each speed is a 2×2 least-squares problem whose normal equations are sums
-    over the windows linear and quadratic in a, so each curvature costs one pass.
-    Candidates whose factor falls under :data:`FACTOR_FLOOR` within commissioning's
-    temperatures are not tried.
-
-    Parameters
-    ----------
-    loss, tq, temp : ndarray, shape (n,)
-        Each window's loss torque [N m], acting torque's magnitude [N m] and temperature
-        [°C].
-    ops : ndarray, shape (P, 2)
-    inv : ndarray of int, shape (n,)
-        As :func:`loss_coefficients`.
-
-    Returns
-    -------
-    TemperatureLaw
-        The best law, continued along its tangent beyond commissioning's temperatures.
-    """
+        return flat, None
     lo, hi = float(np.min(temp)), float(np.max(temp))
-    b = LAW_CURVATURES[:, None]  # (B, 1)
-    g = _growth(b, temp[None, :] - REF_TEMP_C)  # (B, n)
-    a = (LAW_FACTORS_40C[None, :] - 1.0) / _growth(b, 20.0)  # (B, K)
-    ok = 1.0 + a * _growth(b, hi - REF_TEMP_C) >= FACTOR_FLOOR
-    sse = np.zeros(a.shape)
+    knots = np.linspace(lo, hi, max(1, int(round((hi - lo) / SEGMENT_K))) + 1)
+    law = _fit_law(loss, tq, temp, ops, inv, knots)
+    return law, (None if cools(temp) else (law, flat))
+
+
+def _fit_law(loss: np.ndarray, tq: np.ndarray, temp: np.ndarray | None, ops: np.ndarray,
+             inv: np.ndarray, knots: np.ndarray) -> LossLaw:
+    """The :class:`LossLaw` on ``knots`` fitted to the windows' losses, speed by speed
+    (B only where the speed ran at two loads or more), the slopes <= 0 (bounded-variable
+    least squares, :func:`scipy.optimize.lsq_linear`) and neighbouring slopes tied by
+    :data:`SMOOTHING`."""
+    k = max(knots.size - 1, 0)
+    shell = LossLaw(np.zeros((len(ops), k + 2)), knots)
+    out = shell.coef
     for n in np.unique(ops[:, 0]):
         ks = np.flatnonzero(ops[:, 0] == n)
         m = np.isin(inv, ks)
-        gm, y, t = g[:, m], loss[m], tq[m]
-        s = {k: v[:, None] for k, v in (("g", gm.sum(1)), ("gg", (gm * gm).sum(1)),
-                                        ("gt", gm @ t), ("gy", gm @ y))}
-        pp = m.sum() + 2.0 * a * s["g"] + a * a * s["gg"]  # Σ φ², Σ φ τ, Σ φ y
-        pt, py = t.sum() + a * s["gt"], y.sum() + a * s["gy"]
-        if np.unique(ops[ks, 1]).size < 2:  # one load: the loss's level only
-            sse += y @ y - py * py / pp
-        else:
-            tt, ty = t @ t, t @ y
-            det = pp * tt - pt * pt
-            c_a, c_b = (py * tt - pt * ty) / det, (pp * ty - pt * py) / det
-            sse += y @ y - c_a * py - c_b * ty
-    j, k = np.unravel_index(np.argmin(np.where(ok, sse, np.inf)), sse.shape)
-    return TemperatureLaw(float(a[j, k]), float(LAW_CURVATURES[j]), lo, hi)
+        loads = np.unique(ops[ks, 1]).size > 1
+        cols = [np.ones(int(m.sum()))]
+        if k:
+            cols += list(shell.ramps(temp[m]).T)
+        if loads:
+            cols.append(tq[m])
+        x, y = np.stack(cols, axis=1), loss[m]
+        lower = np.r_[-np.inf, np.full(k, -np.inf), [-np.inf] * loads]
+        upper = np.r_[np.inf, np.zeros(k), [np.inf] * loads]
+        if k > 1:  # neighbouring slopes alike where the windows do not say otherwise
+            w = np.sqrt(SMOOTHING * np.mean(np.sum(x[:, 1:k + 1] ** 2, axis=0)))
+            d = np.zeros((k - 1, x.shape[1]))
+            d[np.arange(k - 1), np.arange(1, k)] = -w
+            d[np.arange(k - 1), np.arange(2, k + 1)] = w
+            x, y = np.vstack([x, d]), np.r_[y, np.zeros(k - 1)]
+        c = lsq_linear(x, y, bounds=(lower, upper), method="bvls").x
+        out[ks, :k + 1] = c[:k + 1]
+        out[ks, -1] = c[-1] if loads else 0.0
+    return shell
 
 
 def cools(temp: np.ndarray) -> bool:
@@ -312,43 +295,6 @@ def cools(temp: np.ndarray) -> bool:
         True where some reading lies :data:`MIN_SPREAD_K` [K] or more below an earlier one.
     """
     return bool(np.max(np.maximum.accumulate(temp) - temp) >= MIN_SPREAD_K)
-
-
-def loss_coefficients(loss: np.ndarray, tq: np.ndarray, phi: np.ndarray, ops: np.ndarray,
-                       inv: np.ndarray) -> tuple[np.ndarray, float]:
-    """(A, B) per point for the friction factors ``phi`` of the windows: loss ≈ A φ + B τ
-    by least squares over the windows at each speed (A alone where the speed has one load).
-
-    Parameters
-    ----------
-    loss : ndarray, shape (n,)
-        Each window's loss torque τ (1/η − 1) [N m].
-    tq : ndarray, shape (n,)
-        Each window's acting torque's magnitude τ [N m].
-    phi : ndarray, shape (n,)
-        Each window's friction factor φ(T) (:meth:`TemperatureLaw.factor`) [-].
-    ops : ndarray, shape (P, 2)
-        The operating points (input speed [rpm], torque [N m]).
-    inv : ndarray of int, shape (n,)
-        Each window's operating point.
-
-    Returns
-    -------
-    (ndarray, float)
-        A [N m] and B [-] per point, shape (P, 2); the sum of squared residuals [N² m²].
-    """
-    out, sse = np.zeros((len(ops), 2)), 0.0
-    for n in np.unique(ops[:, 0]):
-        ks = np.flatnonzero(ops[:, 0] == n)
-        m = np.isin(inv, ks)
-        x = np.stack([phi[m], tq[m]], axis=1)
-        if np.unique(ops[ks, 1]).size < 2:  # one load: the loss's level only
-            coef = np.array([phi[m] @ loss[m] / (phi[m] @ phi[m]), 0.0])
-        else:
-            coef = np.linalg.lstsq(x, loss[m], rcond=None)[0]
-        sse += float(np.sum((x @ coef - loss[m]) ** 2))
-        out[ks] = coef
-    return out, sse
 
 
 def load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,

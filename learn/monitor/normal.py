@@ -21,7 +21,7 @@ from .laws import (
     BLOCK,
     EFFICIENCY,
     MIN_SPREAD_K,
-    TemperatureLaw,
+    LossLaw,
     bridge_drift,
     feature_slopes,
     load_curves,
@@ -186,8 +186,8 @@ class NormalBehaviour:
         widened by ``temperature_uncertainty_k`` (NaN: none measured).
     gain, zero : ndarray, shape (5,)
         γ_c [1/K] and ζ_c [mV/V per K] of each bridge (0 without temperature).
-    loss : ndarray, shape (P, 2)
-        (A, B) of the loss torque at each point's speed [N m], [-].
+    loss : LossLaw
+        The loss torque's law at each point (:func:`~.laws.loss_model`).
     load : ndarray, shape (P, 3, F)
         Per point, the quadratic in τ of each feature's load curve at its speed (squared
         amplitudes, offsets, residual power; unused columns zero).
@@ -204,12 +204,9 @@ class NormalBehaviour:
         [1, 1]). On the joint in motion the factor's own noise spans ±5 % over 1000 h
         (robot_joint_motion gear 1, seed 0: 0.94-1.03), which a margin about 1 alone
         advised as a friction change 11 times on a gear with none.
-    friction_law : TemperatureLaw
-        The friction factor's temperature law φ(T) of the loss torque
-        (:func:`~.laws.loss_model`; φ = 1 without temperature).
     loss_band : tuple or None
-        Where commissioning did not cool (:func:`~.laws.cools`) and the law is only
-        bounded, the laws at its bounds, ((A, B) per point shape (P, 2), law) twice
+        Where commissioning did not cool (:func:`~.laws.cools`) and the loss law is only
+        bounded, the laws at its bounds, two :class:`~.laws.LossLaw`
         (:func:`~.laws.loss_model`): the efficiency is judged in its spread widened by the
         difference they make at the window's condition (:meth:`_law_spread`). None where
         the law was learnt.
@@ -239,13 +236,12 @@ class NormalBehaviour:
     temp_range: np.ndarray
     gain: np.ndarray
     zero: np.ndarray
-    loss: np.ndarray
+    loss: LossLaw
     load: np.ndarray
     config: NormalConfig = field(default_factory=NormalConfig)
     count: np.ndarray | None = None
     slope: np.ndarray | None = None
     friction_range: np.ndarray = field(default_factory=lambda: np.ones(2))
-    friction_law: TemperatureLaw = field(default_factory=TemperatureLaw)
     loss_band: tuple | None = None
     warm_dir: np.ndarray | None = None
     warm_range: np.ndarray | None = None
@@ -284,11 +280,11 @@ class NormalBehaviour:
                                if temp is not None else [np.nan, np.nan] for k in range(n_p)])
         dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
         gain, zero = (bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
-        loss, law, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops,
+        loss, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops,
                                       inv)
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
-                 np.bincount(inv, minlength=n_p), friction_law=law, loss_band=band)
+                 np.bincount(inv, minlength=n_p), loss_band=band)
         if use_t:
             nb.slope = feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
         warm = nb._temperature_corrected(feats, inv, dt)
@@ -369,7 +365,7 @@ class NormalBehaviour:
         loads commissioning saw at the speed) and drift law, trusted to
         ``extrapolation_uncertainty`` (κ) times its own size, so the spread is
         ``sqrt(σ² + (κ u)²)``. Inside the range ``u`` is zero and the spread σ. The
-        efficiency's correction (its loss law A φ(T) + B τ carried beyond the loads it was
+        efficiency's correction (its loss law carried beyond the loads it was
         fitted at) widens its spread alike: behind a robot link a 10 % heavier tool left
         the efficiency 1.2 σ above the law's extrapolation (docs/monitor.md, "A real
         day"). The widening lasts until the point is recommissioned at its new load
@@ -665,16 +661,11 @@ class NormalBehaviour:
         return out
 
     def _loss(self, i: np.ndarray, cond: Conditions,
-              law: tuple[np.ndarray, TemperatureLaw] | None = None) -> np.ndarray:
+              law: LossLaw | None = None) -> np.ndarray:
         """Predicted loss torque at each window's load and temperature [N m], by the
-        loss law ``law`` ((A, B) per point, the friction factor's law; None:
-        commissioning's)."""
-        coef, factor_law = (self.loss, self.friction_law) if law is None else law
-        tq = np.abs(cond.torque_nm)
-        phi = (factor_law.factor(cond.temperature_c)
-               if cond.temperature_c is not None and np.isfinite(self.ref_temp).all()
-               else np.ones(len(i)))
-        return coef[i, 0] * phi + coef[i, 1] * tq
+        loss law ``law`` (None: commissioning's)."""
+        temp = cond.temperature_c if np.isfinite(self.ref_temp).all() else None
+        return (self.loss if law is None else law).predict(i, np.abs(cond.torque_nm), temp)
 
     def _corrected(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
                    friction: np.ndarray) -> np.ndarray:
@@ -700,8 +691,7 @@ class NormalBehaviour:
         return out
 
     def _efficiency(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
-                    friction: np.ndarray,
-                    law: tuple[np.ndarray, TemperatureLaw] | None = None
+                    friction: np.ndarray, law: LossLaw | None = None
                     ) -> np.ndarray:
         """The efficiency at the reference condition of its point with friction factors
         ``friction`` (n,) or (m, n): its loss law's prediction (``law``, :meth:`_loss`) at

@@ -428,7 +428,8 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
             named.append(mon.diagnose(tr, a, feats[w], points[w], cond[w]))
             if still is not None and a >= still[0] and tr.hour[a] >= stuck_h:
                 named[-1] = _sensor_named(named[-1])
-            if named[-1].fault in CHANGES_STATE:
+            if named[-1].fault in CHANGES_STATE or _after_change(mon, alarms, named[-1],
+                                                                 float(tr.hour[a]), cond):
                 cut = True
                 break
         if cut:
@@ -440,11 +441,14 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         if stop == n:
             return Trace.concat(traces), alarms, mon
         fstart = None if tr is None else tr.state(len(tr.hour) - 1)
-        undo = None if not cut or named[-1].fault != UNEXPLAINED_CHANGE else \
+        undo = None if not cut or named[-1].fault == TEMPERATURE_SENSOR else \
             _drifting(mon, Trace.concat(traces), alarms, feats, points, hours, cond)
         if undo is not None:  # a drifting reading, not the friction: the changes undone
             alarms[-1] = _sensor_named(alarms[-1])
             fstart = (fstart[0] / undo, fstart[1])
+        elif cut and named[-1].fault not in CHANGES_STATE:  # a gear fault it stays
+            i0 = stop
+            continue
         if cut and named[-1].fault == UNEXPLAINED_CHANGE and undo is None:
             fstart = (adopt_change(mon, named[-1], fstart[0]), fstart[1])
         else:
@@ -467,8 +471,9 @@ RECUR_H = 24.0
 
 def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.ndarray,
               points: np.ndarray, hours: np.ndarray, cond: Conditions) -> float | None:
-    """Where the unexplained change of ``alarms[-1]`` recurs within :data:`RECUR_H` of an
-    earlier one while the reading is in use: the windows since the earlier one's rise
+    """Where the unexplained change or gear fault of ``alarms[-1]`` comes within
+    :data:`RECUR_H` after an unexplained change while the reading is in use
+    (:func:`_after_change`): the windows since the earlier change's rise
     named again (:meth:`GearMonitor.name`) with the friction as it was before it, the
     changes taken since undone. Where the reading's drift
     (:func:`~learn.monitor.sensor_check.fit_temperature_drift`) names them, the factor
@@ -490,6 +495,19 @@ def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.nda
     fault, _ = mon.name(ev, feats[w], points[w], cond[w], trace.friction[w] / taken[w],
                         hours[w])
     return float(taken[-1]) if fault == TEMPERATURE_SENSOR else None
+
+
+def _after_change(mon: GearMonitor, alarms: list[Alarm], alarm: Alarm, hour: float,
+                  cond: Conditions) -> bool:
+    """Whether ``alarm``, named a gear fault at ``hour`` while the reading is in use,
+    comes within :data:`RECUR_H` after an unexplained change (``alarms``, those before
+    it): then :func:`_drifting` names its windows again with the changes taken undone, as
+    for a recurring change (a drifting reading whose first effect was taken for the
+    friction shows next as a change of the efficiency a gear fault also makes)."""
+    return (alarm.kind == "gear_fault" and not mon.reading_virtual
+            and cond.temperature_c is not None
+            and any(a.fault == UNEXPLAINED_CHANGE and a.hour >= hour - RECUR_H
+                    for a in alarms))
 
 
 def _sensor_named(alarm: Alarm) -> Alarm:
