@@ -18,9 +18,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import lsq_linear
+
+from swgsim.base.lazy import lazy_module
 
 from .features import N_HARMONICS
+
+optimize = lazy_module("scipy.optimize")  # at the first fit, not at an app's start
 
 __all__ = ["BLOCK", "EFFICIENCY", "FACTOR_FLOOR", "LossLaw", "MIN_SPREAD_K", "SEGMENT_K",
            "SIGNIFICANT", "SMOOTHING", "WARM_UP_AVERAGE", "bridge_drift", "cools",
@@ -272,7 +275,7 @@ def _fit_law(loss: np.ndarray, tq: np.ndarray, temp: np.ndarray | None, ops: np.
             d[np.arange(k - 1), np.arange(1, k)] = -w
             d[np.arange(k - 1), np.arange(2, k + 1)] = w
             x, y = np.vstack([x, d]), np.r_[y, np.zeros(k - 1)]
-        c = lsq_linear(x, y, bounds=(lower, upper), method="bvls").x
+        c = optimize.lsq_linear(x, y, bounds=(lower, upper), method="bvls").x
         out[ks, :k + 1] = c[:k + 1]
         out[ks, -1] = c[-1] if loads else 0.0
     return shell

@@ -423,15 +423,7 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         w = slice(i0, stop)
         tr = mon.run(feats[w], points[w], hours[w], cond[w], latch=False,
                      friction_start=fstart) if stop > i0 else None
-        named, cut = [], False
-        for a in [] if tr is None else tr.alarms:  # up to the first that changes the state
-            named.append(mon.diagnose(tr, a, feats[w], points[w], cond[w]))
-            if still is not None and a >= still[0] and tr.hour[a] >= stuck_h:
-                named[-1] = _sensor_named(named[-1])
-            if named[-1].fault in CHANGES_STATE or _after_change(mon, alarms, named[-1],
-                                                                 float(tr.hour[a]), cond):
-                cut = True
-                break
+        named, cut = _named(mon, tr, alarms, feats[w], points[w], cond[w], still, stuck_h)
         if cut:
             stop = i0 + named[-1].index + 1
             tr = tr.head(named[-1].index + 1)
@@ -461,6 +453,25 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
                                                  rest.temperature_c is None else
                                                  np.full(stop, np.nan)), rest])
         i0 = stop
+
+
+def _named(mon: GearMonitor, tr: Trace | None, alarms: list[Alarm], feats: np.ndarray,
+           points: np.ndarray, cond: Conditions, still: tuple | None, stuck_h: float
+           ) -> tuple[list[Alarm], bool]:
+    """The alarms of the run ``tr`` (:func:`run_stream`'s, on these windows) named, up to
+    the first that changes the monitor's state (:data:`CHANGES_STATE`, or a gear fault
+    soon after an unexplained change, :func:`_after_change`), and whether one did; one
+    raised where the reading was found stuck (``still``, from ``stuck_h``) named the
+    temperature sensor's (:func:`_sensor_named`)."""
+    named = []
+    for a in [] if tr is None else tr.alarms:
+        named.append(mon.diagnose(tr, a, feats, points, cond))
+        if still is not None and a >= still[0] and tr.hour[a] >= stuck_h:
+            named[-1] = _sensor_named(named[-1])
+        if named[-1].fault in CHANGES_STATE or _after_change(mon, alarms, named[-1],
+                                                             float(tr.hour[a]), cond):
+            return named, True
+    return named, False
 
 
 #: How far back an earlier unexplained change makes the next one recurring
