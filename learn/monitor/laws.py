@@ -267,8 +267,8 @@ def _fit_law(loss: np.ndarray, tq: np.ndarray, temp: np.ndarray | None, ops: np.
         if loads:
             cols.append(tq[m])
         x, y = np.stack(cols, axis=1), loss[m]
-        lower = np.r_[-np.inf, np.full(k, -np.inf), [-np.inf] * loads]
-        upper = np.r_[np.inf, np.zeros(k), [np.inf] * loads]
+        lower, upper = np.full(x.shape[1], -np.inf), np.full(x.shape[1], np.inf)
+        upper[1:k + 1] = 0.0  # the slopes: friction does not rise with the temperature
         if k > 1:  # neighbouring slopes alike where the windows do not say otherwise
             w = np.sqrt(SMOOTHING * np.mean(np.sum(x[:, 1:k + 1] ** 2, axis=0)))
             d = np.zeros((k - 1, x.shape[1]))

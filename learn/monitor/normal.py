@@ -280,8 +280,7 @@ class NormalBehaviour:
                                if temp is not None else [np.nan, np.nan] for k in range(n_p)])
         dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
         gain, zero = (bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
-        loss, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops,
-                                      inv)
+        loss, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
                  np.bincount(inv, minlength=n_p), loss_band=band)
