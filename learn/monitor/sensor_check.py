@@ -417,13 +417,14 @@ def _sum_z2(normal: NormalBehaviour, feats, points, torque_nm, friction, index,
 
 
 def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
-                        torque_nm: np.ndarray, friction: float, index: np.ndarray
-                        ) -> np.ndarray:
+                        torque_nm: np.ndarray, friction: float | np.ndarray,
+                        index: np.ndarray) -> np.ndarray:
     """The temperature the bridges and the efficiency say each window was at, by the
     laws learnt at commissioning (:func:`best_temperature`), as a running median over
     :data:`VIRTUAL_WINDOWS` windows (a joint's temperature moves with a time constant of
     tens of minutes, docs/DATASET.md, "Gear lives"); the monitor's reading where its
     temperature sensor has failed (:func:`learn.monitor.stream.run_stream`). Shape (n,) [°C].
+    ``friction``: the friction factor in force, one for every window or one each (n,).
 
     Raises
     ------
@@ -435,7 +436,8 @@ def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.n
                          "(commissioning without a temperature reading or without its "
                          "spread)")
     temp, _ = best_temperature(normal, feats, points, torque_nm,
-                               np.full(len(feats), float(friction)), index)
+                               np.broadcast_to(np.asarray(friction, float), (len(feats),)),
+                               index)
     half = VIRTUAL_WINDOWS // 2
     padded = np.pad(temp, half, mode="edge")
     return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)

@@ -549,12 +549,13 @@ def adopt_change(mon: GearMonitor, alarm: Alarm, factor: float) -> float:
 
 def reading_lost(mon: GearMonitor) -> GearMonitor:
     """The monitor that goes on where the temperature sensor failed: ``mon`` where
-    commissioning learnt the temperature's laws (marked: its readings are the laws' own
-    from now on, so no alarm is named the temperature sensor again), else ``mon``
+    commissioning learnt the temperature's laws (its readings the laws' own from now on,
+    so no alarm is named the temperature sensor again, and its calibration theirs:
+    :meth:`GearMonitor.read_virtually`), else ``mon``
     commissioned again without temperature (:func:`without_temperature`)."""
     if not mon.normal.temperature_law:
         return without_temperature(mon)
-    mon.reading_virtual = True
+    mon.read_virtually()
     return mon
 
 

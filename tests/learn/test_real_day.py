@@ -11,13 +11,15 @@ import dataclasses
 import numpy as np
 import pytest
 
-from learn.monitor.gear_monitor import MaintenanceEvent
+from learn.monitor.evaluate import _fault_life, _past_changes
+from learn.monitor.gear_monitor import GearMonitor, MaintenanceEvent, normal_windows
 from learn.monitor.laws import cools
 from learn.monitor.normal import Conditions, NormalBehaviour, NormalConfig
 from learn.monitor.rule import Alarm, RuleConfig
+from learn.monitor.sensor_check import virtual_temperature
 from learn.monitor.stream import RECUR_H, _after_change, adopt_change, event_line, monitor_stream
 from learn.monitor.study import MonitorStudyConfig
-from learn.monitor.training import train_model
+from learn.monitor.training import features_of, train_model
 from swgcli import dataset_preset
 from swgsim.datasets.conditions import Regrease
 from swgsim.datasets.config import dataset_config
@@ -532,11 +534,6 @@ def test_the_evaluation_goes_on_without_a_reading_lost_after_the_onset(model, da
     without the reading from that window, as the stream does, and the fault is found and
     named. Before, the life ran on with NaN readings and the naming's least squares met
     them (LinAlgError: robot_joint, gear 3 held out, family sensor_dropout)."""
-    from learn.monitor.evaluate import _fault_life, _past_changes
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.normal import Conditions
-    from learn.monitor.training import features_of
-
     p, bank = day
     life = p.config.life
     cond = dataclasses.replace(life.conditions, friction_law=FrictionLaw("linear", 0.8),
@@ -554,3 +551,47 @@ def test_the_evaluation_goes_on_without_a_reading_lost_after_the_onset(model, da
     mon, tr, *_ = _past_changes(sim, k0, run)
     assert tr.alarms and 40.1 <= tr.hour[tr.alarms[0]] <= 41.0
     assert mon.diagnose(tr, tr.alarms[0], *_[:2], _[3]).fault == "eccentric_wg"
+
+
+def test_a_monitor_that_reads_the_laws_temperature_is_calibrated_as_it_scores(model, day):
+    """GearMonitor.read_virtually: where the sensor fails the monitor scores its windows at
+    the laws' virtual temperature, and its calibration and evidence bias become those of
+    commissioning's calibration windows read the same way (read at the true reading, a
+    virtual temperature a few tenths of a kelvin off left the efficiency alone moving, which
+    reads as reduced damping: bench gear 3, family sensor_stuck, scored seed 1). The
+    commissioned monitor a fault life forks from keeps the reading's; forks share one
+    virtual calibration; a monitor without a temperature law cannot read virtually."""
+    p, bank = day
+    life = p.config.life
+    sim = LifeSimulator(p, 3, life, bank)
+    n_comm = int(round(life.commissioning_h * 60 / life.interval_min))
+    f, pts, meta = features_of(sim, 0, n_comm)
+    cond = Conditions.of(meta)
+    mon = GearMonitor(model, RuleConfig(), life.interval_min)
+    mon.commission(f, pts, cond)
+    reading = {k: v.copy() for k, v in mon.calibration.items()}, mon.bias.copy()
+    a, b = mon.fork(), mon.fork()
+    a.read_virtually()
+    b.read_virtually()
+    assert a.reading_virtual and not mon.reading_virtual
+    assert all(np.array_equal(mon.calibration[k], reading[0][k]) for k in reading[0])
+    assert np.array_equal(mon.bias, reading[1])
+    assert a.calibration is b.calibration and a.bias is b.bias  # computed once
+    other = GearMonitor(model, RuleConfig(), life.interval_min)
+    other.commission(f, pts, cond)
+    fr = other._commissioning_friction(f, pts, cond)
+    virtual = Conditions(cond.torque_nm, virtual_temperature(mon.normal, f, pts,
+                                                             cond.torque_nm, fr,
+                                                             mon.normal.index(pts)))
+    assert np.abs(virtual.temperature_c - cond.temperature_c).max() > 0.0
+    cal = ~normal_windows(pts)
+    scores, lp = mon.scores(f[cal], pts[cal], virtual[cal], fr[cal])
+    opi = mon.normal.index(pts[cal])
+    for k, c in a.calibration.items():
+        np.testing.assert_array_equal(c, np.sort(scores[opi == k], axis=0))
+        np.testing.assert_allclose(a.bias[k], (lp - lp[:, :1])[opi == k].mean(axis=0))
+    assert any(not np.array_equal(a.calibration[k], reading[0][k]) for k in reading[0])
+    blind = GearMonitor(model, RuleConfig(), life.interval_min)
+    blind.commission(f, pts, Conditions(cond.torque_nm, None))
+    with pytest.raises(ValueError, match=r"^read_virtually: the monitor is not commissioned"):
+        blind.read_virtually()
