@@ -24,8 +24,11 @@ detect [h], the share of detected faults named right an hour after the alarm, th
 for the issue's target faults (eccentric WG, reduced damping, root and tip crack; the
 time to detect of their step onsets at the mildest severity), how many failed temperature
 sensors were named and the longest hours to it, and the family's wall time [s]. With
-``--out DIR`` every family's rows are written there; ``--read DIR`` prints their table
-again without running. A bad preset, gear, family or study key ends in one line (exit 2).
+``--out DIR`` every family's rows are written there, and the table as ``DIR/table.csv``
+(``scripts/results_pages.py`` builds the results page from
+``reports/monitor_families/*/table.csv``); ``--read DIR`` prints the table of its rows
+again without running (and writes ``DIR/table.csv``, its wall times unknown: NaN). A bad
+preset, gear, family or study key ends in one line (exit 2).
 """
 
 from __future__ import annotations
@@ -77,10 +80,12 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
                          "'trace' (its joints' rises, scaled, and a friction law drawn)")
     ap.add_argument("--out", default=None, metavar="DIR",
                     help="also write each family's rows: DIR/<family>_results.csv and "
-                         "DIR/<family>_false_alarms.csv (as the evaluation's)")
+                         "DIR/<family>_false_alarms.csv (as the evaluation's), and the "
+                         "table: DIR/table.csv")
     ap.add_argument("--read", default=None, metavar="DIR",
                     help="print the table of rows an earlier run wrote with --out DIR "
-                         "(nothing is run; --study as that run's)")
+                         "and write it as DIR/table.csv (nothing is run; --study and "
+                         "--trace as that run's)")
     ap.add_argument("--study", action="append", default=[], metavar="KEY=VALUE",
                     help="a field of MonitorStudyConfig, the value as JSON (e.g. "
                          "interval_min=2, faults='[\"eccentric_wg\"]')")
@@ -155,6 +160,7 @@ def summary(rows: list[dict], fa: list[dict], cfg) -> dict:
     mild = report.mildest_steps(r)
     t_det, mild_det = t[t.detected.astype(bool)], mild[mild.detected.astype(bool)]
     return {"gear_fault_alarms_per_1000h": 1000 * a.gear_fault_alarms.sum() / hours,
+            "unexplained_changes_per_1000h": 1000 * a.unexplained_changes.sum() / hours,
             "advisories_per_1000h": 1000 * a.advisories.sum() / hours,
             "detected": f"{len(det)}/{len(r)}",
             "growing_detected": f"{int(grow.detected.astype(bool).sum())}/{len(grow)}",
@@ -206,7 +212,7 @@ def main(argv: list[str] | None = None) -> int:
         t1 = time.perf_counter()
         rows, fa, _ = evaluate.evaluate_gear(p, banks, args.gear, model, cfg, args.dataset,
                                              study.FAMILY_PREFIX + fam, seeds)
-        table.append({"family": fam, **summary(rows, fa, cfg),
+        table.append({"family": fam, **labels(rows), **summary(rows, fa, cfg),
                       "wall_s": time.perf_counter() - t1})
         if args.out is not None:
             os.makedirs(args.out, exist_ok=True)
@@ -214,18 +220,35 @@ def main(argv: list[str] | None = None) -> int:
                 ownership.atomic_write_bytes(os.path.join(args.out, f"{fam}_{name}.csv"),
                                              pd.DataFrame(part).to_csv(index=False).encode())
         row = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
-                        for k, v in table[-1].items() if k != "family")
+                        for k, v in table[-1].items() if k not in ("family", *LABELS))
         print(f"  {fam}: {row}", flush=True)  # each family as it ends: a long run shows
-    show(table)
+    show(table, args.out)
     print(f"wall time {time.perf_counter() - t0:.0f} s")
     return 0
 
 
-def show(table: list[dict]) -> None:
-    """Print the families' rows as one table."""
+#: The columns of ``table.csv`` that say whose lives a row counts.
+LABELS = ("dataset", "held_out_gear", "seeds")
+
+
+def labels(rows: list[dict]) -> dict:
+    """The data set, held-out gear and seeds of one family's result rows, as its lives
+    record them (``seeds``: space-separated)."""
+    r = pd.DataFrame(rows)
+    return {"dataset": str(r.dataset.iloc[0]), "held_out_gear": int(r.held_out_gear.iloc[0]),
+            "seeds": " ".join(str(s) for s in sorted(r.seed.unique()))}
+
+
+def show(table: list[dict], folder: str | None = None) -> None:
+    """Print the families' rows as one table; with ``folder``, also write it there as
+    ``table.csv`` (``scripts/results_pages.py`` builds the results page's block from
+    every ``reports/monitor_families/*/table.csv``)."""
     out = pd.DataFrame(table).set_index("family")
     with pd.option_context("display.width", 250, "display.max_columns", 20):
-        print(out.round(3).to_string())
+        print(out.drop(columns=list(LABELS)).round(3).to_string())
+    if folder is not None:
+        ownership.atomic_write_bytes(os.path.join(folder, "table.csv"),
+                                     out.to_csv().encode())
 
 
 def read_table(folder: str, fams: list[str], cfg) -> int:
@@ -236,12 +259,13 @@ def read_table(folder: str, fams: list[str], cfg) -> int:
         paths = [os.path.join(folder, f"{fam}_{n}.csv") for n in ("results", "false_alarms")]
         if all(os.path.isfile(q) for q in paths):
             rows, fa = (pd.read_csv(q).to_dict("records") for q in paths)
-            table.append({"family": fam, **summary(rows, fa, cfg)})
+            table.append({"family": fam, **labels(rows), **summary(rows, fa, cfg),
+                          "wall_s": np.nan})
     if not table:
         print(f"monitor_families: error: --read {folder}: no family's rows there "
               f"(<family>_results.csv and <family>_false_alarms.csv)", file=sys.stderr)
         return 2
-    show(table)
+    show(table, folder)
     return 0
 
 

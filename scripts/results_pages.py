@@ -10,7 +10,7 @@ Each generated table of a results page sits between two markers in its Markdown 
 This script reads a run's ``reports/`` folder (it reruns nothing: the reports of
 ``swgsim-paper``, ``swgsim-train experiment=transfer``, ``swgsim-train
 experiment=monitor``, ``swgsim-train experiment=prognosis``, ``swgsim-observability``,
-``swgsim-export`` and
+``swgsim-export``, ``scripts/monitor_families.py --out`` and
 ``scripts/calibrate_real.py --out``) and writes each block whose report is there, with
 the run named: the command, the commit (``--commit``, else the checkout's HEAD) and the
 date the report was written (its modification time). A block whose report is missing is
@@ -253,6 +253,48 @@ def monitor_real_day(rep: Path) -> str:
             f"of the detected ones:\n\n{md_table(wide.fillna('-'))}")
 
 
+#: The families table's columns (``scripts/monitor_families.py``'s ``table.csv``) and how
+#: each cell prints.
+FAMILY_COLUMNS = {
+    "gear_fault_alarms_per_1000h": ("gear-fault alarms /1000 h", "{:.0f}"),
+    "unexplained_changes_per_1000h": ("unexplained changes /1000 h", "{:.0f}"),
+    "advisories_per_1000h": ("advisories /1000 h", "{:.0f}"),
+    "targets_detected": ("target faults detected", "{}"),
+    "mildest_step_ttd_h": ("median time to detect, mildest step [h]", "{:.2f}"),
+    "targets_named_right": ("target faults named right 1 h after", "{:.2f}"),
+    "sensor_reported_h": ("failed sensors named, longest [h]", "{}"),
+}
+
+
+def _cells(v: pd.Series, form: str) -> str:
+    """A column's values over the held-out gears, ``a / b / c`` (``-``: none)."""
+    return " / ".join("-" if pd.isna(x) else form.format(x) for x in v)
+
+
+def monitor_families(rep: Path) -> str:
+    """The monitor through every family of benign changes (``scripts/monitor_families.py
+    --out reports/monitor_families/<name>``, one folder per data set and held-out gear):
+    per data set, a row per family, each cell its held-out gears' figures in order."""
+    t = pd.concat([pd.read_csv(p, keep_default_na=False, na_values=[""])
+                   for p in sorted(rep.glob("monitor_families/*/table.csv"))])
+    out, walls = [], []
+    for ds, d in t.groupby("dataset", sort=False):
+        d = d.sort_values("held_out_gear", kind="stable")
+        gears = " / ".join(str(g) for g in d.held_out_gear.unique())
+        rows = [{"family": f"`{fam}`", **{name: _cells(f[c], form)
+                                          for c, (name, form) in FAMILY_COLUMNS.items()}}
+                for fam, f in d.groupby("family", sort=False)]
+        seeds = ", ".join(sorted(set(d.seeds.astype(str))))
+        out.append(f"**{ds}**, held-out gears {gears} (cells in that order); seeds "
+                   f"{seeds}:\n\n{md_table(pd.DataFrame(rows))}")
+        walls += [f"{ds} gear {g} {w.sum() / 60:.1f} min"
+                  for g, w in d.groupby("held_out_gear").wall_s if w.notna().all()]
+    wall = (f"Wall time per data set and held-out gear (one process each): "
+            f"{', '.join(walls)}." if walls else "Wall times not recorded (tables read "
+            "again from the rows, `--read`).")
+    return "\n\n".join(out) + f"\n\n{wall}"
+
+
 def monitor_timing(rep: Path) -> str:
     """Worker-minutes per data set and stage (``timing.json``) and the wall time."""
     t = json.loads((rep / "monitor" / "timing.json").read_text(encoding="utf-8"))
@@ -375,6 +417,9 @@ BLOCKS = (
     Block("monitor.real_day", "monitor.md",
           ("monitor/results.csv", "monitor/false_alarms.csv"),
           "swgsim-train experiment=monitor", monitor_real_day),
+    Block("monitor.families", "monitor.md", ("monitor_families/*/table.csv",),
+          "python scripts/monitor_families.py --dataset D --gear G --seeds scored --trace "
+          "FILE --out reports/monitor_families/D_gG", monitor_families),
     Block("monitor.timing", "monitor.md", ("monitor/timing.json",),
           "swgsim-train experiment=monitor", monitor_timing),
     Block("prognosis.targets", "prognosis.md", ("prognosis/table.md",),

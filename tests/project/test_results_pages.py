@@ -90,3 +90,29 @@ def test_the_prognosis_blocks_copy_the_tables_of_their_sections(tmp_path):
     assert results_pages.prognosis_section("After a payload change")(rep).endswith("| c1 |")
     timing = results_pages.prognosis_timing(rep)
     assert "Wall time **10.0 min**" in timing and "| bench | 1 | 80 | 100 | 61 |" in timing
+
+
+def test_the_families_block_puts_each_gears_figures_side_by_side(tmp_path):
+    """Two held-out gears' tables of scripts/monitor_families.py, written in the wrong
+    order: one row per family, each cell gear 1's figure then gear 2's; the wall time of
+    a run that recorded it, none of one read again (--read)."""
+    rep = tmp_path / "reports"
+    for g, alarms, wall in ((2, 6.0, float("nan")), (1, 0.0, 600.0)):
+        folder = rep / "monitor_families" / f"bench_g{g}"
+        folder.mkdir(parents=True)
+        pd.DataFrame([{"family": fam, "dataset": "bench", "held_out_gear": g,
+                       "seeds": "0 1 2 3 4", "gear_fault_alarms_per_1000h": alarms,
+                       "unexplained_changes_per_1000h": 1.0, "advisories_per_1000h": 5.0,
+                       "detected": "70/75", "growing_detected": "20/25",
+                       "median_ttd_h": 0.2, "named_right_1h": 0.9,
+                       "targets_detected": f"{59 - g}/60", "mildest_step_ttd_h": 0.125,
+                       "targets_named_right": 0.8, "sensor_reported_h": sensor,
+                       "wall_s": wall}
+                      for fam, sensor in (("warm_up", "-"), ("sensor_stuck", "5/5, 0.25"))]
+                     ).to_csv(folder / "table.csv", index=False)
+    block = results_pages.monitor_families(rep)
+    assert "held-out gears 1 / 2" in block and "seeds 0 1 2 3 4" in block
+    assert "| `warm_up` | 0 / 6 | 1 / 1 | 5 / 5 | 58/60 / 57/60 | 0.12 / 0.12 | 0.80 / 0.80 " \
+           "| - / - |" in block
+    assert "| `sensor_stuck` | 0 / 6 |" in block and "| 5/5, 0.25 / 5/5, 0.25 |" in block
+    assert "bench gear 1 20.0 min" in block and "gear 2" not in block.split("Wall")[1]
