@@ -295,8 +295,8 @@ class GearMonitor:
         temperature brings - the pattern of reduced damping. Scored against the reading's
         calibration, healthy windows read so gave that class's evidence a 99th
         percentile of 23 against 2.6 with the true temperature, and gear-fault alarms
-        (bench gear 3, family ``sensor_stuck``, scored seed 1: docs/monitor.md, "Scored
-        under every family, every held-out gear").
+        (bench gear 3, family ``sensor_stuck``, scored seed 1: docs/monitor.md, "The
+        monitor checks its temperature sensor").
 
         Raises
         ------
