@@ -399,8 +399,9 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
                 lost, mon = True, reading_lost(mon)
                 state = 0.0 if first["monitor"] is None else state
                 fstate = traces[-1].state(len(traces[-1].hour) - 1) if traces else fstate
-            c = read_without(mon, f[w], p[w], cond[w], mon.friction) if lost else cond[w]
             hours = m["hour"][w]
+            c = read_without(mon, f[w], p[w], cond[w], hours, (mon.friction, mon.last_hour)
+                             if fstate is None else fstate) if lost else cond[w]
             t = mon.run(f[w], p[w], hours, c, latch=True, start=state, friction_start=fstate) \
                 if first["monitor"] is None else mon.score_only(f[w], p[w], hours, c, fstate)
             fstate = None  # from the next span on, the monitor's own

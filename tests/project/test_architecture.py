@@ -166,7 +166,8 @@ def test_library_size_is_counted_and_printed():
 def test_no_test_module_imports_another():
     """Set-ups tests share live in fixtures (``conftest.py``) or in the tests' helper
     modules (``data_sets``, ``physics_reference``, ``bad_input``, ``strain_run``,
-    ``planted_strain``, ``planted_thermal``), never in a test module another imports."""
+    ``planted_strain``, ``planted_thermal``, ``real_day``), never in a test module another
+    imports."""
     bad = []
     for f in sorted((ROOT / "tests").rglob("*.py")):
         for n in ast.walk(ast.parse(f.read_text(encoding="utf-8"))):
