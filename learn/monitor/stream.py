@@ -561,8 +561,8 @@ def reading_lost(mon: GearMonitor) -> GearMonitor:
 
 #: Passes of :func:`read_without`: the virtual temperature at the friction factor
 #: tracked over the last pass's temperatures, the first at the friction in force [choice:
-#: the tracking is slow, the temperature fast; two passes moved the temperature by under
-#: 0.1 K more, ad-hoc].
+#: the tracking is slow, the temperature fast; on tiny_real_day, the reading lost during
+#: its run-in, the mean error was +0.65, +0.14, +0.01 and -0.02 K after 0-3 passes].
 VIRTUAL_PASSES = 2
 
 
