@@ -24,11 +24,16 @@ detect [h], the share of detected faults named right an hour after the alarm, th
 for the issue's target faults (eccentric WG, reduced damping, root and tip crack; the
 time to detect of their step onsets at the mildest severity), how many failed temperature
 sensors were named and the longest hours to it, and the family's wall time [s]. With
-``--out DIR`` every family's rows are written there, and the table as ``DIR/table.csv``
+``--out DIR`` every family's rows are written there as it ends, with its key (what made
+it: the preset's config hash, the held-out gear, the seeds, the study with that family
+alone) and wall time in ``DIR/<family>_part.json``, and the table as ``DIR/table.csv``
 (``scripts/results_pages.py`` builds the results page from
-``reports/monitor_families/*/table.csv``); ``--read DIR`` prints the table of its rows
-again without running (and writes ``DIR/table.csv``, its wall times unknown: NaN). A bad
-preset, gear, family or study key ends in one line (exit 2).
+``reports/monitor_families/*/table.csv``). The same command again resumes: a family whose
+rows and key are there (the ownership stamp proving them this script's) is read back, not
+run. A folder holding files of anything else is refused before any work. ``--read DIR``
+prints the table of its rows again without running (and writes ``DIR/table.csv``, its
+wall times unknown: NaN). A bad preset, gear, family, study key or output folder ends in
+one line (exit 2).
 """
 
 from __future__ import annotations
@@ -39,6 +44,7 @@ import json
 import os
 import sys
 import time
+from contextlib import nullcontext
 
 from swgsim.base.lazy import lazy_module
 
@@ -54,6 +60,10 @@ plans = lazy_module("swgsim.datasets.plan")
 records = lazy_module("swgsim.datasets.records")
 ownership = lazy_module("swgsim.files.ownership")
 report = lazy_module("learn.monitor_evaluation.report")
+parts = lazy_module("learn.tasks.parts")
+
+#: The tag this script claims its ``--out`` folder with (swgsim.files.writers.WRITERS).
+TAG = "monitor-families"
 
 
 def parse(argv: list[str] | None = None) -> argparse.Namespace:
@@ -197,34 +207,106 @@ def main(argv: list[str] | None = None) -> int:
     args = parse(argv)
     try:
         p, cfg, train, fams, seeds = setup(args)
+        if args.read is not None and not os.path.isdir(args.read):
+            raise ValueError(f"--read {args.read}: no such folder")
+        folder, what = (args.read, "--read") if args.read is not None else (args.out, "--out")
+        claim = nullcontext() if folder is None else ownership.claim(folder, TAG, what,
+                                                                      strict=True)
     except (ValueError, KeyError) as e:
         print(f"monitor_families: error: {e}", file=sys.stderr)
         return 2
-    if args.read is not None:
-        return read_table(args.read, fams, cfg)
+    try:
+        with claim:
+            if args.read is not None:
+                return read_table(args.read, fams, cfg)
+            return run(args, p, cfg, train, fams, seeds)
+    except KeyboardInterrupt:
+        print("monitor_families: interrupted (SIGINT); " + (
+            ownership.stop_note() or "nothing written yet; rerun the same command to start "
+            "again"), file=sys.stderr)
+        return 130
+
+
+def run(args: argparse.Namespace, p, cfg, train: list[int], fams: list[str],
+        seeds: list[int]) -> int:
+    """Live the families into the table, each family resumed from ``--out`` where its
+    part is there (:func:`finished`), else run and saved as it ends (:func:`save`)."""
+    t0 = time.perf_counter()
+    fit, table = None, []  # (record banks, diagnosis model): trained at the first run
+    for fam in fams:
+        key = family_key(p, cfg, fam, seeds, args.gear)
+        done = None if args.out is None else finished(args.out, fam, key)
+        resumed = done is not None
+        if not resumed:
+            if fit is None:
+                fit = trained(p, cfg, args, train, seeds)
+            t1 = time.perf_counter()
+            rows, fa, _ = evaluate.evaluate_gear(p, fit[0], args.gear, fit[1], cfg,
+                                                 args.dataset, study.FAMILY_PREFIX + fam,
+                                                 seeds)
+            done = rows, fa, time.perf_counter() - t1
+            if args.out is not None:
+                save(args.out, fam, key, *done)
+        table.append({"family": fam, **labels(done[0]), **summary(done[0], done[1], cfg),
+                      "wall_s": done[2]})
+        row = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                        for k, v in table[-1].items() if k not in ("family", *LABELS))
+        print(f"  {fam}: {row}" + (f" (resumed from {args.out})" if resumed else ""),
+              flush=True)
+        if args.out is not None:  # the table so far: a stopped run leaves it too
+            write_table(table, args.out)
+    show(table)
+    print(f"wall time {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def trained(p, cfg, args: argparse.Namespace, train: list[int], seeds: list[int]):
+    """The gears' record banks and the diagnosis model trained on ``train``, as the
+    evaluation trains it, with the line that says so."""
     t0 = time.perf_counter()
     banks = {g: records.record_bank(p, g) for g in [*train, args.gear]}
     model = training.train_model(p, banks, train, cfg)
     print(f"{args.dataset}, held-out gear {args.gear}, trained on gears {train} in "
           f"{time.perf_counter() - t0:.0f} s; {args.seeds} seeds {seeds}", flush=True)
-    table = []
-    for fam in fams:
-        t1 = time.perf_counter()
-        rows, fa, _ = evaluate.evaluate_gear(p, banks, args.gear, model, cfg, args.dataset,
-                                             study.FAMILY_PREFIX + fam, seeds)
-        table.append({"family": fam, **labels(rows), **summary(rows, fa, cfg),
-                      "wall_s": time.perf_counter() - t1})
-        if args.out is not None:
-            os.makedirs(args.out, exist_ok=True)
-            for name, part in (("results", rows), ("false_alarms", fa)):
-                ownership.atomic_write_bytes(os.path.join(args.out, f"{fam}_{name}.csv"),
-                                             pd.DataFrame(part).to_csv(index=False).encode())
-        row = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
-                        for k, v in table[-1].items() if k not in ("family", *LABELS))
-        print(f"  {fam}: {row}", flush=True)  # each family as it ends: a long run shows
-    show(table, args.out)
-    print(f"wall time {time.perf_counter() - t0:.0f} s")
-    return 0
+    return banks, model
+
+
+def family_key(p, cfg, fam: str, seeds: list[int], gear: int) -> str:
+    """What made a family's rows (:func:`learn.tasks.parts.part_key`): the preset's
+    config hash (its gears, the training ones among them), the held-out gear, the seeds
+    and the study with that family alone (another family's draws do not change it)."""
+    alone = dataclasses.replace(cfg, families={fam: cfg.families[fam]})
+    return parts.part_key([p.config_hash, gear, seeds, dataclasses.asdict(alone)])
+
+
+def _paths(folder: str, fam: str) -> dict[str, str]:
+    return {n: os.path.join(folder, f"{fam}_{n}.{'json' if n == 'part' else 'csv'}")
+            for n in ("results", "false_alarms", "part")}
+
+
+def finished(folder: str, fam: str, key: str) -> tuple[list, list, float] | None:
+    """A family's rows and wall time [s] from an earlier run into ``folder`` with the
+    same key (its part file written last, so a stop between leaves it to run again);
+    None where they are not all there or were made otherwise."""
+    q = _paths(folder, fam)
+    try:
+        part = json.loads(open(q["part"]).read())
+        if part.get("key") != key:
+            return None
+        rows, fa = (pd.read_csv(q[n]).to_dict("records") for n in ("results", "false_alarms"))
+    except (OSError, ValueError):
+        return None
+    return rows, fa, float(part.get("wall_s", np.nan))
+
+
+def save(folder: str, fam: str, key: str, rows: list[dict], fa: list[dict],
+         wall_s: float) -> None:
+    """A family's rows as the evaluation's (``<family>_results.csv``,
+    ``<family>_false_alarms.csv``), then its part (key and wall time) that proves them."""
+    q = _paths(folder, fam)
+    for name, part in (("results", rows), ("false_alarms", fa)):
+        ownership.atomic_write_bytes(q[name], pd.DataFrame(part).to_csv(index=False).encode())
+    ownership.atomic_write_json(q["part"], {"key": key, "wall_s": wall_s})
 
 
 #: The columns of ``table.csv`` that say whose lives a row counts.
@@ -239,16 +321,18 @@ def labels(rows: list[dict]) -> dict:
             "seeds": " ".join(str(s) for s in sorted(r.seed.unique()))}
 
 
-def show(table: list[dict], folder: str | None = None) -> None:
-    """Print the families' rows as one table; with ``folder``, also write it there as
-    ``table.csv`` (``scripts/results_pages.py`` builds the results page's block from
-    every ``reports/monitor_families/*/table.csv``)."""
+def show(table: list[dict]) -> None:
+    """Print the families' rows as one table."""
     out = pd.DataFrame(table).set_index("family")
     with pd.option_context("display.width", 250, "display.max_columns", 20):
         print(out.drop(columns=list(LABELS)).round(3).to_string())
-    if folder is not None:
-        ownership.atomic_write_bytes(os.path.join(folder, "table.csv"),
-                                     out.to_csv().encode())
+
+
+def write_table(table: list[dict], folder: str) -> None:
+    """The families' rows as ``folder/table.csv`` (``scripts/results_pages.py`` builds
+    the results page's block from every ``reports/monitor_families/*/table.csv``)."""
+    ownership.atomic_write_bytes(os.path.join(folder, "table.csv"),
+                                 pd.DataFrame(table).set_index("family").to_csv().encode())
 
 
 def read_table(folder: str, fams: list[str], cfg) -> int:
@@ -265,7 +349,8 @@ def read_table(folder: str, fams: list[str], cfg) -> int:
         print(f"monitor_families: error: --read {folder}: no family's rows there "
               f"(<family>_results.csv and <family>_false_alarms.csv)", file=sys.stderr)
         return 2
-    show(table, folder)
+    show(table)
+    write_table(table, folder)
     return 0
 
 

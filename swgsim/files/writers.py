@@ -69,6 +69,10 @@ WRITERS: dict[str, Writer] = {
         "swgsim-train experiment=monitor", "monitor evaluation", "parts/*.json", "part",
         "it reuses each part in parts/ whose SHA-256 the ownership stamp and whose key the "
         "config prove complete, and runs the rest"),
+    "monitor-families": Writer(
+        "scripts/monitor_families.py", "monitor families", "*_part.json", "family",
+        "it reuses each family whose rows the ownership stamp and whose key in "
+        "<family>_part.json prove complete, and runs the rest"),
     "prognosis": Writer(
         "swgsim-train experiment=prognosis", "prognosis evaluation", "parts/*.json", "part",
         "it reuses each part in parts/ whose SHA-256 the ownership stamp and whose key the "

@@ -1,0 +1,91 @@
+"""scripts/monitor_families.py --out: each family saved as it ends and a rerun of the same
+command resumes from it; a family made otherwise is run again; a folder holding files of
+anything else is refused before any work. The lives are stubbed (the evaluation's rows,
+made up): what is tested is the bookkeeping, not the monitor."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import learn.monitor.evaluate as evaluate
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+import monitor_families  # noqa: E402
+
+
+@pytest.fixture
+def lives(monkeypatch):
+    """The families each run lived, in order; a family named in ``stop`` raises
+    KeyboardInterrupt (a Ctrl-C while it runs)."""
+    state = {"lived": [], "trained": 0, "stop": set()}
+
+    def evaluate_gear(p, banks, g, model, cfg, dataset, nuisance, seeds):
+        fam = nuisance.removeprefix("family:")
+        if fam in state["stop"]:
+            raise KeyboardInterrupt
+        state["lived"].append(fam)
+        key = {"dataset": dataset, "held_out_gear": g, "nuisance": nuisance,
+               "detector": "monitor"}
+        rows = [{**key, "seed": s, "fault": "eccentric_wg", "severity": 0.02,
+                 "onset": "step", "detected": True, "time_to_detect_h": 0.1 * (s + 1),
+                 "fault_after_1h": "eccentric_wg"} for s in seeds]
+        fa = [{**key, "seed": s, "healthy_hours": 200.0, "gear_fault_alarms": 1,
+               "unexplained_changes": 0, "advisories": 0,
+               "temperature_sensor_h": float("nan")} for s in seeds]
+        return rows, fa, []
+
+    def trained(*args):
+        state["trained"] += 1
+        return {}, None
+    monkeypatch.setattr(evaluate, "evaluate_gear", evaluate_gear)
+    monkeypatch.setattr(monitor_families, "trained", trained)
+    return state
+
+
+ARGS = ["--families", "warm_up", "drift", "--n-seeds", "2"]
+
+
+def test_a_stopped_run_resumes_from_its_finished_families(tmp_path, lives, capsys):
+    out = tmp_path / "out"
+    lives["stop"] = {"drift"}
+    assert monitor_families.main([*ARGS, "--out", str(out)]) == 130
+    assert "rerun the same command to resume" in capsys.readouterr().err
+    assert lives["lived"] == ["warm_up"]
+    assert list(pd.read_csv(out / "table.csv").family) == ["warm_up"]
+    first = (out / "warm_up_results.csv").read_bytes()
+
+    lives["stop"] = set()
+    assert monitor_families.main([*ARGS, "--out", str(out)]) == 0
+    assert lives["lived"] == ["warm_up", "drift"]  # warm_up read back, not lived again
+    assert "warm_up: " in (text := capsys.readouterr().out) and "(resumed from" in text
+    table = pd.read_csv(out / "table.csv")
+    assert list(table.family) == ["warm_up", "drift"]
+    assert list(table.gear_fault_alarms_per_1000h) == [5.0, 5.0]  # 2 alarms in 400 h
+    assert table.wall_s.notna().all()  # the resumed family keeps its own wall time
+    assert (out / "warm_up_results.csv").read_bytes() == first
+
+    assert monitor_families.main([*ARGS, "--out", str(out)]) == 0
+    assert lives["lived"] == ["warm_up", "drift"] and lives["trained"] == 2  # nothing to run
+
+
+def test_a_family_made_otherwise_is_run_again(tmp_path, lives):
+    out = str(tmp_path / "out")
+    for change in ([], ["--study", "nuisance_hours=100"], ["--n-seeds", "1"]):
+        assert monitor_families.main([*ARGS, "--out", out, *change]) == 0  # each run anew
+    assert lives["lived"] == ["warm_up", "drift"] * 3
+
+
+def test_a_folder_with_files_of_anything_else_is_refused_before_work(tmp_path, lives,
+                                                                    capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "warm_up_results.csv").write_text("mine\n")
+    assert monitor_families.main([*ARGS, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "warm_up_results.csv" in err and "--out" in err
+    assert (out / "warm_up_results.csv").read_text() == "mine\n"
+    assert lives["lived"] == [] and lives["trained"] == 0
