@@ -290,7 +290,8 @@ def finished(folder: str, fam: str, key: str) -> tuple[list, list, float] | None
     None where they are not all there or were made otherwise."""
     q = _paths(folder, fam)
     try:
-        part = json.loads(open(q["part"]).read())
+        with open(q["part"]) as f:
+            part = json.load(f)
         if part.get("key") != key:
             return None
         rows, fa = (pd.read_csv(q[n]).to_dict("records") for n in ("results", "false_alarms"))
@@ -340,7 +341,7 @@ def read_table(folder: str, fams: list[str], cfg) -> int:
     run); 2 where it holds none of them."""
     table = []
     for fam in fams:
-        paths = [os.path.join(folder, f"{fam}_{n}.csv") for n in ("results", "false_alarms")]
+        paths = [_paths(folder, fam)[n] for n in ("results", "false_alarms")]
         if all(os.path.isfile(q) for q in paths):
             rows, fa = (pd.read_csv(q).to_dict("records") for q in paths)
             table.append({"family": fam, **labels(rows), **summary(rows, fa, cfg),
