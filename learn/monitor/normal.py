@@ -380,8 +380,14 @@ class NormalBehaviour:
         i = self._check(points, index)
         if cond is None:
             cond = Conditions(self.ref_torque[i], None)
-        fr = np.broadcast_to(friction, (len(feats),))
-        ref = self._corrected(feats, i, cond, fr)
+        return self._z_in(feats, i, cond, np.broadcast_to(friction, (len(feats),)))
+
+    def _z_in(self, feats: np.ndarray, i: np.ndarray, cond: Conditions, fr: np.ndarray,
+              load: tuple[np.ndarray, np.ndarray] | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`z_and_spread` of windows at point indices ``i``, with the friction
+        factors ``fr`` (n,) and, when known, their :meth:`_load_terms` ``load``."""
+        ref = self._corrected(feats, i, cond, fr, load)
         spread = self.std[i]
         edge, beyond = self._edge(i, cond)
         kappa = self.config.extrapolation_uncertainty
@@ -444,6 +450,40 @@ class NormalBehaviour:
         z, _ = self._in_spread(dev, np.tile(i, m), spread.reshape(m * n, -1),
                                np.tile(self._heavier(i, cond), m))
         return z.reshape(m, n, -1)
+
+    def z_over_temperature(self, feats: np.ndarray, points: np.ndarray,
+                           torque_nm: np.ndarray, temps: np.ndarray, friction: np.ndarray,
+                           index: np.ndarray | None = None) -> np.ndarray:
+        """z-scores of the same windows at many temperatures, shape (n, G, F): equal to
+        :meth:`z` of each window repeated G times (``temps[k]`` its temperatures) at a
+        lower cost, for the fits of the temperature
+        (:func:`learn.monitor.sensor_check.best_temperature`): the load curves' correction
+        does not depend on the temperature, so it is computed once per window.
+
+        Parameters
+        ----------
+        feats : ndarray, shape (n, F)
+        points : ndarray, shape (n, 2)
+        torque_nm : ndarray, shape (n,)
+            Each window's load [N m].
+        temps : ndarray, shape (n, G)
+            The temperatures tried [°C], G per window.
+        friction : ndarray, shape (n,)
+            Each window's friction factor.
+        index : ndarray of int, shape (n,), optional
+
+        Raises
+        ------
+        ValueError
+            If a window's operating point was not seen at commissioning.
+        """
+        i = self._check(points, index)
+        n, g = temps.shape
+        rep = np.repeat(np.arange(n), g)
+        div, shift = self._load_terms(i, torque_nm)
+        z, _ = self._z_in(feats[rep], i[rep], Conditions(torque_nm[rep], temps.ravel()),
+                          np.asarray(friction, float)[rep], (div[rep], shift[rep]))
+        return z.reshape(n, g, -1)
 
     def _in_spread(self, dev: np.ndarray, index: np.ndarray, spread: np.ndarray,
                    loaded: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -667,11 +707,27 @@ class NormalBehaviour:
         return (self.loss if law is None else law).predict(i, np.abs(cond.torque_nm), temp)
 
     def _corrected(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
-                   friction: np.ndarray) -> np.ndarray:
+                   friction: np.ndarray,
+                   load: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """Features at the reference condition of their point
-        (docs/monitor.md, "The normal behaviour's laws")."""
+        (docs/monitor.md, "The normal behaviour's laws"); ``load``: :meth:`_load_terms` of
+        the windows' loads, when known."""
+        div, shift = self._load_terms(i, cond.torque_nm) if load is None else load
         out = self._temperature_corrected(feats, i, self._dt(i, cond))
-        tq = np.abs(cond.torque_nm)
+        out /= div
+        out += shift
+        out[:, EFFICIENCY] = self._efficiency(feats, i, cond, friction)
+        return out
+
+    def _load_terms(self, i: np.ndarray, torque_nm: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """The load curves' correction of features at loads ``torque_nm`` to their point's
+        reference load, as a divisor and a shift (n, F) each, ``x / div + shift``: the
+        offset's line taken out, the harmonics' amplitudes divided by the square root of
+        the curve's ratio, the residual's log10 shifted by half its log10 (the
+        efficiency's correction is in its loss law: divisor 1, shift 0). It does not
+        depend on the temperature, so a fit over temperatures computes it once."""
+        tq = np.abs(torque_nm)
         t0 = np.abs(self.ref_torque[i])
         q = self.load[i]  # (n, 3, F)
 
@@ -681,13 +737,13 @@ class NormalBehaviour:
         at, at0 = curve(tq), curve(t0)
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = np.where((at > 0) & (at0 > 0), at / at0, 1.0)
+        div, shift = np.ones_like(at), np.zeros_like(at)
         for c in range(5):
             j0 = c * BLOCK
-            out[:, j0] -= (at - at0)[:, j0]  # the offset's line
-            out[:, j0 + 1:j0 + BLOCK - 1] /= np.sqrt(ratio[:, j0 + 1:j0 + BLOCK - 1])
-            out[:, j0 + BLOCK - 1] -= 0.5 * np.log10(ratio[:, j0 + BLOCK - 1])
-        out[:, EFFICIENCY] = self._efficiency(feats, i, cond, friction)
-        return out
+            shift[:, j0] = -(at - at0)[:, j0]  # the offset's line
+            div[:, j0 + 1:j0 + BLOCK - 1] = np.sqrt(ratio[:, j0 + 1:j0 + BLOCK - 1])
+            shift[:, j0 + BLOCK - 1] = -0.5 * np.log10(ratio[:, j0 + BLOCK - 1])
+        return div, shift
 
     def _efficiency(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
                     friction: np.ndarray, law: LossLaw | None = None

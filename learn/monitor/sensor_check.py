@@ -409,10 +409,7 @@ def _sum_z2(normal: NormalBehaviour, feats, points, torque_nm, friction, index,
             temps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Σ z² and z of each window (n) at each of its temperatures ``temps`` (n, G), in one
     evaluation of the normal behaviour; shapes (n, G) and (n, G, F)."""
-    n, g = temps.shape
-    rep = np.repeat(np.arange(n), g)
-    z = normal.z(feats[rep], points[rep], Conditions(torque_nm[rep], temps.ravel()),
-                 friction[rep], index[rep]).reshape(n, g, -1)
+    z = normal.z_over_temperature(feats, points, torque_nm, temps, friction, index)
     return np.sum(z ** 2, axis=2), z
 
 

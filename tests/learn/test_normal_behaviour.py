@@ -331,6 +331,58 @@ def test_z_over_friction_equals_z_of_the_repeated_windows():
     assert np.any(nb._edge(nb.index(p), Conditions(acting, None))[1])  # spread widened
 
 
+def _load_corrected_reference(nb: NormalBehaviour, feats, i, cond, friction):
+    """The features at their point's reference condition as the load correction was
+    written before it became a divisor and a shift (NormalBehaviour._load_terms): in place,
+    feature block by feature block."""
+    out = nb._temperature_corrected(feats, i, nb._dt(i, cond))
+    q = nb.load[i]
+    at, at0 = (q[:, 0] + q[:, 1] * t[:, None] + q[:, 2] * t[:, None] ** 2
+               for t in (np.abs(cond.torque_nm), np.abs(nb.ref_torque[i])))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where((at > 0) & (at0 > 0), at / at0, 1.0)
+    for c in range(5):
+        j0 = c * BLOCK
+        out[:, j0] -= (at - at0)[:, j0]
+        out[:, j0 + 1:j0 + BLOCK - 1] /= np.sqrt(ratio[:, j0 + 1:j0 + BLOCK - 1])
+        out[:, j0 + BLOCK - 1] -= 0.5 * np.log10(ratio[:, j0 + BLOCK - 1])
+    out[:, EFFICIENCY] = nb._efficiency(feats, i, cond, friction)
+    return out
+
+
+def test_z_over_temperature_equals_z_of_the_repeated_windows():
+    """The temperature fits' fast path (NormalBehaviour.z_over_temperature: the load
+    correction computed once per window) gives the same bits as z of the windows repeated
+    once per temperature, inside and beyond commissioning's loads and temperatures, with
+    warm-up directions and with a friction law commissioning could not learn; and the
+    load correction as a divisor and a shift the same bits as the block-by-block one."""
+    rng = np.random.default_rng(7)
+    commanded = np.repeat(LOADS, 80)
+    temp = rng.uniform(20.0, 45.0, commanded.size)
+    points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
+    nb = NormalBehaviour.fit(_features(commanded, rng), points, Conditions(commanded, temp))
+    d = rng.standard_normal((len(nb.points), 2, EFFICIENCY + 1))
+    nb = dataclasses.replace(nb, warm_dir=d / np.linalg.norm(d, axis=2, keepdims=True),
+                             warm_range=np.tile([-1.5, 2.0], (len(nb.points), 2, 1)))
+    band = dataclasses.replace(nb, loss_band=(
+        dataclasses.replace(nb.loss, coef=nb.loss.coef * 1.3),
+        LossLaw(nb.loss.coef[:, [0, -1]] * 0.8)))
+    n, g = 24, 9
+    p = points[rng.choice(len(points), n)]
+    acting = p[:, 1] * rng.uniform(0.8, 1.2, n)
+    feats, fr = _features(acting, rng), np.exp(rng.uniform(-0.3, 0.3, n))
+    temps = rng.uniform(5.0, 65.0, (n, g))
+    for law in (nb, band):
+        fast = law.z_over_temperature(feats, p, acting, temps, fr)
+        rep = np.repeat(np.arange(n), g)
+        slow = law.z(feats[rep], p[rep], Conditions(acting[rep], temps.ravel()),
+                     fr[rep]).reshape(fast.shape)
+        assert np.array_equal(fast, slow)
+    i, cond = nb.index(p), Conditions(acting, temps[:, 0])
+    assert np.array_equal(nb._corrected(feats, i, cond, fr),
+                          _load_corrected_reference(nb, feats, i, cond, fr))
+
+
 
 def _warm(commissioned, lo: float, hi: float, kappa: float = 1.0):
     """The commissioned normal behaviour as a joint without a reading has it: one warm-up
