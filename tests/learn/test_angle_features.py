@@ -118,3 +118,37 @@ def test_short_window_named_across_chunks(steady):
     with pytest.raises(ValueError, match="window 35: psi spans"):
         ft.window_features(np.repeat(sig, 40, axis=0), np.full(40, N_MEAN),
                            np.full(40, 0.8), 10e3, psi=psi)
+
+
+def _angle_basis_reference(psi, psi_order, h, orders):
+    """The angle-domain basis on arrays, as it was written before the compiled loop
+    (learn.inputs.signals._fill_angle_basis)."""
+    n, n_t = psi.shape
+    k = len(orders)
+    bt = np.empty((n, 1 + 2 * (h + k), n_t))
+    bt[:, 0] = 1.0
+    if h:
+        bt[:, 1], bt[:, 1 + h + k] = np.cos(psi), np.sin(psi)
+    for j in range(2, h + 1):
+        c, sn = bt[:, j - 1], bt[:, h + k + j - 1]
+        bt[:, j] = c * bt[:, 1] - sn * bt[:, 1 + h + k]
+        bt[:, h + k + j] = sn * bt[:, 1] + c * bt[:, 1 + h + k]
+    phi_in = psi / psi_order
+    for j, o in enumerate(orders):
+        bt[:, 1 + h + j], bt[:, 1 + 2 * h + k + j] = np.cos(o * phi_in), np.sin(o * phi_in)
+    return bt
+
+
+@pytest.mark.parametrize("h, orders", [(12, ft.NUISANCE_ORDERS), (3, (0.25, 1 / 3, 0.5, 1.0)),
+                                       (0, (0.5,)), (5, ())])
+def test_compiled_angle_basis_matches_the_array_form(h, orders):
+    """The compiled basis (one loop, no temporaries) equals the array form to rounding
+    (the same operations in the same order; a platform's vectorised cos may differ from
+    the compiled one's in the last bit), on a window that reverses."""
+    from learn.inputs.signals import _angle_basis
+
+    rng = np.random.default_rng(3)
+    psi = np.cumsum(rng.normal(0.01, 0.02, (7, 300)), axis=1) + rng.uniform(0, 6, (7, 1))
+    fast = _angle_basis(psi, 1.01, h, orders)
+    np.testing.assert_allclose(fast, _angle_basis_reference(psi, 1.01, h, orders),
+                               rtol=0, atol=1e-12)

@@ -178,3 +178,53 @@ def test_bad_input_is_refused():
         with pytest.raises(ValueError, match=key) as e:
             make()
         assert "\n" not in str(e.value)
+
+
+def _edges_reference(t: np.ndarray, phi: np.ndarray, res: float) -> np.ndarray:
+    """edge_interpolate of one row on arrays, as it was written before the compiled loop
+    (swgsim.sensing.angles._edges_row)."""
+    k = np.rint(phi / res).astype(np.int64)
+    dk = np.diff(k)
+    idx = np.flatnonzero(dk)
+    if idx.size == 0:
+        return phi.copy()
+    m = np.abs(dk[idx])
+    j = np.repeat(idx, m)
+    step = np.sign(dk[idx])
+    within = np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m)
+    bound = np.repeat(k[idx], m) + np.where(np.repeat(step, m) > 0, within + 1, -within)
+    te = t[j] + (within + 0.5) / np.repeat(m, m) * (t[j + 1] - t[j])
+    ang = bound * res
+    if te.size == 1:
+        return np.full_like(phi, ang[0])
+
+    def end_slope(te, ang):
+        d = np.sign(np.diff(ang[:5]))
+        k = int(np.argmax(d != d[0])) if np.any(d != d[0]) else d.size
+        return float((ang[k] - ang[0]) / (te[k] - te[0]))
+
+    out = np.interp(t, te, ang)
+    lo, hi = t < te[0], t > te[-1]
+    out[lo] = ang[0] + (t[lo] - te[0]) * end_slope(te, ang)
+    out[hi] = ang[-1] + (t[hi] - te[-1]) * end_slope(-te[::-1], ang[::-1]) * -1.0
+    return out
+
+
+def test_compiled_edge_interpolation_matches_the_array_form():
+    """The compiled edge interpolation equals its array form to rounding on rows that run
+    steadily, reverse, stand still, cross several counts in one sample, and hold no edge
+    or a single one."""
+    res = 2 * np.pi / 24
+    t = np.arange(600) / 1e4
+    rng = np.random.default_rng(11)
+    rows = [2 * np.pi * 33.0 * t + 0.3,  # steady, 2000 rpm
+            0.8 * np.sin(2 * np.pi * 12.0 * t),  # reversals
+            np.where(t < 0.03, 0.1, 0.1 + 40.0 * (t - 0.03)),  # standstill, then moving
+            2 * np.pi * 500.0 * t,  # several counts per sample
+            np.full(t.size, 0.2),  # no edge
+            np.where(t < 0.02, 0.1, 0.2),  # one edge
+            np.cumsum(rng.normal(0.0, 0.05, t.size))]  # random walk
+    phi = np.floor(np.array(rows) / res) * res
+    got = an.edge_interpolate(t, phi, res)
+    for row, g in zip(phi, got, strict=True):
+        np.testing.assert_allclose(g, _edges_reference(t, row, res), rtol=0, atol=1e-12)
