@@ -300,6 +300,16 @@ def finished(folder: str, fam: str, key: str) -> tuple[list, list, float] | None
     return rows, fa, float(part.get("wall_s", np.nan))
 
 
+def _wall(part: str) -> float:
+    """A family's wall time [s] from its part file; NaN where there is none (rows of a run
+    before part files were written)."""
+    try:
+        with open(part) as f:
+            return float(json.load(f).get("wall_s", np.nan))
+    except (OSError, ValueError):
+        return np.nan
+
+
 def save(folder: str, fam: str, key: str, rows: list[dict], fa: list[dict],
          wall_s: float) -> None:
     """A family's rows as the evaluation's (``<family>_results.csv``,
@@ -341,11 +351,12 @@ def read_table(folder: str, fams: list[str], cfg) -> int:
     run); 2 where it holds none of them."""
     table = []
     for fam in fams:
-        paths = [_paths(folder, fam)[n] for n in ("results", "false_alarms")]
-        if all(os.path.isfile(q) for q in paths):
-            rows, fa = (pd.read_csv(q).to_dict("records") for q in paths)
+        q = _paths(folder, fam)
+        paths = [q[n] for n in ("results", "false_alarms")]
+        if all(os.path.isfile(x) for x in paths):
+            rows, fa = (pd.read_csv(x).to_dict("records") for x in paths)
             table.append({"family": fam, **labels(rows), **summary(rows, fa, cfg),
-                          "wall_s": np.nan})
+                          "wall_s": _wall(q["part"])})
     if not table:
         print(f"monitor_families: error: --read {folder}: no family's rows there "
               f"(<family>_results.csv and <family>_false_alarms.csv)", file=sys.stderr)

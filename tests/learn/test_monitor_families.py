@@ -71,6 +71,10 @@ def test_a_stopped_run_resumes_from_its_finished_families(tmp_path, lives, capsy
     assert monitor_families.main([*ARGS, "--out", str(out)]) == 0
     assert lives["lived"] == ["warm_up", "drift"] and lives["trained"] == 2  # nothing to run
 
+    walls = list(table.wall_s)
+    assert monitor_families.main([*ARGS, "--read", str(out)]) == 0  # the parts' wall times
+    assert list(pd.read_csv(out / "table.csv").wall_s) == walls
+
 
 def test_a_family_made_otherwise_is_run_again(tmp_path, lives):
     out = str(tmp_path / "out")
