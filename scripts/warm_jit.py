@@ -7,7 +7,8 @@ beside its source (``__pycache__``), so that later processes load it. A fresh en
 has none: its first test run or study pays for every compilation, once per process that
 needs a kernel before another has cached it. The costly one is aeon's MiniRocket (about
 21 s on the 2-core machine); the simulator's integrator, deflection chain, influence
-lookup and disturbance, and the monitor's tree walk, take about 3 s together.
+lookup, disturbance and input-angle edges, and the monitor's tree walk and angle-domain
+basis, take about 3 s together.
 ``scripts/quickstart.sh`` runs this once after installing (its output goes to the set-up
 log); it calls each kernel on tiny inputs of the types the project passes them, and prints
 the time it took.
@@ -21,11 +22,14 @@ import time
 import numpy as np
 from sklearn.ensemble import HistGradientBoostingClassifier
 
+from learn.inputs.signals import angle_fit
 from learn.learners.rocket import MiniRocketClassifier
+from learn.monitor.features import NUISANCE_ORDERS
 from learn.monitor.trees import CompiledTrees
 from swgcli import dataset_preset
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
+from swgsim.sensing.angles import edge_interpolate
 
 
 def main() -> None:
@@ -38,6 +42,9 @@ def main() -> None:
         generate(dataset_config(dataset_preset("tiny")), out, progress=False)
     x = rng.standard_normal((40, 3))
     CompiledTrees(HistGradientBoostingClassifier(max_iter=2).fit(x, x[:, 0] > 0)).raw(x)
+    t = np.arange(64) / 1e4
+    edge_interpolate(t, np.floor(2.0 * np.pi * 30.0 * t / 0.3)[None] * 0.3, 0.3)
+    angle_fit(X, np.tile(0.5 * np.arange(64), (8, 1)), 1.01, 3, NUISANCE_ORDERS)
     print(f"numba kernels compiled: MiniRocket {t1 - t0:.1f} s, "
           f"simulator and monitor {time.perf_counter() - t1:.1f} s")
 
