@@ -254,29 +254,16 @@ def harmonic_coefficients(x: np.ndarray, time_s: np.ndarray, f_in_hz: np.ndarray
     return out
 
 
-def _angle_basis(psi: np.ndarray, psi_order: float, n_harmonics: int,
-                 nuisance_orders: tuple[float, ...]) -> np.ndarray:
-    """Transposed angle-domain basis of windows, shape (n, P, T), P = 1 + 2 (H + K).
-
-    Rows [1, cos hψ (h = 1..H), cos o φ_in, sin hψ, sin o φ_in], φ_in = ψ / psi_order: the
-    column order of :func:`_basis_pinv`. cos, sin of hψ by angle addition from (h − 1)ψ
-    (error ~ h eps), sample by sample in one compiled loop (:func:`_fill_angle_basis`;
-    its array form, the reference, is in tests/learn/test_angle_features.py).
-    """
-    n, n_t = psi.shape
-    h, k = n_harmonics, len(nuisance_orders)
-    bt = np.empty((n, 1 + 2 * (h + k), n_t))
-    _fill_angle_basis(np.ascontiguousarray(psi, dtype=np.float64), float(psi_order), int(h),
-                      np.asarray(nuisance_orders, dtype=np.float64), bt)
-    return bt
-
-
 @numba.njit(cache=True)
-def _fill_angle_basis(psi, psi_order, h, orders, bt):
-    """:func:`_angle_basis` into ``bt`` (n, P, T): the same operations in the same order
-    as on arrays, without their temporaries (:func:`angle_fit` of 32 windows of 1,200
-    samples, H = 12, three orders: 12 against 15 ms, the basis 3.7 against 6.6 ms; one
-    core of this project's 2-core machine, 2026-11-28)."""
+def _angle_basis(psi, psi_order, h, orders, bt):
+    """Transposed angle-domain basis of windows ``psi`` (n, T) into ``bt`` (n, P, T),
+    P = 1 + 2 (H + K): rows [1, cos hψ (h = 1..H), cos o φ_in, sin hψ, sin o φ_in],
+    φ_in = ψ / psi_order, the column order of :func:`_basis_pinv`; cos, sin of hψ by angle
+    addition from (h − 1)ψ (error ~ h eps). Compiled, sample by sample: the same
+    operations in the same order as its array form (the reference, in
+    tests/learn/test_angle_features.py) without their temporaries; :func:`angle_fit` of
+    32 windows of 1,200 samples, H = 12, three orders: 12 against 15 ms, the basis 3.7
+    against 6.6 ms (one core of this project's 2-core machine, 2026-11-28)."""
     k = orders.size
     for i in range(psi.shape[0]):
         for t in range(psi.shape[1]):
@@ -382,7 +369,9 @@ def angle_fit(x: np.ndarray, psi: np.ndarray, psi_order: float, n_harmonics: int
         A window whose basis has a condition number above :data:`MAX_CONDITION`, named by
         its index ``first + i``.
     """
-    bt = _angle_basis(psi, psi_order, n_harmonics, nuisance_orders)  # (m, P, T)
+    bt = np.empty((psi.shape[0], 1 + 2 * (n_harmonics + len(nuisance_orders)), psi.shape[1]))
+    _angle_basis(np.ascontiguousarray(psi, dtype=np.float64), float(psi_order),
+                 int(n_harmonics), np.asarray(nuisance_orders, dtype=np.float64), bt)
     gram = bt @ np.swapaxes(bt, 1, 2)  # cond(G) = cond(B)^2 <= MAX_CONDITION^2
     lam = np.linalg.eigvalsh(gram)
     cond = np.sqrt(lam[:, -1] / np.maximum(lam[:, 0], 1e-300))

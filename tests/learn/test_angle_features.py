@@ -122,7 +122,7 @@ def test_short_window_named_across_chunks(steady):
 
 def _angle_basis_reference(psi, psi_order, h, orders):
     """The angle-domain basis on arrays, as it was written before the compiled loop
-    (learn.inputs.signals._fill_angle_basis)."""
+    (learn.inputs.signals._angle_basis)."""
     n, n_t = psi.shape
     k = len(orders)
     bt = np.empty((n, 1 + 2 * (h + k), n_t))
@@ -149,6 +149,7 @@ def test_compiled_angle_basis_matches_the_array_form(h, orders):
 
     rng = np.random.default_rng(3)
     psi = np.cumsum(rng.normal(0.01, 0.02, (7, 300)), axis=1) + rng.uniform(0, 6, (7, 1))
-    fast = _angle_basis(psi, 1.01, h, orders)
+    fast = np.empty((7, 1 + 2 * (h + len(orders)), 300))
+    _angle_basis(psi, 1.01, h, np.asarray(orders, float), fast)
     np.testing.assert_allclose(fast, _angle_basis_reference(psi, 1.01, h, orders),
                                rtol=0, atol=1e-12)
