@@ -32,7 +32,14 @@ from swgsim.base.typed import check_range
 
 from .features import feature_names
 from .model import DiagnosisModel, design_matrix
-from .normal import OUTSIDE_LOAD, OUTSIDE_UNJUDGED, Conditions, NormalBehaviour, NormalConfig
+from .normal import (
+    OUTSIDE_LOAD,
+    OUTSIDE_TEMPERATURE,
+    OUTSIDE_UNJUDGED,
+    Conditions,
+    NormalBehaviour,
+    NormalConfig,
+)
 from .rule import (
     Alarm,
     RuleConfig,
@@ -439,6 +446,9 @@ class GearMonitor:
             out[:] = 1.0
             return out
         ratio = self.normal.friction_ratio(feats, points, cond, opi)
+        # beyond commissioning's temperatures the loss law is an extrapolation: no evidence
+        hot = self.normal.outside(points, cond, 1.0, opi) & OUTSIDE_TEMPERATURE
+        ratio[hot != 0] = np.nan
         default_dh = self.interval_min / 60.0
         settle = self.normal_config.regrease_settle_h
         for i, (h, q) in enumerate(zip(hours.tolist(), ratio.tolist(), strict=True)):
