@@ -42,6 +42,7 @@ import pandas as pd
 from learn.monitor_evaluation.report import false_alarm_table, labelled, with_nuisance
 from learn.paper.results import CELL_COLUMNS, our_cells, paper_cells
 from learn.paper.summary import recall
+from learn.tasks.parts import resumed_note
 from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import display_name
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
@@ -309,9 +310,15 @@ def monitor_timing(rep: Path) -> str:
                                           "total": "total [worker-min]"})
     for c in out.columns[2:]:
         out[c] = [f"{v:.1f}" for v in out[c]]
-    return (f"Wall time **{t['wall_s'] / 60:.1f} min**; per data set and part (the monitor "
+    return (f"{_wall(t)}; per data set and part (the monitor "
             "with its diagnosis model, each per-window detector), summed over the held-out "
             f"gears:\n\n{md_table(out)}")
+
+
+def _wall(t: dict) -> str:
+    """The wall time of a ``timing.json``, saying how many parts were resumed."""
+    return (f"Wall time **{t['wall_s'] / 60:.1f} min**"
+            + resumed_note(int(t.get("resumed", 0)), len(t["parts"])))
 
 
 def prognosis_section(title: str) -> Callable[[Path], str]:
@@ -331,7 +338,7 @@ def prognosis_timing(rep: Path) -> str:
     parts = parts.rename(columns={"dataset": "data set", "held_out_gear": "held-out gear",
                                   "train_s": "train [s]", "calibrate_s": "calibrate [s]",
                                   "evaluate_s": "evaluate [s]"})
-    return (f"Wall time **{t['wall_s'] / 60:.1f} min** (target 20); per part, seconds of one "
+    return (f"{_wall(t)} (target 20); per part, seconds of one "
             f"worker:\n\n{md_table(parts)}")
 
 

@@ -37,6 +37,7 @@ from learn.tasks.parts import (
     Job,
     group_jobs,
     part_key,
+    resumed_note,
     run_group,
     run_one_group,
     run_parts,
@@ -153,7 +154,7 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
                      ("scores.csv", scores), ("changes.csv", changes)):
         write_owned(out / name, lambda tmp, df=df: df.to_csv(tmp, index=False))
     not_run = {f"{p['dataset']}: {f}": w for p in parts for f, w in p["not_run"].items()}
-    atomic_write_json(out / "timing.json", {"wall_s": wall, "parts": [
+    atomic_write_json(out / "timing.json", {"wall_s": wall, "resumed": resumed, "parts": [
         {k: p.get(k) for k in ("dataset", "held_out_gear", "train_s", "calibrate_s",
                                "evaluate_s")} for p in parts]})
     sc = pc.study
@@ -161,10 +162,8 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
               f"Data sets {', '.join(pc.run_on)}; seeds {sc.seeds}; calibration seeds "
               f"{sc.calibration_seeds} on the training gears; payload factors "
               f"{sc.payloads} by seed, from {sc.payload_after_h:g} h after the onset; a "
-              f"prognosis every {sc.prognosis.every_h:g} h after the alarm. Wall time "
-              f"{wall / 60:.1f} min"
-              + (f" ({resumed} of {len(jobs)} parts resumed from parts/, not timed here)"
-                 if resumed else "") + ".\n"
+              f"prognosis every {sc.prognosis.every_h:g} h after the alarm. "
+              f"Wall time {wall / 60:.1f} min{resumed_note(resumed, len(jobs))}.\n"
               + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
     write_table(out / "table.md", header, tgt, summary, buckets, lives, cal, moved)
     fig = figure(buckets, rows, out / "prognosis.png")

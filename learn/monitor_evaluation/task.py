@@ -42,6 +42,7 @@ from learn.tasks.parts import (
     Job,
     group_jobs,
     part_key,
+    resumed_note,
     run_group,
     run_one_group,
     run_parts,
@@ -172,7 +173,7 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
         for d, w in why.items():
             log.warning("detector %s not run on %s: %s", d, name, w)
     t0 = time.perf_counter()
-    parts, _ = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
+    parts, resumed = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
         plans[js[0].dataset], js, mc.study, str(out), device), "monitor evaluation", mc.progress,
         mc.n_jobs)
     wall = time.perf_counter() - t0
@@ -180,14 +181,15 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
     write_owned(out / "results.csv", lambda tmp: res.to_csv(tmp, index=False))
     write_owned(out / "false_alarms.csv", lambda tmp: fa.to_csv(tmp, index=False))
     write_owned(out / "tradeoff.csv", lambda tmp: curve.to_csv(tmp, index=False))
-    timing = {"wall_s": wall, "parts": [{k: p.get(k) for k in ("dataset", "held_out_gear",
-                                                              "detector", "train_s",
-                                                              "evaluate_s")} for p in parts]}
+    keys = ("dataset", "held_out_gear", "detector", "train_s", "evaluate_s")
+    timing = {"wall_s": wall, "resumed": resumed,
+              "parts": [{k: p.get(k) for k in keys} for p in parts]}
     atomic_write_json(out / "timing.json", timing)
     header = (f"# Condition monitor: leave-one-gear-out over simulated lives\n\n"
               f"Data sets {', '.join(mc.run_on)}; seeds {mc.study.seeds}; "
               f"{mc.study.healthy_hours:g} h per healthy life; design: one false alarm per "
-              f"{mc.study.rule.design_hours:g} h. Wall time {wall / 60:.1f} min.\n"
+              f"{mc.study.rule.design_hours:g} h. Wall time {wall / 60:.1f} min"
+              f"{resumed_note(resumed, len(jobs))}.\n"
               + "".join(f"\nDetector {d} not run on {n}: {w}.\n"
                         for n, why in not_run.items() for d, w in why.items())
               + (f"\nTorch detectors on {nets['device']} ("
@@ -204,7 +206,7 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
             for d, w in why.items():
                 print(f"detector {d} not run on {n}: {w}")
         print(f"report: {out}/table.md (+ results.csv, false_alarms.csv, tradeoff.csv, "
-              f"figures); wall time {wall / 60:.1f} min")
+              f"figures); wall time {wall / 60:.1f} min{resumed_note(resumed, len(jobs))}")
     if app.logger is not None:
         _log(app, res, fa, out, wall, plans, nets)
     det = res[(res.detector == "monitor")]

@@ -304,5 +304,14 @@ def run_group(out: str | Path, jobs: list[Job], run_one: Callable[[Job], dict]
     return finished
 
 
+def resumed_note(resumed: int, n_parts: int) -> str:
+    """What follows an evaluation's wall time when its run of ``n_parts`` parts resumed
+    ``resumed`` of them from ``parts/`` (:func:`run_parts`): their time was spent by an
+    earlier run, not in this one's wall time; empty when none was."""
+    return (f" ({resumed} of {n_parts} parts resumed from parts/, not timed here)"
+            if resumed else "")
+
+
 __all__ = ["EvaluationExperiment", "Job", "finished_parts", "group_jobs", "part_key",
-           "plan_datasets", "run_group", "run_one_group", "run_parts", "save_part", "share_key"]
+           "plan_datasets", "run_group", "run_one_group", "run_parts", "save_part", "share_key",
+           "resumed_note"]

@@ -56,6 +56,11 @@ def test_the_monitor_blocks_hold_the_runs_figures(tmp_path):
     assert "Wall time **15.0 min**" in timing
     assert "| bench | monitor | 2.0 | 8.0 | 10.0 |" in timing
     assert "| all |  | 4.0 | 16.0 | 20.0 |" in timing
+    assert "resumed" not in timing
+    t = json.loads((rep / "monitor" / "timing.json").read_text())
+    (rep / "monitor" / "timing.json").write_text(json.dumps({**t, "resumed": 3}))
+    timing = results_pages.monitor_timing(rep)  # a run that resumed parts timed only its own
+    assert "Wall time **15.0 min** (3 of 4 parts resumed from parts/, not timed here)" in timing
 
 
 def test_only_the_blocks_between_their_markers_change(tmp_path):
