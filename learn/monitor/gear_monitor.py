@@ -438,7 +438,10 @@ class GearMonitor:
         windows' loss ratios over ``friction_track_h`` operating hours; for
         ``regrease_settle_h`` after a declared re-greasing, :meth:`declare`, over one
         window's interval: the windows one by one), shape (n,). ``start``: (factor, hour
-        of the window before), default the monitor's own."""
+        of the window before), default the monitor's own. A window beyond commissioning's
+        temperatures at its point (:meth:`.normal.NormalBehaviour.outside`) leaves the
+        factor as it is: its loss law is extrapolated there (docs/monitor.md, "The normal
+        behaviour's laws")."""
         tau = self.normal_config.friction_track_h
         r, last = (self.friction, self.last_hour) if start is None else start
         out = np.empty(len(hours))
