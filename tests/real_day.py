@@ -6,6 +6,11 @@ from __future__ import annotations
 
 import dataclasses
 
+from learn.monitor.gear_monitor import GearMonitor
+from learn.monitor.normal import Conditions
+from learn.monitor.rule import RuleConfig
+from learn.monitor.training import features_of
+from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.schedule import FaultOnset
 from swgsim.gear.thermal import FrictionLaw
 
@@ -25,3 +30,18 @@ def repaired(life):
     fault = FaultOnset("eccentric_wg", 30.0, 0.1, growth="points",
                        points=[[30.0, 0.0], [30.05, 0.1], [34.0, 0.1], [34.05, 0.0]])
     return dataclasses.replace(life, hours=72.0, conditions=cond, fault=fault)
+
+
+def commissioned(model, day):
+    """The healthy day's monitor commissioned on its first ``commissioning_h``:
+    ``(monitor, simulator, commissioning's window count, its features, points,
+    conditions)``."""
+    p, bank = day
+    life = p.config.life
+    sim = LifeSimulator(p, 3, life, bank)
+    n_comm = int(round(life.commissioning_h * 60 / life.interval_min))
+    f, pts, meta = features_of(sim, 0, n_comm)
+    cond = Conditions.of(meta)
+    mon = GearMonitor(model, RuleConfig(), life.interval_min)
+    mon.commission(f, pts, cond)
+    return mon, sim, n_comm, f, pts, cond

@@ -11,9 +11,9 @@ import dataclasses
 
 import numpy as np
 import pytest
-from real_day import growing, repaired
+from real_day import commissioned, growing, repaired
 
-from learn.monitor.gear_monitor import GearMonitor, MaintenanceEvent
+from learn.monitor.gear_monitor import MaintenanceEvent
 from learn.monitor.laws import cools
 from learn.monitor.normal import EFFICIENCY, Conditions, NormalBehaviour, NormalConfig
 from learn.monitor.rule import Alarm, RuleConfig
@@ -341,14 +341,7 @@ def test_the_friction_is_tracked_only_where_the_loss_law_is_not_extrapolated(mod
     the factor tracked to 1.005-1.007 on the hot windows then read each cold start's
     efficiency +1.7 sigma high (bench gear 2, seed 1: 7 reduced-damping alarms in 200 h;
     none with the hot windows left out)."""
-    p, bank = day
-    life = p.config.life
-    sim = LifeSimulator(p, 3, life, bank)
-    n_comm = int(round(life.commissioning_h * 60 / life.interval_min))
-    f, pts, meta = features_of(sim, 0, n_comm)
-    cond = Conditions.of(meta)
-    mon = GearMonitor(model, RuleConfig(), life.interval_min)
-    mon.commission(f, pts, cond)
+    mon, sim, n_comm = commissioned(model, day)[:3]
     g, gp, gm = features_of(sim, n_comm, n_comm + 20)
     g[:, EFFICIENCY] *= 0.9  # a loss well above the law's
     hours = np.asarray(gm["hour"], float)

@@ -10,6 +10,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from real_day import commissioned
 
 from learn.monitor import stream
 from learn.monitor.evaluate import _fault_life, _past_changes
@@ -197,14 +198,8 @@ def test_a_monitor_that_reads_the_laws_temperature_is_calibrated_as_it_scores(mo
     reads as reduced damping: bench gear 3, family sensor_stuck, scored seed 1). The
     commissioned monitor a fault life forks from keeps the reading's; forks share one
     virtual calibration; a monitor without a temperature law cannot read virtually."""
-    p, bank = day
-    life = p.config.life
-    sim = LifeSimulator(p, 3, life, bank)
-    n_comm = int(round(life.commissioning_h * 60 / life.interval_min))
-    f, pts, meta = features_of(sim, 0, n_comm)
-    cond = Conditions.of(meta)
-    mon = GearMonitor(model, RuleConfig(), life.interval_min)
-    mon.commission(f, pts, cond)
+    mon, _, _, f, pts, cond = commissioned(model, day)
+    life = day[0].config.life
     reading = {k: v.copy() for k, v in mon.calibration.items()}, mon.bias.copy()
     a, b = mon.fork(), mon.fork()
     a.read_virtually()
