@@ -5,10 +5,12 @@
         --dataset robot_joint --gear 3 --seed 0 --nuisance payload
 
 Lives the healthy life that ``swgsim-train experiment=monitor`` lives for a held-out gear,
-seed and nuisance (:func:`learn.monitor.evaluate.healthy_life`: the same windows, the
-same monitor seed), commissions the monitor on its first ``commissioning_h`` hours with
-the diagnosis model the evaluation saved for that gear, runs it as the evaluation counts
-false alarms (the CUSUM restarted after each alarm) and prints:
+seed and nuisance, or a family's draw for the seed (``family:<key>``: the families of
+``scripts/monitor_families.py`` but its ``trace``)
+(:func:`learn.monitor.evaluate.healthy_life`: the same windows, the same monitor seed),
+commissions the monitor on its first ``commissioning_h`` hours with the diagnosis model
+the evaluation saved for that gear, runs it as the evaluation counts false alarms (the
+CUSUM restarted after each alarm) and prints:
 
 - every event in time order: each alarm with the fault it names (a gear fault, or a
   sensor fault with its bridge), each advisory with its condition and operating point,
@@ -36,6 +38,7 @@ import numpy as np
 import pandas as pd
 
 from learn.monitor.evaluate import healthy_life, monitor_healthy
+from learn.monitor.families import default_families
 from learn.monitor.features import feature_names
 from learn.monitor.gear_monitor import GearMonitor, Trace
 from learn.monitor.model_io import CARD_SUFFIX, MODEL_SUFFIX, load_model
@@ -46,7 +49,7 @@ from learn.monitor.normal import (
 )
 from learn.monitor.rule import Alarm
 from learn.monitor.stream import advisories, recommissionings
-from learn.monitor.study import MonitorStudyConfig
+from learn.monitor.study import MonitorStudyConfig, family_of
 from learn.monitor.training import has_twist
 from swgcli import dataset_preset
 from swgsim.datasets.plan import plan as make_plan
@@ -69,8 +72,10 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
                          "profile.angles.output_encoder_bits=null (the _hall variant)")
     ap.add_argument("--gear", type=int, default=3, help="held-out gear (default 3)")
     ap.add_argument("--seed", type=int, default=0, help="life seed (default 0)")
-    ap.add_argument("--nuisance", default="none", help="none (default) or one of "
-                    f"{', '.join(MonitorStudyConfig().nuisances)}")
+    ap.add_argument("--nuisance", default="none", help="none (default), one of "
+                    f"{', '.join(MonitorStudyConfig().nuisances)}, or a family's draw for "
+                    "the seed: family:<key>, key one of "
+                    f"{', '.join(default_families())}")
     ap.add_argument("--hours", type=float, default=None,
                     help="operating hours of the life, commissioning included (default: "
                          "the study's, 1000 without a nuisance, 224 under one)")
@@ -81,10 +86,13 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
 def setup(args: argparse.Namespace):
     """The plan, the study design and the held-out gear's healthy life; one line on bad
     input (raises ValueError)."""
-    cfg = MonitorStudyConfig()
-    if args.nuisance != "none" and args.nuisance not in cfg.nuisances:
+    cfg = MonitorStudyConfig(families=default_families())
+    fam = family_of(args.nuisance)
+    if args.nuisance != "none" and args.nuisance not in cfg.nuisances \
+            and fam not in cfg.families:
         raise ValueError(f"--nuisance {args.nuisance!r}: allowed none, "
-                         f"{', '.join(cfg.nuisances)}")
+                         f"{', '.join(cfg.nuisances)}, family:<key> with key one of "
+                         f"{', '.join(cfg.families)}")
     if args.hours is not None:
         if not cfg.commissioning_h < args.hours <= 1e5:
             raise ValueError(f"--hours {args.hours:g}: must lie in ({cfg.commissioning_h:g}, "

@@ -13,6 +13,7 @@ import pandas as pd
 import pytest
 
 from learn.monitor.evaluate import _lives, healthy_life
+from learn.monitor.families import default_families
 from learn.monitor.model_io import save_model
 from learn.monitor.study import MonitorStudyConfig
 from learn.monitor.training import train_model
@@ -35,8 +36,9 @@ def tiny_model(tmp_path_factory, tiny_bench):
 
 def test_healthy_life_is_the_evaluations(tiny_bench):
     p, banks = tiny_bench
-    cfg = MonitorStudyConfig(healthy_hours=30.0, nuisance_hours=30.0)
-    for nuisance in ("none", "warm_up"):
+    cfg = MonitorStudyConfig(healthy_hours=30.0, nuisance_hours=30.0,
+                             families=default_families())
+    for nuisance in ("none", "warm_up", "family:warm_up"):
         ours = healthy_life(p, banks[3], 3, cfg, 4, nuisance)
         theirs, _ = _lives(p, banks, 3, cfg, 4, nuisance)
         assert ours.life == theirs.life
@@ -63,8 +65,17 @@ def test_life_diagnostics_lists_events_and_points(tiny_model, tmp_path, capsys):
     assert table["p"].between(0, 1).all()
 
 
+def test_a_family_draw_is_looked_at_like_a_nuisance(tiny_model, capsys):
+    rc = life_diagnostics.main([str(tiny_model), "--dataset", "tiny_bench", "--gear", "3",
+                                "--seed", "7", "--nuisance", "family:drift", "--hours", "30"])
+    assert rc == 0
+    assert "tiny_bench gear 3, seed 7, nuisance family:drift: 360 windows" \
+        in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("args, says", [
     (["--nuisance", "summer"], "--nuisance 'summer': allowed none, warm_up"),
+    (["--nuisance", "family:summer"], "family:<key> with key one of friction_law, warm_up"),
     (["--gear", "7"], "--gear 7: tiny_bench has gears [1, 2, 3]"),
     (["--hours", "3"], "--hours 3: must lie in (24, 1e5]"),
     (["--set", "chain.window_s=0.2"], "was trained on tiny_bench, not on --dataset tiny_bench"),
