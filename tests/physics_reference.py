@@ -220,7 +220,7 @@ def signals_from_motion(chain: SimulationChain, p: ChainParams, psi: np.ndarray,
     h = torque_influence(psi, inf.g, inf.theta, p.tooth_factors(inf.theta),
                          np.deg2rad(chain.settings.contact_half_width_deg),
                          chain.load_share(p, psi))
-    return s + t_out[None, :] * h
+    return (s + t_out[None, :] * h) + chain.layout.zero_offsets_mvv[:, None]
 
 
 def power_terms(p: dy.GearParams, res: dy.SimResult, t_load_nm: np.ndarray) -> dict:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from learn.inputs.features import FeatureSettings
 from learn.paper.tables import StudyOptions
 from swgsim.datasets.config import DatasetConfig
+from swgsim.gear.sensors import ZERO_OFFSET_RANGE_MVV
 from swgsim.sensing.acquisition import Acquisition
 
 
@@ -156,6 +157,11 @@ def _model_rows(dataset: DatasetConfig, seed: int) -> list[tuple[str, str, str]]
          f"gauge angle σ {tol.sd_theta_deg:g}°, radius σ {tol.sd_r_mm:g} mm, "
          f"orientation σ {tol.sd_beta_deg:g}°, gain σ {100 * tol.sd_gain:g} %",
          "the paper fits each gear's sensor model to a real RT1-T gear; values unverified"),
+        ("Bridges' zero offsets",
+         f"per bridge and gear, uniform in ±{tol.zero_offset_mvv:g} mV/V",
+         "an un-nulled bridge's imbalance; eq. (7) divides by the healthy mean; range "
+         f"{ZERO_OFFSET_RANGE_MVV[0]:g}-{ZERO_OFFSET_RANGE_MVV[1]:g} mV/V from zero-balance "
+         "and amplifier-balance data sheets (docs/PHYSICS.md sec. 4.4)"),
         ("Gear model", "size 20, ratio 100, k1/k2 from catalogue K1/K3, b1/μ from no-load "
          "torque and efficiency at rated torque", "swgsim/gear/dynamics.py (catalogue sources)"),
         ("Classifier settings", "Table VI; everything else scikit-learn's defaults (MLP "

@@ -425,11 +425,22 @@ class WindowConditions:
     span_per_k: np.ndarray
     drift_ref_c: float
 
-    def bridge_gain_offset(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Each window's bridge gain and zero offset, shapes (n, 5) and (n, 5) [-, mV/V]:
-        the drift at the window's temperature."""
+    def bridge_gain_offset(self, rows: np.ndarray, zero_offsets_mvv: np.ndarray | None = None
+                           ) -> tuple[np.ndarray, np.ndarray]:
+        """Each window's bridge gain and the offset to add after it, shapes (n, 5) and
+        (n, 5) [-, mV/V]: the drift at the window's temperature.
+
+        The span drift (the modulus, the gauge factor) acts on the strain's signal, not on
+        a bridge's zero offset z (its arms' imbalance): given the gear's ``zero_offsets_mvv``
+        (shape (5,), :attr:`swgsim.gear.sensors.SensorLayout.zero_offsets_mvv`) of signals
+        that hold them, the offset is (1 − gain) z + zero_c ΔT, so that gain · s + offset
+        = gain (s − z) + z + zero_c ΔT.
+        """
         dt = (self.temperature_c[rows] - self.drift_ref_c)[:, None]
-        return 1.0 + self.span_per_k[None, :] * dt, self.zero_mvv_per_k[None, :] * dt
+        gain, offset = 1.0 + self.span_per_k[None, :] * dt, self.zero_mvv_per_k[None, :] * dt
+        if zero_offsets_mvv is not None:
+            offset = offset + (1.0 - gain) * np.asarray(zero_offsets_mvv, float)[None, :]
+        return gain, offset
 
 
 def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,

@@ -248,7 +248,8 @@ class DatasetConfig:
         after every part's own (so each part is valid here): the name and seed, the gears,
         the variants, the contact width on the mesh, the eccentric load share, eq. (10)'s
         lowest sub-harmonic in the window, a profile within the gears' limits, the settling
-        time, the integrator's stability, the gauges on the mesh and a life on a profile.
+        time, the integrator's stability, the gauges on the mesh, the bridges' zero offsets
+        within the converter's range and a life on a profile.
 
         Raises
         ------
@@ -275,6 +276,7 @@ class DatasetConfig:
         for name, spec in self.variants.items():
             spec.expand(name)
         _check_layout(self)
+        _check_zero_offsets(self)
         if self.life is not None and self.profile is not None:
             _req(not self.life.duty, f"{where}.life.duty must be empty with {where}.profile: "
                                      "the profile is the life's duty cycle")
@@ -463,6 +465,18 @@ def _check_layout(cfg: DatasetConfig) -> None:
             key = ("dataset.mesh.n_theta" if "too coarse" in str(e)
                    else "dataset.sensors (r_torque_mm, r_pairs_mm, grid_length_mm)")
             raise ValueError(f"{key}: {e}") from None
+
+
+def _check_zero_offsets(cfg: DatasetConfig) -> None:
+    """The bridges' zero offsets leave at least half of the converter's input range to
+    the signals (an amplifier's range holds the un-nulled bridge and its strain)."""
+    amp = cfg.acquisition.amplifier
+    if amp is None:
+        return
+    check_range(cfg.tolerances.zero_offset_mvv, 0.0, amp.range_mvv / 2,
+                "dataset.tolerances.zero_offset_mvv", "mV/V",
+                why=f"half of the input range ±{amp.range_mvv:.3g} mV/V of "
+                    "dataset.acquisition.amplifier, the rest left to the signals")
 
 
 def paper_config() -> dict:

@@ -22,6 +22,7 @@ import dataclasses
 import numpy as np
 
 from swgsim.datasets.conditions import WindowConditions, efficiency_ratio, window_conditions
+from swgsim.datasets.config import layout_for
 from swgsim.datasets.growth import LAWS, RunToFailure, draw_scale
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.datasets.recording_table import content_hash
@@ -62,6 +63,8 @@ class LifeSimulator:
         cfg = plan.config
         ops = cfg.operating_points
         self.bank = record_bank(plan, self.gear_id) if bank is None else bank
+        # the bridges' zero offsets in the records' signals (the span drift leaves them)
+        self.zero_offsets_mvv = layout_for(cfg, plan.gears[self.gear_id]).zero_offsets_mvv
         slots = getattr(self.bank, "slots", None)  # a profile: one duty point per slot
         self.schedule = schedule(life if slots is None else dataclasses.replace(
             life, duty=slots.duty(life.interval_min)), list(ops.n_in_rpm), list(ops.t_out_nm))
@@ -204,7 +207,7 @@ class LifeSimulator:
             m = np.array([k == key for k in keys])
             eff[m] *= efficiency_ratio(self.bank.params(key), key[0], key[1],
                                        c.friction[rows][m], c.mu_factor[rows][m])
-        gain, offset = c.bridge_gain_offset(rows)
+        gain, offset = c.bridge_gain_offset(rows, self.zero_offsets_mvv)
         sig *= gain[:, :, None]
         sig += offset[:, :, None]
 

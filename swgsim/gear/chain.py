@@ -5,9 +5,10 @@ the five bridge signals of many gear variants at one operating point
 (:meth:`SimulationChain.simulate`) or along an operating profile with its transients
 (:meth:`SimulationChain.simulate_profile`, :mod:`swgsim.gear.profile`):
 
-    s(t) = w0 (A cos 2ψ + B sin 2ψ) + e (E_x cos θ_e + E_y sin θ_e) + T_out(t) h(ψ(t)),
+    s(t) = w0 (A cos 2ψ + B sin 2ψ) + e (E_x cos θ_e + E_y sin θ_e) + T_out(t) h(ψ(t)) + z,
 
-(:mod:`swgsim.gear.influence`), with ψ = φ_in − φ_out and T_out from the dynamic model.
+(:mod:`swgsim.gear.influence`), with ψ = φ_in − φ_out, T_out from the dynamic model and z
+the bridges' zero offsets of the gear's layout (:class:`swgsim.gear.sensors.Signal`).
 An eccentric WG also shifts load between the two mesh zones: the zone whose engagement the
 eccentricity deepens carries the share 1 + κ_e (e / w0) cos(ψ − θ_e) [unverified, κ_e = 1:
 load share proportional to engagement depth]. The reference path, one sparse solve of
@@ -273,9 +274,10 @@ class SimulationChain:
         Returns
         -------
         ndarray, shape (V, 5, n_t)
-            s0..s4 [mV/V].
+            s0..s4 [mV/V], the layout's zero offsets included.
         """
         v, n_t = psi.shape
+        zero = self.layout.zero_offsets_mvv
         out = np.empty((v, 5, n_t))
         groups: dict[tuple, list[int]] = {}
         for k, p in enumerate(variants):
@@ -303,20 +305,21 @@ class SimulationChain:
                 sig = np.empty((idx.size, 5, n_t))
                 _compose(np.ascontiguousarray(ps), np.ascontiguousarray(t_out[idx]),
                          np.ascontiguousarray(h).reshape(5, idx.size, n_t), w0, inf.A, inf.B,
-                         np.ascontiguousarray(ecc), inf.Ex, inf.Ey, sig)
+                         np.ascontiguousarray(ecc), inf.Ex, inf.Ey, zero, sig)
                 out[idx] = sig
         return out
 
 
 @numba.njit(cache=True)
-def _compose(psi, t_out, h, w0, a, b, ecc, ex, ey, out):
+def _compose(psi, t_out, h, w0, a, b, ecc, ex, ey, zero, out):
     """Signals of m variants (:meth:`SimulationChain.signals_batch`), sample by sample:
-    w0 (A cos 2ψ + B sin 2ψ) + (e_x Ex + e_y Ey) + T_out h(ψ), into ``out`` (m, 5, n_t);
-    the same operations in the same order as on arrays."""
+    w0 (A cos 2ψ + B sin 2ψ) + (e_x Ex + e_y Ey) + T_out h(ψ) + z, into ``out``
+    (m, 5, n_t); the same operations in the same order as on arrays (z = 0 adds nothing:
+    the bits of a chain without zero offsets)."""
     for i in range(psi.shape[0]):
         for t in range(psi.shape[1]):
             c, s = np.cos(2 * psi[i, t]), np.sin(2 * psi[i, t])
             for k in range(5):
-                out[i, k, t] = ((w0[i] * (a[k] * c + b[k] * s)
-                                 + (ecc[i, 0] * ex[k] + ecc[i, 1] * ey[k]))
-                                + t_out[i, t] * h[k, i, t])
+                out[i, k, t] = (((w0[i] * (a[k] * c + b[k] * s)
+                                  + (ecc[i, 0] * ex[k] + ecc[i, 1] * ey[k]))
+                                 + t_out[i, t] * h[k, i, t]) + zero[k])

@@ -29,6 +29,11 @@ R_PAIRS_MM = 32.0      # radius of the s1..s4 half bridges [mm]
 GRID_LENGTH_MM = 3.0   # active grid length [mm]
 GAUGE_FACTOR = 2.0     # [-]
 MIN_GRID_LENGTH_MM = 0.2  # shortest foil strain-gauge grids on the market [mm]
+#: The sourced range of a bridge's zero offset bound [mV/V] (docs/PHYSICS.md sec. 4.4):
+#: from a trimmed torque transducer's zero balance (±0.05 mV/V, Octogon FRB data sheet) to
+#: the balance range an amplifier provides for an un-nulled 120-ohm bridge (±2.5 mV at
+#: 2.5 V excitation = ±1.0 mV/V, NI SCC-SG01 user guide, Table 2) [src].
+ZERO_OFFSET_RANGE_MVV = (0.05, 1.0)
 
 
 @dataclass
@@ -92,15 +97,26 @@ class TolerancesConfig:
         Grid orientation [deg].
     sd_gain : float
         Channel gain [-].
+    zero_offset_mvv : float
+        Bound of each bridge's zero offset [mV/V]: an un-nulled bridge's output at zero
+        strain, drawn per bridge and gear uniformly in ±bound (the arms' resistance
+        tolerance and the bonding; a tolerance stated as a bound, its distribution
+        unknown). Default 0.525, the middle of the sourced range
+        :data:`ZERO_OFFSET_RANGE_MVV` [src: range; choice: its middle]
+        (docs/PHYSICS.md sec. 4.4); 0: balanced bridges.
     """
 
     sd_theta_deg: float = 0.3
     sd_r_mm: float = 0.1
     sd_beta_deg: float = 0.5
     sd_gain: float = 0.01
+    zero_offset_mvv: float = 0.5 * (ZERO_OFFSET_RANGE_MVV[0] + ZERO_OFFSET_RANGE_MVV[1])
 
     def check(self, where: str = "tolerances") -> None:
-        """Refuse a standard deviation outside its range, naming ``<where>.<key>``.
+        """Refuse a standard deviation or bound outside its range, naming
+        ``<where>.<key>``; a zero offset up to 2.64 mV/V, the largest balance range of a
+        bridge amplifier in the sources (NI SCC-SG02, 350-ohm bridges; docs/PHYSICS.md
+        sec. 4.4).
 
         Raises
         ------
@@ -108,7 +124,8 @@ class TolerancesConfig:
             ``<where>.sd_theta_deg must lie in [0, 5] deg, got ...`` and the like.
         """
         for key, hi, unit in (("sd_theta_deg", 5.0, "deg"), ("sd_r_mm", 2.0, "mm"),
-                              ("sd_beta_deg", 10.0, "deg"), ("sd_gain", 0.2, "")):
+                              ("sd_beta_deg", 10.0, "deg"), ("sd_gain", 0.2, ""),
+                              ("zero_offset_mvv", 2.64, "mV/V")):
             check_range(getattr(self, key), 0.0, hi, f"{where}.{key}", unit)
 
 
@@ -151,12 +168,16 @@ class Signal:
         "quarter", "half" or "full" (documentation; the output is GF/4 Σ a_k ε_k).
     gain : float
         Gain of this channel relative to nominal [-] (per-gear tolerance).
+    zero_offset_mvv : float
+        The bridge's output at zero strain [mV/V] (per-gear tolerance): added to the
+        strain's signal, not scaled by ``gain``.
     """
 
     name: str
     grids: tuple[Grid, ...]
     bridge: str
     gain: float = 1.0
+    zero_offset_mvv: float = 0.0
 
 
 def _shear_pair(r, th, length=GRID_LENGTH_MM * 1e-3):
@@ -193,19 +214,24 @@ class SensorLayout:
 
     def perturbed(self, rng: np.random.Generator,
                   tolerances: TolerancesConfig | None = None) -> SensorLayout:
-        """A copy with per-gauge placement and per-channel gain tolerances.
+        """A copy with per-gauge placement, per-channel gain and per-bridge zero offset
+        tolerances.
 
         Models the paper's per-gear sensor models fitted to three real RT1-T gears
         (Sec. III-B): every grid is displaced by N(0, sd) in θ, r and orientation, every
         channel's gain is N(1, sd_gain). Gauge positioning is the dominant error of
-        sensorised RT1-T gears (Schuller et al. 2024, docs/PHYSICS.md sec. 4).
+        sensorised RT1-T gears (Schuller et al. 2024, docs/PHYSICS.md sec. 4). Every
+        bridge's zero offset is U(−b, b), b = ``zero_offset_mvv``: an un-nulled bridge's
+        imbalance (docs/PHYSICS.md sec. 4.4).
 
         Parameters
         ----------
         rng : numpy.random.Generator
-            Draws, in the order grid (r, θ, β) by grid, then the channel's gain.
+            Draws, in the order grid (r, θ, β) by grid, then the channel's gain, signal
+            by signal; then the five zero offsets (drawn last, so that the placements and
+            gains are those of a layout without offsets).
         tolerances : TolerancesConfig, optional
-            Standard deviations; default :class:`TolerancesConfig`.
+            Standard deviations and the offset's bound; default :class:`TolerancesConfig`.
         """
         tol = tolerances if tolerances is not None else TolerancesConfig()
         sd_r_m, sd_theta_deg, sd_beta_deg = tol.sd_r_mm * 1e-3, tol.sd_theta_deg, tol.sd_beta_deg
@@ -223,7 +249,15 @@ class SensorLayout:
             )
             sigs.append(dataclasses.replace(s, grids=grids,
                                             gain=s.gain * (1 + sd_gain * rng.standard_normal())))
+        zero = tol.zero_offset_mvv * rng.uniform(-1.0, 1.0, size=len(sigs))
+        sigs = [dataclasses.replace(s, zero_offset_mvv=s.zero_offset_mvv + float(z))
+                for s, z in zip(sigs, zero, strict=True)]
         return dataclasses.replace(self, signals=tuple(sigs))
+
+    @property
+    def zero_offsets_mvv(self) -> np.ndarray:
+        """The five bridges' zero offsets [mV/V], shape (5,)."""
+        return np.array([s.zero_offset_mvv for s in self.signals], dtype=float)
 
 
 def gear_layout(sensors: SensorsConfig, tolerances: TolerancesConfig,

@@ -39,22 +39,38 @@ def test_healthy_pairs_agree(chain, healthy):
     # exact by symmetry: reached 2.4e-12, tolerance 1e-9 (round-off)
     assert rms(s[1] - s[3]) < 1e-9 * rms(s[1])
     assert rms(s[2] - s[4]) < 1e-9 * rms(s[2])
-    # with gauge tolerances (this draw) the pairs still agree within a few per cent:
-    # reached 2.0 % and 9.4 %, bound 10 %
+    # with gauge tolerances (this draw) the pairs less their zero offsets still agree
+    # within a few per cent: reached 2.0 % and 9.4 %, bound 10 %; the offsets are each
+    # bridge's own (the pairs' means differ by them)
     tol = SensorLayout().perturbed(np.random.default_rng(1))
     ch = SimulationChain(tol, settings=chain.settings, solver=chain.solver)
     (s,), _ = run(ch, [healthy])
-    assert rms(s[1] - s[3]) < 0.1 * rms(s[1])
-    assert rms(s[2] - s[4]) < 0.1 * rms(s[2])
-    assert 0.01 < np.abs(s).max() < 1.0  # mV/V, order 0.1 (docs/PHYSICS.md sec. 4)
+    strain = s - tol.zero_offsets_mvv[:, None]
+    assert rms(strain[1] - strain[3]) < 0.1 * rms(strain[1])
+    assert rms(strain[2] - strain[4]) < 0.1 * rms(strain[2])
+    (s_bal,), _ = run(SimulationChain(dataclasses.replace(tol, signals=tuple(
+        dataclasses.replace(x, zero_offset_mvv=0.0) for x in tol.signals)),
+        settings=chain.settings, solver=chain.solver), [healthy])
+    np.testing.assert_array_equal(s, s_bal + tol.zero_offsets_mvv[:, None])
+    assert np.all(np.abs(tol.zero_offsets_mvv) > 0)
+    assert 0.01 < np.abs(s).max() < 1.5  # mV/V: signals of order 0.1, offsets up to 0.525
+
+
+@pytest.fixture(scope="module")
+def gear_chain(chain):
+    """A gear's chain: its gauge tolerances and its bridges' zero offsets."""
+    return SimulationChain(SensorLayout().perturbed(np.random.default_rng(7)),
+                           settings=chain.settings, solver=chain.solver)
 
 
 @pytest.mark.parametrize("name", sorted(FAULTS))
-def test_severity_zero_is_healthy(chain, healthy, name):
+def test_severity_zero_is_healthy(gear_chain, healthy, name):
+    """Severity 0 of every fault is the healthy gear, bit for bit, zero offsets and all."""
+    assert np.all(np.abs(gear_chain.layout.zero_offsets_mvv) > 0)
     p = apply_fault(healthy, name, 0.0, 54.0)
     assert p == healthy
-    a, _ = run(chain, [healthy])
-    b, _ = run(chain, [p])
+    a, _ = run(gear_chain, [healthy])
+    b, _ = run(gear_chain, [p])
     np.testing.assert_array_equal(a, b)
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from data_sets import PRESET_HASHES
 from scipy.integrate import solve_ivp
 
 from swgcli import dataset_preset
@@ -226,23 +227,8 @@ def test_the_option_parses_from_a_mapping_and_enters_the_hash():
         "life"]["fault"]
 
 
-#: Every preset's config hash, measured before lives could run to failure (commit c77338c,
-#: swgsim.datasets.plan.config_hash): the option at its default leaves them unchanged.
-PRESET_HASHES = {
-    "bench": "00db06abdbb9b3d2", "bench_life": "efdaa4014cd9dd20",
-    "observability": "8b405fe415cee415", "paper": "327287ec3e9788c3",
-    "robot_joint": "0c3ed035adeeed79", "robot_joint_motion": "738b554b87d88675",
-    "tiny": "4f07da142dadcc36", "tiny_bench": "964fab3f05973ca1",
-    "tiny_life": "4f7e0328e05d8b85", "tiny_motion": "32cd8e2f0ed9df21",
-    "tiny_motion_life": "d4cade2479300bad", "tiny_real_day": "28bc082330ec940a",
-}
-#: Presets added with the option.
-NEW_PRESETS = ("tiny_failure",)
-
-
 def test_every_preset_keeps_its_config_hash():
-    names = sorted(p.stem for p in (ROOT / "conf" / "dataset").glob("*.yaml")
-                   if p.stem not in NEW_PRESETS)
+    names = sorted(p.stem for p in (ROOT / "conf" / "dataset").glob("*.yaml"))
     assert names == sorted(PRESET_HASHES)
     assert {n: config_hash(dataset_config(dataset_preset(n))) for n in names} == PRESET_HASHES
 
