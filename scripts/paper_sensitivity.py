@@ -8,13 +8,22 @@ points of the paper, mean absolute deviation):
 * features standardised before every classifier;
 * 4-fold CV over windows instead of groups (gear, fault, variant) (Tables VII, VIII);
 * eq. (10) amplitudes scaled by each factor of ``--amplitudes`` (Tables VIII and X; the
-  paper gives none): a sweep with the Table X cells against the amplitude.
+  paper gives none): a sweep with the Table X cells against the amplitude;
+* the bridges' zero-offset bound at each value of ``--zero-offsets`` (Tables VII, IX, X;
+  default 0, the sourced range's low end, middle and high end, docs/PHYSICS.md sec. 4.4;
+  0 gives the signals before the offsets, bit for bit);
+* what traces the cells that miss (``--skip-trace`` leaves them out): the MLP fitted to
+  convergence (``max_iter`` 2000 instead of 200), the DFT at whole orders only (1 … 8)
+  and with a DFT_rel floor of 0.01 instead of 0.001 (Selections 2 and 3), eq. (10)
+  with its offsets a0 alone and with its sub-harmonics alone (Tables VIII and X).
 
-Writes ``<out>/sensitivity.csv`` (one scorecard row per variant and table),
-``<out>/results_<variant>.csv``, ``<out>/eq10_sweep.csv`` and ``<out>/eq10_sweep.png``.
+Writes ``<out>/sensitivity.csv`` (one scorecard row per variant and table; ``missing``:
+paper cells a variant does not run), ``<out>/cells.csv`` (every cell of every variant
+beside the paper's), ``<out>/results_<variant>.csv``, ``<out>/eq10_sweep.csv`` and
+``<out>/eq10_sweep.png``.
 Nothing here feeds back into the presets.
 
-    python scripts/paper_sensitivity.py                      # about 12 min on 2 cores
+    python scripts/paper_sensitivity.py                      # about 30 min on 2 cores
     python scripts/paper_sensitivity.py --amplitudes 0 1 4 --skip-scale --skip-cv
 """
 
@@ -30,6 +39,12 @@ import numpy as np
 import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run from a checkout
+from swgsim.gear.sensors import ZERO_OFFSET_RANGE_MVV  # noqa: E402
+
+#: The sourced range's low end, middle and high end (docs/PHYSICS.md sec. 4.4).
+RANGE_POINTS = (ZERO_OFFSET_RANGE_MVV[0], sum(ZERO_OFFSET_RANGE_MVV) / 2,
+                ZERO_OFFSET_RANGE_MVV[1])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -44,6 +59,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n-jobs", type=int, default=2)
     ap.add_argument("--skip-scale", action="store_true", help="skip the scaling variant")
     ap.add_argument("--skip-cv", action="store_true", help="skip the CV-over-windows variant")
+    ap.add_argument("--zero-offsets", type=float, nargs="*", default=[0.0, *RANGE_POINTS],
+                    help="bounds of the bridges' zero offsets [mV/V] (default 0 and the "
+                         "sourced range's ends and middle)")
+    ap.add_argument("--skip-trace", action="store_true",
+                    help="skip the variants that trace the misses")
     ap.add_argument("--plot-only", action="store_true",
                     help="redraw eq10_sweep.png from <out>/eq10_sweep.csv and stop")
     args = ap.parse_args(argv)
@@ -53,6 +73,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if any(not np.isfinite(a) or a < 0 for a in args.amplitudes):
         ap.error(f"--amplitudes must be >= 0, got {args.amplitudes}")
+    if any(not np.isfinite(b) or not 0 <= b <= 1.42 for b in args.zero_offsets):
+        ap.error(f"--zero-offsets must lie in [0, 1.42] mV/V, got {args.zero_offsets}")
 
     from learn.paper.results import scorecard, side_by_side
     from learn.paper.tables import StudyOptions
@@ -67,20 +89,28 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     data_root = Path(args.data_root)
 
-    def data_for(factor: float) -> str:
+    def data_for(factor: float, offsets: float = 1.0, harmonics: float = 1.0,
+                 zero_offset_mvv: float | None = None) -> str:
         cfg = copy.deepcopy(base)
-        cfg.disturbance.offset_mvv = base.disturbance.offset_mvv * factor
-        cfg.disturbance.harmonic_mvv = base.disturbance.harmonic_mvv * factor
+        cfg.disturbance.offset_mvv = base.disturbance.offset_mvv * factor * offsets
+        cfg.disturbance.harmonic_mvv = base.disturbance.harmonic_mvv * factor * harmonics
         cfg.name = f"{base.name}_eq10x{factor:g}"
+        if (offsets, harmonics) != (1.0, 1.0):
+            cfg.name += f"_a0x{offsets:g}_ajx{harmonics:g}"
+        if zero_offset_mvv is not None:
+            cfg.tolerances.zero_offset_mvv = zero_offset_mvv
+            cfg.name = f"{base.name}_zero{zero_offset_mvv:g}"
         path = data_root / cfg.name
         generate(cfg, path, n_jobs=args.n_jobs, progress=True)
         return str(path)
 
-    def study(path, tag, protocols=None, **options):
+    def study(path, tag, protocols=None, features=None, rename=None, **options):
         t0 = time.perf_counter()
         r = run_paper_study(path, out / "reports" / tag, StudyOptions(figures=False, **options),
-                            n_jobs=args.n_jobs, track=False, name=tag,
+                            n_jobs=args.n_jobs, track=False, name=tag, features=features,
                             protocols=protocols)["results"]
+        if rename:  # a traced model scored in its paper model's cells
+            r = r.assign(model=r["model"].replace(rename))
         r.to_csv(out / f"results_{tag}.csv", index=False)
         print(f"{tag}: {time.perf_counter() - t0:.0f} s", flush=True)
         return r
@@ -102,22 +132,62 @@ def main(argv: list[str] | None = None) -> int:
             continue
         sweep[a] = study(data_for(a), f"eq10x{a:g}", tables=["VIII", "X"])
         variants[f"eq. (10) amplitudes x{a:g}"] = sweep[a]
+    for b in args.zero_offsets:
+        variants[f"zero offsets ±{b:g} mV/V"] = (
+            variants["as configured"] if b == base.tolerances.zero_offset_mvv else
+            study(data_for(1.0, zero_offset_mvv=b), f"zero{b:g}", tables=["VII", "IX", "X"]))
+    if not args.skip_trace:
+        variants.update(_trace(base_path, data_for, study))
 
-    rows = []
+    rows, cells = [], []
     for name, res in variants.items():
-        card = scorecard(side_by_side({"v": res}), "ours_v")
+        both = side_by_side({"v": res})
+        card = scorecard(both, "ours_v")
         present = set(res["table"])
         for r in card.itertuples():
             if r.table in present:
                 rows.append({"variant": name, "table": r.table, "cells": r.cells,
                              "within_3": r.within_3, "within_5": r.within_5,
-                             "within_10": r.within_10, "mad": round(r.mad, 2)})
+                             "within_10": r.within_10, "mad": round(r.mad, 2),
+                             "missing": r.missing})
+        cells.append(both[both["ours_v"].notna()].rename(columns={"ours_v": "ours"})
+                     .assign(variant=name))
     sens = pd.DataFrame(rows)
     sens.to_csv(out / "sensitivity.csv", index=False)
+    # every cell of every variant beside the paper's: what a variant moved, cell by cell
+    pd.concat(cells).round(2).to_csv(out / "cells.csv", index=False)
     print(sens.to_string(index=False))
     _sweep_figure(sweep, out)
-    print(f"written: {out}/sensitivity.csv, eq10_sweep.csv, eq10_sweep.png")
+    print(f"written: {out}/sensitivity.csv, cells.csv, eq10_sweep.csv, eq10_sweep.png")
     return 0
+
+
+def _trace(base_path: str, data_for, study) -> dict[str, pd.DataFrame]:
+    """The variants that trace the cells missing the paper's (module docstring): each
+    changes one thing against the preset, on the tables it can move."""
+    from learn.inputs.features import FeatureSettings
+    from learn.learners.models import MODELS, PAPER_MODELS, ModelSpec, register_model
+
+    if "mlp_converged" not in MODELS:  # the paper's MLP, fitted until it converges
+        mlp = PAPER_MODELS["mlp"]
+        register_model(ModelSpec("mlp_converged", mlp.estimator,
+                                 {**mlp.settings, "max_iter": 2000}, seeded=True))
+    fs = FeatureSettings()
+    whole = FeatureSettings(order_step=1.0)  # orders 1 ... 8
+    return {
+        "MLP to convergence (max_iter 2000)": study(
+            base_path, "mlp_converged", models=["mlp_converged"],
+            rename={"mlp_converged": "mlp"}),
+        "DFT at whole orders 1-8": study(
+            base_path, "dft_whole_orders", tables=["VII", "IX"], features=whole),
+        "DFT_rel floor 0.01": study(
+            base_path, "dft_floor", tables=["VII", "IX"],
+            features=FeatureSettings(floor_rel=10 * fs.floor_rel)),
+        "eq. (10) offsets a0 alone": study(
+            data_for(1.0, harmonics=0.0), "eq10_a0_alone", tables=["VIII", "X"]),
+        "eq. (10) sub-harmonics alone": study(
+            data_for(1.0, offsets=0.0), "eq10_aj_alone", tables=["VIII", "X"]),
+    }
 
 
 def _sweep_figure(sweep: dict[float, pd.DataFrame], out: Path) -> None:
