@@ -160,7 +160,8 @@ class LifeSimulator:
             on = fault != "healthy"
             if on.any():
                 sig[on] = apply_sensor_fault(sig[on], self.life.fault.fault,
-                                             self.schedule.severity[rows][on], self.sensor)
+                                             self.schedule.severity[rows][on], self.sensor,
+                                             self.zero_offsets_mvv[self.sensor])
         self._record(sig, n_mean, rngs, phi_in)
         meta = self._meta(rows, fault, eff, n_mean, t_mean)
         return sig.astype(np.float32), {**meta, **angles}

@@ -3,8 +3,9 @@
 A gauge or its bridge can fail while the gear is sound; a monitor must name that a sensor
 fault, never a gear fault, so the gear lives (:mod:`swgsim.datasets.life`) carry them as
 classes of their own. Each (:class:`SensorFault`, in :data:`SENSOR_FAULTS`; add one with
-:func:`register_sensor_fault`) acts on one bridge's output before the converter's noise:
-``sensor_gain_drift`` (1 − severity) s, ``sensor_offset_step`` s + severity.
+:func:`register_sensor_fault`) acts on one bridge's strain signal s (its output less its
+zero offset z, which a fault of the strain's transfer leaves) before the converter's
+noise: ``sensor_gain_drift`` z + (1 − severity) s, ``sensor_offset_step`` z + s + severity.
 Effects, causes, magnitudes and their sources: docs/PHYSICS.md sec. 8.2.
 """
 
@@ -31,8 +32,9 @@ class SensorFault:
     unit : str
         Unit of the severity.
     apply : callable
-        ``apply(x, severity)`` on one bridge's signals ``x`` [mV/V], shape (n, n_t),
-        with ``severity`` of shape (n, 1); returns the faulty signals.
+        ``apply(x, severity)`` on one bridge's strain signals ``x`` [mV/V] (its output
+        less its zero offset), shape (n, n_t), with ``severity`` of shape (n, 1); returns
+        the faulty ones.
     display : str
         Name in reports and figures.
     """
@@ -102,8 +104,12 @@ def is_sensor_fault(name: str) -> bool:
 
 
 def apply_sensor_fault(x: np.ndarray, name: str, severity: np.ndarray | float,
-                       sensor: int) -> np.ndarray:
+                       sensor: int, zero_offset_mvv: float = 0.0) -> np.ndarray:
     """One bridge's fault on a batch of windows (a copy; the input is left as it is).
+
+    The fault acts on the bridge's strain signal, x − z; the zero offset z (its arms'
+    imbalance, docs/PHYSICS.md sec. 4.4) stays: a gauge that debonds passes less strain,
+    not less imbalance.
 
     Parameters
     ----------
@@ -115,6 +121,9 @@ def apply_sensor_fault(x: np.ndarray, name: str, severity: np.ndarray | float,
         In the fault's unit.
     sensor : int
         Index of the faulty bridge, 0..4.
+    zero_offset_mvv : float
+        The faulty bridge's zero offset z [mV/V] (the gear's
+        :attr:`swgsim.gear.sensors.SensorLayout.zero_offsets_mvv`); 0: a balanced bridge.
 
     Returns
     -------
@@ -128,7 +137,8 @@ def apply_sensor_fault(x: np.ndarray, name: str, severity: np.ndarray | float,
     f = SENSOR_FAULTS[name]
     out = np.array(x, copy=True)
     sev = np.broadcast_to(np.asarray(severity, float), (x.shape[0],))[:, None]
-    out[:, sensor] = f.apply(out[:, sensor], sev)
+    z = float(zero_offset_mvv)
+    out[:, sensor] = f.apply(out[:, sensor] - z, sev) + z
     return out
 
 

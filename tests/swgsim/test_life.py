@@ -134,6 +134,26 @@ def test_sensor_fault_on_one_bridge_after_onset(tiny):
     assert np.allclose(d[:, [0, 1, 3, 4]], 0.0, atol=2 * lsb)
 
 
+def test_a_gain_drift_scales_the_bridges_strain_not_its_zero_offset(tiny):
+    """A gauge that debonds passes less strain, not less imbalance: the faulty bridge reads
+    z + (1 - severity)(s - z) (docs/PHYSICS.md sec. 8.2), within the converter's noise
+    (without eq. (10), which the fault would scale too)."""
+    healthy = LifeConfig(hours=1.2, commissioning_h=1.0, disturbed=False)
+    bank = RecordBank(tiny, 1)
+    h = LifeSimulator(tiny, 1, healthy, bank)
+    f = LifeSimulator(tiny, 1, dataclasses.replace(
+        healthy, fault=FaultOnset("sensor_gain_drift", 1.1, 0.1, sensor=2)), bank)
+    z = h.zero_offsets_mvv[2]
+    assert abs(z) > 0.05  # the gear's s2 is far from balanced
+    sh, _ = h.windows(0, len(h))
+    sf, mf = f.windows(0, len(f))
+    on = mf["fault"] == "sensor_gain_drift"
+    err = sf[on][:, 2] - (z + 0.9 * (sh[on][:, 2].astype(float) - z))
+    amp = tiny.config.acquisition.amplifier  # what differs is 0.1 of the noise, and the LSB
+    assert np.abs(err).max() < 6 * 0.1 * amp.noise_mvv + 2 * amp.lsb_mvv
+    assert abs(err.mean()) < 0.01 * abs(z)  # scaling z too would leave 0.1 z
+
+
 def test_generate_writes_and_resumes_a_life(tmp_path):
     from swgsim.datasets.generate import generate
     from swgsim.datasets.schema import load
