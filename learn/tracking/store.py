@@ -27,6 +27,12 @@ from learn.tracking.provenance import repo_root
 
 #: How long a process waits for another one creating or migrating an SQLite store.
 STORE_LOCK_TIMEOUT_S = 120.0
+#: How long the check before any work waits for each answer of a tracking server [s]; it
+#: asks once (MLflow's own client waits 120 s a request and retries 7 times: a server
+#: whose backend store is down would hold the app for minutes before the first job).
+SERVER_TIMEOUT_S = 5.0
+#: What the check asks a tracking server: that it is up, and that its API answers.
+SERVER_PROBES = ("/health", "/api/2.0/mlflow/experiments/search?max_results=1")
 _OPENED: set[str] = set()  # stores this process opened (schema created or checked)
 
 
@@ -69,8 +75,9 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
     ValueError
         One line naming ``key`` and the URI: an SQLite store whose folder is missing or
         not writable, or whose file is not an SQLite database; a local folder store that
-        is not writable; an HTTP server that does not answer within 5 s; a store MLflow
-        fails to open (its error's first line).
+        is not writable; an HTTP server whose health check or API does not answer within
+        :data:`SERVER_TIMEOUT_S`, or answers with an error (asked once each, no retries);
+        a store MLflow fails to open (its error's first line).
     learn.tracking.preflight.BrokenInstall
         MLflow (or a library it imports) cannot be imported: one line naming it.
     """
@@ -94,13 +101,7 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
             except sqlite3.DatabaseError as e:
                 raise ValueError(f"{key}={uri}: {db} is not an SQLite database ({e})") from None
     elif uri.startswith(("http://", "https://")):
-        import urllib.request
-
-        try:
-            urllib.request.urlopen(uri.rstrip("/") + "/health", timeout=5).close()
-        except OSError as e:
-            raise ValueError(f"{key}={uri}: the tracking server does not answer ({e})") \
-                from None
+        _ask_server(uri, key)
     else:
         folder = Path(uri.removeprefix("file://"))
         probe = folder if folder.exists() else folder.parent
@@ -110,14 +111,51 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
     return uri
 
 
+def _ask_server(uri: str, key: str) -> None:
+    """Ask a tracking server each of :data:`SERVER_PROBES` once, within
+    :data:`SERVER_TIMEOUT_S`; one line naming what failed."""
+    import urllib.error
+    import urllib.request
+
+    for probe in SERVER_PROBES:
+        what = probe.split("?")[0]
+        try:
+            urllib.request.urlopen(uri.rstrip("/") + probe, timeout=SERVER_TIMEOUT_S).close()
+        except urllib.error.HTTPError as e:
+            raise ValueError(f"{key}={uri}: the tracking server answers {what} with HTTP "
+                             f"{e.code} ({e.reason}); is its backend store up?") from None
+        except OSError as e:  # refused, unreachable, or no answer in time
+            raise ValueError(f"{key}={uri}: the tracking server does not answer {what} "
+                             f"within {SERVER_TIMEOUT_S:g} s ({e})") from None
+
+
+@contextmanager
+def _one_short_request() -> Iterator[None]:
+    """MLflow's HTTP client asks once and waits :data:`SERVER_TIMEOUT_S` while inside."""
+    keys = {"MLFLOW_HTTP_REQUEST_MAX_RETRIES": "0",
+            "MLFLOW_HTTP_REQUEST_TIMEOUT": str(int(SERVER_TIMEOUT_S))}
+    before = {k: os.environ.get(k) for k in keys}
+    os.environ.update(keys)
+    try:
+        yield
+    finally:
+        for k, v in before.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
 def _open(uri: str, key: str) -> None:
-    """Open the store as a run will (:func:`tracking_client`); one line on failure."""
+    """Open the store as a run will (:func:`tracking_client`); one line on failure. A
+    server's store is opened with one short request (:func:`_one_short_request`)."""
     try:
         import mlflow  # noqa: F401 - its import is what a broken install breaks
     except Exception as e:  # noqa: BLE001 - any failure at import is a broken install
         raise import_failure("mlflow", e) from None
     try:
-        tracking_client(uri, key)
+        with _one_short_request():
+            tracking_client(uri, key)
     except ValueError:
         raise
     except ImportError as e:  # a store plugin or driver MLflow imports when opening

@@ -63,10 +63,15 @@ def pid_alive(pid: int) -> bool:
 
 
 def write_atomically(path: str | os.PathLike, write: Callable[[Path], object],
-                     before_replace: Callable[[Path, str], None] | None = None) -> None:
+                     before_replace: Callable[[Path, str], None] | None = None,
+                     exclusive: bool = False) -> None:
     """Have ``write`` write a file at a temporary path in the folder of ``path``, flush it
     to disk, then rename it over ``path``: a reader, or a run after a kill or a full disk
     at any point, sees the old file or the new one whole, never half of one.
+
+    With ``exclusive`` the file is created, never replaced: the temporary file is linked
+    to ``path`` (``os.link`` fails on an existing name), so two runs creating it at once
+    leave one whole file, the first's.
 
     Parameters
     ----------
@@ -78,9 +83,13 @@ def write_atomically(path: str | os.PathLike, write: Callable[[Path], object],
     before_replace : callable, optional
         ``before_replace(path, tmp)`` runs between the flush and the rename (the
         ownership stamp records the file there, :func:`swgsim.files.ownership.write_owned`).
+    exclusive : bool
+        Create ``path``; a file already there is left as it is.
 
     Raises
     ------
+    FileExistsError
+        With ``exclusive``, if ``path`` exists; nothing is left behind.
     DiskFullError
         If the disk is full, naming the file and its folder; nothing is left behind.
     Exception
@@ -97,7 +106,11 @@ def write_atomically(path: str | os.PathLike, write: Callable[[Path], object],
         os.chmod(tmp, _umask_mode())
         if before_replace is not None:
             before_replace(path, tmp)
-        os.replace(tmp, path)
+        if exclusive:
+            os.link(tmp, path)  # whole or not at all, and never over another's file
+            Path(tmp).unlink()
+        else:
+            os.replace(tmp, path)
     except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
         if isinstance(e, OSError) and e.errno == errno.ENOSPC:

@@ -90,21 +90,29 @@ def writers_of(stamp: dict) -> dict:
 
 def update(folder: Path, app: str, change: Callable[[dict], None]) -> None:
     """Apply ``change(stamp)`` to the stamp of ``folder`` under an exclusive lock and write
-    it atomically; the stamp is created (exclusively) when there is none."""
+    it atomically; the stamp is created when there is none, like every other file
+    (:func:`swgsim.files.atomic.write_atomically`, exclusively): a full disk or a kill
+    leaves no stamp at all, never an empty one that would make every rerun refuse the
+    folder.
+
+    Raises
+    ------
+    swgsim.files.atomic.DiskFullError
+        The disk filled up while the stamp was created or updated; nothing left behind.
+    ValueError
+        The stamp there is not this project's.
+    """
     path = folder / STAMP
-    try:
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o666)
-    except FileExistsError:
-        pass
-    else:  # a new stamp: written in place (readers retry an empty one), then updated;
-        # it names this process (its temporary files ours from the start) and lists the
-        # lock files (empty) before they are created
+    if not os.path.lexists(path):
+        # a new stamp names this process (its temporary files ours from the start) and
+        # lists the lock files (empty) before they are created
         new = {"writer": SIGNATURE, "version": VERSION, "apps": [app],
                "files": {name: [EMPTY] for name in LOCKS}, "runs": [run_id()]}
-        with os.fdopen(fd, "wb") as f:
-            f.write((json.dumps(new, indent=1) + "\n").encode())
-            f.flush()
-            os.fsync(f.fileno())
+        data = (json.dumps(new, indent=1) + "\n").encode()
+        try:
+            write_atomically(path, lambda tmp: tmp.write_bytes(data), exclusive=True)
+        except FileExistsError:
+            pass  # another run created it first
     with FileLock(lock_file(folder, STAMP_LOCK), thread_local=False):
         stamp = read_stamp(folder)
         if stamp is None:

@@ -7,6 +7,9 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import threading
+import time
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
 import pytest
@@ -115,6 +118,55 @@ def test_a_broken_mlflow_is_found_by_the_tracking_check(tmp_path):
                        env=env, timeout=300)
     assert r.stdout.startswith("broken install: mlflow cannot be imported"), r.stdout + r.stderr
     assert "cryptography" in r.stdout
+
+
+class _HealthOnly(BaseHTTPRequestHandler):
+    """A tracking server whose backend store is down: ``/health`` answers 200, the API
+    hangs (``api = "hang"``) or answers 500."""
+
+    api = "hang"
+
+    def do_GET(self):  # noqa: N802 - the handler's name
+        if self.path == "/health":
+            self.send_response(200)
+            self.end_headers()
+            self.wfile.write(b"OK")
+        elif self.api == "hang":
+            time.sleep(30)
+        else:
+            self.send_response(500)
+            self.end_headers()
+
+    do_POST = do_GET
+
+    def log_message(self, *args):
+        pass
+
+
+@pytest.mark.parametrize("api, words", [("hang", "does not answer /api/2.0/mlflow/"),
+                                        ("500", "answers /api/2.0/mlflow/experiments/search "
+                                                "with HTTP 500")])
+def test_a_server_that_answers_its_health_check_but_not_its_api_is_refused_at_once(
+        api, words):
+    """MLflow's client waits 120 s a request and retries 7 times (the audit: over 400 s
+    on a hanging API, 256 s on one that answers 500); the check asks once, 5 s."""
+    from learn.tracking.store import SERVER_TIMEOUT_S, check_tracking
+
+    handler = type("Handler", (_HealthOnly,), {"api": api})
+    server = ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    server.daemon_threads = True
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    uri = f"http://127.0.0.1:{server.server_address[1]}"
+    t0 = time.perf_counter()
+    try:
+        with pytest.raises(ValueError) as e:
+            check_tracking(uri, "logger.tracking_uri")
+    finally:
+        server.shutdown()
+    assert time.perf_counter() - t0 < 2 * SERVER_TIMEOUT_S + 2
+    line = str(e.value)
+    assert line.startswith(f"logger.tracking_uri={uri}: ") and words in line, line
+    assert "\n" not in line
 
 
 def test_checking_imports_keeps_numpys_floating_point_state():

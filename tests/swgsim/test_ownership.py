@@ -334,6 +334,30 @@ def test_a_report_file_is_whole_and_stamped_or_not_there(tmp_path, monkeypatch, 
     assert list(ownership.check(out, app="swgsim-monitor").owned) == ["health.png"]
 
 
+def test_a_full_disk_when_the_stamp_is_first_written_leaves_no_stamp(tmp_path, monkeypatch):
+    """Issue 82, cause 6: the stamp is created like every other file (a temporary file,
+    then linked): a full disk at its first write is one line (DiskFullError, a
+    ValueError) and leaves no stamp, not an empty one that made every rerun refuse the
+    folder; the same command then claims it."""
+    out = tmp_path / "report"
+    out.mkdir()
+    write_bytes = Path.write_bytes
+
+    def full(self, data):
+        if self.name.startswith("..swg-owner.json."):  # the stamp's temporary file
+            write_bytes(self, data[:7])
+            raise OSError(28, "No space left on device")
+        return write_bytes(self, data)
+    monkeypatch.setattr(Path, "write_bytes", full)
+    with pytest.raises(atomic.DiskFullError, match=r"disk full while writing .*\.swg-owner"):
+        ownership.claim(out, "swgsim-monitor", strict=True)
+    monkeypatch.undo()
+    assert sorted(p.name for p in out.iterdir()) == []
+    with ownership.claim(out, "swgsim-monitor", strict=True):
+        ownership.write_owned(out / "report.md", lambda tmp: tmp.write_bytes(b"whole"))
+    assert list(ownership.check(out, app="swgsim-monitor").owned) == ["report.md"]
+
+
 def test_the_monitors_figure_is_written_through_write_owned(tmp_path, monkeypatch):
     """A savefig that fails half-way through health.png leaves no health.png at all."""
     import matplotlib.figure
