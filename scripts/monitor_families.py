@@ -56,6 +56,7 @@ study = lazy_module("learn.monitor.study")
 training = lazy_module("learn.monitor.training")
 typed = lazy_module("swgsim.base.typed")
 swgcli = lazy_module("swgcli")
+app = lazy_module("swgcli.app")
 plans = lazy_module("swgsim.datasets.plan")
 records = lazy_module("swgsim.datasets.records")
 ownership = lazy_module("swgsim.files.ownership")
@@ -105,8 +106,8 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
 def study_config(overrides: list[str], trace: str | None = None):
     """The study's design with ``KEY=VALUE`` overrides and, with ``trace``, the family
     ``trace``, checked (ValueError: one line)."""
-    cfg = study.MonitorStudyConfig()
-    names = {f.name for f in dataclasses.fields(cfg)}
+    schema = study.MonitorStudyConfig
+    names = {f.name for f in dataclasses.fields(schema)}
     changes = {}
     for item in overrides:
         key, sep, value = item.partition("=")
@@ -117,7 +118,9 @@ def study_config(overrides: list[str], trace: str | None = None):
             changes[key] = json.loads(value)
         except json.JSONDecodeError:
             changes[key] = value
-    cfg = dataclasses.replace(cfg, **changes)
+    # the values typed and checked as every config's (one line naming the key)
+    cfg = typed.build(typed.complete({**typed.plain(schema()), **changes}, schema,
+                                     "monitor.study"), schema, "monitor.study")
     if not cfg.families:  # the study lives none by default; this script every one
         cfg = dataclasses.replace(cfg, families=families.default_families())
     if trace is not None:
@@ -127,21 +130,33 @@ def study_config(overrides: list[str], trace: str | None = None):
     return cfg
 
 
+def preset(option: str, name: str, overrides: list[str] | None = None) -> dict:
+    """A data-set preset named by ``option``; ValueError naming the option and the
+    presets there are."""
+    try:
+        return swgcli.dataset_preset(name, overrides or [])
+    except Exception as e:  # noqa: BLE001 - Hydra's many errors, said in one line
+        raise ValueError(f"{option} {name}: {app.one_line(e) or e}") from None
+
+
 def setup(args: argparse.Namespace):
     """The plan, the study, the training gears, the families and the seeds; ValueError
     in one line on bad input."""
     cfg = study_config(args.study, args.trace)
-    raw = swgcli.dataset_preset(args.dataset, args.set)
+    raw = preset("--dataset", args.dataset, args.set)
     ids = [int(g["id"]) for g in raw["gears"]]
     if args.gear not in ids:
         raise ValueError(f"--gear {args.gear}: {args.dataset} has gears {ids}")
     if len(ids) == 1:
-        extra = [g for g in swgcli.dataset_preset(args.train_from)["gears"]
+        extra = [g for g in preset("--train-from", args.train_from)["gears"]
                  if int(g["id"]) != args.gear]
         raw["gears"] = extra + raw["gears"]
     p = plans.plan(raw)
     fams = list(cfg.families) if args.families is None else args.families
     bad = sorted(set(fams) - set(cfg.families))
+    if not fams:
+        raise ValueError(f"--families: give one or more of {', '.join(cfg.families)} "
+                         "(or leave the option out for every one)")
     if bad:
         raise ValueError(f"--families: unknown {bad}; allowed: {', '.join(cfg.families)}")
     seeds = cfg.scored_seeds if args.seeds == "scored" else cfg.design_seeds
@@ -212,8 +227,11 @@ def main(argv: list[str] | None = None) -> int:
         folder, what = (args.read, "--read") if args.read is not None else (args.out, "--out")
         claim = nullcontext() if folder is None else ownership.claim(folder, TAG, what,
                                                                       strict=True)
-    except (ValueError, KeyError) as e:
-        print(f"monitor_families: error: {e}", file=sys.stderr)
+    except Exception as e:  # noqa: BLE001 - bad input in one line, the apps' way
+        msg = app.one_line(e)
+        if msg is None:  # not bad input: a bug, with its traceback
+            raise
+        print(f"monitor_families: error: {msg}", file=sys.stderr)
         return 2
     try:
         with claim:

@@ -93,3 +93,19 @@ def test_a_folder_with_files_of_anything_else_is_refused_before_work(tmp_path, l
     assert len(err.splitlines()) == 1 and "warm_up_results.csv" in err and "--out" in err
     assert (out / "warm_up_results.csv").read_text() == "mine\n"
     assert lives["lived"] == [] and lives["trained"] == 0
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--dataset", "nope"], "--dataset nope: Could not find 'dataset/nope'; available: "),
+    (["--train-from", "nope"], "--train-from nope: Could not find 'dataset/nope'"),
+    (["--families"], "--families: give one or more of "),
+    (["--study", "faults=3"], "monitor.study.faults: must be a list, got 3"),
+    (["--study", "families=3"], "monitor.study.families: must be a mapping, got 3"),
+])
+def test_bad_input_is_one_line_before_any_work(argv, words, capsys):
+    """Issue 82, cause 8: every bad input reaches the apps' one-line path (before, a
+    bad preset, an empty --families and a wrongly typed --study value were tracebacks)."""
+    assert monitor_families.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("monitor_families: error: ") and words in err, err
+    assert "\n" not in err and "Traceback" not in err
