@@ -195,7 +195,8 @@ class PrognosisStudyConfig:
             calibration; no fault, a fault without a growth law or its growth to failure
             out of range; ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi <= 10^4 h;
             no payload; ``severity_levels`` not a multiple of 4 in [8, 256];
-            ``payload_after_h`` outside the life after the onset.
+            ``payload_after_h`` outside the life after the onset; ``prognosis.every_h``
+            below the lives' window interval.
         """
         for name in ("seeds", "calibration_seeds"):
             seeds = getattr(self, name)
@@ -230,6 +231,8 @@ class PrognosisStudyConfig:
                              f"{self.severity_levels}")
         check_range(self.payload_after_h, 0.0, self.max_life_h, f"{where}.payload_after_h",
                     "h", lo_open=True, hi_open=True, why="inside the life after the onset")
+        # at most a prognosis per window of the lives (train.interval_min apart)
+        self.prognosis.check(f"{where}.prognosis", interval_h=self.train.interval_min / 60.0)
 
 
 def _law(fault: str) -> str | None:

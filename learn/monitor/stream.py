@@ -35,7 +35,13 @@ from .normal import (
 from .rule import Alarm, RuleConfig, check_commissioning
 from .sensor_check import TEMPERATURE_SENSOR, still_reading, virtual_temperature
 from .stream_figures import health_figure, prognosis_figure
-from .stream_prognosis import StreamPrognoses, StreamPrognosis, stream_prognoses, trained_duty
+from .stream_prognosis import (
+    StreamPrognoses,
+    StreamPrognosis,
+    stream_prognoses,
+    trained_duty,
+    window_interval_h,
+)
 from .unexplained import UNEXPLAINED_CHANGE
 
 #: Bits of :meth:`learn.monitor.normal.NormalBehaviour.outside` and what they mean.
@@ -273,13 +279,15 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     ValueError
         A stream the monitor cannot take (:func:`check_stream`), a maintenance event out
         of range (a tool change or repair inside commissioning) or a prognosis option out
-        of range (a planned duty outside the model's), before any work.
+        of range (a planned duty outside the model's, prognoses more often than the
+        stream's windows), before any work.
     """
     log = sorted(maintenance or [], key=lambda e: e.hour)
-    prognosis = (prognosis.check(trained=trained_duty(model))
-                 if prognosis and prognosis.enabled else None)
     check_stream(ds, model, rule, source)
     hours = ds["hour"].values.astype(float)
+    prognosis = (prognosis.check(trained=trained_duty(model),
+                                 interval_h=window_interval_h(hours))
+                 if prognosis and prognosis.enabled else None)
     n_c = int(ds["commissioning"].values.astype(bool).sum())
     for i, e in enumerate(maintenance or []):
         e.check(f"maintenance[{i}]")

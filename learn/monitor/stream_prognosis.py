@@ -106,10 +106,15 @@ class StreamPrognosis:
         return PrognosisConfig(min_track_h=self.min_track_h, min_estimates=self.min_estimates,
                                interval_scale=self.interval_scale, to_failure=self.to_failure)
 
-    def check(self, where: str = "prognosis", trained: DutyRange | None = None
-              ) -> StreamPrognosis:
+    def check(self, where: str = "prognosis", trained: DutyRange | None = None,
+              interval_h: float | None = None) -> StreamPrognosis:
         """Refuse a field out of range, or a planned duty outside ``trained``, in one line
         naming ``<where>.<field>``; return self.
+
+        The number of prognoses is the hours after an alarm over ``every_h``, each kept
+        and reported: with the stream's window interval given, ``every_h`` below it is
+        refused (between two windows nothing new is known), so that an alarm gets at most
+        a prognosis per window, never millions (a 2-h follow-up at 1e-9 h filled 18 GB).
 
         Parameters
         ----------
@@ -119,6 +124,9 @@ class StreamPrognosis:
         trained : DutyRange, optional
             The duty the diagnosis model was trained on (:func:`trained_duty`); given, a
             planned duty outside it is refused.
+        interval_h : float, optional
+            The stream's window interval [h] (:func:`window_interval_h`); given, the
+            lower bound of ``every_h``.
 
         Returns
         -------
@@ -128,10 +136,15 @@ class StreamPrognosis:
         Raises
         ------
         ValueError
-            A field outside its range (the attributes above), or the planned duty outside
-            ``trained`` (``<where>.planned.<quantity>``).
+            A field outside its range (the attributes above), ``every_h`` below the
+            window interval, or the planned duty outside ``trained``
+            (``<where>.planned.<quantity>``).
         """
         check_range(self.every_h, 0.0, 1000.0, f"{where}.every_h", "h", lo_open=True)
+        if interval_h is not None and self.every_h < interval_h:
+            check_range(self.every_h, interval_h, 1000.0, f"{where}.every_h", "h",
+                        why=f"at most a prognosis per window: the stream's windows are "
+                            f"{60 * interval_h:.3g} min apart")
         check_range(self.block_h, 0.0, 100.0, f"{where}.block_h", "h", lo_open=True)
         if self.threshold is not None:
             check_range(self.threshold, 0.0, 10.0, f"{where}.threshold", lo_open=True)
@@ -143,6 +156,13 @@ class StreamPrognosis:
             if trained is not None:
                 trained.refuse_outside(duty, f"{where}.planned")
         return self
+
+
+def window_interval_h(hours: np.ndarray) -> float | None:
+    """The stream's window interval [h]: the median step between its windows' hours; None
+    for fewer than two windows."""
+    h = np.asarray(hours, float)
+    return float(np.median(np.diff(h))) if h.size > 1 else None
 
 
 def planned_duty(cfg: StreamPrognosis) -> Duty | None:

@@ -681,6 +681,22 @@ def growing_life(tiny_eval, tmp_path_factory):
     return {"ds": ds, "folder": folder, "failure_h": float(failure_h), "config": on, **runs}
 
 
+def test_prognoses_more_often_than_the_streams_windows_are_refused_before_work(growing_life,
+                                                                             tiny_eval):
+    """Issue 82, cause 1: prognosis.every_h inside (0, 1000] h set the number of prognoses
+    (1e-9 h: 18.6 GB, the kernel's OOM killer); below the stream's window interval it is
+    refused in one line, before the stream is monitored."""
+    import dataclasses
+
+    from learn.monitor.stream import monitor_stream
+
+    many = dataclasses.replace(growing_life["config"], every_h=1e-9)
+    with pytest.raises(ValueError, match=r"^prognosis.every_h must lie in \[0.0166667, "
+                                         r"1000\] h \(at most a prognosis per window: the "
+                                         r"stream's windows are 1 min apart\), got 1e-09$"):
+        monitor_stream(growing_life["ds"], tiny_eval["model"], RuleConfig(), prognosis=many)
+
+
 def test_the_prognosis_interval_after_the_alarm_holds_the_true_failure_hour(growing_life):
     """Every valid prognosis made before the true failure (7.67 h) holds it within its
     5-95 % interval; the first, 0.5 h after the alarm with 2 estimates, is not yet valid

@@ -127,6 +127,11 @@ BAD = {  # case -> (override, the start of the one line)
         "prognosis.study.faults.eccentric_wg.to_failure.failure must lie in"),
     "every_h 0": ("prognosis.study.prognosis.every_h=0",
                   "prognosis.study.prognosis.every_h must lie in (0, 1000]"),
+    # issue 82, cause 1: 1e-7 h ended in a SystemError after training
+    "every_h below the lives' window interval": (
+        "prognosis.study.prognosis.every_h=1e-7",
+        "prognosis.study.prognosis.every_h must lie in [0.0166667, 1000] h (at most a "
+        "prognosis per window"),
     "an unknown data set": ("prognosis.run_on=[nope]", "prognosis.run_on: ['nope']"),
     "no data set": ("prognosis.run_on=[]", "prognosis.run_on: empty; allowed: keys of "
                                            "prognosis.datasets ['bench', 'robot_joint', 'tiny']"),
