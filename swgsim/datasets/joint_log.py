@@ -30,13 +30,23 @@ import numpy as np
 
 from swgsim.datasets import recording_table as rt
 from swgsim.datasets.conditions import HOURS_TABLE_COLUMNS, TRACE_GAP_MIN
+from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 from swgsim.files.ownership import atomic_write_bytes
 
-__all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "JointLog", "read_joint_log",
+__all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "READING_RANGES", "JointLog", "read_joint_log",
            "write_joint_log", "write_temperature_table"]
 
 #: Joints of the arm [-] (a UR3: base, shoulder, elbow, three wrists).
 JOINTS = 6
+#: Physical ranges of the log's readings, refused beyond in one line naming the column
+#: and the row (a value outside is a fault of the sensor, a unit mistaken or a file
+#: damaged): the joint temperature the importer takes
+#: (:data:`swgsim.datasets.schema.TEMPERATURE_RANGE_C`); motor currents up to 100 A and
+#: tool currents up to 10 A [choice: over ten times the UR3 day's largest, 6.8 A and
+#: 0.6 A]; joint speeds up to 4 pi rad/s [choice: twice the fastest UR joint, a wrist's
+#: 360 deg/s; the UR3 day's fastest 2.7 rad/s].
+READING_RANGES = {"temperature": TEMPERATURE_RANGE_C, "current": (-100.0, 100.0),
+                  "speed": (-4 * np.pi, 4 * np.pi), "tool_current": (-10.0, 10.0)}
 #: A time step longer than this is a gap of the log [s]: a temperature trace's,
 #: :data:`swgsim.datasets.conditions.TRACE_GAP_MIN` (5 min: beyond a logger's hiccups of 9
 #: and 31 s, short against a joint's thermal time constant) [choice].
@@ -124,7 +134,8 @@ def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES)
         One line naming the file and, where it applies, the column (with its field, e.g.
         ``column 'Current_J3' (current[3]), row 12 (line 14): 'x' is not a number``): no
         such file, not a table, a column missing, a cell not a number, a time stamp or a
-        flag, times not increasing.
+        flag, a reading outside its physical range (:data:`READING_RANGES`), times not
+        increasing.
     """
     df, fmt, _ = rt.read_table(path, LOG_COLUMNS, max_bytes, sep=";", decimal=",")
     t_s = rt.datetime_seconds(df, "Timestamp", "time", fmt)
@@ -134,10 +145,17 @@ def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES)
                          f"{df['Timestamp'].iloc[back[0] + 1]!r} is not after the row "
                          "before; the times must increase")
 
-    def block(prefix: str, t0: str | None = None) -> np.ndarray:  # (n, 6)
+    def column(c: str, quantity: str, unit: str) -> np.ndarray:  # a reading, in range
+        x = rt.numeric(df, c, LOG_COLUMNS[c], fmt, True, ",")
+        lo, hi = READING_RANGES[quantity]
+        rt.check_limit(np.where(np.isfinite(x), x, lo), lo, hi, c, LOG_COLUMNS[c], unit, fmt,
+                       f"a joint's {quantity.replace('_', ' ')} stays inside; a fault of "
+                       "the sensor, a unit mistaken or a damaged file")
+        return x
+
+    def block(prefix: str, quantity: str, unit: str, t0: str | None = None) -> np.ndarray:
         names = [t0 if (j == 0 and t0) else f"{prefix}{j}" for j in range(JOINTS)]
-        return np.column_stack([rt.numeric(df, c, LOG_COLUMNS[c], fmt, True, ",")
-                                for c in names])
+        return np.column_stack([column(c, quantity, unit) for c in names])  # (n, 6)
 
     cycle = rt.numeric(df, "cycle ", "cycle", fmt, decimal=",")
     if np.any(cycle != np.round(cycle)):
@@ -147,9 +165,10 @@ def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES)
     return JointLog(
         name=os.path.splitext(os.path.basename(os.fspath(path)))[0],
         start=str(df["Timestamp"].iloc[0]), t_s=t_s,
-        temperature_c=block("Temperature_J", "Temperature_T0"),
-        current_a=block("Current_J"), speed_rad_s=block("Speed_J"),
-        tool_current_a=rt.numeric(df, "Tool_current", "tool_current", fmt, True, ","),
+        temperature_c=block("Temperature_J", "temperature", "degC", "Temperature_T0"),
+        current_a=block("Current_J", "current", "A"),
+        speed_rad_s=block("Speed_J", "speed", "rad/s"),
+        tool_current_a=column("Tool_current", "tool_current", "A"),
         cycle=cycle.astype(np.int64),
         protective_stop=rt.flag(df, "Robot_ProtectiveStop", "protective_stop", fmt,
                                 missing=False),

@@ -64,6 +64,15 @@ def test_a_cut_of_the_ur3_format_is_mapped(tmp_path):
                                       r"row 1 \(line 3\): 'maybe' is not a flag"),
     ("Timestamp", "yesterday", r"column 'Timestamp' \(time\), row 1 \(line 3\): 'yesterday' "
                                r"is not a time stamp"),
+    # issue 82, cause 3: any finite number was taken (1e30 degC gave an ambient of -1.9e27)
+    ("Temperature_J2", "1e30", r"column 'Temperature_J2' \(temperature\[2\]\), row 1 "
+                               r"\(line 3\): 1e\+30 degC outside \[-40, 150\] degC: "),
+    ("Current_J4", "1e200", r"column 'Current_J4' \(current\[4\]\), row 1 \(line 3\): "
+                            r"1e\+200 A outside \[-100, 100\] A: "),
+    ("Speed_J1", "-40", r"column 'Speed_J1' \(speed\[1\]\), row 1 \(line 3\): -40 rad/s "
+                        r"outside \[-12.5664, 12.5664\] rad/s: "),
+    ("Tool_current", "11", r"column 'Tool_current' \(tool_current\), row 1 \(line 3\): 11 A "
+                           r"outside \[-10, 10\] A: "),
 ])
 def test_a_malformed_row_is_refused_naming_row_and_column(tmp_path, cell, column, match):
     path = _cut(tmp_path / "day.csv")
