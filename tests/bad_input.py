@@ -1,7 +1,7 @@
 """Helpers of the bad-input tests (tests/apps, tests/swgsim): a small data set, snapshots
 of folders, the one-line message of a refused call, an app run in-process as its console
 would run it (its exit code and one line), a friction CSV, the calibration app as a call,
-and the live members of a process group."""
+the live members of a process group, and a small diagnosis model whose parts are right."""
 
 from __future__ import annotations
 
@@ -141,3 +141,22 @@ def process_group(pgid: int) -> list[int]:
             if int(stat[2]) == pgid and stat[0] != "Z":
                 out.append(int(d))
     return out
+
+
+def small_model(**change):
+    """A small diagnosis model whose parts are those ``fit_diagnosis`` makes (two health
+    features and the operating point: four inputs; classes healthy and ``x``), with
+    ``change`` (fields of :class:`learn.monitor.model.DiagnosisModel`) applied."""
+    import dataclasses
+
+    from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
+
+    from learn.monitor.model import DiagnosisModel
+
+    x, y = np.eye(4), [0, 1, 0, 1]
+    m = DiagnosisModel(
+        ["healthy", "x"], HistGradientBoostingClassifier(max_iter=2).fit(x, y),
+        {"x": (HistGradientBoostingRegressor(max_iter=2).fit(x, [0.0, 0.1, 0.0, 0.1]),
+               (-0.02, 0.03))},
+        np.array([[2000.0, 7.0], [4000.0, 70.0]]), 2, 10_000.0, 0.12)
+    return dataclasses.replace(m, **change)

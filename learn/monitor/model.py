@@ -70,6 +70,64 @@ class DiagnosisModel:
     window_s: float = 0.0
     severity_without: dict[int, dict[str, object]] = field(default_factory=dict, repr=False)
 
+    def check(self, where: str = "diagnosis_model") -> DiagnosisModel:
+        """Refuse a model whose parts are not those :func:`fit_diagnosis` makes, in one
+        line naming ``where`` and the part; return self.
+
+        The file's types are checked when it is loaded (:mod:`.model_io`), but a card-
+        matched file can hold another estimator, a number, classes in another order or a
+        fault without its severity regressor, which failed only after the whole stream.
+
+        Raises
+        ------
+        ValueError
+            ``classes`` not distinct names with healthy first; a classifier that is not a
+            fitted gradient-boosting classifier of one class per name; a class other than
+            healthy without a fitted gradient-boosting severity regressor, or a regressor
+            of a class the model lacks; inputs of another width than ``n_features`` + 2;
+            quantiles not finite with q05 <= q95; a sample rate, window or feature count
+            not positive; ``points_range`` not finite (2, 2).
+        """
+        from sklearn.ensemble import HistGradientBoostingClassifier as Clf
+        from sklearn.ensemble import HistGradientBoostingRegressor as Reg
+
+        missing = [f.name for f in dataclasses.fields(self) if not hasattr(self, f.name)]
+        if missing:  # an object made without its fields (a pickle of another make)
+            raise ValueError(f"{where}: not a diagnosis model (no {', '.join(missing)})")
+        c = self.classes
+        if (not isinstance(c, list) or not c or not all(isinstance(x, str) for x in c)
+                or len(set(c)) != len(c) or c[0] != HEALTHY):
+            raise ValueError(f"{where}: classes must be distinct names, {HEALTHY} first; "
+                             f"got {c!r}")
+        for name, v in (("n_features", self.n_features), ("sample_rate_hz",
+                        self.sample_rate_hz), ("window_s", self.window_s)):
+            if not isinstance(v, (int, float)) or not np.isfinite(v) or v <= 0:
+                raise ValueError(f"{where}: {name} must be positive, got {v!r}")
+        width = int(self.n_features) + 2  # the z-scores and the operating point
+        clf = self.classifier
+        if (not isinstance(clf, Clf) or not hasattr(clf, "classes_")
+                or list(clf.classes_) != list(range(len(c)))
+                or getattr(clf, "n_features_in_", None) != width):
+            raise ValueError(f"{where}: the classifier must be a fitted "
+                             f"HistGradientBoostingClassifier of {len(c)} classes on {width} "
+                             f"inputs, got {type(clf).__name__}")
+        if set(self.severity) != set(c[1:]):
+            raise ValueError(f"{where}: a severity regressor for every class but {HEALTHY}: "
+                             f"missing {sorted(set(c[1:]) - set(self.severity))}, extra "
+                             f"{sorted(set(self.severity) - set(c[1:]))}")
+        for f, (reg, q) in self.severity.items():
+            if not isinstance(reg, Reg) or getattr(reg, "n_features_in_", None) != width:
+                raise ValueError(f"{where}: the severity regressor of {f} must be a fitted "
+                                 f"HistGradientBoostingRegressor on {width} inputs, got "
+                                 f"{type(reg).__name__}")
+            if not (np.all(np.isfinite(q)) and len(q) == 2 and q[0] <= q[1]):
+                raise ValueError(f"{where}: the severity interval of {f} must be finite "
+                                 f"(q05, q95) with q05 <= q95, got {q!r}")
+        pr = self.points_range
+        if pr is not None and (np.shape(pr) != (2, 2) or not np.all(np.isfinite(pr))):
+            raise ValueError(f"{where}: points_range must be finite (2, 2), got {pr!r}")
+        return self
+
     def log_proba(self, x: np.ndarray) -> np.ndarray:
         """ln P(class | window), shape (n, n_classes), columns in ``classes`` order: the
         classifier's probabilities through the compiled walk of its trees

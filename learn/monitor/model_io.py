@@ -131,7 +131,8 @@ def load_model(path: str | os.PathLike, key: str = "diagnosis_model",
         One line naming the file: not a regular file of a bounded size, a pickle without
         ``trust_pickle``, no card or a card of another file, a SHA-256 that does not match
         the card, a zip that unpacks to more than :data:`MAX_UNPACKED_BYTES`, a type a
-        diagnosis model does not hold, or not a diagnosis model.
+        diagnosis model does not hold, classes other than its card's, or parts that are
+        not a diagnosis model's (:meth:`DiagnosisModel.check`).
     """
     p = Path(path)
     if not p.exists():
@@ -155,7 +156,7 @@ def load_model(path: str | os.PathLike, key: str = "diagnosis_model",
         raise ValueError(f"{key}: {p} holds types a diagnosis model does not: "
                          f"{', '.join(untrusted[:3])}; refused (no code is loaded)")
     state = sio.loads(data, trusted=TRUSTED)
-    return _model(state, p, key)
+    return _model(state, p, key, card.get("classes", []))
 
 
 def _check_unpacked(data: bytes, p: Path, key: str) -> None:
@@ -187,7 +188,9 @@ def _read_card(p: Path, key: str) -> dict:
     return card
 
 
-def _model(state, p: Path, key: str) -> DiagnosisModel:
+def _model(state, p: Path, key: str, card_classes: list) -> DiagnosisModel:
+    """The model of a loaded state, checked part by part (:meth:`DiagnosisModel.check`)
+    and against its card's classes."""
     try:
         m = DiagnosisModel(list(state["classes"]), state["classifier"],
                            {f: (v[0], (float(v[1][0]), float(v[1][1])))
@@ -198,7 +201,10 @@ def _model(state, p: Path, key: str) -> DiagnosisModel:
                            float(state["window_s"]))
     except (KeyError, TypeError, IndexError, ValueError):
         raise ValueError(f"{key}: {p} is not a diagnosis model") from None
-    return m
+    if m.classes != list(card_classes):
+        raise ValueError(f"{key}: {p} holds classes {m.classes} where its card lists "
+                         f"{list(card_classes)}")
+    return m.check(f"{key}: {p}")
 
 
 def _pickle(p: Path, key: str, trust: bool) -> DiagnosisModel:
@@ -214,4 +220,4 @@ def _pickle(p: Path, key: str, trust: bool) -> DiagnosisModel:
         raise ValueError(f"{key}: {p} is not a diagnosis model ({type(e).__name__})") from None
     if not isinstance(m, DiagnosisModel):
         raise ValueError(f"{key}: {p} holds a {type(m).__name__}, not a diagnosis model")
-    return m
+    return m.check(f"{key}: {p}")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bad_input import app_line, message
+from bad_input import app_line, message, small_model
 
 from swgsim.datasets import schema as dsio
 
@@ -158,13 +158,12 @@ OPTION_CASES = {  # case -> (overrides, the key the line must name)
 
 @pytest.fixture(scope="module")
 def any_model(tmp_path_factory) -> Path:
-    """A file holding a diagnosis model object (empty: the cases are refused before it is
+    """A file holding a small diagnosis model (the cases are refused before it is
     used)."""
     import joblib
 
-    from learn.monitor.model import DiagnosisModel
-    p = tmp_path_factory.mktemp("model") / "empty.joblib"
-    joblib.dump(DiagnosisModel.__new__(DiagnosisModel), p)
+    p = tmp_path_factory.mktemp("model") / "small.joblib"
+    joblib.dump(small_model(), p)
     return p
 
 

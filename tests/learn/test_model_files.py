@@ -10,22 +10,17 @@ import zipfile
 
 import numpy as np
 import pytest
+from bad_input import small_model
+
+from learn.monitor.model_io import load_model, save_model
 
 
 @pytest.fixture
 def model_file(tmp_path):
-    from sklearn.ensemble import HistGradientBoostingClassifier
-
-    from learn.monitor.model import DiagnosisModel
-    from learn.monitor.model_io import save_model
-
-    clf = HistGradientBoostingClassifier(max_iter=2).fit(np.eye(4), [0, 1, 0, 1])
-    return save_model(DiagnosisModel(["healthy", "x"], clf), tmp_path / "m", [])
+    return save_model(small_model(), tmp_path / "m", [])
 
 
 def test_a_real_model_loads(model_file):
-    from learn.monitor.model_io import load_model
-
     assert load_model(model_file).classes == ["healthy", "x"]
 
 
@@ -52,3 +47,42 @@ def test_a_zip_bomb_with_a_matching_card_refused_before_inflating(model_file, mo
                        r"in \d+ members, over the 4 MiB") as info:
         model_io.load_model(model_file)
     assert "\n" not in str(info.value)
+
+
+def _bad_parts():
+    from sklearn.ensemble import HistGradientBoostingRegressor
+    from sklearn.naive_bayes import GaussianNB
+
+    nb = GaussianNB().fit(np.eye(4), [0, 1, 0, 1])  # of no type the gate refuses
+    other = HistGradientBoostingRegressor(max_iter=2).fit(np.eye(3), [0.0, 0.1, 0.0])
+    return {
+        "another estimator as the classifier": (
+            {"classifier": nb}, "the classifier must be a fitted "
+                                "HistGradientBoostingClassifier of 2 classes on 4 inputs, got "
+                                "GaussianNB"),
+        "an int as the classifier": ({"classifier": 3}, "got int"),
+        "classes reversed": ({"classes": ["x", "healthy"]},
+                             "classes must be distinct names, healthy first"),
+        "no severity regressor": ({"severity": {}},
+                                  "a severity regressor for every class but healthy: "
+                                  "missing ['x']"),
+        "a regressor of other inputs": (
+            {"severity": {"x": (other, (-0.02, 0.03))}},
+            "the severity regressor of x must be a fitted HistGradientBoostingRegressor on "
+            "4 inputs"),
+    }
+
+
+@pytest.mark.parametrize("case", list(_bad_parts()))
+def test_a_card_matched_model_of_other_parts_is_refused_when_loaded(tmp_path, case):
+    """Issue 82, cause 7: skops' defaults trust every scikit-learn estimator, so a model
+    whose card matches loaded with another classifier, an int, its classes reversed or a
+    fault without its regressor, and crashed after the whole stream (AttributeError,
+    KeyError); now one line when it is loaded."""
+    change, words = _bad_parts()[case]
+    path = save_model(small_model(**change), tmp_path / "bad", [])  # its card matches it
+    with pytest.raises(ValueError) as info:
+        load_model(path)
+    line = str(info.value)
+    assert line.startswith(f"diagnosis_model: {path}: ") and words in line, line
+    assert "\n" not in line

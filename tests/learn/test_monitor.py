@@ -842,6 +842,8 @@ def test_a_training_gears_severity_is_read_out_of_sample_for_the_prognosis_calib
     x = np.column_stack([severity * np.where(gear == 1, 1.0, 1.5) + 0.01 * rng.normal(size=n),
                          (fault == "x") + 0.1 * rng.normal(size=n), np.ones(n), np.ones(n)])
     model = fit_diagnosis(x, fault, severity, gear, ["healthy", "x"], n_agg=10)
+    # what training sets beside the fit (learn.monitor.training.train_model)
+    model.n_features, model.sample_rate_hz, model.window_s = 2, 10_000.0, 0.12
     out = model.without(2)
     assert out.classifier is model.classifier and out.classes == model.classes
     assert out.severity["x"][1] == model.severity["x"][1]  # the same interval
