@@ -303,7 +303,9 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
                           source, normal, before, prognosis)
     entry = declared([again[0]], None)
     if hours.size - cut <= n_c:  # too few windows after it to commission and monitor
-        return dataclasses.replace(first, recommissioned=first.recommissioned + entry)
+        return dataclasses.replace(first, recommissioned=first.recommissioned + unmonitored(
+            again[0], [e for e in log if e.hour >= again[0].hour and e is not again[0]],
+            hours.size - cut, n_c, float(hours[-1])))
     rest = ds.isel(sample=slice(cut, None)).copy()
     rest["commissioning"] = rest["commissioning"].copy(data=np.arange(rest.sizes["sample"]) < n_c)
     later = monitor_stream(rest, model, rule, seed, confirm_h, source, normal,
@@ -602,6 +604,25 @@ def read_without(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, cond: 
             fr = mon.fork().track_friction(feats, points, hours,
                                            Conditions(cond.torque_nm, temp), opi, start)
     return Conditions(cond.torque_nm, temp)
+
+
+def unmonitored(event: MaintenanceEvent, later: list[MaintenanceEvent], left: int,
+                n_c: int, end_h: float) -> list[dict]:
+    """The entries of a declared tool change or repair after which the stream holds too
+    few windows to commission anew (``left`` of the ``n_c`` commissioning needs), and of
+    the events declared after it: each listed, with the hours left unmonitored said."""
+    what = event.kind.replace("_", " ")
+    out = [{"hour": float(event.hour), "maintenance": event.kind, "declared": True,
+            "monitored": False,
+            "note": f"{what} declared: only {left} window(s) after it, fewer than the {n_c} "
+                    f"commissioning needs; the monitor cannot commission anew, and the "
+                    f"stream's windows from {event.hour:g} h to {end_h:.4g} h are not "
+                    "monitored"}]
+    out += [{"hour": float(e.hour), "maintenance": e.kind, "declared": True,
+             "monitored": False,
+             "note": f"{e.kind.replace('_', ' ')} declared at {e.hour:g} h: not monitored, "
+                     f"after the {what} at {event.hour:g} h"} for e in later]
+    return out
 
 
 def declared(log: list[MaintenanceEvent], mon: GearMonitor | None) -> list[dict]:

@@ -333,6 +333,24 @@ def test_a_declared_repair_commissions_the_monitor_anew(model, day):
 
 
 
+def test_a_tool_change_too_late_to_commission_anew_says_so_and_keeps_later_events(
+        model, healthy):
+    """Issue 82, cause 4: a tool change declared at 50 h leaves 10 h of windows, fewer than
+    commissioning's 24 h: the entry said the monitor commissions anew, the re-greasing
+    declared after it was missing and the last 10 h went unmonitored without a word. Now
+    both events are listed, each saying it is not monitored and why."""
+    log = [MaintenanceEvent(50.0, "tool_change"), MaintenanceEvent(55.0, "regrease")]
+    res = monitor_stream(healthy, model, RuleConfig(), source="day", maintenance=log)
+    entry = [r for r in res.recommissioned if r.get("declared")]
+    assert [(r["maintenance"], r["hour"], r["monitored"]) for r in entry] == [
+        ("tool_change", 50.0, False), ("regrease", 55.0, False)]
+    assert "fewer than the 720 commissioning needs" in entry[0]["note"]
+    assert "windows from 50 h to 59.97 h are not monitored" in entry[0]["note"]
+    assert "not monitored, after the tool change at 50 h" in entry[1]["note"]
+    assert res.trace.hour[-1] < 50.0
+    assert all(len(event_line(e)) for e in res.events())
+
+
 def test_the_friction_is_tracked_only_where_the_loss_law_is_not_extrapolated(model, day):
     """GearMonitor.track_friction: a window beyond commissioning's temperatures is no
     evidence of the friction (its loss law there an extrapolation: end slopes carried on,
