@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
-from swgsim.files.inputs import HEADER_BYTES, check_input_file, read_head
+from swgsim.files.inputs import check_text_file
 from swgsim.gear.friction.signals import FrictionSignals, Scales
 
 from .options import FrictionOptions
@@ -275,14 +275,8 @@ def _head_rows(path: Path) -> list[list[str]]:
     """The header record of ``path``, from a bounded read of its head
     (:data:`swgsim.files.inputs.HEADER_BYTES`); a regular file under
     :data:`swgsim.files.inputs.MAX_INPUT_BYTES` checked first."""
-    check_input_file(path, "friction CSV")
-    head = read_head(path)
-    if b"\0" in head:
-        raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary file)")
+    head = check_text_file(path, "friction CSV")
     end = min((i for i in (head.find(b"\n"), head.find(b"\r")) if i >= 0), default=-1)
-    if end < 0 and len(head) == HEADER_BYTES:
-        raise ValueError(f"{path}: not a text CSV (no line end in its first "
-                         f"{HEADER_BYTES // 1024} KiB: no header line)")
     line = head if end < 0 else head[:end]
     with _not_csv(path):
         return list(itertools.islice(csv.reader(io.StringIO(line.decode("utf-8-sig"))), 1))

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from swgsim.base.typed import allowed, check_range
+from swgsim.files.inputs import check_text_file
 from swgsim.gear.faults import ChainParams
 from swgsim.gear.thermal import (
     REF_TEMP_C,
@@ -58,6 +59,10 @@ TRACE_MODES = ("rise", "hours")
 #: :func:`swgsim.datasets.joint_log.write_temperature_table` writes it: operating hours
 #: [h], the joint's temperature [°C].
 HOURS_TABLE_COLUMNS = ("hour", "temperature_c")
+#: Largest temperature table read [bytes]: 256 MiB, some ten million rows of
+#: ``hour,temperature_c``, a year of a joint at 1 Hz (pandas holds it in a few times
+#: that) [choice].
+MAX_TRACE_BYTES = 256 * 2**20
 
 
 @dataclass
@@ -242,7 +247,9 @@ def trace_table(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarr
     Raises
     ------
     ValueError
-        One line naming ``<key>.path``: no such file, not a comma-separated table with
+        One line naming ``<key>.path``: no such file, not a regular text file of at most
+        :data:`MAX_TRACE_BYTES` (:func:`swgsim.files.inputs.check_text_file`), not a
+        comma-separated table with
         the columns :data:`HOURS_TABLE_COLUMNS`, no row, a cell not a number, hours
         negative or not increasing, a temperature outside [-40, 150] °C (the viscosity
         law's range, :data:`swgsim.gear.thermal.TEMP_RANGE_C`).
@@ -250,8 +257,9 @@ def trace_table(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarr
     import pandas as pd
 
     p, name = Path(trace.path), f"{key}.path"
-    if not p.is_file():
+    if not p.exists():
         raise ValueError(f"{name}: no file {trace.path!r}")
+    check_text_file(p, name, MAX_TRACE_BYTES)  # a regular text file, bounded
     try:
         df = pd.read_csv(p)
     except (ValueError, UnicodeDecodeError) as e:

@@ -12,7 +12,8 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["MAX_INPUT_BYTES", "HEADER_BYTES", "absolute_path", "check_input_file", "read_head"]
+__all__ = ["MAX_INPUT_BYTES", "HEADER_BYTES", "absolute_path", "check_input_file",
+           "check_text_file", "read_head"]
 
 #: Largest input file read [bytes]: 2 GiB. A measured recording, a data set's manifest or
 #: a diagnosis model of this project is far smaller (the Franka friction CSVs are a few
@@ -76,6 +77,30 @@ def check_input_file(path: str | os.PathLike, what: str,
                          f"{_size(on_disk * 512)} on disk: mostly holes never written), not a "
                          "recording; nothing was read")
     return p
+
+
+def check_text_file(path: str | os.PathLike, what: str,
+                    max_bytes: int = MAX_INPUT_BYTES) -> bytes:
+    """:func:`check_input_file`, then the head of a text table: no NUL byte and a line
+    end within :data:`HEADER_BYTES`; return that head (a bounded read).
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ValueError
+        As :func:`check_input_file`; or ``<what> <path>: not a text file (...)``: a binary
+        file (NUL bytes) or no header line in its first 64 KiB.
+    """
+    p = check_input_file(path, what, max_bytes)
+    head = read_head(p)
+    if b"\0" in head:
+        raise ValueError(f"{what} {p}: not a text file (it holds NUL bytes: a binary file); "
+                         "nothing else was read")
+    if len(head) == HEADER_BYTES and head.find(b"\n") < 0 and head.find(b"\r") < 0:
+        raise ValueError(f"{what} {p}: not a text file (no line end in its first "
+                         f"{HEADER_BYTES // 1024} KiB: no header line)")
+    return head
 
 
 def read_head(path: str | os.PathLike, n: int = HEADER_BYTES) -> bytes:

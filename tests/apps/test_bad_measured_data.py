@@ -71,7 +71,7 @@ def test_a_measured_file_is_refused_in_one_line_before_it_is_read(tmp_path, case
     ("too few rows", lambda p: friction_csv(p, T[:60], np.sin(T[:60]), np.cos(T[:60])),
      "at least 100 needed"),
     ("binary", lambda p: (p.write_bytes(b"time_s,q_rad,dq_rad_per_s,tau_friction_Nm\n"
-                                        + bytes(range(256)) * 8), p)[1], "not a text CSV"),
+                                        + bytes(range(256)) * 8), p)[1], "not a text file"),
     ("header only", lambda p: (p.write_text("time_s,q_rad,dq_rad_per_s,tau_friction_Nm\n"),
                                p)[1], "no data rows"),
 ])

@@ -5,6 +5,7 @@ naming the key; the presets leave the conditions off."""
 from __future__ import annotations
 
 import dataclasses
+import os
 from pathlib import Path
 
 import numpy as np
@@ -395,6 +396,28 @@ def test_a_bad_temperature_table_is_refused_naming_the_key(rows, extra, match, t
     with pytest.raises(ValueError, match=r"^dataset\.life\.conditions\.temperature_trace"
                                          + match):
         plan(dataset_config(cfg))
+
+
+@pytest.mark.parametrize(("make", "words"), [
+    (lambda p: p.write_bytes(b"hour,temperature_c\n" + bytes(range(256)) * 8),
+     "not a text file (it holds NUL bytes"),
+    (lambda p: os.mkfifo(p), "is a FIFO (named pipe), not a regular file"),
+    (lambda p: p.mkdir(), "is a folder, not a file"),
+])
+def test_a_temperature_table_is_read_through_the_input_file_checker(make, words, tmp_path):
+    """Issue 82, cause 2: the measured warm-up's table was read with no size or binary
+    check (a FIFO would hang the reader); now through check_text_file, one line naming
+    the key and the file, nothing read."""
+    path = tmp_path / "j1.csv"
+    make(path)
+    cfg = dataset_preset("tiny_life")
+    cfg["life"].update(hours=3.0, commissioning_h=1.0, fault={"fault": "healthy"})
+    cfg["life"]["conditions"] = {"thermal": None, "temperature_trace": {
+        "path": str(path), "mode": "hours"}}
+    with pytest.raises(ValueError) as info:
+        plan(dataset_config(cfg))
+    line = str(info.value)
+    assert line.startswith("dataset.life.conditions.temperature_trace.path ") and words in line
 
 
 def test_a_traces_mode_is_out_of_the_config_hash_at_its_default(tmp_path):
