@@ -14,6 +14,7 @@ import numpy as np
 
 from swgsim.base.typed import allowed, check_range, check_tree
 from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
+from swgsim.datasets.schedule import MAX_WINDOWS
 from swgsim.gear.faults import FAULTS
 from swgsim.gear.thermal import JointThermal
 from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
@@ -184,7 +185,8 @@ class MonitorStudyConfig:
             No seed or one outside [0, 2**32 - 1]; ``commissioning_h`` outside the healthy
             life; ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi and the latest
             onset inside the healthy life; training severities not increasing inside the
-            fault's range; ``nuisance_hours`` not longer than commissioning; a nuisance's
+            fault's range; ``nuisance_hours`` not longer than commissioning; a life of more
+            windows than :data:`swgsim.datasets.schedule.MAX_WINDOWS`; a nuisance's
             conditions out of range; the families' seeds, keys and draws
             (:meth:`_check_families`); an unknown detector; ``detector_hours`` outside each
             healthy life after commissioning.
@@ -212,6 +214,12 @@ class MonitorStudyConfig:
                  f"(0, {top:g}] ({f}'s severity range), got {sevs}")
         check_range(self.nuisance_hours, self.commissioning_h, 1e6, f"{where}.nuisance_hours",
                     "h", lo_open=True, why="longer than commissioning")
+        for key in ("healthy_hours", "nuisance_hours"):  # a life's windows, before any work
+            hours = getattr(self, key)
+            n = hours * 60.0 / self.interval_min
+            _req(n <= MAX_WINDOWS, f"{where}.{key}={hours:g} h at interval_min="
+                 f"{self.interval_min:g} min is {n:.3g} windows a life; allowed: at most "
+                 f"{MAX_WINDOWS:.0e} (up to {MAX_WINDOWS * self.interval_min / 60:.3g} h)")
         for name, c in self.nuisances.items():  # their own rules: checked as parts, before
             c.check_inside(self.nuisance_hours, f"{where}.nuisances.{name}")
         self._check_families(where)

@@ -101,6 +101,10 @@ def test_a_folder_with_files_of_anything_else_is_refused_before_work(tmp_path, l
     (["--families"], "--families: give one or more of "),
     (["--study", "faults=3"], "monitor.study.faults: must be a list, got 3"),
     (["--study", "families=3"], "monitor.study.families: must be a mapping, got 3"),
+    # cause 2: the top of nuisance_hours' range allocated 1.56 GiB and failed after training
+    (["--study", "nuisance_hours=1e6"], "monitor.study.nuisance_hours=1e+06 h at "
+                                        "interval_min=1 min is 6e+07 windows a life; allowed: "
+                                        "at most 5e+06"),
 ])
 def test_bad_input_is_one_line_before_any_work(argv, words, capsys):
     """Issue 82, cause 8: every bad input reaches the apps' one-line path (before, a
