@@ -262,8 +262,10 @@ def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
     as a simulation option (friction: ``friction_effects.yaml``, strain:
     ``sensor_effects.yaml``, thermal: ``joint_thermal.yaml``) and ``figures/*.png``.
 
-    Each file is written atomically (a temporary file renamed into place); nothing else
-    in ``out_dir`` is touched.
+    Each file is written atomically (a temporary file renamed into place), ``summary.json``
+    last (a folder holding it holds the whole calibration); nothing else in ``out_dir`` is
+    touched (``swgsim-calibrate`` claims the folder ``fresh``: an earlier calibration's
+    files are removed first).
 
     Parameters
     ----------
@@ -285,9 +287,9 @@ def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
     summary["figures"] = kind.make_figures(result, out) if figures else {}
     extra = simulation_files(kind.REPORT, summary)
     summary["files"] = ["report.md", "summary.json", *extra]
-    atomic_write_json(out / "summary.json", summary)
     atomic_write_bytes(out / "report.md",
                        render_parts(kind.REPORT, result, summary, summary["figures"]).encode())
     for name, text in extra.items():
         atomic_write_bytes(out / name, text.encode())
+    atomic_write_json(out / "summary.json", summary)  # last: it lists the whole run
     return summary

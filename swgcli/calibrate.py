@@ -184,7 +184,7 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
     log.info("measured data %s: kind %s", measured, kind)
     problem = build_problem(measured, **options)
     result = calibrate(problem, selection)
-    with ownership.claim(out_dir, "swgsim-calibrate", strict=True) as claim:
+    with ownership.claim(out_dir, "swgsim-calibrate", strict=True, fresh=True) as claim:
         summary = write_outputs(result, out_dir, source=str(measured),
                                 figures=bool(cfg.figures))
         claim.record([*summary["files"], *summary["figures"].values()])

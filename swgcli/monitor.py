@@ -86,7 +86,7 @@ def run_monitor_app(cfg) -> dict:
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
                          source=str(src), normal=app.normal, maintenance=app.maintenance,
                          prognosis=app.prognosis)
-    with ownership.claim(out, "swgsim-monitor", strict=True) as claim:
+    with ownership.claim(out, "swgsim-monitor", strict=True, fresh=True) as claim:
         files = write_outputs(res, out, str(src))
         claim.record(files.values())
     if app.logger is not None:

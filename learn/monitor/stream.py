@@ -718,7 +718,9 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
     """``summary.json``, ``report.md`` and ``health.png`` (module docstring), each with
     the threshold the rule used (:attr:`StreamResult.threshold`); with the prognosis on,
     ``summary.json``'s ``prognosis``, a report line per valid one and, where an alarm was
-    followed, ``prognosis.png``."""
+    followed, ``prognosis.png``. ``summary.json`` is written last: a folder that holds it
+    holds the run's every output (the app claims its folder ``fresh``, so none of an
+    earlier run's is left beside them)."""
     from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
     h = res.threshold
@@ -732,7 +734,6 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
         summary["prognosis"] = res.prognosis.events
     if followed:
         prognosis_figure(res.prognosis, out_dir / "prognosis.png")
-    atomic_write_json(out_dir / "summary.json", summary)
     tr = res.trace
     health_figure(res.trace, res.threshold, res.alarms, res.onset_h, res.true_fault,
                   out_dir / "health.png")
@@ -747,6 +748,8 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
         lines += ["", f"Ground truth in the stream: {res.true_fault} from {res.onset_h:.2f} h."]
     lines += ["", "![health indicators](health.png)", ""]
     atomic_write_bytes(out_dir / "report.md", "\n".join(lines).encode())
+    # the summary last: a folder holding it holds the whole run's outputs
+    atomic_write_json(out_dir / "summary.json", summary)
     return {k: out_dir / v for k, v in (("summary", "summary.json"), ("report", "report.md"),
                                         ("figure", "health.png"), ("prognosis", "prognosis.png"))
             if k != "prognosis" or followed}

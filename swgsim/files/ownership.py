@@ -465,7 +465,7 @@ class Claim:
 
 def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
           only: Iterable[str] | None = None, found: Survey | None = None,
-          share: str | None = None, strict: bool = False) -> Claim:
+          share: str | None = None, strict: bool = False, fresh: bool = False) -> Claim:
     """Make ``folder`` a folder of this run: check it, stamp it, clean it.
 
     After :func:`check`, the folder is created, the run admitted under its gate
@@ -492,6 +492,13 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
     strict : bool
         Refuse files of another kind of output than ``app``'s too (:func:`check` with
         ``app``): what every report app passes.
+    fresh : bool
+        Remove what the earlier runs of ``app`` wrote there (the files the stamp proves
+        ``app``'s), once admitted and before any write: an app whose every run writes
+        its whole output leaves the folder this run's alone, never a mix with an earlier
+        run's files it does not write this time (a monitor run without the prognosis after
+        one with it, a thermal calibration after a friction one). An app that resumes
+        from its earlier parts does not pass it.
 
     Returns
     -------
@@ -516,11 +523,22 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
     _hold(folder, what, app, share)
     try:
         c = _stamp_claim(folder, app, found)
+        if fresh:
+            c.remove(_outputs_of(folder, app))
     except BaseException:
         _let_go(folder.resolve())
         raise
     c._locked = True
     return c
+
+
+def _outputs_of(folder: Path, app: str) -> list[str]:
+    """The files the stamp of ``folder`` lists as written by ``app`` (its earlier runs'
+    outputs; the stamp and the lock files are no outputs)."""
+    stamp = read_stamp(folder) or {"files": {}}
+    me = entry(app)
+    return sorted(rel for rel, w in writers_of(stamp).items()
+                  if w == me and rel in stamp["files"] and (folder / rel).is_file())
 
 
 def _stamp_claim(folder: Path, app: str, found: Survey) -> Claim:

@@ -109,6 +109,32 @@ def test_swgsim_calibrate_takes_a_joint_log(tmp_path):
                                                 "~logger", "thermal.joint=6"]))
 
 
+def test_a_calibration_into_a_folder_of_an_earlier_one_leaves_only_its_own_files(tmp_path):
+    """Issue 82, cause 5: a thermal calibration after a friction one into the same out_dir
+    left friction_effects.yaml (an input of the generator) and the friction figures beside
+    the thermal report. swgsim-calibrate claims its folder fresh: an earlier run's files
+    go before this run writes, its summary last."""
+    from bad_input import friction_csv
+
+    t = np.arange(2000) * 0.002
+    rec = friction_csv(tmp_path / "rec.csv", t, np.sin(t), np.cos(t),
+                       0.1 * np.tanh(20 * np.cos(t)))
+    out = tmp_path / "out"
+    run_calibrate(compose_app("calibrate", [f"measured={rec}", f"out_dir={out}", "~logger"]))
+    assert (out / "friction_effects.yaml").is_file()
+    friction = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
+    log = tmp_path / "day.csv"
+    write_joint_log(synthetic_joint_log(SyntheticThermal()), log)
+    run_calibrate(compose_app("calibrate", [f"measured={log}", f"out_dir={out}", "~logger",
+                                            "thermal.joint=1"]))
+    now = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()
+           and not p.name.startswith(".swg-owner")}
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["kind"] == "thermal" and "friction_effects.yaml" not in now
+    assert now == {"summary.json", "report.md", "joint_thermal.yaml",
+                   *(f for f in summary["figures"].values())}, now - friction
+
+
 def test_the_ur3_days_shoulder_warms_with_a_time_constant_of_its_first_look(ur3_day):
     """The README's first look: time constants of roughly 0.5-0.9 h; held out: after the
     gap."""

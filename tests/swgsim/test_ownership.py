@@ -358,6 +358,29 @@ def test_a_full_disk_when_the_stamp_is_first_written_leaves_no_stamp(tmp_path, m
     assert list(ownership.check(out, app="swgsim-monitor").owned) == ["report.md"]
 
 
+def test_a_fresh_claim_removes_what_the_apps_earlier_runs_wrote(tmp_path):
+    """Issue 82, cause 5: a monitor run without the prognosis after one with it left the
+    earlier prognosis.png beside the new report. A fresh claim removes the files the
+    stamp proves the app's before this run writes; a file of the folder it cannot prove
+    is refused as before, and a stopped run's folder holds no earlier file either."""
+    out = tmp_path / "report"
+    with ownership.claim(out, "swgsim-monitor", strict=True, fresh=True):
+        for name in ("report.md", "health.png", "prognosis.png", "summary.json"):
+            ownership.write_owned(out / name, lambda tmp: tmp.write_bytes(b"run 1"))
+    with ownership.claim(out, "swgsim-monitor", strict=True, fresh=True):
+        assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".swg")) == []
+        for name in ("report.md", "health.png", "summary.json"):  # no prognosis this time
+            ownership.write_owned(out / name, lambda tmp: tmp.write_bytes(b"run 2"))
+    files = sorted(p.name for p in out.iterdir() if not p.name.startswith(".swg"))
+    assert files == ["health.png", "report.md", "summary.json"]
+    assert all((out / f).read_bytes() == b"run 2" for f in files)
+    assert sorted(ownership.check(out, app="swgsim-monitor").owned) == files
+    (out / "mine.txt").write_text("a user's")
+    with pytest.raises(ValueError, match=r"mine.txt"):
+        ownership.claim(out, "swgsim-monitor", strict=True, fresh=True)
+    assert (out / "mine.txt").is_file() and (out / "report.md").is_file()
+
+
 def test_the_monitors_figure_is_written_through_write_owned(tmp_path, monkeypatch):
     """A savefig that fails half-way through health.png leaves no health.png at all."""
     import matplotlib.figure
