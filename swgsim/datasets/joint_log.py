@@ -33,8 +33,8 @@ from swgsim.datasets.conditions import HOURS_TABLE_COLUMNS, TRACE_GAP_MIN
 from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 from swgsim.files.ownership import atomic_write_bytes
 
-__all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "READING_RANGES", "JointLog", "read_joint_log",
-           "write_joint_log", "write_temperature_table"]
+__all__ = ["JOINTS", "LOG_COLUMNS", "LOG_GAP_S", "MAX_LOG_ROWS", "READING_RANGES", "JointLog",
+           "read_joint_log", "write_joint_log", "write_temperature_table"]
 
 #: Joints of the arm [-] (a UR3: base, shoulder, elbow, three wrists).
 JOINTS = 6
@@ -47,6 +47,13 @@ JOINTS = 6
 #: 360 deg/s; the UR3 day's fastest 2.7 rad/s].
 READING_RANGES = {"temperature": TEMPERATURE_RANGE_C, "current": (-100.0, 100.0),
                   "speed": (-4 * np.pi, 4 * np.pi), "tool_current": (-10.0, 10.0)}
+#: Most readings (rows) of a joint log read: 1 million, 11.6 days at 1 Hz. What reads it
+#: holds a few kB a reading: the reader about 2 kB (measured: 300 k rows, 631 MB), the
+#: thermal calibration about 1.1 kB more (72 k and 288 k rows of a synthetic log: 268 and
+#: 508 MB), and the audit of issue 82 found 4.5 GB at 1 M rows and a MemoryError at 3 M;
+#: the bound keeps a log's calibration within about 4.5 GB [choice]. A longer log: one
+#: file a week.
+MAX_LOG_ROWS = 1_000_000
 #: A time step longer than this is a gap of the log [s]: a temperature trace's,
 #: :data:`swgsim.datasets.conditions.TRACE_GAP_MIN` (5 min: beyond a logger's hiccups of 9
 #: and 31 s, short against a joint's thermal time constant) [choice].
@@ -135,9 +142,10 @@ def read_joint_log(path: str | os.PathLike, max_bytes: int = rt.MAX_TABLE_BYTES)
         ``column 'Current_J3' (current[3]), row 12 (line 14): 'x' is not a number``): no
         such file, not a table, a column missing, a cell not a number, a time stamp or a
         flag, a reading outside its physical range (:data:`READING_RANGES`), times not
-        increasing.
+        increasing, more than :data:`MAX_LOG_ROWS` rows (before they are parsed).
     """
-    df, fmt, _ = rt.read_table(path, LOG_COLUMNS, max_bytes, sep=";", decimal=",")
+    df, fmt, _ = rt.read_table(path, LOG_COLUMNS, max_bytes, sep=";", decimal=",",
+                               max_cells=MAX_LOG_ROWS * len(LOG_COLUMNS))
     t_s = rt.datetime_seconds(df, "Timestamp", "time", fmt)
     back = np.flatnonzero(np.diff(t_s) <= 0)
     if back.size:

@@ -135,3 +135,23 @@ def test_the_real_shoulders_table_spans_its_operating_hours(tmp_path, ur3_day):
     rows = write_temperature_table(read_joint_log(ur3_day), 1, tmp_path / "j1.csv")
     assert rows.shape == (7355, 2) and rows[-1, 0] == pytest.approx(2.087, abs=1e-3)
     assert (rows[:, 1].min(), rows[:, 1].max()) == (29.3125, 40.5)
+
+
+def test_a_log_longer_than_its_consumers_hold_is_refused_before_it_is_parsed(tmp_path,
+                                                                           monkeypatch):
+    """Issue 82, cause 2: a log inside the reader's byte and cell bounds needed about 19
+    times its size once calibrated (1 M rows: 4.5 GB; 3 M: a MemoryError traceback).
+    The reader bounds the rows by what its consumers hold (MAX_LOG_ROWS), counted from the
+    file before any cell is parsed: one line. (The bound is lowered here to keep the test
+    small.)"""
+    from swgsim.datasets import joint_log, recording_table
+
+    monkeypatch.setattr(joint_log, "MAX_LOG_ROWS", 3)
+
+    def parsed(*a, **k):
+        raise AssertionError("the table was parsed before its rows were counted")
+    monkeypatch.setattr(recording_table, "_read_csv_chunks", parsed)
+    path = _cut(tmp_path / "day.csv")
+    with pytest.raises(ValueError, match=r"day.csv: 6 rows of 23 mapped columns are 138 "
+                                         r"values, more than the 69 read"):
+        read_joint_log(path)
