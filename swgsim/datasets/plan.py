@@ -116,7 +116,7 @@ class DatasetPlan:
 #: ``temperature_sensor`` (:class:`TemperatureSensor`) after data sets were made: where one
 #: holds its default, :func:`plain_config` leaves it out.
 LATER_CONDITIONS = ("friction_law", "regrease", "temperature_trace")
-LATER_SENSOR = ("fault", "fault_hour", "drift_k_per_h")
+LATER_SENSOR = ("fault", "fault_hour", "drift_k_per_h", "lag_min", "offset_k", "ageing_k_per_h")
 LATER_FAULT = ("to_failure",)  # life.fault (:class:`FaultOnset`)
 LATER_TRACE = ("mode",)  # life.conditions.temperature_trace (:class:`TemperatureTrace`)
 

@@ -142,9 +142,19 @@ class TemperatureSensor:
         Quantisation step of the reading [K] (0.1), >= 0 (0: none) [choice: a common
         resolution of joint temperature readouts].
     noise_sd_k : float
-        Sd of the reading's white noise [K] (0.05), >= 0 [choice]. A sensor's offset
-        (a PT1000 of class B: ``±(0.3 + 0.005 |T|)`` K, IEC 60751 [unverified]) is not
-        modelled.
+        Sd of the reading's white noise [K] (0.05), >= 0 [choice].
+    lag_min : float
+        Time constant by which the reading lags the joint's (the grease's) temperature
+        [min], >= 0 (0: none, the reading follows at once). A sensor on the housing or
+        the drive board sits behind thermal masses: minutes to tens of minutes
+        (docs/PHYSICS.md sec. 5.4). First order along the operating hours.
+    offset_k : float
+        The sensor's calibration offset [K], finite (0: none); a PT1000 of class B is
+        within ``±(0.3 + 0.005 |T|)`` K (IEC 60751 [unverified]).
+    ageing_k_per_h : float
+        A slow drift of the reading from hour 0 [K per operating h], finite (0: none): a
+        sound sensor's ageing, some 1e-5 K/h (``drift_k_per_h``'s note), unlike the
+        ``drift`` fault.
     fault : {"none", "stuck", "drift", "dropout"}
         The channel's fault from operating hour ``fault_hour`` on
         (:data:`TEMPERATURE_SENSOR_FAULTS`):
@@ -176,6 +186,9 @@ class TemperatureSensor:
     fault: str = "none"
     fault_hour: float = 0.0
     drift_k_per_h: float = 0.0
+    lag_min: float = 0.0
+    offset_k: float = 0.0
+    ageing_k_per_h: float = 0.0
 
     def check(self, key: str = "TemperatureSensor") -> None:
         """Refuse a field outside its range in one line naming ``<key>.<field>``.
@@ -190,15 +203,30 @@ class TemperatureSensor:
             raise ValueError(f"{key}.fault: {self.fault!r}; allowed: "
                              f"{', '.join(TEMPERATURE_SENSOR_FAULTS)}")
         check_range(self.fault_hour, 0.0, np.inf, f"{key}.fault_hour", "h")
-        if not np.isfinite(self.drift_k_per_h):
-            raise ValueError(f"{key}.drift_k_per_h must be a finite number of K per h, "
-                             f"got {self.drift_k_per_h}")
+        check_range(self.lag_min, 0.0, 600.0, f"{key}.lag_min", "min",
+                    why="a sensor behind the joint's thermal masses, up to 10 h")
+        for name, unit in (("drift_k_per_h", "K per h"), ("offset_k", "K"),
+                           ("ageing_k_per_h", "K per h")):
+            if not np.isfinite(getattr(self, name)):
+                raise ValueError(f"{key}.{name} must be a finite number of {unit}, "
+                                 f"got {getattr(self, name)}")
+
+    @property
+    def needs_hours(self) -> bool:
+        """Whether its readings depend on their operating hours (a fault, a lag, ageing)."""
+        return self.fault != "none" or self.lag_min > 0 or self.ageing_k_per_h != 0
 
 
 def measure_temperature(true_c, sensor: TemperatureSensor, rng: np.random.Generator, *,
                         hours=None) -> np.ndarray:
-    """Readings of the temperature channel: noisy, then quantised to the resolution, and
-    the sensor's fault from its hour on (:class:`TemperatureSensor`).
+    """Readings of the temperature channel (:class:`TemperatureSensor`): the true
+    temperature lagged by the sensor's time constant, its offset and ageing added, noisy,
+    then quantised to the resolution, and the sensor's fault from its hour on.
+
+    The lag is first order in the operating hours, exact for a temperature held between
+    readings: y_k = y_(k-1) + (1 − exp(−Δt / τ)) (T_k − y_(k-1)), y_0 = T_0 (the sensor
+    starts at the joint's temperature). Off (τ = 0, no offset, no ageing) the readings
+    are those of a sensor without the options, bit for bit.
 
     Parameters
     ----------
@@ -209,7 +237,8 @@ def measure_temperature(true_c, sensor: TemperatureSensor, rng: np.random.Genera
         Seeded by the caller; one standard normal per reading, whatever the fault (a
         faultless sensor's readings are those of a faulty one before its hour).
     hours : array_like, shape of ``true_c``, optional
-        Operating hours of the readings [h]; needed when ``sensor.fault`` is not ``none``.
+        Operating hours of the readings [h], increasing; needed when
+        :attr:`TemperatureSensor.needs_hours`.
 
     Returns
     -------
@@ -230,13 +259,19 @@ def measure_temperature(true_c, sensor: TemperatureSensor, rng: np.random.Genera
     t = np.asarray(true_c, dtype=np.float64)
     if not np.all(np.isfinite(t)):
         raise ValueError("true_c must be finite")
-    h = _fault_hours(hours, t.shape, sensor.fault)
+    h = _fault_hours(hours, t.shape, sensor)
+    if h is not None and sensor.lag_min > 0:
+        t = first_order_lag(t, h, sensor.lag_min / 60.0)
+    if sensor.offset_k != 0:
+        t = t + sensor.offset_k
+    if h is not None and sensor.ageing_k_per_h != 0:
+        t = t + sensor.ageing_k_per_h * h
     r = t + sensor.noise_sd_k * rng.standard_normal(t.shape)
     if h is not None and sensor.fault == "drift":
         r = r + sensor.drift_k_per_h * np.maximum(h - sensor.fault_hour, 0.0)
     if sensor.resolution_k > 0:
         r = np.round(r / sensor.resolution_k) * sensor.resolution_k
-    if h is None or sensor.fault == "drift":
+    if sensor.fault in ("none", "drift"):
         return r
     on = h >= sensor.fault_hour
     if sensor.fault == "dropout":
@@ -248,14 +283,41 @@ def measure_temperature(true_c, sensor: TemperatureSensor, rng: np.random.Genera
     return r
 
 
-def _fault_hours(hours, shape: tuple, fault: str) -> np.ndarray | None:
-    """The readings' hours as float64 when the sensor has a fault, else None; refuse them
-    missing, of another shape or not finite."""
-    if fault == "none":
+def first_order_lag(x: np.ndarray, hours: np.ndarray, tau_h: float) -> np.ndarray:
+    """A first-order lag of ``x`` along ``hours`` with time constant ``tau_h`` [h], exact
+    for ``x`` held between samples, starting at ``x[0]`` (:func:`measure_temperature`).
+
+    Parameters
+    ----------
+    x : ndarray, shape (W,)
+    hours : ndarray, shape (W,)
+        Increasing [h].
+    tau_h : float
+        > 0 [h].
+
+    Returns
+    -------
+    ndarray, shape (W,)
+    """
+    a = 1.0 - np.exp(-np.diff(hours, prepend=hours[:1]) / tau_h)
+    y = np.empty_like(x)
+    prev = x[0]
+    for k in range(x.size):  # a recursion: W readings of a life, a few hundred thousand
+        prev = prev + a[k] * (x[k] - prev)
+        y[k] = prev
+    return y
+
+
+def _fault_hours(hours, shape: tuple, sensor: TemperatureSensor) -> np.ndarray | None:
+    """The readings' hours as float64 when the sensor's readings depend on them, else
+    None; refuse them missing, of another shape or not finite."""
+    if not sensor.needs_hours:
         return None
     if hours is None:
-        raise ValueError(f"TemperatureSensor.fault {fault!r} needs the readings' operating "
-                         f"hours: measure_temperature(..., hours=...)")
+        raise ValueError(f"TemperatureSensor (fault {sensor.fault!r}, lag_min "
+                         f"{sensor.lag_min:g}, ageing_k_per_h {sensor.ageing_k_per_h:g}) "
+                         "needs the readings' operating hours: "
+                         "measure_temperature(..., hours=...)")
     h = np.asarray(hours, dtype=np.float64)
     if h.shape != shape or not np.all(np.isfinite(h)):
         raise ValueError(f"hours must be finite, of the readings' shape {shape}, got shape "

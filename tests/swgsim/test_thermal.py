@@ -365,11 +365,43 @@ def test_a_sensor_fault_out_of_range_is_refused_naming_the_key(sensor, match):
 
 def test_a_faulty_sensor_needs_the_readings_hours():
     sensor = bd.TemperatureSensor(fault="dropout", fault_hour=1.0)
-    with pytest.raises(ValueError, match=r"TemperatureSensor.fault 'dropout' needs the "
-                                         r"readings' operating hours"):
+    with pytest.raises(ValueError, match=r"TemperatureSensor \(fault 'dropout', lag_min 0, "
+                                         r"ageing_k_per_h 0\) needs the readings' operating "
+                                         r"hours"):
         bd.measure_temperature([20.0, 21.0], sensor, np.random.default_rng(0))
     with pytest.raises(ValueError, match=r"hours must be finite, of the readings' shape"):
         bd.measure_temperature([20.0, 21.0], sensor, np.random.default_rng(0), hours=[0.0])
+
+
+def test_a_lagging_sensor_reads_behind_the_grease_on_a_warm_up():
+    """Issue 83: the reading is its own node: a sensor 20 min behind the grease reads a
+    step of the joint's temperature 63 % of the way after 20 min, 95 % after an hour
+    (first order, exact for the held step); off, the readings are those of a sensor
+    without the option, bit for bit, even with the hours given."""
+    h = np.arange(180) / 60  # a reading a minute
+    true = np.where(np.arange(180) < 60, 20.0, 40.0)  # 20 K more from the 61st reading on,
+    lagged = bd.measure_temperature(  # held over the minute that ends at it
+        true, bd.TemperatureSensor(0.0, 0.0, lag_min=20.0), np.random.default_rng(0), hours=h)
+    for minutes, share in ((20, 1 - np.exp(-1.0)), (60, 1 - np.exp(-3.0))):
+        assert lagged[59 + minutes] - 20.0 == pytest.approx(20.0 * share, rel=1e-9)
+    assert np.all(lagged[:60] == 20.0) and np.all(np.diff(lagged) >= 0)
+    off = bd.measure_temperature(true, bd.TemperatureSensor(), np.random.default_rng(3),
+                                 hours=h)
+    assert np.array_equal(off, bd.measure_temperature(true, bd.TemperatureSensor(),
+                                                      np.random.default_rng(3)))
+
+
+def test_a_sensors_offset_and_ageing_add_to_its_reading():
+    h = np.linspace(0.0, 1000.0, 11)
+    true = np.full(11, 30.0)
+    r = bd.measure_temperature(true, bd.TemperatureSensor(0.0, 0.0, offset_k=0.4,
+                                                          ageing_k_per_h=1e-3),
+                               np.random.default_rng(0), hours=h)
+    np.testing.assert_allclose(r, 30.4 + 1e-3 * h, rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match=r"^c.lag_min must lie in \[0, 600\] min"):
+        bd.TemperatureSensor(lag_min=-1.0).check("c")
+    with pytest.raises(ValueError, match=r"^c.offset_k must be a finite number of K"):
+        bd.TemperatureSensor(offset_k=float("nan")).check("c")
 
 
 # ------------------------------------------------------------------- re-greasing
