@@ -34,6 +34,7 @@ from swgsim.gear.thermal import (
     run_in_factor,
     steady_efficiency,
     traced_temperature,
+    wall_clock_h,
 )
 from swgsim.sensing.bridge_drift import (
     BridgeDrift,
@@ -486,8 +487,10 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     reading = None
     if cfg.temperature_sensor is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), int(life_seed), 2**22))
+        wall = (hours if cfg.thermal is None  # the sensor cools over a stop with the joint
+                else wall_clock_h(hours, cfg.thermal.run_h_per_day))
         reading = measure_temperature(temp, cfg.temperature_sensor, np.random.default_rng(ss),
-                                      hours=hours)
+                                      hours=hours, wall_h=wall)
     zero, span, ref = np.zeros(5), np.zeros(5), REF_TEMP_C
     if cfg.bridge_drift is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), 2**21))

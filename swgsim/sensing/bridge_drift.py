@@ -218,15 +218,16 @@ class TemperatureSensor:
 
 
 def measure_temperature(true_c, sensor: TemperatureSensor, rng: np.random.Generator, *,
-                        hours=None) -> np.ndarray:
+                        hours=None, wall_h=None) -> np.ndarray:
     """Readings of the temperature channel (:class:`TemperatureSensor`): the true
     temperature lagged by the sensor's time constant, its offset and ageing added, noisy,
     then quantised to the resolution, and the sensor's fault from its hour on.
 
-    The lag is first order in the operating hours, exact for a temperature held between
+    The lag is first order in wall-clock time, exact for a temperature held between
     readings: y_k = y_(k-1) + (1 − exp(−Δt / τ)) (T_k − y_(k-1)), y_0 = T_0 (the sensor
-    starts at the joint's temperature). Off (τ = 0, no offset, no ageing) the readings
-    are those of a sensor without the options, bit for bit.
+    starts at the joint's temperature); over a daily stop the sensor cools with the joint.
+    Off (τ = 0, no offset, no ageing) the readings are those of a sensor without the
+    options, bit for bit.
 
     Parameters
     ----------
@@ -239,6 +240,9 @@ def measure_temperature(true_c, sensor: TemperatureSensor, rng: np.random.Genera
     hours : array_like, shape of ``true_c``, optional
         Operating hours of the readings [h], increasing; needed when
         :attr:`TemperatureSensor.needs_hours`.
+    wall_h : array_like, shape of ``true_c``, optional
+        Wall-clock hours of the readings [h], increasing (the stops included:
+        :func:`swgsim.gear.thermal.wall_clock_h`): the lag's time; default ``hours``.
 
     Returns
     -------
@@ -261,7 +265,11 @@ def measure_temperature(true_c, sensor: TemperatureSensor, rng: np.random.Genera
         raise ValueError("true_c must be finite")
     h = _fault_hours(hours, t.shape, sensor)
     if h is not None and sensor.lag_min > 0:
-        t = first_order_lag(t, h, sensor.lag_min / 60.0)
+        wall = h if wall_h is None else np.asarray(wall_h, dtype=np.float64)
+        if wall.shape != h.shape or not np.all(np.isfinite(wall)) or np.any(np.diff(wall) < 0):
+            raise ValueError(f"wall_h must be finite and increasing, of the readings' shape "
+                             f"{h.shape}, got shape {wall.shape}")
+        t = first_order_lag(t, wall, sensor.lag_min / 60.0)
     if sensor.offset_k != 0:
         t = t + sensor.offset_k
     if h is not None and sensor.ageing_k_per_h != 0:

@@ -231,6 +231,25 @@ def test_a_faulty_temperature_sensor_changes_the_reading_alone(tiny):
                                   equal_nan=True)
 
 
+def test_a_lagging_sensor_lags_the_warm_ups_and_cools_with_the_joint_over_a_stop(tiny):
+    """Issue 83: a reading 20 min behind the grease (TemperatureSensor.lag_min) stays
+    behind it through each warm-up and is cold again after the night's stop (the lag runs
+    in wall-clock time, the 8-h stop included), as the joint."""
+    base = ConditionsConfig(thermal=JointThermal(run_h_per_day=16.0), viscosity=False,
+                            bridge_drift=None)
+    exact = dataclasses.replace(base, temperature_sensor=TemperatureSensor(0.0, 0.0))
+    lagged = dataclasses.replace(base, temperature_sensor=TemperatureSensor(0.0, 0.0,
+                                                                            lag_min=20.0))
+    a, b = (_sim(tiny, c, hours=20.0).conditions for c in (exact, lagged))
+    np.testing.assert_array_equal(a.reading_c, a.temperature_c)
+    hours = _sim(tiny, exact, hours=20.0).schedule.hour
+    warming = (hours > 0.1) & (hours < 1.0)  # the first warm-up, before the steady state
+    assert np.all(b.reading_c[warming] < a.reading_c[warming] - 0.5)
+    after = int(np.searchsorted(hours, 16.0))  # the first window after the stop
+    assert a.temperature_c[after] < a.temperature_c[after - 1] - 5.0  # a cold start
+    assert b.reading_c[after] == pytest.approx(a.temperature_c[after], abs=0.01)
+
+
 def test_a_faultless_sensor_keeps_a_data_sets_config_hash():
     """The faultless sensor's fields are left out of the config: tiny_real_day keeps its
     hash (tests/data_sets.py, as every preset's)."""
