@@ -39,6 +39,7 @@ from swgsim.gear.thermal import (
 from swgsim.sensing.bridge_drift import (
     BridgeDrift,
     TemperatureSensor,
+    bridge_temperatures,
     draw_bridge_drift,
     measure_temperature,
 )
@@ -423,6 +424,9 @@ class WindowConditions:
         The gear's bridge drift coefficients (zeros without drift).
     drift_ref_c : float
         Temperature of no drift [°C].
+    bridge_temperature_c : ndarray, shape (W, 5), or None
+        Each bridge's temperature where the bridges lag the joint
+        (:func:`swgsim.sensing.bridge_drift.bridge_temperatures`); None: the joint's.
     """
 
     temperature_c: np.ndarray
@@ -433,6 +437,7 @@ class WindowConditions:
     zero_mvv_per_k: np.ndarray
     span_per_k: np.ndarray
     drift_ref_c: float
+    bridge_temperature_c: np.ndarray | None = None
 
     def bridge_gain_offset(self, rows: np.ndarray, zero_offsets_mvv: np.ndarray | None = None
                            ) -> tuple[np.ndarray, np.ndarray]:
@@ -445,7 +450,9 @@ class WindowConditions:
         that hold them, the offset is (1 − gain) z + zero_c ΔT, so that gain · s + offset
         = gain (s − z) + z + zero_c ΔT.
         """
-        dt = (self.temperature_c[rows] - self.drift_ref_c)[:, None]
+        dt = ((self.temperature_c[rows] - self.drift_ref_c)[:, None]
+              if self.bridge_temperature_c is None
+              else self.bridge_temperature_c[rows] - self.drift_ref_c)  # (n, 1) or (n, 5)
         gain, offset = 1.0 + self.span_per_k[None, :] * dt, self.zero_mvv_per_k[None, :] * dt
         if zero_offsets_mvv is not None:
             offset = offset + (1.0 - gain) * np.asarray(zero_offsets_mvv, float)[None, :]
@@ -485,19 +492,21 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
         run_in = run_in * regrease_factor(hours, rg.hours, rg.drop, rg.tau_h)
     friction = (cfg.friction_law.factor(temp) if cfg.viscosity else 1.0) * run_in
     reading = None
+    wall = (hours if cfg.thermal is None  # lags run over a stop too: they cool with the joint
+            else wall_clock_h(hours, cfg.thermal.run_h_per_day))
     if cfg.temperature_sensor is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), int(life_seed), 2**22))
-        wall = (hours if cfg.thermal is None  # the sensor cools over a stop with the joint
-                else wall_clock_h(hours, cfg.thermal.run_h_per_day))
         reading = measure_temperature(temp, cfg.temperature_sensor, np.random.default_rng(ss),
                                       hours=hours, wall_h=wall)
-    zero, span, ref = np.zeros(5), np.zeros(5), REF_TEMP_C
+    zero, span, ref, bridges = np.zeros(5), np.zeros(5), REF_TEMP_C, None
     if cfg.bridge_drift is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), 2**21))
-        zero, span = draw_bridge_drift(cfg.bridge_drift, np.random.default_rng(ss))
+        rng = np.random.default_rng(ss)
+        zero, span = draw_bridge_drift(cfg.bridge_drift, rng)
         ref = float(cfg.bridge_drift.ref_c)
+        bridges = bridge_temperatures(temp, wall, cfg.bridge_drift, rng)
     return WindowConditions(temp, reading, np.asarray(friction, float), run_in, payload,
-                            zero, span, ref)
+                            zero, span, ref, bridges)
 
 
 def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,

@@ -27,7 +27,7 @@ from swgsim.files.digest import config_digest
 from swgsim.gear import profile as pf
 from swgsim.gear.faults import Fault, get_fault
 from swgsim.gear.friction import FrictionEffects, friction_effects_from_config
-from swgsim.sensing.bridge_drift import TemperatureSensor
+from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 from swgsim.sensing.effects import SensorEffect, parse_sensor_effects
 
 
@@ -119,6 +119,7 @@ LATER_CONDITIONS = ("friction_law", "regrease", "temperature_trace")
 LATER_SENSOR = ("fault", "fault_hour", "drift_k_per_h", "lag_min", "offset_k", "ageing_k_per_h")
 LATER_FAULT = ("to_failure",)  # life.fault (:class:`FaultOnset`)
 LATER_TRACE = ("mode",)  # life.conditions.temperature_trace (:class:`TemperatureTrace`)
+LATER_DRIFT = ("lag_spread_min",)  # life.conditions.bridge_drift (:class:`BridgeDrift`)
 
 
 def _without_defaults(d: dict, schema: type, names: tuple[str, ...]) -> dict:
@@ -157,6 +158,9 @@ def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
         if isinstance(cond.get("temperature_trace"), dict):
             cond["temperature_trace"] = _without_defaults(cond["temperature_trace"],
                                                           TemperatureTrace, LATER_TRACE)
+        if isinstance(cond.get("bridge_drift"), dict):
+            cond["bridge_drift"] = _without_defaults(cond["bridge_drift"], BridgeDrift,
+                                                     LATER_DRIFT)
         out["life"] = {**out["life"], "conditions": cond}
     return out
 

@@ -59,6 +59,14 @@ class BridgeDrift:
         Bridge-to-bridge sd of the gain change [1/K] (5e-5) [choice].
     ref_c : float
         Temperature at which the coefficients give no change [°C] (20).
+    lag_spread_min : float
+        Each bridge's temperature lags the joint's by its own first-order time constant,
+        drawn per gear and bridge uniformly in [0, ``lag_spread_min``] [min] (0, the
+        default: every bridge at the joint's temperature). During a warm-up the collar is
+        not at one temperature: the wave generator and its bearing heat first, the collar
+        later, so the bridges, at other radii and angles, drift apart for a while and
+        together again in the steady state (docs/PHYSICS.md sec. 5.4) [choice: minutes,
+        a collar's conduction; no measurement found].
 
     :meth:`check` refuses a negative spread, a gauge factor or arm count out of range, a
     non-finite value.
@@ -72,6 +80,7 @@ class BridgeDrift:
                               - 3 * STEEL_EXPANSION_PER_K)
     span_sd_per_k: float = 5e-5
     ref_c: float = REF_TEMP_C
+    lag_spread_min: float = 0.0
 
     def check(self, key: str = "BridgeDrift") -> None:
         """Refuse a field outside its range in one line naming ``<key>.<field>``.
@@ -86,6 +95,8 @@ class BridgeDrift:
         for name in ("gauge_mismatch_ue_per_k", "span_sd_per_k"):
             check_range(getattr(self, name), 0.0, np.inf, f"{key}.{name}")
         check_range(self.gauge_factor, 1.0, 5.0, f"{key}.gauge_factor")
+        check_range(self.lag_spread_min, 0.0, 600.0, f"{key}.lag_spread_min", "min",
+                    why="a bridge behind the joint's temperature, up to 10 h")
         arms = list(self.active_arms)
         if len(arms) != N_BRIDGES or any(a not in (1, 2, 4) for a in arms):
             raise ValueError(f"{key}.active_arms must be {N_BRIDGES} values of 1, 2 or 4, "
@@ -126,6 +137,33 @@ def draw_bridge_drift(cfg: BridgeDrift, rng: np.random.Generator
     zero = cfg.zero_mean_mvv_per_k + cfg.zero_sd_mvv_per_k * z[0]
     span = cfg.span_mean_per_k + cfg.span_sd_per_k * z[1]
     return zero, span
+
+
+def bridge_temperatures(temp_c: np.ndarray, wall_h: np.ndarray, cfg: BridgeDrift,
+                        rng: np.random.Generator) -> np.ndarray | None:
+    """Each bridge's temperature: the joint's lagged by the bridge's own time constant
+    (:attr:`BridgeDrift.lag_spread_min`, drawn here, five uniform numbers, one per
+    bridge); None where the spread is 0 (every bridge at the joint's temperature).
+
+    Parameters
+    ----------
+    temp_c : ndarray, shape (W,)
+        The joint's temperature at each window [°C].
+    wall_h : ndarray, shape (W,)
+        The windows' wall-clock hours, increasing [h] (the lag runs over the stops too).
+    cfg : BridgeDrift
+    rng : numpy.random.Generator
+        The gear's, after :func:`draw_bridge_drift`'s draws.
+
+    Returns
+    -------
+    ndarray, shape (W, 5), or None
+    """
+    if cfg.lag_spread_min <= 0:
+        return None
+    tau_h = cfg.lag_spread_min / 60.0 * rng.uniform(size=N_BRIDGES)
+    return np.column_stack([temp_c if t <= 0 else first_order_lag(temp_c, wall_h, t)
+                            for t in tau_h])
 
 
 #: Faults of :class:`TemperatureSensor` (its docstring).

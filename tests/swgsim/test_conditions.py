@@ -250,6 +250,31 @@ def test_a_lagging_sensor_lags_the_warm_ups_and_cools_with_the_joint_over_a_stop
     assert b.reading_c[after] == pytest.approx(a.temperature_c[after], abs=0.01)
 
 
+def test_bridges_that_lag_the_joint_drift_apart_in_a_warm_up_and_together_after(tiny):
+    """Issue 83: a temperature difference across the collar during a warm-up, so the
+    bridges do not drift together: each bridge's temperature lags the joint's by its own
+    time constant (BridgeDrift.lag_spread_min); apart by kelvins while the joint warms,
+    together again at its steady state (within the lagged swings of its duty). Off, no bridge temperature at all (the windows
+    of before, bit for bit: test_neutral_conditions_change_no_window and the hashes)."""
+    base = ConditionsConfig(thermal=JointThermal(run_h_per_day=24.0), viscosity=False,
+                            bridge_drift=BridgeDrift(), temperature_sensor=None)
+    assert _sim(tiny, base, hours=6.0).conditions.bridge_temperature_c is None
+    lag = dataclasses.replace(base, bridge_drift=BridgeDrift(lag_spread_min=30.0))
+    sim = _sim(tiny, lag, hours=6.0)
+    c, hours = sim.conditions, sim.schedule.hour
+    tb = c.bridge_temperature_c  # (W, 5)
+    assert tb.shape == (hours.size, 5)
+    warming, steady = (hours > 0.2) & (hours < 0.6), hours > 5.0
+    apart = np.ptp(tb[warming], axis=1).max()
+    assert apart > 1.0  # apart by kelvins while it warms
+    # together again in the steady state, but for the duty's own swings (10-min blocks)
+    assert np.ptp(tb[steady], axis=1).max() < 0.25 * apart
+    gain, _ = c.bridge_gain_offset(np.flatnonzero(warming))
+    assert np.ptp(gain, axis=1).max() > 0  # so the bridges' spans drift apart too
+    cfg = dataset_config(dataset_preset("tiny_real_day"))
+    assert "lag_spread_min" not in plain_config(cfg)["life"]["conditions"]["bridge_drift"]
+
+
 def test_a_faultless_sensor_keeps_a_data_sets_config_hash():
     """The faultless sensor's fields are left out of the config: tiny_real_day keeps its
     hash (tests/data_sets.py, as every preset's)."""
