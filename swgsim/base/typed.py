@@ -32,9 +32,9 @@ from typing import Any, Union
 
 import numpy as np
 
-__all__ = ["MISSING", "NONFINITE", "RANGE", "Range", "allowed", "build", "check_finite",
-           "check_keys", "check_range", "check_ranges", "check_tree", "complete", "plain",
-           "schema_of"]
+__all__ = ["LATER", "MISSING", "NONFINITE", "RANGE", "Range", "allowed", "build",
+           "check_finite", "check_keys", "check_range", "check_ranges", "check_tree",
+           "complete", "plain", "schema_of", "without_later_defaults"]
 
 MISSING = "???"  # Hydra's and OmegaConf's marker of a mandatory value
 
@@ -91,6 +91,56 @@ def plain(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]
     return value
+
+
+#: Key of a field's metadata marking an option added after data were made with its schema,
+#: the reason as its value: ``field(default=0.0, metadata={LATER: "issue 83"})``. While it
+#: holds its default, :func:`without_later_defaults` leaves it out of the plain data, so that
+#: a config digest (a data set's config hash) stays what it was before the option.
+LATER = "later"
+
+
+def _dataclass_of(tp: Any) -> type | None:
+    """The dataclass a field's type holds (``X``, ``X | None``, ``list[X]``), else None."""
+    if typing.get_origin(tp) in (Union, types.UnionType):
+        inner = [a for a in typing.get_args(tp) if a is not type(None)]
+        tp = inner[0] if len(inner) == 1 else None
+    if typing.get_origin(tp) in _LISTS:
+        tp = (typing.get_args(tp) or (None,))[0]
+    return tp if dataclasses.is_dataclass(tp) else None
+
+
+def without_later_defaults(data: Mapping[str, Any], schema: type) -> dict[str, Any]:
+    """Plain data of ``schema`` without the fields marked :data:`LATER` that hold their
+    defaults, at every depth (nested dataclasses, optional ones and lists of them).
+
+    Parameters
+    ----------
+    data : mapping
+        Plain data (:func:`plain`) of an instance of ``schema``; keys it lacks stay absent.
+    schema : type
+        The dataclass ``data`` is of.
+
+    Returns
+    -------
+    dict
+        A copy; ``data`` is not changed.
+    """
+    hints, out = _hints(schema), dict(data)
+    for f in dataclasses.fields(schema):
+        if f.name not in out:
+            continue
+        value = out[f.name]
+        if LATER in f.metadata and value == _default(schema, f.name):
+            del out[f.name]
+            continue
+        sub = _dataclass_of(hints.get(f.name, Any))
+        if sub is not None and isinstance(value, Mapping):
+            out[f.name] = without_later_defaults(value, sub)
+        elif sub is not None and isinstance(value, list):
+            out[f.name] = [without_later_defaults(v, sub) if isinstance(v, Mapping) else v
+                           for v in value]
+    return out
 
 
 def _value(value: Any, tp, where: str, fill: bool) -> Any:

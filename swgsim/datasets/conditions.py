@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from swgsim.base.typed import allowed, check_range
+from swgsim.base.typed import LATER, allowed, check_range
 from swgsim.files.inputs import check_text_file
 from swgsim.gear.faults import ChainParams
 from swgsim.gear.thermal import (
@@ -152,14 +152,14 @@ class TemperatureTrace:
         mode ``hours``: not read).
     mode : str
         ``rise`` (the default) or ``hours`` (:data:`TRACE_MODES`); left out of a data
-        set's config hash at its default (:data:`swgsim.datasets.plan.LATER_TRACE`).
+        set's config hash at its default (:data:`swgsim.base.typed.LATER`).
     """
 
     path: str
     column: str | None = None
     scale: float = 1.0
     time_column: str = "Timestamp"
-    mode: str = TRACE_MODES[0]
+    mode: str = field(default=TRACE_MODES[0], metadata={LATER: "tables of hours"})
 
 
 def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarray]:
@@ -358,11 +358,13 @@ class ConditionsConfig:
     """
 
     thermal: JointThermal | None = field(default_factory=JointThermal)
-    temperature_trace: TemperatureTrace | None = None
+    temperature_trace: TemperatureTrace | None = field(default=None,
+                                                       metadata={LATER: "measured warm-ups"})
     viscosity: bool = True
-    friction_law: FrictionLaw = field(default_factory=FrictionLaw)
+    friction_law: FrictionLaw = field(default_factory=FrictionLaw,
+                                      metadata={LATER: "drawn friction laws"})
     run_in: RunInConfig | None = None
-    regrease: Regrease | None = None
+    regrease: Regrease | None = field(default=None, metadata={LATER: "re-greasing"})
     payload: list[list[float]] = field(default_factory=list)
     bridge_drift: BridgeDrift | None = field(default_factory=BridgeDrift)
     temperature_sensor: TemperatureSensor | None = field(default_factory=TemperatureSensor)

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.base.typed import build, check_range, complete
+from swgsim.base.typed import LATER, build, check_range, complete
 from swgsim.datasets.profile_config import ProfileConfig
 from swgsim.datasets.schedule import LifeConfig
 from swgsim.gear import profile as pf
@@ -241,7 +241,7 @@ class DatasetConfig:
     sensor_effects: list[SensorEffectConfig] = field(default_factory=list)
     friction_effects: FrictionEffectsConfig | None = None
     life: LifeConfig | None = None
-    profile: ProfileConfig | None = None
+    profile: ProfileConfig | None = field(default=None, metadata={LATER: "profiles"})
 
     def check(self, where: str = "dataset") -> None:
         """The rules across the data set's parts, run by :func:`swgsim.base.typed.check_tree`

@@ -18,16 +18,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from swgsim.base.typed import check_tree
-from swgsim.datasets.conditions import ConditionsConfig, TemperatureTrace
+from swgsim.base.typed import check_tree, without_later_defaults
 from swgsim.datasets.config import DatasetConfig, GearConfig, dataset_config, lead_s
-from swgsim.datasets.schedule import FaultOnset, n_windows
+from swgsim.datasets.schedule import n_windows
 from swgsim.datasets.slots import slots_of
 from swgsim.files.digest import config_digest
 from swgsim.gear import profile as pf
 from swgsim.gear.faults import Fault, get_fault
 from swgsim.gear.friction import FrictionEffects, friction_effects_from_config
-from swgsim.sensing.bridge_drift import BridgeDrift, TemperatureSensor
 from swgsim.sensing.effects import SensorEffect, parse_sensor_effects
 
 
@@ -112,57 +110,14 @@ class DatasetPlan:
     profile: pf.Profile | None = None
 
 
-#: Fields added to ``life.conditions`` (:class:`ConditionsConfig`) and to its
-#: ``temperature_sensor`` (:class:`TemperatureSensor`) after data sets were made: where one
-#: holds its default, :func:`plain_config` leaves it out.
-LATER_CONDITIONS = ("friction_law", "regrease", "temperature_trace")
-LATER_SENSOR = ("fault", "fault_hour", "drift_k_per_h", "lag_min", "offset_k", "ageing_k_per_h")
-LATER_FAULT = ("to_failure",)  # life.fault (:class:`FaultOnset`)
-LATER_TRACE = ("mode",)  # life.conditions.temperature_trace (:class:`TemperatureTrace`)
-LATER_DRIFT = ("lag_spread_min",)  # life.conditions.bridge_drift (:class:`BridgeDrift`)
-
-
-def _without_defaults(d: dict, schema: type, names: tuple[str, ...]) -> dict:
-    """``d`` without the fields ``names`` that hold the schema's defaults (read from its
-    fields: a schema with required fields, such as :class:`TemperatureTrace`, works too)."""
-    ref = {}
-    for f in dataclasses.fields(schema):
-        v = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
-        ref[f.name] = dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v
-    return {k: v for k, v in d.items() if not (k in names and v == ref[k])}
-
-
 def plain_config(cfg: DatasetConfig | Mapping[str, Any]) -> dict[str, Any]:
-    """A data-set config as plain data, without ``profile``, ``life.conditions`` and
-    ``life.fault.to_failure`` when they are None and without the fields of
-    :data:`LATER_CONDITIONS`, :data:`LATER_SENSOR` and :data:`LATER_TRACE` (the friction
-    law, re-greasing, a temperature trace, the sensor's fault, the trace's mode) that hold
-    their defaults, so that a data set
-    keeps the config (and :func:`config_hash`) it had before these options."""
+    """A data-set config as plain data, without the options added after data sets were made
+    (fields marked :data:`swgsim.base.typed.LATER`: a profile, the real day, a run to
+    failure, re-greasing, drawn friction laws, ...) that hold their defaults, so that a data
+    set keeps the config (and :func:`config_hash`) it had before these options
+    (:func:`swgsim.base.typed.without_later_defaults`)."""
     out = dict(dataclasses.asdict(cfg) if isinstance(cfg, DatasetConfig) else cfg)
-    if "profile" in out and out["profile"] is None:
-        del out["profile"]
-    life = out.get("life")
-    if isinstance(life, dict) and "conditions" in life and life["conditions"] is None:
-        out["life"] = {k: v for k, v in life.items() if k != "conditions"}
-    fault = life.get("fault") if isinstance(life, dict) else None
-    if isinstance(fault, dict):  # a fault not run to failure: as before the option
-        out["life"] = {**out["life"], "fault": _without_defaults(fault, FaultOnset, LATER_FAULT)}
-    cond = (out.get("life") or {}).get("conditions") if isinstance(out.get("life"), dict) \
-        else None
-    if isinstance(cond, dict):
-        cond = _without_defaults(cond, ConditionsConfig, LATER_CONDITIONS)
-        if isinstance(cond.get("temperature_sensor"), dict):
-            cond["temperature_sensor"] = _without_defaults(cond["temperature_sensor"],
-                                                           TemperatureSensor, LATER_SENSOR)
-        if isinstance(cond.get("temperature_trace"), dict):
-            cond["temperature_trace"] = _without_defaults(cond["temperature_trace"],
-                                                          TemperatureTrace, LATER_TRACE)
-        if isinstance(cond.get("bridge_drift"), dict):
-            cond["bridge_drift"] = _without_defaults(cond["bridge_drift"], BridgeDrift,
-                                                     LATER_DRIFT)
-        out["life"] = {**out["life"], "conditions": cond}
-    return out
+    return without_later_defaults(out, DatasetConfig)
 
 
 def config_hash(cfg: DatasetConfig | Mapping[str, Any]) -> str:

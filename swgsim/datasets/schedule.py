@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from swgsim.base.typed import LATER
 from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.growth import (
     LAWS,
@@ -101,7 +102,7 @@ class FaultOnset:
     points: list[list[float]] = field(default_factory=list)
     position_deg: float | None = None
     sensor: int | None = None
-    to_failure: RunToFailure | None = None
+    to_failure: RunToFailure | None = field(default=None, metadata={LATER: "runs to failure"})
 
 
 @dataclass
@@ -140,7 +141,7 @@ class LifeConfig:
     severity_levels: int = 8
     disturbed: bool = True
     life_seed: int = 0
-    conditions: ConditionsConfig | None = None
+    conditions: ConditionsConfig | None = field(default=None, metadata={LATER: "the real day"})
 
     def check(self, where: str) -> None:
         """Refuse a life config outside its ranges, in one line naming the key (run by

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import check_range
+from swgsim.base.typed import LATER, check_range
 
 #: Reference temperature of the drift coefficients [°C] (the temperature at commissioning
 #: is not known in advance; docs/PHYSICS.md sec. 5.4).
@@ -80,7 +80,7 @@ class BridgeDrift:
                               - 3 * STEEL_EXPANSION_PER_K)
     span_sd_per_k: float = 5e-5
     ref_c: float = REF_TEMP_C
-    lag_spread_min: float = 0.0
+    lag_spread_min: float = field(default=0.0, metadata={LATER: "bridges' own temperatures"})
 
     def check(self, key: str = "BridgeDrift") -> None:
         """Refuse a field outside its range in one line naming ``<key>.<field>``.
@@ -166,6 +166,8 @@ def bridge_temperatures(temp_c: np.ndarray, wall_h: np.ndarray, cfg: BridgeDrift
                             for t in tau_h])
 
 
+#: Why the sensor's later fields are :data:`swgsim.base.typed.LATER`.
+_SENSOR = "sensor faults, lag, offset, ageing"
 #: Faults of :class:`TemperatureSensor` (its docstring).
 TEMPERATURE_SENSOR_FAULTS = ("none", "stuck", "drift", "dropout")
 
@@ -221,12 +223,12 @@ class TemperatureSensor:
 
     resolution_k: float = 0.1
     noise_sd_k: float = 0.05
-    fault: str = "none"
-    fault_hour: float = 0.0
-    drift_k_per_h: float = 0.0
-    lag_min: float = 0.0
-    offset_k: float = 0.0
-    ageing_k_per_h: float = 0.0
+    fault: str = field(default="none", metadata={LATER: _SENSOR})
+    fault_hour: float = field(default=0.0, metadata={LATER: _SENSOR})
+    drift_k_per_h: float = field(default=0.0, metadata={LATER: _SENSOR})
+    lag_min: float = field(default=0.0, metadata={LATER: _SENSOR})
+    offset_k: float = field(default=0.0, metadata={LATER: _SENSOR})
+    ageing_k_per_h: float = field(default=0.0, metadata={LATER: _SENSOR})
 
     def check(self, key: str = "TemperatureSensor") -> None:
         """Refuse a field outside its range in one line naming ``<key>.<field>``.

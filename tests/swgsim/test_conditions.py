@@ -15,6 +15,7 @@ from omegaconf import OmegaConf
 
 from swgcli import compose_app, dataset_preset
 from swgcli.app import one_line
+from swgsim.base.typed import LATER, without_later_defaults
 from swgsim.datasets.conditions import (
     ConditionsConfig,
     Regrease,
@@ -203,6 +204,29 @@ def test_a_joint_heated_beyond_the_viscosity_laws_range_is_refused_naming_the_ca
     with pytest.raises(ValueError, match=r"conditions.thermal: the joint reaches .* °C at "
                                          r"operating hour .*r_th_k_per_w 50 K/W.*\[-40, 150\]"):
         _sim(tiny, hot)
+
+
+@dataclasses.dataclass
+class _Leaf:
+    old: float = 1.0
+    new: float = dataclasses.field(default=0.0, metadata={LATER: "a test"})
+
+
+@dataclasses.dataclass
+class _Root:
+    leaf: _Leaf = dataclasses.field(default_factory=_Leaf)
+    leaves: list[_Leaf] = dataclasses.field(default_factory=lambda: [_Leaf(), _Leaf(new=2.0)])
+    maybe: _Leaf | None = dataclasses.field(default=None, metadata={LATER: "a test"})
+
+
+def test_later_fields_at_their_defaults_are_left_out_at_every_depth():
+    """One rule for every option added after data sets were made (plain_config): a field
+    marked LATER is left out while it holds its default, in nested, listed and optional
+    parts; set, it stays, and so does every field not marked."""
+    out = without_later_defaults(dataclasses.asdict(_Root()), _Root)
+    assert out == {"leaf": {"old": 1.0}, "leaves": [{"old": 1.0}, {"old": 1.0, "new": 2.0}]}
+    out = without_later_defaults(dataclasses.asdict(_Root(maybe=_Leaf(new=3.0))), _Root)
+    assert out["maybe"] == {"old": 1.0, "new": 3.0}
 
 
 def test_the_default_friction_law_keeps_a_data_sets_config_hash():
