@@ -7,9 +7,9 @@ interpreter) ``--runs`` times as a whole process, each time into a fresh folder 
 sets, reports and MLflow store there, so every run simulates both data sets and fits every
 study), and prints each run's stages (``wall time per stage`` of the app's last words,
 their ``total`` among them) and the process's wall time, then the minimum, median and
-maximum of each. The target of the stages' total is 240 s on the 2-core machine with nothing else running
-(docs/results/speed.md, "The main job"). Hydra overrides after the options are passed on,
-e.g. ``grid=tiny`` for a quick check of the script itself.
+maximum of each. The target of the stages' total is 240 s on the 2-core machine with
+nothing else running (docs/results/speed.md, "The main job"). Hydra overrides after the
+options are passed on, e.g. ``grid=tiny`` for a quick check of the script itself.
 """
 
 from __future__ import annotations

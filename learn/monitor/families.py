@@ -23,7 +23,7 @@ from swgsim.datasets.conditions import (
     TemperatureTrace,
     trace_rise,
 )
-from swgsim.gear.thermal import FRICTION_FORMS, FrictionLaw, JointThermal
+from swgsim.gear.thermal import FRICTION_FORMS, MONOTONE_FORMS, FrictionLaw, JointThermal
 from swgsim.sensing.bridge_drift import (
     TEMPERATURE_SENSOR_FAULTS,
     BridgeDrift,
@@ -93,7 +93,9 @@ class NuisanceFamily:
         Live at the reference temperature (no warm-up, friction law or bridge drift);
         refused with a part of :data:`THERMAL_PARTS`.
     friction_forms : list of str
-        Forms the friction law is drawn from (:data:`swgsim.gear.thermal.FRICTION_FORMS`).
+        Forms the friction law is drawn from, among
+        :data:`swgsim.gear.thermal.FRICTION_FORMS` (default the monotone ones,
+        :data:`swgsim.gear.thermal.MONOTONE_FORMS`).
     sensor_states : list of str
         States of the temperature sensor drawn from (:data:`SENSOR_STATES`).
     ratio_40c, r_th_k_per_w, tau_min : list of float
@@ -127,7 +129,7 @@ class NuisanceFamily:
 
     parts: list[str] = field(default_factory=lambda: list(DEFAULT_PARTS))
     still: bool = False
-    friction_forms: list[str] = field(default_factory=lambda: list(FRICTION_FORMS))
+    friction_forms: list[str] = field(default_factory=lambda: list(MONOTONE_FORMS))
     sensor_states: list[str] = field(default_factory=lambda: list(SENSOR_STATES))
     ratio_40c: list[float] = _span(0.3, 1.0)
     r_th_k_per_w: list[float] = _span(0.3, 0.5)

@@ -67,6 +67,10 @@ HOURS_TABLE_COLUMNS = ("hour", "temperature_c")
 MAX_TRACE_BYTES = 256 * 2**20
 
 
+#: Why the Coulomb term's own run-in fields are :data:`swgsim.base.typed.LATER`.
+_SPLIT = "viscous and Coulomb friction apart"
+
+
 @dataclass
 class RunInConfig:
     """Friction of a new gear running in (:func:`swgsim.gear.thermal.run_in_factor`).
@@ -74,14 +78,43 @@ class RunInConfig:
     Attributes
     ----------
     drop : float
-        Excess friction of a new gear, in [0, 1] [-].
+        Excess friction of a new gear, in [0, 1] [-]: on every friction term, or on the
+        viscous ones (b1, b2) where the Coulomb term runs in by its own.
     tau_h : float
         Time constant, > 0 [operating h].
+    coulomb_drop, coulomb_tau_h : float or None
+        The Coulomb term's (b0, and μ, the mesh's load-proportional friction) own excess
+        and time constant: the grease's redistribution lowers the churning (viscous) loss,
+        the surfaces' smoothing the boundary (Coulomb) friction, by other amounts and over
+        other times (docs/PHYSICS.md sec. 5.4) [choice: no measured curves]; None: those
+        of ``drop`` and ``tau_h``.
     """
 
     drop: float = field(default=RUN_IN_DROP, metadata=allowed(0.0, 1.0))
     tau_h: float = field(default=RUN_IN_TAU_H, metadata=allowed(0.0, 1e5, lo_open=True,
                                                                 unit="h"))
+    coulomb_drop: float | None = field(default=None,
+                                       metadata={**allowed(0.0, 1.0), LATER: _SPLIT})
+    coulomb_tau_h: float | None = field(default=None, metadata={
+        **allowed(0.0, 1e5, lo_open=True, unit="h"), LATER: _SPLIT})
+
+    @property
+    def split(self) -> bool:
+        """Whether the Coulomb term runs in by its own."""
+        return self.coulomb_drop is not None or self.coulomb_tau_h is not None
+
+    def factors(self, hours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The viscous and the Coulomb terms' run-in factors at operating ``hours``
+        (:func:`swgsim.gear.thermal.run_in_factor`), shapes of ``hours`` [-]."""
+        viscous = run_in_factor(hours, self.drop, self.tau_h)
+        if not self.split:
+            return viscous, viscous
+        return viscous, run_in_factor(hours, _or(self.coulomb_drop, self.drop),
+                                      _or(self.coulomb_tau_h, self.tau_h))
+
+
+def _or(value: float | None, default: float) -> float:
+    return default if value is None else value
 
 
 @dataclass
@@ -99,12 +132,33 @@ class Regrease:
     tau_h : float
         Time constant of running in again, > 0 [operating h] (8: over in about a day)
         [choice].
+    coulomb_drop, coulomb_tau_h : float or None
+        The Coulomb term's own (b0 and μ), as :class:`RunInConfig`'s; None: ``drop``,
+        ``tau_h``.
     """
 
     hours: list[float]
     drop: float = field(default=REGREASE_DROP, metadata=allowed(0.0, 1.0))
     tau_h: float = field(default=REGREASE_TAU_H, metadata=allowed(0.0, 1e5, lo_open=True,
                                                                   unit="h"))
+    coulomb_drop: float | None = field(default=None,
+                                       metadata={**allowed(0.0, 1.0), LATER: _SPLIT})
+    coulomb_tau_h: float | None = field(default=None, metadata={
+        **allowed(0.0, 1e5, lo_open=True, unit="h"), LATER: _SPLIT})
+
+    @property
+    def split(self) -> bool:
+        """Whether the Coulomb term runs in again by its own (:class:`RunInConfig`)."""
+        return self.coulomb_drop is not None or self.coulomb_tau_h is not None
+
+    def factors(self, hours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The viscous and the Coulomb terms' factors at operating ``hours``
+        (:func:`swgsim.gear.thermal.regrease_factor`), shapes of ``hours`` [-]."""
+        viscous = regrease_factor(hours, self.hours, self.drop, self.tau_h)
+        if not self.split:
+            return viscous, viscous
+        return viscous, regrease_factor(hours, self.hours, _or(self.coulomb_drop, self.drop),
+                                        _or(self.coulomb_tau_h, self.tau_h))
 
     def check(self, where: str) -> None:
         """Refuse no hour or hours not increasing, in one line naming ``<where>.hours``
@@ -343,6 +397,11 @@ class ConditionsConfig:
     friction_law : FrictionLaw
         How (default: the grease's viscosity law, :func:`swgsim.gear.thermal.friction_scale`);
         an evaluation draws it from the family.
+    coulomb_law : FrictionLaw or None
+        The Coulomb term's own law (b0; the viscous terms b1, b2 follow ``friction_law``):
+        the viscous term follows the grease's viscosity, the Coulomb and mixed-lubrication
+        term the film and the load, e.g. a ``u_shaped`` law rising again above its
+        minimum (docs/PHYSICS.md sec. 5.4); None: ``friction_law`` on every term.
     run_in : RunInConfig or None
         A new gear's friction running in from hour 0; None: the gear is run in.
     regrease : Regrease or None
@@ -361,6 +420,7 @@ class ConditionsConfig:
     temperature_trace: TemperatureTrace | None = field(default=None,
                                                        metadata={LATER: "measured warm-ups"})
     viscosity: bool = True
+    coulomb_law: FrictionLaw | None = field(default=None, metadata={LATER: _SPLIT})
     friction_law: FrictionLaw = field(default_factory=FrictionLaw,
                                       metadata={LATER: "drawn friction laws"})
     run_in: RunInConfig | None = None
@@ -417,9 +477,11 @@ class WindowConditions:
         The temperature sensor's reading [°C] (None without a sensor; NaN where its fault
         is a dropout).
     friction : ndarray, shape (W,)
-        Factor on the load-independent friction (viscosity, run-in, re-greasing) [-].
+        Factor on the load-independent friction (viscosity, run-in, re-greasing) [-]; on
+        its viscous terms alone where ``coulomb`` is set.
     mu_factor : ndarray, shape (W,)
-        Factor on the mesh's load-proportional friction μ (run-in, re-greasing) [-].
+        Factor on the mesh's load-proportional friction μ (run-in, re-greasing; the
+        Coulomb term's where it runs in by its own) [-].
     payload : ndarray, shape (W,)
         Factor on the acting load [-].
     zero_mvv_per_k, span_per_k : ndarray, shape (5,)
@@ -429,6 +491,9 @@ class WindowConditions:
     bridge_temperature_c : ndarray, shape (W, 5), or None
         Each bridge's temperature where the bridges lag the joint
         (:func:`swgsim.sensing.bridge_drift.bridge_temperatures`); None: the joint's.
+    coulomb : ndarray, shape (W,), or None
+        Factor on the Coulomb term b0 where viscous and Coulomb friction follow their own
+        laws or run in apart (:class:`ConditionsConfig`) [-]; None: ``friction``.
     """
 
     temperature_c: np.ndarray
@@ -440,6 +505,7 @@ class WindowConditions:
     span_per_k: np.ndarray
     drift_ref_c: float
     bridge_temperature_c: np.ndarray | None = None
+    coulomb: np.ndarray | None = None
 
     def bridge_gain_offset(self, rows: np.ndarray, zero_offsets_mvv: np.ndarray | None = None
                            ) -> tuple[np.ndarray, np.ndarray]:
@@ -487,12 +553,7 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     for h, f in cfg.payload:
         payload[hours >= h] = f
     temp = _temperature(cfg, hours, n_in_rpm, t_out_nm, payload, gear)
-    run_in = (run_in_factor(hours, cfg.run_in.drop, cfg.run_in.tau_h)
-              if cfg.run_in is not None else np.ones_like(hours))
-    if cfg.regrease is not None:
-        rg = cfg.regrease
-        run_in = run_in * regrease_factor(hours, rg.hours, rg.drop, rg.tau_h)
-    friction = (cfg.friction_law.factor(temp) if cfg.viscosity else 1.0) * run_in
+    friction, coulomb, run_in = _friction(cfg, hours, temp)
     reading = None
     wall = (hours if cfg.thermal is None  # lags run over a stop too: they cool with the joint
             else wall_clock_h(hours, cfg.thermal.run_h_per_day))
@@ -508,7 +569,26 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
         ref = float(cfg.bridge_drift.ref_c)
         bridges = bridge_temperatures(temp, wall, cfg.bridge_drift, rng)
     return WindowConditions(temp, reading, np.asarray(friction, float), run_in, payload,
-                            zero, span, ref, bridges)
+                            zero, span, ref, bridges, coulomb)
+
+
+def _friction(cfg: ConditionsConfig, hours: np.ndarray, temp: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """The factors on the viscous (or every load-independent) friction and on the Coulomb
+    term (None: one factor on all), and the factor on μ, at the windows, shapes (W,) [-]."""
+    ones = np.ones_like(hours)
+    run_v, run_c = cfg.run_in.factors(hours) if cfg.run_in is not None else (ones, ones)
+    if cfg.regrease is not None:
+        rg_v, rg_c = cfg.regrease.factors(hours)
+        run_v, run_c = run_v * rg_v, run_c * rg_c
+    law_v = cfg.friction_law.factor(temp) if cfg.viscosity else 1.0
+    friction = law_v * run_v
+    split = (cfg.coulomb_law is not None or (cfg.run_in is not None and cfg.run_in.split)
+             or (cfg.regrease is not None and cfg.regrease.split))
+    if not split:
+        return friction, None, run_v
+    law_c = ((cfg.coulomb_law or cfg.friction_law).factor(temp) if cfg.viscosity else 1.0)
+    return friction, np.asarray(law_c * run_c, float), run_c
 
 
 def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
@@ -546,7 +626,7 @@ def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
 
 
 def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray,
-                     mu_factor: np.ndarray) -> np.ndarray:
+                     mu_factor: np.ndarray, coulomb: np.ndarray | None = None) -> np.ndarray:
     """The factor a window's efficiency changes by under its friction: the model's steady
     efficiency at the acting friction over that at the nominal one, at the record's
     speed and load, shape of ``friction`` [-]
@@ -554,6 +634,6 @@ def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray
     n = np.abs(np.asarray(n_in_rpm, float))
     t = np.abs(np.asarray(t_out_nm, float))
     nominal = steady_efficiency(gear.gear, n, t)
-    acting = steady_efficiency(gear.gear, n, t, friction, mu_factor)
+    acting = steady_efficiency(gear.gear, n, t, friction, mu_factor, coulomb)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(nominal > 0, acting / nominal, 1.0)

@@ -207,7 +207,8 @@ class LifeSimulator:
         for key in set(keys):  # the state's own gear parameters, at the record's load
             m = np.array([k == key for k in keys])
             eff[m] *= efficiency_ratio(self.bank.params(key), key[0], key[1],
-                                       c.friction[rows][m], c.mu_factor[rows][m])
+                                       c.friction[rows][m], c.mu_factor[rows][m],
+                                       None if c.coulomb is None else c.coulomb[rows][m])
         gain, offset = c.bridge_gain_offset(rows, self.zero_offsets_mvv)
         sig *= gain[:, :, None]
         sig += offset[:, :, None]

@@ -29,6 +29,7 @@ from itertools import accumulate
 
 import numpy as np
 
+from swgsim.base.typed import LATER
 from swgsim.gear.dynamics import RPM, GearParams
 
 #: Reference temperature of the catalogue and so of :func:`swgsim.gear.dynamics.rt1_size20`
@@ -409,8 +410,18 @@ def friction_scale(temp_c, ref_c: float = REF_TEMP_C,
     return viscosity_ratio(temp_c, ref_c) ** exponent
 
 
-#: Forms of :class:`FrictionLaw` (how friction follows temperature).
-FRICTION_FORMS = ("exponential", "linear", "saturating")
+#: Forms of :class:`FrictionLaw` that fall monotonically as the joint warms.
+MONOTONE_FORMS = ("exponential", "linear", "saturating")
+#: Forms of :class:`FrictionLaw` (how friction follows temperature): the monotone ones and
+#: one whose slope changes sign.
+FRICTION_FORMS = (*MONOTONE_FORMS, "u_shaped")
+#: Temperatures the ``u_shaped`` form's minimum may take [°C]: inside ABB's joint friction
+#: map, 30-80 °C (Bittencourt and Axelsson 2014) [src: that range], and from 45 up, so that
+#: the rise beyond stays moderate (×1.7 at 80 °C at the steepest, r = 0.3, T_m = 45)
+#: [choice; at 30 the 20 and 40 °C points sit symmetric about the minimum].
+U_MINIMUM_RANGE_C = (45.0, 80.0)
+#: Lowest factor any form gives [-]: friction does not vanish [choice].
+FACTOR_FLOOR = 0.2
 #: Width of the saturating form's tanh [K] [choice: it saturates over the −40..80 °C of a
 #: joint's life].
 SATURATING_WIDTH_K = 20.0
@@ -434,18 +445,30 @@ class FrictionLaw:
       ×1.37 at 0 °C;
     * ``saturating``: φ = 1 − A tanh((T − 20)/w), A = (1 − r)/tanh(20/w), w =
       :data:`SATURATING_WIDTH_K`: ×1.37 at 0 °C as the linear, ×0.51 at 80 °C (linear 0.2),
-      bounded by 1 ± A.
+      bounded by 1 ± A;
+    * ``u_shaped``: φ = 1 + c ((T − T_m)² − (20 − T_m)²), c = (r − 1) / (20 (60 − 2 T_m)),
+      its slope changing sign at T_m = ``minimum_c``: friction that falls as the film
+      thickens and rises again as a thin, hot grease lets the surfaces touch (mixed
+      lubrication; static friction rising above a grease's working range [recall, REAL-DAY
+      background: Bittencourt et al.]), for the Coulomb term (``coulomb_law`` of the
+      conditions); with r = 0.63 and T_m = 50 °C: ×1.74 at 0 °C, ×0.58 at 50, ×1.00 at 80.
+
+    The linear and the u-shaped forms are floored at :data:`FACTOR_FLOOR`.
 
     Attributes
     ----------
-    form : {"exponential", "linear", "saturating"}
+    form : {"exponential", "linear", "saturating", "u_shaped"}
     ratio_40c : float or None
         r = φ(40 °C), in [0.3, 1]; None: the catalogue-anchored value of
         :func:`friction_scale` (0.627).
+    minimum_c : float
+        T_m of the ``u_shaped`` form, in :data:`U_MINIMUM_RANGE_C` [°C] (50); the other
+        forms do not read it.
     """
 
     form: str = "exponential"
     ratio_40c: float | None = None
+    minimum_c: float = field(default=50.0, metadata={LATER: "u-shaped laws"})
 
     def check(self, key: str = "FrictionLaw") -> None:
         """Refuse an unknown form or a ratio outside [0.3, 1], naming ``<key>.<field>``.
@@ -458,6 +481,8 @@ class FrictionLaw:
             raise ValueError(f"{key}.form: {self.form!r}; allowed: {', '.join(FRICTION_FORMS)}")
         if self.ratio_40c is not None:
             _finite(self.ratio_40c, f"{key}.ratio_40c", 0.3, 1.0, "[0.3, 1]")
+        lo, hi = U_MINIMUM_RANGE_C
+        _finite(self.minimum_c, f"{key}.minimum_c", lo, hi, f"[{lo:g}, {hi:g}] °C")
 
     def factor(self, temp_c) -> np.ndarray:
         """φ(T) on the load-independent friction [-].
@@ -481,7 +506,11 @@ class FrictionLaw:
         if self.form == "exponential":
             return r ** x
         if self.form == "linear":
-            return np.maximum(1.0 + (r - 1.0) * x, 0.2)
+            return np.maximum(1.0 + (r - 1.0) * x, FACTOR_FLOOR)
+        if self.form == "u_shaped":
+            tm = self.minimum_c
+            c = (r - 1.0) / (20.0 * (60.0 - 2.0 * tm))
+            return np.maximum(1.0 + c * ((t - tm) ** 2 - (REF_TEMP_C - tm) ** 2), FACTOR_FLOOR)
         a = (1.0 - r) / np.tanh(20.0 / SATURATING_WIDTH_K)
         return 1.0 - a * np.tanh((t - REF_TEMP_C) / SATURATING_WIDTH_K)
 
@@ -585,13 +614,14 @@ def gear_at_temperature(gear: GearParams, temp_c: float, run_in: float = 1.0) ->
                                mu=gear.mu * r)
 
 
-def _steady_friction(gear: GearParams, n_in_rpm, t_out_nm, friction=1.0, mu_factor=1.0):
+def _steady_friction(gear: GearParams, n_in_rpm, t_out_nm, friction=1.0, mu_factor=1.0,
+                     coulomb=None):
     """Steady friction torque T_fric [N m] and flank speed v [rad/s], broadcast: with
     v = ω_in / (N sin α) and c T_stiff = T_load + T_fric / sin α, eq. (5) (b3 averaging
-    out) gives T_fric = (f (b0 s + b1 v + b2 v³) + m μ s T_load / cos α) / (1 − m μ s /
-    (sin α cos α)), s = tanh(v / v_s), f and m the factors on the load-independent terms
-    and on μ (:func:`gear_at_temperature`; docs/PHYSICS.md sec. 1.4, as in
-    ``fit_friction``)."""
+    out) gives T_fric = (f_c b0 s + f (b1 v + b2 v³) + m μ s T_load / cos α) / (1 − m μ s /
+    (sin α cos α)), s = tanh(v / v_s), f, f_c and m the factors on the viscous terms, on
+    the Coulomb term (``coulomb``; None: f) and on μ (:func:`gear_at_temperature`;
+    docs/PHYSICS.md sec. 1.4, as in ``fit_friction``)."""
     n = _finite(n_in_rpm, "n_in_rpm", 0.0, np.inf, "(0, inf) rpm")
     t = _finite(t_out_nm, "t_out_nm", 0.0, np.inf, "[0, inf) N m")
     if np.any(n <= 0):
@@ -602,12 +632,17 @@ def _steady_friction(gear: GearParams, n_in_rpm, t_out_nm, friction=1.0, mu_fact
     v = n * RPM / (gear.ratio * sa)
     s = np.tanh(v / gear.v_smooth_rad_s)
     mu = gear.mu * m
-    num = f * (gear.b0_nm * s + gear.b1_nms * v + gear.b2_nms3 * v**3) + mu * s * t / ca
+    if coulomb is None:  # one factor on every load-independent term (the same bits as ever)
+        free = f * (gear.b0_nm * s + gear.b1_nms * v + gear.b2_nms3 * v**3)
+    else:
+        fc = _finite(coulomb, "coulomb", 0.0, np.inf, "(0, inf)")
+        free = fc * gear.b0_nm * s + f * (gear.b1_nms * v + gear.b2_nms3 * v**3)
+    num = free + mu * s * t / ca
     return num / (1.0 - mu * s / (sa * ca)), v, t
 
 
 def steady_efficiency(gear: GearParams, n_in_rpm, t_out_nm, friction=1.0,
-                      mu_factor=1.0) -> np.ndarray:
+                      mu_factor=1.0, coulomb=None) -> np.ndarray:
     """Efficiency of the model in steady state, T_load / (T_load + T_fric / sin α) [-].
 
     The energy balance of :mod:`swgsim.gear.dynamics` (docs/PHYSICS.md sec. 1.5), which
@@ -623,13 +658,17 @@ def steady_efficiency(gear: GearParams, n_in_rpm, t_out_nm, friction=1.0,
         Factors on the load-independent friction (b0, b1, b2; the temperature's and the
         run-in's, :func:`gear_at_temperature`) and on μ (the run-in's), > 0 [-];
         broadcast with the speeds.
+    coulomb : array_like, optional
+        Factor on the Coulomb term b0 alone, > 0 [-]; ``friction`` then acts on the
+        viscous terms b1, b2 only (viscous and Coulomb friction following their own laws,
+        :class:`swgsim.datasets.conditions.ConditionsConfig`); None: ``friction`` on all.
 
     Returns
     -------
     ndarray, broadcast shape
         Efficiency, 0 at no load [-]; ValueError for a speed <= 0, a negative torque.
     """
-    tf, _, t = _steady_friction(gear, n_in_rpm, t_out_nm, friction, mu_factor)
+    tf, _, t = _steady_friction(gear, n_in_rpm, t_out_nm, friction, mu_factor, coulomb)
     return t / (t + tf / np.sin(gear.alpha_tooth_rad))
 
 

@@ -28,7 +28,7 @@ from swgcli import dataset_preset
 from swgsim.base.typed import check_tree
 from swgsim.datasets.plan import plan
 from swgsim.datasets.records import record_bank
-from swgsim.gear.thermal import FRICTION_FORMS
+from swgsim.gear.thermal import MONOTONE_FORMS
 
 FAMILIES = default_families()
 SEEDS = [0, 1, 2, 3, 4, 100, 101, 102, 103, 104]
@@ -62,13 +62,13 @@ def test_draws_stay_inside_the_declared_ranges():
         forms.add(form), states.add(state)
         c = draw_conditions(fam, seed)
         assert 0.3 <= c.friction_law.ratio_40c <= 1.0
-        assert c.friction_law.form in FRICTION_FORMS
+        assert c.friction_law.form in MONOTONE_FORMS
         assert 0.3 <= c.thermal.r_th_k_per_w <= 0.5 and 20.0 <= c.thermal.tau_min <= 60.0
         assert 0.0 <= c.bridge_drift.span_mean_per_k <= 4e-4
         assert 0.8 <= c.payload[0][1] <= 1.2 and 30.0 <= c.payload[0][0] <= 48.0
         if c.regrease is not None:
             assert 30.0 <= c.regrease.hours[0] <= 48.0 and 0.1 <= c.regrease.drop <= 0.5
-    assert forms == set(FRICTION_FORMS) and states == set(SENSOR_STATES)
+    assert forms == set(MONOTONE_FORMS) and states == set(SENSOR_STATES)
 
 
 def test_a_narrow_range_gives_its_value_and_the_parts_not_drawn_keep_defaults():

@@ -132,6 +132,28 @@ def test_the_friction_follows_the_law_drawn_for_the_joint(tiny):
         np.testing.assert_allclose(c.friction, law.factor(temp), rtol=1e-15)
 
 
+def test_viscous_and_coulomb_friction_follow_their_own_laws_and_run_in_apart(tiny):
+    """Issue 83: the Coulomb term (b0, and mu in run-in) follows its own temperature law
+    and runs in by its own drop and time; unset, one factor on every term as before."""
+    warm = dataclasses.replace(NEUTRAL, thermal=JointThermal(ambient_swing_k=0.0),
+                               viscosity=True, run_in=RunInConfig(0.2, 10.0))
+    one = _sim(tiny, warm).conditions
+    assert one.coulomb is None
+    law = FrictionLaw("u_shaped", 0.6, 45.0)
+    split = dataclasses.replace(warm, coulomb_law=law,
+                                run_in=RunInConfig(0.2, 10.0, coulomb_drop=0.05,
+                                                   coulomb_tau_h=0.5))
+    c = _sim(tiny, split).conditions
+    h, temp = _sim(tiny, split).schedule.hour, c.temperature_c
+    np.testing.assert_array_equal(c.friction, one.friction)  # the viscous terms as before
+    np.testing.assert_allclose(c.mu_factor, 1.0 + 0.05 * np.exp(-h / 0.5), rtol=1e-14)
+    np.testing.assert_allclose(c.coulomb, law.factor(temp) * c.mu_factor, rtol=1e-14)
+    assert np.all(c.mu_factor[h > 2.0] < one.mu_factor[h > 2.0])  # run in sooner
+    _, m1 = _windows(tiny, warm)
+    _, m2 = _windows(tiny, split)
+    assert not np.allclose(m1["efficiency"], m2["efficiency"])
+
+
 def test_a_heavier_tool_acts_at_its_load_while_the_commanded_point_stays(tiny):
     _, m0 = _windows(tiny, NEUTRAL)
     _, m1 = _windows(tiny, HEAVY)
@@ -278,8 +300,9 @@ def test_bridges_that_lag_the_joint_drift_apart_in_a_warm_up_and_together_after(
     """Issue 83: a temperature difference across the collar during a warm-up, so the
     bridges do not drift together: each bridge's temperature lags the joint's by its own
     time constant (BridgeDrift.lag_spread_min); apart by kelvins while the joint warms,
-    together again at its steady state (within the lagged swings of its duty). Off, no bridge temperature at all (the windows
-    of before, bit for bit: test_neutral_conditions_change_no_window and the hashes)."""
+    together again at its steady state (within the lagged swings of its duty). Off, no
+    bridge temperature at all (the windows of before, bit for bit:
+    test_neutral_conditions_change_no_window and the hashes)."""
     base = ConditionsConfig(thermal=JointThermal(run_h_per_day=24.0), viscosity=False,
                             bridge_drift=BridgeDrift(), temperature_sensor=None)
     assert _sim(tiny, base, hours=6.0).conditions.bridge_temperature_c is None

@@ -277,7 +277,7 @@ def test_sensor_quantises_and_adds_seeded_noise():
         bd.TemperatureSensor(resolution_k=-0.1).check()
 
 
-@pytest.mark.parametrize("form", th.FRICTION_FORMS)
+@pytest.mark.parametrize("form", th.MONOTONE_FORMS)
 def test_every_friction_law_is_anchored_at_20_and_40_degc_and_falls_smoothly(form):
     t = np.linspace(-40.0, 150.0, 1901)
     for r in (0.3, 0.63, 0.8, 1.0):
@@ -292,12 +292,48 @@ def test_every_friction_law_is_anchored_at_20_and_40_degc_and_falls_smoothly(for
 def test_the_default_friction_law_is_the_viscosity_law_and_the_forms_differ_off_the_anchors():
     t = np.array([-20.0, 0.0, 20.0, 40.0, 60.0, 100.0])
     np.testing.assert_array_equal(th.FrictionLaw().factor(t), th.friction_scale(t))
-    at_80 = {f: float(th.FrictionLaw(f).factor(80.0)) for f in th.FRICTION_FORMS}
+    at_80 = {f: float(th.FrictionLaw(f).factor(80.0)) for f in th.MONOTONE_FORMS}
     assert len({round(v, 2) for v in at_80.values()}) == 3  # three laws, not one
 
 
+def test_a_u_shaped_law_falls_to_its_minimum_then_rises():
+    """The Coulomb term's law whose slope changes sign (issue 83): anchored as every law,
+    falling up to minimum_c, rising beyond it, floored."""
+    law = th.FrictionLaw("u_shaped", 0.63, 60.0)
+    t = np.linspace(-40.0, 150.0, 1901)
+    phi = law.factor(t)
+    assert law.factor(20.0) == pytest.approx(1.0, abs=1e-15)
+    assert law.factor(40.0) == pytest.approx(0.63, rel=1e-12)
+    m = int(np.argmin(phi))
+    assert t[m] == pytest.approx(60.0, abs=0.1)
+    assert np.all(np.diff(phi[:m]) < 0) and np.all(np.diff(phi[m + 1:]) > 0)
+    assert phi.min() >= th.FACTOR_FLOOR and float(law.factor(100.0)) > 0.63
+
+
+def test_viscous_and_coulomb_factors_act_on_their_own_terms():
+    """steady_efficiency with a Coulomb factor: the same as one factor where both are
+    equal, and at no load the loss moves by each term's share alone."""
+    n, t = np.array([500.0, 2000.0, 4000.0]), np.array([0.0, 26.0, 52.0])
+    one = th.steady_efficiency(GEAR, n[:, None], t[None, :], 0.7, 0.9)
+    both = th.steady_efficiency(GEAR, n[:, None], t[None, :], 0.7, 0.9, coulomb=0.7)
+    np.testing.assert_allclose(both, one, rtol=1e-14)
+    v = n * RPM / (GEAR.ratio * np.sin(GEAR.alpha_tooth_rad))
+    s = np.tanh(v / GEAR.v_smooth_rad_s)
+    d = 1.0 - GEAR.mu * s / (np.sin(GEAR.alpha_tooth_rad) * np.cos(GEAR.alpha_tooth_rad))
+    b0, visc = GEAR.b0_nm * s / d, (GEAR.b1_nms * v + GEAR.b2_nms3 * v**3) / d
+    loss = {}
+    for fv, fc in ((1.0, 1.0), (0.5, 1.0), (1.0, 0.5)):  # no load: (fc b0 s + fv (...)) / d
+        tf = th._steady_friction(GEAR, n, 0.0, fv, 1.0, coulomb=fc)[0]
+        np.testing.assert_allclose(tf, fc * b0 + fv * visc, rtol=1e-14)
+        loss[(fv, fc)] = tf
+    np.testing.assert_allclose(loss[(1.0, 1.0)] - loss[(0.5, 1.0)], 0.5 * visc, rtol=1e-12)
+    np.testing.assert_allclose(loss[(1.0, 1.0)] - loss[(1.0, 0.5)], 0.5 * b0, rtol=1e-12)
+
+
 @pytest.mark.parametrize(("law", "match"), [
-    (th.FrictionLaw("cubic"), r"c.form: 'cubic'; allowed: exponential, linear, saturating"),
+    (th.FrictionLaw("cubic"), r"c.form: 'cubic'; allowed: exponential, linear, saturating, "
+                              r"u_shaped"),
+    (th.FrictionLaw("u_shaped", 0.6, 30.0), r"c.minimum_c must lie in \[45, 80\] °C"),
     (th.FrictionLaw("linear", 0.2), r"c.ratio_40c.*\[0.3, 1\]"),
     (th.FrictionLaw("linear", float("nan")), r"c.ratio_40c")])
 def test_a_friction_law_out_of_range_is_refused_naming_the_key(law, match):
