@@ -18,6 +18,7 @@ import numpy as np
 
 from swgsim.base.typed import LATER, allowed, check_range
 from swgsim.files.inputs import check_text_file
+from swgsim.gear.dynamics import RPM
 from swgsim.gear.faults import ChainParams
 from swgsim.gear.thermal import (
     REF_TEMP_C,
@@ -30,6 +31,7 @@ from swgsim.gear.thermal import (
     JointThermal,
     joint_temperature,
     loss_power_w,
+    network_temperatures,
     regrease_factor,
     run_in_factor,
     steady_efficiency,
@@ -444,6 +446,10 @@ class ConditionsConfig:
         """
         if self.temperature_trace is not None:
             _check_trace(self.temperature_trace, self.thermal is not None, where)
+            if self.thermal is not None and self.thermal.network is not None:
+                raise ValueError(f"{where}.thermal.network must be null with a "
+                                 f"temperature_trace (the measured temperature replaces "
+                                 f"the thermal model)")
         for i, step in enumerate(self.payload):
             if len(step) != 2:
                 raise ValueError(f"{where}.payload[{i}] must be [hour, factor], got {step}")
@@ -494,6 +500,10 @@ class WindowConditions:
     coulomb : ndarray, shape (W,), or None
         Factor on the Coulomb term b0 where viscous and Coulomb friction follow their own
         laws or run in apart (:class:`ConditionsConfig`) [-]; None: ``friction``.
+    housing_c : ndarray, shape (W,), or None
+        The housing's temperature of a two-node joint (``thermal.network``; then
+        ``temperature_c`` is the grease's, which the friction follows, and the sensor reads
+        the housing) [°C]; None: one node.
     """
 
     temperature_c: np.ndarray
@@ -506,6 +516,7 @@ class WindowConditions:
     drift_ref_c: float
     bridge_temperature_c: np.ndarray | None = None
     coulomb: np.ndarray | None = None
+    housing_c: np.ndarray | None = None
 
     def bridge_gain_offset(self, rows: np.ndarray, zero_offsets_mvv: np.ndarray | None = None
                            ) -> tuple[np.ndarray, np.ndarray]:
@@ -552,14 +563,15 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
     payload = np.ones_like(hours)
     for h, f in cfg.payload:
         payload[hours >= h] = f
-    temp = _temperature(cfg, hours, n_in_rpm, t_out_nm, payload, gear)
+    temp, housing = _temperature(cfg, hours, n_in_rpm, t_out_nm, payload, gear)
     friction, coulomb, run_in = _friction(cfg, hours, temp)
     reading = None
     wall = (hours if cfg.thermal is None  # lags run over a stop too: they cool with the joint
             else wall_clock_h(hours, cfg.thermal.run_h_per_day))
     if cfg.temperature_sensor is not None:
         ss = np.random.SeedSequence(int(seed), spawn_key=(int(gear_id), int(life_seed), 2**22))
-        reading = measure_temperature(temp, cfg.temperature_sensor, np.random.default_rng(ss),
+        reading = measure_temperature(temp if housing is None else housing,
+                                      cfg.temperature_sensor, np.random.default_rng(ss),
                                       hours=hours, wall_h=wall)
     zero, span, ref, bridges = np.zeros(5), np.zeros(5), REF_TEMP_C, None
     if cfg.bridge_drift is not None:
@@ -567,9 +579,9 @@ def window_conditions(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.nda
         rng = np.random.default_rng(ss)
         zero, span = draw_bridge_drift(cfg.bridge_drift, rng)
         ref = float(cfg.bridge_drift.ref_c)
-        bridges = bridge_temperatures(temp, wall, cfg.bridge_drift, rng)
+        bridges = bridge_temperatures(temp, wall, cfg.bridge_drift, rng, housing)
     return WindowConditions(temp, reading, np.asarray(friction, float), run_in, payload,
-                            zero, span, ref, bridges, coulomb)
+                            zero, span, ref, bridges, coulomb, housing)
 
 
 def _friction(cfg: ConditionsConfig, hours: np.ndarray, temp: np.ndarray
@@ -592,17 +604,20 @@ def _friction(cfg: ConditionsConfig, hours: np.ndarray, temp: np.ndarray
 
 
 def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
-                 t_out_nm: np.ndarray, payload: np.ndarray, gear: ChainParams) -> np.ndarray:
+                 t_out_nm: np.ndarray, payload: np.ndarray, gear: ChainParams
+                 ) -> tuple[np.ndarray, np.ndarray | None]:
     """The joint's true temperature at the windows [°C], shape (W,): a trace's table on
     the operating hours (mode ``hours``), the reference without a thermal model, the
-    measured warm-up with a trace, else the first-order model at the acting loss; refused
-    outside the viscosity law's range naming what sets it."""
+    measured warm-up with a trace, else the thermal model at the acting loss (two nodes:
+    the grease's, and the housing's beside it, else None); refused outside the viscosity
+    law's range naming what sets it."""
     th, tr = cfg.thermal, cfg.temperature_trace
+    housing = None
     if tr is not None and tr.mode == "hours":
         t_h, temp_c = trace_table(tr, "conditions.temperature_trace")
-        return np.interp(hours, t_h, temp_c)
+        return np.interp(hours, t_h, temp_c), None
     if th is None:
-        return np.full(hours.shape, REF_TEMP_C)
+        return np.full(hours.shape, REF_TEMP_C), None
     if tr is not None:
         t_h, rise = trace_rise(tr, "conditions.temperature_trace")
         temp = traced_temperature(hours, t_h, rise, th, tr.scale)
@@ -610,8 +625,13 @@ def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
             f"the hall, ambient_c {th.ambient_c:g} °C, plus scale {tr.scale:g} times the "
             f"rise of {tr.column!r} in {tr.path!r}")
     else:
-        loss = loss_power_w(gear.gear, np.abs(n_in_rpm), np.abs(t_out_nm) * payload)
-        temp = joint_temperature(hours, loss, th)
+        n, load = np.abs(n_in_rpm), np.abs(t_out_nm) * payload
+        loss = loss_power_w(gear.gear, n, load)
+        if th.network is None:
+            temp = joint_temperature(hours, loss, th)
+        else:  # the motor's torque: the load's through the ratio plus the gear's loss
+            torque = load / gear.gear.ratio + loss / (n * RPM)
+            temp, housing = network_temperatures(hours, loss, torque, th)
         key, cause = "conditions.thermal", (
             f"the hall, ambient_c {th.ambient_c:g} °C, plus the gear's loss times "
             f"r_th_k_per_w {th.r_th_k_per_w:g} K/W")
@@ -622,7 +642,7 @@ def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
         raise ValueError(f"{key}: the joint reaches {temp[i]:.4g} °C at operating hour "
                          f"{hours[i]:.4g} ({cause}); the viscosity law takes "
                          f"[{lo:g}, {hi:g}] °C")
-    return temp
+    return temp, housing
 
 
 def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray,

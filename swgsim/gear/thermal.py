@@ -77,6 +77,65 @@ def _finite(x, name: str, lo: float = -np.inf, hi: float = np.inf, rng: str = ""
     return a
 
 
+#: Why the network's fields are :data:`swgsim.base.typed.LATER`.
+_NETWORK = "a thermal network"
+
+
+@dataclass
+class ThermalNetwork:
+    """A joint's heat in two nodes (:func:`network_temperatures`): the wave generator with
+    its bearing, the flexspline's teeth and the grease (*grease*), and the housing with the
+    flexspline's collar, the circular spline and the motor's stator (*housing*).
+
+    The gear's loss heats the grease; the motor's copper loss and its drive's electronics
+    heat the housing; the grease gives its heat to the housing through ``grease_r_k_per_w``
+    while the gear turns and through ``standstill_factor`` times that at a stop (no
+    churning: conduction alone) [choice]; the housing to the hall through the rest of the
+    joint's resistance, r_th − ``grease_r_k_per_w`` (:class:`JointThermal`), with the time
+    constant ``tau_min`` of :class:`JointThermal`. So at steady duty the grease sits
+    ``grease_r_k_per_w`` · P_loss above the housing, and the whole joint at the gear's loss
+    warms as the one-node model's. The drive is off over the daily stops.
+
+    Attributes
+    ----------
+    grease_r_k_per_w : float
+        Resistance grease -> housing while running [K/W], in (0, r_th): 0.06, a fifth of
+        the joint's 0.3 K/W [choice: no measured split found].
+    grease_c_j_per_k : float
+        Heat capacity of the grease node [J/K], > 0: 300, about 0.6 kg of steel (wave
+        generator, bearing, flexspline) at 460 J/(kg K) and 20 g of grease [derived from a
+        size-20 component set's mass of some 0.6 kg, recall]; τ = 18 s running.
+    standstill_factor : float
+        The grease's resistance at a stop over that while running, >= 1 (4) [choice].
+    motor_km_nm_per_sqrt_w : float
+        The motor's constant K_m = T / √P_cu [N m/√W], > 0: 0.2, so the rated point (0.68
+        N m at the input) loses 11 W in the copper against the gear's 32.5 W [choice: a
+        frameless motor of this torque; a 2.2 N m servo motor of 0.49 N m/A and 3.07 Ω has
+        0.28, derived from its data]. P_cu = (T_in / K_m)², T_in = T_load / N + P_loss / ω_in.
+    drive_w : float
+        The drive's electronics while powered [W], >= 0 (5) [choice].
+    """
+
+    grease_r_k_per_w: float = 0.06
+    grease_c_j_per_k: float = 300.0
+    standstill_factor: float = 4.0
+    motor_km_nm_per_sqrt_w: float = 0.2
+    drive_w: float = 5.0
+
+    def check(self, key: str = "ThermalNetwork") -> None:
+        """Refuse a field outside its range in one line naming ``<key>.<field>``.
+
+        Raises
+        ------
+        ValueError
+        """
+        for name, unit in (("grease_r_k_per_w", "K/W"), ("grease_c_j_per_k", "J/K"),
+                           ("motor_km_nm_per_sqrt_w", "N m/√W")):
+            _positive(getattr(self, name), f"{key}.{name}", unit)
+        _finite(self.standstill_factor, f"{key}.standstill_factor", 1.0, 1e3, "[1, 1000]")
+        _finite(self.drive_w, f"{key}.drive_w", 0.0, 1e3, "[0, 1000] W")
+
+
 @dataclass
 class JointThermal:
     """Thermal model of a joint and its day (:func:`joint_temperature`); :meth:`check`
@@ -109,6 +168,11 @@ class JointThermal:
         Operating hours per day before a stop, in (0, 24] (16: two shifts) [h] [choice].
         The stop lasts 24 − run_h_per_day wall-clock hours (8 h = 16 time constants: a
         cold start every day); 24 never stops. The life starts cold, at ambient.
+    network : ThermalNetwork or None
+        Two nodes instead of one (:func:`network_temperatures`): the grease, which the
+        friction follows, and the housing, which the sensor and the bridges read; with it
+        ``r_th_k_per_w`` is the grease's resistance to the hall while running and
+        ``tau_min`` the housing's time constant. None: one node (:func:`joint_temperature`).
     """
 
     r_th_k_per_w: float = 0.3
@@ -117,6 +181,7 @@ class JointThermal:
     ambient_swing_k: float = 3.0
     ambient_points: list[list[float]] = field(default_factory=list)
     run_h_per_day: float = 16.0
+    network: ThermalNetwork | None = field(default=None, metadata={LATER: _NETWORK})
 
     @classmethod
     def preset(cls, name: str, **changes) -> JointThermal:
@@ -154,6 +219,10 @@ class JointThermal:
         if np.any(np.diff(pts[:, 0]) <= 0):
             raise ValueError(f"{key}.ambient_points hours must increase strictly, got "
                              f"{pts[:, 0].tolist()}")
+        if self.network is not None and not self.network.grease_r_k_per_w < self.r_th_k_per_w:
+            raise ValueError(f"{key}.network.grease_r_k_per_w must lie below "
+                             f"{key}.r_th_k_per_w ({self.r_th_k_per_w:g} K/W: the housing's "
+                             f"own resistance is the rest), got {self.network.grease_r_k_per_w:g}")
         offsets = np.concatenate([[0.0], pts[:, 1]])
         lo = self.ambient_c - self.ambient_swing_k + offsets.min()
         hi = self.ambient_c + self.ambient_swing_k + offsets.max()
@@ -297,6 +366,99 @@ def joint_temperature(operating_h, loss_w, cfg: JointThermal | None = None) -> n
     temps = accumulate(zip(e.tolist(), c.tolist(), strict=True),  # T_k+1 = e_k T_k + c_k
                        lambda tk, ec: ec[0] * tk + ec[1], initial=t_start)
     return np.fromiter(temps, float, g.size)[np.searchsorted(g, wall)]
+
+
+#: Longest step of :func:`network_temperatures` [h]: the hall's temperature is held at an
+#: interval's midpoint value, so a stop is cut into steps of at most this; a 3-K day/night
+#: swing moves by at most 0.2 K within one [derived].
+NETWORK_STEP_H = 0.25
+
+
+def network_temperatures(operating_h, loss_w, input_torque_nm, cfg: JointThermal
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Grease and housing temperatures at each window of a life, by the joint's two-node
+    network (:class:`ThermalNetwork`).
+
+    C_g dT_g/dt = P_loss − G (T_g − T_h), C_h dT_h/dt = P_cu + P_drive + G (T_g − T_h)
+    − (T_h − T_amb) / R_ha, G = 1 / R_gh (R_gh times ``standstill_factor`` at a stop, when
+    P_loss, P_cu and P_drive are 0), from T_g = T_h = T_amb at the first start. Each interval
+    between events (windows, stops, the hall's breakpoints, at most :data:`NETWORK_STEP_H`
+    long) holds its window's heat and the hall at its midpoint, and is stepped exactly,
+    x1 = Φ x0 + Γ u, from the matrix exponential of [[A, B], [0, 0]] Δt (zero-order hold;
+    Φ and Γ computed once per interval length and state) [derived].
+
+    Parameters
+    ----------
+    operating_h : array_like, shape (W,)
+        Operating hours of the windows, >= 0, non-decreasing [h].
+    loss_w : array_like, shape (W,)
+        The gear's loss at each window, >= 0 [W] (:func:`loss_power_w`).
+    input_torque_nm : array_like, shape (W,)
+        The motor's torque at each window [N m] (its copper loss, ``(T / K_m)²``).
+    cfg : JointThermal
+        With ``network`` set.
+
+    Returns
+    -------
+    grease_c, housing_c : ndarray, shape (W,)
+        Temperatures at the start of each window [°C].
+
+    Raises
+    ------
+    ValueError
+        ``cfg.network`` None, a field out of range, shapes not (W,) alike, hours negative
+        or decreasing, a loss negative, non-finite values.
+    """
+    from scipy.linalg import expm
+
+    cfg.check()
+    net = cfg.network
+    if net is None:
+        raise ValueError("network_temperatures needs JointThermal.network (two nodes), got None")
+    net.check("JointThermal.network")
+    h = _finite(operating_h, "operating_h", 0.0, np.inf, "[0, inf) h")
+    p = _finite(loss_w, "loss_w", 0.0, np.inf, "[0, inf) W")
+    tq = _finite(input_torque_nm, "input_torque_nm", rng="finite N m")
+    if h.ndim != 1 or h.size == 0 or p.shape != h.shape or tq.shape != h.shape:
+        raise ValueError(f"operating_h, loss_w, input_torque_nm must share a shape (W,), got "
+                         f"{h.shape}, {p.shape}, {tq.shape}")
+    if np.any(np.diff(h) < 0):
+        raise ValueError("operating_h must not decrease (windows in time order)")
+    wall = wall_clock_h(h, cfg.run_h_per_day)
+    g = _grid(wall, cfg)
+    pieces = np.maximum(np.ceil(np.diff(g) / NETWORK_STEP_H), 1).astype(int)
+    g = np.concatenate([np.linspace(a, b, k, endpoint=False) for a, b, k in
+                        zip(g[:-1], g[1:], pieces, strict=True)] + [g[-1:]])
+    t0, t1 = g[:-1], g[1:]
+    mid = 0.5 * (t0 + t1)
+    running = np.mod(mid, _HOURS_PER_DAY) < cfg.run_h_per_day
+    i = np.maximum(np.searchsorted(wall, t0, side="right") - 1, 0)
+    heat_h = p[i]
+    heat_c = (tq[i] / net.motor_km_nm_per_sqrt_w) ** 2 + net.drive_w
+    u = np.column_stack([np.where(running, heat_h, 0.0), np.where(running, heat_c, 0.0),
+                         ambient_temperature(mid, cfg)])  # (K - 1, 3)
+    r_ha = cfg.r_th_k_per_w - net.grease_r_k_per_w
+    c_h = cfg.tau_min * 60.0 / r_ha
+    step: dict[tuple[bool, float], tuple[np.ndarray, np.ndarray]] = {}
+    x = np.full(2, float(ambient_temperature(0.0, cfg)))
+    out = np.empty((g.size, 2))
+    out[0] = x
+    for k, (run, dt) in enumerate(zip(running.tolist(), np.round(t1 - t0, 12).tolist(),
+                                      strict=True)):
+        if (run, dt) not in step:
+            gg = 1.0 / (net.grease_r_k_per_w * (1.0 if run else net.standstill_factor))
+            m = np.zeros((5, 5))
+            m[:2, :2] = [[-gg / net.grease_c_j_per_k, gg / net.grease_c_j_per_k],
+                         [gg / c_h, -(gg + 1.0 / r_ha) / c_h]]
+            m[:2, 2:] = [[1.0 / net.grease_c_j_per_k, 0.0, 0.0],
+                         [0.0, 1.0 / c_h, 1.0 / (r_ha * c_h)]]
+            e = expm(m * dt * 3600.0)
+            step[(run, dt)] = e[:2, :2], e[:2, 2:]
+        phi, gamma = step[(run, dt)]
+        x = phi @ x + gamma @ u[k]
+        out[k + 1] = x
+    at = out[np.searchsorted(g, wall)]
+    return at[:, 0], at[:, 1]
 
 
 def traced_temperature(operating_h, trace_h, rise_k, cfg: JointThermal | None = None,

@@ -67,6 +67,11 @@ class BridgeDrift:
         later, so the bridges, at other radii and angles, drift apart for a while and
         together again in the steady state (docs/PHYSICS.md sec. 5.4) [choice: minutes,
         a collar's conduction; no measurement found].
+    collar_weights : list of float
+        With a two-node joint (:class:`swgsim.gear.thermal.ThermalNetwork`), each bridge's
+        place between the housing (0) and the wave generator's grease (1): its temperature
+        is T_h + w (T_g − T_h), w drawn per gear and bridge uniformly in ``[lo, hi]``
+        within [0, 1] ([0.2, 0.8]) [choice: gauges on the collar, between the two].
 
     :meth:`check` refuses a negative spread, a gauge factor or arm count out of range, a
     non-finite value.
@@ -81,6 +86,8 @@ class BridgeDrift:
     span_sd_per_k: float = 5e-5
     ref_c: float = REF_TEMP_C
     lag_spread_min: float = field(default=0.0, metadata={LATER: "bridges' own temperatures"})
+    collar_weights: list[float] = field(default_factory=lambda: [0.2, 0.8],
+                                        metadata={LATER: "a thermal network"})
 
     def check(self, key: str = "BridgeDrift") -> None:
         """Refuse a field outside its range in one line naming ``<key>.<field>``.
@@ -97,6 +104,10 @@ class BridgeDrift:
         check_range(self.gauge_factor, 1.0, 5.0, f"{key}.gauge_factor")
         check_range(self.lag_spread_min, 0.0, 600.0, f"{key}.lag_spread_min", "min",
                     why="a bridge behind the joint's temperature, up to 10 h")
+        w = list(self.collar_weights)
+        if len(w) != 2 or not (0.0 <= w[0] <= w[1] <= 1.0):
+            raise ValueError(f"{key}.collar_weights must be [lo, hi] with 0 <= lo <= hi <= 1, "
+                             f"got {w}")
         arms = list(self.active_arms)
         if len(arms) != N_BRIDGES or any(a not in (1, 2, 4) for a in arms):
             raise ValueError(f"{key}.active_arms must be {N_BRIDGES} values of 1, 2 or 4, "
@@ -140,30 +151,42 @@ def draw_bridge_drift(cfg: BridgeDrift, rng: np.random.Generator
 
 
 def bridge_temperatures(temp_c: np.ndarray, wall_h: np.ndarray, cfg: BridgeDrift,
-                        rng: np.random.Generator) -> np.ndarray | None:
-    """Each bridge's temperature: the joint's lagged by the bridge's own time constant
-    (:attr:`BridgeDrift.lag_spread_min`, drawn here, five uniform numbers, one per
-    bridge); None where the spread is 0 (every bridge at the joint's temperature).
+                        rng: np.random.Generator, housing_c: np.ndarray | None = None
+                        ) -> np.ndarray | None:
+    """Each bridge's temperature: the joint's (or, with ``housing_c``, its place between
+    the housing and the grease, :attr:`BridgeDrift.collar_weights`) lagged by the bridge's
+    own time constant (:attr:`BridgeDrift.lag_spread_min`); None where the spread is 0 and
+    there is no housing (every bridge at the joint's temperature). Draws five uniform
+    numbers for the lags (spread > 0), then five for the places (``housing_c`` given).
 
     Parameters
     ----------
     temp_c : ndarray, shape (W,)
-        The joint's temperature at each window [°C].
+        The joint's temperature at each window (the grease's, with ``housing_c``) [°C].
     wall_h : ndarray, shape (W,)
         The windows' wall-clock hours, increasing [h] (the lag runs over the stops too).
     cfg : BridgeDrift
     rng : numpy.random.Generator
         The gear's, after :func:`draw_bridge_drift`'s draws.
+    housing_c : ndarray, shape (W,), optional
+        The housing's temperature of a two-node joint [°C].
 
     Returns
     -------
     ndarray, shape (W, 5), or None
     """
-    if cfg.lag_spread_min <= 0:
+    if cfg.lag_spread_min <= 0 and housing_c is None:
         return None
-    tau_h = cfg.lag_spread_min / 60.0 * rng.uniform(size=N_BRIDGES)
-    return np.column_stack([temp_c if t <= 0 else first_order_lag(temp_c, wall_h, t)
-                            for t in tau_h])
+    tau_h = (cfg.lag_spread_min / 60.0 * rng.uniform(size=N_BRIDGES)
+             if cfg.lag_spread_min > 0 else np.zeros(N_BRIDGES))
+    if housing_c is None:
+        base = [temp_c] * N_BRIDGES
+    else:
+        lo, hi = cfg.collar_weights
+        w = lo + (hi - lo) * rng.uniform(size=N_BRIDGES)
+        base = [housing_c + wk * (temp_c - housing_c) for wk in w]
+    return np.column_stack([b if t <= 0 else first_order_lag(b, wall_h, t)
+                            for b, t in zip(base, tau_h, strict=True)])
 
 
 #: Why the sensor's later fields are :data:`swgsim.base.typed.LATER`.

@@ -33,6 +33,7 @@ from swgsim.gear.thermal import (
     FRICTION_FORMS,
     FrictionLaw,
     JointThermal,
+    ThermalNetwork,
     friction_scale,
     run_in_factor,
 )
@@ -320,6 +321,28 @@ def test_bridges_that_lag_the_joint_drift_apart_in_a_warm_up_and_together_after(
     assert np.ptp(gain, axis=1).max() > 0  # so the bridges' spans drift apart too
     cfg = dataset_config(dataset_preset("tiny_real_day"))
     assert "lag_spread_min" not in plain_config(cfg)["life"]["conditions"]["bridge_drift"]
+
+
+def test_a_two_node_joint_drives_friction_by_the_grease_and_the_reading_by_the_housing(tiny):
+    """Issue 83: with JointThermal.network the friction follows the grease, the sensor
+    reads the housing (lagging it and heated by the motor), and each bridge sits at its
+    own place between the two, so the bridges drift apart while the grease leads."""
+    net = JointThermal(ambient_swing_k=0.0, run_h_per_day=24.0, network=ThermalNetwork())
+    cfg = ConditionsConfig(thermal=net, viscosity=True, bridge_drift=BridgeDrift(),
+                           temperature_sensor=TemperatureSensor(0.0, 0.0))
+    sim = _sim(tiny, cfg, hours=3.0)
+    c = sim.conditions
+    assert c.housing_c is not None and np.all(c.temperature_c[1:] > c.housing_c[1:])
+    np.testing.assert_array_equal(c.reading_c, c.housing_c)
+    np.testing.assert_allclose(c.friction, friction_scale(c.temperature_c), rtol=1e-15)
+    span = c.temperature_c - c.housing_c
+    w = (c.bridge_temperature_c[-1] - c.housing_c[-1]) / span[-1]  # each bridge's place
+    assert np.all((w >= 0.2) & (w <= 0.8)) and np.ptp(w) > 0.05
+    np.testing.assert_allclose(c.bridge_temperature_c, c.housing_c[:, None]
+                               + w[None, :] * span[:, None], rtol=0, atol=1e-12)
+    one = _sim(tiny, dataclasses.replace(cfg, thermal=dataclasses.replace(net, network=None)),
+               hours=3.0).conditions
+    assert one.housing_c is None and one.bridge_temperature_c is None
 
 
 def test_a_faultless_sensor_keeps_a_data_sets_config_hash():

@@ -95,6 +95,75 @@ def test_swing_ramps_stops_and_loss_steps_match_a_fixed_step_reference():
     np.testing.assert_allclose(fast, _reference(h, p, cfg), rtol=0, atol=2e-9)
 
 
+NET = th.ThermalNetwork()
+
+
+def test_a_two_node_joint_at_steady_duty_sits_at_its_resistances_closed_form():
+    """Issue 83: the grease sits R_gh P_loss above the housing, the housing (P_loss +
+    P_cu + P_drive) R_ha above the hall; the joint at the gear's loss warms as one node."""
+    cfg = dataclasses.replace(FLAT, network=NET)
+    h = np.array([0.0, 0.5, 50.0])  # 100 of the housing's time constants at the end
+    g, hs = th.network_temperatures(h, np.full(3, 30.0), np.full(3, 0.5), cfg)
+    p_cu = (0.5 / NET.motor_km_nm_per_sqrt_w) ** 2 + NET.drive_w
+    r_ha = R_TH - NET.grease_r_k_per_w
+    assert hs[-1] == pytest.approx(20.0 + (30.0 + p_cu) * r_ha, abs=1e-9)
+    assert g[-1] == pytest.approx(hs[-1] + 30.0 * NET.grease_r_k_per_w, abs=1e-9)
+    assert g[0] == hs[0] == 20.0 and g[1] > hs[1]  # the grease leads in a warm-up
+
+
+def _network_reference(h, p, tq, cfg, dt_h=1.0 / 240.0):
+    """RK4 at a fixed step of 15 s on wall-clock time, the hall's true swing and ramps."""
+    net = cfg.network
+    wall = th.wall_clock_h(h, cfg.run_h_per_day)
+    r_ha = cfg.r_th_k_per_w - net.grease_r_k_per_w
+    c_h, c_g = cfg.tau_min * 60.0 / r_ha, net.grease_c_j_per_k
+    k_w = np.rint(wall / dt_h).astype(int)
+    x, out = np.full(2, float(th.ambient_temperature(0.0, cfg))), {}
+    for k in range(k_w[-1] + 1):
+        out[k] = x
+        t = k * dt_h
+        i = max(np.searchsorted(k_w, k, side="right") - 1, 0)
+        on = np.mod(t + 0.5 * dt_h, 24.0) < cfg.run_h_per_day
+        gg = 1.0 / (net.grease_r_k_per_w * (1.0 if on else net.standstill_factor))
+        pg, ph = p[i] * on, ((tq[i] / net.motor_km_nm_per_sqrt_w) ** 2 + net.drive_w) * on
+
+        def f(tt, y, gg=gg, pg=pg, ph=ph):
+            amb = th.ambient_temperature(tt, cfg)
+            return 3600.0 * np.array([(pg - gg * (y[0] - y[1])) / c_g,
+                                      (ph + gg * (y[0] - y[1]) - (y[1] - amb) / r_ha) / c_h])
+
+        a = f(t, x)
+        b = f(t + dt_h / 2, x + dt_h / 2 * a)
+        c = f(t + dt_h / 2, x + dt_h / 2 * b)
+        d = f(t + dt_h, x + dt_h * c)
+        x = x + dt_h / 6 * (a + 2 * b + 2 * c + d)
+    return np.array([out[k] for k in k_w])
+
+
+def test_a_two_node_joint_through_days_stops_and_a_hall_matches_a_fixed_step_reference():
+    """Exact steps with the hall held at each interval's midpoint, against RK4 at 15 s on
+    the true swing: within 0.02 K through two days with stops, a ramp and changing loads;
+    at a stop the grease cools into the housing (standstill_factor)."""
+    cfg = th.JointThermal(tau_min=40.0, ambient_swing_k=4.0, run_h_per_day=16.0,
+                          ambient_points=[[0.0, 0.0], [30.0, 5.0]], network=NET)
+    h = np.arange(0.0, 32.0, 0.25)
+    p, tq = 20.0 + 15.0 * np.sin(h), 0.4 + 0.2 * np.cos(h)
+    g, hs = th.network_temperatures(h, p, tq, cfg)
+    ref = _network_reference(h, p, tq, cfg)
+    np.testing.assert_allclose(g, ref[:, 0], rtol=0, atol=0.02)
+    np.testing.assert_allclose(hs, ref[:, 1], rtol=0, atol=0.02)
+    after = int(np.searchsorted(h, 16.0))  # the first window after the night's stop
+    assert abs(g[after] - hs[after]) < 0.05 < g[after - 1] - hs[after - 1]
+
+
+def test_a_two_node_joint_refuses_a_grease_resistance_beyond_the_joints():
+    cfg = dataclasses.replace(FLAT, network=th.ThermalNetwork(grease_r_k_per_w=0.3))
+    with pytest.raises(ValueError, match=r"network.grease_r_k_per_w must lie below"):
+        cfg.check("thermal")
+    with pytest.raises(ValueError, match=r"network.standstill_factor must lie in \[1, 1000\]"):
+        th.ThermalNetwork(standstill_factor=0.5).check("network")
+
+
 def test_a_hundred_thousand_windows_take_well_under_a_second():
     h = np.sort(np.random.default_rng(1).uniform(0.0, 1000.0, 100_000))
     cfg = th.JointThermal(ambient_points=[[0.0, 0.0], [48.0, 10.0]])
