@@ -193,6 +193,54 @@ def _paper_gears() -> list[GearConfig]:
             GearConfig(3, 0.8, 0.8, 103)]
 
 
+#: Range of the b1 and k1 factors of a drawn gear instance [-]: paper Table IV's three
+#: gears span 0.8-1.2 of nominal [src]; drawn uniformly and independently within it
+#: [choice: the distribution of a production lot is not given].
+POPULATION_FACTORS = (0.8, 1.2)
+#: Lowest tolerance seed of a drawn population; the paper's gears use 101-103 [choice].
+POPULATION_SEED_BASE = 10_000
+
+
+def gear_population(n: int, seed: int, factors: tuple[float, float] = POPULATION_FACTORS
+                    ) -> list[GearConfig]:
+    """``n`` gear instances of one model, as a production lot gives them: each its own
+    healthy damping and stiffness (b1 and k1 factors uniform in ``factors``) and its own
+    sensor model (gauge placements and gains, the bridges' zero offsets: a tolerance seed
+    of its own, drawn with the data set's tolerances, :func:`layout_for`).
+
+    Parameters
+    ----------
+    n : int
+        Instances, in [1, 999] (ids 1..n).
+    seed : int
+        The population's seed, >= 0: ``default_rng([seed, 0x9EA5])`` draws b1, k1 and
+        instance i's tolerance seed ``POPULATION_SEED_BASE + 1000 seed + i`` (distinct from
+        the paper's 101-103 and across populations of seeds below 2**22).
+    factors : (float, float)
+        Range of the b1 and k1 factors, within (0, 10] [-].
+
+    Returns
+    -------
+    list of GearConfig
+        Instance i (id i) with its factors and tolerance seed, in id order; a population of
+        ``n`` is the first ``n`` of a larger one of the same seed.
+
+    Raises
+    ------
+    ValueError
+        ``n``, ``seed`` or ``factors`` out of range, naming it.
+    """
+    check_range(n, 1, 999, "population.n")
+    check_range(seed, 0, 2**22 - 1, "population.seed")
+    lo, hi = (float(f) for f in factors)
+    if not 0.0 < lo <= hi <= 10.0:
+        raise ValueError(f"population.factors must be [lo, hi] within (0, 10], got {factors}")
+    u = np.random.default_rng([int(seed), 0x9EA5]).uniform(size=(999, 2))[:n]
+    b1, k1 = (lo + (hi - lo) * u[:, j] for j in (0, 1))
+    return [GearConfig(i + 1, float(b1[i]), float(k1[i]),
+                       POPULATION_SEED_BASE + 1000 * int(seed) + i + 1) for i in range(n)]
+
+
 @dataclass
 class DatasetConfig:
     """A data set: grid, chain, disturbance and acquisition; defaults are the paper preset.

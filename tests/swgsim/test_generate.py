@@ -16,7 +16,7 @@ from omegaconf import OmegaConf
 from swgcli import compose_app, dataset_preset
 from swgsim.datasets import generate as gen
 from swgsim.datasets import schema as dsio
-from swgsim.datasets.config import paper_config
+from swgsim.datasets.config import dataset_config, gear_population, layout_for, paper_config
 from swgsim.datasets.plan import plan
 from swgsim.files import atomic, ownership
 from swgsim.gear.faults import PAPER_CLASSES
@@ -317,6 +317,26 @@ def test_a_healthy_bridges_mean_stands_well_above_its_window_to_window_spread(
     the signed offset drawn happens to cancel it (NEAR_ZERO_BRIDGES, strict)."""
     mean, spread = healthy_bench_means[gear, bridge]
     assert np.all(np.abs(mean) >= 10 * spread), (mean, spread)
+
+
+def test_a_gear_population_draws_each_instance_its_own_gear_and_sensor_model():
+    """Issue 83: a preset's gears as a production lot (gear_population): b1 and k1 factors
+    within Table IV's 0.8-1.2, a tolerance seed each (so its own placements, gains and
+    zero offsets), the same instances for the same seed, a larger lot extending a smaller."""
+    lot = gear_population(12, 0)
+    assert [g.id for g in lot] == list(range(1, 13))
+    f = np.array([[g.b1_factor, g.k1_factor] for g in lot])
+    assert f.min() >= 0.8 and f.max() <= 1.2 and f.std(axis=0).min() > 0.05
+    assert len({g.tolerance_seed for g in lot}) == 12
+    assert not {101, 102, 103} & {g.tolerance_seed for g in lot}
+    assert gear_population(12, 0) == lot and gear_population(20, 0)[:12] == lot
+    other = gear_population(12, 1)
+    assert not {g.tolerance_seed for g in lot} & {g.tolerance_seed for g in other}
+    cfg = dataset_config(None)
+    z = np.array([layout_for(cfg, g).zero_offsets_mvv for g in lot])  # (12, 5)
+    assert np.unique(z.round(9)).size == z.size and np.abs(z).max() <= 0.525
+    with pytest.raises(ValueError, match=r"population.n must lie in \[1, 999\]"):
+        gear_population(0, 0)
 
 
 @pytest.mark.slow
