@@ -240,16 +240,19 @@ def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarra
     Raises
     ------
     ValueError
-        One line naming ``<key>.path`` (no such file, not a table), ``<key>.column`` or
-        ``<key>.time_column`` (missing, a cell not a number or time, times not increasing,
+        One line naming ``<key>.path`` (no such file, not a regular text file of at most
+        :data:`MAX_TRACE_BYTES`, :func:`swgsim.files.inputs.check_text_file`; not a
+        table), ``<key>.column`` or ``<key>.time_column`` (missing, a cell not a number or
+        time, a temperature outside [-40, 150] °C naming its row, times not increasing,
         fewer than two readings before the first gap); an empty cell is a missing reading,
         left out.
     """
     import pandas as pd
 
     p = Path(trace.path)
-    if not p.is_file():
+    if not p.exists():
         raise ValueError(f"{key}.path: no file {trace.path!r}")
+    check_text_file(p, f"{key}.path", MAX_TRACE_BYTES)  # a regular text file, bounded
     if trace.column is None:
         raise ValueError(f"{key}.column: name the temperature column of {trace.path!r} "
                          f"(mode {trace.mode!r}), got none")
@@ -272,6 +275,12 @@ def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarra
                          f"{int(text[0]) + 1}: {df[trace.column].iloc[text[0]]!r} is not a "
                          f"number")
     temp = num.to_numpy(dtype=float)
+    lo, hi = TEMP_RANGE_C
+    out = np.flatnonzero((temp < lo) | (temp > hi))  # NaN (a missing reading) passes
+    if out.size:
+        i = int(out[0])
+        raise ValueError(f"{key}.column: {trace.column!r} of {trace.path!r} must lie in "
+                         f"[{lo:g}, {hi:g}] °C, got {temp[i]:g} at row {i + 1}")
     steps = np.diff(t_s)
     if np.any(steps <= 0):
         raise ValueError(f"{key}.time_column: times of {trace.path!r} must increase")

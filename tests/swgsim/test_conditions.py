@@ -16,6 +16,7 @@ from omegaconf import OmegaConf
 from swgcli import compose_app, dataset_preset
 from swgcli.app import one_line
 from swgsim.base.typed import LATER, without_later_defaults
+from swgsim.datasets import conditions
 from swgsim.datasets.conditions import (
     ConditionsConfig,
     Regrease,
@@ -462,6 +463,19 @@ def test_a_bad_temperature_trace_is_refused_naming_the_key(trace, match, tmp_pat
         plan(dataset_config(cfg))
 
 
+def test_a_measured_warm_up_out_of_the_physical_range_is_refused_naming_its_row(tmp_path):
+    """Issue 82: a rise-mode trace took any number: 1e30 °C in one cell gave a rise of 1e30
+    K; now refused in one line naming the column and the row."""
+    path = _trace_csv(tmp_path / "day.csv")
+    rows = path.read_text().splitlines()
+    rows[5] = rows[5].replace("25,8", "1e30")
+    path.write_text("\n".join(rows) + "\n")
+    tr = TemperatureTrace(str(path), "Temperature_J1")
+    with pytest.raises(ValueError, match=r"^k.column: 'Temperature_J1' of .* must lie in "
+                                         r"\[-40, 150\] °C, got 1e\+30 at row 5$"):
+        trace_rise(tr, "k")
+
+
 def test_no_temperature_trace_keeps_a_data_sets_config_hash(tmp_path):
     cfg = dataset_config(dataset_preset("tiny_real_day"))
     assert "temperature_trace" not in plain_config(cfg)["life"]["conditions"]
@@ -512,22 +526,27 @@ def test_a_bad_temperature_table_is_refused_naming_the_key(rows, extra, match, t
         plan(dataset_config(cfg))
 
 
+@pytest.mark.parametrize("mode", ["hours", "rise"])
 @pytest.mark.parametrize(("make", "words"), [
     (lambda p: p.write_bytes(b"hour,temperature_c\n" + bytes(range(256)) * 8),
      "not a text file (it holds NUL bytes"),
     (lambda p: os.mkfifo(p), "is a FIFO (named pipe), not a regular file"),
     (lambda p: p.mkdir(), "is a folder, not a file"),
+    (lambda p: p.write_text("hour,temperature_c\n" + "1.0,30.0\n" * 500), "over the"),
 ])
-def test_a_temperature_table_is_read_through_the_input_file_checker(make, words, tmp_path):
-    """Issue 82, cause 2: the measured warm-up's table was read with no size or binary
-    check (a FIFO would hang the reader); now through check_text_file, one line naming
-    the key and the file, nothing read."""
+def test_a_temperature_table_is_read_through_the_input_file_checker(make, words, mode,
+                                                                      tmp_path, monkeypatch):
+    """Issue 82, cause 2: the measured warm-up's table, of either mode, was read with no
+    size or binary check (a FIFO would hang the reader); now through check_text_file, one
+    line naming the key and the file, nothing read (the size bound lowered here)."""
+    monkeypatch.setattr(conditions, "MAX_TRACE_BYTES", 4096)
     path = tmp_path / "j1.csv"
     make(path)
     cfg = dataset_preset("tiny_life")
     cfg["life"].update(hours=3.0, commissioning_h=1.0, fault={"fault": "healthy"})
-    cfg["life"]["conditions"] = {"thermal": None, "temperature_trace": {
-        "path": str(path), "mode": "hours"}}
+    cfg["life"]["conditions"] = ({"thermal": None, "temperature_trace": {
+        "path": str(path), "mode": "hours"}} if mode == "hours" else {"temperature_trace": {
+            "path": str(path), "column": "temperature_c", "time_column": "hour"}})
     with pytest.raises(ValueError) as info:
         plan(dataset_config(cfg))
     line = str(info.value)
