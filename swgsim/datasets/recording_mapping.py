@@ -17,7 +17,7 @@ from swgsim.base.typed import allowed, build, check_tree, complete
 from swgsim.base.user_yaml import clip, user_yaml
 from swgsim.datasets import recording_table as rt
 from swgsim.datasets.schedule import LifeConfig
-from swgsim.datasets.schema import SENSORS
+from swgsim.datasets.schema import MAX_BRIDGE_MVV, SENSORS
 from swgsim.gear.chain import ChainSettings
 from swgsim.gear.dynamics import GearParams
 from swgsim.gear.profile import MAX_INPUT_SPEED_RPM, MOMENTARY_PEAK_TORQUE_NM
@@ -35,10 +35,6 @@ SPEED_UNITS = {"rpm": 1.0, "rad/s": 60.0 / (2 * np.pi)}
 ANGLE_UNITS = ("rad", "counts")
 #: Units of the clock column: operating hours, seconds, or wall-clock time stamps.
 CLOCK_UNITS = ("h", "s", "datetime")
-#: Largest bridge output accepted [mV/V]: a full-bridge of gauges of factor 2 at 5000
-#: µm/m gives 10 mV/V, beyond a flexspline's elastic strain (the paper's bridges stay
-#: under 1 mV/V); a larger value is raw counts or another unit.
-MAX_BRIDGE_MVV = 10.0
 #: Largest mapping YAML read [bytes].
 MAX_MAPPING_BYTES = 1 << 20
 

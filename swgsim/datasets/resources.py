@@ -34,13 +34,13 @@ the payload factors (plus the commanded one).
 from __future__ import annotations
 
 import math
-import os
 
 from swgsim.datasets.config import gear_params
 from swgsim.datasets.life import BLOCK
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.datasets.records import SIGNAL_GROUP
 from swgsim.datasets.schedule import duty_cycle
+from swgsim.files.inputs import available_memory
 
 #: Peak bytes of simulating a grid or profile shard per fine sample (module docstring:
 #: 56-122 measured).
@@ -62,7 +62,7 @@ RESERVE_BYTES = 1 << 30
 
 __all__ = ["BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_FINE_SAMPLE", "BYTES_PER_LIFE_SAMPLE",
            "BYTES_PER_RECORD_FINE_SAMPLE", "BYTES_PER_RECORD_SAMPLE", "SHARD_FIXED_BYTES",
-           "available_memory", "check_memory", "life_records", "shard_memory"]
+           "check_memory", "life_records", "shard_memory"]
 
 
 def _oversample(plan: DatasetPlan) -> tuple[int, int]:
@@ -131,22 +131,6 @@ def shard_memory(plan: DatasetPlan, shard: ShardSpec) -> int:
     q, _ = _oversample(plan)
     n_t = int(round(ch.window_s * ch.sample_rate_hz))
     return SHARD_FIXED_BYTES + BYTES_PER_FINE_SAMPLE * shard.n_windows * n_t * q
-
-
-def available_memory() -> int | None:
-    """Memory available to new allocations [bytes]: ``MemAvailable`` of /proc/meminfo
-    (Linux), else the free physical pages (``os.sysconf``); None where neither is known."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return None
 
 
 def check_memory(plan: DatasetPlan, shards: list[ShardSpec], n_workers: int,

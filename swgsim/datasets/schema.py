@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from swgsim.files.digest import config_digest, sha256_file
-from swgsim.files.inputs import check_input_file
+from swgsim.files.inputs import available_memory, check_input_file
 from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import FAULTS
 from swgsim.gear.sensors import SENSORS
@@ -50,8 +50,16 @@ MANIFEST = "manifest.json"
 TEMPERATURE_RANGE_C = (-40.0, 150.0)
 #: Largest manifest read [bytes]: 64 MiB (a paper data set's is tens of kB) [choice].
 MAX_MANIFEST_BYTES = 64 * 2**20
-#: The signal variables: every value finite (refused on write and on load).
+#: The signal variables: every value finite and within ±:data:`MAX_BRIDGE_MVV` (refused on
+#: write and on load).
 SIGNALS = ("strain_signal",)
+#: Largest bridge output accepted [mV/V]: a full-bridge of gauges of factor 2 at 5000
+#: µm/m gives 10 mV/V, beyond a flexspline's elastic strain (the paper's bridges stay
+#: under 1 mV/V); a larger value is raw counts or another unit.
+MAX_BRIDGE_MVV = 10.0
+#: Memory a data set's load holds per byte of its shards [-]: the shards read, then
+#: joined (xarray's concatenation copies them once) [derived].
+LOAD_BYTES_PER_FILE_BYTE = 2
 #: Fault labels of the schema besides the registered classes: measured data's unknown state.
 EXTRA_LABELS = ("unknown",)
 _DIMS = {"strain_signal": ("sample", "sensor", "time"), **{k: ("sample",) for k in PER_SAMPLE}}
@@ -270,7 +278,8 @@ def _n_nonfinite(values: np.ndarray) -> int:
 
 
 def check_signals(ds, where: str, what: str = "") -> None:
-    """Refuse NaN or infinity in the signal variables (:data:`SIGNALS`) and in ``time``.
+    """Refuse NaN or infinity in the signal variables (:data:`SIGNALS`) and in ``time``,
+    and a signal beyond ±:data:`MAX_BRIDGE_MVV`.
 
     Parameters
     ----------
@@ -284,7 +293,8 @@ def check_signals(ds, where: str, what: str = "") -> None:
     Raises
     ------
     DataSetError
-        Naming ``where``, the variable and how many of its values are not finite.
+        Naming ``where``, the variable and how many of its values are not finite, or the
+        first sample beyond the bridges' range.
     """
     for name in (*SIGNALS, "time"):
         if name in ds.variables:
@@ -293,6 +303,18 @@ def check_signals(ds, where: str, what: str = "") -> None:
             if bad:
                 raise DataSetError(f"{where}: {name} holds {bad} non-finite value(s) (NaN or "
                                    f"infinity) of {values.size}{'; ' + what if what else ''}")
+    for name in SIGNALS:
+        if name in ds.variables:
+            values = ds[name].values  # (sample, sensor, time)
+            peak = np.abs(values).reshape(values.shape[0], -1).max(axis=1) if values.size \
+                else np.zeros(0)
+            far = np.flatnonzero(peak > MAX_BRIDGE_MVV)
+            if far.size:
+                i = int(far[0])
+                raise DataSetError(
+                    f"{where}: {name} of sample {i} reaches {peak[i]:.4g} mV/V, beyond any "
+                    f"strain-gauge bridge (allowed |s| <= {MAX_BRIDGE_MVV:g} mV/V: raw counts "
+                    f"or another unit?){'; ' + what if what else ''}")
 
 
 def fault_labels(manifest: dict) -> frozenset[str]:
@@ -453,6 +475,19 @@ def _check_same_time(ds, path: Path, first, first_path: Path) -> None:
                            "data set share one time axis")
 
 
+def _check_load_memory(path: Path, files: list[Path]) -> None:
+    """Refuse a data set whose load cannot fit in the memory available, before a shard is
+    read (:data:`LOAD_BYTES_PER_FILE_BYTE`; no check where the memory is not known)."""
+    avail = available_memory()
+    size = sum(f.stat().st_size for f in files if f.is_file())
+    need = LOAD_BYTES_PER_FILE_BYTE * size
+    if avail is not None and need > avail:
+        gib = float(1 << 30)
+        raise DataSetError(f"{path}: loading its {len(files)} shard(s) ({size / gib:.3g} GiB) "
+                           f"needs about {need / gib:.3g} GiB of memory, {avail / gib:.3g} GiB "
+                           "available; nothing was read")
+
+
 def load(path: str | os.PathLike, check: bool = True):
     """Load a schema-v1 data set directory as one ``xarray.Dataset``.
 
@@ -475,12 +510,14 @@ def load(path: str | os.PathLike, check: bool = True):
     ------
     DataSetError
         One line naming the file: the directory is not a complete schema-v1 data set, a
-        shard is altered, or its content fails :func:`check_shard`.
+        shard is altered, its load would not fit in the memory available, or its content
+        fails :func:`check_shard`.
     """
     import xarray as xr
 
     path = Path(path)
     files = verify(path) if check else [path / n for n in read_manifest(path)["shards"]]
+    _check_load_memory(path, files)
     manifest = read_manifest(path)
     entries = manifest["shards"]
     if check:

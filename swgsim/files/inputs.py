@@ -13,7 +13,7 @@ import stat
 from pathlib import Path
 
 __all__ = ["MAX_INPUT_BYTES", "HEADER_BYTES", "absolute_path", "check_input_file",
-           "check_text_file", "read_head"]
+           "available_memory", "check_text_file", "read_head"]
 
 #: Largest input file read [bytes]: 2 GiB. A measured recording, a data set's manifest or
 #: a diagnosis model of this project is far smaller (the Franka friction CSVs are a few
@@ -113,6 +113,22 @@ def read_head(path: str | os.PathLike, n: int = HEADER_BYTES) -> bytes:
     """
     with open(path, "rb") as f:
         return f.read(n)
+
+
+def available_memory() -> int | None:
+    """Memory available to new allocations [bytes]: ``MemAvailable`` of /proc/meminfo
+    (Linux), else the free physical pages (``os.sysconf``); None where neither is known."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return None
 
 
 def absolute_path(path: str) -> str:

@@ -221,8 +221,10 @@ def _set(var: str, index, value):
                                        "not a class of the schema"]),
     (lambda ds: ds.drop_vars("efficiency"), ["variable efficiency is missing"]),
     (lambda ds: ds.assign(gear=ds.gear.astype(str)), ["variable gear has dtype"]),
+    (_set("strain_signal", (2, 1, 3), 1e30), ["strain_signal of sample 2 reaches 1e+30 mV/V",
+                                              "allowed |s| <= 10 mV/V"]),
 ], ids=["nan_signal", "inf_signal", "nan_time", "unknown_label", "dropped_variable",
-        "mistyped_variable"])
+        "mistyped_variable", "signal_beyond_a_bridge"])
 def test_load_refuses_a_shard_with_bad_content_naming_file_and_variable(copy_of, edit, words):
     folder = copy_of()
     f = _rewrite_shard(folder, edit)
@@ -230,6 +232,19 @@ def test_load_refuses_a_shard_with_bad_content_naming_file_and_variable(copy_of,
     assert f"shard {f}" in msg
     for w in words:
         assert w in msg
+
+
+def test_a_data_set_larger_than_the_memory_available_is_refused_before_a_shard_is_read(
+        copy_of, monkeypatch):
+    """Issue 82: a data set's load holds its shards twice (read, then joined); a set that
+    cannot fit is refused in one line before any shard is read."""
+    folder = copy_of()
+    size = sum(f.stat().st_size for f in folder.glob("*.nc"))
+    monkeypatch.setattr(dsio, "available_memory", lambda: size)
+    monkeypatch.setattr(xr, "open_dataset", lambda *a, **k: pytest.fail("a shard was read"))
+    with pytest.raises(dsio.DataSetError, match=r"needs about .* GiB of memory, .* GiB "
+                                                r"available; nothing was read$"):
+        dsio.load(folder)
 
 
 def test_measured_and_user_registered_labels_load(tmp_path, small):
