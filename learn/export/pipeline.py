@@ -221,7 +221,7 @@ def run_export(plan, dataset: str, opts: ExportOptions, out: Path, cross: bool =
                "windows": {"train": int(sum(len(w.y) for w in tr)), "held_out": len(held.y)}}
     if opts.full_model:
         summary["accuracy_full_monitor_model"] = full_model_accuracy(plan, tr, held, opts.seed)
-    with ownership.claim(out, app, strict=True) as claim:
+    with ownership.claim(out, app, strict=True, fresh=True) as claim:
         files = cgen.write_sources(out, tables, cls, code, {
             "dataset": dataset, "gear": held.gear,
             "train_gears": ", ".join(map(str, train_gears))})

@@ -53,6 +53,12 @@ pd = lazy_module("pandas")
 
 log = logging.getLogger(__name__)
 
+#: The files each map writes into ``report_dir``: a run of one map renews its own and keeps
+#: the other's whole (:func:`swgsim.files.ownership.claim`'s ``fresh``).
+STEADY_FILES = ("observability.csv", "observability.png", "torsional_modes.csv")
+MOTION_FILES = ("observability_motion.csv", "observability_motion.png",
+                "smallest_detectable.csv")
+
 
 def j_out_values(cfg: DictConfig) -> list[float]:
     """The map's output inertias [kg m²]: ``j_out_kgm2``, or ``n_j_out`` log-spaced from
@@ -160,7 +166,8 @@ def run_observability(cfg: DictConfig) -> dict:
     table = pd.concat(parts, ignore_index=True)
     loads = [float(t) for t in cfg.dataset.operating_points.t_out_nm]
     modes = torsional_modes(list(configs), loads)
-    with ownership.claim(rep, "swgsim-observability", "report_dir", strict=True) as claim:
+    with ownership.claim(rep, "swgsim-observability", "report_dir", strict=True,
+                         fresh=STEADY_FILES) as claim:
         atomic_write_bytes(csv, table.to_csv(index=False, float_format="%.6g").encode())
         atomic_write_bytes(rep / "torsional_modes.csv",
                            modes.to_csv(index=False, float_format="%.6g").encode())
@@ -219,7 +226,8 @@ def run_motion_map(cfg: DictConfig, rep: Path) -> dict:
                                                          disable=not cfg.progress)]
     table = pd.concat(parts, ignore_index=True)
     small = smallest_detectable(table)
-    with ownership.claim(rep, "swgsim-observability", "report_dir", strict=True) as claim:
+    with ownership.claim(rep, "swgsim-observability", "report_dir", strict=True,
+                         fresh=MOTION_FILES) as claim:
         files = {"csv": rep / "observability_motion.csv",
                  "smallest": rep / "smallest_detectable.csv"}
         atomic_write_bytes(files["csv"], table.to_csv(index=False, float_format="%.6g").encode())

@@ -78,7 +78,8 @@ def run_paper_study(
     study = paper_study(dataset_path, options, tracking=tracking, n_jobs=n_jobs,
                         progress=progress, random_state=random_state, features=features,
                         protocols=protocols, name=name)
-    with ownership.claim(report_dir, "paper-study", "report_dir", strict=True) as claim:
+    with ownership.claim(report_dir, "paper-study", "report_dir", strict=True,
+                         fresh=True) as claim:  # figures=false leaves no earlier figure
         files = write_report(study.results, report_dir,
                              ds=study.ds if options.figures else None,
                              timings_s=study.timings_s, dataset_path=str(dataset_path),

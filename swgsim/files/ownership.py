@@ -465,7 +465,8 @@ class Claim:
 
 def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
           only: Iterable[str] | None = None, found: Survey | None = None,
-          share: str | None = None, strict: bool = False, fresh: bool = False) -> Claim:
+          share: str | None = None, strict: bool = False,
+          fresh: bool | tuple[str, ...] = False) -> Claim:
     """Make ``folder`` a folder of this run: check it, stamp it, clean it.
 
     After :func:`check`, the folder is created, the run admitted under its gate
@@ -492,13 +493,16 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
     strict : bool
         Refuse files of another kind of output than ``app``'s too (:func:`check` with
         ``app``): what every report app passes.
-    fresh : bool
+    fresh : bool or tuple of str
         Remove what the earlier runs of ``app`` wrote there (the files the stamp proves
         ``app``'s), once admitted and before any write: an app whose every run writes
         its whole output leaves the folder this run's alone, never a mix with an earlier
         run's files it does not write this time (a monitor run without the prognosis after
-        one with it, a thermal calibration after a friction one). An app that resumes
-        from its earlier parts does not pass it.
+        one with it, a thermal calibration after a friction one). A tuple of glob patterns
+        (relative to the folder) removes only ``app``'s files matching one: an app with
+        two outputs of its own in one folder (the observability's steady and motion
+        maps) renews one and keeps the other whole. An app that resumes from its earlier
+        parts does not pass it.
 
     Returns
     -------
@@ -524,7 +528,10 @@ def claim(folder: str | os.PathLike, app: str, what: str = "out_dir",
     try:
         c = _stamp_claim(folder, app, found)
         if fresh:
-            c.remove(_outputs_of(folder, app))
+            gone = _outputs_of(folder, app)
+            if not isinstance(fresh, bool):
+                gone = [f for f in gone if any(fnmatch.fnmatch(f, p) for p in fresh)]
+            c.remove(gone)
     except BaseException:
         _let_go(folder.resolve())
         raise

@@ -381,6 +381,29 @@ def test_a_fresh_claim_removes_what_the_apps_earlier_runs_wrote(tmp_path):
     assert (out / "mine.txt").is_file() and (out / "report.md").is_file()
 
 
+def test_an_app_with_two_outputs_in_one_folder_renews_one_and_keeps_the_other(tmp_path):
+    """Issue 82, cause 5 (audit): swgsim-observability's steady and motion maps share a
+    report_dir; a run of one map renews its own files (fresh patterns, as
+    learn/observability/task.py passes them) and keeps the other's whole, never a mix of
+    two runs of one map."""
+    from learn.observability.task import MOTION_FILES, STEADY_FILES
+
+    out, app = tmp_path / "observability", "swgsim-observability"
+    for files, run in ((STEADY_FILES, b"steady 1"),
+                       (MOTION_FILES, b"motion 1")):
+        fresh = STEADY_FILES if files[0] in STEADY_FILES else MOTION_FILES
+        with ownership.claim(out, app, strict=True, fresh=fresh):
+            for name in files:
+                ownership.write_owned(out / name, lambda tmp, run=run: tmp.write_bytes(run))
+    with ownership.claim(out, app, strict=True, fresh=MOTION_FILES):  # motion again
+        assert not (out / "observability_motion.csv").exists()
+        assert (out / "observability.csv").read_bytes() == b"steady 1"
+        for name in MOTION_FILES:
+            ownership.write_owned(out / name, lambda tmp: tmp.write_bytes(b"motion 2"))
+    with ownership.claim(out, app, strict=True, fresh=True):  # the whole app's output
+        assert [p.name for p in out.iterdir() if not p.name.startswith(".swg")] == []
+
+
 def test_the_monitors_figure_is_written_through_write_owned(tmp_path, monkeypatch):
     """A savefig that fails half-way through health.png leaves no health.png at all."""
     import matplotlib.figure
