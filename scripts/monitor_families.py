@@ -33,7 +33,8 @@ rows and key are there (the ownership stamp proving them this script's) is read 
 run. A folder holding files of anything else is refused before any work. ``--read DIR``
 prints the table of its rows again without running (and writes ``DIR/table.csv``, its
 wall times unknown: NaN). A bad preset, gear, family, study key or output folder ends in
-one line (exit 2).
+one line (exit 2), before any work; so does a refusal raised while running
+(:func:`swgcli.app.one_line`: a bug still ends in its traceback).
 """
 
 from __future__ import annotations
@@ -228,11 +229,7 @@ def main(argv: list[str] | None = None) -> int:
         claim = nullcontext() if folder is None else ownership.claim(folder, TAG, what,
                                                                       strict=True)
     except Exception as e:  # noqa: BLE001 - bad input in one line, the apps' way
-        msg = app.one_line(e)
-        if msg is None:  # not bad input: a bug, with its traceback
-            raise
-        print(f"monitor_families: error: {msg}", file=sys.stderr)
-        return 2
+        return error(e)
     try:
         with claim:
             if args.read is not None:
@@ -243,6 +240,34 @@ def main(argv: list[str] | None = None) -> int:
             ownership.stop_note() or "nothing written yet; rerun the same command to start "
             "again"), file=sys.stderr)
         return 130
+    except Exception as e:  # noqa: BLE001 - a refusal while running: one line too
+        return error(e)
+
+
+def error(e: Exception) -> int:
+    """Say an error in one line, the apps' way (:func:`swgcli.app.one_line`), and return
+    2; an error that is no bad input (a bug) is raised again, with its traceback.
+
+    Parameters
+    ----------
+    e : Exception
+        The error being handled.
+
+    Returns
+    -------
+    int
+        2, the exit status of bad input.
+
+    Raises
+    ------
+    Exception
+        ``e`` itself where :func:`swgcli.app.one_line` gives no line for it.
+    """
+    msg = app.one_line(e)
+    if msg is None:  # not bad input: a bug, with its traceback
+        raise e
+    print(f"monitor_families: error: {msg}", file=sys.stderr)
+    return 2
 
 
 def run(args: argparse.Namespace, p, cfg, train: list[int], fams: list[str],

@@ -39,7 +39,7 @@ from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.records import RecordBank, record_bank
-from swgsim.datasets.schedule import FaultOnset, LifeConfig, staircase
+from swgsim.datasets.schedule import MAX_WINDOWS, FaultOnset, LifeConfig, staircase
 
 from .model import DiagnosisModel
 from .prognosis import Prognosis, PrognosisConfig, Track
@@ -196,7 +196,10 @@ class PrognosisStudyConfig:
             out of range; ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi <= 10^4 h;
             no payload; ``severity_levels`` not a multiple of 4 in [8, 256];
             ``payload_after_h`` outside the life after the onset; ``prognosis.every_h``
-            below the lives' window interval.
+            below the lives' window interval or making more than
+            :data:`~learn.monitor.stream_prognosis.MAX_PROGNOSES` prognoses an alarm; a
+            life of more windows than :data:`swgsim.datasets.schedule.MAX_WINDOWS`
+            (``max_life_h`` named: :meth:`_check_life`).
         """
         for name in ("seeds", "calibration_seeds"):
             seeds = getattr(self, name)
@@ -231,8 +234,30 @@ class PrognosisStudyConfig:
                              f"{self.severity_levels}")
         check_range(self.payload_after_h, 0.0, self.max_life_h, f"{where}.payload_after_h",
                     "h", lo_open=True, hi_open=True, why="inside the life after the onset")
-        # at most a prognosis per window of the lives (train.interval_min apart)
-        self.prognosis.check(f"{where}.prognosis", interval_h=self.train.interval_min / 60.0)
+        self._check_life(where)
+        # at most a prognosis per window of the lives (train.interval_min apart), and a
+        # bounded number over the hours a life's alarm may be followed (monitor_stream's
+        # rule, before any work): after commissioning, the latest onset and max_life_h
+        self.prognosis.check(f"{where}.prognosis", interval_h=self.train.interval_min / 60.0,
+                             span_h=self.onset_window_h[1] + self.max_life_h)
+
+    def _check_life(self, where: str) -> None:
+        """Refuse lives (:func:`life_of`: the latest onset, then ``max_life_h``) of more
+        windows at ``train.interval_min`` than a life may hold
+        (:data:`swgsim.datasets.schedule.MAX_WINDOWS`), before any work: ``life_of`` refuses
+        them too, but only after the model is trained. ``max_life_h`` is named, or
+        ``onset_window_h[1]`` where the latest onset alone leaves no hours."""
+        step_min = self.train.interval_min
+        most_h = MAX_WINDOWS * step_min / 60.0  # the hours a life may hold
+        onset = self.train.commissioning_h + self.onset_window_h[1]  # the latest onset
+        why = f"a life of at most {MAX_WINDOWS:.0e} windows, train.interval_min={step_min:g} min"
+        if onset >= most_h:
+            check_range(self.onset_window_h[1], 0.0, most_h - self.train.commissioning_h,
+                        f"{where}.onset_window_h[1]", "h", hi_open=True,
+                        why=f"{why}, after commissioning")
+        if self.max_life_h > most_h - onset:
+            check_range(self.max_life_h, 0.0, most_h - onset, f"{where}.max_life_h", "h",
+                        lo_open=True, why=f"{why}, after the latest onset at {onset:g} h")
 
 
 def _law(fault: str) -> str | None:

@@ -280,15 +280,19 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
         A stream the monitor cannot take (:func:`check_stream`), a maintenance event out
         of range (a tool change or repair inside commissioning) or a prognosis option out
         of range (a planned duty outside the model's, prognoses more often than the
-        stream's windows), before any work.
+        stream's windows or more than :data:`~.stream_prognosis.MAX_PROGNOSES` after an
+        alarm), before any work.
     """
     log = sorted(maintenance or [], key=lambda e: e.hour)
     check_stream(ds, model, rule, source)
     hours = ds["hour"].values.astype(float)
-    prognosis = (prognosis.check(trained=trained_duty(model),
-                                 interval_h=window_interval_h(hours))
-                 if prognosis and prognosis.enabled else None)
     n_c = int(ds["commissioning"].values.astype(bool).sum())
+    # at most a prognosis per window, and a bounded number over the hours an alarm may be
+    # followed: from the first window monitored (the earliest alarm) to the last
+    prognosis = (prognosis.check(trained=trained_duty(model),
+                                 interval_h=window_interval_h(hours),
+                                 span_h=float(hours[-1] - hours[n_c]))
+                 if prognosis and prognosis.enabled else None)
     for i, e in enumerate(maintenance or []):
         e.check(f"maintenance[{i}]")
         if e.kind in RECOMMISSIONS and e.hour <= hours[n_c]:

@@ -186,7 +186,9 @@ class MonitorStudyConfig:
             life; ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi and the latest
             onset inside the healthy life; training severities not increasing inside the
             fault's range; ``nuisance_hours`` not longer than commissioning; a life of more
-            windows than :data:`swgsim.datasets.schedule.MAX_WINDOWS`; a nuisance's
+            windows than :data:`swgsim.datasets.schedule.MAX_WINDOWS` at ``interval_min``
+            (each life the study lives, :meth:`_lives`: the hours option that makes it
+            longest named, with the hours it may have); a nuisance's
             conditions out of range; the families' seeds, keys and draws
             (:meth:`_check_families`); an unknown detector; ``detector_hours`` outside each
             healthy life after commissioning.
@@ -214,12 +216,15 @@ class MonitorStudyConfig:
                  f"(0, {top:g}] ({f}'s severity range), got {sevs}")
         check_range(self.nuisance_hours, self.commissioning_h, 1e6, f"{where}.nuisance_hours",
                     "h", lo_open=True, why="longer than commissioning")
-        for key in ("healthy_hours", "nuisance_hours"):  # a life's windows, before any work
+        most_h = MAX_WINDOWS * self.interval_min / 60.0  # the hours a life may hold
+        for fixed, keys in self._lives():  # a life's windows, before any work
+            life = fixed + sum(getattr(self, k) for k in keys)
+            n = life * 60.0 / self.interval_min
+            key = max(keys, key=lambda k: getattr(self, k))  # the option that makes it long
             hours = getattr(self, key)
-            n = hours * 60.0 / self.interval_min
             _req(n <= MAX_WINDOWS, f"{where}.{key}={hours:g} h at interval_min="
                  f"{self.interval_min:g} min is {n:.3g} windows a life; allowed: at most "
-                 f"{MAX_WINDOWS:.0e} (up to {MAX_WINDOWS * self.interval_min / 60:.3g} h)")
+                 f"{MAX_WINDOWS:.0e} (up to {max(most_h - (life - hours), 0.0):.3g} h)")
         for name, c in self.nuisances.items():  # their own rules: checked as parts, before
             c.check_inside(self.nuisance_hours, f"{where}.nuisances.{name}")
         self._check_families(where)
@@ -228,6 +233,23 @@ class MonitorStudyConfig:
         check_range(self.detector_hours, 0.0, self.healthy_hours - self.commissioning_h,
                     f"{where}.detector_hours", "h", lo_open=True,
                     why="within each healthy life after commissioning")
+
+    def _lives(self) -> list[tuple[float, tuple[str, ...]]]:
+        """The longest life of each kind the study lives, as (its hours set by no hours
+        option, the hours options that add up to the rest): the held-out gear's healthy
+        and nuisance lives, a fault life (the latest onset, then ``horizon_h``; with
+        families, their growing faults' ``family_growth_h`` before it:
+        :func:`learn.monitor.evaluate.nuisance_fault_lives`) and the training lives
+        (:func:`learn.monitor.training.training_lives`). ``growth_h`` makes no life
+        longer: the growing faults of :func:`learn.monitor.evaluate.fault_lives` end
+        ``horizon_h`` after their onset."""
+        onset = self.commissioning_h + self.onset_window_h[1]
+        lives = [(0.0, ("healthy_hours",)), (0.0, ("nuisance_hours",)),
+                 (onset, ("horizon_h",)), (0.0, ("commissioning_h", "train_healthy_h")),
+                 (self.interval_min / 60.0, ("train_fault_h",))]
+        if self.families:
+            lives.append((onset, ("family_growth_h", "horizon_h")))
+        return lives
 
     def _check_families(self, where: str) -> None:
         """The design and scored seeds (disjoint), and each family against the study: its

@@ -697,6 +697,28 @@ def test_prognoses_more_often_than_the_streams_windows_are_refused_before_work(g
         monitor_stream(growing_life["ds"], tiny_eval["model"], RuleConfig(), prognosis=many)
 
 
+def test_more_prognoses_than_an_alarm_may_have_are_refused_before_work(growing_life,
+                                                                      tiny_eval):
+    """Issue 82: every_h was bounded by the median window step alone, and a stream's hours
+    are not bounded: its last window 100 h after the others, at a prognosis a minute, made
+    6,200 prognoses (9.8 s). Over the hours after the earliest alarm, more than
+    MAX_PROGNOSES (10,000) are refused in one line naming every_h and the count, before
+    the stream is monitored."""
+    import dataclasses
+
+    from learn.monitor.stream import monitor_stream
+
+    ds = growing_life["ds"].copy()
+    hours = ds["hour"].values.astype(float)
+    ds["hour"] = ds["hour"].copy(data=np.append(hours[:-1], hours[-1] + 200.0))
+    every = dataclasses.replace(growing_life["config"], every_h=1 / 60)
+    with pytest.raises(ValueError, match=r"^prognosis.every_h=0.0166667 h makes 1.22e\+04 "
+                                         r"prognoses over the 204 h after the earliest alarm; "
+                                         r"allowed: at most 10,000 an alarm \(every_h from "
+                                         r"0.0204 h\)$"):
+        monitor_stream(ds, tiny_eval["model"], RuleConfig(), prognosis=every)
+
+
 def test_the_prognosis_interval_after_the_alarm_holds_the_true_failure_hour(growing_life):
     """Every valid prognosis made before the true failure (7.67 h) holds it within its
     5-95 % interval; the first, 0.5 h after the alarm with 2 estimates, is not yet valid

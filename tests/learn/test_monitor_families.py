@@ -20,13 +20,15 @@ import monitor_families  # noqa: E402
 @pytest.fixture
 def lives(monkeypatch):
     """The families each run lived, in order; a family named in ``stop`` raises
-    KeyboardInterrupt (a Ctrl-C while it runs)."""
-    state = {"lived": [], "trained": 0, "stop": set()}
+    KeyboardInterrupt (a Ctrl-C while it runs), one in ``fail`` its exception."""
+    state = {"lived": [], "trained": 0, "stop": set(), "fail": {}}
 
     def evaluate_gear(p, banks, g, model, cfg, dataset, nuisance, seeds):
         fam = nuisance.removeprefix("family:")
         if fam in state["stop"]:
             raise KeyboardInterrupt
+        if fam in state["fail"]:
+            raise state["fail"][fam]
         state["lived"].append(fam)
         key = {"dataset": dataset, "held_out_gear": g, "nuisance": nuisance,
                "detector": "monitor"}
@@ -105,11 +107,38 @@ def test_a_folder_with_files_of_anything_else_is_refused_before_work(tmp_path, l
     (["--study", "nuisance_hours=1e6"], "monitor.study.nuisance_hours=1e+06 h at "
                                         "interval_min=1 min is 6e+07 windows a life; allowed: "
                                         "at most 5e+06"),
+    # every hours option that makes a life, by the same window bound (horizon_h=1e5: a
+    # MemoryError at 7.4 GB after 36 s of training; the others by the same path)
+    (["--study", "horizon_h=100000"], "monitor.study.horizon_h=100000 h at interval_min=1 "
+                                      "min is 6.01e+06 windows a life; allowed: at most "
+                                      "5e+06 (up to 8.32e+04 h)"),
+    (["--study", "family_growth_h=1e5"], "monitor.study.family_growth_h=100000 h at "
+                                         "interval_min=1 min is 6.01e+06 windows a life"),
+    (["--study", "train_healthy_h=1e5"], "monitor.study.train_healthy_h=100000 h at "
+                                         "interval_min=1 min is 6e+06 windows a life; "
+                                         "allowed: at most 5e+06 (up to 8.33e+04 h)"),
+    (["--study", "train_fault_h=1e5"], "monitor.study.train_fault_h=100000 h at "
+                                       "interval_min=1 min is 6e+06 windows a life"),
 ])
-def test_bad_input_is_one_line_before_any_work(argv, words, capsys):
+def test_bad_input_is_one_line_before_any_work(argv, words, lives, capsys):
     """Issue 82, cause 8: every bad input reaches the apps' one-line path (before, a
-    bad preset, an empty --families and a wrongly typed --study value were tracebacks)."""
+    bad preset, an empty --families and a wrongly typed --study value were tracebacks),
+    before any training or life."""
     assert monitor_families.main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("monitor_families: error: ") and words in err, err
     assert "\n" not in err and "Traceback" not in err
+    assert lives["trained"] == 0 and lives["lived"] == []
+
+
+def test_a_refusal_while_running_is_one_line_and_a_bug_its_traceback(lives, capsys):
+    """Issue 82: the run caught only KeyboardInterrupt, so a refusal raised while a family
+    ran was a traceback; it ends in one line (exit 2), a bug still raises."""
+    lives["fail"] = {"drift": ValueError("monitor.x must lie in [0, 1], got 2\nmore")}
+    assert monitor_families.main(ARGS) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "monitor_families: error: monitor.x must lie in [0, 1], got 2", err
+    assert lives["lived"] == ["warm_up"]
+    lives["fail"] = {"drift": RuntimeError("a bug")}
+    with pytest.raises(RuntimeError, match="a bug"):
+        monitor_families.main(ARGS)

@@ -116,7 +116,7 @@ def test_a_job_of_an_array_runs_its_group_alone_and_writes_no_report(tiny_progno
     assert {f: (out / f).read_bytes() for f in before} == before
 
 
-BAD = {  # case -> (override, the start of the one line)
+BAD = {  # case -> (override or overrides, the start of the one line)
     "seeds shared with the calibration": (
         "prognosis.study.calibration_seeds=[1]", "prognosis.study.calibration_seeds must be "
         "disjoint from seeds"),
@@ -132,6 +132,18 @@ BAD = {  # case -> (override, the start of the one line)
         "prognosis.study.prognosis.every_h=1e-7",
         "prognosis.study.prognosis.every_h must lie in [0.0166667, 1000] h (at most a "
         "prognosis per window"),
+    # issue 82: max_life_h was held to a life's windows only when the lives were built,
+    # after training (15.9 s to the one line against 8.4 s for a refusal before work)
+    "lives of more windows than a life may hold": (
+        ["prognosis.study.max_life_h=10000", "prognosis.study.train.interval_min=0.1"],
+        "prognosis.study.max_life_h must lie in (0, 8328.33] h (a life of at most 5e+06 "
+        "windows, train.interval_min=0.1 min, after the latest onset at 5 h), got 10000"),
+    # issue 82: the prognoses of a life's alarm held to MAX_PROGNOSES (monitor_stream's
+    # rule) before any work, not by a life that fails late, after training
+    "more prognoses than an alarm may have": (
+        "prognosis.study.max_life_h=10000",
+        "prognosis.study.prognosis.every_h=0.25 h makes 4e+04 prognoses over the 1e+04 h "
+        "after the earliest alarm; allowed: at most 10,000 an alarm (every_h from 1 h)"),
     "an unknown data set": ("prognosis.run_on=[nope]", "prognosis.run_on: ['nope']"),
     "no data set": ("prognosis.run_on=[]", "prognosis.run_on: empty; allowed: keys of "
                                            "prognosis.datasets ['bench', 'robot_joint', 'tiny']"),
@@ -149,7 +161,7 @@ BAD = {  # case -> (override, the start of the one line)
 @pytest.mark.parametrize("case", BAD)
 def test_bad_input_is_one_line_before_any_work(tmp_path, case):
     over, start = BAD[case]
-    msg = message(lambda: _run(tmp_path / "rep", over))
+    msg = message(lambda: _run(tmp_path / "rep", *([over] if isinstance(over, str) else over)))
     assert msg.startswith(start), msg
     assert not (tmp_path / "rep").exists()
 
