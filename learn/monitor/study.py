@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from learn.tracking.ledger import SCORED_SEED_MIN, check_seeds
 from swgsim.base.typed import allowed, check_range, check_tree
 from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
 from swgsim.datasets.schedule import MAX_WINDOWS
@@ -138,6 +139,11 @@ class MonitorStudyConfig:
     rule : RuleConfig
     normal : NormalConfig
         How the gear's normal behaviour follows the conditions (:mod:`learn.monitor.normal`).
+    scored_run : bool
+        A declared scored run (:mod:`learn.tracking.ledger`): its ``seeds`` and
+        ``scored_seeds`` must be scored seeds (from
+        :data:`~learn.tracking.ledger.SCORED_SEED_MIN` up) and the run appends itself to
+        the ledger; False (the default): every seed a design seed, below it.
     """
 
     seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
@@ -167,6 +173,7 @@ class MonitorStudyConfig:
     family_growth_h: float = field(default=40.0, metadata=_HOURS)
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)
+    scored_run: bool = False
 
 
     def check(self, where: str) -> None:
@@ -262,6 +269,10 @@ class MonitorStudyConfig:
             _req(len(seeds) >= 1, f"{where}.{name} must list at least one seed")
             for i, s in enumerate(seeds):
                 check_range(s, 0, 2**32 - 1, f"{where}.{name}[{i}]")
+        high = [s for s in self.design_seeds if s >= SCORED_SEED_MIN]
+        _req(not high, f"{where}.design_seeds must lie below {SCORED_SEED_MIN} (the scored "
+                       f"seeds' range), got {high}")
+        check_seeds([*self.seeds, *self.scored_seeds], self.scored_run, f"{where}.scored_run")
         both = sorted(set(self.design_seeds) & set(self.scored_seeds))
         _req(not both, f"{where}.scored_seeds must be disjoint from design_seeds, both hold "
                        f"{both}")

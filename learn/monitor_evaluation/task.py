@@ -48,6 +48,7 @@ from learn.tasks.parts import (
     run_parts,
 )
 from learn.tracking import log_run
+from learn.tracking.ledger import LEDGER, append_scored_run
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.plan import DatasetPlan
@@ -198,6 +199,11 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
     figs = figures(res, fa, out, curve)
     claim.record([out / f for f in ("results.csv", "false_alarms.csv", "tradeoff.csv",
                                     "table.md")] + list(figs))
+    if mc.study.scored_run:  # on record, whatever its figures (learn.tracking.ledger)
+        row = append_scored_run([*mc.study.seeds, *mc.study.scored_seeds],
+                                [out / f for f in ("results.csv", "false_alarms.csv")])
+        print(f"scored run entered in the ledger {LEDGER}: {row['date_utc']}, commit "
+              f"{row['commit'][:12]} ({row['tree']}), results {row['results_sha256'][:16]}")
     if mc.progress:  # the console's summary
         print(f"\ntargets (monitor; held-out gears, {len(mc.study.seeds)} seed(s)):")
         for r in targets(res, fa).itertuples(index=False):
