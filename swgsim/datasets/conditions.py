@@ -408,6 +408,12 @@ class ConditionsConfig:
     friction_law : FrictionLaw
         How (default: the grease's viscosity law, :func:`swgsim.gear.thermal.friction_scale`);
         an evaluation draws it from the family.
+    viscous_in_dynamics : bool
+        The joint's viscous friction acts in the gear's dynamics: each window's signals
+        are those of the gear with b1, b2 times the window's factor (``friction``), not
+        of the nominal gear with its efficiency rescaled alone (:mod:`swgsim.datasets.life`,
+        :data:`~swgsim.datasets.life.VISCOUS_LADDER`): a warm joint's lower damping
+        shows in its bridges as a reduced damping does. False: the nominal gear's signals.
     coulomb_law : FrictionLaw or None
         The Coulomb term's own law (b0; the viscous terms b1, b2 follow ``friction_law``):
         the viscous term follows the grease's viscosity, the Coulomb and mixed-lubrication
@@ -432,6 +438,7 @@ class ConditionsConfig:
                                                        metadata={LATER: "measured warm-ups"})
     viscosity: bool = True
     coulomb_law: FrictionLaw | None = field(default=None, metadata={LATER: _SPLIT})
+    viscous_in_dynamics: bool = field(default=False, metadata={LATER: "friction in dynamics"})
     friction_law: FrictionLaw = field(default_factory=FrictionLaw,
                                       metadata={LATER: "drawn friction laws"})
     run_in: RunInConfig | None = None
@@ -655,14 +662,20 @@ def _temperature(cfg: ConditionsConfig, hours: np.ndarray, n_in_rpm: np.ndarray,
 
 
 def efficiency_ratio(gear: ChainParams, n_in_rpm, t_out_nm, friction: np.ndarray,
-                     mu_factor: np.ndarray, coulomb: np.ndarray | None = None) -> np.ndarray:
+                     mu_factor: np.ndarray, coulomb: np.ndarray | None = None,
+                     simulated: np.ndarray | None = None) -> np.ndarray:
     """The factor a window's efficiency changes by under its friction: the model's steady
-    efficiency at the acting friction over that at the nominal one, at the record's
-    speed and load, shape of ``friction`` [-]
+    efficiency at the acting friction over that at the friction its record was simulated
+    with (the nominal gear's, or with ``simulated``, the factor on its viscous terms b1, b2
+    alone), at the record's speed and load, shape of ``friction`` [-]
     (:func:`swgsim.gear.thermal.steady_efficiency`)."""
     n = np.abs(np.asarray(n_in_rpm, float))
     t = np.abs(np.asarray(t_out_nm, float))
-    nominal = steady_efficiency(gear.gear, n, t)
+    if simulated is None:
+        nominal = steady_efficiency(gear.gear, n, t)
+    else:  # the viscous terms as simulated, the Coulomb term and mu nominal
+        nominal = steady_efficiency(gear.gear, n, t, simulated, 1.0, coulomb=1.0)
+        coulomb = friction if coulomb is None else coulomb
     acting = steady_efficiency(gear.gear, n, t, friction, mu_factor, coulomb)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(nominal > 0, acting / nominal, 1.0)

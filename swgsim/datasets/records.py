@@ -13,6 +13,7 @@ state is simulated once along the whole profile, and its record holds every slot
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -61,18 +62,28 @@ class RecordBank:
         self._influences: dict = {}
 
     @staticmethod
-    def key(dp: DutyPoint, fault: str, severity: float, position_deg: float) -> tuple:
-        """The key of a record: (speed, torque, gear fault, severity, position)."""
+    def key(dp: DutyPoint, fault: str, severity: float, position_deg: float,
+            viscous: float = 1.0) -> tuple:
+        """The key of a record: (speed, torque, gear fault, severity, position), and the
+        factor on the viscous friction b1, b2 where it is not 1 (a joint's warm or cold
+        grease in its dynamics, :data:`swgsim.datasets.life.VISCOUS_LADDER`)."""
         if fault == "healthy" or is_sensor_fault(fault) or severity == 0:
-            return (float(dp.n_in_rpm), float(dp.t_out_nm), "healthy", 0.0, 0.0)
-        pos = float(position_deg) if uses_position(fault) else 0.0
-        return (float(dp.n_in_rpm), float(dp.t_out_nm), fault, float(severity), pos)
+            base = (float(dp.n_in_rpm), float(dp.t_out_nm), "healthy", 0.0, 0.0)
+        else:
+            pos = float(position_deg) if uses_position(fault) else 0.0
+            base = (float(dp.n_in_rpm), float(dp.t_out_nm), fault, float(severity), pos)
+        return base if viscous == 1.0 else (*base, float(viscous))
 
     def params(self, key: tuple) -> ChainParams:
-        """Chain parameters of the gear in the state of a key."""
-        _, _, fault, sev, pos = key
-        return self.healthy if fault == "healthy" else apply_fault(self.healthy, fault, sev,
-                                                                    pos)
+        """Chain parameters of the gear in the state of a key (b1 and b2 times the key's
+        viscous factor, where it has one)."""
+        _, _, fault, sev, pos = key[:5]
+        p = self.healthy if fault == "healthy" else apply_fault(self.healthy, fault, sev, pos)
+        if len(key) > 5:
+            g = p.gear
+            p = dataclasses.replace(p, gear=dataclasses.replace(
+                g, b1_nms=g.b1_nms * key[5], b2_nms3=g.b2_nms3 * key[5]))
+        return p
 
     def want(self, keys) -> None:
         """Ask for records, simulated at the next :meth:`get`."""
@@ -174,9 +185,10 @@ class ProfileRecordBank(RecordBank):
         self.slots = profile_slots(plan)
 
     @staticmethod
-    def key(dp: DutyPoint, fault: str, severity: float, position_deg: float) -> tuple:
+    def key(dp: DutyPoint, fault: str, severity: float, position_deg: float,
+            viscous: float = 1.0) -> tuple:
         """The key of a record: the state alone (every slot is in the record)."""
-        return (0.0, 0.0, *RecordBank.key(dp, fault, severity, position_deg)[2:])
+        return (0.0, 0.0, *RecordBank.key(dp, fault, severity, position_deg, viscous)[2:])
 
     def motion(self, key: tuple) -> tuple:
         """What a record's motion along the profile depends on: the gear's parameters."""

@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 
 from swgsim.datasets.config import gear_params
-from swgsim.datasets.life import BLOCK
+from swgsim.datasets.life import BLOCK, LifeSimulator
 from swgsim.datasets.plan import DatasetPlan, ShardSpec
 from swgsim.datasets.records import SIGNAL_GROUP
 from swgsim.datasets.schedule import duty_cycle
@@ -78,8 +78,10 @@ def life_records(plan: DatasetPlan) -> tuple[int, int]:
     -------
     (int, int)
         Records: duty points (one along a profile) × (severity levels + 1) × (payload
-        factors + 1); samples: one wave-generator revolution at the slowest input speed
-        plus a window (the whole profile along one).
+        factors + 1), × the viscous factors simulated where the friction acts in the
+        dynamics (the rungs its first gear's life uses, :data:`~swgsim.datasets.life.
+        VISCOUS_LADDER`); samples: one wave-generator revolution at the slowest input
+        speed plus a window (the whole profile along one).
     """
     cfg = plan.config
     life, ch = cfg.life, cfg.chain
@@ -89,6 +91,9 @@ def life_records(plan: DatasetPlan) -> tuple[int, int]:
     levels = 1 if f.fault == "healthy" else (2 if f.growth == "step"
                                              else int(life.severity_levels) + 1)
     payloads = 1 + (len(life.conditions.payload) if life.conditions is not None else 0)
+    if life.conditions is not None and life.conditions.viscous_in_dynamics:
+        sim = LifeSimulator(plan, int(cfg.gears[0].id), life)  # its conditions, no record
+        levels *= len({float(v) for v in sim.rungs[sim.rung_weights != 0]})
     if plan.profile is not None:
         return levels, int(math.ceil(plan.profile.speed.duration_s * fs)) + n_t
     ops = cfg.operating_points

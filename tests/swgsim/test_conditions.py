@@ -27,7 +27,7 @@ from swgsim.datasets.conditions import (
 )
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
-from swgsim.datasets.life import LifeSimulator
+from swgsim.datasets.life import LifeSimulator, ladder_weights
 from swgsim.datasets.plan import config_hash, plain_config, plan
 from swgsim.datasets.schedule import DutyPoint, LifeConfig
 from swgsim.gear.thermal import (
@@ -154,6 +154,50 @@ def test_viscous_and_coulomb_friction_follow_their_own_laws_and_run_in_apart(tin
     _, m1 = _windows(tiny, warm)
     _, m2 = _windows(tiny, split)
     assert not np.allclose(m1["efficiency"], m2["efficiency"])
+
+
+def test_ladder_weights_are_quadratic_and_exact_on_their_rungs():
+    f = np.array([0.3, 0.62, 1.0, 1.3, 2.9])
+    rungs, w = ladder_weights(f)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose((w * (3 * rungs**2 - rungs + 2)).sum(axis=1),
+                               3 * f**2 - f + 2, rtol=1e-12)  # a quadratic exactly
+    assert np.array_equal(w[2], [0.0, 1.0, 0.0]) and rungs[2, 1] == 1.0
+    with pytest.raises(ValueError, match=r"viscous friction factor of 5 lies outside"):
+        ladder_weights(np.array([5.0]))
+
+
+def test_a_joint_whose_friction_acts_in_its_dynamics_damps_as_its_grease_says(tiny, tmp_path):
+    """Issue 83: with conditions.viscous_in_dynamics a warm joint's windows are those of
+    the gear with b1, b2 times its factor (a warm grease damps less, as a reduced damping
+    does), within 3 % of their change from the nominal gear; at factor 1 the same windows
+    as without it."""
+    warm = TemperatureTrace(str(_hours_table(tmp_path / "warm.csv", ((0.0, 40.0),))),
+                            mode="hours")
+    base = dataclasses.replace(NEUTRAL, viscosity=True, temperature_trace=warm)
+    sim = _sim(tiny, dataclasses.replace(base, viscous_in_dynamics=True))
+    nominal = _sim(tiny, base)
+    f = float(friction_scale(40.0))
+    assert np.all(sim.conditions.friction == f)
+    rows = np.arange(len(sim))
+    rngs = lambda: [np.random.default_rng(0) for _ in rows]  # noqa: E731
+    got, keys = sim._cut(rows, rngs())[:2]
+    before = nominal._cut(rows, rngs())[0]
+    o0 = [int(np.random.default_rng(0).uniform() * tiny[1].get(k)["n_period"]) for k in keys]
+    exact = np.stack([tiny[1].get(k[:5] + (f,))["signal"][:, o:o + got.shape[-1]]
+                      for k, o in zip(keys, o0, strict=True)])
+
+    def rms(x):
+        return float(np.sqrt(np.mean(x**2)))
+    change = rms(exact - before)
+    assert change > 1e-5  # the damping shows in the bridges
+    assert rms(got - exact) < 0.02 * change, (rms(got - exact), change)
+    cold = dataclasses.replace(NEUTRAL, viscous_in_dynamics=True)  # factor 1 throughout
+    a, b = (_sim(tiny, c) for c in (cold, NEUTRAL))
+    sa, ma = a.windows(0, len(a))
+    sb, mb = b.windows(0, len(b))
+    assert np.array_equal(sa, sb)
+    np.testing.assert_allclose(ma["efficiency"], mb["efficiency"], rtol=1e-13)
 
 
 def test_a_heavier_tool_acts_at_its_load_while_the_commanded_point_stays(tiny):
