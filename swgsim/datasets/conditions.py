@@ -108,15 +108,17 @@ class RunInConfig:
     def factors(self, hours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The viscous and the Coulomb terms' run-in factors at operating ``hours``
         (:func:`swgsim.gear.thermal.run_in_factor`), shapes of ``hours`` [-]."""
-        viscous = run_in_factor(hours, self.drop, self.tau_h)
-        if not self.split:
-            return viscous, viscous
-        return viscous, run_in_factor(hours, _or(self.coulomb_drop, self.drop),
-                                      _or(self.coulomb_tau_h, self.tau_h))
+        return _apart(self, lambda d, t: run_in_factor(hours, d, t))
 
 
-def _or(value: float | None, default: float) -> float:
-    return default if value is None else value
+def _apart(c: RunInConfig | Regrease, factor) -> tuple[np.ndarray, np.ndarray]:
+    """``factor(drop, tau_h)`` of the viscous terms and of the Coulomb term (its own drop
+    and time constant where set; the same array where neither is)."""
+    viscous = factor(c.drop, c.tau_h)
+    if not c.split:
+        return viscous, viscous
+    return viscous, factor(c.drop if c.coulomb_drop is None else c.coulomb_drop,
+                           c.tau_h if c.coulomb_tau_h is None else c.coulomb_tau_h)
 
 
 @dataclass
@@ -156,11 +158,7 @@ class Regrease:
     def factors(self, hours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The viscous and the Coulomb terms' factors at operating ``hours``
         (:func:`swgsim.gear.thermal.regrease_factor`), shapes of ``hours`` [-]."""
-        viscous = regrease_factor(hours, self.hours, self.drop, self.tau_h)
-        if not self.split:
-            return viscous, viscous
-        return viscous, regrease_factor(hours, self.hours, _or(self.coulomb_drop, self.drop),
-                                        _or(self.coulomb_tau_h, self.tau_h))
+        return _apart(self, lambda d, t: regrease_factor(hours, self.hours, d, t))
 
     def check(self, where: str) -> None:
         """Refuse no hour or hours not increasing, in one line naming ``<where>.hours``
