@@ -24,7 +24,7 @@ from omegaconf import MISSING, DictConfig, OmegaConf
 
 from swgcli.app import hydra_app
 from swgsim.base.typed import allowed
-from swgsim.datasets.recording_table import MAX_TABLE_BYTES
+from swgsim.datasets.recording_table import MAX_READ_BYTES, MAX_TABLE_BYTES
 from swgsim.datasets.recordings import import_recording
 from swgsim.files.inputs import absolute_path
 
@@ -39,8 +39,10 @@ class ImportApp:
     mapping: str = MISSING       # its column mapping, a YAML (docs/OWN_JOINT.md)
     out_dir: str = MISSING       # the stream's folder (then swgsim-monitor stream=<out_dir>)
     overwrite: bool = False      # replace a stream or data set this project wrote there
+    # reading needs 2-4 times the file's size: at most MAX_READ_BYTES (4096 MiB)
     max_file_mb: float = field(default=MAX_TABLE_BYTES / 2**20,
-                               metadata=allowed(1.0, 65536.0, "largest table read [MiB]"))
+                               metadata=allowed(1.0, MAX_READ_BYTES / 2**20,
+                                                "largest table read [MiB]"))
     progress: bool = True
 
 

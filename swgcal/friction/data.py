@@ -16,15 +16,17 @@ import csv
 import io
 import itertools
 import logging
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from swgsim.base.lazy import lazy_module
+from swgsim.datasets import recording_table as rt
 from swgsim.files.inputs import check_text_file
 from swgsim.gear.friction.signals import FrictionSignals, Scales
+from swgsim.gear.profile import MAX_INPUT_SPEED_RPM, RPM
 
 from .options import FrictionOptions
 
@@ -46,6 +48,9 @@ __all__ = [
     "write_friction_csv",
     "estimate_acceleration",
     "REQUIRED_COLUMNS",
+    "COLUMN_RANGES",
+    "MAX_ROWS",
+    "MISSING_CELLS",
 ]
 
 REQUIRED_COLUMNS = ("time_s", "q_rad", "dq_rad_per_s", "tau_friction_Nm")
@@ -134,6 +139,12 @@ class FrictionRecording:
             gear_ratio=None if gear_ratio is None else float(gear_ratio))
 
 
+#: Most points of the acceleration's uniform grid per sample of the recording
+#: (:func:`estimate_acceleration`) [choice: gaps of a logger's hiccups pass, a recording
+#: whose time stamps jump by hours is refused before its grid is allocated].
+MAX_GRID_PER_SAMPLE = 10
+
+
 def estimate_acceleration(t_s: np.ndarray, dq: np.ndarray, n_window: int = 21) -> np.ndarray:
     """Acceleration from an irregularly sampled velocity by a local quadratic fit.
 
@@ -158,11 +169,19 @@ def estimate_acceleration(t_s: np.ndarray, dq: np.ndarray, n_window: int = 21) -
     Raises
     ------
     ValueError
-        ``n_window`` < 5.
+        ``n_window`` < 5, or a grid of more than :data:`MAX_GRID_PER_SAMPLE` times the
+        samples (a long gap in the time stamps; it is refused before it is allocated).
     """
     if n_window < 5:
         raise ValueError(f"n_window must be >= 5, got {n_window}")
     dt = float(np.median(np.diff(t_s)))
+    n_grid = (t_s[-1] - t_s[0]) / dt + 1
+    if n_grid > MAX_GRID_PER_SAMPLE * t_s.size:
+        raise ValueError(f"time_s spans {t_s[-1] - t_s[0]:.4g} s at a median step of "
+                         f"{dt:.3g} s: {n_grid:.3g} grid points to estimate the acceleration, "
+                         f"over {MAX_GRID_PER_SAMPLE} times its {t_s.size} rows (a gap in "
+                         "the time stamps); split the recording at the gap or give "
+                         "ddq_rad_per_s2")
     tu = np.arange(t_s[0], t_s[-1] + 0.5 * dt, dt)
     vu = np.interp(tu, t_s, dq)
     w = n_window | 1
@@ -191,6 +210,47 @@ DQ_CONSISTENCY_TOL = 0.5
 DQ_CONSISTENCY_SURE = 0.2
 #: Fewest rows a friction recording must keep after cleaning.
 MIN_ROWS = 100
+#: Physical ranges of a friction recording's columns: column -> (lowest, highest, unit,
+#: what it is). A finite value outside is refused in one line naming the file, the column
+#: and the row (a fault of the sensor, a unit mistaken or a damaged file), before any
+#: work. The six real recordings (``shared/data/joint_friction``) reach at most 181 s,
+#: 1.26 rad, 0.38 rad/s, 0.063 rad/s² and 19.4 N m. Time: 1e10 s either side of zero
+#: [choice: 317 years; a Unix time stamp, 1.7e9 s in 2024, fits]. Angle: 1e4 rad
+#: [choice: 1600 turns, some 8000 times the real recordings' largest; beyond it the ten
+#: significant digits :func:`write_friction_csv` writes resolve less than 1e-6 rad].
+#: Velocity: the gear's catalogue input speed, 6500 rpm = 681 rad/s
+#: (:data:`swgsim.gear.profile.MAX_INPUT_SPEED_RPM`), which bounds even a velocity taken
+#: at the motor. Acceleration: 1e5 rad/s² [choice: 681 rad/s reached within 7 ms].
+#: Friction and load torque: 1e4 N m [choice: 52 times the gear's momentary peak
+#: torque, 191 N m (:data:`swgsim.gear.profile.MOMENTARY_PEAK_TORQUE_NM`), some 500
+#: times the real recordings' largest].
+COLUMN_RANGES = {
+    "time_s": (-1e10, 1e10, "s", "time"),
+    "q_rad": (-1e4, 1e4, "rad", "joint angle"),
+    "dq_rad_per_s": (-MAX_INPUT_SPEED_RPM * RPM, MAX_INPUT_SPEED_RPM * RPM, "rad/s",
+                     "joint velocity"),
+    "ddq_rad_per_s2": (-1e5, 1e5, "rad/s²", "joint acceleration"),
+    "tau_friction_Nm": (-1e4, 1e4, "N m", "friction torque"),
+    "load_Nm": (-1e4, 1e4, "N m", "load torque"),
+}
+#: Cells read as a missing reading (case and surrounding blanks ignored): their rows are
+#: dropped, counted in the notes with the first of them; any other text where a number
+#: belongs is refused naming the file, the column and the row. The empty cell and the
+#: markers spreadsheets and pandas write (pandas' default ``na_values``, less the
+#: ``1.#IND`` and ``1.#QNAN`` of old Windows C libraries) [choice].
+MISSING_CELLS = frozenset({"", "nan", "-nan", "na", "n/a", "#n/a", "#n/a n/a", "#na",
+                           "<na>", "null", "none"})
+#: CSV records parsed at a time: one chunk of text is held, some 1.5 MB as Python strings
+#: at the real recordings' 40-63 bytes a row [choice]. Reading a 102 MB file (1.6 M rows)
+#: peaked at 1.39 times its size (tracemalloc), 8.81 times as a whole list of records.
+_CHUNK_RECORDS = 1 << 12
+#: Most data rows of a friction recording read: 500 000, 20 times the longest real one
+#: (25 402 rows) and 17 min at 2 ms. The calibration (``swgsim-calibrate``) holds about
+#: 6.5 kB a row: measured largest resident size 372 MB on franka_joint2_slow (25 390 rows)
+#: and 2.15 GB on a synthetic recording of 300 000; the bound keeps it within about 3.5 GB
+#: [choice], where the 2 GiB an input file may have (34 M rows of 63 bytes) would ask for
+#: 220 GB. A longer recording: calibrate on a stretch of it, or on every k-th row.
+MAX_ROWS = 500_000
 
 
 def load_friction_csv(path: str | Path,
@@ -210,41 +270,53 @@ def load_friction_csv(path: str | Path,
     Returns
     -------
     FrictionRecording
-        Rows with non-finite or non-numeric values are dropped, and rows repeating the
-        previous time stamp; both are counted in ``notes``, with the measured velocity
-        consistency (:func:`velocity_consistency`), which says so where it is unsure.
+        Rows with a missing reading (an empty cell or a marker of :data:`MISSING_CELLS`)
+        or a non-finite value are dropped, and rows repeating the previous time stamp;
+        both are counted in ``notes`` (and logged) with the first such row, beside the
+        measured velocity consistency (:func:`velocity_consistency`), which says so
+        where it is unsure.
 
     Raises
     ------
     FileNotFoundError
     ValueError
-        Naming the file: not a UTF-8 text CSV, a column named twice, a required column
-        missing, rows of another length than the header, no usable rows or fewer than
-        :data:`MIN_ROWS`, time going backwards, an angle that stays constant while the
-        velocity does not, or a velocity that is not the derivative of the angle
-        (consistency figure above :data:`DQ_CONSISTENCY_TOL` after discounting the
-        angle's quantisation).
+        Naming the file (and, for a cell, the column and the row with its line): not a
+        UTF-8 text CSV, a column named twice, a required column missing, rows of another
+        length than the header, more than :data:`MAX_ROWS` rows (refused as they are
+        read), text where a number belongs, a value outside its column's physical range
+        (:data:`COLUMN_RANGES`), no usable rows or fewer than :data:`MIN_ROWS`, time
+        going backwards, an angle that stays constant while the velocity does not, or a
+        velocity that is not the derivative of the angle (consistency figure above
+        :data:`DQ_CONSISTENCY_TOL` after discounting the angle's quantisation).
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"friction CSV not found: {path}")
-    cols = _read_columns(path)
+    cols, row = _read_columns(path)
+    _check_ranges(path, cols, row)
     notes: list[str] = []
-    sel = _usable_rows(path, cols, notes)
-    t = cols["time_s"][sel]
-    q = cols["q_rad"][sel]
-    dq = cols["dq_rad_per_s"][sel]
+    sel = _usable_rows(path, cols, row, notes)
+
+    def kept(x: np.ndarray) -> np.ndarray:  # no copy where every row is kept
+        return x if sel is None else x[sel]
+
+    t = kept(cols["time_s"])
+    q = kept(cols["q_rad"])
+    dq = kept(cols["dq_rad_per_s"])
     _check_velocity(path, t, q, dq, notes)
     ddq = cols.get("ddq_rad_per_s2")
-    if ddq is None or not np.any(ddq[sel]):
-        acc = estimate_acceleration(t, dq, accel_window)
+    if ddq is None or not np.any(kept(ddq)):
+        try:
+            acc = estimate_acceleration(t, dq, accel_window)
+        except ValueError as e:
+            raise ValueError(f"{path}: {e}") from None
         source = f"estimated (Savitzky-Golay, quadratic, {accel_window} samples)"
     else:
-        acc, source = ddq[sel], "measured"
+        acc, source = kept(ddq), "measured"
     return FrictionRecording(
         t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=acc,
-        tau_nm=cols["tau_friction_Nm"][sel],
-        load_nm=cols["load_Nm"][sel] if "load_Nm" in cols else None,
+        tau_nm=kept(cols["tau_friction_Nm"]),
+        load_nm=kept(cols["load_Nm"]) if "load_Nm" in cols else None,
         name=path.stem, ddq_source=source, notes=tuple(notes))
 
 
@@ -294,17 +366,6 @@ def _not_csv(path: Path) -> Iterator[None]:
         raise ValueError(f"{path}: not a text CSV ({e})") from None
 
 
-def _read_rows(path: Path) -> list[list[str]]:
-    """The CSV records of ``path`` (csv module, ``utf-8-sig``: BOM and quoting undone),
-    after the header's bounded checks (:func:`_head_rows`)."""
-    _head_rows(path)
-    with _not_csv(path), path.open(newline="", encoding="utf-8-sig") as fh:
-        rows = list(csv.reader(fh))
-    if any("\0" in c for r in rows for c in r):
-        raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary file)")
-    return rows
-
-
 def _line_of(path: Path, record: int) -> int:
     """The line on which record number ``record`` (0: the header) of the CSV ends."""
     with path.open(newline="", encoding="utf-8-sig") as fh:
@@ -314,11 +375,8 @@ def _line_of(path: Path, record: int) -> int:
         return reader.line_num
 
 
-def _read_columns(path: Path) -> dict[str, np.ndarray]:
-    """The known columns of the CSV by name (all rows, as floats; NaN where a cell is not
-    a number), after checking the header and the row lengths."""
-    rows = _read_rows(path)
-    header = [h.strip() for h in rows[0]] if rows else []
+def _check_header(path: Path, header: list[str]) -> None:
+    """Each column named once and the required ones present."""
     named = [h for h in header if h]
     twice = sorted({h for h in named if named.count(h) > 1})
     if twice:
@@ -329,45 +387,139 @@ def _read_columns(path: Path) -> dict[str, np.ndarray]:
         raise ValueError(f"{path}: not a friction CSV: missing columns {missing}; expected "
                          f"{list(REQUIRED_COLUMNS)} (+ optional {list(OPTIONAL_COLUMNS)}), "
                          f"found {header}")
-    body = [r for r in rows[1:] if "".join(r).strip()]  # blank lines left out
-    if not body:
-        raise ValueError(f"{path}: no data rows below the header")
-    bad = [i for i, r in enumerate(rows) if len(r) != len(header) and "".join(r).strip()]
-    if bad:
-        raise ValueError(f"{path}: rows of another length than the header: line "
-                         f"{_line_of(path, bad[0])} has {len(rows[bad[0]])} fields, the header "
-                         f"names {len(header)} ({len(bad)} of {len(body)} rows differ)")
-    cells = np.array(body, dtype=object)
+
+
+def _numbers(path: Path, cells: np.ndarray, column: str, row0: int,
+             record_of: Callable[[int], int]) -> np.ndarray:
+    """A chunk's cells of one column as floats, NaN where a cell is missing
+    (:data:`MISSING_CELLS`); other text refused naming the column and the row (``row0``:
+    the chunk's first data row; ``record_of``: a chunk row's CSV record number)."""
+    x = np.asarray(pd.to_numeric(cells, errors="coerce"), dtype=float)
+    for k in np.flatnonzero(np.isnan(x)):
+        if str(cells[k]).strip().lower() not in MISSING_CELLS:
+            raise ValueError(
+                f"{path}: column {column!r}, row {row0 + k} (line "
+                f"{_line_of(path, record_of(int(k)))}): {cells[k]!r} is not a number (a "
+                "missing reading is an empty cell, NaN or n/a: its row is dropped)")
+    return x
+
+
+def _read_columns(path: Path) -> tuple[dict[str, np.ndarray], Callable[[int], str]]:
+    """The known columns of the CSV by name (data rows, as floats; NaN where a cell is a
+    missing reading) and how messages name a data row (``row 12 (line 14)``), after
+    checking the header, the row lengths and that every other cell is a number.
+
+    The records are parsed :data:`_CHUNK_RECORDS` at a time: what is held is the columns
+    as floats and one chunk of text (issue 82: the whole file as lists of strings took
+    ten times its size)."""
+    _head_rows(path)  # the bounded checks of check_text_file, before any full read
     known = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
-    return {h: np.asarray(pd.to_numeric(cells[:, i], errors="coerce"), dtype=float)
-            for i, h in enumerate(header) if h in known}
+    with _not_csv(path), path.open(newline="", encoding="utf-8-sig") as fh:
+        reader = csv.reader(fh)
+        header = [h.strip() for h in next(reader, [])]
+        _check_header(path, header)
+        width = len(header)
+        use = {h: i for i, h in enumerate(header) if h in known}
+        parts: dict[str, list[np.ndarray]] = {h: [] for h in use}
+        blanks: list[np.ndarray] = []  # record numbers of blank lines
+        record, n_body, n_bad, first_bad = 1, 0, 0, None
+        while chunk := list(itertools.islice(reader, _CHUNK_RECORDS)):
+            if "\0" in "".join(itertools.chain.from_iterable(chunk)):
+                raise ValueError(f"{path}: not a text CSV (it holds NUL bytes: a binary "
+                                 "file)")
+            kind = np.array([0 if not "".join(r).strip() else 1 if len(r) == width else 2
+                             for r in chunk], dtype=np.int8)  # blank, a row, another length
+            rows = np.flatnonzero(kind == 1)
+            if (kind == 0).any():
+                blanks.append(record + np.flatnonzero(kind == 0))
+            bad = np.flatnonzero(kind == 2)
+            if n_body + int((kind != 0).sum()) > MAX_ROWS:
+                k = int(np.flatnonzero(kind != 0)[MAX_ROWS - n_body])
+                raise ValueError(
+                    f"{path}: more than {MAX_ROWS} data rows (line "
+                    f"{_line_of(path, record + k)} is row {MAX_ROWS}); the calibration holds "
+                    "about 6.5 kB a row: calibrate on a stretch of the recording, or on "
+                    "every k-th row")
+            if bad.size and first_bad is None:
+                first_bad = (record + int(bad[0]), len(chunk[bad[0]]))
+            n_bad += bad.size
+            cells = None
+            if not n_bad and rows.size:
+                cells = np.array([chunk[k] for k in rows], dtype=object)
+                for h, i in use.items():
+                    parts[h].append(_numbers(path, cells[:, i], h, n_body,
+                                             lambda k, b=record, r=rows: b + int(r[k])))
+            n_body += rows.size + bad.size
+            record += len(chunk)
+            chunk = cells = None  # one chunk's text in hand, not two
+    if not n_body:
+        raise ValueError(f"{path}: no data rows below the header")
+    if first_bad is not None:
+        raise ValueError(f"{path}: rows of another length than the header: line "
+                         f"{_line_of(path, first_bad[0])} has {first_bad[1]} fields, the "
+                         f"header names {width} ({n_bad} of {n_body} rows differ)")
+    blank = np.concatenate(blanks) if blanks else np.empty(0, np.int64)
+
+    def row(i: int) -> str:  # data row i (blank lines not counted) -> its record, line
+        r = i + 1
+        while (nxt := i + 1 + int(np.searchsorted(blank, r, "right"))) != r:
+            r = nxt
+        return f"row {i} (line {_line_of(path, r)})"
+
+    return {h: np.concatenate(p) for h, p in parts.items()}, row
 
 
-def _usable_rows(path: Path, cols: dict[str, np.ndarray], notes: list[str]) -> np.ndarray:
-    """Indices of the rows kept: finite values, time stamps increasing (rows repeating
-    the previous one dropped); what was dropped is appended to ``notes``."""
+def _check_ranges(path: Path, cols: dict[str, np.ndarray], row: Callable[[int], str]
+                  ) -> None:
+    """Every finite value inside its column's physical range (:data:`COLUMN_RANGES`):
+    refused in one line naming the file, the column and the row
+    (:func:`swgsim.datasets.recording_table.check_limit`, the importer's check)."""
+    for c, x in cols.items():
+        lo, hi, unit, what = COLUMN_RANGES[c]
+        try:
+            rt.check_limit(np.where(np.isfinite(x), x, lo), lo, hi, c, what, unit, "csv",
+                           "beyond a joint's physical range: a fault of the sensor, a "
+                           "unit mistaken or a damaged file", row=row)
+        except ValueError as e:
+            raise ValueError(f"{path}: {e}") from None
+
+
+def _usable_rows(path: Path, cols: dict[str, np.ndarray], row: Callable[[int], str],
+                 notes: list[str]) -> np.ndarray | None:
+    """Indices of the rows kept (None: all of them): finite values, time stamps
+    increasing (rows repeating the previous one dropped); what was dropped is appended
+    to ``notes``, how many and the first (``row`` names a data row)."""
     use = list(REQUIRED_COLUMNS) + [c for c in OPTIONAL_COLUMNS if c in cols]
-    ok = np.all(np.isfinite(np.column_stack([cols[c] for c in use])), axis=1)
+    n = cols["time_s"].size
+    ok = np.ones(n, dtype=bool)
+    for c in use:
+        ok &= np.isfinite(cols[c])
     if not ok.all():
-        notes.append(f"dropped {int((~ok).sum())} of {len(ok)} rows with non-finite or "
-                     "non-numeric values")
+        i = int(np.flatnonzero(~ok)[0])
+        which = [c for c in use if not np.isfinite(cols[c][i])]
+        notes.append(f"dropped {int((~ok).sum())} of {n} rows with a missing or non-finite "
+                     f"value (the first: {row(i)}, column {', '.join(which)})")
         log.warning("%s: %s", path.name, notes[-1])
     if not ok.any():
-        raise ValueError(f"{path}: no usable rows: all {len(ok)} rows hold non-finite or "
-                         "non-numeric values")
+        raise ValueError(f"{path}: no usable rows: all {n} rows hold non-finite or "
+                         "missing values")
     t = cols["time_s"][ok]
     dt = np.diff(t)
     if np.any(dt < 0):
         k = int(np.flatnonzero(dt < 0)[0])
         raise ValueError(f"{path}: time_s goes backwards after {t[k]:g} s (to {t[k + 1]:g} "
-                         "s); rows must be in time order")
+                         f"s, {row(int(np.flatnonzero(ok)[k + 1]))}); rows must be in time "
+                         "order")
     keep = np.concatenate([[True], dt > 0])
+    sel = None if ok.all() and keep.all() else np.flatnonzero(ok)[keep]
     if not keep.all():
-        notes.append(f"dropped {int((~keep).sum())} rows repeating the previous time stamp")
+        i = int(np.flatnonzero(ok)[np.flatnonzero(~keep)[0]])
+        notes.append(f"dropped {int((~keep).sum())} rows repeating the previous time stamp "
+                     f"(the first: {row(i)}, {cols['time_s'][i]:g} s)")
         log.warning("%s: %s", path.name, notes[-1])
-    sel = np.flatnonzero(ok)[keep]
-    if sel.size < MIN_ROWS:
-        raise ValueError(f"{path}: {sel.size} usable rows, at least {MIN_ROWS} needed")
+    kept = n if sel is None else sel.size
+    if kept < MIN_ROWS:
+        raise ValueError(f"{path}: {kept} usable rows, at least {MIN_ROWS} needed")
     return sel
 
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import io
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -28,15 +29,25 @@ import numpy as np
 
 from swgsim.files.inputs import check_input_file
 
-__all__ = ["MAX_TABLE_BYTES", "MAX_TABLE_CELLS", "MIN_WINDOW_SAMPLES", "TABLE_FORMATS",
-           "assign_points", "check_file", "check_limit", "column_name", "content_hash",
-           "datetime_seconds", "numeric", "read_table", "row_name", "stream_table", "thin",
-           "window_reduce", "window_starts"]
+__all__ = ["MAX_READ_BYTES", "MAX_TABLE_BYTES", "MAX_TABLE_CELLS", "MIN_WINDOW_SAMPLES",
+           "TABLE_FORMATS", "assign_points", "check_file", "check_limit", "column_name",
+           "content_hash", "datetime_seconds", "numeric", "read_table", "row_name",
+           "stream_table", "thin", "window_reduce", "window_starts"]
 
 #: Largest table read [bytes] (1 GiB): a CSV of about 10 columns at 10 kHz holds some
 #: 1.5 h; pandas holds it in about 2-3 times its size of memory. Longer recordings: one
 #: file per day, or Parquet (compressed, typically 3-5 times smaller).
 MAX_TABLE_BYTES = 1 << 30
+#: Largest ``max_bytes`` a run may ask for (``swgsim-import max_file_mb``) [bytes]: 4 GiB.
+#: Reading holds the file's bytes (hashed and parsed from the one copy, issue 43) and
+#: parses them: measured (growth of the largest resident size over :func:`read_table` and
+#: :func:`numeric` on its columns, a synthetic CSV of 14 numeric columns, 209 bytes a row)
+#: 1.97 and 2.30 times the file at 523 MB (3 and 14 columns mapped), 3.3 and 3.8 times at
+#: 104 MB (the parser's chunk of :data:`_CHUNK_ROWS` rows then holds the whole file). A
+#: file at the bound needs about 9-10 GiB [choice: what a workstation of 16 GiB holds
+#: beside the rest; issue 82 found ``max_file_mb=65536`` allowed]. A longer recording:
+#: one file per day, or Parquet.
+MAX_READ_BYTES = 4 << 30
 #: Most cells (data rows times mapped columns) read from a table: 2**27, 1 GiB as float64,
 #: what a 1 GiB CSV of 8-character cells holds. The file's size alone does not bound it: a
 #: Parquet file compresses a constant column to almost nothing (a 50 MiB file ran out of
@@ -131,12 +142,21 @@ def _header(p: Path, data: bytes, fmt: str, sep: str = ",") -> tuple[list[str], 
 
 def _read_bytes(p: Path, max_bytes: int) -> bytes:
     """The bytes of ``p``, read once and at most ``max_bytes`` of them (the file may have
-    grown since :func:`check_file`)."""
+    grown since :func:`check_file`).
+
+    The buffer is the file's size (plus one byte, to see it grow), not ``max_bytes``:
+    ``read(max_bytes + 1)`` asks for all of it at once, a MemoryError for any file, even
+    a small one, once ``max_bytes`` passes the machine's memory (issue 82:
+    ``max_file_mb=65536`` on a machine of 24 GiB)."""
     with open(p, "rb") as f:
-        data = f.read(max_bytes + 1)
+        size = min(os.fstat(f.fileno()).st_size, max_bytes)
+        data = f.read(size + 1)
     if len(data) > max_bytes:
         raise ValueError(f"recording {p}: grew beyond the {max_bytes / 2**20:g} MiB read "
                          "while it was read; import a finished file")
+    if len(data) > size:
+        raise ValueError(f"recording {p}: grew while it was read (past the {size} bytes it "
+                         "had); import a finished file")
     if not data:
         raise ValueError(f"recording {p}: the file is empty (0 bytes)")
     return data
@@ -374,9 +394,26 @@ def datetime_seconds(df, column: str, key: str, fmt: str) -> np.ndarray:
 
 
 def check_limit(values: np.ndarray, lo: float, hi: float, column: str, key: str, unit: str,
-                fmt: str, why: str) -> None:
+                fmt: str, why: str, row: Callable[[int], str] | None = None) -> None:
     """Refuse the first value outside [lo, hi], naming the column, the row and ``why``
     (what a value there means, e.g. a unit mistaken).
+
+    Parameters
+    ----------
+    values : ndarray, shape (n_rows,)
+        The column (NaN passes: a missing reading is the caller's to refuse or keep).
+    lo, hi : float
+        The range, in ``unit``.
+    column, key : str
+        The column and what it was given as (:func:`column_name`).
+    unit : str
+    fmt : str
+        ``csv`` or ``parquet`` (how rows are named, :func:`row_name`).
+    why : str
+        What a value outside means.
+    row : callable, optional
+        How the message names row ``i`` where a reader knows better than
+        :func:`row_name` (a CSV with blank lines or quoted line breaks).
 
     Raises
     ------
@@ -385,7 +422,8 @@ def check_limit(values: np.ndarray, lo: float, hi: float, column: str, key: str,
     bad = np.flatnonzero((values < lo) | (values > hi))
     if bad.size:
         i = int(bad[0])
-        raise ValueError(f"column {column!r} ({key}), {row_name(i, fmt)}: {values[i]:g} {unit} "
+        where = row_name(i, fmt) if row is None else row(i)
+        raise ValueError(f"column {column!r} ({key}), {where}: {values[i]:g} {unit} "
                          f"outside [{lo:g}, {hi:g}] {unit}: {why}")
 
 

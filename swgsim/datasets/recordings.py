@@ -45,14 +45,22 @@ from swgsim.files import ownership
 from swgsim.files.digest import config_digest
 from swgsim.files.ownership import atomic_write_json
 from swgsim.files.provenance import git_revision, library_versions, package_version
-from swgsim.gear.profile import MAX_INPUT_SPEED_RPM, MOMENTARY_PEAK_TORQUE_NM
+from swgsim.gear.profile import MAX_INPUT_SPEED_RPM, MOMENTARY_PEAK_TORQUE_NM, RPM
 
 log = logging.getLogger(__name__)
 
-__all__ = ["APP", "import_recording", "read_samples", "recording_stream", "write_stream"]
+__all__ = ["APP", "MAX_POWER_W", "import_recording", "read_samples", "recording_stream",
+           "write_stream"]
 
 #: The app that writes imported streams (their ownership stamp's ``apps``).
 APP = "swgsim-import"
+#: Largest input or output power a power column may hold [W]: the product of the limits
+#: the speed and torque columns are held to, the catalogue's 6500 rpm and momentary peak
+#: 191 N m (:data:`~swgsim.gear.profile.MAX_INPUT_SPEED_RPM`,
+#: :data:`~swgsim.gear.profile.MOMENTARY_PEAK_TORQUE_NM`), 130 kW: the output's largest
+#: power at ratio 1; at the catalogue's ratio 100 a hundred times it, room for an input
+#: power at an efficiency down to 1 %. Power in mW, or in W times a gain, lies beyond.
+MAX_POWER_W = MAX_INPUT_SPEED_RPM * RPM * MOMENTARY_PEAK_TORQUE_NM
 
 
 # ------------------------------------------------------------------ the table's samples
@@ -90,7 +98,7 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
         missing column, a non-numeric or non-finite value, a bridge beyond
         ±:data:`MAX_BRIDGE_MVV` mV/V, a speed beyond the catalogue's 6500 rpm, a torque
         beyond its momentary peak (191 N m), a temperature outside
-        :data:`TEMPERATURE_RANGE_C`.
+        :data:`TEMPERATURE_RANGE_C`, a power beyond ±:data:`MAX_POWER_W` W.
     """
     cols = {c: k for k, c in mapping_columns(m).items()}
     df, fmt, digest = rt.read_table(path, cols, max_bytes, progress)
@@ -118,6 +126,11 @@ def read_samples(path: str | os.PathLike, m: RecordingMapping,
     if temp is not None:
         rt.check_limit(temp, *TEMPERATURE_RANGE_C, m.temperature, "temperature", "degC", fmt,
                        "a joint's temperature in degC (kelvin or degF?)")
+    if m.power is not None:
+        for c, key in ((m.power.input, "power.input"), (m.power.output, "power.output")):
+            rt.check_limit(v[c], -MAX_POWER_W, MAX_POWER_W, c, key, "W", fmt,
+                           "beyond the catalogue's speed times its momentary peak torque "
+                           "(mW, or kW given as W?)")
 
     def angle(a: Angle | None) -> np.ndarray | None:
         if a is None:

@@ -150,7 +150,10 @@ def test_the_monitor_reads_an_imported_profile_lifes_angles(tmp_path):
     (["recording=late.csv"], ["column 'time_s' (time), row 5 (line 7): time goes back from "
                               "0.004 to 0.001 s"]),
     (["recording=none.csv"], ["none.csv: no recording file"]),
-    (["max_file_mb=0.5"], ["max_file_mb must lie in [1, 65536]"]),
+    (["max_file_mb=0.5"], ["max_file_mb must lie in [1, 4096]"]),
+    # issue 82: reading holds the file and parses it, 2-4 times its size; 65536 MiB was
+    # allowed (and asked that much memory at once, a MemoryError for any file)
+    (["max_file_mb=65536"], ["max_file_mb must lie in [1, 4096]"]),
     (["out_dir=theirs"], ["out_dir", "holds notes.txt, which this project cannot show"]),
 ])
 def test_bad_input_ends_in_one_line_and_exit_2(tmp_path, monkeypatch, capsys, args, words):

@@ -106,6 +106,104 @@ def test_rows_of_another_length_are_refused_naming_the_line(plain):
         load_friction_csv(plain)
 
 
+# ------------------------------------------------------------------ ranges, text, memory
+PLAIN = ["time_s", "q_rad", "dq_rad_per_s", "ddq_rad_per_s2", "tau_friction_Nm", "load_Nm"]
+
+
+def _with(path: Path, line: int, column: str, cell: str) -> Path:
+    """``path`` (the ``plain`` CSV) with the cell of ``column`` on ``line`` (1: the
+    header) replaced by ``cell``."""
+    lines = path.read_text().splitlines()
+    fields = lines[line - 1].split(",")
+    fields[PLAIN.index(column)] = cell
+    lines[line - 1] = ",".join(fields)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("column, cell, shown", [
+    ("tau_friction_Nm", "1e200", "1e+200 N m outside [-10000, 10000] N m"),
+    ("load_Nm", "-2e4", "-20000 N m outside [-10000, 10000] N m"),
+    ("time_s", "3.2e10", "3.2e+10 s outside [-1e+10, 1e+10] s"),
+    ("q_rad", "-3e4", "-30000 rad outside [-10000, 10000] rad"),
+    ("dq_rad_per_s", "900", "900 rad/s outside [-680.678, 680.678] rad/s"),
+    ("ddq_rad_per_s2", "2e5", "200000 rad/s² outside [-100000, 100000] rad/s²"),
+])
+@pytest.mark.parametrize("blank", [False, True], ids=["", "after a blank line"])
+def test_a_value_outside_its_physical_range_is_refused_naming_file_column_and_row(
+        plain, column, cell, shown, blank):
+    """Issue 82: a friction torque of 1e200 N m in one row was read, and the calibration
+    ended in a TypeError after its work. Each column has its physical range
+    (``COLUMN_RANGES``); a blank line above moves the line, not the row."""
+    _with(plain, 902, column, cell)
+    if blank:
+        lines = plain.read_text().splitlines()
+        plain.write_text("\n".join(lines[:10] + [""] + lines[10:]) + "\n")
+    with pytest.raises(ValueError) as e:
+        load_friction_csv(plain)
+    msg = str(e.value)
+    assert msg.startswith(f"{plain}: column '{column}' (") and "\n" not in msg, msg
+    assert f"row 900 (line {903 if blank else 902}): {shown}: " in msg, msg
+
+
+def test_text_where_a_number_belongs_is_refused_naming_file_column_and_row(plain):
+    """Issue 82: a row whose cell was text was dropped as though the reading were missing;
+    only an empty cell or a missing-value marker (NaN, n/a, ...) is a missing reading."""
+    _with(plain, 14, "q_rad", "0.1x")
+    with pytest.raises(ValueError, match=r"plain\.csv: column 'q_rad', row 12 \(line 14\): "
+                                         r"'0\.1x' is not a number \(a missing reading"):
+        load_friction_csv(plain)
+
+
+def test_the_rows_dropped_are_counted_with_the_first_of_them(plain, caplog):
+    """Issue 82: nothing dropped unsaid: the notes (and the log) give how many rows and
+    the first, with its line, as for the rows repeating a time stamp."""
+    _with(plain, 1002, "q_rad", "NaN")
+    t_before = plain.read_text().splitlines()[1200].split(",")[0]
+    _with(plain, 1202, "time_s", t_before)  # the time stamp of the row above it
+    with caplog.at_level(logging.WARNING, logger="swgcal.friction.data"):
+        rec = load_friction_csv(plain)
+    assert rec.n == 1497
+    assert ("dropped 2 of 1500 rows with a missing or non-finite value (the first: row 700 "
+            "(line 702), column load_Nm)") in rec.notes
+    assert (f"dropped 1 rows repeating the previous time stamp (the first: row 1200 (line "
+            f"1202), {float(t_before):g} s)") in rec.notes
+    assert len(caplog.records) == 2
+
+
+def test_reading_holds_about_the_files_size_not_ten_times_it(tmp_path):
+    """Issue 82: the whole file went into lists of strings, ten times its size (16.2 MB:
+    +169 MB at the peak), so a file at the 2 GiB bound needed some 20 GB. It is parsed a
+    chunk of records at a time now (measured 1.4-1.5 times the file's size)."""
+    import tracemalloc
+
+    t = np.arange(40_000) * 0.002
+    path = _write(tmp_path / "long.csv", t, 0.3 * np.sin(0.5 * t), 0.15 * np.cos(0.5 * t),
+                  0.3 * np.tanh(50 * np.cos(0.5 * t)))
+    load_friction_csv(path)  # the lazy imports of the first load, not measured
+    tracemalloc.start()
+    try:
+        rec = load_friction_csv(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert rec.n == t.size
+    assert peak < 3 * path.stat().st_size, (peak, path.stat().st_size)
+
+
+def test_more_rows_than_the_calibration_holds_are_refused_as_they_are_read(plain,
+                                                                          monkeypatch):
+    """Issue 82: the bound follows what the consumer needs: the calibration holds about
+    6.5 kB a row, so a recording is refused at ``MAX_ROWS`` rows, before the rest is
+    read (the 2 GiB an input file may have would ask some 220 GB)."""
+    from swgcal.friction import data
+
+    monkeypatch.setattr(data, "MAX_ROWS", 1000)
+    with pytest.raises(ValueError, match=r"plain\.csv: more than 1000 data rows \(line 1002 "
+                                         r"is row 1000\); the calibration holds about"):
+        load_friction_csv(plain)
+
+
 # ------------------------------------------------------------------ consistency
 T = np.arange(3000) * 0.002
 
@@ -218,3 +316,15 @@ def test_clear_errors_on_real_recordings_are_refused(real, tmp_path, error):
         msg = str(e.value)
         assert str(path) in msg and "not the time derivative" in msg, (name, msg)
         assert "allowed 0.5" in msg and "\n" not in msg
+
+
+def test_a_gap_in_the_time_stamps_is_refused_before_its_grid_is_allocated(tmp_path):
+    """Issue 82 (audit): without ddq the acceleration is estimated on a uniform grid from
+    the first to the last time stamp; one jump to 1e6 s at 2-ms steps would have asked for
+    gigabytes. Refused in one line naming the file, before the grid is made."""
+    t = np.arange(500) * 2e-3
+    t[-1] = 1e6
+    path = _write(tmp_path / "gap.csv", t, np.zeros(500), np.zeros(500), np.zeros(500))
+    with pytest.raises(ValueError, match=r"gap.csv: time_s spans 1e\+06 s at a median step "
+                                         r"of 0.002 s: .* grid points"):
+        load_friction_csv(path)

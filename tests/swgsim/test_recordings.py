@@ -314,6 +314,12 @@ TABLES = [
      r"column 't_out_nm' \(torque\), row 0 \(line 2\): 10000 N m outside .*N mm"),
     ("temperature in kelvin", _scale("temperature_c", 10.0), None,
      r"column 'temperature_c' \(temperature\), row 0 \(line 2\): 300 degC .*kelvin"),
+    ("input power in mW", _scale("p_in_w", 1000.0), None,
+     r"column 'p_in_w' \(power.input\), row 0 \(line 2\): 200000 W outside "
+     r"\[-130010, 130010\] W: .*mW"),
+    ("output power beyond the catalogue's", _set("p_out_w", 90, -2e5), None,
+     r"column 'p_out_w' \(power.output\), row 90 \(line 92\): -200000 W outside "
+     r"\[-130010, 130010\] W"),
     ("angle not monotone while turning", _shift("phi_in", 90, -3 * 2 * np.pi / 24), None,
      r"column 'phi_in' \(input_angle.column\), row 90 \(line 92\): the angle steps by "
      r"-0.5\d+ rad while the speed is 1500 rpm \(not monotone"),
@@ -467,6 +473,63 @@ def test_a_table_is_bounded_by_its_cells_before_it_is_parsed(tmp_path, monkeypat
                        r"358400 values, more than the 100000 read") as info:
         import_recording(rec, yml, tmp_path / "stream")
     assert "\n" not in str(info.value) and not (tmp_path / "stream").exists()
+
+
+def test_a_large_max_bytes_asks_no_more_memory_than_the_file(tmp_path):
+    """Issue 82: the table was read with ``read(max_bytes + 1)``, which asks for that much
+    memory at once: a MemoryError for a table of kilobytes once ``max_bytes`` passed the
+    machine's memory. The buffer is the file's size now."""
+    import tracemalloc
+
+    import swgsim.datasets.recording_table as rt
+
+    df, mapping = small()
+    rec, _ = _write(df, mapping, tmp_path)
+    tracemalloc.start()
+    try:
+        got, fmt, _ = rt.read_table(rec, {"time_s": "time"}, max_bytes=1 << 40)  # 1 TiB
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert fmt == "csv" and len(got) == len(df)
+    assert peak < 64 * rec.stat().st_size + (16 << 20), peak
+
+
+def test_a_recording_growing_while_it_is_read_is_refused(tmp_path, monkeypatch):
+    """A logger writing on between the file's size taken and its read: refused in one
+    line, as one grown past max_bytes is (the buffer is the size taken)."""
+    import builtins
+
+    import swgsim.datasets.recording_table as rt
+
+    df, mapping = small()
+    rec, yml = _write(df, mapping, tmp_path)
+    size = rec.stat().st_size
+
+    class Growing:  # the file as _read_bytes opens it; a row appended as it is read
+        def __init__(self, f):
+            self.f = f
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.f.close()
+
+        def fileno(self):
+            return self.f.fileno()
+
+        def read(self, n):
+            with builtins.open(rec, "ab") as g:
+                g.write(b"1,2,3\n")
+            return self.f.read(n)
+
+    monkeypatch.setattr(rt, "open", lambda p, mode: Growing(builtins.open(p, mode)),
+                        raising=False)
+    with pytest.raises(ValueError, match=rf"rec\.csv: grew while it was read \(past the "
+                                         rf"{size} bytes it had\); import a finished file"):
+        import_recording(rec, yml, tmp_path / "stream")
+    assert not (tmp_path / "stream").exists()
 
 
 def test_the_recording_is_hashed_from_the_bytes_parsed(tmp_path, monkeypatch):
