@@ -12,6 +12,7 @@ docs/monitor.md, "Families of benign changes".
 from __future__ import annotations
 
 import dataclasses
+import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,29 +24,43 @@ from swgsim.datasets.conditions import (
     TemperatureTrace,
     trace_rise,
 )
-from swgsim.gear.thermal import FRICTION_FORMS, MONOTONE_FORMS, FrictionLaw, JointThermal
+from swgsim.gear.thermal import (
+    FRICTION_FORMS,
+    MONOTONE_FORMS,
+    FrictionLaw,
+    JointThermal,
+    ThermalNetwork,
+)
 from swgsim.sensing.bridge_drift import (
     TEMPERATURE_SENSOR_FAULTS,
     BridgeDrift,
     TemperatureSensor,
 )
 
-__all__ = ["DEFAULT_PARTS", "FAMILY_TAG", "PARTS", "RANGES", "SENSOR_STATES", "UR3_COLUMNS",
-           "NuisanceFamily",
+__all__ = ["ALL_SENSOR_STATES", "DEFAULT_PARTS", "FAMILY_TAG", "KEYED_RANGES", "PARTS",
+           "RANGES", "SENSOR_STATES", "UR3_COLUMNS", "NuisanceFamily", "benchmark_families",
            "default_families", "draw_conditions"]
 
-#: The parts of a joint's day a family can draw (docs/monitor.md, "Families of benign changes").
+#: The parts of a joint's day a family can draw (docs/monitor.md, "Families of benign
+#: changes"); the last three are the physics of issue 83 the monitor was not built on: the
+#: joint in two nodes with its motor and drive (``network``), a Coulomb term with a law of
+#: its own whose slope changes sign and its own run-in (``coulomb``), and the friction in
+#: the gear's dynamics (``dynamics``).
 PARTS = ("friction_law", "warm_up", "drift", "ambient", "run_in", "payload", "sensor",
-         "regrease", "trace")
-#: The parts a family draws by default: all but the ``trace`` (its file is the user's).
-DEFAULT_PARTS = PARTS[:-1]
+         "regrease", "trace", "network", "coulomb", "dynamics")
+#: The parts a family draws by default: the day's, without the ``trace`` (its file is the
+#: user's) and without issue 83's.
+DEFAULT_PARTS = PARTS[:8]
 #: The parts that need the joint's temperature (refused in a ``still`` family).
-THERMAL_PARTS = ("friction_law", "warm_up", "drift", "ambient", "trace")
+THERMAL_PARTS = ("friction_law", "warm_up", "drift", "ambient", "trace", "network", "coulomb")
 #: The UR3 CobotOps file's joint temperature columns (its first is named ``T0``).
 UR3_COLUMNS = ("Temperature_T0", *(f"Temperature_J{i}" for i in range(1, 6)))
-#: States of the temperature sensor a family can draw: a working sensor, none, or one of
-#: the sensor's faults (:data:`swgsim.sensing.bridge_drift.TEMPERATURE_SENSOR_FAULTS`).
+#: States of the temperature sensor a family draws by default: a working sensor, none, or
+#: one of the sensor's faults (:data:`swgsim.sensing.bridge_drift.TEMPERATURE_SENSOR_FAULTS`).
 SENSOR_STATES = ("present", "missing", *TEMPERATURE_SENSOR_FAULTS[1:])
+#: Every state a family may name: those, and a sound sensor that lags the housing or reads
+#: with an offset (issue 83; ``sensor_lag_min``, ``sensor_offset_k``).
+ALL_SENSOR_STATES = (*SENSOR_STATES, "lagging", "offset")
 #: Second word of every family draw's seed, ``default_rng([seed, FAMILY_TAG])``.
 FAMILY_TAG = 0x5F4A11
 
@@ -73,6 +88,23 @@ RANGES = {
     "regrease_drop": ("regrease", 0.0, 1.0, "", "excess friction of fresh grease"),
     "regrease_tau_h": ("regrease", 0.1, 1e3, "h", "time constant of running in again"),
     "trace_scale": ("trace", 0.0, 10.0, "", "factor on the measured rise"),
+}
+
+
+#: Range fields added with issue 83, each drawn from a stream of its own keyed by its name
+#: (:func:`_keyed`), so that adding one moves no other draw: (part, allowed lo, allowed hi,
+#: unit, what), as :data:`RANGES`.
+KEYED_RANGES = {
+    "grease_r_k_per_w": ("network", 0.005, 0.25, "K/W", "grease to housing, running"),
+    "standstill_factor": ("network", 1.0, 20.0, "", "grease to housing at a stop over running"),
+    "motor_km_nm_per_sqrt_w": ("network", 0.05, 1.0, "N m/√W", "the motor's constant"),
+    "drive_w": ("network", 0.0, 50.0, "W", "the drive's electronics while powered"),
+    "coulomb_ratio_40c": ("coulomb", 0.3, 1.0, "", "the Coulomb term's factor at 40 °C"),
+    "coulomb_minimum_c": ("coulomb", 45.0, 80.0, "°C", "where the Coulomb law turns"),
+    "coulomb_drop": ("coulomb", 0.0, 1.0, "", "the Coulomb term's run-in excess"),
+    "coulomb_tau_h": ("coulomb", 0.1, 1e3, "h", "the Coulomb term's run-in time constant"),
+    "sensor_lag_min": ("sensor", 0.0, 600.0, "min", "a lagging sensor's time constant"),
+    "sensor_offset_k": ("sensor", -10.0, 10.0, "K", "a sensor's calibration offset"),
 }
 
 
@@ -155,6 +187,16 @@ class NuisanceFamily:
     trace_columns: list[str] = field(default_factory=lambda: list(UR3_COLUMNS))
     trace_scale: list[float] = _span(1.0, 4.0)
     logged: bool = False
+    grease_r_k_per_w: list[float] = _span(0.03, 0.12)
+    standstill_factor: list[float] = _span(2.0, 8.0)
+    motor_km_nm_per_sqrt_w: list[float] = _span(0.1, 0.3)
+    drive_w: list[float] = _span(2.0, 10.0)
+    coulomb_ratio_40c: list[float] = _span(0.5, 1.0)
+    coulomb_minimum_c: list[float] = _span(45.0, 80.0)
+    coulomb_drop: list[float] = _span(0.0, 0.3)
+    coulomb_tau_h: list[float] = _span(2.0, 20.0)
+    sensor_lag_min: list[float] = _span(5.0, 40.0)
+    sensor_offset_k: list[float] = _span(-2.0, 2.0)
 
     def check(self, key: str = "NuisanceFamily") -> None:
         """Refuse a family outside its ranges in one line naming ``<key>.<field>`` and
@@ -173,7 +215,7 @@ class NuisanceFamily:
             (:data:`RANGES`).
         """
         for name, allowed in (("parts", PARTS), ("friction_forms", FRICTION_FORMS),
-                              ("sensor_states", SENSOR_STATES)):
+                              ("sensor_states", ALL_SENSOR_STATES)):
             got = list(getattr(self, name))
             if not got or len(set(got)) != len(got) or not set(got) <= set(allowed):
                 raise ValueError(f"{key}.{name} must list distinct values of "
@@ -191,7 +233,7 @@ class NuisanceFamily:
         if self.logged and "regrease" not in self.parts:
             raise ValueError(f"{key}.logged: only a family with the regrease part has a "
                              f"maintenance log to hand over, parts {list(self.parts)}")
-        for name, (_, lo, hi, unit, what) in RANGES.items():
+        for name, (_, lo, hi, unit, what) in {**RANGES, **KEYED_RANGES}.items():
             r = list(getattr(self, name))
             try:
                 ok = len(r) == 2 and lo <= float(r[0]) <= float(r[1]) <= hi
@@ -233,6 +275,33 @@ def default_families() -> dict[str, NuisanceFamily]:
             "all": NuisanceFamily()}
 
 
+def benchmark_families() -> dict[str, NuisanceFamily]:
+    """The benchmark's families (issue 83): each a day whose physics the monitor was not
+    built on - the joint in two nodes with its motor and drive, the sensor on the housing, a
+    Coulomb term with a law of its own that turns, the friction in the gear's dynamics, the
+    bridges' drift drawn - under a daily warm-up, and each family's change on top.
+
+    Returns
+    -------
+    dict of str to NuisanceFamily
+        ``warm_up``, ``hall`` (the hall's temperature changes), ``regrease`` (not in the
+        maintenance log), ``payload``, ``sensor_<state>`` for every state but a working
+        sensor (missing, stuck, drift, dropout, lagging, offset), and ``all`` (every
+        part, the sensor in any state, nothing logged).
+    """
+    physics = ["network", "coulomb", "dynamics", "friction_law", "drift", "warm_up"]
+
+    def fam(*parts: str, **kw) -> NuisanceFamily:
+        return NuisanceFamily(parts=[*physics, *parts], **kw)
+
+    return {"warm_up": fam(), "hall": fam("ambient"), "regrease": fam("regrease"),
+            "payload": fam("payload"),
+            **{f"sensor_{s}": fam("sensor", sensor_states=[s])
+               for s in ALL_SENSOR_STATES if s != "present"},
+            "all": fam("ambient", "run_in", "payload", "sensor", "regrease",
+                       sensor_states=list(ALL_SENSOR_STATES))}
+
+
 def _draws(family: NuisanceFamily, seed: int) -> tuple[dict[str, float], str, str]:
     """Every range's value, the friction form and the sensor state for a seed (drawn
     in a fixed order whichever parts the family draws)."""
@@ -242,7 +311,14 @@ def _draws(family: NuisanceFamily, seed: int) -> tuple[dict[str, float], str, st
     form = family.friction_forms[int(rng.integers(len(family.friction_forms)))]
     state = family.sensor_states[int(rng.integers(len(family.sensor_states)))]
     values["trace_scale"] = _trace_draw(family, seed)[0]
+    values.update({name: _keyed(family, name, seed) for name in KEYED_RANGES})
     return values, form, state
+
+
+def _keyed(family: NuisanceFamily, name: str, seed: int) -> float:
+    """A :data:`KEYED_RANGES` magnitude for a seed, from a stream keyed by its name."""
+    rng = np.random.default_rng([seed, FAMILY_TAG, zlib.crc32(name.encode())])
+    return float(rng.uniform(*getattr(family, name)))
 
 
 def _trace_draw(family: NuisanceFamily, seed: int) -> tuple[float, str]:
@@ -288,7 +364,11 @@ def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
         thermal.update(ambient_swing_k=v["ambient_swing_k"], ambient_points=[
             [0.0, 0.0], [start, 0.0], [start + v["ambient_ramp_h"], v["ambient_shift_k"]]])
     sensor = TemperatureSensor()
-    if "sensor" in parts and state != "present":
+    if "sensor" in parts and state in ("lagging", "offset"):  # sound, but not the grease
+        sensor = dataclasses.replace(sensor, **({"lag_min": v["sensor_lag_min"]}
+                                                if state == "lagging"
+                                                else {"offset_k": v["sensor_offset_k"]}))
+    elif "sensor" in parts and state != "present":
         sensor = None if state == "missing" else dataclasses.replace(
             sensor, fault=state, fault_hour=v["sensor_fault_h"],
             drift_k_per_h=v["sensor_drift_k_per_h"] if state == "drift" else 0.0)
@@ -310,6 +390,30 @@ def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
         temperature_trace=(TemperatureTrace(family.trace_path, _trace_draw(family, seed)[1],
                                             scale=v["trace_scale"])
                            if "trace" in parts else None))
+    cond = _issue_83_parts(cond, parts, v)
     if family.still:
         cond = dataclasses.replace(cond, thermal=None, viscosity=False, bridge_drift=None)
+    return cond
+
+
+def _issue_83_parts(cond: ConditionsConfig, parts: set[str], v: dict[str, float]
+                    ) -> ConditionsConfig:
+    """The physics of issue 83 on a drawn day: the joint in two nodes, a Coulomb term of its
+    own (law, and run-in and re-greasing where drawn), the friction in the dynamics."""
+    if "network" in parts:
+        net = ThermalNetwork(grease_r_k_per_w=v["grease_r_k_per_w"],
+                             standstill_factor=v["standstill_factor"],
+                             motor_km_nm_per_sqrt_w=v["motor_km_nm_per_sqrt_w"],
+                             drive_w=v["drive_w"])
+        cond = dataclasses.replace(cond, thermal=dataclasses.replace(cond.thermal, network=net))
+    if "coulomb" in parts:
+        apart = {"coulomb_drop": v["coulomb_drop"], "coulomb_tau_h": v["coulomb_tau_h"]}
+        cond = dataclasses.replace(
+            cond, coulomb_law=FrictionLaw("u_shaped", v["coulomb_ratio_40c"],
+                                          v["coulomb_minimum_c"]),
+            run_in=None if cond.run_in is None else dataclasses.replace(cond.run_in, **apart),
+            regrease=(None if cond.regrease is None
+                      else dataclasses.replace(cond.regrease, **apart)))
+    if "dynamics" in parts:
+        cond = dataclasses.replace(cond, viscous_in_dynamics=True)
     return cond

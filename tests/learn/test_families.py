@@ -16,6 +16,7 @@ from learn.monitor.families import (
     SENSOR_STATES,
     NuisanceFamily,
     _draws,
+    benchmark_families,
     default_families,
     draw_conditions,
 )
@@ -304,3 +305,37 @@ def test_a_monitor_on_the_laws_temperature_raises_no_gear_fault_alarm(bench, fam
     assert not [a for a in named if a.kind == "gear_fault"]
     sensor = [a.hour for a in named if a.fault == TEMPERATURE_SENSOR]
     assert sensor and failed_h <= sensor[0] <= failed_h + 1.0
+
+
+# ------------------------------------------------------------------ issue 83's physics
+@pytest.mark.parametrize("name", list(benchmark_families()))
+def test_every_benchmark_draw_holds_the_physics_the_monitor_was_not_built_on(name):
+    """Issue 83: the benchmark's families live the joint in two nodes, a Coulomb term with a
+    u-shaped law of its own (and its own run-in where one is drawn), the friction in the
+    dynamics; every draw passes the conditions' checks for a 200-h life."""
+    fam = benchmark_families()[name]
+    fam.check(name)
+    for seed in range(20):
+        c = draw_conditions(fam, seed)
+        check_tree(c, f"families.{name}")
+        c.check_inside(200.0, f"families.{name}")
+        assert c.thermal.network is not None and c.viscous_in_dynamics
+        assert c.coulomb_law.form == "u_shaped" and 45.0 <= c.coulomb_law.minimum_c <= 80.0
+        if c.run_in is not None:
+            assert c.run_in.split and 0.0 <= c.run_in.coulomb_drop <= 0.3
+    sensor = [draw_conditions(fam, s).temperature_sensor for s in range(20)]
+    if name == "sensor_lagging":
+        assert all(5.0 <= x.lag_min <= 40.0 and x.offset_k == 0 for x in sensor)
+    if name == "sensor_offset":
+        assert all(-2.0 <= x.offset_k <= 2.0 and x.lag_min == 0 for x in sensor)
+
+
+def test_a_keyed_magnitude_is_drawn_by_its_name_alone():
+    """Each of issue 83's magnitudes comes from a stream keyed by its name: the same for a
+    seed whatever else a family draws or declares, so adding one moves no other."""
+    a = NuisanceFamily(parts=["warm_up", "network"])
+    b = NuisanceFamily(parts=["warm_up", "network", "coulomb"], coulomb_tau_h=[5.0, 6.0])
+    for seed in (0, 1, 1000):
+        va, vb = _draws(a, seed)[0], _draws(b, seed)[0]
+        assert va["grease_r_k_per_w"] == vb["grease_r_k_per_w"]
+        assert va["drive_w"] == vb["drive_w"] and va["coulomb_tau_h"] != vb["coulomb_tau_h"]
