@@ -49,6 +49,12 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
                               "friction's temperature laws: two concepts, to split (issue 83)",
     "swgsim/datasets/conditions.py": "what changes while a gear stays healthy: each change's "
                                      "config and every window's conditions",
+    "swgcal/friction/data.py": "a friction recording: its reader, every check of a user's "
+                               "file (issue 82), the velocity's consistency with the angle",
+    "learn/monitor/prognosis_evaluation.py": "the prognosis's lives, scores and their checks "
+                                             "before any work: to its own block (issue 84)",
+    "tests/swgsim/test_conditions.py": "one test per change of a real day, issue 83's "
+                                       "physics among them",
     "learn/monitor/gear_monitor.py": "commissioning, scoring, alarm, naming: one gear's "
                                      "monitor state machine",
     "learn/monitor/stream.py": "a stream's input checks, the run and its outputs",
