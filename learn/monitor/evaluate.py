@@ -115,9 +115,9 @@ def nuisance_fault_lives(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int,
     return out + slow
 
 
-def _lives(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: MonitorStudyConfig,
-           seed: int, nuisance: str = "none"
-           ) -> tuple[LifeSimulator, list[tuple[LifeSimulator, FaultOnset, str]]]:
+def lives_of(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: MonitorStudyConfig,
+             seed: int, nuisance: str = "none"
+             ) -> tuple[LifeSimulator, list[tuple[LifeSimulator, FaultOnset, str]]]:
     """The healthy life of held-out gear ``g`` for a seed, under a nuisance of
     ``cfg.nuisances``, a family of ``cfg.families`` (``family:<key>``) or none, and its
     fault lives (:func:`fault_lives`, :func:`nuisance_fault_lives`, growing ones under a
@@ -227,7 +227,7 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
     if seeds is None:
         seeds = cfg.scored_seeds if family_of(nuisance) is not None else cfg.seeds
     for seed in seeds:
-        healthy, sims = _lives(plan, banks, g, cfg, seed, nuisance)
+        healthy, sims = lives_of(plan, banks, g, cfg, seed, nuisance)
         commissioned, mon, tr, named, (f, p, c) = monitor_healthy(model, cfg, healthy, seed,
                                                                   nuisance)
         lost_h = next((a.hour for a in named if a.fault == TEMPERATURE_SENSOR), None)
@@ -291,7 +291,7 @@ def evaluate_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     n_det = int(round(cfg.detector_hours * 60 / cfg.interval_min))
     for seed in cfg.seeds:
-        healthy, sims = _lives(plan, banks, g, cfg, seed, nuisance)
+        healthy, sims = lives_of(plan, banks, g, cfg, seed, nuisance)
         refs = References.of(healthy, n_comm)
         stop = min(len(healthy), n_comm + n_det)
         labels, _, _ = _labels(healthy, n_comm, stop, refs, detectors)

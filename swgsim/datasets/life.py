@@ -43,7 +43,7 @@ BLOCK = 1024
 #: tiny bench's gear 3 at 4000 rpm, interpolating to 0.627 (the grease's factor at 40 °C):
 #: RMS error 0.9 % of the signals' change from the nominal gear at 7 N m, 0.04 % at 70 N m
 #: (rungs √2 apart: 5.0 % and 0.28 %) [derived].
-VISCOUS_LADDER = tuple(2.0 ** (k / 4) for k in range(-12, 9))  # 0.125 ... 4
+VISCOUS_LADDER = tuple(2.0 ** (k / 4) for k in range(-20, 9))  # 1/32 ... 4 (a hot grease)
 
 __all__ = ["BLOCK", "VISCOUS_LADDER", "LifeSimulator", "ladder_weights", "life_dataset",
            "simulate_life_shard"]
@@ -66,7 +66,7 @@ def ladder_weights(factor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     ValueError
-        A factor outside the ladder's span (0.125 to 4), naming the first.
+        A factor outside the ladder's span (1/32 to 4), naming the first.
     """
     f = np.asarray(factor, dtype=float)
     lad = np.asarray(VISCOUS_LADDER)
@@ -75,7 +75,7 @@ def ladder_weights(factor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"conditions.viscous_in_dynamics: a viscous friction factor of "
                          f"{f[bad[0]]:g} lies outside [{lad[0]:g}, {lad[-1]:g}] (the "
                          f"ladder of simulated factors)")
-    j = np.clip(np.rint(4.0 * np.log2(f)).astype(int) + 12, 1, lad.size - 2)  # middle rung
+    j = np.clip(np.rint(4.0 * np.log2(f)).astype(int) + 20, 1, lad.size - 2)  # middle rung
     rungs = lad[np.stack([j - 1, j, j + 1], axis=1)]  # (W, 3)
     w = np.ones_like(rungs)
     for a in range(3):

@@ -1,0 +1,264 @@
+"""The benchmark of issue 83: the monitor and two baselines scored on lives whose physics
+they were not built on, over gear instances they never saw, at one false-alarm rate.
+
+A preset's gears become a production lot (:func:`population_plan`,
+:func:`swgsim.datasets.config.gear_population`); the diagnosis model trains on its first
+instances, the last ``held_out`` are scored. Each family of
+:func:`learn.monitor.families.benchmark_families` (the joint in two nodes, a Coulomb law of
+its own, the friction in the dynamics, plus the family's change) is lived per held-out
+instance and seed by a healthy life of ``healthy_hours`` and its fault lives (every gear
+fault at its mildest and largest Table V severity, and at its mildest growing), the
+monitor's rows from :func:`learn.monitor.evaluate.evaluate_gear`. The baselines
+(:mod:`learn.monitor.baselines`) are commissioned on each life's first ``commissioning_h``
+as the monitor is, their thresholds set on design lives of training instances to the
+monitor's own false-alarm rate there (:func:`design_thresholds`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from learn.monitor.baselines import BaselineConfig, PCAChart, RegressionMEWMA
+from learn.monitor.evaluate import evaluate_gear, healthy_life, lives_of, monitor_healthy
+from learn.monitor.families import benchmark_families
+from learn.monitor.model import DiagnosisModel
+from learn.monitor.study import FAMILY_PREFIX, MonitorStudyConfig
+from learn.monitor.training import features_of
+from learn.monitor_evaluation.statistics import matched_threshold, upcrossings
+from learn.tracking.ledger import check_seeds
+from swgsim.base.typed import allowed
+from swgsim.datasets.config import gear_population
+from swgsim.datasets.life import LifeSimulator
+from swgsim.datasets.plan import DatasetPlan, plan
+from swgsim.datasets.records import RecordBank
+
+__all__ = ["BASELINES", "BenchmarkConfig", "baseline_rows", "benchmark_part",
+           "design_thresholds", "instances", "population_plan"]
+
+#: The baselines, by the name their rows carry.
+BASELINES = {"regression_mewma": RegressionMEWMA, "pca": PCAChart}
+
+
+@dataclass
+class BenchmarkConfig:
+    """The benchmark's design (module docstring).
+
+    Attributes
+    ----------
+    population : int
+        Gear instances drawn per preset, in [3, 999] (12).
+    population_seed : int
+        The lot's seed (:func:`~swgsim.datasets.config.gear_population`).
+    held_out : int
+        Instances scored (the last ones), never trained on, in [1, population - 2] (4).
+    design_instances : int
+        Training instances whose design lives set the baselines' thresholds (2).
+    families : list of str
+        Keys of :func:`~learn.monitor.families.benchmark_families` lived (default all).
+    healthy_hours : float
+        Operating hours of each healthy life, commissioning included (200).
+    seeds : list of int
+        The scored lives' seeds, per held-out instance: scored seeds (from
+        :data:`~learn.tracking.ledger.SCORED_SEED_MIN`) in a scored run, design seeds
+        otherwise (:func:`~learn.tracking.ledger.check_seeds`).
+    design_seeds : list of int
+        Seeds of the design lives (below the scored seeds' range).
+    study : MonitorStudyConfig
+        The monitor's evaluation settings (commissioning, windows, horizon, rule, normal
+        behaviour, the training lives); its ``scored_run`` declares the run scored.
+    baselines : BaselineConfig
+    """
+
+    population: int = field(default=12, metadata=allowed(3, 999))
+    population_seed: int = field(default=0, metadata=allowed(0, 2**22 - 1))
+    held_out: int = field(default=4, metadata=allowed(1, 997))
+    design_instances: int = field(default=2, metadata=allowed(1, 996))
+    families: list[str] = field(default_factory=lambda: list(benchmark_families()))
+    healthy_hours: float = field(default=200.0, metadata=allowed(0.0, 1e5, lo_open=True,
+                                                                 unit="h"))
+    seeds: list[int] = field(default_factory=lambda: [300, 301, 302, 303, 304])
+    design_seeds: list[int] = field(default_factory=lambda: [200, 201])
+    study: MonitorStudyConfig = field(default_factory=MonitorStudyConfig)
+    baselines: BaselineConfig = field(default_factory=BaselineConfig)
+
+    def check(self, where: str = "benchmark") -> None:
+        """Refuse instances, families or seeds that do not fit, in one line naming the key.
+
+        Raises
+        ------
+        ValueError
+            ``held_out`` leaving fewer than two training instances, ``design_instances``
+            beyond them, an unknown family, scored and design seeds mixed
+            (:func:`~learn.tracking.ledger.check_seeds`), design seeds among the scored.
+        """
+        if self.held_out > self.population - 2:
+            raise ValueError(f"{where}.held_out must leave at least two training instances "
+                             f"of population={self.population}, got {self.held_out}")
+        if self.design_instances > self.population - self.held_out:
+            raise ValueError(f"{where}.design_instances must lie within the "
+                             f"{self.population - self.held_out} training instances, got "
+                             f"{self.design_instances}")
+        known = benchmark_families()
+        bad = [f for f in self.families if f not in known]
+        if bad or not self.families:
+            raise ValueError(f"{where}.families: {bad or 'empty'}; allowed: "
+                             f"{', '.join(known)}")
+        check_seeds(self.seeds, self.study.scored_run, f"{where}.study.scored_run")
+        check_seeds(self.design_seeds, False, f"{where}.design_seeds")
+        both = sorted(set(self.design_seeds) & (set(self.seeds) | set(self.study.design_seeds)))
+        if both:
+            raise ValueError(f"{where}.design_seeds must differ from seeds and "
+                             f"study.design_seeds, both hold {both}")
+        if self.healthy_hours <= self.study.commissioning_h:
+            raise ValueError(f"{where}.healthy_hours must exceed study.commissioning_h "
+                             f"({self.study.commissioning_h:g} h), got {self.healthy_hours:g}")
+
+    def study_of(self, family: str, design: bool = False) -> MonitorStudyConfig:
+        """The monitor's study for one family's lives: the scored lives (``seeds``), or
+        the design lives (``design_seeds``, never a scored run's), checked."""
+        seeds = list(self.design_seeds if design else self.seeds)
+        study = dataclasses.replace(
+            self.study, families={family: benchmark_families()[family]}, nuisances={},
+            nuisance_hours=self.healthy_hours, seeds=seeds, scored_seeds=seeds,
+            scored_run=self.study.scored_run and not design)
+        study.check("benchmark.study")
+        return study
+
+
+def population_plan(base: DatasetPlan, cfg: BenchmarkConfig) -> DatasetPlan:
+    """A preset's plan with its gears replaced by the benchmark's lot (checked)."""
+    return plan(dataclasses.replace(base.config, gears=gear_population(
+        cfg.population, cfg.population_seed)))
+
+
+def instances(cfg: BenchmarkConfig) -> tuple[list[int], list[int]]:
+    """The training instances and the held-out ones (ids, the last ``held_out``)."""
+    ids = list(range(1, cfg.population + 1))
+    return ids[:-cfg.held_out], ids[-cfg.held_out:]
+
+
+def _chart_windows(sim: LifeSimulator) -> tuple[np.ndarray, np.ndarray, np.ndarray | None,
+                                                 np.ndarray]:
+    """A life's features (W, F), duty labels (W,), temperature readings (W,) or None, and
+    hours (W,)."""
+    f, p, meta = features_of(sim, 0, len(sim))
+    duty = p[:, 0] * 1e4 + p[:, 1]  # a label per (speed, load)
+    return f, duty, meta.get("temperature_c"), meta["hour"]
+
+
+def _statistics(sim: LifeSimulator, n_comm: int, cfg: BenchmarkConfig
+                ) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Each baseline's statistic over the windows after commissioning, commissioned on the
+    life's first ``n_comm`` windows, and those windows' hours."""
+    x, duty, temp, hours = _chart_windows(sim)
+    t = (lambda s: None) if temp is None else (lambda s: temp[s])  # noqa: E731
+    out = {}
+    for name, chart in BASELINES.items():
+        c = chart(cfg.baselines).fit(x[:n_comm], duty[:n_comm], t(slice(None, n_comm)))
+        out[name] = c.statistic(x[n_comm:], duty[n_comm:], t(slice(n_comm, None)))
+    return out, hours[n_comm:]
+
+
+def design_thresholds(plan: DatasetPlan, banks: dict[int, RecordBank],
+                      model: DiagnosisModel, cfg: BenchmarkConfig, dataset: str
+                      ) -> tuple[dict[str, float], dict]:
+    """Each baseline's threshold at the monitor's false-alarm rate, both measured on the
+    healthy design lives of the first ``design_instances`` training instances (every
+    family, every design seed): the monitor's gear-fault alarms there, at least one, over
+    those lives' hours (matched ARL0; :func:`~learn.monitor_evaluation.statistics.
+    matched_threshold`).
+
+    Returns
+    -------
+    thresholds : dict of str to float
+        Per baseline of :data:`BASELINES`.
+    design : dict
+        ``lives``, ``hours`` and the monitor's ``alarms`` and ``per_1000h`` there.
+    """
+    train, _ = instances(cfg)
+    stats: dict[str, list[np.ndarray]] = {b: [] for b in BASELINES}
+    hours, alarms = [], 0
+    for family in cfg.families:
+        study = cfg.study_of(family, design=True)
+        life = f"{FAMILY_PREFIX}{family}"
+        n_comm = int(round(study.commissioning_h * 60 / study.interval_min))
+        for g in train[:cfg.design_instances]:
+            for seed in study.seeds:
+                healthy = healthy_life(plan, banks[g], g, study, seed, life)
+                named = monitor_healthy(model, study, healthy, seed, life)[3]
+                alarms += sum(a.kind == "gear_fault" for a in named)
+                s, _ = _statistics(healthy, n_comm, cfg)
+                for b in BASELINES:
+                    stats[b].append(s[b])
+                hours.append(float(healthy.life.hours - study.commissioning_h))
+    total = float(sum(hours))
+    rate = 1000.0 * max(alarms, 1) / total
+    thresholds = {b: matched_threshold(stats[b], hours, rate)
+                  for b in BASELINES}
+    return thresholds, {"lives": len(hours), "hours": total, "alarms": alarms,
+                        "per_1000h": rate}
+
+
+def baseline_rows(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
+                  study: MonitorStudyConfig, cfg: BenchmarkConfig, family: str,
+                  thresholds: dict[str, float], dataset: str
+                  ) -> tuple[list[dict], list[dict]]:
+    """The baselines on one held-out instance's lives of one family: per seed, the healthy
+    life's alarms (upcrossings of the threshold) and each fault life's first alarm after
+    its onset.
+
+    Returns
+    -------
+    rows : list of dict
+        One per fault life and baseline: ``detected``, ``time_to_detect_h`` (NaN when
+        not), ``alarm_before_onset``.
+    fa_rows : list of dict
+        One per healthy life and baseline: ``healthy_hours``, ``gear_fault_alarms``.
+    """
+    nuisance = f"{FAMILY_PREFIX}{family}"
+    n_comm = int(round(study.commissioning_h * 60 / study.interval_min))
+    rows, fa_rows = [], []
+    for seed in study.seeds:
+        healthy, faults = lives_of(plan, banks, g, study, seed, nuisance)
+        key = {"dataset": dataset, "held_out_gear": g, "seed": seed, "nuisance": nuisance}
+        s, _ = _statistics(healthy, n_comm, cfg)
+        hours = float(healthy.life.hours - study.commissioning_h)  # as the monitor's rows
+        for b in BASELINES:
+            fa_rows.append({**key, "detector": b, "healthy_hours": hours,
+                            "gear_fault_alarms": upcrossings(s[b], thresholds[b])})
+        for sim, fo, kind in faults:
+            s, h = _statistics(sim, n_comm, cfg)
+            for b in BASELINES:
+                above = np.nan_to_num(s[b], nan=-np.inf) > thresholds[b]
+                after = np.flatnonzero(above & (h >= fo.onset_h))
+                rows.append({**key, "detector": b, "fault": fo.fault,
+                             "severity": fo.severity, "onset": kind, "onset_h": fo.onset_h,
+                             "detected": bool(after.size),
+                             "time_to_detect_h": float(h[after[0]] - fo.onset_h)
+                             if after.size else np.nan,
+                             "alarm_before_onset": bool(np.any(above & (h < fo.onset_h)))})
+    return rows, fa_rows
+
+
+def benchmark_part(plan: DatasetPlan, banks: dict[int, RecordBank], model: DiagnosisModel,
+                   g: int, family: str, cfg: BenchmarkConfig, thresholds: dict[str, float],
+                   dataset: str) -> dict:
+    """One held-out instance's lives of one family, the monitor's and the baselines' rows.
+
+    Returns
+    -------
+    dict
+        ``rows`` (fault lives), ``false_alarms`` (healthy lives), each with a
+        ``detector`` column (``monitor`` or a key of :data:`BASELINES`) and ``family``.
+    """
+    study = cfg.study_of(family)
+    rows, fa, _ = evaluate_gear(plan, banks, g, model, study, dataset,
+                                f"{FAMILY_PREFIX}{family}", list(cfg.seeds))
+    rows = [r for r in rows if r["detector"] == "monitor"]
+    fa = [r for r in fa if r["detector"] == "monitor"]
+    b_rows, b_fa = baseline_rows(plan, banks, g, study, cfg, family, thresholds, dataset)
+    return {"rows": [{**r, "family": family} for r in rows + b_rows],
+            "false_alarms": [{**r, "family": family} for r in fa + b_fa]}

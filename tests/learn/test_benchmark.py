@@ -1,0 +1,67 @@
+"""The benchmark of issue 83 (learn.monitor_evaluation.benchmark): its design checked
+before any work, a lot of gear instances split into trained and held out, and, end to end
+on the tiny bench, the monitor and both baselines on lives of a benchmark family at a
+threshold matched on design lives of training instances."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+from learn.monitor.study import MonitorStudyConfig
+from learn.monitor.training import train_model
+from learn.monitor_evaluation import benchmark as bm
+from swgcli import dataset_preset
+from swgsim.datasets import plan as P
+from swgsim.datasets.records import record_bank
+
+TINY = MonitorStudyConfig(commissioning_h=3.0, train_healthy_h=2.0, train_variants=2,
+                          faults=["eccentric_wg"], interval_min=1.0, horizon_h=2.0,
+                          onset_window_h=[0.5, 1.0], family_growth_h=2.0)
+
+
+@pytest.mark.parametrize(("change", "words"), [
+    ({"held_out": 11}, "held_out must leave at least two training instances"),
+    ({"design_instances": 9}, "design_instances must lie within the 8 training instances"),
+    ({"families": ["typo"]}, "families: ['typo']; allowed: warm_up, hall"),
+    ({"seeds": [1000]}, "seeds [1000] are scored seeds"),
+    ({"design_seeds": [300]}, "design_seeds must differ from seeds"),
+    ({"healthy_hours": 2.0}, "healthy_hours must exceed study.commissioning_h"),
+])
+def test_a_bad_design_is_refused_in_one_line_before_any_work(change, words):
+    cfg = bm.BenchmarkConfig(study=TINY, **change)
+    with pytest.raises(ValueError) as e:
+        cfg.check()
+    assert words in str(e.value) and "\n" not in str(e.value)
+
+
+def test_the_lot_is_split_into_trained_and_held_out_instances():
+    cfg = bm.BenchmarkConfig()
+    train, held = bm.instances(cfg)
+    assert train == list(range(1, 9)) and held == [9, 10, 11, 12]
+    p = bm.population_plan(P.plan(dataset_preset("tiny_bench")), cfg)
+    assert [g.id for g in p.config.gears] == list(range(1, 13))
+
+
+@pytest.mark.slow
+def test_the_monitor_and_both_baselines_live_a_benchmark_family_end_to_end():
+    """About 40 s: four instances of the tiny bench (two trained, two held out), the
+    warm-up family (two nodes, a Coulomb law of its own, the friction in the dynamics),
+    one design life and one scored life with its eccentric-WG lives."""
+    cfg = bm.BenchmarkConfig(population=4, held_out=2, design_instances=1,
+                             families=["warm_up"], healthy_hours=8.0, seeds=[300],
+                             design_seeds=[200], study=TINY)
+    cfg.check()
+    p = bm.population_plan(P.plan(dataset_preset("tiny_bench")), cfg)
+    train, held = bm.instances(cfg)
+    banks = {g: record_bank(p, g) for g in train + held}
+    model = train_model(p, banks, train, TINY)
+    thr, design = bm.design_thresholds(p, banks, model, cfg, "tiny_bench")
+    assert set(thr) == set(bm.BASELINES) and design["lives"] == 1
+    assert design["hours"] == pytest.approx(5.0)
+    part = bm.benchmark_part(p, banks, model, held[0], "warm_up", cfg, thr, "tiny_bench")
+    rows, fa = pd.DataFrame(part["rows"]), pd.DataFrame(part["false_alarms"])
+    assert set(rows.detector) == {"monitor", *bm.BASELINES}
+    assert len(rows) == 3 * 3  # mildest and largest step, mildest growing; three detectors
+    assert set(fa.detector) == {"monitor", *bm.BASELINES} and set(fa.healthy_hours) == {5.0}
+    assert (rows.family == "warm_up").all() and rows.detected.dtype == bool
