@@ -7,6 +7,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 
+from learn.monitor_evaluation.benchmark_task import run_benchmark
 from learn.monitor_evaluation.prognosis_task import run_prognosis_evaluation
 from learn.monitor_evaluation.task import run_monitor_evaluation
 from learn.paper.job import run_study_job
@@ -26,6 +27,7 @@ TASKS: dict[str, Callable[..., dict]] = {
     "transfer": run_transfer,
     "monitor": run_monitor_evaluation,
     "prognosis": run_prognosis_evaluation,
+    "benchmark": run_benchmark,
 }
 
 

@@ -35,6 +35,7 @@ from learn.monitor.gear_monitor import MaintenanceEvent
 from learn.monitor.normal import NormalConfig
 from learn.monitor.rule import RuleConfig
 from learn.monitor.stream_prognosis import StreamPrognosis
+from learn.monitor_evaluation.benchmark_task import BenchmarkExperiment
 from learn.monitor_evaluation.prognosis_task import PrognosisExperiment
 from learn.monitor_evaluation.task import MonitorExperiment
 from learn.observability.motion import MotionMapConfig
@@ -156,8 +157,8 @@ class TrainApp:
     """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.train.TASKS`."""
 
     OUT_DIRS: ClassVar[tuple[str, ...]] = ("paths.report_dir", "monitor.report_dir",
-                                           "prognosis.report_dir", "transfer.report_dir",
-                                           "transfer.data_root")
+                                           "prognosis.report_dir", "benchmark.report_dir",
+                                           "transfer.report_dir", "transfer.data_root")
 
     task: str = "study"
     seed: int = 0
@@ -173,6 +174,7 @@ class TrainApp:
     transfer: TransferConfig | None = None
     monitor: MonitorExperiment | None = None
     prognosis: PrognosisExperiment | None = None
+    benchmark: BenchmarkExperiment | None = None
 
 
 #: Keys and groups renamed, per app: old name -> the new one and why. An override that

@@ -68,8 +68,12 @@ class BenchmarkConfig:
         Seeds of the design lives (below the scored seeds' range).
     study : MonitorStudyConfig
         The monitor's evaluation settings (commissioning, windows, horizon, rule, normal
-        behaviour, the training lives); its ``scored_run`` declares the run scored.
+        behaviour, the training lives); its seeds and families are the benchmark's
+        (:meth:`study_of`), not read.
     baselines : BaselineConfig
+    scored_run : bool
+        A declared scored run (:mod:`learn.tracking.ledger`): ``seeds`` must be scored
+        seeds, and the run enters the ledger.
     """
 
     population: int = field(default=12, metadata=allowed(3, 999))
@@ -83,6 +87,7 @@ class BenchmarkConfig:
     design_seeds: list[int] = field(default_factory=lambda: [200, 201])
     study: MonitorStudyConfig = field(default_factory=MonitorStudyConfig)
     baselines: BaselineConfig = field(default_factory=BaselineConfig)
+    scored_run: bool = False
 
     def check(self, where: str = "benchmark") -> None:
         """Refuse instances, families or seeds that do not fit, in one line naming the key.
@@ -106,7 +111,7 @@ class BenchmarkConfig:
         if bad or not self.families:
             raise ValueError(f"{where}.families: {bad or 'empty'}; allowed: "
                              f"{', '.join(known)}")
-        check_seeds(self.seeds, self.study.scored_run, f"{where}.study.scored_run")
+        check_seeds(self.seeds, self.scored_run, f"{where}.scored_run")
         check_seeds(self.design_seeds, False, f"{where}.design_seeds")
         both = sorted(set(self.design_seeds) & (set(self.seeds) | set(self.study.design_seeds)))
         if both:
@@ -123,7 +128,7 @@ class BenchmarkConfig:
         study = dataclasses.replace(
             self.study, families={family: benchmark_families()[family]}, nuisances={},
             nuisance_hours=self.healthy_hours, seeds=seeds, scored_seeds=seeds,
-            scored_run=self.study.scored_run and not design)
+            scored_run=self.scored_run and not design)
         study.check("benchmark.study")
         return study
 

@@ -5,6 +5,8 @@ threshold matched on design lives of training instances."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pandas as pd
 import pytest
 
@@ -65,3 +67,48 @@ def test_the_monitor_and_both_baselines_live_a_benchmark_family_end_to_end():
     assert len(rows) == 3 * 3  # mildest and largest step, mildest growing; three detectors
     assert set(fa.detector) == {"monitor", *bm.BASELINES} and set(fa.healthy_hours) == {5.0}
     assert (rows.family == "warm_up").all() and rows.detected.dtype == bool
+
+
+BENCH_TINY = ["benchmark.run_on=[tiny]", "+dataset@benchmark.datasets.tiny=tiny_bench",
+              "benchmark.study.population=4", "benchmark.study.held_out=2",
+              "benchmark.study.design_instances=1", "benchmark.study.families=[warm_up]",
+              "benchmark.study.healthy_hours=8", "benchmark.study.seeds=[300]",
+              "benchmark.study.design_seeds=[200]", "benchmark.study.study.commissioning_h=3",
+              "benchmark.study.study.train_healthy_h=2", "benchmark.study.study.train_variants=2",
+              "benchmark.study.study.faults=[eccentric_wg]", "benchmark.study.study.horizon_h=2",
+              "benchmark.study.study.onset_window_h=[0.5,1.0]",
+              "benchmark.study.study.family_growth_h=2", "benchmark.progress=false"]
+
+
+def _run(out, *extra):
+    from learn.train import run_train
+    from swgcli import compose_app
+
+    return run_train(compose_app("train", ["experiment=benchmark", "~logger",
+                                           f"benchmark.report_dir={out}", *BENCH_TINY,
+                                           *extra]))
+
+
+@pytest.mark.slow
+def test_the_benchmark_experiment_runs_resumes_and_a_scored_run_enters_the_ledger(
+        tmp_path, monkeypatch):
+    """swgsim-train experiment=benchmark on the tiny bench (two held-out instances, one
+    family): its parts, tables and files; a rerun resumes every part; a scored seed is
+    refused unless the run is declared scored, and a scored run appends one ledger row."""
+    from learn.tracking import ledger
+
+    out = tmp_path / "bench"
+    first = _run(out)
+    assert first["parts"] == 2 and first["resumed"] == 0 and "ledger" not in first
+    tab = pd.read_csv(out / "table.csv")
+    assert set(tab.detector) == {"monitor", *bm.BASELINES}
+    assert {"any_alarm_high", "cadd_h", "worst_life_per_1000h"} <= set(tab.columns)
+    assert _run(out)["resumed"] == 2 + 1  # the lives' parts and the design part
+    with pytest.raises(ValueError, match=r"seeds \[1000\] are scored seeds"):
+        _run(tmp_path / "refused", "benchmark.study.seeds=[1000]")
+    book = tmp_path / "ledger.csv"
+    monkeypatch.setattr(ledger, "LEDGER", str(book))
+    monkeypatch.setattr(ledger, "repo_root", lambda: Path("/"))
+    scored = _run(tmp_path / "scored", "benchmark.study.seeds=[1000]",
+                  "benchmark.study.scored_run=true")
+    assert scored["ledger"]["seeds"] == "1000" and len(ledger.read_ledger(book)) == 1
