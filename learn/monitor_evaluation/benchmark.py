@@ -145,26 +145,44 @@ def instances(cfg: BenchmarkConfig) -> tuple[list[int], list[int]]:
     return ids[:-cfg.held_out], ids[-cfg.held_out:]
 
 
-def _chart_windows(sim: LifeSimulator) -> tuple[np.ndarray, np.ndarray, np.ndarray | None,
-                                                 np.ndarray]:
-    """A life's features (W, F), duty labels (W,), temperature readings (W,) or None, and
-    hours (W,)."""
-    f, p, meta = features_of(sim, 0, len(sim))
-    duty = p[:, 0] * 1e4 + p[:, 1]  # a label per (speed, load)
-    return f, duty, meta.get("temperature_c"), meta["hour"]
+@dataclass(frozen=True)
+class _Windows:
+    """A life's windows as the charts read them: features (W, F), duty labels (W,),
+    temperature readings (W,) or None, hours (W,)."""
+
+    x: np.ndarray
+    duty: np.ndarray
+    temp: np.ndarray | None
+    hour: np.ndarray
+
+    @classmethod
+    def of(cls, sim: LifeSimulator, start: int = 0) -> _Windows:
+        f, p, meta = features_of(sim, start, len(sim))
+        return cls(f, p[:, 0] * 1e4 + p[:, 1], meta.get("temperature_c"), meta["hour"])
+
+    def part(self, rows: slice) -> tuple:
+        return self.x[rows], self.duty[rows], None if self.temp is None else self.temp[rows]
+
+    def then(self, k0: int, after: _Windows) -> _Windows:
+        """These windows up to ``k0``, then ``after``'s (a fault life: the healthy one's
+        windows before its onset are its own)."""
+        temp = None if self.temp is None else np.concatenate([self.temp[:k0], after.temp])
+        return _Windows(np.concatenate([self.x[:k0], after.x]),
+                        np.concatenate([self.duty[:k0], after.duty]), temp,
+                        np.concatenate([self.hour[:k0], after.hour]))
 
 
-def _statistics(sim: LifeSimulator, n_comm: int, cfg: BenchmarkConfig
-                ) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """Each baseline's statistic over the windows after commissioning, commissioned on the
-    life's first ``n_comm`` windows, and those windows' hours."""
-    x, duty, temp, hours = _chart_windows(sim)
-    t = (lambda s: None) if temp is None else (lambda s: temp[s])  # noqa: E731
-    out = {}
-    for name, chart in BASELINES.items():
-        c = chart(cfg.baselines).fit(x[:n_comm], duty[:n_comm], t(slice(None, n_comm)))
-        out[name] = c.statistic(x[n_comm:], duty[n_comm:], t(slice(n_comm, None)))
-    return out, hours[n_comm:]
+def _charts(w: _Windows, n_comm: int, cfg: BenchmarkConfig) -> dict:
+    """Each baseline commissioned on the life's first ``n_comm`` windows."""
+    return {name: chart(cfg.baselines).fit(*w.part(slice(None, n_comm)))
+            for name, chart in BASELINES.items()}
+
+
+def _statistics(charts: dict, w: _Windows, n_comm: int) -> tuple[dict[str, np.ndarray],
+                                                                  np.ndarray]:
+    """Each baseline's statistic over the windows after commissioning, and their hours."""
+    after = slice(n_comm, None)
+    return {b: c.statistic(*w.part(after)) for b, c in charts.items()}, w.hour[after]
 
 
 def design_thresholds(plan: DatasetPlan, banks: dict[int, RecordBank],
@@ -195,7 +213,8 @@ def design_thresholds(plan: DatasetPlan, banks: dict[int, RecordBank],
                 healthy = healthy_life(plan, banks[g], g, study, seed, life)
                 named = monitor_healthy(model, study, healthy, seed, life)[3]
                 alarms += sum(a.kind == "gear_fault" for a in named)
-                s, _ = _statistics(healthy, n_comm, cfg)
+                w = _Windows.of(healthy)
+                s, _ = _statistics(_charts(w, n_comm, cfg), w, n_comm)
                 for b in BASELINES:
                     stats[b].append(s[b])
                 hours.append(float(healthy.life.hours - study.commissioning_h))
@@ -229,13 +248,16 @@ def baseline_rows(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
     for seed in study.seeds:
         healthy, faults = lives_of(plan, banks, g, study, seed, nuisance)
         key = {"dataset": dataset, "held_out_gear": g, "seed": seed, "nuisance": nuisance}
-        s, _ = _statistics(healthy, n_comm, cfg)
+        w = _Windows.of(healthy)
+        charts = _charts(w, n_comm, cfg)
+        s, _ = _statistics(charts, w, n_comm)
         hours = float(healthy.life.hours - study.commissioning_h)  # as the monitor's rows
         for b in BASELINES:
             fa_rows.append({**key, "detector": b, "healthy_hours": hours,
                             "gear_fault_alarms": upcrossings(s[b], thresholds[b])})
-        for sim, fo, kind in faults:
-            s, h = _statistics(sim, n_comm, cfg)
+        for sim, fo, kind in faults:  # the healthy life's windows up to the onset
+            k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
+            s, h = _statistics(charts, w.then(k0, _Windows.of(sim, k0)), n_comm)
             for b in BASELINES:
                 above = np.nan_to_num(s[b], nan=-np.inf) > thresholds[b]
                 after = np.flatnonzero(above & (h >= fo.onset_h))

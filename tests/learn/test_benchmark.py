@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -67,6 +68,18 @@ def test_the_monitor_and_both_baselines_live_a_benchmark_family_end_to_end():
     assert len(rows) == 3 * 3  # mildest and largest step, mildest growing; three detectors
     assert set(fa.detector) == {"monitor", *bm.BASELINES} and set(fa.healthy_hours) == {5.0}
     assert (rows.family == "warm_up").all() and rows.detected.dtype == bool
+    # a fault life's windows before its onset are its healthy life's: the baselines read
+    # those instead of simulating them again, with the same statistic
+    study = cfg.study_of("warm_up")
+    healthy, faults = bm.lives_of(p, banks, held[0], study, 300, "family:warm_up")
+    sim, fo, _ = faults[0]
+    k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
+    w = bm._Windows.of(healthy)
+    charts = bm._charts(w, 180, cfg)
+    reused = bm._statistics(charts, w.then(k0, bm._Windows.of(sim, k0)), 180)[0]
+    whole = bm._statistics(charts, bm._Windows.of(sim), 180)[0]
+    for b in bm.BASELINES:
+        np.testing.assert_array_equal(reused[b], whole[b])
 
 
 BENCH_TINY = ["benchmark.run_on=[tiny]", "+dataset@benchmark.datasets.tiny=tiny_bench",
