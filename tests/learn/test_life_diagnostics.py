@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.monitor.evaluate import _lives, healthy_life
+from learn.monitor.evaluate import healthy_life, lives_of
 from learn.monitor.families import default_families
 from learn.monitor.model_io import save_model
 from learn.monitor.study import MonitorStudyConfig
@@ -40,7 +40,7 @@ def test_healthy_life_is_the_evaluations(tiny_bench):
                              families=default_families())
     for nuisance in ("none", "warm_up", "family:warm_up"):
         ours = healthy_life(p, banks[3], 3, cfg, 4, nuisance)
-        theirs, _ = _lives(p, banks, 3, cfg, 4, nuisance)
+        theirs, _ = lives_of(p, banks, 3, cfg, 4, nuisance)
         assert ours.life == theirs.life
         a, b = ours.windows(1500, 1510)[0], theirs.windows(1500, 1510)[0]
         np.testing.assert_array_equal(a, b)
