@@ -191,8 +191,8 @@ def design_thresholds(plan: DatasetPlan, banks: dict[int, RecordBank],
     """Each baseline's threshold at the monitor's false-alarm rate, both measured on the
     healthy design lives of the first ``design_instances`` training instances (every
     family, every design seed): the monitor's gear-fault alarms there, at least one, over
-    those lives' hours (matched ARL0; :func:`~learn.monitor_evaluation.statistics.
-    matched_threshold`).
+    those lives' hours (matched ARL0;
+    :func:`~learn.monitor_evaluation.statistics.matched_threshold`).
 
     Returns
     -------

@@ -79,9 +79,9 @@ def life_records(plan: DatasetPlan) -> tuple[int, int]:
     (int, int)
         Records: duty points (one along a profile) × (severity levels + 1) × (payload
         factors + 1), × the viscous factors simulated where the friction acts in the
-        dynamics (the rungs its first gear's life uses, :data:`~swgsim.datasets.life.
-        VISCOUS_LADDER`); samples: one wave-generator revolution at the slowest input
-        speed plus a window (the whole profile along one).
+        dynamics (the rungs its first gear's life uses,
+        :data:`~swgsim.datasets.life.VISCOUS_LADDER`); samples: one wave-generator
+        revolution at the slowest input speed plus a window (the whole profile along one).
     """
     cfg = plan.config
     life, ch = cfg.life, cfg.chain
