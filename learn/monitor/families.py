@@ -19,6 +19,7 @@ import numpy as np
 
 from swgsim.datasets.conditions import (
     ConditionsConfig,
+    DutyChange,
     Regrease,
     RunInConfig,
     TemperatureTrace,
@@ -42,12 +43,13 @@ __all__ = ["ALL_SENSOR_STATES", "DEFAULT_PARTS", "FAMILY_TAG", "KEYED_RANGES", "
            "default_families", "draw_conditions"]
 
 #: The parts of a joint's day a family can draw (docs/monitor.md, "Families of benign
-#: changes"); the last three are the physics of issue 83 the monitor was not built on: the
-#: joint in two nodes with its motor and drive (``network``), a Coulomb term with a law of
-#: its own whose slope changes sign and its own run-in (``coulomb``), and the friction in
-#: the gear's dynamics (``dynamics``).
+#: changes"); the last four are issue 83's, which the monitor was not built on: the joint in
+#: two nodes with its motor and drive (``network``), a Coulomb term with a law of its own
+#: whose slope changes sign and its own run-in (``coulomb``), the friction in the gear's
+#: dynamics (``dynamics``), and a new program holding the duty points for other times
+#: (``duty``).
 PARTS = ("friction_law", "warm_up", "drift", "ambient", "run_in", "payload", "sensor",
-         "regrease", "trace", "network", "coulomb", "dynamics")
+         "regrease", "trace", "network", "coulomb", "dynamics", "duty")
 #: The parts a family draws by default: the day's, without the ``trace`` (its file is the
 #: user's) and without issue 83's.
 DEFAULT_PARTS = PARTS[:8]
@@ -105,6 +107,8 @@ KEYED_RANGES = {
     "coulomb_tau_h": ("coulomb", 0.1, 1e3, "h", "the Coulomb term's run-in time constant"),
     "sensor_lag_min": ("sensor", 0.0, 600.0, "min", "a lagging sensor's time constant"),
     "sensor_offset_k": ("sensor", -10.0, 10.0, "K", "a sensor's calibration offset"),
+    "duty_h": ("duty", 0.0, 1e5, "h", "operating hour of the new program"),
+    "duty_shift": ("duty", -1.0, 1.0, "", "time moved to high load (+) or low (-)"),
 }
 
 
@@ -157,6 +161,16 @@ class NuisanceFamily:
         The re-greasing is in the maintenance log handed to the monitor
         (:class:`learn.monitor.gear_monitor.MaintenanceEvent`); refused without the
         ``regrease`` part.
+    grease_r_k_per_w, standstill_factor, motor_km_nm_per_sqrt_w, drive_w : list of float
+        The joint in two nodes (``network``, :data:`KEYED_RANGES`).
+    coulomb_ratio_40c, coulomb_minimum_c, coulomb_drop, coulomb_tau_h : list of float
+        The Coulomb term's own law and run-in (``coulomb``).
+    sensor_lag_min, sensor_offset_k : list of float
+        A sound sensor's lag [min] and offset [K] (states ``lagging``, ``offset``).
+    duty_h, duty_shift : list of float
+        A new program from operating hour ``duty_h`` [h] on, its dwells shifted to high
+        load (> 0) or low by ``duty_shift`` in [-1, 1]
+        (:attr:`swgsim.datasets.conditions.DutyChange.load_shift`).
     """
 
     parts: list[str] = field(default_factory=lambda: list(DEFAULT_PARTS))
@@ -197,6 +211,8 @@ class NuisanceFamily:
     coulomb_tau_h: list[float] = _span(2.0, 20.0)
     sensor_lag_min: list[float] = _span(5.0, 40.0)
     sensor_offset_k: list[float] = _span(-2.0, 2.0)
+    duty_h: list[float] = _span(30.0, 48.0)
+    duty_shift: list[float] = _span(-1.0, 1.0)
 
     def check(self, key: str = "NuisanceFamily") -> None:
         """Refuse a family outside its ranges in one line naming ``<key>.<field>`` and
@@ -285,9 +301,9 @@ def benchmark_families() -> dict[str, NuisanceFamily]:
     -------
     dict of str to NuisanceFamily
         ``warm_up``, ``hall`` (the hall's temperature changes), ``regrease`` (not in the
-        maintenance log), ``payload``, ``sensor_<state>`` for every state but a working
-        sensor (missing, stuck, drift, dropout, lagging, offset), and ``all`` (every
-        part, the sensor in any state, nothing logged).
+        maintenance log), ``payload``, ``duty`` (a new program), ``sensor_<state>`` for
+        every state but a working sensor (missing, stuck, drift, dropout, lagging, offset),
+        and ``all`` (every part, the sensor in any state, nothing logged).
     """
     physics = ["network", "coulomb", "dynamics", "friction_law", "drift", "warm_up"]
 
@@ -295,10 +311,10 @@ def benchmark_families() -> dict[str, NuisanceFamily]:
         return NuisanceFamily(parts=[*physics, *parts], **kw)
 
     return {"warm_up": fam(), "hall": fam("ambient"), "regrease": fam("regrease"),
-            "payload": fam("payload"),
+            "payload": fam("payload"), "duty": fam("duty"),
             **{f"sensor_{s}": fam("sensor", sensor_states=[s])
                for s in ALL_SENSOR_STATES if s != "present"},
-            "all": fam("ambient", "run_in", "payload", "sensor", "regrease",
+            "all": fam("ambient", "run_in", "payload", "sensor", "regrease", "duty",
                        sensor_states=list(ALL_SENSOR_STATES))}
 
 
@@ -389,7 +405,9 @@ def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
         temperature_sensor=sensor,
         temperature_trace=(TemperatureTrace(family.trace_path, _trace_draw(family, seed)[1],
                                             scale=v["trace_scale"])
-                           if "trace" in parts else None))
+                           if "trace" in parts else None),
+        duty_change=(DutyChange(v["duty_h"], load_shift=v["duty_shift"])
+                     if "duty" in parts else None))
     cond = _issue_83_parts(cond, parts, v)
     if family.still:
         cond = dataclasses.replace(cond, thermal=None, viscosity=False, bridge_drift=None)

@@ -1,12 +1,14 @@
-"""A healthy joint's changing day: temperature, run-in, payload and the bridges' drift.
+"""A healthy joint's changing day: temperature, run-in, payload, duty and the bridges' drift.
 
 ``dataset.life.conditions`` (:class:`ConditionsConfig`; None, the default: nothing changes
 but the fault) gives a life what a real joint lives through while its gear stays healthy,
 each with a sourced magnitude (:mod:`swgsim.gear.thermal`, :mod:`swgsim.sensing.bridge_drift`):
 the joint's temperature (modelled, or measured: :class:`TemperatureTrace`), the friction's
-temperature law, run-in and re-greasing, the payload, the bridges' drift and the
-temperature sensor; :func:`window_conditions` gives each window its own. What changes, how,
-what stays, the random streams: docs/DATASET.md, "Gear lives", *A life through a real day*.
+temperature law, run-in and re-greasing, the payload, a new program's dwells
+(:class:`DutyChange`, acting in :func:`swgsim.datasets.schedule.schedule`), the bridges'
+drift and the temperature sensor; :func:`window_conditions` gives each window its own. What
+changes, how, what stays, the random streams: docs/DATASET.md, "Gear lives", *A life
+through a real day*.
 """
 
 from __future__ import annotations
@@ -46,9 +48,10 @@ from swgsim.sensing.bridge_drift import (
     measure_temperature,
 )
 
-__all__ = ["HOURS_TABLE_COLUMNS", "TRACE_MODES", "ConditionsConfig", "Regrease", "RunInConfig",
-           "TemperatureTrace", "WindowConditions", "efficiency_ratio",
-           "trace_rise", "trace_table", "window_conditions"]
+__all__ = ["DWELL_FACTOR_RANGE", "HOURS_TABLE_COLUMNS", "LOAD_SHIFT_BASE", "TRACE_MODES",
+           "ConditionsConfig", "DutyChange", "Regrease", "RunInConfig", "TemperatureTrace",
+           "WindowConditions", "efficiency_ratio", "trace_rise", "trace_table",
+           "window_conditions"]
 
 #: A step of a temperature trace longer than this ends its first continuous segment [min]
 #: [choice: beyond a logger's hiccups (the UR3 CobotOps day has steps of 9 and 31 s),
@@ -169,6 +172,73 @@ class Regrease:
                              f"re-greasing: {where}: null)")
         if any(b <= a for a, b in zip(self.hours[:-1], self.hours[1:], strict=True)):
             raise ValueError(f"{where}.hours must increase, got {list(self.hours)}")
+
+
+#: Largest factor a :attr:`DutyChange.load_shift` of 1 puts on the dwell at the cycle's
+#: highest load (and its inverse at the lowest) [-] [choice: a new program spending up to
+#: four times more or less time at high load].
+LOAD_SHIFT_BASE = 4.0
+#: Allowed factors on a duty point's dwell [-] [choice: a twentieth to twenty times].
+DWELL_FACTOR_RANGE = (0.05, 20.0)
+
+
+@dataclass
+class DutyChange:
+    """A new program from an operating hour on: the same duty points, held for other times
+    (:func:`swgsim.datasets.schedule.schedule`; the cycle restarts at the change).
+
+    Attributes
+    ----------
+    hour_h : float
+        Operating hour of the change, >= 0, inside the life [h].
+    dwell_factors : list of float
+        Factor on each duty point's dwell from ``hour_h`` on, in the duty cycle's order, one
+        per point, each in [0.05, 20] [-]; empty: from ``load_shift``.
+    load_shift : float or None
+        In [-1, 1]: duty point i's factor is ``LOAD_SHIFT_BASE ** (load_shift * z_i)``, z_i
+        its torque placed on [-1, 1] between the cycle's lowest and highest (0 where all
+        are equal): more time at high load (> 0) or less (< 0); None: ``dwell_factors``.
+    """
+
+    hour_h: float = field(metadata=allowed(0.0, None, unit="h"))
+    dwell_factors: list[float] = field(default_factory=list)
+    load_shift: float | None = field(default=None, metadata=allowed(-1.0, 1.0))
+
+    def check(self, where: str) -> None:
+        """Refuse both or neither of ``dwell_factors`` and ``load_shift``, or a factor
+        outside [0.05, 20], in one line naming the key (the cycle's length:
+        :meth:`factors`; the life's: :meth:`ConditionsConfig.check_inside`)."""
+        if (len(self.dwell_factors) == 0) == (self.load_shift is None):
+            raise ValueError(f"{where}: give dwell_factors or load_shift, one of them, got "
+                             f"{list(self.dwell_factors)} and {self.load_shift}")
+        for i, f in enumerate(self.dwell_factors):
+            check_range(f, *DWELL_FACTOR_RANGE, f"{where}.dwell_factors[{i}]",
+                        why="factor on the duty point's dwell")
+
+    def factors(self, t_out_nm: list[float], where: str) -> np.ndarray:
+        """The factor on each duty point's dwell, shape (P,) [-].
+
+        Parameters
+        ----------
+        t_out_nm : list of float
+            The duty cycle's torques, in its order [N m].
+        where : str
+            Full name of the change for messages, e.g. ``dataset.life.conditions.duty_change``.
+
+        Raises
+        ------
+        ValueError
+            ``dwell_factors`` not one per duty point, in one line naming the key.
+        """
+        if self.load_shift is None:
+            if len(self.dwell_factors) != len(t_out_nm):
+                raise ValueError(f"{where}.dwell_factors must hold {len(t_out_nm)} factors, one "
+                                 f"per duty point of the cycle, got {len(self.dwell_factors)}")
+            return np.asarray(self.dwell_factors, float)
+        t = np.asarray(t_out_nm, float)
+        span = t.max() - t.min()
+        z = (2.0 * t - t.min() - t.max()) / span if span > 0 else np.zeros_like(t)
+        return LOAD_SHIFT_BASE ** (float(self.load_shift) * z)
 
 
 @dataclass
@@ -429,6 +499,9 @@ class ConditionsConfig:
         The bridges' zero and span drift with temperature; None: none.
     temperature_sensor : TemperatureSensor or None
         The joint's temperature reading (``temperature_c``); None: the stream has none.
+    duty_change : DutyChange or None
+        A new program from an operating hour on: the duty points held for other times;
+        None: one duty cycle for the whole life.
     """
 
     thermal: JointThermal | None = field(default_factory=JointThermal)
@@ -444,6 +517,7 @@ class ConditionsConfig:
     payload: list[list[float]] = field(default_factory=list)
     bridge_drift: BridgeDrift | None = field(default_factory=BridgeDrift)
     temperature_sensor: TemperatureSensor | None = field(default_factory=TemperatureSensor)
+    duty_change: DutyChange | None = field(default=None, metadata={LATER: "duty changes"})
 
     def check(self, where: str) -> None:
         """Refuse conditions outside their ranges, in one line naming the key (run by
@@ -474,14 +548,18 @@ class ConditionsConfig:
             raise ValueError(f"{where}.payload: hours must increase, got {hours}")
 
     def check_inside(self, hours: float, where: str) -> None:
-        """Refuse a payload step or a re-greasing outside a life of ``hours`` [h], in one
-        line naming ``<where>.payload[i][0]`` or ``<where>.regrease.hours[i]`` (run by
+        """Refuse a payload step, a re-greasing or a duty change outside a life of ``hours``
+        [h], in one line naming ``<where>.payload[i][0]``, ``<where>.regrease.hours[i]`` or
+        ``<where>.duty_change.hour_h`` (run by
         :meth:`swgsim.datasets.schedule.LifeConfig.check`, after :meth:`check`)."""
         for i, step in enumerate(self.payload):
             check_range(step[0], 0.0, hours, f"{where}.payload[{i}][0]", "h",
                         why="an operating hour inside the life")
         for i, h in enumerate(self.regrease.hours if self.regrease is not None else ()):
             check_range(h, 0.0, hours, f"{where}.regrease.hours[{i}]", "h",
+                        why="an operating hour inside the life")
+        if self.duty_change is not None:
+            check_range(self.duty_change.hour_h, 0.0, hours, f"{where}.duty_change.hour_h", "h",
                         why="an operating hour inside the life")
 
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from swgsim.base.typed import LATER, build, check_range, complete
 from swgsim.datasets.profile_config import ProfileConfig
-from swgsim.datasets.schedule import LifeConfig
+from swgsim.datasets.schedule import LifeConfig, duty_cycle
 from swgsim.gear import profile as pf
 from swgsim.gear import profile_dynamics
 from swgsim.gear.chain import ChainSettings
@@ -297,7 +297,8 @@ class DatasetConfig:
         the variants, the contact width on the mesh, the eccentric load share, eq. (10)'s
         lowest sub-harmonic in the window, a profile within the gears' limits, the settling
         time, the integrator's stability, the gauges on the mesh, the bridges' zero offsets
-        within the converter's range and a life on a profile.
+        within the converter's range, a life on a profile and a duty change's factors (one
+        per duty point).
 
         Raises
         ------
@@ -325,12 +326,28 @@ class DatasetConfig:
             spec.expand(name)
         _check_layout(self)
         _check_zero_offsets(self)
-        if self.life is not None and self.profile is not None:
-            _req(not self.life.duty, f"{where}.life.duty must be empty with {where}.profile: "
-                                     "the profile is the life's duty cycle")
-            _req(self.life.conditions is None or not self.life.conditions.payload,
-                 f"{where}.life.conditions.payload: payload changes are for lives at steady "
-                 f"operating points; on a profile, set {where}.profile.load.gravity.payload_kg")
+        if self.life is not None:
+            _check_life(self, where)
+
+
+def _check_life(cfg: DatasetConfig, where: str) -> None:
+    """A life on a profile (no duty points, payload or duty changes of its own: the profile
+    is its duty cycle), and a duty change's factors, one per duty point."""
+    life, cond = cfg.life, cfg.life.conditions
+    change = None if cond is None else cond.duty_change
+    if cfg.profile is not None:
+        _req(not life.duty, f"{where}.life.duty must be empty with {where}.profile: "
+                            "the profile is the life's duty cycle")
+        _req(cond is None or not cond.payload,
+             f"{where}.life.conditions.payload: payload changes are for lives at steady "
+             f"operating points; on a profile, set {where}.profile.load.gravity.payload_kg")
+        _req(change is None, f"{where}.life.conditions.duty_change: duty changes are for "
+                             "lives at steady operating points; on a profile, the profile "
+                             "is the life's duty cycle")
+    elif change is not None:
+        ops = cfg.operating_points
+        change.factors([d.t_out_nm for d in duty_cycle(life, ops.n_in_rpm, ops.t_out_nm)],
+                       f"{where}.life.conditions.duty_change")
 
 
 def _req(cond: bool, msg: str) -> None:

@@ -1,8 +1,9 @@
 """A gear life's schedule: duty cycle, commissioning, fault onset and severity over the
 operating hours, decided before any simulation.
 
-A life runs a duty cycle over operating points (each held for its dwell time, in turn)
-and records one window every ``interval_min`` of operation. It starts with a
+A life runs a duty cycle over operating points (each held for its dwell time, in turn;
+from a duty change's hour on, for other times: ``conditions.duty_change``) and records one
+window every ``interval_min`` of operation. It starts with a
 commissioning period known to be healthy; then, optionally, a fault of any class (a gear
 fault of :data:`swgsim.gear.faults.FAULTS` or a sensor fault of
 :data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`) sets in at ``onset_h`` and follows a
@@ -129,8 +130,9 @@ class LifeConfig:
     life_seed : int
         Number of this life among the lives of one gear and data-set seed, >= 0.
     conditions : ConditionsConfig or None
-        What changes while the gear stays healthy: temperature, run-in, payload, the
-        bridges' drift (:mod:`swgsim.datasets.conditions`); None: nothing but the fault.
+        What changes while the gear stays healthy: temperature, run-in, payload, a new
+        program's dwells, the bridges' drift (:mod:`swgsim.datasets.conditions`); None:
+        nothing but the fault.
     """
 
     hours: float = 1000.0
@@ -159,7 +161,7 @@ class LifeConfig:
             > 0, too many windows or none, ``commissioning_h`` outside the life or
             holding no window, a duty point outside its range, ``severity_levels`` < 1,
             ``life_seed`` < 0, the fault (unknown, before commissioning, its growth and
-            severity), a payload step or re-greasing outside the life
+            severity), a payload step, re-greasing or duty change outside the life
             (:meth:`~swgsim.datasets.conditions.ConditionsConfig.check_inside`).
         """
         for k in ("hours", "interval_min"):
@@ -347,14 +349,27 @@ def schedule(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]) -> 
     """The windows of a life (checked config), in time order.
 
     Window k is taken at ``k · interval_min`` minutes of operation; its operating point is
-    the duty point held at that time. A fault growing to failure grows at the commanded
-    load and 20 °C here (:func:`grow` for the life's conditions).
+    the duty point held at that time. From a duty change's hour on
+    (``life.conditions.duty_change``) the cycle restarts with its dwells times the change's
+    factors. A fault growing to failure grows at the commanded load and 20 °C here
+    (:func:`grow` for the life's conditions).
+
+    Raises
+    ------
+    ValueError
+        A duty change's ``dwell_factors`` not one per duty point, in one line naming
+        ``life.conditions.duty_change.dwell_factors``.
     """
     duty = duty_cycle(life, n_in_rpm, t_out_nm)
     minutes = np.arange(n_windows(life)) * float(life.interval_min)
-    edges = np.cumsum([d.dwell_min for d in duty])
-    idx = np.searchsorted(edges, minutes % edges[-1], side="right")
+    idx = _cycle_index(minutes, [d.dwell_min for d in duty])
     hour = minutes / 60.0
+    change = None if life.conditions is None else life.conditions.duty_change
+    if change is not None:  # a new program: the cycle restarts at its hour, new dwells
+        f = change.factors([d.t_out_nm for d in duty], "life.conditions.duty_change")
+        after = hour >= change.hour_h
+        since = np.maximum(minutes[after] - 60.0 * float(change.hour_h), 0.0)
+        idx[after] = _cycle_index(since, [d.dwell_min * x for d, x in zip(duty, f, strict=True)])
     if life.fault.growth in LAWS and life.fault.fault != "healthy":
         sch = Schedule(hour, idx.astype(np.int64), np.full(hour.shape, "healthy", object),
                        np.zeros_like(hour), hour < life.commissioning_h, duty)
@@ -363,6 +378,12 @@ def schedule(life: LifeConfig, n_in_rpm: list[float], t_out_nm: list[float]) -> 
     fault = np.where(sev != 0, life.fault.fault, "healthy")
     return Schedule(hour, idx.astype(np.int64), fault.astype(object), sev,
                     hour < life.commissioning_h, duty)
+
+
+def _cycle_index(minutes: np.ndarray, dwell_min: list[float]) -> np.ndarray:
+    """The duty point held at each of ``minutes`` of a cycle of ``dwell_min``, from 0."""
+    edges = np.cumsum(dwell_min)
+    return np.searchsorted(edges, minutes % edges[-1], side="right")
 
 
 def grow(sch: Schedule, life: LifeConfig, payload: np.ndarray | None = None,

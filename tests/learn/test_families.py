@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from learn.monitor.evaluate import _benign, healthy_life, maintenance_log, monitor_healthy
@@ -29,6 +30,7 @@ from swgcli import dataset_preset
 from swgsim.base.typed import check_tree
 from swgsim.datasets.plan import plan
 from swgsim.datasets.records import record_bank
+from swgsim.datasets.schedule import LifeConfig, schedule
 from swgsim.gear.thermal import MONOTONE_FORMS
 
 FAMILIES = default_families()
@@ -339,3 +341,42 @@ def test_a_keyed_magnitude_is_drawn_by_its_name_alone():
         va, vb = _draws(a, seed)[0], _draws(b, seed)[0]
         assert va["grease_r_k_per_w"] == vb["grease_r_k_per_w"]
         assert va["drive_w"] == vb["drive_w"] and va["coulomb_tau_h"] != vb["coulomb_tau_h"]
+
+
+# ------------------------------------------------------------------ duty changes
+def test_the_duty_part_moves_no_other_draw():
+    """The duty part's magnitudes are keyed by their names: every family without it draws no
+    duty change, and the benchmark's ``all`` with it draws what it drew without it, the
+    change aside."""
+    bench = benchmark_families()
+    for name, fam in {**FAMILIES, **bench}.items():
+        if "duty" not in fam.parts:
+            assert all(draw_conditions(fam, s).duty_change is None for s in SEEDS), name
+    with_duty = bench["all"]
+    without = dataclasses.replace(with_duty, parts=[p for p in with_duty.parts if p != "duty"])
+    for seed in SEEDS:
+        a, b = draw_conditions(with_duty, seed), draw_conditions(without, seed)
+        assert a.duty_change is not None and dataclasses.replace(a, duty_change=None) == b
+        va, vb = _draws(with_duty, seed), _draws(without, seed)
+        assert va == vb  # every value is drawn whichever parts a family names
+
+
+def test_the_benchmarks_duty_family_draws_a_new_program_inside_the_life():
+    fam = benchmark_families()["duty"]
+    shifts = []
+    for seed in SEEDS:
+        c = draw_conditions(fam, seed)
+        change = c.duty_change
+        assert 30.0 <= change.hour_h <= 48.0 and change.dwell_factors == []
+        assert -1.0 <= change.load_shift <= 1.0
+        c.check_inside(200.0, "c")
+        shifts.append(change.load_shift)
+        life = LifeConfig(hours=200.0, commissioning_h=24.0, conditions=c)
+        check_tree(life, "life")
+        s = schedule(life, [2000.0, 4000.0], [7.0, 39.0, 70.0])
+        t = np.array([d.t_out_nm for d in s.duty])[s.duty_index]
+        after = s.hour >= change.hour_h
+        high = np.mean(t[after] == 70.0)
+        assert np.mean(t[~after] == 70.0) == pytest.approx(1 / 3, abs=0.01)
+        assert (high - 1 / 3) * change.load_shift >= 0  # more high load for a shift > 0
+    assert min(shifts) < 0 < max(shifts)
