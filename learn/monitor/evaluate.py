@@ -96,7 +96,8 @@ def nuisance_fault_lives(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int,
     -------
     list of (FaultOnset, str)
         Every gear fault at its mildest and largest Table V severity with a step onset
-        (``step``), then, with ``growing``, the growing ones (``growing``).
+        (``step``), then, with ``growing``, the growing ones (``growing``); with
+        ``growing`` and ``cfg.family_steps`` False, the growing ones only.
     """
     rng = np.random.default_rng([seed, 8])
     grow = np.random.default_rng([seed, 9])
@@ -112,7 +113,7 @@ def nuisance_fault_lives(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int,
             on = cfg.commissioning_h + grow.uniform(*cfg.onset_window_h)
             slow.append((FaultOnset(c, on, min(sevs, key=abs), growth="linear",
                                     growth_h=cfg.family_growth_h), "growing"))
-    return out + slow
+    return slow if growing and not cfg.family_steps else out + slow
 
 
 def lives_of(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: MonitorStudyConfig,
@@ -514,20 +515,22 @@ def banks_of(plan: DatasetPlan) -> dict[int, RecordBank]:
     return {int(x.id): record_bank(plan, int(x.id)) for x in plan.config.gears}
 
 
-def _payload(cfg: MonitorStudyConfig, life: str) -> bool:
-    """Whether a life's conditions change the payload (a family: whether it draws one)."""
+def _steady_only(cfg: MonitorStudyConfig, life: str) -> bool:
+    """Whether a life's conditions change the payload or the duty cycle (a family:
+    whether it draws either), which need steady operating points."""
     fam = family_of(life)
     if fam is not None:
-        return "payload" in cfg.families[fam].parts
-    return life != "none" and bool(cfg.nuisances[life].payload)
+        return bool({"payload", "duty"} & set(cfg.families[fam].parts))
+    c = None if life == "none" else cfg.nuisances[life]
+    return c is not None and (bool(c.payload) or c.duty_change is not None)
 
 
 def _runnable(plan: DatasetPlan, cfg: MonitorStudyConfig, lives: list[str] | None = None
               ) -> list[str]:
     """The lives a data set can live (default: none and every fixed nuisance): payload
-    changes need steady operating points."""
+    and duty changes need steady operating points."""
     return [n for n in (_nuisances(cfg) if lives is None else lives)
-            if plan.profile is None or not _payload(cfg, n)]
+            if plan.profile is None or not _steady_only(cfg, n)]
 
 
 def run_held_out(plan: DatasetPlan, dataset: str, g: int, cfg: MonitorStudyConfig,

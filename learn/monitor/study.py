@@ -136,6 +136,9 @@ class MonitorStudyConfig:
     family_growth_h : float
         Hours over which a fault of a family life grows linearly from 0 to its mildest
         Table V severity (40: slowly, under daily warm-ups).
+    family_steps : bool
+        A family's seed also lives every gear fault as a step at its mildest and largest
+        Table V severity (False: the growing faults only, as the benchmark does).
     rule : RuleConfig
     normal : NormalConfig
         How the gear's normal behaviour follows the conditions (:mod:`learn.monitor.normal`).
@@ -171,6 +174,7 @@ class MonitorStudyConfig:
     design_seeds: list[int] = field(default_factory=lambda: [100, 101, 102, 103, 104])
     scored_seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
     family_growth_h: float = field(default=40.0, metadata=_HOURS)
+    family_steps: bool = True
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)
     scored_run: bool = False

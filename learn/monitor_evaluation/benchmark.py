@@ -6,9 +6,11 @@ A preset's gears become a production lot (:func:`population_plan`,
 instances, the last ``held_out`` are scored. Each family of
 :func:`learn.monitor.families.benchmark_families` (the joint in two nodes, a Coulomb law of
 its own, the friction in the dynamics, plus the family's change) is lived per held-out
-instance and seed by a healthy life of ``healthy_hours`` and its fault lives (every gear
-fault at its mildest and largest Table V severity, and at its mildest growing), the
-monitor's rows from :func:`learn.monitor.evaluate.evaluate_gear`. The baselines
+instance and seed by a healthy life of ``healthy_hours`` and ``fault_lives`` fault lives:
+gear faults growing from 0 to their mildest Table V severity, taken in turn over the
+instances and seeds (:func:`life_faults`), the monitor's rows from
+:func:`learn.monitor.evaluate.evaluate_gear`. A part keeps the healthy records of its
+family and one fault life's at a time (:func:`part_memory`, checked before any work). The baselines
 (:mod:`learn.monitor.baselines`) are commissioned on each life's first ``commissioning_h``
 as the monitor is, their thresholds set on design lives of training instances to the
 monitor's own false-alarm rate there (:func:`design_thresholds`).
@@ -26,17 +28,21 @@ from learn.monitor.evaluate import evaluate_gear, healthy_life, lives_of, monito
 from learn.monitor.families import benchmark_families
 from learn.monitor.model import DiagnosisModel
 from learn.monitor.study import FAMILY_PREFIX, MonitorStudyConfig
-from learn.monitor.training import features_of
+from learn.monitor.training import classes, features_of
 from learn.monitor_evaluation.statistics import matched_threshold, upcrossings
 from learn.tracking.ledger import check_seeds
 from swgsim.base.typed import allowed
 from swgsim.datasets.config import gear_population
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import DatasetPlan, plan
-from swgsim.datasets.records import RecordBank
+from swgsim.datasets.records import RecordBank, record_bank
+from swgsim.datasets.resources import BYTES_PER_RECORD_SAMPLE, RESERVE_BYTES
+from swgsim.files.inputs import available_memory
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 __all__ = ["BASELINES", "BenchmarkConfig", "baseline_rows", "benchmark_part",
-           "design_thresholds", "instances", "population_plan"]
+           "check_memory", "design_thresholds", "instances", "life_faults", "part_memory",
+           "population_plan"]
 
 #: The baselines, by the name their rows carry.
 BASELINES = {"regression_mewma": RegressionMEWMA, "pca": PCAChart}
@@ -60,6 +66,12 @@ class BenchmarkConfig:
         Keys of :func:`~learn.monitor.families.benchmark_families` lived (default all).
     healthy_hours : float
         Operating hours of each healthy life, commissioning included (200).
+    fault_lives : int
+        Fault lives per held-out instance and seed, each a gear fault growing from 0 to
+        its mildest Table V severity over ``study.family_growth_h``, the faults taken in
+        turn (:func:`life_faults`); at most the data set's gear faults (1: with 4
+        instances and 5 seeds, 20 fault lives per family and data set, each of five
+        faults 4 times).
     seeds : list of int
         The scored lives' seeds, per held-out instance: scored seeds (from
         :data:`~learn.tracking.ledger.SCORED_SEED_MIN`) in a scored run, design seeds
@@ -83,6 +95,7 @@ class BenchmarkConfig:
     families: list[str] = field(default_factory=lambda: list(benchmark_families()))
     healthy_hours: float = field(default=200.0, metadata=allowed(0.0, 1e5, lo_open=True,
                                                                  unit="h"))
+    fault_lives: int = field(default=1, metadata=allowed(1, 99))
     seeds: list[int] = field(default_factory=lambda: [300, 301, 302, 303, 304])
     design_seeds: list[int] = field(default_factory=lambda: [200, 201])
     study: MonitorStudyConfig = field(default_factory=MonitorStudyConfig)
@@ -121,14 +134,17 @@ class BenchmarkConfig:
             raise ValueError(f"{where}.healthy_hours must exceed study.commissioning_h "
                              f"({self.study.commissioning_h:g} h), got {self.healthy_hours:g}")
 
-    def study_of(self, family: str, design: bool = False) -> MonitorStudyConfig:
-        """The monitor's study for one family's lives: the scored lives (``seeds``), or
-        the design lives (``design_seeds``, never a scored run's), checked."""
-        seeds = list(self.design_seeds if design else self.seeds)
+    def study_of(self, family: str, design: bool = False, seeds: list[int] | None = None,
+                 faults: list[str] | None = None) -> MonitorStudyConfig:
+        """The monitor's study for one family's lives, checked: the scored lives
+        (``seeds``, or those given), or the design lives (``design_seeds``, never a
+        scored run's); growing faults only, ``faults`` (default the study's)."""
+        seeds = list(self.design_seeds if design else self.seeds) if seeds is None else seeds
         study = dataclasses.replace(
             self.study, families={family: benchmark_families()[family]}, nuisances={},
             nuisance_hours=self.healthy_hours, seeds=seeds, scored_seeds=seeds,
-            scored_run=self.scored_run and not design)
+            scored_run=self.scored_run and not design, family_steps=False,
+            faults=self.study.faults if faults is None else faults)
         study.check("benchmark.study")
         return study
 
@@ -143,6 +159,82 @@ def instances(cfg: BenchmarkConfig) -> tuple[list[int], list[int]]:
     """The training instances and the held-out ones (ids, the last ``held_out``)."""
     ids = list(range(1, cfg.population + 1))
     return ids[:-cfg.held_out], ids[-cfg.held_out:]
+
+
+def gear_faults(plan: DatasetPlan, cfg: BenchmarkConfig) -> list[str]:
+    """The gear faults the benchmark's lives grow (the study's, sensor faults aside)."""
+    return [c for c in classes(plan, cfg.study)[1:] if c not in SENSOR_FAULTS]
+
+
+def life_faults(plan: DatasetPlan, cfg: BenchmarkConfig, g: int, seed: int) -> list[str]:
+    """The gear faults held-out instance ``g`` lives for a seed: ``fault_lives`` of
+    them in turn, starting at (instance index + seed index × ``fault_lives``) modulo
+    their number, so the instances and seeds spread over every fault evenly.
+
+    Raises
+    ------
+    ValueError
+        ``fault_lives`` above the data set's gear faults.
+    """
+    faults = gear_faults(plan, cfg)
+    if cfg.fault_lives > len(faults):
+        raise ValueError(f"benchmark.study.fault_lives must be at most the "
+                         f"{len(faults)} gear faults of {plan.config.name}, got "
+                         f"{cfg.fault_lives}")
+    i, j = instances(cfg)[1].index(g), list(cfg.seeds).index(seed)
+    start = i + j * cfg.fault_lives
+    return [faults[(start + m) % len(faults)] for m in range(cfg.fault_lives)]
+
+
+def part_memory(plan: DatasetPlan, cfg: BenchmarkConfig) -> int:
+    """Records a lives part holds at its peak [bytes]: over the families, the healthy
+    records of the first held-out instance's healthy life for the first seed plus those
+    of its largest fault life (:meth:`RecordBank.release
+    <swgsim.datasets.records.RecordBank.release>` drops a fault life's after it; nothing
+    is simulated here)."""
+    g, seed = instances(cfg)[1][0], cfg.seeds[0]
+    most = 0
+    for family in cfg.families:
+        bank = record_bank(plan, g)
+        study = cfg.study_of(family, seeds=[seed], faults=life_faults(plan, cfg, g, seed))
+        healthy, faults = lives_of(plan, {g: bank}, g, study, seed, f"{FAMILY_PREFIX}{family}")
+        keys = bank.wanted()
+        base = {k for k in keys if k[2] == "healthy"}
+        worst = max((len(_keys_of(sim) - base) for sim, _, _ in faults), default=0)
+        per = max(bank.record_samples(k) for k in keys) * BYTES_PER_RECORD_SAMPLE
+        most = max(most, (len(base) + worst) * per)
+    return most
+
+
+def _keys_of(sim: LifeSimulator) -> set[tuple]:
+    """The record keys one life asks for (a fresh bank of its gear)."""
+    bank = record_bank(sim.plan, sim.gear_id)
+    LifeSimulator(sim.plan, sim.gear_id, sim.life, bank)
+    return bank.wanted()
+
+
+def check_memory(plans: dict[str, DatasetPlan], cfg: BenchmarkConfig, n_jobs: int,
+                 available: int | None = None) -> None:
+    """Refuse a benchmark whose lives parts, ``n_jobs`` at once, cannot hold their
+    records in memory (:func:`part_memory`), before any work.
+
+    Raises
+    ------
+    ValueError
+        One line naming the data set, the estimate, the memory available and the keys
+        that lower it.
+    """
+    avail = available_memory() if available is None else available
+    if avail is None:
+        return
+    for name, p in plans.items():
+        need = part_memory(p, cfg) * n_jobs + RESERVE_BYTES
+        if need > avail:
+            raise ValueError(
+                f"not enough memory: benchmark.datasets.{name}'s lives parts hold about "
+                f"{need / 2**30:.3g} GiB with benchmark.n_jobs={n_jobs} at once; "
+                f"{avail / 2**30:.3g} GiB available. Lower benchmark.n_jobs or "
+                "benchmark.study.fault_lives")
 
 
 @dataclass(frozen=True)
@@ -218,6 +310,8 @@ def design_thresholds(plan: DatasetPlan, banks: dict[int, RecordBank],
                 for b in BASELINES:
                     stats[b].append(s[b])
                 hours.append(float(healthy.life.hours - study.commissioning_h))
+        for bank in banks.values():  # a family's records serve no other
+            bank.release(healthy=True)
     total = float(sum(hours))
     rate = 1000.0 * max(alarms, 1) / total
     thresholds = {b: matched_threshold(stats[b], hours, rate)
@@ -281,11 +375,15 @@ def benchmark_part(plan: DatasetPlan, banks: dict[int, RecordBank], model: Diagn
         ``rows`` (fault lives), ``false_alarms`` (healthy lives), each with a
         ``detector`` column (``monitor`` or a key of :data:`BASELINES`) and ``family``.
     """
-    study = cfg.study_of(family)
-    rows, fa, _ = evaluate_gear(plan, banks, g, model, study, dataset,
-                                f"{FAMILY_PREFIX}{family}", list(cfg.seeds))
-    rows = [r for r in rows if r["detector"] == "monitor"]
-    fa = [r for r in fa if r["detector"] == "monitor"]
-    b_rows, b_fa = baseline_rows(plan, banks, g, study, cfg, family, thresholds, dataset)
-    return {"rows": [{**r, "family": family} for r in rows + b_rows],
-            "false_alarms": [{**r, "family": family} for r in fa + b_fa]}
+    rows, fa = [], []
+    for seed in cfg.seeds:  # a seed's own fault lives (life_faults)
+        study = cfg.study_of(family, seeds=[seed], faults=life_faults(plan, cfg, g, seed))
+        r, f, _ = evaluate_gear(plan, banks, g, model, study, dataset,
+                                f"{FAMILY_PREFIX}{family}", [seed])
+        b_rows, b_fa = baseline_rows(plan, banks, g, study, cfg, family, thresholds, dataset)
+        rows += [x for x in r if x["detector"] == "monitor"] + b_rows
+        fa += [x for x in f if x["detector"] == "monitor"] + b_fa
+        banks[g].release()  # the seed's fault records: the healthy ones serve the next
+    banks[g].release(healthy=True)
+    return {"rows": [{**r, "family": family} for r in rows],
+            "false_alarms": [{**r, "family": family} for r in fa]}

@@ -26,6 +26,7 @@ from learn.monitor.training import train_model
 from learn.monitor_evaluation.benchmark import (
     BenchmarkConfig,
     benchmark_part,
+    check_memory,
     design_thresholds,
     instances,
     population_plan,
@@ -92,7 +93,9 @@ def run_benchmark(cfg) -> dict:
     ------
     ValueError
         A bad ``benchmark`` key or data set, a scored seed outside a declared scored run,
-        ``benchmark.group`` set (not yet for the benchmark), an unwritable MLflow store or
+        ``benchmark.group`` set (not yet for the benchmark), lives parts that cannot fit in
+        memory ``n_jobs`` at once (:func:`~learn.monitor_evaluation.benchmark.check_memory`),
+        an unwritable MLflow store or
         a ``report_dir`` holding a file this project cannot show it wrote; before any work.
     """
     app = typed_app(cfg)
@@ -102,6 +105,7 @@ def run_benchmark(cfg) -> dict:
         raise ValueError("benchmark.group: the benchmark runs whole (its parts resume); "
                          f"cluster arrays are not built for it yet, got {bc.group}")
     plans = {n: population_plan(p, bc.study) for n, p in bc.plans("benchmark").items()}
+    check_memory(plans, bc.study, bc.n_jobs)
     design_jobs, life_jobs = plan_jobs(bc, plans)
     with bc.claimed_report("benchmark", plans, app.logger) as (out, claim):
         (out / "parts").mkdir(parents=True, exist_ok=True)

@@ -99,6 +99,25 @@ class RecordBank:
             self.simulate()
         return self._records[key]
 
+    def release(self, healthy: bool = False) -> None:
+        """Drop the records kept and asked for: those of gear faults, and with
+        ``healthy`` the healthy ones too (bounded memory between lives; a record asked
+        for again is simulated again)."""
+        def kept(k: tuple) -> bool:
+            return not healthy and k[2] == "healthy"
+        self._records = {k: v for k, v in self._records.items() if kept(k)}
+        self._pending = {k for k in self._pending if kept(k)}
+
+    def record_samples(self, key: tuple) -> int:
+        """Data-rate samples a record holds: one output revolution at its input speed
+        plus a window."""
+        fs, _, n_t, _ = sampling(self.plan.config)
+        return int(math.ceil(self.healthy.gear.ratio * 60.0 / key[0] * fs)) + n_t
+
+    def wanted(self) -> set[tuple]:
+        """The keys of the records kept and asked for."""
+        return set(self._records) | self._pending
+
     def simulate(self) -> None:
         """Simulate every pending record, in batches per input speed of at most
         ``chunk`` distinct motions (:meth:`motion`): an integration costs nearly the same
@@ -189,6 +208,11 @@ class ProfileRecordBank(RecordBank):
             viscous: float = 1.0) -> tuple:
         """The key of a record: the state alone (every slot is in the record)."""
         return (0.0, 0.0, *RecordBank.key(dp, fault, severity, position_deg, viscous)[2:])
+
+    def record_samples(self, key: tuple) -> int:
+        """Data-rate samples a record holds: every slot's window and jitter."""
+        _, _, n_t, _ = sampling(self.plan.config)
+        return len(self.slots.starts) * (n_t + jitter_samples(self.plan.config))
 
     def motion(self, key: tuple) -> tuple:
         """What a record's motion along the profile depends on: the gear's parameters."""

@@ -46,6 +46,45 @@ def test_the_lot_is_split_into_trained_and_held_out_instances():
     assert [g.id for g in p.config.gears] == list(range(1, 13))
 
 
+def test_the_fault_lives_spread_over_instances_and_seeds_evenly():
+    cfg = bm.BenchmarkConfig()
+    p = bm.population_plan(P.plan(dataset_preset("tiny_bench")), cfg)
+    faults = bm.gear_faults(p, cfg)
+    assert len(faults) == 5
+    drawn = [f for g in bm.instances(cfg)[1] for s in cfg.seeds
+             for f in bm.life_faults(p, cfg, g, s)]
+    assert len(drawn) == 20 and {f: drawn.count(f) for f in faults} == dict.fromkeys(faults, 4)
+    g = bm.instances(cfg)[1][0]  # one instance lives every fault over the five seeds
+    assert sorted(f for s in cfg.seeds for f in bm.life_faults(p, cfg, g, s)) == sorted(faults)
+    with pytest.raises(ValueError, match=r"fault_lives must be at most the 5 gear faults"):
+        bm.life_faults(p, bm.BenchmarkConfig(fault_lives=6), g, 300)
+
+
+def test_a_benchmark_whose_records_cannot_fit_is_refused_before_any_work():
+    cfg = bm.BenchmarkConfig(families=["warm_up"], healthy_hours=30.0)
+    p = bm.population_plan(P.plan(dataset_preset("tiny_bench")), cfg)
+    need = bm.part_memory(p, cfg)
+    assert need > 0
+    bm.check_memory({"tiny": p}, cfg, 2, available=2 * need + (1 << 31))
+    with pytest.raises(ValueError) as e:
+        bm.check_memory({"tiny": p}, cfg, 2, available=need)
+    assert "benchmark.n_jobs=2" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_bank_releases_its_fault_records_and_keeps_the_healthy_ones():
+    from swgsim.datasets.schedule import DutyPoint
+
+    p = P.plan(dataset_preset("tiny_bench"))
+    bank = record_bank(p, int(p.config.gears[0].id))
+    dp = DutyPoint(2000.0, 7.0)
+    healthy, fault = bank.key(dp, "healthy", 0.0, 0.0), bank.key(dp, "eccentric_wg", 0.1, 0.0)
+    bank.want([healthy, fault])
+    bank.release()
+    assert bank.wanted() == {healthy}
+    bank.release(healthy=True)
+    assert bank.wanted() == set()
+
+
 @pytest.mark.slow
 def test_the_monitor_and_both_baselines_live_a_benchmark_family_end_to_end():
     """About 40 s: four instances of the tiny bench (two trained, two held out), the
@@ -65,7 +104,8 @@ def test_the_monitor_and_both_baselines_live_a_benchmark_family_end_to_end():
     part = bm.benchmark_part(p, banks, model, held[0], "warm_up", cfg, thr, "tiny_bench")
     rows, fa = pd.DataFrame(part["rows"]), pd.DataFrame(part["false_alarms"])
     assert set(rows.detector) == {"monitor", *bm.BASELINES}
-    assert len(rows) == 3 * 3  # mildest and largest step, mildest growing; three detectors
+    assert len(rows) == 3  # one growing life (fault_lives=1), three detectors
+    assert set(rows.onset) == {"growing"}
     assert set(fa.detector) == {"monitor", *bm.BASELINES} and set(fa.healthy_hours) == {5.0}
     assert (rows.family == "warm_up").all() and rows.detected.dtype == bool
     # a fault life's windows before its onset are its healthy life's: the baselines read
