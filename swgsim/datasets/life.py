@@ -42,8 +42,10 @@ BLOCK = 1024
 #: are the quadratic through the three nearest (Lagrange in the factor). Measured on the
 #: tiny bench's gear 3 at 4000 rpm, interpolating to 0.627 (the grease's factor at 40 °C):
 #: RMS error 0.9 % of the signals' change from the nominal gear at 7 N m, 0.04 % at 70 N m
-#: (rungs √2 apart: 5.0 % and 0.28 %) [derived].
-VISCOUS_LADDER = tuple(2.0 ** (k / 4) for k in range(-20, 9))  # 1/32 ... 4 (a hot grease)
+#: (rungs √2 apart: 5.0 % and 0.28 %) [derived]. From 1/256: the benchmark's families
+#: thin a hot joint's grease to 0.03 of its 20 °C viscosity (bench, family ``all``,
+#: design seeds), 1/32 was too short.
+VISCOUS_LADDER = tuple(2.0 ** (k / 4) for k in range(-32, 9))  # 1/256 ... 4
 
 __all__ = ["BLOCK", "VISCOUS_LADDER", "LifeSimulator", "ladder_weights", "life_dataset",
            "simulate_life_shard"]
@@ -66,7 +68,7 @@ def ladder_weights(factor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     ValueError
-        A factor outside the ladder's span (1/32 to 4), naming the first.
+        A factor outside the ladder's span (1/256 to 4), naming the first.
     """
     f = np.asarray(factor, dtype=float)
     lad = np.asarray(VISCOUS_LADDER)
@@ -75,7 +77,8 @@ def ladder_weights(factor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"conditions.viscous_in_dynamics: a viscous friction factor of "
                          f"{f[bad[0]]:g} lies outside [{lad[0]:g}, {lad[-1]:g}] (the "
                          f"ladder of simulated factors)")
-    j = np.clip(np.rint(4.0 * np.log2(f)).astype(int) + 20, 1, lad.size - 2)  # middle rung
+    k0 = int(round(-4.0 * np.log2(lad[0])))  # the lowest rung's -k
+    j = np.clip(np.rint(4.0 * np.log2(f)).astype(int) + k0, 1, lad.size - 2)  # middle rung
     rungs = lad[np.stack([j - 1, j, j + 1], axis=1)]  # (W, 3)
     w = np.ones_like(rungs)
     for a in range(3):

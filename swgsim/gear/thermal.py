@@ -427,8 +427,9 @@ def network_temperatures(operating_h, loss_w, input_torque_nm, cfg: JointThermal
     wall = wall_clock_h(h, cfg.run_h_per_day)
     g = _grid(wall, cfg)
     pieces = np.maximum(np.ceil(np.diff(g) / NETWORK_STEP_H), 1).astype(int)
-    g = np.concatenate([np.linspace(a, b, k, endpoint=False) for a, b, k in
-                        zip(g[:-1], g[1:], pieces, strict=True)] + [g[-1:]])
+    seg = np.repeat(np.arange(pieces.size), pieces)  # each interval in equal steps, as
+    j = np.arange(seg.size) - np.repeat(np.cumsum(pieces) - pieces, pieces)  # linspace
+    g = np.concatenate([j * (np.diff(g) / pieces)[seg] + g[:-1][seg], g[-1:]])
     t0, t1 = g[:-1], g[1:]
     mid = 0.5 * (t0 + t1)
     running = np.mod(mid, _HOURS_PER_DAY) < cfg.run_h_per_day
