@@ -10,7 +10,10 @@ the physics and the sources).
   :func:`cools`), over a single warm-up bounded by it and kept with its bounds;
 * the load curves: quadratics in the acting torque at each speed (:func:`load_curves`);
 * without a temperature reading, the directions in which commissioning's warm-ups moved
-  the z-scores at each point (:func:`warm_up_directions`).
+  the z-scores at each point (:func:`warm_up_directions`);
+* for the ablation of all the above (the benchmark of issue 83), a generic regression of
+  every feature on the acting load and the temperature per input speed
+  (:func:`generic_laws`).
 """
 
 from __future__ import annotations
@@ -27,7 +30,8 @@ optimize = lazy_module("scipy.optimize")  # at the first fit, not at an app's st
 
 __all__ = ["BLOCK", "EFFICIENCY", "FACTOR_FLOOR", "LossLaw", "MIN_SPREAD_K", "SEGMENT_K",
            "SIGNIFICANT", "SMOOTHING", "WARM_UP_AVERAGE", "bridge_drift", "cools",
-           "feature_slopes", "load_curves", "loss_model", "poly", "warm_up_directions"]
+           "feature_slopes", "generic_laws", "load_curves", "loss_model", "poly",
+           "warm_up_directions", "GENERIC_ALPHA", "GENERIC_DEGREE", "generic_inputs"]
 
 #: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
 BLOCK = N_HARMONICS + 2
@@ -45,6 +49,10 @@ SMOOTHING = 1e-3
 #: Least share of its value at commissioning's coldest that the load-independent loss
 #: keeps when its law is carried beyond commissioning's temperatures [-].
 FACTOR_FLOOR = 0.05
+#: The generic regression's polynomial degree in the load and the temperature and its
+#: ridge penalty on standardised terms (:func:`generic_laws`) [choice: a quadratic, as the
+#: load curves are; the penalty only steadies a term commissioning barely varied].
+GENERIC_DEGREE, GENERIC_ALPHA = 2, 1.0
 #: Least temperature spread of commissioning to fit the temperature terms [K].
 MIN_SPREAD_K = 2.0
 #: Consecutive windows of an operating point whose z-scores :func:`warm_up_directions`
@@ -426,3 +434,57 @@ def _beyond_noise(x: np.ndarray, m: float, k: int, avg: int = 1, dim: int | None
     edge = (1.0 + np.sqrt(dim / m)) ** 2 / avg
     return vt[:k][s[:k] ** 2 / (len(x) - 1) > edge]
 
+
+
+def generic_laws(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray, torque: np.ndarray,
+                 temp: np.ndarray | None) -> list:
+    """The ablation of the laws above: per input speed, one generic regression of every
+    feature on the acting load (and the temperature, where commissioning fitted its
+    terms), scikit-learn's polynomial of degree :data:`GENERIC_DEGREE`, standardised, and
+    ridge regression (penalty :data:`GENERIC_ALPHA`); no drift, loss or load law, no
+    friction factor. The normal behaviour "with a generic regression" of the benchmark
+    (:class:`~.normal.NormalConfig` ``laws``).
+
+    Parameters
+    ----------
+    feats : ndarray, shape (n, F)
+        Commissioning's features.
+    inv : ndarray of int, shape (n,)
+        Each window's operating point (a row of ``ops``).
+    ops : ndarray, shape (P, 2)
+        The operating points (input speed [rpm], torque [N m]).
+    torque : ndarray, shape (n,)
+        Each window's acting load [N m] (its magnitude used).
+    temp : ndarray, shape (n,), or None
+        Each window's temperature [°C]; None: the load alone.
+
+    Returns
+    -------
+    list of sklearn Pipeline, length P
+        The regression of each point (one shared by the points of a speed); its inputs
+        :func:`generic_inputs`.
+    """
+    from sklearn.linear_model import Ridge  # heavy: at the first fit, not at an app's start
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import PolynomialFeatures, StandardScaler
+
+    x = generic_inputs(torque, temp)
+    out: list = [None] * len(ops)
+    for n in np.unique(ops[:, 0]):
+        pts = np.flatnonzero(ops[:, 0] == n)
+        m = np.isin(inv, pts)
+        model = make_pipeline(PolynomialFeatures(GENERIC_DEGREE, include_bias=False),
+                              StandardScaler(), Ridge(alpha=GENERIC_ALPHA))
+        model.fit(x[m], feats[m])
+        for k in pts:
+            out[k] = model
+    return out
+
+
+def generic_inputs(torque: np.ndarray, temp: np.ndarray | None) -> np.ndarray:
+    """The generic regression's inputs: the acting load's magnitude [N m] and the
+    temperature [°C] where given, shape (n, 1) or (n, 2)."""
+    cols = [np.abs(np.asarray(torque, float))]
+    if temp is not None:
+        cols.append(np.asarray(temp, float))
+    return np.stack(cols, axis=1)

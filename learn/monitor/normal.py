@@ -24,11 +24,15 @@ from .laws import (
     LossLaw,
     bridge_drift,
     feature_slopes,
+    generic_inputs,
+    generic_laws,
     load_curves,
     loss_model,
     warm_up_directions,
 )
 
+#: The normal behaviour's laws (:class:`NormalConfig` ``laws``).
+LAWS = ("physics", "generic")
 #: Bits of :meth:`NormalBehaviour.outside`: the condition commissioning did not see.
 OUTSIDE_TEMPERATURE, OUTSIDE_LOAD, OUTSIDE_FRICTION = 1, 2, 4
 #: Bit of :meth:`NormalBehaviour.outside`: the window is not judged (its temperature is
@@ -96,6 +100,11 @@ class NormalConfig:
         direction left the hour after each cold start at -1.1 to -1.6 σ on the second
         harmonic of bridges 1 and 3 and 5 alarms in 200 h; two left none, and both of
         each point's largest eigenvalues lay above the noise's edge.
+    laws : str
+        ``physics`` (the default): the laws above; ``generic``: their ablation, a generic
+        regression of every feature on the acting load and the temperature per input
+        speed (:func:`~.laws.generic_laws`), no friction factor (the benchmark of issue
+        83 scores both).
     """
 
     friction_track_h: float = 4.0
@@ -107,6 +116,7 @@ class NormalConfig:
     recommission_load: bool = True
     regrease_settle_h: float = 72.0
     warm_up_components: int = 2
+    laws: str = "physics"
 
     def check(self, key: str = "normal") -> None:
         """Refuse a field out of range in one line naming ``<key>.<field>``.
@@ -131,6 +141,8 @@ class NormalConfig:
                 or not 0 <= self.warm_up_components <= 5):
             raise ValueError(f"{key}.warm_up_components must be an integer in [0, 5], got "
                              f"{self.warm_up_components!r}")
+        if self.laws not in LAWS:
+            raise ValueError(f"{key}.laws must be one of {', '.join(LAWS)}, got {self.laws!r}")
 
 
 @dataclass
@@ -225,6 +237,10 @@ class NormalBehaviour:
         commissioning's :attr:`torque_range`, kept when that range grows or the point is
         relearnt at a new load (the warm-ups are carried, not seen again): a heavier tool
         heats the joint beyond them for as long as it stays. None with a reading.
+    generic : list or None
+        With ``laws`` ``generic``: each point's generic regression
+        (:func:`~.laws.generic_laws`), in place of the drift, loss and load laws; None
+        with the physics' laws.
     """
 
     points: np.ndarray
@@ -246,6 +262,7 @@ class NormalBehaviour:
     warm_dir: np.ndarray | None = None
     warm_range: np.ndarray | None = None
     warm_torque: np.ndarray | None = None
+    generic: list | None = None
 
     # ------------------------------------------------------------------ fitting
     @classmethod
@@ -284,10 +301,14 @@ class NormalBehaviour:
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
                  np.bincount(inv, minlength=n_p), loss_band=band)
-        if use_t:
+        if config.laws == "generic":
+            nb.generic, nb.loss_band = generic_laws(feats, inv, ops, tq,
+                                                    temp if use_t else None), None
+        elif use_t:
             nb.slope = feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
-        warm = nb._temperature_corrected(feats, inv, dt)
-        nb.load = load_curves(warm, inv, ops, ref_torque)
+        if nb.generic is None:
+            nb.load = load_curves(nb._temperature_corrected(feats, inv, dt), inv, ops,
+                                  ref_torque)
         ref = nb._corrected(feats, inv, cond, np.broadcast_to(friction, (len(feats),)))
         nb.mean = np.stack([ref[inv == k].mean(axis=0) for k in range(n_p)])
         nb.std = np.maximum(np.stack([ref[inv == k].std(axis=0, ddof=1)
@@ -631,6 +652,8 @@ class NormalBehaviour:
         """Each window's loss torque over the model's prediction at its load and
         temperature (the friction factor's evidence), shape (n,)."""
         i = self._check(points, index)
+        if self.generic is not None:  # the ablation tracks no friction factor
+            return np.ones(len(i))
         tq = np.maximum(np.abs(cond.torque_nm), 1e-9)
         eta = np.clip(feats[:, EFFICIENCY], 1e-6, 1.0)
         pred = self._loss(i, cond)
@@ -712,6 +735,8 @@ class NormalBehaviour:
         """Features at the reference condition of their point
         (docs/monitor.md, "The normal behaviour's laws"); ``load``: :meth:`_load_terms` of
         the windows' loads, when known."""
+        if self.generic is not None:
+            return np.asarray(feats, float) - self._generic_shift(i, cond)
         div, shift = self._load_terms(i, cond.torque_nm) if load is None else load
         out = self._temperature_corrected(feats, i, self._dt(i, cond))
         out /= div
@@ -751,7 +776,11 @@ class NormalBehaviour:
         """The efficiency at the reference condition of its point with friction factors
         ``friction`` (n,) or (m, n): its loss law's prediction (``law``, :meth:`_loss`) at
         the window's load and temperature taken out, the reference's put in; the shape of
-        ``friction``."""
+        ``friction`` (the ablation's generic regression, which has no friction factor,
+        the same for every factor)."""
+        if self.generic is not None:
+            eta = feats[:, EFFICIENCY] - self._generic_shift(i, cond)[:, EFFICIENCY]
+            return np.broadcast_to(eta, np.shape(friction)).copy()
         tq, t0 = np.abs(cond.torque_nm), np.abs(self.ref_torque[i])
         ref_cond = Conditions(t0, None if cond.temperature_c is None
                               else self.ref_temp[i])
@@ -761,6 +790,24 @@ class NormalBehaviour:
             eta_pred = np.where(tq > 0, tq / (tq + pred), 0.0)
             eta_ref = np.where(t0 > 0, t0 / (t0 + pred0), 0.0)
         return feats[:, EFFICIENCY] - eta_pred + eta_ref
+
+    def _generic_shift(self, i: np.ndarray, cond: Conditions) -> np.ndarray:
+        """What the generic regression (:attr:`generic`) says the windows' conditions add
+        to their features over their point's reference condition, shape (n, F): without
+        a temperature the reference's taken, a NaN reading gives NaN (as the laws do)."""
+        law_t = self.temperature_law
+        out = np.full((len(i), self.mean.shape[1]), np.nan)
+        for k in np.unique(i):
+            m = np.flatnonzero(i == k)
+            t_ref = np.full(m.size, self.ref_temp[k]) if law_t else None
+            t = t_ref if t_ref is None or cond.temperature_c is None else cond.temperature_c[m]
+            at = generic_inputs(cond.torque_nm[m], t)
+            ok = np.isfinite(at).all(axis=1)
+            if not ok.any():
+                continue
+            ref = generic_inputs(np.full(m.size, self.ref_torque[k]), t_ref)[ok]
+            out[m[ok]] = self.generic[k].predict(at[ok]) - self.generic[k].predict(ref)
+        return out
 
     def _law_spread(self, feats: np.ndarray, i: np.ndarray, cond: Conditions,
                     friction: np.ndarray) -> np.ndarray | None:
@@ -774,5 +821,5 @@ class NormalBehaviour:
         return np.abs(lo - hi)
 
 
-__all__ = ["BLOCK", "Conditions", "EFFICIENCY", "NormalBehaviour", "NormalConfig",
+__all__ = ["BLOCK", "Conditions", "EFFICIENCY", "LAWS", "NormalBehaviour", "NormalConfig",
            "OUTSIDE_FRICTION", "OUTSIDE_LOAD", "OUTSIDE_TEMPERATURE", "OUTSIDE_UNJUDGED"]

@@ -546,3 +546,47 @@ def test_the_warm_up_directions_hold_a_slow_warm_up_beside_a_larger_scatter():
     still, _ = warm_up_directions(scatter, np.zeros(m, int), 2)
     assert still.shape == (1, 2, n_f)
     assert np.linalg.norm(still[0] @ fast.T, axis=1) == pytest.approx([1.0, 1.0], abs=0.05)
+
+
+def test_the_generic_regression_follows_the_temperature_and_tracks_no_friction():
+    """The ablation (laws=generic): a feature that moves with the temperature is carried
+    across commissioning's temperatures by the regression alone, the friction factor
+    is 1 and changes nothing; an unknown law is refused in one line."""
+    rng = np.random.default_rng(5)
+    commanded = np.repeat(LOADS, 120)
+    temp = rng.uniform(20.0, 50.0, commanded.size)
+    points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
+
+    def windows(t):
+        f = _features(commanded, rng)
+        f[:, BLOCK + 2] += 0.004 * (t - 35.0)
+        return f
+
+    nb = NormalBehaviour.fit(windows(temp), points, Conditions(commanded, temp),
+                             NormalConfig(laws="generic"))
+    assert nb.generic is not None and nb.loss_band is None
+    for t0 in (22.0, 48.0):
+        t = np.full(commanded.size, t0)
+        f, cond = windows(t), Conditions(commanded, t)
+        z = nb.z(f, points, cond)
+        assert np.percentile(np.abs(z[:, BLOCK + 2]), 99) < 4.0
+        assert np.all(nb.friction_ratio(f, points, cond) == 1.0)
+        np.testing.assert_array_equal(nb.z(f, points, cond, friction=1.3), z)
+    with pytest.raises(ValueError, match=r"^normal.laws must be one of physics, generic"):
+        NormalConfig(laws="linear").check()
+
+
+def test_the_generic_regression_without_a_reading_takes_the_reference_and_nan_stays_nan():
+    rng = np.random.default_rng(6)
+    commanded = np.repeat(LOADS, 60)
+    temp = rng.uniform(20.0, 50.0, commanded.size)
+    points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
+    f = _features(commanded, rng)
+    nb = NormalBehaviour.fit(f, points, Conditions(commanded, temp),
+                             NormalConfig(laws="generic"))
+    at_ref = nb.z(f, points, Conditions(commanded, nb.ref_temp[nb.index(points)]))
+    np.testing.assert_allclose(nb.z(f, points, Conditions(commanded, None)), at_ref)
+    t = temp.copy()
+    t[:5] = np.nan
+    z = nb.z(f, points, Conditions(commanded, t))
+    assert np.isnan(z[:5]).all() and np.isfinite(z[5:]).all()
