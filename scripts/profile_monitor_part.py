@@ -22,6 +22,15 @@ The last line is one JSON object.
 
     python scripts/profile_monitor_part.py                        # bench, gear 3, seed 0
     python scripts/profile_monitor_part.py --dataset robot_joint --detector paper_rf  # both
+
+With ``--benchmark REPORT_DIR`` it profiles one lives part of the benchmark instead
+(``swgsim-train experiment=benchmark``, issue 83): the data set's first held-out
+instance under ``--family``, the monitor, its ablation and the baselines on the design
+seeds ``--seeds`` (default 300), with the models and thresholds of the design part
+already in ``REPORT_DIR`` (its ``models/`` and ``parts/``); the stage ``baselines`` is
+the charts' fitting and statistics.
+
+    python scripts/profile_monitor_part.py --benchmark reports/benchmark --family all
 """
 
 from __future__ import annotations
@@ -46,6 +55,7 @@ STAGES = {
     "monitoring": [("learn/monitor/gear_monitor.py", n) for n in
                    ("commission", "run", "score_only", "diagnose", "fork")]
     + [("learn/monitor/detectors.py", "labels")],
+    "baselines": [("learn/monitor/baselines.py", n) for n in ("fit", "statistic")],
     "reports and tracking": [("learn/monitor_evaluation/report.py", n) for n in
                              ("figures", "write_table")]
     + [("learn/monitor/model_io.py", "save_model"),
@@ -67,13 +77,67 @@ def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dataset", default="bench", help="data set of the evaluation")
     ap.add_argument("--gear", type=int, default=3, help="held-out gear")
-    ap.add_argument("--seeds", default="0", help="life seeds, comma-separated")
+    ap.add_argument("--seeds", default=None,
+                    help="life seeds, comma-separated (default 0; the benchmark's 300)")
     ap.add_argument("--detector", default=None,
                     help="also this per-window detector's part (after the monitor's)")
     ap.add_argument("--save", default=None, metavar="FILE",
                     help="also write the profile (pstats) to FILE, to read by function")
+    ap.add_argument("--benchmark", default=None, metavar="REPORT_DIR",
+                    help="profile a lives part of the benchmark whose design is in REPORT_DIR")
+    ap.add_argument("--family", default="all", help="the benchmark family (--benchmark)")
     args = ap.parse_args(argv)
+    if args.benchmark:
+        prof, wall, part = _benchmark_part(args)
+    else:
+        prof, wall, part = _monitor_part(args)
+    if args.save:
+        prof.dump_stats(args.save)
+    sec = stage_seconds(pstats.Stats(prof))
+    sec["other"] = max(0.0, wall - sum(sec.values()))
+    print(f"part {args.dataset} {part} seeds {args.seeds}, {wall:.1f} s "
+          f"under the profiler ({platform.machine()}, {platform.python_version()}):")
+    for k, v in sec.items():
+        print(f"  {k:<22s} {v:7.1f} s  {100 * v / wall:5.1f} %")
+    out = {"dataset": args.dataset, "gear": args.gear, "seeds": args.seeds,
+           "part": part, "wall_s": round(wall, 1),
+           "stages_s": {k: round(v, 1) for k, v in sec.items()}}
+    print(json.dumps(out))
+    return out
+
+
+def _benchmark_part(args) -> tuple[cProfile.Profile, float, str]:
+    """One lives part of the benchmark (module docstring) under the profiler."""
+    import dataclasses
+
+    from learn.monitor.evaluate import banks_of
+    from learn.monitor.model_io import load_model
+    from learn.monitor_evaluation import benchmark as bm
+    from learn.monitor_evaluation.benchmark_task import _model_path, _monitors
+    from swgcli import dataset_preset
+    from swgsim.datasets.plan import plan
+
+    seeds = [int(s) for s in (args.seeds or "300").split(",")]
+    cfg = dataclasses.replace(bm.BenchmarkConfig(), seeds=seeds)
+    cfg.check()
+    p = bm.population_plan(plan(dataset_preset(args.dataset)), cfg)
+    report = Path(args.benchmark)
+    design = json.loads((report / "parts" / f"{args.dataset}_gear0_design.json").read_text())
+    models = {n: load_model(_model_path(report, args.dataset, n)) for n in _monitors(cfg)}
+    g = bm.instances(cfg)[1][0]
+    args.gear, args.seeds = g, ",".join(map(str, seeds))
+    prof = cProfile.Profile()
+    t0 = time.perf_counter()
+    prof.runcall(bm.benchmark_part, p, {g: banks_of(p)[g]}, models, g, args.family, cfg,
+                 design["thresholds"], args.dataset)
+    return prof, time.perf_counter() - t0, f"benchmark instance {g} family {args.family}"
+
+
+def _monitor_part(args) -> tuple[cProfile.Profile, float, str]:
+    """One part of the monitor's evaluation (module docstring) under the profiler."""
     from swgcli.train import main as train
+
+    args.seeds = args.seeds or "0"
 
     with tempfile.TemporaryDirectory() as tmp:
         dets = f"[{args.detector}]" if args.detector else "[]"
@@ -91,20 +155,8 @@ def main(argv: list[str] | None = None) -> dict:
             if e.code:
                 raise
         wall = time.perf_counter() - t0
-    if args.save:
-        prof.dump_stats(args.save)
-    sec = stage_seconds(pstats.Stats(prof))
-    sec["other"] = max(0.0, wall - sum(sec.values()))
     part = f"monitor + {args.detector}" if args.detector else "monitor"
-    print(f"part {args.dataset} gear {args.gear} seeds {args.seeds} {part}, {wall:.1f} s "
-          f"under the profiler ({platform.machine()}, {platform.python_version()}):")
-    for k, v in sec.items():
-        print(f"  {k:<22s} {v:7.1f} s  {100 * v / wall:5.1f} %")
-    out = {"dataset": args.dataset, "gear": args.gear, "seeds": args.seeds,
-           "part": part, "wall_s": round(wall, 1),
-           "stages_s": {k: round(v, 1) for k, v in sec.items()}}
-    print(json.dumps(out))
-    return out
+    return prof, wall, f"gear {args.gear} {part}"
 
 
 if __name__ == "__main__":

@@ -125,14 +125,20 @@ def lives_of(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: Monit
     family), sharing its records; a fault life runs ``horizon_h`` after its onset, or
     after its linear growth's end."""
     healthy = healthy_life(plan, banks[g], g, cfg, seed, nuisance)
-    base = healthy.life
+    return healthy, [(LifeSimulator(plan, g, life, banks[g]), f, kind)
+                     for life, f, kind in fault_life_configs(plan, cfg, seed, nuisance,
+                                                             healthy.life)]
+
+
+def fault_life_configs(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int, nuisance: str,
+                       base: LifeConfig) -> list[tuple[LifeConfig, FaultOnset, str]]:
+    """The fault lives of :func:`lives_of` as configs: the healthy life ``base`` with each
+    fault onset, running ``horizon_h`` after it (or after its linear growth's end)."""
     onsets = (fault_lives(plan, cfg, int(seed)) if nuisance == "none" else
               nuisance_fault_lives(plan, cfg, int(seed), family_of(nuisance) is not None))
-    faults = [(LifeSimulator(plan, g, dataclasses.replace(
-        base, hours=f.onset_h + (f.growth_h if f.growth == "linear" else 0.0)
-        + cfg.horizon_h, fault=f), banks[g]), f, kind)
-        for f, kind in onsets]
-    return healthy, faults
+    return [(dataclasses.replace(base, hours=f.onset_h + cfg.horizon_h
+                                 + (f.growth_h if f.growth == "linear" else 0.0), fault=f),
+             f, kind) for f, kind in onsets]
 
 
 def healthy_life(plan: DatasetPlan, bank: RecordBank, g: int, cfg: MonitorStudyConfig,
@@ -599,5 +605,5 @@ def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFra
 
 
 __all__ = ["COMPARED", "CURVE_DESIGN_HOURS", "banks_of", "evaluate_detectors", "evaluate_gear",
-           "fault_lives", "healthy_life", "monitor_healthy", "nuisance_fault_lives",
-           "run_detectors", "run_held_out", "to_frames"]
+           "fault_life_configs", "fault_lives", "healthy_life", "monitor_healthy",
+           "nuisance_fault_lives", "run_detectors", "run_held_out", "to_frames"]

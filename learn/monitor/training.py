@@ -14,7 +14,10 @@ from here.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+import hashlib
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 
 import numpy as np
 
@@ -65,14 +68,68 @@ def classes(plan: DatasetPlan, cfg: MonitorStudyConfig) -> list[str]:
     return [HEALTHY, *chosen]
 
 
+#: The lives' features kept inside :func:`shared_features`, per life (None: none kept).
+_SHARED: ContextVar[dict | None] = ContextVar("shared_features", default=None)
+
+
+@contextmanager
+def shared_features() -> Iterator[None]:
+    """Within the block, :func:`features_of` keeps every life's features per window and
+    hands them to the next caller asking for the same life's windows (the monitor, its
+    ablation and the baselines of the benchmark read the same lives); dropped at exit.
+    A life is known by its plan, gear and :class:`~swgsim.datasets.schedule.LifeConfig`,
+    which fix its windows."""
+    token = _SHARED.set({})
+    try:
+        yield
+    finally:
+        _SHARED.reset(token)
+
+
 def features_of(sim: LifeSimulator, start: int, stop: int,
                 on_block: Callable[[np.ndarray, dict], None] | None = None
                 ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """Health features, operating points and metadata of windows ``start:stop``;
-    ``on_block(signals, meta)`` is called with each block of simulated windows."""
+    ``on_block(signals, meta)`` is called with each block of simulated windows. Inside
+    :func:`shared_features` (and without ``on_block``), windows already computed for
+    the same life are not computed again."""
     if stop <= start:
         n_f = len(feature_names(twist=has_twist(sim.plan)))
         return np.empty((0, n_f)), np.empty((0, 2)), {}
+    memo = _SHARED.get()
+    if memo is not None and on_block is None:
+        return _shared(memo, sim, start, stop)
+    return _computed(sim, start, stop, on_block)
+
+
+def _shared(memo: dict, sim: LifeSimulator, start: int, stop: int
+            ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """:func:`features_of` from the life's windows kept in ``memo``, computing the
+    missing runs of windows and keeping them."""
+    key = hashlib.sha256(repr((sim.plan.config_hash, sim.gear_id, sim.life)).encode()
+                         ).hexdigest()
+    have = memo.setdefault(key, {"done": np.zeros(len(sim), bool)})
+    todo = np.flatnonzero(~have["done"][start:stop]) + start
+    if todo.size:
+        cut = np.flatnonzero(np.diff(todo) > 1) + 1
+        for run in np.split(todo, cut):
+            f, p, m = _computed(sim, int(run[0]), int(run[-1]) + 1)
+            for name, v in (("f", f), ("p", p), *m.items()):
+                if name not in have:  # strings as objects: a later run's may be longer
+                    have[name] = np.empty((len(sim), *v.shape[1:]),
+                                          object if v.dtype.kind == "U" else v.dtype)
+                have[name][run] = v
+            have["done"][run] = True
+    meta = {k: np.array(v[start:stop].tolist()) if v.dtype == object else v[start:stop].copy()
+            for k, v in have.items() if k not in ("done", "f", "p")}
+    return have["f"][start:stop].copy(), have["p"][start:stop].copy(), meta
+
+
+def _computed(sim: LifeSimulator, start: int, stop: int,
+              on_block: Callable[[np.ndarray, dict], None] | None = None
+              ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Health features, operating points and metadata of windows ``start:stop``
+    (``stop > start``), simulated block by block."""
     f, pts, metas = [], [], []
     for a in range(start, stop, BLOCK):
         sig, meta = sim.windows(a, min(a + BLOCK, stop))
@@ -141,7 +198,8 @@ def train_model(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int
         f0, p0, m0 = features_of(lives[0][0], 0, len(lives[0][0]))
         c0 = Conditions.of(m0)
         fit = normal_windows(p0[:n_comm])  # as the monitor builds it
-        base = NormalBehaviour.fit(f0[:n_comm][fit], p0[:n_comm][fit], c0[:n_comm][fit])
+        base = NormalBehaviour.fit(f0[:n_comm][fit], p0[:n_comm][fit], c0[:n_comm][fit],
+                                   cfg.normal)  # the laws the monitor will use
         for sim, c, s in lives:
             if c == HEALTHY:
                 f, p, cond = f0[n_comm:], p0[n_comm:], c0[n_comm:]
@@ -230,5 +288,6 @@ def _balanced(y: np.ndarray, seed: int) -> np.ndarray:
 
 
 __all__ = ["classes", "detector_windows", "features_of", "has_twist", "life_features",
+           "shared_features",
            "table_v_severities", "train_detectors", "train_model", "train_severities",
            "training_lives"]

@@ -24,11 +24,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from learn.monitor.baselines import BaselineConfig, PCAChart, RegressionMEWMA
-from learn.monitor.evaluate import evaluate_gear, healthy_life, lives_of, monitor_healthy
+from learn.monitor.evaluate import (
+    evaluate_gear,
+    fault_life_configs,
+    healthy_life,
+    lives_of,
+    monitor_healthy,
+)
 from learn.monitor.families import benchmark_families
 from learn.monitor.model import DiagnosisModel
 from learn.monitor.study import FAMILY_PREFIX, MonitorStudyConfig
-from learn.monitor.training import classes, features_of
+from learn.monitor.training import classes, features_of, shared_features
 from learn.monitor_evaluation.statistics import matched_threshold, upcrossings
 from learn.tracking.ledger import check_seeds
 from swgsim.base.typed import allowed
@@ -40,12 +46,15 @@ from swgsim.datasets.resources import BYTES_PER_RECORD_SAMPLE, RESERVE_BYTES
 from swgsim.files.inputs import available_memory
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
-__all__ = ["BASELINES", "BenchmarkConfig", "baseline_rows", "benchmark_part",
+__all__ = ["ABLATION", "BASELINES", "BenchmarkConfig", "ablated", "baseline_rows", "benchmark_part",
            "check_memory", "design_thresholds", "instances", "life_faults", "part_memory",
            "population_plan"]
 
 #: The baselines, by the name their rows carry.
 BASELINES = {"regression_mewma": RegressionMEWMA, "pca": PCAChart}
+#: The monitor's ablation: its laws replaced by a generic regression
+#: (:class:`~learn.monitor.normal.NormalConfig` ``laws``), its own model.
+ABLATION = "monitor_generic"
 
 
 @dataclass
@@ -86,6 +95,9 @@ class BenchmarkConfig:
     scored_run : bool
         A declared scored run (:mod:`learn.tracking.ledger`): ``seeds`` must be scored
         seeds, and the run enters the ledger.
+    ablation : bool
+        Also score the monitor with a generic regression in place of its laws
+        (:data:`ABLATION`, :meth:`ablated`), trained and run as the monitor is.
     """
 
     population: int = field(default=12, metadata=allowed(3, 999))
@@ -101,6 +113,7 @@ class BenchmarkConfig:
     study: MonitorStudyConfig = field(default_factory=MonitorStudyConfig)
     baselines: BaselineConfig = field(default_factory=BaselineConfig)
     scored_run: bool = False
+    ablation: bool = True
 
     def check(self, where: str = "benchmark") -> None:
         """Refuse instances, families or seeds that do not fit, in one line naming the key.
@@ -149,6 +162,13 @@ class BenchmarkConfig:
         return study
 
 
+def ablated(study: MonitorStudyConfig) -> MonitorStudyConfig:
+    """The study with the monitor's laws replaced by a generic regression
+    (:data:`ABLATION`)."""
+    return dataclasses.replace(study, normal=dataclasses.replace(study.normal,
+                                                                 laws="generic"))
+
+
 def population_plan(base: DatasetPlan, cfg: BenchmarkConfig) -> DatasetPlan:
     """A preset's plan with its gears replaced by the benchmark's lot (checked)."""
     return plan(dataclasses.replace(base.config, gears=gear_population(
@@ -187,36 +207,41 @@ def life_faults(plan: DatasetPlan, cfg: BenchmarkConfig, g: int, seed: int) -> l
 
 
 def part_memory(plan: DatasetPlan, cfg: BenchmarkConfig) -> int:
-    """Records a lives part holds at its peak [bytes]: over the families, the healthy
-    records of the first held-out instance's healthy life for the first seed plus those
-    of its largest fault life (:meth:`RecordBank.release
-    <swgsim.datasets.records.RecordBank.release>` drops a fault life's after it; nothing
-    is simulated here)."""
-    g, seed = instances(cfg)[1][0], cfg.seeds[0]
+    """Records a lives part holds at its peak [bytes], every life of every part planned on
+    the way (its conditions drawn, its records keyed; nothing simulated): per held-out
+    instance and family, the healthy records of its seeds' healthy lives plus those of its
+    largest fault life (:meth:`RecordBank.release
+    <swgsim.datasets.records.RecordBank.release>` drops a fault life's after its seed).
+
+    Raises
+    ------
+    ValueError
+        A life that cannot be planned (e.g. a friction factor beyond the simulated ones),
+        or ``fault_lives`` beyond the data set's gear faults, before any work.
+    """
     most = 0
-    for family in cfg.families:
-        bank = record_bank(plan, g)
-        study = cfg.study_of(family, seeds=[seed], faults=life_faults(plan, cfg, g, seed))
-        healthy, faults = lives_of(plan, {g: bank}, g, study, seed, f"{FAMILY_PREFIX}{family}")
-        keys = bank.wanted()
-        base = {k for k in keys if k[2] == "healthy"}
-        worst = max((len(_keys_of(sim) - base) for sim, _, _ in faults), default=0)
-        per = max(bank.record_samples(k) for k in keys) * BYTES_PER_RECORD_SAMPLE
-        most = max(most, (len(base) + worst) * per)
+    for g in instances(cfg)[1]:
+        for family in cfg.families:
+            bank, healthy, worst = record_bank(plan, g), set(), 0
+            for seed in cfg.seeds:
+                study = cfg.study_of(family, seeds=[seed],
+                                     faults=life_faults(plan, cfg, g, seed))
+                life = f"{FAMILY_PREFIX}{family}"
+                base = healthy_life(plan, bank, g, study, seed, life).life
+                healthy |= bank.wanted()
+                for fl, _, _ in fault_life_configs(plan, study, seed, life, base):
+                    one = record_bank(plan, g)
+                    LifeSimulator(plan, g, fl, one)
+                    worst = max(worst, len(one.wanted() - healthy))
+            per = max(bank.record_samples(k) for k in healthy) * BYTES_PER_RECORD_SAMPLE
+            most = max(most, (len(healthy) + worst) * per)
     return most
-
-
-def _keys_of(sim: LifeSimulator) -> set[tuple]:
-    """The record keys one life asks for (a fresh bank of its gear)."""
-    bank = record_bank(sim.plan, sim.gear_id)
-    LifeSimulator(sim.plan, sim.gear_id, sim.life, bank)
-    return bank.wanted()
 
 
 def check_memory(plans: dict[str, DatasetPlan], cfg: BenchmarkConfig, n_jobs: int,
                  available: int | None = None) -> None:
-    """Refuse a benchmark whose lives parts, ``n_jobs`` at once, cannot hold their
-    records in memory (:func:`part_memory`), before any work.
+    """Refuse a benchmark whose lives cannot be planned or whose lives parts, ``n_jobs`` at
+    once, cannot hold their records in memory (:func:`part_memory`), before any work.
 
     Raises
     ------
@@ -303,9 +328,10 @@ def design_thresholds(plan: DatasetPlan, banks: dict[int, RecordBank],
         for g in train[:cfg.design_instances]:
             for seed in study.seeds:
                 healthy = healthy_life(plan, banks[g], g, study, seed, life)
-                named = monitor_healthy(model, study, healthy, seed, life)[3]
+                with shared_features():
+                    named = monitor_healthy(model, study, healthy, seed, life)[3]
+                    w = _Windows.of(healthy)
                 alarms += sum(a.kind == "gear_fault" for a in named)
-                w = _Windows.of(healthy)
                 s, _ = _statistics(_charts(w, n_comm, cfg), w, n_comm)
                 for b in BASELINES:
                     stats[b].append(s[b])
@@ -364,25 +390,34 @@ def baseline_rows(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
     return rows, fa_rows
 
 
-def benchmark_part(plan: DatasetPlan, banks: dict[int, RecordBank], model: DiagnosisModel,
-                   g: int, family: str, cfg: BenchmarkConfig, thresholds: dict[str, float],
-                   dataset: str) -> dict:
-    """One held-out instance's lives of one family, the monitor's and the baselines' rows.
+def benchmark_part(plan: DatasetPlan, banks: dict[int, RecordBank],
+                   models: dict[str, DiagnosisModel], g: int, family: str,
+                   cfg: BenchmarkConfig, thresholds: dict[str, float], dataset: str) -> dict:
+    """One held-out instance's lives of one family: the monitor's rows (``models``
+    ``monitor``; and with ``cfg.ablation``, :data:`ABLATION`'s, its model under that
+    key), and the baselines', every detector reading the same lives' features once
+    (:func:`~learn.monitor.training.shared_features`).
 
     Returns
     -------
     dict
         ``rows`` (fault lives), ``false_alarms`` (healthy lives), each with a
-        ``detector`` column (``monitor`` or a key of :data:`BASELINES`) and ``family``.
+        ``detector`` column (``monitor``, :data:`ABLATION` or a key of
+        :data:`BASELINES`) and ``family``.
     """
     rows, fa = [], []
     for seed in cfg.seeds:  # a seed's own fault lives (life_faults)
         study = cfg.study_of(family, seeds=[seed], faults=life_faults(plan, cfg, g, seed))
-        r, f, _ = evaluate_gear(plan, banks, g, model, study, dataset,
-                                f"{FAMILY_PREFIX}{family}", [seed])
-        b_rows, b_fa = baseline_rows(plan, banks, g, study, cfg, family, thresholds, dataset)
-        rows += [x for x in r if x["detector"] == "monitor"] + b_rows
-        fa += [x for x in f if x["detector"] == "monitor"] + b_fa
+        monitors = {"monitor": study, **({ABLATION: ablated(study)} if cfg.ablation else {})}
+        with shared_features():
+            for name, s in monitors.items():
+                r, f, _ = evaluate_gear(plan, banks, g, models[name], s, dataset,
+                                        f"{FAMILY_PREFIX}{family}", [seed])
+                rows += [{**x, "detector": name} for x in r if x["detector"] == "monitor"]
+                fa += [{**x, "detector": name} for x in f if x["detector"] == "monitor"]
+            b_rows, b_fa = baseline_rows(plan, banks, g, study, cfg, family, thresholds,
+                                         dataset)
+        rows, fa = rows + b_rows, fa + b_fa
         banks[g].release()  # the seed's fault records: the healthy ones serve the next
     banks[g].release(healthy=True)
     return {"rows": [{**r, "family": family} for r in rows],

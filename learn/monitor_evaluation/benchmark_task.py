@@ -24,7 +24,9 @@ from learn.monitor.evaluate import banks_of
 from learn.monitor.model_io import MODEL_SUFFIX, load_model, save_model
 from learn.monitor.training import train_model
 from learn.monitor_evaluation.benchmark import (
+    ABLATION,
     BenchmarkConfig,
+    ablated,
     benchmark_part,
     check_memory,
     design_thresholds,
@@ -37,7 +39,16 @@ from learn.monitor_evaluation.statistics import (
     conditional_delay,
 )
 from learn.tasks.config import typed_app
-from learn.tasks.parts import EvaluationExperiment, Job, part_key, run_group, run_parts
+from learn.tasks.parts import (
+    EvaluationExperiment,
+    Job,
+    finished_parts,
+    group_jobs,
+    part_key,
+    run_group,
+    run_one_group,
+    run_parts,
+)
 from learn.tracking.ledger import LEDGER, append_scored_run
 from swgsim.base.lazy import lazy_module
 from swgsim.base.markdown import md_table
@@ -93,23 +104,24 @@ def run_benchmark(cfg) -> dict:
     ------
     ValueError
         A bad ``benchmark`` key or data set, a scored seed outside a declared scored run,
-        ``benchmark.group`` set (not yet for the benchmark), lives parts that cannot fit in
-        memory ``n_jobs`` at once (:func:`~learn.monitor_evaluation.benchmark.check_memory`),
-        an unwritable MLflow store or
-        a ``report_dir`` holding a file this project cannot show it wrote; before any work.
+        ``benchmark.group`` beyond the groups or a lives group before its data set's
+        design part, lives parts that cannot fit in memory ``n_jobs`` at once
+        (:func:`~learn.monitor_evaluation.benchmark.check_memory`), an unwritable MLflow
+        store or a ``report_dir`` holding a file this project cannot show it wrote;
+        before any work.
     """
     app = typed_app(cfg)
     bc: BenchmarkExperiment = app.benchmark
     check_tree(bc.study, "benchmark.study")
-    if bc.group is not None:
-        raise ValueError("benchmark.group: the benchmark runs whole (its parts resume); "
-                         f"cluster arrays are not built for it yet, got {bc.group}")
     plans = {n: population_plan(p, bc.study) for n, p in bc.plans("benchmark").items()}
     check_memory(plans, bc.study, bc.n_jobs)
     design_jobs, life_jobs = plan_jobs(bc, plans)
+    jobs = group_jobs(design_jobs + life_jobs, bc.group, "benchmark.group")
     with bc.claimed_report("benchmark", plans, app.logger) as (out, claim):
         (out / "parts").mkdir(parents=True, exist_ok=True)
         (out / "models").mkdir(exist_ok=True)
+        if bc.group is not None:
+            return _group(bc, plans, out, jobs, design_jobs)
         t0 = time.perf_counter()
         designs, r0 = run_parts(out, design_jobs, lambda js: joblib.delayed(_design)(
             plans[js[0].dataset], js, bc.study, str(out)), "benchmark design", bc.progress,
@@ -122,6 +134,36 @@ def run_benchmark(cfg) -> dict:
         return _report(bc, out, claim, designs, parts, wall, r0 + r1)
 
 
+def _group(bc: BenchmarkExperiment, plans: dict[str, DatasetPlan], out: Path,
+           jobs: list[Job], design_jobs: list[Job]) -> dict:
+    """One group's parts (a job of an array, no report): a data set's design part
+    (groups 0 to D - 1), or one held-out instance's lives, which read its data set's
+    design part from ``parts/``.
+
+    Raises
+    ------
+    ValueError
+        A lives group whose data set's design part is not there yet, naming its group.
+    """
+    design = [j for j in design_jobs if j.dataset == jobs[0].dataset]
+    thresholds = None
+    if jobs[0].detector != DESIGN:
+        done, _ = finished_parts(out, design)
+        if not done:
+            raise ValueError(f"benchmark.group={bc.group} lives {jobs[0].dataset}'s held-out "
+                             f"instance {jobs[0].gear} and needs its design part first: run "
+                             f"benchmark.group={design_jobs.index(design[0])} before")
+        thresholds = done[0]["thresholds"]
+
+    def run(js: list[Job]):
+        p = plans[js[0].dataset]
+        if thresholds is None:
+            return joblib.delayed(_design)(p, js, bc.study, str(out))
+        return joblib.delayed(_lives)(p, js, bc.study, str(out), thresholds)
+    return {"task": "benchmark", **run_one_group(out, jobs, run, "benchmark", bc.progress,
+                                                 bc.n_jobs, "benchmark.group", bc.group)}
+
+
 def _design(plan: DatasetPlan, jobs: list[Job], bc: BenchmarkConfig, out: str
             ) -> list[tuple[dict, Job]]:
     """A data set's design part in a worker: its model (written to ``models/``) and the
@@ -131,11 +173,14 @@ def _design(plan: DatasetPlan, jobs: list[Job], bc: BenchmarkConfig, out: str
     def one(job: Job) -> dict:
         train, _ = instances(bc)
         banks = {g: b for g, b in banks_of(plan).items() if g in train}
-        model = train_model(plan, banks, train, bc.study)
-        save_model(model, _model_path(out, job.dataset),
-                   [{"name": job.dataset, "config_hash": plan.config_hash, "gears": train,
-                     "simulated": "training lives of learn.monitor.training"}])
-        thresholds, design = design_thresholds(plan, banks, model, bc, job.dataset)
+        models = {}
+        for name, study in _monitors(bc).items():
+            models[name] = train_model(plan, banks, train, study)
+            save_model(models[name], _model_path(out, job.dataset, name),
+                       [{"name": job.dataset, "config_hash": plan.config_hash, "gears": train,
+                         "simulated": "training lives of learn.monitor.training"}])
+        thresholds, design = design_thresholds(plan, banks, models["monitor"], bc,
+                                               job.dataset)
         return {"dataset": job.dataset, "thresholds": thresholds, "design": design}
     return run_group(out, jobs, one)
 
@@ -144,20 +189,26 @@ def _lives(plan: DatasetPlan, jobs: list[Job], bc: BenchmarkConfig, out: str,
            thresholds: dict[str, float]) -> list[tuple[dict, Job]]:
     """One held-out instance's families in a worker, sharing its records."""
     ownership.join(out, "benchmark")
-    model = load_model(_model_path(out, jobs[0].dataset))
+    models = {n: load_model(_model_path(out, jobs[0].dataset, n)) for n in _monitors(bc)}
     banks = {jobs[0].gear: banks_of(plan)[jobs[0].gear]}
 
     def one(job: Job) -> dict:
         t0 = time.perf_counter()
-        part = benchmark_part(plan, banks, model, job.gear, job.detector, bc, thresholds,
+        part = benchmark_part(plan, banks, models, job.gear, job.detector, bc, thresholds,
                               job.dataset)
         return {**part, "dataset": job.dataset, "gear": job.gear, "family": job.detector,
                 "wall_s": time.perf_counter() - t0}
     return run_group(out, jobs, one)
 
 
-def _model_path(out: str | Path, dataset: str) -> Path:
-    return Path(out) / "models" / f"{dataset}_benchmark{MODEL_SUFFIX}"
+def _monitors(bc: BenchmarkConfig) -> dict:
+    """The monitor's study and, with the ablation, its ablated one, by detector name."""
+    return {"monitor": bc.study, **({ABLATION: ablated(bc.study)} if bc.ablation else {})}
+
+
+def _model_path(out: str | Path, dataset: str, name: str = "monitor") -> Path:
+    tail = "" if name == "monitor" else f"_{name}"
+    return Path(out) / "models" / f"{dataset}_benchmark{tail}{MODEL_SUFFIX}"
 
 
 def benchmark_tables(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:

@@ -97,16 +97,18 @@ def test_the_monitor_and_both_baselines_live_a_benchmark_family_end_to_end():
     p = bm.population_plan(P.plan(dataset_preset("tiny_bench")), cfg)
     train, held = bm.instances(cfg)
     banks = {g: record_bank(p, g) for g in train + held}
-    model = train_model(p, banks, train, TINY)
-    thr, design = bm.design_thresholds(p, banks, model, cfg, "tiny_bench")
+    models = {"monitor": train_model(p, banks, train, TINY),
+              bm.ABLATION: train_model(p, banks, train, bm.ablated(TINY))}
+    thr, design = bm.design_thresholds(p, banks, models["monitor"], cfg, "tiny_bench")
     assert set(thr) == set(bm.BASELINES) and design["lives"] == 1
     assert design["hours"] == pytest.approx(5.0)
-    part = bm.benchmark_part(p, banks, model, held[0], "warm_up", cfg, thr, "tiny_bench")
+    part = bm.benchmark_part(p, banks, models, held[0], "warm_up", cfg, thr, "tiny_bench")
     rows, fa = pd.DataFrame(part["rows"]), pd.DataFrame(part["false_alarms"])
-    assert set(rows.detector) == {"monitor", *bm.BASELINES}
-    assert len(rows) == 3  # one growing life (fault_lives=1), three detectors
+    detectors = {"monitor", bm.ABLATION, *bm.BASELINES}
+    assert set(rows.detector) == detectors
+    assert len(rows) == 4  # one growing life (fault_lives=1), four detectors
     assert set(rows.onset) == {"growing"}
-    assert set(fa.detector) == {"monitor", *bm.BASELINES} and set(fa.healthy_hours) == {5.0}
+    assert set(fa.detector) == detectors and set(fa.healthy_hours) == {5.0}
     assert (rows.family == "warm_up").all() and rows.detected.dtype == bool
     # a fault life's windows before its onset are its healthy life's: the baselines read
     # those instead of simulating them again, with the same statistic
@@ -120,6 +122,29 @@ def test_the_monitor_and_both_baselines_live_a_benchmark_family_end_to_end():
     whole = bm._statistics(charts, bm._Windows.of(sim), 180)[0]
     for b in bm.BASELINES:
         np.testing.assert_array_equal(reused[b], whole[b])
+
+
+def test_the_lives_features_are_computed_once_and_read_alike():
+    """Inside shared_features, windows asked for again, in other runs of windows, are
+    read from those computed before, equal to computing them anew."""
+    from learn.monitor.training import features_of, shared_features
+
+    cfg = bm.BenchmarkConfig(families=["warm_up"], healthy_hours=8.0, study=TINY)
+    p = bm.population_plan(P.plan(dataset_preset("tiny_bench")), cfg)
+    g = bm.instances(cfg)[1][0]
+    study = cfg.study_of("warm_up", seeds=[300], faults=["eccentric_wg"])
+    _, faults = bm.lives_of(p, {g: record_bank(p, g)}, g, study, 300, "family:warm_up")
+    sim = faults[0][0]
+    n = len(sim)
+    whole = features_of(sim, 0, n)
+    with shared_features():
+        features_of(sim, n // 3, n // 2)
+        again = features_of(sim, 0, n)
+    np.testing.assert_array_equal(again[0], whole[0])
+    np.testing.assert_array_equal(again[1], whole[1])
+    for k, v in whole[2].items():
+        np.testing.assert_array_equal(again[2][k], v)
+        assert again[2][k].dtype == v.dtype
 
 
 BENCH_TINY = ["benchmark.run_on=[tiny]", "+dataset@benchmark.datasets.tiny=tiny_bench",
@@ -154,7 +179,7 @@ def test_the_benchmark_experiment_runs_resumes_and_a_scored_run_enters_the_ledge
     first = _run(out)
     assert first["parts"] == 2 and first["resumed"] == 0 and "ledger" not in first
     tab = pd.read_csv(out / "table.csv")
-    assert set(tab.detector) == {"monitor", *bm.BASELINES}
+    assert set(tab.detector) == {"monitor", bm.ABLATION, *bm.BASELINES}
     assert {"any_alarm_high", "cadd_h", "worst_life_per_1000h"} <= set(tab.columns)
     assert _run(out)["resumed"] == 2 + 1  # the lives' parts and the design part
     with pytest.raises(ValueError, match=r"seeds \[1000\] are scored seeds"):
@@ -165,3 +190,21 @@ def test_the_benchmark_experiment_runs_resumes_and_a_scored_run_enters_the_ledge
     scored = _run(tmp_path / "scored", "benchmark.study.seeds=[1000]",
                   "benchmark.study.scored_run=true")
     assert scored["ledger"]["seeds"] == "1000" and len(ledger.read_ledger(book)) == 1
+
+
+@pytest.mark.slow
+def test_the_benchmark_runs_as_arrays_the_design_first(tmp_path):
+    """benchmark.group: a lives group before its design part is refused in one line naming
+    the group to run first; the design group, then the lives groups, write the parts the
+    whole command then finds done."""
+    out = tmp_path / "bench"
+    with pytest.raises(ValueError) as e:
+        _run(out, "benchmark.group=1")
+    assert "needs its design part first: run benchmark.group=0 before" in str(e.value)
+    assert "\n" not in str(e.value)
+    with pytest.raises(ValueError, match=r"benchmark.group must lie in \[0, 2\]"):
+        _run(out, "benchmark.group=3")
+    assert _run(out, "benchmark.group=0")["group"] == 0
+    for g in (1, 2):
+        assert len(_run(out, f"benchmark.group={g}")["parts"]) == 1
+    assert _run(out)["resumed"] == 3
