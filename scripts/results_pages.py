@@ -10,7 +10,8 @@ Each generated table of a results page sits between two markers in its Markdown 
 This script reads a run's ``reports/`` folder (it reruns nothing: the reports of
 ``swgsim-paper``, ``swgsim-train experiment=transfer``, ``swgsim-train
 experiment=monitor``, ``swgsim-train experiment=prognosis``, ``swgsim-observability``,
-``swgsim-export``, ``scripts/monitor_families.py --out`` and
+``swgsim-export``, ``swgsim-train experiment=benchmark``,
+``scripts/monitor_families.py --out`` and
 ``scripts/calibrate_real.py --out``) and writes each block whose report is there, with
 the run named: the command, the commit (``--commit``, else the checkout's HEAD) and the
 date the report was written (its modification time). A block whose report is missing is
@@ -39,6 +40,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from learn.monitor_evaluation.benchmark_task import FAMILY_TARGETS, benchmark_targets
 from learn.monitor_evaluation.report import false_alarm_table, labelled, with_nuisance
 from learn.paper.results import CELL_COLUMNS, our_cells, paper_cells
 from learn.paper.summary import recall
@@ -342,6 +344,56 @@ def prognosis_timing(rep: Path) -> str:
             f"worker:\n\n{md_table(parts)}")
 
 
+def benchmark_targets_block(rep: Path) -> str:
+    """The protocol's targets (docs/results/protocol.md) judged on the benchmark's rows:
+    per data set, 1-6 per family (the value, ``met`` or ``missed``), then 7 and 8."""
+    t = benchmark_targets(pd.read_csv(rep / "benchmark" / "results.csv"),
+                          pd.read_csv(rep / "benchmark" / "false_alarms.csv"))
+    out = []
+    for d, g in t.groupby("dataset", sort=False):
+        fam = g[g.family != "pooled"]
+        cells = fam.pivot(index="family", columns="target", values="value").reindex(
+            fam.family.unique())
+        met = fam.pivot(index="family", columns="target", values="met").reindex(cells.index)
+        table = pd.DataFrame({f"{n} {q} ({'<=' if most else '>='} {b:g})": [
+            f"{v:.3g} {'met' if ok else '**missed**'}" for v, ok in zip(cells[n], met[n],
+                                                                        strict=True)]
+            for n, q, _, b, most in FAMILY_TARGETS}, index=cells.index).reset_index()
+        pooled = g[g.family == "pooled"]
+        lines = "\n".join(f"- target {r.target}, {r.question}: monitor "
+                          f"{_pair(r.value)}, bound {_pair(r.bound)}: "
+                          f"{'met' if r.met else '**missed**'}" for r in pooled.itertuples())
+        out.append(f"**{d}**: {int(g.met.sum())} of {len(g)} targets met.\n\n"
+                   f"{md_table(table)}\n\n{lines}")
+    return "\n\n".join(out)
+
+
+def _pair(v) -> str:
+    return " / ".join(f"{float(x):.3g}" for x in v)
+
+
+def benchmark_tables_block(rep: Path) -> str:
+    """Every detector per data set and family, over the held-out instances (the
+    benchmark's ``table.md``, a table per data set)."""
+    body = (rep / "benchmark" / "table.md").read_text(encoding="utf-8")
+    return "\n\n".join(f"**{sec.splitlines()[0]}**\n\n{tables_of(sec)}"
+                         for sec in body.split("\n## ")[1:])
+
+
+def benchmark_timing(rep: Path) -> str:
+    """Seconds per lives part (``timing.json``) and the wall time, resumed parts said."""
+    t = json.loads((rep / "benchmark" / "timing.json").read_text(encoding="utf-8"))
+    parts = pd.DataFrame(t["parts"])
+    g = parts.groupby("dataset", sort=False).wall_s.agg(["count", "sum", "median", "max"])
+    g = g.reset_index().rename(columns={"dataset": "data set", "count": "parts",
+                                        "sum": "summed [s]", "median": "median [s]",
+                                        "max": "longest [s]"})
+    for c in g.columns[2:]:
+        g[c] = [f"{v:.0f}" for v in g[c]]
+    return (f"{_wall(t)} (the last sitting; the protocol's limit 6 h for the whole run); "
+            f"lives parts, seconds of one worker:\n\n{md_table(g)}")
+
+
 def observability_map(rep: Path) -> str:
     t = pd.read_csv(rep / "observability" / "observability.csv")
     t = t[t.fault != "healthy"]
@@ -445,6 +497,13 @@ BLOCKS = (
           ("observability/smallest_detectable.csv", "observability/observability_motion.csv"),
           "swgsim-observability map=motion", observability_motion),
     Block("export.size", "export.md", ("export/size.json",), "swgsim-export", export_size),
+    Block("benchmark.targets", "benchmark.md",
+          ("benchmark/results.csv", "benchmark/false_alarms.csv"),
+          "swgsim-train experiment=benchmark", benchmark_targets_block),
+    Block("benchmark.tables", "benchmark.md", ("benchmark/table.md",),
+          "swgsim-train experiment=benchmark", benchmark_tables_block),
+    Block("benchmark.timing", "benchmark.md", ("benchmark/timing.json",),
+          "swgsim-train experiment=benchmark", benchmark_timing),
     Block("calibration.real", "calibration.md", ("calibration_real/*/summary.json",),
           "python scripts/calibrate_real.py --out reports/calibration_real",
           calibration_real),

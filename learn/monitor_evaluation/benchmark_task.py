@@ -60,7 +60,8 @@ from swgsim.files.ownership import atomic_write_bytes, atomic_write_json, write_
 pd = lazy_module("pandas")
 joblib = lazy_module("joblib")
 
-__all__ = ["BenchmarkExperiment", "benchmark_tables", "run_benchmark"]
+__all__ = ["FAMILY_TARGETS", "BenchmarkExperiment", "benchmark_tables", "benchmark_targets",
+           "run_benchmark"]
 
 #: The part of a data set that trains its model and sets the baselines' thresholds.
 DESIGN = "design"
@@ -250,6 +251,77 @@ def benchmark_tables(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
                         "cadd_high_h": delay.high,
                         **_named(named)})
     return pd.DataFrame(out)
+
+
+#: The protocol's targets 1-6 for the monitor, per data set and family
+#: (docs/results/protocol.md): (number, question, table column, bound, at most).
+FAMILY_TARGETS = ((1, "false alarms", "alarms_per_1000h", 2.0, True),
+                  (2, "no storms", "most_alarms_in_a_life", 1.0, True),
+                  (3, "lives touched", "any_alarm", 0.20, True),
+                  (4, "detection", "detected", 0.90, False),
+                  (5, "delay [h]", "cadd_h", 40.0, True),
+                  (6, "naming", "named_after_1h", 0.80, False))
+
+
+def benchmark_targets(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
+    """The protocol's eight targets (docs/results/protocol.md) met or not: 1-6 for the
+    monitor per data set and family, 7 (against each baseline) and 8 (against the
+    ablation) per data set, pooled over the families.
+
+    Parameters
+    ----------
+    rows, fa : DataFrame
+        ``results.csv`` and ``false_alarms.csv`` of a benchmark run.
+
+    Returns
+    -------
+    DataFrame
+        One row per target and cell: ``dataset``, ``family`` (``pooled`` for 7 and 8),
+        ``target``, ``question``, ``value``, ``bound``, ``met`` (False where the value is
+        NaN: nothing to judge is not met).
+    """
+    tab = benchmark_tables(rows, fa)
+    tab = tab[(tab.held_out_gear == "all") & (tab.detector == "monitor")]
+    most = fa[fa.detector == "monitor"].groupby(["dataset", "family"]).gear_fault_alarms.max()
+    out = []
+    for r in tab.itertuples(index=False):
+        vals = {**r._asdict(), "most_alarms_in_a_life": most.get((r.dataset, r.family))}
+        for n, q, col, bound, at_most in FAMILY_TARGETS:
+            v = float(vals[col])
+            out.append({"dataset": r.dataset, "family": r.family, "target": n,
+                        "question": q, "value": v, "bound": bound,
+                        "met": bool(v <= bound if at_most else v >= bound)})
+    for d in rows.dataset.unique():
+        pooled = _pooled(rows[rows.dataset == d], fa[fa.dataset == d])
+        m = pooled["monitor"]
+        for b in [x for x in pooled if x not in ("monitor", ABLATION)]:
+            out.append({"dataset": d, "family": "pooled", "target": 7,
+                        "question": f"against {b}: detected, CADD [h]",
+                        "value": (m["detected"], m["cadd_h"]),
+                        "bound": (pooled[b]["detected"], pooled[b]["cadd_h"]),
+                        "met": bool(m["detected"] >= pooled[b]["detected"]
+                                    and m["cadd_h"] <= pooled[b]["cadd_h"])})
+        if ABLATION in pooled:
+            a = pooled[ABLATION]
+            out.append({"dataset": d, "family": "pooled", "target": 8,
+                        "question": "against the ablation: alarms per 1000 h, detected",
+                        "value": (m["per_1000h"], m["detected"]),
+                        "bound": (a["per_1000h"], a["detected"]),
+                        "met": bool(m["per_1000h"] <= a["per_1000h"]
+                                    and m["detected"] >= a["detected"])})
+    return pd.DataFrame(out)
+
+
+def _pooled(rows: pd.DataFrame, fa: pd.DataFrame) -> dict[str, dict[str, float]]:
+    """Per detector, over every family of a data set: detected, CADD and gear-fault alarms
+    per 1000 h."""
+    out = {}
+    for det, h in fa.groupby("detector", sort=False):
+        r = rows[rows.detector == det]
+        out[det] = {"detected": float(r.detected.mean()) if len(r) else np.nan,
+                    "cadd_h": conditional_delay(r.time_to_detect_h.where(r.detected)).value,
+                    "per_1000h": alarm_rate(h.gear_fault_alarms, h.healthy_hours)[0]}
+    return out
 
 
 def _named(named: pd.DataFrame) -> dict:

@@ -208,3 +208,35 @@ def test_the_benchmark_runs_as_arrays_the_design_first(tmp_path):
     for g in (1, 2):
         assert len(_run(out, f"benchmark.group={g}")["parts"]) == 1
     assert _run(out)["resumed"] == 3
+
+
+def _synthetic(alarms_monitor: list[int], detected_monitor: list[bool]):
+    """results.csv and false_alarms.csv of a benchmark of one data set and family, four
+    lives per detector."""
+    from learn.monitor_evaluation.benchmark_task import benchmark_targets
+
+    rows, fa = [], []
+    for det in ("monitor", bm.ABLATION, *bm.BASELINES):
+        for i in range(4):
+            mon = det == "monitor"
+            hit = detected_monitor[i] if mon else i < 2
+            rows.append({"dataset": "bench", "family": "warm_up", "detector": det,
+                         "held_out_gear": 9 + i, "fault": "eccentric_wg", "detected": hit,
+                         "time_to_detect_h": (5.0 if mon else 30.0) if hit else np.nan,
+                         "fault_at_alarm": "eccentric_wg" if mon else np.nan,
+                         "fault_after_1h": "eccentric_wg" if mon else np.nan})
+            fa.append({"dataset": "bench", "family": "warm_up", "detector": det,
+                       "held_out_gear": 9 + i, "healthy_hours": 176.0,
+                       "gear_fault_alarms": alarms_monitor[i] if mon else 3})
+    return benchmark_targets(pd.DataFrame(rows), pd.DataFrame(fa)).set_index("target")
+
+
+def test_the_protocols_targets_are_judged_from_the_runs_rows():
+    met = _synthetic([0, 0, 0, 0], [True] * 4)
+    assert met.loc[[1, 2, 3, 4, 5, 6], "met"].all()
+    assert met.loc[7, "met"].all() and bool(met.loc[8, "met"])
+    bad = _synthetic([0, 2, 0, 1], [True, True, True, False])
+    assert not bad.loc[1, "met"]  # 3 alarms in 704 h: 4.3 per 1000 h
+    assert not bad.loc[2, "met"] and bad.loc[2, "value"] == 2  # a life with two
+    assert not bad.loc[3, "met"] and bad.loc[3, "value"] == 0.5
+    assert not bad.loc[4, "met"] and bad.loc[5, "met"] and bad.loc[6, "met"]
