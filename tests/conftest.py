@@ -11,7 +11,16 @@ import os
 # monitored in 37 s, 2.3 s with one thread). Set before numpy and scikit-learn load.
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
+import atexit  # noqa: E402
 import shutil  # noqa: E402
+import tempfile  # noqa: E402
+
+# The user's MLflow store is the user's (issue 87): every run a test makes without naming
+# its own store (an app's default, a leaky switch) goes to a throw-away store of this
+# process, and so do the apps the tests start as subprocesses (they inherit it).
+_STORE = tempfile.mkdtemp(prefix="swg-tests-mlflow-")
+atexit.register(shutil.rmtree, _STORE, ignore_errors=True)
+os.environ["MLFLOW_TRACKING_URI"] = f"sqlite:///{_STORE}/mlflow.db"
 from pathlib import Path
 
 import pytest

@@ -308,3 +308,16 @@ def test_a_reused_confusion_figure_draws_what_a_new_one_draws():
         reused.draw(earlier, labels[:len(earlier)], "x" * 80)  # labels and width first
         np.testing.assert_array_equal(pixels(reused.draw(cm, labels, "selection1-rf: 86.7 %")),
                                       pixels(confusion_figure(cm, labels, "selection1-rf: 86.7 %")))
+
+
+def test_the_suite_never_writes_into_the_users_store():
+    """Runs a test makes without a store of its own go to a throw-away store, not the
+    checkout's mlflow.db nor a store the user named in MLFLOW_TRACKING_URI."""
+    import tempfile
+
+    from learn.tracking.provenance import repo_root
+    from learn.tracking.store import default_tracking_uri
+
+    uri = default_tracking_uri()
+    assert uri.startswith(f"sqlite:///{tempfile.gettempdir()}")
+    assert str(repo_root()) not in uri
