@@ -14,6 +14,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import atexit  # noqa: E402
 import shutil  # noqa: E402
 import tempfile  # noqa: E402
+from pathlib import Path
+
+import pytest
+from data_sets import built_once, make_synthetic, write_dataset  # noqa: E402
 
 # The user's MLflow store is the user's (issue 87): every run a test makes without naming
 # its own store (an app's default, a leaky switch) goes to a throw-away store of this
@@ -21,10 +25,6 @@ import tempfile  # noqa: E402
 _STORE = tempfile.mkdtemp(prefix="swg-tests-mlflow-")
 atexit.register(shutil.rmtree, _STORE, ignore_errors=True)
 os.environ["MLFLOW_TRACKING_URI"] = f"sqlite:///{_STORE}/mlflow.db"
-from pathlib import Path
-
-import pytest
-from data_sets import built_once, make_synthetic, write_dataset  # noqa: E402
 
 #: Where the UR3 CobotOps day is read from (M. Tyrovolas, K. Aliev, D. Antonelli and
 #: C. Stylios, "UR3 CobotOps", UCI Machine Learning Repository, 2024, doi:10.24432/C5J891,
