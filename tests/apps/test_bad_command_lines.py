@@ -57,6 +57,7 @@ def test_a_value_with_a_space_in_one_argument_is_taken_whole():
     ("generate", ["dataset.chain.windows_s=0.1"], "dataset.chain.windows_s: unknown key"),
     ("generate", ["dataset.seed=abc"], "dataset.seed"),
     ("generate", ["dataset=papr"], "dataset/papr"),
+    ("paper", ["grid=tny"], "Could not find 'grid/tny'; available: tiny"),  # not skipped
     ("paper", ["+study.scales=true"], "study.scales: unknown key"),
     ("paper", ["n_jobs=two"], "n_jobs"),
     ("train", ["+model.estimator.max_dept=9"], "model.estimator.max_dept"),
