@@ -132,12 +132,10 @@ def test_extrapolation_uncertainty_out_of_range_refused():
         NormalConfig(extrapolation_uncertainty=-0.1).check()
 
 
-def test_a_features_own_temperature_slope_is_taken_out():
-    """A second harmonic that leaks in with the temperature on one bridge (a gauge's span
-    mismatch; not the bridge's common gain): its own slope per point, fitted at
-    commissioning, carries windows across commissioning's temperatures at noise level,
-    where without it they move by many spreads."""
-    rng = np.random.default_rng(3)
+def _leaking(rng: np.random.Generator):
+    """Commissioning at the three loads over 20-50 °C and windows whose second harmonic of
+    bridge 1 leaks in with the temperature (a gauge's span mismatch; not the bridge's
+    common gain): loads, temperatures, points and ``windows(temps)``."""
     commanded = np.repeat(LOADS, 120)
     temp = rng.uniform(20.0, 50.0, commanded.size)
     points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
@@ -146,7 +144,16 @@ def test_a_features_own_temperature_slope_is_taken_out():
         f = _features(commanded, rng)
         f[:, BLOCK + 2] += 0.004 * (t - 35.0)  # bridge 1, harmonic 2
         return f
+    return commanded, temp, points, windows
 
+
+def test_a_features_own_temperature_slope_is_taken_out():
+    """A second harmonic that leaks in with the temperature on one bridge (a gauge's span
+    mismatch; not the bridge's common gain): its own slope per point, fitted at
+    commissioning, carries windows across commissioning's temperatures at noise level,
+    where without it they move by many spreads."""
+    rng = np.random.default_rng(3)
+    commanded, temp, points, windows = _leaking(rng)
     cond = Conditions(commanded, temp)
     nb = NormalBehaviour.fit(windows(temp), points, cond)
     for t0 in (22.0, 48.0):
@@ -552,16 +559,7 @@ def test_the_generic_regression_follows_the_temperature_and_tracks_no_friction()
     """The ablation (laws=generic): a feature that moves with the temperature is carried
     across commissioning's temperatures by the regression alone, the friction factor
     is 1 and changes nothing; an unknown law is refused in one line."""
-    rng = np.random.default_rng(5)
-    commanded = np.repeat(LOADS, 120)
-    temp = rng.uniform(20.0, 50.0, commanded.size)
-    points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
-
-    def windows(t):
-        f = _features(commanded, rng)
-        f[:, BLOCK + 2] += 0.004 * (t - 35.0)
-        return f
-
+    commanded, temp, points, windows = _leaking(np.random.default_rng(5))
     nb = NormalBehaviour.fit(windows(temp), points, Conditions(commanded, temp),
                              NormalConfig(laws="generic"))
     assert nb.generic is not None and nb.loss_band is None
