@@ -58,6 +58,8 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "learn/monitor/gear_monitor.py": "commissioning, scoring, alarm, naming: one gear's "
                                      "monitor state machine",
     "learn/monitor/stream.py": "a stream's input checks, the run and its outputs",
+    "scripts/results_pages.py": "one builder per block of every results page, and the "
+                                "markers' rewrite: grows with the pages it writes",
     "learn/monitor/evaluate.py": "lives to rows: the held-out gear's lives, the monitor and "
                                  "the detectors on them; to the evaluation block (issue 84)",
     "tests/learn/test_monitor.py": "the monitor's tests: to be split by what they hold",
