@@ -27,6 +27,7 @@ from learn.monitor.prognosis_scores import (
     relative_accuracy,
     remaining_fraction,
 )
+from learn.monitor_evaluation.statistics import Interval, life_bootstrap
 from swgsim.base.lazy import lazy_module
 from swgsim.base.markdown import md_table
 from swgsim.files.ownership import save_figure, write_owned
@@ -60,8 +61,10 @@ def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
     -------
     DataFrame
         ``dataset``, ``fault``, ``method``, ``bucket``, ``n`` (valid prognoses), ``picp``,
-        ``mean_width_h`` (inf where an interval is open), ``open`` (share of open
-        intervals), ``phm08`` (mean score of the medians).
+        ``picp_low``, ``picp_high`` (its 95 % interval from a bootstrap over whole lives:
+        a life's prognoses share windows, :func:`~learn.monitor_evaluation.statistics.
+        life_bootstrap`), ``lives``, ``mean_width_h`` (inf where an interval is open),
+        ``open`` (share of open intervals), ``phm08`` (mean score of the medians).
     """
     v = rows[rows.valid].copy()
     v["bucket"] = horizon_bucket(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
@@ -73,7 +76,17 @@ def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
     out = g.agg(n=("hit", "size"), picp=("hit", "mean"), mean_width_h=("width", "mean"),
                 open=("width", lambda w: float(np.mean(~np.isfinite(w)))),
                 phm08=("phm08", "mean")).reset_index()
+    ci = [_picp_interval(b) for _, b in g]
+    out.insert(out.columns.get_loc("picp") + 1, "picp_low", [c.low for c in ci])
+    out.insert(out.columns.get_loc("picp") + 2, "picp_high", [c.high for c in ci])
+    out.insert(out.columns.get_loc("picp") + 3, "lives", [c.n for c in ci])
     return out
+
+
+def _picp_interval(b: pd.DataFrame) -> Interval:
+    """A bucket's coverage, its prognoses pooled, with the bootstrap over its lives."""
+    per = b.groupby(LIFE, sort=False).hit.agg(["sum", "size"])
+    return life_bootstrap(per["sum"].to_numpy(float), per["size"].to_numpy(float))
 
 
 def life_scores(rows: pd.DataFrame, lives: pd.DataFrame) -> pd.DataFrame:

@@ -59,3 +59,26 @@ def test_a_threshold_matched_to_a_rate_gives_that_rate_on_the_lives_it_was_set_o
     lower = below[below < thr][-1]
     assert sum(st.upcrossings(s, lower) for s in lives) > 10  # the lowest such
     assert st.upcrossings(np.array([2.0, 0.0, 2.0, np.nan, 2.0]), 1.0) == 3
+
+
+def test_the_prognosis_coverage_per_bucket_carries_an_interval_over_lives():
+    """Two lives in one bucket, one always covered, one never: PICP 0.5 over 20
+    prognoses, but from two lives its bootstrap interval spans [0, 1] (a life's
+    prognoses are not independent)."""
+    import pandas as pd
+
+    from learn.monitor_evaluation.prognosis_report import bucket_table
+
+    rows = []
+    for seed, hit in ((0, True), (1, False)):
+        for k in range(10):
+            true = 50.0 - k
+            rows.append({"dataset": "bench", "held_out_gear": 3, "seed": seed,
+                         "fault": "eccentric_wg", "method": "growth", "valid": True,
+                         "hour": 10.0 + k, "alarm_h": 10.0, "failure_h": 60.0,
+                         "true_remaining_h": true, "remaining_h": true,
+                         "remaining_h_q05": true - 1 if hit else true + 1,
+                         "remaining_h_q95": true + 1 if hit else true + 2})
+    b = bucket_table(pd.DataFrame(rows)).iloc[0]
+    assert b.n == 10 * 2 and b.lives == 2 and b.picp == 0.5
+    assert b.picp_low == 0.0 and b.picp_high == 1.0
