@@ -24,6 +24,15 @@ CUSUM restarted after each alarm) and prints:
 p-value, both scores and every feature's z-score. The run takes the life's simulation
 and scoring (a 224-h nuisance life of robot_joint: a few minutes on one core).
 A wrong model, preset, gear or nuisance ends in one line naming it (exit 2).
+
+``--benchmark`` lives a benchmark family's draw instead (issue 83;
+:func:`learn.monitor.families.benchmark_families`, ``--nuisance family:<key>``) on the
+benchmark's lot of gears (``--gear`` one of its held-out instances), with the model its
+design part saved (``reports/benchmark/models/<dataset>_benchmark.skops``), for the
+diagnosis of a miss on design seeds only (a scored seed, 1000 and up, is refused):
+
+    python scripts/life_diagnostics.py reports/benchmark/models/bench_benchmark.skops \\
+        --benchmark --dataset bench --gear 9 --seed 300 --nuisance family:all
 """
 
 from __future__ import annotations
@@ -38,7 +47,7 @@ import numpy as np
 import pandas as pd
 
 from learn.monitor.evaluate import healthy_life, monitor_healthy
-from learn.monitor.families import default_families
+from learn.monitor.families import benchmark_families, default_families
 from learn.monitor.features import feature_names
 from learn.monitor.gear_monitor import GearMonitor, Trace
 from learn.monitor.model_io import CARD_SUFFIX, MODEL_SUFFIX, load_model
@@ -51,6 +60,8 @@ from learn.monitor.rule import Alarm
 from learn.monitor.stream import advisories, recommissionings
 from learn.monitor.study import MonitorStudyConfig, family_of
 from learn.monitor.training import has_twist
+from learn.monitor_evaluation.benchmark import BenchmarkConfig, population_plan
+from learn.tracking.ledger import check_seeds
 from swgcli import dataset_preset
 from swgsim.datasets.plan import plan as make_plan
 from swgsim.datasets.records import record_bank
@@ -80,12 +91,16 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
                     help="operating hours of the life, commissioning included (default: "
                          "the study's, 1000 without a nuisance, 224 under one)")
     ap.add_argument("--csv", type=Path, default=None, help="write every window's z-scores")
+    ap.add_argument("--benchmark", action="store_true",
+                    help="a benchmark family's draw on the benchmark's lot (design seeds)")
     return ap.parse_args(argv)
 
 
 def setup(args: argparse.Namespace):
     """The plan, the study design and the held-out gear's healthy life; one line on bad
     input (raises ValueError)."""
+    if args.benchmark:
+        return _benchmark_setup(args)
     cfg = MonitorStudyConfig(families=default_families())
     fam = family_of(args.nuisance)
     if args.nuisance != "none" and args.nuisance not in cfg.nuisances \
@@ -107,6 +122,28 @@ def setup(args: argparse.Namespace):
     life = healthy_life(p, record_bank(p, args.gear), args.gear, cfg, args.seed,
                         args.nuisance)
     return p, cfg, life
+
+
+def _benchmark_setup(args: argparse.Namespace):
+    """:func:`setup` for a benchmark family's draw (module docstring)."""
+    bc = BenchmarkConfig()
+    fam = family_of(args.nuisance)
+    if fam not in benchmark_families():
+        raise ValueError(f"--nuisance {args.nuisance!r}: with --benchmark, family:<key> with "
+                         f"key one of {', '.join(benchmark_families())}")
+    check_seeds([args.seed], False, "--seed (a diagnosis)")
+    cfg = bc.study_of(fam, design=True, seeds=[args.seed])
+    if args.hours is not None:
+        raise ValueError("--hours: with --benchmark the life is the benchmark's "
+                         f"({bc.healthy_hours:g} h)")
+    p = population_plan(make_plan(dataset_preset(args.dataset, args.set)), bc)
+    trained_on(args.model, p, args.dataset)
+    gears = [int(x.id) for x in p.config.gears]
+    if args.gear not in gears:
+        raise ValueError(f"--gear {args.gear}: the benchmark's lot of {args.dataset} has "
+                         f"instances {gears}")
+    return p, cfg, healthy_life(p, record_bank(p, args.gear), args.gear, cfg, args.seed,
+                                args.nuisance)
 
 
 def trained_on(path: Path, p, dataset: str) -> None:

@@ -79,6 +79,12 @@ def test_a_family_draw_is_looked_at_like_a_nuisance(tiny_model, capsys):
     (["--gear", "7"], "--gear 7: tiny_bench has gears [1, 2, 3]"),
     (["--hours", "3"], "--hours 3: must lie in (24, 1e5]"),
     (["--set", "chain.window_s=0.2"], "was trained on tiny_bench, not on --dataset tiny_bench"),
+    (["--benchmark", "--nuisance", "family:drift"],
+     "with --benchmark, family:<key> with key one of warm_up, hall"),
+    (["--benchmark", "--nuisance", "family:all", "--seed", "1000"],
+     "seeds [1000] are scored seeds"),
+    (["--benchmark", "--nuisance", "family:all", "--seed", "300"],
+     "was trained on tiny_bench, not on --dataset tiny_bench"),  # not the benchmark's lot
 ])
 def test_bad_input_is_one_line(tiny_model, capsys, args, says):
     rc = life_diagnostics.main([str(tiny_model), "--dataset", "tiny_bench", *args])
