@@ -7,10 +7,11 @@ samples and scored on the other half, the halves being made of contiguous blocks
 permutation so that periodic structure is not aliased), then the other way round. The
 score is the out-of-sample fraction of the residual's mean square the probe explains:
 about −(bins / samples) for noise, clearly positive for structure. A residual is called
-*structured* when any probe scores above a threshold (default 0.03), or when it is far
-from white (integrated autocorrelation time above 10 samples and RMS above twice the
-noise floor) even if no probe explains it; the signature text names the probes that
-fire, with their detail (period, amplitude, direction symmetry).
+*structured* when any probe scores above a threshold (default 0.03), or when it fails
+the whiteness test against its noise floor (:func:`whiteness`: RMS above
+:data:`WHITENESS_RATIO` times the noise floor) even if no probe explains it; the
+signature text names the probes that fire, with their detail (period, amplitude,
+direction symmetry), and the test's figure.
 
 The noise floor is estimated by the difference-based estimator of Gasser, Sroka &
 Jennen-Steinmetz (1986) on irregular samples: σ² from pseudo-residuals of linear
@@ -29,10 +30,13 @@ import numpy as np
 
 from .core import integrated_autocorr_time
 from .periodogram import periodogram_peaks
+from .split import recorded_time
 
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "WHITENESS_RATIO",
+    "whiteness",
     "Probe",
     "BinnedProbe",
     "PeriodicProbe",
@@ -319,11 +323,53 @@ def noise_floor(t: np.ndarray, r: np.ndarray) -> float:
     return float(np.sqrt(np.mean(c2 * e * e)))
 
 
+#: The whiteness test's limit on RMS / noise floor [-]: white noise gives 1, AR(1) noise
+#: of coefficient ρ about 1 / sqrt(1 − 4ρ/3 + ρ²/3) (1.26 at ρ = 0.3, 1.55 at 0.5, 2 at
+#: 0.66) [derived from the estimator's pseudo-residuals]; above 2 the residual holds more
+#: slow content than mildly coloured measurement noise [choice].
+WHITENESS_RATIO = 2.0
+
+
+def whiteness(t: np.ndarray, r: np.ndarray, idx: np.ndarray) -> tuple[float, float, float]:
+    """The whiteness test against the noise floor: RMS of ``r[idx]``, its
+    difference-based noise floor (:func:`noise_floor` on runs of consecutive samples) and
+    their ratio.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,)
+        Time [s].
+    r : ndarray, shape (n,)
+        Residual [data units].
+    idx : ndarray of int
+        Samples tested (e.g. the held-out ones).
+
+    Returns
+    -------
+    rms, floor, ratio : float
+        [data units, data units, -]; the test fails where ratio > :data:`WHITENESS_RATIO`
+        (NaN ratio: too few consecutive samples).
+    """
+    idx = np.asarray(idx)
+    ra = r[idx]
+    rms = float(np.sqrt(np.mean(ra * ra))) if ra.size else float("nan")
+    runs = np.split(idx, np.flatnonzero(np.diff(idx) != 1) + 1)
+    num, den = 0.0, 0
+    for run in runs:
+        if run.size >= 3:
+            nf = noise_floor(t[run], r[run])
+            num += nf * nf * (run.size - 2)
+            den += run.size - 2
+    nf = float(np.sqrt(num / den)) if den else float("nan")
+    return rms, nf, rms / nf if nf > 0 else float("nan")
+
+
 def _halves(t: np.ndarray, idx: np.ndarray, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
     """Two halves of ``idx`` made of contiguous time blocks assigned by a fixed random
     permutation (balanced), so that a structure periodic in time is not aliased by a
-    regular alternation of blocks."""
-    tt = t[idx]
+    regular alternation of blocks. Blocks cut the recorded time (pauses between sessions
+    shortened, :func:`~swgcal.split.recorded_time`)."""
+    tt = recorded_time(t)[idx]
     edges = np.linspace(tt.min(), tt.max(), n_blocks + 1)
     blk = np.clip(np.searchsorted(edges, tt, side="right") - 1, 0, n_blocks - 1)
     perm = np.random.default_rng(20240607).permutation(n_blocks)
@@ -334,8 +380,7 @@ def _halves(t: np.ndarray, idx: np.ndarray, n_blocks: int) -> tuple[np.ndarray, 
 
 def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
              probes: Sequence[Probe], units: str = "", threshold: float = 0.03,
-             n_blocks: int = 24, coloured_tau: float = 10.0,
-             coloured_ratio: float = 2.0) -> Diagnosis:
+             n_blocks: int = 24) -> Diagnosis:
     """Diagnose the residual ``r`` on the samples ``idx``.
 
     Parameters
@@ -354,23 +399,16 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
         Score above which the residual counts as structured.
     n_blocks : int, default 24
         Contiguous time blocks, half of them (fixed random choice) form each half.
-    coloured_tau, coloured_ratio : float, default 10 and 2
-        The residual also counts as structured when its integrated autocorrelation time
-        exceeds ``coloured_tau`` samples *and* its RMS exceeds ``coloured_ratio`` times
-        the noise floor (not white, and well above the sample-to-sample noise).
+
+    Notes
+    -----
+    The residual also counts as structured when it fails the whiteness test against its
+    noise floor (:func:`whiteness`, :data:`WHITENESS_RATIO`), whatever its integrated
+    autocorrelation time: a ripple left in the residual oscillates, and its τ_int is small.
     """
     idx = np.asarray(idx)
     ra = r[idx]
-    rmse = float(np.sqrt(np.mean(ra * ra)))
-    # noise floor on runs of consecutive samples
-    runs = np.split(idx, np.flatnonzero(np.diff(idx) != 1) + 1)
-    num, den = 0.0, 0
-    for run in runs:
-        if run.size >= 3:
-            nf = noise_floor(t[run], r[run])
-            num += nf * nf * (run.size - 2)
-            den += run.size - 2
-    nf = float(np.sqrt(num / den)) if den else float("nan")
+    rmse, nf, ratio = whiteness(t, r, idx)
     ia, ib = _halves(t, idx, n_blocks)
     results = {}
     for p in probes:
@@ -390,10 +428,9 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
     diag = Diagnosis(rmse=rmse, noise_floor=nf, tau_int=integrated_autocorr_time(ra),
                      probes=results, threshold=threshold)
     top = [p for p in diag.ranked() if p.score >= threshold]
-    ratio = rmse / nf if nf > 0 else float("nan")
-    # whiteness: a residual far above the noise floor and strongly autocorrelated is
-    # structured in time even when no probed variable explains it
-    coloured = bool(diag.tau_int > coloured_tau and ratio > coloured_ratio)
+    # whiteness: a residual far above its noise floor is structured even when no probed
+    # variable explains it (an oscillating residual may have a small τ_int)
+    coloured = bool(ratio > WHITENESS_RATIO)
     diag.structured = bool(top) or coloured
     head = (f"RMS {rmse:.3g} {units}, {ratio:.2f}x the difference-based noise floor "
             f"{nf:.3g} {units}, τ_int {diag.tau_int:.3g} samples")
@@ -402,11 +439,13 @@ def diagnose(sig: Any, t: np.ndarray, r: np.ndarray, idx: np.ndarray,
                  for p in top[:4]]
         diag.signature = f"structured residual ({head}): " + "; ".join(parts)
         if coloured:
-            diag.signature += "; besides, strongly autocorrelated in time"
+            diag.signature += (f"; besides, it fails the whiteness test (RMS {ratio:.2f}x "
+                               f"its noise floor > {WHITENESS_RATIO:g})")
     elif coloured:
-        diag.signature = (f"structured residual ({head}): strongly autocorrelated in time "
-                          "but along none of the probed variables: coloured measurement "
-                          "noise, or an effect of a variable the data do not carry")
+        diag.signature = (f"structured residual ({head}): it fails the whiteness test (RMS "
+                          f"{ratio:.2f}x its noise floor > {WHITENESS_RATIO:g}) along none of "
+                          "the probed variables: strongly coloured measurement noise, or an "
+                          "effect of a variable the data do not carry")
     else:
         best = diag.ranked()[0] if results else None
         diag.signature = (f"no structure found ({head}; best probe "

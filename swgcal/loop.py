@@ -23,16 +23,18 @@ import numpy as np
 from swgsim.base.typed import allowed, check_ranges
 
 from .core import FitResult, Term, fit_terms, with_uncertainty
-from .diagnose import Diagnosis, Probe, diagnose
+from .diagnose import WHITENESS_RATIO, Diagnosis, Probe, diagnose, whiteness
 from .split import HeldOutSplit
 
 log = logging.getLogger(__name__)
 
 __all__ = ["Problem", "SelectionConfig", "CandidateScore", "Iteration", "CalibrationResult",
-           "select_effects", "refit_final", "IMPLAUSIBLE_PREFIX"]
+           "select_effects", "refit_final", "gain_floor", "IMPLAUSIBLE_PREFIX"]
 
 #: Status of a candidate rejected for a parameter outside its physical range, before them.
 IMPLAUSIBLE_PREFIX = "rejected: outside its physical range: "
+#: How the final verdict's signature notes such a candidate.
+_IMPLAUSIBLE_NOTE = ". A library candidate outside its physical range"
 
 
 @dataclass
@@ -56,6 +58,9 @@ class Problem:
     screen_jointly : bool, default False
         Refit the current model's nonlinear parameters with each candidate (from their
         values) instead of holding them: effects that trade off against the base's own.
+    resolution : float, default 0
+        The sensor's resolution in the target's units (a quantisation step; 0 where not
+        known): no effect is kept whose held-out gain is below it (:func:`gain_floor`).
     """
 
     name: str
@@ -70,6 +75,7 @@ class Problem:
     split: HeldOutSplit
     meta: dict[str, Any] = field(default_factory=dict)
     screen_jointly: bool = False
+    resolution: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -190,11 +196,14 @@ class Iteration:
     diagnosis: Diagnosis
     candidates: list[CandidateScore]
     accepted: str | None
+    gain_floor: float = float("nan")
+    gain_floor_why: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         return {"index": self.index, "model": self.model, "val_rmse": self.val_rmse,
                 "bic": self.bic, "diagnosis": self.diagnosis.as_dict(),
-                "candidates": [c.as_dict() for c in self.candidates], "accepted": self.accepted}
+                "candidates": [c.as_dict() for c in self.candidates], "accepted": self.accepted,
+                "gain_floor": self.gain_floor, "gain_floor_why": self.gain_floor_why}
 
 
 @dataclass
@@ -218,6 +227,11 @@ class CalibrationResult:
     implausible : list of str
         Candidates of the last iteration that passed the evidence rule but lie outside
         their physical range, with their gain and the violated range.
+    heldout_whiteness : dict
+        The whiteness test of the final model's residual on the test samples
+        (:func:`swgcal.diagnose.whiteness`): ``rms``, ``noise_floor``, ``ratio``,
+        ``limit``, ``fails``. A failing test makes the residual unexplained even where no
+        probe explains it.
     """
 
     problem: Problem
@@ -233,6 +247,7 @@ class CalibrationResult:
     residual_signature: str
     elapsed_s: float = 0.0
     implausible: list[str] = field(default_factory=list)
+    heldout_whiteness: dict[str, Any] = field(default_factory=dict)
 
     @property
     def rmse_before(self) -> float:
@@ -318,7 +333,8 @@ def _weak(problem: Problem, cfg: SelectionConfig, c: CandidateScore, current: Fi
     weak = []
     for term in _new_terms(c, current):
         est = f.estimates_of(term.name)
-        weak += [f"{term.name}.{k} (rel. s.e. {est[k].std / abs(est[k].value):.2g})"
+        weak += [f"{term.name}.{k} (rel. s.e. "
+                 f"{est[k].std / abs(est[k].value) if est[k].value else np.inf:.2g})"
                  for k in term.primary()
                  if k in est and not est[k].std <= cfg.max_rel_se * abs(est[k].value)]
     return f, weak
@@ -347,10 +363,47 @@ def _out_of_range(c: CandidateScore, current: FitResult) -> bool:
     return False
 
 
+def _new_instance(problem: Problem, key: str, current: FitResult) -> Term | None:
+    """The next instance of library effect ``key`` for the current model (``key#k`` for a
+    repeat), None where the model holds as many as it may or the signals cannot carry it."""
+    present = sum(1 for t in current.terms if t.kind == key)
+    term = problem.library[key].for_signals(problem.signals,
+                                            f"{key}#{present + 1}" if present else key)
+    if present >= term.repeatable or not term.applicable(problem.signals):
+        return None
+    return term
+
+
+def _candidate_terms(problem: Problem, key: str, current: FitResult,
+                     second: bool = False) -> list[list[Term]]:
+    """What is tried for library effect ``key``: an effect alone in the first round; a
+    transform that acts on other kinds (:attr:`~swgcal.terms.FitTerm.acts_on`, a delay
+    of the angle the ripples see) only in the ``second`` round, when no effect of the
+    first passes - alone where the model holds a kind it acts on, else with a fresh
+    instance of each (one candidate per kind; alone it would change nothing). It changes
+    what every later term sees, so it comes after the effects that explain the residual
+    by themselves."""
+    term = _new_instance(problem, key, current)
+    if term is None:
+        return []
+    acts_on = [k for k in getattr(term, "acts_on", ()) if k in problem.library]
+    if not acts_on:
+        return [] if second else [[term]]
+    if not second:
+        return []
+    if any(t.kind in acts_on for t in current.terms):
+        return [[term]]
+    return [[term, other] for k in acts_on
+            if (other := _new_instance(problem, k, current)) is not None]
+
+
 def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
                 current: FitResult, r_cur: np.ndarray, val_cur: float,
-                fit_kw: dict[str, Any]) -> tuple[list[CandidateScore], float]:
-    """Fit every candidate added to the current model; ranked by validation RMSE.
+                fit_kw: dict[str, Any], second: bool = False
+                ) -> tuple[list[CandidateScore], float]:
+    """Fit every candidate of the round (``second``: the transforms that act on other
+    kinds, :func:`_candidate_terms`) added to the current model; ranked by validation
+    RMSE.
 
     Returns the candidates and the noise model's τ_int: the smallest integrated
     autocorrelation time of the residuals of the current model, of every candidate that
@@ -367,15 +420,12 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
     sig, sp = problem.signals, problem.split
     cands = []
     for key in keys:
-        cls = problem.library[key]
-        present = sum(1 for t in current.terms if t.kind == key)
-        term = cls.for_signals(sig, f"{key}#{present + 1}" if present else key)
-        if present >= term.repeatable or not term.applicable(sig):
-            continue
-        c = _fit_candidate(problem, current, [term], [term.starts(sig, r_cur, sp.fit)],
-                           fit_kw, val_cur, key)
-        if c is not None:
-            cands.append(c)
+        for new in _candidate_terms(problem, key, current, second):
+            c = _fit_candidate(problem, current, new, [t.starts(sig, r_cur, sp.fit)
+                                                       for t in new],
+                               fit_kw, val_cur, " + ".join(t.kind for t in new))
+            if c is not None:
+                cands.append(c)
     cands.sort(key=lambda c: c.val_rmse)
     helpful = [c for c in cands if _noise_model_member(problem, cfg, c, current)]
     tau = min([current.tau_int] + [c.fit.tau_int for c in helpful])
@@ -440,9 +490,37 @@ def _pairs(problem: Problem, cfg: SelectionConfig, current: FitResult,
     return out, tau
 
 
+def gain_floor(problem: Problem) -> tuple[float, str]:
+    """The held-out gain an effect must exceed to be kept, and why.
+
+    The sensor's resolution (:attr:`Problem.resolution`, a quantisation step): a gain of
+    the validation RMSE below it is finer than the sensor shows. The noise enters through
+    the evidence rule (:class:`SelectionConfig`): 2 ln Λ counts the validation samples as
+    n_val / τ_int effective ones, so a gain is weighed against the noise floor of the
+    paired comparison. A floor of the noise floor itself (gain > σ_n) would refuse a
+    ripple as large as the noise (its gain is 0.22 σ_n), which the data establish.
+
+    Parameters
+    ----------
+    problem : Problem
+
+    Returns
+    -------
+    floor : float
+        [target units].
+    why : str
+        For the report.
+    """
+    return float(problem.resolution), (
+        f"the sensor's resolution {problem.resolution:.3g} {problem.units}"
+        + ("" if problem.resolution else " (not known)"))
+
+
 def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
-            cands: list[CandidateScore], tau: float) -> CandidateScore | None:
-    """First candidate in the ranking that passes the acceptance rule (module doc)."""
+            cands: list[CandidateScore], tau: float,
+            floor: tuple[float, str] = (0.0, "")) -> CandidateScore | None:
+    """First candidate in the ranking that passes the acceptance rule (module doc) and
+    whose held-out gain exceeds ``floor`` (:func:`gain_floor`)."""
     chosen = None
     for c in cands:
         if chosen is not None:
@@ -464,6 +542,11 @@ def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
         if not dbic < cfg.max_delta_bic:
             short.append(f"{'effective ' if cfg.effective_bic else ''}ΔBIC {dbic:+.3g} >= "
                          f"{cfg.max_delta_bic:g}")
+        gain = c.rel_improvement * (c.val_rmse / (1.0 - c.rel_improvement)
+                                    if c.rel_improvement < 1 else 0.0)
+        if floor[0] > 0 and not gain > floor[0]:
+            short.append(f"held-out gain {gain:.3g} {problem.units} <= {floor[0]:.3g} "
+                         f"{problem.units} ({floor[1]})")
         if short:
             c.small = True
             c.status = (f"rejected: too small for these data (validation gain "
@@ -499,17 +582,26 @@ def _iteration(problem: Problem, cfg: SelectionConfig, keys: Sequence[str], it: 
                     problem.units, cfg.structure_threshold)
     cands: list[CandidateScore] = []
     accepted = None
+    floor = (float("nan"), "")
     if it < cfg.max_iter:
         cands, tau = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw)
-        accepted = _choose(problem, cfg, current, cands, tau)
+        floor = gain_floor(problem)
+        accepted = _choose(problem, cfg, current, cands, tau, floor)
+        if accepted is None:  # the second round: the transforms acting on other kinds
+            more, tau_c = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw,
+                                      second=True)
+            accepted = _choose(problem, cfg, current, more, tau_c, floor) if more else None
+        else:
+            more = []
         evidence = any(c.heldout_evidence > cfg.min_heldout_evidence
                        or c.delta_bic_eff < cfg.max_delta_bic for c in cands)
-        if accepted is None and cfg.pair_candidates >= 2 and evidence:
+        if accepted is None and cfg.pair_candidates >= 2 and evidence:  # look-ahead 2
             pairs, tau = _pairs(problem, cfg, current, cands, tau, val_cur, fit_kw)
-            accepted = _choose(problem, cfg, current, pairs, tau)
+            accepted = _choose(problem, cfg, current, pairs, tau, floor)
             cands = cands + pairs
+        cands = sorted(cands + more, key=lambda c: c.val_rmse) if more else cands
     record = Iteration(it, [t.name for t in current.terms], val_cur, current.bic, diag, cands,
-                       accepted.name if accepted else None)
+                       accepted.name if accepted else None, floor[0], floor[1])
     best = cands[0] if cands else None
     log.info("%s iteration %d: val RMSE %.4g, best %s (%.4g), accepted %s", problem.name, it,
              val_cur, best and best.name, best.val_rmse if best else np.nan, record.accepted)
@@ -577,11 +669,30 @@ def _final_result(problem: Problem, cfg: SelectionConfig, sel: _Selection,
                         cfg.structure_threshold)
     d_after = d_before if not sel.added else diagnose(
         sig, problem.t, r_a, idx_fv, problem.probes, problem.units, cfg.structure_threshold)
+    structured, signature, white = _heldout_verdict(problem, r_a, d_after)
     return CalibrationResult(
         problem=problem, config=cfg, iterations=sel.iterations, added=sel.added,
         base_model_final=base_final, final=final, rmse=rmse, diag_before=d_before,
-        diag_after=d_after, unexplained=d_after.structured,
-        residual_signature=d_after.signature, elapsed_s=time.perf_counter() - t_start)
+        diag_after=d_after, unexplained=structured, residual_signature=signature,
+        elapsed_s=time.perf_counter() - t_start, heldout_whiteness=white)
+
+
+def _heldout_verdict(problem: Problem, r_after: np.ndarray, d_after: Diagnosis
+                     ) -> tuple[bool, str, dict[str, Any]]:
+    """The final verdict with the held-out whiteness test: (structured, signature, the
+    test's figures). The residual of the test samples failing the test (RMS above
+    :data:`~swgcal.diagnose.WHITENESS_RATIO` times its noise floor) is structured even
+    where the diagnosis on the fit samples found none."""
+    rms, nf, ratio = whiteness(problem.t, r_after, problem.split.test)
+    fails = bool(ratio > WHITENESS_RATIO)
+    info = {"rms": rms, "noise_floor": nf, "ratio": ratio, "limit": WHITENESS_RATIO,
+            "fails": fails}
+    if not fails or d_after.structured:
+        return d_after.structured, d_after.signature, info
+    return True, (f"{d_after.signature.rstrip('.')}; but the held-out (test) residual fails "
+                  f"the whiteness test: RMS {rms:.3g} {problem.units}, {ratio:.2f}x its noise "
+                  f"floor {nf:.3g} {problem.units} (> {WHITENESS_RATIO:g}): structure the "
+                  "probes do not see"), info
 
 
 def _flag_implausible(res: CalibrationResult) -> None:
@@ -594,10 +705,9 @@ def _flag_implausible(res: CalibrationResult) -> None:
     if res.implausible:
         res.unexplained = True
         res.residual_signature = (
-            res.residual_signature.rstrip(".") + ". A library candidate outside its "
-            "physical range still explains part of the residual with very strong evidence, "
-            "so an effect the library does not hold is there: " + "; ".join(res.implausible)
-            + ".")
+            res.residual_signature.rstrip(".") + _IMPLAUSIBLE_NOTE + " still explains part "
+            "of the residual with very strong evidence, so an effect the library does not "
+            "hold is there: " + "; ".join(res.implausible) + ".")
 
 
 def refit_final(result: CalibrationResult, cur: FitResult, meta: dict[str, Any], *,
@@ -633,15 +743,16 @@ def refit_final(result: CalibrationResult, cur: FitResult, meta: dict[str, Any],
         rmse[k]["after"] = _rmse(r[getattr(sp, k)])
     d_after = diagnose(sig, p.t, r_a, sp.fit_validation, p.probes, p.units,
                        cfg.structure_threshold)
+    structured, signature, white = _heldout_verdict(p, r_a, d_after)
     names = {t.name for t in cur.terms}
-    head, text = result.diag_after.signature.rstrip("."), result.residual_signature
-    extra = text[len(head):] if keep_note and head and text.startswith(head) else ""
+    at = result.residual_signature.find(_IMPLAUSIBLE_NOTE)
+    extra = result.residual_signature[at:] if keep_note and at >= 0 else ""
     return dataclasses.replace(
         result, problem=dataclasses.replace(p, meta=meta), final=final,
         added=[n for n in result.added if n in names], rmse=rmse, diag_after=d_after,
-        unexplained=bool(d_after.structured or result.implausible),
-        residual_signature=(d_after.signature.rstrip(".") + extra) if extra
-        else d_after.signature)
+        unexplained=bool(structured or result.implausible),
+        residual_signature=(signature.rstrip(".") + extra) if extra else signature,
+        heldout_whiteness=white)
 
 
 def select_effects(problem: Problem, config: SelectionConfig | None = None) -> CalibrationResult:

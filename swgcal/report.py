@@ -486,6 +486,9 @@ def iteration_lines(summary: Mapping[str, Any], *, evidence: bool = False,
              *[fmt_value(c.get("heldout_evidence"), 4)] * evidence,
              fmt_value(c["delta_bic"], 5), fmt_value(c["delta_bic_eff"], 4), f"{c['status']}"]
             for r, c in enumerate(it["candidates"], 1)]), ""]
+        if it.get("gain_floor"):
+            lines += [f"An effect is kept only with a held-out gain (validation RMSE) above "
+                      f"{it['gain_floor_why']}.", ""]
     return lines
 
 

@@ -39,9 +39,14 @@ class FitTerm(Term):
         ``-inf``/``inf`` for an open side). A fit outside the range is not accepted as
         this effect (:meth:`range_violations`): the term would be absorbing something
         else.
+    acts_on : tuple of str
+        A transform's (``is_transform``) library kinds whose columns it changes; while the
+        model holds none of them the loop tries it together with a fresh instance of each
+        (alone it would change nothing). Empty: the term is tried alone.
     """
 
     repeatable: int = 1
+    acts_on: tuple[str, ...] = ()
     signature: str = ""
     probes: tuple[str, ...] = ()
     ranges: dict[str, tuple[float, float, str]] = {}
@@ -49,6 +54,13 @@ class FitTerm(Term):
     def bounds(self, sig: Any) -> list[tuple[float, float]]:
         """Box bounds of the nonlinear parameters [their units], data dependent."""
         return []
+
+    def linear_bounds(self, sig: Any) -> list[tuple[float, float]]:
+        """Bounds of the linear coefficients [their units], data dependent: a physical
+        sign or range the fit may not leave (:func:`swgcal.core.solve_linear`); equal
+        bounds hold a coefficient at their value. Default unbounded (the fast unbounded
+        solve, unchanged)."""
+        return [(-np.inf, np.inf)] * self.n_linear
 
     def starts(self, sig: Any, residual: np.ndarray, idx: np.ndarray) -> list[np.ndarray]:
         """Starting values of the nonlinear parameters (may use the current residual)."""

@@ -2,8 +2,10 @@
 
 A friction recording (data kind 1) is a CSV with the columns of the project's real data
 (``docs/DATASET.md``, "Friction recordings"): ``time_s`` [s], ``q_rad`` [rad],
-``dq_rad_per_s`` [rad/s], optionally ``ddq_rad_per_s2`` [rad/s²] and ``load_Nm`` [N m],
-and the target ``tau_friction_Nm`` [N m]. Sampling may be irregular.
+``dq_rad_per_s`` [rad/s], optionally ``ddq_rad_per_s2`` [rad/s²], ``load_Nm`` [N m] and
+``temperature_c`` [°C], and the target ``tau_friction_Nm`` [N m]. Sampling may be
+irregular. Any other column is named in the recording's notes (and so in the report) as
+read but unused.
 
 The recording becomes the signals of the friction terms
 (:class:`swgsim.gear.friction.FrictionSignals`, :meth:`FrictionRecording.signals`).
@@ -54,7 +56,7 @@ __all__ = [
 ]
 
 REQUIRED_COLUMNS = ("time_s", "q_rad", "dq_rad_per_s", "tau_friction_Nm")
-OPTIONAL_COLUMNS = ("ddq_rad_per_s2", "load_Nm")
+OPTIONAL_COLUMNS = ("ddq_rad_per_s2", "load_Nm", "temperature_c")
 
 
 @dataclass(frozen=True)
@@ -71,6 +73,8 @@ class FrictionRecording:
         Friction torque [N m].
     load_nm : ndarray, shape (n,), optional
         Transmitted load torque [N m] (for the load-dependent Coulomb term).
+    temperature_c : ndarray, shape (n,), optional
+        The joint's measured temperature [°C] (for ``temperature_friction``).
     ddq_source : str
         ``"measured"`` or how it was estimated.
     notes : tuple of str
@@ -84,13 +88,14 @@ class FrictionRecording:
     ddq_rad_s2: np.ndarray
     tau_nm: np.ndarray
     load_nm: np.ndarray | None = None
+    temperature_c: np.ndarray | None = None
     name: str = "recording"
     ddq_source: str = "measured"
     notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         n = self.t_s.shape[0]
-        for f in ("q_rad", "dq_rad_s", "ddq_rad_s2", "tau_nm", "load_nm"):
+        for f in ("q_rad", "dq_rad_s", "ddq_rad_s2", "tau_nm", "load_nm", "temperature_c"):
             a = getattr(self, f)
             if a is not None and a.shape != (n,):
                 raise ValueError(f"{f} has shape {a.shape}, expected ({n},) like t_s")
@@ -136,7 +141,8 @@ class FrictionRecording:
             t_s=self.t_s, q_rad=self.q_rad, dq_rad_s=self.dq_rad_s, ddq_rad_s2=self.ddq_rad_s2,
             load_nm=self.load_nm, v_eff=self.dq_rad_s, v_s=float(v_s),
             scales=Scales.of(self.t_s, self.q_rad, self.dq_rad_s),
-            gear_ratio=None if gear_ratio is None else float(gear_ratio))
+            gear_ratio=None if gear_ratio is None else float(gear_ratio),
+            temperature_c=self.temperature_c)
 
 
 #: Most points of the acceleration's uniform grid per sample of the recording
@@ -223,7 +229,8 @@ MIN_ROWS = 100
 #: at the motor. Acceleration: 1e5 rad/s² [choice: 681 rad/s reached within 7 ms].
 #: Friction and load torque: 1e4 N m [choice: 52 times the gear's momentary peak
 #: torque, 191 N m (:data:`swgsim.gear.profile.MOMENTARY_PEAK_TORQUE_NM`), some 500
-#: times the real recordings' largest].
+#: times the real recordings' largest]. Temperature: -40 to 150 degC, the range a joint's
+#: temperature is read in everywhere in the project (a measured warm-up, docs/DATASET.md).
 COLUMN_RANGES = {
     "time_s": (-1e10, 1e10, "s", "time"),
     "q_rad": (-1e4, 1e4, "rad", "joint angle"),
@@ -232,6 +239,7 @@ COLUMN_RANGES = {
     "ddq_rad_per_s2": (-1e5, 1e5, "rad/s²", "joint acceleration"),
     "tau_friction_Nm": (-1e4, 1e4, "N m", "friction torque"),
     "load_Nm": (-1e4, 1e4, "N m", "load torque"),
+    "temperature_c": (-40.0, 150.0, "degC", "joint temperature"),
 }
 #: Cells read as a missing reading (case and surrounding blanks ignored): their rows are
 #: dropped, counted in the notes with the first of them; any other text where a number
@@ -262,7 +270,8 @@ def load_friction_csv(path: str | Path,
     path : str or Path
         CSV (RFC 4180: quoted fields allowed; UTF-8, with or without a byte-order mark)
         with the columns ``time_s, q_rad, dq_rad_per_s, tau_friction_Nm`` and optionally
-        ``ddq_rad_per_s2`` and ``load_Nm``, in any order; other columns are ignored.
+        ``ddq_rad_per_s2``, ``load_Nm`` and ``temperature_c``, in any order; any other
+        column is named in ``notes`` as read but unused.
     accel_window : int, default 21
         Window of :func:`estimate_acceleration`, used when ``ddq_rad_per_s2`` is absent
         or identically zero (the Franka files).
@@ -295,6 +304,10 @@ def load_friction_csv(path: str | Path,
     cols, row = _read_columns(path)
     _check_ranges(path, cols, row)
     notes: list[str] = []
+    unused = [h for h in read_csv_header(path) if h not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
+    if unused:
+        notes.append(f"column(s) {unused} read but not used: no effect of the library takes "
+                     f"them (used: {list(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)})")
     sel = _usable_rows(path, cols, row, notes)
 
     def kept(x: np.ndarray) -> np.ndarray:  # no copy where every row is kept
@@ -317,6 +330,7 @@ def load_friction_csv(path: str | Path,
         t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=acc,
         tau_nm=kept(cols["tau_friction_Nm"]),
         load_nm=kept(cols["load_Nm"]) if "load_Nm" in cols else None,
+        temperature_c=kept(cols["temperature_c"]) if "temperature_c" in cols else None,
         name=path.stem, ddq_source=source, notes=tuple(notes))
 
 
@@ -724,6 +738,8 @@ def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:
             "ddq_rad_per_s2": rec.ddq_rad_s2, "tau_friction_Nm": rec.tau_nm}
     if rec.load_nm is not None:
         cols["load_Nm"] = rec.load_nm
+    if rec.temperature_c is not None:
+        cols["temperature_c"] = rec.temperature_c
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols),
                comments="", fmt="%.10g")

@@ -35,7 +35,10 @@ from .ranges import (
     SENSOR_DRIFT_TIME_S,
     STRIBECK_EXCESS_NM,
     STRIBECK_VELOCITY_RAD_S,
+    TEMPERATURE_FRICTION_PER_K,
+    TEMPERATURE_VISCOUS_PER_K,
     THERMAL_TIME_S,
+    TRANSPORT_DELAY_S,
     VELOCITY_LAG_S,
     ripple_order_range,
     ripple_period_range,
@@ -54,6 +57,8 @@ __all__ = [
     "ThermalDrift",
     "SensorDrift",
     "VelocityLag",
+    "TransportDelay",
+    "TemperatureFriction",
 ]
 
 
@@ -212,6 +217,31 @@ class VelocityLag(fx.VelocityLag, FitTerm):
         return [np.array([np.clip(f * sig.scales.dt_med, lo, hi)]) for f in (2, 10, 50)]
 
 
+class TransportDelay(fx.TransportDelay, FitTerm):
+    __doc__ = fx.TransportDelay.__doc__
+    signature = ("a ripple over q whose phase turns with the speed: its even and odd parts "
+                 "(over the direction of motion) trade places as |q̇| changes")
+    probes = ("position_periodic", "position_periodic_odd")
+    ranges = {"delay": TRANSPORT_DELAY_S}
+    acts_on = ("position_ripple", "friction_ripple")
+
+    def bounds(self, sig):
+        lo, hi = TRANSPORT_DELAY_S[:2]
+        return [(2.5 * lo, 2.5 * hi)]  # wider than the range: a fit beyond it is seen
+
+    def starts(self, sig, residual, idx):
+        return [np.array([d]) for d in (-2e-3, 1e-3, 4e-3)]
+
+
+class TemperatureFriction(fx.TemperatureFriction, FitTerm):
+    __doc__ = fx.TemperatureFriction.__doc__
+    signature = ("residual odd in the direction of motion that follows the measured "
+                 "temperature (a step between a cold and a warm session)")
+    probes = ("temperature_odd",)
+    ranges = {"k_v": TEMPERATURE_VISCOUS_PER_K, "k_ref": TEMPERATURE_FRICTION_PER_K}
+
+
 for _fitted in (AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
-                LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag):
+                LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag,
+                TransportDelay, TemperatureFriction):
     fx.register_effect(_fitted)  # in place of its form

@@ -32,8 +32,14 @@ def travel_since_reversal(sig: Any) -> np.ndarray:
     return np.abs(q - q[start])
 
 
-def friction_probes() -> list[Probe]:
+def friction_probes(temperature: bool = False) -> list[Probe]:
     """The residual probes of the friction side (one per residual signature).
+
+    Parameters
+    ----------
+    temperature : bool, default False
+        The recording has a temperature column: add temperature_odd (bins over the
+        measured temperature, odd in direction).
 
     Returns
     -------
@@ -41,7 +47,7 @@ def friction_probes() -> list[Probe]:
         velocity, velocity_hysteresis (bins over q̇ per sign of q̈), acceleration,
         position and position_odd (bins over q), position_periodic(_odd) (best
         sinusoid over q), travel_since_reversal (odd), time and time_odd (cubic trend),
-        time_periodic(_odd) (best sinusoid over t).
+        time_periodic(_odd) (best sinusoid over t); temperature_odd where asked.
     """
 
     def q_range(sig):
@@ -52,7 +58,10 @@ def friction_probes() -> list[Probe]:
         s = sig.scales
         return 10.0 * s.dt_med, s.t_span / 3.0
 
-    return [
+    extra: list[Probe] = [BinnedProbe(
+        "temperature_odd", "follows the measured temperature with a sign that flips with "
+        "direction", lambda s: s.temperature_c, 20, odd=True)] if temperature else []
+    return extra + [
         BinnedProbe("velocity", "depends on the velocity q̇", lambda s: s.dq_rad_s, 40),
         BinnedProbe("velocity_hysteresis",
                     "depends on q̇ differently when accelerating and decelerating",

@@ -92,12 +92,14 @@ def friction_problem(
     return Problem(
         name=rec.name, kind="friction", units="N m", signals=sig, y=rec.tau_nm, t=rec.t_s,
         base_model=(PaperLaw(),), library={k: fitted[k] for k in keys},
-        probes=friction_probes(), split=split,
+        probes=friction_probes(temperature=rec.temperature_c is not None), split=split,
         meta={"n_samples": rec.n, "duration_s": float(rec.t_s[-1] - rec.t_s[0]),
               "dt_median_s": sig.scales.dt_med, "v_s_rad_s": sig.v_s,
               "v_ref_rad_s": sig.scales.v_ref, "q_span_rad": sig.scales.q_span,
               "t0_s": sig.scales.t0, "ddq_source": rec.ddq_source,
               "has_load": rec.load_nm is not None, "data_notes": list(rec.notes),
+              "temperature_c": None if rec.temperature_c is None else [
+                  float(rec.temperature_c.min()), float(rec.temperature_c.max())],
               "gear_ratio": sig.gear_ratio})
 
 

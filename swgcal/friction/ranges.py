@@ -29,6 +29,9 @@ __all__ = [
     "OPEN_THERMAL_NM",
     "OPEN_SENSOR_NM",
     "RIPPLE_AMPLITUDE_NM",
+    "TRANSPORT_DELAY_S",
+    "TEMPERATURE_VISCOUS_PER_K",
+    "TEMPERATURE_FRICTION_PER_K",
     "GEAR_RATIO_CATALOGUE",
     "ripple_period_range",
     "ripple_order_range",
@@ -71,6 +74,14 @@ OPEN_THERMAL_NM = (-INF, INF, "friction falls as the joint warms (d > 0) or rise
 OPEN_SENSOR_NM = (-INF, INF, "zero drift of either sign (docs/PHYSICS.md sec. 5)")
 RIPPLE_AMPLITUDE_NM = (0.0, INF, "ripple amplitude, non-negative by construction (Tuttle & "
                        "Seering 1996); its bound needs the Coulomb level")
+TRANSPORT_DELAY_S = (-0.02, 0.02, "a servo drive's dead time: a current loop, filters and "
+                     "a bus cycle of 0.1-4 ms each (EtherCAT, CANopen cycles of 1 ms; "
+                     "Franklin, Powell & Workman, sec. 3.2); either signal may be the later")
+TEMPERATURE_VISCOUS_PER_K = (-INF, 0.0, "the grease's viscosity falls as it warms (Vogel 1921, "
+                             "swgsim.gear.thermal): the viscous slope cannot rise with T")
+TEMPERATURE_FRICTION_PER_K = (-INF, 0.0, "a strain wave gear's running torque falls as it "
+                              "warms (catalogue no-load running torque against temperature, "
+                              "docs/PHYSICS.md sec. 2)")
 GEAR_RATIO_CATALOGUE = (30.0, 160.0)
 """Reduction ratios of the Harmonic Drive CSG/SHG series (30, 50, 80, 100, 120, 160)."""
 

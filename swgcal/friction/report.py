@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from swgsim.base.markdown import md_table
-from swgsim.gear.friction.ripples import RippleTerm
+from swgsim.gear.friction.ripples import RippleTerm, period_in_gear_terms
 
 from ..core import FitResult, Term
 from ..discovery import proposals_section
@@ -36,7 +36,11 @@ from ..report import (
 from .discovery import propose
 from .ripple_groups import HARMONIC_REL_TOL
 
-__all__ = ["REPORT", "summarize", "ripple_lines"]
+__all__ = ["NOT_SIMULATED", "REPORT", "summarize", "ripple_lines"]
+
+#: Accepted effects left out of the simulation option ``friction_effects``: the
+#: simulation's friction effects see t, q, q̇, q̈ only (the report says so).
+NOT_SIMULATED = ("temperature_friction",)
 
 
 def _orders_of(term: Term, fit: FitResult) -> dict[str, Any] | None:
@@ -46,7 +50,10 @@ def _orders_of(term: Term, fit: FitResult) -> dict[str, Any] | None:
         return None
     period = float(fit.thetas[fit.terms.index(term)][0])
     orders = term.orders(period)
+    est = fit.estimates_of(term.name).get("period")
+    std = est.std if est is not None else float("nan")
     return {"harmonics": list(term.harmonics), "fundamental_period": period,
+            "gear_terms": period_in_gear_terms(period, std, term.gear_ratio, HARMONIC_REL_TOL),
             "gear_ratio": term.gear_ratio, "orders": orders,
             "integer_order": None if orders is None else [
                 bool(round(k) >= 1 and abs(k / round(k) - 1.0) <= HARMONIC_REL_TOL)
@@ -88,7 +95,8 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
     s["proposed"] = [x.as_dict() for x in propose(result)]
     s["friction_effects"] = [
         {"name": e["name"], "kind": e["kind"], "params": e["raw_params"],
-         **({"options": e["options"]} if e["options"] else {})} for e in s["effects_added"]]
+         **({"options": e["options"]} if e["options"] else {})} for e in s["effects_added"]
+        if e["kind"] not in NOT_SIMULATED]
     s["simulation"] = {
         "v_s_rad_s": meta.get("v_s_rad_s"), "t0_s": meta.get("t0_s"),
         "base_model": {k: e["value"] for k, e in s["base_model"]["params_in_final_model"].items()},
@@ -122,7 +130,8 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
         Empty when the summary has no ripple record or nothing to show.
     """
     rp = summary.get("ripples")
-    if not rp or not (rp.get("history") or rp.get("groups") or rp.get("removed")):
+    if not rp or not (rp.get("history") or rp.get("groups") or rp.get("removed")
+                      or rp.get("merged")):
         return []
     u = summary.get("units", "")
     n = rp.get("gear_ratio")
@@ -147,6 +156,17 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
                              fmt_value(h["heldout_evidence"], 4),
                              "yes" if h["accepted"] else f"no: {h['status']}"] for h in hist]),
                   ""]
+    for m in rp.get("merged") or []:
+        lines += [f"Merged **{m['members'][1]}** into **{m['name']}**: periods "
+                  + ", ".join(fmt_value(x, 6) for x in m["periods"]) + " rad, "
+                  f"|1/P1 − 1/P2| × span = {fmt_value(m['resolution'], 3)} < 1 (the recording "
+                  f"cannot tell them apart); refitted period {fmt_value(m['period'], 6)} rad, "
+                  f"validation RMSE {fmt_value(m['val_rmse_separate'])} separate, "
+                  f"{fmt_value(m['val_rmse_merged'])} {u} merged.", ""]
+    table = _period_table(summary)
+    if table:
+        lines += ["Periods of the final model's ripples (nonlinear least squares; standard "
+                  "errors corrected for the residual's autocorrelation):", "", *table, ""]
     for g in rp.get("groups") or []:
         orders = (", ".join(f"{k:.3f}" for k in g["orders"]) if g.get("orders") else None)
         lines += [f"Harmonic group {', '.join(g['members'])}: periods "
@@ -171,6 +191,23 @@ def ripple_lines(summary: Mapping[str, Any]) -> list[str]:
                       f"{fmt_value(100 * (x['validation_gain'] or 0), 3)} %)" for x in sup)
                   + ".", ""]
     return lines
+
+
+def _period_table(summary: Mapping[str, Any]) -> list[str]:
+    """Markdown table of the final ripples' periods with standard errors and orders."""
+    rows = []
+    for e in summary.get("effects_added") or []:
+        g = (e.get("orders") or {}).get("gear_terms")
+        if not g:
+            continue
+        wg = (f"{fmt_value(g['wg_order'], 6)} ± {fmt_value(g['wg_order_std'], 2)}"
+              if "wg_order" in g else "– (gear ratio not given)")
+        rows.append([e["name"], f"{fmt_value(g['period'], 7)} ± {fmt_value(g['period_std'], 2)}",
+                     f"{fmt_value(100 * g['rel_std'], 2)} %",
+                     f"{fmt_value(g['output_order'], 6)} ± {fmt_value(g['output_order_std'], 2)}",
+                     wg, g.get("reading", "–")])
+    return [md_table(["ripple", "period [rad]", "rel. s.e.", "cycles per output turn",
+                      "wave-generator (= motor) order", "reading"], rows)] if rows else []
 
 
 def _data_lines(s: Mapping[str, Any]) -> list[str]:
@@ -291,6 +328,10 @@ def _simulation_lines(s: Mapping[str, Any]) -> list[str]:
               f"friction_t0_s: {fmt_value(sim.get('t0_s'), 6)}", "```", ""]
     if sim.get("caveat"):
         lines += [f"**Caveat.** {sim['caveat']}", ""]
+    left = [e["name"] for e in s["effects_added"] if e["kind"] in NOT_SIMULATED]
+    if left:
+        lines += [f"Left out: {', '.join(left)} (the simulation's friction effects see t, q, "
+                  "q̇, q̈, not the joint's temperature).", ""]
     return lines
 
 

@@ -1,8 +1,15 @@
-"""After the selection loop: ripples as harmonics of one fundamental, held-out support.
+"""After the selection loop: near-equal periods merged, ripples as harmonics of one
+fundamental, held-out support, each period with its standard error in the gear's terms.
 
 The loop adds ripple instances one at a time (``position_ripple``, ``position_ripple#2``,
-...), each with its own free period. Two things can then go wrong that no single step
-of the loop sees:
+...), each with its own free period, refined by nonlinear least squares in the period
+(the phase and amplitude are linear, :mod:`swgcal.core`) from the residual periodogram's
+peaks. Three things can then go wrong that no single step of the loop sees:
+
+* two instances of one kind at periods closer than the recording resolves (Rayleigh:
+  ``|1/P1 − 1/P2| · S < 1`` over the angle span S the recording covers) fit an
+  amplitude modulation, not two ripples: :func:`near_equal_pairs` finds them and they
+  are merged into one instance, its period refitted, before anything else;
 
 * harmonics of one fundamental (orders 2 and 4 of the wave generator) enter as unrelated
   instances: :func:`harmonic_groups` finds instances whose periods are integer fractions
@@ -43,7 +50,7 @@ from ..loop import CalibrationResult, refit_final
 log = logging.getLogger(__name__)
 
 __all__ = ["HARMONIC_REL_TOL", "RippleGroupProposal", "harmonic_groups", "group_ripples",
-           "ripple_history", "heldout_evidence"]
+           "ripple_history", "heldout_evidence", "near_equal_pairs"]
 
 HARMONIC_REL_TOL = 0.01
 """Relative tolerance of a harmonic relation (period ratio or wave-generator order): the
@@ -195,6 +202,39 @@ def _groups_by_ratio(p: np.ndarray, eligible: np.ndarray, tol: np.ndarray
     return out
 
 
+def near_equal_pairs(periods: Sequence[float], span: float) -> list[tuple[int, int]]:
+    """Pairs of periods a recording cannot tell apart (Rayleigh's criterion over q).
+
+    Two sinusoids over an angle span S are resolved when their spatial frequencies differ
+    by at least 1 / S (Rayleigh; e.g. Kay, Modern Spectral Estimation, 1988, sec. 4.4):
+    closer, their sum is one sinusoid whose amplitude is modulated across the span.
+
+    Parameters
+    ----------
+    periods : sequence of float
+        Periods [rad], > 0.
+    span : float
+        Angle span the recording covers [rad], > 0.
+
+    Returns
+    -------
+    list of (int, int)
+        Index pairs (i < j) with ``|1/P_i − 1/P_j| · span < 1``, closest first.
+
+    Raises
+    ------
+    ValueError
+        A non-positive period or span.
+    """
+    p = np.asarray(periods, float)
+    if np.any(p <= 0) or not span > 0:
+        raise ValueError(f"periods and span must be > 0, got {list(p)}, {span}")
+    f = 1.0 / p
+    out = [(abs(f[i] - f[j]) * span, i, j) for i in range(p.size)
+           for j in range(i + 1, p.size) if abs(f[i] - f[j]) * span < 1.0]
+    return [(i, j) for _, i, j in sorted(out)]
+
+
 def heldout_evidence(val_with: float, val_without: float, n_val: int, tau: float) -> float:
     """Held-out evidence of a term, 2 ln Λ_val = (n_val / τ_int) ln(RMSE_without² /
     RMSE_with²) (the scale of the loop's acceptance rule, :mod:`swgcal.loop`).
@@ -318,7 +358,7 @@ def group_ripples(result: CalibrationResult, *, rel_tol: float = HARMONIC_REL_TO
         min_evidence = float(getattr(cfg, "min_heldout_evidence", DEFAULT_MIN_EVIDENCE))
     info: dict[str, Any] = {"gear_ratio": getattr(p.signals, "gear_ratio", None),
                             "history": ripple_history(result),
-                            "groups": [], "removed": [], "support": [],
+                            "merged": [], "groups": [], "removed": [], "support": [],
                             "min_heldout_evidence": min_evidence}
     ripples = [t for t in result.final.terms if isinstance(t, RippleTerm)
                and t.name in result.added]
@@ -326,6 +366,7 @@ def group_ripples(result: CalibrationResult, *, rel_tol: float = HARMONIC_REL_TO
         return dataclasses.replace(result, problem=dataclasses.replace(
             p, meta={**p.meta, "ripples": info}))
     st = _Pruning.start(result, min_evidence, info)
+    _merge_near_equal(st, ripples)
     _group_harmonics(st, ripples, rel_tol)
     _drop_unsupported(st, ripples)
     meta = {**p.meta, "ripples": info}
@@ -376,6 +417,52 @@ class _Pruning:
         self.changed = self.changed or changed
         self.thetas = {t.name: np.asarray(th, float) for t, th in
                        zip(fit.terms, fit.thetas, strict=True)}
+
+
+def _merge_near_equal(st: _Pruning, ripples: Sequence[Term]) -> None:
+    """Step 0: two single ripples of one kind at periods the recording cannot tell apart
+    (:func:`near_equal_pairs` over the angle span) become one, started at their
+    amplitude-weighted period and refitted; repeated while such a pair is left."""
+    span = float(st.result.problem.signals.scales.q_span)
+    names = {r.name for r in ripples}
+    while True:
+        for kind in sorted({t.kind for t in ripples}):
+            members = [t for t in st.cur.terms if t.kind == kind and t.name in names
+                       and isinstance(t, RippleTerm) and t.single]
+            pairs = near_equal_pairs([float(st.thetas[t.name][0]) for t in members], span) \
+                if len(members) > 1 else []
+            if pairs:
+                break
+        else:
+            return
+        a, b = members[pairs[0][0]], members[pairs[0][1]]
+        if not _merge(st, a, b, span):
+            return
+
+
+def _merge(st: _Pruning, a: Term, b: Term, span: float) -> bool:
+    """Merge ripple ``b`` into ``a`` (module docstring, step 0); False where the refit fails."""
+    cur = st.cur
+    amp = {t.name: float(np.hypot(*cur.coefs[cur.terms.index(t)][:2])) for t in (a, b)}
+    per = {t.name: float(st.thetas[t.name][0]) for t in (a, b)}
+    w = np.array([amp[a.name] ** 2, amp[b.name] ** 2]) + 1e-300
+    start = float(np.average([per[a.name], per[b.name]], weights=w))
+    terms = [t for t in cur.terms if t is not b]
+    try:
+        fm = _refit(st.result, terms, {**st.thetas, a.name: np.array([start])}, {a.name},
+                    st.fit_kw)
+    except (ValueError, np.linalg.LinAlgError) as e:  # pragma: no cover
+        log.warning("merging %s into %s failed: %s", b.name, a.name, e)
+        return False
+    val_m = _val_rmse(st.result, fm)
+    st.info["merged"].append({
+        "name": a.name, "members": [a.name, b.name], "periods": [per[a.name], per[b.name]],
+        "amplitudes": [amp[a.name], amp[b.name]],
+        "resolution": abs(1.0 / per[a.name] - 1.0 / per[b.name]) * span,
+        "period": float(fm.thetas[fm.terms.index(a)][0]),
+        "val_rmse_separate": st.val_cur, "val_rmse_merged": val_m})
+    st.accept(fm, val_m)
+    return True
 
 
 def _period_errors(st: _Pruning, ripples: Sequence[Term]) -> dict[tuple[str, str], Any]:

@@ -24,7 +24,7 @@ from swgsim.gear.terms import evaluate_terms
 from .data import FrictionRecording
 
 __all__ = ["BASE_MODEL_TRUTH", "PLANTED", "SyntheticTruth", "synthetic_trajectory",
-           "synthetic_recording"]
+           "synthetic_recording", "session_recording"]
 
 BASE_MODEL_TRUTH = {"b0": 0.30, "b1": 0.40, "b2": 0.50, "b3": 0.05, "theta_b": 0.3}
 """Paper-law parameters of the synthetic joint [N m, N m s/rad, N m s³/rad³, N m, rad]."""
@@ -54,10 +54,25 @@ PLANTED: dict[str, dict[str, Any]] = {
     "sensor_drift": {"params": {"c": 0.2, "t_d": 90.0}, "check": {"c": 0.2, "t_d": 90.0},
                      "recording": {"duration_s": 240.0, "dt_s": 0.04}},
     "velocity_lag": {"params": {"t_lag": 0.04}, "check": {"t_lag": 0.04}},
+    # a delay shows only through what it acts on: planted with a ripple at 2 ms sampling
+    "transport_delay": {"params": {"delay": 0.003}, "check": {"delay": 0.003},
+                        "sessions": {"temperatures_c": [30.0], "friction_factors": [1.0],
+                                     "duration_s": 40.0, "with_temperature": False},
+                        "with": [{"kind": "position_ripple",
+                                  "params": {"a_sin": 0.03, "a_cos": 0.02, "period": 0.01}}]},
+    # a temperature needs a temperature column: a cold and a warm session, the warm one's
+    # paper-law friction 12 % lower (b0, b1, b2 scaled by 0.88 over 11.2 K; checked as the
+    # change at the reference speed, k_ref, in tests/swgcal/test_calib_sessions.py)
+    "temperature_friction": {"params": {}, "check": {},
+                             "sessions": {"temperatures_c": [27.5, 38.7],
+                                          "friction_factors": [1.0, 0.88]}},
 }
 """Planted value of every library effect (inside its physical range, :mod:`swgcal.friction.ranges`),
 the derived parameters a test checks and, where the default recording is too short to
-identify the effect, the ``recording`` options (``duration_s``, ``dt_s``) to plant it in."""
+identify the effect, the ``recording`` options (``duration_s``, ``dt_s``) to plant it in;
+an effect that needs sessions (a temperature) or another effect to act on (a delay) is
+planted by :func:`session_recording` with the ``sessions`` options, beside the effects
+``with``."""
 
 
 @dataclass(frozen=True)
@@ -196,3 +211,72 @@ def synthetic_recording(
     spec = [{"kind": x[0].kind, "params": x[0].to_params(x[1], x[2]),
              **({"options": x[0].options()} if x[0].options() else {})} for x in items]
     return rec, SyntheticTruth(sigma=sigma, tau_clean=tau, effects=spec, v_s=v_s)
+
+
+def session_recording(
+    effects: Sequence[Mapping[str, Any]] = (),
+    *,
+    temperatures_c: Sequence[float] = (27.5, 38.7),
+    friction_factors: Sequence[float] = (1.0, 1.0),
+    duration_s: float = 20.0,
+    dt_s: float = 0.002,
+    gap_s: float = 600.0,
+    noise_rel: float = 0.01,
+    with_temperature: bool = True,
+    rng: np.random.Generator | None = None,
+    name: str = "sessions",
+) -> tuple[FrictionRecording, list[SyntheticTruth]]:
+    """Sessions of one joint joined in one recording, each at its own temperature.
+
+    Each session is a :func:`synthetic_recording` (its own trajectory, the same planted
+    ``effects``) whose paper-law Coulomb and viscous coefficients b0, b1, b2 are scaled
+    by its friction factor (a warm joint's thinner grease), started ``gap_s`` after the
+    previous one ended. With ``with_temperature`` the recording carries each session's
+    temperature as a ``temperature_c`` column (constant within a session).
+
+    Parameters
+    ----------
+    effects : sequence of mapping
+        Library effects ``{kind, params}`` planted in every session.
+    temperatures_c, friction_factors : sequence of float
+        One per session [°C, -].
+    duration_s, dt_s : float
+        Each session's length and mean sample interval [s].
+    gap_s : float
+        Time between sessions [s], >= 0.
+    noise_rel : float
+        As in :func:`synthetic_recording`.
+
+    Returns
+    -------
+    FrictionRecording, list of SyntheticTruth
+        The joined recording and each session's truth.
+
+    Raises
+    ------
+    ValueError
+        Sessions of unequal counts, a factor not positive or a negative gap.
+    """
+    if len(temperatures_c) != len(friction_factors) or not len(temperatures_c):
+        raise ValueError("temperatures_c and friction_factors need one entry per session")
+    if min(friction_factors) <= 0 or gap_s < 0:
+        raise ValueError(f"friction_factors must be > 0 and gap_s >= 0, got "
+                         f"{list(friction_factors)}, {gap_s}")
+    rng = rng if rng is not None else np.random.default_rng(0)
+    parts, truths, t_end = [], [], 0.0
+    for temp, f in zip(temperatures_c, friction_factors, strict=True):
+        base = {k: v * f if k in ("b0", "b1", "b2") else v for k, v in BASE_MODEL_TRUTH.items()}
+        rec, truth = synthetic_recording(effects, base_model=base, noise_rel=noise_rel,
+                                         duration_s=duration_s, dt_s=dt_s, rng=rng)
+        t0 = t_end + (gap_s if parts else 0.0)
+        parts.append((rec.t_s + t0, rec, np.full(rec.n, float(temp))))
+        truths.append(truth)
+        t_end = float(parts[-1][0][-1])
+    cat = np.concatenate
+    return FrictionRecording(
+        t_s=cat([p[0] for p in parts]), q_rad=cat([p[1].q_rad for p in parts]),
+        dq_rad_s=cat([p[1].dq_rad_s for p in parts]),
+        ddq_rad_s2=cat([p[1].ddq_rad_s2 for p in parts]),
+        tau_nm=cat([p[1].tau_nm for p in parts]),
+        temperature_c=cat([p[2] for p in parts]) if with_temperature else None,
+        name=name, ddq_source="exact (synthetic)"), truths

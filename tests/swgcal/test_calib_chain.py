@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
+from swgcal.friction.report import NOT_SIMULATED
 from swgcal.friction.synthetic import (
     BASE_MODEL_TRUTH,
     PLANTED,
@@ -17,10 +18,18 @@ from swgcal.friction.synthetic import (
 )
 from swgsim.gear.friction import FRICTION_LIBRARY, FrictionEffects, parse_effects
 
+
+def test_a_temperature_effect_is_refused_by_the_simulation_in_one_line():
+    with pytest.raises(ValueError, match="temperature_friction needs the joint's measured"):
+        FrictionEffects([{"kind": "temperature_friction", "params": {"k_c": -0.01, "k_v": 0.0},
+                          "options": {"t_ref_c": 30.0}}], v_s=V_SMOOTH)
+
+
 CONF = Path(__file__).resolve().parents[2] / "conf" / "friction_effects"
 
 
-@pytest.mark.parametrize("kind", sorted(FRICTION_LIBRARY))
+@pytest.mark.parametrize("kind", sorted(k for k in FRICTION_LIBRARY
+                                         if k not in NOT_SIMULATED))
 def test_effect_torque_reproduces_planted_data(kind):
     spec = [{"kind": kind, "params": PLANTED[kind]["params"]}]
     rec, truth = synthetic_recording(spec, rng=np.random.default_rng(0), duration_s=10)

@@ -22,7 +22,8 @@ from swgsim.gear.terms import Param, Term, linear_recurrence
 
 __all__ = ["FRICTION_LIBRARY", "AsymmetricCoulomb", "Stribeck", "Presliding", "PositionRipple",
            "FrictionRipple", "LoadCoulomb", "GravityResidual", "Inertia", "ThermalDrift",
-           "SensorDrift", "VelocityLag", "make_effect", "register_effect", "dahl_state",
+           "SensorDrift", "VelocityLag", "TransportDelay", "TemperatureFriction",
+           "MIN_TEMPERATURE_SPAN_K", "make_effect", "register_effect", "dahl_state",
            "first_order_lag"]
 
 
@@ -337,11 +338,96 @@ class VelocityLag(Term):
         return sig.replace(v_eff=first_order_lag(sig.t_s, sig.v_eff, float(theta[0])))
 
 
+#: Smallest spread of a recording's temperature for ``temperature_friction`` to be tried
+#: [K] [choice: a few steps of a joint's temperature sensor (0.0625 K on a UR3), and the
+#: size at which a grease's viscosity changes by a few per cent].
+MIN_TEMPERATURE_SPAN_K = 1.0
+
+
+class TransportDelay(Term):
+    """A transport delay d between the measured angle and the measured torque: the torque
+    logged at time t belongs to the angle of time t − d, q(t − d) ≈ q − q̇ d (first order
+    in d, exact at constant speed; a drive's current loop, filters and bus cycle delay the
+    current that gives the torque). A transform term: every term after it sees the
+    delayed angle, so a ripple's phase turns with speed by 2π q̇ d / P, opposite in the
+    two directions of motion. d > 0: the torque lags the angle."""
+
+    kind = "transport_delay"
+    nonlinear = (Param("delay", "s", "transport delay from the angle to the torque"),)
+    is_transform = True
+    description = "the torque lags the angle by a transport delay (phase turning with speed)"
+    source = ("a sampled drive's dead time (current loop, filters, bus cycle): Franklin, "
+              "Powell & Workman, Digital Control of Dynamic Systems, 3rd ed., sec. 3.2")
+
+    def columns(self, sig, theta):  # pragma: no cover - transform only
+        return np.zeros((sig.n, 0))
+
+    def transform(self, sig: FrictionSignals, theta: np.ndarray) -> FrictionSignals:
+        return sig.replace(q_rad=sig.q_rad - sig.dq_rad_s * float(theta[0]))
+
+
+class TemperatureFriction(Term):
+    """Friction changing with the joint's measured temperature T (a recording's
+    ``temperature_c`` column): τ = (T − T_ref) (k_c sgn(v) + k_v v), T_ref the
+    recording's mean temperature (option ``t_ref_c``). The grease thins as it warms
+    (its viscosity falls about exponentially with temperature, :mod:`swgsim.gear.thermal`),
+    so a strain wave gear's running torque falls: the physical signs are k_v <= 0 and a
+    net change at the reference speed v_ref (option ``v_ref``) <= 0."""
+
+    kind = "temperature_friction"
+    linear = (Param("k_c", "N m/K", "Coulomb level change per kelvin"),
+              Param("k_v", "N m s/(rad K)", "viscous coefficient change per kelvin"))
+    description = "friction level and viscous slope change with the measured temperature"
+    source = ("grease viscosity against temperature (swgsim.gear.thermal); Harmonic Drive "
+              "catalogues: no-load running torque falls as the gear warms")
+
+    def __init__(self, name: str | None = None, t_ref_c: float = 20.0,
+                 v_ref: float = 1.0) -> None:
+        super().__init__(name)
+        if not v_ref > 0:
+            raise ValueError(f"v_ref must be > 0 [rad/s], got {v_ref}")
+        self.t_ref_c, self.v_ref = float(t_ref_c), float(v_ref)
+
+    @classmethod
+    def for_signals(cls, sig: FrictionSignals, name: str | None = None) -> Term:
+        t = sig.temperature_c
+        t_ref = float(np.mean(t)) if t is not None else 20.0
+        return cls(name, t_ref_c=t_ref, v_ref=sig.scales.v_ref)
+
+    def applicable(self, sig) -> bool:
+        t = getattr(sig, "temperature_c", None)
+        return t is not None and float(np.ptp(t)) >= MIN_TEMPERATURE_SPAN_K
+
+    def options(self) -> dict[str, Any]:
+        return {"t_ref_c": self.t_ref_c, "v_ref": self.v_ref}
+
+    def required_options(self) -> tuple[str, ...]:
+        return ("t_ref_c",)
+
+    def columns(self, sig, theta):
+        if sig.temperature_c is None:
+            raise ValueError("temperature_friction needs the joint's temperature (a "
+                             "temperature_c column); these signals carry none")
+        dt = sig.temperature_c - self.t_ref_c
+        return np.column_stack([dt * sig.sgn, dt * sig.v_eff])
+
+    def derived(self, coef, theta):
+        k_c, k_v = float(coef[0]), float(coef[1])
+        return {"k_c": k_c, "k_v": k_v, "k_ref": k_c + k_v * self.v_ref}
+
+    def derived_units(self):
+        return {"k_c": "N m/K", "k_v": "N m s/(rad K)", "k_ref": "N m/K"}
+
+    def primary(self):
+        return ("k_ref",)
+
+
 FRICTION_LIBRARY: Registry[type[Term]] = Registry("friction effect", __name__,
                                                   "FRICTION_LIBRARY", (
     (cls.kind, cls) for cls in (
         AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
-        LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag)
+        LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag,
+        TransportDelay, TemperatureFriction)
 ))
 """Kind -> effect class, the one registry of friction effects (ARCHITECTURE.md,
 "To add a calibration effect"):

@@ -22,7 +22,8 @@ import numpy as np
 from swgsim.gear.friction.signals import FrictionSignals
 from swgsim.gear.terms import Param, Term
 
-__all__ = ["RippleTerm", "PositionRipple", "FrictionRipple", "wave_generator_order"]
+__all__ = ["RippleTerm", "PositionRipple", "FrictionRipple", "wave_generator_order",
+           "period_in_gear_terms"]
 
 
 def wave_generator_order(period_rad: float, gear_ratio: float) -> float:
@@ -52,6 +53,78 @@ def wave_generator_order(period_rad: float, gear_ratio: float) -> float:
         raise ValueError(f"period_rad and gear_ratio must be > 0, got {period_rad}, "
                          f"{gear_ratio}")
     return 2.0 * math.pi / (float(period_rad) * float(gear_ratio))
+
+
+def period_in_gear_terms(period: float, std: float, gear_ratio: float | None,
+                         rel_tol: float = 0.01) -> dict[str, Any]:
+    """A ripple's period over the output angle in the gear's terms, with standard errors.
+
+    The output order is the number of ripple cycles per output revolution, 2π / P. With
+    the reduction ratio N the wave-generator order is k = 2π / (P N) (the motor turns with
+    the wave generator: k is also the order per motor revolution, where a motor with p
+    pole pairs ripples at 2p and 6p, cogging at the least common multiple of slots and
+    poles); the flexspline has 2N teeth (circular spline fixed, two teeth more on the
+    circular spline), so the tooth mesh is order 2N per wave-generator turn
+    (docs/PHYSICS.md sec. 1; Tuttle & Seering 1996).
+
+    Parameters
+    ----------
+    period, std : float
+        Period [rad] (> 0) and its standard error [rad] (NaN where unknown).
+    gear_ratio : float or None
+        N [-], > 1, when known.
+    rel_tol : float, default 0.01
+        Relative tolerance of an integer order (widened to 3 standard errors).
+
+    Returns
+    -------
+    dict
+        ``period``, ``period_std`` [rad], ``rel_std`` [-], ``output_order`` and
+        ``output_order_std`` [cycles per output revolution]; with N also ``wg_order``,
+        ``wg_order_std``, ``nearest_integer_wg_order`` and ``integer_within_3_std``
+        (the nearest integer lies within 3 standard errors or ``rel_tol``),
+        ``reading`` (what an integer order of a strain wave gear is).
+
+    Raises
+    ------
+    ValueError
+        A non-positive period.
+    """
+    if not period > 0:
+        raise ValueError(f"period must be > 0, got {period}")
+    rel = float(std) / float(period) if np.isfinite(std) else float("nan")
+    out_order = 2.0 * math.pi / float(period)
+    out: dict[str, Any] = {"period": float(period), "period_std": float(std), "rel_std": rel,
+                           "output_order": out_order, "output_order_std": out_order * rel}
+    if gear_ratio:
+        k = wave_generator_order(period, gear_ratio)
+        ki = int(round(k))
+        tol = max(rel_tol, 3.0 * rel) if np.isfinite(rel) else rel_tol
+        near = ki >= 1 and abs(k / ki - 1.0) <= tol
+        out.update({"wg_order": k, "wg_order_std": k * rel, "nearest_integer_wg_order": ki,
+                    "integer_within_3_std": bool(near),
+                    "reading": _order_reading(k, ki, near, float(gear_ratio), tol)})
+    return out
+
+
+def _order_reading(k: float, ki: int, near: bool, n: float, tol: float) -> str:
+    """What a wave-generator order is in a strain wave gear (docs/PHYSICS.md sec. 1)."""
+    sensing = 2.0 * (1.0 + 1.0 / n)
+    if abs(k / sensing - 1.0) <= tol / 4 and not (near and ki == 2 and
+                                                  abs(k - 2) < abs(k - sensing)):
+        return "order 2(1 + 1/N): the gauges' sensing ripple (the wave passes the gauges)"
+    if not near:
+        return ("not an integer wave-generator order: a motor order of pole pairs or slots "
+                "that is not one, or another shaft")
+    names = {1: "once per wave-generator turn: its eccentricity or bearing",
+             2: "twice per turn: the elliptical wave (kinematic error, meshing stiffness)",
+             4: "4 per turn: the wave's second harmonic (kinematic error)"}
+    if ki in names:
+        return names[ki]
+    if abs(ki - 2 * n) <= 1:
+        return "the tooth mesh: 2N flexspline teeth per wave-generator turn"
+    return (f"integer order {ki}: a motor order (2p or 6p for p pole pairs, cogging at the "
+            "least common multiple of slots and poles) or a harmonic of the wave")
 
 
 class RippleTerm(Term):

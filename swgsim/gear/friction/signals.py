@@ -92,6 +92,9 @@ class FrictionSignals:
         Integrator states of one time step (``{"states": {term name: state}}``).
     gear_ratio : float or None
         Reduction ratio N (wave-generator turns per output turn) when known [-].
+    temperature_c : ndarray, shape (n,), or None
+        The joint's measured temperature where the recording has one [°C]
+        (``temperature_friction``); None otherwise (the simulation's friction effects).
     """
 
     t_s: np.ndarray
@@ -104,6 +107,7 @@ class FrictionSignals:
     scales: Scales
     extra: dict[str, Any] = field(default_factory=dict)
     gear_ratio: float | None = None
+    temperature_c: np.ndarray | None = None
 
     @property
     def n(self) -> int:

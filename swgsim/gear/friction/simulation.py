@@ -30,7 +30,12 @@ from typing import Any
 
 import numpy as np
 
-from swgsim.gear.friction.effects import Presliding, VelocityLag, make_effect
+from swgsim.gear.friction.effects import (
+    Presliding,
+    TemperatureFriction,
+    VelocityLag,
+    make_effect,
+)
 from swgsim.gear.friction.signals import FrictionSignals, PaperLaw, Scales
 from swgsim.gear.terms import Term, evaluate_terms
 
@@ -103,7 +108,9 @@ class FrictionEffects:
     Raises
     ------
     ValueError
-        ``v_s`` not positive (with effects), or ``velocity_lag`` without ``base model``.
+        ``v_s`` not positive (with effects), a transform (``velocity_lag``,
+        ``transport_delay``) without ``base model``, or ``temperature_friction`` (the
+        simulation's friction effects see t, q, q̇, q̈, not the joint's temperature).
 
     Examples
     --------
@@ -118,14 +125,18 @@ class FrictionEffects:
     def __init__(self, effects: Sequence[Mapping[str, Any]], v_s: float | None,
                  base_model: Mapping[str, float] | None = None, t0: float | None = 0.0) -> None:
         self.items = parse_effects(effects or [])
+        if any(isinstance(t, TemperatureFriction) for t, _, _ in self.items):
+            raise ValueError("friction_effects: temperature_friction needs the joint's "
+                             "measured temperature, which the simulation's friction effects "
+                             "do not see (t, q, q̇, q̈ only): leave it out")
         if self.items and not (v_s is not None and v_s > 0):
             raise ValueError(f"v_s must be > 0 [rad/s], got {v_s}")
         self.v_s = float(v_s) if v_s is not None else 1.0
         self.t0 = float(t0 or 0.0)
         self.has_transform = any(t.is_transform for t, _, _ in self.items)
         if self.has_transform and base_model is None:
-            raise ValueError("velocity_lag acts through the friction law: pass base_model="
-                             "{b0, b1, b2, b3, theta_b}")
+            raise ValueError("a transform (velocity_lag, transport_delay) acts through the "
+                             "friction law: pass base_model={b0, b1, b2, b3, theta_b}")
         self.base_coef = (PaperLaw().from_derived(**{k: float(base_model[k]) for k in (
             "b0", "b1", "b2", "b3", "theta_b")}) if base_model is not None else None)
         # state layout: one per presliding or lag effect
