@@ -47,14 +47,14 @@ from swgcal.loop import CalibrationResult, SelectionConfig
 def _row(res) -> dict:
     """One joint's table row from its CalibrationResult."""
     base = res.base_model_final.estimates_of("first_order")
-    effects = {n: {k: (e.value, e.std) for k, e in res.final.estimates_of(n).items()}
+    effects = {n: {k: (e.value, e.std, e.bound) for k, e in res.final.estimates_of(n).items()}
                for n in res.added}
     kept = [c for it in res.iterations for c in it.candidates if c.accepted]
     return {"joint": res.problem.meta["joint"], "rmse": res.rmse,
             "tau_min": base["tau_min"].value, "tau_std": base["tau_min"].std,
             "r_th": base["r_th_k_per_w"].value, "r_th_std": base["r_th_k_per_w"].std,
             "ambient_c": base["ambient_c"].value, "effects": effects, "kept": kept,
-            "final_base": {k: (e.value, e.std)
+            "final_base": {k: (e.value, e.std, e.bound)
                            for k, e in res.final.estimates_of("first_order").items()},
             "unexplained": res.unexplained, "signature": res.residual_signature,
             "removed": res.problem.meta.get("removed", []),
@@ -140,7 +140,10 @@ def _figure(results, path: Path) -> None:
         plot_joint(ax, h, measured(p), before, after, g - 1)
         ax.axvline(h[g - 1] + 0.1, color="k", lw=0.5, ls=":")
         rb, ra = res.rmse["test"]["before"], res.rmse["test"]["after"]
-        ax.set_title(f"J{p.meta['joint']}: test RMSE {rb:.3f} -> {ra:.3f} K", fontsize=8)
+        ph = p.meta.get("physical") or {}
+        scored = not (ph.get("before") or ph.get("after"))
+        ax.set_title(f"J{p.meta['joint']}: test RMSE {rb:.3f} -> {ra:.3f} K" if scored else
+                     f"J{p.meta['joint']}: unphysical fit, not scored", fontsize=8)
         ax.set_xlabel(f"h (gap of {shift + 0.2:.1f} h cut at the dotted line)", fontsize=7)
         ax.tick_params(labelsize=7)
         if ax is not axes.flat[0]:
@@ -168,18 +171,28 @@ def main(argv: list[str] | None = None) -> int:
     results = [calibrate(build_problem(log, joint=j)) for j in args.joints]
     rows = [_row(r) for r in results]
     kept_on = Counter(n.split("#")[0] for r in rows for n in r["effects"])
-    print("| joint | tau [min] | R_th [K/W] | T_amb [°C] | fit RMSE [K] | validation RMSE "
-          "before -> after [K] | test RMSE before -> after [K] | effects kept | unexplained |")
+    print(f"sensor resolution (smallest step between readings): "
+          f"{results[0].problem.meta['resolution']:.4g} K; the room <= the coolest joint's "
+          f"first reading, {results[0].problem.meta['room_max_c']:.4g} °C")
+    print("| joint | physical (alone / final) | R_th [K/W] | τ [min] | T_amb [°C] | ΔT_0 [K] | "
+          "effects kept | forward: fit A, RMSE on B [K] | backward: fit B, RMSE on A [K] |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        m = r["rmse"]
-        fx = "; ".join(f"{n} ({', '.join(f'{k} {v:.3g} ± {s:.2g}' for k, (v, s) in p.items())})"
-                       for n, p in r["effects"].items()) or "none"
-        print(f"| J{r['joint']} | {r['tau_min']:.1f} ± {r['tau_std']:.1f} | {r['r_th']:.3g} ± "
-              f"{r['r_th_std']:.2g} | {r['ambient_c']:.1f} | {m['fit']['before']:.3f} | "
-              f"{m['validation']['before']:.3f} -> {m['validation']['after']:.3f} | "
-              f"{m['test']['before']:.3f} -> {m['test']['after']:.3f} | {fx} | "
-              f"{'yes' if r['unexplained'] else 'no'} |")
+    for r, res in zip(rows, results, strict=True):
+        fb, ph = r["final_base"], res.problem.meta["physical"]
+        cv = res.problem.meta["crossval"]["rows"]
+
+        def pe(k, fb=fb):
+            v, sd, b = fb[k]
+            return f"{v:.3g} ± {sd:.2g}" + (" (bound)" if b.startswith("on its") else "")
+
+        fx = "; ".join(n + " (" + ", ".join(f"{k} {v:.3g} ± {sd:.2g}"
+                                            for k, (v, sd, _) in q.items()) + ")"
+                       for n, q in r["effects"].items()) or "none"
+        way = {w: " -> ".join(f"{c[w]['rmse']:.3f}" for c in cv) for w in ("forward", "backward")}
+        print(f"| J{r['joint']} | {'no' if ph['before'] else 'yes'} / "
+              f"{'no' if ph['after'] else 'yes'} | {pe('r_th_k_per_w')} | {pe('tau_min')} | "
+              f"{pe('ambient_c')} | {pe('initial_k')} | {fx} | {way['forward']} | "
+              f"{way['backward']} |")
     print(f"\neffects kept on (of {len(rows)} joints): {dict(kept_on) or 'none'}")
     for c in transfer_effects(results):
         print(f"{c['effect']} of J{c['from_joint']} ({c['nonlinear']}) carried to the others: "
@@ -188,11 +201,12 @@ def main(argv: list[str] | None = None) -> int:
     for r in rows:
         print(f"J{r['joint']}: {r['signature']}" + (f" removed: {r['removed']}"
                                                     if r["removed"] else ""))
+        print("    unphysical: " + str(results[rows.index(r)].problem.meta["physical"]))
         for c in r["kept"]:
             print(f"    kept {c.name}: validation gain {100 * c.rel_improvement:.3g} %, held-out "
                   f"2 ln Λ {c.heldout_evidence:.3g}, effective ΔBIC {c.delta_bic_eff:+.4g}; "
                   "base with it: " + ", ".join(f"{k} {v:.4g} ± {s:.2g}"
-                                               for k, (v, s) in r["final_base"].items()))
+                                               for k, (v, s, _) in r["final_base"].items()))
         if r["best"] is not None:
             b = r["best"]
             print(f"    best candidate {b.name}: validation RMSE {b.val_rmse:.3f} K, "

@@ -16,7 +16,9 @@ own signals and terms.
 Fitting is separable (variable projection, Golub & Pereyra 1973): for given θ the linear
 coefficients are the exact linear least-squares solution, and θ is found by
 :func:`scipy.optimize.least_squares` (trust region reflective, box bounds, log scale for
-positive scale parameters) from several starts. Uncertainties come from the Jacobian of
+positive scale parameters) from several starts; linear coefficients within the terms'
+:meth:`~swgcal.terms.FitTerm.linear_bounds` (:func:`solve_linear`), one left on a bound
+flagged (:attr:`ParamEstimate.bound`). Uncertainties come from the Jacobian of
 the full parameter vector at the optimum, ``cov = s² (JᵀJ)⁻¹ · τ_int``, where ``s²`` is
 the residual variance and ``τ_int`` the integrated autocorrelation time of the residual
 (Sokal 1997, automatic window c = 5): autocorrelated residuals carry fewer independent
@@ -51,6 +53,7 @@ __all__ = [
     "FitResult",
     "ParamEstimate",
     "fit_terms",
+    "solve_linear",
     "evaluate_terms",
     "with_uncertainty",
     "integrated_autocorr_time",
@@ -116,6 +119,11 @@ class ParamEstimate:
     note : str
         A strong correlation with another parameter (``"correlated with paper_law.b0
         (r = -0.995)"``): the two trade off; informative even when both are pinned down.
+    bound : str
+        ``""``, ``"on its lower bound 0"`` (left on a bound of its fit) or ``"held at 24"``
+        (equal bounds). A linear coefficient on a bound or held has s.e. 0 (the bound holds
+        it; the others' covariance is conditional on it); a nonlinear one on its box's
+        bound keeps the curvature's.
     """
 
     term: str
@@ -125,14 +133,21 @@ class ParamEstimate:
     std: float
     flag: str = ""
     note: str = ""
+    bound: str = ""
 
     @property
     def identifiable(self) -> bool:
         return not self.flag
 
+    @property
+    def on_bound(self) -> bool:
+        """Whether the fit left the parameter on a bound (not one held by equal bounds)."""
+        return self.bound.startswith("on its")
+
     def as_dict(self) -> dict[str, Any]:
         return {"value": self.value, "std": self.std, "unit": self.unit,
-                "identifiable": self.identifiable, "flag": self.flag, "note": self.note}
+                "identifiable": self.identifiable, "flag": self.flag, "note": self.note,
+                "bound": self.bound}
 
 
 @dataclass
@@ -186,11 +201,8 @@ class FitResult:
 # fitting
 
 
-def _solve_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Least-squares coefficients: column-scaled normal equations solved by a symmetric
-    eigendecomposition with a pseudo-inverse cut at 1e-12 of the largest eigenvalue
-    (rank-deficient safe; for the few-column designs here far faster than an SVD of the
-    tall matrix, and accurate while cond(X) < 1e6)."""
+def _solve_unbounded(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least squares by the column-scaled normal equations (:func:`solve_linear`)."""
     if x.shape[1] == 0:
         return np.empty(0)
     norms = np.sqrt(np.einsum("ij,ij->j", x, x))
@@ -201,6 +213,67 @@ def _solve_linear(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     keep = w > w[-1] * 1e-12
     c = v[:, keep] @ ((v[:, keep].T @ (xs.T @ y)) / w[keep])
     return c / norms
+
+
+def solve_linear(x: np.ndarray, y: np.ndarray, lo: np.ndarray | None = None,
+                 hi: np.ndarray | None = None) -> np.ndarray:
+    """Least-squares coefficients of ``y ≈ x c``, optionally within bounds.
+
+    Column-scaled normal equations by a symmetric eigendecomposition, pseudo-inverse cut at
+    1e-12 of the largest eigenvalue (rank-deficient safe, accurate while cond(X) < 1e6;
+    for few columns far faster than an SVD of the tall matrix). With a finite bound:
+    coefficients with ``lo == hi`` held there, the others by BVLS (Stark & Parker 1995,
+    :func:`scipy.optimize.lsq_linear`) on the k × k problem of the same normal equations.
+
+    Parameters
+    ----------
+    x : ndarray, shape (m, k)
+        Design matrix, one column per coefficient.
+    y : ndarray, shape (m,)
+        Target [data units].
+    lo, hi : ndarray, shape (k,), optional
+        Bounds, ``lo <= hi`` (``-inf``/``inf``: open) [the coefficients' units].
+
+    Returns
+    -------
+    ndarray, shape (k,)
+
+    Raises
+    ------
+    ValueError
+        Bounds of the wrong shape, or a lower bound above its upper one.
+    """
+    k = x.shape[1]
+    lo = np.full(k, -np.inf) if lo is None else np.asarray(lo, float)
+    hi = np.full(k, np.inf) if hi is None else np.asarray(hi, float)
+    if lo.shape != (k,) or hi.shape != (k,) or np.any(lo > hi):
+        raise ValueError(f"linear bounds need shape ({k},) and lo <= hi, got {lo}, {hi}")
+    held, free = lo == hi, lo != hi
+    c = np.where(held, lo, 0.0)
+    r = y - x[:, held] @ lo[held] if held.any() else y
+    if free.any() and not np.isfinite(np.r_[lo[free], hi[free]]).any():
+        c[free] = _solve_unbounded(x[:, free], r)
+    elif free.any():  # ||x c - r||² = ||a c - b||² + const, a = W^½ Vᵀ of xᵀx = V W Vᵀ
+        norms = np.sqrt(np.einsum("ij,ij->j", x[:, free], x[:, free]))
+        xs = x[:, free] / np.where(norms == 0, 1.0, norms)
+        norms[norms == 0] = 1.0
+        w, v = np.linalg.eigh(xs.T @ xs)
+        keep = w > w[-1] * 1e-12
+        sw = np.sqrt(w[keep])
+        sol = optimize.lsq_linear(sw[:, None] * v[:, keep].T, (v[:, keep].T @ (xs.T @ r)) / sw,
+                                  bounds=(lo[free] * norms, hi[free] * norms), method="bvls")
+        c[free] = np.clip(sol.x / norms, lo[free], hi[free])
+    return c
+
+
+def _linear_bounds(terms: Sequence[Term], sig: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """The terms' linear bounds concatenated, or None where all are infinite."""
+    b = [x for t in terms for x in (t.linear_bounds(sig) if hasattr(t, "linear_bounds")
+                                    else [(-np.inf, np.inf)] * t.n_linear)]
+    if len(b) != sum(t.n_linear for t in terms):
+        raise ValueError("linear_bounds() must give one (lo, hi) per linear coefficient")
+    lo, hi = (np.array([x[i] for x in b], float) for i in (0, 1))
+    return (lo, hi) if np.isfinite(np.r_[lo, hi]).any() else None
 
 
 def _pieces(v: np.ndarray, sizes: Sequence[int]) -> list[np.ndarray]:
@@ -313,11 +386,12 @@ def _optimise(resid: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], pk: 
 
 def _fit_result(terms: tuple[Term, ...], pk: _Packer, theta: np.ndarray,
                 resid: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], n: int,
-                msg: str, ok: bool) -> FitResult:
-    """The fit at the nonlinear parameters ``theta`` on ``n`` samples: linear
-    coefficients per term, RSS, σ, τ_int of the residual, BIC (no uncertainties yet)."""
+                msg: str, ok: bool, n_held: int = 0) -> FitResult:
+    """The fit at the nonlinear parameters ``theta`` on ``n`` samples: linear coefficients
+    per term, RSS, σ, τ_int of the residual, BIC (no uncertainties yet; ``n_held``
+    coefficients held by equal bounds are no parameters)."""
     r, c = resid(theta)
-    k = int(c.size + pk.lo.size)
+    k = int(c.size - n_held + pk.lo.size)
     if n <= k:
         raise ValueError(f"{n} fit samples for {k} parameters: need more samples")
     rss = float(np.sum(r * r))
@@ -383,18 +457,20 @@ def fit_terms(
     if not np.all(np.isfinite(y[idx])):
         raise ValueError("target has non-finite values on the fit samples")
     pk = _Packer(terms, sig)
+    lb = _linear_bounds(terms, sig)
     cache: dict = {}
 
     def resid(theta_flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         th = pk.split(theta_flat)
         x = design_matrix(terms, sig, th, cache)[idx]
-        c = _solve_linear(x, y[idx])
+        c = _solve_unbounded(x, y[idx]) if lb is None else solve_linear(x, y[idx], *lb)
         return y[idx] - x @ c, c
 
     flat = _start_vectors(terms, sig, y, idx, starts, pk)
     free = _free_mask(terms, fixed, pk.lo.size)
     best_theta, msg, ok = _optimise(resid, pk, flat, free, max_starts, max_nfev)
-    res = _fit_result(terms, pk, best_theta, resid, int(idx.size), msg, ok)
+    res = _fit_result(terms, pk, best_theta, resid, int(idx.size), msg, ok,
+                      0 if lb is None else int(np.sum(lb[0] == lb[1])))
     if uncertainty:
         _uncertainty(res, sig, idx, max_rel_se, max_abs_corr, cache)
     return res
@@ -417,6 +493,8 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
     """Covariance of the raw parameters, delta method to the reported ones, flags."""
     terms, thetas, coefs = res.terms, list(res.thetas), list(res.coefs)
     c_all = np.concatenate(coefs) if coefs else np.empty(0)
+    lb = _linear_bounds(terms, sig)
+    bound_of = _bound_notes(terms, sig, c_all, thetas, lb)
     x = design_matrix(terms, sig, thetas, cache)[idx]
     cols = [x]
     for j, t in enumerate(terms):
@@ -431,18 +509,11 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
                 preds.append(design_matrix(terms, sig, th, cache)[idx] @ c_all)
             cols.append(((preds[0] - preds[1]) / (2 * h))[:, None])
     jac = np.hstack(cols)  # (m, n_lin + n_nl): d prediction / d raw parameter
-    scale = np.sqrt(np.sum(jac * jac, axis=0))
-    scale[scale == 0] = 1.0
-    js = jac / scale
-    jtj = js.T @ js
-    u, sv, vt = np.linalg.svd(jtj)
-    res.cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
-    ok = sv > sv[0] * 1e-12
-    inv = (vt.T / np.where(ok, sv, np.inf)) @ u.T
-    # directions the data do not determine (cond(J) > 1e6): unbounded variance there
-    null = vt[~ok]
-    inv = inv + 1e20 * null.T @ null
-    cov_raw = inv / np.outer(scale, scale) * res.sigma ** 2 * res.tau_int
+    # a coefficient held by equal bounds or by an active one varies no more: no variance
+    held = np.zeros(c_all.size, bool) if lb is None else (lb[0] == lb[1]) | np.isclose(
+        c_all, lb[0], 1e-9, 1e-12) | np.isclose(c_all, lb[1], 1e-9, 1e-12)
+    fitted = np.r_[~held, np.ones(jac.shape[1] - c_all.size, bool)]
+    cov_raw, res.cond = _raw_covariance(jac, fitted, res.sigma, res.tau_int)
     # order of raw parameters: all linear (term order), then all nonlinear (term order)
     raw_values = np.concatenate([c_all] + [np.asarray(t, float) for t in thetas])
 
@@ -474,6 +545,8 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
     for i, (tn, pn, unit) in enumerate(names):
         flag, note = "", ""
         rel = sd[i] / abs(d0[i]) if d0[i] != 0 else np.inf
+        if bound_of.get((tn, pn), "").startswith("held"):
+            rel = 0.0
         if not np.isfinite(sd[i]):
             flag = "not determined (singular)"
         elif rel > max_rel_se:
@@ -483,5 +556,45 @@ def _uncertainty(res: FitResult, sig: Any, idx: np.ndarray, max_rel_se: float,
         j = int(np.argmax(row)) if row.size else 0
         if row.size and row[j] > max_abs_corr:
             note = f"correlated with {names[j][0]}.{names[j][1]} (r = {corr[i, j]:+.3f})"
-        est.append(ParamEstimate(tn, pn, unit, float(d0[i]), float(sd[i]), flag, note))
+        est.append(ParamEstimate(tn, pn, unit, float(d0[i]), float(sd[i]), flag, note,
+                                 bound_of.get((tn, pn), "")))
     res.estimates = est
+
+
+def _raw_covariance(jac: np.ndarray, fitted: np.ndarray, sigma: float, tau: float
+                    ) -> tuple[np.ndarray, float]:
+    """``σ² τ (JᵀJ)⁻¹`` over the ``fitted`` columns of ``jac`` (zero elsewhere; unbounded
+    along directions the data do not determine), and cond of the column-scaled JᵀJ."""
+    js = jac[:, fitted]
+    scale = np.sqrt(np.sum(js * js, axis=0))
+    scale[scale == 0] = 1.0
+    js = js / scale
+    u, sv, vt = np.linalg.svd(js.T @ js)
+    ok = sv > sv[0] * 1e-12
+    inv = (vt.T / np.where(ok, sv, np.inf)) @ u.T + 1e20 * vt[~ok].T @ vt[~ok]
+    cov = np.zeros((fitted.size, fitted.size))
+    cov[np.ix_(fitted, fitted)] = inv / np.outer(scale, scale) * sigma ** 2 * tau
+    return cov, float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
+
+
+def _bound_notes(terms: Sequence[Term], sig: Any, c_all: np.ndarray,
+                 thetas: Sequence[np.ndarray], lb: tuple[np.ndarray, np.ndarray] | None
+                 ) -> dict[tuple[str, str], str]:
+    """(term, raw parameter) -> :attr:`ParamEstimate.bound`: a linear one within 1e-9
+    (relative) of a bound, a nonlinear one within 1e-4 of its box's width."""
+    out = [""] * c_all.size
+    for i, (v, lo, hi) in enumerate(zip(c_all, *lb, strict=True) if lb is not None else ()):
+        on = [w for w, b in (("lower", lo), ("upper", hi)) if np.isclose(v, b, 1e-9, 1e-12)]
+        out[i] = f"held at {lo:.4g}" if lo == hi else (
+            f"on its {on[0]} bound {v:.4g}" if on else "")
+    pk = _Packer(terms, sig)
+    th = np.concatenate([np.asarray(t, float) for t in thetas] or [np.empty(0)])
+    u = np.where(pk.logs, np.log(np.where(pk.logs, np.maximum(th, 1e-300), 1.0)), th)
+    lo_u, hi_u = pk.u_bounds()
+    tol = np.where(np.isfinite(hi_u - lo_u), 1e-4 * (hi_u - lo_u), 0.0)
+    out += [f"on its lower bound {a:.4g}" if uu - ul <= d else
+            f"on its upper bound {b:.4g}" if uh - uu <= d else ""
+            for uu, ul, uh, d, a, b in zip(u, lo_u, hi_u, tol, pk.lo, pk.hi, strict=True)]
+    keys = [(t.name, q.name) for t in terms for q in t.linear] + [
+        (t.name, q.name) for t in terms for q in t.nonlinear]
+    return {k: b for k, b in zip(keys, out, strict=True) if b}

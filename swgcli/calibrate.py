@@ -105,10 +105,10 @@ def _log_mlflow(cfg: DictConfig, summary: dict[str, Any], out_dir: Path) -> str:
     with log_run(lg.experiment, lg.run_name or summary["name"], tracking_uri=lg.tracking_uri,
                  params=resolved, config=resolved, dataset=Path(cfg.measured).expanduser(),
                  tags=tags) as run:
-        metrics = {"rmse_before": summary["rmse_before"], "rmse_after": summary["rmse_after"],
-                   "rmse_ratio": summary["rmse_ratio"],
-                   "n_effects_added": float(len(summary["effects_added"])),
-                   "unexplained": float(summary["unexplained"])}
+        metrics = {k: summary[k] for k in ("rmse_before", "rmse_after", "rmse_ratio")
+                   if summary.get(k) is not None}  # None: not scored (an unphysical base)
+        metrics.update({"n_effects_added": float(len(summary["effects_added"])),
+                        "unexplained": float(summary["unexplained"])})
         for split, v in summary["rmse"].items():
             for when in ("before", "after"):
                 if v[when] is not None:
@@ -189,8 +189,10 @@ def run_calibrate(cfg: DictConfig) -> dict[str, Any]:
                                 figures=bool(cfg.figures))
         claim.record([*summary["files"], *summary["figures"].values()])
     run_id = _log_mlflow(cfg, summary, out_dir) if cfg.get("logger") is not None else None
-    log.info("%s: test RMSE %.4g -> %.4g %s, added %s, unexplained %s; report %s",
-             summary["name"], summary["rmse_before"], summary["rmse_after"], summary["units"],
+    scored = summary.get("rmse_after") is not None
+    log.info("%s: test RMSE %s %s, added %s, unexplained %s; report %s", summary["name"],
+             f"{summary['rmse_before']:.4g} -> {summary['rmse_after']:.4g}" if scored else
+             f"not scored ({summary.get('not_scored', 'no errors')})", summary["units"],
              [e["name"] for e in summary["effects_added"]], summary["unexplained"],
              out_dir / "report.md")
     return {**summary, "out_dir": str(out_dir), "mlflow_run_id": run_id}

@@ -6,7 +6,8 @@ speed level changes every 4 cycles and its holding current (a payload's) every 6
 asked pauses standing still, a gap standing still, and the temperature from the project's
 first-order model (:class:`swgcal.thermal.library.FirstOrderJoint`) with the given
 constants, plus, where asked, one or more library effects (the motor's copper loss, a
-second slow time constant, cooling at standstill) or a cooling fan switching with the
+second slow time constant, cooling at standstill, the motor's and drive's heat while
+powered, with the arm powered off for a while) or a cooling fan switching with the
 cycle count (an effect outside the library), plus white noise. Nothing here is a
 measurement.
 """
@@ -21,6 +22,7 @@ from swgcal.thermal.library import (
     CopperLoss,
     FirstOrderJoint,
     HousingLag,
+    PoweredHeat,
     StandstillCooling,
     first_order_lag,
 )
@@ -47,6 +49,15 @@ class SyntheticThermal:
     dt_still_k, tau_still_min : float
         Cooling at standstill (0: none) [K], [min]
         (:class:`swgcal.thermal.library.StandstillCooling`).
+    k_pw_k, tau_pw_min : float
+        Heat of the joint's motor and drive while powered (0: none) [K], [min]
+        (:class:`swgcal.thermal.library.PoweredHeat`).
+    off_h : float
+        The arm powered off (every current and speed 0) for this long in the middle of the
+        part before the gap (0: never) [h].
+    others_k : float
+        The other joints' readings above the room [K]: they are heated too, so the room
+        lies below the coolest joint's first reading.
     pause_blocks : int
         The joint stands still (holding current only) through every ``pause_blocks``-th
         block of 4 cycles (0: never).
@@ -70,6 +81,10 @@ class SyntheticThermal:
     dt_still_k: float = 0.0
     tau_still_min: float = 20.0
     pause_blocks: int = 0
+    k_pw_k: float = 0.0
+    tau_pw_min: float = 20.0
+    off_h: float = 0.0
+    others_k: float = 2.0
     fan_k: float = 0.0
     fan_cycles: int = 12
     noise_k: float = 0.02
@@ -77,6 +92,11 @@ class SyntheticThermal:
     gap_h: float = 1.0
     hours_after: float = 1.5
     seed: int = 0
+
+    @property
+    def start_c(self) -> float:
+        """The joint at the first reading [°C] (the base's T_0)."""
+        return self.ambient_c + self.initial_k
 
 
 def synthetic_joint_log(c: SyntheticThermal) -> JointLog:
@@ -102,16 +122,20 @@ def synthetic_joint_log(c: SyntheticThermal) -> JointLog:
     current = np.full((n, JOINTS), 0.1)
     speed[:, 1] = block * 2.0 * phase
     current[:, 1] = hold + block * 2.0 * np.abs(phase)
-    temp = np.full((n, JOINTS), c.ambient_c)
+    if c.off_h:
+        off = np.abs(t - n1 / 2) < c.off_h * 1800
+        speed[off], current[off] = 0.0, 0.0
+    temp = np.full((n, JOINTS), c.ambient_c + c.others_k)
     log = JointLog("synthetic", "2026-01-01T08:00:00Z", t, temp, current, speed,
                    np.zeros(n), cycle, np.zeros(n, bool), np.zeros(n, bool),
                    np.array([n1]))
     sig = thermal_signals(log, 1, TORQUE_PER_AMP_NM, GEAR_EFFICIENCY)
-    y = FirstOrderJoint().predict(sig, np.array([c.ambient_c, c.initial_k, c.r_th_k_per_w]),
-                                  np.array([c.tau_min]))
+    y = FirstOrderJoint().predict(sig, np.array([c.ambient_c, c.ambient_c + c.initial_k,
+                                                 c.r_th_k_per_w]), np.array([c.tau_min]))
     for term, gain, tau in ((CopperLoss(), c.k_cu_k_per_a2, c.tau_cu_min),
                             (HousingLag(), c.r2_k_per_w, c.tau2_min),
-                            (StandstillCooling(), c.dt_still_k, c.tau_still_min)):
+                            (StandstillCooling(), c.dt_still_k, c.tau_still_min),
+                            (PoweredHeat(), c.k_pw_k, c.tau_pw_min)):
         y = y + term.predict(sig, np.array([gain]), np.array([tau]))
     if c.fan_k and c.fan_cycles:
         fan = ((cycle // c.fan_cycles) % 2 == 1).astype(float)

@@ -6,12 +6,20 @@ T_amb)/R_th, τ = R_th C, heated by the gear's loss P: with the loss held consta
 readings (a zero-order hold, as the simulator holds a window's loss), its exact discrete
 form is x_k = a_k x_{k−1} + (1 − a_k) P_{k−1}, a_k = exp(−Δt_k/τ) [derived], a unit-gain
 low-pass of the loss (:func:`first_order_lag`, one linear recurrence). The temperature
-T = T_amb + ΔT_0 e^{−(t − t_0)/τ} + R_th · lag_τ(P) is linear in (T_amb, ΔT_0, R_th) for a
-given τ: the separable fit of :mod:`swgcal.core`. Every effect adds columns of its own
-(its own time constant where it has one); none changes the base's.
+T = T_amb (1 − e^{−(t − t_0)/τ}) + T_0 e^{−(t − t_0)/τ} + R_th · lag_τ(P) is linear in
+(T_amb, T_0, R_th) for a given τ: the separable fit of :mod:`swgcal.core` (T_0 the joint at
+the first reading, ΔT_0 = T_0 − T_amb the offset reported). Every effect adds columns of
+its own (its own time constant where it has one); none changes the base's.
 
-Ranges [choice where not sourced]: wide enough for any small to medium robot joint, so
-that a fit outside one is an effect absorbing something else, not a small joint.
+Only physical fits: every linear coefficient is bounded in the fit
+(:meth:`~swgcal.terms.FitTerm.linear_bounds`; a coefficient left on a bound is flagged)
+and every parameter has a physical range with its source (:attr:`~swgcal.terms.FitTerm.ranges`).
+The room: T_amb within :data:`AMBIENT_RANGE_C` and no warmer than the coolest joint's first
+reading (every joint is heated, none cooled below its room) [derived]; the joint at the
+first reading no cooler than that (so ΔT_0 >= 0); R_th >= 0, τ > 0 (so C > 0); each
+effect's gain of its physical sign. Ranges [choice where not sourced]: wide enough for any
+small to medium robot joint, so that a fit outside one is an effect absorbing something
+else, not a small joint.
 """
 
 from __future__ import annotations
@@ -25,10 +33,20 @@ from swgsim.gear.terms import Param, linear_recurrence
 
 from ..terms import FitTerm
 
-__all__ = ["THERMAL_LIBRARY", "AmbientDrift", "CopperLoss", "FirstOrderJoint", "HousingLag",
-           "NeighbourHeat", "StandstillCooling", "first_order_lag"]
+__all__ = ["AMBIENT_RANGE_C", "R_TH_RANGE_K_PER_W", "THERMAL_LIBRARY", "AmbientDrift",
+           "CopperLoss", "FirstOrderJoint", "HousingLag", "NeighbourHeat", "PoweredHeat",
+           "StandstillCooling", "first_order_lag"]
 
 _TAU_BOUNDS_MIN = (2.0, 600.0)  # any time constant a fit may take [min] [choice]
+#: The room a robot joint works in [°C]: 0-50 °C, a UR3's rated ambient range [Universal
+#: Robots, UR3 technical specifications; unverified: no copy in the repository].
+AMBIENT_RANGE_C = (0.0, 50.0)
+#: A small robot joint's thermal resistance to its room [K/W]: above 0 (a finite
+#: conductance), at most 20 [choice: a small servo motor's winding to ambient is a few K/W
+#: [unverified]; the loss proxy's unverified k_τ scales R_th, so the range is wide].
+R_TH_RANGE_K_PER_W = (0.0, 20.0)
+_INF = float("inf")
+_SIGN_BOUNDS = {1: (0.0, _INF), -1: (-_INF, 0.0), 0: (-_INF, _INF)}
 
 
 def first_order_lag(u_held: np.ndarray, dt_s: np.ndarray, tau_min: float) -> np.ndarray:
@@ -59,6 +77,10 @@ class _Lagged(FitTerm):
     input_name = ""
     tau_range: tuple[float, float] = _TAU_BOUNDS_MIN
     tau_starts: tuple[float, ...] = (30.0,)
+    gain_sign = 0  # the gain's physical sign in the fit (+1, -1; 0: either)
+
+    def linear_bounds(self, sig: Any) -> list[tuple[float, float]]:
+        return [_SIGN_BOUNDS[self.gain_sign]]
 
     def columns(self, sig: Any, theta: np.ndarray) -> np.ndarray:
         return first_order_lag(getattr(sig, self.input_name), sig.dt_s, theta[0])[:, None]
@@ -71,21 +93,56 @@ class _Lagged(FitTerm):
 
 
 class FirstOrderJoint(FitTerm):
-    """The project's thermal model (:class:`swgsim.gear.thermal.JointThermal`): the hall's
-    temperature, the start's offset decaying with τ, and R_th times the lagged loss."""
+    """The project's thermal model (:class:`swgsim.gear.thermal.JointThermal`): the room's
+    temperature, the joint's at the first reading decaying towards it with τ, and R_th
+    times the lagged loss (module docstring).
+
+    Parameters
+    ----------
+    name : str, optional
+        Instance name (default ``first_order``).
+    start_c : float, optional
+        Hold T_0 at this value [°C] instead of fitting it: the measured first reading where
+        the fitted part does not see the start (the cross-validation fitted after a gap,
+        :func:`swgcal.thermal.problem.cross_validate`).
+    """
 
     kind = "first_order"
-    linear = (Param("ambient_c", "°C", "hall temperature (constant)"),
-              Param("initial_k", "K", "offset at the first reading over the steady state"),
-              Param("r_th_k_per_w", "K/W", "thermal resistance joint -> hall"))
+    linear = (Param("ambient_c", "°C", "room temperature (constant)"),
+              Param("start_c", "°C", "the joint at the first reading"),
+              Param("r_th_k_per_w", "K/W", "thermal resistance joint -> room"))
     nonlinear = (Param("tau_min", "min", "thermal time constant R_th C", log=True),)
     description = "first-order joint heated by the gear's loss (swgsim.gear.thermal)"
     source = "swgsim.gear.thermal.joint_temperature"
+    ranges = {"ambient_c": (*AMBIENT_RANGE_C, "a UR3's rated ambient [unverified]"),
+              "initial_k": (0.0, _INF, "a heated joint is not below its room [derived]"),
+              "r_th_k_per_w": (*R_TH_RANGE_K_PER_W, "> 0, a small joint [choice]"),
+              "tau_min": (*_TAU_BOUNDS_MIN, "a joint's time constants [choice]")}
+
+    def __init__(self, name: str | None = None, start_c: float | None = None) -> None:
+        super().__init__(name)
+        self.start_c = start_c
 
     def columns(self, sig: Any, theta: np.ndarray) -> np.ndarray:
-        tau_s = 60.0 * float(theta[0])
-        return np.column_stack([np.ones(sig.n), np.exp(-(sig.t_s - sig.t_s[0]) / tau_s),
+        decay = np.exp(-(sig.t_s - sig.t_s[0]) / (60.0 * float(theta[0])))
+        return np.column_stack([1.0 - decay, decay,
                                 first_order_lag(sig.loss_w, sig.dt_s, theta[0])])
+
+    def linear_bounds(self, sig: Any) -> list[tuple[float, float]]:
+        """T_amb in :data:`AMBIENT_RANGE_C` and at most the coolest joint's first reading,
+        T_0 at least that (or held at ``start_c``), R_th >= 0 [°C, °C, K/W]."""
+        room = min(AMBIENT_RANGE_C[1], sig.room_max_c)
+        start = (room, _INF) if self.start_c is None else (self.start_c, self.start_c)
+        return [(AMBIENT_RANGE_C[0], room), start, (R_TH_RANGE_K_PER_W[0], _INF)]
+
+    def derived(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
+        amb, start, r_th = (float(c) for c in coef)
+        return {"ambient_c": amb, "initial_k": start - amb, "r_th_k_per_w": r_th,
+                "tau_min": float(theta[0]), "start_c": start}
+
+    def derived_units(self) -> dict[str, str]:
+        return {"ambient_c": "°C", "initial_k": "K", "r_th_k_per_w": "K/W", "tau_min": "min",
+                "start_c": "°C"}
 
     def bounds(self, sig: Any) -> list[tuple[float, float]]:
         return [_TAU_BOUNDS_MIN]
@@ -114,6 +171,7 @@ class CopperLoss(_Lagged):
     ranges = {"k_cu_k_per_a2": (0.0, 10.0, "R_w <= 5 Ohm, R_th <= 2 K/W [unverified]"),
               "tau_cu_min": (2.0, 300.0, "a motor's thermal time constants [choice]")}
     tau_starts = (10.0, 40.0)
+    gain_sign = 1
 
 
 class HousingLag(_Lagged):
@@ -133,6 +191,7 @@ class HousingLag(_Lagged):
                                         "a few kg of aluminium [choice]")}
     tau_range = (30.0, 600.0)
     tau_starts = (120.0, 300.0)
+    gain_sign = 1
 
 
 class NeighbourHeat(_Lagged):
@@ -150,6 +209,7 @@ class NeighbourHeat(_Lagged):
               "tau_nb_min": (10.0, 600.0, "through the link, slower than the winding "
                                           "[choice]")}
     tau_starts = (60.0,)
+    gain_sign = 1
 
 
 class StandstillCooling(_Lagged):
@@ -166,6 +226,30 @@ class StandstillCooling(_Lagged):
     probes = ("speed", "time")
     ranges = {"dt_still_k": (-10.0, 0.0, "cooling, at most the joint's rise [choice]"),
               "tau_still_min": (2.0, 300.0, "a joint's time constants [choice]")}
+    gain_sign = -1
+
+
+class PoweredHeat(_Lagged):
+    """Heat of the joint's own motor and drive while the arm is powered, moving or not: the
+    servo amplifier's and the encoder's standby loss and the brake's release coil, in the
+    joint's housing [unverified: UR's joint electronics are not documented], through a
+    path of its own to the sensor (its own time constant)."""
+
+    kind = "powered"
+    input_name = "powered"
+    linear = (Param("k_pw_k", "K", "steady rise while powered, R_th,pw P_standby"),)
+    nonlinear = (Param("tau_pw_min", "min", "time constant of the drive's heat path",
+                       log=True),)
+    signature = "warmer while powered than the gear's loss says, from power-on"
+    description = "the joint's motor and drive while powered (standby loss), lagged"
+    source = "a servo drive's quiescent loss and brake coil [textbook]"
+    probes = ("time",)
+    #: P_standby <= 15 W, a sixth of a UR3's typical 100 W [unverified: UR3 technical
+    #: specifications], times R_th <= 2 K/W: at most 30 K [choice].
+    ranges = {"k_pw_k": (0.0, 30.0, "P_standby <= 15 W, R_th <= 2 K/W [unverified]"),
+              "tau_pw_min": (2.0, 600.0, "a joint's time constants [choice]")}
+    tau_starts = (10.0, 60.0)
+    gain_sign = 1
 
 
 class AmbientDrift(FitTerm):
@@ -190,4 +274,4 @@ class AmbientDrift(FitTerm):
 THERMAL_LIBRARY: Registry[type[FitTerm]] = Registry("thermal effect", __name__,
                                                     "THERMAL_LIBRARY", (
     (c.kind, c) for c in (CopperLoss, HousingLag, AmbientDrift, NeighbourHeat,
-                          StandstillCooling)))
+                          StandstillCooling, PoweredHeat)))

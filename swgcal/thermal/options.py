@@ -11,7 +11,7 @@ from typing import Any
 from swgsim.base.typed import allowed, check_ranges
 
 __all__ = ["ThermalKindOptions", "ThermalOptions", "TORQUE_PER_AMP_NM", "GEAR_EFFICIENCY",
-           "STANDSTILL_RAD_S"]
+           "STANDSTILL_RAD_S", "POWERED_A"]
 
 #: Output torque per motor ampere of a UR3 joint [N m/A]: a strain wave gear of ratio
 #: 101 times a motor constant of about 0.1 N m/A [unverified: no UR data sheet gives it;
@@ -24,6 +24,10 @@ GEAR_EFFICIENCY = 0.7
 #: A joint slower than this stands still [rad/s] [choice: 0.3 °/s, the log's speed noise
 #: at rest is below 1e-3 rad/s].
 STANDSTILL_RAD_S = 0.005
+#: The arm is powered where its six motor currents' magnitudes sum above this [A]
+#: [choice: an arm holding itself draws more (the UR3 day's smallest sum over a row with
+#: readings is 1.0 A); one powered off reads 0].
+POWERED_A = 0.1
 
 
 @dataclass(frozen=True)

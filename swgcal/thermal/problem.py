@@ -11,6 +11,11 @@ there, powered and holding its link: no gear loss, the motor's squared current t
 its standstill readings [choice: the log does not say what the robot did; in the UR3 day
 the cycle count does not advance over the 5.2-h gap (105 either side) while every joint
 comes back 1.6-3.6 K warmer than it left: powered, not cycling].
+
+:func:`calibrate` then checks that the fits are physical (:func:`physical_check`: no
+parameter on a bound of its fit or outside its range) and cross-validates both ways
+across the gap (:func:`cross_validate`); the sensor's resolution, the smallest step
+between readings (:func:`sensor_resolution`), is the problem's ``resolution``.
 """
 
 from __future__ import annotations
@@ -27,15 +32,16 @@ import numpy as np
 from swgsim.base.typed import build, complete
 from swgsim.datasets.joint_log import JOINTS, JointLog, read_joint_log
 
-from ..core import fit_terms
+from ..core import FitResult, fit_terms
 from ..diagnose import BinnedProbe, PeriodicProbe, Probe, TrendProbe
 from ..loop import CalibrationResult, Problem, SelectionConfig, refit_final, select_effects
 from ..split import HeldOutSplit
 from .library import THERMAL_LIBRARY, FirstOrderJoint, first_order_lag
-from .options import STANDSTILL_RAD_S, ThermalKindOptions, ThermalOptions
+from .options import POWERED_A, STANDSTILL_RAD_S, ThermalKindOptions, ThermalOptions
 
-__all__ = ["OPTIONS", "ThermalSignals", "build_problem", "calibrate", "thermal_probes",
-           "thermal_problem", "thermal_signals"]
+__all__ = ["OPTIONS", "ThermalSignals", "build_problem", "calibrate", "cross_validate",
+           "physical_check", "sensor_resolution", "thermal_probes", "thermal_problem",
+           "thermal_signals"]
 
 #: The typed options of this kind's problem (read by :func:`swgcal.api.options_from_config`).
 OPTIONS = ThermalKindOptions
@@ -65,6 +71,12 @@ class ThermalSignals:
         abs(ω) held [rad/s].
     cycle : ndarray, shape (n,)
         The log's cycle count [-].
+    powered : ndarray, shape (n,)
+        1 where the arm is powered (its motor currents' magnitudes sum above
+        :data:`.options.POWERED_A`, or a gap), else 0.
+    room_max_c : float
+        The coolest joint's first reading: the room is no warmer [°C] (the base's bound,
+        :meth:`.library.FirstOrderJoint.linear_bounds`).
     """
 
     t_s: np.ndarray
@@ -76,6 +88,8 @@ class ThermalSignals:
     speed_abs: np.ndarray
     cycle: np.ndarray
     joint: int
+    powered: np.ndarray
+    room_max_c: float
 
     @property
     def n(self) -> int:
@@ -116,12 +130,37 @@ def thermal_signals(log: JointLog, joint: int, torque_per_amp_nm: float,
     def holding(x):  # the mean over the standstill readings, over a gap
         return float(np.nanmean(x[stands])) if np.any(stands & np.isfinite(x)) else 0.0
 
+    arm = np.abs(log.current_a)
+    seen = np.isfinite(arm).any(axis=1)
+    powered = np.where(seen, (np.nansum(arm, axis=1) > POWERED_A).astype(float), np.nan)
+    firsts = [col[np.isfinite(col)][0] for col in log.temperature_c.T if np.isfinite(col).any()]
     return ThermalSignals(
         t_s=log.t_s, dt_s=dt, loss_w=_held(loss, g),
         current_sq_a2=_held(i * i, g, holding(i * i)),
         neighbour_sq_a2=_held(nb_sq, g, holding(nb_sq)),
         still=_held((np.abs(w) < STANDSTILL_RAD_S).astype(float), g, 1.0),
-        speed_abs=_held(np.abs(w), g), cycle=log.cycle.astype(float), joint=joint)
+        speed_abs=_held(np.abs(w), g), cycle=log.cycle.astype(float), joint=joint,
+        powered=_held(powered, g, 1.0), room_max_c=float(min(firsts)))
+
+
+def sensor_resolution(y: np.ndarray) -> float:
+    """The temperature sensor's resolution as the data show it: the smallest nonzero step
+    between consecutive readings (0.0625 K in the UR3 day, as its README states).
+
+    Parameters
+    ----------
+    y : ndarray, shape (n,)
+        Readings [°C]; NaN: missing (skipped).
+
+    Returns
+    -------
+    float
+        [K]; 0 where no two readings differ (or the data are not quantised finer than
+        their noise shows: a synthetic log's is its smallest difference).
+    """
+    d = np.abs(np.diff(np.asarray(y, float)[np.isfinite(y)]))
+    d = d[d > 0]
+    return float(d.min()) if d.size else 0.0
 
 
 def thermal_probes() -> list[Probe]:
@@ -216,8 +255,9 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
     y = log.temperature_c[:, joint]
     split = _split(log, np.isfinite(y), fit_frac)
     sig = thermal_signals(log, joint, torque_per_amp_nm, gear_efficiency)
+    res = sensor_resolution(y)
     return Problem(
-        name=f"{log.name}_J{joint}", kind="thermal", units="K", signals=sig,
+        name=f"{log.name}_J{joint}", kind="thermal", units="K", signals=sig, resolution=res,
         y=np.where(np.isfinite(y), y, np.nanmean(y)), t=log.t_s,
         base_model=(FirstOrderJoint(),), library={k: THERMAL_LIBRARY[k] for k in keys},
         probes=thermal_probes(), split=split, screen_jointly=True,
@@ -227,7 +267,8 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
               "missing_readings": int(np.sum(~np.isfinite(y))),
               "protective_stops": int(log.protective_stop.sum()),
               "grip_losses": int(log.grip_lost.sum()),
-              "torque_per_amp_nm": torque_per_amp_nm, "gear_efficiency": gear_efficiency})
+              "torque_per_amp_nm": torque_per_amp_nm, "gear_efficiency": gear_efficiency,
+              "resolution": res, "room_max_c": sig.room_max_c})
 
 
 def build_problem(measured: str | os.PathLike | JointLog, **options: Any) -> Problem:
@@ -265,12 +306,106 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     a second heat source trades off against the base's own time constant, which, held at
     its value fitted without the effect, leaves a single effect too little to show.
 
+    Then the fits are checked (:func:`physical_check`, of the base alone and of the final
+    model) and cross-validated both ways across the gap (:func:`cross_validate`).
+
     Returns
     -------
     CalibrationResult
-        ``problem.meta["removed"]``: the effects removed and why.
+        ``problem.meta``: ``removed`` (the effects removed and why), ``physical``
+        (``{"before": [...], "after": [...]}``: why the base alone and the final model are
+        not physical; empty lists: both are) and ``crossval``.
     """
-    return _drop_unpinned(select_effects(problem, config))
+    res = _drop_unpinned(select_effects(problem, config))
+    meta = {**res.problem.meta, "physical": {"before": physical_check(res.base_model_final),
+                                             "after": physical_check(res.final)},
+            "crossval": cross_validate(res)}
+    return dataclasses.replace(res, problem=dataclasses.replace(res.problem, meta=meta))
+
+
+def physical_check(fit: FitResult) -> list[str]:
+    """Why a fitted model is not physical: each parameter the fit left on a bound
+    (:attr:`swgcal.core.ParamEstimate.bound`) and each outside its physical range with its
+    source (:meth:`swgcal.terms.FitTerm.range_violations`).
+
+    Parameters
+    ----------
+    fit : FitResult
+        With uncertainties (its ``estimates``).
+
+    Returns
+    -------
+    list of str
+        E.g. ``"first_order.r_th_k_per_w = 0 K/W on its lower bound 0"``; empty: physical.
+    """
+    out = []
+    for t in fit.terms:
+        est = fit.estimates_of(t.name)
+        out += [f"{t.name}.{k} = {e.value:.4g} {e.unit} {e.bound}"
+                for k, e in est.items() if e.on_bound]
+        out += [f"{t.name}.{v}" for v in t.range_violations({k: e.value for k, e in est.items()})]
+    return out
+
+
+def _rmse_on(fit: FitResult, problem: Problem, idx: np.ndarray) -> float:
+    r = (problem.y - fit.predict(problem.signals))[idx]
+    return float(np.sqrt(np.mean(r * r)))
+
+
+def cross_validate(result: CalibrationResult) -> dict[str, Any]:
+    """Blocked cross-validation both ways across the log's gap, effect by effect.
+
+    Block A is the fit part (before the first gap), block B the held-out part (after it).
+    Forward: fitted on A, scored on B. Backward: fitted on B, scored on A after its first
+    reading, which sets the joint's temperature at the start (T_0 held: the model's initial
+    condition, which B, hours later, cannot tell). Each model, the base alone and then with
+    each kept effect in the order kept, is refitted (every parameter, from the final
+    model's time constants) on the fit block. The selection itself (which effects) was made
+    on the forward split (fit A, choose on B's first half), so B is not blind to it.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        Of a thermal problem.
+
+    Returns
+    -------
+    dict
+        ``resolution_k`` (:func:`sensor_resolution`), ``noise_floor_k`` (the final
+        residual's difference-based noise floor), ``floor_k`` (the larger), ``blocks``
+        (hours of A and B), ``rows``: per model ``model``, ``forward`` and ``backward``
+        (``rmse`` on the scored block [K], ``gain`` over the model before it [K],
+        ``unphysical``: :func:`physical_check` of that fit) and, for an effect,
+        ``clears``: its gain above ``floor_k`` both ways.
+    """
+    p = result.problem
+    sp, y, sig, final = p.split, p.y, p.signals, result.final
+    a, b = sp.fit, np.union1d(sp.validation, sp.test)
+    res_k = float(p.meta.get("resolution", 0.0))
+    floor = max(res_k, float(result.diag_after.noise_floor))
+    th = {t.name: x for t, x in zip(final.terms, final.thetas, strict=True)}
+    base = final.terms[0]
+    effects = [t for t in final.terms if t.name in result.added]
+    ways = (("forward", a, b, base),
+            ("backward", b, a[1:], FirstOrderJoint(base.name, start_c=float(y[a[0]]))))
+    rows: list[dict[str, Any]] = []
+    for k in range(len(effects) + 1):
+        row: dict[str, Any] = {"model": base.name if k == 0 else "+ " + effects[k - 1].name}
+        for way, fit_idx, score_idx, b0 in ways:
+            terms = [b0, *effects[:k]]
+            f = fit_terms(terms, sig, y, fit_idx, [[th[t.name]] for t in terms], max_starts=1,
+                          max_rel_se=result.config.max_rel_se,
+                          max_abs_corr=result.config.max_abs_corr)
+            rmse = _rmse_on(f, p, score_idx)
+            row[way] = {"rmse": rmse, "gain": rows[-1][way]["rmse"] - rmse if rows else None,
+                        "unphysical": physical_check(f)}
+        if k:
+            row["clears"] = bool(min(row[w]["gain"] for w, *_ in ways) > floor)
+        rows.append(row)
+    hours = {k: [float(p.t[r[0]] / 3600), float(p.t[r[-1]] / 3600)] for k, r in (("A", a),
+                                                                                ("B", b))}
+    return {"resolution_k": res_k, "noise_floor_k": float(result.diag_after.noise_floor),
+            "floor_k": floor, "blocks": hours, "rows": rows}
 
 
 def _drop_unpinned(result: CalibrationResult) -> CalibrationResult:
@@ -286,7 +421,10 @@ def _drop_unpinned(result: CalibrationResult) -> CalibrationResult:
     if not weak:
         return dataclasses.replace(result, problem=dataclasses.replace(p, meta=meta))
     keep = [i for i, t in enumerate(final.terms) if t.name not in weak]
-    cur = fit_terms([final.terms[i] for i in keep], p.signals, p.y, p.split.fit,
-                    [[final.thetas[i]] for i in keep], uncertainty=False,
-                    max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr, max_starts=1)
+    zero = np.zeros_like(p.y)  # each term's own starts beside its value: bounds make the
+    cur = fit_terms([final.terms[i] for i in keep], p.signals, p.y, p.split.fit,  # fit
+                    [[final.thetas[i], *final.terms[i].starts(p.signals, zero, p.split.fit)]
+                     for i in keep], uncertainty=False,  # multimodal
+                    max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr,
+                    max_starts=cfg.max_starts)
     return refit_final(result, cur, meta, keep_note=False)

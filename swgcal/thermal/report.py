@@ -19,7 +19,7 @@ from swgsim.base.markdown import md_table
 from swgsim.files.ownership import save_figure
 
 from ..loop import CalibrationResult
-from ..report import ReportParts, SimulationOption, base_summary, caveat, fmt_value, param_table
+from ..report import ReportParts, SimulationOption, base_summary, caveat, fmt_value
 
 __all__ = ["ATTRIBUTION", "REPORT", "make_figures", "measured", "plot_joint", "summarize"]
 
@@ -47,11 +47,27 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         part [K], ``effects_added`` with their parameters, ``unexplained``, ...) and
         ``joint_thermal``: the final model's first-order constants (``r_th_k_per_w``,
         ``tau_min``, ``ambient_c``) as fields of :class:`swgsim.gear.thermal.JointThermal`,
-        with a caveat where the run is unexplained.
+        with a caveat where the run is unexplained or unphysical; ``physical`` (why the
+        base alone and the final model are not physical, :func:`.problem.physical_check`),
+        ``scored`` (both physical), ``not_scored`` (the one line why not, or None: then
+        ``rmse_before``/``rmse_after``/``rmse_ratio`` are None, no headline) and
+        ``crossval`` (:func:`.problem.cross_validate`).
     """
     s = base_summary(result, source)
+    phys = s["data"].pop("physical", {"before": [], "after": []})
+    s["crossval"] = s["data"].pop("crossval", None)
+    s["physical"] = phys
+    s["scored"] = not (phys["before"] or phys["after"])
+    s["not_scored"] = None if s["scored"] else (
+        "Not scored as a calibration: the fit of "
+        + " and of ".join(w for w, k in (("the first-order model alone", "before"),
+                                         ("the final model", "after")) if phys[k])
+        + " is unphysical (" + "; ".join(dict.fromkeys(phys["before"] + phys["after"]))
+        + ").")
+    if not s["scored"]:
+        s["rmse_before"] = s["rmse_after"] = s["rmse_ratio"] = None
     base = result.final.estimates_of(result.final.terms[0].name)
-    why = caveat(result) or (
+    why = caveat(result) or s["not_scored"] or (
         "The final residual is still structured (" + result.residual_signature.rstrip(".")
         + "): the first-order constants were fitted beside what no library effect explains."
         if result.unexplained else None)
@@ -88,14 +104,48 @@ def _data_lines(s: Mapping[str, Any]) -> list[str]:
 _HEAD = ("parameter", "value", "std", "unit", None)
 
 
+def _params_table(params: Mapping[str, Mapping[str, Any]]) -> list[str]:
+    """Parameters with their standard errors, bounds and flags."""
+    return [md_table(["parameter", "value", "s.e.", "unit", "bound", "pinned down"], [
+        [k, fmt_value(e["value"]), fmt_value(e["std"], 2), f"{e['unit']}",
+         e.get("bound") or "-", "yes" if e["identifiable"] else "no: " + e["flag"]]
+        for k, e in params.items()]), ""]
+
+
 def _fit_lines(s: Mapping[str, Any]) -> list[str]:
-    """The base model's constants in the final fit, and each kept effect's."""
-    lines = ["## Base model (final fit)", "",
-             *param_table(s["base_model"]["params_in_final_model"], _HEAD)]
+    """Whether the fits are physical, the base model's constants alone and in the final
+    fit, and each kept effect's."""
+    ph = s["physical"]
+    lines = ["## Physical fits", "", s["not_scored"] or "Both fits are physical: scored.", ""]
+    lines += [f"- {w}: " + ("; ".join(ph[k]) or "physical") for w, k in
+              (("First-order model alone", "before"), ("Final model", "after"))] + [""]
+    lines += ["## Base model alone", "", *_params_table(s["base_model"]["params"]),
+              "## Base model (final fit)", "",
+              *_params_table(s["base_model"]["params_in_final_model"])]
     for e in s["effects_added"]:
-        lines += [f"## Effect {e['name']}: {e['description']}", "",
-                  *param_table(e["params"], _HEAD)]
+        lines += [f"## Effect {e['name']}: {e['description']}", "", *_params_table(e["params"])]
     return lines
+
+
+def _crossval_lines(s: Mapping[str, Any]) -> list[str]:
+    """Held-out RMSE both ways across the gap, before and after each kept effect."""
+    cv = s.get("crossval")
+    if not cv:
+        return []
+    b = cv["blocks"]
+    rows = [[r["model"], *[f"{fmt_value(r[w]['rmse'])} K" + (
+        f" (gain {fmt_value(r[w]['gain'], 3)})" if r[w]["gain"] is not None else "")
+        + (" unphysical" if r[w]["unphysical"] else "") for w in ("forward", "backward")],
+        {True: "yes", False: "no"}.get(r.get("clears"), "-")] for r in cv["rows"]]
+    return ["## Cross-validation both ways across the gap", "",
+            f"A: h {fmt_value(b['A'][0], 3)}-{fmt_value(b['A'][1], 3)}, B: h "
+            f"{fmt_value(b['B'][0], 3)}-{fmt_value(b['B'][1], 3)}. Forward: fitted on A, "
+            "scored on B; backward: fitted on B, scored on A (its first reading sets the "
+            "start). An effect is worth keeping where its gain exceeds the sensor's "
+            f"resolution {fmt_value(cv['resolution_k'], 3)} K (the smallest step between "
+            f"readings) and the noise floor {fmt_value(cv['noise_floor_k'], 3)} K both ways.",
+            "", md_table(["model", "forward RMSE on B", "backward RMSE on A",
+                          "gain above both ways"], rows), ""]
 
 
 def _candidates_lines(s: Mapping[str, Any]) -> list[str]:
@@ -111,7 +161,9 @@ def _candidates_lines(s: Mapping[str, Any]) -> list[str]:
 #: figure keys of :func:`make_figures`), and its simulation option.
 REPORT = ReportParts(
     title="Thermal calibration", data=_data_lines, base_model="first-order model",
-    sections=(_fit_lines, _candidates_lines), option=_option, run_time=False)
+    sections=(_fit_lines, _crossval_lines, _candidates_lines), option=_option,
+    run_time=False,
+    result_note=lambda s: "" if s["scored"] else " (not scored: unphysical fit, below)")
 
 
 def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, str]:

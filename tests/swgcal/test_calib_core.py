@@ -11,6 +11,7 @@ from swgcal.core import (
     fit_terms,
     integrated_autocorr_time,
     linear_recurrence,
+    solve_linear,
 )
 from swgcal.diagnose import noise_floor
 from swgcal.periodogram import periodogram_peaks
@@ -163,3 +164,75 @@ def test_group_split_holds_out_whole_groups():
     assert not set(g[sp.fit]) & {1, 4, 5}
     with pytest.raises(ValueError, match="not in the data"):
         group_split(g, [9], [4])
+
+
+def _design(seed=5, m=400):
+    rng = np.random.default_rng(seed)
+    x = np.column_stack([np.ones(m), rng.standard_normal((m, 3))])
+    y = x @ np.array([2.0, 0.5, -1.0, 0.3]) + 0.1 * rng.standard_normal(m)
+    return x, y
+
+
+def test_the_fast_unbounded_solve_matches_the_reference_lstsq():
+    x, y = _design()
+    np.testing.assert_allclose(solve_linear(x, y), np.linalg.lstsq(x, y, rcond=None)[0],
+                               rtol=1e-10, atol=1e-12)
+
+
+def test_bounded_and_unbounded_solves_agree_where_no_bound_is_active():
+    """Bounds wide of the solution: the bounded path (BVLS) gives the unbounded fast path's
+    coefficients; the slow reference (lsq_linear on the tall matrix) agrees with both."""
+    from scipy.optimize import lsq_linear
+
+    x, y = _design()
+    lo, hi = np.array([0.0, 0.0, -5.0, -np.inf]), np.array([np.inf, 3.0, 0.0, np.inf])
+    fast = solve_linear(x, y)
+    bounded = solve_linear(x, y, lo, hi)
+    slow = lsq_linear(x, y, bounds=(lo, hi), method="trf", tol=1e-12).x
+    # both are the same minimiser to rounding; the slow path's tolerance 1e-12 [choice]
+    np.testing.assert_allclose(bounded, fast, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(slow, fast, rtol=1e-6, atol=1e-8)
+
+
+def test_an_active_bound_matches_the_slow_reference_and_equal_bounds_hold():
+    from scipy.optimize import lsq_linear
+
+    x, y = _design()
+    lo, hi = np.array([-np.inf, -np.inf, 0.0, -np.inf]), np.full(4, np.inf)  # c2 wants -1
+    c = solve_linear(x, y, lo, hi)
+    assert c[2] == 0.0
+    slow = lsq_linear(x, y, bounds=(lo, hi), method="bvls").x
+    np.testing.assert_allclose(c, slow, rtol=1e-8, atol=1e-10)
+    held = solve_linear(x, y, np.array([2.5, -np.inf, -np.inf, -np.inf]),
+                        np.array([2.5, np.inf, np.inf, np.inf]))
+    ref = np.linalg.lstsq(x[:, 1:], y - 2.5, rcond=None)[0]
+    np.testing.assert_allclose(held, np.r_[2.5, ref], rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="lo <= hi"):
+        solve_linear(x, y, np.zeros(4), -np.ones(4))
+
+
+class _Line(FitTerm):
+    kind = "line"
+    linear = (Param("a", "-"), Param("b", "-"))
+
+    def columns(self, sig, theta):
+        return np.column_stack([np.ones(sig.size), sig])
+
+
+class _PositiveLine(_Line):
+    def linear_bounds(self, sig):
+        return [(-np.inf, np.inf), (0.0, np.inf)]
+
+
+def test_a_fit_on_a_bound_is_flagged_and_an_inactive_bound_changes_nothing():
+    rng = np.random.default_rng(6)
+    t = np.linspace(0, 1, 300)
+    idx = np.arange(t.size)
+    up = 1.0 + 2.0 * t + 0.05 * rng.standard_normal(t.size)
+    free, bounded = (fit_terms([c()], t, up, idx) for c in (_Line, _PositiveLine))
+    np.testing.assert_allclose(bounded.coefs[0], free.coefs[0], rtol=1e-9)
+    assert not any(e.bound for e in bounded.estimates)
+    down = 1.0 - 2.0 * t + 0.05 * rng.standard_normal(t.size)
+    f = fit_terms([_PositiveLine()], t, down, idx)
+    b = f.estimates_of("line")["b"]
+    assert b.value == 0.0 and b.on_bound and b.bound == "on its lower bound 0" and b.std == 0
