@@ -53,6 +53,7 @@ __all__ = [
     "FitResult",
     "ParamEstimate",
     "fit_terms",
+    "physical_check",
     "solve_linear",
     "evaluate_terms",
     "with_uncertainty",
@@ -598,3 +599,27 @@ def _bound_notes(terms: Sequence[Term], sig: Any, c_all: np.ndarray,
     keys = [(t.name, q.name) for t in terms for q in t.linear] + [
         (t.name, q.name) for t in terms for q in t.nonlinear]
     return {k: b for k, b in zip(keys, out, strict=True) if b}
+
+
+def physical_check(fit: FitResult) -> list[str]:
+    """Why a fitted model is not physical: each parameter the fit left on a bound
+    (:attr:`swgcal.core.ParamEstimate.bound`) and each outside its physical range with its
+    source (:meth:`swgcal.terms.FitTerm.range_violations`).
+
+    Parameters
+    ----------
+    fit : FitResult
+        With uncertainties (its ``estimates``).
+
+    Returns
+    -------
+    list of str
+        E.g. ``"first_order.r_th_k_per_w = 0 K/W on its lower bound 0"``; empty: physical.
+    """
+    out = []
+    for t in fit.terms:
+        est = fit.estimates_of(t.name)
+        out += [f"{t.name}.{k} = {e.value:.4g} {e.unit} {e.bound}"
+                for k, e in est.items() if e.on_bound]
+        out += [f"{t.name}.{v}" for v in t.range_violations({k: e.value for k, e in est.items()})]
+    return out

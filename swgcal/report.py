@@ -26,7 +26,8 @@ from swgsim.base.markdown import md_table
 from .core import FitResult, Term
 from .loop import IMPLAUSIBLE_PREFIX, CalibrationResult
 
-__all__ = ["base_summary", "caveat", "UNCERTAINTY_METHOD", "to_jsonable", "fmt_value",
+__all__ = ["base_summary", "caveat", "score_if_physical", "UNCERTAINTY_METHOD", "to_jsonable",
+           "fmt_value",
            "param_table", "implausible_candidates", "implausible_lines", "effect_range_lines",
            "ReportInput", "Section", "SimulationOption", "ReportParts", "render_report",
            "simulation_files", "iteration_lines", "accepted_lines", "diagnosis_lines",
@@ -230,6 +231,37 @@ def caveat(result: CalibrationResult) -> str | None:
 
 # ---------------------------------------------------------------------------------------
 # markdown
+
+
+def score_if_physical(s: dict[str, Any], physical: Mapping[str, list[str]],
+                      base: str) -> None:
+    """Score a summary only where its base model's fit is physical (issue 86), in place.
+
+    Parameters
+    ----------
+    s : dict
+        A summary (:func:`base_summary`); gets ``physical``, ``scored`` (the base alone
+        physical), ``not_scored`` (the one line why not, or None; then ``rmse_before``,
+        ``rmse_after`` and ``rmse_ratio`` become None: no headline) and
+        ``final_unphysical`` (the one line on the final model's fit, or None: reported,
+        not a reason to withhold the score, since its effects may trade off against the
+        base's terms).
+    physical : mapping
+        ``before`` and ``after``: :func:`swgcal.core.physical_check` of the base model
+        alone and of the final model.
+    base : str
+        The base model in words (``"the paper law alone"``).
+    """
+    before, after = list(physical["before"]), list(physical["after"])
+    s["physical"] = {"before": before, "after": after}
+    s["scored"] = not before
+    s["not_scored"] = None if s["scored"] else (
+        f"Not scored as a calibration: the fit of {base} is unphysical ("
+        + "; ".join(before) + ").")
+    s["final_unphysical"] = None if not after else (
+        "The final model's fit is unphysical (" + "; ".join(after) + ").")
+    if not s["scored"]:
+        s["rmse_before"] = s["rmse_after"] = s["rmse_ratio"] = None
 
 
 def fmt_value(x: Any, digits: int = 4) -> str:

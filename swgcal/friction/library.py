@@ -23,6 +23,7 @@ from swgsim.gear.friction.signals import FrictionSignals
 from ..periodogram import periodogram_peaks
 from ..terms import FitTerm
 from .ranges import (
+    DISSIPATIVE_NM,
     LOAD_FRICTION_PER_LOAD,
     OPEN_CONFIGURATION_NM,
     OPEN_DIRECTION_NM,
@@ -63,7 +64,11 @@ __all__ = [
 
 
 class PaperLaw(fsig.PaperLaw, FitTerm):
-    """The paper-law base model (:class:`swgsim.gear.friction.PaperLaw`), linear: nothing to add."""
+    """The paper-law base model (:class:`swgsim.gear.friction.PaperLaw`), linear; its
+    dissipative coefficients b0, b1 of their physical sign (a fit outside makes the run
+    unphysical, :func:`swgcal.core.physical_check`)."""
+
+    ranges = {"b0": DISSIPATIVE_NM, "b1": DISSIPATIVE_NM}
 
 
 class AsymmetricCoulomb(fx.AsymmetricCoulomb, FitTerm):

@@ -30,6 +30,7 @@ __all__ = [
     "OPEN_SENSOR_NM",
     "RIPPLE_AMPLITUDE_NM",
     "TRANSPORT_DELAY_S",
+    "DISSIPATIVE_NM",
     "TEMPERATURE_VISCOUS_PER_K",
     "TEMPERATURE_FRICTION_PER_K",
     "GEAR_RATIO_CATALOGUE",
@@ -74,6 +75,9 @@ OPEN_THERMAL_NM = (-INF, INF, "friction falls as the joint warms (d > 0) or rise
 OPEN_SENSOR_NM = (-INF, INF, "zero drift of either sign (docs/PHYSICS.md sec. 5)")
 RIPPLE_AMPLITUDE_NM = (0.0, INF, "ripple amplitude, non-negative by construction (Tuttle & "
                        "Seering 1996); its bound needs the Coulomb level")
+DISSIPATIVE_NM = (0.0, INF, "Coulomb and viscous friction dissipate: b0, b1 >= 0 "
+                  "(Armstrong-Hélouvry et al. 1994); b2 (the cubic) may bend the curve "
+                  "either way and b3 is the gravity model's, both open")
 TRANSPORT_DELAY_S = (-0.02, 0.02, "a servo drive's dead time: a current loop, filters and "
                      "a bus cycle of 0.1-4 ms each (EtherCAT, CANopen cycles of 1 ms; "
                      "Franklin, Powell & Workman, sec. 3.2); either signal may be the later")

@@ -16,7 +16,7 @@ from typing import Any
 from swgsim.base.markdown import md_table
 from swgsim.gear.friction.ripples import RippleTerm, period_in_gear_terms
 
-from ..core import FitResult, Term
+from ..core import FitResult, Term, physical_check
 from ..discovery import proposals_section
 from ..loop import CalibrationResult
 from ..report import (
@@ -30,6 +30,7 @@ from ..report import (
     fmt_value,
     iteration_lines,
     param_table,
+    score_if_physical,
     to_jsonable,
     uncertainty_lines,
 )
@@ -87,6 +88,8 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         :class:`swgsim.gear.friction.FrictionEffects`.
     """
     s = base_summary(result, source)
+    score_if_physical(s, {"before": physical_check(result.base_model_final),
+                          "after": physical_check(result.final)}, "the paper law alone")
     final = result.final
     by_name = {t.name: t for t in result.effect_terms()}
     for e in s["effects_added"]:
@@ -240,7 +243,10 @@ def _base_model_lines(s: Mapping[str, Any]) -> list[str]:
     """The paper-law base model and its parameters."""
     return ["## Base model: paper law (eq. 5-6 on the joint)", "",
             "τ = b0 tanh(q̇/v_s) + b1 q̇ + b2 q̇³ + b3 sin(q + θ_b), fitted on fit + "
-            "validation blocks.", "", *param_table(s["base_model"]["params"])]
+            "validation blocks.", "", *param_table(s["base_model"]["params"]),
+            s.get("not_scored") or "The paper law alone is physical (b0, b1 >= 0, no "
+                                   "parameter on a bound of its fit): scored.", "",
+            *([s["final_unphysical"], ""] if s.get("final_unphysical") else [])]
 
 
 def _selection_lines(s: ReportInput) -> list[str]:

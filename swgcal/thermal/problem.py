@@ -32,7 +32,7 @@ import numpy as np
 from swgsim.base.typed import build, complete
 from swgsim.datasets.joint_log import JOINTS, JointLog, read_joint_log
 
-from ..core import FitResult, fit_terms
+from ..core import FitResult, fit_terms, physical_check
 from ..diagnose import BinnedProbe, PeriodicProbe, Probe, TrendProbe
 from ..loop import CalibrationResult, Problem, SelectionConfig, refit_final, select_effects
 from ..split import HeldOutSplit
@@ -321,30 +321,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
                                              "after": physical_check(res.final)},
             "crossval": cross_validate(res)}
     return dataclasses.replace(res, problem=dataclasses.replace(res.problem, meta=meta))
-
-
-def physical_check(fit: FitResult) -> list[str]:
-    """Why a fitted model is not physical: each parameter the fit left on a bound
-    (:attr:`swgcal.core.ParamEstimate.bound`) and each outside its physical range with its
-    source (:meth:`swgcal.terms.FitTerm.range_violations`).
-
-    Parameters
-    ----------
-    fit : FitResult
-        With uncertainties (its ``estimates``).
-
-    Returns
-    -------
-    list of str
-        E.g. ``"first_order.r_th_k_per_w = 0 K/W on its lower bound 0"``; empty: physical.
-    """
-    out = []
-    for t in fit.terms:
-        est = fit.estimates_of(t.name)
-        out += [f"{t.name}.{k} = {e.value:.4g} {e.unit} {e.bound}"
-                for k, e in est.items() if e.on_bound]
-        out += [f"{t.name}.{v}" for v in t.range_violations({k: e.value for k, e in est.items()})]
-    return out
 
 
 def _rmse_on(fit: FitResult, problem: Problem, idx: np.ndarray) -> float:

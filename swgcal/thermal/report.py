@@ -19,7 +19,14 @@ from swgsim.base.markdown import md_table
 from swgsim.files.ownership import save_figure
 
 from ..loop import CalibrationResult
-from ..report import ReportParts, SimulationOption, base_summary, caveat, fmt_value
+from ..report import (
+    ReportParts,
+    SimulationOption,
+    base_summary,
+    caveat,
+    fmt_value,
+    score_if_physical,
+)
 
 __all__ = ["ATTRIBUTION", "REPORT", "make_figures", "measured", "plot_joint", "summarize"]
 
@@ -48,26 +55,17 @@ def summarize(result: CalibrationResult, source: str | None = None) -> dict[str,
         ``joint_thermal``: the final model's first-order constants (``r_th_k_per_w``,
         ``tau_min``, ``ambient_c``) as fields of :class:`swgsim.gear.thermal.JointThermal`,
         with a caveat where the run is unexplained or unphysical; ``physical`` (why the
-        base alone and the final model are not physical, :func:`.problem.physical_check`),
-        ``scored`` (both physical), ``not_scored`` (the one line why not, or None: then
-        ``rmse_before``/``rmse_after``/``rmse_ratio`` are None, no headline) and
-        ``crossval`` (:func:`.problem.cross_validate`).
+        base alone and the final model are not physical, :func:`swgcal.core.physical_check`),
+        ``scored``, ``not_scored`` and ``final_unphysical``
+        (:func:`swgcal.report.score_if_physical`) and ``crossval``
+        (:func:`.problem.cross_validate`).
     """
     s = base_summary(result, source)
-    phys = s["data"].pop("physical", {"before": [], "after": []})
     s["crossval"] = s["data"].pop("crossval", None)
-    s["physical"] = phys
-    s["scored"] = not (phys["before"] or phys["after"])
-    s["not_scored"] = None if s["scored"] else (
-        "Not scored as a calibration: the fit of "
-        + " and of ".join(w for w, k in (("the first-order model alone", "before"),
-                                         ("the final model", "after")) if phys[k])
-        + " is unphysical (" + "; ".join(dict.fromkeys(phys["before"] + phys["after"]))
-        + ").")
-    if not s["scored"]:
-        s["rmse_before"] = s["rmse_after"] = s["rmse_ratio"] = None
+    score_if_physical(s, s["data"].pop("physical", {"before": [], "after": []}),
+                      "the first-order model alone")
     base = result.final.estimates_of(result.final.terms[0].name)
-    why = caveat(result) or s["not_scored"] or (
+    why = caveat(result) or s["not_scored"] or s["final_unphysical"] or (
         "The final residual is still structured (" + result.residual_signature.rstrip(".")
         + "): the first-order constants were fitted beside what no library effect explains."
         if result.unexplained else None)
@@ -116,7 +114,9 @@ def _fit_lines(s: Mapping[str, Any]) -> list[str]:
     """Whether the fits are physical, the base model's constants alone and in the final
     fit, and each kept effect's."""
     ph = s["physical"]
-    lines = ["## Physical fits", "", s["not_scored"] or "Both fits are physical: scored.", ""]
+    lines = ["## Physical fits", "", s["not_scored"] or "The first-order model alone is "
+             "physical: scored.", "", *([s["final_unphysical"], ""]
+                                        if s.get("final_unphysical") else [])]
     lines += [f"- {w}: " + ("; ".join(ph[k]) or "physical") for w, k in
               (("First-order model alone", "before"), ("Final model", "after"))] + [""]
     lines += ["## Base model alone", "", *_params_table(s["base_model"]["params"]),

@@ -43,6 +43,8 @@ LONG_MODULES_JUSTIFIED: dict[str, str] = {
     "swgsim/files/ownership.py": "stamps, claims and the proof a file is ours: one chain of "
                                  "custody, split it and each half trusts the other blindly",
     "swgcal/loop.py": "the calibration loop and its before/after error: one algorithm",
+    "swgcal/core.py": "the separable fit, bounded or not, its uncertainties and whether it "
+                      "is physical: one fit result",
     "learn/monitor/normal.py": "the normal-behaviour model and its operating-variable laws; "
                                "the laws to move beside learn/monitor/laws.py",
     "swgsim/gear/thermal.py": "a joint's heat (one node, two nodes, a measured trace) and "

@@ -14,6 +14,7 @@ import pytest
 from data_sets import DATA, needs_data
 
 from swgcal import build_problem, calibrate
+from swgcal.friction import summarize
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "calibrate_real.py"
 spec = importlib.util.spec_from_file_location("calibrate_real", SCRIPT)
@@ -31,6 +32,11 @@ def test_fairino_spiral_improves_on_paper_law():
     assert res.rmse_after <= 0.6 * res.rmse_before
     assert res.added  # something was found
     assert res.unexplained  # and the report says what is left
+    # the paper law alone is physical and scored; with the effects its viscous slope
+    # turns negative (measured b1 = -420 N m s/rad), and the summary says so
+    s = summarize(res)
+    assert s["scored"] and s["rmse_ratio"] is not None
+    assert "paper_law.b1" in s["final_unphysical"], s["final_unphysical"]
 
 
 @needs_data
