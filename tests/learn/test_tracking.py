@@ -321,3 +321,20 @@ def test_the_suite_never_writes_into_the_users_store():
     uri = default_tracking_uri()
     assert uri.startswith(f"sqlite:///{tempfile.gettempdir()}")
     assert str(repo_root()) not in uri
+
+
+APPS_WITH_TRACKING = [("train", [f"experiment={e}"]) for e in
+                      ("paper", "transfer", "transfer_full", "benchmark", "monitor",
+                       "prognosis")] + [
+    ("train", []), ("monitor", ["stream=s.csv", "diagnosis_model=m.skops"]),
+    ("calibrate", ["measured=m.csv", "out_dir=out"])]
+
+
+@pytest.mark.parametrize(("app", "overrides"), APPS_WITH_TRACKING)
+def test_one_switch_turns_tracking_off_for_every_app_and_experiment(app, overrides):
+    """`~logger` leaves no logger (issue 87: experiments that set logger keys brought one
+    back, and the tests wrote runs into the user's store)."""
+    from swgcli import compose_app
+
+    assert compose_app(app, overrides).get("logger") is not None
+    assert compose_app(app, [*overrides, "~logger"]).get("logger") is None
