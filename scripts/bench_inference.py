@@ -6,7 +6,7 @@ each model is fitted briefly (latency does not depend on how well it was trained
 ``predict`` is timed on single windows. Run from the repository root::
 
     python scripts/bench_inference.py data/paper
-    python scripts/bench_inference.py data/tiny --repeats 50 --out /tmp/latency.csv \\
+    python scripts/bench_inference.py data/tiny/paper --repeats 50 --out /tmp/latency.csv \\
         transfer.models.minirocket.estimator.n_kernels=1000
 """
 

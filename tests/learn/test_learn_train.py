@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -133,3 +134,11 @@ def test_signal_input_refused_before_work(tracking_uri, tmp_path):
                              *overrides])
         with pytest.raises(ValueError, match=match):
             run_train(cfg)
+
+
+def test_stored_tiny_is_the_tiny_grids_paper_data_set():
+    """Issue 87: stored=tiny read data/tiny, the folder where grid=tiny writes its data
+    sets (paper/, bench/), which is none itself."""
+    stored = Path(compose_app("train", ["stored=tiny"]).stored.path)
+    grid = Path(compose_app("paper", ["grid=tiny"]).data_root)
+    assert stored == grid / "paper"
