@@ -69,6 +69,7 @@ __all__ = ["SIGNATURE", "STAMP", "LOCK", "STAMP_LOCK", "Survey", "Claim", "surve
 _CLAIMS: dict[Path, Claim] = {}   # folders this process claimed (resolved) -> claim
 _HELD: dict[Path, list] = {}  # run locks held: resolved folder -> [lock, count, pid, folder]
 _STOPPED: list[tuple[Path, str]] = []  # claims a stop (Ctrl-C, SIGTERM) ended: folder, app
+_FINISHED: list[Path] = []  # claims of this run that ended without a stop, before one
 _GATE_S = 30.0  # how long a run waits for the gate (held for milliseconds by others)
 
 
@@ -460,6 +461,8 @@ class Claim:
     def __exit__(self, exc_type, *exc) -> None:
         if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
             _STOPPED.append((self.folder, self.app))  # for the line the app ends with
+        elif exc_type is None and self.folder not in _FINISHED:
+            _FINISHED.append(self.folder)  # written whole before a later stop
         self.close()
 
 
@@ -703,7 +706,8 @@ def atomic_write_json(path: str | os.PathLike, obj: Any, sort_keys: bool = True)
 def stop_note() -> str:
     """What the claims a stop (Ctrl-C, SIGTERM) ended keep, and what a rerun reuses: one
     clause per folder (:class:`swgsim.files.writers.Writer`: its finished parts, proved by
-    the stamp), for the one line an app ends with; empty if the stop ended no claim. Called
+    the stamp), after the folders this run finished before the stop, for the one line an
+    app ends with; empty if the run wrote into no folder. Called
     once the workers are gone: the temporary files they left half-written (a worker killed
     while it wrote) are removed here, as the next claim would."""
     notes, seen = [], set()
@@ -726,13 +730,20 @@ def stop_note() -> str:
                     if kept else f"no {w.part} of the {w.kind} finished yet")
             notes.append(f"{folder}: {what}; rerun the same command to resume: {w.resume}")
         else:
-            notes.append(f"{folder}: nothing of the {w.kind} half-written (each file is "
-                         "written whole); rerun the same command")
+            n = sum(1 for by in found.writers.values() if by is not None and by.kind == w.kind)
+            notes.append(f"{folder}: {n} file(s) of the {w.kind} written whole, none "
+                         "half-written; rerun the same command")
+    done = [str(f) for f in _FINISHED if f not in seen]
+    if done:  # written whole earlier in this run: kept, a rerun reuses what it can
+        notes = [f"finished before the stop and kept: {', '.join(done)}",
+                 *(notes or ["rerun the same command to go on"])]
     _STOPPED.clear()
+    _FINISHED.clear()
     return "; ".join(notes)
 
 
 def forget_stops() -> None:
-    """Forget the claims earlier stops ended (a run starting in this process: its
-    :func:`stop_note` names its own)."""
+    """Forget the claims earlier stops ended and earlier runs finished (a run starting in
+    this process: its :func:`stop_note` names its own)."""
     _STOPPED.clear()
+    _FINISHED.clear()

@@ -141,6 +141,24 @@ def test_stop_names_what_was_kept_and_ignores_a_second_signal(tmp_path, capsys):
         "rerun the same command to start again"]
 
 
+def test_a_stop_between_two_folders_names_the_one_finished(tmp_path, capsys):
+    """Issue 87: a study stopped after its data set was written said nothing had been
+    written into an output folder."""
+    first, second = tmp_path / "data", tmp_path / "report"
+
+    def entry():
+        with ownership.claim(first, "swgsim-generate"):
+            ownership.atomic_write_bytes(first / "gear1_n2000rpm.nc", b"a shard")
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1)  # the handler raises here, before the report's folder is claimed
+        ownership.claim(second, "swgsim-paper")
+
+    code, err = _stopped(entry, capsys)
+    assert code == 130 and _lines(err) == [
+        f"swgsim-x: interrupted (SIGINT); finished before the stop and kept: {first}; "
+        "rerun the same command to go on"]
+
+
 @pytest.mark.slow  # three parts of a tiny evaluation, stopped and resumed: about 90 s
 def test_resumed_evaluation_reuses_only_the_parts_proved_complete(tmp_path):
     out = tmp_path / "meval"
