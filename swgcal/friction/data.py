@@ -19,7 +19,7 @@ import io
 import itertools
 import logging
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +75,8 @@ class FrictionRecording:
         Transmitted load torque [N m] (for the load-dependent Coulomb term).
     temperature_c : ndarray, shape (n,), optional
         The joint's measured temperature [°C] (for ``temperature_friction``).
+    measured : dict of str to ndarray, shape (n,)
+        Other measured variables the file carries, by column (for ``measured_variable``).
     ddq_source : str
         ``"measured"`` or how it was estimated.
     notes : tuple of str
@@ -89,14 +91,16 @@ class FrictionRecording:
     tau_nm: np.ndarray
     load_nm: np.ndarray | None = None
     temperature_c: np.ndarray | None = None
+    measured: dict[str, np.ndarray] = field(default_factory=dict)
     name: str = "recording"
     ddq_source: str = "measured"
     notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         n = self.t_s.shape[0]
-        for f in ("q_rad", "dq_rad_s", "ddq_rad_s2", "tau_nm", "load_nm", "temperature_c"):
-            a = getattr(self, f)
+        arrays = {f: getattr(self, f) for f in ("q_rad", "dq_rad_s", "ddq_rad_s2", "tau_nm",
+                                                 "load_nm", "temperature_c")}
+        for f, a in {**arrays, **self.measured}.items():
             if a is not None and a.shape != (n,):
                 raise ValueError(f"{f} has shape {a.shape}, expected ({n},) like t_s")
         if n < 50:
@@ -142,7 +146,7 @@ class FrictionRecording:
             load_nm=self.load_nm, v_eff=self.dq_rad_s, v_s=float(v_s),
             scales=Scales.of(self.t_s, self.q_rad, self.dq_rad_s),
             gear_ratio=None if gear_ratio is None else float(gear_ratio),
-            temperature_c=self.temperature_c)
+            temperature_c=self.temperature_c, measured=dict(self.measured))
 
 
 #: Most points of the acceleration's uniform grid per sample of the recording
@@ -302,12 +306,10 @@ def load_friction_csv(path: str | Path,
     if not path.is_file():
         raise FileNotFoundError(f"friction CSV not found: {path}")
     cols, row = _read_columns(path)
-    _check_ranges(path, cols, row)
+    _check_ranges(path, {c: x for c, x in cols.items() if c in COLUMN_RANGES}, row)
     notes: list[str] = []
-    unused = [h for h in read_csv_header(path) if h not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
-    if unused:
-        notes.append(f"column(s) {unused} read but not used: no effect of the library takes "
-                     f"them (used: {list(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)})")
+    known = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
+    others = [h for h in read_csv_header(path) if h and h not in known]
     sel = _usable_rows(path, cols, row, notes)
 
     def kept(x: np.ndarray) -> np.ndarray:  # no copy where every row is kept
@@ -326,12 +328,38 @@ def load_friction_csv(path: str | Path,
         source = f"estimated (Savitzky-Golay, quadratic, {accel_window} samples)"
     else:
         acc, source = kept(ddq), "measured"
+    measured = _measured(others, cols, kept, notes)
     return FrictionRecording(
         t_s=t, q_rad=q, dq_rad_s=dq, ddq_rad_s2=acc,
         tau_nm=kept(cols["tau_friction_Nm"]),
         load_nm=kept(cols["load_Nm"]) if "load_Nm" in cols else None,
         temperature_c=kept(cols["temperature_c"]) if "temperature_c" in cols else None,
-        name=path.stem, ddq_source=source, notes=tuple(notes))
+        measured=measured, name=path.stem, ddq_source=source, notes=tuple(notes))
+
+
+def _measured(others: list[str], cols: dict[str, np.ndarray],
+              kept: Callable[[np.ndarray], np.ndarray], notes: list[str]
+              ) -> dict[str, np.ndarray]:
+    """The columns beyond the known ones that are measured variables (a finite number on
+    every kept row, not constant), offered to the loop as ``measured_variable``; each
+    other one named in ``notes`` with why it is not used."""
+    out, why = {}, {}
+    for h in others:
+        x = kept(cols[h]) if h in cols else None
+        if x is None:
+            why[h] = "text where a number belongs"
+        elif not np.all(np.isfinite(x)):
+            why[h] = "missing or non-finite on kept rows"
+        elif not np.ptp(x) > 0:
+            why[h] = "constant"
+        else:
+            out[h] = x
+    if out:
+        notes.append(f"column(s) {list(out)}: measured variables, offered to the loop as "
+                     "measured_variable")
+    if why:
+        notes.append("column(s) not used: " + ", ".join(f"{h} ({w})" for h, w in why.items()))
+    return out
 
 
 def read_csv_header(path: str | Path) -> list[str]:
@@ -434,7 +462,8 @@ def _read_columns(path: Path) -> tuple[dict[str, np.ndarray], Callable[[int], st
         _check_header(path, header)
         width = len(header)
         use = {h: i for i, h in enumerate(header) if h in known}
-        parts: dict[str, list[np.ndarray]] = {h: [] for h in use}
+        others = {h: i for i, h in enumerate(header) if h and h not in known}
+        parts: dict[str, list[np.ndarray]] = {h: [] for h in [*use, *others]}
         blanks: list[np.ndarray] = []  # record numbers of blank lines
         record, n_body, n_bad, first_bad = 1, 0, 0, None
         while chunk := list(itertools.islice(reader, _CHUNK_RECORDS)):
@@ -463,6 +492,14 @@ def _read_columns(path: Path) -> tuple[dict[str, np.ndarray], Callable[[int], st
                 for h, i in use.items():
                     parts[h].append(_numbers(path, cells[:, i], h, n_body,
                                              lambda k, b=record, r=rows: b + int(r[k])))
+                for h, i in list(others.items()):  # a measured variable, or text: unused
+                    x = np.asarray(pd.to_numeric(cells[:, i], errors="coerce"), dtype=float)
+                    if np.isnan(x).sum() > sum(str(c).strip().lower() in MISSING_CELLS
+                                               for c in cells[:, i]):
+                        del others[h]
+                        parts[h] = []
+                    else:
+                        parts[h].append(x)
             n_body += rows.size + bad.size
             record += len(chunk)
             chunk = cells = None  # one chunk's text in hand, not two
@@ -480,7 +517,7 @@ def _read_columns(path: Path) -> tuple[dict[str, np.ndarray], Callable[[int], st
             r = nxt
         return f"row {i} (line {_line_of(path, r)})"
 
-    return {h: np.concatenate(p) for h, p in parts.items()}, row
+    return {h: np.concatenate(p) for h, p in parts.items() if p}, row
 
 
 def _check_ranges(path: Path, cols: dict[str, np.ndarray], row: Callable[[int], str]
@@ -740,6 +777,7 @@ def write_friction_csv(rec: FrictionRecording, path: str | Path) -> Path:
         cols["load_Nm"] = rec.load_nm
     if rec.temperature_c is not None:
         cols["temperature_c"] = rec.temperature_c
+    cols.update(rec.measured)
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols),
                comments="", fmt="%.10g")

@@ -28,6 +28,7 @@ from .ranges import (
     OPEN_CONFIGURATION_NM,
     OPEN_DIRECTION_NM,
     OPEN_INERTIA_KGM2,
+    OPEN_MEASURED,
     OPEN_SENSOR_NM,
     OPEN_THERMAL_NM,
     PRESLIDING_DISPLACEMENT_RAD,
@@ -60,6 +61,7 @@ __all__ = [
     "VelocityLag",
     "TransportDelay",
     "TemperatureFriction",
+    "MeasuredVariable",
 ]
 
 
@@ -246,7 +248,14 @@ class TemperatureFriction(fx.TemperatureFriction, FitTerm):
     ranges = {"k_v": TEMPERATURE_VISCOUS_PER_K, "k_ref": TEMPERATURE_FRICTION_PER_K}
 
 
+class MeasuredVariable(fx.MeasuredVariable, FitTerm):
+    __doc__ = fx.MeasuredVariable.__doc__
+    signature = "residual following a measured variable of the recording the library lacks"
+    probes = ()
+    ranges = {"size": OPEN_MEASURED}
+
+
 for _fitted in (AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
                 LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag,
-                TransportDelay, TemperatureFriction):
+                TransportDelay, TemperatureFriction, MeasuredVariable):
     fx.register_effect(_fitted)  # in place of its form

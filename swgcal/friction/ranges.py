@@ -31,6 +31,7 @@ __all__ = [
     "RIPPLE_AMPLITUDE_NM",
     "TRANSPORT_DELAY_S",
     "DISSIPATIVE_NM",
+    "OPEN_MEASURED",
     "TEMPERATURE_VISCOUS_PER_K",
     "TEMPERATURE_FRICTION_PER_K",
     "GEAR_RATIO_CATALOGUE",
@@ -78,6 +79,8 @@ RIPPLE_AMPLITUDE_NM = (0.0, INF, "ripple amplitude, non-negative by construction
 DISSIPATIVE_NM = (0.0, INF, "Coulomb and viscous friction dissipate: b0, b1 >= 0 "
                   "(Armstrong-Hélouvry et al. 1994); b2 (the cubic) may bend the curve "
                   "either way and b3 is the gravity model's, both open")
+OPEN_MEASURED = (0.0, INF, "a variable the library has no physics for: its size is open "
+                 "(docs/calibration.md, issue 86); the report names it for a person to judge")
 TRANSPORT_DELAY_S = (-0.02, 0.02, "a servo drive's dead time: a current loop, filters and "
                      "a bus cycle of 0.1-4 ms each (EtherCAT, CANopen cycles of 1 ms; "
                      "Franklin, Powell & Workman, sec. 3.2); either signal may be the later")

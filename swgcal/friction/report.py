@@ -41,7 +41,7 @@ __all__ = ["NOT_SIMULATED", "REPORT", "summarize", "ripple_lines"]
 
 #: Accepted effects left out of the simulation option ``friction_effects``: the
 #: simulation's friction effects see t, q, q̇, q̈ only (the report says so).
-NOT_SIMULATED = ("temperature_friction",)
+NOT_SIMULATED = ("temperature_friction", "measured_variable")
 
 
 def _orders_of(term: Term, fit: FitResult) -> dict[str, Any] | None:
@@ -337,7 +337,7 @@ def _simulation_lines(s: Mapping[str, Any]) -> list[str]:
     left = [e["name"] for e in s["effects_added"] if e["kind"] in NOT_SIMULATED]
     if left:
         lines += [f"Left out: {', '.join(left)} (the simulation's friction effects see t, q, "
-                  "q̇, q̈, not the joint's temperature).", ""]
+                  "q̇, q̈, not the joint's temperature or another measured variable).", ""]
     return lines
 
 

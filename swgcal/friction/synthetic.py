@@ -63,6 +63,11 @@ PLANTED: dict[str, dict[str, Any]] = {
     # a temperature needs a temperature column: a cold and a warm session, the warm one's
     # paper-law friction 12 % lower (b0, b1, b2 scaled by 0.88 over 11.2 K; checked as the
     # change at the reference speed, k_ref, in tests/swgcal/test_calib_sessions.py)
+    # a variable nobody declared: a column of the file the friction follows (planted in
+    # tests/swgcal/test_calib_sessions.py: friction 0.05 N m per unit of a slow variable)
+    "measured_variable": {"params": {"c_even": 0.0, "c_odd": 0.05}, "check": {"c_odd": 0.05},
+                          "sessions": {"temperatures_c": [30.0], "friction_factors": [1.0],
+                                       "with_temperature": False}},
     "temperature_friction": {"params": {}, "check": {},
                              "sessions": {"temperatures_c": [27.5, 38.7],
                                           "friction_factors": [1.0, 0.88]}},

@@ -20,7 +20,7 @@ from swgsim.gear.friction import FRICTION_LIBRARY, FrictionEffects, parse_effect
 
 
 def test_a_temperature_effect_is_refused_by_the_simulation_in_one_line():
-    with pytest.raises(ValueError, match="temperature_friction needs the joint's measured"):
+    with pytest.raises(ValueError, match="temperature_friction needs a measured variable"):
         FrictionEffects([{"kind": "temperature_friction", "params": {"k_c": -0.01, "k_v": 0.0},
                           "options": {"t_ref_c": 30.0}}], v_s=V_SMOOTH)
 

@@ -144,8 +144,28 @@ def test_columns_the_loop_cannot_use_are_named_and_temperature_is_read(tmp_path)
                                duration_s=2.0, rng=np.random.default_rng(7))
     path = write_friction_csv(rec, tmp_path / "joint.csv")
     lines = path.read_text().splitlines()
-    path.write_text("\n".join([lines[0] + ",humidity_pct"]
-                              + [ln + ",41" for ln in lines[1:]]) + "\n")
+    path.write_text("\n".join([lines[0] + ",humidity_pct,operator"]
+                              + [ln + f",{41 + k % 3},ann" for k, ln in enumerate(lines[1:])])
+                    + "\n")
     back = load_friction_csv(path)
     np.testing.assert_allclose(back.temperature_c, 25.0)
-    assert any("humidity_pct" in n and "not used" in n for n in back.notes), back.notes
+    assert list(back.measured) == ["humidity_pct"]
+    assert any("humidity_pct" in n and "offered" in n for n in back.notes), back.notes
+    assert any("operator (text where a number belongs)" in n for n in back.notes), back.notes
+
+
+def test_a_variable_nobody_declared_is_proposed_by_its_column(tmp_path):
+    """A column the library has no physics for, which the friction follows: offered as
+    measured_variable, kept, its column named and its coefficient recovered."""
+    case = PLANTED["measured_variable"]
+    rec, truths = session_recording([], rng=np.random.default_rng(8), **case["sessions"])
+    x = 1.0 + np.sin(2 * np.pi * rec.t_s / 7.0)  # a slow variable, 0-2 units
+    tau = rec.tau_nm + case["params"]["c_odd"] * (x - x.mean()) * np.tanh(rec.dq_rad_s / 0.004)
+    rec = dataclasses.replace(rec, tau_nm=tau, measured={"pump_pressure_bar": x})
+    res = _through_csv(rec, tmp_path)
+    assert "measured_variable" in res.added, res.added
+    term = next(t for t in res.final.terms if t.kind == "measured_variable")
+    assert term.column == "pump_pressure_bar"
+    c_odd = _values(res, "measured_variable")["c_odd"].value
+    assert c_odd == pytest.approx(case["check"]["c_odd"], rel=0.1)
+    assert res.rmse_after <= 1.2 * truths[0].sigma

@@ -23,6 +23,7 @@ from swgsim.gear.terms import Param, Term, linear_recurrence
 __all__ = ["FRICTION_LIBRARY", "AsymmetricCoulomb", "Stribeck", "Presliding", "PositionRipple",
            "FrictionRipple", "LoadCoulomb", "GravityResidual", "Inertia", "ThermalDrift",
            "SensorDrift", "VelocityLag", "TransportDelay", "TemperatureFriction",
+           "MeasuredVariable",
            "MIN_TEMPERATURE_SPAN_K", "make_effect", "register_effect", "dahl_state",
            "first_order_lag"]
 
@@ -338,6 +339,62 @@ class VelocityLag(Term):
         return sig.replace(v_eff=first_order_lag(sig.t_s, sig.v_eff, float(theta[0])))
 
 
+class MeasuredVariable(Term):
+    """A measured variable the recording carries beside those the library knows (a
+    column other than time, angle, velocity, acceleration, load, temperature and
+    friction): τ = (x − x̄)(c_e + c_o sgn(v)), even and odd in the direction of motion.
+    Instance k takes the k-th such column (its name: option ``column``): the loop can
+    propose a variable nobody declared, and says which."""
+
+    kind = "measured_variable"
+    linear = (Param("c_even", "N m/unit", "torque per unit of the variable, both directions"),
+              Param("c_odd", "N m/unit", "friction per unit of the variable (flips with v)"))
+    description = "torque following a measured variable of the recording"
+    source = "a column of the recording the library has no physics for (docs/calibration.md)"
+
+    def __init__(self, name: str | None = None, column: str = "", mean: float = 0.0) -> None:
+        super().__init__(name)
+        self.column, self.mean = str(column), float(mean)
+
+    @classmethod
+    def for_signals(cls, sig: FrictionSignals, name: str | None = None) -> Term:
+        cols = list(getattr(sig, "measured", {}) or {})
+        k = _instance(name) - 1
+        if k >= len(cols):
+            return cls(name)
+        return cls(name, column=cols[k], mean=float(np.mean(sig.measured[cols[k]])))
+
+    @property
+    def repeatable(self) -> int:
+        return 1_000_000  # one per column: applicable() bounds it
+
+    def applicable(self, sig) -> bool:
+        return bool(self.column) and self.column in (getattr(sig, "measured", {}) or {})
+
+    def options(self) -> dict[str, Any]:
+        return {"column": self.column, "mean": self.mean}
+
+    def required_options(self) -> tuple[str, ...]:
+        return ("column",)
+
+    def columns(self, sig, theta):
+        if self.column not in sig.measured:
+            raise ValueError(f"measured_variable needs the column {self.column!r}; these "
+                             "signals carry none")
+        x = sig.measured[self.column] - self.mean
+        return np.column_stack([x, x * sig.sgn])
+
+    def derived(self, coef, theta):
+        return {"c_even": float(coef[0]), "c_odd": float(coef[1]),
+                "size": float(np.hypot(coef[0], coef[1]))}
+
+    def derived_units(self):
+        return {"c_even": "N m/unit", "c_odd": "N m/unit", "size": "N m/unit"}
+
+    def primary(self):
+        return ("size",)
+
+
 #: Smallest spread of a recording's temperature for ``temperature_friction`` to be tried
 #: [K] [choice: a few steps of a joint's temperature sensor (0.0625 K on a UR3), and the
 #: size at which a grease's viscosity changes by a few per cent].
@@ -427,7 +484,7 @@ FRICTION_LIBRARY: Registry[type[Term]] = Registry("friction effect", __name__,
     (cls.kind, cls) for cls in (
         AsymmetricCoulomb, Stribeck, Presliding, PositionRipple, FrictionRipple,
         LoadCoulomb, GravityResidual, Inertia, ThermalDrift, SensorDrift, VelocityLag,
-        TransportDelay, TemperatureFriction)
+        TransportDelay, TemperatureFriction, MeasuredVariable)
 ))
 """Kind -> effect class, the one registry of friction effects (ARCHITECTURE.md,
 "To add a calibration effect"):

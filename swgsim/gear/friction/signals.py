@@ -95,6 +95,8 @@ class FrictionSignals:
     temperature_c : ndarray, shape (n,), or None
         The joint's measured temperature where the recording has one [°C]
         (``temperature_friction``); None otherwise (the simulation's friction effects).
+    measured : dict of str to ndarray, shape (n,)
+        Other measured variables of a recording, by column (``measured_variable``).
     """
 
     t_s: np.ndarray
@@ -108,6 +110,7 @@ class FrictionSignals:
     extra: dict[str, Any] = field(default_factory=dict)
     gear_ratio: float | None = None
     temperature_c: np.ndarray | None = None
+    measured: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def n(self) -> int:

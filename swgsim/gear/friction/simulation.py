@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from swgsim.gear.friction.effects import (
+    MeasuredVariable,
     Presliding,
     TemperatureFriction,
     VelocityLag,
@@ -125,10 +126,12 @@ class FrictionEffects:
     def __init__(self, effects: Sequence[Mapping[str, Any]], v_s: float | None,
                  base_model: Mapping[str, float] | None = None, t0: float | None = 0.0) -> None:
         self.items = parse_effects(effects or [])
-        if any(isinstance(t, TemperatureFriction) for t, _, _ in self.items):
-            raise ValueError("friction_effects: temperature_friction needs the joint's "
-                             "measured temperature, which the simulation's friction effects "
-                             "do not see (t, q, q̇, q̈ only): leave it out")
+        for t, _, _ in self.items:
+            if isinstance(t, (TemperatureFriction, MeasuredVariable)):
+                raise ValueError(f"friction_effects: {t.kind} needs a measured variable of "
+                                 "the recording (the joint's temperature, a column), which "
+                                 "the simulation's friction effects do not see (t, q, q̇, q̈ "
+                                 "only): leave it out")
         if self.items and not (v_s is not None and v_s > 0):
             raise ValueError(f"v_s must be > 0 [rad/s], got {v_s}")
         self.v_s = float(v_s) if v_s is not None else 1.0
