@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import zlib
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,7 +39,7 @@ from swgsim.sensing.bridge_drift import (
     TemperatureSensor,
 )
 
-__all__ = ["ALL_SENSOR_STATES", "DEFAULT_PARTS", "FAMILY_TAG", "KEYED_RANGES", "PARTS",
+__all__ = ["ALL_SENSOR_STATES", "DEFAULT_PARTS", "FAMILY_TAG", "PARTS",
            "RANGES", "SENSOR_STATES", "UR3_COLUMNS", "NuisanceFamily", "benchmark_families",
            "default_families", "draw_conditions"]
 
@@ -63,11 +64,13 @@ SENSOR_STATES = ("present", "missing", *TEMPERATURE_SENSOR_FAULTS[1:])
 #: Every state a family may name: those, and a sound sensor that lags the housing or reads
 #: with an offset (issue 83; ``sensor_lag_min``, ``sensor_offset_k``).
 ALL_SENSOR_STATES = (*SENSOR_STATES, "lagging", "offset")
-#: Second word of every family draw's seed, ``default_rng([seed, FAMILY_TAG])``.
+#: Second word of every family draw's seed, ``default_rng([seed, FAMILY_TAG, key])``.
 FAMILY_TAG = 0x5F4A11
 
-#: Range fields, in draw order: (part, allowed lo, allowed hi, unit, what) - the bounds a
-#: range must lie within (:meth:`NuisanceFamily.check`), wider than the defaults.
+#: Range fields: (part, allowed lo, allowed hi, unit, what) - the bounds a range must lie
+#: within (:meth:`NuisanceFamily.check`), wider than the defaults. Each magnitude is drawn
+#: from a stream keyed by its name (:func:`_keyed`): adding a range, a part or a family
+#: moves no existing draw.
 RANGES = {
     "ratio_40c": ("friction_law", 0.3, 1.0, "", "FrictionLaw.ratio_40c"),
     "r_th_k_per_w": ("warm_up", 1e-3, 5.0, "K/W", "thermal resistance"),
@@ -90,13 +93,6 @@ RANGES = {
     "regrease_drop": ("regrease", 0.0, 1.0, "", "excess friction of fresh grease"),
     "regrease_tau_h": ("regrease", 0.1, 1e3, "h", "time constant of running in again"),
     "trace_scale": ("trace", 0.0, 10.0, "", "factor on the measured rise"),
-}
-
-
-#: Range fields added with issue 83, each drawn from a stream of its own keyed by its name
-#: (:func:`_keyed`), so that adding one moves no other draw: (part, allowed lo, allowed hi,
-#: unit, what), as :data:`RANGES`.
-KEYED_RANGES = {
     "grease_r_k_per_w": ("network", 0.005, 0.25, "K/W", "grease to housing, running"),
     "standstill_factor": ("network", 1.0, 20.0, "", "grease to housing at a stop over running"),
     "motor_km_nm_per_sqrt_w": ("network", 0.05, 1.0, "N m/√W", "the motor's constant"),
@@ -162,7 +158,7 @@ class NuisanceFamily:
         (:class:`learn.monitor.gear_monitor.MaintenanceEvent`); refused without the
         ``regrease`` part.
     grease_r_k_per_w, standstill_factor, motor_km_nm_per_sqrt_w, drive_w : list of float
-        The joint in two nodes (``network``, :data:`KEYED_RANGES`).
+        The joint in two nodes (``network``, :data:`RANGES`).
     coulomb_ratio_40c, coulomb_minimum_c, coulomb_drop, coulomb_tau_h : list of float
         The Coulomb term's own law and run-in (``coulomb``).
     sensor_lag_min, sensor_offset_k : list of float
@@ -249,7 +245,7 @@ class NuisanceFamily:
         if self.logged and "regrease" not in self.parts:
             raise ValueError(f"{key}.logged: only a family with the regrease part has a "
                              f"maintenance log to hand over, parts {list(self.parts)}")
-        for name, (_, lo, hi, unit, what) in {**RANGES, **KEYED_RANGES}.items():
+        for name, (_, lo, hi, unit, what) in RANGES.items():
             r = list(getattr(self, name))
             try:
                 ok = len(r) == 2 and lo <= float(r[0]) <= float(r[1]) <= hi
@@ -319,29 +315,35 @@ def benchmark_families() -> dict[str, NuisanceFamily]:
 
 
 def _draws(family: NuisanceFamily, seed: int) -> tuple[dict[str, float], str, str]:
-    """Every range's value, the friction form and the sensor state for a seed (drawn
-    in a fixed order whichever parts the family draws)."""
-    rng = np.random.default_rng([seed, FAMILY_TAG])
-    values = {name: float(rng.uniform(*getattr(family, name))) for name, r in RANGES.items()
-              if r[0] != "trace"}
-    form = family.friction_forms[int(rng.integers(len(family.friction_forms)))]
-    state = family.sensor_states[int(rng.integers(len(family.sensor_states)))]
-    values["trace_scale"] = _trace_draw(family, seed)[0]
-    values.update({name: _keyed(family, name, seed) for name in KEYED_RANGES})
-    return values, form, state
+    """Every range's value, the friction form and the sensor state for a seed, each from
+    a stream keyed by its name (whichever parts the family draws)."""
+    values = {name: _keyed(family, name, seed) for name in RANGES}
+    return (values, _keyed_choice(family.friction_forms, "friction_form", seed),
+            _keyed_choice(family.sensor_states, "sensor_state", seed))
+
+
+def _stream(seed: int, key: str) -> np.random.Generator:
+    """The draw's stream of a seed keyed by a name."""
+    return np.random.default_rng([seed, FAMILY_TAG, zlib.crc32(key.encode())])
 
 
 def _keyed(family: NuisanceFamily, name: str, seed: int) -> float:
-    """A :data:`KEYED_RANGES` magnitude for a seed, from a stream keyed by its name."""
-    rng = np.random.default_rng([seed, FAMILY_TAG, zlib.crc32(name.encode())])
-    return float(rng.uniform(*getattr(family, name)))
+    """A :data:`RANGES` magnitude for a seed, from a stream keyed by its name."""
+    return float(_stream(seed, name).uniform(*getattr(family, name)))
+
+
+def _keyed_choice(options: Sequence[str], what: str, seed: int) -> str:
+    """One of ``options`` for a seed by rendezvous hashing (Thaler & Ravishankar 1998):
+    each option draws a number from a stream keyed by ``what`` and its own name, the
+    smallest wins. Adding an option moves only the seeds it now wins, removing one only
+    those it won; the order of the list does not matter."""
+    return min(options, key=lambda o: float(_stream(seed, f"{what}:{o}").random()))
 
 
 def _trace_draw(family: NuisanceFamily, seed: int) -> tuple[float, str]:
-    """The trace's scale and column for a seed, from a stream of their own."""
-    rng = np.random.default_rng([seed, FAMILY_TAG, 1])
-    scale = float(rng.uniform(*family.trace_scale))
-    return scale, family.trace_columns[int(rng.integers(len(family.trace_columns)))]
+    """The trace's scale and column for a seed, each keyed by its name."""
+    return (_keyed(family, "trace_scale", seed),
+            _keyed_choice(family.trace_columns, "trace_column", seed))
 
 
 def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
