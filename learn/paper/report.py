@@ -11,6 +11,7 @@ Files written to ``report_dir`` (e.g. ``reports/paper/``):
 
 from __future__ import annotations
 
+import itertools
 import logging
 from collections.abc import Mapping
 from pathlib import Path
@@ -161,10 +162,12 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
     """Figures in the manner of the paper's Fig. 6, 7 and 8.
 
     Fig. 6: the five signals of the healthy gear (solid) and of each faulty class
-    (dashed, shifted in time onto the healthy window's WG angle), one panel per fault.
-    Fig. 7: DFT amplitude of zero-mean s0, s1, ds13 = s1 - s3 and ds24 = s2 - s4 versus
-    order of the input rotation, one line per class. Fig. 8: clean (solid) versus
-    disturbed (dashed) healthy signals. One gear and operating point (default: the
+    (dashed, shifted in time onto the healthy window's WG angle), one panel per fault,
+    and a panel of the RMS difference per fault and signal (log scale: a small fault the
+    overlay hides shows there). Fig. 7: DFT amplitude of zero-mean s0, s1, ds13 = s1 - s3
+    and ds24 = s2 - s4 versus order of the input rotation, one line per class, log scale.
+    Fig. 8: clean (solid) versus disturbed (dashed) healthy signals. Legends outside the
+    data. One gear and operating point (default: the
     lowest gear at 2000 rpm, 39 N m, where present); the most severe variant of each
     fault.
 
@@ -224,21 +227,37 @@ def _fig6(t, sig, rows: list[int], faults: list[str], where: str, path: Path) ->
 
     healthy = rows[0]
     fig = Figure(figsize=(12, 7), layout="constrained")
-    axes = fig.subplots(2, 3, sharex=True).ravel()
-    for ax, f, row, letter in zip(axes, faults, rows[1:], "abcdef", strict=False):
+    axes = fig.subplots(2, 3).ravel()
+    rms = np.zeros((len(faults), 5))
+    for k, (ax, f, row, letter) in enumerate(zip(axes, faults, rows[1:], "abcdef",
+                                                 strict=False)):
         # windows start at random WG angles: shift the faulty one onto the healthy one
         lag = _align(sig[healthy], sig[row])
         n = t.size - lag
         for i in range(5):
             ax.plot(t[:n], sig[healthy, i, :n], color=_COLORS[i], lw=1.0, label=f"$s_{i}$")
             ax.plot(t[:n], sig[row, i, lag:], color=_COLORS[i], lw=1.0, ls="--")
+        rms[k] = np.sqrt(np.mean((sig[row, :, lag:] - sig[healthy, :, :n]) ** 2, axis=1))
         ax.set_title(f"({letter}) {display_name(f)}", fontsize=9)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("signal [mV/V]")
-    for ax in axes[len(faults):]:
+    rest = list(axes[len(faults):])
+    if rest and faults:  # how far each fault moves each signal: small faults made visible
+        ax, width = rest.pop(0), 0.8 / 5
+        for i in range(5):
+            ax.bar(np.arange(len(faults)) + (i - 2) * width, rms[:, i], width,
+                   color=_COLORS[i])
+        ax.set_yscale("log")
+        ax.set_xticks(range(len(faults)), [display_name(f) for f in faults], rotation=30,
+                      fontsize=7, ha="right")
+        ax.set_ylabel("RMS faulty − healthy [mV/V]")
+        ax.set_title(f"({'abcdef'[len(faults)]}) how far each fault moves each signal",
+                     fontsize=9)
+    for ax in rest:
         ax.axis("off")
-    axes[0].legend(fontsize=7, ncol=5, title="solid: healthy, dashed: faulty",
-                   title_fontsize=7)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", fontsize=7, ncol=5,
+               title="solid: healthy, dashed: faulty", title_fontsize=7)
     fig.suptitle(f"Healthy and faulty sensor signals ({where})", fontsize=10)
     return save_figure(fig, path, 110)
 
@@ -263,7 +282,9 @@ def _fig7(t, sig, f_in, faults: list[str], where: str, path: Path) -> Path:
         ax.set_title(f"({'abcd'[j]}) DFT of {name}", fontsize=9)
         ax.set_xlabel("order of input rotation [-]")
         ax.set_ylabel("DFT amplitude [mV/V]")
-    axes[0].legend(fontsize=7)
+        ax.set_yscale("log")  # a small fault's orders beside a large one's
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside right upper", fontsize=7)
     fig.suptitle(f"DFT of sensor signals ({where})", fontsize=10)
     return save_figure(fig, path, 110)
 
@@ -279,10 +300,59 @@ def _fig8(t, clean, dist, cls: str, where: str, path: Path) -> Path:
         ax.plot(t, dist[i], color=_COLORS[i], lw=1.0, ls="--")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("signal [mV/V]")
-    ax.legend(fontsize=7, ncol=5, title="solid: clean, dashed: disturbed (eq. 10)",
-              title_fontsize=7)
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=7,
+               ncol=5, title="solid: clean, dashed: disturbed (eq. 10)", title_fontsize=7)
     ax.set_title(f"Clean and disturbed signals, {display_name(cls)} ({where})", fontsize=10)
     return save_figure(fig, path, 110)
+
+
+def write_confusion_figures(confusion: pd.DataFrame, report_dir: str | Path
+                            ) -> dict[str, Path]:
+    """One figure of confusion matrices per table: rows the feature selections, columns
+    the models, each matrix the test windows of a true class (rows) by the class
+    predicted (columns) as a share of the true class, summed over splits.
+
+    Parameters
+    ----------
+    confusion : pandas.DataFrame
+        Columns table, protocol, selection, model, true, predicted, count
+        (:data:`learn.paper.study.CONFUSION_COLUMNS`).
+    report_dir : path-like
+
+    Returns
+    -------
+    dict of str to Path
+        ``confusion_<table>`` -> ``confusion_<table>.png`` (e.g. ``confusion_VII``).
+    """
+    from matplotlib.figure import Figure
+
+    out = {}
+    for table, tab in confusion.groupby("table", sort=True):
+        sels, models = sorted(tab["selection"].unique()), list(dict.fromkeys(tab["model"]))
+        classes = list(dict.fromkeys(tab["true"]))
+        fig = Figure(figsize=(2.3 * len(models) + 1.0, 2.3 * len(sels) + 0.8),
+                     layout="constrained")
+        axes = np.atleast_2d(fig.subplots(len(sels), len(models), squeeze=False))
+        image = None
+        for (i, sel), (j, model) in itertools.product(enumerate(sels), enumerate(models)):
+            ax = axes[i, j]
+            cell = tab[(tab["selection"] == sel) & (tab["model"] == model)]
+            m = (cell.pivot_table(index="true", columns="predicted", values="count",
+                                  aggfunc="sum").reindex(index=classes, columns=classes)
+                 .fillna(0.0).to_numpy(float))
+            share = m / np.maximum(m.sum(axis=1, keepdims=True), 1.0)
+            image = ax.imshow(share, vmin=0.0, vmax=1.0, cmap="Blues")
+            ax.set_xticks(range(len(classes)), [display_name(c)[:10] for c in classes],
+                          rotation=90, fontsize=6)
+            ax.set_yticks(range(len(classes)), [display_name(c)[:10] for c in classes]
+                          if j == 0 else [], fontsize=6)
+            ax.set_title(f"{sel}, {model}: {np.trace(m) / max(m.sum(), 1):.2f}", fontsize=7)
+        fig.colorbar(image, ax=axes, shrink=0.6, label="share of the true class")
+        fig.suptitle(f"Table {table}: test confusion (rows true, columns predicted)",
+                     fontsize=9)
+        key = f"confusion_{table}"
+        out[key] = save_figure(fig, Path(report_dir) / f"{key}.png", 110)
+    return out
 
 
 def write_report(
@@ -314,7 +384,8 @@ def write_report(
     -------
     dict of str to Path
         ``tables`` (tables_vii_x.md), ``csv`` (results.csv), ``confusion``
-        (confusion.csv, if given) and the figures.
+        (confusion.csv, if given), the figures and ``confusion_<table>`` (one figure of
+        confusion matrices per table, :func:`write_confusion_figures`).
     """
     report_dir = Path(report_dir)
     report_dir.mkdir(parents=True, exist_ok=True)
@@ -325,6 +396,7 @@ def write_report(
     if confusion is not None:
         files["confusion"] = report_dir / "confusion.csv"
         write_owned(files["confusion"], lambda tmp: confusion.to_csv(tmp, index=False))
+        files.update(write_confusion_figures(confusion, report_dir))
     if ds is not None:
         files.update(write_figures(ds, report_dir))
     log.info("report written to %s", report_dir)

@@ -66,7 +66,7 @@ def test_paper_study_small(tiny_dataset, tracking_uri, tmp_path):
               & (res["selection"] == "selection1")]
     assert nb1["test_accuracy"].mean() > 0.5  # chance: 1/6
     files = out["files"]
-    for kind in ("tables", "csv", "fig6", "fig7", "fig8"):
+    for kind in ("tables", "csv", "fig6", "fig7", "fig8", "confusion_VII", "confusion_X"):
         assert files[kind].is_file() and files[kind].stat().st_size > 0, kind
     md = files["tables"].read_text()
     assert "## Table VII:" in md and "## Table X:" in md and "## Run time" in md
