@@ -191,6 +191,28 @@ class TrackedRun:
             metrics, self._metrics = self._metrics[:n], self._metrics[n:]
             self.client.log_batch(self.run_id, metrics=metrics, params=params)
 
+    def log_learning_curve(self, model) -> int:
+        """Log a fitted net's learning curve: each epoch's ``epoch/<key>`` (``loss``,
+        ``val_loss``, ``val_accuracy``) at step = the epoch, from the ``history_`` of the
+        model or of a pipeline's last step (:mod:`learn.learners.nets`).
+
+        Parameters
+        ----------
+        model : fitted estimator
+            Anything; one without a ``history_`` logs nothing.
+
+        Returns
+        -------
+        int
+            The epochs logged.
+        """
+        est = model.steps[-1][1] if hasattr(model, "steps") else model
+        history = getattr(est, "history_", None) or []
+        for rec in history:
+            self.log_metrics({f"epoch/{k}": v for k, v in rec.items() if k != "epoch"},
+                             step=int(rec["epoch"]))
+        return len(history)
+
     def log_figure(self, figure, name: str) -> None:
         """Store a matplotlib figure as the artifact ``name`` (e.g. ``"confusion.png"``)."""
         self.client.log_figure(self.run_id, figure, name)
@@ -554,6 +576,7 @@ def log_job(
                 f"{run_name}: mean test accuracy {100 * result.mean_test_accuracy:.1f} %"),
                 "confusion_matrix.png")
         if model is not None:
+            run.log_learning_curve(model)
             run.log_model(model, X_sample=X_sample, tags=model_tags)
     log.info("MLflow run %s (%s/%s)", run.run_id, experiment, run_name)
     return run.run_id

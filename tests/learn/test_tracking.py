@@ -176,6 +176,22 @@ def test_own_estimators_are_logged_in_cloudpickle_quietly(kind, tracking_uri, ca
     np.testing.assert_array_equal(loaded.predict(X), model.predict(X))
 
 
+def test_a_nets_learning_curve_is_logged_per_epoch(tracking_uri):
+    """Issue 87: the nets logged no learning curves."""
+    from learn.learners.models import make_pipeline
+    from learn.learners.nets import MLPClassifierTorch
+
+    X, y = _xy(n=120)
+    est = MLPClassifierTorch(hidden=(8,), max_epochs=4, device="cpu", random_state=0)
+    model = make_pipeline(est, "mlp_torch").fit(X, y)
+    with log_run("test-tracking", "curve", tracking_uri=tracking_uri) as run:
+        n = run.log_learning_curve(model)
+    assert n == len(est.history_) > 0
+    hist = _client(tracking_uri).get_metric_history(run.run_id, "epoch/loss")
+    assert [m.step for m in hist] == [r["epoch"] for r in est.history_]
+    assert [m.value for m in hist] == pytest.approx([r["loss"] for r in est.history_])
+
+
 def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri, tmp_path):
     """swgsim-train's job: the logged model is the last split's, so it reproduces that
     split's reported test accuracy exactly (same seed, same rows)."""
