@@ -149,13 +149,13 @@ def test_a_stop_between_two_folders_names_the_one_finished(tmp_path, capsys):
     def entry():
         with ownership.claim(first, "swgsim-generate"):
             ownership.atomic_write_bytes(first / "gear1_n2000rpm.nc", b"a shard")
-        os.kill(os.getpid(), signal.SIGINT)
+        os.kill(os.getpid(), signal.SIGTERM)  # SIGINT is a pytest-xdist worker's own
         time.sleep(1)  # the handler raises here, before the report's folder is claimed
         ownership.claim(second, "swgsim-paper")
 
     code, err = _stopped(entry, capsys)
-    assert code == 130 and _lines(err) == [
-        f"swgsim-x: interrupted (SIGINT); finished before the stop and kept: {first}; "
+    assert code == 143 and _lines(err) == [
+        f"swgsim-x: terminated (SIGTERM); finished before the stop and kept: {first}; "
         "rerun the same command to go on"]
 
 
