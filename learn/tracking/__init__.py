@@ -12,8 +12,9 @@ from __future__ import annotations
 from swgsim.base.lazy import lazy_exports
 
 _EXPORTS = {
-    **dict.fromkeys(("GROUP_PARENT_TAG", "TrackedRun", "flatten_config", "hydra_sweep",
-                     "log_job", "log_run"), "mlflow_runs"),
+    **dict.fromkeys(("GROUP_PARENT_TAG", "TrackedRun", "flatten_config", "log_job",
+                     "log_run"), "mlflow_runs"),
+    **dict.fromkeys(("SweepSummary", "hydra_sweep", "summarize_sweep"), "sweep"),
     **dict.fromkeys(("check_tracking", "default_tracking_uri", "quiet_mlflow", "store_lock",
                      "tracking_client"), "store"),
     **dict.fromkeys(("DatasetRef", "dataset_ref", "git_tags", "provenance_tags", "repo_root"),

@@ -333,12 +333,22 @@ _FAILED_GROUPS: set[str] = set()
 _EXPERIMENTS: dict[tuple[str, str], str] = {}
 
 
+def group_display_name(group: str) -> str:
+    """A group parent's run name: a sweep's by its folder's last two parts (Hydra's date
+    and time, ``"sweep 2026-11-29/12-00-00"``), the group itself otherwise; the tag
+    :data:`GROUP_PARENT_TAG` keeps the whole group."""
+    if group.startswith("sweep "):
+        return "sweep " + "/".join(Path(group[6:]).parts[-2:])
+    return group
+
+
 def group_parent(client, experiment_id: str, group: str,
                  datasets: Sequence[DatasetRef] = ()) -> str:
     """Run id of the parent run of ``group`` in an experiment, created on first use.
 
     The parent is the run tagged :data:`GROUP_PARENT_TAG` = ``group`` (run name
-    ``group``), found by a search, else created with the git tags and the data sets.
+    :func:`group_display_name`), found by a search, else created with the git tags and
+    the data sets.
     Looked up once per process (cached). Parallel processes starting a group at the same
     moment may each create a parent; their children still share the tag ``group``.
 
@@ -365,7 +375,7 @@ def group_parent(client, experiment_id: str, group: str,
     if found:
         pid = found[0].info.run_id
     else:
-        run = client.create_run(experiment_id, run_name=group,
+        run = client.create_run(experiment_id, run_name=group_display_name(group),
                                 tags={**provenance_tags(), GROUP_PARENT_TAG: group})
         pid = run.info.run_id
         parent = TrackedRun(client, pid, experiment_id)
@@ -373,28 +383,6 @@ def group_parent(client, experiment_id: str, group: str,
             parent.log_dataset(d)
     _GROUP_PARENTS[key] = pid
     return pid
-
-
-def hydra_sweep() -> str | None:
-    """Group name of the Hydra multirun this process runs a job of, else None.
-
-    Returns
-    -------
-    str or None
-        ``"sweep <absolute sweep dir>"`` (Hydra's default sweep dir holds the start date
-        and time, so each sweep has its own); None outside Hydra or in a single run.
-    """
-    try:
-        from hydra.core.hydra_config import HydraConfig
-        from hydra.types import RunMode
-    except ImportError:
-        return None
-    if not HydraConfig.initialized():
-        return None
-    hc = HydraConfig.get()
-    if hc.mode != RunMode.MULTIRUN:
-        return None
-    return f"sweep {Path(str(hc.sweep.dir)).resolve()}"
 
 
 def _create_run(client, experiment: str, run_name: str, tags: Mapping[str, Any] | None,
@@ -463,7 +451,7 @@ def log_run(
         Make the run a child of this run (tag ``mlflow.parentRunId``).
     group : str, optional
         Make the run a child of the group's parent run (created on first use) and tag it
-        ``group``; e.g. :func:`hydra_sweep` for the jobs of a sweep.
+        ``group``; e.g. :func:`learn.tracking.sweep.hydra_sweep` for the jobs of a sweep.
 
     Yields
     ------

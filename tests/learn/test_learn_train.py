@@ -85,6 +85,15 @@ def test_multirun_cli(tiny_dataset, tracking_uri, tmp_path, monkeypatch, capsys)
     exp = client.get_experiment_by_name("ood_disturbed")
     names = {r.info.run_name for r in client.search_runs([exp.experiment_id])}
     assert {"selection1-rf", "selection3-rf", "selection1-knn", "selection3-knn"} <= names
+    # issue 87: the parent holds the sweep's summary under a short name, the console too
+    parent = [r for r in client.search_runs([exp.experiment_id])
+              if r.info.run_name.startswith("sweep ")]
+    assert len(parent) == 1 and str(tmp_path) not in parent[0].info.run_name
+    assert parent[0].data.metrics["n_runs"] == 4
+    assert "best_mean_test_accuracy" in parent[0].data.metrics
+    assert parent[0].data.tags["best_run"] in names
+    out = capsys.readouterr().out
+    assert "sweep summary" in out and "selection3-knn" in out
 
 
 def test_paper_study_task(tiny_dataset, tracking_uri, tmp_path):
