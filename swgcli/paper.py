@@ -119,7 +119,7 @@ def _studies(cfg: DictConfig, names: list[str], root_data: str, root_rep: str, s
         study[n] = run_paper_study(
             f"{root_data}/{n}", f"{root_rep}/{n}", OmegaConf.to_object(cfg.study),
             tracking_uri=cfg.tracking_uri, log_models=cfg.log_models, n_jobs=cfg.n_jobs,
-            random_state=cfg.seed, experiment_prefix=f"paper_study/{n}/", name=n)
+            random_state=cfg.seed, experiment_prefix=f"paper/{n}/", name=n)
         stages[f"study {n}"] = time.perf_counter() - t0
         for w in study[n]["warnings"]:
             caught[(w["category"], w["message"])] += w["count"]

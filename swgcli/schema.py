@@ -49,9 +49,11 @@ from swgsim.datasets.config import DatasetConfig
 from swgsim.gear.thermal import THERMAL_PRESETS
 
 #: Experiments of ``swgsim-train`` (conf/experiment/) whose tracking is a ``logger`` group
-#: option of their name (MLflow experiment and run named after it), selected in their
-#: defaults: ``~logger`` then switches it off like every other app's.
-EXPERIMENT_LOGGERS = ("benchmark", "monitor", "prognosis", "transfer")
+#: option of their name, selected in their defaults (``~logger`` then switches it off like
+#: every other app's): option -> MLflow experiment (the naming scheme, docs/apps.md,
+#: "MLflow experiments and runs"); the run is named after the option.
+EXPERIMENT_LOGGERS = {"benchmark": "monitor/benchmark", "monitor": "monitor/evaluation",
+                      "prognosis": "monitor/prognosis", "transfer": "transfer"}
 #: ``n_jobs`` of every app: worker processes, one or more (0 or a negative count is
 #: refused with the keys, before any work)
 N_JOBS = allowed(1, None, "worker processes")
@@ -258,11 +260,12 @@ def register() -> None:
     cs.store(group="logger", name="mlflow", node=LoggerConfig)
     # swgsim-monitor's tracking as a group option, so that `~logger` removes all of it
     cs.store(group="logger", name="monitor_stream",
-             node=LoggerConfig(experiment="monitor_stream", run_name="monitor"))
+             node=LoggerConfig(experiment="monitor/stream", run_name="monitor"))
     # an experiment's tracking as a group option it selects (conf/experiment/*.yaml):
     # keys an experiment set directly would bring a logger back after `~logger`
-    for name in EXPERIMENT_LOGGERS:
-        cs.store(group="logger", name=name, node=LoggerConfig(experiment=name, run_name=name))
+    for name, experiment in EXPERIMENT_LOGGERS.items():
+        cs.store(group="logger", name=name, node=LoggerConfig(experiment=experiment,
+                                                              run_name=name))
     for table, spec in PAPER_TABLES.items():
         cs.store(group="experiment", name=f"table_{table.lower()}", package="_global_", node={
             "defaults": [{"override /protocol": spec.protocol}],

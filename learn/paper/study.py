@@ -76,7 +76,7 @@ class StudyTracking:
     """
 
     tracking_uri: str | None = None
-    experiment_prefix: str = "paper_study/"
+    experiment_prefix: str = "paper/"
     log_models: bool = LoggerConfig.log_models
     group: str = ""
 

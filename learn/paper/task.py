@@ -49,7 +49,9 @@ def run_paper_study(
         ``"study <name> <start time>"``).
     log_models : bool, default True
         With ``track``, also log each job's model fitted on its last split (no refit).
-    experiment_prefix : str, default "paper_study/"
+    experiment_prefix : str, default "paper/"
+        The naming scheme (docs/apps.md, "MLflow experiments and runs"): ``paper/<data
+        set>/`` for the main job and ``swgsim-train experiment=paper``.
     n_jobs, progress, random_state, features, protocols, name
         See :func:`learn.paper.study.paper_study`.
 
@@ -116,7 +118,8 @@ def run_paper_study_task(cfg) -> dict:
         app.stored.path, Path(app.paths.report_dir) / "paper", app.study,
         tracking_uri=None if logger is None else logger.tracking_uri,
         track=logger is not None, log_models=logger is not None and logger.log_models,
-        n_jobs=app.n_jobs, random_state=app.seed, features=app.features)
+        n_jobs=app.n_jobs, random_state=app.seed, features=app.features,
+        experiment_prefix=f"paper/{app.stored.name}/")
     res = out.pop("results")
     means = res.groupby(["table", "selection", "model"])["test_accuracy"].mean()
     out["mean_test_accuracy"] = {"/".join(k): float(v) for k, v in means.items()}

@@ -16,9 +16,10 @@ class LoggerConfig:
         None: ``$MLFLOW_TRACKING_URI``, else ``sqlite:///<repo>/mlflow.db``
         (:func:`learn.tracking.store.default_tracking_uri`).
     experiment, run_name : str
-        MLflow experiment and run name; interpolations of the app's config (the protocol,
-        the features and the model of ``swgsim-train``; an app without them, e.g.
-        ``swgsim-monitor logger=mlflow``, gets ``swgsim`` and ``run``).
+        MLflow experiment and run name; interpolations of the app's config: a job of
+        ``swgsim-train`` goes to ``paper/<data set>/<protocol>``, as the main job's jobs
+        do, named ``<features>-<model>`` (the naming scheme: docs/apps.md, "MLflow
+        experiments and runs").
     confusion_plot : bool
         Store the confusion matrix as a figure.
     log_models : bool
@@ -30,7 +31,7 @@ class LoggerConfig:
     """
 
     tracking_uri: str | None = None
-    experiment: str = "${oc.select:protocol.name,swgsim}"
+    experiment: str = "paper/${oc.select:stored.name,data}/${oc.select:protocol.name,run}"
     run_name: str = "${oc.select:features.name,run}-${oc.select:model.name,run}"
     confusion_plot: bool = True
     log_models: bool = True

@@ -38,7 +38,7 @@ def test_main_job_runs_both_recordings_side_by_side(tmp_path, tracking_uri, caps
 
     client = mlflow.MlflowClient(tracking_uri)
     exps = [e.experiment_id for e in client.search_experiments()
-            if e.name.startswith("paper_study/")]
+            if e.name.startswith("paper/")]
     run_ids = set()
     for p in ("paper", "bench"):
         run_ids |= set(pd.read_csv(tmp_path / "reports" / p / "results.csv")["run_id"])

@@ -41,7 +41,7 @@ def test_run_train_beats_chance_and_logs(tiny_dataset, tracking_uri, tmp_path, p
     assert run.data.params["protocol.name"] == protocol
     assert {a.path for a in client.list_artifacts(out["run_id"])} == {
         "config.yaml", "confusion_matrix.png"}
-    assert client.get_experiment(run.info.experiment_id).name == protocol
+    assert client.get_experiment(run.info.experiment_id).name == f"paper/paper/{protocol}"
 
 
 def test_unknown_task_is_rejected(tiny_dataset, tracking_uri, tmp_path):
@@ -82,7 +82,7 @@ def test_multirun_cli(tiny_dataset, tracking_uri, tmp_path, monkeypatch, capsys)
     import mlflow
 
     client = mlflow.MlflowClient(tracking_uri)
-    exp = client.get_experiment_by_name("ood_disturbed")
+    exp = client.get_experiment_by_name("paper/paper/ood_disturbed")  # the naming scheme
     names = {r.info.run_name for r in client.search_runs([exp.experiment_id])}
     assert {"selection1-rf", "selection3-rf", "selection1-knn", "selection3-knn"} <= names
     # issue 87: the parent holds the sweep's summary under a short name, the console too
