@@ -40,6 +40,7 @@ from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.datasets.records import RecordBank, record_bank
 from swgsim.datasets.schedule import MAX_WINDOWS, FaultOnset, LifeConfig, staircase
+from swgsim.gear.faults import get_fault
 
 from .model import DiagnosisModel
 from .prognosis import Prognosis, PrognosisConfig, Track
@@ -150,7 +151,16 @@ class PrognosisStudyConfig:
         7.4 times as wide as the law's and the median predicted remaining hours of root
         cracks were 1.9-4.0 times the true ones; with 32, 4.2 times and 1.2-2.3
         (2026-11-26). The diagnosis model trains on every fourth step
-        (:func:`life_levels`).
+        (:func:`life_levels`) and beyond the failure (``train_beyond``).
+    train_beyond : float
+        How far past the failure severity the diagnosis model's training severities
+        reach, as a share of the way from ``initial`` to the failure, in [0, 2]; capped at
+        the fault's severity range (:func:`training_levels`). 0: to the failure, as before.
+        0.5 [choice]: a tree ensemble cannot predict beyond its largest target and
+        shrinks toward the interior near it; trained to the failure, the training gears'
+        last estimates before failure read 0.65-0.84 for a root crack failing at 0.9,
+        0.073-0.095 for an eccentric WG failing at 0.1 (issue 85), a shortfall of up to
+        0.4 of the way; half the way again puts the failure inside the range.
     prognosis : StreamPrognosis
         The stream's prognosis option (``every_h``, ``block_h``, ``min_track_h``,
         ``min_estimates``, ``seed``; a prognosis every 0.25 h, an estimate per 0.25 h,
@@ -172,6 +182,7 @@ class PrognosisStudyConfig:
     payloads: list[float] = field(default_factory=lambda: [1.0, 1.1, 0.9])
     payload_after_h: float = 1.5
     severity_levels: int = 32
+    train_beyond: float = field(default=0.5, metadata=allowed(0.0, 2.0))
     prognosis: StreamPrognosis = field(default_factory=lambda: StreamPrognosis(
         every_h=0.25, min_track_h=0.5, min_estimates=3))
     coverage: float = field(default=0.9, metadata=allowed(0.0, 1.0, lo_open=True,
@@ -291,6 +302,34 @@ def life_levels(gf: GrowingFault, levels: int) -> list[float]:
     top = float(gf.to_failure.failure)
     exact = np.linspace(gf.initial, top, 4 * int(levels) + 1)
     return np.unique(staircase(exact, top, levels, np.ones(exact.size, bool))).tolist()
+
+
+def training_levels(fault: str, gf: GrowingFault, levels: int, beyond: float
+                    ) -> list[float]:
+    """The diagnosis model's training severities of a growing fault [-], increasing:
+    :func:`life_levels` and, past the failure severity, the staircase's steps on to
+    ``failure + beyond (failure - initial)``, capped at the top of the fault's
+    ``severity_range`` (:func:`swgsim.gear.faults.get_fault`), the cap itself added
+    where it cuts a step short.
+
+    A tree ensemble predicts no more than its largest training target and shrinks
+    toward the interior near it; a failure severity inside the training range is read
+    without that bias (issue 85). A failure at the range's top (the tip crack, 1.0)
+    gains nothing: the simulator makes no larger severity.
+
+    Raises
+    ------
+    ValueError
+        If ``fault`` is not registered.
+    """
+    lv = life_levels(gf, levels)
+    fail, top = float(gf.to_failure.failure), float(get_fault(fault).severity_range[1])
+    reach = min(top, fail + beyond * (fail - gf.initial))
+    step = abs(fail) / int(levels)
+    extra = [fail + k * step for k in range(1, int((reach - fail) / step + 1e-9) + 1)]
+    if reach > fail + 1e-9 and (not extra or extra[-1] < reach - 1e-9):
+        extra.append(reach)
+    return lv + extra
 
 
 def life_of(plan: DatasetPlan, bank: RecordBank, g: int, sc: PrognosisStudyConfig,
@@ -587,7 +626,8 @@ def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStu
     gears = [int(x.id) for x in plan.config.gears]
     banks = {x: record_bank(plan, x) for x in gears}
     faults, not_run = evaluated_faults(plan, sc)
-    levels = {f: life_levels(sc.faults[f], sc.severity_levels // 4) for f in faults}
+    levels = {f: training_levels(f, sc.faults[f], sc.severity_levels // 4, sc.train_beyond)
+              for f in faults}
     train = dataclasses.replace(sc.train, faults=sc.train.faults or faults,
                                 fault_severities={**levels, **sc.train.fault_severities})
     model = train_model(plan, banks, [x for x in gears if x != g], train)
@@ -618,4 +658,4 @@ def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStu
 
 __all__ = ["METHODS", "GrowingFault", "PrognosisStudyConfig", "baseline_events", "calibrate",
            "evaluated_faults", "life_levels", "life_of", "run_life",
-           "run_prognosis_part"]
+           "run_prognosis_part", "training_levels"]

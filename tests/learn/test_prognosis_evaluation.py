@@ -244,3 +244,73 @@ def test_a_prognosis_beyond_the_horizon_gets_the_earliest_quarters_scale():
                  {"growth": (1.0, 2.0, 3.0, 4.0)})
     assert rows[0]["interval_scale"] == 4.0 and rows[0]["remaining_h"] == np.inf
     assert np.isnan(rows[1]["interval_scale"]) and np.isnan(rows[1]["remaining_h"])
+
+
+def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
+    """Issue 85: a tree ensemble trained to the failure severity alone reads low at the
+    failure (it cannot predict beyond its largest target and shrinks toward the interior
+    near it); trained past it (``train_beyond``, :func:`training_levels`) it does not.
+    Tiny life: tiny_bench's gear 3, an eccentric WG worn to 0.1, models of gears 1 and 2;
+    the last estimate of the followed alarm's track before the failure."""
+    import dataclasses
+
+    from learn.monitor.prognosis_evaluation import (
+        METHODS,
+        GrowingFault,
+        PrognosisStudyConfig,
+        life_of,
+        run_life,
+        training_levels,
+    )
+    from learn.monitor.study import MonitorStudyConfig
+    from learn.monitor.training import train_model
+    from swgcli import dataset_preset
+    from swgsim.datasets.config import dataset_config
+    from swgsim.datasets.growth import RunToFailure
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import record_bank
+
+    p = plan(dataset_config(dataset_preset("tiny_bench")))
+    gf = GrowingFault(0.0, RunToFailure(failure=0.1, wear_coeff_m_per_nm_rev=7e-13))
+    train = MonitorStudyConfig(faults=["eccentric_wg"], nuisances={}, detectors=[],
+                               commissioning_h=4, healthy_hours=10, train_healthy_h=2,
+                               train_variants=2, detector_hours=2, onset_window_h=[0.5, 1])
+    sc = PrognosisStudyConfig(train=train, seeds=[1], calibration_seeds=[100], gears=[3],
+                              faults={"eccentric_wg": gf}, onset_window_h=[0.5, 1],
+                              max_life_h=6, payload_after_h=1, payloads=[1.0])
+    banks = {g: record_bank(p, g) for g in (1, 2, 3)}
+    scales = {m: (1.0,) * 4 for m in METHODS}
+    short = {}
+    for beyond in (0.0, 0.5):
+        levels = training_levels("eccentric_wg", gf, sc.severity_levels // 4, beyond)
+        assert (levels[-1] > 0.1) == (beyond > 0)
+        model = train_model(p, banks, [1, 2], dataclasses.replace(
+            train, fault_severities={"eccentric_wg": levels}))
+        for seed in (1, 2):
+            _, events = run_life(life_of(p, banks[3], 3, sc, "eccentric_wg", seed, 0),
+                                 model, sc, scales, seed)
+            last = [e["severity"] for e in events["growth"] if e["severity"] is not None][-1]
+            short[beyond, seed] = 0.1 - last
+    for seed in (1, 2):
+        assert short[0.0, seed] > 0.01, short  # trained to the failure: reads low
+        assert short[0.5, seed] < short[0.0, seed] - 0.005, short
+        assert abs(short[0.5, seed]) < 0.0075, short
+
+
+def test_training_levels_reach_past_the_failure_within_the_faults_range():
+    """Past the failure by half the way from the onset's severity, on the staircase's
+    steps, capped at the fault's severity range (the cap added where it cuts a step):
+    none for a tip crack failing at its range's top."""
+    from learn.monitor.prognosis_evaluation import (
+        PrognosisStudyConfig,
+        life_levels,
+        training_levels,
+    )
+
+    sc = PrognosisStudyConfig()
+    got = {f: training_levels(f, gf, 8, 0.5) for f, gf in sc.faults.items()}
+    assert got["eccentric_wg"][-1] == pytest.approx(0.15) and len(got["eccentric_wg"]) == 12
+    assert got["root_tooth_crack"][-2:] == [0.9, 0.99]  # range (0, 0.99)
+    assert got["tip_tooth_crack"] == life_levels(sc.faults["tip_tooth_crack"], 8)
+    for f, gf in sc.faults.items():
+        assert training_levels(f, gf, 8, 0.0) == life_levels(gf, 8)
