@@ -122,7 +122,7 @@ def lives_of(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: Monit
     """The healthy life of held-out gear ``g`` for a seed, under a nuisance of
     ``cfg.nuisances``, a family of ``cfg.families`` (``family:<key>``) or none, and its
     fault lives (:func:`fault_lives`, :func:`nuisance_fault_lives`, growing ones under a
-    family), sharing its records; a fault life runs ``horizon_h`` after its onset, or
+    family), sharing its records; a fault life runs ``fault_life_h`` after its onset, or
     after its linear growth's end."""
     healthy = healthy_life(plan, banks[g], g, cfg, seed, nuisance)
     return healthy, [(LifeSimulator(plan, g, life, banks[g]), f, kind)
@@ -133,10 +133,10 @@ def lives_of(plan: DatasetPlan, banks: dict[int, RecordBank], g: int, cfg: Monit
 def fault_life_configs(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int, nuisance: str,
                        base: LifeConfig) -> list[tuple[LifeConfig, FaultOnset, str]]:
     """The fault lives of :func:`lives_of` as configs: the healthy life ``base`` with each
-    fault onset, running ``horizon_h`` after it (or after its linear growth's end)."""
+    fault onset, running ``fault_life_h`` after it (or after its linear growth's end)."""
     onsets = (fault_lives(plan, cfg, int(seed)) if nuisance == "none" else
               nuisance_fault_lives(plan, cfg, int(seed), family_of(nuisance) is not None))
-    return [(dataclasses.replace(base, hours=f.onset_h + cfg.horizon_h
+    return [(dataclasses.replace(base, hours=f.onset_h + cfg.fault_life_h
                                  + (f.growth_h if f.growth == "linear" else 0.0), fault=f),
              f, kind) for f, kind in onsets]
 
@@ -292,7 +292,7 @@ def evaluate_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
     """Per-window detectors on the lives of held-out gear ``g`` (those of
     :func:`evaluate_gear`, under the same nuisance): false alarms over the first
     ``detector_hours`` of each healthy life, and each fault life from its onset until an
-    hour after the detector's first alarm (or the horizon). Returns result rows and
+    hour after the detector's first alarm (or the fault life's end). Returns result rows and
     false-alarm rows."""
     rows, fa_rows = [], []
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
@@ -317,7 +317,7 @@ def evaluate_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
 def _detector_life(sim: LifeSimulator, k0: int, refs: References, det: WindowClassifier
                    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """A detector's labels of a fault life from its onset, in chunks, until an hour after
-    its first faulty window (or the horizon); with the windows' ``hour`` and
+    its first faulty window (or the fault life's end); with the windows' ``hour`` and
     ``severity``."""
     labs, hours, sevs = [], [], []
     first = None
@@ -388,7 +388,7 @@ def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray
 def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
                 friction_start: tuple[float, float] | None, lost: bool = False):
     """A fault life from its onset, in chunks of windows, until ``confirm_h`` after the
-    monitor's alarm and the per-window rule's (or the horizon); the CUSUMs and the
+    monitor's alarm and the per-window rule's (or the fault life's end); the CUSUMs and the
     friction factor start from ``start`` and ``friction_start`` (the healthy life's before
     the onset; None: the monitor's own). ``lost``: the temperature sensor has failed, the
     monitor goes on without its reading (:func:`~.stream.read_without`), as it does from a

@@ -47,7 +47,7 @@ from .prognosis import Prognosis, PrognosisConfig, Track
 from .prognosis_baselines import predict_linear, predict_wiener
 from .prognosis_calibration import conformal_interval_scale
 from .prognosis_inputs import interval_scale_of, predicted_share, share_bucket
-from .prognosis_scores import HORIZON_BUCKETS, change_response
+from .prognosis_scores import SHARE_BUCKETS, change_response
 from .stream import monitor_stream
 from .stream_prognosis import StreamPrognosis
 from .study import MonitorStudyConfig
@@ -561,7 +561,7 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
         Per method and quarter (and ``all``): ``method``, ``quarter``, ``lives`` (scored),
         ``scale`` (uncapped, inf where too few lives for the coverage), ``scale_used``.
     """
-    labels = [f"[{lo:g}, {hi:g})" for lo, hi in HORIZON_BUCKETS] + ["all"]
+    labels = [f"[{lo:g}, {hi:g})" for lo, hi in SHARE_BUCKETS] + ["all"]
     sims = [(g, s, life_of(plan, banks[g], g, sc, f, s, i))
             for g in gears for i, s in enumerate(sc.calibration_seeds) for f in faults]
     picked: dict[str, list[list]] = {m: [[] for _ in labels] for m in METHODS}

@@ -16,7 +16,7 @@ from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
 from swgsim.datasets.schedule import LifeConfig
 from swgsim.gear.faults import get_fault
 
-from .prognosis_scores import HORIZON_BUCKETS
+from .prognosis_scores import SHARE_BUCKETS
 
 __all__ = ["LONE_WINDOW_H", "Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track",
            "check_track", "from_samples", "interval_scale_of", "not_valid", "not_yet_valid",
@@ -53,10 +53,10 @@ class PrognosisConfig:
         Factor on the interval's log half-widths about the median, each in (0, 20] [-]: one
         for every prognosis, or one per quarter of the predicted remaining share
         (:func:`predicted_share`, quarters as
-        :data:`~.prognosis_scores.HORIZON_BUCKETS`: late in the span first). (1,): the
+        :data:`~.prognosis_scores.SHARE_BUCKETS`: late in the span first). (1,): the
         posterior's own; :func:`~.prognosis_calibration.conformal_interval_scale`
         calibrates each.
-    horizon_h : float
+    in_sight_h : float
         Remaining hours beyond which a sample counts as "no failure in sight" (inf), in
         (0, 10^7] [h] (10^6 [choice]).
     max_bins : int
@@ -76,7 +76,7 @@ class PrognosisConfig:
     n_grid: int = 401
     log_scale_span: float = 5.0
     interval_scale: tuple[float, ...] = (1.0,)
-    horizon_h: float = 1e6
+    in_sight_h: float = 1e6
     max_bins: int = 256
     to_failure: RunToFailure = field(default_factory=RunToFailure)
 
@@ -110,13 +110,13 @@ class PrognosisConfig:
         check_range(self.log_scale_span, 0.0, 10.0, f"{where}.log_scale_span", lo_open=True)
         k = self.interval_scale
         if isinstance(k, (str, bytes)) or not isinstance(k, (tuple, list)) \
-                or len(k) not in (1, len(HORIZON_BUCKETS)):
+                or len(k) not in (1, len(SHARE_BUCKETS)):
             raise ValueError(f"{where}.interval_scale must be a list of 1 or "
-                             f"{len(HORIZON_BUCKETS)} factors (one per quarter of the "
+                             f"{len(SHARE_BUCKETS)} factors (one per quarter of the "
                              f"predicted remaining share), got {k!r}")
         for i, v in enumerate(k):
             check_range(v, 0.0, 20.0, f"{where}.interval_scale[{i}]", lo_open=True)
-        check_range(self.horizon_h, 0.0, 1e7, f"{where}.horizon_h", "h", lo_open=True)
+        check_range(self.in_sight_h, 0.0, 1e7, f"{where}.in_sight_h", "h", lo_open=True)
         unset = dataclasses.replace(self.to_failure, failure=None)
         for law, faults in LAWS.items():
             for fault in faults:  # the onset's severity is not the prognosis's: any > 0
@@ -255,7 +255,7 @@ class Prognosis:
         The last estimate and the failure severity [-].
     remaining_h_median, remaining_h_q05, remaining_h_q95 : float
         Quantiles of the remaining operating hours to the threshold [h] (inf: beyond
-        ``PrognosisConfig.horizon_h``).
+        ``PrognosisConfig.in_sight_h``).
     failure_hour_median, failure_hour_q05, failure_hour_q95 : float
         The same as operating hours, ``hour`` + remaining [h].
     """
@@ -378,10 +378,10 @@ def predicted_share(hour: float, alarm_hour: float, remaining_h: float) -> float
 
 
 def share_bucket(share: float) -> int:
-    """Index into :data:`~.prognosis_scores.HORIZON_BUCKETS` of a share in [0, 1] (the
+    """Index into :data:`~.prognosis_scores.SHARE_BUCKETS` of a share in [0, 1] (the
     last bucket holds 1)."""
-    return min(int(np.searchsorted([hi for _, hi in HORIZON_BUCKETS], share, side="right")),
-               len(HORIZON_BUCKETS) - 1)
+    return min(int(np.searchsorted([hi for _, hi in SHARE_BUCKETS], share, side="right")),
+               len(SHARE_BUCKETS) - 1)
 
 
 def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
@@ -398,9 +398,9 @@ def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
     now, thr : float
         The last severity estimate and the failure severity [-].
     remaining : ndarray, shape (N,)
-        Samples of the remaining operating hours [h]; beyond ``cfg.horizon_h`` inf.
+        Samples of the remaining operating hours [h]; beyond ``cfg.in_sight_h`` inf.
     cfg : PrognosisConfig
-        Its ``horizon_h`` and ``interval_scale``.
+        Its ``in_sight_h`` and ``interval_scale``.
     alarm_hour : float
         Operating hour of the alarm the prognosis follows [h] (its predicted share picks
         the interval scale).
@@ -411,7 +411,7 @@ def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
         Median, 5 % and 95 % quantiles, the interval's log half-widths about the median
         times ``cfg.interval_scale`` (:func:`interval_scale_of`).
     """
-    r = np.where(remaining > cfg.horizon_h, np.inf, np.maximum(remaining, 0.0))
+    r = np.where(remaining > cfg.in_sight_h, np.inf, np.maximum(remaining, 0.0))
     q05, med, q95 = np.quantile(r, [0.05, 0.5, 0.95], method="inverted_cdf")  # inf-safe
     k = interval_scale_of(cfg.interval_scale, hour, alarm_hour, float(med))
     if k != 1.0 and 0 < med < np.inf:
@@ -429,7 +429,7 @@ def interval_scale_of(scales: tuple[float, ...], hour: float, alarm_hour: float,
 
     Parameters
     ----------
-    scales : tuple of float, length 1 or len(HORIZON_BUCKETS)
+    scales : tuple of float, length 1 or len(SHARE_BUCKETS)
     hour, alarm_hour, remaining_h : float
         As :func:`predicted_share` [h].
 

@@ -17,13 +17,13 @@ import numpy as np
 
 from swgsim.base.typed import check_range
 
-__all__ = ["HORIZON_BUCKETS", "PHM08_EARLY", "PHM08_LATE", "alpha_lambda", "at_lambda",
-           "change_response", "horizon_bucket", "interval_hit", "phm08_score",
-           "prognostic_horizon", "relative_accuracy", "remaining_fraction"]
+__all__ = ["PHM08_EARLY", "PHM08_LATE", "SHARE_BUCKETS", "alpha_lambda", "at_lambda",
+           "change_response", "interval_hit", "phm08_score", "prognostic_horizon",
+           "relative_accuracy", "remaining_fraction", "share_bucket_label"]
 
 #: Remaining-life fraction buckets, [lo, hi) and the last [0.75, 1] [choice: quarters].
-HORIZON_BUCKETS: tuple[tuple[float, float], ...] = ((0.0, 0.25), (0.25, 0.5), (0.5, 0.75),
-                                                    (0.75, 1.0))
+SHARE_BUCKETS: tuple[tuple[float, float], ...] = ((0.0, 0.25), (0.25, 0.5), (0.5, 0.75),
+                                                  (0.75, 1.0))
 #: a1 of the PHM08 score for early predictions (d < 0) and a2 for late ones [h] (13 and 10
 #: cycles, Saxena et al. 2008; one operating hour for one cycle [choice]).
 PHM08_EARLY, PHM08_LATE = 13.0, 10.0
@@ -156,8 +156,8 @@ def remaining_fraction(hour: np.ndarray, start_h: np.ndarray, failure_h: np.ndar
     return (f - h) / (f - s)
 
 
-def horizon_bucket(fraction: np.ndarray) -> np.ndarray:
-    """The :data:`HORIZON_BUCKETS` label of each remaining-life fraction, e.g. ``[0.25,
+def share_bucket_label(fraction: np.ndarray) -> np.ndarray:
+    """The :data:`SHARE_BUCKETS` label of each remaining-life fraction, e.g. ``[0.25,
     0.5)``; ``[0.75, 1]`` holds 1; empty outside [0, 1].
 
     Parameters
@@ -171,8 +171,8 @@ def horizon_bucket(fraction: np.ndarray) -> np.ndarray:
     """
     f = np.asarray(fraction, float)
     out = np.full(f.shape, "", dtype=object)
-    for i, (lo, hi) in enumerate(HORIZON_BUCKETS):
-        last = i == len(HORIZON_BUCKETS) - 1
+    for i, (lo, hi) in enumerate(SHARE_BUCKETS):
+        last = i == len(SHARE_BUCKETS) - 1
         inside = (f >= lo) & ((f <= hi) if last else (f < hi))
         out[inside] = f"[{lo:g}, {hi:g}{']' if last else ')'}"
     return out

@@ -15,6 +15,7 @@ monitor's outputs are those without it, bit for bit.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -85,7 +86,8 @@ class StreamPrognosis:
     planned : list of DutyBlock
         A future duty the user declares, repeated from its first block; empty: the
         recorded duty's mean rate.
-    min_track_h, min_estimates, interval_scale : float, int, tuple of float
+    min_track_h, min_estimates, n_samples, n_grid, log_scale_span, interval_scale, \
+in_sight_h, max_bins : float, int, int, int, float, tuple of float, float, int
         The predictor's (:class:`learn.monitor.prognosis.PrognosisConfig`, its defaults
         and ranges).
     to_failure : RunToFailure
@@ -103,15 +105,20 @@ class StreamPrognosis:
     planned: list[DutyBlock] = field(default_factory=list)
     min_track_h: float = PrognosisConfig.min_track_h
     min_estimates: int = PrognosisConfig.min_estimates
+    n_samples: int = PrognosisConfig.n_samples
+    n_grid: int = PrognosisConfig.n_grid
+    log_scale_span: float = PrognosisConfig.log_scale_span
     interval_scale: tuple[float, ...] = PrognosisConfig.interval_scale
+    in_sight_h: float = PrognosisConfig.in_sight_h
+    max_bins: int = PrognosisConfig.max_bins
     to_failure: RunToFailure = field(default_factory=RunToFailure)
     seed: int = 0
 
     @property
     def config(self) -> PrognosisConfig:
-        """The predictor's config of these fields (the others its defaults)."""
-        return PrognosisConfig(min_track_h=self.min_track_h, min_estimates=self.min_estimates,
-                               interval_scale=self.interval_scale, to_failure=self.to_failure)
+        """The predictor's config of these fields."""
+        return PrognosisConfig(**{f.name: getattr(self, f.name)
+                                  for f in dataclasses.fields(PrognosisConfig)})
 
     def check(self, where: str = "prognosis", trained: DutyRange | None = None,
               interval_h: float | None = None, span_h: float | None = None
@@ -233,8 +240,8 @@ class StreamPrognoses:
         alarm it follows [h]), ``valid``, ``reason``, ``severity`` (the
         last estimate), ``threshold``, ``remaining_h`` (median), ``remaining_h_q05``,
         ``remaining_h_q95`` (from ``hour``) and ``failure_h`` (median), ``failure_h_q05``,
-        ``failure_h_q95`` (operating hours) [h]; None where not valid or beyond the
-        horizon.
+        ``failure_h_q95`` (operating hours) [h]; None where not valid or no failure in
+        sight (``in_sight_h``).
     tracks : list of dict
         Per alarm followed: ``fault``, ``alarm_h`` and its estimates ``hours``,
         ``severity``, ``lo``, ``hi`` (lists, the 90 % interval).
@@ -272,7 +279,7 @@ def prognosis_line(event: dict) -> str:
 
 
 def _h(x: float | None) -> str:
-    return "beyond the horizon" if x is None else f"{x:.2f} h"
+    return "no failure in sight" if x is None else f"{x:.2f} h"
 
 
 def _num(x: float) -> float | None:

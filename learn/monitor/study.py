@@ -70,7 +70,7 @@ class MonitorStudyConfig:
         Commissioning period of every life [h].
     interval_min : float
         Minutes between windows.
-    horizon_h : float
+    fault_life_h : float
         Hours a fault life runs after its onset.
     onset_window_h : list of float
         The onset is drawn uniformly this many hours after commissioning, [lo, hi].
@@ -155,7 +155,7 @@ class MonitorStudyConfig:
     commissioning_h: float = 24.0
     interval_min: float = field(default=1.0, metadata=allowed(0.0, 1440.0, lo_open=True,
                                                               unit="min"))
-    horizon_h: float = field(default=24.0, metadata=_HOURS)
+    fault_life_h: float = field(default=24.0, metadata=_HOURS)
     onset_window_h: list[float] = field(default_factory=lambda: [1.0, 100.0])
     growth_h: float = field(default=10.0, metadata=_HOURS)
     train_fault_h: float = field(default=0.5, metadata=_HOURS)
@@ -248,25 +248,25 @@ class MonitorStudyConfig:
     def _lives(self) -> list[tuple[float, tuple[str, ...]]]:
         """The longest life of each kind the study lives, as (its hours set by no hours
         option, the hours options that add up to the rest): the held-out gear's healthy
-        and nuisance lives, a fault life (the latest onset, then ``horizon_h``; with
+        and nuisance lives, a fault life (the latest onset, then ``fault_life_h``; with
         families, their growing faults' ``family_growth_h`` before it:
         :func:`learn.monitor.evaluate.nuisance_fault_lives`) and the training lives
         (:func:`learn.monitor.training.training_lives`). ``growth_h`` makes no life
         longer: the growing faults of :func:`learn.monitor.evaluate.fault_lives` end
-        ``horizon_h`` after their onset."""
+        ``fault_life_h`` after their onset."""
         onset = self.commissioning_h + self.onset_window_h[1]
         lives = [(0.0, ("healthy_hours",)), (0.0, ("nuisance_hours",)),
-                 (onset, ("horizon_h",)), (0.0, ("commissioning_h", "train_healthy_h")),
+                 (onset, ("fault_life_h",)), (0.0, ("commissioning_h", "train_healthy_h")),
                  (self.interval_min / 60.0, ("train_fault_h",))]
         if self.families:
-            lives.append((onset, ("family_growth_h", "horizon_h")))
+            lives.append((onset, ("family_growth_h", "fault_life_h")))
         return lives
 
     def _check_families(self, where: str) -> None:
         """The design and scored seeds (disjoint), and each family against the study: its
         sensor fault and re-greasing after commissioning, its draws for every seed (a
         payload step inside the shortest fault life, commissioning_h + onset_window_h[0] +
-        horizon_h). Each family's own ranges: :meth:`NuisanceFamily.check
+        fault_life_h). Each family's own ranges: :meth:`NuisanceFamily.check
         <learn.monitor.families.NuisanceFamily.check>`, before, in the same pass."""
         for name in ("design_seeds", "scored_seeds"):
             seeds = getattr(self, name)
@@ -280,7 +280,7 @@ class MonitorStudyConfig:
         both = sorted(set(self.design_seeds) & set(self.scored_seeds))
         _req(not both, f"{where}.scored_seeds must be disjoint from design_seeds, both hold "
                        f"{both}")
-        shortest = self.commissioning_h + self.onset_window_h[0] + self.horizon_h
+        shortest = self.commissioning_h + self.onset_window_h[0] + self.fault_life_h
         for name, fam in self.families.items():
             _req(":" not in name, f"{where}.families: a key must not hold ':', got {name!r}")
             for k in ("sensor_fault_h", "regrease_h"):

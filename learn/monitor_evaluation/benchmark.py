@@ -88,7 +88,7 @@ class BenchmarkConfig:
     design_seeds : list of int
         Seeds of the design lives (below the scored seeds' range).
     study : MonitorStudyConfig
-        The monitor's evaluation settings (commissioning, windows, horizon, rule, normal
+        The monitor's evaluation settings (commissioning, windows, fault lives, rule, normal
         behaviour, the training lives); its seeds and families are the benchmark's
         (:meth:`study_of`), not read.
     baselines : BaselineConfig

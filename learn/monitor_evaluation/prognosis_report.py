@@ -2,7 +2,7 @@
 (:mod:`learn.monitor.prognosis_evaluation`; ``swgsim-train experiment=prognosis``), every
 figure computed from the results (:mod:`learn.monitor.prognosis_scores`), none written in.
 
-The targets (issue 47): the 90 % interval's coverage (PICP) in [0.85, 0.95] in every horizon
+The targets (issue 47): the 90 % interval's coverage (PICP) in [0.85, 0.95] in every remaining-share
 bucket with at least 20 prognoses; the relative accuracy at half the way from the first
 prognosis to failure (its median over lives) >= 0.8; the alpha-lambda criterion (alpha 0.2,
 lambda 0.5) met in >= 80 % of the lives; the median absolute error at half-life <= 0.7 times
@@ -17,15 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from learn.monitor.prognosis_scores import (
-    HORIZON_BUCKETS,
+    SHARE_BUCKETS,
     alpha_lambda,
     at_lambda,
-    horizon_bucket,
     interval_hit,
     phm08_score,
     prognostic_horizon,
     relative_accuracy,
     remaining_fraction,
+    share_bucket_label,
 )
 from learn.monitor_evaluation.statistics import Interval, life_bootstrap
 from swgsim.base.lazy import lazy_module
@@ -48,8 +48,8 @@ WITHIN_H = 24.0
 
 
 def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
-    """Coverage and width of the 90 % interval per data set, fault, method and horizon
-    bucket of the remaining-life fraction (:data:`HORIZON_BUCKETS`, from the alarm to the
+    """Coverage and width of the 90 % interval per data set, fault, method and remaining-share
+    bucket of the remaining-life fraction (:data:`SHARE_BUCKETS`, from the alarm to the
     failure).
 
     Parameters
@@ -67,7 +67,7 @@ def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
         ``open`` (share of open intervals), ``phm08`` (mean score of the medians).
     """
     v = rows[rows.valid].copy()
-    v["bucket"] = horizon_bucket(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
+    v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
     v["hit"] = interval_hit(v.true_remaining_h.to_numpy(), v.remaining_h_q05.to_numpy(),
                             v.remaining_h_q95.to_numpy())
     v["width"] = v.remaining_h_q95 - v.remaining_h_q05
@@ -216,7 +216,7 @@ def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFram
                 buckets: pd.DataFrame, lives: pd.DataFrame, calibration: pd.DataFrame,
                 moved: pd.DataFrame) -> None:
     """``table.md``: the header, the targets with pass or fail, the scores per fault and
-    method, the coverage per horizon bucket, the payload changes (:func:`change_table`),
+    method, the coverage per remaining-share bucket, the payload changes (:func:`change_table`),
     the lives and the calibration."""
     lv = lives.assign(after_onset_h=lives.failure_h - lives.onset_h,
                       alarm_after_onset_h=lives.alarm_h - lives.onset_h)
@@ -229,7 +229,7 @@ def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFram
         f"\n## {title}\n\n{md_table(t.columns, t.itertuples(index=False))}\n" for title, t in (
             ("Targets (the growth law)", tgt),
             ("Scores per fault and method (held-out gears)", summary),
-            ("The 90 % interval per horizon bucket (remaining share of the way from the "
+            ("The 90 % interval per remaining-share bucket (remaining share of the way from the "
              "alarm to failure)", buckets),
             ("After a payload change, against the same life without it", moved),
             ("Lives", alarms),
@@ -239,7 +239,7 @@ def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFram
 
 
 def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path) -> Path:
-    """``prognosis.png``: the 90 % interval's coverage per horizon bucket and method (all
+    """``prognosis.png``: the 90 % interval's coverage per remaining-share bucket and method (all
     faults and data sets pooled), and the predicted against the true remaining hours of
     every valid prognosis per method (median)."""
     import matplotlib
@@ -249,10 +249,10 @@ def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path) -> Path:
 
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
     v = rows[rows.valid].copy()
-    v["bucket"] = horizon_bucket(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
+    v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
     v["hit"] = interval_hit(v.true_remaining_h.to_numpy(), v.remaining_h_q05.to_numpy(),
                             v.remaining_h_q95.to_numpy())
-    labels = [f"[{lo:g}, {hi:g}{']' if hi == 1.0 else ')'}" for lo, hi in HORIZON_BUCKETS]
+    labels = [f"[{lo:g}, {hi:g}{']' if hi == 1.0 else ')'}" for lo, hi in SHARE_BUCKETS]
     methods = sorted(v.method.unique())
     for k, m in enumerate(methods):
         cov = v[v.method == m].groupby("bucket").hit.mean().reindex(labels)

@@ -286,7 +286,7 @@ def figures(res: pd.DataFrame, fa: pd.DataFrame, out_dir: Path,
         ax.set_ylabel("time to detect [min]", fontsize=8)
     axes[0, 0].legend(fontsize=7)
     fig.suptitle("Monitor: time to detect per life, held-out gears, step onsets (dashed: 30 "
-                 "min; x: not detected within the horizon)", fontsize=9)
+                 "min; x: not detected within the fault life)", fontsize=9)
     p = _save(fig, out_dir / "time_to_detect.png")
     paths.append(p)
 

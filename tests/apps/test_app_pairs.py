@@ -310,7 +310,7 @@ TINY_MONITOR = [
     "monitor.run_on=[tiny_bench]", "+dataset@monitor.datasets.tiny_bench=tiny_bench",
     "monitor.n_jobs=1", "monitor.progress=false", "monitor.study.seeds=[0]",
     "monitor.study.healthy_hours=3.0", "monitor.study.commissioning_h=2.0",
-    "monitor.study.horizon_h=1.0", "monitor.study.onset_window_h=[0.5,1.0]",
+    "monitor.study.fault_life_h=1.0", "monitor.study.onset_window_h=[0.5,1.0]",
     "monitor.study.growth_h=0.5", "monitor.study.train_fault_h=0.25",
     "monitor.study.train_healthy_h=1.0", "monitor.study.train_variants=1",
     "monitor.study.faults=[eccentric_wg]", "monitor.study.gears=[3]",

@@ -19,7 +19,7 @@ from swgsim.datasets import plan as P
 from swgsim.datasets.records import record_bank
 
 TINY = MonitorStudyConfig(commissioning_h=3.0, train_healthy_h=2.0, train_variants=2,
-                          faults=["eccentric_wg"], interval_min=1.0, horizon_h=2.0,
+                          faults=["eccentric_wg"], interval_min=1.0, fault_life_h=2.0,
                           onset_window_h=[0.5, 1.0], family_growth_h=2.0)
 
 
@@ -153,7 +153,7 @@ BENCH_TINY = ["benchmark.run_on=[tiny]", "+dataset@benchmark.datasets.tiny=tiny_
               "benchmark.study.healthy_hours=8", "benchmark.study.seeds=[300]",
               "benchmark.study.design_seeds=[200]", "benchmark.study.study.commissioning_h=3",
               "benchmark.study.study.train_healthy_h=2", "benchmark.study.study.train_variants=2",
-              "benchmark.study.study.faults=[eccentric_wg]", "benchmark.study.study.horizon_h=2",
+              "benchmark.study.study.faults=[eccentric_wg]", "benchmark.study.study.fault_life_h=2",
               "benchmark.study.study.onset_window_h=[0.5,1.0]",
               "benchmark.study.study.family_growth_h=2", "benchmark.progress=false"]
 

@@ -109,7 +109,7 @@ def test_stream_outside_the_models_operating_points_refused():
         check_stream(_stream(), m, RuleConfig(), "s")
 
 
-TINY_STUDY = dict(seeds=[0], healthy_hours=10.0, commissioning_h=4.0, horizon_h=2.0,
+TINY_STUDY = dict(seeds=[0], healthy_hours=10.0, commissioning_h=4.0, fault_life_h=2.0,
                   onset_window_h=[0.5, 1.0], growth_h=0.5, train_fault_h=0.5,
                   train_healthy_h=2.0, train_variants=2,
                   faults=["eccentric_wg", "sensor_offset_step"], gears=[3], detector_hours=2.0,

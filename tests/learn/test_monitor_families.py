@@ -107,9 +107,9 @@ def test_a_folder_with_files_of_anything_else_is_refused_before_work(tmp_path, l
     (["--study", "nuisance_hours=1e6"], "monitor.study.nuisance_hours=1e+06 h at "
                                         "interval_min=1 min is 6e+07 windows a life; allowed: "
                                         "at most 5e+06"),
-    # every hours option that makes a life, by the same window bound (horizon_h=1e5: a
+    # every hours option that makes a life, by the same window bound (fault_life_h=1e5: a
     # MemoryError at 7.4 GB after 36 s of training; the others by the same path)
-    (["--study", "horizon_h=100000"], "monitor.study.horizon_h=100000 h at interval_min=1 "
+    (["--study", "fault_life_h=100000"], "monitor.study.fault_life_h=100000 h at interval_min=1 "
                                       "min is 6.01e+06 windows a life; allowed: at most "
                                       "5e+06 (up to 8.32e+04 h)"),
     (["--study", "family_growth_h=1e5"], "monitor.study.family_growth_h=100000 h at "

@@ -249,3 +249,33 @@ def test_a_failure_severity_is_checked_against_the_followed_fault_only():
     assert "\n" not in str(err.value)
     with one_line(r"prognosis.to_failure.failure must lie in \(0, 1\]"):
         PrognosisConfig(to_failure=RunToFailure(failure=1.2)).check()
+
+
+def test_every_predictor_option_is_an_option_of_the_monitor_app():
+    """Issue 84/85: each field of PrognosisConfig is a ``prognosis.<field>`` of
+    swgsim-monitor, composed from its command line into the predictor's config, its
+    range checked in one line naming the key."""
+    import dataclasses
+
+    from omegaconf import OmegaConf
+
+    from learn.monitor.prognosis_inputs import PrognosisConfig
+    from learn.monitor.stream_prognosis import StreamPrognosis
+    from swgcli import compose_app
+    from swgsim.base.typed import plain
+
+    names = {f.name for f in dataclasses.fields(PrognosisConfig)}
+    assert names <= {f.name for f in dataclasses.fields(StreamPrognosis)}
+    app = compose_app("monitor", ["stream=s", "diagnosis_model=m", "prognosis.n_samples=500",
+                                  "prognosis.n_grid=101",
+                                  "prognosis.log_scale_span=3", "prognosis.in_sight_h=100",
+                                  "prognosis.max_bins=16"])
+    opt = OmegaConf.to_object(app.prognosis)
+    cfg = opt.config.check()
+    assert (cfg.n_samples, cfg.n_grid, cfg.log_scale_span, cfg.in_sight_h, cfg.max_bins) \
+        == (500, 101, 3.0, 100.0, 16)
+    assert plain(cfg) == plain(dataclasses.replace(PrognosisConfig(), n_samples=500, n_grid=101,
+                                                   log_scale_span=3.0, in_sight_h=100.0,
+                                                   max_bins=16))
+    with pytest.raises(ValueError, match=r"^prognosis.n_grid must lie in \[21, 10001\]"):
+        StreamPrognosis(n_grid=5).check()

@@ -231,8 +231,8 @@ def test_the_model_is_trained_on_every_severity_a_life_passes_through():
             assert trained[0] <= lived[0] + trained[1] - trained[0] and lived[-1] <= trained[-1]
 
 
-def test_a_prognosis_beyond_the_horizon_gets_the_earliest_quarters_scale():
-    """A valid prognosis whose median lies beyond the horizon (null remaining hours):
+def test_a_prognosis_with_no_failure_in_sight_gets_the_earliest_quarters_scale():
+    """A valid prognosis whose median lies beyond in_sight_h (null remaining hours):
     predicted share 1, the scale of the quarter that holds the alarm; a prognosis not
     yet valid gets none."""
     from learn.monitor.prognosis_evaluation import _rows

@@ -10,12 +10,12 @@ from learn.monitor.prognosis_scores import (
     alpha_lambda,
     at_lambda,
     change_response,
-    horizon_bucket,
     interval_hit,
     phm08_score,
     prognostic_horizon,
     relative_accuracy,
     remaining_fraction,
+    share_bucket_label,
 )
 
 
@@ -55,9 +55,9 @@ def test_interval_coverage_and_buckets():
     f = remaining_fraction(np.array([10.0, 12.0, 15.0, 18.0, 20.0]), np.full(5, 10.0),
                            np.full(5, 20.0))
     assert f == pytest.approx([1.0, 0.8, 0.5, 0.2, 0.0])
-    assert horizon_bucket(f).tolist() == ["[0.75, 1]", "[0.75, 1]", "[0.5, 0.75)",
+    assert share_bucket_label(f).tolist() == ["[0.75, 1]", "[0.75, 1]", "[0.5, 0.75)",
                                           "[0, 0.25)", "[0, 0.25)"]
-    assert horizon_bucket(np.array([1.2, -0.1])).tolist() == ["", ""]
+    assert share_bucket_label(np.array([1.2, -0.1])).tolist() == ["", ""]
 
 
 def test_prognostic_horizon_by_hand():

@@ -126,17 +126,17 @@ def test_check_finite_walks_every_container_and_honours_the_field_metadata():
 def test_a_range_with_a_unit_reads_as_check_range_writes_it():
     @dataclasses.dataclass
     class Part:
-        horizon_h: float = dataclasses.field(default=1.0, metadata=allowed(
+        life_h: float = dataclasses.field(default=1.0, metadata=allowed(
             0.0, 1e5, "after the onset", lo_open=True, unit="h"))
 
     with pytest.raises(ValueError) as by_hand:
-        check_range(-1.0, 0.0, 1e5, "part.horizon_h", "h", lo_open=True, why="after the onset")
-    for refuse in (lambda: check_tree(Part(horizon_h=-1.0), "part"),
-                   lambda: check_keys({"horizon_h": -1.0}, Part, "part")):
+        check_range(-1.0, 0.0, 1e5, "part.life_h", "h", lo_open=True, why="after the onset")
+    for refuse in (lambda: check_tree(Part(life_h=-1.0), "part"),
+                   lambda: check_keys({"life_h": -1.0}, Part, "part")):
         with pytest.raises(ValueError) as e:
             refuse()
         assert str(e.value) == str(by_hand.value) == (
-            "part.horizon_h must lie in (0, 100000] h (after the onset), got -1.0")
+            "part.life_h must lie in (0, 100000] h (after the onset), got -1.0")
 
 
 def test_a_root_config_named_empty_names_its_keys_alone():
