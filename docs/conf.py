@@ -2,7 +2,7 @@
 
 Built offline (no intersphinx, nothing fetched) with warnings as errors. Sources: the
 Markdown pages of ``docs/`` (MyST), the API reference generated from the numpydoc
-docstrings of ``swgsim``, ``learn``, ``swgcal`` and ``swgcli`` (autosummary, recursive),
+docstrings of ``swgsim``, ``learn``, ``swgmon``, ``swgcal`` and ``swgcli`` (autosummary, recursive),
 and the gallery of ``examples/`` (sphinx-gallery, run on the tiny presets at each build).
 """
 

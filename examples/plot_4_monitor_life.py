@@ -3,10 +3,10 @@ A gear's life through the condition monitor
 ===========================================
 
 A diagnosis model trained on simulated lives of gears 1 and 2 of the tiny bench grid
-(:func:`learn.monitor.training.train_model`), then gear 3, never seen in training, lives
+(:func:`swgmon.evaluation.training.train_model`), then gear 3, never seen in training, lives
 8 h (the ``tiny_life`` preset: 4 h of commissioning, then an eccentric wave generator of
 severity 0.1 from 6 h on), and the monitor reads its windows in time order
-(:func:`learn.monitor.stream.monitor_stream`). It commissions on the first 4 h, turns each
+(:func:`swgmon.advisories.stream.monitor_stream`). It commissions on the first 4 h, turns each
 window into a conformal p-value against the gear's own normal behaviour, and alarms when a
 CUSUM of those p-values crosses the threshold of its design false-alarm rate (one per
 1000 h).
@@ -18,11 +18,11 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from learn.monitor.rule import RuleConfig, threshold
-from learn.monitor.stream import monitor_stream
-from learn.monitor.study import MonitorStudyConfig
-from learn.monitor.training import train_model
 from swgcli import dataset_preset
+from swgmon.advisories.stream import monitor_stream
+from swgmon.detection.rule import RuleConfig, threshold
+from swgmon.evaluation.study import MonitorStudyConfig
+from swgmon.evaluation.training import train_model
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.datasets.plan import plan

@@ -15,13 +15,12 @@ Layers, each importing only those before it:
   :mod:`learn.paper` - the paper study's folder above them: Tables VII-X, its report and
   summary, the task ``paper_study`` and ``run_paper_study`` (``swgsim-paper``) and one job
   of the study, the task ``study``;
-  :mod:`learn.monitor_evaluation` - the monitor's and the prognosis's evaluations beside
-  it: their tasks ``monitor`` and ``prognosis`` and their reports;
   :mod:`learn.transfer` - the transfer comparison's folder above the paper's (its report quotes
   the paper's numbers): its study, report and the task ``transfer``
-  (``swgsim-train -m experiment=transfer``);
-* :mod:`learn.train` - ``swgsim-train``'s dispatch on top of them all: each task's
-  function by its name (:data:`learn.train.TASKS`).
+  (``swgsim-train -m experiment=transfer``).
+
+The condition monitor, its prognosis and their evaluations are their own package,
+:mod:`swgmon`; ``swgsim-train``'s dispatch of every task is :mod:`swgcli.tasks`.
 
 The public API is listed in ``__all__``; names are imported on first use (torch only
 when a net is asked for).

@@ -33,11 +33,11 @@ def main() -> None:
     ap.add_argument("--windows", type=int, default=3000, help="windows timed (default 3000)")
     args = ap.parse_args()
 
-    from learn.monitor.features import window_features
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.study import MonitorStudyConfig
-    from learn.monitor.training import features_of, train_model
+    from learn.inputs.health import window_features
     from swgcli import dataset_preset
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.evaluation.study import MonitorStudyConfig
+    from swgmon.evaluation.training import features_of, train_model
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.plan import plan
     from swgsim.datasets.records import record_bank

@@ -13,8 +13,8 @@ steps then read the same numbers)::
     python scripts/bench_nets.py save data/bench bench_nets.npz --input diff --gear 3
 
 ``save-monitor``: the same for the monitor's CNN detector (``cnn_res`` of
-:mod:`learn.monitor.detectors`, as ``swgsim-train experiment=monitor`` makes it): its
-training set of one part (:func:`learn.monitor.training.detector_windows` of the gears
+:mod:`swgmon.evaluation.detectors`, as ``swgsim-train experiment=monitor`` makes it): its
+training set of one part (:func:`swgmon.evaluation.training.detector_windows` of the gears
 other than the held-out one) and, to score, the same windows of the held-out gear's
 training lives (no data set on disk needed; the records are simulated, minutes)::
 
@@ -116,11 +116,11 @@ def save(a: argparse.Namespace) -> None:
 
 def save_monitor(a: argparse.Namespace) -> None:
     """The ``save-monitor`` step (module docstring)."""
-    from learn.monitor.detectors import DETECTORS
-    from learn.monitor.evaluate import banks_of
-    from learn.monitor.training import detector_windows
     from learn.tasks.config import typed_app
     from swgcli import compose_app
+    from swgmon.evaluation.detectors import DETECTORS
+    from swgmon.evaluation.evaluate import banks_of
+    from swgmon.evaluation.training import detector_windows
 
     mc = typed_app(compose_app("train", ["experiment=monitor", *a.overrides])).monitor
     plan = mc.plans("monitor").get(a.dataset)

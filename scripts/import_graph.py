@@ -1,7 +1,7 @@
 """The project's import graph and function lengths, from the source (no imports run).
 
 Prints modules and lines per package (the library's size, :func:`library_lines`: the
-``.py`` files of swgsim, swgcal, learn and swgcli; the architecture test prints it too),
+``.py`` files of swgsim, swgcal, learn, swgmon and swgcli; the architecture test prints it too),
 the import cycles between modules (strongly
 connected components of the graph of intra-project imports, TYPE_CHECKING imports
 included), imports that climb back up a declared layer, and the longest functions.
@@ -17,9 +17,9 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("swgsim", "swgcal", "learn", "swgcli")
+PACKAGES = ("swgsim", "swgcal", "learn", "swgmon", "swgcli")
 #: Lower layers never import higher ones (the apps sit on top).
-LAYERS = {"swgsim": 0, "swgcal": 1, "learn": 1, "swgcli": 2}
+LAYERS = {"swgsim": 0, "swgcal": 1, "learn": 1, "swgmon": 2, "swgcli": 3}
 
 
 def modules() -> dict[str, Path]:

@@ -7,7 +7,7 @@
 Lives the healthy life that ``swgsim-train experiment=monitor`` lives for a held-out gear,
 seed and nuisance, or a family's draw for the seed (``family:<key>``: the families of
 ``scripts/monitor_families.py`` but its ``trace``)
-(:func:`learn.monitor.evaluate.healthy_life`: the same windows, the same monitor seed),
+(:func:`swgmon.evaluation.evaluate.healthy_life`: the same windows, the same monitor seed),
 commissions the monitor on its first ``commissioning_h`` hours with the diagnosis model
 the evaluation saved for that gear, runs it as the evaluation counts false alarms (the
 CUSUM restarted after each alarm) and prints:
@@ -26,7 +26,7 @@ and scoring (a 224-h nuisance life of robot_joint: a few minutes on one core).
 A wrong model, preset, gear or nuisance ends in one line naming it (exit 2).
 
 ``--benchmark`` lives a benchmark family's draw instead (issue 83;
-:func:`learn.monitor.families.benchmark_families`, ``--nuisance family:<key>``) on the
+:func:`swgmon.evaluation.families.benchmark_families`, ``--nuisance family:<key>``) on the
 benchmark's lot of gears (``--gear`` one of its held-out instances), with the model its
 design part saved (``reports/benchmark/models/<dataset>_benchmark.skops``), for the
 diagnosis of a miss on design seeds only (a scored seed, 1000 and up, is refused):
@@ -46,23 +46,23 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.monitor.evaluate import healthy_life, monitor_healthy
-from learn.monitor.families import benchmark_families, default_families
-from learn.monitor.features import feature_names
-from learn.monitor.gear_monitor import GearMonitor, Trace
-from learn.monitor.model_io import CARD_SUFFIX, MODEL_SUFFIX, load_model
-from learn.monitor.normal import (
+from learn.inputs.health import feature_names
+from learn.tracking.ledger import check_seeds
+from swgcli import dataset_preset
+from swgmon.advisories.stream import advisories, recommissionings
+from swgmon.assessment.gear_monitor import GearMonitor, Trace
+from swgmon.assessment.model_io import CARD_SUFFIX, MODEL_SUFFIX, load_model
+from swgmon.detection.normal import (
     OUTSIDE_FRICTION,
     OUTSIDE_LOAD,
     OUTSIDE_TEMPERATURE,
 )
-from learn.monitor.rule import Alarm
-from learn.monitor.stream import advisories, recommissionings
-from learn.monitor.study import MonitorStudyConfig, family_of
-from learn.monitor.training import has_twist
-from learn.monitor_evaluation.benchmark import BenchmarkConfig, population_plan
-from learn.tracking.ledger import check_seeds
-from swgcli import dataset_preset
+from swgmon.detection.rule import Alarm
+from swgmon.evaluation.benchmark import BenchmarkConfig, population_plan
+from swgmon.evaluation.evaluate import healthy_life, monitor_healthy
+from swgmon.evaluation.families import benchmark_families, default_families
+from swgmon.evaluation.study import MonitorStudyConfig, family_of
+from swgmon.evaluation.training import has_twist
 from swgsim.datasets.plan import plan as make_plan
 from swgsim.datasets.records import record_bank
 from swgsim.files.ownership import atomic_write_bytes

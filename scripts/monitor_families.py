@@ -1,5 +1,5 @@
 """The monitor through drawn benign changes: one table row per family of
-``monitor.study.families`` (learn/monitor/families.py).
+``monitor.study.families`` (swgmon/evaluation/families.py).
 
     python scripts/monitor_families.py [--dataset tiny_real_day] [--gear 3]
         [--seeds scored|design] [--n-seeds N] [--families warm_up all]
@@ -7,11 +7,11 @@
     python scripts/monitor_families.py --dataset robot_joint --read DIR
 
 Trains the diagnosis model on the data set's other gears (as the evaluation does,
-:func:`learn.monitor.training.train_model`) and lives the held-out gear through every
+:func:`swgmon.evaluation.training.train_model`) and lives the held-out gear through every
 family's draws, one per seed (the study's scored seeds, or its design seeds, the only
 ones to choose the monitor's settings on): a healthy life of ``nuisance_hours`` and every
 gear fault at its mildest and largest Table V severity with a step onset and at its
-mildest growing over ``family_growth_h`` (:func:`learn.monitor.evaluate.evaluate_gear`).
+mildest growing over ``family_growth_h`` (:func:`swgmon.evaluation.evaluate.evaluate_gear`).
 The monitor only: no per-window detectors.
 
 A preset with the held-out gear alone (the default, ``tiny_real_day``, as
@@ -51,17 +51,17 @@ from swgsim.base.lazy import lazy_module
 
 np = lazy_module("numpy")
 pd = lazy_module("pandas")
-evaluate = lazy_module("learn.monitor.evaluate")
-families = lazy_module("learn.monitor.families")
-study = lazy_module("learn.monitor.study")
-training = lazy_module("learn.monitor.training")
+evaluate = lazy_module("swgmon.evaluation.evaluate")
+families = lazy_module("swgmon.evaluation.families")
+study = lazy_module("swgmon.evaluation.study")
+training = lazy_module("swgmon.evaluation.training")
 typed = lazy_module("swgsim.base.typed")
 swgcli = lazy_module("swgcli")
 app = lazy_module("swgcli.app")
 plans = lazy_module("swgsim.datasets.plan")
 records = lazy_module("swgsim.datasets.records")
 ownership = lazy_module("swgsim.files.ownership")
-report = lazy_module("learn.monitor_evaluation.report")
+report = lazy_module("swgmon.evaluation.report")
 parts = lazy_module("learn.tasks.parts")
 
 #: The tag this script claims its ``--out`` folder with (swgsim.files.writers.WRITERS).

@@ -16,7 +16,7 @@ Sensor faults are judged on each of the five bridges at five severities from the
 the severe one (a growing sensor fault is named while between them); ``--sensor-levels``
 sets how many severities the training lives have.
 
-Rules: ``monitor`` (the monitor's, :meth:`learn.monitor.gear_monitor.GearMonitor.name`: a
+Rules: ``monitor`` (the monitor's, :meth:`swgmon.assessment.gear_monitor.GearMonitor.name`: a
 sensor fault where one bridge's fitted offset step or gain drift explains the windows,
 else ``sum``), ``sum`` (summed evidence relative to the gear's calibration windows),
 ``vote`` (the most frequent per-window argmax among the faults), ``clip`` (summed
@@ -25,8 +25,8 @@ means of the training gear's z-scores, applied to the hour's mean z-score). Each
 prints the best plausible one-bridge sensor fit, the median p-value it leaves and the mean
 shift left on the other bridges (``rest``), and the first line that shift on the judged
 gear's healthy hour after commissioning, for every bridge
-(:data:`learn.monitor.sensor_check.SENSOR_P_MIN` and
-:data:`~learn.monitor.sensor_check.REST_MAX` were read off these).
+(:data:`swgmon.assessment.sensor_check.SENSOR_P_MIN` and
+:data:`~swgmon.assessment.sensor_check.REST_MAX` were read off these).
 """
 
 from __future__ import annotations
@@ -37,9 +37,9 @@ import numpy as np
 
 
 def _best_sensor_fit(mon, z, q, opi):
-    """The plausible one-bridge sensor fit (learn.monitor.sensor_check) after which the
+    """The plausible one-bridge sensor fit (swgmon.assessment.sensor_check) after which the
     windows look most healthy, and their median p-value then (None, 0 if none)."""
-    from learn.monitor.sensor_check import fit_sensor_faults
+    from swgmon.assessment.sensor_check import fit_sensor_faults
 
     b = mon.normal
     best, p_best = None, 0.0
@@ -57,8 +57,8 @@ def _best_sensor_fit(mon, z, q, opi):
 def _healthy_rest(mon, healthy, n_comm: int) -> None:
     """Print the mean shift each one-bridge fit leaves on the other bridges over the
     healthy hour after commissioning (about 1 where the windows are independent)."""
-    from learn.monitor.sensor_check import fit_sensor_faults
-    from learn.monitor.training import features_of
+    from swgmon.assessment.sensor_check import fit_sensor_faults
+    from swgmon.evaluation.training import features_of
 
     f, q, _ = features_of(healthy, n_comm, len(healthy))
     opi = mon.normal.index(q)
@@ -84,10 +84,10 @@ def _train(p, gear: int, cfg, cls: list[str], n_comm: int):
     one training gear's lives."""
     from sklearn.ensemble import HistGradientBoostingClassifier
 
-    from learn.monitor.gear_monitor import normal_windows
-    from learn.monitor.model import HEALTHY, design_matrix
-    from learn.monitor.normal import Conditions, NormalBehaviour
-    from learn.monitor.training import features_of, training_lives
+    from swgmon.assessment.gear_monitor import normal_windows
+    from swgmon.assessment.model import HEALTHY, design_matrix
+    from swgmon.detection.normal import Conditions, NormalBehaviour
+    from swgmon.evaluation.training import features_of, training_lives
     from swgsim.datasets.records import record_bank
 
     bank = record_bank(p, gear)
@@ -130,11 +130,11 @@ def main() -> None:
                     "evaluation's, MonitorStudyConfig.train_variants)")
     args = ap.parse_args()
 
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.model import DiagnosisModel
-    from learn.monitor.study import MonitorStudyConfig
-    from learn.monitor.training import classes, features_of, table_v_severities
     from swgcli import dataset_preset
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.assessment.model import DiagnosisModel
+    from swgmon.evaluation.study import MonitorStudyConfig
+    from swgmon.evaluation.training import classes, features_of, table_v_severities
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.plan import plan
     from swgsim.datasets.records import record_bank

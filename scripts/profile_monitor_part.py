@@ -48,17 +48,17 @@ from pathlib import Path
 #: Functions (file suffix, name) whose cumulative time makes each stage.
 STAGES = {
     "simulating lives": [("swgsim/datasets/life.py", "windows")],
-    "features": [("learn/monitor/features.py", "health_features"),
-                 ("learn/monitor/detectors.py", "window_inputs")],
-    "training": [("learn/monitor/model.py", "fit_diagnosis"),
-                 ("learn/monitor/detectors.py", "fit_detector")],
-    "monitoring": [("learn/monitor/gear_monitor.py", n) for n in
+    "features": [("learn/inputs/health.py", "health_features"),
+                 ("swgmon/evaluation/detectors.py", "window_inputs")],
+    "training": [("swgmon/assessment/model.py", "fit_diagnosis"),
+                 ("swgmon/evaluation/detectors.py", "fit_detector")],
+    "monitoring": [("swgmon/assessment/gear_monitor.py", n) for n in
                    ("commission", "run", "score_only", "diagnose", "fork")]
-    + [("learn/monitor/detectors.py", "labels")],
-    "baselines": [("learn/monitor/baselines.py", n) for n in ("fit", "statistic")],
-    "reports and tracking": [("learn/monitor_evaluation/report.py", n) for n in
+    + [("swgmon/evaluation/detectors.py", "labels")],
+    "baselines": [("swgmon/evaluation/baselines.py", n) for n in ("fit", "statistic")],
+    "reports and tracking": [("swgmon/evaluation/report.py", n) for n in
                              ("figures", "write_table")]
-    + [("learn/monitor/model_io.py", "save_model"),
+    + [("swgmon/assessment/model_io.py", "save_model"),
        ("learn/tracking/mlflow_runs.py", "log_run")],
 }
 
@@ -110,11 +110,11 @@ def _benchmark_part(args) -> tuple[cProfile.Profile, float, str]:
     """One lives part of the benchmark (module docstring) under the profiler."""
     import dataclasses
 
-    from learn.monitor.evaluate import banks_of
-    from learn.monitor.model_io import load_model
-    from learn.monitor_evaluation import benchmark as bm
-    from learn.monitor_evaluation.benchmark_task import _model_path, _monitors
     from swgcli import dataset_preset
+    from swgmon.assessment.model_io import load_model
+    from swgmon.evaluation import benchmark as bm
+    from swgmon.evaluation.benchmark_task import _model_path, _monitors
+    from swgmon.evaluation.evaluate import banks_of
     from swgsim.datasets.plan import plan
 
     seeds = [int(s) for s in (args.seeds or "300").split(",")]

@@ -1,5 +1,5 @@
 """The prognosis's cost per update and its intervals' coverage on synthetic lives
-(learn/monitor/prognosis.py; docs/monitor.md, "Prognosis").
+(swgmon/prognosis/growth.py; docs/monitor.md, "Prognosis").
 
 A synthetic life: the paper's duty (2000 and 4000 rpm, 7, 39 and 70 N m, 10 min each,
 20 °C), a window every 2 min, the fault grown from hour 0 by swgsim.datasets.growth's law
@@ -31,7 +31,9 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.signal import lfilter  # noqa: E402
 
-from learn.monitor.prognosis import (  # noqa: E402
+from swgmon.prognosis.baselines import predict_linear, predict_wiener  # noqa: E402
+from swgmon.prognosis.calibration import conformal_interval_scale  # noqa: E402
+from swgmon.prognosis.growth import (  # noqa: E402
     Z90,
     Duty,
     Prognosis,
@@ -39,8 +41,6 @@ from learn.monitor.prognosis import (  # noqa: E402
     Track,
     predict_growth,
 )
-from learn.monitor.prognosis_baselines import predict_linear, predict_wiener  # noqa: E402
-from learn.monitor.prognosis_calibration import conformal_interval_scale  # noqa: E402
 from swgsim.datasets.growth import (  # noqa: E402
     LAWS,
     RunToFailure,

@@ -40,11 +40,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from learn.monitor_evaluation.benchmark_task import FAMILY_TARGETS, benchmark_targets
-from learn.monitor_evaluation.report import false_alarm_table, labelled, with_nuisance
 from learn.paper.results import CELL_COLUMNS, our_cells, paper_cells
 from learn.paper.summary import recall
 from learn.tasks.parts import resumed_note
+from swgmon.evaluation.benchmark_task import FAMILY_TARGETS, benchmark_targets
+from swgmon.evaluation.report import false_alarm_table, labelled, with_nuisance
 from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import display_name
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS

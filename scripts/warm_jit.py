@@ -22,11 +22,11 @@ import time
 import numpy as np
 from sklearn.ensemble import HistGradientBoostingClassifier
 
+from learn.inputs.health import NUISANCE_ORDERS
 from learn.inputs.signals import angle_fit
 from learn.learners.rocket import MiniRocketClassifier
-from learn.monitor.features import NUISANCE_ORDERS
-from learn.monitor.trees import CompiledTrees
 from swgcli import dataset_preset
+from swgmon.assessment.trees import CompiledTrees
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.generate import generate
 from swgsim.sensing.angles import edge_interpolate

@@ -1,7 +1,7 @@
 """swgsim-export: the monitor's per-window stage as C99 for a microcontroller (Hydra app).
 
 Trains the exported classifier on simulated lives of the data set's training gears (the
-stage's own features, :mod:`learn.export.reference`), writes ``swg_monitor.h``,
+stage's own features, :mod:`swgmon.export.reference`), writes ``swg_monitor.h``,
 ``swg_monitor.c``, ``swg_tables.h`` and ``swg_model.h`` (with emlearn's headers) to
 ``out_dir``, checks the C compiled for the host against the Python pipeline on every
 held-out window, and, with ``arm-none-eabi-gcc`` and ``qemu-system-arm`` on PATH,
@@ -26,8 +26,8 @@ from typing import ClassVar
 from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
-from learn.export.pipeline import ExportOptions
 from swgcli.app import hydra_app
+from swgmon.export.pipeline import ExportOptions
 from swgsim.datasets.config import DatasetConfig
 from swgsim.files.inputs import absolute_path
 
@@ -56,7 +56,7 @@ def run_export_app(cfg) -> dict:
         Bad options (named by key), a foreign file in ``out_dir`` (before any work), or a
         model the C stage cannot represent.
     """
-    from learn.export.pipeline import run_export
+    from swgmon.export.pipeline import run_export
     from swgsim.datasets.plan import plan
 
     app = OmegaConf.to_object(cfg) if isinstance(cfg, DictConfig) else cfg
@@ -74,7 +74,7 @@ NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "sklearn", "skops.io"
 def main(cfg: DictConfig) -> dict:
     """Run the export and print the figures and where they went; a failed external tool
     (compiler, cross tool, QEMU) ends it with exit 2 and one line, after every file is
-    written (:func:`learn.export.pipeline.run_export`)."""
+    written (:func:`swgmon.export.pipeline.run_export`)."""
     s = run_export_app(cfg)
     size, host = s["size"], s["host_c"]
     print(f"accuracy on held-out gear {s['held_out_gear']}: python {s['accuracy_python']:.4f}, "

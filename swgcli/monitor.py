@@ -4,9 +4,9 @@ Reads a stream (a gear's life: a schema-v1 data set with ``hour`` and ``commissi
 e.g. ``swgsim-generate dataset=tiny_life``) and a diagnosis model trained on simulated
 gears (``models/*.skops`` of ``swgsim-train experiment=monitor``), checks that they fit
 before any work, builds the gear's normal behaviour from its commissioning windows, runs the
-sequential rule (:mod:`learn.monitor`) and writes ``summary.json``, ``report.md``,
+sequential rule (:mod:`swgmon`) and writes ``summary.json``, ``report.md``,
 ``health.png`` and an MLflow run; with ``prognosis.enabled=true`` the prognosis after each
-gear-fault alarm (:mod:`learn.monitor.stream_prognosis`) and ``prognosis.png``.
+gear-fault alarm (:mod:`swgmon.prognosis.stream`) and ``prognosis.png``.
 Config: ``conf/monitor.yaml``.
 """
 
@@ -17,13 +17,13 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
-from learn.monitor.model_io import load_model
-from learn.monitor.stream import event_line, monitor_stream, select_gear, write_outputs
-from learn.monitor.stream_prognosis import prognosis_line, trained_duty
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgcli.app import hydra_app
 from swgcli.schema import MonitorApp
+from swgmon.advisories.stream import event_line, monitor_stream, select_gear, write_outputs
+from swgmon.assessment.model_io import load_model
+from swgmon.prognosis.stream import prognosis_line, trained_duty
 from swgsim.base.typed import check_tree
 from swgsim.datasets.schema import load, read_manifest
 from swgsim.files import ownership
@@ -67,7 +67,7 @@ def run_monitor_app(cfg) -> dict:
     ------
     ValueError
         Before any work: a rule option or ``confirm_h`` out of range
-        (:meth:`learn.monitor.rule.RuleConfig.check`), an unwritable MLflow store, ``out_dir``
+        (:meth:`swgmon.detection.rule.RuleConfig.check`), an unwritable MLflow store, ``out_dir``
         holding a file this project cannot show it wrote (named,
         :func:`swgsim.files.ownership.check`), a model or stream that is unfit, or a
         prognosis option out of range (a planned duty outside the model's operating
@@ -113,7 +113,7 @@ NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "sklearn", "skops.io"
 @hydra_app("monitor", MonitorApp, "swgsim-monitor", NEEDS, inputs=check_inputs)
 def main(cfg: DictConfig) -> dict:
     """Run the monitor and print the threshold it used, its events (one line each, by
-    kind: :func:`learn.monitor.stream.event_line`) and where the outputs went."""
+    kind: :func:`swgmon.advisories.stream.event_line`) and where the outputs went."""
     out = run_monitor_app(cfg)
     print(f"alarm threshold h = {out['threshold']:.2f}")
     if not out["alarms"]:

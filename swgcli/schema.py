@@ -31,19 +31,19 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
 from learn.inputs.features import SELECTIONS, FeatureSettings
-from learn.monitor.gear_monitor import MaintenanceEvent
-from learn.monitor.normal import NormalConfig
-from learn.monitor.rule import RuleConfig
-from learn.monitor.stream_prognosis import StreamPrognosis
-from learn.monitor_evaluation.benchmark_task import BenchmarkExperiment
-from learn.monitor_evaluation.prognosis_task import PrognosisExperiment
-from learn.monitor_evaluation.task import MonitorExperiment
 from learn.observability.motion import MotionMapConfig
 from learn.paper.study import StudyTracking
 from learn.paper.tables import StudyOptions
 from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.tracking.config import LoggerConfig
 from learn.transfer.study import TransferConfig
+from swgmon.assessment.gear_monitor import MaintenanceEvent
+from swgmon.detection.normal import NormalConfig
+from swgmon.detection.rule import RuleConfig
+from swgmon.evaluation.benchmark_task import BenchmarkExperiment
+from swgmon.evaluation.prognosis_task import PrognosisExperiment
+from swgmon.evaluation.task import MonitorExperiment
+from swgmon.prognosis.stream import StreamPrognosis
 from swgsim.base.typed import allowed, check_keys
 from swgsim.datasets.config import DatasetConfig
 from swgsim.gear.thermal import THERMAL_PRESETS
@@ -130,11 +130,11 @@ class MonitorApp:
         0.0, 1000.0, "hours after an alarm whose windows name the fault",  # the fault
         lo_open=True, unit="h"))
     # the joint's maintenance log: [{hour: 40.0, kind: regrease}, ...]; kinds regrease,
-    # tool_change, repair (learn/monitor/gear_monitor.py MaintenanceEvent)
+    # tool_change, repair (swgmon/assessment/gear_monitor.py MaintenanceEvent)
     maintenance: list[MaintenanceEvent] = field(default_factory=list)
     # after a gear-fault alarm the hours to failure: prognosis.enabled=true; a planned duty
     # prognosis.planned=[{minutes: 60, n_in_rpm: 2500, t_acting_nm: 40, temp_c: 30}]
-    # (learn/monitor/stream_prognosis.py StreamPrognosis)
+    # (swgmon/prognosis/stream.py StreamPrognosis)
     prognosis: StreamPrognosis = field(default_factory=StreamPrognosis)
     seed: int = 0                            # the p-values' smoothing draws
     logger: LoggerConfig | None = None
@@ -160,7 +160,7 @@ class PathsConfig:
 
 @dataclass
 class TrainApp:
-    """``swgsim-train``: one study job, a sweep, or a task of :data:`learn.train.TASKS`."""
+    """``swgsim-train``: one study job, a sweep, or a task of :data:`swgcli.tasks.TASKS`."""
 
     OUT_DIRS: ClassVar[tuple[str, ...]] = ("paths.report_dir", "monitor.report_dir",
                                            "prognosis.report_dir", "benchmark.report_dir",

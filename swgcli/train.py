@@ -1,4 +1,4 @@
-"""``swgsim-train``: Hydra app around :func:`learn.train.run_train`.
+"""``swgsim-train``: Hydra app around :func:`swgcli.tasks.run_train`.
 
 Examples
 --------
@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from omegaconf import DictConfig
 
-from learn.train import check_inputs, run_train
 from swgcli.app import hydra_app
 from swgcli.schema import TrainApp
+from swgcli.tasks import check_inputs, run_train
 
 #: The libraries its runs import, resolved before any work
 #: (:func:`learn.tracking.preflight.check_imports`).

@@ -146,12 +146,12 @@ def process_group(pgid: int) -> list[int]:
 def small_model(**change):
     """A small diagnosis model whose parts are those ``fit_diagnosis`` makes (two health
     features and the operating point: four inputs; classes healthy and ``x``), with
-    ``change`` (fields of :class:`learn.monitor.model.DiagnosisModel`) applied."""
+    ``change`` (fields of :class:`swgmon.assessment.model.DiagnosisModel`) applied."""
     import dataclasses
 
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
-    from learn.monitor.model import DiagnosisModel
+    from swgmon.assessment.model import DiagnosisModel
 
     x, y = np.eye(4), [0, 1, 0, 1]
     m = DiagnosisModel(

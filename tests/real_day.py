@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import dataclasses
 
-from learn.monitor.gear_monitor import GearMonitor
-from learn.monitor.normal import Conditions
-from learn.monitor.rule import RuleConfig
-from learn.monitor.training import features_of
+from swgmon.assessment.gear_monitor import GearMonitor
+from swgmon.detection.normal import Conditions
+from swgmon.detection.rule import RuleConfig
+from swgmon.evaluation.training import features_of
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.schedule import FaultOnset
 from swgsim.gear.thermal import FrictionLaw

@@ -290,7 +290,7 @@ def angle_coefficients(x: np.ndarray, psi: np.ndarray, psi_order: float, n_harmo
     Computed order tracking by least squares on the samples as they are (no resampling to
     uniform ψ; a reversal keeps each sample's angle), solved by the normal equations with
     the condition-number refusal :data:`MAX_CONDITION` (:func:`angle_fit`, also the
-    solver of ``learn.monitor.features``). Nuisance
+    solver of ``learn.inputs.health``). Nuisance
     orders are multiples of φ_in = ψ / psi_order = ψ N / (N + 1) (rigid gear; the elastic
     twist shifts it by the output-side twist angle [not measured]; they are dropped).
 
@@ -343,7 +343,7 @@ def angle_fit(x: np.ndarray, psi: np.ndarray, psi_order: float, n_harmonics: int
               ) -> tuple[np.ndarray, np.ndarray]:
     """Least squares of windows on their own angle-domain basis (:func:`_angle_basis`),
     by the normal equations; the one solver of :func:`angle_coefficients` and
-    ``learn.monitor.features.window_features``.
+    ``learn.inputs.health.window_features``.
 
     Parameters
     ----------

@@ -4,7 +4,7 @@ Per output inertia J_out, three views of the same gear: ``steady`` (the ``robot_
 recording at :data:`STEADY_POINTS`), ``profile`` (the ``robot_joint_motion`` profile, input
 angle only) and ``profile + output encoder`` (the output twist's mean and RMS added). Every
 window is a gear life's (:class:`swgsim.datasets.life.LifeSimulator`); its monitor health
-features (:func:`learn.monitor.training.life_features`) are z-scored against healthy
+features (:func:`learn.inputs.health.life_features`) are z-scored against healthy
 reference windows of its operating point or slot, and its *separation* is the mean square
 z-score; a fault window is *beyond* above the healthy test windows' 95th percentile at its
 point. The smallest detectable loss of a view: the smallest severity with at least half
@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from learn.inputs.health import life_features
 from swgsim.base.lazy import lazy_module
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.schedule import DutyPoint, FaultOnset, LifeConfig
@@ -97,8 +98,6 @@ def _windows(plan, fault: str, severity: float, n: int, seed: int, points=None):
     """Features, operating points and, for a profile, the same windows' features without
     the output encoder: n windows of one state, cycling through the steady ``points``
     ((input speed [rpm], load [N m]) pairs) or, when None, the profile's slots."""
-    from learn.monitor.training import life_features
-
     iv = 1.0
     duty = [DutyPoint(s, t, iv) for s, t in points] if points is not None else []
     c0 = iv / 60.0

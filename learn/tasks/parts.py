@@ -4,7 +4,7 @@ gear) run in one worker, in order (:func:`run_parts`, :func:`run_group`), resume
 ``parts/`` when their key matches (:func:`finished_parts`), and one (data set, held-out
 gear) alone as a job of a cluster array (:func:`group_jobs`, :func:`run_one_group`); the
 options an evaluation's group of ``swgsim-train`` shares (:class:`EvaluationExperiment`). Used by
-the monitor's and the prognosis's evaluations (:mod:`learn.monitor_evaluation`) and the
+the monitor's and the prognosis's evaluations (:mod:`swgmon.evaluation`) and the
 transfer comparison (:mod:`learn.transfer.task`)."""
 
 from __future__ import annotations
@@ -55,8 +55,8 @@ class Job:
 @dataclass(kw_only=True)
 class EvaluationExperiment:
     """What the ``monitor`` and ``prognosis`` groups of ``swgsim-train`` share
-    (:class:`learn.monitor_evaluation.task.MonitorExperiment`,
-    :class:`learn.monitor_evaluation.prognosis_task.PrognosisExperiment` add their study's
+    (:class:`swgmon.evaluation.task.MonitorExperiment`,
+    :class:`swgmon.evaluation.prognosis_task.PrognosisExperiment` add their study's
     type and default, their ``report_dir`` default and what only they have).
 
     Attributes

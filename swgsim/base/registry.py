@@ -7,7 +7,7 @@ friction effects (:data:`swgsim.gear.friction.FRICTION_LIBRARY`), the thermal ca
 effects (``swgcal.thermal.library.THERMAL_LIBRARY``), the strain calibration's
 (``swgcal.strain.effects.STRAIN_LIBRARY``), learners
 (:data:`learn.learners.models.MODELS`) and the monitor's detectors
-(:data:`learn.monitor.detectors.DETECTORS`). Each is a :class:`Registry`: a dict of name to
+(:data:`swgmon.evaluation.detectors.DETECTORS`). Each is a :class:`Registry`: a dict of name to
 entry that knows its kind and where it lives, and refuses a name taken, except by an
 extension of its entry (:func:`extends`: a subclass of the class registered under it,
 which takes its place; the calibration adds its fit to a friction effect's form so).

@@ -57,7 +57,7 @@ MAX_TABLE_CELLS = 1 << 27
 TABLE_FORMATS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet"}
 #: Fewest samples in a window: the monitor's least-squares series in the wave-generator
 #: angle has 31 coefficients per bridge (offset, 12 harmonics and 3 sub-harmonic orders,
-#: as cosine and sine; learn/monitor/features.py), so a window needs at least twice as many
+#: as cosine and sine; learn/inputs/health.py), so a window needs at least twice as many
 #: samples [choice].
 MIN_WINDOW_SAMPLES = 64
 _CHUNK_ROWS = 1_000_000  # CSV rows read at a time (the progress bar's step)

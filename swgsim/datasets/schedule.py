@@ -119,7 +119,7 @@ class LifeConfig:
     commissioning_h : float
         The first hours, known healthy: the monitor's commissioning. The default, 24 h (1,440
         windows, 240 per operating point of the paper's six), is above the minimum of the
-        monitor's default design (one false alarm per 1000 h; ``learn.monitor``).
+        monitor's default design (one false alarm per 1000 h; ``swgmon``).
     duty : list of DutyPoint
         The duty cycle; empty: the data set's operating points, 10 min each.
     fault : FaultOnset

@@ -6,7 +6,7 @@ along the whole profile (:func:`swgsim.gear.profile_dynamics.simulate_profile`; 
 records: :mod:`swgsim.datasets.records`) and every window of the life is a cut of that
 motion, in a *slot*: a window of the data set in which the wave generator turns at least
 :data:`MIN_WG_REVOLUTIONS` revolutions one way (the angle-domain features need about 1.45
-revolutions, :mod:`learn.monitor.features`; gauge misplacement needs a monotone ψ,
+revolutions, :mod:`learn.inputs.health`; gauge misplacement needs a monotone ψ,
 :mod:`swgsim.sensing.effects`). Window k lies in slot k mod S, starting up to
 ``dataset.profile.start_jitter_s`` after the slot's start; its operating point is the
 slot's *commanded* one, the same for every state of the gear. From cycle to cycle only

@@ -107,12 +107,12 @@ def runners(root, csv):
     mapping = root / "mapping.json"  # YAML reads JSON
     mapping.write_text(json.dumps(MAPPING))
     from learn.observability.task import run_observability
-    from learn.train import run_train
     from swgcli.calibrate import run_calibrate
     from swgcli.export import run_export_app
     from swgcli.importer import run_import
     from swgcli.monitor import run_monitor_app
     from swgcli.paper import run_paper
+    from swgcli.tasks import run_train
 
     def with_dir(cfg, key, task):
         def run(folder: Path):
@@ -252,9 +252,9 @@ def test_generation_still_replaces_its_own_unfinished_data_set(tmp_path, monkeyp
 def test_every_app_stamps_its_files_with_its_writer(tmp_path, csv):
     """What the fixtures above fake: each app's stamp names it for every file it wrote."""
     from learn.observability.task import run_observability
-    from learn.train import run_train
     from swgcli.export import run_export_app
     from swgcli.paper import run_paper
+    from swgcli.tasks import run_train
 
     runs = {
         "calibrate": calibrate_call(csv, tmp_path / "calibrate", "figures=false"),

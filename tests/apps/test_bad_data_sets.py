@@ -100,7 +100,7 @@ def test_the_monitor_app_refuses_a_manifest_pointing_out(tmp_path, life):
     model = tmp_path / "m.joblib"
     import joblib
 
-    from learn.monitor.model import DiagnosisModel
+    from swgmon.assessment.model import DiagnosisModel
     joblib.dump(DiagnosisModel.__new__(DiagnosisModel), model)
     line = app_line("monitor", [f"stream={folder}", f"diagnosis_model={model}",
                                 "trust_pickle=true", f"out_dir={tmp_path}/out", "~logger"],
@@ -111,7 +111,7 @@ def test_the_monitor_app_refuses_a_manifest_pointing_out(tmp_path, life):
 
 # ------------------------------------------------------------------ shards and counts
 def test_manifest_with_an_entry_removed_is_refused_naming_it(copy_of, tmp_path):
-    from learn.train import run_train
+    from swgcli.tasks import run_train
 
     folder = copy_of()
     m = _manifest(folder)
@@ -149,7 +149,7 @@ def test_extra_and_miscounted_shards_are_named(copy_of):
 ])
 def test_a_manifest_without_hashes_is_named_to_every_reader(copy_of, tmp_path, edit,
                                                             words):
-    from learn.train import run_train
+    from swgcli.tasks import run_train
 
     folder = copy_of()
     m = json.loads((folder / dsio.MANIFEST).read_text())
@@ -197,7 +197,7 @@ def test_an_impossible_sample_rate_attribute_names_the_file(copy_of):
 
 
 def test_shards_of_another_rate_are_named_not_the_features(copy_of, tmp_path):
-    from learn.train import run_train
+    from swgcli.tasks import run_train
 
     folder = copy_of()
 

@@ -37,7 +37,7 @@ def test_a_bad_export_option_is_one_line(tmp_path, case):
 def test_a_failing_cross_tool_is_reported_not_measured(tmp_path, monkeypatch):
     """The Cortex-M4F figures when the cross compiler fails: 'not measured (why)' in the
     target and in size.json; swgsim-export ends with exit 2 and one line."""
-    from learn.export import pipeline, target
+    from swgmon.export import pipeline, target
 
     fake = tmp_path / "bin"
     fake.mkdir()
@@ -69,9 +69,9 @@ def test_a_failing_cross_tool_is_reported_not_measured(tmp_path, monkeypatch):
 
 @pytest.mark.slow  # a real export of the tiny bench grid: about 25 s
 def test_a_failing_cross_tool_leaves_every_file_listed(tmp_path, monkeypatch):
-    from learn.export import target
     from swgcli import compose_app
     from swgcli.export import run_export_app
+    from swgmon.export import target
 
     fake = tmp_path / "bin"
     fake.mkdir()

@@ -65,8 +65,8 @@ STREAM_CASES = {
 
 @pytest.mark.parametrize("case", STREAM_CASES)
 def test_a_stream_the_monitor_cannot_take_is_refused(stream, case):
-    from learn.monitor.rule import RuleConfig
-    from learn.monitor.stream import check_stream
+    from swgmon.advisories.stream import check_stream
+    from swgmon.detection.rule import RuleConfig
 
     spoil, named = STREAM_CASES[case]
     ds = spoil(stream.copy())
@@ -107,8 +107,8 @@ def _skops_case(tmp_path: Path, case: str) -> Path:
     """A real model file and card, then spoiled."""
     from sklearn.ensemble import HistGradientBoostingClassifier
 
-    from learn.monitor.model import DiagnosisModel
-    from learn.monitor.model_io import save_model
+    from swgmon.assessment.model import DiagnosisModel
+    from swgmon.assessment.model_io import save_model
 
     clf = HistGradientBoostingClassifier(max_iter=2).fit(np.eye(4), [0, 1, 0, 1])
     p = save_model(DiagnosisModel(["healthy", "x"], clf), tmp_path / "m", [])

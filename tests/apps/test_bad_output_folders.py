@@ -80,9 +80,9 @@ OUT_CASES = {  # case -> (app, how the output folder is prepared, name)
 
 
 def _run_into(app: str, out: Path, tmp_path: Path, life: Path):
-    from learn.train import run_train
     from swgcli.export import run_export_app
     from swgcli.monitor import run_monitor_app
+    from swgcli.tasks import run_train
 
     if app == "monitor":
         return lambda: run_monitor_app(compose_app("monitor", [

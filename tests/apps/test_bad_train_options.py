@@ -15,7 +15,7 @@ from swgcli import compose_app
     ("features.order_step=0.05", "features.order_step=0.05"),  # finer than the window
 ])
 def test_feature_orders_the_data_cannot_carry_are_refused(small, tmp_path, override, key):
-    from learn.train import run_train
+    from swgcli.tasks import run_train
 
     cfg = compose_app("train", [f"stored.path={small}", "~logger", "features=selection3",
                                 override, f"paths.report_dir={tmp_path}"])

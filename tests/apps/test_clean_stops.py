@@ -213,8 +213,8 @@ def test_an_evaluation_runs_as_a_job_array_and_a_last_run_builds_the_report(tmp_
 
 
 def test_a_group_beyond_the_evaluations_pairs_is_refused_before_any_work(tmp_path):
-    from learn.train import run_train
     from swgcli import compose_app
+    from swgcli.tasks import run_train
 
     out = tmp_path / "meval"
     cfg = compose_app("train", [*TINY_MONITOR, "monitor.study.gears=[2,3]",

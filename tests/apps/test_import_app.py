@@ -23,16 +23,16 @@ from swgsim.datasets.recording_table import stream_table
 def trained(tmp_path_factory, tiny_bench):
     """Gear 3's life of the tiny_life preset (8 h, commissioning 4 h, an eccentric WG of
     severity 0.1 at 180° from 6 h) and a diagnosis model trained on gears 1 and 3
-    (healthy and eccentric WG lives, learn.monitor.training.train_model, as the
+    (healthy and eccentric WG lives, swgmon.evaluation.training.train_model, as the
     monitor's evaluation trains it): the round trip is under test, not the model's reach
     to unseen gears (tests/learn/test_monitor.py), so the stream's gear shares the
     records of the training lives and nothing is simulated twice (the bench's records are
     shared with the worker's other tests: tests/conftest.py)."""
-    from learn.monitor.model_io import save_model
-    from learn.monitor.rule import RuleConfig
-    from learn.monitor.stream import monitor_stream
-    from learn.monitor.study import MonitorStudyConfig
-    from learn.monitor.training import train_model
+    from swgmon.advisories.stream import monitor_stream
+    from swgmon.assessment.model_io import save_model
+    from swgmon.detection.rule import RuleConfig
+    from swgmon.evaluation.study import MonitorStudyConfig
+    from swgmon.evaluation.training import train_model
     from swgsim.datasets.life import LifeSimulator, life_dataset
     from swgsim.datasets.schedule import FaultOnset, LifeConfig
 
@@ -128,8 +128,8 @@ def test_the_monitor_reads_an_imported_profile_lifes_angles(tmp_path):
     """The monitor's features of a profile life (angle channels: a 24-count input sensor,
     a 20-bit output encoder) are the same from the imported stream as from the original:
     the angles, and the input sensor the monitor interpolates between the edges of."""
-    from learn.monitor.stream import stream_features
     from swgcli import dataset_preset
+    from swgmon.advisories.stream import stream_features
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.life import LifeSimulator, life_dataset
     from swgsim.datasets.plan import plan

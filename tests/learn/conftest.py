@@ -9,9 +9,9 @@ import dataclasses
 import pytest
 from real_day import growing, repaired
 
-from learn.monitor.study import MonitorStudyConfig
-from learn.monitor.training import train_model
 from swgcli import dataset_preset
+from swgmon.evaluation.study import MonitorStudyConfig
+from swgmon.evaluation.training import train_model
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import plan

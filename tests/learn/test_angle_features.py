@@ -11,7 +11,7 @@ Tolerances are set near the accuracy reached, each stated with its measured valu
 import numpy as np
 import pytest
 
-from learn.monitor import features as ft
+from learn.inputs import health as ft
 from swgsim.gear import dynamics as dy
 from swgsim.gear import profile as pf
 from swgsim.gear.chain import SimulationChain

@@ -1,4 +1,4 @@
-"""The baselines (learn.monitor.baselines): a normal-behaviour regression with a MEWMA
+"""The baselines (swgmon.evaluation.baselines): a normal-behaviour regression with a MEWMA
 chart and a PCA chart, commissioned on healthy windows of several duty points through a
 warm-up; on fresh healthy windows they stay low, on a shift of a few features they rise,
 and a missing temperature reading is taken as commissioning's mean."""
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learn.monitor.baselines import BaselineConfig, PCAChart, RegressionMEWMA
+from swgmon.evaluation.baselines import BaselineConfig, PCAChart, RegressionMEWMA
 
 
 def _windows(rng, n: int, shift: float = 0.0):

@@ -1,4 +1,4 @@
-"""The benchmark of issue 83 (learn.monitor_evaluation.benchmark): its design checked
+"""The benchmark of issue 83 (swgmon.evaluation.benchmark): its design checked
 before any work, a lot of gear instances split into trained and held out, and, end to end
 on the tiny bench, the monitor and both baselines on lives of a benchmark family at a
 threshold matched on design lives of training instances."""
@@ -11,10 +11,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.monitor.study import MonitorStudyConfig
-from learn.monitor.training import train_model
-from learn.monitor_evaluation import benchmark as bm
 from swgcli import dataset_preset
+from swgmon.evaluation import benchmark as bm
+from swgmon.evaluation.study import MonitorStudyConfig
+from swgmon.evaluation.training import train_model
 from swgsim.datasets import plan as P
 from swgsim.datasets.records import record_bank
 
@@ -127,7 +127,7 @@ def test_the_monitor_and_both_baselines_live_a_benchmark_family_end_to_end():
 def test_the_lives_features_are_computed_once_and_read_alike():
     """Inside shared_features, windows asked for again, in other runs of windows, are
     read from those computed before, equal to computing them anew."""
-    from learn.monitor.training import features_of, shared_features
+    from swgmon.evaluation.training import features_of, shared_features
 
     cfg = bm.BenchmarkConfig(families=["warm_up"], healthy_hours=8.0, study=TINY)
     p = bm.population_plan(P.plan(dataset_preset("tiny_bench")), cfg)
@@ -159,8 +159,8 @@ BENCH_TINY = ["benchmark.run_on=[tiny]", "+dataset@benchmark.datasets.tiny=tiny_
 
 
 def _run(out, *extra):
-    from learn.train import run_train
     from swgcli import compose_app
+    from swgcli.tasks import run_train
 
     return run_train(compose_app("train", ["experiment=benchmark", "~logger",
                                            f"benchmark.report_dir={out}", *BENCH_TINY,
@@ -213,7 +213,7 @@ def test_the_benchmark_runs_as_arrays_the_design_first(tmp_path):
 def _synthetic(alarms_monitor: list[int], detected_monitor: list[bool]):
     """results.csv and false_alarms.csv of a benchmark of one data set and family, four
     lives per detector."""
-    from learn.monitor_evaluation.benchmark_task import benchmark_targets
+    from swgmon.evaluation.benchmark_task import benchmark_targets
 
     rows, fa = [], []
     for det in ("monitor", bm.ABLATION, *bm.BASELINES):

@@ -1,4 +1,4 @@
-"""The benchmark's statistics (learn.monitor_evaluation.statistics): exact binomial
+"""The benchmark's statistics (swgmon.evaluation.statistics): exact binomial
 intervals against their closed forms, pooled and worst-life rates, the conditional delay,
 a life-clustered bootstrap that covers at its level, and thresholds matched to a
 false-alarm rate."""
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learn.monitor_evaluation import statistics as st
+from swgmon.evaluation import statistics as st
 
 
 def test_an_alarm_share_has_the_exact_clopper_pearson_interval():
@@ -67,7 +67,7 @@ def test_the_prognosis_coverage_per_bucket_carries_an_interval_over_lives():
     prognoses are not independent)."""
     import pandas as pd
 
-    from learn.monitor_evaluation.prognosis_report import bucket_table
+    from swgmon.evaluation.prognosis_report import bucket_table
 
     rows = []
     for seed, hit in ((0, True), (1, False)):

@@ -121,8 +121,8 @@ def test_coral_recovers_a_shifted_domain():
 
 def test_transfer_end_to_end(tmp_path):
     """Compose the real experiment, shrink it, run it; check the report."""
-    from learn.train import run_train
     from swgcli import compose_app
+    from swgcli.tasks import run_train
 
     data = write_toy_dataset(tmp_path / "toy", n_variants=4, n_time=64)
     overrides = [
@@ -404,8 +404,8 @@ def _toy_overrides(tmp_path: Path, *extra: str) -> list[str]:
 
 
 def test_a_stopped_comparison_runs_only_its_unfinished_cells_again(tmp_path, monkeypatch):
-    from learn.train import run_train
     from learn.transfer import study
+    from swgcli.tasks import run_train
 
     rep = Path(run_train(_toy_comparison(tmp_path))["report_dir"])
     first = pd.read_csv(rep / "results.csv")
@@ -424,8 +424,8 @@ def test_a_splits_seeds_stacked_in_one_job_give_what_one_by_one_gives(tmp_path, 
     one job whose CNNs train at once; without dropout every row is what one job per seed
     gives, to rounding, and each seed's cell is kept apart (a stopped run resumes it)."""
     from learn.learners import stacked
-    from learn.train import run_train
     from learn.transfer import study
+    from swgcli.tasks import run_train
 
     no_dropout = "transfer.models.cnn.estimator.dropout=0.0"
     one = pd.read_csv(Path(run_train(_toy_comparison(tmp_path / "one", no_dropout,
@@ -450,8 +450,8 @@ def test_a_splits_seeds_stacked_in_one_job_give_what_one_by_one_gives(tmp_path, 
 
 
 def test_a_comparison_runs_as_a_job_array_then_builds_its_report(tmp_path, monkeypatch):
-    from learn.train import run_train
     from learn.transfer import study
+    from swgcli.tasks import run_train
 
     out = run_train(_toy_comparison(tmp_path, "transfer.group=0"))
     rep = Path(out["report_dir"])

@@ -124,8 +124,8 @@ def test_latency_records_what_it_timed_and_restores_torch_threads():
 def test_the_monitor_refuses_cuda_here_before_any_work(tmp_path, detectors):
     """monitor.device=cuda on a machine without CUDA: one line naming the key, nothing
     written, when the CNN detector is evaluated; without it the device is only checked."""
-    from learn.monitor_evaluation.task import run_monitor_evaluation
     from swgcli import compose_app
+    from swgmon.evaluation.task import run_monitor_evaluation
 
     cfg = compose_app("train", ["experiment=monitor", "~logger", "monitor.device=cuda",
                                 "monitor.run_on=[bench]", "monitor.n_jobs=1",
@@ -134,7 +134,7 @@ def test_the_monitor_refuses_cuda_here_before_any_work(tmp_path, detectors):
     if detectors == ["paper_rf"]:
         from omegaconf import OmegaConf
 
-        from learn.monitor_evaluation.task import _nets
+        from swgmon.evaluation.task import _nets
 
         assert _nets(OmegaConf.to_object(cfg).monitor) == {}
         return

@@ -1,4 +1,4 @@
-"""The monitor's per-window stage as C (learn.export, swgsim-export): the Python reference
+"""The monitor's per-window stage as C (swgmon.export, swgsim-export): the Python reference
 against the monitor's least squares, the C compiled for the host against the Python
 pipeline on held-out windows of a tiny model (classes exactly, features bit for bit),
 refusals of models the C cannot represent, and the Cortex-M4F build (skipped without the
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from bad_input import app_line
 
-from learn.export import reference as ref
+from swgmon.export import reference as ref
 
 #: Largest |C − Python| of a feature accepted: the C is the reference's float32 arithmetic
 #: op for op, so the host build gives the same bits (0); 1e-6 leaves room for a libm
@@ -39,7 +39,7 @@ def _steady_windows(n=6, n_t=600, fs=10e3, rpm=4000.0, seed=0):
 def test_reference_features_are_the_monitors_least_squares():
     """At the nominal angle the stage's float32 features are the monitor's float64
     least-squares ones: offsets and amplitudes to 1e-5 mV/V, log10 residual RMS to 0.02."""
-    from learn.monitor.features import window_features
+    from learn.inputs.health import window_features
 
     x, phi, eff = _steady_windows()
     gi, g = ref.normal_equations(4000.0, 10e3, x.shape[-1])
@@ -76,7 +76,7 @@ def test_short_window_refused():
 def test_unsupported_estimator_refused_in_one_line():
     from sklearn.linear_model import LogisticRegression
 
-    from learn.export.forest import check_representable
+    from swgmon.export.forest import check_representable
 
     m = LogisticRegression().fit(np.arange(10.0)[:, None], np.arange(10) % 2)
     with pytest.raises(ValueError, match=r"^unsupported estimator LogisticRegression: the C "
@@ -89,7 +89,7 @@ def test_tree_beyond_int16_node_indices_refused():
     decision nodes; emlearn's int16 child jumps allow 32767."""
     from sklearn.tree import DecisionTreeClassifier
 
-    from learn.export.forest import check_representable, to_c
+    from swgmon.export.forest import check_representable, to_c
 
     rng = np.random.default_rng(0)
     t = DecisionTreeClassifier(random_state=0).fit(rng.uniform(size=(80000, 2)),
@@ -103,7 +103,7 @@ def test_tree_beyond_int16_node_indices_refused():
 
 
 def test_forest_size_follows_the_flash_budget():
-    from learn.export.forest import NODE_BYTES, leaves_for_budget
+    from swgmon.export.forest import NODE_BYTES, leaves_for_budget
 
     assert leaves_for_budget(12288, 10) == 12288 // (NODE_BYTES * 10) + 1
     with pytest.raises(ValueError, match="forest_bytes=40 holds no split for 10 trees"):
@@ -117,7 +117,7 @@ def test_app_refuses_bad_options_with_exit_code_2(tmp_path):
 
 
 def test_foreign_file_in_out_dir_refused_before_any_work(tmp_path):
-    from learn.export.pipeline import ExportOptions, run_export
+    from swgmon.export.pipeline import ExportOptions, run_export
 
     (tmp_path / "notes.txt").write_text("mine")
     with pytest.raises(ValueError, match="notes.txt.*cannot show it wrote"):
@@ -131,8 +131,8 @@ def tiny_export(tmp_path_factory):
     the cross tools are there (else the target says why not)."""
     if shutil.which("cc") is None and shutil.which("gcc") is None:
         pytest.skip("no C compiler (cc) on PATH: sudo apt-get install -y gcc")
-    from learn.export.pipeline import ExportOptions, run_export
     from swgcli import dataset_preset
+    from swgmon.export.pipeline import ExportOptions, run_export
     from swgsim.datasets.plan import plan
 
     out = tmp_path_factory.mktemp("export")
@@ -191,7 +191,7 @@ def test_cortex_m4f_build_fits_and_computes_the_same_bits(tiny_export):
 
 def test_the_export_leaves_numpys_error_state_alone(tiny_export):
     """emlearn sets numpy.seterr(all='raise') on import; the export imports it through
-    learn.export.import_emlearn, which restores the state (an underflow elsewhere in the
+    swgmon.export.import_emlearn, which restores the state (an underflow elsewhere in the
     process raised before)."""
     assert np.geterr() == {"divide": "warn", "over": "warn", "under": "ignore",
                            "invalid": "warn"}

@@ -1,8 +1,8 @@
-"""Families of benign changes (learn.monitor.families): draws deterministic per seed and
+"""Families of benign changes (swgmon.evaluation.families): draws deterministic per seed and
 different between seeds, inside the declared ranges, accepted by the conditions' checks;
 design and scored seeds kept apart; a range out of its bounds refused in one line naming
-it; the evaluation's lives of a family (learn.monitor.study.life_conditions,
-learn.monitor.evaluate.nuisance_fault_lives)."""
+it; the evaluation's lives of a family (swgmon.evaluation.study.life_conditions,
+swgmon.evaluation.evaluate.nuisance_fault_lives)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from learn.monitor.evaluate import _benign, healthy_life, maintenance_log, monitor_healthy
-from learn.monitor.families import (
+from swgcli import dataset_preset
+from swgmon.detection.rule import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE, Alarm
+from swgmon.evaluation.evaluate import _benign, healthy_life, maintenance_log, monitor_healthy
+from swgmon.evaluation.families import (
     RANGES,
     SENSOR_STATES,
     NuisanceFamily,
@@ -21,12 +23,8 @@ from learn.monitor.families import (
     default_families,
     draw_conditions,
 )
-from learn.monitor.rule import Alarm
-from learn.monitor.sensor_check import TEMPERATURE_SENSOR
-from learn.monitor.study import FAMILY_PREFIX, MonitorStudyConfig, life_conditions
-from learn.monitor.training import train_model
-from learn.monitor.unexplained import UNEXPLAINED_CHANGE
-from swgcli import dataset_preset
+from swgmon.evaluation.study import FAMILY_PREFIX, MonitorStudyConfig, life_conditions
+from swgmon.evaluation.training import train_model
 from swgsim.base.typed import check_tree
 from swgsim.datasets.plan import plan
 from swgsim.datasets.records import record_bank
@@ -171,8 +169,8 @@ def test_the_fixed_nuisances_are_lived_as_before_and_families_by_the_seed():
 
 
 def test_a_family_life_also_lives_slowly_growing_faults():
-    from learn.monitor.evaluate import nuisance_fault_lives
     from swgcli import dataset_preset
+    from swgmon.evaluation.evaluate import nuisance_fault_lives
     from swgsim.datasets.plan import plan
 
     p = plan(dataset_preset("tiny_bench"))
@@ -186,7 +184,7 @@ def test_a_family_life_also_lives_slowly_growing_faults():
 
 
 def test_only_a_logged_family_hands_its_regreasing_to_the_monitor():
-    """learn.monitor.evaluate.maintenance_log: the re-greasing drawn for the life, declared
+    """swgmon.evaluation.evaluate.maintenance_log: the re-greasing drawn for the life, declared
     where the family is logged, not where it is not (an unexplained change to name)."""
     cfg = MonitorStudyConfig(families={k: FAMILIES[k] for k in ("regrease",
                                                                 "regrease_logged")})
@@ -205,7 +203,7 @@ def _alarm(fault: str, hour: float) -> Alarm:
 
 
 def test_a_fault_life_passes_only_the_alarms_its_own_benign_events_explain():
-    """learn.monitor.evaluate._benign: after a fault's onset an alarm is that fault's
+    """swgmon.evaluation.evaluate._benign: after a fault's onset an alarm is that fault's
     detection unless the life holds what it names - a re-greasing at or before an
     unexplained change, a temperature sensor failed at or before an alarm naming it. An
     unexplained change in a life with no re-greasing (reduced damping under a warm-up,

@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from learn.paper.job import run_study_job
-from learn.train import TASKS, run_train
 from learn.transfer.task import run_transfer
 from swgcli import compose_app
+from swgcli.tasks import TASKS, run_train
 
 
 def compose_train(overrides=()):

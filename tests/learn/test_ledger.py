@@ -8,8 +8,8 @@ import dataclasses
 
 import pytest
 
-from learn.monitor.study import MonitorStudyConfig
 from learn.tracking import ledger as lg
+from swgmon.evaluation.study import MonitorStudyConfig
 from swgsim.base.typed import check_tree
 
 

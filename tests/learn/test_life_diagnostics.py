@@ -1,5 +1,5 @@
 """scripts/life_diagnostics.py: one held-out gear's life through the monitor, the same
-windows as the evaluation's (learn.monitor.evaluate.healthy_life), its events and per-point
+windows as the evaluation's (swgmon.evaluation.evaluate.healthy_life), its events and per-point
 z-scores; bad input in one line, exit 2."""
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.monitor.evaluate import healthy_life, lives_of
-from learn.monitor.families import default_families
-from learn.monitor.model_io import save_model
-from learn.monitor.study import MonitorStudyConfig
-from learn.monitor.training import train_model
+from swgmon.assessment.model_io import save_model
+from swgmon.evaluation.evaluate import healthy_life, lives_of
+from swgmon.evaluation.families import default_families
+from swgmon.evaluation.study import MonitorStudyConfig
+from swgmon.evaluation.training import train_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 import life_diagnostics  # noqa: E402

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from bad_input import small_model
 
-from learn.monitor.model_io import load_model, save_model
+from swgmon.assessment.model_io import load_model, save_model
 
 
 @pytest.fixture
@@ -27,7 +27,7 @@ def test_a_real_model_loads(model_file):
 def test_a_zip_bomb_with_a_matching_card_refused_before_inflating(model_file, monkeypatch):
     import skops.io as sio
 
-    from learn.monitor import model_io
+    from swgmon.assessment import model_io
 
     monkeypatch.setattr(model_io, "MAX_UNPACKED_BYTES", 4 * 2**20)
     with zipfile.ZipFile(model_file, "a", zipfile.ZIP_DEFLATED) as z:

@@ -1,4 +1,4 @@
-"""The condition monitor (learn.monitor): the rule's false-alarm rate against its design,
+"""The condition monitor (swgmon): the rule's false-alarm rate against its design,
 its bounds, bad input, and the monitor end to end on tiny lives (a planted step fault
 detected and named, a sensor fault named as a sensor fault)."""
 
@@ -8,7 +8,7 @@ import types
 import numpy as np
 import pytest
 
-from learn.monitor.rule import (
+from swgmon.detection.rule import (
     RuleConfig,
     check_commissioning,
     conformal_p,
@@ -94,14 +94,14 @@ MODEL = types.SimpleNamespace(sample_rate_hz=10e3, window_s=0.06,
     (_stream(n_comm=40), "commissioning too short"),
 ])
 def test_stream_refused_before_any_work(ds, match):
-    from learn.monitor.stream import check_stream
+    from swgmon.advisories.stream import check_stream
 
     with pytest.raises(ValueError, match=match):
         check_stream(ds, MODEL, RuleConfig(), "s")
 
 
 def test_stream_outside_the_models_operating_points_refused():
-    from learn.monitor.stream import check_stream
+    from swgmon.advisories.stream import check_stream
 
     m = types.SimpleNamespace(**{**vars(MODEL), "points_range": np.array([[2000.0, 7.0],
                                                                            [3000.0, 70.0]])})
@@ -155,8 +155,8 @@ def tiny_banks(tiny_bench):
 @pytest.fixture(scope="module")
 def tiny_eval(tiny_banks):
     """The monitor's part of held-out gear 3 of tiny_bench (the diagnosis model with it)."""
-    from learn.monitor.evaluate import run_held_out
-    from learn.monitor.study import MonitorStudyConfig
+    from swgmon.evaluation.evaluate import run_held_out
+    from swgmon.evaluation.study import MonitorStudyConfig
 
     p, banks = tiny_banks
     return run_held_out(p, "tiny_bench", 3, MonitorStudyConfig(**TINY_STUDY), banks=banks)
@@ -186,8 +186,8 @@ def test_per_window_detectors_beside_the_monitor(tiny_eval, tiny_banks, monkeypa
     with its records, as in a worker, they simulate no record again."""
     import pandas as pd
 
-    from learn.monitor.evaluate import COMPARED, run_detectors
-    from learn.monitor.study import MonitorStudyConfig
+    from swgmon.evaluation.evaluate import COMPARED, run_detectors
+    from swgmon.evaluation.study import MonitorStudyConfig
     from swgsim.datasets.records import RecordBank
 
     res = pd.DataFrame(tiny_eval["rows"])
@@ -214,8 +214,8 @@ def test_per_window_detectors_beside_the_monitor(tiny_eval, tiny_banks, monkeypa
 def test_the_detectors_training_set_holds_every_class_alike(tiny_banks):
     """detector_windows: every input kind asked for, one row per window, as many windows of
     each class the diagnosis model knows (the paper's balanced data set)."""
-    from learn.monitor.study import MonitorStudyConfig
-    from learn.monitor.training import classes, detector_windows
+    from swgmon.evaluation.study import MonitorStudyConfig
+    from swgmon.evaluation.training import classes, detector_windows
 
     p, banks = tiny_banks
     cfg = MonitorStudyConfig(**TINY_STUDY)
@@ -231,9 +231,9 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch)
     eccentric WG of severity 0.1 from 6 h on) with the model trained without gear 3."""
     import json
 
-    from learn.monitor.model_io import save_model
     from swgcli import compose_app, dataset_preset
     from swgcli.monitor import run_monitor_app
+    from swgmon.assessment.model_io import save_model
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.generate import generate
 
@@ -260,7 +260,7 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch)
 def test_compiled_trees_equal_scikit_learn(tiny_eval):
     """The compiled walk of the trees gives scikit-learn's probabilities bit for bit, for
     one window and for a block, with a missing value (NaN) among them."""
-    from learn.monitor.trees import CompiledTrees
+    from swgmon.assessment.trees import CompiledTrees
 
     clf = tiny_eval["model"].classifier
     rng = np.random.default_rng(3)
@@ -275,9 +275,9 @@ def test_compiled_trees_equal_scikit_learn(tiny_eval):
 def test_one_window_at_a_time_equals_the_block_path(tiny_eval, tiny_banks):
     """GearMonitor.step, window by window, gives run()'s scores, p-values, CUSUMs and
     alarms (a CUSUM pushed over h by a shifted stretch: one alarm, then a restart)."""
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.rule import RuleConfig
-    from learn.monitor.training import features_of
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.detection.rule import RuleConfig
+    from swgmon.evaluation.training import features_of
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.schedule import LifeConfig
 
@@ -310,7 +310,7 @@ def test_one_bridge_fits_recover_planted_sensor_faults():
     """Least squares of sensor_check: an offset step on s2 and a gain drift on s4, planted
     in z-scores of noise, come back with their severities and leave noise behind; the
     mean shift left on the other bridges (rest) is small unless another bridge moved."""
-    from learn.monitor.sensor_check import BLOCK, REST_MAX, fit_sensor_faults
+    from swgmon.assessment.sensor_check import BLOCK, REST_MAX, fit_sensor_faults
 
     rng = np.random.default_rng(0)
     n, f = 40, 5 * BLOCK + 1
@@ -345,7 +345,7 @@ def test_a_drifting_gain_is_fitted_with_its_rate():
     The threshold of a level and a rate is the χ²₂ quantile 0.999."""
     from scipy.stats import chi2
 
-    from learn.monitor.sensor_check import BLOCK, FIT_MIN_GAIN_RATE, fit_sensor_faults
+    from swgmon.assessment.sensor_check import BLOCK, FIT_MIN_GAIN_RATE, fit_sensor_faults
 
     assert FIT_MIN_GAIN_RATE == pytest.approx(chi2.ppf(0.999, 2), rel=1e-12)
     rng = np.random.default_rng(1)
@@ -370,8 +370,8 @@ def test_a_drifting_gain_is_fitted_with_its_rate():
 def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval, tiny_banks):
     """An offset step on s1 alone (whose eccentric WG moves s1 and s3 oppositely) is named
     a sensor fault on s1; an eccentric WG is not explained by one bridge."""
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.training import features_of
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.evaluation.training import features_of
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.schedule import FaultOnset
 
@@ -399,10 +399,10 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     1/2, let it pass): that point is relearnt. Windows off the laws by a spread are
     relearnt. The block path, one window at a time and a fork's replay from
     commissioning give the same numbers and the same recommissionings."""
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.normal import OUTSIDE_LOAD, Conditions
-    from learn.monitor.rule import RuleConfig
-    from learn.monitor.training import features_of
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.detection.normal import OUTSIDE_LOAD, Conditions
+    from swgmon.detection.rule import RuleConfig
+    from swgmon.evaluation.training import features_of
     from swgsim.datasets.life import LifeSimulator
 
     p, banks = tiny_banks
@@ -455,10 +455,10 @@ def test_a_window_without_its_reference_features_is_not_gathered_for_recommissio
     neither gathered nor clears what was gathered. Gathered, three such windows of 120
     gave a relearnt point a NaN mean, and the naming's least squares failed
     (LinAlgError: robot_joint, gear 3 held out, family ``all``, scored seeds)."""
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.normal import OUTSIDE_LOAD, Conditions
-    from learn.monitor.rule import RuleConfig
-    from learn.monitor.training import features_of
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.detection.normal import OUTSIDE_LOAD, Conditions
+    from swgmon.detection.rule import RuleConfig
+    from swgmon.evaluation.training import features_of
     from swgsim.datasets.life import LifeSimulator
 
     p, banks = tiny_banks
@@ -481,9 +481,9 @@ def test_beyond_the_load_range_only_the_novelty_scores():
     """A window whose acting load commissioning did not see at its point is scored by the
     novelty alone (the widened spread bounds the z-scores' size, not their direction);
     outside only in temperature or friction, both scores count (Bonferroni)."""
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.normal import OUTSIDE_FRICTION, OUTSIDE_LOAD, OUTSIDE_TEMPERATURE
-    from learn.monitor.rule import RuleConfig, conformal_p
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.detection.normal import OUTSIDE_FRICTION, OUTSIDE_LOAD, OUTSIDE_TEMPERATURE
+    from swgmon.detection.rule import RuleConfig, conformal_p
 
     mon = GearMonitor(None, RuleConfig(), 1.0)
     cal = np.sort(np.random.default_rng(0).normal(size=(99, 2)), axis=0)
@@ -509,10 +509,10 @@ def test_commissioning_tracks_a_running_in_gear_friction(tiny_eval, tiny_banks):
     friction law cannot be told from (tests/learn/test_real_day.py; with the catalogue's
     law, the simulator's, taken there the spread fell by more than half).
     Measured (no law): the spread 0.55 and 0.40 times, the factor 0.978 and 0.9997."""
-    from learn.monitor.gear_monitor import GearMonitor
-    from learn.monitor.normal import EFFICIENCY, Conditions, NormalConfig
-    from learn.monitor.rule import RuleConfig
-    from learn.monitor.training import features_of
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.detection.normal import EFFICIENCY, Conditions, NormalConfig
+    from swgmon.detection.rule import RuleConfig
+    from swgmon.evaluation.training import features_of
     from swgsim.datasets.conditions import ConditionsConfig, RunInConfig
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.schedule import LifeConfig
@@ -543,8 +543,8 @@ def test_every_event_kind_is_printed_in_one_line():
     recommissionings) is one line by :func:`event_line`, which the app
     and report.md print; a kind it does not know is refused naming the kinds (issue 43,
     cause 1: a recommissioning printed as an alarm raised KeyError: 'fault')."""
-    from learn.monitor.rule import Alarm
-    from learn.monitor.stream import EVENT_KINDS, StreamResult, event_line
+    from swgmon.advisories.stream import EVENT_KINDS, StreamResult, event_line
+    from swgmon.detection.rule import Alarm
 
     gear = Alarm(6.2, 10, 4, "eccentric_wg", "eccentric_wg", 0.1, 0.08, 0.12)
     sensor = Alarm(7.0, 20, 18, "sensor_offset_step", "sensor_offset_step", 0.05, 0.04,
@@ -582,8 +582,8 @@ def test_a_sensor_fault_named_without_a_bridge_is_a_sensor_fault_not_a_gear_faul
     """A sensor-fault class that no one bridge explains (``bridge`` None) is counted and
     printed as a sensor fault: before, only a named bridge or the temperature sensor made
     an alarm a sensor fault's, so this one was counted as a gear-fault alarm."""
-    from learn.monitor.rule import Alarm
-    from learn.monitor.stream import event_line
+    from swgmon.advisories.stream import event_line
+    from swgmon.detection.rule import Alarm
 
     al = Alarm(7.0, 20, 18, "sensor_offset_step", "sensor_offset_step", 0.05, 0.04, 0.06)
     assert al.sensor_fault and al.kind == "sensor_fault"
@@ -594,8 +594,8 @@ def test_a_sensor_fault_named_without_a_bridge_is_a_sensor_fault_not_a_gear_faul
 
 
 def test_a_resumed_evaluations_tables_keep_a_fresh_runs_columns(tmp_path):
-    from learn.monitor.evaluate import to_frames
     from learn.tasks.parts import Job, finished_parts, save_part
+    from swgmon.evaluation.evaluate import to_frames
 
     job = Job("tiny", 3, None, "k1")
     part = {"key": "k1", "dataset": "tiny", "held_out_gear": 3,
@@ -615,7 +615,7 @@ def test_the_friction_fits_thresholds_are_the_chi2_quantiles_they_say():
     and a rate: three) are the χ² quantiles 0.999, written without importing scipy."""
     from scipy.stats import chi2
 
-    from learn.monitor.sensor_check import FIT_MIN, FIT_MIN_RATE
+    from swgmon.assessment.sensor_check import FIT_MIN, FIT_MIN_RATE
 
     assert FIT_MIN == pytest.approx(chi2.ppf(0.999, 1), rel=1e-9)
     assert FIT_MIN_RATE == pytest.approx(chi2.ppf(0.999, 3), rel=1e-12)
@@ -624,8 +624,8 @@ def test_the_friction_fits_thresholds_are_the_chi2_quantiles_they_say():
 def test_an_alarm_says_which_features_moved():
     """rule.moved_features: the largest mean z-scores, at least 1 sigma, the first
     always; event_line prints them after the alarm."""
-    from learn.monitor.rule import Alarm, moved_features
-    from learn.monitor.stream import event_line
+    from swgmon.advisories.stream import event_line
+    from swgmon.detection.rule import Alarm, moved_features
 
     z = np.zeros((4, 5))
     z[:, 2], z[:, 4], z[:, 0] = -6.0, 1.5, 0.5
@@ -653,9 +653,9 @@ def growing_life(tiny_eval, tmp_path_factory):
     prognosis per 0.5 h, valid after 0.5 h and 3 estimates)."""
     from threadpoolctl import threadpool_limits
 
-    from learn.monitor.stream import monitor_stream
-    from learn.monitor.stream_prognosis import StreamPrognosis
     from swgcli import dataset_preset
+    from swgmon.advisories.stream import monitor_stream
+    from swgmon.prognosis.stream import StreamPrognosis
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.generate import generate
     from swgsim.datasets.growth import RunToFailure
@@ -688,7 +688,7 @@ def test_prognoses_more_often_than_the_streams_windows_are_refused_before_work(g
     refused in one line, before the stream is monitored."""
     import dataclasses
 
-    from learn.monitor.stream import monitor_stream
+    from swgmon.advisories.stream import monitor_stream
 
     many = dataclasses.replace(growing_life["config"], every_h=1e-9)
     with pytest.raises(ValueError, match=r"^prognosis.every_h must lie in \[0.0166667, "
@@ -706,7 +706,7 @@ def test_more_prognoses_than_an_alarm_may_have_are_refused_before_work(growing_l
     the stream is monitored."""
     import dataclasses
 
-    from learn.monitor.stream import monitor_stream
+    from swgmon.advisories.stream import monitor_stream
 
     ds = growing_life["ds"].copy()
     hours = ds["hour"].values.astype(float)
@@ -743,7 +743,7 @@ def test_the_prognosis_is_written_and_off_leaves_every_output_as_it_was(growing_
     events, a report line per valid one, the figure."""
     import json
 
-    from learn.monitor.stream import write_outputs
+    from swgmon.advisories.stream import write_outputs
 
     files = {k: write_outputs(growing_life[k], tmp_path / k, "life")
              for k in ("none", "off", "on")}
@@ -763,7 +763,7 @@ def test_no_prognosis_before_an_alarm(growing_life, tiny_eval, tmp_path):
     prognosis.png and no line of it in report.md."""
     from threadpoolctl import threadpool_limits
 
-    from learn.monitor.stream import monitor_stream, write_outputs
+    from swgmon.advisories.stream import monitor_stream, write_outputs
 
     ds = growing_life["ds"]
     healthy = ds.isel(sample=np.flatnonzero(ds["hour"].values < GROWING["onset_h"]))
@@ -785,7 +785,7 @@ def test_a_planned_duty_outside_the_models_is_refused_by_the_app(growing_life, t
     import sys
 
     import swgcli.monitor
-    from learn.monitor.model_io import save_model
+    from swgmon.assessment.model_io import save_model
 
     model = save_model(tiny_eval["model"], tmp_path / "model", [{"name": "tiny_bench"}])
     monkeypatch.chdir(tmp_path)
@@ -804,7 +804,7 @@ def test_a_planned_duty_outside_the_models_is_refused_by_the_app(growing_life, t
 def test_two_alarms_of_one_fault_keep_their_own_prognoses():
     """Two wear alarms (2 h and 5 h), both followed to the stream's end, their prognoses
     at overlapping hours: each track gets its own alarm's events, not the later one's."""
-    from learn.monitor.stream_prognosis import StreamPrognoses
+    from swgmon.prognosis.stream import StreamPrognoses
 
     tracks = [{"fault": "wear", "alarm_h": a, "hours": [a + 1.0], "severity": [0.1],
                "lo": [0.0], "hi": [0.2]} for a in (2.0, 5.0)]
@@ -817,7 +817,7 @@ def test_two_alarms_of_one_fault_keep_their_own_prognoses():
 
 
 def test_the_diagnosis_models_boosting_runs_on_one_openmp_thread_with_the_same_trees():
-    """``one_thread`` (learn/monitor/model.py) limits the threads scikit-learn's gradient
+    """``one_thread`` (swgmon/assessment/model.py) limits the threads scikit-learn's gradient
     boosting asks OpenMP for to one and puts the limit back after (another OpenMP runtime
     loaded later, torch's, is not scikit-learn's and not limited); the trees fitted inside
     are those fitted with two threads (what makes the limit safe: the model does not
@@ -826,7 +826,7 @@ def test_the_diagnosis_models_boosting_runs_on_one_openmp_thread_with_the_same_t
     from sklearn.utils._openmp_helpers import _openmp_effective_n_threads  # what it asks
     from threadpoolctl import threadpool_limits
 
-    from learn.monitor.model import one_thread
+    from swgmon.assessment.model import one_thread
 
     two = min(2, os.cpu_count() or 1)
     rng = np.random.default_rng(0)
@@ -846,14 +846,14 @@ def test_the_diagnosis_models_boosting_runs_on_one_openmp_thread_with_the_same_t
 
 def test_a_training_gears_severity_is_read_out_of_sample_for_the_prognosis_calibration(
         tmp_path):
-    """``DiagnosisModel.without(g)`` (learn/monitor/model.py): the severity regressors
+    """``DiagnosisModel.without(g)`` (swgmon/assessment/model.py): the severity regressors
     fitted without training gear ``g`` - on its windows the estimate is out of sample, as
     on a held-out gear's - with the classifier and the intervals unchanged; a gear the
     model did not train on, and a loaded model, are refused."""
     from sklearn.ensemble import HistGradientBoostingRegressor
 
-    from learn.monitor.model import fit_diagnosis
-    from learn.monitor.model_io import load_model, save_model
+    from swgmon.assessment.model import fit_diagnosis
+    from swgmon.assessment.model_io import load_model, save_model
 
     rng = np.random.default_rng(0)
     n = 600
@@ -864,7 +864,7 @@ def test_a_training_gears_severity_is_read_out_of_sample_for_the_prognosis_calib
     x = np.column_stack([severity * np.where(gear == 1, 1.0, 1.5) + 0.01 * rng.normal(size=n),
                          (fault == "x") + 0.1 * rng.normal(size=n), np.ones(n), np.ones(n)])
     model = fit_diagnosis(x, fault, severity, gear, ["healthy", "x"], n_agg=10)
-    # what training sets beside the fit (learn.monitor.training.train_model)
+    # what training sets beside the fit (swgmon.evaluation.training.train_model)
     model.n_features, model.sample_rate_hz, model.window_s = 2, 10_000.0, 0.12
     out = model.without(2)
     assert out.classifier is model.classifier and out.classes == model.classes

@@ -11,7 +11,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-import learn.monitor.evaluate as evaluate
+import swgmon.evaluation.evaluate as evaluate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 import monitor_families  # noqa: E402

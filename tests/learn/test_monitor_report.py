@@ -1,5 +1,5 @@
 """The monitor evaluation's tables with lives of a real day beside the stationary ones
-(learn.monitor_evaluation.report), on small hand-made result frames whose figures are known."""
+(swgmon.evaluation.report), on small hand-made result frames whose figures are known."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from learn.monitor_evaluation.report import (
+from swgmon.evaluation.report import (
     _mildest_detected,
     false_alarm_table,
     nuisance_table,

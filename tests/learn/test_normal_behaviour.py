@@ -1,4 +1,4 @@
-"""The gear's normal behaviour (learn/monitor/normal.py) against closed forms: features
+"""The gear's normal behaviour (swgmon/detection/normal.py) against closed forms: features
 that follow the load laws it assumes are carried to a load commissioning did not see,
 beyond commissioning's range the spread widens by the correction's own size, and a point
 recommissioned at a new load holds it normal."""
@@ -10,8 +10,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from learn.monitor.laws import LossLaw, warm_up_directions
-from learn.monitor.normal import (
+from swgmon.detection.laws import LossLaw, warm_up_directions
+from swgmon.detection.normal import (
     BLOCK,
     EFFICIENCY,
     OUTSIDE_LOAD,
@@ -169,7 +169,7 @@ def test_a_features_own_temperature_slope_is_taken_out():
 def test_friction_outside_the_range_commissioning_tracked(commissioned):
     """The friction factor is outside where it leaves commissioning's tracked range by
     more than the margin (0.05), not where it leaves 1."""
-    from learn.monitor.normal import OUTSIDE_FRICTION
+    from swgmon.detection.normal import OUTSIDE_FRICTION
 
     nb, rng = commissioned
     nb = dataclasses.replace(nb, friction_range=np.array([0.97, 1.02]))
@@ -185,7 +185,7 @@ def test_a_constant_commissioning_temperature_keeps_its_range_widened_by_the_unc
     terms) still has a temperature range, its readings' widened by the sensor's
     uncertainty: a window beyond it is outside and not judged, without the margin the
     fitted law gets (issue 43, cause 2: temperature was never outside there)."""
-    from learn.monitor.normal import MIN_SPREAD_K, OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
+    from swgmon.detection.normal import MIN_SPREAD_K, OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
 
     rng = np.random.default_rng(4)
     tq = np.repeat([7.0, 39.0, 70.0], 20)
@@ -219,10 +219,10 @@ def test_the_loss_law_is_learnt_from_commissioning_whatever_its_form(form):
     """Exponential, linear and saturating (a tanh with its inflection inside the range)
     laws of the load-independent loss are each learnt from commissioning's windows within
     1 % of the loss over its temperatures, a speed at one load included
-    (learn/monitor/laws.py, LossLaw: any monotone law, piecewise linear); beyond those
+    (swgmon/detection/laws.py, LossLaw: any monotone law, piecewise linear); beyond those
     temperatures the end segments' slopes go on, and the law never rises with the
     temperature."""
-    from learn.monitor.laws import loss_model as _loss_model
+    from swgmon.detection.laws import loss_model as _loss_model
 
     rng = np.random.default_rng(3)
     temp = rng.uniform(18.0, 61.0, 1500)
@@ -247,10 +247,10 @@ def test_the_loss_law_is_learnt_from_commissioning_whatever_its_form(form):
 
 def test_over_a_single_warm_up_the_law_is_bounded_not_assumed_and_a_cold_start_learns_it():
     """Over one warm-up a run-in would pass for the friction's temperature law (learnt
-    only after commissioning saw the joint cool, learn/monitor/laws.py): the law that
+    only after commissioning saw the joint cool, swgmon/detection/laws.py): the law that
     fits the warm-up is kept as one bound of the law (a run-in only steepens it), no
     temperature law the other, and no catalogue's law is taken."""
-    from learn.monitor.laws import loss_model as _loss_model
+    from swgmon.detection.laws import loss_model as _loss_model
 
     hours = np.linspace(0.0, 8.0, 480)
     warm = 20.0 + 20.0 * (1.0 - np.exp(-hours / 0.5))  # one warm-up, no cold start

@@ -1,4 +1,4 @@
-"""The prognosis after an alarm (learn/monitor/prognosis.py): its interval against true
+"""The prognosis after an alarm (swgmon/prognosis/growth.py): its interval against true
 failure hours of synthetic lives grown by swgsim.datasets.growth's laws, the planned
 duty, the refusals, "not yet valid", determinism, the conformal scale and the baselines."""
 
@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from learn.monitor.prognosis import (
+from swgmon.prognosis.baselines import predict_linear, predict_wiener
+from swgmon.prognosis.calibration import conformal_interval_scale
+from swgmon.prognosis.growth import (
     Duty,
     DutyRange,
     Prognosis,
@@ -20,8 +22,6 @@ from learn.monitor.prognosis import (
     hours_for_exposure,
     predict_growth,
 )
-from learn.monitor.prognosis_baselines import predict_linear, predict_wiener
-from learn.monitor.prognosis_calibration import conformal_interval_scale
 from swgsim.datasets.growth import RunToFailure
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
@@ -194,7 +194,7 @@ def test_the_config_scales_the_interval_about_the_median():
 def test_each_quarter_of_the_predicted_share_gets_its_own_scale():
     """Four factors: the prognosis takes the one of the quarter its own predicted remaining
     share falls in; a list of another length, or a factor out of range, is one line."""
-    from learn.monitor.prognosis_inputs import predicted_share, share_bucket
+    from swgmon.prognosis.inputs import predicted_share, share_bucket
 
     track, alarm, duty, wh, _ = life("wear", 0, 0.3)
     a = predict_growth(track, "wear", alarm, duty, wh)
@@ -259,9 +259,9 @@ def test_every_predictor_option_is_an_option_of_the_monitor_app():
 
     from omegaconf import OmegaConf
 
-    from learn.monitor.prognosis_inputs import PrognosisConfig
-    from learn.monitor.stream_prognosis import StreamPrognosis
     from swgcli import compose_app
+    from swgmon.prognosis.inputs import PrognosisConfig
+    from swgmon.prognosis.stream import StreamPrognosis
     from swgsim.base.typed import plain
 
     names = {f.name for f in dataclasses.fields(PrognosisConfig)}

@@ -1,5 +1,5 @@
 """The prognosis's evaluation (swgsim-train experiment=prognosis,
-learn/monitor_evaluation/prognosis_task.py): a tiny part end to end through the task, its files
+swgmon/evaluation/prognosis_task.py): a tiny part end to end through the task, its files
 and columns, the resume from parts/, and bad input refused in one line before any work."""
 
 from __future__ import annotations
@@ -32,8 +32,8 @@ COLUMNS = ["dataset", "held_out_gear", "seed", "fault", "payload", "method", "in
 
 
 def _run(out, *extra):
-    from learn.train import run_train
     from swgcli import compose_app
+    from swgcli.tasks import run_train
 
     return run_train(compose_app("train", ["experiment=prognosis", "~logger",
                                            f"prognosis.report_dir={out}", *TINY, *extra]))
@@ -83,7 +83,7 @@ def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
 def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):
     """The same config again: the part is read back from parts/, nothing recomputed, the
     same results."""
-    import learn.monitor_evaluation.prognosis_task as task
+    import swgmon.evaluation.prognosis_task as task
 
     out, _ = tiny_prognosis
     before = (out / "results.csv").read_bytes()
@@ -101,7 +101,7 @@ def test_a_job_of_an_array_runs_its_group_alone_and_writes_no_report(tiny_progno
                                                                      monkeypatch, capsys):
     """``prognosis.group=0`` (a job of a cluster array, docs/scale_out.md) into the same
     folder: its part is found done, nothing is computed and the report stays as it was."""
-    import learn.monitor_evaluation.prognosis_task as task
+    import swgmon.evaluation.prognosis_task as task
 
     out, _ = tiny_prognosis
     before = {f: (out / f).read_bytes() for f in ("results.csv", "table.md")}
@@ -168,7 +168,7 @@ def test_bad_input_is_one_line_before_any_work(tmp_path, case):
 
 def test_a_fault_without_a_growth_law_is_refused_naming_it():
     """(A new key of ``faults`` from the command line is refused by OmegaConf itself.)"""
-    from learn.monitor.prognosis_evaluation import GrowingFault, PrognosisStudyConfig
+    from swgmon.evaluation.prognosis_evaluation import GrowingFault, PrognosisStudyConfig
     from swgsim.base.typed import check_tree
 
     sc = PrognosisStudyConfig(faults={"reduced_damping": GrowingFault(0.1)})
@@ -180,11 +180,11 @@ def test_a_fault_without_a_growth_law_is_refused_naming_it():
 def test_an_alarm_naming_a_fault_whose_range_ends_below_the_threshold_is_not_predicted():
     """A root crack's life fails at 0.9; an alarm that names the eccentric wave generator
     (range up to 0.5) is followed, each event saying why it is not predicted, instead of
-    the stream failing (stream_prognosis._follow)."""
+    the stream failing (swgmon.prognosis.stream._follow)."""
     from types import SimpleNamespace
 
-    from learn.monitor.normal import Conditions
-    from learn.monitor.stream_prognosis import StreamPrognosis, stream_prognoses
+    from swgmon.detection.normal import Conditions
+    from swgmon.prognosis.stream import StreamPrognosis, stream_prognoses
 
     n = 120
     hours = 10.0 + np.arange(n) / 60.0
@@ -212,8 +212,8 @@ def test_the_model_is_trained_on_every_severity_a_life_passes_through():
     it, span them to the failure from within a step of the first: a severity regressor is not asked
     for what it never saw (the bench's, trained on Table V's three, read root cracks of
     0.225-0.45 as 0.49-0.53)."""
-    from learn.monitor.prognosis_evaluation import PrognosisStudyConfig, life_levels, life_of
     from swgcli import dataset_preset
+    from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, life_levels, life_of
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.plan import plan
     from swgsim.datasets.records import record_bank
@@ -235,7 +235,7 @@ def test_a_prognosis_with_no_failure_in_sight_gets_the_earliest_quarters_scale()
     """A valid prognosis whose median lies beyond in_sight_h (null remaining hours):
     predicted share 1, the scale of the quarter that holds the alarm; a prognosis not
     yet valid gets none."""
-    from learn.monitor.prognosis_evaluation import _rows
+    from swgmon.evaluation.prognosis_evaluation import _rows
 
     life = {"fault": "wear", "payload": 1.0, "alarm_h": 1.0, "failure_h": 10.0}
     ev = {"hour": 2.0, "valid": True, "remaining_h": None, "remaining_h_q05": 5.0,
@@ -254,7 +254,8 @@ def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
     the last estimate of the followed alarm's track before the failure."""
     import dataclasses
 
-    from learn.monitor.prognosis_evaluation import (
+    from swgcli import dataset_preset
+    from swgmon.evaluation.prognosis_evaluation import (
         METHODS,
         GrowingFault,
         PrognosisStudyConfig,
@@ -262,9 +263,8 @@ def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
         run_life,
         training_levels,
     )
-    from learn.monitor.study import MonitorStudyConfig
-    from learn.monitor.training import train_model
-    from swgcli import dataset_preset
+    from swgmon.evaluation.study import MonitorStudyConfig
+    from swgmon.evaluation.training import train_model
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.growth import RunToFailure
     from swgsim.datasets.plan import plan
@@ -301,7 +301,7 @@ def test_training_levels_reach_past_the_failure_within_the_faults_range():
     """Past the failure by half the way from the onset's severity, on the staircase's
     steps, capped at the fault's severity range (the cap added where it cuts a step):
     none for a tip crack failing at its range's top."""
-    from learn.monitor.prognosis_evaluation import (
+    from swgmon.evaluation.prognosis_evaluation import (
         PrognosisStudyConfig,
         life_levels,
         training_levels,

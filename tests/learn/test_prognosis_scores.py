@@ -1,4 +1,4 @@
-"""The prognosis's scores (learn/monitor/prognosis_scores.py) against values worked by hand
+"""The prognosis's scores (swgmon/prognosis/scores.py) against values worked by hand
 from their definitions (Saxena et al. 2010; PHM08, Saxena et al. 2008)."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learn.monitor.prognosis_scores import (
+from swgmon.prognosis.scores import (
     alpha_lambda,
     at_lambda,
     change_response,

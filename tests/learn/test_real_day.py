@@ -2,7 +2,7 @@
 warming, run-in, a heavier tool, the bridges' drift, a temperature sensor): no gear-fault
 alarm on the healthy gear, the changes that leave commissioning's range advised, the
 heavier tool's points recommissioned, and a fault under them still found and named
-(learn/monitor/normal.py); its temperature sensor's faults: test_temperature_sensor.py.
+(swgmon/detection/normal.py); its temperature sensor's faults: test_temperature_sensor.py.
 Fixtures: tests/learn/conftest.py."""
 
 from __future__ import annotations
@@ -13,13 +13,19 @@ import numpy as np
 import pytest
 from real_day import commissioned, growing, repaired
 
-from learn.monitor.gear_monitor import MaintenanceEvent
-from learn.monitor.laws import cools
-from learn.monitor.normal import EFFICIENCY, Conditions, NormalBehaviour, NormalConfig
-from learn.monitor.rule import Alarm, RuleConfig
-from learn.monitor.stream import RECUR_H, _after_change, adopt_change, event_line, monitor_stream
-from learn.monitor.training import features_of
 from swgcli import dataset_preset
+from swgmon.advisories.stream import (
+    RECUR_H,
+    _after_change,
+    adopt_change,
+    event_line,
+    monitor_stream,
+)
+from swgmon.assessment.gear_monitor import MaintenanceEvent
+from swgmon.detection.laws import cools
+from swgmon.detection.normal import EFFICIENCY, Conditions, NormalBehaviour, NormalConfig
+from swgmon.detection.rule import Alarm, RuleConfig
+from swgmon.evaluation.training import features_of
 from swgsim.datasets.conditions import Regrease
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.life import LifeSimulator, life_dataset
@@ -93,7 +99,7 @@ def test_a_joint_commissioned_at_one_temperature_is_advised_not_alarmed_when_hot
     temperature's range is still commissioning's, widened by the sensor's uncertainty;
     at 80 °C every window is outside it, advised once, and not judged (no gear-fault
     alarm: the eccentric WG this case raised before)."""
-    from learn.monitor.normal import OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
+    from swgmon.detection.normal import OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
 
     ds = _hot_after_commissioning(day)
     t, comm = ds["temperature_c"].values, ds["commissioning"].values
@@ -115,7 +121,7 @@ def test_a_joint_commissioned_over_one_warm_up_learns_no_law_it_cannot_tell(
         model, day, form, ratio_40c):
     """Commissioning the first 8 h, one warm-up with the run-in going on and no cold
     start: which part of the friction's fall is the temperature's is not known
-    (learn/monitor/laws.py, loss_model). Its bounds are kept and the efficiency judged
+    (swgmon/detection/laws.py, loss_model). Its bounds are kept and the efficiency judged
     in the spread they make: no alarm at all (with the catalogue's law taken there, an
     unexplained change at 32.3 h for each of these laws)."""
     p, bank = day
@@ -135,8 +141,8 @@ def test_the_threshold_reported_is_the_one_the_rule_used(model, healthy, tmp_pat
     rule's, not of the first two windows' (issue 43, cause 5)."""
     import json
 
-    from learn.monitor.rule import threshold
-    from learn.monitor.stream import write_outputs
+    from swgmon.advisories.stream import write_outputs
+    from swgmon.detection.rule import threshold
 
     ds = healthy.isel(sample=np.r_[0, 2:healthy.sizes["sample"]])
     hours = ds["hour"].values
@@ -159,8 +165,8 @@ def test_the_monitor_app_ends_well_on_a_day_with_recommissioned_points(model, tm
     import json
     import sys
 
-    from learn.monitor.model_io import save_model
     from swgcli.monitor import main
+    from swgmon.assessment.model_io import save_model
     from swgsim.datasets.generate import generate
 
     generate(dataset_config(dataset_preset("tiny_real_day")), tmp_path / "day", n_jobs=1,
@@ -196,7 +202,7 @@ def test_a_joint_whose_friction_follows_another_law_raises_no_gear_fault_alarm(
         model, day, form, ratio_40c):
     """Daily warm-ups with the friction following a law the monitor does not share (the
     catalogue's viscosity law gave an eccentric-WG alarm at 32.4 h for each of these): the
-    monitor learns the joint's law at commissioning (learn/monitor/normal.py)."""
+    monitor learns the joint's law at commissioning (swgmon/detection/normal.py)."""
     p, bank = day
     life = p.config.life
     law = FrictionLaw(form, ratio_40c)
@@ -212,7 +218,7 @@ def test_an_even_change_of_friction_is_named_an_unexplained_change_not_a_gear_fa
     """The loss torque 50 % higher at every operating point from 40 h (what a
     re-greasing does to the efficiency alone; the bridges left as they were): no gear
     fault's signature, so the alarm says "unexplained change" with the friction's change
-    (learn/monitor/sensor_check.py, fit_friction) - the part the friction tracking had not
+    (swgmon/assessment/sensor_check.py, fit_friction) - the part the friction tracking had not
     followed by then - and the monitor goes on from the new level without a gear-fault
     alarm. (A 20 % step the tracking follows before any alarm, on this warming joint.)"""
     ds = healthy.copy(deep=True)

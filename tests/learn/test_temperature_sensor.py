@@ -2,7 +2,7 @@
 gear 3): a reading that fails (stuck, drifting, dropped out, missing from the start) is
 named the temperature sensor's fault and the monitor goes on on the temperature its laws
 say, calibrated as it then scores, the friction it tracks included
-(learn/monitor/sensor_check.py, learn/monitor/stream.py)."""
+(swgmon/assessment/sensor_check.py, swgmon/advisories/stream.py)."""
 
 from __future__ import annotations
 
@@ -12,14 +12,14 @@ import numpy as np
 import pytest
 from real_day import commissioned
 
-from learn.monitor import stream
-from learn.monitor.evaluate import _fault_life, _past_changes
-from learn.monitor.gear_monitor import GearMonitor, normal_windows
-from learn.monitor.normal import Conditions
-from learn.monitor.rule import RuleConfig
-from learn.monitor.sensor_check import virtual_temperature
-from learn.monitor.stream import event_line, monitor_stream, read_without
-from learn.monitor.training import features_of
+from swgmon.advisories import stream
+from swgmon.advisories.stream import event_line, monitor_stream, read_without
+from swgmon.assessment.gear_monitor import GearMonitor, normal_windows
+from swgmon.assessment.sensor_check import virtual_temperature
+from swgmon.detection.normal import Conditions
+from swgmon.detection.rule import RuleConfig
+from swgmon.evaluation.evaluate import _fault_life, _past_changes
+from swgmon.evaluation.training import features_of
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.schedule import FaultOnset
 from swgsim.gear.thermal import FrictionLaw
@@ -50,7 +50,7 @@ def test_a_failed_temperature_sensor_is_reported_and_no_gear_fault_alarm_follows
     1.3 h later, when only the window-by-window fit was tried), or drops a reading inside
     commissioning. The
     monitor names the temperature sensor within a day and goes on without it
-    (learn/monitor/stream.py)."""
+    (swgmon/advisories/stream.py)."""
     kind = "dropout" if fault == "lost_at_commissioning" else fault
     ds = _day_with(day, FrictionLaw("linear", 0.8), TemperatureSensor(
         fault=kind, fault_hour=30.0, drift_k_per_h=-0.3 if kind == "drift" else 0.0))
@@ -166,7 +166,7 @@ def test_a_reading_lost_within_the_hour_after_a_gear_fault_alarm_leaves_its_name
 
 
 def test_the_evaluation_goes_on_without_a_reading_lost_after_the_onset(model, day):
-    """learn.monitor.evaluate: a fault life whose temperature reading drops out after the
+    """swgmon.evaluation.evaluate: a fault life whose temperature reading drops out after the
     onset (an eccentric WG from 40 h, the reading lost at 40.1 h, before the alarm) goes on
     without the reading from that window, as the stream does, and the fault is found and
     named. Before, the life ran on with NaN readings and the naming's least squares met

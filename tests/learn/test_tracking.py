@@ -201,8 +201,8 @@ def test_study_job_logs_dataset_and_last_split_model(tiny_dataset, tracking_uri,
 
     from learn.inputs.features import extract_features
     from learn.studies.protocols import make_splits
-    from learn.train import run_train
     from swgcli import compose_app
+    from swgcli.tasks import run_train
     from swgsim.datasets.schema import load
 
     cfg = compose_app("train", [f"stored.path={tiny_dataset}",

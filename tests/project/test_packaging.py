@@ -13,7 +13,7 @@ def test_every_package_and_config_folder_is_listed():
     cfg = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     listed = set(cfg["packages"])
     found = {".".join(p.parent.relative_to(ROOT).parts)
-             for top in ("swgsim", "swgcal", "learn", "swgcli")
+             for top in ("swgsim", "swgcal", "learn", "swgmon", "swgcli")
              for p in (ROOT / top).rglob("__init__.py")}
     conf = {"swgcli.conf", *("swgcli.conf." + ".".join(d.relative_to(ROOT / "conf").parts)
                              for d in (ROOT / "conf").rglob("*") if d.is_dir()
@@ -22,7 +22,7 @@ def test_every_package_and_config_folder_is_listed():
     assert cfg["package-dir"]["swgcli.conf"] == "conf"
 
 
-@pytest.mark.parametrize("package", ["swgsim", "learn"])
+@pytest.mark.parametrize("package", ["swgsim", "learn", "swgmon"])
 def test_public_api_resolves(package):
     import importlib
 

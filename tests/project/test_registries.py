@@ -59,7 +59,7 @@ class _Churn(FitTerm):
 def _register(kind: str, name: str) -> None:
     """Register an entry of ``kind`` named ``name`` in this process."""
     from learn.learners.models import ModelSpec, register_model
-    from learn.monitor.detectors import DetectorSpec, register_detector
+    from swgmon.evaluation.detectors import DetectorSpec, register_detector
 
     if kind == "gear fault":
         faults.register_fault(faults.Fault(name, "I/O dynamics", (0.0, 1.0), False,
@@ -82,7 +82,7 @@ def _register(kind: str, name: str) -> None:
 def _use(kind: str, name: str) -> str:
     """In a worker: the entry found by name through the project's own look-ups."""
     from learn.learners.models import make_model
-    from learn.monitor.detectors import DETECTORS
+    from swgmon.evaluation.detectors import DETECTORS
 
     if kind == "gear fault":
         return faults.get_fault(name).name
@@ -104,7 +104,7 @@ KINDS = {"gear fault": "swgsim.gear.faults:FAULTS",
          "sensor fault": "swgsim.sensing.sensor_faults:SENSOR_FAULTS",
          "friction effect": "swgsim.gear.friction.effects:FRICTION_LIBRARY",
          "learner": "learn.learners.models:MODELS",
-         "detector": "learn.monitor.detectors:DETECTORS",
+         "detector": "swgmon.evaluation.detectors:DETECTORS",
          "thermal effect": "swgcal.thermal.library:THERMAL_LIBRARY",
          "strain effect": "swgcal.strain.effects:STRAIN_LIBRARY"}
 

@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from learn.monitor.features import TWIST_FEATURES, feature_names
-from learn.monitor.training import has_twist, life_features
+from learn.inputs.health import TWIST_FEATURES, feature_names
 from swgcli import dataset_preset
+from swgmon.evaluation.training import has_twist, life_features
 from swgsim.datasets.config import dataset_config
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import plan
@@ -177,8 +177,8 @@ def test_a_profile_stream_gives_the_lifes_features_and_a_model_mismatch_is_named
 
     import xarray as xr
 
-    from learn.monitor.rule import RuleConfig
-    from learn.monitor.stream import check_stream, stream_features
+    from swgmon.advisories.stream import check_stream, stream_features
+    from swgmon.detection.rule import RuleConfig
 
     sim = LifeSimulator(motion, 1, LifeConfig(hours=0.3, commissioning_h=0.2), bank)
     sig, meta = sim.windows(0, len(sim))

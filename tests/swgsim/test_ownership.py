@@ -272,7 +272,7 @@ def test_observability_and_transfer_refuse_before_any_work(tmp_path, app, key):
                                             f"data_root={tmp_path}/data"])
         call = lambda: run_observability(cfg)  # noqa: E731
     else:
-        from learn.train import run_train
+        from swgcli.tasks import run_train
 
         cfg = compose_app("train", [f"experiment={app}", "~logger",
                                     f"{key}={out}", f"paths.data_dir={tmp_path}/data"])
@@ -412,7 +412,7 @@ def test_the_monitors_figure_is_written_through_write_owned(tmp_path, monkeypatc
         Path(fname).write_bytes(b"\x89PNG half")
         raise OSError(28, "No space left on device")
     monkeypatch.setattr(matplotlib.figure.Figure, "savefig", half)
-    from learn.monitor import stream
+    from swgmon.advisories import stream
 
     with pytest.raises(atomic.DiskFullError):
         stream.write_outputs(_TinyResult(), tmp_path, "s")

@@ -1,0 +1,277 @@
+"""The diagnosis model trained on simulated gears.
+
+A window is described by its z-scores against its own gear's normal behaviour
+(:mod:`swgmon.detection.normal`), so that a model trained on other gears sees deviations from
+healthy,
+not the gear's individual signature (the leave-one-gear-out study measured that one
+commissioning window is too few: its error is as large as a mild fault's shift).
+
+**Diagnosis model.** A histogram gradient-boosting classifier (scikit-learn) on the
+z-scores and the operating point, trained on simulated gears' lives: healthy windows and
+windows of every gear and sensor fault at every severity. Its evidence against healthy,
+``ln(1 − P(healthy)) − ln P(healthy)``, is the window's score; after an alarm its
+log-probabilities summed over the windows since the rise name the fault (windows taken as
+independent given the class). Per fault, a gradient-boosting regressor estimates the
+severity; the estimate after an alarm is the median over the windows, and its interval
+comes from the training gears themselves: fitted on one, the aggregated estimate's error
+on the other gives the 5 % and 95 % quantiles (a split-conformal interval across gears).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from dataclasses import dataclass, field
+
+import numpy as np
+from threadpoolctl import ThreadpoolController
+
+from swgmon.assessment.trees import CompiledTrees
+
+HEALTHY = "healthy"
+
+
+def design_matrix(z: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The diagnosis model's inputs: z-scores and the operating point (speed, torque)."""
+    return np.concatenate([z, np.asarray(points, float)], axis=1)
+
+
+@dataclass
+class DiagnosisModel:
+    """Classifier and severity regressors trained on simulated gears (module docstring).
+
+    Attributes
+    ----------
+    classes : list of str
+        Healthy first.
+    classifier : sklearn classifier
+    severity : dict of str to (regressor, (q05, q95))
+        Per fault: the regressor and the 5 % / 95 % quantiles of the aggregated estimate's
+        error across training gears.
+    points_range : ndarray, shape (2, 2)
+        Lowest and highest (speed, torque) of the training windows.
+    n_features : int
+        Health features per window.
+    sample_rate_hz : float
+        Of the training windows.
+    window_s : float
+        Length of the training windows [s].
+    severity_without : dict of int to dict of str to regressor
+        Per training gear, the severity regressors fitted without it (those that
+        calibrate the intervals across gears; :meth:`without`); kept in the process that
+        trained the model, not saved with it (:mod:`.model_io`).
+    """
+
+    classes: list[str]
+    classifier: object
+    severity: dict[str, tuple[object, tuple[float, float]]] = field(default_factory=dict)
+    points_range: np.ndarray | None = None
+    n_features: int = 0
+    sample_rate_hz: float = 0.0
+    window_s: float = 0.0
+    severity_without: dict[int, dict[str, object]] = field(default_factory=dict, repr=False)
+
+    def check(self, where: str = "diagnosis_model") -> DiagnosisModel:
+        """Refuse a model whose parts are not those :func:`fit_diagnosis` makes, in one
+        line naming ``where`` and the part; return self.
+
+        The file's types are checked when it is loaded (:mod:`.model_io`), but a card-
+        matched file can hold another estimator, a number, classes in another order or a
+        fault without its severity regressor, which failed only after the whole stream.
+
+        Raises
+        ------
+        ValueError
+            ``classes`` not distinct names with healthy first; a classifier that is not a
+            fitted gradient-boosting classifier of one class per name; a class other than
+            healthy without a fitted gradient-boosting severity regressor, or a regressor
+            of a class the model lacks; inputs of another width than ``n_features`` + 2;
+            quantiles not finite with q05 <= q95; a sample rate, window or feature count
+            not positive; ``points_range`` not finite (2, 2).
+        """
+        from sklearn.ensemble import HistGradientBoostingClassifier as Clf
+        from sklearn.ensemble import HistGradientBoostingRegressor as Reg
+
+        missing = [f.name for f in dataclasses.fields(self) if not hasattr(self, f.name)]
+        if missing:  # an object made without its fields (a pickle of another make)
+            raise ValueError(f"{where}: not a diagnosis model (no {', '.join(missing)})")
+        c = self.classes
+        if (not isinstance(c, list) or not c or not all(isinstance(x, str) for x in c)
+                or len(set(c)) != len(c) or c[0] != HEALTHY):
+            raise ValueError(f"{where}: classes must be distinct names, {HEALTHY} first; "
+                             f"got {c!r}")
+        for name, v in (("n_features", self.n_features), ("sample_rate_hz",
+                        self.sample_rate_hz), ("window_s", self.window_s)):
+            if not isinstance(v, (int, float)) or not np.isfinite(v) or v <= 0:
+                raise ValueError(f"{where}: {name} must be positive, got {v!r}")
+        width = int(self.n_features) + 2  # the z-scores and the operating point
+        clf = self.classifier
+        if (not isinstance(clf, Clf) or not hasattr(clf, "classes_")
+                or list(clf.classes_) != list(range(len(c)))
+                or getattr(clf, "n_features_in_", None) != width):
+            raise ValueError(f"{where}: the classifier must be a fitted "
+                             f"HistGradientBoostingClassifier of {len(c)} classes on {width} "
+                             f"inputs, got {type(clf).__name__}")
+        if set(self.severity) != set(c[1:]):
+            raise ValueError(f"{where}: a severity regressor for every class but {HEALTHY}: "
+                             f"missing {sorted(set(c[1:]) - set(self.severity))}, extra "
+                             f"{sorted(set(self.severity) - set(c[1:]))}")
+        for f, (reg, q) in self.severity.items():
+            if not isinstance(reg, Reg) or getattr(reg, "n_features_in_", None) != width:
+                raise ValueError(f"{where}: the severity regressor of {f} must be a fitted "
+                                 f"HistGradientBoostingRegressor on {width} inputs, got "
+                                 f"{type(reg).__name__}")
+            if not (np.all(np.isfinite(q)) and len(q) == 2 and q[0] <= q[1]):
+                raise ValueError(f"{where}: the severity interval of {f} must be finite "
+                                 f"(q05, q95) with q05 <= q95, got {q!r}")
+        pr = self.points_range
+        if pr is not None and (np.shape(pr) != (2, 2) or not np.all(np.isfinite(pr))):
+            raise ValueError(f"{where}: points_range must be finite (2, 2), got {pr!r}")
+        return self
+
+    def log_proba(self, x: np.ndarray) -> np.ndarray:
+        """ln P(class | window), shape (n, n_classes), columns in ``classes`` order: the
+        classifier's probabilities through the compiled walk of its trees
+        (:class:`.trees.CompiledTrees`, the same numbers)."""
+        if getattr(self, "_trees", None) is None:
+            self._trees = CompiledTrees(self.classifier)
+        return np.log(np.clip(self._trees.predict_proba(x), 1e-12, 1.0))
+
+    def score(self, log_p: np.ndarray) -> np.ndarray:
+        """Evidence against healthy, ln(1 − P(healthy)) − ln P(healthy), shape (n,)."""
+        lh = log_p[:, 0]
+        return np.log(-np.expm1(np.minimum(lh, -1e-12))) - lh
+
+    def name(self, log_p: np.ndarray) -> str:
+        """The fault with the largest summed log-probability over windows (healthy
+        excluded: an alarm has been raised)."""
+        tot = log_p.sum(axis=0)
+        return self.classes[1 + int(np.argmax(tot[1:]))]
+
+    def without(self, gear: int) -> DiagnosisModel:
+        """This model with the severity regressors fitted without training gear ``gear``
+        (the classifier and the intervals unchanged): its estimates on that gear's windows
+        are out of sample, as on a held-out gear's (the prognosis calibrates its intervals
+        on training gears' lives so, :func:`swgmon.evaluation.prognosis_evaluation.calibrate`).
+
+        Raises
+        ------
+        ValueError
+            ``gear`` is not a training gear of this model, or the model was loaded (the
+            regressors without each gear are not saved).
+        """
+        if gear not in self.severity_without:
+            raise ValueError(f"no severity regressors fitted without gear {gear}: the "
+                             f"model's are for {sorted(self.severity_without)} (a loaded "
+                             "model has none)")
+        out = dataclasses.replace(self, severity={
+            c: (self.severity_without[gear][c], q) for c, (_, q) in self.severity.items()})
+        out._trees = getattr(self, "_trees", None)  # the same classifier, compiled once
+        return out
+
+    def estimate(self, fault: str, x: np.ndarray) -> tuple[float, float, float]:
+        """Severity estimate and its interval from windows ``x`` of one fault."""
+        reg, (q05, q95) = self.severity[fault]
+        with one_thread():
+            est = float(np.median(reg.predict(x)))
+        return est, est - q95, est - q05
+
+
+@functools.cache
+def _controller() -> ThreadpoolController:
+    from sklearn import ensemble  # noqa: F401  (its OpenMP runtime, for the controller to see)
+
+    return ThreadpoolController()
+
+
+def one_thread():
+    """A context in which scikit-learn's gradient boosting runs on one OpenMP thread.
+
+    The fitted trees and their predictions are the same with any number of threads (the
+    bench's diagnosis model trained with one and with two: identical probabilities and
+    severities); but on a machine with other work running, OpenMP's waiting threads made
+    the bench model's training 13 times slower (1254 s against 94 s, two cores) and the
+    stream's predictions of small blocks 16 times slower (docs/monitor.md, Prognosis).
+    Work runs in parallel as processes instead (the evaluation's parts, ``n_jobs``).
+    The controller is made once (``threadpoolctl``: 0.05 ms a call, against 12 ms for a
+    fresh ``threadpool_limits``)."""
+    return _controller().limit(limits=1, user_api="openmp")
+
+
+def _classifier(seed: int):
+    from sklearn.ensemble import HistGradientBoostingClassifier
+
+    return HistGradientBoostingClassifier(max_iter=200, learning_rate=0.1,
+                                          early_stopping=False, random_state=seed)
+
+
+def _regressor(seed: int):
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
+    return HistGradientBoostingRegressor(max_iter=100, early_stopping=False,
+                                         random_state=seed)
+
+
+def fit_diagnosis(x: np.ndarray, fault: np.ndarray, severity: np.ndarray, gear: np.ndarray,
+                  classes: list[str], seed: int = 0, n_agg: int = 60) -> DiagnosisModel:
+    """Train the diagnosis model on training gears' windows.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, F + 2)
+        :func:`design_matrix` rows.
+    fault : ndarray of str, shape (n,)
+    severity : ndarray, shape (n,)
+    gear : ndarray of int, shape (n,)
+        Training gear of each window (the severity intervals are calibrated across them).
+    classes : list of str
+        Healthy first; every class must have windows.
+    seed : int
+    n_agg : int
+        Windows per aggregated severity estimate in the interval's calibration.
+
+    Returns
+    -------
+    DiagnosisModel
+
+    Raises
+    ------
+    ValueError
+        If a class has no windows or fewer than two training gears are given.
+    """
+    missing = [c for c in classes if not (fault == c).any()]
+    if missing or classes[0] != HEALTHY:
+        raise ValueError(f"training windows lack classes {missing} (healthy must come first)")
+    gears = np.unique(gear)
+    if gears.size < 2:
+        raise ValueError(f"the severity intervals need two training gears, got {gears.tolist()}")
+    y = np.array([classes.index(f) for f in fault])
+    clf = _classifier(seed)
+    with one_thread():
+        model = DiagnosisModel(list(classes), clf.fit(x, y))
+        return _severity_regressors(model, x, fault, severity, gear, seed, n_agg)
+
+
+def _severity_regressors(model: DiagnosisModel, x, fault, severity, gear, seed, n_agg
+                         ) -> DiagnosisModel:
+    """:func:`fit_diagnosis`'s severity regressors and their intervals across gears."""
+    gears = np.unique(gear)
+    rng = np.random.default_rng(seed)
+    for c in model.classes[1:]:
+        m = fault == c
+        errs = []
+        for g in gears:  # fitted without gear g, judged on it
+            tr, te = m & (gear != g), m & (gear == g)
+            reg = _regressor(seed).fit(x[tr], severity[tr])
+            model.severity_without.setdefault(int(g), {})[c] = reg
+            pred, true = reg.predict(x[te]), severity[te]
+            for s in np.unique(true):
+                ps = pred[true == s]
+                for _ in range(20):
+                    errs.append(np.median(rng.choice(ps, min(n_agg, ps.size))) - s)
+        q = (float(np.quantile(errs, 0.05)), float(np.quantile(errs, 0.95)))
+        model.severity[c] = (_regressor(seed).fit(x[m], severity[m]), q)
+    return model
+
+
+__all__ = ["DiagnosisModel", "design_matrix", "fit_diagnosis", "one_thread", "HEALTHY"]

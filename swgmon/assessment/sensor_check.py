@@ -1,0 +1,502 @@
+"""Is one sensor's fault enough to explain an alarm? The test that keeps sensor faults
+from being named as gear faults (the analytical redundancy of sensor fault isolation).
+
+:func:`fit_bridge_faults` and :func:`fit_sensor_faults` fit each one-bridge fault to the
+windows since the alarm (:class:`SensorFit`), judged window by window
+(:data:`SENSOR_P_MIN`) and on the other bridges together (:data:`REST_MAX`);
+:func:`fit_temperature`, :func:`fit_temperature_drift` and :func:`still_reading` test the
+joint's temperature sensor, :func:`virtual_temperature` replaces a failed one (an even
+change of friction, the other hypothesis: :mod:`.unexplained`). Design and source (Frank
+1990): docs/monitor.md, "Naming a sensor fault" and "The monitor checks its temperature sensor".
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from statistics import NormalDist
+
+import numpy as np
+
+from swgmon.detection.normal import BLOCK, Conditions, NormalBehaviour
+from swgsim.sensing.sensor_faults import SENSOR_FAULTS
+
+#: Median conformal p-value of the corrected windows from which on a sensor fault explains
+#: the alarm. Chosen on the training gears (``scripts/naming_study.py``, bench, trained on
+#: gear 1, judged on gear 2, an hour of windows): the right fit of every sensor fault on
+#: every bridge from 0.005 to 0.05 mV/V and from 2 to 10 % gain left 0.43-0.76; the best
+#: plausible one-bridge fit of a gear fault at most 0.19 (a tip crack of 0.5 fitted as a
+#: 0.03 % gain loss; a mild eccentric WG with its s1 offset alone taken out: 0.14).
+SENSOR_P_MIN = 0.3
+#: Largest mean shift left on the other bridges (:attr:`SensorFit.rest`) for a one-bridge
+#: fit to explain an alarm. Chosen on the training gears of both presets
+#: (``scripts/naming_study.py --dataset bench|robot_joint``, trained on gear 1, judged on
+#: gear 2, an hour of windows): the right fit of each of the 100 sensor-fault lives per
+#: preset left 0.51-1.82 (the healthy hour 0.96-1.29); of the gear-fault lives whose
+#: best plausible one-bridge fit left a median p-value above 0.2 (robot_joint root and
+#: tip cracks of 0.5 and 0.7) it left 3.33-9.48, every other gear fault's 10-5657.
+#: 2.5 is about the geometric middle of the gap.
+REST_MAX = 2.5
+#: Smallest reduction of Σ z² for a fit to count: the χ² (one degree of freedom) quantile
+#: 0.999, so that a bridge without a fault is fitted one in a thousand times: the square of
+#: the standard normal quantile 0.9995 (χ²₁ is the square of a standard normal variable).
+FIT_MIN = NormalDist().inv_cdf(0.9995) ** 2
+#: The same for a gain drift's level and rate (:func:`fit_sensor_faults` with hours): the
+#: χ² (two degrees of freedom) quantile 0.999, −2 ln 0.001 (χ²₂ is exponential).
+FIT_MIN_GAIN_RATE = -2.0 * math.log(0.001)
+#: Step of the temperatures :func:`fit_temperature` tries [K].
+TEMPERATURE_STEP_K = 0.25
+#: Least median distance (unsigned) of the fitted temperature from the reading for the
+#: reading to be wrong [K]: ten times the reading's uncertainty of 0.2 K
+#: (:class:`swgmon.detection.normal.NormalConfig` ``temperature_uncertainty_k``). Unsigned: a
+#: reading stuck at a warm joint's temperature lies above the true one in the duty cycle's
+#: cool phases and below it in the hot ones; signed, its median error over the hour after an
+#: alarm was 1.3-1.7 K while the fit left the windows healthy (median p 0.7; bench gear 3,
+#: family ``sensor_stuck``, design seed 100, stuck at 68.7 h), and the alarm named a gear
+#: fault.
+TEMPERATURE_MIN_K = 2.0
+#: Least median distance of a drift's fitted temperature from the reading
+#: (:func:`fit_temperature_drift`) [K]: twice the reading's uncertainty of 0.2 K
+#: (:class:`swgmon.detection.normal.NormalConfig` ``temperature_uncertainty_k``) [choice].
+DRIFT_MIN_K = 0.4
+#: Rates of a drifting reading :func:`fit_temperature_drift` tries first [K/h]: the
+#: families' ±0.5 K/h (:mod:`swgmon.evaluation.families`) and a little beyond.
+DRIFT_RATES = np.linspace(-0.6, 0.6, 13)
+#: Step of the coarse grid :func:`best_temperature` starts from [K], and how many fine
+#: steps it then tries on either side of the coarse best (to half a coarse step beyond).
+COARSE_STEP_K, COARSE_STEPS = 2.0, 6
+#: Windows :func:`best_temperature` fits at once.
+FIT_CHUNK = 512
+#: How far beyond commissioning's temperature range the fits look [K]: the hall's drift
+#: over a season, 10-20 K (:mod:`swgmon.evaluation.families`).
+TEMPERATURE_BEYOND_K = 20.0
+#: Smallest reduction of Σ z² for the fit with a step, a factor and a rate to count: the
+#: χ² (three degrees of freedom) quantile 0.999, as :data:`FIT_MIN` for one
+#: (``scipy.stats.chi2.ppf(0.999, 3)``, checked by tests/learn/test_monitor.py; scipy is
+#: not imported here, to keep the apps' start light).
+FIT_MIN_RATE = 16.26623619623813
+#: Windows of the running median of :func:`virtual_temperature` (odd).
+VIRTUAL_WINDOWS = 7
+#: Least time a temperature reading stays the same, to the bit, for :func:`still_reading`
+#: to judge it [h]. A working reading moves with its noise and the joint's duty: the UR3's
+#: six joint readings over a working day (UR3 CobotOps, Tyrovolas et al. 2024, CC BY 4.0),
+#: one a second at 0.0625 K, held one value for at most 85 readings (1.4 min;
+#: docs/monitor.md, "The monitor checks its temperature sensor") [choice: 15 minutes].
+STILL_H = 0.25
+#: Least range of the temperature the bridges and the efficiency say
+#: (:func:`virtual_temperature`) over such a run for the reading to be stuck [K]: twice
+#: :data:`TEMPERATURE_MIN_K` [choice]. At :data:`TEMPERATURE_MIN_K` itself the tiny real
+#: day's readings in whole kelvin, without noise, were taken for stuck (the virtual
+#: temperature's own scatter; tests/learn/test_real_day.py); at twice, not.
+STILL_MOVED_K = 2.0 * TEMPERATURE_MIN_K
+#: Windows :func:`still_reading` takes the virtual temperature of at once.
+STILL_CHUNK = 240
+
+
+@dataclass(frozen=True)
+class SensorFit:
+    """One hypothesis fitted to the windows since an alarm.
+
+    Attributes
+    ----------
+    fault : str
+        ``sensor_offset_step`` or ``sensor_gain_drift``.
+    bridge : int
+        0..4 (s0..s4).
+    severity : float
+        δ [mV/V] of an offset step, 1 − g of a gain drift [-].
+    z : ndarray, shape (n, F)
+        The windows' z-scores with the fitted effect taken out.
+    reduction : float
+        How much the fit lowers Σ z² over the windows (χ² with one degree of freedom
+        where the bridge has no such fault, two with a rate).
+    rate_per_h : float or None
+        A gain drift's fitted rate of 1 − g [1/h]; None: not fitted.
+    """
+
+    fault: str
+    bridge: int
+    severity: float
+    z: np.ndarray
+    reduction: float
+    rate_per_h: float | None = None
+
+    @property
+    def rest(self) -> float:
+        """``n · mean_j(mean_i z_ij)²`` over the n windows and the features j outside
+        the fitted bridge (the other bridges, the efficiency and the twist): the χ² per degree of
+        freedom of their mean shift where the windows are independent and nothing but
+        this bridge moved (docs/monitor.md, "Naming a sensor fault")."""
+        keep = np.ones(self.z.shape[1], bool)
+        keep[self.bridge * BLOCK:(self.bridge + 1) * BLOCK] = False
+        m = self.z[:, keep].mean(axis=0)
+        return float(len(self.z) * np.mean(m ** 2))
+
+    def plausible(self) -> bool:
+        """Significant (:data:`FIT_MIN`) and within the fault's severity range (a gain
+        only falls: :data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`)."""
+        lo, hi = SENSOR_FAULTS[self.fault].severity_range
+        least = FIT_MIN if self.rate_per_h is None else FIT_MIN_GAIN_RATE
+        return self.reduction >= least and lo <= self.severity <= hi
+
+
+def fit_sensor_faults(z: np.ndarray, mean: np.ndarray, std: np.ndarray,
+                      hours: np.ndarray | None = None) -> list[SensorFit]:
+    """Fit every one-bridge sensor fault to windows (docs/monitor.md, "Naming a sensor fault").
+
+    Parameters
+    ----------
+    z : ndarray, shape (n, F)
+        z-scores of the windows since the alarm against the gear's normal behaviour,
+        F = 5 (H + 2) + 1, or more (:func:`learn.inputs.health.feature_names`: the
+        twist features of an output encoder come after the bridges' and efficiency).
+    mean, std : ndarray, shape (n, F)
+        The normal behaviour's mean and standard deviation at each window's operating point.
+    hours : ndarray, shape (n,), optional
+        The windows' operating hours [h]: the gain drifts, 1 − g = s + r (h − h_last),
+        its level s at the last window and its rate r [1/h] fitted together (linear
+        least squares; :attr:`SensorFit.rate_per_h`). A drift that moves the gain by a
+        few tenths of a percent in the hour after an alarm moves a harmonic's amplitude
+        by many σ (robot_joint s3_h2: 0.02 of gain is 41 σ), which one level leaves
+        behind. None: one level (a step).
+
+    Returns
+    -------
+    list of SensorFit
+        Ten: both faults on each of the five bridges.
+
+    Raises
+    ------
+    ValueError
+        If the shapes disagree with five bridges of H + 2 features.
+    """
+    n, f = z.shape
+    if f < 5 * BLOCK + 1 or mean.shape != z.shape or std.shape != z.shape:
+        raise ValueError(f"z, mean and std must be (n, >= {5 * BLOCK + 1}), got {z.shape}, "
+                         f"{mean.shape}, {std.shape}")
+    out = []
+    for c in range(5):
+        j0 = c * BLOCK
+        # offset step: z of the offset rises by δ / σ
+        m = 1.0 / std[:, j0]
+        d = float(z[:, j0] @ m / (m @ m))
+        zc = z.copy()
+        zc[:, j0] -= d * m
+        out.append(SensorFit("sensor_offset_step", c, d, zc, d * d * float(m @ m)))
+        # gain drift: offset and amplitudes f -> g f, so z rises by (g - 1) μ / σ
+        cols = slice(j0, j0 + BLOCK - 1)
+        m = mean[:, cols] / std[:, cols]
+        x = m.reshape(-1, 1) if hours is None else np.stack(
+            [m.ravel(), (m * (np.asarray(hours, float) - hours[-1])[:, None]).ravel()], 1)
+        a = np.linalg.lstsq(x, z[:, cols].ravel(), rcond=None)[0]
+        fitted = x @ a
+        zc = z.copy()
+        zc[:, cols] -= fitted.reshape(n, -1)
+        zc[:, j0 + BLOCK - 1] = 0.0  # the residual's RMS holds the noise too: left free
+        out.append(SensorFit("sensor_gain_drift", c, -float(a[0]), zc,
+                             float(fitted @ fitted), None if hours is None else -float(a[1])))
+    return out
+
+
+def fit_bridge_faults(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                      cond: Conditions | None, friction: np.ndarray, index: np.ndarray,
+                      z: np.ndarray, spread: np.ndarray, hours: np.ndarray | None = None
+                      ) -> list[SensorFit]:
+    """Every one-bridge sensor fault fitted to windows since an alarm
+    (:func:`fit_sensor_faults`), and where the joint has no reading (``normal.warm_dir``)
+    also fitted before its latent temperature is taken out: a bridge's gain drift moves
+    its features in a direction that may share a part with a warm-up direction, which the
+    clipped projection takes out in part and bends the rest of; fitted with the warm-ups
+    left in and the warm-ups then taken out of what is left, the hypothesis is "this
+    bridge's fault, and the joint warmed as commissioning saw". Without it the default
+    evaluation at 2a3c421 named 9 of robot_joint's 37 detected gain drifts of s3 a gear
+    fault (root crack 7, eccentric WG 2; gears 2-3); none before ae2a28d learnt the
+    warm-up directions (found by bisection on gear 2, seed 1).
+
+    Parameters
+    ----------
+    normal : NormalBehaviour
+    feats, points, cond, friction, index
+        The windows, as :meth:`NormalBehaviour.z_and_spread` takes them.
+    z, spread : ndarray, shape (n, F)
+        Their z-scores and spread (:meth:`NormalBehaviour.z_and_spread`).
+    hours : ndarray, shape (n,), optional
+        Their operating hours [h]: a gain drift with a rate (:func:`fit_sensor_faults`).
+
+    Returns
+    -------
+    list of SensorFit
+        Ten, or twenty without a reading (the second ten with the warm-ups left in at
+        the fit).
+    """
+    fits = fit_sensor_faults(z, normal.mean[index], spread, hours)
+    if normal.warm_dir is None:
+        return fits
+    bare = dataclasses.replace(normal, warm_dir=None, warm_range=None, warm_torque=None)
+    raw, _ = bare.z_and_spread(feats, points, cond, friction, index)
+    return fits + [dataclasses.replace(f, z=normal.without_warm_ups(f.z, index))
+                   for f in fit_sensor_faults(raw, normal.mean[index], spread, hours)]
+
+
+@dataclass(frozen=True)
+class TemperatureFit:
+    """The hypothesis "the temperature reading is wrong" fitted to the windows since an
+    alarm (:func:`fit_temperature`).
+
+    Attributes
+    ----------
+    temperature_c : ndarray, shape (n,)
+        Each window's temperature that leaves its z-scores smallest [°C].
+    reading_c : ndarray, shape (n,)
+        The sensor's readings [°C].
+    z : ndarray, shape (n, F)
+        The windows' z-scores at the fitted temperatures.
+    reduction : float
+        How much the fit lowers Σ z² over the windows.
+    """
+
+    temperature_c: np.ndarray
+    reading_c: np.ndarray
+    z: np.ndarray
+    reduction: float
+    rate_k_per_h: float | None = None
+
+    @property
+    def offset_k(self) -> float:
+        """Median of the fitted temperature minus the reading [K]."""
+        return float(np.median(self.temperature_c - self.reading_c))
+
+    @property
+    def error_k(self) -> float:
+        """Median distance of the fitted temperature from the reading [K]."""
+        return float(np.median(np.abs(self.temperature_c - self.reading_c)))
+
+    def plausible(self) -> bool:
+        """Window by window (``rate_k_per_h`` None): the fit moved the temperature by at
+        least :data:`TEMPERATURE_MIN_K`, either way, at the median window and lowered Σ z²
+        by at least :data:`FIT_MIN` per window (each window has its own temperature: one
+        degree of freedom each). A drift (an offset and a rate): by at least
+        :data:`DRIFT_MIN_K` and Σ z² by :data:`FIT_MIN_RATE` over all windows."""
+        if self.rate_k_per_h is None:
+            return (self.error_k >= TEMPERATURE_MIN_K
+                    and self.reduction >= FIT_MIN * len(self.z))
+        return self.error_k >= DRIFT_MIN_K and self.reduction >= FIT_MIN_RATE
+
+
+def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                    cond: Conditions, friction: np.ndarray, index: np.ndarray
+                    ) -> TemperatureFit | None:
+    """Fit the hypothesis "the temperature reading is wrong" (stuck, drifting, off):
+    each window's temperature chosen to leave Σ z² smallest (:func:`best_temperature`),
+    where that beats the reading. The
+    bridges' span and zero drift, their features' own slopes and the friction's law
+    learnt at commissioning (:mod:`swgmon.detection.normal`) together say what temperature each
+    window
+    was at; a gear fault moves them in a pattern no temperature gives.
+
+    Parameters
+    ----------
+    normal : NormalBehaviour
+        With temperature terms (:attr:`NormalBehaviour.temperature_law`).
+    feats : ndarray, shape (n, F)
+    points : ndarray, shape (n, 2)
+    cond : Conditions
+        With the readings.
+    friction : ndarray, shape (n,)
+        The friction factor in force at each window.
+    index : ndarray of int, shape (n,)
+        Each window's operating point's row in ``normal``.
+
+    Returns
+    -------
+    TemperatureFit or None
+        None where the normal behaviour has no temperature terms or the stream no
+        reading.
+    """
+    if cond.temperature_c is None or not normal.temperature_law:
+        return None
+    z0 = normal.z(feats, points, cond, friction, index)
+    temp, z = best_temperature(normal, feats, points, cond.torque_nm, friction, index)
+    s0, s = np.sum(z0 ** 2, axis=1), np.sum(z ** 2, axis=1)
+    worse = s0 <= s  # the reading is as good: kept
+    temp[worse], z[worse] = cond.temperature_c[worse], z0[worse]
+    return TemperatureFit(temp, cond.temperature_c, z, float(np.sum(s0 - np.minimum(s, s0))))
+
+
+def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                          cond: Conditions, friction: np.ndarray, index: np.ndarray,
+                          hours: np.ndarray | None) -> TemperatureFit | None:
+    """Fit the hypothesis "the temperature reading drifts" (a loosened or ageing sensor:
+    :class:`~swgsim.sensing.bridge_drift.TemperatureSensor` ``drift``): the true
+    temperature is the reading plus an offset and a rate, a + r (t − t₀), the same for
+    every window since the alarm (two parameters in all, where :func:`fit_temperature`
+    gives each window its own: a drift is named while its error is still small, before
+    a gear-fault alarm has fired on the features it moves). Offsets within
+    :data:`TEMPERATURE_BEYOND_K`, rates within :data:`DRIFT_RATES` (the families' ±0.5
+    K/h), on a coarse grid refined about its best; the z-scores by the laws commissioning
+    learnt, unwidened beyond its range (as :func:`best_temperature`).
+
+    Returns
+    -------
+    TemperatureFit or None
+        ``rate_k_per_h`` the fitted rate; None where the normal behaviour has no
+        temperature terms, the stream no reading (or a missing one among these windows)
+        or no hours are given.
+    """
+    if (cond.temperature_c is None or not normal.temperature_law or hours is None
+            or not np.all(np.isfinite(cond.temperature_c))):
+        return None
+    z0 = normal.z(feats, points, cond, friction, index)
+    flat = _unwidened(normal)
+    dt = np.asarray(hours, float) - float(hours[0])
+    args = (flat, feats, points, cond.torque_nm, friction, index)
+
+    def best(offsets: np.ndarray, rates: np.ndarray) -> tuple[float, float]:
+        tot = [_sum_z2(*args, (cond.temperature_c + r * dt)[:, None] + offsets[None, :])[0]
+               .sum(axis=0) for r in rates]  # (R, G)
+        i, j = np.unravel_index(int(np.argmin(tot)), (len(rates), len(offsets)))
+        return float(offsets[j]), float(rates[i])
+
+    a, r = best(np.arange(-TEMPERATURE_BEYOND_K, TEMPERATURE_BEYOND_K + 0.5, 1.0), DRIFT_RATES)
+    a, r = best(a + np.arange(-0.5, 0.51, 0.125), r + np.arange(-0.05, 0.051, 0.01))
+    temp = cond.temperature_c + a + r * dt
+    s, z = _sum_z2(*args, temp[:, None])
+    return TemperatureFit(temp, cond.temperature_c, z[:, 0],
+                          float(np.sum(z0 ** 2) - s.sum()), r)
+
+
+def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                     torque_nm: np.ndarray, friction: np.ndarray, index: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Each window's temperature that leaves its z-scores smallest (Σ z²), on a grid of
+    :data:`COARSE_STEP_K` refined to :data:`TEMPERATURE_STEP_K` about its best, over the
+    range commissioning saw widened by :data:`TEMPERATURE_BEYOND_K` on either side, and
+    the z-scores there; shapes (n,) [°C] and (n, F). Beyond commissioning's range the
+    laws are extrapolated in commissioning's spread (not
+    :meth:`~swgmon.detection.normal.NormalBehaviour.z_and_spread`'s widened one, which would
+    pull every fit to the grid's ends)."""
+    lo = float(np.min(normal.temp_range[:, 0])) - TEMPERATURE_BEYOND_K
+    hi = float(np.max(normal.temp_range[:, 1])) + TEMPERATURE_BEYOND_K
+    normal = _unwidened(normal)  # no pull to the ends
+    fine = TEMPERATURE_STEP_K * np.arange(-COARSE_STEPS, COARSE_STEPS + 1)
+    grid = np.arange(lo, hi + COARSE_STEP_K, COARSE_STEP_K)  # coarse, then fine about it
+    temp, zb = np.empty(len(feats)), np.empty(feats.shape)
+    for a in range(0, len(feats), FIT_CHUNK):  # a bounded memory over long streams
+        w = slice(a, a + FIT_CHUNK)
+        args = (normal, feats[w], points[w], torque_nm[w], friction[w], index[w])
+        n = len(args[1])
+        best = grid[np.argmin(_sum_z2(*args, np.broadcast_to(grid, (n, len(grid))))[0],
+                              axis=1)]
+        cand = best[:, None] + fine[None, :]  # (n, G)
+        s, z = _sum_z2(*args, cand)
+        k = np.argmin(s, axis=1)
+        temp[w], zb[w] = cand[np.arange(n), k], z[np.arange(n), k]
+    return temp, zb
+
+
+def _unwidened(normal: NormalBehaviour) -> NormalBehaviour:
+    """``normal`` extrapolating beyond commissioning's range in commissioning's spread
+    (not widened: a fit over temperatures would be pulled to its grid's ends)."""
+    return dataclasses.replace(normal, config=dataclasses.replace(
+        normal.config, extrapolation_uncertainty=0.0))
+
+
+def _sum_z2(normal: NormalBehaviour, feats, points, torque_nm, friction, index,
+            temps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Σ z² and z of each window (n) at each of its temperatures ``temps`` (n, G), in one
+    evaluation of the normal behaviour; shapes (n, G) and (n, G, F)."""
+    z = normal.z_over_temperature(feats, points, torque_nm, temps, friction, index)
+    return np.sum(z ** 2, axis=2), z
+
+
+def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                        torque_nm: np.ndarray, friction: float | np.ndarray,
+                        index: np.ndarray) -> np.ndarray:
+    """The temperature the bridges and the efficiency say each window was at, by the
+    laws learnt at commissioning (:func:`best_temperature`), as a running median over
+    :data:`VIRTUAL_WINDOWS` windows (a joint's temperature moves with a time constant of
+    tens of minutes, docs/DATASET.md, "Gear lives"); the monitor's reading where its
+    temperature sensor has failed (:func:`swgmon.advisories.stream.run_stream`). Shape (n,) [°C].
+    ``friction``: the friction factor in force, one for every window or one each (n,).
+
+    Raises
+    ------
+    ValueError
+        If the normal behaviour has no temperature terms.
+    """
+    if not normal.temperature_law:
+        raise ValueError("virtual_temperature: the normal behaviour has no temperature law "
+                         "(commissioning without a temperature reading or without its "
+                         "spread)")
+    temp, _ = best_temperature(normal, feats, points, torque_nm,
+                               np.broadcast_to(np.asarray(friction, float), (len(feats),)),
+                               index)
+    half = VIRTUAL_WINDOWS // 2
+    padded = np.pad(temp, half, mode="edge")
+    return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
+
+
+def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
+                  cond: Conditions, friction: float, hours: np.ndarray
+                  ) -> tuple[int, int] | None:
+    """The first window at which the temperature reading is stuck: it has stayed the same,
+    to the bit, for at least :data:`STILL_H` while the temperature the bridges and the
+    efficiency say (:func:`virtual_temperature`, at friction factor ``friction``) moved by
+    at least :data:`STILL_MOVED_K` since the run began (a frozen converter, a bus that
+    repeats its last value: a flat-line test, with the bridges telling a stuck reading from
+    a joint at a steady temperature read without noise). Judged without an alarm and
+    without the spreads: a reading stuck beyond commissioning's range is cheap in the
+    spread widened there (docs/monitor.md, "The monitor checks its temperature sensor").
+
+    Parameters
+    ----------
+    normal : NormalBehaviour
+    feats, points : ndarray, shapes (n, F), (n, 2)
+    cond : Conditions
+        The readings [°C] (NaN: none).
+    friction : float
+        The friction factor in force.
+    hours : ndarray, shape (n,)
+        Operating hours, increasing [h].
+
+    Returns
+    -------
+    (int, int) or None
+        The first window of the run of one reading, and the window at which it is found
+        stuck (the running median's half-width after the first whose virtual temperature
+        has moved enough, within the run); None where no reading is stuck, or the stream
+        has no reading or the normal behaviour no temperature law.
+    """
+    t = cond.temperature_c
+    if t is None or not normal.temperature_law or not len(t):
+        return None
+    starts = np.flatnonzero(np.r_[True, t[1:] != t[:-1]])  # NaN: a run of its own
+    ends = np.r_[starts[1:], len(t)]
+    long = hours[ends - 1] - hours[starts] >= STILL_H
+    half = VIRTUAL_WINDOWS // 2
+    for s, e in zip(starts[long], ends[long], strict=True):
+        judged = s + int(np.searchsorted(hours[s:e], hours[s] + STILL_H))
+        lo, hi = np.inf, -np.inf
+        for a in range(s, e, STILL_CHUNK):
+            b = min(e, a + STILL_CHUNK)
+            w = slice(max(s, a - half), min(e, b + half))  # the running median's edges
+            v = virtual_temperature(normal, feats[w], points[w], cond.torque_nm[w], friction,
+                                    normal.index(points[w]))[a - w.start:b - w.start]
+            moved = (np.maximum.accumulate(np.maximum(v, hi))
+                     - np.minimum.accumulate(np.minimum(v, lo)))
+            hit = (moved >= STILL_MOVED_K) & (np.arange(a, b) >= judged)
+            if hit.any():
+                return int(s), min(int(e) - 1, a + int(np.argmax(hit)) + half)
+            lo, hi = min(lo, float(v.min())), max(hi, float(v.max()))
+    return None
+
+
+__all__ = ["BLOCK", "DRIFT_MIN_K", "DRIFT_RATES", "FIT_MIN", "FIT_MIN_GAIN_RATE", "FIT_MIN_RATE",
+           "REST_MAX", "SENSOR_P_MIN",
+           "STILL_CHUNK", "STILL_H", "STILL_MOVED_K", "SensorFit", "TEMPERATURE_BEYOND_K",
+           "TEMPERATURE_MIN_K", "TEMPERATURE_STEP_K", "TemperatureFit",
+           "VIRTUAL_WINDOWS",
+           "best_temperature", "fit_bridge_faults", "fit_sensor_faults",
+           "fit_temperature", "fit_temperature_drift", "still_reading",
+           "virtual_temperature"]

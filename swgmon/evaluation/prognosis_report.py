@@ -1,0 +1,276 @@
+"""Tables, targets and the figure of the prognosis's evaluation
+(:mod:`.prognosis_evaluation`; ``swgsim-train experiment=prognosis``), every
+figure computed from the results (:mod:`swgmon.prognosis.scores`), none written in.
+
+The targets (issue 47): the 90 % interval's coverage (PICP) in [0.85, 0.95] in every remaining-share
+bucket with at least 20 prognoses; the relative accuracy at half the way from the first
+prognosis to failure (its median over lives) >= 0.8; the alpha-lambda criterion (alpha 0.2,
+lambda 0.5) met in >= 80 % of the lives; the median absolute error at half-life <= 0.7 times
+the better baseline's; after a payload change, the predicted failure moves the way the
+growth law says within 24 h of operation in every life (against its twin without the change).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from swgmon.evaluation.statistics import Interval, life_bootstrap
+from swgmon.prognosis.scores import (
+    SHARE_BUCKETS,
+    alpha_lambda,
+    at_lambda,
+    interval_hit,
+    phm08_score,
+    prognostic_horizon,
+    relative_accuracy,
+    remaining_fraction,
+    share_bucket_label,
+)
+from swgsim.base.lazy import lazy_module
+from swgsim.base.markdown import md_table
+from swgsim.files.ownership import save_figure, write_owned
+
+pd = lazy_module("pandas")
+
+#: The targets' thresholds (issue 47).
+PICP_RANGE, MIN_BUCKET, RA_MIN, AL_SHARE, ERROR_RATIO = (0.85, 0.95), 20, 0.8, 0.8, 0.7
+#: alpha and lambda of the scores judged at half-life (issue 47).
+ALPHA, LAMBDA = 0.2, 0.5
+#: Columns naming a life.
+LIFE = ["dataset", "held_out_gear", "seed", "fault"]
+#: ``changes.csv``'s columns (:func:`.prognosis_evaluation.run_prognosis_part`).
+CHANGE_COLUMNS = [*LIFE, "payload", "method", "change_h", "failure_h", "twin_failure_h",
+                  "paired", "moved", "lag_h"]
+#: Hours of operation after a change within which the prediction must have moved (issue 47).
+WITHIN_H = 24.0
+
+
+def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
+    """Coverage and width of the 90 % interval per data set, fault, method and remaining-share
+    bucket of the remaining-life fraction (:data:`SHARE_BUCKETS`, from the alarm to the
+    failure).
+
+    Parameters
+    ----------
+    rows : DataFrame
+        ``results.csv``: one row per prognosis and method.
+
+    Returns
+    -------
+    DataFrame
+        ``dataset``, ``fault``, ``method``, ``bucket``, ``n`` (valid prognoses), ``picp``,
+        ``picp_low``, ``picp_high`` (its 95 % interval from a bootstrap over whole lives:
+        a life's prognoses share windows, :func:`~.statistics.
+        life_bootstrap`), ``lives``, ``mean_width_h`` (inf where an interval is open),
+        ``open`` (share of open intervals), ``phm08`` (mean score of the medians).
+    """
+    v = rows[rows.valid].copy()
+    v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
+    v["hit"] = interval_hit(v.true_remaining_h.to_numpy(), v.remaining_h_q05.to_numpy(),
+                            v.remaining_h_q95.to_numpy())
+    v["width"] = v.remaining_h_q95 - v.remaining_h_q05
+    v["phm08"] = phm08_score(v.true_remaining_h.to_numpy(), v.remaining_h.to_numpy())
+    g = v.groupby(["dataset", "fault", "method", "bucket"], sort=True)
+    out = g.agg(n=("hit", "size"), picp=("hit", "mean"), mean_width_h=("width", "mean"),
+                open=("width", lambda w: float(np.mean(~np.isfinite(w)))),
+                phm08=("phm08", "mean")).reset_index()
+    ci = [_picp_interval(b) for _, b in g]
+    out.insert(out.columns.get_loc("picp") + 1, "picp_low", [c.low for c in ci])
+    out.insert(out.columns.get_loc("picp") + 2, "picp_high", [c.high for c in ci])
+    out.insert(out.columns.get_loc("picp") + 3, "lives", [c.n for c in ci])
+    return out
+
+
+def _picp_interval(b: pd.DataFrame) -> Interval:
+    """A bucket's coverage, its prognoses pooled, with the bootstrap over its lives."""
+    per = b.groupby(LIFE, sort=False).hit.agg(["sum", "size"])
+    return life_bootstrap(per["sum"].to_numpy(float), per["size"].to_numpy(float))
+
+
+def life_scores(rows: pd.DataFrame, lives: pd.DataFrame) -> pd.DataFrame:
+    """Each life's scores per method: at half-life (λ 0.5 of the way from the method's
+    first valid prognosis to failure, :func:`~swgmon.prognosis.scores.at_lambda`)
+    the relative accuracy, the absolute error and the alpha-lambda criterion, and the
+    prognostic horizon over all its prognoses.
+
+    Parameters
+    ----------
+    rows : DataFrame
+        ``results.csv``.
+    lives : DataFrame
+        ``lives.csv``: one row per life.
+
+    Returns
+    -------
+    DataFrame
+        One row per life with a failure and method: :data:`LIFE`, ``method``,
+        ``followed`` (a prognosis at half-life), ``ra``, ``abs_error_h``,
+        ``alpha_lambda`` (False where none), ``horizon_h``, ``horizon_share`` (of the
+        span from the first prognosis to failure).
+    """
+    out = []
+    methods = sorted(rows.method.unique()) if len(rows) else []
+    for life in lives[np.isfinite(lives.failure_h)].itertuples(index=False):
+        mine = rows[(rows[LIFE] == [getattr(life, k) for k in LIFE]).all(axis=1) & rows.valid]
+        for m in methods:
+            r = mine[mine.method == m].sort_values("hour")
+            key = {k: getattr(life, k) for k in LIFE}
+            i = at_lambda(r.hour.to_numpy(), life.failure_h, LAMBDA)
+            if i is None or i < 0:
+                out.append({**key, "method": m, "followed": False, "ra": np.nan,
+                            "abs_error_h": np.nan, "alpha_lambda": False, "horizon_h": 0.0,
+                            "horizon_share": 0.0})
+                continue
+            t, p = r.true_remaining_h.to_numpy(), r.remaining_h.to_numpy()
+            ph = prognostic_horizon(r.hour.to_numpy(), t, p, life.failure_h, ALPHA)
+            out.append({**key, "method": m, "followed": True,
+                        "ra": float(relative_accuracy(t[i:i + 1], p[i:i + 1])[0]),
+                        "abs_error_h": float(abs(p[i] - t[i])),
+                        "alpha_lambda": bool(alpha_lambda(t[i:i + 1], p[i:i + 1], ALPHA)[0]),
+                        "horizon_h": ph, "horizon_share": ph / (life.failure_h - r.hour.iloc[0])})
+    return pd.DataFrame(out)
+
+
+def change_table(changes: pd.DataFrame) -> pd.DataFrame:
+    """Per data set, fault and method, the lives with a payload change: how many, how
+    many were judged (a paired prognosis after the change), the share of judged ones whose
+    predicted failure moved the law's way within :data:`WITHIN_H` and the median lag.
+
+    Parameters
+    ----------
+    changes : DataFrame
+        ``changes.csv`` (:data:`CHANGE_COLUMNS`).
+
+    Returns
+    -------
+    DataFrame
+        ``dataset``, ``fault``, ``method``, ``lives``, ``judged``, ``moved_share`` (NaN
+        where none judged), ``lag_median_h``.
+    """
+    c = changes.assign(judged=changes.moved.notna(),
+                       ok=changes.moved.eq(True) & (changes.lag_h <= WITHIN_H))
+    g = c.groupby(["dataset", "fault", "method"], sort=True)
+    out = g.agg(lives=("judged", "size"), judged=("judged", "sum"), ok=("ok", "sum"),
+                lag_median_h=("lag_h", "median")).reset_index()
+    out.insert(5, "moved_share", out.ok / out.judged.where(out.judged > 0))
+    return out.drop(columns="ok")
+
+
+def summary_table(scores: pd.DataFrame) -> pd.DataFrame:
+    """Per data set, fault and method: lives, lives followed to half-life, the median
+    relative accuracy and absolute error at half-life over the followed lives, the share
+    of all lives meeting alpha-lambda, the median prognostic horizon and its share."""
+    g = scores.groupby(["dataset", "fault", "method"], sort=True)
+    return g.agg(lives=("followed", "size"), followed=("followed", "sum"),
+                 ra_median=("ra", "median"), abs_error_median_h=("abs_error_h", "median"),
+                 alpha_lambda_share=("alpha_lambda", "mean"),
+                 horizon_median_h=("horizon_h", "median"),
+                 horizon_share_median=("horizon_share", "median")).reset_index()
+
+
+def targets(buckets: pd.DataFrame, summary: pd.DataFrame, moved: pd.DataFrame
+            ) -> pd.DataFrame:
+    """The issue's targets for the growth law per data set and fault, each with its
+    measured value and pass or fail (module docstring); a bucket with fewer than
+    :data:`MIN_BUCKET` prognoses, and a fault without a judged payload change
+    (:func:`change_table`), are listed as not judged."""
+    out = []
+    for b in buckets[buckets.method == "growth"].itertuples(index=False):
+        judged = b.n >= MIN_BUCKET
+        ok = PICP_RANGE[0] <= b.picp <= PICP_RANGE[1]
+        out.append({"dataset": b.dataset, "fault": b.fault,
+                    "what": f"PICP of the 90 % interval, bucket {b.bucket} ({b.n} prognoses)",
+                    "target": f"{PICP_RANGE[0]:g}-{PICP_RANGE[1]:g}", "measured": f"{b.picp:.2f}",
+                    "result": ("pass" if ok else "fail") if judged else
+                    f"not judged (< {MIN_BUCKET})"})
+    for (ds, fault), s in summary.groupby(["dataset", "fault"]):
+        if not (s.method == "growth").any():
+            continue
+        gr = s[s.method == "growth"].iloc[0]
+        base = s[s.method != "growth"].abs_error_median_h.min()
+        out += [{"dataset": ds, "fault": fault, "what": what, "target": tgt,
+                 "measured": f"{val:.3g}", "result": "pass" if ok else "fail"}
+                for what, tgt, val, ok in (
+                    ("relative accuracy at half-life (median over lives)", f">= {RA_MIN:g}",
+                     gr.ra_median, gr.ra_median >= RA_MIN),
+                    (f"lives meeting alpha-lambda (alpha {ALPHA:g}, lambda {LAMBDA:g})",
+                     f">= {AL_SHARE:g}", gr.alpha_lambda_share,
+                     gr.alpha_lambda_share >= AL_SHARE),
+                    ("median abs error at half-life / the better baseline's",
+                     f"<= {ERROR_RATIO:g}", gr.abs_error_median_h / base,
+                     gr.abs_error_median_h <= ERROR_RATIO * base))]
+    for m in moved[moved.method == "growth"].itertuples(index=False):
+        out.append({"dataset": m.dataset, "fault": m.fault,
+                    "what": f"after a payload change the predicted failure moves the law's "
+                            f"way within {WITHIN_H:g} h ({m.judged} of {m.lives} lives judged)",
+                    "target": "every life", "measured": f"{m.moved_share:.2f}",
+                    "result": ("pass" if m.moved_share == 1.0 else "fail") if m.judged
+                    else "not judged (no paired prognosis)"})
+    return pd.DataFrame(out, columns=["dataset", "fault", "what", "target", "measured",
+                                      "result"])
+
+
+def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFrame,
+                buckets: pd.DataFrame, lives: pd.DataFrame, calibration: pd.DataFrame,
+                moved: pd.DataFrame) -> None:
+    """``table.md``: the header, the targets with pass or fail, the scores per fault and
+    method, the coverage per remaining-share bucket, the payload changes (:func:`change_table`),
+    the lives and the calibration."""
+    lv = lives.assign(after_onset_h=lives.failure_h - lives.onset_h,
+                      alarm_after_onset_h=lives.alarm_h - lives.onset_h)
+    alarms = lv.groupby(["dataset", "fault"]).agg(
+        lives=("seed", "size"), failed=("failure_h", lambda f: int(np.isfinite(f).sum())),
+        followed=("alarm_h", lambda a: int(np.isfinite(a).sum())),
+        median_failure_after_onset_h=("after_onset_h", "median"),
+        median_alarm_after_onset_h=("alarm_after_onset_h", "median")).reset_index()
+    text = header + "".join(
+        f"\n## {title}\n\n{md_table(t.columns, t.itertuples(index=False))}\n" for title, t in (
+            ("Targets (the growth law)", tgt),
+            ("Scores per fault and method (held-out gears)", summary),
+            ("The 90 % interval per remaining-share bucket (remaining share of the way from the "
+             "alarm to failure)", buckets),
+            ("After a payload change, against the same life without it", moved),
+            ("Lives", alarms),
+            ("Calibration (split conformal on the training gears' lives)", calibration))
+    ) + "\n![prognosis](prognosis.png)\n"
+    write_owned(path, lambda tmp: Path(tmp).write_text(text))
+
+
+def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path) -> Path:
+    """``prognosis.png``: the 90 % interval's coverage per remaining-share bucket and method (all
+    faults and data sets pooled), and the predicted against the true remaining hours of
+    every valid prognosis per method (median)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    v = rows[rows.valid].copy()
+    v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
+    v["hit"] = interval_hit(v.true_remaining_h.to_numpy(), v.remaining_h_q05.to_numpy(),
+                            v.remaining_h_q95.to_numpy())
+    labels = [f"[{lo:g}, {hi:g}{']' if hi == 1.0 else ')'}" for lo, hi in SHARE_BUCKETS]
+    methods = sorted(v.method.unique())
+    for k, m in enumerate(methods):
+        cov = v[v.method == m].groupby("bucket").hit.mean().reindex(labels)
+        ax[0].bar(np.arange(len(labels)) + 0.25 * (k - 1), cov.to_numpy(), 0.25, label=m)
+        r = v[(v.method == m) & np.isfinite(v.remaining_h) & (v.remaining_h > 0)]
+        ax[1].loglog(r.true_remaining_h, r.remaining_h, ".", ms=3, alpha=0.5, label=m)
+    ax[0].axhspan(*PICP_RANGE, color="0.85", zorder=0, label="target")
+    ax[0].set(xticks=range(len(labels)), xticklabels=labels, ylim=(0, 1.05),
+              xlabel="remaining share of the way from alarm to failure",
+              ylabel="coverage of the 90 % interval (PICP)")
+    lim = [max(v.true_remaining_h.min(), 1e-2), v.true_remaining_h.max()] if len(v) else [1, 2]
+    ax[1].loglog(lim, lim, "k-", lw=1)
+    ax[1].set(xlabel="true remaining hours [h]", ylabel="predicted (median) [h]")
+    for a in ax:
+        a.legend(fontsize=8)
+    fig.tight_layout()
+    return save_figure(fig, path, 110)
+
+
+__all__ = ["ALPHA", "LAMBDA", "bucket_table", "figure", "life_scores", "summary_table",
+           "targets", "write_table"]

@@ -1,0 +1,207 @@
+"""Task ``prognosis`` (``swgsim-train experiment=prognosis``): the prognosis's
+leave-one-gear-out evaluation on lives that run to failure
+(:mod:`.prognosis_evaluation`), its tables, targets and figure
+(:mod:`.prognosis_report`) and an MLflow run.
+
+Files in ``report_dir``: ``results.csv`` (one row per prognosis and method), ``lives.csv``
+(one row per life), ``calibration.csv`` (the conformal scale per held-out gear and method),
+``scores.csv`` (each life's scores per method), ``changes.csv`` (each life with a payload
+change against its twin without it, per method), ``table.md``, ``prognosis.png``,
+``timing.json`` and ``parts/``: one finished part per (data set, held-out gear) with the
+hash of the config that made it (:func:`learn.tasks.parts.part_key`), so that a rerun of
+the same config resumes from them (the part machinery of :mod:`learn.tasks.parts`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from learn.tasks.config import typed_app
+from learn.tasks.parts import (
+    EvaluationExperiment,
+    Job,
+    group_jobs,
+    part_key,
+    resumed_note,
+    run_group,
+    run_one_group,
+    run_parts,
+)
+from learn.tracking import log_run
+from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, run_prognosis_part
+from swgmon.evaluation.prognosis_report import (
+    CHANGE_COLUMNS,
+    bucket_table,
+    change_table,
+    figure,
+    life_scores,
+    summary_table,
+    targets,
+    write_table,
+)
+from swgsim.base.lazy import lazy_module
+from swgsim.base.typed import check_tree, plain
+from swgsim.datasets.plan import DatasetPlan
+from swgsim.files import ownership
+from swgsim.files.ownership import atomic_write_json, write_owned
+
+pd = lazy_module("pandas")
+joblib = lazy_module("joblib")
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class PrognosisExperiment(EvaluationExperiment):
+    """``prognosis`` group of ``swgsim-train``: the shared keys
+    (:class:`learn.tasks.parts.EvaluationExperiment`: ``run_on``, ``datasets`` - their
+    own ``life`` is not used, the study makes the lives -, ``report_dir``, ``n_jobs``,
+    ``progress``, ``group``) and the prognosis's study.
+
+    Attributes
+    ----------
+    study : PrognosisStudyConfig
+        The evaluation's design.
+    report_dir : str
+        Default ``reports/prognosis`` [choice].
+    """
+
+    study: PrognosisStudyConfig = field(default_factory=PrognosisStudyConfig)
+    report_dir: str = "reports/prognosis"
+
+
+def plan_parts(pc: PrognosisExperiment, plans: dict[str, DatasetPlan]) -> list[Job]:
+    """One part per data set and held-out gear (``study.gears``, default all), its key the
+    hash of the data set's config, the gear and the study."""
+    study = dataclasses.asdict(pc.study)
+    return [Job(name, g, None, part_key({"dataset": p.config_hash, "gear": g,
+                                         "study": study, "task": "prognosis"}))
+            for name, p in plans.items()
+            for g in pc.study.gears or [int(x.id) for x in p.config.gears]]
+
+
+def run_prognosis_evaluation(cfg) -> dict:
+    """Run the evaluation (module docstring); return its summary.
+
+    Raises
+    ------
+    ValueError
+        A bad ``prognosis`` key or data set, a held-out gear a data set lacks, an
+        unwritable MLflow store, or a ``report_dir`` holding a file this project cannot
+        show it wrote (named); before any work.
+    """
+    app = typed_app(cfg)
+    pc: PrognosisExperiment = app.prognosis
+    check_tree(pc.study, "prognosis.study")  # its training design, ..., then its rules
+    plans = pc.plans("prognosis")  # every data set's config checked before any work
+    for name in plans:
+        have = [int(x.id) for x in plans[name].config.gears]
+        bad = sorted(set(pc.study.gears) - set(have))
+        if bad:
+            raise ValueError(f"prognosis.study.gears: {bad} not in prognosis.datasets.{name}; "
+                             f"allowed: {have}")
+    jobs = group_jobs(plan_parts(pc, plans), pc.group, "prognosis.group")
+    with pc.claimed_report("prognosis", plans, app.logger) as (out, claim):
+        if pc.group is not None:
+            return {"task": "prognosis", **run_one_group(
+                out, jobs, lambda js: joblib.delayed(_job)(plans[js[0].dataset], js,
+                                                           pc.study, str(out)),
+                "prognosis evaluation", pc.progress, pc.n_jobs, "prognosis.group", pc.group)}
+        return _evaluate(app, pc, plans, out, claim)
+
+
+def _job(plan_: DatasetPlan, jobs: list[Job], study: PrognosisStudyConfig, out: str
+         ) -> list[tuple[dict, Job]]:
+    """The part of one held-out gear in a worker, saved as it ends."""
+    ownership.join(out, "prognosis")
+    return run_group(out, jobs, lambda j: run_prognosis_part(plan_, j.dataset, j.gear, study))
+
+
+def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
+    """Results, lives, payload changes and calibration tables of the parts."""
+    rows = pd.DataFrame([r for p in parts for r in p["rows"]])
+    lives = pd.DataFrame([r for p in parts for r in p["lives"]])
+    changes = pd.DataFrame([r for p in parts for r in p.get("changes", [])],
+                           columns=CHANGE_COLUMNS)
+    cal = pd.DataFrame([{"dataset": p["dataset"], "held_out_gear": p["held_out_gear"], **c}
+                        for p in parts for c in p["calibration"]])
+    return rows, lives, changes, cal
+
+
+def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> dict:
+    """The evaluation into the claimed ``out`` (every file it writes recorded)."""
+    (out / "parts").mkdir(parents=True, exist_ok=True)
+    jobs = plan_parts(pc, plans)
+    t0 = time.perf_counter()
+    parts, resumed = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
+        plans[js[0].dataset], js, pc.study, str(out)), "prognosis evaluation", pc.progress,
+        pc.n_jobs)
+    wall = time.perf_counter() - t0
+    rows, lives, changes, cal = _frames(parts)
+    if rows.empty:
+        raise ValueError("prognosis: no life was followed to a prognosis (no alarm named "
+                         "a growing fault); nothing to score")
+    rows["valid"] = rows["valid"].astype(bool)
+    scores = life_scores(rows, lives)
+    buckets, summary = bucket_table(rows), summary_table(scores)
+    moved = change_table(changes)
+    tgt = targets(buckets, summary, moved)
+    for name, df in (("results.csv", rows), ("lives.csv", lives), ("calibration.csv", cal),
+                     ("scores.csv", scores), ("changes.csv", changes)):
+        write_owned(out / name, lambda tmp, df=df: df.to_csv(tmp, index=False))
+    not_run = {f"{p['dataset']}: {f}": w for p in parts for f, w in p["not_run"].items()}
+    atomic_write_json(out / "timing.json", {"wall_s": wall, "resumed": resumed, "parts": [
+        {k: p.get(k) for k in ("dataset", "held_out_gear", "train_s", "calibrate_s",
+                               "evaluate_s")} for p in parts]})
+    sc = pc.study
+    header = (f"# Prognosis: leave-one-gear-out over lives to failure\n\n"
+              f"Data sets {', '.join(pc.run_on)}; seeds {sc.seeds}; calibration seeds "
+              f"{sc.calibration_seeds} on the training gears; payload factors "
+              f"{sc.payloads} by seed, from {sc.payload_after_h:g} h after the onset; a "
+              f"prognosis every {sc.prognosis.every_h:g} h after the alarm. "
+              f"Wall time {wall / 60:.1f} min{resumed_note(resumed, len(jobs))}.\n"
+              + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
+    write_table(out / "table.md", header, tgt, summary, buckets, lives, cal, moved)
+    fig = figure(buckets, rows, out / "prognosis.png")
+    claim.record([out / f for f in ("results.csv", "lives.csv", "calibration.csv",
+                                    "scores.csv", "changes.csv", "table.md")] + [fig])
+    if pc.progress:
+        print("\ntargets (prognosis, the growth law; held-out gears):")
+        for r in tgt.itertuples(index=False):
+            print(f"  {r.dataset:<12s} {r.fault:<17s} {r.what:<62s} {r.target:>9s} "
+                  f"{r.measured:>7s} {r.result}")
+        print(f"report: {out}/table.md; wall time {wall / 60:.1f} min")
+    if app.logger is not None:
+        _log(app, summary, tgt, out, wall, plans)
+    return {"task": "prognosis", "report_dir": str(out), "wall_s": wall,
+            "lives": int(len(lives)), "prognoses": int(rows.valid.sum()) if len(rows) else 0,
+            "targets_passed": int((tgt.result == "pass").sum()),
+            "targets_judged": int(tgt.result.isin(["pass", "fail"]).sum())}
+
+
+def _log(app, summary: pd.DataFrame, tgt: pd.DataFrame, out: Path, wall: float,
+         plans: dict[str, DatasetPlan]) -> None:
+    """The evaluation's MLflow run (:func:`learn.tracking.log_run`)."""
+    pc: PrognosisExperiment = app.prognosis
+    gr = summary[summary.method == "growth"]
+    params = {"run_on": ",".join(pc.run_on), "seeds": str(pc.study.seeds),
+              "calibration_seeds": str(pc.study.calibration_seeds),
+              **{f"config_hash.{n}": p.config_hash for n, p in plans.items()}}
+    with log_run(app.logger.experiment, app.logger.run_name,
+                 tracking_uri=app.logger.tracking_uri, params=params,
+                 config=plain(app)) as run:
+        run.log_metrics({"ra_half_life_median": float(gr.ra_median.median()),
+                         "alpha_lambda_share": float(gr.alpha_lambda_share.mean()),
+                         "targets_passed": float((tgt.result == "pass").sum()),
+                         "wall_s": wall})
+        for f in ("results.csv", "lives.csv", "scores.csv", "changes.csv", "table.md",
+                  "prognosis.png"):
+            if (out / f).is_file():
+                run.log_artifact(out / f)
+
+
+__all__ = ["PrognosisExperiment", "plan_parts", "run_prognosis_evaluation"]

@@ -1,0 +1,314 @@
+"""Prognosis after an alarm: the hours left until the named fault's severity reaches its
+failure threshold, as a distribution (in the stream: :mod:`.stream`).
+
+:func:`predict_growth` takes the fault's growth law from :mod:`swgsim.datasets.growth`
+(Paris' law for the cracks, Archard's for the eccentricity and wear) with one unknown, the
+gear's scale s; in a transformed severity (:func:`transformed`) the law is a straight line
+in the exposure the duty gave, ln s gets a grid posterior, Monte-Carlo draws give the
+remaining hours. Baselines: :mod:`.baselines`. Design, formulas and
+assumptions (and why not ProgPy or SurPyval): docs/monitor.md, "Prognosis".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swgmon.prognosis.inputs import (
+    Duty,
+    DutyRange,
+    Prognosis,
+    PrognosisConfig,
+    Track,
+    check_track,
+    from_samples,
+    not_valid,
+    not_yet_valid,
+)
+from swgsim.datasets.growth import (
+    DEPTH_AT_ONE_M,
+    LAWS,
+    RunToFailure,
+    archard_depth,
+    load_cycles,
+    paris_damage,
+)
+
+__all__ = ["Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track", "check_track",
+           "exposure", "from_samples", "hours_for_exposure", "not_valid", "not_yet_valid",
+           "predict_growth", "severity_of", "transformed"]
+
+#: z of a central 90 % interval of a normal distribution, its half-width in σ [-].
+Z90 = 1.6448536269514722
+
+#: Gauss-Newton steps of u0's fit at each grid point of ln s (6 [choice]: from the first
+#: quarter's mean, 3, 6 and 12 steps gave the same quantiles to 1e-13 on synthetic root
+#: crack and wear tracks as in tests/learn/test_prognosis.py).
+GAUSS_NEWTON_STEPS = 6
+
+
+# ------------------------------------------------------------------ the growth law
+#: Smallest severity mapped to Paris' u (the start of u0's fit, the threshold) (1e-3:
+#: 2 µm of a root crack) [choice: a mean estimate at or below 0 says "small", and u =
+#: (severity d1)^(1 − m/2) has no value there].
+SEVERITY_FLOOR = 1e-3
+
+
+def _law(fault: str) -> str:
+    """The growth law of ``fault`` (a key of :data:`LAWS`)."""
+    return next(g for g, fs in LAWS.items() if fault in fs)
+
+
+def transformed(fault: str, severity: np.ndarray, tf: RunToFailure) -> tuple[np.ndarray, float]:
+    """The severity in which the fault's law is a straight line in the exposure.
+
+    Parameters
+    ----------
+    fault : str
+        A fault of :data:`swgsim.datasets.growth.LAWS`.
+    severity : ndarray, shape (n,)
+        Severity [-] (a crack's floored at :data:`SEVERITY_FLOOR`).
+    tf : RunToFailure
+        The law's constants.
+
+    Returns
+    -------
+    u : ndarray, shape (n,)
+        Archard: the severity; Paris: (severity d1)^(1 − m/2), ln(severity d1) for m = 2
+        (docs/monitor.md, "Prognosis") [derived].
+    b : float
+        du/dX per unit scale: u = u0 + b s X [-/exposure].
+    """
+    sev = np.asarray(severity, float)
+    d1 = DEPTH_AT_ONE_M[fault]
+    if _law(fault) == "archard":
+        return sev, 1.0 / d1
+    a = np.maximum(sev, SEVERITY_FLOOR) * d1
+    k = (tf.shape_factor * np.sqrt(np.pi)) ** tf.paris_m
+    if tf.paris_m == 2.0:
+        return np.log(a), float(k)
+    e = 1.0 - tf.paris_m / 2.0
+    return a ** e, float(e * k)
+
+
+def exposure(fault: str, duty: Duty, tf: RunToFailure) -> np.ndarray:
+    """The exposure at s = 1 after each block of a duty, cumulative.
+
+    Parameters
+    ----------
+    fault : str
+        A fault of :data:`swgsim.datasets.growth.LAWS`.
+    duty : Duty
+        K blocks.
+    tf : RunToFailure
+        The law's constants.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Paris: the damage sum D (:func:`swgsim.datasets.growth.paris_damage`, two load
+        cycles per input revolution, Δσ = ``stress_mpa_per_nm`` · abs(load)) [m^(1 − m/2)];
+        Archard: the worn depth (:func:`swgsim.datasets.growth.archard_depth`) [m].
+    """
+    minutes = np.asarray(duty.minutes, float)
+    if _law(fault) == "paris":
+        cycles = load_cycles(duty.n_in_rpm, 1.0) * minutes
+        return paris_damage(cycles, tf.stress_mpa_per_nm * np.abs(duty.t_acting_nm),
+                            tf.paris_c, tf.paris_m)
+    revs = np.abs(np.asarray(duty.n_in_rpm, float)) * minutes
+    return archard_depth(duty.t_acting_nm, revs, duty.temp_c, tf.wear_coeff_m_per_nm_rev,
+                         tf.film_exponent)
+
+
+def hours_for_exposure(need: np.ndarray, duty: Duty, cum: np.ndarray) -> np.ndarray:
+    """Operating hours for a duty, repeated as a cycle from its start, to add exposure.
+
+    Parameters
+    ----------
+    need : ndarray, shape (N,)
+        Exposure to add at s = 1 (≤ 0: none) [as :func:`exposure`].
+    duty : Duty
+        The future duty, K blocks.
+    cum : ndarray, shape (K,)
+        :func:`exposure` of ``duty``.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Hours [h]: 0 where nothing is needed, inf where the duty adds no exposure.
+    """
+    cum_e = np.concatenate([[0.0], cum])
+    cum_h = np.concatenate([[0.0], np.cumsum(duty.minutes) / 60.0])
+    per_cycle = cum_e[-1]
+    need = np.where(np.isnan(need), np.inf, need)
+    if per_cycle <= 0:
+        return np.where(need > 0, np.inf, 0.0)
+    finite = np.isfinite(need) & (need > 0)
+    x = np.where(finite, need, 0.0)
+    n = np.floor(x / per_cycle)
+    rem = x - n * per_cycle
+    i = np.clip(np.searchsorted(cum_e, rem, side="left"), 1, cum_e.size - 1)  # block of rem
+    de = cum_e[i] - cum_e[i - 1]
+    frac = np.divide(rem - cum_e[i - 1], de, out=np.zeros_like(rem), where=de > 0)
+    t = n * cum_h[-1] + cum_h[i - 1] + np.clip(frac, 0.0, 1.0) * (cum_h[i] - cum_h[i - 1])
+    return np.where(finite, t, np.where(need > 0, np.inf, 0.0))
+
+
+def _track_exposure(fault: str, hours: np.ndarray, recorded: Duty, windows_h: np.ndarray,
+                    tf: RunToFailure) -> np.ndarray:
+    """Exposure since the first recorded window at each estimate hour, shape (n,): each
+    window's own grows over its interval (linear within it)."""
+    cum = exposure(fault, recorded, tf)
+    xp = np.append(windows_h, windows_h[-1] + recorded.minutes[-1] / 60.0)
+    return np.interp(hours, xp, np.concatenate([[0.0], cum]))
+
+
+def severity_of(fault: str, u: np.ndarray, tf: RunToFailure) -> tuple[np.ndarray, np.ndarray]:
+    """The inverse of :func:`transformed`.
+
+    Parameters
+    ----------
+    fault : str
+        A fault of :data:`swgsim.datasets.growth.LAWS`.
+    u : ndarray, any shape
+        Transformed severity (:func:`transformed`).
+    tf : RunToFailure
+        The law's constants.
+
+    Returns
+    -------
+    severity, slope : ndarray, each of ``u``'s shape
+        Severity [-] and d(severity)/du; a crack grown without bound (u ≤ 0 for m > 2)
+        clipped at severity 10^3 [choice: far beyond any failure severity], its slope 0.
+    """
+    v = np.asarray(u, float)
+    if _law(fault) == "archard":
+        return v, np.ones_like(v)
+    d1, m = DEPTH_AT_ONE_M[fault], tf.paris_m
+    if m == 2.0:
+        sev = np.exp(np.minimum(v, np.log(1e3 * d1))) / d1
+        return sev, sev
+    e = 1.0 - m / 2.0
+    v_cap = (1e3 * d1) ** e  # u of severity 10^3
+    vc = np.maximum(v, v_cap) if e < 0 else np.minimum(v, v_cap)
+    sev = vc ** (1.0 / e) / d1
+    return sev, np.where(vc == v, sev / (e * vc), 0.0)
+
+
+def _grid_posterior(ls: np.ndarray, y: np.ndarray, w: np.ndarray, x: np.ndarray,
+                    fault: str, tf: RunToFailure) -> tuple[np.ndarray, ...]:
+    """Log posterior of ln s at grid ``ls`` (shape (G,)), u0's fit and precision there,
+    each shape (G,); y, w = 1/σ², x: the estimates, shape (n,)
+    (docs/monitor.md, "Prognosis")."""
+    u, b = transformed(fault, y, tf)
+    beta = b * np.exp(ls)[:, None]  # (G, 1)
+    early = slice(0, max(3, y.size // 4))  # the start: the first quarter's mean [choice]
+    u0 = transformed(fault, np.array([w[early] @ y[early] / w[early].sum()]), tf)[0] \
+        - beta[:, 0] * (w[early] @ x[early] / w[early].sum())
+    for _ in range(GAUSS_NEWTON_STEPS):
+        sev, jac = severity_of(fault, u0[:, None] + beta * x, tf)  # (G, n)
+        wj = w * jac
+        u0 = u0 + (wj * (y - sev)).sum(axis=1) / np.maximum((wj * jac).sum(axis=1), 1e-300)
+    sev, jac = severity_of(fault, u0[:, None] + beta * x, tf)
+    info = np.maximum((w * jac ** 2).sum(axis=1), 1e-300)
+    prior_sd = max(tf.scatter, 1e-3)  # scatter 0: the scale known [choice]
+    logp = -0.5 * (w * (y - sev) ** 2).sum(axis=1) - 0.5 * np.log(info) \
+        - 0.5 * (ls / prior_sd) ** 2
+    return logp - logp.max(), u0, info
+
+
+def _posterior_draws(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
+                     cfg: PrognosisConfig, rng: np.random.Generator
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Draws of (s, u0), shapes (N,) each: the grid posterior of ln s over
+    ±``log_scale_span``, then again on ``n_grid`` points over where it exceeds e^-25 of its
+    peak (a cell beyond each end) [choice: a precise track's posterior is narrower than a
+    coarse cell], u0 given s normal about its fit (Laplace's method)."""
+    ls = np.linspace(-cfg.log_scale_span, cfg.log_scale_span, cfg.n_grid)
+    logp, _, _ = _grid_posterior(ls, y, w, x, fault, cfg.to_failure)
+    keep = np.flatnonzero(logp > -25.0)
+    cell = ls[1] - ls[0]
+    ls = np.linspace(ls[keep[0]] - cell, ls[keep[-1]] + cell, cfg.n_grid)
+    logp, u0, info = _grid_posterior(ls, y, w, x, fault, cfg.to_failure)
+    p = np.exp(logp)
+    pick = rng.choice(ls.size, size=cfg.n_samples, p=p / p.sum())
+    s = np.exp(ls[pick] + (ls[1] - ls[0]) * (rng.random(cfg.n_samples) - 0.5))
+    return s, u0[pick] + rng.standard_normal(cfg.n_samples) / np.sqrt(info[pick])
+
+
+def predict_growth(track: Track, fault: str, alarm_hour: float | None, recorded: Duty,
+                   windows_h: np.ndarray, cfg: PrognosisConfig | None = None, *,
+                   planned: Duty | None = None, trained: DutyRange | None = None,
+                   threshold: float | None = None, seed: int = 0) -> Prognosis:
+    """The physics-based prognosis: the fault's growth law, its scale from the track.
+
+    Parameters
+    ----------
+    track : Track
+        The severity estimates since the alarm, n of them.
+    fault : str
+        The alarm's fault, one of :data:`swgsim.datasets.growth.LAWS`.
+    alarm_hour : float or None
+        Operating hour of the alarm that named it [h]; None: no alarm (refused).
+    recorded : Duty
+        The windows' duty since the alarm (:meth:`Duty.from_windows`), W blocks.
+    windows_h : ndarray, shape (W,)
+        The operating hour of each recorded window [h].
+    cfg : PrognosisConfig or None
+        None: the defaults.
+    planned : Duty or None
+        A duty the user declares for the future, repeated from its first block; None: the
+        recorded one's mean exposure per hour [choice: the recorded windows' order need
+        not be a whole number of the duty's cycles].
+    trained : DutyRange or None
+        The duty the model was trained on; a planned duty outside it is refused.
+    threshold : float or None
+        Failure severity [-]; None: ``cfg.threshold(fault)``.
+    seed : int
+        Seed of the Monte-Carlo draws (same seed, same prognosis).
+
+    Returns
+    -------
+    Prognosis
+        ``method`` "growth"; not valid before ``cfg.min_track_h`` and ``min_estimates``.
+
+    Raises
+    ------
+    ValueError
+        Before any work, in one line naming the key: no alarm, an estimate before the
+        alarm, a fault without a growth law, a threshold at or below the current
+        severity, a duty malformed or a planned one outside ``trained``, a bad config.
+    """
+    cfg = (cfg or PrognosisConfig()).check()
+    h, y, lo, hi, thr = check_track(track, fault, alarm_hour, threshold, cfg)
+    recorded.check("prognosis.recorded")
+    wh = np.asarray(windows_h, float)
+    if wh.shape != np.shape(recorded.minutes) or np.any(np.diff(wh) <= 0) \
+            or not wh[0] <= h[0]:
+        raise ValueError(f"prognosis.windows_h must be one increasing hour per recorded "
+                         f"window ({np.shape(recorded.minutes)}), the first at or before "
+                         f"the first estimate ({h[0]:g} h), got shape {wh.shape}")
+    if planned is not None:
+        planned.check("prognosis.planned")
+        if trained is not None:
+            trained.refuse_outside(planned, "prognosis.planned")
+    if reason := not_yet_valid(h, cfg, alarm_hour):
+        return not_valid(float(h[-1]), fault, "growth", float(y[-1]), thr, reason)
+    tf = cfg.to_failure
+    w = ((2.0 * Z90) / (hi - lo)) ** 2  # 1/σ² of each estimate
+    x = _track_exposure(fault, h, recorded, wh, tf)
+    if y.size > cfg.max_bins:  # groups of consecutive estimates (PrognosisConfig.max_bins)
+        first = np.unique(np.linspace(0, y.size, cfg.max_bins, endpoint=False).astype(int))
+        wsum = np.add.reduceat(w, first)
+        y, x = np.add.reduceat(w * y, first) / wsum, np.add.reduceat(w * x, first) / wsum
+        w = wsum
+    s, u0 = _posterior_draws(y, w, x, fault, cfg, np.random.default_rng(seed))
+    u_fail, b = transformed(fault, np.array([thr]), tf)
+    u_fail = float(u_fail[0])
+    need = (u_fail - u0) / (b * s) - x[-1]  # exposure still to come at s = 1
+    if planned is None:  # the recorded duty's mean rate: its cycle's phase is unknown
+        rec = exposure(fault, recorded, tf)[-1] / (np.sum(recorded.minutes) / 60.0)
+        remaining = np.where(need > 0, need / rec if rec > 0 else np.inf, 0.0)
+    else:
+        remaining = hours_for_exposure(need, planned, exposure(fault, planned, tf))
+    return from_samples(float(h[-1]), fault, "growth", float(y[-1]), thr, remaining, cfg,
+                        alarm_hour)
