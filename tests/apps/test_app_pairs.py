@@ -110,9 +110,9 @@ def runners(root, csv):
     from swgcli.calibrate import run_calibrate
     from swgcli.export import run_export_app
     from swgcli.importer import run_import
-    from swgcli.monitor import run_monitor_app
     from swgcli.paper import run_paper
     from swgcli.tasks import run_train
+    from swgmon.advisories.task import run_monitor_app
 
     def with_dir(cfg, key, task):
         def run(folder: Path):
@@ -287,7 +287,7 @@ def test_every_app_stamps_its_files_with_its_writer(tmp_path, csv):
     assert {w["app"] for w in stamp["writers"].values()} == {"swgsim-paper"}
     # swgsim-monitor with the evaluation's diagnosis model, into the calibration's folder
     from swgcli import dataset_preset
-    from swgcli.monitor import run_monitor_app
+    from swgmon.advisories.task import run_monitor_app
     from swgsim.datasets.config import dataset_config
 
     life = dataset_config(dataset_preset("tiny_life"))

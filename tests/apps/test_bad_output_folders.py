@@ -81,8 +81,8 @@ OUT_CASES = {  # case -> (app, how the output folder is prepared, name)
 
 def _run_into(app: str, out: Path, tmp_path: Path, life: Path):
     from swgcli.export import run_export_app
-    from swgcli.monitor import run_monitor_app
     from swgcli.tasks import run_train
+    from swgmon.advisories.task import run_monitor_app
 
     if app == "monitor":
         return lambda: run_monitor_app(compose_app("monitor", [
@@ -118,7 +118,7 @@ def test_no_link_is_followed_out_of_an_output_folder(tmp_path, life, case):
 
 # ------------------------------------------------------------------ a file, a data set
 def test_monitor_into_its_own_stream_folder_names_the_data_set(tmp_path, life):
-    from swgcli.monitor import run_monitor_app
+    from swgmon.advisories.task import run_monitor_app
     before = files(life)
     msg = message(lambda: run_monitor_app(compose_app("monitor", [
         f"stream={life}", f"diagnosis_model={tmp_path}/m.joblib", f"out_dir={life}",

@@ -67,7 +67,7 @@ def run_app(module, args: list[str], cwd, monkeypatch, capsys) -> tuple[int, str
 
 def monitor_app(stream, model_path, out) -> list[dict]:
     """swgsim-monitor's task on a stream, without tracking; its summary's alarms."""
-    from swgcli.monitor import run_monitor_app
+    from swgmon.advisories.task import run_monitor_app
 
     run_monitor_app(compose_app("monitor", [f"stream={stream}",
                                             f"diagnosis_model={model_path}",
@@ -189,7 +189,7 @@ def test_an_imported_recording_gets_the_prognosis(trained, tmp_path, monkeypatch
     """swgsim-import, then swgsim-monitor with prognosis.enabled=true: the alarm's fault
     (eccentric WG, a step of 0.1 at 6 h) followed, a prognosis each 0.5 h after it in
     summary.json (the step does not grow: valid ones need not be finite), the figure."""
-    from swgcli.monitor import run_monitor_app
+    from swgmon.advisories.task import run_monitor_app
 
     df, mapping = stream_table(trained["stream"])
     df.to_parquet(tmp_path / "joint.parquet")

@@ -232,7 +232,7 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch)
     import json
 
     from swgcli import compose_app, dataset_preset
-    from swgcli.monitor import run_monitor_app
+    from swgmon.advisories.task import run_monitor_app
     from swgmon.assessment.model_io import save_model
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.generate import generate
