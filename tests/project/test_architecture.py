@@ -1,7 +1,7 @@
 """The layout's rules, held by a test (docs/ARCHITECTURE.md, "Floors"): no import cycle
 anywhere in the project (imports inside functions included), every package's declared
-floors respected, no module over 600 lines and no function over 80 lines but those
-listed with a reason; the library's size printed (``pytest -s -k library_size``)."""
+floors respected, every package within its line budget, no function over 80 lines but
+those listed with a reason; the library's size printed (``pytest -s -k library_size``)."""
 
 from __future__ import annotations
 
@@ -38,40 +38,14 @@ FLOORS: dict[str, list[tuple[str, int]]] = {
 #: Which packages a package may import (besides itself).
 USES = {"swgsim": set(), "swgcal": {"swgsim"}, "learn": {"swgsim"},
         "swgmon": {"swgsim", "learn"}, "swgcli": {"swgsim", "swgcal", "learn", "swgmon"}}
-MAX_MODULE_LINES = 600
 MAX_FUNCTION_LINES = 80
-#: Modules allowed beyond MAX_MODULE_LINES: path -> why. An entry back under the limit
-#: fails the test, so the list stays true; shrinking it is work still to do (issue 46).
-LONG_MODULES_JUSTIFIED: dict[str, str] = {
-    "swgsim/files/ownership.py": "stamps, claims and the proof a file is ours: one chain of "
-                                 "custody, split it and each half trusts the other blindly",
-    "swgcal/loop.py": "the calibration loop and its before/after error: one algorithm",
-    "swgcal/core.py": "the separable fit, bounded or not, its uncertainties and whether it "
-                      "is physical: one fit result",
-    "swgmon/detection/normal.py": "the normal-behaviour model and its operating-variable laws; "
-                               "the laws to move beside swgmon/detection/laws.py",
-    "swgsim/gear/thermal.py": "a joint's heat (one node, two nodes, a measured trace) and "
-                              "friction's temperature laws: two concepts, to split (issue 83)",
-    "swgsim/datasets/conditions.py": "what changes while a gear stays healthy: each change's "
-                                     "config and every window's conditions",
-    "swgcal/friction/data.py": "a friction recording: its reader, every check of a user's "
-                               "file (issue 82), the velocity's consistency with the angle",
-    "swgmon/evaluation/prognosis_evaluation.py": "the prognosis's lives, scores and their checks "
-                                             "before any work: to its own block (issue 84)",
-    "tests/swgsim/test_conditions.py": "one test per change of a real day, issue 83's "
-                                       "physics among them",
-    "swgmon/assessment/gear_monitor.py": "commissioning, scoring, alarm, naming: one gear's "
-                                     "monitor state machine",
-    "swgmon/advisories/stream.py": "a stream's input checks, the run and its outputs",
-    "scripts/results_pages.py": "one builder per block of every results page, and the "
-                                "markers' rewrite: grows with the pages it writes",
-    "swgmon/evaluation/evaluate.py": "lives to rows: the held-out gear's lives, the monitor and "
-                                 "the detectors on them; to the evaluation block (issue 84)",
-    "tests/learn/test_monitor.py": "the monitor's tests: to be split by what they hold",
-    "tests/swgsim/test_recordings.py": "every table format and bad mapping of a recording",
-    "swgsim/base/typed.py": "the one config toolkit: ranges, finiteness, keys, the build, "
-                            "its inverse and the apps' structured schema (issue 46)",
-}
+#: Lines each package may hold, and the library in all (issue 84: a budget per package in
+#: place of a cap per module; sizes follow concepts, a module is as long as its concept).
+#: Today's sizes rounded up to the next 500 lines; a package that grows past its budget
+#: fails, and its budget moves only in a commit that says why. The issue's targets, to
+#: reach by design: swgmon 9000, learn 11000, the library 47500.
+LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11500,
+                                "swgmon": 13500, "swgcli": 2000, "all": 56000}
 #: Functions allowed beyond MAX_FUNCTION_LINES: "path:name" -> why (most are over by
 #: their numpydoc docstring, which the style asks for; the code lines follow).
 LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
@@ -142,11 +116,6 @@ def _python_files() -> list[Path]:
     return sorted(f for d in dirs for f in (ROOT / d).rglob("*.py"))
 
 
-def _long_modules() -> dict[str, int]:
-    return {str(f.relative_to(ROOT)): n for f in _python_files()
-            if (n := len(f.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES}
-
-
 def _long_functions() -> dict[str, int]:
     out = {}
     for f in _python_files():
@@ -160,10 +129,11 @@ def _long_functions() -> dict[str, int]:
     return out
 
 
-def test_no_module_over_600_lines_without_a_reason():
-    long = _long_modules()
-    assert {k: v for k, v in long.items() if k not in LONG_MODULES_JUSTIFIED} == {}
-    assert sorted(set(LONG_MODULES_JUSTIFIED) - set(long)) == []  # back under: unlist it
+def test_every_package_within_its_line_budget():
+    size = import_graph.library_lines()
+    over = {k: (v[1], LINE_BUDGETS[k]) for k, v in size.items() if v[1] > LINE_BUDGETS[k]}
+    assert over == {}, "lines over the package's budget (lines, budget)"
+    assert set(LINE_BUDGETS) == set(size)  # a new package gets a budget
 
 
 def test_no_function_over_80_lines_without_a_reason():
