@@ -1,5 +1,5 @@
 """The prognosis's cost per update and its intervals' coverage on synthetic lives
-(swgmon/prognosis/growth.py; docs/monitor.md, "Prognosis").
+(swgmon/prognosis/growth.py; docs/monitor/prognosis.md, "Prognosis").
 
 A synthetic life: the paper's duty (2000 and 4000 rpm, 7, 39 and 70 N m, 10 min each,
 20 °C), a window every 2 min, the fault grown from hour 0 by swgsim.datasets.growth's law

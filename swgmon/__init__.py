@@ -20,14 +20,8 @@ Docs: ``docs/monitor.md``.
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
-
+from learn import __version__  # one distribution, one version
 from swgsim.base.lazy import lazy_exports
-
-try:
-    __version__ = version("swg-monitor")
-except PackageNotFoundError:  # not installed (source tree on sys.path)
-    __version__ = "0+unknown"
 
 #: The front door: a name -> its module under swgmon (imported on first use).
 _EXPORTS = {

@@ -509,7 +509,7 @@ def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.nda
     (:func:`~swgmon.assessment.sensor_check.fit_temperature_drift`) names them, the factor
     the friction was taken to have changed by since (to divide out), else None: under a
     steep friction law a drifting reading moves the efficiency before the bridges, and
-    each change taken hid a part of it (docs/monitor.md, "Scored under every family,
+    each change taken hid a part of it (docs/monitor/evaluation.md, "Scored under every family,
     every held-out gear")."""
     last = alarms[-1]
     earlier = [a for a in alarms[:-1] if a.fault == UNEXPLAINED_CHANGE
@@ -601,7 +601,8 @@ def read_without(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, cond: 
     and every cold start as a pattern of the bridges' second harmonics (bench gear 1,
     family ``all``, scored seed 4: the factor tracked from 1.05 to 0.90 in the 32 h after
     the reading was lost, the virtual temperature 5 K warm at the cold start of 112 h and a
-    root crack named there; docs/monitor.md, "The monitor checks its temperature sensor").
+    root crack named there; docs/monitor/assessment.md,
+    "The monitor checks its temperature sensor").
     """
     if not mon.normal.temperature_law:
         return Conditions(cond.torque_nm)

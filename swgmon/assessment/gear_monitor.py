@@ -304,7 +304,7 @@ class GearMonitor:
         temperature brings - the pattern of reduced damping. Scored against the reading's
         calibration, healthy windows read so gave that class's evidence a 99th
         percentile of 23 against 2.6 with the true temperature, and gear-fault alarms
-        (bench gear 3, family ``sensor_stuck``, scored seed 1: docs/monitor.md, "The
+        (bench gear 3, family ``sensor_stuck``, scored seed 1: docs/monitor/assessment.md, "The
         monitor checks its temperature sensor").
 
         Raises
@@ -444,7 +444,7 @@ class GearMonitor:
         of the window before), default the monitor's own. A window beyond commissioning's
         temperatures at its point (:meth:`swgmon.detection.normal.NormalBehaviour.outside`) leaves
         the
-        factor as it is: its loss law is extrapolated there (docs/monitor.md, "The normal
+        factor as it is: its loss law is extrapolated there (docs/monitor/detection.md, "The normal
         behaviour's laws")."""
         tau = self.normal_config.friction_track_h
         r, last = (self.friction, self.last_hour) if start is None else start

@@ -7,7 +7,8 @@ windows since the alarm (:class:`SensorFit`), judged window by window
 :func:`fit_temperature`, :func:`fit_temperature_drift` and :func:`still_reading` test the
 joint's temperature sensor, :func:`virtual_temperature` replaces a failed one (an even
 change of friction, the other hypothesis: :mod:`.unexplained`). Design and source (Frank
-1990): docs/monitor.md, "Naming a sensor fault" and "The monitor checks its temperature sensor".
+1990): docs/monitor/assessment.md, "Naming a sensor fault" and
+"The monitor checks its temperature sensor".
 """
 
 from __future__ import annotations
@@ -82,7 +83,7 @@ VIRTUAL_WINDOWS = 7
 #: to judge it [h]. A working reading moves with its noise and the joint's duty: the UR3's
 #: six joint readings over a working day (UR3 CobotOps, Tyrovolas et al. 2024, CC BY 4.0),
 #: one a second at 0.0625 K, held one value for at most 85 readings (1.4 min;
-#: docs/monitor.md, "The monitor checks its temperature sensor") [choice: 15 minutes].
+#: docs/monitor/assessment.md, "The monitor checks its temperature sensor") [choice: 15 minutes].
 STILL_H = 0.25
 #: Least range of the temperature the bridges and the efficiency say
 #: (:func:`virtual_temperature`) over such a run for the reading to be stuck [K]: twice
@@ -127,7 +128,7 @@ class SensorFit:
         """``n · mean_j(mean_i z_ij)²`` over the n windows and the features j outside
         the fitted bridge (the other bridges, the efficiency and the twist): the χ² per degree of
         freedom of their mean shift where the windows are independent and nothing but
-        this bridge moved (docs/monitor.md, "Naming a sensor fault")."""
+        this bridge moved (docs/monitor/assessment.md, "Naming a sensor fault")."""
         keep = np.ones(self.z.shape[1], bool)
         keep[self.bridge * BLOCK:(self.bridge + 1) * BLOCK] = False
         m = self.z[:, keep].mean(axis=0)
@@ -143,7 +144,8 @@ class SensorFit:
 
 def fit_sensor_faults(z: np.ndarray, mean: np.ndarray, std: np.ndarray,
                       hours: np.ndarray | None = None) -> list[SensorFit]:
-    """Fit every one-bridge sensor fault to windows (docs/monitor.md, "Naming a sensor fault").
+    """Fit every one-bridge sensor fault to windows (docs/monitor/assessment.md, "Naming a sensor
+    fault").
 
     Parameters
     ----------
@@ -447,7 +449,7 @@ def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray
     repeats its last value: a flat-line test, with the bridges telling a stuck reading from
     a joint at a steady temperature read without noise). Judged without an alarm and
     without the spreads: a reading stuck beyond commissioning's range is cheap in the
-    spread widened there (docs/monitor.md, "The monitor checks its temperature sensor").
+    spread widened there (docs/monitor/assessment.md, "The monitor checks its temperature sensor").
 
     Parameters
     ----------

@@ -372,7 +372,7 @@ def warm_up_directions(z: np.ndarray, inv: np.ndarray, k: int
     window (one acting torque, its phase against the window's start drawn anew; robot_joint
     gear 1, family ``sensor``, scored seed 0), larger than a warm-up: without the slow
     ones every later cold start, which moves s1_h2, s3_h2 and the efficiency, was alarmed
-    as a root crack (docs/monitor.md, "Scored under every family"). Where no slow one
+    as a root crack (docs/monitor/evaluation.md, "Scored under every family"). Where no slow one
     counts (a joint at a steady temperature) the result is the first alone, shape (P, k,
     F), as before the slow ones were added. The range along a direction is that of the
     windows themselves.

@@ -6,7 +6,7 @@ the temperature, the loss torque's law of temperature and load, each feature's l
 acting load and a tracked friction factor; :meth:`NormalBehaviour.reference` brings a
 window's features to commissioning's condition, :meth:`NormalBehaviour.outside` flags a
 condition commissioning did not see, :meth:`NormalBehaviour.recommission` relearns a point.
-Design and sources: docs/monitor.md, "The normal behaviour's laws" (and "A real day").
+Design and sources: docs/monitor/detection.md, "The normal behaviour's laws" (and "A real day").
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ OUTSIDE_UNJUDGED = 8
 @dataclass
 class NormalConfig:
     """How the normal behaviour follows the conditions
-    (docs/monitor.md, "The normal behaviour's laws").
+    (docs/monitor/detection.md, "The normal behaviour's laws").
 
     Attributes
     ----------
@@ -52,7 +52,7 @@ class NormalConfig:
         Where commissioning fitted the temperature terms, a window's temperature may
         exceed commissioning's range at its operating point by this much before it is
         outside [K], >= 0 (without them: by nothing,
-        docs/monitor.md, "The normal behaviour's laws").
+        docs/monitor/detection.md, "The normal behaviour's laws").
     temperature_uncertainty_k : float
         The temperature reading's uncertainty [K], in [0, 10]: commissioning's range is
         its readings' widened by this on either side. 0.2, of the simulated sensor's
@@ -71,7 +71,7 @@ class NormalConfig:
         tuned: an extrapolation known to its own order of magnitude. Behind a robot link
         (robot_joint, gear 3, seed 0) a 10 % heavier tool left the residual's RMS and the
         third harmonic 0.7-1.3 times the predicted correction away from it
-        (docs/monitor.md, "A real day").
+        (docs/monitor/detection.md, "A real day").
     recommission_load : bool
         Where an operating point's acting load stays beyond what commissioning saw there
         for as many windows in a row, without an alarm, as commissioning gave the point's
@@ -181,7 +181,7 @@ class Conditions:
 @dataclass
 class NormalBehaviour:
     """The gear's normal behaviour per operating point
-    (docs/monitor.md, "The normal behaviour's laws").
+    (docs/monitor/detection.md, "The normal behaviour's laws").
 
     Attributes
     ----------
@@ -209,7 +209,7 @@ class NormalBehaviour:
     slope : ndarray, shape (P, F), optional
         Per point, each bridge feature's own change per K left after the bridges' gain
         and zero drift [unit per K] (0 without temperature;
-        docs/monitor.md, "The normal behaviour's laws").
+        docs/monitor/detection.md, "The normal behaviour's laws").
     friction_range : ndarray, shape (2,)
         The friction factor's range over commissioning, as tracked there [-] (default
         [1, 1]). On the joint in motion the factor's own noise spans ±5 % over 1000 h
@@ -339,7 +339,7 @@ class NormalBehaviour:
                   friction: np.ndarray | float = 1.0, index: np.ndarray | None = None
                   ) -> np.ndarray:
         """Windows' features brought to the reference condition of their operating point
-        (docs/monitor.md, "The normal behaviour's laws"), shape (n, F).
+        (docs/monitor/detection.md, "The normal behaviour's laws"), shape (n, F).
 
         Parameters
         ----------
@@ -386,7 +386,7 @@ class NormalBehaviour:
         ``sqrt(σ² + (κ u)²)``. Inside the range ``u`` is zero and the spread σ. The
         efficiency's correction (its loss law carried beyond the loads it was
         fitted at) widens its spread alike: behind a robot link a 10 % heavier tool left
-        the efficiency 1.2 σ above the law's extrapolation (docs/monitor.md, "A real
+        the efficiency 1.2 σ above the law's extrapolation (docs/monitor/detection.md, "A real
         day"). The widening lasts until the point is recommissioned at its new load
         (:meth:`recommission`). Where commissioning only bounded the friction's
         temperature law (:attr:`loss_band`), the efficiency's spread also holds the
@@ -429,7 +429,7 @@ class NormalBehaviour:
         :meth:`z` of the windows repeated m times (``friction.ravel()`` the factor of each),
         at a fraction of its cost, for the friction fits
         (:func:`swgmon.assessment.unexplained.fit_friction`): a factor moves only the
-        efficiency (its loss law, docs/monitor.md, "The normal behaviour's laws") and,
+        efficiency (its loss law, docs/monitor/detection.md, "The normal behaviour's laws") and,
         beyond commissioning's range, its spread, so every other feature is corrected once.
 
         Parameters
@@ -662,7 +662,7 @@ class NormalBehaviour:
     @property
     def temperature_law(self) -> bool:
         """Whether commissioning fitted the temperature terms
-        (docs/monitor.md, "The normal behaviour's laws")."""
+        (docs/monitor/detection.md, "The normal behaviour's laws")."""
         return bool(np.isfinite(self.ref_temp).all())
 
     def outside(self, points: np.ndarray, cond: Conditions, friction: np.ndarray | float,
@@ -670,7 +670,7 @@ class NormalBehaviour:
         """Which condition each window has that commissioning did not see: a bit field,
         :data:`OUTSIDE_TEMPERATURE` (1), :data:`OUTSIDE_LOAD` (2), :data:`OUTSIDE_FRICTION`
         (4), and :data:`OUTSIDE_UNJUDGED` (8) where the temperature is outside with no
-        temperature law (docs/monitor.md, "The normal behaviour's laws"); 0: none;
+        temperature law (docs/monitor/detection.md, "The normal behaviour's laws"); 0: none;
         shape (n,) int."""
         i = self._check(points, index)
         c = self.config
@@ -732,7 +732,7 @@ class NormalBehaviour:
                    friction: np.ndarray,
                    load: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """Features at the reference condition of their point
-        (docs/monitor.md, "The normal behaviour's laws"); ``load``: :meth:`_load_terms` of
+        (docs/monitor/detection.md, "The normal behaviour's laws"); ``load``: :meth:`_load_terms` of
         the windows' loads, when known."""
         if self.generic is not None:
             return np.asarray(feats, float) - self._generic_shift(i, cond)

@@ -1,5 +1,5 @@
 """Evaluation of the monitor: leave-one-gear-out over simulated gear lives
-(docs/monitor.md, "The evaluation"). Per data set and held-out gear the diagnosis model
+(docs/monitor/evaluation.md, "The evaluation"). Per data set and held-out gear the diagnosis model
 is trained on the other gears' lives; per seed the held-out gear lives healthy (false
 alarms, the CUSUM restarted after each) and, from the same commissioning, once per fault,
 severity and onset kind, a fault life being the healthy life up to its onset. Nothing is

@@ -6,7 +6,7 @@ one fixed :class:`~swgsim.datasets.conditions.ConditionsConfig` made with the mo
 per magnitude; :func:`draw_conditions` turns a family and a seed into one life's
 conditions, the same for the same seed; :func:`default_families` gives the study's.
 Design and sources (every range's origin, the draws' order):
-docs/monitor.md, "Families of benign changes".
+docs/monitor/evaluation.md, "Families of benign changes".
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ __all__ = ["ALL_SENSOR_STATES", "DEFAULT_PARTS", "FAMILY_TAG", "PARTS",
            "RANGES", "SENSOR_STATES", "UR3_COLUMNS", "NuisanceFamily", "benchmark_families",
            "default_families", "draw_conditions"]
 
-#: The parts of a joint's day a family can draw (docs/monitor.md, "Families of benign
+#: The parts of a joint's day a family can draw (docs/monitor/evaluation.md, "Families of benign
 #: changes"); the last four are issue 83's, which the monitor was not built on: the joint in
 #: two nodes with its motor and drive (``network``), a Coulomb term with a law of its own
 #: whose slope changes sign and its own run-in (``coulomb``), the friction in the gear's
@@ -115,7 +115,7 @@ def _span(lo: float, hi: float):
 @dataclass
 class NuisanceFamily:
     """A family of benign changes: the parts drawn and each magnitude's range ``[lo, hi]``
-    (units and origins: docs/monitor.md, "Families of benign changes").
+    (units and origins: docs/monitor/evaluation.md, "Families of benign changes").
 
     Attributes
     ----------
@@ -347,8 +347,8 @@ def _trace_draw(family: NuisanceFamily, seed: int) -> tuple[float, str]:
 
 
 def draw_conditions(family: NuisanceFamily, seed: int) -> ConditionsConfig:
-    """One life's conditions drawn from a family (docs/monitor.md, "Families of benign changes");
-    pure and deterministic.
+    """One life's conditions drawn from a family (docs/monitor/evaluation.md, "Families of
+    benign changes"); pure and deterministic.
 
     Parameters
     ----------

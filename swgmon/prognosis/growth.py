@@ -6,7 +6,7 @@ failure threshold, as a distribution (in the stream: :mod:`.stream`).
 gear's scale s; in a transformed severity (:func:`transformed`) the law is a straight line
 in the exposure the duty gave, ln s gets a grid posterior, Monte-Carlo draws give the
 remaining hours. Baselines: :mod:`.baselines`. Design, formulas and
-assumptions (and why not ProgPy or SurPyval): docs/monitor.md, "Prognosis".
+assumptions (and why not ProgPy or SurPyval): docs/monitor/prognosis.md, "Prognosis".
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ def transformed(fault: str, severity: np.ndarray, tf: RunToFailure) -> tuple[np.
     -------
     u : ndarray, shape (n,)
         Archard: the severity; Paris: (severity d1)^(1 − m/2), ln(severity d1) for m = 2
-        (docs/monitor.md, "Prognosis") [derived].
+        (docs/monitor/prognosis.md, "Prognosis") [derived].
     b : float
         du/dX per unit scale: u = u0 + b s X [-/exposure].
     """
@@ -198,7 +198,7 @@ def _grid_posterior(ls: np.ndarray, y: np.ndarray, w: np.ndarray, x: np.ndarray,
                     fault: str, tf: RunToFailure) -> tuple[np.ndarray, ...]:
     """Log posterior of ln s at grid ``ls`` (shape (G,)), u0's fit and precision there,
     each shape (G,); y, w = 1/σ², x: the estimates, shape (n,)
-    (docs/monitor.md, "Prognosis")."""
+    (docs/monitor/prognosis.md, "Prognosis")."""
     u, b = transformed(fault, y, tf)
     beta = b * np.exp(ls)[:, None]  # (G, 1)
     early = slice(0, max(3, y.size // 4))  # the start: the first quarter's mean [choice]

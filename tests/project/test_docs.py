@@ -285,6 +285,6 @@ def test_checker_reports_planted_bad_citations():
 def test_checker_accepts_good_citations():
     good = ('"""docs/PHYSICS.md sec. 3.6, PHYSICS.md sec. 1, 5 and STYLE.md; README.md;\n'
             'ARCHITECTURE.md, "Calibration loop"; docs/DATASET.md; lower case report.md,\n'
-            'docs/monitor.md, "Prognosis"; docs/calibration.md;\n'
+            'docs/monitor/prognosis.md, "Prognosis"; docs/calibration.md;\n'
             'a URL https://example.org/SOMETHING' + MD + '."""')
     assert citation_problems(good, "good.py") == []
