@@ -10,11 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from swgmon.assessment.gear_monitor import Trace
-from swgmon.detection.rule import Alarm
 from swgmon.prognosis.stream import StreamPrognoses
 from swgsim.files.ownership import save_figure
 
-__all__ = ["health_figure", "prognosis_figure"]
+__all__ = ["EVENT_MARKS", "crossings", "health_figure", "prognosis_figure"]
 
 
 def _pyplot():
@@ -27,11 +26,25 @@ def _pyplot():
     return plt
 
 
-def health_figure(trace: Trace, threshold: float, alarms: list[Alarm], onset_h: float | None,
+#: How each kind of event is marked on ``health.png``: (colour, line style).
+EVENT_MARKS = {"gear_fault": ("r", "-"), "sensor_fault": ("tab:purple", "-"),
+               "unexplained_change": ("tab:brown", "-"), "advisory": ("tab:orange", "-."),
+               "recommissioned": ("tab:green", ":")}
+
+
+def crossings(s: np.ndarray, threshold: float) -> np.ndarray:
+    """Indices of the windows where the CUSUM ``s`` (shape (n,)) reaches ``threshold``
+    from below (the first window counts when it starts there), shape (k,)."""
+    above = np.asarray(s, float) >= threshold
+    return np.flatnonzero(above & ~np.concatenate([[False], above[:-1]]))
+
+
+def health_figure(trace: Trace, threshold: float, events: list[dict], onset_h: float | None,
                   true_fault: str | None, path: Path) -> None:
     """``health.png`` at ``path``: the windows' −log10 p-values and the CUSUM against the
-    rule's threshold, the alarms (red) and the stream's true onset (dotted) where it
-    records one (the fields of a :class:`.stream.StreamResult`); written
+    rule's threshold, every crossing of it (triangles), every event by its kind (alarms,
+    advisories, recommissioned points: :data:`EVENT_MARKS`) and the stream's true onset
+    (dotted black) where it records one; the legend outside the data; written
     atomically.
 
     Parameters
@@ -40,7 +53,8 @@ def health_figure(trace: Trace, threshold: float, alarms: list[Alarm], onset_h: 
         The monitored windows' p-values ``p`` and CUSUM ``s`` by ``hour`` [h].
     threshold : float
         h, the rule's alarm threshold.
-    alarms : list of Alarm
+    events : list of dict
+        :meth:`.stream.StreamResult.events`: ``kind`` and ``hour`` [h] each.
     onset_h : float or None
         The true onset [h] (a simulated stream), else None.
     true_fault : str or None
@@ -48,22 +62,29 @@ def health_figure(trace: Trace, threshold: float, alarms: list[Alarm], onset_h: 
     """
     plt = _pyplot()
     tr, h = trace, threshold
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8.5, 4.5), sharex=True)
     a1.plot(tr.hour, -np.log10(tr.p), ".", ms=1.5, color="0.4")
     a1.set_ylabel("−log10 p")
-    a2.plot(tr.hour, tr.s, lw=0.8)
+    a2.plot(tr.hour, tr.s, lw=0.8, label="CUSUM")
     a2.axhline(h, color="r", lw=0.8, ls="--", label=f"threshold h = {h:.1f}")
+    up = crossings(tr.s, h)
+    a2.plot(np.asarray(tr.hour)[up], np.full(up.size, h), "v", color="r", ms=5,
+            label=f"crossings ({up.size})")
     for ax in (a1, a2):
         if onset_h is not None:
-            ax.axvline(onset_h, color="k", lw=0.8, ls=":")
-        for al in alarms:
-            ax.axvline(al.hour, color="r", lw=0.8)
+            ax.axvline(onset_h, color="k", lw=0.8, ls=":",
+                       label=f"true onset ({true_fault})" if ax is a2 else None)
+        seen = set()
+        for e in events:
+            colour, style = EVENT_MARKS[e["kind"]]
+            first = ax is a2 and e["kind"] not in seen
+            seen.add(e["kind"])
+            ax.axvline(e["hour"], color=colour, lw=0.8, ls=style,
+                       label=e["kind"].replace("_", " ") if first else None)
     a2.set_ylabel("CUSUM")
     a2.set_xlabel("operating hours")
-    a2.legend(fontsize=7)
-    title = "health indicators" + (f"; true onset ({true_fault}) dotted"
-                                   if onset_h is not None else "")
-    a1.set_title(title, fontsize=9)
+    a2.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    a1.set_title("health indicators", fontsize=9)
     fig.tight_layout()
     save_figure(fig, path, 130)
 

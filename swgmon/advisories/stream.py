@@ -745,7 +745,7 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
     if followed:
         prognosis_figure(res.prognosis, out_dir / "prognosis.png")
     tr = res.trace
-    health_figure(res.trace, res.threshold, res.alarms, res.onset_h, res.true_fault,
+    health_figure(res.trace, res.threshold, res.events(), res.onset_h, res.true_fault,
                   out_dir / "health.png")
     lines = [f"# Monitor report: {source}", "",
              f"{res.n_commissioning} commissioning windows, {tr.s.size} monitored; alarm "

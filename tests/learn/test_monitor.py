@@ -883,3 +883,35 @@ def test_a_training_gears_severity_is_read_out_of_sample_for_the_prognosis_calib
     loaded = load_model(save_model(model, tmp_path / "m", []))
     with pytest.raises(ValueError, match="a loaded model has none"):
         loaded.without(1)
+
+
+def test_the_health_figure_marks_every_crossing_and_every_event(tmp_path, monkeypatch):
+    """Issue 87: a verdict a field engineer reads - ``health.png`` marks every upward
+    crossing of the threshold (a second one too, not only the alarms') and every event
+    of each kind the stream reports, with the legend outside the axes."""
+    from types import SimpleNamespace
+
+    import swgmon.advisories.figures as figures
+    from swgmon.advisories.stream import EVENT_KINDS
+
+    assert figures.crossings(np.array([0, 5, 12, 3, 0, 13, 14, 2.0]), 11.7).tolist() == [2, 5]
+    assert figures.crossings(np.array([12.0, 1.0, 11.7]), 11.7).tolist() == [0, 2]
+    assert set(figures.EVENT_MARKS) == set(EVENT_KINDS)
+    drawn = {}
+    monkeypatch.setattr(figures, "save_figure", lambda fig, path, dpi: drawn.update(fig=fig))
+    hours = np.arange(8.0)
+    trace = SimpleNamespace(hour=hours, p=np.full(8, 0.5),
+                            s=np.array([0, 5, 12, 3, 0, 13, 14, 2.0]))
+    events = [{"kind": k, "hour": 1.0 + i} for i, k in enumerate(EVENT_KINDS)]
+    figures.health_figure(trace, 11.7, events, 0.5, "eccentric_wg", tmp_path / "health.png")
+    ax = drawn["fig"].axes[1]
+    marks = [ln for ln in ax.get_lines() if ln.get_marker() == "v"]
+    assert len(marks) == 1 and marks[0].get_xdata().tolist() == [2.0, 5.0]
+    for i, k in enumerate(EVENT_KINDS):
+        colour, style = figures.EVENT_MARKS[k]
+        assert any(ln.get_xdata()[0] == 1.0 + i and ln.get_linestyle() == style
+                   for ln in ax.get_lines()), k
+    legend = ax.get_legend()
+    assert {t.get_text() for t in legend.get_texts()} >= {k.replace("_", " ") for k in EVENT_KINDS}
+    drawn["fig"].canvas.draw()
+    assert legend.get_window_extent().x0 >= ax.get_window_extent().x1  # outside the data
