@@ -271,8 +271,7 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
                    prognosis: StreamPrognosis | None = None) -> StreamResult:
     """Commission on the stream's commissioning windows and monitor the rest, with its
     conditions (acting load, temperature where the stream has it; :mod:`swgmon.detection.normal`)
-    and
-    its maintenance log (:meth:`GearMonitor.declare`: each declared event is listed
+    and its maintenance log (:meth:`GearMonitor.declare`: each declared event is listed
     among the recommissionings; after a declared tool change or repair,
     :data:`~swgmon.assessment.gear_monitor.RECOMMISSIONS`, the monitor commissions anew on as
     many windows as commissioning had, and monitors the rest); the monitor keeps

@@ -4,8 +4,7 @@
 gear's windows in time order. :meth:`GearMonitor.commission` builds the normal behaviour from
 the commissioning windows, alternately per operating point: even ones fit the normal behaviour,
 odd ones calibrate the rule (:mod:`swgmon.detection.rule`). :meth:`GearMonitor.run` scores every
-later
-window, updates the CUSUM and raises an alarm when it crosses h; the fault is then named
+later window, updates the CUSUM and raises an alarm when it crosses h; the fault is then named
 from the windows since the CUSUM's last rise from zero up to the alarm
 (``fault_at_alarm``) and up to one hour after it (``fault``, with the severity and its
 interval): a sensor fault, with its bridge, where one bridge's offset step or gain drift
@@ -120,8 +119,8 @@ class Trace:
     p : ndarray, shape (n,)
         Combined conformal p-value.
     cusums : ndarray, shape (n, k)
-        Every CUSUM of the rule (:func:`swgmon.detection.rule.log_bets`); NaN after a latched
-        alarm.
+        Every CUSUM of the rule (:func:`swgmon.detection.rule.log_bets`); NaN after a
+        latched alarm.
     alarms : list of int
         Windows that raised an alarm.
     log_proba : ndarray, shape (n, n_classes)
@@ -437,14 +436,13 @@ class GearMonitor:
                        start: tuple[float, float | None] | None = None) -> np.ndarray:
         """The friction factor in force at each window (before it updates it) and the
         monitor's own factor after the last (:mod:`swgmon.detection.normal`: an exponential mean
-        of the
-        windows' loss ratios over ``friction_track_h`` operating hours; for
+        of the windows' loss ratios over ``friction_track_h`` operating hours; for
         ``regrease_settle_h`` after a declared re-greasing, :meth:`declare`, over one
         window's interval: the windows one by one), shape (n,). ``start``: (factor, hour
         of the window before), default the monitor's own. A window beyond commissioning's
         temperatures at its point (:meth:`swgmon.detection.normal.NormalBehaviour.outside`) leaves
-        the
-        factor as it is: its loss law is extrapolated there (docs/monitor/detection.md, "The normal
+        the factor as it is: its loss law is extrapolated there (docs/monitor/detection.md, "The
+        normal
         behaviour's laws")."""
         tau = self.normal_config.friction_track_h
         r, last = (self.friction, self.last_hour) if start is None else start

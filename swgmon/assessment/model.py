@@ -2,8 +2,7 @@
 
 A window is described by its z-scores against its own gear's normal behaviour
 (:mod:`swgmon.detection.normal`), so that a model trained on other gears sees deviations from
-healthy,
-not the gear's individual signature (the leave-one-gear-out study measured that one
+healthy, not the gear's individual signature (the leave-one-gear-out study measured that one
 commissioning window is too few: its error is as large as a mild fault's shift).
 
 **Diagnosis model.** A histogram gradient-boosting classifier (scikit-learn) on the
@@ -191,7 +190,8 @@ def one_thread():
     bench's diagnosis model trained with one and with two: identical probabilities and
     severities); but on a machine with other work running, OpenMP's waiting threads made
     the bench model's training 13 times slower (1254 s against 94 s, two cores) and the
-    stream's predictions of small blocks 16 times slower (docs/monitor.md, Prognosis).
+    stream's predictions of small blocks 16 times slower (docs/monitor/prognosis.md,
+    "Prognosis").
     Work runs in parallel as processes instead (the evaluation's parts, ``n_jobs``).
     The controller is made once (``threadpoolctl``: 0.05 ms a call, against 12 ms for a
     fresh ``threadpool_limits``)."""

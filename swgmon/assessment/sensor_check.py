@@ -294,8 +294,7 @@ def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarr
     where that beats the reading. The
     bridges' span and zero drift, their features' own slopes and the friction's law
     learnt at commissioning (:mod:`swgmon.detection.normal`) together say what temperature each
-    window
-    was at; a gear fault moves them in a pattern no temperature gives.
+    window was at; a gear fault moves them in a pattern no temperature gives.
 
     Parameters
     ----------

@@ -3,8 +3,8 @@ re-greasing nobody declared, or grease running in again, from being named a gear
 :func:`fit_friction` fits a factor on the friction (and a rate) to the windows since an
 alarm (:class:`FrictionFit`); where it is significant and no gear fault's signature fits
 better, the alarm is named :data:`~swgmon.detection.rule.UNEXPLAINED_CHANGE` with what moved.
-Design: the
-paragraph on an unexplained change in docs/monitor.md.
+Design: docs/monitor/assessment.md, "The monitor checks its temperature sensor" (a
+recurring unexplained change) and docs/monitor.md, "The monitor".
 """
 
 from __future__ import annotations
@@ -67,9 +67,9 @@ def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
     (:data:`FRICTION_RATES`: fresh grease running in again) from a window on (the
     change's step; the windows before it as they were), chosen to leave Σ z² over the
     windows smallest. A gear fault that changes friction changes it unevenly (reduced
-    damping lowers the viscous term only, more at light loads, :mod:`swgmon.detection.normal`) and
-    moves
-    the bridges too, so neither factor nor rate explains it.
+    damping lowers the viscous term only, more at light loads,
+    :mod:`swgmon.detection.normal`) and moves the bridges too, so neither factor nor rate
+    explains it.
 
     Parameters
     ----------

@@ -402,10 +402,9 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
     friction factor start from ``start`` and ``friction_start`` (the healthy life's before
     the onset; None: the monitor's own). ``lost``: the temperature sensor has failed, the
     monitor goes on without its reading (:func:`~swgmon.advisories.stream.read_without`), as it
-    does from a
-    reading that drops out (NaN), its CUSUMs anew, as :func:`~swgmon.advisories.stream.run_stream`
-    does.
-    Returns the trace, features, operating points, metadata and conditions, the monitor in
+    does from a reading that drops out (NaN), its CUSUMs anew, as
+    :func:`~swgmon.advisories.stream.run_stream`
+    does. Returns the trace, features, operating points, metadata and conditions, the monitor in
     force at the end and whether the reading was lost by then."""
     traces, feats, pts, metas, conds = [], [], [], [], []
     first: dict[str, float | None] = {"monitor": None, "per_window": None}

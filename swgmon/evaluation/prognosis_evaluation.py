@@ -540,8 +540,7 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
 
     A training gear's lives are read with the severity regressors fitted without it
     (:meth:`~swgmon.assessment.model.DiagnosisModel.without`): out of sample, as the held-out
-    gear's will
-    be (read with the model's own, they were in sample: the severity track, and so the
+    gear's will be (read with the model's own, they were in sample: the severity track, and so the
     remaining life's error, was the training gears' own, smaller than a new gear's).
 
     Of a life's valid prognoses with finite, positive quantiles, each quarter gets the one
