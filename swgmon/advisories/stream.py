@@ -136,9 +136,11 @@ def event_line(event: dict) -> str:
     kind, hour = event.get("kind"), float(event["hour"])
     moved = "".join(f"{'; moved: ' if i == 0 else ', '}{name} {z:+.1f} sigma"
                     for i, (name, z) in enumerate(event.get("moved") or []))
-    if kind == "unexplained_change":
+    if kind == "unexplained_change":  # its severity: the friction's change, always fitted
+        lo, hi = event["severity_low"], event["severity_high"]
+        ci = "" if lo is None or hi is None else f" [{100 * lo:+.1f}, {100 * hi:+.1f}] %"
         return (f"alarm at {hour:.2f} h: an unexplained change: the friction changed by "
-                f"{100 * event['severity']:+.0f} % evenly over the operating points (no "
+                f"{100 * event['severity']:+.1f} %{ci} evenly over the operating points (no "
                 "gear fault's signature; was the joint re-greased? the monitor goes on "
                 f"from the new level){moved}")
     if kind in ("gear_fault", "sensor_fault"):
@@ -147,9 +149,11 @@ def event_line(event: dict) -> str:
                  " (check the joint's temperature sensor; the monitor goes on without it)"
                  if event["fault"] == TEMPERATURE_SENSOR else
                  " (no one bridge explains it: check the gauges and their wiring)")
+        sev, lo, hi = event["severity"], event["severity_low"], event["severity_high"]
+        severity = ("no severity" if sev is None else f"severity {sev:.3g}" + (
+            "" if lo is None or hi is None else f" [{lo:.3g}, {hi:.3g}]"))
         return (f"alarm at {hour:.2f} h: {event['fault']}{where} (at the alarm: "
-                f"{event['fault_at_alarm']}), severity {event['severity']:.3g} "
-                f"[{event['severity_low']:.3g}, {event['severity_high']:.3g}]{moved}")
+                f"{event['fault_at_alarm']}), {severity}{moved}")
     if kind == "advisory":
         return f"advisory at {hour:.2f} h: {event['advice']}"
     if kind == "recommissioned":

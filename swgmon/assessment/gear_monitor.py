@@ -669,7 +669,7 @@ class GearMonitor:
             err = fit.temperature_c - fit.reading_c
             est, lo, hi = fit.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))
         elif fault == UNEXPLAINED_CHANGE:  # the friction's relative change [-]
-            est = lo = hi = fit.factor - 1.0
+            est, lo, hi = fit.factor - 1.0, fit.low - 1.0, fit.high - 1.0
         else:
             x = self.inputs(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end])
             est, lo, hi = self.model.estimate(fault, x)

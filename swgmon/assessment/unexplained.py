@@ -43,12 +43,17 @@ class FrictionFit:
         friction did not change, two with a rate).
     rate_per_h : float or None
         The fitted rate of change of the factor's logarithm [1/h]; None: not fitted.
+    low, high : float
+        The factor's 90 % interval (:func:`profile_interval`); NaN where the fit's
+        profile has no curvature to tell it.
     """
 
     factor: float
     z: np.ndarray
     reduction: float
     rate_per_h: float | None = None
+    low: float = float("nan")
+    high: float = float("nan")
 
     def plausible(self) -> bool:
         """Significant (:data:`FIT_MIN`, :data:`FIT_MIN_RATE` with a rate): where the
@@ -56,6 +61,29 @@ class FrictionFit:
         many of them (the friction tracking's lag behind a re-greasing running in again,
         tiny_real_day gear 3)."""
         return self.reduction >= (FIT_MIN if self.rate_per_h is None else FIT_MIN_RATE)
+
+
+def profile_interval(log_factor: np.ndarray, total: np.ndarray) -> tuple[float, float]:
+    """The 90 % interval of a factor from the profile of Σ z² over ``log_factor`` (shape
+    (m,), increasing, m >= 3; ``total`` the same shape): a parabola fitted to the profile
+    around its least, Σ z² ≈ min + (x − x̂)² / σ², and x̂ ± 1.645 σ, as factors.
+
+    Wilks' theorem: twice the log-likelihood ratio, here the rise of Σ z² over unit-variance
+    z-scores, is χ² with one degree of freedom, so the 90 % interval is where the rise is
+    below 2.706 = 1.645². The windows are taken as independent: windows that share a
+    thermal state are not, so the interval is a lower bound on the width. A profile with
+    no upward curvature gives NaN, NaN.
+    """
+    x, y = np.asarray(log_factor, float), np.asarray(total, float)
+    k = int(np.argmin(y))
+    lo, hi = max(0, k - 2), min(len(x), k + 3)
+    if hi - lo < 3:
+        return float("nan"), float("nan")
+    a, b, _ = np.polyfit(x[lo:hi], y[lo:hi], 2)
+    if not a * np.ptp(x[lo:hi]) ** 2 > 1e-9 * (1.0 + abs(y[k])):  # flat: rounding's curve
+        return float("nan"), float("nan")
+    centre, half = -b / (2 * a), 1.6448536269514722 / np.sqrt(a)
+    return float(np.exp(centre - half)), float(np.exp(centre + half))
 
 
 def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
@@ -96,7 +124,8 @@ def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
     one = int(np.argmin(np.abs(FRICTION_FACTORS - 1.0)))
     if hours is None:
         k = int(np.argmin(s.sum(axis=1)))
-        return FrictionFit(float(FRICTION_FACTORS[k]), z[k], float(s[one].sum() - s[k].sum()))
+        return FrictionFit(float(FRICTION_FACTORS[k]), z[k], float(s[one].sum() - s[k].sum()),
+                           None, *profile_interval(np.log(FRICTION_FACTORS), s.sum(axis=1)))
     step = np.log(FRICTION_FACTORS[1] / FRICTION_FACTORS[0])
     dt = np.asarray(hours, float) - float(hours[-1])
     before = np.concatenate([[0.0], np.cumsum(s[one])])[:n]  # windows before the step
@@ -138,9 +167,10 @@ def _refined(normal: NormalBehaviour, feats, points, cond, friction, index, dt, 
                   index[:j])
     b = int(np.argmin(sa))
     total = float(np.sum(z0 ** 2) + sa[b])
+    at_rate = sa.reshape(REFINE, REFINE)[:, b % REFINE]  # the profile at the best rate
     return FrictionFit(float(combos[b, 0]), np.concatenate([z0, za[b]]), s_one - total,
-                       float(combos[b, 1]))
+                       float(combos[b, 1]), *profile_interval(np.log(fs), at_rate))
 
 
 __all__ = ["FRICTION_FACTORS", "FRICTION_RATES", "FrictionFit", "REFINE",
-           "fit_friction"]
+           "fit_friction", "profile_interval"]

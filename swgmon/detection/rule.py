@@ -266,8 +266,9 @@ class Alarm:
     severity, severity_low, severity_high : float
         Estimate of ``fault``'s severity and its 90 % interval; of the temperature
         sensor's fault, the fitted temperature minus the reading [K], median and 5-95 %
-        over the windows; of an unexplained change, the friction's relative change [-]
-        (all three).
+        over the windows; of an unexplained change, the friction's relative change and
+        its 90 % interval from the fit's profile [-]
+        (:func:`swgmon.assessment.unexplained.profile_interval`; NaN where it has none).
     bridge : str or None
         The faulty bridge (``s0``..``s4``) where ``fault`` is a sensor fault that one
         bridge alone explains (:mod:`swgmon.assessment.sensor_check`).
@@ -303,10 +304,13 @@ class Alarm:
                 "unexplained_change" if self.fault == UNEXPLAINED_CHANGE else "gear_fault")
 
     def as_dict(self) -> dict:
-        """The ``summary.json`` entry."""
+        """The ``summary.json`` entry (a severity or bound that is NaN: null)."""
+        def finite(x: float) -> float | None:
+            return float(x) if np.isfinite(x) else None
+
         return {"hour": self.hour, "fault": self.fault, "fault_at_alarm": self.fault_at_alarm,
-                "severity": self.severity, "severity_low": self.severity_low,
-                "severity_high": self.severity_high, "bridge": self.bridge,
+                "severity": finite(self.severity), "severity_low": finite(self.severity_low),
+                "severity_high": finite(self.severity_high), "bridge": self.bridge,
                 "moved": [list(m) for m in self.moved]}
 
 

@@ -556,8 +556,10 @@ def test_every_event_kind_is_printed_in_one_line():
     rec = {"hour": 8.0, "index": 30, "operating_point": [4000.0, 7.0], "relearnt": False,
            "load_range_nm": [7.0, 7.7], "note": "the load at 4000 rpm, 7 N m stayed beyond"}
     hot = Alarm(7.5, 25, 22, "temperature_sensor", "temperature_sensor", -6.0, -9.0, -2.0)
-    even = Alarm(7.8, 28, 26, "unexplained_change", "unexplained_change", 0.2, 0.2, 0.2)
-    res = StreamResult(None, [gear, sensor, hot, even], [adv], 10, None, None, 12.3, [rec])
+    even = Alarm(7.8, 28, 26, "unexplained_change", "unexplained_change", 0.2, 0.18, 0.22)
+    stuck = Alarm(7.9, 29, 27, "temperature_sensor", "temperature_sensor", *[np.nan] * 3)
+    res = StreamResult(None, [gear, sensor, hot, even, stuck], [adv], 10, None, None, 12.3,
+                       [rec])
     events = res.events()
     assert sorted({e["kind"] for e in events}) == sorted(EVENT_KINDS)
     lines = [event_line(e) for e in events]
@@ -570,9 +572,11 @@ def test_every_event_kind_is_printed_in_one_line():
         "sensor_offset_step), severity 0.05 [0.04, 0.06]",
         "alarm at 7.50 h: temperature_sensor (check the joint's temperature sensor; the "
         "monitor goes on without it) (at the alarm: temperature_sensor), severity -6 [-9, -2]",
-        "alarm at 7.80 h: an unexplained change: the friction changed by +20 % evenly over "
-        "the operating points (no gear fault's signature; was the joint re-greased? the "
-        "monitor goes on from the new level)",
+        "alarm at 7.80 h: an unexplained change: the friction changed by +20.0 % [+18.0, "
+        "+22.0] % evenly over the operating points (no gear fault's signature; was the joint "
+        "re-greased? the monitor goes on from the new level)",
+        "alarm at 7.90 h: temperature_sensor (check the joint's temperature sensor; the "
+        "monitor goes on without it) (at the alarm: temperature_sensor), no severity",
         f"recommissioned at 8.00 h: {rec['note']}"]
     with pytest.raises(ValueError, match=r"event kind: 'x' is not one of \['gear_fault'"):
         event_line({"kind": "x", "hour": 1.0})
@@ -915,3 +919,17 @@ def test_the_health_figure_marks_every_crossing_and_every_event(tmp_path, monkey
     assert {t.get_text() for t in legend.get_texts()} >= {k.replace("_", " ") for k in EVENT_KINDS}
     drawn["fig"].canvas.draw()
     assert legend.get_window_extent().x0 >= ax.get_window_extent().x1  # outside the data
+
+
+def test_the_profile_interval_of_a_parabola_is_its_wilks_interval():
+    """Issue 87: an unexplained change's friction factor gets a 90 % interval from the fit's
+    profile of Σ z² (Wilks: a rise of 1.645² over the least): on an exact parabola of
+    known curvature, centre and width come back; a flat profile gives none."""
+    from swgmon.assessment.unexplained import profile_interval
+
+    x = np.log(np.linspace(1.2, 1.4, 9))
+    sigma, centre = 0.01, np.log(1.3)
+    lo, hi = profile_interval(x, 50.0 + (x - centre) ** 2 / sigma ** 2)
+    assert np.log(lo) == pytest.approx(centre - 1.6449 * sigma, abs=1e-6)
+    assert np.log(hi) == pytest.approx(centre + 1.6449 * sigma, abs=1e-6)
+    assert np.isnan(profile_interval(x, np.full(9, 3.0))).all()

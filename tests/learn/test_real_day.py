@@ -230,7 +230,9 @@ def test_an_even_change_of_friction_is_named_an_unexplained_change_not_a_gear_fa
     assert named and {e["kind"] for e in named} == {"unexplained_change"}
     assert 40.0 <= named[0]["hour"] <= 42.0
     assert 0.1 <= named[0]["severity"] <= 0.5
-    assert "unexplained change" in event_line(named[0])
+    # issue 87: an interval of finite width from the fit's profile, not [x, x]
+    assert named[0]["severity_low"] < named[0]["severity"] < named[0]["severity_high"]
+    assert "unexplained change" in event_line(named[0]) and "] %" in event_line(named[0])
 
 
 def test_a_declared_regreasing_recommissions_the_friction_an_undeclared_one_is_unexplained(
