@@ -41,6 +41,7 @@ from swgmon.assessment.gear_monitor import MaintenanceEvent
 from swgmon.detection.normal import NormalConfig
 from swgmon.detection.rule import RuleConfig
 from swgmon.evaluation.benchmark_task import BenchmarkExperiment
+from swgmon.evaluation.own_joint import OwnJointExperiment
 from swgmon.evaluation.prognosis_task import PrognosisExperiment
 from swgmon.evaluation.task import MonitorExperiment
 from swgmon.prognosis.stream import StreamPrognosis
@@ -53,7 +54,8 @@ from swgsim.gear.thermal import THERMAL_PRESETS
 #: every other app's): option -> MLflow experiment (the naming scheme, docs/apps.md,
 #: "MLflow experiments and runs"); the run is named after the option.
 EXPERIMENT_LOGGERS = {"benchmark": "monitor/benchmark", "monitor": "monitor/evaluation",
-                      "prognosis": "monitor/prognosis", "transfer": "transfer"}
+                      "own_joint": "monitor/own_joint", "prognosis": "monitor/prognosis",
+                      "transfer": "transfer"}
 #: ``n_jobs`` of every app: worker processes, one or more (0 or a negative count is
 #: refused with the keys, before any work)
 N_JOBS = allowed(1, None, "worker processes")
@@ -181,6 +183,7 @@ class TrainApp:
     monitor: MonitorExperiment | None = None
     prognosis: PrognosisExperiment | None = None
     benchmark: BenchmarkExperiment | None = None
+    own_joint: OwnJointExperiment | None = None
 
 
 #: Keys and groups renamed, per app: old name -> the new one and why. An override that

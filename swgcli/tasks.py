@@ -13,6 +13,7 @@ from learn.tasks.config import typed_app
 from learn.tracking.store import check_tracking
 from learn.transfer.task import run_transfer
 from swgmon.evaluation.benchmark_task import run_benchmark
+from swgmon.evaluation.own_joint import run_own_joint
 from swgmon.evaluation.prognosis_task import run_prognosis_evaluation
 from swgmon.evaluation.task import run_monitor_evaluation
 from swgsim.datasets.schema import read_manifest
@@ -28,6 +29,7 @@ TASKS: dict[str, Callable[..., dict]] = {
     "monitor": run_monitor_evaluation,
     "prognosis": run_prognosis_evaluation,
     "benchmark": run_benchmark,
+    "own_joint": run_own_joint,
 }
 
 

@@ -151,7 +151,7 @@ def event_line(event: dict) -> str:
                  " (no one bridge explains it: check the gauges and their wiring)")
         sev, lo, hi = event["severity"], event["severity_low"], event["severity_high"]
         severity = ("no severity" if sev is None else f"severity {sev:.3g}" + (
-            "" if lo is None or hi is None else f" [{lo:.3g}, {hi:.3g}]"))
+            "" if lo is None or hi is None else f" [{_apart(lo, hi)}]"))
         return (f"alarm at {hour:.2f} h: {event['fault']}{where} (at the alarm: "
                 f"{event['fault_at_alarm']}), {severity}{moved}")
     if kind == "advisory":
@@ -159,6 +159,14 @@ def event_line(event: dict) -> str:
     if kind == "recommissioned":
         return f"recommissioned at {hour:.2f} h: {event['note']}"
     raise ValueError(f"event kind: {kind!r} is not one of {list(EVENT_KINDS)}")
+
+
+def _apart(lo: float, hi: float) -> str:
+    """``lo, hi`` with the fewest significant digits (3 at least) that tell them apart."""
+    digits = 3
+    while f"{lo:.{digits}g}" == f"{hi:.{digits}g}" and lo != hi and digits < 12:
+        digits += 1
+    return f"{lo:.{digits}g}, {hi:.{digits}g}"
 
 
 def select_gear(ds, gear: int | None):
@@ -177,6 +185,11 @@ def select_gear(ds, gear: int | None):
     if int(gear) not in gears:
         raise ValueError(f"gear: {gear} is not in the stream; it holds gears {gears}")
     return ds.isel(sample=np.flatnonzero(ds["gear"].values == int(gear)))
+
+
+#: The command that makes a diagnosis model for a stream's acquisition
+#: (:mod:`swgmon.evaluation.own_joint`), named by :func:`check_stream` when it refuses one.
+OWN_JOINT_COMMAND = "swgsim-train experiment=own_joint own_joint.stream={stream}"
 
 
 def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
@@ -211,20 +224,23 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
     sensors = [str(s) for s in ds["sensor"].values]
     if sensors != list(SENSORS):
         raise ValueError(f"{source}: bridges {sensors}; the model was trained on s0..s4")
+    twist = "phi_out_meas" in ds
+    make = ("; a model for it: " + (
+        "swgsim-train experiment=monitor (robot_joint_motion's models)" if twist
+        else OWN_JOINT_COMMAND.format(stream=source)))
     fs = float(ds.attrs.get("sample_rate_hz", np.nan))
     if not np.isclose(fs, model.sample_rate_hz):
         raise ValueError(f"{source}: sample rate {fs:g} Hz; the model was trained at "
-                         f"{model.sample_rate_hz:g} Hz")
+                         f"{model.sample_rate_hz:g} Hz{make}")
     n_t = ds.sizes["time"]
     if not np.isclose(n_t / fs, model.window_s):
         raise ValueError(f"{source}: windows of {n_t / fs:g} s; the model was trained on "
-                         f"windows of {model.window_s:g} s")
-    twist = "phi_out_meas" in ds
+                         f"windows of {model.window_s:g} s{make}")
     n_f = len(feature_names(twist=twist))
     if getattr(model, "n_features", 0) and n_f != model.n_features:
         raise ValueError(f"{source}: its windows give {n_f} health features "
                          f"({'with' if twist else 'without'} an output encoder's twist); the "
-                         f"model was trained on {model.n_features}")
+                         f"model was trained on {model.n_features}{make}")
     pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
     lo, hi = model.points_range
     out = ~np.all((pts >= lo - 1e-9) & (pts <= hi + 1e-9), axis=1)
@@ -232,7 +248,7 @@ def check_stream(ds, model, rule: RuleConfig, source: str = "stream") -> float:
         o = pts[np.flatnonzero(out)[0]]
         raise ValueError(f"{source}: operating point {o[0]:g} rpm, {o[1]:g} N m outside the "
                          f"model's training range: speed [{lo[0]:g}, {hi[0]:g}] rpm, torque "
-                         f"[{lo[1]:g}, {hi[1]:g}] N m")
+                         f"[{lo[1]:g}, {hi[1]:g}] N m{make}")
     if "temperature_c" in ds:
         t = ds["temperature_c"].values.astype(float)
         lo, hi = TEMPERATURE_RANGE_C
@@ -768,6 +784,6 @@ def write_outputs(res: StreamResult, out_dir: Path, source: str) -> dict[str, Pa
             if k != "prognosis" or followed}
 
 
-__all__ = ["CHANGES_STATE", "CONDITIONS", "EVENT_KINDS", "StreamResult", "advisories",
-           "check_stream", "declared", "event_line", "monitor_stream", "recommissionings",
-           "run_stream", "select_gear", "without_temperature", "write_outputs"]
+__all__ = ["CHANGES_STATE", "CONDITIONS", "EVENT_KINDS", "OWN_JOINT_COMMAND", "StreamResult",
+           "advisories", "check_stream", "declared", "event_line", "monitor_stream",
+           "recommissionings", "run_stream", "select_gear", "without_temperature", "write_outputs"]

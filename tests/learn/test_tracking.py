@@ -6,6 +6,7 @@ import hashlib
 import json
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -340,9 +341,10 @@ def test_the_suite_never_writes_into_the_users_store():
     assert str(repo_root()) not in uri
 
 
-APPS_WITH_TRACKING = [("train", [f"experiment={e}"]) for e in
-                      ("paper", "transfer", "transfer_full", "benchmark", "monitor",
-                       "prognosis")] + [
+#: Every experiment of conf/experiment/ (a new one is covered without a word here).
+EXPERIMENTS = sorted(p.stem for p in (Path(__file__).parents[2] / "conf" / "experiment"
+                                      ).glob("*.yaml"))
+APPS_WITH_TRACKING = [("train", [f"experiment={e}"]) for e in EXPERIMENTS] + [
     ("train", []), ("monitor", ["stream=s.csv", "diagnosis_model=m.skops"]),
     ("calibrate", ["measured=m.csv", "out_dir=out"])]
 

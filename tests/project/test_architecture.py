@@ -43,9 +43,10 @@ MAX_FUNCTION_LINES = 80
 #: place of a cap per module; sizes follow concepts, a module is as long as its concept).
 #: Today's sizes rounded up to the next 500 lines; a package that grows past its budget
 #: fails, and its budget moves only in a commit that says why. The issue's targets, to
-#: reach by design: swgmon 9000, learn 11000, the library 47500.
+#: reach by design: swgmon 9000, learn 11000, the library 47500. Moved: swgmon 13500 ->
+#: 14000 and all 56000 -> 56500 for the own-joint route (issue 87, +190 lines).
 LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11500,
-                                "swgmon": 13500, "swgcli": 2000, "all": 56000}
+                                "swgmon": 14000, "swgcli": 2000, "all": 56500}
 #: Functions allowed beyond MAX_FUNCTION_LINES: "path:name" -> why (most are over by
 #: their numpydoc docstring, which the style asks for; the code lines follow).
 LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
