@@ -597,6 +597,31 @@ def test_a_sensor_fault_named_without_a_bridge_is_a_sensor_fault_not_a_gear_faul
     assert "no one bridge explains it" in line and "temperature sensor" not in line
 
 
+def test_a_severity_interval_is_never_of_zero_width_where_the_windows_differ():
+    """Training gears that agree to the digit (a sensor fault is the same on every gear:
+    calibration errors 0, 0) left the interval [x, x]; the median's own spread over the
+    alarm's windows keeps it open, and the line prints its bounds apart (issue 87)."""
+    from swgmon.advisories.stream import event_line
+    from swgmon.assessment.model import DiagnosisModel
+    from swgmon.detection.rule import Alarm
+
+    class Column:  # a regressor reading the first input
+        def predict(self, x):
+            return x[:, 0]
+
+    m = DiagnosisModel(["healthy", "sensor_offset_step"], None,
+                       {"sensor_offset_step": (Column(), (0.0, 0.0))})
+    x = np.c_[0.05 + 1e-5 * np.random.default_rng(3).standard_normal(40), np.zeros(40)]
+    est, lo, hi = m.estimate("sensor_offset_step", x)
+    assert lo < est < hi and hi - lo < 1e-4
+    assert m.estimate("sensor_offset_step", np.c_[np.full(5, 0.05), np.zeros(5)])[1:] \
+        == (0.05, 0.05)  # identical windows, no calibration error: nothing to widen by
+    al = Alarm(7.0, 20, 18, "sensor_offset_step", "sensor_offset_step", est, lo, hi)
+    lo_s, hi_s = event_line({"kind": al.kind, **al.as_dict()}).split("[")[1].split("]")[0] \
+        .split(", ")
+    assert lo_s != hi_s and float(lo_s) == pytest.approx(lo, rel=1e-3)
+
+
 def test_a_resumed_evaluations_tables_keep_a_fresh_runs_columns(tmp_path):
     from learn.tasks.parts import Job, finished_parts, save_part
     from swgmon.evaluation.evaluate import to_frames
