@@ -165,7 +165,8 @@ def write_figures(ds, report_dir: str | Path, gear: int | None = None,
     (dashed, shifted in time onto the healthy window's WG angle), one panel per fault,
     and a panel of the RMS difference per fault and signal (log scale: a small fault the
     overlay hides shows there). Fig. 7: DFT amplitude of zero-mean s0, s1, ds13 = s1 - s3
-    and ds24 = s2 - s4 versus order of the input rotation, one line per class, log scale.
+    and ds24 = s2 - s4 versus order of the input rotation, one line per class, log scale,
+    and below each each fault's distance from healthy's (where the small faults show).
     Fig. 8: clean (solid) versus disturbed (dashed) healthy signals. Legends outside the
     data. One gear and operating point (default: the
     lowest gear at 2000 rpm, 39 N m, where present); the most severe variant of each
@@ -264,7 +265,9 @@ def _fig6(t, sig, rows: list[int], faults: list[str], where: str, path: Path) ->
 
 def _fig7(t, sig, f_in, faults: list[str], where: str, path: Path) -> Path:
     """Fig. 7: DFT of s0, s1, ds13 and ds24 against the order, one line per class
-    (``sig`` and ``f_in``: healthy first, then ``faults``)."""
+    (``sig`` and ``f_in``: healthy first, then ``faults``), and below each view how far
+    each fault's amplitude lies from healthy's (a small fault's line lies under a large
+    one's above; its difference does not)."""
     from matplotlib.figure import Figure
 
     orders = np.arange(1, 161) * 0.05  # 0.05 .. 8
@@ -272,18 +275,24 @@ def _fig7(t, sig, f_in, faults: list[str], where: str, path: Path) -> Path:
     s = sig.astype(np.float64)  # (n_classes, 5, T)
     views = np.stack([s[:, 0], s[:, 1], s[:, 1] - s[:, 3], s[:, 2] - s[:, 4]], axis=1)
     amp = order_spectrum(views, t, f_in, orders)  # (n_classes, 4, n_orders)
-    fig = Figure(figsize=(11, 7), layout="constrained")
-    axes = fig.subplots(2, 2, sharex=True).ravel()
-    for j, (ax, name) in enumerate(zip(axes, (r"$\bar s_0$", r"$\bar s_1$",
-                                              r"$\Delta\bar s_{1,3}$", r"$\Delta\bar s_{2,4}$"),
-                                       strict=True)):
+    fig = Figure(figsize=(11, 12), layout="constrained")
+    axes = fig.subplots(4, 2, sharex=True)
+    spectra, diffs = axes[:2].ravel(), axes[2:].ravel()
+    names = (r"$\bar s_0$", r"$\bar s_1$", r"$\Delta\bar s_{1,3}$", r"$\Delta\bar s_{2,4}$")
+    for j, name in enumerate(names):
+        ax, dx = spectra[j], diffs[j]
         for c, cls in enumerate(classes):
-            ax.plot(orders, amp[c, j], lw=1.0, label=display_name(cls))
-        ax.set_title(f"({'abcd'[j]}) DFT of {name}", fontsize=9)
-        ax.set_xlabel("order of input rotation [-]")
-        ax.set_ylabel("DFT amplitude [mV/V]")
-        ax.set_yscale("log")  # a small fault's orders beside a large one's
-    handles, labels = axes[0].get_legend_handles_labels()
+            ax.plot(orders, amp[c, j], lw=1.0, color=f"C{c}", label=display_name(cls))
+            if c:
+                dx.plot(orders, np.abs(amp[c, j] - amp[0, j]), lw=1.0, color=f"C{c}")
+        ax.set_title(f"({'abcdefgh'[j]}) DFT of {name}", fontsize=9)
+        dx.set_title(f"({'abcdefgh'[4 + j]}) |DFT - healthy's| of {name}", fontsize=9)
+        for a in (ax, dx):
+            a.set_ylabel("amplitude [mV/V]")
+            a.set_yscale("log")  # a small fault's orders beside a large one's
+    for a in axes[-1]:
+        a.set_xlabel("order of input rotation [-]")
+    handles, labels = spectra[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside right upper", fontsize=7)
     fig.suptitle(f"DFT of sensor signals ({where})", fontsize=10)
     return save_figure(fig, path, 110)
@@ -342,10 +351,10 @@ def write_confusion_figures(confusion: pd.DataFrame, report_dir: str | Path
                  .fillna(0.0).to_numpy(float))
             share = m / np.maximum(m.sum(axis=1, keepdims=True), 1.0)
             image = ax.imshow(share, vmin=0.0, vmax=1.0, cmap="Blues")
-            ax.set_xticks(range(len(classes)), [display_name(c)[:10] for c in classes],
+            names = [display_name(c) for c in classes]  # whole: "reduced da..." helps none
+            ax.set_xticks(range(len(classes)), names if i == len(sels) - 1 else [],
                           rotation=90, fontsize=6)
-            ax.set_yticks(range(len(classes)), [display_name(c)[:10] for c in classes]
-                          if j == 0 else [], fontsize=6)
+            ax.set_yticks(range(len(classes)), names if j == 0 else [], fontsize=6)
             ax.set_title(f"{sel}, {model}: {np.trace(m) / max(m.sum(), 1):.2f}", fontsize=7)
         fig.colorbar(image, ax=axes, shrink=0.6, label="share of the true class")
         fig.suptitle(f"Table {table}: test confusion (rows true, columns predicted)",
