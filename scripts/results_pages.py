@@ -14,8 +14,9 @@ experiment=monitor``, ``swgsim-train experiment=prognosis``, ``swgsim-observabil
 ``scripts/monitor_families.py --out`` and
 ``scripts/calibrate_real.py --out``) and writes each block whose report is there, with
 the run named: the command, the commit (``--commit``, else the checkout's HEAD) and the
-date the report was written (its modification time). A block whose report is missing is
-left as it is, and said so. The readings around the blocks are not touched.
+date the report was written (its modification time). A block showing figures copies them
+to the pages' ``figures/`` folder. A block whose report is missing is left as it is, and
+said so. The readings around the blocks are not touched.
 
     python scripts/results_pages.py reports/
     python scripts/results_pages.py reports/ --commit abc1234 --check   # exit 1 if stale
@@ -76,6 +77,10 @@ class Block:
         The command that writes those reports (named on the page).
     build : callable
         ``build(reports) -> str``: the block's Markdown below its run line.
+    figures : callable or None
+        ``figures(reports) -> {name: file}``: the report images the block's Markdown
+        shows as ``figures/<name>``, copied to ``<pages>/figures/<name>`` when the pages
+        are written; None: the block shows none.
     """
 
     name: str
@@ -83,6 +88,7 @@ class Block:
     sources: tuple[str, ...]
     command: str
     build: Callable[[Path], str]
+    figures: Callable[[Path], dict[str, Path]] | None = None
 
 
 # ------------------------------------------------------------------- reading markdown
@@ -192,6 +198,54 @@ def paper_phase_lock(rep: Path) -> str:
             f"{md_table(tab)}\n\nSpread of the clean healthy windows' features and how far "
             "each fault class lies from the healthy median (`reports/summary.md`):\n\n"
             f"{spread}")
+
+
+#: The figures of an acquisition's folder (``learn/paper/report.py``, the confusion
+#: matrices of ``swgsim-paper``) and the caption each gets, in the page's order.
+PAPER_FIGURES = (
+    ("fig6_signals", "Fig. 6 analogue: healthy (solid) and faulty (dashed) signals s0-s4, "
+                     "one panel per fault, and how far each fault moves each signal (RMS "
+                     "of the difference, log scale)"),
+    ("fig7_dft", "Fig. 7 analogue: the DFT of s0, s1 and the pair differences Δs13, Δs24 "
+                 "over the order of the input rotation, every class"),
+    ("fig8_disturbed", "Fig. 8 analogue: a healthy window clean (solid) and disturbed by "
+                       "eq. (10) (dashed)"),
+    ("confusion_VII", "Table VII (4-fold CV, clean): test confusion summed over the "
+                      "folds, per selection and model (rows true, columns predicted; the "
+                      "title gives the accuracy)"),
+    ("confusion_VIII", "Table VIII (4-fold CV, disturbed): test confusion summed over the "
+                       "folds"),
+    ("confusion_IX", "Table IX (each gear held out, clean): test confusion summed over the "
+                     "held-out gears"),
+    ("confusion_X", "Table X (each gear held out, disturbed): test confusion summed over "
+                    "the held-out gears"),
+)
+
+
+def paper_figure_files(rep: Path) -> dict[str, Path]:
+    """``<acquisition>_<figure>.png`` -> the run's file, the paper acquisition first, then
+    the others by name; a figure an acquisition lacks is left out."""
+    folders = sorted((p for p in rep.iterdir() if p.is_dir()),
+                     key=lambda p: (p.name != "paper", p.name))
+    return {f"{d.name}_{name}.png": d / f"{name}.png" for d in folders
+            for name, _ in PAPER_FIGURES if (d / f"{name}.png").is_file()}
+
+
+def paper_figures(rep: Path) -> str:
+    """The run's figures per acquisition, each with its caption, shown from the pages'
+    ``figures/`` folder (:func:`paper_figure_files` names them)."""
+    captions = dict(PAPER_FIGURES)
+    out, last = [], None
+    for copy, file in paper_figure_files(rep).items():
+        acq = file.parent.name
+        if acq != last:
+            out.append(f"**{acq} acquisition** (`reports/{acq}/`):")
+            last = acq
+        out.append(f"![{acq}: {file.stem}](figures/{copy})\n\n"
+                   f"{captions[file.stem]} (`reports/{acq}/{file.name}`).")
+    if not out:
+        raise ReportError(f"{rep}: no acquisition folder with the paper's figures")
+    return "\n\n".join(out)
 
 
 def transfer_headline(rep: Path) -> str:
@@ -467,6 +521,8 @@ BLOCKS = (
           paper_key_cells),
     Block("paper.phase_lock", "paper.md", ("*/tables_vii_x.md", "summary.md"), "swgsim-paper",
           paper_phase_lock),
+    Block("paper.figures", "paper.md", ("*/fig*.png", "*/confusion_*.png"), "swgsim-paper",
+          paper_figures, paper_figure_files),
     Block("transfer.headline", "transfer.md", ("transfer/table.md",),
           "swgsim-train -m experiment=transfer", transfer_headline),
     Block("transfer.recall", "transfer.md", ("transfer/table.md",),
@@ -532,6 +588,14 @@ def sources_of(block: Block, rep: Path) -> list[Path] | None:
     return files
 
 
+def figure_copies(rep: Path, pages: Path) -> dict[Path, Path]:
+    """Where each figure a block of this run shows goes (``<pages>/figures/<name>``) ->
+    the run's file; a block whose reports are missing copies none."""
+    return {pages / "figures" / name: file for b in BLOCKS
+            if b.figures is not None and sources_of(b, rep) is not None
+            for name, file in b.figures(rep).items()}
+
+
 def run_line(block: Block, rep: Path, files: list[Path], commit: str) -> str:
     """The block's first line: the command, the commit and the date of the run."""
     newest = max(files, key=lambda p: p.stat().st_mtime)
@@ -582,18 +646,26 @@ def main(argv: list[str] | None = None) -> int:
             raise ReportError(f"pages folder {args.pages} does not exist")
         texts, notes = rebuild(args.reports.resolve(), args.pages,
                                args.commit or head_commit())
+        copies = figure_copies(args.reports.resolve(), args.pages)
     except (ReportError, FileNotFoundError, KeyError, pd.errors.ParserError) as e:
         print(f"results_pages: error: {e}", file=sys.stderr)
         return 2
     changed = [p for p, t in texts.items() if t != p.read_text(encoding="utf-8")]
+    figures = [d for d, f in copies.items() if not d.is_file()
+               or d.read_bytes() != f.read_bytes()]
     for line in notes:
         print(line)
     if args.check:
-        print(f"{len(changed)} page(s) would change: {', '.join(p.name for p in changed)}")
-        return 1 if changed else 0
+        print(f"{len(changed)} page(s) would change: {', '.join(p.name for p in changed)}"
+              + (f"; {len(figures)} figure(s)" if copies else ""))
+        return 1 if changed or figures else 0
     for p in changed:
         atomic_write_bytes(p, texts[p].encode("utf-8"))
-    print(f"{len(changed)} page(s) written: {', '.join(p.name for p in changed) or 'none'}")
+    for d in figures:
+        atomic_write_bytes(d, copies[d].read_bytes())
+    print(f"{len(changed)} page(s) written: {', '.join(p.name for p in changed) or 'none'}"
+          + (f"; {len(figures)} figure(s) copied to {args.pages / 'figures'}" if copies
+             else ""))
     return 0
 
 

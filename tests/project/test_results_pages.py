@@ -73,8 +73,33 @@ def test_only_the_blocks_between_their_markers_change(tmp_path):
     assert "at commit `abc1234`" in after and "0 / 5" in after
     outside = results_pages.BLOCK_RE.sub("", before)
     assert results_pages.BLOCK_RE.sub("", after) == outside
-    assert [p.name for p in pages.iterdir() if p.read_text(encoding="utf-8") !=
-            (ROOT / "docs" / "results" / p.name).read_text(encoding="utf-8")] == ["monitor.md"]
+    assert [p.name for p in pages.iterdir() if p.is_file() and p.read_text(encoding="utf-8")
+            != (ROOT / "docs" / "results" / p.name).read_text(encoding="utf-8")] == ["monitor.md"]
+
+
+def test_the_figures_block_shows_and_copies_each_acquisitions_figures(tmp_path):
+    """A paper run with two tiny figures, one per acquisition: the block shows both, the
+    paper acquisition first, and the run copies them beside the page, nothing else; a
+    second run finds nothing to do."""
+    rep = tmp_path / "reports"
+    for acq, name, data in (("bench", "fig6_signals", b"png-b"),
+                            ("paper", "confusion_X", b"png-p")):
+        (rep / acq).mkdir(parents=True)
+        (rep / acq / f"{name}.png").write_bytes(data)
+    block = results_pages.paper_figures(rep)
+    assert block.index("**paper acquisition**") < block.index("**bench acquisition**")
+    assert "](figures/paper_confusion_X.png)" in block and "Table X" in block
+    assert "](figures/bench_fig6_signals.png)" in block and "Fig. 6 analogue" in block
+    pages = tmp_path / "pages"
+    shutil.copytree(ROOT / "docs" / "results", pages, ignore=shutil.ignore_patterns("*.png"))
+    args = [str(rep), "--pages", str(pages), "--commit", "abc1234"]
+    assert results_pages.main(args) == 0
+    assert sorted(p.name for p in (pages / "figures").iterdir()) == [
+        "bench_fig6_signals.png", "paper_confusion_X.png"]
+    assert (pages / "figures" / "bench_fig6_signals.png").read_bytes() == b"png-b"
+    page = (pages / "paper.md").read_text(encoding="utf-8")
+    assert "`swgsim-paper` at commit `abc1234`" in page and "paper_confusion_X.png" in page
+    assert results_pages.main([*args, "--check"]) == 0
 
 
 def test_the_prognosis_blocks_copy_the_tables_of_their_sections(tmp_path):
