@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 from scipy.signal import lfilter  # noqa: E402
 
 from swgmon.prognosis.baselines import predict_linear, predict_wiener  # noqa: E402
-from swgmon.prognosis.calibration import conformal_interval_scale  # noqa: E402
+from swgmon.prognosis.calibration import tail_scales  # noqa: E402
 from swgmon.prognosis.growth import (  # noqa: E402
     Z90,
     Duty,
@@ -41,6 +41,7 @@ from swgmon.prognosis.growth import (  # noqa: E402
     Track,
     predict_growth,
 )
+from swgmon.prognosis.inputs import scaled_interval  # noqa: E402
 from swgsim.datasets.growth import (  # noqa: E402
     LAWS,
     RunToFailure,
@@ -159,8 +160,9 @@ def coverage(fault: str, frac: float, lives: int) -> dict[str, tuple[float, floa
 
 
 def calibration(fault: str, frac: float, lives: int, phi: float) -> tuple[float, ...]:
-    """Split conformal with correlated estimates: the scale from lives 0 .. lives/2 − 1
-    (the training gears'), the coverage of lives/2 .. lives − 1 without and with it."""
+    """Split conformal with correlated estimates: the lower and upper scales from lives
+    0 .. lives/2 − 1 (the training gears'), the coverage of lives/2 .. lives − 1 without
+    and with them; returns (the larger scale, coverage before, after)."""
     half = lives // 2
     ps, fails = [], []
     for seed in range(lives):
@@ -168,16 +170,16 @@ def calibration(fault: str, frac: float, lives: int, phi: float) -> tuple[float,
         ps.append(predict_growth(track, fault, alarm, duty, wh, seed=seed))
         fails.append(fail)
     fails_a = np.array(fails)
-    scale = conformal_interval_scale(ps[:half], fails_a[:half])
+    lower, upper = tail_scales(ps[:half], fails_a[:half])
 
-    def held(p: Prognosis, f: float, k: float) -> bool:
-        lo = p.remaining_h_median * (p.remaining_h_q05 / p.remaining_h_median) ** k
-        hi = p.remaining_h_median * (p.remaining_h_q95 / p.remaining_h_median) ** k
+    def held(p: Prognosis, f: float, kl: float, ku: float) -> bool:
+        lo, hi = scaled_interval(p.remaining_h_q05, p.remaining_h_median, p.remaining_h_q95,
+                                 kl, ku)
         return p.hour + lo <= f <= p.hour + hi
 
     test = list(zip(ps[half:], fails_a[half:], strict=True))
-    return (scale, float(np.mean([held(p, f, 1.0) for p, f in test])),
-            float(np.mean([held(p, f, scale) for p, f in test])))
+    return (max(lower, upper), float(np.mean([held(p, f, 1.0, 1.0) for p, f in test])),
+            float(np.mean([held(p, f, lower, upper) for p, f in test])))
 
 
 def tiny_failure(fracs: tuple[float, ...] = (0.2, 0.4), seeds: int = 5

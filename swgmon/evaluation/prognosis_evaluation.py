@@ -15,13 +15,13 @@ is kept with the life's true failure hour (its own growth: the exact law's, the 
 ``failure_h``), and the two baselines (:mod:`swgmon.prognosis.baselines`) predict on the same tracks
 at the same hours.
 
-The intervals are calibrated by split conformal prediction
-(:func:`swgmon.prognosis.calibration.conformal_interval_scale`) on lives of the *training* gears
-(``calibration_seeds``, disjoint from ``seeds``), per method and per quarter of the remaining
-share the prognosis itself predicts, one prognosis per life and quarter at a fraction of the
-way drawn from the seed (:func:`calibrate`), each training gear's lives read with the
-severity regressors fitted without it (out of sample); the held-out gear is never seen
-before it is scored.
+The intervals are calibrated by split conformal prediction, lower and upper tails apart
+(:func:`swgmon.prognosis.calibration.tail_scales`), on lives of the *training* gears
+(``calibration_seeds``, disjoint from ``seeds``), per method and per quarter of the *true*
+remaining share (label-conditional: :func:`swgmon.prognosis.inputs.calibrated_interval`),
+one prognosis per life and quarter at a fraction of the way drawn from the seed
+(:func:`calibrate`), each training gear's lives read with the severity regressors fitted
+without it (out of sample); the held-out gear is never seen before it is scored.
 """
 
 from __future__ import annotations
@@ -38,9 +38,9 @@ from swgmon.assessment.model import DiagnosisModel
 from swgmon.evaluation.study import MonitorStudyConfig
 from swgmon.evaluation.training import train_model
 from swgmon.prognosis.baselines import predict_linear, predict_wiener
-from swgmon.prognosis.calibration import conformal_interval_scale
+from swgmon.prognosis.calibration import tail_scales
 from swgmon.prognosis.growth import Prognosis, PrognosisConfig, Track
-from swgmon.prognosis.inputs import interval_scale_of, predicted_share, share_bucket
+from swgmon.prognosis.inputs import share_bucket
 from swgmon.prognosis.scores import SHARE_BUCKETS, change_response
 from swgmon.prognosis.stream import StreamPrognosis
 from swgsim.base.typed import allowed, check_range, check_tree
@@ -56,9 +56,9 @@ log = logging.getLogger(__name__)
 
 #: The predictors compared: the growth law (the stream's) and the two baselines.
 METHODS = ("growth", "linear", "wiener")
-#: Largest interval scale a calibration may set (``PrognosisConfig.interval_scale``'s
-#: range); a calibration that asks for more (too few lives for its coverage) is capped here
-#: and says so in the part.
+#: Largest interval scale a calibration may set (``PrognosisConfig.lower_scale``'s and
+#: ``upper_scale``'s range); a calibration that asks for more (too few lives for its
+#: coverage) is capped here and says so in the part.
 MAX_SCALE = 20.0
 
 
@@ -164,8 +164,8 @@ class PrognosisStudyConfig:
         The stream's prognosis option (``every_h``, ``block_h``, ``min_track_h``,
         ``min_estimates``, ``seed``; a prognosis every 0.25 h, an estimate per 0.25 h,
         valid after 0.5 h and 3 estimates [choice: several prognoses in a life of a few
-        hours]); ``enabled``, ``threshold``, ``to_failure`` and ``interval_scale`` are set
-        per life and method.
+        hours]); ``enabled``, ``threshold``, ``to_failure``, ``lower_scale`` and
+        ``upper_scale`` are set per life and method.
     coverage : float
         The calibrated interval's target coverage, in (0, 1) (0.9: the 5-95 % interval).
     """
@@ -379,7 +379,7 @@ def baseline_events(track: dict, events: list[dict], method: str, cfg: Prognosis
         Its events (:meth:`~swgmon.prognosis.stream.StreamPrognoses.of_track`).
     method : {"linear", "wiener"}
     cfg : PrognosisConfig
-        Its ``interval_scale`` the method's.
+        Its ``lower_scale`` and ``upper_scale`` the method's.
     seed : int
 
     Returns
@@ -419,7 +419,7 @@ def _track_of(res, fault: str, onset_h: float) -> dict | None:
 
 
 def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig,
-             scales: dict[str, tuple[float, ...]], seed: int
+             scales: dict[str, tuple[tuple[float, ...], tuple[float, ...]]], seed: int
              ) -> tuple[dict, dict[str, list[dict]]]:
     """One life to failure through the monitor with the prognosis on, and the baselines on
     its track.
@@ -431,8 +431,9 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     model : DiagnosisModel
         Trained without the life's gear.
     sc : PrognosisStudyConfig
-    scales : dict of str to tuple of float
-        Interval scales of each of :data:`METHODS` (``PrognosisConfig.interval_scale``) [-].
+    scales : dict of str to (tuple of float, tuple of float)
+        Interval scales of each of :data:`METHODS` (``PrognosisConfig.lower_scale`` and
+        ``upper_scale``) [-].
     seed : int
         The life's seed (the monitor's and the prognoses' draws).
 
@@ -459,7 +460,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     n_end = int(np.searchsorted(sim.schedule.hour, fail_h, side="left"))
     opt = dataclasses.replace(sc.prognosis, enabled=True, threshold=None,
                               to_failure=sc.faults[fo.fault].to_failure,
-                              interval_scale=scales["growth"], seed=int(seed))
+                              lower_scale=scales["growth"][0],
+                              upper_scale=scales["growth"][1], seed=int(seed))
     res = monitor_stream(life_dataset(sim, 0, n_end), model, sc.train.rule, seed=int(seed),
                          normal=sc.train.normal, prognosis=opt, source="prognosis life")
     first = next((a for a in res.alarms if a.kind == "gear_fault" and a.hour >= fo.onset_h),
@@ -473,13 +475,13 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     events = {"growth": res.prognosis.of_track(track)}
     for m in METHODS[1:]:
         events[m] = baseline_events(track, events["growth"], m, dataclasses.replace(
-            opt.config, interval_scale=scales[m]), int(seed))
+            opt.config, lower_scale=scales[m][0], upper_scale=scales[m][1]), int(seed))
     log.info("life of gear %d, seed %d, %s: %d windows, %.1f s", sim.gear_id, seed, fo.fault,
              n_end, time.perf_counter() - t0)
     return life, events
 
 
-def _rows(key: dict, life: dict, events: dict[str, list[dict]], scales: dict) -> list[dict]:
+def _rows(key: dict, life: dict, events: dict[str, list[dict]]) -> list[dict]:
     """One row per prognosis before the failure and method (remaining hours from its
     hour; an open interval's end inf)."""
     rows = []
@@ -488,11 +490,8 @@ def _rows(key: dict, life: dict, events: dict[str, list[dict]], scales: dict) ->
             if e["hour"] >= life["failure_h"]:
                 continue
             inf = np.inf if e["valid"] else np.nan
-            med = inf if e["remaining_h"] is None else e["remaining_h"]
-            k = interval_scale_of(scales[m], e["hour"], life["alarm_h"], med) \
-                if e["valid"] else np.nan  # the factor this prognosis got
             rows.append({**key, "fault": life["fault"], "payload": life["payload"],
-                         "method": m, "interval_scale": k, "alarm_h": life["alarm_h"],
+                         "method": m, "alarm_h": life["alarm_h"],
                          "hour": e["hour"], "failure_h": life["failure_h"],
                          "true_remaining_h": life["failure_h"] - e["hour"],
                          "valid": bool(e["valid"]),
@@ -533,10 +532,13 @@ def _changes(key: dict, life: dict, events: dict[str, list[dict]], twin: dict,
 
 def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
               model: DiagnosisModel, sc: PrognosisStudyConfig, faults: list[str]
-              ) -> tuple[dict[str, tuple[float, ...]], list[dict]]:
-    """The interval scales of each method by split conformal prediction on lives of the
-    training ``gears`` (``calibration_seeds``; module docstring), one per quarter of the
-    predicted remaining share (:func:`~swgmon.prognosis.inputs.predicted_share`).
+              ) -> tuple[dict[str, tuple[tuple[float, ...], tuple[float, ...]]], list[dict]]:
+    """The interval's lower and upper scales of each method by split conformal prediction
+    on lives of the training ``gears`` (``calibration_seeds``; module docstring), one pair
+    per quarter of the *true* remaining share (:func:`~swgmon.prognosis.scores.
+    remaining_fraction`; label-conditional: the prognosis applies each quarter's pair to
+    the remaining lives of that quarter, :func:`~swgmon.prognosis.inputs.
+    calibrated_interval`).
 
     A training gear's lives are read with the severity regressors fitted without it
     (:meth:`~swgmon.assessment.model.DiagnosisModel.without`): out of sample, as the held-out
@@ -545,54 +547,53 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
 
     Of a life's valid prognoses with finite, positive quantiles, each quarter gets the one
     at a fraction λ of those in it, λ uniform in [0, 1] from the life's seed and gear (one
-    per life and quarter: the lives stay exchangeable); a quarter without enough lives for
-    the coverage takes the scale of one prognosis per life at λ over all quarters
-    [choice: the posterior's width is off by a different factor late and early in a span,
-    measured: one scale for all left the last quarter's coverage at 0.68 and the middle's
-    at 1.00].
+    per life and quarter: the lives stay exchangeable within a quarter); a quarter without
+    enough lives for the coverage takes the pair of one prognosis per life at λ over all
+    quarters (and loses its conditional guarantee: ``lives`` in ``info`` says where).
 
     Returns
     -------
-    scales : dict of str to tuple of float
-        Per method, one per quarter, each in (0, :data:`MAX_SCALE`] (capped; 1 without a
-        scored life) [-].
+    scales : dict of str to (tuple of float, tuple of float)
+        Per method, the lower and the upper factors, one per quarter, each in [0,
+        :data:`MAX_SCALE`] (capped; 1 without a scored life) [-].
     info : list of dict
         Per method and quarter (and ``all``): ``method``, ``quarter``, ``lives`` (scored),
-        ``scale`` (uncapped, inf where too few lives for the coverage), ``scale_used``.
+        ``lower``, ``upper`` (uncapped, inf where too few lives for the coverage),
+        ``lower_used``, ``upper_used``.
     """
     labels = [f"[{lo:g}, {hi:g})" for lo, hi in SHARE_BUCKETS] + ["all"]
     sims = [(g, s, life_of(plan, banks[g], g, sc, f, s, i))
             for g in gears for i, s in enumerate(sc.calibration_seeds) for f in faults]
     picked: dict[str, list[list]] = {m: [[] for _ in labels] for m in METHODS}
-    ones = dict.fromkeys(METHODS, (1.0,))
+    ones = dict.fromkeys(METHODS, ((1.0,), (1.0,)))
     read_by = {g: model.without(g) for g in gears}
     for g, s, sim in sims:
         life, events = run_life(sim, read_by[g], sc, ones, s)
         lam = np.random.default_rng([s, g, 48]).uniform()
+        fail, alarm = life["failure_h"], life["alarm_h"]
         for m, evs in events.items():
-            ok = [_as_prognosis(e, m) for e in evs if e["valid"] and e["hour"] < life["failure_h"]]
+            ok = [_as_prognosis(e, m) for e in evs if e["valid"] and e["hour"] < fail]
             ok = [p for p in ok if 0 < p.remaining_h_q05 and np.isfinite(p.remaining_h_q95)]
-            quarter = [share_bucket(predicted_share(p.hour, life["alarm_h"],
-                                                    p.remaining_h_median)) for p in ok]
+            quarter = [share_bucket((fail - p.hour) / (fail - alarm)) for p in ok]
             for b in range(len(labels)):  # the last: all quarters
                 inb = [p for p, q in zip(ok, quarter, strict=True)
                        if b == len(labels) - 1 or q == b]
                 if inb:
-                    picked[m][b].append((inb[int(round(lam * (len(inb) - 1)))],
-                                         life["failure_h"]))
+                    picked[m][b].append((inb[int(round(lam * (len(inb) - 1)))], fail))
     scales, info = {}, []
     for m in METHODS:
-        raw = [conformal_interval_scale([p for p, _ in pk], np.array([f for _, f in pk]),
-                                        sc.coverage) if pk else np.inf for pk in picked[m]]
-        pooled = raw[-1] if picked[m][-1] else 1.0
-        used = [min(r if np.isfinite(r) else pooled, MAX_SCALE) for r in raw[:-1]]
-        used.append(min(pooled, MAX_SCALE))
-        scales[m] = tuple(float(u) for u in used[:-1])
-        info += [{"method": m, "quarter": q, "lives": len(pk), "scale": r, "scale_used": u}
+        raw = [tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage)
+               if pk else (np.inf, np.inf) for pk in picked[m]]
+        pooled = raw[-1] if picked[m][-1] and np.isfinite(raw[-1][0]) else (1.0, 1.0)
+        used = [tuple(min(v, MAX_SCALE) for v in (r if np.isfinite(r[0]) else pooled))
+                for r in raw]
+        scales[m] = (tuple(u[0] for u in used[:-1]), tuple(u[1] for u in used[:-1]))
+        info += [{"method": m, "quarter": q, "lives": len(pk), "lower": r[0], "upper": r[1],
+                  "lower_used": u[0], "upper_used": u[1]}
                  for q, pk, r, u in zip(labels, picked[m], raw, used, strict=True)]
-        if max(r if np.isfinite(r) else pooled for r in raw[:-1]) > MAX_SCALE:
+        if max(max(r if np.isfinite(r[0]) else pooled) for r in raw[:-1]) > MAX_SCALE:
             log.warning("calibration of %s: scales %s capped at %g (%s lives)", m,
-                        [round(r, 2) for r in raw[:-1]], MAX_SCALE,
+                        [tuple(round(v, 2) for v in r) for r in raw[:-1]], MAX_SCALE,
                         [len(pk) for pk in picked[m][:-1]])
     return scales, info
 
@@ -645,7 +646,7 @@ def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStu
         life, events = run_life(sim, model, sc, scales, s)
         key = {"dataset": dataset, "held_out_gear": g, "seed": s}
         lives.append({**key, **life})
-        rows += _rows(key, life, events, scales)
+        rows += _rows(key, life, events)
         if twin is not None:
             changes += _changes(key, life, events, *run_life(twin, model, sc, scales, s),
                                 life["onset_h"] + sc.payload_after_h, sc.prognosis.every_h)

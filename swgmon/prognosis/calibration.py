@@ -1,5 +1,5 @@
-"""Calibration of the prognosis's interval (:mod:`.growth`) by split
-conformal prediction across lives."""
+"""Calibration of the prognosis's interval (:mod:`.growth`) by split conformal prediction
+across lives, its lower and upper tails apart."""
 
 from __future__ import annotations
 
@@ -8,24 +8,30 @@ import numpy as np
 from swgmon.prognosis.growth import Prognosis
 from swgsim.base.typed import check_range
 
-__all__ = ["conformal_interval_scale"]
+__all__ = ["tail_scales"]
 
 
-def conformal_interval_scale(prognoses: list[Prognosis], failure_hours: np.ndarray,
-                             coverage: float = 0.9) -> float:
-    """Split-conformal factor on the interval's log half-widths about the median.
+def tail_scales(prognoses: list[Prognosis], failure_hours: np.ndarray,
+                coverage: float = 0.9) -> tuple[float, float]:
+    """Split-conformal factors on the interval's lower and upper log half-widths.
 
-    Each score is how many of its log half-widths the true failure lies from the median
-    (the lower one below it, the upper above); the factor is the scores'
-    ⌈(n + 1) coverage⌉-th smallest [split conformal, Lei et al., "Distribution-free
-    predictive inference for regression", JASA 113 (2018) 1094-1111 [unverified:
-    recalled]]. Calibrate across lives of the training gears, one prognosis per life (the
-    lives are then exchangeable; windows of one life are not), never the held-out gear's.
+    Each prognosis gives two scores: how many of its lower log half-widths the true
+    remaining life lies below the median, (ln m − ln r) / (ln m − ln q05), and how many
+    upper ones above it, (ln r − ln m) / (ln q95 − ln m) (one of them negative). Each
+    factor is its scores' ⌈(n + 1)(1 + coverage)/2⌉-th smallest, so that each tail misses
+    at most (1 − coverage)/2 and the interval covers at least ``coverage`` (conformalized
+    quantile regression's tails calibrated apart: Romano, Patterson and Candès, NeurIPS
+    2019, sec. 4; split conformal: Lei et al., JASA 113 (2018) 1094-1111). A factor below
+    0 is taken as 0: the median stays inside. Calibrate across lives of the training
+    gears, one prognosis per life (the lives are then exchangeable; windows of one life
+    are not), never the held-out gear's; for a label-conditional interval, once per
+    quarter of the true remaining share, on the prognoses of that quarter
+    (:func:`~.inputs.calibrated_interval`).
 
     Parameters
     ----------
     prognoses : list of Prognosis
-        Valid prognoses with finite, positive quantiles, made at ``interval_scale`` 1.
+        Valid prognoses with finite, positive quantiles, made with factors 1.
     failure_hours : ndarray, shape (len(prognoses),)
         Each life's true failure hour [h].
     coverage : float
@@ -33,8 +39,9 @@ def conformal_interval_scale(prognoses: list[Prognosis], failure_hours: np.ndarr
 
     Returns
     -------
-    float
-        ``PrognosisConfig.interval_scale`` [-]; inf when n is too small for ``coverage``.
+    (float, float)
+        ``PrognosisConfig.lower_scale`` and ``upper_scale`` [-], each >= 0; inf when n is
+        too small for ``coverage``.
 
     Raises
     ------
@@ -56,7 +63,10 @@ def conformal_interval_scale(prognoses: list[Prognosis], failure_hours: np.ndarr
     left = truth - np.array([p.hour for p in prognoses])
     lq = np.log(q)
     lt = np.log(np.maximum(left, 1e-9))
-    score = np.where(lt < lq[:, 1], (lq[:, 1] - lt) / (lq[:, 1] - lq[:, 0]),
-                     (lt - lq[:, 1]) / (lq[:, 2] - lq[:, 1]))
-    rank = int(np.ceil((score.size + 1) * coverage))
-    return float(np.sort(score)[rank - 1]) if rank <= score.size else float("inf")
+    lower = (lq[:, 1] - lt) / np.maximum(lq[:, 1] - lq[:, 0], 1e-12)
+    upper = (lt - lq[:, 1]) / np.maximum(lq[:, 2] - lq[:, 1], 1e-12)
+    rank = int(np.ceil((truth.size + 1) * (1.0 + coverage) / 2.0))
+    if rank > truth.size:
+        return float("inf"), float("inf")
+    return (max(float(np.sort(lower)[rank - 1]), 0.0),
+            max(float(np.sort(upper)[rank - 1]), 0.0))

@@ -18,8 +18,8 @@ from swgsim.datasets.schedule import LifeConfig
 from swgsim.gear.faults import get_fault
 
 __all__ = ["LONE_WINDOW_H", "Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track",
-           "check_track", "from_samples", "interval_scale_of", "not_valid", "not_yet_valid",
-           "predicted_share", "share_bucket"]
+           "calibrated_interval", "check_track", "from_samples", "not_valid",
+           "not_yet_valid", "scaled_interval", "share_bucket"]
 
 
 #: Operating hours a lone recorded window holds (no interval to take the median of): the
@@ -48,13 +48,12 @@ class PrognosisConfig:
     log_scale_span : float
         Half-width of that grid around ln s = 0, in (0, 10] [-] (5: s within a factor
         e^5 = 148 of the growth's constants [choice]).
-    interval_scale : tuple of float
-        Factor on the interval's log half-widths about the median, each in (0, 20] [-]: one
-        for every prognosis, or one per quarter of the predicted remaining share
-        (:func:`predicted_share`, quarters as
-        :data:`~.scores.SHARE_BUCKETS`: late in the span first). (1,): the
-        posterior's own; :func:`~.calibration.conformal_interval_scale`
-        calibrates each.
+    lower_scale, upper_scale : tuple of float
+        Factors on the interval's lower and upper log half-widths about the median, each
+        in [0, 20] [-], calibrated apart (CQR-style, :func:`~.calibration.tail_scales`):
+        one pair for every prognosis, or one per quarter of the *true* remaining share
+        (:data:`~.scores.SHARE_BUCKETS`; label-conditional, :func:`calibrated_interval`).
+        (1,), (1,): the posterior's own interval.
     in_sight_h : float
         Remaining hours beyond which a sample counts as "no failure in sight" (inf), in
         (0, 10^7] [h] (10^6 [choice]).
@@ -74,7 +73,8 @@ class PrognosisConfig:
     n_samples: int = 4000
     n_grid: int = 401
     log_scale_span: float = 5.0
-    interval_scale: tuple[float, ...] = (1.0,)
+    lower_scale: tuple[float, ...] = (1.0,)
+    upper_scale: tuple[float, ...] = (1.0,)
     in_sight_h: float = 1e6
     max_bins: int = 256
     to_failure: RunToFailure = field(default_factory=RunToFailure)
@@ -107,14 +107,16 @@ class PrognosisConfig:
             check_range(v, lo, hi, f"{where}.{name}")
         check_range(self.min_track_h, 0.0, 1000.0, f"{where}.min_track_h", "h", lo_open=True)
         check_range(self.log_scale_span, 0.0, 10.0, f"{where}.log_scale_span", lo_open=True)
-        k = self.interval_scale
-        if isinstance(k, (str, bytes)) or not isinstance(k, (tuple, list)) \
-                or len(k) not in (1, len(SHARE_BUCKETS)):
-            raise ValueError(f"{where}.interval_scale must be a list of 1 or "
-                             f"{len(SHARE_BUCKETS)} factors (one per quarter of the "
-                             f"predicted remaining share), got {k!r}")
-        for i, v in enumerate(k):
-            check_range(v, 0.0, 20.0, f"{where}.interval_scale[{i}]", lo_open=True)
+        for name in ("lower_scale", "upper_scale"):
+            k = getattr(self, name)
+            if isinstance(k, (str, bytes)) or not isinstance(k, (tuple, list)) \
+                    or len(k) not in (1, len(SHARE_BUCKETS)) \
+                    or len(k) != len(self.lower_scale):
+                raise ValueError(f"{where}.{name} must be a list of 1 or "
+                                 f"{len(SHARE_BUCKETS)} factors (one per quarter of the "
+                                 f"true remaining share), as many as lower_scale; got {k!r}")
+            for i, v in enumerate(k):
+                check_range(v, 0.0, 20.0, f"{where}.{name}[{i}]")
         check_range(self.in_sight_h, 0.0, 1e7, f"{where}.in_sight_h", "h", lo_open=True)
         unset = dataclasses.replace(self.to_failure, failure=None)
         for law, faults in LAWS.items():
@@ -353,29 +355,6 @@ def not_yet_valid(h: np.ndarray, cfg: PrognosisConfig, alarm_hour: float) -> str
     return ""
 
 
-def predicted_share(hour: float, alarm_hour: float, remaining_h: float) -> float:
-    """The share of the prognosis's span still to come, as the prognosis itself sees it:
-    r / (t − t_alarm + r), r its median remaining hours (the known counterpart of
-    :func:`~.scores.remaining_fraction`, which needs the true failure).
-
-    Parameters
-    ----------
-    hour, alarm_hour : float
-        Operating hours of the prognosis and of the alarm it follows [h].
-    remaining_h : float
-        Median remaining hours [h], >= 0 (inf: 1).
-
-    Returns
-    -------
-    float
-        In [0, 1] [-]; 1 at the alarm.
-    """
-    if not np.isfinite(remaining_h):
-        return 1.0
-    span = hour - alarm_hour + remaining_h
-    return float(remaining_h / span) if span > 0 else 1.0
-
-
 def share_bucket(share: float) -> int:
     """Index into :data:`~.scores.SHARE_BUCKETS` of a share in [0, 1] (the
     last bucket holds 1)."""
@@ -399,7 +378,7 @@ def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
     remaining : ndarray, shape (N,)
         Samples of the remaining operating hours [h]; beyond ``cfg.in_sight_h`` inf.
     cfg : PrognosisConfig
-        Its ``in_sight_h`` and ``interval_scale``.
+        Its ``in_sight_h``, ``lower_scale`` and ``upper_scale``.
     alarm_hour : float
         Operating hour of the alarm the prognosis follows [h] (its predicted share picks
         the interval scale).
@@ -407,39 +386,67 @@ def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
     Returns
     -------
     Prognosis
-        Median, 5 % and 95 % quantiles, the interval's log half-widths about the median
-        times ``cfg.interval_scale`` (:func:`interval_scale_of`).
+        Median, and the 5 % and 95 % quantiles calibrated by ``cfg.lower_scale`` and
+        ``cfg.upper_scale`` (:func:`calibrated_interval`).
     """
     r = np.where(remaining > cfg.in_sight_h, np.inf, np.maximum(remaining, 0.0))
     q05, med, q95 = np.quantile(r, [0.05, 0.5, 0.95], method="inverted_cdf")  # inf-safe
-    k = interval_scale_of(cfg.interval_scale, hour, alarm_hour, float(med))
-    if k != 1.0 and 0 < med < np.inf:
-        q05 = med * (q05 / med) ** k if q05 > 0 else 0.0
-        q95 = med * (q95 / med) ** k
+    q05, q95 = calibrated_interval(float(q05), float(med), float(q95), hour - alarm_hour,
+                                   cfg.lower_scale, cfg.upper_scale)
     q05, med, q95 = (float(q) for q in (q05, med, q95))
     return Prognosis(hour, fault, method, True, "", now, thr, med, q05, q95,
                      hour + med, hour + q05, hour + q95)
 
 
-def interval_scale_of(scales: tuple[float, ...], hour: float, alarm_hour: float,
-                      remaining_h: float) -> float:
-    """The factor of ``PrognosisConfig.interval_scale`` a prognosis gets: the only one, or
-    that of the quarter its :func:`predicted_share` falls in.
+def scaled_interval(q05: float, med: float, q95: float, lower: float, upper: float
+                    ) -> tuple[float, float]:
+    """The interval with its lower and upper log half-widths about the median times
+    ``lower`` and ``upper`` [h] (unchanged where the median is 0 or inf)."""
+    if not 0 < med < np.inf:
+        return q05, q95
+    return (med * (q05 / med) ** lower if q05 > 0 else 0.0), med * (q95 / med) ** upper
+
+
+def calibrated_interval(q05: float, med: float, q95: float, elapsed_h: float,
+                        lower: tuple[float, ...], upper: tuple[float, ...]
+                        ) -> tuple[float, float]:
+    """The prognosis's interval, calibrated conditional on the true remaining share.
+
+    With one pair of factors, :func:`scaled_interval`. With one pair per quarter of
+    :data:`~.scores.SHARE_BUCKETS`, a remaining life r belongs to the set where it lies
+    inside the interval scaled by the factors of *its own* quarter: its share
+    r / (elapsed + r) is a known function of the candidate (label-conditional, "Mondrian"
+    conformal prediction: Vovk, Gammerman and Shafer, "Algorithmic Learning in a Random
+    World", Springer 2005, ch. 4.5; Sadinle, Lei and Wasserman, JASA 114 (2019) 223-234).
+    Quarter b holds r in [s0 e / (1 - s0), s1 e / (1 - s1)); the set is the union of
+    each quarter's range cut by its scaled interval, returned as its hull. The quarter of
+    the median is never empty (factors >= 0 keep the median inside), so neither is the set.
 
     Parameters
     ----------
-    scales : tuple of float, length 1 or len(SHARE_BUCKETS)
-    hour, alarm_hour, remaining_h : float
-        As :func:`predicted_share` [h].
+    q05, med, q95 : float
+        The posterior's quantiles of the remaining hours [h] (q95 may be inf).
+    elapsed_h : float
+        Operating hours since the alarm the prognosis follows, >= 0 [h].
+    lower, upper : tuple of float
+        ``PrognosisConfig.lower_scale`` and ``upper_scale`` [-].
 
     Returns
     -------
-    float
-        [-]
+    (float, float)
+        The interval's ends [h].
     """
-    if len(scales) == 1:
-        return float(scales[0])
-    return float(scales[share_bucket(predicted_share(hour, alarm_hour, remaining_h))])
+    if len(lower) == 1:
+        return scaled_interval(q05, med, q95, lower[0], upper[0])
+    e = max(float(elapsed_h), 0.0)
+    ends = []
+    for b, (s0, s1) in enumerate(SHARE_BUCKETS):
+        r0 = s0 * e / (1.0 - s0)
+        r1 = np.inf if b == len(SHARE_BUCKETS) - 1 else s1 * e / (1.0 - s1)
+        lo, hi = scaled_interval(q05, med, q95, lower[b], upper[b])
+        if max(lo, r0) <= min(hi, r1):
+            ends.append((max(lo, r0), min(hi, r1)))
+    return min(a for a, _ in ends), max(z for _, z in ends)
 
 
 def not_valid(hour: float, fault: str, method: str, now: float, thr: float,

@@ -85,8 +85,9 @@ class StreamPrognosis:
     planned : list of DutyBlock
         A future duty the user declares, repeated from its first block; empty: the
         recorded duty's mean rate.
-    min_track_h, min_estimates, n_samples, n_grid, log_scale_span, interval_scale, \
-in_sight_h, max_bins : float, int, int, int, float, tuple of float, float, int
+    min_track_h, min_estimates, n_samples, n_grid, log_scale_span, lower_scale, \
+upper_scale, in_sight_h, max_bins : float, int, int, int, float, tuple of float, tuple of \
+float, float, int
         The predictor's (:class:`.growth.PrognosisConfig`, its defaults
         and ranges).
     to_failure : RunToFailure
@@ -107,7 +108,8 @@ in_sight_h, max_bins : float, int, int, int, float, tuple of float, float, int
     n_samples: int = PrognosisConfig.n_samples
     n_grid: int = PrognosisConfig.n_grid
     log_scale_span: float = PrognosisConfig.log_scale_span
-    interval_scale: tuple[float, ...] = PrognosisConfig.interval_scale
+    lower_scale: tuple[float, ...] = PrognosisConfig.lower_scale
+    upper_scale: tuple[float, ...] = PrognosisConfig.upper_scale
     in_sight_h: float = PrognosisConfig.in_sight_h
     max_bins: int = PrognosisConfig.max_bins
     to_failure: RunToFailure = field(default_factory=RunToFailure)

@@ -26,7 +26,7 @@ TINY = ["prognosis.run_on=[tiny]", "+dataset@prognosis.datasets.tiny=tiny_bench"
         "prognosis.study.prognosis.min_track_h=0.5", "prognosis.study.prognosis.min_estimates=3",
         "prognosis.n_jobs=1", "prognosis.progress=false"]
 #: The columns of results.csv: one row per prognosis and method.
-COLUMNS = ["dataset", "held_out_gear", "seed", "fault", "payload", "method", "interval_scale",
+COLUMNS = ["dataset", "held_out_gear", "seed", "fault", "payload", "method",
            "alarm_h", "hour", "failure_h", "true_remaining_h", "valid", "remaining_h",
            "remaining_h_q05", "remaining_h_q95"]
 
@@ -68,10 +68,9 @@ def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
     assert "## Targets" in table and ("pass" in table or "fail" in table)
     assert summary["lives"] == 1 and (out / "prognosis.png").stat().st_size > 10_000
     cal = pd.read_csv(out / "calibration.csv")
-    assert set(cal.method) == {"growth", "linear", "wiener"} and (cal.scale_used > 0).all()
+    assert set(cal.method) == {"growth", "linear", "wiener"}
+    assert (cal.lower_used >= 0).all() and (cal.upper_used >= 0).all()
     assert cal.groupby("method").quarter.apply(list).map(len).eq(5).all()  # 4 and all
-    used = rows[rows.valid].interval_scale
-    assert used.notna().all() and used.isin(cal.scale_used.to_numpy()).all()
     changes = pd.read_csv(out / "changes.csv")  # the life again as a twin at payload 1
     assert list(changes.method) == ["growth", "linear", "wiener"]
     assert (changes.failure_h < changes.twin_failure_h).all()  # heavier: earlier (the law)
@@ -231,19 +230,17 @@ def test_the_model_is_trained_on_every_severity_a_life_passes_through():
             assert trained[0] <= lived[0] + trained[1] - trained[0] and lived[-1] <= trained[-1]
 
 
-def test_a_prognosis_with_no_failure_in_sight_gets_the_earliest_quarters_scale():
-    """A valid prognosis whose median lies beyond in_sight_h (null remaining hours):
-    predicted share 1, the scale of the quarter that holds the alarm; a prognosis not
-    yet valid gets none."""
+def test_a_prognosis_with_no_failure_in_sight_is_a_row_with_an_open_end():
+    """A valid prognosis whose median lies beyond in_sight_h (null remaining hours): its
+    remaining hours inf; a prognosis not yet valid: NaN."""
     from swgmon.evaluation.prognosis_evaluation import _rows
 
     life = {"fault": "wear", "payload": 1.0, "alarm_h": 1.0, "failure_h": 10.0}
     ev = {"hour": 2.0, "valid": True, "remaining_h": None, "remaining_h_q05": 5.0,
           "remaining_h_q95": None}
-    rows = _rows({}, life, {"growth": [ev, {**ev, "valid": False, "remaining_h_q05": None}]},
-                 {"growth": (1.0, 2.0, 3.0, 4.0)})
-    assert rows[0]["interval_scale"] == 4.0 and rows[0]["remaining_h"] == np.inf
-    assert np.isnan(rows[1]["interval_scale"]) and np.isnan(rows[1]["remaining_h"])
+    rows = _rows({}, life, {"growth": [ev, {**ev, "valid": False, "remaining_h_q05": None}]})
+    assert rows[0]["remaining_h"] == np.inf and rows[0]["remaining_h_q95"] == np.inf
+    assert np.isnan(rows[1]["remaining_h"])
 
 
 def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
@@ -279,7 +276,7 @@ def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
                               faults={"eccentric_wg": gf}, onset_window_h=[0.5, 1],
                               max_life_h=6, payload_after_h=1, payloads=[1.0])
     banks = {g: record_bank(p, g) for g in (1, 2, 3)}
-    scales = {m: (1.0,) * 4 for m in METHODS}
+    scales = {m: ((1.0,) * 4, (1.0,) * 4) for m in METHODS}
     short = {}
     for beyond in (0.0, 0.5):
         levels = training_levels("eccentric_wg", gf, sc.severity_levels // 4, beyond)
