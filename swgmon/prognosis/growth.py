@@ -35,7 +35,7 @@ from swgsim.datasets.growth import (
 
 __all__ = ["Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track", "check_track",
            "exposure", "from_samples", "hours_for_exposure", "not_valid", "not_yet_valid",
-           "predict_growth", "severity_of", "transformed"]
+           "predict_growth", "residual_correlation", "severity_of", "transformed"]
 
 #: z of a central 90 % interval of a normal distribution, its half-width in σ [-].
 Z90 = 1.6448536269514722
@@ -216,14 +216,42 @@ def _grid_posterior(ls: np.ndarray, y: np.ndarray, w: np.ndarray, x: np.ndarray,
     return logp - logp.max(), u0, info
 
 
+def residual_correlation(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
+                         tf: RunToFailure, ls: np.ndarray, cap: float) -> float:
+    """Lag-1 autocorrelation of the standardised residuals at the posterior's peak over
+    grid ``ls``, in [0, ``cap``] [-].
+
+    Neighbouring severity estimates are read by one regressor from windows of one gear
+    in one state: their errors are correlated, not independent as the likelihood of
+    :func:`_grid_posterior` takes them. An AR(1) error with coefficient ρ carries the
+    information of n (1 − ρ) / (1 + ρ) independent ones about a level or a slope (the
+    effective sample size; Box, Jenkins and Reinsel, "Time Series Analysis", 4th ed.,
+    Wiley 2008, sec. 2.1.5), so the fit's weights are scaled by that factor
+    (:func:`_posterior_draws`). A negative ρ is taken as 0 (no gain claimed).
+    """
+    logp, u0, _ = _grid_posterior(ls, y, w, x, fault, tf)
+    k = int(np.argmax(logp))
+    b = transformed(fault, y, tf)[1]
+    sev, _ = severity_of(fault, u0[k] + b * np.exp(ls[k]) * x, tf)
+    z = (y - sev) * np.sqrt(w)
+    z = z - z.mean()
+    if z.size < 3 or not np.any(z):
+        return 0.0
+    return float(np.clip((z[1:] @ z[:-1]) / (z @ z), 0.0, cap))
+
+
 def _posterior_draws(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
                      cfg: PrognosisConfig, rng: np.random.Generator
                      ) -> tuple[np.ndarray, np.ndarray]:
     """Draws of (s, u0), shapes (N,) each: the grid posterior of ln s over
-    ±``log_scale_span``, then again on ``n_grid`` points over where it exceeds e^-25 of its
-    peak (a cell beyond each end) [choice: a precise track's posterior is narrower than a
-    coarse cell], u0 given s normal about its fit (Laplace's method)."""
+    ±``log_scale_span`` with the weights scaled to the effective sample size of an AR(1)
+    error (:func:`residual_correlation`), then again on ``n_grid`` points over where it
+    exceeds e^-25 of its peak (a cell beyond each end) [choice: a precise track's
+    posterior is narrower than a coarse cell], u0 given s normal about its fit (Laplace's
+    method)."""
     ls = np.linspace(-cfg.log_scale_span, cfg.log_scale_span, cfg.n_grid)
+    rho = residual_correlation(y, w, x, fault, cfg.to_failure, ls, cfg.max_correlation)
+    w = w * (1.0 - rho) / (1.0 + rho)
     logp, _, _ = _grid_posterior(ls, y, w, x, fault, cfg.to_failure)
     keep = np.flatnonzero(logp > -25.0)
     cell = ls[1] - ls[0]

@@ -54,6 +54,10 @@ class PrognosisConfig:
         one pair for every prognosis, or one per quarter of the *true* remaining share
         (:data:`~.scores.SHARE_BUCKETS`; label-conditional, :func:`calibrated_interval`).
         (1,), (1,): the posterior's own interval.
+    max_correlation : float
+        Largest lag-1 autocorrelation of the estimates' errors the fit takes, in [0, 0.99]
+        [-] (0.95 [choice]: an effective sample size of at least n/39); 0: the estimates
+        taken as independent (:func:`.growth.residual_correlation`).
     in_sight_h : float
         Remaining hours beyond which a sample counts as "no failure in sight" (inf), in
         (0, 10^7] [h] (10^6 [choice]).
@@ -75,6 +79,7 @@ class PrognosisConfig:
     log_scale_span: float = 5.0
     lower_scale: tuple[float, ...] = (1.0,)
     upper_scale: tuple[float, ...] = (1.0,)
+    max_correlation: float = 0.95
     in_sight_h: float = 1e6
     max_bins: int = 256
     to_failure: RunToFailure = field(default_factory=RunToFailure)
@@ -107,6 +112,7 @@ class PrognosisConfig:
             check_range(v, lo, hi, f"{where}.{name}")
         check_range(self.min_track_h, 0.0, 1000.0, f"{where}.min_track_h", "h", lo_open=True)
         check_range(self.log_scale_span, 0.0, 10.0, f"{where}.log_scale_span", lo_open=True)
+        check_range(self.max_correlation, 0.0, 0.99, f"{where}.max_correlation")
         for name in ("lower_scale", "upper_scale"):
             k = getattr(self, name)
             if isinstance(k, (str, bytes)) or not isinstance(k, (tuple, list)) \

@@ -86,8 +86,8 @@ class StreamPrognosis:
         A future duty the user declares, repeated from its first block; empty: the
         recorded duty's mean rate.
     min_track_h, min_estimates, n_samples, n_grid, log_scale_span, lower_scale, \
-upper_scale, in_sight_h, max_bins : float, int, int, int, float, tuple of float, tuple of \
-float, float, int
+upper_scale, max_correlation, in_sight_h, max_bins : float, int, int, int, float, tuple of \
+float, tuple of float, float, float, int
         The predictor's (:class:`.growth.PrognosisConfig`, its defaults
         and ranges).
     to_failure : RunToFailure
@@ -110,6 +110,7 @@ float, float, int
     log_scale_span: float = PrognosisConfig.log_scale_span
     lower_scale: tuple[float, ...] = PrognosisConfig.lower_scale
     upper_scale: tuple[float, ...] = PrognosisConfig.upper_scale
+    max_correlation: float = PrognosisConfig.max_correlation
     in_sight_h: float = PrognosisConfig.in_sight_h
     max_bins: int = PrognosisConfig.max_bins
     to_failure: RunToFailure = field(default_factory=RunToFailure)
