@@ -207,7 +207,8 @@ PAPER_FIGURES = (
                      "one panel per fault, and how far each fault moves each signal (RMS "
                      "of the difference, log scale)"),
     ("fig7_dft", "Fig. 7 analogue: the DFT of s0, s1 and the pair differences Δs13, Δs24 "
-                 "over the order of the input rotation, every class"),
+                 "over the order of the input rotation, every class; below, each fault's "
+                 "distance from healthy's (where the small faults show)"),
     ("fig8_disturbed", "Fig. 8 analogue: a healthy window clean (solid) and disturbed by "
                        "eq. (10) (dashed)"),
     ("confusion_VII", "Table VII (4-fold CV, clean): test confusion summed over the "
