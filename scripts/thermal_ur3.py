@@ -25,6 +25,7 @@ An effect holds for the arm when it passes on most of the joints it was not fitt
 
     python scripts/thermal_ur3.py PATH/ur3_cobotops_2022-10-26.csv
     python scripts/thermal_ur3.py PATH/ur3.csv --figure docs/figures/thermal_ur3.png
+    python scripts/thermal_ur3.py PATH/ur3.csv --room-c 22.5   # a measured room [°C]
 """
 
 from __future__ import annotations
@@ -161,6 +162,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("path", type=Path, help="ur3_cobotops_2022-10-26.csv")
     ap.add_argument("--joints", type=int, nargs="*", default=list(range(6)))
     ap.add_argument("--figure", type=Path, default=None)
+    ap.add_argument("--room-c", type=float, default=None,
+                    help="the room's measured temperature [°C]: the ambient held at it")
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
     from swgcal.thermal import build_problem, calibrate
@@ -168,12 +171,14 @@ def main(argv: list[str] | None = None) -> int:
 
     t0 = time.perf_counter()
     log = read_joint_log(args.path)
-    results = [calibrate(build_problem(log, joint=j)) for j in args.joints]
+    results = [calibrate(build_problem(log, joint=j, room_c=args.room_c)) for j in args.joints]
     rows = [_row(r) for r in results]
     kept_on = Counter(n.split("#")[0] for r in rows for n in r["effects"])
-    print(f"sensor resolution (smallest step between readings): "
-          f"{results[0].problem.meta['resolution']:.4g} K; the room <= the coolest joint's "
-          f"first reading, {results[0].problem.meta['room_max_c']:.4g} °C")
+    meta = results[0].problem.meta
+    print(f"sensor resolution (smallest step between readings): {meta['resolution']:.4g} K; "
+          + (f"the room measured, {meta['room_c']:.4g} °C (the ambient held at it)"
+             if meta.get("room_c") is not None else
+             f"the room <= the coolest joint's first reading, {meta['room_max_c']:.4g} °C"))
     print("| joint | physical (alone / final) | R_th [K/W] | τ [min] | T_amb [°C] | ΔT_0 [K] | "
           "effects kept | forward: fit A, RMSE on B [K] | backward: fit B, RMSE on A [K] |")
     print("|---|---|---|---|---|---|---|---|---|")

@@ -25,8 +25,8 @@ from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
 from .friction.data import REQUIRED_COLUMNS, FrictionRecording, read_csv_header
 from .loop import CalibrationResult, Problem, SelectionConfig
+from .report import heldout_whiteness_figure, simulation_files
 from .report import render_report as render_parts
-from .report import simulation_files
 
 __all__ = ["KINDS", "MeasuredDataError", "detect_kind", "kind_module", "options_from_config",
            "build_problem", "calibrate", "summarize", "render_report", "make_figures",
@@ -246,14 +246,16 @@ def render_report(result: CalibrationResult, summary: dict[str, Any],
 
 
 def make_figures(result: CalibrationResult, out_dir: str | Path) -> dict[str, str]:
-    """Diagnosis figures of a calibration, written to ``out_dir/figures/``.
+    """Diagnosis figures of a calibration, written to ``out_dir/figures/``: the kind's and
+    the held-out whiteness test's (:func:`swgcal.report.heldout_whiteness_figure`).
 
     Returns
     -------
     dict of str to str
         Figure key -> path relative to ``out_dir``.
     """
-    return kind_module(result.problem.kind).make_figures(result, out_dir)
+    return {**kind_module(result.problem.kind).make_figures(result, out_dir),
+            **heldout_whiteness_figure(result, out_dir)}
 
 
 def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
@@ -284,7 +286,7 @@ def write_outputs(result: CalibrationResult, out_dir: str | Path, *,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     summary = kind.summarize(result, source)
-    summary["figures"] = kind.make_figures(result, out) if figures else {}
+    summary["figures"] = make_figures(result, out) if figures else {}
     extra = simulation_files(kind.REPORT, summary)
     summary["files"] = ["report.md", "summary.json", *extra]
     atomic_write_bytes(out / "report.md",

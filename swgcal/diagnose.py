@@ -37,6 +37,7 @@ log = logging.getLogger(__name__)
 __all__ = [
     "WHITENESS_RATIO",
     "whiteness",
+    "acf_and_periodogram",
     "Probe",
     "BinnedProbe",
     "PeriodicProbe",
@@ -362,6 +363,55 @@ def whiteness(t: np.ndarray, r: np.ndarray, idx: np.ndarray) -> tuple[float, flo
             den += run.size - 2
     nf = float(np.sqrt(num / den)) if den else float("nan")
     return rms, nf, rms / nf if nf > 0 else float("nan")
+
+
+def acf_and_periodogram(t: np.ndarray, r: np.ndarray, idx: np.ndarray, max_lag: int = 200,
+                        segment: int = 1024) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The whiteness test's views of ``r[idx]`` (docs/calibration.md, "The held-out
+    whiteness test as a figure"), pooled over the runs of at least 8 consecutive samples:
+    the normalised autocorrelation (a lag never crosses a run's end) and the averaged
+    periodogram (Welch: segments of ``segment`` samples, or a shorter run whole).
+
+    Parameters
+    ----------
+    t, r : ndarray, shape (n,)
+        Time [s] and residual [data units].
+    idx : ndarray of int
+        Samples used, increasing.
+    max_lag, segment : int
+        Largest lag (at most the longest run less one), segment length [samples].
+
+    Returns
+    -------
+    acf : ndarray, shape (k + 1,)
+        ρ_0 = 1, ..., ρ_k of the mean-removed residual.
+    freq, power : ndarray, shape (m,)
+        Frequencies above 0 [Hz] (median sample spacing) and the mean of |X_f|² / L
+        [(data units)²]: white noise of variance σ² gives σ² at every frequency.
+
+    Raises
+    ------
+    ValueError
+        No run of 8 consecutive samples.
+    """
+    idx = np.asarray(idx)
+    runs = [u for u in np.split(idx, np.flatnonzero(np.diff(idx) != 1) + 1) if u.size >= 8]
+    if not runs:
+        raise ValueError("no run of 8 consecutive samples for the whiteness views")
+    x = np.asarray(r, float) - float(np.mean(r[idx]))
+    k = min(max_lag, max(u.size for u in runs) - 1)
+    acf, segs = np.zeros(k + 1), []
+    for u in runs:
+        f = np.fft.rfft(x[u], 2 * u.size)
+        m = min(u.size, k + 1)
+        acf[:m] += np.fft.irfft(f * np.conj(f), 2 * u.size)[:m]
+        segs += [u[s:s + segment] for s in range(0, u.size, segment)
+                 if s == 0 or u.size - s >= segment]
+    dt = float(np.median(np.concatenate([np.diff(t[u]) for u in runs])))
+    freq = np.fft.rfftfreq(max(s.size for s in segs), dt)[1:]
+    power = np.mean([np.interp(freq, np.fft.rfftfreq(s.size, dt)[1:], np.abs(
+        np.fft.rfft(x[s] - x[s].mean())[1:]) ** 2 / s.size) for s in segs], axis=0)
+    return acf / acf[0], freq, power
 
 
 def _halves(t: np.ndarray, idx: np.ndarray, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:

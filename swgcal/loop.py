@@ -29,7 +29,7 @@ from .split import HeldOutSplit
 log = logging.getLogger(__name__)
 
 __all__ = ["Problem", "SelectionConfig", "CandidateScore", "Iteration", "CalibrationResult",
-           "select_effects", "refit_final", "gain_floor", "IMPLAUSIBLE_PREFIX"]
+           "select_effects", "refit_final", "gain_floor", "paired_gain", "IMPLAUSIBLE_PREFIX"]
 
 #: Status of a candidate rejected for a parameter outside its physical range, before them.
 IMPLAUSIBLE_PREFIX = "rejected: outside its physical range: "
@@ -114,6 +114,10 @@ class SelectionConfig:
         When no single candidate passes but some show evidence (held-out evidence or
         effective ΔBIC beyond its threshold), pairs of this many best candidates (by fit
         RSS) are tried jointly (0 or 1: no look-ahead).
+    gain_noise_z : float, default 1
+        The noise floor of a held-out gain in its standard errors, 0-10 (:func:`gain_floor`);
+        1: a gain's noise floor is its s.e. as a residual's is its σ (set after 2 was
+        measured on the shared recordings: docs/calibration.md, "Two floors of a gain").
     """
 
     min_rel_improvement: float = field(default=0.0, metadata=allowed(0, 1, hi_open=True))
@@ -127,6 +131,7 @@ class SelectionConfig:
     max_starts: int = field(default=3, metadata=allowed(1, 50))
     effective_bic: bool = True
     pair_candidates: int = field(default=4, metadata=allowed(0, 50))
+    gain_noise_z: float = field(default=1.0, metadata=allowed(0, 10, "standard errors"))
 
     def __post_init__(self) -> None:
         check_ranges(self)
@@ -160,6 +165,11 @@ class CandidateScore:
     small : bool
         Rejected only for lack of evidence although its held-out gain is positive: an
         effect that may be there but is too small for these data.
+    heldout_gain, gain_se_white, gain_se, gain_floor : float
+        RMSE_val,current − val_rmse, its paired s.e. (:func:`paired_gain`) with every
+        validation sample and with n_val / τ_int, the floor it must exceed [data units].
+    gain_floor_why : str
+        Both floors (:func:`gain_floor`) with their figures and which binds.
     """
 
     name: str
@@ -175,6 +185,11 @@ class CandidateScore:
     implausible: bool = False
     heldout_evidence: float = float("nan")
     small: bool = False
+    heldout_gain: float = float("nan")
+    gain_se_white: float = float("nan")
+    gain_se: float = float("nan")
+    gain_floor: float = float("nan")
+    gain_floor_why: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         return {"name": self.name, "kind": self.kind, "val_rmse": self.val_rmse,
@@ -182,7 +197,9 @@ class CandidateScore:
                 "delta_bic_eff": self.delta_bic_eff,
                 "heldout_evidence": self.heldout_evidence, "accepted": self.accepted,
                 "status": self.status, "params": self.params,
-                "implausible": self.implausible, "small": self.small}
+                "implausible": self.implausible, "small": self.small,
+                "heldout_gain": self.heldout_gain, "gain_se": self.gain_se,
+                "gain_floor": self.gain_floor, "gain_floor_why": self.gain_floor_why}
 
 
 @dataclass
@@ -291,9 +308,10 @@ def _score(problem: Problem, fit: FitResult) -> tuple[np.ndarray, float]:
 
 def _fit_candidate(problem: Problem, current: FitResult, new_terms: Sequence[Term],
                    starts_new: Sequence[Sequence[np.ndarray]], fit_kw: dict[str, Any],
-                   val_cur: float, kind: str) -> CandidateScore | None:
+                   r_cur: np.ndarray, kind: str) -> CandidateScore | None:
     """Add ``new_terms`` to the current model: their θ optimised, the rest held (or
-    optimised too, from the current values: :attr:`Problem.screen_jointly`)."""
+    optimised too, from the current values: :attr:`Problem.screen_jointly`); scored
+    against the current model's residual ``r_cur``."""
     sig, sp = problem.signals, problem.split
     cur_th = {t.name: th for t, th in zip(current.terms, current.thetas, strict=True)}
     new_st = {t.name: st for t, st in zip(new_terms, starts_new, strict=True)}
@@ -306,7 +324,10 @@ def _fit_candidate(problem: Problem, current: FitResult, new_terms: Sequence[Ter
     except (ValueError, np.linalg.LinAlgError) as e:
         log.warning("candidate %s failed: %s", "+".join(t.name for t in new_terms), e)
         return None
-    _, v = _score(problem, f)
+    r, v = _score(problem, f)
+    val = problem.split.validation
+    val_cur = _rmse(r_cur[val])
+    gain, se_white = paired_gain(r_cur[val], r[val])
     params: dict[str, float] = {}
     for t in new_terms:
         i = f.terms.index(t)
@@ -316,7 +337,7 @@ def _fit_candidate(problem: Problem, current: FitResult, new_terms: Sequence[Ter
         name=" + ".join(t.name for t in new_terms), kind=kind, val_rmse=v,
         rel_improvement=1.0 - v / val_cur if val_cur > 0 else 0.0,
         delta_bic=f.bic - current.bic, delta_bic_eff=float("nan"), accepted=False,
-        params=params, fit=f)
+        params=params, fit=f, heldout_gain=gain, gain_se_white=se_white)
 
 
 def _new_terms(c: CandidateScore, current: FitResult) -> list[Term]:
@@ -423,7 +444,7 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
         for new in _candidate_terms(problem, key, current, second):
             c = _fit_candidate(problem, current, new, [t.starts(sig, r_cur, sp.fit)
                                                        for t in new],
-                               fit_kw, val_cur, " + ".join(t.kind for t in new))
+                               fit_kw, r_cur, " + ".join(t.kind for t in new))
             if c is not None:
                 cands.append(c)
     cands.sort(key=lambda c: c.val_rmse)
@@ -450,11 +471,12 @@ def _candidates(problem: Problem, cfg: SelectionConfig, keys: Sequence[str],
 
 def _set_evidence(cands: Sequence[CandidateScore], current: FitResult, tau: float,
                   n_val: int, val_cur: float) -> None:
-    """Effective ΔBIC on the fit samples and held-out evidence 2 ln Λ_val (module doc),
-    both with n / τ_int effective samples."""
+    """Effective ΔBIC on the fit samples, held-out evidence 2 ln Λ_val (module doc) and the
+    held-out gain's s.e. (:func:`paired_gain`), all with n / τ_int effective samples."""
     tau = max(tau, 1.0)
     n_eff = current.n / tau
     for c in cands:
+        c.gain_se = float(c.gain_se_white * np.sqrt(tau))
         dk = c.fit.k - current.k
         c.delta_bic_eff = float(n_eff * np.log(max(c.fit.rss, 1e-300) / current.rss)
                                 + dk * np.log(n_eff))
@@ -463,7 +485,7 @@ def _set_evidence(cands: Sequence[CandidateScore], current: FitResult, tau: floa
 
 
 def _pairs(problem: Problem, cfg: SelectionConfig, current: FitResult,
-           cands: Sequence[CandidateScore], tau: float, val_cur: float,
+           cands: Sequence[CandidateScore], tau: float, r_cur: np.ndarray,
            fit_kw: dict[str, Any]) -> tuple[list[CandidateScore], float]:
     """Look-ahead when no single candidate passes: two effects that are confounded on
     the fit data may each fail alone (each absorbs part of the other and generalises
@@ -480,49 +502,94 @@ def _pairs(problem: Problem, cfg: SelectionConfig, current: FitResult,
             for f in (top[i].fit, top[j].fit):
                 th.update({t.name: x for t, x in zip(f.terms, f.thetas, strict=True)})
             c = _fit_candidate(problem, current, [ti, tj], [[th[ti.name]], [th[tj.name]]],
-                               {**fit_kw, "max_starts": 1}, val_cur, f"{ti.kind} + {tj.kind}")
+                               {**fit_kw, "max_starts": 1}, r_cur, f"{ti.kind} + {tj.kind}")
             if c is not None:
                 out.append(c)
     out.sort(key=lambda c: c.val_rmse)
     tau = min([tau] + [c.fit.tau_int for c in out
                        if _noise_model_member(problem, cfg, c, current)])
-    _set_evidence(out, current, tau, problem.split.validation.size, val_cur)
+    _set_evidence(out, current, tau, problem.split.validation.size,
+                  _rmse(r_cur[problem.split.validation]))
     return out, tau
 
 
-def gain_floor(problem: Problem) -> tuple[float, str]:
-    """The held-out gain an effect must exceed to be kept, and why.
+def paired_gain(r_cur: np.ndarray, r_cand: np.ndarray, tau_int: float = 1.0
+                ) -> tuple[float, float]:
+    """A candidate's held-out gain over the current model and its standard error, paired.
 
-    The sensor's resolution (:attr:`Problem.resolution`, a quantisation step): a gain of
-    the validation RMSE below it is finer than the sensor shows. The noise enters through
-    the evidence rule (:class:`SelectionConfig`): 2 ln Λ counts the validation samples as
-    n_val / τ_int effective ones, so a gain is weighed against the noise floor of the
-    paired comparison. A floor of the noise floor itself (gain > σ_n) would refuse a
-    ripple as large as the noise (its gain is 0.22 σ_n), which the data establish.
+    With d_i = r_cur,i² − r_cand,i² on the same samples, the mean square drops by mean(d),
+    s.e. sd(d) / sqrt(n / τ_int); the RMSE by g = mean(d) / (RMSE_cur + RMSE_cand)
+    exactly, its s.e. the same ratio (delta method). The noise both models share cancels.
+
+    Parameters
+    ----------
+    r_cur, r_cand : ndarray, shape (n,)
+        Residuals of the current model and of the candidate [data units].
+    tau_int : float, default 1
+        Integrated autocorrelation time [samples]: n / τ_int effective samples (as the
+        evidence rule counts them); below 1 counts as 1.
+
+    Returns
+    -------
+    gain, se : float
+        g and its s.e. [data units]; NaN without samples (se: fewer than 2).
+
+    Raises
+    ------
+    ValueError
+        The residuals differ in shape.
+    """
+    a, b = np.asarray(r_cur, float), np.asarray(r_cand, float)
+    if a.shape != b.shape:
+        raise ValueError(f"paired residuals differ in shape: {a.shape} and {b.shape}")
+    d, den = a * a - b * b, _rmse(a) + _rmse(b)
+    if not den > 0:
+        return (0.0, 0.0) if a.size else (float("nan"), float("nan"))
+    se = np.std(d, ddof=1) * np.sqrt(max(tau_int, 1.0) / a.size) if a.size > 1 else np.nan
+    return float(np.mean(d) / den), float(se / den)
+
+
+def gain_floor(problem: Problem, gain_se: float = 0.0,
+               z: float = SelectionConfig.gain_noise_z) -> tuple[float, str]:
+    """The held-out gain an effect must exceed to be kept: the larger of two floors.
+
+    The sensor's resolution (:attr:`Problem.resolution`, a quantisation step): a gain below
+    it is finer than the sensor shows. The gain's noise floor, z times its paired standard
+    error (:func:`paired_gain`): what noise alone gives. Not the residual's noise floor
+    σ_n: a ripple as large as the noise gains 0.22 σ_n, which the data establish; nor the
+    unpaired s.e. of one validation RMSE, which holds the noise both models share (twice
+    it refused a planted ripple's gain of 0.00097 N m).
 
     Parameters
     ----------
     problem : Problem
+        Its ``resolution`` and ``units``.
+    gain_se : float, default 0
+        The gain's standard error [target units]; 0 or NaN: no noise floor.
+    z : float, default :attr:`SelectionConfig.gain_noise_z`
 
     Returns
     -------
-    floor : float
-        [target units].
-    why : str
-        For the report.
+    floor, why : float, str
+        [target units]; both floors with their figures and which binds, for the report.
     """
-    return float(problem.resolution), (
-        f"the sensor's resolution {problem.resolution:.3g} {problem.units}"
-        + ("" if problem.resolution else " (not known)"))
+    u, res = problem.units, float(problem.resolution)
+    noise = float(z * gain_se) if gain_se > 0 else 0.0  # NaN > 0 is False
+    binds = "the noise floor" if noise > res else "the resolution" if res else "neither"
+    return max(res, noise), (
+        (f"resolution {res:.3g} {u}" if res else "resolution not known") + "; "
+        + (f"noise floor {noise:.3g} {u} ({z:g} × s.e. {gain_se:.3g})" if noise
+           else "noise floor not known") + f": {binds} binds")
 
 
 def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
-            cands: list[CandidateScore], tau: float,
-            floor: tuple[float, str] = (0.0, "")) -> CandidateScore | None:
+            cands: list[CandidateScore], tau: float) -> CandidateScore | None:
     """First candidate in the ranking that passes the acceptance rule (module doc) and
-    whose held-out gain exceeds ``floor`` (:func:`gain_floor`)."""
+    whose held-out gain exceeds both its floors (:func:`gain_floor`)."""
     chosen = None
     for c in cands:
+        se = c.gain_se if cfg.effective_bic else c.gain_se_white
+        c.gain_floor, c.gain_floor_why = gain_floor(problem, se, cfg.gain_noise_z)
         if chosen is not None:
             c.status = "not needed (a better-ranked candidate was accepted)"
             continue
@@ -542,11 +609,9 @@ def _choose(problem: Problem, cfg: SelectionConfig, current: FitResult,
         if not dbic < cfg.max_delta_bic:
             short.append(f"{'effective ' if cfg.effective_bic else ''}ΔBIC {dbic:+.3g} >= "
                          f"{cfg.max_delta_bic:g}")
-        gain = c.rel_improvement * (c.val_rmse / (1.0 - c.rel_improvement)
-                                    if c.rel_improvement < 1 else 0.0)
-        if floor[0] > 0 and not gain > floor[0]:
-            short.append(f"held-out gain {gain:.3g} {problem.units} <= {floor[0]:.3g} "
-                         f"{problem.units} ({floor[1]})")
+        if c.gain_floor > 0 and not c.heldout_gain > c.gain_floor:
+            short.append(f"held-out gain {c.heldout_gain:.3g} {problem.units} <= "
+                         f"{c.gain_floor:.3g} {problem.units} ({c.gain_floor_why})")
         if short:
             c.small = True
             c.status = (f"rejected: too small for these data (validation gain "
@@ -585,19 +650,21 @@ def _iteration(problem: Problem, cfg: SelectionConfig, keys: Sequence[str], it: 
     floor = (float("nan"), "")
     if it < cfg.max_iter:
         cands, tau = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw)
-        floor = gain_floor(problem)
-        accepted = _choose(problem, cfg, current, cands, tau, floor)
+        floor = (float(problem.resolution), f"the sensor's resolution ({problem.resolution:.3g} "
+                 f"{problem.units}; 0: not known) and the gain's noise floor, "
+                 f"{cfg.gain_noise_z:g} × its standard error (paired, n_val / τ_int samples)")
+        accepted = _choose(problem, cfg, current, cands, tau)
         if accepted is None:  # the second round: the transforms acting on other kinds
             more, tau_c = _candidates(problem, cfg, keys, current, r_cur, val_cur, fit_kw,
                                       second=True)
-            accepted = _choose(problem, cfg, current, more, tau_c, floor) if more else None
+            accepted = _choose(problem, cfg, current, more, tau_c) if more else None
         else:
             more = []
         evidence = any(c.heldout_evidence > cfg.min_heldout_evidence
                        or c.delta_bic_eff < cfg.max_delta_bic for c in cands)
         if accepted is None and cfg.pair_candidates >= 2 and evidence:  # look-ahead 2
-            pairs, tau = _pairs(problem, cfg, current, cands, tau, val_cur, fit_kw)
-            accepted = _choose(problem, cfg, current, pairs, tau, floor)
+            pairs, tau = _pairs(problem, cfg, current, cands, tau, r_cur, fit_kw)
+            accepted = _choose(problem, cfg, current, pairs, tau)
             cands = cands + pairs
         cands = sorted(cands + more, key=lambda c: c.val_rmse) if more else cands
     record = Iteration(it, [t.name for t in current.terms], val_cur, current.bic, diag, cands,
@@ -655,8 +722,8 @@ def _final_result(problem: Problem, cfg: SelectionConfig, sel: _Selection,
     sig, y, sp = problem.signals, problem.y, problem.split
     idx_fv = sp.fit_validation
     base_final = fit_terms(_order(problem.base_model), sig, y, idx_fv, **fit_kw)
-    starts = [[th] for th in sel.current.thetas]
-    final = fit_terms(sel.current.terms, sig, y, idx_fv, starts, **fit_kw)
+    final = fit_terms(sel.current.terms, sig, y, idx_fv, _final_starts(sel.current, base_final),
+                      **fit_kw)
     r_b = y - base_final.predict(sig)
     r_a = y - final.predict(sig)
     r_bs = y - sel.base_model.predict(sig)
@@ -675,6 +742,15 @@ def _final_result(problem: Problem, cfg: SelectionConfig, sel: _Selection,
         base_model_final=base_final, final=final, rmse=rmse, diag_before=d_before,
         diag_after=d_after, unexplained=structured, residual_signature=signature,
         elapsed_s=time.perf_counter() - t_start, heldout_whiteness=white)
+
+
+def _final_starts(cur: FitResult, base_final: FitResult) -> list[list[np.ndarray]]:
+    """Starts of a final refit: every term from its values in ``cur``, a base term also
+    from the base's own refit (``base_final``, from several starts): a bounded fit has
+    several optima (the UR3 day's J3, J5: docs/calibration.md, "Several starts")."""
+    base_th = {t.name: th for t, th in zip(base_final.terms, base_final.thetas, strict=True)}
+    return [[th] if (b := base_th.get(t.name)) is None or not b.size or np.allclose(b, th)
+            else [th, b] for t, th in zip(cur.terms, cur.thetas, strict=True)]
 
 
 def _heldout_verdict(problem: Problem, r_after: np.ndarray, d_after: Diagnosis
@@ -713,7 +789,8 @@ def _flag_implausible(res: CalibrationResult) -> None:
 def refit_final(result: CalibrationResult, cur: FitResult, meta: dict[str, Any], *,
                 keep_note: bool = True) -> CalibrationResult:
     """``result`` with a changed model (after the loop: ripples grouped or pruned, unpinned
-    effects dropped): ``cur`` refitted on fit + validation samples from its values.
+    effects dropped): ``cur`` refitted on fit + validation samples from its values (and a
+    base term also from the base model's own optimum, :func:`_final_starts`).
 
     Parameters
     ----------
@@ -735,8 +812,9 @@ def refit_final(result: CalibrationResult, cur: FitResult, meta: dict[str, Any],
     """
     p, cfg = result.problem, result.config
     sp, sig, y = p.split, p.signals, p.y
-    final = fit_terms(cur.terms, sig, y, sp.fit_validation, [[th] for th in cur.thetas],
-                      max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr, max_starts=1)
+    final = fit_terms(cur.terms, sig, y, sp.fit_validation,
+                      _final_starts(cur, result.base_model_final), max_rel_se=cfg.max_rel_se,
+                      max_abs_corr=cfg.max_abs_corr, max_starts=cfg.max_starts)
     r_fit, r_a = y - cur.predict(sig), y - final.predict(sig)
     rmse = {k: dict(v) for k, v in result.rmse.items()}
     for k, r in (("fit", r_fit), ("validation", r_fit), ("test", r_a)):

@@ -17,13 +17,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from swgsim.base.markdown import md_table
+from swgsim.files.ownership import save_figure
 
 from .core import FitResult, Term
+from .diagnose import WHITENESS_RATIO, acf_and_periodogram
 from .loop import IMPLAUSIBLE_PREFIX, CalibrationResult
 
 __all__ = ["base_summary", "caveat", "score_if_physical", "UNCERTAINTY_METHOD", "to_jsonable",
@@ -31,7 +34,7 @@ __all__ = ["base_summary", "caveat", "score_if_physical", "UNCERTAINTY_METHOD", 
            "param_table", "implausible_candidates", "implausible_lines", "effect_range_lines",
            "ReportInput", "Section", "SimulationOption", "ReportParts", "render_report",
            "simulation_files", "iteration_lines", "accepted_lines", "diagnosis_lines",
-           "uncertainty_lines"]
+           "uncertainty_lines", "heldout_whiteness_figure"]
 
 UNCERTAINTY_METHOD = (
     "Jacobian of the full parameter vector at the optimum (linear coefficients exactly, "
@@ -420,12 +423,77 @@ class ReportParts:
     run_time: bool = True
 
 
+#: The held-out whiteness test's figure: its key among a report's figures, and its caption.
+WHITENESS_FIGURE = "heldout_whiteness"
+WHITENESS_CAPTION = ("The held-out residual's whiteness test: its autocorrelation against "
+                     "the white-noise band ±1.96/√n (Box, Jenkins & Reinsel, sec. 2.1.6), its "
+                     "averaged periodogram against white noise at its noise floor.")
+
+
+def heldout_whiteness_figure(result: CalibrationResult, out_dir: str | Path, dpi: int = 110
+                             ) -> dict[str, str]:
+    """The held-out whiteness test as a figure (:func:`swgcal.diagnose.acf_and_periodogram`)
+    in ``out_dir/figures/`` (atomically) where that test alone makes the final residual
+    structured (:attr:`~swgcal.loop.CalibrationResult.heldout_whiteness`).
+
+    Parameters
+    ----------
+    result : CalibrationResult
+    out_dir : str or Path
+        The report's folder.
+    dpi : int, default 110
+
+    Returns
+    -------
+    dict of str to str
+        ``{WHITENESS_FIGURE: "figures/heldout_whiteness.png"}``, or empty (not drawn).
+
+    Raises
+    ------
+    ValueError
+        No run of 8 consecutive test samples.
+    """
+    white, p = result.heldout_whiteness or {}, result.problem
+    if not white.get("fails") or result.diag_after.structured:
+        return {}
+    from matplotlib.figure import Figure  # heavy: imported where a figure is drawn
+
+    idx, u = np.asarray(p.split.test), p.units
+    acf, freq, power = acf_and_periodogram(p.t, p.y - result.final.predict(p.signals), idx)
+    fig = Figure(figsize=(9.0, 6.4), layout="constrained")
+    ax1, ax2 = fig.subplots(2, 1)
+    band = 1.96 / np.sqrt(idx.size)
+    ax1.axhspan(-band, band, color="0.85", label=f"white noise: ±1.96/√n\n(n = {idx.size})")
+    ax1.vlines(np.arange(1, acf.size), 0.0, acf[1:], color="tab:red", label="held-out residual")
+    ax1.set(xlabel=f"lag [samples of {np.median(np.diff(p.t[idx])):.3g} s]",
+            ylabel="autocorrelation [-]", xlim=(0, acf.size))
+    ax1.set_title("normalised autocorrelation (lag 0 = 1 not drawn)", fontsize=9)
+    edges = np.geomspace(freq[0], freq[-1] * 1.000001, 81)  # log bins, for readability
+    b = np.searchsorted(edges, freq, side="right") - 1
+    n = np.bincount(b, minlength=80)
+    ax2.loglog(np.sqrt(edges[:-1] * edges[1:])[n > 0], (np.bincount(b, power, 80) / np.maximum(
+        n, 1))[n > 0], color="tab:red", label="held-out residual\n(log-binned mean)")
+    for level, style, text in ((white["noise_floor"], "k--", "white noise at the\nnoise floor"),
+                               (white["rms"], "b:", "its mean square\n(RMS)")):
+        ax2.axhline(level ** 2, color=style[0], ls=style[1:], label=f"{text} {level:.3g} {u}")
+    ax2.set(xlabel="frequency [Hz]", ylabel=f"power [({u})² per frequency bin]")
+    ax2.set_title("averaged periodogram against the noise floor", fontsize=9)
+    for ax in (ax1, ax2):
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    fig.suptitle(f"{p.name}: the held-out (test) residual fails the whiteness test\nRMS / "
+                 f"noise floor = {white['rms']:.3g} / {white['noise_floor']:.3g} {u} = "
+                 f"{white['ratio']:.2f} > {WHITENESS_RATIO:g} (the test's limit)", fontsize=10)
+    (Path(out_dir) / "figures").mkdir(parents=True, exist_ok=True)
+    save_figure(fig, Path(out_dir) / (path := f"figures/{WHITENESS_FIGURE}.png"), dpi)
+    return {WHITENESS_FIGURE: path}
+
+
 def render_report(parts: ReportParts, result: CalibrationResult, summary: Mapping[str, Any],
                   figures: Mapping[str, str] | None = None) -> str:
     """Markdown report of a calibration (``report.md``), any data kind: the title, the
     kind's data section, the Result section (RMSE before and after on fit, validation and
-    test data, the effects added, whether the final residual is still structured, the
-    candidates rejected as implausible: :func:`implausible_lines`), the kind's sections,
+    test data, the effects added, whether the final residual is still structured, with
+    :data:`WHITENESS_FIGURE`, the candidates rejected as implausible), the kind's sections,
     the figures, its closing sections and the run time (:class:`ReportParts`).
 
     Parameters
@@ -451,10 +519,15 @@ def render_report(parts: ReportParts, result: CalibrationResult, summary: Mappin
              ("**The final residual is still structured and no library effect explains it.** "
               if s["unexplained"] else
               "The final residual shows no structure along the probed variables: ")
-             + s["residual_signature"], "", *implausible_lines(s)]
+             + s["residual_signature"], ""]
+    figures = dict(figures or {})
+    white = figures.pop(WHITENESS_FIGURE, None)
+    if white is not None:
+        lines += [f"![held-out residual: autocorrelation and periodogram against the noise "
+                  f"floor]({white})", "", f"*{WHITENESS_CAPTION}*", ""]
+    lines += implausible_lines(s)
     for section in parts.sections:
         lines += section(s)
-    figures = dict(figures or {})
     if figures and parts.captions is not None:
         lines += ["## Figures", ""]
     for k, path in figures.items():
@@ -511,14 +584,16 @@ def iteration_lines(summary: Mapping[str, Any], *, evidence: bool = False,
             lines += ["(no candidates tried: iteration limit)", ""]
             continue
         cols = ["rank", "candidate", "val. RMSE", "gain", *(["2 ln Λ (held out)"] * evidence),
-                "ΔBIC", "eff. ΔBIC", "status"]
+                "ΔBIC", "eff. ΔBIC", f"held-out gain [{u}]", "its floors", "status"]
         lines += [md_table(cols, [
             [r, f"{c['name']}", fmt_value(c["val_rmse"]),
              f"{fmt_value(100 * c['rel_improvement'], 3)} %",
              *[fmt_value(c.get("heldout_evidence"), 4)] * evidence,
-             fmt_value(c["delta_bic"], 5), fmt_value(c["delta_bic_eff"], 4), f"{c['status']}"]
+             fmt_value(c["delta_bic"], 5), fmt_value(c["delta_bic_eff"], 4),
+             f"{fmt_value(c.get('heldout_gain'), 3)} ± {fmt_value(c.get('gain_se'), 2)}",
+             c.get("gain_floor_why") or "–", f"{c['status']}"]
             for r, c in enumerate(it["candidates"], 1)]), ""]
-        if it.get("gain_floor"):
+        if it.get("gain_floor_why"):
             lines += [f"An effect is kept only with a held-out gain (validation RMSE) above "
                       f"{it['gain_floor_why']}.", ""]
     return lines

@@ -129,11 +129,14 @@ class FirstOrderJoint(FitTerm):
                                 first_order_lag(sig.loss_w, sig.dt_s, theta[0])])
 
     def linear_bounds(self, sig: Any) -> list[tuple[float, float]]:
-        """T_amb in :data:`AMBIENT_RANGE_C` and at most the coolest joint's first reading,
-        T_0 at least that (or held at ``start_c``), R_th >= 0 [°C, °C, K/W]."""
-        room = min(AMBIENT_RANGE_C[1], sig.room_max_c)
+        """T_amb in :data:`AMBIENT_RANGE_C` and at most the coolest joint's first reading
+        (held at the measured room, ``sig.room_c``, where given), T_0 at least the room's
+        bound (or held at ``start_c``), R_th >= 0 [°C, °C, K/W]."""
+        measured = sig.room_c is not None
+        room = float(sig.room_c) if measured else min(AMBIENT_RANGE_C[1], sig.room_max_c)
+        ambient = (room, room) if measured else (AMBIENT_RANGE_C[0], room)
         start = (room, _INF) if self.start_c is None else (self.start_c, self.start_c)
-        return [(AMBIENT_RANGE_C[0], room), start, (R_TH_RANGE_K_PER_W[0], _INF)]
+        return [ambient, start, (R_TH_RANGE_K_PER_W[0], _INF)]
 
     def derived(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
         amb, start, r_th = (float(c) for c in coef)

@@ -10,6 +10,8 @@ from typing import Any
 
 from swgsim.base.typed import allowed, check_ranges
 
+from .library import AMBIENT_RANGE_C
+
 __all__ = ["ThermalKindOptions", "ThermalOptions", "TORQUE_PER_AMP_NM", "GEAR_EFFICIENCY",
            "STANDSTILL_RAD_S", "POWERED_A"]
 
@@ -45,6 +47,10 @@ class ThermalOptions:
     fit_frac : float
         Without a gap in the log: the first fraction of it fitted, in (0, 1) (0.6)
         [choice]; with one, the part before the first gap is fitted.
+    room_c : float or None
+        The room's measured temperature [°C], 0-50: the base's ambient held at it; None: the
+        ambient fitted between 0 °C and the coolest joint's first reading (a log starting
+        after a long stop leaves it on that bound: unphysical, not scored).
     """
 
     joint: int = field(default=1, metadata=allowed(0, 5))
@@ -53,6 +59,7 @@ class ThermalOptions:
     gear_efficiency: float = field(default=GEAR_EFFICIENCY,
                                    metadata=allowed(0, 1, lo_open=True, hi_open=True))
     fit_frac: float = field(default=0.6, metadata=allowed(0, 1, lo_open=True, hi_open=True))
+    room_c: float | None = field(default=None, metadata=allowed(*AMBIENT_RANGE_C, unit="°C"))
 
     def __post_init__(self) -> None:
         check_ranges(self)
@@ -60,7 +67,8 @@ class ThermalOptions:
     def problem_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :func:`swgcal.thermal.build_problem`."""
         return dict(joint=self.joint, torque_per_amp_nm=self.torque_per_amp_nm,
-                    gear_efficiency=self.gear_efficiency, fit_frac=self.fit_frac)
+                    gear_efficiency=self.gear_efficiency, fit_frac=self.fit_frac,
+                    room_c=self.room_c)
 
 
 @dataclass(frozen=True)

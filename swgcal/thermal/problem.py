@@ -32,9 +32,17 @@ import numpy as np
 from swgsim.base.typed import build, complete
 from swgsim.datasets.joint_log import JOINTS, JointLog, read_joint_log
 
-from ..core import FitResult, fit_terms, physical_check
+from ..core import fit_terms, integrated_autocorr_time, physical_check
 from ..diagnose import BinnedProbe, PeriodicProbe, Probe, TrendProbe
-from ..loop import CalibrationResult, Problem, SelectionConfig, refit_final, select_effects
+from ..loop import (
+    CalibrationResult,
+    Problem,
+    SelectionConfig,
+    gain_floor,
+    paired_gain,
+    refit_final,
+    select_effects,
+)
 from ..split import HeldOutSplit
 from .library import THERMAL_LIBRARY, FirstOrderJoint, first_order_lag
 from .options import POWERED_A, STANDSTILL_RAD_S, ThermalKindOptions, ThermalOptions
@@ -77,6 +85,8 @@ class ThermalSignals:
     room_max_c : float
         The coolest joint's first reading: the room is no warmer [°C] (the base's bound,
         :meth:`.library.FirstOrderJoint.linear_bounds`).
+    room_c : float or None
+        A measured room [°C] (:attr:`.options.ThermalOptions.room_c`), or None.
     """
 
     t_s: np.ndarray
@@ -90,6 +100,7 @@ class ThermalSignals:
     joint: int
     powered: np.ndarray
     room_max_c: float
+    room_c: float | None = None
 
     @property
     def n(self) -> int:
@@ -109,7 +120,7 @@ def _held(x: np.ndarray, gap_rows: np.ndarray, at_gap: float = 0.0) -> np.ndarra
 
 
 def thermal_signals(log: JointLog, joint: int, torque_per_amp_nm: float,
-                    gear_efficiency: float) -> ThermalSignals:
+                    gear_efficiency: float, room_c: float | None = None) -> ThermalSignals:
     """The signals of one joint of a log (:class:`ThermalSignals`).
 
     Parameters
@@ -118,6 +129,8 @@ def thermal_signals(log: JointLog, joint: int, torque_per_amp_nm: float,
         0-5.
     torque_per_amp_nm, gear_efficiency : float
         k_τ [N m/A] and η [-] of the loss proxy (:mod:`.options`).
+    room_c : float, optional
+        A measured room [°C] (:attr:`.options.ThermalOptions.room_c`).
     """
     i, w = log.current_a[:, joint], log.speed_rad_s[:, joint]
     nb = [k for k in (joint - 1, joint + 1) if 0 <= k < JOINTS]
@@ -140,7 +153,7 @@ def thermal_signals(log: JointLog, joint: int, torque_per_amp_nm: float,
         neighbour_sq_a2=_held(nb_sq, g, holding(nb_sq)),
         still=_held((np.abs(w) < STANDSTILL_RAD_S).astype(float), g, 1.0),
         speed_abs=_held(np.abs(w), g), cycle=log.cycle.astype(float), joint=joint,
-        powered=_held(powered, g, 1.0), room_max_c=float(min(firsts)))
+        powered=_held(powered, g, 1.0), room_max_c=float(min(firsts)), room_c=room_c)
 
 
 def sensor_resolution(y: np.ndarray) -> float:
@@ -223,12 +236,13 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
                     torque_per_amp_nm: float = ThermalOptions.torque_per_amp_nm,
                     gear_efficiency: float = ThermalOptions.gear_efficiency,
                     fit_frac: float = ThermalOptions.fit_frac,
+                    room_c: float | None = ThermalOptions.room_c,
                     candidates: Sequence[str] | None = None) -> Problem:
     """Calibration problem of one joint of a log (module docstring).
 
     Parameters
     ----------
-    joint, torque_per_amp_nm, gear_efficiency, fit_frac
+    joint, torque_per_amp_nm, gear_efficiency, fit_frac, room_c
         :class:`.options.ThermalOptions` (defaults and ranges there).
     candidates : sequence of str, optional
         Library keys (default all of :data:`THERMAL_LIBRARY`).
@@ -245,7 +259,8 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
         unknown candidate, too few readings to fit, validate or test.
     """
     given = {"thermal": {"joint": joint, "torque_per_amp_nm": torque_per_amp_nm,
-                         "gear_efficiency": gear_efficiency, "fit_frac": fit_frac}}
+                         "gear_efficiency": gear_efficiency, "fit_frac": fit_frac,
+                         "room_c": room_c}}
     build(complete(given, ThermalKindOptions, ""), ThermalKindOptions, "")
     keys = list(candidates) if candidates is not None else list(THERMAL_LIBRARY)
     unknown = [k for k in keys if k not in THERMAL_LIBRARY]
@@ -254,7 +269,7 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
                          f"{sorted(THERMAL_LIBRARY)}")
     y = log.temperature_c[:, joint]
     split = _split(log, np.isfinite(y), fit_frac)
-    sig = thermal_signals(log, joint, torque_per_amp_nm, gear_efficiency)
+    sig = thermal_signals(log, joint, torque_per_amp_nm, gear_efficiency, room_c)
     res = sensor_resolution(y)
     return Problem(
         name=f"{log.name}_J{joint}", kind="thermal", units="K", signals=sig, resolution=res,
@@ -268,7 +283,7 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
               "protective_stops": int(log.protective_stop.sum()),
               "grip_losses": int(log.grip_lost.sum()),
               "torque_per_amp_nm": torque_per_amp_nm, "gear_efficiency": gear_efficiency,
-              "resolution": res, "room_max_c": sig.room_max_c})
+              "resolution": res, "room_max_c": sig.room_max_c, "room_c": sig.room_c})
 
 
 def build_problem(measured: str | os.PathLike | JointLog, **options: Any) -> Problem:
@@ -279,7 +294,7 @@ def build_problem(measured: str | os.PathLike | JointLog, **options: Any) -> Pro
     measured : path-like or JointLog
         A joint log in the UR3 CobotOps format, or one read.
     **options
-        ``joint``, ``torque_per_amp_nm``, ``gear_efficiency``, ``fit_frac``,
+        ``joint``, ``torque_per_amp_nm``, ``gear_efficiency``, ``fit_frac``, ``room_c``,
         ``candidates``: see :func:`thermal_problem`.
 
     Raises
@@ -323,11 +338,6 @@ def calibrate(problem: Problem, config: SelectionConfig | None = None) -> Calibr
     return dataclasses.replace(res, problem=dataclasses.replace(res.problem, meta=meta))
 
 
-def _rmse_on(fit: FitResult, problem: Problem, idx: np.ndarray) -> float:
-    r = (problem.y - fit.predict(problem.signals))[idx]
-    return float(np.sqrt(np.mean(r * r)))
-
-
 def cross_validate(result: CalibrationResult) -> dict[str, Any]:
     """Blocked cross-validation both ways across the log's gap, effect by effect.
 
@@ -335,9 +345,12 @@ def cross_validate(result: CalibrationResult) -> dict[str, Any]:
     Forward: fitted on A, scored on B. Backward: fitted on B, scored on A after its first
     reading, which sets the joint's temperature at the start (T_0 held: the model's initial
     condition, which B, hours later, cannot tell). Each model, the base alone and then with
-    each kept effect in the order kept, is refitted (every parameter, from the final
-    model's time constants) on the fit block. The selection itself (which effects) was made
-    on the forward split (fit A, choose on B's first half), so B is not blind to it.
+    each kept effect in the order kept, is refitted (every parameter) on the fit block from
+    the final model's time constants and each term's own starts (several optima). The
+    selection itself (which effects) was made on the forward split (fit A, choose on B's
+    first half), so B is not blind to it. An effect clears where its gain over the model
+    before it exceeds both its floors (:func:`swgcal.loop.gain_floor`; the paired s.e. on
+    the scored block with the τ_int of the model-before's residual) both ways.
 
     Parameters
     ----------
@@ -348,40 +361,46 @@ def cross_validate(result: CalibrationResult) -> dict[str, Any]:
     -------
     dict
         ``resolution_k`` (:func:`sensor_resolution`), ``noise_floor_k`` (the final
-        residual's difference-based noise floor), ``floor_k`` (the larger), ``blocks``
+        residual's difference-based noise floor), ``z`` (``gain_noise_z``), ``blocks``
         (hours of A and B), ``rows``: per model ``model``, ``forward`` and ``backward``
-        (``rmse`` on the scored block [K], ``gain`` over the model before it [K],
-        ``unphysical``: :func:`physical_check` of that fit) and, for an effect,
-        ``clears``: its gain above ``floor_k`` both ways.
+        (``rmse`` on the scored block [K], ``gain`` over the model before it [K], for an
+        effect ``gain_se``, ``floor`` [K] and ``why``; ``unphysical``:
+        :func:`physical_check` of that fit) and, for an effect, ``clears``.
     """
-    p = result.problem
-    sp, y, sig, final = p.split, p.y, p.signals, result.final
+    p, cfg = result.problem, result.config
+    sp, y, sig, final, zero = p.split, p.y, p.signals, result.final, np.zeros_like(p.y)
     a, b = sp.fit, np.union1d(sp.validation, sp.test)
-    res_k = float(p.meta.get("resolution", 0.0))
-    floor = max(res_k, float(result.diag_after.noise_floor))
     th = {t.name: x for t, x in zip(final.terms, final.thetas, strict=True)}
     base = final.terms[0]
     effects = [t for t in final.terms if t.name in result.added]
     ways = (("forward", a, b, base),
             ("backward", b, a[1:], FirstOrderJoint(base.name, start_c=float(y[a[0]]))))
     rows: list[dict[str, Any]] = []
+    before: dict[str, np.ndarray] = {}
     for k in range(len(effects) + 1):
         row: dict[str, Any] = {"model": base.name if k == 0 else "+ " + effects[k - 1].name}
         for way, fit_idx, score_idx, b0 in ways:
             terms = [b0, *effects[:k]]
-            f = fit_terms(terms, sig, y, fit_idx, [[th[t.name]] for t in terms], max_starts=1,
-                          max_rel_se=result.config.max_rel_se,
-                          max_abs_corr=result.config.max_abs_corr)
-            rmse = _rmse_on(f, p, score_idx)
-            row[way] = {"rmse": rmse, "gain": rows[-1][way]["rmse"] - rmse if rows else None,
+            f = fit_terms(terms, sig, y, fit_idx, [[th[t.name], *t.starts(sig, zero, fit_idx)]
+                                                   for t in terms], max_starts=cfg.max_starts,
+                          max_rel_se=cfg.max_rel_se, max_abs_corr=cfg.max_abs_corr)
+            r = (y - f.predict(sig))[score_idx]
+            row[way] = {"rmse": float(np.sqrt(np.mean(r * r))), "gain": None,
                         "unphysical": physical_check(f)}
+            if k:
+                gain, se = paired_gain(before[way], r, integrated_autocorr_time(before[way]))
+                row[way].update(zip(("gain", "gain_se", "floor", "why"),
+                                    (gain, se, *gain_floor(p, se, cfg.gain_noise_z)),
+                                    strict=True))
+            before[way] = r
         if k:
-            row["clears"] = bool(min(row[w]["gain"] for w, *_ in ways) > floor)
+            row["clears"] = bool(all(row[w]["gain"] > row[w]["floor"] for w, *_ in ways))
         rows.append(row)
     hours = {k: [float(p.t[r[0]] / 3600), float(p.t[r[-1]] / 3600)] for k, r in (("A", a),
                                                                                 ("B", b))}
-    return {"resolution_k": res_k, "noise_floor_k": float(result.diag_after.noise_floor),
-            "floor_k": floor, "blocks": hours, "rows": rows}
+    return {"resolution_k": float(p.meta.get("resolution", 0.0)), "z": cfg.gain_noise_z,
+            "noise_floor_k": float(result.diag_after.noise_floor), "blocks": hours,
+            "rows": rows}
 
 
 def _drop_unpinned(result: CalibrationResult) -> CalibrationResult:

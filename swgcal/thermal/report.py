@@ -95,7 +95,10 @@ def _data_lines(s: Mapping[str, Any]) -> list[str]:
             f"Joint {d['joint']}, {d['n_samples']} readings from {d['start']} over "
             f"{fmt_value(d['duration_h'], 3)} h, gaps {d['gaps_h']} h, "
             f"{d['missing_readings']} rows without a reading. Loss proxy (1 − η) k_τ |I| |ω| "
-            f"with k_τ = {d['torque_per_amp_nm']} N m/A, η = {d['gear_efficiency']}.", "",
+            f"with k_τ = {d['torque_per_amp_nm']} N m/A, η = {d['gear_efficiency']}. Room: "
+            + (f"measured, {fmt_value(d['room_c'], 4)} °C." if d.get("room_c") is not None else
+               f"fitted, at most the coolest joint's first reading "
+               f"{fmt_value(d.get('room_max_c'), 4)} °C."), "",
             f"Held out: {s['heldout']}", ""]
 
 
@@ -128,31 +131,38 @@ def _fit_lines(s: Mapping[str, Any]) -> list[str]:
 
 
 def _crossval_lines(s: Mapping[str, Any]) -> list[str]:
-    """Held-out RMSE both ways across the gap, before and after each kept effect."""
+    """Held-out RMSE both ways across the gap, before and after each kept effect (its gain,
+    both floors)."""
     cv = s.get("crossval")
     if not cv:
         return []
     b = cv["blocks"]
-    rows = [[r["model"], *[f"{fmt_value(r[w]['rmse'])} K" + (
-        f" (gain {fmt_value(r[w]['gain'], 3)})" if r[w]["gain"] is not None else "")
-        + (" unphysical" if r[w]["unphysical"] else "") for w in ("forward", "backward")],
+    rows = [[r["model"], *[f"{fmt_value(c['rmse'])} K" + (
+        f" (gain {fmt_value(c['gain'], 3)} ± {fmt_value(c.get('gain_se'), 2)}; {c.get('why')})"
+        if c["gain"] is not None else "") + (" unphysical" if c["unphysical"] else "")
+        for c in (r["forward"], r["backward"])],
         {True: "yes", False: "no"}.get(r.get("clears"), "-")] for r in cv["rows"]]
     return ["## Cross-validation both ways across the gap", "",
             f"A: h {fmt_value(b['A'][0], 3)}-{fmt_value(b['A'][1], 3)}, B: h "
             f"{fmt_value(b['B'][0], 3)}-{fmt_value(b['B'][1], 3)}. Forward: fitted on A, "
             "scored on B; backward: fitted on B, scored on A (its first reading sets the "
-            "start). An effect is worth keeping where its gain exceeds the sensor's "
-            f"resolution {fmt_value(cv['resolution_k'], 3)} K (the smallest step between "
-            f"readings) and the noise floor {fmt_value(cv['noise_floor_k'], 3)} K both ways.",
+            "start). An effect is worth keeping where its gain exceeds, both ways, the "
+            f"sensor's resolution {fmt_value(cv['resolution_k'], 3)} K (the smallest step "
+            "between readings) and the gain's noise floor, "
+            f"{fmt_value(cv.get('z'), 3)} × the standard error of the paired gain on the "
+            "scored block (n / τ_int effective samples).",
             "", md_table(["model", "forward RMSE on B", "backward RMSE on A",
-                          "gain above both ways"], rows), ""]
+                          "gain above both floors both ways"], rows), ""]
 
 
 def _candidates_lines(s: Mapping[str, Any]) -> list[str]:
     """The candidates of the last iteration."""
     return ["## Candidates of the last iteration", "",
-            md_table(["candidate", "validation RMSE", "status"],
-                     [[f"{c['name']}", f"{fmt_value(c['val_rmse'])} K", f"{c['status']}"]
+            md_table(["candidate", "validation RMSE", "held-out gain [K]", "its floors",
+                      "status"],
+                     [[f"{c['name']}", f"{fmt_value(c['val_rmse'])} K",
+                       f"{fmt_value(c.get('heldout_gain'), 3)} ± {fmt_value(c.get('gain_se'), 2)}",
+                       c.get("gain_floor_why") or "–", f"{c['status']}"]
                       for c in (s["iterations"][-1]["candidates"] if s["iterations"] else [])]),
             ""]
 

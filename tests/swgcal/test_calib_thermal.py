@@ -13,7 +13,7 @@ import pytest
 import yaml
 from planted_thermal import SyntheticThermal, synthetic_joint_log
 
-from swgcal import build_problem, calibrate, detect_kind
+from swgcal import build_problem, calibrate, detect_kind, render_report
 from swgcal.thermal import summarize
 from swgcli import compose_app
 from swgcli.calibrate import run_calibrate
@@ -213,3 +213,36 @@ def test_an_effect_kept_on_one_joint_is_checked_on_the_joints_not_fitted():
     for c in carried:
         passes = [t["passes"] for t in c["to"]]
         assert passes == [True, True, False] and c["holds_for_arm"]
+
+
+def test_a_measured_room_holds_the_ambient_so_a_cold_start_is_not_flagged():
+    """Issue 86: a log that starts after a long stop, every other joint at the room's
+    temperature, leaves the fitted room on its bound, the coolest joint's first reading
+    (an unphysical fit, not scored); the room measured (``thermal.room_c``) holds the
+    ambient at it, and the fit is physical with its constants back."""
+    truth = SyntheticThermal(others_k=0.0, initial_k=0.5)
+    log = synthetic_joint_log(truth)
+    free = calibrate(build_problem(log, joint=1))
+    assert any("ambient_c" in w and "on its upper bound" in w
+               for w in free.problem.meta["physical"]["before"])
+    held = calibrate(build_problem(log, joint=1, room_c=truth.ambient_c))
+    assert held.problem.meta["physical"] == {"before": [], "after": []}
+    assert held.problem.meta["room_c"] == truth.ambient_c
+    est = held.base_model_final.estimates_of("first_order")
+    assert est["ambient_c"].value == truth.ambient_c and est["ambient_c"].bound == "held at 24"
+    for name in ("r_th_k_per_w", "tau_min", "initial_k"):
+        assert abs(est[name].value - getattr(truth, name)) < 4 * est[name].std, name
+    s = summarize(held)
+    assert s["scored"] is True and "Room: measured, 24 °C" in render_report(held, s)
+    with pytest.raises(ValueError, match=r"^thermal.room_c must lie in \[0, 50\]"):
+        build_problem(log, joint=1, room_c=80.0)
+
+
+def test_a_final_model_without_effects_is_the_base_models_optimum(ur3_day):
+    """Issue 86: J5's bounded first-order fit has two optima on the UR3 day (τ 3.1 min,
+    and τ on its 600-min bound with 3.5 times less RSS on fit + validation); the final
+    model, nothing kept, is refitted from the base's optimum too and is the base model."""
+    res = calibrate(build_problem(ur3_day, joint=5))
+    assert res.added == []
+    assert res.final.thetas[0] == pytest.approx(res.base_model_final.thetas[0])
+    assert res.rmse["test"]["after"] == pytest.approx(res.rmse["test"]["before"])
