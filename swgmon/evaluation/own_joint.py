@@ -34,7 +34,7 @@ from swgmon.evaluation.training import train_model
 from swgsim.base.typed import allowed, check_tree, plain
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.plan import DatasetPlan, plan
-from swgsim.datasets.schema import load
+from swgsim.datasets.schema import DataSetError, load
 from swgsim.files import ownership
 from swgsim.files.inputs import absolute_path
 
@@ -111,7 +111,10 @@ def acquisition(exp: OwnJointExperiment) -> dict:
     """
     acq = {"sample_rate_hz": None, "window_s": None, "n_in_rpm": [], "t_out_nm": []}
     if exp.stream is not None:
-        ds = load(absolute_path(exp.stream))
+        try:
+            ds = load(absolute_path(exp.stream))
+        except DataSetError as e:
+            raise DataSetError(f"own_joint.stream: {e}") from None
         if "phi_out_meas" in ds:
             raise ValueError(f"own_joint.stream={exp.stream}: recorded with an output "
                              "encoder; a model for its twist is trained on motion: "

@@ -91,7 +91,7 @@ def test_bad_own_joint_keys_are_refused_before_any_work(tmp_path):
                          "['bench', 'robot_joint']"),
                         (["own_joint.n_in_rpm=[9000]"], "n_in_rpm"),
                         (["own_joint.window_s=-1"], "own_joint.window_s"),
-                        ([f"own_joint.stream={tmp_path}"], str(tmp_path))):
+                        ([f"own_joint.stream={tmp_path}"], f"own_joint.stream: {tmp_path}")):
         with pytest.raises(ValueError) as e:
             run_train(compose_app("train", ["experiment=own_joint", "~logger",
                                             f"own_joint.out={tmp_path}/m", *args]))
