@@ -2,12 +2,18 @@
 (:mod:`.prognosis_evaluation`; ``swgsim-train experiment=prognosis``), every
 figure computed from the results (:mod:`swgmon.prognosis.scores`), none written in.
 
-The targets (issue 47): the 90 % interval's coverage (PICP) in [0.85, 0.95] in every remaining-share
-bucket with at least 20 prognoses; the relative accuracy at half the way from the first
-prognosis to failure (its median over lives) >= 0.8; the alpha-lambda criterion (alpha 0.2,
-lambda 0.5) met in >= 80 % of the lives; the median absolute error at half-life <= 0.7 times
-the better baseline's; after a payload change, the predicted failure moves the way the
-growth law says within 24 h of operation in every life (against its twin without the change).
+The targets (issue 85, in place of issue 47's, which a calibrated interval met in all 18
+buckets with probability 0.0014), per data set and fault on the held-out gears: the 90 %
+interval's pooled coverage (PICP) with a 95 % interval from a bootstrap over whole lives
+that contains 0.90; in every true remaining-share bucket with at least 20 prognoses,
+coverage at least 0.85 at 95 % confidence, one-sided (the bootstrap's upper one-sided
+95 % bound at or above 0.85); the interval's median width over the true remaining life
+beside them; the relative accuracy at half the way from the first prognosis to failure
+(its median over lives) >= 0.7; the law's median absolute error at half-life below both
+baselines' (linear, Wiener); after a payload change, the predicted failure moves the way
+the growth law says within 24 h of operation in every life judged (against its twin
+without the change). The alpha-lambda share (alpha 0.2, lambda 0.5) is reported, not a
+target.
 """
 
 from __future__ import annotations
@@ -34,8 +40,9 @@ from swgsim.files.ownership import save_figure, write_owned
 
 pd = lazy_module("pandas")
 
-#: The targets' thresholds (issue 47).
-PICP_RANGE, MIN_BUCKET, RA_MIN, AL_SHARE, ERROR_RATIO = (0.85, 0.95), 20, 0.8, 0.8, 0.7
+#: The targets' thresholds (issue 85): the nominal coverage, a bucket's least coverage
+#: at 95 % one-sided confidence and its least prognoses, the median relative accuracy.
+NOMINAL, BUCKET_MIN, MIN_BUCKET, RA_MIN = 0.90, 0.85, 20, 0.7
 #: alpha and lambda of the scores judged at half-life (issue 47).
 ALPHA, LAMBDA = 0.2, 0.5
 #: Columns naming a life.
@@ -71,22 +78,34 @@ def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
     v["hit"] = interval_hit(v.true_remaining_h.to_numpy(), v.remaining_h_q05.to_numpy(),
                             v.remaining_h_q95.to_numpy())
     v["width"] = v.remaining_h_q95 - v.remaining_h_q05
+    v["rel_width"] = v.width / v.true_remaining_h
     v["phm08"] = phm08_score(v.true_remaining_h.to_numpy(), v.remaining_h.to_numpy())
-    g = v.groupby(["dataset", "fault", "method", "bucket"], sort=True)
-    out = g.agg(n=("hit", "size"), picp=("hit", "mean"), mean_width_h=("width", "mean"),
-                open=("width", lambda w: float(np.mean(~np.isfinite(w)))),
-                phm08=("phm08", "mean")).reset_index()
-    ci = [_picp_interval(b) for _, b in g]
-    out.insert(out.columns.get_loc("picp") + 1, "picp_low", [c.low for c in ci])
-    out.insert(out.columns.get_loc("picp") + 2, "picp_high", [c.high for c in ci])
-    out.insert(out.columns.get_loc("picp") + 3, "lives", [c.n for c in ci])
-    return out
+    out = []
+    for keys, by in (("bucket", ["dataset", "fault", "method", "bucket"]),
+                     ("all", ["dataset", "fault", "method"])):
+        g = v.groupby(by, sort=True)
+        t = g.agg(n=("hit", "size"), picp=("hit", "mean"), mean_width_h=("width", "mean"),
+                  median_width_share=("rel_width", "median"),
+                  open=("width", lambda w: float(np.mean(~np.isfinite(w)))),
+                  phm08=("phm08", "mean")).reset_index()
+        if keys == "all":
+            t.insert(3, "bucket", "all")
+        ci = [_picp_interval(b) for _, b in g]
+        one = [_picp_interval(b, 0.90) for _, b in g]
+        t.insert(t.columns.get_loc("picp") + 1, "picp_low", [c.low for c in ci])
+        t.insert(t.columns.get_loc("picp") + 2, "picp_high", [c.high for c in ci])
+        t.insert(t.columns.get_loc("picp") + 3, "picp_upper95", [c.high for c in one])
+        t.insert(t.columns.get_loc("picp") + 4, "lives", [c.n for c in ci])
+        out.append(t)
+    return pd.concat(out, ignore_index=True)
 
 
-def _picp_interval(b: pd.DataFrame) -> Interval:
-    """A bucket's coverage, its prognoses pooled, with the bootstrap over its lives."""
+def _picp_interval(b: pd.DataFrame, level: float = 0.95) -> Interval:
+    """A bucket's coverage, its prognoses pooled, with the bootstrap over its lives at
+    ``level`` (two-sided)."""
     per = b.groupby(LIFE, sort=False).hit.agg(["sum", "size"])
-    return life_bootstrap(per["sum"].to_numpy(float), per["size"].to_numpy(float))
+    return life_bootstrap(per["sum"].to_numpy(float), per["size"].to_numpy(float),
+                          level=level)
 
 
 def life_scores(rows: pd.DataFrame, lives: pd.DataFrame) -> pd.DataFrame:
@@ -177,37 +196,42 @@ def targets(buckets: pd.DataFrame, summary: pd.DataFrame, moved: pd.DataFrame
     :data:`MIN_BUCKET` prognoses, and a fault without a judged payload change
     (:func:`change_table`), are listed as not judged."""
     out = []
+
+    def row(ds, fault, what, target, measured, result):
+        out.append({"dataset": ds, "fault": fault, "what": what, "target": target,
+                    "measured": measured, "result": result})
+
     for b in buckets[buckets.method == "growth"].itertuples(index=False):
+        width = f"; median width {b.median_width_share:.2f} of the true remaining life"
+        if b.bucket == "all":
+            ok = b.picp_low <= NOMINAL <= b.picp_high
+            row(b.dataset, b.fault, f"pooled PICP of the 90 % interval ({b.n} prognoses, "
+                f"{b.lives} lives){width}", f"95 % interval holds {NOMINAL:g}",
+                f"{b.picp:.2f} [{b.picp_low:.2f}, {b.picp_high:.2f}]",
+                "pass" if ok else "fail")
+            continue
         judged = b.n >= MIN_BUCKET
-        ok = PICP_RANGE[0] <= b.picp <= PICP_RANGE[1]
-        out.append({"dataset": b.dataset, "fault": b.fault,
-                    "what": f"PICP of the 90 % interval, bucket {b.bucket} ({b.n} prognoses)",
-                    "target": f"{PICP_RANGE[0]:g}-{PICP_RANGE[1]:g}", "measured": f"{b.picp:.2f}",
-                    "result": ("pass" if ok else "fail") if judged else
-                    f"not judged (< {MIN_BUCKET})"})
+        row(b.dataset, b.fault, f"PICP, true bucket {b.bucket} ({b.n} prognoses){width}",
+            f">= {BUCKET_MIN:g} at 95 % (one-sided)",
+            f"{b.picp:.2f} (upper bound {b.picp_upper95:.2f})",
+            ("pass" if b.picp_upper95 >= BUCKET_MIN else "fail") if judged
+            else f"not judged (< {MIN_BUCKET})")
     for (ds, fault), s in summary.groupby(["dataset", "fault"]):
         if not (s.method == "growth").any():
             continue
         gr = s[s.method == "growth"].iloc[0]
-        base = s[s.method != "growth"].abs_error_median_h.min()
-        out += [{"dataset": ds, "fault": fault, "what": what, "target": tgt,
-                 "measured": f"{val:.3g}", "result": "pass" if ok else "fail"}
-                for what, tgt, val, ok in (
-                    ("relative accuracy at half-life (median over lives)", f">= {RA_MIN:g}",
-                     gr.ra_median, gr.ra_median >= RA_MIN),
-                    (f"lives meeting alpha-lambda (alpha {ALPHA:g}, lambda {LAMBDA:g})",
-                     f">= {AL_SHARE:g}", gr.alpha_lambda_share,
-                     gr.alpha_lambda_share >= AL_SHARE),
-                    ("median abs error at half-life / the better baseline's",
-                     f"<= {ERROR_RATIO:g}", gr.abs_error_median_h / base,
-                     gr.abs_error_median_h <= ERROR_RATIO * base))]
+        row(ds, fault, "relative accuracy at half-life (median over lives)",
+            f">= {RA_MIN:g}", f"{gr.ra_median:.3g}", "pass" if gr.ra_median >= RA_MIN else "fail")
+        for b in s[s.method != "growth"].itertuples(index=False):
+            ratio = gr.abs_error_median_h / b.abs_error_median_h
+            row(ds, fault, f"median abs error at half-life / {b.method}'s", "< 1",
+                f"{ratio:.3g}", "pass" if ratio < 1 else "fail")
     for m in moved[moved.method == "growth"].itertuples(index=False):
-        out.append({"dataset": m.dataset, "fault": m.fault,
-                    "what": f"after a payload change the predicted failure moves the law's "
-                            f"way within {WITHIN_H:g} h ({m.judged} of {m.lives} lives judged)",
-                    "target": "every life", "measured": f"{m.moved_share:.2f}",
-                    "result": ("pass" if m.moved_share == 1.0 else "fail") if m.judged
-                    else "not judged (no paired prognosis)"})
+        row(m.dataset, m.fault, f"after a payload change the predicted failure moves the "
+            f"law's way within {WITHIN_H:g} h ({m.judged} of {m.lives} lives judged)",
+            "every life", f"{m.moved_share:.2f}",
+            ("pass" if m.moved_share == 1.0 else "fail") if m.judged
+            else "not judged (no paired prognosis)")
     return pd.DataFrame(out, columns=["dataset", "fault", "what", "target", "measured",
                                       "result"])
 
@@ -259,7 +283,8 @@ def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path) -> Path:
         ax[0].bar(np.arange(len(labels)) + 0.25 * (k - 1), cov.to_numpy(), 0.25, label=m)
         r = v[(v.method == m) & np.isfinite(v.remaining_h) & (v.remaining_h > 0)]
         ax[1].loglog(r.true_remaining_h, r.remaining_h, ".", ms=3, alpha=0.5, label=m)
-    ax[0].axhspan(*PICP_RANGE, color="0.85", zorder=0, label="target")
+    ax[0].axhline(NOMINAL, color="k", lw=1, label=f"nominal {NOMINAL:g}")
+    ax[0].axhline(BUCKET_MIN, color="0.5", lw=1, ls="--", label=f"least {BUCKET_MIN:g}")
     ax[0].set(xticks=range(len(labels)), xticklabels=labels, ylim=(0, 1.05),
               xlabel="remaining share of the way from alarm to failure",
               ylabel="coverage of the 90 % interval (PICP)")

@@ -146,9 +146,9 @@ def conditional_delay(delays_h: Sequence[float], n_boot: int = 2000,
 
 
 def life_bootstrap(numerator: Sequence[float], denominator: Sequence[float],
-                   n_boot: int = 2000, seed: int = 0) -> Interval:
-    """A ratio of sums over lives, Σ num / Σ den, with a percentile bootstrap 95 %
-    interval that resamples whole lives.
+                   n_boot: int = 2000, seed: int = 0, level: float = LEVEL) -> Interval:
+    """A ratio of sums over lives, Σ num / Σ den, with a percentile bootstrap interval
+    that resamples whole lives.
 
     Parameters
     ----------
@@ -157,6 +157,8 @@ def life_bootstrap(numerator: Sequence[float], denominator: Sequence[float],
         positive sum.
     n_boot, seed : int
         See :func:`conditional_delay`.
+    level : float
+        Two-sided confidence level (0.95; 0.90: each end a one-sided 95 % bound).
 
     Returns
     -------
@@ -182,18 +184,18 @@ def life_bootstrap(numerator: Sequence[float], denominator: Sequence[float],
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.sum(a, axis=axis) / np.sum(b, axis=axis)
 
-    lo, hi = _bootstrap((num, den), ratio, n_boot, seed, paired=True)
+    lo, hi = _bootstrap((num, den), ratio, n_boot, seed, paired=True, level=level)
     return Interval(value, lo, hi, int(num.size))
 
 
 def _bootstrap(data: tuple, statistic, n_boot: int, seed: int,
-               paired: bool = False) -> tuple[float, float]:
-    """``scipy.stats.bootstrap``'s percentile interval at :data:`LEVEL`."""
+               paired: bool = False, level: float = LEVEL) -> tuple[float, float]:
+    """``scipy.stats.bootstrap``'s percentile interval at ``level``."""
     from scipy.stats import bootstrap
 
     if n_boot < 100:
         raise ValueError(f"n_boot must be >= 100, got {n_boot}")
-    res = bootstrap(data, statistic, n_resamples=int(n_boot), confidence_level=LEVEL,
+    res = bootstrap(data, statistic, n_resamples=int(n_boot), confidence_level=level,
                     method="percentile", paired=paired, vectorized=True,
                     random_state=np.random.default_rng(int(seed)))
     return float(res.confidence_interval.low), float(res.confidence_interval.high)

@@ -311,3 +311,30 @@ def test_training_levels_reach_past_the_failure_within_the_faults_range():
     assert got["tip_tooth_crack"] == life_levels(sc.faults["tip_tooth_crack"], 8)
     for f, gf in sc.faults.items():
         assert training_levels(f, gf, 8, 0.0) == life_levels(gf, 8)
+
+
+def test_the_honest_targets_judge_coverage_with_its_uncertainty():
+    """Issue 85's targets: pooled coverage passes when its life-bootstrap interval holds
+    0.90, a judged bucket when its one-sided 95 % upper bound reaches 0.85 (0.80 measured
+    on few lives can pass, 0.60 on many cannot), the law's error against each baseline."""
+    import pandas as pd
+
+    from swgmon.evaluation.prognosis_report import targets
+
+    def b(bucket, n, picp, low, high, upper):
+        return {"dataset": "bench", "fault": "root_tooth_crack", "method": "growth",
+                "bucket": bucket, "n": n, "picp": picp, "picp_low": low, "picp_high": high,
+                "picp_upper95": upper, "lives": 5, "median_width_share": 0.5}
+
+    buckets = pd.DataFrame([b("all", 100, 0.86, 0.78, 0.93, 0.92),
+                            b("[0, 0.25)", 30, 0.80, 0.6, 0.9, 0.88),
+                            b("[0.25, 0.5)", 60, 0.60, 0.5, 0.7, 0.69),
+                            b("[0.5, 0.75)", 10, 1.0, 1.0, 1.0, 1.0)])
+    summary = pd.DataFrame([
+        {"dataset": "bench", "fault": "root_tooth_crack", "method": m, "ra_median": ra,
+         "abs_error_median_h": e} for m, ra, e in (("growth", 0.75, 1.0), ("linear", 0.1, 2.0),
+                                                   ("wiener", 0.2, 0.9))])
+    moved = pd.DataFrame(columns=["dataset", "fault", "method", "judged", "lives",
+                                  "moved_share"])
+    t = targets(buckets, summary, moved).set_index("what").result
+    assert list(t) == ["pass", "pass", "fail", "not judged (< 20)", "pass", "pass", "fail"]
