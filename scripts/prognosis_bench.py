@@ -26,6 +26,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # one core, before numpy loads its BLAS
 
 import argparse  # noqa: E402
+import dataclasses  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -72,7 +73,8 @@ def paper_duty(h: np.ndarray, load_factor: float = 1.0, temp_c: float = 20.0
 
 
 def synthetic_life(fault: str, seed: int, frac: float, sigma: float = SIGMA, every: int = 15,
-                   track_h: float | None = None, phi: float = 0.0
+                   track_h: float | None = None, phi: float = 0.0,
+                   paris_m: float | None = None
                    ) -> tuple[Track, float, Duty, np.ndarray, float]:
     """A gear's life to failure and the monitor's track of it (module docstring).
 
@@ -93,6 +95,9 @@ def synthetic_life(fault: str, seed: int, frac: float, sigma: float = SIGMA, eve
     phi : float
         Correlation of consecutive estimates' errors, an AR(1) process of stationary σ
         ``sigma``, in [0, 1) (0: independent).
+    paris_m : float or None
+        The life's own Paris exponent (a crack grown by a law the prognosis, which takes
+        ``RunToFailure().paris_m``, does not know); None: the prognosis's.
 
     Returns
     -------
@@ -100,7 +105,8 @@ def synthetic_life(fault: str, seed: int, frac: float, sigma: float = SIGMA, eve
     failure hour [h].
     """
     rng = np.random.default_rng(seed)
-    tf = RunToFailure()
+    tf = RunToFailure() if paris_m is None else dataclasses.replace(RunToFailure(),
+                                                                     paris_m=paris_m)
     law = next(g for g, fs in LAWS.items() if fault in fs)
     h = np.arange(0.0, HOURS[fault], WINDOW_H)
     n, t, tc = paper_duty(h)
@@ -159,14 +165,19 @@ def coverage(fault: str, frac: float, lives: int) -> dict[str, tuple[float, floa
     return {k: (float(np.mean(hits[k])), float(np.median(width[k]))) for k in hits}
 
 
-def calibration(fault: str, frac: float, lives: int, phi: float) -> tuple[float, ...]:
+def calibration(fault: str, frac: float, lives: int, phi: float,
+                paris_m: tuple[float, float] | None = None) -> tuple[float, ...]:
     """Split conformal with correlated estimates: the lower and upper scales from lives
     0 .. lives/2 − 1 (the training gears'), the coverage of lives/2 .. lives − 1 without
-    and with them; returns (the larger scale, coverage before, after)."""
+    and with them; returns (the larger scale, coverage before, after). ``paris_m``: each
+    life's Paris exponent drawn uniformly in this range from its seed (out of the
+    prognosis's model, which takes 3)."""
     half = lives // 2
     ps, fails = [], []
     for seed in range(lives):
-        track, alarm, duty, wh, fail = synthetic_life(fault, seed, frac, phi=phi)
+        m = None if paris_m is None else float(
+            np.random.default_rng([seed, 85]).uniform(*paris_m))
+        track, alarm, duty, wh, fail = synthetic_life(fault, seed, frac, phi=phi, paris_m=m)
         ps.append(predict_growth(track, fault, alarm, duty, wh, seed=seed))
         fails.append(fail)
     fails_a = np.array(fails)
