@@ -191,7 +191,8 @@ def test_a_profile_stream_gives_the_lifes_features_and_a_model_mismatch_is_named
                             n_features=len(feature_names()), points_range=None)
     with pytest.raises(ValueError, match=r"^stream: its windows give 73 health features "
                                          r"\(with an output encoder's twist\); the model "
-                                         r"was trained on 71$"):
+                                         r"was trained on 71; a model for it: "
+                                         r"swgsim-train experiment=monitor"):
         check_stream(back, model, RuleConfig())
 
 
