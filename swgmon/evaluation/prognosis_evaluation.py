@@ -535,10 +535,10 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
               ) -> tuple[dict[str, tuple[tuple[float, ...], tuple[float, ...]]], list[dict]]:
     """The interval's lower and upper scales of each method by split conformal prediction
     on lives of the training ``gears`` (``calibration_seeds``; module docstring), one pair
-    per quarter of the *true* remaining share (:func:`~swgmon.prognosis.scores.
-    remaining_fraction`; label-conditional: the prognosis applies each quarter's pair to
-    the remaining lives of that quarter, :func:`~swgmon.prognosis.inputs.
-    calibrated_interval`).
+    per quarter of the *true* remaining share
+    (:func:`~swgmon.prognosis.scores.remaining_fraction`; label-conditional: the prognosis
+    applies each quarter's pair to the remaining lives of that quarter,
+    :func:`~swgmon.prognosis.inputs.calibrated_interval`).
 
     A training gear's lives are read with the severity regressors fitted without it
     (:meth:`~swgmon.assessment.model.DiagnosisModel.without`): out of sample, as the held-out
