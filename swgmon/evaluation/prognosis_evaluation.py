@@ -549,7 +549,10 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     at a fraction λ of those in it, λ uniform in [0, 1] from the life's seed and gear (one
     per life and quarter: the lives stay exchangeable within a quarter); a quarter without
     enough lives for the coverage takes the pair of one prognosis per life at λ over all
-    quarters (and loses its conditional guarantee: ``lives`` in ``info`` says where).
+    quarters (and loses its conditional guarantee: ``lives`` in ``info`` says where), and
+    where those are too few to hold the tails apart (19 lives at 0.9), one factor for both
+    tails from them (9 lives; before, the posterior's own interval was left: robot_joint's
+    17 calibration lives kept factors 1).
 
     Returns
     -------
@@ -584,7 +587,10 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     for m in METHODS:
         raw = [tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage)
                if pk else (np.inf, np.inf) for pk in picked[m]]
-        pooled = raw[-1] if picked[m][-1] and np.isfinite(raw[-1][0]) else (1.0, 1.0)
+        pk = picked[m][-1]
+        one = tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage,
+                          apart=False) if pk else (np.inf, np.inf)
+        pooled = next((r for r in (raw[-1], one) if np.isfinite(r[0])), (1.0, 1.0))
         used = [tuple(min(v, MAX_SCALE) for v in (r if np.isfinite(r[0]) else pooled))
                 for r in raw]
         scales[m] = (tuple(u[0] for u in used[:-1]), tuple(u[1] for u in used[:-1]))

@@ -12,7 +12,7 @@ __all__ = ["tail_scales"]
 
 
 def tail_scales(prognoses: list[Prognosis], failure_hours: np.ndarray,
-                coverage: float = 0.9) -> tuple[float, float]:
+                coverage: float = 0.9, apart: bool = True) -> tuple[float, float]:
     """Split-conformal factors on the interval's lower and upper log half-widths.
 
     Each prognosis gives two scores: how many of its lower log half-widths the true
@@ -36,12 +36,17 @@ def tail_scales(prognoses: list[Prognosis], failure_hours: np.ndarray,
         Each life's true failure hour [h].
     coverage : float
         Target coverage in (0, 1) (0.9: the 5-95 % interval).
+    apart : bool
+        True: the tails apart, which needs n >= 2/(1 − coverage) − 1 lives (19 at 0.9).
+        False: one factor for both, the ⌈(n + 1) coverage⌉-th smallest of each
+        prognosis's larger score (n >= 9 at 0.9): where too few lives hold the tails
+        apart.
 
     Returns
     -------
     (float, float)
-        ``PrognosisConfig.lower_scale`` and ``upper_scale`` [-], each >= 0; inf when n is
-        too small for ``coverage``.
+        ``PrognosisConfig.lower_scale`` and ``upper_scale`` [-], each >= 0 (equal when not
+        ``apart``); inf when n is too small for ``coverage``.
 
     Raises
     ------
@@ -65,6 +70,11 @@ def tail_scales(prognoses: list[Prognosis], failure_hours: np.ndarray,
     lt = np.log(np.maximum(left, 1e-9))
     lower = (lq[:, 1] - lt) / np.maximum(lq[:, 1] - lq[:, 0], 1e-12)
     upper = (lt - lq[:, 1]) / np.maximum(lq[:, 2] - lq[:, 1], 1e-12)
+    if not apart:
+        rank = int(np.ceil((truth.size + 1) * coverage))
+        k = float(np.sort(np.maximum(lower, upper))[rank - 1]) if rank <= truth.size \
+            else float("inf")
+        return max(k, 0.0), max(k, 0.0)
     rank = int(np.ceil((truth.size + 1) * (1.0 + coverage) / 2.0))
     if rank > truth.size:
         return float("inf"), float("inf")

@@ -184,6 +184,20 @@ def test_tail_scales_bring_a_too_narrow_skewed_interval_to_its_coverage():
         tail_scales(ps, truth[:3])
 
 
+def test_too_few_lives_for_the_tails_apart_still_get_one_factor():
+    """12 calibration lives: too few to hold each tail at 0.95 (19 needed), enough for one
+    factor on both at 0.90 (9): the evaluation falls back to it, not to the posterior's
+    own interval. The factor is the 12th-smallest larger score of (12 + 1) 0.9."""
+    rng = np.random.default_rng(2)
+    ps = [Prognosis(0.0, "wear", "growth", True, "", 0.1, 0.8, 100.0, 100 / 1.1, 110.0,
+                    100.0, 100 / 1.1, 110.0)] * 12
+    truth = 100.0 * np.exp(0.2 * rng.standard_normal(12))
+    assert tail_scales(ps, truth) == (np.inf, np.inf)
+    lower, upper = tail_scales(ps, truth, apart=False)
+    scores = np.maximum(np.log(100.0 / truth) / np.log(1.1), np.log(truth / 100.0) / np.log(1.1))
+    assert lower == upper == pytest.approx(np.sort(scores)[11])
+
+
 def test_the_config_scales_the_interval_about_the_median():
     track, alarm, duty, wh, _ = life("wear", 0, 0.3)
     a = predict_growth(track, "wear", alarm, duty, wh)
