@@ -11,24 +11,27 @@ sources, the accelerated life: docs/DATASET.md, "Lives that run to failure".
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgsim.base.typed import check_range
+from swgsim.base.typed import LATER, check_range
 from swgsim.gear.dynamics import GearParams
 from swgsim.gear.faults import WEAR_BACKLASH_ARCMIN, ChainParams, get_fault
 from swgsim.gear.flexspline import FlexsplineGeometry
-from swgsim.gear.thermal import viscosity_ratio
+from swgsim.gear.thermal import REF_TEMP_C, viscosity_ratio
 
 __all__ = ["DEPTH_AT_ONE_M", "FAILURE_SEVERITY", "LAWS", "RunToFailure", "archard_depth",
-           "check_to_failure", "draw_scale", "failure_hour", "film_factor", "grown_severity",
-           "load_cycles", "paris_crack_depth", "paris_damage"]
+           "arrhenius_factor", "check_to_failure", "draw_scale", "failure_hour",
+           "film_factor", "grown_severity", "load_cycles", "paris_crack_depth",
+           "paris_damage", "paris_threshold_depth"]
 
 #: The law of each growth and the faults it grows.
 LAWS: dict[str, tuple[str, ...]] = {"paris": ("root_tooth_crack", "tip_tooth_crack"),
                                     "archard": ("eccentric_wg", "wear")}
 
+#: The molar gas constant [J/(mol K)] (CODATA 2018, exact) and 0 °C in kelvin.
+GAS_CONSTANT, ZERO_C_K = 8.314462618, 273.15
 #: Load cycles of a flexspline tooth per input revolution: the wave generator's two lobes
 #: (each lobe meshes every flexspline tooth once a revolution) [derived].
 CYCLES_PER_REV = 2.0
@@ -88,6 +91,14 @@ class RunToFailure:
     film_exponent : float
         p of the film factor (ν(T)/ν(20 °C))^(−p), in [0, 3] [-] (0.67,
         DATASET.md, "Lives that run to failure").
+    threshold_sif : float
+        ΔK_th of the Klesnil-Lukáš law da/dN = C (ΔK^m − ΔK_th^m), no growth below it,
+        in [0, 100] [MPa √m] (0: Paris' law) (Klesnil and Lukáš, Eng. Fract. Mech. 4
+        (1972) 77-92; :func:`paris_threshold_depth`).
+    activation_kj_per_mol : float or None
+        Q of an Arrhenius factor exp(−Q/R (1/T − 1/T_20)) on the wear rate in place of the
+        film factor, in [1, 200] [kJ/mol] (oxidational wear, Quinn, Wear 18 (1971)
+        413-419); None: the film factor.
     """
 
     failure: float | None = None
@@ -98,6 +109,8 @@ class RunToFailure:
     stress_mpa_per_nm: float = 0.6
     wear_coeff_m_per_nm_rev: float = 2e-14
     film_exponent: float = 0.67
+    threshold_sif: float = field(default=0.0, metadata={LATER: "issue 85"})
+    activation_kj_per_mol: float | None = field(default=None, metadata={LATER: "issue 85"})
 
     def failure_severity(self, fault: str) -> float:
         """The failure severity of ``fault``: ``failure`` or its default [-]."""
@@ -144,6 +157,10 @@ def check_to_failure(cfg: RunToFailure, fault: str, growth: str, initial: float,
     check_range(cfg.wear_coeff_m_per_nm_rev, 0.0, 1e-9,
                 f"{key}.to_failure.wear_coeff_m_per_nm_rev", "m/(N m rev)", lo_open=True)
     check_range(cfg.film_exponent, 0.0, 3.0, f"{key}.to_failure.film_exponent")
+    check_range(cfg.threshold_sif, 0.0, 100.0, f"{key}.to_failure.threshold_sif", "MPa √m")
+    if cfg.activation_kj_per_mol is not None:
+        check_range(cfg.activation_kj_per_mol, 1.0, 200.0,
+                    f"{key}.to_failure.activation_kj_per_mol", "kJ/mol")
 
 
 def load_cycles(n_in_rpm: np.ndarray, minutes: float) -> np.ndarray:
@@ -203,6 +220,83 @@ def paris_crack_depth(a0_m: float, damage: np.ndarray, m: float, y: float) -> np
         return np.where(base > 0, np.abs(base) ** (1.0 / e), np.inf)
 
 
+def paris_threshold_depth(a0_m: float, cycles: np.ndarray, delta_sigma_mpa: np.ndarray,
+                          c: float, m: float, y: float, threshold_sif: float,
+                          stop_m: float = np.inf, substeps: int = 4) -> np.ndarray:
+    """Crack depth after each block by the Klesnil-Lukáš law
+    da/dN = C (ΔK^m − ΔK_th^m), ΔK = Y Δσ √(π a), no growth where ΔK ≤ ΔK_th.
+
+    No closed form: each block (Δσ held) is integrated by ``substeps`` classic Runge-Kutta
+    steps in u = a^(1 − m/2) (ln a for m = 2), where the law without a threshold is a
+    straight line (:func:`paris_crack_depth`: exact there, to rounding)
+    [derived]: du/dN = (1 − m/2) C ((Y √π Δσ)^m − ΔK_th^m a^(−m/2)).
+
+    Parameters
+    ----------
+    a0_m : float
+        Depth before the first block, > 0 [m].
+    cycles, delta_sigma_mpa : ndarray, shape (K,)
+        Load cycles ΔN_i of each block [-] and their stress range Δσ_i [MPa].
+    c, m, y : float
+        Paris' C [m/cycle per (MPa √m)^m], m [-] and the shape factor Y [-].
+    threshold_sif : float
+        ΔK_th [MPa √m] (0: :func:`paris_crack_depth`'s law).
+    stop_m : float
+        Depth beyond which nothing more is integrated: every later block reads inf [m]
+        (a failure depth: the blocks after failure are not needed).
+    substeps : int
+        Runge-Kutta steps per block, >= 1.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        Depth after each block [m]; inf once beyond ``stop_m`` or grown without bound.
+
+    Source: Klesnil and Lukáš, Eng. Fract. Mech. 4 (1972) 77-92.
+    """
+    n = np.asarray(cycles, float)
+    ds = np.asarray(delta_sigma_mpa, float)
+    e = 1.0 - m / 2.0
+    k = (y * np.sqrt(np.pi)) ** m
+    th = float(threshold_sif) ** m
+    to_a = (lambda u: np.exp(u)) if e == 0 else (lambda u: u ** (1.0 / e) if u > 0 else np.inf)
+    u = np.log(a0_m) if e == 0 else a0_m ** e
+    slope = 1.0 if e == 0 else e
+    out = np.full(n.shape, np.inf)
+
+    def rate(u_: float, drive: float) -> float:  # du/dN
+        a = to_a(u_)
+        if not np.isfinite(a):
+            return 0.0
+        return slope * c * max(drive - th * a ** (-m / 2.0), 0.0)
+
+    for i in range(n.size):
+        drive, h = k * ds[i] ** m, n[i] / substeps
+        for _ in range(int(substeps)):
+            k1 = rate(u, drive)
+            k2 = rate(u + 0.5 * h * k1, drive)
+            k3 = rate(u + 0.5 * h * k2, drive)
+            k4 = rate(u + h * k3, drive)
+            u += h * (k1 + 2 * k2 + 2 * k3 + k4) / 6.0
+        a = to_a(u)
+        if not a <= stop_m:
+            break
+        out[i] = a
+    return out
+
+
+def arrhenius_factor(temp_c: np.ndarray, activation_kj_per_mol: float,
+                     ref_c: float = REF_TEMP_C) -> np.ndarray:
+    """Factor on a wear rate at a temperature, exp(−Q/R (1/T − 1/T_ref)), T in kelvin,
+    shape of ``temp_c`` [-] (1 at ``ref_c``).
+
+    Source: Quinn, "Oxidational wear", Wear 18 (1971) 413-419 (the rate of the oxide's
+    growth, Arrhenius in the contact's temperature)."""
+    t = np.asarray(temp_c, float) + ZERO_C_K
+    q = float(activation_kj_per_mol) * 1e3 / GAS_CONSTANT
+    return np.exp(-q * (1.0 / t - 1.0 / (float(ref_c) + ZERO_C_K)))
+
+
 def film_factor(temp_c: np.ndarray, exponent: float) -> np.ndarray:
     """Factor on the wear rate at a grease temperature, (ν(T)/ν(20 °C))^(−p), shape of
     ``temp_c`` [-] (:func:`swgsim.gear.thermal.viscosity_ratio`; ValueError outside its
@@ -211,8 +305,10 @@ def film_factor(temp_c: np.ndarray, exponent: float) -> np.ndarray:
 
 
 def archard_depth(t_acting_nm: np.ndarray, revolutions: np.ndarray, temp_c: np.ndarray,
-                  coeff: float, exponent: float) -> np.ndarray:
-    """Worn depth after each block by Archard's law, Σ k abs(T) n_rev film(T_grease).
+                  coeff: float, exponent: float, activation_kj_per_mol: float | None = None
+                  ) -> np.ndarray:
+    """Worn depth after each block by Archard's law, Σ k abs(T) n_rev film(T_grease)
+    (or, with an activation energy, its Arrhenius factor in place of the film factor).
 
     Parameters
     ----------
@@ -222,6 +318,9 @@ def archard_depth(t_acting_nm: np.ndarray, revolutions: np.ndarray, temp_c: np.n
         k [m/(N m rev)] at 20 °C.
     exponent : float
         The film factor's p (:func:`film_factor`).
+    activation_kj_per_mol : float or None
+        Q of :func:`arrhenius_factor`, used in place of the film factor; None: the film
+        factor.
 
     Returns
     -------
@@ -229,7 +328,9 @@ def archard_depth(t_acting_nm: np.ndarray, revolutions: np.ndarray, temp_c: np.n
         Depth after each block [m].
     """
     rate = coeff * np.abs(np.asarray(t_acting_nm, float)) * np.asarray(revolutions, float)
-    return np.cumsum(rate * film_factor(temp_c, exponent))
+    temp = (film_factor(temp_c, exponent) if activation_kj_per_mol is None
+            else arrhenius_factor(temp_c, activation_kj_per_mol))
+    return np.cumsum(rate * temp)
 
 
 def grown_severity(fault: str, growth: str, cfg: RunToFailure, onset_h: float,
@@ -267,7 +368,15 @@ def grown_severity(fault: str, growth: str, cfg: RunToFailure, onset_h: float,
     depth0 = initial * DEPTH_AT_ONE_M[fault]
     grown = np.zeros(h.shape)
     n = np.where(on, np.asarray(n_in_rpm, float), 0.0)
-    if growth == "paris":
+    if growth == "paris" and cfg.threshold_sif > 0:
+        start = int(np.argmax(on)) if on.any() else h.size
+        a = paris_threshold_depth(
+            depth0, load_cycles(n[start:-1], interval_min),
+            cfg.stress_mpa_per_nm * np.abs(np.asarray(t_acting_nm, float)[start:-1]),
+            scale * cfg.paris_c, cfg.paris_m, cfg.shape_factor, cfg.threshold_sif,
+            stop_m=cfg.failure_severity(fault) * DEPTH_AT_ONE_M[fault])
+        grown[start + 1:] = a - depth0
+    elif growth == "paris":
         dmg = paris_damage(load_cycles(n, interval_min),
                            cfg.stress_mpa_per_nm * np.abs(t_acting_nm), scale * cfg.paris_c,
                            cfg.paris_m)
@@ -276,7 +385,8 @@ def grown_severity(fault: str, growth: str, cfg: RunToFailure, onset_h: float,
     else:
         revs = np.abs(n) * float(interval_min)
         grown[1:] = archard_depth(t_acting_nm, revs, temp_c,
-                                  scale * cfg.wear_coeff_m_per_nm_rev, cfg.film_exponent)[:-1]
+                                  scale * cfg.wear_coeff_m_per_nm_rev, cfg.film_exponent,
+                                  cfg.activation_kj_per_mol)[:-1]
     sev = np.minimum(initial + grown / DEPTH_AT_ONE_M[fault], cfg.failure_severity(fault))
     return np.where(on, sev, 0.0)
 

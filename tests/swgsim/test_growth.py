@@ -23,11 +23,13 @@ from swgsim.datasets.growth import (
     DEPTH_AT_ONE_M,
     RunToFailure,
     archard_depth,
+    arrhenius_factor,
     film_factor,
     grown_severity,
     load_cycles,
     paris_crack_depth,
     paris_damage,
+    paris_threshold_depth,
 )
 from swgsim.datasets.life import LifeSimulator
 from swgsim.datasets.plan import config_hash, plain_config, plan
@@ -84,6 +86,73 @@ def test_paris_law_at_variable_amplitude_is_the_piecewise_ode():
 
 def test_a_crack_without_bound_is_infinite():
     assert np.isinf(paris_crack_depth(1e-4, np.array([1e9]), 3.0, 1.12))[0]
+
+
+@pytest.mark.parametrize("m", [2.0, 2.5, 3.0, 4.0])
+def test_the_threshold_law_without_a_threshold_is_paris_closed_form(m):
+    """Runge-Kutta in u = a^(1 - m/2), where Paris' law is a straight line: exact."""
+    a0, c, y = 40e-6, 6.9e-12, 1.12
+    ds, n = np.array([10.0, 45.0, 25.0, 45.0, 5.0]), np.array([3e6, 1e6, 2e6, 5e5, 4e6])
+    a = paris_threshold_depth(a0, n, ds, c, m, y, 0.0)
+    np.testing.assert_allclose(a, paris_crack_depth(a0, paris_damage(n, ds, c, m), m, y),
+                               rtol=1e-9)
+
+
+@pytest.mark.parametrize("m", [2.5, 3.0, 4.0])
+def test_the_threshold_law_at_constant_amplitude_is_its_quadrature(m):
+    """N(a) = ∫ da / (C (ΔK^m - ΔK_th^m)) from a0 to each block's depth (scipy.quad)."""
+    from scipy.integrate import quad
+    a0, c, y, ds, th = 40e-6, 6.9e-12, 1.12, 30.0, 0.25
+    assert y * ds * np.sqrt(np.pi * a0) > th  # grows from the start
+    n = np.full(20, 4.0e5)
+    a = paris_threshold_depth(a0, n, ds * np.ones(20), c, m, y, th, substeps=8)
+    finite = np.isfinite(a)
+    assert finite.sum() >= 5
+    cycles = [quad(lambda x: 1.0 / (c * ((y * ds * np.sqrt(np.pi * x)) ** m - th ** m)),
+                   a0, ak, epsrel=1e-12)[0] for ak in a[finite]]
+    np.testing.assert_allclose(cycles, np.cumsum(n)[finite], rtol=1e-5)
+    slower = paris_threshold_depth(a0, n, ds * np.ones(20), c, m, y, 0.0)
+    assert np.all(a[finite] < slower[finite])
+
+
+def test_below_the_threshold_no_crack_grows_and_a_stop_ends_the_integration():
+    a0, c, m, y = 40e-6, 6.9e-12, 3.0, 1.12
+    th = 1.12 * 30.0 * np.sqrt(np.pi * a0)  # ΔK at 30 MPa: the threshold
+    ds = np.array([20.0, 29.9, 45.0, 45.0, 45.0])
+    a = paris_threshold_depth(a0, np.array([1e6, 1e6, 1e6, 1e8, 1e8]), ds, c, m, y, th,
+                              stop_m=60e-6)
+    assert a[0] == a[1] == pytest.approx(a0, rel=1e-12)  # below: nothing
+    assert a0 < a[2] < 60e-6 and np.all(np.isinf(a[3:]))  # then through the stop: inf
+
+
+def test_the_arrhenius_law_replaces_the_film_factor():
+    revs = np.full(10, 1.2e5)
+    cold = archard_depth(np.full(10, 39.0), revs, np.full(10, 20.0), 2e-14, 0.67, 40.0)
+    np.testing.assert_allclose(cold, 2e-14 * 39.0 * np.cumsum(revs), rtol=1e-12)
+    hot = archard_depth(np.full(10, 39.0), revs, np.full(10, 50.0), 2e-14, 0.67, 40.0)
+    # Q/R (1/293.15 - 1/323.15), Q 40 kJ/mol, R 8.314462618 J/(mol K): 1.5237...
+    np.testing.assert_allclose(hot / cold, np.exp(40e3 / 8.314462618
+                                                  * (1 / 293.15 - 1 / 323.15)), rtol=1e-12)
+    assert arrhenius_factor(np.array([20.0]), 40.0)[0] == 1.0
+
+
+def test_a_threshold_holds_a_life_still_at_light_load(tiny):
+    """The crack grows in the heavy windows only; the same life without it, in all."""
+    law = RunToFailure(stress_mpa_per_nm=2.0)
+    d1 = DEPTH_AT_ONE_M["root_tooth_crack"]
+    th = law.shape_factor * law.stress_mpa_per_nm * 50.0 * np.sqrt(np.pi * 0.3 * d1)
+    hours = np.arange(40) / 6.0
+    load = np.where(np.arange(40) % 2 == 0, 39.0, 70.0)
+    kw = dict(hours=hours, interval_min=10.0, n_in_rpm=np.full(40, 2000.0),
+              t_acting_nm=load, temp_c=np.full(40, 20.0))
+    free = grown_severity("root_tooth_crack", "paris", law, 0.0, 0.3, **kw)
+    held = grown_severity("root_tooth_crack", "paris",
+                          dataclasses.replace(law, threshold_sif=th), 0.0, 0.3, **kw)
+    steps = np.diff(held)
+    assert np.all(np.abs(steps[load[:-1] < 50.0]) < 1e-12)  # round-off of a^(1 - m/2)
+    growing = held[1:] < law.failure_severity("root_tooth_crack")  # before it saturates
+    assert growing.sum() > 5 and np.all(steps[(load[:-1] > 50.0) & growing] > 1e-6)
+    assert np.all(held <= free) and np.argmax(held >= 0.5) > np.argmax(free >= 0.5)
 
 
 def test_archard_wear_is_linear_in_sliding_distance_and_follows_the_film():
@@ -201,6 +270,12 @@ def test_the_schedule_is_a_staircase_of_the_failure_severity():
      "dataset.life.fault.to_failure is for growth paris or archard"),
     (FaultOnset("wear", 6.0, 0.1, growth="archard", to_failure=RunToFailure(scatter=-1)),
      "dataset.life.fault.to_failure.scatter must lie in [0, 2]"),
+    (FaultOnset("root_tooth_crack", 6.0, 0.1, growth="paris",
+                to_failure=RunToFailure(threshold_sif=-1.0)),
+     "dataset.life.fault.to_failure.threshold_sif must lie in [0, 100] MPa √m"),
+    (FaultOnset("wear", 6.0, 0.1, growth="archard",
+                to_failure=RunToFailure(activation_kj_per_mol=500.0)),
+     "dataset.life.fault.to_failure.activation_kj_per_mol must lie in [1, 200] kJ/mol"),
     (FaultOnset("wear", 6.0, 0.0, growth="points", points=[[6.0, 0.1], [6.0, 0.2]]),
      "dataset.life.fault.points must be [hour, severity] pairs with strictly increasing"),
     (FaultOnset("wear", 6.0, 0.0, growth="points", points=[[6.0, 0.1], [7.0, 1.2]]),
