@@ -503,7 +503,7 @@ def _named(mon: GearMonitor, tr: Trace | None, alarms: list[Alarm], feats: np.nd
     temperature sensor's (:func:`_sensor_named`)."""
     named = []
     for a in [] if tr is None else tr.alarms:
-        named.append(mon.diagnose(tr, a, feats, points, cond))
+        named.append(mon.diagnose(tr, a, feats, points, cond, named[-1] if named else None))
         if still is not None and a >= still[0] and tr.hour[a] >= stuck_h:
             named[-1] = _sensor_named(named[-1])
         if named[-1].fault in CHANGES_STATE or _after_change(mon, alarms, named[-1],

@@ -646,25 +646,36 @@ class GearMonitor:
                      self.normal.outside(points, cond, fr, opi))
 
     def diagnose(self, trace: Trace, a: int, feats: np.ndarray, points: np.ndarray,
-                 cond: Conditions | None = None) -> Alarm:
+                 cond: Conditions | None = None, before: Alarm | None = None) -> Alarm:
         """Name the fault of the alarm at window ``a`` of ``trace`` and its severity.
 
         ``trace``, ``feats``, ``points`` and ``cond`` cover the same windows: those of the
         run, the ones after the alarm included as far as the stream goes (up to
-        ``confirm_h``).
+        ``confirm_h``). ``before``: the alarm named before it in the same run (indices
+        into the same windows), or None. Where that named a gear fault and this alarm's
+        rise began at or before it, the two are one episode: the CUSUM has not gone back
+        to zero since, so the windows named then are among those named now; the alarm
+        keeps that name and only its severity is estimated anew (a growing crack alarms
+        again some 9 times an hour; weighing every hypothesis each time cost 1.2 s an
+        alarm, a 100-h life 18 min: issue 85).
         """
         j = int(np.argmax(trace.cusums[a]))  # the CUSUM that raised it
         zero = np.flatnonzero(trace.cusums[:a, j] <= 0)
         rise = int(zero[-1]) + 1 if zero.size else 0
         end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
         cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
-        ev = self.evidence(trace.log_proba, trace.op_index)
-        ev[(trace.outside & OUTSIDE_UNJUDGED) != 0] = 0.0  # not judged: no evidence
         fr = trace.friction
-        at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
-                                    cond[rise:a + 1], fr[rise:a + 1], trace.hour[rise:a + 1])
-        fault, bridge, fit = self._name(ev[rise:end], feats[rise:end], points[rise:end],
-                                        cond[rise:end], fr[rise:end], trace.hour[rise:end])
+        if before is not None and before.kind == "gear_fault" and rise <= before.index:
+            at_alarm, fault, bridge, fit = before.fault, before.fault, None, None
+        else:
+            ev = self.evidence(trace.log_proba, trace.op_index)
+            ev[(trace.outside & OUTSIDE_UNJUDGED) != 0] = 0.0  # not judged: no evidence
+            at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1],
+                                        points[rise:a + 1], cond[rise:a + 1],
+                                        fr[rise:a + 1], trace.hour[rise:a + 1])
+            fault, bridge, fit = self._name(ev[rise:end], feats[rise:end], points[rise:end],
+                                            cond[rise:end], fr[rise:end],
+                                            trace.hour[rise:end])
         if fault == TEMPERATURE_SENSOR:  # its severity: the reading's error [K]
             err = fit.temperature_c - fit.reading_c
             est, lo, hi = fit.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))

@@ -748,6 +748,38 @@ def test_more_prognoses_than_an_alarm_may_have_are_refused_before_work(growing_l
         monitor_stream(ds, tiny_eval["model"], RuleConfig(), prognosis=every)
 
 
+def test_an_alarm_in_a_named_gear_faults_episode_keeps_its_name(growing_life, tiny_eval,
+                                                                monkeypatch):
+    """A growing fault alarms again and again; an alarm whose CUSUM rose at or before the
+    previous one named a gear fault keeps that name without the hypotheses weighed again
+    (GearMonitor._name: twice per episode, not per alarm), its severity estimated anew."""
+    from threadpoolctl import threadpool_limits
+
+    import swgmon.assessment.gear_monitor as gm
+    from swgmon.advisories.stream import monitor_stream
+
+    weighed, named = [], []
+    name, diagnose = gm.GearMonitor._name, gm.GearMonitor.diagnose
+
+    def counted(self, *a, **k):
+        weighed.append(1)
+        return name(self, *a, **k)
+
+    def kept(self, *a, **k):
+        named.append(diagnose(self, *a, **k))
+        return named[-1]
+
+    monkeypatch.setattr(gm.GearMonitor, "_name", counted)
+    monkeypatch.setattr(gm.GearMonitor, "diagnose", kept)
+    with threadpool_limits(1):
+        res = monitor_stream(growing_life["ds"], tiny_eval["model"], RuleConfig())
+    episodes = 1 + sum(b.rise_index > a.index for a, b in zip(named[:-1], named[1:], strict=True))
+    assert len(named) >= 3 and episodes < len(named)  # it alarmed again within the episode
+    assert len(weighed) == 2 * episodes
+    assert {a.fault for a in named} == {"eccentric_wg"} == {a.fault for a in res.alarms}
+    assert len({a.severity for a in named}) > 1  # each estimated anew
+
+
 def test_the_prognosis_interval_after_the_alarm_holds_the_true_failure_hour(growing_life):
     """Every valid prognosis made before the true failure (7.67 h) holds it within its
     5-95 % interval; the first, 0.5 h after the alarm with 2 estimates, is not yet valid
