@@ -39,7 +39,8 @@ log = logging.getLogger(__name__)
 @dataclass(frozen=True)
 class Job:
     """One resumable part: the monitor (``detector`` None) or one per-window detector on
-    one held-out gear of one data set."""
+    one held-out gear of one data set; ``gear`` 0: every held-out instance of a data set's
+    lot (the prognosis's part)."""
 
     dataset: str
     gear: int
@@ -49,7 +50,13 @@ class Job:
     @property
     def file(self) -> str:
         """Its part's file name in ``parts/``."""
-        return f"{self.dataset}_gear{self.gear}{'_' + self.detector if self.detector else ''}.json"
+        return (f"{self.dataset}{f'_gear{self.gear}' if self.gear else ''}"
+                f"{'_' + self.detector if self.detector else ''}.json")
+
+    @property
+    def held_out(self) -> str:
+        """What it scores, in messages."""
+        return f"held-out gear {self.gear}" if self.gear else "every held-out instance"
 
 
 @dataclass(kw_only=True)
@@ -195,7 +202,8 @@ def group_jobs(jobs: list[Job], group: int | None, key: str = "monitor.group"
         return jobs
     keys = list(dict.fromkeys((j.dataset, j.gear) for j in jobs))
     if not 0 <= group < len(keys):
-        pairs = ", ".join(f"{k}: {d} gear {g}" for k, (d, g) in enumerate(keys))
+        pairs = ", ".join(f"{k}: {d}" + (f" gear {g}" if g else "")
+                          for k, (d, g) in enumerate(keys))
         raise ValueError(f"{key} must lie in [0, {len(keys) - 1}] ({pairs}), got {group}")
     return [j for j in jobs if (j.dataset, j.gear) == keys[group]]
 
@@ -209,7 +217,7 @@ def run_one_group(out: Path, jobs: list[Job], delayed: Callable, desc: str, prog
     parts, resumed = run_parts(out, jobs, delayed, desc, progress, n_jobs)
     wall = time.perf_counter() - t0
     if progress:
-        print(f"{key} {group} ({jobs[0].dataset}, held-out gear {jobs[0].gear}): "
+        print(f"{key} {group} ({jobs[0].dataset}, {jobs[0].held_out}): "
               f"{len(parts)} part(s) in {out}/parts ({resumed} already there), "
               f"{wall / 60:.1f} min; the report: the same command without {key}")
     return {"report_dir": str(out), "group": group, "parts": [j.file for j in jobs],

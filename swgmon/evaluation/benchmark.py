@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
@@ -46,9 +47,9 @@ from swgsim.datasets.resources import BYTES_PER_RECORD_SAMPLE, RESERVE_BYTES
 from swgsim.files.inputs import available_memory
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
-__all__ = ["ABLATION", "BASELINES", "BenchmarkConfig", "ablated", "baseline_rows", "benchmark_part",
-           "check_memory", "design_thresholds", "instances", "life_faults", "part_memory",
-           "population_plan"]
+__all__ = ["ABLATION", "BASELINES", "BenchmarkConfig", "Lot", "ablated", "baseline_rows",
+           "benchmark_part", "check_memory", "design_thresholds", "instances", "life_faults",
+           "part_memory", "population_plan"]
 
 #: The baselines, by the name their rows carry.
 BASELINES = {"regression_mewma": RegressionMEWMA, "pca": PCAChart}
@@ -169,13 +170,22 @@ def ablated(study: MonitorStudyConfig) -> MonitorStudyConfig:
                                                                  laws="generic"))
 
 
-def population_plan(base: DatasetPlan, cfg: BenchmarkConfig) -> DatasetPlan:
-    """A preset's plan with its gears replaced by the benchmark's lot (checked)."""
+class Lot(Protocol):
+    """A design over a production lot: :class:`BenchmarkConfig`, the prognosis's
+    :class:`~.prognosis_evaluation.PrognosisStudyConfig`."""
+
+    population: int
+    population_seed: int
+    held_out: int
+
+
+def population_plan(base: DatasetPlan, cfg: Lot) -> DatasetPlan:
+    """A preset's plan with its gears replaced by the design's lot (checked)."""
     return plan(dataclasses.replace(base.config, gears=gear_population(
         cfg.population, cfg.population_seed)))
 
 
-def instances(cfg: BenchmarkConfig) -> tuple[list[int], list[int]]:
+def instances(cfg: Lot) -> tuple[list[int], list[int]]:
     """The training instances and the held-out ones (ids, the last ``held_out``)."""
     ids = list(range(1, cfg.population + 1))
     return ids[:-cfg.held_out], ids[-cfg.held_out:]

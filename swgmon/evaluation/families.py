@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from swgsim.base.typed import check_range
 from swgsim.datasets.conditions import (
     ConditionsConfig,
     DutyChange,
@@ -26,6 +27,14 @@ from swgsim.datasets.conditions import (
     TemperatureTrace,
     trace_rise,
 )
+from swgsim.datasets.growth import (
+    DEPTH_AT_ONE_M,
+    LAWS,
+    RunToFailure,
+    arrhenius_factor,
+    film_factor,
+)
+from swgsim.gear.faults import get_fault
 from swgsim.gear.thermal import (
     FRICTION_FORMS,
     MONOTONE_FORMS,
@@ -40,8 +49,8 @@ from swgsim.sensing.bridge_drift import (
 )
 
 __all__ = ["ALL_SENSOR_STATES", "DEFAULT_PARTS", "FAMILY_TAG", "PARTS",
-           "RANGES", "SENSOR_STATES", "UR3_COLUMNS", "NuisanceFamily", "benchmark_families",
-           "default_families", "draw_conditions"]
+           "RANGES", "SENSOR_STATES", "UR3_COLUMNS", "GrowthFamily", "NuisanceFamily",
+           "benchmark_families", "default_families", "draw_conditions", "draw_growth"]
 
 #: The parts of a joint's day a family can draw (docs/monitor/evaluation.md, "Families of benign
 #: changes"); the last four are issue 83's, which the monitor was not built on: the joint in
@@ -437,3 +446,116 @@ def _issue_83_parts(cond: ConditionsConfig, parts: set[str], v: dict[str, float]
     if "dynamics" in parts:
         cond = dataclasses.replace(cond, viscous_in_dynamics=True)
     return cond
+
+
+@dataclass
+class GrowthFamily:
+    """Growth laws a prognosis does not assume (issue 85): each life to failure draws
+    its law's constants from these ranges, every one from a stream keyed by its name, the
+    fault, the gear and the seed (:func:`draw_growth`); the prognosis keeps the nominal
+    law (one Paris m, no threshold, the film factor, the nominal failure severity).
+    Sources and the ranges' origins: docs/monitor/prognosis.md, "Out-of-model lives".
+
+    Attributes
+    ----------
+    paris_m : list of float
+        Paris' m of a crack's life, [lo, hi] within [1, 6] ([2.5, 4]: steels' m
+        scatter there, Barsom and Rolfe [unverified: recalled]). C moves with m about a
+        pivot (the C-m correlation, Cortie and Garrett, Eng. Fract. Mech. 30 (1988) 49-58
+        [unverified: recalled]): the crack grows at the nominal law's rate at the pivot
+        ΔK, Y Δσ √(π a) at the data set's mean load and the geometric mean of the onset's
+        and the failure's depths.
+    threshold_share : list of float
+        ΔK_th over the pivot ΔK, [lo, hi] within [0, 1) ([0, 0.5] [choice]: from none to
+        a threshold that stops growth at the light loads of the duty).
+    activation_kj_per_mol : list of float
+        Q of the Arrhenius factor on the wear rate in place of the film factor, [lo, hi]
+        within [1, 200] kJ/mol ([20, 60] [choice: tribo-oxidation, below the 100-200 of
+        static oxidation; Quinn, Wear 18 (1971) 413-419 [unverified: recalled]]); the
+        wear coefficient moves so that both laws wear alike at ``pivot_c``.
+    pivot_c : float
+        The grease temperature at which a drawn wear law and the nominal one wear alike,
+        in [-40, 150] °C (40 [choice: a working joint's grease, about 20 K above its
+        hall, docs/DATASET.md, "Gear lives"]).
+    failure_spread : float
+        σ of a lognormal factor on the failure severity, per life, in [0, 1] (0.1
+        [choice]), capped at the fault's range.
+    """
+
+    paris_m: list[float] = _span(2.5, 4.0)
+    threshold_share: list[float] = _span(0.0, 0.5)
+    activation_kj_per_mol: list[float] = _span(20.0, 60.0)
+    pivot_c: float = 40.0
+    failure_spread: float = 0.1
+
+    def check(self, key: str = "GrowthFamily") -> None:
+        """Refuse a range not ``[lo, hi]`` with lo <= hi within its bounds, in one line
+        naming the key.
+
+        Raises
+        ------
+        ValueError
+            As above, ``failure_spread`` outside [0, 1] or ``pivot_c`` outside
+            [-40, 150] °C.
+        """
+        for name, lo, hi, hi_open in (("paris_m", 1.0, 6.0, False),
+                                      ("threshold_share", 0.0, 1.0, True),
+                                      ("activation_kj_per_mol", 1.0, 200.0, False)):
+            r = getattr(self, name)
+            if len(r) != 2 or not r[0] <= r[1]:
+                raise ValueError(f"{key}.{name} must be [lo, hi] with lo <= hi, got {r}")
+            for i, v in enumerate(r):
+                check_range(v, lo, hi, f"{key}.{name}[{i}]", hi_open=hi_open)
+        check_range(self.failure_spread, 0.0, 1.0, f"{key}.failure_spread")
+        check_range(self.pivot_c, -40.0, 150.0, f"{key}.pivot_c", "°C")
+
+
+def draw_growth(family: GrowthFamily, fault: str, nominal: RunToFailure, initial: float,
+                pivot_load_nm: float, gear: int, seed: int) -> RunToFailure:
+    """One life's law drawn from a growth family (:class:`GrowthFamily`); pure and
+    deterministic, each constant from its own keyed stream (adding a constant moves no
+    other draw).
+
+    Parameters
+    ----------
+    family : GrowthFamily
+        Checked.
+    fault : str
+        A fault of :data:`swgsim.datasets.growth.LAWS`.
+    nominal : RunToFailure
+        The law the prognosis takes (its m, C, wear coefficient, failure severity).
+    initial : float
+        The severity at the onset [-].
+    pivot_load_nm : float
+        The load of the C-m pivot, > 0 [N m] (the data set's mean).
+    gear, seed : int
+        The life's gear instance and seed.
+
+    Returns
+    -------
+    RunToFailure
+        A crack's: m, C about the pivot, ΔK_th; a wear's: the Arrhenius law and its
+        coefficient at the pivot temperature; both: the
+        failure severity times exp(``failure_spread`` z), within (initial, the fault's
+        top].
+    """
+    def u(name: str, lo_hi: list[float]) -> float:
+        return float(_stream(seed, f"growth:{fault}:{gear}:{name}").uniform(*lo_hi))
+
+    fail = nominal.failure_severity(fault)
+    z = float(_stream(seed, f"growth:{fault}:{gear}:failure").standard_normal())
+    top = float(get_fault(fault).severity_range[1])
+    drawn = float(np.clip(fail * np.exp(family.failure_spread * z), initial + 1e-3 * fail, top))
+    if fault in LAWS["archard"]:  # the same rate at the pivot temperature
+        q = u("activation", family.activation_kj_per_mol)
+        at = float(film_factor(np.array(family.pivot_c), nominal.film_exponent)
+                   / arrhenius_factor(np.array(family.pivot_c), q))
+        return dataclasses.replace(nominal, failure=drawn, activation_kj_per_mol=q,
+                                   wear_coeff_m_per_nm_rev=nominal.wear_coeff_m_per_nm_rev * at)
+    m = u("paris_m", family.paris_m)
+    d1 = DEPTH_AT_ONE_M[fault]
+    pivot = float(nominal.shape_factor * nominal.stress_mpa_per_nm * pivot_load_nm * np.sqrt(
+        np.pi * np.sqrt(initial * fail) * d1))  # ΔK at the mean load, mid-life [MPa √m]
+    return dataclasses.replace(nominal, failure=drawn, paris_m=m,
+                               paris_c=nominal.paris_c * pivot ** (nominal.paris_m - m),
+                               threshold_sif=u("threshold", family.threshold_share) * pivot)

@@ -1,27 +1,34 @@
-"""Evaluation of the prognosis (:mod:`swgmon.prognosis.growth`) on lives that run to failure,
-leave-one-gear-out (``swgsim-train experiment=prognosis``,
-:mod:`.prognosis_task`).
+"""Evaluation of the prognosis (:mod:`swgmon.prognosis.growth`) on lives that run to failure
+by laws it does not assume, over gear instances it never saw
+(``swgsim-train experiment=prognosis``, :mod:`.prognosis_task`).
 
-For a data set (a checked :class:`~swgsim.datasets.plan.DatasetPlan`) and a held-out gear,
-the diagnosis model is trained on the other gears (:func:`.training.train_model`,
-the monitor evaluation's training). Each seed gives the held-out gear one life per fault that
-can grow (a fault of :data:`swgsim.datasets.growth.LAWS` the data set has a class for), its
-severity grown from ``initial`` at an onset drawn from the seed by its law to the failure
-severity (:class:`GrowingFault`), its acting load changed by a payload factor some hours after
-the onset in some lives (``payloads``). Each life runs through the monitor as a stream does
-(:func:`swgmon.advisories.stream.monitor_stream` on its windows up to the true failure, the
-prognosis option on: :func:`swgmon.prognosis.stream.stream_prognoses`); every prognosis
-is kept with the life's true failure hour (its own growth: the exact law's, the schedule's
-``failure_h``), and the two baselines (:mod:`swgmon.prognosis.baselines`) predict on the same tracks
-at the same hours.
+For a data set (a checked :class:`~swgsim.datasets.plan.DatasetPlan`) its gears become a
+production lot (``population`` instances, :func:`swgsim.datasets.config.gear_population`,
+as the benchmark's); the diagnosis model is trained on the first instances
+(:func:`.training.train_model`, the monitor evaluation's training), the last ``held_out``
+are scored. Each seed gives every held-out instance one life per fault that can grow (a
+fault of :data:`swgsim.datasets.growth.LAWS` the data set has a class for): its severity
+grown from ``initial`` at an onset drawn from the seed to the failure, under a real day
+drawn from ``day`` (:func:`.families.draw_conditions`: warm-ups, the joint in two nodes,
+a payload and a program changed inside the life), by a law drawn from ``growth``
+(:func:`.families.draw_growth`: Paris' m and a threshold, an Arrhenius wear, the failure
+severity spread) while the prognosis keeps the nominal law of ``faults``. Each life runs
+through the monitor as a stream does (:func:`swgmon.advisories.stream.monitor_stream` on
+its windows up to the true failure, the prognosis option on:
+:func:`swgmon.prognosis.stream.stream_prognoses`); every prognosis is kept with the
+life's true failure hour, and the two baselines (:mod:`swgmon.prognosis.baselines`)
+predict on the same tracks at the same hours.
 
-The intervals are calibrated by split conformal prediction, lower and upper tails apart
-(:func:`swgmon.prognosis.calibration.tail_scales`), on lives of the *training* gears
-(``calibration_seeds``, disjoint from ``seeds``), per method and per quarter of the *true*
-remaining share (label-conditional: :func:`swgmon.prognosis.inputs.calibrated_interval`),
-one prognosis per life and quarter at a fraction of the way drawn from the seed
-(:func:`calibrate`), each training gear's lives read with the severity regressors fitted
-without it (out of sample); the held-out gear is never seen before it is scored.
+The intervals are calibrated by conformal prediction over gear instances, lower and upper
+tails apart (:func:`swgmon.prognosis.calibration.tail_scales`), on lives of the *training*
+instances (``calibration_seeds``, disjoint from ``seeds``), each read with the severity
+regressors fitted without its instance (the jackknife's out-of-instance scores, Barber et
+al., Ann. Statist. 49 (2021) 486-507; the test lives are read by the full model, not by
+each leave-one-out model as jackknife+ would: that is one monitor run per training
+instance and test life), per method and per quarter of the *true* remaining share
+(label-conditional: :func:`swgmon.prognosis.inputs.calibrated_interval`), one prognosis
+per life and quarter at a fraction of the way drawn from the seed (:func:`calibrate`);
+the held-out instances are never seen before they are scored.
 """
 
 from __future__ import annotations
@@ -35,6 +42,14 @@ import numpy as np
 
 from swgmon.advisories.stream import monitor_stream
 from swgmon.assessment.model import DiagnosisModel
+from swgmon.evaluation.benchmark import instances, population_plan
+from swgmon.evaluation.families import (
+    GrowthFamily,
+    NuisanceFamily,
+    benchmark_families,
+    draw_conditions,
+    draw_growth,
+)
 from swgmon.evaluation.study import MonitorStudyConfig
 from swgmon.evaluation.training import train_model
 from swgmon.prognosis.baselines import predict_linear, predict_wiener
@@ -44,7 +59,6 @@ from swgmon.prognosis.inputs import share_bucket
 from swgmon.prognosis.scores import SHARE_BUCKETS, change_response
 from swgmon.prognosis.stream import StreamPrognosis
 from swgsim.base.typed import allowed, check_range, check_tree
-from swgsim.datasets.conditions import ConditionsConfig
 from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.plan import DatasetPlan
@@ -80,24 +94,33 @@ class GrowingFault:
 
 
 def _growing() -> dict[str, GrowingFault]:
-    """The default lives [choice]: each fault fails at the largest severity of the bench's
-    and tiny grids (paper Table V: root crack 0.9, tip crack 1.0, eccentric WG 0.1); the
-    cracks start at 0.25, half the bench's mildest crack (the diagnosis model trains on
-    the severities the lives pass through, :func:`life_levels`); the constants make the lives fail
-    within hours at the bench's duty (the evaluation's time: the monitor diagnoses every
-    alarm it raises again while a fault grows, about 0.85 s each, some 7 per hour of a
-    growing fault on bench gear 2): Δσ 2 MPa per N m (3.3 times the growth module's
-    default) and a wear coefficient 1e-12 m/(N m rev) (50 times it) fail the bench's and
-    robot_joint's lives 1.7-8.2 h after the onset, medians 3.3, 4.4 and 3.9 h for root
-    crack, tip crack and eccentric WG (21 lives each: three gears, the seeds and
-    calibration seeds; measured on the lives' schedules)."""
+    """The default faults and the nominal law the prognosis takes [choice]: each fails at
+    the largest severity of the bench's and tiny grids (paper Table V: root crack 0.9, tip
+    crack 1.0, eccentric WG 0.1); the cracks start at 0.25, half the bench's mildest crack
+    (the diagnosis model trains on the severities the lives pass through,
+    :func:`life_levels`); Δσ 0.5 MPa per N m and a wear coefficient 4e-15 m/(N m rev)
+    make the lives drawn around them (:func:`life_of`) last at least 100 h from the onset
+    to the failure at the bench's duty under the real day (issue 85; measured on the
+    lives' schedules: docs/monitor/prognosis.md, "Out-of-model lives")."""
     return {"root_tooth_crack": GrowingFault(0.25, RunToFailure(failure=0.9,
-                                                                stress_mpa_per_nm=2.0)),
+                                                                stress_mpa_per_nm=0.5)),
             "tip_tooth_crack": GrowingFault(0.25, RunToFailure(failure=1.0,
-                                                               stress_mpa_per_nm=2.0)),
+                                                               stress_mpa_per_nm=0.5)),
             "eccentric_wg": GrowingFault(0.0, RunToFailure(failure=0.1,
-                                                           wear_coeff_m_per_nm_rev=1e-12)),
-            "wear": GrowingFault(0.0, RunToFailure(failure=0.8, wear_coeff_m_per_nm_rev=1e-12))}
+                                                           wear_coeff_m_per_nm_rev=4e-15)),
+            "wear": GrowingFault(0.0, RunToFailure(failure=0.8,
+                                                   wear_coeff_m_per_nm_rev=2.5e-14))}
+
+
+def _day() -> NuisanceFamily:
+    """The lives' real day [choice]: the benchmark's payload family (the joint in two
+    nodes, a Coulomb law of its own, the friction in the dynamics, drawn friction law and
+    bridge drift, a daily warm-up, a payload factor in [0.8, 1.2]) with a new program too,
+    both changed 40-90 h into the operating hours: after the onset, before the shortest
+    life fails."""
+    base = benchmark_families()["payload"]
+    return dataclasses.replace(base, parts=[*base.parts, "duty"], payload_h=[40.0, 90.0],
+                               duty_h=[40.0, 90.0])
 
 
 def _training() -> MonitorStudyConfig:
@@ -119,28 +142,36 @@ class PrognosisStudyConfig:
         The diagnosis model's training and the monitor's settings (its ``commissioning_h``,
         ``interval_min``, ``rule``, ``normal``; ``faults``: the classes it learns).
     seeds : list of int
-        Life seeds of the held-out gear.
+        Life seeds of the held-out instances.
     calibration_seeds : list of int
-        Life seeds of the training gears' calibration lives, disjoint from ``seeds``
-        ([100, 101, 102, 103] [choice]: a quarter's 90 % conformal scale needs at least 9
-        lives with a prognosis in it; for the growth law two seeds gave 1-11 lives a
-        quarter, four 3-22).
-    gears : list of int
-        Held-out gears; empty: every gear of the data set.
+        Life seeds of the training instances' calibration lives, disjoint from ``seeds``
+        ([100] [choice]: with 8 training instances and 3 faults, 24 lives a method and
+        quarter, above the 19 that hold the tails apart at 0.9).
+    population : int
+        Gear instances drawn per data set, in [3, 999] (12: the benchmark's lot).
+    population_seed : int
+        The lot's seed (:func:`~swgsim.datasets.config.gear_population`).
+    held_out : int
+        Instances scored (the last ones), never trained on, in [1, population - 2] (4).
     faults : dict of str to GrowingFault
-        The faults that grow and their lives; those the data set has no class for (or the
-        model no severity regressor) are left out and reported.
+        The faults that grow and the nominal law the prognosis takes; those the data set
+        has no class for (or the model no severity regressor) are left out and reported.
+    growth : GrowthFamily or None
+        The laws the lives grow by, drawn per life around the nominal
+        (:func:`~.families.draw_growth`); None: the nominal law, the prognosis's own.
+    day : NuisanceFamily or None
+        The real day each life lives (:func:`~.families.draw_conditions`, one per seed,
+        the same on every instance): the benchmark's physics the monitor was not built on
+        and a daily warm-up, a payload and a program changed 40-90 h into the life; None:
+        20 °C, nothing changes.
     onset_window_h : list of float
         The onset is drawn uniformly this many hours after commissioning, [lo, hi].
     max_life_h : float
         Hours after the onset a life is planned for, in (0, 10^4] [h]; a life that has not
         failed by then is cut there (reported, not scored).
-    payloads : list of float
-        Payload factor of each seed's lives (seed i: ``payloads[i % len]``), each in
-        (0, 2]; 1: no change [-].
-    payload_after_h : float
-        Hours after the onset the payload changes, > 0 [h] (1.5 h [choice]: before the
-        shortest default life fails).
+    twins : int
+        The first ``twins`` seeds' lives whose day changes the payload also run without
+        that change, to score the response to it, in [0, 99] (1).
     severity_levels : int
         Steps of the failure severity on which a life's severity grows
         (``LifeConfig.severity_levels``: the exact law rounded down to them), a multiple
@@ -171,15 +202,18 @@ class PrognosisStudyConfig:
     """
 
     train: MonitorStudyConfig = field(default_factory=_training)
-    seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
-    calibration_seeds: list[int] = field(default_factory=lambda: [100, 101, 102, 103])
-    gears: list[int] = field(default_factory=list)
+    seeds: list[int] = field(default_factory=lambda: [0, 1])
+    calibration_seeds: list[int] = field(default_factory=lambda: [100])
+    population: int = field(default=12, metadata=allowed(3, 999))
+    population_seed: int = field(default=0, metadata=allowed(0, 2**22 - 1))
+    held_out: int = field(default=4, metadata=allowed(1, 997))
     faults: dict[str, GrowingFault] = field(default_factory=_growing)
+    growth: GrowthFamily | None = field(default_factory=GrowthFamily)
+    day: NuisanceFamily | None = field(default_factory=_day)
     onset_window_h: list[float] = field(default_factory=lambda: [0.5, 2.0])
-    max_life_h: float = field(default=100.0, metadata=allowed(0.0, 1e4, lo_open=True,
+    max_life_h: float = field(default=800.0, metadata=allowed(0.0, 1e4, lo_open=True,
                                                               unit="h"))
-    payloads: list[float] = field(default_factory=lambda: [1.0, 1.1, 0.9])
-    payload_after_h: float = 1.5
+    twins: int = field(default=1, metadata=allowed(0, 99))
     severity_levels: int = 32
     train_beyond: float = field(default=0.5, metadata=allowed(0.0, 2.0))
     prognosis: StreamPrognosis = field(default_factory=lambda: StreamPrognosis(
@@ -204,8 +238,8 @@ class PrognosisStudyConfig:
             Seeds none, out of [0, 2**32 - 1] or shared between the evaluation and the
             calibration; no fault, a fault without a growth law or its growth to failure
             out of range; ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi <= 10^4 h;
-            no payload; ``severity_levels`` not a multiple of 4 in [8, 256];
-            ``payload_after_h`` outside the life after the onset; ``prognosis.every_h``
+            ``held_out`` leaving fewer than two training instances; ``severity_levels``
+            not a multiple of 4 in [8, 256]; ``prognosis.every_h``
             below the lives' window interval or making more than
             :data:`~swgmon.prognosis.stream.MAX_PROGNOSES` prognoses an alarm; a
             life of more windows than :data:`swgsim.datasets.schedule.MAX_WINDOWS`
@@ -234,16 +268,13 @@ class PrognosisStudyConfig:
             raise ValueError(f"{where}.onset_window_h must be [lo, hi] with 0 <= lo <= hi, "
                              f"got {w}")
         check_range(w[1], 0.0, 1e4, f"{where}.onset_window_h[1]", "h")
-        if not self.payloads:
-            raise ValueError(f"{where}.payloads must list at least one factor (1: no change)")
-        for i, f in enumerate(self.payloads):
-            check_range(f, 0.0, 2.0, f"{where}.payloads[{i}]", lo_open=True)
+        if self.held_out > self.population - 2:
+            raise ValueError(f"{where}.held_out must leave at least two training instances "
+                             f"of population={self.population}, got {self.held_out}")
         if self.severity_levels % 4 or not 8 <= self.severity_levels <= 256:
             raise ValueError(f"{where}.severity_levels must be a multiple of 4 in [8, 256] "
                              "(the training's steps are every fourth), got "
                              f"{self.severity_levels}")
-        check_range(self.payload_after_h, 0.0, self.max_life_h, f"{where}.payload_after_h",
-                    "h", lo_open=True, hi_open=True, why="inside the life after the onset")
         self._check_life(where)
         # at most a prognosis per window of the lives (train.interval_min apart), and a
         # bounded number over the hours a life's alarm may be followed (monitor_stream's
@@ -331,26 +362,33 @@ def training_levels(fault: str, gf: GrowingFault, levels: int, beyond: float
     return lv + extra
 
 
-def life_of(plan: DatasetPlan, bank: RecordBank, g: int, sc: PrognosisStudyConfig,
-            fault: str, seed: int, i_seed: int, payload: float | None = None
-            ) -> LifeSimulator:
-    """The life to failure of gear ``g`` for a fault and seed (module docstring): onset drawn
-    from the seed (the same for every fault of it), payload ``payloads[i_seed % len]`` (or
-    ``payload``: a twin without the change, 1) from ``payload_after_h`` after the onset."""
+def pivot_load_nm(plan_: DatasetPlan) -> float:
+    """The load of the growth family's C-m pivot: the mean of the data set's operating
+    loads [N m] (:func:`~.families.draw_growth`)."""
+    return float(np.mean(plan_.config.operating_points.t_out_nm))
+
+
+def life_of(plan_: DatasetPlan, bank: RecordBank, g: int, sc: PrognosisStudyConfig,
+            fault: str, seed: int, twin: bool = False) -> LifeSimulator:
+    """The life to failure of instance ``g`` for a fault and seed (module docstring): the
+    onset drawn from the seed (the same for every fault of it), the day from ``sc.day``
+    (``twin``: without its payload change), the law from ``sc.growth`` about the fault's
+    nominal one."""
     tr = sc.train
     onset = tr.commissioning_h + np.random.default_rng([seed, 47]).uniform(*sc.onset_window_h)
-    factor = float(sc.payloads[i_seed % len(sc.payloads)] if payload is None else payload)
-    cond = None if factor == 1.0 else ConditionsConfig(
-        thermal=None, viscosity=False, bridge_drift=None, temperature_sensor=None,
-        payload=[[float(onset + sc.payload_after_h), factor]])
+    cond = None if sc.day is None else draw_conditions(sc.day, int(seed))
+    if twin and cond is not None:
+        cond = dataclasses.replace(cond, payload=[])
     gf = sc.faults[fault]
+    law = gf.to_failure if sc.growth is None else draw_growth(
+        sc.growth, fault, gf.to_failure, gf.initial, pivot_load_nm(plan_), g, int(seed))
     life = LifeConfig(hours=float(onset + sc.max_life_h), interval_min=tr.interval_min,
                       severity_levels=sc.severity_levels,
                       commissioning_h=tr.commissioning_h, life_seed=int(seed), conditions=cond,
                       fault=FaultOnset(fault, float(onset), gf.initial, growth=_law(fault),
-                                       to_failure=gf.to_failure))
+                                       to_failure=law))
     check_tree(life, "prognosis.study.life")
-    return LifeSimulator(plan, g, life, bank)
+    return LifeSimulator(plan_, g, life, bank)
 
 
 def _as_prognosis(ev: dict, method: str) -> Prognosis:
@@ -441,7 +479,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     -------
     life : dict
         ``fault``, ``onset_h``, ``failure_h`` (NaN: not failed within ``max_life_h``),
-        ``payload``, ``first_alarm_h``, ``first_alarm_fault`` (the first gear-fault alarm
+        ``payload`` (its factor), ``payload_h`` (the hour it changed; NaN: none),
+        ``first_alarm_h``, ``first_alarm_fault`` (the first gear-fault alarm
         after the onset), ``alarm_h`` (that of the followed alarm, naming the life's
         fault; NaN: none) [h].
     events : dict of str to list of dict
@@ -453,7 +492,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     fail_h = float(sim.schedule.failure_h)
     cond = sim.life.conditions
     life = {"fault": fo.fault, "onset_h": fo.onset_h, "failure_h": fail_h,
-            "payload": cond.payload[0][1] if cond is not None else 1.0,
+            "payload": cond.payload[0][1] if cond is not None and cond.payload else 1.0,
+            "payload_h": cond.payload[0][0] if cond is not None and cond.payload else np.nan,
             "first_alarm_h": np.nan, "first_alarm_fault": "", "alarm_h": np.nan}
     if not np.isfinite(fail_h):
         return life, {}
@@ -533,17 +573,18 @@ def _changes(key: dict, life: dict, events: dict[str, list[dict]], twin: dict,
 def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
               model: DiagnosisModel, sc: PrognosisStudyConfig, faults: list[str]
               ) -> tuple[dict[str, tuple[tuple[float, ...], tuple[float, ...]]], list[dict]]:
-    """The interval's lower and upper scales of each method by split conformal prediction
-    on lives of the training ``gears`` (``calibration_seeds``; module docstring), one pair
+    """The interval's lower and upper scales of each method by conformal prediction over
+    the training instances ``gears`` (``calibration_seeds``; module docstring), one pair
     per quarter of the *true* remaining share
     (:func:`~swgmon.prognosis.scores.remaining_fraction`; label-conditional: the prognosis
     applies each quarter's pair to the remaining lives of that quarter,
     :func:`~swgmon.prognosis.inputs.calibrated_interval`).
 
-    A training gear's lives are read with the severity regressors fitted without it
-    (:meth:`~swgmon.assessment.model.DiagnosisModel.without`): out of sample, as the held-out
-    gear's will be (read with the model's own, they were in sample: the severity track, and so the
-    remaining life's error, was the training gears' own, smaller than a new gear's).
+    A training instance's lives are read with the severity regressors fitted without it
+    (:meth:`~swgmon.assessment.model.DiagnosisModel.without`): out of sample, as a held-out
+    instance's will be (the jackknife's scores; read with the model's own, they were in
+    sample: the severity track, and so the remaining life's error, was the training
+    instances' own, smaller than a new one's).
 
     Of a life's valid prognoses with finite, positive quantiles, each quarter gets the one
     at a fraction λ of those in it, λ uniform in [0, 1] from the life's seed and gear (one
@@ -565,13 +606,12 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
         ``lower_used``, ``upper_used``.
     """
     labels = [f"[{lo:g}, {hi:g})" for lo, hi in SHARE_BUCKETS] + ["all"]
-    sims = [(g, s, life_of(plan, banks[g], g, sc, f, s, i))
-            for g in gears for i, s in enumerate(sc.calibration_seeds) for f in faults]
     picked: dict[str, list[list]] = {m: [[] for _ in labels] for m in METHODS}
     ones = dict.fromkeys(METHODS, ((1.0,), (1.0,)))
-    read_by = {g: model.without(g) for g in gears}
-    for g, s, sim in sims:
-        life, events = run_life(sim, read_by[g], sc, ones, s)
+    for g, s, f in [(g, s, f) for g in gears for s in sc.calibration_seeds for f in faults]:
+        life, events = run_life(life_of(plan, banks[g], g, sc, f, s), model.without(g), sc,
+                                ones, s)
+        banks[g].release()  # a life's records serve no other (its own law's steps)
         lam = np.random.default_rng([s, g, 48]).uniform()
         fail, alarm = life["failure_h"], life["alarm_h"]
         for m, evs in events.items():
@@ -604,18 +644,17 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     return scales, info
 
 
-def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStudyConfig
-                       ) -> dict:
-    """Train on the other gears, calibrate on their lives, and evaluate the prognosis on
-    every life to failure of held-out gear ``g`` (module docstring).
+def run_prognosis_part(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig) -> dict:
+    """Train on a data set's training instances, calibrate on their lives, and evaluate
+    the prognosis on every life to failure of its held-out instances (module docstring).
 
     Parameters
     ----------
-    plan : DatasetPlan
+    base : DatasetPlan
+        The data set's plan; its gears are replaced by the lot
+        (:func:`population_plan`).
     dataset : str
         Its name in the tables.
-    g : int
-        The held-out gear.
     sc : PrognosisStudyConfig
         Checked (:meth:`PrognosisStudyConfig.check`).
 
@@ -623,45 +662,51 @@ def run_prognosis_part(plan: DatasetPlan, dataset: str, g: int, sc: PrognosisStu
     -------
     dict
         ``rows`` (one per prognosis and method, :func:`_rows`), ``lives`` (one per life,
-        :func:`run_life`'s), ``changes`` (per life with a payload change and method, run
-        again as a twin without it: :func:`_changes`), ``calibration``
-        (:func:`calibrate`'s info), ``not_run`` (fault -> why), ``train_s``,
-        ``calibrate_s``, ``evaluate_s`` [s], ``dataset``, ``held_out_gear``.
+        :func:`run_life`'s), ``changes`` (per life of the first ``twins`` seeds with a
+        payload change and method, run again as a twin without it: :func:`_changes`),
+        ``calibration`` (:func:`calibrate`'s info), ``not_run`` (fault -> why),
+        ``train_s``, ``calibrate_s``, ``evaluate_s`` [s], ``dataset``.
     """
     t0 = time.perf_counter()
-    gears = [int(x.id) for x in plan.config.gears]
-    banks = {x: record_bank(plan, x) for x in gears}
-    faults, not_run = evaluated_faults(plan, sc)
+    lot = population_plan(base, sc)
+    train_ids, held = instances(sc)
+    banks = {x: record_bank(lot, x) for x in train_ids + held}
+    faults, not_run = evaluated_faults(lot, sc)
     levels = {f: training_levels(f, sc.faults[f], sc.severity_levels // 4, sc.train_beyond)
               for f in faults}
     train = dataclasses.replace(sc.train, faults=sc.train.faults or faults,
                                 fault_severities={**levels, **sc.train.fault_severities})
-    model = train_model(plan, banks, [x for x in gears if x != g], train)
+    model = train_model(lot, banks, train_ids, train)
     for f in [f for f in faults if f not in model.severity]:
         not_run[f] = "the diagnosis model has no severity regressor for it"
     faults = [f for f in faults if f in model.severity]
     t1 = time.perf_counter()
-    scales, info = calibrate(plan, banks, [x for x in gears if x != g], model, sc, faults)
+    scales, info = calibrate(lot, banks, train_ids, model, sc, faults)
+    for g in train_ids:
+        banks[g].release(healthy=True)  # the training instances' records serve no more
     t2 = time.perf_counter()
-    sims = [(s, life_of(plan, banks[g], g, sc, f, s, i),  # every record wanted at once
-             life_of(plan, banks[g], g, sc, f, s, i, payload=1.0)
-             if sc.payloads[i % len(sc.payloads)] != 1.0 else None)
-            for i, s in enumerate(sc.seeds) for f in faults]
     rows, lives, changes = [], [], []
-    for s, sim, twin in sims:
-        life, events = run_life(sim, model, sc, scales, s)
-        key = {"dataset": dataset, "held_out_gear": g, "seed": s}
-        lives.append({**key, **life})
-        rows += _rows(key, life, events)
-        if twin is not None:
-            changes += _changes(key, life, events, *run_life(twin, model, sc, scales, s),
-                                life["onset_h"] + sc.payload_after_h, sc.prognosis.every_h)
+    for g in held:
+        for i, s in enumerate(sc.seeds):
+            for f in faults:
+                sim = life_of(lot, banks[g], g, sc, f, s)
+                life, events = run_life(sim, model, sc, scales, s)
+                key = {"dataset": dataset, "held_out_gear": g, "seed": s}
+                lives.append({**key, **life})
+                rows += _rows(key, life, events)
+                if i < sc.twins and np.isfinite(life["payload_h"]):
+                    twin = life_of(lot, banks[g], g, sc, f, s, twin=True)
+                    changes += _changes(key, life, events, *run_life(twin, model, sc, scales,
+                                                                     s),
+                                        life["payload_h"], sc.prognosis.every_h)
+            banks[g].release()
+        banks[g].release(healthy=True)
     return {"rows": rows, "lives": lives, "changes": changes, "calibration": info,
             "not_run": not_run,
             "train_s": t1 - t0, "calibrate_s": t2 - t1, "evaluate_s": time.perf_counter() - t2,
-            "dataset": dataset, "held_out_gear": g}
+            "dataset": dataset}
 
 
 __all__ = ["METHODS", "GrowingFault", "PrognosisStudyConfig", "baseline_events", "calibrate",
-           "evaluated_faults", "life_levels", "life_of", "run_life",
+           "evaluated_faults", "life_levels", "life_of", "pivot_load_nm", "run_life",
            "run_prognosis_part", "training_levels"]

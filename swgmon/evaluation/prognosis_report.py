@@ -252,12 +252,12 @@ def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFram
     text = header + "".join(
         f"\n## {title}\n\n{md_table(t.columns, t.itertuples(index=False))}\n" for title, t in (
             ("Targets (the growth law)", tgt),
-            ("Scores per fault and method (held-out gears)", summary),
+            ("Scores per fault and method (held-out instances)", summary),
             ("The 90 % interval per remaining-share bucket (remaining share of the way from the "
              "alarm to failure)", buckets),
             ("After a payload change, against the same life without it", moved),
             ("Lives", alarms),
-            ("Calibration (split conformal on the training gears' lives)", calibration))
+            ("Calibration (conformal over the training instances' lives)", calibration))
     ) + "\n![prognosis](prognosis.png)\n"
     write_owned(path, lambda tmp: Path(tmp).write_text(text))
 

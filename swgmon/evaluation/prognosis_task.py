@@ -33,6 +33,7 @@ from learn.tasks.parts import (
     run_parts,
 )
 from learn.tracking import log_run
+from swgmon.evaluation.benchmark import instances
 from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, run_prognosis_part
 from swgmon.evaluation.prognosis_report import (
     CHANGE_COLUMNS,
@@ -76,13 +77,12 @@ class PrognosisExperiment(EvaluationExperiment):
 
 
 def plan_parts(pc: PrognosisExperiment, plans: dict[str, DatasetPlan]) -> list[Job]:
-    """One part per data set and held-out gear (``study.gears``, default all), its key the
-    hash of the data set's config, the gear and the study."""
+    """One part per data set (its lot trained, calibrated and scored), its key the hash of
+    the data set's config and the study."""
     study = dataclasses.asdict(pc.study)
-    return [Job(name, g, None, part_key({"dataset": p.config_hash, "gear": g,
-                                         "study": study, "task": "prognosis"}))
-            for name, p in plans.items()
-            for g in pc.study.gears or [int(x.id) for x in p.config.gears]]
+    return [Job(name, 0, None, part_key({"dataset": p.config_hash, "study": study,
+                                         "task": "prognosis"}))
+            for name, p in plans.items()]
 
 
 def run_prognosis_evaluation(cfg) -> dict:
@@ -99,12 +99,6 @@ def run_prognosis_evaluation(cfg) -> dict:
     pc: PrognosisExperiment = app.prognosis
     check_tree(pc.study, "prognosis.study")  # its training design, ..., then its rules
     plans = pc.plans("prognosis")  # every data set's config checked before any work
-    for name in plans:
-        have = [int(x.id) for x in plans[name].config.gears]
-        bad = sorted(set(pc.study.gears) - set(have))
-        if bad:
-            raise ValueError(f"prognosis.study.gears: {bad} not in prognosis.datasets.{name}; "
-                             f"allowed: {have}")
     jobs = group_jobs(plan_parts(pc, plans), pc.group, "prognosis.group")
     with pc.claimed_report("prognosis", plans, app.logger) as (out, claim):
         if pc.group is not None:
@@ -117,9 +111,9 @@ def run_prognosis_evaluation(cfg) -> dict:
 
 def _job(plan_: DatasetPlan, jobs: list[Job], study: PrognosisStudyConfig, out: str
          ) -> list[tuple[dict, Job]]:
-    """The part of one held-out gear in a worker, saved as it ends."""
+    """The part of one data set in a worker, saved as it ends."""
     ownership.join(out, "prognosis")
-    return run_group(out, jobs, lambda j: run_prognosis_part(plan_, j.dataset, j.gear, study))
+    return run_group(out, jobs, lambda j: run_prognosis_part(plan_, j.dataset, study))
 
 
 def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
@@ -128,8 +122,8 @@ def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
     lives = pd.DataFrame([r for p in parts for r in p["lives"]])
     changes = pd.DataFrame([r for p in parts for r in p.get("changes", [])],
                            columns=CHANGE_COLUMNS)
-    cal = pd.DataFrame([{"dataset": p["dataset"], "held_out_gear": p["held_out_gear"], **c}
-                        for p in parts for c in p["calibration"]])
+    cal = pd.DataFrame([{"dataset": p["dataset"], **c} for p in parts
+                        for c in p["calibration"]])
     return rows, lives, changes, cal
 
 
@@ -156,14 +150,18 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
         write_owned(out / name, lambda tmp, df=df: df.to_csv(tmp, index=False))
     not_run = {f"{p['dataset']}: {f}": w for p in parts for f, w in p["not_run"].items()}
     atomic_write_json(out / "timing.json", {"wall_s": wall, "resumed": resumed, "parts": [
-        {k: p.get(k) for k in ("dataset", "held_out_gear", "train_s", "calibrate_s",
-                               "evaluate_s")} for p in parts]})
+        {k: p.get(k) for k in ("dataset", "train_s", "calibrate_s", "evaluate_s")}
+        for p in parts]})
     sc = pc.study
-    header = (f"# Prognosis: leave-one-gear-out over lives to failure\n\n"
-              f"Data sets {', '.join(pc.run_on)}; seeds {sc.seeds}; calibration seeds "
-              f"{sc.calibration_seeds} on the training gears; payload factors "
-              f"{sc.payloads} by seed, from {sc.payload_after_h:g} h after the onset; a "
-              f"prognosis every {sc.prognosis.every_h:g} h after the alarm. "
+    train_ids, held = instances(sc)
+    header = (f"# Prognosis: lives to failure by laws it does not assume, on gear instances "
+              f"it never saw\n\n"
+              f"Data sets {', '.join(pc.run_on)}; a lot of {sc.population} instances (seed "
+              f"{sc.population_seed}), trained on {len(train_ids)}, scored on {held}; seeds "
+              f"{sc.seeds}; calibration seeds {sc.calibration_seeds} on the training "
+              f"instances, each read without its own; the lives' day and law drawn per seed "
+              f"(`prognosis.study.day`, `prognosis.study.growth`); a prognosis every "
+              f"{sc.prognosis.every_h:g} h after the alarm. "
               f"Wall time {wall / 60:.1f} min{resumed_note(resumed, len(jobs))}.\n"
               + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
     write_table(out / "table.md", header, tgt, summary, buckets, lives, cal, moved)
@@ -171,7 +169,7 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
     claim.record([out / f for f in ("results.csv", "lives.csv", "calibration.csv",
                                     "scores.csv", "changes.csv", "table.md")] + [fig])
     if pc.progress:
-        print("\ntargets (prognosis, the growth law; held-out gears):")
+        print("\ntargets (prognosis, the growth law; held-out instances):")
         for r in tgt.itertuples(index=False):
             print(f"  {r.dataset:<12s} {r.fault:<17s} {r.what:<62s} {r.target:>9s} "
                   f"{r.measured:>7s} {r.result}")

@@ -17,15 +17,18 @@ from swgmon.evaluation.evaluate import _benign, healthy_life, maintenance_log, m
 from swgmon.evaluation.families import (
     RANGES,
     SENSOR_STATES,
+    GrowthFamily,
     NuisanceFamily,
     _draws,
     benchmark_families,
     default_families,
     draw_conditions,
+    draw_growth,
 )
 from swgmon.evaluation.study import FAMILY_PREFIX, MonitorStudyConfig, life_conditions
 from swgmon.evaluation.training import train_model
 from swgsim.base.typed import check_tree
+from swgsim.datasets.growth import DEPTH_AT_ONE_M, RunToFailure
 from swgsim.datasets.plan import plan
 from swgsim.datasets.records import record_bank
 from swgsim.datasets.schedule import LifeConfig, schedule
@@ -404,3 +407,60 @@ def test_adding_a_friction_form_moves_only_the_seeds_it_wins():
         reordered = dataclasses.replace(base, friction_forms=forms[::-1])
         assert _draws(reordered, seed)[1] == fa
     assert 0 < moved < 200 / len(forms)  # about 1 / (n + 1) of the seeds
+
+
+# ------------------------------------------------------------- growth families (issue 85)
+def _drawn(fault: str, seed: int, family=None, gear: int = 9) -> RunToFailure:
+    nominal = RunToFailure(failure=0.9 if "crack" in fault else 0.1, stress_mpa_per_nm=0.6)
+    return draw_growth(family or GrowthFamily(), fault, nominal,
+                       0.25 if "crack" in fault else 0.0, 39.0, gear, seed)
+
+
+def test_a_growth_draw_is_keyed_by_its_name_fault_gear_and_seed():
+    a = _drawn("root_tooth_crack", 3)
+    assert a == _drawn("root_tooth_crack", 3)  # pure
+    assert a != _drawn("root_tooth_crack", 4) and a != _drawn("root_tooth_crack", 3, gear=10)
+    fixed = _drawn("root_tooth_crack", 3, GrowthFamily(failure_spread=0.0))
+    assert (fixed.paris_m, fixed.threshold_sif) == (a.paris_m, a.threshold_sif)  # only failure
+    assert fixed.failure == 0.9 and a.failure != 0.9
+
+
+def test_a_drawn_crack_grows_at_the_nominal_rate_at_the_pivot_and_stays_in_its_ranges():
+    fam, nominal = GrowthFamily(), RunToFailure(failure=0.9, stress_mpa_per_nm=0.6)
+    pivot = 1.12 * 0.6 * 39.0 * np.sqrt(np.pi * np.sqrt(0.25 * 0.9)
+                                        * DEPTH_AT_ONE_M["root_tooth_crack"])
+    ms, shares, fails = [], [], []
+    for seed in range(200):
+        d = _drawn("root_tooth_crack", seed)
+        assert d.paris_c * pivot ** d.paris_m == pytest.approx(
+            nominal.paris_c * pivot ** nominal.paris_m, rel=1e-12)
+        ms.append(d.paris_m), shares.append(d.threshold_sif / pivot), fails.append(d.failure)
+        assert d.activation_kj_per_mol is None
+    assert fam.paris_m[0] <= min(ms) < 2.6 and 3.9 < max(ms) <= fam.paris_m[1]
+    assert 0.0 <= min(shares) < 0.05 and 0.45 < max(shares) <= 0.5
+    assert 0.25 < min(fails) and max(fails) <= 0.99  # the crack's top severity
+    assert np.std(np.log(fails)) == pytest.approx(0.1, rel=0.2)
+
+
+def test_a_drawn_wear_takes_an_arrhenius_law_that_wears_alike_at_the_pivot():
+    from swgsim.datasets.growth import archard_depth
+    d, nominal = _drawn("eccentric_wg", 1), RunToFailure()
+    assert 20.0 <= d.activation_kj_per_mol <= 60.0 and (d.paris_m, d.threshold_sif) == (3.0, 0.0)
+    load, revs = np.full(3, 39.0), np.full(3, 1e5)
+    worn = {t: [archard_depth(load, revs, np.full(3, t), law.wear_coeff_m_per_nm_rev,
+                              law.film_exponent, law.activation_kj_per_mol)[-1]
+                for law in (d, nominal)] for t in (20.0, 40.0, 60.0)}
+    assert worn[40.0][0] == pytest.approx(worn[40.0][1], rel=1e-12)  # the pivot
+    assert worn[20.0][0] < worn[20.0][1] and worn[60.0][0] > worn[60.0][1]  # steeper
+
+
+@pytest.mark.parametrize(("change", "match"), [
+    ({"paris_m": [4.0, 2.5]}, r"growth.paris_m must be \[lo, hi\] with lo <= hi"),
+    ({"paris_m": [0.5, 3.0]}, r"growth.paris_m\[0\] must lie in \[1, 6\], got 0.5"),
+    ({"threshold_share": [0.0, 1.0]}, r"growth.threshold_share\[1\]"),
+    ({"failure_spread": 2.0}, r"growth.failure_spread"),
+])
+def test_a_bad_growth_family_is_refused_in_one_line_naming_the_key(change, match):
+    with pytest.raises(ValueError, match=match) as info:
+        GrowthFamily(**change).check("growth")
+    assert "\n" not in str(info.value)

@@ -9,20 +9,23 @@ import pandas as pd
 import pytest
 from bad_input import message
 
-#: The tiny evaluation: tiny_bench's gear 3 held out, one seed, one fault (an eccentric wave
-#: generator worn by Archard's law to 0.1, the largest severity the tiny grid trains, in
-#: about 3 h: the wear coefficient of tests/learn/test_monitor.py's growing life).
+#: The tiny evaluation: a lot of 3 instances of tiny_bench's gear, instance 3 held out, one
+#: seed, one fault (an eccentric wave generator worn by a drawn Arrhenius law to about 0.1,
+#: the largest severity the tiny grid trains, in about 2.3 h), the day's payload changed to
+#: 1.1 at 5.5 h.
 TINY = ["prognosis.run_on=[tiny]", "+dataset@prognosis.datasets.tiny=tiny_bench",
         "prognosis.study.seeds=[1]", "prognosis.study.calibration_seeds=[100]",
-        "prognosis.study.gears=[3]", "prognosis.study.train.commissioning_h=4",
+        "prognosis.study.population=3", "prognosis.study.held_out=1",
+        "prognosis.study.train.commissioning_h=4",
         "prognosis.study.train.healthy_hours=10", "prognosis.study.train.train_healthy_h=2",
         "prognosis.study.train.train_variants=2", "prognosis.study.train.faults=[eccentric_wg]",
         "prognosis.study.train.detector_hours=2", "prognosis.study.train.onset_window_h=[0.5,1]",
         "~prognosis.study.faults.root_tooth_crack", "~prognosis.study.faults.tip_tooth_crack",
         "~prognosis.study.faults.wear",
-        "prognosis.study.faults.eccentric_wg.to_failure.wear_coeff_m_per_nm_rev=7e-13",
+        "prognosis.study.faults.eccentric_wg.to_failure.wear_coeff_m_per_nm_rev=3e-13",
         "prognosis.study.onset_window_h=[0.5,1]", "prognosis.study.max_life_h=6",
-        "prognosis.study.payload_after_h=1", "prognosis.study.payloads=[1.1]",
+        "prognosis.study.day.payload_h=[5.5,5.5]", "prognosis.study.day.duty_h=[5.5,5.5]",
+        "prognosis.study.day.payload_factor=[1.1,1.1]",
         "prognosis.study.prognosis.min_track_h=0.5", "prognosis.study.prognosis.min_estimates=3",
         "prognosis.n_jobs=1", "prognosis.progress=false"]
 #: The columns of results.csv: one row per prognosis and method.
@@ -74,8 +77,9 @@ def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
     changes = pd.read_csv(out / "changes.csv")  # the life again as a twin at payload 1
     assert list(changes.method) == ["growth", "linear", "wiener"]
     assert (changes.failure_h < changes.twin_failure_h).all()  # heavier: earlier (the law)
-    assert (changes.change_h == lives.onset_h.iloc[0] + 1.0).all()
-    assert (changes.paired >= 1).all() and changes.moved.notna().all()
+    assert (changes.change_h == 5.5).all() and (lives.payload_h == 5.5).all()
+    law = changes[changes.method == "growth"]
+    assert (law.paired >= 1).all() and law.moved.notna().all()
     assert "## After a payload change" in table
 
 
@@ -110,8 +114,9 @@ def test_a_job_of_an_array_runs_its_group_alone_and_writes_no_report(tiny_progno
 
     monkeypatch.setattr(task, "run_prognosis_part", fail)
     summary = _run(out, "prognosis.group=0", "prognosis.progress=true")
-    assert summary["group"] == 0 and summary["parts"] == ["tiny_gear3.json"]
-    assert "prognosis.group 0 (tiny, held-out gear 3): 1 part(s)" in capsys.readouterr().out
+    assert summary["group"] == 0 and summary["parts"] == ["tiny.json"]
+    assert "prognosis.group 0 (tiny, every held-out instance): 1 part(s)" in \
+        capsys.readouterr().out
     assert {f: (out / f).read_bytes() for f in before} == before
 
 
@@ -119,8 +124,11 @@ BAD = {  # case -> (override or overrides, the start of the one line)
     "seeds shared with the calibration": (
         "prognosis.study.calibration_seeds=[1]", "prognosis.study.calibration_seeds must be "
         "disjoint from seeds"),
-    "a payload factor of 3": ("prognosis.study.payloads=[3.0]",
-                              "prognosis.study.payloads[0] must lie in (0, 2]"),
+    "a Paris exponent of 9": ("prognosis.study.growth.paris_m=[2.5,9]",
+                              "prognosis.study.growth.paris_m[1] must lie in [1, 6]"),
+    "no training instance left": ("prognosis.study.held_out=2",
+                                  "prognosis.study.held_out must leave at least two training "
+                                  "instances of population=3, got 2"),
     "a failure below the onset's severity": (
         "prognosis.study.faults.eccentric_wg.to_failure.failure=0.0",
         "prognosis.study.faults.eccentric_wg.to_failure.failure must lie in"),
@@ -146,14 +154,12 @@ BAD = {  # case -> (override or overrides, the start of the one line)
     "an unknown data set": ("prognosis.run_on=[nope]", "prognosis.run_on: ['nope']"),
     "no data set": ("prognosis.run_on=[]", "prognosis.run_on: empty; allowed: keys of "
                                            "prognosis.datasets ['bench', 'robot_joint', 'tiny']"),
-    "a gear the data set lacks": ("prognosis.study.gears=[7]",
-                                  "prognosis.study.gears: [7] not in"),
     "severity_levels not a multiple of 4": (
         "prognosis.study.severity_levels=30",
         "prognosis.study.severity_levels must be a multiple of 4 in [8, 256]"),
     "coverage 1": ("prognosis.study.coverage=1.0", "prognosis.study.coverage must lie in"),
     "a group beyond the pairs": ("prognosis.group=1", "prognosis.group must lie in [0, 0] "
-                                 "(0: tiny gear 3), got 1"),
+                                 "(0: tiny), got 1"),
 }
 
 
@@ -207,27 +213,41 @@ def test_an_alarm_naming_a_fault_whose_range_ends_below_the_threshold_is_not_pre
 
 def test_the_model_is_trained_on_every_severity_a_life_passes_through():
     """The severities a growing fault's lives take after the onset lie on their staircase
-    (life_levels), and the diagnosis model's training severities, every fourth step of
-    it, span them to the failure from within a step of the first: a severity regressor is not asked
-    for what it never saw (the bench's, trained on Table V's three, read root cracks of
-    0.225-0.45 as 0.49-0.53)."""
+    (life_levels) where the law is the nominal one, and within the diagnosis model's
+    training severities (every fourth step, past the failure: training_levels) where the
+    failure severity is drawn: a severity regressor is not asked for what it never saw
+    (the bench's, trained on Table V's three, read root cracks of 0.225-0.45 as
+    0.49-0.53)."""
+    import dataclasses
+
     from swgcli import dataset_preset
-    from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, life_levels, life_of
+    from swgmon.evaluation.prognosis_evaluation import (
+        PrognosisStudyConfig,
+        life_levels,
+        life_of,
+        training_levels,
+    )
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.plan import plan
     from swgsim.datasets.records import record_bank
 
     p = plan(dataset_config(dataset_preset("tiny_bench")))
-    sc = PrognosisStudyConfig()
+    drawn = PrognosisStudyConfig()
+    nominal = dataclasses.replace(drawn, growth=None, day=None)
     for f in ("root_tooth_crack", "eccentric_wg"):
-        every = life_levels(sc.faults[f], sc.severity_levels)
-        trained = life_levels(sc.faults[f], sc.severity_levels // 4)
-        assert set(trained) <= set(every) and trained[-1] == sc.faults[f].to_failure.failure
+        every = life_levels(drawn.faults[f], drawn.severity_levels)
+        trained = training_levels(f, drawn.faults[f], drawn.severity_levels // 4,
+                                  drawn.train_beyond)
+        assert set(life_levels(drawn.faults[f], drawn.severity_levels // 4)) <= set(every)
         for seed in (0, 1):
-            sim = life_of(p, record_bank(p, 3), 3, sc, f, seed, seed)
-            lived = np.unique(sim.schedule.severity[sim.schedule.severity > 0])
-            assert lived.size >= 8 and set(lived.tolist()) <= set(every), (f, lived)
-            assert trained[0] <= lived[0] + trained[1] - trained[0] and lived[-1] <= trained[-1]
+            for sc in (nominal, drawn):
+                sim = life_of(p, record_bank(p, 3), 3, sc, f, seed)
+                lived = np.unique(sim.schedule.severity[sim.schedule.severity > 0])
+                assert lived.size >= 8, (f, lived)
+                if sc is nominal:
+                    assert set(lived.tolist()) <= set(every), (f, lived)
+                assert trained[0] <= lived[0] + trained[1] - trained[0], (f, lived)
+                assert lived[-1] <= trained[-1], (f, lived)
 
 
 def test_a_prognosis_with_no_failure_in_sight_is_a_row_with_an_open_end():
@@ -272,9 +292,9 @@ def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
     train = MonitorStudyConfig(faults=["eccentric_wg"], nuisances={}, detectors=[],
                                commissioning_h=4, healthy_hours=10, train_healthy_h=2,
                                train_variants=2, detector_hours=2, onset_window_h=[0.5, 1])
-    sc = PrognosisStudyConfig(train=train, seeds=[1], calibration_seeds=[100], gears=[3],
+    sc = PrognosisStudyConfig(train=train, seeds=[1], calibration_seeds=[100],
                               faults={"eccentric_wg": gf}, onset_window_h=[0.5, 1],
-                              max_life_h=6, payload_after_h=1, payloads=[1.0])
+                              max_life_h=6, growth=None, day=None)  # unchanged lives
     banks = {g: record_bank(p, g) for g in (1, 2, 3)}
     scales = {m: ((1.0,) * 4, (1.0,) * 4) for m in METHODS}
     short = {}
@@ -284,7 +304,7 @@ def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
         model = train_model(p, banks, [1, 2], dataclasses.replace(
             train, fault_severities={"eccentric_wg": levels}))
         for seed in (1, 2):
-            _, events = run_life(life_of(p, banks[3], 3, sc, "eccentric_wg", seed, 0),
+            _, events = run_life(life_of(p, banks[3], 3, sc, "eccentric_wg", seed),
                                  model, sc, scales, seed)
             last = [e["severity"] for e in events["growth"] if e["severity"] is not None][-1]
             short[beyond, seed] = 0.1 - last

@@ -44,9 +44,11 @@ MAX_FUNCTION_LINES = 80
 #: Today's sizes rounded up to the next 500 lines; a package that grows past its budget
 #: fails, and its budget moves only in a commit that says why. The issue's targets, to
 #: reach by design: swgmon 9000, learn 11000, the library 47500. Moved: swgmon 13500 ->
-#: 14000 and all 56000 -> 56500 for the own-joint route (issue 87, +190 lines).
+#: 14000 and all 56000 -> 56500 for the own-joint route (issue 87, +190 lines); swgmon
+#: 14000 -> 14100 and all 56500 -> 56700 for issue 85's lives by laws the prognosis does
+#: not assume (a growth family, its day, the lot: +107 lines in swgmon, +110 in swgsim).
 LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11500,
-                                "swgmon": 14000, "swgcli": 2000, "all": 56500}
+                                "swgmon": 14100, "swgcli": 2000, "all": 56700}
 #: Functions allowed beyond MAX_FUNCTION_LINES: "path:name" -> why (most are over by
 #: their numpydoc docstring, which the style asks for; the code lines follow).
 LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
