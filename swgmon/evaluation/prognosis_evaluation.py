@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from learn.tracking.ledger import check_seeds
 from swgmon.advisories.stream import monitor_stream
 from swgmon.assessment.model import DiagnosisModel
 from swgmon.evaluation.benchmark import instances, population_plan
@@ -172,6 +173,10 @@ class PrognosisStudyConfig:
     twins : int
         The first ``twins`` seeds' lives whose day changes the payload also run without
         that change, to score the response to it, in [0, 99] (1).
+    scored_run : bool
+        A declared scored run (:mod:`learn.tracking.ledger`): ``seeds`` must be scored
+        seeds (``calibration_seeds`` stay design seeds: they fit, not score), and the run
+        enters the ledger.
     severity_levels : int
         Steps of the failure severity on which a life's severity grows
         (``LifeConfig.severity_levels``: the exact law rounded down to them), a multiple
@@ -214,6 +219,7 @@ class PrognosisStudyConfig:
     max_life_h: float = field(default=800.0, metadata=allowed(0.0, 1e4, lo_open=True,
                                                               unit="h"))
     twins: int = field(default=1, metadata=allowed(0, 99))
+    scored_run: bool = False
     severity_levels: int = 32
     train_beyond: float = field(default=0.5, metadata=allowed(0.0, 2.0))
     prognosis: StreamPrognosis = field(default_factory=lambda: StreamPrognosis(
@@ -236,8 +242,10 @@ class PrognosisStudyConfig:
         ------
         ValueError
             Seeds none, out of [0, 2**32 - 1] or shared between the evaluation and the
-            calibration; no fault, a fault without a growth law or its growth to failure
-            out of range; ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi <= 10^4 h;
+            calibration; scored seeds outside a declared scored run, design seeds in one
+            or among the calibration's (:func:`~learn.tracking.ledger.check_seeds`); no
+            fault, a fault without a growth law or its growth to failure out of range;
+            ``onset_window_h`` not ``[lo, hi]`` with 0 <= lo <= hi <= 10^4 h;
             ``held_out`` leaving fewer than two training instances; ``severity_levels``
             not a multiple of 4 in [8, 256]; ``prognosis.every_h``
             below the lives' window interval or making more than
@@ -251,6 +259,8 @@ class PrognosisStudyConfig:
                 raise ValueError(f"{where}.{name} must list at least one seed")
             for i, s in enumerate(seeds):
                 check_range(s, 0, 2**32 - 1, f"{where}.{name}[{i}]")
+        check_seeds(self.seeds, self.scored_run, f"{where}.scored_run")
+        check_seeds(self.calibration_seeds, False, f"{where}.calibration_seeds")
         both = sorted(set(self.seeds) & set(self.calibration_seeds))
         if both:
             raise ValueError(f"{where}.calibration_seeds must be disjoint from seeds, both "

@@ -33,6 +33,7 @@ from learn.tasks.parts import (
     run_parts,
 )
 from learn.tracking import log_run
+from learn.tracking.ledger import LEDGER, append_scored_run
 from swgmon.evaluation.benchmark import instances
 from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, run_prognosis_part
 from swgmon.evaluation.prognosis_report import (
@@ -161,13 +162,20 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
               f"{sc.seeds}; calibration seeds {sc.calibration_seeds} on the training "
               f"instances, each read without its own; the lives' day and law drawn per seed "
               f"(`prognosis.study.day`, `prognosis.study.growth`); a prognosis every "
-              f"{sc.prognosis.every_h:g} h after the alarm. "
+              f"{sc.prognosis.every_h:g} h after the alarm; "
+              f"{'a scored run' if sc.scored_run else 'design seeds: not a scored run'}. "
               f"Wall time {wall / 60:.1f} min{resumed_note(resumed, len(jobs))}.\n"
               + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
     write_table(out / "table.md", header, tgt, summary, buckets, lives, cal, moved)
     fig = figure(buckets, rows, out / "prognosis.png")
     claim.record([out / f for f in ("results.csv", "lives.csv", "calibration.csv",
                                     "scores.csv", "changes.csv", "table.md")] + [fig])
+    ledger = None
+    if sc.scored_run:
+        ledger = append_scored_run(sc.seeds, [out / "results.csv", out / "lives.csv"])
+        print(f"scored run entered in the ledger {LEDGER}: {ledger['date_utc']}, commit "
+              f"{ledger['commit'][:12]} ({ledger['tree']}), results "
+              f"{ledger['results_sha256'][:16]}")
     if pc.progress:
         print("\ntargets (prognosis, the growth law; held-out instances):")
         for r in tgt.itertuples(index=False):
@@ -179,7 +187,8 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
     return {"task": "prognosis", "report_dir": str(out), "wall_s": wall,
             "lives": int(len(lives)), "prognoses": int(rows.valid.sum()) if len(rows) else 0,
             "targets_passed": int((tgt.result == "pass").sum()),
-            "targets_judged": int(tgt.result.isin(["pass", "fail"]).sum())}
+            "targets_judged": int(tgt.result.isin(["pass", "fail"]).sum()),
+            **({} if ledger is None else {"ledger": ledger})}
 
 
 def _log(app, summary: pd.DataFrame, tgt: pd.DataFrame, out: Path, wall: float,

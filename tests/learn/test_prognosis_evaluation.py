@@ -100,6 +100,24 @@ def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):
     assert "(1 of 1 parts resumed from parts/" in (out / "table.md").read_text()
 
 
+def test_a_scored_run_enters_the_ledger(tmp_path, monkeypatch):
+    """Scored seeds in a declared scored run: the run appends one ledger row, its seeds
+    and the digest of results.csv and lives.csv (a ledger of the test's own)."""
+    from pathlib import Path
+
+    from learn.tracking import ledger
+
+    book = tmp_path / "ledger.csv"
+    monkeypatch.setattr(ledger, "LEDGER", str(book))
+    monkeypatch.setattr(ledger, "repo_root", lambda: Path("/"))
+    summary = _run(tmp_path / "rep", "prognosis.study.seeds=[1001]",
+                   "prognosis.study.scored_run=true")
+    (row,) = ledger.read_ledger(book)
+    assert summary["ledger"]["seeds"] == row["seeds"] == "1001"
+    assert row["results"] == "lives.csv results.csv"
+    assert "a scored run" in (tmp_path / "rep" / "table.md").read_text()
+
+
 def test_a_job_of_an_array_runs_its_group_alone_and_writes_no_report(tiny_prognosis,
                                                                      monkeypatch, capsys):
     """``prognosis.group=0`` (a job of a cluster array, docs/scale_out.md) into the same
@@ -154,6 +172,11 @@ BAD = {  # case -> (override or overrides, the start of the one line)
     "an unknown data set": ("prognosis.run_on=[nope]", "prognosis.run_on: ['nope']"),
     "no data set": ("prognosis.run_on=[]", "prognosis.run_on: empty; allowed: keys of "
                                            "prognosis.datasets ['bench', 'robot_joint', 'tiny']"),
+    "a scored seed outside a scored run": (
+        "prognosis.study.seeds=[1000]", "seeds [1000] are scored seeds"),
+    "a design seed in a scored run": (
+        ["prognosis.study.scored_run=true"],
+        "prognosis.study.scored_run=true: a scored run draws scored seeds (>= 1000) only"),
     "severity_levels not a multiple of 4": (
         "prognosis.study.severity_levels=30",
         "prognosis.study.severity_levels must be a multiple of 4 in [8, 256]"),
