@@ -5,11 +5,17 @@ without scatter at payload 1.0 and 1.2 and in a hall +0 K and +15 K (the real da
 thermal model and viscosity law), then with the default scatter across five life seeds.
 Only schedules are computed (no window is simulated): seconds.
 
-    python scripts/failure_hours.py
+With ``--prognosis``: the prognosis evaluation's lives (issue 85; its default design,
+swgmon/evaluation/prognosis_evaluation.py): hours from onset to failure per data set and
+fault over the lot's 12 instances and the seeds and calibration seeds, each life's law and
+day drawn (about a minute per data set).
+
+    python scripts/failure_hours.py [--prognosis]
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
 
@@ -49,7 +55,38 @@ def failure_h(p, bank, fault: str, conditions: ConditionsConfig, life_seed: int 
     return LifeSimulator(p, bank.gear_id, life, bank).schedule.failure_h
 
 
+def prognosis_lives() -> None:
+    """The prognosis evaluation's lives: hours from onset to failure, per fault."""
+    from swgmon.evaluation.benchmark import instances, population_plan
+    from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, life_of
+
+    sc = PrognosisStudyConfig()
+    check_tree(sc, "prognosis.study")
+    train, held = instances(sc)
+    for name in ("bench", "robot_joint"):
+        lot = population_plan(plan(dataset_preset(name)), sc)
+        hours: dict[str, list[float]] = {}
+        for g in train + held:
+            bank = record_bank(lot, g)
+            for s in sc.seeds + sc.calibration_seeds:
+                for f in ("root_tooth_crack", "tip_tooth_crack", "eccentric_wg"):
+                    sim = life_of(lot, bank, g, sc, f, s)
+                    hours.setdefault(f, []).append(sim.schedule.failure_h
+                                                   - sim.life.fault.onset_h)
+        for f, v in hours.items():
+            h = np.array(v)
+            print(f"{name:12s} {f:17s} lives {h.size}, not failed {int(np.isnan(h).sum())}; "
+                  f"h from onset to failure: min {np.nanmin(h):.1f}, median "
+                  f"{np.nanmedian(h):.1f}, max {np.nanmax(h):.1f}")
+
+
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--prognosis", action="store_true",
+                    help="the prognosis evaluation's lives instead of the example")
+    if ap.parse_args().prognosis:
+        prognosis_lives()
+        return
     p = plan(dataset_preset("tiny_bench"))
     gear = int(p.config.gears[0].id)
     bank = record_bank(p, gear)

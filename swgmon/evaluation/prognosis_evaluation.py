@@ -686,7 +686,7 @@ def run_prognosis_part(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
               for f in faults}
     train = dataclasses.replace(sc.train, faults=sc.train.faults or faults,
                                 fault_severities={**levels, **sc.train.fault_severities})
-    model = train_model(lot, banks, train_ids, train)
+    model = train_model(lot, banks, train_ids, train, release=True)
     for f in [f for f in faults if f not in model.severity]:
         not_run[f] = "the diagnosis model has no severity regressor for it"
     faults = [f for f in faults if f in model.severity]

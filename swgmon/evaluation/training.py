@@ -183,10 +183,15 @@ def training_lives(plan: DatasetPlan, bank: RecordBank, g: int, cfg: MonitorStud
 
 
 def train_model(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
-                cfg: MonitorStudyConfig, seed: int = 0) -> DiagnosisModel:
+                cfg: MonitorStudyConfig, seed: int = 0, release: bool = False
+                ) -> DiagnosisModel:
     """The diagnosis model trained on the lives of ``gears`` (:func:`training_lives`):
     the healthy life gives the gear's normal behaviour (as the monitor builds it) and the healthy
-    windows after commissioning, each fault life its windows after the first."""
+    windows after commissioning, each fault life its windows after the first. With
+    ``release``, each gear's records are dropped once its features are taken, so the peak
+    holds one gear's (a lot of many instances); a record asked for again is simulated
+    again, the same (a record is a function of its key). Without it, a worker's later
+    parts read them (the monitor evaluation's)."""
     cls = classes(plan, cfg)
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     xs, ys, sev, gid = [], [], [], []
@@ -207,6 +212,8 @@ def train_model(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int
             ys.append(np.full(len(f), c, object))
             sev.append(np.full(len(f), s))
             gid.append(np.full(len(f), g))
+        if release:
+            banks[g].release(healthy=True)
     x = np.concatenate(xs)
     model = fit_diagnosis(x, np.concatenate(ys).astype(str), np.concatenate(sev),
                           np.concatenate(gid), cls, seed=seed)
