@@ -24,6 +24,7 @@ kept in the monitor, at a fraction of the block path's overhead for a single win
 from __future__ import annotations
 
 import copy
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -654,28 +655,26 @@ class GearMonitor:
         ``confirm_h``). ``before``: the alarm named before it in the same run (indices
         into the same windows), or None. Where that named a gear fault and this alarm's
         rise began at or before it, the two are one episode: the CUSUM has not gone back
-        to zero since, so the windows named then are among those named now; the alarm
-        keeps that name and only its severity is estimated anew (a growing crack alarms
-        again some 9 times an hour; weighing every hypothesis each time cost 1.2 s an
-        alarm, a 100-h life 18 min: issue 85).
+        to zero since, so the windows named then are among those named now. The alarm is
+        then that one again at its own hour (name, severity, what moved): the stream
+        keeps an episode's first alarm only (:func:`swgmon.advisories.stream.run_stream`),
+        and the severity's course is the prognosis's track. A growing crack alarms again
+        some 10 times an hour; naming each cost 1.2 s, a 356-h life 397 s (issue 85).
         """
         j = int(np.argmax(trace.cusums[a]))  # the CUSUM that raised it
         zero = np.flatnonzero(trace.cusums[:a, j] <= 0)
         rise = int(zero[-1]) + 1 if zero.size else 0
+        if before is not None and before.kind == "gear_fault" and rise <= before.index:
+            return dataclasses.replace(before, hour=float(trace.hour[a]), index=int(a))
         end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
         cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
         fr = trace.friction
-        if before is not None and before.kind == "gear_fault" and rise <= before.index:
-            at_alarm, fault, bridge, fit = before.fault, before.fault, None, None
-        else:
-            ev = self.evidence(trace.log_proba, trace.op_index)
-            ev[(trace.outside & OUTSIDE_UNJUDGED) != 0] = 0.0  # not judged: no evidence
-            at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1],
-                                        points[rise:a + 1], cond[rise:a + 1],
-                                        fr[rise:a + 1], trace.hour[rise:a + 1])
-            fault, bridge, fit = self._name(ev[rise:end], feats[rise:end], points[rise:end],
-                                            cond[rise:end], fr[rise:end],
-                                            trace.hour[rise:end])
+        ev = self.evidence(trace.log_proba, trace.op_index)
+        ev[(trace.outside & OUTSIDE_UNJUDGED) != 0] = 0.0  # not judged: no evidence
+        at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
+                                    cond[rise:a + 1], fr[rise:a + 1], trace.hour[rise:a + 1])
+        fault, bridge, fit = self._name(ev[rise:end], feats[rise:end], points[rise:end],
+                                        cond[rise:end], fr[rise:end], trace.hour[rise:end])
         if fault == TEMPERATURE_SENSOR:  # its severity: the reading's error [K]
             err = fit.temperature_c - fit.reading_c
             est, lo, hi = fit.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))

@@ -26,6 +26,7 @@ TINY = ["prognosis.run_on=[tiny]", "+dataset@prognosis.datasets.tiny=tiny_bench"
         "prognosis.study.onset_window_h=[0.5,1]", "prognosis.study.max_life_h=6",
         "prognosis.study.day.payload_h=[5.5,5.5]", "prognosis.study.day.duty_h=[5.5,5.5]",
         "prognosis.study.day.payload_factor=[1.1,1.1]",
+        "prognosis.study.prognosis.every_h=0.25", "prognosis.study.prognosis.block_h=0.25",
         "prognosis.study.prognosis.min_track_h=0.5", "prognosis.study.prognosis.min_estimates=3",
         "prognosis.n_jobs=1", "prognosis.progress=false"]
 #: The columns of results.csv: one row per prognosis and method.
@@ -305,6 +306,7 @@ def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
     )
     from swgmon.evaluation.study import MonitorStudyConfig
     from swgmon.evaluation.training import train_model
+    from swgmon.prognosis.stream import StreamPrognosis
     from swgsim.datasets.config import dataset_config
     from swgsim.datasets.growth import RunToFailure
     from swgsim.datasets.plan import plan
@@ -317,7 +319,9 @@ def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
                                train_variants=2, detector_hours=2, onset_window_h=[0.5, 1])
     sc = PrognosisStudyConfig(train=train, seeds=[1], calibration_seeds=[100],
                               faults={"eccentric_wg": gf}, onset_window_h=[0.5, 1],
-                              max_life_h=6, growth=None, day=None)  # unchanged lives
+                              max_life_h=6, growth=None, day=None,  # unchanged lives
+                              prognosis=StreamPrognosis(every_h=0.25, block_h=0.25,
+                                                        min_track_h=0.5, min_estimates=3))
     banks = {g: record_bank(p, g) for g in (1, 2, 3)}
     scales = {m: ((1.0,) * 4, (1.0,) * 4) for m in METHODS}
     short = {}
