@@ -25,8 +25,8 @@ means of the training gear's z-scores, applied to the hour's mean z-score). Each
 prints the best plausible one-bridge sensor fit, the median p-value it leaves and the mean
 shift left on the other bridges (``rest``), and the first line that shift on the judged
 gear's healthy hour after commissioning, for every bridge
-(:data:`swgmon.assessment.sensor_check.SENSOR_P_MIN` and
-:data:`~swgmon.assessment.sensor_check.REST_MAX` were read off these).
+(:attr:`swgmon.assessment.sensor_check.NamingConfig.sensor_p_min` and
+:attr:`~swgmon.assessment.sensor_check.NamingConfig.rest_max` were read off these).
 """
 
 from __future__ import annotations

@@ -38,6 +38,7 @@ from learn.studies.protocols import PROTOCOLS, ProtocolConfig
 from learn.tracking.config import LoggerConfig
 from learn.transfer.study import TransferConfig
 from swgmon.assessment.gear_monitor import MaintenanceEvent
+from swgmon.assessment.sensor_check import NamingConfig
 from swgmon.detection.normal import NormalConfig
 from swgmon.detection.rule import RuleConfig
 from swgmon.evaluation.benchmark_task import BenchmarkExperiment
@@ -128,6 +129,7 @@ class MonitorApp:
     out_dir: str = "reports/monitor_run"
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)  # conditions (temperature, ...)
+    naming: NamingConfig = field(default_factory=NamingConfig)  # the naming's tuned numbers
     confirm_h: float = field(default=1.0, metadata=allowed(  # hours after an alarm that name
         0.0, 1000.0, "hours after an alarm whose windows name the fault",  # the fault
         lo_open=True, unit="h"))

@@ -23,7 +23,7 @@ import numpy as np
 from learn.inputs.health import feature_names, health_features
 from swgmon.advisories.figures import health_figure, prognosis_figure
 from swgmon.assessment.gear_monitor import RECOMMISSIONS, GearMonitor, MaintenanceEvent, Trace
-from swgmon.assessment.sensor_check import still_reading, virtual_temperature
+from swgmon.assessment.sensor_check import NamingConfig, still_reading, virtual_temperature
 from swgmon.detection.normal import (
     OUTSIDE_FRICTION,
     OUTSIDE_LOAD,
@@ -288,7 +288,8 @@ def stream_features(ds) -> np.ndarray:
 def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
                    source: str = "stream", normal: NormalConfig | None = None,
                    maintenance: list[MaintenanceEvent] | None = None,
-                   prognosis: StreamPrognosis | None = None) -> StreamResult:
+                   prognosis: StreamPrognosis | None = None,
+                   naming: NamingConfig | None = None) -> StreamResult:
     """Commission on the stream's commissioning windows and monitor the rest, with its
     conditions (acting load, temperature where the stream has it; :mod:`swgmon.detection.normal`)
     and its maintenance log (:meth:`GearMonitor.declare`: each declared event is listed
@@ -324,11 +325,12 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
                              f"after the first window monitored, at {hours[n_c]:g} h")
     again = [e for e in log if e.kind in RECOMMISSIONS]
     if not again:
-        return _monitor_once(ds, model, rule, seed, confirm_h, source, normal, log, prognosis)
+        return _monitor_once(ds, model, rule, seed, confirm_h, source, normal, log, prognosis,
+                             naming)
     cut = int(np.searchsorted(hours, again[0].hour))
     before = [e for e in log if e.hour < again[0].hour]
     first = _monitor_once(ds.isel(sample=slice(0, cut)), model, rule, seed, confirm_h,
-                          source, normal, before, prognosis)
+                          source, normal, before, prognosis, naming)
     entry = declared([again[0]], None)
     if hours.size - cut <= n_c:  # too few windows after it to commission and monitor
         return dataclasses.replace(first, recommissioned=first.recommissioned + unmonitored(
@@ -338,7 +340,7 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     rest["commissioning"] = rest["commissioning"].copy(data=np.arange(rest.sizes["sample"]) < n_c)
     later = monitor_stream(rest, model, rule, seed, confirm_h, source, normal,
                            [e for e in log if e.hour >= again[0].hour and e is not again[0]],
-                           prognosis)
+                           prognosis, naming)
     return _joined(first, later, entry)
 
 
@@ -365,7 +367,8 @@ def _joined(first: StreamResult, later: StreamResult, entry: list[dict]) -> Stre
 def _monitor_once(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
                    source: str = "stream", normal: NormalConfig | None = None,
                    maintenance: list[MaintenanceEvent] | None = None,
-                   prognosis: StreamPrognosis | None = None) -> StreamResult:
+                   prognosis: StreamPrognosis | None = None,
+                   naming: NamingConfig | None = None) -> StreamResult:
     """:func:`monitor_stream` on a stream without a declared recommissioning after its
     commissioning."""
     log = list(maintenance or [])
@@ -377,7 +380,8 @@ def _monitor_once(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float =
     comm = ds["commissioning"].values.astype(bool)
     n_c = int(comm.sum())
     hours = ds["hour"].values.astype(float)
-    mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h, normal=normal)
+    mon = GearMonitor(model, rule, interval, seed=seed, confirm_h=confirm_h, normal=normal,
+                      naming=naming)
     mon.declare(log)
     lost = _lost_reading(cond, n_c, hours)
     read = np.ones(n_c, bool) if lost is None else np.isfinite(cond.temperature_c[:n_c])
@@ -455,7 +459,7 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         stop = n if not bad.size else i0 + int(bad[0])
         still = None if mon.reading_virtual else still_reading(
             mon.normal, feats[i0:stop], points[i0:stop], cond[i0:stop],
-            mon.friction if fstart is None else fstart[0], hours[i0:stop])
+            mon.friction if fstart is None else fstart[0], hours[i0:stop], mon.naming)
         stop = stop if still is None else i0 + still[1]
         stuck_h = np.inf if still is None else float(hours[stop]) - mon.confirm_h
         w = slice(i0, stop)
@@ -512,16 +516,10 @@ def _named(mon: GearMonitor, tr: Trace | None, alarms: list[Alarm], feats: np.nd
     return named, False
 
 
-#: How far back an earlier unexplained change makes the next one recurring
-#: (:func:`_drifting`) [h]: a day, in which a drifting reading's ±0.5 K/h (the families'
-#: range, :mod:`swgmon.evaluation.families`) reach 12 K [choice].
-RECUR_H = 24.0
-
-
 def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.ndarray,
               points: np.ndarray, hours: np.ndarray, cond: Conditions) -> float | None:
     """Where the unexplained change or gear fault of ``alarms[-1]`` comes within
-    :data:`RECUR_H` after an unexplained change while the reading is in use
+    ``naming.recur_h`` after an unexplained change while the reading is in use
     (:func:`_after_change`): the windows since the earlier change's rise
     named again (:meth:`GearMonitor.name`) with the friction as it was before it, the
     changes taken since undone. Where the reading's drift
@@ -532,7 +530,7 @@ def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.nda
     every held-out gear")."""
     last = alarms[-1]
     earlier = [a for a in alarms[:-1] if a.fault == UNEXPLAINED_CHANGE
-               and a.hour >= last.hour - RECUR_H]
+               and a.hour >= last.hour - mon.naming.recur_h]
     if mon.reading_virtual or cond.temperature_c is None or not earlier:
         return None
     w = slice(earlier[0].rise_index, last.index + 1)
@@ -549,13 +547,13 @@ def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.nda
 def _after_change(mon: GearMonitor, alarms: list[Alarm], alarm: Alarm, hour: float,
                   cond: Conditions) -> bool:
     """Whether ``alarm``, named a gear fault at ``hour`` while the reading is in use,
-    comes within :data:`RECUR_H` after an unexplained change (``alarms``, those before
+    comes within ``naming.recur_h`` after an unexplained change (``alarms``, those before
     it): then :func:`_drifting` names its windows again with the changes taken undone, as
     for a recurring change (a drifting reading whose first effect was taken for the
     friction shows next as a change of the efficiency a gear fault also makes)."""
     return (alarm.kind == "gear_fault" and not mon.reading_virtual
             and cond.temperature_c is not None
-            and any(a.fault == UNEXPLAINED_CHANGE and a.hour >= hour - RECUR_H
+            and any(a.fault == UNEXPLAINED_CHANGE and a.hour >= hour - mon.naming.recur_h
                     for a in alarms))
 
 
@@ -597,16 +595,6 @@ def reading_lost(mon: GearMonitor) -> GearMonitor:
     return mon
 
 
-#: Passes of :func:`read_without`: the virtual temperature at the friction factor
-#: tracked over the last pass's temperatures, the first at the friction in force [choice,
-#: on design seeds: the tracking is slow, the temperature fast. Family lost_running_in
-#: (the reading stuck, drifting or dropped out while the grease runs in and is
-#: re-greased; design seeds 100-104) after 0, 1 and 2 passes: gear-fault alarms 140, 0, 0
-#: per 1000 h on bench gear 3 and 152, 3, 0 on robot_joint gear 2; on tiny_real_day,
-#: the reading lost during its run-in, the mean error +0.65, +0.14, +0.01 K (3: -0.02)].
-VIRTUAL_PASSES = 2
-
-
 def read_without(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, cond: Conditions,
                  hours: np.ndarray, start: tuple[float, float | None]) -> Conditions:
     """Windows' conditions without the temperature reading (:func:`reading_lost`'s
@@ -614,7 +602,7 @@ def read_without(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, cond: 
     (:func:`~swgmon.assessment.sensor_check.virtual_temperature`), or none where
     commissioning learnt no law. Each window's at the friction factor the monitor tracks
     there (:meth:`GearMonitor.track_friction` from ``start``, the factor in force and the
-    hour of the window before, over the last pass's temperatures; :data:`VIRTUAL_PASSES`):
+    hour of the window before, over the last pass's temperatures; ``naming.virtual_passes``):
     at the factor in force at the loss for every later window, a friction still running in
     after it was read as a warmer joint (the efficiency up, the bridges saying otherwise)
     and every cold start as a pattern of the bridges' second harmonics (bench gear 1,
@@ -627,9 +615,11 @@ def read_without(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, cond: 
         return Conditions(cond.torque_nm)
     opi = mon.normal.index(points)
     fr = np.full(len(feats), float(start[0]))
-    for k in range(VIRTUAL_PASSES + 1):
-        temp = virtual_temperature(mon.normal, feats, points, cond.torque_nm, fr, opi)
-        if k < VIRTUAL_PASSES:
+    passes = mon.naming.virtual_passes
+    for k in range(passes + 1):
+        temp = virtual_temperature(mon.normal, feats, points, cond.torque_nm, fr, opi,
+                                   mon.naming)
+        if k < passes:
             fr = mon.fork().track_friction(feats, points, hours,
                                            Conditions(cond.torque_nm, temp), opi, start)
     return Conditions(cond.torque_nm, temp)
@@ -689,7 +679,7 @@ def without_temperature(mon: GearMonitor) -> GearMonitor:
         raise ValueError("the monitor is not commissioned (GearMonitor.commission)")
     feats, points, cond = mon.commissioned_on
     out = GearMonitor(mon.model, mon.rule, mon.interval_min, mon.seed, mon.confirm_h,
-                      mon.normal_config)
+                      mon.normal_config, mon.naming)
     out.commission(feats, points, Conditions(cond.torque_nm, None))
     out.regreased = list(mon.regreased)
     return out

@@ -82,14 +82,14 @@ def run_monitor_app(cfg) -> dict:
     ds = select_gear(load(src), app.gear)
     res = monitor_stream(ds, model, app.rule, seed=app.seed, confirm_h=app.confirm_h,
                          source=str(src), normal=app.normal, maintenance=app.maintenance,
-                         prognosis=app.prognosis)
+                         prognosis=app.prognosis, naming=app.naming)
     with ownership.claim(out, "swgsim-monitor", strict=True, fresh=True) as claim:
         files = write_outputs(res, out, str(src))
         claim.record(files.values())
     if app.logger is not None:
         params = {"stream": str(src), "diagnosis_model": app.diagnosis_model,
                   "gear": app.gear, "rule": dataclasses.asdict(app.rule),
-                  "confirm_h": app.confirm_h}
+                  "naming": dataclasses.asdict(app.naming), "confirm_h": app.confirm_h}
         with log_run(app.logger.experiment, app.logger.run_name,
                      tracking_uri=app.logger.tracking_uri, params=params,
                      config=dataclasses.asdict(app), dataset=src) as run:

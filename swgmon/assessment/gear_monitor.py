@@ -32,8 +32,7 @@ import numpy as np
 from learn.inputs.health import feature_names
 from swgmon.assessment.model import DiagnosisModel, design_matrix
 from swgmon.assessment.sensor_check import (
-    REST_MAX,
-    SENSOR_P_MIN,
+    NamingConfig,
     fit_bridge_faults,
     fit_temperature,
     fit_temperature_drift,
@@ -63,11 +62,6 @@ from swgmon.detection.rule import (
     threshold,
 )
 from swgsim.base.typed import check_range
-
-#: One-sided level of the test whether commissioning's laws hold at a point's new load
-#: (:meth:`GearMonitor._recommission`): declared, not tuned.
-LAW_LEVEL = 0.01
-
 
 #: What the maintenance log may declare (:class:`MaintenanceEvent`).
 MAINTENANCE_KINDS = ("regrease", "tool_change", "repair")
@@ -209,11 +203,14 @@ class GearMonitor:
         Hours after an alarm whose windows name the fault (default 1 h).
     normal : NormalConfig, optional
         How the normal behaviour follows the conditions (:mod:`swgmon.detection.normal`).
+    naming : NamingConfig, optional
+        The numbers the naming of an alarm was tuned with (:mod:`.sensor_check`).
     """
 
     def __init__(self, model: DiagnosisModel, rule: RuleConfig, interval_min: float,
                  seed: int = 0, confirm_h: float = 1.0,
-                 normal: NormalConfig | None = None) -> None:
+                 normal: NormalConfig | None = None,
+                 naming: NamingConfig | None = None) -> None:
         self.model, self.rule = model, rule
         self.interval_min = float(interval_min)
         self.h = threshold(rule, interval_min)
@@ -221,6 +218,7 @@ class GearMonitor:
         self.rng = np.random.default_rng(seed)
         self.confirm_h = float(confirm_h)
         self.normal_config = normal or NormalConfig()
+        self.naming = naming or NamingConfig()
         self.normal: NormalBehaviour | None = None
         self.calibration: dict[int, np.ndarray] = {}
         self.cusum = np.zeros(0)
@@ -319,11 +317,12 @@ class GearMonitor:
         if "calibration" not in self._virtual:
             feats, points, cond = self.commissioned_on
             fresh = GearMonitor(self.model, self.rule, self.interval_min, self.seed,
-                                self.confirm_h, self.normal_config)
+                                self.confirm_h, self.normal_config, self.naming)
             fresh.commission(feats, points, cond)  # commissioning's normal behaviour
             fr = fresh._commissioning_friction(feats, points, cond)
             virtual = Conditions(cond.torque_nm, virtual_temperature(
-                fresh.normal, feats, points, cond.torque_nm, fr, fresh.normal.index(points)))
+                fresh.normal, feats, points, cond.torque_nm, fr, fresh.normal.index(points),
+                self.naming))
             cal = ~normal_windows(points)
             self._virtual["calibration"] = fresh._calibrated(feats[cal], points[cal],
                                                              virtual[cal], fr[cal])
@@ -564,7 +563,7 @@ class GearMonitor:
         """Point ``k`` at a new load, from its gathered windows (:meth:`_learn`): where
         they agree with commissioning's normal behaviour carried there by its laws
         (each score's p-values in σ, not the widened spread, uniform: the mean of their
-        normal scores Φ⁻¹(1 − p) within the one-sided bound of N(0, 1/m) at ``LAW_LEVEL``
+        normal scores Φ⁻¹(1 − p) within the one-sided bound of N(0, 1/m) at ``naming.law_level``
         shared by the two scores; not the combined p-value, 1 wherever both exceed 1/2: on
         tiny_bench its statistic lay at −9 to −17 for healthy windows and at −1.2 for a
         point one of whose features was 2.7 σ off its law), the laws
@@ -577,7 +576,7 @@ class GearMonitor:
         score, _ = self._scores_of(z, np.broadcast_to(nb.points[k], (len(ref), 2)))
         p = self.p_each(score, np.full(len(ref), k), np.full(score.shape, 0.5))
         stat = np.sqrt(len(p)) * np.mean(normal_scores(p), axis=0)
-        if (stat <= normal_scores(LAW_LEVEL / score.shape[1])).all():
+        if (stat <= normal_scores(self.naming.law_level / score.shape[1])).all():
             nb.extend_load_range(k, torque)
             return False
         nb.recommission(k, ref, torque)
@@ -695,9 +694,9 @@ class GearMonitor:
         """Name the fault of windows since an alarm: a sensor fault where one sensor's
         fault explains them (:mod:`.sensor_check`): a bridge's offset step or gain drift
         (a plausible fit after which the windows look healthy, median p-value at least
-        :data:`~.sensor_check.SENSOR_P_MIN`, and the other bridges have not moved on
+        :attr:`~.sensor_check.NamingConfig.sensor_p_min`, and the other bridges have not moved on
         average, :attr:`~.sensor_check.SensorFit.rest` at most
-        :data:`~.sensor_check.REST_MAX`), with its bridge, or the temperature reading
+        :attr:`~.sensor_check.NamingConfig.rest_max`), with its bridge, or the temperature reading
         (:func:`~.sensor_check.fit_temperature`, the same median p-value), named
         :data:`~.sensor_check.TEMPERATURE_SENSOR`, bridge None; or an even change of the
         friction that no gear fault gives and no maintenance declared
@@ -721,18 +720,21 @@ class GearMonitor:
         fr = np.broadcast_to(friction, (len(z),))
         fits = [f for f in fit_bridge_faults(b, feats, points, cond, fr, opi, z, spread,
                                                  hours)
-                if f.fault in self.model.classes and f.plausible() and f.rest <= REST_MAX]
+                if f.fault in self.model.classes and f.plausible()
+                and f.rest <= self.naming.rest_max]
         read = cond is not None and not self.reading_virtual
-        hot = fit_temperature(b, feats, points, cond, fr, opi) if read else None
-        drift = fit_temperature_drift(b, feats, points, cond, fr, opi, hours) if read else None
-        even = fit_friction(b, feats, points, cond, fr, opi, hours)
+        nc = self.naming
+        hot = fit_temperature(b, feats, points, cond, fr, opi, nc) if read else None
+        drift = fit_temperature_drift(b, feats, points, cond, fr, opi, hours, nc) \
+            if read else None
+        even = fit_friction(b, feats, points, cond, fr, opi, hours, nc)
         cands = [(median_p(f.z), f.fault, f.bridge, None) for f in fits]
         cands += [(median_p(h.z), name, None, h) for h, name in
                   ((hot, TEMPERATURE_SENSOR), (drift, TEMPERATURE_SENSOR),
                    (even, UNEXPLAINED_CHANGE))
-                  if h is not None and h.plausible()]
+                  if h is not None and h.plausible(nc)]
         best = max(cands, key=lambda c: c[0], default=None)
-        if best is not None and best[0] >= SENSOR_P_MIN:
+        if best is not None and best[0] >= nc.sensor_p_min:
             return best[1:]
         return self.model.name(ev), None, None
 

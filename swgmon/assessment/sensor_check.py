@@ -3,7 +3,8 @@ from being named as gear faults (the analytical redundancy of sensor fault isola
 
 :func:`fit_bridge_faults` and :func:`fit_sensor_faults` fit each one-bridge fault to the
 windows since the alarm (:class:`SensorFit`), judged window by window
-(:data:`SENSOR_P_MIN`) and on the other bridges together (:data:`REST_MAX`);
+(:attr:`NamingConfig.sensor_p_min`) and on the other bridges together
+(:attr:`NamingConfig.rest_max`);
 :func:`fit_temperature`, :func:`fit_temperature_drift` and :func:`still_reading` test the
 joint's temperature sensor, :func:`virtual_temperature` replaces a failed one (an even
 change of friction, the other hypothesis: :mod:`.unexplained`). Design and source (Frank
@@ -15,30 +16,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from statistics import NormalDist
 
 import numpy as np
 
 from swgmon.detection.normal import BLOCK, Conditions, NormalBehaviour
+from swgsim.base.typed import allowed
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
-#: Median conformal p-value of the corrected windows from which on a sensor fault explains
-#: the alarm. Chosen on the training gears (``scripts/naming_study.py``, bench, trained on
-#: gear 1, judged on gear 2, an hour of windows): the right fit of every sensor fault on
-#: every bridge from 0.005 to 0.05 mV/V and from 2 to 10 % gain left 0.43-0.76; the best
-#: plausible one-bridge fit of a gear fault at most 0.19 (a tip crack of 0.5 fitted as a
-#: 0.03 % gain loss; a mild eccentric WG with its s1 offset alone taken out: 0.14).
-SENSOR_P_MIN = 0.3
-#: Largest mean shift left on the other bridges (:attr:`SensorFit.rest`) for a one-bridge
-#: fit to explain an alarm. Chosen on the training gears of both presets
-#: (``scripts/naming_study.py --dataset bench|robot_joint``, trained on gear 1, judged on
-#: gear 2, an hour of windows): the right fit of each of the 100 sensor-fault lives per
-#: preset left 0.51-1.82 (the healthy hour 0.96-1.29); of the gear-fault lives whose
-#: best plausible one-bridge fit left a median p-value above 0.2 (robot_joint root and
-#: tip cracks of 0.5 and 0.7) it left 3.33-9.48, every other gear fault's 10-5657.
-#: 2.5 is about the geometric middle of the gap.
-REST_MAX = 2.5
 #: Smallest reduction of Σ z² for a fit to count: the χ² (one degree of freedom) quantile
 #: 0.999, so that a bridge without a fault is fitted one in a thousand times: the square of
 #: the standard normal quantile 0.9995 (χ²₁ is the square of a standard normal variable).
@@ -46,53 +32,132 @@ FIT_MIN = NormalDist().inv_cdf(0.9995) ** 2
 #: The same for a gain drift's level and rate (:func:`fit_sensor_faults` with hours): the
 #: χ² (two degrees of freedom) quantile 0.999, −2 ln 0.001 (χ²₂ is exponential).
 FIT_MIN_GAIN_RATE = -2.0 * math.log(0.001)
-#: Step of the temperatures :func:`fit_temperature` tries [K].
-TEMPERATURE_STEP_K = 0.25
-#: Least median distance (unsigned) of the fitted temperature from the reading for the
-#: reading to be wrong [K]: ten times the reading's uncertainty of 0.2 K
-#: (:class:`swgmon.detection.normal.NormalConfig` ``temperature_uncertainty_k``). Unsigned: a
-#: reading stuck at a warm joint's temperature lies above the true one in the duty cycle's
-#: cool phases and below it in the hot ones; signed, its median error over the hour after an
-#: alarm was 1.3-1.7 K while the fit left the windows healthy (median p 0.7; bench gear 3,
-#: family ``sensor_stuck``, design seed 100, stuck at 68.7 h), and the alarm named a gear
-#: fault.
-TEMPERATURE_MIN_K = 2.0
-#: Least median distance of a drift's fitted temperature from the reading
-#: (:func:`fit_temperature_drift`) [K]: twice the reading's uncertainty of 0.2 K
-#: (:class:`swgmon.detection.normal.NormalConfig` ``temperature_uncertainty_k``) [choice].
-DRIFT_MIN_K = 0.4
-#: Rates of a drifting reading :func:`fit_temperature_drift` tries first [K/h]: the
-#: families' ±0.5 K/h (:mod:`swgmon.evaluation.families`) and a little beyond.
-DRIFT_RATES = np.linspace(-0.6, 0.6, 13)
-#: Step of the coarse grid :func:`best_temperature` starts from [K], and how many fine
-#: steps it then tries on either side of the coarse best (to half a coarse step beyond).
-COARSE_STEP_K, COARSE_STEPS = 2.0, 6
-#: Windows :func:`best_temperature` fits at once.
-FIT_CHUNK = 512
-#: How far beyond commissioning's temperature range the fits look [K]: the hall's drift
-#: over a season, 10-20 K (:mod:`swgmon.evaluation.families`).
-TEMPERATURE_BEYOND_K = 20.0
 #: Smallest reduction of Σ z² for the fit with a step, a factor and a rate to count: the
 #: χ² (three degrees of freedom) quantile 0.999, as :data:`FIT_MIN` for one
 #: (``scipy.stats.chi2.ppf(0.999, 3)``, checked by tests/learn/test_monitor.py; scipy is
 #: not imported here, to keep the apps' start light).
 FIT_MIN_RATE = 16.26623619623813
-#: Windows of the running median of :func:`virtual_temperature` (odd).
-VIRTUAL_WINDOWS = 7
-#: Least time a temperature reading stays the same, to the bit, for :func:`still_reading`
-#: to judge it [h]. A working reading moves with its noise and the joint's duty: the UR3's
-#: six joint readings over a working day (UR3 CobotOps, Tyrovolas et al. 2024, CC BY 4.0),
-#: one a second at 0.0625 K, held one value for at most 85 readings (1.4 min;
-#: docs/monitor/assessment.md, "The monitor checks its temperature sensor") [choice: 15 minutes].
-STILL_H = 0.25
-#: Least range of the temperature the bridges and the efficiency say
-#: (:func:`virtual_temperature`) over such a run for the reading to be stuck [K]: twice
-#: :data:`TEMPERATURE_MIN_K` [choice]. At :data:`TEMPERATURE_MIN_K` itself the tiny real
-#: day's readings in whole kelvin, without noise, were taken for stuck (the virtual
-#: temperature's own scatter; tests/learn/test_real_day.py); at twice, not.
-STILL_MOVED_K = 2.0 * TEMPERATURE_MIN_K
-#: Windows :func:`still_reading` takes the virtual temperature of at once.
-STILL_CHUNK = 240
+#: Windows :func:`best_temperature` fits at once, and :func:`still_reading` takes the
+#: virtual temperature of at once (bounded memory, no effect on the result).
+FIT_CHUNK, STILL_CHUNK = 512, 240
+
+
+@dataclass
+class NamingConfig:
+    """The numbers the naming of an alarm was tuned or chosen with (issue 84: every
+    constant on record), one typed object: ``monitor.study.naming`` of the evaluation,
+    ``naming`` of ``swgsim-monitor``, logged with every run. Design and sources:
+    docs/monitor/assessment.md.
+
+    Attributes
+    ----------
+    sensor_p_min : float
+        Median conformal p-value of the corrected windows from which on a sensor fault
+        explains the alarm, in (0, 1) (0.3). Chosen on the training gears
+        (``scripts/naming_study.py``, bench, trained on gear 1, judged on gear 2, an hour
+        of windows): the right fit of every sensor fault on every bridge from 0.005 to
+        0.05 mV/V and from 2 to 10 % gain left 0.43-0.76; the best plausible one-bridge fit
+        of a gear fault at most 0.19.
+    rest_max : float
+        Largest mean shift left on the other bridges (:attr:`SensorFit.rest`) for a
+        one-bridge fit to explain an alarm, > 0 (2.5). Chosen on the training gears of both
+        presets (``scripts/naming_study.py --dataset bench|robot_joint``): the right fit of
+        each of the 100 sensor-fault lives per preset left 0.51-1.82, the gear-fault lives
+        with a median p-value above 0.2 3.33-9.48; about the geometric middle of the gap.
+    temperature_step_k : float
+        Step of the temperatures :func:`fit_temperature` tries, in (0, 5] [K] (0.25).
+    temperature_min_k : float
+        Least median distance (unsigned) of the fitted temperature from the reading for the
+        reading to be wrong, in [0, 50] [K] (2.0: ten times the reading's uncertainty of
+        0.2 K, ``NormalConfig.temperature_uncertainty_k``; unsigned: a reading stuck at a
+        warm joint's temperature lies above the true one in the cool phases and below it in
+        the hot ones, bench gear 3, family ``sensor_stuck``, design seed 100).
+    drift_min_k : float
+        Least median distance of a drift's fitted temperature from the reading
+        (:func:`fit_temperature_drift`), in [0, 50] [K] (0.4: twice the reading's
+        uncertainty [choice]).
+    drift_rate_k_per_h : float
+        Largest rate of a drifting reading :func:`fit_temperature_drift` tries first, on 13
+        rates from minus it, in (0, 10] [K/h] (0.6: the families' ±0.5 K/h and a little
+        beyond).
+    coarse_step_k : float
+        Step of the coarse grid :func:`best_temperature` starts from, in (0, 20] [K] (2.0).
+    coarse_steps : int
+        Fine steps it then tries on either side of the coarse best, in [1, 100] (6: to half
+        a coarse step beyond).
+    temperature_beyond_k : float
+        How far beyond commissioning's temperature range the fits look, in [0, 100] [K]
+        (20: the hall's drift over a season, 10-20 K).
+    virtual_windows : int
+        Windows of the running median of :func:`virtual_temperature`, odd, in [1, 999] (7).
+    still_h : float
+        Least time a temperature reading stays the same, to the bit, for
+        :func:`still_reading` to judge it, in (0, 100] [h] (0.25 [choice]: the UR3's six
+        joint readings over a working day, UR3 CobotOps, Tyrovolas et al. 2024, CC BY 4.0,
+        held one value for at most 1.4 min).
+    still_moved_k : float
+        Least range of the virtual temperature over such a run for the reading to be stuck,
+        in [0, 100] [K] (4.0: twice ``temperature_min_k`` [choice]; at once
+        ``temperature_min_k`` the tiny real day's whole-kelvin readings were taken for
+        stuck).
+    friction_refine : int
+        Factors and rates :func:`~.unexplained.fit_friction` refines its grid's best with,
+        over one grid step on either side, odd, in [3, 99] (9).
+    law_level : float
+        One-sided level of the test whether commissioning's laws hold at a point's new
+        load (:meth:`~.gear_monitor.GearMonitor.commission` after a tool change), in
+        (0, 0.5) (0.01: declared, not tuned).
+    recur_h : float
+        How far back an earlier unexplained change makes the next one recurring
+        (:func:`swgmon.advisories.stream.run_stream`), in [0, 10^4] [h] (24: a day, in
+        which a drifting reading's ±0.5 K/h reach 12 K [choice]).
+    virtual_passes : int
+        Passes of the virtual temperature and the friction factor after a lost reading
+        (:func:`swgmon.advisories.stream.read_without`), in [0, 10] (2 [choice, on design
+        seeds: family lost_running_in, seeds 100-104, after 0, 1 and 2 passes gear-fault
+        alarms 140, 0, 0 per 1000 h on bench gear 3, 152, 3, 0 on robot_joint gear 2]).
+    """
+
+    sensor_p_min: float = field(default=0.3, metadata=allowed(0.0, 1.0, lo_open=True,
+                                                              hi_open=True))
+    rest_max: float = field(default=2.5, metadata=allowed(0.0, 1e4, lo_open=True))
+    temperature_step_k: float = field(default=0.25, metadata=allowed(0.0, 5.0, lo_open=True,
+                                                                     unit="K"))
+    temperature_min_k: float = field(default=2.0, metadata=allowed(0.0, 50.0, unit="K"))
+    drift_min_k: float = field(default=0.4, metadata=allowed(0.0, 50.0, unit="K"))
+    drift_rate_k_per_h: float = field(default=0.6, metadata=allowed(0.0, 10.0, lo_open=True,
+                                                                    unit="K/h"))
+    coarse_step_k: float = field(default=2.0, metadata=allowed(0.0, 20.0, lo_open=True,
+                                                               unit="K"))
+    coarse_steps: int = field(default=6, metadata=allowed(1, 100))
+    temperature_beyond_k: float = field(default=20.0, metadata=allowed(0.0, 100.0, unit="K"))
+    virtual_windows: int = field(default=7, metadata=allowed(1, 999))
+    still_h: float = field(default=0.25, metadata=allowed(0.0, 100.0, lo_open=True, unit="h"))
+    still_moved_k: float = field(default=4.0, metadata=allowed(0.0, 100.0, unit="K"))
+    friction_refine: int = field(default=9, metadata=allowed(3, 99))
+    law_level: float = field(default=0.01, metadata=allowed(0.0, 0.5, lo_open=True,
+                                                            hi_open=True))
+    recur_h: float = field(default=24.0, metadata=allowed(0.0, 1e4, unit="h"))
+    virtual_passes: int = field(default=2, metadata=allowed(0, 10))
+
+    def check(self, where: str = "naming") -> None:
+        """Refuse an even window count where an odd one is needed, in one line naming the
+        key (the ranges are the fields' metadata, :func:`swgsim.base.typed.check_tree`).
+
+        Raises
+        ------
+        ValueError
+            ``virtual_windows`` or ``friction_refine`` even.
+        """
+        for name in ("virtual_windows", "friction_refine"):
+            if getattr(self, name) % 2 == 0:
+                raise ValueError(f"{where}.{name} must be odd (its own window in the "
+                                 f"middle), got {getattr(self, name)}")
+
+    @property
+    def drift_rates(self) -> np.ndarray:
+        """The rates :func:`fit_temperature_drift` tries first, shape (13,) [K/h]."""
+        return np.linspace(-self.drift_rate_k_per_h, self.drift_rate_k_per_h, 13)
 
 
 @dataclass(frozen=True)
@@ -274,21 +339,22 @@ class TemperatureFit:
         """Median distance of the fitted temperature from the reading [K]."""
         return float(np.median(np.abs(self.temperature_c - self.reading_c)))
 
-    def plausible(self) -> bool:
+    def plausible(self, naming: NamingConfig | None = None) -> bool:
         """Window by window (``rate_k_per_h`` None): the fit moved the temperature by at
-        least :data:`TEMPERATURE_MIN_K`, either way, at the median window and lowered Σ z²
-        by at least :data:`FIT_MIN` per window (each window has its own temperature: one
-        degree of freedom each). A drift (an offset and a rate): by at least
-        :data:`DRIFT_MIN_K` and Σ z² by :data:`FIT_MIN_RATE` over all windows."""
+        least ``naming.temperature_min_k``, either way, at the median window and lowered
+        Σ z² by at least :data:`FIT_MIN` per window (each window has its own temperature:
+        one degree of freedom each). A drift (an offset and a rate): by at least
+        ``naming.drift_min_k`` and Σ z² by :data:`FIT_MIN_RATE` over all windows."""
+        nc = naming or NamingConfig()
         if self.rate_k_per_h is None:
-            return (self.error_k >= TEMPERATURE_MIN_K
+            return (self.error_k >= nc.temperature_min_k
                     and self.reduction >= FIT_MIN * len(self.z))
-        return self.error_k >= DRIFT_MIN_K and self.reduction >= FIT_MIN_RATE
+        return self.error_k >= nc.drift_min_k and self.reduction >= FIT_MIN_RATE
 
 
 def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
-                    cond: Conditions, friction: np.ndarray, index: np.ndarray
-                    ) -> TemperatureFit | None:
+                    cond: Conditions, friction: np.ndarray, index: np.ndarray,
+                    naming: NamingConfig | None = None) -> TemperatureFit | None:
     """Fit the hypothesis "the temperature reading is wrong" (stuck, drifting, off):
     each window's temperature chosen to leave Σ z² smallest (:func:`best_temperature`),
     where that beats the reading. The
@@ -318,7 +384,8 @@ def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarr
     if cond.temperature_c is None or not normal.temperature_law:
         return None
     z0 = normal.z(feats, points, cond, friction, index)
-    temp, z = best_temperature(normal, feats, points, cond.torque_nm, friction, index)
+    temp, z = best_temperature(normal, feats, points, cond.torque_nm, friction, index,
+                               naming)
     s0, s = np.sum(z0 ** 2, axis=1), np.sum(z ** 2, axis=1)
     worse = s0 <= s  # the reading is as good: kept
     temp[worse], z[worse] = cond.temperature_c[worse], z0[worse]
@@ -327,14 +394,15 @@ def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarr
 
 def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
                           cond: Conditions, friction: np.ndarray, index: np.ndarray,
-                          hours: np.ndarray | None) -> TemperatureFit | None:
+                          hours: np.ndarray | None, naming: NamingConfig | None = None
+                          ) -> TemperatureFit | None:
     """Fit the hypothesis "the temperature reading drifts" (a loosened or ageing sensor:
     :class:`~swgsim.sensing.bridge_drift.TemperatureSensor` ``drift``): the true
     temperature is the reading plus an offset and a rate, a + r (t − t₀), the same for
     every window since the alarm (two parameters in all, where :func:`fit_temperature`
     gives each window its own: a drift is named while its error is still small, before
     a gear-fault alarm has fired on the features it moves). Offsets within
-    :data:`TEMPERATURE_BEYOND_K`, rates within :data:`DRIFT_RATES` (the families' ±0.5
+    ``naming.temperature_beyond_k``, rates within ``naming.drift_rates`` (the families' ±0.5
     K/h), on a coarse grid refined about its best; the z-scores by the laws commissioning
     learnt, unwidened beyond its range (as :func:`best_temperature`).
 
@@ -359,7 +427,9 @@ def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np
         i, j = np.unravel_index(int(np.argmin(tot)), (len(rates), len(offsets)))
         return float(offsets[j]), float(rates[i])
 
-    a, r = best(np.arange(-TEMPERATURE_BEYOND_K, TEMPERATURE_BEYOND_K + 0.5, 1.0), DRIFT_RATES)
+    nc = naming or NamingConfig()
+    beyond = nc.temperature_beyond_k
+    a, r = best(np.arange(-beyond, beyond + 0.5, 1.0), nc.drift_rates)
     a, r = best(a + np.arange(-0.5, 0.51, 0.125), r + np.arange(-0.05, 0.051, 0.01))
     temp = cond.temperature_c + a + r * dt
     s, z = _sum_z2(*args, temp[:, None])
@@ -368,20 +438,21 @@ def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np
 
 
 def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
-                     torque_nm: np.ndarray, friction: np.ndarray, index: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray]:
+                     torque_nm: np.ndarray, friction: np.ndarray, index: np.ndarray,
+                     naming: NamingConfig | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Each window's temperature that leaves its z-scores smallest (Σ z²), on a grid of
-    :data:`COARSE_STEP_K` refined to :data:`TEMPERATURE_STEP_K` about its best, over the
-    range commissioning saw widened by :data:`TEMPERATURE_BEYOND_K` on either side, and
+    ``naming.coarse_step_k`` refined to ``naming.temperature_step_k`` about its best, over the
+    range commissioning saw widened by ``naming.temperature_beyond_k`` on either side, and
     the z-scores there; shapes (n,) [°C] and (n, F). Beyond commissioning's range the
     laws are extrapolated in commissioning's spread (not
     :meth:`~swgmon.detection.normal.NormalBehaviour.z_and_spread`'s widened one, which would
     pull every fit to the grid's ends)."""
-    lo = float(np.min(normal.temp_range[:, 0])) - TEMPERATURE_BEYOND_K
-    hi = float(np.max(normal.temp_range[:, 1])) + TEMPERATURE_BEYOND_K
+    nc = naming or NamingConfig()
+    lo = float(np.min(normal.temp_range[:, 0])) - nc.temperature_beyond_k
+    hi = float(np.max(normal.temp_range[:, 1])) + nc.temperature_beyond_k
     normal = _unwidened(normal)  # no pull to the ends
-    fine = TEMPERATURE_STEP_K * np.arange(-COARSE_STEPS, COARSE_STEPS + 1)
-    grid = np.arange(lo, hi + COARSE_STEP_K, COARSE_STEP_K)  # coarse, then fine about it
+    fine = nc.temperature_step_k * np.arange(-nc.coarse_steps, nc.coarse_steps + 1)
+    grid = np.arange(lo, hi + nc.coarse_step_k, nc.coarse_step_k)  # coarse, then fine
     temp, zb = np.empty(len(feats)), np.empty(feats.shape)
     for a in range(0, len(feats), FIT_CHUNK):  # a bounded memory over long streams
         w = slice(a, a + FIT_CHUNK)
@@ -413,10 +484,10 @@ def _sum_z2(normal: NormalBehaviour, feats, points, torque_nm, friction, index,
 
 def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
                         torque_nm: np.ndarray, friction: float | np.ndarray,
-                        index: np.ndarray) -> np.ndarray:
+                        index: np.ndarray, naming: NamingConfig | None = None) -> np.ndarray:
     """The temperature the bridges and the efficiency say each window was at, by the
     laws learnt at commissioning (:func:`best_temperature`), as a running median over
-    :data:`VIRTUAL_WINDOWS` windows (a joint's temperature moves with a time constant of
+    ``naming.virtual_windows`` windows (a joint's temperature moves with a time constant of
     tens of minutes, docs/DATASET.md, "Gear lives"); the monitor's reading where its
     temperature sensor has failed (:func:`swgmon.advisories.stream.run_stream`). Shape (n,) [°C].
     ``friction``: the friction factor in force, one for every window or one each (n,).
@@ -430,21 +501,22 @@ def virtual_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.n
         raise ValueError("virtual_temperature: the normal behaviour has no temperature law "
                          "(commissioning without a temperature reading or without its "
                          "spread)")
+    nc = naming or NamingConfig()
     temp, _ = best_temperature(normal, feats, points, torque_nm,
                                np.broadcast_to(np.asarray(friction, float), (len(feats),)),
-                               index)
-    half = VIRTUAL_WINDOWS // 2
+                               index, nc)
+    half = nc.virtual_windows // 2
     padded = np.pad(temp, half, mode="edge")
     return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
 
 
 def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
-                  cond: Conditions, friction: float, hours: np.ndarray
-                  ) -> tuple[int, int] | None:
+                  cond: Conditions, friction: float, hours: np.ndarray,
+                  naming: NamingConfig | None = None) -> tuple[int, int] | None:
     """The first window at which the temperature reading is stuck: it has stayed the same,
-    to the bit, for at least :data:`STILL_H` while the temperature the bridges and the
+    to the bit, for at least ``naming.still_h`` while the temperature the bridges and the
     efficiency say (:func:`virtual_temperature`, at friction factor ``friction``) moved by
-    at least :data:`STILL_MOVED_K` since the run began (a frozen converter, a bus that
+    at least ``naming.still_moved_k`` since the run began (a frozen converter, a bus that
     repeats its last value: a flat-line test, with the bridges telling a stuck reading from
     a joint at a steady temperature read without noise). Judged without an alarm and
     without the spreads: a reading stuck beyond commissioning's range is cheap in the
@@ -474,30 +546,27 @@ def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray
         return None
     starts = np.flatnonzero(np.r_[True, t[1:] != t[:-1]])  # NaN: a run of its own
     ends = np.r_[starts[1:], len(t)]
-    long = hours[ends - 1] - hours[starts] >= STILL_H
-    half = VIRTUAL_WINDOWS // 2
+    nc = naming or NamingConfig()
+    long = hours[ends - 1] - hours[starts] >= nc.still_h
+    half = nc.virtual_windows // 2
     for s, e in zip(starts[long], ends[long], strict=True):
-        judged = s + int(np.searchsorted(hours[s:e], hours[s] + STILL_H))
+        judged = s + int(np.searchsorted(hours[s:e], hours[s] + nc.still_h))
         lo, hi = np.inf, -np.inf
         for a in range(s, e, STILL_CHUNK):
             b = min(e, a + STILL_CHUNK)
             w = slice(max(s, a - half), min(e, b + half))  # the running median's edges
             v = virtual_temperature(normal, feats[w], points[w], cond.torque_nm[w], friction,
-                                    normal.index(points[w]))[a - w.start:b - w.start]
+                                    normal.index(points[w]), nc)[a - w.start:b - w.start]
             moved = (np.maximum.accumulate(np.maximum(v, hi))
                      - np.minimum.accumulate(np.minimum(v, lo)))
-            hit = (moved >= STILL_MOVED_K) & (np.arange(a, b) >= judged)
+            hit = (moved >= nc.still_moved_k) & (np.arange(a, b) >= judged)
             if hit.any():
                 return int(s), min(int(e) - 1, a + int(np.argmax(hit)) + half)
             lo, hi = min(lo, float(v.min())), max(hi, float(v.max()))
     return None
 
 
-__all__ = ["BLOCK", "DRIFT_MIN_K", "DRIFT_RATES", "FIT_MIN", "FIT_MIN_GAIN_RATE", "FIT_MIN_RATE",
-           "REST_MAX", "SENSOR_P_MIN",
-           "STILL_CHUNK", "STILL_H", "STILL_MOVED_K", "SensorFit", "TEMPERATURE_BEYOND_K",
-           "TEMPERATURE_MIN_K", "TEMPERATURE_STEP_K", "TemperatureFit",
-           "VIRTUAL_WINDOWS",
-           "best_temperature", "fit_bridge_faults", "fit_sensor_faults",
-           "fit_temperature", "fit_temperature_drift", "still_reading",
-           "virtual_temperature"]
+__all__ = ["BLOCK", "FIT_CHUNK", "FIT_MIN", "FIT_MIN_GAIN_RATE", "FIT_MIN_RATE", "STILL_CHUNK",
+           "NamingConfig", "SensorFit", "TemperatureFit", "best_temperature",
+           "fit_bridge_faults", "fit_sensor_faults", "fit_temperature", "fit_temperature_drift",
+           "still_reading", "virtual_temperature"]

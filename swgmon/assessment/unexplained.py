@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swgmon.assessment.sensor_check import FIT_MIN, FIT_MIN_RATE
+from swgmon.assessment.sensor_check import FIT_MIN, FIT_MIN_RATE, NamingConfig
 from swgmon.detection.normal import Conditions, NormalBehaviour
 
 #: Factors on the friction :func:`fit_friction` tries: 1/3 to 3, in steps of about 1 %.
@@ -22,9 +22,6 @@ FRICTION_FACTORS = np.exp(np.linspace(np.log(1 / 3), np.log(3.0), 221))
 #: fresh grease running in again (excess friction up to 0.5 over 4 h or more, the
 #: families' ranges, swgmon/evaluation/families.py), in steps of 0.01/h.
 FRICTION_RATES = np.linspace(-0.15, 0.15, 31)
-#: Factors and rates :func:`fit_friction` refines its grid's best with, each over one grid
-#: step on either side (odd: the grid's own point among them).
-REFINE = 9
 
 
 @dataclass(frozen=True)
@@ -55,11 +52,13 @@ class FrictionFit:
     low: float = float("nan")
     high: float = float("nan")
 
-    def plausible(self) -> bool:
+    def plausible(self, naming: NamingConfig | None = None) -> bool:
         """Significant (:data:`FIT_MIN`, :data:`FIT_MIN_RATE` with a rate): where the
         efficiency's spread is small (a joint at a steady temperature), a change of 1 % is
         many of them (the friction tracking's lag behind a re-greasing running in again,
-        tiny_real_day gear 3)."""
+        tiny_real_day gear 3). ``naming``: not read (the χ² quantiles are statistics,
+        not tuned), taken as every hypothesis's fit takes it
+        (:meth:`~.sensor_check.TemperatureFit.plausible`)."""
         return self.reduction >= (FIT_MIN if self.rate_per_h is None else FIT_MIN_RATE)
 
 
@@ -88,7 +87,8 @@ def profile_interval(log_factor: np.ndarray, total: np.ndarray) -> tuple[float, 
 
 def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
                  cond: Conditions | None, friction: np.ndarray, index: np.ndarray,
-                 hours: np.ndarray | None = None) -> FrictionFit:
+                 hours: np.ndarray | None = None, naming: NamingConfig | None = None
+                 ) -> FrictionFit:
     """Fit the hypothesis "the friction changed evenly" (re-greasing, another grease, a
     seal): one factor on the loss torque at every operating point, on a logarithmic grid
     (:data:`FRICTION_FACTORS`), and with ``hours`` a rate at which its logarithm changes
@@ -111,6 +111,8 @@ def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
     hours : ndarray, shape (n,), optional
         The windows' operating hours [h]; None: one factor over all windows, no step, no
         rate.
+    naming : NamingConfig, optional
+        Its ``friction_refine``: the factors and rates the grid's best is refined with.
 
     Returns
     -------
@@ -140,13 +142,14 @@ def fit_friction(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
             best = (float(tot[i, j]), int(i), int(j), rate, k[i])
     _, i, j, rate, _ = best
     return _refined(normal, feats, points, cond, friction, index, dt, j,
-                    float(FRICTION_FACTORS[i]), rate, float(s[one].sum()))
+                    float(FRICTION_FACTORS[i]), rate, float(s[one].sum()),
+                    (naming or NamingConfig()).friction_refine)
 
 
 def _refined(normal: NormalBehaviour, feats, points, cond, friction, index, dt, j: int,
-             factor: float, rate: float, s_one: float) -> FrictionFit:
-    """:func:`fit_friction`'s grid best refined without the grid's steps: factors within
-    one step of ``factor`` and rates within one step of ``rate`` (:data:`REFINE`), the
+             factor: float, rate: float, s_one: float, refine: int) -> FrictionFit:
+    """:func:`fit_friction`'s grid best refined without the grid's steps: ``refine``
+    factors within one step of ``factor`` and rates within one step of ``rate``, the
     factor at each window from the step ``j`` on ``factor · exp(rate · dt)`` exactly. Where
     the efficiency's spread is small a grid step is several of it: a re-greasing of +33 %
     moved the bench's efficiency by 119 σ, so the grid's 1 % was 3.6 σ, and the fit left
@@ -154,8 +157,8 @@ def _refined(normal: NormalBehaviour, feats, points, cond, friction, index, dt, 
     ``regrease``, design seed 101), naming a gear fault."""
     n = len(feats)
     step = float(np.log(FRICTION_FACTORS[1] / FRICTION_FACTORS[0]))
-    fs = factor * np.exp(step * np.linspace(-1.0, 1.0, REFINE))
-    rs = rate + (FRICTION_RATES[1] - FRICTION_RATES[0]) * np.linspace(-1.0, 1.0, REFINE)
+    fs = factor * np.exp(step * np.linspace(-1.0, 1.0, refine))
+    rs = rate + (FRICTION_RATES[1] - FRICTION_RATES[0]) * np.linspace(-1.0, 1.0, refine)
     combos = np.stack(np.meshgrid(fs, rs, indexing="ij"), axis=-1).reshape(-1, 2)  # (m, 2)
     after = np.arange(j, n)
     fr = (friction[after][None, :] * combos[:, :1]
@@ -167,10 +170,10 @@ def _refined(normal: NormalBehaviour, feats, points, cond, friction, index, dt, 
                   index[:j])
     b = int(np.argmin(sa))
     total = float(np.sum(z0 ** 2) + sa[b])
-    at_rate = sa.reshape(REFINE, REFINE)[:, b % REFINE]  # the profile at the best rate
+    at_rate = sa.reshape(refine, refine)[:, b % refine]  # the profile at the best rate
     return FrictionFit(float(combos[b, 0]), np.concatenate([z0, za[b]]), s_one - total,
                        float(combos[b, 1]), *profile_interval(np.log(fs), at_rate))
 
 
-__all__ = ["FRICTION_FACTORS", "FRICTION_RATES", "FrictionFit", "REFINE",
-           "fit_friction", "profile_interval"]
+__all__ = ["FRICTION_FACTORS", "FRICTION_RATES", "FrictionFit", "fit_friction",
+           "profile_interval"]

@@ -56,9 +56,10 @@ GENERIC_DEGREE, GENERIC_ALPHA = 2, 1.0
 MIN_SPREAD_K = 2.0
 #: Consecutive windows of an operating point whose z-scores :func:`warm_up_directions`
 #: averages before it looks for directions: 7, as many as the running median of the
-#: temperature the bridges say (:data:`swgmon.assessment.sensor_check.VIRTUAL_WINDOWS`), which
-#: divides a window-to-window scatter's variance by 7 while a warm-up, slow, keeps its
-#: direction [choice; chosen on the design seeds, robot_joint gear 1, family ``sensor``].
+#: temperature the bridges say (``NamingConfig.virtual_windows`` of
+#: :mod:`swgmon.assessment.sensor_check`), which divides a window-to-window scatter's
+#: variance by 7 while a warm-up, slow, keeps its direction [choice; chosen on the design
+#: seeds, robot_joint gear 1, family ``sensor``].
 WARM_UP_AVERAGE = 7
 #: An amplitude enters the fit of its bridge's gain when its mean is this many standard
 #: deviations above zero (its log is then well defined).

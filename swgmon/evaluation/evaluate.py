@@ -205,7 +205,8 @@ def monitor_healthy(model: DiagnosisModel, cfg: MonitorStudyConfig, life: LifeSi
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     f, p, meta = features_of(life, 0, len(life))
     cond = Conditions.of(meta)
-    mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed), normal=cfg.normal)
+    mon = GearMonitor(model, cfg.rule, cfg.interval_min, seed=int(seed), normal=cfg.normal,
+                      naming=cfg.naming)
     mon.declare(maintenance_log(cfg, nuisance, life.life.conditions))
     mon.commission(f[:n_comm], p[:n_comm], cond[:n_comm])
     commissioned = mon.fork()

@@ -511,7 +511,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
                               lower_scale=scales["growth"][0],
                               upper_scale=scales["growth"][1], seed=int(seed))
     res = monitor_stream(life_dataset(sim, 0, n_end), model, sc.train.rule, seed=int(seed),
-                         normal=sc.train.normal, prognosis=opt, source="prognosis life")
+                         normal=sc.train.normal, prognosis=opt, source="prognosis life",
+                         naming=sc.train.naming)
     first = next((a for a in res.alarms if a.kind == "gear_fault" and a.hour >= fo.onset_h),
                  None)
     if first is not None:

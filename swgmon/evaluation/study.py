@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from learn.tracking.ledger import SCORED_SEED_MIN, check_seeds
+from swgmon.assessment.sensor_check import NamingConfig
 from swgmon.detection.normal import NormalConfig
 from swgmon.detection.rule import RuleConfig
 from swgmon.evaluation.detectors import DETECTORS
@@ -141,6 +142,9 @@ class MonitorStudyConfig:
     rule : RuleConfig
     normal : NormalConfig
         How the gear's normal behaviour follows the conditions (:mod:`swgmon.detection.normal`).
+    naming : NamingConfig
+        The numbers the naming of an alarm was tuned with
+        (:class:`swgmon.assessment.sensor_check.NamingConfig`), logged with the run.
     scored_run : bool
         A declared scored run (:mod:`learn.tracking.ledger`): its ``seeds`` and
         ``scored_seeds`` must be scored seeds (from
@@ -176,6 +180,7 @@ class MonitorStudyConfig:
     family_steps: bool = True
     rule: RuleConfig = field(default_factory=RuleConfig)
     normal: NormalConfig = field(default_factory=NormalConfig)
+    naming: NamingConfig = field(default_factory=NamingConfig)
     scored_run: bool = False
 
 

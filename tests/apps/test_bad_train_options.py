@@ -36,6 +36,8 @@ EVAL_CASES = {  # case -> (overrides of swgsim-train experiment=monitor, the key
     "a negative seed": (["monitor.study.seeds=[-1]"], "monitor.study.seeds[0]"),
     "design_hours=0": (["monitor.study.rule.design_hours=0"],
                        "monitor.study.rule.design_hours"),
+    "a naming number out of range": (["monitor.study.naming.rest_max=0"],
+                                     "monitor.study.naming.rest_max"),
     "an old key": (["monitor.study.baselines=[paper_rf]"], "monitor.study.detectors"),
     "a device that is none": (["monitor.device=gpu"], "monitor.device: must be one of"),
     "training severities not increasing": (

@@ -2,12 +2,14 @@
 its bounds, bad input, and the monitor end to end on tiny lives (a planted step fault
 detected and named, a sensor fault named as a sensor fault)."""
 
+import dataclasses
 import os
 import types
 
 import numpy as np
 import pytest
 
+from swgmon.assessment.sensor_check import NamingConfig
 from swgmon.detection.rule import (
     RuleConfig,
     check_commissioning,
@@ -257,6 +259,40 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch)
     assert (tmp_path / "out" / "health.png").stat().st_size > 10_000
 
 
+def test_the_namings_numbers_are_logged_with_the_monitors_run(tiny_eval, tmp_path,
+                                                              monkeypatch):
+    """``naming`` of swgsim-monitor (issue 84: every constant on record) reaches the
+    monitor and enters its MLflow run's parameters, each field by name."""
+    import contextlib
+
+    import swgmon.advisories.stream as stream
+    import swgmon.advisories.task as task
+    from swgcli import compose_app, dataset_preset
+    from swgmon.assessment.model_io import save_model
+    from swgsim.datasets.config import dataset_config
+    from swgsim.datasets.generate import generate
+
+    cfg = dataset_config(dataset_preset("tiny_life"))
+    cfg.gears = [g for g in cfg.gears if g.id == 3]
+    generate(cfg, tmp_path / "life", progress=False)
+    model = save_model(tiny_eval["model"], tmp_path / "model", [{"name": "tiny_bench"}])
+    logged, used = {}, []
+    run = type("Run", (), {"log_metrics": lambda self, m: None,
+                           "log_artifact": lambda self, f: None})()
+    monkeypatch.setattr(task, "log_run", lambda *a, params, **k: (
+        logged.update(params), contextlib.nullcontext(run))[1])
+    monkeypatch.setattr(task, "check_tracking", lambda *a: None)
+    once = stream._monitor_once
+    monkeypatch.setattr(stream, "_monitor_once", lambda *a, **k: (
+        used.append(a[-1]), once(*a, **k))[1])
+    task.run_monitor_app(compose_app("monitor", [
+        f"stream={tmp_path / 'life'}", f"diagnosis_model={model}",
+        f"out_dir={tmp_path / 'out'}", "naming.recur_h=12", "naming.sensor_p_min=0.35"]))
+    assert logged["naming"]["recur_h"] == 12.0 and logged["naming"]["sensor_p_min"] == 0.35
+    assert set(logged["naming"]) == set(dataclasses.asdict(NamingConfig()))
+    assert used[0].recur_h == 12.0
+
+
 def test_compiled_trees_equal_scikit_learn(tiny_eval):
     """The compiled walk of the trees gives scikit-learn's probabilities bit for bit, for
     one window and for a block, with a missing value (NaN) among them."""
@@ -310,7 +346,9 @@ def test_one_bridge_fits_recover_planted_sensor_faults():
     """Least squares of sensor_check: an offset step on s2 and a gain drift on s4, planted
     in z-scores of noise, come back with their severities and leave noise behind; the
     mean shift left on the other bridges (rest) is small unless another bridge moved."""
-    from swgmon.assessment.sensor_check import BLOCK, REST_MAX, fit_sensor_faults
+    from swgmon.assessment.sensor_check import BLOCK, NamingConfig, fit_sensor_faults
+
+    rest_max = NamingConfig().rest_max
 
     rng = np.random.default_rng(0)
     n, f = 40, 5 * BLOCK + 1
@@ -323,10 +361,10 @@ def test_one_bridge_fits_recover_planted_sensor_faults():
     off = fit[("sensor_offset_step", 2)]
     assert off.severity == pytest.approx(0.6, abs=3 * 0.02 / np.sqrt(n))
     assert np.sum(off.z ** 2) < 1.2 * np.sum(noise ** 2) < np.sum(z ** 2) / 5
-    assert 0.5 < off.rest < REST_MAX  # the other bridges hold noise only: about 1
+    assert 0.5 < off.rest < rest_max  # the other bridges hold noise only: about 1
     z[:, 3 * BLOCK] += 3.0  # ... unless s3's offset moved too (an eccentric WG's pattern)
     moved = {(x.fault, x.bridge): x for x in fit_sensor_faults(z, mean, std)}
-    assert moved[("sensor_offset_step", 2)].rest > 2 * REST_MAX
+    assert moved[("sensor_offset_step", 2)].rest > 2 * rest_max
     z = noise.copy()
     cols = slice(4 * BLOCK, 5 * BLOCK - 1)
     z[:, cols] += -0.1 * mean[:, cols] / std[:, cols]  # gain 0.9 on s4

@@ -15,13 +15,13 @@ from real_day import commissioned, growing, repaired
 
 from swgcli import dataset_preset
 from swgmon.advisories.stream import (
-    RECUR_H,
     _after_change,
     adopt_change,
     event_line,
     monitor_stream,
 )
 from swgmon.assessment.gear_monitor import MaintenanceEvent
+from swgmon.assessment.sensor_check import NamingConfig
 from swgmon.detection.laws import cools
 from swgmon.detection.normal import EFFICIENCY, Conditions, NormalBehaviour, NormalConfig
 from swgmon.detection.rule import Alarm, RuleConfig
@@ -281,7 +281,7 @@ def test_an_unexplained_change_within_seen_friction_is_not_followed_window_by_wi
 
 
 def test_a_gear_fault_soon_after_an_unexplained_change_is_named_again():
-    """A gear-fault alarm within RECUR_H after an unexplained change, while the reading is
+    """A gear-fault alarm within naming.recur_h after an unexplained change, while the reading is
     in use, is named again with the change undone (stream._after_change, then _drifting:
     a drifting reading whose first effect was taken for the friction); not after a day,
     not without a reading in use, not an unexplained change (the recurring change's own
@@ -290,12 +290,13 @@ def test_a_gear_fault_soon_after_an_unexplained_change_is_named_again():
     def alarm(hour, fault):
         return Alarm(hour, 0, 0, fault, fault, 0.1, 0.1, 0.1, None, [])
 
-    mon = dataclasses.make_dataclass("M", ["reading_virtual"])(False)
+    mon = dataclasses.make_dataclass("M", ["reading_virtual", "naming"])(False, NamingConfig())
+    recur_h = mon.naming.recur_h
     cond = Conditions(np.ones(2), np.full(2, 30.0))
     before = [alarm(10.0, "unexplained_change")]
     assert _after_change(mon, before, alarm(12.0, "reduced_damping"), 12.0, cond)
-    assert not _after_change(mon, before, alarm(10.0 + RECUR_H + 0.1, "root_crack"),
-                             10.0 + RECUR_H + 0.1, cond)
+    assert not _after_change(mon, before, alarm(10.0 + recur_h + 0.1, "root_crack"),
+                             10.0 + recur_h + 0.1, cond)
     assert not _after_change(mon, [alarm(10.0, "root_crack")], alarm(12.0, "root_crack"),
                              12.0, cond)
     assert not _after_change(mon, before, alarm(12.0, "unexplained_change"), 12.0, cond)

@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 from real_day import commissioned
 
-from swgmon.advisories import stream
 from swgmon.advisories.stream import event_line, monitor_stream, read_without
 from swgmon.assessment.gear_monitor import GearMonitor, normal_windows
 from swgmon.assessment.sensor_check import virtual_temperature
@@ -97,7 +96,7 @@ def test_a_reading_stuck_beyond_commissionings_range_is_named_before_any_gear_fa
     cheaper there than a wrong reading (robot_joint gear 3, family sensor_stuck, scored
     seed 4: 257 alarms, root crack first; here nothing named at all, before
     sensor_check.still_reading). A reading the same to the bit for 15 min while the bridges
-    say the temperature moved by sensor_check.STILL_MOVED_K is named the temperature
+    say the temperature moved by naming.still_moved_k is named the temperature
     sensor's fault: at the cold start at 32 h (the joint cools by 1-2 K from 30 h to
     it)."""
     t = healthy["temperature_c"].values
@@ -126,7 +125,7 @@ def test_an_alarm_raised_while_the_reading_was_already_stuck_names_the_sensor(mo
 def test_a_coarse_reading_without_noise_is_not_taken_for_a_stuck_one(model, healthy):
     """The day's readings in whole kelvin, without noise (a coarse readout): long runs of
     one value while the joint moves by less than a kelvin; the bridges' temperature moves
-    by less than sensor_check.STILL_MOVED_K over them, so nothing is named."""
+    by less than naming.still_moved_k over them, so nothing is named."""
     ds = _reading_from(healthy, 0.0, np.round)
     res = monitor_stream(ds, model, RuleConfig(), source="day")
     assert not [e for e in res.events() if e["kind"] in ("gear_fault", "sensor_fault")]
@@ -229,7 +228,7 @@ def test_a_monitor_that_reads_the_laws_temperature_is_calibrated_as_it_scores(mo
 
 
 def test_the_laws_temperature_follows_the_friction_tracked_after_the_reading_is_lost(
-        model, day, monkeypatch):
+        model, day):
     """stream.read_without: the reading lost at 30 h while the grease still runs in (the
     day's run-in, 16 % over 30 h) under a linear friction law. At the friction factor in
     force at the loss the running-in friction was read as a warmer joint (mean error +0.65
@@ -252,5 +251,5 @@ def test_the_laws_temperature_follows_the_friction_tracked_after_the_reading_is_
         return float(np.mean(v.temperature_c - true_c))
 
     assert abs(bias()) < 0.3
-    monkeypatch.setattr(stream, "VIRTUAL_PASSES", 0)  # at the factor in force at the loss
+    mon.naming = dataclasses.replace(mon.naming, virtual_passes=0)  # the factor at the loss
     assert bias() > 0.5

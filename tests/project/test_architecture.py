@@ -46,9 +46,11 @@ MAX_FUNCTION_LINES = 80
 #: reach by design: swgmon 9000, learn 11000, the library 47500. Moved: swgmon 13500 ->
 #: 14000 and all 56000 -> 56500 for the own-joint route (issue 87, +190 lines); swgmon
 #: 14000 -> 14100 and all 56500 -> 56700 for issue 85's lives by laws the prognosis does
-#: not assume (a growth family, its day, the lot: +107 lines in swgmon, +110 in swgsim).
+#: not assume (a growth family, its day, the lot: +107 lines in swgmon, +110 in swgsim);
+#: swgmon 14100 -> 14200 and all 56700 -> 56800 for issue 84's NamingConfig (16 tuned
+#: numbers as typed fields with ranges, units and sources, plumbed to the apps: +30).
 LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11500,
-                                "swgmon": 14100, "swgcli": 2000, "all": 56700}
+                                "swgmon": 14200, "swgcli": 2000, "all": 56800}
 #: Functions allowed beyond MAX_FUNCTION_LINES: "path:name" -> why (most are over by
 #: their numpydoc docstring, which the style asks for; the code lines follow).
 LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
