@@ -3,7 +3,7 @@
 figure computed from the results (:mod:`swgmon.prognosis.scores`), none written in.
 
 The targets (issue 85, in place of issue 47's, which a calibrated interval met in all 18
-buckets with probability 0.0014), per data set and fault on the held-out gears: the 90 %
+buckets with probability 0.0014), per data set and fault on the held-out instances: the 90 %
 interval's pooled coverage (PICP) with a 95 % interval from a bootstrap over whole lives
 that contains 0.90; in every true remaining-share bucket with at least 20 prognoses,
 coverage at least 0.85 at 95 % confidence, one-sided (the bootstrap's upper one-sided

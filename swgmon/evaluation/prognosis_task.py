@@ -8,7 +8,7 @@ Files in ``report_dir``: ``results.csv`` (one row per prognosis and method), ``l
 gear, method and quarter of the true remaining share),
 ``scores.csv`` (each life's scores per method), ``changes.csv`` (each life with a payload
 change against its twin without it, per method), ``table.md``, ``prognosis.png``,
-``timing.json`` and ``parts/``: one finished part per (data set, held-out gear) with the
+``timing.json`` and ``parts/``: one finished part per data set (its lot) with the
 hash of the config that made it (:func:`learn.tasks.parts.part_key`), so that a rerun of
 the same config resumes from them (the part machinery of :mod:`learn.tasks.parts`).
 """
@@ -92,7 +92,7 @@ def run_prognosis_evaluation(cfg) -> dict:
     Raises
     ------
     ValueError
-        A bad ``prognosis`` key or data set, a held-out gear a data set lacks, an
+        A bad ``prognosis`` key or data set, a lot without two training instances, an
         unwritable MLflow store, or a ``report_dir`` holding a file this project cannot
         show it wrote (named); before any work.
     """
