@@ -89,7 +89,8 @@ def run_monitor_app(cfg) -> dict:
     if app.logger is not None:
         params = {"stream": str(src), "diagnosis_model": app.diagnosis_model,
                   "gear": app.gear, "rule": dataclasses.asdict(app.rule),
-                  "naming": dataclasses.asdict(app.naming), "confirm_h": app.confirm_h}
+                  "naming": dataclasses.asdict(app.naming),
+                  "normal": dataclasses.asdict(app.normal), "confirm_h": app.confirm_h}
         with log_run(app.logger.experiment, app.logger.run_name,
                      tracking_uri=app.logger.tracking_uri, params=params,
                      config=dataclasses.asdict(app), dataset=src) as run:

@@ -24,46 +24,75 @@ import numpy as np
 
 from learn.inputs.health import N_HARMONICS
 from swgsim.base.lazy import lazy_module
+from swgsim.base.typed import allowed
 
 optimize = lazy_module("scipy.optimize")  # at the first fit, not at an app's start
 
-__all__ = ["BLOCK", "EFFICIENCY", "FACTOR_FLOOR", "LossLaw", "MIN_SPREAD_K", "SEGMENT_K",
-           "SIGNIFICANT", "SMOOTHING", "WARM_UP_AVERAGE", "bridge_drift", "cools",
+__all__ = ["BLOCK", "EFFICIENCY", "LawFit", "LossLaw", "bridge_drift", "cools",
            "feature_slopes", "generic_laws", "load_curves", "loss_model", "poly",
-           "warm_up_directions", "GENERIC_ALPHA", "GENERIC_DEGREE", "generic_inputs"]
+           "warm_up_directions", "generic_inputs"]
 
 #: Per-bridge block of health features: offset, H amplitudes, log10 RMS of the rest.
 BLOCK = N_HARMONICS + 2
 EFFICIENCY = 5 * BLOCK
 
-#: Width of the loss law's temperature segments over commissioning's temperatures [K]
-#: (:class:`LossLaw`): its range in as many equal segments as come nearest this width,
-#: at least one [choice: 5 K and 2.5 K fitted the design seeds' lives alike (bench, gear
-#: 3, families ``friction_law`` and ``trace``, seeds 100-104)].
-SEGMENT_K = 5.0
-#: Weight of the penalty on unequal slopes of neighbouring segments, relative to the
-#: segments' own weight in the fit: it decides only a slope the windows do not (a
-#: segment a speed did not run in) [choice].
-SMOOTHING = 1e-3
-#: Least share of its value at commissioning's coldest that the load-independent loss
-#: keeps when its law is carried beyond commissioning's temperatures [-].
-FACTOR_FLOOR = 0.05
-#: The generic regression's polynomial degree in the load and the temperature and its
-#: ridge penalty on standardised terms (:func:`generic_laws`) [choice: a quadratic, as the
-#: load curves are; the penalty only steadies a term commissioning barely varied].
-GENERIC_DEGREE, GENERIC_ALPHA = 2, 1.0
-#: Least temperature spread of commissioning to fit the temperature terms [K].
-MIN_SPREAD_K = 2.0
-#: Consecutive windows of an operating point whose z-scores :func:`warm_up_directions`
-#: averages before it looks for directions: 7, as many as the running median of the
-#: temperature the bridges say (``NamingConfig.virtual_windows`` of
-#: :mod:`swgmon.assessment.sensor_check`), which divides a window-to-window scatter's
-#: variance by 7 while a warm-up, slow, keeps its direction [choice; chosen on the design
-#: seeds, robot_joint gear 1, family ``sensor``].
-WARM_UP_AVERAGE = 7
-#: An amplitude enters the fit of its bridge's gain when its mean is this many standard
-#: deviations above zero (its log is then well defined).
-SIGNIFICANT = 20.0
+@dataclass
+class LawFit:
+    """The numbers the normal behaviour's laws are fitted with (issue 84: every constant
+    on record): ``normal.fit`` of ``swgsim-monitor`` and ``monitor.study.normal.fit`` of
+    the evaluation, logged with every run. Design and sources: docs/monitor/detection.md,
+    "The normal behaviour's laws".
+
+    Attributes
+    ----------
+    segment_k : float
+        Width of the loss law's temperature segments over commissioning's temperatures
+        [K], in (0, 50] (:class:`LossLaw`): its range in as many equal segments as come
+        nearest this width, at least one (5 [choice: 5 K and 2.5 K fitted the design
+        seeds' lives alike: bench, gear 3, families ``friction_law`` and ``trace``, seeds
+        100-104]).
+    smoothing : float
+        Weight of the penalty on unequal slopes of neighbouring segments, relative to the
+        segments' own weight in the fit [-], in [0, 1] (1e-3 [choice]): it decides only a
+        slope the windows do not (a segment a speed did not run in).
+    factor_floor : float
+        Least share of its value at commissioning's coldest that the load-independent
+        loss keeps when its law is carried beyond commissioning's temperatures [-], in
+        [0, 1) (0.05 [choice]).
+    generic_degree : int
+        The generic regression's polynomial degree in the load and the temperature
+        (:func:`generic_laws`), in [1, 3] (2 [choice: a quadratic, as the load curves
+        are]).
+    generic_alpha : float
+        Its ridge penalty on standardised terms, in [0, 1e3] (1 [choice: it only steadies
+        a term commissioning barely varied]).
+    min_spread_k : float
+        Least temperature spread of commissioning to fit the temperature terms, and the
+        least fall below an earlier reading for commissioning to have cooled
+        (:func:`cools`) [K], in [0, 50] (2, ten times the reading's uncertainty of 0.2 K,
+        ``normal.temperature_uncertainty_k``).
+    warm_up_average : int
+        Consecutive windows of an operating point whose z-scores
+        :func:`warm_up_directions` averages before it looks for slow directions, in
+        [1, 99] (7, as many as the running median of the temperature the bridges say,
+        ``naming.virtual_windows``: it divides a window-to-window scatter's variance by 7
+        while a warm-up, slow, keeps its direction [choice; chosen on the design seeds,
+        robot_joint gear 1, family ``sensor``]).
+    significant_sd : float
+        An amplitude enters the fit of its bridge's gain (:func:`bridge_drift`) when its
+        mean is this many standard deviations above zero (its log is then well defined),
+        in [1, 1e3] (20 [choice]).
+    """
+
+    segment_k: float = field(default=5.0, metadata=allowed(0.0, 50.0, lo_open=True,
+                                                           unit="K"))
+    smoothing: float = field(default=1e-3, metadata=allowed(0.0, 1.0))
+    factor_floor: float = field(default=0.05, metadata=allowed(0.0, 1.0, hi_open=True))
+    generic_degree: int = field(default=2, metadata=allowed(1, 3))
+    generic_alpha: float = field(default=1.0, metadata=allowed(0.0, 1e3))
+    min_spread_k: float = field(default=2.0, metadata=allowed(0.0, 50.0, unit="K"))
+    warm_up_average: int = field(default=7, metadata=allowed(1, 99))
+    significant_sd: float = field(default=20.0, metadata=allowed(1.0, 1e3))
 
 
 @dataclass(frozen=True)
@@ -75,18 +104,22 @@ class LossLaw:
     its width above), never rising with the temperature (E_j <= 0): any monotone law, its
     own per input speed. Beyond commissioning's temperatures the end segments' slopes go
     on (no curvature commissioning did not see), and the load-independent part keeps at
-    least :data:`FACTOR_FLOOR` of D.
+    least :attr:`floor` of D.
 
     Parameters
     ----------
     coef : ndarray, shape (P, K + 2)
         Per operating point: D [N m] (the load-independent loss at ``knots[0]``), the
         slopes E_1..E_K [N m/K] and B [-]; K = 0 without a temperature law.
+    floor : float
+        Least share of D the load-independent part keeps beyond commissioning's
+        temperatures [-] (:attr:`LawFit.factor_floor`).
     knots : ndarray, shape (K + 1,) or (0,)
         The segments' ends [°C]; empty without a temperature law.
     """
 
     coef: np.ndarray
+    floor: float
     knots: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def ramps(self, temp: np.ndarray) -> np.ndarray:
@@ -106,7 +139,7 @@ class LossLaw:
         free = c[:, 0]
         if temp is not None and self.knots.size:
             free = np.maximum(free + np.sum(self.ramps(temp) * c[:, 1:-1], axis=1),
-                              FACTOR_FLOOR * free)
+                              self.floor * free)
         return free + c[:, -1] * tq
 
 
@@ -135,10 +168,10 @@ def poly(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
     return np.vstack([coef, np.zeros((2 - deg, y.shape[1]))])
 
 
-def bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray, significant_sd: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """γ_c and ζ_c of the five bridges (module docstring of :mod:`.normal`): the gain from
-    the significant amplitudes' logs (means over :data:`SIGNIFICANT` standard deviations),
+    the significant amplitudes' logs (means over ``significant_sd`` standard deviations),
     the zero from the offsets, by least squares pooled over points.
 
     Parameters
@@ -149,6 +182,8 @@ def bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
         Each window's operating point.
     dt : ndarray, shape (n,)
         Each window's temperature less its point's mean [K].
+    significant_sd : float
+        :attr:`LawFit.significant_sd`.
 
     Returns
     -------
@@ -166,7 +201,7 @@ def bridge_drift(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray
         for k in np.unique(inv):
             m = inv == k
             a = amp[m]
-            sig = a.mean(axis=0) > SIGNIFICANT * a.std(axis=0, ddof=1)
+            sig = a.mean(axis=0) > significant_sd * a.std(axis=0, ddof=1)
             if sig.any():  # Σ_j Σ_i ΔT_i (ln a_ij − mean_i ln a_ij) over Σ_j Σ_i ΔT_i²
                 la = np.log(a[:, sig])
                 num += float(dt[m] @ (la - la.mean(axis=0)).sum(axis=1))
@@ -212,12 +247,13 @@ def feature_slopes(feats: np.ndarray, inv: np.ndarray, dt: np.ndarray) -> np.nda
 
 
 def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
-               ops: np.ndarray, inv: np.ndarray) -> tuple[LossLaw, tuple | None]:
+               ops: np.ndarray, inv: np.ndarray, fit: LawFit
+               ) -> tuple[LossLaw, tuple | None]:
     """The loss torque's law (:class:`LossLaw`) fitted to commissioning's windows: at each
     input speed the loss τ (1/η − 1) by least squares over its windows with the slopes
     bounded (friction does not rise with the temperature; module docstring of
     :mod:`.normal`), the temperature's range cut into segments of about
-    :data:`SEGMENT_K`.
+    ``fit.segment_k``.
 
     Where commissioning did not cool (:func:`cools`) the law that fits is not the
     friction's alone: a run-in lowers the loss while the joint warms, so the law is no
@@ -238,6 +274,8 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
         The operating points (input speed [rpm], torque [N m]).
     inv : ndarray of int, shape (n,)
         Each window's operating point.
+    fit : LawFit
+        The segments' width, the slopes' tie, the floor and the least cooling.
 
     Returns
     -------
@@ -247,23 +285,23 @@ def loss_model(eta: np.ndarray, torque: np.ndarray, temp: np.ndarray | None,
     """
     tq = np.abs(torque)
     loss = tq * (1.0 / np.clip(eta, 1e-6, 1.0) - 1.0)
-    flat = _fit_law(loss, tq, None, ops, inv, np.zeros(0))
+    flat = _fit_law(loss, tq, None, ops, inv, np.zeros(0), fit)
     if temp is None:
         return flat, None
     lo, hi = float(np.min(temp)), float(np.max(temp))
-    knots = np.linspace(lo, hi, max(1, int(round((hi - lo) / SEGMENT_K))) + 1)
-    law = _fit_law(loss, tq, temp, ops, inv, knots)
-    return law, (None if cools(temp) else (law, flat))
+    knots = np.linspace(lo, hi, max(1, int(round((hi - lo) / fit.segment_k))) + 1)
+    law = _fit_law(loss, tq, temp, ops, inv, knots, fit)
+    return law, (None if cools(temp, fit.min_spread_k) else (law, flat))
 
 
 def _fit_law(loss: np.ndarray, tq: np.ndarray, temp: np.ndarray | None, ops: np.ndarray,
-             inv: np.ndarray, knots: np.ndarray) -> LossLaw:
+             inv: np.ndarray, knots: np.ndarray, fit: LawFit) -> LossLaw:
     """The :class:`LossLaw` on ``knots`` fitted to the windows' losses, speed by speed
     (B only where the speed ran at two loads or more), the slopes <= 0 (bounded-variable
     least squares, :func:`scipy.optimize.lsq_linear`) and neighbouring slopes tied by
-    :data:`SMOOTHING`."""
+    ``fit.smoothing``."""
     k = max(knots.size - 1, 0)
-    shell = LossLaw(np.zeros((len(ops), k + 2)), knots)
+    shell = LossLaw(np.zeros((len(ops), k + 2)), fit.factor_floor, knots)
     out = shell.coef
     for n in np.unique(ops[:, 0]):
         ks = np.flatnonzero(ops[:, 0] == n)
@@ -278,7 +316,7 @@ def _fit_law(loss: np.ndarray, tq: np.ndarray, temp: np.ndarray | None, ops: np.
         lower, upper = np.full(x.shape[1], -np.inf), np.full(x.shape[1], np.inf)
         upper[1:k + 1] = 0.0  # the slopes: friction does not rise with the temperature
         if k > 1:  # neighbouring slopes alike where the windows do not say otherwise
-            w = np.sqrt(SMOOTHING * np.mean(np.sum(x[:, 1:k + 1] ** 2, axis=0)))
+            w = np.sqrt(fit.smoothing * np.mean(np.sum(x[:, 1:k + 1] ** 2, axis=0)))
             d = np.zeros((k - 1, x.shape[1]))
             d[np.arange(k - 1), np.arange(1, k)] = -w
             d[np.arange(k - 1), np.arange(2, k + 1)] = w
@@ -289,9 +327,9 @@ def _fit_law(loss: np.ndarray, tq: np.ndarray, temp: np.ndarray | None, ops: np.
     return shell
 
 
-def cools(temp: np.ndarray) -> bool:
+def cools(temp: np.ndarray, min_fall_k: float) -> bool:
     """Whether commissioning's temperature (windows in time order) falls by at least
-    :data:`MIN_SPREAD_K` below an earlier reading somewhere (a cold start): only then can
+    ``min_fall_k`` below an earlier reading somewhere (a cold start): only then can
     the friction's temperature law be told from a slow drift in time (run-in), which over
     a single warm-up falls as the temperature rises.
 
@@ -299,13 +337,15 @@ def cools(temp: np.ndarray) -> bool:
     ----------
     temp : ndarray, shape (n,)
         Commissioning's temperatures [°C], in time order.
+    min_fall_k : float
+        The least fall [K] (:attr:`LawFit.min_spread_k`).
 
     Returns
     -------
     bool
-        True where some reading lies :data:`MIN_SPREAD_K` [K] or more below an earlier one.
+        True where some reading lies ``min_fall_k`` or more below an earlier one.
     """
-    return bool(np.max(np.maximum.accumulate(temp) - temp) >= MIN_SPREAD_K)
+    return bool(np.max(np.maximum.accumulate(temp) - temp) >= min_fall_k)
 
 
 def load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,
@@ -351,7 +391,7 @@ def load_curves(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray,
     return out
 
 
-def warm_up_directions(z: np.ndarray, inv: np.ndarray, k: int
+def warm_up_directions(z: np.ndarray, inv: np.ndarray, k: int, average: int
                        ) -> tuple[np.ndarray, np.ndarray]:
     """Per operating point, the directions in which commissioning's z-scores varied
     together beyond noise, and their range: what a joint without a temperature reading
@@ -366,7 +406,7 @@ def warm_up_directions(z: np.ndarray, inv: np.ndarray, k: int
     1967; I. M. Johnstone, Ann. Statist. 29(2), 2001, for the largest eigenvalue's spike):
     on the bench's joint without a sensor (gear 3, family ``sensor``) the two largest were
     3.3-5.3 against an edge of 3.1, the warm-ups. Then, in what those leave, at most ``k``
-    slow ones: the same test on running means of :data:`WARM_UP_AVERAGE` consecutive
+    slow ones: the same test on running means of ``average`` consecutive
     windows of the point, edge (1 + sqrt(F' L / m))² / L (the overlapping means taken as
     m / L independent ones, F' the features left). Behind a robot link the first are the
     torque ripple, which scatters every bridge's orders 2 and 4 together from window to
@@ -387,6 +427,8 @@ def warm_up_directions(z: np.ndarray, inv: np.ndarray, k: int
         Each window's point.
     k : int
         Most directions per point of each kind.
+    average : int
+        Windows per running mean (:attr:`LawFit.warm_up_average`).
 
     Returns
     -------
@@ -405,7 +447,7 @@ def warm_up_directions(z: np.ndarray, inv: np.ndarray, k: int
             continue
         first = _beyond_noise(zp - zp.mean(axis=0), m, k)
         rest = zp - (zp @ first.T) @ first  # in the complement of the first
-        avg = max(1, min(WARM_UP_AVERAGE, m // 3))
+        avg = max(1, min(average, m // 3))
         run = np.cumsum(np.vstack([np.zeros(n_f), rest]), axis=0)
         means = (run[avg:] - run[:-avg]) / avg  # running means (m - avg + 1, F)
         each.append((first, _beyond_noise(means - means.mean(axis=0), m / avg, k, avg,
@@ -437,11 +479,11 @@ def _beyond_noise(x: np.ndarray, m: float, k: int, avg: int = 1, dim: int | None
 
 
 def generic_laws(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray, torque: np.ndarray,
-                 temp: np.ndarray | None) -> list:
+                 temp: np.ndarray | None, fit: LawFit) -> list:
     """The ablation of the laws above: per input speed, one generic regression of every
     feature on the acting load (and the temperature, where commissioning fitted its
-    terms), scikit-learn's polynomial of degree :data:`GENERIC_DEGREE`, standardised, and
-    ridge regression (penalty :data:`GENERIC_ALPHA`); no drift, loss or load law, no
+    terms), scikit-learn's polynomial of degree ``fit.generic_degree``, standardised, and
+    ridge regression (penalty ``fit.generic_alpha``); no drift, loss or load law, no
     friction factor. The normal behaviour "with a generic regression" of the benchmark
     (:class:`~.normal.NormalConfig` ``laws``).
 
@@ -457,6 +499,8 @@ def generic_laws(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray, torque: np
         Each window's acting load [N m] (its magnitude used).
     temp : ndarray, shape (n,), or None
         Each window's temperature [°C]; None: the load alone.
+    fit : LawFit
+        The polynomial's degree and the ridge penalty.
 
     Returns
     -------
@@ -473,8 +517,8 @@ def generic_laws(feats: np.ndarray, inv: np.ndarray, ops: np.ndarray, torque: np
     for n in np.unique(ops[:, 0]):
         pts = np.flatnonzero(ops[:, 0] == n)
         m = np.isin(inv, pts)
-        model = make_pipeline(PolynomialFeatures(GENERIC_DEGREE, include_bias=False),
-                              StandardScaler(), Ridge(alpha=GENERIC_ALPHA))
+        model = make_pipeline(PolynomialFeatures(fit.generic_degree, include_bias=False),
+                              StandardScaler(), Ridge(alpha=fit.generic_alpha))
         model.fit(x[m], feats[m])
         for k in pts:
             out[k] = model

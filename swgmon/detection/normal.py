@@ -18,7 +18,7 @@ import numpy as np
 from swgmon.detection.laws import (
     BLOCK,
     EFFICIENCY,
-    MIN_SPREAD_K,
+    LawFit,
     LossLaw,
     bridge_drift,
     feature_slopes,
@@ -104,6 +104,8 @@ class NormalConfig:
         regression of every feature on the acting load and the temperature per input
         speed (:func:`~.laws.generic_laws`), no friction factor (the benchmark of issue
         83 scores both).
+    fit : LawFit
+        The numbers the laws are fitted with (:class:`~.laws.LawFit`).
     """
 
     friction_track_h: float = 4.0
@@ -116,6 +118,7 @@ class NormalConfig:
     regrease_settle_h: float = 72.0
     warm_up_components: int = 2
     laws: str = "physics"
+    fit: LawFit = field(default_factory=LawFit)
 
     def check(self, key: str = "normal") -> None:
         """Refuse a field out of range in one line naming ``<key>.<field>``.
@@ -191,7 +194,7 @@ class NormalBehaviour:
         Commissioning's features brought to the reference condition: mean and spread.
     ref_torque, ref_temp : ndarray, shape (P,)
         Commissioning's mean acting load [N m] and temperature [°C] (NaN: no temperature
-        terms, none measured or a spread below :data:`MIN_SPREAD_K`).
+        terms, none measured or a spread below ``config.fit.min_spread_k``).
     torque_range, temp_range : ndarray, shape (P, 2)
         Commissioning's range of acting load [N m] and temperature [°C], the latter
         widened by ``temperature_uncertainty_k`` (NaN: none measured).
@@ -289,20 +292,22 @@ class NormalBehaviour:
         ref_torque = np.array([tq[inv == k].mean() for k in range(n_p)])
         torque_range = np.array([[tq[inv == k].min(), tq[inv == k].max()] for k in range(n_p)])
         temp = cond.temperature_c
-        use_t = temp is not None and np.ptp(temp) >= MIN_SPREAD_K
+        use_t = temp is not None and np.ptp(temp) >= config.fit.min_spread_k
         ref_temp = np.array([temp[inv == k].mean() if use_t else np.nan for k in range(n_p)])
         u = config.temperature_uncertainty_k
         temp_range = np.array([[temp[inv == k].min() - u, temp[inv == k].max() + u]
                                if temp is not None else [np.nan, np.nan] for k in range(n_p)])
         dt = temp - ref_temp[inv] if use_t else np.zeros(len(feats))
-        gain, zero = (bridge_drift(feats, inv, dt) if use_t else (np.zeros(5), np.zeros(5)))
-        loss, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv)
+        gain, zero = (bridge_drift(feats, inv, dt, config.fit.significant_sd) if use_t
+                      else (np.zeros(5), np.zeros(5)))
+        loss, band = loss_model(feats[:, EFFICIENCY], tq, temp if use_t else None, ops, inv,
+                                config.fit)
         nb = cls(ops, np.zeros((n_p, n_f)), np.ones((n_p, n_f)), ref_torque, ref_temp,
                  torque_range, temp_range, gain, zero, loss, np.zeros((n_p, 3, n_f)), config,
                  np.bincount(inv, minlength=n_p), loss_band=band)
         if config.laws == "generic":
             nb.generic, nb.loss_band = generic_laws(feats, inv, ops, tq,
-                                                    temp if use_t else None), None
+                                                    temp if use_t else None, config.fit), None
         elif use_t:
             nb.slope = feature_slopes(nb._temperature_corrected(feats, inv, dt), inv, dt)
         if nb.generic is None:
@@ -314,7 +319,8 @@ class NormalBehaviour:
                                       for k in range(n_p)]), 1e-12)
         if temp is None and config.warm_up_components > 0:
             nb.warm_dir, nb.warm_range = warm_up_directions(
-                (ref - nb.mean[inv]) / nb.std[inv], inv, config.warm_up_components)
+                (ref - nb.mean[inv]) / nb.std[inv], inv, config.warm_up_components,
+                config.fit.warm_up_average)
             nb.warm_torque = torque_range.copy()
         return nb
 

@@ -199,6 +199,7 @@ def _log(app, summary: pd.DataFrame, tgt: pd.DataFrame, out: Path, wall: float,
     params = {"run_on": ",".join(pc.run_on), "seeds": str(pc.study.seeds),
               "calibration_seeds": str(pc.study.calibration_seeds),
               "naming": dataclasses.asdict(pc.study.train.naming),
+              "normal": dataclasses.asdict(pc.study.train.normal),
               **{f"config_hash.{n}": p.config_hash for n, p in plans.items()}}
     with log_run(app.logger.experiment, app.logger.run_name,
                  tracking_uri=app.logger.tracking_uri, params=params,

@@ -259,6 +259,7 @@ def _log(app, res: pd.DataFrame, fa: pd.DataFrame, out: Path, wall: float,
               "healthy_hours": mc.study.healthy_hours,
               "design_hours": mc.study.rule.design_hours,
               "naming": dataclasses.asdict(mc.study.naming),
+              "normal": dataclasses.asdict(mc.study.normal),
               **{f"config_hash.{n}": p.config_hash for n, p in plans.items()},
               **{k: v for k, v in nets.items() if k != "torch_device"}}
     with log_run("monitor", "monitor", tracking_uri=lcfg.tracking_uri, params=params,

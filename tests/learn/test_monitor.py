@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from swgmon.assessment.sensor_check import NamingConfig
+from swgmon.detection.laws import LawFit
 from swgmon.detection.rule import (
     RuleConfig,
     check_commissioning,
@@ -259,10 +260,10 @@ def test_monitor_app_end_to_end_on_a_tiny_life(tiny_eval, tmp_path, monkeypatch)
     assert (tmp_path / "out" / "health.png").stat().st_size > 10_000
 
 
-def test_the_namings_numbers_are_logged_with_the_monitors_run(tiny_eval, tmp_path,
-                                                              monkeypatch):
-    """``naming`` of swgsim-monitor (issue 84: every constant on record) reaches the
-    monitor and enters its MLflow run's parameters, each field by name."""
+def test_the_namings_and_laws_numbers_are_logged_with_the_monitors_run(tiny_eval, tmp_path,
+                                                                        monkeypatch):
+    """``naming`` and ``normal.fit`` of swgsim-monitor (issue 84: every constant on
+    record) reach the monitor and enter its MLflow run's parameters, each field by name."""
     import contextlib
 
     import swgmon.advisories.stream as stream
@@ -287,9 +288,12 @@ def test_the_namings_numbers_are_logged_with_the_monitors_run(tiny_eval, tmp_pat
         used.append(a[-1]), once(*a, **k))[1])
     task.run_monitor_app(compose_app("monitor", [
         f"stream={tmp_path / 'life'}", f"diagnosis_model={model}",
-        f"out_dir={tmp_path / 'out'}", "naming.recur_h=12", "naming.sensor_p_min=0.35"]))
+        f"out_dir={tmp_path / 'out'}", "naming.recur_h=12", "naming.sensor_p_min=0.35",
+        "normal.fit.segment_k=2.5"]))
     assert logged["naming"]["recur_h"] == 12.0 and logged["naming"]["sensor_p_min"] == 0.35
     assert set(logged["naming"]) == set(dataclasses.asdict(NamingConfig()))
+    assert logged["normal"]["fit"]["segment_k"] == 2.5
+    assert set(logged["normal"]["fit"]) == set(dataclasses.asdict(LawFit()))
     assert used[0].recur_h == 12.0
 
 

@@ -10,7 +10,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from swgmon.detection.laws import LossLaw, warm_up_directions
+from swgmon.detection.laws import LawFit, LossLaw, warm_up_directions
 from swgmon.detection.normal import (
     BLOCK,
     EFFICIENCY,
@@ -181,16 +181,16 @@ def test_friction_outside_the_range_commissioning_tracked(commissioned):
 
 
 def test_a_constant_commissioning_temperature_keeps_its_range_widened_by_the_uncertainty():
-    """Commissioning at one temperature (a spread below MIN_SPREAD_K: no temperature
+    """Commissioning at one temperature (a spread below ``fit.min_spread_k``: no temperature
     terms) still has a temperature range, its readings' widened by the sensor's
     uncertainty: a window beyond it is outside and not judged, without the margin the
     fitted law gets (issue 43, cause 2: temperature was never outside there)."""
-    from swgmon.detection.normal import MIN_SPREAD_K, OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
+    from swgmon.detection.normal import OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
 
     rng = np.random.default_rng(4)
     tq = np.repeat([7.0, 39.0, 70.0], 20)
     temp = 30.0 + rng.uniform(-0.1, 0.1, tq.size)
-    assert np.ptp(temp) < MIN_SPREAD_K
+    assert np.ptp(temp) < LawFit().min_spread_k
     pts = np.stack([np.full(tq.size, 4000.0), tq], axis=1)
     cfg = NormalConfig(temperature_uncertainty_k=0.3)
     nb = NormalBehaviour.fit(_features(tq, rng), pts, Conditions(tq, temp), cfg)
@@ -231,7 +231,7 @@ def test_the_loss_law_is_learnt_from_commissioning_whatever_its_form(form):
     tq = ops[inv, 1]
     phi = LAWS[form]
     loss = 4.0 * phi(temp) + 0.1 * tq
-    law, band = _loss_model(tq / (tq + loss), tq, temp, ops, inv)
+    law, band = _loss_model(tq / (tq + loss), tq, temp, ops, inv, LawFit())
     assert band is None and (law.knots[0], law.knots[-1]) == (temp.min(), temp.max())
     grid = np.linspace(temp.min(), temp.max(), 44)
     for k, (_, t0) in enumerate(ops):
@@ -260,7 +260,7 @@ def test_over_a_single_warm_up_the_law_is_bounded_not_assumed_and_a_cold_start_l
     tq = ops[inv, 1]
     for temp in (warm, day):
         loss = 4.0 * np.exp(-0.01 * (temp - 20.0)) + 0.1 * tq
-        law, band = _loss_model(tq / (tq + loss), tq, temp, ops, inv)
+        law, band = _loss_model(tq / (tq + loss), tq, temp, ops, inv, LawFit())
         np.testing.assert_allclose(law.predict(inv, tq, temp), loss, rtol=2e-3)
         if temp is day:
             assert band is None
@@ -326,7 +326,7 @@ def test_z_over_friction_equals_z_of_the_repeated_windows():
     feats = _features(acting, rng)
     factors = np.exp(rng.uniform(-1.0, 1.0, (7, n)))
     steep = dataclasses.replace(nb.loss, coef=nb.loss.coef * 1.3)
-    flat = LossLaw(nb.loss.coef[:, [0, -1]] * 0.8)
+    flat = LossLaw(nb.loss.coef[:, [0, -1]] * 0.8, nb.loss.floor)
     band = dataclasses.replace(nb, loss_band=(steep, flat))
     for law, cond in ((nb, Conditions(acting, rng.uniform(10.0, 60.0, n))), (nb, None),
                      (band, Conditions(acting, rng.uniform(10.0, 60.0, n)))):
@@ -373,7 +373,7 @@ def test_z_over_temperature_equals_z_of_the_repeated_windows():
                              warm_range=np.tile([-1.5, 2.0], (len(nb.points), 2, 1)))
     band = dataclasses.replace(nb, loss_band=(
         dataclasses.replace(nb.loss, coef=nb.loss.coef * 1.3),
-        LossLaw(nb.loss.coef[:, [0, -1]] * 0.8)))
+        LossLaw(nb.loss.coef[:, [0, -1]] * 0.8, nb.loss.floor)))
     n, g = 24, 9
     p = points[rng.choice(len(points), n)]
     acting = p[:, 1] * rng.uniform(0.8, 1.2, n)
@@ -543,14 +543,14 @@ def test_the_warm_up_directions_hold_a_slow_warm_up_beside_a_larger_scatter():
     warm = 6.0 * (1.0 - np.exp(-t / 30.0)) - 3.0
     scatter = rng.standard_normal((m, n_f)) + 2.5 * rng.standard_normal((m, 2)) @ fast
     z = scatter + warm[:, None] * slow
-    dirs, along = warm_up_directions(z, np.zeros(m, int), 2)
+    dirs, along = warm_up_directions(z, np.zeros(m, int), 2, 7)
     assert dirs.shape == (1, 3, n_f)
     assert np.linalg.norm(dirs[0, :2] @ slow) < 0.3  # the first two: the scatter's
     assert abs(dirs[0, 2] @ slow) > 0.85  # the slow one: the warm-up's
     np.testing.assert_allclose(dirs[0] @ dirs[0].T, np.eye(3), atol=1e-12)
     u = z @ dirs[0].T
     np.testing.assert_allclose(along[0], np.stack([u.min(axis=0), u.max(axis=0)], axis=1))
-    still, _ = warm_up_directions(scatter, np.zeros(m, int), 2)
+    still, _ = warm_up_directions(scatter, np.zeros(m, int), 2, 7)
     assert still.shape == (1, 2, n_f)
     assert np.linalg.norm(still[0] @ fast.T, axis=1) == pytest.approx([1.0, 1.0], abs=0.05)
 

@@ -22,7 +22,7 @@ from swgmon.advisories.stream import (
 )
 from swgmon.assessment.gear_monitor import MaintenanceEvent
 from swgmon.assessment.sensor_check import NamingConfig
-from swgmon.detection.laws import cools
+from swgmon.detection.laws import LawFit, cools
 from swgmon.detection.normal import EFFICIENCY, Conditions, NormalBehaviour, NormalConfig
 from swgmon.detection.rule import Alarm, RuleConfig
 from swgmon.evaluation.training import features_of
@@ -130,7 +130,7 @@ def test_a_joint_commissioned_over_one_warm_up_learns_no_law_it_cannot_tell(
         life.conditions, friction_law=FrictionLaw(form, ratio_40c)))
     ds = life_dataset(LifeSimulator(p, 3, life, bank))
     comm = ds["commissioning"].values
-    assert not cools(ds["temperature_c"].values[comm])
+    assert not cools(ds["temperature_c"].values[comm], LawFit().min_spread_k)
     res = monitor_stream(ds, model, RuleConfig(), source="day")
     assert [(a.hour, a.fault) for a in res.alarms] == []
 
