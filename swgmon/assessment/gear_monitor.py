@@ -720,7 +720,7 @@ class GearMonitor:
         fr = np.broadcast_to(friction, (len(z),))
         fits = [f for f in fit_bridge_faults(b, feats, points, cond, fr, opi, z, spread,
                                                  hours)
-                if f.fault in self.model.classes and f.plausible()
+                if f.fault in self.model.classes and f.plausible(self.naming)
                 and f.rest <= self.naming.rest_max]
         read = cond is not None and not self.reading_virtual
         nc = self.naming

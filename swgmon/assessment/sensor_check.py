@@ -15,28 +15,18 @@ change of friction, the other hypothesis: :mod:`.unexplained`). Design and sourc
 from __future__ import annotations
 
 import dataclasses
-import math
+import functools
 from dataclasses import dataclass, field
-from statistics import NormalDist
 
 import numpy as np
 
 from swgmon.detection.normal import BLOCK, Conditions, NormalBehaviour
+from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import allowed
 from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
-#: Smallest reduction of Σ z² for a fit to count: the χ² (one degree of freedom) quantile
-#: 0.999, so that a bridge without a fault is fitted one in a thousand times: the square of
-#: the standard normal quantile 0.9995 (χ²₁ is the square of a standard normal variable).
-FIT_MIN = NormalDist().inv_cdf(0.9995) ** 2
-#: The same for a gain drift's level and rate (:func:`fit_sensor_faults` with hours): the
-#: χ² (two degrees of freedom) quantile 0.999, −2 ln 0.001 (χ²₂ is exponential).
-FIT_MIN_GAIN_RATE = -2.0 * math.log(0.001)
-#: Smallest reduction of Σ z² for the fit with a step, a factor and a rate to count: the
-#: χ² (three degrees of freedom) quantile 0.999, as :data:`FIT_MIN` for one
-#: (``scipy.stats.chi2.ppf(0.999, 3)``, checked by tests/learn/test_monitor.py; scipy is
-#: not imported here, to keep the apps' start light).
-FIT_MIN_RATE = 16.26623619623813
+stats = lazy_module("scipy.stats")  # at the first naming, not at an app's start
+
 #: Windows :func:`best_temperature` fits at once, and :func:`still_reading` takes the
 #: virtual temperature of at once (bounded memory, no effect on the result).
 FIT_CHUNK, STILL_CHUNK = 512, 240
@@ -116,6 +106,11 @@ class NamingConfig:
         (:func:`swgmon.advisories.stream.read_without`), in [0, 10] (2 [choice, on design
         seeds: family lost_running_in, seeds 100-104, after 0, 1 and 2 passes gear-fault
         alarms 140, 0, 0 per 1000 h on bench gear 3, 152, 3, 0 on robot_joint gear 2]).
+    fit_level : float
+        How often a hypothesis's fit may count where its effect is absent, in (0, 0.5)
+        (0.001 [choice]: a bridge without a fault fitted one in a thousand times): a fit
+        of k parameters counts where it lowers Σ z² by the χ²_k quantile 1 − ``fit_level``
+        (:meth:`least_reduction`; Wilks' theorem, twice the log-likelihood ratio).
     """
 
     sensor_p_min: float = field(default=0.3, metadata=allowed(0.0, 1.0, lo_open=True,
@@ -139,6 +134,8 @@ class NamingConfig:
                                                             hi_open=True))
     recur_h: float = field(default=24.0, metadata=allowed(0.0, 1e4, unit="h"))
     virtual_passes: int = field(default=2, metadata=allowed(0, 10))
+    fit_level: float = field(default=0.001, metadata=allowed(0.0, 0.5, lo_open=True,
+                                                             hi_open=True))
 
     def check(self, where: str = "naming") -> None:
         """Refuse an even window count where an odd one is needed, in one line naming the
@@ -154,10 +151,23 @@ class NamingConfig:
                 raise ValueError(f"{where}.{name} must be odd (its own window in the "
                                  f"middle), got {getattr(self, name)}")
 
+    def least_reduction(self, dof: int) -> float:
+        """Smallest reduction of Σ z² for a fit of ``dof`` parameters to count: the χ²
+        quantile 1 − :attr:`fit_level` with ``dof`` degrees of freedom [-] (1: a sensor's
+        step or a temperature per window; 2: a gain drift's level and rate; 3: a
+        friction or temperature drift's step, factor and rate)."""
+        return _chi2_isf(self.fit_level, dof)
+
     @property
     def drift_rates(self) -> np.ndarray:
         """The rates :func:`fit_temperature_drift` tries first, shape (13,) [K/h]."""
         return np.linspace(-self.drift_rate_k_per_h, self.drift_rate_k_per_h, 13)
+
+
+@functools.lru_cache(maxsize=64)
+def _chi2_isf(level: float, dof: int) -> float:
+    """``scipy.stats.chi2.isf(level, dof)``, once per level and degrees of freedom."""
+    return float(stats.chi2.isf(level, dof))
 
 
 @dataclass(frozen=True)
@@ -199,11 +209,13 @@ class SensorFit:
         m = self.z[:, keep].mean(axis=0)
         return float(len(self.z) * np.mean(m ** 2))
 
-    def plausible(self) -> bool:
-        """Significant (:data:`FIT_MIN`) and within the fault's severity range (a gain
-        only falls: :data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`)."""
+    def plausible(self, naming: NamingConfig | None = None) -> bool:
+        """Significant (:meth:`NamingConfig.least_reduction` of one parameter, two with a
+        rate) and within the fault's severity range (a gain only falls:
+        :data:`swgsim.sensing.sensor_faults.SENSOR_FAULTS`)."""
         lo, hi = SENSOR_FAULTS[self.fault].severity_range
-        least = FIT_MIN if self.rate_per_h is None else FIT_MIN_GAIN_RATE
+        least = (naming or NamingConfig()).least_reduction(
+            1 if self.rate_per_h is None else 2)
         return self.reduction >= least and lo <= self.severity <= hi
 
 
@@ -342,14 +354,15 @@ class TemperatureFit:
     def plausible(self, naming: NamingConfig | None = None) -> bool:
         """Window by window (``rate_k_per_h`` None): the fit moved the temperature by at
         least ``naming.temperature_min_k``, either way, at the median window and lowered
-        Σ z² by at least :data:`FIT_MIN` per window (each window has its own temperature:
-        one degree of freedom each). A drift (an offset and a rate): by at least
-        ``naming.drift_min_k`` and Σ z² by :data:`FIT_MIN_RATE` over all windows."""
+        Σ z² by at least ``naming.least_reduction(1)`` per window (each window has its
+        own temperature: one degree of freedom each). A drift (an offset and a rate): by
+        at least ``naming.drift_min_k`` and Σ z² by ``naming.least_reduction(3)`` over all
+        windows."""
         nc = naming or NamingConfig()
         if self.rate_k_per_h is None:
             return (self.error_k >= nc.temperature_min_k
-                    and self.reduction >= FIT_MIN * len(self.z))
-        return self.error_k >= nc.drift_min_k and self.reduction >= FIT_MIN_RATE
+                    and self.reduction >= nc.least_reduction(1) * len(self.z))
+        return self.error_k >= nc.drift_min_k and self.reduction >= nc.least_reduction(3)
 
 
 def fit_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray,
@@ -566,7 +579,7 @@ def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray
     return None
 
 
-__all__ = ["BLOCK", "FIT_CHUNK", "FIT_MIN", "FIT_MIN_GAIN_RATE", "FIT_MIN_RATE", "STILL_CHUNK",
+__all__ = ["BLOCK", "FIT_CHUNK", "STILL_CHUNK",
            "NamingConfig", "SensorFit", "TemperatureFit", "best_temperature",
            "fit_bridge_faults", "fit_sensor_faults", "fit_temperature", "fit_temperature_drift",
            "still_reading", "virtual_temperature"]

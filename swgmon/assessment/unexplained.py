@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from swgmon.assessment.sensor_check import FIT_MIN, FIT_MIN_RATE, NamingConfig
+from swgmon.assessment.sensor_check import NamingConfig
 from swgmon.detection.normal import Conditions, NormalBehaviour
 
 #: Factors on the friction :func:`fit_friction` tries: 1/3 to 3, in steps of about 1 %.
@@ -53,13 +53,12 @@ class FrictionFit:
     high: float = float("nan")
 
     def plausible(self, naming: NamingConfig | None = None) -> bool:
-        """Significant (:data:`FIT_MIN`, :data:`FIT_MIN_RATE` with a rate): where the
-        efficiency's spread is small (a joint at a steady temperature), a change of 1 % is
-        many of them (the friction tracking's lag behind a re-greasing running in again,
-        tiny_real_day gear 3). ``naming``: not read (the χ² quantiles are statistics,
-        not tuned), taken as every hypothesis's fit takes it
-        (:meth:`~.sensor_check.TemperatureFit.plausible`)."""
-        return self.reduction >= (FIT_MIN if self.rate_per_h is None else FIT_MIN_RATE)
+        """Significant (:meth:`~.sensor_check.NamingConfig.least_reduction` of one
+        parameter, three with a rate): where the efficiency's spread is small (a joint at a
+        steady temperature), a change of 1 % is many of them (the friction tracking's lag
+        behind a re-greasing running in again, tiny_real_day gear 3)."""
+        return self.reduction >= (naming or NamingConfig()).least_reduction(
+            1 if self.rate_per_h is None else 3)
 
 
 def profile_interval(log_factor: np.ndarray, total: np.ndarray) -> tuple[float, float]:

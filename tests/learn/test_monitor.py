@@ -387,9 +387,9 @@ def test_a_drifting_gain_is_fitted_with_its_rate():
     The threshold of a level and a rate is the χ²₂ quantile 0.999."""
     from scipy.stats import chi2
 
-    from swgmon.assessment.sensor_check import BLOCK, FIT_MIN_GAIN_RATE, fit_sensor_faults
+    from swgmon.assessment.sensor_check import BLOCK, NamingConfig, fit_sensor_faults
 
-    assert FIT_MIN_GAIN_RATE == pytest.approx(chi2.ppf(0.999, 2), rel=1e-12)
+    assert NamingConfig().least_reduction(2) == pytest.approx(chi2.ppf(0.999, 2), rel=1e-12)
     rng = np.random.default_rng(1)
     n, f = 120, 5 * BLOCK + 1
     hours = np.linspace(50.0, 52.0, n)
@@ -681,15 +681,23 @@ def test_a_resumed_evaluations_tables_keep_a_fresh_runs_columns(tmp_path):
         assert list(back.columns) == list(fresh.columns)
 
 
-def test_the_friction_fits_thresholds_are_the_chi2_quantiles_they_say():
-    """sensor_check.FIT_MIN (one degree of freedom) and FIT_MIN_RATE (a step, a factor
-    and a rate: three) are the χ² quantiles 0.999, written without importing scipy."""
+def test_a_fit_counts_at_the_chi2_quantile_of_its_parameters_and_level():
+    """``naming.least_reduction(k)`` is the χ²_k quantile 1 − ``naming.fit_level``
+    (0.999 by default); a lower level asks more of a fit, and a bridge without a fault is
+    fitted at about that level (Monte Carlo of a one-parameter step in pure noise)."""
     from scipy.stats import chi2
 
-    from swgmon.assessment.sensor_check import FIT_MIN, FIT_MIN_RATE
+    from swgmon.assessment.sensor_check import NamingConfig
 
-    assert FIT_MIN == pytest.approx(chi2.ppf(0.999, 1), rel=1e-9)
-    assert FIT_MIN_RATE == pytest.approx(chi2.ppf(0.999, 3), rel=1e-12)
+    nc = NamingConfig()
+    for k in (1, 2, 3):
+        assert nc.least_reduction(k) == pytest.approx(chi2.ppf(0.999, k), rel=1e-9)
+    assert NamingConfig(fit_level=1e-4).least_reduction(1) > nc.least_reduction(1)
+    rng = np.random.default_rng(0)
+    z = rng.standard_normal((20000, 30))  # 30 windows of one feature, no step in them
+    reduction = 30 * z.mean(axis=1) ** 2  # the best step's lowering of Σ z²: χ²₁
+    rate = np.mean(reduction >= NamingConfig(fit_level=0.01).least_reduction(1))
+    assert 0.008 <= rate <= 0.012
 
 
 def test_an_alarm_says_which_features_moved():
