@@ -53,9 +53,7 @@ from swgmon.advisories.stream import advisories, recommissionings
 from swgmon.assessment.gear_monitor import GearMonitor, Trace
 from swgmon.assessment.model_io import CARD_SUFFIX, MODEL_SUFFIX, load_model
 from swgmon.detection.normal import (
-    OUTSIDE_FRICTION,
-    OUTSIDE_LOAD,
-    OUTSIDE_TEMPERATURE,
+    Outside,
 )
 from swgmon.detection.rule import Alarm
 from swgmon.evaluation.benchmark import BenchmarkConfig, population_plan
@@ -191,8 +189,8 @@ def points_table(commissioned: GearMonitor, tr: Trace, windows, names: list[str]
         top = np.argsort(-np.abs(mz))[:TOP]
         rows.append({"point": f"{o[0]:g} rpm, {o[1]:g} N m", "windows": int(m.sum()),
                      **{f"beyond {n}": float(np.mean(tr.outside[m] & b != 0))
-                        for n, b in (("temperature", OUTSIDE_TEMPERATURE),
-                                     ("load", OUTSIDE_LOAD), ("friction", OUTSIDE_FRICTION))},
+                        for n, b in (("temperature", Outside.TEMPERATURE),
+                                     ("load", Outside.LOAD), ("friction", Outside.FRICTION))},
                      "p < 0.01": float(np.mean(tr.p[m] < 0.01)),
                      "mean z, furthest": ", ".join(f"{names[j]} {mz[j]:+.2f}" for j in top)})
     return pd.DataFrame(rows)

@@ -25,12 +25,9 @@ from swgmon.advisories.figures import health_figure, prognosis_figure
 from swgmon.assessment.gear_monitor import RECOMMISSIONS, GearMonitor, MaintenanceEvent, Trace
 from swgmon.assessment.sensor_check import NamingConfig, still_reading, virtual_temperature
 from swgmon.detection.normal import (
-    OUTSIDE_FRICTION,
-    OUTSIDE_LOAD,
-    OUTSIDE_TEMPERATURE,
-    OUTSIDE_UNJUDGED,
     Conditions,
     NormalConfig,
+    Outside,
 )
 from swgmon.detection.rule import (
     TEMPERATURE_SENSOR,
@@ -49,8 +46,8 @@ from swgmon.prognosis.stream import (
 from swgsim.datasets.schema import SENSORS, TEMPERATURE_RANGE_C
 
 #: Bits of :meth:`swgmon.detection.normal.NormalBehaviour.outside` and what they mean.
-CONDITIONS = {OUTSIDE_TEMPERATURE: "temperature", OUTSIDE_LOAD: "load",
-              OUTSIDE_FRICTION: "friction"}
+CONDITIONS = {Outside.TEMPERATURE: "temperature", Outside.LOAD: "load",
+              Outside.FRICTION: "friction"}
 
 
 @dataclass
@@ -538,7 +535,7 @@ def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.nda
     for a in earlier:  # each taken from the window after its alarm
         taken[a.index + 1:] *= 1.0 + a.severity
     ev = mon.evidence(trace.log_proba[w], trace.op_index[w])
-    ev[(trace.outside[w] & OUTSIDE_UNJUDGED) != 0] = 0.0
+    ev[(trace.outside[w] & Outside.UNJUDGED) != 0] = 0.0
     fault, _ = mon.name(ev, feats[w], points[w], cond[w], trace.friction[w] / taken[w],
                         hours[w])
     return float(taken[-1]) if fault == TEMPERATURE_SENSOR else None

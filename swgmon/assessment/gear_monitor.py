@@ -40,12 +40,10 @@ from swgmon.assessment.sensor_check import (
 )
 from swgmon.assessment.unexplained import fit_friction
 from swgmon.detection.normal import (
-    OUTSIDE_LOAD,
-    OUTSIDE_TEMPERATURE,
-    OUTSIDE_UNJUDGED,
     Conditions,
     NormalBehaviour,
     NormalConfig,
+    Outside,
 )
 from swgmon.detection.rule import (
     TEMPERATURE_SENSOR,
@@ -409,13 +407,13 @@ class GearMonitor:
         measures: behind a robot link a 10 % heavier tool left every bridge's residual
         0.7 spread above the extrapolation, a pattern the model took for a root crack
         (10 gear-fault alarms in 200 h, robot_joint gear 3, seed 0). A window not judged
-        (:data:`~swgmon.detection.normal.OUTSIDE_UNJUDGED`) has p-value 1."""
+        (:attr:`~swgmon.detection.normal.Outside.UNJUDGED`) has p-value 1."""
         pe = self.p_each(score, opi, u)
         p = np.minimum(1.0, score.shape[1] * pe.min(axis=1))
         if outside is not None:
-            beyond = (np.asarray(outside) & OUTSIDE_LOAD) != 0
+            beyond = (np.asarray(outside) & Outside.LOAD) != 0
             p[beyond] = pe[beyond, 1]
-            p[(np.asarray(outside) & OUTSIDE_UNJUDGED) != 0] = 1.0
+            p[(np.asarray(outside) & Outside.UNJUDGED) != 0] = 1.0
         return p
 
     def p_each(self, score: np.ndarray, opi: np.ndarray, u: np.ndarray | None = None
@@ -452,7 +450,7 @@ class GearMonitor:
             return out
         ratio = self.normal.friction_ratio(feats, points, cond, opi)
         # beyond commissioning's temperatures the loss law is an extrapolation: no evidence
-        hot = self.normal.outside(points, cond, 1.0, opi) & OUTSIDE_TEMPERATURE
+        hot = self.normal.outside(points, cond, 1.0, opi) & Outside.TEMPERATURE
         ratio[hot != 0] = np.nan
         default_dh = self.interval_min / 60.0
         settle = self.normal_config.regrease_settle_h
@@ -540,7 +538,7 @@ class GearMonitor:
         behaviour has changed from the next on), the point's row and whether it was
         relearnt (:meth:`_recommission`), or None. ``ref``: the windows' features at the
         reference condition, shape (n, F)."""
-        loaded = (out & OUTSIDE_LOAD) != 0
+        loaded = (out & Outside.LOAD) != 0
         if not self.normal_config.recommission_load or not (loaded.any() or self.learning):
             return None
         alarm = set(alarms)
@@ -669,7 +667,7 @@ class GearMonitor:
         cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
         fr = trace.friction
         ev = self.evidence(trace.log_proba, trace.op_index)
-        ev[(trace.outside & OUTSIDE_UNJUDGED) != 0] = 0.0  # not judged: no evidence
+        ev[(trace.outside & Outside.UNJUDGED) != 0] = 0.0  # not judged: no evidence
         at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
                                     cond[rise:a + 1], fr[rise:a + 1], trace.hour[rise:a + 1])
         fault, bridge, fit = self._name(ev[rise:end], feats[rise:end], points[rise:end],

@@ -11,6 +11,7 @@ Design and sources: docs/monitor/detection.md, "The normal behaviour's laws" (an
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,11 +33,18 @@ from swgsim.base.typed import check_range
 
 #: The normal behaviour's laws (:class:`NormalConfig` ``laws``).
 LAWS = ("physics", "generic")
-#: Bits of :meth:`NormalBehaviour.outside`: the condition commissioning did not see.
-OUTSIDE_TEMPERATURE, OUTSIDE_LOAD, OUTSIDE_FRICTION = 1, 2, 4
-#: Bit of :meth:`NormalBehaviour.outside`: the window is not judged (its temperature is
-#: outside and no temperature law carries the normal behaviour there).
-OUTSIDE_UNJUDGED = 8
+
+
+class Outside(enum.IntFlag):
+    """Bits of :meth:`NormalBehaviour.outside`: the condition commissioning did not see
+    (temperature, load, friction), and ``UNJUDGED``: the window is not judged (its
+    temperature is outside and no temperature law carries the normal behaviour there)."""
+
+    TEMPERATURE = 1
+    LOAD = 2
+    FRICTION = 4
+    UNJUDGED = 8
+
 
 @dataclass
 class NormalConfig:
@@ -630,7 +638,7 @@ class NormalBehaviour:
     def _loaded(self, i: np.ndarray, cond: Conditions,
                 ranges: np.ndarray | None = None) -> np.ndarray:
         """Windows whose acting load lies beyond ``ranges`` (P, 2) at their point, by default
-        the point's load range (the advisory's :data:`OUTSIDE_LOAD`), by more than
+        the point's load range (the advisory's :attr:`Outside.LOAD`), by more than
         ``load_margin``, shape (n,) bool."""
         r = self.torque_range if ranges is None else ranges
         span = self.config.load_margin * np.abs(self.ref_torque[i])
@@ -674,8 +682,8 @@ class NormalBehaviour:
     def outside(self, points: np.ndarray, cond: Conditions, friction: np.ndarray | float,
                 index: np.ndarray | None = None) -> np.ndarray:
         """Which condition each window has that commissioning did not see: a bit field,
-        :data:`OUTSIDE_TEMPERATURE` (1), :data:`OUTSIDE_LOAD` (2), :data:`OUTSIDE_FRICTION`
-        (4), and :data:`OUTSIDE_UNJUDGED` (8) where the temperature is outside with no
+        :attr:`Outside.TEMPERATURE` (1), :attr:`Outside.LOAD` (2), :attr:`Outside.FRICTION`
+        (4), and :attr:`Outside.UNJUDGED` (8) where the temperature is outside with no
         temperature law (docs/monitor/detection.md, "The normal behaviour's laws"); 0: none;
         shape (n,) int."""
         i = self._check(points, index)
@@ -687,11 +695,11 @@ class NormalBehaviour:
             margin = c.temperature_margin_k if law else 0.0
             lo, hi = self.temp_range[i, 0], self.temp_range[i, 1]
             beyond = (t < lo - margin) | (t > hi + margin)
-            out |= beyond * (OUTSIDE_TEMPERATURE if law
-                             else OUTSIDE_TEMPERATURE | OUTSIDE_UNJUDGED)
-        out |= self._loaded(i, cond) * OUTSIDE_LOAD
+            out |= beyond * (Outside.TEMPERATURE if law
+                             else Outside.TEMPERATURE | Outside.UNJUDGED)
+        out |= self._loaded(i, cond) * Outside.LOAD
         fr = np.broadcast_to(np.asarray(friction, float), (len(points),))
-        out |= self.beyond_friction(fr) * OUTSIDE_FRICTION
+        out |= self.beyond_friction(fr) * Outside.FRICTION
         return out
 
     def beyond_friction(self, friction: np.ndarray | float) -> np.ndarray:
@@ -827,4 +835,4 @@ class NormalBehaviour:
 
 
 __all__ = ["BLOCK", "Conditions", "EFFICIENCY", "LAWS", "NormalBehaviour", "NormalConfig",
-           "OUTSIDE_FRICTION", "OUTSIDE_LOAD", "OUTSIDE_TEMPERATURE", "OUTSIDE_UNJUDGED"]
+           "Outside"]

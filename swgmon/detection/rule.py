@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgmon.detection.normal import OUTSIDE_UNJUDGED
+from swgmon.detection.normal import Outside
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import allowed, check_range
 from swgsim.sensing.sensor_faults import is_sensor_fault
@@ -240,10 +240,10 @@ def check_commissioning(points: np.ndarray, rule: RuleConfig, interval_min: floa
 def judged_bets(p: np.ndarray, outside: np.ndarray, rule: RuleConfig) -> np.ndarray:
     """ln f of every CUSUM of the rule per window (:func:`~.rule.log_bets`), shape
     (n, k), 0 where the window is not judged (``outside`` has
-    :data:`~.normal.OUTSIDE_UNJUDGED`): the CUSUMs hold there, neither rising nor
+    :attr:`~.normal.Outside.UNJUDGED`): the CUSUMs hold there, neither rising nor
     draining."""
     bets = log_bets(p, rule)
-    bets[(np.asarray(outside) & OUTSIDE_UNJUDGED) != 0] = 0.0
+    bets[(np.asarray(outside) & Outside.UNJUDGED) != 0] = 0.0
     return bets
 
 

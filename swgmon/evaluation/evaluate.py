@@ -24,7 +24,7 @@ from swgmon.advisories.stream import (
 )
 from swgmon.assessment.gear_monitor import GearMonitor, MaintenanceEvent, Trace
 from swgmon.assessment.model import DiagnosisModel
-from swgmon.detection.normal import OUTSIDE_LOAD, Conditions
+from swgmon.detection.normal import Conditions, Outside
 from swgmon.detection.rule import (
     TEMPERATURE_SENSOR,
     UNEXPLAINED_CHANGE,
@@ -384,7 +384,7 @@ def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray
     range by then (its recommissioning; :meth:`GearMonitor.run`), following the friction
     as after a re-greasing from each unexplained change ``named`` by then
     (:func:`swgmon.advisories.stream.run_stream`)."""
-    if before < 0 or not (tr.outside[:before + 1] & OUTSIDE_LOAD).any():
+    if before < 0 or not (tr.outside[:before + 1] & Outside.LOAD).any():
         m = commissioned.fork()
     else:
         m = commissioned.fork(fresh_draws=True)

@@ -442,7 +442,7 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     relearnt. The block path, one window at a time and a fork's replay from
     commissioning give the same numbers and the same recommissionings."""
     from swgmon.assessment.gear_monitor import GearMonitor
-    from swgmon.detection.normal import OUTSIDE_LOAD, Conditions
+    from swgmon.detection.normal import Conditions, Outside
     from swgmon.detection.rule import RuleConfig
     from swgmon.evaluation.training import features_of
     from swgsim.datasets.life import LifeSimulator
@@ -485,7 +485,7 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     np.testing.assert_allclose(d.normal.mean[0], own.mean(axis=0) + s0)
     for i, k, _ in events:  # a recommissioned point's later windows are inside its range
         later = [j for j in range(i + 1, 180) if whole.op_index[j] == k]
-        assert later and not (whole.outside[later] & OUTSIDE_LOAD).any()
+        assert later and not (whole.outside[later] & Outside.LOAD).any()
     np.testing.assert_array_equal(a.normal.mean, c.normal.mean)
     np.testing.assert_array_equal(a.normal.torque_range, b.normal.torque_range)
 
@@ -498,7 +498,7 @@ def test_a_window_without_its_reference_features_is_not_gathered_for_recommissio
     gave a relearnt point a NaN mean, and the naming's least squares failed
     (LinAlgError: robot_joint, gear 3 held out, family ``all``, scored seeds)."""
     from swgmon.assessment.gear_monitor import GearMonitor
-    from swgmon.detection.normal import OUTSIDE_LOAD, Conditions
+    from swgmon.detection.normal import Conditions, Outside
     from swgmon.detection.rule import RuleConfig
     from swgmon.evaluation.training import features_of
     from swgsim.datasets.life import LifeSimulator
@@ -514,7 +514,7 @@ def test_a_window_without_its_reference_features_is_not_gathered_for_recommissio
     ref = nb.reference(f[w], pts[w], cond[w])[np.arange(n + 3) % len(w)]
     ref[[5, 6, 7]] = np.nan
     torque = np.full(n + 3, 1.1 * nb.points[k, 1])
-    ev = mon._learn(np.full(n + 3, k), np.full(n + 3, OUTSIDE_LOAD), ref, torque, [], False)
+    ev = mon._learn(np.full(n + 3, k), np.full(n + 3, Outside.LOAD), ref, torque, [], False)
     assert ev is not None and ev[:2] == (n + 2, k)
     assert np.isfinite(nb.mean[k]).all() and np.isfinite(nb.std[k]).all()
 
@@ -524,7 +524,7 @@ def test_beyond_the_load_range_only_the_novelty_scores():
     novelty alone (the widened spread bounds the z-scores' size, not their direction);
     outside only in temperature or friction, both scores count (Bonferroni)."""
     from swgmon.assessment.gear_monitor import GearMonitor
-    from swgmon.detection.normal import OUTSIDE_FRICTION, OUTSIDE_LOAD, OUTSIDE_TEMPERATURE
+    from swgmon.detection.normal import Outside
     from swgmon.detection.rule import RuleConfig, conformal_p
 
     mon = GearMonitor(None, RuleConfig(), 1.0)
@@ -532,8 +532,8 @@ def test_beyond_the_load_range_only_the_novelty_scores():
     mon.calibration = {0: cal}
     score = np.tile([[10.0, 0.0]], (4, 1))  # evidence beyond every calibration window
     u = np.full(score.shape, 0.5)
-    out = np.array([0, OUTSIDE_LOAD, OUTSIDE_TEMPERATURE | OUTSIDE_FRICTION,
-                    OUTSIDE_LOAD | OUTSIDE_TEMPERATURE])
+    out = np.array([0, Outside.LOAD, Outside.TEMPERATURE | Outside.FRICTION,
+                    Outside.LOAD | Outside.TEMPERATURE])
     p = mon.p_values(score, np.zeros(4, int), u, out)
     p_ev = conformal_p(score[:1, 0], cal[:, 0], u[:1, 0])[0]
     p_nov = conformal_p(score[:1, 1], cal[:, 1], u[:1, 1])[0]

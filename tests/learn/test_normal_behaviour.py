@@ -14,10 +14,10 @@ from swgmon.detection.laws import LawFit, LossLaw, warm_up_directions
 from swgmon.detection.normal import (
     BLOCK,
     EFFICIENCY,
-    OUTSIDE_LOAD,
     Conditions,
     NormalBehaviour,
     NormalConfig,
+    Outside,
 )
 
 LOADS = (7.0, 39.0, 70.0)  # N m, the duty points' loads at one speed
@@ -169,13 +169,13 @@ def test_a_features_own_temperature_slope_is_taken_out():
 def test_friction_outside_the_range_commissioning_tracked(commissioned):
     """The friction factor is outside where it leaves commissioning's tracked range by
     more than the margin (0.05), not where it leaves 1."""
-    from swgmon.detection.normal import OUTSIDE_FRICTION
+    from swgmon.detection.normal import Outside
 
     nb, rng = commissioned
     nb = dataclasses.replace(nb, friction_range=np.array([0.97, 1.02]))
     f, p, cond = _windows(nb, rng, 1.0, n=5)
     fr = np.resize([0.93, 0.919, 0.921, 1.069, 1.071], len(p))
-    bits = nb.outside(p, cond, fr) & OUTSIDE_FRICTION
+    bits = nb.outside(p, cond, fr) & Outside.FRICTION
     np.testing.assert_array_equal(bits != 0, np.resize([False, True, False, False, True],
                                                        len(p)))
 
@@ -185,7 +185,7 @@ def test_a_constant_commissioning_temperature_keeps_its_range_widened_by_the_unc
     terms) still has a temperature range, its readings' widened by the sensor's
     uncertainty: a window beyond it is outside and not judged, without the margin the
     fitted law gets (issue 43, cause 2: temperature was never outside there)."""
-    from swgmon.detection.normal import OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
+    from swgmon.detection.normal import Outside
 
     rng = np.random.default_rng(4)
     tq = np.repeat([7.0, 39.0, 70.0], 20)
@@ -201,8 +201,8 @@ def test_a_constant_commissioning_temperature_keeps_its_range_widened_by_the_unc
     hi = nb.temp_range[0, 1]  # of the point probed, 4000 rpm, 7 N m
     probe = np.array([30.0, hi - 0.01, hi + 0.05, 80.0])
     out = nb.outside(np.repeat(pts[:1], 4, axis=0), Conditions(np.full(4, 7.0), probe), 1.0)
-    assert [int(o) for o in out] == [0, 0, OUTSIDE_TEMPERATURE | OUTSIDE_UNJUDGED,
-                                     OUTSIDE_TEMPERATURE | OUTSIDE_UNJUDGED]
+    assert [int(o) for o in out] == [0, 0, Outside.TEMPERATURE | Outside.UNJUDGED,
+                                     Outside.TEMPERATURE | Outside.UNJUDGED]
     with pytest.raises(ValueError, match="normal.temperature_uncertainty_k"):
         NormalConfig(temperature_uncertainty_k=-1.0).check("normal")
 
@@ -481,7 +481,7 @@ def test_the_warm_ups_keep_the_load_they_were_seen_at(commissioned):
     i = nb.index(p)
     for k in np.unique(i):
         nb.extend_load_range(k, cond.torque_nm[i == k])
-    assert not (nb.outside(p, cond, 1.0) & OUTSIDE_LOAD).any()  # the new load is known
+    assert not (nb.outside(p, cond, 1.0) & Outside.LOAD).any()  # the new load is known
     u0 = np.einsum("nf,nf->n", (nb.reference(f, p, cond) - nb.mean[i]) / nb.std[i],
                    nb.warm_dir[i, 0])
     z0, s0 = nb.z_and_spread(f, p, cond)

@@ -99,7 +99,7 @@ def test_a_joint_commissioned_at_one_temperature_is_advised_not_alarmed_when_hot
     temperature's range is still commissioning's, widened by the sensor's uncertainty;
     at 80 °C every window is outside it, advised once, and not judged (no gear-fault
     alarm: the eccentric WG this case raised before)."""
-    from swgmon.detection.normal import OUTSIDE_TEMPERATURE, OUTSIDE_UNJUDGED
+    from swgmon.detection.normal import Outside
 
     ds = _hot_after_commissioning(day)
     t, comm = ds["temperature_c"].values, ds["commissioning"].values
@@ -110,8 +110,8 @@ def test_a_joint_commissioned_at_one_temperature_is_advised_not_alarmed_when_hot
     assert [a["condition"] for a in res.advisories][:1] == ["temperature"]
     assert 24.0 <= res.advisories[0]["hour"] <= 24.5
     hot = res.trace.hour > 25.0
-    assert (res.trace.outside[hot] & OUTSIDE_TEMPERATURE).all()
-    assert (res.trace.outside[hot] & OUTSIDE_UNJUDGED).all()
+    assert (res.trace.outside[hot] & Outside.TEMPERATURE).all()
+    assert (res.trace.outside[hot] & Outside.UNJUDGED).all()
     assert (res.trace.p[hot] == 1.0).all()  # not judged: the CUSUMs hold
     assert (np.diff(res.trace.cusums[hot], axis=0) == 0.0).all()
 
