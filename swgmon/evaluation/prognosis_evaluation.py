@@ -51,6 +51,7 @@ from swgmon.evaluation.families import (
     draw_conditions,
     draw_growth,
 )
+from swgmon.evaluation.prognosis_report import PrognosisTargets
 from swgmon.evaluation.study import MonitorStudyConfig
 from swgmon.evaluation.training import train_model
 from swgmon.prognosis.baselines import predict_linear, predict_wiener
@@ -71,10 +72,6 @@ log = logging.getLogger(__name__)
 
 #: The predictors compared: the growth law (the stream's) and the two baselines.
 METHODS = ("growth", "linear", "wiener")
-#: Largest interval scale a calibration may set (``PrognosisConfig.lower_scale``'s and
-#: ``upper_scale``'s range); a calibration that asks for more (too few lives for its
-#: coverage) is capped here and says so in the part.
-MAX_SCALE = 20.0
 
 
 @dataclass
@@ -202,6 +199,13 @@ class PrognosisStudyConfig:
         ``to_failure``, ``lower_scale`` and ``upper_scale`` are set per life and method.
     coverage : float
         The calibrated interval's target coverage, in (0, 1) (0.9: the 5-95 % interval).
+    max_scale : float
+        Largest interval scale a calibration may set, in [1, 20] (the range of
+        ``PrognosisConfig.lower_scale`` and ``upper_scale``; 20 [choice]); a calibration
+        that asks for more (too few lives for its coverage) is capped here and says so in
+        the part.
+    targets : PrognosisTargets
+        The targets the lives are judged by (:class:`~.prognosis_report.PrognosisTargets`).
     """
 
     train: MonitorStudyConfig = field(default_factory=_training)
@@ -224,6 +228,8 @@ class PrognosisStudyConfig:
         every_h=2.0, block_h=1.0, min_track_h=4.0, min_estimates=3))
     coverage: float = field(default=0.9, metadata=allowed(0.0, 1.0, lo_open=True,
                                                           hi_open=True))
+    max_scale: float = field(default=20.0, metadata=allowed(1.0, 20.0))
+    targets: PrognosisTargets = field(default_factory=PrognosisTargets)
 
     def check(self, where: str) -> None:
         """Refuse a design whose rules across fields fail, in one line naming the key,
@@ -608,7 +614,7 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     -------
     scales : dict of str to (tuple of float, tuple of float)
         Per method, the lower and the upper factors, one per quarter, each in [0,
-        :data:`MAX_SCALE`] (capped; 1 without a scored life) [-].
+        ``max_scale``] (capped; 1 without a scored life) [-].
     info : list of dict
         Per method and quarter (and ``all``): ``method``, ``quarter``, ``lives`` (scored),
         ``lower``, ``upper`` (uncapped, inf where too few lives for the coverage),
@@ -640,15 +646,15 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
         one = tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage,
                           apart=False) if pk else (np.inf, np.inf)
         pooled = next((r for r in (raw[-1], one) if np.isfinite(r[0])), (1.0, 1.0))
-        used = [tuple(min(v, MAX_SCALE) for v in (r if np.isfinite(r[0]) else pooled))
+        used = [tuple(min(v, sc.max_scale) for v in (r if np.isfinite(r[0]) else pooled))
                 for r in raw]
         scales[m] = (tuple(u[0] for u in used[:-1]), tuple(u[1] for u in used[:-1]))
         info += [{"method": m, "quarter": q, "lives": len(pk), "lower": r[0], "upper": r[1],
                   "lower_used": u[0], "upper_used": u[1]}
                  for q, pk, r, u in zip(labels, picked[m], raw, used, strict=True)]
-        if max(max(r if np.isfinite(r[0]) else pooled) for r in raw[:-1]) > MAX_SCALE:
+        if max(max(r if np.isfinite(r[0]) else pooled) for r in raw[:-1]) > sc.max_scale:
             log.warning("calibration of %s: scales %s capped at %g (%s lives)", m,
-                        [tuple(round(v, 2) for v in r) for r in raw[:-1]], MAX_SCALE,
+                        [tuple(round(v, 2) for v in r) for r in raw[:-1]], sc.max_scale,
                         [len(pk) for pk in picked[m][:-1]])
     return scales, info
 

@@ -18,6 +18,7 @@ target.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -36,22 +37,52 @@ from swgmon.prognosis.scores import (
 )
 from swgsim.base.lazy import lazy_module
 from swgsim.base.markdown import md_table
+from swgsim.base.typed import allowed
 from swgsim.files.ownership import save_figure, write_owned
 
 pd = lazy_module("pandas")
 
-#: The targets' thresholds (issue 85): the nominal coverage, a bucket's least coverage
-#: at 95 % one-sided confidence and its least prognoses, the median relative accuracy.
-NOMINAL, BUCKET_MIN, MIN_BUCKET, RA_MIN = 0.90, 0.85, 20, 0.7
-#: alpha and lambda of the scores judged at half-life (issue 47).
-ALPHA, LAMBDA = 0.2, 0.5
 #: Columns naming a life.
 LIFE = ["dataset", "held_out_gear", "seed", "fault"]
 #: ``changes.csv``'s columns (:func:`.prognosis_evaluation.run_prognosis_part`).
 CHANGE_COLUMNS = [*LIFE, "payload", "method", "change_h", "failure_h", "twin_failure_h",
                   "paired", "moved", "lag_h"]
-#: Hours of operation after a change within which the prediction must have moved (issue 47).
-WITHIN_H = 24.0
+
+
+@dataclass
+class PrognosisTargets:
+    """The prognosis's targets and the scores' parameters (issue 85; declared in
+    docs/results/prognosis_protocol.md), ``prognosis.study.targets``, logged with the
+    run; the nominal coverage is the study's ``coverage``.
+
+    Attributes
+    ----------
+    bucket_min : float
+        Least coverage of a true remaining-share bucket at 95 % one-sided confidence, in
+        (0, 1) (0.85).
+    min_bucket : int
+        Least prognoses in a bucket for it to be judged, in [1, 10^6] (20).
+    ra_min : float
+        Least median relative accuracy at half-life, in [0, 1] (0.7).
+    alpha : float
+        α of the alpha-lambda score and the prognostic horizon, in (0, 1) (0.2; Saxena et
+        al., Int. J. Prognostics and Health Management 1(1), 2010; issue 47).
+    lambda_share : float
+        λ: the share of the way from the first prognosis to failure at which the scores
+        are judged, in (0, 1) (0.5: half-life).
+    within_h : float
+        Hours of operation after a payload change within which the predicted failure must
+        have moved, in (0, 10^4] [h] (24; issue 47).
+    """
+
+    bucket_min: float = field(default=0.85, metadata=allowed(0.0, 1.0, lo_open=True,
+                                                             hi_open=True))
+    min_bucket: int = field(default=20, metadata=allowed(1, 10**6))
+    ra_min: float = field(default=0.7, metadata=allowed(0.0, 1.0))
+    alpha: float = field(default=0.2, metadata=allowed(0.0, 1.0, lo_open=True, hi_open=True))
+    lambda_share: float = field(default=0.5, metadata=allowed(0.0, 1.0, lo_open=True,
+                                                              hi_open=True))
+    within_h: float = field(default=24.0, metadata=allowed(0.0, 1e4, lo_open=True, unit="h"))
 
 
 def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
@@ -108,11 +139,12 @@ def _picp_interval(b: pd.DataFrame, level: float = 0.95) -> Interval:
                           level=level)
 
 
-def life_scores(rows: pd.DataFrame, lives: pd.DataFrame) -> pd.DataFrame:
-    """Each life's scores per method: at half-life (λ 0.5 of the way from the method's
-    first valid prognosis to failure, :func:`~swgmon.prognosis.scores.at_lambda`)
-    the relative accuracy, the absolute error and the alpha-lambda criterion, and the
-    prognostic horizon over all its prognoses.
+def life_scores(rows: pd.DataFrame, lives: pd.DataFrame, goal: PrognosisTargets
+                ) -> pd.DataFrame:
+    """Each life's scores per method: at half-life (``goal.lambda_share`` of the way from
+    the method's first valid prognosis to failure,
+    :func:`~swgmon.prognosis.scores.at_lambda`) the relative accuracy, the absolute error
+    and the alpha-lambda criterion, and the prognostic horizon over all its prognoses.
 
     Parameters
     ----------
@@ -120,6 +152,8 @@ def life_scores(rows: pd.DataFrame, lives: pd.DataFrame) -> pd.DataFrame:
         ``results.csv``.
     lives : DataFrame
         ``lives.csv``: one row per life.
+    goal : PrognosisTargets
+        α and λ.
 
     Returns
     -------
@@ -136,31 +170,34 @@ def life_scores(rows: pd.DataFrame, lives: pd.DataFrame) -> pd.DataFrame:
         for m in methods:
             r = mine[mine.method == m].sort_values("hour")
             key = {k: getattr(life, k) for k in LIFE}
-            i = at_lambda(r.hour.to_numpy(), life.failure_h, LAMBDA)
+            i = at_lambda(r.hour.to_numpy(), life.failure_h, goal.lambda_share)
             if i is None or i < 0:
                 out.append({**key, "method": m, "followed": False, "ra": np.nan,
                             "abs_error_h": np.nan, "alpha_lambda": False, "horizon_h": 0.0,
                             "horizon_share": 0.0})
                 continue
             t, p = r.true_remaining_h.to_numpy(), r.remaining_h.to_numpy()
-            ph = prognostic_horizon(r.hour.to_numpy(), t, p, life.failure_h, ALPHA)
+            ph = prognostic_horizon(r.hour.to_numpy(), t, p, life.failure_h, goal.alpha)
             out.append({**key, "method": m, "followed": True,
                         "ra": float(relative_accuracy(t[i:i + 1], p[i:i + 1])[0]),
                         "abs_error_h": float(abs(p[i] - t[i])),
-                        "alpha_lambda": bool(alpha_lambda(t[i:i + 1], p[i:i + 1], ALPHA)[0]),
+                        "alpha_lambda": bool(alpha_lambda(t[i:i + 1], p[i:i + 1],
+                                                          goal.alpha)[0]),
                         "horizon_h": ph, "horizon_share": ph / (life.failure_h - r.hour.iloc[0])})
     return pd.DataFrame(out)
 
 
-def change_table(changes: pd.DataFrame) -> pd.DataFrame:
+def change_table(changes: pd.DataFrame, goal: PrognosisTargets) -> pd.DataFrame:
     """Per data set, fault and method, the lives with a payload change: how many, how
     many were judged (a paired prognosis after the change), the share of judged ones whose
-    predicted failure moved the law's way within :data:`WITHIN_H` and the median lag.
+    predicted failure moved the law's way within ``goal.within_h`` and the median lag.
 
     Parameters
     ----------
     changes : DataFrame
         ``changes.csv`` (:data:`CHANGE_COLUMNS`).
+    goal : PrognosisTargets
+        The hours within which it must have moved.
 
     Returns
     -------
@@ -169,7 +206,7 @@ def change_table(changes: pd.DataFrame) -> pd.DataFrame:
         where none judged), ``lag_median_h``.
     """
     c = changes.assign(judged=changes.moved.notna(),
-                       ok=changes.moved.eq(True) & (changes.lag_h <= WITHIN_H))
+                       ok=changes.moved.eq(True) & (changes.lag_h <= goal.within_h))
     g = c.groupby(["dataset", "fault", "method"], sort=True)
     out = g.agg(lives=("judged", "size"), judged=("judged", "sum"), ok=("ok", "sum"),
                 lag_median_h=("lag_h", "median")).reset_index()
@@ -189,12 +226,13 @@ def summary_table(scores: pd.DataFrame) -> pd.DataFrame:
                  horizon_share_median=("horizon_share", "median")).reset_index()
 
 
-def targets(buckets: pd.DataFrame, summary: pd.DataFrame, moved: pd.DataFrame
-            ) -> pd.DataFrame:
+def targets(buckets: pd.DataFrame, summary: pd.DataFrame, moved: pd.DataFrame,
+            goal: PrognosisTargets, nominal: float) -> pd.DataFrame:
     """The issue's targets for the growth law per data set and fault, each with its
-    measured value and pass or fail (module docstring); a bucket with fewer than
-    :data:`MIN_BUCKET` prognoses, and a fault without a judged payload change
-    (:func:`change_table`), are listed as not judged."""
+    measured value and pass or fail (module docstring; ``goal``'s thresholds, the
+    interval's ``nominal`` coverage); a bucket with fewer than ``goal.min_bucket``
+    prognoses, and a fault without a judged payload change (:func:`change_table`), are
+    listed as not judged."""
     out = []
 
     def row(ds, fault, what, target, measured, result):
@@ -204,31 +242,32 @@ def targets(buckets: pd.DataFrame, summary: pd.DataFrame, moved: pd.DataFrame
     for b in buckets[buckets.method == "growth"].itertuples(index=False):
         width = f"; median width {b.median_width_share:.2f} of the true remaining life"
         if b.bucket == "all":
-            ok = b.picp_low <= NOMINAL <= b.picp_high
+            ok = b.picp_low <= nominal <= b.picp_high
             row(b.dataset, b.fault, f"pooled PICP of the 90 % interval ({b.n} prognoses, "
-                f"{b.lives} lives){width}", f"95 % interval holds {NOMINAL:g}",
+                f"{b.lives} lives){width}", f"95 % interval holds {nominal:g}",
                 f"{b.picp:.2f} [{b.picp_low:.2f}, {b.picp_high:.2f}]",
                 "pass" if ok else "fail")
             continue
-        judged = b.n >= MIN_BUCKET
+        judged = b.n >= goal.min_bucket
         row(b.dataset, b.fault, f"PICP, true bucket {b.bucket} ({b.n} prognoses){width}",
-            f">= {BUCKET_MIN:g} at 95 % (one-sided)",
+            f">= {goal.bucket_min:g} at 95 % (one-sided)",
             f"{b.picp:.2f} (upper bound {b.picp_upper95:.2f})",
-            ("pass" if b.picp_upper95 >= BUCKET_MIN else "fail") if judged
-            else f"not judged (< {MIN_BUCKET})")
+            ("pass" if b.picp_upper95 >= goal.bucket_min else "fail") if judged
+            else f"not judged (< {goal.min_bucket})")
     for (ds, fault), s in summary.groupby(["dataset", "fault"]):
         if not (s.method == "growth").any():
             continue
         gr = s[s.method == "growth"].iloc[0]
         row(ds, fault, "relative accuracy at half-life (median over lives)",
-            f">= {RA_MIN:g}", f"{gr.ra_median:.3g}", "pass" if gr.ra_median >= RA_MIN else "fail")
+            f">= {goal.ra_min:g}", f"{gr.ra_median:.3g}",
+            "pass" if gr.ra_median >= goal.ra_min else "fail")
         for b in s[s.method != "growth"].itertuples(index=False):
             ratio = gr.abs_error_median_h / b.abs_error_median_h
             row(ds, fault, f"median abs error at half-life / {b.method}'s", "< 1",
                 f"{ratio:.3g}", "pass" if ratio < 1 else "fail")
     for m in moved[moved.method == "growth"].itertuples(index=False):
         row(m.dataset, m.fault, f"after a payload change the predicted failure moves the "
-            f"law's way within {WITHIN_H:g} h ({m.judged} of {m.lives} lives judged)",
+            f"law's way within {goal.within_h:g} h ({m.judged} of {m.lives} lives judged)",
             "every life", f"{m.moved_share:.2f}",
             ("pass" if m.moved_share == 1.0 else "fail") if m.judged
             else "not judged (no paired prognosis)")
@@ -262,10 +301,12 @@ def write_table(path: Path, header: str, tgt: pd.DataFrame, summary: pd.DataFram
     write_owned(path, lambda tmp: Path(tmp).write_text(text))
 
 
-def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path) -> Path:
+def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path, goal: PrognosisTargets,
+           nominal: float) -> Path:
     """``prognosis.png``: the 90 % interval's coverage per remaining-share bucket and method (all
-    faults and data sets pooled), and the predicted against the true remaining hours of
-    every valid prognosis per method (median)."""
+    faults and data sets pooled; the ``nominal`` coverage and ``goal.bucket_min`` drawn),
+    and the predicted against the true remaining hours of every valid prognosis per method
+    (median)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -283,8 +324,9 @@ def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path) -> Path:
         ax[0].bar(np.arange(len(labels)) + 0.25 * (k - 1), cov.to_numpy(), 0.25, label=m)
         r = v[(v.method == m) & np.isfinite(v.remaining_h) & (v.remaining_h > 0)]
         ax[1].loglog(r.true_remaining_h, r.remaining_h, ".", ms=3, alpha=0.5, label=m)
-    ax[0].axhline(NOMINAL, color="k", lw=1, label=f"nominal {NOMINAL:g}")
-    ax[0].axhline(BUCKET_MIN, color="0.5", lw=1, ls="--", label=f"least {BUCKET_MIN:g}")
+    ax[0].axhline(nominal, color="k", lw=1, label=f"nominal {nominal:g}")
+    ax[0].axhline(goal.bucket_min, color="0.5", lw=1, ls="--",
+                  label=f"least {goal.bucket_min:g}")
     ax[0].set(xticks=range(len(labels)), xticklabels=labels, ylim=(0, 1.05),
               xlabel="remaining share of the way from alarm to failure",
               ylabel="coverage of the 90 % interval (PICP)")
@@ -297,5 +339,5 @@ def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path, 110)
 
 
-__all__ = ["ALPHA", "LAMBDA", "bucket_table", "figure", "life_scores", "summary_table",
+__all__ = ["PrognosisTargets", "bucket_table", "figure", "life_scores", "summary_table",
            "targets", "write_table"]

@@ -142,10 +142,11 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
         raise ValueError("prognosis: no life was followed to a prognosis (no alarm named "
                          "a growing fault); nothing to score")
     rows["valid"] = rows["valid"].astype(bool)
-    scores = life_scores(rows, lives)
+    goal, nominal = pc.study.targets, pc.study.coverage
+    scores = life_scores(rows, lives, goal)
     buckets, summary = bucket_table(rows), summary_table(scores)
-    moved = change_table(changes)
-    tgt = targets(buckets, summary, moved)
+    moved = change_table(changes, goal)
+    tgt = targets(buckets, summary, moved, goal, nominal)
     for name, df in (("results.csv", rows), ("lives.csv", lives), ("calibration.csv", cal),
                      ("scores.csv", scores), ("changes.csv", changes)):
         write_owned(out / name, lambda tmp, df=df: df.to_csv(tmp, index=False))
@@ -167,7 +168,7 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
               f"Wall time {wall / 60:.1f} min{resumed_note(resumed, len(jobs))}.\n"
               + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
     write_table(out / "table.md", header, tgt, summary, buckets, lives, cal, moved)
-    fig = figure(buckets, rows, out / "prognosis.png")
+    fig = figure(buckets, rows, out / "prognosis.png", goal, nominal)
     claim.record([out / f for f in ("results.csv", "lives.csv", "calibration.csv",
                                     "scores.csv", "changes.csv", "table.md")] + [fig])
     ledger = None
@@ -200,6 +201,8 @@ def _log(app, summary: pd.DataFrame, tgt: pd.DataFrame, out: Path, wall: float,
               "calibration_seeds": str(pc.study.calibration_seeds),
               "naming": dataclasses.asdict(pc.study.train.naming),
               "normal": dataclasses.asdict(pc.study.train.normal),
+              "targets": dataclasses.asdict(pc.study.targets),
+              "max_scale": pc.study.max_scale,
               **{f"config_hash.{n}": p.config_hash for n, p in plans.items()}}
     with log_run(app.logger.experiment, app.logger.run_name,
                  tracking_uri=app.logger.tracking_uri, params=params,

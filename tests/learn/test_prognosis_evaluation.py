@@ -182,6 +182,9 @@ BAD = {  # case -> (override or overrides, the start of the one line)
         "prognosis.study.severity_levels=30",
         "prognosis.study.severity_levels must be a multiple of 4 in [8, 256]"),
     "coverage 1": ("prognosis.study.coverage=1.0", "prognosis.study.coverage must lie in"),
+    "a bucket's least coverage 1": ("prognosis.study.targets.bucket_min=1",
+                                    "prognosis.study.targets.bucket_min must lie in"),
+    "max_scale 30": ("prognosis.study.max_scale=30", "prognosis.study.max_scale must lie in"),
     "a group beyond the pairs": ("prognosis.group=1", "prognosis.group must lie in [0, 0] "
                                  "(0: tiny), got 1"),
 }
@@ -366,7 +369,7 @@ def test_the_honest_targets_judge_coverage_with_its_uncertainty():
     on few lives can pass, 0.60 on many cannot), the law's error against each baseline."""
     import pandas as pd
 
-    from swgmon.evaluation.prognosis_report import targets
+    from swgmon.evaluation.prognosis_report import PrognosisTargets, targets
 
     def b(bucket, n, picp, low, high, upper):
         return {"dataset": "bench", "fault": "root_tooth_crack", "method": "growth",
@@ -383,5 +386,8 @@ def test_the_honest_targets_judge_coverage_with_its_uncertainty():
                                                    ("wiener", 0.2, 0.9))])
     moved = pd.DataFrame(columns=["dataset", "fault", "method", "judged", "lives",
                                   "moved_share"])
-    t = targets(buckets, summary, moved).set_index("what").result
+    t = targets(buckets, summary, moved, PrognosisTargets(), 0.9).set_index("what").result
     assert list(t) == ["pass", "pass", "fail", "not judged (< 20)", "pass", "pass", "fail"]
+    stricter = PrognosisTargets(bucket_min=0.9, min_bucket=5, ra_min=0.8)
+    t = targets(buckets, summary, moved, stricter, 0.9).set_index("what").result
+    assert list(t) == ["pass", "fail", "fail", "pass", "fail", "pass", "fail"]
