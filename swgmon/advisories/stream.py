@@ -302,7 +302,7 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
         A stream the monitor cannot take (:func:`check_stream`), a maintenance event out
         of range (a tool change or repair inside commissioning) or a prognosis option out
         of range (a planned duty outside the model's, prognoses more often than the
-        stream's windows or more than :data:`~swgmon.prognosis.stream.MAX_PROGNOSES` after an
+        stream's windows or more than ``prognosis.max_prognoses`` after an
         alarm), before any work.
     """
     log = sorted(maintenance or [], key=lambda e: e.hour)

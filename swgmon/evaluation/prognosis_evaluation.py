@@ -253,7 +253,7 @@ class PrognosisStudyConfig:
             ``held_out`` leaving fewer than two training instances; ``severity_levels``
             not a multiple of 4 in [8, 256]; ``prognosis.every_h``
             below the lives' window interval or making more than
-            :data:`~swgmon.prognosis.stream.MAX_PROGNOSES` prognoses an alarm; a
+            ``prognosis.max_prognoses`` prognoses an alarm; a
             life of more windows than :data:`swgsim.datasets.schedule.MAX_WINDOWS`
             (``max_life_h`` named: :meth:`_check_life`).
         """

@@ -32,15 +32,9 @@ from swgsim.datasets.schema import TEMPERATURE_RANGE_C
 from swgsim.gear.faults import get_fault
 from swgsim.gear.thermal import REF_TEMP_C
 
-__all__ = ["MAX_PROGNOSES", "DutyBlock", "StreamPrognosis", "StreamPrognoses", "planned_duty",
+__all__ = ["DutyBlock", "StreamPrognosis", "StreamPrognoses", "planned_duty",
            "prognosis_line", "stream_prognoses", "trained_duty"]
 
-#: Most prognoses after one alarm (its follow-up's hours over ``every_h``), each predicted,
-#: kept and reported in a line: 10,000 [choice] is a prognosis an hour (the default
-#: ``every_h``) for more than a year of operation (8,760 h), and bounds the work: on a
-#: 480-window stream 6,200 prognoses took 9.8 s and 12,200 26 s (2 shared cores), so
-#: 10,000 take some 15-25 s and 10,000 lines of the report.
-MAX_PROGNOSES = 10_000
 
 
 @dataclass
@@ -96,6 +90,13 @@ float, tuple of float, float, float, int
         to_failure``), the prior of the gear's scale.
     seed : int
         Seed of the Monte-Carlo draws, >= 0.
+    max_prognoses : int
+        Most prognoses after one alarm (its follow-up's hours over ``every_h``), each
+        predicted, kept and reported in a line, in [1, 10^6]: 10,000 [choice] is a
+        prognosis an hour (the default ``every_h``) for more than a year of operation
+        (8,760 h), and bounds the work: on a 480-window stream 6,200 prognoses took 9.8 s
+        and 12,200 26 s (2 shared cores), so 10,000 take some 15-25 s and 10,000 lines of
+        the report.
     """
 
     enabled: bool = False
@@ -115,6 +116,7 @@ float, tuple of float, float, float, int
     max_bins: int = PrognosisConfig.max_bins
     to_failure: RunToFailure = field(default_factory=RunToFailure)
     seed: int = 0
+    max_prognoses: int = 10_000
 
     @property
     def config(self) -> PrognosisConfig:
@@ -133,7 +135,7 @@ float, tuple of float, float, float, int
         refused (between two windows nothing new is known), so that an alarm gets at most
         a prognosis per window, never millions (a 2-h follow-up at 1e-9 h filled 18 GB);
         with the stream's hours after its earliest possible alarm given, ``every_h`` that
-        makes more than :data:`MAX_PROGNOSES` of them is refused (the window interval is a
+        makes more than :attr:`max_prognoses` of them is refused (the window interval is a
         median: a stream whose last window lies 100 h after the others, at one a minute,
         made 6,200).
 
@@ -151,7 +153,7 @@ float, tuple of float, float, float, int
         span_h : float, optional
             The operating hours an alarm may be followed for, from the earliest possible
             alarm (the first window after commissioning) to the stream's last window [h];
-            given, ``every_h`` is bounded below by ``span_h / MAX_PROGNOSES``.
+            given, ``every_h`` is bounded below by ``span_h / max_prognoses``.
 
         Returns
         -------
@@ -162,20 +164,22 @@ float, tuple of float, float, float, int
         ------
         ValueError
             A field outside its range (the attributes above), ``every_h`` below the
-            window interval or making more than :data:`MAX_PROGNOSES` prognoses over
+            window interval or making more than :attr:`max_prognoses` prognoses over
             ``span_h``, or the planned duty outside ``trained``
             (``<where>.planned.<quantity>``).
         """
         check_range(self.every_h, 0.0, 1000.0, f"{where}.every_h", "h", lo_open=True)
+        check_range(self.max_prognoses, 1, 10**6, f"{where}.max_prognoses")
+        most = self.max_prognoses
         if interval_h is not None and self.every_h < interval_h:
             check_range(self.every_h, interval_h, 1000.0, f"{where}.every_h", "h",
                         why=f"at most a prognosis per window: the stream's windows are "
                             f"{60 * interval_h:.3g} min apart")
-        if span_h is not None and (n := span_h / self.every_h) > MAX_PROGNOSES:
+        if span_h is not None and (n := span_h / self.every_h) > most:
             raise ValueError(f"{where}.every_h={self.every_h:g} h makes {n:.3g} prognoses "
                              f"over the {span_h:.4g} h after the earliest alarm; allowed: at "
-                             f"most {MAX_PROGNOSES:,} an alarm (every_h from "
-                             f"{span_h / MAX_PROGNOSES:.3g} h)")
+                             f"most {most:,} an alarm (every_h from "
+                             f"{span_h / most:.3g} h; {where}.max_prognoses)")
         check_range(self.block_h, 0.0, 100.0, f"{where}.block_h", "h", lo_open=True)
         if self.threshold is not None:
             check_range(self.threshold, 0.0, 10.0, f"{where}.threshold", lo_open=True)

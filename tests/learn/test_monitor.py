@@ -781,7 +781,7 @@ def test_more_prognoses_than_an_alarm_may_have_are_refused_before_work(growing_l
     """Issue 82: every_h was bounded by the median window step alone, and a stream's hours
     are not bounded: its last window 100 h after the others, at a prognosis a minute, made
     6,200 prognoses (9.8 s). Over the hours after the earliest alarm, more than
-    MAX_PROGNOSES (10,000) are refused in one line naming every_h and the count, before
+    ``max_prognoses`` (10,000) are refused in one line naming every_h and the count, before
     the stream is monitored."""
     import dataclasses
 
@@ -794,7 +794,7 @@ def test_more_prognoses_than_an_alarm_may_have_are_refused_before_work(growing_l
     with pytest.raises(ValueError, match=r"^prognosis.every_h=0.0166667 h makes 1.22e\+04 "
                                          r"prognoses over the 204 h after the earliest alarm; "
                                          r"allowed: at most 10,000 an alarm \(every_h from "
-                                         r"0.0204 h\)$"):
+                                         r"0.0204 h; prognosis.max_prognoses\)$"):
         monitor_stream(ds, tiny_eval["model"], RuleConfig(), prognosis=every)
 
 

@@ -164,7 +164,7 @@ BAD = {  # case -> (override or overrides, the start of the one line)
         ["prognosis.study.max_life_h=10000", "prognosis.study.train.interval_min=0.1"],
         "prognosis.study.max_life_h must lie in (0, 8328.33] h (a life of at most 5e+06 "
         "windows, train.interval_min=0.1 min, after the latest onset at 5 h), got 10000"),
-    # issue 82: the prognoses of a life's alarm held to MAX_PROGNOSES (monitor_stream's
+    # issue 82: the prognoses of a life's alarm held to max_prognoses (monitor_stream's
     # rule) before any work, not by a life that fails late, after training
     "more prognoses than an alarm may have": (
         "prognosis.study.max_life_h=10000",
