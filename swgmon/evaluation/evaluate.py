@@ -55,9 +55,6 @@ pd = lazy_module("pandas")
 
 #: The rows every evaluation has, beside the chosen per-window detectors.
 COMPARED = ("monitor", "per_window", "always")
-#: Design rates of the trade-off curve (one false alarm per this many hours), up to the
-#: study's own: each is a threshold of the same rule on the same p-values.
-CURVE_DESIGN_HOURS = (1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0)
 #: Windows of a fault life scored at once.
 CHUNK = 120
 
@@ -346,7 +343,7 @@ def _detector_life(sim: LifeSimulator, k0: int, refs: References, det: WindowCla
 
 def _curve_thresholds(cfg: MonitorStudyConfig) -> dict[float, float]:
     return {d: threshold(dataclasses.replace(cfg.rule, design_hours=d), cfg.interval_min)
-            for d in CURVE_DESIGN_HOURS if d <= cfg.rule.design_hours}
+            for d in cfg.curve_hours if d <= cfg.rule.design_hours}
 
 
 def _curve_healthy(tr: Trace, cfg: MonitorStudyConfig, key: dict, hours_h: float,
@@ -616,6 +613,6 @@ def to_frames(parts: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFra
                  for k in ("rows", "false_alarms", "curve"))
 
 
-__all__ = ["COMPARED", "CURVE_DESIGN_HOURS", "banks_of", "evaluate_detectors", "evaluate_gear",
+__all__ = ["COMPARED", "banks_of", "evaluate_detectors", "evaluate_gear",
            "fault_life_configs", "fault_lives", "healthy_life", "monitor_healthy",
            "nuisance_fault_lives", "run_detectors", "run_held_out", "to_frames"]

@@ -150,6 +150,11 @@ class MonitorStudyConfig:
         ``scored_seeds`` must be scored seeds (from
         :data:`~learn.tracking.ledger.SCORED_SEED_MIN` up) and the run appends itself to
         the ledger; False (the default): every seed a design seed, below it.
+    curve_hours : list of float
+        Design rates of the trade-off curve (one false alarm per this many hours), each a
+        threshold of the same rule on the same p-values; those up to
+        ``rule.design_hours`` are drawn; increasing, each in (0, 10^6] [h] (1, 3, 10, 30,
+        100, 300, 1000 [choice: two a decade]).
     """
 
     seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
@@ -182,7 +187,8 @@ class MonitorStudyConfig:
     normal: NormalConfig = field(default_factory=NormalConfig)
     naming: NamingConfig = field(default_factory=NamingConfig)
     scored_run: bool = False
-
+    curve_hours: list[float] = field(
+        default_factory=lambda: [1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0])
 
     def check(self, where: str) -> None:
         """Refuse a design whose rules across fields fail, in one line naming the key,
@@ -248,6 +254,9 @@ class MonitorStudyConfig:
         check_range(self.detector_hours, 0.0, self.healthy_hours - self.commissioning_h,
                     f"{where}.detector_hours", "h", lo_open=True,
                     why="within each healthy life after commissioning")
+        _req(len(self.curve_hours) >= 1 and all(np.diff(self.curve_hours) > 0)
+             and 0 < self.curve_hours[0] and self.curve_hours[-1] <= 1e6,
+             f"{where}.curve_hours must be increasing in (0, 1e6] h, got {self.curve_hours}")
 
     def _lives(self) -> list[tuple[float, tuple[str, ...]]]:
         """The longest life of each kind the study lives, as (its hours set by no hours

@@ -1044,3 +1044,18 @@ def test_the_profile_interval_of_a_parabola_is_its_wilks_interval():
     assert np.log(lo) == pytest.approx(centre - 1.6449 * sigma, abs=1e-6)
     assert np.log(hi) == pytest.approx(centre + 1.6449 * sigma, abs=1e-6)
     assert np.isnan(profile_interval(x, np.full(9, 3.0))).all()
+
+
+def test_the_trade_off_curve_draws_the_studys_design_rates():
+    """``monitor.study.curve_hours`` (issue 84: every constant on record) sets the
+    trade-off curve's thresholds, those up to the rule's design rate; a list that does
+    not increase is refused in one line naming the key."""
+    from swgmon.evaluation.evaluate import _curve_thresholds
+    from swgmon.evaluation.study import MonitorStudyConfig
+    from swgsim.base.typed import check_tree
+
+    cfg = MonitorStudyConfig(curve_hours=[2.0, 20.0, 1e5])
+    t = _curve_thresholds(cfg)
+    assert list(t) == [2.0, 20.0] and t[2.0] < t[20.0]
+    with pytest.raises(ValueError, match=r"^monitor\.study\.curve_hours must be increasing"):
+        check_tree(MonitorStudyConfig(curve_hours=[10.0, 3.0]), "monitor.study")
