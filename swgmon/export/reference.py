@@ -27,7 +27,6 @@ BLOCK = 64
 #: Scale of the classifier's int16 z-score inputs: 1/Z_SCALE z per step, ±32767 / Z_SCALE
 #: z at most (larger z-scores are clipped; a tree learns on the clipped values).
 Z_SCALE = 64.0
-INT16_MAX = 32767
 #: Nuisance orders as multiples of 1/NUISANCE_DEN of the input angle (1/4, 1/3, 1/2).
 NUISANCE_DEN = 12
 
@@ -327,7 +326,8 @@ def quantize(z: np.ndarray) -> np.ndarray:
     """The classifier's int16 inputs of z-scores: ⌊z · Z_SCALE + 1/2⌋ clipped to ±32767
     (float32 arithmetic, as the C), shape of ``z``."""
     q = np.floor(np.asarray(z, F32) * F32(Z_SCALE) + F32(0.5))
-    return np.clip(q, -INT16_MAX, INT16_MAX).astype(np.int16)
+    top = np.iinfo(np.int16).max
+    return np.clip(q, -top, top).astype(np.int16)
 
 
 def z32(feats: np.ndarray, tables: StageTables, op: np.ndarray) -> np.ndarray:
