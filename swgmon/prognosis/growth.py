@@ -40,17 +40,9 @@ __all__ = ["Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track", "check_
 #: z of a central 90 % interval of a normal distribution, its half-width in σ [-].
 Z90 = 1.6448536269514722
 
-#: Gauss-Newton steps of u0's fit at each grid point of ln s (6 [choice]: from the first
-#: quarter's mean, 3, 6 and 12 steps gave the same quantiles to 1e-13 on synthetic root
-#: crack and wear tracks as in tests/learn/test_prognosis.py).
-GAUSS_NEWTON_STEPS = 6
 
 
 # ------------------------------------------------------------------ the growth law
-#: Smallest severity mapped to Paris' u (the start of u0's fit, the threshold) (1e-3:
-#: 2 µm of a root crack) [choice: a mean estimate at or below 0 says "small", and u =
-#: (severity d1)^(1 − m/2) has no value there].
-SEVERITY_FLOOR = 1e-3
 
 
 def _law(fault: str) -> str:
@@ -58,7 +50,8 @@ def _law(fault: str) -> str:
     return next(g for g, fs in LAWS.items() if fault in fs)
 
 
-def transformed(fault: str, severity: np.ndarray, tf: RunToFailure) -> tuple[np.ndarray, float]:
+def transformed(fault: str, severity: np.ndarray, tf: RunToFailure, floor: float
+                ) -> tuple[np.ndarray, float]:
     """The severity in which the fault's law is a straight line in the exposure.
 
     Parameters
@@ -66,9 +59,11 @@ def transformed(fault: str, severity: np.ndarray, tf: RunToFailure) -> tuple[np.
     fault : str
         A fault of :data:`swgsim.datasets.growth.LAWS`.
     severity : ndarray, shape (n,)
-        Severity [-] (a crack's floored at :data:`SEVERITY_FLOOR`).
+        Severity [-] (a crack's floored at ``floor``).
     tf : RunToFailure
         The law's constants.
+    floor : float
+        The least severity of a crack (:attr:`PrognosisConfig.severity_floor`) [-].
 
     Returns
     -------
@@ -82,7 +77,7 @@ def transformed(fault: str, severity: np.ndarray, tf: RunToFailure) -> tuple[np.
     d1 = DEPTH_AT_ONE_M[fault]
     if _law(fault) == "archard":
         return sev, 1.0 / d1
-    a = np.maximum(sev, SEVERITY_FLOOR) * d1
+    a = np.maximum(sev, floor) * d1
     k = (tf.shape_factor * np.sqrt(np.pi)) ** tf.paris_m
     if tf.paris_m == 2.0:
         return np.log(a), float(k)
@@ -195,16 +190,17 @@ def severity_of(fault: str, u: np.ndarray, tf: RunToFailure) -> tuple[np.ndarray
 
 
 def _grid_posterior(ls: np.ndarray, y: np.ndarray, w: np.ndarray, x: np.ndarray,
-                    fault: str, tf: RunToFailure) -> tuple[np.ndarray, ...]:
+                    fault: str, cfg: PrognosisConfig) -> tuple[np.ndarray, ...]:
     """Log posterior of ln s at grid ``ls`` (shape (G,)), u0's fit and precision there,
     each shape (G,); y, w = 1/σ², x: the estimates, shape (n,)
     (docs/monitor/prognosis.md, "Prognosis")."""
-    u, b = transformed(fault, y, tf)
+    tf, floor = cfg.to_failure, cfg.severity_floor
+    u, b = transformed(fault, y, tf, floor)
     beta = b * np.exp(ls)[:, None]  # (G, 1)
     early = slice(0, max(3, y.size // 4))  # the start: the first quarter's mean [choice]
-    u0 = transformed(fault, np.array([w[early] @ y[early] / w[early].sum()]), tf)[0] \
+    u0 = transformed(fault, np.array([w[early] @ y[early] / w[early].sum()]), tf, floor)[0] \
         - beta[:, 0] * (w[early] @ x[early] / w[early].sum())
-    for _ in range(GAUSS_NEWTON_STEPS):
+    for _ in range(cfg.gauss_newton_steps):
         sev, jac = severity_of(fault, u0[:, None] + beta * x, tf)  # (G, n)
         wj = w * jac
         u0 = u0 + (wj * (y - sev)).sum(axis=1) / np.maximum((wj * jac).sum(axis=1), 1e-300)
@@ -217,9 +213,9 @@ def _grid_posterior(ls: np.ndarray, y: np.ndarray, w: np.ndarray, x: np.ndarray,
 
 
 def residual_correlation(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
-                         tf: RunToFailure, ls: np.ndarray, cap: float) -> float:
+                         cfg: PrognosisConfig, ls: np.ndarray) -> float:
     """Lag-1 autocorrelation of the standardised residuals at the posterior's peak over
-    grid ``ls``, in [0, ``cap``] [-].
+    grid ``ls``, in [0, ``cfg.max_correlation``] [-].
 
     Neighbouring severity estimates are read by one regressor from windows of one gear
     in one state: their errors are correlated, not independent as the likelihood of
@@ -229,15 +225,15 @@ def residual_correlation(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str
     Wiley 2008, sec. 2.1.5), so the fit's weights are scaled by that factor
     (:func:`_posterior_draws`). A negative ρ is taken as 0 (no gain claimed).
     """
-    logp, u0, _ = _grid_posterior(ls, y, w, x, fault, tf)
+    logp, u0, _ = _grid_posterior(ls, y, w, x, fault, cfg)
     k = int(np.argmax(logp))
-    b = transformed(fault, y, tf)[1]
-    sev, _ = severity_of(fault, u0[k] + b * np.exp(ls[k]) * x, tf)
+    b = transformed(fault, y, cfg.to_failure, cfg.severity_floor)[1]
+    sev, _ = severity_of(fault, u0[k] + b * np.exp(ls[k]) * x, cfg.to_failure)
     z = (y - sev) * np.sqrt(w)
     z = z - z.mean()
     if z.size < 3 or not np.any(z):
         return 0.0
-    return float(np.clip((z[1:] @ z[:-1]) / (z @ z), 0.0, cap))
+    return float(np.clip((z[1:] @ z[:-1]) / (z @ z), 0.0, cfg.max_correlation))
 
 
 def _posterior_draws(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
@@ -250,13 +246,13 @@ def _posterior_draws(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
     posterior is narrower than a coarse cell], u0 given s normal about its fit (Laplace's
     method)."""
     ls = np.linspace(-cfg.log_scale_span, cfg.log_scale_span, cfg.n_grid)
-    rho = residual_correlation(y, w, x, fault, cfg.to_failure, ls, cfg.max_correlation)
+    rho = residual_correlation(y, w, x, fault, cfg, ls)
     w = w * (1.0 - rho) / (1.0 + rho)
-    logp, _, _ = _grid_posterior(ls, y, w, x, fault, cfg.to_failure)
+    logp, _, _ = _grid_posterior(ls, y, w, x, fault, cfg)
     keep = np.flatnonzero(logp > -25.0)
     cell = ls[1] - ls[0]
     ls = np.linspace(ls[keep[0]] - cell, ls[keep[-1]] + cell, cfg.n_grid)
-    logp, u0, info = _grid_posterior(ls, y, w, x, fault, cfg.to_failure)
+    logp, u0, info = _grid_posterior(ls, y, w, x, fault, cfg)
     p = np.exp(logp)
     pick = rng.choice(ls.size, size=cfg.n_samples, p=p / p.sum())
     s = np.exp(ls[pick] + (ls[1] - ls[0]) * (rng.random(cfg.n_samples) - 0.5))
@@ -330,7 +326,7 @@ def predict_growth(track: Track, fault: str, alarm_hour: float | None, recorded:
         y, x = np.add.reduceat(w * y, first) / wsum, np.add.reduceat(w * x, first) / wsum
         w = wsum
     s, u0 = _posterior_draws(y, w, x, fault, cfg, np.random.default_rng(seed))
-    u_fail, b = transformed(fault, np.array([thr]), tf)
+    u_fail, b = transformed(fault, np.array([thr]), tf, cfg.severity_floor)
     u_fail = float(u_fail[0])
     need = (u_fail - u0) / (b * s) - x[-1]  # exposure still to come at s = 1
     if planned is None:  # the recorded duty's mean rate: its cycle's phase is unknown

@@ -66,6 +66,14 @@ class PrognosisConfig:
         longer track is fitted on each group's inverse-variance weighted mean severity and
         mean exposure, their weight the group's sum (exact for a law straight within a
         group; a 100 h track then costs what 256 estimates cost).
+    severity_floor : float
+        Smallest severity mapped to Paris' u (the start of u0's fit, the threshold), in
+        (0, 0.1] [-] (1e-3: 2 µm of a root crack [choice: a mean estimate at or below 0
+        says "small", and u = (severity d1)^(1 − m/2) has no value there]).
+    gauss_newton_steps : int
+        Gauss-Newton steps of u0's fit at each grid point of ln s, in [1, 100] (6
+        [choice]: from the first quarter's mean, 3, 6 and 12 steps gave the same quantiles
+        to 1e-13 on synthetic root crack and wear tracks as in tests/learn/test_prognosis.py).
     to_failure : RunToFailure
         The growth's constants (:class:`swgsim.datasets.growth.RunToFailure`): the laws'
         m, Y, Δσ per N m, film exponent, the median C and wear coefficient (s = 1), the
@@ -82,6 +90,8 @@ class PrognosisConfig:
     max_correlation: float = 0.95
     in_sight_h: float = 1e6
     max_bins: int = 256
+    severity_floor: float = 1e-3
+    gauss_newton_steps: int = 6
     to_failure: RunToFailure = field(default_factory=RunToFailure)
 
     def check(self, where: str = "prognosis") -> PrognosisConfig:
@@ -105,7 +115,8 @@ class PrognosisConfig:
             A field outside its range (the ranges in the attributes above).
         """
         for name, lo, hi in (("min_estimates", 3, 1e6), ("n_samples", 100, 1e6),
-                             ("n_grid", 21, 10001), ("max_bins", 8, 1e5)):
+                             ("n_grid", 21, 10001), ("max_bins", 8, 1e5),
+                             ("gauss_newton_steps", 1, 100)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, numbers.Integral):  # 1000.5, True
                 raise ValueError(f"{where}.{name} must be an integer, got {v!r}")
@@ -124,6 +135,7 @@ class PrognosisConfig:
             for i, v in enumerate(k):
                 check_range(v, 0.0, 20.0, f"{where}.{name}[{i}]")
         check_range(self.in_sight_h, 0.0, 1e7, f"{where}.in_sight_h", "h", lo_open=True)
+        check_range(self.severity_floor, 0.0, 0.1, f"{where}.severity_floor", lo_open=True)
         unset = dataclasses.replace(self.to_failure, failure=None)
         for law, faults in LAWS.items():
             for fault in faults:  # the onset's severity is not the prognosis's: any > 0

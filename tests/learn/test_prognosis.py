@@ -312,11 +312,12 @@ def test_the_fit_reads_the_correlation_of_its_residuals():
         e[i] = 0.9 * e[i - 1] + rng.standard_normal()
     tf, ls, w = RunToFailure(), np.linspace(-5, 5, 401), np.full(x.size, 1.0 / 0.01 ** 2)
     y = 0.2 + x / DEPTH_AT_ONE_M["wear"]  # 0.2 -> 0.5
-    ar = residual_correlation(y + 0.01 * e / e.std(), w, x, "wear", tf, ls, 0.95)
-    white = residual_correlation(y + 0.01 * rng.standard_normal(x.size), w, x, "wear", tf,
-                                 ls, 0.95)
+    cfg, capped = (PrognosisConfig(to_failure=tf, max_correlation=c) for c in (0.95, 0.5))
+    ar = residual_correlation(y + 0.01 * e / e.std(), w, x, "wear", cfg, ls)
+    white = residual_correlation(y + 0.01 * rng.standard_normal(x.size), w, x, "wear", cfg,
+                                 ls)
     assert 0.8 < ar < 0.95 and white < 0.1
-    assert residual_correlation(y + 0.01 * e / e.std(), w, x, "wear", tf, ls, 0.5) == 0.5
+    assert residual_correlation(y + 0.01 * e / e.std(), w, x, "wear", capped, ls) == 0.5
 
 
 def test_a_failure_severity_is_checked_against_the_followed_fault_only():

@@ -169,7 +169,8 @@ BAD = {  # case -> (override or overrides, the start of the one line)
     "more prognoses than an alarm may have": (
         "prognosis.study.max_life_h=10000",
         "prognosis.study.prognosis.every_h=0.25 h makes 4e+04 prognoses over the 1e+04 h "
-        "after the earliest alarm; allowed: at most 10,000 an alarm (every_h from 1 h)"),
+        "after the earliest alarm; allowed: at most 10,000 an alarm (every_h from 1 h; "
+        "prognosis.study.prognosis.max_prognoses)"),
     "an unknown data set": ("prognosis.run_on=[nope]", "prognosis.run_on: ['nope']"),
     "no data set": ("prognosis.run_on=[]", "prognosis.run_on: empty; allowed: keys of "
                                            "prognosis.datasets ['bench', 'robot_joint', 'tiny']"),
