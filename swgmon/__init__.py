@@ -4,8 +4,8 @@
 * :mod:`swgmon.detection` - state detection: the gear's own normal behaviour and its
   laws, conformal p-values and their CUSUM (the alarm rule);
 * :mod:`swgmon.assessment` - health assessment: the diagnosis model that names the
-  fault and its severity, the checks of the sensors, the unexplained change, and one
-  gear's monitor that holds them;
+  fault and its severity, the hypotheses an alarm is weighed against (the sensors'
+  faults, the unexplained change, one's own), and one gear's monitor that holds them;
 * :mod:`swgmon.prognosis` - prognostic assessment: the growth law's remaining useful
   life, its baselines, scores and calibration, and the prognosis along a stream;
 * :mod:`swgmon.advisories` - advisory generation: a stream through the monitor, its
@@ -28,6 +28,7 @@ _EXPORTS = {
     "RuleConfig": "detection.rule", "NormalConfig": "detection.normal",
     "DiagnosisModel": "assessment.model", "GearMonitor": "assessment.gear_monitor",
     "load_model": "assessment.model_io", "save_model": "assessment.model_io",
+    "NamingConfig": "assessment.sensor_check", "register_hypothesis": "assessment.hypotheses",
     "StreamPrognosis": "prognosis.stream", "predict_growth": "prognosis.growth",
     "monitor_stream": "advisories.stream",
     "MonitorStudyConfig": "evaluation.study", "train_model": "evaluation.training",

@@ -19,6 +19,7 @@ from learn.tasks.config import typed_app
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
 from swgmon.advisories.stream import monitor_stream, select_gear, write_outputs
+from swgmon.assessment.hypotheses import registered
 from swgmon.assessment.model_io import load_model
 from swgmon.prognosis.stream import trained_duty
 from swgsim.base.typed import check_tree
@@ -45,13 +46,15 @@ def check_inputs(cfg):
     ------
     ValueError
         A rule, normal-behaviour, maintenance or prognosis option or ``confirm_h`` out of
-        range (named), ``out_dir`` holding a file this project cannot show it wrote
+        range (named), a hypothesis that does not import (``naming.hypotheses``),
+        ``out_dir`` holding a file this project cannot show it wrote
         (:func:`swgsim.files.ownership.check`), or a ``stream`` that is not a data set.
     """
     app = typed_app(cfg)
     # every part's ranges and check (the rule, the normal behaviour, each maintenance
     # event, the prognosis; its planned duty against the model's once it is loaded)
     check_tree(app, "")
+    registered(app.naming)  # each hypothesis named imports, before any work
     ownership.check(Path(absolute_path(app.out_dir)), "out_dir", app="swgsim-monitor")
     read_manifest(absolute_path(app.stream))
     return app

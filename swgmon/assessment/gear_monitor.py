@@ -30,15 +30,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from learn.inputs.health import feature_names
+from swgmon.assessment.hypotheses import Candidate, Windows, registered
 from swgmon.assessment.model import DiagnosisModel, design_matrix
-from swgmon.assessment.sensor_check import (
-    NamingConfig,
-    fit_bridge_faults,
-    fit_temperature,
-    fit_temperature_drift,
-    virtual_temperature,
-)
-from swgmon.assessment.unexplained import fit_friction
+from swgmon.assessment.sensor_check import NamingConfig, virtual_temperature
 from swgmon.detection.normal import (
     Conditions,
     NormalBehaviour,
@@ -217,6 +211,7 @@ class GearMonitor:
         self.confirm_h = float(confirm_h)
         self.normal_config = normal or NormalConfig()
         self.naming = naming or NamingConfig()
+        self.hypotheses = registered(self.naming)
         self.normal: NormalBehaviour | None = None
         self.calibration: dict[int, np.ndarray] = {}
         self.cusum = np.zeros(0)
@@ -668,15 +663,18 @@ class GearMonitor:
         fr = trace.friction
         ev = self.evidence(trace.log_proba, trace.op_index)
         ev[(trace.outside & Outside.UNJUDGED) != 0] = 0.0  # not judged: no evidence
-        at_alarm, _, _ = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
-                                    cond[rise:a + 1], fr[rise:a + 1], trace.hour[rise:a + 1])
-        fault, bridge, fit = self._name(ev[rise:end], feats[rise:end], points[rise:end],
-                                        cond[rise:end], fr[rise:end], trace.hour[rise:end])
+        at_alarm = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
+                              cond[rise:a + 1], fr[rise:a + 1], trace.hour[rise:a + 1])[0]
+        fault, bridge, fit, weighed = self._name(ev[rise:end], feats[rise:end],
+                                                 points[rise:end], cond[rise:end],
+                                                 fr[rise:end], trace.hour[rise:end])
         if fault == TEMPERATURE_SENSOR:  # its severity: the reading's error [K]
             err = fit.temperature_c - fit.reading_c
             est, lo, hi = fit.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))
         elif fault == UNEXPLAINED_CHANGE:  # the friction's relative change [-]
             est, lo, hi = fit.factor - 1.0, fit.low - 1.0, fit.high - 1.0
+        elif fault not in self.model.classes:  # a hypothesis of one's own: no regressor
+            est = lo = hi = float("nan")
         else:
             x = self.inputs(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end])
             est, lo, hi = self.model.estimate(fault, x)
@@ -684,58 +682,44 @@ class GearMonitor:
                           trace.op_index[rise:end])
         names = feature_names(twist=z.shape[1] > len(feature_names()))
         return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi,
-                     None if bridge is None else f"s{bridge}", moved_features(z, names))
+                     None if bridge is None else f"s{bridge}", moved_features(z, names),
+                     weighed)
 
     def name(self, ev: np.ndarray, feats: np.ndarray, points: np.ndarray,
              cond: Conditions | None = None, friction: np.ndarray | float = 1.0,
              hours: np.ndarray | None = None) -> tuple[str, int | None]:
-        """Name the fault of windows since an alarm: a sensor fault where one sensor's
-        fault explains them (:mod:`.sensor_check`): a bridge's offset step or gain drift
-        (a plausible fit after which the windows look healthy, median p-value at least
-        :attr:`~.sensor_check.NamingConfig.sensor_p_min`, and the other bridges have not moved on
-        average, :attr:`~.sensor_check.SensorFit.rest` at most
-        :attr:`~.sensor_check.NamingConfig.rest_max`), with its bridge, or the temperature reading
-        (:func:`~.sensor_check.fit_temperature`, the same median p-value), named
-        :data:`~.sensor_check.TEMPERATURE_SENSOR`, bridge None; or an even change of the
-        friction that no gear fault gives and no maintenance declared
-        (:func:`~.unexplained.fit_friction`), named
-        :data:`~.unexplained.UNEXPLAINED_CHANGE`; of those the one that leaves the windows
-        most healthy; else the fault with the largest summed evidence (:meth:`evidence`
-        rows ``ev``) and None. ``hours``: the windows' hours, for the friction's rate."""
+        """Name the fault of windows since an alarm by the hypotheses of
+        ``naming.hypotheses`` (:mod:`.hypotheses`: a bridge's offset step or gain drift, a
+        wrong or drifting temperature reading, an even change of the friction, one's own):
+        the candidate whose windows, its effect taken out, have the largest median
+        conformal p-value, where that is at least
+        :attr:`~.sensor_check.NamingConfig.sensor_p_min`, with its bridge (None but for a
+        bridge's fault); else the fault with the largest summed evidence
+        (:meth:`evidence` rows ``ev``) and None. ``hours``: the windows' hours, for the
+        rates."""
         return self._name(ev, feats, points, cond, friction, hours)[:2]
 
     def _name(self, ev, feats, points, cond, friction, hours=None):
-        """:meth:`name` and the fit of the temperature or the friction that named it
-        (None where neither did)."""
+        """:meth:`name`, the fit of the candidate that named it (None where the gear
+        fault did) and the candidates weighed, ``[hypothesis, fault, bridge, median
+        p-value]`` each (docs/monitor/assessment.md, "The hypotheses")."""
         b = self.normal
         opi = b.index(points)
         z, spread = b.z_and_spread(feats, points, cond, friction, opi)
         u = np.full((len(z), 2), 0.5)  # mid-p: the naming draws nothing from the monitor
 
-        def median_p(zz: np.ndarray) -> float:
-            return float(np.median(self.p_values(self._scores_of(zz, points)[0], opi, u)))
+        def median_p(c: Candidate) -> float:
+            return float(np.median(self.p_values(self._scores_of(c.z, points)[0], opi, u)))
 
-        fr = np.broadcast_to(friction, (len(z),))
-        fits = [f for f in fit_bridge_faults(b, feats, points, cond, fr, opi, z, spread,
-                                                 hours)
-                if f.fault in self.model.classes and f.plausible(self.naming)
-                and f.rest <= self.naming.rest_max]
-        read = cond is not None and not self.reading_virtual
-        nc = self.naming
-        hot = fit_temperature(b, feats, points, cond, fr, opi, nc) if read else None
-        drift = fit_temperature_drift(b, feats, points, cond, fr, opi, hours, nc) \
-            if read else None
-        even = fit_friction(b, feats, points, cond, fr, opi, hours, nc)
-        cands = [(median_p(f.z), f.fault, f.bridge, None) for f in fits]
-        cands += [(median_p(h.z), name, None, h) for h, name in
-                  ((hot, TEMPERATURE_SENSOR), (drift, TEMPERATURE_SENSOR),
-                   (even, UNEXPLAINED_CHANGE))
-                  if h is not None and h.plausible(nc)]
-        best = max(cands, key=lambda c: c[0], default=None)
-        if best is not None and best[0] >= nc.sensor_p_min:
-            return best[1:]
-        return self.model.name(ev), None, None
-
+        w = Windows(b, feats, points, cond, np.broadcast_to(friction, (len(z),)), opi, z,
+                    spread, hours, self.naming, tuple(self.model.classes),
+                    cond is not None and not self.reading_virtual)
+        cands = [(median_p(c), c) for h in self.hypotheses for c in h.candidates(w)]
+        weighed = [[c.hypothesis, c.fault, c.bridge, round(p, 4)] for p, c in cands]
+        best = max(cands, key=lambda pc: pc[0], default=None)
+        if best is not None and best[0] >= self.naming.sensor_p_min:
+            return best[1].fault, best[1].bridge, best[1].fit, weighed
+        return self.model.name(ev), None, None, weighed
 
 __all__ = ["MAINTENANCE_KINDS", "RECOMMISSIONS", "GearMonitor", "MaintenanceEvent", "Trace",
            "normal_windows"]

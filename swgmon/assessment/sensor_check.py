@@ -111,6 +111,9 @@ class NamingConfig:
         (0.001 [choice]: a bridge without a fault fitted one in a thousand times): a fit
         of k parameters counts where it lowers Σ z² by the χ²_k quantile 1 − ``fit_level``
         (:meth:`least_reduction`; Wilks' theorem, twice the log-likelihood ratio).
+    hypotheses : list of str or None
+        The hypotheses an alarm is weighed against, in order: names registered in
+        :data:`~.hypotheses.HYPOTHESES`; None: every registered one.
     """
 
     sensor_p_min: float = field(default=0.3, metadata=allowed(0.0, 1.0, lo_open=True,
@@ -136,6 +139,7 @@ class NamingConfig:
     virtual_passes: int = field(default=2, metadata=allowed(0, 10))
     fit_level: float = field(default=0.001, metadata=allowed(0.0, 0.5, lo_open=True,
                                                              hi_open=True))
+    hypotheses: list[str] | None = None
 
     def check(self, where: str = "naming") -> None:
         """Refuse an even window count where an odd one is needed, in one line naming the

@@ -275,6 +275,10 @@ class Alarm:
     moved : list of [str, float]
         The features that moved most over the windows named from, with their mean
         z-score [σ] (:func:`moved_features`): what the alarm saw.
+    hypotheses : list of [str, str, int or None, float]
+        The candidates it was weighed against (:mod:`swgmon.assessment.hypotheses`):
+        hypothesis, what it would name, its bridge, and the median p-value of the windows
+        with its effect taken out, the evidence the rule picks by; empty: none plausible.
     """
 
     hour: float
@@ -287,6 +291,7 @@ class Alarm:
     severity_high: float
     bridge: str | None = None
     moved: list[list] = field(default_factory=list)
+    hypotheses: list[list] = field(default_factory=list)
 
     @property
     def sensor_fault(self) -> bool:
@@ -311,7 +316,8 @@ class Alarm:
         return {"hour": self.hour, "fault": self.fault, "fault_at_alarm": self.fault_at_alarm,
                 "severity": finite(self.severity), "severity_low": finite(self.severity_low),
                 "severity_high": finite(self.severity_high), "bridge": self.bridge,
-                "moved": [list(m) for m in self.moved]}
+                "moved": [list(m) for m in self.moved],
+                "hypotheses": [list(h) for h in self.hypotheses]}
 
 
 def moved_features(z: np.ndarray, names: list[str], k: int = 3) -> list[list]:

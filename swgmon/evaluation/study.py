@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from learn.tracking.ledger import SCORED_SEED_MIN, check_seeds
+from swgmon.assessment.hypotheses import registered
 from swgmon.assessment.sensor_check import NamingConfig
 from swgmon.detection.normal import NormalConfig
 from swgmon.detection.rule import RuleConfig
@@ -254,6 +255,7 @@ class MonitorStudyConfig:
         check_range(self.detector_hours, 0.0, self.healthy_hours - self.commissioning_h,
                     f"{where}.detector_hours", "h", lo_open=True,
                     why="within each healthy life after commissioning")
+        registered(self.naming)  # each hypothesis named imports, before any work
         _req(len(self.curve_hours) >= 1 and all(np.diff(self.curve_hours) > 0)
              and 0 < self.curve_hours[0] and self.curve_hours[-1] <= 1e6,
              f"{where}.curve_hours must be increasing in (0, 1e6] h, got {self.curve_hours}")

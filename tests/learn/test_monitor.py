@@ -1059,3 +1059,51 @@ def test_the_trade_off_curve_draws_the_studys_design_rates():
     assert list(t) == [2.0, 20.0] and t[2.0] < t[20.0]
     with pytest.raises(ValueError, match=r"^monitor\.study\.curve_hours must be increasing"):
         check_tree(MonitorStudyConfig(curve_hours=[10.0, 3.0]), "monitor.study")
+
+
+def test_a_hypothesis_of_ones_own_is_one_file_and_a_registration(tiny_eval, tiny_banks):
+    """Issue 84: a hypothesis written outside the package (tests/hypothesis_example.py)
+    and registered (``register_hypothesis``) is weighed with the built-in ones, in two
+    worker processes (``travelling``), and names the windows it explains (every bridge's
+    zero moved by one δ: no one bridge's fault explains that); a monitor whose
+    ``naming.hypotheses`` leaves it out does not name them so. The candidates come with
+    their evidence; an unknown name is refused in one line before any work."""
+    import joblib
+    from hypothesis_example import SupplyStep
+
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.assessment.hypotheses import HYPOTHESES, register_hypothesis, registered
+    from swgmon.detection.laws import BLOCK
+    from swgmon.detection.normal import Conditions
+    from swgmon.detection.rule import RuleConfig
+    from swgmon.evaluation.training import features_of
+    from swgsim.base.registry import travelling
+    from swgsim.datasets.life import LifeSimulator
+    from swgsim.datasets.schedule import LifeConfig
+
+    p, banks = tiny_banks
+    sim = LifeSimulator(p, 3, LifeConfig(hours=5.0, commissioning_h=4.0, life_seed=9),
+                        banks[3])
+    f, pts, meta = features_of(sim, 0, len(sim))
+    cols = [c * BLOCK for c in range(5)]
+    f[270:, cols] += 1.0 * f[:240, cols].std(axis=0).max()  # one δ on every bridge's zero
+    built_in = NamingConfig(hypotheses=list(HYPOTHESES))
+    register_hypothesis(SupplyStep())
+    try:
+        mons = [GearMonitor(tiny_eval["model"], RuleConfig(design_hours=1.0), 1.0, naming=n)
+                for n in (built_in, NamingConfig())]
+        cond, w, hours = Conditions.of(meta), slice(270, 300), meta["hour"][270:300]
+        for m in mons:
+            m.commission(f[:240], pts[:240], cond[:240])
+        tr = mons[0].run(f[w], pts[w], hours, cond[w], latch=False)
+        ev = mons[0].evidence(tr.log_proba, tr.op_index)
+        named = joblib.Parallel(n_jobs=2)(joblib.delayed(travelling(m.name))(
+            ev, f[w], pts[w], cond[w], 1.0, hours) for m in mons)
+        weighed = mons[1]._name(ev, f[w], pts[w], cond[w], 1.0, hours)[3]
+    finally:
+        HYPOTHESES.pop("supply_step")
+    assert named[1] == ("supply_step", None) and named[0][0] != "supply_step"
+    assert weighed[-1][:3] == ["supply_step", "supply_step", None]
+    assert weighed[-1][3] >= NamingConfig().sensor_p_min  # its evidence, with the alarm
+    with pytest.raises(ValueError, match=r"^naming.hypotheses: 'no_such' is no hypothesis"):
+        registered(NamingConfig(hypotheses=["no_such"]))

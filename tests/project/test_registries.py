@@ -17,6 +17,7 @@ from joblib import Parallel, delayed
 from swgcal.strain.effects import STRAIN_LIBRARY, strain_library
 from swgcal.terms import FitTerm
 from swgcal.thermal.library import THERMAL_LIBRARY
+from swgmon.assessment.hypotheses import register_hypothesis
 from swgsim.base.registry import REGISTRIES, Registry, travelling
 from swgsim.gear import faults
 from swgsim.gear.friction import effects
@@ -77,11 +78,16 @@ def _register(kind: str, name: str) -> None:
         THERMAL_LIBRARY.add(name, type(name, (_Churn,), {"kind": name}))
     elif kind == "strain effect":
         STRAIN_LIBRARY.add(name, type(name, (_Churn,), {"kind": name}))
+    elif kind == "hypothesis":
+        register_hypothesis(type(name, (), {"name": name,
+                                            "candidates": lambda self, w: []})())
 
 
 def _use(kind: str, name: str) -> str:
     """In a worker: the entry found by name through the project's own look-ups."""
     from learn.learners.models import make_model
+    from swgmon.assessment.hypotheses import registered
+    from swgmon.assessment.sensor_check import NamingConfig
     from swgmon.evaluation.detectors import DETECTORS
 
     if kind == "gear fault":
@@ -97,6 +103,8 @@ def _use(kind: str, name: str) -> str:
         return THERMAL_LIBRARY[name].kind
     if kind == "strain effect":  # the library the strain calibration tries
         return strain_library()[name].kind
+    if kind == "hypothesis":  # what a monitor's naming weighs
+        return registered(NamingConfig(hypotheses=[name]))[0].name
     return DETECTORS[name].make(0, "cpu")
 
 
@@ -106,7 +114,8 @@ KINDS = {"gear fault": "swgsim.gear.faults:FAULTS",
          "learner": "learn.learners.models:MODELS",
          "detector": "swgmon.evaluation.detectors:DETECTORS",
          "thermal effect": "swgcal.thermal.library:THERMAL_LIBRARY",
-         "strain effect": "swgcal.strain.effects:STRAIN_LIBRARY"}
+         "strain effect": "swgcal.strain.effects:STRAIN_LIBRARY",
+         "hypothesis": "swgmon.assessment.hypotheses:HYPOTHESES"}
 
 
 @pytest.fixture

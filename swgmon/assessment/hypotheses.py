@@ -1,0 +1,199 @@
+"""The hypotheses an alarm is weighed against: a registry, one class each.
+
+An alarm is a question with several answers. Each hypothesis fits the windows since the
+alarm (:class:`Windows`) and returns its candidates (:class:`Candidate`): the answer it
+gives and the windows' z-scores with its effect taken out. The monitor weighs them all by
+one rule (:meth:`~.gear_monitor.GearMonitor.name`): the candidate whose corrected windows
+look most healthy, where they look healthy enough; else the gear fault the diagnosis model
+names. Which hypotheses are weighed, in which order, is ``naming.hypotheses``
+(:class:`~.sensor_check.NamingConfig`): a built-in name of :data:`HYPOTHESES`, or
+``module:Class`` of one's own (docs/ARCHITECTURE.md, "Adding a hypothesis").
+Design and sources: docs/monitor/assessment.md, "The hypotheses".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from swgmon.assessment.sensor_check import (
+    NamingConfig,
+    fit_bridge_faults,
+    fit_temperature,
+    fit_temperature_drift,
+)
+from swgmon.assessment.unexplained import fit_friction
+from swgmon.detection.normal import Conditions, NormalBehaviour
+from swgmon.detection.rule import TEMPERATURE_SENSOR, UNEXPLAINED_CHANGE
+from swgsim.base.registry import Registry
+
+
+@dataclass(frozen=True)
+class Windows:
+    """The windows since an alarm, as every hypothesis fits them.
+
+    Attributes
+    ----------
+    normal : NormalBehaviour
+        Commissioning's normal behaviour.
+    feats : ndarray, shape (n, F)
+        The windows' health features.
+    points : ndarray, shape (n, 2)
+        Their operating points (input speed [rpm], torque [N m]).
+    cond : Conditions or None
+        Their conditions (None: the points' loads, no reading).
+    friction : ndarray, shape (n,)
+        The friction factor in force at each window [-].
+    index : ndarray of int, shape (n,)
+        Each window's operating point in ``normal``.
+    z, spread : ndarray, shape (n, F)
+        Their z-scores and spread (:meth:`NormalBehaviour.z_and_spread`).
+    hours : ndarray, shape (n,), or None
+        Their operating hours [h]; None: no rate is fitted.
+    naming : NamingConfig
+        The naming's numbers.
+    classes : tuple of str
+        The diagnosis model's classes (a sensor fault it has no class for is not named).
+    read : bool
+        Whether the joint's temperature reading is in use (not virtual, not absent).
+    """
+
+    normal: NormalBehaviour
+    feats: np.ndarray
+    points: np.ndarray
+    cond: Conditions | None
+    friction: np.ndarray
+    index: np.ndarray
+    z: np.ndarray
+    spread: np.ndarray
+    hours: np.ndarray | None
+    naming: NamingConfig
+    classes: tuple[str, ...]
+    read: bool
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One answer a hypothesis gives.
+
+    Attributes
+    ----------
+    hypothesis : str
+        The hypothesis's name (``naming.hypotheses``).
+    fault : str
+        What the monitor names if it wins: a sensor fault, the temperature sensor's,
+        an unexplained change, or a fault of one's own.
+    bridge : int or None
+        The faulty bridge (0..4) of a bridge's sensor fault, else None.
+    z : ndarray, shape (n, F)
+        The windows' z-scores with the hypothesis's effect taken out.
+    fit : object or None
+        The fit behind it (its severity: :meth:`~.gear_monitor.GearMonitor.diagnose`).
+    """
+
+    hypothesis: str
+    fault: str
+    bridge: int | None
+    z: np.ndarray
+    fit: object | None = None
+
+
+class Hypothesis(Protocol):
+    """What the registry holds: a ``name`` and the candidates it fits to windows."""
+
+    name: str
+
+    def candidates(self, w: Windows) -> list[Candidate]:
+        """The hypothesis's plausible answers for the windows ``w`` (none: it does not
+        explain them)."""
+
+
+class BridgeFault:
+    """One bridge's offset step or gain drift (:func:`~.sensor_check.fit_bridge_faults`):
+    each plausible fit of a fault the model has a class for, whose other bridges have not
+    moved on average (``naming.rest_max``)."""
+
+    name = "bridge_fault"
+
+    def candidates(self, w: Windows) -> list[Candidate]:
+        fits = fit_bridge_faults(w.normal, w.feats, w.points, w.cond, w.friction, w.index,
+                                 w.z, w.spread, w.hours)
+        return [Candidate(self.name, f.fault, f.bridge, f.z) for f in fits
+                if f.fault in w.classes and f.plausible(w.naming)
+                and f.rest <= w.naming.rest_max]
+
+
+class TemperatureReading:
+    """The temperature reading is wrong, window by window: stuck, lagging or off
+    (:func:`~.sensor_check.fit_temperature`); only while the reading is in use."""
+
+    name = "temperature_reading"
+
+    def candidates(self, w: Windows) -> list[Candidate]:
+        fit = fit_temperature(w.normal, w.feats, w.points, w.cond, w.friction, w.index,
+                              w.naming) if w.read else None
+        return [Candidate(self.name, TEMPERATURE_SENSOR, None, fit.z, fit)] \
+            if fit is not None and fit.plausible(w.naming) else []
+
+
+class TemperatureDrift:
+    """The temperature reading drifts: an offset and a rate
+    (:func:`~.sensor_check.fit_temperature_drift`); only while the reading is in use."""
+
+    name = "temperature_drift"
+
+    def candidates(self, w: Windows) -> list[Candidate]:
+        fit = fit_temperature_drift(w.normal, w.feats, w.points, w.cond, w.friction,
+                                    w.index, w.hours, w.naming) if w.read else None
+        return [Candidate(self.name, TEMPERATURE_SENSOR, None, fit.z, fit)] \
+            if fit is not None and fit.plausible(w.naming) else []
+
+
+class EvenFriction:
+    """The friction changed evenly, as no gear fault changes it: re-greasing, another
+    grease, a seal (:func:`~.unexplained.fit_friction`), named an unexplained change."""
+
+    name = "even_friction"
+
+    def candidates(self, w: Windows) -> list[Candidate]:
+        fit = fit_friction(w.normal, w.feats, w.points, w.cond, w.friction, w.index,
+                           w.hours, w.naming)
+        return [Candidate(self.name, UNEXPLAINED_CHANGE, None, fit.z, fit)] \
+            if fit.plausible(w.naming) else []
+
+
+#: The hypotheses by name, weighed in registration order where ``naming.hypotheses`` is
+#: None; carried to worker processes by :func:`swgsim.base.registry.travelling`.
+HYPOTHESES: Registry[Hypothesis] = Registry("hypothesis", __name__, "HYPOTHESES", [
+    (h.name, h()) for h in (BridgeFault, TemperatureReading, TemperatureDrift, EvenFriction)])
+
+
+def register_hypothesis(h: Hypothesis) -> Hypothesis:
+    """Register ``h`` under ``h.name`` (weighed after those before it; a name taken is
+    refused, :meth:`swgsim.base.registry.Registry.add`); returns it."""
+    return HYPOTHESES.add(h.name, h)
+
+
+def registered(naming: NamingConfig) -> list[Hypothesis]:
+    """The hypotheses ``naming.hypotheses`` names, in its order (None: every registered
+    one); checked before any work by the apps and the studies.
+
+    Raises
+    ------
+    ValueError
+        A name not registered, or a name twice (one line naming ``naming.hypotheses``).
+    """
+    names = list(HYPOTHESES) if naming.hypotheses is None else list(naming.hypotheses)
+    for n in names:
+        what = "no hypothesis" if n not in HYPOTHESES else "twice in the list"
+        if n not in HYPOTHESES or names.count(n) > 1:
+            raise ValueError(f"naming.hypotheses: {n!r} is {what}; registered: "
+                             f"{', '.join(HYPOTHESES)}")
+    return [HYPOTHESES[n] for n in names]
+
+
+__all__ = ["HYPOTHESES", "BridgeFault", "Candidate", "EvenFriction", "Hypothesis",
+           "TemperatureDrift", "TemperatureReading", "Windows", "register_hypothesis",
+           "registered"]
