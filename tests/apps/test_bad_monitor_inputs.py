@@ -157,6 +157,8 @@ OPTION_CASES = {  # case -> (overrides, the key the line must name)
     "monitor naming.virtual_windows even": (["naming.virtual_windows=8"],
                                             "naming.virtual_windows must be odd"),
     "monitor normal.fit.segment_k=0": (["normal.fit.segment_k=0"], "normal.fit.segment_k"),
+    "monitor an unknown hypothesis": (["naming.hypotheses=[nope]"],
+                                      "naming.hypotheses: 'nope' is no hypothesis"),
     "monitor confirm_h=nan": (["confirm_h=nan"], "confirm_h"),
     "monitor an unknown rule key": (["rule.bogus=1"], "rule.bogus: unknown key"),
     "monitor an old key": (["rule.min_baseline=3"], "rule.min_normal_windows"),
