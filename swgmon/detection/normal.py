@@ -463,26 +463,31 @@ class NormalBehaviour:
         i = self._check(points, index)
         if cond is None:
             cond = Conditions(self.ref_torque[i], None)
-        m, n, law = len(friction), len(feats), slice(0, EFFICIENCY + 1)
-        ref = np.repeat(self._corrected(feats, i, cond, np.ones(n))[None], m, axis=0)
-        ref[..., EFFICIENCY] = self._efficiency(feats, i, cond, friction)
-        spread = np.repeat(self.std[i][None], m, axis=0)
+        m, n, law, e = len(friction), len(feats), slice(0, EFFICIENCY + 1), EFFICIENCY
+        ref = self._corrected(feats, i, cond, np.ones(n))  # (n, F): all but the efficiency
+        ref_e = self._efficiency(feats, i, cond, friction)  # (m, n): the efficiency
+        spread, spread_e = self.std[i].copy(), np.repeat(self.std[i, e][None], m, axis=0)
         edge, beyond = self._edge(i, cond)
         kappa = self.config.extrapolation_uncertainty
         if kappa > 0 and beyond.any():
             b = np.flatnonzero(beyond)
-            at_edge = np.repeat(self._corrected(feats[b], i[b], edge[b], np.ones(len(b)))[None],
-                                m, axis=0)
-            at_edge[..., EFFICIENCY] = self._efficiency(feats[b], i[b], edge[b],
-                                                        friction[:, b])
-            u = ref[:, b, law] - at_edge[..., law]
-            spread[:, b, law] = np.sqrt(spread[:, b, law] ** 2 + (kappa * u) ** 2)
+            at_edge = self._corrected(feats[b], i[b], edge[b], np.ones(len(b)))
+            u = ref[b, law] - at_edge[:, law]
+            spread[b, law] = np.sqrt(spread[b, law] ** 2 + (kappa * u) ** 2)
+            u_e = ref_e[:, b] - self._efficiency(feats[b], i[b], edge[b], friction[:, b])
+            spread_e[:, b] = np.sqrt(spread_e[:, b] ** 2 + (kappa * u_e) ** 2)
         w = self._law_spread(feats, i, cond, friction)
         if w is not None:
-            spread[..., EFFICIENCY] = np.sqrt(spread[..., EFFICIENCY] ** 2 + w ** 2)
-        dev = (ref - self.mean[i][None]).reshape(m * n, -1)
-        z, _ = self._in_spread(dev, np.tile(i, m), spread.reshape(m * n, -1),
-                               np.tile(self._heavier(i, cond), m))
+            spread_e = np.sqrt(spread_e ** 2 + w ** 2)
+        dev, dev_e = ref - self.mean[i], ref_e - self.mean[i, e]
+        if self.warm_dir is None:  # the columns do not mix: all but one are the same
+            z = np.repeat((dev / spread)[None], m, axis=0)
+            z[..., e] = dev_e / spread_e
+            return z
+        dev, spread = np.repeat(dev[None], m, axis=0), np.repeat(spread[None], m, axis=0)
+        dev[..., e], spread[..., e] = dev_e, spread_e
+        z, _ = self._in_spread(dev.reshape(m * n, -1), np.tile(i, m),
+                               spread.reshape(m * n, -1), np.tile(self._heavier(i, cond), m))
         return z.reshape(m, n, -1)
 
     def z_over_temperature(self, feats: np.ndarray, points: np.ndarray,

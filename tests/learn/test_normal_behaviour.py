@@ -310,16 +310,18 @@ def test_z_over_friction_equals_z_of_the_repeated_windows():
     z of the windows repeated once per factor: with a temperature law, warm-up
     directions and windows beyond commissioning's loads and temperatures (the widened
     spread), without conditions, and with a friction law commissioning could not learn
-    (the efficiency's spread widened by its range's ends)."""
+    (the efficiency's spread widened by its range's ends); with and without warm-up
+    directions (without, the columns do not mix and all but one are repeated)."""
     rng = np.random.default_rng(5)
     commanded = np.repeat(LOADS, 80)
     temp = rng.uniform(20.0, 45.0, commanded.size)
     points = np.stack([np.full(commanded.size, 2000.0), commanded], axis=1)
-    nb = NormalBehaviour.fit(_features(commanded, rng), points, Conditions(commanded, temp))
+    plain = NormalBehaviour.fit(_features(commanded, rng), points,
+                                Conditions(commanded, temp))
     k, f_n = 2, EFFICIENCY + 1
-    d = rng.standard_normal((len(nb.points), k, f_n))
-    nb = dataclasses.replace(nb, warm_dir=d / np.linalg.norm(d, axis=2, keepdims=True),
-                             warm_range=np.tile([-1.5, 2.0], (len(nb.points), k, 1)))
+    d = rng.standard_normal((len(plain.points), k, f_n))
+    nb = dataclasses.replace(plain, warm_dir=d / np.linalg.norm(d, axis=2, keepdims=True),
+                             warm_range=np.tile([-1.5, 2.0], (len(plain.points), k, 1)))
     n = 24
     p = points[rng.choice(len(points), n)]
     acting = p[:, 1] * rng.uniform(0.95, 1.15, n)
@@ -327,14 +329,15 @@ def test_z_over_friction_equals_z_of_the_repeated_windows():
     factors = np.exp(rng.uniform(-1.0, 1.0, (7, n)))
     steep = dataclasses.replace(nb.loss, coef=nb.loss.coef * 1.3)
     flat = LossLaw(nb.loss.coef[:, [0, -1]] * 0.8, nb.loss.floor)
-    band = dataclasses.replace(nb, loss_band=(steep, flat))
-    for law, cond in ((nb, Conditions(acting, rng.uniform(10.0, 60.0, n))), (nb, None),
-                     (band, Conditions(acting, rng.uniform(10.0, 60.0, n)))):
-        fast = law.z_over_friction(feats, p, cond, factors)
-        rep = np.tile(np.arange(n), len(factors))
-        slow = law.z(feats[rep], p[rep], None if cond is None else cond[rep],
-                     factors.ravel()).reshape(fast.shape)
-        assert np.array_equal(fast, slow)
+    for warm in (nb, plain):  # the columns mixed by warm-up directions, and not
+        band = dataclasses.replace(warm, loss_band=(steep, flat))
+        for law, cond in ((warm, Conditions(acting, rng.uniform(10.0, 60.0, n))),
+                          (warm, None), (band, Conditions(acting, rng.uniform(10.0, 60.0, n)))):
+            fast = law.z_over_friction(feats, p, cond, factors)
+            rep = np.tile(np.arange(n), len(factors))
+            slow = law.z(feats[rep], p[rep], None if cond is None else cond[rep],
+                         factors.ravel()).reshape(fast.shape)
+            assert np.array_equal(fast, slow)
     assert np.any(nb._edge(nb.index(p), Conditions(acting, None))[1])  # spread widened
 
 
