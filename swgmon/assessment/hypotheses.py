@@ -5,9 +5,9 @@ alarm (:class:`Windows`) and returns its candidates (:class:`Candidate`): the an
 gives and the windows' z-scores with its effect taken out. The monitor weighs them all by
 one rule (:meth:`~.gear_monitor.GearMonitor.name`): the candidate whose corrected windows
 look most healthy, where they look healthy enough; else the gear fault the diagnosis model
-names. Which hypotheses are weighed, in which order, is ``naming.hypotheses``
-(:class:`~.sensor_check.NamingConfig`): a built-in name of :data:`HYPOTHESES`, or
-``module:Class`` of one's own (docs/ARCHITECTURE.md, "Adding a hypothesis").
+names. The hypotheses are a registry (:data:`HYPOTHESES`; one's own by
+:func:`register_hypothesis`, docs/ARCHITECTURE.md, "To add a hypothesis"); which are
+weighed, in which order, is ``naming.hypotheses`` (:class:`~.sensor_check.NamingConfig`).
 Design and sources: docs/monitor/assessment.md, "The hypotheses".
 """
 
