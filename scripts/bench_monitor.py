@@ -10,7 +10,10 @@ it, cost amortised) and one window at a time (as a live monitor receives them:
 ``GearMonitor.step``; ``run`` on blocks of one window for comparison). The
 simulation of the windows is timed apart: the records of a healthy life (six operating
 points) and the windows cut from them, with the records spread over a 1000-h life.
-Prints ms per window; target for the monitor: at most 1 ms.
+Prints ms per window; target for the monitor: at most 1 ms. Then the cost of naming
+an alarm: each registered hypothesis (``swgmon.assessment.hypotheses``) fitted once to a
+day of the timed windows (1440 at most; a recurring change renames up to a day), the
+largest piece of a long life's time on robot_joint (issue 85's profile).
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
+import dataclasses  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -97,9 +101,36 @@ def main() -> None:
     print(f"  one at a time:     {single:.3f} ms per window ({n1} windows, GearMonitor.step; "
           f"run() on blocks of one: {single_run:.3f} ms)")
     print("  target: <= 1 ms per window")
+    warm = LifeSimulator(p, 3, dataclasses.replace(life, conditions=cfg.nuisances["warm_up"]),
+                         record_bank(p, 3))  # a day's warm-ups, read by a sensor
+    for title, s in (("without a temperature reading", sim), ("with one (warm-ups)", warm)):
+        _time_naming(title, s, n_c, min(args.windows, 1440), model, cfg)
     print(f"life generation: records of a healthy life {t_rec:.1f} s, windows "
           f"{t_win * 1e3:.3f} ms each; over a 1000-h life (60,000 windows) "
           f"{(t_rec / 60000 + t_win) * 1e3:.3f} ms per window")
+
+
+def _time_naming(title: str, sim, n_c: int, n: int, model, cfg) -> None:
+    """Print the seconds each registered hypothesis takes to fit ``n`` windows after
+    commissioning on ``sim``'s first ``n_c`` (its conditions as the life has them)."""
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.assessment.hypotheses import Windows, registered
+    from swgmon.detection.normal import Conditions
+    from swgmon.evaluation.training import features_of
+
+    f, pts, meta = features_of(sim, 0, n_c + n)
+    cond = Conditions.of(meta)
+    mon = GearMonitor(model, cfg.rule, 1.0)
+    mon.commission(f[:n_c], pts[:n_c], cond[:n_c])
+    nb, day, c = mon.normal, slice(n_c, n_c + n), cond[n_c:n_c + n]
+    w = Windows(nb, f[day], pts[day], c, np.ones(n), nb.index(pts[day]),
+                *nb.z_and_spread(f[day], pts[day], c, 1.0), meta["hour"][day], mon.naming,
+                tuple(model.classes), c.temperature_c is not None)
+    print(f"naming an alarm over {n} windows {title}, each hypothesis once:")
+    for h in registered(mon.naming):
+        t0 = time.perf_counter()
+        h.candidates(w)
+        print(f"  {h.name:20s} {time.perf_counter() - t0:6.2f} s")
 
 
 if __name__ == "__main__":
