@@ -9,17 +9,29 @@ Node format, budget and refusals: ``docs/EXPORT.md``, "Method".
 
 from __future__ import annotations
 
+import importlib.util
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 
 #: Estimators the C stage can run (emlearn's tree ensembles, classifiers).
 SUPPORTED = ("RandomForestClassifier", "ExtraTreesClassifier", "DecisionTreeClassifier")
-#: emlearn's limits: int16 relative child jumps, int8 feature index, EMTREES_MAX_CLASSES.
-MAX_DECISION_NODES = 32767
-MAX_FEATURES = 127
-MAX_CLASSES = 30
-NODE_BYTES = 8  # sizeof(EmlTreesNode) on Cortex-M (int8, pad, 3 x int16)
+#: One decision node as emlearn's C holds it (``EmlTreesNode`` of ``eml_trees.h``: int8
+#: feature index, int16 threshold and relative child jumps, C alignment).
+NODE = np.dtype([("feature", np.int8), ("value", np.int16), ("left", np.int16),
+                 ("right", np.int16)], align=True)
+#: sizeof(EmlTreesNode) on Cortex-M [bytes].
+NODE_BYTES = NODE.itemsize
+#: emlearn's limits from its node: int16 relative child jumps, int8 feature index.
+MAX_DECISION_NODES = int(np.iinfo(NODE["left"]).max)
+MAX_FEATURES = int(np.iinfo(NODE["feature"]).max)
+#: emlearn's ``EMTREES_MAX_CLASSES``, read from its installed ``eml_trees.h`` (not imported:
+#: importing emlearn changes numpy's error state, :func:`~swgmon.export.import_emlearn`).
+MAX_CLASSES = int(re.search(r"#define\s+EMTREES_MAX_CLASSES\s+(\d+)", Path(
+    importlib.util.find_spec("emlearn").submodule_search_locations[0], "eml_trees.h"
+).read_text()).group(1))
 
 
 def check_representable(estimator) -> None:

@@ -14,6 +14,7 @@ against the monitor's float64 least squares: ``docs/EXPORT.md``, "Method".
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -27,8 +28,10 @@ BLOCK = 64
 #: Scale of the classifier's int16 z-score inputs: 1/Z_SCALE z per step, ±32767 / Z_SCALE
 #: z at most (larger z-scores are clipped; a tree learns on the clipped values).
 Z_SCALE = 64.0
-#: Nuisance orders as multiples of 1/NUISANCE_DEN of the input angle (1/4, 1/3, 1/2).
-NUISANCE_DEN = 12
+#: The nuisance orders' least common denominator: each is a multiple of 1/NUISANCE_DEN of
+#: the input angle (1/4, 1/3, 1/2 of :data:`learn.inputs.health.NUISANCE_ORDERS`: 12).
+NUISANCE_DEN = math.lcm(*(Fraction(o).limit_denominator(1000).denominator
+                          for o in NUISANCE_ORDERS))
 
 # float32 constants of the C (each printed by swgmon.export.cgen from these values)
 TWO_OVER_PI = F32(2 / np.pi)
@@ -52,13 +55,13 @@ def nuisance_multiples() -> tuple[int, ...]:
     Raises
     ------
     ValueError
-        If an order of :data:`learn.inputs.health.NUISANCE_ORDERS` is not such a
-        multiple.
+        If an order of :data:`learn.inputs.health.NUISANCE_ORDERS` is no ratio of small
+        integers (denominator at most 1000), so no such multiple.
     """
     out = []
     for o in NUISANCE_ORDERS:
         m = Fraction(o).limit_denominator(1000) * NUISANCE_DEN
-        if m.denominator != 1:
+        if not np.isclose(float(m) / NUISANCE_DEN, o, rtol=0.0, atol=1e-12):
             raise ValueError(f"nuisance order {o:g} is not a multiple of 1/{NUISANCE_DEN}")
         out.append(int(m))
     return tuple(out)

@@ -12,6 +12,7 @@ assumptions (and why not ProgPy or SurPyval): docs/monitor/prognosis.md, "Progno
 from __future__ import annotations
 
 import numpy as np
+from scipy.special import ndtri
 
 from swgmon.prognosis.inputs import (
     Duty,
@@ -37,8 +38,9 @@ __all__ = ["Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track", "check_
            "exposure", "from_samples", "hours_for_exposure", "not_valid", "not_yet_valid",
            "predict_growth", "residual_correlation", "severity_of", "transformed"]
 
-#: z of a central 90 % interval of a normal distribution, its half-width in σ [-].
-Z90 = 1.6448536269514722
+#: z of a central 90 % interval of a normal distribution, its half-width in σ [-]: the
+#: standard normal's 95 % quantile.
+Z90 = float(ndtri(0.95))
 
 
 

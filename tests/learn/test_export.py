@@ -102,6 +102,23 @@ def test_tree_beyond_int16_node_indices_refused():
         to_c(t)
 
 
+def test_node_format_and_class_limit_read_from_the_installed_emlearn():
+    import importlib.util
+    import re
+    from pathlib import Path
+
+    from swgmon.export.forest import MAX_CLASSES, NODE, NODE_BYTES
+
+    header = Path(importlib.util.find_spec("emlearn").submodule_search_locations[0],
+                  "eml_trees.h").read_text()
+    body = re.search(r"typedef struct _EmlTreesNode \{(.*?)\} EmlTreesNode;", header, re.S)
+    fields = re.findall(r"(u?int\d+)_t\s+(\w+);", body.group(1))
+    assert [(n, np.dtype(t)) for t, n in fields] == \
+        [(n, NODE[n]) for n in NODE.names]  # the node the budget counts is emlearn's
+    assert NODE_BYTES == 8  # int8, one byte of padding, three int16 (C alignment)
+    assert MAX_CLASSES == int(re.search(r"EMTREES_MAX_CLASSES (\d+)", header).group(1))
+
+
 def test_forest_size_follows_the_flash_budget():
     from swgmon.export.forest import NODE_BYTES, leaves_for_budget
 
