@@ -365,3 +365,11 @@ def test_every_predictor_option_is_an_option_of_the_monitor_app():
                                                    max_bins=16))
     with pytest.raises(ValueError, match=r"^prognosis.n_grid must lie in \[21, 10001\]"):
         StreamPrognosis(n_grid=5).check()
+
+
+def test_z90_is_the_standard_normals_95_percent_quantile():
+    from scipy.special import ndtri
+
+    from swgmon.prognosis.growth import Z90
+
+    assert Z90 == float(ndtri(0.95))  # written in: an app's start imports no scipy
