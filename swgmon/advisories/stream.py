@@ -453,7 +453,8 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         missing reading's alarm has no severity), and the monitor in force at the end.
     """
     traces, alarms, i0, n, fstart = [], [], 0, len(feats), None
-    while True:
+    while True:  # an alarm named a gear fault keeps the monitor from relearning a point
+        mon.fault_suspected = any(a.kind == "gear_fault" for a in alarms)
         t = cond.temperature_c
         bad = np.array([], int) if t is None else np.flatnonzero(~np.isfinite(t[i0:]))
         stop = n if not bad.size else i0 + int(bad[0])

@@ -434,7 +434,7 @@ def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np
             or not np.all(np.isfinite(cond.temperature_c))):
         return None
     z0 = normal.z(feats, points, cond, friction, index)
-    flat = _unwidened(normal)
+    flat = normal.unwidened()
     dt = np.asarray(hours, float) - float(hours[0])
     args = (flat, feats, points, cond.torque_nm, friction, index)
 
@@ -467,7 +467,7 @@ def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndar
     nc = naming or NamingConfig()
     lo = float(np.min(normal.temp_range[:, 0])) - nc.temperature_beyond_k
     hi = float(np.max(normal.temp_range[:, 1])) + nc.temperature_beyond_k
-    normal = _unwidened(normal)  # no pull to the ends
+    normal = normal.unwidened()  # no pull to the ends
     fine = nc.temperature_step_k * np.arange(-nc.coarse_steps, nc.coarse_steps + 1)
     grid = np.arange(lo, hi + nc.coarse_step_k, nc.coarse_step_k)  # coarse, then fine
     temp, zb = np.empty(len(feats)), np.empty(feats.shape)
@@ -482,13 +482,6 @@ def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndar
         k = np.argmin(s, axis=1)
         temp[w], zb[w] = cand[np.arange(n), k], z[np.arange(n), k]
     return temp, zb
-
-
-def _unwidened(normal: NormalBehaviour) -> NormalBehaviour:
-    """``normal`` extrapolating beyond commissioning's range in commissioning's spread
-    (not widened: a fit over temperatures would be pulled to its grid's ends)."""
-    return dataclasses.replace(normal, config=dataclasses.replace(
-        normal.config, extrapolation_uncertainty=0.0))
 
 
 def _sum_z2(normal: NormalBehaviour, feats, points, torque_nm, friction, index,

@@ -12,7 +12,7 @@ Design and sources: docs/monitor/detection.md, "The normal behaviour's laws" (an
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -372,6 +372,13 @@ class NormalBehaviour:
         """
         i = self._check(points, index)
         return self._corrected(feats, i, cond, np.broadcast_to(friction, (len(feats),)))
+
+    def unwidened(self) -> NormalBehaviour:
+        """This normal behaviour extrapolating beyond commissioning's range in
+        commissioning's spread (``extrapolation_uncertainty`` 0): a fit over conditions
+        would be pulled to its grid's ends by the widened spread, and a severity read in
+        it shrinks (:meth:`~swgmon.assessment.gear_monitor.GearMonitor.inputs`)."""
+        return replace(self, config=replace(self.config, extrapolation_uncertainty=0.0))
 
     def z(self, feats: np.ndarray, points: np.ndarray, cond: Conditions | None = None,
           friction: np.ndarray | float = 1.0, index: np.ndarray | None = None) -> np.ndarray:

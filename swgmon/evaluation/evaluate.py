@@ -380,13 +380,17 @@ def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray
     the healthy windows replayed through it where a point's load had left commissioning's
     range by then (its recommissioning; :meth:`GearMonitor.run`), following the friction
     as after a re-greasing from each unexplained change ``named`` by then
-    (:func:`swgmon.advisories.stream.run_stream`)."""
+    (:func:`swgmon.advisories.stream.run_stream`), and not relearning from an alarm
+    named a gear fault on (:attr:`GearMonitor.fault_suspected`; the replay, one run,
+    relearns nothing from its first alarm on, as the stream where no later cut explains
+    it away)."""
     if before < 0 or not (tr.outside[:before + 1] & Outside.LOAD).any():
         m = commissioned.fork()
     else:
         m = commissioned.fork(fresh_draws=True)
         w = slice(0, before + 1)
         m.run(f[w], p[w], tr.hour[w], c[w], latch=False)
+    m.fault_suspected = any(a.kind == "gear_fault" and a.index <= before for a in named)
     for a in named:
         if before >= 0 and a.fault == UNEXPLAINED_CHANGE and a.hour <= tr.hour[before]:
             adopt_change(m, a, 1.0)  # the factor itself is in the trace's state

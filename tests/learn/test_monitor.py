@@ -490,6 +490,51 @@ def test_heavier_tool_recommissions_points_alike_in_block_step_and_replay(tiny_e
     np.testing.assert_array_equal(a.normal.torque_range, b.normal.torque_range)
 
 
+def test_a_suspected_fault_keeps_every_point_and_the_severity_reads_unwidened(tiny_eval,
+                                                                             tiny_banks):
+    """After an alarm not explained away (a gear fault named) the monitor recommissions
+    no point: the heavier tool's windows that relearn point 1 of a monitor without one
+    leave every point as commissioning made it. An alarm sets the suspicion and clears
+    what was gathered. Beyond the load range the severity regressors read the z-scores in
+    commissioning's spread, not the detection's widened one, which shrinks them."""
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.assessment.model import design_matrix
+    from swgmon.detection.normal import Conditions, Outside
+    from swgmon.detection.rule import RuleConfig
+    from swgmon.evaluation.training import features_of
+    from swgsim.datasets.life import LifeSimulator
+
+    p, banks = tiny_banks
+    sim = LifeSimulator(p, 3, _heavier_tool_life(), banks[3])
+    f, pts, meta = features_of(sim, 0, len(sim))
+    cond, hour = Conditions.of(meta), meta["hour"]
+    free, held = (GearMonitor(tiny_eval["model"], RuleConfig(design_hours=1.0), 1.0, seed=5)
+                  for _ in range(2))
+    for m in (free, held):
+        m.commission(f[:240], pts[:240], cond[:240])
+    mean0 = held.normal.mean.copy()
+    held.fault_suspected = True
+    w = slice(240, None)
+    assert free.run(f[w], pts[w], hour[w], cond[w], latch=False).recommissioned
+    tr = held.run(f[w], pts[w], hour[w], cond[w], latch=False)
+    assert tr.recommissioned == [] and held.fault_suspected
+    np.testing.assert_array_equal(held.normal.mean, mean0)
+    beyond = np.flatnonzero((tr.outside & Outside.LOAD) != 0) + 240
+    assert beyond.size
+    x = held.inputs(f[beyond], pts[beyond], cond[beyond])
+    z_wide = held.normal.z(f[beyond], pts[beyond], cond[beyond])
+    np.testing.assert_array_equal(x, design_matrix(held.normal.unwidened().z(
+        f[beyond], pts[beyond], cond[beyond]), pts[beyond]))
+    assert np.abs(x[:, :-2]).sum() > np.abs(z_wide).sum()  # the widened spread shrinks them
+    fresh = free.fork()
+    fresh.fault_suspected, fresh.learning = False, {0: []}
+    opi = fresh.normal.index(pts[w])
+    out = np.full(len(opi), Outside.LOAD)
+    assert fresh._learn(opi, out, fresh.normal.mean[opi], cond.torque_nm[w], [3],
+                        latch=False) is None
+    assert fresh.fault_suspected and fresh.learning == {}
+
+
 def test_a_window_without_its_reference_features_is_not_gathered_for_recommissioning(
         tiny_eval, tiny_banks):
     """A window whose features could not be brought to the reference condition (NaN where
