@@ -510,7 +510,7 @@ class GearMonitor:
             out = self.normal.outside(points[w], cond[w], fr[w], opi[w])
             p = self.p_values(score, opi[w], u[w], out)
             cus, alarms = run_cusums(judged_bets(p, out, self.rule), self.h, s, latch)
-            ev = self._learn(opi[w], out, ref, cond.torque_nm[w], alarms, latch)
+            ev = self._learn(opi[w], out, ref, cond.torque_nm[w], alarms)
             n = len(p) if ev is None else ev[0] + 1
             parts.append(Trace(hours[w][:n], score[:n], p[:n], cus[:n],
                                [a for a in alarms if a < n], lp[:n], opi[w][:n], fr[w][:n],
@@ -532,7 +532,7 @@ class GearMonitor:
         return score, lp, ref
 
     def _learn(self, opi: np.ndarray, out: np.ndarray, ref: np.ndarray, torque: np.ndarray,
-               alarms: list[int], latch: bool) -> tuple[int, int, bool] | None:
+               alarms: list[int]) -> tuple[int, int, bool] | None:
         """Windows in time order through the recommissioning of points whose acting load
         left commissioning's range (:class:`~swgmon.detection.normal.NormalConfig`
         ``recommission_load``): a point's windows beyond its load range gather, in a row,
@@ -636,7 +636,7 @@ class GearMonitor:
         cus = np.maximum(0.0, self.cusum + judged_bets(p, out, self.rule)[0])
         alarm = bool((cus >= self.h).any())
         self.cusum = np.zeros_like(cus) if alarm else cus
-        ev = self._learn(opi, out, ref, cond.torque_nm, [0] if alarm else [], latch=False)
+        ev = self._learn(opi, out, ref, cond.torque_nm, [0] if alarm else [])
         return Trace(np.array([float(hour)]), score, p, cus[None, :],
                      [0] if alarm else [], lp, opi, fr, out, [] if ev is None else [ev])
 

@@ -11,6 +11,8 @@ assumptions (and why not ProgPy or SurPyval): docs/monitor/prognosis.md, "Progno
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from swgmon.prognosis.inputs import (
@@ -192,11 +194,13 @@ def severity_of(fault: str, u: np.ndarray, tf: RunToFailure) -> tuple[np.ndarray
 
 
 def _grid_posterior(ls: np.ndarray, y: np.ndarray, w: np.ndarray, x: np.ndarray,
-                    fault: str, cfg: PrognosisConfig) -> tuple[np.ndarray, ...]:
-    """Log posterior of ln s at grid ``ls`` (shape (G,)), u0's fit and precision there,
-    each shape (G,); y, w = 1/σ², x: the estimates, shape (n,)
-    (docs/monitor/prognosis.md, "Prognosis")."""
-    tf, floor = cfg.to_failure, cfg.severity_floor
+                    fault: str, cfg: PrognosisConfig, tf: RunToFailure
+                    ) -> tuple[np.ndarray, ...]:
+    """Log posterior of ln s at grid ``ls`` (shape (G,); not normalised: the prior
+    and the likelihood's sum of squares, u0 integrated out under a flat prior by
+    Laplace's method), u0's fit and precision there, each shape (G,); y, w = 1/σ², x: the
+    estimates, shape (n,), under the law ``tf`` (docs/monitor/prognosis.md, "Prognosis")."""
+    floor = cfg.severity_floor
     u, b = transformed(fault, y, tf, floor)
     beta = b * np.exp(ls)[:, None]  # (G, 1)
     early = slice(0, max(3, y.size // 4))  # the start: the first quarter's mean [choice]
@@ -211,13 +215,13 @@ def _grid_posterior(ls: np.ndarray, y: np.ndarray, w: np.ndarray, x: np.ndarray,
     prior_sd = max(tf.scatter, 1e-3)  # scatter 0: the scale known [choice]
     logp = -0.5 * (w * (y - sev) ** 2).sum(axis=1) - 0.5 * np.log(info) \
         - 0.5 * (ls / prior_sd) ** 2
-    return logp - logp.max(), u0, info
+    return logp, u0, info
 
 
 def residual_correlation(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
                          cfg: PrognosisConfig, ls: np.ndarray) -> float:
     """Lag-1 autocorrelation of the standardised residuals at the posterior's peak over
-    grid ``ls``, in [0, ``cfg.max_correlation``] [-].
+    grid ``ls``, under the law ``cfg.to_failure``, in [0, ``cfg.max_correlation``] [-].
 
     Neighbouring severity estimates are read by one regressor from windows of one gear
     in one state: their errors are correlated, not independent as the likelihood of
@@ -225,12 +229,13 @@ def residual_correlation(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str
     information of n (1 − ρ) / (1 + ρ) independent ones about a level or a slope (the
     effective sample size; Box, Jenkins and Reinsel, "Time Series Analysis", 4th ed.,
     Wiley 2008, sec. 2.1.5), so the fit's weights are scaled by that factor
-    (:func:`_posterior_draws`). A negative ρ is taken as 0 (no gain claimed).
+    (:func:`predict_growth`). A negative ρ is taken as 0 (no gain claimed).
     """
-    logp, u0, _ = _grid_posterior(ls, y, w, x, fault, cfg)
+    tf = cfg.to_failure
+    logp, u0, _ = _grid_posterior(ls, y, w, x, fault, cfg, tf)
     k = int(np.argmax(logp))
-    b = transformed(fault, y, cfg.to_failure, cfg.severity_floor)[1]
-    sev, _ = severity_of(fault, u0[k] + b * np.exp(ls[k]) * x, cfg.to_failure)
+    b = transformed(fault, y, tf, cfg.severity_floor)[1]
+    sev, _ = severity_of(fault, u0[k] + b * np.exp(ls[k]) * x, tf)
     z = (y - sev) * np.sqrt(w)
     z = z - z.mean()
     if z.size < 3 or not np.any(z):
@@ -238,27 +243,94 @@ def residual_correlation(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str
     return float(np.clip((z[1:] @ z[:-1]) / (z @ z), 0.0, cfg.max_correlation))
 
 
-def _posterior_draws(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
-                     cfg: PrognosisConfig, rng: np.random.Generator
-                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Draws of (s, u0), shapes (N,) each: the grid posterior of ln s over
-    ±``log_scale_span`` with the weights scaled to the effective sample size of an AR(1)
-    error (:func:`residual_correlation`), then again on ``n_grid`` points over where it
-    exceeds e^-25 of its peak (a cell beyond each end) [choice: a precise track's
-    posterior is narrower than a coarse cell], u0 given s normal about its fit (Laplace's
-    method)."""
+def _paris_laws(fault: str, tf: RunToFailure, cfg: PrognosisConfig, y: np.ndarray,
+                thr: float, recorded: Duty) -> tuple[list[RunToFailure], np.ndarray]:
+    """The laws a prognosis weighs, M of them, and their log prior, shape (M,): for a
+    crack with ``cfg.paris_m_sd`` > 0, Paris' m on ``paris_m_points`` points over the
+    prior's mean ``tf.paris_m`` ± 2σ (within [1, 6]); else ``tf`` alone.
+
+    C moves with m about a pivot ΔK (the C-m correlation, Cortie and Garrett, Eng. Fract.
+    Mech. 30 (1988) 49-58 [unverified: recalled]), so the scale's prior means one rate
+    whatever m. The material's pivot is unknown; the crack's own mid-life stands for it:
+    Y Δσ √(π a) at the ``recorded`` duty's mean load and the geometric mean of the depths
+    at the start (the median of the first quarter of the estimates ``y``) and at failure
+    (``thr``) [choice]."""
+    load_nm = np.sum(np.abs(recorded.t_acting_nm) * recorded.minutes) / np.sum(recorded.minutes)
+    if _law(fault) == "archard" or cfg.paris_m_sd == 0 or cfg.paris_m_points == 1 \
+            or load_nm <= 0:
+        return [tf], np.zeros(1)
+    start = float(np.median(y[:max(3, y.size // 4)]))
+    m = np.clip(tf.paris_m + cfg.paris_m_sd * np.linspace(-2.0, 2.0, cfg.paris_m_points),
+                1.0, 6.0)
+    depth = DEPTH_AT_ONE_M[fault] * np.sqrt(max(start, cfg.severity_floor) * thr)
+    pivot = tf.shape_factor * tf.stress_mpa_per_nm * load_nm * np.sqrt(np.pi * depth)
+    laws = [dataclasses.replace(tf, paris_m=float(mi),
+                                paris_c=float(tf.paris_c * pivot ** (tf.paris_m - mi)))
+            for mi in m]
+    return laws, -0.5 * ((m - tf.paris_m) / cfg.paris_m_sd) ** 2
+
+
+def _posterior(y: np.ndarray, w: np.ndarray, x: np.ndarray, fault: str,
+               cfg: PrognosisConfig, tf: RunToFailure) -> tuple[np.ndarray, ...]:
+    """The grid posterior of ln s under ``tf`` over ±``log_scale_span``, then again on
+    ``n_grid`` points over where it exceeds e^-25 of its peak (a cell beyond each end)
+    [choice: a precise track's posterior is narrower than a coarse cell]: the grid, its
+    log posterior, u0 and its precision (shape (G,) each), and the log evidence
+    (the posterior's integral, with u0's prior flat in the starting severity: the
+    Jacobian d severity / d u0 at the peak) [-]."""
     ls = np.linspace(-cfg.log_scale_span, cfg.log_scale_span, cfg.n_grid)
-    rho = residual_correlation(y, w, x, fault, cfg, ls)
-    w = w * (1.0 - rho) / (1.0 + rho)
-    logp, _, _ = _grid_posterior(ls, y, w, x, fault, cfg)
-    keep = np.flatnonzero(logp > -25.0)
+    logp, _, _ = _grid_posterior(ls, y, w, x, fault, cfg, tf)
+    keep = np.flatnonzero(logp > logp.max() - 25.0)
     cell = ls[1] - ls[0]
     ls = np.linspace(ls[keep[0]] - cell, ls[keep[-1]] + cell, cfg.n_grid)
-    logp, u0, info = _grid_posterior(ls, y, w, x, fault, cfg)
+    logp, u0, info = _grid_posterior(ls, y, w, x, fault, cfg, tf)
+    k = int(np.argmax(logp))
+    slope = abs(float(severity_of(fault, u0[k:k + 1], tf)[1][0]))
+    peak = float(logp[k])
+    evidence = peak + np.log(np.exp(logp - peak).sum() * (ls[1] - ls[0])) \
+        + np.log(max(slope, 1e-300))
+    return ls, logp - peak, u0, info, evidence
+
+
+def _draws(post: tuple[np.ndarray, ...], n: int, rng: np.random.Generator
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """n draws of (s, u0) from a :func:`_posterior`: ln s from the grid (uniform within
+    a cell), u0 given s normal about its fit (Laplace's method)."""
+    ls, logp, u0, info, _ = post
     p = np.exp(logp)
-    pick = rng.choice(ls.size, size=cfg.n_samples, p=p / p.sum())
-    s = np.exp(ls[pick] + (ls[1] - ls[0]) * (rng.random(cfg.n_samples) - 0.5))
-    return s, u0[pick] + rng.standard_normal(cfg.n_samples) / np.sqrt(info[pick])
+    pick = rng.choice(ls.size, size=n, p=p / p.sum())
+    s = np.exp(ls[pick] + (ls[1] - ls[0]) * (rng.random(n) - 0.5))
+    return s, u0[pick] + rng.standard_normal(n) / np.sqrt(info[pick])
+
+
+def _remaining(fault: str, laws: list[RunToFailure], log_prior: np.ndarray,
+               tracks: list[tuple[np.ndarray, ...]], thr: float, cfg: PrognosisConfig,
+               recorded: Duty, planned: Duty | None, rng: np.random.Generator
+               ) -> np.ndarray:
+    """``cfg.n_samples`` draws of the remaining hours [h], shape (N,): each law's share
+    its prior times its evidence (:func:`_paris_laws`, :func:`_posterior`; one law: all),
+    its draws of (s, u0) from its posterior; ``tracks`` the (severity, weight, exposure)
+    the fit sees under each law."""
+    posts = [_posterior(*t, fault, cfg, law) for t, law in zip(tracks, laws, strict=True)]
+    if len(laws) == 1:
+        counts = np.array([cfg.n_samples])
+    else:
+        lp = log_prior + np.array([p[-1] for p in posts])
+        pm = np.exp(lp - lp.max())
+        counts = rng.multinomial(cfg.n_samples, pm / pm.sum())
+    out = []
+    for law, t, post, n in zip(laws, tracks, posts, counts, strict=True):
+        if n == 0:
+            continue
+        s, u0 = _draws(post, int(n), rng)
+        u_fail, b = transformed(fault, np.array([thr]), law, cfg.severity_floor)
+        need = (float(u_fail[0]) - u0) / (b * s) - t[2][-1]  # exposure to come at s = 1
+        if planned is None:  # the recorded duty's mean rate: its cycle's phase is unknown
+            rec = exposure(fault, recorded, law)[-1] / (np.sum(recorded.minutes) / 60.0)
+            out.append(np.where(need > 0, need / rec if rec > 0 else np.inf, 0.0))
+        else:
+            out.append(hours_for_exposure(need, planned, exposure(fault, planned, law)))
+    return np.concatenate(out)
 
 
 def predict_growth(track: Track, fault: str, alarm_hour: float | None, recorded: Duty,
@@ -321,20 +393,22 @@ def predict_growth(track: Track, fault: str, alarm_hour: float | None, recorded:
         return not_valid(float(h[-1]), fault, "growth", float(y[-1]), thr, reason)
     tf = cfg.to_failure
     w = ((2.0 * Z90) / (hi - lo)) ** 2  # 1/σ² of each estimate
-    x = _track_exposure(fault, h, recorded, wh, tf)
+    first = np.arange(y.size)
     if y.size > cfg.max_bins:  # groups of consecutive estimates (PrognosisConfig.max_bins)
         first = np.unique(np.linspace(0, y.size, cfg.max_bins, endpoint=False).astype(int))
-        wsum = np.add.reduceat(w, first)
-        y, x = np.add.reduceat(w * y, first) / wsum, np.add.reduceat(w * x, first) / wsum
-        w = wsum
-    s, u0 = _posterior_draws(y, w, x, fault, cfg, np.random.default_rng(seed))
-    u_fail, b = transformed(fault, np.array([thr]), tf, cfg.severity_floor)
-    u_fail = float(u_fail[0])
-    need = (u_fail - u0) / (b * s) - x[-1]  # exposure still to come at s = 1
-    if planned is None:  # the recorded duty's mean rate: its cycle's phase is unknown
-        rec = exposure(fault, recorded, tf)[-1] / (np.sum(recorded.minutes) / 60.0)
-        remaining = np.where(need > 0, need / rec if rec > 0 else np.inf, 0.0)
-    else:
-        remaining = hours_for_exposure(need, planned, exposure(fault, planned, tf))
+    wsum = np.add.reduceat(w, first)
+
+    def binned(v: np.ndarray) -> np.ndarray:
+        return np.add.reduceat(w * v, first) / wsum
+
+    yb = binned(y)
+    laws, log_prior = _paris_laws(fault, tf, cfg, y, thr, recorded)
+    xs = [binned(_track_exposure(fault, h, recorded, wh, law)) for law in laws]
+    ls = np.linspace(-cfg.log_scale_span, cfg.log_scale_span, cfg.n_grid)
+    rho = residual_correlation(yb, wsum, binned(_track_exposure(fault, h, recorded, wh, tf)),
+                               fault, cfg, ls)
+    wb = wsum * (1.0 - rho) / (1.0 + rho)  # the effective sample size of an AR(1) error
+    remaining = _remaining(fault, laws, log_prior, [(yb, wb, x) for x in xs], thr, cfg,
+                           recorded, planned, np.random.default_rng(seed))
     return from_samples(float(h[-1]), fault, "growth", float(y[-1]), thr, remaining, cfg,
                         alarm_hour)

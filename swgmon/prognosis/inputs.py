@@ -74,10 +74,20 @@ class PrognosisConfig:
         Gauss-Newton steps of u0's fit at each grid point of ln s, in [1, 100] (6
         [choice]: from the first quarter's mean, 3, 6 and 12 steps gave the same quantiles
         to 1e-13 on synthetic root crack and wear tracks as in tests/learn/test_prognosis.py).
+    paris_m_sd : float
+        σ of the normal prior on a crack's Paris m about ``to_failure.paris_m``, in
+        [0, 2] [-]; 0 (default): m known (:func:`.growth._paris_laws`). 0.5 [choice:
+        steels' m spans about 2-4, Barsom and Rolfe [unverified: recalled]] learns m
+        from the track's curvature, at about 5 times the cost; not the default while
+        the monitor's estimates bend the track (docs/monitor/prognosis.md, "Paris' m
+        learnt").
+    paris_m_points : int
+        Points of m's grid over the prior's ±2σ, in [1, 41] (9 [choice]: a step of σ/2).
     to_failure : RunToFailure
         The growth's constants (:class:`swgsim.datasets.growth.RunToFailure`): the laws'
-        m, Y, Δσ per N m, film exponent, the median C and wear coefficient (s = 1), the
-        per-gear scatter (the prior σ of ln s) and the failure severities.
+        m (a crack's the prior's mean), Y, Δσ per N m, film exponent, the median C and
+        wear coefficient (s = 1), the per-gear scatter (the prior σ of ln s) and the
+        failure severities.
     """
 
     min_track_h: float = 2.0
@@ -92,6 +102,8 @@ class PrognosisConfig:
     max_bins: int = 256
     severity_floor: float = 1e-3
     gauss_newton_steps: int = 6
+    paris_m_sd: float = 0.0
+    paris_m_points: int = 9
     to_failure: RunToFailure = field(default_factory=RunToFailure)
 
     def check(self, where: str = "prognosis") -> PrognosisConfig:
@@ -116,7 +128,7 @@ class PrognosisConfig:
         """
         for name, lo, hi in (("min_estimates", 3, 1e6), ("n_samples", 100, 1e6),
                              ("n_grid", 21, 10001), ("max_bins", 8, 1e5),
-                             ("gauss_newton_steps", 1, 100)):
+                             ("gauss_newton_steps", 1, 100), ("paris_m_points", 1, 41)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, numbers.Integral):  # 1000.5, True
                 raise ValueError(f"{where}.{name} must be an integer, got {v!r}")
@@ -124,6 +136,7 @@ class PrognosisConfig:
         check_range(self.min_track_h, 0.0, 1000.0, f"{where}.min_track_h", "h", lo_open=True)
         check_range(self.log_scale_span, 0.0, 10.0, f"{where}.log_scale_span", lo_open=True)
         check_range(self.max_correlation, 0.0, 0.99, f"{where}.max_correlation")
+        check_range(self.paris_m_sd, 0.0, 2.0, f"{where}.paris_m_sd")
         for name in ("lower_scale", "upper_scale"):
             k = getattr(self, name)
             if isinstance(k, (str, bytes)) or not isinstance(k, (tuple, list)) \

@@ -80,8 +80,9 @@ class StreamPrognosis:
         A future duty the user declares, repeated from its first block; empty: the
         recorded duty's mean rate.
     min_track_h, min_estimates, n_samples, n_grid, log_scale_span, lower_scale, \
-upper_scale, max_correlation, in_sight_h, max_bins, severity_floor, gauss_newton_steps : \
-float, int, int, int, float, tuple of float, tuple of float, float, float, int, float, int
+upper_scale, max_correlation, in_sight_h, max_bins, severity_floor, gauss_newton_steps, \
+paris_m_sd, paris_m_points : float, int, int, int, float, tuple of float, tuple of float, \
+float, float, int, float, int, float, int
         The predictor's (:class:`.growth.PrognosisConfig`, its defaults
         and ranges).
     to_failure : RunToFailure
@@ -116,6 +117,8 @@ float, int, int, int, float, tuple of float, tuple of float, float, float, int, 
     max_bins: int = PrognosisConfig.max_bins
     severity_floor: float = PrognosisConfig.severity_floor
     gauss_newton_steps: int = PrognosisConfig.gauss_newton_steps
+    paris_m_sd: float = PrognosisConfig.paris_m_sd
+    paris_m_points: int = PrognosisConfig.paris_m_points
     to_failure: RunToFailure = field(default_factory=RunToFailure)
     seed: int = 0
     max_prognoses: int = 10_000

@@ -530,8 +530,7 @@ def test_a_suspected_fault_keeps_every_point_and_the_severity_reads_unwidened(ti
     fresh.fault_suspected, fresh.learning = False, {0: []}
     opi = fresh.normal.index(pts[w])
     out = np.full(len(opi), Outside.LOAD)
-    assert fresh._learn(opi, out, fresh.normal.mean[opi], cond.torque_nm[w], [3],
-                        latch=False) is None
+    assert fresh._learn(opi, out, fresh.normal.mean[opi], cond.torque_nm[w], [3]) is None
     assert fresh.fault_suspected and fresh.learning == {}
 
 
@@ -559,7 +558,7 @@ def test_a_window_without_its_reference_features_is_not_gathered_for_recommissio
     ref = nb.reference(f[w], pts[w], cond[w])[np.arange(n + 3) % len(w)]
     ref[[5, 6, 7]] = np.nan
     torque = np.full(n + 3, 1.1 * nb.points[k, 1])
-    ev = mon._learn(np.full(n + 3, k), np.full(n + 3, Outside.LOAD), ref, torque, [], False)
+    ev = mon._learn(np.full(n + 3, k), np.full(n + 3, Outside.LOAD), ref, torque, [])
     assert ev is not None and ev[:2] == (n + 2, k)
     assert np.isfinite(nb.mean[k]).all() and np.isfinite(nb.std[k]).all()
 
