@@ -64,6 +64,8 @@ def _state(model: DiagnosisModel) -> dict:
     return {"classes": list(model.classes), "classifier": model.classifier,
             "severity": {f: [reg, [float(q[0]), float(q[1])]]
                          for f, (reg, q) in model.severity.items()},
+            "reading": {f: [np.asarray(lv, float).tolist(), np.asarray(rd, float).tolist()]
+                        for f, (lv, rd) in model.reading.items()},
             "points_range": None if model.points_range is None
             else np.asarray(model.points_range, float).tolist(),
             "n_features": int(model.n_features), "sample_rate_hz": float(model.sample_rate_hz),
@@ -197,7 +199,9 @@ def _model(state, p: Path, key: str, card_classes: list) -> DiagnosisModel:
                            None if state["points_range"] is None
                            else np.asarray(state["points_range"], float),
                            int(state["n_features"]), float(state["sample_rate_hz"]),
-                           float(state["window_s"]))
+                           float(state["window_s"]),
+                           {f: (np.asarray(v[0], float), np.asarray(v[1], float))
+                            for f, v in state.get("reading", {}).items()})
     except (KeyError, TypeError, IndexError, ValueError):
         raise ValueError(f"{key}: {p} is not a diagnosis model") from None
     if m.classes != list(card_classes):

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from bad_input import small_model
 
+from swgmon.assessment.model import read_through, reading_curve
 from swgmon.assessment.model_io import load_model, save_model
 
 
@@ -22,6 +23,31 @@ def model_file(tmp_path):
 
 def test_a_real_model_loads(model_file):
     assert load_model(model_file).classes == ["healthy", "x"]
+
+
+def test_the_reading_curve_travels_with_the_model_and_reads_a_shrunk_regressor_true(
+        tmp_path):
+    """A regressor that reads 0.2 + 0.6 s (shrunk toward the middle, as the tip crack's
+    across gears) read back through its curve gives s on average at every level; beyond
+    the curve's ends one for one, and a flat top does not amplify; the curve is saved,
+    loaded and refused when not increasing."""
+    rng = np.random.default_rng(0)
+    true = np.repeat(np.linspace(0.25, 1.0, 7), 300)
+    pred = 0.2 + 0.6 * true + 0.03 * rng.standard_normal(true.size)
+    curve = reading_curve(pred, true)
+    back = read_through(curve, pred)
+    assert max(abs(np.median(back[true == v]) - v) for v in np.unique(true)) < 0.01
+    assert read_through(curve, np.array([curve[1][-1] + 0.05]))[0] == pytest.approx(1.05)
+    flat = reading_curve(np.minimum(pred, 0.5), true)  # the regressor saturates at 0.5
+    assert np.all(np.diff(flat[1]) > 0) and read_through(flat, np.array([0.6]))[0] < 1.2
+    path = save_model(small_model(reading={"x": curve}), tmp_path / "c", [])
+    got = load_model(path).reading["x"]
+    assert np.array_equal(got[0], curve[0]) and np.array_equal(got[1], curve[1])
+    bad = save_model(small_model(reading={"x": (curve[0], curve[1][::-1])}),
+                     tmp_path / "b", [])
+    with pytest.raises(ValueError, match="the reading curve of x must be two finite "
+                                         "increasing arrays"):
+        load_model(bad)
 
 
 def test_a_zip_bomb_with_a_matching_card_refused_before_inflating(model_file, monkeypatch):
