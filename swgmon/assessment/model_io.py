@@ -223,4 +223,6 @@ def _pickle(p: Path, key: str, trust: bool) -> DiagnosisModel:
         raise ValueError(f"{key}: {p} is not a diagnosis model ({type(e).__name__})") from None
     if not isinstance(m, DiagnosisModel):
         raise ValueError(f"{key}: {p} holds a {type(m).__name__}, not a diagnosis model")
+    for name in ("reading", "reading_without"):  # pickled before the reading curve
+        vars(m).setdefault(name, {})
     return m.check(f"{key}: {p}")

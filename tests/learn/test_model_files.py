@@ -112,3 +112,16 @@ def test_a_card_matched_model_of_other_parts_is_refused_when_loaded(tmp_path, ca
     line = str(info.value)
     assert line.startswith(f"diagnosis_model: {path}: ") and words in line, line
     assert "\n" not in line
+
+
+def test_a_trusted_pickle_of_a_model_from_before_the_reading_curve_reads_without_one(
+        tmp_path):
+    """A pickle restores the fields it was saved with: one saved before the reading curve
+    has none and loads as a .skops file of then does, its estimates unchanged."""
+    import joblib
+
+    old = small_model()
+    for name in ("reading", "reading_without"):
+        del vars(old)[name]
+    joblib.dump(old, tmp_path / "old.joblib")
+    assert load_model(tmp_path / "old.joblib", trust_pickle=True).reading == {}
