@@ -358,23 +358,34 @@ def _severity_regressors(model: DiagnosisModel, x, fault, severity, gear, seed, 
             reg = _regressor(seed).fit(x[tr], severity[tr])
             model.severity_without.setdefault(int(g), {})[c] = reg
             oof[te] = reg.predict(x[te])
-        model.reading[c] = reading_curve(oof[m], severity[m])
-        for g in gears:
-            o = m & (gear != g)
-            model.reading_without.setdefault(int(g), {})[c] = reading_curve(oof[o], severity[o])
-        errs = []
-        for g in gears:  # the aggregated estimate's error on gear g, read through the others'
-            te = m & (gear == g)
-            curve = model.reading_without.get(int(g), {}).get(c)
-            pred = oof[te] if curve is None else read_through(curve, oof[te])
-            true = severity[te]
-            for s in np.unique(true):
-                ps = pred[true == s]
-                for _ in range(20):
-                    errs.append(np.median(rng.choice(ps, min(n_agg, ps.size))) - s)
-        q = (float(np.quantile(errs, 0.05)), float(np.quantile(errs, 0.95)))
+        for g, o in ((None, m), *((g, m & (gear != g)) for g in gears)):
+            curve = reading_curve(oof[o], severity[o])
+            if curve[0].size >= 2:  # one level read: nothing to calibrate, read as said
+                (model.reading if g is None else
+                 model.reading_without.setdefault(int(g), {}))[c] = curve
+        q = _error_quantiles(oof, severity, m & (gear == gears[:, None]), rng, n_agg, {
+            k: model.reading_without.get(int(g), {}).get(c) for k, g in enumerate(gears)})
+        if q[0] == q[1]:  # read, the training gears agree to the digit: the raw errors
+            q = _error_quantiles(oof, severity, m & (gear == gears[:, None]), rng, n_agg, {})
         model.severity[c] = (_regressor(seed).fit(x[m], severity[m]), q)
     return model
+
+
+def _error_quantiles(oof: np.ndarray, severity: np.ndarray, masks: np.ndarray,
+                     rng: np.random.Generator, n_agg: int, curves: dict) -> tuple[float, float]:
+    """The 5 % and 95 % quantiles of the aggregated estimate's error on each training gear
+    (``masks``, shape (G, n)), each read through its curve in ``curves`` (by the gear's
+    index; none: as the regressor said): 20 medians of ``n_agg`` windows per level."""
+    errs = []
+    for k, te in enumerate(masks):
+        curve = curves.get(k)
+        pred = oof[te] if curve is None else read_through(curve, oof[te])
+        true = severity[te]
+        for s in np.unique(true):
+            ps = pred[true == s]
+            for _ in range(20):
+                errs.append(np.median(rng.choice(ps, min(n_agg, ps.size))) - s)
+    return float(np.quantile(errs, 0.05)), float(np.quantile(errs, 0.95))
 
 
 __all__ = ["DiagnosisModel", "design_matrix", "fit_diagnosis", "one_thread", "read_through",

@@ -59,10 +59,11 @@ MAX_FUNCTION_LINES = 80
 #: after a gear-fault alarm, the severity read unwidened) and the export's limits read
 #: from emlearn (+38); swgmon 14550 -> 14610 and all 57200 -> 57260 for issue 85's prior
 #: on a crack's Paris m (a grid of laws weighed by their evidence: +56); swgmon 14610 ->
-#: 14690 and all 57260 -> 57340 for issue 85's reading curve (the severity regressors'
-#: out-of-sample shrinkage inverted, saved with the model and checked: +78).
+#: 14705 and all 57260 -> 57350 for issue 85's reading curve (the severity regressors'
+#: out-of-sample shrinkage inverted, saved with the model and checked: +78; its
+#: degenerate case, training gears read alike to the digit, and old pickles: +13).
 LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11500,
-                                "swgmon": 14690, "swgcli": 2000, "all": 57340}
+                                "swgmon": 14705, "swgcli": 2000, "all": 57350}
 #: Numeric module constants the monitor may hold (issue 84: at most 10, physical and
 #: format constants with sources; a tuned number is a typed config field, logged with
 #: every run). Today's count: it moves only down.
