@@ -363,10 +363,11 @@ def _severity_regressors(model: DiagnosisModel, x, fault, severity, gear, seed, 
             if curve[0].size >= 2:  # one level read: nothing to calibrate, read as said
                 (model.reading if g is None else
                  model.reading_without.setdefault(int(g), {}))[c] = curve
-        q = _error_quantiles(oof, severity, m & (gear == gears[:, None]), rng, n_agg, {
+        masks = m & (gear == gears[:, None])  # each training gear's windows of c
+        q = _error_quantiles(oof, severity, masks, rng, n_agg, {
             k: model.reading_without.get(int(g), {}).get(c) for k, g in enumerate(gears)})
         if q[0] == q[1]:  # read, the training gears agree to the digit: the raw errors
-            q = _error_quantiles(oof, severity, m & (gear == gears[:, None]), rng, n_agg, {})
+            q = _error_quantiles(oof, severity, masks, rng, n_agg, {})
         model.severity[c] = (_regressor(seed).fit(x[m], severity[m]), q)
     return model
 
