@@ -27,10 +27,6 @@ from swgsim.sensing.sensor_faults import SENSOR_FAULTS
 
 stats = lazy_module("scipy.stats")  # at the first naming, not at an app's start
 
-#: Windows :func:`best_temperature` fits at once, and :func:`still_reading` takes the
-#: virtual temperature of at once (bounded memory, no effect on the result).
-FIT_CHUNK, STILL_CHUNK = 512, 240
-
 
 @dataclass
 class NamingConfig:
@@ -114,6 +110,9 @@ class NamingConfig:
     hypotheses : list of str or None
         The hypotheses an alarm is weighed against, in order: names registered in
         :data:`~.hypotheses.HYPOTHESES`; None: every registered one.
+    windows_at_once : int
+        Windows the temperature fits take at once, in [16, 10^5] (512 [choice]: about
+        10 MB an array); memory only, no result changes.
     """
 
     sensor_p_min: float = field(default=0.3, metadata=allowed(0.0, 1.0, lo_open=True,
@@ -140,6 +139,7 @@ class NamingConfig:
     fit_level: float = field(default=0.001, metadata=allowed(0.0, 0.5, lo_open=True,
                                                              hi_open=True))
     hypotheses: list[str] | None = None
+    windows_at_once: int = field(default=512, metadata=allowed(16, 10**5))
 
     def check(self, where: str = "naming") -> None:
         """Refuse an even window count where an odd one is needed, in one line naming the
@@ -471,8 +471,8 @@ def best_temperature(normal: NormalBehaviour, feats: np.ndarray, points: np.ndar
     fine = nc.temperature_step_k * np.arange(-nc.coarse_steps, nc.coarse_steps + 1)
     grid = np.arange(lo, hi + nc.coarse_step_k, nc.coarse_step_k)  # coarse, then fine
     temp, zb = np.empty(len(feats)), np.empty(feats.shape)
-    for a in range(0, len(feats), FIT_CHUNK):  # a bounded memory over long streams
-        w = slice(a, a + FIT_CHUNK)
+    for a in range(0, len(feats), nc.windows_at_once):  # a bounded memory
+        w = slice(a, a + nc.windows_at_once)
         args = (normal, feats[w], points[w], torque_nm[w], friction[w], index[w])
         n = len(args[1])
         best = grid[np.argmin(_sum_z2(*args, np.broadcast_to(grid, (n, len(grid))))[0],
@@ -562,8 +562,8 @@ def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray
     for s, e in zip(starts[long], ends[long], strict=True):
         judged = s + int(np.searchsorted(hours[s:e], hours[s] + nc.still_h))
         lo, hi = np.inf, -np.inf
-        for a in range(s, e, STILL_CHUNK):
-            b = min(e, a + STILL_CHUNK)
+        for a in range(s, e, nc.windows_at_once):
+            b = min(e, a + nc.windows_at_once)
             w = slice(max(s, a - half), min(e, b + half))  # the running median's edges
             v = virtual_temperature(normal, feats[w], points[w], cond.torque_nm[w], friction,
                                     normal.index(points[w]), nc)[a - w.start:b - w.start]
@@ -576,7 +576,6 @@ def still_reading(normal: NormalBehaviour, feats: np.ndarray, points: np.ndarray
     return None
 
 
-__all__ = ["BLOCK", "FIT_CHUNK", "STILL_CHUNK",
-           "NamingConfig", "SensorFit", "TemperatureFit", "best_temperature",
+__all__ = ["BLOCK", "NamingConfig", "SensorFit", "TemperatureFit", "best_temperature",
            "fit_bridge_faults", "fit_sensor_faults", "fit_temperature", "fit_temperature_drift",
            "still_reading", "virtual_temperature"]

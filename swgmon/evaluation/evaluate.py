@@ -55,8 +55,6 @@ pd = lazy_module("pandas")
 
 #: The rows every evaluation has, beside the chosen per-window detectors.
 COMPARED = ("monitor", "per_window", "always")
-#: Windows of a fault life scored at once.
-CHUNK = 120
 
 
 def fault_lives(plan: DatasetPlan, cfg: MonitorStudyConfig, seed: int
@@ -268,12 +266,13 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
             fmon = _monitor_at(commissioned, tr, before, f, p, c, named)
             lost = lost_h is not None and before >= 0 and lost_h <= tr.hour[before]
             fmon = reading_lost(fmon) if lost else fmon
-            life = _fault_life(fmon, sim, k0, *start, lost=lost)
+            life = _fault_life(fmon, sim, k0, *start, cfg.windows_at_once, lost=lost)
             ftr, mm = life[0], life[3]
             row = _fault_row(key, sim, fo, kind)
             if healthy_curve is not None:
                 _curve_fault(ftr, fo, before, healthy_curve, cfg, row, curve)
-            rows.append({**row, **_monitor_row(*_past_changes(sim, k0, life), fo)})
+            past = _past_changes(sim, k0, life, cfg.windows_at_once)
+            rows.append({**row, **_monitor_row(*past, fo)})
             rows.append({**row, **_per_window_row("per_window", model.classes,
                                                   np.argmax(ftr.log_proba, axis=1), mm, fo)})
             rows.append({**row, "detector": "always", "detected": True, "time_to_detect_h": 0.0,
@@ -317,20 +316,20 @@ def evaluate_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
             k0 = int(np.searchsorted(sim.schedule.hour, fo.onset_h, side="left"))
             row = _fault_row(key, sim, fo, kind)
             for d in detectors:
-                lab, mm = _detector_life(sim, k0, refs, d)
+                lab, mm = _detector_life(sim, k0, refs, d, cfg.windows_at_once)
                 rows.append({**row, **_per_window_row(d.name, d.classes, lab, mm, fo)})
     return rows, fa_rows
 
 
-def _detector_life(sim: LifeSimulator, k0: int, refs: References, det: WindowClassifier
-                   ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """A detector's labels of a fault life from its onset, in chunks, until an hour after
+def _detector_life(sim: LifeSimulator, k0: int, refs: References, det: WindowClassifier,
+                   chunk: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A detector's labels of a fault life from its onset, ``chunk`` windows at a time, until an hour after
     its first faulty window (or the fault life's end); with the windows' ``hour`` and
     ``severity``."""
     labs, hours, sevs = [], [], []
     first = None
-    for a in range(k0, len(sim), CHUNK):
-        lab, hour, sev = _labels(sim, a, min(a + CHUNK, len(sim)), refs, [det])
+    for a in range(k0, len(sim), chunk):
+        lab, hour, sev = _labels(sim, a, min(a + chunk, len(sim)), refs, [det])
         labs.append(lab[det.name]), hours.append(hour), sevs.append(sev)
         bad = np.flatnonzero(lab[det.name] > 0)
         if first is None and bad.size:
@@ -398,8 +397,8 @@ def _monitor_at(commissioned: GearMonitor, tr: Trace, before: int, f: np.ndarray
 
 
 def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
-                friction_start: tuple[float, float] | None, lost: bool = False):
-    """A fault life from its onset, in chunks of windows, until ``confirm_h`` after the
+                friction_start: tuple[float, float] | None, chunk: int, lost: bool = False):
+    """A fault life from its onset, ``chunk`` windows at a time, until ``confirm_h`` after the
     monitor's alarm and the per-window rule's (or the fault life's end); the CUSUMs and the
     friction factor start from ``start`` and ``friction_start`` (the healthy life's before
     the onset; None: the monitor's own). ``lost``: the temperature sensor has failed, the
@@ -411,8 +410,8 @@ def _fault_life(mon: GearMonitor, sim: LifeSimulator, k0: int, start,
     traces, feats, pts, metas, conds = [], [], [], [], []
     first: dict[str, float | None] = {"monitor": None, "per_window": None}
     state, fstate = start, friction_start
-    for a in range(k0, len(sim), CHUNK):
-        f, p, m = features_of(sim, a, min(a + CHUNK, len(sim)))
+    for a in range(k0, len(sim), chunk):
+        f, p, m = features_of(sim, a, min(a + chunk, len(sim)))
         cond = Conditions.of(m)
         for w, lose in _reading_spans(cond, len(f), lost):
             if lose:  # the reading lost at window w.start
@@ -464,7 +463,7 @@ def _benign(al: Alarm, cond: ConditionsConfig | None) -> bool:
             and sensor.fault_hour <= al.hour)
 
 
-def _past_changes(sim: LifeSimulator, k0: int, life: tuple):
+def _past_changes(sim: LifeSimulator, k0: int, life: tuple, chunk: int):
     """The monitor and a fault life's trace (with its windows, :func:`_fault_life`'s
     ``life``, from window ``k0``) from its first alarm that is not the fault's
     (:func:`_benign`: a re-greasing's or a failed temperature sensor's alarm, named so, is
@@ -484,7 +483,7 @@ def _past_changes(sim: LifeSimulator, k0: int, life: tuple):
         else:
             lost, mon = True, reading_lost(mon)
         k += a + 1
-        life = _fault_life(mon, sim, k, 0.0, (fr, hour), lost=lost)
+        life = _fault_life(mon, sim, k, 0.0, (fr, hour), chunk, lost=lost)
         tr, mon, lost = life[0], life[5], life[6]
     return mon, *life[:5]
 

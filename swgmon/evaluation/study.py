@@ -156,6 +156,10 @@ class MonitorStudyConfig:
         threshold of the same rule on the same p-values; those up to
         ``rule.design_hours`` are drawn; increasing, each in (0, 10^6] [h] (1, 3, 10, 30,
         100, 300, 1000 [choice: two a decade]).
+    windows_at_once : int
+        Windows of a fault life simulated at once, in [1, 10^4] (120 [choice]: a life stops
+        after the chunk that holds its confirmation); no result changes
+        (tests/learn/test_monitor.py).
     """
 
     seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
@@ -190,6 +194,7 @@ class MonitorStudyConfig:
     scored_run: bool = False
     curve_hours: list[float] = field(
         default_factory=lambda: [1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0])
+    windows_at_once: int = field(default=120, metadata=allowed(1, 10**4))
 
     def check(self, where: str) -> None:
         """Refuse a design whose rules across fields fail, in one line naming the key,

@@ -18,6 +18,7 @@ from swgmon.assessment.sensor_check import virtual_temperature
 from swgmon.detection.normal import Conditions
 from swgmon.detection.rule import RuleConfig
 from swgmon.evaluation.evaluate import _fault_life, _past_changes
+from swgmon.evaluation.study import MonitorStudyConfig
 from swgmon.evaluation.training import features_of
 from swgsim.datasets.life import LifeSimulator, life_dataset
 from swgsim.datasets.schedule import FaultOnset
@@ -182,9 +183,10 @@ def test_the_evaluation_goes_on_without_a_reading_lost_after_the_onset(model, da
     mon = GearMonitor(model, RuleConfig(), life.interval_min)
     mon.commission(f, pts, Conditions.of(meta))
     k0 = int(np.searchsorted(sim.schedule.hour, 40.0))
-    run = _fault_life(mon, sim, k0, 0.0, None)
+    chunk = MonitorStudyConfig().windows_at_once
+    run = _fault_life(mon, sim, k0, 0.0, None, chunk)
     assert run[6] and np.isfinite(run[4].temperature_c).all()  # lost; the laws' readings
-    mon, tr, *_ = _past_changes(sim, k0, run)
+    mon, tr, *_ = _past_changes(sim, k0, run, chunk)
     assert tr.alarms and 40.1 <= tr.hour[tr.alarms[0]] <= 41.0
     assert mon.diagnose(tr, tr.alarms[0], *_[:2], _[3]).fault == "eccentric_wg"
 
