@@ -343,15 +343,15 @@ class GearMonitor:
 
     def fork(self, fresh_draws: bool = False) -> GearMonitor:
         """A copy whose state (normal behaviour, recommissioning, CUSUMs, friction
-        factor) is its own; the diagnosis model is shared. ``fresh_draws``: its p-value
-        draws start again from the seed (a replay of the windows since commissioning
-        then gives the same numbers)."""
+        factor) is its own, and so are its p-value draws: a stream spawned from the
+        monitor's (``Generator.spawn``), so that what one fork draws moves no other's, nor
+        the monitor's own. ``fresh_draws``: its draws start again from the seed (a replay
+        of the windows since commissioning then gives the same numbers)."""
         out = copy.copy(self)
         out.normal = copy.deepcopy(self.normal)
         out.learning = {k: list(v) for k, v in self.learning.items()}
         out.cusum = self.cusum.copy()
-        if fresh_draws:
-            out.rng = np.random.default_rng(self.seed)
+        out.rng = np.random.default_rng(self.seed) if fresh_draws else self.rng.spawn(1)[0]
         return out
 
     def evidence(self, lp: np.ndarray, opi: np.ndarray) -> np.ndarray:

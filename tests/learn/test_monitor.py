@@ -165,6 +165,24 @@ def tiny_eval(tiny_banks):
     return run_held_out(p, "tiny_bench", 3, MonitorStudyConfig(**TINY_STUDY), banks=banks)
 
 
+def test_the_evaluation_is_the_same_whatever_its_chunk(tiny_banks, tiny_eval):
+    """The fault lives simulated 7 windows at a time give tiny_eval's rows (120 at a time).
+    Before each fork of the monitor drew its own p-value stream, forks shared one: a life's
+    draws hung on what the lives before it had drawn, so on the chunk, and the eccentric
+    WG's first life alarmed a window earlier at 7."""
+    import pandas as pd
+
+    from swgmon.evaluation.evaluate import run_held_out
+    from swgmon.evaluation.study import MonitorStudyConfig
+
+    p, banks = tiny_banks
+    other = run_held_out(p, "tiny_bench", 3, MonitorStudyConfig(**TINY_STUDY,
+                                                                windows_at_once=7),
+                         banks=banks)
+    for key in ("rows", "false_alarms", "curve"):
+        pd.testing.assert_frame_equal(pd.DataFrame(other[key]), pd.DataFrame(tiny_eval[key]))
+
+
 def test_planted_step_fault_detected_and_named(tiny_eval):
     import pandas as pd
 
