@@ -57,8 +57,7 @@ from swgmon.evaluation.training import train_model
 from swgmon.prognosis.baselines import predict_linear, predict_wiener
 from swgmon.prognosis.calibration import tail_scales
 from swgmon.prognosis.growth import Prognosis, PrognosisConfig, Track
-from swgmon.prognosis.inputs import share_bucket
-from swgmon.prognosis.scores import SHARE_BUCKETS, change_response
+from swgmon.prognosis.scores import change_response, share_bucket, share_buckets
 from swgmon.prognosis.stream import StreamPrognosis
 from swgsim.base.typed import allowed, check_range, check_tree
 from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
@@ -590,9 +589,10 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
               ) -> tuple[dict[str, tuple[tuple[float, ...], tuple[float, ...]]], list[dict]]:
     """The interval's lower and upper scales of each method by conformal prediction over
     the training instances ``gears`` (``calibration_seeds``; module docstring), one pair
-    per quarter of the *true* remaining share
-    (:func:`~swgmon.prognosis.scores.remaining_fraction`; label-conditional: the prognosis
-    applies each quarter's pair to the remaining lives of that quarter,
+    per quarter of the *true* remaining share (``targets.share_buckets`` equal buckets, the
+    ones judged; 4: quarters; :func:`~swgmon.prognosis.scores.remaining_fraction`;
+    label-conditional: the prognosis applies each quarter's pair to the remaining lives of
+    that quarter,
     :func:`~swgmon.prognosis.inputs.calibrated_interval`).
 
     A training instance's lives are read with the severity regressors fitted without it
@@ -620,7 +620,8 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
         ``lower``, ``upper`` (uncapped, inf where too few lives for the coverage),
         ``lower_used``, ``upper_used``.
     """
-    labels = [f"[{lo:g}, {hi:g})" for lo, hi in SHARE_BUCKETS] + ["all"]
+    count = sc.targets.share_buckets
+    labels = [*share_buckets(count), "all"]
     picked: dict[str, list[list]] = {m: [[] for _ in labels] for m in METHODS}
     ones = dict.fromkeys(METHODS, ((1.0,), (1.0,)))
     for g, s, f in [(g, s, f) for g in gears for s in sc.calibration_seeds for f in faults]:
@@ -632,7 +633,7 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
         for m, evs in events.items():
             ok = [_as_prognosis(e, m) for e in evs if e["valid"] and e["hour"] < fail]
             ok = [p for p in ok if 0 < p.remaining_h_q05 and np.isfinite(p.remaining_h_q95)]
-            quarter = [share_bucket((fail - p.hour) / (fail - alarm)) for p in ok]
+            quarter = share_bucket([(fail - p.hour) / (fail - alarm) for p in ok], count)
             for b in range(len(labels)):  # the last: all quarters
                 inb = [p for p, q in zip(ok, quarter, strict=True)
                        if b == len(labels) - 1 or q == b]

@@ -25,7 +25,6 @@ import numpy as np
 
 from swgmon.evaluation.statistics import Interval, life_bootstrap
 from swgmon.prognosis.scores import (
-    SHARE_BUCKETS,
     alpha_lambda,
     at_lambda,
     interval_hit,
@@ -34,6 +33,7 @@ from swgmon.prognosis.scores import (
     relative_accuracy,
     remaining_fraction,
     share_bucket_label,
+    share_buckets,
 )
 from swgsim.base.lazy import lazy_module
 from swgsim.base.markdown import md_table
@@ -73,6 +73,10 @@ class PrognosisTargets:
     within_h : float
         Hours of operation after a payload change within which the predicted failure must
         have moved, in (0, 10^4] [h] (24; issue 47).
+    share_buckets : int
+        Equal buckets of the true remaining share the coverage is judged in, and
+        calibrated in (:func:`~.prognosis_evaluation.calibrate`), in [1, 20] (4 [choice]:
+        quarters, issue 85).
     """
 
     bucket_min: float = field(default=0.85, metadata=allowed(0.0, 1.0, lo_open=True,
@@ -83,17 +87,20 @@ class PrognosisTargets:
     lambda_share: float = field(default=0.5, metadata=allowed(0.0, 1.0, lo_open=True,
                                                               hi_open=True))
     within_h: float = field(default=24.0, metadata=allowed(0.0, 1e4, lo_open=True, unit="h"))
+    share_buckets: int = field(default=4, metadata=allowed(1, 20))
 
 
-def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
+def bucket_table(rows: pd.DataFrame, count: int) -> pd.DataFrame:
     """Coverage and width of the 90 % interval per data set, fault, method and remaining-share
-    bucket of the remaining-life fraction (:data:`SHARE_BUCKETS`, from the alarm to the
-    failure).
+    bucket of the remaining-life fraction (``count`` equal ones,
+    :func:`~swgmon.prognosis.scores.share_buckets`, from the alarm to the failure).
 
     Parameters
     ----------
     rows : DataFrame
         ``results.csv``: one row per prognosis and method.
+    count : int
+        Buckets (``PrognosisTargets.share_buckets``).
 
     Returns
     -------
@@ -105,7 +112,8 @@ def bucket_table(rows: pd.DataFrame) -> pd.DataFrame:
         ``open`` (share of open intervals), ``phm08`` (mean score of the medians).
     """
     v = rows[rows.valid].copy()
-    v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
+    v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h),
+                                     count)
     v["hit"] = interval_hit(v.true_remaining_h.to_numpy(), v.remaining_h_q05.to_numpy(),
                             v.remaining_h_q95.to_numpy())
     v["width"] = v.remaining_h_q95 - v.remaining_h_q05
@@ -314,10 +322,11 @@ def figure(buckets: pd.DataFrame, rows: pd.DataFrame, path: Path, goal: Prognosi
 
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
     v = rows[rows.valid].copy()
-    v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h))
+    v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h),
+                                     goal.share_buckets)
     v["hit"] = interval_hit(v.true_remaining_h.to_numpy(), v.remaining_h_q05.to_numpy(),
                             v.remaining_h_q95.to_numpy())
-    labels = [f"[{lo:g}, {hi:g}{']' if hi == 1.0 else ')'}" for lo, hi in SHARE_BUCKETS]
+    labels = share_buckets(goal.share_buckets)
     methods = sorted(v.method.unique())
     for k, m in enumerate(methods):
         cov = v[v.method == m].groupby("bucket").hit.mean().reindex(labels)

@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swgmon.prognosis.scores import SHARE_BUCKETS
 from swgsim.base.typed import check_range
 from swgsim.datasets.growth import LAWS, RunToFailure, check_to_failure
 from swgsim.datasets.schedule import LifeConfig
@@ -19,7 +18,7 @@ from swgsim.gear.faults import get_fault
 
 __all__ = ["LONE_WINDOW_H", "Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track",
            "calibrated_interval", "check_track", "from_samples", "not_valid",
-           "not_yet_valid", "scaled_interval", "share_bucket"]
+           "not_yet_valid", "scaled_interval"]
 
 
 #: Operating hours a lone recorded window holds (no interval to take the median of): the
@@ -51,8 +50,9 @@ class PrognosisConfig:
     lower_scale, upper_scale : tuple of float
         Factors on the interval's lower and upper log half-widths about the median, each
         in [0, 20] [-], calibrated apart (CQR-style, :func:`~.calibration.tail_scales`):
-        one pair for every prognosis, or one per quarter of the *true* remaining share
-        (:data:`~.scores.SHARE_BUCKETS`; label-conditional, :func:`calibrated_interval`).
+        one pair for every prognosis, or one per equal bucket of the *true* remaining
+        share, as many as 20 (:func:`~.scores.share_buckets`; label-conditional,
+        :func:`calibrated_interval`).
         (1,), (1,): the posterior's own interval.
     max_correlation : float
         Largest lag-1 autocorrelation of the estimates' errors the fit takes, in [0, 0.99]
@@ -140,11 +140,10 @@ class PrognosisConfig:
         for name in ("lower_scale", "upper_scale"):
             k = getattr(self, name)
             if isinstance(k, (str, bytes)) or not isinstance(k, (tuple, list)) \
-                    or len(k) not in (1, len(SHARE_BUCKETS)) \
-                    or len(k) != len(self.lower_scale):
-                raise ValueError(f"{where}.{name} must be a list of 1 or "
-                                 f"{len(SHARE_BUCKETS)} factors (one per quarter of the "
-                                 f"true remaining share), as many as lower_scale; got {k!r}")
+                    or not 1 <= len(k) <= 20 or len(k) != len(self.lower_scale):
+                raise ValueError(f"{where}.{name} must be a list of 1 to 20 factors (one "
+                                 f"per equal bucket of the true remaining share), as many "
+                                 f"as lower_scale; got {k!r}")
             for i, v in enumerate(k):
                 check_range(v, 0.0, 20.0, f"{where}.{name}[{i}]")
         check_range(self.in_sight_h, 0.0, 1e7, f"{where}.in_sight_h", "h", lo_open=True)
@@ -386,13 +385,6 @@ def not_yet_valid(h: np.ndarray, cfg: PrognosisConfig, alarm_hour: float) -> str
     return ""
 
 
-def share_bucket(share: float) -> int:
-    """Index into :data:`~.scores.SHARE_BUCKETS` of a share in [0, 1] (the
-    last bucket holds 1)."""
-    return min(int(np.searchsorted([hi for _, hi in SHARE_BUCKETS], share, side="right")),
-               len(SHARE_BUCKETS) - 1)
-
-
 def from_samples(hour: float, fault: str, method: str, now: float, thr: float,
                  remaining: np.ndarray, cfg: PrognosisConfig, alarm_hour: float
                  ) -> Prognosis:
@@ -443,15 +435,15 @@ def calibrated_interval(q05: float, med: float, q95: float, elapsed_h: float,
                         ) -> tuple[float, float]:
     """The prognosis's interval, calibrated conditional on the true remaining share.
 
-    With one pair of factors, :func:`scaled_interval`. With one pair per quarter of
-    :data:`~.scores.SHARE_BUCKETS`, a remaining life r belongs to the set where it lies
-    inside the interval scaled by the factors of *its own* quarter: its share
-    r / (elapsed + r) is a known function of the candidate (label-conditional, "Mondrian"
-    conformal prediction: Vovk, Gammerman and Shafer, "Algorithmic Learning in a Random
-    World", Springer 2005, ch. 4.5; Sadinle, Lei and Wasserman, JASA 114 (2019) 223-234).
-    Quarter b holds r in [s0 e / (1 - s0), s1 e / (1 - s1)); the set is the union of
-    each quarter's range cut by its scaled interval, returned as its hull. The quarter of
-    the median is never empty (factors >= 0 keep the median inside), so neither is the set.
+    With one pair of factors, :func:`scaled_interval`. With one pair per bucket of
+    :func:`~.scores.share_buckets` (as many as the factors), a remaining life r belongs to
+    the set where it lies inside the interval scaled by the factors of *its own* bucket:
+    its share r / (elapsed + r) is a known function of the candidate (label-conditional,
+    "Mondrian" conformal prediction: Vovk, Gammerman and Shafer, "Algorithmic Learning in a
+    Random World", Springer 2005, ch. 4.5; Sadinle, Lei and Wasserman, JASA 114 (2019)
+    223-234). Bucket b holds r in [s0 e / (1 - s0), s1 e / (1 - s1)); the set is the union
+    of each bucket's range cut by its scaled interval, returned as its hull. The median's
+    bucket is never empty (factors >= 0 keep the median inside), so neither is the set.
 
     Parameters
     ----------
@@ -471,9 +463,10 @@ def calibrated_interval(q05: float, med: float, q95: float, elapsed_h: float,
         return scaled_interval(q05, med, q95, lower[0], upper[0])
     e = max(float(elapsed_h), 0.0)
     ends = []
-    for b, (s0, s1) in enumerate(SHARE_BUCKETS):
+    for b in range(len(lower)):
+        s0, s1 = b / len(lower), (b + 1) / len(lower)
         r0 = s0 * e / (1.0 - s0)
-        r1 = np.inf if b == len(SHARE_BUCKETS) - 1 else s1 * e / (1.0 - s1)
+        r1 = np.inf if b == len(lower) - 1 else s1 * e / (1.0 - s1)
         lo, hi = scaled_interval(q05, med, q95, lower[b], upper[b])
         if max(lo, r0) <= min(hi, r1):
             ends.append((max(lo, r0), min(hi, r1)))

@@ -17,13 +17,10 @@ import numpy as np
 
 from swgsim.base.typed import check_range
 
-__all__ = ["PHM08_EARLY", "PHM08_LATE", "SHARE_BUCKETS", "alpha_lambda", "at_lambda",
-           "change_response", "interval_hit", "phm08_score", "prognostic_horizon",
-           "relative_accuracy", "remaining_fraction", "share_bucket_label"]
+__all__ = ["PHM08_EARLY", "PHM08_LATE", "alpha_lambda", "at_lambda", "change_response",
+           "interval_hit", "phm08_score", "prognostic_horizon", "relative_accuracy",
+           "remaining_fraction", "share_bucket", "share_bucket_label", "share_buckets"]
 
-#: Remaining-life fraction buckets, [lo, hi) and the last [0.75, 1] [choice: quarters].
-SHARE_BUCKETS: tuple[tuple[float, float], ...] = ((0.0, 0.25), (0.25, 0.5), (0.5, 0.75),
-                                                  (0.75, 1.0))
 #: a1 of the PHM08 score for early predictions (d < 0) and a2 for late ones [h] (13 and 10
 #: cycles, Saxena et al. 2008; one operating hour for one cycle [choice]).
 PHM08_EARLY, PHM08_LATE = 13.0, 10.0
@@ -156,26 +153,26 @@ def remaining_fraction(hour: np.ndarray, start_h: np.ndarray, failure_h: np.ndar
     return (f - h) / (f - s)
 
 
-def share_bucket_label(fraction: np.ndarray) -> np.ndarray:
-    """The :data:`SHARE_BUCKETS` label of each remaining-life fraction, e.g. ``[0.25,
-    0.5)``; ``[0.75, 1]`` holds 1; empty outside [0, 1].
+def share_buckets(count: int) -> list[str]:
+    """The labels of ``count`` (>= 1) equal buckets of the remaining-life share, [lo, hi)
+    and the last [lo, 1], e.g. ``[0.25, 0.5)`` (``PrognosisTargets.share_buckets``; 4:
+    quarters)."""
+    return [f"[{i / count:g}, {(i + 1) / count:g}{']' if i == count - 1 else ')'}"
+            for i in range(count)]
 
-    Parameters
-    ----------
-    fraction : ndarray, shape (n,)
-        :func:`remaining_fraction` [-].
 
-    Returns
-    -------
-    ndarray of str, shape (n,)
-    """
+def share_bucket(fraction: float | np.ndarray, count: int) -> np.ndarray:
+    """The index of each remaining-life fraction's bucket (:func:`share_buckets`), the
+    last holding 1; -1 outside [0, 1]. Shape as ``fraction``."""
     f = np.asarray(fraction, float)
-    out = np.full(f.shape, "", dtype=object)
-    for i, (lo, hi) in enumerate(SHARE_BUCKETS):
-        last = i == len(SHARE_BUCKETS) - 1
-        inside = (f >= lo) & ((f <= hi) if last else (f < hi))
-        out[inside] = f"[{lo:g}, {hi:g}{']' if last else ')'}"
-    return out
+    k = np.minimum(np.floor(f * count), count - 1).astype(int)
+    return np.where((f >= 0) & (f <= 1), k, -1)
+
+
+def share_bucket_label(fraction: np.ndarray, count: int) -> np.ndarray:
+    """The label of each remaining-life fraction's bucket (:func:`share_buckets`, of
+    ``count``); empty outside [0, 1]. Shape as ``fraction``, str."""
+    return np.array([*share_buckets(count), ""], dtype=object)[share_bucket(fraction, count)]
 
 
 def prognostic_horizon(hour: np.ndarray, true_h: np.ndarray, pred_h: np.ndarray,

@@ -79,6 +79,6 @@ def test_the_prognosis_coverage_per_bucket_carries_an_interval_over_lives():
                          "true_remaining_h": true, "remaining_h": true,
                          "remaining_h_q05": true - 1 if hit else true + 1,
                          "remaining_h_q95": true + 1 if hit else true + 2})
-    b = bucket_table(pd.DataFrame(rows)).iloc[0]
+    b = bucket_table(pd.DataFrame(rows), 4).iloc[0]
     assert b.n == 10 * 2 and b.lives == 2 and b.picp == 0.5
     assert b.picp_low == 0.0 and b.picp_high == 1.0

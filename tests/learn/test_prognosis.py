@@ -237,7 +237,8 @@ def test_a_label_conditional_interval_covers_at_its_rate_in_every_true_quarter()
     share is low and right elsewhere; split by the true quarter, the calibrated interval
     covers at least 90 % in every quarter on fresh draws (a one-sided binomial bound at
     3 σ), where one pooled pair leaves the last quarter of the life short."""
-    from swgmon.prognosis.inputs import calibrated_interval, share_bucket
+    from swgmon.prognosis.inputs import calibrated_interval
+    from swgmon.prognosis.scores import share_bucket
 
     rng = np.random.default_rng(7)
 
@@ -252,13 +253,13 @@ def test_a_label_conditional_interval_covers_at_its_rate_in_every_true_quarter()
         return ps, elapsed + truth, elapsed, share  # alarm at 0: failure = elapsed + truth
 
     ps, fail, _, share = draws(4000)
-    quarter = np.array([share_bucket(s) for s in share])
+    quarter = np.array([share_bucket(s, 4) for s in share])
     pairs = [tail_scales([p for p, q in zip(ps, quarter, strict=True) if q == b],
                          fail[quarter == b]) for b in range(4)]
     lower, upper = tuple(p[0] for p in pairs), tuple(p[1] for p in pairs)
     pooled = tail_scales(ps, fail)
     ps, fail, elapsed, share = draws(4000)
-    quarter = np.array([share_bucket(s) for s in share])
+    quarter = np.array([share_bucket(s, 4) for s in share])
     truth = fail - elapsed
 
     def covered(lo_k, hi_k):
@@ -275,10 +276,11 @@ def test_a_label_conditional_interval_covers_at_its_rate_in_every_true_quarter()
 
 
 def test_the_scales_are_checked():
-    with one_line("prognosis.lower_scale must be a list of 1 or 4"):
-        PrognosisConfig(lower_scale=(1.0, 2.0), upper_scale=(1.0, 2.0)).check()
-    with one_line("prognosis.upper_scale must be a list of 1 or 4"):
+    with one_line("prognosis.lower_scale must be a list of 1 to 20"):
+        PrognosisConfig(lower_scale=(1.0,) * 21, upper_scale=(1.0,) * 21).check()
+    with one_line("prognosis.upper_scale must be a list of 1 to 20"):
         PrognosisConfig(lower_scale=(1.0,) * 4, upper_scale=(1.0,)).check()
+    PrognosisConfig(lower_scale=(1.0, 2.0), upper_scale=(1.0, 2.0)).check()  # halves
     with one_line(r"prognosis.upper_scale\[1\]"):
         PrognosisConfig(lower_scale=(1.0,) * 4, upper_scale=(1.0, -0.1, 1.0, 1.0)).check()
 

@@ -15,7 +15,9 @@ from swgmon.prognosis.scores import (
     prognostic_horizon,
     relative_accuracy,
     remaining_fraction,
+    share_bucket,
     share_bucket_label,
+    share_buckets,
 )
 
 
@@ -55,9 +57,12 @@ def test_interval_coverage_and_buckets():
     f = remaining_fraction(np.array([10.0, 12.0, 15.0, 18.0, 20.0]), np.full(5, 10.0),
                            np.full(5, 20.0))
     assert f == pytest.approx([1.0, 0.8, 0.5, 0.2, 0.0])
-    assert share_bucket_label(f).tolist() == ["[0.75, 1]", "[0.75, 1]", "[0.5, 0.75)",
-                                          "[0, 0.25)", "[0, 0.25)"]
-    assert share_bucket_label(np.array([1.2, -0.1])).tolist() == ["", ""]
+    assert share_bucket_label(f, 4).tolist() == ["[0.75, 1]", "[0.75, 1]", "[0.5, 0.75)",
+                                                 "[0, 0.25)", "[0, 0.25)"]
+    assert share_bucket_label(np.array([1.2, -0.1]), 4).tolist() == ["", ""]
+    assert share_bucket_label(f, 2).tolist() == ["[0.5, 1]"] * 3 + ["[0, 0.5)"] * 2
+    assert [share_bucket(x, 3) for x in (0.0, 0.34, 0.7, 1.0)] == [0, 1, 2, 2]
+    assert share_buckets(4) == ["[0, 0.25)", "[0.25, 0.5)", "[0.5, 0.75)", "[0.75, 1]"]
 
 
 def test_prognostic_horizon_by_hand():

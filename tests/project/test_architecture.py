@@ -67,7 +67,7 @@ LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11500
 #: Numeric module constants the monitor may hold (issue 84: at most 10, physical and
 #: format constants with sources; a tuned number is a typed config field, logged with
 #: every run). Today's count: it moves only down.
-MAX_NUMERIC_CONSTANTS = {"swgmon": 12}
+MAX_NUMERIC_CONSTANTS = {"swgmon": 11}
 #: Functions allowed beyond MAX_FUNCTION_LINES: "path:name" -> why (most are over by
 #: their numpydoc docstring, which the style asks for; the code lines follow).
 LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
