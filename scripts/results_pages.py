@@ -44,6 +44,7 @@ import pandas as pd
 from learn.paper.results import CELL_COLUMNS, our_cells, paper_cells
 from learn.paper.summary import recall
 from learn.tasks.parts import resumed_note
+from swgmon.evaluation.benchmark import BenchmarkConfig
 from swgmon.evaluation.benchmark_task import FAMILY_TARGETS, benchmark_targets
 from swgmon.evaluation.report import false_alarm_table, labelled, with_nuisance
 from swgsim.files.ownership import atomic_write_bytes
@@ -405,7 +406,8 @@ def benchmark_targets_block(rep: Path) -> str:
     """The protocol's targets (docs/results/protocol.md) judged on the benchmark's rows:
     per data set, 1-6 per family (the value, ``met`` or ``missed``), then 7 and 8."""
     t = benchmark_targets(pd.read_csv(rep / "benchmark" / "results.csv"),
-                          pd.read_csv(rep / "benchmark" / "false_alarms.csv"))
+                          pd.read_csv(rep / "benchmark" / "false_alarms.csv"),
+                          BenchmarkConfig().level)  # the targets judge values only
     out = []
     for d, g in t.groupby("dataset", sort=False):
         fam = g[g.family != "pooled"]

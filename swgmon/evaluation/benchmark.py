@@ -99,6 +99,10 @@ class BenchmarkConfig:
     ablation : bool
         Also score the monitor with a generic regression in place of its laws
         (:data:`ABLATION`, :meth:`ablated`), trained and run as the monitor is.
+    level : float
+        Two-sided confidence level of every interval the tables give (the healthy lives'
+        Clopper-Pearson interval, the delay's bootstrap), in (0, 1) (0.95: the protocol's,
+        docs/results/protocol.md).
     """
 
     population: int = field(default=12, metadata=allowed(3, 999))
@@ -115,6 +119,7 @@ class BenchmarkConfig:
     baselines: BaselineConfig = field(default_factory=BaselineConfig)
     scored_run: bool = False
     ablation: bool = True
+    level: float = field(default=0.95, metadata=allowed(0.0, 1.0, lo_open=True, hi_open=True))
 
     def check(self, where: str = "benchmark") -> None:
         """Refuse instances, families or seeds that do not fit, in one line naming the key.

@@ -212,9 +212,9 @@ def _model_path(out: str | Path, dataset: str, name: str = "monitor") -> Path:
     return Path(out) / "models" / f"{dataset}_benchmark{tail}{MODEL_SUFFIX}"
 
 
-def benchmark_tables(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
+def benchmark_tables(rows: pd.DataFrame, fa: pd.DataFrame, level: float) -> pd.DataFrame:
     """Per data set, family, held-out instance (and ``all`` of them) and detector: healthy
-    lives with any gear-fault alarm and their Clopper-Pearson 95 % interval, false alarms
+    lives with any gear-fault alarm and their Clopper-Pearson interval, false alarms
     per 1000 h pooled with the worst life's, faulty lives detected, the conditional
     average delay with its bootstrap interval, and (the monitor) named right at the alarm
     and an hour after.
@@ -224,6 +224,8 @@ def benchmark_tables(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
     rows, fa : DataFrame
         The fault lives' and the healthy lives' rows (``results.csv``,
         ``false_alarms.csv``).
+    level : float
+        The intervals' two-sided confidence level (``BenchmarkConfig.level``).
 
     Returns
     -------
@@ -237,9 +239,10 @@ def benchmark_tables(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
         r = rows if gear == "all" else rows[rows.held_out_gear == gear]
         for (d, fam, det), h in f.groupby(keys, sort=False):
             lives = r[(r.dataset == d) & (r.family == fam) & (r.detector == det)]
-            share = alarm_share(h.gear_fault_alarms > 0)
+            share = alarm_share(h.gear_fault_alarms > 0, level=level)
             pooled, worst, _ = alarm_rate(h.gear_fault_alarms, h.healthy_hours)
-            delay = conditional_delay(lives.time_to_detect_h.where(lives.detected))
+            delay = conditional_delay(lives.time_to_detect_h.where(lives.detected),
+                                      level=level)
             named = lives[lives.detected]
             out.append({"dataset": d, "family": fam, "held_out_gear": gear, "detector": det,
                         "healthy_lives": share.n, "any_alarm": share.value,
@@ -263,7 +266,7 @@ FAMILY_TARGETS = ((1, "false alarms", "alarms_per_1000h", 2.0, True),
                   (6, "naming", "named_after_1h", 0.80, False))
 
 
-def benchmark_targets(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
+def benchmark_targets(rows: pd.DataFrame, fa: pd.DataFrame, level: float) -> pd.DataFrame:
     """The protocol's eight targets (docs/results/protocol.md) met or not: 1-6 for the
     monitor per data set and family, 7 (against each baseline) and 8 (against the
     ablation) per data set, pooled over the families.
@@ -272,6 +275,8 @@ def benchmark_targets(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
     ----------
     rows, fa : DataFrame
         ``results.csv`` and ``false_alarms.csv`` of a benchmark run.
+    level : float
+        As :func:`benchmark_tables` (the targets judge values, not intervals).
 
     Returns
     -------
@@ -280,7 +285,7 @@ def benchmark_targets(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
         ``target``, ``question``, ``value``, ``bound``, ``met`` (False where the value is
         NaN: nothing to judge is not met).
     """
-    tab = benchmark_tables(rows, fa)
+    tab = benchmark_tables(rows, fa, level)
     tab = tab[(tab.held_out_gear == "all") & (tab.detector == "monitor")]
     most = fa[fa.detector == "monitor"].groupby(["dataset", "family"]).gear_fault_alarms.max()
     out = []
@@ -292,7 +297,7 @@ def benchmark_targets(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
                         "question": q, "value": v, "bound": bound,
                         "met": bool(v <= bound if at_most else v >= bound)})
     for d in rows.dataset.unique():
-        pooled = _pooled(rows[rows.dataset == d], fa[fa.dataset == d])
+        pooled = _pooled(rows[rows.dataset == d], fa[fa.dataset == d], level)
         m = pooled["monitor"]
         for b in [x for x in pooled if x not in ("monitor", ABLATION)]:
             out.append({"dataset": d, "family": "pooled", "target": 7,
@@ -312,14 +317,16 @@ def benchmark_targets(rows: pd.DataFrame, fa: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-def _pooled(rows: pd.DataFrame, fa: pd.DataFrame) -> dict[str, dict[str, float]]:
+def _pooled(rows: pd.DataFrame, fa: pd.DataFrame, level: float
+            ) -> dict[str, dict[str, float]]:
     """Per detector, over every family of a data set: detected, CADD and gear-fault alarms
     per 1000 h."""
     out = {}
     for det, h in fa.groupby("detector", sort=False):
         r = rows[rows.detector == det]
         out[det] = {"detected": float(r.detected.mean()) if len(r) else np.nan,
-                    "cadd_h": conditional_delay(r.time_to_detect_h.where(r.detected)).value,
+                    "cadd_h": conditional_delay(r.time_to_detect_h.where(r.detected),
+                                                level=level).value,
                     "per_1000h": alarm_rate(h.gear_fault_alarms, h.healthy_hours)[0]}
     return out
 
@@ -338,7 +345,7 @@ def _report(bc: BenchmarkExperiment, out: Path, claim, designs: list[dict],
     """The benchmark's files, its console summary and, for a scored run, its ledger row."""
     rows = pd.DataFrame([r for p in parts for r in p["rows"]])
     fa = pd.DataFrame([r for p in parts for r in p["false_alarms"]])
-    tab = benchmark_tables(rows, fa)
+    tab = benchmark_tables(rows, fa, bc.study.level)
     write_owned(out / "results.csv", lambda tmp: rows.to_csv(tmp, index=False))
     write_owned(out / "false_alarms.csv", lambda tmp: fa.to_csv(tmp, index=False))
     write_owned(out / "table.csv", lambda tmp: tab.to_csv(tmp, index=False))

@@ -58,8 +58,8 @@ class PrognosisTargets:
     Attributes
     ----------
     bucket_min : float
-        Least coverage of a true remaining-share bucket at 95 % one-sided confidence, in
-        (0, 1) (0.85).
+        Least coverage of a true remaining-share bucket at ``level`` one-sided confidence,
+        in (0, 1) (0.85).
     min_bucket : int
         Least prognoses in a bucket for it to be judged, in [1, 10^6] (20).
     ra_min : float
@@ -77,6 +77,10 @@ class PrognosisTargets:
         Equal buckets of the true remaining share the coverage is judged in, and
         calibrated in (:func:`~.prognosis_evaluation.calibrate`), in [1, 20] (4 [choice]:
         quarters, issue 85).
+    level : float
+        Confidence level l of the pooled coverage's two-sided interval and of a bucket's
+        one-sided bound (the two-sided interval at 2 l − 1's upper end), in (0.5, 1)
+        (0.95, issue 85).
     """
 
     bucket_min: float = field(default=0.85, metadata=allowed(0.0, 1.0, lo_open=True,
@@ -88,32 +92,34 @@ class PrognosisTargets:
                                                               hi_open=True))
     within_h: float = field(default=24.0, metadata=allowed(0.0, 1e4, lo_open=True, unit="h"))
     share_buckets: int = field(default=4, metadata=allowed(1, 20))
+    level: float = field(default=0.95, metadata=allowed(0.5, 1.0, lo_open=True, hi_open=True))
 
 
-def bucket_table(rows: pd.DataFrame, count: int) -> pd.DataFrame:
+def bucket_table(rows: pd.DataFrame, goal: PrognosisTargets) -> pd.DataFrame:
     """Coverage and width of the 90 % interval per data set, fault, method and remaining-share
-    bucket of the remaining-life fraction (``count`` equal ones,
+    bucket of the remaining-life fraction (``goal.share_buckets`` equal ones,
     :func:`~swgmon.prognosis.scores.share_buckets`, from the alarm to the failure).
 
     Parameters
     ----------
     rows : DataFrame
         ``results.csv``: one row per prognosis and method.
-    count : int
-        Buckets (``PrognosisTargets.share_buckets``).
+    goal : PrognosisTargets
+        Its ``share_buckets`` and ``level``.
 
     Returns
     -------
     DataFrame
         ``dataset``, ``fault``, ``method``, ``bucket``, ``n`` (valid prognoses), ``picp``,
-        ``picp_low``, ``picp_high`` (its 95 % interval from a bootstrap over whole lives:
+        ``picp_low``, ``picp_high`` (its interval at ``goal.level`` from a bootstrap over
+        whole lives, ``picp_upper`` the one-sided bound at it:
         a life's prognoses share windows, :func:`~.statistics.
         life_bootstrap`), ``lives``, ``mean_width_h`` (inf where an interval is open),
         ``open`` (share of open intervals), ``phm08`` (mean score of the medians).
     """
     v = rows[rows.valid].copy()
     v["bucket"] = share_bucket_label(remaining_fraction(v.hour, v.alarm_h, v.failure_h),
-                                     count)
+                                     goal.share_buckets)
     v["hit"] = interval_hit(v.true_remaining_h.to_numpy(), v.remaining_h_q05.to_numpy(),
                             v.remaining_h_q95.to_numpy())
     v["width"] = v.remaining_h_q95 - v.remaining_h_q05
@@ -129,17 +135,17 @@ def bucket_table(rows: pd.DataFrame, count: int) -> pd.DataFrame:
                   phm08=("phm08", "mean")).reset_index()
         if keys == "all":
             t.insert(3, "bucket", "all")
-        ci = [_picp_interval(b) for _, b in g]
-        one = [_picp_interval(b, 0.90) for _, b in g]
+        ci = [_picp_interval(b, goal.level) for _, b in g]
+        one = [_picp_interval(b, 2.0 * goal.level - 1.0) for _, b in g]
         t.insert(t.columns.get_loc("picp") + 1, "picp_low", [c.low for c in ci])
         t.insert(t.columns.get_loc("picp") + 2, "picp_high", [c.high for c in ci])
-        t.insert(t.columns.get_loc("picp") + 3, "picp_upper95", [c.high for c in one])
+        t.insert(t.columns.get_loc("picp") + 3, "picp_upper", [c.high for c in one])
         t.insert(t.columns.get_loc("picp") + 4, "lives", [c.n for c in ci])
         out.append(t)
     return pd.concat(out, ignore_index=True)
 
 
-def _picp_interval(b: pd.DataFrame, level: float = 0.95) -> Interval:
+def _picp_interval(b: pd.DataFrame, level: float) -> Interval:
     """A bucket's coverage, its prognoses pooled, with the bootstrap over its lives at
     ``level`` (two-sided)."""
     per = b.groupby(LIFE, sort=False).hit.agg(["sum", "size"])
@@ -252,15 +258,15 @@ def targets(buckets: pd.DataFrame, summary: pd.DataFrame, moved: pd.DataFrame,
         if b.bucket == "all":
             ok = b.picp_low <= nominal <= b.picp_high
             row(b.dataset, b.fault, f"pooled PICP of the 90 % interval ({b.n} prognoses, "
-                f"{b.lives} lives){width}", f"95 % interval holds {nominal:g}",
+                f"{b.lives} lives){width}", f"{goal.level:.0%} interval holds {nominal:g}",
                 f"{b.picp:.2f} [{b.picp_low:.2f}, {b.picp_high:.2f}]",
                 "pass" if ok else "fail")
             continue
         judged = b.n >= goal.min_bucket
         row(b.dataset, b.fault, f"PICP, true bucket {b.bucket} ({b.n} prognoses){width}",
-            f">= {goal.bucket_min:g} at 95 % (one-sided)",
-            f"{b.picp:.2f} (upper bound {b.picp_upper95:.2f})",
-            ("pass" if b.picp_upper95 >= goal.bucket_min else "fail") if judged
+            f">= {goal.bucket_min:g} at {goal.level:.0%} (one-sided)",
+            f"{b.picp:.2f} (upper bound {b.picp_upper:.2f})",
+            ("pass" if b.picp_upper >= goal.bucket_min else "fail") if judged
             else f"not judged (< {goal.min_bucket})")
     for (ds, fault), s in summary.groupby(["dataset", "fault"]):
         if not (s.method == "growth").any():

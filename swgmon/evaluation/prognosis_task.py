@@ -144,7 +144,7 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
     rows["valid"] = rows["valid"].astype(bool)
     goal, nominal = pc.study.targets, pc.study.coverage
     scores = life_scores(rows, lives, goal)
-    buckets, summary = bucket_table(rows, goal.share_buckets), summary_table(scores)
+    buckets, summary = bucket_table(rows, goal), summary_table(scores)
     moved = change_table(changes, goal)
     tgt = targets(buckets, summary, moved, goal, nominal)
     for name, df in (("results.csv", rows), ("lives.csv", lives), ("calibration.csv", cal),

@@ -30,13 +30,9 @@ import numpy as np
 __all__ = ["Interval", "alarm_rate", "alarm_share", "conditional_delay", "life_bootstrap",
            "matched_threshold", "upcrossings"]
 
-#: Confidence level of every interval [-].
-LEVEL = 0.95
-
-
 @dataclass(frozen=True)
 class Interval:
-    """A figure with its 95 % interval.
+    """A figure with its interval (at the study's confidence level).
 
     Attributes
     ----------
@@ -54,19 +50,21 @@ class Interval:
     n: int
 
 
-def alarm_share(alarmed: Sequence[bool]) -> Interval:
-    """The share of lives with an alarm and its Clopper-Pearson 95 % interval.
+def alarm_share(alarmed: Sequence[bool], *, level: float) -> Interval:
+    """The share of lives with an alarm and its Clopper-Pearson interval.
 
     Parameters
     ----------
     alarmed : sequence of bool, shape (L,)
         Per life: whether it had any gear-fault alarm.
+    level : float
+        Two-sided confidence level, in (0, 1) (``BenchmarkConfig.level``).
 
     Returns
     -------
     Interval
         k / L and the exact binomial interval; NaN for no lives. With 0 of 20 the upper
-        bound is 1 − 0.025^(1/20) = 0.168.
+        bound at level 0.95 is 1 − 0.025^(1/20) = 0.168.
     """
     from scipy.stats import binomtest
 
@@ -74,7 +72,7 @@ def alarm_share(alarmed: Sequence[bool]) -> Interval:
     if a.size == 0:
         return Interval(np.nan, np.nan, np.nan, 0)
     k = int(a.sum())
-    ci = binomtest(k, int(a.size)).proportion_ci(confidence_level=LEVEL, method="exact")
+    ci = binomtest(k, int(a.size)).proportion_ci(confidence_level=level, method="exact")
     return Interval(k / a.size, float(ci.low), float(ci.high), int(a.size))
 
 
@@ -114,10 +112,10 @@ def alarm_rate(alarms: Sequence[int], hours: Sequence[float]) -> tuple[float, fl
     return float(1000.0 * a.sum() / h.sum()), float(per[i]), int(a[i])
 
 
-def conditional_delay(delays_h: Sequence[float], n_boot: int = 2000,
-                      seed: int = 0) -> Interval:
+def conditional_delay(delays_h: Sequence[float], n_boot: int = 2000, seed: int = 0, *,
+                      level: float) -> Interval:
     """The conditional average delay to detect over the lives detected after onset, with a
-    percentile bootstrap 95 % interval over those lives.
+    percentile bootstrap interval over those lives.
 
     Parameters
     ----------
@@ -128,6 +126,8 @@ def conditional_delay(delays_h: Sequence[float], n_boot: int = 2000,
         Bootstrap resamples, >= 100.
     seed : int
         Seed of the resampling.
+    level : float
+        Two-sided confidence level, in (0, 1) (``BenchmarkConfig.level``).
 
     Returns
     -------
@@ -141,12 +141,13 @@ def conditional_delay(delays_h: Sequence[float], n_boot: int = 2000,
         return Interval(np.nan, np.nan, np.nan, 0)
     if d.size < 2 or np.ptp(d) == 0:
         return Interval(float(d.mean()), float(d.mean()), float(d.mean()), int(d.size))
-    lo, hi = _bootstrap((d,), lambda x, axis=-1: np.mean(x, axis=axis), n_boot, seed)
+    lo, hi = _bootstrap((d,), lambda x, axis=-1: np.mean(x, axis=axis), n_boot, seed,
+                        level=level)
     return Interval(float(d.mean()), lo, hi, int(d.size))
 
 
 def life_bootstrap(numerator: Sequence[float], denominator: Sequence[float],
-                   n_boot: int = 2000, seed: int = 0, level: float = LEVEL) -> Interval:
+                   n_boot: int = 2000, seed: int = 0, *, level: float) -> Interval:
     """A ratio of sums over lives, Σ num / Σ den, with a percentile bootstrap interval
     that resamples whole lives.
 
@@ -158,7 +159,8 @@ def life_bootstrap(numerator: Sequence[float], denominator: Sequence[float],
     n_boot, seed : int
         See :func:`conditional_delay`.
     level : float
-        Two-sided confidence level (0.95; 0.90: each end a one-sided 95 % bound).
+        Two-sided confidence level, in (0, 1) (``PrognosisTargets.level`` l, or 2 l − 1:
+        each end a one-sided bound at l).
 
     Returns
     -------
@@ -189,7 +191,7 @@ def life_bootstrap(numerator: Sequence[float], denominator: Sequence[float],
 
 
 def _bootstrap(data: tuple, statistic, n_boot: int, seed: int,
-               paired: bool = False, level: float = LEVEL) -> tuple[float, float]:
+               paired: bool = False, *, level: float) -> tuple[float, float]:
     """``scipy.stats.bootstrap``'s percentile interval at ``level``."""
     from scipy.stats import bootstrap
 

@@ -228,7 +228,7 @@ def _synthetic(alarms_monitor: list[int], detected_monitor: list[bool]):
             fa.append({"dataset": "bench", "family": "warm_up", "detector": det,
                        "held_out_gear": 9 + i, "healthy_hours": 176.0,
                        "gear_fault_alarms": alarms_monitor[i] if mon else 3})
-    return benchmark_targets(pd.DataFrame(rows), pd.DataFrame(fa)).set_index("target")
+    return benchmark_targets(pd.DataFrame(rows), pd.DataFrame(fa), 0.95).set_index("target")
 
 
 def test_the_protocols_targets_are_judged_from_the_runs_rows():

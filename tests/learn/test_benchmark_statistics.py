@@ -12,12 +12,13 @@ from swgmon.evaluation import statistics as st
 
 
 def test_an_alarm_share_has_the_exact_clopper_pearson_interval():
-    none, every = st.alarm_share([False] * 20), st.alarm_share([True] * 20)
+    none = st.alarm_share([False] * 20, level=0.95)
+    every = st.alarm_share([True] * 20, level=0.95)
     assert none.value == 0 and none.low == 0 and none.n == 20
     assert none.high == pytest.approx(1 - 0.025 ** (1 / 20), rel=1e-9)  # 0.168
     assert every.low == pytest.approx(0.025 ** (1 / 20), rel=1e-9) and every.high == 1
-    one = st.alarm_share([True] + [False] * 19)
-    assert one.low < 0.05 < one.high and np.isnan(st.alarm_share([]).value)
+    one = st.alarm_share([True] + [False] * 19, level=0.95)
+    assert one.low < 0.05 < one.high and np.isnan(st.alarm_share([], level=0.95).value)
 
 
 def test_a_rate_per_1000_h_is_pooled_and_the_worst_life_stands_beside_it():
@@ -29,9 +30,9 @@ def test_a_rate_per_1000_h_is_pooled_and_the_worst_life_stands_beside_it():
 
 
 def test_the_conditional_delay_takes_the_lives_detected_after_onset_alone():
-    d = st.conditional_delay([0.5, 1.5, np.nan, -2.0, 1.0], seed=1)
+    d = st.conditional_delay([0.5, 1.5, np.nan, -2.0, 1.0], seed=1, level=0.95)
     assert d.value == pytest.approx(1.0) and d.n == 3 and d.low <= 1.0 <= d.high
-    assert st.conditional_delay([np.nan, -1.0]).n == 0
+    assert st.conditional_delay([np.nan, -1.0], level=0.95).n == 0
 
 
 def test_a_life_clustered_interval_covers_the_truth_at_about_its_level():
@@ -43,7 +44,7 @@ def test_a_life_clustered_interval_covers_the_truth_at_about_its_level():
     for rep in range(200):
         p = np.clip(rng.normal(0.9, 0.05, 40), 0, 1)
         covered = rng.binomial(30, p)
-        iv = st.life_bootstrap(covered, np.full(40, 30.0), n_boot=400, seed=rep)
+        iv = st.life_bootstrap(covered, np.full(40, 30.0), n_boot=400, seed=rep, level=0.95)
         held += iv.low <= 0.9 <= iv.high
     assert 0.90 <= held / 200 <= 0.99, held
 
@@ -67,7 +68,7 @@ def test_the_prognosis_coverage_per_bucket_carries_an_interval_over_lives():
     prognoses are not independent)."""
     import pandas as pd
 
-    from swgmon.evaluation.prognosis_report import bucket_table
+    from swgmon.evaluation.prognosis_report import PrognosisTargets, bucket_table
 
     rows = []
     for seed, hit in ((0, True), (1, False)):
@@ -79,6 +80,6 @@ def test_the_prognosis_coverage_per_bucket_carries_an_interval_over_lives():
                          "true_remaining_h": true, "remaining_h": true,
                          "remaining_h_q05": true - 1 if hit else true + 1,
                          "remaining_h_q95": true + 1 if hit else true + 2})
-    b = bucket_table(pd.DataFrame(rows), 4).iloc[0]
+    b = bucket_table(pd.DataFrame(rows), PrognosisTargets()).iloc[0]
     assert b.n == 10 * 2 and b.lives == 2 and b.picp == 0.5
     assert b.picp_low == 0.0 and b.picp_high == 1.0

@@ -381,7 +381,7 @@ def test_the_honest_targets_judge_coverage_with_its_uncertainty():
     def b(bucket, n, picp, low, high, upper):
         return {"dataset": "bench", "fault": "root_tooth_crack", "method": "growth",
                 "bucket": bucket, "n": n, "picp": picp, "picp_low": low, "picp_high": high,
-                "picp_upper95": upper, "lives": 5, "median_width_share": 0.5}
+                "picp_upper": upper, "lives": 5, "median_width_share": 0.5}
 
     buckets = pd.DataFrame([b("all", 100, 0.86, 0.78, 0.93, 0.92),
                             b("[0, 0.25)", 30, 0.80, 0.6, 0.9, 0.88),

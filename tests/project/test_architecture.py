@@ -61,13 +61,16 @@ MAX_FUNCTION_LINES = 80
 #: on a crack's Paris m (a grid of laws weighed by their evidence: +56); swgmon 14610 ->
 #: 14705 and all 57260 -> 57350 for issue 85's reading curve (the severity regressors'
 #: out-of-sample shrinkage inverted, saved with the model and checked: +78; its
-#: degenerate case, training gears read alike to the digit, and old pickles: +13).
+#: degenerate case, training gears read alike to the digit, and old pickles: +13);
+#: swgmon 14705 -> 14725 and all 57350 -> 57370 for issue 84's last five numeric module
+#: constants as typed, logged fields (two chunk sizes, the share buckets, the confidence
+#: level of two studies: +20, the buckets' three functions in one place).
 LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11500,
-                                "swgmon": 14705, "swgcli": 2000, "all": 57350}
+                                "swgmon": 14725, "swgcli": 2000, "all": 57370}
 #: Numeric module constants the monitor may hold (issue 84: at most 10, physical and
 #: format constants with sources; a tuned number is a typed config field, logged with
 #: every run). Today's count: it moves only down.
-MAX_NUMERIC_CONSTANTS = {"swgmon": 11}
+MAX_NUMERIC_CONSTANTS = {"swgmon": 10}
 #: Functions allowed beyond MAX_FUNCTION_LINES: "path:name" -> why (most are over by
 #: their numpydoc docstring, which the style asks for; the code lines follow).
 LONG_FUNCTIONS_JUSTIFIED: dict[str, str] = {
