@@ -205,6 +205,11 @@ class PrognosisStudyConfig:
         the part.
     targets : PrognosisTargets
         The targets the lives are judged by (:class:`~.prognosis_report.PrognosisTargets`).
+    failure_history : bool
+        Give each prognosis the severities at which the training instances' calibration
+        lives failed, over the nominal one (``PrognosisConfig.failure_ratios``: a lot's
+        teardown records; :func:`failure_ratios`), a calibration life those of the other
+        training instances; False: the nominal failure severity alone.
     """
 
     train: MonitorStudyConfig = field(default_factory=_training)
@@ -229,6 +234,7 @@ class PrognosisStudyConfig:
                                                           hi_open=True))
     max_scale: float = field(default=20.0, metadata=allowed(1.0, 20.0))
     targets: PrognosisTargets = field(default_factory=PrognosisTargets)
+    failure_history: bool = True
 
     def check(self, where: str) -> None:
         """Refuse a design whose rules across fields fail, in one line naming the key,
@@ -404,6 +410,21 @@ def life_of(plan_: DatasetPlan, bank: RecordBank, g: int, sc: PrognosisStudyConf
     return LifeSimulator(plan_, g, life, bank)
 
 
+def failure_ratios(plan_: DatasetPlan, sc: PrognosisStudyConfig, fault: str,
+                   gears: list[int]) -> tuple[float, ...]:
+    """The severities at which the lives of ``gears`` (``calibration_seeds``) fail, over
+    the fault's nominal one (their laws as :func:`life_of` draws them); empty without
+    ``sc.failure_history``."""
+    if not sc.failure_history:
+        return ()
+    gf = sc.faults[fault]
+    laws = [gf.to_failure if sc.growth is None else draw_growth(
+        sc.growth, fault, gf.to_failure, gf.initial, pivot_load_nm(plan_), g, int(s))
+        for g in gears for s in sc.calibration_seeds]
+    return tuple(law.failure_severity(fault) / gf.to_failure.failure_severity(fault)
+                 for law in laws)
+
+
 def _as_prognosis(ev: dict, method: str) -> Prognosis:
     """A stream event (:attr:`~swgmon.prognosis.stream.StreamPrognoses.events`) as a Prognosis
     made at its hour (remaining hours from it), for the conformal calibration."""
@@ -470,8 +491,8 @@ def _track_of(res, fault: str, onset_h: float) -> dict | None:
 
 
 def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig,
-             scales: dict[str, tuple[tuple[float, ...], tuple[float, ...]]], seed: int
-             ) -> tuple[dict, dict[str, list[dict]]]:
+             scales: dict[str, tuple[tuple[float, ...], tuple[float, ...]]], seed: int,
+             failures: tuple[float, ...] = ()) -> tuple[dict, dict[str, list[dict]]]:
     """One life to failure through the monitor with the prognosis on, and the baselines on
     its track.
 
@@ -487,6 +508,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
         ``upper_scale``) [-].
     seed : int
         The life's seed (the monitor's and the prognoses' draws).
+    failures : tuple of float
+        ``PrognosisConfig.failure_ratios`` (:func:`failure_ratios`).
 
     Returns
     -------
@@ -514,7 +537,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     opt = dataclasses.replace(sc.prognosis, enabled=True, threshold=None,
                               to_failure=sc.faults[fo.fault].to_failure,
                               lower_scale=scales["growth"][0],
-                              upper_scale=scales["growth"][1], seed=int(seed))
+                              upper_scale=scales["growth"][1], seed=int(seed),
+                              failure_ratios=failures)
     res = monitor_stream(life_dataset(sim, 0, n_end), model, sc.train.rule, seed=int(seed),
                          normal=sc.train.normal, prognosis=opt, source="prognosis life",
                          naming=sc.train.naming)
@@ -625,8 +649,9 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     picked: dict[str, list[list]] = {m: [[] for _ in labels] for m in METHODS}
     ones = dict.fromkeys(METHODS, ((1.0,), (1.0,)))
     for g, s, f in [(g, s, f) for g in gears for s in sc.calibration_seeds for f in faults]:
+        others = failure_ratios(plan, sc, f, [x for x in gears if x != g])
         life, events = run_life(life_of(plan, banks[g], g, sc, f, s), model.without(g), sc,
-                                ones, s)
+                                ones, s, others)
         banks[g].release()  # a life's records serve no other (its own law's steps)
         lam = np.random.default_rng([s, g, 48]).uniform()
         fail, alarm = life["failure_h"], life["alarm_h"]
@@ -706,14 +731,15 @@ def run_prognosis_part(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
         for i, s in enumerate(sc.seeds):
             for f in faults:
                 sim = life_of(lot, banks[g], g, sc, f, s)
-                life, events = run_life(sim, model, sc, scales, s)
+                failures = failure_ratios(lot, sc, f, train_ids)
+                life, events = run_life(sim, model, sc, scales, s, failures)
                 key = {"dataset": dataset, "held_out_gear": g, "seed": s}
                 lives.append({**key, **life})
                 rows += _rows(key, life, events)
                 if i < sc.twins and np.isfinite(life["payload_h"]):
                     twin = life_of(lot, banks[g], g, sc, f, s, twin=True)
                     changes += _changes(key, life, events, *run_life(twin, model, sc, scales,
-                                                                     s),
+                                                                     s, failures),
                                         life["payload_h"], sc.prognosis.every_h)
             banks[g].release()
         banks[g].release(healthy=True)
@@ -724,5 +750,5 @@ def run_prognosis_part(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
 
 
 __all__ = ["METHODS", "GrowingFault", "PrognosisStudyConfig", "baseline_events", "calibrate",
-           "evaluated_faults", "life_levels", "life_of", "pivot_load_nm", "run_life",
-           "run_prognosis_part", "training_levels"]
+           "evaluated_faults", "failure_ratios", "life_levels", "life_of", "pivot_load_nm",
+           "run_life", "run_prognosis_part", "training_levels"]

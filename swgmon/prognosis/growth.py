@@ -303,14 +303,27 @@ def _draws(post: tuple[np.ndarray, ...], n: int, rng: np.random.Generator
     return s, u0[pick] + rng.standard_normal(n) / np.sqrt(info[pick])
 
 
+def _failures(thr: float, now: float, cfg: PrognosisConfig, n: int,
+              rng: np.random.Generator) -> np.ndarray:
+    """n failure severities [-]: the threshold, or with ``cfg.failure_ratios`` the
+    threshold times ratios drawn among those above the last estimate ``now`` (the largest
+    where none is)."""
+    r = np.asarray(cfg.failure_ratios, float)
+    if not r.size:
+        return np.full(n, thr)
+    alive = r[r * thr > now]
+    return thr * rng.choice(alive if alive.size else r.max(keepdims=True), size=n)
+
+
 def _remaining(fault: str, laws: list[RunToFailure], log_prior: np.ndarray,
-               tracks: list[tuple[np.ndarray, ...]], thr: float, cfg: PrognosisConfig,
-               recorded: Duty, planned: Duty | None, rng: np.random.Generator
-               ) -> np.ndarray:
+               tracks: list[tuple[np.ndarray, ...]], thr: float, now: float,
+               cfg: PrognosisConfig, recorded: Duty, planned: Duty | None,
+               rng: np.random.Generator) -> np.ndarray:
     """``cfg.n_samples`` draws of the remaining hours [h], shape (N,): each law's share
     its prior times its evidence (:func:`_paris_laws`, :func:`_posterior`; one law: all),
-    its draws of (s, u0) from its posterior; ``tracks`` the (severity, weight, exposure)
-    the fit sees under each law."""
+    its draws of (s, u0) from its posterior, each failing at :func:`_failures`'s severity
+    (``now``: the last estimate); ``tracks`` the (severity, weight, exposure) the fit sees
+    under each law."""
     posts = [_posterior(*t, fault, cfg, law) for t, law in zip(tracks, laws, strict=True)]
     if len(laws) == 1:
         counts = np.array([cfg.n_samples])
@@ -323,8 +336,9 @@ def _remaining(fault: str, laws: list[RunToFailure], log_prior: np.ndarray,
         if n == 0:
             continue
         s, u0 = _draws(post, int(n), rng)
-        u_fail, b = transformed(fault, np.array([thr]), law, cfg.severity_floor)
-        need = (float(u_fail[0]) - u0) / (b * s) - t[2][-1]  # exposure to come at s = 1
+        u_fail, b = transformed(fault, _failures(thr, now, cfg, int(n), rng), law,
+                                cfg.severity_floor)
+        need = (u_fail - u0) / (b * s) - t[2][-1]  # exposure to come at s = 1
         if planned is None:  # the recorded duty's mean rate: its cycle's phase is unknown
             rec = exposure(fault, recorded, law)[-1] / (np.sum(recorded.minutes) / 60.0)
             out.append(np.where(need > 0, need / rec if rec > 0 else np.inf, 0.0))
@@ -408,7 +422,7 @@ def predict_growth(track: Track, fault: str, alarm_hour: float | None, recorded:
     rho = residual_correlation(yb, wsum, binned(_track_exposure(fault, h, recorded, wh, tf)),
                                fault, cfg, ls)
     wb = wsum * (1.0 - rho) / (1.0 + rho)  # the effective sample size of an AR(1) error
-    remaining = _remaining(fault, laws, log_prior, [(yb, wb, x) for x in xs], thr, cfg,
-                           recorded, planned, np.random.default_rng(seed))
+    remaining = _remaining(fault, laws, log_prior, [(yb, wb, x) for x in xs], thr,
+                           float(y[-1]), cfg, recorded, planned, np.random.default_rng(seed))
     return from_samples(float(h[-1]), fault, "growth", float(y[-1]), thr, remaining, cfg,
                         alarm_hour)

@@ -83,6 +83,13 @@ class PrognosisConfig:
         learnt").
     paris_m_points : int
         Points of m's grid over the prior's ±2σ, in [1, 41] (9 [choice]: a step of σ/2).
+    failure_ratios : tuple of float
+        Severities at which earlier gears of the lot failed, over the threshold, each in
+        (0, 10] [-] (a teardown's record of failed units); each Monte-Carlo sample fails
+        at the threshold times one of them drawn at random among those above the last
+        estimate (the gear has not failed yet: the empirical distribution conditioned on
+        survival, Meeker and Escobar, *Statistical Methods for Reliability Data*, 1998,
+        sec. 3.5 [unverified: recalled]). Empty (default): the threshold is the failure.
     to_failure : RunToFailure
         The growth's constants (:class:`swgsim.datasets.growth.RunToFailure`): the laws'
         m (a crack's the prior's mean), Y, Δσ per N m, film exponent, the median C and
@@ -104,6 +111,7 @@ class PrognosisConfig:
     gauss_newton_steps: int = 6
     paris_m_sd: float = 0.0
     paris_m_points: int = 9
+    failure_ratios: tuple[float, ...] = ()
     to_failure: RunToFailure = field(default_factory=RunToFailure)
 
     def check(self, where: str = "prognosis") -> PrognosisConfig:
@@ -147,6 +155,12 @@ class PrognosisConfig:
             for i, v in enumerate(k):
                 check_range(v, 0.0, 20.0, f"{where}.{name}[{i}]")
         check_range(self.in_sight_h, 0.0, 1e7, f"{where}.in_sight_h", "h", lo_open=True)
+        if isinstance(self.failure_ratios, (str, bytes)) \
+                or not isinstance(self.failure_ratios, (tuple, list)):
+            raise ValueError(f"{where}.failure_ratios must be a list of ratios, got "
+                             f"{self.failure_ratios!r}")
+        for i, v in enumerate(self.failure_ratios):
+            check_range(v, 0.0, 10.0, f"{where}.failure_ratios[{i}]", lo_open=True)
         check_range(self.severity_floor, 0.0, 0.1, f"{where}.severity_floor", lo_open=True)
         unset = dataclasses.replace(self.to_failure, failure=None)
         for law, faults in LAWS.items():

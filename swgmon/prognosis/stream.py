@@ -81,8 +81,8 @@ class StreamPrognosis:
         recorded duty's mean rate.
     min_track_h, min_estimates, n_samples, n_grid, log_scale_span, lower_scale, \
 upper_scale, max_correlation, in_sight_h, max_bins, severity_floor, gauss_newton_steps, \
-paris_m_sd, paris_m_points : float, int, int, int, float, tuple of float, tuple of float, \
-float, float, int, float, int, float, int
+paris_m_sd, paris_m_points, failure_ratios : float, int, int, int, float, tuple of float, \
+tuple of float, float, float, int, float, int, float, int, tuple of float
         The predictor's (:class:`.growth.PrognosisConfig`, its defaults
         and ranges).
     to_failure : RunToFailure
@@ -119,6 +119,7 @@ float, float, int, float, int, float, int
     gauss_newton_steps: int = PrognosisConfig.gauss_newton_steps
     paris_m_sd: float = PrognosisConfig.paris_m_sd
     paris_m_points: int = PrognosisConfig.paris_m_points
+    failure_ratios: tuple[float, ...] = PrognosisConfig.failure_ratios
     to_failure: RunToFailure = field(default_factory=RunToFailure)
     seed: int = 0
     max_prognoses: int = 10_000

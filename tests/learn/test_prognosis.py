@@ -90,6 +90,30 @@ def test_a_prior_on_m_learns_a_crack_whose_exponent_differs(paris_m):
         assert abs(p.remaining_h_median / (fail - p.hour) - 1.0) < 0.1
 
 
+@pytest.mark.parametrize("fault", ["root_tooth_crack", "wear"])
+def test_earlier_failures_spread_the_failure_severity(fault):
+    """A gear that fails at 1.1 times the threshold the prognosis is told, σ 0.002, 60 %
+    of the way, seeds 0-3: with the threshold alone the interval ends before the true
+    failure hour; with the lot's failures at 0.9, 1.0, 1.1 and 1.2 times it, it holds it.
+    Failures below the last estimate are left out: wear at 60 % of the way, ratios 0.5
+    and 1 give the numbers of ratio 1 alone."""
+    thr = RunToFailure().failure_severity(fault)
+    lot = PrognosisConfig(failure_ratios=(0.9, 1.0, 1.1, 1.2))
+    for seed in range(4):
+        track, alarm, duty, wh, fail = life(fault, seed, 0.6, sigma=0.002, every=3)
+        told = predict_growth(track, fault, alarm, duty, wh, threshold=thr / 1.1, seed=seed)
+        spread = predict_growth(track, fault, alarm, duty, wh, lot, threshold=thr / 1.1,
+                                seed=seed)
+        assert told.failure_hour_q95 < fail and covered(spread, fail)
+    if fault == "wear":
+        one, two = (predict_growth(track, fault, alarm, duty, wh, PrognosisConfig(
+            failure_ratios=r), seed=1) for r in ((1.0,), (0.5, 1.0)))
+        assert (one.remaining_h_q05, one.remaining_h_median, one.remaining_h_q95) == \
+            (two.remaining_h_q05, two.remaining_h_median, two.remaining_h_q95)
+    with one_line(r"prognosis.failure_ratios\[1\]"):
+        PrognosisConfig(failure_ratios=(1.0, 0.0)).check()
+
+
 @pytest.mark.parametrize("fault, factor", [("root_tooth_crack", 1.5 ** 3), ("wear", 1.5)])
 def test_a_heavier_planned_duty_shortens_the_life_by_the_law(fault, factor):
     """The paper's duty at 1.5 times the load: Paris' rate × 1.5^3, Archard's × 1.5, so
