@@ -202,7 +202,7 @@ def _log(app, summary: pd.DataFrame, tgt: pd.DataFrame, out: Path, wall: float,
               "naming": dataclasses.asdict(pc.study.train.naming),
               "normal": dataclasses.asdict(pc.study.train.normal),
               "targets": dataclasses.asdict(pc.study.targets),
-              "max_scale": pc.study.max_scale,
+              "max_scale": pc.study.max_scale, "failure_history": pc.study.failure_history,
               **{f"config_hash.{n}": p.config_hash for n, p in plans.items()}}
     with log_run(app.logger.experiment, app.logger.run_name,
                  tracking_uri=app.logger.tracking_uri, params=params,
