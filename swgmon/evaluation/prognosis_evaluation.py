@@ -210,7 +210,7 @@ class PrognosisStudyConfig:
         lives failed, over the nominal one (``PrognosisConfig.failure_ratios``: a lot's
         teardown records; :func:`failure_ratios`), a calibration life those of the other
         training instances; False (default [choice, design seeds 0 and 1]: with it the
-        bench passed 21 of 27 rows against 18, robot_joint 18 against 23): the nominal
+        bench passed 21 of 27 rows against 18, robot_joint 18 against 24): the nominal
         failure severity alone.
     """
 
