@@ -22,11 +22,10 @@ else ``sum``), ``sum`` (summed evidence relative to the gear's calibration windo
 ``vote`` (the most frequent per-window argmax among the faults), ``clip`` (summed
 evidence, each window's clipped to +-2 nats), ``mean_z`` (a classifier trained on hour
 means of the training gear's z-scores, applied to the hour's mean z-score). Each life
-prints the best plausible one-bridge sensor fit, the median p-value it leaves and the mean
-shift left on the other bridges (``rest``), and the first line that shift on the judged
-gear's healthy hour after commissioning, for every bridge
-(:attr:`swgmon.assessment.sensor_check.NamingConfig.sensor_p_min` and
-:attr:`~swgmon.assessment.sensor_check.NamingConfig.rest_max` were read off these).
+prints the best plausible one-bridge sensor fit, the log posterior odds and median p-value
+it leaves and the mean shift left on the other bridges (``rest``), and the first line that
+shift on the judged gear's healthy hour after commissioning, for every bridge
+(:attr:`swgmon.assessment.sensor_check.NamingConfig.rest_max` was read off these).
 """
 
 from __future__ import annotations
@@ -38,20 +37,25 @@ import numpy as np
 
 def _best_sensor_fit(mon, z, q, opi):
     """The plausible one-bridge sensor fit (swgmon.assessment.sensor_check) after which the
-    windows look most healthy, and their median p-value then (None, 0 if none)."""
+    windows look most healthy (the largest log posterior odds,
+    :func:`swgmon.assessment.hypotheses.log_odds`), the odds and the median p-value then
+    (None, -inf, 0 if none)."""
+    from swgmon.assessment.hypotheses import log_odds
+    from swgmon.assessment.model import design_matrix
     from swgmon.assessment.sensor_check import fit_sensor_faults
 
     b = mon.normal
-    best, p_best = None, 0.0
+    best, o_best, p_best = None, -np.inf, 0.0
     for f in fit_sensor_faults(z, b.mean[opi], b.std[opi]):
         if not f.plausible():
             continue
         score = np.stack([mon.model.score(mon.model.log_proba(
-            np.concatenate([f.z, q], axis=1))), np.sum(f.z ** 2, axis=1)], axis=1)
-        p = float(np.median(mon.p_values(score, opi, np.full(score.shape, 0.5))))
-        if p > p_best:
-            best, p_best = f, p
-    return best, p_best
+            design_matrix(f.z, q))), np.sum(f.z ** 2, axis=1)], axis=1)
+        p = mon.p_values(score, opi, np.full(score.shape, 0.5))
+        o = log_odds(p, mon.naming.prior_odds)
+        if o > o_best:
+            best, o_best, p_best = f, o, float(np.median(p))
+    return best, o_best, p_best
 
 
 def _healthy_rest(mon, healthy, n_comm: int) -> None:
@@ -62,7 +66,7 @@ def _healthy_rest(mon, healthy, n_comm: int) -> None:
 
     f, q, _ = features_of(healthy, n_comm, len(healthy))
     opi = mon.normal.index(q)
-    fits = fit_sensor_faults(mon.normal.z(f, q, opi), mon.normal.mean[opi],
+    fits = fit_sensor_faults(mon.normal.z(f, q, index=opi), mon.normal.mean[opi],
                              mon.normal.std[opi])
     print("healthy hour: rest of each bridge's fit "
           + " ".join(f"s{x.bridge} {x.rest:.2f}" for x in fits[::2]), flush=True)
@@ -71,12 +75,13 @@ def _healthy_rest(mon, healthy, n_comm: int) -> None:
 def _name_rules(mon, lp, opi, z_mean, agg_clf, classes, f, q):
     ev = mon.evidence(lp, opi)[:, 1:]
     out = {"sum": 1 + int(np.argmax(ev.sum(axis=0))),
-           "monitor": classes.index(mon.name(mon.evidence(lp, opi), f, q)[0]),
            "clip": 1 + int(np.argmax(np.clip(ev, -2, 2).sum(axis=0)))}
     am = np.argmax(lp[:, 1:], axis=1)
     out["vote"] = 1 + int(np.bincount(am, minlength=len(classes) - 1).argmax())
     out["mean_z"] = 1 + int(np.argmax(agg_clf.predict_proba(z_mean[None])[0][1:]))
-    return {k: classes[v] for k, v in out.items()}
+    # the monitor may name what is no class (an unexplained change): named wrong
+    return {k: classes[v] for k, v in out.items()} | {
+        "monitor": mon.name(mon.evidence(lp, opi), f, q)[0]}
 
 
 def _train(p, gear: int, cfg, cls: list[str], n_comm: int):
@@ -179,12 +184,12 @@ def main() -> None:
                 a = int(np.searchsorted(sim.schedule.hour, on))
                 f, q, _ = features_of(sim, a, len(sim))
                 opi = mon.normal.index(q)
-                _, lp = mon.scores(f, q, opi)
-                z = mon.normal.z(f, q, opi)
-                fit, p_fit = _best_sensor_fit(mon, z, q, opi)
+                _, lp = mon.scores(f, q, index=opi)
+                z = mon.normal.z(f, q, index=opi)
+                fit, o_fit, p_fit = _best_sensor_fit(mon, z, q, opi)
                 print(f"  {c} {s:.4g}{f' on s{i}' if sensor else ''}: best plausible "
                       "one-bridge fit " + ("none" if fit is None else
-                                           f"p {p_fit:.3f} ({fit.fault} s{fit.bridge} "
+                                           f"log odds {o_fit:.2f}, median p {p_fit:.3f} ({fit.fault} s{fit.bridge} "
                                            f"{fit.severity:.4g}) rest {fit.rest:.2f}"),
                       flush=True)
                 rules = _name_rules(mon, lp, opi, z.mean(axis=0), agg, cls, f, q)

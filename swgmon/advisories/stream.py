@@ -134,8 +134,8 @@ def event_line(event: dict) -> str:
     moved = "".join(f"{'; moved: ' if i == 0 else ', '}{name} {z:+.1f} sigma"
                     for i, (name, z) in enumerate(event.get("moved") or []))
     moved += "".join(f"{'; weighed: ' if i == 0 else ', '}{h}"
-                     f"{'' if bridge is None else f' s{bridge}'} p {p:.2f}"
-                     for i, (h, _, bridge, p) in enumerate(event.get("hypotheses") or []))
+                     f"{'' if bridge is None else f' s{bridge}'} log odds {o:+.1f}"
+                     for i, (h, _, bridge, o) in enumerate(event.get("hypotheses") or []))
     if kind == "unexplained_change":  # its severity: the friction's change, always fitted
         lo, hi = event["severity_low"], event["severity_high"]
         ci = "" if lo is None or hi is None else f" [{100 * lo:+.1f}, {100 * hi:+.1f}] %"

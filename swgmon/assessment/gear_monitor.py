@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from learn.inputs.health import feature_names
-from swgmon.assessment.hypotheses import Candidate, Windows, registered
+from swgmon.assessment.hypotheses import Candidate, Windows, log_odds, registered
 from swgmon.assessment.model import DiagnosisModel, design_matrix
 from swgmon.assessment.sensor_check import NamingConfig, virtual_temperature
 from swgmon.detection.normal import (
@@ -707,33 +707,34 @@ class GearMonitor:
         """Name the fault of windows since an alarm by the hypotheses of
         ``naming.hypotheses`` (:mod:`.hypotheses`: a bridge's offset step or gain drift, a
         wrong or drifting temperature reading, an even change of the friction, one's own):
-        the candidate whose windows, its effect taken out, have the largest median
-        conformal p-value, where that is at least
-        :attr:`~.sensor_check.NamingConfig.sensor_p_min`, with its bridge (None but for a
-        bridge's fault); else the fault with the largest summed evidence
-        (:meth:`evidence` rows ``ev``) and None. ``hours``: the windows' hours, for the
-        rates."""
+        the candidate with the largest posterior odds that its corrected windows look
+        healthy (:func:`~.hypotheses.log_odds` of their conformal p-values, prior odds
+        :attr:`~.sensor_check.NamingConfig.prior_odds`), where they are above 1, with its
+        bridge (None but for a bridge's fault); else the fault with the largest summed
+        evidence (:meth:`evidence` rows ``ev``) and None. ``hours``: the windows' hours,
+        for the rates."""
         return self._name(ev, feats, points, cond, friction, hours)[:2]
 
     def _name(self, ev, feats, points, cond, friction, hours=None):
         """:meth:`name`, the fit of the candidate that named it (None where the gear
-        fault did) and the candidates weighed, ``[hypothesis, fault, bridge, median
-        p-value]`` each (docs/monitor/assessment.md, "The hypotheses")."""
+        fault did) and the candidates weighed, ``[hypothesis, fault, bridge, log
+        posterior odds]`` each (docs/monitor/assessment.md, "The hypotheses")."""
         b = self.normal
         opi = b.index(points)
         z, spread = b.z_and_spread(feats, points, cond, friction, opi)
         u = np.full((len(z), 2), 0.5)  # mid-p: the naming draws nothing from the monitor
 
-        def median_p(c: Candidate) -> float:
-            return float(np.median(self.p_values(self._scores_of(c.z, points)[0], opi, u)))
+        def odds(c: Candidate) -> float:
+            p = self.p_values(self._scores_of(c.z, points)[0], opi, u)
+            return log_odds(p, self.naming.prior_odds)
 
         w = Windows(b, feats, points, cond, np.broadcast_to(friction, (len(z),)), opi, z,
                     spread, hours, self.naming, tuple(self.model.classes),
                     cond is not None and not self.reading_virtual)
-        cands = [(median_p(c), c) for h in self.hypotheses for c in h.candidates(w)]
-        weighed = [[c.hypothesis, c.fault, c.bridge, round(p, 4)] for p, c in cands]
-        best = max(cands, key=lambda pc: pc[0], default=None)
-        if best is not None and best[0] >= self.naming.sensor_p_min:
+        cands = [(odds(c), c) for h in self.hypotheses for c in h.candidates(w)]
+        weighed = [[c.hypothesis, c.fault, c.bridge, round(o, 3)] for o, c in cands]
+        best = max(cands, key=lambda oc: oc[0], default=None)
+        if best is not None and best[0] > 0.0:
             return best[1].fault, best[1].bridge, best[1].fit, weighed
         return self.model.name(ev), None, None, weighed
 

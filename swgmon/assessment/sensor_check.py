@@ -3,7 +3,7 @@ from being named as gear faults (the analytical redundancy of sensor fault isola
 
 :func:`fit_bridge_faults` and :func:`fit_sensor_faults` fit each one-bridge fault to the
 windows since the alarm (:class:`SensorFit`), judged window by window
-(:attr:`NamingConfig.sensor_p_min`) and on the other bridges together
+(:func:`~.hypotheses.log_odds`) and on the other bridges together
 (:attr:`NamingConfig.rest_max`);
 :func:`fit_temperature`, :func:`fit_temperature_drift` and :func:`still_reading` test the
 joint's temperature sensor, :func:`virtual_temperature` replaces a failed one (an even
@@ -37,13 +37,11 @@ class NamingConfig:
 
     Attributes
     ----------
-    sensor_p_min : float
-        Median conformal p-value of the corrected windows from which on a sensor fault
-        explains the alarm, in (0, 1) (0.3). Chosen on the training gears
-        (``scripts/naming_study.py``, bench, trained on gear 1, judged on gear 2, an hour
-        of windows): the right fit of every sensor fault on every bridge from 0.005 to
-        0.05 mV/V and from 2 to 10 % gain left 0.43-0.76; the best plausible one-bridge fit
-        of a gear fault at most 0.19.
+    prior_odds : float
+        Prior odds of a hypothesis that fitted (significant at ``fit_level``, the other
+        bridges within ``rest_max``) against its windows staying abnormal, in
+        [10^-6, 10^6] (1.0 [declared, not tuned]: even odds; the rule,
+        :func:`~.hypotheses.log_odds`, names it where the posterior odds exceed 1).
     rest_max : float
         Largest mean shift left on the other bridges (:attr:`SensorFit.rest`) for a
         one-bridge fit to explain an alarm, > 0 (2.5). Chosen on the training gears of both
@@ -115,8 +113,7 @@ class NamingConfig:
         10 MB an array); memory only, no result changes.
     """
 
-    sensor_p_min: float = field(default=0.3, metadata=allowed(0.0, 1.0, lo_open=True,
-                                                              hi_open=True))
+    prior_odds: float = field(default=1.0, metadata=allowed(1e-6, 1e6))
     rest_max: float = field(default=2.5, metadata=allowed(0.0, 1e4, lo_open=True))
     temperature_step_k: float = field(default=0.25, metadata=allowed(0.0, 5.0, lo_open=True,
                                                                      unit="K"))

@@ -277,8 +277,10 @@ class Alarm:
         z-score [σ] (:func:`moved_features`): what the alarm saw.
     hypotheses : list of [str, str, int or None, float]
         The candidates it was weighed against (:mod:`swgmon.assessment.hypotheses`):
-        hypothesis, what it would name, its bridge, and the median p-value of the windows
-        with its effect taken out, the evidence the rule picks by; empty: none plausible.
+        hypothesis, what it would name, its bridge, and the log posterior odds [nats]
+        that the windows look healthy with its effect taken out
+        (:func:`swgmon.assessment.hypotheses.log_odds`), the evidence the rule picks by;
+        empty: none plausible.
     """
 
     hour: float

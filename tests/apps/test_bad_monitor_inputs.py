@@ -153,7 +153,7 @@ OPTION_CASES = {  # case -> (overrides, the key the line must name)
     "monitor rule.min_normal_windows=1": (["rule.min_normal_windows=1"],
                                           "rule.min_normal_windows"),
     "monitor confirm_h=-1": (["confirm_h=-1"], "confirm_h"),
-    "monitor naming.sensor_p_min=1": (["naming.sensor_p_min=1"], "naming.sensor_p_min"),
+    "monitor naming.prior_odds=0": (["naming.prior_odds=0"], "naming.prior_odds"),
     "monitor naming.virtual_windows even": (["naming.virtual_windows=8"],
                                             "naming.virtual_windows must be odd"),
     "monitor normal.fit.segment_k=0": (["normal.fit.segment_k=0"], "normal.fit.segment_k"),

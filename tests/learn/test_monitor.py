@@ -306,9 +306,9 @@ def test_the_namings_and_laws_numbers_are_logged_with_the_monitors_run(tiny_eval
         used.append(a[-1]), once(*a, **k))[1])
     task.run_monitor_app(compose_app("monitor", [
         f"stream={tmp_path / 'life'}", f"diagnosis_model={model}",
-        f"out_dir={tmp_path / 'out'}", "naming.recur_h=12", "naming.sensor_p_min=0.35",
+        f"out_dir={tmp_path / 'out'}", "naming.recur_h=12", "naming.prior_odds=2",
         "normal.fit.segment_k=2.5"]))
-    assert logged["naming"]["recur_h"] == 12.0 and logged["naming"]["sensor_p_min"] == 0.35
+    assert logged["naming"]["recur_h"] == 12.0 and logged["naming"]["prior_odds"] == 2.0
     assert set(logged["naming"]) == set(dataclasses.asdict(NamingConfig()))
     assert logged["normal"]["fit"]["segment_k"] == 2.5
     assert set(logged["normal"]["fit"]) == set(dataclasses.asdict(LawFit()))
@@ -1123,6 +1123,39 @@ def test_the_trade_off_curve_draws_the_studys_design_rates():
         check_tree(MonitorStudyConfig(curve_hours=[10.0, 3.0]), "monitor.study")
 
 
+def test_the_rule_weighs_a_candidate_by_its_bayes_factor():
+    """log_odds: the Bayes factor of Beta(xi, 1) p-values (xi uniform on (0, 1)) against
+    uniform ones, by quadrature; uniform p-values name the candidate, Beta(0.5, 1) ones
+    do not (400 draws, seed 7); correlated windows count as fewer (an AR(1)'s effective
+    number); the prior odds add their log."""
+    from scipy.integrate import quad
+
+    from swgmon.assessment.hypotheses import effective_windows, log_odds
+
+    rng = np.random.default_rng(7)
+    for n in (1, 5, 30, 500):
+        for xi in (1.0, 0.8, 0.4):
+            p = rng.uniform(size=n) ** (1 / xi)
+            x = -np.log(p)
+            m = effective_windows(x)
+            s = m * x.mean()
+            top = min(1.0, m / s)  # the integrand's peak, scaled out
+            c = m * np.log(top) + (1 - top) * s
+            ref, _ = quad(lambda t: np.exp(m * np.log(t) + (1 - t) * s - c), 0, 1,
+                          points=[top], limit=200, epsabs=0, epsrel=1e-10)
+            assert log_odds(p, 1.0) == pytest.approx(-(np.log(ref) + c), abs=1e-3)
+    named = [log_odds(rng.uniform(size=30), 1.0) > 0 for _ in range(400)]
+    abnormal = [log_odds(rng.uniform(size=30) ** 2, 1.0) > 0 for _ in range(400)]
+    assert np.mean(named) >= 0.9 and np.mean(abnormal) <= 0.05
+    x = np.empty(2000)
+    x[0], e = 0.0, rng.normal(size=2000)
+    for i in range(1, 2000):
+        x[i] = 0.9 * x[i - 1] + np.sqrt(1 - 0.81) * e[i]
+    assert effective_windows(x) == pytest.approx(2000 * 0.1 / 1.9, rel=0.25)
+    p = rng.uniform(size=30)
+    assert log_odds(p, 10.0) - log_odds(p, 1.0) == pytest.approx(np.log(10.0))
+
+
 def test_a_hypothesis_of_ones_own_is_one_file_and_a_registration(tiny_eval, tiny_banks):
     """Issue 84: a hypothesis written outside the package (tests/hypothesis_example.py)
     and registered (``register_hypothesis``) is weighed with the built-in ones, in two
@@ -1166,6 +1199,6 @@ def test_a_hypothesis_of_ones_own_is_one_file_and_a_registration(tiny_eval, tiny
         HYPOTHESES.pop("supply_step")
     assert named[1] == ("supply_step", None) and named[0][0] != "supply_step"
     assert weighed[-1][:3] == ["supply_step", "supply_step", None]
-    assert weighed[-1][3] >= NamingConfig().sensor_p_min  # its evidence, with the alarm
+    assert weighed[-1][3] > 0.0  # its evidence (log posterior odds), with the alarm
     with pytest.raises(ValueError, match=r"^naming.hypotheses: 'no_such' is no hypothesis"):
         registered(NamingConfig(hypotheses=["no_such"]))
