@@ -52,7 +52,8 @@ def _best_sensor_fit(mon, z, q, opi):
         score = np.stack([mon.model.score(mon.model.log_proba(
             design_matrix(f.z, q))), np.sum(f.z ** 2, axis=1)], axis=1)
         p = mon.p_values(score, opi, np.full(score.shape, 0.5))
-        o = log_odds(p, mon.naming.prior_odds)
+        o = log_odds(p, mon.naming.prior_odds, mon.naming.right_median_p,
+                         mon.naming.wrong_median_p)
         if o > o_best:
             best, o_best, p_best = f, o, float(np.median(p))
     return best, o_best, p_best

@@ -708,8 +708,9 @@ class GearMonitor:
         ``naming.hypotheses`` (:mod:`.hypotheses`: a bridge's offset step or gain drift, a
         wrong or drifting temperature reading, an even change of the friction, one's own):
         the candidate with the largest posterior odds that its corrected windows look
-        healthy (:func:`~.hypotheses.log_odds` of their conformal p-values, prior odds
-        :attr:`~.sensor_check.NamingConfig.prior_odds`), where they are above 1, with its
+        healthy (:func:`~.hypotheses.log_odds` of their conformal p-values, priors
+        :attr:`~.sensor_check.NamingConfig.prior_odds`,
+        ``right_median_p`` and ``wrong_median_p``), where they are above 1, with its
         bridge (None but for a bridge's fault); else the fault with the largest summed
         evidence (:meth:`evidence` rows ``ev``) and None. ``hours``: the windows' hours,
         for the rates."""
@@ -726,7 +727,8 @@ class GearMonitor:
 
         def odds(c: Candidate) -> float:
             p = self.p_values(self._scores_of(c.z, points)[0], opi, u)
-            return log_odds(p, self.naming.prior_odds)
+            return log_odds(p, self.naming.prior_odds, self.naming.right_median_p,
+                            self.naming.wrong_median_p)
 
         w = Windows(b, feats, points, cond, np.broadcast_to(friction, (len(z),)), opi, z,
                     spread, hours, self.naming, tuple(self.model.classes),

@@ -3,9 +3,9 @@
 An alarm is a question with several answers. Each hypothesis fits the windows since the
 alarm (:class:`Windows`) and returns its candidates (:class:`Candidate`): the answer it
 gives and the windows' z-scores with its effect taken out. The monitor weighs them all by
-one rule (:meth:`~.gear_monitor.GearMonitor.name`): the candidate whose corrected windows
-look most healthy, where they look healthy enough; else the gear fault the diagnosis model
-names. The hypotheses are a registry (:data:`HYPOTHESES`; one's own by
+one rule (:meth:`~.gear_monitor.GearMonitor.name`, :func:`log_odds`): the candidate with
+the largest posterior odds that it explains the alarm, where they exceed 1; else the gear
+fault the diagnosis model names. The hypotheses are a registry (:data:`HYPOTHESES`; one's own by
 :func:`register_hypothesis`, docs/ARCHITECTURE.md, "To add a hypothesis"); which are
 weighed, in which order, is ``naming.hypotheses`` (:class:`~.sensor_check.NamingConfig`).
 Design and sources: docs/monitor/assessment.md, "The hypotheses".
@@ -178,23 +178,38 @@ def effective_windows(x: np.ndarray) -> float:
     return max(1.0, len(x) * (1.0 - rho) / (1.0 + rho))
 
 
-#: The trapezoid rule's grid over the alternative's Beta exponent ξ in (0, 1] and its log
-#: weights (:func:`log_odds`; ξ = 0 adds nothing for n ≥ 1): error below 1e-3 nats
-#: (tests, against scipy's quad).
-_XI = np.linspace(0.0, 1.0, 4097)[1:]
-_LOG_W = np.log(np.r_[np.ones(len(_XI) - 1), 0.5] / len(_XI))
+#: The trapezoid rule's grid over [0, 1] and its log weights (:func:`_log_marginal`):
+#: error below 1e-3 nats (tests, against scipy's quad).
+_T = np.linspace(0.0, 1.0, 4097)
+_LOG_W = np.log(np.r_[0.5, np.ones(len(_T) - 2), 0.5] / (len(_T) - 1))
 
 
-def log_odds(p: np.ndarray, prior_odds: float) -> float:
-    """Log posterior odds that windows look healthy once a candidate's effect is taken out:
+def _log_marginal(n: float, s: float, median_lo: float, median_hi: float) -> float:
+    """ln ∫ ξⁿ exp((1 − ξ) s) dξ / (ξ₁ − ξ₀) over the Beta(ξ, 1) exponents whose median
+    p-value lies in [``median_lo``, ``median_hi``] (ξ = ln 2 / −ln median): the marginal
+    likelihood ratio of Beta(ξ, 1) p-values, ξ uniform there, against uniform ones, for n
+    windows with S = −Σ ln p = ``s``."""
+    lo, hi = (np.log(2.0) / -np.log(m) if m > 0 else 0.0 for m in (median_lo, median_hi))
+    xi = lo + _T * (hi - lo)
+    with np.errstate(divide="ignore"):
+        g = n * np.log(xi) + (1.0 - xi) * s + _LOG_W
+    top = float(g.max())
+    return top + float(np.log(np.sum(np.exp(g - top))))
+
+
+def log_odds(p: np.ndarray, prior_odds: float, right_median_p: float,
+             wrong_median_p: float) -> float:
+    """Log posterior odds that a candidate explains an alarm, from its corrected windows:
     the rule that weighs the hypotheses (docs/monitor/assessment.md, "The rule").
 
-    Healthy: the windows' conformal p-values are uniform. Not healthy (the candidate does
-    not explain the alarm): they follow Beta(ξ, 1), ξ < 1, with ξ uniform on (0, 1) a
-    priori - the alternative of Sellke, Bayarri and Berger ("Calibration of p values for
-    testing precise null hypotheses", The American Statistician 55(1), 2001). The Bayes
-    factor of the alternative is ∫₀¹ ξⁿ exp((1 − ξ) S) dξ, S = −Σ ln p, on the effective
-    number n of windows (:func:`effective_windows`, S scaled with it).
+    The windows' conformal p-values follow Beta(ξ, 1) (the family of Sellke, Bayarri and
+    Berger, "Calibration of p values for testing precise null hypotheses", The American
+    Statistician 55(1), 2001; ξ = 1: uniform, healthy). The candidate explains the
+    alarm: ξ uniform over the exponents whose median p-value is at least
+    ``right_median_p`` (as a right candidate leaves the windows); it does not: ξ uniform
+    over those whose median is at most ``wrong_median_p`` (as a wrong one leaves them).
+    The Bayes factor of the two on the effective number n of windows
+    (:func:`effective_windows`, S = −Σ ln p scaled with it), times the prior odds.
 
     Parameters
     ----------
@@ -203,20 +218,24 @@ def log_odds(p: np.ndarray, prior_odds: float) -> float:
     prior_odds : float
         Prior odds of the candidate against its windows staying abnormal, > 0
         (``naming.prior_odds``).
+    right_median_p : float
+        The least median p-value a right candidate leaves, in (``wrong_median_p``, 0.5)
+        (``naming.right_median_p``).
+    wrong_median_p : float
+        The largest median p-value a wrong candidate leaves, in (0, ``right_median_p``)
+        (``naming.wrong_median_p``).
 
     Returns
     -------
     float
-        ln(prior odds) − ln(Bayes factor of the alternative) [nats]; the candidate explains
-        the alarm where it is positive.
+        The log posterior odds [nats]; the candidate explains the alarm where they are
+        positive.
     """
     x = -np.log(np.clip(np.asarray(p, float), 1e-300, 1.0))
     n = effective_windows(x)
     s = n * float(x.mean())
-    g = n * np.log(_XI) + (1.0 - _XI) * s + _LOG_W
-    top = float(g.max())
-    log_bf = top + float(np.log(np.sum(np.exp(g - top))))
-    return float(np.log(prior_odds)) - log_bf
+    return float(np.log(prior_odds) + _log_marginal(n, s, right_median_p, 0.5)
+                 - _log_marginal(n, s, 0.0, wrong_median_p))
 
 
 #: The hypotheses by name, weighed in registration order where ``naming.hypotheses`` is

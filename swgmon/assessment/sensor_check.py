@@ -42,6 +42,15 @@ class NamingConfig:
         bridges within ``rest_max``) against its windows staying abnormal, in
         [10^-6, 10^6] (1.0 [declared, not tuned]: even odds; the rule,
         :func:`~.hypotheses.log_odds`, names it where the posterior odds exceed 1).
+    right_median_p, wrong_median_p : float
+        The least median conformal p-value a hypothesis that explains an alarm leaves its
+        windows at (0.43), and the largest one that does not (0.23), in (0, 0.5), the
+        second below the first: the priors of :func:`~.hypotheses.log_odds` (Beta(ξ, 1)
+        p-values, ξ uniform over the exponents of medians above the first, or below the
+        second). Read on the training gears (``scripts/naming_study.py``, trained on gear
+        1, judged on gear 2, an hour of windows): the right fit of every sensor fault on
+        every bridge left 0.43-0.76 (bench; robot_joint from 0.438); the best plausible
+        one-bridge fit of a gear fault at most 0.231 (bench) and 0.223 (robot_joint).
     rest_max : float
         Largest mean shift left on the other bridges (:attr:`SensorFit.rest`) for a
         one-bridge fit to explain an alarm, > 0 (2.5). Chosen on the training gears of both
@@ -114,6 +123,10 @@ class NamingConfig:
     """
 
     prior_odds: float = field(default=1.0, metadata=allowed(1e-6, 1e6))
+    right_median_p: float = field(default=0.43, metadata=allowed(0.0, 0.5, lo_open=True,
+                                                                 hi_open=True))
+    wrong_median_p: float = field(default=0.23, metadata=allowed(0.0, 0.5, lo_open=True,
+                                                                 hi_open=True))
     rest_max: float = field(default=2.5, metadata=allowed(0.0, 1e4, lo_open=True))
     temperature_step_k: float = field(default=0.25, metadata=allowed(0.0, 5.0, lo_open=True,
                                                                      unit="K"))
@@ -145,8 +158,12 @@ class NamingConfig:
         Raises
         ------
         ValueError
-            ``virtual_windows`` or ``friction_refine`` even.
+            ``virtual_windows`` or ``friction_refine`` even; ``wrong_median_p`` not below
+            ``right_median_p``.
         """
+        if self.wrong_median_p >= self.right_median_p:
+            raise ValueError(f"{where}.wrong_median_p must lie below {where}.right_median_p "
+                             f"({self.right_median_p}), got {self.wrong_median_p}")
         for name in ("virtual_windows", "friction_refine"):
             if getattr(self, name) % 2 == 0:
                 raise ValueError(f"{where}.{name} must be odd (its own window in the "

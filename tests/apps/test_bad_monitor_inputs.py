@@ -154,6 +154,8 @@ OPTION_CASES = {  # case -> (overrides, the key the line must name)
                                           "rule.min_normal_windows"),
     "monitor confirm_h=-1": (["confirm_h=-1"], "confirm_h"),
     "monitor naming.prior_odds=0": (["naming.prior_odds=0"], "naming.prior_odds"),
+    "monitor naming.wrong_median_p above right": (["naming.wrong_median_p=0.45"],
+                                                  "naming.wrong_median_p"),
     "monitor naming.virtual_windows even": (["naming.virtual_windows=8"],
                                             "naming.virtual_windows must be odd"),
     "monitor normal.fit.segment_k=0": (["normal.fit.segment_k=0"], "normal.fit.segment_k"),

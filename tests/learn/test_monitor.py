@@ -1124,36 +1124,44 @@ def test_the_trade_off_curve_draws_the_studys_design_rates():
 
 
 def test_the_rule_weighs_a_candidate_by_its_bayes_factor():
-    """log_odds: the Bayes factor of Beta(xi, 1) p-values (xi uniform on (0, 1)) against
-    uniform ones, by quadrature; uniform p-values name the candidate, Beta(0.5, 1) ones
-    do not (400 draws, seed 7); correlated windows count as fewer (an AR(1)'s effective
-    number); the prior odds add their log."""
+    """log_odds: the Bayes factor of Beta(xi, 1) p-values with xi uniform over the right
+    candidates' exponents against the wrong ones', by quadrature; uniform p-values name
+    the candidate, Beta(1/3, 1) ones (median p 0.125) do not (400 draws, seed 7);
+    correlated windows count as fewer (an AR(1)'s effective number); the prior odds add
+    their log."""
     from scipy.integrate import quad
 
     from swgmon.assessment.hypotheses import effective_windows, log_odds
 
+    def log_marginal(m, s, a, b):  # ln of the mean of xi^m exp((1 - xi) s) over [a, b]
+        peak = min(max(m / s, a), b)
+        c = m * np.log(peak) + (1 - peak) * s
+        val, _ = quad(lambda t: np.exp(m * np.log(t) + (1 - t) * s - c), a, b,
+                      points=[peak], limit=200, epsabs=0, epsrel=1e-10)
+        return np.log(val / (b - a)) + c
+
     rng = np.random.default_rng(7)
-    for n in (1, 5, 30, 500):
-        for xi in (1.0, 0.8, 0.4):
-            p = rng.uniform(size=n) ** (1 / xi)
-            x = -np.log(p)
-            m = effective_windows(x)
-            s = m * x.mean()
-            top = min(1.0, m / s)  # the integrand's peak, scaled out
-            c = m * np.log(top) + (1 - top) * s
-            ref, _ = quad(lambda t: np.exp(m * np.log(t) + (1 - t) * s - c), 0, 1,
-                          points=[top], limit=200, epsabs=0, epsrel=1e-10)
-            assert log_odds(p, 1.0) == pytest.approx(-(np.log(ref) + c), abs=1e-3)
-    named = [log_odds(rng.uniform(size=30), 1.0) > 0 for _ in range(400)]
-    abnormal = [log_odds(rng.uniform(size=30) ** 2, 1.0) > 0 for _ in range(400)]
-    assert np.mean(named) >= 0.9 and np.mean(abnormal) <= 0.05
+    for right, wrong in ((0.43, 0.23), (0.45, 0.1)):
+        a, b = (np.log(2) / -np.log(m) for m in (right, wrong))
+        for n in (1, 5, 30, 500):
+            for xi in (1.0, 0.8, 0.4):
+                p = rng.uniform(size=n) ** (1 / xi)
+                x = -np.log(p)
+                m = effective_windows(x)
+                s = m * x.mean()
+                want = log_marginal(m, s, a, 1.0) - log_marginal(m, s, 1e-9, b)
+                assert log_odds(p, 1.0, right, wrong) == pytest.approx(want, abs=1e-3)
+    named = [log_odds(rng.uniform(size=30), 1.0, 0.43, 0.23) > 0 for _ in range(400)]
+    wrong = [log_odds(rng.uniform(size=30) ** 3, 1.0, 0.43, 0.23) > 0 for _ in range(400)]
+    assert np.mean(named) >= 0.95 and np.mean(wrong) <= 0.05
     x = np.empty(2000)
     x[0], e = 0.0, rng.normal(size=2000)
     for i in range(1, 2000):
         x[i] = 0.9 * x[i - 1] + np.sqrt(1 - 0.81) * e[i]
     assert effective_windows(x) == pytest.approx(2000 * 0.1 / 1.9, rel=0.25)
     p = rng.uniform(size=30)
-    assert log_odds(p, 10.0) - log_odds(p, 1.0) == pytest.approx(np.log(10.0))
+    assert log_odds(p, 10.0, 0.43, 0.23) - log_odds(p, 1.0, 0.43, 0.23) == \
+        pytest.approx(np.log(10.0))
 
 
 def test_a_hypothesis_of_ones_own_is_one_file_and_a_registration(tiny_eval, tiny_banks):
