@@ -197,21 +197,23 @@ class DiagnosisModel:
                  ) -> tuple[float, float, float]:
         """Severity estimate and its 90 % interval from windows ``x`` of one fault.
 
-        The estimate is the median of the windows' estimates (each read through the
-        fault's reading curve, :meth:`read`). Its interval has two parts,
-        added: the median's own spread over these windows (the 5 % and 95 % quantiles of
-        the medians of ``n_boot`` bootstrap resamples of the windows, Efron and Tibshirani
-        1993, ch. 13; a fixed seed), and the calibration error across training gears
-        (``q05``, ``q95``): ``[b05 - q95, b95 - q05]``. The first keeps the interval open
-        where the training gears agree to the digit (a sensor fault is the same on every
-        gear); the windows are taken as independent, so it is a lower bound on that part.
+        The estimate is the median of the windows' estimates (:meth:`reads`). Its
+        interval has two parts, added: the median's own spread over these windows (the
+        5 % and 95 % quantiles of the medians of ``n_boot`` bootstrap resamples of the
+        windows, Efron and Tibshirani 1993, ch. 13; a fixed seed), and the calibration
+        error across training gears (``q05``, ``q95``): ``[b05 - q95, b95 - q05]``. The
+        first keeps the interval open where the training gears agree to the digit (a
+        sensor fault is the same on every gear); the windows are taken as independent, so
+        it is a lower bound on that part.
 
         Parameters
         ----------
         fault : str
             A class of the model other than healthy.
-        x : ndarray, shape (n, n_features + 2)
-            :func:`design_matrix` rows of the windows since the alarm's rise.
+        x : ndarray, shape (n, n_features + 2), or (n,)
+            :func:`design_matrix` rows of the windows since the alarm's rise, or their
+            estimates already read (:meth:`reads`: the prognosis reads a track's windows
+            at once and estimates block by block).
         n_boot : int
 
         Returns
@@ -219,13 +221,19 @@ class DiagnosisModel:
         (float, float, float)
             Estimate, low and high, in the fault's severity units.
         """
-        reg, (q05, q95) = self.severity[fault]
-        with one_thread():
-            pred = self.read(fault, reg.predict(x))
+        pred = self.reads(fault, x) if np.ndim(x) == 2 else np.asarray(x, float)
+        _, (q05, q95) = self.severity[fault]
         boot = np.median(pred[np.random.default_rng(0).integers(
             0, pred.size, (n_boot, pred.size))], axis=1)
         b05, b95 = np.quantile(boot, [0.05, 0.95])
         return float(np.median(pred)), float(b05 - q95), float(b95 - q05)
+
+    def reads(self, fault: str, x: np.ndarray) -> np.ndarray:
+        """Each window's severity estimate: the fault's regressor on :func:`design_matrix`
+        rows ``x`` (n, n_features + 2), read through its curve (:meth:`read`), shape (n,)."""
+        reg, _ = self.severity[fault]
+        with one_thread():
+            return self.read(fault, reg.predict(x))
 
 
 def read_through(curve: tuple[np.ndarray, np.ndarray], pred: np.ndarray) -> np.ndarray:

@@ -337,11 +337,11 @@ def _follow(tr, al, mon, feats, points, cond, cfg, out) -> None:
     idx = np.arange(al.index, tr.hour.size)
     hours = tr.hour[idx]
     block = np.floor((hours - al.hour) / cfg.block_h).astype(int)
-    est = []
-    for b in np.unique(block):
-        w = idx[block == b]
-        x = mon.inputs(feats[w], points[w], cond[w], tr.friction[w])
-        est.append((float(tr.hour[w[-1]]), *mon.model.estimate(al.fault, x)))
+    # every window read at once (one regressor call, not one a block: issue 85's time)
+    read = mon.model.reads(al.fault, mon.inputs(feats[idx], points[idx], cond[idx],
+                                                tr.friction[idx]))
+    est = [(float(hours[block == b][-1]), *mon.model.estimate(al.fault, read[block == b]))
+           for b in np.unique(block)]
     h, y, lo, hi = np.array(est, float).T
     out.tracks.append({"fault": al.fault, "alarm_h": al.hour, "hours": h.tolist(),
                        "severity": y.tolist(), "lo": lo.tolist(), "hi": hi.tolist()})

@@ -896,6 +896,33 @@ def test_an_alarm_in_a_named_gear_faults_episode_keeps_its_name(growing_life, ti
     assert len(res.alarms) == 1 and res.alarms[0] == named[0]
 
 
+def test_a_tracks_windows_read_at_once_are_read_as_block_by_block(growing_life, tiny_eval):
+    """The prognosis reads every window after an alarm at once and estimates block by
+    block (swgmon.prognosis.stream._follow); the slow reference, each block's windows
+    read alone, gives the same inputs and the same estimates to the last bit."""
+    from swgmon.advisories.stream import stream_features
+    from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.detection.normal import Conditions
+
+    ds, model = growing_life["ds"], tiny_eval["model"]
+    feats = stream_features(ds)
+    pts = np.stack([ds["n_in_rpm"].values, ds["t_out_nm"].values], axis=1)
+    cond = Conditions.of({k: ds[k].values for k in ("t_out_mean_nm", "temperature_c")
+                          if k in ds})
+    n_c = int(ds["commissioning"].values.sum())
+    mon = GearMonitor(model, RuleConfig(), 1.0)
+    mon.commission(feats[:n_c], pts[:n_c], cond[:n_c])
+    w = np.arange(n_c, len(feats))
+    x = mon.inputs(feats[w], pts[w], cond[w], 1.0)
+    read = model.reads("eccentric_wg", x)
+    for b in range(0, len(w), 15):
+        part = w[b:b + 15]
+        alone = mon.inputs(feats[part], pts[part], cond[part], 1.0)
+        assert np.array_equal(alone, x[b:b + 15])
+        assert model.estimate("eccentric_wg", alone) == \
+            model.estimate("eccentric_wg", read[b:b + 15])
+
+
 def test_the_prognosis_interval_after_the_alarm_holds_the_true_failure_hour(growing_life):
     """Every valid prognosis made before the true failure (7.67 h) holds it within its
     5-95 % interval; the first, 0.5 h after the alarm with 2 estimates, is not yet valid

@@ -225,6 +225,9 @@ def test_an_alarm_naming_a_fault_whose_range_ends_below_the_threshold_is_not_pre
     class Model:
         severity = {"eccentric_wg": None}
 
+        def reads(self, fault, x):
+            return np.full(len(x), 0.05)
+
         def estimate(self, fault, x):
             return 0.05, 0.03, 0.07
 
