@@ -1,8 +1,9 @@
 """Resumable parts of an evaluation, saved as each ends, grouped for job arrays: a part's
 key (:func:`part_key`, the hash of what made it), the parts of one (data set, held-out
 gear) run in one worker, in order (:func:`run_parts`, :func:`run_group`), resumed from
-``parts/`` when their key matches (:func:`finished_parts`), and one (data set, held-out
-gear) alone as a job of a cluster array (:func:`group_jobs`, :func:`run_one_group`); the
+``parts/`` when their key matches (:func:`finished_parts`), each data set's design part
+before its lives' (:func:`run_staged`), and one (data set, held-out gear) alone as a job
+of a cluster array (:func:`group_jobs`, :func:`run_one_group`); the
 options an evaluation's group of ``swgsim-train`` shares (:class:`EvaluationExperiment`). Used by
 the monitor's and the prognosis's evaluations (:mod:`swgmon.evaluation`) and the
 transfer comparison (:mod:`learn.transfer.task`)."""
@@ -36,11 +37,16 @@ joblib = lazy_module("joblib")
 log = logging.getLogger(__name__)
 
 
+#: The name of a data set's design part in a staged evaluation (:func:`run_staged`).
+DESIGN = "design"
+
+
 @dataclass(frozen=True)
 class Job:
     """One resumable part: the monitor (``detector`` None) or one per-window detector on
-    one held-out gear of one data set; ``gear`` 0: every held-out instance of a data set's
-    lot (the prognosis's part)."""
+    one held-out gear of one data set; of a staged evaluation (:func:`run_staged`), a
+    data set's design part (``gear`` 0, ``detector`` :data:`DESIGN`) or its lives on one
+    held-out gear (``detector`` None, or the family they live)."""
 
     dataset: str
     gear: int
@@ -56,7 +62,7 @@ class Job:
     @property
     def held_out(self) -> str:
         """What it scores, in messages."""
-        return f"held-out gear {self.gear}" if self.gear else "every held-out instance"
+        return "its design" if self.detector == DESIGN else f"held-out gear {self.gear}"
 
 
 @dataclass(kw_only=True)
@@ -312,6 +318,65 @@ def run_group(out: str | Path, jobs: list[Job], run_one: Callable[[Job], dict]
     return finished
 
 
+def run_staged(out: Path, design_jobs: list[Job], life_jobs: list[Job], design: Callable,
+               lives: Callable, desc: str, progress: bool, n_jobs: int
+               ) -> tuple[list[dict], list[dict], int]:
+    """An evaluation in two stages: each data set's design part (:data:`DESIGN`: its
+    model, trained once, written by the part), then the lives' parts (per data set and
+    held-out gear), each given its data set's design part; both by :func:`run_parts`.
+
+    Parameters
+    ----------
+    out : Path
+        The report folder.
+    design_jobs, life_jobs : list of Job
+    design : callable
+        As :func:`run_parts`'s ``delayed``, for the design parts.
+    lives : callable
+        (jobs, design part) -> the ``joblib.delayed`` call, for the lives' parts.
+    desc : str
+        The progress lines' label (``<desc> design``, ``<desc> lives``).
+    progress : bool
+    n_jobs : int
+
+    Returns
+    -------
+    (list of dict, list of dict, int)
+        The design parts, the lives' parts, and how many parts were resumed.
+    """
+    designs, r0 = run_parts(out, design_jobs, design, f"{desc} design", progress, n_jobs)
+    by = {d["dataset"]: d for d in designs}
+    parts, r1 = run_parts(out, life_jobs, lambda js: lives(js, by[js[0].dataset]),
+                          f"{desc} lives", progress, n_jobs)
+    return designs, parts, r0 + r1
+
+
+def run_staged_group(out: Path, jobs: list[Job], design_jobs: list[Job], design: Callable,
+                     lives: Callable, desc: str, progress: bool, n_jobs: int, key: str,
+                     group: int) -> dict:
+    """One group of a staged evaluation (:func:`run_staged`; a job of an array, option
+    ``key`` = ``group``, no report): a data set's design part, or one held-out gear's
+    lives, which read their data set's design part from ``parts/``
+    (:func:`run_one_group`).
+
+    Raises
+    ------
+    ValueError
+        A lives group whose data set's design part is not there yet, naming the group to
+        run first.
+    """
+    first = [j for j in design_jobs if j.dataset == jobs[0].dataset]
+    done, _ = finished_parts(out, first)
+    if jobs[0].detector != DESIGN and not done:
+        raise ValueError(f"{key}={group} lives {jobs[0].dataset}'s held-out instance "
+                         f"{jobs[0].gear} and needs its design part first: run "
+                         f"{key}={design_jobs.index(first[0])} before")
+
+    def call(js: list[Job]):
+        return design(js) if js[0].detector == DESIGN else lives(js, done[0])
+    return run_one_group(out, jobs, call, desc, progress, n_jobs, key, group)
+
+
 def resumed_note(resumed: int, n_parts: int) -> str:
     """What follows an evaluation's wall time when its run of ``n_parts`` parts resumed
     ``resumed`` of them from ``parts/`` (:func:`run_parts`): their time was spent by an
@@ -320,6 +385,6 @@ def resumed_note(resumed: int, n_parts: int) -> str:
             if resumed else "")
 
 
-__all__ = ["EvaluationExperiment", "Job", "finished_parts", "group_jobs", "part_key",
-           "plan_datasets", "run_group", "run_one_group", "run_parts", "save_part", "share_key",
-           "resumed_note"]
+__all__ = ["DESIGN", "EvaluationExperiment", "Job", "finished_parts", "group_jobs", "part_key",
+           "plan_datasets", "resumed_note", "run_group", "run_one_group", "run_parts",
+           "run_staged", "run_staged_group", "save_part", "share_key"]

@@ -22,14 +22,14 @@ import numpy as np
 
 from learn.tasks.config import typed_app
 from learn.tasks.parts import (
+    DESIGN,
     EvaluationExperiment,
     Job,
-    finished_parts,
     group_jobs,
     part_key,
     run_group,
-    run_one_group,
-    run_parts,
+    run_staged,
+    run_staged_group,
 )
 from learn.tracking.ledger import LEDGER, append_scored_run
 from swgmon.assessment.model_io import MODEL_SUFFIX, load_model, save_model
@@ -62,10 +62,6 @@ joblib = lazy_module("joblib")
 
 __all__ = ["FAMILY_TARGETS", "BenchmarkExperiment", "benchmark_tables", "benchmark_targets",
            "run_benchmark"]
-
-#: The part of a data set that trains its model and sets the baselines' thresholds.
-DESIGN = "design"
-
 
 @dataclass
 class BenchmarkExperiment(EvaluationExperiment):
@@ -121,48 +117,21 @@ def run_benchmark(cfg) -> dict:
     with bc.claimed_report("benchmark", plans, app.logger) as (out, claim):
         (out / "parts").mkdir(parents=True, exist_ok=True)
         (out / "models").mkdir(exist_ok=True)
+
+        def design(js: list[Job]):
+            return joblib.delayed(_design)(plans[js[0].dataset], js, bc.study, str(out))
+
+        def lives(js: list[Job], d: dict):
+            return joblib.delayed(_lives)(plans[js[0].dataset], js, bc.study, str(out),
+                                          d["thresholds"])
         if bc.group is not None:
-            return _group(bc, plans, out, jobs, design_jobs)
+            return {"task": "benchmark", **run_staged_group(
+                out, jobs, design_jobs, design, lives, "benchmark", bc.progress, bc.n_jobs,
+                "benchmark.group", bc.group)}
         t0 = time.perf_counter()
-        designs, r0 = run_parts(out, design_jobs, lambda js: joblib.delayed(_design)(
-            plans[js[0].dataset], js, bc.study, str(out)), "benchmark design", bc.progress,
-            bc.n_jobs)
-        thresholds = {d["dataset"]: d["thresholds"] for d in designs}
-        parts, r1 = run_parts(out, life_jobs, lambda js: joblib.delayed(_lives)(
-            plans[js[0].dataset], js, bc.study, str(out), thresholds[js[0].dataset]),
-            "benchmark lives", bc.progress, bc.n_jobs)
-        wall = time.perf_counter() - t0
-        return _report(bc, out, claim, designs, parts, wall, r0 + r1)
-
-
-def _group(bc: BenchmarkExperiment, plans: dict[str, DatasetPlan], out: Path,
-           jobs: list[Job], design_jobs: list[Job]) -> dict:
-    """One group's parts (a job of an array, no report): a data set's design part
-    (groups 0 to D - 1), or one held-out instance's lives, which read its data set's
-    design part from ``parts/``.
-
-    Raises
-    ------
-    ValueError
-        A lives group whose data set's design part is not there yet, naming its group.
-    """
-    design = [j for j in design_jobs if j.dataset == jobs[0].dataset]
-    thresholds = None
-    if jobs[0].detector != DESIGN:
-        done, _ = finished_parts(out, design)
-        if not done:
-            raise ValueError(f"benchmark.group={bc.group} lives {jobs[0].dataset}'s held-out "
-                             f"instance {jobs[0].gear} and needs its design part first: run "
-                             f"benchmark.group={design_jobs.index(design[0])} before")
-        thresholds = done[0]["thresholds"]
-
-    def run(js: list[Job]):
-        p = plans[js[0].dataset]
-        if thresholds is None:
-            return joblib.delayed(_design)(p, js, bc.study, str(out))
-        return joblib.delayed(_lives)(p, js, bc.study, str(out), thresholds)
-    return {"task": "benchmark", **run_one_group(out, jobs, run, "benchmark", bc.progress,
-                                                 bc.n_jobs, "benchmark.group", bc.group)}
+        designs, parts, resumed = run_staged(out, design_jobs, life_jobs, design, lives,
+                                             "benchmark", bc.progress, bc.n_jobs)
+        return _report(bc, out, claim, designs, parts, time.perf_counter() - t0, resumed)
 
 
 def _design(plan: DatasetPlan, jobs: list[Job], bc: BenchmarkConfig, out: str

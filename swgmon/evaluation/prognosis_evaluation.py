@@ -687,9 +687,10 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     return scales, info
 
 
-def run_prognosis_part(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig) -> dict:
-    """Train on a data set's training instances, calibrate on their lives, and evaluate
-    the prognosis on every life to failure of its held-out instances (module docstring).
+def prognosis_design(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
+                     ) -> tuple[DiagnosisModel, dict]:
+    """A data set's design: the diagnosis model trained on its lot's training instances
+    and the intervals' scales calibrated on their lives (module docstring).
 
     Parameters
     ----------
@@ -703,17 +704,16 @@ def run_prognosis_part(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
 
     Returns
     -------
-    dict
-        ``rows`` (one per prognosis and method, :func:`_rows`), ``lives`` (one per life,
-        :func:`run_life`'s), ``changes`` (per life of the first ``twins`` seeds with a
-        payload change and method, run again as a twin without it: :func:`_changes`),
-        ``calibration`` (:func:`calibrate`'s info), ``not_run`` (fault -> why),
-        ``train_s``, ``calibrate_s``, ``evaluate_s`` [s], ``dataset``.
+    (DiagnosisModel, dict)
+        The model, and the design: ``scales`` (per method, the lower and upper factors
+        per quarter, :func:`calibrate`), ``calibration`` (its info), ``faults`` (those
+        evaluated), ``not_run`` (fault -> why), ``train_s``, ``calibrate_s`` [s],
+        ``dataset``.
     """
     t0 = time.perf_counter()
     lot = population_plan(base, sc)
-    train_ids, held = instances(sc)
-    banks = {x: record_bank(lot, x) for x in train_ids + held}
+    train_ids, _ = instances(sc)
+    banks = {x: record_bank(lot, x) for x in train_ids}
     faults, not_run = evaluated_faults(lot, sc)
     levels = {f: training_levels(f, sc.faults[f], sc.severity_levels // 4, sc.train_beyond)
               for f in faults}
@@ -727,30 +727,51 @@ def run_prognosis_part(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
     scales, info = calibrate(lot, banks, train_ids, model, sc, faults)
     for g in train_ids:
         banks[g].release(healthy=True)  # the training instances' records serve no more
-    t2 = time.perf_counter()
+    return model, {"scales": scales, "calibration": info, "faults": faults,
+                   "not_run": not_run, "train_s": t1 - t0,
+                   "calibrate_s": time.perf_counter() - t1, "dataset": dataset}
+
+
+def prognosis_lives(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig,
+                    model: DiagnosisModel, design: dict, gear: int) -> dict:
+    """The prognosis on every life to failure of held-out instance ``gear`` (module
+    docstring), with a data set's design (:func:`prognosis_design`'s model and design,
+    as read back from its part: lists for tuples).
+
+    Returns
+    -------
+    dict
+        ``rows`` (one per prognosis and method, :func:`_rows`), ``lives`` (one per life,
+        :func:`run_life`'s), ``changes`` (per life of the first ``twins`` seeds with a
+        payload change and method, run again as a twin without it: :func:`_changes`),
+        ``evaluate_s`` [s], ``dataset``, ``held_out_gear``.
+    """
+    t0 = time.perf_counter()
+    lot = population_plan(base, sc)
+    train_ids, _ = instances(sc)
+    scales = {m: (tuple(lo), tuple(hi)) for m, (lo, hi) in design["scales"].items()}
+    bank = record_bank(lot, gear)
     rows, lives, changes = [], [], []
-    for g in held:
-        for i, s in enumerate(sc.seeds):
-            for f in faults:
-                sim = life_of(lot, banks[g], g, sc, f, s)
-                failures = failure_ratios(lot, sc, f, train_ids)
-                life, events = run_life(sim, model, sc, scales, s, failures)
-                key = {"dataset": dataset, "held_out_gear": g, "seed": s}
-                lives.append({**key, **life})
-                rows += _rows(key, life, events)
-                if i < sc.twins and np.isfinite(life["payload_h"]):
-                    twin = life_of(lot, banks[g], g, sc, f, s, twin=True)
-                    changes += _changes(key, life, events, *run_life(twin, model, sc, scales,
-                                                                     s, failures),
-                                        life["payload_h"], sc.prognosis.every_h)
-            banks[g].release()
-        banks[g].release(healthy=True)
-    return {"rows": rows, "lives": lives, "changes": changes, "calibration": info,
-            "not_run": not_run,
-            "train_s": t1 - t0, "calibrate_s": t2 - t1, "evaluate_s": time.perf_counter() - t2,
-            "dataset": dataset}
+    for i, s in enumerate(sc.seeds):
+        for f in design["faults"]:
+            failures = failure_ratios(lot, sc, f, train_ids)
+            life, events = run_life(life_of(lot, bank, gear, sc, f, s), model, sc, scales, s,
+                                    failures)
+            key = {"dataset": dataset, "held_out_gear": gear, "seed": s}
+            lives.append({**key, **life})
+            rows += _rows(key, life, events)
+            if i < sc.twins and np.isfinite(life["payload_h"]):
+                twin = life_of(lot, bank, gear, sc, f, s, twin=True)
+                changes += _changes(key, life, events, *run_life(twin, model, sc, scales,
+                                                                 s, failures),
+                                    life["payload_h"], sc.prognosis.every_h)
+        bank.release()
+    bank.release(healthy=True)
+    return {"rows": rows, "lives": lives, "changes": changes,
+            "evaluate_s": time.perf_counter() - t0, "dataset": dataset,
+            "held_out_gear": gear}
 
 
 __all__ = ["METHODS", "GrowingFault", "PrognosisStudyConfig", "baseline_events", "calibrate",
            "evaluated_faults", "failure_ratios", "life_levels", "life_of", "pivot_load_nm",
-           "run_life", "run_prognosis_part", "training_levels"]
+           "prognosis_design", "prognosis_lives", "run_life", "training_levels"]

@@ -44,7 +44,7 @@ pd = lazy_module("pandas")
 
 #: Columns naming a life.
 LIFE = ["dataset", "held_out_gear", "seed", "fault"]
-#: ``changes.csv``'s columns (:func:`.prognosis_evaluation.run_prognosis_part`).
+#: ``changes.csv``'s columns (:func:`.prognosis_evaluation.prognosis_lives`).
 CHANGE_COLUMNS = [*LIFE, "payload", "method", "change_h", "failure_h", "twin_failure_h",
                   "paired", "moved", "lag_h"]
 

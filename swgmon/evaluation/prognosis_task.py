@@ -8,9 +8,12 @@ Files in ``report_dir``: ``results.csv`` (one row per prognosis and method), ``l
 gear, method and quarter of the true remaining share),
 ``scores.csv`` (each life's scores per method), ``changes.csv`` (each life with a payload
 change against its twin without it, per method), ``table.md``, ``prognosis.png``,
-``timing.json`` and ``parts/``: one finished part per data set (its lot) with the
-hash of the config that made it (:func:`learn.tasks.parts.part_key`), so that a rerun of
-the same config resumes from them (the part machinery of :mod:`learn.tasks.parts`).
+``timing.json``, ``models/<dataset>_prognosis.skops`` with its ``.card.json`` (each data
+set's diagnosis model) and ``parts/``: per data set its design part (the model trained
+and the intervals calibrated), then one part per held-out instance (its lives), each with
+the hash of the config that made it (:func:`learn.tasks.parts.part_key`), so that a rerun
+of the same config resumes from them and a stopped run loses at most one part per worker
+(the staged parts of :mod:`learn.tasks.parts`, as the benchmark's).
 """
 
 from __future__ import annotations
@@ -23,19 +26,25 @@ from pathlib import Path
 
 from learn.tasks.config import typed_app
 from learn.tasks.parts import (
+    DESIGN,
     EvaluationExperiment,
     Job,
     group_jobs,
     part_key,
     resumed_note,
     run_group,
-    run_one_group,
-    run_parts,
+    run_staged,
+    run_staged_group,
 )
 from learn.tracking import log_run
 from learn.tracking.ledger import LEDGER, append_scored_run
+from swgmon.assessment.model_io import MODEL_SUFFIX, load_model, save_model
 from swgmon.evaluation.benchmark import instances
-from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, run_prognosis_part
+from swgmon.evaluation.prognosis_evaluation import (
+    PrognosisStudyConfig,
+    prognosis_design,
+    prognosis_lives,
+)
 from swgmon.evaluation.prognosis_report import (
     CHANGE_COLUMNS,
     bucket_table,
@@ -77,13 +86,18 @@ class PrognosisExperiment(EvaluationExperiment):
     report_dir: str = "reports/prognosis"
 
 
-def plan_parts(pc: PrognosisExperiment, plans: dict[str, DatasetPlan]) -> list[Job]:
-    """One part per data set (its lot trained, calibrated and scored), its key the hash of
-    the data set's config and the study."""
+def plan_parts(pc: PrognosisExperiment, plans: dict[str, DatasetPlan]
+               ) -> tuple[list[Job], list[Job]]:
+    """Each data set's design part and its lives' parts (one per held-out instance), each
+    keyed by the hash of the data set's config, the study and the part."""
     study = dataclasses.asdict(pc.study)
-    return [Job(name, 0, None, part_key({"dataset": p.config_hash, "study": study,
-                                         "task": "prognosis"}))
-            for name, p in plans.items()]
+    design, lives = [], []
+    for name, p in plans.items():
+        base = {"dataset": p.config_hash, "study": study, "task": "prognosis"}
+        design.append(Job(name, 0, DESIGN, part_key({**base, "part": DESIGN})))
+        lives += [Job(name, g, None, part_key({**base, "gear": g}))
+                  for g in instances(pc.study)[1]]
+    return design, lives
 
 
 def run_prognosis_evaluation(cfg) -> dict:
@@ -92,52 +106,84 @@ def run_prognosis_evaluation(cfg) -> dict:
     Raises
     ------
     ValueError
-        A bad ``prognosis`` key or data set, a lot without two training instances, an
-        unwritable MLflow store, or a ``report_dir`` holding a file this project cannot
-        show it wrote (named); before any work.
+        A bad ``prognosis`` key or data set, a lot without two training instances,
+        ``prognosis.group`` beyond the groups or a lives group before its data set's
+        design part, an unwritable MLflow store, or a ``report_dir`` holding a file this
+        project cannot show it wrote (named); before any work.
     """
     app = typed_app(cfg)
     pc: PrognosisExperiment = app.prognosis
     check_tree(pc.study, "prognosis.study")  # its training design, ..., then its rules
     plans = pc.plans("prognosis")  # every data set's config checked before any work
-    jobs = group_jobs(plan_parts(pc, plans), pc.group, "prognosis.group")
+    design_jobs, life_jobs = plan_parts(pc, plans)
+    jobs = group_jobs(design_jobs + life_jobs, pc.group, "prognosis.group")
     with pc.claimed_report("prognosis", plans, app.logger) as (out, claim):
+        (out / "parts").mkdir(parents=True, exist_ok=True)
+        (out / "models").mkdir(exist_ok=True)
+
+        def design(js: list[Job]):
+            return joblib.delayed(_design)(plans[js[0].dataset], js, pc.study, str(out))
+
+        def lives(js: list[Job], d: dict):
+            return joblib.delayed(_lives)(plans[js[0].dataset], js, pc.study, str(out), d)
         if pc.group is not None:
-            return {"task": "prognosis", **run_one_group(
-                out, jobs, lambda js: joblib.delayed(_job)(plans[js[0].dataset], js,
-                                                           pc.study, str(out)),
-                "prognosis evaluation", pc.progress, pc.n_jobs, "prognosis.group", pc.group)}
-        return _evaluate(app, pc, plans, out, claim)
+            return {"task": "prognosis", **run_staged_group(
+                out, jobs, design_jobs, design, lives, "prognosis", pc.progress, pc.n_jobs,
+                "prognosis.group", pc.group)}
+        t0 = time.perf_counter()
+        designs, parts, resumed = run_staged(out, design_jobs, life_jobs, design, lives,
+                                             "prognosis", pc.progress, pc.n_jobs)
+        return _evaluate(app, pc, plans, out, claim, designs, parts,
+                         time.perf_counter() - t0, resumed, len(jobs))
 
 
-def _job(plan_: DatasetPlan, jobs: list[Job], study: PrognosisStudyConfig, out: str
-         ) -> list[tuple[dict, Job]]:
-    """The part of one data set in a worker, saved as it ends."""
+def _model_path(out: str | Path, dataset: str) -> Path:
+    return Path(out) / "models" / f"{dataset}_prognosis{MODEL_SUFFIX}"
+
+
+def _design(plan_: DatasetPlan, jobs: list[Job], study: PrognosisStudyConfig, out: str
+            ) -> list[tuple[dict, Job]]:
+    """A data set's design part in a worker: its model, written to ``models/``, and
+    its calibration (:func:`~.prognosis_evaluation.prognosis_design`)."""
     ownership.join(out, "prognosis")
-    return run_group(out, jobs, lambda j: run_prognosis_part(plan_, j.dataset, study))
+
+    def one(job: Job) -> dict:
+        model, part = prognosis_design(plan_, job.dataset, study)
+        save_model(model, _model_path(out, job.dataset),
+                   [{"name": job.dataset, "config_hash": plan_.config_hash,
+                     "gears": instances(study)[0],
+                     "simulated": "training lives of swgmon.evaluation.training"}])
+        return part
+    return run_group(out, jobs, one)
 
 
-def _frames(parts: list[dict]) -> tuple[pd.DataFrame, ...]:
+def _lives(plan_: DatasetPlan, jobs: list[Job], study: PrognosisStudyConfig, out: str,
+           design: dict) -> list[tuple[dict, Job]]:
+    """One held-out instance's lives in a worker, by its data set's model and design
+    (:func:`~.prognosis_evaluation.prognosis_lives`)."""
+    ownership.join(out, "prognosis")
+    model = load_model(_model_path(out, jobs[0].dataset))
+    return run_group(out, jobs, lambda j: prognosis_lives(plan_, j.dataset, study, model,
+                                                          design, j.gear))
+
+
+def _frames(designs: list[dict], parts: list[dict]) -> tuple[pd.DataFrame, ...]:
     """Results, lives, payload changes and calibration tables of the parts."""
     rows = pd.DataFrame([r for p in parts for r in p["rows"]])
     lives = pd.DataFrame([r for p in parts for r in p["lives"]])
     changes = pd.DataFrame([r for p in parts for r in p.get("changes", [])],
                            columns=CHANGE_COLUMNS)
-    cal = pd.DataFrame([{"dataset": p["dataset"], **c} for p in parts
-                        for c in p["calibration"]])
+    cal = pd.DataFrame([{"dataset": d["dataset"], **c} for d in designs
+                        for c in d["calibration"]])
     return rows, lives, changes, cal
 
 
-def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> dict:
-    """The evaluation into the claimed ``out`` (every file it writes recorded)."""
-    (out / "parts").mkdir(parents=True, exist_ok=True)
-    jobs = plan_parts(pc, plans)
-    t0 = time.perf_counter()
-    parts, resumed = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
-        plans[js[0].dataset], js, pc.study, str(out)), "prognosis evaluation", pc.progress,
-        pc.n_jobs)
-    wall = time.perf_counter() - t0
-    rows, lives, changes, cal = _frames(parts)
+def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim,
+              designs: list[dict], parts: list[dict], wall: float, resumed: int,
+              n_parts: int) -> dict:
+    """The report of the parts into the claimed ``out`` (every file it writes
+    recorded)."""
+    rows, lives, changes, cal = _frames(designs, parts)
     if rows.empty:
         raise ValueError("prognosis: no life was followed to a prognosis (no alarm named "
                          "a growing fault); nothing to score")
@@ -150,10 +196,10 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
     for name, df in (("results.csv", rows), ("lives.csv", lives), ("calibration.csv", cal),
                      ("scores.csv", scores), ("changes.csv", changes)):
         write_owned(out / name, lambda tmp, df=df: df.to_csv(tmp, index=False))
-    not_run = {f"{p['dataset']}: {f}": w for p in parts for f, w in p["not_run"].items()}
+    not_run = {f"{d['dataset']}: {f}": w for d in designs for f, w in d["not_run"].items()}
     atomic_write_json(out / "timing.json", {"wall_s": wall, "resumed": resumed, "parts": [
-        {k: p.get(k) for k in ("dataset", "train_s", "calibrate_s", "evaluate_s")}
-        for p in parts]})
+        {k: p.get(k) for k in ("dataset", "held_out_gear", "train_s", "calibrate_s",
+                               "evaluate_s")} for p in designs + parts]})
     sc = pc.study
     train_ids, held = instances(sc)
     header = (f"# Prognosis: lives to failure by laws it does not assume, on gear instances "
@@ -165,7 +211,7 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim) -> di
               f"(`prognosis.study.day`, `prognosis.study.growth`); a prognosis every "
               f"{sc.prognosis.every_h:g} h after the alarm; "
               f"{'a scored run' if sc.scored_run else 'design seeds: not a scored run'}. "
-              f"Wall time {wall / 60:.1f} min{resumed_note(resumed, len(jobs))}.\n"
+              f"Wall time {wall / 60:.1f} min{resumed_note(resumed, n_parts)}.\n"
               + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
     write_table(out / "table.md", header, tgt, summary, buckets, lives, cal, moved)
     fig = figure(buckets, rows, out / "prognosis.png", goal, nominal)

@@ -84,21 +84,28 @@ def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
     assert "## After a payload change" in table
 
 
-def test_a_rerun_resumes_from_its_part(tiny_prognosis, monkeypatch):
-    """The same config again: the part is read back from parts/, nothing recomputed, the
-    same results."""
+def _no_part_computed(monkeypatch):
+    """Make computing any part fail the test."""
     import swgmon.evaluation.prognosis_task as task
-
-    out, _ = tiny_prognosis
-    before = (out / "results.csv").read_bytes()
 
     def fail(*args, **kwargs):
         raise AssertionError("a finished part was computed again")
 
-    monkeypatch.setattr(task, "run_prognosis_part", fail)
+    for name in ("prognosis_design", "prognosis_lives"):
+        monkeypatch.setattr(task, name, fail)
+
+
+def test_a_rerun_resumes_from_its_parts(tiny_prognosis, monkeypatch):
+    """The same config again: the design part and the held-out instance's lives are read
+    back from parts/ (the model from models/), nothing recomputed, the same results."""
+    out, _ = tiny_prognosis
+    before = (out / "results.csv").read_bytes()
+    _no_part_computed(monkeypatch)
     _run(out)
     assert (out / "results.csv").read_bytes() == before
-    assert "(1 of 1 parts resumed from parts/" in (out / "table.md").read_text()
+    assert "(2 of 2 parts resumed from parts/" in (out / "table.md").read_text()
+    assert sorted(p.name for p in (out / "parts").iterdir()) == ["tiny_design.json",
+                                                                 "tiny_gear3.json"]
 
 
 def test_a_scored_run_enters_the_ledger(tmp_path, monkeypatch):
@@ -121,22 +128,35 @@ def test_a_scored_run_enters_the_ledger(tmp_path, monkeypatch):
 
 def test_a_job_of_an_array_runs_its_group_alone_and_writes_no_report(tiny_prognosis,
                                                                      monkeypatch, capsys):
-    """``prognosis.group=0`` (a job of a cluster array, docs/scale_out.md) into the same
-    folder: its part is found done, nothing is computed and the report stays as it was."""
-    import swgmon.evaluation.prognosis_task as task
-
+    """``prognosis.group=0`` and ``=1`` (jobs of a cluster array, docs/scale_out.md: the
+    design part, then the held-out instance's lives) into the same folder: each finds its
+    part done, nothing is computed and the report stays as it was."""
     out, _ = tiny_prognosis
     before = {f: (out / f).read_bytes() for f in ("results.csv", "table.md")}
-
-    def fail(*args, **kwargs):
-        raise AssertionError("a finished part was computed again")
-
-    monkeypatch.setattr(task, "run_prognosis_part", fail)
+    _no_part_computed(monkeypatch)
     summary = _run(out, "prognosis.group=0", "prognosis.progress=true")
-    assert summary["group"] == 0 and summary["parts"] == ["tiny.json"]
-    assert "prognosis.group 0 (tiny, every held-out instance): 1 part(s)" in \
-        capsys.readouterr().out
+    assert summary["group"] == 0 and summary["parts"] == ["tiny_design.json"]
+    assert "prognosis.group 0 (tiny, its design): 1 part(s)" in capsys.readouterr().out
+    assert _run(out, "prognosis.group=1")["parts"] == ["tiny_gear3.json"]
     assert {f: (out / f).read_bytes() for f in before} == before
+
+
+def test_an_array_runs_the_design_first_then_the_lives(tiny_prognosis, tmp_path):
+    """A lives group before its design part is refused in one line naming the group to
+    run first; the design group, then the lives group, write the parts the whole command
+    then finds done, with the results of a run in one go."""
+    out = tmp_path / "rep"
+    with pytest.raises(ValueError) as e:
+        _run(out, "prognosis.group=1")
+    assert str(e.value) == ("prognosis.group=1 lives tiny's held-out instance 3 and needs "
+                            "its design part first: run prognosis.group=0 before")
+    for g in (0, 1):
+        _run(out, f"prognosis.group={g}")
+    assert not (out / "results.csv").exists()
+    _run(out)
+    assert (out / "results.csv").read_bytes() == (tiny_prognosis[0] / "results.csv"
+                                                  ).read_bytes()
+    assert "(2 of 2 parts resumed from parts/" in (out / "table.md").read_text()
 
 
 BAD = {  # case -> (override or overrides, the start of the one line)
@@ -186,8 +206,8 @@ BAD = {  # case -> (override or overrides, the start of the one line)
     "a bucket's least coverage 1": ("prognosis.study.targets.bucket_min=1",
                                     "prognosis.study.targets.bucket_min must lie in"),
     "max_scale 30": ("prognosis.study.max_scale=30", "prognosis.study.max_scale must lie in"),
-    "a group beyond the pairs": ("prognosis.group=1", "prognosis.group must lie in [0, 0] "
-                                 "(0: tiny), got 1"),
+    "a group beyond the pairs": ("prognosis.group=2", "prognosis.group must lie in [0, 1] "
+                                 "(0: tiny, 1: tiny gear 3), got 2"),
 }
 
 

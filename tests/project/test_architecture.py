@@ -71,9 +71,12 @@ MAX_FUNCTION_LINES = 80
 #: 14880 and all 57435 -> 57525 for issue 84's arbitration rule (a Bayes factor with
 #: declared priors on an effective number of windows, in place of a tuned median p: +86);
 #: swgmon 14880 -> 14885 and all 57525 -> 57530 for issue 85's evaluation time (a track's
-#: windows read at once, block by block estimated: +4).
-LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11500,
-                                "swgmon": 14885, "swgcli": 2000, "all": 57530}
+#: windows read at once, block by block estimated: +4); learn 11500 -> 11520, swgmon
+#: 14885 -> 14920 and all 57530 -> 57630 for issue 85's staged parts (the prognosis's
+#: evaluation resumable per held-out instance, the benchmark's design-then-lives stages
+#: moved beside the other part machinery and shared: +98).
+LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11520,
+                                "swgmon": 14920, "swgcli": 2000, "all": 57630}
 #: Numeric module constants the monitor may hold (issue 84: at most 10, physical and
 #: format constants with sources; a tuned number is a typed config field, logged with
 #: every run). Today's count: it moves only down.
