@@ -323,9 +323,9 @@ def evaluate_detectors(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
 
 def _detector_life(sim: LifeSimulator, k0: int, refs: References, det: WindowClassifier,
                    chunk: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """A detector's labels of a fault life from its onset, ``chunk`` windows at a time, until an hour after
-    its first faulty window (or the fault life's end); with the windows' ``hour`` and
-    ``severity``."""
+    """A detector's labels of a fault life from its onset, ``chunk`` windows at a time,
+    until an hour after its first faulty window (or the fault life's end); with the
+    windows' ``hour`` and ``severity``."""
     labs, hours, sevs = [], [], []
     first = None
     for a in range(k0, len(sim), chunk):

@@ -26,8 +26,9 @@ regressors fitted without its instance (the jackknife's out-of-instance scores, 
 al., Ann. Statist. 49 (2021) 486-507; the test lives are read by the full model, not by
 each leave-one-out model as jackknife+ would: that is one monitor run per training
 instance and test life), per method and per quarter of the *true* remaining share
-(label-conditional: :func:`swgmon.prognosis.inputs.calibrated_interval`), one prognosis
-per life and quarter at a fraction of the way drawn from the seed (:func:`calibrate`);
+(label-conditional: :func:`swgmon.prognosis.inputs.calibrated_interval`) and per fault
+where its lives are enough, one prognosis per life and quarter at a fraction of the way
+drawn from the seed (:func:`calibrate`);
 the held-out instances are never seen before they are scored.
 """
 
@@ -612,14 +613,16 @@ def _changes(key: dict, life: dict, events: dict[str, list[dict]], twin: dict,
 
 def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
               model: DiagnosisModel, sc: PrognosisStudyConfig, faults: list[str]
-              ) -> tuple[dict[str, tuple[tuple[float, ...], tuple[float, ...]]], list[dict]]:
-    """The interval's lower and upper scales of each method by conformal prediction over
-    the training instances ``gears`` (``calibration_seeds``; module docstring), one pair
-    per quarter of the *true* remaining share (``targets.share_buckets`` equal buckets, the
-    ones judged; 4: quarters; :func:`~swgmon.prognosis.scores.remaining_fraction`;
-    label-conditional: the prognosis applies each quarter's pair to the remaining lives of
-    that quarter,
-    :func:`~swgmon.prognosis.inputs.calibrated_interval`).
+              ) -> tuple[dict[str, dict[str, tuple[tuple[float, ...], tuple[float, ...]]]],
+                         list[dict]]:
+    """The interval's lower and upper scales of each fault and method by conformal
+    prediction over the training instances ``gears`` (``calibration_seeds``; module
+    docstring), one pair per quarter of the *true* remaining share
+    (``targets.share_buckets`` equal buckets, the ones judged; 4: quarters;
+    :func:`~swgmon.prognosis.scores.remaining_fraction`; label-conditional: the prognosis
+    applies each quarter's pair to the remaining lives of that quarter,
+    :func:`~swgmon.prognosis.inputs.calibrated_interval`), and per fault where its own
+    lives are enough (Mondrian over faults: a fault's median may err its own way).
 
     A training instance's lives are read with the severity regressors fitted without it
     (:meth:`~swgmon.assessment.model.DiagnosisModel.without`): out of sample, as a held-out
@@ -629,26 +632,26 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
 
     Of a life's valid prognoses with finite, positive quantiles, each quarter gets the one
     at a fraction λ of those in it, λ uniform in [0, 1] from the life's seed and gear (one
-    per life and quarter: the lives stay exchangeable within a quarter); a quarter without
-    enough lives for the coverage takes the pair of one prognosis per life at λ over all
-    quarters (and loses its conditional guarantee: ``lives`` in ``info`` says where), and
-    where those are too few to hold the tails apart (19 lives at 0.9), one factor for both
-    tails from them (9 lives; before, the posterior's own interval was left: robot_joint's
-    17 calibration lives kept factors 1).
+    per life and quarter: the lives stay exchangeable within a quarter). Each fault's
+    lives, then every fault's pooled (:func:`_cell_scales`): a quarter's tails apart; where
+    too few lives for the coverage, all quarters' (and the quarter loses its conditional
+    guarantee: ``lives`` in ``info`` says where); where those are too few to hold the tails
+    apart (19 lives at 0.9), one factor for both tails from them (9 lives); where a fault
+    has fewer, the pooled pair of the quarter.
 
     Returns
     -------
-    scales : dict of str to (tuple of float, tuple of float)
-        Per method, the lower and the upper factors, one per quarter, each in [0,
-        ``max_scale``] (capped; 1 without a scored life) [-].
+    scales : dict of str to dict of str to (tuple of float, tuple of float)
+        Per fault and method, the lower and the upper factors, one per quarter, each in
+        [0, ``max_scale``] (capped; 1 without a scored life) [-].
     info : list of dict
-        Per method and quarter (and ``all``): ``method``, ``quarter``, ``lives`` (scored),
-        ``lower``, ``upper`` (uncapped, inf where too few lives for the coverage),
-        ``lower_used``, ``upper_used``.
+        Per method, fault (and ``all``: pooled) and quarter (and ``all``): ``method``,
+        ``fault``, ``quarter``, ``lives`` (scored), ``lower``, ``upper`` (uncapped, inf
+        where too few lives for the coverage), ``lower_used``, ``upper_used``.
     """
     count = sc.targets.share_buckets
     labels = [*share_buckets(count), "all"]
-    picked: dict[str, list[list]] = {m: [[] for _ in labels] for m in METHODS}
+    picked = {(m, c): [[] for _ in labels] for m in METHODS for c in [*faults, "all"]}
     ones = dict.fromkeys(METHODS, ((1.0,), (1.0,)))
     for g, s, f in [(g, s, f) for g in gears for s in sc.calibration_seeds for f in faults]:
         others = failure_ratios(plan, sc, f, [x for x in gears if x != g])
@@ -665,26 +668,49 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
                 inb = [p for p, q in zip(ok, quarter, strict=True)
                        if b == len(labels) - 1 or q == b]
                 if inb:
-                    picked[m][b].append((inb[int(round(lam * (len(inb) - 1)))], fail))
-    scales, info = {}, []
+                    one = (inb[int(round(lam * (len(inb) - 1)))], fail)
+                    picked[m, f][b].append(one)
+                    picked[m, "all"][b].append(one)
+    scales: dict[str, dict] = {f: {} for f in faults}
+    info = []
     for m in METHODS:
-        raw = [tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage)
-               if pk else (np.inf, np.inf) for pk in picked[m]]
-        pk = picked[m][-1]
-        one = tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage,
-                          apart=False) if pk else (np.inf, np.inf)
-        pooled = next((r for r in (raw[-1], one) if np.isfinite(r[0])), (1.0, 1.0))
-        used = [tuple(min(v, sc.max_scale) for v in (r if np.isfinite(r[0]) else pooled))
-                for r in raw]
-        scales[m] = (tuple(u[0] for u in used[:-1]), tuple(u[1] for u in used[:-1]))
-        info += [{"method": m, "quarter": q, "lives": len(pk), "lower": r[0], "upper": r[1],
-                  "lower_used": u[0], "upper_used": u[1]}
-                 for q, pk, r, u in zip(labels, picked[m], raw, used, strict=True)]
-        if max(max(r if np.isfinite(r[0]) else pooled) for r in raw[:-1]) > sc.max_scale:
-            log.warning("calibration of %s: scales %s capped at %g (%s lives)", m,
-                        [tuple(round(v, 2) for v in r) for r in raw[:-1]], sc.max_scale,
-                        [len(pk) for pk in picked[m][:-1]])
+        pooled, rows = _cell_scales(picked[m, "all"], sc, None)
+        info += [{"method": m, "fault": "all", **r} for r in rows]
+        for f in faults:
+            used, rows = _cell_scales(picked[m, f], sc, pooled)
+            scales[f][m] = (tuple(u[0] for u in used[:-1]), tuple(u[1] for u in used[:-1]))
+            info += [{"method": m, "fault": f, **r} for r in rows]
     return scales, info
+
+
+def _cell_scales(picked: list[list], sc: PrognosisStudyConfig,
+                 fallback: list[tuple[float, float]] | None
+                 ) -> tuple[list[tuple[float, float]], list[dict]]:
+    """The (lower, upper) factors of one cell of lives (a fault's, or every fault's) per
+    quarter and over all of them (the last), from the (prognosis, failure hour) picked so
+    (``picked``): the quarter's tails apart, else all quarters', else one factor for both,
+    else ``fallback``'s (the pooled cell's; None: 1), capped at ``max_scale``; and the
+    info rows (:func:`calibrate`)."""
+    labels = [*share_buckets(sc.targets.share_buckets), "all"]
+
+    def scales(pk: list, apart: bool = True) -> tuple[float, float]:
+        return tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage,
+                           apart=apart) if pk else (np.inf, np.inf)
+    raw = [scales(pk) for pk in picked]
+    own = next((r for r in (raw[-1], scales(picked[-1], False)) if np.isfinite(r[0])),
+               None)
+    used = [tuple(min(v, sc.max_scale) for v in r) if np.isfinite(r[0])
+            else tuple(min(v, sc.max_scale) for v in own) if own is not None
+            else (fallback[b] if fallback is not None else (1.0, 1.0))
+            for b, r in enumerate(raw)]
+    if any(max(r) > sc.max_scale for r in [*raw[:-1], *([own] if own else [])]
+           if np.isfinite(r[0])):
+        log.warning("calibration: scales %s capped at %g (%s lives)",
+                    [tuple(round(v, 2) for v in r) for r in raw[:-1]], sc.max_scale,
+                    [len(pk) for pk in picked[:-1]])
+    return used, [{"quarter": q, "lives": len(pk), "lower": r[0], "upper": r[1],
+                        "lower_used": u[0], "upper_used": u[1]}
+                       for q, pk, r, u in zip(labels, picked, raw, used, strict=True)]
 
 
 def prognosis_design(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
@@ -705,8 +731,8 @@ def prognosis_design(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
     Returns
     -------
     (DiagnosisModel, dict)
-        The model, and the design: ``scales`` (per method, the lower and upper factors
-        per quarter, :func:`calibrate`), ``calibration`` (its info), ``faults`` (those
+        The model, and the design: ``scales`` (per fault and method, the lower and
+        upper factors per quarter, :func:`calibrate`), ``calibration`` (its info), ``faults`` (those
         evaluated), ``not_run`` (fault -> why), ``train_s``, ``calibrate_s`` [s],
         ``dataset``.
     """
@@ -749,21 +775,22 @@ def prognosis_lives(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig,
     t0 = time.perf_counter()
     lot = population_plan(base, sc)
     train_ids, _ = instances(sc)
-    scales = {m: (tuple(lo), tuple(hi)) for m, (lo, hi) in design["scales"].items()}
+    scales = {f: {m: (tuple(lo), tuple(hi)) for m, (lo, hi) in sc_f.items()}
+              for f, sc_f in design["scales"].items()}
     bank = record_bank(lot, gear)
     rows, lives, changes = [], [], []
     for i, s in enumerate(sc.seeds):
         for f in design["faults"]:
             failures = failure_ratios(lot, sc, f, train_ids)
-            life, events = run_life(life_of(lot, bank, gear, sc, f, s), model, sc, scales, s,
-                                    failures)
+            life, events = run_life(life_of(lot, bank, gear, sc, f, s), model, sc, scales[f],
+                                    s, failures)
             key = {"dataset": dataset, "held_out_gear": gear, "seed": s}
             lives.append({**key, **life})
             rows += _rows(key, life, events)
             if i < sc.twins and np.isfinite(life["payload_h"]):
                 twin = life_of(lot, bank, gear, sc, f, s, twin=True)
-                changes += _changes(key, life, events, *run_life(twin, model, sc, scales,
-                                                                 s, failures),
+                changes += _changes(key, life, events, *run_life(twin, model, sc,
+                                                                 scales[f], s, failures),
                                     life["payload_h"], sc.prognosis.every_h)
         bank.release()
     bank.release(healthy=True)

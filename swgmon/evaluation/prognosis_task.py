@@ -4,8 +4,8 @@ leave-one-gear-out evaluation on lives that run to failure
 (:mod:`.prognosis_report`) and an MLflow run.
 
 Files in ``report_dir``: ``results.csv`` (one row per prognosis and method), ``lives.csv``
-(one row per life), ``calibration.csv`` (the lower and upper conformal scales per held-out
-gear, method and quarter of the true remaining share),
+(one row per life), ``calibration.csv`` (the lower and upper conformal scales per data
+set, method, fault (and pooled) and quarter of the true remaining share),
 ``scores.csv`` (each life's scores per method), ``changes.csv`` (each life with a payload
 change against its twin without it, per method), ``table.md``, ``prognosis.png``,
 ``timing.json``, ``models/<dataset>_prognosis.skops`` with its ``.card.json`` (each data

@@ -74,7 +74,8 @@ def test_a_tiny_part_writes_every_prognosis_of_every_method(tiny_prognosis):
     cal = pd.read_csv(out / "calibration.csv")
     assert set(cal.method) == {"growth", "linear", "wiener"}
     assert (cal.lower_used >= 0).all() and (cal.upper_used >= 0).all()
-    assert cal.groupby("method").quarter.apply(list).map(len).eq(5).all()  # 4 and all
+    assert cal.groupby(["method", "fault"]).quarter.apply(list).map(len).eq(5).all()
+    assert set(cal.fault) == {"eccentric_wg", "all"}  # the fault's own and the pooled
     changes = pd.read_csv(out / "changes.csv")  # the life again as a twin at payload 1
     assert list(changes.method) == ["growth", "linear", "wiener"]
     assert (changes.failure_h < changes.twin_failure_h).all()  # heavier: earlier (the law)
@@ -391,6 +392,37 @@ def test_training_levels_reach_past_the_failure_within_the_faults_range():
     assert got["tip_tooth_crack"] == life_levels(sc.faults["tip_tooth_crack"], 8)
     for f, gf in sc.faults.items():
         assert training_levels(f, gf, 8, 0.0) == life_levels(gf, 8)
+
+
+def test_a_fault_with_lives_enough_gets_its_own_scales_the_others_the_pooled():
+    """Mondrian over faults (issue 85, "coverage where it is judged"): a fault whose 40
+    calibration lives err widely gets the factors of its own lives, quarter by quarter;
+    one of 12 lives (too few for the tails apart, 19 at 0.9) one factor for both; one of
+    5 lives (too few for any) the pooled cell's quarters, and the pooled cell without
+    enough lives factors 1."""
+    from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, _cell_scales
+    from swgmon.prognosis.calibration import tail_scales
+    from swgmon.prognosis.growth import Prognosis
+
+    rng = np.random.default_rng(3)
+    sc = PrognosisStudyConfig()
+    p = Prognosis(0.0, "wear", "growth", True, "", 0.1, 0.8, 100.0, 100 / 1.1, 110.0,
+                  100.0, 100 / 1.1, 110.0)
+
+    def cell(k, sigma):  # the same picks in each quarter and in "all"
+        picks = [(p, f) for f in 100.0 * np.exp(sigma * rng.standard_normal(k))]
+        return [picks] * 5
+
+    wide, twelve, few = cell(40, 0.3), cell(12, 0.3), cell(5, 0.01)
+    pooled, rows = _cell_scales(cell(60, 0.1), sc, None)
+    own = tail_scales([q for q, _ in wide[0]], np.array([f for _, f in wide[0]]))
+    assert own[0] > 1.0 and _cell_scales(wide, sc, pooled)[0] == [own] * 5
+    one = tail_scales([q for q, _ in twelve[0]], np.array([f for _, f in twelve[0]]),
+                      apart=False)
+    assert _cell_scales(twelve, sc, pooled)[0] == [one] * 5
+    assert _cell_scales(few, sc, pooled)[0] == pooled
+    assert _cell_scales(few, sc, None)[0] == [(1.0, 1.0)] * 5
+    assert [r["lives"] for r in rows] == [60] * 5 and rows[-1]["quarter"] == "all"
 
 
 def test_the_honest_targets_judge_coverage_with_its_uncertainty():

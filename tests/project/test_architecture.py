@@ -74,9 +74,11 @@ MAX_FUNCTION_LINES = 80
 #: windows read at once, block by block estimated: +4); learn 11500 -> 11520, swgmon
 #: 14885 -> 14920 and all 57530 -> 57630 for issue 85's staged parts (the prognosis's
 #: evaluation resumable per held-out instance, the benchmark's design-then-lives stages
-#: moved beside the other part machinery and shared: +98).
+#: moved beside the other part machinery and shared: +98); swgmon 14920 -> 14950 and all
+#: 57630 -> 57660 for issue 85's calibration per fault (a Mondrian cell per fault with
+#: the pooled one as its fallback: +27).
 LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11520,
-                                "swgmon": 14920, "swgcli": 2000, "all": 57630}
+                                "swgmon": 14950, "swgcli": 2000, "all": 57660}
 #: Numeric module constants the monitor may hold (issue 84: at most 10, physical and
 #: format constants with sources; a tuned number is a typed config field, logged with
 #: every run). Today's count: it moves only down.
