@@ -387,19 +387,19 @@ def prognosis_section(title: str) -> Callable[[Path], str]:
 
 
 def prognosis_timing(rep: Path) -> str:
-    """Seconds per part and stage of the prognosis's evaluation (``timing.json``)."""
+    """Seconds per data set and stage of the prognosis's evaluation (``timing.json``): its
+    design part's training and calibration, its lives' parts summed and the longest."""
     t = json.loads((rep / "prognosis" / "timing.json").read_text(encoding="utf-8"))
-    parts = pd.DataFrame(t["parts"])
-    cols = ["dataset", *(["held_out_gear"] if "held_out_gear" in parts else []), "train_s",
-            "calibrate_s", "evaluate_s"]  # one part per data set since issue 85
-    parts = parts[cols]
-    for c in ("train_s", "calibrate_s", "evaluate_s"):
-        parts[c] = [f"{v:.0f}" for v in parts[c]]
-    parts = parts.rename(columns={"dataset": "data set", "held_out_gear": "held-out gear",
-                                  "train_s": "train [s]", "calibrate_s": "calibrate [s]",
-                                  "evaluate_s": "evaluate [s]"})
-    return (f"{_wall(t)} (target 40); per part, seconds of one "
-            f"worker:\n\n{md_table(parts)}")
+    parts = pd.DataFrame(t["parts"]).reindex(columns=["dataset", "train_s", "calibrate_s",
+                                                      "evaluate_s"])
+    parts[parts.columns[1:]] = parts[parts.columns[1:]].apply(pd.to_numeric)
+    by = parts.groupby("dataset", sort=False)
+    tab = pd.DataFrame({"train [s]": by.train_s.sum(), "calibrate [s]": by.calibrate_s.sum(),
+                        "lives [s]": by.evaluate_s.sum(),
+                        "longest lives part [s]": by.evaluate_s.max()})
+    tab = tab.map(lambda v: f"{v:.0f}").rename_axis("data set").reset_index()
+    return (f"{_wall(t)} (target 40); per data set, seconds of one "
+            f"worker:\n\n{md_table(tab)}")
 
 
 def benchmark_targets_block(rep: Path) -> str:
