@@ -633,11 +633,10 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     Of a life's valid prognoses with finite, positive quantiles, each quarter gets the one
     at a fraction λ of those in it, λ uniform in [0, 1] from the life's seed and gear (one
     per life and quarter: the lives stay exchangeable within a quarter). Each fault's
-    lives, then every fault's pooled (:func:`_cell_scales`): a quarter's tails apart; where
-    too few lives for the coverage, all quarters' (and the quarter loses its conditional
-    guarantee: ``lives`` in ``info`` says where); where those are too few to hold the tails
-    apart (19 lives at 0.9), one factor for both tails from them (9 lives); where a fault
-    has fewer, the pooled pair of the quarter.
+    lives, then every fault's pooled (:func:`_cell_scales`): a quarter's tails apart (19
+    lives at 0.9); where too few, one factor for both tails (9 lives); where still too
+    few, all quarters' (and the quarter loses its conditional guarantee: ``lives`` in
+    ``info`` says where); where a fault has fewer, the pooled pair of the quarter.
 
     Returns
     -------
@@ -674,43 +673,43 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     scales: dict[str, dict] = {f: {} for f in faults}
     info = []
     for m in METHODS:
-        pooled, rows = _cell_scales(picked[m, "all"], sc, None)
+        pooled, rows = _cell_scales(picked[m, "all"], sc, None, f"{m}, every fault")
         info += [{"method": m, "fault": "all", **r} for r in rows]
         for f in faults:
-            used, rows = _cell_scales(picked[m, f], sc, pooled)
+            used, rows = _cell_scales(picked[m, f], sc, pooled, f"{m}, {f}")
             scales[f][m] = (tuple(u[0] for u in used[:-1]), tuple(u[1] for u in used[:-1]))
             info += [{"method": m, "fault": f, **r} for r in rows]
     return scales, info
 
 
 def _cell_scales(picked: list[list], sc: PrognosisStudyConfig,
-                 fallback: list[tuple[float, float]] | None
+                 fallback: list[tuple[float, float]] | None, name: str
                  ) -> tuple[list[tuple[float, float]], list[dict]]:
     """The (lower, upper) factors of one cell of lives (a fault's, or every fault's) per
     quarter and over all of them (the last), from the (prognosis, failure hour) picked so
-    (``picked``): the quarter's tails apart, else all quarters', else one factor for both,
-    else ``fallback``'s (the pooled cell's; None: 1), capped at ``max_scale``; and the
-    info rows (:func:`calibrate`)."""
+    (``picked``): the quarter's tails apart (19 lives at 0.9), else its one factor for
+    both (9), else all quarters' apart, else their one factor, else ``fallback``'s (the
+    pooled cell's; None: 1), capped at ``max_scale`` (a warning naming the cell,
+    ``name``); and the info rows (:func:`calibrate`)."""
     labels = [*share_buckets(sc.targets.share_buckets), "all"]
 
-    def scales(pk: list, apart: bool = True) -> tuple[float, float]:
+    def scales(pk: list, apart: bool) -> tuple[float, float]:
         return tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage,
                            apart=apart) if pk else (np.inf, np.inf)
-    raw = [scales(pk) for pk in picked]
-    own = next((r for r in (raw[-1], scales(picked[-1], False)) if np.isfinite(r[0])),
-               None)
-    used = [tuple(min(v, sc.max_scale) for v in r) if np.isfinite(r[0])
-            else tuple(min(v, sc.max_scale) for v in own) if own is not None
-            else (fallback[b] if fallback is not None else (1.0, 1.0))
-            for b, r in enumerate(raw)]
-    if any(max(r) > sc.max_scale for r in [*raw[:-1], *([own] if own else [])]
-           if np.isfinite(r[0])):
-        log.warning("calibration: scales %s capped at %g (%s lives)",
-                    [tuple(round(v, 2) for v in r) for r in raw[:-1]], sc.max_scale,
-                    [len(pk) for pk in picked[:-1]])
+    raw = [scales(pk, True) for pk in picked]
+    one = [scales(pk, False) for pk in picked]
+    found = [next((r for r in (raw[b], one[b], raw[-1], one[-1]) if np.isfinite(r[0])),
+                  None) for b in range(len(picked))]
+    used = [tuple(min(v, sc.max_scale) for v in r) if r is not None
+            else fallback[b] if fallback is not None else (1.0, 1.0)
+            for b, r in enumerate(found)]
+    if any(r is not None and max(r) > sc.max_scale for r in found):
+        log.warning("calibration of %s: scales %s capped at %g (%s lives)", name,
+                    [None if r is None else tuple(round(v, 2) for v in r) for r in found],
+                    sc.max_scale, [len(pk) for pk in picked])
     return used, [{"quarter": q, "lives": len(pk), "lower": r[0], "upper": r[1],
-                        "lower_used": u[0], "upper_used": u[1]}
-                       for q, pk, r, u in zip(labels, picked, raw, used, strict=True)]
+                   "lower_used": u[0], "upper_used": u[1]}
+                  for q, pk, r, u in zip(labels, picked, raw, used, strict=True)]
 
 
 def prognosis_design(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig

@@ -414,14 +414,14 @@ def test_a_fault_with_lives_enough_gets_its_own_scales_the_others_the_pooled():
         return [picks] * 5
 
     wide, twelve, few = cell(40, 0.3), cell(12, 0.3), cell(5, 0.01)
-    pooled, rows = _cell_scales(cell(60, 0.1), sc, None)
+    pooled, rows = _cell_scales(cell(60, 0.1), sc, None, "pooled")
     own = tail_scales([q for q, _ in wide[0]], np.array([f for _, f in wide[0]]))
-    assert own[0] > 1.0 and _cell_scales(wide, sc, pooled)[0] == [own] * 5
+    assert own[0] > 1.0 and _cell_scales(wide, sc, pooled, "wide")[0] == [own] * 5
     one = tail_scales([q for q, _ in twelve[0]], np.array([f for _, f in twelve[0]]),
                       apart=False)
-    assert _cell_scales(twelve, sc, pooled)[0] == [one] * 5
-    assert _cell_scales(few, sc, pooled)[0] == pooled
-    assert _cell_scales(few, sc, None)[0] == [(1.0, 1.0)] * 5
+    assert _cell_scales(twelve, sc, pooled, "12")[0] == [one] * 5
+    assert _cell_scales(few, sc, pooled, "few")[0] == pooled
+    assert _cell_scales(few, sc, None, "few")[0] == [(1.0, 1.0)] * 5
     assert [r["lives"] for r in rows] == [60] * 5 and rows[-1]["quarter"] == "all"
 
 
