@@ -2,13 +2,13 @@
 ``monitor.study.families`` (swgmon/evaluation/families.py).
 
     python scripts/monitor_families.py [--dataset tiny_real_day] [--gear 3]
-        [--seeds scored|design] [--n-seeds N] [--families warm_up all]
+        [--seeds family|design] [--n-seeds N] [--families warm_up all]
         [--study interval_min=2] [--study nuisance_hours=100] [--out DIR]
     python scripts/monitor_families.py --dataset robot_joint --read DIR
 
 Trains the diagnosis model on the data set's other gears (as the evaluation does,
 :func:`swgmon.evaluation.training.train_model`) and lives the held-out gear through every
-family's draws, one per seed (the study's scored seeds, or its design seeds, the only
+family's draws, one per seed (the study's family seeds, or its design seeds, the only
 ones to choose the monitor's settings on): a healthy life of ``nuisance_hours`` and every
 gear fault at its mildest and largest Table V severity with a step onset and at its
 mildest growing over ``family_growth_h`` (:func:`swgmon.evaluation.evaluate.evaluate_gear`).
@@ -81,8 +81,8 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
                     help="preset whose gears train the model where --dataset has the "
                          "held-out gear alone (default tiny_bench)")
     ap.add_argument("--gear", type=int, default=3, help="held-out gear (default 3)")
-    ap.add_argument("--seeds", choices=("scored", "design"), default="scored",
-                    help="the study's scored (default) or design seeds")
+    ap.add_argument("--seeds", choices=("family", "design"), default="family",
+                    help="the study's family seeds (default) or design seeds")
     ap.add_argument("--n-seeds", type=int, default=None,
                     help="the first N of those seeds (default all)")
     ap.add_argument("--families", nargs="*", default=None,
@@ -160,7 +160,7 @@ def setup(args: argparse.Namespace):
                          "(or leave the option out for every one)")
     if bad:
         raise ValueError(f"--families: unknown {bad}; allowed: {', '.join(cfg.families)}")
-    seeds = cfg.scored_seeds if args.seeds == "scored" else cfg.design_seeds
+    seeds = cfg.family_seeds if args.seeds == "family" else cfg.design_seeds
     if args.n_seeds is not None:
         if not 1 <= args.n_seeds <= len(seeds):
             raise ValueError(f"--n-seeds {args.n_seeds}: must lie in [1, {len(seeds)}]")

@@ -538,7 +538,7 @@ BLOCKS = (
           ("monitor/results.csv", "monitor/false_alarms.csv"),
           "swgsim-train experiment=monitor", monitor_real_day),
     Block("monitor.families", "monitor.md", ("monitor_families/*/table.csv",),
-          "python scripts/monitor_families.py --dataset D --gear G --seeds scored --trace "
+          "python scripts/monitor_families.py --dataset D --gear G --seeds family --trace "
           "FILE --out reports/monitor_families/D_gG", monitor_families),
     Block("monitor.timing", "monitor.md", ("monitor/timing.json",),
           "swgsim-train experiment=monitor", monitor_timing),

@@ -161,7 +161,7 @@ class BenchmarkConfig:
         seeds = list(self.design_seeds if design else self.seeds) if seeds is None else seeds
         study = dataclasses.replace(
             self.study, families={family: benchmark_families()[family]}, nuisances={},
-            nuisance_hours=self.healthy_hours, seeds=seeds, scored_seeds=seeds,
+            nuisance_hours=self.healthy_hours, seeds=seeds, family_seeds=seeds,
             scored_run=self.scored_run and not design, family_steps=False,
             faults=self.study.faults if faults is None else faults)
         study.check("benchmark.study")

@@ -234,11 +234,11 @@ def evaluate_gear(plan: DatasetPlan, banks: dict[int, RecordBank], g: int,
     alarms among them, the advisories, the hour of the first alarm naming the temperature
     sensor, ``temperature_sensor_h``, NaN: none) and, without a nuisance, the rows of the
     trade-off curve (:func:`_curve_healthy`, :func:`_curve_fault`). ``seeds`` None:
-    ``cfg.seeds``, and for a family ``cfg.scored_seeds``."""
+    ``cfg.seeds``, and for a family ``cfg.family_seeds``."""
     rows, fa_rows, curve = [], [], []
     n_comm = int(round(cfg.commissioning_h * 60 / cfg.interval_min))
     if seeds is None:
-        seeds = cfg.scored_seeds if family_of(nuisance) is not None else cfg.seeds
+        seeds = cfg.family_seeds if family_of(nuisance) is not None else cfg.seeds
     for seed in seeds:
         healthy, sims = lives_of(plan, banks, g, cfg, seed, nuisance)
         commissioned, mon, tr, named, (f, p, c) = monitor_healthy(model, cfg, healthy, seed,

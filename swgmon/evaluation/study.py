@@ -131,8 +131,9 @@ class MonitorStudyConfig:
         design draws only, never on scored ones. Those in force were set before the
         families existed (the friction law's rate on nine hand-picked laws of
         tiny_real_day, issue 44), on no family draw.
-    scored_seeds : list of int
-        Seeds of the family draws the monitor is scored on; disjoint from
+    family_seeds : list of int
+        Seeds of the family draws the evaluation judges the monitor on (design seeds
+        unless ``scored_run``: :mod:`learn.tracking.ledger`); disjoint from
         ``design_seeds`` (:meth:`check`).
     family_growth_h : float
         Hours over which a fault of a family life grows linearly from 0 to its mildest
@@ -148,7 +149,7 @@ class MonitorStudyConfig:
         (:class:`swgmon.assessment.sensor_check.NamingConfig`), logged with the run.
     scored_run : bool
         A declared scored run (:mod:`learn.tracking.ledger`): its ``seeds`` and
-        ``scored_seeds`` must be scored seeds (from
+        ``family_seeds`` must be scored seeds (from
         :data:`~learn.tracking.ledger.SCORED_SEED_MIN` up) and the run appends itself to
         the ledger; False (the default): every seed a design seed, below it.
     curve_hours : list of float
@@ -185,7 +186,7 @@ class MonitorStudyConfig:
     nuisance_hours: float = 224.0
     families: dict[str, NuisanceFamily] = field(default_factory=dict)
     design_seeds: list[int] = field(default_factory=lambda: [100, 101, 102, 103, 104])
-    scored_seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
+    family_seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
     family_growth_h: float = field(default=40.0, metadata=_HOURS)
     family_steps: bool = True
     rule: RuleConfig = field(default_factory=RuleConfig)
@@ -288,7 +289,7 @@ class MonitorStudyConfig:
         payload step inside the shortest fault life, commissioning_h + onset_window_h[0] +
         fault_life_h). Each family's own ranges: :meth:`NuisanceFamily.check
         <swgmon.evaluation.families.NuisanceFamily.check>`, before, in the same pass."""
-        for name in ("design_seeds", "scored_seeds"):
+        for name in ("design_seeds", "family_seeds"):
             seeds = getattr(self, name)
             _req(len(seeds) >= 1, f"{where}.{name} must list at least one seed")
             for i, s in enumerate(seeds):
@@ -296,9 +297,9 @@ class MonitorStudyConfig:
         high = [s for s in self.design_seeds if s >= SCORED_SEED_MIN]
         _req(not high, f"{where}.design_seeds must lie below {SCORED_SEED_MIN} (the scored "
                        f"seeds' range), got {high}")
-        check_seeds([*self.seeds, *self.scored_seeds], self.scored_run, f"{where}.scored_run")
-        both = sorted(set(self.design_seeds) & set(self.scored_seeds))
-        _req(not both, f"{where}.scored_seeds must be disjoint from design_seeds, both hold "
+        check_seeds([*self.seeds, *self.family_seeds], self.scored_run, f"{where}.scored_run")
+        both = sorted(set(self.design_seeds) & set(self.family_seeds))
+        _req(not both, f"{where}.family_seeds must be disjoint from design_seeds, both hold "
                        f"{both}")
         shortest = self.commissioning_h + self.onset_window_h[0] + self.fault_life_h
         for name, fam in self.families.items():
@@ -307,7 +308,7 @@ class MonitorStudyConfig:
                 _req(getattr(fam, k)[0] > self.commissioning_h,
                      f"{where}.families.{name}.{k} must lie after commissioning (> "
                      f"{self.commissioning_h:g} h), got {getattr(fam, k)}")
-            for s in self.design_seeds + self.scored_seeds:
+            for s in self.design_seeds + self.family_seeds:
                 draw, key = draw_conditions(fam, int(s)), f"{where}.families.{name}[seed={s}]"
                 check_tree(draw, key)
                 draw.check_inside(min(shortest, self.nuisance_hours), key)

@@ -200,7 +200,7 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
     claim.record([out / f for f in ("results.csv", "false_alarms.csv", "tradeoff.csv",
                                     "table.md")] + list(figs))
     if mc.study.scored_run:  # on record, whatever its figures (learn.tracking.ledger)
-        row = append_scored_run([*mc.study.seeds, *mc.study.scored_seeds],
+        row = append_scored_run([*mc.study.seeds, *mc.study.family_seeds],
                                 [out / f for f in ("results.csv", "false_alarms.csv")])
         print(f"scored run entered in the ledger {LEDGER}: {row['date_utc']}, commit "
               f"{row['commit'][:12]} ({row['tree']}), results {row['results_sha256'][:16]}")

@@ -142,10 +142,10 @@ def test_a_seed_not_an_integer_in_range_is_refused():
         draw_conditions(NuisanceFamily(), -1)
 
 
-def test_design_and_scored_seeds_that_overlap_are_refused():
+def test_design_and_family_seeds_that_overlap_are_refused():
     check_tree(MonitorStudyConfig(families=default_families()), "monitor.study")
-    cfg = MonitorStudyConfig(design_seeds=[100, 3], scored_seeds=[0, 3])
-    with pytest.raises(ValueError, match=r"^monitor\.study\.scored_seeds must be disjoint "
+    cfg = MonitorStudyConfig(design_seeds=[100, 3], family_seeds=[0, 3])
+    with pytest.raises(ValueError, match=r"^monitor\.study\.family_seeds must be disjoint "
                                          r"from design_seeds, both hold \[3\]$"):
         check_tree(cfg, "monitor.study")
 

@@ -28,7 +28,7 @@ def test_the_monitor_study_refuses_scored_seeds_unless_declared_a_scored_run():
     study = dataclasses.replace(MonitorStudyConfig(), seeds=[1000, 1001])
     with pytest.raises(ValueError, match=r"monitor.study.scored_run=true"):
         check_tree(study, "monitor.study")
-    scored = dataclasses.replace(study, scored_run=True, scored_seeds=[1002])
+    scored = dataclasses.replace(study, scored_run=True, family_seeds=[1002])
     check_tree(scored, "monitor.study")
     with pytest.raises(ValueError, match=r"design_seeds must lie below 1000"):
         check_tree(dataclasses.replace(scored, design_seeds=[1003]), "monitor.study")
