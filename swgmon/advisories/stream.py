@@ -15,6 +15,7 @@ each event (:meth:`StreamResult.events`) that the report and ``swgsim-monitor`` 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,6 +24,7 @@ import numpy as np
 from learn.inputs.health import feature_names, health_features
 from swgmon.advisories.figures import health_figure, prognosis_figure
 from swgmon.assessment.gear_monitor import RECOMMISSIONS, GearMonitor, MaintenanceEvent, Trace
+from swgmon.assessment.model import DiagnosisModel
 from swgmon.assessment.sensor_check import NamingConfig, still_reading, virtual_temperature
 from swgmon.detection.normal import (
     Conditions,
@@ -289,7 +291,8 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
                    source: str = "stream", normal: NormalConfig | None = None,
                    maintenance: list[MaintenanceEvent] | None = None,
                    prognosis: StreamPrognosis | None = None,
-                   naming: NamingConfig | None = None) -> StreamResult:
+                   naming: NamingConfig | None = None,
+                   readers: Sequence[DiagnosisModel] = ()) -> StreamResult:
     """Commission on the stream's commissioning windows and monitor the rest, with its
     conditions (acting load, temperature where the stream has it; :mod:`swgmon.detection.normal`)
     and its maintenance log (:meth:`GearMonitor.declare`: each declared event is listed
@@ -297,7 +300,9 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     :data:`~swgmon.assessment.gear_monitor.RECOMMISSIONS`, the monitor commissions anew on as
     many windows as commissioning had, and monitors the rest); the monitor keeps
     watching after every alarm and advisory; with ``prognosis`` enabled, the prognoses
-    after its gear-fault alarms (:func:`swgmon.prognosis.stream.stream_prognoses`).
+    after its gear-fault alarms (:func:`swgmon.prognosis.stream.stream_prognoses`; and
+    by each of ``readers``, the model with other severity regressors: a cross-validation's,
+    in ``prognosis.readers``).
 
     Raises
     ------
@@ -326,11 +331,11 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     again = [e for e in log if e.kind in RECOMMISSIONS]
     if not again:
         return _monitor_once(ds, model, rule, seed, confirm_h, source, normal, log, prognosis,
-                             naming)
+                             naming, readers)
     cut = int(np.searchsorted(hours, again[0].hour))
     before = [e for e in log if e.hour < again[0].hour]
     first = _monitor_once(ds.isel(sample=slice(0, cut)), model, rule, seed, confirm_h,
-                          source, normal, before, prognosis, naming)
+                          source, normal, before, prognosis, naming, readers)
     entry = declared([again[0]], None)
     if hours.size - cut <= n_c:  # too few windows after it to commission and monitor
         return dataclasses.replace(first, recommissioned=first.recommissioned + unmonitored(
@@ -340,7 +345,7 @@ def monitor_stream(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float 
     rest["commissioning"] = rest["commissioning"].copy(data=np.arange(rest.sizes["sample"]) < n_c)
     later = monitor_stream(rest, model, rule, seed, confirm_h, source, normal,
                            [e for e in log if e.hour >= again[0].hour and e is not again[0]],
-                           prognosis, naming)
+                           prognosis, naming, readers)
     return _joined(first, later, entry)
 
 
@@ -359,16 +364,23 @@ def _joined(first: StreamResult, later: StreamResult, entry: list[dict]) -> Stre
                         first.advisories + shift[:len(later.advisories)],
                         first.n_commissioning, on, fault, first.threshold,
                         first.recommissioned + entry + shift[len(later.advisories):],
-                        None if first.prognosis is None else StreamPrognoses(
-                            first.prognosis.events + later.prognosis.events,
-                            first.prognosis.tracks + later.prognosis.tracks))
+                        None if first.prognosis is None else _both(first.prognosis,
+                                                                   later.prognosis))
+
+
+def _both(first: StreamPrognoses, later: StreamPrognoses) -> StreamPrognoses:
+    """The prognoses of a stream's two parts (:func:`_joined`), each reader's joined too."""
+    return StreamPrognoses(first.events + later.events, first.tracks + later.tracks,
+                           [_both(a, b) for a, b in zip(first.readers, later.readers,
+                                                        strict=True)])
 
 
 def _monitor_once(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float = 1.0,
                    source: str = "stream", normal: NormalConfig | None = None,
                    maintenance: list[MaintenanceEvent] | None = None,
                    prognosis: StreamPrognosis | None = None,
-                   naming: NamingConfig | None = None) -> StreamResult:
+                   naming: NamingConfig | None = None,
+                   readers: Sequence[DiagnosisModel] = ()) -> StreamResult:
     """:func:`monitor_stream` on a stream without a declared recommissioning after its
     commissioning."""
     log = list(maintenance or [])
@@ -403,7 +415,7 @@ def _monitor_once(ds, model, rule: RuleConfig, seed: int = 0, confirm_h: float =
                         str(fault[on[0]]) if on.size else None, mon.h,
                         recommissionings(tr, mon) + declared(log, mon),
                         None if prognosis is None else
-                        stream_prognoses(tr, alarms, mon, f, p, c, prognosis))
+                        stream_prognoses(tr, alarms, mon, f, p, c, prognosis, readers))
 
 
 def _lost_reading(cond: Conditions, n_c: int, hours: np.ndarray) -> Alarm | None:

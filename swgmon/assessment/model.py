@@ -63,10 +63,10 @@ class DiagnosisModel:
         increasing; a fault without one is read as the regressor says (a model saved
         before the curve).
     severity_without, reading_without : dict of int to dict of str
-        Per training gear, the severity regressors fitted without it (those that
-        calibrate the intervals across gears; :meth:`without`) and the reading curves of
-        the other gears; kept in the process that trained the model, not saved with it
-        (:mod:`.model_io`).
+        Per training gear, the severity regressors fitted without it (without its fold,
+        :func:`gear_folds`: those that calibrate the intervals across gears;
+        :meth:`without`) and the reading curves of the other folds; saved with the model
+        only where asked (:func:`.model_io.save_model`'s ``without``).
     """
 
     classes: list[str]
@@ -134,7 +134,16 @@ class DiagnosisModel:
             if not (np.all(np.isfinite(q)) and len(q) == 2 and q[0] <= q[1]):
                 raise ValueError(f"{where}: the severity interval of {f} must be finite "
                                  f"(q05, q95) with q05 <= q95, got {q!r}")
-        for f, (lv, rd) in self.reading.items():
+        for g, regs in self.severity_without.items():
+            if set(regs) != set(self.severity) or not all(
+                    isinstance(r, Reg) and getattr(r, "n_features_in_", None) == width
+                    for r in regs.values()):
+                raise ValueError(f"{where}: the severity regressors without gear {g} must "
+                                 f"be fitted HistGradientBoostingRegressors on {width} "
+                                 f"inputs, one for each of {sorted(self.severity)}")
+        for f, (lv, rd) in [*self.reading.items(), *((f, c) for r in
+                                                     self.reading_without.values()
+                                                     for f, c in r.items())]:
             a = np.asarray([lv, rd], float) if np.shape(lv) == np.shape(rd) else None
             if f not in self.severity or a is None or a.ndim != 2 or a.shape[1] < 1 \
                     or not np.all(np.isfinite(a)) or np.any(np.diff(a, axis=1) <= 0):
@@ -172,21 +181,21 @@ class DiagnosisModel:
 
     def without(self, gear: int) -> DiagnosisModel:
         """This model with the severity regressors fitted without training gear ``gear``
-        and read through the other gears' curves (the classifier and the intervals
-        unchanged): its estimates on that gear's windows
+        (without its fold, :func:`gear_folds`) and read through the other folds' curves
+        (the classifier and the intervals unchanged): its estimates on that gear's windows
         are out of sample, as on a held-out gear's (the prognosis calibrates its intervals
         on training gears' lives so, :func:`swgmon.evaluation.prognosis_evaluation.calibrate`).
 
         Raises
         ------
         ValueError
-            ``gear`` is not a training gear of this model, or the model was loaded (the
-            regressors without each gear are not saved).
+            ``gear`` is not a training gear of this model, or the model was loaded from a
+            file saved without them (:func:`.model_io.save_model`'s ``without``).
         """
         if gear not in self.severity_without:
             raise ValueError(f"no severity regressors fitted without gear {gear}: the "
-                             f"model's are for {sorted(self.severity_without)} (a loaded "
-                             "model has none)")
+                             f"model's are for {sorted(self.severity_without)} (a model "
+                             "loaded from a file saved without them has none)")
         out = dataclasses.replace(self, severity={
             c: (self.severity_without[gear][c], q) for c, (_, q) in self.severity.items()},
             reading=self.reading_without.get(gear, {}))
@@ -314,7 +323,8 @@ def _regressor(seed: int):
 
 
 def fit_diagnosis(x: np.ndarray, fault: np.ndarray, severity: np.ndarray, gear: np.ndarray,
-                  classes: list[str], seed: int = 0, n_agg: int = 60) -> DiagnosisModel:
+                  classes: list[str], seed: int = 0, n_agg: int = 60, folds: int = 0
+                  ) -> DiagnosisModel:
     """Train the diagnosis model on training gears' windows.
 
     Parameters
@@ -330,6 +340,12 @@ def fit_diagnosis(x: np.ndarray, fault: np.ndarray, severity: np.ndarray, gear: 
     seed : int
     n_agg : int
         Windows per aggregated severity estimate in the interval's calibration.
+    folds : int
+        Groups of training gears the severity regressors are fitted without, each gear's
+        windows read by the regressors of the group without it (:func:`gear_folds`): 0
+        (or the number of gears and more), one gear a group (the jackknife's); fewer,
+        cross-validation's folds (CV+, Barber et al., Ann. Statist. 49 (2021) 486-507:
+        as many regressors, each fitted on fewer gears).
 
     Returns
     -------
@@ -338,7 +354,8 @@ def fit_diagnosis(x: np.ndarray, fault: np.ndarray, severity: np.ndarray, gear: 
     Raises
     ------
     ValueError
-        If a class has no windows or fewer than two training gears are given.
+        If a class has no windows, fewer than two training gears are given, or ``folds``
+        is 1 or negative.
     """
     missing = [c for c in classes if not (fault == c).any()]
     if missing or classes[0] != HEALTHY:
@@ -346,27 +363,53 @@ def fit_diagnosis(x: np.ndarray, fault: np.ndarray, severity: np.ndarray, gear: 
     gears = np.unique(gear)
     if gears.size < 2:
         raise ValueError(f"the severity intervals need two training gears, got {gears.tolist()}")
+    if folds < 0 or folds == 1:
+        raise ValueError(f"folds must be 0 (one gear a fold) or at least 2, got {folds}")
     y = np.array([classes.index(f) for f in fault])
     clf = _classifier(seed)
     with one_thread():
         model = DiagnosisModel(list(classes), clf.fit(x, y))
-        return _severity_regressors(model, x, fault, severity, gear, seed, n_agg)
+        return _severity_regressors(model, x, fault, severity, gear, seed, n_agg, folds)
 
 
-def _severity_regressors(model: DiagnosisModel, x, fault, severity, gear, seed, n_agg
-                         ) -> DiagnosisModel:
+def gear_folds(gears: list[int] | np.ndarray, folds: int = 0) -> list[list[int]]:
+    """The training gears in ``folds`` groups, in order, as even as can be
+    (:func:`numpy.array_split` of the sorted ids); 0 or as many as the gears: one each.
+
+    Parameters
+    ----------
+    gears : list of int
+        Training gear ids.
+    folds : int
+        Groups, 0 or >= 2.
+
+    Returns
+    -------
+    list of list of int
+        The groups, each non-empty.
+    """
+    ids = sorted(int(g) for g in gears)
+    k = len(ids) if folds == 0 or folds >= len(ids) else folds
+    return [[int(g) for g in a] for a in np.array_split(np.array(ids), k)]
+
+
+def _severity_regressors(model: DiagnosisModel, x, fault, severity, gear, seed, n_agg,
+                         folds) -> DiagnosisModel:
     """:func:`fit_diagnosis`'s severity regressors and their intervals across gears."""
     gears = np.unique(gear)
+    groups = gear_folds(gears, folds)
     rng = np.random.default_rng(seed)
     for c in model.classes[1:]:
         m = fault == c
-        oof = np.full(x.shape[0], np.nan)  # each window read by a regressor without its gear
-        for g in gears:
-            tr, te = m & (gear != g), m & (gear == g)
-            reg = _regressor(seed).fit(x[tr], severity[tr])
-            model.severity_without.setdefault(int(g), {})[c] = reg
-            oof[te] = reg.predict(x[te])
-        for g, o in ((None, m), *((g, m & (gear != g)) for g in gears)):
+        oof = np.full(x.shape[0], np.nan)  # each window read by a regressor without its fold
+        for fold in groups:
+            inside = np.isin(gear, fold)
+            reg = _regressor(seed).fit(x[m & ~inside], severity[m & ~inside])
+            for g in fold:
+                model.severity_without.setdefault(g, {})[c] = reg
+            oof[m & inside] = reg.predict(x[m & inside])
+        for g, o in ((None, m), *((g, m & ~np.isin(gear, fold)) for fold in groups
+                                  for g in fold)):
             curve = reading_curve(oof[o], severity[o])
             if curve[0].size >= 2:  # one level read: nothing to calibrate, read as said
                 (model.reading if g is None else
@@ -397,5 +440,5 @@ def _error_quantiles(oof: np.ndarray, severity: np.ndarray, masks: np.ndarray,
     return float(np.quantile(errs, 0.05)), float(np.quantile(errs, 0.95))
 
 
-__all__ = ["DiagnosisModel", "design_matrix", "fit_diagnosis", "one_thread", "read_through",
-           "reading_curve", "HEALTHY"]
+__all__ = ["DiagnosisModel", "design_matrix", "fit_diagnosis", "gear_folds", "one_thread",
+           "read_through", "reading_curve", "HEALTHY"]

@@ -59,13 +59,22 @@ TRUSTED = [
 ]
 
 
-def _state(model: DiagnosisModel) -> dict:
-    """The model as plain data and estimators (no class of this project)."""
+def _curves(reading: dict) -> dict:
+    return {f: [np.asarray(lv, float).tolist(), np.asarray(rd, float).tolist()]
+            for f, (lv, rd) in reading.items()}
+
+
+def _state(model: DiagnosisModel, without: bool = False) -> dict:
+    """The model as plain data and estimators (no class of this project); ``without``:
+    with the severity regressors and curves without each training gear."""
     return {"classes": list(model.classes), "classifier": model.classifier,
             "severity": {f: [reg, [float(q[0]), float(q[1])]]
                          for f, (reg, q) in model.severity.items()},
-            "reading": {f: [np.asarray(lv, float).tolist(), np.asarray(rd, float).tolist()]
-                        for f, (lv, rd) in model.reading.items()},
+            "reading": _curves(model.reading),
+            **({"severity_without": {str(g): dict(r) for g, r in
+                                     model.severity_without.items()},
+                "reading_without": {str(g): _curves(r) for g, r in
+                                    model.reading_without.items()}} if without else {}),
             "points_range": None if model.points_range is None
             else np.asarray(model.points_range, float).tolist(),
             "n_features": int(model.n_features), "sample_rate_hz": float(model.sample_rate_hz),
@@ -95,13 +104,16 @@ def model_card(model: DiagnosisModel, training: list[dict], path: Path) -> dict:
             package_version(), "library_versions": library_versions()}
 
 
-def save_model(model: DiagnosisModel, path: str | os.PathLike, training: list[dict]) -> Path:
+def save_model(model: DiagnosisModel, path: str | os.PathLike, training: list[dict],
+               without: bool = False) -> Path:
     """Write a diagnosis model as ``<path>.skops`` and its card ``<path>.card.json``,
     atomically (in a claimed folder, both listed in its ownership stamp); return the
-    model file's path (the suffix added when ``path`` lacks it)."""
+    model file's path (the suffix added when ``path`` lacks it). ``without``: with the
+    severity regressors without each training gear (:meth:`DiagnosisModel.without`: the
+    prognosis's cross-validation; a file as many times larger)."""
     p = Path(path)
     p = p if p.suffix == MODEL_SUFFIX else p.with_name(p.name + MODEL_SUFFIX)
-    atomic_write_bytes(p, sio.dumps(_state(model)))
+    atomic_write_bytes(p, sio.dumps(_state(model, without)))
     atomic_write_json(_card_path(p), model_card(model, training, p))
     return p
 
@@ -189,6 +201,10 @@ def _read_card(p: Path, key: str) -> dict:
     return card
 
 
+def _read(curves: dict) -> dict:
+    return {f: (np.asarray(v[0], float), np.asarray(v[1], float)) for f, v in curves.items()}
+
+
 def _model(state, p: Path, key: str, card_classes: list) -> DiagnosisModel:
     """The model of a loaded state, checked part by part (:meth:`DiagnosisModel.check`)
     and against its card's classes."""
@@ -200,8 +216,11 @@ def _model(state, p: Path, key: str, card_classes: list) -> DiagnosisModel:
                            else np.asarray(state["points_range"], float),
                            int(state["n_features"]), float(state["sample_rate_hz"]),
                            float(state["window_s"]),
-                           {f: (np.asarray(v[0], float), np.asarray(v[1], float))
-                            for f, v in state.get("reading", {}).items()})
+                           _read(state.get("reading", {})),
+                           {int(g): dict(r) for g, r in
+                            state.get("severity_without", {}).items()},
+                           {int(g): _read(r) for g, r in
+                            state.get("reading_without", {}).items()})
     except (KeyError, TypeError, IndexError, ValueError):
         raise ValueError(f"{key}: {p} is not a diagnosis model") from None
     if m.classes != list(card_classes):

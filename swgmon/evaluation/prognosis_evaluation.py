@@ -43,7 +43,7 @@ import numpy as np
 
 from learn.tracking.ledger import check_seeds
 from swgmon.advisories.stream import monitor_stream
-from swgmon.assessment.model import DiagnosisModel
+from swgmon.assessment.model import DiagnosisModel, gear_folds
 from swgmon.evaluation.benchmark import instances, population_plan
 from swgmon.evaluation.families import (
     GrowthFamily,
@@ -56,8 +56,9 @@ from swgmon.evaluation.prognosis_report import PrognosisTargets
 from swgmon.evaluation.study import MonitorStudyConfig
 from swgmon.evaluation.training import train_model
 from swgmon.prognosis.baselines import predict_linear, predict_wiener
-from swgmon.prognosis.calibration import tail_scales
+from swgmon.prognosis.calibration import cv_plus_interval, tail_scales, tail_scores
 from swgmon.prognosis.growth import Prognosis, PrognosisConfig, Track
+from swgmon.prognosis.inputs import share_hull
 from swgmon.prognosis.scores import change_response, share_bucket, share_buckets
 from swgmon.prognosis.stream import StreamPrognosis
 from swgsim.base.typed import allowed, check_range, check_tree
@@ -122,9 +123,13 @@ def _day() -> NuisanceFamily:
 def _training() -> MonitorStudyConfig:
     """The diagnosis model's training design: the monitor evaluation's, its classes the
     faults that grow [choice: a model that names healthy and the growing faults; the
-    monitor evaluation's other classes are its own study], no nuisances, no detectors."""
+    monitor evaluation's other classes are its own study], no nuisances, no detectors,
+    the severity regressors also fitted without each of 4 folds of the training instances
+    [choice: two instances a fold of 8; the held-out lives are read by each fold's
+    (``cross_validation``), one monitor pass with 4 more reads, where the jackknife's 8
+    folds would be 8]."""
     return MonitorStudyConfig(faults=["eccentric_wg", "root_tooth_crack", "tip_tooth_crack"],
-                              nuisances={}, detectors=[])
+                              nuisances={}, detectors=[], severity_folds=4)
 
 
 @dataclass
@@ -208,6 +213,15 @@ class PrognosisStudyConfig:
         the part.
     targets : PrognosisTargets
         The targets the lives are judged by (:class:`~.prognosis_report.PrognosisTargets`).
+    cross_validation : bool
+        The held-out lives' intervals by CV+ over the training instances' folds
+        (``train.severity_folds``; :func:`~swgmon.prognosis.calibration.cv_plus_interval`):
+        each life's severity also read by the model without each fold, each calibration
+        life's scores applied to the prognosis of its own fold's model (Barber et al.
+        2021: the test lives read as the calibration lives were, the gear-level
+        exchangeability split conformal lacks); the split-conformal interval of the full
+        model beside it (``split_remaining_h_q05``, ``_q95``). False: split conformal
+        alone.
     failure_history : bool
         Give each prognosis the severities at which the training instances' calibration
         lives failed, over the nominal one (``PrognosisConfig.failure_ratios``: a lot's
@@ -239,6 +253,7 @@ class PrognosisStudyConfig:
                                                           hi_open=True))
     max_scale: float = field(default=20.0, metadata=allowed(1.0, 20.0))
     targets: PrognosisTargets = field(default_factory=PrognosisTargets)
+    cross_validation: bool = True
     failure_history: bool = False
 
     def check(self, where: str) -> None:
@@ -489,15 +504,17 @@ def baseline_events(track: dict, events: list[dict], method: str, cfg: Prognosis
     return out
 
 
-def _track_of(res, fault: str, onset_h: float) -> dict | None:
-    """The track of the first alarm after the onset that names the life's fault."""
-    tracks = [] if res.prognosis is None else res.prognosis.tracks
+def _track_of(prog, fault: str, onset_h: float) -> dict | None:
+    """The track of the first alarm after the onset that names the life's fault (of
+    ``prog``, a :class:`~swgmon.prognosis.stream.StreamPrognoses` or None)."""
+    tracks = [] if prog is None else prog.tracks
     return next((t for t in tracks if t["fault"] == fault and t["alarm_h"] >= onset_h), None)
 
 
 def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig,
              scales: dict[str, tuple[tuple[float, ...], tuple[float, ...]]], seed: int,
-             failures: tuple[float, ...] = ()) -> tuple[dict, dict[str, list[dict]]]:
+             failures: tuple[float, ...] = (), readers: list[DiagnosisModel] | None = None
+             ) -> tuple[dict, dict[str, list[dict]], list[dict[str, list[dict]]]]:
     """One life to failure through the monitor with the prognosis on, and the baselines on
     its track.
 
@@ -515,6 +532,9 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
         The life's seed (the monitor's and the prognoses' draws).
     failures : tuple of float
         ``PrognosisConfig.failure_ratios`` (:func:`failure_ratios`).
+    readers : list of DiagnosisModel or None
+        The model without each fold (:meth:`DiagnosisModel.without`): the followed
+        alarm's severity also read by each, every method's prognoses uncalibrated.
 
     Returns
     -------
@@ -527,6 +547,8 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
     events : dict of str to list of dict
         Per method, the prognoses after the followed alarm up to the failure (empty
         without one).
+    folds : list of dict of str to list of dict
+        Per reader, as ``events`` (factors 1; empty without readers or an alarm).
     """
     t0 = time.perf_counter()
     fo = sim.life.fault
@@ -537,7 +559,7 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
             "payload_h": cond.payload[0][0] if cond is not None and cond.payload else np.nan,
             "first_alarm_h": np.nan, "first_alarm_fault": "", "alarm_h": np.nan}
     if not np.isfinite(fail_h):
-        return life, {}
+        return life, {}, []
     n_end = int(np.searchsorted(sim.schedule.hour, fail_h, side="left"))
     opt = dataclasses.replace(sc.prognosis, enabled=True, threshold=None,
                               to_failure=sc.faults[fo.fault].to_failure,
@@ -546,22 +568,35 @@ def run_life(sim: LifeSimulator, model: DiagnosisModel, sc: PrognosisStudyConfig
                               failure_ratios=failures)
     res = monitor_stream(life_dataset(sim, 0, n_end), model, sc.train.rule, seed=int(seed),
                          normal=sc.train.normal, prognosis=opt, source="prognosis life",
-                         naming=sc.train.naming)
+                         naming=sc.train.naming, readers=readers or ())
     first = next((a for a in res.alarms if a.kind == "gear_fault" and a.hour >= fo.onset_h),
                  None)
     if first is not None:
         life.update(first_alarm_h=first.hour, first_alarm_fault=first.fault)
-    track = _track_of(res, fo.fault, fo.onset_h)
+    track = _track_of(res.prognosis, fo.fault, fo.onset_h)
     if track is None:
-        return life, {}
+        return life, {}, []
     life["alarm_h"] = track["alarm_h"]
-    events = {"growth": res.prognosis.of_track(track)}
-    for m in METHODS[1:]:
-        events[m] = baseline_events(track, events["growth"], m, dataclasses.replace(
-            opt.config, lower_scale=scales[m][0], upper_scale=scales[m][1]), int(seed))
+    events = _methods(res.prognosis, track, opt.config, scales, int(seed))
+    ones = dict.fromkeys(METHODS, ((1.0,), (1.0,)))
+    folds = [_methods(r, _track_of(r, fo.fault, fo.onset_h), opt.config, ones, int(seed))
+             for r in res.prognosis.readers]
     log.info("life of gear %d, seed %d, %s: %d windows, %.1f s", sim.gear_id, seed, fo.fault,
              n_end, time.perf_counter() - t0)
-    return life, events
+    return life, events, folds
+
+
+def _methods(prog, track: dict, cfg: PrognosisConfig,
+             scales: dict[str, tuple[tuple[float, ...], tuple[float, ...]]], seed: int
+             ) -> dict[str, list[dict]]:
+    """Per method, the prognoses of one followed alarm (``track`` of ``prog``, a
+    :class:`~swgmon.prognosis.stream.StreamPrognoses`): the growth law's as the stream
+    made them, the baselines' on its track at their hours, with ``scales``."""
+    events = {"growth": prog.of_track(track)}
+    for m in METHODS[1:]:
+        events[m] = baseline_events(track, events["growth"], m, dataclasses.replace(
+            cfg, lower_scale=scales[m][0], upper_scale=scales[m][1]), seed)
+    return events
 
 
 def _rows(key: dict, life: dict, events: dict[str, list[dict]]) -> list[dict]:
@@ -579,7 +614,9 @@ def _rows(key: dict, life: dict, events: dict[str, list[dict]]) -> list[dict]:
                          "true_remaining_h": life["failure_h"] - e["hour"],
                          "valid": bool(e["valid"]),
                          **{k: inf if e[k] is None else e[k]
-                            for k in ("remaining_h", "remaining_h_q05", "remaining_h_q95")}})
+                            for k in ("remaining_h", "remaining_h_q05", "remaining_h_q95",
+                                      "split_remaining_h_q05", "split_remaining_h_q95")
+                            if k in e}})
     return rows
 
 
@@ -616,7 +653,7 @@ def _changes(key: dict, life: dict, events: dict[str, list[dict]], twin: dict,
 def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
               model: DiagnosisModel, sc: PrognosisStudyConfig, faults: list[str]
               ) -> tuple[dict[str, dict[str, tuple[tuple[float, ...], tuple[float, ...]]]],
-                         list[dict]]:
+                         dict[str, dict[str, list[dict | None]]], list[dict]]:
     """The interval's lower and upper scales of each fault and method by conformal
     prediction over the training instances ``gears`` (``calibration_seeds``; module
     docstring), one pair per quarter of the *true* remaining share
@@ -626,11 +663,11 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     :func:`~swgmon.prognosis.inputs.calibrated_interval`), and per fault where its own
     lives are enough (Mondrian over faults: a fault's median may err its own way).
 
-    A training instance's lives are read with the severity regressors fitted without it
-    (:meth:`~swgmon.assessment.model.DiagnosisModel.without`): out of sample, as a held-out
-    instance's will be (the jackknife's scores; read with the model's own, they were in
-    sample: the severity track, and so the remaining life's error, was the training
-    instances' own, smaller than a new one's).
+    A training instance's lives are read with the severity regressors fitted without its
+    fold (:meth:`~swgmon.assessment.model.DiagnosisModel.without`, ``train.severity_folds``):
+    out of sample, as a held-out instance's will be (the cross-validation's scores; read
+    with the model's own, they were in sample: the severity track, and so the remaining
+    life's error, was the training instances' own, smaller than a new one's).
 
     Of a life's valid prognoses with finite, positive quantiles, each quarter gets the one
     at a fraction λ of those in it, λ uniform in [0, 1] from the life's seed and gear (one
@@ -645,6 +682,10 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     scales : dict of str to dict of str to (tuple of float, tuple of float)
         Per fault and method, the lower and the upper factors, one per quarter, each in
         [0, ``max_scale``] (capped; 1 without a scored life) [-].
+    cv : dict of str to dict of str to list of (dict or None)
+        Per fault and method, per quarter, the choice CV+ takes the same way
+        (:func:`_cell_scales`): ``apart`` and ``scores``, rows of (fold index, lower,
+        upper score) of the lives chosen.
     info : list of dict
         Per method, fault (and ``all``: pooled) and quarter (and ``all``): ``method``,
         ``fault``, ``quarter``, ``lives`` (scored), ``lower``, ``upper`` (uncapped, inf
@@ -654,10 +695,11 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
     labels = [*share_buckets(count), "all"]
     picked = {(m, c): [[] for _ in labels] for m in METHODS for c in [*faults, "all"]}
     ones = dict.fromkeys(METHODS, ((1.0,), (1.0,)))
+    fold = {g: k for k, f in enumerate(gear_folds(gears, sc.train.severity_folds)) for g in f}
     for g, s, f in [(g, s, f) for g in gears for s in sc.calibration_seeds for f in faults]:
         others = failure_ratios(plan, sc, f, [x for x in gears if x != g])
-        life, events = run_life(life_of(plan, banks[g], g, sc, f, s), model.without(g), sc,
-                                ones, s, others)
+        life, events, _ = run_life(life_of(plan, banks[g], g, sc, f, s), model.without(g),
+                                   sc, ones, s, others)
         banks[g].release()  # a life's records serve no other (its own law's steps)
         lam = np.random.default_rng([s, g, 48]).uniform()
         fail, alarm = life["failure_h"], life["alarm_h"]
@@ -669,41 +711,59 @@ def calibrate(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int],
                 inb = [p for p, q in zip(ok, quarter, strict=True)
                        if b == len(labels) - 1 or q == b]
                 if inb:
-                    one = (inb[int(round(lam * (len(inb) - 1)))], fail)
+                    one = (inb[int(round(lam * (len(inb) - 1)))], fail, fold[g])
                     picked[m, f][b].append(one)
                     picked[m, "all"][b].append(one)
     scales: dict[str, dict] = {f: {} for f in faults}
+    cv: dict[str, dict] = {f: {} for f in faults}
     info = []
     for m in METHODS:
-        pooled, rows = _cell_scales(picked[m, "all"], sc, None, f"{m}, every fault")
+        pooled, rows, chosen = _cell_scales(picked[m, "all"], sc, None, f"{m}, every fault")
         info += [{"method": m, "fault": "all", **r} for r in rows]
         for f in faults:
-            used, rows = _cell_scales(picked[m, f], sc, pooled, f"{m}, {f}")
+            used, rows, cv[f][m] = _cell_scales(picked[m, f], sc, (pooled, chosen),
+                                                f"{m}, {f}")
             scales[f][m] = (tuple(u[0] for u in used[:-1]), tuple(u[1] for u in used[:-1]))
+            cv[f][m] = cv[f][m][:-1]
             info += [{"method": m, "fault": f, **r} for r in rows]
-    return scales, info
+    return scales, cv, info
 
 
 def _cell_scales(picked: list[list], sc: PrognosisStudyConfig,
-                 fallback: list[tuple[float, float]] | None, name: str
-                 ) -> tuple[list[tuple[float, float]], list[dict]]:
+                 fallback: tuple[list, list] | None, name: str
+                 ) -> tuple[list[tuple[float, float]], list[dict], list[dict | None]]:
     """The (lower, upper) factors of one cell of lives (a fault's, or every fault's) per
-    quarter and over all of them (the last), from the (prognosis, failure hour) picked so
-    (``picked``): the quarter's tails apart (19 lives at 0.9), else its one factor for
-    both (9), else all quarters' apart, else their one factor, else ``fallback``'s (the
-    pooled cell's; None: 1), capped at ``max_scale`` (a warning naming the cell,
-    ``name``); and the info rows (:func:`calibrate`)."""
+    quarter and over all of them (the last), from the (prognosis, failure hour, fold)
+    picked so (``picked``): the quarter's tails apart (19 lives at 0.9), else its one
+    factor for both (9), else all quarters' apart, else their one factor, else
+    ``fallback``'s (the pooled cell's factors and choices; None: 1), capped at
+    ``max_scale`` (a warning naming the cell, ``name``); the info rows
+    (:func:`calibrate`); and per quarter the choice CV+ makes the same way
+    (:func:`cross_validated`): ``apart`` and the ``scores`` (fold, lower, upper) of the
+    lives chosen, each capped at ``max_scale`` (None: uncalibrated)."""
     labels = [*share_buckets(sc.targets.share_buckets), "all"]
 
     def scales(pk: list, apart: bool) -> tuple[float, float]:
-        return tail_scales([p for p, _ in pk], np.array([f for _, f in pk]), sc.coverage,
+        return tail_scales([p for p, *_ in pk], np.array([f for _, f, _ in pk]), sc.coverage,
                            apart=apart) if pk else (np.inf, np.inf)
+
+    def scores(pk: list, apart: bool) -> dict:
+        q = [[p.remaining_h_q05, p.remaining_h_median, p.remaining_h_q95] for p, *_ in pk]
+        lo, up = tail_scores(np.array(q), np.array([f - p.hour for p, f, _ in pk]))
+        return {"apart": apart, "scores": np.c_[[k for *_, k in pk], np.minimum(
+            lo, sc.max_scale), np.minimum(up, sc.max_scale)].tolist()}
     raw = [scales(pk, True) for pk in picked]
     one = [scales(pk, False) for pk in picked]
-    found = [next((r for r in (raw[b], one[b], raw[-1], one[-1]) if np.isfinite(r[0])),
-                  None) for b in range(len(picked))]
+    ways = [[(raw[b], b, True), (one[b], b, False), (raw[-1], -1, True), (one[-1], -1, False)]
+            for b in range(len(picked))]
+    found = [next((w for w in ways[b] if np.isfinite(w[0][0])), None)
+             for b in range(len(picked))]
+    chosen = [scores(picked[w[1]], w[2]) if w is not None
+              else fallback[1][b] if fallback is not None else None
+              for b, w in enumerate(found)]
+    found = [None if w is None else w[0] for w in found]
     used = [tuple(min(v, sc.max_scale) for v in r) if r is not None
-            else fallback[b] if fallback is not None else (1.0, 1.0)
+            else fallback[0][b] if fallback is not None else (1.0, 1.0)
             for b, r in enumerate(found)]
     if any(r is not None and max(r) > sc.max_scale for r in found):
         log.warning("calibration of %s: scales %s capped at %g (%s lives)", name,
@@ -711,7 +771,66 @@ def _cell_scales(picked: list[list], sc: PrognosisStudyConfig,
                     sc.max_scale, [len(pk) for pk in picked])
     return used, [{"quarter": q, "lives": len(pk), "lower": r[0], "upper": r[1],
                    "lower_used": u[0], "upper_used": u[1]}
-                  for q, pk, r, u in zip(labels, picked, raw, used, strict=True)]
+                  for q, pk, r, u in zip(labels, picked, raw, used, strict=True)], chosen
+
+
+def cross_validated(events: dict[str, list[dict]], folds: list[dict[str, list[dict]]],
+                    cv: dict[str, list[dict | None]], coverage: float
+                    ) -> dict[str, list[dict]]:
+    """A life's prognoses with CV+ intervals (``cross_validation``): each valid one's
+    interval, per quarter of the true remaining share, by
+    :func:`~swgmon.prognosis.calibration.cv_plus_interval` on the folds' prognoses at its
+    hour and the quarter's chosen calibration scores (``cv``, :func:`_cell_scales`; None:
+    the split interval), made to hold the full model's median, then joined over the
+    quarters (:func:`~swgmon.prognosis.inputs.share_hull`); the split interval kept as
+    ``split_remaining_h_q05``, ``_q95``.
+
+    Parameters
+    ----------
+    events : dict of str to list of dict
+        Per method, the full model's prognoses (:func:`run_life`).
+    folds : list of dict of str to list of dict
+        Per fold, its model's, at the same hours (:func:`run_life`'s ``folds``).
+    cv : dict of str to list of (dict or None)
+        Per method and quarter, CV+'s choice (the design's ``cv`` of the fault).
+    coverage : float
+
+    Returns
+    -------
+    dict of str to list of dict
+        ``events`` with ``remaining_h_q05``, ``remaining_h_q95`` (and the failure hours)
+        by CV+ where valid [h].
+    """
+    out: dict[str, list[dict]] = {}
+    for m, evs in events.items():
+        out[m] = []
+        for j, ev in enumerate(evs):
+            ev = {**ev, "split_remaining_h_q05": ev["remaining_h_q05"],
+                  "split_remaining_h_q95": ev["remaining_h_q95"]}
+            med = ev["remaining_h"]
+            if ev["valid"] and med is not None:
+                raw = [_quantiles(fo[m][j]) if j < len(fo[m]) else None for fo in folds]
+                split = (ev["remaining_h_q05"] or 0.0, ev["remaining_h_q95"] or np.inf)
+                ends = [split if c is None else cv_plus_interval(raw, np.array(c["scores"]),
+                                                                 c["apart"], coverage)
+                        for c in cv[m]]
+                lo, hi = share_hull([(min(a, med), max(b, med)) for a, b in ends],
+                                    ev["hour"] - ev["alarm_h"])
+                ev.update(remaining_h_q05=lo, remaining_h_q95=None if np.isinf(hi) else hi)
+                for q, r in (("_q05", lo), ("_q95", hi)):
+                    if "failure_h" + q in ev:
+                        ev["failure_h" + q] = None if np.isinf(r) else ev["hour"] + r
+            out[m].append(ev)
+    return out
+
+
+def _quantiles(ev: dict) -> tuple[float, float, float] | None:
+    """An event's q05, median and q95 of the remaining hours (an open q95 inf; None where
+    not valid or without a median)."""
+    if not ev["valid"] or ev["remaining_h"] is None:
+        return None
+    return (ev["remaining_h_q05"] or 0.0, ev["remaining_h"],
+            np.inf if ev["remaining_h_q95"] is None else ev["remaining_h_q95"])
 
 
 def prognosis_design(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
@@ -733,9 +852,10 @@ def prognosis_design(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
     -------
     (DiagnosisModel, dict)
         The model, and the design: ``scales`` (per fault and method, the lower and
-        upper factors per quarter, :func:`calibrate`), ``calibration`` (its info), ``faults`` (those
-        evaluated), ``not_run`` (fault -> why), ``train_s``, ``calibrate_s`` [s],
-        ``dataset``.
+        upper factors per quarter, :func:`calibrate`), ``cv`` (per fault and method,
+        CV+'s choice per quarter), ``folds`` (the training instances' folds),
+        ``calibration`` (its info), ``faults`` (those evaluated), ``not_run`` (fault ->
+        why), ``train_s``, ``calibrate_s`` [s], ``dataset``.
     """
     t0 = time.perf_counter()
     lot = population_plan(base, sc)
@@ -751,10 +871,11 @@ def prognosis_design(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
         not_run[f] = "the diagnosis model has no severity regressor for it"
     faults = [f for f in faults if f in model.severity]
     t1 = time.perf_counter()
-    scales, info = calibrate(lot, banks, train_ids, model, sc, faults)
+    scales, cv, info = calibrate(lot, banks, train_ids, model, sc, faults)
     for g in train_ids:
         banks[g].release(healthy=True)  # the training instances' records serve no more
-    return model, {"scales": scales, "calibration": info, "faults": faults,
+    return model, {"scales": scales, "cv": cv, "calibration": info, "faults": faults,
+                   "folds": gear_folds(train_ids, sc.train.severity_folds),
                    "not_run": not_run, "train_s": t1 - t0,
                    "calibrate_s": time.perf_counter() - t1, "dataset": dataset}
 
@@ -779,19 +900,24 @@ def prognosis_lives(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig,
     scales = {f: {m: (tuple(lo), tuple(hi)) for m, (lo, hi) in sc_f.items()}
               for f, sc_f in design["scales"].items()}
     bank = record_bank(lot, gear)
+    readers = [model.without(f[0]) for f in design["folds"]] if sc.cross_validation \
+        else None
     rows, lives, changes = [], [], []
+
+    def one(f: str, s: int, twin: bool = False) -> tuple[dict, dict[str, list[dict]]]:
+        life, events, folds = run_life(life_of(lot, bank, gear, sc, f, s, twin=twin), model,
+                                       sc, scales[f], s, failure_ratios(lot, sc, f,
+                                                                        train_ids), readers)
+        return life, cross_validated(events, folds, design["cv"][f], sc.coverage) \
+            if readers else events
     for i, s in enumerate(sc.seeds):
         for f in design["faults"]:
-            failures = failure_ratios(lot, sc, f, train_ids)
-            life, events = run_life(life_of(lot, bank, gear, sc, f, s), model, sc, scales[f],
-                                    s, failures)
+            life, events = one(f, s)
             key = {"dataset": dataset, "held_out_gear": gear, "seed": s}
             lives.append({**key, **life})
             rows += _rows(key, life, events)
             if i < sc.twins and np.isfinite(life["payload_h"]):
-                twin = life_of(lot, bank, gear, sc, f, s, twin=True)
-                changes += _changes(key, life, events, *run_life(twin, model, sc,
-                                                                 scales[f], s, failures),
+                changes += _changes(key, life, events, *one(f, s, twin=True),
                                     life["payload_h"], sc.prognosis.every_h)
         bank.release()
     bank.release(healthy=True)

@@ -152,7 +152,8 @@ def _design(plan_: DatasetPlan, jobs: list[Job], study: PrognosisStudyConfig, ou
         save_model(model, _model_path(out, job.dataset),
                    [{"name": job.dataset, "config_hash": plan_.config_hash,
                      "gears": instances(study)[0],
-                     "simulated": "training lives of swgmon.evaluation.training"}])
+                     "simulated": "training lives of swgmon.evaluation.training"}],
+                   without=study.cross_validation)
         return part
     return run_group(out, jobs, one)
 

@@ -157,6 +157,11 @@ class MonitorStudyConfig:
         threshold of the same rule on the same p-values; those up to
         ``rule.design_hours`` are drawn; increasing, each in (0, 10^6] [h] (1, 3, 10, 30,
         100, 300, 1000 [choice: two a decade]).
+    severity_folds : int
+        Groups of training gears the severity regressors are also fitted without
+        (:func:`~swgmon.assessment.model.gear_folds`), 0 or in [2, 999]: 0, one gear a
+        group (the jackknife's); the prognosis's cross-validation reads a held-out
+        gear's lives with each group's (:mod:`.prognosis_evaluation`).
     windows_at_once : int
         Windows of a fault life simulated at once, in [1, 10^4] (120 [choice]: a life stops
         after the chunk that holds its confirmation); no result changes
@@ -195,6 +200,7 @@ class MonitorStudyConfig:
     scored_run: bool = False
     curve_hours: list[float] = field(
         default_factory=lambda: [1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0])
+    severity_folds: int = field(default=0, metadata=allowed(0, 999))
     windows_at_once: int = field(default=120, metadata=allowed(1, 10**4))
 
     def check(self, where: str) -> None:
@@ -219,8 +225,10 @@ class MonitorStudyConfig:
             longest named, with the hours it may have); a nuisance's
             conditions out of range; the families' seeds, keys and draws
             (:meth:`_check_families`); an unknown detector; ``detector_hours`` outside each
-            healthy life after commissioning.
+            healthy life after commissioning; ``severity_folds`` 1.
         """
+        _req(self.severity_folds != 1, f"{where}.severity_folds must be 0 (one gear a fold) "
+                                       "or in [2, 999], got 1")
         _req(len(self.seeds) >= 1, f"{where}.seeds must list at least one seed")
         for i, s in enumerate(self.seeds):
             check_range(s, 0, 2**32 - 1, f"{where}.seeds[{i}]")

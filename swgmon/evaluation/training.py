@@ -216,7 +216,7 @@ def train_model(plan: DatasetPlan, banks: dict[int, RecordBank], gears: list[int
             banks[g].release(healthy=True)
     x = np.concatenate(xs)
     model = fit_diagnosis(x, np.concatenate(ys).astype(str), np.concatenate(sev),
-                          np.concatenate(gid), cls, seed=seed)
+                          np.concatenate(gid), cls, seed=seed, folds=cfg.severity_folds)
     model.points_range = np.stack([x[:, -2:].min(axis=0), x[:, -2:].max(axis=0)])
     model.n_features = x.shape[1] - 2
     model.sample_rate_hz = float(plan.config.chain.sample_rate_hz)

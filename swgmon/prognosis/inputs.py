@@ -18,7 +18,7 @@ from swgsim.gear.faults import get_fault
 
 __all__ = ["LONE_WINDOW_H", "Duty", "DutyRange", "Prognosis", "PrognosisConfig", "Track",
            "calibrated_interval", "check_track", "from_samples", "not_valid",
-           "not_yet_valid", "scaled_interval"]
+           "not_yet_valid", "scaled_interval", "share_hull"]
 
 
 #: Operating hours a lone recorded window holds (no interval to take the median of): the
@@ -475,13 +475,34 @@ def calibrated_interval(q05: float, med: float, q95: float, elapsed_h: float,
     """
     if len(lower) == 1:
         return scaled_interval(q05, med, q95, lower[0], upper[0])
-    e = max(float(elapsed_h), 0.0)
+    return share_hull([scaled_interval(q05, med, q95, lo, hi)
+                       for lo, hi in zip(lower, upper, strict=True)], elapsed_h)
+
+
+def share_hull(intervals: list[tuple[float, float]], elapsed_h: float) -> tuple[float, float]:
+    """The hull of the remaining lives r that lie inside the interval of their own bucket
+    of the true remaining share (:func:`calibrated_interval`'s set).
+
+    Parameters
+    ----------
+    intervals : list of (float, float)
+        Per bucket of :func:`~.scores.share_buckets` (as many as given), the interval of
+        the remaining hours calibrated on that bucket [h]; one at least must hold r in
+        its own bucket (each holding the median does).
+    elapsed_h : float
+        Operating hours since the alarm the prognosis follows, >= 0 [h].
+
+    Returns
+    -------
+    (float, float)
+        The hull's ends [h].
+    """
+    e, k = max(float(elapsed_h), 0.0), len(intervals)
     ends = []
-    for b in range(len(lower)):
-        s0, s1 = b / len(lower), (b + 1) / len(lower)
+    for b, (lo, hi) in enumerate(intervals):
+        s0, s1 = b / k, (b + 1) / k
         r0 = s0 * e / (1.0 - s0)
-        r1 = np.inf if b == len(lower) - 1 else s1 * e / (1.0 - s1)
-        lo, hi = scaled_interval(q05, med, q95, lower[b], upper[b])
+        r1 = np.inf if b == k - 1 else s1 * e / (1.0 - s1)
         if max(lo, r0) <= min(hi, r1):
             ends.append((max(lo, r0), min(hi, r1)))
     return min(a for a, _ in ends), max(z for _, z in ends)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -257,10 +258,15 @@ class StreamPrognoses:
     tracks : list of dict
         Per alarm followed: ``fault``, ``alarm_h`` and its estimates ``hours``,
         ``severity``, ``lo``, ``hi`` (lists, the 90 % interval).
+    readers : list of StreamPrognoses
+        The same alarms followed by each of :func:`stream_prognoses`'s ``readers`` (the
+        model with other severity regressors), their intervals uncalibrated; empty
+        without.
     """
 
     events: list[dict]
     tracks: list[dict]
+    readers: list[StreamPrognoses] = field(default_factory=list)
 
     def report_lines(self) -> list[str]:
         """One line per valid prognosis (for ``report.md``, :func:`prognosis_line`) and
@@ -299,8 +305,8 @@ def _num(x: float) -> float | None:
 
 
 def stream_prognoses(tr: Trace, alarms: list[Alarm], mon: GearMonitor, feats: np.ndarray,
-                     points: np.ndarray, cond: Conditions, cfg: StreamPrognosis
-                     ) -> StreamPrognoses:
+                     points: np.ndarray, cond: Conditions, cfg: StreamPrognosis,
+                     readers: Sequence[DiagnosisModel] = ()) -> StreamPrognoses:
     """The prognoses after each gear-fault alarm whose fault has a growth law.
 
     Parameters
@@ -317,6 +323,10 @@ def stream_prognoses(tr: Trace, alarms: list[Alarm], mon: GearMonitor, feats: np
         The windows' conditions (acting load, temperature where read).
     cfg : StreamPrognosis
         The option (checked by the caller).
+    readers : sequence of DiagnosisModel
+        The model with other severity regressors (the folds' of a cross-validation,
+        :meth:`~swgmon.assessment.model.DiagnosisModel.without`): each follows the same
+        alarms, its interval with factors 1 (:attr:`StreamPrognoses.readers`).
 
     Returns
     -------
@@ -325,22 +335,26 @@ def stream_prognoses(tr: Trace, alarms: list[Alarm], mon: GearMonitor, feats: np
         regressor for it.
     """
     grown = {f for fs in LAWS.values() for f in fs}
-    out = StreamPrognoses([], [])
+    raw = dataclasses.replace(cfg, lower_scale=(1.0,), upper_scale=(1.0,))
+    out = StreamPrognoses([], [], [StreamPrognoses([], []) for _ in readers])
     for al in alarms:
         if al.kind == "gear_fault" and al.fault in grown and al.fault in mon.model.severity:
-            _follow(tr, al, mon, feats, points, cond, cfg, out)
+            _follow(tr, al, mon, mon.model, feats, points, cond, cfg, out)
+            for model, o in zip(readers, out.readers, strict=True):
+                _follow(tr, al, mon, model, feats, points, cond, raw, o)
     return out
 
 
-def _follow(tr, al, mon, feats, points, cond, cfg, out) -> None:
-    """Append the track and prognoses of one alarm to ``out`` (:func:`stream_prognoses`)."""
+def _follow(tr, al, mon, model, feats, points, cond, cfg, out) -> None:
+    """Append the track and prognoses of one alarm, its severity read by ``model``, to
+    ``out`` (:func:`stream_prognoses`)."""
     idx = np.arange(al.index, tr.hour.size)
     hours = tr.hour[idx]
     block = np.floor((hours - al.hour) / cfg.block_h).astype(int)
     # every window read at once (one regressor call, not one a block: issue 85's time)
-    read = mon.model.reads(al.fault, mon.inputs(feats[idx], points[idx], cond[idx],
-                                                tr.friction[idx]))
-    est = [(float(hours[block == b][-1]), *mon.model.estimate(al.fault, read[block == b]))
+    read = model.reads(al.fault, mon.inputs(feats[idx], points[idx], cond[idx],
+                                            tr.friction[idx]))
+    est = [(float(hours[block == b][-1]), *model.estimate(al.fault, read[block == b]))
            for b in np.unique(block)]
     h, y, lo, hi = np.array(est, float).T
     out.tracks.append({"fault": al.fault, "alarm_h": al.hour, "hours": h.tolist(),

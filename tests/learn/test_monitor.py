@@ -1085,8 +1085,43 @@ def test_a_training_gears_severity_is_read_out_of_sample_for_the_prognosis_calib
     with pytest.raises(ValueError, match="no severity regressors fitted without gear 3"):
         model.without(3)
     loaded = load_model(save_model(model, tmp_path / "m", []))
-    with pytest.raises(ValueError, match="a loaded model has none"):
+    with pytest.raises(ValueError, match="a model loaded from a file saved without them"):
         loaded.without(1)
+    kept = load_model(save_model(model, tmp_path / "k", [], without=True)).without(2)
+    np.testing.assert_array_equal(kept.severity["x"][0].predict(on2),
+                                  out.severity["x"][0].predict(on2))
+    assert set(kept.reading) == set(out.reading)
+
+
+def test_severity_folds_fit_one_regressor_a_fold_and_read_each_gear_out_of_it():
+    """CV+'s folds (``fit_diagnosis``'s ``folds``, swgmon/assessment/model.py): four gears in
+    two folds give two regressors, each gear's the one fitted without its fold (the same
+    for both gears of a fold, fitted on the other fold's windows alone); 0 folds, one a
+    gear as before; 1 fold refused."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
+    from swgmon.assessment.model import fit_diagnosis, gear_folds
+
+    rng = np.random.default_rng(1)
+    n = 800
+    gear = np.repeat([1, 2, 3, 4], n // 4)
+    fault = np.where(np.arange(n) % 2, "x", "healthy")
+    severity = np.where(fault == "x", rng.uniform(0.1, 1.0, n), 0.0)
+    x = np.column_stack([severity + 0.05 * rng.normal(size=n),
+                         (fault == "x") + 0.1 * rng.normal(size=n), np.ones(n), np.ones(n)])
+    assert gear_folds([4, 2, 3, 1], 2) == [[1, 2], [3, 4]]
+    assert gear_folds([1, 2, 3], 0) == gear_folds([1, 2, 3], 5) == [[1], [2], [3]]
+    two = fit_diagnosis(x, fault, severity, gear, ["healthy", "x"], n_agg=10, folds=2)
+    assert two.severity_without[1]["x"] is two.severity_without[2]["x"]
+    assert two.severity_without[1]["x"] is not two.severity_without[3]["x"]
+    other = (gear >= 3) & (fault == "x")
+    alone = HistGradientBoostingRegressor(max_iter=100, early_stopping=False, random_state=0)
+    np.testing.assert_array_equal(two.severity_without[1]["x"].predict(x[:50]),
+                                  alone.fit(x[other], severity[other]).predict(x[:50]))
+    each = fit_diagnosis(x, fault, severity, gear, ["healthy", "x"], n_agg=10)
+    assert len({id(r["x"]) for r in each.severity_without.values()}) == 4
+    with pytest.raises(ValueError, match="folds must be 0"):
+        fit_diagnosis(x, fault, severity, gear, ["healthy", "x"], folds=1)
 
 
 def test_the_health_figure_marks_every_crossing_and_every_event(tmp_path, monkeypatch):

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from swgmon.prognosis.baselines import predict_linear, predict_wiener
-from swgmon.prognosis.calibration import tail_scales
+from swgmon.prognosis.calibration import cv_plus_interval, tail_scales, tail_scores
 from swgmon.prognosis.growth import (
     Duty,
     DutyRange,
@@ -242,6 +242,54 @@ def test_too_few_lives_for_the_tails_apart_still_get_one_factor():
     lower, upper = tail_scales(ps, truth, apart=False)
     scores = np.maximum(np.log(100.0 / truth) / np.log(1.1), np.log(truth / 100.0) / np.log(1.1))
     assert lower == upper == pytest.approx(np.sort(scores)[11])
+
+
+def test_cv_plus_with_folds_that_agree_is_split_conformal():
+    """Folds whose models make the same prognosis: CV+'s ends are the split-conformal
+    interval of the same scores (the rank ⌊(n + 1)α⌋ of the candidate ends is the rank
+    ⌈(n + 1)(1 − α)⌉ of the scores), tails apart and one factor alike."""
+    rng = np.random.default_rng(4)
+    p = Prognosis(0.0, "wear", "growth", True, "", 0.1, 0.8, 100.0, 100 / 1.1, 110.0,
+                  100.0, 100 / 1.1, 110.0)
+    truth = 90.0 * np.exp(0.2 * rng.standard_normal(25))
+    lo, up = tail_scores(np.array([[100 / 1.1, 100.0, 110.0]] * 25), truth)
+    scores = np.c_[np.arange(25) % 3, lo, up]
+    raw = [(100 / 1.1, 100.0, 110.0)] * 3
+    for apart in (True, False):
+        k = tail_scales([p] * 25, truth, apart=apart)
+        assert cv_plus_interval(raw, scores, apart) == pytest.approx(
+            (100 / 1.1 ** k[0], 100 * 1.1 ** k[1]))
+    assert cv_plus_interval(raw, scores[:5], True) == (0.0, np.inf)  # too few: open
+    assert cv_plus_interval([None] * 3, scores, True) == (0.0, np.inf)  # no fold's
+
+
+def test_cv_plus_covers_at_its_rate_where_each_fold_errs_its_own_way():
+    """Two folds whose models err in opposite ways (medians 20 % high and low), each life's
+    own error (σ 0.15, its windows') shared by both folds' reads and a small one (σ 0.03)
+    each fold's, a spread half the truth's: calibration lives of each fold read by its own
+    model, a fresh life by both. Over 3000 draws of 40 calibration lives and one fresh one,
+    CV+ covers the fresh remaining hours at least at 90 % (3 binomial σ), neither tail
+    missing more than 5 % (3 σ); one fold's model with every fold's scores (split
+    conformal on models that are not the one that reads the fresh life) misses its low
+    tail far more often."""
+    rng = np.random.default_rng(11)
+    bias, n, reps = np.array([1.2, 1 / 1.2]), 40, 3000
+    fold = np.arange(n) % 2
+    miss, one = np.zeros((reps, 2), bool), np.zeros((reps, 2), bool)
+    for r in range(reps):
+        truth = 100.0 * np.exp(0.3 * rng.standard_normal(n + 1))
+        med = truth[:n] * bias[fold] * np.exp(0.15 * rng.standard_normal(n)
+                                              + 0.03 * rng.standard_normal(n))
+        lo, up = tail_scores(np.c_[med / np.exp(0.25), med, med * np.exp(0.25)], truth[:n])
+        m = truth[n] * bias * np.exp(0.15 * rng.standard_normal()
+                                     + 0.03 * rng.standard_normal(2))
+        raw = [(x / np.exp(0.25), x, x * np.exp(0.25)) for x in m]
+        for out, rd in ((miss, raw), (one, [raw[0]] * 2)):
+            a, b = cv_plus_interval(rd, np.c_[fold, lo, up], True)
+            out[r] = truth[n] < a, truth[n] > b
+    assert 1.0 - miss.any(axis=1).mean() >= 0.9 - 3 * np.sqrt(0.09 / reps)
+    assert (miss.mean(axis=0) <= 0.05 + 3 * np.sqrt(0.0475 / reps)).all()
+    assert one.mean(axis=0)[0] > 0.08  # the test can fail: with one fold's model, it does
 
 
 def test_the_config_scales_the_interval_about_the_median():

@@ -32,7 +32,8 @@ TINY = ["prognosis.run_on=[tiny]", "+dataset@prognosis.datasets.tiny=tiny_bench"
 #: The columns of results.csv: one row per prognosis and method.
 COLUMNS = ["dataset", "held_out_gear", "seed", "fault", "payload", "method",
            "alarm_h", "hour", "failure_h", "true_remaining_h", "valid", "remaining_h",
-           "remaining_h_q05", "remaining_h_q95"]
+           "remaining_h_q05", "remaining_h_q95", "split_remaining_h_q05",
+           "split_remaining_h_q95"]
 
 
 def _run(out, *extra):
@@ -209,6 +210,9 @@ BAD = {  # case -> (override or overrides, the start of the one line)
     "max_scale 30": ("prognosis.study.max_scale=30", "prognosis.study.max_scale must lie in"),
     "a group beyond the pairs": ("prognosis.group=2", "prognosis.group must lie in [0, 1] "
                                  "(0: tiny, 1: tiny gear 3), got 2"),
+    "one fold": ("prognosis.study.train.severity_folds=1",
+                 "prognosis.study.train.severity_folds must be 0 (one gear a fold) or in "
+                 "[2, 999], got 1"),
 }
 
 
@@ -363,8 +367,8 @@ def test_a_regressor_trained_past_the_failure_reads_it_without_the_edge_bias():
             train, fault_severities={"eccentric_wg": levels}))
         for seed in (1, 2):
             for curve, m in ((True, model), (False, dataclasses.replace(model, reading={}))):
-                _, events = run_life(life_of(p, banks[3], 3, sc, "eccentric_wg", seed),
-                                     m, sc, scales, seed)
+                _, events, _ = run_life(life_of(p, banks[3], 3, sc, "eccentric_wg", seed),
+                                        m, sc, scales, seed)
                 last = [e["severity"] for e in events["growth"]
                         if e["severity"] is not None][-1]
                 short[beyond, curve, seed] = 0.1 - last
@@ -409,19 +413,27 @@ def test_a_fault_with_lives_enough_gets_its_own_scales_the_others_the_pooled():
     p = Prognosis(0.0, "wear", "growth", True, "", 0.1, 0.8, 100.0, 100 / 1.1, 110.0,
                   100.0, 100 / 1.1, 110.0)
 
-    def cell(k, sigma):  # the same picks in each quarter and in "all"
-        picks = [(p, f) for f in 100.0 * np.exp(sigma * rng.standard_normal(k))]
+    def cell(k, sigma):  # the same picks in each quarter and in "all", in two folds
+        picks = [(p, f, i % 2) for i, f in
+                 enumerate(100.0 * np.exp(sigma * rng.standard_normal(k)))]
         return [picks] * 5
 
     wide, twelve, few = cell(40, 0.3), cell(12, 0.3), cell(5, 0.01)
-    pooled, rows = _cell_scales(cell(60, 0.1), sc, None, "pooled")
-    own = tail_scales([q for q, _ in wide[0]], np.array([f for _, f in wide[0]]))
-    assert own[0] > 1.0 and _cell_scales(wide, sc, pooled, "wide")[0] == [own] * 5
-    one = tail_scales([q for q, _ in twelve[0]], np.array([f for _, f in twelve[0]]),
+    pooled, rows, chosen = _cell_scales(cell(60, 0.1), sc, None, "pooled")
+    fallback = (pooled, chosen)
+    own = tail_scales([q for q, *_ in wide[0]], np.array([f for _, f, _ in wide[0]]))
+    used, _, cv = _cell_scales(wide, sc, fallback, "wide")
+    assert own[0] > 1.0 and used == [own] * 5
+    assert all(c["apart"] and len(c["scores"]) == 40 for c in cv)  # CV+ takes the same
+    assert [row[0] for row in cv[0]["scores"]] == [i % 2 for i in range(40)]
+    one = tail_scales([q for q, *_ in twelve[0]], np.array([f for _, f, _ in twelve[0]]),
                       apart=False)
-    assert _cell_scales(twelve, sc, pooled, "12")[0] == [one] * 5
-    assert _cell_scales(few, sc, pooled, "few")[0] == pooled
-    assert _cell_scales(few, sc, None, "few")[0] == [(1.0, 1.0)] * 5
+    used, _, cv = _cell_scales(twelve, sc, fallback, "12")
+    assert used == [one] * 5 and not any(c["apart"] for c in cv)
+    used, _, cv = _cell_scales(few, sc, fallback, "few")
+    assert used == pooled and cv == chosen
+    used, _, cv = _cell_scales(few, sc, None, "few")
+    assert used == [(1.0, 1.0)] * 5 and cv == [None] * 5
     assert [r["lives"] for r in rows] == [60] * 5 and rows[-1]["quarter"] == "all"
 
 
