@@ -20,16 +20,17 @@ life's true failure hour, and the two baselines (:mod:`swgmon.prognosis.baseline
 predict on the same tracks at the same hours.
 
 The intervals are calibrated by conformal prediction over gear instances, lower and upper
-tails apart (:func:`swgmon.prognosis.calibration.tail_scales`), on lives of the *training*
-instances (``calibration_seeds``, disjoint from ``seeds``), each read with the severity
-regressors fitted without its instance (the jackknife's out-of-instance scores, Barber et
-al., Ann. Statist. 49 (2021) 486-507; the test lives are read by the full model, not by
-each leave-one-out model as jackknife+ would: that is one monitor run per training
-instance and test life), per method and per quarter of the *true* remaining share
+tails apart, on lives of the *training* instances (``calibration_seeds``, disjoint from
+``seeds``), each read with the severity regressors fitted without its instance's fold
+(``train.severity_folds``), per method and per quarter of the *true* remaining share
 (label-conditional: :func:`swgmon.prognosis.inputs.calibrated_interval`) and per fault
 where its lives are enough, one prognosis per life and quarter at a fraction of the way
-drawn from the seed (:func:`calibrate`);
-the held-out instances are never seen before they are scored.
+drawn from the seed (:func:`calibrate`). A held-out life is read by the full model and by
+each fold's, and its interval is CV+'s (Barber et al., Ann. Statist. 49 (2021) 486-507:
+each calibration life's scores applied to its own fold's prognosis,
+:func:`cross_validated`; ``cross_validation``), the split-conformal interval of the full
+model (:func:`swgmon.prognosis.calibration.tail_scales`) beside it; the held-out
+instances are never seen before they are scored.
 """
 
 from __future__ import annotations
@@ -905,11 +906,13 @@ def prognosis_lives(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig,
     rows, lives, changes = [], [], []
 
     def one(f: str, s: int, twin: bool = False) -> tuple[dict, dict[str, list[dict]]]:
+        # a twin's medians alone are compared (:func:`_changes`): no folds read it
         life, events, folds = run_life(life_of(lot, bank, gear, sc, f, s, twin=twin), model,
                                        sc, scales[f], s, failure_ratios(lot, sc, f,
-                                                                        train_ids), readers)
+                                                                        train_ids),
+                                       None if twin else readers)
         return life, cross_validated(events, folds, design["cv"][f], sc.coverage) \
-            if readers else events
+            if readers and not twin else events
     for i, s in enumerate(sc.seeds):
         for f in design["faults"]:
             life, events = one(f, s)

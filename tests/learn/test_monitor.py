@@ -303,7 +303,7 @@ def test_the_namings_and_laws_numbers_are_logged_with_the_monitors_run(tiny_eval
     monkeypatch.setattr(task, "check_tracking", lambda *a: None)
     once = stream._monitor_once
     monkeypatch.setattr(stream, "_monitor_once", lambda *a, **k: (
-        used.append(a[-1]), once(*a, **k))[1])
+        used.append(a[9]), once(*a, **k))[1])  # naming, after prognosis
     task.run_monitor_app(compose_app("monitor", [
         f"stream={tmp_path / 'life'}", f"diagnosis_model={model}",
         f"out_dir={tmp_path / 'out'}", "naming.recur_h=12", "naming.prior_odds=2",
