@@ -111,6 +111,24 @@ def _temp_owner(name: str, runs: set[str]) -> str | None:
     return "stale" if not pid_alive(int(m["pid"])) else "live"
 
 
+def _joining(path: Path) -> set[str]:
+    """The run that wrote ``path``, a temporary copy of the stamp beside it, where the
+    copy's own content lists that run (the run named by the file's name): a worker killed
+    while it joined (:func:`join`) leaves one, whose run the stamp on disk does not list
+    yet; else nothing."""
+    m = TEMP_NAME.match(path.name)
+    if not m or m["name"] != STAMP or path.is_symlink() or path.stat().st_size > 2**24:
+        return set()
+    try:
+        copy = json.loads(path.read_bytes())
+    except (OSError, ValueError):
+        return set()
+    me = f"{m['host']}-{m['pid']}"
+    ok = (isinstance(copy, dict) and copy.get("writer") == SIGNATURE
+          and isinstance(copy.get("runs"), list) and me in copy["runs"])
+    return {me} if ok else set()
+
+
 def _listed(stamp: dict, rel: str, path: Path) -> bool:
     """Whether ``stamp`` lists ``rel`` with the SHA-256 ``path`` has now."""
     hashes = stamp["files"].get(rel)
@@ -129,6 +147,8 @@ def _classify(s: Survey, path: Path, rel: str, stamps: list[tuple[Path, dict]]) 
             and _listed(stamps[0][1], path.name, path):
         return  # a lock file of ours, listed by the stamp beside it: kept, as the stamp
     runs = {r for _, st in stamps for r in st["runs"]}
+    if stamps and stamps[0][0] == path.parent:
+        runs |= _joining(path)
     kind = _temp_owner(path.name, runs)
     if kind == "stale":
         s.stale.append(path)

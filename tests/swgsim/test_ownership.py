@@ -148,6 +148,26 @@ def test_stale_temp_cleanup_leaves_a_foreign_temp_looking_file(ours, tmp_path):
     assert s["complete"] and not mine.exists() and not list(folder.glob("*.tmp"))
 
 
+def test_a_worker_killed_while_it_joined_leaves_a_stamp_copy_that_is_removed(ours, tmp_path):
+    """A worker killed between writing the stamp that lists it and renaming it into place
+    (clean stops, issue 85's CI run) leaves a temporary copy of the stamp whose run the
+    stamp on disk does not list: the copy's own content names it, so it is ours and goes
+    once that process is gone; a copy that does not list its writer stays foreign."""
+    folder = tmp_path / "joined"
+    shutil.copytree(ours, folder)
+    stamp = json.loads((folder / ownership.STAMP).read_text())
+    dead = dead_pid()
+    run = f"{atomic.temp_host()}-{dead}"
+    name = atomic.temp_prefix(folder / ownership.STAMP).replace(f"-{os.getpid()}.",
+                                                                f"-{dead}.")
+    copy = folder / f"{name}j.tmp"
+    copy.write_text(json.dumps({**stamp, "runs": [*stamp["runs"], run]}))
+    other = folder / f"{name}o.tmp"
+    other.write_text(json.dumps(stamp))  # named like a stamp copy, not listing its writer
+    s = ownership.survey(folder)
+    assert copy in s.stale and other.name in s.foreign
+
+
 def test_an_edited_file_of_ours_is_no_longer_ours(ours, tmp_path):
     folder = tmp_path / "edited"
     shutil.copytree(ours, folder)
