@@ -810,7 +810,8 @@ def cross_validated(events: dict[str, list[dict]], folds: list[dict[str, list[di
                   "split_remaining_h_q95": ev["remaining_h_q95"]}
             med = ev["remaining_h"]
             if ev["valid"] and med is not None:
-                raw = [_quantiles(fo[m][j]) if j < len(fo[m]) else None for fo in folds]
+                raw = [_raw(_as_prognosis(fo[m][j], m)) if j < len(fo[m]) else None
+                       for fo in folds]
                 split = (ev["remaining_h_q05"] or 0.0, ev["remaining_h_q95"] or np.inf)
                 ends = [split if c is None else cv_plus_interval(raw, np.array(c["scores"]),
                                                                  c["apart"], coverage)
@@ -825,13 +826,9 @@ def cross_validated(events: dict[str, list[dict]], folds: list[dict[str, list[di
     return out
 
 
-def _quantiles(ev: dict) -> tuple[float, float, float] | None:
-    """An event's q05, median and q95 of the remaining hours (an open q95 inf; None where
-    not valid or without a median)."""
-    if not ev["valid"] or ev["remaining_h"] is None:
-        return None
-    return (ev["remaining_h_q05"] or 0.0, ev["remaining_h"],
-            np.inf if ev["remaining_h_q95"] is None else ev["remaining_h_q95"])
+def _raw(p: Prognosis) -> tuple[float, float, float] | None:
+    """A fold's q05, median and q95 for :func:`cross_validated` (NaN where open)."""
+    return (p.remaining_h_q05, p.remaining_h_median, p.remaining_h_q95) if p.valid else None
 
 
 def prognosis_design(base: DatasetPlan, dataset: str, sc: PrognosisStudyConfig
