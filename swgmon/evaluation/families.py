@@ -511,7 +511,7 @@ class GrowthFamily:
 
 
 def draw_growth(family: GrowthFamily, fault: str, nominal: RunToFailure, initial: float,
-                pivot_load_nm: float, gear: int, seed: int) -> RunToFailure:
+                pivot_load_nm: float, gear: int, seed: int, attempt: int = 0) -> RunToFailure:
     """One life's law drawn from a growth family (:class:`GrowthFamily`); pure and
     deterministic, each constant from its own keyed stream (adding a constant moves no
     other draw).
@@ -530,6 +530,10 @@ def draw_growth(family: GrowthFamily, fault: str, nominal: RunToFailure, initial
         The load of the C-m pivot, > 0 [N m] (the data set's mean).
     gear, seed : int
         The life's gear instance and seed.
+    attempt : int
+        The draw's number, >= 0: a life drawn again (its length outside the plan,
+        :func:`~.prognosis_evaluation.life_of`) takes the streams of its next attempt;
+        attempt 0 keys as before attempts existed, so no earlier draw moves.
 
     Returns
     -------
@@ -539,11 +543,13 @@ def draw_growth(family: GrowthFamily, fault: str, nominal: RunToFailure, initial
         failure severity times exp(``failure_spread`` z), within (initial, the fault's
         top].
     """
+    key = f"growth:{fault}:{gear}:" + (f"{attempt}:" if attempt else "")
+
     def u(name: str, lo_hi: list[float]) -> float:
-        return float(_stream(seed, f"growth:{fault}:{gear}:{name}").uniform(*lo_hi))
+        return float(_stream(seed, key + name).uniform(*lo_hi))
 
     fail = nominal.failure_severity(fault)
-    z = float(_stream(seed, f"growth:{fault}:{gear}:failure").standard_normal())
+    z = float(_stream(seed, key + "failure").standard_normal())
     top = float(get_fault(fault).severity_range[1])
     drawn = float(np.clip(fail * np.exp(family.failure_spread * z), initial + 1e-3 * fail, top))
     if fault in LAWS["archard"]:  # the same rate at the pivot temperature

@@ -125,17 +125,38 @@ class LifeSimulator:
         self.conditions = None if life.conditions is None else self._conditions(life)
         if f.growth in LAWS and f.fault != "healthy":  # grown by the life's load and heat
             self.schedule = self._grow(life)
+        self.rungs = self.rung_weights = None
+        if life.conditions is not None and life.conditions.viscous_in_dynamics:
+            self.rungs, self.rung_weights = ladder_weights(self.conditions.friction)
+        self._ask()
+
+    def _ask(self) -> None:
+        """Ask the bank for the records of every state the life passes through."""
         lam = (np.ones(len(self.schedule.hour)) if self.conditions is None
                else self.conditions.payload)
         states = {(int(d), float(s), float(x)) for d, s, x in zip(
             self.schedule.duty_index, self.schedule.severity, lam, strict=True)}
-        self.rungs = self.rung_weights = None
-        if life.conditions is not None and life.conditions.viscous_in_dynamics:
-            self.rungs, self.rung_weights = ladder_weights(self.conditions.friction)
+        if self.rungs is not None:
             used = sorted({float(r) for r in self.rungs[self.rung_weights != 0]})
             self.bank.want(self._key(d, s, x, v) for d, s, x in states for v in used)
         else:
             self.bank.want(self._key(d, s, x) for d, s, x in states)
+
+    def to_bank(self, bank: RecordBank) -> LifeSimulator:
+        """This life with its records from ``bank`` (another bank of the same gear,
+        shared with its other lives), asked for there; returns itself.
+
+        Raises
+        ------
+        ValueError
+            If ``bank`` is of another gear or plan.
+        """
+        if bank.gear_id != self.gear_id or bank.plan is not self.plan:
+            raise ValueError(f"LifeSimulator.to_bank: a bank of gear {bank.gear_id} for a life "
+                             f"of gear {self.gear_id} (or of another plan)")
+        self.bank = bank
+        self._ask()
+        return self
 
     def _conditions(self, life: LifeConfig) -> WindowConditions:
         """The life's conditions per window
@@ -167,6 +188,14 @@ class LifeSimulator:
         c = self.conditions
         return grow(self.schedule, life, None if c is None else c.payload,
                     None if c is None else c.temperature_c, scale)
+
+    def failure_h_by(self, to_failure: RunToFailure) -> float:
+        """The hour this life's fault would fail by another law [h], under the same
+        windows, conditions and gear scatter; NaN where it would not within the life.
+        Only the schedule is grown again (:func:`~swgsim.datasets.schedule.grow`): no
+        window is simulated, no record asked for."""
+        fault = dataclasses.replace(self.life.fault, to_failure=to_failure)
+        return float(self._grow(dataclasses.replace(self.life, fault=fault)).failure_h)
 
     def _key(self, d: int, severity: float, payload: float = 1.0,
              viscous: float = 1.0) -> tuple:

@@ -425,6 +425,17 @@ def test_a_growth_draw_is_keyed_by_its_name_fault_gear_and_seed():
     assert fixed.failure == 0.9 and a.failure != 0.9
 
 
+def test_a_redraw_takes_streams_of_its_own_and_moves_no_first_draw():
+    """Attempt 0 keys as draws did before attempts existed (the key without a number);
+    each later attempt draws every constant anew from its own streams."""
+    nominal = RunToFailure(failure=0.9, stress_mpa_per_nm=0.6)
+    first = _drawn("root_tooth_crack", 3)
+    assert draw_growth(GrowthFamily(), "root_tooth_crack", nominal, 0.25, 39.0, 9, 3, 0) == first
+    again = [draw_growth(GrowthFamily(), "root_tooth_crack", nominal, 0.25, 39.0, 9, 3, a)
+             for a in (1, 2)]
+    assert len({(d.paris_m, d.threshold_sif, d.failure) for d in [first, *again]}) == 3
+
+
 def test_a_drawn_crack_grows_at_the_nominal_rate_at_the_pivot_and_stays_in_its_ranges():
     fam, nominal = GrowthFamily(), RunToFailure(failure=0.9, stress_mpa_per_nm=0.6)
     pivot = 1.12 * 0.6 * 39.0 * np.sqrt(np.pi * np.sqrt(0.25 * 0.9)

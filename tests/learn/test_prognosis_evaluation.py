@@ -24,6 +24,7 @@ TINY = ["prognosis.run_on=[tiny]", "+dataset@prognosis.datasets.tiny=tiny_bench"
         "~prognosis.study.faults.wear",
         "prognosis.study.faults.eccentric_wg.to_failure.wear_coeff_m_per_nm_rev=3e-13",
         "prognosis.study.onset_window_h=[0.5,1]", "prognosis.study.max_life_h=6",
+        "prognosis.study.min_life_h=0",
         "prognosis.study.day.payload_h=[5.5,5.5]", "prognosis.study.day.duty_h=[5.5,5.5]",
         "prognosis.study.day.payload_factor=[1.1,1.1]",
         "prognosis.study.prognosis.every_h=0.25", "prognosis.study.prognosis.block_h=0.25",
@@ -210,6 +211,11 @@ BAD = {  # case -> (override or overrides, the start of the one line)
     "max_scale 30": ("prognosis.study.max_scale=30", "prognosis.study.max_scale must lie in"),
     "a group beyond the pairs": ("prognosis.group=2", "prognosis.group must lie in [0, 1] "
                                  "(0: tiny, 1: tiny gear 3), got 2"),
+    "lives planned shorter than their least": (
+        "prognosis.study.min_life_h=6", "prognosis.study.min_life_h must lie in [0, 6) h "
+        "(below max_life_h=6 h), got 6"),
+    "a redraw count of 100": ("prognosis.study.redraws=100",
+                              "prognosis.study.redraws must lie in [0, 99]"),
     "one fold": ("prognosis.study.train.severity_folds=1",
                  "prognosis.study.train.severity_folds must be 0 (one gear a fold) or in "
                  "[2, 999], got 1"),
@@ -304,6 +310,43 @@ def test_the_model_is_trained_on_every_severity_a_life_passes_through():
                     assert set(lived.tolist()) <= set(every), (f, lived)
                 assert trained[0] <= lived[0] + trained[1] - trained[0], (f, lived)
                 assert lived[-1] <= trained[-1], (f, lived)
+
+
+def test_a_life_is_drawn_again_until_it_lasts_as_planned():
+    """A law whose life fails within min_life_h of its onset is drawn again (its own
+    streams, ``redraws`` times at most; with none, the first draw stays); the schedule
+    grown by another law (``failure_h_by``) fails where a life made with that law does; a
+    twin keeps the life's law; a life moves to the lot's bank with its records asked
+    for there."""
+    import dataclasses
+
+    from swgcli import dataset_preset
+    from swgmon.evaluation.prognosis_evaluation import PrognosisStudyConfig, life_of
+    from swgsim.datasets.config import dataset_config
+    from swgsim.datasets.plan import plan
+    from swgsim.datasets.records import record_bank
+
+    p = plan(dataset_config(dataset_preset("tiny_bench")))
+    f, seed = "root_tooth_crack", 0
+    free = PrognosisStudyConfig(redraws=0, min_life_h=0.0)
+    first = life_of(p, record_bank(p, 3), 3, free, f, seed)
+    hours = first.schedule.failure_h - first.life.fault.onset_h
+    assert np.isfinite(hours)
+    assert first.failure_h_by(first.life.fault.to_failure) == first.schedule.failure_h
+    longer = dataclasses.replace(free, min_life_h=hours + 1.0)  # the first is too short
+    assert life_of(p, record_bank(p, 3), 3, longer, f, seed).life == first.life  # no redraw
+    bank = record_bank(p, 3)
+    sim = life_of(p, bank, 3, dataclasses.replace(longer, redraws=8), f, seed)
+    assert sim.life.fault.to_failure != first.life.fault.to_failure
+    again = sim.schedule.failure_h - sim.life.fault.onset_h
+    assert again >= longer.min_life_h or np.isnan(again)  # NaN: not failed within the plan
+    assert sim.bank is bank and bank.wanted()
+    twin = life_of(p, record_bank(p, 3), 3, dataclasses.replace(longer, redraws=8), f, seed,
+                   twin=True)
+    assert twin.life.fault.to_failure == sim.life.fault.to_failure
+    assert twin.life.conditions.payload == [] != sim.life.conditions.payload
+    with pytest.raises(ValueError, match="to_bank"):
+        sim.to_bank(record_bank(p, 2))
 
 
 def test_a_prognosis_with_no_failure_in_sight_is_a_row_with_an_open_end():
