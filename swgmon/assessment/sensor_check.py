@@ -70,9 +70,19 @@ class NamingConfig:
         (:func:`fit_temperature_drift`), in [0, 50] [K] (0.4: twice the reading's
         uncertainty [choice]).
     drift_rate_k_per_h : float
-        Largest rate of a drifting reading :func:`fit_temperature_drift` tries first, on 13
-        rates from minus it, in (0, 10] [K/h] (0.6: the families' ±0.5 K/h and a little
-        beyond).
+        Largest rate of a drifting reading :func:`fit_temperature_drift` tries first, on
+        ``drift_rate_points`` rates from minus it, in (0, 10] [K/h] (0.6: the families'
+        ±0.5 K/h and a little beyond).
+    drift_rate_points : int
+        Rates it tries first, odd (zero among them), in [3, 999] (13 [choice]: a step of
+        0.1 K/h at 0.6).
+    drift_offset_step_k : float
+        Step of the offsets it tries first, over ±``temperature_beyond_k``, in (0, 20] [K]
+        (1.0 [choice]).
+    drift_fine_k, drift_fine_k_per_h : float
+        Steps of its second grid, over half a first step on either side of the first
+        grid's best offset and rate, in (0, 5] [K] and (0, 1] [K/h] (0.125 and 0.01
+        [choice]: an eighth and a tenth of the first steps).
     coarse_step_k : float
         Step of the coarse grid :func:`best_temperature` starts from, in (0, 20] [K] (2.0).
     coarse_steps : int
@@ -134,6 +144,13 @@ class NamingConfig:
     drift_min_k: float = field(default=0.4, metadata=allowed(0.0, 50.0, unit="K"))
     drift_rate_k_per_h: float = field(default=0.6, metadata=allowed(0.0, 10.0, lo_open=True,
                                                                     unit="K/h"))
+    drift_rate_points: int = field(default=13, metadata=allowed(3, 999))
+    drift_offset_step_k: float = field(default=1.0, metadata=allowed(0.0, 20.0, lo_open=True,
+                                                                     unit="K"))
+    drift_fine_k: float = field(default=0.125, metadata=allowed(0.0, 5.0, lo_open=True,
+                                                                unit="K"))
+    drift_fine_k_per_h: float = field(default=0.01, metadata=allowed(0.0, 1.0, lo_open=True,
+                                                                     unit="K/h"))
     coarse_step_k: float = field(default=2.0, metadata=allowed(0.0, 20.0, lo_open=True,
                                                                unit="K"))
     coarse_steps: int = field(default=6, metadata=allowed(1, 100))
@@ -158,13 +175,13 @@ class NamingConfig:
         Raises
         ------
         ValueError
-            ``virtual_windows`` or ``friction_refine`` even; ``wrong_median_p`` not below
-            ``right_median_p``.
+            ``virtual_windows``, ``friction_refine`` or ``drift_rate_points`` even;
+            ``wrong_median_p`` not below ``right_median_p``.
         """
         if self.wrong_median_p >= self.right_median_p:
             raise ValueError(f"{where}.wrong_median_p must lie below {where}.right_median_p "
                              f"({self.right_median_p}), got {self.wrong_median_p}")
-        for name in ("virtual_windows", "friction_refine"):
+        for name in ("virtual_windows", "friction_refine", "drift_rate_points"):
             if getattr(self, name) % 2 == 0:
                 raise ValueError(f"{where}.{name} must be odd (its own window in the "
                                  f"middle), got {getattr(self, name)}")
@@ -178,8 +195,10 @@ class NamingConfig:
 
     @property
     def drift_rates(self) -> np.ndarray:
-        """The rates :func:`fit_temperature_drift` tries first, shape (13,) [K/h]."""
-        return np.linspace(-self.drift_rate_k_per_h, self.drift_rate_k_per_h, 13)
+        """The rates :func:`fit_temperature_drift` tries first, shape
+        (``drift_rate_points``,) [K/h]."""
+        return np.linspace(-self.drift_rate_k_per_h, self.drift_rate_k_per_h,
+                           self.drift_rate_points)
 
 
 @functools.lru_cache(maxsize=64)
@@ -434,7 +453,8 @@ def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np
     gives each window its own: a drift is named while its error is still small, before
     a gear-fault alarm has fired on the features it moves). Offsets within
     ``naming.temperature_beyond_k``, rates within ``naming.drift_rates`` (the families' ±0.5
-    K/h), on a coarse grid refined about its best; the z-scores by the laws commissioning
+    K/h), on a grid (``naming.drift_offset_step_k``) refined about its best
+    (``drift_fine_k``, ``drift_fine_k_per_h``); the z-scores by the laws commissioning
     learnt, unwidened beyond its range (as :func:`best_temperature`).
 
     Returns
@@ -459,9 +479,13 @@ def fit_temperature_drift(normal: NormalBehaviour, feats: np.ndarray, points: np
         return float(offsets[j]), float(rates[i])
 
     nc = naming or NamingConfig()
-    beyond = nc.temperature_beyond_k
-    a, r = best(np.arange(-beyond, beyond + 0.5, 1.0), nc.drift_rates)
-    a, r = best(a + np.arange(-0.5, 0.51, 0.125), r + np.arange(-0.05, 0.051, 0.01))
+    beyond, step = nc.temperature_beyond_k, nc.drift_offset_step_k
+    rates = nc.drift_rates
+    a, r = best(np.arange(-beyond, beyond + step / 2, step), rates)
+    half_a, half_r = step / 2, (rates[1] - rates[0]) / 2  # half a first step
+    a, r = best(a + np.arange(-half_a, half_a + nc.drift_fine_k / 2, nc.drift_fine_k),
+                r + np.arange(-half_r, half_r + nc.drift_fine_k_per_h / 2,
+                              nc.drift_fine_k_per_h))
     temp = cond.temperature_c + a + r * dt
     s, z = _sum_z2(*args, temp[:, None])
     return TemperatureFit(temp, cond.temperature_c, z[:, 0],
