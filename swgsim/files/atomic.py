@@ -52,14 +52,29 @@ TEMP_NAME = re.compile(r"^\.(?P<name>.+)\.(?P<host>[A-Za-z0-9_-]+)-(?P<pid>\d+)\
 
 
 def pid_alive(pid: int) -> bool:
-    """Whether process ``pid`` of this host runs (another user's counts as running)."""
+    """Whether process ``pid`` of this host runs (another user's counts as running).
+
+    A zombie, a process that has exited and waits for its parent to collect it, does
+    not run: a worker killed while its pool is still being shut down is one, and the
+    signal test alone (``os.kill(pid, 0)``) counts it alive. Its state is read from
+    ``/proc/<pid>/stat`` (proc(5); elsewhere the signal test alone decides)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except PermissionError:  # alive, another user's
-        return True
-    return True
+    except PermissionError:  # another user's: alive unless a zombie
+        pass
+    return not _zombie(pid)
+
+
+def _zombie(pid: int) -> bool:
+    """Whether ``pid`` is a zombie (state ``Z`` after the name in ``/proc/<pid>/stat``);
+    False where /proc cannot be read."""
+    try:
+        stat = Path(f"/proc/{int(pid)}/stat").read_text()
+    except OSError:
+        return False
+    return stat[stat.rfind(")") + 2:].startswith("Z")
 
 
 def write_atomically(path: str | os.PathLike, write: Callable[[Path], object],

@@ -168,6 +168,25 @@ def test_a_worker_killed_while_it_joined_leaves_a_stamp_copy_that_is_removed(our
     assert copy in s.stale and other.name in s.foreign
 
 
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="no /proc to read")
+def test_a_process_that_exited_and_waits_to_be_collected_does_not_run():
+    """A zombie (exited, its parent has not waited for it) is not alive: a worker killed
+    while its pool shuts down is one, and its temporary files are stale, not live."""
+    import time
+
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    try:
+        deadline = time.monotonic() + 30.0
+        stat = Path(f"/proc/{child.pid}/stat")
+        while stat.read_text().rsplit(")", 1)[1].split()[0] != "Z":
+            assert time.monotonic() < deadline, "the child did not exit within 30 s"
+            time.sleep(0.01)
+        assert not atomic.pid_alive(child.pid)  # exited, not yet collected
+    finally:
+        child.wait()
+    assert atomic.pid_alive(os.getpid())
+
+
 def test_an_edited_file_of_ours_is_no_longer_ours(ours, tmp_path):
     folder = tmp_path / "edited"
     shutil.copytree(ours, folder)
