@@ -179,11 +179,12 @@ class PrognosisStudyConfig:
         [h] (100: the issue's "at least 100 operating hours", so that warm-ups, the
         payload and the program change inside every life).
     redraws : int
-        How often a life's law is drawn again while its hours from onset to failure
-        fall outside [``min_life_h``, ``max_life_h``], in [0, 99] (:func:`life_of`;
-        20 [choice]: without redraws, on design seeds 2-11, 7 of 40 bench root cracks
-        and 10 of 40 tip cracks did not fail within 800 h, 4 root cracks failed within
-        100 h).
+        How often a life's law is drawn again at most while the life fails within
+        ``min_life_h`` of its onset, in [0, 99] (:func:`life_of`; 20 [choice]: on design
+        seeds 2-11, bench, instances 9-12, 4 of 40 root cracks failed within 100 h with
+        one draw, none with redraws). A life not failed within ``max_life_h`` is not
+        drawn again: its day holds it back (redrawn too, 6 of 40 root and 8 of 40 tip
+        cracks still did not fail, against 7 and 10).
     twins : int
         The first ``twins`` seeds' lives whose day changes the payload also run without
         that change, to score the response to it, in [0, 99] (1).
