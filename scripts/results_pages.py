@@ -45,7 +45,12 @@ from learn.paper.results import CELL_COLUMNS, our_cells, paper_cells
 from learn.paper.summary import recall
 from learn.tasks.parts import resumed_note
 from swgmon.evaluation.benchmark import BenchmarkConfig
-from swgmon.evaluation.benchmark_task import FAMILY_TARGETS, benchmark_targets
+from swgmon.evaluation.benchmark_task import (
+    FAMILY_TARGETS,
+    SECOND_TARGETS,
+    benchmark_targets,
+    second_targets,
+)
 from swgmon.evaluation.report import false_alarm_table, labelled, with_nuisance
 from swgsim.files.ownership import atomic_write_bytes
 from swgsim.gear.faults import display_name
@@ -427,6 +432,48 @@ def benchmark_targets_block(rep: Path) -> str:
     return "\n\n".join(out)
 
 
+def benchmark_second(rep: Path) -> str:
+    """The second protocol's targets A-F (docs/results/protocol.md) judged on the
+    benchmark's rows: per data set, A per family (its instances met, the worst cell with
+    its Clopper-Pearson upper bound), B-D per gear fault, then E and F."""
+    cfg = BenchmarkConfig()
+    t = second_targets(pd.read_csv(rep / "benchmark" / "results.csv"),
+                       pd.read_csv(rep / "benchmark" / "false_alarms.csv"),
+                       cfg.study.family_growth_h, cfg.level)
+    spec = {n: (q, b, most) for n, q, b, most in SECOND_TARGETS}
+
+    def verdict(v: float, ok: bool, judged: bool = True) -> str:
+        return f"{v:.3g}" + ("" if not judged else " met" if ok else " **missed**")
+    out = []
+    for d, g in t.groupby("dataset", sort=False):
+        judged = g[g.judged.astype(bool)]
+        a = g[g.target == "A"].assign(family=lambda x: x.cell.str.split(", ").str[0])
+        fam = pd.DataFrame([{
+            "family": f, "instances met": f"{int(x[x.judged].met.sum())} of {int(x.judged.sum())}",
+            "worst instance (CP upper)": "{:.2g} ({:.2g})".format(
+                *x[x.judged].sort_values("value").iloc[-1][["value", "high"]]),
+            "over its lives": f"{x[~x.judged].value.iloc[0]:.2g}"}
+            for f, x in a.groupby("family", sort=False)])
+        per = g[g.target.isin(["B", "C", "D"])]
+        faults = pd.DataFrame([{"fault": fault, "lives": int(x[x.target == "B"].n.iloc[0]),
+                                **{f"{n} {spec[n][0]} ({'<=' if spec[n][2] else '>='} "
+                                   f"{spec[n][1]:g})": verdict(r.value, r.met, r.judged)
+                                   for n in "BCD" for r in x[x.target == n].itertuples()}}
+                               for fault, x in per.groupby("cell", sort=False)])
+        e = g[g.target == "E"].iloc[0]
+        lines = [f"- E, {e.question}: {int(e.value)} of {int(e.n)}: "
+                 f"{'met' if e.met else '**missed**'}"]
+        lines += [f"- F, {r.question}: monitor {_pair(r.value)}, bound {_pair(r.bound)}: "
+                  f"{'met' if r.met else '**missed**'}"
+                  for r in g[g.target == "F"].itertuples()]
+        out.append(f"**{d}**: {int(judged.met.sum())} of {len(judged)} judged cells met.\n\n"
+                   f"A, healthy lives touched (at most 1 in 20: none of an instance's "
+                   f"5):\n\n{md_table(fam)}\n\nB-D per gear fault, over every family "
+                   f"(reduced stiffness not judged):\n\n{md_table(faults)}\n\n"
+                   + "\n".join(lines))
+    return "\n\n".join(out)
+
+
 def _pair(v) -> str:
     return " / ".join(f"{float(x):.3g}" for x in v)
 
@@ -561,6 +608,9 @@ BLOCKS = (
     Block("benchmark.targets", "benchmark.md",
           ("benchmark/results.csv", "benchmark/false_alarms.csv"),
           "swgsim-train experiment=benchmark", benchmark_targets_block),
+    Block("benchmark.second", "benchmark.md",
+          ("benchmark/results.csv", "benchmark/false_alarms.csv"),
+          "swgsim-train experiment=benchmark", benchmark_second),
     Block("benchmark.tables", "benchmark.md", ("benchmark/table.md",),
           "swgsim-train experiment=benchmark", benchmark_tables_block),
     Block("benchmark.timing", "benchmark.md", ("benchmark/timing.json",),

@@ -60,8 +60,8 @@ from swgsim.files.ownership import atomic_write_bytes, atomic_write_json, write_
 pd = lazy_module("pandas")
 joblib = lazy_module("joblib")
 
-__all__ = ["FAMILY_TARGETS", "BenchmarkExperiment", "benchmark_tables", "benchmark_targets",
-           "run_benchmark"]
+__all__ = ["FAMILY_TARGETS", "JUDGED_FAULTS", "SECOND_TARGETS", "BenchmarkExperiment",
+           "benchmark_tables", "benchmark_targets", "run_benchmark", "second_targets"]
 
 @dataclass
 class BenchmarkExperiment(EvaluationExperiment):
@@ -283,6 +283,86 @@ def benchmark_targets(rows: pd.DataFrame, fa: pd.DataFrame, level: float) -> pd.
                         "bound": (a["per_1000h"], a["detected"]),
                         "met": bool(m["per_1000h"] <= a["per_1000h"]
                                     and m["detected"] >= a["detected"])})
+    return pd.DataFrame(out)
+
+
+#: The gear faults the second protocol's targets B-D judge (docs/results/protocol.md);
+#: the others are reported beside them.
+JUDGED_FAULTS = ("eccentric_wg", "reduced_damping", "root_tooth_crack", "tip_tooth_crack")
+#: The second protocol's targets A-E: (letter, question, bound, at most).
+SECOND_TARGETS = (("A", "healthy lives touched", 0.05, True),
+                  ("B", "detected", 0.95, False),
+                  ("C", "delay at the mildest severity [h]", 1.0, True),
+                  ("D", "named right at the alarm", 0.95, False),
+                  ("E", "sensor families' healthy lives with a gear-fault alarm", 0.0, True))
+
+
+def second_targets(rows: pd.DataFrame, fa: pd.DataFrame, growth_h: float, level: float
+                   ) -> pd.DataFrame:
+    """The second protocol's targets A-F (docs/results/protocol.md, issue 84) for the
+    monitor, from a benchmark run's rows alone.
+
+    A per data set, family and held-out instance (and per family over its instances, not
+    judged); B-D per data set and gear fault over every family (judged for
+    :data:`JUDGED_FAULTS`); E per data set over the ``sensor_*`` families; F per data set
+    against each baseline, pooled over the families (:func:`_pooled`).
+
+    Parameters
+    ----------
+    rows, fa : DataFrame
+        ``results.csv`` and ``false_alarms.csv`` of a benchmark run.
+    growth_h : float
+        Hours a fault life's fault grows to its mildest severity
+        (``MonitorStudyConfig.family_growth_h``) [h]: C counts the delay from there, an
+        alarm before it as 0.
+    level : float
+        Two-sided level of A's Clopper-Pearson interval.
+
+    Returns
+    -------
+    DataFrame
+        One row per target and cell: ``dataset``, ``target``, ``cell`` (family and
+        instance, fault, or ``pooled``), ``question``, ``value``, ``high`` (A's upper
+        bound, else NaN), ``n`` (lives behind it), ``bound``, ``judged``, ``met`` (False
+        where the value is NaN).
+    """
+    spec = {t: (q, b, most) for t, q, b, most in SECOND_TARGETS}
+    out = []
+
+    def add(d, t, cell, value, n, judged=True, high=np.nan):
+        q, b, most = spec[t]
+        v = float(value)
+        out.append({"dataset": d, "target": t, "cell": cell, "question": q, "value": v,
+                    "high": float(high), "n": int(n), "bound": b, "judged": judged,
+                    "met": bool(v <= b if most else v >= b)})
+    for d in fa.dataset.unique():
+        f = fa[(fa.dataset == d) & (fa.detector == "monitor")]
+        r = rows[(rows.dataset == d) & (rows.detector == "monitor")]
+        for keys, judged in ((["family", "held_out_gear"], True), (["family"], False)):
+            for k, h in f.groupby(keys, sort=False):
+                s = alarm_share(h.gear_fault_alarms > 0, level=level)
+                cell = f"{k[0]}, {k[1]}" if judged else f"{k[0]}, all"
+                add(d, "A", cell, s.value, s.n, judged, s.high)
+        for fault, x in r.groupby("fault", sort=False):
+            hit = x[x.detected.astype(bool)]
+            judged = fault in JUDGED_FAULTS
+            late = np.clip(hit.time_to_detect_h.to_numpy(float) - growth_h, 0.0, None)
+            add(d, "B", fault, x.detected.astype(bool).mean(), len(x), judged)
+            add(d, "C", fault, late.mean() if len(hit) else np.nan, len(hit), judged)
+            add(d, "D", fault, (hit.fault_at_alarm == fault).mean() if len(hit) else np.nan,
+                len(hit), judged)
+        sensor = f[f.family.astype(str).str.startswith("sensor_")]
+        add(d, "E", "pooled", (sensor.gear_fault_alarms > 0).sum(), len(sensor))
+        pooled = _pooled(rows[rows.dataset == d], fa[fa.dataset == d], level)
+        m = pooled["monitor"]
+        for b in [x for x in pooled if x not in ("monitor", ABLATION)]:
+            out.append({"dataset": d, "target": "F", "cell": b,
+                        "question": f"against {b}: detected, CADD [h]",
+                        "value": (m["detected"], m["cadd_h"]), "high": np.nan,
+                        "n": len(r), "bound": (pooled[b]["detected"], pooled[b]["cadd_h"]),
+                        "judged": True,
+                        "met": bool(m["detected"] >= pooled[b]["detected"]
+                                    and m["cadd_h"] < pooled[b]["cadd_h"])})
     return pd.DataFrame(out)
 
 

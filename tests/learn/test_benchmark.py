@@ -240,3 +240,48 @@ def test_the_protocols_targets_are_judged_from_the_runs_rows():
     assert not bad.loc[2, "met"] and bad.loc[2, "value"] == 2  # a life with two
     assert not bad.loc[3, "met"] and bad.loc[3, "value"] == 0.5
     assert not bad.loc[4, "met"] and bad.loc[5, "met"] and bad.loc[6, "met"]
+
+
+def test_the_second_protocols_targets_are_judged_from_the_runs_rows():
+    """Targets A-F (docs/results/protocol.md, the second protocol) on rows written by hand:
+    each met where it should be and missed where one life breaks it."""
+    from swgmon.evaluation.benchmark_task import second_targets
+
+    rows, fa = [], []
+    faults = ("eccentric_wg", "root_tooth_crack", "reduced_stiffness")
+    for det in ("monitor", *bm.BASELINES):
+        mon = det == "monitor"
+        for fam in ("warm_up", "sensor_stuck"):
+            for g in (9, 10):
+                for seed in range(5):
+                    alarms = int(mon and fam == "sensor_stuck" and g == 10 and seed == 0)
+                    fa.append({"dataset": "bench", "family": fam, "detector": det,
+                               "held_out_gear": g, "seed": seed, "healthy_hours": 176.0,
+                               "gear_fault_alarms": alarms if mon else 2})
+                for i, fault in enumerate(faults):
+                    t = (41.5 if fault == "root_tooth_crack" else 12.0) if mon else 30.0
+                    hit = mon or i == 0
+                    named = "tip_tooth_crack" if fault == "reduced_stiffness" else fault
+                    rows.append({"dataset": "bench", "family": fam, "detector": det,
+                                 "held_out_gear": g, "fault": fault, "detected": hit,
+                                 "time_to_detect_h": t if hit else np.nan,
+                                 "fault_at_alarm": named if mon else np.nan})
+    t = second_targets(pd.DataFrame(rows), pd.DataFrame(fa), 40.0, 0.95)
+    a = t[t.target == "A"].set_index("cell")
+    assert a.loc["warm_up, 9", "met"] and a.loc["warm_up, 9", "n"] == 5
+    assert not a.loc["sensor_stuck, 10", "met"] and a.loc["sensor_stuck, 10", "value"] == 0.2
+    assert a.loc["sensor_stuck, 10", "high"] > 0.2  # Clopper-Pearson's upper bound
+    assert not a.loc["sensor_stuck, all", "judged"]
+    assert a.loc["sensor_stuck, all", "value"] == 0.1 and a.loc["sensor_stuck, all", "n"] == 10
+    c = t[t.target == "C"].set_index("cell")
+    assert c.loc["eccentric_wg", "value"] == 0.0 and c.loc["eccentric_wg", "met"]
+    assert c.loc["root_tooth_crack", "value"] == 1.5 and not c.loc["root_tooth_crack", "met"]
+    d = t[t.target == "D"].set_index("cell")
+    assert d.loc["eccentric_wg", "met"] and not d.loc["reduced_stiffness", "judged"]
+    assert d.loc["reduced_stiffness", "value"] == 0.0
+    b = t[t.target == "B"].set_index("cell")
+    assert b.loc["root_tooth_crack", "value"] == 1.0 and b.loc["root_tooth_crack", "n"] == 4
+    e = t[t.target == "E"].iloc[0]
+    assert e.value == 1 and e.n == 10 and not e.met
+    f = t[t.target == "F"].set_index("cell")
+    assert set(f.index) == set(bm.BASELINES) and f.met.all()  # all found, sooner on average

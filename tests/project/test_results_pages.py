@@ -182,6 +182,13 @@ def test_the_benchmark_blocks_judge_the_protocols_targets(tmp_path):
     assert "**bench**: 13 of 15 targets met" in block  # named 1 h after missed twice
     assert "6 naming (>= 0.8) |" in block and "0 **missed**" in block
     assert "target 8, against the ablation" in block
+    second = results_pages.benchmark_second(tmp_path)
+    assert "**bench**: 12 of 14 judged cells met" in second  # F: CADD equal, not below
+    assert "- F, against pca: detected, CADD [h]: monitor 1 / 3, bound 0.5 / 3: **missed**" \
+        in second
+    assert "| warm_up | 4 of 4 | 0 (0.97) | 0 |" in second
+    assert "| eccentric_wg | 8 | 1 met | 0 met | 1 met |" in second
+    assert "- E, sensor families' healthy lives with a gear-fault alarm: 0 of 0: met" in second
     tables = results_pages.benchmark_tables_block(tmp_path)
     assert tables == "**bench, every held-out instance**\n\n| a |\n|---|\n| 1 |"
     assert "| bench | 2 | 400 | 200 | 300 |" in results_pages.benchmark_timing(tmp_path)
