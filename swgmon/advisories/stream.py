@@ -24,8 +24,9 @@ import numpy as np
 from learn.inputs.health import feature_names, health_features
 from swgmon.advisories.figures import health_figure, prognosis_figure
 from swgmon.assessment.gear_monitor import RECOMMISSIONS, GearMonitor, MaintenanceEvent, Trace
+from swgmon.assessment.hypotheses import Finding, ReadingCheck, Stream
 from swgmon.assessment.model import DiagnosisModel
-from swgmon.assessment.sensor_check import NamingConfig, still_reading, virtual_temperature
+from swgmon.assessment.sensor_check import NamingConfig, virtual_temperature
 from swgmon.detection.normal import (
     Conditions,
     NormalConfig,
@@ -437,10 +438,11 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
                cond: Conditions) -> tuple[Trace, list[Alarm], GearMonitor]:
     """Monitor windows after commissioning, keep watching after every alarm, and go on
     without the temperature sensor where it fails: from the first window without a
-    reading (missing, dropped out), from the first at which the reading is found stuck
-    (:func:`~swgmon.assessment.sensor_check.still_reading`; an alarm raised while it was
-    already stuck and found so within the alarm's ``confirm_h`` is named the sensor's
-    fault), or after an alarm named
+    reading (missing, dropped out), from the first at which a check in force finds the
+    reading failed without an alarm (:func:`_checked`; built in, a stuck reading,
+    :class:`~swgmon.assessment.hypotheses.StuckReading`; an alarm raised from the failure's
+    first window and within ``confirm_h`` of its finding is named the sensor's fault), or
+    after an alarm named
     :data:`~swgmon.assessment.sensor_check.TEMPERATURE_SENSOR` (a stuck or drifting reading,
     :func:`~swgmon.assessment.sensor_check.fit_temperature`), the monitor goes on without the
     reading (:func:`reading_lost`, :func:`read_without`). After an alarm named an
@@ -470,15 +472,12 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         t = cond.temperature_c
         bad = np.array([], int) if t is None else np.flatnonzero(~np.isfinite(t[i0:]))
         stop = n if not bad.size else i0 + int(bad[0])
-        still = None if mon.reading_virtual else still_reading(
-            mon.normal, feats[i0:stop], points[i0:stop], cond[i0:stop],
-            mon.friction if fstart is None else fstart[0], hours[i0:stop], mon.naming)
-        stop = stop if still is None else i0 + still[1]
-        stuck_h = np.inf if still is None else float(hours[stop]) - mon.confirm_h
+        stop, found = _checked(mon, feats, points, hours, cond, i0, stop, fstart)
         w = slice(i0, stop)
         tr = mon.run(feats[w], points[w], hours[w], cond[w], latch=False,
                      friction_start=fstart) if stop > i0 else None
-        named, cut = _named(mon, tr, alarms, feats[w], points[w], cond[w], still, stuck_h)
+        named, cut = _named(mon, tr, alarms, feats[w], points[w], cond[w], found,
+                            float(hours[stop]) - mon.confirm_h if found is not None else np.inf)
         if cut:
             stop = i0 + named[-1].index + 1
             tr = tr.head(named[-1].index + 1)
@@ -510,18 +509,37 @@ def run_stream(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: n
         i0 = stop
 
 
+def _checked(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: np.ndarray,
+             cond: Conditions, i0: int, stop: int, fstart: tuple | None
+             ) -> tuple[int, Finding | None]:
+    """Where the checks in force (:class:`~swgmon.assessment.hypotheses.ReadingCheck`,
+    in ``naming.hypotheses``'s order) find the reading failed in windows ``i0:stop``: each
+    asked on the windows before the last one's finding, at the friction factor in force
+    (``fstart``'s, else the monitor's). Returns the window to stop at (``stop`` where none
+    holds) and the last finding (indices from ``i0``), else None."""
+    found = None
+    for c in (h for h in mon.hypotheses if isinstance(h, ReadingCheck)):
+        w = slice(i0, stop)
+        f = c.found(Stream(mon.normal, feats[w], points[w], cond[w],
+                           mon.friction if fstart is None else fstart[0], hours[w],
+                           mon.naming, not mon.reading_virtual))
+        stop, found = (stop, found) if f is None else (i0 + f.found, f)
+    return stop, found
+
+
 def _named(mon: GearMonitor, tr: Trace | None, alarms: list[Alarm], feats: np.ndarray,
-           points: np.ndarray, cond: Conditions, still: tuple | None, stuck_h: float
+           points: np.ndarray, cond: Conditions, found: Finding | None, found_h: float
            ) -> tuple[list[Alarm], bool]:
     """The alarms of the run ``tr`` (:func:`run_stream`'s, on these windows) named, up to
     the first that changes the monitor's state (:data:`CHANGES_STATE`, or a gear fault
     soon after an unexplained change, :func:`_after_change`), and whether one did; one
-    raised where the reading was found stuck (``still``, from ``stuck_h``) named the
-    temperature sensor's (:func:`_sensor_named`)."""
+    raised where a check found the reading failed (``found``, from its ``first`` window
+    and ``found_h``: its finding's hour less ``confirm_h``) named the temperature
+    sensor's (:func:`_sensor_named`)."""
     named = []
     for a in [] if tr is None else tr.alarms:
         named.append(mon.diagnose(tr, a, feats, points, cond, named[-1] if named else None))
-        if still is not None and a >= still[0] and tr.hour[a] >= stuck_h:
+        if found is not None and a >= found.first and tr.hour[a] >= found_h:
             named[-1] = _sensor_named(named[-1])
         if named[-1].fault in CHANGES_STATE or _after_change(mon, alarms, named[-1],
                                                              float(tr.hour[a]), cond):

@@ -5,7 +5,10 @@ alarm (:class:`Windows`) and returns its candidates (:class:`Candidate`): the an
 gives and the windows' z-scores with its effect taken out. The monitor weighs them all by
 one rule (:meth:`~.gear_monitor.GearMonitor.name`, :func:`log_odds`): the candidate with
 the largest posterior odds that it explains the alarm, where they exceed 1; else the gear
-fault the diagnosis model names. The hypotheses are a registry (:data:`HYPOTHESES`; one's own by
+fault the diagnosis model names. A hypothesis that holds without an alarm (a stuck
+reading) is also a check (:class:`ReadingCheck`): the stream asks it, window by
+window, where it is found (:class:`Finding`), names the temperature sensor's fault there
+and goes on without the reading. The hypotheses are a registry (:data:`HYPOTHESES`; one's own by
 :func:`register_hypothesis`, docs/ARCHITECTURE.md, "To add a hypothesis"); which are
 weighed, in which order, is ``naming.hypotheses`` (:class:`~.sensor_check.NamingConfig`).
 Design and sources: docs/monitor/assessment.md, "The hypotheses".
@@ -14,7 +17,7 @@ Design and sources: docs/monitor/assessment.md, "The hypotheses".
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -23,6 +26,7 @@ from swgmon.assessment.sensor_check import (
     fit_bridge_faults,
     fit_temperature,
     fit_temperature_drift,
+    still_reading,
 )
 from swgmon.assessment.unexplained import fit_friction
 from swgmon.detection.normal import Conditions, NormalBehaviour
@@ -164,6 +168,80 @@ class EvenFriction:
             if fit.plausible(w.naming) else []
 
 
+@dataclass(frozen=True)
+class Stream:
+    """The windows a check reads: those since the monitor last went on up to the first
+    without a reading, no alarm needed.
+
+    Attributes
+    ----------
+    normal : NormalBehaviour
+        Commissioning's normal behaviour.
+    feats, points : ndarray, shapes (n, F), (n, 2)
+        The windows' health features and operating points.
+    cond : Conditions
+        Their conditions, each with a reading where the stream has one.
+    friction : float
+        The friction factor in force [-].
+    hours : ndarray, shape (n,)
+        Operating hours, increasing [h].
+    naming : NamingConfig
+        The naming's numbers.
+    read : bool
+        Whether the joint's temperature reading is in use (not virtual).
+    """
+
+    normal: NormalBehaviour
+    feats: np.ndarray
+    points: np.ndarray
+    cond: Conditions
+    friction: float
+    hours: np.ndarray
+    naming: NamingConfig
+    read: bool
+
+
+@dataclass(frozen=True)
+class Finding:
+    """Where a check holds: the window its fault began at and the one it is found at
+    (indices into the :class:`Stream`'s windows, ``first`` <= ``found``)."""
+
+    hypothesis: str
+    first: int
+    found: int
+
+
+@runtime_checkable
+class ReadingCheck(Protocol):
+    """A hypothesis that holds without an alarm: the temperature reading has failed.
+    The stream (:func:`~swgmon.advisories.stream.run_stream`) asks every one in force, in
+    ``naming.hypotheses``'s order, each on the windows before the last one's finding; at
+    the earliest it names the temperature sensor's fault (an alarm raised from ``first``
+    and within ``confirm_h`` of ``found`` too) and goes on without the reading."""
+
+    name: str
+
+    def found(self, s: Stream) -> Finding | None:
+        """Where the check holds in ``s``, else None."""
+
+
+class StuckReading:
+    """The reading is stuck: one value, to the bit, while the temperature the bridges and
+    the efficiency say moves (:func:`~.sensor_check.still_reading`); only while the
+    reading is in use. Weighed at an alarm, a stuck reading is
+    :class:`TemperatureReading`'s candidate."""
+
+    name = "stuck_reading"
+
+    def candidates(self, w: Windows) -> list[Candidate]:
+        return []
+
+    def found(self, s: Stream) -> Finding | None:
+        still = still_reading(s.normal, s.feats, s.points, s.cond, s.friction, s.hours,
+                              s.naming) if s.read else None
+        return None if still is None else Finding(self.name, *still)
+
+
 def effective_windows(x: np.ndarray) -> float:
     """The effective number of independent windows in a series ``x`` (n,): n (1 − ρ) /
     (1 + ρ), ρ its lag-1 autocorrelation clipped to [0, 0.99], at least 1 (the variance
@@ -241,7 +319,8 @@ def log_odds(p: np.ndarray, prior_odds: float, right_median_p: float,
 #: The hypotheses by name, weighed in registration order where ``naming.hypotheses`` is
 #: None; carried to worker processes by :func:`swgsim.base.registry.travelling`.
 HYPOTHESES: Registry[Hypothesis] = Registry("hypothesis", __name__, "HYPOTHESES", [
-    (h.name, h()) for h in (BridgeFault, TemperatureReading, TemperatureDrift, EvenFriction)])
+    (h.name, h()) for h in (BridgeFault, TemperatureReading, TemperatureDrift, EvenFriction,
+                            StuckReading)])
 
 
 def register_hypothesis(h: Hypothesis) -> Hypothesis:
@@ -268,6 +347,7 @@ def registered(naming: NamingConfig) -> list[Hypothesis]:
     return [HYPOTHESES[n] for n in names]
 
 
-__all__ = ["HYPOTHESES", "BridgeFault", "Candidate", "EvenFriction", "Hypothesis",
-           "TemperatureDrift", "TemperatureReading", "Windows", "effective_windows",
-           "log_odds", "register_hypothesis", "registered"]
+__all__ = ["HYPOTHESES", "BridgeFault", "Candidate", "EvenFriction", "Finding", "Hypothesis",
+           "ReadingCheck", "Stream", "StuckReading", "TemperatureDrift",
+           "TemperatureReading", "Windows", "effective_windows", "log_odds",
+           "register_hypothesis", "registered"]

@@ -125,7 +125,8 @@ class NamingConfig:
         of k parameters counts where it lowers Σ z² by the χ²_k quantile 1 − ``fit_level``
         (:meth:`least_reduction`; Wilks' theorem, twice the log-likelihood ratio).
     hypotheses : list of str or None
-        The hypotheses an alarm is weighed against, in order: names registered in
+        The hypotheses an alarm is weighed against, and the checks the stream asks
+        (:class:`~.hypotheses.ReadingCheck`), in order: names registered in
         :data:`~.hypotheses.HYPOTHESES`; None: every registered one.
     windows_at_once : int
         Windows the temperature fits take at once, in [16, 10^5] (512 [choice]: about

@@ -132,6 +132,32 @@ def test_a_coarse_reading_without_noise_is_not_taken_for_a_stuck_one(model, heal
     assert not [e for e in res.events() if e["kind"] in ("gear_fault", "sensor_fault")]
 
 
+def test_a_check_of_ones_own_finds_the_reading_failed_without_an_alarm(model, healthy):
+    """Issue 84: a check written outside the package (tests/hypothesis_example.py,
+    ReadingJump) and registered is asked by the stream window by window, as the built-in
+    stuck reading is: the reading jumps by 8 K at 30 h (a loose contact), the temperature
+    sensor is named at that very window and the monitor goes on without the reading; a
+    monitor whose ``naming.hypotheses`` leaves the check out names it 1.8 h later, at the
+    alarm the offset raises (TemperatureReading weighed)."""
+    from hypothesis_example import ReadingJump
+
+    from swgmon.assessment.hypotheses import HYPOTHESES, register_hypothesis
+    from swgmon.assessment.sensor_check import NamingConfig
+
+    ds = _reading_from(healthy, 30.0, lambda t: t + 8.0)
+    at = float(ds["hour"].values[ds["hour"].values >= 30.0][0])
+    built_in = NamingConfig(hypotheses=list(HYPOTHESES))
+    register_hypothesis(ReadingJump())
+    try:
+        res = [monitor_stream(ds, model, RuleConfig(), source="day", naming=n)
+               for n in (NamingConfig(), built_in)]
+    finally:
+        HYPOTHESES.pop("reading_jump")
+    sensor = [[a.hour for a in r.alarms if a.fault == "temperature_sensor"] for r in res]
+    assert sensor[0][:1] == [at]
+    assert at not in sensor[1]
+
+
 @pytest.mark.parametrize("fault", [None, FaultOnset("eccentric_wg", 40.0, 0.05)])
 def test_a_joint_whose_sensor_never_reads_is_monitored_without_it(model, day, fault):
     """The temperature channel without a reading from the start (a joint without a working
