@@ -516,13 +516,22 @@ def _checked(mon: GearMonitor, feats: np.ndarray, points: np.ndarray, hours: np.
     in ``naming.hypotheses``'s order) find the reading failed in windows ``i0:stop``: each
     asked on the windows before the last one's finding, at the friction factor in force
     (``fstart``'s, else the monitor's). Returns the window to stop at (``stop`` where none
-    holds) and the last finding (indices from ``i0``), else None."""
+    holds) and the last finding (indices from ``i0``), else None.
+
+    Raises
+    ------
+    ValueError
+        A finding outside the windows it was asked on, or found before its first window.
+    """
     found = None
     for c in (h for h in mon.hypotheses if isinstance(h, ReadingCheck)):
         w = slice(i0, stop)
         f = c.found(Stream(mon.normal, feats[w], points[w], cond[w],
                            mon.friction if fstart is None else fstart[0], hours[w],
                            mon.naming, not mon.reading_virtual))
+        if f is not None and not 0 <= f.first <= f.found < stop - i0:
+            raise ValueError(f"check {c.name}: first {f.first} and found {f.found} must "
+                             f"satisfy 0 <= first <= found < {stop - i0}, the windows asked")
         stop, found = (stop, found) if f is None else (i0 + f.found, f)
     return stop, found
 

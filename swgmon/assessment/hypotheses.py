@@ -171,24 +171,8 @@ class EvenFriction:
 @dataclass(frozen=True)
 class Stream:
     """The windows a check reads: those since the monitor last went on up to the first
-    without a reading, no alarm needed.
-
-    Attributes
-    ----------
-    normal : NormalBehaviour
-        Commissioning's normal behaviour.
-    feats, points : ndarray, shapes (n, F), (n, 2)
-        The windows' health features and operating points.
-    cond : Conditions
-        Their conditions, each with a reading where the stream has one.
-    friction : float
-        The friction factor in force [-].
-    hours : ndarray, shape (n,)
-        Operating hours, increasing [h].
-    naming : NamingConfig
-        The naming's numbers.
-    read : bool
-        Whether the joint's temperature reading is in use (not virtual).
+    without a reading, no alarm needed. The attributes are :class:`Windows`'s of the same
+    name, but ``friction``, one factor in force [-], and ``cond``, never None.
     """
 
     normal: NormalBehaviour

@@ -281,3 +281,26 @@ def test_the_laws_temperature_follows_the_friction_tracked_after_the_reading_is_
     assert abs(bias()) < 0.3
     mon.naming = dataclasses.replace(mon.naming, virtual_passes=0)  # the factor at the loss
     assert bias() > 0.5
+
+
+def test_a_check_that_finds_outside_its_windows_is_refused_in_one_line(model, healthy):
+    """A check of one's own whose finding lies beyond the windows it was asked on is
+    refused by the stream, naming the check, not taken for a window."""
+    from swgmon.assessment.hypotheses import HYPOTHESES, Finding, register_hypothesis
+
+    class Beyond:
+        name = "beyond"
+
+        def candidates(self, w):
+            return []
+
+        def found(self, s):
+            return Finding(self.name, 0, len(s.hours))
+
+    register_hypothesis(Beyond())
+    try:
+        with pytest.raises(ValueError, match=r"^check beyond: first 0 and found \d+ must "
+                                             r"satisfy 0 <= first <= found < \d+"):
+            monitor_stream(healthy, model, RuleConfig(), source="day")
+    finally:
+        HYPOTHESES.pop("beyond")
