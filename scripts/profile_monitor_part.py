@@ -110,6 +110,7 @@ def _benchmark_part(args) -> tuple[cProfile.Profile, float, str]:
     """One lives part of the benchmark (module docstring) under the profiler."""
     import dataclasses
 
+    from learn.tasks.parts import DESIGN, Job
     from swgcli import dataset_preset
     from swgmon.assessment.model_io import load_model
     from swgmon.evaluation import benchmark as bm
@@ -122,7 +123,8 @@ def _benchmark_part(args) -> tuple[cProfile.Profile, float, str]:
     cfg.check()
     p = bm.population_plan(plan(dataset_preset(args.dataset)), cfg)
     report = Path(args.benchmark)
-    design = json.loads((report / "parts" / f"{args.dataset}_gear0_design.json").read_text())
+    part = Job(args.dataset, 0, DESIGN, "").file  # the design part's file, as the task names it
+    design = json.loads((report / "parts" / part).read_text())
     models = {n: load_model(_model_path(report, args.dataset, n)) for n in _monitors(cfg)}
     g = bm.instances(cfg)[1][0]
     args.gear, args.seeds = g, ",".join(map(str, seeds))
