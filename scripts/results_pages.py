@@ -496,7 +496,7 @@ def benchmark_timing(rep: Path) -> str:
                                         "max": "longest [s]"})
     for c in g.columns[2:]:
         g[c] = [f"{v:.0f}" for v in g[c]]
-    return (f"{_wall(t)} (the last sitting; the protocol's limit 6 h for the whole run); "
+    return (f"{_wall(t)} (the last sitting); "
             f"lives parts, seconds of one worker:\n\n{md_table(g)}")
 
 
