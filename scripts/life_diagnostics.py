@@ -49,7 +49,7 @@ import pandas as pd
 from learn.inputs.health import feature_names
 from learn.tracking.ledger import check_seeds
 from swgcli import dataset_preset
-from swgmon.advisories.stream import advisories, recommissionings
+from swgmon.advisories.report import advisories, recommissionings
 from swgmon.assessment.gear_monitor import GearMonitor, Trace
 from swgmon.assessment.model_io import CARD_SUFFIX, MODEL_SUFFIX, load_model
 from swgmon.detection.normal import (

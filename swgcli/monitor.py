@@ -9,7 +9,7 @@ from omegaconf import DictConfig
 
 from swgcli.app import hydra_app
 from swgcli.schema import MonitorApp
-from swgmon.advisories.stream import event_line
+from swgmon.advisories.report import event_line
 from swgmon.advisories.task import check_inputs, run_monitor_app
 from swgmon.prognosis.stream import prognosis_line
 
@@ -22,7 +22,7 @@ NEEDS = ("numpy", "scipy", "pandas", "xarray", "h5netcdf", "sklearn", "skops.io"
 @hydra_app("monitor", MonitorApp, "swgsim-monitor", NEEDS, inputs=check_inputs)
 def main(cfg: DictConfig) -> dict:
     """Run the monitor and print the threshold it used, its events (one line each, by
-    kind: :func:`swgmon.advisories.stream.event_line`) and where the outputs went."""
+    kind: :func:`swgmon.advisories.report.event_line`) and where the outputs went."""
     out = run_monitor_app(cfg)
     print(f"alarm threshold h = {out['threshold']:.2f}")
     if not out["alarms"]:

@@ -1,3 +1,3 @@
 """Advisory generation (ISO 13374): a stream of windows through the monitor, with its
-maintenance log, recommissioning and advisories (:mod:`.stream`), and its figures
-(:mod:`.figures`)."""
+maintenance log and recommissioning (:mod:`.stream`), what it tells of it: events,
+advisories, outputs (:mod:`.report`), and its figures (:mod:`.figures`)."""

@@ -1,6 +1,6 @@
 """The monitor's figures of a stream: ``health.png`` (:func:`health_figure`) and
 ``prognosis.png`` (:func:`prognosis_figure`), each written atomically
-(:func:`swgsim.files.ownership.write_owned`) by :func:`.stream.write_outputs`.
+(:func:`swgsim.files.ownership.write_owned`) by :func:`.report.write_outputs`.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def health_figure(trace: Trace, threshold: float, events: list[dict], onset_h: f
     threshold : float
         h, the rule's alarm threshold.
     events : list of dict
-        :meth:`.stream.StreamResult.events`: ``kind`` and ``hour`` [h] each.
+        :meth:`.report.StreamResult.events`: ``kind`` and ``hour`` [h] each.
     onset_h : float or None
         The true onset [h] (a simulated stream), else None.
     true_fault : str or None

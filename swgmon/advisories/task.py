@@ -18,7 +18,8 @@ from pathlib import Path
 from learn.tasks.config import typed_app
 from learn.tracking import log_run
 from learn.tracking.store import check_tracking
-from swgmon.advisories.stream import monitor_stream, select_gear, write_outputs
+from swgmon.advisories.report import write_outputs
+from swgmon.advisories.stream import monitor_stream, select_gear
 from swgmon.assessment.hypotheses import registered
 from swgmon.assessment.model_io import load_model
 from swgmon.prognosis.stream import trained_duty

@@ -15,9 +15,9 @@ import time
 
 import numpy as np
 
+from swgmon.advisories.report import advisories
 from swgmon.advisories.stream import (
     adopt_change,
-    advisories,
     read_without,
     reading_lost,
     run_stream,

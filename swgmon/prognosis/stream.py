@@ -314,7 +314,7 @@ def stream_prognoses(tr: Trace, alarms: list[Alarm], mon: GearMonitor, feats: np
     tr : Trace
         The monitored windows, n of them.
     alarms : list of Alarm
-        The named alarms (:attr:`swgmon.advisories.stream.StreamResult.alarms`).
+        The named alarms (:attr:`swgmon.advisories.report.StreamResult.alarms`).
     mon : GearMonitor
         The monitor that ran them (its normal behaviour gives the estimates' inputs).
     feats, points : ndarray, shape (n, F) and (n, 2)

@@ -647,7 +647,7 @@ def test_every_event_kind_is_printed_in_one_line():
     recommissionings) is one line by :func:`event_line`, which the app
     and report.md print; a kind it does not know is refused naming the kinds (issue 43,
     cause 1: a recommissioning printed as an alarm raised KeyError: 'fault')."""
-    from swgmon.advisories.stream import EVENT_KINDS, StreamResult, event_line
+    from swgmon.advisories.report import EVENT_KINDS, StreamResult, event_line
     from swgmon.detection.rule import Alarm
 
     gear = Alarm(6.2, 10, 4, "eccentric_wg", "eccentric_wg", 0.1, 0.08, 0.12)
@@ -690,7 +690,7 @@ def test_a_sensor_fault_named_without_a_bridge_is_a_sensor_fault_not_a_gear_faul
     """A sensor-fault class that no one bridge explains (``bridge`` None) is counted and
     printed as a sensor fault: before, only a named bridge or the temperature sensor made
     an alarm a sensor fault's, so this one was counted as a gear-fault alarm."""
-    from swgmon.advisories.stream import event_line
+    from swgmon.advisories.report import event_line
     from swgmon.detection.rule import Alarm
 
     al = Alarm(7.0, 20, 18, "sensor_offset_step", "sensor_offset_step", 0.05, 0.04, 0.06)
@@ -705,7 +705,7 @@ def test_a_severity_interval_is_never_of_zero_width_where_the_windows_differ():
     """Training gears that agree to the digit (a sensor fault is the same on every gear:
     calibration errors 0, 0) left the interval [x, x]; the median's own spread over the
     alarm's windows keeps it open, and the line prints its bounds apart (issue 87)."""
-    from swgmon.advisories.stream import event_line
+    from swgmon.advisories.report import event_line
     from swgmon.assessment.model import DiagnosisModel
     from swgmon.detection.rule import Alarm
 
@@ -765,7 +765,7 @@ def test_a_fit_counts_at_the_chi2_quantile_of_its_parameters_and_level():
 def test_an_alarm_says_which_features_moved():
     """rule.moved_features: the largest mean z-scores, at least 1 sigma, the first
     always; event_line prints them after the alarm."""
-    from swgmon.advisories.stream import event_line
+    from swgmon.advisories.report import event_line
     from swgmon.detection.rule import Alarm, moved_features
 
     z = np.zeros((4, 5))
@@ -947,7 +947,7 @@ def test_the_prognosis_is_written_and_off_leaves_every_output_as_it_was(growing_
     events, a report line per valid one, the figure."""
     import json
 
-    from swgmon.advisories.stream import write_outputs
+    from swgmon.advisories.report import write_outputs
 
     files = {k: write_outputs(growing_life[k], tmp_path / k, "life")
              for k in ("none", "off", "on")}
@@ -967,7 +967,8 @@ def test_no_prognosis_before_an_alarm(growing_life, tiny_eval, tmp_path):
     prognosis.png and no line of it in report.md."""
     from threadpoolctl import threadpool_limits
 
-    from swgmon.advisories.stream import monitor_stream, write_outputs
+    from swgmon.advisories.report import write_outputs
+    from swgmon.advisories.stream import monitor_stream
 
     ds = growing_life["ds"]
     healthy = ds.isel(sample=np.flatnonzero(ds["hour"].values < GROWING["onset_h"]))
@@ -1131,7 +1132,7 @@ def test_the_health_figure_marks_every_crossing_and_every_event(tmp_path, monkey
     from types import SimpleNamespace
 
     import swgmon.advisories.figures as figures
-    from swgmon.advisories.stream import EVENT_KINDS
+    from swgmon.advisories.report import EVENT_KINDS
 
     assert figures.crossings(np.array([0, 5, 12, 3, 0, 13, 14, 2.0]), 11.7).tolist() == [2, 5]
     assert figures.crossings(np.array([12.0, 1.0, 11.7]), 11.7).tolist() == [0, 2]

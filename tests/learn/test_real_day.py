@@ -14,10 +14,10 @@ import pytest
 from real_day import commissioned, growing, repaired
 
 from swgcli import dataset_preset
+from swgmon.advisories.report import event_line
 from swgmon.advisories.stream import (
     _after_change,
     adopt_change,
-    event_line,
     monitor_stream,
 )
 from swgmon.assessment.gear_monitor import MaintenanceEvent
@@ -141,7 +141,7 @@ def test_the_threshold_reported_is_the_one_the_rule_used(model, healthy, tmp_pat
     rule's, not of the first two windows' (issue 43, cause 5)."""
     import json
 
-    from swgmon.advisories.stream import write_outputs
+    from swgmon.advisories.report import write_outputs
     from swgmon.detection.rule import threshold
 
     ds = healthy.isel(sample=np.r_[0, 2:healthy.sizes["sample"]])

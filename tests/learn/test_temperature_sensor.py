@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from real_day import commissioned
 
-from swgmon.advisories.stream import event_line, monitor_stream, read_without
+from swgmon.advisories.report import event_line
+from swgmon.advisories.stream import monitor_stream, read_without
 from swgmon.assessment.gear_monitor import GearMonitor, normal_windows
 from swgmon.assessment.sensor_check import virtual_temperature
 from swgmon.detection.normal import Conditions

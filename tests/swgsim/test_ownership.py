@@ -451,10 +451,10 @@ def test_the_monitors_figure_is_written_through_write_owned(tmp_path, monkeypatc
         Path(fname).write_bytes(b"\x89PNG half")
         raise OSError(28, "No space left on device")
     monkeypatch.setattr(matplotlib.figure.Figure, "savefig", half)
-    from swgmon.advisories import stream
+    from swgmon.advisories import report
 
     with pytest.raises(atomic.DiskFullError):
-        stream.write_outputs(_TinyResult(), tmp_path, "s")
+        report.write_outputs(_TinyResult(), tmp_path, "s")
     assert not (tmp_path / "health.png").exists()
     assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
 
