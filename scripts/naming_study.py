@@ -16,7 +16,7 @@ Sensor faults are judged on each of the five bridges at five severities from the
 the severe one (a growing sensor fault is named while between them); ``--sensor-levels``
 sets how many severities the training lives have.
 
-Rules: ``monitor`` (the monitor's, :meth:`swgmon.assessment.gear_monitor.GearMonitor.name`: a
+Rules: ``monitor`` (the monitor's, :func:`swgmon.assessment.naming.name`: a
 sensor fault where one bridge's fitted offset step or gain drift explains the windows,
 else ``sum``), ``sum`` (summed evidence relative to the gear's calibration windows),
 ``vote`` (the most frequent per-window argmax among the faults), ``clip`` (summed
@@ -74,6 +74,8 @@ def _healthy_rest(mon, healthy, n_comm: int) -> None:
 
 
 def _name_rules(mon, lp, opi, z_mean, agg_clf, classes, f, q):
+    from swgmon.assessment.naming import name
+
     ev = mon.evidence(lp, opi)[:, 1:]
     out = {"sum": 1 + int(np.argmax(ev.sum(axis=0))),
            "clip": 1 + int(np.argmax(np.clip(ev, -2, 2).sum(axis=0)))}
@@ -82,7 +84,7 @@ def _name_rules(mon, lp, opi, z_mean, agg_clf, classes, f, q):
     out["mean_z"] = 1 + int(np.argmax(agg_clf.predict_proba(z_mean[None])[0][1:]))
     # the monitor may name what is no class (an unexplained change): named wrong
     return {k: classes[v] for k, v in out.items()} | {
-        "monitor": mon.name(mon.evidence(lp, opi), f, q)[0]}
+        "monitor": name(mon, mon.evidence(lp, opi), f, q)[0]}
 
 
 def _train(p, gear: int, cfg, cls: list[str], n_comm: int):

@@ -30,6 +30,7 @@ from swgmon.advisories.report import (
 from swgmon.assessment.gear_monitor import RECOMMISSIONS, GearMonitor, MaintenanceEvent, Trace
 from swgmon.assessment.hypotheses import Finding, ReadingCheck, Stream
 from swgmon.assessment.model import DiagnosisModel
+from swgmon.assessment.naming import diagnose, name
 from swgmon.assessment.sensor_check import NamingConfig, virtual_temperature
 from swgmon.detection.normal import (
     Conditions,
@@ -433,7 +434,7 @@ def _named(mon: GearMonitor, tr: Trace | None, alarms: list[Alarm], feats: np.nd
     sensor's (:func:`_sensor_named`)."""
     named = []
     for a in [] if tr is None else tr.alarms:
-        named.append(mon.diagnose(tr, a, feats, points, cond, named[-1] if named else None))
+        named.append(diagnose(mon, tr, a, feats, points, cond, named[-1] if named else None))
         if found is not None and a >= found.first and tr.hour[a] >= found_h:
             named[-1] = _sensor_named(named[-1])
         if named[-1].fault in CHANGES_STATE or _after_change(mon, alarms, named[-1],
@@ -447,7 +448,7 @@ def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.nda
     """Where the unexplained change or gear fault of ``alarms[-1]`` comes within
     ``naming.recur_h`` after an unexplained change while the reading is in use
     (:func:`_after_change`): the windows since the earlier change's rise
-    named again (:meth:`GearMonitor.name`) with the friction as it was before it, the
+    named again (:func:`~swgmon.assessment.naming.name`) with the friction as it was before it, the
     changes taken since undone. Where the reading's drift
     (:func:`~swgmon.assessment.sensor_check.fit_temperature_drift`) names them, the factor
     the friction was taken to have changed by since (to divide out), else None: under a
@@ -465,8 +466,8 @@ def _drifting(mon: GearMonitor, trace: Trace, alarms: list[Alarm], feats: np.nda
         taken[a.index + 1:] *= 1.0 + a.severity
     ev = mon.evidence(trace.log_proba[w], trace.op_index[w])
     ev[(trace.outside[w] & Outside.UNJUDGED) != 0] = 0.0
-    fault, _ = mon.name(ev, feats[w], points[w], cond[w], trace.friction[w] / taken[w],
-                        hours[w])
+    fault, _ = name(mon, ev, feats[w], points[w], cond[w], trace.friction[w] / taken[w],
+                    hours[w])
     return float(taken[-1]) if fault == TEMPERATURE_SENSOR else None
 
 

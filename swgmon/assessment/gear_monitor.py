@@ -1,15 +1,12 @@
-"""One gear's monitor: commissioning, scoring, the sequential alarm, naming and severity.
+"""One gear's monitor: commissioning, scoring and the sequential alarm.
 
 :class:`GearMonitor` takes a trained :class:`~.model.DiagnosisModel` and a
 gear's windows in time order. :meth:`GearMonitor.commission` builds the normal behaviour from
 the commissioning windows, alternately per operating point: even ones fit the normal behaviour,
 odd ones calibrate the rule (:mod:`swgmon.detection.rule`). :meth:`GearMonitor.run` scores every
-later window, updates the CUSUM and raises an alarm when it crosses h; the fault is then named
-from the windows since the CUSUM's last rise from zero up to the alarm
-(``fault_at_alarm``) and up to one hour after it (``fault``, with the severity and its
-interval): a sensor fault, with its bridge, where one bridge's offset step or gain drift
-explains them (:mod:`.sensor_check`), else by the diagnosis model's evidence relative to
-the gear's own healthy calibration windows (:meth:`GearMonitor.evidence`). The alarm
+later window by the diagnosis model's evidence relative to the gear's own healthy
+calibration windows (:meth:`GearMonitor.evidence`) and the novelty, updates the CUSUM and
+raises an alarm when it crosses h; :func:`.naming.diagnose` names it. The alarm
 latches: one alarm per stream until the gear is commissioned again; an evaluation of false
 alarms restarts the CUSUM after each (``latch=False``). Where an operating point's acting
 load stays beyond what commissioning saw there (a heavier tool), the monitor gathers the
@@ -24,13 +21,11 @@ kept in the monitor, at a fraction of the block path's overhead for a single win
 from __future__ import annotations
 
 import copy
-import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from learn.inputs.health import feature_names
-from swgmon.assessment.hypotheses import Candidate, Windows, log_odds, registered
+from swgmon.assessment.hypotheses import registered
 from swgmon.assessment.model import DiagnosisModel, design_matrix
 from swgmon.assessment.sensor_check import NamingConfig, virtual_temperature
 from swgmon.detection.normal import (
@@ -40,15 +35,11 @@ from swgmon.detection.normal import (
     Outside,
 )
 from swgmon.detection.rule import (
-    TEMPERATURE_SENSOR,
-    UNEXPLAINED_CHANGE,
-    Alarm,
     RuleConfig,
     check_commissioning,
     conformal_p,
     judged_bets,
     log_bets,
-    moved_features,
     normal_scores,
     run_cusums,
     threshold,
@@ -390,12 +381,13 @@ class GearMonitor:
     def _scores(self, feats, points, cond, friction, index):
         """:meth:`scores` and the windows' features at the reference condition."""
         z, spread = self.normal.z_and_spread(feats, points, cond, friction, index)
-        score, lp = self._scores_of(z, points)
+        score, lp = self.scores_of(z, points)
         i = self.normal.index(points) if index is None else index
         return score, lp, z * spread + self.normal.mean[i]
 
-    def _scores_of(self, z: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`scores` of windows' z-scores (n, F) at their points (n, 2)."""
+    def scores_of(self, z: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`scores` (n, 2) and log-probabilities (n, n_classes) of windows' z-scores
+        (n, F) at their points (n, 2)."""
         lp = self.model.log_proba(design_matrix(z, points))
         return np.stack([self.model.score(lp), np.sum(z ** 2, axis=1)], axis=1), lp
 
@@ -582,7 +574,7 @@ class GearMonitor:
         point was relearnt."""
         nb = self.normal
         z = nb.without_warm_ups((ref - nb.mean[k]) / nb.std[k], np.full(len(ref), k))
-        score, _ = self._scores_of(z, np.broadcast_to(nb.points[k], (len(ref), 2)))
+        score, _ = self.scores_of(z, np.broadcast_to(nb.points[k], (len(ref), 2)))
         p = self.p_each(score, np.full(len(ref), k), np.full(score.shape, 0.5))
         stat = np.sqrt(len(p)) * np.mean(normal_scores(p), axis=0)
         if (stat <= normal_scores(self.naming.law_level / score.shape[1])).all():
@@ -654,91 +646,6 @@ class GearMonitor:
                      np.full((len(score), k), np.nan), [], lp, opi, fr,
                      self.normal.outside(points, cond, fr, opi))
 
-    def diagnose(self, trace: Trace, a: int, feats: np.ndarray, points: np.ndarray,
-                 cond: Conditions | None = None, before: Alarm | None = None) -> Alarm:
-        """Name the fault of the alarm at window ``a`` of ``trace`` and its severity.
-
-        ``trace``, ``feats``, ``points`` and ``cond`` cover the same windows: those of the
-        run, the ones after the alarm included as far as the stream goes (up to
-        ``confirm_h``). ``before``: the alarm named before it in the same run (indices
-        into the same windows), or None. Where that named a gear fault and this alarm's
-        rise began at or before it, the two are one episode: the CUSUM has not gone back
-        to zero since, so the windows named then are among those named now. The alarm is
-        then that one again at its own hour (name, severity, what moved): the stream
-        keeps an episode's first alarm only (:func:`swgmon.advisories.stream.run_stream`),
-        and the severity's course is the prognosis's track. A growing crack alarms again
-        some 10 times an hour; naming each cost 1.2 s, a 356-h life 397 s (issue 85).
-        """
-        j = int(np.argmax(trace.cusums[a]))  # the CUSUM that raised it
-        zero = np.flatnonzero(trace.cusums[:a, j] <= 0)
-        rise = int(zero[-1]) + 1 if zero.size else 0
-        if before is not None and before.kind == "gear_fault" and rise <= before.index:
-            return dataclasses.replace(before, hour=float(trace.hour[a]), index=int(a))
-        end = int(np.searchsorted(trace.hour, trace.hour[a] + self.confirm_h, side="right"))
-        cond = cond if cond is not None else Conditions(np.asarray(points[:, 1], float))
-        fr = trace.friction
-        ev = self.evidence(trace.log_proba, trace.op_index)
-        ev[(trace.outside & Outside.UNJUDGED) != 0] = 0.0  # not judged: no evidence
-        at_alarm = self._name(ev[rise:a + 1], feats[rise:a + 1], points[rise:a + 1],
-                              cond[rise:a + 1], fr[rise:a + 1], trace.hour[rise:a + 1])[0]
-        fault, bridge, fit, weighed = self._name(ev[rise:end], feats[rise:end],
-                                                 points[rise:end], cond[rise:end],
-                                                 fr[rise:end], trace.hour[rise:end])
-        if fault == TEMPERATURE_SENSOR:  # its severity: the reading's error [K]
-            err = fit.temperature_c - fit.reading_c
-            est, lo, hi = fit.offset_k, *map(float, np.quantile(err, [0.05, 0.95]))
-        elif fault == UNEXPLAINED_CHANGE:  # the friction's relative change [-]
-            est, lo, hi = fit.factor - 1.0, fit.low - 1.0, fit.high - 1.0
-        elif fault not in self.model.classes:  # a hypothesis of one's own: no regressor
-            est = lo = hi = float("nan")
-        else:
-            x = self.inputs(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end])
-            est, lo, hi = self.model.estimate(fault, x)
-        z = self.normal.z(feats[rise:end], points[rise:end], cond[rise:end], fr[rise:end],
-                          trace.op_index[rise:end])
-        names = feature_names(twist=z.shape[1] > len(feature_names()))
-        return Alarm(float(trace.hour[a]), int(a), rise, at_alarm, fault, est, lo, hi,
-                     None if bridge is None else f"s{bridge}", moved_features(z, names),
-                     weighed)
-
-    def name(self, ev: np.ndarray, feats: np.ndarray, points: np.ndarray,
-             cond: Conditions | None = None, friction: np.ndarray | float = 1.0,
-             hours: np.ndarray | None = None) -> tuple[str, int | None]:
-        """Name the fault of windows since an alarm by the hypotheses of
-        ``naming.hypotheses`` (:mod:`.hypotheses`: a bridge's offset step or gain drift, a
-        wrong or drifting temperature reading, an even change of the friction, one's own):
-        the candidate with the largest posterior odds that its corrected windows look
-        healthy (:func:`~.hypotheses.log_odds` of their conformal p-values, priors
-        :attr:`~.sensor_check.NamingConfig.prior_odds`,
-        ``right_median_p`` and ``wrong_median_p``), where they are above 1, with its
-        bridge (None but for a bridge's fault); else the fault with the largest summed
-        evidence (:meth:`evidence` rows ``ev``) and None. ``hours``: the windows' hours,
-        for the rates."""
-        return self._name(ev, feats, points, cond, friction, hours)[:2]
-
-    def _name(self, ev, feats, points, cond, friction, hours=None):
-        """:meth:`name`, the fit of the candidate that named it (None where the gear
-        fault did) and the candidates weighed, ``[hypothesis, fault, bridge, log
-        posterior odds]`` each (docs/monitor/assessment.md, "The hypotheses")."""
-        b = self.normal
-        opi = b.index(points)
-        z, spread = b.z_and_spread(feats, points, cond, friction, opi)
-        u = np.full((len(z), 2), 0.5)  # mid-p: the naming draws nothing from the monitor
-
-        def odds(c: Candidate) -> float:
-            p = self.p_values(self._scores_of(c.z, points)[0], opi, u)
-            return log_odds(p, self.naming.prior_odds, self.naming.right_median_p,
-                            self.naming.wrong_median_p)
-
-        w = Windows(b, feats, points, cond, np.broadcast_to(friction, (len(z),)), opi, z,
-                    spread, hours, self.naming, tuple(self.model.classes),
-                    cond is not None and not self.reading_virtual)
-        cands = [(odds(c), c) for h in self.hypotheses for c in h.candidates(w)]
-        weighed = [[c.hypothesis, c.fault, c.bridge, round(o, 3)] for o, c in cands]
-        best = max(cands, key=lambda oc: oc[0], default=None)
-        if best is not None and best[0] > 0.0:
-            return best[1].fault, best[1].bridge, best[1].fit, weighed
-        return self.model.name(ev), None, None, weighed
 
 __all__ = ["MAINTENANCE_KINDS", "RECOMMISSIONS", "GearMonitor", "MaintenanceEvent", "Trace",
            "normal_windows"]

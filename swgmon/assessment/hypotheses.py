@@ -3,7 +3,7 @@
 An alarm is a question with several answers. Each hypothesis fits the windows since the
 alarm (:class:`Windows`) and returns its candidates (:class:`Candidate`): the answer it
 gives and the windows' z-scores with its effect taken out. The monitor weighs them all by
-one rule (:meth:`~.gear_monitor.GearMonitor.name`, :func:`log_odds`): the candidate with
+one rule (:func:`~.naming.name`, :func:`log_odds`): the candidate with
 the largest posterior odds that it explains the alarm, where they exceed 1; else the gear
 fault the diagnosis model names. A hypothesis that holds without an alarm (a stuck
 reading) is also a check (:class:`ReadingCheck`): the stream asks it, window by
@@ -94,7 +94,7 @@ class Candidate:
     z : ndarray, shape (n, F)
         The windows' z-scores with the hypothesis's effect taken out.
     fit : object or None
-        The fit behind it (its severity: :meth:`~.gear_monitor.GearMonitor.diagnose`).
+        The fit behind it (its severity: :func:`~.naming.diagnose`).
     """
 
     hypothesis: str

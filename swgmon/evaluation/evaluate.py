@@ -24,6 +24,7 @@ from swgmon.advisories.stream import (
 )
 from swgmon.assessment.gear_monitor import GearMonitor, MaintenanceEvent, Trace
 from swgmon.assessment.model import DiagnosisModel
+from swgmon.assessment.naming import diagnose
 from swgmon.detection.normal import Conditions, Outside
 from swgmon.detection.rule import (
     TEMPERATURE_SENSOR,
@@ -473,7 +474,7 @@ def _past_changes(sim: LifeSimulator, k0: int, life: tuple, chunk: int):
     k, tr, mon, lost = k0, life[0], life[5], life[6]
     while tr.alarms:
         a = tr.alarms[0]
-        al = mon.diagnose(tr, a, *life[1:3], life[4])
+        al = diagnose(mon, tr, a, *life[1:3], life[4])
         if not _benign(al, sim.life.conditions) or a + 1 >= len(tr.hour) \
                 or (al.fault == TEMPERATURE_SENSOR and lost):
             break
@@ -494,7 +495,7 @@ def _monitor_row(mon, tr, ff, pp, mm, cond, fo) -> dict:
                 "fault_at_alarm": "", "fault_after_1h": "", "severity_est": np.nan,
                 "severity_at_alarm": np.nan, "severity_low": np.nan, "severity_high": np.nan}
     a = tr.alarms[0]
-    al = mon.diagnose(tr, a, ff, pp, cond)
+    al = diagnose(mon, tr, a, ff, pp, cond)
     return {"detector": "monitor", "detected": True, "time_to_detect_h": al.hour - fo.onset_h,
             "fault_at_alarm": al.fault_at_alarm, "fault_after_1h": al.fault,
             "severity_est": al.severity, "severity_at_alarm": float(mm["severity"][a]),

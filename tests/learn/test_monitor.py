@@ -431,6 +431,7 @@ def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval, tiny_bank
     """An offset step on s1 alone (whose eccentric WG moves s1 and s3 oppositely) is named
     a sensor fault on s1; an eccentric WG is not explained by one bridge."""
     from swgmon.assessment.gear_monitor import GearMonitor
+    from swgmon.assessment.naming import name
     from swgmon.evaluation.training import features_of
     from swgsim.datasets.life import LifeSimulator
     from swgsim.datasets.schedule import FaultOnset
@@ -443,8 +444,8 @@ def test_offset_on_a_wg_bending_bridge_named_a_sensor_fault(tiny_eval, tiny_bank
         f, pts, _ = features_of(sim, 0, len(sim))
         mon.commission(f[:240], pts[:240])
         _, lp = mon.scores(f[240:], pts[240:])
-        named[fo.fault] = mon.name(mon.evidence(lp, mon.normal.index(pts[240:])),
-                                   f[240:], pts[240:])
+        named[fo.fault] = name(mon, mon.evidence(lp, mon.normal.index(pts[240:])),
+                               f[240:], pts[240:])
     assert named == {"sensor_offset_step": ("sensor_offset_step", 1),
                      "eccentric_wg": ("eccentric_wg", None)}
 
@@ -864,26 +865,27 @@ def test_an_alarm_in_a_named_gear_faults_episode_keeps_its_name(growing_life, ti
                                                                 monkeypatch):
     """A growing fault alarms again and again; an alarm whose CUSUM rose at or before the
     previous one named a gear fault is that alarm again at its own hour, without the
-    hypotheses weighed again (GearMonitor._name: twice per episode, not per alarm); the
+    hypotheses weighed again (naming._weighed: twice per episode, not per alarm); the
     stream keeps the episode's first."""
     from threadpoolctl import threadpool_limits
 
-    import swgmon.assessment.gear_monitor as gm
+    import swgmon.advisories.stream as stream
+    import swgmon.assessment.naming as naming
     from swgmon.advisories.stream import monitor_stream
 
     weighed, named = [], []
-    name, diagnose = gm.GearMonitor._name, gm.GearMonitor.diagnose
+    weigh, diagnose = naming._weighed, naming.diagnose
 
-    def counted(self, *a, **k):
+    def counted(*a, **k):
         weighed.append(1)
-        return name(self, *a, **k)
+        return weigh(*a, **k)
 
-    def kept(self, *a, **k):
-        named.append(diagnose(self, *a, **k))
+    def kept(*a, **k):
+        named.append(diagnose(*a, **k))
         return named[-1]
 
-    monkeypatch.setattr(gm.GearMonitor, "_name", counted)
-    monkeypatch.setattr(gm.GearMonitor, "diagnose", kept)
+    monkeypatch.setattr(naming, "_weighed", counted)
+    monkeypatch.setattr(stream, "diagnose", kept)
     with threadpool_limits(1):
         res = monitor_stream(growing_life["ds"], tiny_eval["model"], RuleConfig())
     episodes = 1 + sum(b.rise_index > a.index for a, b in zip(named[:-1], named[1:], strict=True))
@@ -1239,6 +1241,7 @@ def test_a_hypothesis_of_ones_own_is_one_file_and_a_registration(tiny_eval, tiny
 
     from swgmon.assessment.gear_monitor import GearMonitor
     from swgmon.assessment.hypotheses import HYPOTHESES, register_hypothesis, registered
+    from swgmon.assessment.naming import _weighed, name
     from swgmon.detection.laws import BLOCK
     from swgmon.detection.normal import Conditions
     from swgmon.detection.rule import RuleConfig
@@ -1263,9 +1266,9 @@ def test_a_hypothesis_of_ones_own_is_one_file_and_a_registration(tiny_eval, tiny
             m.commission(f[:240], pts[:240], cond[:240])
         tr = mons[0].run(f[w], pts[w], hours, cond[w], latch=False)
         ev = mons[0].evidence(tr.log_proba, tr.op_index)
-        named = joblib.Parallel(n_jobs=2)(joblib.delayed(travelling(m.name))(
-            ev, f[w], pts[w], cond[w], 1.0, hours) for m in mons)
-        weighed = mons[1]._name(ev, f[w], pts[w], cond[w], 1.0, hours)[3]
+        named = joblib.Parallel(n_jobs=2)(joblib.delayed(travelling(name))(
+            m, ev, f[w], pts[w], cond[w], 1.0, hours) for m in mons)
+        weighed = _weighed(mons[1], ev, f[w], pts[w], cond[w], 1.0, hours)[3]
     finally:
         HYPOTHESES.pop("supply_step")
     assert named[1] == ("supply_step", None) and named[0][0] != "supply_step"

@@ -15,6 +15,7 @@ from real_day import commissioned
 from swgmon.advisories.report import event_line
 from swgmon.advisories.stream import monitor_stream, read_without
 from swgmon.assessment.gear_monitor import GearMonitor, normal_windows
+from swgmon.assessment.naming import diagnose
 from swgmon.assessment.sensor_check import virtual_temperature
 from swgmon.detection.normal import Conditions
 from swgmon.detection.rule import RuleConfig
@@ -215,7 +216,7 @@ def test_the_evaluation_goes_on_without_a_reading_lost_after_the_onset(model, da
     assert run[6] and np.isfinite(run[4].temperature_c).all()  # lost; the laws' readings
     mon, tr, *_ = _past_changes(sim, k0, run, chunk)
     assert tr.alarms and 40.1 <= tr.hour[tr.alarms[0]] <= 41.0
-    assert mon.diagnose(tr, tr.alarms[0], *_[:2], _[3]).fault == "eccentric_wg"
+    assert diagnose(mon, tr, tr.alarms[0], *_[:2], _[3]).fault == "eccentric_wg"
 
 
 def test_a_monitor_that_reads_the_laws_temperature_is_calibrated_as_it_scores(model, day):
