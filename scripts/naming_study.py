@@ -192,8 +192,9 @@ def main() -> None:
                 fit, o_fit, p_fit = _best_sensor_fit(mon, z, q, opi)
                 print(f"  {c} {s:.4g}{f' on s{i}' if sensor else ''}: best plausible "
                       "one-bridge fit " + ("none" if fit is None else
-                                           f"log odds {o_fit:.2f}, median p {p_fit:.3f} ({fit.fault} s{fit.bridge} "
-                                           f"{fit.severity:.4g}) rest {fit.rest:.2f}"),
+                                           f"log odds {o_fit:.2f}, median p {p_fit:.3f} "
+                                           f"({fit.fault} s{fit.bridge} {fit.severity:.4g}) "
+                                           f"rest {fit.rest:.2f}"),
                       flush=True)
                 rules = _name_rules(mon, lp, opi, z.mean(axis=0), agg, cls, f, q)
                 for rule, name in rules.items():
