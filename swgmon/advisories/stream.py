@@ -12,6 +12,7 @@ and goes on without the temperature sensor where it fails or from a change it na
 (:func:`run_stream`); what it made of the stream, :class:`~.report.StreamResult`, is
 reported by :mod:`.report`.
 """
+
 from __future__ import annotations
 
 import dataclasses
