@@ -29,7 +29,8 @@ from .split import HeldOutSplit
 log = logging.getLogger(__name__)
 
 __all__ = ["Problem", "SelectionConfig", "CandidateScore", "Iteration", "CalibrationResult",
-           "select_effects", "refit_final", "gain_floor", "paired_gain", "IMPLAUSIBLE_PREFIX"]
+           "select_effects", "refit_final", "gain_floor", "paired_gain", "check_candidates",
+           "IMPLAUSIBLE_PREFIX"]
 
 #: Status of a candidate rejected for a parameter outside its physical range, before them.
 IMPLAUSIBLE_PREFIX = "rejected: outside its physical range: "
@@ -290,6 +291,34 @@ class CalibrationResult:
         """Predictions of the base model and the final model on all samples."""
         sig = self.problem.signals
         return self.base_model_final.predict(sig), self.final.predict(sig)
+
+
+def check_candidates(candidates: Sequence[str] | None, library: Mapping[str, Any], kind: str,
+                     library_name: str = "library") -> list[str]:
+    """The library keys to try, every one checked against the kind's library.
+
+    Parameters
+    ----------
+    candidates : sequence of str or None
+        ``selection.candidates``; None: every key of ``library``, in its order.
+    library : mapping of str to type
+        The kind's effects by key (:attr:`Problem.library`).
+    kind : str
+        The data kind whose effects the error names (``"friction"``, ...).
+    library_name : str, default "library"
+        What the error calls ``library``.
+
+    Raises
+    ------
+    ValueError
+        ``selection.candidates: unknown {kind} effects [...]; {library_name}: [...]``.
+    """
+    keys = list(candidates) if candidates is not None else list(library)
+    unknown = [k for k in keys if k not in library]
+    if unknown:
+        raise ValueError(f"selection.candidates: unknown {kind} effects {unknown}; "
+                         f"{library_name}: {sorted(library)}")
+    return keys
 
 
 def _rmse(r: np.ndarray) -> float:

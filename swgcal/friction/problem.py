@@ -17,7 +17,7 @@ from typing import Any
 from swgsim.base.typed import build, complete
 from swgsim.gear.friction import FRICTION_LIBRARY
 
-from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
+from ..loop import CalibrationResult, Problem, SelectionConfig, check_candidates, select_effects
 from ..split import time_block_split
 from ..terms import FitTerm
 from .data import FrictionRecording, load_friction_csv
@@ -78,11 +78,7 @@ def friction_problem(
     build(complete(given, FrictionOptions, ""), FrictionOptions, "")
     sig = rec.signals(v_s=v_s, v_s_rel=v_s_rel, gear_ratio=gear_ratio)
     fitted = {k: c for k, c in FRICTION_LIBRARY.items() if issubclass(c, FitTerm)}
-    keys = list(candidates) if candidates is not None else list(fitted)
-    unknown = [k for k in keys if k not in fitted]
-    if unknown:
-        raise ValueError(f"selection.candidates: unknown friction effects {unknown}; library "
-                         f"(the effects with a fit): {sorted(fitted)}")
+    keys = check_candidates(candidates, fitted, "friction", "library (the effects with a fit)")
     if rec.n < MIN_ROWS_PER_BLOCK * n_blocks:
         raise ValueError(f"recording {rec.name!r}: {rec.n} samples are too few for "
                          f"split.n_blocks={n_blocks} held-out blocks of at least "

@@ -22,7 +22,7 @@ import numpy as np
 
 from swgsim.sensing.effects import psi_rate
 
-from ..loop import CalibrationResult, Problem, SelectionConfig, select_effects
+from ..loop import CalibrationResult, Problem, SelectionConfig, check_candidates, select_effects
 from ..split import HeldOutSplit, group_split
 from .data import StrainWindows, heldout_split, strain_windows
 from .effects import ChainBaseModel, StrainSignals, strain_library, strain_probes
@@ -55,30 +55,6 @@ class StrainOptions:
 
 #: The typed options of this kind's problem (read by :func:`swgcal.api.options_from_config`).
 OPTIONS = StrainOptions
-
-def check_candidates(candidates: Sequence[str] | None, model: StrainModel) -> list[str]:
-    """The library keys to try, every one checked against the strain library.
-
-    Parameters
-    ----------
-    candidates : sequence of str or None
-        ``selection.candidates``; None: the whole library.
-    model : StrainModel
-        Its kinematic-error orders add the ``ke_order{k}`` keys.
-
-    Raises
-    ------
-    ValueError
-        ``selection.candidates: unknown strain effects [...]; library: [...]``.
-    """
-    lib = strain_library(model.ke_orders)
-    keys = list(candidates) if candidates is not None else list(lib)
-    unknown = [k for k in keys if k not in lib]
-    if unknown:
-        raise ValueError(f"selection.candidates: unknown strain effects {unknown}; library: "
-                         f"{sorted(lib)}")
-    return keys
-
 
 def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
                    heldout: str = "windows", validation: Sequence[int] | None = None,
@@ -113,13 +89,13 @@ def strain_problem(win: StrainWindows, model: StrainModel | None = None, *,
     Raises
     ------
     ValueError
-        Unknown candidate (:func:`check_candidates`), bad held-out settings, a window
-        shorter than one WG half revolution, or bad bounds.
+        Unknown candidate (:func:`swgcal.loop.check_candidates`), bad held-out settings, a
+        window shorter than one WG half revolution, or bad bounds.
     """
     model = model if model is not None else StrainModel()
-    keys = check_candidates(candidates, model)
-    rate, (lo, hi), n_lead, n_tail = _filter_margins(win, model, f_c_bounds_hz)
     lib_all = strain_library(model.ke_orders)
+    keys = check_candidates(candidates, lib_all, "strain")
+    rate, (lo, hi), n_lead, n_tail = _filter_margins(win, model, f_c_bounds_hz)
     role, held_text = heldout_split(win, heldout, validation, test)
     sim = _simulate_windows(win, model, n_lead, n_tail)
     period = float(window_period_s) if window_period_s is not None else win.n_t / win.fs
@@ -313,15 +289,17 @@ def build_problem(measured: Any, *, model: StrainModel | None = None,
     TypeError
         An unknown option (the message lists the allowed ones).
     ValueError
-        An unknown candidate, before the data are read (:func:`check_candidates`); see
-        :func:`strain_windows`, :func:`strain_problem`.
+        An unknown candidate, before the data are read
+        (:func:`swgcal.loop.check_candidates`); see :func:`strain_windows`,
+        :func:`strain_problem`.
     """
     unknown = sorted(set(options) - set(_PROBLEM_KEYS))
     if unknown:
         raise TypeError(f"unknown strain problem options {unknown}; allowed: "
                         f"{sorted(_PROBLEM_KEYS)}")
     model = model if model is not None else StrainModel()
-    check_candidates(options.get("candidates"), model)  # before the data set is loaded
+    # before the data set is loaded
+    check_candidates(options.get("candidates"), strain_library(model.ke_orders), "strain")
     win = (measured if isinstance(measured, StrainWindows)
            else strain_windows(measured, select, max_windows, name))
     with one_blas_thread():

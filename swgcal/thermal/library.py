@@ -71,8 +71,9 @@ def first_order_lag(u_held: np.ndarray, dt_s: np.ndarray, tau_min: float) -> np.
 
 
 class _Lagged(FitTerm):
-    """A term of one column, ``lag_τ(input)``, τ its nonlinear parameter; the input is the
-    signals' attribute ``input_name``."""
+    """A term with a time constant τ [min] (in ``tau_range``, started at each of
+    ``tau_starts``), by default of one column, ``lag_τ(input)``: the input the signals'
+    attribute ``input_name``, its gain of the sign ``gain_sign``."""
 
     input_name = ""
     tau_range: tuple[float, float] = _TAU_BOUNDS_MIN
@@ -92,7 +93,7 @@ class _Lagged(FitTerm):
         return [np.array([t]) for t in self.tau_starts]
 
 
-class FirstOrderJoint(FitTerm):
+class FirstOrderJoint(_Lagged):
     """The project's thermal model (:class:`swgsim.gear.thermal.JointThermal`): the room's
     temperature, the joint's at the first reading decaying towards it with τ, and R_th
     times the lagged loss (module docstring).
@@ -118,6 +119,7 @@ class FirstOrderJoint(FitTerm):
               "initial_k": (0.0, _INF, "a heated joint is not below its room [derived]"),
               "r_th_k_per_w": (*R_TH_RANGE_K_PER_W, "> 0, a small joint [choice]"),
               "tau_min": (*_TAU_BOUNDS_MIN, "a joint's time constants [choice]")}
+    tau_starts = (15.0, 40.0, 120.0)
 
     def __init__(self, name: str | None = None, start_c: float | None = None) -> None:
         super().__init__(name)
@@ -146,12 +148,6 @@ class FirstOrderJoint(FitTerm):
     def derived_units(self) -> dict[str, str]:
         return {"ambient_c": "°C", "initial_k": "K", "r_th_k_per_w": "K/W", "tau_min": "min",
                 "start_c": "°C"}
-
-    def bounds(self, sig: Any) -> list[tuple[float, float]]:
-        return [_TAU_BOUNDS_MIN]
-
-    def starts(self, sig: Any, residual: np.ndarray, idx: np.ndarray) -> list[np.ndarray]:
-        return [np.array([t]) for t in (15.0, 40.0, 120.0)]
 
 
 class CopperLoss(_Lagged):

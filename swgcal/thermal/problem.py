@@ -38,6 +38,7 @@ from ..loop import (
     CalibrationResult,
     Problem,
     SelectionConfig,
+    check_candidates,
     gain_floor,
     paired_gain,
     refit_final,
@@ -262,11 +263,7 @@ def thermal_problem(log: JointLog, *, joint: int = ThermalOptions.joint,
                          "gear_efficiency": gear_efficiency, "fit_frac": fit_frac,
                          "room_c": room_c}}
     build(complete(given, ThermalKindOptions, ""), ThermalKindOptions, "")
-    keys = list(candidates) if candidates is not None else list(THERMAL_LIBRARY)
-    unknown = [k for k in keys if k not in THERMAL_LIBRARY]
-    if unknown:
-        raise ValueError(f"selection.candidates: unknown thermal effects {unknown}; library: "
-                         f"{sorted(THERMAL_LIBRARY)}")
+    keys = check_candidates(candidates, THERMAL_LIBRARY, "thermal")
     y = log.temperature_c[:, joint]
     split = _split(log, np.isfinite(y), fit_frac)
     sig = thermal_signals(log, joint, torque_per_amp_nm, gear_efficiency, room_c)
