@@ -76,8 +76,26 @@ MAX_TRACE_BYTES = 256 * 2**20
 _SPLIT = "viscous and Coulomb friction apart"
 
 
+class _CoulombApart:
+    """The Coulomb term apart from the viscous ones (:class:`RunInConfig`, :class:`Regrease`)."""
+
+    @property
+    def split(self) -> bool:
+        """Whether the Coulomb term runs in (again) by its own."""
+        return self.coulomb_drop is not None or self.coulomb_tau_h is not None
+
+    def _apart(self, factor) -> tuple[np.ndarray, np.ndarray]:
+        """``factor(drop, tau_h)`` of the viscous terms and of the Coulomb term (its own
+        drop and time constant where set; the same array where neither is)."""
+        viscous = factor(self.drop, self.tau_h)
+        if not self.split:
+            return viscous, viscous
+        return viscous, factor(self.drop if self.coulomb_drop is None else self.coulomb_drop,
+                               self.tau_h if self.coulomb_tau_h is None else self.coulomb_tau_h)
+
+
 @dataclass
-class RunInConfig:
+class RunInConfig(_CoulombApart):
     """Friction of a new gear running in (:func:`swgsim.gear.thermal.run_in_factor`).
 
     Attributes
@@ -103,29 +121,14 @@ class RunInConfig:
     coulomb_tau_h: float | None = field(default=None, metadata={
         **allowed(0.0, 1e5, lo_open=True, unit="h"), LATER: _SPLIT})
 
-    @property
-    def split(self) -> bool:
-        """Whether the Coulomb term runs in by its own."""
-        return self.coulomb_drop is not None or self.coulomb_tau_h is not None
-
     def factors(self, hours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The viscous and the Coulomb terms' run-in factors at operating ``hours``
         (:func:`swgsim.gear.thermal.run_in_factor`), shapes of ``hours`` [-]."""
-        return _apart(self, lambda d, t: run_in_factor(hours, d, t))
-
-
-def _apart(c: RunInConfig | Regrease, factor) -> tuple[np.ndarray, np.ndarray]:
-    """``factor(drop, tau_h)`` of the viscous terms and of the Coulomb term (its own drop
-    and time constant where set; the same array where neither is)."""
-    viscous = factor(c.drop, c.tau_h)
-    if not c.split:
-        return viscous, viscous
-    return viscous, factor(c.drop if c.coulomb_drop is None else c.coulomb_drop,
-                           c.tau_h if c.coulomb_tau_h is None else c.coulomb_tau_h)
+        return self._apart(lambda d, t: run_in_factor(hours, d, t))
 
 
 @dataclass
-class Regrease:
+class Regrease(_CoulombApart):
     """Re-greasing in service: the friction steps up and runs in again
     (:func:`swgsim.gear.thermal.regrease_factor`; the latest re-greasing counts).
 
@@ -153,15 +156,10 @@ class Regrease:
     coulomb_tau_h: float | None = field(default=None, metadata={
         **allowed(0.0, 1e5, lo_open=True, unit="h"), LATER: _SPLIT})
 
-    @property
-    def split(self) -> bool:
-        """Whether the Coulomb term runs in again by its own (:class:`RunInConfig`)."""
-        return self.coulomb_drop is not None or self.coulomb_tau_h is not None
-
     def factors(self, hours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The viscous and the Coulomb terms' factors at operating ``hours``
         (:func:`swgsim.gear.thermal.regrease_factor`), shapes of ``hours`` [-]."""
-        return _apart(self, lambda d, t: regrease_factor(hours, self.hours, d, t))
+        return self._apart(lambda d, t: regrease_factor(hours, self.hours, d, t))
 
     def check(self, where: str) -> None:
         """Refuse no hour or hours not increasing, in one line naming ``<where>.hours``
@@ -343,12 +341,7 @@ def trace_rise(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarra
                          f"{int(text[0]) + 1}: {df[trace.column].iloc[text[0]]!r} is not a "
                          f"number")
     temp = num.to_numpy(dtype=float)
-    lo, hi = TEMP_RANGE_C
-    out = np.flatnonzero((temp < lo) | (temp > hi))  # NaN (a missing reading) passes
-    if out.size:
-        i = int(out[0])
-        raise ValueError(f"{key}.column: {trace.column!r} of {trace.path!r} must lie in "
-                         f"[{lo:g}, {hi:g}] °C, got {temp[i]:g} at row {i + 1}")
+    _check_temperatures(temp, f"{key}.column: {trace.column!r} of {trace.path!r}")
     steps = np.diff(t_s)
     if np.any(steps <= 0):
         raise ValueError(f"{key}.time_column: times of {trace.path!r} must increase")
@@ -416,13 +409,19 @@ def trace_table(trace: TemperatureTrace, key: str) -> tuple[np.ndarray, np.ndarr
         i = int(back[0]) + 1 if hour[0] >= 0 else 0
         raise ValueError(f"{name}: hour of {trace.path!r} must increase from >= 0 h, got "
                          f"{hour[i]:g} at row {i + 1}" + (f" after {hour[i - 1]:g}" if i else ""))
+    _check_temperatures(temp, f"{name}: temperature_c of {trace.path!r}")
+    return hour, temp
+
+
+def _check_temperatures(temp: np.ndarray, what: str) -> None:
+    """Refuse a temperature outside :data:`swgsim.gear.thermal.TEMP_RANGE_C` (NaN, a missing
+    reading, passes) in one line: ``<what> must lie in [-40, 150] °C, got <t> at row <i>``."""
     lo, hi = TEMP_RANGE_C
     out = np.flatnonzero((temp < lo) | (temp > hi))
     if out.size:
         i = int(out[0])
-        raise ValueError(f"{name}: temperature_c of {trace.path!r} must lie in [{lo:g}, "
-                         f"{hi:g}] °C, got {temp[i]:g} at row {i + 1}")
-    return hour, temp
+        raise ValueError(f"{what} must lie in [{lo:g}, {hi:g}] °C, got {temp[i]:g} at row "
+                         f"{i + 1}")
 
 
 def _check_trace(tr: TemperatureTrace, has_thermal: bool, key: str) -> None:

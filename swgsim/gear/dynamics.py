@@ -18,8 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swgsim.gear.integrator import StageInputs, integrate, rk4_record
-
-RPM = 2 * np.pi / 60.0
+from swgsim.gear.profile import RPM
 
 #: Output inertia of the bench: flange and load coupling [kg m²] (public script seed,
 #: docs/PHYSICS.md sec. 1); the default of :class:`GearParams` and of the data-set option

@@ -102,10 +102,9 @@ class Term:
         return sig
 
     def derived(self, coef: np.ndarray, theta: np.ndarray) -> dict[str, float]:
-        """Reported parameters (default: the raw ones). Override for amplitude/phase."""
-        out = {p.name: float(v) for p, v in zip(self.linear, coef, strict=True)}
-        out.update({p.name: float(v) for p, v in zip(self.nonlinear, theta, strict=True)})
-        return out
+        """Reported parameters (default: the raw ones, :meth:`to_params`). Override for
+        amplitude/phase."""
+        return self.to_params(coef, theta)
 
     def derived_units(self) -> dict[str, str]:
         """Units of :meth:`derived` entries."""

@@ -227,7 +227,7 @@ class LoadCoulomb(_RangePolynomial):
     def for_signals(cls, sig: FrictionSignals, name: str | None = None) -> LoadCoulomb:
         if sig.load_nm is not None:
             return cls(name, use_load=True)
-        return cls(name, q_center=sig.scales.q_center, q_half=0.5 * sig.scales.q_span)
+        return super().for_signals(sig, name)
 
     @property
     def linear(self):  # type: ignore[override]
