@@ -208,25 +208,27 @@ def window_features(signals: np.ndarray, n_in_rpm: np.ndarray, efficiency: np.nd
         raise ValueError(f"harmonic {n_harmonics} of {speeds.max():g} rpm reaches the Nyquist "
                          f"frequency of {fs_hz:g} Hz")
     if psi is not None:
-        return _features_in_angle(x, psi, efficiency, fs_hz, n_harmonics)
-    out = np.empty((n, c, n_harmonics + 2))
-    for v in np.unique(speeds):
-        idx = np.flatnonzero(speeds == v)
-        b, p = _basis(float(v), float(fs_hz), n_t, n_harmonics)
-        coef = x[idx] @ p.T  # (m, 5, P)
-        rest = x[idx] - coef @ b.T
-        out[idx, :, 0] = coef[..., 0]
-        out[idx, :, 1:n_harmonics + 1] = np.hypot(coef[..., 1:n_harmonics + 1],
-                                                  coef[..., 1 + n_harmonics + 3:
-                                                       1 + 2 * n_harmonics + 3])
-        out[idx, :, -1] = np.log10(np.sqrt(np.mean(rest ** 2, axis=-1)) + 1e-9)
+        coef, rest = _fit_in_angle(x, psi, fs_hz, n_harmonics)
+    else:
+        coef, rest = np.empty((n, c, 2 * (n_harmonics + 3) + 1)), np.empty_like(x)
+        for v in np.unique(speeds):
+            idx = np.flatnonzero(speeds == v)
+            b, p = _basis(float(v), float(fs_hz), n_t, n_harmonics)
+            coef_v = x[idx] @ p.T  # (m, 5, P)
+            coef[idx], rest[idx] = coef_v, x[idx] - coef_v @ b.T
+    h, k = n_harmonics, len(NUISANCE_ORDERS)
+    out = np.empty((n, c, h + 2))
+    out[..., 0] = coef[..., 0]
+    out[..., 1:h + 1] = np.hypot(coef[..., 1:h + 1], coef[..., 1 + h + k:1 + 2 * h + k])
+    out[..., -1] = np.log10(np.sqrt(np.mean(rest ** 2, axis=-1)) + 1e-9)
     return np.concatenate([out.reshape(n, -1), np.asarray(efficiency, float)[:, None]],
                           axis=1)
 
 
-def _features_in_angle(x: np.ndarray, psi: np.ndarray, efficiency: np.ndarray,
-                       fs_hz: float, n_harmonics: int) -> np.ndarray:
-    """:func:`window_features` with ``psi`` given: shapes (n, 5, n_t), (n, n_t), (n,)."""
+def _fit_in_angle(x: np.ndarray, psi: np.ndarray, fs_hz: float, n_harmonics: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The coefficients (n, 5, P) and rest (n, 5, n_t) of :func:`window_features` with
+    ``psi`` (n, n_t) given, from windows ``x`` (n, 5, n_t)."""
     n, c, n_t = x.shape
     ang = np.asarray(psi, dtype=np.float64)
     if ang.shape != (n, n_t) or not np.all(np.isfinite(ang)):
@@ -238,18 +240,11 @@ def _features_in_angle(x: np.ndarray, psi: np.ndarray, efficiency: np.ndarray,
             raise ValueError(f"harmonic {n_harmonics} of psi's fastest step "
                              f"{step * fs_hz / (2 * np.pi) * 60:g} rpm (WG) reaches the "
                              f"Nyquist frequency of {fs_hz:g} Hz")
-    out = np.empty((n, c, n_harmonics + 2))
-    if n:
-        coef, rest = np.empty((n, c, 2 * (n_harmonics + 3) + 1)), np.empty_like(x)
-        for i in range(0, n, 32):  # chunks of 32 windows: the bases stay in cache
-            coef[i:i + 32], rest[i:i + 32] = angle_fit(
-                x[i:i + 32], ang[i:i + 32], 1.0 + 1.0 / RATIO, n_harmonics, NUISANCE_ORDERS, i)
-        h, k = n_harmonics, len(NUISANCE_ORDERS)
-        out[..., 0] = coef[..., 0]
-        out[..., 1:h + 1] = np.hypot(coef[..., 1:h + 1], coef[..., 1 + h + k:1 + 2 * h + k])
-        out[..., -1] = np.log10(np.sqrt(np.mean(rest ** 2, axis=-1)) + 1e-9)
-    return np.concatenate([out.reshape(n, -1), np.asarray(efficiency, float)[:, None]],
-                          axis=1)
+    coef, rest = np.empty((n, c, 2 * (n_harmonics + 3) + 1)), np.empty_like(x)
+    for i in range(0, n, 32):  # chunks of 32 windows: the bases stay in cache
+        coef[i:i + 32], rest[i:i + 32] = angle_fit(
+            x[i:i + 32], ang[i:i + 32], 1.0 + 1.0 / RATIO, n_harmonics, NUISANCE_ORDERS, i)
+    return coef, rest
 
 
 def life_features(plan: DatasetPlan, sig: np.ndarray, meta: dict[str, np.ndarray]) -> np.ndarray:

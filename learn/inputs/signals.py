@@ -562,38 +562,34 @@ def build_input(ds, kind: str, aux: tuple[str, ...] | list[str] = AUX,
     meta, refs = window_meta(ds, disturbed)
     samples = meta["sample"].to_numpy()
     y = meta["fault"].to_numpy()
-    eff_cols = [AUX.index(a) for a in aux]
+    if kind in ("sel1", "sel3"):  # the paper's features (Table III)
+        feats = extract_features(ds, int(kind[-1]), **dict(feature_kwargs or {}))
+        fs = feats.meta["sample"].to_numpy()
+        pos = np.searchsorted(fs, samples)
+        if not np.array_equal(fs[np.minimum(pos, fs.size - 1)], samples):
+            raise ValueError("features and windows disagree on the non-reference windows")
+        return InputSet(np.asarray(feats.X[pos], dtype=np.float32), y, meta, 0, kind)
+    eff = efficiency_features(ds, samples, refs)[:, [AUX.index(a) for a in aux]]  # (n, A)
     if kind in RESIDUAL_INPUTS:
         rs = residual or ResidualSettings()
         key = ("residual", disturbed, repr(rs))
-        res = None if psi is not None or cache is None else cache.get(key)
-        if res is None:
-            res = reference_residual(ds, samples, refs, rs, psi)  # (n, 5, H+1)
+        x = None if psi is not None or cache is None else cache.get(key)
+        if x is None:
+            x = reference_residual(ds, samples, refs, rs, psi)  # (n, 5, H+1)
             if psi is None and cache is not None:
-                cache[key] = res
-        eff = efficiency_features(ds, samples, refs)[:, eff_cols]  # (n, A)
+                cache[key] = x
         if kind == "res_spec":
-            amp = np.log10(np.abs(res[:, :, int(rs.min_harmonic):]) + 1e-7)  # (n, 5, H')
+            amp = np.log10(np.abs(x[:, :, int(rs.min_harmonic):]) + 1e-7)  # (n, 5, H')
             x = np.concatenate([amp.reshape(len(amp), -1), eff], axis=1)
             return InputSet(x.astype(np.float32), y, meta, 0, kind)
-        if kind == "diff_res":
-            res = np.stack([res[:, 0], res[:, 1] - res[:, 3], res[:, 2] - res[:, 4]], axis=1)
-        x = synthesise(res, int(rs.n_points), int(rs.min_harmonic))  # (n, C, M)
+    else:
+        x = normalise_signals(ds, samples, refs)  # (n, 5, T)
+    if kind in ("diff", "diff_res"):  # s0 and the redundant gauges' differences (eq. 8)
+        x = np.stack([x[:, 0], x[:, 1] - x[:, 3], x[:, 2] - x[:, 4]], axis=1)  # (n, 3, .)
+    if kind in RESIDUAL_INPUTS:
+        x = synthesise(x, int(rs.n_points), int(rs.min_harmonic))  # (n, C, M)
         if rs.compress:
             x = np.arcsinh(x / float(rs.compress))
-        x = _append_aux(x.astype(np.float32), eff)
-        return InputSet(np.ascontiguousarray(x), y, meta, len(eff_cols), kind)
-    if kind in SIGNAL_INPUTS:
-        x = normalise_signals(ds, samples, refs)  # (n, 5, T)
-        if kind == "diff":
-            x = np.stack([x[:, 0], x[:, 1] - x[:, 3], x[:, 2] - x[:, 4]], axis=1)  # (n, 3, T)
-        eff = efficiency_features(ds, samples, refs)  # (n, 2)
-        x = _append_aux(x, eff[:, eff_cols])
-        return InputSet(np.ascontiguousarray(x, dtype=np.float32), y, meta, len(eff_cols),
-                        kind)
-    feats = extract_features(ds, int(kind[-1]), **dict(feature_kwargs or {}))
-    fs = feats.meta["sample"].to_numpy()
-    pos = np.searchsorted(fs, samples)
-    if not np.array_equal(fs[np.minimum(pos, fs.size - 1)], samples):
-        raise ValueError("features and windows disagree on the non-reference windows")
-    return InputSet(np.asarray(feats.X[pos], dtype=np.float32), y, meta, 0, kind)
+        x = x.astype(np.float32)
+    x = _append_aux(x, eff)
+    return InputSet(np.ascontiguousarray(x, dtype=np.float32), y, meta, eff.shape[1], kind)

@@ -115,11 +115,13 @@ class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
         """Standardised features of a fitted model, shape (n, n_features)."""
         return self._features(self._check_X(X))
 
-    def _features(self, X: np.ndarray) -> np.ndarray:
+    def _features(self, X: np.ndarray, rocket: np.ndarray | None = None) -> np.ndarray:
+        """Standardised features of ``X`` (``rocket``: its MiniRocket features, if known)."""
         sig, aux = self._split(X)
         parts = []
         if sig is not None:
-            parts.append(self.scaler_.transform(self.rocket_.transform(sig)))
+            rocket = self.rocket_.transform(sig) if rocket is None else rocket
+            parts.append(self.scaler_.transform(rocket))
         if aux is not None and aux.shape[1]:
             parts.append(self.aux_weight * self.aux_scaler_.transform(aux))
         return np.concatenate(parts, axis=1)
@@ -165,18 +167,16 @@ class MiniRocketClassifier(ClassifierMixin, TransformerMixin, BaseEstimator):
         sample_weight = _weights(sample_weight, X.shape[0])
         self.input_ndim_ = X.ndim
         sig, aux = self._split(X)
-        parts = []
+        feats = None
         if sig is not None:
             self.rocket_ = MiniRocket(n_kernels=self.n_kernels,
                                       max_dilations_per_kernel=self.max_dilations_per_kernel,
                                       n_jobs=self.n_jobs, random_state=self.random_state)
             feats = self.rocket_.fit_transform(sig)
             self.scaler_ = StandardScaler().fit(feats, sample_weight=sample_weight)
-            parts.append(self.scaler_.transform(feats))
         if aux is not None and aux.shape[1]:
             self.aux_scaler_ = StandardScaler().fit(aux, sample_weight=sample_weight)
-            parts.append(self.aux_weight * self.aux_scaler_.transform(aux))
-        features = np.concatenate(parts, axis=1)
+        features = self._features(X, feats)
         self.ridge_ = RidgeClassifierCV(alphas=np.asarray(self.alphas)).fit(
             features, y, sample_weight=sample_weight)
         self.classes_ = self.ridge_.classes_

@@ -313,10 +313,8 @@ def protocol_splits(meta: pd.DataFrame, protocol: str, random_state: int | None 
     Raises
     ------
     ValueError
-        For an unknown protocol.
+        For an unknown protocol (:meth:`ProtocolConfig.paper`).
     """
-    if protocol not in PROTOCOLS:
-        raise ValueError(f"protocol must be one of {sorted(PROTOCOLS)}, got {protocol!r}")
     return ProtocolConfig.paper(protocol, random_state=random_state).splits(meta)
 
 

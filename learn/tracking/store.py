@@ -19,7 +19,7 @@ import logging
 import os
 import re
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import closing, contextmanager
 from pathlib import Path
 
 from learn.tracking.preflight import import_failure
@@ -93,11 +93,8 @@ def check_tracking(tracking_uri: str | None = None, key: str = "tracking_uri") -
             raise ValueError(f"{key}={uri}: {db if db.exists() else folder} is not writable")
         if db.exists():
             try:
-                con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
-                try:
+                with closing(sqlite3.connect(f"file:{db}?mode=ro", uri=True)) as con:
                     con.execute("select name from sqlite_master limit 1").fetchall()
-                finally:
-                    con.close()
             except sqlite3.DatabaseError as e:
                 raise ValueError(f"{key}={uri}: {db} is not an SQLite database ({e})") from None
     elif uri.startswith(("http://", "https://")):
