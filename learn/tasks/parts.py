@@ -2,11 +2,12 @@
 key (:func:`part_key`, the hash of what made it), the parts of one (data set, held-out
 gear) run in one worker, in order (:func:`run_parts`, :func:`run_group`), resumed from
 ``parts/`` when their key matches (:func:`finished_parts`), each data set's design part
-before its lives' (:func:`run_staged`), and one (data set, held-out gear) alone as a job
-of a cluster array (:func:`group_jobs`, :func:`run_one_group`); the
-options an evaluation's group of ``swgsim-train`` shares (:class:`EvaluationExperiment`). Used by
-the monitor's and the prognosis's evaluations (:mod:`swgmon.evaluation`) and the
-transfer comparison (:mod:`learn.transfer.task`)."""
+before its lives' (:meth:`EvaluationExperiment.run_stages`), and one (data set, held-out
+gear) alone as a job of a cluster array (:func:`group_jobs`, :func:`run_one_group`); the
+options an evaluation's group of ``swgsim-train`` shares (:class:`EvaluationExperiment`);
+what reports write alike (:func:`write_csvs`). Used by the
+monitor's, the prognosis's and the benchmark's evaluations (:mod:`swgmon.evaluation`) and
+the transfer comparison (:mod:`learn.transfer.task`)."""
 
 from __future__ import annotations
 
@@ -30,23 +31,24 @@ from swgsim.base.typed import allowed
 from swgsim.datasets.config import DatasetConfig
 from swgsim.datasets.plan import DatasetPlan, plan
 from swgsim.files import ownership
-from swgsim.files.ownership import atomic_write_json
+from swgsim.files.ownership import atomic_write_json, write_owned
 
 joblib = lazy_module("joblib")
 
 log = logging.getLogger(__name__)
 
 
-#: The name of a data set's design part in a staged evaluation (:func:`run_staged`).
+#: A data set's design part in a staged evaluation (:meth:`EvaluationExperiment.run_stages`).
 DESIGN = "design"
 
 
 @dataclass(frozen=True)
 class Job:
     """One resumable part: the monitor (``detector`` None) or one per-window detector on
-    one held-out gear of one data set; of a staged evaluation (:func:`run_staged`), a
-    data set's design part (``gear`` 0, ``detector`` :data:`DESIGN`) or its lives on one
-    held-out gear (``detector`` None, or the family they live)."""
+    one held-out gear of one data set; of a staged evaluation
+    (:meth:`EvaluationExperiment.run_stages`), a data set's design part (``gear`` 0,
+    ``detector`` :data:`DESIGN`) or its lives on one held-out gear (``detector`` None, or
+    the family they live)."""
 
     dataset: str
     gear: int
@@ -160,6 +162,59 @@ class EvaluationExperiment:
         with ownership.claim(out, where, f"{where}.report_dir", share=share,
                              strict=True) as claim:
             yield out, claim
+
+    def run_stages(self, where: str, plans: dict[str, DatasetPlan], logger,
+                   design_jobs: list[Job], life_jobs: list[Job], design: Callable,
+                   lives: Callable, report: Callable[..., dict]) -> dict:
+        """An evaluation in two stages, in its claimed report folder (:meth:`claimed_report`;
+        ``parts/`` and ``models/`` made): each data set's design part (:data:`DESIGN`, by
+        ``design(plan, jobs, study, out)``: its model, trained once, written by the part),
+        then the lives' parts (per data set and held-out gear, by ``lives(plan, jobs,
+        study, out, design part)``), both by :func:`run_parts` (progress lines ``<where>
+        design``, ``<where> lives``; the workers return :func:`run_group`'s pairs); then
+        ``report(out, claim, design parts, lives' parts, wall time [s], parts resumed)``'s
+        summary. With ``group``, that group's parts alone (a job of an array, option
+        ``<where>.group``; :func:`run_one_group`), no report: its summary with ``task`` =
+        ``where``.
+
+        Raises
+        ------
+        ValueError
+            ``group`` beyond the groups (:func:`group_jobs`), a lives group before its
+            data set's design part (naming the group to run first), or as
+            :meth:`claimed_report`; before any work.
+        """
+        key = f"{where}.group"
+        jobs = group_jobs(design_jobs + life_jobs, self.group, key)
+        with self.claimed_report(where, plans, logger) as (out, claim):
+            (out / "parts").mkdir(parents=True, exist_ok=True)
+            (out / "models").mkdir(exist_ok=True)
+            by: dict[str, dict] = {}  # data set -> its design part, for its lives
+
+            def run_design(js: list[Job]):
+                return joblib.delayed(design)(plans[js[0].dataset], js, self.study, str(out))
+
+            def run_lives(js: list[Job]):
+                return joblib.delayed(lives)(plans[js[0].dataset], js, self.study, str(out),
+                                             by[js[0].dataset])
+            if self.group is not None:  # its lives read their design part from parts/
+                first = [j for j in design_jobs if j.dataset == jobs[0].dataset]
+                done, _ = finished_parts(out, first)
+                if jobs[0].detector != DESIGN and not done:
+                    raise ValueError(f"{key}={self.group} lives {jobs[0].dataset}'s held-out "
+                                     f"instance {jobs[0].gear} and needs its design part "
+                                     f"first: run {key}={design_jobs.index(first[0])} before")
+                by.update({d["dataset"]: d for d in done})
+                run = run_design if jobs[0].detector == DESIGN else run_lives
+                return {"task": where, **run_one_group(out, jobs, run, where, self.progress,
+                                                       self.n_jobs, key, self.group)}
+            t0 = time.perf_counter()
+            designs, r0 = run_parts(out, design_jobs, run_design, f"{where} design",
+                                    self.progress, self.n_jobs)
+            by.update({d["dataset"]: d for d in designs})
+            parts, r1 = run_parts(out, life_jobs, run_lives, f"{where} lives", self.progress,
+                                  self.n_jobs)
+            return report(out, claim, designs, parts, time.perf_counter() - t0, r0 + r1)
 
 
 def plan_datasets(datasets: dict[str, DatasetConfig], names: list[str], where: str
@@ -318,65 +373,6 @@ def run_group(out: str | Path, jobs: list[Job], run_one: Callable[[Job], dict]
     return finished
 
 
-def run_staged(out: Path, design_jobs: list[Job], life_jobs: list[Job], design: Callable,
-               lives: Callable, desc: str, progress: bool, n_jobs: int
-               ) -> tuple[list[dict], list[dict], int]:
-    """An evaluation in two stages: each data set's design part (:data:`DESIGN`: its
-    model, trained once, written by the part), then the lives' parts (per data set and
-    held-out gear), each given its data set's design part; both by :func:`run_parts`.
-
-    Parameters
-    ----------
-    out : Path
-        The report folder.
-    design_jobs, life_jobs : list of Job
-    design : callable
-        As :func:`run_parts`'s ``delayed``, for the design parts.
-    lives : callable
-        (jobs, design part) -> the ``joblib.delayed`` call, for the lives' parts.
-    desc : str
-        The progress lines' label (``<desc> design``, ``<desc> lives``).
-    progress : bool
-    n_jobs : int
-
-    Returns
-    -------
-    (list of dict, list of dict, int)
-        The design parts, the lives' parts, and how many parts were resumed.
-    """
-    designs, r0 = run_parts(out, design_jobs, design, f"{desc} design", progress, n_jobs)
-    by = {d["dataset"]: d for d in designs}
-    parts, r1 = run_parts(out, life_jobs, lambda js: lives(js, by[js[0].dataset]),
-                          f"{desc} lives", progress, n_jobs)
-    return designs, parts, r0 + r1
-
-
-def run_staged_group(out: Path, jobs: list[Job], design_jobs: list[Job], design: Callable,
-                     lives: Callable, desc: str, progress: bool, n_jobs: int, key: str,
-                     group: int) -> dict:
-    """One group of a staged evaluation (:func:`run_staged`; a job of an array, option
-    ``key`` = ``group``, no report): a data set's design part, or one held-out gear's
-    lives, which read their data set's design part from ``parts/``
-    (:func:`run_one_group`).
-
-    Raises
-    ------
-    ValueError
-        A lives group whose data set's design part is not there yet, naming the group to
-        run first.
-    """
-    first = [j for j in design_jobs if j.dataset == jobs[0].dataset]
-    done, _ = finished_parts(out, first)
-    if jobs[0].detector != DESIGN and not done:
-        raise ValueError(f"{key}={group} lives {jobs[0].dataset}'s held-out instance "
-                         f"{jobs[0].gear} and needs its design part first: run "
-                         f"{key}={design_jobs.index(first[0])} before")
-
-    def call(js: list[Job]):
-        return design(js) if js[0].detector == DESIGN else lives(js, done[0])
-    return run_one_group(out, jobs, call, desc, progress, n_jobs, key, group)
-
-
 def resumed_note(resumed: int, n_parts: int) -> str:
     """What follows an evaluation's wall time when its run of ``n_parts`` parts resumed
     ``resumed`` of them from ``parts/`` (:func:`run_parts`): their time was spent by an
@@ -385,6 +381,15 @@ def resumed_note(resumed: int, n_parts: int) -> str:
             if resumed else "")
 
 
+def write_csvs(out: Path, tables: dict[str, Any]) -> list[Path]:
+    """Each table of ``tables`` (file name -> DataFrame) into ``out`` as CSV without its
+    index, in their order, as a run writes its files
+    (:func:`swgsim.files.ownership.write_owned`); returns their paths (the claim's record)."""
+    for name, table in tables.items():
+        write_owned(out / name, lambda tmp, t=table: t.to_csv(tmp, index=False))
+    return [out / name for name in tables]
+
+
 __all__ = ["DESIGN", "EvaluationExperiment", "Job", "finished_parts", "group_jobs", "part_key",
            "plan_datasets", "resumed_note", "run_group", "run_one_group", "run_parts",
-           "run_staged", "run_staged_group", "save_part", "share_key"]
+           "save_part", "share_key", "write_csvs"]

@@ -82,7 +82,8 @@ def results_digest(files: Sequence[str | Path]) -> str:
 
 def append_scored_run(seeds: Iterable[int], results: Sequence[str | Path],
                       command: str | None = None, ledger: str | Path | None = None) -> dict:
-    """Append a scored run to the ledger (atomic; runs on one machine take turns).
+    """Append a scored run to the ledger (atomic; runs on one machine take turns) and say
+    so on the console.
 
     Parameters
     ----------
@@ -117,6 +118,8 @@ def append_scored_run(seeds: Iterable[int], results: Sequence[str | Path],
         w.writeheader()
         w.writerows([*rows, row])
         atomic_write_bytes(path, buf.getvalue().encode())
+    print(f"scored run entered in the ledger {path}: {row['date_utc']}, commit "
+          f"{commit[:12]} ({row['tree']}), results {row['results_sha256'][:16]}")
     return row
 
 

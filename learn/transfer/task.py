@@ -18,13 +18,13 @@ import numpy as np
 
 from learn.studies.runs import net_device_settings
 from learn.tasks.config import typed_app
-from learn.tasks.parts import part_key, plan_datasets
+from learn.tasks.parts import part_key, plan_datasets, write_csvs
 from learn.transfer.study import TransferConfig, run_comparisons
 from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.schema import read_manifest
 from swgsim.files.inputs import absolute_path
-from swgsim.files.ownership import atomic_write_json, write_owned
+from swgsim.files.ownership import atomic_write_json
 
 pd = lazy_module("pandas")
 
@@ -255,11 +255,10 @@ def _write(res, conf, got: _Collected, tc: TransferConfig, report_dir: Path, tim
     files = dict(got.files)
     run_s = pd.concat(got.run_s, ignore_index=True) if got.run_s else None
     latency = got.latency if got.latency is not None and len(got.latency) else None
-    for key, table in {"results": res, "confusion": conf, "run_times": run_s,
-                       "latency": latency}.items():
-        if table is not None:
-            files[key] = report_dir / f"{key}.csv"
-            write_owned(files[key], lambda tmp, t=table: t.to_csv(tmp, index=False))
+    tables = {"results": res, "confusion": conf, "run_times": run_s, "latency": latency}
+    written = write_csvs(report_dir, {f"{key}.csv": table for key, table in tables.items()
+                                      if table is not None})
+    files.update({path.stem: path for path in written})
     targets = {d: t for d, t in tc.targets.items() if d in set(res["dataset"])}
     files["table"] = write_table(res, conf, report_dir / "table.md", targets=targets,
                                  primary=tc.primary, separability=got.separability,

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -25,13 +26,11 @@ from learn.tasks.parts import (
     DESIGN,
     EvaluationExperiment,
     Job,
-    group_jobs,
     part_key,
     run_group,
-    run_staged,
-    run_staged_group,
+    write_csvs,
 )
-from learn.tracking.ledger import LEDGER, append_scored_run
+from learn.tracking.ledger import append_scored_run
 from swgmon.assessment.model_io import MODEL_SUFFIX, load_model, save_model
 from swgmon.evaluation.benchmark import (
     ABLATION,
@@ -55,10 +54,9 @@ from swgsim.base.markdown import md_table
 from swgsim.base.typed import check_tree
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.files import ownership
-from swgsim.files.ownership import atomic_write_bytes, atomic_write_json, write_owned
+from swgsim.files.ownership import atomic_write_bytes, atomic_write_json
 
 pd = lazy_module("pandas")
-joblib = lazy_module("joblib")
 
 __all__ = ["FAMILY_TARGETS", "JUDGED_FAULTS", "SECOND_TARGETS", "BenchmarkExperiment",
            "benchmark_tables", "benchmark_targets", "run_benchmark", "second_targets"]
@@ -112,26 +110,8 @@ def run_benchmark(cfg) -> dict:
     check_tree(bc.study, "benchmark.study")
     plans = {n: population_plan(p, bc.study) for n, p in bc.plans("benchmark").items()}
     check_memory(plans, bc.study, bc.n_jobs)
-    design_jobs, life_jobs = plan_jobs(bc, plans)
-    jobs = group_jobs(design_jobs + life_jobs, bc.group, "benchmark.group")
-    with bc.claimed_report("benchmark", plans, app.logger) as (out, claim):
-        (out / "parts").mkdir(parents=True, exist_ok=True)
-        (out / "models").mkdir(exist_ok=True)
-
-        def design(js: list[Job]):
-            return joblib.delayed(_design)(plans[js[0].dataset], js, bc.study, str(out))
-
-        def lives(js: list[Job], d: dict):
-            return joblib.delayed(_lives)(plans[js[0].dataset], js, bc.study, str(out),
-                                          d["thresholds"])
-        if bc.group is not None:
-            return {"task": "benchmark", **run_staged_group(
-                out, jobs, design_jobs, design, lives, "benchmark", bc.progress, bc.n_jobs,
-                "benchmark.group", bc.group)}
-        t0 = time.perf_counter()
-        designs, parts, resumed = run_staged(out, design_jobs, life_jobs, design, lives,
-                                             "benchmark", bc.progress, bc.n_jobs)
-        return _report(bc, out, claim, designs, parts, time.perf_counter() - t0, resumed)
+    return bc.run_stages("benchmark", plans, app.logger, *plan_jobs(bc, plans), _design,
+                         _lives, partial(_report, bc))
 
 
 def _design(plan: DatasetPlan, jobs: list[Job], bc: BenchmarkConfig, out: str
@@ -156,9 +136,11 @@ def _design(plan: DatasetPlan, jobs: list[Job], bc: BenchmarkConfig, out: str
 
 
 def _lives(plan: DatasetPlan, jobs: list[Job], bc: BenchmarkConfig, out: str,
-           thresholds: dict[str, float]) -> list[tuple[dict, Job]]:
-    """One held-out instance's families in a worker, sharing its records."""
+           design: dict) -> list[tuple[dict, Job]]:
+    """One held-out instance's families in a worker, sharing its records, by its data
+    set's design part (the baselines' ``thresholds``)."""
     ownership.join(out, "benchmark")
+    thresholds = design["thresholds"]
     models = {n: load_model(_model_path(out, jobs[0].dataset, n)) for n in _monitors(bc)}
     banks = {jobs[0].gear: banks_of(plan)[jobs[0].gear]}
 
@@ -398,23 +380,18 @@ def _report(bc: BenchmarkExperiment, out: Path, claim, designs: list[dict],
     rows = pd.DataFrame([r for p in parts for r in p["rows"]])
     fa = pd.DataFrame([r for p in parts for r in p["false_alarms"]])
     tab = benchmark_tables(rows, fa, bc.study.level)
-    write_owned(out / "results.csv", lambda tmp: rows.to_csv(tmp, index=False))
-    write_owned(out / "false_alarms.csv", lambda tmp: fa.to_csv(tmp, index=False))
-    write_owned(out / "table.csv", lambda tmp: tab.to_csv(tmp, index=False))
+    csvs = write_csvs(out, {"results.csv": rows, "false_alarms.csv": fa, "table.csv": tab})
     atomic_write_json(out / "design.json", {d["dataset"]: {"thresholds": d["thresholds"],
                                                            **d["design"]} for d in designs})
     atomic_write_json(out / "timing.json", {"wall_s": wall, "resumed": resumed, "parts": [
         {k: p.get(k) for k in ("dataset", "gear", "family", "wall_s")} for p in parts]})
     atomic_write_bytes(out / "table.md", _markdown(bc, tab, wall).encode())
-    claim.record([out / f for f in ("results.csv", "false_alarms.csv", "table.csv",
-                                    "table.md")])
+    claim.record([*csvs, out / "table.md"])
     summary = {"task": "benchmark", "report_dir": str(out), "wall_s": wall,
                "parts": len(parts), "resumed": resumed}
     if bc.study.scored_run:
-        row = append_scored_run(bc.study.seeds, [out / "results.csv", out / "false_alarms.csv"])
-        summary["ledger"] = row
-        print(f"scored run entered in the ledger {LEDGER}: {row['date_utc']}, commit "
-              f"{row['commit'][:12]} ({row['tree']}), results {row['results_sha256'][:16]}")
+        summary["ledger"] = append_scored_run(bc.study.seeds,
+                                             [out / "results.csv", out / "false_alarms.csv"])
     if bc.progress:
         print(f"report: {out}/table.md (+ results.csv, false_alarms.csv, table.csv); "
               f"wall time {wall / 60:.1f} min")

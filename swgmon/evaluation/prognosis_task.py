@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import time
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 from learn.tasks.config import typed_app
@@ -29,15 +29,13 @@ from learn.tasks.parts import (
     DESIGN,
     EvaluationExperiment,
     Job,
-    group_jobs,
     part_key,
     resumed_note,
     run_group,
-    run_staged,
-    run_staged_group,
+    write_csvs,
 )
 from learn.tracking import log_run
-from learn.tracking.ledger import LEDGER, append_scored_run
+from learn.tracking.ledger import append_scored_run
 from swgmon.assessment.model_io import MODEL_SUFFIX, load_model, save_model
 from swgmon.evaluation.benchmark import instances
 from swgmon.evaluation.prognosis_evaluation import (
@@ -59,10 +57,9 @@ from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.files import ownership
-from swgsim.files.ownership import atomic_write_json, write_owned
+from swgsim.files.ownership import atomic_write_json
 
 pd = lazy_module("pandas")
-joblib = lazy_module("joblib")
 
 log = logging.getLogger(__name__)
 
@@ -115,26 +112,8 @@ def run_prognosis_evaluation(cfg) -> dict:
     pc: PrognosisExperiment = app.prognosis
     check_tree(pc.study, "prognosis.study")  # its training design, ..., then its rules
     plans = pc.plans("prognosis")  # every data set's config checked before any work
-    design_jobs, life_jobs = plan_parts(pc, plans)
-    jobs = group_jobs(design_jobs + life_jobs, pc.group, "prognosis.group")
-    with pc.claimed_report("prognosis", plans, app.logger) as (out, claim):
-        (out / "parts").mkdir(parents=True, exist_ok=True)
-        (out / "models").mkdir(exist_ok=True)
-
-        def design(js: list[Job]):
-            return joblib.delayed(_design)(plans[js[0].dataset], js, pc.study, str(out))
-
-        def lives(js: list[Job], d: dict):
-            return joblib.delayed(_lives)(plans[js[0].dataset], js, pc.study, str(out), d)
-        if pc.group is not None:
-            return {"task": "prognosis", **run_staged_group(
-                out, jobs, design_jobs, design, lives, "prognosis", pc.progress, pc.n_jobs,
-                "prognosis.group", pc.group)}
-        t0 = time.perf_counter()
-        designs, parts, resumed = run_staged(out, design_jobs, life_jobs, design, lives,
-                                             "prognosis", pc.progress, pc.n_jobs)
-        return _evaluate(app, pc, plans, out, claim, designs, parts,
-                         time.perf_counter() - t0, resumed, len(jobs))
+    return pc.run_stages("prognosis", plans, app.logger, *plan_parts(pc, plans), _design,
+                         _lives, partial(_evaluate, app, pc, plans))
 
 
 def _model_path(out: str | Path, dataset: str) -> Path:
@@ -180,8 +159,7 @@ def _frames(designs: list[dict], parts: list[dict]) -> tuple[pd.DataFrame, ...]:
 
 
 def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim,
-              designs: list[dict], parts: list[dict], wall: float, resumed: int,
-              n_parts: int) -> dict:
+              designs: list[dict], parts: list[dict], wall: float, resumed: int) -> dict:
     """The report of the parts into the claimed ``out`` (every file it writes
     recorded)."""
     rows, lives, changes, cal = _frames(designs, parts)
@@ -194,9 +172,8 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim,
     buckets, summary = bucket_table(rows, goal), summary_table(scores)
     moved = change_table(changes, goal)
     tgt = targets(buckets, summary, moved, goal, nominal)
-    for name, df in (("results.csv", rows), ("lives.csv", lives), ("calibration.csv", cal),
-                     ("scores.csv", scores), ("changes.csv", changes)):
-        write_owned(out / name, lambda tmp, df=df: df.to_csv(tmp, index=False))
+    csvs = write_csvs(out, {"results.csv": rows, "lives.csv": lives, "calibration.csv": cal,
+                            "scores.csv": scores, "changes.csv": changes})
     not_run = {f"{d['dataset']}: {f}": w for d in designs for f, w in d["not_run"].items()}
     atomic_write_json(out / "timing.json", {"wall_s": wall, "resumed": resumed, "parts": [
         {k: p.get(k) for k in ("dataset", "held_out_gear", "train_s", "calibrate_s",
@@ -212,18 +189,15 @@ def _evaluate(app, pc: PrognosisExperiment, plans: dict, out: Path, claim,
               f"(`prognosis.study.day`, `prognosis.study.growth`); a prognosis every "
               f"{sc.prognosis.every_h:g} h after the alarm; "
               f"{'a scored run' if sc.scored_run else 'design seeds: not a scored run'}. "
-              f"Wall time {wall / 60:.1f} min{resumed_note(resumed, n_parts)}.\n"
+              f"Wall time {wall / 60:.1f} min"
+              f"{resumed_note(resumed, len(designs) + len(parts))}.\n"
               + "".join(f"\nNot evaluated: {k}: {w}.\n" for k, w in sorted(not_run.items())))
     write_table(out / "table.md", header, tgt, summary, buckets, lives, cal, moved)
     fig = figure(buckets, rows, out / "prognosis.png", goal, nominal)
-    claim.record([out / f for f in ("results.csv", "lives.csv", "calibration.csv",
-                                    "scores.csv", "changes.csv", "table.md")] + [fig])
+    claim.record([*csvs, out / "table.md", fig])
     ledger = None
     if sc.scored_run:
         ledger = append_scored_run(sc.seeds, [out / "results.csv", out / "lives.csv"])
-        print(f"scored run entered in the ledger {LEDGER}: {ledger['date_utc']}, commit "
-              f"{ledger['commit'][:12]} ({ledger['tree']}), results "
-              f"{ledger['results_sha256'][:16]}")
     if pc.progress:
         print("\ntargets (prognosis, the growth law; held-out instances):")
         for r in tgt.itertuples(index=False):

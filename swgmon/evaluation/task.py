@@ -35,9 +35,10 @@ from learn.tasks.parts import (
     run_group,
     run_one_group,
     run_parts,
+    write_csvs,
 )
 from learn.tracking import log_run
-from learn.tracking.ledger import LEDGER, append_scored_run
+from learn.tracking.ledger import append_scored_run
 from swgmon.assessment.model_io import MODEL_SUFFIX, save_model
 from swgmon.evaluation.detectors import DETECTORS
 from swgmon.evaluation.evaluate import banks_of, run_detectors, run_held_out, to_frames
@@ -53,7 +54,7 @@ from swgsim.base.lazy import lazy_module
 from swgsim.base.typed import check_tree, plain
 from swgsim.datasets.plan import DatasetPlan
 from swgsim.files import ownership
-from swgsim.files.ownership import atomic_write_json, write_owned
+from swgsim.files.ownership import atomic_write_json
 
 pd = lazy_module("pandas")
 joblib = lazy_module("joblib")
@@ -135,20 +136,16 @@ def run_monitor_evaluation(cfg) -> dict:
     jobs, not_run = plan_jobs(mc, plans, nets.get("torch_device", "cpu"))
     jobs = group_jobs(jobs, mc.group)
     with mc.claimed_report("monitor", plans, app.logger) as (out, claim):
-        if mc.group is not None:
-            return _evaluate_group(mc, plans, out, jobs, nets)
-        return _evaluate(app, mc, plans, out, claim, nets, jobs, not_run)
+        (out / "models").mkdir(parents=True, exist_ok=True)
 
-
-def _evaluate_group(mc: MonitorExperiment, plans: dict, out: Path, jobs: list[Job],
-                    nets: dict) -> dict:
-    """One (data set, held-out gear)'s parts (a job of an array), no report."""
-    (out / "models").mkdir(parents=True, exist_ok=True)
-    device = nets.get("torch_device", "cpu")
-    return {"task": "monitor", **run_one_group(
-        out, jobs, lambda js: joblib.delayed(_job)(plans[js[0].dataset], js, mc.study,
-                                                   str(out), device),
-        "monitor evaluation", mc.progress, mc.n_jobs, "monitor.group", mc.group)}
+        def delayed(js: list[Job]):
+            return joblib.delayed(_job)(plans[js[0].dataset], js, mc.study, str(out),
+                                        nets.get("torch_device", "cpu"))
+        if mc.group is not None:  # one (data set, held-out gear)'s parts, no report
+            return {"task": "monitor", **run_one_group(
+                out, jobs, delayed, "monitor evaluation", mc.progress, mc.n_jobs,
+                "monitor.group", mc.group)}
+        return _evaluate(app, mc, plans, out, claim, nets, jobs, not_run, delayed)
 
 
 def _nets(mc: MonitorExperiment) -> dict:
@@ -165,23 +162,19 @@ def _nets(mc: MonitorExperiment) -> dict:
 
 
 def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: dict,
-              jobs: list[Job], not_run: dict) -> dict:
-    """The evaluation into the claimed ``out`` (every file it writes recorded)."""
-    (out / "parts").mkdir(parents=True, exist_ok=True)
-    (out / "models").mkdir(exist_ok=True)
-    device = nets.get("torch_device", "cpu")
+              jobs: list[Job], not_run: dict, delayed) -> dict:
+    """The evaluation into the claimed ``out`` (every file it writes recorded); its parts
+    by ``delayed`` (:func:`learn.tasks.parts.run_parts`)."""
+    (out / "parts").mkdir(exist_ok=True)
     for name, why in not_run.items():
         for d, w in why.items():
             log.warning("detector %s not run on %s: %s", d, name, w)
     t0 = time.perf_counter()
-    parts, resumed = run_parts(out, jobs, lambda js: joblib.delayed(_job)(
-        plans[js[0].dataset], js, mc.study, str(out), device), "monitor evaluation", mc.progress,
-        mc.n_jobs)
+    parts, resumed = run_parts(out, jobs, delayed, "monitor evaluation", mc.progress,
+                               mc.n_jobs)
     wall = time.perf_counter() - t0
     res, fa, curve = to_frames(parts)
-    write_owned(out / "results.csv", lambda tmp: res.to_csv(tmp, index=False))
-    write_owned(out / "false_alarms.csv", lambda tmp: fa.to_csv(tmp, index=False))
-    write_owned(out / "tradeoff.csv", lambda tmp: curve.to_csv(tmp, index=False))
+    csvs = write_csvs(out, {"results.csv": res, "false_alarms.csv": fa, "tradeoff.csv": curve})
     keys = ("dataset", "held_out_gear", "detector", "train_s", "evaluate_s")
     timing = {"wall_s": wall, "resumed": resumed,
               "parts": [{k: p.get(k) for k in keys} for p in parts]}
@@ -197,13 +190,10 @@ def _evaluate(app, mc: MonitorExperiment, plans: dict, out: Path, claim, nets: d
                  f"{'' if nets['deterministic'] else 'not '}deterministic).\n" if nets else ""))
     write_table(res, fa, out / "table.md", header)
     figs = figures(res, fa, out, curve)
-    claim.record([out / f for f in ("results.csv", "false_alarms.csv", "tradeoff.csv",
-                                    "table.md")] + list(figs))
+    claim.record([*csvs, out / "table.md", *figs])
     if mc.study.scored_run:  # on record, whatever its figures (learn.tracking.ledger)
-        row = append_scored_run([*mc.study.seeds, *mc.study.family_seeds],
-                                [out / f for f in ("results.csv", "false_alarms.csv")])
-        print(f"scored run entered in the ledger {LEDGER}: {row['date_utc']}, commit "
-              f"{row['commit'][:12]} ({row['tree']}), results {row['results_sha256'][:16]}")
+        append_scored_run([*mc.study.seeds, *mc.study.family_seeds],
+                         [out / f for f in ("results.csv", "false_alarms.csv")])
     if mc.progress:  # the console's summary
         print(f"\ntargets (monitor; held-out gears, {len(mc.study.seeds)} seed(s)):")
         for r in targets(res, fa).itertuples(index=False):

@@ -95,9 +95,12 @@ MAX_FUNCTION_LINES = 80
 #: monitor tells of a stream, its report, apart from the run: a module's header, +29);
 #: swgmon 15555 -> 15580 and all 58330 -> 58355 for issue 84's assessment apart from
 #: detection (an alarm named and its severity estimated in naming.py, GearMonitor the
-#: detection's scores and alarms: a module's header, +25).
-LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11520,
-                                "swgmon": 15580, "swgcli": 2000, "all": 58355}
+#: detection's scores and alarms: a module's header, +25); learn 11520 -> 11513, swgmon
+#: 15580 -> 15521 and all 58355 -> 58280 for what the library wrote twice, merged (the
+#: evaluations' two stages and CSVs, a scored run's console line, the candidates' check,
+#: the features' summary, the run-in's and re-greasing's Coulomb term apart, -75).
+LINE_BUDGETS: dict[str, int] = {"swgsim": 18000, "swgcal": 11500, "learn": 11513,
+                                "swgmon": 15521, "swgcli": 2000, "all": 58280}
 #: Numeric module constants the monitor may hold (issue 84: at most 10, physical and
 #: format constants with sources; a tuned number is a typed config field, logged with
 #: every run). Today's count: it moves only down.
